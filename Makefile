@@ -1,0 +1,41 @@
+# All set-up happens here: `make demo` and `make test` work on a fresh Debian machine.
+PYTHON ?= python3
+VENV   := .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed
+SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
+OUT    ?= out
+
+.PHONY: setup llvm demo test test-slow bench clean
+
+setup: llvm $(STAMP)
+
+# Dr.Jit needs libLLVM >= 17 (15 and 16 crash it); install Debian's libllvm19 when none is present.
+llvm:
+	@if ls /usr/lib/*/libLLVM*.so* /usr/lib/llvm-*/lib/libLLVM*.so* 2>/dev/null \
+	     | grep -Eq 'libLLVM(-|\.so\.)(1[7-9]|[2-9][0-9])|llvm-(1[7-9]|[2-9][0-9])/'; then :; \
+	 else echo "installing libllvm19 (Dr.Jit needs libLLVM >= 17)"; \
+	      $(SUDO) apt-get update -qq && $(SUDO) apt-get install -y -qq libllvm19; fi
+
+$(STAMP): pyproject.toml requirements.lock
+	@[ -x $(PY) ] || $(PYTHON) -m venv $(VENV) || { \
+	   echo "python venv missing: installing python3-venv"; \
+	   $(SUDO) apt-get update -qq && $(SUDO) apt-get install -y -qq python3-venv && $(PYTHON) -m venv $(VENV); }
+	$(PY) -m pip install -q --disable-pip-version-check -r requirements.lock
+	$(PY) -m pip install -q --disable-pip-version-check --no-deps --no-build-isolation -e .
+	@touch $(STAMP)
+
+demo: setup
+	$(PY) -m solas_mi.demo --out $(OUT)
+
+test: setup
+	$(PY) -m pytest -q
+
+test-slow: setup
+	$(PY) -m pytest -q -m slow
+
+bench: setup
+	$(PY) benchmarks/run_all.py
+
+clean:
+	rm -rf $(VENV) $(OUT) .pytest_cache

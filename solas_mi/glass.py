@@ -1,0 +1,121 @@
+"""Optical glass: the catalogue (Sellmeier) and model glass given by (n_d, V_d).
+
+Indices are relative to air; AIR has index 1. Wavelengths are in nm.
+"""
+from __future__ import annotations
+
+import re
+import tomllib
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+from typing import Callable
+
+import numpy as np
+
+from .errors import SolasError
+
+CATALOG_PATH = Path(__file__).parent / "data" / "glass_catalog.toml"
+# Fraunhofer lines (nm) defining n_d and V_d.
+LINE_D, LINE_F, LINE_C = 587.5618, 486.1327, 656.2725
+# Range (nm) over which a model glass's two-term dispersion is offered.
+MODEL_RANGE_NM = (365.0, 1014.0)
+_MODEL_RE = re.compile(r"^\s*model\s*:\s*([0-9.]+)\s*/\s*([0-9.]+)\s*$", re.IGNORECASE)
+
+
+@dataclass(frozen=True)
+class Glass:
+    """A refractive medium. `kind` is "sellmeier", "model" or "air"."""
+
+    name: str
+    kind: str
+    coefficients: tuple[tuple[float, ...], tuple[float, ...]] = ((), ())
+    range_nm: tuple[float, float] = (0.0, float("inf"))
+
+    def index(self, wavelength_nm: float | np.ndarray) -> np.ndarray | float:
+        """Refractive index at `wavelength_nm`; SolasError outside the valid range."""
+        wl = np.asarray(wavelength_nm, dtype=np.float64)
+        lo, hi = self.range_nm
+        if np.any(~np.isfinite(wl)) or np.any(wl < lo) or np.any(wl > hi):
+            bad = wl[(wl < lo) | (wl > hi) | ~np.isfinite(wl)] if wl.ndim else wl
+            raise SolasError(
+                f"wavelength {np.atleast_1d(bad)[0]:g} nm is outside glass {self.name}'s "
+                f"valid range {lo:g}-{hi:g} nm"
+            )
+        n = self.index_formula(wl / 1000.0, np.sqrt)
+        return float(n) if n.ndim == 0 else n
+
+    def index_formula(self, wavelength_um, sqrt: Callable):
+        """n(λ) with λ in µm for any array type (NumPy, Dr.Jit) given its `sqrt`; no range check."""
+        if self.kind == "air":
+            return wavelength_um * 0.0 + 1.0
+        a, b = self.coefficients
+        l2 = wavelength_um * wavelength_um
+        if self.kind == "model":
+            return a[0] + b[0] / l2
+        n2 = 1.0
+        for bi, ci in zip(a, b):
+            n2 = n2 + bi * l2 / (l2 - ci)
+        return sqrt(n2)
+
+    def abbe(self) -> tuple[float, float]:
+        """(n_d, V_d) computed from the dispersion formula."""
+        nd, nf, nc = (float(self.index(w)) for w in (LINE_D, LINE_F, LINE_C))
+        return nd, (nd - 1.0) / (nf - nc)
+
+
+AIR = Glass("AIR", "air")
+
+
+def model_glass(nd: float, vd: float) -> Glass:
+    """Model glass with exactly the given n_d and V_d: n(λ) = A + B/λ² (Cauchy's two terms)."""
+    if not (1.0 < nd < 3.0) or not (5.0 < vd < 150.0):
+        raise SolasError(f"model glass n_d={nd:g}, V_d={vd:g}: n_d must lie in (1, 3) and V_d in (5, 150)")
+    inv = lambda nm: 1.0 / (nm / 1000.0) ** 2  # noqa: E731 - µm⁻²
+    b = (nd - 1.0) / vd / (inv(LINE_F) - inv(LINE_C))
+    a = nd - b * inv(LINE_D)
+    return Glass(f"model:{nd:g}/{vd:g}", "model", ((a,), (b,)), MODEL_RANGE_NM)
+
+
+@lru_cache(maxsize=4)
+def load_catalog(path: str | None = None) -> dict[str, Glass]:
+    """The catalogue as {"VENDOR:NAME": Glass}."""
+    with open(path or CATALOG_PATH, "rb") as f:
+        entries = tomllib.load(f)["glass"]
+    return {
+        key: Glass(key, "sellmeier", (tuple(e["B"]), tuple(e["C"])), tuple(e["range_nm"]))
+        for key, e in entries.items()
+    }
+
+
+@lru_cache(maxsize=4)
+def _aliases(path: str | None = None) -> dict[str, list[str]]:
+    """Upper-case name → catalogue keys it may mean (full key, bare name and listed aliases)."""
+    with open(path or CATALOG_PATH, "rb") as f:
+        entries = tomllib.load(f)["glass"]
+    names: dict[str, list[str]] = {}
+    for key, e in entries.items():
+        for name in {key, key.split(":", 1)[-1], *e.get("aliases", [])}:
+            names.setdefault(name.upper(), []).append(key)
+    return names
+
+
+def resolve(name: str, catalog: str | None = None) -> Glass:
+    """The one glass that `name` means: "AIR", a catalogue name ("N-BK7", "SCHOTT:F2", "BK7"),
+    or "model:n_d/V_d". Unknown or ambiguous names raise SolasError."""
+    if not isinstance(name, str) or not name.strip():
+        raise SolasError(f"glass name {name!r} must be a non-empty string")
+    if name.strip().upper() == "AIR":
+        return AIR
+    m = _MODEL_RE.match(name)
+    if m:
+        return model_glass(float(m.group(1)), float(m.group(2)))
+    keys = _aliases(catalog).get(name.strip().upper(), [])
+    if not keys:
+        known = sorted({k.split(":", 1)[-1] for k in load_catalog(catalog)})
+        raise SolasError(
+            f"unknown glass {name!r}; known: AIR, {', '.join(known)}, or model:n_d/V_d (e.g. model:1.62/36.4)"
+        )
+    if len(set(keys)) > 1:
+        raise SolasError(f"glass name {name!r} is ambiguous: it matches {', '.join(sorted(set(keys)))}; use one of those")
+    return load_catalog(catalog)[keys[0]]

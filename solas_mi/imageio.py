@@ -1,0 +1,115 @@
+"""Reading and writing images: OpenEXR (linear float + metadata) for data, PNG (sRGB) for viewing.
+
+Every writer is atomic: it writes a temporary file beside the target and renames it.
+"""
+from __future__ import annotations
+
+import json
+import os
+import tempfile
+from contextlib import contextmanager
+from pathlib import Path
+from typing import Iterator
+
+import numpy as np
+
+from .errors import SolasError
+
+META_KEY = "solas_mi"
+
+
+@contextmanager
+def atomic_path(path: str | os.PathLike) -> Iterator[str]:
+    """Yield a temporary path beside `path`; rename it onto `path` only if the block succeeds."""
+    path = Path(path)
+    if path.parent and not path.parent.exists():
+        path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
+    os.close(fd)
+    try:
+        yield tmp
+        os.replace(tmp, path)
+    finally:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+
+
+def srgb_encode(linear: np.ndarray) -> np.ndarray:
+    """Linear [0, 1] → sRGB-encoded [0, 1] (IEC 61966-2-1)."""
+    x = np.clip(linear, 0.0, 1.0)
+    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
+
+
+def srgb_decode(encoded: np.ndarray) -> np.ndarray:
+    """sRGB-encoded [0, 1] → linear [0, 1] (IEC 61966-2-1)."""
+    x = np.clip(encoded, 0.0, 1.0)
+    return np.where(x <= 0.04045, x / 12.92, np.power((x + 0.055) / 1.055, 2.4))
+
+
+def write_exr(path: str | os.PathLike, channels: dict[str, np.ndarray], meta: dict | None = None) -> None:
+    """Write float32 channels (equal 2-D shapes, row 0 = top) and JSON metadata to an OpenEXR file."""
+    import OpenEXR
+
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    if meta is not None:
+        header[META_KEY] = json.dumps(meta)
+    data = {name: np.ascontiguousarray(a, dtype=np.float32) for name, a in channels.items()}
+    with atomic_path(path) as tmp:
+        with OpenEXR.File(header, data) as f:
+            f.write(tmp)
+
+
+def read_exr(path: str | os.PathLike) -> tuple[dict[str, np.ndarray], dict]:
+    """Channels (name → float32 2-D array) and the solas-mi metadata ({} if absent) of an EXR file."""
+    import OpenEXR
+
+    if not Path(path).is_file():
+        raise SolasError(f"no such EXR file: {path}")
+    with OpenEXR.File(str(path)) as f:
+        header = f.header()
+        # read the metadata before the pixels: loading channels rebuilds the header dictionary
+        meta = json.loads(header[META_KEY]) if META_KEY in header else {}
+        channels = {name: np.array(c.pixels) for name, c in f.channels().items()}
+    return channels, meta
+
+
+def write_png(path: str | os.PathLike, image: np.ndarray, *, encoded: bool = False) -> None:
+    """Write a linear [0, 1] image (H×W or H×W×3) as 8-bit sRGB PNG; `encoded=True` skips the encoding."""
+    import imageio.v3 as iio
+
+    values = image if encoded else srgb_encode(image)
+    data = np.round(np.clip(values, 0.0, 1.0) * 255.0).astype(np.uint8)
+    with atomic_path(path) as tmp:
+        iio.imwrite(tmp, data, extension=".png")
+
+
+def read_image(path: str | os.PathLike, *, linearize: bool = True) -> np.ndarray:
+    """An image as float64 H×W or H×W×C: EXR as stored (linear); PNG/JPEG/TIFF scaled to [0, 1]
+    and sRGB-decoded unless `linearize` is False."""
+    path = Path(path)
+    if not path.is_file():
+        raise SolasError(f"no such image file: {path}")
+    if path.suffix.lower() == ".exr":
+        channels, _ = read_exr(path)
+        names = list(channels)
+        rgb = [n for n in ("R", "G", "B") if n in channels]
+        if len(rgb) == 3:
+            return np.stack([channels[n] for n in rgb], axis=-1).astype(np.float64)
+        if len(names) == 1:
+            return channels[names[0]].astype(np.float64)
+        return np.stack([channels[n] for n in names], axis=-1).astype(np.float64)
+    import imageio.v3 as iio
+
+    try:
+        raw = iio.imread(path)
+    except Exception as exc:  # imageio raises many types for unreadable files
+        raise SolasError(f"cannot read image {path}: {exc}") from exc
+    if raw.dtype == np.uint8:
+        scaled = raw.astype(np.float64) / 255.0
+    elif raw.dtype == np.uint16:
+        scaled = raw.astype(np.float64) / 65535.0
+    else:
+        scaled = raw.astype(np.float64)
+    if scaled.ndim == 3 and scaled.shape[-1] == 4:
+        scaled = scaled[..., :3]
+    return srgb_decode(scaled) if linearize else scaled

@@ -1,0 +1,245 @@
+"""A lens prescription: surfaces, glass, object and image plane, loaded from a TOML lens file.
+
+Lengths in mm, wavelengths in nm, field angles in degrees. +z is the optical axis toward the image;
+surface 1's vertex is at z = 0.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+import tomllib
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from . import glass as glass_mod
+from .errors import SolasError
+from .resources import resource_dir
+
+LENS_DIR = "lenses"
+
+
+@dataclass(frozen=True)
+class Surface:
+    """One sequential surface; `material` fills the space after it, `thickness` reaches the next."""
+
+    label: str
+    radius: float  # mm; 0 = flat
+    thickness: float  # mm to the next surface (or to the image plane for the last one)
+    diameter: float  # clear diameter, mm
+    material: str
+    glass: glass_mod.Glass
+    stop: bool = False
+
+    @property
+    def curvature(self) -> float:
+        """1/R in 1/mm (0 for a flat surface)."""
+        return 0.0 if self.radius == 0.0 else 1.0 / self.radius
+
+    @property
+    def semi_diameter(self) -> float:
+        return 0.5 * self.diameter
+
+    def sag(self, r: np.ndarray | float) -> np.ndarray | float:
+        """Surface z relative to its vertex at radial distance r (mm)."""
+        c = self.curvature
+        r = np.asarray(r, dtype=np.float64)
+        return c * r * r / (1.0 + np.sqrt(np.maximum(1.0 - c * c * r * r, 0.0)))
+
+
+@dataclass(frozen=True)
+class Lens:
+    """A sequential lens. Load with `Lens.load("solas-doublet")` or a path to a lens file."""
+
+    name: str
+    surfaces: tuple[Surface, ...]
+    object_distance: float = math.inf  # mm from the object to surface 1
+    object_glass: glass_mod.Glass = glass_mod.AIR
+    image_diameter: float = 0.0
+    wavelengths_nm: tuple[float, ...] = (486.0, 531.0, 656.0)
+    field_deg: float = 0.0
+    description: str = ""
+    source: str = ""
+    _spec: dict = field(default_factory=dict, repr=False, compare=False)
+    _paraxial_cache: dict = field(default_factory=dict, repr=False, compare=False)
+
+    # ------------------------------------------------------------------ loading
+    @classmethod
+    def load(cls, name_or_path: str | Path) -> "Lens":
+        """A lens by shipped name (e.g. "solas-doublet") or by path to a TOML lens file."""
+        path = Path(name_or_path)
+        if not path.suffix:
+            path = resource_dir("scenes") / LENS_DIR / (str(name_or_path).replace("-", "_") + ".toml")
+            if not path.is_file():
+                shipped = sorted(p.stem.replace("_", "-") for p in (path.parent).glob("*.toml"))
+                raise SolasError(f"unknown lens {str(name_or_path)!r}; shipped lenses: {', '.join(shipped)}, or a path to a .toml file")
+        if not path.is_file():
+            raise SolasError(f"lens file {str(path)!r} does not exist")
+        try:
+            with open(path, "rb") as f:
+                spec = tomllib.load(f)
+        except tomllib.TOMLDecodeError as exc:
+            raise SolasError(f"lens file {path}: not valid TOML: {exc}") from exc
+        return cls.from_dict(spec, source=str(path))
+
+    @classmethod
+    def from_dict(cls, spec: dict[str, Any], source: str = "") -> "Lens":
+        """Build and validate a lens from the lens-file dictionary."""
+        where = source or "lens"
+        rows = spec.get("surface")
+        if not isinstance(rows, list) or not rows:
+            raise SolasError(f"{where}: no [[surface]] entries")
+        surfaces = []
+        for i, row in enumerate(rows, start=1):
+            label = str(row.get("label", f"surface {i}"))
+            ident = f"{where}: surface {i} ({label})"
+            values = {}
+            for key in ("radius", "thickness", "diameter"):
+                if key not in row:
+                    raise SolasError(f"{ident}: missing '{key}'")
+                value = row[key]
+                if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
+                    raise SolasError(f"{ident}: {key} = {value!r} must be a finite number (mm)")
+                values[key] = float(value)
+            material = row.get("material", "AIR")
+            try:
+                g = glass_mod.resolve(material)
+            except SolasError as exc:
+                raise SolasError(f"{ident}: {exc}") from None
+            surfaces.append(Surface(label, values["radius"], values["thickness"], values["diameter"],
+                                    str(material), g, bool(row.get("stop", False))))
+        obj = spec.get("object", {})
+        distance = obj.get("distance", "infinity")
+        if isinstance(distance, str) and distance.strip().lower() in ("inf", "infinity"):
+            distance = math.inf
+        elif not isinstance(distance, (int, float)) or isinstance(distance, bool) or not distance > 0:
+            raise SolasError(f"{where}: object distance {distance!r} must be a positive number (mm) or \"infinity\"")
+        try:
+            object_glass = glass_mod.resolve(obj.get("material", "AIR"))
+        except SolasError as exc:
+            raise SolasError(f"{where}: object: {exc}") from None
+        wavelengths = tuple(float(w) for w in spec.get("wavelengths_nm", (486.0, 531.0, 656.0)))
+        lens = cls(
+            name=str(spec.get("name", Path(source).stem if source else "lens")),
+            surfaces=tuple(surfaces),
+            object_distance=float(distance),
+            object_glass=object_glass,
+            image_diameter=float(spec.get("image", {}).get("diameter", 0.0)),
+            wavelengths_nm=wavelengths,
+            field_deg=float(spec.get("field_deg", 0.0)),
+            description=str(spec.get("description", "")),
+            source=source,
+            _spec=spec,
+        )
+        lens._validate(where)
+        return lens
+
+    def _validate(self, where: str) -> None:
+        stops = [i for i, s in enumerate(self.surfaces) if s.stop]
+        if not stops:
+            raise SolasError(f"{where}: no surface is marked as the aperture stop (set stop = true on one)")
+        if len(stops) > 1:
+            raise SolasError(f"{where}: surfaces {', '.join(str(i + 1) for i in stops)} are all marked stop; exactly one may be")
+        for i, s in enumerate(self.surfaces, start=1):
+            ident = f"{where}: surface {i} ({s.label})"
+            if s.diameter <= 0:
+                raise SolasError(f"{ident}: diameter {s.diameter:g} mm must be positive")
+            if s.radius != 0 and s.semi_diameter >= abs(s.radius):
+                raise SolasError(
+                    f"{ident}: clear semi-diameter {s.semi_diameter:g} mm is not smaller than |radius| "
+                    f"{abs(s.radius):g} mm; the sphere cannot hold that aperture"
+                )
+            if s.thickness < 0:
+                raise SolasError(f"{ident}: thickness {s.thickness:g} mm is negative; thicknesses must be >= 0")
+            if s.glass is not glass_mod.AIR and s.thickness == 0:
+                raise SolasError(f"{ident}: thickness 0 mm inside glass {s.material}; glass needs a positive thickness")
+        last = self.surfaces[-1]
+        if last.thickness <= 0:
+            raise SolasError(f"{where}: surface {len(self.surfaces)} ({last.label}): distance to the image "
+                             f"{last.thickness:g} mm must be positive")
+        for i, (a, b) in enumerate(zip(self.surfaces[:-1], self.surfaces[1:]), start=1):
+            r = np.linspace(0.0, min(a.semi_diameter, b.semi_diameter), 257)
+            gap = a.thickness + b.sag(r) - a.sag(r)
+            if np.any(gap < -1e-12) or (a.glass is not glass_mod.AIR and np.any(gap <= 0)):
+                k = int(np.argmin(gap))
+                raise SolasError(
+                    f"{where}: surfaces {i} ({a.label}) and {i + 1} ({b.label}) cross: their sags meet at "
+                    f"r = {r[k]:.3f} mm (gap {gap[k]:.4f} mm with thickness {a.thickness:g} mm)"
+                )
+
+    # ------------------------------------------------------------------ geometry
+    @property
+    def stop_index(self) -> int:
+        return next(i for i, s in enumerate(self.surfaces) if s.stop)
+
+    @property
+    def vertex_z(self) -> np.ndarray:
+        """z of each surface vertex (mm), surface 1 at 0."""
+        return np.concatenate([[0.0], np.cumsum([s.thickness for s in self.surfaces[:-1]])])
+
+    @property
+    def image_z(self) -> float:
+        """z of the image plane (mm)."""
+        return float(self.vertex_z[-1] + self.surfaces[-1].thickness)
+
+    @property
+    def at_infinity(self) -> bool:
+        return math.isinf(self.object_distance)
+
+    def indices(self, wavelength_nm: float) -> np.ndarray:
+        """Refractive index of the object space and after each surface at `wavelength_nm`."""
+        return np.array([self.object_glass.index(wavelength_nm)] + [s.glass.index(wavelength_nm) for s in self.surfaces])
+
+    @property
+    def hash(self) -> str:
+        """Short SHA-256 of the optical prescription (what changes the optics, not labels)."""
+        content = {
+            "object": [self.object_distance if math.isfinite(self.object_distance) else "inf", self.object_glass.name],
+            "surfaces": [[s.radius, s.thickness, s.diameter, s.glass.name, s.glass.coefficients, s.stop] for s in self.surfaces],
+        }
+        return hashlib.sha256(json.dumps(content, sort_keys=True).encode()).hexdigest()[:16]
+
+    def check_wavelength(self, wavelength_nm: float) -> float:
+        """`wavelength_nm` as float after checking every glass accepts it."""
+        if not isinstance(wavelength_nm, (int, float, np.floating)) or not math.isfinite(wavelength_nm) or wavelength_nm <= 0:
+            raise SolasError(f"wavelength {wavelength_nm!r} nm must be a positive number")
+        self.indices(float(wavelength_nm))
+        return float(wavelength_nm)
+
+    # ------------------------------------------------------------------ analyses
+    def paraxial(self, wavelength_nm: float | None = None, fields_deg: list[float] | None = None):
+        """Paraxial data (EFL, pupils, f/#, image offset, chief rays) at one wavelength."""
+        from .paraxial import paraxial
+
+        wl = float(wavelength_nm if wavelength_nm is not None else self.primary_wavelength)
+        if fields_deg is not None:
+            return paraxial(self, wl, fields_deg)
+        if wl not in self._paraxial_cache:  # the prescription is immutable
+            self._paraxial_cache[wl] = paraxial(self, wl)
+        return self._paraxial_cache[wl]
+
+    @property
+    def primary_wavelength(self) -> float:
+        """The middle design wavelength (nm)."""
+        return sorted(self.wavelengths_nm)[len(self.wavelengths_nm) // 2]
+
+    def spot(self, field_deg, wavelength_nm: float, *args, **kwargs):
+        """Spot diagram at the image plane; see `solas_mi.spot.spot`."""
+        from .spot import spot
+
+        return spot(self, field_deg, wavelength_nm, *args, **kwargs)
+
+    def psf(self, field_deg, wavelength_nm, **kwargs):
+        """One PSF; see `solas_mi.psf.psf`."""
+        from .psf import psf
+
+        return psf(self, field_deg, wavelength_nm, **kwargs)
+
+    def psf_grid(self, **kwargs):
+        """A PSF grid over the field; see `solas_mi.psf_grid.psf_grid`."""
+        from .psf_grid import psf_grid
+
+        return psf_grid(self, **kwargs)

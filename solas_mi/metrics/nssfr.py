@@ -1,0 +1,371 @@
+"""Natural-scene SFR (NS-SFR, the SOLAS paper's SS-SFR): slanted edges found in an image, the e-SFR
+of each, and MTF50 statistics per radial annulus; a before/after comparison measures identical ROIs.
+
+ROIs are (x, y, w, h) in px; radii are fractions of R, the centre-to-corner distance; MTF50 in cy/px.
+"""
+from __future__ import annotations
+
+import math
+import os
+from collections import Counter
+from dataclasses import dataclass, field
+from typing import Any, Sequence
+
+import numpy as np
+from scipy import ndimage as ndi
+from skimage.feature import canny
+
+from ..errors import SolasError
+from .esfr import EsfrResult, crop, esfr, luminance, matlab_round
+
+Roi = tuple[int, int, int, int]
+
+ANNULI: dict[str, tuple[float, float, float]] = {
+    "automotive": (0.24, 0.6, 1.0),
+    "equal-area": (math.sqrt(1 / 3), math.sqrt(2 / 3), 1.0),
+}
+ANNULUS_NAMES = ("centre", "middle", "edge")
+CONTRAST_BANDS: dict[str, tuple[float, float]] = {"automotive": (0.1, 0.9), "chart": (0.55, 0.65)}
+ANGLE_RANGE_DEG = (2.5, 42.5)
+MAX_OVERSHOOT = 1.4  # a local SFR maximum above this is implausible
+MIN_MTF50 = 0.1  # cy/px; lower values are rejected unless the whole image is that soft
+POLY_ORDER = 4
+POLY_DEVIATION = 0.2  # SFR deviation from its 4th-order fit that counts as a bad frequency
+POLY_BAD_FRACTION = 0.1  # fraction of bad frequencies that rejects a curve
+CURVE_FREQ = np.linspace(0.0, 0.5, 51)  # cy/px, grid of the per-annulus mean SFR curves
+NS_MARGINS = (10,)  # px each side of an edge's bounding box (spec §4.3)
+CHART_MARGINS = (32, 24, 16, 10)  # widest first: chart ROIs as wide as the layout allows
+ROW_GUARD_PX = 10  # rows kept this far from rows where another edge enters the ROI
+CANNY_SIGMA = 1.5
+CANNY_THRESHOLDS = (0.04, 0.1)  # on the Sobel magnitude of the image scaled to its 99.9th percentile
+
+
+def _longest_run(flags: np.ndarray) -> tuple[int, int]:
+    """(start, stop) of the longest run of True values; (0, 0) if none."""
+    d = np.diff(np.concatenate(([0], flags.astype(np.int8), [0])))
+    starts, stops = np.flatnonzero(d == 1), np.flatnonzero(d == -1)
+    if starts.size == 0:
+        return 0, 0
+    i = int(np.argmax(stops - starts))
+    return int(starts[i]), int(stops[i])
+
+
+def _segment_rois(
+    mask: np.ndarray, edges: np.ndarray, margins: Sequence[int], max_rows: int | None, min_rows: int
+) -> list[Roi]:
+    """ROIs (x, y, w, h) around the near-vertical edge segments of `mask`.
+
+    A segment's rows are trimmed to the longest run free of other edge pixels inside the ROI and
+    at least ROW_GUARD_PX rows from such pixels (isolation from texture and from the adjacent sides
+    of a square); the ROI spans the segment's columns widened by the chosen margin each side.
+    """
+    height, width = mask.shape
+    labels, _ = ndi.label(mask, structure=np.ones((3, 3), bool))
+    out: list[Roi] = []
+    for lab, sl in enumerate(ndi.find_objects(labels), start=1):
+        if sl is None or sl[0].stop - sl[0].start < min_rows:
+            continue
+        rs, cs = sl
+        seg = labels[sl] == lab
+        has = seg.any(axis=1)
+        first = seg.argmax(axis=1) + cs.start
+        last = seg.shape[1] - 1 - seg[:, ::-1].argmax(axis=1) + cs.start
+
+        def clean(r0: int, r1: int, m: int) -> tuple[int, int, int, int] | None:
+            while r1 - r0 >= min_rows:
+                rows = slice(r0 - rs.start, r1 - rs.start)
+                if not has[rows].any():
+                    return None
+                lo, hi = first[rows][has[rows]].min(), last[rows][has[rows]].max()
+                x0, x1 = max(0, lo - m), min(width, hi + 1 + m)
+                dirty = (edges[r0:r1, x0:x1] & (labels[r0:r1, x0:x1] != lab)).any(axis=1)
+                dirty = ndi.maximum_filter1d(dirty, 2 * ROW_GUARD_PX + 1, mode="constant")
+                if not dirty.any():
+                    if min(lo - x0, x1 - 1 - hi) < m // 2:
+                        return None  # the edge runs too close to the image border
+                    return r0, r1, x0, x1
+                a, b = _longest_run(~dirty)
+                r0, r1 = r0 + a, r0 + b
+            return None
+
+        spans = {m: clean(rs.start, rs.stop, m) for m in margins}
+        narrow = spans[min(margins)]
+        if narrow is None:
+            continue
+        margin = max(m for m, s in spans.items() if s is not None and s[1] - s[0] >= 0.5 * (narrow[1] - narrow[0]))
+        r0, r1 = spans[margin][:2]
+        n_rows = r1 - r0
+        if max_rows is None or n_rows <= max_rows:
+            starts = [r0]
+            size = n_rows
+        else:
+            count = math.ceil((n_rows - max_rows) / (max_rows / 2)) + 1
+            starts = [matlab_round(s) for s in np.linspace(r0, r1 - max_rows, count)]
+            size = max_rows
+        for s in starts:
+            span = clean(s, s + size, margin)
+            if span is not None:
+                y0, y1, x0, x1 = span
+                out.append((int(x0), int(y0), int(x1 - x0), int(y1 - y0)))
+    return out
+
+
+def find_edge_rois(
+    luma: np.ndarray,
+    *,
+    margins: Sequence[int] = NS_MARGINS,
+    max_rows: int | None = 128,
+    min_rows: int = 20,
+) -> list[Roi]:
+    """Candidate slanted-edge ROIs (x, y, w, h) in a linear luminance image (spec §4.1–4.3).
+
+    Canny edges are split into near-vertical and near-horizontal by gradient direction; segments
+    shorter than `min_rows` px are dropped; ROIs hold rows free of other edges within the margin and
+    are split into overlapping pieces of ≤ `max_rows` rows (None: no split). With several margins,
+    the widest that keeps at least half the rows of the narrowest is used.
+    """
+    scale = float(np.percentile(luma, 99.9))
+    if not scale > 0:
+        return []
+    img = luma / scale
+    edges = canny(img, sigma=CANNY_SIGMA, low_threshold=CANNY_THRESHOLDS[0], high_threshold=CANNY_THRESHOLDS[1])
+    smooth = ndi.gaussian_filter(img, CANNY_SIGMA)
+    near_vertical = edges & (np.abs(ndi.sobel(smooth, axis=1)) >= np.abs(ndi.sobel(smooth, axis=0)))
+    rois = _segment_rois(near_vertical, edges, margins, max_rows, min_rows)
+    transposed = _segment_rois((edges & ~near_vertical).T, edges.T, margins, max_rows, min_rows)
+    rois += [(y, x, h, w) for x, y, w, h in transposed]
+    return sorted(rois)
+
+
+def _curve_problem(res: EsfrResult) -> str | None:
+    """Why an SFR curve is implausible (spec §4.6), or None."""
+    m = res.freq <= 0.5
+    f, s = res.freq[m], res.sfr[m]
+    peaks = (s[1:-1] >= s[:-2]) & (s[1:-1] >= s[2:]) & (s[1:-1] > MAX_OVERSHOOT)
+    if peaks.any():
+        return f"SFR local maximum above {MAX_OVERSHOOT}"
+    fit = np.polynomial.Polynomial.fit(f, s, POLY_ORDER)
+    if np.mean(np.abs(s - fit(f)) > POLY_DEVIATION) > POLY_BAD_FRACTION:
+        return f"SFR deviates > {POLY_DEVIATION} from a 4th-order fit at many frequencies"
+    return None
+
+
+@dataclass
+class RoiMeasurement:
+    """One edge ROI: box (x, y, w, h) px, radius as a fraction of R, annulus index, results."""
+
+    roi: Roi
+    radius: float
+    annulus: int
+    before: EsfrResult
+    after: EsfrResult | None = None
+
+
+@dataclass
+class AnnulusStats:
+    """MTF50 statistics (cy/px) of one annulus r_inner ≤ r/R < r_outer; curve: mean SFR on CURVE_FREQ."""
+
+    name: str
+    r_inner: float
+    r_outer: float
+    count: int
+    mean_mtf50: float | None
+    median_mtf50: float | None
+    sharpest10_mtf50: float | None
+    curve: np.ndarray | None
+
+    @staticmethod
+    def of(name: str, r_inner: float, r_outer: float, results: list[EsfrResult]) -> "AnnulusStats":
+        values = np.sort([r.mtf50 for r in results])[::-1]
+        if values.size == 0:
+            return AnnulusStats(name, r_inner, r_outer, 0, None, None, None, None)
+        top = values[: max(1, math.ceil(0.1 * values.size))]
+        curve = np.mean([np.interp(CURVE_FREQ, r.freq, r.sfr) for r in results], axis=0)
+        return AnnulusStats(
+            name, r_inner, r_outer, int(values.size), float(values.mean()), float(np.median(values)),
+            float(top.mean()), curve,
+        )
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "name": self.name, "r_inner": self.r_inner, "r_outer": self.r_outer, "count": self.count,
+            "mean_mtf50": self.mean_mtf50, "median_mtf50": self.median_mtf50,
+            "sharpest10_mtf50": self.sharpest10_mtf50,
+            "mean_sfr": None if self.curve is None else [round(float(v), 6) for v in self.curve],
+        }
+
+
+@dataclass
+class NsSfrReport:
+    """Natural-scene SFR of one image, or of a before/after pair measured on the same ROIs."""
+
+    shape: tuple[int, int]
+    scheme: str
+    mode: str
+    rois: list[RoiMeasurement]
+    before: list[AnnulusStats]
+    after: list[AnnulusStats] | None = None
+    rejected: dict[str, int] = field(default_factory=dict)
+
+    @property
+    def radius_px(self) -> float:
+        """R: distance from the image centre to a corner, px."""
+        return math.hypot(self.shape[0], self.shape[1]) / 2
+
+    def mean_change(self) -> list[float | None]:
+        """Per annulus: mean of (after − before) MTF50 over identical ROIs, cy/px."""
+        if self.after is None:
+            raise SolasError("no comparison image was measured")
+        out: list[float | None] = []
+        for i in range(len(self.before)):
+            d = [m.after.mtf50 - m.before.mtf50 for m in self.rois if m.annulus == i and m.after]
+            out.append(float(np.mean(d)) if d else None)
+        return out
+
+    def to_dict(self) -> dict[str, Any]:
+        out: dict[str, Any] = {
+            "shape": list(self.shape), "annuli_scheme": self.scheme, "mode": self.mode,
+            "radius_px": self.radius_px, "freq_cy_px": [round(float(f), 6) for f in CURVE_FREQ],
+            "annuli": [s.to_dict() for s in self.before], "rejected": self.rejected,
+        }
+        if self.after is not None:
+            out["annuli_after"] = [s.to_dict() for s in self.after]
+            out["mean_change_mtf50"] = self.mean_change()
+        out["rois"] = [
+            {
+                "roi": list(m.roi), "radius": round(m.radius, 4), "annulus": ANNULUS_NAMES[m.annulus],
+                "mtf50": m.before.mtf50, "angle_deg": m.before.angle_deg,
+                "orientation": m.before.orientation, "contrast": m.before.contrast,
+                **({"mtf50_after": m.after.mtf50} if m.after is not None else {}),
+            }
+            for m in self.rois
+        ]
+        return out
+
+
+def natural_scene_sfr(
+    image: np.ndarray,
+    *,
+    compare: np.ndarray | None = None,
+    annuli: str = "automotive",
+    mode: str = "2023",
+    contrast: str = "automotive",
+    full_scale: float | None = 1.0,
+) -> NsSfrReport:
+    """NS-SFR of a linear image (H×W or H×W×C); with `compare`, the same ROIs in a second image.
+
+    annuli: "automotive" (0.24 / 0.6 / 1.0 R) or "equal-area"; contrast: "automotive" (0.1, 0.9) or
+    "chart" (0.55, 0.65) band of (p95 − p5)/(p95 + p5); full_scale: saturation level (None: none).
+    """
+    if annuli not in ANNULI:
+        raise SolasError(f"annuli scheme {annuli!r} is not supported: allowed {', '.join(ANNULI)}")
+    if contrast not in CONTRAST_BANDS:
+        raise SolasError(f"contrast band {contrast!r} is not supported: allowed {', '.join(CONTRAST_BANDS)}")
+    if compare is not None and compare.shape[:2] != image.shape[:2]:
+        raise SolasError(
+            f"comparison image is {compare.shape[1]}×{compare.shape[0]} px, the image is "
+            f"{image.shape[1]}×{image.shape[0]} px: they must be the same size"
+        )
+    c_lo, c_hi = CONTRAST_BANDS[contrast]
+    rejected: Counter[str] = Counter()
+    found: list[tuple[Roi, EsfrResult]] = []
+    for roi in find_edge_rois(luminance(image)):
+        res = esfr(crop(image, roi), mode=mode, full_scale=full_scale)
+        if not res.valid:
+            why = "invalid e-SFR"
+        elif not c_lo < res.contrast < c_hi:
+            why = f"contrast outside ({c_lo}, {c_hi})"
+        elif not ANGLE_RANGE_DEG[0] <= res.angle_deg <= ANGLE_RANGE_DEG[1]:
+            why = f"angle outside {ANGLE_RANGE_DEG[0]}–{ANGLE_RANGE_DEG[1]}°"
+        elif res.mtf50 is None:
+            why = "MTF50 not found"
+        else:
+            why = _curve_problem(res)
+        if why:
+            rejected[why] += 1
+        else:
+            found.append((roi, res))
+    if found:
+        floor = min(MIN_MTF50, 0.5 * float(np.median([r.mtf50 for _, r in found])))
+        low = [f for f in found if f[1].mtf50 < floor]
+        if low:
+            rejected[f"MTF50 below {MIN_MTF50} cy/px in a sharper image"] += len(low)
+            found = [f for f in found if f[1].mtf50 >= floor]
+
+    height, width = image.shape[:2]
+    big_r = math.hypot(height, width) / 2
+    bounds = ANNULI[annuli]
+    measured: list[RoiMeasurement] = []
+    for roi, res in found:
+        x, y, w, h = roi
+        r = math.hypot(x + (w - 1) / 2 - (width - 1) / 2, y + (h - 1) / 2 - (height - 1) / 2) / big_r
+        ring = int(np.searchsorted(bounds[:-1], r, side="right"))
+        m = RoiMeasurement(roi, r, ring, res)
+        if compare is not None:
+            after = esfr(crop(compare, roi), mode=mode, full_scale=full_scale)
+            if not after.valid or after.mtf50 is None:
+                rejected["comparison image: invalid e-SFR or MTF50 not found"] += 1
+                continue
+            m.after = after
+        measured.append(m)
+
+    edges_r = (0.0, *bounds)
+
+    def stats(pick: str) -> list[AnnulusStats]:
+        return [
+            AnnulusStats.of(name, edges_r[i], edges_r[i + 1],
+                            [getattr(m, pick) for m in measured if m.annulus == i])
+            for i, name in enumerate(ANNULUS_NAMES)
+        ]
+
+    return NsSfrReport(
+        shape=(height, width), scheme=annuli, mode=str(mode), rois=measured, before=stats("before"),
+        after=stats("after") if compare is not None else None, rejected=dict(rejected),
+    )
+
+
+def plot_report(report: NsSfrReport, image: np.ndarray, path: str | os.PathLike) -> None:
+    """PNG like the SOLAS paper's figure 5: annuli and ROIs over the image; mean SFR per annulus
+    (solid: image, dashed: comparison image)."""
+    from matplotlib.figure import Figure
+    from matplotlib.patches import Circle, Rectangle
+
+    from ..imageio import atomic_path, srgb_encode
+
+    colours = ("tab:green", "tab:orange", "tab:red")
+    lin = np.asarray(image, dtype=np.float64)
+    if lin.ndim == 3:
+        lin = lin[:, :, :3] if lin.shape[2] >= 3 else lin[:, :, 0]
+    top = float(np.percentile(lin, 99.5)) or 1.0
+    shown = srgb_encode(lin / top)
+    fig = Figure(figsize=(13, 5.2), layout="constrained")
+    ax_img, ax_sfr = fig.subplots(1, 2, width_ratios=(1.25, 1))
+    ax_img.imshow(shown, cmap="gray", vmin=0, vmax=1)
+    height, width = report.shape
+    centre = ((width - 1) / 2, (height - 1) / 2)
+    for stats, colour in zip(report.before, colours):
+        ax_img.add_patch(Circle(centre, stats.r_outer * report.radius_px, fill=False, color=colour, lw=1.5))
+    for m in report.rois:
+        x, y, w, h = m.roi
+        ax_img.add_patch(Rectangle((x - 0.5, y - 0.5), w, h, fill=False, color=colours[m.annulus], lw=1))
+    ax_img.set_xlim(-0.5, width - 0.5)
+    ax_img.set_ylim(height - 0.5, -0.5)
+    ax_img.set_title(f"edge ROIs in {report.scheme} annuli")
+    after = report.after or [None] * len(report.before)
+    for stats, post, colour in zip(report.before, after, colours):
+        if stats.curve is None:
+            continue
+        ax_sfr.plot(CURVE_FREQ, stats.curve, "-", color=colour,
+                    label=f"{stats.name} (n={stats.count}) MTF50 {stats.mean_mtf50:.3f}")
+        if post is not None and post.curve is not None:
+            ax_sfr.plot(CURVE_FREQ, post.curve, "--", color=colour,
+                        label=f"{stats.name} compared: MTF50 {post.mean_mtf50:.3f}")
+    ax_sfr.axhline(0.5, color="0.6", lw=0.8)
+    ax_sfr.set_xlim(0, 0.5)
+    ax_sfr.set_ylim(0, 1.1)
+    ax_sfr.set_xlabel("frequency (cy/px)")
+    ax_sfr.set_ylabel("mean SFR")
+    ax_sfr.set_title("mean SFR per annulus (solid: image, dashed: comparison)")
+    ax_sfr.legend(fontsize=8)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=100)

@@ -1,0 +1,149 @@
+"""First-order (paraxial) optics of a lens: focal length, pupils, f-number, chief rays.
+
+Lengths in mm; z measured from surface 1's vertex; slopes are paraxial angles (tangents).
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+from .lens import Lens
+
+
+@dataclass(frozen=True)
+class Paraxial:
+    """Paraxial data at one wavelength (mm unless named otherwise)."""
+
+    wavelength_nm: float
+    efl_mm: float
+    bfd_mm: float  # from the last surface with optical power to the paraxial focus
+    focus_z_mm: float  # paraxial image of the object
+    image_z_mm: float  # the lens file's image plane
+    image_offset_mm: float  # image plane − paraxial focus (negative: the plane lies inside focus)
+    entrance_pupil_z_mm: float
+    entrance_pupil_diameter_mm: float
+    exit_pupil_z_mm: float
+    exit_pupil_diameter_mm: float
+    f_number: float  # EFL / EPD
+    working_f_number: float  # 1 / (2 n' |u'|) of the marginal ray
+    exit_pupil_f_number: float  # (image plane − exit pupil) / exit pupil diameter
+    fields_deg: tuple[float, ...]
+    chief_ray_image_height_mm: tuple[float, ...]  # paraxial chief ray at the image plane
+
+    def as_dict(self) -> dict:
+        return asdict(self)
+
+
+def ynu_trace(lens: Lens, wavelength_nm: float, y1: float, u0: float, start: int = 0,
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """Paraxial ray heights at each surface and slopes after each surface.
+
+    The ray has height `y1` at surface `start` and slope `u0` just before it (earlier entries are NaN).
+    """
+    n = lens.indices(wavelength_nm)
+    z = lens.vertex_z
+    m = len(lens.surfaces)
+    y = np.full(m, np.nan)
+    u = np.full(m, np.nan)
+    height, slope = y1, u0
+    for k in range(start, m):
+        if k > start:
+            height = height + slope * (z[k] - z[k - 1])
+        s = lens.surfaces[k]
+        power = (n[k + 1] - n[k]) * s.curvature
+        slope = (n[k] * slope - height * power) / n[k + 1]
+        y[k], u[k] = height, slope
+    return y, u
+
+
+def _object_ray(lens: Lens, wavelength_nm: float, y_obj: float, u0: float) -> tuple[np.ndarray, np.ndarray]:
+    """A ray leaving the object plane at height `y_obj` with slope `u0` (finite objects)."""
+    return ynu_trace(lens, wavelength_nm, y_obj + u0 * lens.object_distance, u0)
+
+
+def paraxial(lens: Lens, wavelength_nm: float, fields_deg: list[float] | None = None) -> Paraxial:
+    """Paraxial analysis of `lens` at `wavelength_nm`."""
+    wavelength_nm = lens.check_wavelength(wavelength_nm)
+    n = lens.indices(wavelength_nm)
+    z = lens.vertex_z
+    s = lens.stop_index
+    last = len(lens.surfaces) - 1
+    r_stop = lens.surfaces[s].semi_diameter
+
+    # Two base rays at surface 1: a = (y=1, u=0), b = (y=0, u=1); every ray is a mix of them.
+    ya, ua = ynu_trace(lens, wavelength_nm, 1.0, 0.0)
+    yb, ub = ynu_trace(lens, wavelength_nm, 0.0, 1.0)
+    efl = -1.0 / (n[-1] * ua[-1]) if ua[-1] != 0 else math.inf  # 1/power: n'u' = −y1·power
+
+    # Entrance pupil: the object-space chief ray (slope 1) crosses the axis where y_stop = 0.
+    y1_chief = -yb[s] / ya[s]  # height at surface 1 of the slope-1 ray through the stop centre
+    ep_z = z[0] - y1_chief  # y(z) = y1 + (z − z1) = 0
+    ep_radius = r_stop / abs(ya[s])  # parallel rays: height at the pupil equals height at surface 1
+
+    # Exit pupil: the image of the stop by the surfaces after it.
+    if s == last:
+        xp_z, xp_radius = z[s], r_stop
+    else:
+        # chief ray leaves the stop centre with slope 1; rim ray leaves the stop edge with slope 0
+        yc, uc = _from_stop(lens, wavelength_nm, 0.0, 1.0)
+        yr, ur = _from_stop(lens, wavelength_nm, r_stop, 0.0)
+        xp_z = z[last] - yc[last] / uc[last]
+        xp_radius = abs(yr[last] + ur[last] * (xp_z - z[last]))
+
+    # Marginal ray from the axial object point through the stop edge.
+    if lens.at_infinity:
+        ym, um = ya * (r_stop / ya[s]), ua * (r_stop / ya[s])
+        obj_z = -math.inf
+    else:
+        d = lens.object_distance
+        # ray from the axial object point with slope 1 → height at stop; scale to the stop edge
+        y0, u0 = _object_ray(lens, wavelength_nm, 0.0, 1.0)
+        scale = r_stop / y0[s]
+        ym, um = y0 * scale, u0 * scale
+        obj_z = -d
+    focus_z = z[last] - ym[last] / um[last]
+    powered = [k for k in range(last + 1) if (n[k + 1] - n[k]) * lens.surfaces[k].curvature != 0 or n[k + 1] != n[k]]
+    k_pow = powered[-1] if powered else last
+    bfd = focus_z - z[k_pow]
+    image_z = lens.image_z
+
+    fields = list(fields_deg) if fields_deg is not None else [0.0, lens.field_deg]
+    heights = []
+    for f in fields:
+        slope = math.tan(math.radians(f))
+        if lens.at_infinity:
+            y, u = ynu_trace(lens, wavelength_nm, slope * (z[0] - ep_z), slope)
+        else:
+            # chief ray: from the object point toward the entrance pupil centre
+            y_obj = -slope * (ep_z - obj_z)
+            y, u = _object_ray(lens, wavelength_nm, y_obj, slope)
+        heights.append(float(y[last] + u[last] * (image_z - z[last])))
+
+    epd = 2.0 * ep_radius
+    return Paraxial(
+        wavelength_nm=wavelength_nm,
+        efl_mm=float(efl),
+        bfd_mm=float(bfd),
+        focus_z_mm=float(focus_z),
+        image_z_mm=float(image_z),
+        image_offset_mm=float(image_z - focus_z),
+        entrance_pupil_z_mm=float(ep_z),
+        entrance_pupil_diameter_mm=float(epd),
+        exit_pupil_z_mm=float(xp_z),
+        exit_pupil_diameter_mm=float(2.0 * xp_radius),
+        f_number=float(efl / epd),
+        working_f_number=float(1.0 / (2.0 * n[-1] * abs(um[last]))),
+        exit_pupil_f_number=float((image_z - xp_z) / (2.0 * xp_radius)),
+        fields_deg=tuple(float(f) for f in fields),
+        chief_ray_image_height_mm=tuple(heights),
+    )
+
+
+def _from_stop(lens: Lens, wavelength_nm: float, y_stop: float, u_after: float) -> tuple[np.ndarray, np.ndarray]:
+    """A ray leaving the stop at height `y_stop` with slope `u_after`, traced to the last surface."""
+    s = lens.stop_index
+    y, u = ynu_trace(lens, wavelength_nm, y_stop + u_after * lens.surfaces[s].thickness, u_after, start=s + 1)
+    y[s], u[s] = y_stop, u_after
+    return y, u

@@ -1,0 +1,157 @@
+"""PSF grids over the field: one stack of PSFs per wavelength, stored as OpenEXR with the metadata
+needed to use them without the lens, and a PNG mosaic for looking at them.
+
+Field grid convention: `ny`×`nx` nodes in image orientation, row 0 = top = largest y field angle,
+column 0 = smallest x field angle. "centers" sampling puts the nodes at the centres of ny×nx equal
+cells spanning ±field (the block centres of a tiled image); "edges" spans ±field including the ends.
+"""
+from __future__ import annotations
+
+import math
+import re
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import psf as S
+from .errors import SolasError
+from .imageio import read_exr, write_exr, write_png
+from .lens import Lens
+
+FIELD_SAMPLINGS = ("centers", "edges")
+_FIELDS_PER_BATCH = 64
+_CHANNEL = re.compile(r"^psf_([0-9.]+)nm$")
+
+
+@dataclass
+class PSFGrid:
+    """PSFs on a field grid: data[wavelength, row, column] is a size×size PSF (float32)."""
+
+    data: np.ndarray  # (n_wavelengths, ny, nx, size, size)
+    fields_deg: np.ndarray  # (ny, nx, 2)
+    chief_ray_mm: np.ndarray  # (n_wavelengths, ny, nx, 2): image point at each PSF's origin pixel
+    wavelengths_nm: tuple[float, ...]
+    pitch_um: float
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def size(self) -> int:
+        return self.data.shape[-1]
+
+    @property
+    def shape(self) -> tuple[int, int]:
+        """(ny, nx) of the field grid."""
+        return self.data.shape[1], self.data.shape[2]
+
+    def mosaic(self, k: int) -> np.ndarray:
+        """Wavelength k's PSFs tiled as one (ny·size, nx·size) image."""
+        ny, nx = self.shape
+        s = self.size
+        return self.data[k].transpose(0, 2, 1, 3).reshape(ny * s, nx * s)
+
+    def write(self, path: str) -> None:
+        """Write as OpenEXR: one mosaic channel per wavelength ("psf_531nm"), metadata in the header."""
+        meta = dict(self.meta)
+        meta.update({
+            "pitch_um": self.pitch_um, "size": self.size, "grid": list(self.shape),
+            "wavelengths_nm": list(self.wavelengths_nm), "fields_deg": self.fields_deg.tolist(),
+            "chief_ray_mm": self.chief_ray_mm.tolist(),
+        })
+        write_exr(path, {f"psf_{w:g}nm": self.mosaic(k) for k, w in enumerate(self.wavelengths_nm)}, meta)
+
+    @classmethod
+    def read(cls, path: str) -> "PSFGrid":
+        """Read a grid written by `write`."""
+        channels, meta = read_exr(path)
+        if "grid" not in meta:
+            raise SolasError(f"{path} is not a solas-mi PSF grid (no grid metadata)")
+        ny, nx = meta["grid"]
+        s = meta["size"]
+        wl = [float(w) for w in meta["wavelengths_nm"]]
+        stacks = []
+        for w in wl:
+            m = channels[f"psf_{w:g}nm"]
+            stacks.append(m.reshape(ny, s, nx, s).transpose(0, 2, 1, 3))
+        rest = {k: v for k, v in meta.items() if k not in ("pitch_um", "wavelengths_nm", "fields_deg", "chief_ray_mm")}
+        return cls(np.stack(stacks), np.array(meta["fields_deg"]), np.array(meta["chief_ray_mm"]), tuple(wl),
+                   float(meta["pitch_um"]), rest)
+
+    def write_png(self, path: str) -> None:
+        """A mosaic for viewing: each PSF scaled to its peak; three wavelengths → R, G, B (longest red)."""
+        tiles = self.data / np.maximum(self.data.max(axis=(-2, -1), keepdims=True), 1e-300)
+        ny, nx = self.shape
+        s = self.size
+        mosaics = [tiles[k].transpose(0, 2, 1, 3).reshape(ny * s, nx * s) for k in range(len(self.wavelengths_nm))]
+        if len(mosaics) == 3:
+            order = np.argsort(self.wavelengths_nm)[::-1]
+            image = np.stack([mosaics[i] for i in order], axis=-1)
+        else:
+            image = np.mean(mosaics, axis=0)
+        write_png(path, image)
+
+
+def parse_grid(text: str) -> tuple[int, int]:
+    """"8x8" → (ny, nx) = (8, 8); "32x24" → nx=32 columns, ny=24 rows."""
+    m = re.fullmatch(r"\s*(\d+)\s*[xX×]\s*(\d+)\s*", str(text))
+    if not m or int(m.group(1)) < 1 or int(m.group(2)) < 1:
+        raise SolasError(f"grid {text!r} must look like 8x8 or 32x24 (columns x rows, each >= 1)")
+    return int(m.group(2)), int(m.group(1))
+
+
+def field_nodes(n: int, half_range: float, sampling: str) -> np.ndarray:
+    """n field angles (degrees) spanning ±half_range, increasing."""
+    if sampling == "centers":
+        return -half_range + (np.arange(n) + 0.5) * (2.0 * half_range / n)
+    if sampling == "edges":
+        return np.linspace(-half_range, half_range, n) if n > 1 else np.zeros(1)
+    raise SolasError(f"field sampling {sampling!r} must be one of {', '.join(FIELD_SAMPLINGS)}")
+
+
+def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=None,
+             field_range_deg: tuple[float, float] | float | None = None, pitch_um: float = 0.5, size: int = 160,
+             method: str = "fraunhofer", normalization: str = "sum", pupil_samples: int = S.DEFAULT_PUPIL_SAMPLES,
+             rays: int = S.DEFAULT_GEOMETRIC_RAYS, field_sampling: str = "centers", progress=None) -> PSFGrid:
+    """PSFs on a (ny, nx) field grid spanning ±field_range_deg (x, y) (default: the lens's field in both)."""
+    ny, nx = parse_grid(grid) if isinstance(grid, str) else grid
+    S.check_grid(pitch_um, size)
+    S.check_method(method)
+    wl = tuple(float(w) for w in (wavelengths_nm if wavelengths_nm is not None else lens.wavelengths_nm))
+    if not wl:
+        raise SolasError("at least one wavelength is needed")
+    for w in wl:
+        lens.check_wavelength(w)
+    if field_range_deg is None:
+        field_range_deg = lens.field_deg
+    hx, hy = (field_range_deg, field_range_deg) if np.isscalar(field_range_deg) else field_range_deg
+    if not (math.isfinite(hx) and math.isfinite(hy)) or hx < 0 or hy < 0 or max(hx, hy) >= 89:
+        raise SolasError(f"field range ({hx:g}, {hy:g}) deg must be non-negative and below 89 deg")
+    fx = field_nodes(nx, hx, field_sampling)
+    fy = field_nodes(ny, hy, field_sampling)[::-1]  # row 0 = top = largest y
+    fields = np.stack(np.meshgrid(fx, fy), axis=-1)  # (ny, nx, 2)
+    flat = fields.reshape(-1, 2)
+    n = len(flat)
+    data = np.zeros((len(wl), n, size, size), dtype=np.float32)
+    chief = np.zeros((len(wl), n, 2))
+    transmission = np.zeros((len(wl), n))
+    start = time.perf_counter()
+    for k, w in enumerate(wl):
+        for a in range(0, n, _FIELDS_PER_BATCH):
+            b = min(n, a + _FIELDS_PER_BATCH)
+            psfs, cr, tr, _ = S.compute(lens, flat[a:b], np.full(b - a, w), pitch_um, size, method, pupil_samples, rays)
+            data[k, a:b] = S.normalize(psfs, normalization)
+            chief[k, a:b] = cr.image_xy
+            transmission[k, a:b] = tr
+            if progress is not None:
+                progress(k * n + b, len(wl) * n)
+    meta = {
+        "lens": lens.name, "lens_hash": lens.hash, "lens_source": lens.source, "method": method,
+        "normalization": normalization, "field_sampling": field_sampling, "field_range_deg": [hx, hy],
+        "sampling": {"pupil_samples": pupil_samples} if method == "fraunhofer" else {"rays": rays},
+        "transmission": transmission.reshape(len(wl), ny, nx).tolist(),
+        "origin_pixel": [size // 2, size // 2],
+        "orientation": "PSF row 0 = top (largest y), column 0 = left (smallest x); grid row 0 = largest y field",
+        "seconds": time.perf_counter() - start,
+    }
+    return PSFGrid(data.reshape(len(wl), ny, nx, size, size), fields, chief.reshape(len(wl), ny, nx, 2), wl,
+                   float(pitch_um), meta)

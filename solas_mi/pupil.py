@@ -1,0 +1,287 @@
+"""Real-ray aiming and the pupil function on the exit-pupil reference sphere.
+
+For each field, the chief ray is aimed through the stop centre; the reference sphere is centred on
+the chief ray's image point P0 and passes through the chief ray's crossing of the paraxial exit-pupil
+plane. The pupil is sampled on a regular grid of direction cosines (α, β) of the vector from P0 to the
+sphere point, each ray found by Newton iteration on its entrance coordinates, so the Fraunhofer
+integral is an exact matrix DFT in (α, β). Lengths in mm.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from . import tracer as T
+from .errors import SolasError
+from .lens import Lens
+
+dr = T.dr
+RIM_RAYS = 32
+_STEP = 1e-5  # mm, finite-difference step in entrance coordinates
+_TOL = 1e-13  # convergence of aimed quantities (mm at the stop, direction cosines on the sphere)
+
+
+class Bundle:
+    """`per_field` rays for each of a batch of fields (degrees, (n, 2)) and wavelengths (nm, (n,))."""
+
+    def __init__(self, lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, per_field: int):
+        self.lens = lens
+        self.n_fields = len(field_deg)
+        self.per_field = per_field
+        self.index = dr.arange(T.UInt32, self.n_fields * per_field) // per_field
+        tan = T.field_tangents(field_deg)
+        self.tan_x, self.tan_y = T.gather(tan[:, 0], self.index), T.gather(tan[:, 1], self.index)
+        self.wavelength_um = T.gather(np.asarray(wavelength_nm) / 1000.0, self.index)
+        pts = T.object_points(lens, field_deg)
+        self.object_point = None if pts is None else (T.gather(pts[:, 0], self.index), T.gather(pts[:, 1], self.index))
+
+    def per_ray(self, values: np.ndarray) -> T.F:
+        """Per-field values spread over the bundle's rays."""
+        return T.gather(values, self.index)
+
+    def trace(self, ex: T.F, ey: T.F) -> T.Traced:
+        rays = T.launch(self.lens, self.tan_x, self.tan_y, ex, ey, self.object_point)
+        return T.trace(self.lens, rays, self.wavelength_um)
+
+
+def aim(bundle: Bundle, target, ex: T.F, ey: T.F, goal_x: T.F, goal_y: T.F, max_iter: int = 12):
+    """Newton iteration on entrance coordinates so that target(traced) → (goal_x, goal_y).
+
+    `target(traced)` returns (gx, gy, ok). The Jacobian is taken by finite differences at the start
+    point and reused (chord method). Returns (ex, ey, traced at the solution, converged mask)."""
+    def residual(ax, ay):
+        tr = bundle.trace(ax, ay)
+        gx, gy, ok = target(tr)
+        return gx - goal_x, gy - goal_y, ok, tr
+
+    rx, ry, ok, tr = residual(ex, ey)
+    ax_, ay_, _, _ = residual(ex + _STEP, ey)
+    bx_, by_, _, _ = residual(ex, ey + _STEP)
+    j11, j21 = (ax_ - rx) / _STEP, (ay_ - ry) / _STEP
+    j12, j22 = (bx_ - rx) / _STEP, (by_ - ry) / _STEP
+    det = j11 * j22 - j12 * j21
+    dr.eval(j11, j12, j21, j22, det)
+    for _ in range(max_iter):
+        step_x = (j22 * rx - j12 * ry) / det
+        step_y = (-j21 * rx + j11 * ry) / det
+        good = ok & dr.isfinite(step_x) & dr.isfinite(step_y)
+        ex = dr.select(good, ex - step_x, ex)
+        ey = dr.select(good, ey - step_y, ey)
+        rx, ry, ok, tr = residual(ex, ey)
+        dr.eval(ex, ey, rx, ry, ok)
+        err = np.abs(np.asarray(dr.select(ok, dr.maximum(dr.abs(rx), dr.abs(ry)), 0.0)))
+        if err.size == 0 or err.max() < _TOL:
+            break
+    converged = ok & (dr.maximum(dr.abs(rx), dr.abs(ry)) < 1e3 * _TOL)
+    return ex, ey, tr, converged
+
+
+def _stop_target(tr: T.Traced):
+    return tr.stop_x, tr.stop_y, tr.ok
+
+
+def _paraxial_aim(lens: Lens, field_deg: np.ndarray) -> np.ndarray:
+    """Entrance coordinates (n, 2) of the paraxial chief ray (through the entrance-pupil centre)."""
+    ep_z = lens.paraxial().entrance_pupil_z_mm
+    tan = T.field_tangents(field_deg)
+    if lens.at_infinity:
+        inv = 1.0 / np.sqrt(tan[:, 0] ** 2 + tan[:, 1] ** 2 + 1.0)
+        dx, dy, dz = tan[:, 0] * inv, tan[:, 1] * inv, inv
+        inv1 = 1.0 / np.sqrt(dz * dz + dx * dx)
+        e1z, e2z = -dx * inv1, -dy * dz * inv1
+        span = ep_z - T.launch_plane_z(lens)
+        return np.stack([span * e1z, span * e2z], axis=-1)
+    pts = T.object_points(lens, field_deg)
+    return pts * (1.0 - lens.object_distance / (ep_z + lens.object_distance))
+
+
+@dataclass
+class ChiefRays:
+    """Chief rays of a batch of fields (mm)."""
+
+    entrance: np.ndarray  # (n, 2) entrance coordinates
+    image_xy: np.ndarray  # (n, 2) image-plane point P0
+    sphere_radius: np.ndarray  # (n,) reference-sphere radius
+    opl: np.ndarray  # (n,) optical path to the reference sphere
+    sphere_point: np.ndarray  # (n, 2) (α, β) of the chief ray's sphere point: (Q0 − P0) / R
+    n_image: np.ndarray  # (n,)
+    converged: np.ndarray  # (n,) bool: the ray reaches the stop centre
+    vignetted: np.ndarray  # (n,) bool: an aperture blocks the chief ray itself
+
+
+def chief_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> ChiefRays:
+    """Real chief rays aimed through the stop centre."""
+    field_deg = np.atleast_2d(np.asarray(field_deg, dtype=np.float64))
+    wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(field_deg),))
+    b = Bundle(lens, field_deg, wavelength_nm, 1)
+    e0 = _paraxial_aim(lens, field_deg)
+    zero = dr.zeros(T.F, b.n_fields)
+    ex, ey, tr, conv = aim(b, _stop_target, T.F(e0[:, 0]), T.F(e0[:, 1]), zero, zero)
+    px, py, _ = T.to_plane(tr, lens.image_z)
+    xp_z = np.array([lens.paraxial(w).exit_pupil_z_mm for w in wavelength_nm])
+    qx, qy, qopl = T.to_plane(tr, b.per_ray(xp_z))
+    radius = dr.sqrt((qx - px) ** 2 + (qy - py) ** 2 + (b.per_ray(xp_z) - lens.image_z) ** 2)
+    return ChiefRays(
+        entrance=np.stack([np.asarray(ex), np.asarray(ey)], axis=-1),
+        image_xy=np.stack([np.asarray(px), np.asarray(py)], axis=-1),
+        sphere_radius=np.asarray(radius),
+        opl=np.asarray(qopl),
+        sphere_point=np.stack([np.asarray((qx - px) / radius), np.asarray((qy - py) / radius)], axis=-1),
+        n_image=np.broadcast_to(np.asarray(tr.n_image), (b.n_fields,)).copy(),
+        converged=np.asarray(conv),
+        vignetted=np.asarray(tr.clipped_by) != 0,
+    )
+
+
+def stop_rim(rim: Bundle, chief: ChiefRays) -> tuple[np.ndarray, np.ndarray, T.Traced, np.ndarray]:
+    """Rays aimed at RIM_RAYS points of the stop's rim for each field of the `rim` bundle:
+    entrance coordinates (n, RIM_RAYS) each, the trace, and which converged."""
+    lens = rim.lens
+    r_stop = lens.surfaces[lens.stop_index].semi_diameter
+    phi = np.tile(np.linspace(0.0, 2.0 * math.pi, RIM_RAYS, endpoint=False), rim.n_fields)
+    gx, gy = T.F(r_stop * np.cos(phi)), T.F(r_stop * np.sin(phi))
+    # start from the chief ray, scaled by the paraxial entrance-pupil/stop size ratio
+    ratio = lens.paraxial().entrance_pupil_diameter_mm / (2.0 * r_stop)
+    ex, ey, tr, ok = aim(rim, _stop_target, rim.per_ray(chief.entrance[:, 0]) + gx * ratio,
+                         rim.per_ray(chief.entrance[:, 1]) + gy * ratio, gx, gy)
+    shape = (rim.n_fields, RIM_RAYS)
+    return np.asarray(ex).reshape(shape), np.asarray(ey).reshape(shape), tr, np.asarray(ok).reshape(shape)
+
+
+@dataclass
+class PupilFunction:
+    """Pupil functions of a batch of fields on regular (α, β) grids (relative to the chief ray)."""
+
+    alpha: np.ndarray  # (n, N) direction cosines of grid columns
+    beta: np.ndarray  # (n, N) direction cosines of grid rows
+    opd_mm: np.ndarray  # (n, N, N) optical path difference to the chief ray, [field, β, α]
+    power: np.ndarray  # (n, N, N) power per dα dβ, as a fraction of the on-axis entrance-pupil power
+    coverage: np.ndarray  # (n, N, N) fraction of each grid cell inside the apertures
+    chief: ChiefRays
+    wavelength_nm: np.ndarray  # (n,)
+    vignetted_by: list[list[int]]  # per field: 1-based surfaces that block part of the pupil
+
+    @property
+    def cell_area(self) -> np.ndarray:
+        """dα dβ of one grid cell, per field."""
+        return (self.alpha[:, 1] - self.alpha[:, 0]) * (self.beta[:, 1] - self.beta[:, 0])
+
+    @property
+    def amplitude(self) -> np.ndarray:
+        """Field amplitude per grid cell: √power × covered fraction."""
+        return np.sqrt(self.power) * self.coverage
+
+    @property
+    def transmission(self) -> np.ndarray:
+        """Fraction of the on-axis entrance-pupil power that reaches the image, per field."""
+        return np.sum(self.power * self.coverage, axis=(1, 2)) * self.cell_area
+
+
+def _power_density(lens: Lens, wavelength_nm: float) -> float:
+    """Power per unit entrance area (1/mm²) such that the on-axis entrance pupil carries 1."""
+    p = lens.paraxial(wavelength_nm)
+    r_ep = 0.5 * p.entrance_pupil_diameter_mm
+    if lens.at_infinity:
+        return 1.0 / (math.pi * r_ep ** 2)
+    half = math.atan(r_ep / (p.entrance_pupil_z_mm + lens.object_distance))
+    solid = 2.0 * math.pi * (1.0 - math.cos(half))
+    return 1.0 / (lens.object_distance ** 2 * solid)
+
+
+def pupil_function(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, samples: int) -> PupilFunction:
+    """Pupil function on an N×N (α, β) grid (N = `samples`) for each field/wavelength pair."""
+    if not isinstance(samples, (int, np.integer)) or samples < 8:
+        raise SolasError(f"pupil samples {samples!r} must be an integer >= 8")
+    field_deg = np.atleast_2d(np.asarray(field_deg, dtype=np.float64))
+    nf = len(field_deg)
+    wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (nf,)).copy()
+    chief = chief_rays(lens, field_deg, wavelength_nm)
+    if not chief.converged.all():
+        bad = field_deg[~chief.converged][0]
+        raise SolasError(f"no real ray reaches the stop centre for field ({bad[0]:g}, {bad[1]:g}) deg")
+
+    def sphere_target_for(b: Bundle):
+        cx, cy = b.per_ray(chief.image_xy[:, 0]), b.per_ray(chief.image_xy[:, 1])
+        radius = b.per_ray(chief.sphere_radius)
+        cz = lens.image_z
+
+        def target(tr: T.Traced):
+            x, y, z, opl, hit = T.to_sphere(tr, cx, cy, cz, radius)
+            return (x - cx) / radius, (y - cy) / radius, tr.ok & hit
+
+        return target
+
+    # 1. Rim of the stop → extent of the pupil in (α, β) and an affine entrance map.
+    rim = Bundle(lens, field_deg, wavelength_nm, RIM_RAYS)
+    rex, rey, rtr, rok = stop_rim(rim, chief)
+    ra, rb, hit = sphere_target_for(rim)(rtr)
+    ra, rb = np.asarray(ra).reshape(nf, RIM_RAYS), np.asarray(rb).reshape(nf, RIM_RAYS)
+    rok &= np.asarray(hit).reshape(nf, RIM_RAYS)
+    if not rok.any(axis=1).all():
+        raise SolasError("the stop rim cannot be reached by real rays for some field; the lens is not usable there")
+    ca, cb = chief.sphere_point[:, 0], chief.sphere_point[:, 1]
+    alpha = np.empty((nf, samples))
+    beta = np.empty((nf, samples))
+    affine = np.empty((nf, 3, 2))
+    for f in range(nf):
+        m = rok[f]
+        a_rel, b_rel = ra[f, m] - ca[f], rb[f, m] - cb[f]
+        for grid, lo, hi in ((alpha, a_rel.min(), a_rel.max()), (beta, b_rel.min(), b_rel.max())):
+            half = 0.5 * (hi - lo) * (1.0 + 2.0 / samples) * 1.01
+            mid = 0.5 * (hi + lo)
+            grid[f] = mid + half * np.linspace(-1.0, 1.0, samples)
+        design = np.stack([np.ones(m.sum()), a_rel, b_rel], axis=1)
+        affine[f], *_ = np.linalg.lstsq(design, np.stack([rex[f, m], rey[f, m]], axis=1), rcond=None)
+
+    # 2. The grid: aim every ray at its (α, β).
+    per = samples * samples
+    g = Bundle(lens, field_deg, wavelength_nm, per)
+    ta = np.broadcast_to(alpha[:, None, :], (nf, samples, samples))
+    tb = np.broadcast_to(beta[:, :, None], (nf, samples, samples))
+    ex0 = affine[:, 0, 0, None, None] + affine[:, 1, 0, None, None] * ta + affine[:, 2, 0, None, None] * tb
+    ey0 = affine[:, 0, 1, None, None] + affine[:, 1, 1, None, None] * ta + affine[:, 2, 1, None, None] * tb
+    goal_a = T.F((ta + ca[:, None, None]).ravel())
+    goal_b = T.F((tb + cb[:, None, None]).ravel())
+    gex, gey, gtr, gconv = aim(g, sphere_target_for(g), T.F(ex0.ravel()), T.F(ey0.ravel()), goal_a, goal_b)
+    cx, cy = g.per_ray(chief.image_xy[:, 0]), g.per_ray(chief.image_xy[:, 1])
+    _, _, _, opl, hit = T.to_sphere(gtr, cx, cy, lens.image_z, g.per_ray(chief.sphere_radius))
+    shape = (nf, samples, samples)
+    opd = np.asarray(opl).reshape(shape) - chief.opl[:, None, None]
+    ok = (np.asarray(gconv) & np.asarray(hit)).reshape(shape)
+    clipped = np.asarray(gtr.clipped_by).reshape(shape)
+    sx, sy = np.asarray(gtr.stop_x).reshape(shape), np.asarray(gtr.stop_y).reshape(shape)
+    ex, ey = np.asarray(gex).reshape(shape), np.asarray(gey).reshape(shape)
+
+    # 3. Amplitude: power density × |∂e/∂(α,β)|, stop edge anti-aliased by the covered cell fraction.
+    r_stop = lens.surfaces[lens.stop_index].semi_diameter
+    da = (alpha[:, 1] - alpha[:, 0])[:, None, None]
+    db = (beta[:, 1] - beta[:, 0])[:, None, None]
+
+    def jacobian(u: np.ndarray, w: np.ndarray) -> np.ndarray:
+        """|∂(u, w)/∂(α, β)| on the grid of each field."""
+        du_db, du_da = np.gradient(u, axis=(1, 2))
+        dw_db, dw_da = np.gradient(w, axis=(1, 2))
+        return np.abs(du_da * dw_db - du_db * dw_da) / (da * db)
+
+    density = np.array([_power_density(lens, float(w)) for w in wavelength_nm])[:, None, None]
+    if lens.at_infinity:
+        weight = density
+    else:
+        pts = T.object_points(lens, field_deg)
+        dist2 = (ex - pts[:, 0, None, None]) ** 2 + (ey - pts[:, 1, None, None]) ** 2 + lens.object_distance ** 2
+        weight = density * lens.object_distance ** 3 / dist2 ** 1.5  # cos³ψ
+    power = weight * jacobian(ex, ey)
+    cell = np.sqrt(jacobian(sx, sy) * da * db)  # grid cell size at the stop (mm)
+    margin = r_stop - np.hypot(sx, sy)
+    coverages = np.clip(0.5 + margin / np.maximum(cell, 1e-300), 0.0, 1.0)
+    stop_code = lens.stop_index + 1
+    other = (clipped != 0) & (clipped != stop_code)
+    coverages = np.where(other | ~ok | ~np.isfinite(power), 0.0, coverages)
+    powers = np.where(coverages > 0, power, 0.0)
+    vignetted = [sorted({int(c) for c in np.unique(clipped[f][ok[f] & (margin[f] > 0)]) if c != 0})
+                 for f in range(nf)]
+    opd = np.where(coverages > 0, opd, 0.0)
+    return PupilFunction(alpha, beta, opd, powers, coverages, chief, wavelength_nm, vignetted)
+

@@ -1,0 +1,188 @@
+"""Sequential ray tracer in Dr.Jit Float64 (LLVM): exact spheres and planes, Snell's law per
+wavelength, clipping at every clear aperture and the stop, total internal reflection flagged,
+optical path length accumulated.
+
+Rays are vectorised Dr.Jit arrays; nothing here loops over rays in Python. Lengths in mm,
+wavelengths in µm inside this module (nm at every public interface above it).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from .lens import Lens
+from .llvm import import_drjit
+
+dr = import_drjit()
+from drjit.llvm import Bool, Float64, UInt32  # noqa: E402
+
+F = Float64
+_RIM_SLACK = 1e-9  # relative: a ray aimed exactly at an aperture rim passes
+
+
+@dataclass
+class Rays:
+    """Ray positions, unit directions and optical path (mm) as Dr.Jit Float64 arrays."""
+
+    x: F
+    y: F
+    z: F
+    dx: F
+    dy: F
+    dz: F
+    opl: F
+
+
+@dataclass
+class Traced:
+    """Result of tracing through every surface."""
+
+    rays: Rays  # at the last surface, directions in image space
+    ok: Bool  # geometric success: every surface hit, no total internal reflection
+    tir: Bool  # total internal reflection at some surface
+    clipped_by: UInt32  # 1-based index of the first aperture (clear or stop) that blocks the ray; 0 = none
+    stop_x: F  # where the ray crosses the stop surface (mm)
+    stop_y: F
+    n_image: F  # refractive index of image space
+
+
+def _opaque(value: float) -> F:
+    """A scalar as an opaque Dr.Jit value, so kernels are reused across lenses and wavelengths."""
+    return dr.opaque(F, float(value))
+
+
+def refractive_index(glass, wavelength_um: F) -> F:
+    """n(λ) as a Dr.Jit array (λ in µm)."""
+    return glass.index_formula(wavelength_um, dr.sqrt)
+
+
+def launch_plane_z(lens: Lens) -> float:
+    """z (mm) of the point where collimated rays start: in front of every surface's sag."""
+    reach = max(s.semi_diameter for s in lens.surfaces)
+    return -(2.0 * reach + 10.0)
+
+
+def launch(lens: Lens, tan_x: F, tan_y: F, ex: F, ey: F, object_point: tuple[F, F] | None = None) -> Rays:
+    """Rays for field tangents (tan_x, tan_y) and entrance coordinates (ex, ey), mm.
+
+    Object at infinity: the ray starts on the plane through (0, 0, launch_plane_z) perpendicular to
+    the field direction, at (ex, ey) in that plane's basis (e1 ⟂ y, e2 = d × e1); OPL starts at 0 there.
+    Finite object: the ray starts at `object_point` (x, y at z = −distance) and aims at (ex, ey, 0).
+    """
+    if object_point is None:
+        inv = dr.rsqrt(tan_x * tan_x + tan_y * tan_y + 1.0)
+        dx, dy, dz = tan_x * inv, tan_y * inv, inv
+        inv1 = dr.rsqrt(dz * dz + dx * dx)
+        e1x, e1z = dz * inv1, -dx * inv1
+        # e2 = d × e1 with e1 = (e1x, 0, e1z)
+        e2x, e2y, e2z = dy * e1z, dz * e1x - dx * e1z, -dy * e1x
+        z0 = _opaque(launch_plane_z(lens))
+        x = ex * e1x + ey * e2x
+        y = ey * e2y
+        z = z0 + ex * e1z + ey * e2z
+        return Rays(x, y, z, dx, dy, dz, dr.zeros(F, dr.width(x)))
+    ox, oy = object_point
+    oz = _opaque(-lens.object_distance)
+    vx, vy, vz = ex - ox, ey - oy, -oz + 0.0 * ex
+    inv = dr.rsqrt(vx * vx + vy * vy + vz * vz)
+    return Rays(ox + 0.0 * ex, oy + 0.0 * ex, oz + 0.0 * ex, vx * inv, vy * inv, vz * inv,
+                dr.zeros(F, dr.width(ex)))
+
+
+def trace(lens: Lens, rays: Rays, wavelength_um: F) -> Traced:
+    """Trace `rays` (in object space, before surface 1) through every surface of `lens`."""
+    x, y, z, dx, dy, dz, opl = rays.x, rays.y, rays.z, rays.dx, rays.dy, rays.dz, rays.opl
+    ok = dr.full(Bool, True, dr.width(x))
+    tir = dr.full(Bool, False, dr.width(x))
+    clipped = dr.zeros(UInt32, dr.width(x))
+    stop_x = stop_y = None
+    n_before = refractive_index(lens.object_glass, wavelength_um)
+    for k, (s, zv) in enumerate(zip(lens.surfaces, lens.vertex_z)):
+        lz = z - _opaque(zv)
+        if s.curvature == 0.0:
+            t = -lz / dz
+            ok &= dz > 0
+        else:
+            c = _opaque(s.curvature)
+            b = dz - c * (x * dx + y * dy + lz * dz)
+            cc = c * (x * x + y * y + lz * lz) - 2.0 * lz
+            disc = b * b - c * cc
+            ok &= (disc >= 0) & (b > 0)
+            # cancellation-free root nearest the vertex: t = C / (B + sqrt(B² − cC))
+            t = cc / (b + dr.sqrt(dr.maximum(disc, 0.0)))
+        x, y, lz = dr.fma(t, dx, x), dr.fma(t, dy, y), dr.fma(t, dz, lz)
+        opl = dr.fma(n_before, t, opl)
+        r2 = x * x + y * y
+        blocked = r2 > _opaque((s.semi_diameter * (1.0 + _RIM_SLACK)) ** 2)
+        clipped = dr.select((clipped == 0) & blocked, UInt32(k + 1), clipped)
+        if s.stop:
+            stop_x, stop_y = x, y
+        n_after = refractive_index(s.glass, wavelength_um)
+        if s.glass is not (lens.surfaces[k - 1].glass if k else lens.object_glass):
+            if s.curvature == 0.0:
+                nx, ny, nz = dr.zeros(F, 1), dr.zeros(F, 1), dr.ones(F, 1)
+            else:
+                nx, ny, nz = -c * x, -c * y, 1.0 - c * lz
+            mu = n_before / n_after
+            cosi = dx * nx + dy * ny + dz * nz
+            k2 = 1.0 - mu * mu * (1.0 - cosi * cosi)
+            tir |= k2 < 0
+            ok &= k2 >= 0
+            g = dr.sqrt(dr.maximum(k2, 0.0)) - mu * cosi
+            dx, dy, dz = dr.fma(mu, dx, g * nx), dr.fma(mu, dy, g * ny), dr.fma(mu, dz, g * nz)
+        z = lz + _opaque(zv)
+        n_before = n_after
+    return Traced(Rays(x, y, z, dx, dy, dz, opl), ok, tir, clipped, stop_x, stop_y, n_before)
+
+
+def to_plane(traced: Traced, z_plane: float | F) -> tuple[F, F, F]:
+    """Image-space rays continued to the plane z = `z_plane`: (x, y, optical path to it)."""
+    r = traced.rays
+    t = (z_plane - r.z) / r.dz
+    return dr.fma(t, r.dx, r.x), dr.fma(t, r.dy, r.y), dr.fma(traced.n_image, t, r.opl)
+
+
+def to_sphere(traced: Traced, cx: F, cy: F, cz: F, radius: F) -> tuple[F, F, F, Bool]:
+    """Image-space rays continued (forward or back) to the sphere of `radius` about (cx, cy, cz),
+    on the side away from the centre: (x, y, z, optical path to it) and whether it was hit."""
+    r = traced.rays
+    wx, wy, wz = r.x - cx, r.y - cy, r.z - cz
+    b = wx * r.dx + wy * r.dy + wz * r.dz
+    c = wx * wx + wy * wy + wz * wz - radius * radius
+    disc = b * b - c
+    hit = disc >= 0
+    far = -b + dr.sqrt(dr.maximum(disc, 0.0))  # root beyond the centre; the near one is c / far
+    t = c / far
+    x, y, z = dr.fma(t, r.dx, r.x), dr.fma(t, r.dy, r.y), dr.fma(t, r.dz, r.z)
+    return x, y, z, dr.fma(traced.n_image, t, r.opl), hit
+
+
+def field_tangents(field_deg: np.ndarray) -> np.ndarray:
+    """(…, 2) field angles in degrees → tangents."""
+    return np.tan(np.radians(np.asarray(field_deg, dtype=np.float64)))
+
+
+def object_points(lens: Lens, field_deg: np.ndarray) -> np.ndarray | None:
+    """Object points (x, y) in mm for field angles, finite objects only (None at infinity).
+
+    A field angle names the chief ray's direction toward the entrance pupil at the primary wavelength.
+    """
+    if lens.at_infinity:
+        return None
+    ep_z = lens.paraxial().entrance_pupil_z_mm
+    return -field_tangents(field_deg) * (ep_z + lens.object_distance)
+
+
+def gather(values: np.ndarray, index: UInt32) -> F:
+    """Per-ray Dr.Jit values from per-group NumPy values."""
+    return dr.gather(F, F(np.ascontiguousarray(values, dtype=np.float64)), index)
+
+
+def numpy(a) -> np.ndarray:
+    """A Dr.Jit array as a NumPy array."""
+    return np.asarray(a)
+
+
+__all__ = ["Rays", "Traced", "launch", "trace", "to_plane", "to_sphere", "field_tangents", "object_points",
+           "gather", "numpy", "refractive_index", "launch_plane_z"]

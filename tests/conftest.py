@@ -1,0 +1,20 @@
+import copy
+import tomllib
+
+import pytest
+
+from solas_mi.resources import resource_dir
+
+
+@pytest.fixture(scope="session")
+def doublet():
+    from solas_mi import Lens
+
+    return Lens.load("solas-doublet")
+
+
+@pytest.fixture
+def doublet_spec():
+    """The shipped doublet's lens-file dictionary, free to modify."""
+    with open(resource_dir("scenes") / "lenses" / "solas_doublet.toml", "rb") as f:
+        return copy.deepcopy(tomllib.load(f))

@@ -1,0 +1,67 @@
+import math
+
+import pytest
+
+from solas_mi import Lens, SolasError
+
+
+def test_load_by_name_and_path(doublet):
+    again = Lens.load(doublet.source)
+    assert again.hash == doublet.hash
+    assert [s.radius for s in doublet.surfaces] == [92.847, -30.716, -78.197, 0.0]
+    assert doublet.surfaces[0].glass.name == "SCHOTT:N-BK7"
+    assert doublet.stop_index == 3 and math.isinf(doublet.object_distance)
+    assert doublet.image_z == pytest.approx(6 + 3 + 57.376 + 39.496)
+
+
+def test_unknown_lens_name():
+    with pytest.raises(SolasError, match="unknown lens 'no-such-lens'.*solas-doublet"):
+        Lens.load("no-such-lens")
+
+
+def _bad(spec, match):
+    with pytest.raises(SolasError, match=match):
+        Lens.from_dict(spec, source="test.toml")
+
+
+def test_negative_thickness(doublet_spec):
+    doublet_spec["surface"][2]["thickness"] = -1.0
+    _bad(doublet_spec, r"surface 3 \(Surface 3\): thickness -1 mm is negative")
+
+
+def test_zero_glass_thickness(doublet_spec):
+    doublet_spec["surface"][0]["thickness"] = 0.0
+    _bad(doublet_spec, r"surface 1 \(Surface 1\): thickness 0 mm inside glass BK7")
+
+
+def test_aperture_larger_than_sphere(doublet_spec):
+    doublet_spec["surface"][1]["diameter"] = 62.0
+    _bad(doublet_spec, r"surface 2 \(Surface 2\): clear semi-diameter 31 mm is not smaller than \|radius\| 30.716")
+
+
+def test_crossing_sags(doublet_spec):
+    doublet_spec["surface"][0]["thickness"] = 2.0  # the biconvex element's edge thickness goes negative
+    _bad(doublet_spec, r"surfaces 1 \(Surface 1\) and 2 \(Surface 2\) cross")
+
+
+def test_missing_stop(doublet_spec):
+    del doublet_spec["surface"][3]["stop"]
+    _bad(doublet_spec, "no surface is marked as the aperture stop")
+
+
+def test_unknown_glass_names_surface(doublet_spec):
+    doublet_spec["surface"][1]["material"] = "F3"
+    _bad(doublet_spec, r"surface 2 \(Surface 2\): unknown glass 'F3'")
+
+
+def test_wavelength_outside_glass_range(doublet):
+    with pytest.raises(SolasError, match="wavelength 200 nm is outside glass SCHOTT:N-BK7"):
+        doublet.paraxial(200.0)
+
+
+def test_hash_follows_optics_not_labels(doublet_spec):
+    a = Lens.from_dict(doublet_spec)
+    doublet_spec["surface"][0]["label"] = "renamed"
+    assert Lens.from_dict(doublet_spec).hash == a.hash
+    doublet_spec["surface"][0]["radius"] = 92.0
+    assert Lens.from_dict(doublet_spec).hash != a.hash

@@ -1,0 +1,111 @@
+"""Natural-scene SFR on a synthetic scene whose blur grows from the centre to the periphery."""
+import math
+
+import imageio.v3 as iio
+import numpy as np
+import pytest
+
+from solas_mi.errors import SolasError
+from solas_mi.metrics.nssfr import ANNULI, find_edge_rois, natural_scene_sfr, plot_report
+from solas_mi.metrics.targets import Square, slanted_squares
+
+SHAPE = (480, 640)
+CENTRE = (319.5, 239.5)
+# square centres and the annulus they lie in (R = 400 px: centre < 96 px, middle < 240 px)
+LAYOUT = [((0, 0), 0)] + [((dx, dy), 1) for dx, dy in ((-170, 0), (170, 0), (0, -150), (0, 150))] + [
+    ((dx, dy), 2) for dx in (-250, 250) for dy in (-170, 170)
+]
+SIGMA = (0.8, 1.4, 2.2)  # px per annulus
+
+
+def scene(scale=(1.0, 1.0, 1.0), texture=False) -> np.ndarray:
+    squares = [
+        Square(CENTRE[0] + dx, CENTRE[1] + dy, 70, 6.0 if i % 2 else -7.0, SIGMA[ring] * scale[ring], 0.2)
+        for i, ((dx, dy), ring) in enumerate(LAYOUT)
+    ]
+    img = slanted_squares(SHAPE, squares, background=0.7, noise=0.002, seed=7, supersample=4)
+    if texture:  # random 3-px blocks between the squares: edges everywhere, none isolated
+        blocks = np.random.default_rng(1).uniform(0.3, 0.6, (20, 20)).repeat(3, 0).repeat(3, 1)
+        img[200:260, 420:480] = blocks
+    return img
+
+
+@pytest.fixture(scope="module")
+def sharp():
+    return scene(texture=True)
+
+
+@pytest.fixture(scope="module")
+def degraded():
+    return scene((1.0, 1.4, 1.8), texture=True)
+
+
+@pytest.fixture(scope="module")
+def report(sharp):
+    return natural_scene_sfr(sharp)
+
+
+def test_mtf50_falls_from_centre_to_edge(report):
+    centre, middle, edge = report.before
+    assert min(s.count for s in report.before) >= 4
+    assert centre.mean_mtf50 > middle.mean_mtf50 > edge.mean_mtf50
+    assert centre.median_mtf50 > middle.median_mtf50 > edge.median_mtf50
+    for s in report.before:
+        assert s.sharpest10_mtf50 >= s.median_mtf50
+
+
+def test_rois_lie_in_their_annulus_and_avoid_texture(report):
+    bounds = (0.0, *ANNULI["automotive"])
+    for m in report.rois:
+        assert bounds[m.annulus] <= m.radius < bounds[m.annulus + 1] + 1e-12
+        x, y, w, h = m.roi
+        assert x + w <= 420 or x >= 480 or y + h <= 200 or y >= 260, f"ROI {m.roi} overlaps the texture"
+
+
+def test_compare_measures_identical_rois(report, sharp, degraded):
+    both = natural_scene_sfr(sharp, compare=degraded)
+    assert [m.roi for m in both.rois] == [m.roi for m in report.rois]
+    for m, alone in zip(both.rois, report.rois):
+        assert m.before.mtf50 == alone.before.mtf50
+    change = both.mean_change()
+    assert change[0] == pytest.approx(0.0, abs=1e-12)  # the centre square is blurred the same in both
+    assert change[1] < 0 and change[2] < 0
+    ratio = [a.mean_mtf50 / b.mean_mtf50 for a, b in zip(both.after, both.before)]
+    assert ratio[2] < ratio[1] < ratio[0]
+
+
+def test_compare_with_itself_changes_nothing(sharp):
+    same = natural_scene_sfr(sharp, compare=sharp.copy())
+    assert all(c == 0.0 for c in same.mean_change() if c is not None)
+
+
+def test_equal_area_annuli(sharp):
+    rep = natural_scene_sfr(sharp, annuli="equal-area")
+    assert [s.r_outer for s in rep.before] == pytest.approx([math.sqrt(1 / 3), math.sqrt(2 / 3), 1.0])
+    bounds = (0.0, *ANNULI["equal-area"])
+    for m in rep.rois:
+        assert bounds[m.annulus] <= m.radius < bounds[m.annulus + 1] + 1e-12
+
+
+def test_square_gives_four_isolated_rois_and_close_edges_none():
+    img = slanted_squares((200, 200), [Square(99.5, 99.5, 90, 5, 1.0, 0.2)], background=0.7)
+    rois = find_edge_rois(img)
+    assert len(rois) == 4
+    bars = slanted_squares((200, 200), [Square(99.5, 99.5, 8, 5, 1.0, 0.2)], background=0.7)
+    assert find_edge_rois(bars) == []  # the square's sides lie within 10 px of each other
+
+
+def test_user_errors(sharp):
+    with pytest.raises(SolasError, match="same size"):
+        natural_scene_sfr(sharp, compare=sharp[:100])
+    with pytest.raises(SolasError, match="annuli"):
+        natural_scene_sfr(sharp, annuli="rings")
+
+
+def test_plot_is_written(tmp_path, sharp, degraded):
+    rep = natural_scene_sfr(sharp, compare=degraded)
+    out = tmp_path / "fig5.png"
+    plot_report(rep, sharp, out)
+    img = iio.imread(out)
+    assert img.shape[:2] == (520, 1300)
+    assert [p.name for p in tmp_path.iterdir()] == ["fig5.png"]

@@ -1,0 +1,57 @@
+import pytest
+
+# DESIGN.md: facts about the SOLAS doublet that independent tools agree on.
+EFL = {486: 99.9395, 531: 99.9468, 656: 100.0882}
+FNO = {486: 7.991, 531: 7.991, 656: 8.016}
+
+
+@pytest.mark.parametrize("wavelength", sorted(EFL))
+def test_efl_and_f_number(doublet, wavelength):
+    p = doublet.paraxial(wavelength)
+    assert p.efl_mm == pytest.approx(EFL[wavelength], abs=1e-3)
+    assert p.f_number == pytest.approx(FNO[wavelength], abs=1e-3)
+
+
+def test_pupils_and_focus(doublet):
+    p = doublet.paraxial(531)
+    assert p.entrance_pupil_diameter_mm == pytest.approx(12.51, abs=0.01)
+    assert p.entrance_pupil_z_mm == pytest.approx(153.4, abs=0.1)  # virtual, behind surface 1
+    assert p.exit_pupil_z_mm == pytest.approx(66.376)  # the stop
+    assert p.exit_pupil_diameter_mm == pytest.approx(5.0)
+    assert p.exit_pupil_f_number == pytest.approx(39.496 / 5.0)
+    assert p.image_offset_mm == pytest.approx(-0.46, abs=0.01)  # image plane inside paraxial focus
+
+
+def test_thin_lens_limit():
+    """A thin singlet in air: EFL = 1 / ((n − 1)(1/R1 − 1/R2))."""
+    from solas_mi import Lens
+
+    spec = {"surface": [
+        {"radius": 200.0, "thickness": 0.01, "diameter": 1.0, "material": "N-BK7", "stop": True},
+        {"radius": -200.0, "thickness": 200.0, "diameter": 1.0, "material": "AIR"},
+    ]}
+    lens = Lens.from_dict(spec)
+    n = lens.surfaces[0].glass.index(587.5618)
+    assert lens.paraxial(587.5618).efl_mm == pytest.approx(1.0 / ((n - 1) * (2 / 200.0)), rel=1e-4)
+
+
+def test_real_chief_ray_height(doublet):
+    from solas_mi.pupil import chief_rays
+
+    cr = chief_rays(doublet, [[0.0, 2.0], [0.0, -2.0], [2.0, 0.0]], [531.0] * 3)
+    assert cr.image_xy[0, 1] == pytest.approx(3.4745, abs=1e-3)
+    assert cr.image_xy[1, 1] == pytest.approx(-cr.image_xy[0, 1], abs=1e-12)
+    assert cr.image_xy[2, 0] == pytest.approx(cr.image_xy[0, 1], abs=1e-12)
+    assert cr.converged.all()
+
+
+def test_cli_lens_info_json(capsys):
+    import json
+
+    from solas_mi.cli import main
+
+    assert main(["lens", "info", "solas-doublet", "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    rows = {r["wavelength_nm"]: r for r in info["per_wavelength"]}
+    assert rows[531.0]["efl_mm"] == pytest.approx(99.9468, abs=1e-3)
+    assert rows[531.0]["real_chief_ray_image_height_mm"][1] == pytest.approx(3.4745, abs=1e-3)

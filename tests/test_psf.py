@@ -1,0 +1,117 @@
+import math
+
+import numpy as np
+import pytest
+from scipy.special import j1
+
+from solas_mi import Lens, SolasError
+from solas_mi import psf as S
+from solas_mi import pupil as P
+
+
+@pytest.fixture(scope="module")
+def slow_singlet():
+    """A plano-convex N-BK7 singlet stopped to 2 mm (f/50), image plane at its paraxial focus:
+    diffraction-limited, so its PSF is the Airy pattern."""
+    spec = {"surface": [
+        {"radius": 51.68, "thickness": 3.0, "diameter": 2.0, "material": "N-BK7", "stop": True},
+        {"radius": 0.0, "thickness": 100.0, "diameter": 10.0, "material": "AIR"},
+    ]}
+    bfd = Lens.from_dict(spec).paraxial(550.0).bfd_mm
+    spec["surface"][1]["thickness"] = bfd
+    return Lens.from_dict(spec)
+
+
+def test_airy_pattern(slow_singlet):
+    psf = slow_singlet.psf((0, 0), 550.0, pitch_um=1.0, size=121, normalization="peak")
+    rim = P.stop_rim(P.Bundle(slow_singlet, np.zeros((1, 2)), np.array([550.0]), P.RIM_RAYS),
+                     P.chief_rays(slow_singlet, [[0.0, 0.0]], [550.0]))[2]
+    na = float(np.max(np.asarray(rim.rays.dy)))  # sine of the real marginal ray's angle
+    x, y = np.meshgrid(psf.x_um, psf.y_um)
+    arg = 2 * math.pi / 0.55 * na * np.hypot(x, y)
+    airy = np.where(arg > 0, (2 * j1(arg) / np.where(arg > 0, arg, 1)) ** 2, 1.0)
+    rmse = np.sqrt(np.mean((psf.data - airy) ** 2))
+    assert rmse < 1e-3
+    assert 1.22 * 0.55 / (2 * na) == pytest.approx(33.5, rel=0.02)  # f/50: first dark ring at 33.5 µm
+
+
+def test_parseval_discrete(doublet):
+    """On a grid spanning exactly one period λ/Δα of the pupil DFT, Σ|U|² equals Σ|a|² dα dβ."""
+    n = 64
+    pf = P.pupil_function(doublet, [[0.0, 0.0]], [531.0], n)
+    da = pf.alpha[0, 1] - pf.alpha[0, 0]
+    assert pf.beta[0, 1] - pf.beta[0, 0] == pytest.approx(da)
+    pitch_um = 531e-6 / (n * da) * 1e3
+    psf = S.fraunhofer(pf, pitch_um, n)[0]
+    assert psf.sum() * pitch_um ** 2 == pytest.approx(float(np.sum(pf.amplitude ** 2) * pf.cell_area[0]), rel=1e-5)
+
+
+def test_energy_matches_geometric_transmission(doublet):
+    """The pupil's transmitted power equals the power of real rays through the entrance pupil."""
+    fields = np.array([[0.0, 0.0], [0.0, 2.0]])
+    pf = P.pupil_function(doublet, fields, [531.0, 531.0], 128)
+    geo, _ = S.geometric(doublet, fields, np.array([531.0, 531.0]), 1.0, 200, rays=400)
+    assert geo.sum(axis=(1, 2)) == pytest.approx(pf.transmission, rel=2e-3)
+    assert pf.transmission[0] == pytest.approx(1.0, abs=2e-3)
+
+
+def test_field_symmetry(doublet):
+    up = doublet.psf((0, 2), 486.0, size=161).data
+    down = doublet.psf((0, -2), 486.0, size=161).data
+    right = doublet.psf((2, 0), 486.0, size=161).data
+    peak = up.max()
+    assert np.sqrt(np.mean((up - down[::-1, :]) ** 2)) < 1e-6 * peak
+    assert np.sqrt(np.mean((up - up[:, ::-1]) ** 2)) < 1e-6 * peak
+    assert np.sqrt(np.mean((np.rot90(up, -1) - right) ** 2)) < 1e-6 * peak
+
+
+@pytest.mark.parametrize("field", [0.0, 2.0])
+def test_pupil_sampling_converges(doublet, field):
+    """Doubling the default pupil sampling changes the PSF by < 1e-3 RMSE of the peak."""
+    a = doublet.psf((0, field), 486.0, pupil_samples=S.DEFAULT_PUPIL_SAMPLES).data
+    b = doublet.psf((0, field), 486.0, pupil_samples=2 * S.DEFAULT_PUPIL_SAMPLES).data
+    assert np.sqrt(np.mean((a - b) ** 2)) < 1e-3 * b.max()
+
+
+def test_fraunhofer_centroid_matches_geometric(doublet):
+    """Coma moves the centroid off the chief ray; wave and ray optics agree where it lands."""
+    kw = dict(pitch_um=1.0, size=241)
+    wave = doublet.psf((0, 2), 531.0, **kw)
+    ray = doublet.psf((0, 2), 531.0, method="geometric", rays=600, **kw)
+    cy = [float((p.data.sum(axis=1) * p.y_um).sum()) for p in (wave, ray)]
+    assert cy[0] > 2.0  # +y: the comatic flare points away from the axis
+    assert cy[0] == pytest.approx(cy[1], abs=0.1)
+    cx = float((wave.data.sum(axis=0) * wave.x_um).sum())
+    assert abs(cx) < 1e-3
+
+
+def test_polychromatic_keeps_lateral_colour(doublet):
+    blue = doublet.psf((0, 2), 486.0, method="geometric", pitch_um=1.0, size=101)
+    red_on_blue = doublet.psf((0, 2), [486.0, 656.0], weights=[0.0, 1.0], method="geometric", pitch_um=1.0, size=101)
+    red = doublet.psf((0, 2), 656.0, method="geometric", pitch_um=1.0, size=101)
+    shift_um = (red.chief_ray_mm[1] - blue.chief_ray_mm[1]) * 1e3
+    assert -5 < shift_um < -1  # lateral colour of a few µm
+    c = lambda p: float((p.data.sum(axis=1) * p.y_um).sum())  # noqa: E731
+    assert c(red_on_blue) == pytest.approx(c(red) + shift_um, abs=0.05)
+
+
+def test_normalizations(doublet):
+    s = doublet.psf((0, 0), 531.0, size=64)
+    p = doublet.psf((0, 0), 531.0, size=64, normalization="peak")
+    n = doublet.psf((0, 0), 531.0, size=64, normalization="none")
+    assert s.data.sum() == pytest.approx(1.0)
+    assert p.data.max() == pytest.approx(1.0)
+    assert n.data / n.data.sum() == pytest.approx(s.data, rel=1e-9, abs=1e-15)
+    assert s.meta["lens_hash"] == doublet.hash and s.meta["origin_pixel"] == [32, 32]
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(pitch_um=0.0), "pitch 0.0 µm must be a positive number"),
+    (dict(size=1), "size 1 must be an integer from 2"),
+    (dict(method="huygens"), "method 'huygens' must be one of fraunhofer, geometric"),
+    (dict(normalization="max"), "normalization 'max' must be one of sum, peak, none"),
+    (dict(pupil_samples=4), "pupil samples 4 must be an integer >= 8"),
+])
+def test_bad_psf_arguments(doublet, kwargs, match):
+    with pytest.raises(SolasError, match=match):
+        doublet.psf((0, 0), 531.0, **kwargs)

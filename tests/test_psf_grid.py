@@ -1,0 +1,61 @@
+import numpy as np
+import pytest
+
+from solas_mi import SolasError
+from solas_mi.cli import main
+from solas_mi.psf_grid import PSFGrid, field_nodes, parse_grid
+
+
+def test_grid_layout_and_round_trip(doublet, tmp_path):
+    g = doublet.psf_grid(grid=(2, 3), wavelengths_nm=[486.0, 656.0], size=48, pupil_samples=32)
+    assert g.data.shape == (2, 2, 3, 48, 48)
+    assert g.fields_deg[0, 0].tolist() == pytest.approx([-4 / 3, 1.0])  # row 0 = top = +y field
+    assert g.chief_ray_mm[0, 0, 0, 1] > 0 and g.chief_ray_mm[0, 0, 0, 0] < 0
+    assert g.data.sum(axis=(-2, -1)) == pytest.approx(1.0, rel=1e-5)
+    path = tmp_path / "grid.exr"
+    g.write(str(path))
+    back = PSFGrid.read(str(path))
+    assert np.array_equal(back.data, g.data)
+    assert back.wavelengths_nm == (486.0, 656.0) and back.pitch_um == 0.5
+    assert np.allclose(back.chief_ray_mm, g.chief_ray_mm) and np.allclose(back.fields_deg, g.fields_deg)
+    assert back.meta["lens_hash"] == doublet.hash and back.meta["method"] == "fraunhofer"
+    assert [p.name for p in tmp_path.iterdir()] == ["grid.exr"]  # nothing half-written left
+
+
+def test_grid_matches_single_psfs(doublet):
+    g = doublet.psf_grid(grid=(1, 2), wavelengths_nm=[531.0], field_range_deg=(2.0, 0.0), size=40,
+                         field_sampling="edges")
+    one = doublet.psf((2.0, 0.0), 531.0, size=40).data
+    assert np.abs(g.data[0, 0, 1] - one).max() < 1e-6 * one.max()
+
+
+def test_field_nodes():
+    assert field_nodes(8, 2.0, "centers").tolist() == pytest.approx([-1.75 + 0.5 * i for i in range(8)])
+    assert field_nodes(3, 2.0, "edges").tolist() == [-2.0, 0.0, 2.0]
+    with pytest.raises(SolasError, match="grid 'eight' must look like 8x8"):
+        parse_grid("eight")
+    assert parse_grid("32x24") == (24, 32)
+
+
+def test_cli_psf_and_grid(tmp_path, capsys):
+    out = tmp_path / "psf.exr"
+    assert main(["psf", "solas-doublet", "--field-deg", "0,2", "--wavelength-nm", "531", "--size", "32",
+                 "--pitch-um", "1", "--normalize", "peak", "-o", str(out)]) == 0
+    from solas_mi.imageio import read_exr
+
+    ch, meta = read_exr(out)
+    assert ch["Y"].max() == pytest.approx(1.0) and meta["field_deg"] == [0.0, 2.0]
+    assert meta["chief_ray_origin_mm"][1] == pytest.approx(3.4745, abs=1e-3)
+    assert (tmp_path / "psf.png").is_file()
+    grid = tmp_path / "grid.exr"
+    assert main(["psf-grid", "solas-doublet", "--grid", "2x2", "--wavelengths", "531", "--size", "24",
+                 "--pupil-samples", "32", "-o", str(grid)]) == 0
+    assert PSFGrid.read(str(grid)).data.shape == (1, 2, 2, 24, 24)
+
+
+def test_cli_bad_input_is_one_clear_line(tmp_path, capsys):
+    assert main(["psf", "solas-doublet", "--field-deg", "0,2", "--wavelength-nm", "100", "-o",
+                 str(tmp_path / "x.exr")]) == 2
+    err = capsys.readouterr().err
+    assert "wavelength 100 nm is outside glass" in err
+    assert not any(tmp_path.iterdir())
