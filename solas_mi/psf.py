@@ -119,7 +119,8 @@ def geometric(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitc
     edges = (np.arange(size + 1) - size // 2 - 0.5) * pitch_um
     shift = np.zeros((nf, 2)) if center_um is None else center_um
     for f, (dx, dy, w) in enumerate(hits):
-        h, _, _ = np.histogram2d(shift[f, 1] - dy, dx - shift[f, 0], bins=(-edges[::-1], edges), weights=w)
+        # rows run down from +y: the row coordinate is −(y offset), binned like the columns
+        h, _, _ = np.histogram2d(shift[f, 1] - dy, dx - shift[f, 0], bins=(edges, edges), weights=w)
         out[f] = h / pitch_um ** 2
     return out, chief
 

@@ -1,6 +1,10 @@
 """PSF grids over the field: one stack of PSFs per wavelength, stored as OpenEXR with the metadata
 needed to use them without the lens, and a PNG mosaic for looking at them.
 
+The lens is centred (every surface is rotationally symmetric about the axis), so the PSF of field
+(−x, y) is the mirror image of that of (x, y), and that of (y, x) its transpose: each distinct
+|field| pair is computed once (on an odd grid, symmetric about the chief ray) and mirrored.
+
 Field grid convention: `ny`×`nx` nodes in image orientation, row 0 = top = largest y field angle,
 column 0 = smallest x field angle. "centers" sampling puts the nodes at the centres of ny×nx equal
 cells spanning ±field (the block centres of a tiled image); "edges" spans ±field including the ends.
@@ -108,6 +112,19 @@ def field_nodes(n: int, half_range: float, sampling: str) -> np.ndarray:
     raise SolasError(f"field sampling {sampling!r} must be one of {', '.join(FIELD_SAMPLINGS)}")
 
 
+def symmetry_classes(fields: np.ndarray, decimals: int = 12):
+    """Fields (n, 2) reduced by the mirror and diagonal symmetries of a centred lens.
+
+    Returns the canonical fields (m, 2) with x ≥ y ≥ 0, and for each input field the index of its
+    canonical field, whether x and y are swapped, and the signs (n, 2) that map canonical to input."""
+    ax = np.abs(fields)
+    swap = ax[:, 1] > ax[:, 0]
+    key = np.round(np.where(swap[:, None], ax[:, ::-1], ax), decimals)
+    canon, which = np.unique(key, axis=0, return_inverse=True)
+    sign = np.where(fields < 0, -1.0, 1.0)
+    return canon, which.ravel(), swap, sign
+
+
 def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=None,
              field_range_deg: tuple[float, float] | float | None = None, pitch_um: float = 0.5, size: int = 160,
              method: str = "fraunhofer", normalization: str = "sum", pupil_samples: int = S.DEFAULT_PUPIL_SAMPLES,
@@ -131,19 +148,31 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
     fields = np.stack(np.meshgrid(fx, fy), axis=-1)  # (ny, nx, 2)
     flat = fields.reshape(-1, 2)
     n = len(flat)
+    canon, which, swap, sign = symmetry_classes(flat)
+    odd = 2 * (size // 2) + 1  # symmetric about the origin pixel, so mirrors stay on the grid
     data = np.zeros((len(wl), n, size, size), dtype=np.float32)
     chief = np.zeros((len(wl), n, 2))
     transmission = np.zeros((len(wl), n))
     start = time.perf_counter()
     for k, w in enumerate(wl):
-        for a in range(0, n, _FIELDS_PER_BATCH):
-            b = min(n, a + _FIELDS_PER_BATCH)
-            psfs, cr, tr, _ = S.compute(lens, flat[a:b], np.full(b - a, w), pitch_um, size, method, pupil_samples, rays)
-            data[k, a:b] = S.normalize(psfs, normalization)
-            chief[k, a:b] = cr.image_xy
-            transmission[k, a:b] = tr
+        for a in range(0, len(canon), _FIELDS_PER_BATCH):
+            b = min(len(canon), a + _FIELDS_PER_BATCH)
+            psfs, cr, tr, _ = S.compute(lens, canon[a:b], np.full(b - a, w), pitch_um, odd, method, pupil_samples, rays)
+            for c in range(a, b):
+                for i in np.flatnonzero(which == c):
+                    p = psfs[c - a]
+                    xy = cr.image_xy[c - a]
+                    if swap[i]:
+                        p, xy = p[::-1, ::-1].T, xy[::-1]
+                    if sign[i, 0] < 0:
+                        p = p[:, ::-1]
+                    if sign[i, 1] < 0:
+                        p = p[::-1, :]
+                    data[k, i] = S.normalize(p[:size, :size], normalization)
+                    chief[k, i] = xy * sign[i]
+                    transmission[k, i] = tr[c - a]
             if progress is not None:
-                progress(k * n + b, len(wl) * n)
+                progress(k * len(canon) + b, len(wl) * len(canon))
     meta = {
         "lens": lens.name, "lens_hash": lens.hash, "lens_source": lens.source, "method": method,
         "normalization": normalization, "field_sampling": field_sampling, "field_range_deg": [hx, hy],

@@ -59,3 +59,18 @@ def test_cli_bad_input_is_one_clear_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "wavelength 100 nm is outside glass" in err
     assert not any(tmp_path.iterdir())
+
+
+@pytest.mark.parametrize("method", ["fraunhofer", "geometric"])
+def test_grid_symmetry_reuse_is_exact(doublet, method):
+    """Nodes filled by mirroring/transposing a computed PSF equal a direct computation."""
+    g = doublet.psf_grid(grid=(2, 3), wavelengths_nm=[531.0], field_range_deg=(2.0, 2.0), size=40,
+                         field_sampling="edges", method=method, rays=200, pupil_samples=48, normalization="none")
+    ny, nx = g.shape
+    for r in range(ny):
+        for c in range(nx):
+            fx, fy = g.fields_deg[r, c]
+            one = doublet.psf((fx, fy), 531.0, size=40, method=method, rays=200, pupil_samples=48,
+                              normalization="none")
+            assert np.abs(g.data[0, r, c] - one.data).max() <= 1e-5 * one.data.max()
+            assert g.chief_ray_mm[0, r, c] == pytest.approx(one.chief_ray_mm, abs=1e-12)

@@ -8,9 +8,12 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 from ..errors import SolasError
+
+if TYPE_CHECKING:
+    from .nssfr import NsSfrReport
 
 CHANNELS = {"R": 0, "G": 1, "B": 2}
 
@@ -77,7 +80,8 @@ def run_sfr(args: argparse.Namespace) -> int:
     return 0 if any(res.valid for _, res in results) else 1
 
 
-def _annulus_table(report: Any) -> list[str]:
+def _annulus_table(report: NsSfrReport) -> list[str]:
+    """Markdown table of the per-annulus MTF50 statistics (cy/px)."""
     head = "| annulus | r/R | count | mean MTF50 | median MTF50 | sharpest 10 % |"
     rule = "|---|---|---|---|---|---|"
     if report.after is not None:

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, Literal
+from typing import Any
 
 import numpy as np
 from scipy import ndimage as ndi
@@ -15,7 +15,6 @@ from scipy.special import fdtrc
 
 from ..errors import SolasError
 
-Mode = Literal["2023", "2017"]
 MODES: tuple[str, ...] = ("2023", "2017")
 LUMA_WEIGHTS = (0.213, 0.715, 0.072)
 OVERSAMPLING = 4  # ESF bins per px (horizontal distance)
@@ -47,7 +46,7 @@ class EsfrResult:
     freq: cy/px along the edge normal (0 … 1/cos θ); sfr: normalised to 1 at f = 0.
     mtf50 / mtf10: cy/px, None when invalid (see `reason`) or when the SFR does not fall to
     0.5 / 0.1 below 0.5 cy/px (mtf50_reason "not found").
-    angle_deg: edge tilt θ from the nearest pixel axis (0–45°); orientation: which axis
+    angle_deg: edge tilt θ from the axis it runs along (0–45°, more is warned); orientation: that axis
     ("vertical": the edge runs top to bottom). Empty arrays and no numbers when invalid.
     """
 
@@ -225,7 +224,7 @@ def _angle_warnings(theta: float) -> list[str]:
 def esfr(
     roi: np.ndarray,
     *,
-    mode: Mode | str = "2023",
+    mode: str = "2023",
     full_scale: float | None = 1.0,
     channel: int | None = None,
 ) -> EsfrResult:
