@@ -14,6 +14,8 @@ import numpy as np
 
 from solas_mi import Lens
 from solas_mi import psf as S
+from solas_mi.fraunhofer import fraunhofer
+from solas_mi.geometric import geometric
 from solas_mi import pupil as P
 
 FIELDS = np.array([[0.0, 0.0], [0.0, 2.0], [0.0, -2.0]] * 3)
@@ -34,7 +36,7 @@ def sampling_sweep(lens: Lens, samples=(32, 64, 128, 256, 512)) -> list[tuple[in
     results = {}
     for n in samples:
         start = time.perf_counter()
-        data = S.fraunhofer(P.pupil_function(lens, FIELDS, WAVELENGTHS, n), 0.5, 160)
+        data = fraunhofer(P.pupil_function(lens, FIELDS, WAVELENGTHS, n), 0.5, 160)
         results[n] = (data, time.perf_counter() - start)
     ref = results[samples[-1]][0]
     peak = ref.max(axis=(1, 2))

@@ -1,7 +1,7 @@
 """Point spread functions on an image-plane grid of any pitch.
 
-Fraunhofer: |matrix DFT of the pupil function|², the pupil sampled on the exit-pupil reference sphere
-(see `pupil`). Geometric: histogram of real rays uniformly filling the entrance pupil.
+Methods: "fraunhofer" (`fraunhofer`, from the pupil function of `pupil`) and "geometric"
+(`geometric`, a histogram of real rays uniformly filling the entrance pupil).
 
 Grid convention: `size`×`size` pixels of `pitch_um`; the chief ray's image point is at pixel
 (size//2, size//2); row 0 is the top (largest y), column 0 the left (smallest x). Values are
@@ -12,19 +12,20 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from . import pupil as P
-from . import tracer as T
 from .errors import SolasError
 from .lens import Lens
+
+if TYPE_CHECKING:
+    from .pupil import ChiefRays
 
 METHODS = ("fraunhofer", "geometric")
 NORMALIZATIONS = ("sum", "peak", "none")
 DEFAULT_PUPIL_SAMPLES = 128
 DEFAULT_GEOMETRIC_RAYS = 512
-_BATCH_RAYS = 1 << 20  # rays traced at once
 
 
 @dataclass
@@ -78,91 +79,6 @@ def normalize(data: np.ndarray, how: str) -> np.ndarray:
     return data / np.where(scale > 0, scale, 1.0)
 
 
-def fraunhofer(pf: P.PupilFunction, pitch_um: float, size: int, center_um: np.ndarray | None = None) -> np.ndarray:
-    """Fraunhofer PSFs (n, size, size) in 1/µm² from pupil functions, by matrix DFT.
-
-    `center_um` (n, 2) shifts each grid's origin from the chief ray (default: none)."""
-    n = len(pf.alpha)
-    offs = grid_offsets(size, pitch_um) * 1e-3  # mm
-    u = np.broadcast_to(offs, (n, size)).copy()
-    v = np.broadcast_to(-offs, (n, size)).copy()
-    if center_um is not None:
-        u += center_um[:, 0:1] * 1e-3
-        v += center_um[:, 1:2] * 1e-3
-    lam = pf.wavelength_nm * 1e-6 / pf.chief.n_image  # mm, in image space
-    k = 2.0 * math.pi / lam
-    phase = (2.0 * math.pi / (pf.wavelength_nm * 1e-6))[:, None, None] * pf.opd_mm
-    pupil = (pf.amplitude * np.exp(1j * phase)).astype(np.complex64)
-    # separable DFT kernels; phases in float64, products in complex64 (errors ~1e-7 of the peak)
-    ex = np.exp(-1j * k[:, None, None] * pf.alpha[:, :, None] * u[:, None, :]).astype(np.complex64)  # (n, N, size)
-    ey = np.exp(-1j * k[:, None, None] * v[:, :, None] * pf.beta[:, None, :]).astype(np.complex64)  # (n, size, N)
-    field_ = np.empty((n, len(offs), len(offs)), dtype=np.complex64)
-    for f in range(n):
-        field_[f] = (ey[f] @ pupil[f]) @ ex[f]
-    scale = (pf.cell_area / lam) ** 2 * 1e-6  # |U|² in 1/mm² → 1/µm²
-    return (field_.real.astype(np.float64) ** 2 + field_.imag.astype(np.float64) ** 2) * scale[:, None, None]
-
-
-def geometric(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int,
-              rays: int = DEFAULT_GEOMETRIC_RAYS, chief: P.ChiefRays | None = None,
-              center_um: np.ndarray | None = None) -> tuple[np.ndarray, P.ChiefRays]:
-    """Geometric PSFs (n, size, size) in 1/µm²: rays on a rays×rays grid over the entrance pupil,
-    binned on the image-plane grid (each bin holds the power that lands in that pixel).
-
-    `center_um` (n, 2) shifts each grid's origin from the chief ray (default: none)."""
-    field_deg = np.atleast_2d(np.asarray(field_deg, dtype=np.float64))
-    nf = len(field_deg)
-    wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (nf,)).copy()
-    chief = chief or P.chief_rays(lens, field_deg, wavelength_nm)
-    hits = entrance_grid_hits(lens, field_deg, wavelength_nm, rays, chief)
-    out = np.zeros((nf, size, size))
-    edges = (np.arange(size + 1) - size // 2 - 0.5) * pitch_um
-    shift = np.zeros((nf, 2)) if center_um is None else center_um
-    for f, (dx, dy, w) in enumerate(hits):
-        # rows run down from +y: the row coordinate is −(y offset), binned like the columns
-        h, _, _ = np.histogram2d(shift[f, 1] - dy, dx - shift[f, 0], bins=(edges, edges), weights=w)
-        out[f] = h / pitch_um ** 2
-    return out, chief
-
-
-def entrance_grid_hits(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, rays: int,
-                       chief: P.ChiefRays) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
-    """Per field: image-plane offsets (µm) from the chief ray of unvignetted rays on a regular
-    rays×rays entrance grid covering the pupil, and each ray's power (fraction of the on-axis pupil)."""
-    nf = len(field_deg)
-    half = _entrance_half_width(lens, field_deg, wavelength_nm, chief)
-    t = (np.arange(rays) + 0.5) / rays * 2.0 - 1.0
-    per_batch = max(1, _BATCH_RAYS // (rays * rays))
-    result = []
-    for start in range(0, nf, per_batch):
-        sl = slice(start, min(nf, start + per_batch))
-        b = P.Bundle(lens, field_deg[sl], wavelength_nm[sl], rays * rays)
-        cx, cy, hw = chief.entrance[sl, 0], chief.entrance[sl, 1], half[sl]
-        ex = (cx[:, None, None] + hw[:, None, None] * t[None, None, :]).repeat(rays, axis=1)
-        ey = (cy[:, None, None] + hw[:, None, None] * t[None, :, None]).repeat(rays, axis=2)
-        tr = b.trace(T.F(ex.ravel()), T.F(ey.ravel()))
-        x, y, _ = T.to_plane(tr, lens.image_z)
-        keep = (np.asarray(tr.ok) & (np.asarray(tr.clipped_by) == 0)).reshape(-1, rays * rays)
-        x, y = np.asarray(x).reshape(-1, rays * rays), np.asarray(y).reshape(-1, rays * rays)
-        for j, f in enumerate(range(sl.start, sl.stop)):
-            weight = (2.0 * hw[j] / rays) ** 2 * P._power_density(lens, float(wavelength_nm[f]))
-            if not lens.at_infinity:
-                pts = T.object_points(lens, field_deg[f:f + 1])[0]
-                d2 = (ex[j] - pts[0]) ** 2 + (ey[j] - pts[1]) ** 2 + lens.object_distance ** 2
-                weight = weight * (lens.object_distance ** 3 / d2 ** 1.5).ravel()[keep[j]]
-            m = keep[j]
-            result.append(((x[j, m] - chief.image_xy[f, 0]) * 1e3, (y[j, m] - chief.image_xy[f, 1]) * 1e3,
-                           np.broadcast_to(weight, (int(m.sum()),)).astype(np.float64)))
-    return result
-
-
-def _entrance_half_width(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chief: P.ChiefRays) -> np.ndarray:
-    """Half-width (mm) of a square about the chief ray's entrance point that holds the whole pupil."""
-    ex, ey, _, _ = P.stop_rim(P.Bundle(lens, field_deg, wavelength_nm, P.RIM_RAYS), chief)
-    ex, ey = ex - chief.entrance[:, 0:1], ey - chief.entrance[:, 1:2]
-    return np.maximum(np.abs(ex).max(axis=1), np.abs(ey).max(axis=1)) * 1.02
-
-
 def check_method(method: str) -> None:
     if method not in METHODS:
         raise SolasError(f"PSF method {method!r} must be one of {', '.join(METHODS)}")
@@ -170,13 +86,18 @@ def check_method(method: str) -> None:
 
 def compute(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int,
             method: str, pupil_samples: int, rays: int, origin_mm: np.ndarray | None = None,
-            ) -> tuple[np.ndarray, P.ChiefRays, np.ndarray, list]:
+            ) -> tuple[np.ndarray, "ChiefRays", np.ndarray, list]:
     """Unnormalised PSFs (n, size, size) in 1/µm² for field/wavelength pairs, each grid's origin on
     its chief ray or at `origin_mm` (n, 2); also the chief rays, the transmitted power fraction and
     the vignetting surfaces of each."""
-    chief = P.chief_rays(lens, field_deg, wavelength_nm) if method == "geometric" else None
+    # the ray-tracing modules load Dr.Jit: imported here so that PSF constants and types stay light
+    from .fraunhofer import fraunhofer
+    from .geometric import geometric
+    from .pupil import chief_rays, pupil_function
+
+    chief = chief_rays(lens, field_deg, wavelength_nm) if method == "geometric" else None
     if method == "fraunhofer":
-        pf = P.pupil_function(lens, field_deg, wavelength_nm, pupil_samples)
+        pf = pupil_function(lens, field_deg, wavelength_nm, pupil_samples)
         chief = pf.chief
     center = None if origin_mm is None else (origin_mm - chief.image_xy) * 1e3
     if method == "fraunhofer":
@@ -212,7 +133,9 @@ def psf(lens: Lens, field_deg, wavelength_nm, *, weights=None, pitch_um: float =
     w8 = w8 / w8.sum()
     fields = np.repeat(np.array([field]), len(wavelengths), axis=0)
     # all wavelengths share one origin, the first wavelength's chief ray, so lateral colour shows
-    origin = P.chief_rays(lens, fields[:1], np.array(wavelengths[:1])).image_xy
+    from .pupil import chief_rays
+
+    origin = chief_rays(lens, fields[:1], np.array(wavelengths[:1])).image_xy
     data, chief, transmission, vignetted = compute(lens, fields, np.array(wavelengths), pitch_um, size, method,
                                                    pupil_samples, rays, np.repeat(origin, len(wavelengths), axis=0))
     total = np.tensordot(w8, data, axes=1)

@@ -179,8 +179,22 @@ class PupilFunction:
         return np.sum(self.power * self.coverage, axis=(1, 2)) * self.cell_area
 
 
+def entrance_power(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, ex: np.ndarray,
+                   ey: np.ndarray) -> np.ndarray:
+    """Power per unit entrance area (1/mm²) of rays at entrance coordinates ex, ey (n, ...) for
+    fields (n, 2): the on-axis entrance pupil carries 1. Finite objects add cos³ of the ray's angle
+    to the axis (a point source's power per area of the aim plane)."""
+    density = np.array([_power_density(lens, float(w)) for w in wavelength_nm])
+    density = density.reshape((-1,) + (1,) * (np.ndim(ex) - 1))
+    if lens.at_infinity:
+        return np.broadcast_to(density, np.shape(ex))
+    pts = T.object_points(lens, field_deg).reshape((-1, 2) + (1,) * (np.ndim(ex) - 1))
+    dist2 = (ex - pts[:, 0]) ** 2 + (ey - pts[:, 1]) ** 2 + lens.object_distance ** 2
+    return density * lens.object_distance ** 3 / dist2 ** 1.5
+
+
 def _power_density(lens: Lens, wavelength_nm: float) -> float:
-    """Power per unit entrance area (1/mm²) such that the on-axis entrance pupil carries 1."""
+    """Power per unit entrance area (1/mm²) on axis, such that the on-axis entrance pupil carries 1."""
     p = lens.paraxial(wavelength_nm)
     r_ep = 0.5 * p.entrance_pupil_diameter_mm
     if lens.at_infinity:
@@ -265,14 +279,7 @@ def pupil_function(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray,
         dw_db, dw_da = np.gradient(w, axis=(1, 2))
         return np.abs(du_da * dw_db - du_db * dw_da) / (da * db)
 
-    density = np.array([_power_density(lens, float(w)) for w in wavelength_nm])[:, None, None]
-    if lens.at_infinity:
-        weight = density
-    else:
-        pts = T.object_points(lens, field_deg)
-        dist2 = (ex - pts[:, 0, None, None]) ** 2 + (ey - pts[:, 1, None, None]) ** 2 + lens.object_distance ** 2
-        weight = density * lens.object_distance ** 3 / dist2 ** 1.5  # cos³ψ
-    power = weight * jacobian(ex, ey)
+    power = entrance_power(lens, field_deg, wavelength_nm, ex, ey) * jacobian(ex, ey)
     cell = np.sqrt(jacobian(sx, sy) * da * db)  # grid cell size at the stop (mm)
     margin = r_stop - np.hypot(sx, sy)
     coverages = np.clip(0.5 + margin / np.maximum(cell, 1e-300), 0.0, 1.0)

@@ -99,14 +99,19 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F) -> Traced:
     stop_x = stop_y = None
     n_before = refractive_index(lens.object_glass, wavelength_um)
     for k, (s, zv) in enumerate(zip(lens.surfaces, lens.vertex_z)):
-        lz = z - _opaque(zv)
+        # move to the vertex plane first: the sphere equation is then solved from nearby, free of the
+        # cancellation that a distant start point (a finite object far away) would bring into B² − cC
+        t0 = (_opaque(zv) - z) / dz
+        ok &= dz > 0
+        x, y = dr.fma(t0, dx, x), dr.fma(t0, dy, y)
+        lz = dr.zeros(F, dr.width(x))
+        opl = dr.fma(n_before, t0, opl)
         if s.curvature == 0.0:
-            t = -lz / dz
-            ok &= dz > 0
+            t = dr.zeros(F, dr.width(x))
         else:
             c = _opaque(s.curvature)
-            b = dz - c * (x * dx + y * dy + lz * dz)
-            cc = c * (x * x + y * y + lz * lz) - 2.0 * lz
+            b = dz - c * (x * dx + y * dy)
+            cc = c * (x * x + y * y)
             disc = b * b - c * cc
             ok &= (disc >= 0) & (b > 0)
             # cancellation-free root nearest the vertex: t = C / (B + sqrt(B² − cC))

@@ -1,0 +1,34 @@
+"""Fraunhofer PSFs: |matrix DFT of the pupil function|² on an image-plane grid of any pitch."""
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from .psf import grid_offsets
+from .pupil import PupilFunction
+
+
+def fraunhofer(pf: PupilFunction, pitch_um: float, size: int, center_um: np.ndarray | None = None) -> np.ndarray:
+    """Fraunhofer PSFs (n, size, size) in 1/µm² from pupil functions, by matrix DFT.
+
+    `center_um` (n, 2) shifts each grid's origin from the chief ray (default: none)."""
+    n = len(pf.alpha)
+    offs = grid_offsets(size, pitch_um) * 1e-3  # mm
+    u = np.broadcast_to(offs, (n, size)).copy()
+    v = np.broadcast_to(-offs, (n, size)).copy()
+    if center_um is not None:
+        u += center_um[:, 0:1] * 1e-3
+        v += center_um[:, 1:2] * 1e-3
+    lam = pf.wavelength_nm * 1e-6 / pf.chief.n_image  # mm, in image space
+    k = 2.0 * math.pi / lam
+    phase = (2.0 * math.pi / (pf.wavelength_nm * 1e-6))[:, None, None] * pf.opd_mm
+    pupil = (pf.amplitude * np.exp(1j * phase)).astype(np.complex64)
+    # separable DFT kernels; phases in float64, products in complex64 (errors ~1e-7 of the peak)
+    ex = np.exp(-1j * k[:, None, None] * pf.alpha[:, :, None] * u[:, None, :]).astype(np.complex64)  # (n, N, size)
+    ey = np.exp(-1j * k[:, None, None] * v[:, :, None] * pf.beta[:, None, :]).astype(np.complex64)  # (n, size, N)
+    field_ = np.empty((n, len(offs), len(offs)), dtype=np.complex64)
+    for f in range(n):
+        field_[f] = (ey[f] @ pupil[f]) @ ex[f]
+    scale = (pf.cell_area / lam) ** 2 * 1e-6  # |U|² in 1/mm² → 1/µm²
+    return (field_.real.astype(np.float64) ** 2 + field_.imag.astype(np.float64) ** 2) * scale[:, None, None]
