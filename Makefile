@@ -6,7 +6,7 @@ STAMP  := $(VENV)/.installed
 SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 OUT    ?= out
 
-.PHONY: setup llvm demo test test-slow bench clean
+.PHONY: setup llvm demo test bench clean
 
 setup: llvm $(STAMP)
 
@@ -30,9 +30,6 @@ demo: setup
 
 test: setup
 	$(PY) -m pytest -q
-
-test-slow: setup
-	$(PY) -m pytest -q -m slow
 
 bench: setup
 	$(PY) benchmarks/run_all.py

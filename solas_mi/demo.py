@@ -1,4 +1,5 @@
-"""`make demo`: the bundled doublet's paraxial table, its nine PSFs and an 8×8 PSF grid."""
+"""`make demo`: the bundled doublet's paraxial table, its nine PSFs and an 8×8 PSF grid, and a
+slanted-edge target of known MTF measured by the e-SFR."""
 from __future__ import annotations
 
 import argparse
@@ -24,8 +25,11 @@ def run(out: Path) -> None:
                  "--size", "160", "--normalize", "peak", "-o", str(psfs / f"psf_{field:+d}deg_{wl}nm.exr")])
     cli(["psf-grid", "solas-doublet", "--grid", "8x8", "--wavelengths", "656,531,486", "--pitch-um", "0.5",
          "--size", "160", "-o", str(out / "psf_grid_8x8.exr")])
+    edge = out / "sfr" / "edge_5deg_sigma1px.png"
+    cli(["sfr-target", "-o", str(edge), "--angle-deg", "5", "--sigma-px", "1", "--size", "128x128"])
+    cli(["sfr", str(edge)])
     print(json.dumps({"results": str(out.resolve()), "paraxial": "lens_info.txt", "psfs": "psf/*.exr|png",
-                      "grid": "psf_grid_8x8.exr|png"}, indent=2))
+                      "grid": "psf_grid_8x8.exr|png", "slanted edge": "sfr/edge_5deg_sigma1px.png"}, indent=2))
 
 
 def main() -> None:

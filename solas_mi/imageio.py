@@ -8,6 +8,7 @@ import json
 import os
 import tempfile
 from contextlib import contextmanager
+from functools import lru_cache
 from pathlib import Path
 from typing import Iterator
 
@@ -28,6 +29,9 @@ def atomic_path(path: str | os.PathLike) -> Iterator[str]:
     os.close(fd)
     try:
         yield tmp
+        umask = os.umask(0)
+        os.umask(umask)
+        os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes the file private; give it the usual mode
         os.replace(tmp, path)
     finally:
         if os.path.exists(tmp):
@@ -40,17 +44,27 @@ def srgb_encode(linear: np.ndarray) -> np.ndarray:
     return np.where(x <= 0.0031308, 12.92 * x, 1.055 * np.power(x, 1 / 2.4) - 0.055)
 
 
+@lru_cache(maxsize=1)
+def _srgb8_table() -> np.ndarray:
+    """8-bit sRGB code of each 16-bit linear level (the nearest code, ±1 at code boundaries)."""
+    return np.round(srgb_encode(np.linspace(0.0, 1.0, 65536)) * 255.0).astype(np.uint8)
+
+
 def srgb_decode(encoded: np.ndarray) -> np.ndarray:
     """sRGB-encoded [0, 1] → linear [0, 1] (IEC 61966-2-1)."""
     x = np.clip(encoded, 0.0, 1.0)
     return np.where(x <= 0.04045, x / 12.92, np.power((x + 0.055) / 1.055, 2.4))
 
 
-def write_exr(path: str | os.PathLike, channels: dict[str, np.ndarray], meta: dict | None = None) -> None:
-    """Write float32 channels (equal 2-D shapes, row 0 = top) and JSON metadata to an OpenEXR file."""
+def write_exr(path: str | os.PathLike, channels: dict[str, np.ndarray], meta: dict | None = None,
+              compress: bool = True) -> None:
+    """Write float32 channels (equal 2-D shapes, row 0 = top) and JSON metadata to an OpenEXR file.
+
+    `compress=False` skips ZIP compression, for data that does not compress (PSF grids)."""
     import OpenEXR
 
-    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    compression = OpenEXR.ZIP_COMPRESSION if compress else OpenEXR.NO_COMPRESSION
+    header = {"compression": compression, "type": OpenEXR.scanlineimage}
     if meta is not None:
         header[META_KEY] = json.dumps(meta)
     data = {name: np.ascontiguousarray(a, dtype=np.float32) for name, a in channels.items()}
@@ -77,10 +91,12 @@ def write_png(path: str | os.PathLike, image: np.ndarray, *, encoded: bool = Fal
     """Write a linear [0, 1] image (H×W or H×W×3) as 8-bit sRGB PNG; `encoded=True` skips the encoding."""
     import imageio.v3 as iio
 
-    values = image if encoded else srgb_encode(image)
-    data = np.round(np.clip(values, 0.0, 1.0) * 255.0).astype(np.uint8)
+    if encoded:
+        data = np.round(np.clip(image, 0.0, 1.0) * 255.0).astype(np.uint8)
+    else:
+        data = _srgb8_table()[(np.clip(image, 0.0, 1.0) * 65535.0 + 0.5).astype(np.uint16)]
     with atomic_path(path) as tmp:
-        iio.imwrite(tmp, data, extension=".png")
+        iio.imwrite(tmp, data, extension=".png", compress_level=1)  # fast zlib: viewing copies only
 
 
 def read_image(path: str | os.PathLike, *, linearize: bool = True) -> np.ndarray:

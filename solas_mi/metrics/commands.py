@@ -203,7 +203,7 @@ def register(subparsers: Any) -> None:
 
     p = subparsers.add_parser(
         "sfr-target", help="write a synthetic slanted-edge target with a known MTF",
-        description="Slanted edge (or square) blurred by a Gaussian PSF and integrated over 100 %% "
+        description="Slanted edge (or square) blurred by a Gaussian PSF and integrated over 100 % "
                     "fill-factor pixels; prints the analytic MTF50 to check a measurement setup.")
     p.add_argument("-o", "--output", required=True, help="OUT.png (8-bit sRGB) or OUT.exr (linear float)")
     p.add_argument("--angle-deg", type=float, default=5.0, help="edge tilt from vertical, degrees")
