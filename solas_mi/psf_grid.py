@@ -154,11 +154,14 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
     data = np.zeros((len(wl), n, size, size), dtype=np.float32)
     chief = np.zeros((len(wl), n, 2))
     transmission = np.zeros((len(wl), n))
+    vignetting: set[int] = set()
     start = time.perf_counter()
     for k, w in enumerate(wl):
         for a in range(0, len(canon), _FIELDS_PER_BATCH):
             b = min(len(canon), a + _FIELDS_PER_BATCH)
-            psfs, cr, tr, _ = S.compute(lens, canon[a:b], np.full(b - a, w), pitch_um, odd, method, pupil_samples, rays)
+            psfs, cr, tr, vig = S.compute(lens, canon[a:b], np.full(b - a, w), pitch_um, odd, method, pupil_samples,
+                                          rays)
+            vignetting.update(s for v in vig for s in v)
             for c in range(a, b):
                 for i in np.flatnonzero(which == c):
                     p = psfs[c - a]
@@ -179,6 +182,7 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
         "normalization": normalization, "field_sampling": field_sampling, "field_range_deg": [hx, hy],
         "sampling": {"pupil_samples": pupil_samples} if method == "fraunhofer" else {"rays": rays},
         "transmission": transmission.reshape(len(wl), ny, nx).tolist(),
+        "vignetted_by_surfaces": sorted(vignetting),
         "origin_pixel": [size // 2, size // 2],
         "orientation": "PSF row 0 = top (largest y), column 0 = left (smallest x); grid row 0 = largest y field",
         "seconds": time.perf_counter() - start,

@@ -19,6 +19,7 @@ def test_grid_layout_and_round_trip(doublet, tmp_path):
     assert back.wavelengths_nm == (486.0, 656.0) and back.pitch_um == 0.5
     assert np.allclose(back.chief_ray_mm, g.chief_ray_mm) and np.allclose(back.fields_deg, g.fields_deg)
     assert back.meta["lens_hash"] == doublet.hash and back.meta["method"] == "fraunhofer"
+    assert back.meta["vignetted_by_surfaces"] == [] and len(back.meta["transmission"][0]) == 2
     assert [p.name for p in tmp_path.iterdir()] == ["grid.exr"]  # nothing half-written left
 
 
