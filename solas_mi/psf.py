@@ -24,6 +24,11 @@ if TYPE_CHECKING:
 
 METHODS = ("fraunhofer", "geometric")
 NORMALIZATIONS = ("sum", "peak", "none")
+VALUE_MEANING = {
+    "sum": "unit sum over the grid",
+    "peak": "unit peak",
+    "none": "irradiance per um^2 as a fraction of the on-axis entrance-pupil power",
+}
 DEFAULT_PUPIL_SAMPLES = 128
 DEFAULT_GEOMETRIC_RAYS = 512
 
@@ -69,19 +74,28 @@ def check_grid(pitch_um: float, size: int) -> None:
         raise SolasError(f"PSF pitch {pitch_um!r} µm must be a positive number")
 
 
-def normalize(data: np.ndarray, how: str) -> np.ndarray:
-    """Normalise PSFs over the last two axes: "sum", "peak" or "none"."""
+def check_normalization(how: str) -> None:
     if how not in NORMALIZATIONS:
         raise SolasError(f"normalization {how!r} must be one of {', '.join(NORMALIZATIONS)}")
+
+
+def normalize(data: np.ndarray, how: str) -> np.ndarray:
+    """Normalise PSFs over the last two axes: "sum", "peak" or "none"."""
+    check_normalization(how)
     if how == "none":
         return data
     scale = data.sum(axis=(-2, -1), keepdims=True) if how == "sum" else data.max(axis=(-2, -1), keepdims=True)
     return data / np.where(scale > 0, scale, 1.0)
 
 
-def check_method(method: str) -> None:
+def check_method(method: str, pupil_samples: int, rays: int) -> None:
+    """The method's name and its sampling: pupil samples N (N×N) or rays (rays×rays)."""
     if method not in METHODS:
         raise SolasError(f"PSF method {method!r} must be one of {', '.join(METHODS)}")
+    if method == "fraunhofer" and (not isinstance(pupil_samples, (int, np.integer)) or pupil_samples < 8):
+        raise SolasError(f"pupil samples {pupil_samples!r} must be an integer >= 8")
+    if method == "geometric" and (not isinstance(rays, (int, np.integer)) or rays < 2):
+        raise SolasError(f"rays {rays!r} must be an integer >= 2 (rays × rays per PSF)")
 
 
 def compute(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int,
@@ -123,7 +137,8 @@ def psf(lens: Lens, field_deg, wavelength_nm, *, weights=None, pitch_um: float =
     (polychromatic: the power-weighted sum of the monochromatic PSFs)."""
     field = check_field(field_deg)
     check_grid(pitch_um, size)
-    check_method(method)
+    check_method(method, pupil_samples, rays)
+    check_normalization(normalization)
     wavelengths = tuple(float(w) for w in np.atleast_1d(wavelength_nm))
     for w in wavelengths:
         lens.check_wavelength(w)
@@ -140,7 +155,7 @@ def psf(lens: Lens, field_deg, wavelength_nm, *, weights=None, pitch_um: float =
                                                    pupil_samples, rays, np.repeat(origin, len(wavelengths), axis=0))
     total = np.tensordot(w8, data, axes=1)
     meta = {
-        "lens": lens.name, "lens_hash": lens.hash, "units": "1/um^2 of the on-axis entrance-pupil power" if normalization == "none" else normalization,
+        "lens": lens.name, "lens_hash": lens.hash, "values": VALUE_MEANING[normalization],
         "sampling": {"pupil_samples": pupil_samples} if method == "fraunhofer" else {"rays": rays},
         "chief_ray_mm": {f"{w:g}": chief.image_xy[i].tolist() for i, w in enumerate(wavelengths)},
         "transmission": float(np.dot(w8, transmission)),

@@ -133,7 +133,8 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
     """PSFs on a (ny, nx) field grid spanning ±field_range_deg (x, y) (default: the lens's field in both)."""
     ny, nx = parse_grid(grid) if isinstance(grid, str) else grid
     S.check_grid(pitch_um, size)
-    S.check_method(method)
+    S.check_method(method, pupil_samples, rays)
+    S.check_normalization(normalization)
     wl = tuple(float(w) for w in (wavelengths_nm if wavelengths_nm is not None else lens.wavelengths_nm))
     if not wl:
         raise SolasError("at least one wavelength is needed")
@@ -179,7 +180,7 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
                 progress(k * len(canon) + b, len(wl) * len(canon))
     meta = {
         "lens": lens.name, "lens_hash": lens.hash, "lens_source": lens.source, "method": method,
-        "normalization": normalization, "field_sampling": field_sampling, "field_range_deg": [hx, hy],
+        "normalization": normalization, "values": S.VALUE_MEANING[normalization], "field_sampling": field_sampling, "field_range_deg": [hx, hy],
         "sampling": {"pupil_samples": pupil_samples} if method == "fraunhofer" else {"rays": rays},
         "transmission": transmission.reshape(len(wl), ny, nx).tolist(),
         "vignetted_by_surfaces": sorted(vignetting),

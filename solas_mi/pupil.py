@@ -205,9 +205,8 @@ def _power_density(lens: Lens, wavelength_nm: float) -> float:
 
 
 def pupil_function(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, samples: int) -> PupilFunction:
-    """Pupil function on an N×N (α, β) grid (N = `samples`) for each field/wavelength pair."""
-    if not isinstance(samples, (int, np.integer)) or samples < 8:
-        raise SolasError(f"pupil samples {samples!r} must be an integer >= 8")
+    """Pupil function on an N×N (α, β) grid (N = `samples`, checked by `psf.check_method`) for each
+    field/wavelength pair."""
     field_deg = np.atleast_2d(np.asarray(field_deg, dtype=np.float64))
     nf = len(field_deg)
     wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (nf,)).copy()

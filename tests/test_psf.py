@@ -113,6 +113,7 @@ def test_normalizations(doublet):
     (dict(method="huygens"), "method 'huygens' must be one of fraunhofer, geometric"),
     (dict(normalization="max"), "normalization 'max' must be one of sum, peak, none"),
     (dict(pupil_samples=4), "pupil samples 4 must be an integer >= 8"),
+    (dict(method="geometric", rays=1), "rays 1 must be an integer >= 2"),
 ])
 def test_bad_psf_arguments(doublet, kwargs, match):
     with pytest.raises(SolasError, match=match):
