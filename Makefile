@@ -11,11 +11,11 @@ OUT    ?= out
 setup: llvm $(STAMP)
 
 # Dr.Jit needs libLLVM >= 17 (15 and 16 crash it); install Debian's libllvm19 when none is present.
+# The search is solas_mi.llvm's own (standard library only), so Makefile and package agree.
 llvm:
-	@if ls /usr/lib/*/libLLVM*.so* /usr/lib/llvm-*/lib/libLLVM*.so* 2>/dev/null \
-	     | grep -Eq 'libLLVM(-|\.so\.)(1[7-9]|[2-9][0-9])|llvm-(1[7-9]|[2-9][0-9])/'; then :; \
-	 else echo "installing libllvm19 (Dr.Jit needs libLLVM >= 17)"; \
-	      $(SUDO) apt-get update -qq && $(SUDO) apt-get install -y -qq libllvm19; fi
+	@$(PYTHON) -c 'import sys; sys.path.insert(0, "."); from solas_mi.llvm import find_libllvm; sys.exit(find_libllvm()[0] is None)' \
+	 || { echo "installing libllvm19 (Dr.Jit needs libLLVM >= 17)"; \
+	      $(SUDO) apt-get update -qq && $(SUDO) apt-get install -y -qq libllvm19; }
 
 $(STAMP): pyproject.toml requirements.lock
 	@[ -x $(PY) ] || $(PYTHON) -m venv $(VENV) || { \

@@ -6,18 +6,12 @@ import json
 import sys
 from pathlib import Path
 
+from .arguments import floats, parse_wxh
 from .errors import SolasError
 
 
-def _floats(text: str, what: str) -> list[float]:
-    try:
-        return [float(v) for v in text.split(",") if v.strip()]
-    except ValueError:
-        raise SolasError(f"{what} {text!r} must be comma-separated numbers") from None
-
-
 def _field(text: str) -> tuple[float, float]:
-    values = _floats(text, "--field-deg")
+    values = floats(text, "--field-deg")
     if len(values) == 1:
         values = [0.0, values[0]]
     if len(values) != 2:
@@ -35,8 +29,8 @@ def _lens_info(args) -> int:
     from .paraxial import paraxial
 
     lens = _lens(args.lens)
-    wavelengths = _floats(args.wavelengths, "--wavelengths") if args.wavelengths else list(lens.wavelengths_nm)
-    fields = _floats(args.fields, "--fields") if args.fields else [0.0, lens.field_deg, -lens.field_deg]
+    wavelengths = floats(args.wavelengths, "--wavelengths") if args.wavelengths else list(lens.wavelengths_nm)
+    fields = floats(args.fields, "--fields") if args.fields else [0.0, lens.field_deg, -lens.field_deg]
     from .pupil import chief_rays
     import numpy as np
 
@@ -47,11 +41,12 @@ def _lens_info(args) -> int:
         p["real_chief_ray_image_height_mm"] = real.image_xy[:, 1].tolist()
         rows.append(p)
     info = {"lens": lens.name, "hash": lens.hash, "source": lens.source, "stop_surface": lens.stop_index + 1,
-            "image_z_mm": lens.image_z, "per_wavelength": rows}
+            "image_z_mm": lens.image_z, "image_diameter_mm": lens.image_diameter, "per_wavelength": rows}
     if args.json:
         print(json.dumps(info, indent=2))
         return 0
     print(f"{lens.name}  ({lens.description})  hash {lens.hash}")
+    print(f"stop: surface {lens.stop_index + 1}; image plane z = {lens.image_z:.6f} mm, diameter {lens.image_diameter:g} mm")
     keys = [("efl_mm", "EFL (mm)"), ("bfd_mm", "BFD (mm)"), ("entrance_pupil_diameter_mm", "EPD (mm)"),
             ("entrance_pupil_z_mm", "entrance pupil z (mm)"), ("exit_pupil_diameter_mm", "exit pupil D (mm)"),
             ("exit_pupil_z_mm", "exit pupil z (mm)"), ("f_number", "f/# (EFL/EPD)"),
@@ -67,30 +62,23 @@ def _lens_info(args) -> int:
 
 
 def _psf(args) -> int:
-    from .imageio import write_exr, write_png
-
     lens = _lens(args.lens)
-    wavelengths = _floats(args.wavelength_nm, "--wavelength-nm")
-    weights = _floats(args.weights, "--weights") if args.weights else None
+    wavelengths = floats(args.wavelength_nm, "--wavelength-nm")
+    weights = floats(args.weights, "--weights") if args.weights else None
     p = lens.psf(_field(args.field_deg), wavelengths, weights=weights, pitch_um=args.pitch_um, size=args.size,
                  method=args.method, normalization=args.normalize, pupil_samples=args.pupil_samples, rays=args.rays)
-    meta = dict(p.meta, field_deg=list(p.field_deg), wavelengths_nm=list(p.wavelengths_nm), weights=list(p.weights),
-                pitch_um=p.pitch_um, size=p.size, method=p.method, normalization=p.normalization,
-                chief_ray_origin_mm=list(p.chief_ray_mm))
-    write_exr(args.output, {"Y": p.data}, meta)
+    p.write(args.output)
     png = args.png or str(Path(args.output).with_suffix(".png"))
-    write_png(png, p.data / p.data.max())
+    p.write_png(png)
     print(f"wrote {args.output} and {png}")
     return 0
 
 
 def _psf_grid(args) -> int:
-    from .psf_grid import parse_grid
-
     lens = _lens(args.lens)
-    grid = parse_grid(args.grid)
-    wavelengths = _floats(args.wavelengths, "--wavelengths") if args.wavelengths else None
-    rng = _floats(args.field_range_deg, "--field-range-deg") if args.field_range_deg else None
+    grid = parse_wxh(args.grid, "--grid")
+    wavelengths = floats(args.wavelengths, "--wavelengths") if args.wavelengths else None
+    rng = floats(args.field_range_deg, "--field-range-deg") if args.field_range_deg else None
     if rng is not None and len(rng) not in (1, 2):
         raise SolasError(f"--field-range-deg {args.field_range_deg!r} must be one value or X,Y")
 
@@ -111,10 +99,11 @@ def _psf_grid(args) -> int:
 
 
 def _add_psf_options(p: argparse.ArgumentParser) -> None:
-    from .psf import DEFAULT_GEOMETRIC_RAYS, DEFAULT_PUPIL_SAMPLES, METHODS, NORMALIZATIONS
+    from .psf import (DEFAULT_GEOMETRIC_RAYS, DEFAULT_PITCH_UM, DEFAULT_PUPIL_SAMPLES, DEFAULT_SIZE, METHODS,
+                      NORMALIZATIONS)
 
-    p.add_argument("--pitch-um", type=float, default=0.5, help="image-plane pixel pitch (µm)")
-    p.add_argument("--size", type=int, default=160, help="PSF width and height (pixels)")
+    p.add_argument("--pitch-um", type=float, default=DEFAULT_PITCH_UM, help="image-plane pixel pitch (µm)")
+    p.add_argument("--size", type=int, default=DEFAULT_SIZE, help="PSF width and height (pixels)")
     p.add_argument("--method", choices=METHODS, default="fraunhofer")
     p.add_argument("--normalize", choices=NORMALIZATIONS, default="sum")
     p.add_argument("--pupil-samples", type=int, default=DEFAULT_PUPIL_SAMPLES, help="Fraunhofer pupil grid N×N")
@@ -145,12 +134,14 @@ def build_parser() -> argparse.ArgumentParser:
     _add_psf_options(psf)
     psf.set_defaults(run=_psf)
 
+    from .psf_grid import FIELD_SAMPLINGS
+
     grid = sub.add_parser("psf-grid", help="PSFs on a field grid, one stack per wavelength, as OpenEXR + PNG mosaic")
     grid.add_argument("lens")
     grid.add_argument("--grid", default="8x8", help="columns x rows of field nodes")
     grid.add_argument("--wavelengths", help="nm, comma-separated (default: the lens file's)")
     grid.add_argument("--field-range-deg", help="half range X[,Y] in degrees (default: the lens file's field)")
-    grid.add_argument("--field-sampling", choices=("centers", "edges"), default="centers")
+    grid.add_argument("--field-sampling", choices=FIELD_SAMPLINGS, default=FIELD_SAMPLINGS[0])
     _add_psf_options(grid)
     grid.set_defaults(run=_psf_grid)
 

@@ -6,17 +6,23 @@ import argparse
 import json
 from pathlib import Path
 
-from .cli import main as cli
+from contextlib import redirect_stdout
+
+from .cli import main as solas_mi
+from .imageio import atomic_path
+
+
+def cli(argv: list[str]) -> None:
+    """Run one solas-mi command; stop the demo when it fails."""
+    if solas_mi(argv) != 0:
+        raise SystemExit(f"demo step failed: solas-mi {' '.join(argv)}")
 
 
 def run(out: Path) -> None:
     out.mkdir(parents=True, exist_ok=True)
-    from contextlib import redirect_stdout
-
-    with open(out / "lens_info.txt", "w") as f, redirect_stdout(f):
-        cli(["lens", "info", "solas-doublet"])
-    with open(out / "lens_info.json", "w") as f, redirect_stdout(f):
-        cli(["lens", "info", "solas-doublet", "--json"])
+    for name, extra in (("lens_info.txt", []), ("lens_info.json", ["--json"])):
+        with atomic_path(out / name) as tmp, open(tmp, "w") as f, redirect_stdout(f):
+            cli(["lens", "info", "solas-doublet", *extra])
     print((out / "lens_info.txt").read_text())
     psfs = out / "psf"
     for field in (0, 2, -2):

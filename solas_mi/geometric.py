@@ -14,9 +14,10 @@ _BATCH_RAYS = 1 << 20  # rays traced at once
 
 def geometric(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int,
               rays: int = DEFAULT_GEOMETRIC_RAYS, chief: ChiefRays | None = None,
-              center_um: np.ndarray | None = None) -> tuple[np.ndarray, ChiefRays]:
+              center_um: np.ndarray | None = None) -> tuple[np.ndarray, ChiefRays, np.ndarray]:
     """Geometric PSFs (n, size, size) in 1/µm²: rays on a rays×rays grid over the entrance pupil,
-    binned on the image-plane grid (each bin holds the power that lands in that pixel).
+    binned on the image-plane grid (each bin holds the power that lands in that pixel); also the
+    chief rays and the transmitted power (fraction of the on-axis pupil, inside the grid or not).
 
     `center_um` (n, 2) shifts each grid's origin from the chief ray (default: none)."""
     field_deg = np.atleast_2d(np.asarray(field_deg, dtype=np.float64))
@@ -31,7 +32,7 @@ def geometric(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitc
         # rows run down from +y: the row coordinate is −(y offset), binned like the columns
         h, _, _ = np.histogram2d(shift[f, 1] - dy, dx - shift[f, 0], bins=(edges, edges), weights=w)
         out[f] = h / pitch_um ** 2
-    return out, chief
+    return out, chief, np.array([w.sum() for _, _, w in hits])
 
 
 def entrance_grid_hits(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, rays: int,
@@ -51,8 +52,7 @@ def entrance_grid_hits(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndar
         ey = (cy[:, None, None] + hw[:, None, None] * t[None, :, None]).repeat(rays, axis=2)
         tr = b.trace(T.F(ex.ravel()), T.F(ey.ravel()))
         x, y, _ = T.to_plane(tr, lens.image_z)
-        keep = (np.asarray(tr.ok) & (np.asarray(tr.clipped_by) == 0)).reshape(-1, rays * rays)
-        x, y = np.asarray(x).reshape(-1, rays * rays), np.asarray(y).reshape(-1, rays * rays)
+        keep, x, y = (a.reshape(-1, rays * rays) for a in T.to_numpy(tr.ok & (tr.clipped_by == 0), x, y))
         area = (2.0 * hw / rays) ** 2  # entrance area of one ray
         power = P.entrance_power(lens, field_deg[sl], wavelength_nm[sl], ex, ey).reshape(-1, rays * rays)
         for j, f in enumerate(range(sl.start, sl.stop)):

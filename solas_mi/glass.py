@@ -20,7 +20,8 @@ CATALOG_PATH = Path(__file__).parent / "data" / "glass_catalog.toml"
 LINE_D, LINE_F, LINE_C = 587.5618, 486.1327, 656.2725
 # Range (nm) over which a model glass's two-term dispersion is offered.
 MODEL_RANGE_NM = (365.0, 1014.0)
-_MODEL_RE = re.compile(r"^\s*model\s*:\s*([0-9.]+)\s*/\s*([0-9.]+)\s*$", re.IGNORECASE)
+_NUMBER = r"([0-9]+(?:\.[0-9]*)?|\.[0-9]+)"
+_MODEL_RE = re.compile(rf"^\s*model\s*:\s*{_NUMBER}\s*/\s*{_NUMBER}\s*$", re.IGNORECASE)
 
 
 @dataclass(frozen=True)
@@ -78,10 +79,16 @@ def model_glass(nd: float, vd: float) -> Glass:
 
 
 @lru_cache(maxsize=4)
+def _entries(path: str | None) -> dict:
+    """The catalogue file's [glass] tables."""
+    with open(path or CATALOG_PATH, "rb") as f:
+        return tomllib.load(f)["glass"]
+
+
+@lru_cache(maxsize=4)
 def load_catalog(path: str | None = None) -> dict[str, Glass]:
     """The catalogue as {"VENDOR:NAME": Glass}."""
-    with open(path or CATALOG_PATH, "rb") as f:
-        entries = tomllib.load(f)["glass"]
+    entries = _entries(path)
     return {
         key: Glass(key, "sellmeier", (tuple(e["B"]), tuple(e["C"])), tuple(e["range_nm"]))
         for key, e in entries.items()
@@ -91,10 +98,8 @@ def load_catalog(path: str | None = None) -> dict[str, Glass]:
 @lru_cache(maxsize=4)
 def _aliases(path: str | None = None) -> dict[str, list[str]]:
     """Upper-case name → catalogue keys it may mean (full key, bare name and listed aliases)."""
-    with open(path or CATALOG_PATH, "rb") as f:
-        entries = tomllib.load(f)["glass"]
     names: dict[str, list[str]] = {}
-    for key, e in entries.items():
+    for key, e in _entries(path).items():
         for name in {key, key.split(":", 1)[-1], *e.get("aliases", [])}:
             names.setdefault(name.upper(), []).append(key)
     return names

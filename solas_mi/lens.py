@@ -22,6 +22,26 @@ from .resources import resource_dir
 LENS_DIR = "lenses"
 
 
+def _number(table: dict, key: str, where: str, unit: str, default: float | None = None) -> float:
+    """table[key] as a finite float; SolasError naming the entry when missing or not a number."""
+    if key not in table:
+        if default is None:
+            raise SolasError(f"{where}: missing '{key}'")
+        return default
+    value = table[key]
+    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
+        raise SolasError(f"{where}: {key} = {value!r} must be a finite number ({unit})")
+    return float(value)
+
+
+def _table(spec: dict, key: str, where: str) -> dict:
+    """spec[key] as a table ({} when absent)."""
+    value = spec.get(key, {})
+    if not isinstance(value, dict):
+        raise SolasError(f"{where}: {key} = {value!r} must be a table ([{key}])")
+    return value
+
+
 @dataclass(frozen=True)
 class Surface:
     """One sequential surface; `material` fills the space after it, `thickness` reaches the next."""
@@ -63,7 +83,6 @@ class Lens:
     field_deg: float = 0.0
     description: str = ""
     source: str = ""
-    _spec: dict = field(default_factory=dict, repr=False, compare=False)
     _paraxial_cache: dict = field(default_factory=dict, repr=False, compare=False)
 
     # ------------------------------------------------------------------ loading
@@ -90,49 +109,42 @@ class Lens:
         """Build and validate a lens from the lens-file dictionary."""
         where = source or "lens"
         rows = spec.get("surface")
-        if not isinstance(rows, list) or not rows:
-            raise SolasError(f"{where}: no [[surface]] entries")
+        if not isinstance(rows, list) or not rows or not all(isinstance(r, dict) for r in rows):
+            raise SolasError(f"{where}: no [[surface]] entries (each surface is a table of radius, thickness, ...)")
         surfaces = []
         for i, row in enumerate(rows, start=1):
             label = str(row.get("label", f"surface {i}"))
             ident = f"{where}: surface {i} ({label})"
-            values = {}
-            for key in ("radius", "thickness", "diameter"):
-                if key not in row:
-                    raise SolasError(f"{ident}: missing '{key}'")
-                value = row[key]
-                if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
-                    raise SolasError(f"{ident}: {key} = {value!r} must be a finite number (mm)")
-                values[key] = float(value)
+            radius, thickness, diameter = (_number(row, key, ident, "mm") for key in ("radius", "thickness", "diameter"))
             material = row.get("material", "AIR")
             try:
                 g = glass_mod.resolve(material)
             except SolasError as exc:
                 raise SolasError(f"{ident}: {exc}") from None
-            surfaces.append(Surface(label, values["radius"], values["thickness"], values["diameter"],
-                                    str(material), g, bool(row.get("stop", False))))
-        obj = spec.get("object", {})
+            surfaces.append(Surface(label, radius, thickness, diameter, str(material), g, bool(row.get("stop", False))))
+        obj, image = _table(spec, "object", where), _table(spec, "image", where)
         distance = obj.get("distance", "infinity")
         if isinstance(distance, str) and distance.strip().lower() in ("inf", "infinity"):
             distance = math.inf
-        elif not isinstance(distance, (int, float)) or isinstance(distance, bool) or not distance > 0:
+        elif not isinstance(distance, (int, float)) or isinstance(distance, bool) or not 0 < distance < math.inf:
             raise SolasError(f"{where}: object distance {distance!r} must be a positive number (mm) or \"infinity\"")
         try:
             object_glass = glass_mod.resolve(obj.get("material", "AIR"))
         except SolasError as exc:
             raise SolasError(f"{where}: object: {exc}") from None
-        wavelengths = tuple(float(w) for w in spec.get("wavelengths_nm", (486.0, 531.0, 656.0)))
+        wavelengths = spec.get("wavelengths_nm", [486.0, 531.0, 656.0])
+        if not isinstance(wavelengths, list) or not wavelengths:
+            raise SolasError(f"{where}: wavelengths_nm = {wavelengths!r} must be a non-empty list of numbers (nm)")
         lens = cls(
             name=str(spec.get("name", Path(source).stem if source else "lens")),
             surfaces=tuple(surfaces),
             object_distance=float(distance),
             object_glass=object_glass,
-            image_diameter=float(spec.get("image", {}).get("diameter", 0.0)),
-            wavelengths_nm=wavelengths,
-            field_deg=float(spec.get("field_deg", 0.0)),
+            image_diameter=_number(image, "diameter", f"{where}: image", "mm", 0.0),
+            wavelengths_nm=tuple(_number({"wavelengths_nm": w}, "wavelengths_nm", where, "nm") for w in wavelengths),
+            field_deg=_number(spec, "field_deg", where, "degrees", 0.0),
             description=str(spec.get("description", "")),
             source=source,
-            _spec=spec,
         )
         lens._validate(where)
         return lens

@@ -24,11 +24,10 @@ _SEARCH = (
 
 
 def _version(path: str) -> int | None:
-    """Major version read from a libLLVM file name (libLLVM-19.so, libLLVM.so.19.1, llvm-19/...)."""
+    """Major version of a libLLVM: from its folder (/usr/lib/llvm-19/lib/libLLVM.so.1) or else its
+    file name (libLLVM-19.so, libLLVM.so.19.1)."""
     name = Path(path).name
-    m = re.search(r"libLLVM[-.]?(\d+)", name) or re.search(r"\.so\.(\d+)", name)
-    if m is None:
-        m = re.search(r"llvm-(\d+)", path)
+    m = re.search(r"llvm-(\d+)/", path) or re.search(r"libLLVM-(\d+)", name) or re.search(r"\.so\.(\d+)", name)
     return int(m.group(1)) if m else None
 
 
@@ -73,12 +72,3 @@ def import_drjit():
     import drjit
 
     return drjit
-
-
-def import_mitsuba(variant: str):
-    """Import mitsuba after selecting libLLVM and set `variant`; returns the mitsuba module."""
-    select_libllvm()
-    import mitsuba
-
-    mitsuba.set_variant(variant)
-    return mitsuba

@@ -18,7 +18,7 @@ class Paraxial:
 
     wavelength_nm: float
     efl_mm: float
-    bfd_mm: float  # from the last surface with optical power to the paraxial focus
+    bfd_mm: float  # from the last refracting surface (the medium changes there) to the paraxial focus
     focus_z_mm: float  # paraxial image of the object
     image_z_mm: float  # the lens file's image plane
     image_offset_mm: float  # image plane − paraxial focus (negative: the plane lies inside focus)
@@ -104,9 +104,8 @@ def paraxial(lens: Lens, wavelength_nm: float, fields_deg: list[float] | None = 
         ym, um = y0 * scale, u0 * scale
         obj_z = -d
     focus_z = z[last] - ym[last] / um[last]
-    powered = [k for k in range(last + 1) if (n[k + 1] - n[k]) * lens.surfaces[k].curvature != 0 or n[k + 1] != n[k]]
-    k_pow = powered[-1] if powered else last
-    bfd = focus_z - z[k_pow]
+    refracting = [k for k in range(last + 1) if n[k + 1] != n[k]]
+    bfd = focus_z - z[refracting[-1] if refracting else last]
     image_z = lens.image_z
 
     fields = list(fields_deg) if fields_deg is not None else [0.0, lens.field_deg]

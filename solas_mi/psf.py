@@ -29,6 +29,8 @@ VALUE_MEANING = {
     "peak": "unit peak",
     "none": "irradiance per um^2 as a fraction of the on-axis entrance-pupil power",
 }
+DEFAULT_PITCH_UM = 0.5
+DEFAULT_SIZE = 160
 DEFAULT_PUPIL_SAMPLES = 128
 DEFAULT_GEOMETRIC_RAYS = 512
 
@@ -60,6 +62,21 @@ class PSF:
     def y_um(self) -> np.ndarray:
         """Row centres relative to the chief ray (µm), top row first."""
         return -grid_offsets(self.size, self.pitch_um)
+
+    def write(self, path: str) -> None:
+        """Write as OpenEXR (channel "Y") with all metadata in the header."""
+        from .imageio import write_exr
+
+        meta = dict(self.meta, field_deg=list(self.field_deg), wavelengths_nm=list(self.wavelengths_nm),
+                    weights=list(self.weights), pitch_um=self.pitch_um, size=self.size,
+                    chief_ray_origin_mm=list(self.chief_ray_mm))
+        write_exr(path, {"Y": self.data}, meta)
+
+    def write_png(self, path: str) -> None:
+        """The PSF scaled to its peak, as an sRGB PNG for viewing."""
+        from .imageio import write_png
+
+        write_png(path, self.data / max(float(self.data.max()), 1e-300))
 
 
 def grid_offsets(size: int, pitch_um: float) -> np.ndarray:
@@ -116,8 +133,19 @@ def compute(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_
     center = None if origin_mm is None else (origin_mm - chief.image_xy) * 1e3
     if method == "fraunhofer":
         return fraunhofer(pf, pitch_um, size, center), chief, pf.transmission, pf.vignetted_by
-    data, _ = geometric(lens, field_deg, wavelength_nm, pitch_um, size, rays, chief, center)
-    return data, chief, data.sum(axis=(1, 2)) * pitch_um ** 2, [[] for _ in range(len(field_deg))]
+    data, _, transmission = geometric(lens, field_deg, wavelength_nm, pitch_um, size, rays, chief, center)
+    return data, chief, transmission, [[] for _ in range(len(field_deg))]
+
+
+def describe(lens: Lens, method: str, normalization: str, pupil_samples: int, rays: int, size: int) -> dict:
+    """The metadata every PSF output carries: lens, method, sampling and array conventions."""
+    return {
+        "lens": lens.name, "lens_hash": lens.hash, "lens_source": lens.source, "method": method,
+        "normalization": normalization, "values": VALUE_MEANING[normalization],
+        "sampling": {"pupil_samples": pupil_samples} if method == "fraunhofer" else {"rays": rays},
+        "origin_pixel": [size // 2, size // 2],
+        "orientation": "row 0 = top (largest y), column 0 = left (smallest x)",
+    }
 
 
 def check_field(field_deg) -> tuple[float, float]:
@@ -130,7 +158,8 @@ def check_field(field_deg) -> tuple[float, float]:
     return fx, fy
 
 
-def psf(lens: Lens, field_deg, wavelength_nm, *, weights=None, pitch_um: float = 0.5, size: int = 160,
+def psf(lens: Lens, field_deg, wavelength_nm, *, weights=None, pitch_um: float = DEFAULT_PITCH_UM,
+        size: int = DEFAULT_SIZE,
         method: str = "fraunhofer", normalization: str = "sum", pupil_samples: int = DEFAULT_PUPIL_SAMPLES,
         rays: int = DEFAULT_GEOMETRIC_RAYS) -> PSF:
     """The PSF at `field_deg` (x, y degrees) for one wavelength (nm) or several with `weights`
@@ -154,15 +183,12 @@ def psf(lens: Lens, field_deg, wavelength_nm, *, weights=None, pitch_um: float =
     data, chief, transmission, vignetted = compute(lens, fields, np.array(wavelengths), pitch_um, size, method,
                                                    pupil_samples, rays, np.repeat(origin, len(wavelengths), axis=0))
     total = np.tensordot(w8, data, axes=1)
-    meta = {
-        "lens": lens.name, "lens_hash": lens.hash, "values": VALUE_MEANING[normalization],
-        "sampling": {"pupil_samples": pupil_samples} if method == "fraunhofer" else {"rays": rays},
+    meta = describe(lens, method, normalization, pupil_samples, rays, size)
+    meta.update({
         "chief_ray_mm": {f"{w:g}": chief.image_xy[i].tolist() for i, w in enumerate(wavelengths)},
         "transmission": float(np.dot(w8, transmission)),
         "energy_in_grid": float(total.sum() * pitch_um ** 2 / max(np.dot(w8, transmission), 1e-300)),
         "vignetted_by_surfaces": sorted({s for v in vignetted for s in v}),
-        "origin_pixel": [size // 2, size // 2],
-        "orientation": "row 0 = top (largest y), column 0 = left (smallest x)",
-    }
+    })
     return PSF(normalize(total, normalization), float(pitch_um), field, wavelengths, tuple(w8.tolist()),
                tuple(chief.image_xy[0].tolist()), method, normalization, meta)

@@ -11,8 +11,6 @@ cells spanning ±field (the block centres of a tiled image); "edges" spans ±fie
 """
 from __future__ import annotations
 
-import math
-import re
 import time
 from dataclasses import dataclass, field
 
@@ -20,12 +18,12 @@ import numpy as np
 
 from . import psf as S
 from .errors import SolasError
+from .arguments import parse_wxh
 from .imageio import read_exr, write_exr, write_png
 from .lens import Lens
 
 FIELD_SAMPLINGS = ("centers", "edges")
 _FIELDS_PER_BATCH = 64
-_CHANNEL = re.compile(r"^psf_([0-9.]+)nm$")
 
 
 @dataclass
@@ -50,9 +48,7 @@ class PSFGrid:
 
     def mosaic(self, k: int) -> np.ndarray:
         """Wavelength k's PSFs tiled as one (ny·size, nx·size) image."""
-        ny, nx = self.shape
-        s = self.size
-        return self.data[k].transpose(0, 2, 1, 3).reshape(ny * s, nx * s)
+        return tile(self.data[k])
 
     def write(self, path: str) -> None:
         """Write as OpenEXR: one mosaic channel per wavelength ("psf_531nm"), metadata in the header."""
@@ -63,8 +59,10 @@ class PSFGrid:
             "chief_ray_mm": self.chief_ray_mm.tolist(),
         })
         # PSF tails are float noise that ZIP cannot shrink (3 % for 10× the time): stored uncompressed
-        write_exr(path, {f"psf_{w:g}nm": self.mosaic(k) for k, w in enumerate(self.wavelengths_nm)}, meta,
-                  compress=False)
+        channels = {f"psf_{w:g}nm": self.mosaic(k) for k, w in enumerate(self.wavelengths_nm)}
+        if len(channels) != len(self.wavelengths_nm):
+            raise SolasError(f"wavelengths {self.wavelengths_nm} nm are not distinct to 6 digits; channel names would collide")
+        write_exr(path, channels, meta, compress=False)
 
     @classmethod
     def read(cls, path: str) -> "PSFGrid":
@@ -86,8 +84,7 @@ class PSFGrid:
     def write_png(self, path: str) -> None:
         """A mosaic for viewing: each PSF scaled to its peak; three wavelengths → R, G, B (longest red)."""
         peak = np.maximum(self.data.max(axis=(-2, -1), keepdims=True), np.float32(1e-30))
-        tiles = PSFGrid(self.data / peak, self.fields_deg, self.chief_ray_mm, self.wavelengths_nm, self.pitch_um)
-        mosaics = [tiles.mosaic(k) for k in range(len(self.wavelengths_nm))]
+        mosaics = [tile(stack) for stack in self.data / peak]
         if len(mosaics) == 3:
             order = np.argsort(self.wavelengths_nm)[::-1]
             image = np.stack([mosaics[i] for i in order], axis=-1)
@@ -96,12 +93,10 @@ class PSFGrid:
         write_png(path, image)
 
 
-def parse_grid(text: str) -> tuple[int, int]:
-    """"8x8" → (ny, nx) = (8, 8); "32x24" → nx=32 columns, ny=24 rows."""
-    m = re.fullmatch(r"\s*(\d+)\s*[xX×]\s*(\d+)\s*", str(text))
-    if not m or int(m.group(1)) < 1 or int(m.group(2)) < 1:
-        raise SolasError(f"grid {text!r} must look like 8x8 or 32x24 (columns x rows, each >= 1)")
-    return int(m.group(2)), int(m.group(1))
+def tile(stack: np.ndarray) -> np.ndarray:
+    """(ny, nx, s, s) PSFs tiled as one (ny·s, nx·s) image."""
+    ny, nx, s, _ = stack.shape
+    return stack.transpose(0, 2, 1, 3).reshape(ny * s, nx * s)
 
 
 def field_nodes(n: int, half_range: float, sampling: str) -> np.ndarray:
@@ -127,11 +122,13 @@ def symmetry_classes(fields: np.ndarray, decimals: int = 12):
 
 
 def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=None,
-             field_range_deg: tuple[float, float] | float | None = None, pitch_um: float = 0.5, size: int = 160,
+             field_range_deg: tuple[float, float] | float | None = None, pitch_um: float = S.DEFAULT_PITCH_UM,
+             size: int = S.DEFAULT_SIZE,
              method: str = "fraunhofer", normalization: str = "sum", pupil_samples: int = S.DEFAULT_PUPIL_SAMPLES,
              rays: int = S.DEFAULT_GEOMETRIC_RAYS, field_sampling: str = "centers", progress=None) -> PSFGrid:
-    """PSFs on a (ny, nx) field grid spanning ±field_range_deg (x, y) (default: the lens's field in both)."""
-    ny, nx = parse_grid(grid) if isinstance(grid, str) else grid
+    """PSFs on a field grid ("columns x rows" text or a (rows, columns) tuple) spanning
+    ±field_range_deg (x, y) (default: the lens's field in both)."""
+    ny, nx = parse_wxh(grid, "grid")
     S.check_grid(pitch_um, size)
     S.check_method(method, pupil_samples, rays)
     S.check_normalization(normalization)
@@ -142,9 +139,9 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
         lens.check_wavelength(w)
     if field_range_deg is None:
         field_range_deg = lens.field_deg
-    hx, hy = (field_range_deg, field_range_deg) if np.isscalar(field_range_deg) else field_range_deg
-    if not (math.isfinite(hx) and math.isfinite(hy)) or hx < 0 or hy < 0 or max(hx, hy) >= 89:
-        raise SolasError(f"field range ({hx:g}, {hy:g}) deg must be non-negative and below 89 deg")
+    hx, hy = S.check_field((field_range_deg, field_range_deg) if np.isscalar(field_range_deg) else field_range_deg)
+    if hx < 0 or hy < 0:
+        raise SolasError(f"field range ({hx:g}, {hy:g}) deg must be non-negative (half ranges)")
     fx = field_nodes(nx, hx, field_sampling)
     fy = field_nodes(ny, hy, field_sampling)[::-1]  # row 0 = top = largest y
     fields = np.stack(np.meshgrid(fx, fy), axis=-1)  # (ny, nx, 2)
@@ -178,15 +175,13 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
                     transmission[k, i] = tr[c - a]
             if progress is not None:
                 progress(k * len(canon) + b, len(wl) * len(canon))
-    meta = {
-        "lens": lens.name, "lens_hash": lens.hash, "lens_source": lens.source, "method": method,
-        "normalization": normalization, "values": S.VALUE_MEANING[normalization], "field_sampling": field_sampling, "field_range_deg": [hx, hy],
-        "sampling": {"pupil_samples": pupil_samples} if method == "fraunhofer" else {"rays": rays},
+    meta = S.describe(lens, method, normalization, pupil_samples, rays, size)
+    meta.update({
+        "field_sampling": field_sampling, "field_range_deg": [hx, hy],
+        "grid_orientation": "grid row 0 = largest y field, column 0 = smallest x field",
         "transmission": transmission.reshape(len(wl), ny, nx).tolist(),
         "vignetted_by_surfaces": sorted(vignetting),
-        "origin_pixel": [size // 2, size // 2],
-        "orientation": "PSF row 0 = top (largest y), column 0 = left (smallest x); grid row 0 = largest y field",
         "seconds": time.perf_counter() - start,
-    }
+    })
     return PSFGrid(data.reshape(len(wl), ny, nx, size, size), fields, chief.reshape(len(wl), ny, nx, 2), wl,
                    float(pitch_um), meta)

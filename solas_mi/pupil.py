@@ -87,10 +87,8 @@ def _paraxial_aim(lens: Lens, field_deg: np.ndarray) -> np.ndarray:
     ep_z = lens.paraxial().entrance_pupil_z_mm
     tan = T.field_tangents(field_deg)
     if lens.at_infinity:
-        inv = 1.0 / np.sqrt(tan[:, 0] ** 2 + tan[:, 1] ** 2 + 1.0)
-        dx, dy, dz = tan[:, 0] * inv, tan[:, 1] * inv, inv
-        inv1 = 1.0 / np.sqrt(dz * dz + dx * dx)
-        e1z, e2z = -dx * inv1, -dy * dz * inv1
+        # the ray through the pupil centre, in launch-plane coordinates: project (0, 0, ep_z − z0)
+        _, (_, _, e1z), (_, _, e2z) = T.beam_basis(tan[:, 0], tan[:, 1], np.sqrt)
         span = ep_z - T.launch_plane_z(lens)
         return np.stack([span * e1z, span * e2z], axis=-1)
     pts = T.object_points(lens, field_deg)
@@ -107,12 +105,11 @@ class ChiefRays:
     opl: np.ndarray  # (n,) optical path to the reference sphere
     sphere_point: np.ndarray  # (n, 2) (α, β) of the chief ray's sphere point: (Q0 − P0) / R
     n_image: np.ndarray  # (n,)
-    converged: np.ndarray  # (n,) bool: the ray reaches the stop centre
     vignetted: np.ndarray  # (n,) bool: an aperture blocks the chief ray itself
 
 
 def chief_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> ChiefRays:
-    """Real chief rays aimed through the stop centre."""
+    """Real chief rays aimed through the stop centre; SolasError for a field no ray can reach."""
     field_deg = np.atleast_2d(np.asarray(field_deg, dtype=np.float64))
     wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(field_deg),))
     b = Bundle(lens, field_deg, wavelength_nm, 1)
@@ -123,15 +120,20 @@ def chief_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> 
     xp_z = np.array([lens.paraxial(w).exit_pupil_z_mm for w in wavelength_nm])
     qx, qy, qopl = T.to_plane(tr, b.per_ray(xp_z))
     radius = dr.sqrt((qx - px) ** 2 + (qy - py) ** 2 + (b.per_ray(xp_z) - lens.image_z) ** 2)
+    ex, ey, px, py, radius, qopl, sa, sb, n_image, conv, clipped = T.to_numpy(
+        ex, ey, px, py, radius, qopl, (qx - px) / radius, (qy - py) / radius, tr.n_image, conv, tr.clipped_by)
+    if not conv.all():
+        bad = field_deg[~conv][0]
+        raise SolasError(f"no real ray of {wavelength_nm[~conv][0]:g} nm reaches the stop centre for field "
+                         f"({bad[0]:g}, {bad[1]:g}) deg; the lens does not image that field")
     return ChiefRays(
-        entrance=np.stack([np.asarray(ex), np.asarray(ey)], axis=-1),
-        image_xy=np.stack([np.asarray(px), np.asarray(py)], axis=-1),
-        sphere_radius=np.asarray(radius),
-        opl=np.asarray(qopl),
-        sphere_point=np.stack([np.asarray((qx - px) / radius), np.asarray((qy - py) / radius)], axis=-1),
-        n_image=np.broadcast_to(np.asarray(tr.n_image), (b.n_fields,)).copy(),
-        converged=np.asarray(conv),
-        vignetted=np.asarray(tr.clipped_by) != 0,
+        entrance=np.stack([ex, ey], axis=-1),
+        image_xy=np.stack([px, py], axis=-1),
+        sphere_radius=radius,
+        opl=qopl,
+        sphere_point=np.stack([sa, sb], axis=-1),
+        n_image=np.broadcast_to(n_image, (b.n_fields,)).copy(),
+        vignetted=clipped != 0,
     )
 
 
@@ -147,7 +149,8 @@ def stop_rim(rim: Bundle, chief: ChiefRays) -> tuple[np.ndarray, np.ndarray, T.T
     ex, ey, tr, ok = aim(rim, _stop_target, rim.per_ray(chief.entrance[:, 0]) + gx * ratio,
                          rim.per_ray(chief.entrance[:, 1]) + gy * ratio, gx, gy)
     shape = (rim.n_fields, RIM_RAYS)
-    return np.asarray(ex).reshape(shape), np.asarray(ey).reshape(shape), tr, np.asarray(ok).reshape(shape)
+    ex, ey, ok = T.to_numpy(ex, ey, ok)
+    return ex.reshape(shape), ey.reshape(shape), tr, ok.reshape(shape)
 
 
 @dataclass
@@ -211,9 +214,6 @@ def pupil_function(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray,
     nf = len(field_deg)
     wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (nf,)).copy()
     chief = chief_rays(lens, field_deg, wavelength_nm)
-    if not chief.converged.all():
-        bad = field_deg[~chief.converged][0]
-        raise SolasError(f"no real ray reaches the stop centre for field ({bad[0]:g}, {bad[1]:g}) deg")
 
     def sphere_target_for(b: Bundle):
         cx, cy = b.per_ray(chief.image_xy[:, 0]), b.per_ray(chief.image_xy[:, 1])
@@ -229,9 +229,9 @@ def pupil_function(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray,
     # 1. Rim of the stop → extent of the pupil in (α, β) and an affine entrance map.
     rim = Bundle(lens, field_deg, wavelength_nm, RIM_RAYS)
     rex, rey, rtr, rok = stop_rim(rim, chief)
-    ra, rb, hit = sphere_target_for(rim)(rtr)
-    ra, rb = np.asarray(ra).reshape(nf, RIM_RAYS), np.asarray(rb).reshape(nf, RIM_RAYS)
-    rok &= np.asarray(hit).reshape(nf, RIM_RAYS)
+    ra, rb, hit = T.to_numpy(*sphere_target_for(rim)(rtr))
+    ra, rb = ra.reshape(nf, RIM_RAYS), rb.reshape(nf, RIM_RAYS)
+    rok &= hit.reshape(nf, RIM_RAYS)
     if not rok.any(axis=1).all():
         raise SolasError("the stop rim cannot be reached by real rays for some field; the lens is not usable there")
     ca, cb = chief.sphere_point[:, 0], chief.sphere_point[:, 1]
@@ -261,11 +261,9 @@ def pupil_function(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray,
     cx, cy = g.per_ray(chief.image_xy[:, 0]), g.per_ray(chief.image_xy[:, 1])
     _, _, _, opl, hit = T.to_sphere(gtr, cx, cy, lens.image_z, g.per_ray(chief.sphere_radius))
     shape = (nf, samples, samples)
-    opd = np.asarray(opl).reshape(shape) - chief.opl[:, None, None]
-    ok = (np.asarray(gconv) & np.asarray(hit)).reshape(shape)
-    clipped = np.asarray(gtr.clipped_by).reshape(shape)
-    sx, sy = np.asarray(gtr.stop_x).reshape(shape), np.asarray(gtr.stop_y).reshape(shape)
-    ex, ey = np.asarray(gex).reshape(shape), np.asarray(gey).reshape(shape)
+    opl, ok, clipped, sx, sy, ex, ey = (a.reshape(shape) for a in T.to_numpy(
+        opl, gconv & hit, gtr.clipped_by, gtr.stop_x, gtr.stop_y, gex, gey))
+    opd = opl - chief.opl[:, None, None]
 
     # 3. Amplitude: power density × |∂e/∂(α,β)|, stop edge anti-aliased by the covered cell fraction.
     r_stop = lens.surfaces[lens.stop_index].semi_diameter

@@ -10,6 +10,7 @@ from . import pupil as P
 from . import tracer as T
 from .errors import SolasError
 from .lens import Lens
+from .psf import check_field
 
 PATTERNS = ("hexapolar", "grid")
 
@@ -61,16 +62,16 @@ def spot(lens: Lens, field_deg, wavelength_nm: float, pattern: str = "hexapolar"
     Rays on `pattern` fill the real entrance pupil about the real chief ray (aimed through the stop
     centre): the disc reaching the nearest of the real rays aimed at the stop's rim."""
     wavelength_nm = lens.check_wavelength(wavelength_nm)
-    field = np.asarray(field_deg, dtype=np.float64).reshape(1, 2)
+    field = np.array([check_field(field_deg)])
     points = pupil_pattern(pattern, density)
-    chief = P.chief_rays(lens, field, np.array([wavelength_nm]))
     wl = np.array([wavelength_nm])
+    chief = P.chief_rays(lens, field, wl)
     ex, ey, _, ok = P.stop_rim(P.Bundle(lens, field, wl, P.RIM_RAYS), chief)
     radius = float(np.hypot(ex - chief.entrance[0, 0], ey - chief.entrance[0, 1])[ok].min())
-    b = P.Bundle(lens, field, np.array([wavelength_nm]), len(points))
+    b = P.Bundle(lens, field, wl, len(points))
     tr = b.trace(T.F(chief.entrance[0, 0] + radius * points[:, 0]), T.F(chief.entrance[0, 1] + radius * points[:, 1]))
     x, y, _ = T.to_plane(tr, lens.image_z)
-    keep = np.asarray(tr.ok) & (np.asarray(tr.clipped_by) == 0)
+    keep, x, y = T.to_numpy(tr.ok & (tr.clipped_by == 0), x, y)
     x0, y0 = chief.image_xy[0]
-    return Spot((np.asarray(x)[keep] - x0) * 1e3, (np.asarray(y)[keep] - y0) * 1e3, (float(x0), float(y0)),
+    return Spot((x[keep] - x0) * 1e3, (y[keep] - y0) * 1e3, (float(x0), float(y0)),
                 len(points), int((~keep).sum()))

@@ -63,6 +63,16 @@ def launch_plane_z(lens: Lens) -> float:
     return -(2.0 * reach + 10.0)
 
 
+def beam_basis(tan_x, tan_y, sqrt):
+    """Direction d of collimated rays with field tangents (tan_x, tan_y) and the basis (e1, e2) of the
+    plane across the beam: e1 ⟂ y, e2 = d × e1. Any array type (NumPy, Dr.Jit) given its `sqrt`."""
+    inv = 1.0 / sqrt(tan_x * tan_x + tan_y * tan_y + 1.0)
+    dx, dy, dz = tan_x * inv, tan_y * inv, inv
+    inv1 = 1.0 / sqrt(dz * dz + dx * dx)
+    e1x, e1z = dz * inv1, -dx * inv1
+    return (dx, dy, dz), (e1x, 0.0 * e1x, e1z), (dy * e1z, dz * e1x - dx * e1z, -dy * e1x)
+
+
 def launch(lens: Lens, tan_x: F, tan_y: F, ex: F, ey: F, object_point: tuple[F, F] | None = None) -> Rays:
     """Rays for field tangents (tan_x, tan_y) and entrance coordinates (ex, ey), mm.
 
@@ -71,12 +81,7 @@ def launch(lens: Lens, tan_x: F, tan_y: F, ex: F, ey: F, object_point: tuple[F, 
     Finite object: the ray starts at `object_point` (x, y at z = −distance) and aims at (ex, ey, 0).
     """
     if object_point is None:
-        inv = dr.rsqrt(tan_x * tan_x + tan_y * tan_y + 1.0)
-        dx, dy, dz = tan_x * inv, tan_y * inv, inv
-        inv1 = dr.rsqrt(dz * dz + dx * dx)
-        e1x, e1z = dz * inv1, -dx * inv1
-        # e2 = d × e1 with e1 = (e1x, 0, e1z)
-        e2x, e2y, e2z = dy * e1z, dz * e1x - dx * e1z, -dy * e1x
+        (dx, dy, dz), (e1x, _, e1z), (e2x, e2y, e2z) = beam_basis(tan_x, tan_y, dr.sqrt)
         z0 = _opaque(launch_plane_z(lens))
         x = ex * e1x + ey * e2x
         y = ey * e2y
@@ -124,7 +129,7 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F) -> Traced:
         if s.stop:
             stop_x, stop_y = x, y
         n_after = refractive_index(s.glass, wavelength_um)
-        if s.glass is not (lens.surfaces[k - 1].glass if k else lens.object_glass):
+        if s.glass != (lens.surfaces[k - 1].glass if k else lens.object_glass):
             if s.curvature == 0.0:
                 nx, ny, nz = dr.zeros(F, 1), dr.zeros(F, 1), dr.ones(F, 1)
             else:
@@ -184,9 +189,11 @@ def gather(values: np.ndarray, index: UInt32) -> F:
     return dr.gather(F, F(np.ascontiguousarray(values, dtype=np.float64)), index)
 
 
-def numpy(a) -> np.ndarray:
-    """A Dr.Jit array as a NumPy array."""
-    return np.asarray(a)
+def to_numpy(*values) -> tuple[np.ndarray, ...]:
+    """Dr.Jit arrays as NumPy arrays, evaluated together: converting them one by one would run
+    the whole trace kernel once per array."""
+    dr.eval(*values)
+    return tuple(np.asarray(v) for v in values)
 
 
 __all__ = ["Rays", "Traced", "launch", "trace", "to_plane", "to_sphere", "field_tangents", "object_points",

@@ -55,3 +55,8 @@ def test_ambiguous_name_fails(tmp_path):
 def test_outside_valid_range(wavelength):
     with pytest.raises(SolasError, match="outside glass SCHOTT:N-BK7's valid range 300-2500 nm"):
         glass.resolve("N-BK7").index(wavelength)
+
+
+def test_malformed_model_glass():
+    with pytest.raises(SolasError, match="unknown glass 'model:1.2.3/40'"):
+        glass.resolve("model:1.2.3/40")

@@ -65,3 +65,21 @@ def test_hash_follows_optics_not_labels(doublet_spec):
     assert Lens.from_dict(doublet_spec).hash == a.hash
     doublet_spec["surface"][0]["radius"] = 92.0
     assert Lens.from_dict(doublet_spec).hash != a.hash
+
+
+@pytest.mark.parametrize("key, value, match", [
+    ("wavelengths_nm", [], r"wavelengths_nm = \[\] must be a non-empty list"),
+    ("wavelengths_nm", ["green"], r"wavelengths_nm = 'green' must be a finite number \(nm\)"),
+    ("field_deg", "two", r"field_deg = 'two' must be a finite number \(degrees\)"),
+    ("object", 5, r"object = 5 must be a table"),
+    ("image", {"diameter": "wide"}, r"image: diameter = 'wide' must be a finite number \(mm\)"),
+    ("surface", [1, 2], r"no \[\[surface\]\] entries"),
+])
+def test_malformed_entries(doublet_spec, key, value, match):
+    doublet_spec[key] = value
+    _bad(doublet_spec, match)
+
+
+def test_malformed_surface_number(doublet_spec):
+    doublet_spec["surface"][0]["radius"] = "92.8"
+    _bad(doublet_spec, r"surface 1 \(Surface 1\): radius = '92.8' must be a finite number \(mm\)")

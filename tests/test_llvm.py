@@ -28,3 +28,13 @@ def test_explicit_old_path_is_refused(tmp_path, monkeypatch):
     monkeypatch.setenv("DRJIT_LIBLLVM_PATH", str(old))
     with pytest.raises(SolasError, match="is libLLVM 15; Dr.Jit needs libLLVM >= 17"):
         llvm.select_libllvm()
+
+
+@pytest.mark.parametrize("path, version", [
+    ("/usr/lib/llvm-19/lib/libLLVM.so.1", 19),
+    ("/usr/lib/x86_64-linux-gnu/libLLVM-15.so.1", 15),
+    ("/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1", 19),
+    ("/usr/lib/llvm-14/lib/libLLVM-14.so", 14),
+])
+def test_version_of_library_path(path, version):
+    assert llvm._version(path) == version

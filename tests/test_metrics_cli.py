@@ -63,6 +63,7 @@ def test_sfr_user_errors_exit_2(tmp_path, capsys, argv, message):
 def test_target_user_errors_exit_2(tmp_path, capsys):
     assert main(["sfr-target", "-o", str(tmp_path / "edge.jpg")]) == 2
     assert main(["sfr-target", "-o", str(tmp_path / "edge.png"), "--size", "12x"]) == 2
+    assert "--size '12x' must look like 32x24" in capsys.readouterr().err
     assert main(["sfr", str(tmp_path / "missing.png")]) == 2
     assert list(tmp_path.iterdir()) == []
 

@@ -52,8 +52,13 @@ def test_energy_matches_geometric_transmission(doublet):
     """The pupil's transmitted power equals the power of real rays through the entrance pupil."""
     fields = np.array([[0.0, 0.0], [0.0, 2.0]])
     pf = P.pupil_function(doublet, fields, [531.0, 531.0], 128)
-    geo, _ = geometric(doublet, fields, np.array([531.0, 531.0]), 1.0, 200, rays=400)
-    assert geo.sum(axis=(1, 2)) == pytest.approx(pf.transmission, rel=2e-3)
+    geo, _, transmission = geometric(doublet, fields, np.array([531.0, 531.0]), 1.0, 200, rays=400)
+    assert transmission == pytest.approx(pf.transmission, rel=2e-3)
+    assert geo.sum(axis=(1, 2)) == pytest.approx(transmission, rel=1e-12)  # the 200 µm grid holds every ray
+    small = doublet.psf((0, 0), 531.0, method="geometric", size=16, pitch_um=1.0)
+    assert small.meta["transmission"] == pytest.approx(pf.transmission[0], rel=2e-3)
+    # the 16 µm square catches about its area over that of the 58 µm defocus disc: 256 / (π 29²) ≈ 0.1
+    assert 0.07 < small.meta["energy_in_grid"] < 0.13
     assert pf.transmission[0] == pytest.approx(1.0, abs=2e-3)
 
 

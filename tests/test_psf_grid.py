@@ -3,7 +3,8 @@ import pytest
 
 from solas_mi import SolasError
 from solas_mi.cli import main
-from solas_mi.psf_grid import PSFGrid, field_nodes, parse_grid
+from solas_mi.arguments import parse_wxh
+from solas_mi.psf_grid import PSFGrid, field_nodes
 
 
 def test_grid_layout_and_round_trip(doublet, tmp_path):
@@ -33,9 +34,20 @@ def test_grid_matches_single_psfs(doublet):
 def test_field_nodes():
     assert field_nodes(8, 2.0, "centers").tolist() == pytest.approx([-1.75 + 0.5 * i for i in range(8)])
     assert field_nodes(3, 2.0, "edges").tolist() == [-2.0, 0.0, 2.0]
-    with pytest.raises(SolasError, match="grid 'eight' must look like 8x8"):
-        parse_grid("eight")
-    assert parse_grid("32x24") == (24, 32)
+    with pytest.raises(SolasError, match="grid 'eight' must look like 32x24"):
+        parse_wxh("eight", "grid")
+    assert parse_wxh("32x24", "grid") == (24, 32)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    (dict(grid=(0, 1)), r"grid \(0, 1\) must look like 32x24"),
+    (dict(field_range_deg=(1.0, 2.0, 3.0)), r"field \(1.0, 2.0, 3.0\) must be two angles"),
+    (dict(field_range_deg=(-1.0, 2.0)), r"field range \(-1, 2\) deg must be non-negative"),
+    (dict(normalization="max"), "normalization 'max' must be one of"),
+])
+def test_bad_grid_arguments(doublet, kwargs, match):
+    with pytest.raises(SolasError, match=match):
+        doublet.psf_grid(**kwargs)
 
 
 def test_cli_psf_and_grid(tmp_path, capsys):

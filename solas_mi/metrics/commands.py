@@ -10,6 +10,7 @@ import json
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from ..arguments import parse_wxh
 from ..errors import SolasError
 
 if TYPE_CHECKING:
@@ -29,6 +30,13 @@ def _full_scale(args: argparse.Namespace) -> float | None:
             raise SolasError(f"--full-scale {args.full_scale} must be > 0")
         return args.full_scale
     return None if Path(args.image).suffix.lower() == ".exr" else 1.0
+
+
+def _image_parser(subparsers: Any, name: str, help_: str, description: str) -> argparse.ArgumentParser:
+    """Subcommand parser whose first argument is the image to measure."""
+    p = subparsers.add_parser(name, help=help_, description=description)
+    p.add_argument("image", help="PNG/JPEG/TIFF (sRGB, decoded unless --linear) or EXR (linear)")
+    return p
 
 
 def _add_input_options(p: argparse.ArgumentParser) -> None:
@@ -124,18 +132,6 @@ def run_ss_sfr(args: argparse.Namespace) -> int:
     return 0 if report.rois else 1
 
 
-def _parse_size(text: str) -> tuple[int, int]:
-    """"WxH" in px → (rows, columns)."""
-    parts = text.lower().split("x")
-    try:
-        w, h = (int(p) for p in parts)
-    except ValueError:
-        w = h = 0
-    if len(parts) != 2 or w < 16 or h < 16:
-        raise SolasError(f"--size {text!r} is malformed: expected WxH in px, both ≥ 16 (e.g. 128x128)")
-    return h, w
-
-
 def run_sfr_target(args: argparse.Namespace) -> int:
     """Write a synthetic slanted-edge (or slanted-square) target with a known MTF."""
     from ..imageio import write_exr, write_png
@@ -148,7 +144,7 @@ def run_sfr_target(args: argparse.Namespace) -> int:
         raise SolasError(f"--sigma-px {args.sigma_px} must be ≥ 0")
     if not (0 <= args.low <= 1 and 0 <= args.high <= 1):
         raise SolasError(f"--low {args.low} and --high {args.high} must lie in [0, 1] (linear levels)")
-    rows, cols = _parse_size(args.size)
+    rows, cols = parse_wxh(args.size, "--size", 16)
     if args.shape == "edge":
         img = slanted_edge((rows, cols), args.angle_deg, args.sigma_px, low=args.low, high=args.high,
                            noise=args.noise, seed=args.seed)
@@ -172,12 +168,10 @@ def run_sfr_target(args: argparse.Namespace) -> int:
 
 def register(subparsers: Any) -> None:
     """Add the `sfr`, `ss-sfr` and `sfr-target` subcommands."""
-    p = subparsers.add_parser(
-        "sfr", help="ISO 12233 e-SFR, MTF50 and MTF10 of slanted edges",
-        description="e-SFR of slanted edges (ISO 12233:2023 / 2017). Without --roi, every edge of a "
-                    "slanted-edge or slanted-square chart is found and measured. Exit 1 if no ROI "
-                    "could be measured.")
-    p.add_argument("image", help="PNG/JPEG/TIFF (sRGB, decoded unless --linear) or EXR (linear)")
+    p = _image_parser(
+        subparsers, "sfr", "ISO 12233 e-SFR, MTF50 and MTF10 of slanted edges",
+        "e-SFR of slanted edges (ISO 12233:2023 / 2017). Without --roi, every edge of a "
+        "slanted-edge or slanted-square chart is found and measured. Exit 1 if no ROI could be measured.")
     p.add_argument("--roi", action="append", metavar="x,y,w,h",
                    help="ROI in px (top-left corner, width, height) holding one edge; repeatable")
     p.add_argument("--channel", choices=tuple(CHANNELS), default=None,
@@ -185,12 +179,11 @@ def register(subparsers: Any) -> None:
     _add_input_options(p)
     p.set_defaults(run=run_sfr)
 
-    p = subparsers.add_parser(
-        "ss-sfr", help="natural-scene SFR: MTF50 of edges found in an image, per radial annulus",
-        description="Natural-scene SFR: slanted edges found in the image, e-SFR of each, MTF50 "
-                    "statistics per annulus. --compare measures the same ROIs in a second image "
-                    "(e.g. the lens-degraded one). Exit 1 if no edge could be measured.")
-    p.add_argument("image", help="PNG/JPEG/TIFF (sRGB, decoded unless --linear) or EXR (linear)")
+    p = _image_parser(
+        subparsers, "ss-sfr", "natural-scene SFR: MTF50 of edges found in an image, per radial annulus",
+        "Natural-scene SFR: slanted edges found in the image, e-SFR of each, MTF50 statistics per "
+        "annulus. --compare measures the same ROIs in a second image (e.g. the lens-degraded one). "
+        "Exit 1 if no edge could be measured.")
     p.add_argument("--compare", metavar="DEGRADED", help="second image of the same scene and size")
     p.add_argument("--plot", metavar="OUT.png", help="write annuli/ROIs and mean SFR curves")
     p.add_argument("--annuli", default="automotive",

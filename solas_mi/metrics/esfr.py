@@ -5,6 +5,7 @@ Input pixel values must be linear in scene luminance (decode sRGB before calling
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -72,8 +73,9 @@ class EsfrResult:
     lsf_width_px: float | None = None  # equivalent width ∫LSF / max LSF, along the normal
     esf: np.ndarray = field(default_factory=lambda: np.zeros(0))  # 4× oversampled, bin = cos θ/4 px
 
-    def to_dict(self, curves: bool = True) -> dict[str, Any]:
-        """JSON-ready dict; `curves=False` leaves out the SFR and ESF arrays."""
+    def to_dict(self) -> dict[str, Any]:
+        """JSON-ready dict of the scalar results and diagnostics, with the SFR curve as
+        "freq_cy_px" and "sfr" (rounded to 6 decimals); the ESF is not included."""
         out: dict[str, Any] = {
             k: getattr(self, k)
             for k in (
@@ -83,9 +85,8 @@ class EsfrResult:
                 "clipped_fraction", "lsf_width_px",
             )
         }
-        if curves:
-            out["freq_cy_px"] = [round(float(v), 6) for v in self.freq]
-            out["sfr"] = [round(float(v), 6) for v in self.sfr]
+        out["freq_cy_px"] = [round(float(v), 6) for v in self.freq]
+        out["sfr"] = [round(float(v), 6) for v in self.sfr]
         return out
 
 
@@ -162,9 +163,12 @@ def _step_filter(a: np.ndarray) -> np.ndarray:
     return ndi.gaussian_filter(a, STEP_SMOOTHING_PX, order=(0, 1), mode="nearest")
 
 
-_impulse = np.zeros((41, 41))
-_impulse[20, 20] = 1.0
-STEP_NOISE_GAIN = float(np.sqrt(np.sum(_step_filter(_impulse) ** 2)))  # gradient sd per unit pixel noise sd
+@functools.lru_cache(maxsize=1)
+def _step_noise_gain() -> float:
+    """Sd of the smoothed gradient per unit sd of white pixel noise."""
+    impulse = np.zeros((41, 41))
+    impulse[20, 20] = 1.0
+    return float(np.sqrt(np.sum(_step_filter(impulse) ** 2)))
 
 
 def _step_rows(a: np.ndarray, sign: float, noise: float) -> tuple[float, float]:
@@ -175,7 +179,7 @@ def _step_rows(a: np.ndarray, sign: float, noise: float) -> tuple[float, float]:
     4 noise sd on noisy ROIs) and none below minus the threshold.
     """
     g = _step_filter(a) * sign
-    threshold = max(STEP_THRESHOLD, 4.0 * STEP_NOISE_GAIN * noise)
+    threshold = max(STEP_THRESHOLD, 4.0 * _step_noise_gain() * noise)
     pos = g > threshold
     neg = g < -threshold
 
@@ -186,14 +190,14 @@ def _step_rows(a: np.ndarray, sign: float, noise: float) -> tuple[float, float]:
     return float(np.mean((rp == 1) & (rn == 0))), float(np.mean((rp == 0) & (rn == 0)))
 
 
-def _crossing(freq: np.ndarray, sfr: np.ndarray, level: float, f_max: float = 0.5) -> float | None:
-    """First frequency where the SFR falls below `level` (linear interpolation); None above f_max."""
+def _crossing(freq: np.ndarray, sfr: np.ndarray, level: float) -> float | None:
+    """First frequency where the SFR falls below `level` (linear interpolation); None above 0.5 cy/px."""
     below = np.flatnonzero(sfr[1:] < level) + 1
     if below.size == 0:
         return None
     i = below[0]
     f = freq[i - 1] + (sfr[i - 1] - level) / (sfr[i - 1] - sfr[i]) * (freq[i] - freq[i - 1])
-    return float(f) if f <= f_max else None
+    return float(f) if f <= 0.5 else None
 
 
 def _fit_edge(loc: np.ndarray, ok: np.ndarray, order: int) -> np.polynomial.Polynomial:
@@ -305,15 +309,14 @@ def esfr(
 
     rows = np.arange(nlin, dtype=np.float64)
     order = 5 if mode == "2023" else 1
-    loc, ok = centroids(np.full(nlin, (npix - 1) / 2.0))
-    if np.count_nonzero(ok) < max(order + 3, nlin // 2):
-        res.reason = "no edge found: the derivative has no positive centroid in most rows"
-        return res
-    fit = _fit_edge(loc, ok, order)
-    loc, ok = centroids(np.clip(fit(rows), pos[0], pos[-1]))
-    if np.count_nonzero(ok) < max(order + 3, nlin // 2):
-        res.reason = "no edge found: the derivative has no positive centroid in most rows"
-        return res
+    centre = np.full(nlin, (npix - 1) / 2.0)
+    for first_pass in (True, False):  # windows centred on the ROI, then on the fitted edge
+        loc, ok = centroids(centre)
+        if np.count_nonzero(ok) < max(order + 3, nlin // 2):
+            res.reason = "no edge found: the derivative has no positive centroid in most rows"
+            return res
+        if first_pass:
+            centre = np.clip(_fit_edge(loc, ok, order)(rows), pos[0], pos[-1])
     line = _fit_edge(loc, ok, 1)
     fit = _fit_edge(loc, ok, order) if order > 1 else line
     if order > 1:

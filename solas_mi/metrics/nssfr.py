@@ -195,6 +195,11 @@ class AnnulusStats:
         }
 
 
+def _corner_radius(shape: tuple[int, ...]) -> float:
+    """Distance from the centre of an image of `shape` (rows, columns, …) to a corner, px."""
+    return math.hypot(shape[0], shape[1]) / 2
+
+
 @dataclass
 class NsSfrReport:
     """Natural-scene SFR of one image, or of a before/after pair measured on the same ROIs."""
@@ -210,7 +215,7 @@ class NsSfrReport:
     @property
     def radius_px(self) -> float:
         """R: distance from the image centre to a corner, px."""
-        return math.hypot(self.shape[0], self.shape[1]) / 2
+        return _corner_radius(self.shape)
 
     def mean_change(self) -> list[float | None]:
         """Per annulus: mean of (after − before) MTF50 over identical ROIs, cy/px."""
@@ -293,12 +298,12 @@ def natural_scene_sfr(
             found = [f for f in found if f[1].mtf50 >= floor]
 
     height, width = image.shape[:2]
-    big_r = math.hypot(height, width) / 2
+    radius_px = _corner_radius((height, width))
     bounds = ANNULI[annuli]
     measured: list[RoiMeasurement] = []
     for roi, res in found:
         x, y, w, h = roi
-        r = math.hypot(x + (w - 1) / 2 - (width - 1) / 2, y + (h - 1) / 2 - (height - 1) / 2) / big_r
+        r = math.hypot(x + (w - 1) / 2 - (width - 1) / 2, y + (h - 1) / 2 - (height - 1) / 2) / radius_px
         ring = int(np.searchsorted(bounds[:-1], r, side="right"))
         m = RoiMeasurement(roi, r, ring, res)
         if compare is not None:

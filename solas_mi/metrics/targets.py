@@ -127,10 +127,11 @@ def slanted_edge(
 ) -> np.ndarray:
     """Straight edge blurred by a Gaussian PSF (σ px) and integrated exactly over each pixel.
 
-    The edge passes `offset_px` right of the image centre, tilted `angle_deg` clockwise from
-    vertical (90° = horizontal, bright side up); left/bottom is `low`, the other side `high`
-    (linear levels). noise: Gaussian sd as a fraction of the step; clip: clip to [0, 1];
-    encoding "srgb" encodes the linear values; bit_depth 8/16 quantises to unsigned integers.
+    The edge passes `offset_px` right of the image centre, turned `angle_deg` counter-clockwise
+    from vertical as displayed (row 0 at the top): its top end leans left (90° = horizontal,
+    bright side up); left/bottom is `low`, the other side `high` (linear levels). noise: Gaussian
+    sd as a fraction of the step; clip: clip to [0, 1]; encoding "srgb" encodes the linear values;
+    bit_depth 8/16 quantises to unsigned integers.
     """
     _check_common(shape, sigma_px)
     rows, cols = shape
