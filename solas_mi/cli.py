@@ -6,6 +6,8 @@ import json
 import sys
 from pathlib import Path
 
+import numpy as np
+
 from .arguments import floats, parse_wxh
 from .errors import SolasError
 
@@ -26,17 +28,14 @@ def _lens(name: str):
 
 
 def _lens_info(args) -> int:
-    from .paraxial import paraxial
+    from .pupil import chief_rays  # loads Dr.Jit
 
     lens = _lens(args.lens)
     wavelengths = floats(args.wavelengths, "--wavelengths") if args.wavelengths else list(lens.wavelengths_nm)
     fields = floats(args.fields, "--fields") if args.fields else [0.0, lens.field_deg, -lens.field_deg]
-    from .pupil import chief_rays
-    import numpy as np
-
     rows = []
     for w in wavelengths:
-        p = paraxial(lens, w, fields).as_dict()
+        p = lens.paraxial(w, fields).as_dict()
         real = chief_rays(lens, np.array([[0.0, f] for f in fields]), np.full(len(fields), w))
         p["real_chief_ray_image_height_mm"] = real.image_xy[:, 1].tolist()
         rows.append(p)

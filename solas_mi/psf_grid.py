@@ -17,8 +17,8 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import psf as S
-from .errors import SolasError
 from .arguments import parse_wxh
+from .errors import SolasError
 from .imageio import read_exr, write_exr, write_png
 from .lens import Lens
 
@@ -58,10 +58,10 @@ class PSFGrid:
             "wavelengths_nm": list(self.wavelengths_nm), "fields_deg": self.fields_deg.tolist(),
             "chief_ray_mm": self.chief_ray_mm.tolist(),
         })
-        # PSF tails are float noise that ZIP cannot shrink (3 % for 10× the time): stored uncompressed
         channels = {f"psf_{w:g}nm": self.mosaic(k) for k, w in enumerate(self.wavelengths_nm)}
         if len(channels) != len(self.wavelengths_nm):
             raise SolasError(f"wavelengths {self.wavelengths_nm} nm are not distinct to 6 digits; channel names would collide")
+        # PSF tails are float noise that ZIP cannot shrink (3 % for 10× the time): stored uncompressed
         write_exr(path, channels, meta, compress=False)
 
     @classmethod
