@@ -116,10 +116,10 @@ def check_method(method: str, pupil_samples: int, rays: int) -> None:
 
 
 def compute(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int,
-            method: str, pupil_samples: int, rays: int, origin_mm: np.ndarray | None = None,
+            method: str, pupil_samples: int, rays: int, shared_origin: bool = False,
             ) -> tuple[np.ndarray, "ChiefRays", np.ndarray, list]:
     """Unnormalised PSFs (n, size, size) in 1/µm² for field/wavelength pairs, each grid's origin on
-    its chief ray or at `origin_mm` (n, 2); also the chief rays, the transmitted power fraction and
+    its chief ray or, with `shared_origin`, all at the first one's; also the chief rays, the transmitted power fraction and
     the vignetting surfaces of each."""
     # the ray-tracing modules load Dr.Jit: imported here so that PSF constants and types stay light
     from .fraunhofer import fraunhofer
@@ -130,7 +130,7 @@ def compute(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_
     if method == "fraunhofer":
         pf = pupil_function(lens, field_deg, wavelength_nm, pupil_samples)
         chief = pf.chief
-    center = None if origin_mm is None else (origin_mm - chief.image_xy) * 1e3
+    center = (chief.image_xy[:1] - chief.image_xy) * 1e3 if shared_origin else None
     if method == "fraunhofer":
         return fraunhofer(pf, pitch_um, size, center), chief, pf.transmission, pf.vignetted_by
     data, _, transmission = geometric(lens, field_deg, wavelength_nm, pitch_um, size, rays, chief, center)
@@ -177,11 +177,8 @@ def psf(lens: Lens, field_deg, wavelength_nm, *, weights=None, pitch_um: float =
     w8 = w8 / w8.sum()
     fields = np.repeat(np.array([field]), len(wavelengths), axis=0)
     # all wavelengths share one origin, the first wavelength's chief ray, so lateral colour shows
-    from .pupil import chief_rays
-
-    origin = chief_rays(lens, fields[:1], np.array(wavelengths[:1])).image_xy
     data, chief, transmission, vignetted = compute(lens, fields, np.array(wavelengths), pitch_um, size, method,
-                                                   pupil_samples, rays, np.repeat(origin, len(wavelengths), axis=0))
+                                                   pupil_samples, rays, shared_origin=True)
     total = np.tensordot(w8, data, axes=1)
     meta = describe(lens, method, normalization, pupil_samples, rays, size)
     meta.update({
