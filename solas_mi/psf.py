@@ -119,20 +119,19 @@ def compute(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_
             method: str, pupil_samples: int, rays: int, shared_origin: bool = False,
             ) -> tuple[np.ndarray, "ChiefRays", np.ndarray, list]:
     """Unnormalised PSFs (n, size, size) in 1/µm² for field/wavelength pairs, each grid's origin on
-    its chief ray or, with `shared_origin`, all at the first one's; also the chief rays, the transmitted power fraction and
-    the vignetting surfaces of each."""
+    its chief ray or, with `shared_origin`, all on the first one's; also the chief rays, the
+    transmitted power fraction and the vignetting surfaces of each."""
     # the ray-tracing modules load Dr.Jit: imported here so that PSF constants and types stay light
     from .fraunhofer import fraunhofer
     from .geometric import geometric
     from .pupil import chief_rays, pupil_function
 
-    chief = chief_rays(lens, field_deg, wavelength_nm) if method == "geometric" else None
     if method == "fraunhofer":
         pf = pupil_function(lens, field_deg, wavelength_nm, pupil_samples)
-        chief = pf.chief
+        center = (pf.chief.image_xy[:1] - pf.chief.image_xy) * 1e3 if shared_origin else None
+        return fraunhofer(pf, pitch_um, size, center), pf.chief, pf.transmission, pf.vignetted_by
+    chief = chief_rays(lens, field_deg, wavelength_nm)
     center = (chief.image_xy[:1] - chief.image_xy) * 1e3 if shared_origin else None
-    if method == "fraunhofer":
-        return fraunhofer(pf, pitch_um, size, center), chief, pf.transmission, pf.vignetted_by
     data, _, transmission = geometric(lens, field_deg, wavelength_nm, pitch_um, size, rays, chief, center)
     return data, chief, transmission, [[] for _ in range(len(field_deg))]
 

@@ -233,7 +233,9 @@ def pupil_function(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray,
     ra, rb = ra.reshape(nf, RIM_RAYS), rb.reshape(nf, RIM_RAYS)
     rok &= hit.reshape(nf, RIM_RAYS)
     if not rok.any(axis=1).all():
-        raise SolasError("the stop rim cannot be reached by real rays for some field; the lens is not usable there")
+        bad = field_deg[~rok.any(axis=1)][0]
+        raise SolasError(f"no real ray reaches the stop's rim for field ({bad[0]:g}, {bad[1]:g}) deg; "
+                         "the lens is not usable there")
     ca, cb = chief.sphere_point[:, 0], chief.sphere_point[:, 1]
     alpha = np.empty((nf, samples))
     beta = np.empty((nf, samples))
