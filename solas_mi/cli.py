@@ -1,4 +1,4 @@
-"""The `solas-mi` command line: lens data, PSFs and PSF grids, image metrics."""
+"""The `solas-mi` command line: lens data, PSFs and PSF grids, direct renders, image metrics."""
 from __future__ import annotations
 
 import argparse
@@ -112,6 +112,8 @@ def _add_psf_options(p: argparse.ArgumentParser) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from . import render_commands
+    from .convolution import commands as convolution_commands
     from .metrics import commands as metrics_commands
 
     parser = argparse.ArgumentParser(prog="solas-mi", description=__doc__)
@@ -145,6 +147,8 @@ def build_parser() -> argparse.ArgumentParser:
     grid.set_defaults(run=_psf_grid)
 
     metrics_commands.register(sub)
+    render_commands.register(sub)
+    convolution_commands.register(sub)
     return parser
 
 

@@ -40,7 +40,7 @@ def entrance_grid_hits(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndar
     """Per field: image-plane offsets (µm) from the chief ray of unvignetted rays on a regular
     rays×rays entrance grid covering the pupil, and each ray's power (fraction of the on-axis pupil)."""
     nf = len(field_deg)
-    half = _entrance_half_width(lens, field_deg, wavelength_nm, chief)
+    half = entrance_half_width(lens, field_deg, wavelength_nm, chief)
     t = (np.arange(rays) + 0.5) / rays * 2.0 - 1.0
     per_batch = max(1, _BATCH_RAYS // (rays * rays))
     result = []
@@ -62,7 +62,7 @@ def entrance_grid_hits(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndar
     return result
 
 
-def _entrance_half_width(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chief: ChiefRays) -> np.ndarray:
+def entrance_half_width(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chief: ChiefRays) -> np.ndarray:
     """Half-width (mm) of a square about the chief ray's entrance point that holds the whole pupil."""
     ex, ey, _, _ = P.stop_rim(P.Bundle(lens, field_deg, wavelength_nm, P.RIM_RAYS), chief)
     ex, ey = ex - chief.entrance[:, 0:1], ey - chief.entrance[:, 1:2]

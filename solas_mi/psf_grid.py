@@ -18,6 +18,7 @@ import numpy as np
 
 from . import psf as S
 from .arguments import parse_wxh
+from .camera import pinhole_focal_mm
 from .errors import SolasError
 from .imageio import read_exr, write_exr, write_png
 from .lens import Lens
@@ -183,5 +184,7 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
         "vignetted_by_surfaces": sorted(vignetting),
         "seconds": time.perf_counter() - start,
     })
+    if hx > 0:  # the ideal image an input spanning ±hx horizontally stands for (`camera`)
+        meta.update(pinhole_focal_mm=pinhole_focal_mm(lens, hx), reference_wavelength_nm=lens.primary_wavelength)
     return PSFGrid(data.reshape(len(wl), ny, nx, size, size), fields, chief.reshape(len(wl), ny, nx, 2), wl,
                    float(pitch_um), meta)

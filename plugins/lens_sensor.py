@@ -1,0 +1,145 @@
+"""`lens_sensor`: a film on a lens's image plane that looks through the lens.
+
+Each sample takes a point in its pixel and a point inside the exit-pupil bound of that film
+position (`solas_mi.exit_pupil`; nothing assumes the stop is the last surface), and one wavelength
+drawn from the camera response (`solas_mi.response`), carried in all four spectral lanes: with
+dispersion a path has one wavelength. The weight makes the pixel value the mean image irradiance
+over the pixel in units of the ideal camera's (`solas_mi.illumination.ideal_irradiance`, with the
+pinhole focal length of `solas_mi.camera` for an input spanning ±fov_deg): an ideal lossless lens
+returns the input image.
+
+Parameters: `lens` (shipped name or lens-file path), `pitch_um`, `fov_deg` (half the horizontal field
+the input image spans), `response` ("lines", "srgb", "mono:531", "table:FILE.csv"), and a film (its
+width and height are the sensor's pixels). Coordinates
+are the lens file's: surface 1's vertex at the origin, +z toward the image, +y up; film row 0 is +y.
+"""
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+from solas_mi import response as responses
+from solas_mi.errors import SolasError
+from solas_mi.exit_pupil import pupil_bounds
+from solas_mi.camera import pinhole_focal_mm
+from solas_mi.illumination import ideal_irradiance, image_scales
+from solas_mi.lens import Lens
+
+
+class LensSensor(mi.Sensor):
+    def __init__(self, props: mi.Properties) -> None:
+        super().__init__(props)
+        name = str(props.get("lens", "solas-doublet"))
+        resolved = mi.file_resolver().resolve(name)
+        self.lens = Lens.load(str(resolved) if Path(str(resolved)).is_file() else name)
+        if not self.lens.at_infinity:
+            raise SolasError(f"lens_sensor: lens {self.lens.name} has a finite object; the sensor needs a lens "
+                             "focused at infinity (put a near object in the scene with image_object's distance_mm)")
+        self.pitch_mm = float(props.get("pitch_um", 5.0)) * 1e-3
+        if not self.pitch_mm > 0:
+            raise SolasError(f"lens_sensor: pitch_um {self.pitch_mm * 1e3!r} must be positive")
+        self.response = responses.parse(str(props.get("response", "lines")), self.lens.wavelengths_nm)
+        responses.check_lens(self.response, self.lens)
+        self.width, self.height = (int(v) for v in self.film().size())
+        self.image_z = self.lens.image_z
+        half_diag = 0.5 * self.pitch_mm * math.hypot(self.width, self.height)
+        bounds = pupil_bounds(self.lens, half_diag, wavelengths_nm=sorted({float(self.response.lo_nm.min()),
+                                                                          float(self.response.hi_nm.max()),
+                                                                          *self.lens.wavelengths_nm}))
+        union = np.stack([bounds.at(r) for r in bounds.radius_mm[:-1]])  # rows i and i + 1
+        self.radius_step = float(bounds.radius_mm[1] - bounds.radius_mm[0])
+        self.rows = len(union)
+        self.bounds = [mi.Float(union[:, k]) for k in range(5)]
+        self.plane_z = bounds.plane_z
+        self.focal_mm = pinhole_focal_mm(self.lens, float(props.get("fov_deg", self.lens.field_deg)))
+        self.norm = 1.0 / ideal_irradiance(self.lens, self.focal_mm)
+        heights, radial, tangential = image_scales(self.lens, half_diag, self.lens.primary_wavelength)
+        self.scale_step = float(heights[1] - heights[0]) if heights[-1] > 0 else 1.0
+        self.inv_radial, self.inv_tangential = mi.Float(1.0 / radial), mi.Float(1.0 / tangential)
+        self.scale_rows = len(heights)
+        self.max_footprint = float(self.pitch_mm / min(radial.min(), tangential.min()))
+        r = self.response
+        self.spectrum = mi.DiscreteDistribution(mi.Float(r.probability))
+        self.lo, self.hi = mi.Float(r.lo_nm), mi.Float(r.hi_nm)
+        self.channel_table = mi.Float(r.weights.ravel())
+        self.channels = len(r.channels)
+        # a response of equally likely spectral lines (lines, mono) lets a render stratify by line
+        lines = np.all(r.lo_nm == r.hi_nm) and np.allclose(r.probability, 1.0 / len(r.probability))
+        self.discrete_lines = len(r.probability) if lines else 0
+
+    def sample_wavelength(self, sample1: mi.Float, active=True):
+        """Wavelength (nm) of a path and the bin it came from."""
+        index, u = self.spectrum.sample_reuse(sample1, active)
+        lo, hi = dr.gather(mi.Float, self.lo, index, active), dr.gather(mi.Float, self.hi, index, active)
+        return dr.fma(u, hi - lo, lo), index
+
+    def channel_weights(self, index: mi.UInt32, active=True) -> list[mi.Float]:
+        """Per-channel weight response_c(λ)/p(λ) of the wavelength bin `index`."""
+        return [dr.gather(mi.Float, self.channel_table, index * self.channels + c, active)
+                for c in range(self.channels)]
+
+    def footprint(self, film: mi.Point2f) -> mi.Vector2f:
+        """Widths in field tangent (x, y) that the pixel centred at film point (x, y) mm covers on the
+        object: the pitch over the chief ray's radial and tangential image scales there."""
+        r = dr.sqrt(dr.squared_norm(film))
+        f = r / self.scale_step
+        i = dr.minimum(mi.UInt32(f), self.scale_rows - 2)
+        w = dr.clip(f - mi.Float(i), 0.0, 1.0)
+        inv_r = dr.lerp(dr.gather(mi.Float, self.inv_radial, i), dr.gather(mi.Float, self.inv_radial, i + 1), w)
+        inv_t = dr.lerp(dr.gather(mi.Float, self.inv_tangential, i),
+                        dr.gather(mi.Float, self.inv_tangential, i + 1), w)
+        c2 = dr.select(r > 0, dr.square(film.x / r), 1.0)
+        return mi.Vector2f(self.pitch_mm * (c2 * inv_r + (1.0 - c2) * inv_t),
+                           self.pitch_mm * ((1.0 - c2) * inv_r + c2 * inv_t))
+
+    def film_point(self, sample2: mi.Point2f) -> mi.Point2f:
+        """Image-plane point (mm) of a film sample in [0, 1]² (row 0 at +y)."""
+        return mi.Point2f((sample2.x - 0.5) * (self.width * self.pitch_mm), (0.5 - sample2.y) * (self.height * self.pitch_mm))
+
+    def sample_ray(self, time, sample1, sample2, sample3, active=True):
+        lam, _ = self.sample_wavelength(sample1, active)
+        film = self.film_point(sample2)
+        x, y = film.x, film.y
+        r = dr.sqrt(x * x + y * y)
+        inv = dr.select(r > 0, dr.rcp(r), 0.0)
+        cos_p, sin_p = dr.select(r > 0, x * inv, 1.0), y * inv
+        row = dr.minimum(mi.UInt32(r / self.radius_step), self.rows - 1)
+        u0, u1, v0, v1, ellipse = (dr.gather(mi.Float, b, row, active) for b in self.bounds)
+        ellipse = ellipse > 0.5
+        disk = mi.warp.square_to_uniform_disk_concentric(sample3)
+        su = dr.select(ellipse, 0.5 * (disk.x + 1.0), sample3.x)
+        sv = dr.select(ellipse, 0.5 * (disk.y + 1.0), sample3.y)
+        u, v = dr.fma(su, u1 - u0, u0), dr.fma(sv, v1 - v0, v0)
+        target = mi.Point3f(u * cos_p - v * sin_p, u * sin_p + v * cos_p, self.plane_z)
+        origin = mi.Point3f(x, y, self.image_z)
+        d = target - origin
+        dist2 = dr.squared_norm(d)
+        dz = self.plane_z - self.image_z
+        cos4 = dr.square(dz * dz / dist2)
+        area = (u1 - u0) * (v1 - v0) * dr.select(ellipse, 0.25 * dr.pi, 1.0)
+        weight = area * cos4 / (dz * dz) * self.norm
+        ray = mi.Ray3f(origin, d * dr.rsqrt(dist2), time, mi.Spectrum(lam) if mi.is_spectral else mi.Spectrum(0.0))
+        return ray, mi.Spectrum(weight) & active
+
+    def sample_ray_differential(self, time, sample1, sample2, sample3, active=True):
+        ray, weight = self.sample_ray(time, sample1, sample2, sample3, active)
+        return mi.RayDifferential3f(ray), weight
+
+    def bbox(self):
+        half = 0.5 * self.pitch_mm * mi.ScalarVector2f(self.width, self.height)
+        return mi.ScalarBoundingBox3f([-half.x, -half.y, self.image_z], [half.x, half.y, self.image_z])
+
+    def traverse(self, callback) -> None:
+        pass
+
+    def to_string(self) -> str:
+        return (f"LensSensor[{self.lens.name}, {self.width}x{self.height} px of {self.pitch_mm * 1e3:g} um, "
+                f"response {self.response.name}]")
+
+
+def register() -> None:
+    mi.register_sensor("lens_sensor", lambda props: LensSensor(props))

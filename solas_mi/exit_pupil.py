@@ -1,0 +1,117 @@
+"""Where rays from a point on the image plane can leave the lens: a bound on the exit pupil per
+image-plane radius, found by tracing the lens backwards (the image plane as a finite object of the
+reversed lens) with the Float64 tracer.
+
+The bound is a rectangle on the plane of the last surface's vertex, in the frame of the film point:
+u along its radial direction, v across it, or the ellipse inscribed in it where that holds every
+passing ray (a round stop seen straight on). A sensor samples rays uniformly inside it; rays that the
+lens blocks are absorbed by the scene's rims and stop, so a bound only has to contain the pupil.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, replace
+
+import numpy as np
+
+from .lens import Lens, Surface
+
+
+def reversed_lens(lens: Lens) -> Lens:
+    """The lens seen from the image side: surfaces in reverse order, mirrored in z, the image plane
+    as a finite object. Vertex z of the reversed lens = last vertex z − original vertex z."""
+    s = lens.surfaces
+    before = [lens.object_glass] + [x.glass for x in s[:-1]]
+    materials = ["AIR"] + [x.material for x in s[:-1]]
+    rev = []
+    for j, i in enumerate(range(len(s) - 1, -1, -1)):
+        thickness = s[i - 1].thickness if i > 0 else 1.0  # beyond the original first surface: unused
+        rev.append(Surface(s[i].label, -s[i].radius, thickness, s[i].diameter, materials[i], before[i], s[i].stop))
+    return replace(lens, name=lens.name + " (reversed)", surfaces=tuple(rev), object_distance=s[-1].thickness,
+                   object_glass=s[-1].glass, _paraxial_cache={})
+
+
+@dataclass(frozen=True)
+class PupilBounds:
+    """Per film radius (mm), the rectangle [u0, u1]×[v0, v1] (mm, film-point frame) on the plane
+    z = plane_z that holds every ray leaving the lens, and whether its inscribed ellipse does too."""
+
+    radius_mm: np.ndarray  # (n,) increasing from 0
+    bounds_mm: np.ndarray  # (n, 4): u0, u1, v0, v1
+    elliptical: np.ndarray  # (n,) bool
+    plane_z: float
+
+    def at(self, r: np.ndarray) -> np.ndarray:
+        """Conservative bounds (…, 5) at film radii r: the union of the two enclosing table rows, and
+        1 where both rows are elliptical."""
+        i = np.clip(np.searchsorted(self.radius_mm, r) - 1, 0, len(self.radius_mm) - 2)
+        a, b = self.bounds_mm[i], self.bounds_mm[i + 1]
+        return np.stack([np.minimum(a[..., 0], b[..., 0]), np.maximum(a[..., 1], b[..., 1]),
+                         np.minimum(a[..., 2], b[..., 2]), np.maximum(a[..., 3], b[..., 3]),
+                         self.elliptical[i] & self.elliptical[i + 1]], axis=-1)
+
+
+def _passes(rev: Lens, r: np.ndarray, ex: np.ndarray, ey: np.ndarray, wavelength_nm: float) -> np.ndarray:
+    """Whether the ray from film point (r, 0) toward (ex, ey) on the last vertex plane leaves the lens."""
+    from . import tracer as T
+
+    n = len(ex)
+    zero = T.F(np.zeros(n))
+    rays = T.launch(rev, zero, zero, T.F(ex), T.F(ey), (T.F(r), zero))
+    tr = T.trace(rev, rays, T.F(np.full(n, wavelength_nm * 1e-3)))
+    ok, clipped = T.to_numpy(tr.ok, tr.clipped_by)
+    return ok & (clipped == 0)
+
+
+def pupil_bounds(lens: Lens, max_radius_mm: float, wavelengths_nm=None, radii: int = 64, directions: int = 256,
+                 coarse: int = 64) -> PupilBounds:
+    """Exit-pupil bounds for film radii 0…max_radius_mm, over `wavelengths_nm` (default: the lens's).
+
+    Per radius and wavelength, a coarse grid over the last surface's aperture finds a point inside the
+    pupil (the pupil, an intersection of disks, is convex); bisection along `directions` rays from
+    it finds the rim to 1e-9 mm. The bound is the box of the rim points, widened by the most a convex
+    rim can bulge between neighbouring directions."""
+    rev = reversed_lens(lens)
+    reach = 1.05 * lens.surfaces[-1].semi_diameter
+    step = 2.0 * reach / coarse
+    g = -reach + (np.arange(coarse) + 0.5) * step
+    gx, gy = (a.ravel() for a in np.meshgrid(g, g))
+    radius = np.linspace(0.0, max_radius_mm, radii) * (1.0 + 1.0 / radii)  # the last row lies past the corner
+    phi = 2.0 * np.pi * np.arange(directions) / directions
+    bounds = np.zeros((radii, 4))
+    lo_u = np.full(radii, np.inf)
+    hi_u, lo_v, hi_v = -lo_u, lo_u.copy(), -lo_u
+    elliptical = np.ones(radii, dtype=bool)
+    seen = np.zeros(radii, dtype=bool)
+    rim_u, rim_v = [], []
+    for w in (lens.wavelengths_nm if wavelengths_nm is None else wavelengths_nm):
+        ok = _passes(rev, np.repeat(radius, len(gx)), np.tile(gx, radii), np.tile(gy, radii), w).reshape(radii, -1)
+        seen |= ok.any(axis=1)
+        count = np.maximum(ok.sum(axis=1), 1)
+        cu, cv = (ok * gx).sum(axis=1) / count, (ok * gy).sum(axis=1) / count
+        inside = np.zeros((radii, directions))
+        outside = np.full((radii, directions), 4.0 * reach)
+        r_all = np.repeat(radius, directions)
+        cos, sin = np.tile(np.cos(phi), radii), np.tile(np.sin(phi), radii)
+        for _ in range(42):
+            mid = 0.5 * (inside + outside).ravel()
+            p = _passes(rev, r_all, np.repeat(cu, directions) + mid * cos, np.repeat(cv, directions) + mid * sin, w)
+            p = p.reshape(radii, directions) & ok.any(axis=1)[:, None]
+            inside, outside = np.where(p, mid.reshape(radii, -1), inside), np.where(p, outside, mid.reshape(radii, -1))
+        u = cu[:, None] + inside * np.cos(phi)
+        v = cv[:, None] + inside * np.sin(phi)
+        rim_u.append(u)
+        rim_v.append(v)
+        lo_u, hi_u = np.minimum(lo_u, u.min(axis=1)), np.maximum(hi_u, u.max(axis=1))
+        lo_v, hi_v = np.minimum(lo_v, v.min(axis=1)), np.maximum(hi_v, v.max(axis=1))
+    # a convex rim between two rim points Δφ apart bulges at most ρ(1 − cos(Δφ/2)) beyond their chord
+    size = np.maximum(hi_u - lo_u, hi_v - lo_v)
+    margin = size * (1.0 - np.cos(np.pi / directions)) + 1e-6
+    bounds = np.stack([lo_u - margin, hi_u + margin, lo_v - margin, hi_v + margin], axis=-1)
+    bounds[~seen] = 0.0  # nothing reaches these film radii
+    cu, cv = 0.5 * (bounds[:, 0] + bounds[:, 1]), 0.5 * (bounds[:, 2] + bounds[:, 3])
+    au, av = 0.5 * (bounds[:, 1] - bounds[:, 0]), 0.5 * (bounds[:, 3] - bounds[:, 2])
+    for u, v in zip(rim_u, rim_v):
+        e = ((u - cu[:, None]) / np.maximum(au - margin, 1e-12)[:, None]) ** 2 + \
+            ((v - cv[:, None]) / np.maximum(av - margin, 1e-12)[:, None]) ** 2
+        elliptical &= (e <= 1.0 + 1e-9).all(axis=1)
+    return PupilBounds(radius, bounds, elliptical & seen, float(lens.vertex_z[-1]))

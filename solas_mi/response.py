@@ -1,0 +1,139 @@
+"""Camera spectral responses: how a sensor turns the wavelength of each path into its channels.
+
+A response samples one wavelength per path (pdf p(λ)) and gives each channel the weight
+response_c(λ)/p(λ), so the expected pixel value of channel c is ∫ response_c(λ) L(λ) dλ.
+
+- "lines": one wavelength per channel, the lens's design wavelengths (R = longest): the camera the
+  PSF-grid convolution assumes (656/531/486 nm for the doublet).
+- "srgb": linear sRGB from the CIE 1931 2° colour-matching functions (colour-science), balanced so a
+  flat spectrum of radiance 1 gives (1, 1, 1).
+- "mono:λ": one channel at a fixed wavelength λ (nm).
+- "table:FILE.csv": a camera's RGB sensitivities, rows "wavelength_nm, r, g, b", balanced like srgb.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from .errors import SolasError
+
+SRGB_RANGE_NM = (380.0, 780.0)
+# An RGB image as a spectrum: B below the first edge, G up to the second, R above (nm).
+RGB_BANDS_NM = (500.0, 590.0)  # within every catalogue and model glass's range
+RESPONSES = ("lines", "srgb", "mono:<nm>", "table:<file.csv>")
+
+
+@dataclass(frozen=True)
+class Response:
+    """A tabulated response: wavelength bins [lo_nm[i], hi_nm[i]) with channel weights
+    weights[i, c] = response_c / p (p = probability density in the bin); `probability` per bin.
+    Discrete lines are bins of zero width."""
+
+    name: str
+    channels: tuple[str, ...]
+    lo_nm: np.ndarray  # (n,)
+    hi_nm: np.ndarray  # (n,)
+    probability: np.ndarray  # (n,) sums to 1
+    weights: np.ndarray  # (n, C)
+
+    def sample(self, u: np.ndarray):
+        """Wavelengths (nm) and channel weights (…, C) for uniform samples u in [0, 1) (NumPy)."""
+        cdf = np.concatenate([[0.0], np.cumsum(self.probability)])
+        i = np.clip(np.searchsorted(cdf, u, side="right") - 1, 0, len(self.probability) - 1)
+        frac = (u - cdf[i]) / np.maximum(self.probability[i], 1e-300)
+        lam = self.lo_nm[i] + np.clip(frac, 0.0, 1.0) * (self.hi_nm[i] - self.lo_nm[i])
+        return lam, self.weights[i]
+
+    def meta(self) -> dict:
+        return {"response": self.name, "channels": list(self.channels),
+                "wavelength_range_nm": [float(self.lo_nm.min()), float(self.hi_nm.max())]}
+
+
+def lines(wavelengths_nm) -> Response:
+    """One channel per wavelength; channels ordered longest first (R, G, B for three)."""
+    w = np.sort(np.asarray(wavelengths_nm, dtype=np.float64))[::-1]
+    n = len(w)
+    names = ("R", "G", "B") if n == 3 else tuple(f"{x:g}nm" for x in w)
+    if not n:
+        _bad("lines", "no wavelengths")
+    return Response("lines:" + ",".join(f"{x:g}" for x in w), names, w, w, np.full(n, 1.0 / n), np.eye(n) * n)
+
+
+def mono(wavelength_nm: float) -> Response:
+    w = np.array([float(wavelength_nm)])
+    return Response(f"mono:{wavelength_nm:g}", ("Y",), w, w, np.ones(1), np.ones((1, 1)))
+
+
+def _balanced(name: str, lam: np.ndarray, rgb: np.ndarray) -> Response:
+    """Tabulated sensitivities at 1 nm steps → response with p ∝ Σ|response| and unit white balance."""
+    step = np.diff(lam)
+    if not (np.all(step > 0)):
+        raise SolasError(f"{name}: wavelengths must increase")
+    centre = 0.5 * (rgb[1:] + rgb[:-1])
+    white = (centre * step[:, None]).sum(axis=0)
+    if np.any(white <= 0):
+        raise SolasError(f"{name}: a channel has no positive response (flat-spectrum white {white.tolist()})")
+    centre = centre / white
+    density = np.abs(centre).sum(axis=1)
+    prob = density * step
+    prob /= prob.sum()
+    pdf = prob / step
+    weights = np.where(pdf[:, None] > 0, centre / np.maximum(pdf, 1e-300)[:, None], 0.0)
+    return Response(name, ("R", "G", "B"), lam[:-1], lam[1:], prob, weights)
+
+
+def srgb() -> Response:
+    import colour
+
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
+    lam = np.asarray(cmfs.wavelengths, dtype=np.float64)
+    keep = (lam >= SRGB_RANGE_NM[0]) & (lam <= SRGB_RANGE_NM[1])
+    xyz = np.asarray(cmfs.values, dtype=np.float64)[keep]
+    rgb = xyz @ np.asarray(colour.models.RGB_COLOURSPACE_sRGB.matrix_XYZ_to_RGB).T
+    return _balanced("srgb", lam[keep], rgb)
+
+
+def table(path: str) -> Response:
+    try:
+        data = np.loadtxt(path, delimiter=",", comments="#", ndmin=2)
+    except (OSError, ValueError) as exc:
+        raise SolasError(f"camera response table {path!r}: {exc}") from None
+    if data.shape[1] != 4 or len(data) < 2:
+        raise SolasError(f"camera response table {path!r} must have rows 'wavelength_nm, r, g, b' "
+                         f"(got {data.shape[1]} columns, {len(data)} rows)")
+    if np.any(data[:, 1:] < 0):
+        raise SolasError(f"camera response table {path!r}: sensitivities must be >= 0")
+    return _balanced(f"table:{Path(path).name}", data[:, 0], data[:, 1:])
+
+
+def _bad(text: str, why: str):
+    raise SolasError(f"camera response {text!r}: {why}; allowed: {', '.join(RESPONSES)}")
+
+
+def parse(text: str, lens_wavelengths_nm) -> Response:
+    """A response from its name (see the module docstring)."""
+    kind, _, arg = str(text).partition(":")
+    kind = kind.strip().lower()
+    if kind == "lines":
+        return lines([float(v) for v in arg.split(",")] if arg.strip() else lens_wavelengths_nm)
+    if kind == "srgb" and not arg:
+        return srgb()
+    if kind == "mono":
+        try:
+            w = float(arg)
+        except ValueError:
+            _bad(text, "mono needs a wavelength in nm, e.g. mono:531")
+        if not w > 0:
+            _bad(text, "the wavelength must be positive")
+        return mono(w)
+    if kind == "table" and arg:
+        return table(arg)
+    _bad(text, "unknown response")
+
+
+def check_lens(response: Response, lens) -> None:
+    """SolasError when a glass of `lens` has no index at some wavelength the response samples."""
+    for w in (response.lo_nm.min(), response.hi_nm.max()):
+        lens.check_wavelength(float(w))
