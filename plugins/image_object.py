@@ -24,6 +24,7 @@ import numpy as np
 
 from solas_mi.errors import SolasError
 from solas_mi.imageio import read_image
+from solas_mi.plugins.tables import lookup, table
 from solas_mi.response import RGB_BANDS_NM
 
 BOUNDARIES = ("edge", "reflect", "zero")
@@ -56,7 +57,7 @@ class ImageObject(mi.Emitter):
         if rgb.ndim != 3 or rgb.shape[-1] != 3:
             raise SolasError(f"image_object: image of shape {rgb.shape} must be H x W (grey) or H x W x 3 (RGB)")
         self.height, self.width = rgb.shape[:2]
-        self.texels = mi.Float(rgb.ravel() * float(props.get("scale", 1.0)))
+        self.texels = table(rgb * float(props.get("scale", 1.0)))
         self.tan_pitch = math.tan(math.radians(self.fov_deg)) / (self.width / 2)
 
     def radiance(self, o: mi.Point3f, d: mi.Vector3f, wavelengths, active=True, footprint=None) -> mi.Spectrum:
@@ -92,7 +93,7 @@ class ImageObject(mi.Emitter):
         col, ok_c = _fold(mi.Int32(u), self.width, self.boundary)
         row, ok_r = _fold(mi.Int32(v), self.height, self.boundary)
         index = (mi.UInt32(row) * self.width + mi.UInt32(col)) * 3 + channel
-        return dr.gather(mi.Float, self.texels, index, active & ok_c & ok_r)
+        return lookup(self.texels, index, active & ok_c & ok_r)
 
     def eval(self, si, active=True):
         return self.radiance(si.p, -si.wi, si.wavelengths, active)

@@ -28,6 +28,7 @@ from solas_mi.exit_pupil import pupil_bounds
 from solas_mi.camera import pinhole_focal_mm
 from solas_mi.illumination import ideal_irradiance, image_scales
 from solas_mi.lens import Lens
+from solas_mi.plugins.tables import lookup, table
 
 
 class LensSensor(mi.Sensor):
@@ -53,19 +54,19 @@ class LensSensor(mi.Sensor):
         union = np.stack([bounds.at(r) for r in bounds.radius_mm[:-1]])  # rows i and i + 1
         self.radius_step = float(bounds.radius_mm[1] - bounds.radius_mm[0])
         self.rows = len(union)
-        self.bounds = [mi.Float(union[:, k]) for k in range(5)]
+        self.bounds = [table(union[:, k]) for k in range(5)]
         self.plane_z = bounds.plane_z
         self.focal_mm = pinhole_focal_mm(self.lens, float(props.get("fov_deg", self.lens.field_deg)))
         self.norm = 1.0 / ideal_irradiance(self.lens, self.focal_mm)
         heights, radial, tangential = image_scales(self.lens, half_diag, self.lens.primary_wavelength)
         self.scale_step = float(heights[1] - heights[0]) if heights[-1] > 0 else 1.0
-        self.inv_radial, self.inv_tangential = mi.Float(1.0 / radial), mi.Float(1.0 / tangential)
+        self.inv_radial, self.inv_tangential = table(1.0 / radial), table(1.0 / tangential)
         self.scale_rows = len(heights)
         self.max_footprint = float(self.pitch_mm / min(radial.min(), tangential.min()))
         r = self.response
-        self.spectrum = mi.DiscreteDistribution(mi.Float(r.probability))
-        self.lo, self.hi = mi.Float(r.lo_nm), mi.Float(r.hi_nm)
-        self.channel_table = mi.Float(r.weights.ravel())
+        self.spectrum = mi.DiscreteDistribution(table(r.probability))
+        self.lo, self.hi = table(r.lo_nm), table(r.hi_nm)
+        self.channel_table = table(r.weights)
         self.channels = len(r.channels)
         # a response of equally likely spectral lines (lines, mono) lets a render stratify by line
         lines = np.all(r.lo_nm == r.hi_nm) and np.allclose(r.probability, 1.0 / len(r.probability))
@@ -74,12 +75,12 @@ class LensSensor(mi.Sensor):
     def sample_wavelength(self, sample1: mi.Float, active=True):
         """Wavelength (nm) of a path and the bin it came from."""
         index, u = self.spectrum.sample_reuse(sample1, active)
-        lo, hi = dr.gather(mi.Float, self.lo, index, active), dr.gather(mi.Float, self.hi, index, active)
+        lo, hi = lookup(self.lo, index, active), lookup(self.hi, index, active)
         return dr.fma(u, hi - lo, lo), index
 
     def channel_weights(self, index: mi.UInt32, active=True) -> list[mi.Float]:
         """Per-channel weight response_c(λ)/p(λ) of the wavelength bin `index`."""
-        return [dr.gather(mi.Float, self.channel_table, index * self.channels + c, active)
+        return [lookup(self.channel_table, index * self.channels + c, active)
                 for c in range(self.channels)]
 
     def footprint(self, film: mi.Point2f) -> mi.Vector2f:
@@ -89,9 +90,8 @@ class LensSensor(mi.Sensor):
         f = r / self.scale_step
         i = dr.minimum(mi.UInt32(f), self.scale_rows - 2)
         w = dr.clip(f - mi.Float(i), 0.0, 1.0)
-        inv_r = dr.lerp(dr.gather(mi.Float, self.inv_radial, i), dr.gather(mi.Float, self.inv_radial, i + 1), w)
-        inv_t = dr.lerp(dr.gather(mi.Float, self.inv_tangential, i),
-                        dr.gather(mi.Float, self.inv_tangential, i + 1), w)
+        inv_r = dr.lerp(lookup(self.inv_radial, i), lookup(self.inv_radial, i + 1), w)
+        inv_t = dr.lerp(lookup(self.inv_tangential, i), lookup(self.inv_tangential, i + 1), w)
         c2 = dr.select(r > 0, dr.square(film.x / r), 1.0)
         return mi.Vector2f(self.pitch_mm * (c2 * inv_r + (1.0 - c2) * inv_t),
                            self.pitch_mm * ((1.0 - c2) * inv_r + c2 * inv_t))
@@ -108,7 +108,7 @@ class LensSensor(mi.Sensor):
         inv = dr.select(r > 0, dr.rcp(r), 0.0)
         cos_p, sin_p = dr.select(r > 0, x * inv, 1.0), y * inv
         row = dr.minimum(mi.UInt32(r / self.radius_step), self.rows - 1)
-        u0, u1, v0, v1, ellipse = (dr.gather(mi.Float, b, row, active) for b in self.bounds)
+        u0, u1, v0, v1, ellipse = (lookup(b, row, active) for b in self.bounds)
         ellipse = ellipse > 0.5
         disk = mi.warp.square_to_uniform_disk_concentric(sample3)
         su = dr.select(ellipse, 0.5 * (disk.x + 1.0), sample3.x)

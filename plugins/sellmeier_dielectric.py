@@ -51,8 +51,8 @@ class SellmeierDielectric(mi.BSDF):
         bs.sampled_type = dr.select(reflect, mi.UInt32(+mi.BSDFFlags.DeltaReflection),
                                     mi.UInt32(+mi.BSDFFlags.DeltaTransmission))
         # radiance is scaled by the squared index ratio on refraction (not importance)
-        radiance = ctx.mode == mi.TransportMode.Radiance
-        scale = dr.select(reflect | ~radiance, 1.0, dr.square(eta_ti))
+        radiance = ctx.mode == mi.TransportMode.Radiance  # the mode is one value for all lanes
+        scale = dr.select(reflect, 1.0, dr.square(eta_ti)) if radiance else mi.Float(1.0)
         if self.fresnel == "transmit":
             scale = dr.select(reflect, scale, scale * (1.0 - r_i))
         return bs, dr.select(active, mi.Spectrum(scale), 0.0)

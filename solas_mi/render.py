@@ -126,7 +126,8 @@ def render(scene, spp: int, seed: int = 0, max_depth: int | None = None, progres
     done = 0
     for k in range(passes):
         n_spp = min(per_pass, spp - done)
-        accum += _pass(mi, dr, scene, sensor, emitter, n_spp, done, spp, seed, seed * 1_000_003 + k + 1, depth)
+        run = _pass if dr.is_jit_v(mi.Float) else _pass_scalar
+        accum += run(mi, dr, scene, sensor, emitter, n_spp, done, spp, seed, seed * 1_000_003 + k + 1, depth)
         done += n_spp
         if progress is not None:
             progress(done, spp)
@@ -227,3 +228,40 @@ def render_image(lens, image: str | np.ndarray, sensor: tuple[int, int] = (960, 
     result.meta.update({"lens": lens.name, "lens_hash": lens.hash, "boundary": boundary, "fresnel": fresnel,
                         "cap_rings": rings or DEFAULT_RINGS})
     return result
+
+
+def _pass_scalar(mi, dr, scene, sensor, emitter, spp: int, first: int, total: int, base: int, seed: int, depth: int
+                 ) -> np.ndarray:
+    """`_pass` one sample at a time, for the scalar reference variants: the same estimator with
+    independent samples (no stratification), each line of a discrete response sampled equally often."""
+    width, height, nc = sensor.width, sensor.height, sensor.channels
+    rng = np.random.default_rng([base, seed])
+    out = np.zeros(width * height * nc)
+    lines = sensor.discrete_lines
+    filtered = sensor.max_footprint <= 2.0 * emitter.tan_pitch
+    ctx = mi.BSDFContext()
+    for pixel in range(width * height):
+        for k in range(spp):
+            s = first + k
+            u = rng.random(8)
+            s1 = (s % lines + 0.5) / lines if lines else u[0]
+            share = total / (lines * len(range(s % lines, total, lines))) if lines else 1.0
+            jitter = (0.5, 0.5) if filtered else (u[1], u[2])
+            pos = mi.Point2f((pixel % width + jitter[0]) / width, (pixel // width + jitter[1]) / height)
+            footprint = sensor.footprint(sensor.film_point(pos)) if filtered else None
+            ray, throughput = sensor.sample_ray(0.0, s1, pos, mi.Point2f(u[3], u[4]))
+            _, band = sensor.sample_wavelength(s1)
+            weight, radiance = throughput[0] * share, 0.0
+            for _ in range(depth):
+                si = scene.ray_intersect(ray)
+                if not si.is_valid():
+                    radiance = weight * emitter.radiance(ray.o, ray.d, ray.wavelengths, True, footprint)[0]
+                    break
+                bs, bw = si.bsdf(ray).sample(ctx, si, float(rng.random()), mi.Point2f(rng.random(), rng.random()))
+                weight *= bw[0]
+                if weight == 0.0:
+                    break
+                ray = continue_ray(si, ray, bs.wo)
+            for c, w in enumerate(sensor.channel_weights(band)):
+                out[pixel * nc + c] += radiance * w
+    return out
