@@ -83,7 +83,13 @@ def read_exr(path: str | os.PathLike) -> tuple[dict[str, np.ndarray], dict]:
         header = f.header()
         # read the metadata before the pixels: loading channels rebuilds the header dictionary
         meta = json.loads(header[META_KEY]) if META_KEY in header else {}
-        channels = {name: np.array(c.pixels) for name, c in f.channels().items()}
+        channels = {}
+        for name, c in f.channels().items():
+            pixels = np.array(c.pixels)
+            if pixels.ndim == 3 and len(name) == pixels.shape[-1]:  # OpenEXR groups R, G, B as "RGB"
+                channels.update({letter: pixels[..., k] for k, letter in enumerate(name)})
+            else:
+                channels[name] = pixels
     return channels, meta
 
 

@@ -122,7 +122,7 @@ def render(scene, spp: int, seed: int = 0, max_depth: int | None = None, progres
     per_pass = max(1, min(spp, _SAMPLES_PER_PASS // pixels))
     passes = math.ceil(spp / per_pass)
     accum = np.zeros(pixels * nc, dtype=np.float64)
-    start = time.perf_counter()
+    start, cpu = time.perf_counter(), time.process_time()
     done = 0
     for k in range(passes):
         n_spp = min(per_pass, spp - done)
@@ -131,10 +131,10 @@ def render(scene, spp: int, seed: int = 0, max_depth: int | None = None, progres
         done += n_spp
         if progress is not None:
             progress(done, spp)
-    seconds = time.perf_counter() - start
+    seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
     image = (accum / spp).reshape(height, width, nc).astype(np.float32)
     return Render(image, tuple(sensor.response.channels), spp, seconds, pixels * spp / seconds,
-                  {"variant": mi.variant(), "spp": spp, "max_depth": depth, "seconds": seconds,
+                  {"variant": mi.variant(), "spp": spp, "max_depth": depth, "seconds": seconds, "cpu_seconds": cpu,
                    **sensor.response.meta()})
 
 

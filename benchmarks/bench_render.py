@@ -1,0 +1,93 @@
+"""Direct spectral render through the doublet's geometry (`solas-mi render-image`): speed, noise
+against run time, and the cap-mesh ring count's accuracy/speed trade-off.
+
+Run: .venv/bin/python benchmarks/bench_render.py [--quick]
+- Speed: the bundled 1280×960 photograph, llvm_ad_spectral, samples per second at 64 spp.
+- Noise: relative RMSE = RMS(a − b)/√2 / RMS(mean) of two renders with different seeds, for spp
+  4…1024, responses `lines` and `srgb`, on the 320×240 centre of the 1280×960 sensor (same pitch;
+  per-pixel noise does not depend on the sensor size). Time = the 1280×960 render time at that spp
+  from the measured rate.
+- Rings: the scene PSF's worst centroid and RMS-radius error against the tracer (0°, ±2°,
+  486/531/656 nm) and the render rate, per ring count.
+Prints Markdown tables.
+"""
+from __future__ import annotations
+
+import argparse
+import math
+import os
+import time
+
+import numpy as np
+
+from solas_mi import Lens
+from solas_mi.camera import camera_for
+from solas_mi.imageio import read_image
+from solas_mi.render import mitsuba, render_image
+from solas_mi.resources import resource_dir
+
+
+def noise_table(lens, image, camera, spps, response):
+    rows = []
+    for spp in spps:
+        a = render_image(lens, image, (240, 320), camera.pitch_um, spp, response, seed=1).image
+        b = render_image(lens, image, (240, 320), camera.pitch_um, spp, response, seed=2).image
+        noise = np.sqrt(np.mean((a - b) ** 2) / 2) / np.sqrt(np.mean((0.5 * (a + b)) ** 2))
+        rows.append((spp, noise))
+        print(f"  {response} spp {spp}: noise {noise * 100:.2f} %", flush=True)
+    return rows
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--quick", action="store_true", help="fewer spp, for a smoke run")
+    args = ap.parse_args()
+    mitsuba("llvm_ad_spectral")
+    lens = Lens.load("solas-doublet")
+    image = read_image(resource_dir("scenes") / "images" / "rocket.png")
+    camera = camera_for(lens)
+    render_image(lens, image, (96, 128), spp=4, response="lines")  # compile the kernels once
+    rates = {}
+    for response in ("lines", "srgb"):
+        r = render_image(lens, image, (960, 1280), spp=16 if args.quick else 64, response=response)
+        rates[response] = r.samples_per_second
+        cores = os.cpu_count()
+        print(f"1280x960 {response} {r.spp} spp: {r.seconds:.1f} s wall, {r.samples_per_second / 1e6:.2f} M samples/s; "
+              f"CPU {r.meta['cpu_seconds']:.1f} s = {1280 * 960 * r.spp / r.meta['cpu_seconds'] * cores / 1e6:.2f} "
+              f"M samples/s on {cores} idle cores", flush=True)
+    spps = (4, 16, 64) if args.quick else (4, 16, 64, 256, 1024)
+    print("\n| response | spp | noise (relative RMSE) | 1280×960 time (s) |\n|---|---|---|---|")
+    table = {resp: noise_table(lens, image, camera, spps, resp) for resp in ("lines", "srgb")}
+    for resp, rows in table.items():
+        for spp, noise in rows:
+            print(f"| {resp} | {spp} | {noise * 100:.2f} % | {spp * 1280 * 960 / rates[resp]:.0f} |")
+    print("\n| cap rings | scene PSF centroid error (µm) | RMS radius error | render rate (M samples/s) |\n|---|---|---|---|")
+    from solas_mi.geometric import entrance_grid_hits
+    from solas_mi.pupil import chief_rays
+    from solas_mi.render import load_scene
+    from solas_mi.scene import write_scene
+    from solas_mi.scene_psf import scene_psf
+    import tempfile
+
+    for rings in (16, 32, 64, 128):
+        with tempfile.TemporaryDirectory() as tmp:
+            scene = load_scene(write_scene(lens, tmp, "x.png", rings=rings, fresnel="off"), image=str(
+                resource_dir("scenes") / "images" / "rocket.png"))
+            worst_c = worst_r = 0.0
+            for field in ((0.0, 0.0), (0.0, 2.0), (0.0, -2.0)):
+                for w in (486.0, 531.0, 656.0):
+                    p = scene_psf(scene, lens, field, w, rays=512)
+                    f, ww = np.array([field]), np.array([w])
+                    dx, dy, pw = entrance_grid_hits(lens, f, ww, 512, chief_rays(lens, f, ww))[0]
+                    cx, cy = np.average(dx, weights=pw), np.average(dy, weights=pw)
+                    rms = math.sqrt(np.average((dx - cx) ** 2 + (dy - cy) ** 2, weights=pw))
+                    worst_c = max(worst_c, math.hypot(p.meta["centroid_um"][0] - cx, p.meta["centroid_um"][1] - cy))
+                    worst_r = max(worst_r, abs(p.meta["rms_radius_um"] / rms - 1))
+        r = render_image(lens, image, (240, 320), camera.pitch_um, 64, "lines", rings=rings)
+        print(f"| {rings} | {worst_c:.3f} | {worst_r * 100:.3f} % | {r.samples_per_second / 1e6:.2f} |", flush=True)
+
+
+if __name__ == "__main__":
+    t = time.perf_counter()
+    main()
+    print(f"\n(total {time.perf_counter() - t:.0f} s)")
