@@ -112,7 +112,7 @@ def _add_psf_options(p: argparse.ArgumentParser) -> None:
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from . import render_commands
+    from . import crossval, render_commands, report
     from .convolution import commands as convolution_commands
     from .metrics import commands as metrics_commands
 
@@ -149,6 +149,8 @@ def build_parser() -> argparse.ArgumentParser:
     metrics_commands.register(sub)
     render_commands.register(sub)
     convolution_commands.register(sub)
+    crossval.register(sub)
+    report.register(sub)
     return parser
 
 
