@@ -77,7 +77,6 @@ def pupil_bounds(lens: Lens, max_radius_mm: float, wavelengths_nm=None, radii: i
     gx, gy = (a.ravel() for a in np.meshgrid(g, g))
     radius = np.linspace(0.0, max_radius_mm, radii) * (1.0 + 1.0 / radii)  # the last row lies past the corner
     phi = 2.0 * np.pi * np.arange(directions) / directions
-    bounds = np.zeros((radii, 4))
     lo_u = np.full(radii, np.inf)
     hi_u, lo_v, hi_v = -lo_u, lo_u.copy(), -lo_u
     elliptical = np.ones(radii, dtype=bool)

@@ -116,6 +116,9 @@ def render(scene, spp: int, seed: int = 0, max_depth: int | None = None, progres
     if not (isinstance(spp, int) and spp >= 1):
         raise SolasError(f"samples per pixel {spp!r} must be a positive integer")
     sensor, emitter = _components(scene)
+    if spp < max(sensor.discrete_lines, 1):
+        raise SolasError(f"samples per pixel {spp} must be at least the response's {sensor.discrete_lines} lines "
+                         "(each line needs its own samples)")
     width, height, nc = sensor.width, sensor.height, sensor.channels
     depth = max_depth if max_depth is not None else _max_depth(scene, sensor.lens)
     pixels = width * height
@@ -140,10 +143,13 @@ def render(scene, spp: int, seed: int = 0, max_depth: int | None = None, progres
 
 def _pass(mi, dr, scene, sensor, emitter, spp: int, first: int, total: int, base: int, seed: int, depth: int
           ) -> np.ndarray:
+    """Samples first…first+spp−1 of every pixel's stratified set of `total`, traced as one wavefront;
+    returns the per-pixel, per-channel sums."""
+    from .sampling import cmj_2d, hash_seed, stratified_1d
+
     width, height, nc = sensor.width, sensor.height, sensor.channels
     n = width * height * spp
     total_samples = total
-    from .sampling import cmj_2d, hash_seed, stratified_1d
 
     sampler = mi.load_dict({"type": "independent", "sample_count": spp})
     sampler.seed(seed, n)

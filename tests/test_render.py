@@ -162,6 +162,8 @@ def test_bad_inputs(doublet):
         mitsuba("llvm_ad_rgb_nonexistent")
     with pytest.raises(SolasError, match="samples per pixel"):
         render_image(doublet, np.ones((6, 8)), (6, 8), spp=0, variant="llvm_ad_spectral")
+    with pytest.raises(SolasError, match="at least the response's 3 lines"):
+        render_image(doublet, np.ones((6, 8)), (6, 8), spp=2, response="lines", variant="llvm_ad_spectral")
     with pytest.raises(SolasError, match="camera response"):
         render_image(doublet, np.ones((6, 8)), (6, 8), spp=4, response="infrared", variant="llvm_ad_spectral")
     with pytest.raises(SolasError, match="boundary"):
