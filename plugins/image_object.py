@@ -22,12 +22,12 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from solas_mi.camera import BOUNDARIES
 from solas_mi.errors import SolasError
 from solas_mi.imageio import read_image
 from solas_mi.plugins.tables import lookup, table
 from solas_mi.response import RGB_BANDS_NM
 
-BOUNDARIES = ("edge", "reflect", "zero")
 
 
 def _fold(i, n: int, boundary: str):

@@ -24,8 +24,8 @@ import numpy as np
 
 from solas_mi import response as responses
 from solas_mi.errors import SolasError
-from solas_mi.exit_pupil import pupil_bounds
 from solas_mi.camera import pinhole_focal_mm
+from solas_mi.exit_pupil import pupil_bounds
 from solas_mi.illumination import ideal_irradiance, image_scales
 from solas_mi.lens import Lens
 from solas_mi.plugins.tables import lookup, table

@@ -25,6 +25,8 @@ from .errors import SolasError
 from .lens import Lens
 
 DEFAULT_SENSOR = (960, 1280)  # rows, columns
+# What lies outside the input image, for both engines: the border repeated, mirrored, or black.
+BOUNDARIES = ("edge", "reflect", "zero")
 
 
 @dataclass(frozen=True)

@@ -9,10 +9,10 @@ channels of its pixel (a box pixel: the mean irradiance over the pixel's area).
 from __future__ import annotations
 
 import importlib
-from pathlib import Path
 import math
 import time
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
@@ -21,7 +21,7 @@ from .llvm import select_libllvm
 
 VARIANTS = ("llvm_ad_spectral", "scalar_spectral", "cuda_ad_spectral")
 _PLUGINS = ("sellmeier_dielectric", "image_object", "lens_sensor")
-_SAMPLES_PER_PASS = 1 << 22  # bounds the memory of one pass (≈ 1 GB of kernel state)
+_SAMPLES_PER_PASS = 1 << 22  # samples traced at once: bounds the memory of one pass
 
 
 def default_variant() -> str:

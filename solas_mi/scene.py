@@ -16,13 +16,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .camera import Camera, camera_for
+from .camera import BOUNDARIES, Camera, camera_for
 from .errors import SolasError
 from .imageio import atomic_path
 from .lens import Lens
 
 DEFAULT_RINGS = 32  # scene PSFs match the tracer to 0.04 µm / 0.2 %; denser meshes render slower (README)
-BOUNDARIES = ("edge", "reflect", "zero")
 
 
 def check_rings(rings: int) -> int:

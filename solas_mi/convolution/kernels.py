@@ -40,11 +40,10 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..camera import Camera
+from ..camera import BOUNDARIES, Camera
 from ..errors import SolasError
 from ..psf_grid import PSFGrid
 
-BOUNDARIES = ("edge", "zero", "reflect")
 _PAD_MODES = {"edge": "edge", "zero": "constant", "reflect": "symmetric"}
 COVER_TOLERANCE = 0.1  # the image may reach this fraction of a node spacing beyond the outermost node's cell
 TILE_SAMPLES = 1 << 20  # samples per batch of FFT tiles (≈4 MB in float32): bounds memory, fits caches
