@@ -43,9 +43,9 @@ from typing import Any
 import numpy as np
 
 from .errors import SolasError
+from .metrics.annuli import ANNULI as SCHEMES, ANNULUS_NAMES
 
-ANNULI = (0.24, 0.6, 1.0)  # fractions of the half-diagonal: centre / middle / edge (automotive)
-ANNULUS_NAMES = ("centre", "middle", "edge")
+ANNULI = SCHEMES["automotive"]  # fractions of the half-diagonal: centre / middle / edge
 PSF_KINDS = ("geometric", "fraunhofer")
 CONV_METHODS = ("interp", "patch")
 # PSF sampling per kind: geometric spots of the doublet fit ±40 µm; Fraunhofer tails need more room
@@ -113,8 +113,7 @@ def render_units(lens, wavelengths_nm, fov_deg: float) -> np.ndarray:
 
     focal = pinhole_focal_mm(lens, fov_deg)
     unit = ideal_irradiance(lens, focal)
-    return np.array([math.pi * (lens.paraxial(float(w)).entrance_pupil_diameter_mm / 2) ** 2 / focal ** 2 / unit
-                     for w in wavelengths_nm])
+    return np.array([ideal_irradiance(lens, focal, float(w)) / unit for w in wavelengths_nm])
 
 
 # ------------------------------------------------------------------------------------------ the engines
@@ -241,9 +240,9 @@ REFERENCE_KEYS = ("lens_hash", "sensor", "fov_deg", "boundary", "spp", "seeds", 
 def write_reference(path: Path, ref: Reference, var_map: np.ndarray, meta: dict) -> None:
     """reference.exr: R, G, B and the per-pixel noise variance of the mean ("noise_var"); the metadata
     names what it was rendered with (`REFERENCE_KEYS`), its noise and time, so a later run can reuse it."""
-    from .imageio import write_exr
+    from .imageio import image_channels, write_exr
 
-    channels = dict(zip("RGB", np.moveaxis(ref.image.astype(np.float32), -1, 0)))
+    channels = image_channels(ref.image.astype(np.float32))
     channels["noise_var"] = var_map.astype(np.float32)
     write_exr(path, channels, dict(meta, spp=ref.spp, seeds=len(ref.renders), seconds=ref.seconds,
                                    noise_abs=ref.noise, response="lines", fresnel="off"))
@@ -395,17 +394,10 @@ def csv_text(rows: list[Row]) -> str:
     return buf.getvalue()
 
 
-def write_text(path: Path, text: str) -> None:
-    from .imageio import atomic_path
-
-    with atomic_path(path) as tmp:
-        Path(tmp).write_text(text)
-
-
 def write_rgb_exr(path: Path, image: np.ndarray, meta: dict) -> None:
-    from .imageio import write_exr
+    from .imageio import image_channels, write_exr
 
-    write_exr(path, dict(zip("RGB", np.moveaxis(np.asarray(image, dtype=np.float32), -1, 0))), meta)
+    write_exr(path, image_channels(np.asarray(image, dtype=np.float32)), meta)
 
 
 def write_error_map(out: Path, stem: str, image: np.ndarray, ref: np.ndarray, ref_rms: float, meta: dict) -> None:
@@ -517,6 +509,8 @@ def crossval(lens, image: np.ndarray, out: str | Path | None, spp: int = 1024, s
                                    for (kind, b), (g, _) in grids.items() if kind == "fraunhofer"},
                 rows=[r.flat() for r in rows])
     if out_dir is not None:
+        from .imageio import write_text
+
         note = (f"Reference: mean of {seeds} direct renders, {ref.spp} spp in all ({ref.seconds:.1f} s), noise "
                 f"{100 * ref.noise / ref_rms:.3f} % of RMS(reference); \"− noise\" and the annuli remove it in "
                 "quadrature. PSF s: computing the PSF grid; run s: the convolution (or render).")

@@ -50,13 +50,15 @@ class PupilBounds:
                          self.elliptical[i] & self.elliptical[i + 1]], axis=-1)
 
 
-def _passes(rev: Lens, r: np.ndarray, ex: np.ndarray, ey: np.ndarray, wavelength_nm: float) -> np.ndarray:
-    """Whether the ray from film point (r, 0) toward (ex, ey) on the last vertex plane leaves the lens."""
+def passes(rev: Lens, x: np.ndarray, y: np.ndarray, ex: np.ndarray, ey: np.ndarray, wavelength_nm: float
+           ) -> np.ndarray:
+    """Whether the ray from image point (x, y) toward (ex, ey) on the last vertex plane leaves the lens
+    (`rev`: the `reversed_lens`)."""
     from . import tracer as T
 
     n = len(ex)
     zero = T.F(np.zeros(n))
-    rays = T.launch(rev, zero, zero, T.F(ex), T.F(ey), (T.F(r), zero))
+    rays = T.launch(rev, zero, zero, T.F(ex), T.F(ey), (T.F(np.broadcast_to(x, n)), T.F(np.broadcast_to(y, n))))
     tr = T.trace(rev, rays, T.F(np.full(n, wavelength_nm * 1e-3)))
     ok, clipped = T.to_numpy(tr.ok, tr.clipped_by)
     return ok & (clipped == 0)
@@ -83,7 +85,7 @@ def pupil_bounds(lens: Lens, max_radius_mm: float, wavelengths_nm=None, radii: i
     seen = np.zeros(radii, dtype=bool)
     rim_u, rim_v = [], []
     for w in (lens.wavelengths_nm if wavelengths_nm is None else wavelengths_nm):
-        ok = _passes(rev, np.repeat(radius, len(gx)), np.tile(gx, radii), np.tile(gy, radii), w).reshape(radii, -1)
+        ok = passes(rev, np.repeat(radius, len(gx)), 0.0, np.tile(gx, radii), np.tile(gy, radii), w).reshape(radii, -1)
         seen |= ok.any(axis=1)
         count = np.maximum(ok.sum(axis=1), 1)
         cu, cv = (ok * gx).sum(axis=1) / count, (ok * gy).sum(axis=1) / count
@@ -93,7 +95,7 @@ def pupil_bounds(lens: Lens, max_radius_mm: float, wavelengths_nm=None, radii: i
         cos, sin = np.tile(np.cos(phi), radii), np.tile(np.sin(phi), radii)
         for _ in range(42):
             mid = 0.5 * (inside + outside).ravel()
-            p = _passes(rev, r_all, np.repeat(cu, directions) + mid * cos, np.repeat(cv, directions) + mid * sin, w)
+            p = passes(rev, r_all, 0.0, np.repeat(cu, directions) + mid * cos, np.repeat(cv, directions) + mid * sin, w)
             p = p.reshape(radii, directions) & ok.any(axis=1)[:, None]
             inside, outside = np.where(p, mid.reshape(radii, -1), inside), np.where(p, outside, mid.reshape(radii, -1))
         u = cu[:, None] + inside * np.cos(phi)

@@ -73,6 +73,22 @@ def write_exr(path: str | os.PathLike, channels: dict[str, np.ndarray], meta: di
             f.write(tmp)
 
 
+def image_channels(image: np.ndarray, names: list[str] | None = None) -> dict[str, np.ndarray]:
+    """EXR channels of an image: H×W → "Y"; H×W×3 → "R", "G", "B"; other channel counts need `names`."""
+    if image.ndim == 2:
+        return {"Y": image}
+    names = names if names is not None else (list("RGB") if image.shape[-1] == 3 else None)
+    if names is None or len(names) != image.shape[-1]:
+        raise SolasError(f"image of shape {image.shape} needs one channel name per channel (got {names})")
+    return dict(zip(names, np.moveaxis(image, -1, 0)))
+
+
+def write_text(path: str | os.PathLike, text: str) -> None:
+    """A text file, written atomically."""
+    with atomic_path(path) as tmp:
+        Path(tmp).write_text(text)
+
+
 def read_exr(path: str | os.PathLike) -> tuple[dict[str, np.ndarray], dict]:
     """Channels (name → float32 2-D array) and the solas-mi metadata ({} if absent) of an EXR file."""
     import OpenEXR

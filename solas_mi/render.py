@@ -141,6 +141,12 @@ def render(scene, spp: int, seed: int = 0, max_depth: int | None = None, progres
                    **sensor.response.meta()})
 
 
+def _line_shares(total: int, lines: int) -> list[float]:
+    """Weight of a sample of each spectral line when sample s of `total` takes line s % lines: the
+    response's weights assume 1/lines of the samples per line, the count may differ by one."""
+    return [total / (lines * len(range(c, total, lines))) for c in range(lines)]
+
+
 def _pass(mi, dr, scene, sensor, emitter, spp: int, first: int, total: int, base: int, seed: int, depth: int
           ) -> np.ndarray:
     """Samples first…first+spp−1 of every pixel's stratified set of `total`, traced as one wavefront;
@@ -161,8 +167,7 @@ def _pass(mi, dr, scene, sensor, emitter, spp: int, first: int, total: int, base
         band = s % lines
         s, total = s // lines, -(-total // lines)
         s1 = (mi.Float(band) + 0.5) / lines
-        counts = [len(range(c, total_samples, lines)) for c in range(lines)]
-        share = dr.gather(mi.Float, mi.Float([total_samples / (lines * k) for k in counts]), band)
+        share = dr.gather(mi.Float, mi.Float(_line_shares(total_samples, lines)), band)
     else:
         s1 = stratified_1d(s, total, hash_seed(pixel, 2, base), sampler.next_1d())
         share = mi.Float(1.0)
@@ -220,12 +225,11 @@ def render_image(lens, image: str | np.ndarray, sensor: tuple[int, int] = (960, 
     camera = camera_for(lens, sensor, fov_deg, pitch_um)
     with tempfile.TemporaryDirectory(prefix="solas-scene-") as tmp:
         if isinstance(image, np.ndarray):
-            from .imageio import write_exr
+            from .imageio import image_channels, write_exr
 
-            arr = np.asarray(image, dtype=np.float32)
-            channels = {"Y": arr} if arr.ndim == 2 else dict(zip("RGB", np.moveaxis(arr, -1, 0)))
-            image = str(Path(tmp) / "object.exr")
-            write_exr(image, channels)
+            path = str(Path(tmp) / "object.exr")
+            write_exr(path, image_channels(np.asarray(image, dtype=np.float32)))
+            image = path
         xml = write_scene(lens, tmp, str(Path(image).resolve()), camera, rings or DEFAULT_RINGS, spp, response,
                           boundary, fresnel)
         scene = load_scene(xml, variant)
@@ -244,6 +248,7 @@ def _pass_scalar(mi, dr, scene, sensor, emitter, spp: int, first: int, total: in
     rng = np.random.default_rng([base, seed])
     out = np.zeros(width * height * nc)
     lines = sensor.discrete_lines
+    shares = _line_shares(total, lines) if lines else []
     filtered = sensor.max_footprint <= 2.0 * emitter.tan_pitch
     ctx = mi.BSDFContext()
     for pixel in range(width * height):
@@ -251,7 +256,7 @@ def _pass_scalar(mi, dr, scene, sensor, emitter, spp: int, first: int, total: in
             s = first + k
             u = rng.random(8)
             s1 = (s % lines + 0.5) / lines if lines else u[0]
-            share = total / (lines * len(range(s % lines, total, lines))) if lines else 1.0
+            share = shares[s % lines] if lines else 1.0
             jitter = (0.5, 0.5) if filtered else (u[1], u[2])
             pos = mi.Point2f((pixel % width + jitter[0]) / width, (pixel // width + jitter[1]) / height)
             footprint = sensor.footprint(sensor.film_point(pos)) if filtered else None

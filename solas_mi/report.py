@@ -23,8 +23,9 @@ from typing import Any
 import numpy as np
 
 from .crossval import (DEFAULT_CASES, PSF_KINDS, Errors, Row, compare, convolve, csv_text, load_input,
-                       noise_variance_map, psf_grid_for, reference, render, render_units, write_text)
+                       noise_variance_map, psf_grid_for, reference, render, render_units)
 from .errors import SolasError
+from .imageio import write_text
 
 DEFAULT_RENDER_SPP = (3, 12, 48, 192, 768)  # 3·4^k: each line's third a perfect square (stratifies best)
 DEFAULT_INTERP_GRIDS = ((4, 3), (8, 6), (16, 12), (32, 24), (64, 48))  # (columns, rows)

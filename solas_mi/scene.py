@@ -18,7 +18,7 @@ import numpy as np
 
 from .camera import BOUNDARIES, Camera, camera_for
 from .errors import SolasError
-from .imageio import atomic_path
+from .imageio import atomic_path, write_text
 from .lens import Lens
 
 DEFAULT_RINGS = 32  # scene PSFs match the tracer to 0.04 µm / 0.2 %; denser meshes render slower (README)
@@ -225,6 +225,5 @@ def write_scene(lens: Lens, out_dir: str | os.PathLike, image: str, camera: Came
         lens_ref = lens_copy.name
     xml = scene_xml(lens_ref, parts, camera, image, spp, response, boundary, fresnel)
     path = out / name
-    with atomic_path(path) as tmp:
-        Path(tmp).write_text(xml)
+    write_text(path, xml)
     return path

@@ -77,7 +77,7 @@ def degrade(image: np.ndarray, grid: "PSFGrid | str", method: str = DEFAULT_METH
 
 
 def run_degrade(args: argparse.Namespace) -> int:
-    from ..imageio import atomic_path, read_image, write_exr, write_png
+    from ..imageio import atomic_path, image_channels, read_image, write_exr, write_png
     from ..psf_grid import PSFGrid
 
     output = Path(args.output)
@@ -96,12 +96,9 @@ def run_degrade(args: argparse.Namespace) -> int:
                                                                        "field_range_deg", "field_sampling")},
                  "psf_grid_shape": list(grid.shape), "psf_pitch_um": grid.pitch_um, "psf_size": grid.size,
                  "values": "mean irradiance over each pixel, in the units of the linear input"})
-    if out.ndim == 2:
-        channels = {"Y": out}
-    elif out.shape[-1] == 3:
-        channels = dict(zip("RGB", np.moveaxis(out, -1, 0)))
-    else:
-        channels = {f"C{c:02d}_{meta['channel_wavelengths_nm'][c]:g}nm": out[..., c] for c in range(out.shape[-1])}
+    names = None if out.ndim == 2 or out.shape[-1] == 3 else \
+        [f"C{c:02d}_{meta['channel_wavelengths_nm'][c]:g}nm" for c in range(out.shape[-1])]
+    channels = image_channels(out, names)
     view = out if out.ndim == 2 or out.shape[-1] == 3 else out.mean(axis=-1)
     # both files appear together or not at all
     with atomic_path(output) as tmp_exr, atomic_path(png) as tmp_png:

@@ -16,15 +16,11 @@ from scipy import ndimage as ndi
 from skimage.feature import canny
 
 from ..errors import SolasError
+from .annuli import ANNULI, ANNULUS_NAMES
 from .esfr import EsfrResult, crop, esfr, luminance, matlab_round
 
 Roi = tuple[int, int, int, int]
 
-ANNULI: dict[str, tuple[float, float, float]] = {
-    "automotive": (0.24, 0.6, 1.0),
-    "equal-area": (math.sqrt(1 / 3), math.sqrt(2 / 3), 1.0),
-}
-ANNULUS_NAMES = ("centre", "middle", "edge")
 CONTRAST_BANDS: dict[str, tuple[float, float]] = {"automotive": (0.1, 0.9), "chart": (0.55, 0.65)}
 ANGLE_RANGE_DEG = (2.5, 42.5)
 MAX_OVERSHOOT = 1.4  # a local SFR maximum above this is implausible
