@@ -23,6 +23,8 @@ from pathlib import Path
 
 import numpy as np
 
+from solas_mi.psf import psf_grid
+
 CACHE = Path(__file__).resolve().parent.parent / "out" / "bench"
 WAVELENGTHS = (656.0, 531.0, 486.0)
 # name: (grid, method, image width, height, what)
@@ -43,7 +45,7 @@ def grid_path(grid: str) -> Path:
         from solas_mi import Lens
 
         print(f"computing the {grid} PSF grid once (cached in {path})", file=sys.stderr, flush=True)
-        g = Lens.load("solas-doublet").psf_grid(grid=grid, wavelengths_nm=WAVELENGTHS, pitch_um=0.5, size=160)
+        g = psf_grid(Lens.load("solas-doublet"), grid=grid, wavelengths_nm=WAVELENGTHS, pitch_um=0.5, size=160)
         g.write(str(path))
     return path
 
@@ -74,7 +76,7 @@ def busy_seconds() -> float:
 
 def run_case(name: str, repeats: int) -> dict:
     from solas_mi.convolution import degrade
-    from solas_mi.psf_grid import PSFGrid
+    from solas_mi.psf.grid import PSFGrid
 
     grid_name, method, width, height, _ = CASES[name]
     grid = PSFGrid.read(str(grid_path(grid_name)))

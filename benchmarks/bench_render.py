@@ -21,9 +21,9 @@ import time
 import numpy as np
 
 from solas_mi import Lens
-from solas_mi.camera import camera_for
 from solas_mi.imageio import read_image
-from solas_mi.render import mitsuba, render_image
+from solas_mi.optics.camera import camera_for
+from solas_mi.render.loop import mitsuba, render_image
 from solas_mi.resources import resource_dir
 
 
@@ -62,12 +62,13 @@ def main() -> None:
         for spp, noise in rows:
             print(f"| {resp} | {spp} | {noise * 100:.2f} % | {spp * 1280 * 960 / rates[resp]:.0f} |")
     print("\n| cap rings | scene PSF centroid error (µm) | RMS radius error | render rate (M samples/s) |\n|---|---|---|---|")
-    from solas_mi.geometric import entrance_grid_hits
-    from solas_mi.pupil import chief_rays
-    from solas_mi.render import load_scene
-    from solas_mi.scene import write_scene
-    from solas_mi.scene_psf import scene_psf
     import tempfile
+
+    from solas_mi.optics.pupil import chief_rays
+    from solas_mi.psf.geometric import entrance_grid_hits
+    from solas_mi.render.loop import load_scene
+    from solas_mi.render.scene import write_scene
+    from solas_mi.validation.scene_psf import scene_psf
 
     for rings in (16, 32, 64, 128):
         with tempfile.TemporaryDirectory() as tmp:

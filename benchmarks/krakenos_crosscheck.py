@@ -14,9 +14,9 @@ import sys
 import numpy as np
 
 from solas_mi import Lens
-from solas_mi.fraunhofer import fraunhofer
-from solas_mi.psf import normalize
-from solas_mi.pupil import pupil_function
+from solas_mi.optics.pupil import pupil_function
+from solas_mi.psf.base import normalize
+from solas_mi.psf.fraunhofer import fraunhofer
 
 CASES = [(f, w) for f in (0, -2, 2) for w in (486, 531, 656)]
 

@@ -21,13 +21,12 @@ import math
 import drjit as dr
 import mitsuba as mi
 import numpy as np
+from solas_mi.plugins.tables import lookup, table
 
-from solas_mi.camera import BOUNDARIES
 from solas_mi.errors import SolasError
 from solas_mi.imageio import read_image
-from solas_mi.plugins.tables import lookup, table
-from solas_mi.response import RGB_BANDS_NM
-
+from solas_mi.optics.camera import BOUNDARIES
+from solas_mi.render.response import RGB_BANDS_NM
 
 
 def _fold(i, n: int, boundary: str):

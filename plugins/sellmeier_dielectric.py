@@ -16,7 +16,7 @@ import drjit as dr
 import mitsuba as mi
 
 from solas_mi.errors import SolasError
-from solas_mi.glass import resolve
+from solas_mi.optics.glass import resolve
 
 FRESNEL_MODES = ("transmit", "sample", "off")
 

@@ -6,9 +6,8 @@ from __future__ import annotations
 
 import argparse
 import json
-from pathlib import Path
-
 from contextlib import redirect_stdout
+from pathlib import Path
 
 from .cli import main as solas_mi
 from .imageio import atomic_path, read_image
@@ -49,7 +48,7 @@ def run(out: Path) -> None:
 def degrade(out: Path) -> dict:
     """The bundled photograph through the doublet: direct render and the three convolutions, and a
     comparison sheet of the four."""
-    from .comparison import comparison_sheet
+    from .validation.sheet import comparison_sheet
 
     photo = str(resource_dir("scenes") / "images" / "rocket.png")
     d = out / "degraded"

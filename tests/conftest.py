@@ -1,7 +1,7 @@
 import copy
-import tomllib
 
 import pytest
+import tomllib
 
 from solas_mi.resources import resource_dir
 

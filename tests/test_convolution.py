@@ -5,13 +5,21 @@ import math
 import numpy as np
 import pytest
 
-from solas_mi.convolution import degrade, register
+from solas_mi.convolution import degrade
+from solas_mi.convolution.commands import register
 from solas_mi.convolution.interp import hats
-from solas_mi.convolution.kernels import (grid_camera, kernel_radius, layout, node_kernels, overlap_matrices,
-                                          pixel_kernels)
+from solas_mi.convolution.kernels import (
+    grid_camera,
+    kernel_radius,
+    layout,
+    node_kernels,
+    overlap_matrices,
+    pixel_kernels,
+)
 from solas_mi.convolution.patch import block_layout
 from solas_mi.errors import SolasError
-from solas_mi.psf_grid import PSFGrid, field_nodes
+from solas_mi.psf import psf, psf_grid
+from solas_mi.psf.grid import PSFGrid, field_nodes
 
 FOCAL = 100.0  # synthetic pinhole focal length (mm)
 METHODS = ("interp", "patch")
@@ -310,18 +318,18 @@ def test_interp_blends_the_offsets_of_the_nodes():
 
 @pytest.fixture(scope="module")
 def doublet_grid(doublet):
-    return doublet.psf_grid(grid="4x4", size=64, pitch_um=1.0, pupil_samples=32, wavelengths_nm=[656, 531, 486])
+    return psf_grid(doublet, grid="4x4", size=64, pitch_um=1.0, pupil_samples=32, wavelengths_nm=[656, 531, 486])
 
 
 def tracer_centroids(lens, cam, field) -> np.ndarray:
     """(column, row) pixel positions, 656/531/486 nm, of the tracer's chief ray at `field` plus the
     PSF's own centroid there (its energy is not centred on the chief ray)."""
-    from solas_mi.pupil import chief_rays
+    from solas_mi.optics.pupil import chief_rays
 
     found = []
     for wl in (656.0, 531.0, 486.0):
         xy = chief_rays(lens, np.array([field]), np.array([wl])).image_xy[0] * 1e3  # µm
-        p = lens.psf(tuple(field), wl, size=64, pitch_um=1.0, pupil_samples=32)
+        p = psf(lens, tuple(field), wl, size=64, pitch_um=1.0, pupil_samples=32)
         dx, dy = centroid(p.data) - 32  # µm right, µm down from the chief ray
         found.append([(xy[0] + dx) / cam.pitch_um + cam.width / 2 - 0.5,
                       cam.height / 2 - 0.5 - (xy[1] - dy) / cam.pitch_um])

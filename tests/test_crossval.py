@@ -6,10 +6,9 @@ import math
 import numpy as np
 import pytest
 
-from solas_mi import crossval as C
-from solas_mi import report as R
 from solas_mi.errors import SolasError
-
+from solas_mi.validation import crossval as C
+from solas_mi.validation import error_vs_time as R
 
 # ------------------------------------------------------------------------------------------ cheap units
 
@@ -95,8 +94,8 @@ def test_uniform_white_radiometry_agrees(doublet):
     """A white object: the render's relative illumination (0.986 at the edge middle, 0.978 at the
     corner, of the on-axis irradiance, which is ≈ 1.01 ideal-camera units) is what interp gives with
     cos³θ, "none" kernels and the unit factor k."""
-    from solas_mi.camera import pinhole_focal_mm
-    from solas_mi.illumination import axis_irradiance, ideal_irradiance
+    from solas_mi.optics.camera import pinhole_focal_mm
+    from solas_mi.optics.illumination import axis_irradiance, ideal_irradiance
 
     w, h = 160, 120
     white = np.ones((h, w, 3))

@@ -2,7 +2,7 @@ import numpy as np
 import pytest
 
 from solas_mi import SolasError
-from solas_mi import glass
+from solas_mi.optics import glass
 
 # Schott catalogue values n_d, V_d: a check on every coefficient in the catalogue.
 CATALOG = {

@@ -1,7 +1,6 @@
 import pytest
 
-from solas_mi import SolasError
-from solas_mi import llvm
+from solas_mi import SolasError, llvm
 
 
 def _fake_libs(tmp_path, monkeypatch, names):

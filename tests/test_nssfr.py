@@ -6,7 +6,12 @@ import numpy as np
 import pytest
 
 from solas_mi.errors import SolasError
-from solas_mi.metrics.nssfr import ANNULI, find_edge_rois, natural_scene_sfr, plot_report
+from solas_mi.metrics.nssfr import (
+    ANNULI,
+    find_edge_rois,
+    natural_scene_sfr,
+    plot_report,
+)
 from solas_mi.metrics.targets import Square, slanted_squares
 
 SHAPE = (480, 640)

@@ -3,12 +3,13 @@ import pytest
 
 from solas_mi import SolasError
 from solas_mi.cli import main
-from solas_mi.arguments import parse_wxh
-from solas_mi.psf_grid import PSFGrid, field_nodes
+from solas_mi.options import parse_wxh
+from solas_mi.psf import psf, psf_grid
+from solas_mi.psf.grid import PSFGrid, field_nodes
 
 
 def test_grid_layout_and_round_trip(doublet, tmp_path):
-    g = doublet.psf_grid(grid=(2, 3), wavelengths_nm=[486.0, 656.0], size=48, pupil_samples=32)
+    g = psf_grid(doublet, grid=(2, 3), wavelengths_nm=[486.0, 656.0], size=48, pupil_samples=32)
     assert g.data.shape == (2, 2, 3, 48, 48)
     assert g.fields_deg[0, 0].tolist() == pytest.approx([-4 / 3, 1.0])  # row 0 = top = +y field
     assert g.chief_ray_mm[0, 0, 0, 1] > 0 and g.chief_ray_mm[0, 0, 0, 0] < 0
@@ -25,9 +26,9 @@ def test_grid_layout_and_round_trip(doublet, tmp_path):
 
 
 def test_grid_matches_single_psfs(doublet):
-    g = doublet.psf_grid(grid=(1, 2), wavelengths_nm=[531.0], field_range_deg=(2.0, 0.0), size=40,
+    g = psf_grid(doublet, grid=(1, 2), wavelengths_nm=[531.0], field_range_deg=(2.0, 0.0), size=40,
                          field_sampling="edges")
-    one = doublet.psf((2.0, 0.0), 531.0, size=40).data
+    one = psf(doublet, (2.0, 0.0), 531.0, size=40).data
     assert np.abs(g.data[0, 0, 1] - one).max() < 1e-6 * one.max()
 
 
@@ -47,7 +48,7 @@ def test_field_nodes():
 ])
 def test_bad_grid_arguments(doublet, kwargs, match):
     with pytest.raises(SolasError, match=match):
-        doublet.psf_grid(**kwargs)
+        psf_grid(doublet, **kwargs)
 
 
 def test_cli_psf_and_grid(tmp_path, capsys):
@@ -77,13 +78,13 @@ def test_cli_bad_input_is_one_clear_line(tmp_path, capsys):
 @pytest.mark.parametrize("method", ["fraunhofer", "geometric"])
 def test_grid_symmetry_reuse_is_exact(doublet, method):
     """Nodes filled by mirroring/transposing a computed PSF equal a direct computation."""
-    g = doublet.psf_grid(grid=(2, 3), wavelengths_nm=[531.0], field_range_deg=(2.0, 2.0), size=40,
+    g = psf_grid(doublet, grid=(2, 3), wavelengths_nm=[531.0], field_range_deg=(2.0, 2.0), size=40,
                          field_sampling="edges", method=method, rays=200, pupil_samples=48, normalization="none")
     ny, nx = g.shape
     for r in range(ny):
         for c in range(nx):
             fx, fy = g.fields_deg[r, c]
-            one = doublet.psf((fx, fy), 531.0, size=40, method=method, rays=200, pupil_samples=48,
+            one = psf(doublet, (fx, fy), 531.0, size=40, method=method, rays=200, pupil_samples=48,
                               normalization="none")
             assert np.abs(g.data[0, r, c] - one.data).max() <= 1e-5 * one.data.max()
             assert g.chief_ray_mm[0, r, c] == pytest.approx(one.chief_ray_mm, abs=1e-12)

@@ -6,13 +6,17 @@ import numpy as np
 import pytest
 
 from solas_mi import Lens, SolasError
-from solas_mi.camera import camera_for
-from solas_mi.geometric import entrance_grid_hits
-from solas_mi.illumination import ideal_irradiance, irradiance, relative_illumination
-from solas_mi.pupil import chief_rays
-from solas_mi.render import load_scene, mitsuba, render, render_image
-from solas_mi.scene import cap_mesh, lens_parts, write_scene
-from solas_mi.scene_psf import scene_psf
+from solas_mi.optics.camera import camera_for
+from solas_mi.optics.illumination import (
+    ideal_irradiance,
+    irradiance,
+    relative_illumination,
+)
+from solas_mi.optics.pupil import chief_rays
+from solas_mi.psf.geometric import entrance_grid_hits
+from solas_mi.render.loop import load_scene, mitsuba, render_image
+from solas_mi.render.scene import cap_mesh, lens_parts, write_scene
+from solas_mi.validation.scene_psf import scene_psf
 
 RAYS = 256
 

@@ -7,7 +7,13 @@ from scipy.special import ndtr
 
 from solas_mi.errors import SolasError
 from solas_mi.imageio import srgb_decode
-from solas_mi.metrics.targets import Square, analytic_mtf, analytic_mtf50, slanted_edge, slanted_squares
+from solas_mi.metrics.targets import (
+    Square,
+    analytic_mtf,
+    analytic_mtf50,
+    slanted_edge,
+    slanted_squares,
+)
 
 
 @pytest.mark.parametrize("sigma, expected", [(0.5, 0.323111), (1.0, 0.179965), (2.0, 0.092732), (3.0, 0.062176)])

@@ -1,10 +1,11 @@
-"""Spatially variant convolution of images with a lens's PSF grid (`solas-mi degrade`).
+"""Spatially variant convolution of images with a lens's PSF grid.
 
 `kernels`: PSF grid → pixel kernels (exact pixel/texel integration, chief-ray offsets), padding;
 `patch`: the SOLAS paper's one kernel per block; `interp`: kernels interpolated between nodes,
-seamless; `commands`: `degrade` and the command line.
+seamless; `methods`: the method registry and `degrade(image, grid, method)`; `commands`: `degrade`
+on the command line.
 """
-from .commands import DEFAULT_METHOD, METHODS, degrade, register
-from .kernels import BOUNDARIES
+from ..lazy import lazy_exports
 
-__all__ = ["BOUNDARIES", "DEFAULT_METHOD", "METHODS", "degrade", "register"]
+__all__ = ["DEFAULT_METHOD", "METHODS", "degrade"]
+__getattr__ = lazy_exports(__name__, {"DEFAULT_METHOD": ".methods", "METHODS": ".methods", "degrade": ".methods"})

@@ -1,4 +1,4 @@
-"""`solas-mi degrade`: an image degraded by a lens's spatially variant PSF grid, and `degrade` for Python.
+"""`solas-mi degrade`: an image degraded by a lens's spatially variant PSF grid.
 
 The input image is the ideal (pinhole) image of the scene spanning the grid's ±x field range; its
 pixel grid is the sensor (`kernels.grid_camera`). PNG/JPEG input is sRGB-decoded first (unless
@@ -7,78 +7,16 @@ pixel grid is the sensor (`kernels.grid_camera`). PNG/JPEG input is sRGB-decoded
 from __future__ import annotations
 
 import argparse
-import time
 from pathlib import Path
-from typing import TYPE_CHECKING, Any
-
-import numpy as np
+from typing import Any
 
 from ..errors import SolasError
-
-if TYPE_CHECKING:
-    from ..psf_grid import PSFGrid
-
-METHODS = ("interp", "patch")
-DEFAULT_METHOD = "interp"
-
-
-def check_method(method: str) -> str:
-    if method not in METHODS:
-        raise SolasError(f"convolution method {method!r} must be one of {', '.join(METHODS)}")
-    return method
-
-
-def degrade(image: np.ndarray, grid: "PSFGrid | str", method: str = DEFAULT_METHOD, boundary: str = "edge", *,
-            dtype=np.float32, meta: dict | None = None) -> np.ndarray:
-    """The linear image (H, W) or (H, W, C) seen through the lens of `grid` (a PSFGrid or its EXR path).
-
-    method "interp" (default): PSFs interpolated bilinearly between nodes, seamless; "patch": the
-    SOLAS paper's one kernel per block. boundary: how the image is padded ("edge" replicates the
-    border, "zero", "reflect" mirrors); it is never wrapped around. Channels take the grid's
-    wavelengths longest first (R, G, B ← 656, 531, 486 nm); a one-wavelength grid serves all.
-    Returns an array of the image's shape in `dtype` (float32 or float64); `meta`, if given, is
-    filled with what was done (camera, channels, blocks or nodes)."""
-    from ..psf_grid import PSFGrid
-    from . import interp, patch
-    from .kernels import channel_wavelengths, check_boundary, kernel_radius, layout, single_threaded_blas
-
-    check_method(method)
-    check_boundary(boundary)
-    dtype = np.dtype(dtype)
-    if dtype not in (np.float32, np.float64):
-        raise SolasError(f"dtype {dtype} must be float32 or float64")
-    if isinstance(grid, (str, Path)):
-        grid = PSFGrid.read(str(grid))
-    image = np.asarray(image)
-    if image.ndim not in (2, 3) or image.size == 0 or not np.issubdtype(image.dtype, np.number):
-        raise SolasError(f"image of shape {image.shape} must be a non-empty H×W or H×W×C array of numbers")
-    planes = image[..., None] if image.ndim == 2 else image
-    height, width, nchan = planes.shape
-    wavelengths = channel_wavelengths(grid, nchan)
-    lay = layout(grid, width, height)
-    module = interp if method == "interp" else patch
-    start = time.perf_counter()
-    out = np.empty(planes.shape, dtype=dtype)
-    with single_threaded_blas():
-        for c, k in enumerate(wavelengths):
-            out[..., c] = module.convolve_channel(planes[..., c], grid, lay, k, boundary, dtype)
-    if meta is not None:
-        radius = kernel_radius(grid.size, lay.q)
-        meta.update({
-            "method": method, "boundary": boundary, "camera": lay.camera.meta(),
-            "channel_wavelengths_nm": [grid.wavelengths_nm[k] for k in wavelengths],
-            "kernel_size_px": 2 * radius + 1, "psf_pitch_px": lay.q,
-            "max_chief_ray_offset_px": float(np.abs(lay.offsets[sorted(set(wavelengths))]).max()),
-            "seconds": time.perf_counter() - start,
-        })
-        meta.update(interp.describe(lay, radius, lay.max_shift(wavelengths)) if method == "interp"
-                    else patch.describe(lay))
-    return out if image.ndim == 3 else out[..., 0]
+from .methods import DEFAULT_METHOD, METHODS, check_method, degrade
 
 
 def run_degrade(args: argparse.Namespace) -> int:
     from ..imageio import atomic_path, image_channels, read_image, write_exr, write_png
-    from ..psf_grid import PSFGrid
+    from ..psf.grid import PSFGrid
 
     output = Path(args.output)
     if output.suffix.lower() != ".exr":
@@ -122,10 +60,9 @@ def register(subparsers: Any) -> None:
                     "lateral colour are kept). Writes linear OpenEXR and an sRGB PNG beside it.")
     p.add_argument("image", help="PNG/JPEG (sRGB, decoded unless --linear) or EXR (linear)")
     p.add_argument("--psf-grid", required=True, metavar="GRID.exr", help="PSF grid written by `solas-mi psf-grid`")
-    p.add_argument("--method", choices=METHODS, default=DEFAULT_METHOD,
-                   help="interp (default): PSF interpolated bilinearly between grid nodes at every pixel, no "
-                        "seams; patch: the SOLAS paper's one PSF per block (8x6 blocks from an 8x8 grid on a "
-                        "1280x960 image), seams at block borders")
+    p.add_argument("--method", choices=list(METHODS), default=DEFAULT_METHOD,
+                   help="; ".join(f"{name}{' (default)' if name == DEFAULT_METHOD else ''}: {module.SUMMARY}"
+                                  for name, module in METHODS.items()))
     p.add_argument("--boundary", choices=BOUNDARIES, default=BOUNDARIES[0],
                    help="padding outside the image, never wrapped around: edge (default) replicates the border "
                         "pixels, zero pads with black, reflect mirrors the image about its border")

@@ -33,8 +33,19 @@ import math
 
 import numpy as np
 
-from ..psf_grid import PSFGrid
-from .kernels import Layout, batches, fast_len, fft_convolve, kernel_radius, node_kernels, pad, parallel_map
+from ..psf.grid import PSFGrid
+from .kernels import (
+    Layout,
+    batches,
+    fast_len,
+    fft_convolve,
+    kernel_radius,
+    node_kernels,
+    pad,
+    parallel_map,
+)
+
+SUMMARY = "PSFs interpolated bilinearly between grid nodes at every pixel: no seams"
 
 
 def hats(knots: np.ndarray, first: int, count: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:

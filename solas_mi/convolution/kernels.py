@@ -40,9 +40,9 @@ from functools import lru_cache
 
 import numpy as np
 
-from ..camera import BOUNDARIES, Camera
 from ..errors import SolasError
-from ..psf_grid import PSFGrid
+from ..optics.camera import BOUNDARIES, Camera
+from ..psf.grid import PSFGrid
 
 _PAD_MODES = {"edge": "edge", "zero": "constant", "reflect": "symmetric"}
 COVER_TOLERANCE = 0.1  # the image may reach this fraction of a node spacing beyond the outermost node's cell

@@ -10,8 +10,8 @@ import json
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ..arguments import parse_wxh
 from ..errors import SolasError
+from ..options import parse_wxh
 
 if TYPE_CHECKING:
     from .nssfr import NsSfrReport

@@ -11,8 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..llvm import import_drjit
 from .lens import Lens
-from .llvm import import_drjit
+from .paraxial import paraxial
 
 dr = import_drjit()
 from drjit.llvm import Bool, Float64, UInt32  # noqa: E402
@@ -180,7 +181,7 @@ def object_points(lens: Lens, field_deg: np.ndarray) -> np.ndarray | None:
     """
     if lens.at_infinity:
         return None
-    ep_z = lens.paraxial().entrance_pupil_z_mm
+    ep_z = paraxial(lens).entrance_pupil_z_mm
     return -field_tangents(field_deg) * (ep_z + lens.object_distance)
 
 
@@ -197,4 +198,4 @@ def to_numpy(*values) -> tuple[np.ndarray, ...]:
 
 
 __all__ = ["Rays", "Traced", "launch", "trace", "to_plane", "to_sphere", "field_tangents", "object_points",
-           "gather", "numpy", "refractive_index", "launch_plane_z"]
+           "gather", "to_numpy", "refractive_index", "launch_plane_z"]

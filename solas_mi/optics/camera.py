@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .errors import SolasError
+from ..errors import SolasError
 from .lens import Lens
 
 DEFAULT_SENSOR = (960, 1280)  # rows, columns

@@ -3,13 +3,22 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import pupil as P
-from . import tracer as T
-from .lens import Lens
-from .psf import DEFAULT_GEOMETRIC_RAYS
-from .pupil import ChiefRays
+from ..optics import pupil as P
+from ..optics import tracer as T
+from ..optics.lens import Lens
+from ..optics.pupil import ChiefRays
+from .base import DEFAULT_GEOMETRIC_RAYS, Computed, shared_origin_um
 
 _BATCH_RAYS = 1 << 20  # rays traced at once
+
+
+def compute(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int, rays: int,
+            shared_origin: bool = False) -> Computed:
+    """Geometric PSFs of field/wavelength pairs from rays×rays entrance grids (`methods.compute`)."""
+    chief = P.chief_rays(lens, field_deg, wavelength_nm)
+    center = shared_origin_um(chief.image_xy) if shared_origin else None
+    data, _, transmission = geometric(lens, field_deg, wavelength_nm, pitch_um, size, rays, chief, center)
+    return Computed(data, chief, transmission, [[] for _ in range(len(field_deg))])
 
 
 def geometric(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int,

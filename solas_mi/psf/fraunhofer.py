@@ -5,8 +5,17 @@ import math
 
 import numpy as np
 
-from .psf import grid_offsets
-from .pupil import PupilFunction
+from ..optics.pupil import PupilFunction, pupil_function
+from .base import Computed, grid_offsets, shared_origin_um
+
+
+def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int, samples: int,
+            shared_origin: bool = False) -> Computed:
+    """Fraunhofer PSFs of field/wavelength pairs from their pupil functions on samples×samples grids
+    (`methods.compute`)."""
+    pf = pupil_function(lens, field_deg, wavelength_nm, samples)
+    center = shared_origin_um(pf.chief.image_xy) if shared_origin else None
+    return Computed(fraunhofer(pf, pitch_um, size, center), pf.chief, pf.transmission, pf.vignetted_by)
 
 
 def fraunhofer(pf: PupilFunction, pitch_um: float, size: int, center_um: np.ndarray | None = None) -> np.ndarray:

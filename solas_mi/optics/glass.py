@@ -5,15 +5,15 @@ Indices are relative to air; AIR has index 1. Wavelengths are in nm.
 from __future__ import annotations
 
 import re
-import tomllib
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
+import tomllib
 
-from .errors import SolasError
+from ..errors import SolasError
 
 CATALOG_PATH = Path(__file__).parent / "data" / "glass_catalog.toml"
 # Fraunhofer lines (nm) defining n_d and V_d.

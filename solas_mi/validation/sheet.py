@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .imageio import atomic_path, srgb_encode
+from ..imageio import atomic_path, srgb_encode
 
 
 def crop_boxes(height: int, width: int, size: tuple[int, int] = (120, 160)) -> dict[str, tuple[int, int, int, int]]:

@@ -6,8 +6,8 @@ import shutil
 import sys
 from pathlib import Path
 
-from .arguments import parse_wxh
-from .errors import SolasError
+from ..errors import SolasError
+from ..options import parse_wxh
 
 DEFAULT_IMAGE = "images/rocket.png"  # under the shipped scenes directory
 
@@ -19,14 +19,14 @@ def _progress(done: int, total: int) -> None:
 
 
 def _default_image() -> str:
-    from .resources import resource_dir
+    from ..resources import resource_dir
 
     return str(resource_dir("scenes") / DEFAULT_IMAGE)
 
 
 def _scene(args) -> int:
-    from .camera import camera_for
-    from .lens import Lens
+    from ..optics.camera import camera_for
+    from ..optics.lens import Lens
     from .scene import write_scene
 
     lens = Lens.load(args.lens)
@@ -44,7 +44,7 @@ def _scene(args) -> int:
 
 
 def _render(args) -> int:
-    from .render import load_scene, render
+    from .loop import load_scene, render
 
     params = {}
     for item in args.set or []:
@@ -64,8 +64,8 @@ def _render(args) -> int:
 
 
 def _render_image(args) -> int:
-    from .lens import Lens
-    from .render import render_image
+    from ..optics.lens import Lens
+    from .loop import render_image
 
     lens = Lens.load(args.lens)
     result = render_image(lens, args.image, parse_wxh(args.sensor, "--sensor"), args.pitch_um, args.spp,
@@ -78,7 +78,7 @@ def _render_image(args) -> int:
 
 
 def _add_render_options(p: argparse.ArgumentParser, spp_default: int | None) -> None:
-    from .render import VARIANTS
+    from .loop import VARIANTS
 
     p.add_argument("--spp", type=int, default=spp_default, help="samples per pixel")
     p.add_argument("--variant", choices=VARIANTS, help="Mitsuba variant (default: cuda_ad_spectral with a GPU, "

@@ -16,12 +16,13 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from . import psf as S
-from .arguments import parse_wxh
-from .camera import pinhole_focal_mm
-from .errors import SolasError
-from .imageio import read_exr, write_exr, write_png
-from .lens import Lens
+from ..errors import SolasError
+from ..imageio import read_exr, write_exr, write_png
+from ..optics.camera import pinhole_focal_mm
+from ..optics.lens import Lens, check_field
+from ..options import parse_wxh
+from . import base as S
+from .methods import DEFAULT_METHOD, METHODS, check_method, compute
 
 FIELD_SAMPLINGS = ("centers", "edges")
 _FIELDS_PER_BATCH = 64
@@ -125,13 +126,13 @@ def symmetry_classes(fields: np.ndarray, decimals: int = 12):
 def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=None,
              field_range_deg: tuple[float, float] | float | None = None, pitch_um: float = S.DEFAULT_PITCH_UM,
              size: int = S.DEFAULT_SIZE,
-             method: str = "fraunhofer", normalization: str = "sum", pupil_samples: int = S.DEFAULT_PUPIL_SAMPLES,
+             method: str = DEFAULT_METHOD, normalization: str = "sum", pupil_samples: int = S.DEFAULT_PUPIL_SAMPLES,
              rays: int = S.DEFAULT_GEOMETRIC_RAYS, field_sampling: str = "centers", progress=None) -> PSFGrid:
     """PSFs on a field grid ("columns x rows" text or a (rows, columns) tuple) spanning
     ±field_range_deg (x, y) (default: the lens's field in both)."""
     ny, nx = parse_wxh(grid, "grid")
     S.check_grid(pitch_um, size)
-    S.check_method(method, pupil_samples, rays)
+    sampling = check_method(method, pupil_samples, rays)
     S.check_normalization(normalization)
     wl = tuple(float(w) for w in (wavelengths_nm if wavelengths_nm is not None else lens.wavelengths_nm))
     if not wl:
@@ -140,7 +141,7 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
         lens.check_wavelength(w)
     if field_range_deg is None:
         field_range_deg = lens.field_deg
-    hx, hy = S.check_field((field_range_deg, field_range_deg) if np.isscalar(field_range_deg) else field_range_deg)
+    hx, hy = check_field((field_range_deg, field_range_deg) if np.isscalar(field_range_deg) else field_range_deg)
     if hx < 0 or hy < 0:
         raise SolasError(f"field range ({hx:g}, {hy:g}) deg must be non-negative (half ranges)")
     fx = field_nodes(nx, hx, field_sampling)
@@ -158,7 +159,7 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
     for k, w in enumerate(wl):
         for a in range(0, len(canon), _FIELDS_PER_BATCH):
             b = min(len(canon), a + _FIELDS_PER_BATCH)
-            psfs, cr, tr, vig = S.compute(lens, canon[a:b], np.full(b - a, w), pitch_um, odd, method, pupil_samples,
+            psfs, cr, tr, vig = compute(lens, canon[a:b], np.full(b - a, w), pitch_um, odd, method, pupil_samples,
                                           rays)
             vignetting.update(s for v in vig for s in v)
             for c in range(a, b):
@@ -176,7 +177,7 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
                     transmission[k, i] = tr[c - a]
             if progress is not None:
                 progress(k * len(canon) + b, len(wl) * len(canon))
-    meta = S.describe(lens, method, normalization, pupil_samples, rays, size)
+    meta = S.describe(lens, method, normalization, {METHODS[method].sampling: sampling}, size)
     meta.update({
         "field_sampling": field_sampling, "field_range_deg": [hx, hy],
         "grid_orientation": "grid row 0 = largest y field, column 0 = smallest x field",

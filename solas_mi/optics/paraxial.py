@@ -63,8 +63,20 @@ def _object_ray(lens: Lens, wavelength_nm: float, y_obj: float, u0: float) -> tu
     return ynu_trace(lens, wavelength_nm, y_obj + u0 * lens.object_distance, u0)
 
 
-def paraxial(lens: Lens, wavelength_nm: float, fields_deg: list[float] | None = None) -> Paraxial:
-    """Paraxial analysis of `lens` at `wavelength_nm`."""
+def paraxial(lens: Lens, wavelength_nm: float | None = None, fields_deg: list[float] | None = None) -> Paraxial:
+    """Paraxial data (EFL, pupils, f/#, image offset, chief rays) of `lens` at `wavelength_nm`
+    (default: its primary wavelength), with chief rays at `fields_deg` (default: 0 and the lens's
+    field). Results for the default fields are memoised on the lens."""
+    wl = float(wavelength_nm if wavelength_nm is not None else lens.primary_wavelength)
+    if fields_deg is not None:
+        return _paraxial(lens, wl, fields_deg)
+    memo = lens.memo.setdefault("paraxial", {})
+    if wl not in memo:
+        memo[wl] = _paraxial(lens, wl)
+    return memo[wl]
+
+
+def _paraxial(lens: Lens, wavelength_nm: float, fields_deg: list[float] | None = None) -> Paraxial:
     wavelength_nm = lens.check_wavelength(wavelength_nm)
     n = lens.indices(wavelength_nm)
     z = lens.vertex_z

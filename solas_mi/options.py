@@ -1,4 +1,4 @@
-"""Parsing of command-line values shared by several commands."""
+"""What the commands share: parsing of command-line values and the option groups several commands take."""
 from __future__ import annotations
 
 import re
@@ -28,3 +28,8 @@ def floats(text: str, what: str) -> list[float]:
         return [float(v) for v in text.split(",") if v.strip()]
     except ValueError:
         raise SolasError(f"{what} {text!r} must be comma-separated numbers") from None
+
+
+def add_lens_argument(p) -> None:
+    """The positional LENS argument of every command that takes a lens."""
+    p.add_argument("lens", help="shipped lens name (solas-doublet, cooke-triplet) or a .toml lens file")

@@ -16,10 +16,10 @@ from pathlib import Path
 
 import numpy as np
 
-from .camera import BOUNDARIES, Camera, camera_for
-from .errors import SolasError
-from .imageio import atomic_path, write_text
-from .lens import Lens
+from ..errors import SolasError
+from ..imageio import atomic_path, write_text
+from ..optics.camera import BOUNDARIES, Camera, camera_for
+from ..optics.lens import Lens
 
 DEFAULT_RINGS = 32  # scene PSFs match the tracer to 0.04 µm / 0.2 %; denser meshes render slower (README)
 

@@ -9,12 +9,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import psf as S
-from . import tracer as T
-from .geometric import entrance_half_width
-from .lens import Lens
-from .pupil import chief_rays
-from .render import continue_ray
+from ..optics import tracer as T
+from ..optics.lens import Lens, check_field
+from ..optics.pupil import chief_rays
+from ..psf import base as S
+from ..psf.geometric import entrance_half_width
+from ..render.loop import continue_ray
 
 
 def scene_psf(scene, lens: Lens, field_deg, wavelength_nm: float, pitch_um: float = S.DEFAULT_PITCH_UM,
@@ -25,7 +25,7 @@ def scene_psf(scene, lens: Lens, field_deg, wavelength_nm: float, pitch_um: floa
     import drjit as dr
     import mitsuba as mi
 
-    field = np.array([S.check_field(field_deg)])
+    field = np.array([check_field(field_deg)])
     S.check_grid(pitch_um, size)
     wl = np.array([lens.check_wavelength(wavelength_nm)])
     chief = chief_rays(lens, field, wl)
@@ -65,7 +65,7 @@ def scene_psf(scene, lens: Lens, field_deg, wavelength_nm: float, pitch_um: floa
     hist, _, _ = np.histogram2d(-py, px, bins=(edges, edges), weights=w)
     cx, cy = np.average(px, weights=w), np.average(py, weights=w)
     rms = float(np.sqrt(np.average((px - cx) ** 2 + (py - cy) ** 2, weights=w)))
-    meta = S.describe(lens, "scene-geometric", "sum", 0, rays, size)
+    meta = S.describe(lens, "scene-geometric", "sum", {"rays": rays}, size)
     meta.update({"centroid_um": [float(cx), float(cy)], "rms_radius_um": rms,
                  "transmission": float(w.sum() / n), "chief_ray_mm": chief.image_xy[0].tolist()})
     return S.PSF(S.normalize(hist, "sum"), float(pitch_um), tuple(field[0]), (float(wl[0]),), (1.0,),

@@ -16,8 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import SolasError
-from .llvm import select_libllvm
+from ..errors import SolasError
+from ..llvm import select_libllvm
 
 VARIANTS = ("llvm_ad_spectral", "scalar_spectral", "cuda_ad_spectral")
 _PLUGINS = ("sellmeier_dielectric", "image_object", "lens_sensor")
@@ -67,7 +67,7 @@ class Render:
     def write(self, path: str, png: str | None = None) -> str:
         """OpenEXR (linear, one channel per response channel, metadata in the header) and an sRGB PNG
         beside it (or at `png`); returns the PNG's path."""
-        from .imageio import write_exr, write_png
+        from ..imageio import write_exr, write_png
 
         meta = dict(self.meta, spp=self.spp, samples_per_second=self.samples_per_second)
         write_exr(path, {c: self.image[..., k] for k, c in enumerate(self.channels)}, meta)
@@ -110,8 +110,8 @@ def _max_depth(scene, lens) -> int:
 
 def render(scene, spp: int, seed: int = 0, max_depth: int | None = None, progress=None) -> Render:
     """Render a lens scene with `spp` samples per pixel in passes of bounded size."""
-    import mitsuba as mi
     import drjit as dr
+    import mitsuba as mi
 
     if not (isinstance(spp, int) and spp >= 1):
         raise SolasError(f"samples per pixel {spp!r} must be a positive integer")
@@ -219,13 +219,13 @@ def render_image(lens, image: str | np.ndarray, sensor: tuple[int, int] = (960, 
     spans the same field (`solas_mi.camera`)."""
     import tempfile
 
-    from .camera import camera_for
+    from ..optics.camera import camera_for
     from .scene import DEFAULT_RINGS, write_scene
 
     camera = camera_for(lens, sensor, fov_deg, pitch_um)
     with tempfile.TemporaryDirectory(prefix="solas-scene-") as tmp:
         if isinstance(image, np.ndarray):
-            from .imageio import image_channels, write_exr
+            from ..imageio import image_channels, write_exr
 
             path = str(Path(tmp) / "object.exr")
             write_exr(path, image_channels(np.asarray(image, dtype=np.float32)))

@@ -22,10 +22,23 @@ from typing import Any
 
 import numpy as np
 
-from .crossval import (DEFAULT_CASES, PSF_KINDS, Errors, Row, compare, convolve, csv_text, load_input,
-                       noise_variance_map, psf_grid_for, reference, render, render_units)
-from .errors import SolasError
-from .imageio import write_text
+from ..errors import SolasError
+from ..imageio import write_text
+from .crossval import (
+    DEFAULT_CASES,
+    PSF_KINDS,
+    Errors,
+    Row,
+    compare,
+    convolve,
+    csv_text,
+    load_input,
+    noise_variance_map,
+    psf_grid_for,
+    reference,
+    render,
+    render_units,
+)
 
 DEFAULT_RENDER_SPP = (3, 12, 48, 192, 768)  # 3·4^k: each line's third a perfect square (stratifies best)
 DEFAULT_INTERP_GRIDS = ((4, 3), (8, 6), (16, 12), (32, 24), (64, 48))  # (columns, rows)
@@ -33,7 +46,7 @@ DEFAULT_PATCH_GRIDS = ((8, 6), (32, 24))
 
 
 def _grids(text: str | None, default, what: str) -> tuple[tuple[int, int], ...]:
-    from .arguments import parse_wxh
+    from ..options import parse_wxh
 
     if text is None:
         return tuple(default)
@@ -63,8 +76,8 @@ def error_vs_time(lens, image: np.ndarray, out: str | Path | None, ref_spp: int 
                   boundary: str = "edge", repeats: int = 3, variant: str | None = None, log=print) -> list[Row]:
     """The error of every case against the reference and its run time; writes the table and plot to
     `out` (None: nothing written)."""
-    from .camera import check_fov
-    from .convolution.kernels import channel_wavelengths, check_boundary
+    from ..convolution.kernels import channel_wavelengths, check_boundary
+    from ..optics.camera import check_fov
 
     fov = check_fov(lens.field_deg if fov_deg is None else fov_deg)
     check_boundary(boundary)
@@ -151,7 +164,7 @@ def plot(rows: list[Row], path: Path, title: str) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from .imageio import atomic_path
+    from ..imageio import atomic_path
 
     fig, ax = plt.subplots(figsize=(7.5, 5), dpi=120)
     styles = {"patch": ("tab:red", "s"), "interp": ("tab:blue", "o"), "render": ("tab:green", "^")}
@@ -195,8 +208,8 @@ def plot(rows: list[Row], path: Path, title: str) -> None:
 
 
 def run_error_vs_time(args: argparse.Namespace) -> int:
-    from .arguments import parse_wxh
-    from .lens import Lens
+    from ..optics.lens import Lens
+    from ..options import parse_wxh
 
     lens = Lens.load(args.lens)
     sensor = parse_wxh(args.sensor, "--sensor") if args.sensor else None
@@ -213,8 +226,8 @@ def run_error_vs_time(args: argparse.Namespace) -> int:
 
 def register(sub: Any) -> None:
     """Add the `report` subcommand (`report error-vs-time`)."""
-    from .convolution.kernels import BOUNDARIES
-    from .render import VARIANTS
+    from ..convolution.kernels import BOUNDARIES
+    from ..render.loop import VARIANTS
 
     report = sub.add_parser("report", help="reports: error against run time").add_subparsers(
         dest="report_command", required=True)

@@ -42,8 +42,9 @@ from typing import Any
 
 import numpy as np
 
-from .errors import SolasError
-from .metrics.annuli import ANNULI as SCHEMES, ANNULUS_NAMES
+from ..errors import SolasError
+from ..metrics.annuli import ANNULI as SCHEMES
+from ..metrics.annuli import ANNULUS_NAMES
 
 ANNULI = SCHEMES["automotive"]  # fractions of the half-diagonal: centre / middle / edge
 PSF_KINDS = ("geometric", "fraunhofer")
@@ -60,7 +61,7 @@ def load_input(image: str | np.ndarray, sensor: tuple[int, int] | None = None, s
                linear: bool = False) -> np.ndarray:
     """The linear H×W×3 float64 input image, resampled (area average) to sensor (rows, columns) or by
     `scale`. PNG/JPEG are sRGB-decoded unless `linear`; a one-channel image is repeated as R, G, B."""
-    from .imageio import read_image
+    from ..imageio import read_image
 
     if isinstance(image, np.ndarray):
         arr = np.asarray(image, dtype=np.float64)
@@ -108,8 +109,8 @@ def tangent_cos3(width: int, height: int, fov_deg: float) -> np.ndarray:
 def render_units(lens, wavelengths_nm, fov_deg: float) -> np.ndarray:
     """k per wavelength: convolution output (input × cos³θ, "none" grid) → render units (the ideal
     camera's irradiance, `illumination.ideal_irradiance`)."""
-    from .camera import pinhole_focal_mm
-    from .illumination import ideal_irradiance
+    from ..optics.camera import pinhole_focal_mm
+    from ..optics.illumination import ideal_irradiance
 
     focal = pinhole_focal_mm(lens, fov_deg)
     unit = ideal_irradiance(lens, focal)
@@ -132,7 +133,7 @@ class Case:
 
     @classmethod
     def parse(cls, text: str) -> "Case":
-        from .arguments import parse_wxh
+        from ..options import parse_wxh
 
         parts = text.strip().split(":")
         if len(parts) != 3 or parts[0] not in CONV_METHODS or parts[1] not in PSF_KINDS:
@@ -150,10 +151,12 @@ def psf_grid_for(lens, kind: str, blocks: tuple[int, int], width: int, height: i
     sum to their transmission. Returns (grid, seconds)."""
     if kind not in PSF_KINDS:
         raise SolasError(f"PSF kind {kind!r} must be one of {', '.join(PSF_KINDS)}")
+    from ..psf.grid import psf_grid
+
     cols, rows = blocks
     pitch, size = PSF_SAMPLING[kind]
     start = time.perf_counter()
-    grid = lens.psf_grid(grid=(rows, cols), field_range_deg=(fov_deg, fov_deg * height / width), method=kind,
+    grid = psf_grid(lens, grid=(rows, cols), field_range_deg=(fov_deg, fov_deg * height / width), method=kind,
                          normalization="none", pitch_um=pitch, size=size, progress=progress)
     if kind == "fraunhofer":
         fold_tails(grid)
@@ -175,8 +178,8 @@ def fold_tails(grid) -> None:
 def convolve(image: np.ndarray, grid, method: str, lens, fov_deg: float, boundary: str = "edge",
              scale: np.ndarray | None = None) -> tuple[np.ndarray, float]:
     """The convolution engine in render units: k_c · degrade(image · cos³θ, grid). Returns (image, seconds)."""
-    from .convolution import degrade
-    from .convolution.kernels import channel_wavelengths
+    from ..convolution import degrade
+    from ..convolution.kernels import channel_wavelengths
 
     height, width = image.shape[:2]
     start = time.perf_counter()
@@ -198,7 +201,7 @@ def ideal(image: np.ndarray, lens, fov_deg: float, scale: np.ndarray) -> np.ndar
 def render(lens, image: np.ndarray, spp: int, seed: int, fov_deg: float, boundary: str = "edge",
            variant: str | None = None, progress=None):
     """The direct render in the cross-validation's settings (lines, no Fresnel, sensor = image grid)."""
-    from .render import render_image
+    from ..render.loop import render_image
 
     h, w = image.shape[:2]
     return render_image(lens, image, sensor=(h, w), spp=spp, response="lines", fov_deg=fov_deg, boundary=boundary,
@@ -240,7 +243,7 @@ REFERENCE_KEYS = ("lens_hash", "sensor", "fov_deg", "boundary", "spp", "seeds", 
 def write_reference(path: Path, ref: Reference, var_map: np.ndarray, meta: dict) -> None:
     """reference.exr: R, G, B and the per-pixel noise variance of the mean ("noise_var"); the metadata
     names what it was rendered with (`REFERENCE_KEYS`), its noise and time, so a later run can reuse it."""
-    from .imageio import image_channels, write_exr
+    from ..imageio import image_channels, write_exr
 
     channels = image_channels(ref.image.astype(np.float32))
     channels["noise_var"] = var_map.astype(np.float32)
@@ -250,7 +253,7 @@ def write_reference(path: Path, ref: Reference, var_map: np.ndarray, meta: dict)
 
 def read_reference(path: Path, expect: dict) -> tuple[Reference, np.ndarray] | None:
     """The reference stored at `path` if it was rendered with the settings `expect`, else None."""
-    from .imageio import read_exr
+    from ..imageio import read_exr
 
     if not path.is_file():
         return None
@@ -395,7 +398,7 @@ def csv_text(rows: list[Row]) -> str:
 
 
 def write_rgb_exr(path: Path, image: np.ndarray, meta: dict) -> None:
-    from .imageio import image_channels, write_exr
+    from ..imageio import image_channels, write_exr
 
     write_exr(path, image_channels(np.asarray(image, dtype=np.float32)), meta)
 
@@ -415,7 +418,7 @@ def heat_png(path: Path, data: np.ndarray, title: str, vmax: float = 0.05) -> No
     import matplotlib.pyplot as plt
     from matplotlib.patches import Circle
 
-    from .imageio import atomic_path
+    from ..imageio import atomic_path
 
     h, w = data.shape
     fig, ax = plt.subplots(figsize=(8, 8 * h / w + 0.6), dpi=100)
@@ -445,8 +448,8 @@ def crossval(lens, image: np.ndarray, out: str | Path | None, spp: int = 1024, s
     """Degrade `image` (linear H×W×3, the sensor's grid) by the direct render (reference, `spp` in
     `seeds` renders) and by each convolution case; write the error maps and tables to `out` (None:
     write nothing). reuse: take `out`/reference.exr if it was rendered with the same settings."""
-    from .camera import check_fov
-    from .convolution.kernels import check_boundary
+    from ..convolution.kernels import check_boundary
+    from ..optics.camera import check_fov
 
     fov = check_fov(lens.field_deg if fov_deg is None else fov_deg)
     check_boundary(boundary)
@@ -480,7 +483,7 @@ def crossval(lens, image: np.ndarray, out: str | Path | None, spp: int = 1024, s
             grids[key] = psf_grid_for(lens, case.kind, case.blocks, w, h, fov)
         grid, psf_s = grids[key]
         if scale is None:
-            from .convolution.kernels import channel_wavelengths
+            from ..convolution.kernels import channel_wavelengths
 
             waves = [grid.wavelengths_nm[k] for k in channel_wavelengths(grid, 3)]
             scale = render_units(lens, waves, fov)
@@ -509,7 +512,7 @@ def crossval(lens, image: np.ndarray, out: str | Path | None, spp: int = 1024, s
                                    for (kind, b), (g, _) in grids.items() if kind == "fraunhofer"},
                 rows=[r.flat() for r in rows])
     if out_dir is not None:
-        from .imageio import write_text
+        from ..imageio import write_text
 
         note = (f"Reference: mean of {seeds} direct renders, {ref.spp} spp in all ({ref.seconds:.1f} s), noise "
                 f"{100 * ref.noise / ref_rms:.3f} % of RMS(reference); \"− noise\" and the annuli remove it in "
@@ -523,8 +526,8 @@ def crossval(lens, image: np.ndarray, out: str | Path | None, spp: int = 1024, s
 # ------------------------------------------------------------------------------------------ command line
 
 def run_crossval(args: argparse.Namespace) -> int:
-    from .arguments import parse_wxh
-    from .lens import Lens
+    from ..optics.lens import Lens
+    from ..options import parse_wxh
 
     lens = Lens.load(args.lens)
     sensor = parse_wxh(args.sensor, "--sensor") if args.sensor else None
@@ -540,8 +543,8 @@ def run_crossval(args: argparse.Namespace) -> int:
 
 def register(sub: Any) -> None:
     """Add the `crossval` subcommand."""
-    from .convolution.kernels import BOUNDARIES
-    from .render import VARIANTS
+    from ..convolution.kernels import BOUNDARIES
+    from ..render.loop import VARIANTS
 
     p = sub.add_parser(
         "crossval", help="cross-validate the PSF-grid convolution against the direct render",

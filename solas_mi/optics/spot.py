@@ -6,11 +6,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import SolasError
 from . import pupil as P
 from . import tracer as T
-from .errors import SolasError
-from .lens import Lens
-from .psf import check_field
+from .lens import Lens, check_field
 
 PATTERNS = ("hexapolar", "grid")
 

@@ -16,8 +16,9 @@ import math
 
 import numpy as np
 
-from .errors import SolasError
+from ..errors import SolasError
 from .lens import Lens
+from .paraxial import paraxial
 
 _STEP = 1e-4  # tangent step of the finite differences
 
@@ -67,7 +68,7 @@ def ideal_irradiance(lens: Lens, focal_mm: float, wavelength_nm: float | None = 
     """E / L (steradians) of the ideal camera (`camera`): the lens's paraxial entrance pupil area over
     the pinhole focal length squared. Renders and convolutions report irradiance in this unit, so an
     ideal lossless lens returns the input radiance."""
-    r_ep = 0.5 * lens.paraxial(wavelength_nm).entrance_pupil_diameter_mm
+    r_ep = 0.5 * paraxial(lens, wavelength_nm).entrance_pupil_diameter_mm
     return math.pi * r_ep ** 2 / focal_mm ** 2
 
 

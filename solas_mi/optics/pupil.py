@@ -13,9 +13,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..errors import SolasError
 from . import tracer as T
-from .errors import SolasError
 from .lens import Lens
+from .paraxial import paraxial
 
 dr = T.dr
 RIM_RAYS = 32
@@ -84,7 +85,7 @@ def _stop_target(tr: T.Traced):
 
 def _paraxial_aim(lens: Lens, field_deg: np.ndarray) -> np.ndarray:
     """Entrance coordinates (n, 2) of the paraxial chief ray (through the entrance-pupil centre)."""
-    ep_z = lens.paraxial().entrance_pupil_z_mm
+    ep_z = paraxial(lens).entrance_pupil_z_mm
     tan = T.field_tangents(field_deg)
     if lens.at_infinity:
         # the ray through the pupil centre, in launch-plane coordinates: project (0, 0, ep_z − z0)
@@ -117,7 +118,7 @@ def chief_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> 
     zero = dr.zeros(T.F, b.n_fields)
     ex, ey, tr, conv = aim(b, _stop_target, T.F(e0[:, 0]), T.F(e0[:, 1]), zero, zero)
     px, py, _ = T.to_plane(tr, lens.image_z)
-    xp_z = np.array([lens.paraxial(w).exit_pupil_z_mm for w in wavelength_nm])
+    xp_z = np.array([paraxial(lens, w).exit_pupil_z_mm for w in wavelength_nm])
     qx, qy, qopl = T.to_plane(tr, b.per_ray(xp_z))
     radius = dr.sqrt((qx - px) ** 2 + (qy - py) ** 2 + (b.per_ray(xp_z) - lens.image_z) ** 2)
     ex, ey, px, py, radius, qopl, sa, sb, n_image, conv, clipped = T.to_numpy(
@@ -145,7 +146,7 @@ def stop_rim(rim: Bundle, chief: ChiefRays) -> tuple[np.ndarray, np.ndarray, T.T
     phi = np.tile(np.linspace(0.0, 2.0 * math.pi, RIM_RAYS, endpoint=False), rim.n_fields)
     gx, gy = T.F(r_stop * np.cos(phi)), T.F(r_stop * np.sin(phi))
     # start from the chief ray, scaled by the paraxial entrance-pupil/stop size ratio
-    ratio = lens.paraxial().entrance_pupil_diameter_mm / (2.0 * r_stop)
+    ratio = paraxial(lens).entrance_pupil_diameter_mm / (2.0 * r_stop)
     ex, ey, tr, ok = aim(rim, _stop_target, rim.per_ray(chief.entrance[:, 0]) + gx * ratio,
                          rim.per_ray(chief.entrance[:, 1]) + gy * ratio, gx, gy)
     shape = (rim.n_fields, RIM_RAYS)
@@ -198,7 +199,7 @@ def entrance_power(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray,
 
 def _power_density(lens: Lens, wavelength_nm: float) -> float:
     """Power per unit entrance area (1/mm²) on axis, such that the on-axis entrance pupil carries 1."""
-    p = lens.paraxial(wavelength_nm)
+    p = paraxial(lens, wavelength_nm)
     r_ep = 0.5 * p.entrance_pupil_diameter_mm
     if lens.at_infinity:
         return 1.0 / (math.pi * r_ep ** 2)

@@ -8,16 +8,16 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
+import tomllib
 
+from ..errors import SolasError
+from ..resources import resource_dir
 from . import glass as glass_mod
-from .errors import SolasError
-from .resources import resource_dir
 
 LENS_DIR = "lenses"
 
@@ -40,6 +40,17 @@ def _table(spec: dict, key: str, where: str) -> dict:
     if not isinstance(value, dict):
         raise SolasError(f"{where}: {key} = {value!r} must be a table ([{key}])")
     return value
+
+
+def check_field(field_deg) -> tuple[float, float]:
+    """A field angle (x, y) in degrees as two floats, each finite and within ±89°."""
+    try:
+        fx, fy = (float(v) for v in field_deg)
+    except (TypeError, ValueError):
+        raise SolasError(f"field {field_deg!r} must be two angles (x, y) in degrees") from None
+    if not (math.isfinite(fx) and math.isfinite(fy)) or abs(fx) >= 89 or abs(fy) >= 89:
+        raise SolasError(f"field ({fx:g}, {fy:g}) deg must be finite and within ±89 deg")
+    return fx, fy
 
 
 @dataclass(frozen=True)
@@ -72,7 +83,8 @@ class Surface:
 
 @dataclass(frozen=True)
 class Lens:
-    """A sequential lens. Load with `Lens.load("solas-doublet")` or a path to a lens file."""
+    """A sequential lens: data only. Load with `Lens.load("solas-doublet")` or a path to a lens file;
+    analyses take it as an argument (`solas_mi.paraxial(lens)`, `solas_mi.psf(lens, ...)`)."""
 
     name: str
     surfaces: tuple[Surface, ...]
@@ -83,7 +95,8 @@ class Lens:
     field_deg: float = 0.0
     description: str = ""
     source: str = ""
-    _paraxial_cache: dict = field(default_factory=dict, repr=False, compare=False)
+    # results derived from the (immutable) prescription, memoised by the analyses that compute them
+    memo: dict = field(default_factory=dict, repr=False, compare=False)
 
     # ------------------------------------------------------------------ loading
     @classmethod
@@ -221,37 +234,7 @@ class Lens:
         self.indices(float(wavelength_nm))
         return float(wavelength_nm)
 
-    # ------------------------------------------------------------------ analyses
-    def paraxial(self, wavelength_nm: float | None = None, fields_deg: list[float] | None = None):
-        """Paraxial data (EFL, pupils, f/#, image offset, chief rays) at one wavelength."""
-        from .paraxial import paraxial
-
-        wl = float(wavelength_nm if wavelength_nm is not None else self.primary_wavelength)
-        if fields_deg is not None:
-            return paraxial(self, wl, fields_deg)
-        if wl not in self._paraxial_cache:  # the prescription is immutable
-            self._paraxial_cache[wl] = paraxial(self, wl)
-        return self._paraxial_cache[wl]
-
     @property
     def primary_wavelength(self) -> float:
         """The middle design wavelength (nm)."""
         return sorted(self.wavelengths_nm)[len(self.wavelengths_nm) // 2]
-
-    def spot(self, field_deg, wavelength_nm: float, *args, **kwargs):
-        """Spot diagram at the image plane; see `solas_mi.spot.spot`."""
-        from .spot import spot
-
-        return spot(self, field_deg, wavelength_nm, *args, **kwargs)
-
-    def psf(self, field_deg, wavelength_nm, **kwargs):
-        """One PSF; see `solas_mi.psf.psf`."""
-        from .psf import psf
-
-        return psf(self, field_deg, wavelength_nm, **kwargs)
-
-    def psf_grid(self, **kwargs):
-        """A PSF grid over the field; see `solas_mi.psf_grid.psf_grid`."""
-        from .psf_grid import psf_grid
-
-        return psf_grid(self, **kwargs)

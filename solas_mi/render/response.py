@@ -17,7 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import SolasError
+from ..errors import SolasError
 
 SRGB_RANGE_NM = (380.0, 780.0)
 # An RGB image as a spectrum: B below the first edge, G up to the second, R above (nm).

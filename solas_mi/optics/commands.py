@@ -1,0 +1,56 @@
+"""`solas-mi lens info`: paraxial data and real chief rays of a lens, as a table or JSON."""
+from __future__ import annotations
+
+import json
+from typing import Any
+
+import numpy as np
+
+from ..options import add_lens_argument, floats
+
+_ROWS = [("efl_mm", "EFL (mm)"), ("bfd_mm", "BFD (mm)"), ("entrance_pupil_diameter_mm", "EPD (mm)"),
+         ("entrance_pupil_z_mm", "entrance pupil z (mm)"), ("exit_pupil_diameter_mm", "exit pupil D (mm)"),
+         ("exit_pupil_z_mm", "exit pupil z (mm)"), ("f_number", "f/# (EFL/EPD)"),
+         ("working_f_number", "working f/#"), ("exit_pupil_f_number", "f/# (exit pupil → image)"),
+         ("image_offset_mm", "image plane − paraxial focus (mm)")]
+
+
+def run_lens_info(args) -> int:
+    from .lens import Lens
+    from .paraxial import paraxial
+    from .pupil import chief_rays  # loads Dr.Jit
+
+    lens = Lens.load(args.lens)
+    wavelengths = floats(args.wavelengths, "--wavelengths") if args.wavelengths else list(lens.wavelengths_nm)
+    fields = floats(args.fields, "--fields") if args.fields else [0.0, lens.field_deg, -lens.field_deg]
+    rows = []
+    for w in wavelengths:
+        p = paraxial(lens, w, fields).as_dict()
+        real = chief_rays(lens, np.array([[0.0, f] for f in fields]), np.full(len(fields), w))
+        p["real_chief_ray_image_height_mm"] = real.image_xy[:, 1].tolist()
+        rows.append(p)
+    info = {"lens": lens.name, "hash": lens.hash, "source": lens.source, "stop_surface": lens.stop_index + 1,
+            "image_z_mm": lens.image_z, "image_diameter_mm": lens.image_diameter, "per_wavelength": rows}
+    if args.json:
+        print(json.dumps(info, indent=2))
+        return 0
+    print(f"{lens.name}  ({lens.description})  hash {lens.hash}")
+    print(f"stop: surface {lens.stop_index + 1}; image plane z = {lens.image_z:.6f} mm, diameter {lens.image_diameter:g} mm")
+    print(f"{'quantity':36s}" + "".join(f"{w:>12g} nm" for w in wavelengths))
+    for key, label in _ROWS:
+        print(f"{label:36s}" + "".join(f"{r[key]:15.6f}" for r in rows))
+    for i, f in enumerate(fields):
+        print(f"{f'chief ray y at {f:g} deg, paraxial (mm)':36s}" + "".join(f"{r['chief_ray_image_height_mm'][i]:15.6f}" for r in rows))
+        print(f"{f'chief ray y at {f:g} deg, real (mm)':36s}" + "".join(f"{r['real_chief_ray_image_height_mm'][i]:15.6f}" for r in rows))
+    return 0
+
+
+def register(sub: Any) -> None:
+    """Add `lens info`."""
+    lens = sub.add_parser("lens", help="lens data").add_subparsers(dest="lens_command", required=True)
+    info = lens.add_parser("info", help="paraxial data: EFL, BFD, pupils, f/#, chief rays")
+    add_lens_argument(info)
+    info.add_argument("--wavelengths", help="nm, comma-separated (default: the lens file's)")
+    info.add_argument("--fields", help="y field angles in degrees, comma-separated")
+    info.add_argument("--json", action="store_true")
+    info.set_defaults(run=run_lens_info)

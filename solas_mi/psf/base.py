@@ -1,0 +1,123 @@
+"""What every PSF shares, whatever computed it: the `PSF` record, the grid and value conventions,
+the checks of sampling arguments and the metadata. Imports no method (`methods` is the registry).
+
+Grid convention: `size`×`size` pixels of `pitch_um`; the chief ray's image point is at pixel
+(size//2, size//2); row 0 is the top (largest y), column 0 the left (smallest x). Values are
+irradiance per µm² as a fraction of the on-axis entrance-pupil power ("none"), or normalised to unit
+sum ("sum", default) or unit peak ("peak").
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from typing import Any, NamedTuple
+
+import numpy as np
+
+from ..errors import SolasError
+
+NORMALIZATIONS = ("sum", "peak", "none")
+VALUE_MEANING = {
+    "sum": "unit sum over the grid",
+    "peak": "unit peak",
+    "none": "irradiance per um^2 as a fraction of the on-axis entrance-pupil power",
+}
+DEFAULT_PITCH_UM = 0.5
+DEFAULT_SIZE = 160
+DEFAULT_PUPIL_SAMPLES = 128
+DEFAULT_GEOMETRIC_RAYS = 512
+
+
+@dataclass
+class PSF:
+    """One PSF (2-D array, image orientation) and what it means."""
+
+    data: np.ndarray
+    pitch_um: float
+    field_deg: tuple[float, float]
+    wavelengths_nm: tuple[float, ...]
+    weights: tuple[float, ...]
+    chief_ray_mm: tuple[float, float]  # image-plane point at pixel (size//2, size//2), first wavelength
+    method: str
+    normalization: str
+    meta: dict = field(default_factory=dict)
+
+    @property
+    def size(self) -> int:
+        return self.data.shape[0]
+
+    @property
+    def x_um(self) -> np.ndarray:
+        """Column centres relative to the chief ray (µm)."""
+        return grid_offsets(self.size, self.pitch_um)
+
+    @property
+    def y_um(self) -> np.ndarray:
+        """Row centres relative to the chief ray (µm), top row first."""
+        return -grid_offsets(self.size, self.pitch_um)
+
+    def write(self, path: str) -> None:
+        """Write as OpenEXR (channel "Y") with all metadata in the header."""
+        from ..imageio import write_exr
+
+        meta = dict(self.meta, field_deg=list(self.field_deg), wavelengths_nm=list(self.wavelengths_nm),
+                    weights=list(self.weights), pitch_um=self.pitch_um, size=self.size,
+                    chief_ray_origin_mm=list(self.chief_ray_mm))
+        write_exr(path, {"Y": self.data}, meta)
+
+    def write_png(self, path: str) -> None:
+        """The PSF scaled to its peak, as an sRGB PNG for viewing."""
+        from ..imageio import write_png
+
+        write_png(path, self.data / max(float(self.data.max()), 1e-300))
+
+
+class Computed(NamedTuple):
+    """What a PSF method computes for n field/wavelength pairs."""
+
+    data: np.ndarray  # (n, size, size) PSFs in 1/µm² (irradiance per µm² / on-axis entrance-pupil power)
+    chief: Any  # optics.pupil.ChiefRays of the pairs
+    transmission: np.ndarray  # (n,) transmitted power, fraction of the on-axis entrance-pupil power
+    vignetted_by: list  # per pair: 1-based surfaces that block part of the pupil
+
+
+def shared_origin_um(image_xy: np.ndarray) -> np.ndarray:
+    """Offsets (n, 2) in µm that put every grid's origin on the first chief ray's image point."""
+    return (image_xy[:1] - image_xy) * 1e3
+
+
+def grid_offsets(size: int, pitch_um: float) -> np.ndarray:
+    """Pixel-centre offsets (µm) from the grid origin at index size//2, increasing."""
+    return (np.arange(size) - size // 2) * pitch_um
+
+
+def check_grid(pitch_um: float, size: int) -> None:
+    if not isinstance(size, (int, np.integer)) or not 2 <= size <= 8192:
+        raise SolasError(f"PSF size {size!r} must be an integer from 2 to 8192 pixels")
+    if not isinstance(pitch_um, (int, float)) or not math.isfinite(pitch_um) or pitch_um <= 0:
+        raise SolasError(f"PSF pitch {pitch_um!r} µm must be a positive number")
+
+
+def check_normalization(how: str) -> None:
+    if how not in NORMALIZATIONS:
+        raise SolasError(f"normalization {how!r} must be one of {', '.join(NORMALIZATIONS)}")
+
+
+def normalize(data: np.ndarray, how: str) -> np.ndarray:
+    """Normalise PSFs over the last two axes: "sum", "peak" or "none"."""
+    check_normalization(how)
+    if how == "none":
+        return data
+    scale = data.sum(axis=(-2, -1), keepdims=True) if how == "sum" else data.max(axis=(-2, -1), keepdims=True)
+    return data / np.where(scale > 0, scale, 1.0)
+
+
+def describe(lens, method: str, normalization: str, sampling: dict, size: int) -> dict:
+    """The metadata every PSF output carries: lens, method, sampling (its parameter and value) and
+    array conventions."""
+    return {
+        "lens": lens.name, "lens_hash": lens.hash, "lens_source": lens.source, "method": method,
+        "normalization": normalization, "values": VALUE_MEANING[normalization], "sampling": dict(sampling),
+        "origin_pixel": [size // 2, size // 2],
+        "orientation": "row 0 = top (largest y), column 0 = left (smallest x)",
+    }

@@ -1,0 +1,103 @@
+"""`solas-mi psf` (one PSF) and `solas-mi psf-grid` (PSFs over the field), as OpenEXR + PNG."""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+from typing import Any
+
+from ..errors import SolasError
+from ..options import add_lens_argument, floats, parse_wxh
+from .base import (
+    DEFAULT_GEOMETRIC_RAYS,
+    DEFAULT_PITCH_UM,
+    DEFAULT_PUPIL_SAMPLES,
+    DEFAULT_SIZE,
+    NORMALIZATIONS,
+)
+from .methods import DEFAULT_METHOD, METHODS
+
+
+def _field(text: str) -> tuple[float, float]:
+    values = floats(text, "--field-deg")
+    if len(values) == 1:
+        values = [0.0, values[0]]
+    if len(values) != 2:
+        raise SolasError(f"--field-deg {text!r} must be X,Y in degrees (or one value, taken as Y)")
+    return values[0], values[1]
+
+
+def run_psf(args) -> int:
+    from ..optics.lens import Lens
+    from .methods import psf
+
+    lens = Lens.load(args.lens)
+    wavelengths = floats(args.wavelength_nm, "--wavelength-nm")
+    weights = floats(args.weights, "--weights") if args.weights else None
+    p = psf(lens, _field(args.field_deg), wavelengths, weights=weights, pitch_um=args.pitch_um, size=args.size,
+            method=args.method, normalization=args.normalize, pupil_samples=args.pupil_samples, rays=args.rays)
+    p.write(args.output)
+    png = args.png or str(Path(args.output).with_suffix(".png"))
+    p.write_png(png)
+    print(f"wrote {args.output} and {png}")
+    return 0
+
+
+def run_psf_grid(args) -> int:
+    from ..optics.lens import Lens
+    from .grid import psf_grid
+
+    lens = Lens.load(args.lens)
+    grid = parse_wxh(args.grid, "--grid")
+    wavelengths = floats(args.wavelengths, "--wavelengths") if args.wavelengths else None
+    rng = floats(args.field_range_deg, "--field-range-deg") if args.field_range_deg else None
+    if rng is not None and len(rng) not in (1, 2):
+        raise SolasError(f"--field-range-deg {args.field_range_deg!r} must be one value or X,Y")
+
+    def progress(done: int, total: int) -> None:
+        print(f"\r{done}/{total} PSFs", end="", file=sys.stderr, flush=True)
+
+    g = psf_grid(lens, grid=grid, wavelengths_nm=wavelengths,
+                 field_range_deg=None if rng is None else (rng[0], rng[-1]), pitch_um=args.pitch_um,
+                 size=args.size, method=args.method, normalization=args.normalize,
+                 pupil_samples=args.pupil_samples, rays=args.rays, field_sampling=args.field_sampling,
+                 progress=progress)
+    print(file=sys.stderr)
+    g.write(args.output)
+    png = args.png or str(Path(args.output).with_suffix(".png"))
+    g.write_png(png)
+    print(f"wrote {args.output} and {png} ({g.meta['seconds']:.1f} s)")
+    return 0
+
+
+def _add_psf_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--pitch-um", type=float, default=DEFAULT_PITCH_UM, help="image-plane pixel pitch (µm)")
+    p.add_argument("--size", type=int, default=DEFAULT_SIZE, help="PSF width and height (pixels)")
+    p.add_argument("--method", choices=list(METHODS), default=DEFAULT_METHOD)
+    p.add_argument("--normalize", choices=NORMALIZATIONS, default="sum")
+    p.add_argument("--pupil-samples", type=int, default=DEFAULT_PUPIL_SAMPLES, help="Fraunhofer pupil grid N×N")
+    p.add_argument("--rays", type=int, default=DEFAULT_GEOMETRIC_RAYS, help="geometric: rays×rays per PSF")
+    p.add_argument("-o", "--output", required=True, help="output OpenEXR file")
+    p.add_argument("--png", help="PNG for viewing (default: beside the EXR)")
+
+
+def register(sub: Any) -> None:
+    """Add `psf` and `psf-grid`."""
+    from .grid import FIELD_SAMPLINGS
+
+    psf = sub.add_parser("psf", help="one PSF (Fraunhofer or geometric) as OpenEXR + PNG")
+    add_lens_argument(psf)
+    psf.add_argument("--field-deg", required=True, help="X,Y field angle in degrees")
+    psf.add_argument("--wavelength-nm", required=True, help="one wavelength, or several for a polychromatic PSF")
+    psf.add_argument("--weights", help="weights of the wavelengths (default: equal)")
+    _add_psf_options(psf)
+    psf.set_defaults(run=run_psf)
+
+    grid = sub.add_parser("psf-grid", help="PSFs on a field grid, one stack per wavelength, as OpenEXR + PNG mosaic")
+    add_lens_argument(grid)
+    grid.add_argument("--grid", default="8x8", help="columns x rows of field nodes")
+    grid.add_argument("--wavelengths", help="nm, comma-separated (default: the lens file's)")
+    grid.add_argument("--field-range-deg", help="half range X[,Y] in degrees (default: the lens file's field)")
+    grid.add_argument("--field-sampling", choices=FIELD_SAMPLINGS, default=FIELD_SAMPLINGS[0])
+    _add_psf_options(grid)
+    grid.set_defaults(run=run_psf_grid)
