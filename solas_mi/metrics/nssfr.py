@@ -16,7 +16,7 @@ from scipy import ndimage as ndi
 from skimage.feature import canny
 
 from ..errors import SolasError
-from .annuli import ANNULI, ANNULUS_NAMES
+from .annuli import ANNULI, ANNULUS_NAMES, annulus_index, corner_radius, radius_fraction
 from .esfr import EsfrResult, crop, esfr, luminance, matlab_round
 
 Roi = tuple[int, int, int, int]
@@ -191,11 +191,6 @@ class AnnulusStats:
         }
 
 
-def _corner_radius(shape: tuple[int, ...]) -> float:
-    """Distance from the centre of an image of `shape` (rows, columns, …) to a corner, px."""
-    return math.hypot(shape[0], shape[1]) / 2
-
-
 @dataclass
 class NsSfrReport:
     """Natural-scene SFR of one image, or of a before/after pair measured on the same ROIs."""
@@ -211,7 +206,7 @@ class NsSfrReport:
     @property
     def radius_px(self) -> float:
         """R: distance from the image centre to a corner, px."""
-        return _corner_radius(self.shape)
+        return corner_radius(*self.shape[:2])
 
     def mean_change(self) -> list[float | None]:
         """Per annulus: mean of (after − before) MTF50 over identical ROIs, cy/px."""
@@ -294,13 +289,12 @@ def natural_scene_sfr(
             found = [f for f in found if f[1].mtf50 >= floor]
 
     height, width = image.shape[:2]
-    radius_px = _corner_radius((height, width))
     bounds = ANNULI[annuli]
     measured: list[RoiMeasurement] = []
     for roi, res in found:
         x, y, w, h = roi
-        r = math.hypot(x + (w - 1) / 2 - (width - 1) / 2, y + (h - 1) / 2 - (height - 1) / 2) / radius_px
-        ring = int(np.searchsorted(bounds[:-1], r, side="right"))
+        r = float(radius_fraction(x + (w - 1) / 2, y + (h - 1) / 2, height, width))
+        ring = int(annulus_index(r, annuli))
         m = RoiMeasurement(roi, r, ring, res)
         if compare is not None:
             after = esfr(crop(compare, roi), mode=mode, full_scale=full_scale)

@@ -44,7 +44,7 @@ import numpy as np
 
 from ..errors import SolasError
 from ..metrics.annuli import ANNULI as SCHEMES
-from ..metrics.annuli import ANNULUS_NAMES
+from ..metrics.annuli import ANNULUS_NAMES, annulus_map
 
 ANNULI = SCHEMES["automotive"]  # fractions of the half-diagonal: centre / middle / edge
 PSF_KINDS = ("geometric", "fraunhofer")
@@ -267,14 +267,6 @@ def read_reference(path: Path, expect: dict) -> tuple[Reference, np.ndarray] | N
 
 
 # ---------------------------------------------------------------------------------------------- metrics
-
-def annulus_map(height: int, width: int) -> np.ndarray:
-    """Annulus index (0 centre, 1 middle, 2 edge) of each pixel: r/R of its centre, R the half-diagonal."""
-    y = np.arange(height) - (height - 1) / 2
-    x = np.arange(width) - (width - 1) / 2
-    r = np.hypot(x[None, :], y[:, None]) / math.hypot((width - 1) / 2, (height - 1) / 2)
-    return np.searchsorted(np.array(ANNULI[:-1]), r, side="right")
-
 
 @dataclass
 class Errors:
