@@ -17,7 +17,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 
 def main() -> int:
-    from solas_mi.validation import error_vs_time as report
+    from solas_mi.validation import commands
 
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--scale", type=float, default=0.5, help="image scale (1 = 1280x960)")
@@ -31,7 +31,7 @@ def main() -> int:
     if a.spp:
         argv += ["--spp", a.spp]
     parser = argparse.ArgumentParser(prog="bench_error_vs_time")
-    report.register(parser.add_subparsers(dest="command", required=True))
+    commands.register(parser.add_subparsers(dest="command", required=True))
     args = parser.parse_args(argv)
     return int(args.run(args) or 0)
 

@@ -23,7 +23,8 @@ import numpy as np
 from solas_mi import Lens
 from solas_mi.imageio import read_image
 from solas_mi.optics.camera import camera_for
-from solas_mi.render.loop import mitsuba, render_image
+from solas_mi.render.image import render_image
+from solas_mi.render.mitsuba import load_scene, mitsuba
 from solas_mi.resources import resource_dir
 
 
@@ -66,7 +67,6 @@ def main() -> None:
 
     from solas_mi.optics.pupil import chief_rays
     from solas_mi.psf.geometric import entrance_grid_hits
-    from solas_mi.render.loop import load_scene
     from solas_mi.render.scene import write_scene
     from solas_mi.validation.scene_psf import scene_psf
 

@@ -1,15 +1,25 @@
-"""`image_object`: an input image as the scene's object, at infinity (radiance as a function of
-direction) or on a plane at a finite distance.
+"""`image_object` (emitter): an input image as the scene's object, at infinity (radiance as a function
+of direction) or on a plane at a finite distance.
 
-The image's width spans ±fov_deg horizontally, square pixels in tangent space (`solas_mi.camera`);
-a texel is constant over its square (nearest neighbour, the model the PSF-grid convolution uses).
-Outside the image `boundary` decides: "edge" repeats the border texels, "reflect" mirrors about the
-border, "zero" is black. RGB becomes a spectrum of three bands (`solas_mi.response.RGB_BANDS_NM`):
-blue below 500 nm, green to 590 nm, red above.
+| parameter     | type   | unit    | default         | meaning                                                 |
+|---------------|--------|---------|-----------------|---------------------------------------------------------|
+| `filename`    | string | —       | required        | the image: PNG/JPEG (sRGB) or OpenEXR (linear)          |
+| `image`       | tensor | —       | none            | from Python (`mi.load_dict`), instead of `filename`     |
+| `fov_deg`     | float  | degrees | 2.0             | half the horizontal field the image's width spans       |
+| `boundary`    | string | —       | "edge"          | the object outside the image: "edge", "reflect", "zero" |
+| `distance_mm` | float  | mm      | 0 (at infinity) | the image on the plane z = −distance_mm instead         |
+| `scale`       | float  | —       | 1.0             | radiance multiplier                                     |
 
-Parameters: `filename` (PNG/JPEG decoded from sRGB, or linear EXR), `fov_deg`, `boundary`,
-`distance_mm` (omit for infinity: the plane z = −distance_mm, centred on the axis, spanning
-±distance·tan(fov) across its width), `scale` (radiance multiplier).
+`traverse` exposes nothing: no parameter is differentiable or editable through `mi.traverse`.
+
+`filename` is found by Mitsuba's file resolver; `image` is a linear H×W (grey) or H×W×3 (RGB)
+`mi.TensorXf`. Radiance is the texel's linear value times `scale` (relative units: the `lens_sensor`
+renders radiance 1 as irradiance 1 of the ideal camera). The image's width spans ±fov_deg
+horizontally, square pixels in tangent space (`solas_mi.optics.camera`); a texel is constant over its
+square (nearest neighbour, the model the PSF-grid convolution uses). Outside the image "edge" repeats the border
+texels, "reflect" mirrors about the border, "zero" is black. At a finite distance the plane is
+centred on the axis and spans ±distance_mm·tan(fov_deg) across its width. RGB becomes a spectrum of
+three bands (`solas_mi.render.response.RGB_BANDS_NM`): blue below 500 nm, green to 590 nm, red above.
 
 Rays arriving here travel away from the lens (−z): a direction d has tangents (d_x/d_z, d_y/d_z),
 which is the field of light coming from there.
@@ -38,6 +48,8 @@ def _fold(i, n: int, boundary: str):
 
 
 class ImageObject(mi.Emitter):
+    """The `image_object` emitter (parameters: the module docstring)."""
+
     def __init__(self, props: mi.Properties) -> None:
         super().__init__(props)
         self.m_flags = mi.EmitterFlags.Infinite
@@ -47,7 +59,7 @@ class ImageObject(mi.Emitter):
         self.fov_deg = float(props.get("fov_deg", 2.0))
         distance = props.get("distance_mm", 0.0)
         self.distance = float(distance) if distance else math.inf
-        image = props.get("image", None)  # a NumPy array from Python (tests); else the file
+        image = props.get("image", None)  # a tensor from Python (`mi.load_dict`); else the file
         if image is None:
             image = read_image(str(mi.file_resolver().resolve(str(props.get("filename")))))
         rgb = np.asarray(image, dtype=np.float32)

@@ -1,17 +1,35 @@
-"""`lens_sensor`: a film on a lens's image plane that looks through the lens.
+"""`lens_sensor` (sensor): a film on a lens's image plane that looks through the lens.
+
+| parameter  | type    | unit    | default          | meaning                                                |
+|------------|---------|---------|------------------|--------------------------------------------------------|
+| `lens`     | string  | —       | "solas-doublet"  | shipped lens name or lens-file path                    |
+| `pitch_um` | float   | µm      | 5.0              | pixel pitch                                            |
+| `fov_deg`  | float   | degrees | the lens's field | half the horizontal field the input image spans        |
+| `response` | string  | —       | "lines"          | camera response (`solas_mi.render.response.parse`)     |
+| (film)     | film    | pixels  | hdrfilm 768×576  | its width and height are the sensor's columns and rows |
+| (sampler)  | sampler | —       | independent, 4   | its sample_count is `solas-mi render`'s default spp    |
+
+`traverse` exposes nothing: no parameter is differentiable or editable through `mi.traverse`.
+
+`lens` goes through Mitsuba's file resolver first; the lens must be focused at infinity (a near
+object is `image_object`'s `distance_mm`). `fov_deg` sets the ideal camera's pinhole focal length.
+`response` is "lines" (the lens's design wavelengths), "lines:λ,…", "srgb", "mono:λ" (λ in nm) or
+"table:FILE.csv". The film's other settings are unused: the render loop accumulates pixels itself.
 
 Each sample takes a point in its pixel and a point inside the exit-pupil bound of that film
-position (`solas_mi.exit_pupil`; nothing assumes the stop is the last surface), and one wavelength
-drawn from the camera response (`solas_mi.response`), carried in all four spectral lanes: with
-dispersion a path has one wavelength. The weight makes the pixel value the mean image irradiance
-over the pixel in units of the ideal camera's (`solas_mi.illumination.ideal_irradiance`, with the
-pinhole focal length of `solas_mi.camera` for an input spanning ±fov_deg): an ideal lossless lens
-returns the input image.
+position (`solas_mi.optics.exit_pupil`; nothing assumes the stop is the last surface), and one
+wavelength drawn from the camera response (`solas_mi.render.response`), carried in all four spectral
+lanes: with dispersion a path has one wavelength. A ray from film point x toward a point of the bound
+(area A, on a plane a distance d from the film) weighs A·cos⁴θ/d², θ its angle to the axis, as in
+pbrt-v4's RealisticCamera (M. Pharr, W. Jakob, G. Humphreys, "Physically Based Rendering: From
+Theory to Implementation", 4th ed., MIT Press, 2023). The weight is scaled so that the pixel value is
+the mean image irradiance over the pixel in units of the ideal camera's
+(`solas_mi.optics.illumination.ideal_irradiance`, with the pinhole focal length of
+`solas_mi.optics.camera` for an input spanning ±fov_deg): an ideal lossless lens returns the input
+image.
 
-Parameters: `lens` (shipped name or lens-file path), `pitch_um`, `fov_deg` (half the horizontal field
-the input image spans), `response` ("lines", "srgb", "mono:531", "table:FILE.csv"), and a film (its
-width and height are the sensor's pixels). Coordinates
-are the lens file's: surface 1's vertex at the origin, +z toward the image, +y up; film row 0 is +y.
+Coordinates are the lens file's (mm): surface 1's vertex at the origin, +z toward the image, +y up;
+film row 0 is +y.
 """
 from __future__ import annotations
 
@@ -32,6 +50,8 @@ from solas_mi.render import response as responses
 
 
 class LensSensor(mi.Sensor):
+    """The `lens_sensor` sensor (parameters: the module docstring)."""
+
     def __init__(self, props: mi.Properties) -> None:
         super().__init__(props)
         name = str(props.get("lens", "solas-doublet"))

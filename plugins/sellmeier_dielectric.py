@@ -1,14 +1,27 @@
-"""`sellmeier_dielectric`: a smooth dielectric interface whose two media are catalogue (or model)
-glasses, with the index evaluated per path at its wavelength (`solas_mi.glass`).
+"""`sellmeier_dielectric` (BSDF): a smooth dielectric interface between two catalogue (or model)
+glasses, the index evaluated per path at its wavelength (`solas_mi.optics.glass`: the catalogue's
+Sellmeier formula, or a model glass's two-term fit).
 
-Parameters: `int_glass` (the side opposite the normal), `ext_glass` (the normal's side), glass names
-as in lens files ("N-BK7", "F2", "model:1.5168/64.17", "AIR"); `fresnel`:
+| parameter   | type   | unit | default    | meaning                                              |
+|-------------|--------|------|------------|------------------------------------------------------|
+| `int_glass` | string | —    | "AIR"      | glass on the side opposite the normal (the interior) |
+| `ext_glass` | string | —    | "AIR"      | glass on the normal's side                           |
+| `fresnel`   | string | —    | "transmit" | Fresnel losses: "transmit", "sample" or "off"        |
+
+Glass names are those of lens files: "N-BK7", "F2", "model:1.5168/64.17", "AIR".
+`traverse` exposes nothing: no parameter is differentiable or editable through `mi.traverse`.
+
+The reflectance R is the unpolarised Fresnel reflectance of a dielectric interface, the mean of the
+s and p terms (M. Born, E. Wolf, "Principles of Optics", 7th ed., Cambridge University Press, 1999,
+§1.5.2), evaluated by Mitsuba's `fresnel`:
 - "transmit" (default): refract with weight 1 − R, the Fresnel transmittance (no ghost paths, no
   noise from choosing between reflection and refraction);
 - "sample": reflect with probability R, as a real interface does, so ghost images appear;
 - "off": refract with weight one, the sequential tracer's radiometry.
-Total internal reflection reflects in every mode. Paths carry one wavelength in every lane (the lens
-sensor samples it), so lane 0's index serves all four.
+Total internal reflection reflects in every mode. Radiance crossing from index n₁ into n₂ is scaled
+by (n₂/n₁)², importance is not (E. Veach, "Robust Monte Carlo Methods for Light Transport
+Simulation", PhD thesis, Stanford University, 1997, ch. 5). Paths carry one wavelength (nm) in every
+lane (the lens sensor samples it), so lane 0's index serves all four.
 """
 from __future__ import annotations
 
@@ -22,6 +35,8 @@ FRESNEL_MODES = ("transmit", "sample", "off")
 
 
 class SellmeierDielectric(mi.BSDF):
+    """The `sellmeier_dielectric` BSDF (parameters: the module docstring)."""
+
     def __init__(self, props: mi.Properties) -> None:
         super().__init__(props)
         self.int_glass = resolve(props.get("int_glass", "AIR"))

@@ -23,7 +23,7 @@ _SEARCH = (
 )
 
 
-def _version(path: str) -> int | None:
+def libllvm_version(path: str) -> int | None:
     """Major version of a libLLVM: from its folder (/usr/lib/llvm-19/lib/libLLVM.so.1) or else its
     file name (libLLVM-19.so, libLLVM.so.19.1)."""
     name = Path(path).name
@@ -36,7 +36,7 @@ def find_libllvm() -> tuple[str | None, list[tuple[int, str]]]:
     found: list[tuple[int, str]] = []
     for pattern in _SEARCH:
         for path in sorted(glob.glob(pattern)):
-            version = _version(path)
+            version = libllvm_version(path)
             if version is not None and os.path.isfile(path):
                 found.append((version, path))
     usable = sorted((v, p) for v, p in found if v >= MIN_VERSION)
@@ -47,7 +47,7 @@ def select_libllvm() -> str:
     """Point DRJIT_LIBLLVM_PATH at a usable libLLVM; raise SolasError when none exists."""
     chosen = os.environ.get("DRJIT_LIBLLVM_PATH")
     if chosen:
-        version = _version(chosen)
+        version = libllvm_version(chosen)
         if not os.path.isfile(chosen):
             raise SolasError(f"DRJIT_LIBLLVM_PATH={chosen!r} does not exist")
         if version is not None and version < MIN_VERSION:

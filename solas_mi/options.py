@@ -33,3 +33,33 @@ def floats(text: str, what: str) -> list[float]:
 def add_lens_argument(p) -> None:
     """The positional LENS argument of every command that takes a lens."""
     p.add_argument("lens", help="shipped lens name (solas-doublet, cooke-triplet) or a .toml lens file")
+
+
+def positive_ints(text: str, what: str) -> tuple[int, ...]:
+    """Comma-separated positive integers, at least one."""
+    try:
+        values = tuple(int(v) for v in text.split(",") if v.strip())
+    except ValueError:
+        values = ()
+    if not values or min(values) < 1:
+        raise SolasError(f"{what} {text!r} must be comma-separated positive integers")
+    return values
+
+
+def add_image_input_options(p, boundaries, variants) -> None:
+    """The options of a command that degrades one input image both ways (PSF-grid convolution and
+    direct render) and compares them: LENS and IMAGE, -o DIR, --sensor | --scale, --seeds of the
+    reference render, --fov-deg, --boundary, --linear, --variant. `boundaries` and `variants` are the
+    choices (`optics.camera.BOUNDARIES`, `render.mitsuba.VARIANTS`), given by the caller so that this
+    module imports no stage."""
+    add_lens_argument(p)
+    p.add_argument("image", help="input image, the ideal image spanning ±fov (PNG/JPEG sRGB, EXR linear)")
+    p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
+    size = p.add_mutually_exclusive_group()
+    size.add_argument("--sensor", help="resample the image to COLSxROWS first (area average); it is the sensor")
+    size.add_argument("--scale", type=float, help="resample the image by this factor in (0, 1] first")
+    p.add_argument("--seeds", type=int, default=2, help="renders the reference is averaged from (>= 2)")
+    p.add_argument("--fov-deg", type=float, help="half the horizontal field the image spans (default: the lens's)")
+    p.add_argument("--boundary", choices=boundaries, default="edge", help="padding / object outside the image")
+    p.add_argument("--linear", action="store_true", help="PNG/JPEG values are already linear")
+    p.add_argument("--variant", choices=variants, help="Mitsuba variant of the render")

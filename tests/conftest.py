@@ -1,3 +1,4 @@
+"""Fixtures shared by the test modules: the shipped lenses."""
 import copy
 
 import pytest
@@ -11,6 +12,13 @@ def doublet():
     from solas_mi import Lens
 
     return Lens.load("solas-doublet")
+
+
+@pytest.fixture(scope="session")
+def triplet():
+    from solas_mi import Lens
+
+    return Lens.load("cooke-triplet")
 
 
 @pytest.fixture

@@ -36,4 +36,4 @@ def test_explicit_old_path_is_refused(tmp_path, monkeypatch):
     ("/usr/lib/llvm-14/lib/libLLVM-14.so", 14),
 ])
 def test_version_of_library_path(path, version):
-    assert llvm._version(path) == version
+    assert llvm.libllvm_version(path) == version

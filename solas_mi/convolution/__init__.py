@@ -4,6 +4,10 @@
 `patch`: the SOLAS paper's one kernel per block; `interp`: kernels interpolated between nodes,
 seamless; `methods`: the method registry and `degrade(image, grid, method)`; `commands`: `degrade`
 on the command line.
+
+References: the SOLAS paper's patch-wise convolution (`solas_mi` package docstring); J. G. Nagy and
+D. P. O'Leary, "Restoring images degraded by spatially variant blur", SIAM J. Sci. Comput. 19(4),
+1063–1082, 1998 (PSFs interpolated between grid nodes, the basis of `interp`).
 """
 from ..lazy import lazy_exports
 

@@ -34,16 +34,7 @@ import math
 import numpy as np
 
 from ..psf.grid import PSFGrid
-from .kernels import (
-    Layout,
-    batches,
-    fast_len,
-    fft_convolve,
-    kernel_radius,
-    node_kernels,
-    pad,
-    parallel_map,
-)
+from .kernels import Layout, batches, fast_len, fft_convolve, kernel_radius, node_kernels, pad, parallel_map
 
 SUMMARY = "PSFs interpolated bilinearly between grid nodes at every pixel: no seams"
 

@@ -1,6 +1,6 @@
 """A PSF grid on an input image's pixels: node positions, chief-ray offsets, pixel kernels, padding.
 
-Geometry (`camera`): the input image is the ideal rectilinear image of the scene and the sensor is
+Geometry (`optics.camera`): the input image is the ideal rectilinear image of the scene and the sensor is
 its pixel grid. A grid node of field (θx, θy) sits at the ideal pixel `Camera.ideal_pixel` of its
 field; the node's PSF for wavelength k is centred on that wavelength's real chief ray, which lies
 `offset = chief_ray_mm − ideal_mm(field)` away (+x → +column, +y → −row). The offset is the lens's

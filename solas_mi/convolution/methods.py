@@ -14,13 +14,7 @@ import numpy as np
 
 from ..errors import SolasError
 from . import interp, patch
-from .kernels import (
-    channel_wavelengths,
-    check_boundary,
-    kernel_radius,
-    layout,
-    single_threaded_blas,
-)
+from .kernels import channel_wavelengths, check_boundary, kernel_radius, layout, single_threaded_blas
 
 if TYPE_CHECKING:
     from ..psf.grid import PSFGrid

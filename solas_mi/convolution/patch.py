@@ -26,16 +26,7 @@ import math
 import numpy as np
 
 from ..psf.grid import PSFGrid
-from .kernels import (
-    Layout,
-    batches,
-    fast_len,
-    fft_convolve,
-    kernel_radius,
-    node_kernels,
-    pad,
-    parallel_map,
-)
+from .kernels import Layout, batches, fast_len, fft_convolve, kernel_radius, node_kernels, pad, parallel_map
 
 SUMMARY = ("the SOLAS paper's one PSF per block (8x6 blocks from an 8x8 grid on a 1280x960 image): seams at "
            "block borders")

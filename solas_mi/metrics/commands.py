@@ -52,8 +52,9 @@ def _add_input_options(p: argparse.ArgumentParser) -> None:
 def run_sfr(args: argparse.Namespace) -> int:
     """e-SFR of the given ROIs, or of every edge found in a slanted-edge/square chart."""
     from ..imageio import read_image
-    from .esfr import check_mode, crop, esfr, luminance, parse_roi
+    from .esfr import check_mode, esfr
     from .nssfr import CHART_MARGINS, find_edge_rois
+    from .roi import crop, luminance, parse_roi
 
     check_mode(args.mode)
     image = read_image(args.image, linearize=not args.linear)

@@ -1,11 +1,25 @@
-"""ISO 12233 e-SFR of one slanted-edge ROI, MTF50 and MTF10 (sfrmat5 / sfrmat3 behaviour).
+"""ISO 12233 e-SFR of one slanted-edge ROI, MTF50 and MTF10 (spec §1–2).
 
-Units: positions in px, frequencies in cycles/px along the edge normal, angles in degrees.
+The edge is located row by row and fitted; every pixel, projected onto its distance from the edge,
+fills a 4× oversampled edge-spread function (ESF), whose derivative (the line-spread function, LSF)
+is windowed and Fourier transformed. Mode "2023" follows ISO 12233:2023 as sfrmat5 implements it
+(5th-order edge fit, Tukey window over the whole ROI); mode "2017" follows ISO 12233:2017 as sfrmat3
+does (linear fit, Hamming window). What cannot be measured is flagged, never returned as a number.
+
+Units: positions in px, frequencies in cycles/px (cy/px) along the edge normal, angles in degrees.
 Input pixel values must be linear in scene luminance (decode sRGB before calling).
+
+References
+----------
+- ISO 12233:2023 (4th ed.), "Photography — Electronic still picture imaging — Resolution and spatial
+  frequency responses" (the 2023 mode).
+- ISO 12233:2017, "Photography — Electronic still picture imaging — Resolution and spatial frequency
+  responses" (the 2017 mode).
+- P. D. Burns, sfrmat5, the de-facto reference implementation of ISO 12233:2023, and sfrmat3 (the 2017
+  mode): the edge fits, the windows and the MATLAB-style rounding follow them.
 """
 from __future__ import annotations
 
-import functools
 import math
 from dataclasses import dataclass, field
 from typing import Any
@@ -15,17 +29,13 @@ from scipy import ndimage as ndi
 from scipy.special import fdtrc
 
 from ..errors import SolasError
+from .roi import MIN_ROI_PX, STEP_ROW_LIMIT, clipped_fraction, luminance, step_rows
 
 MODES: tuple[str, ...] = ("2023", "2017")
-LUMA_WEIGHTS = (0.213, 0.715, 0.072)
 OVERSAMPLING = 4  # ESF bins per px (horizontal distance)
-MIN_ROI_PX = 8
 CLIP_LIMIT = 0.005  # fraction of clipped pixels that rejects a ROI
 EMPTY_BIN_LIMIT = 0.8  # fraction of empty ESF bins that rejects a ROI (fewer than 4 phases)
-STEP_ROW_LIMIT = 0.5  # fraction of rows that must be single steps
-STEP_THRESHOLD = 0.02  # gradient run threshold, fraction of the step per px
 LEVEL_SMOOTHING_PX = 2.0  # Gaussian sd of the denoising before the level percentiles
-STEP_SMOOTHING_PX = (2.0, 1.5)  # Gaussian sd (rows, columns) of the step test's gradient
 ANGLE_WARN_DEG = 1.0  # half-width of the warning band around 45° and the critical angles
 CRITICAL_TANGENTS = (1 / 2, 1 / 3, 1 / 4)
 LOW_CONTRAST = 0.2
@@ -96,59 +106,6 @@ def check_mode(mode: str) -> None:
         raise SolasError(f"mode {mode!r} is not supported: allowed {', '.join(MODES)}")
 
 
-def luminance(image: np.ndarray, channel: int | None = None) -> np.ndarray:
-    """2-D float64 luminance Y = 0.213 R + 0.715 G + 0.072 B, or one channel of a colour image."""
-    a = np.asarray(image, dtype=np.float64)
-    if a.ndim == 2:
-        return a
-    if a.ndim != 3 or a.shape[2] not in (1, 3, 4):
-        raise SolasError(f"image shape {a.shape} is not H×W, H×W×1, H×W×3 or H×W×4")
-    if channel is not None:
-        if not 0 <= channel < min(a.shape[2], 3):
-            raise SolasError(f"channel {channel} does not exist: allowed 0…{min(a.shape[2], 3) - 1}")
-        return a[:, :, channel]
-    if a.shape[2] == 1:
-        return a[:, :, 0]
-    return a[:, :, 0] * LUMA_WEIGHTS[0] + a[:, :, 1] * LUMA_WEIGHTS[1] + a[:, :, 2] * LUMA_WEIGHTS[2]
-
-
-def clipped_fraction(image: np.ndarray, full_scale: float | None) -> float:
-    """Fraction of pixels with any channel at or below 0 or at or above `full_scale`."""
-    a = np.asarray(image, dtype=np.float64)
-    bad = a <= 0.0
-    if full_scale is not None:
-        bad |= a >= full_scale
-    if a.ndim == 3:
-        bad = bad[:, :, :3].any(axis=2)
-    return float(bad.mean())
-
-
-def crop(image: np.ndarray, roi: tuple[int, int, int, int]) -> np.ndarray:
-    """The ROI (x, y, w, h) in px of an image; SolasError if it leaves the image."""
-    x, y, w, h = roi
-    height, width = image.shape[:2]
-    if w < MIN_ROI_PX or h < MIN_ROI_PX:
-        raise SolasError(f"ROI {x},{y},{w},{h} is too small: width and height must be ≥ {MIN_ROI_PX} px")
-    if x < 0 or y < 0 or x + w > width or y + h > height:
-        raise SolasError(
-            f"ROI {x},{y},{w},{h} leaves the {width}×{height} image: need 0 ≤ x, x+w ≤ {width}, "
-            f"0 ≤ y, y+h ≤ {height}"
-        )
-    return image[y : y + h, x : x + w]
-
-
-def parse_roi(text: str) -> tuple[int, int, int, int]:
-    """Parse "x,y,w,h" (non-negative integers, px)."""
-    parts = text.split(",")
-    try:
-        values = tuple(int(p) for p in parts)
-    except ValueError:
-        values = ()
-    if len(values) != 4 or min(values) < 0:
-        raise SolasError(f"--roi {text!r} is malformed: expected x,y,w,h as 4 non-negative integers (px)")
-    return values  # type: ignore[return-value]
-
-
 def _window(pos: np.ndarray, centre: np.ndarray | float, half_width: np.ndarray | float, kind: str) -> np.ndarray:
     """Cosine window centred on `centre`, reaching its end value `half_width` px away.
 
@@ -156,38 +113,6 @@ def _window(pos: np.ndarray, centre: np.ndarray | float, half_width: np.ndarray 
     """
     c = np.cos(np.pi * np.clip((pos - centre) / half_width, -1.0, 1.0))
     return 0.5 + 0.5 * c if kind == "tukey" else 0.54 + 0.46 * c
-
-
-def _step_filter(a: np.ndarray) -> np.ndarray:
-    """Row gradient (per px) smoothed by a Gaussian of STEP_SMOOTHING_PX (rows, columns)."""
-    return ndi.gaussian_filter(a, STEP_SMOOTHING_PX, order=(0, 1), mode="nearest")
-
-
-@functools.lru_cache(maxsize=1)
-def _step_noise_gain() -> float:
-    """Sd of the smoothed gradient per unit sd of white pixel noise."""
-    impulse = np.zeros((41, 41))
-    impulse[20, 20] = 1.0
-    return float(np.sqrt(np.sum(_step_filter(impulse) ** 2)))
-
-
-def _step_rows(a: np.ndarray, sign: float, noise: float) -> tuple[float, float]:
-    """Fractions of rows that are single steps of the edge's sign, and of rows with no gradient run.
-
-    `a` is in units of the step height, `noise` its noise sd. A row is a step if its smoothed
-    gradient has exactly one connected run above the threshold (0.02 of the step per px, raised to
-    4 noise sd on noisy ROIs) and none below minus the threshold.
-    """
-    g = _step_filter(a) * sign
-    threshold = max(STEP_THRESHOLD, 4.0 * _step_noise_gain() * noise)
-    pos = g > threshold
-    neg = g < -threshold
-
-    def runs(m: np.ndarray) -> np.ndarray:
-        return m[:, 0].astype(int) + np.count_nonzero(m[:, 1:] & ~m[:, :-1], axis=1)
-
-    rp, rn = runs(pos), runs(neg)
-    return float(np.mean((rp == 1) & (rn == 0))), float(np.mean((rp == 0) & (rn == 0)))
 
 
 def _crossing(freq: np.ndarray, sfr: np.ndarray, level: float) -> float | None:
@@ -234,9 +159,11 @@ def esfr(
 ) -> EsfrResult:
     """e-SFR of a ROI holding one slanted edge that crosses two opposite borders.
 
-    roi: H×W or H×W×C linear values; full_scale: the saturation level (None: no upper clip test);
-    channel: measure one colour channel instead of luminance.
+    roi: H×W or H×W×C linear values (at least 8×8 px); full_scale: the saturation level (None: no
+    upper clip test); channel: measure one colour channel instead of luminance.
     mode "2023": 5th-order edge fit, Tukey α = 1 windows (sfrmat5); "2017": linear fit, Hamming.
+    The result holds the SFR over frequencies in cy/px along the edge normal, MTF50 and MTF10 in cy/px
+    and the edge angle in degrees.
     """
     check_mode(mode)
     data = np.asarray(roi)
@@ -284,7 +211,7 @@ def esfr(
         res.reason = "no edge: the ROI is flat"
         return res
     res.noise = noise_sd / step
-    res.step_rows_fraction, no_run = _step_rows(a / step, sign, res.noise)
+    res.step_rows_fraction, no_run = step_rows(a / step, sign, res.noise)
     if res.step_rows_fraction < STEP_ROW_LIMIT:
         what = "no edge found" if no_run >= 0.5 else "not one step edge (two edges, texture or a line)"
         res.reason = (

@@ -22,7 +22,7 @@ _SMALL = 1e-6  # pixel-footprint spread below which the 1-D pixel integral is us
 
 
 def analytic_mtf(freq: np.ndarray | float, sigma_px: float, angle_deg: float) -> np.ndarray:
-    """MTF of the target edge at `freq` cy/px along the edge normal."""
+    """MTF of the target edge at `freq` cy/px along the edge normal (Gaussian σ in px, tilt in degrees)."""
     f = np.asarray(freq, dtype=np.float64)
     t = math.radians(angle_deg)
     return np.exp(-2.0 * np.pi**2 * sigma_px**2 * f**2) * np.abs(
@@ -31,7 +31,8 @@ def analytic_mtf(freq: np.ndarray | float, sigma_px: float, angle_deg: float) ->
 
 
 def analytic_mtf50(sigma_px: float, angle_deg: float, level: float = 0.5) -> float:
-    """First frequency (cy/px) where the analytic MTF falls to `level`, by root finding."""
+    """First frequency (cy/px) where the analytic MTF (σ in px, tilt in degrees) falls to `level`, by
+    root finding."""
     grid = np.linspace(0.0, 2.0, 4001)
     below = np.flatnonzero(analytic_mtf(grid, sigma_px, angle_deg) < level)
     if below.size == 0:
@@ -127,11 +128,11 @@ def slanted_edge(
 ) -> np.ndarray:
     """Straight edge blurred by a Gaussian PSF (σ px) and integrated exactly over each pixel.
 
-    The edge passes `offset_px` right of the image centre, turned `angle_deg` counter-clockwise
-    from vertical as displayed (row 0 at the top): its top end leans left (90° = horizontal,
-    bright side up); left/bottom is `low`, the other side `high` (linear levels). noise: Gaussian
-    sd as a fraction of the step; clip: clip to [0, 1]; encoding "srgb" encodes the linear values;
-    bit_depth 8/16 quantises to unsigned integers.
+    `shape` is (rows, columns) px. The edge passes `offset_px` right of the image centre, turned
+    `angle_deg` degrees counter-clockwise from vertical as displayed (row 0 at the top): its top end
+    leans left (90° = horizontal, bright side up); left/bottom is `low`, the other side `high`
+    (linear levels). noise: Gaussian sd as a fraction of the step; clip: clip to [0, 1]; encoding
+    "srgb" encodes the linear values; bit_depth 8/16 quantises to unsigned integers.
     """
     _check_common(shape, sigma_px)
     rows, cols = shape
@@ -168,9 +169,9 @@ def slanted_squares(
 ) -> np.ndarray:
     """Squares on a uniform background (linear level), each blurred by its own Gaussian PSF (σ px).
 
-    The blurred square is exact at a point (the isotropic Gaussian separates along the square's
-    own axes); the pixel area is integrated with supersample² sub-pixel samples. noise: Gaussian
-    sd in linear units; clip, encoding, bit_depth as in `slanted_edge`.
+    `shape` is (rows, columns) px. The blurred square is exact at a point (the isotropic Gaussian
+    separates along the square's own axes); the pixel area is integrated with supersample² sub-pixel
+    samples. noise: Gaussian sd in linear units; clip, encoding, bit_depth as in `slanted_edge`.
     """
     _check_common(shape, 0.0)
     if supersample < 1:

@@ -6,6 +6,12 @@ The bound is a rectangle on the plane of the last surface's vertex, in the frame
 u along its radial direction, v across it, or the ellipse inscribed in it where that holds every
 passing ray (a round stop seen straight on). A sensor samples rays uniformly inside it; rays that the
 lens blocks are absorbed by the scene's rims and stop, so a bound only has to contain the pupil.
+Lengths are in mm.
+
+The idea, bounds on the exit pupil per radial bin of the film found once by tracing, is pbrt-v4's
+RealisticCamera (M. Pharr, W. Jakob, G. Humphreys, "Physically Based Rendering: From Theory to
+Implementation", 4th ed., MIT Press, 2023); here they are found by bisecting to the pupil's rim
+through the reversed lens in Float64, rather than by testing rays over the rear element's square.
 """
 from __future__ import annotations
 

@@ -1,6 +1,10 @@
 """Optical glass: the catalogue (Sellmeier) and model glass given by (n_d, V_d).
 
 Indices are relative to air; AIR has index 1. Wavelengths are in nm.
+
+References: the Sellmeier dispersion formula with the coefficients and valid ranges of the SCHOTT
+optical glass data sheets (SCHOTT AG, "Optical Glass — Data Sheets"; TIE-29 "Refractive Index and
+Dispersion"); model glass from n_d and V_d (Fraunhofer d, F, C lines) as a two-term Cauchy fit.
 """
 from __future__ import annotations
 

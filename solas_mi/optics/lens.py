@@ -84,7 +84,7 @@ class Surface:
 @dataclass(frozen=True)
 class Lens:
     """A sequential lens: data only. Load with `Lens.load("solas-doublet")` or a path to a lens file;
-    analyses take it as an argument (`solas_mi.paraxial(lens)`, `solas_mi.psf(lens, ...)`)."""
+    analyses take it as an argument (`solas_mi.paraxial(lens)`, `solas_mi.psf.psf(lens, ...)`)."""
 
     name: str
     surfaces: tuple[Surface, ...]

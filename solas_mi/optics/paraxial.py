@@ -1,6 +1,9 @@
 """First-order (paraxial) optics of a lens: focal length, pupils, f-number, chief rays.
 
 Lengths in mm; z measured from surface 1's vertex; slopes are paraxial angles (tangents).
+
+Reference: the y-nu paraxial ray trace, W. J. Smith, "Modern Optical Engineering", 4th ed.,
+McGraw-Hill, 2008, ch. 2–3.
 """
 from __future__ import annotations
 

@@ -209,7 +209,7 @@ def _power_density(lens: Lens, wavelength_nm: float) -> float:
 
 
 def pupil_function(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, samples: int) -> PupilFunction:
-    """Pupil function on an N×N (α, β) grid (N = `samples`, checked by `psf.check_method`) for each
+    """Pupil function on an N×N (α, β) grid (N = `samples`, checked by `psf.methods.check_method`) for each
     field/wavelength pair."""
     field_deg = np.atleast_2d(np.asarray(field_deg, dtype=np.float64))
     nf = len(field_deg)

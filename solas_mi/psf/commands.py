@@ -8,13 +8,7 @@ from typing import Any
 
 from ..errors import SolasError
 from ..options import add_lens_argument, floats, parse_wxh
-from .base import (
-    DEFAULT_GEOMETRIC_RAYS,
-    DEFAULT_PITCH_UM,
-    DEFAULT_PUPIL_SAMPLES,
-    DEFAULT_SIZE,
-    NORMALIZATIONS,
-)
+from .base import DEFAULT_GEOMETRIC_RAYS, DEFAULT_PITCH_UM, DEFAULT_PUPIL_SAMPLES, DEFAULT_SIZE, NORMALIZATIONS
 from .methods import DEFAULT_METHOD, METHODS
 
 

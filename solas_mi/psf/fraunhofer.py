@@ -1,4 +1,14 @@
-"""Fraunhofer PSFs: |matrix DFT of the pupil function|² on an image-plane grid of any pitch."""
+"""Fraunhofer PSFs: |matrix DFT of the pupil function|² on an image-plane grid of any pitch.
+
+The pupil function (`optics.pupil`) is sampled on a regular grid of direction cosines on the exit
+pupil's reference sphere, so the Fraunhofer integral is a separable matrix Fourier transform at any
+image-plane pitch, with no FFT padding or λ·F/(Q·D) constraint.
+
+References: J. W. Goodman, "Introduction to Fourier Optics", 3rd ed., Roberts & Company, 2005
+(Fraunhofer diffraction from the exit pupil); R. Soummer, L. Pueyo, A. Sivaramakrishnan and
+R. J. Vanderbei, "Fast computation of Lyot-style coronagraph propagation", Optics Express 15(24),
+15935–15951, 2007 (the matrix Fourier transform).
+"""
 from __future__ import annotations
 
 import math

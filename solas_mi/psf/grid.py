@@ -8,6 +8,7 @@ The lens is centred (every surface is rotationally symmetric about the axis), so
 Field grid convention: `ny`×`nx` nodes in image orientation, row 0 = top = largest y field angle,
 column 0 = smallest x field angle. "centers" sampling puts the nodes at the centres of ny×nx equal
 cells spanning ±field (the block centres of a tiled image); "edges" spans ±field including the ends.
+The SOLAS paper's PSF maps are such grids (8×8 over the doublet's ±2°; see the `solas_mi` docstring).
 """
 from __future__ import annotations
 
@@ -185,7 +186,7 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
         "vignetted_by_surfaces": sorted(vignetting),
         "seconds": time.perf_counter() - start,
     })
-    if hx > 0:  # the ideal image an input spanning ±hx horizontally stands for (`camera`)
+    if hx > 0:  # the ideal image an input spanning ±hx horizontally stands for (`optics.camera`)
         meta.update(pinhole_focal_mm=pinhole_focal_mm(lens, hx), reference_wavelength_nm=lens.primary_wavelength)
     return PSFGrid(data.reshape(len(wl), ny, nx, size, size), fields, chief.reshape(len(wl), ny, nx, 2), wl,
                    float(pitch_um), meta)

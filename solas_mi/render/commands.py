@@ -44,7 +44,8 @@ def _scene(args) -> int:
 
 
 def _render(args) -> int:
-    from .loop import load_scene, render
+    from .loop import render
+    from .mitsuba import load_scene
 
     params = {}
     for item in args.set or []:
@@ -65,7 +66,7 @@ def _render(args) -> int:
 
 def _render_image(args) -> int:
     from ..optics.lens import Lens
-    from .loop import render_image
+    from .image import render_image
 
     lens = Lens.load(args.lens)
     result = render_image(lens, args.image, parse_wxh(args.sensor, "--sensor"), args.pitch_um, args.spp,
@@ -78,7 +79,7 @@ def _render_image(args) -> int:
 
 
 def _add_render_options(p: argparse.ArgumentParser, spp_default: int | None) -> None:
-    from .loop import VARIANTS
+    from .mitsuba import VARIANTS
 
     p.add_argument("--spp", type=int, default=spp_default, help="samples per pixel")
     p.add_argument("--variant", choices=VARIANTS, help="Mitsuba variant (default: cuda_ad_spectral with a GPU, "

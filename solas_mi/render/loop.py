@@ -1,14 +1,15 @@
-"""Direct spectral rendering through the lens geometry: Mitsuba set-up (variant, plugins), the path
-loop, and rendering an input image or a scene file.
+"""The path loop of the direct spectral render: camera paths from the `lens_sensor` through the glass
+(`sellmeier_dielectric`) until they leave the lens; a path that escapes toward the object takes the
+`image_object`'s radiance.
 
-The loop follows camera paths from the `lens_sensor` through the glass (`sellmeier_dielectric`)
-until they leave the lens; a path that escapes toward the object takes the `image_object`'s
-radiance. One wavelength per path; each sample adds response_c(λ)/p(λ) × its radiance to the
-channels of its pixel (a box pixel: the mean irradiance over the pixel's area).
+One wavelength per path; each sample adds response_c(λ)/p(λ) × its radiance to the channels of its
+pixel (a box pixel: the mean irradiance over the pixel's area, in units of the ideal camera's).
+JIT variants trace a pass as one wavefront, with pixel positions, pupil points and wavelengths
+stratified per pixel (`sampling`), so a pixel's samples form one stratified set however many passes
+they take; the scalar reference variant runs the same estimator one independent sample at a time.
 """
 from __future__ import annotations
 
-import importlib
 import math
 import time
 from dataclasses import dataclass, field
@@ -17,45 +18,15 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import SolasError
-from ..llvm import select_libllvm
 
-VARIANTS = ("llvm_ad_spectral", "scalar_spectral", "cuda_ad_spectral")
-_PLUGINS = ("sellmeier_dielectric", "image_object", "lens_sensor")
 _SAMPLES_PER_PASS = 1 << 22  # samples traced at once: bounds the memory of one pass
-
-
-def default_variant() -> str:
-    """cuda_ad_spectral where a CUDA device works, else llvm_ad_spectral."""
-    select_libllvm()
-    import drjit as dr
-
-    return "cuda_ad_spectral" if dr.has_backend(dr.JitBackend.CUDA) else "llvm_ad_spectral"
-
-
-def mitsuba(variant: str | None = None):
-    """Mitsuba with `variant` set (default: `default_variant`) and the solas-mi plugins registered."""
-    variant = variant or default_variant()
-    if variant not in VARIANTS:
-        raise SolasError(f"variant {variant!r} must be one of {', '.join(VARIANTS)}")
-    select_libllvm()
-    import mitsuba as mi
-
-    if variant not in mi.variants():
-        raise SolasError(f"variant {variant} is not in this Mitsuba build (has: {', '.join(mi.variants())})")
-    if mi.variant() != variant:
-        try:
-            mi.set_variant(variant)
-        except Exception as exc:  # a CUDA variant without a working device
-            raise SolasError(f"Mitsuba variant {variant} cannot start: {exc}") from exc
-        for name in _PLUGINS:  # the plugin classes subclass the current variant's types
-            module = importlib.import_module(f"solas_mi.plugins.{name}")
-            importlib.reload(module).register()
-    return mi
+SPAWN_OFFSET_MM = 1e-4  # a continued ray starts this far (mm) along its own direction
 
 
 @dataclass
 class Render:
-    """A rendered image (H×W×C, float32, image orientation) and what produced it."""
+    """A rendered image (H×W×C, float32, image orientation; irradiance in units of the ideal camera's)
+    and what produced it: `spp` samples per pixel in `seconds` (wall clock, s)."""
 
     image: np.ndarray
     channels: tuple[str, ...]
@@ -86,11 +57,8 @@ def _components(scene):
     return sensor, objects[0]
 
 
-SPAWN_OFFSET_MM = 1e-4  # a continued ray starts this far along its own direction
-
-
 def continue_ray(si, ray, wo_local):
-    """The ray leaving interaction `si` in local direction `wo_local`, started a hair along itself.
+    """The ray leaving interaction `si` in local direction `wo_local`, started SPAWN_OFFSET_MM along itself.
     (Mitsuba's spawn_ray offsets along the normal by ~1e-4 of the scene scale, up to ~10 µm here,
     which shifts refracted rays sideways.)"""
     import mitsuba as mi
@@ -109,7 +77,9 @@ def _max_depth(scene, lens) -> int:
 
 
 def render(scene, spp: int, seed: int = 0, max_depth: int | None = None, progress=None) -> Render:
-    """Render a lens scene with `spp` samples per pixel in passes of bounded size."""
+    """Render a lens scene (a `lens_sensor` and one `image_object`) with `spp` samples per pixel in
+    passes of bounded size; `max_depth` interactions per path (default: what the lens needs);
+    `progress(done, spp)` is called after each pass."""
     import drjit as dr
     import mitsuba as mi
 
@@ -199,45 +169,6 @@ def _pass(mi, dr, scene, sensor, emitter, spp: int, first: int, total: int, base
         dr.scatter_reduce(dr.ReduceOp.Add, out, radiance * w, pixel * nc + c)
     dr.eval(out)
     return np.asarray(out, dtype=np.float64) * 1.0  # the pass's sum over its samples
-
-
-def load_scene(path: str, variant: str | None = None, **params):
-    """Load a scene XML with the solas-mi plugins; `params` fill its <default> values."""
-    mi = mitsuba(variant)
-    try:
-        return mi.load_file(str(path), **{k: str(v) for k, v in params.items()})
-    except RuntimeError as exc:
-        raise SolasError(f"cannot load scene {path}: {exc}") from None
-
-
-def render_image(lens, image: str | np.ndarray, sensor: tuple[int, int] = (960, 1280), pitch_um: float | None = None,
-                 spp: int = 64, response: str = "srgb", fov_deg: float | None = None, boundary: str = "edge",
-                 fresnel: str = "transmit", rings: int | None = None, variant: str | None = None, seed: int = 0,
-                 progress=None) -> Render:
-    """Render an input image (a path, or a linear H×W[×3] array) through `lens` onto a sensor of
-    (rows, columns) pixels. Defaults: the image width spans ±lens.field_deg and the sensor's width
-    spans the same field (`solas_mi.camera`)."""
-    import tempfile
-
-    from ..optics.camera import camera_for
-    from .scene import DEFAULT_RINGS, write_scene
-
-    camera = camera_for(lens, sensor, fov_deg, pitch_um)
-    with tempfile.TemporaryDirectory(prefix="solas-scene-") as tmp:
-        if isinstance(image, np.ndarray):
-            from ..imageio import image_channels, write_exr
-
-            path = str(Path(tmp) / "object.exr")
-            write_exr(path, image_channels(np.asarray(image, dtype=np.float32)))
-            image = path
-        xml = write_scene(lens, tmp, str(Path(image).resolve()), camera, rings or DEFAULT_RINGS, spp, response,
-                          boundary, fresnel)
-        scene = load_scene(xml, variant)
-        result = render(scene, spp, seed=seed, progress=progress)
-    result.meta.update(camera.meta())
-    result.meta.update({"lens": lens.name, "lens_hash": lens.hash, "boundary": boundary, "fresnel": fresnel,
-                        "cap_rings": rings or DEFAULT_RINGS})
-    return result
 
 
 def _pass_scalar(mi, dr, scene, sensor, emitter, spp: int, first: int, total: int, base: int, seed: int, depth: int

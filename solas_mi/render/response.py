@@ -1,14 +1,18 @@
 """Camera spectral responses: how a sensor turns the wavelength of each path into its channels.
 
-A response samples one wavelength per path (pdf p(λ)) and gives each channel the weight
+A response samples one wavelength per path (pdf p(λ), λ in nm) and gives each channel the weight
 response_c(λ)/p(λ), so the expected pixel value of channel c is ∫ response_c(λ) L(λ) dλ.
 
 - "lines": one wavelength per channel, the lens's design wavelengths (R = longest): the camera the
-  PSF-grid convolution assumes (656/531/486 nm for the doublet).
-- "srgb": linear sRGB from the CIE 1931 2° colour-matching functions (colour-science), balanced so a
-  flat spectrum of radiance 1 gives (1, 1, 1).
+  PSF-grid convolution assumes (656/531/486 nm for the doublet); "lines:λ1,λ2,…" names them (nm).
+- "srgb": linear sRGB from the CIE 1931 2° colour-matching functions, balanced so a flat spectrum
+  of radiance 1 gives (1, 1, 1).
 - "mono:λ": one channel at a fixed wavelength λ (nm).
 - "table:FILE.csv": a camera's RGB sensitivities, rows "wavelength_nm, r, g, b", balanced like srgb.
+
+References: the CIE 1931 2° standard observer's colour-matching functions (CIE 015:2018,
+"Colorimetry", 4th ed.) and the sRGB primaries (IEC 61966-2-1:1999), both as tabulated by
+colour-science (`colour.MSDS_CMFS`, `colour.models.RGB_COLOURSPACE_sRGB`).
 """
 from __future__ import annotations
 
@@ -47,6 +51,7 @@ class Response:
         return lam, self.weights[i]
 
     def meta(self) -> dict:
+        """Name, channels and sampled wavelength range (nm) for a render's metadata."""
         return {"response": self.name, "channels": list(self.channels),
                 "wavelength_range_nm": [float(self.lo_nm.min()), float(self.hi_nm.max())]}
 
@@ -62,6 +67,7 @@ def lines(wavelengths_nm) -> Response:
 
 
 def mono(wavelength_nm: float) -> Response:
+    """One channel "Y" at one wavelength (nm)."""
     w = np.array([float(wavelength_nm)])
     return Response(f"mono:{wavelength_nm:g}", ("Y",), w, w, np.ones(1), np.ones((1, 1)))
 
@@ -85,6 +91,7 @@ def _balanced(name: str, lam: np.ndarray, rgb: np.ndarray) -> Response:
 
 
 def srgb() -> Response:
+    """Linear sRGB from the CIE 1931 2° colour-matching functions over 380–780 nm, white-balanced."""
     import colour
 
     cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
@@ -96,6 +103,7 @@ def srgb() -> Response:
 
 
 def table(path: str) -> Response:
+    """A camera's RGB sensitivities from a CSV file of rows "wavelength_nm, r, g, b", white-balanced."""
     try:
         data = np.loadtxt(path, delimiter=",", comments="#", ndmin=2)
     except (OSError, ValueError) as exc:

@@ -1,8 +1,11 @@
-"""Stratified sample patterns for renders: correlated multi-jittered samples (Kensler, "Correlated
-Multi-Jittered Sampling", Pixar 2013) computed per sample index, so a pixel's samples may be drawn
-in any number of passes and still form one stratified set.
+"""Stratified sample patterns for renders: correlated multi-jittered samples computed per sample
+index, so a pixel's samples may be drawn in any number of passes and still form one stratified set.
+`permute` and `cmj_2d` follow Kensler's hashed permutation and correlated multi-jittered pattern.
 
-All functions take and return Dr.Jit arrays of the current Mitsuba variant (`mi.UInt32`, `mi.Float`).
+All functions take and return Dr.Jit arrays of the current Mitsuba variant (`mi.UInt32`, `mi.Float`);
+`stratified_1d` and `cmj_2d` return points in [0, 1) (unitless).
+
+Reference: A. Kensler, "Correlated Multi-Jittered Sampling", Pixar Technical Memo 13-01, 2013.
 """
 from __future__ import annotations
 

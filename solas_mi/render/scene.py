@@ -25,6 +25,7 @@ DEFAULT_RINGS = 32  # scene PSFs match the tracer to 0.04 µm / 0.2 %; denser me
 
 
 def check_rings(rings: int) -> int:
+    """`rings` (rings per cap mesh), or SolasError unless it is an integer in 2..4096."""
     if not (isinstance(rings, int) and 2 <= rings <= 4096):
         raise SolasError(f"cap rings {rings!r} must be an integer in 2..4096")
     return rings

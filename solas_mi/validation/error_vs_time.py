@@ -3,7 +3,7 @@ comes to the converged direct render, and what it costs.
 
 Cases: the SOLAS paper's `patch` convolution (8×6 and 32×24 blocks), the seamless `interp`
 convolution on grids of 4×3 … 64×48 nodes, and the direct render itself at a range of samples per
-pixel. The reference is a high-spp render averaged from several seeds (`crossval.reference`); each
+pixel. The reference is a high-spp render averaged from several seeds (`reference.reference`); each
 error is the relative RMSE against it with the reference's own noise removed in quadrature (a render's
 error includes its own noise: that is its error). Times: the PSF grid's computation and the
 convolution apart (a grid is computed once per lens and reused for every image); the render's time is
@@ -13,61 +13,25 @@ Outputs: table.md, table.csv, error_vs_time.png (log x: seconds; y: relative RMS
 """
 from __future__ import annotations
 
-import argparse
 import json
-import math
 import statistics
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from ..convolution.kernels import check_boundary
 from ..errors import SolasError
 from ..imageio import write_text
-from .crossval import (
-    DEFAULT_CASES,
-    PSF_KINDS,
-    Errors,
-    Row,
-    compare,
-    convolve,
-    csv_text,
-    load_input,
-    noise_variance_map,
-    psf_grid_for,
-    reference,
-    render,
-    render_units,
-)
+from ..optics.camera import check_fov
+from .engines import check_kind, convolve, grid_units, psf_grid_for, render
+from .reference import noise_variance_map, reference
+from .scores import Errors, compare
+from .tables import Row, csv_text, error_vs_time_markdown
 
 DEFAULT_RENDER_SPP = (3, 12, 48, 192, 768)  # 3·4^k: each line's third a perfect square (stratifies best)
 DEFAULT_INTERP_GRIDS = ((4, 3), (8, 6), (16, 12), (32, 24), (64, 48))  # (columns, rows)
 DEFAULT_PATCH_GRIDS = ((8, 6), (32, 24))
-
-
-def _grids(text: str | None, default, what: str) -> tuple[tuple[int, int], ...]:
-    from ..options import parse_wxh
-
-    if text is None:
-        return tuple(default)
-    out = []
-    for item in text.split(","):
-        if item.strip():
-            rows, cols = parse_wxh(item, what)
-            out.append((cols, rows))
-    return tuple(out)
-
-
-def _ints(text: str | None, default, what: str) -> tuple[int, ...]:
-    if text is None:
-        return tuple(default)
-    try:
-        values = tuple(int(v) for v in text.split(",") if v.strip())
-    except ValueError:
-        raise SolasError(f"{what} {text!r} must be comma-separated positive integers") from None
-    if not values or min(values) < 1:
-        raise SolasError(f"{what} {text!r} must be comma-separated positive integers")
-    return values
 
 
 def error_vs_time(lens, image: np.ndarray, out: str | Path | None, ref_spp: int = 1536, seeds: int = 2,
@@ -76,13 +40,9 @@ def error_vs_time(lens, image: np.ndarray, out: str | Path | None, ref_spp: int 
                   boundary: str = "edge", repeats: int = 3, variant: str | None = None, log=print) -> list[Row]:
     """The error of every case against the reference and its run time; writes the table and plot to
     `out` (None: nothing written)."""
-    from ..convolution.kernels import channel_wavelengths, check_boundary
-    from ..optics.camera import check_fov
-
     fov = check_fov(lens.field_deg if fov_deg is None else fov_deg)
     check_boundary(boundary)
-    if kind not in PSF_KINDS:
-        raise SolasError(f"PSF kind {kind!r} must be one of {', '.join(PSF_KINDS)}")
+    check_kind(kind)
     if not (isinstance(repeats, int) and repeats >= 1):
         raise SolasError(f"repeats {repeats!r} must be a positive integer")
     h, w = image.shape[:2]
@@ -95,7 +55,7 @@ def error_vs_time(lens, image: np.ndarray, out: str | Path | None, ref_spp: int 
 
     log(f"error-vs-time: {w}x{h} px, reference {ref_spp} spp in {seeds} renders")
     ref = reference(lens, image, ref_spp, fov, seeds, boundary, variant)
-    ref_rms = math.sqrt(float(np.mean(ref.image ** 2)))
+    ref_rms = ref.rms
     var_map = noise_variance_map(ref.renders)
     log(f"error-vs-time: reference {ref.seconds:.1f} s, noise {100 * ref.noise / ref_rms:.3f} %")
 
@@ -111,7 +71,7 @@ def error_vs_time(lens, image: np.ndarray, out: str | Path | None, ref_spp: int 
             grids[blocks] = psf_grid_for(lens, kind, blocks, w, h, fov)
         grid, psf_s = grids[blocks]
         if scale is None:
-            scale = render_units(lens, [grid.wavelengths_nm[k] for k in channel_wavelengths(grid, 3)], fov)
+            scale = grid_units(lens, grid, fov)
         times = []
         for _ in range(repeats):
             img, s = convolve(image, grid, method, lens, fov, boundary, scale)
@@ -129,7 +89,7 @@ def error_vs_time(lens, image: np.ndarray, out: str | Path | None, ref_spp: int 
                 f"({ref.seconds:.1f} s), noise {100 * ref.noise / ref_rms:.3f} % of RMS(reference), removed in "
                 f"quadrature in \"− noise\" and the annuli. PSF s: computing the PSF grid (once per lens); run s: "
                 f"the convolution (median of {repeats}) or the render.")
-        write_text(out_dir / "table.md", table_markdown(rows, note))
+        write_text(out_dir / "table.md", error_vs_time_markdown(rows, note))
         write_text(out_dir / "table.csv", csv_text(rows))
         plot(rows, out_dir / "error_vs_time.png", f"{lens.name}, {w}x{h} px: error against the converged render")
         write_text(out_dir / "report.json", json.dumps({
@@ -138,22 +98,6 @@ def error_vs_time(lens, image: np.ndarray, out: str | Path | None, ref_spp: int 
             "reference_seconds": ref.seconds, "reference_noise_rel": ref.noise / ref_rms,
             "render_units_k": [float(v) for v in scale], "rows": [r.flat() for r in rows]}, indent=1))
     return rows
-
-
-def table_markdown(rows: list[Row], note: str = "") -> str:
-    lines = ["| case | PSF grid s | run s | total s | rel. RMSE − noise | centre | middle | edge | rel. RMSE | "
-             "PSNR dB | SSIM |", "|" + "---|" * 11]
-    for r in rows:
-        e = r.errors
-        ann = " | ".join(f"{100 * e.annuli_denoised[n]:.3f} %" if n in e.annuli_denoised else "—"
-                         for n in ("centre", "middle", "edge"))
-        psf = f"{r.psf_seconds:.2f}" if r.method != "render" else "—"
-        lines.append(f"| {r.name} | {psf} | {r.conv_seconds:.3f} | {r.seconds:.2f} | "
-                     f"{100 * e.rel_rmse_denoised:.3f} % | {ann} | {100 * e.rel_rmse:.3f} % | {e.psnr_db:.2f} | "
-                     f"{e.ssim:.5f} |")
-    if note:
-        lines += ["", note]
-    return "\n".join(lines) + "\n"
 
 
 def plot(rows: list[Row], path: Path, title: str) -> None:
@@ -205,56 +149,3 @@ def plot(rows: list[Row], path: Path, title: str) -> None:
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png")
     plt.close(fig)
-
-
-def run_error_vs_time(args: argparse.Namespace) -> int:
-    from ..optics.lens import Lens
-    from ..options import parse_wxh
-
-    lens = Lens.load(args.lens)
-    sensor = parse_wxh(args.sensor, "--sensor") if args.sensor else None
-    image = load_input(args.image, sensor, args.scale, args.linear)
-    rows = error_vs_time(lens, image, args.output, args.ref_spp, args.seeds,
-                         _ints(args.spp, DEFAULT_RENDER_SPP, "--spp"),
-                         _grids(args.interp_grids, DEFAULT_INTERP_GRIDS, "--interp-grids"),
-                         _grids(args.patch_grids, DEFAULT_PATCH_GRIDS, "--patch-grids"), args.psf, args.fov_deg,
-                         args.boundary, args.repeats, args.variant, log=lambda s: print(s, flush=True))
-    print(table_markdown(rows))
-    print(f"wrote {args.output}/table.md, table.csv, error_vs_time.png, report.json")
-    return 0
-
-
-def register(sub: Any) -> None:
-    """Add the `report` subcommand (`report error-vs-time`)."""
-    from ..convolution.kernels import BOUNDARIES
-    from ..render.loop import VARIANTS
-
-    report = sub.add_parser("report", help="reports: error against run time").add_subparsers(
-        dest="report_command", required=True)
-    p = report.add_parser(
-        "error-vs-time", help="error of patch / interp convolution and of the direct render against run time",
-        description="Relative RMSE against a converged direct render (noise removed) and run time of the paper's "
-                    "patch convolution, the interp convolution on grids of increasing size and the direct render "
-                    "at increasing spp; writes table.md, table.csv, error_vs_time.png (log x) and report.json.")
-    p.add_argument("lens", help="shipped lens name (solas-doublet) or a .toml lens file")
-    p.add_argument("image", help="input image (PNG/JPEG sRGB, EXR linear)")
-    p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
-    size = p.add_mutually_exclusive_group()
-    size.add_argument("--sensor", help="resample the image to COLSxROWS first (area average)")
-    size.add_argument("--scale", type=float, help="resample the image by this factor in (0, 1] first")
-    p.add_argument("--ref-spp", type=int, default=1536, help="reference spp, all seeds together (default 1536)")
-    p.add_argument("--seeds", type=int, default=2, help="renders the reference is averaged from (>= 2)")
-    p.add_argument("--spp", help="render spp to time, comma-separated (default 3,12,48,192,768)")
-    p.add_argument("--interp-grids", help="interp grids COLSxROWS, comma-separated (default 4x3,8x6,16x12,32x24,64x48)")
-    p.add_argument("--patch-grids", help="patch grids COLSxROWS, comma-separated (default 8x6,32x24)")
-    p.add_argument("--psf", choices=PSF_KINDS, default="geometric", help="PSF kind (default geometric: the render "
-                                                                        "is a ray render, without diffraction)")
-    p.add_argument("--repeats", type=int, default=3, help="convolution runs to take the median time of")
-    p.add_argument("--fov-deg", type=float, help="half the horizontal field the image spans (default: the lens's)")
-    p.add_argument("--boundary", choices=BOUNDARIES, default="edge")
-    p.add_argument("--linear", action="store_true", help="PNG/JPEG values are already linear")
-    p.add_argument("--variant", choices=VARIANTS, help="Mitsuba variant of the render")
-    p.set_defaults(run=run_error_vs_time)
-
-
-__all__ = ["DEFAULT_CASES", "error_vs_time", "register"]

@@ -1,7 +1,7 @@
 """Geometric PSFs traced through the Mitsuba scene: the bridge showing that the scene's meshes and
 plugins describe the same lens as the Float64 tracer.
 
-Collimated rays of one field and wavelength start on the tracer's entrance grid (`geometric`), cross
+Collimated rays of one field and wavelength start on the tracer's entrance grid (`psf.geometric`), cross
 the scene's caps through `sellmeier_dielectric` (importance transport), and are binned where they
 meet the image plane, on the tracer's PSF grid centred on the tracer's chief ray.
 """

@@ -68,12 +68,10 @@ def test_target_user_errors_exit_2(tmp_path, capsys):
     assert list(tmp_path.iterdir()) == []
 
 
-def test_ss_sfr_compare_json_and_plot(tmp_path, capsys):
-    from test_nssfr import scene
-
+def test_ss_sfr_compare_json_and_plot(tmp_path, capsys, graded_scene):
     a, b, plot = tmp_path / "a.exr", tmp_path / "b.exr", tmp_path / "fig.png"
-    write_exr(a, {"Y": scene()})
-    write_exr(b, {"Y": scene((1.0, 1.4, 1.8))})
+    write_exr(a, {"Y": graded_scene()})
+    write_exr(b, {"Y": graded_scene((1.0, 1.4, 1.8))})
     code, data = run_json(capsys, "ss-sfr", str(a), "--compare", str(b), "--json", "--plot", str(plot),
                           "--full-scale", "1")
     assert code == 0 and plot.is_file()

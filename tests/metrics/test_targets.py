@@ -7,13 +7,7 @@ from scipy.special import ndtr
 
 from solas_mi.errors import SolasError
 from solas_mi.imageio import srgb_decode
-from solas_mi.metrics.targets import (
-    Square,
-    analytic_mtf,
-    analytic_mtf50,
-    slanted_edge,
-    slanted_squares,
-)
+from solas_mi.metrics.targets import Square, analytic_mtf, analytic_mtf50, slanted_edge, slanted_squares
 
 
 @pytest.mark.parametrize("sigma, expected", [(0.5, 0.323111), (1.0, 0.179965), (2.0, 0.092732), (3.0, 0.062176)])
@@ -28,7 +22,7 @@ def test_analytic_mtf50_is_a_root_of_the_mtf():
     assert np.all(analytic_mtf(np.linspace(0, f50 * 0.999, 200), 1.3, 17.0) > 0.5)
 
 
-def _brute_force(shape, angle_deg, sigma, sub=200):
+def brute_force(shape, angle_deg, sigma, sub=200):
     """Mean of the blurred step over each pixel by midpoint supersampling (sub² samples)."""
     rows, cols = shape
     t = math.radians(angle_deg)
@@ -48,7 +42,7 @@ def test_pixel_values_are_exact_pixel_integrals(angle, sigma):
     exact = slanted_edge((12, 12), angle, sigma, low=0.0, high=1.0, clip=False)
     # midpoint rule with 200² samples: error well under 1e-4 except at the discontinuity (σ = 0)
     tol = 3e-3 if sigma == 0 else 1e-4
-    assert np.max(np.abs(exact - _brute_force((12, 12), angle, sigma))) < tol
+    assert np.max(np.abs(exact - brute_force((12, 12), angle, sigma))) < tol
 
 
 def test_far_from_edge_is_exactly_the_levels_and_symmetric():

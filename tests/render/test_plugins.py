@@ -1,0 +1,56 @@
+"""The Mitsuba plugins (`plugins/`): the defaults their docstrings document, what they expose to
+`mi.traverse`, and their parameter checks."""
+import math
+
+import numpy as np
+import pytest
+
+from solas_mi.optics.camera import pinhole_focal_mm
+from solas_mi.render.mitsuba import mitsuba
+
+
+@pytest.fixture(scope="module")
+def mi():
+    return mitsuba("llvm_ad_spectral")
+
+
+@pytest.fixture(scope="module")
+def plugins(mi):
+    """Each plugin with its default parameters (the object's image from Python: a 2×4 grey 0.5)."""
+    image = mi.TensorXf(np.full((2, 4), 0.5, dtype=np.float32))
+    return {"lens_sensor": mi.load_dict({"type": "lens_sensor"}),
+            "sellmeier_dielectric": mi.load_dict({"type": "sellmeier_dielectric"}),
+            "image_object": mi.load_dict({"type": "image_object", "image": image})}
+
+
+def test_lens_sensor_defaults(plugins, doublet):
+    sensor = plugins["lens_sensor"]
+    assert sensor.lens.name == doublet.name and sensor.pitch_mm == pytest.approx(5e-3)
+    assert sensor.focal_mm == pytest.approx(pinhole_focal_mm(doublet, doublet.field_deg))
+    assert sensor.response.channels == ("R", "G", "B") and sensor.response.lo_nm.tolist() == [656.0, 531.0, 486.0]
+    assert (sensor.width, sensor.height) == (768, 576) and sensor.sampler().sample_count() == 4
+
+
+def test_sellmeier_dielectric_defaults(plugins):
+    bsdf = plugins["sellmeier_dielectric"]
+    assert (bsdf.int_glass.name, bsdf.ext_glass.name, bsdf.fresnel) == ("AIR", "AIR", "transmit")
+
+
+def test_image_object_defaults(plugins):
+    emitter = plugins["image_object"]
+    assert emitter.fov_deg == 2.0 and emitter.boundary == "edge" and math.isinf(emitter.distance)
+    assert (emitter.width, emitter.height) == (4, 2) and np.allclose(np.asarray(emitter.texels), 0.5)  # scale 1
+
+
+def test_plugins_expose_no_parameters(mi, plugins):
+    assert {name: len(mi.traverse(p).keys()) for name, p in plugins.items()} == dict.fromkeys(plugins, 0)
+
+
+@pytest.mark.parametrize("plugin, message", [
+    ({"type": "sellmeier_dielectric", "fresnel": "ghost"}, "fresnel 'ghost' must be one of transmit, sample, off"),
+    ({"type": "image_object", "boundary": "wrap"}, "boundary 'wrap' must be one of edge, reflect, zero"),
+    ({"type": "lens_sensor", "pitch_um": -1.0}, "pitch_um -1.0 must be positive"),
+])
+def test_bad_parameters_are_named(mi, plugin, message):
+    with pytest.raises(RuntimeError, match=message):
+        mi.load_dict(plugin)

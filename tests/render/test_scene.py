@@ -1,0 +1,32 @@
+"""The lens as Mitsuba geometry (`render.scene`): cap meshes and the parts of a lens."""
+import numpy as np
+import pytest
+
+from solas_mi import SolasError
+from solas_mi.render.scene import cap_mesh, lens_parts
+
+
+def test_cap_mesh_lies_on_the_sphere_and_faces_the_object():
+    v, n, f = cap_mesh(-30.716, 6.0, 15.0, 32)
+    centre = np.array([0.0, 0.0, 6.0 - 30.716])
+    assert np.allclose(np.linalg.norm(v - centre, axis=1), 30.716, atol=1e-9)
+    assert np.allclose(np.linalg.norm(n, axis=1), 1.0) and np.all(n[:, 2] < 0)
+    geo = np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]])
+    assert np.all(geo[:, 2] < 0)  # winding agrees with the normals
+    # the flat triangles sit inside the sphere by about (edge length)² / 8R, no more
+    edge = np.linalg.norm(v[f[:, 1]] - v[f[:, 2]], axis=1).max()
+    depth = 30.716 - np.linalg.norm(v[f].mean(axis=1) - centre, axis=1)
+    assert 0 < depth.max() < 1.5 * edge ** 2 / (8 * 30.716)
+
+
+def test_parts_of_the_doublet(doublet):
+    names = [p.name for p in lens_parts(doublet, 16)]
+    # three refracting caps (the stop refracts nothing), an absorbing ring per aperture, the barrel
+    assert names == ["surface1", "aperture1", "surface2", "aperture2", "surface3", "aperture3", "aperture4", "barrel"]
+    glasses = [(p.ext_glass, p.int_glass) for p in lens_parts(doublet, 16) if p.int_glass]
+    assert glasses == [("AIR", "BK7"), ("BK7", "F2"), ("F2", "AIR")]
+
+
+def test_bad_ring_count(doublet):
+    with pytest.raises(SolasError, match="rings"):
+        lens_parts(doublet, 1)

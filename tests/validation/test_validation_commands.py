@@ -1,0 +1,26 @@
+"""`solas-mi crossval` and `solas-mi report error-vs-time` (`solas_mi.validation.commands`)."""
+import argparse
+
+import pytest
+
+from solas_mi.errors import SolasError
+from solas_mi.options import positive_ints
+from solas_mi.validation import commands
+
+
+def test_commands_register_and_parse():
+    parser = argparse.ArgumentParser()
+    sub = parser.add_subparsers(dest="command")
+    commands.register(sub)
+    a = parser.parse_args(["crossval", "solas-doublet", "img.png", "-o", "d", "--scale", "0.25", "--spp", "96"])
+    assert a.run is commands.run_crossval and a.spp == 96 and a.scale == 0.25
+    a = parser.parse_args(["report", "error-vs-time", "solas-doublet", "img.png", "-o", "d", "--sensor", "320x240"])
+    assert a.run is commands.run_error_vs_time and a.sensor == "320x240"
+    assert commands.block_grids("4x3,64x48", "--interp-grids") == ((4, 3), (64, 48))
+    with pytest.raises(SystemExit):
+        parser.parse_args(["crossval", "solas-doublet", "img.png", "-o", "d", "--scale", "0.5", "--sensor", "8x8"])
+
+
+def test_bad_values_are_a_solas_error():
+    with pytest.raises(SolasError, match="comma-separated"):
+        positive_ints("3,x", "--spp")
