@@ -31,11 +31,11 @@ import math
 import drjit as dr
 import mitsuba as mi
 import numpy as np
-from solas_mi.plugins.tables import lookup, table
 
 from solas_mi.errors import SolasError
 from solas_mi.imageio import read_image
 from solas_mi.optics.camera import BOUNDARIES
+from solas_mi.plugins.tables import lookup, table
 from solas_mi.render.response import RGB_BANDS_NM
 
 

@@ -39,13 +39,13 @@ from pathlib import Path
 import drjit as dr
 import mitsuba as mi
 import numpy as np
-from solas_mi.plugins.tables import lookup, table
 
 from solas_mi.errors import SolasError
 from solas_mi.optics.camera import pinhole_focal_mm
 from solas_mi.optics.exit_pupil import pupil_bounds
 from solas_mi.optics.illumination import ideal_irradiance, image_scales
 from solas_mi.optics.lens import Lens
+from solas_mi.plugins.tables import lookup, table
 from solas_mi.render import response as responses
 
 
