@@ -15,7 +15,7 @@ ALLOWED = {
     "optics": set(),
     "psf": {"optics"},
     "convolution": {"optics", "psf"},
-    "render": {"optics"},  # the Mitsuba plugins (plugins/, installed as solas_mi.plugins) are part of it
+    "render": {"optics", "psf"},  # the Mitsuba plugins (plugins/, installed as solas_mi.plugins) are part of it
     "metrics": set(),
     "validation": {"optics", "psf", "convolution", "render", "metrics"},
 }

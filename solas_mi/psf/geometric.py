@@ -33,41 +33,58 @@ def geometric(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitc
     nf = len(field_deg)
     wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (nf,)).copy()
     chief = chief or P.chief_rays(lens, field_deg, wavelength_nm)
-    hits = entrance_grid_hits(lens, field_deg, wavelength_nm, rays, chief)
-    out = np.zeros((nf, size, size))
+    data, transmission = bin_hits(entrance_grid_hits(lens, field_deg, wavelength_nm, rays, chief), pitch_um, size,
+                                  center_um)
+    return data, chief, transmission
+
+
+def bin_hits(hits: list[tuple[np.ndarray, np.ndarray, np.ndarray]], pitch_um: float, size: int,
+             center_um: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """PSFs (n, size, size) in 1/µm² from per-field hits (x, y offsets in µm from the chief ray, power
+    of each ray), on the grid whose origin is the chief ray shifted by `center_um` (n, 2); and the
+    power of each field's hits."""
+    out = np.zeros((len(hits), size, size))
     edges = (np.arange(size + 1) - size // 2 - 0.5) * pitch_um
-    shift = np.zeros((nf, 2)) if center_um is None else center_um
+    shift = np.zeros((len(hits), 2)) if center_um is None else center_um
     for f, (dx, dy, w) in enumerate(hits):
         # rows run down from +y: the row coordinate is −(y offset), binned like the columns
         h, _, _ = np.histogram2d(shift[f, 1] - dy, dx - shift[f, 0], bins=(edges, edges), weights=w)
         out[f] = h / pitch_um ** 2
-    return out, chief, np.array([w.sum() for _, _, w in hits])
+    return out, np.array([w.sum() for _, _, w in hits])
+
+
+def entrance_grid(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, rays: int, chief: ChiefRays):
+    """The rays×rays entrance grids over the pupils of the fields, in batches of about a million rays:
+    yields (slice of fields, ex, ey, power) with entrance coordinates ex, ey (b, rays, rays) in mm about
+    each chief ray and each ray's power (b, rays², fraction of the on-axis entrance-pupil power)."""
+    nf = len(field_deg)
+    half = entrance_half_width(lens, field_deg, wavelength_nm, chief)
+    t = (np.arange(rays) + 0.5) / rays * 2.0 - 1.0
+    per_batch = max(1, _BATCH_RAYS // (rays * rays))
+    for start in range(0, nf, per_batch):
+        sl = slice(start, min(nf, start + per_batch))
+        cx, cy, hw = chief.entrance[sl, 0], chief.entrance[sl, 1], half[sl]
+        ex = (cx[:, None, None] + hw[:, None, None] * t[None, None, :]).repeat(rays, axis=1)
+        ey = (cy[:, None, None] + hw[:, None, None] * t[None, :, None]).repeat(rays, axis=2)
+        area = (2.0 * hw / rays) ** 2  # entrance area of one ray
+        power = P.entrance_power(lens, field_deg[sl], wavelength_nm[sl], ex, ey).reshape(-1, rays * rays)
+        yield sl, ex, ey, power * area[:, None]
 
 
 def entrance_grid_hits(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, rays: int,
                        chief: ChiefRays) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """Per field: image-plane offsets (µm) from the chief ray of unvignetted rays on a regular
     rays×rays entrance grid covering the pupil, and each ray's power (fraction of the on-axis pupil)."""
-    nf = len(field_deg)
-    half = entrance_half_width(lens, field_deg, wavelength_nm, chief)
-    t = (np.arange(rays) + 0.5) / rays * 2.0 - 1.0
-    per_batch = max(1, _BATCH_RAYS // (rays * rays))
     result = []
-    for start in range(0, nf, per_batch):
-        sl = slice(start, min(nf, start + per_batch))
+    for sl, ex, ey, power in entrance_grid(lens, field_deg, wavelength_nm, rays, chief):
         b = P.Bundle(lens, field_deg[sl], wavelength_nm[sl], rays * rays)
-        cx, cy, hw = chief.entrance[sl, 0], chief.entrance[sl, 1], half[sl]
-        ex = (cx[:, None, None] + hw[:, None, None] * t[None, None, :]).repeat(rays, axis=1)
-        ey = (cy[:, None, None] + hw[:, None, None] * t[None, :, None]).repeat(rays, axis=2)
         tr = b.trace(T.F(ex.ravel()), T.F(ey.ravel()))
         x, y, _ = T.to_plane(tr, lens.image_z)
         keep, x, y = (a.reshape(-1, rays * rays) for a in T.to_numpy(tr.ok & (tr.clipped_by == 0), x, y))
-        area = (2.0 * hw / rays) ** 2  # entrance area of one ray
-        power = P.entrance_power(lens, field_deg[sl], wavelength_nm[sl], ex, ey).reshape(-1, rays * rays)
         for j, f in enumerate(range(sl.start, sl.stop)):
             m = keep[j]
             result.append(((x[j, m] - chief.image_xy[f, 0]) * 1e3, (y[j, m] - chief.image_xy[f, 1]) * 1e3,
-                           power[j, m] * area[j]))
+                           power[j, m]))
     return result
 
 

@@ -34,7 +34,8 @@ from .base import (
 
 @dataclass(frozen=True)
 class Method:
-    """A PSF method: its module in this package and its one sampling parameter."""
+    """A PSF method: the module that computes it (relative to this package) and its one sampling
+    parameter."""
 
     name: str
     module: str
@@ -43,13 +44,16 @@ class Method:
     summary: str
 
     def compute(self, *args, **kwargs) -> Computed:
-        return importlib.import_module(f"{__package__}.{self.module}").compute(*args, **kwargs)
+        return importlib.import_module(self.module, __package__).compute(*args, **kwargs)
 
 
 METHODS: dict[str, Method] = {m.name: m for m in (
-    Method("fraunhofer", "fraunhofer", "pupil_samples", 8,
+    Method("fraunhofer", ".fraunhofer", "pupil_samples", 8,
            "|matrix DFT of the pupil function|^2 (diffraction and aberrations)"),
-    Method("geometric", "geometric", "rays", 2, "real rays on a regular entrance grid, binned per pixel"),
+    Method("geometric", ".geometric", "rays", 2, "real rays on a regular entrance grid, binned per pixel"),
+    # recorded through the Mitsuba scene: the render stage computes it, imported only when used
+    Method("render", "..render.psf", "rays", 2, "the entrance-grid rays traced through the Mitsuba scene's "
+                                                 "lens meshes, binned per pixel"),
 )}
 DEFAULT_METHOD = "fraunhofer"
 

@@ -1,0 +1,95 @@
+"""PSFs recorded through the Mitsuba scene (the PSF method "render"): a point source — at infinity,
+collimated rays; at the lens file's finite object distance, rays from the object point — sends rays
+from the tracer's entrance grid (`psf.geometric.entrance_grid`) through the lens as Mitsuba sees it:
+float32 cap meshes (`render.scene.lens_parts`), absorbing rims and stop, and the
+`sellmeier_dielectric` BSDF in importance transport. Where the rays meet the image plane they are
+binned on the tracer's PSF grid (`psf.geometric.bin_hits`), so the result compares directly with
+the "geometric" method: the difference is the scene's geometry (mesh chords, float32) alone.
+
+Fresnel losses are off, as in the tracer's radiometry. Lengths in mm, PSF values in 1/µm².
+"""
+from __future__ import annotations
+
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+from ..optics import pupil as P
+from ..optics import tracer as T
+from ..psf.base import Computed, shared_origin_um
+from ..psf.geometric import bin_hits, entrance_grid
+from .loop import continue_ray
+from .scene import DEFAULT_RINGS, lens_parts, write_ply
+
+VARIANT = "llvm_ad_spectral"
+
+
+def lens_geometry(lens, rings: int = DEFAULT_RINGS):
+    """The lens alone as a Mitsuba scene: cap meshes with `sellmeier_dielectric` (no Fresnel losses)
+    and absorbing apertures, no sensor image and no texture."""
+    from .mitsuba import mitsuba
+
+    mi = mitsuba(VARIANT)
+    scene = {"type": "scene", "absorber": {"type": "diffuse", "reflectance": {"type": "rgb", "value": 0.0}}}
+    with tempfile.TemporaryDirectory(prefix="solas-lens-") as tmp:
+        for part in lens_parts(lens, rings):
+            path = Path(tmp) / f"{part.name}.ply"
+            write_ply(path, *part.mesh)
+            bsdf = {"type": "ref", "id": "absorber"} if part.int_glass is None else {
+                "type": "sellmeier_dielectric", "ext_glass": part.ext_glass, "int_glass": part.int_glass,
+                "fresnel": "off"}
+            scene[part.name] = {"type": "ply", "filename": str(path), "bsdf": bsdf}
+        return mi.load_dict(scene)  # the meshes are read here, before the folder goes
+
+
+def scene_hits(scene, lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, rays: int, chief: P.ChiefRays):
+    """Per field: image-plane offsets (µm) from the chief ray of the entrance-grid rays that cross the
+    scene's lens, and each one's power (fraction of the on-axis entrance-pupil power)."""
+    import drjit as dr
+    import mitsuba as mi
+
+    sampler = mi.load_dict({"type": "independent"})
+    ctx = mi.BSDFContext(mi.TransportMode.Importance)
+    tan = T.field_tangents(field_deg)
+    points = T.object_points(lens, field_deg)
+    hits = []
+    for sl, ex, ey, power in entrance_grid(lens, field_deg, wavelength_nm, rays, chief):
+        for j, f in enumerate(range(sl.start, sl.stop)):
+            n = rays * rays
+            obj = None if points is None else (T.F(np.full(n, points[f, 0])), T.F(np.full(n, points[f, 1])))
+            start = T.launch(lens, T.F(np.full(n, tan[f, 0])), T.F(np.full(n, tan[f, 1])), T.F(ex[j].ravel()),
+                             T.F(ey[j].ravel()), obj)
+            x, y, z, dx, dy, dz = T.to_numpy(start.x, start.y, start.z, start.dx, start.dy, start.dz)
+            ray = mi.Ray3f(mi.Point3f(x, y, z), mi.Vector3f(dx, dy, dz), 0.0, mi.Spectrum(float(wavelength_nm[f])))
+            sampler.seed(f, n)
+            weight, active = mi.Float(1.0), mi.Bool(True)
+            out_o, out_d, out_w = mi.Point3f(0.0), mi.Vector3f(0.0), mi.Float(0.0)
+            for _ in range(2 * len(lens.surfaces) + 2):
+                si = scene.ray_intersect(ray, active)
+                escaped = active & ~si.is_valid()
+                out_o, out_d = dr.select(escaped, ray.o, out_o), dr.select(escaped, ray.d, out_d)
+                out_w = dr.select(escaped, weight, out_w)
+                active &= si.is_valid()
+                bs, bw = si.bsdf(ray).sample(ctx, si, sampler.next_1d(active), sampler.next_2d(active), active)
+                weight *= bw[0]
+                active &= weight != 0.0
+                ray = continue_ray(si, ray, bs.wo)
+            ox, oy, oz, vx, vy, vz, w = (np.asarray(a, dtype=np.float64) for a in
+                                         (out_o.x, out_o.y, out_o.z, out_d.x, out_d.y, out_d.z, out_w))
+            keep = (vz > 0) & (w > 0)
+            s = (lens.image_z - oz[keep]) / vz[keep]
+            hits.append(((ox[keep] + s * vx[keep] - chief.image_xy[f, 0]) * 1e3,
+                         (oy[keep] + s * vy[keep] - chief.image_xy[f, 1]) * 1e3, power[j][keep] * w[keep]))
+    return hits
+
+
+def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int, rays: int,
+            shared_origin: bool = False) -> Computed:
+    """PSFs of field/wavelength pairs recorded through the Mitsuba scene (`psf.methods.compute`)."""
+    field_deg = np.atleast_2d(np.asarray(field_deg, dtype=np.float64))
+    wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(field_deg),)).copy()
+    chief = P.chief_rays(lens, field_deg, wavelength_nm)
+    hits = scene_hits(lens_geometry(lens), lens, field_deg, wavelength_nm, rays, chief)
+    data, transmission = bin_hits(hits, pitch_um, size, shared_origin_um(chief.image_xy) if shared_origin else None)
+    return Computed(data, chief, transmission, [[] for _ in range(len(field_deg))])

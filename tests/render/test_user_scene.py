@@ -1,0 +1,77 @@
+"""A user's scene file prepared for rendering (`render.user_scene`): a default integrator, and the
+perspective camera swapped for a lens_camera at the same pose with the matching field."""
+import xml.etree.ElementTree as ET
+
+import pytest
+
+from solas_mi.errors import SolasError
+from solas_mi.optics.camera import camera_for
+from solas_mi.optics.pupil import chief_rays
+from solas_mi.render.user_scene import scene_text
+
+SCENE = """<scene version="3.0.0">
+    <default name="w" value="1280"/>
+    <sensor type="perspective">
+        <float name="fov" value="4"/>
+        <transform name="to_world"><lookat origin="0, 1, -5" target="0, 1, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="$w"/><integer name="height" value="960"/></film>
+        <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
+    </sensor>
+    <shape type="sphere"/>
+</scene>"""
+
+
+@pytest.fixture
+def scene_file(tmp_path):
+    path = tmp_path / "scene.xml"
+    path.write_text(SCENE)
+    return path
+
+
+def test_a_default_path_integrator_is_added(scene_file):
+    root = ET.fromstring(scene_text(scene_file))
+    assert root.find("integrator").get("type") == "path"
+    assert root.find("sensor").get("type") == "perspective"
+
+
+def test_lens_camera_takes_the_pose_film_and_field(scene_file, doublet):
+    root = ET.fromstring(scene_text(scene_file, doublet, focus_distance=2.0))
+    sensor = root.find("sensor")
+    assert sensor.get("type") == "lens_camera"
+    values = {c.get("name"): c.get("value") for c in sensor if c.get("name")}
+    assert values["lens"] == doublet.source and values["focus_distance"] == "2.0"
+    # the ±2° field across 1280 px: the pitch of the convolution's default camera (`optics.camera`)
+    assert float(values["pitch_um"]) == pytest.approx(camera_for(doublet, (960, 1280), 2.0).pitch_um, rel=1e-9)
+    assert sensor.find("transform/lookat").get("origin") == "0, 1, -5"
+    assert sensor.find("film").get("type") == "hdrfilm" and sensor.find("sampler") is not None
+
+
+def test_explicit_pitch_and_fov_axis_y(tmp_path, doublet):
+    path = tmp_path / "y.xml"
+    path.write_text(SCENE.replace('<float name="fov" value="4"/>',
+                                  '<float name="fov" value="3"/><string name="fov_axis" value="y"/>'))
+    values = {c.get("name"): c.get("value") for c in ET.fromstring(scene_text(path, doublet)).find("sensor")}
+    # the real chief ray of the 1.5° field in y lands at the film's top edge, 480 px above the centre
+    height_mm = chief_rays(doublet, [[0.0, 1.5]], [doublet.primary_wavelength]).image_xy[0, 1]
+    assert float(values["pitch_um"]) == pytest.approx(height_mm * 1e3 / 480, rel=1e-9)
+    values = {c.get("name"): c.get("value") for c in
+              ET.fromstring(scene_text(path, doublet, pitch_um=3.0)).find("sensor")}
+    assert values["pitch_um"] == "3.0"
+
+
+@pytest.mark.parametrize("text, match", [
+    ("<scene version='3.0.0'><shape type='sphere'/></scene>", "has no <sensor>"),
+    ("<scene version='3.0.0'><sensor type='orthographic'/></scene>", "sensor is 'orthographic'"),
+    ("<scene version='3.0.0'><sensor type='perspective'/></scene>", "neither fov nor focal_length"),
+    ("<scene", "not valid XML"),
+])
+def test_scenes_that_cannot_take_a_lens(tmp_path, doublet, text, match):
+    path = tmp_path / "bad.xml"
+    path.write_text(text)
+    with pytest.raises(SolasError, match=match):
+        scene_text(path, doublet)
+
+
+def test_missing_scene_file(tmp_path):
+    with pytest.raises(SolasError, match="no such scene file"):
+        scene_text(tmp_path / "none.xml")
