@@ -17,7 +17,10 @@ def build_parser() -> argparse.ArgumentParser:
     from .render import commands as render
     from .validation import commands as validation
 
+    from . import __version__
+
     parser = argparse.ArgumentParser(prog="solas-mi", description=__doc__.split("\n")[0])
+    parser.add_argument("--version", action="version", version=f"solas-mi {__version__}")
     sub = parser.add_subparsers(dest="command", required=True)
     # in the order of the data: lens → PSFs → convolution; lens → scene → render; images → metrics; checks
     for area in (optics, psf, convolution, render, metrics, validation):

@@ -7,6 +7,7 @@ from __future__ import annotations
 import json
 import os
 import tempfile
+import warnings
 from contextlib import contextmanager
 from functools import lru_cache
 from pathlib import Path
@@ -125,6 +126,8 @@ def read_image(path: str | os.PathLike, *, linearize: bool = True) -> np.ndarray
     """An image as float64 H×W or H×W×C: EXR as stored (linear); PNG/JPEG/TIFF scaled to [0, 1]
     and sRGB-decoded unless `linearize` is False."""
     path = Path(path)
+    if path.is_dir():
+        raise SolasError(f"{path} is a folder, not an image file")
     if not path.is_file():
         raise SolasError(f"no such image file: {path}")
     if path.suffix.lower() == ".exr":
@@ -139,9 +142,12 @@ def read_image(path: str | os.PathLike, *, linearize: bool = True) -> np.ndarray
     import imageio.v3 as iio
 
     try:
-        raw = iio.imread(path)
+        with warnings.catch_warnings():  # imageio's probing of legacy plugins (DICOM …) on unknown content
+            warnings.simplefilter("ignore", DeprecationWarning)
+            raw = iio.imread(path)
     except Exception as exc:  # imageio raises many types for unreadable files
-        raise SolasError(f"cannot read image {path}: {exc}") from exc
+        reason = str(exc).split("\n")[0].rstrip(".")  # its first line; the rest suggests plugins to install
+        raise SolasError(f"cannot read image {path} as PNG, JPEG, TIFF or OpenEXR ({reason})") from None
     if raw.dtype == np.uint8:
         scaled = raw.astype(np.float64) / 255.0
     elif raw.dtype == np.uint16:

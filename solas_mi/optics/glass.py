@@ -44,7 +44,7 @@ class Glass:
         if np.any(~np.isfinite(wl)) or np.any(wl < lo) or np.any(wl > hi):
             bad = wl[(wl < lo) | (wl > hi) | ~np.isfinite(wl)] if wl.ndim else wl
             raise SolasError(
-                f"wavelength {np.atleast_1d(bad)[0]:g} nm is outside glass {self.name}'s "
+                f"wavelength {float(np.atleast_1d(bad)[0]):.10g} nm is outside glass {self.name}'s "
                 f"valid range {lo:g}-{hi:g} nm"
             )
         n = self.index_formula(wl / 1000.0, np.sqrt)

@@ -20,6 +20,20 @@ from ..resources import resource_dir
 from . import glass as glass_mod
 
 LENS_DIR = "lenses"
+# What a lens file may hold (anything else is a mistake worth naming, e.g. a surface type we do not model)
+KEYS = {
+    "lens": ("name", "description", "wavelengths_nm", "field_deg", "surface", "object", "image"),
+    "surface": ("label", "radius", "thickness", "diameter", "material", "stop"),
+    "object": ("distance", "material"),
+    "image": ("diameter",),
+}
+
+
+def _check_keys(table: dict, kind: str, where: str) -> None:
+    unknown = sorted(set(table) - set(KEYS[kind]))
+    if unknown:
+        raise SolasError(f"{where}: unknown {'key' if len(unknown) == 1 else 'keys'} {', '.join(unknown)} "
+                         f"in the {kind} table; allowed: {', '.join(KEYS[kind])}")
 
 
 def _number(table: dict, key: str, where: str, unit: str, default: float | None = None) -> float:
@@ -49,7 +63,7 @@ def check_field(field_deg) -> tuple[float, float]:
     except (TypeError, ValueError):
         raise SolasError(f"field {field_deg!r} must be two angles (x, y) in degrees") from None
     if not (math.isfinite(fx) and math.isfinite(fy)) or abs(fx) >= 89 or abs(fy) >= 89:
-        raise SolasError(f"field ({fx:g}, {fy:g}) deg must be finite and within ±89 deg")
+        raise SolasError(f"field ({fx:g}, {fy:g}) deg: each angle must be finite and below 89 deg in magnitude")
     return fx, fy
 
 
@@ -121,6 +135,7 @@ class Lens:
     def from_dict(cls, spec: dict[str, Any], source: str = "") -> "Lens":
         """Build and validate a lens from the lens-file dictionary."""
         where = source or "lens"
+        _check_keys(spec, "lens", where)
         rows = spec.get("surface")
         if not isinstance(rows, list) or not rows or not all(isinstance(r, dict) for r in rows):
             raise SolasError(f"{where}: no [[surface]] entries (each surface is a table of radius, thickness, ...)")
@@ -128,14 +143,20 @@ class Lens:
         for i, row in enumerate(rows, start=1):
             label = str(row.get("label", f"surface {i}"))
             ident = f"{where}: surface {i} ({label})"
+            _check_keys(row, "surface", ident)
+            stop = row.get("stop", False)
+            if not isinstance(stop, bool):
+                raise SolasError(f"{ident}: stop = {stop!r} must be true or false (a TOML boolean, unquoted)")
             radius, thickness, diameter = (_number(row, key, ident, "mm") for key in ("radius", "thickness", "diameter"))
             material = row.get("material", "AIR")
             try:
                 g = glass_mod.resolve(material)
             except SolasError as exc:
                 raise SolasError(f"{ident}: {exc}") from None
-            surfaces.append(Surface(label, radius, thickness, diameter, str(material), g, bool(row.get("stop", False))))
+            surfaces.append(Surface(label, radius, thickness, diameter, str(material), g, stop))
         obj, image = _table(spec, "object", where), _table(spec, "image", where)
+        _check_keys(obj, "object", f"{where}: object")
+        _check_keys(image, "image", f"{where}: image")
         distance = obj.get("distance", "infinity")
         if isinstance(distance, str) and distance.strip().lower() in ("inf", "infinity"):
             distance = math.inf

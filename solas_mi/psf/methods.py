@@ -89,6 +89,8 @@ def psf(lens, field_deg, wavelength_nm, *, weights=None, pitch_um: float = DEFAU
     sampling = check_method(method, pupil_samples, rays)
     check_normalization(normalization)
     wavelengths = tuple(float(w) for w in np.atleast_1d(wavelength_nm))
+    if not wavelengths:
+        raise SolasError("at least one wavelength (nm) is needed")
     for w in wavelengths:
         lens.check_wavelength(w)
     w8 = np.ones(len(wavelengths)) if weights is None else np.asarray(weights, dtype=np.float64)

@@ -83,3 +83,22 @@ def test_malformed_entries(doublet_spec, key, value, match):
 def test_malformed_surface_number(doublet_spec):
     doublet_spec["surface"][0]["radius"] = "92.8"
     _bad(doublet_spec, r"surface 1 \(Surface 1\): radius = '92.8' must be a finite number \(mm\)")
+
+
+@pytest.mark.parametrize("where, key, value, match", [
+    ("surface", "conic", -1.0, r"surface 1 \(Surface 1\): unknown key conic in the surface table; allowed: label, "
+                               r"radius, thickness, diameter, material, stop"),
+    ("lens", "focal", 100.0, r"unknown key focal in the lens table; allowed: name, description"),
+    ("object", "angle", 3.0, r"object: unknown key angle in the object table; allowed: distance, material"),
+    ("image", "width", 3.0, r"image: unknown key width in the image table; allowed: diameter"),
+])
+def test_unknown_keys_are_named(doublet_spec, where, key, value, match):
+    table = {"lens": doublet_spec, "surface": doublet_spec["surface"][0]}.get(where) or doublet_spec.setdefault(where, {})
+    table[key] = value
+    _bad(doublet_spec, match)
+
+
+@pytest.mark.parametrize("value", ["false", 1, "yes"])
+def test_stop_must_be_a_boolean(doublet_spec, value):
+    doublet_spec["surface"][0]["stop"] = value
+    _bad(doublet_spec, rf"surface 1 \(Surface 1\): stop = {value!r} must be true or false")
