@@ -1,23 +1,25 @@
 """The `solas-mi` command line. Each stage owns its sub-commands (`<stage>/commands.py`, a
-`register(subparsers)` each); this module only composes them and turns user errors into one line
-on stderr and exit status 2."""
+`register(subparsers)` each); this module only composes them, turns user errors into one line on
+stderr and exit status 2, and makes SIGTERM an interruption like Ctrl-C, so that temporary files
+and folders are removed and no output is left half-written (exit status 130 / 143)."""
 from __future__ import annotations
 
 import argparse
+import signal
 import sys
+import threading
 
 from .errors import SolasError
 
 
 def build_parser() -> argparse.ArgumentParser:
+    from . import __version__
     from .convolution import commands as convolution
     from .metrics import commands as metrics
     from .optics import commands as optics
     from .psf import commands as psf
     from .render import commands as render
     from .validation import commands as validation
-
-    from . import __version__
 
     parser = argparse.ArgumentParser(prog="solas-mi", description=__doc__.split("\n")[0])
     parser.add_argument("--version", action="version", version=f"solas-mi {__version__}")
@@ -28,14 +30,31 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
+class Terminated(KeyboardInterrupt):
+    """SIGTERM, raised where the program is so that every `finally` and context manager runs."""
+
+
+def _terminate(signum, frame) -> None:
+    raise Terminated()
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    main_thread = threading.current_thread() is threading.main_thread()
+    previous = signal.signal(signal.SIGTERM, _terminate) if main_thread else None
     try:
         return int(args.run(args) or 0)
     except SolasError as exc:
         print(f"solas-mi {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except KeyboardInterrupt as exc:
+        how = "terminated" if isinstance(exc, Terminated) else "interrupted"
+        print(f"\nsolas-mi {args.command}: {how}; no output was left half-written", file=sys.stderr)
+        return 143 if isinstance(exc, Terminated) else 130
+    finally:
+        if main_thread:
+            signal.signal(signal.SIGTERM, previous)
 
 
 if __name__ == "__main__":

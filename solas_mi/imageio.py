@@ -22,11 +22,16 @@ META_KEY = "solas_mi"
 
 @contextmanager
 def atomic_path(path: str | os.PathLike) -> Iterator[str]:
-    """Yield a temporary path beside `path`; rename it onto `path` only if the block succeeds."""
+    """Yield a temporary path beside `path`; rename it onto `path` only if the block succeeds. The
+    temporary file is removed on any error or interruption; a write that fails (a full disk, a folder
+    that cannot be written) is a SolasError naming `path` and the reason."""
     path = Path(path)
-    if path.parent and not path.parent.exists():
-        path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
+    try:
+        if path.parent and not path.parent.exists():
+            path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=path.suffix, dir=path.parent)
+    except OSError as exc:
+        raise SolasError(f"cannot write {path}: {exc.strerror or exc}") from None
     os.close(fd)
     try:
         yield tmp
@@ -34,6 +39,13 @@ def atomic_path(path: str | os.PathLike) -> Iterator[str]:
         os.umask(umask)
         os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes the file private; give it the usual mode
         os.replace(tmp, path)
+    except OSError as exc:
+        raise SolasError(f"cannot write {path}: {exc.strerror or exc}") from None
+    except RuntimeError as exc:  # OpenEXR reports failed writes (e.g. no space left) this way
+        if "write" not in str(exc).lower():
+            raise
+        reason = str(exc).rsplit(". ", 1)[-1].rstrip(".") if ". " in str(exc) else str(exc)
+        raise SolasError(f"cannot write {path}: {reason}") from None
     finally:
         if os.path.exists(tmp):
             os.unlink(tmp)
@@ -96,17 +108,14 @@ def read_exr(path: str | os.PathLike) -> tuple[dict[str, np.ndarray], dict]:
 
     if not Path(path).is_file():
         raise SolasError(f"no such EXR file: {path}")
-    with OpenEXR.File(str(path)) as f:
-        header = f.header()
-        # read the metadata before the pixels: loading channels rebuilds the header dictionary
-        meta = json.loads(header[META_KEY]) if META_KEY in header else {}
-        channels = {}
-        for name, c in f.channels().items():
-            pixels = np.array(c.pixels)
-            if pixels.ndim == 3 and len(name) == pixels.shape[-1]:  # OpenEXR groups R, G, B as "RGB"
-                channels.update({letter: pixels[..., k] for k, letter in enumerate(name)})
-            else:
-                channels[name] = pixels
+    try:
+        with OpenEXR.File(str(path), separate_channels=True) as f:
+            header = f.header()
+            # read the metadata before the pixels: loading channels rebuilds the header dictionary
+            meta = json.loads(header[META_KEY]) if META_KEY in header else {}
+            channels = {name: np.array(c.pixels) for name, c in f.channels().items()}
+    except (RuntimeError, OSError, ValueError) as exc:  # not an EXR, truncated, bad metadata
+        raise SolasError(f"cannot read {path} as OpenEXR: {str(exc).splitlines()[0] if str(exc) else exc}") from None
     return channels, meta
 
 
@@ -122,9 +131,96 @@ def write_png(path: str | os.PathLike, image: np.ndarray, *, encoded: bool = Fal
         iio.imwrite(tmp, data, extension=".png", compress_level=1)  # fast zlib: viewing copies only
 
 
+# The channel names read as an RGB image, in order; or one layer's LAYER.R, LAYER.G, LAYER.B.
+RGB_SPELLINGS = (("R", "G", "B"), ("r", "g", "b"))
+GREY_SPELLINGS = ("Y", "y", "L", "l")
+
+
+def exr_image_channels(names: list[str], path: str | os.PathLike) -> list[str]:
+    """The channels of an EXR file that make an image, by name: R, G, B (or r, g, b, or one layer's
+    LAYER.R/G/B) for colour; Y (or L, or the only channel) for grey; A is ignored. SolasError naming
+    the channels otherwise."""
+    for rgb in RGB_SPELLINGS:
+        if all(c in names for c in rgb):
+            return list(rgb)
+    layers = sorted({n.rsplit(".", 1)[0] for n in names
+                     if "." in n and all(f"{n.rsplit('.', 1)[0]}.{c}" in names for c in "RGB")})
+    if len(layers) == 1:
+        return [f"{layers[0]}.{c}" for c in "RGB"]
+    colour = [n for n in names if n not in ("A", "a")]
+    grey = [n for n in colour if n in GREY_SPELLINGS]
+    if len(grey) == 1 or len(colour) == 1:
+        return grey[:1] or colour
+    why = f"several layers have R, G, B ({', '.join(layers)})" if layers else "no R, G, B or single grey channel"
+    raise SolasError(f"{path}: channels {', '.join(names)}: {why}; an image needs R, G, B (or r, g, b, or one "
+                     f"layer's LAYER.R/G/B) or one grey channel (Y)")
+
+
+def check_finite(image: np.ndarray, what: str) -> np.ndarray:
+    """`image` unchanged if every value is finite, else a SolasError with the count and the first one."""
+    bad = ~np.isfinite(image)
+    if bad.any():
+        first = np.argwhere(bad)[0]
+        where = f"row {first[0]}, column {first[1]}" + (f", channel {first[2]}" if len(first) > 2 else "")
+        raise SolasError(f"{what}: {int(bad.sum())} values are NaN or infinite (the first at {where}); "
+                         "images must hold finite values")
+    return image
+
+
+def _png_bit_depth(path: Path) -> int:
+    with open(path, "rb") as f:
+        head = f.read(25)
+    return head[24] if head[:8] == b"\x89PNG\r\n\x1a\n" and len(head) == 25 else 8
+
+
+def _read_png16(path: Path) -> np.ndarray:
+    """A 16-bit PNG at full depth (Pillow, behind imageio, reduces 16-bit RGB to 8 bits)."""
+    import png
+
+    width, height, rows, info = png.Reader(filename=str(path)).asDirect()
+    return np.vstack([np.asarray(r, dtype=np.uint16) for r in rows]).reshape(height, width, info["planes"]).squeeze()
+
+
+@contextmanager
+def _plain_imageio() -> Iterator[None]:
+    """imageio without its noise: no warnings from probing legacy plugins (DICOM …) on unknown content,
+    and no Pillow "decompression bomb" limit — the commands check an image's memory themselves
+    (`budget`) before reading it."""
+    from PIL import Image
+
+    limit, Image.MAX_IMAGE_PIXELS = Image.MAX_IMAGE_PIXELS, None
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", DeprecationWarning)
+            yield
+    finally:
+        Image.MAX_IMAGE_PIXELS = limit
+
+
+def image_size(path: str | os.PathLike) -> tuple[int, int, int]:
+    """(rows, columns, channels) of an image file, read from its header only (0, 0, 0 where the
+    header cannot be read: `read_image` will then say why)."""
+    path = Path(path)
+    try:
+        if path.suffix.lower() == ".exr":
+            import OpenEXR
+
+            with OpenEXR.File(str(path), header_only=True) as f:
+                lo, hi = f.header()["dataWindow"]
+                return int(hi[1] - lo[1] + 1), int(hi[0] - lo[0] + 1), len(f.header()["channels"])
+        import imageio.v3 as iio
+
+        with _plain_imageio():
+            shape = iio.improps(path).shape
+        return int(shape[0]), int(shape[1]), int(shape[2]) if len(shape) > 2 else 1
+    except Exception:  # unreadable: the reader names the problem
+        return 0, 0, 0
+
+
 def read_image(path: str | os.PathLike, *, linearize: bool = True) -> np.ndarray:
-    """An image as float64 H×W or H×W×C: EXR as stored (linear); PNG/JPEG/TIFF scaled to [0, 1]
-    and sRGB-decoded unless `linearize` is False."""
+    """An image as float64 H×W or H×W×3: EXR as stored (linear; channels by name, `exr_image_channels`);
+    PNG (8 or 16 bits), JPEG, TIFF scaled to [0, 1] and sRGB-decoded unless `linearize` is False; an
+    alpha channel is dropped. SolasError for NaN or infinite values."""
     path = Path(path)
     if path.is_dir():
         raise SolasError(f"{path} is a folder, not an image file")
@@ -132,20 +228,18 @@ def read_image(path: str | os.PathLike, *, linearize: bool = True) -> np.ndarray
         raise SolasError(f"no such image file: {path}")
     if path.suffix.lower() == ".exr":
         channels, _ = read_exr(path)
-        names = list(channels)
-        rgb = [n for n in ("R", "G", "B") if n in channels]
-        if len(rgb) == 3:
-            return np.stack([channels[n] for n in rgb], axis=-1).astype(np.float64)
-        if len(names) == 1:
-            return channels[names[0]].astype(np.float64)
-        return np.stack([channels[n] for n in names], axis=-1).astype(np.float64)
+        names = exr_image_channels(list(channels), path)
+        image = channels[names[0]] if len(names) == 1 else np.stack([channels[n] for n in names], axis=-1)
+        return check_finite(image.astype(np.float64), str(path))
     import imageio.v3 as iio
 
     try:
-        with warnings.catch_warnings():  # imageio's probing of legacy plugins (DICOM …) on unknown content
-            warnings.simplefilter("ignore", DeprecationWarning)
-            raw = iio.imread(path)
-    except Exception as exc:  # imageio raises many types for unreadable files
+        if path.suffix.lower() == ".png" and _png_bit_depth(path) == 16:
+            raw = _read_png16(path)
+        else:
+            with _plain_imageio():
+                raw = iio.imread(path)
+    except Exception as exc:  # imageio and pypng raise many types for unreadable files
         reason = str(exc).split("\n")[0].rstrip(".")  # its first line; the rest suggests plugins to install
         raise SolasError(f"cannot read image {path} as PNG, JPEG, TIFF or OpenEXR ({reason})") from None
     if raw.dtype == np.uint8:
@@ -153,7 +247,7 @@ def read_image(path: str | os.PathLike, *, linearize: bool = True) -> np.ndarray
     elif raw.dtype == np.uint16:
         scaled = raw.astype(np.float64) / 65535.0
     else:
-        scaled = raw.astype(np.float64)
-    if scaled.ndim == 3 and scaled.shape[-1] == 4:
-        scaled = scaled[..., :3]
+        scaled = check_finite(raw.astype(np.float64), str(path))
+    if scaled.ndim == 3 and scaled.shape[-1] in (2, 4):
+        scaled = scaled[..., :-1] if scaled.shape[-1] == 4 else scaled[..., 0]
     return srgb_decode(scaled) if linearize else scaled

@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from ..errors import SolasError
+from ..imageio import check_finite
 from . import interp, patch
 from .kernels import channel_wavelengths, check_boundary, kernel_radius, layout, single_threaded_blas
 
@@ -52,7 +53,7 @@ def degrade(image: np.ndarray, grid: "PSFGrid | str", method: str = DEFAULT_METH
     image = np.asarray(image)
     if image.ndim not in (2, 3) or image.size == 0 or not np.issubdtype(image.dtype, np.number):
         raise SolasError(f"image of shape {image.shape} must be a non-empty H×W or H×W×C array of numbers")
-    planes = image[..., None] if image.ndim == 2 else image
+    planes = check_finite(image[..., None] if image.ndim == 2 else image, "image")  # a NaN would spread
     height, width, nchan = planes.shape
     wavelengths = channel_wavelengths(grid, nchan)
     lay = layout(grid, width, height)

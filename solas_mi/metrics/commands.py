@@ -136,11 +136,13 @@ def run_ss_sfr(args: argparse.Namespace) -> int:
 def run_sfr_target(args: argparse.Namespace) -> int:
     """Write a synthetic slanted-edge (or slanted-square) target with a known MTF."""
     from ..imageio import write_exr, write_png
+    from ..outputs import check_target
     from .targets import Square, analytic_mtf50, slanted_edge, slanted_squares
 
     out = Path(args.output)
     if out.suffix.lower() not in (".png", ".exr"):
         raise SolasError(f"output {args.output!r} must end in .png (8-bit sRGB) or .exr (linear float)")
+    check_target(out)
     if not args.sigma_px >= 0:
         raise SolasError(f"--sigma-px {args.sigma_px} must be ≥ 0")
     if not (0 <= args.low <= 1 and 0 <= args.high <= 1):

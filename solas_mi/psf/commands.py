@@ -3,11 +3,11 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 from typing import Any
 
 from ..errors import SolasError
 from ..options import add_lens_argument, floats, parse_wxh
+from ..outputs import data_and_preview, written_together
 from .base import DEFAULT_GEOMETRIC_RAYS, DEFAULT_PITCH_UM, DEFAULT_PUPIL_SAMPLES, DEFAULT_SIZE, NORMALIZATIONS
 from .methods import DEFAULT_METHOD, METHODS
 
@@ -25,25 +25,33 @@ def run_psf(args) -> int:
     from ..optics.lens import Lens
     from .methods import psf
 
+    data_file, png = data_and_preview(args.output, args.png)
     lens = Lens.load(args.lens)
     wavelengths = floats(args.wavelength_nm, "--wavelength-nm")
     weights = floats(args.weights, "--weights") if args.weights else None
     p = psf(lens, _field(args.field_deg), wavelengths, weights=weights, pitch_um=args.pitch_um, size=args.size,
             method=args.method, normalization=args.normalize, pupil_samples=args.pupil_samples, rays=args.rays)
-    p.write(args.output)
-    png = args.png or str(Path(args.output).with_suffix(".png"))
-    p.write_png(png)
-    print(f"wrote {args.output} and {png}")
+    with written_together(data_file, png) as (tmp_data, tmp_png):
+        p.write(tmp_data)
+        p.write_png(tmp_png)
+    print(f"wrote {data_file} and {png}")
     return 0
 
 
 def run_psf_grid(args) -> int:
+    from ..budget import check_memory
     from ..optics.lens import Lens
     from .grid import psf_grid
 
+    data_file, png = data_and_preview(args.output, args.png)
     lens = Lens.load(args.lens)
     grid = parse_wxh(args.grid, "--grid")
     wavelengths = floats(args.wavelengths, "--wavelengths") if args.wavelengths else None
+    count = (len(wavelengths) if wavelengths else len(lens.wavelengths_nm)) * grid[0] * grid[1]
+    # the float32 PSFs, their mosaics and the PNG when written, and a batch of complex fields
+    need = 3 * 4 * count * args.size ** 2 + 64 * 64 * (args.size + 1) ** 2
+    check_memory(f"psf-grid of {count} PSFs of {args.size}x{args.size}", need, args.force,
+                 "fewer nodes or a smaller --size")
     rng = floats(args.field_range_deg, "--field-range-deg") if args.field_range_deg else None
     if rng is not None and len(rng) not in (1, 2):
         raise SolasError(f"--field-range-deg {args.field_range_deg!r} must be one value or X,Y")
@@ -57,10 +65,10 @@ def run_psf_grid(args) -> int:
                  pupil_samples=args.pupil_samples, rays=args.rays, field_sampling=args.field_sampling,
                  progress=progress)
     print(file=sys.stderr)
-    g.write(args.output)
-    png = args.png or str(Path(args.output).with_suffix(".png"))
-    g.write_png(png)
-    print(f"wrote {args.output} and {png} ({g.meta['seconds']:.1f} s)")
+    with written_together(data_file, png) as (tmp_data, tmp_png):
+        g.write(tmp_data)
+        g.write_png(tmp_png)
+    print(f"wrote {data_file} and {png} ({g.meta['seconds']:.1f} s)")
     return 0
 
 
@@ -93,5 +101,6 @@ def register(sub: Any) -> None:
     grid.add_argument("--wavelengths", help="nm, comma-separated (default: the lens file's)")
     grid.add_argument("--field-range-deg", help="half range X[,Y] in degrees (default: the lens file's field)")
     grid.add_argument("--field-sampling", choices=FIELD_SAMPLINGS, default=FIELD_SAMPLINGS[0])
+    grid.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
     _add_psf_options(grid)
     grid.set_defaults(run=run_psf_grid)

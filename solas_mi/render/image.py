@@ -7,8 +7,9 @@ from pathlib import Path
 
 import numpy as np
 
-from ..imageio import image_channels, write_exr
+from ..imageio import image_channels, read_image, write_exr
 from ..optics.camera import camera_for
+from . import response as responses
 from .loop import Render, render
 from .mitsuba import load_scene
 from .scene import DEFAULT_RINGS, write_scene
@@ -24,6 +25,10 @@ def render_image(lens, image: str | np.ndarray, sensor: tuple[int, int] = (960, 
     `pitch_um` is given (`solas_mi.optics.camera`). `response`, `boundary` and `fresnel` are the
     plugins' parameters; `rings` per cap mesh (default `scene.DEFAULT_RINGS`)."""
     camera = camera_for(lens, sensor, fov_deg, pitch_um)
+    # the user's mistakes, named here rather than inside the scene's plugins
+    responses.check_lens(responses.parse(response, lens.wavelengths_nm), lens)
+    if not isinstance(image, np.ndarray):
+        read_image(image)
     with tempfile.TemporaryDirectory(prefix="solas-scene-") as tmp:
         if isinstance(image, np.ndarray):
             path = str(Path(tmp) / "object.exr")

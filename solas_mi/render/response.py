@@ -111,6 +111,9 @@ def table(path: str) -> Response:
     if data.shape[1] != 4 or len(data) < 2:
         raise SolasError(f"camera response table {path!r} must have rows 'wavelength_nm, r, g, b' "
                          f"(got {data.shape[1]} columns, {len(data)} rows)")
+    if not np.isfinite(data).all():
+        row = int(np.argwhere(~np.isfinite(data))[0][0]) + 1
+        raise SolasError(f"camera response table {path!r}: data row {row} holds a value that is not a finite number")
     if np.any(data[:, 1:] < 0):
         raise SolasError(f"camera response table {path!r}: sensitivities must be >= 0")
     return _balanced(f"table:{Path(path).name}", data[:, 0], data[:, 1:])

@@ -13,7 +13,7 @@ import time
 
 import numpy as np
 
-from ..errors import SolasError
+from ..errors import SolasError, plugin_error
 from .loop import Render
 
 SAMPLES_PER_PASS = 1 << 22  # bounds the memory of one wavefront
@@ -34,7 +34,10 @@ def render_scene(scene, spp: int, seed: int = 0, progress=None) -> Render:
     start = time.perf_counter()
     for k in range(passes):
         n = min(per_pass, spp - done)
-        mi.render(scene, seed=seed * 1_000_003 + k, spp=n)
+        try:
+            mi.render(scene, seed=seed * 1_000_003 + k, spp=n)
+        except RuntimeError as exc:  # a plugin's refusal (e.g. an integrator that cannot see through a lens)
+            raise plugin_error(exc, "render") from None
         bitmap = film.bitmap()
         names = [bitmap.struct_()[i].name for i in range(bitmap.channel_count())]
         image = np.array(bitmap, dtype=np.float64).reshape(height, width, len(names))

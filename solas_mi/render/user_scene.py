@@ -15,7 +15,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..errors import SolasError
+from ..errors import SolasError, plugin_error
 
 SWAPPABLE = ("perspective", "thinlens")
 FILM_35MM_WIDTH_MM = 36.0  # Mitsuba's `focal_length` is a 35 mm-equivalent
@@ -135,6 +135,6 @@ def load(xml_path: str | Path, variant: str | None = None, lens=None, params: di
     try:
         return mi.load_string(text, **{k: str(v) for k, v in (params or {}).items()})
     except RuntimeError as exc:
-        raise SolasError(f"cannot load scene {xml_path}: {exc}") from None
+        raise plugin_error(exc, f"cannot load scene {xml_path}") from None
     finally:
         del resolver[0]

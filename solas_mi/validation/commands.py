@@ -9,6 +9,7 @@ from typing import Any
 from ..convolution.kernels import BOUNDARIES
 from ..optics.lens import Lens
 from ..options import add_image_input_options, parse_wxh, positive_ints
+from ..outputs import output_folder
 from ..psf.methods import METHODS as PSF_METHODS
 from ..render.mitsuba import VARIANTS
 from .crossval import DEFAULT_CASES, crossval
@@ -28,6 +29,7 @@ def _grids_text(grids) -> str:
 
 
 def _lens_and_image(args: argparse.Namespace):
+    output_folder(args.output)
     lens = Lens.load(args.lens)
     sensor = parse_wxh(args.sensor, "--sensor") if args.sensor else None
     return lens, load_input(args.image, sensor, args.scale, args.linear)

@@ -1,0 +1,90 @@
+"""Where the commands write, checked before any work is done, and how: a data file (OpenEXR) and its
+preview (PNG) replaced together or not at all.
+
+The guarantees: no output replaces an input of the same command; an output is a new name or an
+existing regular file (never a folder, a device or a symbolic link, which would be replaced by a
+plain file); the data file is always OpenEXR and its preview never collides with it or with an
+input; the output's folder is writable before the computation starts. Writes go to temporary files
+beside the targets, renamed into place at the end (`imageio.atomic_path`), and removed on any error
+or interruption.
+"""
+from __future__ import annotations
+
+import os
+from contextlib import ExitStack, contextmanager
+from pathlib import Path
+from typing import Iterable, Iterator
+
+from .errors import SolasError
+
+
+def _same(a: Path, b: Path) -> bool:
+    try:
+        return a.resolve() == b.resolve() or (a.exists() and b.exists() and os.path.samefile(a, b))
+    except OSError:
+        return False
+
+
+def _writable_folder(path: Path) -> None:
+    folder = path.parent if str(path.parent) else Path(".")
+    existing = next(p for p in (folder, *folder.parents) if p.exists())
+    if not existing.is_dir():
+        raise SolasError(f"cannot write {path}: {existing} is not a folder")
+    if not os.access(existing, os.W_OK | os.X_OK):
+        raise SolasError(f"cannot write {path}: folder {existing} is not writable")
+
+
+def check_target(path: str | os.PathLike, inputs: Iterable[str | os.PathLike] = (), what: str = "output") -> Path:
+    """`path` as a Path after checking it may be written: not an input, a new name or a regular file,
+    in a writable folder."""
+    p = Path(path)
+    if p.is_symlink() or (p.exists() and not p.is_file()):
+        kind = "a symbolic link" if p.is_symlink() else "a folder" if p.is_dir() else "not a regular file"
+        raise SolasError(f"{what} {str(path)!r} is {kind}; give a new file name (or a regular file to replace)")
+    for source in inputs:
+        if source is not None and _same(p, Path(source)):
+            raise SolasError(f"{what} {str(path)!r} is an input of this command; give the output another name")
+    _writable_folder(p)
+    return p
+
+
+def data_and_preview(output: str | os.PathLike, preview: str | os.PathLike | None = None,
+                     inputs: Iterable[str | os.PathLike] = ()) -> tuple[Path, Path]:
+    """The checked OpenEXR data path `output` and its PNG preview (default: beside it)."""
+    inputs = [i for i in inputs if i is not None]
+    data = Path(output)
+    if data.suffix.lower() != ".exr":
+        hint = f"; write {data.with_suffix('.exr')} (a PNG preview is written beside it)" if data.suffix else ""
+        raise SolasError(f"output {str(output)!r} must end in .exr: data is linear OpenEXR{hint}")
+    png = Path(preview) if preview is not None else data.with_suffix(".png")
+    if png.suffix.lower() != ".png":
+        raise SolasError(f"preview {str(png)!r} must end in .png")
+    check_target(data, inputs, "output")
+    check_target(png, [*inputs, data], "preview")
+    return data, png
+
+
+def output_folder(path: str | os.PathLike) -> Path:
+    """A checked output folder: an existing folder or a new name, in a writable place."""
+    p = Path(path)
+    if p.exists() and not p.is_dir():
+        raise SolasError(f"output folder {str(path)!r} exists and is not a folder")
+    _writable_folder(p / "x")
+    return p
+
+
+@contextmanager
+def written_together(*paths: Path) -> Iterator[tuple[str, ...]]:
+    """Temporary paths for `paths`, renamed onto them together when the block succeeds; on an error
+    or an interruption none of the targets changes and the temporary files are removed."""
+    from .imageio import atomic_path
+
+    with ExitStack() as stack:
+        tmps = tuple(stack.enter_context(atomic_path(p)) for p in paths)
+        try:
+            yield tmps
+        except SolasError as exc:  # a failed write names the temporary file: name the target instead
+            message = str(exc)
+            for tmp, target in zip(tmps, paths):
+                message = message.replace(tmp, str(target))
+            raise SolasError(message) from None
