@@ -7,6 +7,7 @@ pixel grid is the sensor (`kernels.grid_camera`). PNG/JPEG input is sRGB-decoded
 from __future__ import annotations
 
 import argparse
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -14,6 +15,7 @@ from .methods import DEFAULT_METHOD, METHODS, check_method, degrade
 
 # input float64 + its sRGB decoding + padded planes and output (measured: 10 GB for 14000×12000×3)
 BYTES_PER_VALUE = 24
+LARGE_IMAGE_VALUES = 4096 * 3072 * 3  # beyond 4K (≈ 1.7 s) the command reports each channel
 
 
 def run_degrade(args: argparse.Namespace) -> int:
@@ -29,7 +31,13 @@ def run_degrade(args: argparse.Namespace) -> int:
     grid = PSFGrid.read(args.psf_grid)
     image = read_image(args.image, linearize=not args.linear)
     meta: dict[str, Any] = {}
-    out = degrade(image, grid, args.method, args.boundary, meta=meta)
+    large = image.size > LARGE_IMAGE_VALUES
+
+    def progress(done: int, total: int) -> None:
+        if large:  # a large image takes long enough to want a sign of life
+            print(f"\rdegrade: channel {done}/{total}", end="\n" if done == total else "", file=sys.stderr, flush=True)
+
+    out = degrade(image, grid, args.method, args.boundary, meta=meta, progress=progress)
     meta.update({"input": str(args.image), "input_encoding": "linear" if args.linear or
                  Path(args.image).suffix.lower() == ".exr" else "sRGB, decoded to linear",
                  "psf_grid": str(args.psf_grid),

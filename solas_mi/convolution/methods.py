@@ -32,7 +32,7 @@ def check_method(method: str) -> str:
 
 
 def degrade(image: np.ndarray, grid: "PSFGrid | str", method: str = DEFAULT_METHOD, boundary: str = "edge", *,
-            dtype=np.float32, meta: dict | None = None) -> np.ndarray:
+            dtype=np.float32, meta: dict | None = None, progress=None) -> np.ndarray:
     """The linear image (H, W) or (H, W, C) seen through the lens of `grid` (a PSFGrid or its EXR path).
 
     method "interp" (default): PSFs interpolated bilinearly between nodes, seamless; "patch": the
@@ -40,7 +40,8 @@ def degrade(image: np.ndarray, grid: "PSFGrid | str", method: str = DEFAULT_METH
     border, "zero", "reflect" mirrors); it is never wrapped around. Channels take the grid's
     wavelengths longest first (R, G, B ← 656, 531, 486 nm); a one-wavelength grid serves all.
     Returns an array of the image's shape in `dtype` (float32 or float64); `meta`, if given, is
-    filled with what was done (camera, channels, blocks or nodes)."""
+    filled with what was done (camera, channels, blocks or nodes); `progress(done, total)` is called
+    after each channel."""
     from ..psf.grid import PSFGrid
 
     check_method(method)
@@ -63,6 +64,8 @@ def degrade(image: np.ndarray, grid: "PSFGrid | str", method: str = DEFAULT_METH
     with single_threaded_blas():
         for c, k in enumerate(wavelengths):
             out[..., c] = module.convolve_channel(planes[..., c], grid, lay, k, boundary, dtype)
+            if progress is not None:
+                progress(c + 1, nchan)
     if meta is not None:
         radius = kernel_radius(grid.size, lay.q)
         meta.update({
