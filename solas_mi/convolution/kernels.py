@@ -29,14 +29,11 @@ repeats).
 """
 from __future__ import annotations
 
-import ctypes
 import math
 import os
 from collections import deque
 from concurrent.futures import ThreadPoolExecutor
-from contextlib import contextmanager
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 
@@ -252,42 +249,3 @@ def parallel_map(fn, items: list):
                 yield pending.popleft().result()
         while pending:
             yield pending.popleft().result()
-
-
-@lru_cache(maxsize=1)
-def _openblas_threads():
-    """(get, set) of the number of threads of the OpenBLAS that NumPy loaded, or None (other BLAS,
-    not Linux)."""
-    try:
-        with open("/proc/self/maps") as f:
-            paths = {line.split()[-1] for line in f if "openblas" in line.rsplit("/", 1)[-1].lower()}
-        for path in sorted(paths):
-            lib = ctypes.CDLL(path)
-            for prefix in ("scipy_openblas", "openblas"):
-                for suffix in ("64_", ""):
-                    get = getattr(lib, f"{prefix}_get_num_threads{suffix}", None)
-                    set_ = getattr(lib, f"{prefix}_set_num_threads{suffix}", None)
-                    if get is not None and set_ is not None:
-                        set_.argtypes, get.restype = [ctypes.c_int], ctypes.c_int
-                        return get, set_
-    except OSError:
-        pass
-    return None
-
-
-@contextmanager
-def single_threaded_blas():
-    """OpenBLAS on one thread inside the block: the kernels' many small matmuls run on the thread
-    pool, and OpenBLAS's own threads, spinning while they wait, would fight the pool for the cores
-    (measured: 3 s → 28 s for a 4K image on 2 busy cores)."""
-    api = _openblas_threads()
-    if api is None:
-        yield
-        return
-    get, set_ = api
-    before = get()
-    set_(1)
-    try:
-        yield
-    finally:
-        set_(before)

@@ -12,10 +12,11 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from ..blas import single_threaded_blas
 from ..errors import SolasError
 from ..imageio import check_finite
 from . import interp, patch
-from .kernels import channel_wavelengths, check_boundary, kernel_radius, layout, single_threaded_blas
+from .kernels import channel_wavelengths, check_boundary, kernel_radius, layout
 
 if TYPE_CHECKING:
     from ..psf.grid import PSFGrid
