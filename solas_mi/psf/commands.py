@@ -8,7 +8,14 @@ from typing import Any
 from ..errors import SolasError
 from ..options import add_lens_argument, floats, parse_wxh
 from ..outputs import data_and_preview, written_together
-from .base import DEFAULT_GEOMETRIC_RAYS, DEFAULT_PITCH_UM, DEFAULT_PUPIL_SAMPLES, DEFAULT_SIZE, NORMALIZATIONS
+from .base import (
+    DEFAULT_GEOMETRIC_RAYS,
+    DEFAULT_PITCH_UM,
+    DEFAULT_PUPIL_SAMPLES,
+    DEFAULT_SIZE,
+    NORMALIZATIONS,
+    WINDOW_ENERGY_LIMIT,
+)
 from .methods import DEFAULT_METHOD, METHODS
 
 
@@ -21,6 +28,12 @@ def _field(text: str) -> tuple[float, float]:
     return values[0], values[1]
 
 
+def _warn(command: str, warnings: list[str]) -> None:
+    """Each warning once, on stderr (stdout stays for results); they are in the output's metadata too."""
+    for text in warnings:
+        print(f"solas-mi {command}: warning: {text}", file=sys.stderr)
+
+
 def run_psf(args) -> int:
     from ..optics.lens import Lens
     from .methods import psf
@@ -30,7 +43,9 @@ def run_psf(args) -> int:
     wavelengths = floats(args.wavelength_nm, "--wavelength-nm")
     weights = floats(args.weights, "--weights") if args.weights else None
     p = psf(lens, _field(args.field_deg), wavelengths, weights=weights, pitch_um=args.pitch_um, size=args.size,
-            method=args.method, normalization=args.normalize, pupil_samples=args.pupil_samples, rays=args.rays)
+            method=args.method, normalization=args.normalize, pupil_samples=args.pupil_samples, rays=args.rays,
+            auto_window=args.auto_window)
+    _warn("psf", p.meta["warnings"])
     with written_together(data_file, png) as (tmp_data, tmp_png):
         p.write(tmp_data)
         p.write_png(tmp_png)
@@ -63,8 +78,9 @@ def run_psf_grid(args) -> int:
                  field_range_deg=None if rng is None else (rng[0], rng[-1]), pitch_um=args.pitch_um,
                  size=args.size, method=args.method, normalization=args.normalize,
                  pupil_samples=args.pupil_samples, rays=args.rays, field_sampling=args.field_sampling,
-                 progress=progress)
+                 progress=progress, auto_window=args.auto_window)
     print(file=sys.stderr)
+    _warn("psf-grid", g.meta["warnings"])
     with written_together(data_file, png) as (tmp_data, tmp_png):
         g.write(tmp_data)
         g.write_png(tmp_png)
@@ -79,6 +95,8 @@ def _add_psf_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--normalize", choices=NORMALIZATIONS, default="sum")
     p.add_argument("--pupil-samples", type=int, default=DEFAULT_PUPIL_SAMPLES, help="Fraunhofer pupil grid N×N")
     p.add_argument("--rays", type=int, default=DEFAULT_GEOMETRIC_RAYS, help="geometric: rays×rays per PSF")
+    p.add_argument("--auto-window", action="store_true",
+                   help=f"double --size until each window holds {100 * WINDOW_ENERGY_LIMIT:g} %% of the light")
     p.add_argument("-o", "--output", required=True, help="output OpenEXR file")
     p.add_argument("--png", help="PNG for viewing (default: beside the EXR)")
 

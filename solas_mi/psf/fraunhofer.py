@@ -26,7 +26,39 @@ def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: fl
     (`methods.compute`)."""
     pf = pupil_function(lens, field_deg, wavelength_nm, samples)
     center = shared_origin_um(pf.chief.image_xy) if shared_origin else None
-    return Computed(fraunhofer(pf, pitch_um, size, center), pf.chief, pf.transmission, pf.vignetted_by)
+    return Computed(fraunhofer(pf, pitch_um, size, center), pf.chief, pf.transmission, pf.vignetted_by,
+                    tuple(sampling_warnings(pf, pitch_um, size, np.atleast_2d(field_deg))))
+
+
+def sampling_warnings(pf: PupilFunction, pitch_um: float, size: int, field_deg: np.ndarray) -> list[str]:
+    """Where the pupil grid cannot carry the wavefront: a phase step above π between neighbouring
+    cells (the wavefront is under-sampled), or a PSF period λ'/Δα shorter than the window (copies of
+    the PSF fold into it). Each names the worst field and the pupil samples that would do."""
+    n = pf.alpha.shape[1]
+    lam_nm = pf.wavelength_nm[:, None, None]
+    phase = 2.0 * math.pi / (lam_nm * 1e-6) * pf.opd_mm
+    inside = pf.coverage > 0
+    steps = np.zeros(len(phase))
+    for axis in (1, 2):
+        both = np.logical_and(np.take(inside, range(1, n), axis=axis), np.take(inside, range(n - 1), axis=axis))
+        step = np.abs(np.diff(phase, axis=axis))
+        steps = np.maximum(steps, np.where(both, step, 0.0).max(axis=(1, 2)))
+    period_um = (pf.wavelength_nm * 1e-3 / pf.chief.n_image) / np.minimum(pf.alpha[:, 1] - pf.alpha[:, 0],
+                                                                          pf.beta[:, 1] - pf.beta[:, 0])
+    window_um = size * pitch_um
+    need = np.maximum(n * steps / (0.5 * math.pi), n * window_um / period_um)
+    out = []
+    if (steps > math.pi).any():
+        i = int(np.argmax(steps))
+        out.append(f"pupil samples {n} under-resolve the wavefront at field ({field_deg[i, 0]:g}, {field_deg[i, 1]:g}) "
+                   f"deg, {pf.wavelength_nm[i]:g} nm: phase steps up to {steps[i]:.1f} rad per cell (> pi); use "
+                   f"--pupil-samples {int(math.ceil(need.max() / 8) * 8)} or more")
+    if (period_um < window_um).any():
+        i = int(np.argmin(period_um))
+        out.append(f"the {window_um:g} um window is wider than the PSF period {period_um[i]:.1f} um of {n} pupil samples "
+                   f"at field ({field_deg[i, 0]:g}, {field_deg[i, 1]:g}) deg: copies of the PSF fold in; use "
+                   f"--pupil-samples {int(math.ceil(need.max() / 8) * 8)} or more")
+    return out
 
 
 def fraunhofer(pf: PupilFunction, pitch_um: float, size: int, center_um: np.ndarray | None = None) -> np.ndarray:

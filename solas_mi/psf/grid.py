@@ -128,9 +128,12 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
              field_range_deg: tuple[float, float] | float | None = None, pitch_um: float = S.DEFAULT_PITCH_UM,
              size: int = S.DEFAULT_SIZE,
              method: str = DEFAULT_METHOD, normalization: str = "sum", pupil_samples: int = S.DEFAULT_PUPIL_SAMPLES,
-             rays: int = S.DEFAULT_GEOMETRIC_RAYS, field_sampling: str = "centers", progress=None) -> PSFGrid:
+             rays: int = S.DEFAULT_GEOMETRIC_RAYS, field_sampling: str = "centers", progress=None,
+             auto_window: bool = False) -> PSFGrid:
     """PSFs on a field grid ("columns x rows" text or a (rows, columns) tuple) spanning
-    ±field_range_deg (x, y) (default: the lens's field in both)."""
+    ±field_range_deg (x, y) (default: the lens's field in both). meta["energy_in_window"] holds each
+    PSF's fraction of its transmitted light inside the window and meta["warnings"] what looked
+    doubtful; `auto_window` doubles `size` until every window holds `base.WINDOW_ENERGY_LIMIT`."""
     ny, nx = parse_wxh(grid, "grid")
     S.check_grid(pitch_um, size)
     sampling = check_method(method, pupil_samples, rays)
@@ -155,14 +158,17 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
     data = np.zeros((len(wl), n, size, size), dtype=np.float32)
     chief = np.zeros((len(wl), n, 2))
     transmission = np.zeros((len(wl), n))
+    energy = np.zeros((len(wl), n))
     vignetting: set[int] = set()
+    doubts: list[str] = []
     start = time.perf_counter()
     for k, w in enumerate(wl):
         for a in range(0, len(canon), _FIELDS_PER_BATCH):
             b = min(len(canon), a + _FIELDS_PER_BATCH)
-            psfs, cr, tr, vig = compute(lens, canon[a:b], np.full(b - a, w), pitch_um, odd, method, pupil_samples,
-                                          rays)
+            psfs, cr, tr, vig, warned = compute(lens, canon[a:b], np.full(b - a, w), pitch_um, odd, method,
+                                                pupil_samples, rays)
             vignetting.update(s for v in vig for s in v)
+            doubts.extend(d for d in warned if d not in doubts)
             for c in range(a, b):
                 for i in np.flatnonzero(which == c):
                     p = psfs[c - a]
@@ -176,6 +182,7 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
                     data[k, i] = S.normalize(p[:size, :size], normalization)
                     chief[k, i] = xy * sign[i]
                     transmission[k, i] = tr[c - a]
+                    energy[k, i] = S.window_energy(p[:size, :size], pitch_um, tr[c - a])
             if progress is not None:
                 progress(k * len(canon) + b, len(wl) * len(canon))
     meta = S.describe(lens, method, normalization, {METHODS[method].sampling: sampling}, size)
@@ -183,10 +190,15 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
         "field_sampling": field_sampling, "field_range_deg": [hx, hy],
         "grid_orientation": "grid row 0 = largest y field, column 0 = smallest x field",
         "transmission": transmission.reshape(len(wl), ny, nx).tolist(),
+        "energy_in_window": energy.reshape(len(wl), ny, nx).tolist(),
         "vignetted_by_surfaces": sorted(vignetting),
+        "warnings": [*doubts, *S.window_warnings(energy, flat, size, pitch_um)],
         "seconds": time.perf_counter() - start,
     })
     if hx > 0:  # the ideal image an input spanning ±hx horizontally stands for (`optics.camera`)
         meta.update(pinhole_focal_mm=pinhole_focal_mm(lens, hx), reference_wavelength_nm=lens.primary_wavelength)
+    if auto_window and energy.min() < S.WINDOW_ENERGY_LIMIT and 2 * size <= S.MAX_SIZE:
+        return psf_grid(lens, (ny, nx), wl, (hx, hy), pitch_um, 2 * size, method, normalization, pupil_samples, rays,
+                        field_sampling, progress, auto_window=True)
     return PSFGrid(data.reshape(len(wl), ny, nx, size, size), fields, chief.reshape(len(wl), ny, nx, 2), wl,
                    float(pitch_um), meta)

@@ -23,12 +23,16 @@ from .base import (
     DEFAULT_PITCH_UM,
     DEFAULT_PUPIL_SAMPLES,
     DEFAULT_SIZE,
+    MAX_SIZE,
     PSF,
+    WINDOW_ENERGY_LIMIT,
     Computed,
     check_grid,
     check_normalization,
     describe,
     normalize,
+    window_energy,
+    window_warnings,
 )
 
 
@@ -81,9 +85,11 @@ def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: fl
 def psf(lens, field_deg, wavelength_nm, *, weights=None, pitch_um: float = DEFAULT_PITCH_UM,
         size: int = DEFAULT_SIZE,
         method: str = DEFAULT_METHOD, normalization: str = "sum", pupil_samples: int = DEFAULT_PUPIL_SAMPLES,
-        rays: int = DEFAULT_GEOMETRIC_RAYS) -> PSF:
+        rays: int = DEFAULT_GEOMETRIC_RAYS, auto_window: bool = False) -> PSF:
     """The PSF at `field_deg` (x, y degrees) for one wavelength (nm) or several with `weights`
-    (polychromatic: the power-weighted sum of the monochromatic PSFs)."""
+    (polychromatic: the power-weighted sum of the monochromatic PSFs). meta["energy_in_grid"] is the
+    fraction of the transmitted light inside the window and meta["warnings"] what looked doubtful;
+    `auto_window` doubles `size` until the window holds `base.WINDOW_ENERGY_LIMIT` of the light."""
     field = check_field(field_deg)
     check_grid(pitch_um, size)
     sampling = check_method(method, pupil_samples, rays)
@@ -99,15 +105,20 @@ def psf(lens, field_deg, wavelength_nm, *, weights=None, pitch_um: float = DEFAU
     w8 = w8 / w8.sum()
     fields = np.repeat(np.array([field]), len(wavelengths), axis=0)
     # all wavelengths share one origin, the first wavelength's chief ray, so lateral colour shows
-    data, chief, transmission, vignetted = compute(lens, fields, np.array(wavelengths), pitch_um, size, method,
-                                                   pupil_samples, rays, shared_origin=True)
+    data, chief, transmission, vignetted, doubts = compute(lens, fields, np.array(wavelengths), pitch_um, size,
+                                                          method, pupil_samples, rays, shared_origin=True)
     total = np.tensordot(w8, data, axes=1)
+    energy = float(window_energy(total, pitch_um, np.dot(w8, transmission)))
     meta = describe(lens, method, normalization, {METHODS[method].sampling: sampling}, size)
     meta.update({
         "chief_ray_mm": {f"{w:g}": chief.image_xy[i].tolist() for i, w in enumerate(wavelengths)},
         "transmission": float(np.dot(w8, transmission)),
-        "energy_in_grid": float(total.sum() * pitch_um ** 2 / max(np.dot(w8, transmission), 1e-300)),
+        "energy_in_grid": energy,
         "vignetted_by_surfaces": sorted({s for v in vignetted for s in v}),
+        "warnings": [*doubts, *window_warnings(energy, np.array([field]), size, pitch_um)],
     })
+    if auto_window and energy < WINDOW_ENERGY_LIMIT and 2 * size <= MAX_SIZE:
+        return psf(lens, field_deg, wavelength_nm, weights=weights, pitch_um=pitch_um, size=2 * size, method=method,
+                   normalization=normalization, pupil_samples=pupil_samples, rays=rays, auto_window=True)
     return PSF(normalize(total, normalization), float(pitch_um), field, wavelengths, tuple(w8.tolist()),
                tuple(chief.image_xy[0].tolist()), method, normalization, meta)
