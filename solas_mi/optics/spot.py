@@ -71,6 +71,9 @@ def spot(lens: Lens, field_deg, wavelength_nm: float, pattern: str = "hexapolar"
     tr = b.trace(T.F(chief.entrance[0, 0] + radius * points[:, 0]), T.F(chief.entrance[0, 1] + radius * points[:, 1]))
     x, y, _ = T.to_plane(tr, lens.image_z)
     keep, x, y = T.to_numpy(tr.ok & (tr.clipped_by == 0), x, y)
+    if not keep.any():
+        raise SolasError(f"no ray of {wavelength_nm:g} nm through the pupil reaches the image for field "
+                         f"({field[0, 0]:g}, {field[0, 1]:g}) deg: every one is blocked")
     x0, y0 = chief.image_xy[0]
     return Spot((x[keep] - x0) * 1e3, (y[keep] - y0) * 1e3, (float(x0), float(y0)),
                 len(points), int((~keep).sum()))

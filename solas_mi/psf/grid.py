@@ -185,6 +185,7 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
                     energy[k, i] = S.window_energy(p[:size, :size], pitch_um, tr[c - a])
             if progress is not None:
                 progress(k * len(canon) + b, len(wl) * len(canon))
+    lit = transmission > 0
     meta = S.describe(lens, method, normalization, {METHODS[method].sampling: sampling}, size)
     meta.update({
         "field_sampling": field_sampling, "field_range_deg": [hx, hy],
@@ -192,7 +193,10 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
         "transmission": transmission.reshape(len(wl), ny, nx).tolist(),
         "energy_in_window": energy.reshape(len(wl), ny, nx).tolist(),
         "vignetted_by_surfaces": sorted(vignetting),
-        "warnings": [*doubts, *S.window_warnings(energy, flat, size, pitch_um)],
+        "warnings": [*doubts, *S.window_warnings(energy[lit], np.broadcast_to(flat, (len(wl), n, 2))[lit], size,
+                                                  pitch_um)] + ([f"{int((~lit).sum())} of {lit.size} PSFs receive no "
+                                                                 "light (every ray blocked): they are zero"]
+                                                                if not lit.all() else []),
         "seconds": time.perf_counter() - start,
     })
     if hx > 0:  # the ideal image an input spanning ±hx horizontally stands for (`optics.camera`)

@@ -107,6 +107,10 @@ def psf(lens, field_deg, wavelength_nm, *, weights=None, pitch_um: float = DEFAU
     # all wavelengths share one origin, the first wavelength's chief ray, so lateral colour shows
     data, chief, transmission, vignetted, doubts = compute(lens, fields, np.array(wavelengths), pitch_um, size,
                                                           method, pupil_samples, rays, shared_origin=True)
+    if not np.dot(w8, transmission) > 0:
+        raise SolasError(f"no light reaches the image at field ({field[0]:g}, {field[1]:g}) deg: every ray is blocked"
+                         + (f" (by surfaces {', '.join(map(str, sorted({s for v in vignetted for s in v})))})"
+                            if any(vignetted) else ""))
     total = np.tensordot(w8, data, axes=1)
     energy = float(window_energy(total, pitch_um, np.dot(w8, transmission)))
     meta = describe(lens, method, normalization, {METHODS[method].sampling: sampling}, size)
