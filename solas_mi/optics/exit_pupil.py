@@ -47,9 +47,10 @@ class PupilBounds:
     plane_z: float
 
     def at(self, r: np.ndarray) -> np.ndarray:
-        """Conservative bounds (…, 5) at film radii r: the union of the two enclosing table rows, and
-        1 where both rows are elliptical."""
-        i = np.clip(np.searchsorted(self.radius_mm, r) - 1, 0, len(self.radius_mm) - 2)
+        """Conservative bounds (…, 5) at film radii r: the union of the two enclosing table rows
+        (radius_mm[i] ≤ r < radius_mm[i + 1]; a radius on a row takes that row and the next), and 1
+        where both rows are elliptical."""
+        i = np.clip(np.searchsorted(self.radius_mm, r, side="right") - 1, 0, len(self.radius_mm) - 2)
         a, b = self.bounds_mm[i], self.bounds_mm[i + 1]
         return np.stack([np.minimum(a[..., 0], b[..., 0]), np.maximum(a[..., 1], b[..., 1]),
                          np.minimum(a[..., 2], b[..., 2]), np.maximum(a[..., 3], b[..., 3]),
@@ -79,7 +80,11 @@ def pupil_bounds(lens: Lens, max_radius_mm: float, wavelengths_nm=None, radii: i
     it finds the rim to 1e-9 mm. The bound is the box of the rim points, widened by the most a convex
     rim can bulge between neighbouring directions."""
     rev = reversed_lens(lens)
-    reach = 1.05 * lens.surfaces[-1].semi_diameter
+    last = lens.surfaces[-1]
+    # rays cross the last vertex plane within its aperture projected there from the film: a curved last
+    # surface's rim lies off that plane, so the reach widens by the rim's sag over the way to the film
+    sag = abs(float(last.sag(last.semi_diameter)))
+    reach = 1.05 * (last.semi_diameter + (last.semi_diameter + max_radius_mm) * sag / max(last.thickness - sag, 1e-9))
     step = 2.0 * reach / coarse
     g = -reach + (np.arange(coarse) + 0.5) * step
     gx, gy = (a.ravel() for a in np.meshgrid(g, g))

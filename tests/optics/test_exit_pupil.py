@@ -1,0 +1,36 @@
+"""Exit-pupil bounds per film radius (`optics.exit_pupil`): the table a sensor samples from must hold
+every ray that leaves the lens, at every radius between its rows."""
+import numpy as np
+import pytest
+
+from solas_mi import Lens
+from solas_mi.optics.exit_pupil import PupilBounds, passes, pupil_bounds, reversed_lens
+
+
+def test_a_radius_takes_its_row_and_the_next():
+    """Between rows i and i + 1 (a radius on row i included) the bound is their union: taking rows
+    i − 1 and i there under-sampled pupils that grow with the radius."""
+    radius = np.array([0.0, 1.0, 2.0, 3.0])
+    rows = np.array([[-1, 1, -1, 1], [-2, 2, -2, 2], [-3, 3, -3, 3], [-4, 4, -4, 4]], dtype=float)
+    table = PupilBounds(radius, rows, np.ones(4, dtype=bool), 0.0)
+    assert table.at(np.array(1.0))[:4].tolist() == [-3, 3, -3, 3]
+    assert table.at(np.array(1.5))[:4].tolist() == [-3, 3, -3, 3]
+    assert table.at(np.array(0.0))[:4].tolist() == [-2, 2, -2, 2]
+
+
+@pytest.mark.parametrize("name", ["solas-doublet", "cooke-triplet"])
+def test_every_passing_ray_lies_inside_the_bound(name):
+    """Rays from film points between the table's rows toward a fine grid on the last vertex plane: all
+    that leave the lens fall inside the bound at that radius."""
+    lens = Lens.load(name)
+    half = 0.5 * lens.image_diameter if lens.image_diameter else 3.0
+    table = pupil_bounds(lens, half, wavelengths_nm=[lens.primary_wavelength], radii=16)
+    rev = reversed_lens(lens)
+    reach = 2.0 * lens.surfaces[-1].semi_diameter
+    g = np.linspace(-reach, reach, 161)
+    gx, gy = (a.ravel() for a in np.meshgrid(g, g))
+    for r in (table.radius_mm[3] + 0.37 * (table.radius_mm[4] - table.radius_mm[3]), table.radius_mm[-2]):
+        ok = passes(rev, np.full(len(gx), r), 0.0, gx, gy, lens.primary_wavelength)
+        u0, u1, v0, v1, _ = table.at(np.array(r))
+        assert ok.any()
+        assert (gx[ok] >= u0).all() and (gx[ok] <= u1).all() and (gy[ok] >= v0).all() and (gy[ok] <= v1).all()
