@@ -22,7 +22,7 @@ from ..errors import SolasError
 from ..metrics.annuli import ANNULI, corner_radius
 from ..optics.camera import check_fov
 from .engines import PSF_SAMPLING, Case, convolve, grid_units, ideal, psf_grid_for
-from .reference import Reference, noise_variance_map, read_reference, reference, write_reference
+from .reference import Reference, check_reference, noise_variance_map, read_reference, reference, write_reference
 from .scores import compare
 from .tables import Row, crossval_markdown, csv_text
 
@@ -90,6 +90,7 @@ def crossval(lens, image: np.ndarray, out: str | Path | None, spp: int = 1024, s
         raise SolasError("no convolution case given")
     h, w = image.shape[:2]
     out_dir = Path(out) if out is not None else None
+    check_reference(spp, seeds)
     if out_dir is not None:
         out_dir.mkdir(parents=True, exist_ok=True)
     common = {"lens": lens.name, "lens_hash": lens.hash, "fov_deg": fov, "sensor": [w, h], "boundary": boundary}

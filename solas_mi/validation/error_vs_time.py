@@ -25,7 +25,7 @@ from ..errors import SolasError
 from ..imageio import write_text
 from ..optics.camera import check_fov
 from .engines import check_kind, convolve, grid_units, psf_grid_for, render
-from .reference import noise_variance_map, reference
+from .reference import check_reference, noise_variance_map, reference
 from .scores import Errors, compare
 from .tables import Row, csv_text, error_vs_time_markdown
 
@@ -45,6 +45,7 @@ def error_vs_time(lens, image: np.ndarray, out: str | Path | None, ref_spp: int 
     check_kind(kind)
     if not (isinstance(repeats, int) and repeats >= 1):
         raise SolasError(f"repeats {repeats!r} must be a positive integer")
+    check_reference(ref_spp, seeds)
     h, w = image.shape[:2]
     out_dir = Path(out) if out is not None else None
     if out_dir is not None:

@@ -34,13 +34,18 @@ class Reference:
         return math.sqrt(float(np.mean(self.image ** 2)))
 
 
-def reference(lens, image: np.ndarray, spp: int, fov_deg: float, seeds: int = 2, boundary: str = "edge",
-              variant: str | None = None, first_seed: int = 1001, progress=None) -> Reference:
-    """Mean of `seeds` renders of spp/seeds samples each, with its noise estimated from their spread."""
+def check_reference(spp: int, seeds: int) -> None:
+    """SolasError unless `seeds` ≥ 2 renders of spp/seeds samples each can be made."""
     if not (isinstance(seeds, int) and seeds >= 2):
         raise SolasError(f"reference seeds {seeds!r} must be an integer >= 2 (the noise is estimated from their spread)")
     if not (isinstance(spp, int) and spp >= seeds):
         raise SolasError(f"reference spp {spp!r} must be an integer >= the number of seeds ({seeds})")
+
+
+def reference(lens, image: np.ndarray, spp: int, fov_deg: float, seeds: int = 2, boundary: str = "edge",
+              variant: str | None = None, first_seed: int = 1001, progress=None) -> Reference:
+    """Mean of `seeds` renders of spp/seeds samples each, with its noise estimated from their spread."""
+    check_reference(spp, seeds)
     per = spp // seeds
     images, seconds = [], 0.0
     for k in range(seeds):
