@@ -26,6 +26,7 @@ from . import base as S
 from .methods import DEFAULT_METHOD, METHODS, check_method, compute
 
 FIELD_SAMPLINGS = ("centers", "edges")
+MOSAIC_PX = 2048  # the preview mosaic is block-averaged to fit this (a 32×32 grid of 160 px: 64 px a PSF)
 _FIELDS_PER_BATCH = 64
 
 
@@ -85,9 +86,14 @@ class PSFGrid:
                    float(meta["pitch_um"]), rest)
 
     def write_png(self, path: str) -> None:
-        """A mosaic for viewing: each PSF scaled to its peak; three wavelengths → R, G, B (longest red)."""
-        peak = np.maximum(self.data.max(axis=(-2, -1), keepdims=True), np.float32(1e-30))
-        mosaics = [tile(stack) for stack in self.data / peak]
+        """A mosaic for viewing, at most MOSAIC_PX wide and high: each PSF block-averaged down to fit
+        and scaled to its peak; three wavelengths → R, G, B (longest red)."""
+        ny, nx = self.shape
+        step = max(1, -(-max(ny, nx) * self.size // MOSAIC_PX))
+        s = self.size // step
+        data = self.data[..., : s * step, : s * step].reshape(*self.data.shape[:3], s, step, s, step).mean(axis=(4, 6))
+        peak = np.maximum(data.max(axis=(-2, -1), keepdims=True), np.float32(1e-30))
+        mosaics = [tile(stack) for stack in data / peak]
         if len(mosaics) == 3:
             order = np.argsort(self.wavelengths_nm)[::-1]
             image = np.stack([mosaics[i] for i in order], axis=-1)

@@ -64,3 +64,20 @@ def test_grid_symmetry_reuse_is_exact(doublet, method):
                               normalization="none")
             assert np.abs(g.data[0, r, c] - one.data).max() <= 1e-5 * one.data.max()
             assert g.chief_ray_mm[0, r, c] == pytest.approx(one.chief_ray_mm, abs=1e-12)
+
+
+def test_the_preview_mosaic_is_bounded(doublet, tmp_path, monkeypatch):
+    """The PNG is for looking: PSFs are block-averaged until the mosaic fits MOSAIC_PX, each tile still
+    scaled to its own peak."""
+    import imageio.v3 as iio
+
+    from solas_mi.psf import grid as grid_module
+
+    g = psf_grid(doublet, grid=(2, 3), wavelengths_nm=[486.0, 531.0, 656.0], size=48, pupil_samples=32)
+    g.write_png(tmp_path / "full.png")
+    assert iio.imread(tmp_path / "full.png").shape == (96, 144, 3)
+    monkeypatch.setattr(grid_module, "MOSAIC_PX", 64)
+    g.write_png(tmp_path / "small.png")
+    small = iio.imread(tmp_path / "small.png")
+    assert small.shape == (2 * 16, 3 * 16, 3)  # 48 px PSFs averaged by 3 to fit 3 across 64 px
+    assert small.reshape(2, 16, 3, 16, 3).max(axis=(1, 3)).min() == 255  # every tile keeps its peak
