@@ -28,10 +28,15 @@ def _field(text: str) -> tuple[float, float]:
     return values[0], values[1]
 
 
-def _warn(command: str, warnings: list[str]) -> None:
-    """Each warning once, on stderr (stdout stays for results); they are in the output's metadata too."""
-    for text in warnings:
+def _finish(command: str, result, data_file, png, note: str) -> None:
+    """Each warning of `result` (a PSF or PSFGrid) once on stderr — stdout stays for results, and the
+    warnings are in its metadata too — then its EXR and PNG, written together."""
+    for text in result.meta["warnings"]:
         print(f"solas-mi {command}: warning: {text}", file=sys.stderr)
+    with written_together(data_file, png) as (tmp_data, tmp_png):
+        result.write(tmp_data)
+        result.write_png(tmp_png)
+    print(f"wrote {data_file} and {png}{note}")
 
 
 def run_psf(args) -> int:
@@ -45,11 +50,7 @@ def run_psf(args) -> int:
     p = psf(lens, _field(args.field_deg), wavelengths, weights=weights, pitch_um=args.pitch_um, size=args.size,
             method=args.method, normalization=args.normalize, pupil_samples=args.pupil_samples, rays=args.rays,
             auto_window=args.auto_window)
-    _warn("psf", p.meta["warnings"])
-    with written_together(data_file, png) as (tmp_data, tmp_png):
-        p.write(tmp_data)
-        p.write_png(tmp_png)
-    print(f"wrote {data_file} and {png}")
+    _finish("psf", p, data_file, png, "")
     return 0
 
 
@@ -80,11 +81,7 @@ def run_psf_grid(args) -> int:
                  pupil_samples=args.pupil_samples, rays=args.rays, field_sampling=args.field_sampling,
                  progress=progress, auto_window=args.auto_window)
     print(file=sys.stderr)
-    _warn("psf-grid", g.meta["warnings"])
-    with written_together(data_file, png) as (tmp_data, tmp_png):
-        g.write(tmp_data)
-        g.write_png(tmp_png)
-    print(f"wrote {data_file} and {png} ({g.meta['seconds']:.1f} s)")
+    _finish("psf-grid", g, data_file, png, f" ({g.meta['seconds']:.1f} s)")
     return 0
 
 
