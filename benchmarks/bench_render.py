@@ -1,7 +1,7 @@
 """Direct spectral render through the doublet's geometry (`solas-mi render-image`): speed, noise
 against run time, and the cap-mesh ring count's accuracy/speed trade-off.
 
-Run: .venv/bin/python benchmarks/bench_render.py [--quick]
+Run: .venv/bin/python benchmarks/bench_render.py [--quick | --stock]
 - Speed: the bundled 1280×960 photograph, llvm_ad_spectral, samples per second at 64 spp.
 - Noise: relative RMSE = RMS(a − b)/√2 / RMS(mean) of two renders with different seeds, for spp
   4…1024, responses `lines` and `srgb`, on the 320×240 centre of the 1280×960 sensor (same pitch;
@@ -9,6 +9,10 @@ Run: .venv/bin/python benchmarks/bench_render.py [--quick]
   from the measured rate.
 - Rings: the scene PSF's worst centroid and RMS-radius error against the tracer (0°, ±2°,
   486/531/656 nm) and the render rate, per ring count.
+- Stock (`--stock`, only this): the shipped scene (scenes/solas_doublet/scene.xml, srgb, the bundled
+  photograph) on its 320×240 centre, 64 spp: samples per second of Mitsuba's `path` (`mi.render`,
+  hdrfilm, stratified sampler) and of solas-mi's loop, median of 3 after a warm-up render, and each
+  one's per-pixel noise (relative RMSE between two seeds / √2; stock divided by its flat white).
 Prints Markdown tables.
 """
 from __future__ import annotations
@@ -39,10 +43,48 @@ def noise_table(lens, image, camera, spps, response):
     return rows
 
 
+def stock_table(spp: int = 64, size: tuple[int, int] = (320, 240)) -> None:
+    """Mitsuba's `path` against solas-mi's loop on the shipped scene: samples/s and noise."""
+    from statistics import median
+
+    from solas_mi.render.loop import render
+
+    mi = mitsuba("llvm_ad_spectral")
+    scene = mi.load_file(str(resource_dir("scenes") / "solas_doublet" / "scene.xml"), width=str(size[0]),
+                         height=str(size[1]))
+    lam = np.arange(380.0, 780.0, 0.05) + 0.025  # hdrfilm's flat white over the camera's wavelengths
+    xyz = np.array(mi.cie1931_xyz(mi.Float(lam))).T.sum(axis=0) * 0.05 * mi.MI_CIE_Y_NORMALIZATION
+    white = np.array(mi.xyz_to_srgb(mi.Color3f(*(float(v) for v in xyz)))).ravel()
+    samples = size[0] * size[1] * spp
+
+    def stock(seed):
+        t = time.perf_counter()
+        image = np.array(mi.render(scene, spp=spp, seed=seed)) / white
+        return image, time.perf_counter() - t
+
+    def loop(seed):
+        r = render(scene, spp, seed=seed)
+        return r.image, r.seconds
+
+    print(f"\n| engine ({size[0]}×{size[1]}, {spp} spp, srgb) | M samples/s (median of 3) | runs (s) | noise |")
+    print("|---|---|---|---|")
+    for name, run in (("Mitsuba path (mi.render)", stock), ("solas-mi loop", loop)):
+        run(0)  # compile
+        runs = [run(seed) for seed in (1, 2, 3)]
+        a, b = runs[0][0], runs[1][0]
+        noise = np.sqrt(np.mean((a - b) ** 2) / 2) / np.sqrt(np.mean((0.5 * (a + b)) ** 2))
+        seconds = [t for _, t in runs]
+        print(f"| {name} | {samples / median(seconds) / 1e6:.2f} | {', '.join(f'{t:.2f}' for t in seconds)} | "
+              f"{noise * 100:.1f} % |", flush=True)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--quick", action="store_true", help="fewer spp, for a smoke run")
+    ap.add_argument("--stock", action="store_true", help="only Mitsuba's path integrator against the loop")
     args = ap.parse_args()
+    if args.stock:
+        return stock_table()
     mitsuba("llvm_ad_spectral")
     lens = Lens.load("solas-doublet")
     image = read_image(resource_dir("scenes") / "images" / "rocket.png")

@@ -7,7 +7,9 @@
 | `image_object`         | emitter | `image_object.py`         |
 
 Each module documents its parameters. The modules subclass the types of Mitsuba's current variant,
-so they are imported only by `register`, after a variant is set (`solas_mi.render.mitsuba`).
+so they are imported only by `register`, after a variant is set (`solas_mi.render.mitsuba`). Beside
+them: `tables` (lookup tables and records in every variant) and `scene_probe` (the scene and
+integrator of the render calling a plugin, which Mitsuba does not pass to Python plugins).
 """
 from __future__ import annotations
 
@@ -18,7 +20,8 @@ PLUGINS = ("sellmeier_dielectric", "image_object", "lens_sensor")
 
 def register() -> None:
     """(Re)import the plugin modules for Mitsuba's current variant and register them under their names.
-    The reload is needed after a variant change: the classes must subclass the new variant's types."""
+    The reload is needed after a variant change: the classes must subclass the new variant's types.
+    Each registration keeps its own variant's class, so registering once per variant suffices."""
     for name in PLUGINS:
         module = importlib.import_module(f"{__name__}.{name}")
         importlib.reload(module).register()

@@ -10,7 +10,8 @@ of direction) or on a plane at a finite distance.
 | `distance_mm` | float  | mm      | 0 (at infinity) | the image on the plane z = −distance_mm instead         |
 | `scale`       | float  | —       | 1.0             | radiance multiplier                                     |
 
-`traverse` exposes nothing: no parameter is differentiable or editable through `mi.traverse`.
+`traverse` exposes `scale` (differentiable; in the JIT variants `mi.traverse` edits it without reloading
+the scene; the scalar variants can read it only).
 
 `filename` is found by Mitsuba's file resolver; `image` is a linear H×W (grey) or H×W×3 (RGB)
 `mi.TensorXf`. Radiance is the texel's linear value times `scale` (relative units: the `lens_sensor`
@@ -19,10 +20,29 @@ horizontally, square pixels in tangent space (`solas_mi.optics.camera`); a texel
 square (nearest neighbour, the model the PSF-grid convolution uses). Outside the image "edge" repeats the border
 texels, "reflect" mirrors about the border, "zero" is black. At a finite distance the plane is
 centred on the axis and spans ±distance_mm·tan(fov_deg) across its width. RGB becomes a spectrum of
-three bands (`solas_mi.render.response.RGB_BANDS_NM`): blue below 500 nm, green to 590 nm, red above.
+three bands (`solas_mi.render.response.RGB_BANDS_NM`): blue below 500 nm, green to 590 nm, red above;
+each spectral lane takes the band of its own wavelength.
 
 Rays arriving here travel away from the lens (−z): a direction d has tangents (d_x/d_z, d_y/d_z),
 which is the field of light coming from there.
+
+Mitsuba's integrators (at infinity only): `eval`/`eval_direction` as above; `sample_direction` picks
+a texel with probability ∝ its R + G + B and a uniform point of its tangent-space square, so
+`pdf_direction` = p(texel)/pitch² × (1 + t_x² + t_y²)^(3/2) per steradian (0 outside the image: the
+"edge"/"reflect" surroundings are reached by BSDF sampling only); `sample_ray` (light tracing) takes
+that direction and an origin on the disk of the scene's bounding sphere facing it, as Mitsuba's
+`envmap` does, wavelengths uniform over 360–830 nm (`sample_wavelengths`, `pdf_wavelengths`); light
+tracing therefore emits only the image itself, as if the boundary were "zero".
+An infinite emitter has no position: `sample_position` returns pdf NaN, `pdf_position` 0. Mitsuba does
+not pass the scene to Python emitters, so its bounding sphere comes from `set_scene(scene)` (Mitsuba's
+name; called on first need with the scene of the calling render, `plugins/scene_probe.py`).
+Mitsuba hands an emitter no ray origin, so an object at a finite distance works only in solas-mi's
+loop (`radiance`); in a stock render `eval` stops with a SolasError. There, put the image on a
+`rectangle` with an `area` emitter whose `radiance` is a `bitmap` texture (`filter_type` "nearest";
+a linear EXR), `to_world` = scale(x = −distance_mm·tan(fov_deg), y = +that × height/width), then
+translate(z = −distance_mm): the mirrored x puts image column 0 at +x, where the lens images it on the
+left. `bitmap` turns RGB into Mitsuba's smooth spectra, not the three bands above, so only grey
+images render alike (within 0.4 % in tests/render/test_stock_integrators.py).
 """
 from __future__ import annotations
 
@@ -35,8 +55,11 @@ import numpy as np
 from solas_mi.errors import SolasError
 from solas_mi.imageio import read_image
 from solas_mi.optics.camera import BOUNDARIES
-from solas_mi.plugins.tables import lookup, table
+from solas_mi.plugins.scene_probe import calling_render
+from solas_mi.plugins.tables import lookup, table, zeros
 from solas_mi.render.response import RGB_BANDS_NM
+
+SPECTRUM_NM = (mi.MI_CIE_MIN, mi.MI_CIE_MAX)  # light tracing samples wavelengths uniformly here
 
 
 def _fold(i, n: int, boundary: str):
@@ -68,8 +91,31 @@ class ImageObject(mi.Emitter):
         if rgb.ndim != 3 or rgb.shape[-1] != 3:
             raise SolasError(f"image_object: image of shape {rgb.shape} must be H x W (grey) or H x W x 3 (RGB)")
         self.height, self.width = rgb.shape[:2]
-        self.texels = table(rgb * float(props.get("scale", 1.0)))
+        self.texels = table(rgb)
+        self.scale = mi.Float(float(props.get("scale", 1.0)))
         self.tan_pitch = math.tan(math.radians(self.fov_deg)) / (self.width / 2)
+        weights = np.maximum(rgb, 0.0).sum(axis=-1).ravel()
+        weights = weights if weights.sum() > 0 else np.ones_like(weights)  # a black image: uniform
+        self.texel_distribution = mi.DiscreteDistribution(table(weights))
+        self.bsphere = None  # (centre, radius) of the scene, from set_scene
+
+    def set_scene(self, scene) -> None:
+        """Take the bounding sphere of `scene` (light tracing starts rays on its disks)."""
+        box = scene.bbox()
+        self.bsphere = (mi.ScalarPoint3f(box.center()), max(float(dr.norm(box.extents())) / 2, 1e-3)) \
+            if box.valid() else (mi.ScalarPoint3f(0.0), 1.0)
+
+    def bounding_sphere(self):
+        if self.bsphere is None:
+            scene, _ = calling_render()
+            if scene is None:
+                raise SolasError("image_object: the scene's bounds are unknown; call set_scene(scene) first")
+            self.set_scene(scene)
+        return self.bsphere
+
+    def _channel(self, lam) -> mi.UInt32:
+        """RGB channel of the band of wavelength `lam` (nm)."""
+        return mi.UInt32(dr.select(lam < RGB_BANDS_NM[0], 2, dr.select(lam < RGB_BANDS_NM[1], 1, 0)))
 
     def radiance(self, o: mi.Point3f, d: mi.Vector3f, wavelengths, active=True, footprint=None) -> mi.Spectrum:
         """Radiance toward the lens along the ray (o, d) that left the lens; one value in every lane.
@@ -83,8 +129,7 @@ class ImageObject(mi.Emitter):
             tx, ty = -tx, -ty  # a point at +x on the plane sends light of field −x
         u = tx / self.tan_pitch + self.width / 2  # continuous texel coordinates
         v = self.height / 2 - ty / self.tan_pitch
-        lam = wavelengths[0] if mi.is_spectral else 550.0
-        channel = mi.UInt32(dr.select(lam < RGB_BANDS_NM[0], 2, dr.select(lam < RGB_BANDS_NM[1], 1, 0)))
+        channel = self._channel(wavelengths[0] if mi.is_spectral else 550.0)
         active = active & (d.z < 0)
         if footprint is None:
             return mi.Spectrum(self._texel(dr.floor(u), dr.floor(v), channel, active))
@@ -104,13 +149,106 @@ class ImageObject(mi.Emitter):
         col, ok_c = _fold(mi.Int32(u), self.width, self.boundary)
         row, ok_r = _fold(mi.Int32(v), self.height, self.boundary)
         index = (mi.UInt32(row) * self.width + mi.UInt32(col)) * 3 + channel
-        return lookup(self.texels, index, active & ok_c & ok_r)
+        return lookup(self.texels, index, active & ok_c & ok_r) * self.scale
+
+    # ---- Mitsuba's Emitter interface (stock integrators), the object at infinity ----
+
+    def _tangent(self, d: mi.Vector3f):
+        """Continuous texel coordinates (u, v) of direction d (toward the object), and whether d.z < 0."""
+        z = dr.select(d.z < 0, d.z, -1.0)
+        return d.x / z / self.tan_pitch + self.width / 2, self.height / 2 - d.y / z / self.tan_pitch, d.z < 0
+
+    def _lanes(self, u, v, wavelengths, active) -> mi.Spectrum:
+        """Radiance of texel coordinates (u, v), each spectral lane in the band of its own wavelength."""
+        if not mi.is_spectral:
+            return mi.Spectrum(self._texel(dr.floor(u), dr.floor(v), mi.UInt32(1), active))
+        value = mi.Spectrum(0.0)
+        for i in range(4):
+            value[i] = self._texel(dr.floor(u), dr.floor(v), self._channel(wavelengths[i]), active)
+        return value
+
+    def _at_infinity(self) -> None:
+        if not math.isinf(self.distance):
+            raise SolasError(f"image_object at distance_mm {self.distance:g}: Mitsuba's integrators give an emitter no "
+                             "ray origin; use solas-mi's render loop, or a rectangle with an area emitter and a bitmap "
+                             "texture (plugins/image_object.py)")
 
     def eval(self, si, active=True):
-        return self.radiance(si.p, -si.wi, si.wavelengths, active)
+        self._at_infinity()
+        u, v, front = self._tangent(-si.wi)
+        return self._lanes(u, v, si.wavelengths, active & front)
+
+    def eval_direction(self, it, ds, active=True):
+        self._at_infinity()
+        u, v, front = self._tangent(ds.d)
+        return self._lanes(u, v, it.wavelengths, active & front)
+
+    def _sample_texel(self, sample: mi.Point2f, active):
+        """(direction toward the object, texel coordinates u, v, pdf per steradian)."""
+        index, x = self.texel_distribution.sample_reuse(sample.x, active)
+        u, v = mi.Float(index % self.width) + x, mi.Float(index // self.width) + sample.y
+        tx, ty = (u - self.width / 2) * self.tan_pitch, (self.height / 2 - v) * self.tan_pitch
+        q = 1.0 + tx * tx + ty * ty
+        d = mi.Vector3f(-tx, -ty, -1.0) * dr.rsqrt(q)
+        pmf = self.texel_distribution.eval_pmf_normalized(index, active)
+        return d, u, v, pmf / (self.tan_pitch ** 2) * q * dr.sqrt(q)
+
+    def sample_direction(self, it, sample, active=True):
+        self._at_infinity()
+        d, u, v, pdf = self._sample_texel(sample, active)
+        centre, radius = self.bounding_sphere()
+        dist = 2.0 * dr.maximum(radius, dr.norm(it.p - centre))
+        ds = zeros(mi.DirectionSample3f)
+        ds.p, ds.n, ds.uv, ds.time = it.p + d * dist, -d, mi.Point2f(u / self.width, v / self.height), it.time
+        ds.pdf, ds.delta, ds.d, ds.dist = dr.select(active, pdf, 0.0), False, d, dist
+        ds.emitter = mi.EmitterPtr(self) if dr.is_jit_v(mi.Float) else self
+        value = self._lanes(u, v, it.wavelengths, active)
+        return ds, dr.select(active & (pdf > 0), value / pdf, 0.0)
+
+    def pdf_direction(self, it, ds, active=True):
+        self._at_infinity()
+        u, v, front = self._tangent(ds.d)
+        inside = front & (u >= 0) & (u < self.width) & (v >= 0) & (v < self.height) & active
+        index = mi.UInt32(dr.clip(dr.floor(v), 0, self.height - 1)) * self.width + \
+            mi.UInt32(dr.clip(dr.floor(u), 0, self.width - 1))
+        q = dr.square(dr.norm(ds.d) / ds.d.z)  # 1 + t_x² + t_y²
+        pdf = self.texel_distribution.eval_pmf_normalized(index, inside) / (self.tan_pitch ** 2) * q * dr.sqrt(q)
+        return dr.select(inside, pdf, 0.0)
+
+    def sample_wavelengths(self, si, sample, active=True):
+        """Wavelengths uniform over SPECTRUM_NM, weighted by the radiance at si.uv over their pdf."""
+        lo, hi = SPECTRUM_NM
+        lam = mi.Spectrum(lo + (hi - lo) * mi.sample_shifted(sample)) if mi.is_spectral else mi.Spectrum(0.0)
+        u, v = si.uv.x * self.width, si.uv.y * self.height
+        return lam, self._lanes(u, v, lam, active) * (hi - lo)
+
+    def pdf_wavelengths(self, wavelengths, active=True):
+        lo, hi = SPECTRUM_NM
+        return dr.select((wavelengths >= lo) & (wavelengths <= hi), 1.0 / (hi - lo), 0.0)
+
+    def sample_ray(self, time, sample1, sample2, sample3, active=True):
+        self._at_infinity()
+        d, u, v, pdf = self._sample_texel(sample3, active)
+        centre, radius = self.bounding_sphere()
+        offset = mi.warp.square_to_uniform_disk_concentric(sample2)
+        origin = centre + (mi.Frame3f(d).to_world(mi.Vector3f(offset.x, offset.y, 0.0)) + d) * radius
+        si = zeros(mi.SurfaceInteraction3f)
+        si.time, si.p, si.uv = time, origin, mi.Point2f(u / self.width, v / self.height)
+        wavelengths, weight = self.sample_wavelengths(si, sample1, active)
+        ray = mi.Ray3f(origin, -d, time, wavelengths)
+        return ray, dr.select(active & (pdf > 0), weight * (dr.pi * radius * radius) / pdf, 0.0)
+
+    def sample_position(self, time, sample, active=True):
+        return zeros(mi.PositionSample3f), mi.Float(dr.nan)  # an infinite emitter has no position
+
+    def pdf_position(self, ps, active=True):
+        return mi.Float(0.0)
+
+    def bbox(self):
+        return mi.ScalarBoundingBox3f()
 
     def traverse(self, callback) -> None:
-        pass
+        callback.put("scale", self.scale, mi.ParamFlags.Differentiable)
 
     def to_string(self) -> str:
         where = "infinity" if math.isinf(self.distance) else f"{self.distance:g} mm"
@@ -118,4 +256,4 @@ class ImageObject(mi.Emitter):
 
 
 def register() -> None:
-    mi.register_emitter("image_object", lambda props: ImageObject(props))
+    mi.register_emitter("image_object", ImageObject)  # this variant's class, bound now

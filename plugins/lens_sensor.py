@@ -9,12 +9,28 @@
 | (film)     | film    | pixels  | hdrfilm 768×576  | its width and height are the sensor's columns and rows |
 | (sampler)  | sampler | —       | independent, 4   | its sample_count is `solas-mi render`'s default spp    |
 
-`traverse` exposes nothing: no parameter is differentiable or editable through `mi.traverse`.
+`traverse` exposes `pitch_um` and `fov_deg`, read-only (the exit-pupil bounds and the irradiance
+scale are built from them), and the film and sampler as children.
 
 `lens` goes through Mitsuba's file resolver first; the lens must be focused at infinity (a near
 object is `image_object`'s `distance_mm`). `fov_deg` sets the ideal camera's pinhole focal length.
 `response` is "lines" (the lens's design wavelengths), "lines:λ,…", "srgb", "mono:λ" (λ in nm) or
-"table:FILE.csv". The film's other settings are unused: the render loop accumulates pixels itself.
+"table:FILE.csv".
+
+Films: solas-mi's loop (`solas_mi.render.loop`) develops pixels itself with the response's channel
+weights and ignores the film's other settings. Mitsuba's own integrators develop through the film,
+with the sample weight of `sample_ray` = the pupil weight below × 1/p(λ) (`sample_wavelengths`: p is
+the response's density in nm⁻¹, or a line's probability): `hdrfilm` then converts a continuous
+response ("srgb", "table:") with Mitsuba's CIE 1931 tables over the response's range (srgb: 380–780
+nm) and without the response's white balance (a flat spectrum of radiance 1 gives Mitsuba's
+(1.206, 0.949, 0.910), not (1, 1, 1)), and `specfilm` with one sensitivity per line, zero at the
+other lines, returns each line's value for "lines" and "mono" (lines have no density: `hdrfilm`
+cannot integrate them).
+
+Integrators: the sensor sees the scene only through the lens, so Mitsuba's `path`, `volpath` and
+`aov` render it (and solas-mi's loop); others (`direct`, `ptracer`, …) stop with a SolasError naming
+them when the render starts (`plugins/scene_probe.py` finds the integrator). Light tracing cannot
+connect to it: `sample_direction`, `pdf_direction` and `eval_direction` raise.
 
 Each sample takes a point in its pixel and a point inside the exit-pupil bound of that film
 position (`solas_mi.optics.exit_pupil`; nothing assumes the stop is the last surface), and one
@@ -45,8 +61,11 @@ from solas_mi.optics.camera import pinhole_focal_mm
 from solas_mi.optics.exit_pupil import pupil_bounds
 from solas_mi.optics.illumination import ideal_irradiance, image_scales
 from solas_mi.optics.lens import Lens
-from solas_mi.plugins.tables import lookup, table
+from solas_mi.plugins.scene_probe import calling_render, integrator_name
+from solas_mi.plugins.tables import lookup, table, zeros
 from solas_mi.render import response as responses
+
+INTEGRATORS = ("path", "volpath", "aov")  # Mitsuba's integrators that render through the lens
 
 
 class LensSensor(mi.Sensor):
@@ -60,7 +79,9 @@ class LensSensor(mi.Sensor):
         if not self.lens.at_infinity:
             raise SolasError(f"lens_sensor: lens {self.lens.name} has a finite object; the sensor needs a lens "
                              "focused at infinity (put a near object in the scene with image_object's distance_mm)")
-        self.pitch_mm = float(props.get("pitch_um", 5.0)) * 1e-3
+        self.pitch_um = float(props.get("pitch_um", 5.0))
+        self.fov_deg = float(props.get("fov_deg", self.lens.field_deg))
+        self.pitch_mm = self.pitch_um * 1e-3
         if not self.pitch_mm > 0:
             raise SolasError(f"lens_sensor: pitch_um {self.pitch_mm * 1e3!r} must be positive")
         self.response = responses.parse(str(props.get("response", "lines")), self.lens.wavelengths_nm)
@@ -76,7 +97,7 @@ class LensSensor(mi.Sensor):
         self.rows = len(union)
         self.bounds = [table(union[:, k]) for k in range(5)]
         self.plane_z = bounds.plane_z
-        self.focal_mm = pinhole_focal_mm(self.lens, float(props.get("fov_deg", self.lens.field_deg)))
+        self.focal_mm = pinhole_focal_mm(self.lens, self.fov_deg)
         self.norm = 1.0 / ideal_irradiance(self.lens, self.focal_mm)
         heights, radial, tangential = image_scales(self.lens, half_diag, self.lens.primary_wavelength)
         self.scale_step = float(heights[1] - heights[0]) if heights[-1] > 0 else 1.0
@@ -86,6 +107,9 @@ class LensSensor(mi.Sensor):
         r = self.response
         self.spectrum = mi.DiscreteDistribution(table(r.probability))
         self.lo, self.hi = table(r.lo_nm), table(r.hi_nm)
+        # 1/p(λ): the bin's width over its probability (a line: 1 over its probability)
+        self.inv_pdf = table(np.where(r.hi_nm > r.lo_nm, r.hi_nm - r.lo_nm, 1.0) / r.probability)
+        self.checked = set()  # ids of the integrators found to render through the lens
         self.channel_table = table(r.weights)
         self.channels = len(r.channels)
         # a response of equally likely spectral lines (lines, mono) lets a render stratify by line
@@ -120,7 +144,22 @@ class LensSensor(mi.Sensor):
         """Image-plane point (mm) of a film sample in [0, 1]² (row 0 at +y)."""
         return mi.Point2f((sample2.x - 0.5) * (self.width * self.pitch_mm), (0.5 - sample2.y) * (self.height * self.pitch_mm))
 
+    def sample_wavelengths(self, si, sample, active=True):
+        """One wavelength from the response in all four lanes, and its weight 1/p(λ)."""
+        lam, index = self.sample_wavelength(sample, active)
+        inv_pdf = lookup(self.inv_pdf, index, active)
+        return (mi.Spectrum(lam), mi.Spectrum(inv_pdf)) if mi.is_spectral else (mi.Spectrum(0.0), mi.Spectrum(1.0))
+
     def sample_ray(self, time, sample1, sample2, sample3, active=True):
+        """A camera ray for Mitsuba's integrators: `pupil_ray` with the weight 1/p(λ) of its wavelength."""
+        self.check_integrator()
+        ray, weight = self.pupil_ray(time, sample1, sample2, sample3, active)
+        _, inv_pdf = self.sample_wavelengths(None, sample1, active)
+        return ray, weight * inv_pdf
+
+    def pupil_ray(self, time, sample1, sample2, sample3, active=True):
+        """A camera ray and its pupil weight (no wavelength weight: solas-mi's loop applies the
+        response's channel weights itself)."""
         lam, _ = self.sample_wavelength(sample1, active)
         film = self.film_point(sample2)
         x, y = film.x, film.y
@@ -149,12 +188,54 @@ class LensSensor(mi.Sensor):
         ray, weight = self.sample_ray(time, sample1, sample2, sample3, active)
         return mi.RayDifferential3f(ray), weight
 
+    def check_integrator(self) -> None:
+        """SolasError unless the calling render's integrator can see the scene through the lens."""
+        _, integrator = calling_render()
+        if integrator is None or id(integrator) in self.checked:
+            return
+        name = integrator_name(integrator)
+        if name not in INTEGRATORS:
+            raise SolasError(f"lens_sensor: integrator {name!r} cannot render through the lens (the sensor is "
+                             f"reachable only through glass); use {', '.join(INTEGRATORS)} or solas-mi's render loop")
+        self.checked.add(id(integrator))
+
+    def sample_direction(self, it, sample, active=True):
+        self.check_integrator()
+        raise SolasError("lens_sensor: light tracing cannot connect to a sensor behind a lens; "
+                         f"use the integrators {', '.join(INTEGRATORS)} or solas-mi's render loop")
+
+    def pdf_direction(self, it, ds, active=True):
+        return self.sample_direction(it, None, active)
+
+    def eval_direction(self, it, ds, active=True):
+        return self.sample_direction(it, None, active)
+
+    def sample_position(self, time, sample, active=True):
+        """A point of the film, uniform over its area (mm²), facing the lens."""
+        film = self.film_point(sample)
+        ps = zeros(mi.PositionSample3f)
+        ps.p = mi.Point3f(film.x, film.y, self.image_z)
+        ps.n = mi.Normal3f(0.0, 0.0, -1.0)
+        ps.uv, ps.time, ps.pdf, ps.delta = sample, time, mi.Float(self.pdf_area()), False
+        return ps, mi.Float(1.0)
+
+    def pdf_position(self, ps, active=True):
+        return dr.select(active, self.pdf_area(), 0.0)
+
+    def pdf_area(self) -> float:
+        return 1.0 / (self.width * self.height * self.pitch_mm ** 2)
+
+    def eval(self, si, active=True):
+        return mi.Spectrum(0.0)  # the film emits nothing and cannot be hit
+
     def bbox(self):
         half = 0.5 * self.pitch_mm * mi.ScalarVector2f(self.width, self.height)
         return mi.ScalarBoundingBox3f([-half.x, -half.y, self.image_z], [half.x, half.y, self.image_z])
 
     def traverse(self, callback) -> None:
-        pass
+        super().traverse(callback)
+        callback.put("pitch_um", self.pitch_um, mi.ParamFlags.ReadOnly)
+        callback.put("fov_deg", self.fov_deg, mi.ParamFlags.ReadOnly)
 
     def to_string(self) -> str:
         return (f"LensSensor[{self.lens.name}, {self.width}x{self.height} px of {self.pitch_mm * 1e3:g} um, "
@@ -162,4 +243,4 @@ class LensSensor(mi.Sensor):
 
 
 def register() -> None:
-    mi.register_sensor("lens_sensor", lambda props: LensSensor(props))
+    mi.register_sensor("lens_sensor", LensSensor)  # this variant's class, bound now

@@ -20,8 +20,24 @@ s and p terms (M. Born, E. Wolf, "Principles of Optics", 7th ed., Cambridge Univ
 - "off": refract with weight one, the sequential tracer's radiometry.
 Total internal reflection reflects in every mode. Radiance crossing from index n₁ into n₂ is scaled
 by (n₂/n₁)², importance is not (E. Veach, "Robust Monte Carlo Methods for Light Transport
-Simulation", PhD thesis, Stanford University, 1997, ch. 5). Paths carry one wavelength (nm) in every
-lane (the lens sensor samples it), so lane 0's index serves all four.
+Simulation", PhD thesis, Stanford University, 1997, ch. 5).
+
+Components (`BSDFContext.component`, `type_mask`): 0 is the reflection, 1 the transmission. A request
+for one of them alone returns it every time with its own weight, as Mitsuba's `dielectric` does:
+reflection R (1 under total internal reflection; with "off", 1 only there), transmission 1 − R
+(with "off", 1; 0 under total internal reflection), radiance transmission times (n₂/n₁)².
+
+Wavelengths: solas-mi's sensors carry one wavelength (nm) in all four spectral lanes, and lane 0's
+index serves all four. A stock camera (`perspective`, …) carries four different wavelengths that
+refract into four directions. The interface then follows one lane, chosen uniformly from `sample1`,
+and weighs it by 4 and the others by 0 (pbrt-v4's `SampledWavelengths::TerminateSecondary`, made
+per interface: M. Pharr, W. Jakob, G. Humphreys, "Physically Based Rendering", 4th ed., MIT Press,
+2023). Each lane's expected contribution is exact after any number of interfaces; a path
+through k interfaces survives in one of its lanes with probability 4^(1−k), so stock-camera renders
+through glass are noisier than the same render through solas-mi's sensors. (Terminating once per
+path, as pbrt-v4 does, needs the path's state: Mitsuba gives a BSDF none — writing `si.wavelengths`
+does not reach the next ray — and scaling lane 0 by 4 at every interface comes out 4^(k−1) too
+bright.)
 """
 from __future__ import annotations
 
@@ -49,15 +65,28 @@ class SellmeierDielectric(mi.BSDF):
         self.m_components = [reflection, transmission]
         self.m_flags = reflection | transmission
 
-    def eta(self, wavelengths) -> mi.Float:
-        """n_int / n_ext at the path's wavelength (nm)."""
-        um = mi.Float(wavelengths[0]) * 1e-3 if mi.is_spectral else mi.Float(0.5876)
+    def eta(self, wavelength) -> mi.Float:
+        """n_int / n_ext at `wavelength` (nm; 587.6 nm in the non-spectral variants)."""
+        um = mi.Float(wavelength) * 1e-3 if mi.is_spectral else mi.Float(0.5876)
         return self.int_glass.index_formula(um, dr.sqrt) / self.ext_glass.index_formula(um, dr.sqrt)
 
     def sample(self, ctx, si, sample1, sample2, active=True):
+        has_r = ctx.is_enabled(mi.BSDFFlags.DeltaReflection, 0)
+        has_t = ctx.is_enabled(mi.BSDFFlags.DeltaTransmission, 1)
+        lam, lane, sample1, mixed = self._lane(si.wavelengths, sample1)
         cos_theta_i = mi.Frame3f.cos_theta(si.wi)
-        r_i, cos_theta_t, eta_it, eta_ti = mi.fresnel(cos_theta_i, self.eta(si.wavelengths))
-        reflect = (sample1 <= r_i) if self.fresnel == "sample" else (r_i >= 1.0)
+        r_i, cos_theta_t, eta_it, eta_ti = mi.fresnel(cos_theta_i, self.eta(lam))
+        tir = r_i >= 1.0
+        if self.fresnel == "off":
+            r_w, t_w = dr.select(tir, 1.0, 0.0), dr.select(tir, 0.0, 1.0)
+        else:
+            r_w, t_w = r_i, 1.0 - r_i
+        if has_r and has_t:
+            reflect = (sample1 <= r_i) if self.fresnel == "sample" else tir
+            scale = dr.select(reflect, 1.0, 1.0 if self.fresnel == "sample" else t_w)
+        else:
+            reflect = mi.Bool(has_r)
+            scale = r_w if has_r else t_w
         bs = mi.BSDFSample3f()
         bs.wo = dr.select(reflect, mi.reflect(si.wi), mi.refract(si.wi, cos_theta_t, eta_ti))
         bs.pdf = 1.0
@@ -66,11 +95,35 @@ class SellmeierDielectric(mi.BSDF):
         bs.sampled_type = dr.select(reflect, mi.UInt32(+mi.BSDFFlags.DeltaReflection),
                                     mi.UInt32(+mi.BSDFFlags.DeltaTransmission))
         # radiance is scaled by the squared index ratio on refraction (not importance)
-        radiance = ctx.mode == mi.TransportMode.Radiance  # the mode is one value for all lanes
-        scale = dr.select(reflect, 1.0, dr.square(eta_ti)) if radiance else mi.Float(1.0)
-        if self.fresnel == "transmit":
-            scale = dr.select(reflect, scale, scale * (1.0 - r_i))
-        return bs, dr.select(active, mi.Spectrum(scale), 0.0)
+        if ctx.mode == mi.TransportMode.Radiance:  # the mode is one value for all lanes
+            scale = scale * dr.select(reflect, 1.0, dr.square(eta_ti))
+        active = active & (has_r or has_t)
+        return bs, dr.select(active, self._lane_weights(scale, lane, mixed), 0.0)
+
+    def _lane(self, wavelengths, sample1):
+        """(wavelength the interface follows, its lane, sample1 left for the Fresnel choice, whether
+        the lanes differ). Equal lanes: lane 0, sample1 unchanged; else a lane chosen by sample1."""
+        if not mi.is_spectral:
+            return None, 0, sample1, False
+        mixed = (wavelengths[1] != wavelengths[0]) | (wavelengths[2] != wavelengths[0]) | \
+            (wavelengths[3] != wavelengths[0])
+        scaled = sample1 * 4.0
+        lane = dr.select(mixed, dr.minimum(mi.UInt32(scaled), 3), 0)
+        sample1 = dr.select(mixed, scaled - mi.Float(lane), sample1)
+        lam = dr.select(lane == 0, wavelengths[0], dr.select(lane == 1, wavelengths[1],
+                                                             dr.select(lane == 2, wavelengths[2], wavelengths[3])))
+        return lam, lane, sample1, mixed
+
+    @staticmethod
+    def _lane_weights(scale, lane, mixed) -> mi.Spectrum:
+        """`scale` in every lane, or, where the lanes carry different wavelengths, 4·scale in the
+        followed lane and 0 in the others."""
+        if not mi.is_spectral:
+            return mi.Spectrum(scale)
+        weight = mi.Spectrum(scale)
+        for i in range(4):
+            weight[i] = dr.select(mixed, dr.select(lane == i, 4.0 * scale, 0.0), scale)
+        return weight
 
     def eval(self, ctx, si, wo, active=True):
         return mi.Spectrum(0.0)
@@ -89,4 +142,4 @@ class SellmeierDielectric(mi.BSDF):
 
 
 def register() -> None:
-    mi.register_bsdf("sellmeier_dielectric", lambda props: SellmeierDielectric(props))
+    mi.register_bsdf("sellmeier_dielectric", SellmeierDielectric)  # this variant's class, bound now

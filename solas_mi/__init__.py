@@ -16,8 +16,10 @@ from __future__ import annotations
 from .errors import SolasError
 from .lazy import lazy_exports
 
-__all__ = ["Lens", "SolasError", "paraxial", "spot"]
+__all__ = ["Lens", "SolasError", "mitsuba", "paraxial", "spot"]
 __version__ = "0.1.0"
 
-# `from solas_mi import Lens, paraxial, spot`; PSFs: `from solas_mi.psf import psf, psf_grid, PSFGrid`
-__getattr__ = lazy_exports(__name__, {"Lens": ".optics.lens", "paraxial": ".optics.paraxial", "spot": ".optics.spot"})
+# `from solas_mi import Lens, paraxial, spot`; PSFs: `from solas_mi.psf import psf, psf_grid, PSFGrid`;
+# Mitsuba with the plugins: `mi = solas_mi.mitsuba(); mi.render(mi.load_file("scene.xml"))`
+__getattr__ = lazy_exports(__name__, {"Lens": ".optics.lens", "paraxial": ".optics.paraxial", "spot": ".optics.spot",
+                                      "mitsuba": ".render.mitsuba"})

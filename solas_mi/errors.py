@@ -6,9 +6,15 @@ class SolasError(ValueError):
 
 
 def plugin_error(exc: BaseException, context: str) -> SolasError:
-    """The user's one-line message out of an error Mitsuba raised around one of our plugins: Mitsuba
-    wraps a plugin's SolasError in its parser error, with a Python traceback ending in
-    "SolasError: <message>"; any other error gives the first line of Mitsuba's text."""
+    """The user's one-line message out of an error Mitsuba raised around one of our plugins: the
+    plugin's SolasError where Mitsuba kept it as the cause (JIT renders wrap it in their own
+    RuntimeError) or in its text (the parser embeds a traceback ending in "SolasError: <message>");
+    any other error gives the first line of Mitsuba's text."""
+    cause = exc
+    while cause is not None:
+        if isinstance(cause, SolasError):
+            return SolasError(f"{context}: {cause}")
+        cause = cause.__cause__ or cause.__context__
     text = str(exc)
     marker = "SolasError: "
     message = text.rsplit(marker, 1)[1] if marker in text else text

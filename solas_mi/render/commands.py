@@ -10,6 +10,27 @@ from ..errors import SolasError
 from ..options import parse_wxh
 
 DEFAULT_IMAGE = "images/rocket.png"  # under the shipped scenes directory
+MAX_SPP = 1 << 20
+BYTES_PER_SAMPLE = 80  # a pass's wavefront (measured: 1.1 GB peak for 12.6 M samples in one pass)
+SAMPLES_PER_SECOND_PER_CORE = 0.9e6  # measured on the bundled image, `lines` (README: 1.8–2 M/s on 2 cores)
+
+
+def _check_render(width: int, height: int, spp: int, force: bool) -> None:
+    """Refuse an absurd spp or a render that cannot fit in memory; announce a long one on stderr."""
+    import os
+
+    from ..budget import check_memory
+    from .stock import SAMPLES_PER_PASS  # the loop's passes are as large
+
+    if not (isinstance(spp, int) and 1 <= spp <= MAX_SPP):
+        raise SolasError(f"samples per pixel {spp!r} must be an integer from 1 to {MAX_SPP}")
+    pixels = width * height
+    check_memory(f"render {width}x{height}", max(pixels, SAMPLES_PER_PASS) * BYTES_PER_SAMPLE + 48 * pixels, force,
+                 "a smaller sensor")
+    seconds = pixels * spp / (SAMPLES_PER_SECOND_PER_CORE * (os.cpu_count() or 1))
+    if seconds > 60:
+        print(f"render {width}x{height} at {spp} spp: {pixels * spp:.3g} samples, about {seconds / 60:.0f} min",
+              file=sys.stderr, flush=True)
 
 
 def _progress(done: int, total: int) -> None:
@@ -25,28 +46,45 @@ def _default_image() -> str:
 
 
 def _scene(args) -> int:
+    from ..imageio import atomic_path
     from ..optics.camera import camera_for
     from ..optics.lens import Lens
+    from ..outputs import output_folder
     from .scene import write_scene
 
+    out = output_folder(args.output)
     lens = Lens.load(args.lens)
     camera = camera_for(lens, parse_wxh(args.sensor, "--sensor"), args.fov_deg, args.pitch_um)
-    out = Path(args.output)
     out.mkdir(parents=True, exist_ok=True)
     image = Path(args.image or _default_image())
     if not image.is_file():
         raise SolasError(f"no such image file: {image}")
     if not (out / image.name).exists() or not (out / image.name).samefile(image):
-        shutil.copyfile(image, out / image.name)
+        with atomic_path(out / image.name) as tmp:
+            shutil.copyfile(image, tmp)
     xml = write_scene(lens, out, image.name, camera, args.rings, args.spp, args.response, args.boundary, args.fresnel)
     print(f"wrote {xml} (meshes in {out / 'meshes'}); render it with: solas-mi render {xml} -o out.exr")
     return 0
 
 
-def _render(args) -> int:
-    from .loop import render
-    from .mitsuba import load_scene
+# auto: our stratified loop for the scenes it was made for (a lens_sensor before an image_object, from
+# `solas-mi scene`: it renders the sensor's response exactly, R/G/B lines included), the scene's own
+# integrator for everything else; scene: always the scene's own (stock path where it has none); solas: the loop
+INTEGRATORS = ("auto", "scene", "solas")
 
+
+def _image_scene(scene) -> bool:
+    """A scene of `solas-mi scene`: a lens_sensor looking at one image_object."""
+    return (type(scene.sensors()[0]).__name__ == "LensSensor"
+            and [type(e).__name__ for e in scene.emitters()] == ["ImageObject"])
+
+
+def _render(args) -> int:
+    from ..optics.lens import Lens
+    from ..outputs import data_and_preview
+    from .user_scene import load
+
+    data_file, png = data_and_preview(args.output, args.png, inputs=[args.scene])
     params = {}
     for item in args.set or []:
         key, sep, value = item.partition("=")
@@ -55,27 +93,55 @@ def _render(args) -> int:
         params[key] = value
     if args.spp is not None:
         params["spp"] = args.spp
-    scene = load_scene(args.scene, args.variant, **params)
+    lens = Lens.load(args.lens) if args.lens else None
+    if lens is None and (args.pitch_um is not None or args.focus_distance is not None):
+        raise SolasError("--pitch-um and --focus-distance set the lens camera: give --lens too")
+    if lens is not None and args.integrator == "solas":
+        raise SolasError("--integrator solas renders lens_sensor scenes (from `solas-mi scene`); with --lens the "
+                         "scene's own integrator renders it")
+    scene = load(args.scene, args.variant, lens, params, pitch_um=args.pitch_um, focus_distance=args.focus_distance,
+                 response=args.response)
     spp = args.spp or int(scene.sensors()[0].sampler().sample_count())
-    result = render(scene, spp, seed=args.seed, progress=_progress)
+    width, height = (int(v) for v in scene.sensors()[0].film().crop_size())
+    _check_render(width, height, spp, args.force)
+    loop = args.integrator == "solas" or (args.integrator == "auto" and lens is None and _image_scene(scene))
+    if loop:
+        from .loop import render
+
+        result = render(scene, spp, seed=args.seed, progress=_progress)
+    else:
+        from .stock import render_scene
+
+        result = render_scene(scene, spp, seed=args.seed, progress=_progress)
     result.meta["scene"] = str(args.scene)
-    png = result.write(args.output, args.png)
-    print(f"wrote {args.output} and {png} ({result.seconds:.1f} s, {result.samples_per_second / 1e6:.2f} M samples/s)")
+    if lens is not None:
+        result.meta.update(lens=lens.name, lens_hash=lens.hash)
+    return _write(result, data_file, png)
+
+
+def _write(result, data_file, png) -> int:
+    from ..outputs import written_together
+
+    with written_together(data_file, png) as (tmp_data, tmp_png):
+        result.write(tmp_data, tmp_png)
+    print(f"wrote {data_file} and {png} ({result.seconds:.1f} s, {result.samples_per_second / 1e6:.2f} M samples/s)")
     return 0
 
 
 def _render_image(args) -> int:
     from ..optics.lens import Lens
+    from ..outputs import data_and_preview
     from .image import render_image
 
+    data_file, png = data_and_preview(args.output, args.png, inputs=[args.image])
+    rows, cols = parse_wxh(args.sensor, "--sensor")
+    _check_render(cols, rows, args.spp, args.force)
     lens = Lens.load(args.lens)
     result = render_image(lens, args.image, parse_wxh(args.sensor, "--sensor"), args.pitch_um, args.spp,
                           args.response, args.fov_deg, args.boundary, args.fresnel, args.rings, args.variant,
                           args.seed, progress=_progress)
     result.meta["image"] = str(args.image)
-    png = result.write(args.output, args.png)
-    print(f"wrote {args.output} and {png} ({result.seconds:.1f} s, {result.samples_per_second / 1e6:.2f} M samples/s)")
-    return 0
+    return _write(result, data_file, png)
 
 
 def _add_render_options(p: argparse.ArgumentParser, spp_default: int | None) -> None:
@@ -85,6 +151,7 @@ def _add_render_options(p: argparse.ArgumentParser, spp_default: int | None) -> 
     p.add_argument("--variant", choices=VARIANTS, help="Mitsuba variant (default: cuda_ad_spectral with a GPU, "
                                                        "else llvm_ad_spectral)")
     p.add_argument("--seed", type=int, default=0)
+    p.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
     p.add_argument("-o", "--output", required=True, help="output OpenEXR file (linear)")
     p.add_argument("--png", help="sRGB PNG for viewing (default: beside the EXR)")
 
@@ -112,10 +179,24 @@ def register(sub) -> None:
     _add_camera_options(scene)
     scene.set_defaults(run=_scene)
 
-    render = sub.add_parser("render", help="render a solas-mi scene XML to OpenEXR + PNG")
-    render.add_argument("scene", help="scene XML (from `solas-mi scene`)")
+    render = sub.add_parser(
+        "render", help="render a Mitsuba scene XML to OpenEXR + PNG, through a real lens with --lens",
+        description="Render a scene with its own integrator (stock path where it has none): a scene from "
+                    "`solas-mi scene`, any scene holding a lens_sensor or lens_camera, or, with --lens, any "
+                    "Mitsuba scene whose perspective camera is replaced by a lens_camera at the same pose.")
+    render.add_argument("scene", help="scene XML")
     render.add_argument("--set", action="append", metavar="NAME=VALUE",
                         help="override a <default> of the scene (e.g. --set image=other.png); repeatable")
+    render.add_argument("--lens", help="replace the scene's perspective camera by this lens (shipped name or .toml)")
+    render.add_argument("--pitch-um", type=float, help="with --lens: pixel pitch in µm (default: the lens's field "
+                                                       "matches the perspective camera's fov)")
+    render.add_argument("--focus-distance", type=float, help="with --lens: focus distance in world units "
+                                                             "(default: the lens file's image plane)")
+    render.add_argument("--response", help="with --lens: camera response (srgb, lines, mono:<nm>, table:<file.csv>)")
+    render.add_argument("--integrator", choices=INTEGRATORS, default=INTEGRATORS[0],
+                        help="auto (default): solas-mi's stratified loop for scenes of `solas-mi scene`, the "
+                             "scene's own integrator for any other; scene: the scene's own (path where it has "
+                             "none); solas: the loop (lens_sensor + image_object scenes)")
     _add_render_options(render, None)
     render.set_defaults(run=_render)
 

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import SolasError
+from .scene import path_depth
 
 _SAMPLES_PER_PASS = 1 << 22  # samples traced at once: bounds the memory of one pass
 SPAWN_OFFSET_MM = 1e-4  # a continued ray starts this far (mm) along its own direction
@@ -68,12 +69,8 @@ def continue_ray(si, ray, wo_local):
 
 
 def _max_depth(scene, lens) -> int:
-    """Interactions a path needs: one per refracting surface and the escape; with sampled Fresnel
-    reflections, room for a ghost (two reflections and the way back)."""
-    refracting = sum(1 for k, s in enumerate(lens.surfaces)
-                     if s.glass != (lens.surfaces[k - 1].glass if k else lens.object_glass))
-    ghosts = any(getattr(shape.bsdf(), "fresnel", None) == "sample" for shape in scene.shapes())
-    return 3 * refracting + 2 if ghosts else refracting + 2
+    """Interactions a path needs (`scene.path_depth`), with room for ghosts where a glass samples them."""
+    return path_depth(lens, any(getattr(shape.bsdf(), "fresnel", None) == "sample" for shape in scene.shapes()))
 
 
 def render(scene, spp: int, seed: int = 0, max_depth: int | None = None, progress=None) -> Render:
@@ -148,7 +145,7 @@ def _pass(mi, dr, scene, sensor, emitter, spp: int, first: int, total: int, base
     pos = (film + jitter) / mi.ScalarPoint2f(width, height)
     footprint = sensor.footprint(sensor.film_point(pos)) if filtered else None
     aperture = cmj_2d(s, total, hash_seed(pixel, 3, base), sampler.next_2d())
-    ray, throughput = sensor.sample_ray(0.0, s1, pos, aperture)
+    ray, throughput = sensor.pupil_ray(0.0, s1, pos, aperture)
     _, band = sensor.sample_wavelength(s1)
     ctx = mi.BSDFContext()
     radiance = mi.Float(0.0)
@@ -191,7 +188,7 @@ def _pass_scalar(mi, dr, scene, sensor, emitter, spp: int, first: int, total: in
             jitter = (0.5, 0.5) if filtered else (u[1], u[2])
             pos = mi.Point2f((pixel % width + jitter[0]) / width, (pixel // width + jitter[1]) / height)
             footprint = sensor.footprint(sensor.film_point(pos)) if filtered else None
-            ray, throughput = sensor.sample_ray(0.0, s1, pos, mi.Point2f(u[3], u[4]))
+            ray, throughput = sensor.pupil_ray(0.0, s1, pos, mi.Point2f(u[3], u[4]))
             _, band = sensor.sample_wavelength(s1)
             weight, radiance = throughput[0] * share, 0.0
             for _ in range(depth):

@@ -2,14 +2,19 @@
 
 Variants are spectral (float32): `llvm_ad_spectral` by default, `cuda_ad_spectral` where a CUDA
 device works, `scalar_spectral` for small reference renders. The solas-mi plugins (`plugins/`,
-installed as `solas_mi.plugins`) are registered again whenever the variant changes.
+installed as `solas_mi.plugins`) are registered once for each variant, whoever set it.
+
+    mi = solas_mi.mitsuba()                      # the variant set, the plugins registered
+    scene = mi.load_file("scenes/solas_doublet/scene.xml")
+    image = mi.render(scene)                     # Mitsuba's path integrator, through the lens
 """
 from __future__ import annotations
 
-from ..errors import SolasError
+from ..errors import SolasError, plugin_error
 from ..llvm import select_libllvm
 
 VARIANTS = ("llvm_ad_spectral", "scalar_spectral", "cuda_ad_spectral")
+_registered: set[str] = set()  # variants whose plugin classes are registered
 
 
 def default_variant() -> str:
@@ -21,7 +26,8 @@ def default_variant() -> str:
 
 
 def mitsuba(variant: str | None = None):
-    """Mitsuba with `variant` set (default: `default_variant`) and the solas-mi plugins registered."""
+    """The `mitsuba` module with `variant` set (default: `default_variant`) and the solas-mi plugins
+    registered for it (`solas_mi.mitsuba`, the entry for Python users)."""
     variant = variant or default_variant()
     if variant not in VARIANTS:
         raise SolasError(f"variant {variant!r} must be one of {', '.join(VARIANTS)}")
@@ -35,9 +41,11 @@ def mitsuba(variant: str | None = None):
             mi.set_variant(variant)
         except Exception as exc:  # a CUDA variant without a working device
             raise SolasError(f"Mitsuba variant {variant} cannot start: {exc}") from exc
+    if variant not in _registered:
         from .. import plugins
 
         plugins.register()
+        _registered.add(variant)
     return mi
 
 
@@ -47,4 +55,4 @@ def load_scene(path: str, variant: str | None = None, **params):
     try:
         return mi.load_file(str(path), **{k: str(v) for k, v in params.items()})
     except RuntimeError as exc:
-        raise SolasError(f"cannot load scene {path}: {exc}") from None
+        raise plugin_error(exc, f"cannot load scene {path}") from None

@@ -142,10 +142,22 @@ def lens_parts(lens: Lens, rings: int = DEFAULT_RINGS) -> list[Part]:
     return parts
 
 
+def path_depth(lens: Lens, ghosts: bool) -> int:
+    """Interactions a camera path through `lens` needs: one per refracting surface and the escape; with
+    sampled Fresnel reflections (`ghosts`), room for a ghost (two reflections and the way back)."""
+    refracting = sum(1 for k, s in enumerate(lens.surfaces)
+                     if s.glass != (lens.surfaces[k - 1].glass if k else lens.object_glass))
+    return 3 * refracting + 2 if ghosts else refracting + 2
+
+
 def scene_xml(lens_file: str, parts: list[Part], camera: Camera, image: str, spp: int, response: str,
-              boundary: str, fresnel: str) -> str:
+              boundary: str, fresnel: str, max_depth: int) -> str:
     """Mitsuba 3 scene XML; meshes are referenced as meshes/<part>.ply beside it. Every number a user
-    may want to change is a <default> at the top."""
+    may want to change is a <default> at the top. The integrator is Mitsuba's `path` with `max_depth`
+    interactions (`mi.render`); solas-mi's loop reads only the sensor, the object, the shapes and the
+    sampler's count. The sampler is `independent`, the one that takes any count as given: `multijitter`
+    has 2.4× less noise in 40-px blocks under `mi.render` but rounds the count (128 → 132) and kills the
+    process with a floating-point exception on a count of 0."""
     shapes = []
     for p in parts:
         if p.int_glass is None:
@@ -157,7 +169,8 @@ def scene_xml(lens_file: str, parts: list[Part], camera: Camera, image: str, spp
                       f'        {bsdf}\n    </shape>')
     shapes_text = "\n".join(shapes)
     return f"""<?xml version="1.0" encoding="utf-8"?>
-<!-- solas-mi lens scene: render with `solas-mi render THIS.xml -o out.exr` (lengths in mm, pitch in um).
+<!-- solas-mi lens scene: render with `solas-mi render THIS.xml -o out.exr` (lengths in mm, pitch in um), or in
+     Python: `mi = solas_mi.mitsuba(); mi.render(mi.load_file("THIS.xml"))` (Mitsuba's path integrator below).
      Pixel values are image irradiance in units of the ideal camera's: an ideal lossless lens returns the image. -->
 <scene version="3.0.0">
     <default name="spp" value="{spp}"/>
@@ -169,8 +182,13 @@ def scene_xml(lens_file: str, parts: list[Part], camera: Camera, image: str, spp
     <default name="fov_deg" value="{camera.fov_deg!r}"/>
     <default name="boundary" value="{boundary}"/>
     <default name="fresnel" value="{fresnel}"/>
+    <default name="max_depth" value="{max_depth}"/>
 
-    <sensor type="lens_sensor">
+    <integrator type="path">
+        <integer name="max_depth" value="$max_depth"/>
+    </integrator>
+
+    <sensor type="lens_sensor" id="sensor">
         <string name="lens" value="{lens_file}"/>
         <float name="pitch_um" value="$pitch_um"/>
         <float name="fov_deg" value="$fov_deg"/>
@@ -185,7 +203,7 @@ def scene_xml(lens_file: str, parts: list[Part], camera: Camera, image: str, spp
         </sampler>
     </sensor>
 
-    <emitter type="image_object">
+    <emitter type="image_object" id="object">
         <string name="filename" value="$image"/>
         <float name="fov_deg" value="$fov_deg"/>
         <string name="boundary" value="$boundary"/>
@@ -224,7 +242,8 @@ def write_scene(lens: Lens, out_dir: str | os.PathLike, image: str, camera: Came
             with atomic_path(lens_copy) as tmp:
                 shutil.copyfile(lens.source, tmp)
         lens_ref = lens_copy.name
-    xml = scene_xml(lens_ref, parts, camera, image, spp, response, boundary, fresnel)
+    # deep enough for ghosts whatever `fresnel` is set to later: a path without them ends sooner anyway
+    xml = scene_xml(lens_ref, parts, camera, image, spp, response, boundary, fresnel, path_depth(lens, ghosts=True))
     path = out / name
     write_text(path, xml)
     return path
