@@ -33,8 +33,9 @@ def _check_render(width: int, height: int, spp: int, force: bool) -> None:
               file=sys.stderr, flush=True)
 
 
-def _progress(done: int, total: int) -> None:
-    print(f"\rrender: {done}/{total} spp ({100.0 * done / total:.0f} %)", end="", file=sys.stderr, flush=True)
+def _progress(done: float, total: int) -> None:
+    """Samples per pixel done (a fraction while a large image's bands are traced) of `total`."""
+    print(f"\rrender: {done:.4g}/{total} spp ({100.0 * done / total:.0f} %)", end="", file=sys.stderr, flush=True)
     if done == total:
         print(file=sys.stderr)
 

@@ -91,15 +91,26 @@ def render(scene, spp: int, seed: int = 0, max_depth: int | None = None, progres
     pixels = width * height
     per_pass = max(1, min(spp, _SAMPLES_PER_PASS // pixels))
     passes = math.ceil(spp / per_pass)
+    # an image larger than a pass is traced in bands of rows, so a pass stays bounded in memory and time
+    band = pixels if not dr.is_jit_v(mi.Float) else max(width, _SAMPLES_PER_PASS // width * width)
     accum = np.zeros(pixels * nc, dtype=np.float64)
     start, cpu = time.perf_counter(), time.process_time()
-    done = 0
-    for k in range(passes):
+    done, k = 0, 0
+    for _ in range(passes):
         n_spp = min(per_pass, spp - done)
-        run = _pass if dr.is_jit_v(mi.Float) else _pass_scalar
-        accum += run(mi, dr, scene, sensor, emitter, n_spp, done, spp, seed, seed * 1_000_003 + k + 1, depth)
+        for first in range(0, pixels, band):
+            count = min(band, pixels - first)
+            k += 1
+            if dr.is_jit_v(mi.Float):
+                accum[first * nc:(first + count) * nc] += _pass(mi, dr, scene, sensor, emitter, n_spp, done, spp,
+                                                                 seed, seed * 1_000_003 + k, depth, first, count)
+            else:
+                accum += _pass_scalar(mi, dr, scene, sensor, emitter, n_spp, done, spp, seed, seed * 1_000_003 + k,
+                                      depth)
+            if progress is not None and count < pixels:
+                progress(done + n_spp * (first + count) / pixels, spp)
         done += n_spp
-        if progress is not None:
+        if progress is not None and band >= pixels:
             progress(done, spp)
     seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
     image = (accum / spp).reshape(height, width, nc).astype(np.float32)
@@ -114,20 +125,20 @@ def _line_shares(total: int, lines: int) -> list[float]:
     return [total / (lines * len(range(c, total, lines))) for c in range(lines)]
 
 
-def _pass(mi, dr, scene, sensor, emitter, spp: int, first: int, total: int, base: int, seed: int, depth: int
-          ) -> np.ndarray:
-    """Samples first…first+spp−1 of every pixel's stratified set of `total`, traced as one wavefront;
-    returns the per-pixel, per-channel sums."""
+def _pass(mi, dr, scene, sensor, emitter, spp: int, first: int, total: int, base: int, seed: int, depth: int,
+          first_pixel: int, pixels: int) -> np.ndarray:
+    """Samples first…first+spp−1 of the stratified sets of `total` of pixels first_pixel… (`pixels` of
+    them, row-major), traced as one wavefront; returns their per-pixel, per-channel sums."""
     from .sampling import cmj_2d, hash_seed, stratified_1d
 
     width, height, nc = sensor.width, sensor.height, sensor.channels
-    n = width * height * spp
+    n = pixels * spp
     total_samples = total
 
     sampler = mi.load_dict({"type": "independent", "sample_count": spp})
     sampler.seed(seed, n)
     idx = dr.arange(mi.UInt32, n)
-    pixel = idx // spp
+    pixel = idx // spp + first_pixel
     s = idx % spp + first  # the sample's index in its pixel's stratified set of `total`
     lines = sensor.discrete_lines
     if lines:  # each line gets its own stratified set, so every channel sees a stratified pupil
@@ -161,9 +172,9 @@ def _pass(mi, dr, scene, sensor, emitter, spp: int, first: int, total: int, base
         weight *= bw[0]
         active &= weight != 0.0
         ray = continue_ray(si, ray, bs.wo)
-    out = dr.zeros(mi.Float, width * height * nc)
+    out = dr.zeros(mi.Float, pixels * nc)
     for c, w in enumerate(sensor.channel_weights(band)):
-        dr.scatter_reduce(dr.ReduceOp.Add, out, radiance * w, pixel * nc + c)
+        dr.scatter_reduce(dr.ReduceOp.Add, out, radiance * w, (pixel - first_pixel) * nc + c)
     dr.eval(out)
     return np.asarray(out, dtype=np.float64) * 1.0  # the pass's sum over its samples
 
