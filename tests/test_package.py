@@ -18,6 +18,7 @@ ALLOWED = {
     "render": {"optics", "psf"},  # the Mitsuba plugins (plugins/, installed as solas_mi.plugins) are part of it
     "metrics": set(),
     "validation": {"optics", "psf", "convolution", "render", "metrics"},
+    "batch": {"optics", "psf", "convolution", "metrics"},
 }
 
 
@@ -107,6 +108,7 @@ def test_stages_import_only_downward():
     ("solas_mi.render.commands", ("drjit", "mitsuba", "matplotlib")),
     ("solas_mi.render.response", ("drjit", "mitsuba", "matplotlib")),
     ("solas_mi.metrics.commands", ("scipy", "skimage", "matplotlib")),
+    ("solas_mi.batch.commands", ("dask", "distributed", "tqdm", "drjit", "matplotlib")),
     ("solas_mi", ("drjit", "mitsuba", "matplotlib", "numpy")),
 ])
 def test_light_modules_stay_light(module, heavy):
@@ -117,7 +119,7 @@ def test_light_modules_stay_light(module, heavy):
 
 def test_building_the_command_line_stays_light():
     code = ("import sys; from solas_mi.cli import build_parser; build_parser(); "
-            "print(','.join(m for m in ('drjit', 'mitsuba', 'matplotlib') if m in sys.modules))")
+            "print(','.join(m for m in ('drjit', 'mitsuba', 'matplotlib', 'dask', 'tqdm') if m in sys.modules))")
     loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
     assert loaded == "", f"building the parser loads {loaded}"
 

@@ -8,52 +8,32 @@ from __future__ import annotations
 
 import argparse
 import sys
-from pathlib import Path
 from typing import Any
 
-from .methods import DEFAULT_METHOD, METHODS, check_method, degrade
+from .methods import DEFAULT_METHOD, METHODS, check_method
 
-# input float64 + its sRGB decoding + padded planes and output (measured: 10 GB for 14000×12000×3)
-BYTES_PER_VALUE = 24
 LARGE_IMAGE_VALUES = 4096 * 3072 * 3  # beyond 4K (≈ 1.7 s) the command reports each channel
 
 
 def run_degrade(args: argparse.Namespace) -> int:
-    from ..budget import check_memory
-    from ..imageio import image_channels, image_size, read_image, write_exr, write_png
-    from ..outputs import data_and_preview, written_together
+    from ..imageio import image_size
+    from ..outputs import data_and_preview
     from ..psf.grid import PSFGrid
+    from .output import degrade_file
 
     output, png = data_and_preview(args.output, args.png, inputs=[args.image, args.psf_grid])
     check_method(args.method)
     rows, cols, channels = image_size(args.image)
-    check_memory(f"degrade {cols}x{rows}", BYTES_PER_VALUE * rows * cols * max(channels, 1), args.force)
-    grid = PSFGrid.read(args.psf_grid)
-    image = read_image(args.image, linearize=not args.linear)
-    meta: dict[str, Any] = {}
-    large = image.size > LARGE_IMAGE_VALUES
+    large = rows * cols * channels > LARGE_IMAGE_VALUES
 
     def progress(done: int, total: int) -> None:
         if large:  # a large image takes long enough to want a sign of life
             print(f"\rdegrade: channel {done}/{total}", end="\n" if done == total else "", file=sys.stderr, flush=True)
 
-    out = degrade(image, grid, args.method, args.boundary, meta=meta, progress=progress)
-    meta.update({"input": str(args.image), "input_encoding": "linear" if args.linear or
-                 Path(args.image).suffix.lower() == ".exr" else "sRGB, decoded to linear",
-                 "psf_grid": str(args.psf_grid),
-                 "psf_grid_meta": {key: grid.meta.get(key) for key in ("lens", "lens_hash", "method", "normalization",
-                                                                       "field_range_deg", "field_sampling")},
-                 "psf_grid_shape": list(grid.shape), "psf_pitch_um": grid.pitch_um, "psf_size": grid.size,
-                 "values": "mean irradiance over each pixel, in the units of the linear input"})
-    names = None if out.ndim == 2 or out.shape[-1] == 3 else \
-        [f"C{c:02d}_{meta['channel_wavelengths_nm'][c]:g}nm" for c in range(out.shape[-1])]
-    channels = image_channels(out, names)
-    view = out if out.ndim == 2 or out.shape[-1] == 3 else out.mean(axis=-1)
-    # both files appear together or not at all
-    with written_together(output, png) as (tmp_exr, tmp_png):
-        write_exr(tmp_exr, channels, meta)
-        write_png(tmp_png, view)
-    print(f"wrote {output} and {png} ({args.method}, {out.shape[1]}x{out.shape[0]} px, {meta['seconds']:.2f} s)")
+    meta = degrade_file(args.image, PSFGrid.read(args.psf_grid), args.psf_grid, output, png, args.method,
+                        args.boundary, linear=args.linear, force=args.force, progress=progress)
+    height, width = meta["output_shape"][:2]
+    print(f"wrote {output} and {png} ({args.method}, {width}x{height} px, {meta['seconds']:.2f} s)")
     return 0
 
 

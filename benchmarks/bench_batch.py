@@ -1,0 +1,58 @@
+"""Throughput of `solas-mi batch degrade`: 1280×960 RGB images (copies of scenes/images/rocket.png)
+degraded with the doublet's 32×32 grid (656/531/486 nm, Fraunhofer, 160×160 PSFs at 0.5 µm,
+`interp`), on 1 and 2 local worker processes and on a Dask LocalCluster of 1 and 2 workers.
+
+Run: .venv/bin/python benchmarks/bench_batch.py [--images 16] [--repeats 3]
+The grid is computed once through the batch's own cache (out/bench/batch-cache). Each run is a fresh
+batch into a fresh folder, timed from the call to the end (worker start-up, grid loading or
+scattering, reading, degrading, writing EXR + PNG, manifest). Prints a Markdown table of the median
+images/s and the median seconds one item takes inside its worker.
+"""
+from __future__ import annotations
+
+import argparse
+import shutil
+import statistics
+import time
+from pathlib import Path
+
+from solas_mi import Lens
+from solas_mi.batch import GridCache, degrade_batch
+
+ROOT = Path(__file__).resolve().parent.parent
+WORK = ROOT / "out" / "bench"
+GRID = {"grid": "32x32", "wavelengths": [656.0, 531.0, 486.0], "size": 160, "pitch_um": 0.5, "method": "fraunhofer"}
+CASES = [("local processes", None, 1), ("local processes", None, 2), ("Dask LocalCluster", "local", 1),
+         ("Dask LocalCluster", "local", 2)]
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--images", type=int, default=16)
+    parser.add_argument("--repeats", type=int, default=3)
+    args = parser.parse_args()
+    images = WORK / "batch-images"
+    shutil.rmtree(images, ignore_errors=True)
+    images.mkdir(parents=True)
+    for i in range(args.images):
+        shutil.copy(ROOT / "scenes" / "images" / "rocket.png", images / f"rocket{i:03d}.png")
+    cache = GridCache(WORK / "batch-cache")
+    start = time.perf_counter()
+    grid_path, hit, _ = cache.get(Lens.load("solas-doublet"), GRID)
+    print(f"grid {grid_path.name}: {'cache hit' if hit else 'computed'} in {time.perf_counter() - start:.1f} s")
+    print("| runner | workers | images/s (median of %d) | s per image in a worker |" % args.repeats)
+    print("|---|---|---|---|")
+    for name, dask, workers in CASES:
+        rates, items = [], []
+        for r in range(args.repeats):
+            out = WORK / "batch-out"
+            shutil.rmtree(out, ignore_errors=True)
+            result = degrade_batch([images], out, psf_grid=grid_path, workers=workers, dask=dask, progress=False)
+            assert not result.failed, result.failed[0].error
+            rates.append(args.images / result.seconds)
+            items.extend(job.seconds for job in result.jobs)
+        print(f"| {name} | {workers} | {statistics.median(rates):.2f} | {statistics.median(items):.2f} |", flush=True)
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,117 @@
+"""`solas-mi batch degrade`: many images degraded by one PSF grid, on local processes or Dask.
+
+Exit status 0 when every item is done (or was already), 1 when any item failed (after finishing the
+others; the manifest `batch.json` says which and why), 2 for a mistake in the arguments.
+"""
+from __future__ import annotations
+
+import argparse
+import sys
+from typing import Any
+
+from ..errors import SolasError
+
+
+def _grid_options(args: argparse.Namespace) -> dict[str, Any]:
+    return {"grid": args.grid, "wavelengths": args.wavelengths, "field_range_deg": args.field_range_deg,
+            "field_sampling": args.field_sampling, "pitch_um": args.pitch_um, "size": args.size,
+            "method": args.psf_method, "normalize": args.normalize, "pupil_samples": args.pupil_samples,
+            "rays": args.rays, "auto_window": args.auto_window}
+
+
+def _dry_run(args: argparse.Namespace) -> int:
+    from ..budget import size_text
+    from .degrade import check_workers, estimate, plan_batch
+
+    workers = check_workers(_workers(args.workers))
+    p = plan_batch(args.inputs, args.output, psf_grid=args.psf_grid, lens=args.lens,
+                   grid_options=_grid_options(args) if args.lens else None, method=args.method,
+                   boundary=args.boundary, linear=args.linear, cache=args.cache)
+    need = estimate(p, workers if args.dask is None else 1)
+    where = f"Dask at {args.dask}" if args.dask else f"{workers} local worker process(es)"
+    skipped = len(p.jobs) - len(p.todo)
+    then = "; computed once, then cached" if p.grid_source == "to compute" else ""
+    print(f"1. PSF grid: {p.grid_path} ({p.grid_source}{then})")
+    print(f"2. degrade {len(p.todo)} of {len(p.jobs)} images ({skipped} already finished, skipped) "
+          f"with {args.method}, boundary {args.boundary}, on {where}")
+    print(f"3. write EXR + PNG per image and {p.manifest.path}")
+    print(f"estimate: about {need['seconds']:.1f} s of degrading (after the grid), peak memory about "
+          f"{size_text(need['peak_bytes'])} (grid {size_text(need['grid_bytes'])} per worker)")
+    return 0
+
+
+def run_batch_degrade(args: argparse.Namespace) -> int:
+    if args.dry_run:
+        return _dry_run(args)
+    from .degrade import degrade_batch
+
+    result = degrade_batch(args.inputs, args.output, psf_grid=args.psf_grid, lens=args.lens,
+                           grid_options=_grid_options(args) if args.lens else None, method=args.method,
+                           boundary=args.boundary, linear=args.linear, workers=_workers(args.workers), dask=args.dask,
+                           cache=args.cache, force=args.force, progress=not args.quiet)
+    for job in result.failed:
+        print(f"solas-mi batch degrade: failed: {job.input}: {job.error}", file=sys.stderr)
+    print(f"{result.count('done')} done, {result.count('skipped')} skipped, {len(result.failed)} failed "
+          f"in {result.seconds:.1f} s (grid: {result.grid_source}); manifest {result.manifest}")
+    return 1 if result.failed else 0
+
+
+def _workers(text: str | None) -> int | None:
+    if text is None:
+        return None
+    try:
+        value = int(text)
+    except ValueError:
+        value = 0
+    if value < 1:
+        raise SolasError(f"--workers {text!r} must be a whole number >= 1")
+    return value
+
+
+def register(subparsers: Any) -> None:
+    """Add `batch` and its `degrade`."""
+    from ..convolution.kernels import BOUNDARIES
+    from ..convolution.methods import DEFAULT_METHOD, METHODS
+    from ..psf.base import DEFAULT_GEOMETRIC_RAYS, DEFAULT_PITCH_UM, DEFAULT_PUPIL_SAMPLES, DEFAULT_SIZE, NORMALIZATIONS
+    from ..psf.grid import FIELD_SAMPLINGS
+    from ..psf.methods import DEFAULT_METHOD as DEFAULT_PSF_METHOD
+    from ..psf.methods import METHODS as PSF_METHODS
+
+    batch = subparsers.add_parser("batch", help="many images at once, on local processes or a Dask cluster",
+                                  description="Batch work, resumable, with a manifest batch.json in the output "
+                                              "folder.")
+    sub = batch.add_subparsers(dest="batch_command", required=True)
+    p = sub.add_parser(
+        "degrade", help="degrade images (files, folders, glob patterns) with one PSF grid",
+        description="Degrade every input image with one PSF grid — a given file, or computed once from --lens "
+                    "and cached — writing OUT_DIR/<name>.exr + .png and OUT_DIR/batch.json. Finished items are "
+                    "skipped on a re-run; a failed item is reported and the others go on (exit status 1).")
+    p.add_argument("inputs", nargs="+", metavar="INPUT", help="image files, folders of images, or glob patterns")
+    source = p.add_mutually_exclusive_group(required=True)
+    source.add_argument("--psf-grid", metavar="GRID.exr", help="PSF grid written by `solas-mi psf-grid`")
+    source.add_argument("--lens", help="compute the grid from this lens (shipped name or .toml file)")
+    p.add_argument("-o", "--output", required=True, metavar="OUT_DIR", help="output folder")
+    p.add_argument("--method", choices=list(METHODS), default=DEFAULT_METHOD, help="convolution method")
+    p.add_argument("--boundary", choices=BOUNDARIES, default=BOUNDARIES[0], help="padding outside the image")
+    p.add_argument("--linear", action="store_true", help="PNG/JPEG values are already linear: do not decode sRGB")
+    p.add_argument("--workers", help="local worker processes (default: the machine's cores); "
+                                     "with --dask local, the LocalCluster's workers")
+    p.add_argument("--dask", metavar="ADDRESS", help="Dask scheduler (tcp://HOST:PORT), or local for a LocalCluster")
+    p.add_argument("--cache", metavar="DIR", help="PSF-grid cache (default: the user's cache folder)/psf-grids")
+    p.add_argument("--dry-run", action="store_true",
+                   help="print the stages, what is reused and an estimate; do nothing")
+    p.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    grid = p.add_argument_group("grid options (with --lens; those of `solas-mi psf-grid`)")
+    grid.add_argument("--grid", default="8x8", help="columns x rows of field nodes")
+    grid.add_argument("--wavelengths", help="nm, comma-separated (default: the lens file's)")
+    grid.add_argument("--field-range-deg", help="half range X[,Y] in degrees (default: the lens file's field)")
+    grid.add_argument("--field-sampling", choices=FIELD_SAMPLINGS, default=FIELD_SAMPLINGS[0])
+    grid.add_argument("--pitch-um", type=float, default=DEFAULT_PITCH_UM, help="PSF pixel pitch (µm)")
+    grid.add_argument("--size", type=int, default=DEFAULT_SIZE, help="PSF width and height (pixels)")
+    grid.add_argument("--psf-method", choices=list(PSF_METHODS), default=DEFAULT_PSF_METHOD)
+    grid.add_argument("--normalize", choices=NORMALIZATIONS, default="sum")
+    grid.add_argument("--pupil-samples", type=int, default=DEFAULT_PUPIL_SAMPLES, help="Fraunhofer pupil grid N×N")
+    grid.add_argument("--rays", type=int, default=DEFAULT_GEOMETRIC_RAYS, help="geometric: rays×rays per PSF")
+    grid.add_argument("--auto-window", action="store_true", help="double --size until each window holds the light")
+    p.set_defaults(run=run_batch_degrade)

@@ -1,0 +1,187 @@
+"""A batch of images degraded by one PSF grid: `degrade_batch` (the work) and `plan_batch` (what a
+run would do, for --dry-run).
+
+The grid is a given file, or computed from a lens once per batch through the `GridCache` and shared
+with every worker. Items a former run of the same batch finished (outputs unchanged) are skipped;
+every other item is done, and its result (done or failed, with the error) recorded in the manifest.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import time
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any, Iterable
+
+from ..errors import SolasError
+from .cache import GridCache, canonical_options, file_hash
+from .jobs import MANIFEST, Job, Manifest, expand_inputs, plan, remove_leftovers
+
+# seconds per image value (H·W·C) on one core of the 2-core benchmark machine, reading, degrading
+# (interp) and writing included (benchmarks/bench_batch.py: 1280×960 RGB, 32×32 grid)
+SECONDS_PER_VALUE = 2.0e-7
+
+
+@dataclass
+class BatchPlan:
+    """What a batch will do: its items (skipped ones marked), the grid and where it comes from."""
+
+    jobs: list[Job]
+    manifest: Manifest
+    key: str  # the batch's identity: the grid, method, boundary and input encoding
+    grid_path: Path
+    grid_source: str  # "given", "cache hit" or "to compute"
+    lens: Any = None
+    options: dict[str, Any] | None = None
+
+    @property
+    def todo(self) -> list[int]:
+        return [i for i, job in enumerate(self.jobs) if job.status != "skipped"]
+
+
+@dataclass
+class BatchResult:
+    """A finished batch: its items, manifest path and where its grid came from."""
+
+    jobs: list[Job]
+    manifest: Path
+    grid_path: Path
+    grid_source: str
+    seconds: float
+
+    @property
+    def failed(self) -> list[Job]:
+        return [job for job in self.jobs if job.status == "failed"]
+
+    def count(self, status: str) -> int:
+        return sum(job.status == status for job in self.jobs)
+
+
+def check_workers(workers: int | None) -> int:
+    n = (os.cpu_count() or 1) if workers is None else workers
+    if isinstance(n, bool) or not isinstance(n, int) or n < 1:
+        raise SolasError(f"workers {workers!r} must be a whole number >= 1")
+    return n
+
+
+def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *,
+               psf_grid: str | os.PathLike | None = None, lens=None, grid_options: dict[str, Any] | None = None,
+               method: str = "interp", boundary: str = "edge", linear: bool = False,
+               cache: GridCache | str | os.PathLike | None = None) -> BatchPlan:
+    """Check everything a batch needs before any work and find what a former run finished."""
+    from ..convolution.kernels import check_boundary
+    from ..convolution.methods import check_method
+    from ..outputs import output_folder
+
+    check_method(method)
+    check_boundary(boundary)
+    if (psf_grid is None) == (lens is None):
+        raise SolasError("give either a PSF grid file or a lens to compute one from, not both and not neither")
+    out_dir = output_folder(output_dir).resolve()
+    jobs = plan(expand_inputs(inputs), out_dir)
+    options = None
+    if psf_grid is not None:
+        grid_path = Path(psf_grid).resolve()
+        if not grid_path.is_file():
+            raise SolasError(f"PSF grid {str(psf_grid)!r} is not a file; give an EXR written by `solas-mi psf-grid`")
+        grid_id, source = file_hash(grid_path), "given"
+    else:
+        from ..optics.lens import Lens
+
+        lens = lens if isinstance(lens, Lens) else Lens.load(str(lens))
+        cache = cache if isinstance(cache, GridCache) else GridCache(cache)
+        options = canonical_options(grid_options)
+        grid_path = cache.path(lens, options)
+        grid_id, source = grid_path.stem, "cache hit" if grid_path.is_file() else "to compute"
+    key = hashlib.sha256(json.dumps([grid_id, method, boundary, linear]).encode()).hexdigest()[:16]
+    manifest = Manifest(out_dir / MANIFEST, {"version": 1, "kind": "degrade", "batch_id": key}, jobs)
+    manifest.resume(key)
+    return BatchPlan(jobs, manifest, key, grid_path, source, lens, options)
+
+
+def estimate(p: BatchPlan, workers: int) -> dict[str, float]:
+    """Rough seconds and peak memory (bytes, all workers) of the items still to do."""
+    from ..convolution.output import BYTES_PER_VALUE
+    from ..imageio import image_size
+
+    values = [max(1, r * c * ch) for r, c, ch in (image_size(p.jobs[i].input) for i in p.todo)]
+    if p.options is None:
+        grid_bytes = p.grid_path.stat().st_size  # float32 mosaics, stored uncompressed
+    else:
+        cols, rows = (int(v) for v in p.options["grid"].split("x"))
+        grid_bytes = 4 * rows * cols * p.options["size"] ** 2 * len(p.options["wavelengths"] or p.lens.wavelengths_nm)
+    per_worker = BYTES_PER_VALUE * max(values, default=0) + 2 * grid_bytes
+    return {"seconds": SECONDS_PER_VALUE * sum(values) / min(workers, max(1, len(values))),
+            "peak_bytes": min(workers, max(1, len(values))) * per_worker, "grid_bytes": grid_bytes}
+
+
+def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *,
+                  psf_grid: str | os.PathLike | None = None, lens=None, grid_options: dict[str, Any] | None = None,
+                  method: str = "interp", boundary: str = "edge", linear: bool = False, workers: int | None = None,
+                  dask: str | None = None, cache: GridCache | str | os.PathLike | None = None, force: bool = False,
+                  progress: bool = True) -> BatchResult:
+    """Degrade every image of `inputs` (files, folders, glob patterns) into `output_dir` (one EXR +
+    PNG per input, `batch.json` beside them) with the grid `psf_grid` (an EXR file) or one computed
+    from `lens` (a Lens or its name / file) with `grid_options` (those of `psf_grid`: grid "8x8",
+    wavelengths, field_range_deg, field_sampling, pitch_um, size, method, normalize, pupil_samples,
+    rays, auto_window), cached in `cache` (a GridCache or folder). `workers` local processes (default:
+    the cores), or the Dask scheduler at `dask` ("local": a LocalCluster for this batch). An item
+    that fails is recorded and the others go on."""
+    from ..budget import check_memory
+    from ..psf.grid import PSFGrid
+
+    start = time.perf_counter()
+    n = check_workers(workers)
+    if dask is not None and (not isinstance(dask, str) or not dask.strip()):
+        raise SolasError(f"dask {dask!r} must be a scheduler address (tcp://HOST:PORT) or local")
+    cache = cache if isinstance(cache, GridCache) or psf_grid is not None else GridCache(cache)
+    p = plan_batch(inputs, output_dir, psf_grid=psf_grid, lens=lens, grid_options=grid_options, method=method,
+                   boundary=boundary, linear=linear, cache=cache)
+    need = estimate(p, n if dask is None else 1)
+    check_memory(f"batch of {len(p.todo)} images on {n} workers", need["peak_bytes"], force)
+    header: dict[str, Any] = {"method": method, "boundary": boundary, "linear": linear}
+    if p.lens is not None:
+        p.grid_path, hit, seconds = cache.get(p.lens, p.options)
+        header["grid_source"], header["grid_seconds"] = "cache hit" if hit else "computed", seconds
+        header["grid_options"] = p.options
+    else:
+        header["grid_source"] = "given"
+    grid = PSFGrid.read(str(p.grid_path))
+    header.update({"psf_grid": str(p.grid_path), "grid_hash": file_hash(p.grid_path),
+                   "lens": grid.meta.get("lens"), "lens_hash": grid.meta.get("lens_hash"),
+                   "runner": {"dask": dask} if dask is not None else {"workers": n}})
+    p.manifest.header.update(header)
+    settings = {"method": method, "boundary": boundary, "linear": linear, "force": force,
+                "batch": {"id": p.key, "manifest": str(p.manifest.path), "grid_hash": header["grid_hash"],
+                          "lens_hash": header["lens_hash"]}}
+    p.manifest.path.parent.mkdir(parents=True, exist_ok=True)
+    p.manifest.save()
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(p.jobs), initial=len(p.jobs) - len(p.todo), unit="image", desc="degrade")
+
+    def on_done(i: int, job: Job) -> None:
+        p.jobs[i] = job
+        p.manifest.save(force=False)
+        if bar is not None:
+            bar.update()
+
+    try:
+        if p.todo and dask is None:
+            from .runner import run_local
+
+            run_local(p.jobs, p.todo, str(p.grid_path), settings, n, on_done)
+        elif p.todo:
+            from .runner import run_dask
+
+            run_dask(p.jobs, p.todo, grid, str(p.grid_path), settings, dask, n, on_done)
+    finally:
+        if bar is not None:
+            bar.close()
+        remove_leftovers(p.manifest.path.parent, p.jobs)  # a worker killed while writing cannot remove its own
+        p.manifest.save()
+    return BatchResult(p.jobs, p.manifest.path, p.grid_path, header["grid_source"], time.perf_counter() - start)

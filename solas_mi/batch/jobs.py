@@ -1,0 +1,161 @@
+"""A batch's items and its manifest.
+
+An item (`Job`) is one unit of work with its inputs and outputs; `kind` names what it does
+("degrade" today; a "render" kind adds its own fields, e.g. a scene and a `seed`). The manifest,
+`batch.json` in the output folder, records each item's status ("pending", "done", "skipped",
+"failed"), timings, seed, error and the outputs' sizes and times, beside what the whole batch
+shares (the grid's hash, the lens's hash, the method). It is rewritten atomically, so it is valid
+JSON whenever it is read, also after the batch was killed.
+"""
+from __future__ import annotations
+
+import glob
+import json
+import os
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any, Iterable
+
+from ..errors import SolasError
+
+MANIFEST = "batch.json"
+IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".exr")
+SAVE_EVERY_S = 1.0  # the manifest is rewritten at most this often while items finish (and at the end)
+
+
+@dataclass
+class Job:
+    """One item of a batch: `kind` "degrade" reads `input` and writes `output` (EXR) + `png`."""
+
+    input: str
+    output: str
+    png: str
+    kind: str = "degrade"
+    seed: int | None = None  # degrading has no randomness; a render item records its seed here
+    status: str = "pending"
+    error: str | None = None
+    seconds: float | None = None
+    attempts: int = 0
+    outputs: dict[str, list[int]] = field(default_factory=dict)  # path → [size, mtime_ns] when finished
+
+    def stamp(self) -> None:
+        """Record the finished outputs' sizes and modification times (how a re-run knows them)."""
+        self.outputs = {p: [(s := os.stat(p)).st_size, s.st_mtime_ns] for p in (self.output, self.png)}
+
+    def finished(self) -> bool:
+        """Both outputs are there, as this batch wrote them (same sizes and times)."""
+        try:
+            return bool(self.outputs) and all(
+                [(s := os.stat(p)).st_size, s.st_mtime_ns] == list(v) for p, v in self.outputs.items())
+        except OSError:
+            return False
+
+
+def remove_leftovers(folder: Path, jobs: list[Job]) -> int:
+    """Remove the temporary files (`imageio.atomic_path`: ".NAME.XXXXXXXX.SUFFIX") that a worker killed
+    while writing left beside the outputs of `jobs` in `folder`; the number removed."""
+    names = {Path(p).name for job in jobs for p in (job.output, job.png)}
+    removed = 0
+    for path in folder.iterdir() if folder.is_dir() else ():
+        if path.name.startswith(".") and path.name[1:].rsplit(".", 2)[0] in names and path.is_file():
+            path.unlink(missing_ok=True)
+            removed += 1
+    return removed
+
+
+def expand_inputs(inputs: Iterable[str | os.PathLike]) -> list[Path]:
+    """Image files from files, folders (their images, sorted, not recursive) and glob patterns; each
+    once, in the order given. SolasError naming an input that matches nothing."""
+    found: list[Path] = []
+    for item in inputs:
+        text = str(item)
+        path = Path(text)
+        if path.is_dir():
+            matches = sorted(p for p in path.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES and p.is_file())
+        elif path.exists():
+            matches = [path]
+        elif glob.has_magic(text):
+            matches = sorted(Path(p) for p in glob.glob(text) if Path(p).is_file())
+        else:
+            raise SolasError(f"input {text!r} is not a file, a folder or a glob pattern that matches files")
+        if not matches:
+            raise SolasError(f"input {text!r} holds no images ({', '.join(IMAGE_SUFFIXES)})")
+        found.extend(matches)
+    unique = list(dict.fromkeys(p.resolve() for p in found))
+    if not unique:
+        raise SolasError("no input images given")
+    return unique
+
+
+def plan(inputs: list[Path], out_dir: Path) -> list[Job]:
+    """One degrade job per input: OUT_DIR/<name>.exr + .png. SolasError when two inputs would write
+    the same output or an output would replace an input."""
+    jobs, seen = [], {}
+    sources = set(inputs)
+    for path in inputs:
+        output = out_dir / f"{path.stem}.exr"
+        if output in seen:
+            raise SolasError(f"inputs {str(seen[output])!r} and {str(path)!r} would both write {output}; "
+                             "give them different names or run them as separate batches")
+        seen[output] = path
+        for target in (output, output.with_suffix(".png")):
+            if target in sources:
+                raise SolasError(f"output {target} would replace the input of the same name; choose another -o")
+        jobs.append(Job(str(path), str(output), str(output.with_suffix(".png"))))
+    return jobs
+
+
+class Manifest:
+    """`batch.json`: what the batch shares (`header`) and its items, saved atomically."""
+
+    def __init__(self, path: Path, header: dict[str, Any], jobs: list[Job]):
+        self.path, self.header, self.jobs = path, header, jobs
+        self._saved = 0.0
+
+    @staticmethod
+    def previous(path: Path) -> dict[str, Any]:
+        """The manifest a former run left (empty when there is none or it cannot be read)."""
+        try:
+            data = json.loads(path.read_text())
+            return data if isinstance(data, dict) else {}
+        except (OSError, ValueError):
+            return {}
+
+    def resume(self, key: str) -> int:
+        """Mark "skipped" each job a former run of the same batch `key` finished and whose outputs are
+        unchanged; the number skipped."""
+        old = self.previous(self.path)
+        if old.get("batch_id") != key:
+            return 0
+        done = {(i.get("input"), i.get("output")): i for i in old.get("items", [])
+                if i.get("status") in ("done", "skipped")}
+        skipped = 0
+        for job in self.jobs:
+            before = done.get((job.input, job.output))
+            if before is not None:
+                job.outputs = before.get("outputs", {})
+                if job.finished():
+                    job.status, job.seconds, job.seed = "skipped", before.get("seconds"), before.get("seed")
+                    skipped += 1
+                else:
+                    job.outputs = {}
+        return skipped
+
+    def summary(self) -> dict[str, int]:
+        counts: dict[str, int] = {}
+        for job in self.jobs:
+            counts[job.status] = counts.get(job.status, 0) + 1
+        return counts
+
+    def save(self, force: bool = True) -> None:
+        """Rewrite the manifest atomically (unless `force` is False and it was saved under a second ago)."""
+        from ..imageio import write_text
+
+        now = time.monotonic()
+        if not force and now - self._saved < SAVE_EVERY_S:
+            return
+        data = {**self.header, "updated": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "summary": self.summary(),
+                "items": [asdict(job) for job in self.jobs]}
+        write_text(self.path, json.dumps(data, indent=1) + "\n")
+        self._saved = now

@@ -1,0 +1,205 @@
+"""Where a batch's items run: local worker processes (`run_local`) or a Dask cluster (`run_dask`).
+Both run `run_job` on each item with the one PSF grid of the batch, and hand each finished item
+(done or failed) to `on_done` as it comes.
+
+Local: `workers` spawned processes, each reading the grid file once and then taking one item at a
+time over its own pipe, so the batch always knows which item each process holds. A process that
+dies (killed, out of memory) loses only that item: it is retried in a fresh process up to
+MAX_ATTEMPTS times, then reported failed. Interrupted (Ctrl-C, SIGTERM), the workers are sent
+SIGTERM, which each turns into an interruption, so the temporary files of the item it was writing
+are removed and no partial output is left.
+
+Dask: the grid is scattered to every worker once; the scheduler retries an item whose worker died
+(`distributed.scheduler.allowed-failures`) and then reports it failed (KilledWorker).
+"""
+from __future__ import annotations
+
+import multiprocessing
+import signal
+import time
+from collections import deque
+from multiprocessing.connection import wait
+from typing import TYPE_CHECKING, Any, Callable
+
+from ..errors import SolasError
+from .jobs import Job
+
+if TYPE_CHECKING:
+    from ..psf.grid import PSFGrid
+
+MAX_ATTEMPTS = 3
+STOP_WAIT_S = 10.0  # how long interrupted workers get to remove their temporary files
+
+
+def run_job(job: Job, grid: "PSFGrid", grid_path: str, settings: dict[str, Any]) -> Job:
+    """Do one item and return it with its status, error and timing; never raises for the item's own
+    problems (an unreadable input, a failed write): they are its `error`."""
+    from ..convolution.output import degrade_file
+    from ..outputs import data_and_preview
+
+    start = time.perf_counter()
+    job.attempts += 1
+    try:
+        if job.kind != "degrade":
+            raise SolasError(f"item kind {job.kind!r} must be degrade")
+        output, png = data_and_preview(job.output, job.png, inputs=[job.input, grid_path])
+        degrade_file(job.input, grid, grid_path, output, png, settings["method"], settings["boundary"],
+                     linear=settings["linear"], force=settings["force"],
+                     extra_meta={"batch": {**settings["batch"], "seed": job.seed}})
+        job.stamp()
+        job.status, job.error = "done", None
+    except SolasError as exc:
+        job.status, job.error = "failed", str(exc)
+    except Exception as exc:  # one bad item never stops the batch (MemoryError included)
+        job.status, job.error = "failed", f"{type(exc).__name__}: {exc}"
+    job.seconds = time.perf_counter() - start
+    return job
+
+
+def _interrupt(signum, frame) -> None:
+    raise KeyboardInterrupt()
+
+
+def _serve(conn, grid_path: str, settings: dict[str, Any]) -> None:
+    """A local worker process: read the grid once, then do the items sent until None comes."""
+    from ..psf.grid import PSFGrid
+
+    signal.signal(signal.SIGTERM, _interrupt)  # interrupted, not killed: temporary files are removed
+    try:
+        grid = PSFGrid.read(grid_path)
+        while (job := conn.recv()) is not None:
+            conn.send(run_job(job, grid, grid_path, settings))
+    except (KeyboardInterrupt, EOFError):
+        pass
+
+
+class _Worker:
+    def __init__(self, ctx, grid_path: str, settings: dict[str, Any]):
+        self.conn, child = ctx.Pipe()
+        self.proc = ctx.Process(target=_serve, args=(child, grid_path, settings), daemon=True)
+        self.proc.start()
+        child.close()
+        self.index: int | None = None  # the item it holds
+
+    def give(self, index: int, job: Job) -> None:
+        self.index = index
+        try:
+            self.conn.send(job)
+        except OSError:  # the process has died: the loop sees it end and retries the item
+            pass
+
+    def stop(self, now: bool) -> None:
+        if self.proc.is_alive():
+            if now:
+                self.proc.terminate()
+            else:
+                try:
+                    self.conn.send(None)
+                except OSError:
+                    self.proc.terminate()
+        self.proc.join(STOP_WAIT_S)
+        if self.proc.is_alive():
+            self.proc.kill()
+            self.proc.join()
+
+    def last_result(self) -> Job | None:
+        """The result of its item if the (stopped) process sent it before it ended."""
+        try:
+            result = self.conn.recv() if self.conn.poll() else None
+        except (EOFError, OSError):
+            result = None
+        self.conn.close()
+        return result if isinstance(result, Job) else None
+
+
+def run_local(jobs: list[Job], todo: list[int], grid_path: str, settings: dict[str, Any], workers: int,
+              on_done: Callable[[int, Job], None]) -> None:
+    """Items `todo` (indices into `jobs`) on `workers` local processes."""
+    ctx = multiprocessing.get_context("spawn")  # never fork a process that may hold Dr.Jit's threads
+    queue = deque(todo)
+    pool = [_Worker(ctx, grid_path, settings) for _ in range(min(workers, len(todo)))]
+    interrupted = True
+    try:
+        for w in pool:
+            if queue:
+                i = queue.popleft()
+                w.give(i, jobs[i])
+        while any(w.index is not None for w in pool):
+            busy = [w for w in pool if w.index is not None]
+            wait([w.conn for w in busy] + [w.proc.sentinel for w in busy])
+            for n, w in enumerate(pool):
+                if w.index is None:
+                    continue
+                i = w.index
+                try:
+                    if not w.conn.poll():
+                        if w.proc.is_alive():
+                            continue
+                        raise EOFError
+                    result = w.conn.recv()
+                except (EOFError, OSError):  # the process died holding item i
+                    jobs[i].attempts += 1
+                    w.index = None
+                    w.stop(now=True)
+                    w.conn.close()
+                    code = w.proc.exitcode
+                    pool[n] = w = _Worker(ctx, grid_path, settings)
+                    if jobs[i].attempts < MAX_ATTEMPTS:
+                        queue.appendleft(i)
+                    else:
+                        jobs[i].status = "failed"
+                        jobs[i].error = (f"its worker process died {jobs[i].attempts} times "
+                                         f"(exit status {code}); killed or out of memory?")
+                        on_done(i, jobs[i])
+                else:
+                    w.index = None
+                    on_done(i, result)
+                if queue:
+                    i = queue.popleft()
+                    w.give(i, jobs[i])
+        interrupted = False
+    finally:
+        for w in pool:
+            w.stop(now=interrupted)
+            result = w.last_result()
+            if result is not None and w.index is not None:  # finished just as the batch was interrupted
+                on_done(w.index, result)
+
+
+def run_dask(jobs: list[Job], todo: list[int], grid: "PSFGrid", grid_path: str, settings: dict[str, Any],
+             address: str, workers: int, on_done: Callable[[int, Job], None]) -> None:
+    """Items `todo` on the Dask scheduler at `address`, or on a LocalCluster of `workers` processes
+    started for this batch when `address` is "local"."""
+    import dask
+    from distributed import Client, LocalCluster, as_completed
+
+    cluster = None
+    try:
+        if address == "local":
+            # Dask's nanny sets MALLOC_TRIM_THRESHOLD_=65536 in its workers, which turns off glibc's adaptive
+            # mmap threshold: every large temporary is mapped afresh (measured: degrade 0.5 s → 1.1 s)
+            with dask.config.set({"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}):
+                cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True,
+                                       dashboard_address=None)
+        try:
+            client = Client(cluster if cluster is not None else address, timeout="20s")
+        except OSError as exc:
+            raise SolasError(f"cannot reach the Dask scheduler {address!r} ({exc}); give tcp://HOST:PORT "
+                             "of a running `dask scheduler`, or local") from None
+        with client:
+            shared = client.scatter(grid, broadcast=True)
+            futures = {client.submit(run_job, jobs[i], shared, grid_path, settings, pure=False): i for i in todo}
+            for future in as_completed(futures):
+                i = futures.pop(future)
+                try:
+                    result = future.result()
+                except Exception as exc:  # the item's worker died too often (KilledWorker) or was lost
+                    jobs[i].status, jobs[i].error = "failed", f"{type(exc).__name__}: {exc}"
+                    result = jobs[i]
+                # released, so that a worker dying later does not make the scheduler redo (rewrite) it
+                future.release()
+                on_done(i, result)
+    finally:
+        if cluster is not None:
+            cluster.close()
+

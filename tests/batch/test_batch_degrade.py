@@ -1,0 +1,200 @@
+"""`solas-mi batch degrade` and `degrade_batch`: failures reported per item, resuming, interruption,
+local processes against Dask, the PSF-grid cache, argument errors."""
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import numpy as np
+import pytest
+
+from solas_mi.cli import main
+
+
+def manifest(folder):
+    return json.loads((folder / "batch.json").read_text())
+
+
+def test_one_corrupt_item_is_reported_and_a_rerun_skips_the_rest(batch_inputs, capsys):
+    batch_inputs.write(19)
+    (batch_inputs.images / "frame007b.png").write_bytes(b"not a png at all")
+    out = batch_inputs.root / "out"
+    argv = ["batch", "degrade", str(batch_inputs.images), "--psf-grid", str(batch_inputs.grid), "-o", str(out),
+            "--workers", "2", "--quiet"]
+    assert main(argv) == 1
+    err = capsys.readouterr().err
+    assert "frame007b.png" in err and "cannot read image" in err
+    m = manifest(out)
+    assert m["summary"] == {"done": 19, "failed": 1} and m["grid_source"] == "given"
+    (bad,) = [i for i in m["items"] if i["status"] == "failed"]
+    assert bad["input"].endswith("frame007b.png") and "cannot read image" in bad["error"]
+    assert all(i["seconds"] > 0 and i["seed"] is None for i in m["items"])
+    assert len(list(out.glob("*.exr"))) == 19 and len(list(out.glob("*.png"))) == 19
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]
+    from solas_mi.imageio import read_exr
+
+    meta = read_exr(out / "frame000.exr")[1]
+    assert meta["batch"]["id"] == m["batch_id"] and meta["batch"]["grid_hash"] == m["grid_hash"]
+    times = {p.name: p.stat().st_mtime_ns for p in out.glob("frame*")}
+    assert main(argv) == 1  # the corrupt one fails again; the others are not touched
+    assert {p.name: p.stat().st_mtime_ns for p in out.glob("frame*")} == times
+    assert manifest(out)["summary"] == {"skipped": 19, "failed": 1}
+    # a finished output changed since: done again
+    os.utime(out / "frame003.exr", ns=(1, 1))
+    assert main(argv) == 1
+    assert manifest(out)["summary"] == {"skipped": 18, "done": 1, "failed": 1}
+
+
+def test_sigterm_midway_leaves_only_finished_items(batch_inputs):
+    batch_inputs.write(40, shape=(480, 640))
+    out = batch_inputs.root / "out"
+    p = subprocess.Popen([sys.executable, "-m", "solas_mi", "batch", "degrade", str(batch_inputs.images),
+                          "--psf-grid", str(batch_inputs.grid), "-o", str(out), "--workers", "2", "--quiet"],
+                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while len(list(out.glob("[!.]*.exr"))) < 3 and time.monotonic() < deadline:  # not the temporary files
+        time.sleep(0.05)
+    p.send_signal(signal.SIGTERM)
+    _, err = p.communicate(timeout=60)
+    assert p.returncode == 143, err
+    m = manifest(out)  # valid JSON
+    done = {i["output"] for i in m["items"] if i["status"] == "done"}
+    written = {str(f) for f in out.glob("*.exr")}
+    assert 1 <= len(done) and done <= written and len(written) < 40
+    # an item finished while the signal came may be written and not yet recorded: it is done again on a re-run
+    assert len(written - done) <= 2
+    assert not [f for f in out.iterdir() if f.name.startswith(".")]  # no temporary file left
+    from solas_mi.imageio import read_image
+
+    for f in out.glob("*.exr"):
+        assert read_image(f).shape == (480, 640, 3)
+
+
+def test_dask_local_and_local_processes_give_identical_outputs(batch_inputs):
+    from solas_mi.batch import degrade_batch
+    from solas_mi.imageio import read_exr
+
+    batch_inputs.write(4)
+    a = degrade_batch([batch_inputs.images], batch_inputs.root / "local", psf_grid=batch_inputs.grid, workers=2,
+                      progress=False)
+    b = degrade_batch([str(batch_inputs.images / "*.png")], batch_inputs.root / "dask", psf_grid=batch_inputs.grid,
+                      dask="local", workers=2, progress=False)
+    assert a.count("done") == b.count("done") == 4 and not b.failed
+    assert manifest(batch_inputs.root / "dask")["runner"] == {"dask": "local"}
+    for job in a.jobs:
+        name = os.path.basename(job.output)
+        x, y = read_exr(job.output)[0], read_exr(batch_inputs.root / "dask" / name)[0]
+        assert list(x) == list(y) and all(np.array_equal(x[k], y[k]) for k in x)
+        png = name.replace(".exr", ".png")
+        assert (batch_inputs.root / "local" / png).read_bytes() == (batch_inputs.root / "dask" / png).read_bytes()
+
+
+def test_the_grid_is_computed_once_and_cached(batch_inputs, doublet):
+    from solas_mi.batch import GridCache, degrade_batch
+
+    batch_inputs.write(3)
+    cache = GridCache(batch_inputs.root / "cache")
+    options = {"grid": "4x4", "size": 32, "pupil_samples": 32}
+    first = degrade_batch([batch_inputs.images], batch_inputs.root / "a", lens=doublet, grid_options=options,
+                          cache=cache, workers=2, progress=False)
+    assert (cache.misses, cache.hits) == (1, 0) and first.grid_source == "computed" and not first.failed
+    second = degrade_batch([batch_inputs.images], batch_inputs.root / "b", lens="solas-doublet",
+                           grid_options={**options, "method": "fraunhofer"}, cache=cache, workers=1, progress=False)
+    assert (cache.misses, cache.hits) == (1, 1) and second.grid_source == "cache hit"
+    assert len(list(cache.folder.iterdir())) == 1
+    m = manifest(batch_inputs.root / "b")
+    assert m["lens_hash"] == doublet.hash and m["grid_options"]["grid"] == "4x4"
+    degrade_batch([batch_inputs.images], batch_inputs.root / "c", lens=doublet, grid_options={**options, "size": 48},
+                  cache=cache, workers=1, progress=False)
+    assert (cache.misses, cache.hits) == (2, 1)  # another sampling option: another grid
+
+
+def test_dry_run_says_what_is_reused_and_does_nothing(batch_inputs, capsys):
+    batch_inputs.write(3)
+    out = batch_inputs.root / "out"
+    argv = ["batch", "degrade", str(batch_inputs.images), "--psf-grid", str(batch_inputs.grid), "-o", str(out)]
+    assert main([*argv, "--dry-run"]) == 0
+    text = capsys.readouterr().out
+    assert "degrade 3 of 3 images (0 already finished" in text and "estimate" in text and not out.exists()
+    assert main([*argv, "--quiet"]) == 0
+    capsys.readouterr()
+    assert main([*argv, "--dry-run"]) == 0
+    assert "degrade 0 of 3 images (3 already finished" in capsys.readouterr().out
+
+
+def test_a_dead_worker_loses_only_its_item(batch_inputs):
+    """SIGKILL one worker process holding an item: the item is retried in a fresh process."""
+    import psutil
+
+    from solas_mi.batch.jobs import expand_inputs, plan
+    from solas_mi.batch.runner import run_local
+
+    batch_inputs.write(12, shape=(240, 320))
+    jobs = plan(expand_inputs([batch_inputs.images]), batch_inputs.root / "out")
+    killed = []
+
+    def is_worker(process):
+        try:
+            return "resource_tracker" not in " ".join(process.cmdline())
+        except psutil.Error:  # a process ending just now
+            return False
+
+    def on_done(i, job):
+        jobs[i] = job
+        if not killed:
+            victim = next(p for p in psutil.Process().children() if is_worker(p))
+            victim.kill()
+            killed.append(victim.pid)
+
+    settings = {"method": "interp", "boundary": "edge", "linear": False, "force": False, "batch": {}}
+    run_local(jobs, list(range(len(jobs))), str(batch_inputs.grid), settings, 2, on_done)
+    assert killed and all(job.status == "done" for job in jobs), [job.error for job in jobs]
+    assert max(job.attempts for job in jobs) == 2  # the item the killed process held, done again
+    assert not [f for f in (batch_inputs.root / "out").iterdir() if f.name.startswith(".")]
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--workers", "0"], "--workers '0' must be a whole number >= 1"),
+    (["--psf-grid", "{tmp}/nothing.exr"], "PSF grid '{tmp}/nothing.exr' is not a file"),
+    (["--lens", "solas-doublet", "--grid", "4by4"], "--grid '4by4' must look like 32x24"),
+    (["--lens", "no-such-lens"], "no-such-lens"),
+    (["--psf-grid", "{tmp}/grid.exr", "--dask", " "], "must be a scheduler address"),
+])
+def test_bad_arguments_are_one_line(batch_inputs, capsys, extra, message):
+    batch_inputs.write(2)
+    tmp = str(batch_inputs.root)
+    extra = [e.replace("{tmp}", tmp) for e in extra]
+    if not any(e in ("--psf-grid", "--lens") for e in extra):
+        extra += ["--psf-grid", str(batch_inputs.grid)]
+    argv = ["batch", "degrade", str(batch_inputs.images), "-o", f"{tmp}/out", "--quiet", *extra]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert message.replace("{tmp}", tmp) in err and err.count("\n") == 1, err
+    assert not (batch_inputs.root / "out").exists()
+
+
+def test_inputs_that_match_nothing_or_collide(batch_inputs, capsys):
+    batch_inputs.write(1)
+    (batch_inputs.root / "other").mkdir()
+    (batch_inputs.root / "other" / "frame000.png").write_bytes((batch_inputs.images / "frame000.png").read_bytes())
+    for inputs, message in (([f"{batch_inputs.root}/nope*.png"], "holds no images"),
+                            ([str(batch_inputs.images), str(batch_inputs.root / "other")], "would both write")):
+        argv = ["batch", "degrade", *inputs, "--psf-grid", str(batch_inputs.grid), "-o", str(batch_inputs.root / "o")]
+        assert main(argv) == 2
+        err = capsys.readouterr().err
+        assert message in err and err.count("\n") == 1, err
+
+
+def test_temporary_files_of_killed_workers_are_removed(batch_inputs):
+    from solas_mi.batch import degrade_batch
+
+    batch_inputs.write(2)
+    out = batch_inputs.root / "out"
+    out.mkdir()
+    (out / ".frame001.exr.k1lled00.exr").write_bytes(b"half an EXR")  # as `imageio.atomic_path` names them
+    (out / ".notes.txt").write_text("not ours")
+    result = degrade_batch([batch_inputs.images], out, psf_grid=batch_inputs.grid, workers=1, progress=False)
+    assert result.count("done") == 2
+    assert sorted(p.name for p in out.iterdir() if p.name.startswith(".")) == [".notes.txt"]
