@@ -5,17 +5,19 @@
 | `lens_sensor`          | sensor  | `lens_sensor.py`          |
 | `sellmeier_dielectric` | BSDF    | `sellmeier_dielectric.py` |
 | `image_object`         | emitter | `image_object.py`         |
+| `lens_camera`          | sensor  | `lens_camera.py`          |
 
 Each module documents its parameters. The modules subclass the types of Mitsuba's current variant,
 so they are imported only by `register`, after a variant is set (`solas_mi.render.mitsuba`). Beside
-them: `tables` (lookup tables and records in every variant) and `scene_probe` (the scene and
+them: `tables` (lookup tables and records in every variant), `pupil_sampling` (rays toward the exit
+pupil, for both sensors) and `scene_probe` (the scene and
 integrator of the render calling a plugin, which Mitsuba does not pass to Python plugins).
 """
 from __future__ import annotations
 
 import importlib
 
-PLUGINS = ("sellmeier_dielectric", "image_object", "lens_sensor")
+PLUGINS = ("sellmeier_dielectric", "image_object", "lens_sensor", "lens_camera")
 
 
 def register() -> None:

@@ -2,8 +2,11 @@
 wavelength, clipping at every clear aperture and the stop, total internal reflection flagged,
 optical path length accumulated.
 
-Rays are vectorised Dr.Jit arrays; nothing here loops over rays in Python. Lengths in mm,
-wavelengths in µm inside this module (nm at every public interface above it).
+Rays are vectorised Dr.Jit arrays; nothing here loops over rays in Python. `launch` and `trace` work on
+the array type of the rays they are given: `drjit.llvm.Float64` (the default `F`, for the analyses),
+the AD or CUDA Float64 of a Mitsuba variant (a sensor tracing inside a render), or Python floats (one
+ray, Mitsuba's scalar variants). Lengths in mm, wavelengths in µm inside this module (nm at every
+public interface above it).
 
 Reference: G. H. Spencer and M. V. R. K. Murty, "General Ray-Tracing Procedure", J. Opt. Soc. Am.
 52(6), 672–678, 1962 (transfer to the vertex plane, then the surface; vector refraction). The sphere
@@ -51,11 +54,19 @@ class Traced:
     stop_x: F  # where the ray crosses the stop surface (mm)
     stop_y: F
     n_image: F  # refractive index of image space
+    transmittance: F | float = 1.0  # unpolarised Fresnel transmittance of every refraction (`trace(fresnel=True)`)
 
 
-def _opaque(value: float) -> F:
-    """A scalar as an opaque Dr.Jit value, so kernels are reused across lenses and wavelengths."""
-    return dr.opaque(F, float(value))
+def _opaque(value: float, ftype=F) -> F:
+    """A scalar as an opaque value of `ftype`, so kernels are reused across lenses and wavelengths."""
+    return dr.opaque(ftype, float(value))
+
+
+def _types(value) -> tuple[type, type, type]:
+    """The Float64, UInt32 and Bool types of the array family of `value` (Python float, bool, int for
+    a Python float)."""
+    ftype = dr.float64_array_t(type(value))
+    return ftype, dr.uint32_array_t(ftype), dr.mask_t(ftype)
 
 
 def refractive_index(glass, wavelength_um: F) -> F:
@@ -86,41 +97,46 @@ def launch(lens: Lens, tan_x: F, tan_y: F, ex: F, ey: F, object_point: tuple[F, 
     the field direction, at (ex, ey) in that plane's basis (e1 ⟂ y, e2 = d × e1); OPL starts at 0 there.
     Finite object: the ray starts at `object_point` (x, y at z = −distance) and aims at (ex, ey, 0).
     """
+    ftype = _types(ex)[0]
     if object_point is None:
         (dx, dy, dz), (e1x, _, e1z), (e2x, e2y, e2z) = beam_basis(tan_x, tan_y, dr.sqrt)
-        z0 = _opaque(launch_plane_z(lens))
+        z0 = _opaque(launch_plane_z(lens), ftype)
         x = ex * e1x + ey * e2x
         y = ey * e2y
         z = z0 + ex * e1z + ey * e2z
-        return Rays(x, y, z, dx, dy, dz, dr.zeros(F, dr.width(x)))
+        return Rays(x, y, z, dx, dy, dz, dr.zeros(ftype, dr.width(x)))
     ox, oy = object_point
-    oz = _opaque(-lens.object_distance)
+    oz = _opaque(-lens.object_distance, ftype)
     vx, vy, vz = ex - ox, ey - oy, -oz + 0.0 * ex
     inv = dr.rsqrt(vx * vx + vy * vy + vz * vz)
     return Rays(ox + 0.0 * ex, oy + 0.0 * ex, oz + 0.0 * ex, vx * inv, vy * inv, vz * inv,
-                dr.zeros(F, dr.width(ex)))
+                dr.zeros(ftype, dr.width(ex)))
 
 
-def trace(lens: Lens, rays: Rays, wavelength_um: F) -> Traced:
-    """Trace `rays` (in object space, before surface 1) through every surface of `lens`."""
+def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False) -> Traced:
+    """Trace `rays` (in object space, before surface 1) through every surface of `lens`, in the array
+    type of the rays (see the module docstring); with `fresnel`, also the product of the unpolarised
+    Fresnel transmittances (1 − (r_s² + r_p²)/2) of every refraction."""
     x, y, z, dx, dy, dz, opl = rays.x, rays.y, rays.z, rays.dx, rays.dy, rays.dz, rays.opl
-    ok = dr.full(Bool, True, dr.width(x))
-    tir = dr.full(Bool, False, dr.width(x))
-    clipped = dr.zeros(UInt32, dr.width(x))
+    ftype, utype, btype = _types(x)
+    ok = dr.full(btype, True, dr.width(x))
+    tir = dr.full(btype, False, dr.width(x))
+    clipped = dr.zeros(utype, dr.width(x))
+    transmittance = 1.0
     stop_x = stop_y = None
     n_before = refractive_index(lens.object_glass, wavelength_um)
     for k, (s, zv) in enumerate(zip(lens.surfaces, lens.vertex_z)):
         # move to the vertex plane first: the sphere equation is then solved from nearby, free of the
         # cancellation that a distant start point (a finite object far away) would bring into B² − cC
-        t0 = (_opaque(zv) - z) / dz
+        t0 = (_opaque(zv, ftype) - z) / dz
         ok &= dz > 0
         x, y = dr.fma(t0, dx, x), dr.fma(t0, dy, y)
-        lz = dr.zeros(F, dr.width(x))
+        lz = dr.zeros(ftype, dr.width(x))
         opl = dr.fma(n_before, t0, opl)
         if s.curvature == 0.0:
-            t = dr.zeros(F, dr.width(x))
+            t = dr.zeros(ftype, dr.width(x))
         else:
-            c = _opaque(s.curvature)
+            c = _opaque(s.curvature, ftype)
             b = dz - c * (x * dx + y * dy)
             cc = c * (x * x + y * y)
             disc = b * b - c * cc
@@ -130,14 +146,14 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F) -> Traced:
         x, y, lz = dr.fma(t, dx, x), dr.fma(t, dy, y), dr.fma(t, dz, lz)
         opl = dr.fma(n_before, t, opl)
         r2 = x * x + y * y
-        blocked = r2 > _opaque((s.semi_diameter * (1.0 + _RIM_SLACK)) ** 2)
-        clipped = dr.select((clipped == 0) & blocked, UInt32(k + 1), clipped)
+        blocked = r2 > _opaque((s.semi_diameter * (1.0 + _RIM_SLACK)) ** 2, ftype)
+        clipped = dr.select((clipped == 0) & blocked, utype(k + 1), clipped)
         if s.stop:
             stop_x, stop_y = x, y
         n_after = refractive_index(s.glass, wavelength_um)
         if s.glass != (lens.surfaces[k - 1].glass if k else lens.object_glass):
             if s.curvature == 0.0:
-                nx, ny, nz = dr.zeros(F, 1), dr.zeros(F, 1), dr.ones(F, 1)
+                nx, ny, nz = dr.zeros(ftype, 1), dr.zeros(ftype, 1), dr.ones(ftype, 1)
             else:
                 nx, ny, nz = -c * x, -c * y, 1.0 - c * lz
             mu = n_before / n_after
@@ -145,11 +161,16 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F) -> Traced:
             k2 = 1.0 - mu * mu * (1.0 - cosi * cosi)
             tir |= k2 < 0
             ok &= k2 >= 0
-            g = dr.sqrt(dr.maximum(k2, 0.0)) - mu * cosi
+            cost = dr.sqrt(dr.maximum(k2, 0.0))
+            if fresnel:
+                rs = (mu * cosi - cost) / (mu * cosi + cost)
+                rp = (cosi - mu * cost) / (cosi + mu * cost)
+                transmittance = transmittance * (1.0 - 0.5 * (rs * rs + rp * rp))
+            g = cost - mu * cosi
             dx, dy, dz = dr.fma(mu, dx, g * nx), dr.fma(mu, dy, g * ny), dr.fma(mu, dz, g * nz)
-        z = lz + _opaque(zv)
+        z = lz + _opaque(zv, ftype)
         n_before = n_after
-    return Traced(Rays(x, y, z, dx, dy, dz, opl), ok, tir, clipped, stop_x, stop_y, n_before)
+    return Traced(Rays(x, y, z, dx, dy, dz, opl), ok, tir, clipped, stop_x, stop_y, n_before, transmittance)
 
 
 def to_plane(traced: Traced, z_plane: float | F) -> tuple[F, F, F]:
