@@ -58,9 +58,9 @@ import numpy as np
 
 from solas_mi.errors import SolasError
 from solas_mi.optics.camera import pinhole_focal_mm
-from solas_mi.optics.exit_pupil import pupil_bounds
 from solas_mi.optics.illumination import ideal_irradiance, image_scales
 from solas_mi.optics.lens import Lens
+from solas_mi.plugins.pupil_sampling import PupilSampler
 from solas_mi.plugins.scene_probe import calling_render, integrator_name
 from solas_mi.plugins.tables import lookup, table, zeros
 from solas_mi.render import response as responses
@@ -89,14 +89,9 @@ class LensSensor(mi.Sensor):
         self.width, self.height = (int(v) for v in self.film().size())
         self.image_z = self.lens.image_z
         half_diag = 0.5 * self.pitch_mm * math.hypot(self.width, self.height)
-        bounds = pupil_bounds(self.lens, half_diag, wavelengths_nm=sorted({float(self.response.lo_nm.min()),
-                                                                          float(self.response.hi_nm.max()),
-                                                                          *self.lens.wavelengths_nm}))
-        union = np.stack([bounds.at(r) for r in bounds.radius_mm[:-1]])  # rows i and i + 1
-        self.radius_step = float(bounds.radius_mm[1] - bounds.radius_mm[0])
-        self.rows = len(union)
-        self.bounds = [table(union[:, k]) for k in range(5)]
-        self.plane_z = bounds.plane_z
+        self.pupil = PupilSampler(self.lens, half_diag, sorted({float(self.response.lo_nm.min()),
+                                                                float(self.response.hi_nm.max()),
+                                                                *self.lens.wavelengths_nm}))
         self.focal_mm = pinhole_focal_mm(self.lens, self.fov_deg)
         self.norm = 1.0 / ideal_irradiance(self.lens, self.focal_mm)
         heights, radial, tangential = image_scales(self.lens, half_diag, self.lens.primary_wavelength)
@@ -162,27 +157,11 @@ class LensSensor(mi.Sensor):
         response's channel weights itself)."""
         lam, _ = self.sample_wavelength(sample1, active)
         film = self.film_point(sample2)
-        x, y = film.x, film.y
-        r = dr.sqrt(x * x + y * y)
-        inv = dr.select(r > 0, dr.rcp(r), 0.0)
-        cos_p, sin_p = dr.select(r > 0, x * inv, 1.0), y * inv
-        row = dr.minimum(mi.UInt32(r / self.radius_step), self.rows - 1)
-        u0, u1, v0, v1, ellipse = (lookup(b, row, active) for b in self.bounds)
-        ellipse = ellipse > 0.5
-        disk = mi.warp.square_to_uniform_disk_concentric(sample3)
-        su = dr.select(ellipse, 0.5 * (disk.x + 1.0), sample3.x)
-        sv = dr.select(ellipse, 0.5 * (disk.y + 1.0), sample3.y)
-        u, v = dr.fma(su, u1 - u0, u0), dr.fma(sv, v1 - v0, v0)
-        target = mi.Point3f(u * cos_p - v * sin_p, u * sin_p + v * cos_p, self.plane_z)
-        origin = mi.Point3f(x, y, self.image_z)
-        d = target - origin
-        dist2 = dr.squared_norm(d)
-        dz = self.plane_z - self.image_z
-        cos4 = dr.square(dz * dz / dist2)
-        area = (u1 - u0) * (v1 - v0) * dr.select(ellipse, 0.25 * dr.pi, 1.0)
-        weight = area * cos4 / (dz * dz) * self.norm
-        ray = mi.Ray3f(origin, d * dr.rsqrt(dist2), time, mi.Spectrum(lam) if mi.is_spectral else mi.Spectrum(0.0))
-        return ray, mi.Spectrum(weight) & active
+        target, weight = self.pupil.sample(film, sample3, active)
+        origin = mi.Point3f(film.x, film.y, self.image_z)
+        d = mi.Point3f(target.x, target.y, self.pupil.plane_z) - origin
+        ray = mi.Ray3f(origin, dr.normalize(d), time, mi.Spectrum(lam) if mi.is_spectral else mi.Spectrum(0.0))
+        return ray, mi.Spectrum(weight * self.norm) & active
 
     def sample_ray_differential(self, time, sample1, sample2, sample3, active=True):
         ray, weight = self.sample_ray(time, sample1, sample2, sample3, active)
