@@ -72,10 +72,7 @@ def register(subparsers: Any) -> None:
     """Add `batch` and its `degrade`."""
     from ..convolution.kernels import BOUNDARIES
     from ..convolution.methods import DEFAULT_METHOD, METHODS
-    from ..psf.base import DEFAULT_GEOMETRIC_RAYS, DEFAULT_PITCH_UM, DEFAULT_PUPIL_SAMPLES, DEFAULT_SIZE, NORMALIZATIONS
-    from ..psf.grid import FIELD_SAMPLINGS
-    from ..psf.methods import DEFAULT_METHOD as DEFAULT_PSF_METHOD
-    from ..psf.methods import METHODS as PSF_METHODS
+    from ..psf.commands import add_grid_options
 
     batch = subparsers.add_parser("batch", help="many images at once, on local processes or a Dask cluster",
                                   description="Batch work, resumable, with a manifest batch.json in the output "
@@ -102,16 +99,5 @@ def register(subparsers: Any) -> None:
                    help="print the stages, what is reused and an estimate; do nothing")
     p.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
-    grid = p.add_argument_group("grid options (with --lens; those of `solas-mi psf-grid`)")
-    grid.add_argument("--grid", default="8x8", help="columns x rows of field nodes")
-    grid.add_argument("--wavelengths", help="nm, comma-separated (default: the lens file's)")
-    grid.add_argument("--field-range-deg", help="half range X[,Y] in degrees (default: the lens file's field)")
-    grid.add_argument("--field-sampling", choices=FIELD_SAMPLINGS, default=FIELD_SAMPLINGS[0])
-    grid.add_argument("--pitch-um", type=float, default=DEFAULT_PITCH_UM, help="PSF pixel pitch (µm)")
-    grid.add_argument("--size", type=int, default=DEFAULT_SIZE, help="PSF width and height (pixels)")
-    grid.add_argument("--psf-method", choices=list(PSF_METHODS), default=DEFAULT_PSF_METHOD)
-    grid.add_argument("--normalize", choices=NORMALIZATIONS, default="sum")
-    grid.add_argument("--pupil-samples", type=int, default=DEFAULT_PUPIL_SAMPLES, help="Fraunhofer pupil grid N×N")
-    grid.add_argument("--rays", type=int, default=DEFAULT_GEOMETRIC_RAYS, help="geometric: rays×rays per PSF")
-    grid.add_argument("--auto-window", action="store_true", help="double --size until each window holds the light")
+    add_grid_options(p.add_argument_group("grid options (with --lens; those of `solas-mi psf-grid`)"), "--psf-method")
     p.set_defaults(run=run_batch_degrade)

@@ -58,7 +58,9 @@ def remove_leftovers(folder: Path, jobs: list[Job]) -> int:
     names = {Path(p).name for job in jobs for p in (job.output, job.png)}
     removed = 0
     for path in folder.iterdir() if folder.is_dir() else ():
-        if path.name.startswith(".") and path.name[1:].rsplit(".", 2)[0] in names and path.is_file():
+        # ".NAME.XXXXXXXX.SUFFIX", or nested (a writer's own temporary beside the batch's: "..NAME.X.SUFFIX.Y.SUFFIX")
+        if path.name.startswith(".") and any(path.name.lstrip(".").startswith(n + ".") for n in names) \
+                and path.is_file():
             path.unlink(missing_ok=True)
             removed += 1
     return removed

@@ -1,7 +1,6 @@
 """`solas-mi psf` (one PSF) and `solas-mi psf-grid` (PSFs over the field), as OpenEXR + PNG."""
 from __future__ import annotations
 
-import argparse
 import sys
 from typing import Any
 
@@ -85,37 +84,49 @@ def run_psf_grid(args) -> int:
     return 0
 
 
-def _add_psf_options(p: argparse.ArgumentParser) -> None:
+def add_sampling_options(p, method_flag: str = "--method") -> None:
+    """How PSFs are computed and sampled: pitch, size, method (`method_flag`: a command whose --method
+    means something else names it --psf-method), normalisation, pupil samples, rays, auto window."""
     p.add_argument("--pitch-um", type=float, default=DEFAULT_PITCH_UM, help="image-plane pixel pitch (µm)")
     p.add_argument("--size", type=int, default=DEFAULT_SIZE, help="PSF width and height (pixels)")
-    p.add_argument("--method", choices=list(METHODS), default=DEFAULT_METHOD)
+    p.add_argument(method_flag, choices=list(METHODS), default=DEFAULT_METHOD, help="PSF method")
     p.add_argument("--normalize", choices=NORMALIZATIONS, default="sum")
     p.add_argument("--pupil-samples", type=int, default=DEFAULT_PUPIL_SAMPLES, help="Fraunhofer pupil grid N×N")
     p.add_argument("--rays", type=int, default=DEFAULT_GEOMETRIC_RAYS, help="geometric: rays×rays per PSF")
     p.add_argument("--auto-window", action="store_true",
                    help=f"double --size until each window holds {100 * WINDOW_ENERGY_LIMIT:g} %% of the light")
+
+
+def add_grid_options(p, method_flag: str = "--method") -> None:
+    """The options that define a PSF grid (`psf-grid`, and batch jobs that compute one)."""
+    from .grid import FIELD_SAMPLINGS
+
+    p.add_argument("--grid", default="8x8", help="columns x rows of field nodes")
+    p.add_argument("--wavelengths", help="nm, comma-separated (default: the lens file's)")
+    p.add_argument("--field-range-deg", help="half range X[,Y] in degrees (default: the lens file's field)")
+    p.add_argument("--field-sampling", choices=FIELD_SAMPLINGS, default=FIELD_SAMPLINGS[0])
+    add_sampling_options(p, method_flag)
+
+
+def _add_outputs(p) -> None:
     p.add_argument("-o", "--output", required=True, help="output OpenEXR file")
     p.add_argument("--png", help="PNG for viewing (default: beside the EXR)")
 
 
 def register(sub: Any) -> None:
     """Add `psf` and `psf-grid`."""
-    from .grid import FIELD_SAMPLINGS
-
     psf = sub.add_parser("psf", help="one PSF (Fraunhofer or geometric) as OpenEXR + PNG")
     add_lens_argument(psf)
     psf.add_argument("--field-deg", required=True, help="X,Y field angle in degrees")
     psf.add_argument("--wavelength-nm", required=True, help="one wavelength, or several for a polychromatic PSF")
     psf.add_argument("--weights", help="weights of the wavelengths (default: equal)")
-    _add_psf_options(psf)
+    add_sampling_options(psf)
+    _add_outputs(psf)
     psf.set_defaults(run=run_psf)
 
     grid = sub.add_parser("psf-grid", help="PSFs on a field grid, one stack per wavelength, as OpenEXR + PNG mosaic")
     add_lens_argument(grid)
-    grid.add_argument("--grid", default="8x8", help="columns x rows of field nodes")
-    grid.add_argument("--wavelengths", help="nm, comma-separated (default: the lens file's)")
-    grid.add_argument("--field-range-deg", help="half range X[,Y] in degrees (default: the lens file's field)")
-    grid.add_argument("--field-sampling", choices=FIELD_SAMPLINGS, default=FIELD_SAMPLINGS[0])
+    add_grid_options(grid)
     grid.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
-    _add_psf_options(grid)
+    _add_outputs(grid)
     grid.set_defaults(run=run_psf_grid)

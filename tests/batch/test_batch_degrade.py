@@ -128,7 +128,7 @@ def test_a_dead_worker_loses_only_its_item(batch_inputs):
     """SIGKILL one worker process holding an item: the item is retried in a fresh process."""
     import psutil
 
-    from solas_mi.batch.jobs import expand_inputs, plan
+    from solas_mi.batch.jobs import expand_inputs, plan, remove_leftovers
     from solas_mi.batch.runner import run_local
 
     batch_inputs.write(12, shape=(240, 320))
@@ -152,6 +152,7 @@ def test_a_dead_worker_loses_only_its_item(batch_inputs):
     run_local(jobs, list(range(len(jobs))), str(batch_inputs.grid), settings, 2, on_done)
     assert killed and all(job.status == "done" for job in jobs), [job.error for job in jobs]
     assert max(job.attempts for job in jobs) == 2  # the item the killed process held, done again
+    remove_leftovers(batch_inputs.root / "out", jobs)  # as degrade_batch does after every run
     assert not [f for f in (batch_inputs.root / "out").iterdir() if f.name.startswith(".")]
 
 
