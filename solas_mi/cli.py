@@ -54,7 +54,7 @@ def main(argv: list[str] | None = None) -> int:
         print(f"\nsolas-mi {args.command}: {how}; no output was left half-written", file=sys.stderr)
         return 143 if isinstance(exc, Terminated) else 130
     finally:
-        if main_thread:
+        if previous is not None:  # None: not ours to restore (not the main thread, or set outside Python)
             signal.signal(signal.SIGTERM, previous)
 
 
