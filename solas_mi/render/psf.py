@@ -25,13 +25,14 @@ from .scene import DEFAULT_RINGS, lens_parts, write_ply
 VARIANT = "llvm_ad_spectral"
 
 
-def lens_geometry(lens, rings: int = DEFAULT_RINGS):
-    """The lens alone as a Mitsuba scene: cap meshes with `sellmeier_dielectric` (no Fresnel losses)
-    and absorbing apertures, no sensor image and no texture."""
+def lens_geometry(lens, rings: int = DEFAULT_RINGS, **extra):
+    """The lens as a Mitsuba scene (mm, lens file's frame): cap meshes with `sellmeier_dielectric` (no
+    Fresnel losses) and absorbing apertures, no sensor image and no texture; `extra` scene entries
+    (a sensor, an integrator, objects) are added as given."""
     from .mitsuba import mitsuba
 
     mi = mitsuba(VARIANT)
-    scene = {"type": "scene", "absorber": {"type": "diffuse", "reflectance": {"type": "rgb", "value": 0.0}}}
+    scene = {"type": "scene", "absorber": {"type": "diffuse", "reflectance": {"type": "rgb", "value": 0.0}}, **extra}
     with tempfile.TemporaryDirectory(prefix="solas-lens-") as tmp:
         for part in lens_parts(lens, rings):
             path = Path(tmp) / f"{part.name}.ply"
