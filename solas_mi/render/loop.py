@@ -20,7 +20,7 @@ import numpy as np
 from ..errors import SolasError
 from .scene import path_depth
 
-_SAMPLES_PER_PASS = 1 << 22  # samples traced at once: bounds the memory of one pass
+_SAMPLES_PER_PASS = 1 << 21  # samples traced at once: bounds a pass's memory and time (~1 s: Ctrl-C waits no longer)
 SPAWN_OFFSET_MM = 1e-4  # a continued ray starts this far (mm) along its own direction
 
 
