@@ -10,8 +10,9 @@
 Each module documents its parameters. The modules subclass the types of Mitsuba's current variant,
 so they are imported only by `register`, after a variant is set (`solas_mi.render.mitsuba`). Beside
 them: `tables` (lookup tables and records in every variant), `pupil_sampling` (rays toward the exit
-pupil, for both sensors) and `scene_probe` (the scene and
-integrator of the render calling a plugin, which Mitsuba does not pass to Python plugins).
+pupil) and `wavelength_sampling` (a path's wavelength from the camera response), for both sensors,
+and `scene_probe` (the scene and integrator of the render calling a plugin, which Mitsuba does not
+pass to Python plugins).
 """
 from __future__ import annotations
 

@@ -58,7 +58,7 @@ from solas_mi.optics.exit_pupil import passes, reversed_lens
 from solas_mi.optics.focus import focused
 from solas_mi.optics.lens import Lens
 from solas_mi.plugins.pupil_sampling import PupilSampler
-from solas_mi.plugins.tables import lookup, table
+from solas_mi.plugins.wavelength_sampling import WavelengthSampler
 from solas_mi.render import response as responses
 
 FRESNEL = ("off", "transmit")
@@ -130,17 +130,12 @@ class LensCamera(mi.Sensor):
         self.norm = 1.0 / solid_angle
         self.reversed = reversed_lens(lens)
         self.last_vertex_z = float(lens.vertex_z[-1])
-        self.spectrum = mi.DiscreteDistribution(table(r.probability))
-        self.lo, self.hi = table(r.lo_nm), table(r.hi_nm)
-        # 1/p(λ): the bin's width over its probability (a line: 1 over its probability)
-        self.inv_pdf = table(np.where(r.hi_nm > r.lo_nm, r.hi_nm - r.lo_nm, 1.0) / r.probability)
+        self.wavelengths = WavelengthSampler(r)
 
     def sample_wavelengths(self, si, sample, active=True):
         """One wavelength (nm) from the response in all four lanes, and its weight 1/p(λ)."""
-        index, u = self.spectrum.sample_reuse(sample, active)
-        lo, hi = lookup(self.lo, index, active), lookup(self.hi, index, active)
-        lam = dr.fma(u, hi - lo, lo)
-        return mi.Spectrum(lam), mi.Spectrum(lookup(self.inv_pdf, index, active))
+        lam, index = self.wavelengths.sample(sample, active)
+        return mi.Spectrum(lam), mi.Spectrum(self.wavelengths.weight(index, active))
 
     def sample_ray(self, time, sample1, sample2, sample3, active=True):
         """The ray leaving surface 1 toward the scene (world units) and its weight (module docstring)."""

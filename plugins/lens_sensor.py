@@ -63,6 +63,7 @@ from solas_mi.optics.lens import Lens
 from solas_mi.plugins.pupil_sampling import PupilSampler
 from solas_mi.plugins.scene_probe import calling_render, integrator_name
 from solas_mi.plugins.tables import lookup, table, zeros
+from solas_mi.plugins.wavelength_sampling import WavelengthSampler
 from solas_mi.render import response as responses
 
 INTEGRATORS = ("path", "volpath", "aov")  # Mitsuba's integrators that render through the lens
@@ -100,10 +101,7 @@ class LensSensor(mi.Sensor):
         self.scale_rows = len(heights)
         self.max_footprint = float(self.pitch_mm / min(radial.min(), tangential.min()))
         r = self.response
-        self.spectrum = mi.DiscreteDistribution(table(r.probability))
-        self.lo, self.hi = table(r.lo_nm), table(r.hi_nm)
-        # 1/p(λ): the bin's width over its probability (a line: 1 over its probability)
-        self.inv_pdf = table(np.where(r.hi_nm > r.lo_nm, r.hi_nm - r.lo_nm, 1.0) / r.probability)
+        self.wavelengths = WavelengthSampler(r)
         self.checked = set()  # ids of the integrators found to render through the lens
         self.channel_table = table(r.weights)
         self.channels = len(r.channels)
@@ -113,9 +111,7 @@ class LensSensor(mi.Sensor):
 
     def sample_wavelength(self, sample1: mi.Float, active=True):
         """Wavelength (nm) of a path and the bin it came from."""
-        index, u = self.spectrum.sample_reuse(sample1, active)
-        lo, hi = lookup(self.lo, index, active), lookup(self.hi, index, active)
-        return dr.fma(u, hi - lo, lo), index
+        return self.wavelengths.sample(sample1, active)
 
     def channel_weights(self, index: mi.UInt32, active=True) -> list[mi.Float]:
         """Per-channel weight response_c(λ)/p(λ) of the wavelength bin `index`."""
@@ -142,7 +138,7 @@ class LensSensor(mi.Sensor):
     def sample_wavelengths(self, si, sample, active=True):
         """One wavelength from the response in all four lanes, and its weight 1/p(λ)."""
         lam, index = self.sample_wavelength(sample, active)
-        inv_pdf = lookup(self.inv_pdf, index, active)
+        inv_pdf = self.wavelengths.weight(index, active)
         return (mi.Spectrum(lam), mi.Spectrum(inv_pdf)) if mi.is_spectral else (mi.Spectrum(0.0), mi.Spectrum(1.0))
 
     def sample_ray(self, time, sample1, sample2, sample3, active=True):

@@ -20,7 +20,7 @@ def _check_render(width: int, height: int, spp: int, force: bool) -> None:
     import os
 
     from ..budget import check_memory
-    from .stock import SAMPLES_PER_PASS  # the loop's passes are as large
+    from .stock import SAMPLES_PER_PASS  # the larger pass of the two engines (the loop's is half of it)
 
     if not (isinstance(spp, int) and 1 <= spp <= MAX_SPP):
         raise SolasError(f"samples per pixel {spp!r} must be an integer from 1 to {MAX_SPP}")

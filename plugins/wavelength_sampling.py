@@ -1,0 +1,30 @@
+"""One wavelength per path drawn from a camera response (`solas_mi.render.response`), for the sensors
+that look through a lens (in every Mitsuba variant; `tables` holds the lookups). Wavelengths in nm."""
+from __future__ import annotations
+
+import drjit as dr
+import mitsuba as mi
+import numpy as np
+
+from solas_mi.plugins.tables import lookup, table
+
+
+class WavelengthSampler:
+    """The response's bins: a bin chosen by its probability, a wavelength uniform inside it."""
+
+    def __init__(self, response) -> None:
+        r = response
+        self.distribution = mi.DiscreteDistribution(table(r.probability))
+        self.lo, self.hi = table(r.lo_nm), table(r.hi_nm)
+        # 1/p(λ): the bin's width over its probability (a line: 1 over its probability)
+        self.inverse_pdf = table(np.where(r.hi_nm > r.lo_nm, r.hi_nm - r.lo_nm, 1.0) / r.probability)
+
+    def sample(self, sample1: mi.Float, active=True) -> tuple[mi.Float, mi.UInt32]:
+        """A wavelength (nm) and the bin it came from."""
+        index, u = self.distribution.sample_reuse(sample1, active)
+        lo, hi = lookup(self.lo, index, active), lookup(self.hi, index, active)
+        return dr.fma(u, hi - lo, lo), index
+
+    def weight(self, index: mi.UInt32, active=True) -> mi.Float:
+        """1/p(λ) of a wavelength of bin `index`."""
+        return lookup(self.inverse_pdf, index, active)
