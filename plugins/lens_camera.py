@@ -46,7 +46,6 @@ tracing (`ptracer`) cannot connect to a sensor behind a lens: `sample_direction`
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import drjit as dr
 import mitsuba as mi
@@ -58,8 +57,8 @@ from solas_mi.optics.exit_pupil import passes, reversed_lens
 from solas_mi.optics.focus import focused
 from solas_mi.optics.lens import Lens
 from solas_mi.plugins.pupil_sampling import PupilSampler
+from solas_mi.plugins.scene_files import load_lens, load_response
 from solas_mi.plugins.wavelength_sampling import WavelengthSampler
-from solas_mi.render import response as responses
 
 FRESNEL = ("off", "transmit")
 
@@ -97,9 +96,7 @@ class LensCamera(mi.Sensor):
         if not mi.is_spectral:
             raise SolasError(f"lens_camera: variant {mi.variant()} is not spectral; the lens needs one "
                              "wavelength per path (use llvm_ad_spectral, cuda_ad_spectral or scalar_spectral)")
-        name = str(props.get("lens", "solas-doublet"))
-        resolved = mi.file_resolver().resolve(name)
-        lens = Lens.load(str(resolved) if Path(str(resolved)).is_file() else name)
+        lens = load_lens(props)
         self.pitch_um = _positive(props, "pitch_um", 5.0, "µm")
         self.world_unit_mm = _positive(props, "world_unit_mm", 1000.0, "mm per world unit")
         self.fresnel = str(props.get("fresnel", "off"))
@@ -114,8 +111,7 @@ class LensCamera(mi.Sensor):
                                  f"mm): {exc}") from None
         self.lens = lens
         self.focus_distance = lens.object_distance / self.world_unit_mm
-        self.response = responses.parse(str(props.get("response", "srgb")), lens.wavelengths_nm)
-        responses.check_lens(self.response, lens)
+        self.response = load_response(props, lens, "srgb")
         self.pitch_mm = self.pitch_um * 1e-3
         self.width, self.height = (int(v) for v in self.film().size())
         self.crop_offset = [int(v) for v in self.film().crop_offset()]

@@ -50,7 +50,6 @@ film row 0 is +y.
 from __future__ import annotations
 
 import math
-from pathlib import Path
 
 import drjit as dr
 import mitsuba as mi
@@ -59,12 +58,11 @@ import numpy as np
 from solas_mi.errors import SolasError
 from solas_mi.optics.camera import pinhole_focal_mm
 from solas_mi.optics.illumination import ideal_irradiance, image_scales
-from solas_mi.optics.lens import Lens
 from solas_mi.plugins.pupil_sampling import PupilSampler
+from solas_mi.plugins.scene_files import load_lens, load_response
 from solas_mi.plugins.scene_probe import calling_render, integrator_name
 from solas_mi.plugins.tables import lookup, table, zeros
 from solas_mi.plugins.wavelength_sampling import WavelengthSampler
-from solas_mi.render import response as responses
 
 INTEGRATORS = ("path", "volpath", "aov")  # Mitsuba's integrators that render through the lens
 
@@ -74,9 +72,7 @@ class LensSensor(mi.Sensor):
 
     def __init__(self, props: mi.Properties) -> None:
         super().__init__(props)
-        name = str(props.get("lens", "solas-doublet"))
-        resolved = mi.file_resolver().resolve(name)
-        self.lens = Lens.load(str(resolved) if Path(str(resolved)).is_file() else name)
+        self.lens = load_lens(props)
         if not self.lens.at_infinity:
             raise SolasError(f"lens_sensor: lens {self.lens.name} has a finite object; the sensor needs a lens "
                              "focused at infinity (put a near object in the scene with image_object's distance_mm)")
@@ -85,8 +81,7 @@ class LensSensor(mi.Sensor):
         self.pitch_mm = self.pitch_um * 1e-3
         if not self.pitch_mm > 0:
             raise SolasError(f"lens_sensor: pitch_um {self.pitch_mm * 1e3!r} must be positive")
-        self.response = responses.parse(str(props.get("response", "lines")), self.lens.wavelengths_nm)
-        responses.check_lens(self.response, self.lens)
+        self.response = load_response(props, self.lens, "lines")
         self.width, self.height = (int(v) for v in self.film().size())
         self.image_z = self.lens.image_z
         half_diag = 0.5 * self.pitch_mm * math.hypot(self.width, self.height)

@@ -11,6 +11,16 @@ import threading
 
 from .errors import SolasError
 
+DESCRIPTION = ("Physically based lens simulation: PSFs ray-traced through a real lens, images degraded with "
+               "them or rendered through the lens in Mitsuba 3, and the result measured.")
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse, with a usage error on one line that says where the usage is (sub-commands inherit it)."""
+
+    def error(self, message: str):
+        self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
+
 
 def build_parser() -> argparse.ArgumentParser:
     from . import __version__
@@ -22,9 +32,9 @@ def build_parser() -> argparse.ArgumentParser:
     from .render import commands as render
     from .validation import commands as validation
 
-    parser = argparse.ArgumentParser(prog="solas-mi", description=__doc__.split("\n")[0])
+    parser = Parser(prog="solas-mi", description=DESCRIPTION)
     parser.add_argument("--version", action="version", version=f"solas-mi {__version__}")
-    sub = parser.add_subparsers(dest="command", required=True)
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     # in the order of the data: lens → PSFs → convolution; lens → scene → render; images → metrics; checks
     for area in (optics, psf, convolution, render, metrics, validation, batch):
         area.register(sub)

@@ -17,5 +17,9 @@ def plugin_error(exc: BaseException, context: str) -> SolasError:
         cause = cause.__cause__ or cause.__context__
     text = str(exc)
     marker = "SolasError: "
-    message = text.rsplit(marker, 1)[1] if marker in text else text
-    return SolasError(f"{context}: {message.strip().splitlines()[0] if message.strip() else type(exc).__name__}")
+    lines = [line.strip() for line in (text.rsplit(marker, 1)[1] if marker in text else text).strip().splitlines()]
+    if not lines:
+        return SolasError(f"{context}: {type(exc).__name__}")
+    # a first line that announces a list ("Found unused parameters:") takes the list along
+    message = lines[0] + (" " + "; ".join(line.lstrip("- ") for line in lines[1:]) if lines[0].endswith(":") else "")
+    return SolasError(f"{context}: {message}")

@@ -1,9 +1,13 @@
 """The command line as a whole (`cli`): composition of the stages' commands, --version, and user
 errors as one line naming the bad value."""
+import numpy as np
 import pytest
+from PIL import Image
 
 from solas_mi import __version__
 from solas_mi.cli import main
+
+PHOTO_SMALL = Image.fromarray((np.indices((24, 32)).sum(axis=0) * 4).astype(np.uint8))
 
 
 def test_version(capsys):
@@ -21,10 +25,46 @@ def test_version(capsys):
      "wavelength 2500.0001 nm is outside glass SCHOTT:N-BK7's valid range 300-2500 nm"),
     (["sfr", "{tmp}"], "is a folder, not an image file"),
     (["sfr", "{tmp}/garbage.png"], "cannot read image"),
+    (["lens", "info", "{tmp}/binary.toml"], "binary.toml is not UTF-8 text; a lens file is TOML text"),
+    (["psf", "solas-doublet", "--field-deg", "0,1", "--wavelength-nm", "531", "--pupil-samples", "100000",
+      "-o", "{tmp}/x.exr"], "pupil samples 100000 must be an integer from 8 to 4096"),
+    (["render-image", "solas-doublet", "{tmp}/photo.png", "--sensor", "32x24", "--spp", "1", "--seed", "-1",
+      "-o", "{tmp}/x.exr"], "seed -1 must be an integer from 0 to 4294967295"),
+    (["scene", "solas-doublet", "-o", "{tmp}/scene", "--spp", "0"], "samples per pixel 0 must be an integer from 1"),
+    (["scene", "solas-doublet", "-o", "{tmp}/scene", "--response", "mono:x"], "mono needs a wavelength in nm"),
+    (["scene", "solas-doublet", "-o", "{tmp}/scene", "--response", "table:{tmp}/rising.csv"],
+     "wavelengths must increase"),
+    (["ss-sfr", "{tmp}/photo.png", "--plot", "{tmp}/photo.png"], "is an input of this command"),
+    (["sfr-target", "-o", "{tmp}/t.png", "--low", "0.5", "--high", "0.5"], "an edge needs two different levels"),
 ])
 def test_user_errors_are_one_line(tmp_path, capsys, argv, message):
     (tmp_path / "garbage.png").write_text("not a png")
+    (tmp_path / "binary.toml").write_bytes(b"\x89PNG\r\n")
+    (tmp_path / "rising.csv").write_text("nm,r,g,b\n600,1,1,1\n500,1,1,1\n")
+    PHOTO_SMALL.save(tmp_path / "photo.png")
     assert main([a.replace("{tmp}", str(tmp_path)) for a in argv]) == 2
     err = capsys.readouterr().err
     assert message in err and err.count("\n") == 1 and "pip install" not in err
     assert not (tmp_path / "x.exr").exists()
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["degrade", "x.png", "--psf-grid", "g.exr", "-o", "d.exr", "--boundary", "nope"],
+     "solas-mi degrade: error: argument --boundary: invalid choice: 'nope'"),
+    (["nope"], "solas-mi: error: argument COMMAND: invalid choice: 'nope'"),
+    (["lens"], "solas-mi lens: error: the following arguments are required: COMMAND"),
+])
+def test_usage_errors_are_one_line(capsys, argv, message):
+    with pytest.raises(SystemExit) as exit_:
+        main(argv)
+    err = capsys.readouterr().err
+    assert exit_.value.code == 2 and err.startswith(message) and err.count("\n") == 1, err
+    assert err.rstrip().endswith("--help)")
+
+
+def test_no_measurement_says_so_on_stderr(tmp_path, capsys):
+    """An image without a usable edge: exit status 1 and a line on stderr, even when stdout is JSON."""
+    PHOTO_SMALL.save(tmp_path / "flat.png")
+    assert main(["sfr", str(tmp_path / "flat.png"), "--json"]) == 1
+    out, err = capsys.readouterr()
+    assert '"results": []' in out and "no valid edge measured" in err

@@ -77,7 +77,7 @@ def register(subparsers: Any) -> None:
     batch = subparsers.add_parser("batch", help="many images at once, on local processes or a Dask cluster",
                                   description="Batch work, resumable, with a manifest batch.json in the output "
                                               "folder.")
-    sub = batch.add_subparsers(dest="batch_command", required=True)
+    sub = batch.add_subparsers(dest="batch_command", metavar="COMMAND", required=True)
     p = sub.add_parser(
         "degrade", help="degrade images (files, folders, glob patterns) with one PSF grid",
         description="Degrade every input image with one PSF grid — a given file, or computed once from --lens "

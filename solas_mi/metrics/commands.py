@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
@@ -86,7 +87,10 @@ def run_sfr(args: argparse.Namespace) -> int:
         for roi, res in results:
             for w in res.warnings:
                 print(f"warning (ROI {','.join(map(str, roi))}): {w}")
-    return 0 if any(res.valid for _, res in results) else 1
+    if not any(res.valid for _, res in results):
+        print(f"solas-mi sfr: no valid edge measured in {args.image} (exit status 1)", file=sys.stderr)
+        return 1
+    return 0
 
 
 def _annulus_table(report: NsSfrReport) -> list[str]:
@@ -111,8 +115,13 @@ def _annulus_table(report: NsSfrReport) -> list[str]:
 def run_ss_sfr(args: argparse.Namespace) -> int:
     """Natural-scene SFR per annulus, optionally against a degraded image on the same ROIs."""
     from ..imageio import read_image
+    from ..outputs import check_target
     from .nssfr import natural_scene_sfr, plot_report
 
+    if args.plot:
+        if Path(args.plot).suffix.lower() != ".png":
+            raise SolasError(f"--plot {args.plot!r} must end in .png")
+        check_target(args.plot, [args.image, args.compare], "plot")
     image = read_image(args.image, linearize=not args.linear)
     other = read_image(args.compare, linearize=not args.linear) if args.compare else None
     report = natural_scene_sfr(image, compare=other, annuli=args.annuli, mode=args.mode,
@@ -130,7 +139,10 @@ def run_ss_sfr(args: argparse.Namespace) -> int:
             print("rejected: " + ", ".join(f"{k}: {v}" for k, v in sorted(report.rejected.items())))
         if args.plot:
             print(f"plot written to {args.plot}")
-    return 0 if report.rois else 1
+    if not report.rois:
+        print(f"solas-mi ss-sfr: no edge passed the filters in {args.image} (exit status 1)", file=sys.stderr)
+        return 1
+    return 0
 
 
 def run_sfr_target(args: argparse.Namespace) -> int:
@@ -147,6 +159,8 @@ def run_sfr_target(args: argparse.Namespace) -> int:
         raise SolasError(f"--sigma-px {args.sigma_px} must be ≥ 0")
     if not (0 <= args.low <= 1 and 0 <= args.high <= 1):
         raise SolasError(f"--low {args.low} and --high {args.high} must lie in [0, 1] (linear levels)")
+    if args.low == args.high:
+        raise SolasError(f"--low and --high are both {args.low}: an edge needs two different levels")
     rows, cols = parse_wxh(args.size, "--size", 16)
     if args.shape == "edge":
         img = slanted_edge((rows, cols), args.angle_deg, args.sigma_px, low=args.low, high=args.high,

@@ -379,6 +379,7 @@ def plot_report(report: NsSfrReport, image: np.ndarray, path: str | os.PathLike)
     ax_sfr.set_xlabel("frequency (cy/px)")
     ax_sfr.set_ylabel("mean SFR")
     ax_sfr.set_title("mean SFR per annulus (solid: image, dashed: comparison)")
-    ax_sfr.legend(fontsize=8)
+    if ax_sfr.get_legend_handles_labels()[0]:  # no curves when no edge was measured
+        ax_sfr.legend(fontsize=8)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=100)

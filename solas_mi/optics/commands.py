@@ -47,7 +47,7 @@ def run_lens_info(args) -> int:
 
 def register(sub: Any) -> None:
     """Add `lens info`."""
-    lens = sub.add_parser("lens", help="lens data").add_subparsers(dest="lens_command", required=True)
+    lens = sub.add_parser("lens", help="lens data").add_subparsers(dest="lens_command", metavar="COMMAND", required=True)
     info = lens.add_parser("info", help="paraxial data: EFL, BFD, pupils, f/#, chief rays")
     add_lens_argument(info)
     info.add_argument("--wavelengths", help="nm, comma-separated (default: the lens file's)")

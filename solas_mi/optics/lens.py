@@ -129,6 +129,8 @@ class Lens:
                 spec = tomllib.load(f)
         except tomllib.TOMLDecodeError as exc:
             raise SolasError(f"lens file {path}: not valid TOML: {exc}") from exc
+        except UnicodeDecodeError:
+            raise SolasError(f"lens file {path} is not UTF-8 text; a lens file is TOML text") from None
         return cls.from_dict(spec, source=str(path))
 
     @classmethod

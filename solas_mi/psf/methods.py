@@ -60,6 +60,9 @@ METHODS: dict[str, Method] = {m.name: m for m in (
                                                  "lens meshes, binned per pixel"),
 )}
 DEFAULT_METHOD = "fraunhofer"
+# largest sampling per side: 4096² = 16.8 M rays per PSF (about 1 GB of float64 working arrays);
+# Dr.Jit refuses arrays beyond 2^32 entries long before memory would
+MAX_SAMPLING = 4096
 
 
 def check_method(method: str, pupil_samples: int, rays: int) -> int:
@@ -68,9 +71,10 @@ def check_method(method: str, pupil_samples: int, rays: int) -> int:
         raise SolasError(f"PSF method {method!r} must be one of {', '.join(METHODS)}")
     m = METHODS[method]
     value = {"pupil_samples": pupil_samples, "rays": rays}[m.sampling]
-    if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < m.minimum:
+    if (not isinstance(value, (int, np.integer)) or isinstance(value, bool)
+            or not m.minimum <= value <= MAX_SAMPLING):
         what, per = ("pupil samples", "") if m.sampling == "pupil_samples" else ("rays", " (rays × rays per PSF)")
-        raise SolasError(f"{what} {value!r} must be an integer >= {m.minimum}{per}")
+        raise SolasError(f"{what} {value!r} must be an integer from {m.minimum} to {MAX_SAMPLING}{per}")
     return int(value)
 
 

@@ -15,6 +15,11 @@ BYTES_PER_SAMPLE = 80  # a pass's wavefront (measured: 1.1 GB peak for 12.6 M sa
 SAMPLES_PER_SECOND_PER_CORE = 0.9e6  # measured on the bundled image, `lines` (README: 1.8–2 M/s on 2 cores)
 
 
+def _check_spp(spp) -> None:
+    if not (isinstance(spp, int) and 1 <= spp <= MAX_SPP):
+        raise SolasError(f"samples per pixel {spp!r} must be an integer from 1 to {MAX_SPP}")
+
+
 def _check_render(width: int, height: int, spp: int, force: bool) -> None:
     """Refuse an absurd spp or a render that cannot fit in memory; announce a long one on stderr."""
     import os
@@ -22,8 +27,7 @@ def _check_render(width: int, height: int, spp: int, force: bool) -> None:
     from ..budget import check_memory
     from .stock import SAMPLES_PER_PASS  # the larger pass of the two engines (the loop's is half of it)
 
-    if not (isinstance(spp, int) and 1 <= spp <= MAX_SPP):
-        raise SolasError(f"samples per pixel {spp!r} must be an integer from 1 to {MAX_SPP}")
+    _check_spp(spp)
     pixels = width * height
     check_memory(f"render {width}x{height}", max(pixels, SAMPLES_PER_PASS) * BYTES_PER_SAMPLE + 48 * pixels, force,
                  "a smaller sensor")
@@ -46,24 +50,38 @@ def _default_image() -> str:
     return str(resource_dir("scenes") / DEFAULT_IMAGE)
 
 
-def _scene(args) -> int:
+def _copy_beside(path: Path, out: Path) -> str:
+    """Copy `path` into the scene folder `out` (atomically; nothing when it is already there): its name."""
     from ..imageio import atomic_path
+
+    if not (out / path.name).exists() or not (out / path.name).samefile(path):
+        with atomic_path(out / path.name) as tmp:
+            shutil.copyfile(path, tmp)
+    return path.name
+
+
+def _scene(args) -> int:
     from ..optics.camera import camera_for
     from ..optics.lens import Lens
     from ..outputs import output_folder
+    from .response import parse
     from .scene import write_scene
 
     out = output_folder(args.output)
     lens = Lens.load(args.lens)
+    _check_spp(args.spp)
+    parse(args.response, lens.wavelengths_nm)  # a bad response is refused now, not when the scene renders
     camera = camera_for(lens, parse_wxh(args.sensor, "--sensor"), args.fov_deg, args.pitch_um)
     out.mkdir(parents=True, exist_ok=True)
     image = Path(args.image or _default_image())
     if not image.is_file():
         raise SolasError(f"no such image file: {image}")
-    if not (out / image.name).exists() or not (out / image.name).samefile(image):
-        with atomic_path(out / image.name) as tmp:
-            shutil.copyfile(image, tmp)
-    xml = write_scene(lens, out, image.name, camera, args.rings, args.spp, args.response, args.boundary, args.fresnel)
+    response = args.response
+    kind, sep, table = response.partition(":")
+    if kind.strip().lower() == "table" and table:  # the table travels with the scene, like the image
+        response = f"{kind}{sep}{_copy_beside(Path(table), out)}"
+    xml = write_scene(lens, out, _copy_beside(image, out), camera, args.rings, args.spp, response, args.boundary,
+                      args.fresnel)
     print(f"wrote {xml} (meshes in {out / 'meshes'}); render it with: solas-mi render {xml} -o out.exr")
     return 0
 
@@ -92,8 +110,6 @@ def _render(args) -> int:
         if not sep or not key:
             raise SolasError(f"--set {item!r} must look like name=value (a <default> of the scene)")
         params[key] = value
-    if args.spp is not None:
-        params["spp"] = args.spp
     lens = Lens.load(args.lens) if args.lens else None
     if lens is None and (args.pitch_um is not None or args.focus_distance is not None):
         raise SolasError("--pitch-um and --focus-distance set the lens camera: give --lens too")

@@ -18,6 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import SolasError
+from .mitsuba import check_run, pass_seed
 from .scene import path_depth
 
 _SAMPLES_PER_PASS = 1 << 21  # samples traced at once: bounds a pass's memory and time (~1 s: Ctrl-C waits no longer)
@@ -80,8 +81,7 @@ def render(scene, spp: int, seed: int = 0, max_depth: int | None = None, progres
     import drjit as dr
     import mitsuba as mi
 
-    if not (isinstance(spp, int) and spp >= 1):
-        raise SolasError(f"samples per pixel {spp!r} must be a positive integer")
+    check_run(spp, seed)
     sensor, emitter = _components(scene)
     if spp < max(sensor.discrete_lines, 1):
         raise SolasError(f"samples per pixel {spp} must be at least the response's {sensor.discrete_lines} lines "
@@ -103,9 +103,9 @@ def render(scene, spp: int, seed: int = 0, max_depth: int | None = None, progres
             k += 1
             if dr.is_jit_v(mi.Float):
                 accum[first * nc:(first + count) * nc] += _pass(mi, dr, scene, sensor, emitter, n_spp, done, spp,
-                                                                 seed, seed * 1_000_003 + k, depth, first, count)
+                                                                 seed, pass_seed(seed, k), depth, first, count)
             else:
-                accum += _pass_scalar(mi, dr, scene, sensor, emitter, n_spp, done, spp, seed, seed * 1_000_003 + k,
+                accum += _pass_scalar(mi, dr, scene, sensor, emitter, n_spp, done, spp, seed, pass_seed(seed, k),
                                       depth)
             if progress is not None and count < pixels:
                 progress(done + n_spp * (first + count) / pixels, spp)

@@ -56,3 +56,20 @@ def load_scene(path: str, variant: str | None = None, **params):
         return mi.load_file(str(path), **{k: str(v) for k, v in params.items()})
     except RuntimeError as exc:
         raise plugin_error(exc, f"cannot load scene {path}") from None
+
+
+MAX_SEED = 2**32 - 1  # Mitsuba's samplers take 32-bit seeds
+
+
+def check_run(spp, seed) -> None:
+    """Refuse what a render cannot use: `spp` must be a positive integer (samples per pixel), `seed`
+    an integer from 0 to 2³² − 1."""
+    if not (isinstance(spp, int) and not isinstance(spp, bool) and spp >= 1):
+        raise SolasError(f"samples per pixel {spp!r} must be a positive integer")
+    if not (isinstance(seed, int) and not isinstance(seed, bool) and 0 <= seed <= MAX_SEED):
+        raise SolasError(f"seed {seed!r} must be an integer from 0 to {MAX_SEED}")
+
+
+def pass_seed(seed: int, k: int) -> int:
+    """The 32-bit seed of pass `k` of a render seeded with `seed`: distinct per pass and per seed."""
+    return (seed * 1_000_003 + k) & 0xFFFFFFFF

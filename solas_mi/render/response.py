@@ -102,11 +102,24 @@ def srgb() -> Response:
     return _balanced("srgb", lam[keep], rgb)
 
 
-def table(path: str) -> Response:
-    """A camera's RGB sensitivities from a CSV file of rows "wavelength_nm, r, g, b", white-balanced."""
+def _numbers(line: str) -> bool:
     try:
-        data = np.loadtxt(path, delimiter=",", comments="#", ndmin=2)
-    except (OSError, ValueError) as exc:
+        [float(v) for v in line.split(",")]
+    except ValueError:
+        return False
+    return True
+
+
+def table(path: str) -> Response:
+    """A camera's RGB sensitivities from a CSV file of rows "wavelength_nm, r, g, b" (one header line
+    of column names and "#" comment lines allowed), white-balanced."""
+    try:
+        with open(path, encoding="utf-8") as f:
+            rows = [line for line in f if line.strip() and not line.lstrip().startswith("#")]
+        if rows and not _numbers(rows[0]):
+            rows = rows[1:]  # a header line of column names
+        data = np.loadtxt(rows, delimiter=",", ndmin=2)
+    except (OSError, ValueError) as exc:  # UnicodeDecodeError is a ValueError
         raise SolasError(f"camera response table {path!r}: {exc}") from None
     if data.shape[1] != 4 or len(data) < 2:
         raise SolasError(f"camera response table {path!r} must have rows 'wavelength_nm, r, g, b' "

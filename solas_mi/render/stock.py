@@ -13,8 +13,9 @@ import time
 
 import numpy as np
 
-from ..errors import SolasError, plugin_error
+from ..errors import plugin_error
 from .loop import Render
+from .mitsuba import check_run, pass_seed
 
 SAMPLES_PER_PASS = 1 << 22  # bounds the memory of one wavefront
 
@@ -23,8 +24,7 @@ def render_scene(scene, spp: int, seed: int = 0, progress=None) -> Render:
     """Render `scene` (loaded by `mitsuba.load_scene`) with its own integrator and `spp` samples per pixel."""
     import mitsuba as mi
 
-    if not (isinstance(spp, int) and not isinstance(spp, bool) and spp >= 1):
-        raise SolasError(f"samples per pixel {spp!r} must be a positive integer")
+    check_run(spp, seed)
     sensor = scene.sensors()[0]
     film = sensor.film()
     width, height = (int(v) for v in film.crop_size())
@@ -35,7 +35,7 @@ def render_scene(scene, spp: int, seed: int = 0, progress=None) -> Render:
     for k in range(passes):
         n = min(per_pass, spp - done)
         try:
-            mi.render(scene, seed=seed * 1_000_003 + k, spp=n)
+            mi.render(scene, seed=pass_seed(seed, k), spp=n)
         except RuntimeError as exc:  # a plugin's refusal (e.g. an integrator that cannot see through a lens)
             raise plugin_error(exc, "render") from None
         bitmap = film.bitmap()

@@ -129,6 +129,11 @@ def load(xml_path: str | Path, variant: str | None = None, lens=None, params: di
     from .mitsuba import mitsuba
 
     text = scene_text(xml_path, lens, **lens_options)
+    defaults = sorted(d.get("name") for d in ET.fromstring(text).iter("default"))
+    unknown = sorted(set(params or {}) - set(defaults))
+    if unknown:
+        raise SolasError(f"scene {xml_path} has no <default> named {', '.join(unknown)}; "
+                         f"its defaults: {', '.join(defaults) or 'none'}")
     mi = mitsuba(variant)
     resolver = mi.file_resolver()
     resolver.prepend(str(Path(xml_path).resolve().parent))

@@ -82,7 +82,7 @@ def register(sub: Any) -> None:
     p.set_defaults(run=run_crossval)
 
     report = sub.add_parser("report", help="reports: error against run time").add_subparsers(
-        dest="report_command", required=True)
+        dest="report_command", metavar="COMMAND", required=True)
     p = report.add_parser(
         "error-vs-time", help="error of patch / interp convolution and of the direct render against run time",
         description="Relative RMSE against a converged direct render (noise removed) and run time of the paper's "

@@ -69,8 +69,9 @@ def test_normalizations(doublet):
     (dict(size=1), "size 1 must be an integer from 2"),
     (dict(method="huygens"), "method 'huygens' must be one of fraunhofer, geometric"),
     (dict(normalization="max"), "normalization 'max' must be one of sum, peak, none"),
-    (dict(pupil_samples=4), "pupil samples 4 must be an integer >= 8"),
-    (dict(method="geometric", rays=1), "rays 1 must be an integer >= 2"),
+    (dict(pupil_samples=4), "pupil samples 4 must be an integer from 8 to 4096"),
+    (dict(pupil_samples=100000), "pupil samples 100000 must be an integer from 8 to 4096"),
+    (dict(method="geometric", rays=1), "rays 1 must be an integer from 2 to 4096"),
 ])
 def test_bad_psf_arguments(doublet, kwargs, match):
     with pytest.raises(SolasError, match=match):

@@ -75,3 +75,42 @@ def test_scenes_that_cannot_take_a_lens(tmp_path, doublet, text, match):
 def test_missing_scene_file(tmp_path):
     with pytest.raises(SolasError, match="no such scene file"):
         scene_text(tmp_path / "none.xml")
+
+
+def test_set_names_only_the_scenes_defaults(scene_file):
+    from solas_mi.render.user_scene import load
+
+    with pytest.raises(SolasError, match=r"has no <default> named nope, spp; its defaults: w"):
+        load(scene_file, "scalar_spectral", params={"nope": "1", "spp": "4", "w": "64"})
+
+
+def test_spp_renders_a_scene_without_an_spp_default(tmp_path):
+    """`render --spp` sets the samples of the render, not a <default> the scene may not have."""
+    from solas_mi.cli import main
+    from solas_mi.imageio import read_exr
+
+    path = tmp_path / "scene.xml"
+    path.write_text(SCENE.replace('value="1280"', 'value="16"').replace('value="960"', 'value="12"')
+                    .replace("</scene>", '<emitter type="constant"/></scene>'))
+    assert main(["render", str(path), "--spp", "2", "-o", str(tmp_path / "out.exr")]) == 0
+    channels, _ = read_exr(tmp_path / "out.exr")
+    assert all(c.shape == (12, 16) and c.mean() > 0 for c in channels.values())
+
+
+def test_a_response_table_travels_with_the_scene(tmp_path, monkeypatch):
+    """`solas-mi scene --response table:F.csv` copies the table beside the scene (a header line is
+    allowed), so the scene renders from any working folder and gives the table's white balance."""
+    from solas_mi.cli import main
+    from solas_mi.imageio import read_exr
+
+    table = tmp_path / "camera.csv"
+    table.write_text("# a camera\nwavelength_nm,r,g,b\n" + "".join(f"{w},1,1,1\n" for w in range(400, 701, 50)))
+    assert main(["scene", "solas-doublet", "-o", str(tmp_path / "scene"), "--sensor", "16x12",
+                 "--response", f"table:{table}"]) == 0
+    assert (tmp_path / "scene" / "camera.csv").read_text() == table.read_text()
+    elsewhere = tmp_path / "elsewhere"
+    elsewhere.mkdir()
+    monkeypatch.chdir(elsewhere)
+    table.unlink()
+    assert main(["render", str(tmp_path / "scene" / "scene.xml"), "--spp", "1", "-o", "out.exr"]) == 0
+    assert all(c.shape == (12, 16) for c in read_exr(elsewhere / "out.exr")[0].values())
