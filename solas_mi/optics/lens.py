@@ -139,8 +139,11 @@ class Lens:
         where = source or "lens"
         _check_keys(spec, "lens", where)
         rows = spec.get("surface")
-        if not isinstance(rows, list) or not rows or not all(isinstance(r, dict) for r in rows):
+        if not isinstance(rows, list) or not rows:
             raise SolasError(f"{where}: no [[surface]] entries (each surface is a table of radius, thickness, ...)")
+        if not all(isinstance(r, dict) for r in rows):
+            raise SolasError(f"{where}: surface = {rows!r}: each surface must be a table ([[surface]] with radius, "
+                             "thickness, ...)")
         surfaces = []
         for i, row in enumerate(rows, start=1):
             label = str(row.get("label", f"surface {i}"))
@@ -186,6 +189,13 @@ class Lens:
         return lens
 
     def _validate(self, where: str) -> None:
+        if not 0 <= self.field_deg < 180:
+            raise SolasError(f"{where}: field_deg = {self.field_deg:g} must be a half field angle in [0, 180) degrees")
+        for w in self.wavelengths_nm:
+            if not w > 0:
+                raise SolasError(f"{where}: wavelengths_nm holds {w:g}; wavelengths must be positive (nm)")
+        if self.image_diameter < 0:
+            raise SolasError(f"{where}: image diameter {self.image_diameter:g} mm must be positive (or left out)")
         stops = [i for i, s in enumerate(self.surfaces) if s.stop]
         if not stops:
             raise SolasError(f"{where}: no surface is marked as the aperture stop (set stop = true on one)")
@@ -252,7 +262,8 @@ class Lens:
 
     def check_wavelength(self, wavelength_nm: float) -> float:
         """`wavelength_nm` as float after checking every glass accepts it."""
-        if not isinstance(wavelength_nm, (int, float, np.floating)) or not math.isfinite(wavelength_nm) or wavelength_nm <= 0:
+        if (not isinstance(wavelength_nm, (int, float, np.integer, np.floating)) or isinstance(wavelength_nm, bool)
+                or not math.isfinite(wavelength_nm) or wavelength_nm <= 0):
             raise SolasError(f"wavelength {wavelength_nm!r} nm must be a positive number")
         self.indices(float(wavelength_nm))
         return float(wavelength_nm)

@@ -12,6 +12,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
+from ..errors import SolasError
 from .lens import Lens
 
 
@@ -70,7 +71,7 @@ def paraxial(lens: Lens, wavelength_nm: float | None = None, fields_deg: list[fl
     """Paraxial data (EFL, pupils, f/#, image offset, chief rays) of `lens` at `wavelength_nm`
     (default: its primary wavelength), with chief rays at `fields_deg` (default: 0 and the lens's
     field). Results for the default fields are memoised on the lens."""
-    wl = float(wavelength_nm if wavelength_nm is not None else lens.primary_wavelength)
+    wl = lens.check_wavelength(wavelength_nm if wavelength_nm is not None else lens.primary_wavelength)
     if fields_deg is not None:
         return _paraxial(lens, wl, fields_deg)
     memo = lens.memo.setdefault("paraxial", {})
@@ -118,6 +119,9 @@ def _paraxial(lens: Lens, wavelength_nm: float, fields_deg: list[float] | None =
         scale = r_stop / y0[s]
         ym, um = y0 * scale, u0 * scale
         obj_z = -d
+    if um[last] == 0:
+        raise SolasError(f"lens {lens.name} forms no image at {wavelength_nm:g} nm: rays from an object point leave "
+                         "it parallel (no optical power, or the object in the front focal plane)")
     focus_z = z[last] - ym[last] / um[last]
     refracting = [k for k in range(last + 1) if n[k + 1] != n[k]]
     bfd = focus_z - z[refracting[-1] if refracting else last]

@@ -98,11 +98,9 @@ def psf(lens, field_deg, wavelength_nm, *, weights=None, pitch_um: float = DEFAU
     check_grid(pitch_um, size)
     sampling = check_method(method, pupil_samples, rays)
     check_normalization(normalization)
-    wavelengths = tuple(float(w) for w in np.atleast_1d(wavelength_nm))
+    wavelengths = tuple(lens.check_wavelength(w) for w in np.atleast_1d(wavelength_nm).tolist())
     if not wavelengths:
         raise SolasError("at least one wavelength (nm) is needed")
-    for w in wavelengths:
-        lens.check_wavelength(w)
     w8 = np.ones(len(wavelengths)) if weights is None else np.asarray(weights, dtype=np.float64)
     if w8.shape != (len(wavelengths),) or np.any(w8 < 0) or not np.isfinite(w8).all() or w8.sum() <= 0:
         raise SolasError(f"weights {weights!r} must be {len(wavelengths)} non-negative numbers, not all zero")

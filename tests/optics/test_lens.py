@@ -73,7 +73,12 @@ def test_hash_follows_optics_not_labels(doublet_spec):
     ("field_deg", "two", r"field_deg = 'two' must be a finite number \(degrees\)"),
     ("object", 5, r"object = 5 must be a table"),
     ("image", {"diameter": "wide"}, r"image: diameter = 'wide' must be a finite number \(mm\)"),
-    ("surface", [1, 2], r"no \[\[surface\]\] entries"),
+    ("surface", [], r"no \[\[surface\]\] entries"),
+    ("surface", [1, 2], r"surface = \[1, 2\]: each surface must be a table"),
+    ("wavelengths_nm", [-531.0], r"wavelengths_nm holds -531; wavelengths must be positive"),
+    ("field_deg", 180.0, r"field_deg = 180 must be a half field angle in \[0, 180\) degrees"),
+    ("field_deg", -2.0, r"field_deg = -2 must be a half field angle"),
+    ("image", {"diameter": -4.0}, r"image diameter -4 mm must be positive"),
 ])
 def test_malformed_entries(doublet_spec, key, value, match):
     doublet_spec[key] = value
@@ -102,3 +107,22 @@ def test_unknown_keys_are_named(doublet_spec, where, key, value, match):
 def test_stop_must_be_a_boolean(doublet_spec, value):
     doublet_spec["surface"][0]["stop"] = value
     _bad(doublet_spec, rf"surface 1 \(Surface 1\): stop = {value!r} must be true or false")
+
+
+def test_a_lens_without_power_forms_no_image(doublet_spec):
+    """Flat surfaces only: paraxial data is a clear refusal, not an infinite focus with warnings."""
+    from solas_mi import paraxial
+
+    for row in doublet_spec["surface"]:
+        row["radius"] = 0.0
+    lens = Lens.from_dict(doublet_spec)
+    with pytest.raises(SolasError, match=r"forms no image at 531 nm: rays from an object point leave it parallel"):
+        paraxial(lens, 531.0)
+
+
+@pytest.mark.parametrize("wavelength", ["green", True, None])
+def test_wavelength_must_be_a_number(doublet, wavelength):
+    from solas_mi import paraxial
+
+    with pytest.raises(SolasError, match=r"must be a positive number"):
+        paraxial(doublet, wavelength) if wavelength is not None else doublet.check_wavelength(wavelength)
