@@ -71,7 +71,12 @@ def default_pitch_um(lens, half_deg: float, axis: str, width: int, height: int) 
                                                                    height / math.hypot(width, height))}[axis]
     t = math.tan(math.radians(half_deg))
     field = np.degrees(np.arctan(np.array([[t * direction[0], t * direction[1]]])))
-    xy = chief_rays(lens, field, np.array([lens.primary_wavelength])).image_xy[0]
+    try:
+        xy = chief_rays(lens, field, np.array([lens.primary_wavelength])).image_xy[0]
+    except SolasError as exc:
+        raise SolasError(f"the scene's camera sees ±{half_deg:g} deg along {axis} and lens {lens.name} cannot image "
+                         f"that field ({exc}); narrow the camera's fov, or give --pitch-um for a film that the "
+                         "lens's field covers") from None
     return 2e3 * float(np.hypot(*xy)) / span
 
 

@@ -114,3 +114,11 @@ def test_a_response_table_travels_with_the_scene(tmp_path, monkeypatch):
     table.unlink()
     assert main(["render", str(tmp_path / "scene" / "scene.xml"), "--spp", "1", "-o", "out.exr"]) == 0
     assert all(c.shape == (12, 16) for c in read_exr(elsewhere / "out.exr")[0].values())
+
+
+def test_a_camera_wider_than_the_lens_is_named(tmp_path, doublet):
+    path = tmp_path / "wide.xml"
+    path.write_text(SCENE.replace('name="fov" value="4"', 'name="fov" value="30"'))
+    with pytest.raises(SolasError, match=r"the scene's camera sees ±15 deg along x and lens solas-doublet cannot image "
+                                         r"that field .*narrow the camera's fov, or give --pitch-um"):
+        scene_text(path, doublet)
