@@ -1,6 +1,7 @@
 """A procedural street, written as a Mitsuba scene (`scenes/street/street.xml` and its textures): a
 road with lane markings and kerbs, pavements, buildings with windows, shop signs and road signs,
-parked cars, poles and pedestrians from a few metres to ~140 m, under a uniform sky.
+office blocks closing the street, parked cars, poles and pedestrians from a few metres to ~140 m,
+under a uniform sky.
 
 Every surface is an area emitter with a grey radiance (a constant or a bitmap texture, read raw: byte
 value / 255) and a black BSDF, rendered with `path` at max_depth 1: what the camera sees is the
@@ -66,7 +67,7 @@ def _panel(centre, size, normal: str, yaw_deg: float = 0.0) -> tuple[str, ...]:
 
 
 def facade(rng: np.random.Generator, width_m: float, height_m: float) -> np.ndarray:
-    """A facade texture (rows top first, values 0–1): wall, a grid of windows per floor, a shop band
+    """A facade texture (rows top first, values 0–1): wall, a grid of windows of four panes per floor, a shop band
     with sign lettering on the ground floor."""
     rows, cols = round(height_m / TEXEL_M), round(width_m / TEXEL_M)
     wall = rng.choice([0.35, 0.45, 0.55, 0.62])
@@ -80,6 +81,8 @@ def facade(rng: np.random.Generator, width_m: float, height_m: float) -> np.ndar
             break
         for x0 in range(first, cols - win_w + 1, pitch):
             tex[y0:y0 + win_h, x0:x0 + win_w] = rng.choice([0.05, 0.08, 0.12, 0.2])
+            tex[y0:y0 + win_h, x0 + win_w // 2] = min(0.9, wall + 0.25)  # mullion and transom: panes
+            tex[y0 + win_h // 3, x0:x0 + win_w] = min(0.9, wall + 0.25)
             tex[y0 + win_h:y0 + win_h + 1, x0 - 1:x0 + win_w + 1] = min(0.9, wall + 0.25)  # sill
     band = slice(rows - floor + 4, rows - floor + 12)  # shop sign band with block letters
     tex[band, 2:-2] = 0.08
@@ -90,6 +93,16 @@ def facade(rng: np.random.Generator, width_m: float, height_m: float) -> np.ndar
         x += w + int(rng.integers(2, 5))
     for x0 in range(first, cols - 12, 3 * pitch):  # shop windows and doors
         tex[rows - floor + 15:rows - 1, x0:x0 + 12] = 0.1
+    return tex
+
+
+def office(rng: np.random.Generator, width_m: float, height_m: float) -> np.ndarray:
+    """An office block's facade texture: a dense grid of windows (0.5 × 0.7 m at a 0.8 × 1.0 m pitch)."""
+    rows, cols = round(height_m / TEXEL_M), round(width_m / TEXEL_M)
+    tex = np.full((rows, cols), 0.6)
+    for y0 in range(2, rows - 12, 10):
+        for x0 in range(2, cols - 6, 8):
+            tex[y0:y0 + 7, x0:x0 + 5] = rng.choice([0.06, 0.1, 0.16, 0.24])
     return tex
 
 
@@ -145,7 +158,7 @@ def _street_layout(rng: np.random.Generator) -> tuple[list[Shape], dict[str, np.
     for x_c in (-12.0, 8.0):  # the buildings closing the street, facing the camera
         w, h = 20.0, 16.0
         name = f"facade_{len(textures):02d}.png"
-        textures[name] = facade(rng, w, h)
+        textures[name] = office(rng, w, h)
         shapes.append(Shape("cube", _box((x_c, h / 2, STREET_END_M + 6), (w, h, 12)), 0.3))
         shapes.append(Shape("rectangle", _panel((x_c, h / 2, STREET_END_M - 0.02), (w, h), "-z"), name))
     _street_furniture(rng, shapes)
@@ -153,7 +166,7 @@ def _street_layout(rng: np.random.Generator) -> tuple[list[Shape], dict[str, np.
 
 
 def _street_furniture(rng: np.random.Generator, shapes: list[Shape]) -> None:
-    """Parked cars, poles with signs and pedestrians along both kerbs, posts on the centre line."""
+    """Parked cars, poles with signs and pedestrians along both kerbs, posts on traffic islands."""
     for i, z in enumerate((7.0, 13.0, 22.0, 34.0, 48.0, 63.0, 80.0, 98.0, 118.0)):  # parked cars
         side = 1 if i % 2 == 0 else -1
         x = side * (ROAD_HALF_M - 1.1)
@@ -165,9 +178,9 @@ def _street_furniture(rng: np.random.Generator, shapes: list[Shape]) -> None:
             shapes.append(Shape("cylinder", (), 0.04, (f'<point name="p0" x="{_f(x - 0.92)}" y="0.33" z="{_f(z + dz)}"/>',
                                                         f'<point name="p1" x="{_f(x + 0.92)}" y="0.33" z="{_f(z + dz)}"/>',
                                                         '<float name="radius" value="0.33"/>')))
-    for z in (20.0, 60.0):  # posts on the centre line's traffic islands
-        shapes.append(Shape("cylinder", (), 0.65, ('<point name="p0" x="0.5" y="0" z="' + _f(z) + '"/>',
-                                                    '<point name="p1" x="0.5" y="3" z="' + _f(z) + '"/>',
+    for x, z in ((0.05, 20.0), (2.1, 60.0)):  # posts on traffic islands
+        shapes.append(Shape("cylinder", (), 0.65, (f'<point name="p0" x="{_f(x)}" y="0" z="{_f(z)}"/>',
+                                                    f'<point name="p1" x="{_f(x)}" y="3" z="{_f(z)}"/>',
                                                     '<float name="radius" value="0.06"/>')))
     kinds = ("parking", "warning", "stripes")
     for i, z in enumerate(np.arange(10.0, STREET_END_M - 5, 14.0)):  # poles, every other one with a sign
@@ -204,7 +217,7 @@ def scene_xml(shapes: list[Shape]) -> str:
            '        <transform name="to_world"><lookat origin="$origin" target="$target" up="$up"/></transform>',
            '        <sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>',
            '        <film type="hdrfilm"><integer name="width" value="$width"/>'
-           '<integer name="height" value="$height"/><rfilter type="box"/></film>',
+           '<integer name="height" value="$height"/><rfilter type="gaussian"/></film>',
            '    </sensor>', f'    <emitter type="constant"><spectrum name="radiance" value="{_f(SKY)}"/></emitter>',
            '    <bsdf type="diffuse" id="black"><spectrum name="reflectance" value="0"/></bsdf>']
     for s in shapes:
