@@ -1,0 +1,109 @@
+"""Steps (d) and (e) of the street experiment (`run`): NS-SFR of each degraded image against the ideal
+one with the PSF grid's prediction per edge, and the relative error maps of the convolution against
+the lens renders, near and far; then the tables (Markdown, CSV, JSON) and the figure-5 plots.
+
+A table row is one image and one annulus, for all edges or the far ones (every pixel of the ROI beyond
+`run.FAR_M`): n (edges measured), the mean MTF50 of the ideal image and of the degraded one, the
+degraded one's median, the mean change (degraded − ideal, same ROIs) and the mean MTF50 predicted by
+the PSF grid (`prediction`) on the same ROIs. MTF50 in cy/px.
+"""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import numpy as np
+
+from ...metrics.annuli import ANNULUS_NAMES
+from .prediction import edge_normal_deg, predicted_mtf50
+
+APERTURE = "gaussian"  # the scene's film filter (scenes/street/street.xml)
+COLUMNS = ("image", "annulus", "edges", "n", "ideal_mean", "mean", "median", "change", "predicted")
+
+
+def _mean(values) -> float | None:
+    values = [v for v in values if v is not None]
+    return float(np.mean(values)) if values else None
+
+
+def sfr_rows(name: str, report, far: list[bool], predicted: list[float | None]) -> list[dict]:
+    """Table rows of one image's report (ROIs in report order; `far` and `predicted` per ROI)."""
+    rows = []
+    for ring, ring_name in enumerate(ANNULUS_NAMES):
+        for subset in ("all", "far"):
+            pick = [i for i, m in enumerate(report.rois) if m.annulus == ring and (subset == "all" or far[i])]
+            before = [report.rois[i].before.mtf50 for i in pick]
+            after = [report.rois[i].after.mtf50 for i in pick]
+            rows.append({"image": name, "annulus": ring_name, "edges": subset, "n": len(pick),
+                         "ideal_mean": _mean(before), "mean": _mean(after),
+                         "median": float(np.median(after)) if after else None,
+                         "change": _mean([a - b for a, b in zip(after, before)]),
+                         "predicted": _mean([predicted[i] for i in pick])})
+    return rows
+
+
+def error_stats(image: np.ndarray, render: np.ndarray, near: np.ndarray, far: np.ndarray) -> dict:
+    """Relative error (image − render)/RMS(render): its RMS over all, near and far pixels, and the counts."""
+    rel = (image.astype(np.float64) - render) / np.sqrt(np.mean(render.astype(np.float64) ** 2))
+    return {"rel_rmse_all": float(np.sqrt(np.mean(rel ** 2))),
+            "rel_rmse_near": float(np.sqrt(np.mean(rel[near] ** 2))) if near.any() else None,
+            "rel_rmse_far": float(np.sqrt(np.mean(rel[far] ** 2))) if far.any() else None,
+            "near_pixels": int(near.sum()), "far_pixels": int(far.sum()), "map": rel}
+
+
+def measure(outcome, grid, lay, near_focus_m: float, out: Path) -> None:
+    """Fill outcome.reports and outcome.errors; write the tables, the plots and the error maps to `out`."""
+    from ...metrics.nssfr import natural_scene_sfr, plot_report
+    from ...validation.crossval import heat_png
+    from .run import FAR_M
+
+    ideal, depth = outcome.images["ideal"], outcome.depth
+    rows: list[dict] = []
+    for name, img in outcome.images.items():
+        if name == "ideal":
+            continue
+        rep = natural_scene_sfr(ideal, compare=img, full_scale=None)
+        far, predicted = [], []
+        for m in rep.rois:
+            x, y, w, h = m.roi
+            far.append(bool(depth[y:y + h, x:x + w].min() > FAR_M))
+            normal = edge_normal_deg(m.before.orientation, m.before.angle_deg)
+            predicted.append(predicted_mtf50(grid, lay, x + (w - 1) / 2, y + (h - 1) / 2, normal, APERTURE))
+        outcome.reports[name] = rep
+        rows += sfr_rows(name, rep, far, predicted)
+        plot_report(rep, ideal, out / f"fig5_{name.replace(' ', '_')}.png")
+    near = depth < 1.5 * near_focus_m
+    far_px = depth > FAR_M
+    interp = next(n for n in outcome.images if n.startswith("interp"))
+    for name in [n for n in outcome.images if n.startswith("render")]:
+        stats = error_stats(outcome.images[interp], outcome.images[name], near, far_px)
+        rel = stats.pop("map")
+        heat_png(out / f"error_{name.replace(' ', '_')}.png", np.abs(rel),
+                 f"|{interp} − {name}| / RMS({name})", vmax=0.2)
+        outcome.errors[name] = dict(stats, near_m=1.5 * near_focus_m, far_m=FAR_M)
+    outcome.meta.update(rejected={n: r.rejected for n, r in outcome.reports.items()})
+    write_tables(out, rows, outcome)
+
+
+def _fmt(v, digits: int = 3) -> str:
+    return "—" if v is None else f"{v:.{digits}f}" if isinstance(v, float) else str(v)
+
+
+def write_tables(out: Path, rows: list[dict], outcome) -> None:
+    """street.md (SFR table, error table, step times), street.csv (the SFR table), street.json (all)."""
+    from ...imageio import write_text
+
+    md = ["| image | annulus | edges | n | ideal MTF50 | MTF50 mean | median | change | predicted |",
+          "|---|---|---|---:|---:|---:|---:|---:|---:|"]
+    md += ["| " + " | ".join(_fmt(r[c]) for c in COLUMNS) + " |" for r in rows]
+    md += ["", "| render | interp rel. RMSE: all | near | far | near px | far px |", "|---|---:|---:|---:|---:|---:|"]
+    for name, e in outcome.errors.items():
+        md.append(f"| {name} | {100 * e['rel_rmse_all']:.2f} % | "
+                  + " | ".join("—" if e[k] is None else f"{100 * e[k]:.2f} %" for k in ("rel_rmse_near", "rel_rmse_far"))
+                  + f" | {e['near_pixels']} | {e['far_pixels']} |")
+    md += ["", "| step | seconds |", "|---|---:|"] + [f"| {k} | {v:.1f} |" for k, v in outcome.seconds.items()]
+    write_text(out / "street.md", "\n".join(md) + "\n")
+    csv = [",".join(COLUMNS)] + [",".join("" if r[c] is None else str(r[c]) for c in COLUMNS) for r in rows]
+    write_text(out / "street.csv", "\n".join(csv) + "\n")
+    write_text(out / "street.json", json.dumps(dict(outcome.meta, sfr=rows, errors=outcome.errors,
+                                                    seconds=outcome.seconds), indent=1))
