@@ -3,7 +3,7 @@ one with the PSF grid's prediction per edge, and the relative error maps of the 
 the lens renders, near and far; then the tables (Markdown, CSV, JSON) and the figure-5 plots.
 
 A table row is one image and one annulus, for all edges or the far ones (every pixel of the ROI beyond
-`run.FAR_M`): n (edges measured), the mean MTF50 of the ideal image and of the degraded one, the
+FAR_M): n (edges measured), the mean MTF50 of the ideal image and of the degraded one, the
 degraded one's median, the mean change (degraded − ideal, same ROIs) and the mean MTF50 predicted by
 the PSF grid (`prediction`) on the same ROIs. MTF50 in cy/px.
 """
@@ -17,6 +17,7 @@ import numpy as np
 from ...metrics.annuli import ANNULUS_NAMES
 from .prediction import edge_normal_deg, predicted_mtf50
 
+FAR_M = 50.0  # objects beyond this distance (m) are the far field
 APERTURE = "gaussian"  # the scene's film filter (scenes/street/street.xml)
 COLUMNS = ("image", "annulus", "edges", "n", "ideal_mean", "mean", "median", "change", "predicted")
 
@@ -55,7 +56,6 @@ def measure(outcome, grid, lay, near_focus_m: float, out: Path) -> None:
     """Fill outcome.reports and outcome.errors; write the tables, the plots and the error maps to `out`."""
     from ...metrics.nssfr import natural_scene_sfr, plot_report
     from ...validation.crossval import heat_png
-    from .run import FAR_M
 
     ideal, depth = outcome.images["ideal"], outcome.depth
     rows: list[dict] = []

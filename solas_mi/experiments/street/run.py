@@ -32,12 +32,13 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import SolasError
+from ...resources import resource_dir
 from .framings import framing
+from .measure import FAR_M, measure
 
-FAR_M = 50.0
 PATCH_GRIDS = ((8, 6), (32, 24))
 INTERP_GRID = (32, 24)
-SCENE = Path(__file__).resolve().parents[3] / "scenes" / "street" / "street.xml"
+SCENE = resource_dir("scenes") / "street" / "street.xml"
 BAND = ((-2.0, 0.0), (-1.0, 1.0), (1.0, 1.0), (2.0, 0.0))  # the ideal film's sensitivity: (nm from λ, weight)
 BAND_NM = 3.0  # its integral (nm): specfilm sums sensitivity × radiance, so the ideal image is divided by it
 
@@ -187,7 +188,5 @@ def run(lens, out: str | Path, settings: Settings | None = None, log=print) -> O
             "pixel_pitch_um": lay.camera.pitch_um, "spp": {"ideal": s.spp_ideal, "lens": s.spp_lens,
                                                           "depth": s.spp_depth}}
     outcome = Outcome(images, depth, seconds=seconds, meta=meta)
-    from .measure import measure
-
     timed("(d, e) NS-SFR, predictions and error maps", measure, outcome, grids[s.interp_grid], lay, near_focus, out)
     return outcome
