@@ -2,7 +2,8 @@
 
 A framing is the camera's origin and target (world metres, `scene` explains the world), its roll
 (degrees, so that the street's vertical and horizontal edges are slanted as the SFR needs) and the
-near focus distance (m) of the depth experiment. `FRAMINGS` is keyed by lens name; a lens without an
+near focus distance (m) of the depth experiment and the distance of the far subject (m), where a second
+PSF grid is computed. `FRAMINGS` is keyed by lens name; a lens without an
 entry takes `NARROW` (half field ≤ NARROW_MAX_DEG: the far end of the street, the doublet's view) or
 `WIDE` (the street ahead).
 """
@@ -14,12 +15,14 @@ from dataclasses import dataclass
 
 @dataclass(frozen=True)
 class Framing:
-    """origin, target: metres; roll_deg: degrees about the view axis; near_focus_m: metres in front of the lens."""
+    """origin, target: metres; roll_deg: degrees about the view axis; near_focus_m, far_m: metres in front of
+    the lens."""
 
     origin: tuple[float, float, float]
     target: tuple[float, float, float]
     roll_deg: float
     near_focus_m: float
+    far_m: float
 
     def up(self) -> tuple[float, float, float]:
         """The up vector: world +y turned by roll_deg about the view axis (a view along +z assumed)."""
@@ -35,10 +38,10 @@ class Framing:
                 "width": str(width), "height": str(height), "spp": str(spp)}
 
 
-# the doublet (±2°, 9.8 m wide at 140 m): the buildings closing the street, a car, posts at 20 and 60 m
-NARROW = Framing((0.0, 1.4, 0.0), (3.5, 5.0, 140.0), 5.0, 20.0)
+# the doublet (±2°, 9.8 m wide at 140 m): the office blocks closing the street, a car, posts at 20 and 60 m
+NARROW = Framing((0.0, 1.4, 0.0), (3.5, 5.0, 140.0), 5.0, 20.0, 140.0)
 # a wide lens: the street ahead, buildings, cars, poles and pedestrians on both sides
-WIDE = Framing((0.0, 1.4, 0.0), (1.0, 3.0, 40.0), 5.0, 8.0)
+WIDE = Framing((0.0, 1.4, 0.0), (1.0, 3.0, 40.0), 5.0, 8.0, 140.0)
 NARROW_MAX_DEG = 5.0
 FRAMINGS = {"solas-doublet": NARROW, "cooke-triplet": WIDE}
 

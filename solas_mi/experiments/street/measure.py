@@ -19,7 +19,7 @@ from .prediction import edge_normal_deg, predicted_mtf50
 
 FAR_M = 50.0  # objects beyond this distance (m) are the far field
 APERTURE = "gaussian"  # the scene's film filter (scenes/street/street.xml)
-COLUMNS = ("image", "annulus", "edges", "n", "ideal_mean", "mean", "median", "change", "predicted")
+COLUMNS = ("image", "annulus", "edges", "n", "ideal_mean", "mean", "median", "change")
 
 
 def _mean(values) -> float | None:
@@ -27,8 +27,8 @@ def _mean(values) -> float | None:
     return float(np.mean(values)) if values else None
 
 
-def sfr_rows(name: str, report, far: list[bool], predicted: list[float | None]) -> list[dict]:
-    """Table rows of one image's report (ROIs in report order; `far` and `predicted` per ROI)."""
+def sfr_rows(name: str, report, far: list[bool], predicted: dict[str, list[float | None]]) -> list[dict]:
+    """Table rows of one image's report (ROIs in report order; `far` and each grid's `predicted` per ROI)."""
     rows = []
     for ring, ring_name in enumerate(ANNULUS_NAMES):
         for subset in ("all", "far"):
@@ -39,7 +39,7 @@ def sfr_rows(name: str, report, far: list[bool], predicted: list[float | None]) 
                          "ideal_mean": _mean(before), "mean": _mean(after),
                          "median": float(np.median(after)) if after else None,
                          "change": _mean([a - b for a, b in zip(after, before)]),
-                         "predicted": _mean([predicted[i] for i in pick])})
+                         **{f"predicted {g}": _mean([p[i] for i in pick]) for g, p in predicted.items()}})
     return rows
 
 
@@ -52,35 +52,40 @@ def error_stats(image: np.ndarray, render: np.ndarray, near: np.ndarray, far: np
             "near_pixels": int(near.sum()), "far_pixels": int(far.sum()), "map": rel}
 
 
-def measure(outcome, grid, lay, near_focus_m: float, out: Path) -> None:
-    """Fill outcome.reports and outcome.errors; write the tables, the plots and the error maps to `out`."""
+def measure(outcome, grids: dict, lay, near_focus_m: float, out: Path) -> None:
+    """Fill outcome.reports and outcome.errors; write the tables, the plots and the error maps to `out`.
+    `grids`: label → PSF grid whose predicted MTF50 is tabulated ("predicted LABEL")."""
     from ...metrics.nssfr import natural_scene_sfr, plot_report
     from ...validation.crossval import heat_png
 
     ideal, depth = outcome.images["ideal"], outcome.depth
     rows: list[dict] = []
+    known: dict[tuple, tuple[bool, dict]] = {}  # ROI → (far, predicted MTF50 per grid): the same edges each time
     for name, img in outcome.images.items():
         if name == "ideal":
             continue
         rep = natural_scene_sfr(ideal, compare=img, full_scale=None)
-        far, predicted = [], []
         for m in rep.rois:
-            x, y, w, h = m.roi
-            far.append(bool(depth[y:y + h, x:x + w].min() > FAR_M))
-            normal = edge_normal_deg(m.before.orientation, m.before.angle_deg)
-            predicted.append(predicted_mtf50(grid, lay, x + (w - 1) / 2, y + (h - 1) / 2, normal, APERTURE))
+            if m.roi not in known:
+                x, y, w, h = m.roi
+                normal = edge_normal_deg(m.before.orientation, m.before.angle_deg)
+                known[m.roi] = (bool(depth[y:y + h, x:x + w].min() > FAR_M),
+                                {g: predicted_mtf50(grid, lay, x + (w - 1) / 2, y + (h - 1) / 2, normal, APERTURE)
+                                 for g, grid in grids.items()})
+        far = [known[m.roi][0] for m in rep.rois]
+        predicted = {g: [known[m.roi][1][g] for m in rep.rois] for g in grids}
         outcome.reports[name] = rep
         rows += sfr_rows(name, rep, far, predicted)
         plot_report(rep, ideal, out / f"fig5_{name.replace(' ', '_')}.png")
     near = depth < 1.5 * near_focus_m
     far_px = depth > FAR_M
-    interp = next(n for n in outcome.images if n.startswith("interp"))
-    for name in [n for n in outcome.images if n.startswith("render")]:
-        stats = error_stats(outcome.images[interp], outcome.images[name], near, far_px)
-        rel = stats.pop("map")
-        heat_png(out / f"error_{name.replace(' ', '_')}.png", np.abs(rel),
-                 f"|{interp} − {name}| / RMS({name})", vmax=0.2)
-        outcome.errors[name] = dict(stats, near_m=1.5 * near_focus_m, far_m=FAR_M)
+    for conv in [n for n in outcome.images if n.startswith("interp")]:
+        for name in [n for n in outcome.images if n.startswith("render")]:
+            stats = error_stats(outcome.images[conv], outcome.images[name], near, far_px)
+            rel = stats.pop("map")
+            heat_png(out / f"error_{conv.replace(' ', '_')}_vs_{name.replace(' ', '_')}.png", np.abs(rel),
+                     f"|{conv} − {name}| / RMS({name})", vmax=0.2)
+            outcome.errors[f"{conv} vs {name}"] = dict(stats, near_m=1.5 * near_focus_m, far_m=FAR_M)
     outcome.meta.update(rejected={n: r.rejected for n, r in outcome.reports.items()})
     write_tables(out, rows, outcome)
 
@@ -93,17 +98,20 @@ def write_tables(out: Path, rows: list[dict], outcome) -> None:
     """street.md (SFR table, error table, step times), street.csv (the SFR table), street.json (all)."""
     from ...imageio import write_text
 
-    md = ["| image | annulus | edges | n | ideal MTF50 | MTF50 mean | median | change | predicted |",
-          "|---|---|---|---:|---:|---:|---:|---:|---:|"]
-    md += ["| " + " | ".join(_fmt(r[c]) for c in COLUMNS) + " |" for r in rows]
-    md += ["", "| render | interp rel. RMSE: all | near | far | near px | far px |", "|---|---:|---:|---:|---:|---:|"]
+    columns = list(rows[0]) if rows else list(COLUMNS)
+    predicted = [c for c in columns if c.startswith("predicted")]
+    md = ["| image | annulus | edges | n | ideal MTF50 | MTF50 mean | median | change | " + " | ".join(predicted) + " |",
+          "|---|---|---|" + "---:|" * (5 + len(predicted))]
+    md += ["| " + " | ".join(_fmt(r[c]) for c in columns) + " |" for r in rows]
+    md += ["", "| convolution vs render | rel. RMSE: all | near | far | near px | far px |",
+           "|---|---:|---:|---:|---:|---:|"]
     for name, e in outcome.errors.items():
         md.append(f"| {name} | {100 * e['rel_rmse_all']:.2f} % | "
                   + " | ".join("—" if e[k] is None else f"{100 * e[k]:.2f} %" for k in ("rel_rmse_near", "rel_rmse_far"))
                   + f" | {e['near_pixels']} | {e['far_pixels']} |")
     md += ["", "| step | seconds |", "|---|---:|"] + [f"| {k} | {v:.1f} |" for k, v in outcome.seconds.items()]
     write_text(out / "street.md", "\n".join(md) + "\n")
-    csv = [",".join(COLUMNS)] + [",".join("" if r[c] is None else str(r[c]) for c in COLUMNS) for r in rows]
+    csv = [",".join(columns)] + [",".join("" if r[c] is None else str(r[c]) for c in columns) for r in rows]
     write_text(out / "street.csv", "\n".join(csv) + "\n")
     write_text(out / "street.json", json.dumps(dict(outcome.meta, sfr=rows, errors=outcome.errors,
                                                     seconds=outcome.seconds), indent=1))

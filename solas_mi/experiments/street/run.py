@@ -9,7 +9,9 @@ Steps (each timed, wall-clock seconds):
     depth: the distance (m) along each pixel's ray (`aov`), to tell near objects from far ones.
 (b) the PSF grid (geometric, one wavelength, normalised "none", nodes at the centres of COLS×ROWS
     blocks as in the cross-validation) and `convolution.methods.degrade` of the ideal image: interp
-    on the finest grid, patch on each grid (the paper's 8×6 and 32×24), in the lens camera's units.
+    on the finest grid, patch on each grid (the paper's 8×6 and 32×24), in the lens camera's units;
+    and interp with the PSFs of an object at the framing's far distance (the lens still focused as
+    its file says: a far subject is not at infinity, and the doublet's defocus depends on it).
 (c) the scene through `lens_camera` (same pose, film and sampler; `mono` at the primary wavelength),
     focused at infinity and at the framing's near focus distance.
 (d) NS-SFR (`metrics.nssfr`) of every degraded image against the ideal one, on the edges found in the
@@ -26,7 +28,7 @@ from __future__ import annotations
 
 import time
 import xml.etree.ElementTree as ET
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 
 import numpy as np
@@ -163,6 +165,11 @@ def run(lens, out: str | Path, settings: Settings | None = None, log=print) -> O
         grids[blocks] = timed(f"(b) PSF grid {blocks[0]}x{blocks[1]}", psf_grid, lens, grid=(blocks[1], blocks[0]),
                               wavelengths_nm=[primary], field_range_deg=(fov, fov * h / w), method="geometric",
                               normalization="none", pitch_um=pitch, size=160)
+    far_lens = replace(lens, object_distance=1e3 * fr.far_m)  # the far subject's PSFs, the lens focused as before
+    far_grid = timed(f"(b) PSF grid {s.interp_grid[0]}x{s.interp_grid[1]}, object at {fr.far_m:g} m", psf_grid,
+                     far_lens, grid=(s.interp_grid[1], s.interp_grid[0]), wavelengths_nm=[primary],
+                     field_range_deg=(fov, fov * h / w), method="geometric", normalization="none", pitch_um=pixel_um / 8,
+                     size=160)
     k = axis_irradiance(lens, primary) / ideal_irradiance(lens, pinhole_focal_mm(lens, fov), primary)
     weighted = ideal * tangent_cos3(w, h, fov)
     images = {"ideal": ideal}
@@ -170,6 +177,8 @@ def run(lens, out: str | Path, settings: Settings | None = None, log=print) -> O
     for method, blocks in cases:
         name = f"{method} {blocks[0]}x{blocks[1]}"
         images[name] = timed(f"(b) {name}", degrade, weighted, grids[blocks], method, "edge") / np.float32(k)
+    far_name = f"interp {s.interp_grid[0]}x{s.interp_grid[1]} at {fr.far_m:g} m"
+    images[far_name] = timed(f"(b) {far_name}", degrade, weighted, far_grid, "interp", "edge") / np.float32(k)
     lens_params = {k: v for k, v in params.items() if k != "fov"} | {"spp": str(s.spp_lens)}
     render_options = {"response": f"mono:{primary:g}", "pitch_um": pixel_um}
     images["render infinity"] = timed("(c) lens render, focus at infinity", _render, xml, s.variant, lens,
@@ -184,9 +193,11 @@ def run(lens, out: str | Path, settings: Settings | None = None, log=print) -> O
     write_exr(out / "depth.exr", {"Z": depth}, {"lens": lens.name, "unit": "m", "sky": "inf"})
     lay = layout(grids[s.interp_grid], w, h)
     meta = {"lens": lens.name, "lens_hash": lens.hash, "size": [w, h], "field_deg": fov, "wavelength_nm": primary,
-            "framing": params, "near_focus_m": near_focus, "far_m": FAR_M, "unit_k": k,
+            "framing": params, "near_focus_m": near_focus, "far_m": FAR_M,
+            "far_subject_m": fr.far_m, "unit_k": k,
             "pixel_pitch_um": lay.camera.pitch_um, "spp": {"ideal": s.spp_ideal, "lens": s.spp_lens,
                                                           "depth": s.spp_depth}}
     outcome = Outcome(images, depth, seconds=seconds, meta=meta)
-    timed("(d, e) NS-SFR, predictions and error maps", measure, outcome, grids[s.interp_grid], lay, near_focus, out)
+    predictors = {"infinity": grids[s.interp_grid], f"{fr.far_m:g} m": far_grid}
+    timed("(d, e) NS-SFR, predictions and error maps", measure, outcome, predictors, lay, near_focus, out)
     return outcome
