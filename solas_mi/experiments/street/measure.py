@@ -52,8 +52,9 @@ def error_stats(image: np.ndarray, render: np.ndarray, near: np.ndarray, far: np
             "near_pixels": int(near.sum()), "far_pixels": int(far.sum()), "map": rel}
 
 
-def measure(outcome, grids: dict, lay, near_focus_m: float, out: Path) -> None:
-    """Fill outcome.reports and outcome.errors; write the tables, the plots and the error maps to `out`.
+def measure(outcome, grids: dict, lay, near_focus_m: float, out: Path) -> list[dict]:
+    """Fill outcome.reports and outcome.errors, write the plots and the error maps to `out`; return the
+    SFR table's rows (`write_tables`).
     `grids`: label → PSF grid whose predicted MTF50 is tabulated ("predicted LABEL")."""
     from ...metrics.nssfr import natural_scene_sfr, plot_report
     from ...validation.crossval import heat_png
@@ -87,7 +88,7 @@ def measure(outcome, grids: dict, lay, near_focus_m: float, out: Path) -> None:
                      f"|{conv} − {name}| / RMS({name})", vmax=0.2)
             outcome.errors[f"{conv} vs {name}"] = dict(stats, near_m=1.5 * near_focus_m, far_m=FAR_M)
     outcome.meta.update(rejected={n: r.rejected for n, r in outcome.reports.items()})
-    write_tables(out, rows, outcome)
+    return rows
 
 
 def _fmt(v, digits: int = 3) -> str:

@@ -36,7 +36,7 @@ import numpy as np
 from ...errors import SolasError
 from ...resources import resource_dir
 from .framings import framing
-from .measure import FAR_M, measure
+from .measure import FAR_M, measure, write_tables
 
 PATCH_GRIDS = ((8, 6), (32, 24))
 INTERP_GRID = (32, 24)
@@ -122,7 +122,7 @@ def _render(xml: Path, variant, lens, params: dict, spp: int, log, **lens_option
 
 def run(lens, out: str | Path, settings: Settings | None = None, log=print) -> Outcome:
     """The experiment on `lens` (a Lens), its images and depth map written to `out` as EXR and PNG
-    (tables and plots: `report.write_report`)."""
+    and the tables (street.md, .csv, .json), figure-5 plots and error maps (`measure`)."""
     from ...convolution.kernels import layout
     from ...convolution.methods import degrade
     from ...imageio import image_channels, write_exr, write_png
@@ -199,5 +199,6 @@ def run(lens, out: str | Path, settings: Settings | None = None, log=print) -> O
                                                           "depth": s.spp_depth}}
     outcome = Outcome(images, depth, seconds=seconds, meta=meta)
     predictors = {"infinity": grids[s.interp_grid], f"{fr.far_m:g} m": far_grid}
-    timed("(d, e) NS-SFR, predictions and error maps", measure, outcome, predictors, lay, near_focus, out)
+    rows = timed("(d, e) NS-SFR, predictions and error maps", measure, outcome, predictors, lay, near_focus, out)
+    write_tables(out, rows, outcome)
     return outcome
