@@ -26,6 +26,7 @@ camera's unit (a lossless lens's on-axis irradiance).
 """
 from __future__ import annotations
 
+import math
 import time
 import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field, replace
@@ -159,16 +160,17 @@ def run(lens, out: str | Path, settings: Settings | None = None, log=print) -> O
     depth = np.where(depth > 0, depth, np.inf).astype(np.float32)
 
     pixel_um = default_pitch_um(lens, fov, "x", w, h)  # the lens camera's pixel, matched to the field
+    field_range = (fov, math.degrees(math.atan(math.tan(math.radians(fov)) * h / w)))  # the image's y edge
     grids = {}
     for blocks in dict.fromkeys((s.interp_grid, *s.patch_grids)):
         pitch = pixel_um / 8
         grids[blocks] = timed(f"(b) PSF grid {blocks[0]}x{blocks[1]}", psf_grid, lens, grid=(blocks[1], blocks[0]),
-                              wavelengths_nm=[primary], field_range_deg=(fov, fov * h / w), method="geometric",
+                              wavelengths_nm=[primary], field_range_deg=field_range, method="geometric",
                               normalization="none", pitch_um=pitch, size=160)
     far_lens = replace(lens, object_distance=1e3 * fr.far_m)  # the far subject's PSFs, the lens focused as before
     far_grid = timed(f"(b) PSF grid {s.interp_grid[0]}x{s.interp_grid[1]}, object at {fr.far_m:g} m", psf_grid,
                      far_lens, grid=(s.interp_grid[1], s.interp_grid[0]), wavelengths_nm=[primary],
-                     field_range_deg=(fov, fov * h / w), method="geometric", normalization="none", pitch_um=pixel_um / 8,
+                     field_range_deg=field_range, method="geometric", normalization="none", pitch_um=pixel_um / 8,
                      size=160)
     k = axis_irradiance(lens, primary) / ideal_irradiance(lens, pinhole_focal_mm(lens, fov), primary)
     weighted = ideal * tangent_cos3(w, h, fov)
