@@ -118,7 +118,14 @@ def _render(xml: Path, variant, lens, params: dict, spp: int, log, **lens_option
     from ...render.user_scene import load
 
     scene = load(xml, variant, lens, params, **lens_options)
-    return render_scene(scene, spp, progress=lambda done, total: log(f"  {done}/{total} spp")).image
+    quarters = set()
+
+    def progress(done: int, total: int) -> None:  # a line at each quarter
+        if 4 * done // total not in quarters:
+            quarters.add(4 * done // total)
+            log(f"  {done}/{total} spp")
+
+    return render_scene(scene, spp, progress=progress).image
 
 
 def run(lens, out: str | Path, settings: Settings | None = None, log=print) -> Outcome:
@@ -161,17 +168,15 @@ def run(lens, out: str | Path, settings: Settings | None = None, log=print) -> O
 
     pixel_um = default_pitch_um(lens, fov, "x", w, h)  # the lens camera's pixel, matched to the field
     field_range = (fov, math.degrees(math.atan(math.tan(math.radians(fov)) * h / w)))  # the image's y edge
-    grids = {}
-    for blocks in dict.fromkeys((s.interp_grid, *s.patch_grids)):
-        pitch = pixel_um / 8
-        grids[blocks] = timed(f"(b) PSF grid {blocks[0]}x{blocks[1]}", psf_grid, lens, grid=(blocks[1], blocks[0]),
-                              wavelengths_nm=[primary], field_range_deg=field_range, method="geometric",
-                              normalization="none", pitch_um=pitch, size=160)
-    far_lens = replace(lens, object_distance=1e3 * fr.far_m)  # the far subject's PSFs, the lens focused as before
-    far_grid = timed(f"(b) PSF grid {s.interp_grid[0]}x{s.interp_grid[1]}, object at {fr.far_m:g} m", psf_grid,
-                     far_lens, grid=(s.interp_grid[1], s.interp_grid[0]), wavelengths_nm=[primary],
-                     field_range_deg=field_range, method="geometric", normalization="none", pitch_um=pixel_um / 8,
-                     size=160)
+
+    def grid_for(subject, blocks: tuple[int, int], label: str):
+        return timed(f"(b) PSF grid {blocks[0]}x{blocks[1]}{label}", psf_grid, subject, grid=(blocks[1], blocks[0]),
+                     wavelengths_nm=[primary], field_range_deg=field_range, method="geometric",
+                     normalization="none", pitch_um=pixel_um / 8, size=160)
+
+    grids = {blocks: grid_for(lens, blocks, "") for blocks in dict.fromkeys((s.interp_grid, *s.patch_grids))}
+    # the far subject's PSFs, the lens focused as its file says
+    far_grid = grid_for(replace(lens, object_distance=1e3 * fr.far_m), s.interp_grid, f", object at {fr.far_m:g} m")
     k = axis_irradiance(lens, primary) / ideal_irradiance(lens, pinhole_focal_mm(lens, fov), primary)
     weighted = ideal * tangent_cos3(w, h, fov)
     images = {"ideal": ideal}
@@ -181,7 +186,7 @@ def run(lens, out: str | Path, settings: Settings | None = None, log=print) -> O
         images[name] = timed(f"(b) {name}", degrade, weighted, grids[blocks], method, "edge") / np.float32(k)
     far_name = f"interp {s.interp_grid[0]}x{s.interp_grid[1]} at {fr.far_m:g} m"
     images[far_name] = timed(f"(b) {far_name}", degrade, weighted, far_grid, "interp", "edge") / np.float32(k)
-    lens_params = {k: v for k, v in params.items() if k != "fov"} | {"spp": str(s.spp_lens)}
+    lens_params = {key: v for key, v in params.items() if key != "fov"} | {"spp": str(s.spp_lens)}
     render_options = {"response": f"mono:{primary:g}", "pitch_um": pixel_um}
     images["render infinity"] = timed("(c) lens render, focus at infinity", _render, xml, s.variant, lens,
                                       lens_params, s.spp_lens, log, **render_options)[..., 0]
