@@ -101,15 +101,15 @@ def write_tables(out: Path, rows: list[dict], outcome) -> None:
 
     columns = list(rows[0]) if rows else list(COLUMNS)
     predicted = [c for c in columns if c.startswith("predicted")]
-    md = ["| image | annulus | edges | n | ideal MTF50 | MTF50 mean | median | change | " + " | ".join(predicted) + " |",
-          "|---|---|---|" + "---:|" * (5 + len(predicted))]
+    md = ["| image | annulus | edges | n | ideal MTF50 | MTF50 mean | median | change | "
+          + " | ".join(predicted) + " |", "|---|---|---|" + "---:|" * (5 + len(predicted))]
     md += ["| " + " | ".join(_fmt(r[c]) for c in columns) + " |" for r in rows]
     md += ["", "| convolution vs render | rel. RMSE: all | near | far | near px | far px |",
            "|---|---:|---:|---:|---:|---:|"]
     for name, e in outcome.errors.items():
-        md.append(f"| {name} | {100 * e['rel_rmse_all']:.2f} % | "
-                  + " | ".join("—" if e[k] is None else f"{100 * e[k]:.2f} %" for k in ("rel_rmse_near", "rel_rmse_far"))
-                  + f" | {e['near_pixels']} | {e['far_pixels']} |")
+        parts = ["—" if e[k] is None else f"{100 * e[k]:.2f} %"
+                 for k in ("rel_rmse_all", "rel_rmse_near", "rel_rmse_far")]
+        md.append(f"| {name} | " + " | ".join(parts) + f" | {e['near_pixels']} | {e['far_pixels']} |")
     md += ["", "| step | seconds |", "|---|---:|"] + [f"| {k} | {v:.1f} |" for k, v in outcome.seconds.items()]
     write_text(out / "street.md", "\n".join(md) + "\n")
     csv = [",".join(columns)] + [",".join("" if r[c] is None else str(r[c]) for c in columns) for r in rows]

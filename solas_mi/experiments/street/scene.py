@@ -66,6 +66,16 @@ def _panel(centre, size, normal: str, yaw_deg: float = 0.0) -> tuple[str, ...]:
             f'<translate x="{_f(centre[0])}" y="{_f(centre[1])}" z="{_f(centre[2])}"/>')
 
 
+def _cylinder(p0, p1, radius: float) -> tuple[str, ...]:
+    """Properties of Mitsuba's cylinder from p0 to p1 (m) of `radius` (m)."""
+    return (_point("p0", p0), _point("p1", p1), f'<float name="radius" value="{_f(radius)}"/>')
+
+
+def _point(name: str, p) -> str:
+    """A named <point> at p (m)."""
+    return f'<point name="{name}" x="{_f(p[0])}" y="{_f(p[1])}" z="{_f(p[2])}"/>'
+
+
 def facade(rng: np.random.Generator, width_m: float, height_m: float) -> np.ndarray:
     """A facade texture (rows top first, values 0–1): wall, a grid of windows of four panes per floor, a shop band
     with sign lettering on the ground floor."""
@@ -175,20 +185,15 @@ def _street_furniture(rng: np.random.Generator, shapes: list[Shape]) -> None:
         shapes.append(Shape("cube", _box((x, 0.65, z), (1.8, 0.8, 4.3), yaw), body))
         shapes.append(Shape("cube", _box((x, 1.3, z - 0.2), (1.6, 0.55, 2.2), yaw), 0.1 if body > 0.3 else 0.5))
         for dz in (-1.4, 1.4):
-            shapes.append(Shape("cylinder", (), 0.04, (f'<point name="p0" x="{_f(x - 0.92)}" y="0.33" z="{_f(z + dz)}"/>',
-                                                        f'<point name="p1" x="{_f(x + 0.92)}" y="0.33" z="{_f(z + dz)}"/>',
-                                                        '<float name="radius" value="0.33"/>')))
+            wheel = _cylinder((x - 0.92, 0.33, z + dz), (x + 0.92, 0.33, z + dz), 0.33)
+            shapes.append(Shape("cylinder", (), 0.04, wheel))
     for x, z in ((0.05, 20.0), (2.1, 60.0)):  # posts on traffic islands
-        shapes.append(Shape("cylinder", (), 0.65, (f'<point name="p0" x="{_f(x)}" y="0" z="{_f(z)}"/>',
-                                                    f'<point name="p1" x="{_f(x)}" y="3" z="{_f(z)}"/>',
-                                                    '<float name="radius" value="0.06"/>')))
+        shapes.append(Shape("cylinder", (), 0.65, _cylinder((x, 0, z), (x, 3, z), 0.06)))
     kinds = ("parking", "warning", "stripes")
     for i, z in enumerate(np.arange(10.0, STREET_END_M - 5, 14.0)):  # poles, every other one with a sign
         side = -1 if i % 2 == 0 else 1
         x = side * (ROAD_HALF_M + 0.6)
-        shapes.append(Shape("cylinder", (), 0.12, (f'<point name="p0" x="{_f(x)}" y="0" z="{_f(z)}"/>',
-                                                    f'<point name="p1" x="{_f(x)}" y="4.5" z="{_f(z)}"/>',
-                                                    '<float name="radius" value="0.06"/>')))
+        shapes.append(Shape("cylinder", (), 0.12, _cylinder((x, 0, z), (x, 4.5, z), 0.06)))
         if i % 2 == 0:
             shapes.append(Shape("rectangle", _panel((x, 3.6, z - 0.08), (0.8, 0.8), "-z", float(rng.uniform(-6, 6))),
                                 f"sign_{kinds[i // 2 % 3]}.png"))
@@ -196,11 +201,8 @@ def _street_furniture(rng: np.random.Generator, shapes: list[Shape]) -> None:
         side = 1 if i % 2 else -1
         x = side * (ROAD_HALF_M + 1.2 + float(rng.uniform(0, 1.5)))
         tone = float(rng.choice([0.05, 0.12, 0.6]))
-        shapes.append(Shape("cylinder", (), tone, (f'<point name="p0" x="{_f(x)}" y="0.15" z="{_f(z)}"/>',
-                                                    f'<point name="p1" x="{_f(x)}" y="1.45" z="{_f(z)}"/>',
-                                                    '<float name="radius" value="0.22"/>')))
-        shapes.append(Shape("sphere", (), 0.5, (f'<point name="center" x="{_f(x)}" y="1.62" z="{_f(z)}"/>',
-                                                 '<float name="radius" value="0.13"/>')))
+        shapes.append(Shape("cylinder", (), tone, _cylinder((x, 0.15, z), (x, 1.45, z), 0.22)))
+        shapes.append(Shape("sphere", (), 0.5, (_point("center", (x, 1.62, z)), '<float name="radius" value="0.13"/>')))
 
 
 def scene_xml(shapes: list[Shape]) -> str:
