@@ -26,6 +26,7 @@ def build_parser() -> argparse.ArgumentParser:
     from . import __version__
     from .batch import commands as batch
     from .convolution import commands as convolution
+    from .experiments import commands as experiments
     from .metrics import commands as metrics
     from .optics import commands as optics
     from .psf import commands as psf
@@ -36,7 +37,7 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"solas-mi {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     # in the order of the data: lens → PSFs → convolution; lens → scene → render; images → metrics; checks
-    for area in (optics, psf, convolution, render, metrics, validation, batch):
+    for area in (optics, psf, convolution, render, metrics, validation, batch, experiments):
         area.register(sub)
     return parser
 

@@ -40,9 +40,12 @@ def run(out: Path) -> None:
     edge = out / "sfr" / "edge_5deg_sigma1px.png"
     cli(["sfr-target", "-o", str(edge), "--angle-deg", "5", "--sigma-px", "1", "--size", "128x128"])
     cli(["sfr", str(edge)])
+    cli(["experiment", "street", "--lens", "solas-doublet", "-o", str(out / "street")])
     print(json.dumps({"results": str(out.resolve()), "paraxial": "lens_info.txt", "psfs": "psf/*.exr|png",
                       "grids": "psf_grid_8x8.exr|png, psf_grid_32x32.exr|png", **degraded,
-                      "slanted edge": "sfr/edge_5deg_sigma1px.png"}, indent=2))
+                      "slanted edge": "sfr/edge_5deg_sigma1px.png",
+                      "street experiment": "street/street.md (table), street/fig5_render_infinity.png (plot)"},
+                     indent=2))
 
 
 def degrade(out: Path) -> dict:

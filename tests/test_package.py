@@ -19,6 +19,7 @@ ALLOWED = {
     "metrics": set(),
     "validation": {"optics", "psf", "convolution", "render", "metrics"},
     "batch": {"optics", "psf", "convolution", "metrics"},
+    "experiments": {"optics", "psf", "convolution", "render", "metrics", "validation"},
 }
 
 

@@ -1,0 +1,78 @@
+"""The street scene and experiment: the generator is deterministic and wrote the shipped files; the
+doublet's ideal 1280×960 view has enough slanted edges in every annulus; the experiment runs end to end
+at a tiny size and shows the depth-dependent blur (the lens focused near matches the convolution on near
+objects and not on far ones; focused at infinity the other way round)."""
+import json
+from pathlib import Path
+from types import SimpleNamespace
+
+import pytest
+
+from solas_mi.cli import main
+from solas_mi.errors import SolasError
+from solas_mi.experiments.street.framings import FRAMINGS, NARROW, WIDE, framing
+from solas_mi.experiments.street.run import SCENE, Settings, experiment_scene, run
+from solas_mi.experiments.street.scene import write_street
+
+
+def files(folder: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def test_the_generator_wrote_the_shipped_scene_byte_for_byte(tmp_path):
+    write_street(tmp_path / "a")
+    written = files(tmp_path / "a")
+    assert written == files(SCENE.parent)
+    assert sum(len(b) for b in written.values()) < 3e6  # small enough for the repository
+
+
+def test_framings_by_lens_and_by_field(doublet, triplet):
+    assert framing(doublet) is FRAMINGS["solas-doublet"] is NARROW
+    assert framing(triplet) is FRAMINGS["cooke-triplet"] is WIDE
+    assert framing(SimpleNamespace(name="unknown", field_deg=3.0)) is NARROW
+    assert framing(SimpleNamespace(name="unknown", field_deg=30.0)) is WIDE
+
+
+def test_the_doublets_ideal_view_has_edges_in_every_annulus(doublet, tmp_path):
+    """At the experiment's full size (4 spp: a few seconds), the spec's filters keep ≥ 20 edges per annulus."""
+    from solas_mi.metrics.nssfr import natural_scene_sfr
+    from solas_mi.render.stock import render_scene
+    from solas_mi.render.user_scene import load
+
+    xml = experiment_scene(SCENE, tmp_path, 531.0)
+    scene = load(xml, "llvm_ad_spectral", None, framing(doublet).params(4.0, 1280, 960, 4))
+    image = render_scene(scene, 4).image[..., 0] / 3.0
+    report = natural_scene_sfr(image, full_scale=None)
+    counts = [s.count for s in report.before]
+    assert min(counts) >= 20, counts
+    # the film's Gaussian filter (σ = 0.5 px) alone: MTF50 = √(ln 2 / (2π² σ²)) = 0.375 cy/px
+    assert all(0.3 < s.mean_mtf50 < 0.42 for s in report.before)
+
+
+def test_the_experiment_end_to_end(tmp_path):
+    out = tmp_path / "street"
+    assert main(["experiment", "street", "-o", str(out), "--size", "160x120", "--spp", "16", "--spp-ideal", "4",
+                 "--variant", "llvm_ad_spectral"]) == 0
+    for name in ("street.md", "street.csv", "street.json", "ideal.exr", "depth.exr", "interp_32x24.exr",
+                 "patch_8x6.exr", "patch_32x24.exr", "render_infinity.exr", "render_20_m.exr",
+                 "fig5_interp_32x24.png", "error_interp_32x24_vs_render_20_m.png", "interp_32x24_at_140_m.exr"):
+        assert (out / name).is_file(), name
+    report = json.loads((out / "street.json").read_text())
+    assert {r["image"] for r in report["sfr"]} == {"interp 32x24", "patch 8x6", "patch 32x24", "render infinity",
+                                                   "render 20 m", "interp 32x24 at 140 m"}
+    assert set(report["seconds"]) >= {"(a) ideal image", "(c) lens render, focus at 20 m"}
+    infinity, near = (report["errors"][f"interp 32x24 vs render {f}"] for f in ("infinity", "20 m"))
+    assert near["rel_rmse_near"] < near["rel_rmse_far"]  # focused at 20 m: the near post sharp, the far field not
+    # the convolution (objects at infinity) fits the near post better when the lens is focused on it, and the
+    # far field better when it is focused at infinity
+    assert near["rel_rmse_near"] < infinity["rel_rmse_near"] and infinity["rel_rmse_far"] < near["rel_rmse_far"]
+    assert not list(out.glob(".*"))  # no temporary file left
+
+
+def test_bad_settings(tmp_path, doublet):
+    with pytest.raises(SolasError, match="spp lens 0 must be a positive integer"):
+        Settings(spp_lens=0).check()
+    with pytest.raises(SolasError, match="near focus -1"):
+        Settings(near_focus_m=-1.0).check()
+    with pytest.raises(SolasError, match="no street scene"):
+        run(doublet, tmp_path, Settings(width=64, height=48, scene=tmp_path / "none.xml"))
