@@ -60,6 +60,11 @@ def main(argv: list[str] | None = None) -> int:
     except SolasError as exc:
         print(f"solas-mi {args.command}: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:  # the reader of stdout has gone (`| head`): stop quietly, as Unix tools do
+        import os
+
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 141
     except KeyboardInterrupt as exc:
         how = "terminated" if isinstance(exc, Terminated) else "interrupted"
         print(f"\nsolas-mi {args.command}: {how}; no output was left half-written", file=sys.stderr)

@@ -21,6 +21,8 @@ import numpy as np
 
 from .lens import Lens, Surface
 
+MARCH = 48  # samples along each direction from the pupil's centroid to three times the aperture's reach
+
 
 def reversed_lens(lens: Lens) -> Lens:
     """The lens seen from the image side: surfaces in reverse order, mirrored in z, the image plane
@@ -75,15 +77,17 @@ def pupil_bounds(lens: Lens, max_radius_mm: float, wavelengths_nm=None, radii: i
                  coarse: int = 64) -> PupilBounds:
     """Exit-pupil bounds for film radii 0…max_radius_mm, over `wavelengths_nm` (default: the lens's).
 
-    Per radius and wavelength, a coarse grid over the last surface's aperture finds a point inside the
-    pupil (the pupil, an intersection of disks, is convex); bisection along `directions` rays from
-    it finds the rim to 1e-9 mm. The bound is the box of the rim points, widened by the most a convex
-    rim can bulge between neighbouring directions."""
+    Per radius and wavelength, a coarse grid over the last surface's aperture finds the pupil's centroid;
+    along `directions` rays from it, a march inward from beyond the aperture finds the outermost passing
+    sample (a pupil need not be convex: strong aberration or total internal reflection can cut it into
+    a disc and a ring) and bisection the rim beyond it, to 1e-9 mm. The bound is the box of the rim
+    points, widened by the most a convex rim can bulge between neighbouring directions."""
     rev = reversed_lens(lens)
     last = lens.surfaces[-1]
-    # rays cross the last vertex plane within its aperture projected there from the film: a curved last
-    # surface's rim lies off that plane, so the reach widens by the rim's sag over the way to the film
-    sag = abs(float(last.sag(last.semi_diameter)))
+    # rays cross the last vertex plane within its aperture projected there from the film: a rim that
+    # bends toward the film (sag > 0) widens that projection by its sag over the rest of the way to the
+    # film; a rim bent away from it (a ball lens's rear face) narrows it, and the aperture itself bounds
+    sag = max(float(last.sag(last.semi_diameter)), 0.0)
     reach = 1.05 * (last.semi_diameter + (last.semi_diameter + max_radius_mm) * sag / max(last.thickness - sag, 1e-9))
     step = 2.0 * reach / coarse
     g = -reach + (np.arange(coarse) + 0.5) * step
@@ -100,10 +104,16 @@ def pupil_bounds(lens: Lens, max_radius_mm: float, wavelengths_nm=None, radii: i
         seen |= ok.any(axis=1)
         count = np.maximum(ok.sum(axis=1), 1)
         cu, cv = (ok * gx).sum(axis=1) / count, (ok * gy).sum(axis=1) / count
-        inside = np.zeros((radii, directions))
-        outside = np.full((radii, directions), 4.0 * reach)
         r_all = np.repeat(radius, directions)
         cos, sin = np.tile(np.cos(phi), radii), np.tile(np.sin(phi), radii)
+        # march in from beyond the aperture to the outermost passing sample of each direction, so a pupil
+        # that is not convex (a disc and a ring, a crescent) keeps its outer rim; then bisect to it
+        t = np.linspace(0.0, 3.0 * reach, MARCH + 1)
+        su = np.repeat(cu, directions)[:, None] + t * cos[:, None]
+        sv = np.repeat(cv, directions)[:, None] + t * sin[:, None]
+        hit = passes(rev, np.repeat(r_all, MARCH + 1), 0.0, su.ravel(), sv.ravel(), w).reshape(radii, directions, -1)
+        last_in = np.where(hit.any(axis=-1), MARCH - np.argmax(hit[..., ::-1], axis=-1), 0)
+        inside, outside = t[np.minimum(last_in, MARCH)], t[np.minimum(last_in + 1, MARCH)]
         for _ in range(42):
             mid = 0.5 * (inside + outside).ravel()
             p = passes(rev, r_all, 0.0, np.repeat(cu, directions) + mid * cos, np.repeat(cv, directions) + mid * sin, w)

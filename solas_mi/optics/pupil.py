@@ -20,6 +20,8 @@ from .paraxial import paraxial
 
 dr = T.dr
 RIM_RAYS = 32
+_HALVINGS = 6  # a Newton step that loses its ray is halved up to this many times
+RIM_BISECTIONS = 30  # a rim ray moved inside the stop's rim: its radius to 1e-9 of the rim's
 _STEP = 1e-5  # mm, finite-difference step in entrance coordinates
 _TOL = 1e-13  # convergence of aimed quantities (mm at the stop, direction cosines on the sphere)
 
@@ -54,8 +56,9 @@ def aim(bundle: Bundle, target, ex: T.F, ey: T.F, goal_x: T.F, goal_y: T.F, max_
     """Newton iteration on entrance coordinates so that target(traced) → (goal_x, goal_y).
 
     `target(traced)` returns (gx, gy, ok). The Jacobian is taken by finite differences and reused
-    (chord method), and taken again where the residual stops falling; the iteration ends when every
-    residual is below _TOL, or none has fallen for a few steps, or after `max_iter`. A ray counts as
+    (chord method), and taken again where a residual stops falling; a step that would leave the rays
+    that pass (into total internal reflection, past a surface's edge) is halved; the iteration ends when
+    every ray's residual is below _TOL or has not fallen for a few steps, or after `max_iter`. A ray counts as
     converged when its residual is within the precision the launch allows (`Bundle.tolerance`).
     Returns (ex, ey, traced at the solution, converged mask)."""
     def residual(ax, ay):
@@ -72,26 +75,30 @@ def aim(bundle: Bundle, target, ex: T.F, ey: T.F, goal_x: T.F, goal_y: T.F, max_
 
     rx, ry, ok, tr = residual(ex, ey)
     j11, j12, j21, j22 = jacobian(ex, ey, rx, ry)
-    best, stalled = np.inf, 0
+    best = np.full(dr.width(rx), np.inf)  # per ray, so a batch's stiff rays do not stop the others
+    stalled = np.zeros(dr.width(rx), dtype=np.int64)
     for _ in range(max_iter):
         det = j11 * j22 - j12 * j21
         step_x = (j22 * rx - j12 * ry) / det
         step_y = (-j21 * rx + j11 * ry) / det
         good = ok & dr.isfinite(step_x) & dr.isfinite(step_y)
-        ex = dr.select(good, ex - step_x, ex)
-        ey = dr.select(good, ey - step_y, ey)
-        rx, ry, ok, tr = residual(ex, ey)
-        dr.eval(ex, ey, rx, ry, ok)
+        for _ in range(_HALVINGS + 1):
+            nx, ny = dr.select(good, ex - step_x, ex), dr.select(good, ey - step_y, ey)
+            nrx, nry, nok, ntr = residual(nx, ny)
+            lost = good & ~nok  # the step left the rays that pass (total internal reflection, a missed surface)
+            dr.eval(nx, ny, nrx, nry, nok, lost)
+            if not dr.any(lost):
+                break
+            step_x, step_y = dr.select(lost, 0.5 * step_x, step_x), dr.select(lost, 0.5 * step_y, step_y)
+        ex, ey, rx, ry, ok, tr = nx, ny, nrx, nry, nok, ntr
         err = np.abs(np.asarray(dr.select(ok, dr.maximum(dr.abs(rx), dr.abs(ry)), 0.0)))
-        worst = float(err.max()) if err.size else 0.0
-        if worst < _TOL:
+        stalled = np.where(err > 0.5 * best, stalled + 1, 0)
+        best = np.minimum(best, err)
+        active = (err >= _TOL) & (stalled < 4)  # stalled 4 times: at the floor of what the arithmetic resolves
+        if not active.any():
             break
-        stalled = stalled + 1 if worst > 0.5 * best else 0
-        best = min(best, worst)
-        if stalled == 2:  # the chord has stopped working: a fresh Jacobian where the rays are now
+        if (active & (stalled == 2)).any():  # the chord has stopped working: a fresh Jacobian where the rays are now
             j11, j12, j21, j22 = jacobian(ex, ey, rx, ry)
-        elif stalled >= 4:  # at the floor of what the arithmetic resolves
-            break
     converged = ok & (dr.maximum(dr.abs(rx), dr.abs(ry)) < bundle.tolerance)
     return ex, ey, tr, converged
 
@@ -155,19 +162,33 @@ def chief_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> 
     )
 
 
-def stop_rim(rim: Bundle, chief: ChiefRays) -> tuple[np.ndarray, np.ndarray, T.Traced, np.ndarray]:
-    """Rays aimed at RIM_RAYS points of the stop's rim for each field of the `rim` bundle:
-    entrance coordinates (n, RIM_RAYS) each, the trace, and which converged."""
+def stop_rim(rim: Bundle, chief: ChiefRays, accept=None) -> tuple[np.ndarray, np.ndarray, T.Traced, np.ndarray]:
+    """Rays aimed at RIM_RAYS points of the stop's rim for each field of the `rim` bundle: entrance
+    coordinates (n, RIM_RAYS) each, the trace, and which passed. Where the ray to the rim fails (total
+    internal reflection, a surface missed, or `accept(traced)` false) the pupil's edge lies inside the
+    rim: that ray is moved in, by bisection of its radius at the stop, to the outermost one that passes."""
     lens = rim.lens
     r_stop = lens.surfaces[lens.stop_index].semi_diameter
     phi = np.tile(np.linspace(0.0, 2.0 * math.pi, RIM_RAYS, endpoint=False), rim.n_fields)
-    gx, gy = T.F(r_stop * np.cos(phi)), T.F(r_stop * np.sin(phi))
     # start from the chief ray, scaled by the paraxial entrance-pupil/stop size ratio
     ratio = paraxial(lens).entrance_pupil_diameter_mm / (2.0 * r_stop)
-    ex, ey, tr, ok = aim(rim, _stop_target, rim.per_ray(chief.entrance[:, 0]) + gx * ratio,
-                         rim.per_ray(chief.entrance[:, 1]) + gy * ratio, gx, gy)
+
+    def at(scale: np.ndarray):
+        gx, gy = T.F(r_stop * scale * np.cos(phi)), T.F(r_stop * scale * np.sin(phi))
+        ex, ey, tr, ok = aim(rim, _stop_target, rim.per_ray(chief.entrance[:, 0]) + gx * ratio,
+                             rim.per_ray(chief.entrance[:, 1]) + gy * ratio, gx, gy)
+        return ex, ey, tr, T.to_numpy(ok & accept(tr) if accept is not None else ok)[0]
+
+    ex, ey, tr, ok = at(np.ones(len(phi)))
+    if not ok.all():
+        lo, hi = np.where(ok, 1.0, 0.0), np.ones(len(phi))
+        for _ in range(RIM_BISECTIONS):
+            mid = 0.5 * (lo + hi)
+            passed = at(mid)[3]
+            lo, hi = np.where(passed, mid, lo), np.where(passed, hi, mid)
+        ex, ey, tr, ok = at(lo)
     shape = (rim.n_fields, RIM_RAYS)
-    ex, ey, ok = T.to_numpy(ex, ey, ok)
+    ex, ey = T.to_numpy(ex, ey)
     return ex.reshape(shape), ey.reshape(shape), tr, ok.reshape(shape)
 
 
@@ -246,10 +267,9 @@ def pupil_function(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray,
 
     # 1. Rim of the stop → extent of the pupil in (α, β) and an affine entrance map.
     rim = Bundle(lens, field_deg, wavelength_nm, RIM_RAYS)
-    rex, rey, rtr, rok = stop_rim(rim, chief)
-    ra, rb, hit = T.to_numpy(*sphere_target_for(rim)(rtr))
-    ra, rb = ra.reshape(nf, RIM_RAYS), rb.reshape(nf, RIM_RAYS)
-    rok &= hit.reshape(nf, RIM_RAYS)
+    rim_target = sphere_target_for(rim)
+    rex, rey, rtr, rok = stop_rim(rim, chief, accept=lambda tr: rim_target(tr)[2])
+    ra, rb = (a.reshape(nf, RIM_RAYS) for a in T.to_numpy(*rim_target(rtr)[:2]))
     if not rok.any(axis=1).all():
         bad = field_deg[~rok.any(axis=1)][0]
         raise SolasError(f"no real ray reaches the stop's rim for field ({bad[0]:g}, {bad[1]:g}) deg; "

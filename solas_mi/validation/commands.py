@@ -1,4 +1,5 @@
-"""`solas-mi crossval` and `solas-mi report error-vs-time`: the validation package's command line.
+"""`solas-mi crossval`, `solas-mi report error-vs-time` and `solas-mi check-stability`: the validation
+package's command line.
 The work is done by `crossval.crossval` and `error_vs_time.error_vs_time`; the options both take
 come from `options.add_image_input_options`."""
 from __future__ import annotations
@@ -8,7 +9,7 @@ from typing import Any
 
 from ..convolution.kernels import BOUNDARIES
 from ..optics.lens import Lens
-from ..options import add_image_input_options, parse_wxh, positive_ints
+from ..options import add_image_input_options, add_lens_argument, parse_wxh, positive_ints
 from ..outputs import output_folder
 from ..psf.methods import METHODS as PSF_METHODS
 from ..render.mitsuba import VARIANTS
@@ -62,8 +63,27 @@ def run_error_vs_time(args: argparse.Namespace) -> int:
     return 0
 
 
+def run_check_stability(args: argparse.Namespace) -> int:
+    import json
+    import sys
+
+    from .stability import check_stability, markdown
+
+    lens = Lens.load(args.lens)
+    cases = check_stability(lens, progress=lambda name: print(f"check-stability: {name}", file=sys.stderr, flush=True))
+    if args.json:
+        print(json.dumps({"lens": lens.name, "lens_hash": lens.hash, "passed": all(c.passed for c in cases),
+                          "cases": [c.to_dict() for c in cases]}, indent=1))
+    else:
+        print(markdown(lens, cases))
+    failed = [c.name for c in cases if not c.passed]
+    if failed:
+        print(f"solas-mi check-stability: {len(failed)} case(s) failed: {', '.join(failed)}", file=sys.stderr)
+    return 1 if failed else 0
+
+
 def register(sub: Any) -> None:
-    """Add the `crossval` and `report` (`report error-vs-time`) subcommands."""
+    """Add the `crossval`, `report` (`report error-vs-time`) and `check-stability` subcommands."""
     p = sub.add_parser(
         "crossval", help="cross-validate the PSF-grid convolution against the direct render",
         description="Degrade one image by the direct spectral render (the reference: lines response, no Fresnel, "
@@ -100,3 +120,14 @@ def register(sub: Any) -> None:
                    help="PSF kind (default geometric: the render is a ray render, without diffraction)")
     p.add_argument("--repeats", type=int, default=3, help="convolution runs to take the median time of")
     p.set_defaults(run=run_error_vs_time)
+
+    p = sub.add_parser(
+        "check-stability", help="stiff and extreme cases of a lens: accurate, or a warning, never silently wrong",
+        description="Run the stability cases for LENS (pupil sampling, window energy, wave vs ray transmission, "
+                    "centring, chief rays, fields beyond the design, object distances 100 mm to 1e12 mm, the "
+                    "glasses' wavelength limits, near-flat and monocentric surfaces, float64 OPD, the render's "
+                    "exit-pupil bound) and print a table: case, expected, observed, verdict. Exit status 1 when "
+                    "any case fails.")
+    add_lens_argument(p)
+    p.add_argument("--json", action="store_true", help="print the table as JSON")
+    p.set_defaults(run=run_check_stability)
