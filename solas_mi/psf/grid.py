@@ -161,7 +161,9 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
     n = len(flat)
     canon, which, swap, sign = symmetry_classes(flat)
     odd = 2 * (size // 2) + 1  # symmetric about the origin pixel, so mirrors stay on the grid
-    data = np.zeros((len(wl), n, size, size), dtype=np.float32)
+    # stored as the EXR's mosaics (wavelength, row, y, column, x), the layout `read` gives too, so that
+    # writing needs no copy; `data` (wavelength, row, column, y, x) is a view of it
+    data = np.zeros((len(wl), ny, size, nx, size), dtype=np.float32).transpose(0, 1, 3, 2, 4)
     chief = np.zeros((len(wl), n, 2))
     transmission = np.zeros((len(wl), n))
     energy = np.zeros((len(wl), n))
@@ -185,7 +187,7 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
                         p = p[:, ::-1]
                     if sign[i, 1] < 0:
                         p = p[::-1, :]
-                    data[k, i] = S.normalize(p[:size, :size], normalization)
+                    data[k, i // nx, i % nx] = S.normalize(p[:size, :size], normalization)
                     chief[k, i] = xy * sign[i]
                     transmission[k, i] = tr[c - a]
                     energy[k, i] = S.window_energy(p[:size, :size], pitch_um, tr[c - a])
@@ -210,5 +212,5 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
     if auto_window and energy.min() < S.WINDOW_ENERGY_LIMIT and 2 * size <= S.MAX_SIZE:
         return psf_grid(lens, (ny, nx), wl, (hx, hy), pitch_um, 2 * size, method, normalization, pupil_samples, rays,
                         field_sampling, progress, auto_window=True)
-    return PSFGrid(data.reshape(len(wl), ny, nx, size, size), fields, chief.reshape(len(wl), ny, nx, 2), wl,
+    return PSFGrid(data, fields, chief.reshape(len(wl), ny, nx, 2), wl,
                    float(pitch_um), meta)
