@@ -65,7 +65,10 @@ class PSFGrid:
         channels = {f"psf_{w:g}nm": self.mosaic(k) for k, w in enumerate(self.wavelengths_nm)}
         if len(channels) != len(self.wavelengths_nm):
             raise SolasError(f"wavelengths {self.wavelengths_nm} nm are not distinct to 6 digits; channel names would collide")
-        # PSF tails are float noise that ZIP cannot shrink (3 % for 10× the time): stored uncompressed
+        # PSF tails are float noise that compression cannot shrink; stored as uncompressed float32, the
+        # fastest (measured, 32×32×3 grid of 160 px, 315 MB: 0.17 s; ZIPS 3.8 s for 1 % less, PIZ 3.9 s for
+        # 14 % less; half floats 157 MB but 4.9 s, numpy's float16 conversion of the 88 % of the values
+        # below half's normal range being slow, and a PSF's sum off by up to 2e-5)
         write_exr(path, channels, meta, compress=False)
 
     @classmethod
