@@ -1,6 +1,11 @@
 """`solas-mi batch render` and `render_batch`: images and scene files through a lens, a failed item
 reported, resuming, the sweep's product, seeds, local processes against Dask. Tiny sensors, few spp."""
 import json
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -137,3 +142,25 @@ def test_one_wavelength_renders_in_the_spectral_variant(render_inputs, tmp_path)
     assert s[1] < 1e-4 * s[0]
     colour = np.linalg.svd(rgb)[2][0]
     assert abs(colour @ np.ones(3) / np.sqrt(3)) < 0.9
+
+
+def test_sigterm_midway_leaves_no_partial_render(batch_inputs):
+    batch_inputs.write(12, shape=(48, 64))
+    out = batch_inputs.root / "out"
+    p = subprocess.Popen([sys.executable, "-m", "solas_mi", "batch", "render", str(batch_inputs.images), "--lens",
+                          "solas-doublet", "--sensor", "64x48", "--spp", "64", "-o", str(out), "--workers", "2",
+                          "--quiet"], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while len(list(out.glob("[!.]*.exr"))) < 2 and time.monotonic() < deadline:
+        time.sleep(0.05)
+    p.send_signal(signal.SIGTERM)
+    _, err = p.communicate(timeout=60)
+    assert p.returncode == 143, err
+    m = manifest(out)
+    done = {i["output"] for i in m["items"] if i["status"] == "done"}
+    written = {str(f) for f in out.glob("*.exr")}
+    assert 1 <= len(done) and done <= written and len(written) < 12 and len(written - done) <= 2
+    assert not [f for f in out.iterdir() if f.name.startswith(".")]
+    for f in written:
+        data, meta = read_exr(f)
+        assert data["R"].shape == (48, 64) and meta["spp"] == 64 and Path(f).with_suffix(".png").is_file()
