@@ -66,6 +66,11 @@ def check_workers(workers: int | None) -> int:
     return n
 
 
+def check_dask(dask: str | None) -> None:
+    if dask is not None and (not isinstance(dask, str) or not dask.strip()):
+        raise SolasError(f"dask {dask!r} must be a scheduler address (tcp://HOST:PORT) or local")
+
+
 def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *,
                psf_grid: str | os.PathLike | None = None, lens=None, grid_options: dict[str, Any] | None = None,
                method: str = "interp", boundary: str = "edge", linear: bool = False,
@@ -134,8 +139,7 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
 
     start = time.perf_counter()
     n = check_workers(workers)
-    if dask is not None and (not isinstance(dask, str) or not dask.strip()):
-        raise SolasError(f"dask {dask!r} must be a scheduler address (tcp://HOST:PORT) or local")
+    check_dask(dask)
     cache = cache if isinstance(cache, GridCache) or psf_grid is not None else GridCache(cache)
     p = plan_batch(inputs, output_dir, psf_grid=psf_grid, lens=lens, grid_options=grid_options, method=method,
                    boundary=boundary, linear=linear, cache=cache)

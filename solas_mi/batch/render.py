@@ -26,10 +26,10 @@ import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable, Sequence
+from typing import Iterable, Sequence
 
 from ..errors import SolasError
-from .degrade import BatchResult, check_workers
+from .degrade import BatchResult, check_dask, check_workers
 from .jobs import IMAGE_SUFFIXES, MANIFEST, Job, Manifest, expand_inputs
 from .work import SCENE_SUFFIXES
 
@@ -193,8 +193,7 @@ def render_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathL
 
     start = time.perf_counter()
     n = check_workers(workers)
-    if dask is not None and (not isinstance(dask, str) or not dask.strip()):
-        raise SolasError(f"dask {dask!r} must be a scheduler address (tcp://HOST:PORT) or local")
+    check_dask(dask)
     p = plan_render(inputs, output_dir, lens=lens, focus_distance=focus_distance, sensor=sensor, pitch_um=pitch_um,
                     spp=spp, response=response, fov_deg=fov_deg, boundary=boundary, fresnel=fresnel, seed=seed)
     check_memory(f"batch of {len(p.todo)} renders on {n} workers", estimate(p, n if dask is None else 1)["peak_bytes"],
