@@ -164,3 +164,17 @@ def test_sigterm_midway_leaves_no_partial_render(batch_inputs):
     for f in written:
         data, meta = read_exr(f)
         assert data["R"].shape == (48, 64) and meta["spp"] == 64 and Path(f).with_suffix(".png").is_file()
+
+
+def test_dry_run_names_the_stages_and_what_is_finished(render_inputs, tmp_path, capsys):
+    image = render_inputs.images / "frame000.png"
+    argv = ["batch", "render", str(image), "--lens", "solas-doublet", "--sensor", "16x12", "--spp", "1,2",
+            "-o", str(tmp_path / "d"), "--workers", "1"]
+    assert main(argv + ["--dry-run"]) == 0
+    out = capsys.readouterr().out
+    assert "no PSF grid" in out and "render 2 of 2 items (0 already finished" in out and "spp (2 values)" in out
+    assert not (tmp_path / "d").exists()  # nothing done
+    assert main(argv + ["--quiet"]) == 0
+    capsys.readouterr()
+    assert main(argv + ["--dry-run"]) == 0
+    assert "render 0 of 2 items (2 already finished" in capsys.readouterr().out
