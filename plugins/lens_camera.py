@@ -6,7 +6,7 @@ sensor; the scene sees only the rays that leave the lens's first surface.
 | `lens`           | string    | —           | "solas-doublet" | shipped lens name or lens-file path                |
 | `pitch_um`       | float     | µm          | 5.0             | pixel pitch                                        |
 | `response`       | string    | —           | "srgb"          | camera response (`solas_mi.render.response.parse`) |
-| `focus_distance` | float     | world units | the lens file's | object distance in focus, in front of surface 1    |
+| `focus_distance` | float     | world units | the lens file's | object distance in focus, in front of surface 1 (inf: infinity) |
 | `world_unit_mm`  | float     | mm          | 1000            | one world unit in mm (1000: the scene in metres)   |
 | `fresnel`        | string    | —           | "off"           | "transmit": weight by each refraction's unpolarised|
 |                  |           |             |                 | Fresnel transmittance; "off": lossless surfaces    |
@@ -63,14 +63,14 @@ from solas_mi.plugins.wavelength_sampling import WavelengthSampler
 FRESNEL = ("off", "transmit")
 
 
-def _positive(props: mi.Properties, name: str, default: float, unit: str) -> float:
-    """A positive, finite float property (SolasError naming it otherwise)."""
+def _positive(props: mi.Properties, name: str, default: float, unit: str, infinite: bool = False) -> float:
+    """A positive, finite (or, if `infinite`, also inf) float property (SolasError naming it otherwise)."""
     value = props.get(name, default)
     try:
         value = float(value)
     except (TypeError, ValueError):
         value = math.nan
-    if not (math.isfinite(value) and value > 0):
+    if not ((math.isfinite(value) or (infinite and value == math.inf)) and value > 0):
         raise SolasError(f"lens_camera: {name} {props.get(name)!r} must be a positive number ({unit})")
     return value
 
@@ -103,7 +103,7 @@ class LensCamera(mi.Sensor):
         if self.fresnel not in FRESNEL:
             raise SolasError(f"lens_camera: fresnel {self.fresnel!r} must be one of {', '.join(FRESNEL)}")
         if "focus_distance" in props:
-            distance = _positive(props, "focus_distance", 1.0, "world units, in front of surface 1")
+            distance = _positive(props, "focus_distance", 1.0, "world units, in front of surface 1; inf", True)
             try:
                 lens = focused(lens, distance * self.world_unit_mm)
             except SolasError as exc:

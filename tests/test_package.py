@@ -18,7 +18,7 @@ ALLOWED = {
     "render": {"optics", "psf"},  # the Mitsuba plugins (plugins/, installed as solas_mi.plugins) are part of it
     "metrics": set(),
     "validation": {"optics", "psf", "convolution", "render", "metrics"},
-    "batch": {"optics", "psf", "convolution", "metrics"},
+    "batch": {"optics", "psf", "convolution", "render", "metrics"},
     "experiments": {"optics", "psf", "convolution", "render", "metrics", "validation"},
 }
 

@@ -1,4 +1,6 @@
-"""`solas-mi batch degrade`: many images degraded by one PSF grid, on local processes or Dask.
+"""`solas-mi batch degrade` (many images degraded by one PSF grid) and `solas-mi batch render` (images
+and scene files rendered through a lens, swept over lenses, focus, sensor, pitch and spp), on local
+processes or Dask.
 
 Exit status 0 when every item is done (or was already), 1 when any item failed (after finishing the
 others; the manifest `batch.json` says which and why), 2 for a mistake in the arguments.
@@ -49,11 +51,60 @@ def run_batch_degrade(args: argparse.Namespace) -> int:
                            grid_options=_grid_options(args) if args.lens else None, method=args.method,
                            boundary=args.boundary, linear=args.linear, workers=_workers(args.workers), dask=args.dask,
                            cache=args.cache, force=args.force, progress=not args.quiet)
+    return _report("degrade", result, f" (grid: {result.grid_source})")
+
+
+def _report(command: str, result, extra: str = "") -> int:
     for job in result.failed:
-        print(f"solas-mi batch degrade: failed: {job.input}: {job.error}", file=sys.stderr)
+        print(f"solas-mi batch {command}: failed: {job.input} → {job.output}: {job.error}", file=sys.stderr)
     print(f"{result.count('done')} done, {result.count('skipped')} skipped, {len(result.failed)} failed "
-          f"in {result.seconds:.1f} s (grid: {result.grid_source}); manifest {result.manifest}")
+          f"in {result.seconds:.1f} s{extra}; manifest {result.manifest}")
     return 1 if result.failed else 0
+
+
+def _list(text: str | None, name: str, kind=str) -> list:
+    """A comma-separated sweep "a,b,c" (None: [None])."""
+    if text is None:
+        return [None]
+    values = [v.strip() for v in text.split(",")]
+    try:
+        return [kind(v) for v in values if v]
+    except ValueError:
+        raise SolasError(f"{name} {text!r} must be a comma-separated list of {kind.__name__} values") from None
+
+
+def _sweep(args: argparse.Namespace) -> dict[str, Any]:
+    return {"lens": args.lens, "focus_distance": _list(args.focus_distance, "--focus-distance"),
+            "sensor": _list(args.sensor, "--sensor"), "pitch_um": _list(args.pitch_um, "--pitch-um", float),
+            "spp": _list(args.spp, "--spp", int), "response": args.response, "fov_deg": args.fov_deg,
+            "boundary": args.boundary, "fresnel": args.fresnel, "seed": args.seed}
+
+
+def run_batch_render(args: argparse.Namespace) -> int:
+    workers = _workers(args.workers)
+    if args.dry_run:
+        from ..budget import size_text
+        from ..render.mitsuba import default_variant
+        from .degrade import check_workers
+        from .render import estimate, plan_render
+
+        n = check_workers(workers)
+        p = plan_render(args.inputs, args.output, **_sweep(args))
+        need = estimate(p, n if args.dask is None else 1)
+        where = f"Dask at {args.dask}" if args.dask else f"{n} local worker process(es)"
+        swept = ", ".join(f"{k} ({len(v)} values)" for k, v in p.manifest.header["sweep"].items()) or "nothing"
+        print("1. no PSF grid (a direct render through the lens)")
+        print(f"2. render {len(p.todo)} of {len(p.jobs)} items ({len(p.jobs) - len(p.todo)} already finished, "
+              f"skipped; swept: {swept}) with Mitsuba {args.variant or default_variant()}, on {where}")
+        print(f"3. write EXR + PNG per item and {p.manifest.path}")
+        print(f"estimate: about {need['seconds']:.1f} s ({need['samples']:.3g} samples), peak memory about "
+              f"{size_text(need['peak_bytes'])}")
+        return 0
+    from .render import render_batch
+
+    result = render_batch(args.inputs, args.output, **_sweep(args), variant=args.variant, workers=workers,
+                          dask=args.dask, force=args.force, progress=not args.quiet)
+    return _report("render", result)
 
 
 def _workers(text: str | None) -> int | None:
@@ -68,11 +119,24 @@ def _workers(text: str | None) -> int | None:
     return value
 
 
+def _add_runner_options(p: argparse.ArgumentParser) -> None:
+    p.add_argument("-o", "--output", required=True, metavar="OUT_DIR", help="output folder")
+    p.add_argument("--workers", help="local worker processes (default: the machine's cores); "
+                                     "with --dask local, the LocalCluster's workers")
+    p.add_argument("--dask", metavar="ADDRESS", help="Dask scheduler (tcp://HOST:PORT), or local for a LocalCluster")
+    p.add_argument("--dry-run", action="store_true",
+                   help="print the stages, what is reused and an estimate; do nothing")
+    p.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
+    p.add_argument("--quiet", action="store_true", help="no progress bar")
+
+
 def register(subparsers: Any) -> None:
-    """Add `batch` and its `degrade`."""
+    """Add `batch` and its `degrade` and `render`."""
     from ..convolution.kernels import BOUNDARIES
     from ..convolution.methods import DEFAULT_METHOD, METHODS
     from ..psf.commands import add_grid_options
+    from ..render.mitsuba import VARIANTS
+    from ..render.scene import BOUNDARIES as RENDER_BOUNDARIES
 
     batch = subparsers.add_parser("batch", help="many images at once, on local processes or a Dask cluster",
                                   description="Batch work, resumable, with a manifest batch.json in the output "
@@ -87,17 +151,38 @@ def register(subparsers: Any) -> None:
     source = p.add_mutually_exclusive_group(required=True)
     source.add_argument("--psf-grid", metavar="GRID.exr", help="PSF grid written by `solas-mi psf-grid`")
     source.add_argument("--lens", help="compute the grid from this lens (shipped name or .toml file)")
-    p.add_argument("-o", "--output", required=True, metavar="OUT_DIR", help="output folder")
     p.add_argument("--method", choices=list(METHODS), default=DEFAULT_METHOD, help="convolution method")
     p.add_argument("--boundary", choices=BOUNDARIES, default=BOUNDARIES[0], help="padding outside the image")
     p.add_argument("--linear", action="store_true", help="PNG/JPEG values are already linear: do not decode sRGB")
-    p.add_argument("--workers", help="local worker processes (default: the machine's cores); "
-                                     "with --dask local, the LocalCluster's workers")
-    p.add_argument("--dask", metavar="ADDRESS", help="Dask scheduler (tcp://HOST:PORT), or local for a LocalCluster")
     p.add_argument("--cache", metavar="DIR", help="PSF-grid cache (default: the user's cache folder)/psf-grids")
-    p.add_argument("--dry-run", action="store_true",
-                   help="print the stages, what is reused and an estimate; do nothing")
-    p.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
-    p.add_argument("--quiet", action="store_true", help="no progress bar")
+    _add_runner_options(p)
     add_grid_options(p.add_argument_group("grid options (with --lens; those of `solas-mi psf-grid`)"), "--psf-method")
     p.set_defaults(run=run_batch_degrade)
+
+    r = sub.add_parser(
+        "render", help="render images and scene files through a lens, swept over lenses, focus, sensor, spp",
+        description="Render every input — images (the lens's image-object scene, as `solas-mi render-image`) and "
+                    "Mitsuba scene XML files (the lens camera in place of the scene's camera, as `solas-mi render "
+                    "SCENE --lens`) — at every point of the sweep (the product of the values of --lens, "
+                    "--focus-distance, --sensor, --pitch-um, --spp), writing OUT_DIR/<name>[_<swept values>].exr + "
+                    ".png and OUT_DIR/batch.json. Finished items are skipped on a re-run; a failed item is reported "
+                    "and the others go on (exit status 1).")
+    r.add_argument("inputs", nargs="+", metavar="INPUT", help="images or scene XML files, folders of them, or globs")
+    r.add_argument("--lens", action="append", required=True,
+                   help="shipped lens name or .toml file; repeat to sweep over lenses")
+    r.add_argument("--focus-distance", metavar="D[,D…]", help="scene files: focus distances in world units "
+                                                              "(inf: infinity; default: the lens file's)")
+    r.add_argument("--sensor", default="1280x960", metavar="WxH[,WxH…]", help="images: sensor pixels")
+    r.add_argument("--pitch-um", metavar="P[,P…]", help="pixel pitch in µm (default: the field spans the sensor)")
+    r.add_argument("--spp", default="64", metavar="N[,N…]", help="samples per pixel")
+    r.add_argument("--response", default="srgb", help="camera response: srgb, lines, mono:<nm>, table:<file.csv>")
+    r.add_argument("--fov-deg", type=float, help="images: half the horizontal field the image spans "
+                                                 "(default: the lens's)")
+    r.add_argument("--boundary", choices=RENDER_BOUNDARIES, default="edge",
+                   help="images: the object outside the image")
+    r.add_argument("--fresnel", choices=("transmit", "sample", "off"), default="transmit", help="images: Fresnel losses")
+    r.add_argument("--seed", type=int, default=0, help="the batch's base seed (each item's seed derives from it)")
+    r.add_argument("--variant", choices=VARIANTS,
+                   help="Mitsuba variant (default: cuda_ad_spectral with a GPU, else llvm_ad_spectral)")
+    _add_runner_options(r)
+    r.set_defaults(run=run_batch_render)

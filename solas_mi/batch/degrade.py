@@ -17,7 +17,7 @@ from typing import Any, Iterable
 
 from ..errors import SolasError
 from .cache import GridCache, canonical_options, file_hash
-from .jobs import MANIFEST, Job, Manifest, expand_inputs, plan, remove_leftovers
+from .jobs import MANIFEST, Job, Manifest, expand_inputs, plan
 
 # seconds per image value (H·W·C) on one core of the 2-core benchmark machine, reading, degrading
 # (interp) and writing included (benchmarks/bench_batch.py: 1280×960 RGB, 32×32 grid)
@@ -43,11 +43,11 @@ class BatchPlan:
 
 @dataclass
 class BatchResult:
-    """A finished batch: its items, manifest path and where its grid came from."""
+    """A finished batch: its items, manifest path and where its grid came from (a render batch: none)."""
 
     jobs: list[Job]
     manifest: Path
-    grid_path: Path
+    grid_path: Path | None
     grid_source: str
     seconds: float
 
@@ -64,6 +64,11 @@ def check_workers(workers: int | None) -> int:
     if isinstance(n, bool) or not isinstance(n, int) or n < 1:
         raise SolasError(f"workers {workers!r} must be a whole number >= 1")
     return n
+
+
+def check_dask(dask: str | None) -> None:
+    if dask is not None and (not isinstance(dask, str) or not dask.strip()):
+        raise SolasError(f"dask {dask!r} must be a scheduler address (tcp://HOST:PORT) or local")
 
 
 def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *,
@@ -134,8 +139,7 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
 
     start = time.perf_counter()
     n = check_workers(workers)
-    if dask is not None and (not isinstance(dask, str) or not dask.strip()):
-        raise SolasError(f"dask {dask!r} must be a scheduler address (tcp://HOST:PORT) or local")
+    check_dask(dask)
     cache = cache if isinstance(cache, GridCache) or psf_grid is not None else GridCache(cache)
     p = plan_batch(inputs, output_dir, psf_grid=psf_grid, lens=lens, grid_options=grid_options, method=method,
                    boundary=boundary, linear=linear, cache=cache)
@@ -156,32 +160,7 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
     settings = {"method": method, "boundary": boundary, "linear": linear, "force": force,
                 "batch": {"id": p.key, "manifest": str(p.manifest.path), "grid_hash": header["grid_hash"],
                           "lens_hash": header["lens_hash"]}}
-    p.manifest.path.parent.mkdir(parents=True, exist_ok=True)
-    p.manifest.save()
-    bar = None
-    if progress:
-        from tqdm import tqdm
+    from .runner import run_batch
 
-        bar = tqdm(total=len(p.jobs), initial=len(p.jobs) - len(p.todo), unit="image", desc="degrade")
-
-    def on_done(i: int, job: Job) -> None:
-        p.jobs[i] = job
-        p.manifest.save(force=False)
-        if bar is not None:
-            bar.update()
-
-    try:
-        if p.todo and dask is None:
-            from .runner import run_local
-
-            run_local(p.jobs, p.todo, str(p.grid_path), settings, n, on_done)
-        elif p.todo:
-            from .runner import run_dask
-
-            run_dask(p.jobs, p.todo, grid, str(p.grid_path), settings, dask, n, on_done)
-    finally:
-        if bar is not None:
-            bar.close()
-        remove_leftovers(p.manifest.path.parent, p.jobs)  # a worker killed while writing cannot remove its own
-        p.manifest.save()
+    run_batch(p.manifest, p.todo, grid, str(p.grid_path), settings, n, dask, "image" if progress else None)
     return BatchResult(p.jobs, p.manifest.path, p.grid_path, header["grid_source"], time.perf_counter() - start)

@@ -1,7 +1,7 @@
 """A batch's items and its manifest.
 
 An item (`Job`) is one unit of work with its inputs and outputs; `kind` names what it does
-("degrade" today; a "render" kind adds its own fields, e.g. a scene and a `seed`). The manifest,
+("degrade", or "render" with its `seed` and the `params` of its sweep point). The manifest,
 `batch.json` in the output folder, records each item's status ("pending", "done", "skipped",
 "failed"), timings, seed, error and the outputs' sizes and times, beside what the whole batch
 shares (the grid's hash, the lens's hash, the method). It is rewritten atomically, so it is valid
@@ -26,7 +26,8 @@ SAVE_EVERY_S = 1.0  # the manifest is rewritten at most this often while items f
 
 @dataclass
 class Job:
-    """One item of a batch: `kind` "degrade" reads `input` and writes `output` (EXR) + `png`."""
+    """One item of a batch: it reads `input` and writes `output` (EXR) + `png`; `kind` "degrade" or
+    "render" (`params`: lens, focus distance, sensor, pitch, spp, response of its sweep point)."""
 
     input: str
     output: str
@@ -38,6 +39,7 @@ class Job:
     seconds: float | None = None
     attempts: int = 0
     outputs: dict[str, list[int]] = field(default_factory=dict)  # path → [size, mtime_ns] when finished
+    params: dict[str, Any] = field(default_factory=dict)
 
     def stamp(self) -> None:
         """Record the finished outputs' sizes and modification times (how a re-run knows them)."""
@@ -66,15 +68,15 @@ def remove_leftovers(folder: Path, jobs: list[Job]) -> int:
     return removed
 
 
-def expand_inputs(inputs: Iterable[str | os.PathLike]) -> list[Path]:
-    """Image files from files, folders (their images, sorted, not recursive) and glob patterns; each
-    once, in the order given. SolasError naming an input that matches nothing."""
+def expand_inputs(inputs: Iterable[str | os.PathLike], suffixes: tuple[str, ...] = IMAGE_SUFFIXES) -> list[Path]:
+    """Files from files, folders (their files ending in `suffixes`, sorted, not recursive) and glob
+    patterns; each once, in the order given. SolasError naming an input that matches nothing."""
     found: list[Path] = []
     for item in inputs:
         text = str(item)
         path = Path(text)
         if path.is_dir():
-            matches = sorted(p for p in path.iterdir() if p.suffix.lower() in IMAGE_SUFFIXES and p.is_file())
+            matches = sorted(p for p in path.iterdir() if p.suffix.lower() in suffixes and p.is_file())
         elif path.exists():
             matches = [path]
         elif glob.has_magic(text):
@@ -82,7 +84,7 @@ def expand_inputs(inputs: Iterable[str | os.PathLike]) -> list[Path]:
         else:
             raise SolasError(f"input {text!r} is not a file, a folder or a glob pattern that matches files")
         if not matches:
-            raise SolasError(f"input {text!r} holds no images ({', '.join(IMAGE_SUFFIXES)})")
+            raise SolasError(f"input {text!r} holds no input files ({', '.join(suffixes)})")
         found.extend(matches)
     unique = list(dict.fromkeys(p.resolve() for p in found))
     if not unique:

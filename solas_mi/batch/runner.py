@@ -1,6 +1,6 @@
 """Where a batch's items run: local worker processes (`run_local`) or a Dask cluster (`run_dask`).
-Both run `run_job` on each item with the one PSF grid of the batch, and hand each finished item
-(done or failed) to `on_done` as it comes.
+Both run `work.run_job` on each item (with the one PSF grid of a degrade batch; a render batch has
+none), and hand each finished item (done or failed) to `on_done` as it comes.
 
 Local: `workers` spawned processes, each reading the grid file once and then taking one item at a
 time over its own pipe, so the batch always knows which item each process holds. A process that
@@ -16,57 +16,33 @@ from __future__ import annotations
 
 import multiprocessing
 import signal
-import time
 from collections import deque
 from multiprocessing.connection import wait
 from typing import TYPE_CHECKING, Any, Callable
 
 from ..errors import SolasError
 from .jobs import Job
+from .work import run_job
 
 if TYPE_CHECKING:
     from ..psf.grid import PSFGrid
+    from .jobs import Manifest
 
 MAX_ATTEMPTS = 3
 STOP_WAIT_S = 10.0  # how long interrupted workers get to remove their temporary files
-
-
-def run_job(job: Job, grid: "PSFGrid", grid_path: str, settings: dict[str, Any]) -> Job:
-    """Do one item and return it with its status, error and timing; never raises for the item's own
-    problems (an unreadable input, a failed write): they are its `error`."""
-    from ..convolution.output import degrade_file
-    from ..outputs import data_and_preview
-
-    start = time.perf_counter()
-    job.attempts += 1
-    try:
-        if job.kind != "degrade":
-            raise SolasError(f"item kind {job.kind!r} must be degrade")
-        output, png = data_and_preview(job.output, job.png, inputs=[job.input, grid_path])
-        degrade_file(job.input, grid, grid_path, output, png, settings["method"], settings["boundary"],
-                     linear=settings["linear"], force=settings["force"],
-                     extra_meta={"batch": {**settings["batch"], "seed": job.seed}})
-        job.stamp()
-        job.status, job.error = "done", None
-    except SolasError as exc:
-        job.status, job.error = "failed", str(exc)
-    except Exception as exc:  # one bad item never stops the batch (MemoryError included)
-        job.status, job.error = "failed", f"{type(exc).__name__}: {exc}"
-    job.seconds = time.perf_counter() - start
-    return job
 
 
 def _interrupt(signum, frame) -> None:
     raise KeyboardInterrupt()
 
 
-def _serve(conn, grid_path: str, settings: dict[str, Any]) -> None:
-    """A local worker process: read the grid once, then do the items sent until None comes."""
+def _serve(conn, grid_path: str | None, settings: dict[str, Any]) -> None:
+    """A local worker process: read the grid (if any) once, then do the items sent until None comes."""
     from ..psf.grid import PSFGrid
 
     signal.signal(signal.SIGTERM, _interrupt)  # interrupted, not killed: temporary files are removed
     try:
-        grid = PSFGrid.read(grid_path)
+        grid = PSFGrid.read(grid_path) if grid_path is not None else None
         while (job := conn.recv()) is not None:
             conn.send(run_job(job, grid, grid_path, settings))
     except (KeyboardInterrupt, EOFError):
@@ -74,7 +50,7 @@ def _serve(conn, grid_path: str, settings: dict[str, Any]) -> None:
 
 
 class _Worker:
-    def __init__(self, ctx, grid_path: str, settings: dict[str, Any]):
+    def __init__(self, ctx, grid_path: str | None, settings: dict[str, Any]):
         self.conn, child = ctx.Pipe()
         self.proc = ctx.Process(target=_serve, args=(child, grid_path, settings), daemon=True)
         self.proc.start()
@@ -112,7 +88,7 @@ class _Worker:
         return result if isinstance(result, Job) else None
 
 
-def run_local(jobs: list[Job], todo: list[int], grid_path: str, settings: dict[str, Any], workers: int,
+def run_local(jobs: list[Job], todo: list[int], grid_path: str | None, settings: dict[str, Any], workers: int,
               on_done: Callable[[int, Job], None]) -> None:
     """Items `todo` (indices into `jobs`) on `workers` local processes."""
     ctx = multiprocessing.get_context("spawn")  # never fork a process that may hold Dr.Jit's threads
@@ -166,7 +142,7 @@ def run_local(jobs: list[Job], todo: list[int], grid_path: str, settings: dict[s
                 on_done(w.index, result)
 
 
-def run_dask(jobs: list[Job], todo: list[int], grid: "PSFGrid", grid_path: str, settings: dict[str, Any],
+def run_dask(jobs: list[Job], todo: list[int], grid: "PSFGrid | None", grid_path: str | None, settings: dict[str, Any],
              address: str, workers: int, on_done: Callable[[int, Job], None]) -> None:
     """Items `todo` on the Dask scheduler at `address`, or on a LocalCluster of `workers` processes
     started for this batch when `address` is "local"."""
@@ -187,7 +163,7 @@ def run_dask(jobs: list[Job], todo: list[int], grid: "PSFGrid", grid_path: str, 
             raise SolasError(f"cannot reach the Dask scheduler {address!r} ({exc}); give tcp://HOST:PORT "
                              "of a running `dask scheduler`, or local") from None
         with client:
-            shared = client.scatter(grid, broadcast=True)
+            shared = client.scatter(grid, broadcast=True) if grid is not None else None
             futures = {client.submit(run_job, jobs[i], shared, grid_path, settings, pure=False): i for i in todo}
             for future in as_completed(futures):
                 i = futures.pop(future)
@@ -203,3 +179,37 @@ def run_dask(jobs: list[Job], todo: list[int], grid: "PSFGrid", grid_path: str, 
         if cluster is not None:
             cluster.close()
 
+
+
+def run_batch(manifest: "Manifest", todo: list[int], grid: "PSFGrid | None", grid_path: str | None,
+              settings: dict[str, Any], workers: int, dask: str | None, progress: str | None) -> None:
+    """Items `todo` of `manifest.jobs` on `workers` local processes or the Dask scheduler `dask`, the
+    manifest saved as they finish (and at the end, also when interrupted), a progress bar of the unit
+    `progress` ("image", "render"; None: no bar); the temporary files of killed workers removed."""
+    from .jobs import remove_leftovers
+
+    jobs = manifest.jobs
+    manifest.path.parent.mkdir(parents=True, exist_ok=True)
+    manifest.save()
+    bar = None
+    if progress:
+        from tqdm import tqdm
+
+        bar = tqdm(total=len(jobs), initial=len(jobs) - len(todo), unit=progress, desc=manifest.header.get("kind"))
+
+    def on_done(i: int, job: Job) -> None:
+        jobs[i] = job
+        manifest.save(force=False)
+        if bar is not None:
+            bar.update()
+
+    try:
+        if todo and dask is None:
+            run_local(jobs, todo, grid_path, settings, workers, on_done)
+        elif todo:
+            run_dask(jobs, todo, grid, grid_path, settings, dask, workers, on_done)
+    finally:
+        if bar is not None:
+            bar.close()
+        remove_leftovers(manifest.path.parent, jobs)  # a worker killed while writing cannot remove its own
+        manifest.save()

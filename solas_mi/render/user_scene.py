@@ -43,6 +43,17 @@ def _film_size(sensor: ET.Element, defaults: dict[str, str]) -> tuple[int, int]:
     return size["width"], size["height"]
 
 
+def scene_film_size(xml_path: str | Path) -> tuple[int, int]:
+    """(width, height) pixels of the film of the first sensor of the scene file `xml_path`."""
+    try:
+        root = ET.parse(xml_path).getroot()
+    except (OSError, ET.ParseError) as exc:
+        raise SolasError(f"scene {xml_path} cannot be read as XML: {exc}") from None
+    sensor = root.find("sensor")
+    defaults = {d.get("name"): d.get("value") for d in root.iter("default")}
+    return _film_size(sensor if sensor is not None else ET.Element("sensor"), defaults)
+
+
 def field_half_angle(sensor: ET.Element, defaults: dict[str, str]) -> tuple[float, str]:
     """(half field in degrees, axis "x" | "y" | "diagonal") of a perspective sensor element."""
     fov, focal = _property(sensor, "fov", defaults), _property(sensor, "focal_length", defaults)

@@ -180,7 +180,7 @@ def test_inputs_that_match_nothing_or_collide(batch_inputs, capsys):
     batch_inputs.write(1)
     (batch_inputs.root / "other").mkdir()
     (batch_inputs.root / "other" / "frame000.png").write_bytes((batch_inputs.images / "frame000.png").read_bytes())
-    for inputs, message in (([f"{batch_inputs.root}/nope*.png"], "holds no images"),
+    for inputs, message in (([f"{batch_inputs.root}/nope*.png"], "holds no input files"),
                             ([str(batch_inputs.images), str(batch_inputs.root / "other")], "would both write")):
         argv = ["batch", "degrade", *inputs, "--psf-grid", str(batch_inputs.grid), "-o", str(batch_inputs.root / "o")]
         assert main(argv) == 2

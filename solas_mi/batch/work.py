@@ -1,0 +1,84 @@
+"""One item of a batch, done where a runner placed it (`run_job`): a "degrade" item convolves its
+image with the batch's PSF grid; a "render" item renders its image (the lens's image-object scene,
+`render.image`) or its Mitsuba scene file (the lens camera in place of the scene's camera,
+`render.user_scene` + `render.stock`) at its sweep point. No PSF grid is read for a render.
+"""
+from __future__ import annotations
+
+import time
+from typing import TYPE_CHECKING, Any
+
+from ..errors import SolasError
+from .jobs import Job
+
+if TYPE_CHECKING:
+    from ..psf.grid import PSFGrid
+
+SCENE_SUFFIXES = (".xml",)
+
+
+def run_job(job: Job, grid: "PSFGrid | None", grid_path: str | None, settings: dict[str, Any]) -> Job:
+    """Do one item and return it with its status, error and timing; never raises for the item's own
+    problems (an unreadable input, a failed write): they are its `error`."""
+    start = time.perf_counter()
+    job.attempts += 1
+    try:
+        if job.kind == "degrade":
+            _degrade(job, grid, grid_path, settings)
+        elif job.kind == "render":
+            _render(job, settings)
+        else:
+            raise SolasError(f"item kind {job.kind!r} must be degrade or render")
+        job.stamp()
+        job.status, job.error = "done", None
+    except SolasError as exc:
+        job.status, job.error = "failed", str(exc)
+    except Exception as exc:  # one bad item never stops the batch (MemoryError included)
+        job.status, job.error = "failed", f"{type(exc).__name__}: {exc}"
+    job.seconds = time.perf_counter() - start
+    return job
+
+
+def _degrade(job: Job, grid: "PSFGrid", grid_path: str, settings: dict[str, Any]) -> None:
+    from ..convolution.output import degrade_file
+    from ..outputs import data_and_preview
+
+    output, png = data_and_preview(job.output, job.png, inputs=[job.input, grid_path])
+    degrade_file(job.input, grid, grid_path, output, png, settings["method"], settings["boundary"],
+                 linear=settings["linear"], force=settings["force"],
+                 extra_meta={"batch": {**settings["batch"], "seed": job.seed}})
+
+
+def _render(job: Job, settings: dict[str, Any]) -> None:
+    """Render the item at its sweep point `job.params` with its seed; EXR (metadata: the batch, seed,
+    sweep point, Mitsuba variant) + PNG written together, atomically."""
+    from pathlib import Path
+
+    from ..optics.lens import Lens
+    from ..outputs import data_and_preview, written_together
+
+    p = job.params
+    if settings.get("threads"):
+        import drjit as dr
+
+        dr.set_thread_count(settings["threads"])  # the batch's workers share the cores
+    output, png = data_and_preview(job.output, job.png, inputs=[job.input])
+    lens = Lens.load(p["lens"])
+    if Path(job.input).suffix.lower() in SCENE_SUFFIXES:
+        from ..render.stock import render_scene
+        from ..render.user_scene import load
+
+        scene = load(job.input, settings["variant"], lens, pitch_um=p["pitch_um"], focus_distance=p["focus_distance"],
+                     response=p["response"])
+        result = render_scene(scene, p["spp"], seed=job.seed)
+        result.meta.update(scene=job.input, lens=lens.name, lens_hash=lens.hash)
+    else:
+        from ..render.image import render_image
+
+        result = render_image(lens, job.input, tuple(p["sensor"]), p["pitch_um"], p["spp"], p["response"],
+                              settings["fov_deg"], settings["boundary"], settings["fresnel"], None, settings["variant"],
+                              job.seed)
+        result.meta["image"] = job.input
+    result.meta["batch"] = {**settings["batch"], "seed": job.seed, "params": p}
+    with written_together(output, png) as (tmp_data, tmp_png):
+        result.write(tmp_data, tmp_png)
