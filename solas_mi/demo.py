@@ -35,7 +35,7 @@ def run(out: Path) -> None:
                  "--size", "160", "--normalize", "peak", "-o", str(psfs / f"psf_{field:+d}deg_{wl}nm.exr")])
     for grid in ("8x8", "32x32"):
         cli(["psf-grid", "solas-doublet", "--grid", grid, "--wavelengths", "656,531,486", "--pitch-um", "0.5",
-             "--size", "160", "-o", str(out / f"psf_grid_{grid}.exr")])
+             "--size", "160", "--png", "-o", str(out / f"psf_grid_{grid}.exr")])
     degraded = degrade(out)
     edge = out / "sfr" / "edge_5deg_sigma1px.png"
     cli(["sfr-target", "-o", str(edge), "--angle-deg", "5", "--sigma-px", "1", "--size", "128x128"])
