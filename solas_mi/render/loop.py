@@ -19,10 +19,9 @@ import numpy as np
 
 from ..errors import SolasError
 from .mitsuba import check_run, pass_seed
-from .scene import path_depth
+from .scene import SPAWN_OFFSET_MM, path_depth
 
 _SAMPLES_PER_PASS = 1 << 21  # samples traced at once: bounds a pass's memory and time (~1 s: Ctrl-C waits no longer)
-SPAWN_OFFSET_MM = 1e-4  # a continued ray starts this far (mm) along its own direction
 
 
 @dataclass

@@ -21,6 +21,8 @@ from ..imageio import atomic_path, write_text
 from ..optics.camera import BOUNDARIES, Camera, camera_for
 from ..optics.lens import Lens
 
+SPAWN_OFFSET_MM = 1e-4  # a continued ray starts this far (mm) along its own direction (`loop.continue_ray`)
+MIN_GAP_MM = 10 * SPAWN_OFFSET_MM  # closest two refracting surfaces of the mesh scene may come
 DEFAULT_RINGS = 32  # scene PSFs match the tracer to 0.04 µm / 0.2 %; denser meshes render slower (README)
 
 
@@ -122,10 +124,28 @@ class Part:
     int_glass: str | None = None
 
 
+def check_gaps(lens: Lens) -> None:
+    """Refuse a lens whose neighbouring refracting surfaces come closer, anywhere inside their clear
+    apertures, than MIN_GAP_MM: a ray continued SPAWN_OFFSET_MM past one surface would skip the next."""
+    caps = [k for k, s in enumerate(lens.surfaces)
+            if s.glass != (lens.surfaces[k - 1].glass if k else lens.object_glass)]
+    for a, b in zip(caps[:-1], caps[1:]):
+        sa, sb = lens.surfaces[a], lens.surfaces[b]
+        r = np.linspace(0.0, min(sa.semi_diameter, sb.semi_diameter), 257)
+        gap = lens.vertex_z[b] - lens.vertex_z[a] + sb.sag(r) - sa.sag(r)
+        if gap.min() < MIN_GAP_MM:
+            i = int(np.argmin(gap))
+            raise SolasError(f"surfaces {a + 1} and {b + 1} of lens {lens.name} are {gap[i]:.3g} mm apart at r = "
+                             f"{r[i]:.3g} mm: the mesh scene continues each ray {SPAWN_OFFSET_MM:g} mm past a surface, "
+                             f"so its refracting surfaces must be at least {MIN_GAP_MM:g} mm apart (the tracer's psf, "
+                             "psf-grid and the lens_camera take this lens as it is)")
+
+
 def lens_parts(lens: Lens, rings: int = DEFAULT_RINGS) -> list[Part]:
     """Caps for refracting surfaces, absorbing annuli around every clear aperture (and the stop), and
     a barrel closing the sides from the first aperture to the image plane."""
     check_rings(rings)
+    check_gaps(lens)
     parts = []
     outer = 2.0 * max(s.semi_diameter for s in lens.surfaces) + 10.0
     before = lens.object_glass

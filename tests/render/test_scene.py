@@ -30,3 +30,19 @@ def test_parts_of_the_doublet(doublet):
 def test_bad_ring_count(doublet):
     with pytest.raises(SolasError, match="rings"):
         lens_parts(doublet, 1)
+
+
+def test_surfaces_closer_than_the_ray_continuation_are_refused(doublet_spec):
+    """A 5e-5 mm air gap between two refracting surfaces: a ray continued 1e-4 mm past the first would
+    skip the second, so the mesh scene refuses the lens with the surfaces and the minimum named (the
+    tracer takes it)."""
+    from solas_mi import Lens
+
+    spec = dict(doublet_spec)
+    spec["surface"] = [dict(s) for s in doublet_spec["surface"]]
+    spec["surface"][1]["material"] = "AIR"
+    spec["surface"][1]["thickness"] = 5e-5
+    spec["surface"].insert(2, dict(spec["surface"][1], thickness=3.0, material="F2", label="thin"))
+    lens = Lens.from_dict(spec)
+    with pytest.raises(SolasError, match=r"surfaces 2 and 3 .* are 5e-05 mm apart .* at least 0.001 mm apart"):
+        lens_parts(lens)
