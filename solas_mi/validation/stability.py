@@ -120,9 +120,9 @@ def _beyond(lens: Lens, wl: float) -> Case:
         ok = bool(np.isfinite(p.data).all() and abs(p.data.sum() - 1.0) < 1e-9)
         seen = "finite, normalised PSF" if ok else "NaN or unnormalised PSF"
     except SolasError as exc:
-        ok, seen = f"({0:g}, {far:g})" in str(exc), f"refused: {exc}"
+        ok, seen = f"({0:g}, {far:g})" in str(exc), f"refused: {str(exc).split(';')[0]}"
     return Case(f"field {far:g} deg, beyond the design", "a finite normalised PSF or a refusal naming the field",
-                seen[:110], ok)
+                seen, ok)
 
 
 def _distances(lens: Lens, field: tuple, wl: float) -> list[Case]:
@@ -133,7 +133,7 @@ def _distances(lens: Lens, field: tuple, wl: float) -> list[Case]:
         try:
             p = psf(replace(lens, object_distance=d, memo={}), field, wl, size=96)
         except SolasError as exc:
-            cases.append(Case(f"object at {d:g} mm", "finite or a clear refusal", f"refused: {exc}"[:110],
+            cases.append(Case(f"object at {d:g} mm", "finite or a clear refusal", f"refused: {exc}",
                               "object" in str(exc) or "field" in str(exc)))
             continue
         finite = bool(np.isfinite(p.data).all()) and math.isfinite(p.meta["transmission"])
@@ -166,7 +166,7 @@ def _glass_limits(lens: Lens) -> list[Case]:
         seen, ok = "accepted", False
     except SolasError as exc:
         seen, ok = str(exc), "valid range" in str(exc)
-    cases.append(Case(f"wavelength {hi + 1:g} nm (beyond)", "a refusal naming the glass range", seen[:110], ok))
+    cases.append(Case(f"wavelength {hi + 1:g} nm (beyond)", "a refusal naming the glass range", seen, ok))
     return cases
 
 
