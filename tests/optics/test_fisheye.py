@@ -8,6 +8,7 @@ from solas_mi.optics import pupil as P
 from solas_mi.optics import tracer as T
 from solas_mi.optics.lens import check_field
 from solas_mi.optics.paraxial import paraxial
+from solas_mi.psf import psf
 
 LINE_D = 587.5618  # nm
 
@@ -76,3 +77,17 @@ def test_polar_field_limits():
         check_field((130.0, 130.0), polar=True)
     with pytest.raises(SolasError, match="below 89 deg"):
         check_field((0.0, 95.0))
+
+
+def test_psf_at_the_edge_of_the_field(fisheye):
+    """At 90° (on the y axis and on the diagonal) the PSF is finite, sums to one and says how much of
+    the transmitted light its window holds, converged under pupil refinement; both azimuths give the
+    same transmission (symmetry, to the square pupil grid's resolution). 64 pupil samples alias there (the PSF warns so): 256 are needed."""
+    out = [psf(fisheye, f, LINE_D, size=64, pitch_um=2.0, pupil_samples=n)
+           for f, n in [((0.0, 90.0), 256), ((63.6396, 63.6396), 256), ((0.0, 90.0), 512)]]
+    for p in out:
+        assert np.isfinite(p.data).all() and p.data.min() >= 0 and abs(p.data.sum() - 1.0) < 1e-12
+        assert 0.0 < p.meta["energy_in_grid"] <= 1.0 and 0.0 < p.meta["transmission"] < 1.0
+        assert abs(np.hypot(*p.chief_ray_mm) - 14.0045) < 1e-3
+    assert abs(out[0].meta["transmission"] - out[1].meta["transmission"]) < 2e-3  # square pupil grid
+    assert abs(out[0].meta["energy_in_grid"] - out[2].meta["energy_in_grid"]) < 1e-3
