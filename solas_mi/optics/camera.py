@@ -27,6 +27,8 @@ from .lens import Lens
 DEFAULT_SENSOR = (960, 1280)  # rows, columns
 # What lies outside the input image, for both engines: the border repeated, mirrored, or black.
 BOUNDARIES = ("edge", "reflect", "zero")
+# How an input image maps to directions (plugins/image_object.py); rectilinear is the ideal pinhole image above.
+MAPPINGS = ("rectilinear", "equidistant", "equisolid", "equirectangular")
 
 
 @dataclass(frozen=True)
