@@ -20,6 +20,7 @@ from .paraxial import paraxial
 
 dr = T.dr
 RIM_RAYS = 32
+RIM_STEPS = 8  # lenses of polar fields: steps of the rim aim from the stop centre out to the rim
 _STEP = 1e-5  # mm, finite-difference step in entrance coordinates
 POLAR_STEP_DEG = 2.0  # largest step of the polar angle when continuing a chief-ray aim outward
 _TOL = 1e-13  # convergence of aimed quantities (mm at the stop, direction cosines on the sphere)
@@ -186,8 +187,12 @@ def stop_rim(rim: Bundle, chief: ChiefRays) -> tuple[np.ndarray, np.ndarray, T.T
     gx, gy = T.F(r_stop * np.cos(phi)), T.F(r_stop * np.sin(phi))
     # start from the chief ray, scaled by the paraxial entrance-pupil/stop size ratio
     ratio = paraxial(lens).entrance_pupil_diameter_mm / (2.0 * r_stop)
-    ex, ey, tr, ok = aim(rim, _stop_target, rim.per_ray(chief.entrance[:, 0]) + gx * ratio,
-                         rim.per_ray(chief.entrance[:, 1]) + gy * ratio, gx, gy)
+    ex, ey = rim.per_ray(chief.entrance[:, 0]) + gx * ratio, rim.per_ray(chief.entrance[:, 1]) + gy * ratio
+    if lens.polar_field:  # wide fields: the pupil is squeezed and tilted; grow the aim out from the chief ray
+        ex, ey = rim.per_ray(chief.entrance[:, 0]), rim.per_ray(chief.entrance[:, 1])
+        for k in range(1, RIM_STEPS):
+            ex, ey, _, _ = aim(rim, _stop_target, ex, ey, gx * (k / RIM_STEPS), gy * (k / RIM_STEPS))
+    ex, ey, tr, ok = aim(rim, _stop_target, ex, ey, gx, gy)
     shape = (rim.n_fields, RIM_RAYS)
     ex, ey, ok = T.to_numpy(ex, ey, ok)
     return ex.reshape(shape), ey.reshape(shape), tr, ok.reshape(shape)
