@@ -8,6 +8,7 @@ of direction) or on a plane at a finite distance.
 | `fov_deg`     | float  | degrees | 2.0             | half the horizontal field the image's width spans       |
 | `boundary`    | string | —       | "edge"          | the object outside the image: "edge", "reflect", "zero" |
 | `distance_mm` | float  | mm      | 0 (at infinity) | the image on the plane z = −distance_mm instead         |
+| `mapping`     | string | —       | "rectilinear"   | projection of the image at infinity (below)             |
 | `scale`       | float  | —       | 1.0             | radiance multiplier                                     |
 
 `traverse` exposes `scale` (differentiable; in the JIT variants `mi.traverse` edits it without reloading
@@ -25,6 +26,15 @@ each spectral lane takes the band of its own wavelength.
 
 Rays arriving here travel away from the lens (−z): a direction d has tangents (d_x/d_z, d_y/d_z),
 which is the field of light coming from there.
+
+`mapping` (object at infinity): how the image's square pixels map to directions, for fields up to and
+beyond 90°. With w = −d the light's direction of travel, θ its angle from the axis and φ its azimuth,
+the image-plane point (in units where the width spans ±P(fov_deg)) is "rectilinear" tan θ (cos φ,
+sin φ) (w_z > 0 only; the default), "equidistant" θ (cos φ, sin φ) (the polar fields of wide lenses,
+`Lens.polar_field`: field (x, y) deg sits at (x, y) in radians), "equisolid" 2 sin(θ/2) (cos φ,
+sin φ) (equal area), or "equirectangular" (longitude atan2(w_x, w_z), latitude asin(w_y)), an
+environment map. Emitter sampling for stock integrators (`sample_direction`, `pdf_direction`,
+`sample_ray`) is rectilinear only; the other mappings render in solas-mi's loop.
 
 Mitsuba's integrators (at infinity only): `eval`/`eval_direction` as above; `sample_direction` picks
 a texel with probability ∝ its R + G + B and a uniform point of its tangent-space square, so
@@ -54,12 +64,34 @@ import numpy as np
 
 from solas_mi.errors import SolasError
 from solas_mi.imageio import read_image
-from solas_mi.optics.camera import BOUNDARIES
+from solas_mi.optics.camera import BOUNDARIES, MAPPINGS
 from solas_mi.plugins.scene_probe import calling_render
 from solas_mi.plugins.tables import lookup, table, zeros
 from solas_mi.render.response import RGB_BANDS_NM
 
 SPECTRUM_NM = (mi.MI_CIE_MIN, mi.MI_CIE_MAX)  # light tracing samples wavelengths uniformly here
+
+
+def half_width(mapping: str, fov_deg: float) -> float:
+    """Image-plane half width P(fov_deg) of an image spanning ±fov_deg in `mapping` (module docstring)."""
+    t = math.radians(fov_deg)
+    return {"rectilinear": math.tan(t), "equidistant": t, "equisolid": 2.0 * math.sin(t / 2.0),
+            "equirectangular": t}[mapping]
+
+
+def plane_point(mapping: str, wx, wy, wz):
+    """Image-plane point (a, b) of the light's direction of travel w (unit) in `mapping`, and whether
+    the mapping covers it."""
+    if mapping == "rectilinear":
+        z = dr.select(wz > 0, wz, 1.0)
+        return wx / z, wy / z, wz > 0
+    if mapping == "equirectangular":
+        return dr.atan2(wx, wz), dr.asin(dr.clip(wy, -1.0, 1.0)), wz > -2.0
+    s = dr.sqrt(wx * wx + wy * wy)
+    theta = dr.atan2(s, wz)
+    r = theta if mapping == "equidistant" else 2.0 * dr.sin(0.5 * theta)
+    k = dr.select(s > 0, r / dr.select(s > 0, s, 1.0), 1.0)
+    return wx * k, wy * k, theta < math.pi
 
 
 def _fold(i, n: int, boundary: str):
@@ -82,6 +114,12 @@ class ImageObject(mi.Emitter):
         self.fov_deg = float(props.get("fov_deg", 2.0))
         distance = props.get("distance_mm", 0.0)
         self.distance = float(distance) if distance else math.inf
+        self.mapping = str(props.get("mapping", "rectilinear"))
+        if self.mapping not in MAPPINGS:
+            raise SolasError(f"image_object mapping {self.mapping!r} must be one of {', '.join(MAPPINGS)}")
+        if self.mapping != "rectilinear" and not math.isinf(self.distance):
+            raise SolasError(f"image_object mapping {self.mapping!r} is for an object at infinity; an image at "
+                             f"distance_mm {self.distance:g} is rectilinear")
         image = props.get("image", None)  # a tensor from Python (`mi.load_dict`); else the file
         if image is None:
             image = read_image(str(mi.file_resolver().resolve(str(props.get("filename")))))
@@ -93,7 +131,7 @@ class ImageObject(mi.Emitter):
         self.height, self.width = rgb.shape[:2]
         self.texels = table(rgb)
         self.scale = mi.Float(float(props.get("scale", 1.0)))
-        self.tan_pitch = math.tan(math.radians(self.fov_deg)) / (self.width / 2)
+        self.tan_pitch = half_width(self.mapping, self.fov_deg) / (self.width / 2)  # image-plane units per texel
         weights = np.maximum(rgb, 0.0).sum(axis=-1).ravel()
         weights = weights if weights.sum() > 0 else np.ones_like(weights)  # a black image: uniform
         self.texel_distribution = mi.DiscreteDistribution(table(weights))
@@ -122,7 +160,8 @@ class ImageObject(mi.Emitter):
         With `footprint` (widths in field tangent, at most two texels), the mean radiance over that
         box centred on the ray: the exact area-weighted texels of a piecewise-constant image."""
         if math.isinf(self.distance):
-            tx, ty = d.x / d.z, d.y / d.z
+            tx, ty, covered = plane_point(self.mapping, -d.x, -d.y, -d.z)
+            active = active & covered
         else:  # the point on the plane z = −distance, as a tangent seen from the axis at z = 0
             t = (-self.distance - o.z) / d.z
             tx, ty = (o.x + t * d.x) / self.distance, (o.y + t * d.y) / self.distance
@@ -130,7 +169,8 @@ class ImageObject(mi.Emitter):
         u = tx / self.tan_pitch + self.width / 2  # continuous texel coordinates
         v = self.height / 2 - ty / self.tan_pitch
         channel = self._channel(wavelengths[0] if mi.is_spectral else 550.0)
-        active = active & (d.z < 0)
+        if self.mapping == "rectilinear":
+            active = active & (d.z < 0)
         if footprint is None:
             return mi.Spectrum(self._texel(dr.floor(u), dr.floor(v), channel, active))
         hu, hv = 0.5 * footprint.x / self.tan_pitch, 0.5 * footprint.y / self.tan_pitch
@@ -154,9 +194,10 @@ class ImageObject(mi.Emitter):
     # ---- Mitsuba's Emitter interface (stock integrators), the object at infinity ----
 
     def _tangent(self, d: mi.Vector3f):
-        """Continuous texel coordinates (u, v) of direction d (toward the object), and whether d.z < 0."""
-        z = dr.select(d.z < 0, d.z, -1.0)
-        return d.x / z / self.tan_pitch + self.width / 2, self.height / 2 - d.y / z / self.tan_pitch, d.z < 0
+        """Continuous texel coordinates (u, v) of direction d (toward the object), and whether the
+        mapping covers it (rectilinear: d.z < 0)."""
+        a, b, covered = plane_point(self.mapping, -d.x, -d.y, -d.z)
+        return a / self.tan_pitch + self.width / 2, self.height / 2 - b / self.tan_pitch, covered
 
     def _lanes(self, u, v, wavelengths, active) -> mi.Spectrum:
         """Radiance of texel coordinates (u, v), each spectral lane in the band of its own wavelength."""
@@ -166,6 +207,12 @@ class ImageObject(mi.Emitter):
         for i in range(4):
             value[i] = self._texel(dr.floor(u), dr.floor(v), self._channel(wavelengths[i]), active)
         return value
+
+    def _rectilinear(self) -> None:
+        self._at_infinity()
+        if self.mapping != "rectilinear":
+            raise SolasError(f"image_object mapping {self.mapping!r}: emitter sampling for Mitsuba's integrators is "
+                             "rectilinear only; render this object with solas-mi's loop (render-image)")
 
     def _at_infinity(self) -> None:
         if not math.isinf(self.distance):
@@ -194,7 +241,7 @@ class ImageObject(mi.Emitter):
         return d, u, v, pmf / (self.tan_pitch ** 2) * q * dr.sqrt(q)
 
     def sample_direction(self, it, sample, active=True):
-        self._at_infinity()
+        self._rectilinear()
         d, u, v, pdf = self._sample_texel(sample, active)
         centre, radius = self.bounding_sphere()
         dist = 2.0 * dr.maximum(radius, dr.norm(it.p - centre))
@@ -206,7 +253,7 @@ class ImageObject(mi.Emitter):
         return ds, dr.select(active & (pdf > 0), value / pdf, 0.0)
 
     def pdf_direction(self, it, ds, active=True):
-        self._at_infinity()
+        self._rectilinear()
         u, v, front = self._tangent(ds.d)
         inside = front & (u >= 0) & (u < self.width) & (v >= 0) & (v < self.height) & active
         index = mi.UInt32(dr.clip(dr.floor(v), 0, self.height - 1)) * self.width + \
@@ -227,7 +274,7 @@ class ImageObject(mi.Emitter):
         return dr.select((wavelengths >= lo) & (wavelengths <= hi), 1.0 / (hi - lo), 0.0)
 
     def sample_ray(self, time, sample1, sample2, sample3, active=True):
-        self._at_infinity()
+        self._rectilinear()
         d, u, v, pdf = self._sample_texel(sample3, active)
         centre, radius = self.bounding_sphere()
         offset = mi.warp.square_to_uniform_disk_concentric(sample2)
@@ -252,7 +299,8 @@ class ImageObject(mi.Emitter):
 
     def to_string(self) -> str:
         where = "infinity" if math.isinf(self.distance) else f"{self.distance:g} mm"
-        return f"ImageObject[{self.width}x{self.height}, fov=+-{self.fov_deg:g} deg, at {where}, {self.boundary}]"
+        return (f"ImageObject[{self.width}x{self.height}, fov=+-{self.fov_deg:g} deg, {self.mapping}, at {where}, "
+                f"{self.boundary}]")
 
 
 def register() -> None:

@@ -13,7 +13,8 @@
 scale are built from them), and the film and sampler as children.
 
 `lens` goes through Mitsuba's file resolver first; the lens must be focused at infinity (a near
-object is `image_object`'s `distance_mm`). `fov_deg` sets the ideal camera's pinhole focal length.
+object is `image_object`'s `distance_mm`). `fov_deg` sets the ideal camera's pinhole focal length (a lens of polar fields, a fisheye, uses its
+paraxial focal length instead).
 `response` is "lines" (the lens's design wavelengths), "lines:λ,…", "srgb", "mono:λ" (λ in nm) or
 "table:FILE.csv".
 
@@ -58,6 +59,8 @@ import numpy as np
 from solas_mi.errors import SolasError
 from solas_mi.optics.camera import pinhole_focal_mm
 from solas_mi.optics.illumination import ideal_irradiance, image_scales
+from solas_mi.optics.lens import Lens
+from solas_mi.optics.paraxial import paraxial
 from solas_mi.plugins.pupil_sampling import PupilSampler
 from solas_mi.plugins.scene_files import load_lens, load_response
 from solas_mi.plugins.scene_probe import calling_render, integrator_name
@@ -88,7 +91,8 @@ class LensSensor(mi.Sensor):
         self.pupil = PupilSampler(self.lens, half_diag, sorted({float(self.response.lo_nm.min()),
                                                                 float(self.response.hi_nm.max()),
                                                                 *self.lens.wavelengths_nm}))
-        self.focal_mm = pinhole_focal_mm(self.lens, self.fov_deg)
+        # a lens of polar fields (a fisheye) has no pinhole image: its units are those of the paraxial camera
+        self.focal_mm = paraxial(self.lens).efl_mm if self.lens.polar_field else pinhole_focal_mm(self.lens, self.fov_deg)
         self.norm = 1.0 / ideal_irradiance(self.lens, self.focal_mm)
         heights, radial, tangential = image_scales(self.lens, half_diag, self.lens.primary_wavelength)
         self.scale_step = float(heights[1] - heights[0]) if heights[-1] > 0 else 1.0

@@ -110,6 +110,8 @@ def layout(grid: PSFGrid, width: int, height: int) -> Layout:
     a tensor product of x and y fields or do not cover the image."""
     if width < 1 or height < 1:
         raise SolasError(f"image size {width}x{height} must be at least 1x1")
+    if grid.meta.get("layout") == "sensor":
+        return sensor_layout(grid, width, height)
     camera = grid_camera(grid, width, height)
     f = np.asarray(grid.fields_deg, dtype=np.float64)
     if not (np.allclose(f[:, :, 0], f[:1, :, 0], rtol=0, atol=1e-9)
@@ -125,6 +127,26 @@ def layout(grid: PSFGrid, width: int, height: int) -> Layout:
     off = (grid.chief_ray_mm - camera.ideal_mm(f)[None]) * (1e3 / camera.pitch_um)
     offsets = np.stack([off[..., 0], -off[..., 1]], axis=-1)
     return Layout(camera, cols, rows, offsets, grid.pitch_um / camera.pitch_um)
+
+
+def sensor_layout(grid: PSFGrid, width: int, height: int) -> Layout:
+    """Layout of a grid whose nodes lie on the sensor (`psf.sensor`): the width×height input image is
+    the sensor (meta["sensor_mm"], square pixels), each node sits at its image point (meta["node_mm"])
+    and its offset is only what its chief ray at each wavelength lies away from that point."""
+    w_mm, h_mm = (float(v) for v in grid.meta["sensor_mm"])
+    pitch_mm = w_mm / width
+    if abs(h_mm / height / pitch_mm - 1.0) > 1e-3:
+        raise SolasError(f"image size {width}x{height} does not have the PSF grid's sensor aspect {w_mm:g} x {h_mm:g} mm "
+                         f"(pixels would not be square); use an image of {width}x{round(width * h_mm / w_mm)}")
+    camera = Camera(int(width), int(height), pitch_mm * 1e3, 0.0, 0.0, float(grid.meta["reference_wavelength_nm"]),
+                    "sensor")
+    nodes = np.asarray(grid.meta["node_mm"], dtype=np.float64)  # (ny, nx, 2)
+    cols = nodes[0, :, 0] / pitch_mm + width / 2 - 0.5
+    rows = height / 2 - 0.5 - nodes[:, 0, 1] / pitch_mm
+    for name, knots, extent in (("x", cols, width), ("y", rows, height)):
+        check_covers(knots, extent, name)
+    off = (grid.chief_ray_mm - nodes[None]) / pitch_mm
+    return Layout(camera, cols, rows, np.stack([off[..., 0], -off[..., 1]], axis=-1), grid.pitch_um / camera.pitch_um)
 
 
 def check_covers(knots: np.ndarray, extent: int, axis: str) -> None:

@@ -12,7 +12,7 @@ if TYPE_CHECKING:
 
 # input float64 + its sRGB decoding + padded planes and output (measured: 10 GB for 14000×12000×3)
 BYTES_PER_VALUE = 24
-GRID_META_KEYS = ("lens", "lens_hash", "method", "normalization", "field_range_deg", "field_sampling")
+GRID_META_KEYS = ("lens", "lens_hash", "method", "normalization", "field_range_deg", "field_sampling", "layout", "sensor_mm")
 
 
 def degrade_file(image_path: str | Path, grid: "PSFGrid", grid_path: str | Path, output: Path, png: Path,

@@ -27,6 +27,8 @@ from .lens import Lens
 DEFAULT_SENSOR = (960, 1280)  # rows, columns
 # What lies outside the input image, for both engines: the border repeated, mirrored, or black.
 BOUNDARIES = ("edge", "reflect", "zero")
+# How an input image maps to directions (plugins/image_object.py); rectilinear is the ideal pinhole image above.
+MAPPINGS = ("rectilinear", "equidistant", "equisolid", "equirectangular")
 
 
 @dataclass(frozen=True)
@@ -39,6 +41,9 @@ class Camera:
     focal_mm: float
     fov_deg: float  # half the horizontal field the default input image spans
     wavelength_nm: float  # reference wavelength of focal_mm
+    # "rectilinear": the input image is the ideal pinhole image above; "sensor": it is already the
+    # sensor image in the lens's own projection (PSF grids laid out on the sensor; focal_mm, fov_deg unused)
+    projection: str = "rectilinear"
 
     @property
     def pitch_mm(self) -> float:
@@ -67,6 +72,11 @@ class Camera:
         return math.tan(math.radians(self.fov_deg if fov_deg is None else fov_deg)) / (input_width / 2)
 
     def meta(self) -> dict:
+        if self.projection == "sensor":
+            return {"sensor": [self.width, self.height], "pitch_um": self.pitch_um,
+                    "reference_wavelength_nm": self.wavelength_nm,
+                    "projection": "sensor: the input image is the sensor image in the lens's own projection; PSF grid "
+                                  "nodes sit at their chief rays' image points"}
         return {"sensor": [self.width, self.height], "pitch_um": self.pitch_um, "pinhole_focal_mm": self.focal_mm,
                 "fov_deg": self.fov_deg, "reference_wavelength_nm": self.wavelength_nm,
                 "projection": "rectilinear: ideal point = pinhole_focal_mm * (tan x, tan y); image width spans "

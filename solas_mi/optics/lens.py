@@ -20,6 +20,8 @@ from ..resources import resource_dir
 from . import glass as glass_mod
 
 LENS_DIR = "lenses"
+# Lenses whose field reaches this (degrees) take polar fields: see `Lens.polar_field`
+POLAR_FIELD_DEG = 89.0
 # What a lens file may hold (anything else is a mistake worth naming, e.g. a surface type we do not model)
 KEYS = {
     "lens": ("name", "description", "wavelengths_nm", "field_deg", "surface", "object", "image"),
@@ -56,12 +58,17 @@ def _table(spec: dict, key: str, where: str) -> dict:
     return value
 
 
-def check_field(field_deg) -> tuple[float, float]:
-    """A field angle (x, y) in degrees as two floats, each finite and within ±89°."""
+def check_field(field_deg, polar: bool = False) -> tuple[float, float]:
+    """A field angle (x, y) in degrees as two floats, each finite and within ±89°; a polar field
+    (`Lens.polar_field`) instead has a polar angle hypot(x, y) below 180°."""
     try:
         fx, fy = (float(v) for v in field_deg)
     except (TypeError, ValueError):
         raise SolasError(f"field {field_deg!r} must be two angles (x, y) in degrees") from None
+    if polar and math.isfinite(fx) and math.isfinite(fy):
+        if math.hypot(fx, fy) >= 180:
+            raise SolasError(f"field ({fx:g}, {fy:g}) deg: the polar angle hypot(x, y) must be below 180 deg")
+        return fx, fy
     if not (math.isfinite(fx) and math.isfinite(fy)) or abs(fx) >= 89 or abs(fy) >= 89:
         raise SolasError(f"field ({fx:g}, {fy:g}) deg: each angle must be finite and below 89 deg in magnitude")
     return fx, fy
@@ -242,6 +249,14 @@ class Lens:
     def image_z(self) -> float:
         """z of the image plane (mm)."""
         return float(self.vertex_z[-1] + self.surfaces[-1].thickness)
+
+    @property
+    def polar_field(self) -> bool:
+        """Whether fields (x, y) in degrees are polar: the incoming direction has polar angle
+        θ = hypot(x, y) from the axis and azimuth atan2(y, x), which reaches 90° and beyond. True for
+        lenses whose `field_deg` is at least POLAR_FIELD_DEG; the others take field tangents
+        (direction ∝ (tan x, tan y, 1)). On the x and y axes both forms name the same direction."""
+        return self.field_deg >= POLAR_FIELD_DEG
 
     @property
     def at_infinity(self) -> bool:

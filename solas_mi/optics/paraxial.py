@@ -130,6 +130,9 @@ def _paraxial(lens: Lens, wavelength_nm: float, fields_deg: list[float] | None =
     fields = list(fields_deg) if fields_deg is not None else [0.0, lens.field_deg]
     heights = []
     for f in fields:
+        if abs(f) >= 90.0:  # a polar field at or beyond 90°: its paraxial image lies at infinity
+            heights.append(math.copysign(math.inf, f))
+            continue
         slope = math.tan(math.radians(f))
         if lens.at_infinity:
             y, u = ynu_trace(lens, wavelength_nm, slope * (z[0] - ep_z), slope)

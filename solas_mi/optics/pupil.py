@@ -22,7 +22,9 @@ dr = T.dr
 RIM_RAYS = 32
 _HALVINGS = 6  # a Newton step that loses its ray is halved up to this many times
 RIM_BISECTIONS = 30  # a rim ray moved inside the stop's rim: its radius to 1e-9 of the rim's
+RIM_STEPS = 8  # lenses of polar fields: steps of the rim aim from the stop centre out to the rim
 _STEP = 1e-5  # mm, finite-difference step in entrance coordinates
+POLAR_STEP_DEG = 2.0  # largest step of the polar angle when continuing a chief-ray aim outward
 _TOL = 1e-13  # convergence of aimed quantities (mm at the stop, direction cosines on the sphere)
 
 
@@ -34,8 +36,13 @@ class Bundle:
         self.n_fields = len(field_deg)
         self.per_field = per_field
         self.index = dr.arange(T.UInt32, self.n_fields * per_field) // per_field
-        tan = T.field_tangents(field_deg)
-        self.tan_x, self.tan_y = T.gather(tan[:, 0], self.index), T.gather(tan[:, 1], self.index)
+        if lens.polar_field:  # direction-based fields, up to and beyond 90°
+            d = T.polar_directions(field_deg)
+            self.direction = tuple(T.gather(d[:, i], self.index) for i in range(3))
+        else:
+            self.direction = None
+            tan = T.field_tangents(field_deg)
+            self.tan_x, self.tan_y = T.gather(tan[:, 0], self.index), T.gather(tan[:, 1], self.index)
         self.wavelength_um = T.gather(np.asarray(wavelength_nm) / 1000.0, self.index)
         pts = T.object_points(lens, field_deg)
         self.object_point = None if pts is None else (T.gather(pts[:, 0], self.index), T.gather(pts[:, 1], self.index))
@@ -48,6 +55,8 @@ class Bundle:
         return T.gather(values, self.index)
 
     def trace(self, ex: T.F, ey: T.F) -> T.Traced:
+        if self.direction is not None:
+            return T.trace(self.lens, T.launch_direction(self.lens, *self.direction, ex, ey), self.wavelength_um)
         rays = T.launch(self.lens, self.tan_x, self.tan_y, ex, ey, self.object_point)
         return T.trace(self.lens, rays, self.wavelength_um)
 
@@ -107,6 +116,20 @@ def _stop_target(tr: T.Traced):
     return tr.stop_x, tr.stop_y, tr.ok
 
 
+def _continued_aim(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> np.ndarray:
+    """Entrance coordinates (n, 2) of the real chief ray for polar fields, found by continuation: the
+    polar angle grows from 0 in steps of at most POLAR_STEP_DEG, each aim starting from the last
+    solution, so the aim follows the entrance pupil as it moves and tilts (no paraxial guess)."""
+    steps = max(1, math.ceil(float(np.hypot(field_deg[:, 0], field_deg[:, 1]).max()) / POLAR_STEP_DEG))
+    e = np.zeros((len(field_deg), 2))
+    zero = dr.zeros(T.F, len(field_deg))
+    for k in range(1, steps + 1):
+        b = Bundle(lens, field_deg * (k / steps), wavelength_nm, 1)
+        ex, ey, _, _ = aim(b, _stop_target, T.F(e[:, 0]), T.F(e[:, 1]), zero, zero)
+        e = np.stack(T.to_numpy(ex, ey), axis=-1)
+    return e
+
+
 def _paraxial_aim(lens: Lens, field_deg: np.ndarray) -> np.ndarray:
     """Entrance coordinates (n, 2) of the paraxial chief ray (through the entrance-pupil centre)."""
     ep_z = paraxial(lens).entrance_pupil_z_mm
@@ -138,7 +161,7 @@ def chief_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> 
     field_deg = np.atleast_2d(np.asarray(field_deg, dtype=np.float64))
     wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(field_deg),))
     b = Bundle(lens, field_deg, wavelength_nm, 1)
-    e0 = _paraxial_aim(lens, field_deg)
+    e0 = _continued_aim(lens, field_deg, wavelength_nm) if lens.polar_field else _paraxial_aim(lens, field_deg)
     zero = dr.zeros(T.F, b.n_fields)
     ex, ey, tr, conv = aim(b, _stop_target, T.F(e0[:, 0]), T.F(e0[:, 1]), zero, zero)
     px, py, _ = T.to_plane(tr, lens.image_z)
@@ -175,8 +198,12 @@ def stop_rim(rim: Bundle, chief: ChiefRays, accept=None) -> tuple[np.ndarray, np
 
     def at(scale: np.ndarray):
         gx, gy = T.F(r_stop * scale * np.cos(phi)), T.F(r_stop * scale * np.sin(phi))
-        ex, ey, tr, ok = aim(rim, _stop_target, rim.per_ray(chief.entrance[:, 0]) + gx * ratio,
-                             rim.per_ray(chief.entrance[:, 1]) + gy * ratio, gx, gy)
+        ex, ey = rim.per_ray(chief.entrance[:, 0]) + gx * ratio, rim.per_ray(chief.entrance[:, 1]) + gy * ratio
+        if lens.polar_field:  # wide fields: the pupil is squeezed and tilted; grow the aim out from the chief ray
+            ex, ey = rim.per_ray(chief.entrance[:, 0]), rim.per_ray(chief.entrance[:, 1])
+            for k in range(1, RIM_STEPS):
+                ex, ey, _, _ = aim(rim, _stop_target, ex, ey, gx * (k / RIM_STEPS), gy * (k / RIM_STEPS))
+        ex, ey, tr, ok = aim(rim, _stop_target, ex, ey, gx, gy)
         return ex, ey, tr, T.to_numpy(ok & accept(tr) if accept is not None else ok)[0]
 
     ex, ey, tr, ok = at(np.ones(len(phi)))

@@ -131,6 +131,51 @@ def launch(lens: Lens, tan_x: F, tan_y: F, ex: F, ey: F, object_point: tuple[F, 
     return Rays(x, y, z0 + 0.0 * ex, sx * inv, sy * inv, inv, opl)
 
 
+def _sphere_from_launch(c, x, y, wz, dx, dy, dz):
+    """Distance t (mm) along the ray from (x, y, wz), relative to a sphere's vertex, to the sphere
+    c|p|² − 2 p_z = 0 near its vertex, for rays of any direction (fields at or beyond 90° meet surface
+    1 travelling sideways or backwards, dz ≤ 0, so they cannot be moved to the vertex plane first).
+    Returns (wz, t, hit)."""
+    b = dz - c * (x * dx + y * dy + wz * dz)
+    cc = c * (x * x + y * y + wz * wz) - 2.0 * wz
+    disc = b * b - c * cc
+    return wz, cc / (b + dr.sqrt(dr.maximum(disc, 0.0))), (disc >= 0) & (b > 0)
+
+
+def polar_directions(field_deg: np.ndarray) -> np.ndarray:
+    """(…, 2) polar fields in degrees (`Lens.polar_field`: polar angle θ = hypot(x, y), azimuth
+    atan2(y, x)) → (…, 3) unit directions of the incoming collimated rays."""
+    f = np.radians(np.asarray(field_deg, dtype=np.float64))
+    theta, phi = np.hypot(f[..., 0], f[..., 1]), np.arctan2(f[..., 1], f[..., 0])
+    return np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=-1)
+
+
+def launch_direction(lens: Lens, dx: F, dy: F, dz: F, ex: F, ey: F) -> Rays:
+    """Collimated rays of unit direction (dx, dy, dz), any polar angle up to 180° (object at infinity),
+    and entrance coordinates (ex, ey), mm: the ray starts on the plane perpendicular to d through
+    −L·d (L = −launch_plane_z, outside every surface), at ex·e1 + ey·e2. With θ, φ the polar angles
+    of d, e1 = cos φ e_θ − sin φ e_φ and e2 = sin φ e_θ + cos φ e_φ, well defined at every θ (e1 = x,
+    e2 = y on axis; the same basis as `beam_basis` on the y axis). OPL starts at 0 there."""
+    ftype = _types(ex)[0]
+    reach = _opaque(-launch_plane_z(lens), ftype)
+    s = dr.sqrt(dx * dx + dy * dy)
+    cos_t, sin_t = dz, s
+    on_axis = s == 0.0
+    cos_p = dr.select(on_axis, 1.0, dx / dr.select(on_axis, 1.0, s))
+    sin_p = dr.select(on_axis, 0.0, dy / dr.select(on_axis, 1.0, s))
+    # e_θ = (cos θ cos φ, cos θ sin φ, −sin θ), e_φ = (−sin φ, cos φ, 0)
+    e1x = cos_p * cos_p * cos_t + sin_p * sin_p
+    e1y = cos_p * sin_p * (cos_t - 1.0)
+    e1z = -cos_p * sin_t
+    e2x = e1y
+    e2y = sin_p * sin_p * cos_t + cos_p * cos_p
+    e2z = -sin_p * sin_t
+    x = dr.fma(ex, e1x, ey * e2x) - reach * dx
+    y = dr.fma(ex, e1y, ey * e2y) - reach * dy
+    z = dr.fma(ex, e1z, ey * e2z) - reach * dz
+    return Rays(x, y, z, dx + 0.0 * ex, dy + 0.0 * ex, dz + 0.0 * ex, dr.zeros(ftype, dr.width(x)))
+
+
 def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False) -> Traced:
     """Trace `rays` (in object space, before surface 1) through every surface of `lens`, in the array
     type of the rays (see the module docstring); with `fresnel`, also the product of the unpolarised
@@ -147,21 +192,26 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False) -> Tr
     for k, (s, zv) in enumerate(zip(lens.surfaces, lens.vertex_z)):
         # move to the vertex plane first: the sphere equation is then solved from nearby, free of the
         # cancellation that a distant start point (a finite object far away) would bring into B² − cC
-        t0 = (_opaque(zv, ftype) - z) / dz
-        ok &= dz > 0
-        x, y = dr.fma(t0, dx, x), dr.fma(t0, dy, y)
-        lz = dr.zeros(ftype, dr.width(x))
-        opl = dr.fma(n_before, t0, opl)
-        if s.curvature == 0.0:
-            t = dr.zeros(ftype, dr.width(x))
-        else:
+        if k == 0 and lens.polar_field and s.curvature != 0.0:
             c = _opaque(s.curvature, ftype)
-            b = dz - c * (x * dx + y * dy)
-            cc = c * (x * x + y * y)
-            disc = b * b - c * cc
-            ok &= (disc >= 0) & (b > 0)
-            # cancellation-free root nearest the vertex: t = C / (B + sqrt(B² − cC))
-            t = cc / (b + dr.sqrt(dr.maximum(disc, 0.0)))
+            lz, t, hit = _sphere_from_launch(c, x, y, z - _opaque(zv, ftype), dx, dy, dz)
+            ok &= hit
+        else:
+            t0 = (_opaque(zv, ftype) - z) / dz
+            ok &= dz > 0
+            x, y = dr.fma(t0, dx, x), dr.fma(t0, dy, y)
+            lz = dr.zeros(ftype, dr.width(x))
+            opl = dr.fma(n_before, t0, opl)
+            if s.curvature == 0.0:
+                t = dr.zeros(ftype, dr.width(x))
+            else:
+                c = _opaque(s.curvature, ftype)
+                b = dz - c * (x * dx + y * dy)
+                cc = c * (x * x + y * y)
+                disc = b * b - c * cc
+                ok &= (disc >= 0) & (b > 0)
+                # cancellation-free root nearest the vertex: t = C / (B + sqrt(B² − cC))
+                t = cc / (b + dr.sqrt(dr.maximum(disc, 0.0)))
         x, y, lz = dr.fma(t, dx, x), dr.fma(t, dy, y), dr.fma(t, dz, lz)
         opl = dr.fma(n_before, t, opl)
         r2 = x * x + y * y
@@ -242,5 +292,5 @@ def to_numpy(*values) -> tuple[np.ndarray, ...]:
     return tuple(np.asarray(v) for v in values)
 
 
-__all__ = ["Rays", "Traced", "launch", "trace", "to_plane", "to_sphere", "field_tangents", "object_points",
+__all__ = ["Rays", "Traced", "launch", "launch_direction", "polar_directions", "trace", "to_plane", "to_sphere", "field_tangents", "object_points",
            "gather", "to_numpy", "refractive_index", "launch_plane_z"]

@@ -85,10 +85,24 @@ def run_psf_grid(args) -> int:
                  field_range_deg=None if rng is None else (rng[0], rng[-1]), pitch_um=args.pitch_um,
                  size=args.size, method=args.method, normalization=args.normalize,
                  pupil_samples=args.pupil_samples, rays=args.rays, field_sampling=args.field_sampling,
-                 progress=progress, auto_window=args.auto_window)
+                 progress=progress, auto_window=args.auto_window, layout=args.layout,
+                 sensor_mm=parse_sensor_mm(args.sensor_mm))
     print(file=sys.stderr)
     _finish("psf-grid", g, data_file, png, f" ({g.meta['seconds']:.1f} s)")
     return 0
+
+
+def parse_sensor_mm(text: str | None) -> tuple[float, float] | None:
+    """--sensor-mm "23.6x15.8" (mm) → (width, height); None when absent."""
+    if text is None:
+        return None
+    parts = str(text).lower().split("x")
+    try:
+        if len(parts) != 2:
+            raise ValueError
+        return float(parts[0]), float(parts[1])
+    except ValueError:
+        raise SolasError(f"--sensor-mm {text!r} must look like 23.6x15.8 (width x height in mm)") from None
 
 
 def add_sampling_options(p, method_flag: str = "--method") -> None:
@@ -106,12 +120,15 @@ def add_sampling_options(p, method_flag: str = "--method") -> None:
 
 def add_grid_options(p, method_flag: str = "--method") -> None:
     """The options that define a PSF grid (`psf-grid`, and batch jobs that compute one)."""
-    from .grid import FIELD_SAMPLINGS
+    from .grid import FIELD_SAMPLINGS, LAYOUTS
 
     p.add_argument("--grid", default="8x8", help="columns x rows of field nodes")
     p.add_argument("--wavelengths", help="nm, comma-separated (default: the lens file's)")
     p.add_argument("--field-range-deg", help="half range X[,Y] in degrees (default: the lens file's field)")
     p.add_argument("--field-sampling", choices=FIELD_SAMPLINGS, default=FIELD_SAMPLINGS[0])
+    p.add_argument("--layout", choices=LAYOUTS, default=LAYOUTS[0],
+                   help="field: nodes on field angles; sensor: nodes on sensor positions (wide and fisheye lenses)")
+    p.add_argument("--sensor-mm", help="sensor WxH in mm for --layout sensor (default: the square in the image circle)")
     add_sampling_options(p, method_flag)
 
 

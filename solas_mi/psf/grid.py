@@ -25,8 +25,10 @@ from ..optics.lens import Lens, check_field
 from ..options import parse_wxh
 from . import base as S
 from .methods import DEFAULT_METHOD, METHODS, check_method, compute
+from .sensor import check_sensor_mm, default_sensor_mm, fields_for_points, node_mm
 
 FIELD_SAMPLINGS = ("centers", "edges")
+LAYOUTS = ("field", "sensor")  # nodes on field angles (tangents), or on sensor positions (`psf.sensor`)
 MOSAIC_PX = 2048  # the preview mosaic is block-averaged to fit this (a 32×32 grid of 160 px: 64 px a PSF)
 _FIELDS_PER_BATCH = 64
 
@@ -139,11 +141,15 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
              size: int = S.DEFAULT_SIZE,
              method: str = DEFAULT_METHOD, normalization: str = "sum", pupil_samples: int = S.DEFAULT_PUPIL_SAMPLES,
              rays: int = S.DEFAULT_GEOMETRIC_RAYS, field_sampling: str = "centers", progress=None,
-             auto_window: bool = False) -> PSFGrid:
+             auto_window: bool = False, layout: str = "field", sensor_mm: tuple[float, float] | None = None) -> PSFGrid:
     """PSFs on a field grid ("columns x rows" text or a (rows, columns) tuple) spanning
     ±field_range_deg (x, y) (default: the lens's field in both). meta["energy_in_window"] holds each
     PSF's fraction of its transmitted light inside the window and meta["warnings"] what looked
-    doubtful; `auto_window` doubles `size` until every window holds `base.WINDOW_ENERGY_LIMIT`."""
+    doubtful; `auto_window` doubles `size` until every window holds `base.WINDOW_ENERGY_LIMIT`.
+
+    layout "sensor" (`psf.sensor`) puts the nodes at the cell centres of a sensor_mm = (width, height)
+    mm sensor instead (default: the square in the lens's image circle), each with the field whose chief
+    ray lands there; meta["node_mm"] holds the nodes' image points and field_range_deg is unused."""
     ny, nx = parse_wxh(grid, "grid")
     S.check_grid(pitch_um, size)
     sampling = check_method(method, pupil_samples, rays)
@@ -153,14 +159,22 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
         raise SolasError("at least one wavelength is needed")
     for w in wl:
         lens.check_wavelength(w)
-    if field_range_deg is None:
-        field_range_deg = lens.field_deg
-    hx, hy = check_field((field_range_deg, field_range_deg) if np.isscalar(field_range_deg) else field_range_deg)
-    if hx < 0 or hy < 0:
-        raise SolasError(f"field range ({hx:g}, {hy:g}) deg must be non-negative (half ranges)")
-    fx = field_nodes(nx, hx, field_sampling)
-    fy = field_nodes(ny, hy, field_sampling)[::-1]  # row 0 = top = largest y
-    fields = np.stack(np.meshgrid(fx, fy), axis=-1)  # (ny, nx, 2)
+    if layout == "sensor":
+        sensor_mm = default_sensor_mm(lens) if sensor_mm is None else check_sensor_mm(sensor_mm)
+        nodes = node_mm(sensor_mm, ny, nx)
+        fields = fields_for_points(lens, nodes, lens.primary_wavelength)
+        hx = hy = 0.0
+    elif layout == "field":
+        if field_range_deg is None:
+            field_range_deg = lens.field_deg
+        hx, hy = check_field((field_range_deg, field_range_deg) if np.isscalar(field_range_deg) else field_range_deg)
+        if hx < 0 or hy < 0:
+            raise SolasError(f"field range ({hx:g}, {hy:g}) deg must be non-negative (half ranges)")
+        fx = field_nodes(nx, hx, field_sampling)
+        fy = field_nodes(ny, hy, field_sampling)[::-1]  # row 0 = top = largest y
+        fields = np.stack(np.meshgrid(fx, fy), axis=-1)  # (ny, nx, 2)
+    else:
+        raise SolasError(f"grid layout {layout!r} must be one of {', '.join(LAYOUTS)}")
     flat = fields.reshape(-1, 2)
     n = len(flat)
     canon, which, swap, sign = symmetry_classes(flat)
@@ -200,8 +214,10 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
                 progress(k * len(canon) + b, len(wl) * len(canon))
     lit = transmission > 0
     meta = S.describe(lens, method, normalization, {METHODS[method].sampling: sampling}, size)
+    meta.update({"layout": layout, "reference_wavelength_nm": lens.primary_wavelength, "sensor_mm": list(sensor_mm),
+                 "node_mm": nodes.tolist()}
+                if layout == "sensor" else {"layout": layout, "field_sampling": field_sampling, "field_range_deg": [hx, hy]})
     meta.update({
-        "field_sampling": field_sampling, "field_range_deg": [hx, hy],
         "grid_orientation": "grid row 0 = largest y field, column 0 = smallest x field",
         "transmission": transmission.reshape(len(wl), ny, nx).tolist(),
         "energy_in_window": energy.reshape(len(wl), ny, nx).tolist(),
@@ -212,10 +228,13 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
                                                                 if not lit.all() else []),
         "seconds": time.perf_counter() - start,
     })
+    if layout == "sensor":
+        meta["grid_orientation"] = "grid row 0 = top (largest y) of the sensor, column 0 = left"
     if hx > 0:  # the ideal image an input spanning ±hx horizontally stands for (`optics.camera`)
         meta.update(pinhole_focal_mm=pinhole_focal_mm(lens, hx), reference_wavelength_nm=lens.primary_wavelength)
     if auto_window and energy.min() < S.WINDOW_ENERGY_LIMIT and 2 * size <= S.MAX_SIZE:
-        return psf_grid(lens, (ny, nx), wl, (hx, hy), pitch_um, 2 * size, method, normalization, pupil_samples, rays,
-                        field_sampling, progress, auto_window=True)
+        return psf_grid(lens, (ny, nx), wl, field_range_deg if layout == "sensor" else (hx, hy), pitch_um, 2 * size,
+                        method, normalization, pupil_samples, rays, field_sampling, progress, auto_window=True,
+                        layout=layout, sensor_mm=sensor_mm)
     return PSFGrid(data, fields, chief.reshape(len(wl), ny, nx, 2), wl,
                    float(pitch_um), meta)

@@ -94,7 +94,7 @@ def psf(lens, field_deg, wavelength_nm, *, weights=None, pitch_um: float = DEFAU
     (polychromatic: the power-weighted sum of the monochromatic PSFs). meta["energy_in_grid"] is the
     fraction of the transmitted light inside the window and meta["warnings"] what looked doubtful;
     `auto_window` doubles `size` until the window holds `base.WINDOW_ENERGY_LIMIT` of the light."""
-    field = check_field(field_deg)
+    field = check_field(field_deg, lens.polar_field)
     check_grid(pitch_um, size)
     sampling = check_method(method, pupil_samples, rays)
     check_normalization(normalization)

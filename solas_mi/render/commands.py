@@ -156,7 +156,7 @@ def _render_image(args) -> int:
     lens = Lens.load(args.lens)
     result = render_image(lens, args.image, parse_wxh(args.sensor, "--sensor"), args.pitch_um, args.spp,
                           args.response, args.fov_deg, args.boundary, args.fresnel, args.rings, args.variant,
-                          args.seed, progress=_progress)
+                          args.seed, progress=_progress, mapping=args.mapping)
     result.meta["image"] = str(args.image)
     return _write(result, data_file, png)
 
@@ -221,5 +221,10 @@ def register(sub) -> None:
     image.add_argument("lens", help="shipped lens name (solas-doublet) or a .toml lens file")
     image.add_argument("image", help="input image (PNG/JPEG: sRGB; EXR: linear)")
     _add_camera_options(image)
+    from ..optics.camera import MAPPINGS
+
+    image.add_argument("--mapping", choices=MAPPINGS, default=MAPPINGS[0],
+                       help="projection of the input image at infinity: rectilinear, or for wide and fisheye lenses "
+                            "equidistant, equisolid, equirectangular (an environment image spanning +-fov-deg)")
     _add_render_options(image, 64)
     image.set_defaults(run=_render_image)

@@ -8,23 +8,45 @@ from pathlib import Path
 import numpy as np
 
 from ..imageio import image_channels, read_image, write_exr
-from ..optics.camera import camera_for
+from ..errors import SolasError
+from ..optics.camera import MAPPINGS, Camera, camera_for
+from ..optics.paraxial import paraxial
 from . import response as responses
 from .loop import Render, render
 from .mitsuba import load_scene
 from .scene import DEFAULT_RINGS, write_scene
 
 
+def fisheye_camera(lens, sensor: tuple[int, int], fov_deg: float | None, pitch_um: float | None) -> Camera:
+    """The sensor of a lens of polar fields: (rows, columns) pixels of `pitch_um` µm (default: the
+    width spans the lens's [image] diameter); the input spans ±fov_deg (default: the lens's field)."""
+    rows, cols = sensor
+    if pitch_um is None:
+        if lens.image_diameter <= 0:
+            raise SolasError(f"lens {lens.name} has no [image] diameter: give the pixel pitch (um)")
+        pitch_um = 1e3 * lens.image_diameter / cols
+    fov = lens.field_deg if fov_deg is None else float(fov_deg)
+    if not (0.0 < pitch_um < 1e4) or not (0.0 < fov < 180.0):
+        raise SolasError(f"pixel pitch {pitch_um!r} um must be in (0, 1e4) and fov {fov!r} deg in (0, 180)")
+    return Camera(cols, rows, float(pitch_um), paraxial(lens).efl_mm, fov, lens.primary_wavelength, "sensor")
+
+
 def render_image(lens, image: str | np.ndarray, sensor: tuple[int, int] = (960, 1280), pitch_um: float | None = None,
                  spp: int = 64, response: str = "srgb", fov_deg: float | None = None, boundary: str = "edge",
                  fresnel: str = "transmit", rings: int | None = None, variant: str | None = None, seed: int = 0,
-                 progress=None) -> Render:
+                 progress=None, mapping: str = "rectilinear") -> Render:
     """Render an input image (a path, or a linear H×W[×3] array) through `lens` onto a sensor of
     (rows, columns) pixels of `pitch_um` µm, `spp` samples per pixel. The image's width spans
     ±`fov_deg` degrees (default: ±lens.field_deg) and the sensor's width the same field unless
     `pitch_um` is given (`solas_mi.optics.camera`). `response`, `boundary` and `fresnel` are the
-    plugins' parameters; `rings` per cap mesh (default `scene.DEFAULT_RINGS`)."""
-    camera = camera_for(lens, sensor, fov_deg, pitch_um)
+    plugins' parameters; `rings` per cap mesh (default `scene.DEFAULT_RINGS`). `mapping` is the input
+    image's projection (plugins/image_object.py): for a lens of polar fields (a fisheye) the image is
+    an environment image spanning ±`fov_deg` in that mapping, the sensor is just pixels of `pitch_um`
+    (default: the sensor's width spans the lens's image circle) and the distortion is the lens's own."""
+    camera = fisheye_camera(lens, sensor, fov_deg, pitch_um) if lens.polar_field else camera_for(lens, sensor, fov_deg,
+                                                                                                  pitch_um)
+    if mapping not in MAPPINGS:
+        raise SolasError(f"mapping {mapping!r} must be one of {', '.join(MAPPINGS)}")
     # the user's mistakes, named here rather than inside the scene's plugins
     responses.check_lens(responses.parse(response, lens.wavelengths_nm), lens)
     if not isinstance(image, np.ndarray):
@@ -35,10 +57,11 @@ def render_image(lens, image: str | np.ndarray, sensor: tuple[int, int] = (960, 
             write_exr(path, image_channels(np.asarray(image, dtype=np.float32)))
             image = path
         xml = write_scene(lens, tmp, str(Path(image).resolve()), camera, rings or DEFAULT_RINGS, spp, response,
-                          boundary, fresnel)
+                          boundary, fresnel, mapping=mapping)
         scene = load_scene(xml, variant)
         result = render(scene, spp, seed=seed, progress=progress)
     result.meta.update(camera.meta())
     result.meta.update({"lens": lens.name, "lens_hash": lens.hash, "boundary": boundary, "fresnel": fresnel,
+                        "mapping": mapping,
                         "cap_rings": rings or DEFAULT_RINGS})
     return result

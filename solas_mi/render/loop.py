@@ -150,7 +150,7 @@ def _pass(mi, dr, scene, sensor, emitter, spp: int, first: int, total: int, base
         share = mi.Float(1.0)
     film = mi.Point2f(mi.Float(pixel % width), mi.Float(pixel // width))
     # a pixel that covers at most two texels is integrated exactly by the object's footprint filter
-    filtered = sensor.max_footprint <= 2.0 * emitter.tan_pitch
+    filtered = sensor.max_footprint <= 2.0 * emitter.tan_pitch and emitter.mapping == "rectilinear"
     jitter = mi.Point2f(0.5) if filtered else cmj_2d(s, total, hash_seed(pixel, 1, base), sampler.next_2d())
     pos = (film + jitter) / mi.ScalarPoint2f(width, height)
     footprint = sensor.footprint(sensor.film_point(pos)) if filtered else None
@@ -187,7 +187,7 @@ def _pass_scalar(mi, dr, scene, sensor, emitter, spp: int, first: int, total: in
     out = np.zeros(width * height * nc)
     lines = sensor.discrete_lines
     shares = _line_shares(total, lines) if lines else []
-    filtered = sensor.max_footprint <= 2.0 * emitter.tan_pitch
+    filtered = sensor.max_footprint <= 2.0 * emitter.tan_pitch and emitter.mapping == "rectilinear"
     ctx = mi.BSDFContext()
     for pixel in range(width * height):
         for k in range(spp):

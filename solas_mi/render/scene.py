@@ -143,7 +143,10 @@ def check_gaps(lens: Lens) -> None:
 
 def lens_parts(lens: Lens, rings: int = DEFAULT_RINGS) -> list[Part]:
     """Caps for refracting surfaces, absorbing annuli around every clear aperture (and the stop), and
-    a barrel closing the sides from the first aperture to the image plane."""
+    a barrel closing the sides from the first aperture to the image plane. A lens of polar fields (a
+    fisheye) takes light from 90° and beyond, which reaches its front element from the side and from
+    behind its vertex: that element stands proud of the mount, with no annulus and the barrel starting
+    at the second surface's rim."""
     check_rings(rings)
     check_gaps(lens)
     parts = []
@@ -156,9 +159,11 @@ def lens_parts(lens: Lens, rings: int = DEFAULT_RINGS) -> list[Part]:
         rim_z.append(zr)
         if s.glass != before:
             parts.append(Part(f"surface{k}", cap_mesh(s.radius, zv, s.semi_diameter, rings), before_name, s.material))
-        parts.append(Part(f"aperture{k}", annulus_mesh(zr, s.semi_diameter, outer)))
+        if not (k == 1 and lens.polar_field):
+            parts.append(Part(f"aperture{k}", annulus_mesh(zr, s.semi_diameter, outer)))
         before, before_name = s.glass, s.material
-    parts.append(Part("barrel", tube_mesh(outer, min(rim_z) - 1.0, lens.image_z)))
+    start = rim_z[1] if lens.polar_field and len(rim_z) > 1 else min(rim_z) - 1.0
+    parts.append(Part("barrel", tube_mesh(outer, start, lens.image_z)))
     return parts
 
 
@@ -171,7 +176,7 @@ def path_depth(lens: Lens, ghosts: bool) -> int:
 
 
 def scene_xml(lens_file: str, parts: list[Part], camera: Camera, image: str, spp: int, response: str,
-              boundary: str, fresnel: str, max_depth: int) -> str:
+              boundary: str, fresnel: str, max_depth: int, mapping: str = "rectilinear") -> str:
     """Mitsuba 3 scene XML; meshes are referenced as meshes/<part>.ply beside it. Every number a user
     may want to change is a <default> at the top. The integrator is Mitsuba's `path` with `max_depth`
     interactions (`mi.render`); solas-mi's loop reads only the sensor, the object, the shapes and the
@@ -201,6 +206,7 @@ def scene_xml(lens_file: str, parts: list[Part], camera: Camera, image: str, spp
     <default name="image" value="{image}"/>
     <default name="fov_deg" value="{camera.fov_deg!r}"/>
     <default name="boundary" value="{boundary}"/>
+    <default name="mapping" value="{mapping}"/>
     <default name="fresnel" value="{fresnel}"/>
     <default name="max_depth" value="{max_depth}"/>
 
@@ -227,6 +233,7 @@ def scene_xml(lens_file: str, parts: list[Part], camera: Camera, image: str, spp
         <string name="filename" value="$image"/>
         <float name="fov_deg" value="$fov_deg"/>
         <string name="boundary" value="$boundary"/>
+        <string name="mapping" value="$mapping"/>
     </emitter>
 
     <bsdf type="diffuse" id="absorber">
@@ -240,10 +247,11 @@ def scene_xml(lens_file: str, parts: list[Part], camera: Camera, image: str, spp
 
 def write_scene(lens: Lens, out_dir: str | os.PathLike, image: str, camera: Camera | None = None,
                 rings: int = DEFAULT_RINGS, spp: int = 64, response: str = "srgb", boundary: str = "edge",
-                fresnel: str = "transmit", name: str = "scene.xml", lens_ref: str | None = None) -> Path:
+                fresnel: str = "transmit", name: str = "scene.xml", lens_ref: str | None = None,
+                mapping: str = "rectilinear") -> Path:
     """Write `name` and meshes/*.ply for `lens` into out_dir; returns the XML path. The lens file is
     copied beside it so the directory is self-contained, unless `lens_ref` (a path relative to
-    out_dir) names it."""
+    out_dir) names it. `mapping`: the image object's projection (plugins/image_object.py)."""
     import shutil
 
     if boundary not in BOUNDARIES:
@@ -263,7 +271,8 @@ def write_scene(lens: Lens, out_dir: str | os.PathLike, image: str, camera: Came
                 shutil.copyfile(lens.source, tmp)
         lens_ref = lens_copy.name
     # deep enough for ghosts whatever `fresnel` is set to later: a path without them ends sooner anyway
-    xml = scene_xml(lens_ref, parts, camera, image, spp, response, boundary, fresnel, path_depth(lens, ghosts=True))
+    xml = scene_xml(lens_ref, parts, camera, image, spp, response, boundary, fresnel, path_depth(lens, ghosts=True),
+                    mapping)
     path = out / name
     write_text(path, xml)
     return path

@@ -22,7 +22,7 @@ def scene_psf(scene, lens: Lens, field_deg, wavelength_nm: float, pitch_um: floa
     """Geometric PSF (unit sum) of field (x, y) degrees at one wavelength through `scene`'s geometry.
     meta holds the rays' landing centroid and RMS radius (µm from the chief ray) and the transmitted
     power (fraction of the on-axis entrance-pupil power)."""
-    field = np.array([check_field(field_deg)])
+    field = np.array([check_field(field_deg, lens.polar_field)])
     S.check_grid(pitch_um, size)
     wl = np.array([lens.check_wavelength(wavelength_nm)])
     chief = chief_rays(lens, field, wl)
