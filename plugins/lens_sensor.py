@@ -59,7 +59,6 @@ import numpy as np
 from solas_mi.errors import SolasError
 from solas_mi.optics.camera import pinhole_focal_mm
 from solas_mi.optics.illumination import ideal_irradiance, image_scales
-from solas_mi.optics.lens import Lens
 from solas_mi.optics.paraxial import paraxial
 from solas_mi.plugins.pupil_sampling import PupilSampler
 from solas_mi.plugins.scene_files import load_lens, load_response

@@ -7,8 +7,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..imageio import image_channels, read_image, write_exr
 from ..errors import SolasError
+from ..imageio import image_channels, read_image, write_exr
 from ..optics.camera import MAPPINGS, Camera, camera_for
 from ..optics.paraxial import paraxial
 from . import response as responses
