@@ -80,6 +80,7 @@ class Computed(NamedTuple):
     transmission: np.ndarray  # (n,) transmitted power, fraction of the on-axis entrance-pupil power
     vignetted_by: list  # per pair: 1-based surfaces that block part of the pupil
     warnings: tuple = ()  # what the method found doubtful (e.g. under-sampling), one line each
+    centre_um: np.ndarray | None = None  # (n, 2) each window's centre less its chief ray's image point
 
 
 # A PSF window holding less than this fraction of the transmitted light (or, from aliasing, more than
@@ -114,6 +115,27 @@ def window_warnings(energy: np.ndarray, fields_deg: np.ndarray, size: int, pitch
 def _count(mask: np.ndarray) -> str:
     n = int(mask.sum())
     return f"{n} PSF{'' if n == 1 else 's'}"
+
+
+def window_centres_um(chief, light_um: np.ndarray | None, shared_origin: bool) -> np.ndarray | None:
+    """Offsets (n, 2) in µm from each chief ray's image point to its window's centre: the first chief
+    ray's point for all (`shared_origin`), moved to the centroid of the arriving light where a chief
+    ray is blocked (`light_um`, from `geometric.light_offsets_um`); None when every window sits on its
+    own chief ray."""
+    if light_um is None:
+        return shared_origin_um(chief.image_xy) if shared_origin else None
+    return shared_origin_um(chief.image_xy) + light_um[:1] if shared_origin else light_um
+
+
+def centring_warnings(chief, light_um: np.ndarray | None, fields_deg: np.ndarray) -> list[str]:
+    """A line for the fields whose window is centred on the arriving light instead of the blocked chief ray."""
+    if light_um is None:
+        return []
+    i = int(np.argmax(np.hypot(*light_um.T)))
+    fx, fy = np.atleast_2d(fields_deg)[i]
+    return [f"the chief ray is blocked at {int(chief.vignetted.sum())} field(s) (e.g. ({fx:g}, {fy:g}) deg): their "
+            f"PSF windows are centred on the light that arrives, up to {np.hypot(*light_um[i]):.1f} um from the "
+            "chief ray (meta centre)"]
 
 
 def shared_origin_um(image_xy: np.ndarray) -> np.ndarray:

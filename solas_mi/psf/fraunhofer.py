@@ -17,7 +17,8 @@ import numpy as np
 
 from ..blas import single_threaded_blas
 from ..optics.pupil import PupilFunction, pupil_function
-from .base import Computed, grid_offsets, shared_origin_um
+from .base import Computed, centring_warnings, grid_offsets, window_centres_um
+from .geometric import light_offsets_um
 
 
 def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int, samples: int,
@@ -25,9 +26,11 @@ def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: fl
     """Fraunhofer PSFs of field/wavelength pairs from their pupil functions on samples×samples grids
     (`methods.compute`)."""
     pf = pupil_function(lens, field_deg, wavelength_nm, samples)
-    center = shared_origin_um(pf.chief.image_xy) if shared_origin else None
+    light = light_offsets_um(lens, field_deg, wavelength_nm, pf.chief)
+    center = window_centres_um(pf.chief, light, shared_origin)
     return Computed(fraunhofer(pf, pitch_um, size, center), pf.chief, pf.transmission, pf.vignetted_by,
-                    tuple(sampling_warnings(pf, pitch_um, size, np.atleast_2d(field_deg))))
+                    tuple(sampling_warnings(pf, pitch_um, size, np.atleast_2d(field_deg))
+                          + centring_warnings(pf.chief, light, field_deg)), center)
 
 
 def sampling_warnings(pf: PupilFunction, pitch_um: float, size: int, field_deg: np.ndarray) -> list[str]:

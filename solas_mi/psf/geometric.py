@@ -7,7 +7,7 @@ from ..optics import pupil as P
 from ..optics import tracer as T
 from ..optics.lens import Lens
 from ..optics.pupil import ChiefRays
-from .base import DEFAULT_GEOMETRIC_RAYS, Computed, shared_origin_um
+from .base import DEFAULT_GEOMETRIC_RAYS, Computed, centring_warnings, window_centres_um
 
 _BATCH_RAYS = 1 << 20  # rays traced at once
 
@@ -16,9 +16,27 @@ def compute(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_
             shared_origin: bool = False) -> Computed:
     """Geometric PSFs of field/wavelength pairs from rays×rays entrance grids (`methods.compute`)."""
     chief = P.chief_rays(lens, field_deg, wavelength_nm)
-    center = shared_origin_um(chief.image_xy) if shared_origin else None
+    light = light_offsets_um(lens, field_deg, wavelength_nm, chief)
+    center = window_centres_um(chief, light, shared_origin)
     data, _, transmission = geometric(lens, field_deg, wavelength_nm, pitch_um, size, rays, chief, center)
-    return Computed(data, chief, transmission, [[] for _ in range(len(field_deg))])
+    return Computed(data, chief, transmission, [[] for _ in range(len(field_deg))],
+                    tuple(centring_warnings(chief, light, field_deg)), center)
+
+
+def light_offsets_um(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chief: ChiefRays,
+                     rays: int = 64) -> np.ndarray | None:
+    """Where the chief ray of a field is blocked but light passes, the offset (µm) from the chief ray's
+    image point to the power centroid of the light that arrives (rays×rays entrance grid), else 0:
+    (n, 2), or None when no chief ray is blocked."""
+    if not chief.vignetted.any():
+        return None
+    field_deg = np.atleast_2d(np.asarray(field_deg, dtype=np.float64))
+    wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(field_deg),)).copy()
+    out = np.zeros((len(field_deg), 2))
+    for i, (x, y, power) in enumerate(entrance_grid_hits(lens, field_deg, wavelength_nm, rays, chief)):
+        if chief.vignetted[i] and power.sum() > 0:
+            out[i] = (np.dot(power, x) / power.sum(), np.dot(power, y) / power.sum())
+    return out
 
 
 def geometric(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int,

@@ -192,14 +192,14 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
         for a in range(0, len(canon), _FIELDS_PER_BATCH):
             b = min(len(canon), a + _FIELDS_PER_BATCH)
             with single_threaded():  # small kernels and products: more threads only wait for each other
-                psfs, cr, tr, vig, warned = compute(lens, canon[a:b], np.full(b - a, w), pitch_um, odd, method,
-                                                    pupil_samples, rays)
+                psfs, cr, tr, vig, warned, centre_um = compute(lens, canon[a:b], np.full(b - a, w), pitch_um, odd,
+                                                               method, pupil_samples, rays)
             vignetting.update(s for v in vig for s in v)
             doubts.extend(d for d in warned if d not in doubts)
             for c in range(a, b):
                 for i in np.flatnonzero(which == c):
                     p = psfs[c - a]
-                    xy = cr.image_xy[c - a]
+                    xy = cr.image_xy[c - a] + (0.0 if centre_um is None else centre_um[c - a] * 1e-3)
                     if swap[i]:
                         p, xy = p[::-1, ::-1].T, xy[::-1]
                     if sign[i, 0] < 0:

@@ -107,8 +107,11 @@ def psf(lens, field_deg, wavelength_nm, *, weights=None, pitch_um: float = DEFAU
     w8 = w8 / w8.sum()
     fields = np.repeat(np.array([field]), len(wavelengths), axis=0)
     # all wavelengths share one origin, the first wavelength's chief ray, so lateral colour shows
-    data, chief, transmission, vignetted, doubts = compute(lens, fields, np.array(wavelengths), pitch_um, size,
-                                                          method, pupil_samples, rays, shared_origin=True)
+    data, chief, transmission, vignetted, doubts, centre_um = compute(lens, fields, np.array(wavelengths), pitch_um,
+                                                                     size, method, pupil_samples, rays,
+                                                                     shared_origin=True)
+    light = centre_um is not None and bool(chief.vignetted[0])
+    origin = chief.image_xy[0] + (centre_um[0] * 1e-3 if light else 0.0)  # the window's centre, mm
     if not np.dot(w8, transmission) > 0:
         raise SolasError(f"no light reaches the image at field ({field[0]:g}, {field[1]:g}) deg: every ray is blocked"
                          + (f" (by surfaces {', '.join(map(str, sorted({s for v in vignetted for s in v})))})"
@@ -118,6 +121,7 @@ def psf(lens, field_deg, wavelength_nm, *, weights=None, pitch_um: float = DEFAU
     meta = describe(lens, method, normalization, {METHODS[method].sampling: sampling}, size)
     meta.update({
         "chief_ray_mm": {f"{w:g}": chief.image_xy[i].tolist() for i, w in enumerate(wavelengths)},
+        "centre": "centroid of the arriving light (the chief ray is blocked)" if light else "chief ray",
         "transmission": float(np.dot(w8, transmission)),
         "energy_in_grid": energy,
         "vignetted_by_surfaces": sorted({s for v in vignetted for s in v}),
@@ -127,4 +131,4 @@ def psf(lens, field_deg, wavelength_nm, *, weights=None, pitch_um: float = DEFAU
         return psf(lens, field_deg, wavelength_nm, weights=weights, pitch_um=pitch_um, size=2 * size, method=method,
                    normalization=normalization, pupil_samples=pupil_samples, rays=rays, auto_window=True)
     return PSF(normalize(total, normalization), float(pitch_um), field, wavelengths, tuple(w8.tolist()),
-               tuple(chief.image_xy[0].tolist()), method, normalization, meta)
+               tuple(origin.tolist()), method, normalization, meta)

@@ -17,8 +17,8 @@ import numpy as np
 
 from ..optics import pupil as P
 from ..optics import tracer as T
-from ..psf.base import Computed, shared_origin_um
-from ..psf.geometric import bin_hits, entrance_grid
+from ..psf.base import Computed, centring_warnings, window_centres_um
+from ..psf.geometric import bin_hits, entrance_grid, light_offsets_um
 from .loop import continue_ray
 from .scene import DEFAULT_RINGS, lens_parts, write_ply
 
@@ -92,5 +92,8 @@ def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: fl
     wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(field_deg),)).copy()
     chief = P.chief_rays(lens, field_deg, wavelength_nm)
     hits = scene_hits(lens_geometry(lens), lens, field_deg, wavelength_nm, rays, chief)
-    data, transmission = bin_hits(hits, pitch_um, size, shared_origin_um(chief.image_xy) if shared_origin else None)
-    return Computed(data, chief, transmission, [[] for _ in range(len(field_deg))])
+    light = light_offsets_um(lens, field_deg, wavelength_nm, chief)
+    center = window_centres_um(chief, light, shared_origin)
+    data, transmission = bin_hits(hits, pitch_um, size, center)
+    return Computed(data, chief, transmission, [[] for _ in range(len(field_deg))],
+                    tuple(centring_warnings(chief, light, field_deg)), center)

@@ -8,6 +8,7 @@ import pytest
 from solas_mi import Lens
 from solas_mi.cli import main
 from solas_mi.optics.pupil import pupil_function
+from solas_mi.psf import psf
 from solas_mi.psf.geometric import geometric
 from solas_mi.validation import stability
 from solas_mi.validation.stability import check_stability
@@ -61,3 +62,24 @@ def test_the_command_prints_the_table_and_fails_on_a_failed_case(capsys, monkeyp
     assert main(["check-stability", "solas-doublet", "--json"]) == 1
     out, err = capsys.readouterr()
     assert '"passed": false' in out and "1 case(s) failed: centring" in err
+
+
+@pytest.mark.parametrize("method", ["fraunhofer", "geometric"])
+def test_a_blocked_chief_ray_centres_the_psf_on_the_light(method):
+    """At 9° the front aperture blocks the chief ray while the lower part of the beam passes, landing
+    about 140 µm from where the chief ray would: the PSF was centred on the chief ray (the geometric
+    PSF empty, the Fraunhofer one a tail); now its window is centred on the light, and says so."""
+    lens = Lens.load(STIFF / "vignetting_front.toml")
+    p = psf(lens, (0.0, 9.0), 531.0, method=method, size=128, pitch_um=2.0)
+    assert p.meta["centre"].startswith("centroid") and any("chief ray is blocked" in w for w in p.meta["warnings"])
+    assert p.meta["energy_in_grid"] > 0.94
+    y, x = np.indices(p.data.shape)
+    centroid = np.array([(p.data * x).sum(), (p.data * y).sum()]) / p.data.sum()
+    assert np.abs(centroid - p.size // 2).max() < 4.0  # pixels of 2 µm
+    chief = p.meta["chief_ray_mm"]["531"]
+    assert abs(p.chief_ray_mm[1] - chief[1]) > 0.1  # mm: the window's centre is not the chief ray's point
+
+
+def test_an_unblocked_chief_ray_stays_the_centre(doublet):
+    p = psf(doublet, (0.0, 2.0), 531.0, size=64)
+    assert p.meta["centre"] == "chief ray" and p.chief_ray_mm == tuple(p.meta["chief_ray_mm"]["531"])
