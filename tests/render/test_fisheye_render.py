@@ -47,3 +47,33 @@ def test_wide_mappings_are_for_objects_at_infinity_and_named():
     lens = Lens.load("nikkor-fisheye")
     with pytest.raises(SolasError, match="mapping 'fisheye' must be one of"):
         render_image(lens, np.ones((4, 4)), (4, 4), PITCH_UM, spp=1, mapping="fisheye")
+
+
+def test_a_3d_scene_through_the_fisheye_lens_camera(tmp_path):
+    """Any Mitsuba scene through the fisheye (`render --lens`): small glowing balls 10 m away at 0°,
+    60° and 90° off the axis land at the image heights of the tracer's chief rays, within a pixel."""
+    from solas_mi.render.stock import render_scene
+    from solas_mi.render.user_scene import load
+
+    balls = {0.0: (0.0, 0.0, 10.0), 60.0: (10 * np.sin(np.radians(60)), 0.0, 10 * np.cos(np.radians(60))),
+             90.0: (0.0, 10.0, 0.0)}
+    shapes = "".join(f'<shape type="sphere"><point name="center" x="{x}" y="{y}" z="{z}"/><float name="radius" '
+                     f'value="0.05"/><emitter type="area"><rgb name="radiance" value="100"/></emitter></shape>'
+                     for x, y, z in balls.values())
+    (tmp_path / "balls.xml").write_text(
+        '<scene version="3.0.0"><sensor type="perspective"><float name="fov" value="60"/><transform '
+        'name="to_world"><lookat origin="0,0,0" target="0,0,1" up="0,1,0"/></transform><film type="hdrfilm">'
+        f'<integer name="width" value="{SENSOR}"/><integer name="height" value="{SENSOR}"/></film></sensor>'
+        f"{shapes}</scene>")
+    lens = Lens.load("nikkor-fisheye")
+    scene = load(tmp_path / "balls.xml", "llvm_ad_spectral", lens, pitch_um=PITCH_UM, response="mono:587.5618")
+    img = render_scene(scene, 64).image[..., 0].astype(np.float64)
+    chief = chief_rays(lens, [[0.0, f] for f in balls], np.full(3, 587.5618))
+    heights = np.hypot(*chief.image_xy.T) / (PITCH_UM * 1e-3)
+    rows, cols = np.indices(img.shape)
+    radius = np.hypot(cols - (SENSOR / 2 - 0.5), rows - (SENSOR / 2 - 0.5))
+    for angle, expected in zip(balls, heights):
+        ring = np.abs(radius - expected) <= 4
+        assert img[ring].sum() > 0.01 * img.sum() / len(balls), f"no light near the {angle:g} deg ring"
+        found = (img * ring * radius).sum() / (img * ring).sum()
+        assert abs(found - expected) < 1.0, (angle, found, expected)
