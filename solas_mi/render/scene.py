@@ -19,7 +19,8 @@ import numpy as np
 from ..errors import SolasError
 from ..imageio import atomic_path, write_text
 from ..optics.camera import BOUNDARIES, Camera, camera_for
-from ..optics.lens import Lens, sag, sag_slope
+from ..optics.lens import Lens, sag_slope
+from ..optics.lens import sag as asphere_sag
 
 DEFAULT_RINGS = 32  # scene PSFs match the tracer to 0.04 µm / 0.2 %; denser meshes render slower (README)
 
@@ -46,7 +47,7 @@ def cap_mesh(radius: float, vertex_z: float, semi_diameter: float, rings: int, c
     y = np.concatenate([[0.0], (rr * np.sin(pp)).ravel()])
     if conic != 0.0 or any(aspheric):
         c, rho2 = (1.0 / radius if radius else 0.0), x * x + y * y
-        z = vertex_z + sag(rho2, c, conic, aspheric)
+        z = vertex_z + asphere_sag(rho2, c, conic, aspheric)
         slope = 2.0 * sag_slope(rho2, c, conic, aspheric)
         normals = np.stack([slope * x, slope * y, -np.ones_like(x)], axis=-1)
         normals /= np.linalg.norm(normals, axis=-1, keepdims=True)
