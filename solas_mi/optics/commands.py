@@ -1,4 +1,5 @@
-"""`solas-mi lens info`: paraxial data and real chief rays of a lens, as a table or JSON."""
+"""`solas-mi lens info`: paraxial data and real chief rays of a lens, as a table or JSON;
+`solas-mi lens convert`: a lens file in another format (.toml, .zmx, .dat)."""
 from __future__ import annotations
 
 import json
@@ -45,6 +46,15 @@ def run_lens_info(args) -> int:
     return 0
 
 
+def run_lens_convert(args) -> int:
+    from .lens import Lens
+
+    lens = Lens.load(args.lens)
+    out = lens.save(args.output)
+    print(f"wrote {out} ({lens.name}: {len(lens.surfaces)} surfaces, hash {lens.hash})")
+    return 0
+
+
 def register(sub: Any) -> None:
     """Add `lens info`."""
     lens = sub.add_parser("lens", help="lens data").add_subparsers(dest="lens_command", metavar="COMMAND", required=True)
@@ -54,3 +64,7 @@ def register(sub: Any) -> None:
     info.add_argument("--fields", help="y field angles in degrees, comma-separated")
     info.add_argument("--json", action="store_true")
     info.set_defaults(run=run_lens_info)
+    convert = lens.add_parser("convert", help="write a lens file in another format (.toml, .zmx, .dat by extension)")
+    add_lens_argument(convert)
+    convert.add_argument("-o", "--output", required=True, help="the new lens file: .toml, .zmx (Zemax) or .dat (pbrt)")
+    convert.set_defaults(run=run_lens_convert)

@@ -19,10 +19,15 @@ import numpy as np
 import tomllib
 
 from ..errors import SolasError
+from ..imageio import write_text
 from ..resources import resource_dir
 from . import glass as glass_mod
+from . import lens_toml, pbrt_dat, zemax
 
 LENS_DIR = "lenses"
+# Lens file formats besides our TOML: text → lens-file dictionary, and Lens → text
+READERS = {".zmx": zemax.read_spec, ".dat": pbrt_dat.read_spec}
+WRITERS = {".toml": lens_toml.dumps, ".zmx": zemax.dumps, ".dat": pbrt_dat.dumps}
 # What a lens file may hold (anything else is a mistake worth naming, e.g. a surface type we do not model)
 KEYS = {
     "lens": ("name", "description", "wavelengths_nm", "field_deg", "surface", "object", "image"),
@@ -157,6 +162,12 @@ class Lens:
                 raise SolasError(f"unknown lens {str(name_or_path)!r}; shipped lenses: {', '.join(shipped)}, or a path to a .toml file")
         if not path.is_file():
             raise SolasError(f"lens file {str(path)!r} does not exist")
+        if path.suffix.lower() in READERS:
+            try:
+                text = path.read_text(encoding="utf-8", errors="replace")
+            except OSError as exc:
+                raise SolasError(f"lens file {path}: cannot be read: {exc}") from None
+            return cls.from_dict(READERS[path.suffix.lower()](text, str(path)), source=str(path))
         try:
             with open(path, "rb") as f:
                 spec = tomllib.load(f)
@@ -165,6 +176,17 @@ class Lens:
         except UnicodeDecodeError:
             raise SolasError(f"lens file {path} is not UTF-8 text; a lens file is TOML text") from None
         return cls.from_dict(spec, source=str(path))
+
+    def save(self, path: str | Path) -> Path:
+        """Write the lens to `path` (written whole or not at all) in the format its extension names:
+        .toml (ours), .zmx (Zemax) or .dat (pbrt lens table)."""
+        path = Path(path)
+        writer = WRITERS.get(path.suffix.lower())
+        if writer is None:
+            raise SolasError(f"lens file {str(path)!r}: unknown extension {path.suffix!r}; "
+                             f"allowed: {', '.join(WRITERS)}")
+        write_text(path, writer(self))
+        return path
 
     @classmethod
     def from_dict(cls, spec: dict[str, Any], source: str = "") -> "Lens":
