@@ -42,12 +42,11 @@ def _rows(text: str, where: str) -> tuple[list[list[float]], int | None]:
     return rows, stop
 
 
-def _back_focus(rows: list[list[float]]) -> float:
-    """Paraxial distance (mm) from the last surface to the focus of a collimated beam, from the
-    tables's indices (a y-nu marginal ray trace)."""
+def _back_focus(rows: list[list[float]], indices: list[float]) -> float:
+    """Paraxial distance (mm) from the last surface to the focus of a collimated beam, with the index
+    after each surface at the d line (a y-nu marginal ray trace)."""
     y, nu, n = 1.0, 0.0, 1.0
-    for k, (radius, thickness, index, *_) in enumerate(rows):
-        n_after = index if index > 1.0 else 1.0
+    for k, ((radius, thickness, *_), n_after) in enumerate(zip(rows, indices)):
         if radius:
             nu -= y * (n_after - n) / radius
         n = n_after
@@ -77,7 +76,8 @@ def read_spec(text: str, where: str) -> dict:
                          "material": glass_mod.material_for(index, vd)})
     surfaces[stop - 1]["stop"] = True
     if surfaces[-1]["thickness"] == 0:
-        surfaces[-1]["thickness"] = _back_focus(rows)
+        indices = [glass_mod.resolve(s["material"]).index(glass_mod.LINE_D) for s in surfaces]
+        surfaces[-1]["thickness"] = _back_focus(rows, indices)
     return {"object": {"distance": "infinity"}, "surface": surfaces,
             "wavelengths_nm": [glass_mod.LINE_F, glass_mod.LINE_D, glass_mod.LINE_C]}
 
