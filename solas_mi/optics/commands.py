@@ -34,7 +34,9 @@ def run_lens_info(args) -> int:
         rows.append(p)
     info = {"lens": lens.name, "hash": lens.hash, "source": lens.source, "stop_surface": lens.stop_index + 1,
             "image_z_mm": lens.image_z, "image_diameter_mm": lens.image_diameter, "per_wavelength": rows}
-    table = distortion(lens, None if lens.field_deg > 0 else fields) if lens.field_deg > 0 or len(fields) > 1 else None
+    table = None
+    if args.fields or lens.field_deg > 0:  # the given fields, else 0 … the lens's half field
+        table = distortion(lens, sorted({abs(f) for f in fields} | {0.0}) if args.fields else None)
     info["distortion"] = table.as_dict() if table else None
     if args.json:
         print(json.dumps(info, indent=2))
@@ -53,7 +55,8 @@ def run_lens_info(args) -> int:
         print(f"{'field (deg)':>12s}{'height (mm)':>14s}{'f tan(θ) (mm)':>16s}{'distortion %':>14s}{'rel. illum.':>13s}")
         for row in zip(table.field_deg, table.image_height_mm, table.rectilinear_height_mm, table.distortion_percent,
                        table.relative_illumination):
-            print(f"{row[0]:12.3f}{row[1]:14.6f}{row[2]:16.6f}{row[3]:14.4f}{row[4]:13.4f}")
+            rect, percent = ("-", "-") if row[2] is None else (f"{row[2]:.6f}", f"{row[3]:.4f}")
+            print(f"{row[0]:12.3f}{row[1]:14.6f}{rect:>16s}{percent:>14s}{row[4]:13.4f}")
         print("projection fits (focal mm, RMS residual mm): " + ", ".join(
             f"{k} {f:.4f} / {r:.2e}" for k, (f, r) in table.projection_fits.items()))
     return 0

@@ -8,6 +8,7 @@ projection). Angles in degrees at the interfaces, heights in mm.
 """
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -24,14 +25,19 @@ PROJECTIONS = {
 
 
 def fit_projections(field_deg: np.ndarray, height_mm: np.ndarray) -> dict[str, tuple[float, float]]:
-    """Per projection, (focal length mm, RMS residual mm) of the least-squares fit h ≈ f·g(θ)."""
+    """Per projection, (focal length mm, RMS residual mm) of the least-squares fit h ≈ f·g(θ). Field
+    angles in [0, 180) degrees, one at least nonzero; rectilinear, undefined from 90°, is then
+    (nan, inf)."""
     theta = np.radians(np.asarray(field_deg, dtype=np.float64))
     h = np.asarray(height_mm, dtype=np.float64)
-    if theta.shape != h.shape or theta.size < 2 or np.any(np.abs(theta) >= np.pi / 2):
-        raise SolasError(f"projection fit needs matching field angles (below 90 deg) and heights, at least two; "
-                         f"got {theta.size} angles and {h.size} heights")
+    if theta.shape != h.shape or theta.ndim != 1 or not np.all((theta >= 0) & (theta < np.pi)) or not theta.any():
+        raise SolasError(f"projection fit needs field angles in [0, 180) deg, one at least nonzero, and as many "
+                         f"image heights; got {np.degrees(theta).tolist()} deg and {h.size} heights")
     fits = {}
     for name, g in PROJECTIONS.items():
+        if name == "rectilinear" and theta.max() >= np.pi / 2:
+            fits[name] = (float("nan"), float("inf"))
+            continue
         gt = g(theta)
         f = float(np.dot(gt, h) / np.dot(gt, gt))
         fits[name] = (f, float(np.sqrt(np.mean((h - f * gt) ** 2))))
@@ -51,11 +57,11 @@ class Distortion:
     wavelength_nm: float
     field_deg: list[float]
     image_height_mm: list[float]  # real chief ray
-    rectilinear_height_mm: list[float]  # EFL · tanθ
-    distortion_percent: list[float]  # (h − EFL tanθ) / (EFL tanθ) · 100; 0 on the axis
+    rectilinear_height_mm: list[float | None]  # EFL · tanθ (None from 90°)
+    distortion_percent: list[float | None]  # (h − EFL tanθ) / (EFL tanθ) · 100; 0 on the axis, None from 90°
     relative_illumination: list[float]  # E(θ)/E(0)
     projection: str  # the closest projection
-    projection_fits: dict[str, list[float]]  # name → [focal length mm, RMS residual mm]
+    projection_fits: dict[str, list[float | None]]  # name → [focal length mm, RMS residual mm]; None: undefined
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -76,10 +82,10 @@ def distortion(lens: Lens, field_deg=None, wavelength_nm: float | None = None, s
     angles = np.asarray(field_deg, dtype=np.float64)
     fields = np.stack([np.zeros_like(angles), angles], -1)
     h = np.abs(chief_rays(lens, fields, np.full(len(angles), wl)).image_xy[:, 1])
-    rect = paraxial(lens, wl).efl_mm * np.tan(np.radians(np.abs(angles)))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        percent = np.where(rect > 0, (h - rect) / rect * 100.0, 0.0)
+    efl = paraxial(lens, wl).efl_mm
+    rect = [efl * math.tan(math.radians(abs(a))) if abs(a) < 90 else None for a in angles]
+    percent = [None if r is None else (hi - r) / r * 100.0 if r > 0 else 0.0 for hi, r in zip(h, rect)]
     ri = relative_illumination(lens, fields, wl)
     fits = fit_projections(np.abs(angles), h)
-    return Distortion(wl, angles.tolist(), h.tolist(), rect.tolist(), percent.tolist(), ri.tolist(),
-                      min(fits, key=lambda name: fits[name][1]), {k: list(v) for k, v in fits.items()})
+    return Distortion(wl, angles.tolist(), h.tolist(), rect, percent, ri.tolist(),
+                      min(fits, key=lambda name: fits[name][1]), {k: [x if math.isfinite(x) else None for x in v] for k, v in fits.items()})
