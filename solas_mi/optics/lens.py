@@ -164,9 +164,11 @@ class Lens:
             raise SolasError(f"lens file {str(path)!r} does not exist")
         if path.suffix.lower() in READERS:
             try:
-                text = path.read_text(encoding="utf-8", errors="replace")
+                data = path.read_bytes()
             except OSError as exc:
                 raise SolasError(f"lens file {path}: cannot be read: {exc}") from None
+            # OpticStudio writes UTF-16 with a byte-order mark; older files and tables are ASCII
+            text = data.decode("utf-16") if data[:2] in (b"\xff\xfe", b"\xfe\xff") else data.decode("latin-1")
             return cls.from_dict(READERS[path.suffix.lower()](text, str(path)), source=str(path))
         try:
             with open(path, "rb") as f:

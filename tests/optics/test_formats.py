@@ -91,6 +91,12 @@ def test_aspheric_round_trip_and_units(tmp_path):
         lens.save(tmp_path / "singlet.dat")
 
 
+def test_utf16_file_as_opticstudio_writes_it(tmp_path):
+    (tmp_path / "utf16.zmx").write_bytes(ZMX.format(glass="N-BK7").encode("utf-16"))
+    (tmp_path / "ascii.zmx").write_text(ZMX.format(glass="N-BK7"))
+    same_lens(Lens.load(tmp_path / "ascii.zmx"), Lens.load(tmp_path / "utf16.zmx"))
+
+
 def test_unknown_glass_is_named(tmp_path):
     (tmp_path / "other.zmx").write_text(ZMX.format(glass="S-BSL7"))
     with pytest.raises(SolasError, match=r"other.zmx: surface 1 \(SURF 1\): unknown glass 'S-BSL7'"):
