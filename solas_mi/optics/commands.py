@@ -74,7 +74,8 @@ def run_lens_convert(args) -> int:
 def register(sub: Any) -> None:
     """Add `lens info`."""
     lens = sub.add_parser("lens", help="lens data").add_subparsers(dest="lens_command", metavar="COMMAND", required=True)
-    info = lens.add_parser("info", help="paraxial data: EFL, BFD, pupils, f/#, chief rays, distortion and relative illumination")
+    info = lens.add_parser("info", help="paraxial data: EFL, BFD, pupils, f/#, chief rays, distortion and "
+                           "relative illumination")
     add_lens_argument(info)
     info.add_argument("--wavelengths", help="nm, comma-separated (default: the lens file's)")
     info.add_argument("--fields", help="y field angles in degrees, comma-separated")

@@ -44,9 +44,8 @@ def fit_projections(field_deg: np.ndarray, height_mm: np.ndarray) -> dict[str, t
     return fits
 
 
-def closest_projection(field_deg: np.ndarray, height_mm: np.ndarray) -> str:
-    """The name of the projection with the smallest fit residual (`fit_projections`)."""
-    fits = fit_projections(field_deg, height_mm)
+def closest_projection(fits: dict[str, tuple[float, float]]) -> str:
+    """The name of the projection with the smallest RMS residual among `fit_projections`' fits."""
     return min(fits, key=lambda name: fits[name][1])
 
 
@@ -87,5 +86,5 @@ def distortion(lens: Lens, field_deg=None, wavelength_nm: float | None = None, s
     percent = [None if r is None else (hi - r) / r * 100.0 if r > 0 else 0.0 for hi, r in zip(h, rect)]
     ri = relative_illumination(lens, fields, wl)
     fits = fit_projections(np.abs(angles), h)
-    return Distortion(wl, angles.tolist(), h.tolist(), rect, percent, ri.tolist(),
-                      min(fits, key=lambda name: fits[name][1]), {k: [x if math.isfinite(x) else None for x in v] for k, v in fits.items()})
+    return Distortion(wl, angles.tolist(), h.tolist(), rect, percent, ri.tolist(), closest_projection(fits),
+                      {k: [x if math.isfinite(x) else None for x in v] for k, v in fits.items()})

@@ -154,5 +154,6 @@ def material_for(nd: float, vd: float | None, catalog: str | None = None) -> str
     if vd is None:
         return f"model:{nd!r}"
     vd = round(vd, 5)
-    near = [(abs(n - nd), key) for key, n, v in _abbe_table(catalog) if abs(n - nd) <= MATCH_ND and abs(v - vd) <= MATCH_VD]
+    near = [(abs(n - nd), key) for key, n, v in _abbe_table(catalog)
+            if abs(n - nd) <= MATCH_ND and abs(v - vd) <= MATCH_VD]
     return min(near)[1] if near else f"model:{nd!r}/{vd!r}"

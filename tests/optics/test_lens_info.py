@@ -50,8 +50,9 @@ def test_projection_classifier_picks_the_generating_projection(projection):
 
     angles = np.linspace(0.0, 60.0, 13)
     heights = 8.0 * PROJECTIONS[projection](np.radians(angles))
-    assert closest_projection(angles, heights) == projection
-    focal, residual = fit_projections(angles, heights)[projection]
+    fits = fit_projections(angles, heights)
+    assert closest_projection(fits) == projection
+    focal, residual = fits[projection]
     assert focal == pytest.approx(8.0) and residual < 1e-12
 
 
@@ -59,10 +60,10 @@ def test_projection_fit_beyond_90_degrees_leaves_out_rectilinear():
     import numpy as np
 
     from solas_mi import SolasError
-    from solas_mi.optics.distortion import PROJECTIONS, fit_projections
+    from solas_mi.optics.distortion import PROJECTIONS, closest_projection, fit_projections
 
     angles = np.linspace(0.0, 100.0, 11)
     fits = fit_projections(angles, 5.0 * PROJECTIONS["equisolid"](np.radians(angles)))
-    assert fits["rectilinear"][1] == np.inf and min(fits, key=lambda k: fits[k][1]) == "equisolid"
+    assert fits["rectilinear"][1] == np.inf and closest_projection(fits) == "equisolid"
     with pytest.raises(SolasError, match=r"projection fit needs field angles in \[0, 180\) deg, one at least nonzero"):
         fit_projections([0.0, 0.0], [0.0, 0.0])
