@@ -159,7 +159,7 @@ class Lens:
             path = resource_dir("scenes") / LENS_DIR / (str(name_or_path).replace("-", "_") + ".toml")
             if not path.is_file():
                 shipped = sorted(p.stem.replace("_", "-") for p in (path.parent).glob("*.toml"))
-                raise SolasError(f"unknown lens {str(name_or_path)!r}; shipped lenses: {', '.join(shipped)}, or a path to a .toml file")
+                raise SolasError(f"unknown lens {str(name_or_path)!r}; shipped lenses: {', '.join(shipped)}, or a path to a lens file (.toml, .zmx, .dat)")
         if not path.is_file():
             raise SolasError(f"lens file {str(path)!r} does not exist")
         if path.suffix.lower() in READERS:
