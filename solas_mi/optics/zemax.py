@@ -3,8 +3,8 @@
 
 Read: SURF blocks of TYPE STANDARD and EVENASPH (CURV in 1/unit, DISZ, CONI, PARM 2… = A4, A6, … of
 the even asphere; PARM 1, the r² term, must be 0), STOP, DIAM (the semi-diameter), COMM (the label),
-GLAS names resolved through our catalogue (unknown names fail naming the glass) and model glass
-(`GLAS ___BLANK 1 0 n_d V_d …`, V_d 0 for a constant index); UNIT (MM, CM, IN, METER) scales every
+GLAS names resolved through our catalogue (unknown names fail naming the glass; on SURF 0 the
+object's medium) and model glass (`GLAS ___BLANK 1 0 n_d V_d …`, V_d 0 for a constant index); UNIT (MM, CM, IN, METER) scales every
 length to mm; angle fields (YFLN/XFLN with FTYP 0) give the half field; WAVM (or WAVL) the
 wavelengths (µm in the file, nm here); surface 0's DISZ the object distance (INFINITY). Surface 0 is
 the object, the last SURF the image plane (its DIAM the image semi-diameter). Other surface types,
@@ -72,6 +72,8 @@ def read_spec(text: str, where: str) -> dict:
     obj_z = (blocks[0].get("DISZ") or [["INFINITY"]])[0][0]
     spec["object"] = {"distance": "infinity" if obj_z.upper().startswith("INF")
                       else _floats([obj_z], f"{where}: object DISZ")[0] * scale}
+    if "GLAS" in blocks[0]:
+        spec["object"]["material"] = _material(blocks[0]["GLAS"][0], f"{where}: SURF 0 (object)")
     for i, b in enumerate(blocks[1:-1], start=1):
         ident = f"{where}: SURF {i} (line {b['line']})"
         kind = (b.get("TYPE") or [["STANDARD"]])[0][0].upper()

@@ -91,6 +91,14 @@ def test_aspheric_round_trip_and_units(tmp_path):
         lens.save(tmp_path / "singlet.dat")
 
 
+def test_finite_object_in_glass_round_trip(doublet_spec, tmp_path):
+    doublet_spec["object"] = {"distance": 800.0, "material": "model:1.333/55"}
+    lens = Lens.from_dict(doublet_spec)
+    back = Lens.load(lens.save(tmp_path / "water.zmx"))
+    same_lens(lens, back)
+    assert back.object_distance == 800.0 and back.object_glass.name == "model:1.333/55"
+
+
 def test_utf16_file_as_opticstudio_writes_it(tmp_path):
     (tmp_path / "utf16.zmx").write_bytes(ZMX.format(glass="N-BK7").encode("utf-16"))
     (tmp_path / "ascii.zmx").write_text(ZMX.format(glass="N-BK7"))
