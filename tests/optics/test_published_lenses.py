@@ -14,6 +14,37 @@ PUBLISHED = {
 }
 
 
+# The published tables (radius, thickness to the next surface, aperture diameter; mm; stop radius 0;
+# the last thickness is the focus, not tabulated) and their indices n_d.
+TABLES = {
+    "double-gauss-50mm": ([(29.475, 3.76, 25.2), (84.83, 0.12, 25.2), (19.275, 4.025, 23.0), (40.77, 3.275, 23.0),
+                           (12.75, 5.705, 18.0), (0.0, 4.5, None), (-14.495, 1.18, 17.0), (40.77, 6.065, 20.0),
+                           (-20.385, 0.19, 20.0), (437.065, 3.22, 20.0), (-39.73, None, 20.0)],
+                          [1.670, 1, 1.670, 1.699, 1, 1, 1.603, 1.658, 1, 1.717, 1]),
+    "wide-angle-22mm": ([(35.98738, 1.21638, 23.716), (11.69718, 9.99570, 17.996), (13.08714, 5.12622, 12.364),
+                         (-22.63294, 1.76924, 9.812), (71.05802, 0.81840, 9.152), (0.0, 2.27766, 8.756),
+                         (-9.58584, 2.43254, 8.184), (-11.28864, 0.11506, 9.152), (-166.7765, 3.09606, 10.648),
+                         (-7.59110, 1.32682, 11.440), (-16.76620, 3.98068, 12.276), (-7.70286, 1.21638, 13.420),
+                         (-11.97328, None, 17.996)],
+                        [1.540, 1, 1.772, 1.617, 1, 1, 1.617, 1, 1.713, 1.805, 1, 1.617, 1]),
+}
+
+
+@pytest.mark.parametrize("name", sorted(TABLES))
+def test_the_file_is_the_published_table_scaled(name):
+    """Every tabulated length of the file is the published one times one factor (within 1e-6, the
+    file's rounding), that factor is within 1 % of 1, and the indices at the d line are the table's."""
+    rows, nd = TABLES[name]
+    lens = Lens.load(name)
+    scale = lens.surfaces[0].radius / rows[0][0]
+    assert scale == pytest.approx(1.0, abs=0.01)
+    for s, row in zip(lens.surfaces, rows, strict=True):
+        for value, published in zip((s.radius, s.thickness, s.diameter), row):
+            if published is not None:
+                assert value == pytest.approx(scale * published, rel=1e-6, abs=1e-6)
+    assert lens.indices(587.5618)[1:] == pytest.approx(nd, abs=5e-5)
+
+
 @pytest.mark.parametrize("name", sorted(PUBLISHED))
 def test_efl_and_f_number_match_the_published_values(name):
     efl, fno, field = PUBLISHED[name]
