@@ -1,4 +1,6 @@
-"""`solas-mi lens info`: paraxial data and real chief rays of a lens, as a table or JSON."""
+"""`solas-mi lens info`: paraxial data, real chief rays, and the distortion and relative illumination
+table (image height vs field, closest projection) of a lens, as a table or JSON;
+`solas-mi lens convert`: a lens file in another format (.toml, .zmx, .dat)."""
 from __future__ import annotations
 
 import json
@@ -16,6 +18,7 @@ _ROWS = [("efl_mm", "EFL (mm)"), ("bfd_mm", "BFD (mm)"), ("entrance_pupil_diamet
 
 
 def run_lens_info(args) -> int:
+    from .distortion import distortion
     from .lens import Lens
     from .paraxial import paraxial
     from .pupil import chief_rays  # loads Dr.Jit
@@ -31,6 +34,10 @@ def run_lens_info(args) -> int:
         rows.append(p)
     info = {"lens": lens.name, "hash": lens.hash, "source": lens.source, "stop_surface": lens.stop_index + 1,
             "image_z_mm": lens.image_z, "image_diameter_mm": lens.image_diameter, "per_wavelength": rows}
+    table = None
+    if args.fields or lens.field_deg > 0:  # the given fields, else 0 … the lens's half field
+        table = distortion(lens, sorted({abs(f) for f in fields} | {0.0}) if args.fields else None)
+    info["distortion"] = table.as_dict() if table else None
     if args.json:
         print(json.dumps(info, indent=2))
         return 0
@@ -42,15 +49,39 @@ def run_lens_info(args) -> int:
     for i, f in enumerate(fields):
         print(f"{f'chief ray y at {f:g} deg, paraxial (mm)':36s}" + "".join(f"{r['chief_ray_image_height_mm'][i]:15.6f}" for r in rows))
         print(f"{f'chief ray y at {f:g} deg, real (mm)':36s}" + "".join(f"{r['real_chief_ray_image_height_mm'][i]:15.6f}" for r in rows))
+    if table:
+        print(f"\nimage height vs field at {table.wavelength_nm:g} nm (real chief ray); closest projection: "
+              f"{table.projection}")
+        print(f"{'field (deg)':>12s}{'height (mm)':>14s}{'f tan(θ) (mm)':>16s}{'distortion %':>14s}{'rel. illum.':>13s}")
+        for row in zip(table.field_deg, table.image_height_mm, table.rectilinear_height_mm, table.distortion_percent,
+                       table.relative_illumination):
+            rect, percent = ("-", "-") if row[2] is None else (f"{row[2]:.6f}", f"{row[3]:.4f}")
+            print(f"{row[0]:12.3f}{row[1]:14.6f}{rect:>16s}{percent:>14s}{row[4]:13.4f}")
+        print("projection fits (focal mm, RMS residual mm): " + ", ".join(
+            f"{k} {f:.4f} / {r:.2e}" for k, (f, r) in table.projection_fits.items()))
+    return 0
+
+
+def run_lens_convert(args) -> int:
+    from .lens import Lens
+
+    lens = Lens.load(args.lens)
+    out = lens.save(args.output)
+    print(f"wrote {out} ({lens.name}: {len(lens.surfaces)} surfaces, hash {lens.hash})")
     return 0
 
 
 def register(sub: Any) -> None:
     """Add `lens info`."""
     lens = sub.add_parser("lens", help="lens data").add_subparsers(dest="lens_command", metavar="COMMAND", required=True)
-    info = lens.add_parser("info", help="paraxial data: EFL, BFD, pupils, f/#, chief rays")
+    info = lens.add_parser("info", help="paraxial data: EFL, BFD, pupils, f/#, chief rays, distortion and "
+                           "relative illumination")
     add_lens_argument(info)
     info.add_argument("--wavelengths", help="nm, comma-separated (default: the lens file's)")
     info.add_argument("--fields", help="y field angles in degrees, comma-separated")
     info.add_argument("--json", action="store_true")
     info.set_defaults(run=run_lens_info)
+    convert = lens.add_parser("convert", help="write a lens file in another format (.toml, .zmx, .dat by extension)")
+    add_lens_argument(convert)
+    convert.add_argument("-o", "--output", required=True, help="the new lens file: .toml, .zmx (Zemax) or .dat (pbrt)")
+    convert.set_defaults(run=run_lens_convert)

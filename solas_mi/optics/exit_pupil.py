@@ -33,7 +33,8 @@ def reversed_lens(lens: Lens) -> Lens:
     rev = []
     for j, i in enumerate(range(len(s) - 1, -1, -1)):
         thickness = s[i - 1].thickness if i > 0 else 1.0  # beyond the original first surface: unused
-        rev.append(Surface(s[i].label, -s[i].radius, thickness, s[i].diameter, materials[i], before[i], s[i].stop))
+        rev.append(Surface(s[i].label, -s[i].radius, thickness, s[i].diameter, materials[i], before[i], s[i].stop,
+                           s[i].conic, tuple(-a for a in s[i].aspheric)))
     return replace(lens, name=lens.name + " (reversed)", surfaces=tuple(rev), object_distance=s[-1].thickness,
                    object_glass=s[-1].glass, memo={})
 

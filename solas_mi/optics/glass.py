@@ -25,7 +25,9 @@ LINE_D, LINE_F, LINE_C = 587.5618, 486.1327, 656.2725
 # Range (nm) over which a model glass's two-term dispersion is offered.
 MODEL_RANGE_NM = (365.0, 1014.0)
 _NUMBER = r"([0-9]+(?:\.[0-9]*)?|\.[0-9]+)"
-_MODEL_RE = re.compile(rf"^\s*model\s*:\s*{_NUMBER}\s*/\s*{_NUMBER}\s*$", re.IGNORECASE)
+_MODEL_RE = re.compile(rf"^\s*model\s*:\s*{_NUMBER}\s*(?:/\s*{_NUMBER}\s*)?$", re.IGNORECASE)
+# A catalogue glass stands for a table's (n_d, V_d) when both agree within these (its formula's values).
+MATCH_ND, MATCH_VD = 5e-5, 0.05
 
 
 @dataclass(frozen=True)
@@ -72,8 +74,13 @@ class Glass:
 AIR = Glass("AIR", "air")
 
 
-def model_glass(nd: float, vd: float) -> Glass:
-    """Model glass with exactly the given n_d and V_d: n(λ) = A + B/λ² (Cauchy's two terms)."""
+def model_glass(nd: float, vd: float | None = None) -> Glass:
+    """Model glass with exactly the given n_d and V_d: n(λ) = A + B/λ² (Cauchy's two terms); without
+    V_d, the constant index n_d (no dispersion)."""
+    if vd is None:
+        if not 1.0 < nd < 3.0:
+            raise SolasError(f"model glass n_d={nd:g}: n_d must lie in (1, 3)")
+        return Glass(f"model:{nd:g}", "model", ((nd,), (0.0,)), MODEL_RANGE_NM)
     if not (1.0 < nd < 3.0) or not (5.0 < vd < 150.0):
         raise SolasError(f"model glass n_d={nd:g}, V_d={vd:g}: n_d must lie in (1, 3) and V_d in (5, 150)")
     inv = lambda nm: 1.0 / (nm / 1000.0) ** 2  # noqa: E731 - µm⁻²
@@ -111,14 +118,14 @@ def _aliases(path: str | None = None) -> dict[str, list[str]]:
 
 def resolve(name: str, catalog: str | None = None) -> Glass:
     """The one glass that `name` means: "AIR", a catalogue name ("N-BK7", "SCHOTT:F2", "BK7"),
-    or "model:n_d/V_d". Unknown or ambiguous names raise SolasError."""
+    "model:n_d/V_d" or "model:n_d". Unknown or ambiguous names raise SolasError."""
     if not isinstance(name, str) or not name.strip():
         raise SolasError(f"glass name {name!r} must be a non-empty string")
     if name.strip().upper() == "AIR":
         return AIR
     m = _MODEL_RE.match(name)
     if m:
-        return model_glass(float(m.group(1)), float(m.group(2)))
+        return model_glass(float(m.group(1)), None if m.group(2) is None else float(m.group(2)))
     keys = _aliases(catalog).get(name.strip().upper(), [])
     if not keys:
         known = sorted({k.split(":", 1)[-1] for k in load_catalog(catalog)})
@@ -128,3 +135,25 @@ def resolve(name: str, catalog: str | None = None) -> Glass:
     if len(set(keys)) > 1:
         raise SolasError(f"glass name {name!r} is ambiguous: it matches {', '.join(sorted(set(keys)))}; use one of those")
     return load_catalog(catalog)[keys[0]]
+
+
+@lru_cache(maxsize=4)
+def _abbe_table(path: str | None = None) -> tuple[tuple[str, float, float], ...]:
+    """(key, n_d, V_d) of every catalogue glass, from its formula."""
+    return tuple((key, *g.abbe()) for key, g in load_catalog(path).items())
+
+
+def material_for(nd: float, vd: float | None, catalog: str | None = None) -> str:
+    """The material name for a lens table's n_d (and V_d, None when not given): "AIR" for n_d ≤ 1, the
+    catalogue glass nearest in n_d within MATCH_ND and in V_d within MATCH_VD, else a model glass
+    ("model:n_d/V_d", or the constant index "model:n_d" without V_d). n_d is rounded to 1e-7 and V_d to
+    1e-5 first: tables print them so, and the written name stays short."""
+    if nd <= 1.0:
+        return "AIR"
+    nd = round(nd, 7)
+    if vd is None:
+        return f"model:{nd!r}"
+    vd = round(vd, 5)
+    near = [(abs(n - nd), key) for key, n, v in _abbe_table(catalog)
+            if abs(n - nd) <= MATCH_ND and abs(v - vd) <= MATCH_VD]
+    return min(near)[1] if near else f"model:{nd!r}/{vd!r}"

@@ -1,7 +1,10 @@
-"""A lens prescription: surfaces, glass, object and image plane, loaded from a TOML lens file.
+"""A lens prescription: surfaces, glass, object and image plane, loaded from a TOML lens file
+(or a Zemax .zmx or pbrt .dat lens table, read by `zemax` and `pbrt_dat`).
 
 Lengths in mm, wavelengths in nm, field angles in degrees. +z is the optical axis toward the image;
-surface 1's vertex is at z = 0.
+surface 1's vertex is at z = 0. A surface is a sphere, or an even asphere: sag
+z(r) = c r² / (1 + √(1 − (1 + k) c² r²)) + Σ_i A_2i r^2i (i ≥ 2) with c = 1/radius, k = `conic` and
+`aspheric` = [A4, A6, …] (mm^(1−2i)).
 """
 from __future__ import annotations
 
@@ -16,19 +19,48 @@ import numpy as np
 import tomllib
 
 from ..errors import SolasError
+from ..imageio import write_text
 from ..resources import resource_dir
 from . import glass as glass_mod
+from . import lens_toml, pbrt_dat, zemax
 
 LENS_DIR = "lenses"
 # Lenses whose field reaches this (degrees) take polar fields: see `Lens.polar_field`
 POLAR_FIELD_DEG = 89.0
+# Lens file formats besides our TOML: text → lens-file dictionary, and Lens → text
+READERS = {".zmx": zemax.read_spec, ".dat": pbrt_dat.read_spec}
+WRITERS = {".toml": lens_toml.dumps, ".zmx": zemax.dumps, ".dat": pbrt_dat.dumps}
 # What a lens file may hold (anything else is a mistake worth naming, e.g. a surface type we do not model)
 KEYS = {
     "lens": ("name", "description", "wavelengths_nm", "field_deg", "surface", "object", "image"),
-    "surface": ("label", "radius", "thickness", "diameter", "material", "stop"),
+    "surface": ("label", "radius", "thickness", "diameter", "material", "stop", "conic", "aspheric"),
     "object": ("distance", "material"),
     "image": ("diameter",),
 }
+
+
+def sag(r2, curvature: float, conic: float = 0.0, aspheric: tuple[float, ...] = (), sqrt=np.sqrt, maximum=np.maximum):
+    """Even-asphere sag z (mm) at squared radial distance r2 (mm²), for any array type given its `sqrt`
+    and `maximum` (NumPy, Dr.Jit); beyond a conic's rim (1 − (1 + k) c² r² < 0) the root is taken as 0."""
+    c = curvature
+    z = c * r2 / (1.0 + sqrt(maximum(1.0 - (1.0 + conic) * c * c * r2, 0.0)))
+    power = r2 * r2
+    for a in aspheric:
+        z = z + a * power
+        power = power * r2
+    return z
+
+
+def sag_slope(r2, curvature: float, conic: float = 0.0, aspheric: tuple[float, ...] = (), sqrt=np.sqrt,
+              maximum=np.maximum):
+    """dz/d(r²) of `sag` (1/mm): the surface normal is (−2x·s', −2y·s', 1), normalised."""
+    c = curvature
+    slope = 0.5 * c / sqrt(maximum(1.0 - (1.0 + conic) * c * c * r2, 1e-300))
+    power = r2
+    for i, a in enumerate(aspheric, start=2):
+        slope = slope + i * a * power
+        power = power * r2
+    return slope
 
 
 def _check_keys(table: dict, kind: str, where: str) -> None:
@@ -85,6 +117,13 @@ class Surface:
     material: str
     glass: glass_mod.Glass
     stop: bool = False
+    conic: float = 0.0  # k: 0 sphere, −1 paraboloid, < −1 hyperboloid
+    aspheric: tuple[float, ...] = ()  # A4, A6, … (mm^(1−2i)) of the even asphere
+
+    @property
+    def is_sphere(self) -> bool:
+        """A sphere or plane (no conic, no polynomial terms)."""
+        return self.conic == 0.0 and not any(self.aspheric)
 
     @property
     def curvature(self) -> float:
@@ -97,9 +136,8 @@ class Surface:
 
     def sag(self, r: np.ndarray | float) -> np.ndarray | float:
         """Surface z relative to its vertex at radial distance r (mm)."""
-        c = self.curvature
         r = np.asarray(r, dtype=np.float64)
-        return c * r * r / (1.0 + np.sqrt(np.maximum(1.0 - c * c * r * r, 0.0)))
+        return sag(r * r, self.curvature, self.conic, self.aspheric)
 
 
 @dataclass(frozen=True)
@@ -128,9 +166,17 @@ class Lens:
             path = resource_dir("scenes") / LENS_DIR / (str(name_or_path).replace("-", "_") + ".toml")
             if not path.is_file():
                 shipped = sorted(p.stem.replace("_", "-") for p in (path.parent).glob("*.toml"))
-                raise SolasError(f"unknown lens {str(name_or_path)!r}; shipped lenses: {', '.join(shipped)}, or a path to a .toml file")
+                raise SolasError(f"unknown lens {str(name_or_path)!r}; shipped lenses: {', '.join(shipped)}, or a path to a lens file (.toml, .zmx, .dat)")
         if not path.is_file():
             raise SolasError(f"lens file {str(path)!r} does not exist")
+        if path.suffix.lower() in READERS:
+            try:
+                data = path.read_bytes()
+            except OSError as exc:
+                raise SolasError(f"lens file {path}: cannot be read: {exc}") from None
+            # OpticStudio writes UTF-16 with a byte-order mark; older files and tables are ASCII
+            text = data.decode("utf-16") if data[:2] in (b"\xff\xfe", b"\xfe\xff") else data.decode("latin-1")
+            return cls.from_dict(READERS[path.suffix.lower()](text, str(path)), source=str(path))
         try:
             with open(path, "rb") as f:
                 spec = tomllib.load(f)
@@ -139,6 +185,17 @@ class Lens:
         except UnicodeDecodeError:
             raise SolasError(f"lens file {path} is not UTF-8 text; a lens file is TOML text") from None
         return cls.from_dict(spec, source=str(path))
+
+    def save(self, path: str | Path) -> Path:
+        """Write the lens to `path` (written whole or not at all) in the format its extension names:
+        .toml (ours), .zmx (Zemax) or .dat (pbrt lens table)."""
+        path = Path(path)
+        writer = WRITERS.get(path.suffix.lower())
+        if writer is None:
+            raise SolasError(f"lens file {str(path)!r}: unknown extension {path.suffix!r}; "
+                             f"allowed: {', '.join(WRITERS)}")
+        write_text(path, writer(self))
+        return path
 
     @classmethod
     def from_dict(cls, spec: dict[str, Any], source: str = "") -> "Lens":
@@ -160,12 +217,19 @@ class Lens:
             if not isinstance(stop, bool):
                 raise SolasError(f"{ident}: stop = {stop!r} must be true or false (a TOML boolean, unquoted)")
             radius, thickness, diameter = (_number(row, key, ident, "mm") for key in ("radius", "thickness", "diameter"))
+            conic = _number(row, "conic", ident, "conic constant k, dimensionless", 0.0)
+            aspheric = row.get("aspheric", [])
+            if (not isinstance(aspheric, list) or len(aspheric) > 12
+                    or not all(isinstance(a, (int, float)) and not isinstance(a, bool) and math.isfinite(a) for a in aspheric)):
+                raise SolasError(f"{ident}: aspheric = {aspheric!r} must be a list of at most 12 finite numbers "
+                                 "[A4, A6, ...] (mm^(1-2i))")
             material = row.get("material", "AIR")
             try:
                 g = glass_mod.resolve(material)
             except SolasError as exc:
                 raise SolasError(f"{ident}: {exc}") from None
-            surfaces.append(Surface(label, radius, thickness, diameter, str(material), g, stop))
+            surfaces.append(Surface(label, radius, thickness, diameter, str(material), g, stop, conic,
+                                    tuple(float(a) for a in aspheric)))
         obj, image = _table(spec, "object", where), _table(spec, "image", where)
         _check_keys(obj, "object", f"{where}: object")
         _check_keys(image, "image", f"{where}: image")
@@ -212,11 +276,14 @@ class Lens:
             ident = f"{where}: surface {i} ({s.label})"
             if s.diameter <= 0:
                 raise SolasError(f"{ident}: diameter {s.diameter:g} mm must be positive")
-            if s.radius != 0 and s.semi_diameter >= abs(s.radius):
+            if s.radius != 0 and s.conic == 0 and s.semi_diameter >= abs(s.radius):
                 raise SolasError(
                     f"{ident}: clear semi-diameter {s.semi_diameter:g} mm is not smaller than |radius| "
                     f"{abs(s.radius):g} mm; the sphere cannot hold that aperture"
                 )
+            if s.conic != 0 and (1.0 + s.conic) * (s.curvature * s.semi_diameter) ** 2 >= 1.0:
+                raise SolasError(f"{ident}: conic {s.conic:g} with radius {s.radius:g} mm closes before the clear "
+                                 f"semi-diameter {s.semi_diameter:g} mm; the conic cannot hold that aperture")
             if s.thickness < 0:
                 raise SolasError(f"{ident}: thickness {s.thickness:g} mm is negative; thicknesses must be >= 0")
             if s.glass is not glass_mod.AIR and s.thickness == 0:
@@ -271,7 +338,8 @@ class Lens:
         """Short SHA-256 of the optical prescription (what changes the optics, not labels)."""
         content = {
             "object": [self.object_distance if math.isfinite(self.object_distance) else "inf", self.object_glass.name],
-            "surfaces": [[s.radius, s.thickness, s.diameter, s.glass.name, s.glass.coefficients, s.stop] for s in self.surfaces],
+            "surfaces": [[s.radius, s.thickness, s.diameter, s.glass.name, s.glass.coefficients, s.stop]
+                         + ([] if s.is_sphere else [s.conic, list(s.aspheric)]) for s in self.surfaces],
         }
         return hashlib.sha256(json.dumps(content, sort_keys=True).encode()).hexdigest()[:16]
 

@@ -1,6 +1,7 @@
-"""Sequential ray tracer in Dr.Jit Float64 (LLVM): exact spheres and planes, Snell's law per
-wavelength, clipping at every clear aperture and the stop, total internal reflection flagged,
-optical path length accumulated.
+"""Sequential ray tracer in Dr.Jit Float64 (LLVM): exact spheres, planes, conics (closed form) and
+even aspheres (Newton's method from the conic root, exact normal), Snell's law per wavelength,
+clipping at every clear aperture and the stop, total internal reflection flagged, optical path length
+accumulated.
 
 Rays are vectorised Dr.Jit arrays; nothing here loops over rays in Python. `launch` and `trace` work on
 the array type of the rays they are given: `drjit.llvm.Float64` (the default `F`, for the analyses),
@@ -20,7 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..llvm import import_drjit
-from .lens import Lens
+from .lens import Lens, sag, sag_slope
 from .paraxial import paraxial
 
 dr = import_drjit()
@@ -28,6 +29,8 @@ from drjit.llvm import Bool, Float64, UInt32  # noqa: E402
 
 F = Float64
 _RIM_SLACK = 1e-9  # relative: a ray aimed exactly at an aperture rim passes
+ASPHERE_ITERATIONS = 8  # Newton steps from the conic root; quadratic convergence reaches Float64 rounding
+ASPHERE_TOL_MM = 1e-7  # a ray whose residual |z − sag| stays above this misses the asphere
 
 
 @dataclass
@@ -192,7 +195,7 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False) -> Tr
     for k, (s, zv) in enumerate(zip(lens.surfaces, lens.vertex_z)):
         # move to the vertex plane first: the sphere equation is then solved from nearby, free of the
         # cancellation that a distant start point (a finite object far away) would bring into B² − cC
-        if k == 0 and lens.polar_field and s.curvature != 0.0:
+        if k == 0 and lens.polar_field and s.curvature != 0.0 and s.is_sphere:  # rays from the side or behind
             c = _opaque(s.curvature, ftype)
             lz, t, hit = _sphere_from_launch(c, x, y, z - _opaque(zv, ftype), dx, dy, dz)
             ok &= hit
@@ -202,16 +205,20 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False) -> Tr
             x, y = dr.fma(t0, dx, x), dr.fma(t0, dy, y)
             lz = dr.zeros(ftype, dr.width(x))
             opl = dr.fma(n_before, t0, opl)
-            if s.curvature == 0.0:
+            if s.curvature == 0.0 and s.is_sphere:
                 t = dr.zeros(ftype, dr.width(x))
             else:
                 c = _opaque(s.curvature, ftype)
                 b = dz - c * (x * dx + y * dy)
                 cc = c * (x * x + y * y)
-                disc = b * b - c * cc
-                ok &= (disc >= 0) & (b > 0)
-                # cancellation-free root nearest the vertex: t = C / (B + sqrt(B² − cC))
+                # conic: A t² − 2B t + C = 0 with A = c (1 + k dz²) (= c for a sphere)
+                disc = b * b - (c if s.conic == 0.0 else c * (1.0 + s.conic * dz * dz)) * cc
+                hit = (disc >= 0) & (b > 0)
+                # cancellation-free root nearest the vertex: t = C / (B + sqrt(B² − AC))
                 t = cc / (b + dr.sqrt(dr.maximum(disc, 0.0)))
+                if any(s.aspheric):
+                    t, hit = _asphere_hit(s, x, y, dx, dy, dz, dr.select(hit, t, 0.0))
+                ok &= hit
         x, y, lz = dr.fma(t, dx, x), dr.fma(t, dy, y), dr.fma(t, dz, lz)
         opl = dr.fma(n_before, t, opl)
         r2 = x * x + y * y
@@ -221,10 +228,14 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False) -> Tr
             stop_x, stop_y = x, y
         n_after = refractive_index(s.glass, wavelength_um)
         if s.glass != (lens.surfaces[k - 1].glass if k else lens.object_glass):
-            if s.curvature == 0.0:
+            if s.curvature == 0.0 and s.is_sphere:
                 nx, ny, nz = dr.zeros(ftype, 1), dr.zeros(ftype, 1), dr.ones(ftype, 1)
-            else:
+            elif s.is_sphere:
                 nx, ny, nz = -c * x, -c * y, 1.0 - c * lz
+            else:  # exact even-asphere normal (−2x s', −2y s', 1) / |…|
+                slope = 2.0 * sag_slope(r2, s.curvature, s.conic, s.aspheric, dr.sqrt, dr.maximum)
+                nz = dr.rsqrt(dr.fma(slope * slope, r2, 1.0))
+                nx, ny = -slope * x * nz, -slope * y * nz
             mu = n_before / n_after
             cosi = dx * nx + dy * ny + dz * nz
             k2 = 1.0 - mu * mu * (1.0 - cosi * cosi)
@@ -240,6 +251,23 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False) -> Tr
         z = lz + _opaque(zv, ftype)
         n_before = n_after
     return Traced(Rays(x, y, z, dx, dy, dz, opl), ok, tir, clipped, stop_x, stop_y, n_before, transmittance)
+
+
+def _asphere_hit(s, x, y, dx, dy, dz, t):
+    """Ray parameter t where the ray (x, y, 0) + t (dx, dy, dz), in the vertex frame of surface `s`,
+    meets its even asphere: Newton's method on f(t) = z(t) − sag(r²(t)) from the conic root `t`.
+    Also whether it converged (|f| < ASPHERE_TOL_MM inside the conic's domain)."""
+    for _ in range(ASPHERE_ITERATIONS):
+        px, py = dr.fma(t, dx, x), dr.fma(t, dy, y)
+        r2 = px * px + py * py
+        f = t * dz - sag(r2, s.curvature, s.conic, s.aspheric, dr.sqrt, dr.maximum)
+        df = dz - 2.0 * sag_slope(r2, s.curvature, s.conic, s.aspheric, dr.sqrt, dr.maximum) * (px * dx + py * dy)
+        t = t - f / df
+    px, py = dr.fma(t, dx, x), dr.fma(t, dy, y)
+    r2 = px * px + py * py
+    residual = t * dz - sag(r2, s.curvature, s.conic, s.aspheric, dr.sqrt, dr.maximum)
+    inside = (1.0 + s.conic) * s.curvature ** 2 * r2 <= 1.0
+    return t, inside & (dr.abs(residual) < ASPHERE_TOL_MM) & dr.isfinite(t)
 
 
 def to_plane(traced: Traced, z_plane: float | F) -> tuple[F, F, F]:

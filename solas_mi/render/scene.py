@@ -1,4 +1,4 @@
-"""A lens as Mitsuba geometry: every refracting surface a triangle-mesh spherical cap with vertex
+"""A lens as Mitsuba geometry: every refracting surface a triangle-mesh cap (sphere or even asphere) with vertex
 normals carrying its two glasses (`sellmeier_dielectric`), every clear aperture and the stop an
 absorbing annulus, a barrel closing the sides, the `lens_sensor` on the image plane and the input
 image as `image_object`.
@@ -19,7 +19,8 @@ import numpy as np
 from ..errors import SolasError
 from ..imageio import atomic_path, write_text
 from ..optics.camera import BOUNDARIES, Camera, camera_for
-from ..optics.lens import Lens
+from ..optics.lens import Lens, sag_slope
+from ..optics.lens import sag as asphere_sag
 
 SPAWN_OFFSET_MM = 1e-4  # a continued ray starts this far (mm) along its own direction (`loop.continue_ray`)
 MIN_GAP_MM = 10 * SPAWN_OFFSET_MM  # closest two refracting surfaces of the mesh scene may come
@@ -33,8 +34,10 @@ def check_rings(rings: int) -> int:
     return rings
 
 
-def cap_mesh(radius: float, vertex_z: float, semi_diameter: float, rings: int):
-    """A spherical cap (flat disk if radius is 0): vertices (n, 3), unit normals (n, 3) facing −z,
+def cap_mesh(radius: float, vertex_z: float, semi_diameter: float, rings: int, conic: float = 0.0,
+             aspheric: tuple[float, ...] = ()):
+    """A spherical cap (flat disk if radius is 0), or the even asphere of `conic` and `aspheric` (the
+    lens file's sag, `optics.lens.sag`): vertices (n, 3), unit normals (n, 3) facing −z,
     faces (m, 3) wound so that their geometric normals face −z too. `rings` rings of 4·rings
     segments; ring radii are uniform in r. Spokes sit half a segment off the axes and diagonals,
     where regular ray grids would graze the shared edges."""
@@ -44,7 +47,13 @@ def cap_mesh(radius: float, vertex_z: float, semi_diameter: float, rings: int):
     rr, pp = np.meshgrid(r, phi, indexing="ij")
     x = np.concatenate([[0.0], (rr * np.cos(pp)).ravel()])
     y = np.concatenate([[0.0], (rr * np.sin(pp)).ravel()])
-    if radius == 0.0:
+    if conic != 0.0 or any(aspheric):
+        c, rho2 = (1.0 / radius if radius else 0.0), x * x + y * y
+        z = vertex_z + asphere_sag(rho2, c, conic, aspheric)
+        slope = 2.0 * sag_slope(rho2, c, conic, aspheric)
+        normals = np.stack([slope * x, slope * y, -np.ones_like(x)], axis=-1)
+        normals /= np.linalg.norm(normals, axis=-1, keepdims=True)
+    elif radius == 0.0:
         z = np.full_like(x, vertex_z)
         normals = np.tile([0.0, 0.0, -1.0], (len(x), 1))
     else:
@@ -158,7 +167,8 @@ def lens_parts(lens: Lens, rings: int = DEFAULT_RINGS) -> list[Part]:
         zr = zv + float(s.sag(s.semi_diameter))
         rim_z.append(zr)
         if s.glass != before:
-            parts.append(Part(f"surface{k}", cap_mesh(s.radius, zv, s.semi_diameter, rings), before_name, s.material))
+            parts.append(Part(f"surface{k}", cap_mesh(s.radius, zv, s.semi_diameter, rings, s.conic, s.aspheric),
+                              before_name, s.material))
         if not (k == 1 and lens.polar_field):
             parts.append(Part(f"aperture{k}", annulus_mesh(zr, s.semi_diameter, outer)))
         before, before_name = s.glass, s.material

@@ -91,8 +91,8 @@ def test_malformed_surface_number(doublet_spec):
 
 
 @pytest.mark.parametrize("where, key, value, match", [
-    ("surface", "conic", -1.0, r"surface 1 \(Surface 1\): unknown key conic in the surface table; allowed: label, "
-                               r"radius, thickness, diameter, material, stop"),
+    ("surface", "conik", -1.0, r"surface 1 \(Surface 1\): unknown key conik in the surface table; allowed: label, "
+                               r"radius, thickness, diameter, material, stop, conic, aspheric"),
     ("lens", "focal", 100.0, r"unknown key focal in the lens table; allowed: name, description"),
     ("object", "angle", 3.0, r"object: unknown key angle in the object table; allowed: distance, material"),
     ("image", "width", 3.0, r"image: unknown key width in the image table; allowed: diameter"),

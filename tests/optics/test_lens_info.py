@@ -14,3 +14,56 @@ def test_cli_lens_info_json(capsys):
     rows = {r["wavelength_nm"]: r for r in info["per_wavelength"]}
     assert rows[531.0]["efl_mm"] == pytest.approx(99.9468, abs=1e-3)
     assert rows[531.0]["real_chief_ray_image_height_mm"][1] == pytest.approx(3.4745, abs=1e-3)
+
+
+@pytest.mark.parametrize("name", ["solas-doublet", "cooke-triplet"])
+def test_lens_info_carries_distortion_and_illumination(name, capsys):
+    """Both lenses are rectilinear; the table's heights are the real chief rays' and its distortion is
+    their departure from EFL·tanθ; the illumination falls steadily off the axis."""
+    import json
+
+    import numpy as np
+
+    from solas_mi.cli import main
+
+    assert main(["lens", "info", name, "--json"]) == 0
+    info = json.loads(capsys.readouterr().out)
+    d = info["distortion"]
+    assert d["projection"] == "rectilinear"
+    theta = np.radians(d["field_deg"])
+    efl = next(r for r in info["per_wavelength"] if r["wavelength_nm"] == d["wavelength_nm"])["efl_mm"]
+    assert np.allclose(d["rectilinear_height_mm"], efl * np.tan(theta))
+    h, rect = np.array(d["image_height_mm"]), np.array(d["rectilinear_height_mm"])
+    assert np.allclose(d["distortion_percent"][1:], (h[1:] / rect[1:] - 1) * 100)
+    assert h[-1] == pytest.approx(abs(info["per_wavelength"][0]["real_chief_ray_image_height_mm"][1]), rel=0.02)
+    ri = np.array(d["relative_illumination"])
+    assert ri[0] == pytest.approx(1.0) and np.all(np.diff(ri) < 0) and ri[-1] > 0.5
+    assert main(["lens", "info", name]) == 0
+    assert "closest projection: rectilinear" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("projection", ["rectilinear", "equidistant", "equisolid", "stereographic"])
+def test_projection_classifier_picks_the_generating_projection(projection):
+    import numpy as np
+
+    from solas_mi.optics.distortion import PROJECTIONS, closest_projection, fit_projections
+
+    angles = np.linspace(0.0, 60.0, 13)
+    heights = 8.0 * PROJECTIONS[projection](np.radians(angles))
+    fits = fit_projections(angles, heights)
+    assert closest_projection(fits) == projection
+    focal, residual = fits[projection]
+    assert focal == pytest.approx(8.0) and residual < 1e-12
+
+
+def test_projection_fit_beyond_90_degrees_leaves_out_rectilinear():
+    import numpy as np
+
+    from solas_mi import SolasError
+    from solas_mi.optics.distortion import PROJECTIONS, closest_projection, fit_projections
+
+    angles = np.linspace(0.0, 100.0, 11)
+    fits = fit_projections(angles, 5.0 * PROJECTIONS["equisolid"](np.radians(angles)))
+    assert fits["rectilinear"][1] == np.inf and closest_projection(fits) == "equisolid"
+    with pytest.raises(SolasError, match=r"projection fit needs field angles in \[0, 180\) deg, one at least nonzero"):
+        fit_projections([0.0, 0.0], [0.0, 0.0])

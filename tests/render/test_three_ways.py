@@ -56,10 +56,16 @@ def test_lens_camera_sees_the_image_scene_as_the_loop_does(mi, doublet, tmp_path
     assert np.sqrt(np.mean((seen - reference) ** 2)) / np.sqrt(np.mean(reference ** 2)) < 0.01  # measured 0.28 %
 
 
-def test_lens_camera_matches_the_lens_as_geometry_on_a_3d_edge(mi, doublet):
+@pytest.mark.parametrize("aspheric", [False, True])
+def test_lens_camera_matches_the_lens_as_geometry_on_a_3d_edge(mi, doublet, doublet_spec, tmp_path, aspheric):
     """A lit half-plane 100 m away (world in mm): its edge through the cap meshes and lens_sensor, and
-    through lens_camera's sequential trace — width, position and brightness."""
+    through lens_camera's sequential trace — width, position and brightness; also with the doublet's
+    front face an even asphere (both engines must build the same surface; measured edge widths 73.74 µm
+    through the meshes, 73.09 µm sequential, against 46.2 µm for the spheres)."""
     width, height, distance = 96, 8, 1e5
+    if aspheric:
+        doublet_spec["surface"][0].update(conic=-2.0, aspheric=[-3e-7, 1e-10])
+        doublet = solas_mi.Lens.load(solas_mi.Lens.from_dict(doublet_spec).save(tmp_path / "aspheric.toml"))
 
     def plane():  # world x > 0 lit, facing the lens
         tf = mi.ScalarTransform4f().translate([distance, 0, -distance]).scale(distance)

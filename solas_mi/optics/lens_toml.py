@@ -1,0 +1,44 @@
+"""Our TOML lens file written from a `Lens` (the reader is `Lens.from_dict`): every key the reader
+knows, numbers written in full (Python's shortest exact form), so reading the text back gives the
+same lens. Lengths in mm, wavelengths in nm, field in degrees."""
+from __future__ import annotations
+
+import json
+import math
+
+
+def _value(v) -> str:
+    """A TOML value: booleans, numbers in their exact shortest form, strings and lists."""
+    if isinstance(v, bool):
+        return "true" if v else "false"
+    if isinstance(v, (int, float)):
+        return repr(float(v))
+    if isinstance(v, (list, tuple)):
+        return "[" + ", ".join(_value(x) for x in v) + "]"
+    return json.dumps(str(v), ensure_ascii=False)  # a JSON string is a valid TOML basic string
+
+
+def dumps(lens) -> str:
+    """The TOML text of `lens` (a `solas_mi.optics.lens.Lens`)."""
+    lines = [f"# {lens.name}: lens file written by solas-mi (lengths in mm, wavelengths in nm)",
+             f"name = {_value(lens.name)}"]
+    if lens.description:
+        lines.append(f"description = {_value(lens.description)}")
+    lines += [f"wavelengths_nm = {_value(lens.wavelengths_nm)}", f"field_deg = {_value(lens.field_deg)}", "",
+              "[object]",
+              f"distance = {_value('infinity') if math.isinf(lens.object_distance) else _value(lens.object_distance)}"]
+    if lens.object_glass.kind != "air":
+        lines.append(f"material = {_value(lens.object_glass.name)}")
+    for s in lens.surfaces:
+        lines += ["", "[[surface]]", f"label = {_value(s.label)}", f"radius = {_value(s.radius)}"]
+        if s.conic:
+            lines.append(f"conic = {_value(s.conic)}")
+        if any(s.aspheric):
+            lines.append(f"aspheric = {_value(s.aspheric)}")
+        lines += [f"thickness = {_value(s.thickness)}", f"diameter = {_value(s.diameter)}",
+                  f"material = {_value(s.material)}"]
+        if s.stop:
+            lines.append("stop = true")
+    if lens.image_diameter:
+        lines += ["", "[image]", f"diameter = {_value(lens.image_diameter)}"]
+    return "\n".join(lines) + "\n"

@@ -1,0 +1,106 @@
+"""pbrt-style lens tables (.dat, text): read into our lens-file dictionary and written from a `Lens`.
+
+One row per surface, from the object side: radius, thickness (to the next row's surface), index of
+refraction n_d of the medium after it (0 or 1: air), aperture diameter, all lengths in mm, and an
+optional fifth column, the Abbe number V_d (0: none given). Rows are whitespace-separated numbers;
+`#` starts a comment. The aperture stop is the row of radius 0 in air (pbrt's convention), or the row
+named by a `# stop = N` comment (1-based; written by us when the stop is a curved surface, which
+pbrt's table cannot mark). Glass: `glass.material_for(n_d, V_d)` — a catalogue glass that matches,
+else a model glass. A last thickness of 0 (pbrt focuses the camera itself) is replaced by the
+paraxial back focal distance at the d line, so the image plane is at the focus for an object at
+infinity; the object is at infinity and the wavelengths are the F, d and C lines.
+"""
+from __future__ import annotations
+
+import re
+
+from ..errors import SolasError
+from . import glass as glass_mod
+
+_STOP_RE = re.compile(r"^\s*#\s*stop\s*=\s*(\d+)\s*$", re.IGNORECASE)
+
+
+def _rows(text: str, where: str) -> tuple[list[list[float]], int | None]:
+    rows, stop = [], None
+    for number, raw in enumerate(text.splitlines(), start=1):
+        m = _STOP_RE.match(raw)
+        if m:
+            stop = int(m.group(1))
+        line = raw.split("#", 1)[0].split()
+        if not line:
+            continue
+        try:
+            values = [float(v) for v in line]
+        except ValueError:
+            raise SolasError(f"{where}: line {number}: {raw.strip()!r} is not a row of numbers") from None
+        if len(values) not in (4, 5):
+            raise SolasError(f"{where}: line {number} has {len(values)} numbers; a row is radius, thickness, "
+                             "index, aperture diameter (mm) and optionally the Abbe number")
+        rows.append(values)
+    if not rows:
+        raise SolasError(f"{where}: no rows; a lens table holds radius, thickness, index, aperture per surface")
+    return rows, stop
+
+
+def _back_focus(rows: list[list[float]], indices: list[float]) -> float:
+    """Paraxial distance (mm) from the last surface to the focus of a collimated beam, with the index
+    after each surface at the d line (a y-nu marginal ray trace)."""
+    y, nu, n = 1.0, 0.0, 1.0
+    for k, ((radius, thickness, *_), n_after) in enumerate(zip(rows, indices)):
+        if radius:
+            nu -= y * (n_after - n) / radius
+        n = n_after
+        if k < len(rows) - 1:
+            y += thickness * nu / n
+    if nu >= 0:
+        raise SolasError("the lens table has no positive power: its last thickness 0 cannot be replaced by a focus")
+    return -y * n / nu
+
+
+def read_spec(text: str, where: str) -> dict:
+    """The lens-file dictionary of a .dat text; `where` names it in messages."""
+    rows, stop = _rows(text, where)
+    if stop is None:
+        air = [i for i, r in enumerate(rows)
+               if r[0] == 0 and r[2] <= 1 and (i == 0 or rows[i - 1][2] <= 1)]
+        if len(air) != 1:
+            raise SolasError(f"{where}: {len(air)} rows of radius 0 in air; exactly one must mark the aperture "
+                             "stop (or name it with a '# stop = N' comment)")
+        stop = air[0] + 1
+    if not 1 <= stop <= len(rows):
+        raise SolasError(f"{where}: stop = {stop} names no row (1..{len(rows)})")
+    surfaces = []
+    for i, (radius, thickness, index, aperture, *abbe) in enumerate(rows, start=1):
+        vd = abbe[0] if abbe and abbe[0] > 0 else None
+        surfaces.append({"label": f"row {i}", "radius": radius, "thickness": thickness, "diameter": aperture,
+                         "material": glass_mod.material_for(index, vd)})
+    surfaces[stop - 1]["stop"] = True
+    if surfaces[-1]["thickness"] == 0:
+        indices = [glass_mod.resolve(s["material"]).index(glass_mod.LINE_D) for s in surfaces]
+        surfaces[-1]["thickness"] = _back_focus(rows, indices)
+    return {"object": {"distance": "infinity"}, "surface": surfaces,
+            "wavelengths_nm": [glass_mod.LINE_F, glass_mod.LINE_D, glass_mod.LINE_C]}
+
+
+def dumps(lens) -> str:
+    """The .dat text of `lens` (a `solas_mi.optics.lens.Lens`, object at infinity, spherical surfaces):
+    five columns, n_d and V_d of each glass from its dispersion formula (0 for air)."""
+    if not lens.at_infinity:
+        raise SolasError(f"lens {lens.name}: a .dat lens table holds no object distance; its object is at infinity")
+    bad = [i for i, s in enumerate(lens.surfaces, start=1) if not s.is_sphere]
+    if bad:
+        raise SolasError(f"lens {lens.name}: surface {bad[0]} is aspheric; a .dat lens table holds spheres only")
+    lines = [f"# {lens.name}: lens table written by solas-mi", "# radius thickness n_d aperture V_d (mm)"]
+    flat_air = [i for i, s in enumerate(lens.surfaces) if s.radius == 0 and s.glass.kind == "air"
+                and (i == 0 or lens.surfaces[i - 1].glass.kind == "air")]
+    if flat_air != [lens.stop_index]:
+        lines.append(f"# stop = {lens.stop_index + 1}")
+    for s in lens.surfaces:
+        if s.glass.kind == "air":
+            nd, vd = 1.0, 0.0
+        elif s.glass.kind == "model" and s.glass.coefficients[1][0] == 0:
+            nd, vd = s.glass.coefficients[0][0], 0.0
+        else:
+            nd, vd = s.glass.abbe()
+        lines.append(" ".join(repr(float(v)) for v in (s.radius, s.thickness, nd, s.diameter, vd)))
+    return "\n".join(lines) + "\n"
