@@ -58,7 +58,8 @@ def run_lens_info(args) -> int:
             rect, percent = ("-", "-") if row[2] is None else (f"{row[2]:.6f}", f"{row[3]:.4f}")
             print(f"{row[0]:12.3f}{row[1]:14.6f}{rect:>16s}{percent:>14s}{row[4]:13.4f}")
         print("projection fits (focal mm, RMS residual mm): " + ", ".join(
-            f"{k} {f:.4f} / {r:.2e}" for k, (f, r) in table.projection_fits.items()))
+            f"{k} {f:.4f} / {r:.2e}" if f is not None else f"{k} undefined beyond 90 deg"
+            for k, (f, r) in table.projection_fits.items()))
     return 0
 
 

@@ -21,6 +21,7 @@ from .lens import Lens
 from .paraxial import paraxial
 
 _STEP = 1e-4  # tangent step of the finite differences
+_POLAR_STEP_DEG = 0.01  # polar-angle step of the finite differences of lenses with polar fields
 
 
 def _jacobian(lens: Lens, field_deg: np.ndarray, wavelength_nm: float) -> np.ndarray:
@@ -80,12 +81,33 @@ def relative_illumination(lens: Lens, field_deg: np.ndarray, wavelength_nm: floa
 
     field_deg = np.atleast_2d(np.asarray(field_deg, dtype=np.float64))
     lens.check_wavelength(wavelength_nm)
-    tan = np.tan(np.radians(field_deg))
-    cos3 = (1.0 + (tan ** 2).sum(axis=1)) ** -1.5
     fields = np.vstack([np.zeros((1, 2)), field_deg])
     transmission = pupil_function(lens, fields, np.full(len(fields), wavelength_nm), pupil_samples).transmission
+    if lens.polar_field:  # fields to 90° and beyond: per solid angle, sinθ dθ dφ onto h dh dφ
+        scale = _polar_scale(lens, fields, wavelength_nm)
+        return transmission[1:] / transmission[0] * scale[0] / scale[1:]
+    tan = np.tan(np.radians(field_deg))
+    cos3 = (1.0 + (tan ** 2).sum(axis=1)) ** -1.5
     j = _jacobian(lens, fields, wavelength_nm)
     return transmission[1:] / transmission[0] * cos3 * j[0] / j[1:]
+
+
+def _polar_scale(lens: Lens, field_deg: np.ndarray, wavelength_nm: float) -> np.ndarray:
+    """Image area per unit solid angle, h·(dh/dθ)/sin θ (mm²/sr; (dh/dθ)² on the axis), at polar fields
+    (n, 2) of a rotationally symmetric lens: h the chief ray's image height, dh/dθ from a second chief
+    ray _POLAR_STEP_DEG nearer the axis (the edge of the field has nothing beyond it)."""
+    from .pupil import chief_rays
+
+    theta = np.radians(np.hypot(field_deg[:, 0], field_deg[:, 1]))
+    step = np.radians(_POLAR_STEP_DEG)
+    other = np.where(theta > 0, np.maximum(theta - step, 0.0), step)
+    azimuth = np.arctan2(field_deg[:, 1], field_deg[:, 0])
+    direction = np.stack([np.cos(azimuth), np.sin(azimuth)], -1)
+    both = np.degrees(np.concatenate([theta, other]))[:, None] * np.vstack([direction, direction])
+    h = np.hypot(*chief_rays(lens, both, np.full(len(both), wavelength_nm)).image_xy.T)
+    h, h_other = h[:len(theta)], h[len(theta):]
+    slope = (h - h_other) / (theta - other)
+    return np.where(theta > 0, h * slope / np.maximum(np.sin(theta), 1e-300), slope ** 2)
 
 
 def image_scales(lens: Lens, max_height_mm: float, wavelength_nm: float, samples: int = 64):
