@@ -127,8 +127,8 @@ class Manifest:
             return {}
 
     def resume(self, key: str) -> int:
-        """Mark "skipped" each job a former run of the same batch `key` finished and whose outputs are
-        unchanged; the number skipped."""
+        """Mark "skipped" each job (same input, output and sweep point) that a former run of batch `key`
+        finished and whose outputs are unchanged; the number skipped."""
         old = self.previous(self.path)
         if old.get("batch_id") != key:
             return 0
@@ -137,7 +137,7 @@ class Manifest:
         skipped = 0
         for job in self.jobs:
             before = done.get((job.input, job.output))
-            if before is not None:
+            if before is not None and before.get("params", {}) == json.loads(json.dumps(job.params)):
                 job.outputs = before.get("outputs", {})
                 if job.finished():
                     job.status, job.seconds, job.seed = "skipped", before.get("seconds"), before.get("seed")

@@ -144,8 +144,9 @@ def plan_render(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLi
             params["focus_distance"] = "inf"  # JSON has no infinity; Mitsuba reads "inf"
         jobs.append(Job(str(path), str(output), str(output.with_suffix(".png")), kind="render",
                         seed=seed_of(stem, seed), params=params))
-    key = hashlib.sha256(json.dumps([[j.input, j.params] for j in jobs] + [fov_deg, boundary, fresnel, seed],
-                                    sort_keys=True).encode()).hexdigest()[:16]
+    # the settings every item shares; each item is matched on its input, output and sweep point, so a
+    # sweep grown by a value redoes only the new items
+    key = hashlib.sha256(json.dumps(["render", fov_deg, boundary, fresnel, seed]).encode()).hexdigest()[:16]
     manifest = Manifest(out_dir / MANIFEST, {"version": 1, "kind": "render", "batch_id": key,
                                              "sweep": {name: axes[name] for name in swept}}, jobs)
     manifest.resume(key)

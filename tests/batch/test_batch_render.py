@@ -89,6 +89,13 @@ def test_a_sweep_renders_the_product_and_names_its_parameters(render_inputs, tmp
         assert data.shape[1:] == (rows, cols)  # the sensor of its sweep point
         assert meta["lens"] == item["params"]["lens_name"] and meta["spp"] == item["params"]["spp"]
     assert len({i["seed"] for i in m["items"]}) > 1
+    # the sweep grown by a value: only the new sweep points are rendered, the eight finished ones skipped
+    grown = render_batch([image], tmp_path / "sweep", lens=["solas-doublet", "cooke-triplet"],
+                         sensor=["16x12", "24x8"], spp=[1, 2, 3], workers=1, progress=False)
+    statuses = {Path(j.output).stem: j.status for j in grown.jobs}
+    assert sorted(k for k, v in statuses.items() if v == "done") == sorted(
+        f"frame000_{lens}_{sensor}_spp3" for lens in ("solas-doublet", "cooke-triplet") for sensor in ("16x12", "24x8"))
+    assert sum(v == "skipped" for v in statuses.values()) == 8
 
 
 def test_focus_sweep_of_a_scene_and_its_limits(render_inputs, tmp_path):
