@@ -44,22 +44,3 @@ def single_threaded_blas():
     finally:
         set_(before)
 
-
-@contextmanager
-def single_threaded():
-    """OpenBLAS and Dr.Jit's LLVM thread pool on one thread inside the block: for a PSF grid, whose
-    tracing launches thousands of small kernels that a pool only slows (each launch wakes and waits
-    for its threads, and with another process on a core the wait is that process's time slice;
-    measured, 32×32×3 grid on 2 shared cores: 3.0–3.3 s on one thread, 3.4–4.1 s on two)."""
-    import sys
-
-    dr = sys.modules.get("drjit")  # only where the tracer has loaded it: never imported for this
-    before = dr.thread_count() if dr is not None else None
-    if dr is not None:
-        dr.set_thread_count(1)
-    try:
-        with single_threaded_blas():
-            yield
-    finally:
-        if dr is not None:
-            dr.set_thread_count(before)

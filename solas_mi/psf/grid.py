@@ -17,7 +17,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ..blas import single_threaded
 from ..errors import SolasError
 from ..imageio import read_exr, write_exr, write_png
 from ..optics.camera import pinhole_focal_mm
@@ -191,9 +190,8 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
     for k, w in enumerate(wl):
         for a in range(0, len(canon), _FIELDS_PER_BATCH):
             b = min(len(canon), a + _FIELDS_PER_BATCH)
-            with single_threaded():  # small kernels and products: more threads only wait for each other
-                psfs, cr, tr, vig, warned, centre_um = compute(lens, canon[a:b], np.full(b - a, w), pitch_um, odd,
-                                                               method, pupil_samples, rays)
+            psfs, cr, tr, vig, warned, centre_um = compute(lens, canon[a:b], np.full(b - a, w), pitch_um, odd, method,
+                                                           pupil_samples, rays)
             vignetting.update(s for v in vig for s in v)
             doubts.extend(d for d in warned if d not in doubts)
             for c in range(a, b):
