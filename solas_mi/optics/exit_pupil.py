@@ -21,6 +21,7 @@ import numpy as np
 
 from .lens import Lens, Surface
 
+FINE = 512  # points per side of the search for a pupil the coarse grid missed
 MARCH = 48  # samples along each direction from the pupil's centroid to three times the aperture's reach
 
 
@@ -85,11 +86,13 @@ def pupil_bounds(lens: Lens, max_radius_mm: float, wavelengths_nm=None, radii: i
     points, widened by the most a convex rim can bulge between neighbouring directions."""
     rev = reversed_lens(lens)
     last = lens.surfaces[-1]
-    # rays cross the last vertex plane within its aperture projected there from the film: a rim that
-    # bends toward the film (sag > 0) widens that projection by its sag over the rest of the way to the
-    # film; a rim bent away from it (a ball lens's rear face) narrows it, and the aperture itself bounds
-    sag = max(float(last.sag(last.semi_diameter)), 0.0)
-    reach = 1.05 * (last.semi_diameter + (last.semi_diameter + max_radius_mm) * sag / max(last.thickness - sag, 1e-9))
+    # a ray leaves through a point of the last surface's clear aperture; seen from a film point at radius
+    # r, thickness T below the vertex plane, a point at height ρ and sag z projects onto that plane at
+    # r + T/(T − z)·(ρ − r): within ρ of the axis for z = 0 and within s·ρ + |1 − s|·r at the rim,
+    # s = T/(T − sag) (> 1 for a rim bent toward the film, < 1 for one bent away, a ball lens's)
+    rho, sag = last.semi_diameter, float(last.sag(last.semi_diameter))
+    s_rim = last.thickness / max(last.thickness - sag, 1e-9)
+    reach = 1.05 * max(rho, s_rim * rho + abs(1.0 - s_rim) * max_radius_mm)
     step = 2.0 * reach / coarse
     g = -reach + (np.arange(coarse) + 0.5) * step
     gx, gy = (a.ravel() for a in np.meshgrid(g, g))
@@ -102,9 +105,17 @@ def pupil_bounds(lens: Lens, max_radius_mm: float, wavelengths_nm=None, radii: i
     rim_u, rim_v = [], []
     for w in (lens.wavelengths_nm if wavelengths_nm is None else wavelengths_nm):
         ok = passes(rev, np.repeat(radius, len(gx)), 0.0, np.tile(gx, radii), np.tile(gy, radii), w).reshape(radii, -1)
-        seen |= ok.any(axis=1)
         count = np.maximum(ok.sum(axis=1), 1)
         cu, cv = (ok * gx).sum(axis=1) / count, (ok * gy).sum(axis=1) / count
+        empty = np.flatnonzero(~ok.any(axis=1))
+        if len(empty):  # a sliver of pupil (heavy vignetting at the field's edge) can fall between coarse points
+            fu, fv = (a.ravel() for a in np.meshgrid(*2 * [-reach + (np.arange(FINE) + 0.5) * (2.0 * reach / FINE)]))
+            fine = passes(rev, np.repeat(radius[empty], len(fu)), 0.0, np.tile(fu, len(empty)), np.tile(fv, len(empty)),
+                          w).reshape(len(empty), -1)
+            n = np.maximum(fine.sum(axis=1), 1)
+            cu[empty], cv[empty] = (fine * fu).sum(axis=1) / n, (fine * fv).sum(axis=1) / n
+            ok[empty, 0] = fine.any(axis=1)  # marks the rows seen
+        seen |= ok.any(axis=1)
         r_all = np.repeat(radius, directions)
         cos, sin = np.tile(np.cos(phi), radii), np.tile(np.sin(phi), radii)
         # march in from beyond the aperture to the outermost passing sample of each direction, so a pupil

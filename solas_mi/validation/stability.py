@@ -21,7 +21,7 @@ from ..optics import tracer as T
 from ..optics.exit_pupil import passes, pupil_bounds, reversed_lens
 from ..optics.lens import Lens
 from ..optics.paraxial import paraxial
-from ..optics.pupil import chief_rays, pupil_function
+from ..optics.pupil import Bundle, chief_rays, pupil_function
 from ..psf.base import DEFAULT_PITCH_UM, DEFAULT_PUPIL_SAMPLES, DEFAULT_SIZE, WINDOW_ENERGY_LIMIT
 from ..psf.fraunhofer import sampling_warnings
 from ..psf.geometric import geometric
@@ -103,10 +103,7 @@ def _centred(lens: Lens, field: tuple, wl: float) -> Case:
 def _chief(lens: Lens, wl: float) -> Case:
     fields = np.stack([np.zeros(11), np.linspace(0.0, lens.field_deg, 11)], axis=-1)
     chief = chief_rays(lens, fields, np.full(11, wl))
-    rays = T.launch(lens, T.F(np.tan(np.radians(fields[:, 0]))), T.F(np.tan(np.radians(fields[:, 1]))),
-                    T.F(chief.entrance[:, 0]), T.F(chief.entrance[:, 1]), None if lens.at_infinity else
-                    tuple(T.F(c) for c in T.object_points(lens, fields).T))
-    tr = T.trace(lens, rays, T.F(np.full(11, wl * 1e-3)))
+    tr = Bundle(lens, fields, np.full(11, wl), 1).trace(T.F(chief.entrance[:, 0]), T.F(chief.entrance[:, 1]))
     sx, sy = T.to_numpy(tr.stop_x, tr.stop_y)
     miss = float(np.hypot(sx, sy).max())
     return Case("chief ray through the stop centre", "within 1e-9 mm at 11 fields to the full field",
@@ -212,8 +209,11 @@ def _opd_precision(lens: Lens, wl: float) -> Case:
 def _exit_pupil(lens: Lens, wl: float) -> Case:
     from ..optics.camera import camera_for
 
-    camera = camera_for(lens)
-    r_max = 0.5e-3 * camera.pitch_um * math.hypot(camera.width, camera.height)  # the film's corner
+    if lens.polar_field:  # the image circle
+        r_max = float(np.hypot(*chief_rays(lens, [[0.0, lens.field_deg]], [wl]).image_xy[0]))
+    else:
+        camera = camera_for(lens)
+        r_max = 0.5e-3 * camera.pitch_um * math.hypot(camera.width, camera.height)  # the film's corner
     bounds = pupil_bounds(lens, r_max, [wl], radii=32, directions=128)
     rev = reversed_lens(lens)
     last = lens.surfaces[-1]

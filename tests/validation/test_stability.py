@@ -10,14 +10,20 @@ from solas_mi.cli import main
 from solas_mi.optics.pupil import pupil_function
 from solas_mi.psf import psf
 from solas_mi.psf.geometric import geometric
+from solas_mi.resources import resource_dir
 from solas_mi.validation import stability
 from solas_mi.validation.stability import check_stability
 
 STIFF = Path(__file__).parents[1] / "data" / "stiff"
 
 
-@pytest.mark.parametrize("name", ["solas-doublet", "cooke-triplet", *sorted(p.name for p in STIFF.glob("*.toml"))])
+SHIPPED = sorted(p.stem.replace("_", "-") for p in (resource_dir("scenes") / "lenses").glob("*.toml"))
+
+
+@pytest.mark.parametrize("name", [*SHIPPED, *sorted(p.name for p in STIFF.glob("*.toml"))])
 def test_every_case_passes(name):
+    """Every shipped lens (the doublet, the triplet, the published ones, the fisheye) and every stiff
+    lens of ours passes every case."""
     lens = Lens.load(STIFF / name if name.endswith(".toml") else name)
     cases = check_stability(lens)
     assert len(cases) >= 20
