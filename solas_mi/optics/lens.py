@@ -288,6 +288,12 @@ class Lens:
                 raise SolasError(f"{ident}: thickness {s.thickness:g} mm is negative; thicknesses must be >= 0")
             if s.glass is not glass_mod.AIR and s.thickness == 0:
                 raise SolasError(f"{ident}: thickness 0 mm inside glass {s.material}; glass needs a positive thickness")
+        first = self.surfaces[0]
+        if self.polar_field and not first.is_sphere:
+            raise SolasError(f"{where}: surface 1 ({first.label}) is a conic or asphere; a lens of polar fields "
+                             f"(field_deg {self.field_deg:g} >= {POLAR_FIELD_DEG:g}) takes rays from the side of its "
+                             "first surface, which solas-mi intersects as a whole sphere only: make surface 1 "
+                             f"spherical or flat, or set field_deg below {POLAR_FIELD_DEG:g}")
         last = self.surfaces[-1]
         if last.thickness <= 0:
             raise SolasError(f"{where}: surface {len(self.surfaces)} ({last.label}): distance to the image "

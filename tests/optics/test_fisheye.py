@@ -79,6 +79,20 @@ def test_polar_field_limits():
         check_field((0.0, 95.0))
 
 
+def test_polar_lens_with_an_aspheric_first_surface_is_refused(tmp_path):
+    """Rays of polar fields meet surface 1 from the side, which is intersected as a whole sphere: a
+    conic there is refused when the lens is read, not met later as a field the lens cannot image."""
+    from solas_mi.resources import resource_dir
+
+    text = (resource_dir("scenes") / "lenses" / "nikkor_fisheye.toml").read_text().replace("radius = 90.1559", "radius = 90.1559\nconic = -0.5", 1)
+    assert "conic = -0.5" in text
+    (tmp_path / "fe.toml").write_text(text)
+    with pytest.raises(SolasError, match="surface 1 .* conic or asphere; a lens of polar fields"):
+        Lens.load(tmp_path / "fe.toml")
+    (tmp_path / "fe85.toml").write_text(text.replace("field_deg = 90.0", "field_deg = 85.0"))
+    assert not Lens.load(tmp_path / "fe85.toml").polar_field  # tangent fields: the conic is traced
+
+
 def test_psf_at_the_edge_of_the_field(fisheye):
     """At 90° (on the y axis and on the diagonal) the PSF is finite, sums to one and says how much of
     the transmitted light its window holds, converged under pupil refinement; both azimuths give the
