@@ -255,33 +255,49 @@ def scene_xml(lens_file: str, parts: list[Part], camera: Camera, image: str, spp
 """
 
 
+def lens_file(lens: Lens, folder: str | os.PathLike | None = None) -> Path:
+    """A file that holds exactly `lens`, for a scene's sensor to load: its source file when that still
+    reads as this very lens (every field equal), else the lens written as TOML into `folder` (a lens changed in
+    memory — refocused, edited with `dataclasses.replace` — or built with `Lens.from_dict`). Without a
+    folder such a lens is a SolasError, never its source file's lens in its place."""
+    source = Path(lens.source) if lens.source else None
+    if source is not None and source.is_file() and Lens.load(source) == lens:
+        return source
+    if folder is None:
+        raise SolasError(f"lens {lens.name} differs from its file {lens.source or '(none)'}; save it "
+                         "(Lens.save) and load it from there to render it")
+    path = Path(folder) / f"{(source.stem if source is not None else 'lens')}_{lens.hash}.toml"
+    lens.save(path)
+    if Lens.load(path).hash != lens.hash:  # the TOML writer keeps every number: a miss is a bug, not noise
+        raise SolasError(f"lens {lens.name} did not survive writing to {path}")
+    return path
+
+
 def write_scene(lens: Lens, out_dir: str | os.PathLike, image: str, camera: Camera | None = None,
                 rings: int = DEFAULT_RINGS, spp: int = 64, response: str = "srgb", boundary: str = "edge",
-                fresnel: str = "transmit", name: str = "scene.xml", lens_ref: str | None = None,
-                mapping: str = "rectilinear") -> Path:
-    """Write `name` and meshes/*.ply for `lens` into out_dir; returns the XML path. The lens file is
-    copied beside it so the directory is self-contained, unless `lens_ref` (a path relative to
-    out_dir) names it. `mapping`: the image object's projection (plugins/image_object.py)."""
+                fresnel: str = "transmit", name: str = "scene.xml", mapping: str = "rectilinear") -> Path:
+    """Write `name`, meshes/*.ply and the lens file (`lens_file`: a copy of its source, or the lens
+    as changed in memory) for `lens` into out_dir, so that the directory is self-contained; returns
+    the XML path. `mapping`: the image object's projection (plugins/image_object.py)."""
     import shutil
 
     if boundary not in BOUNDARIES:
         raise SolasError(f"boundary {boundary!r} must be one of {', '.join(BOUNDARIES)}")
-    if not lens.source or not Path(lens.source).is_file():
-        raise SolasError(f"lens {lens.name} has no lens file to reference")
     camera = camera or camera_for(lens)
     out = Path(out_dir)
     (out / "meshes").mkdir(parents=True, exist_ok=True)
     parts = lens_parts(lens, rings)
     for p in parts:
         write_ply(out / "meshes" / f"{p.name}.ply", *p.mesh)
-    if lens_ref is None:
-        lens_copy = out / Path(lens.source).name
-        if not lens_copy.exists() or not lens_copy.samefile(lens.source):
-            with atomic_path(lens_copy) as tmp:
-                shutil.copyfile(lens.source, tmp)
-        lens_ref = lens_copy.name
+    held = lens_file(lens, out)
+    if held.parent.resolve() != out.resolve():  # the source file, unchanged: copied beside the scene
+        copy = out / held.name
+        if not copy.exists() or not copy.samefile(held):
+            with atomic_path(copy) as tmp:
+                shutil.copyfile(held, tmp)
+        held = copy
     # deep enough for ghosts whatever `fresnel` is set to later: a path without them ends sooner anyway
-    xml = scene_xml(lens_ref, parts, camera, image, spp, response, boundary, fresnel, path_depth(lens, ghosts=True),
+    xml = scene_xml(held.name, parts, camera, image, spp, response, boundary, fresnel, path_depth(lens, ghosts=True),
                     mapping)
     path = out / name
     write_text(path, xml)

@@ -10,12 +10,14 @@ are world units; the lens camera converts with `world_unit_mm` (default 1000: me
 from __future__ import annotations
 
 import math
+import tempfile
 import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import SolasError, plugin_error
+from .scene import lens_file
 
 SWAPPABLE = ("perspective", "thinlens")
 FILM_35MM_WIDTH_MM = 36.0  # Mitsuba's `focal_length` is a 35 mm-equivalent
@@ -92,10 +94,12 @@ def default_pitch_um(lens, half_deg: float, axis: str, width: int, height: int) 
 
 
 def scene_text(xml_path: str | Path, lens=None, pitch_um: float | None = None, focus_distance: float | None = None,
-               response: str | None = None, world_unit_mm: float | None = None) -> str:
-    """The scene XML at `xml_path` as text, with a `path` integrator if it has none and, given `lens`
-    (a Lens loaded from a file), its first sensor replaced by a `lens_camera` at the same `to_world`,
-    film and sampler."""
+               response: str | None = None, world_unit_mm: float | None = None,
+               lens_folder: str | Path | None = None) -> str:
+    """The scene XML at `xml_path` as text, with a `path` integrator if it has none and, given `lens`,
+    its first sensor replaced by a `lens_camera` at the same `to_world`, film and sampler, naming a
+    file that holds the lens (`render.scene.lens_file`: written into `lens_folder` when the lens was
+    changed in memory)."""
     path = Path(xml_path)
     if not path.is_file():
         raise SolasError(f"no such scene file: {path}")
@@ -106,11 +110,12 @@ def scene_text(xml_path: str | Path, lens=None, pitch_um: float | None = None, f
     if root.find("integrator") is None:
         root.insert(0, ET.Element("integrator", {"type": "path"}))
     if lens is not None:
-        _swap_sensor(root, path, lens, pitch_um, focus_distance, response, world_unit_mm)
+        _swap_sensor(root, path, lens, pitch_um, focus_distance, response, world_unit_mm, lens_folder)
     return ET.tostring(root, encoding="unicode")
 
 
-def _swap_sensor(root: ET.Element, path: Path, lens, pitch_um, focus_distance, response, world_unit_mm) -> None:
+def _swap_sensor(root: ET.Element, path: Path, lens, pitch_um, focus_distance, response, world_unit_mm,
+                 lens_folder) -> None:
     defaults = {d.get("name"): d.get("value") for d in root.iter("default")}
     sensors = root.findall("sensor")
     if not sensors:
@@ -119,15 +124,14 @@ def _swap_sensor(root: ET.Element, path: Path, lens, pitch_um, focus_distance, r
     kind = old.get("type")
     if kind not in SWAPPABLE:
         raise SolasError(f"the scene's sensor is {kind!r}; --lens replaces a {' or '.join(SWAPPABLE)} camera")
-    if not lens.source or not Path(lens.source).is_file():
-        raise SolasError(f"lens {lens.name} has no lens file to reference")
+    held = lens_file(lens, lens_folder)
     width, height = _film_size(old, defaults)
     if pitch_um is None:
         pitch_um = default_pitch_um(lens, *field_half_angle(old, defaults), width, height)
     elif not (isinstance(pitch_um, (int, float)) and 0.0 < pitch_um < 1e4):
         raise SolasError(f"pixel pitch {pitch_um!r} um must be a positive number below 1e4")
     new = ET.Element("sensor", {"type": "lens_camera"})
-    ET.SubElement(new, "string", {"name": "lens", "value": str(Path(lens.source).resolve())})
+    ET.SubElement(new, "string", {"name": "lens", "value": str(held.resolve())})
     ET.SubElement(new, "float", {"name": "pitch_um", "value": repr(float(pitch_um))})
     for name, value, tag in (("focus_distance", focus_distance, "float"), ("world_unit_mm", world_unit_mm, "float"),
                              ("response", response, "string")):
@@ -144,18 +148,19 @@ def load(xml_path: str | Path, variant: str | None = None, lens=None, params: di
     the scene file's folder; `params` fill its <default> values."""
     from .mitsuba import mitsuba
 
-    text = scene_text(xml_path, lens, **lens_options)
-    defaults = sorted(d.get("name") for d in ET.fromstring(text).iter("default"))
-    unknown = sorted(set(params or {}) - set(defaults))
-    if unknown:
-        raise SolasError(f"scene {xml_path} has no <default> named {', '.join(unknown)}; "
-                         f"its defaults: {', '.join(defaults) or 'none'}")
-    mi = mitsuba(variant)
-    resolver = mi.file_resolver()
-    resolver.prepend(str(Path(xml_path).resolve().parent))
-    try:
-        return mi.load_string(text, **{k: str(v) for k, v in (params or {}).items()})
-    except RuntimeError as exc:
-        raise plugin_error(exc, f"cannot load scene {xml_path}") from None
-    finally:
-        del resolver[0]
+    with tempfile.TemporaryDirectory(prefix="solas-lens-") as folder:  # the lens camera reads its lens while loading
+        text = scene_text(xml_path, lens, lens_folder=folder, **lens_options)
+        defaults = sorted(d.get("name") for d in ET.fromstring(text).iter("default"))
+        unknown = sorted(set(params or {}) - set(defaults))
+        if unknown:
+            raise SolasError(f"scene {xml_path} has no <default> named {', '.join(unknown)}; "
+                             f"its defaults: {', '.join(defaults) or 'none'}")
+        mi = mitsuba(variant)
+        resolver = mi.file_resolver()
+        resolver.prepend(str(Path(xml_path).resolve().parent))
+        try:
+            return mi.load_string(text, **{k: str(v) for k, v in (params or {}).items()})
+        except RuntimeError as exc:
+            raise plugin_error(exc, f"cannot load scene {xml_path}") from None
+        finally:
+            del resolver[0]

@@ -5,9 +5,12 @@ come from `options.add_image_input_options`."""
 from __future__ import annotations
 
 import argparse
+import json
+from pathlib import Path
 from typing import Any
 
 from ..convolution.kernels import BOUNDARIES
+from ..errors import SolasError
 from ..optics.lens import Lens
 from ..options import add_image_input_options, add_lens_argument, parse_wxh, positive_ints
 from ..outputs import output_folder
@@ -18,6 +21,8 @@ from .engines import parse_blocks
 from .error_vs_time import DEFAULT_INTERP_GRIDS, DEFAULT_PATCH_GRIDS, DEFAULT_RENDER_SPP, error_vs_time
 from .inputs import load_input
 from .tables import crossval_markdown, error_vs_time_markdown
+
+FISHEYE_MARGIN_DEG = 5.0  # the environment reaches this far beyond a fisheye's field by default
 
 
 def block_grids(text: str, what: str) -> tuple[tuple[int, int], ...]:
@@ -41,13 +46,52 @@ def _say(text: str) -> None:
 
 
 def run_crossval(args: argparse.Namespace) -> int:
+    lens = Lens.load(args.lens)
+    if lens.polar_field:
+        return _crossval_fisheye(args, lens)
+    given = [name for name, value in (("--size", args.size), ("--pitch-um", args.pitch_um), ("--grid", args.grid))
+             if value is not None] + ["--defocus-mm"] * (args.defocus_mm != 0.0)
+    if given:
+        raise SolasError(f"{', '.join(given)}: only for a lens of polar fields (a fisheye); {lens.name} has tangent "
+                         "fields: give its sensor with --sensor or --scale and its grids with --cases")
     lens, image = _lens_and_image(args)
     cases = tuple(c for c in args.cases.split(",") if c.strip()) if args.cases else DEFAULT_CASES
-    res = crossval(lens, image, args.output, args.spp, args.seeds, cases, args.fov_deg, args.boundary,
+    res = crossval(lens, image, args.output, 1024 if args.spp is None else args.spp, args.seeds, cases, args.fov_deg, args.boundary,
                    args.variant, reuse=args.reuse_reference, log=_say)
     print(crossval_markdown(res.rows))
     print(f"wrote {args.output}/table.md, table.csv, crossval.json, reference.exr and per case: .exr, _error.exr, "
           "_error.png")
+    return 0
+
+
+def _crossval_fisheye(args: argparse.Namespace, lens) -> int:
+    """crossval of a lens of polar fields: the input is an equidistant environment (`validation.fisheye`)."""
+    from .fisheye import crossval_fisheye, defocused, fisheye_markdown
+
+    given = [name for name, value in (("--sensor", args.sensor), ("--scale", args.scale), ("--cases", args.cases),
+                                      ("--variant", args.variant)) if value is not None]
+    given += ["--reuse-reference"] * args.reuse_reference + ["--seeds"] * (args.seeds != 2) + \
+        ["--boundary"] * (args.boundary != "edge")
+    if given:
+        raise SolasError(f"{', '.join(given)}: not for a lens of polar fields ({lens.name}); its cross-validation "
+                         "takes --size, --pitch-um, --grid, --fov-deg, --spp and --linear")
+    fov = lens.field_deg + FISHEYE_MARGIN_DEG if args.fov_deg is None else args.fov_deg
+    if not 0 < fov < 180:
+        raise SolasError(f"--fov-deg {fov:g} must lie in (0, 180): half the width of the equidistant environment")
+    size = 64 if args.size is None else args.size
+    if size < 8:
+        raise SolasError(f"--size {size} must be at least 8 (pixels per side of the square sensor)")
+    if args.pitch_um is not None and not args.pitch_um > 0:
+        raise SolasError(f"--pitch-um {args.pitch_um:g} must be positive (um)")
+    grid = parse_wxh(args.grid, "--grid", minimum=2) if args.grid else (5, 5)
+    if args.defocus_mm:
+        defocused(lens, args.defocus_mm)  # checked before anything is written
+    output_folder(args.output)
+    env = load_input(args.image, linear=args.linear).mean(axis=-1)
+    spp = 256 if args.spp is None else args.spp
+    crossval_fisheye(lens, env, args.output, fov, size, args.pitch_um, grid, spp, args.defocus_mm, log=_say)
+    print(fisheye_markdown(json.loads((Path(args.output) / "crossval.json").read_text())))
+    print(f"wrote {args.output}/table.md, crossval.json, direct.exr, convolved.exr, ideal.exr, error.exr, error.png")
     return 0
 
 
@@ -92,8 +136,19 @@ def register(sub: Any) -> None:
                     "maps and a table of relative RMSE (whole image and centre/middle/edge annuli), PSNR, SSIM "
                     "and run times (PSF grid and convolution apart).")
     add_image_input_options(p, BOUNDARIES, VARIANTS)
-    p.add_argument("--spp", type=int, default=1024, help="reference samples per pixel, all seeds together "
-                                                          "(default 1024; 1280x960 takes ~13 min on 2 cores)")
+    p.add_argument("--spp", type=int, help="reference samples per pixel, all seeds together (default 1024; "
+                                            "1280x960 takes ~13 min on 2 cores); a fisheye: per seed (default 256)")
+    fisheye = p.add_argument_group(
+        "a lens of polar fields (a fisheye)", "IMAGE is then an equidistant environment spanning ±--fov-deg across "
+        "its width (default: the lens's field + 5 deg), rendered through the lens onto a square sensor and, as its "
+        "ideal sensor image, degraded by the lens's sensor-space PSF grid")
+    fisheye.add_argument("--size", type=int, help="sensor pixels per side (default 64)")
+    fisheye.add_argument("--pitch-um", type=float, help="pixel pitch in um (default: the sensor's corners reach "
+                                                        "the lens's field)")
+    fisheye.add_argument("--grid", help="PSF grid on the sensor, COLSxROWS (default 5x5)")
+    fisheye.add_argument("--defocus-mm", type=float, default=0.0,
+                         help="move the film this far behind the image plane in both engines (mm, default 0): in "
+                              "focus the PSFs are far below a pixel; a few mm spread them over pixels")
     p.add_argument("--cases", help="comma-separated METHOD:PSF:COLSxROWS (default: "
                                    + ",".join(DEFAULT_CASES) + ")")
     p.add_argument("--reuse-reference", action="store_true",

@@ -1,4 +1,6 @@
 """The lens as Mitsuba geometry (`render.scene`): cap meshes and the parts of a lens."""
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -46,3 +48,44 @@ def test_surfaces_closer_than_the_ray_continuation_are_refused(doublet_spec):
     lens = Lens.from_dict(spec)
     with pytest.raises(SolasError, match=r"surfaces 2 and 3 .* are 5e-05 mm apart .* at least 0.001 mm apart"):
         lens_parts(lens)
+
+
+def test_a_lens_changed_in_memory_is_the_lens_the_scene_loads(tmp_path, doublet):
+    """The sensor loads its lens from a file: an unchanged lens names its own file; a lens changed in
+    memory (here refocused) is written beside the scene, never replaced by its file's lens."""
+    import xml.etree.ElementTree as ET
+
+    from solas_mi import Lens
+    from solas_mi.optics.focus import focused
+    from solas_mi.render.scene import lens_file, write_scene
+
+    assert lens_file(doublet) == Path(doublet.source)
+    near = focused(doublet, 2000.0)
+    assert near.source == doublet.source and near.hash != doublet.hash
+    with pytest.raises(SolasError, match="differs from its file"):
+        lens_file(near)
+    for lens, folder in ((doublet, tmp_path / "same"), (near, tmp_path / "near")):
+        xml = write_scene(lens, folder, "white.exr")
+        named = [e.get("value") for e in ET.parse(xml).iter("string") if e.get("name") == "lens"]
+        assert len(named) == 1
+        loaded = Lens.load(folder / named[0])
+        assert loaded.hash == lens.hash and loaded.image_z == pytest.approx(lens.image_z, abs=1e-12)
+    assert (tmp_path / "same" / Path(doublet.source).name).read_text() == Path(doublet.source).read_text()
+
+
+def test_a_user_scene_names_the_lens_changed_in_memory(tmp_path, doublet):
+    import xml.etree.ElementTree as ET
+
+    from solas_mi import Lens
+    from solas_mi.optics.focus import focused
+    from solas_mi.render.user_scene import scene_text
+
+    scene = tmp_path / "scene.xml"
+    scene.write_text('<scene version="3.0.0"><sensor type="perspective"><float name="fov" value="4"/>'
+                     '<film type="hdrfilm"><integer name="width" value="64"/><integer name="height" value="48"/>'
+                     '</film></sensor></scene>')
+    near = focused(doublet, 2000.0)
+    text = scene_text(scene, near, lens_folder=tmp_path)
+    named = [e.get("value") for e in ET.fromstring(text).iter("string") if e.get("name") == "lens"]
+    assert Lens.load(named[0]).hash == near.hash
+    assert Lens.load(named[0]).hash != doublet.hash
