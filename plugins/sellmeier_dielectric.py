@@ -8,7 +8,8 @@ Sellmeier formula, or a model glass's two-term fit).
 | `ext_glass` | string | —    | "AIR"      | glass on the normal's side                           |
 | `fresnel`   | string | —    | "transmit" | Fresnel losses: "transmit", "sample" or "off"        |
 
-Glass names are those of lens files: "N-BK7", "F2", "model:1.5168/64.17", "AIR".
+Glass names are those of lens files: "N-BK7", "SCHOTT:F2", "OHARA:S-LAH59", "model:1.5168/64.17", "AIR"
+(a bare name that two vendors use, such as "F2", is refused).
 `traverse` exposes nothing: no parameter is differentiable or editable through `mi.traverse`.
 
 The reflectance R is the unpolarised Fresnel reflectance of a dielectric interface, the mean of the

@@ -2,24 +2,34 @@
 
 Indices are relative to air; AIR has index 1. Wavelengths are in nm.
 
-References: the Sellmeier dispersion formula with the coefficients and valid ranges of the SCHOTT
-optical glass data sheets (SCHOTT AG, "Optical Glass — Data Sheets"; TIE-29 "Refractive Index and
-Dispersion"); model glass from n_d and V_d (Fraunhofer d, F, C lines) as a two-term Cauchy fit.
+The catalogue: one TOML file per vendor (`data/glass_<vendor>.toml`: SCHOTT, OHARA, HOYA, CDGM,
+SUMITA, HIKARI), numbers from the refractiveindex.info database (public domain), which took them from
+the vendors' Zemax catalogues; each file's header says which and when. Entries are named
+"VENDOR:NAME"; a bare name (or an alias such as "BK7") must mean exactly one entry. Loaded on first
+use and cached.
+
+References: the Sellmeier formula n² = 1 + Σ B λ²/(λ² − C) and the power series n² = Σ K λ^P (the
+Schott / Hoya / Sumita / Hikari formulas, refractiveindex.info's "formula 3") with the vendors' valid
+ranges (SCHOTT TIE-29 "Refractive Index and Dispersion"); model glass from n_d and V_d (Fraunhofer
+d, F, C lines) as a two-term Cauchy fit.
 """
 from __future__ import annotations
 
+import difflib
 import re
 from dataclasses import dataclass
 from functools import lru_cache
 from pathlib import Path
-from typing import Callable
+from typing import Callable, NamedTuple
 
 import numpy as np
 import tomllib
 
 from ..errors import SolasError
 
-CATALOG_PATH = Path(__file__).parent / "data" / "glass_catalog.toml"
+CATALOG_DIR = Path(__file__).parent / "data"
+# The vendors' catalogue files, read in this order (the order names no preference).
+VENDORS = ("SCHOTT", "OHARA", "HOYA", "CDGM", "SUMITA", "HIKARI")
 # Fraunhofer lines (nm) defining n_d and V_d.
 LINE_D, LINE_F, LINE_C = 587.5618, 486.1327, 656.2725
 # Range (nm) over which a model glass's two-term dispersion is offered.
@@ -32,12 +42,16 @@ MATCH_ND, MATCH_VD = 5e-5, 0.05
 
 @dataclass(frozen=True)
 class Glass:
-    """A refractive medium. `kind` is "sellmeier", "model" or "air"."""
+    """A refractive medium. `kind` is "sellmeier" (coefficients (B, C)), "polynomial" (coefficients
+    (K, P): n² = Σ K λ^P, P even integers), "model" or "air". `nd`, `vd`: a catalogue glass's stated
+    values (None for others)."""
 
     name: str
     kind: str
     coefficients: tuple[tuple[float, ...], tuple[float, ...]] = ((), ())
     range_nm: tuple[float, float] = (0.0, float("inf"))
+    nd: float | None = None
+    vd: float | None = None
 
     def index(self, wavelength_nm: float | np.ndarray) -> np.ndarray | float:
         """Refractive index at `wavelength_nm`; SolasError outside the valid range."""
@@ -60,6 +74,15 @@ class Glass:
         l2 = wavelength_um * wavelength_um
         if self.kind == "model":
             return a[0] + b[0] / l2
+        if self.kind == "polynomial":
+            n2 = wavelength_um * 0.0
+            inv = 1.0 / l2
+            for k, p in zip(a, b):
+                term, base = k, (l2 if p > 0 else inv)
+                for _ in range(abs(int(p)) // 2):
+                    term = term * base
+                n2 = n2 + term
+            return sqrt(n2)
         n2 = 1.0
         for bi, ci in zip(a, b):
             n2 = n2 + bi * l2 / (l2 - ci)
@@ -89,21 +112,31 @@ def model_glass(nd: float, vd: float | None = None) -> Glass:
     return Glass(f"model:{nd:g}/{vd:g}", "model", ((a,), (b,)), MODEL_RANGE_NM)
 
 
+def catalog_files() -> list[Path]:
+    """The shipped catalogue files, one per vendor."""
+    return [CATALOG_DIR / f"glass_{v.lower()}.toml" for v in VENDORS]
+
+
 @lru_cache(maxsize=4)
 def _entries(path: str | None) -> dict:
-    """The catalogue file's [glass] tables."""
-    with open(path or CATALOG_PATH, "rb") as f:
-        return tomllib.load(f)["glass"]
+    """The [glass] tables of the catalogue file `path`, or of all shipped vendor files (None)."""
+    entries: dict = {}
+    for file in [path] if path else catalog_files():
+        with open(file, "rb") as f:
+            entries.update(tomllib.load(f)["glass"])
+    return entries
+
+
+def _glass(key: str, e: dict) -> Glass:
+    if "K" in e:
+        return Glass(key, "polynomial", (tuple(e["K"]), tuple(e["P"])), tuple(e["range_nm"]), e.get("nd"), e.get("vd"))
+    return Glass(key, "sellmeier", (tuple(e["B"]), tuple(e["C"])), tuple(e["range_nm"]), e.get("nd"), e.get("vd"))
 
 
 @lru_cache(maxsize=4)
 def load_catalog(path: str | None = None) -> dict[str, Glass]:
-    """The catalogue as {"VENDOR:NAME": Glass}."""
-    entries = _entries(path)
-    return {
-        key: Glass(key, "sellmeier", (tuple(e["B"]), tuple(e["C"])), tuple(e["range_nm"]))
-        for key, e in entries.items()
-    }
+    """The catalogue as {"VENDOR:NAME": Glass}: the file `path`, or the shipped one (None)."""
+    return {key: _glass(key, e) for key, e in _entries(path).items()}
 
 
 @lru_cache(maxsize=4)
@@ -116,9 +149,15 @@ def _aliases(path: str | None = None) -> dict[str, list[str]]:
     return names
 
 
+def candidates(name: str, catalog: str | None = None) -> list[str]:
+    """The catalogue keys that `name` (a full key, bare name or alias, any case) may mean."""
+    return sorted(set(_aliases(catalog).get(name.strip().upper(), [])))
+
+
 def resolve(name: str, catalog: str | None = None) -> Glass:
-    """The one glass that `name` means: "AIR", a catalogue name ("N-BK7", "SCHOTT:F2", "BK7"),
-    "model:n_d/V_d" or "model:n_d". Unknown or ambiguous names raise SolasError."""
+    """The one glass that `name` means: "AIR", a catalogue name ("N-BK7", "SCHOTT:F2", "OHARA:S-LAH59",
+    "BK7"), "model:n_d/V_d" or "model:n_d". Unknown or ambiguous names raise SolasError (an ambiguous
+    one lists the entries it may mean)."""
     if not isinstance(name, str) or not name.strip():
         raise SolasError(f"glass name {name!r} must be a non-empty string")
     if name.strip().upper() == "AIR":
@@ -126,14 +165,19 @@ def resolve(name: str, catalog: str | None = None) -> Glass:
     m = _MODEL_RE.match(name)
     if m:
         return model_glass(float(m.group(1)), None if m.group(2) is None else float(m.group(2)))
-    keys = _aliases(catalog).get(name.strip().upper(), [])
+    keys = candidates(name, catalog)
     if not keys:
-        known = sorted({k.split(":", 1)[-1] for k in load_catalog(catalog)})
+        names = _aliases(catalog)
+        close = difflib.get_close_matches(name.strip().upper(), names, n=5, cutoff=0.8)
+        hint = f"; close: {', '.join(sorted({k for c in close for k in names[c]}))}" if close else ""
+        vendors = sorted({k.split(":", 1)[0] for k in load_catalog(catalog)})
         raise SolasError(
-            f"unknown glass {name!r}; known: AIR, {', '.join(known)}, or model:n_d/V_d (e.g. model:1.62/36.4)"
+            f"unknown glass {name!r}{hint}; allowed: AIR, a catalogue glass ({len(load_catalog(catalog))} of "
+            f"{', '.join(vendors)}, as VENDOR:NAME or a name that only one of them uses), or model:n_d/V_d "
+            "(e.g. model:1.62/36.4)"
         )
-    if len(set(keys)) > 1:
-        raise SolasError(f"glass name {name!r} is ambiguous: it matches {', '.join(sorted(set(keys)))}; use one of those")
+    if len(keys) > 1:
+        raise SolasError(f"glass name {name!r} is ambiguous: it matches {', '.join(keys)}; use one of those")
     return load_catalog(catalog)[keys[0]]
 
 
@@ -143,17 +187,57 @@ def _abbe_table(path: str | None = None) -> tuple[tuple[str, float, float], ...]
     return tuple((key, *g.abbe()) for key, g in load_catalog(path).items())
 
 
-def material_for(nd: float, vd: float | None, catalog: str | None = None) -> str:
-    """The material name for a lens table's n_d (and V_d, None when not given): "AIR" for n_d ≤ 1, the
-    catalogue glass nearest in n_d within MATCH_ND and in V_d within MATCH_VD, else a model glass
-    ("model:n_d/V_d", or the constant index "model:n_d" without V_d). n_d is rounded to 1e-7 and V_d to
-    1e-5 first: tables print them so, and the written name stays short."""
+class Match(NamedTuple):
+    """A catalogue glass near a wanted (n_d, V_d): its key, its stated n_d / V_d (the vendor's), and
+    the n_d / V_d its formula gives."""
+
+    key: str
+    nd: float
+    vd: float
+    formula_nd: float
+    formula_vd: float
+
+
+def match(nd: float, vd: float, nd_tol: float = MATCH_ND, vd_tol: float = MATCH_VD,
+          catalog: str | None = None) -> list[Match]:
+    """The catalogue glasses within `nd_tol` in n_d and `vd_tol` in V_d of the given ones, by their stated
+    values (the vendor's catalogue numbers, which patents quote) or by their formula's, best first: by
+    the larger of |Δn_d|/nd_tol and |ΔV_d|/vd_tol (the smaller of the stated and formula scores), then
+    the formula's score, then the key."""
+    entries = _entries(catalog)
+    found = []
+    for key, n, v in _abbe_table(catalog):
+        e = entries[key]
+        sn, sv = e.get("nd", n), e.get("vd", v)
+        stated = max(abs(sn - nd) / nd_tol, abs(sv - vd) / vd_tol)
+        formula = max(abs(n - nd) / nd_tol, abs(v - vd) / vd_tol)
+        if min(stated, formula) <= 1.0:
+            found.append((min(stated, formula), formula, key, Match(key, sn, sv, n, v)))
+    return [f[-1] for f in sorted(found)]
+
+
+def _same_glass(keys: list[str], catalog: str | None) -> bool:
+    """Whether the entries have the same index at the F, d and C lines to 1e-6 (one melt sold under
+    several names, e.g. SCHOTT's N-SF57 and N-SF57HT)."""
+    cat = load_catalog(catalog)
+    n = [[float(cat[k].index(w)) for w in (LINE_F, LINE_D, LINE_C)] for k in keys]
+    return all(abs(a - b) <= 1e-6 for row in n[1:] for a, b in zip(row, n[0]))
+
+
+def material_for(nd: float, vd: float | None, catalog: str | None = None, nd_tol: float = MATCH_ND,
+                 vd_tol: float = MATCH_VD) -> str:
+    """The material name for a lens table's n_d (and V_d, None when not given): "AIR" for n_d ≤ 1; the
+    catalogue glass within `nd_tol` and `vd_tol` (`match`; a table reader passes half a unit of the last
+    printed digit) when it is the only one, or when all that match are one glass under several names
+    (then the best-matching name); else a model glass ("model:n_d/V_d", or the constant index "model:n_d"
+    without V_d): n_d / V_d that several glasses share within the table's rounding do not say which one
+    was meant. n_d is rounded to 1e-7 and V_d to 1e-5 first: tables print them so, and the written name
+    stays short."""
     if nd <= 1.0:
         return "AIR"
-    nd = round(nd, 7)
     if vd is None:
-        return f"model:{nd!r}"
-    vd = round(vd, 5)
-    near = [(abs(n - nd), key) for key, n, v in _abbe_table(catalog)
-            if abs(n - nd) <= MATCH_ND and abs(v - vd) <= MATCH_VD]
-    return min(near)[1] if near else f"model:{nd!r}/{vd!r}"
+        return f"model:{round(nd, 7)!r}"
+    near = [m.key for m in match(nd, vd, max(nd_tol, 1e-9), max(vd_tol, 1e-7), catalog)]
+    if near and _same_glass(near, catalog):
+        return near[0]
+    return f"model:{round(nd, 7)!r}/{round(vd, 5)!r}"

@@ -5,14 +5,15 @@ refraction n_d of the medium after it (0 or 1: air), aperture diameter, all leng
 optional fifth column, the Abbe number V_d (0: none given). Rows are whitespace-separated numbers;
 `#` starts a comment. The aperture stop is the row of radius 0 in air (pbrt's convention), or the row
 named by a `# stop = N` comment (1-based; written by us when the stop is a curved surface, which
-pbrt's table cannot mark). Glass: `glass.material_for(n_d, V_d)` — a catalogue glass that matches,
-else a model glass. A last thickness of 0 (pbrt focuses the camera itself) is replaced by the
+pbrt's table cannot mark). Glass: `glass.material_for(n_d, V_d)` — the one catalogue glass that
+matches within the printed digits (half a unit of the last one), else a model glass. A last thickness of 0 (pbrt focuses the camera itself) is replaced by the
 paraxial back focal distance at the d line, so the image plane is at the focus for an object at
 infinity; the object is at infinity and the wavelengths are the F, d and C lines.
 """
 from __future__ import annotations
 
 import re
+from decimal import Decimal, InvalidOperation
 
 from ..errors import SolasError
 from . import glass as glass_mod
@@ -20,8 +21,18 @@ from . import glass as glass_mod
 _STOP_RE = re.compile(r"^\s*#\s*stop\s*=\s*(\d+)\s*$", re.IGNORECASE)
 
 
-def _rows(text: str, where: str) -> tuple[list[list[float]], int | None]:
-    rows, stop = [], None
+def _half_unit(token: str) -> float:
+    """Half a unit of the last digit printed in `token` ("1.670" → 5e-4)."""
+    try:
+        return 0.5 * 10.0 ** Decimal(token).as_tuple().exponent
+    except (InvalidOperation, TypeError):
+        return 0.0
+
+
+def _rows(text: str, where: str) -> tuple[list[list[float]], int | None, list[tuple[float, float]]]:
+    """The rows' numbers, the stop row named by a comment (or None), and per row half a unit of the
+    last printed digit of n_d and V_d."""
+    rows, stop, digits = [], None, []
     for number, raw in enumerate(text.splitlines(), start=1):
         m = _STOP_RE.match(raw)
         if m:
@@ -37,9 +48,10 @@ def _rows(text: str, where: str) -> tuple[list[list[float]], int | None]:
             raise SolasError(f"{where}: line {number} has {len(values)} numbers; a row is radius, thickness, "
                              "index, aperture diameter (mm) and optionally the Abbe number")
         rows.append(values)
+        digits.append((_half_unit(line[2]), _half_unit(line[4]) if len(line) == 5 else 0.0))
     if not rows:
         raise SolasError(f"{where}: no rows; a lens table holds radius, thickness, index, aperture per surface")
-    return rows, stop
+    return rows, stop, digits
 
 
 def _back_focus(rows: list[list[float]], indices: list[float]) -> float:
@@ -59,7 +71,7 @@ def _back_focus(rows: list[list[float]], indices: list[float]) -> float:
 
 def read_spec(text: str, where: str) -> dict:
     """The lens-file dictionary of a .dat text; `where` names it in messages."""
-    rows, stop = _rows(text, where)
+    rows, stop, digits = _rows(text, where)
     if stop is None:
         air = [i for i, r in enumerate(rows)
                if r[0] == 0 and r[2] <= 1 and (i == 0 or rows[i - 1][2] <= 1)]
@@ -70,10 +82,10 @@ def read_spec(text: str, where: str) -> dict:
     if not 1 <= stop <= len(rows):
         raise SolasError(f"{where}: stop = {stop} names no row (1..{len(rows)})")
     surfaces = []
-    for i, (radius, thickness, index, aperture, *abbe) in enumerate(rows, start=1):
+    for i, ((radius, thickness, index, aperture, *abbe), (nd_tol, vd_tol)) in enumerate(zip(rows, digits), start=1):
         vd = abbe[0] if abbe and abbe[0] > 0 else None
         surfaces.append({"label": f"row {i}", "radius": radius, "thickness": thickness, "diameter": aperture,
-                         "material": glass_mod.material_for(index, vd)})
+                         "material": glass_mod.material_for(index, vd, nd_tol=nd_tol, vd_tol=vd_tol)})
     surfaces[stop - 1]["stop"] = True
     if surfaces[-1]["thickness"] == 0:
         indices = [glass_mod.resolve(s["material"]).index(glass_mod.LINE_D) for s in surfaces]

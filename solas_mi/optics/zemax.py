@@ -3,7 +3,8 @@
 
 Read: SURF blocks of TYPE STANDARD and EVENASPH (CURV in 1/unit, DISZ, CONI, PARM 2… = A4, A6, … of
 the even asphere; PARM 1, the r² term, must be 0), STOP, DIAM (the semi-diameter), COMM (the label),
-GLAS names resolved through our catalogue (unknown names fail naming the glass; on SURF 0 the
+GLAS names resolved through our catalogue (unknown names fail naming the glass; a name that several
+vendors use is taken from the vendor that GCAT lists, else it fails listing them; on SURF 0 the
 object's medium) and model glass (`GLAS ___BLANK 1 0 n_d V_d …`, V_d 0 for a constant index); UNIT (MM, CM, IN, METER) scales every
 length to mm; angle fields (YFLN/XFLN with FTYP 0) give the half field; WAVM (or WAVL) the
 wavelengths (µm in the file, nm here); surface 0's DISZ the object distance (INFINITY). Surface 0 is
@@ -13,9 +14,12 @@ mirrors and other field types are refused, naming them.
 from __future__ import annotations
 
 from ..errors import SolasError
+from . import glass as glass_mod
 
 UNITS = {"MM": 1.0, "CM": 10.0, "IN": 25.4, "METER": 1000.0, "M": 1000.0}
 SURFACE_TYPES = ("STANDARD", "EVENASPH")
+# GCAT catalogue names → our vendors (Zemax's NIKON catalogue is Hikari's glass).
+GCAT_VENDORS = {**{v: v for v in glass_mod.VENDORS}, "NIKON": "HIKARI", "NIKON-HIKARI": "HIKARI"}
 
 
 def _floats(tokens: list[str], where: str) -> list[float]:
@@ -45,15 +49,18 @@ def _blocks(text: str, where: str) -> tuple[dict, list[dict]]:
     return top, surfaces
 
 
-def _material(glas: list[str], ident: str) -> str:
-    """Our material name for a GLAS line's tokens."""
+def _material(glas: list[str], ident: str, gcat: tuple[str, ...] = ()) -> str:
+    """Our material name for a GLAS line's tokens; `gcat`: our vendors that the file's GCAT line lists,
+    which pick among catalogue entries of the same name."""
     name = glas[0] if glas else ""
     if name.upper() == "MIRROR":
         raise SolasError(f"{ident}: GLAS MIRROR: mirrors are not supported (refracting surfaces only)")
     if name.upper() == "___BLANK":
         nd, vd = _floats(glas[3:5], f"{ident}: model glass GLAS ___BLANK")
         return f"model:{nd!r}" if vd == 0 else f"model:{nd!r}/{vd!r}"
-    return name
+    keys = glass_mod.candidates(name) if name and name.upper() != "AIR" else []
+    listed = [k for k in keys if k.split(":", 1)[0] in gcat]
+    return listed[0] if len(keys) > 1 and len(listed) == 1 else name
 
 
 def read_spec(text: str, where: str) -> dict:
@@ -72,8 +79,9 @@ def read_spec(text: str, where: str) -> dict:
     obj_z = (blocks[0].get("DISZ") or [["INFINITY"]])[0][0]
     spec["object"] = {"distance": "infinity" if obj_z.upper().startswith("INF")
                       else _floats([obj_z], f"{where}: object DISZ")[0] * scale}
+    gcat = tuple(GCAT_VENDORS[c.upper()] for line in top.get("GCAT", []) for c in line if c.upper() in GCAT_VENDORS)
     if "GLAS" in blocks[0]:
-        spec["object"]["material"] = _material(blocks[0]["GLAS"][0], f"{where}: SURF 0 (object)")
+        spec["object"]["material"] = _material(blocks[0]["GLAS"][0], f"{where}: SURF 0 (object)", gcat)
     for i, b in enumerate(blocks[1:-1], start=1):
         ident = f"{where}: SURF {i} (line {b['line']})"
         kind = (b.get("TYPE") or [["STANDARD"]])[0][0].upper()
@@ -89,7 +97,7 @@ def read_spec(text: str, where: str) -> dict:
                "radius": 0.0 if curv == 0 else 1.0 / curv,
                "thickness": _floats([thickness], f"{ident}: DISZ")[0] * scale,
                "diameter": 2.0 * _floats(b["DIAM"][0][:1], f"{ident}: DIAM")[0] * scale,
-               "material": _material(b["GLAS"][0], ident) if "GLAS" in b else "AIR"}
+               "material": _material(b["GLAS"][0], ident, gcat) if "GLAS" in b else "AIR"}
         conic = _floats((b.get("CONI") or [["0"]])[0][:1], f"{ident}: CONI")[0]
         if conic:
             row["conic"] = conic
@@ -124,7 +132,9 @@ def read_spec(text: str, where: str) -> dict:
 
 def dumps(lens) -> str:
     """The .zmx text of `lens` (a `solas_mi.optics.lens.Lens`): UNIT MM, the aperture floating on the
-    stop's DIAM, angle fields 0 and the half field, the lens's wavelengths."""
+    stop's DIAM, angle fields 0 and the half field, the lens's wavelengths; GCAT lists the vendors of
+    its catalogue glasses and GLAS their names in those catalogues (the full VENDOR:NAME where two
+    of the listed vendors use the same name)."""
     def number(v: float) -> str:
         return repr(float(v))
 
@@ -134,10 +144,17 @@ def dumps(lens) -> str:
         if g.kind == "model":
             nd, vd = (g.coefficients[0][0], 0.0) if g.coefficients[1][0] == 0 else g.abbe()
             return [f"  GLAS ___BLANK 1 0 {number(nd)} {number(vd)} 0 0 0 0 0 0"]
-        return [f"  GLAS {g.name.split(':', 1)[-1]} 0 0 {number(g.abbe()[0])} {number(g.abbe()[1])} 0 0 0 0 0 0"]
+        bare = g.name.split(":", 1)[-1]
+        same = [k for k in glass_mod.candidates(bare) if k.split(":", 1)[0] in vendors]
+        name = bare if same == [g.name] else g.name
+        return [f"  GLAS {name} 0 0 {number(g.abbe()[0])} {number(g.abbe()[1])} 0 0 0 0 0 0"]
+
+    glasses = [lens.object_glass, *(s.glass for s in lens.surfaces)]
+    vendors = list(dict.fromkeys(g.name.split(":", 1)[0] for g in glasses if g.kind not in ("air", "model")))
 
     out = ["VERS 190513 80 123457 L123457", "MODE SEQ", f"NAME {lens.name}", "PFIL 0 0 0",
-           "UNIT MM X W X CM MR CPMM", "FLOA", "FTYP 0 0 2 %d 0 0 0" % len(lens.wavelengths_nm),
+           "UNIT MM X W X CM MR CPMM", *([f"GCAT {' '.join(vendors)}"] if vendors else []),
+           "FLOA", "FTYP 0 0 2 %d 0 0 0" % len(lens.wavelengths_nm),
            "XFLN 0 0", f"YFLN 0 {number(lens.field_deg)}"]
     out += [f"WAVM {i} {number(w / 1000.0)} 1" for i, w in enumerate(lens.wavelengths_nm, start=1)]
     out += [f"PWAV {lens.wavelengths_nm.index(lens.primary_wavelength) + 1}"]

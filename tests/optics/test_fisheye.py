@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from solas_mi import Lens, SolasError
+from solas_mi.optics import glass as glass_mod
 from solas_mi.optics import pupil as P
 from solas_mi.optics import tracer as T
 from solas_mi.optics.lens import check_field
@@ -23,6 +24,23 @@ def test_published_efl_and_f_number(fisheye):
     assert abs(p.efl_mm / 10.5 - 1.0) < 1e-3
     assert abs(p.f_number / 2.8 - 1.0) < 1e-2
     assert fisheye.polar_field and fisheye.field_deg >= 90.0
+
+
+# The patent's n_d / V_d per element (US 7,161,746 B2), in file order.
+PATENT_GLASS = [(1.62041, 60.29), (1.81600, 46.63), (1.72000, 43.69), (1.77250, 49.61), (1.72825, 28.46),
+                (1.51742, 52.42), (1.83481, 42.72), (1.84666, 23.78), (1.49700, 81.61), (1.65160, 58.54)]
+
+
+def test_the_glasses_are_vendor_glasses_of_the_patents_nd_vd(fisheye):
+    glasses = [s.glass for s in fisheye.surfaces if s.glass.kind != "air"]
+    assert len(glasses) == len(PATENT_GLASS)
+    for g, (nd, vd) in zip(glasses, PATENT_GLASS):
+        assert g.kind in ("sellmeier", "polynomial") and g.name.split(":")[0] in glass_mod.VENDORS
+        assert g.name in [m.key for m in glass_mod.match(nd, vd)]
+        formula_nd, formula_vd = g.abbe()
+        assert abs(formula_nd - nd) <= 4e-6 and abs(formula_vd - vd) <= 0.015, g.name
+    # n_d as the patent's to 4e-6: the d-line EFL is the scaled 10.5 mm to 1e-5 (the model glasses gave 10.500034)
+    assert paraxial(fisheye, LINE_D).efl_mm == pytest.approx(10.5, rel=1e-5)
 
 
 def test_chief_rays_reach_the_stop_centre_out_to_90_degrees(fisheye):

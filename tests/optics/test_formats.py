@@ -106,9 +106,34 @@ def test_utf16_file_as_opticstudio_writes_it(tmp_path):
 
 
 def test_unknown_glass_is_named(tmp_path):
-    (tmp_path / "other.zmx").write_text(ZMX.format(glass="S-BSL7"))
-    with pytest.raises(SolasError, match=r"other.zmx: surface 1 \(SURF 1\): unknown glass 'S-BSL7'"):
+    (tmp_path / "other.zmx").write_text(ZMX.format(glass="S-BSL99"))
+    with pytest.raises(SolasError, match=r"other.zmx: surface 1 \(SURF 1\): unknown glass 'S-BSL99'"):
         Lens.load(tmp_path / "other.zmx")
+
+
+@pytest.mark.parametrize("name,key", [("S-LAH59", "OHARA:S-LAH59"), ("TAFD5G", "HOYA:TAFD5G"),
+                                      ("TAFD5F", "HOYA:TAFD5F"), ("H-ZF52", "CDGM:H-ZF52"), ("S-BSL7", "OHARA:S-BSL7")])
+def test_other_vendors_glass_names_load(name, key, tmp_path):
+    (tmp_path / "vendor.zmx").write_text(ZMX.format(glass=name))
+    lens = Lens.load(tmp_path / "vendor.zmx")
+    assert lens.surfaces[0].glass.name == key
+    same_lens(lens, Lens.load(lens.save(tmp_path / "again.zmx")))
+
+
+def test_gcat_picks_the_vendor_of_a_shared_name(tmp_path):
+    """"F2" is SCHOTT's, CDGM's and HIKARI's: the file's GCAT line says which; without one it fails."""
+    path = tmp_path / "f2.zmx"
+    path.write_text(ZMX.format(glass="F2"))
+    with pytest.raises(SolasError, match=r"glass name 'F2' is ambiguous: it matches CDGM:F2, HIKARI:F2, SCHOTT:F2"):
+        Lens.load(path)
+    for gcat, key in [("SCHOTT", "SCHOTT:F2"), ("OHARA CDGM", "CDGM:F2"), ("NIKON HOYA", "HIKARI:F2")]:
+        path.write_text(ZMX.format(glass="F2").replace("ENPD 2", f"ENPD 2\nGCAT {gcat}"))
+        assert Lens.load(path).surfaces[0].glass.name == key
+    lens = Lens.load("solas-doublet")  # written with GCAT SCHOTT and GLAS F2, read back as SCHOTT:F2
+    text = (tmp_path / "doublet.zmx")
+    lens.save(text)
+    assert "GCAT SCHOTT" in text.read_text() and "GLAS F2 " in text.read_text()
+    assert [s.glass.name for s in Lens.load(text).surfaces][:2] == ["SCHOTT:N-BK7", "SCHOTT:F2"]
 
 
 def test_model_glass_and_refusals(tmp_path):
@@ -138,6 +163,9 @@ def test_pbrt_table_with_and_without_abbe_numbers(tmp_path):
         Lens.load(path)
     path.write_text("50.0 6.0 1.5168 24.0 64.17\n-500.0 2.0 1 24.0 0\n0 40 0 10.0 0\n")
     assert Lens.load(path).surfaces[0].glass.name == "SCHOTT:N-BK7"  # n_d, V_d of the catalogue's N-BK7
+    # 3 decimals that several vendors' glasses share within the rounding: a model glass
+    path.write_text("50.0 6.0 1.670 24.0 47.1\n-500.0 2.0 1 24.0 0\n0 40 0 10.0 0\n")
+    assert Lens.load(path).surfaces[0].glass.name == "model:1.67/47.1"
 
 
 def test_lens_convert_command(tmp_path, capsys):

@@ -50,8 +50,10 @@ def test_missing_stop(doublet_spec):
 
 
 def test_unknown_glass_names_surface(doublet_spec):
-    doublet_spec["surface"][1]["material"] = "F3"
-    _bad(doublet_spec, r"surface 2 \(Surface 2\): unknown glass 'F3'")
+    doublet_spec["surface"][1]["material"] = "F33"
+    _bad(doublet_spec, r"surface 2 \(Surface 2\): unknown glass 'F33'")
+    doublet_spec["surface"][1]["material"] = "F3"  # CDGM's and HIKARI's
+    _bad(doublet_spec, r"surface 2 \(Surface 2\): glass name 'F3' is ambiguous: it matches CDGM:F3, HIKARI:F3")
 
 
 def test_wavelength_outside_glass_range(doublet):

@@ -101,3 +101,15 @@ def test_different_wavelengths_follow_one_lane_weighted_by_four(mi, sample1, lan
     assert sin_t == pytest.approx(0.6 / n, rel=1e-5)  # Snell's law at this lane's index
     _, equal = _sample(mi, bsdf, ctx, _interaction(mi, [lams[lane]] * 4), sample1)
     assert np.allclose(equal, (1 - r) / n ** 2, rtol=1e-5)
+
+
+@pytest.mark.parametrize("name", ["HOYA:TAFD5F", "OHARA:S-LAH59"])
+def test_vendor_glass_refracts_with_its_catalogue_index(mi, name):
+    """A polynomial-formula glass (HOYA) and a Sellmeier one (OHARA) in the BSDF: the refracted
+    direction obeys Snell's law with the catalogue's index at each lane's wavelength."""
+    bsdf = mi.load_dict({"type": "sellmeier_dielectric", "int_glass": name, "fresnel": "transmit"})
+    ctx = mi.BSDFContext(mi.TransportMode.Radiance, +mi.BSDFFlags.DeltaTransmission, 1)
+    for lam in (450.0, 587.5618, 700.0):
+        bs, _ = _sample(mi, bsdf, ctx, _interaction(mi, [lam] * 4), sample1=0.0)
+        n = resolve(name).index(lam)
+        assert abs(float(bs.wo.x[0])) == pytest.approx(0.6 / n, rel=2e-6)

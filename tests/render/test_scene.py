@@ -26,7 +26,7 @@ def test_parts_of_the_doublet(doublet):
     # three refracting caps (the stop refracts nothing), an absorbing ring per aperture, the barrel
     assert names == ["surface1", "aperture1", "surface2", "aperture2", "surface3", "aperture3", "aperture4", "barrel"]
     glasses = [(p.ext_glass, p.int_glass) for p in lens_parts(doublet, 16) if p.int_glass]
-    assert glasses == [("AIR", "BK7"), ("BK7", "F2"), ("F2", "AIR")]
+    assert glasses == [("AIR", "BK7"), ("BK7", "SCHOTT:F2"), ("SCHOTT:F2", "AIR")]
 
 
 def test_bad_ring_count(doublet):
@@ -44,7 +44,7 @@ def test_surfaces_closer_than_the_ray_continuation_are_refused(doublet_spec):
     spec["surface"] = [dict(s) for s in doublet_spec["surface"]]
     spec["surface"][1]["material"] = "AIR"
     spec["surface"][1]["thickness"] = 5e-5
-    spec["surface"].insert(2, dict(spec["surface"][1], thickness=3.0, material="F2", label="thin"))
+    spec["surface"].insert(2, dict(spec["surface"][1], thickness=3.0, material="SCHOTT:F2", label="thin"))
     lens = Lens.from_dict(spec)
     with pytest.raises(SolasError, match=r"surfaces 2 and 3 .* are 5e-05 mm apart .* at least 0.001 mm apart"):
         lens_parts(lens)
