@@ -43,6 +43,28 @@ def test_the_glasses_are_vendor_glasses_of_the_patents_nd_vd(fisheye):
     assert paraxial(fisheye, LINE_D).efl_mm == pytest.approx(10.5, rel=1e-5)
 
 
+def test_scaled_to_10_5_mm_the_image_circle_is_the_products_diagonal(fisheye):
+    """An independent check of the file's scaling (the transcription traces to 9.8995 mm; every length
+    is ×1.060657 for the published 10.5 mm): the product's angle of view, 180° across the diagonal of
+    the 23.6 × 15.8 mm DX frame, puts 90° at the half-diagonal 14.20 mm. The scaled lens lands its
+    real chief ray there within 2 % (measured 14.00 mm); the table as transcribed lands 7 % short."""
+    from dataclasses import replace
+
+    half_diagonal = 0.5 * np.hypot(23.6, 15.8)
+    ninety = np.array([[0.0, 90.0]])
+    h = chief_rays_height(fisheye, ninety)
+    assert abs(h / half_diagonal - 1.0) < 0.02
+    k = 10.5 / 9.8995
+    printed = replace(fisheye, surfaces=tuple(replace(s, radius=s.radius / k, thickness=s.thickness / k,
+                                                      diameter=s.diameter / k) for s in fisheye.surfaces), memo={})
+    assert paraxial(printed, LINE_D).efl_mm == pytest.approx(9.8995, rel=1e-4)
+    assert chief_rays_height(printed, ninety) / half_diagonal < 0.94
+
+
+def chief_rays_height(lens, field_deg):
+    return float(np.hypot(*P.chief_rays(lens, field_deg, np.array([LINE_D])).image_xy[0]))
+
+
 def test_chief_rays_reach_the_stop_centre_out_to_90_degrees(fisheye):
     theta = np.concatenate([[0.0, 1.0], np.arange(10.0, 91.0, 10.0)])
     fields = np.stack([np.zeros_like(theta), theta], axis=-1)
