@@ -33,12 +33,12 @@ the image-plane point (in units where the width spans ±P(fov_deg)) is "rectilin
 sin φ) (w_z > 0 only; the default), "equidistant" θ (cos φ, sin φ) (the polar fields of wide lenses,
 `Lens.polar_field`: field (x, y) deg sits at (x, y) in radians), "equisolid" 2 sin(θ/2) (cos φ,
 sin φ) (equal area), or "equirectangular" (longitude atan2(w_x, w_z), latitude asin(w_y)), an
-environment map. Emitter sampling for stock integrators (`sample_direction`, `pdf_direction`,
-`sample_ray`) is rectilinear only; the other mappings render in solas-mi's loop.
+environment map (`plane_point`, and its inverse `plane_direction`).
 
-Mitsuba's integrators (at infinity only): `eval`/`eval_direction` as above; `sample_direction` picks
-a texel with probability ∝ its R + G + B and a uniform point of its tangent-space square, so
-`pdf_direction` = p(texel)/pitch² × (1 + t_x² + t_y²)^(3/2) per steradian (0 outside the image: the
+Mitsuba's integrators (at infinity only, every mapping): `eval`/`eval_direction` as above;
+`sample_direction` picks a texel with probability ∝ its R + G + B and a uniform point of its square on
+the image plane, so `pdf_direction` = p(texel)/pitch² × dA/dω per steradian, dA/dω the mapping's
+image-plane area per steradian (`plane_direction`; (1 + t_x² + t_y²)^(3/2) rectilinear) (0 outside the image: the
 "edge"/"reflect" surroundings are reached by BSDF sampling only); `sample_ray` (light tracing) takes
 that direction and an origin on the disk of the scene's bounding sphere facing it, as Mitsuba's
 `envmap` does, wavelengths uniform over 360–830 nm (`sample_wavelengths`, `pdf_wavelengths`); light
@@ -94,6 +94,33 @@ def plane_point(mapping: str, wx, wy, wz):
     return wx * k, wy * k, theta < math.pi
 
 
+def plane_direction(mapping: str, a, b):
+    """The inverse of `plane_point`: the light's direction of travel w (unit) at image-plane point
+    (a, b) in `mapping`, the image-plane area per steradian there (dA/dω: (1 + a² + b²)^(3/2)
+    rectilinear, θ/sin θ equidistant, 1 equisolid, 1/cos(latitude) equirectangular), and whether the
+    mapping covers the point (equidistant: θ ≤ π; equisolid: r ≤ 2; equirectangular: |longitude| ≤ π,
+    |latitude| < π/2)."""
+    if mapping == "rectilinear":
+        q = 1.0 + a * a + b * b
+        inv = dr.rsqrt(q)
+        return mi.Vector3f(a * inv, b * inv, inv), q * dr.sqrt(q), mi.Bool(True)
+    if mapping == "equirectangular":
+        cos_b = dr.cos(b)
+        covered = (dr.abs(a) <= math.pi) & (dr.abs(b) < 0.5 * math.pi)
+        return (mi.Vector3f(cos_b * dr.sin(a), dr.sin(b), cos_b * dr.cos(a)),
+                dr.rcp(dr.maximum(cos_b, 1e-12)), covered)
+    r = dr.sqrt(a * a + b * b)
+    if mapping == "equidistant":
+        theta, covered = r, r <= math.pi
+    else:
+        theta, covered = 2.0 * dr.asin(dr.minimum(0.5 * r, 1.0)), r <= 2.0
+    sin_t = dr.sin(theta)
+    k = dr.select(r > 0, sin_t / dr.select(r > 0, r, 1.0), 1.0)
+    area = 1.0 if mapping == "equisolid" else dr.select(theta > 1e-4, theta / dr.maximum(sin_t, 1e-12),
+                                                         1.0 + theta * theta / 6.0)
+    return mi.Vector3f(a * k, b * k, dr.cos(theta)), mi.Float(area), covered
+
+
 def _fold(i, n: int, boundary: str):
     """Integer texel index i folded into [0, n) by the boundary rule, and whether it is inside."""
     if boundary == "reflect":
@@ -134,8 +161,22 @@ class ImageObject(mi.Emitter):
         self.tan_pitch = half_width(self.mapping, self.fov_deg) / (self.width / 2)  # image-plane units per texel
         weights = np.maximum(rgb, 0.0).sum(axis=-1).ravel()
         weights = weights if weights.sum() > 0 else np.ones_like(weights)  # a black image: uniform
+        weights = np.where(self._texels_seen(), weights, 0.0)  # none drawn wholly outside the mapping's domain
         self.texel_distribution = mi.DiscreteDistribution(table(weights))
         self.bsphere = None  # (centre, radius) of the scene, from set_scene
+
+    def _texels_seen(self) -> np.ndarray:
+        """Per texel (row-major), whether a corner or the centre of its square is a direction of the
+        mapping (`plane_direction`); texels wholly beyond it (an equisolid image reaching past 180°,
+        an equirectangular one past the poles) are never sampled."""
+        col, row = np.meshgrid(np.arange(2 * self.width + 1) / 2.0, np.arange(2 * self.height + 1) / 2.0)
+        a = (col - self.width / 2) * self.tan_pitch
+        b = (self.height / 2 - row) * self.tan_pitch
+        covered = np.broadcast_to(np.array(plane_direction(self.mapping, mi.Float(a.ravel()), mi.Float(b.ravel()))[2]),
+                                  a.size).reshape(a.shape)
+        seen = covered[0::2, 0::2][:-1, :-1] | covered[0::2, 2::2][:-1] | covered[2::2, 0::2][:, :-1] | \
+            covered[2::2, 2::2] | covered[1::2, 1::2]
+        return seen.ravel()
 
     def set_scene(self, scene) -> None:
         """Take the bounding sphere of `scene` (light tracing starts rays on its disks)."""
@@ -208,12 +249,6 @@ class ImageObject(mi.Emitter):
             value[i] = self._texel(dr.floor(u), dr.floor(v), self._channel(wavelengths[i]), active)
         return value
 
-    def _rectilinear(self) -> None:
-        self._at_infinity()
-        if self.mapping != "rectilinear":
-            raise SolasError(f"image_object mapping {self.mapping!r}: emitter sampling for Mitsuba's integrators is "
-                             "rectilinear only; render this object with solas-mi's loop (render-image)")
-
     def _at_infinity(self) -> None:
         if not math.isinf(self.distance):
             raise SolasError(f"image_object at distance_mm {self.distance:g}: Mitsuba's integrators give an emitter no "
@@ -231,17 +266,18 @@ class ImageObject(mi.Emitter):
         return self._lanes(u, v, it.wavelengths, active & front)
 
     def _sample_texel(self, sample: mi.Point2f, active):
-        """(direction toward the object, texel coordinates u, v, pdf per steradian)."""
+        """(direction toward the object, texel coordinates u, v, pdf per steradian): a texel by its
+        weight, a uniform point of its square on the image plane, that point's direction in the
+        mapping (pdf 0 where the mapping does not cover it)."""
         index, x = self.texel_distribution.sample_reuse(sample.x, active)
         u, v = mi.Float(index % self.width) + x, mi.Float(index // self.width) + sample.y
-        tx, ty = (u - self.width / 2) * self.tan_pitch, (self.height / 2 - v) * self.tan_pitch
-        q = 1.0 + tx * tx + ty * ty
-        d = mi.Vector3f(-tx, -ty, -1.0) * dr.rsqrt(q)
+        a, b = (u - self.width / 2) * self.tan_pitch, (self.height / 2 - v) * self.tan_pitch
+        w, area, covered = plane_direction(self.mapping, a, b)
         pmf = self.texel_distribution.eval_pmf_normalized(index, active)
-        return d, u, v, pmf / (self.tan_pitch ** 2) * q * dr.sqrt(q)
+        return -w, u, v, dr.select(covered, pmf / (self.tan_pitch ** 2) * area, 0.0)
 
     def sample_direction(self, it, sample, active=True):
-        self._rectilinear()
+        self._at_infinity()
         d, u, v, pdf = self._sample_texel(sample, active)
         centre, radius = self.bounding_sphere()
         dist = 2.0 * dr.maximum(radius, dr.norm(it.p - centre))
@@ -253,14 +289,16 @@ class ImageObject(mi.Emitter):
         return ds, dr.select(active & (pdf > 0), value / pdf, 0.0)
 
     def pdf_direction(self, it, ds, active=True):
-        self._rectilinear()
-        u, v, front = self._tangent(ds.d)
+        self._at_infinity()
+        d = dr.normalize(ds.d)
+        a, b, front = plane_point(self.mapping, -d.x, -d.y, -d.z)
+        u, v = a / self.tan_pitch + self.width / 2, self.height / 2 - b / self.tan_pitch
         inside = front & (u >= 0) & (u < self.width) & (v >= 0) & (v < self.height) & active
         index = mi.UInt32(dr.clip(dr.floor(v), 0, self.height - 1)) * self.width + \
             mi.UInt32(dr.clip(dr.floor(u), 0, self.width - 1))
-        q = dr.square(dr.norm(ds.d) / ds.d.z)  # 1 + t_x² + t_y²
-        pdf = self.texel_distribution.eval_pmf_normalized(index, inside) / (self.tan_pitch ** 2) * q * dr.sqrt(q)
-        return dr.select(inside, pdf, 0.0)
+        _, area, covered = plane_direction(self.mapping, a, b)
+        pdf = self.texel_distribution.eval_pmf_normalized(index, inside) / (self.tan_pitch ** 2) * area
+        return dr.select(inside & covered, pdf, 0.0)
 
     def sample_wavelengths(self, si, sample, active=True):
         """Wavelengths uniform over SPECTRUM_NM, weighted by the radiance at si.uv over their pdf."""
@@ -274,7 +312,7 @@ class ImageObject(mi.Emitter):
         return dr.select((wavelengths >= lo) & (wavelengths <= hi), 1.0 / (hi - lo), 0.0)
 
     def sample_ray(self, time, sample1, sample2, sample3, active=True):
-        self._rectilinear()
+        self._at_infinity()
         d, u, v, pdf = self._sample_texel(sample3, active)
         centre, radius = self.bounding_sphere()
         offset = mi.warp.square_to_uniform_disk_concentric(sample2)

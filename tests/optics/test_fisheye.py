@@ -39,6 +39,8 @@ def test_the_glasses_are_vendor_glasses_of_the_patents_nd_vd(fisheye):
         assert g.name in [m.key for m in glass_mod.match(nd, vd)]
         formula_nd, formula_vd = g.abbe()
         assert abs(formula_nd - nd) <= 4e-6 and abs(formula_vd - vd) <= 0.015, g.name
+        lo, hi = g.range_nm
+        assert lo <= 380.0 and hi >= 780.0, g.name  # the srgb response renders over 380-780 nm
     # n_d as the patent's to 4e-6: the d-line EFL is the scaled 10.5 mm to 1e-5 (the model glasses gave 10.500034)
     assert paraxial(fisheye, LINE_D).efl_mm == pytest.approx(10.5, rel=1e-5)
 
