@@ -10,6 +10,7 @@ of direction) or on a plane at a finite distance.
 | `distance_mm` | float  | mm      | 0 (at infinity) | the image on the plane z = −distance_mm instead         |
 | `mapping`     | string | —       | "rectilinear"   | projection of the image at infinity (below)             |
 | `scale`       | float  | —       | 1.0             | radiance multiplier                                     |
+| `wavelength`  | float  | nm      | 587.5618        | the wavelength of the non-spectral (mono) variants      |
 
 `traverse` exposes `scale` (differentiable; in the JIT variants `mi.traverse` edits it without reloading
 the scene; the scalar variants can read it only).
@@ -22,7 +23,8 @@ square (nearest neighbour, the model the PSF-grid convolution uses). Outside the
 texels, "reflect" mirrors about the border, "zero" is black. At a finite distance the plane is
 centred on the axis and spans ±distance_mm·tan(fov_deg) across its width. RGB becomes a spectrum of
 three bands (`solas_mi.render.response.RGB_BANDS_NM`): blue below 500 nm, green to 590 nm, red above;
-each spectral lane takes the band of its own wavelength.
+each spectral lane takes the band of its own wavelength. A mono variant carries no wavelength: the
+band is that of `wavelength`, which solas-mi's scenes set to the camera response's one wavelength.
 
 Rays arriving here travel away from the lens (−z): a direction d has tangents (d_x/d_z, d_y/d_z),
 which is the field of light coming from there.
@@ -66,6 +68,7 @@ from solas_mi.errors import SolasError
 from solas_mi.imageio import read_image
 from solas_mi.optics.camera import BOUNDARIES, MAPPINGS
 from solas_mi.plugins.scene_probe import calling_render
+from solas_mi.plugins.sellmeier_dielectric import D_LINE_NM
 from solas_mi.plugins.tables import lookup, table, zeros
 from solas_mi.render.response import RGB_BANDS_NM
 
@@ -114,6 +117,9 @@ class ImageObject(mi.Emitter):
         self.fov_deg = float(props.get("fov_deg", 2.0))
         distance = props.get("distance_mm", 0.0)
         self.distance = float(distance) if distance else math.inf
+        self.wavelength = float(props.get("wavelength", D_LINE_NM))
+        if not self.wavelength > 0:
+            raise SolasError(f"image_object wavelength {props.get('wavelength')!r} must be positive (nm)")
         self.mapping = str(props.get("mapping", "rectilinear"))
         if self.mapping not in MAPPINGS:
             raise SolasError(f"image_object mapping {self.mapping!r} must be one of {', '.join(MAPPINGS)}")
@@ -168,7 +174,7 @@ class ImageObject(mi.Emitter):
             tx, ty = -tx, -ty  # a point at +x on the plane sends light of field −x
         u = tx / self.tan_pitch + self.width / 2  # continuous texel coordinates
         v = self.height / 2 - ty / self.tan_pitch
-        channel = self._channel(wavelengths[0] if mi.is_spectral else 550.0)
+        channel = self._channel(wavelengths[0] if mi.is_spectral else self.wavelength)
         if self.mapping == "rectilinear":
             active = active & (d.z < 0)
         if footprint is None:
@@ -202,7 +208,7 @@ class ImageObject(mi.Emitter):
     def _lanes(self, u, v, wavelengths, active) -> mi.Spectrum:
         """Radiance of texel coordinates (u, v), each spectral lane in the band of its own wavelength."""
         if not mi.is_spectral:
-            return mi.Spectrum(self._texel(dr.floor(u), dr.floor(v), mi.UInt32(1), active))
+            return mi.Spectrum(self._texel(dr.floor(u), dr.floor(v), self._channel(self.wavelength), active))
         value = mi.Spectrum(0.0)
         for i in range(4):
             value[i] = self._texel(dr.floor(u), dr.floor(v), self._channel(wavelengths[i]), active)
@@ -263,10 +269,13 @@ class ImageObject(mi.Emitter):
         return dr.select(inside, pdf, 0.0)
 
     def sample_wavelengths(self, si, sample, active=True):
-        """Wavelengths uniform over SPECTRUM_NM, weighted by the radiance at si.uv over their pdf."""
-        lo, hi = SPECTRUM_NM
-        lam = mi.Spectrum(lo + (hi - lo) * mi.sample_shifted(sample)) if mi.is_spectral else mi.Spectrum(0.0)
+        """Wavelengths uniform over SPECTRUM_NM, weighted by the radiance at si.uv over their pdf (a mono
+        variant: none, and the radiance at `wavelength`)."""
         u, v = si.uv.x * self.width, si.uv.y * self.height
+        if not mi.is_spectral:
+            return mi.Color0f(), self._lanes(u, v, None, active)
+        lo, hi = SPECTRUM_NM
+        lam = mi.Spectrum(lo + (hi - lo) * mi.sample_shifted(sample))
         return lam, self._lanes(u, v, lam, active) * (hi - lo)
 
     def pdf_wavelengths(self, wavelengths, active=True):

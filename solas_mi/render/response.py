@@ -50,6 +50,12 @@ class Response:
         lam = self.lo_nm[i] + np.clip(frac, 0.0, 1.0) * (self.hi_nm[i] - self.lo_nm[i])
         return lam, self.weights[i]
 
+    @property
+    def single_wavelength(self) -> float | None:
+        """The response's one wavelength (nm) when it samples only one (mono:λ, lines:λ), else None."""
+        one = len(self.lo_nm) == 1 and self.lo_nm[0] == self.hi_nm[0]
+        return float(self.lo_nm[0]) if one else None
+
     def meta(self) -> dict:
         """Name, channels and sampled wavelength range (nm) for a render's metadata."""
         return {"response": self.name, "channels": list(self.channels),
