@@ -9,12 +9,13 @@ value), e.g. `street_solas-doublet_focus1000_spp64.exr`. Each item's seed is der
 and the batch's base seed, so a re-run, another worker or Dask render it identically; the seed and
 the sweep point are in the manifest and in the EXR's metadata. No PSF grid is computed.
 
-Mitsuba variant: the cheapest that renders the job exactly (`render.mitsuba.variant_for`): an image
-with a response of one wavelength (mono:λ) renders in the mono JIT variant (its object's spectra are
-the image's bands, evaluated at λ), anything else, and every scene file, in the spectral one (a mono
-variant would turn a scene's RGB and spectral data into luminance). A `variant` given is used for
-every item (a mono one only with a response of one wavelength). The manifest's header records the
-variant of images and of scenes, each EXR the variant it was rendered in.
+Mitsuba variant (`render.mitsuba.variant_for`): the spectral JIT variant for every item, also at a
+response of one wavelength (mono:λ): the mono variant is measured no faster (images render in
+solas-mi's loop, which takes the same CPU time in mono; scene files render 1.5× slower in mono on the
+street scene, `benchmarks/bench_mono.py`), and it turns a scene file's RGB and spectral data into
+luminance instead of evaluating them at λ. A `variant` given is used for every item: a mono one
+needs a response of one wavelength, and renders images exactly as the spectral one, scene files
+alike only where their spectra are grey. The manifest's header and each EXR record the variant.
 """
 from __future__ import annotations
 
@@ -176,20 +177,15 @@ def estimate(p: RenderPlan, workers: int) -> dict[str, float]:
             "peak_bytes": min(workers, max(1, len(p.todo))) * peak}
 
 
-def batch_variants(lens, response: str, variant: str | None) -> str | dict[str, str]:
-    """The Mitsuba variant of a batch's items: `variant` when given (SolasError unless it serves the
-    response of every lens), else {"images": …, "scenes": …} as `render.mitsuba.variant_for` picks."""
+def batch_variant(lens, response: str, variant: str | None) -> str:
+    """The Mitsuba variant of a batch's items (`render.mitsuba.variant_for`): `variant` when given,
+    SolasError unless it serves the response of every lens of `lens`; else the spectral one."""
     from ..optics.lens import Lens
     from ..render import response as responses
     from ..render.mitsuba import variant_for
 
     parsed = [responses.parse(response, Lens.load(str(v)).wavelengths_nm) for v in _values("lens", lens)]
-    if variant is not None:
-        for r in parsed:
-            variant_for(r, False, variant)
-        return variant
-    return {kind: ", ".join(sorted({variant_for(r, grey) for r in parsed}))
-            for kind, grey in (("images", True), ("scenes", False))}
+    return ", ".join(sorted({variant_for(r, variant) for r in parsed}))
 
 
 def render_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *, lens: str | Sequence[str],
@@ -214,7 +210,7 @@ def render_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathL
                     spp=spp, response=response, fov_deg=fov_deg, boundary=boundary, fresnel=fresnel, seed=seed)
     check_memory(f"batch of {len(p.todo)} renders on {n} workers", estimate(p, n if dask is None else 1)["peak_bytes"],
                  force)
-    chosen = batch_variants(lens, response, variant)
+    chosen = batch_variant(lens, response, variant)
     # each local worker (and each Dask worker of a LocalCluster) gets its share of the cores, so that
     # the local and the Dask runs render with the same thread count (identical sums)
     threads = max(1, (os.cpu_count() or 1) // n) if dask in (None, "local") else None

@@ -50,7 +50,7 @@ def render_image(lens, image: str | np.ndarray, sensor: tuple[int, int] = (960, 
     # the user's mistakes, named here rather than inside the scene's plugins
     parsed = responses.parse(response, lens.wavelengths_nm)
     responses.check_lens(parsed, lens)
-    variant = variant_for(parsed, True, variant)  # the object's spectra are its image's bands: mono at one λ
+    variant = variant_for(parsed, variant)
     if not isinstance(image, np.ndarray):
         read_image(image)
     with tempfile.TemporaryDirectory(prefix="solas-scene-") as tmp:

@@ -1,9 +1,10 @@
 """Mitsuba for solas-mi: the variant, the plugins registered for it, and loading a scene file.
 
 Variants (float32): spectral — `llvm_ad_spectral` by default, `cuda_ad_spectral` where a CUDA device
-works, `scalar_spectral` for small reference renders — and mono — `llvm_ad_mono`, `cuda_ad_mono` —
-for a job of one wavelength (`variant_for` picks). The solas-mi plugins (`plugins/`, installed as
-`solas_mi.plugins`) are registered once for each variant, whoever set it.
+works, `scalar_spectral` for small reference renders — and, on request, mono — `llvm_ad_mono`,
+`cuda_ad_mono` — for a job of one wavelength (`variant_for`: why mono is not the default). The
+solas-mi plugins (`plugins/`, installed as `solas_mi.plugins`) are registered once for each variant,
+whoever set it.
 
 A mono variant carries no wavelength: the plugins take the response's one wavelength instead (the
 lens sensors trace the lens at it, `sellmeier_dielectric` and `image_object` their `wavelength`
@@ -25,16 +26,12 @@ VARIANTS = ("llvm_ad_spectral", "scalar_spectral", "cuda_ad_spectral", "llvm_ad_
 _registered: set[str] = set()  # variants whose plugin classes are registered
 
 
-def _cuda() -> bool:
+def default_variant() -> str:
+    """cuda_ad_spectral where a CUDA device works, else llvm_ad_spectral."""
     select_libllvm()
     import drjit as dr
 
-    return dr.has_backend(dr.JitBackend.CUDA)
-
-
-def default_variant() -> str:
-    """cuda_ad_spectral where a CUDA device works, else llvm_ad_spectral."""
-    return "cuda_ad_spectral" if _cuda() else "llvm_ad_spectral"
+    return "cuda_ad_spectral" if dr.has_backend(dr.JitBackend.CUDA) else "llvm_ad_spectral"
 
 
 def spectral(variant: str) -> bool:
@@ -43,25 +40,27 @@ def spectral(variant: str) -> bool:
 
 
 def check_variant(variant: str, response) -> None:
-    """SolasError unless `variant` can render `response` (`render.response.Response`): a non-spectral
-    variant needs a response of one wavelength."""
+    """SolasError unless `variant` is a known one that can render `response`
+    (`render.response.Response`): a non-spectral variant needs a response of one wavelength."""
+    check_name(variant)
     if not spectral(variant) and response.single_wavelength is None:
         raise SolasError(f"Mitsuba variant {variant} is not spectral: it renders one wavelength, and camera response "
                          f"{response.name} has more (use a spectral variant, or a response mono:<nm>)")
 
 
-def variant_for(response, grey_scene: bool, variant: str | None = None) -> str:
-    """The cheapest variant that renders `response` exactly: the mono JIT variant (cuda_ad_mono where
-    a CUDA device works, else llvm_ad_mono) for a response of one wavelength in a scene whose spectra
-    are grey (`grey_scene`: the image-object scene, the street experiment), else the spectral one
-    (`default_variant`). A `variant` given (the user's --variant) wins, checked against `response`."""
-    if variant is not None:
-        check_name(variant)
-        check_variant(variant, response)
-        return variant
-    if grey_scene and response.single_wavelength is not None:
-        return "cuda_ad_mono" if _cuda() else "llvm_ad_mono"
-    return default_variant()
+def variant_for(response, variant: str | None = None) -> str:
+    """The Mitsuba variant of a job at camera response `response` (`render.response.Response`):
+    `variant` when given (the user's --variant, checked by `check_variant`), else the spectral JIT
+    variant (`default_variant`), also at one wavelength. The mono variant is measured no faster there
+    (`benchmarks/bench_mono.py`, README): solas-mi's loop uses one lane of the spectral variant's four
+    and takes the same CPU time in mono, and Mitsuba's integrators render the street scene 1.5× slower
+    in mono (its hdrfilm costs more than the spectral variant's one-channel specfilm). A mono variant
+    renders the same image at λ where the scene's spectra are grey (the image-object scene, the
+    street experiment); elsewhere it turns RGB and spectral data into luminance."""
+    if variant is None:
+        return default_variant()
+    check_variant(variant, response)
+    return variant
 
 
 def check_name(variant: str) -> None:

@@ -77,7 +77,7 @@ def compare_fisheye(lens: Lens, env: np.ndarray, fov_deg: float, size: int, pitc
         raise SolasError(f"lens {lens.name} has tangent fields; the fisheye comparison needs a lens of polar fields")
     w = lens.primary_wavelength if wavelength_nm is None else lens.check_wavelength(wavelength_nm)
     runs = [render_image(lens, env, (size, size), pitch_um, spp=spp, response=f"mono:{w!r}", fov_deg=fov_deg,
-                         fresnel="off", mapping="equidistant", seed=seed).image[..., 0]
+                         fresnel="off", mapping="equidistant", variant="llvm_ad_spectral", seed=seed).image[..., 0]
             for seed in (0, 1)]
     direct = 0.5 * (runs[0] + runs[1])
     sensor_mm = (size * pitch_um * 1e-3,) * 2

@@ -15,8 +15,8 @@ Steps (each timed, wall-clock seconds):
     its file says: a far subject is not at infinity, and the doublet's defocus depends on it).
 (c) the scene through `lens_camera` (same pose, film and sampler; `mono` at the primary wavelength),
     focused at infinity and at the framing's near focus distance.
-Every render runs in the variant `render.mitsuba.variant_for` picks for a grey scene at one wavelength
-(the mono one) unless the settings name one.
+Every render runs in the settings' variant, by default the spectral one (`render.mitsuba.variant_for`:
+the mono variant renders this grey scene alike, 1.5× slower).
 (d) NS-SFR (`metrics.nssfr`) of every degraded image against the ideal one, on the edges found in the
     ideal one, per annulus: all edges and the far ones (every pixel of the ROI beyond FAR_M).
 (e) relative error maps (interp − render)/RMS(render) for both renders; RMS of the error on near
@@ -167,7 +167,7 @@ def run(lens, out: str | Path, settings: Settings | None = None, log=print) -> O
         log(f"street: {name}: {seconds[name]:.1f} s")
         return value
 
-    variant = variant_for(responses.mono(primary), True, s.variant)  # the scene is grey
+    variant = variant_for(responses.mono(primary), s.variant)  # grey scene: a mono variant given renders it alike
     xml = experiment_scene(s.scene, out, primary, spectral=spectral(variant))
     depth_xml = experiment_scene(s.scene, out, primary, depth=True)
     params = fr.params(2 * fov, w, h, s.spp_ideal)
