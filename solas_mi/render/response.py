@@ -163,6 +163,13 @@ def parse(text: str, lens_wavelengths_nm) -> Response:
     _bad(text, "unknown response")
 
 
+def one_wavelength(text: str, lens_wavelengths_nm) -> float | None:
+    """The one wavelength (nm) of the response named `text` (`Response.single_wavelength`), without
+    reading a table's file or the colour-matching functions: only "mono" and "lines" can have one."""
+    kind = str(text).partition(":")[0].strip().lower()
+    return parse(text, lens_wavelengths_nm).single_wavelength if kind in ("mono", "lines") else None
+
+
 def check_lens(response: Response, lens) -> None:
     """SolasError when a glass of `lens` has no index at some wavelength the response samples."""
     for w in (response.lo_nm.min(), response.hi_nm.max()):

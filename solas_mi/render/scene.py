@@ -289,7 +289,7 @@ def write_scene(lens: Lens, out_dir: str | os.PathLike, image: str, camera: Came
         lens_ref = lens_copy.name
     # deep enough for ghosts whatever `fresnel` is set to later: a path without them ends sooner anyway
     xml = scene_xml(lens_ref, parts, camera, image, spp, response, boundary, fresnel, path_depth(lens, ghosts=True),
-                    mapping, responses.parse(response, lens.wavelengths_nm).single_wavelength)
+                    mapping, responses.one_wavelength(response, lens.wavelengths_nm))
     path = out / name
     write_text(path, xml)
     return path
