@@ -10,6 +10,7 @@ of direction) or on a plane at a finite distance.
 | `distance_mm` | float  | mm      | 0 (at infinity) | the image on the plane z = −distance_mm instead         |
 | `mapping`     | string | —       | "rectilinear"   | projection of the image at infinity (below)             |
 | `scale`       | float  | —       | 1.0             | radiance multiplier                                     |
+| `wavelength`  | float  | nm      | 587.5618        | the wavelength of the non-spectral (mono) variants      |
 
 `traverse` exposes `scale` (differentiable; in the JIT variants `mi.traverse` edits it without reloading
 the scene; the scalar variants can read it only).
@@ -22,7 +23,8 @@ square (nearest neighbour, the model the PSF-grid convolution uses). Outside the
 texels, "reflect" mirrors about the border, "zero" is black. At a finite distance the plane is
 centred on the axis and spans ±distance_mm·tan(fov_deg) across its width. RGB becomes a spectrum of
 three bands (`solas_mi.render.response.RGB_BANDS_NM`): blue below 500 nm, green to 590 nm, red above;
-each spectral lane takes the band of its own wavelength.
+each spectral lane takes the band of its own wavelength. A mono variant carries no wavelength: the
+band is that of `wavelength`, which solas-mi's scenes set to the camera response's one wavelength.
 
 Rays arriving here travel away from the lens (−z): a direction d has tangents (d_x/d_z, d_y/d_z),
 which is the field of light coming from there.
@@ -66,6 +68,7 @@ from solas_mi.errors import SolasError
 from solas_mi.imageio import read_image
 from solas_mi.optics.camera import BOUNDARIES, MAPPINGS
 from solas_mi.plugins.scene_probe import calling_render
+from solas_mi.plugins.sellmeier_dielectric import D_LINE_NM
 from solas_mi.plugins.tables import lookup, table, zeros
 from solas_mi.render.response import RGB_BANDS_NM
 
@@ -94,26 +97,33 @@ def plane_point(mapping: str, wx, wy, wz):
     return wx * k, wy * k, theta < math.pi
 
 
+def in_domain(mapping: str, a, b):
+    """Whether the mapping covers image-plane point (a, b) (NumPy or Dr.Jit arrays): every point
+    rectilinear; θ ≤ π equidistant; r ≤ 2 (θ ≤ π) equisolid; |longitude| ≤ π and |latitude| < π/2
+    equirectangular."""
+    if mapping == "rectilinear":
+        return a == a
+    if mapping == "equirectangular":
+        return (a * a <= math.pi ** 2) & (b * b < 0.25 * math.pi ** 2)
+    return a * a + b * b <= (math.pi ** 2 if mapping == "equidistant" else 4.0)
+
+
 def plane_direction(mapping: str, a, b):
     """The inverse of `plane_point`: the light's direction of travel w (unit) at image-plane point
     (a, b) in `mapping`, the image-plane area per steradian there (dA/dω: (1 + a² + b²)^(3/2)
     rectilinear, θ/sin θ equidistant, 1 equisolid, 1/cos(latitude) equirectangular), and whether the
-    mapping covers the point (equidistant: θ ≤ π; equisolid: r ≤ 2; equirectangular: |longitude| ≤ π,
-    |latitude| < π/2)."""
+    mapping covers the point (`in_domain`)."""
+    covered = in_domain(mapping, a, b)
     if mapping == "rectilinear":
         q = 1.0 + a * a + b * b
         inv = dr.rsqrt(q)
-        return mi.Vector3f(a * inv, b * inv, inv), q * dr.sqrt(q), mi.Bool(True)
+        return mi.Vector3f(a * inv, b * inv, inv), q * dr.sqrt(q), covered
     if mapping == "equirectangular":
         cos_b = dr.cos(b)
-        covered = (dr.abs(a) <= math.pi) & (dr.abs(b) < 0.5 * math.pi)
         return (mi.Vector3f(cos_b * dr.sin(a), dr.sin(b), cos_b * dr.cos(a)),
                 dr.rcp(dr.maximum(cos_b, 1e-12)), covered)
     r = dr.sqrt(a * a + b * b)
-    if mapping == "equidistant":
-        theta, covered = r, r <= math.pi
-    else:
-        theta, covered = 2.0 * dr.asin(dr.minimum(0.5 * r, 1.0)), r <= 2.0
+    theta = r if mapping == "equidistant" else 2.0 * dr.asin(dr.minimum(0.5 * r, 1.0))
     sin_t = dr.sin(theta)
     k = dr.select(r > 0, sin_t / dr.select(r > 0, r, 1.0), 1.0)
     area = 1.0 if mapping == "equisolid" else dr.select(theta > 1e-4, theta / dr.maximum(sin_t, 1e-12),
@@ -141,6 +151,9 @@ class ImageObject(mi.Emitter):
         self.fov_deg = float(props.get("fov_deg", 2.0))
         distance = props.get("distance_mm", 0.0)
         self.distance = float(distance) if distance else math.inf
+        self.wavelength = float(props.get("wavelength", D_LINE_NM))
+        if not self.wavelength > 0:
+            raise SolasError(f"image_object wavelength {props.get('wavelength')!r} must be positive (nm)")
         self.mapping = str(props.get("mapping", "rectilinear"))
         if self.mapping not in MAPPINGS:
             raise SolasError(f"image_object mapping {self.mapping!r} must be one of {', '.join(MAPPINGS)}")
@@ -167,13 +180,12 @@ class ImageObject(mi.Emitter):
 
     def _texels_seen(self) -> np.ndarray:
         """Per texel (row-major), whether a corner or the centre of its square is a direction of the
-        mapping (`plane_direction`); texels wholly beyond it (an equisolid image reaching past 180°,
+        mapping (`in_domain`); texels wholly beyond it (an equisolid image reaching past 180°,
         an equirectangular one past the poles) are never sampled."""
         col, row = np.meshgrid(np.arange(2 * self.width + 1) / 2.0, np.arange(2 * self.height + 1) / 2.0)
         a = (col - self.width / 2) * self.tan_pitch
         b = (self.height / 2 - row) * self.tan_pitch
-        covered = np.broadcast_to(np.array(plane_direction(self.mapping, mi.Float(a.ravel()), mi.Float(b.ravel()))[2]),
-                                  a.size).reshape(a.shape)
+        covered = in_domain(self.mapping, a, b)
         seen = covered[0::2, 0::2][:-1, :-1] | covered[0::2, 2::2][:-1] | covered[2::2, 0::2][:, :-1] | \
             covered[2::2, 2::2] | covered[1::2, 1::2]
         return seen.ravel()
@@ -209,7 +221,7 @@ class ImageObject(mi.Emitter):
             tx, ty = -tx, -ty  # a point at +x on the plane sends light of field −x
         u = tx / self.tan_pitch + self.width / 2  # continuous texel coordinates
         v = self.height / 2 - ty / self.tan_pitch
-        channel = self._channel(wavelengths[0] if mi.is_spectral else 550.0)
+        channel = self._channel(wavelengths[0] if mi.is_spectral else self.wavelength)
         if self.mapping == "rectilinear":
             active = active & (d.z < 0)
         if footprint is None:
@@ -243,7 +255,7 @@ class ImageObject(mi.Emitter):
     def _lanes(self, u, v, wavelengths, active) -> mi.Spectrum:
         """Radiance of texel coordinates (u, v), each spectral lane in the band of its own wavelength."""
         if not mi.is_spectral:
-            return mi.Spectrum(self._texel(dr.floor(u), dr.floor(v), mi.UInt32(1), active))
+            return mi.Spectrum(self._texel(dr.floor(u), dr.floor(v), self._channel(self.wavelength), active))
         value = mi.Spectrum(0.0)
         for i in range(4):
             value[i] = self._texel(dr.floor(u), dr.floor(v), self._channel(wavelengths[i]), active)
@@ -301,10 +313,13 @@ class ImageObject(mi.Emitter):
         return dr.select(inside & covered, pdf, 0.0)
 
     def sample_wavelengths(self, si, sample, active=True):
-        """Wavelengths uniform over SPECTRUM_NM, weighted by the radiance at si.uv over their pdf."""
-        lo, hi = SPECTRUM_NM
-        lam = mi.Spectrum(lo + (hi - lo) * mi.sample_shifted(sample)) if mi.is_spectral else mi.Spectrum(0.0)
+        """Wavelengths uniform over SPECTRUM_NM, weighted by the radiance at si.uv over their pdf (a mono
+        variant: none, and the radiance at `wavelength`)."""
         u, v = si.uv.x * self.width, si.uv.y * self.height
+        if not mi.is_spectral:
+            return mi.Color0f(), self._lanes(u, v, None, active)
+        lo, hi = SPECTRUM_NM
+        lam = mi.Spectrum(lo + (hi - lo) * mi.sample_shifted(sample))
         return lam, self._lanes(u, v, lam, active) * (hi - lo)
 
     def pdf_wavelengths(self, wavelengths, active=True):

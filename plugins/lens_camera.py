@@ -39,6 +39,11 @@ is 1 at the image centre (less with `fresnel` "transmit") and falls off with the
 illumination. `hdrfilm` develops a continuous response ("srgb", "table:") with Mitsuba's CIE tables;
 lines ("lines", "mono:λ") have no density and need `specfilm`.
 
+Variants: spectral, or mono for a response of one wavelength (mono:λ): the lens is traced at λ and
+the scene's RGB and spectral data become Mitsuba's luminance, so a mono render equals the spectral
+one at λ only in a scene of grey (flat) spectra (`solas_mi.render.mitsuba.variant_for`). A mono
+variant with a response of more wavelengths is refused (SolasError naming both).
+
 Integrators: any that starts paths at the camera (`path`, `volpath`, `aov`, `direct`, …). Light
 tracing (`ptracer`) cannot connect to a sensor behind a lens: `sample_direction`, `pdf_direction`,
 `eval_direction` and `sample_position` raise a SolasError.
@@ -58,7 +63,7 @@ from solas_mi.optics.focus import focused
 from solas_mi.optics.lens import Lens
 from solas_mi.plugins.pupil_sampling import PupilSampler
 from solas_mi.plugins.scene_files import load_lens, load_response
-from solas_mi.plugins.wavelength_sampling import WavelengthSampler
+from solas_mi.plugins.wavelength_sampling import WavelengthSampler, lanes
 
 FRESNEL = ("off", "transmit")
 
@@ -93,9 +98,6 @@ class LensCamera(mi.Sensor):
 
     def __init__(self, props: mi.Properties) -> None:
         super().__init__(props)
-        if not mi.is_spectral:
-            raise SolasError(f"lens_camera: variant {mi.variant()} is not spectral; the lens needs one "
-                             "wavelength per path (use llvm_ad_spectral, cuda_ad_spectral or scalar_spectral)")
         lens = load_lens(props)
         self.pitch_um = _positive(props, "pitch_um", 5.0, "µm")
         self.world_unit_mm = _positive(props, "world_unit_mm", 1000.0, "mm per world unit")
@@ -129,14 +131,15 @@ class LensCamera(mi.Sensor):
         self.wavelengths = WavelengthSampler(r)
 
     def sample_wavelengths(self, si, sample, active=True):
-        """One wavelength (nm) from the response in all four lanes, and its weight 1/p(λ)."""
+        """One wavelength (nm) from the response in all four lanes (none in a mono variant), and its
+        weight 1/p(λ)."""
         lam, index = self.wavelengths.sample(sample, active)
-        return mi.Spectrum(lam), mi.Spectrum(self.wavelengths.weight(index, active))
+        return lanes(lam), mi.Spectrum(self.wavelengths.weight(index, active))
 
     def sample_ray(self, time, sample1, sample2, sample3, active=True):
         """The ray leaving surface 1 toward the scene (world units) and its weight (module docstring)."""
-        lam, inv_pdf = self.sample_wavelengths(None, sample1, active)
-        lam = lam[0]
+        lam, index = self.wavelengths.sample(sample1, active)
+        inv_pdf = self.wavelengths.weight(index, active)
         # film point, lens frame (mm): row 0 at +y, column 0 at −x, the lens inverting the image;
         # Mitsuba's integrators pass sample2 in [0, 1]² over the film's crop window
         col = dr.fma(sample2.x, self.crop_size[0], self.crop_offset[0])
@@ -154,10 +157,12 @@ class LensCamera(mi.Sensor):
         origin = mi.Point3f(mi.Float(out.x * scale), mi.Float(-out.y * scale),
                             mi.Float((out.z - self.last_vertex_z) * scale))
         direction = mi.Vector3f(mi.Float(out.dx), mi.Float(-out.dy), mi.Float(out.dz))
-        ray = self.world_transform() @ mi.Ray3f(origin, direction, time, mi.Spectrum(lam))
+        # origin and direction apart: `transform @ ray` fails in a mono variant once a spectral one ran (Mitsuba 3.9)
+        to_world = self.world_transform()
+        ray = mi.Ray3f(to_world @ origin, to_world @ direction, time, lanes(lam))
         weight = weight * self.norm * mi.Float(traced.transmittance)
         weight = dr.select(active & mi.Bool(passed), weight, 0.0)
-        return ray, mi.Spectrum(weight) * inv_pdf
+        return ray, mi.Spectrum(weight * inv_pdf)
 
     def sample_ray_differential(self, time, sample1, sample2, sample3, active=True):
         ray, weight = self.sample_ray(time, sample1, sample2, sample3, active)

@@ -45,6 +45,11 @@ the mean image irradiance over the pixel in units of the ideal camera's
 `solas_mi.optics.camera` for an input spanning ±fov_deg): an ideal lossless lens returns the input
 image.
 
+Variants: spectral, or mono for a response of one wavelength (the lens geometry then refracts at
+`sellmeier_dielectric`'s `wavelength` and the object takes `image_object`'s, which solas-mi's scenes
+set to the response's; solas-mi's loop checks that they agree). A mono variant with a response of
+more wavelengths is refused (SolasError naming both).
+
 Coordinates are the lens file's (mm): surface 1's vertex at the origin, +z toward the image, +y up;
 film row 0 is +y.
 """
@@ -64,7 +69,7 @@ from solas_mi.plugins.pupil_sampling import PupilSampler
 from solas_mi.plugins.scene_files import load_lens, load_response
 from solas_mi.plugins.scene_probe import calling_render, integrator_name
 from solas_mi.plugins.tables import lookup, table, zeros
-from solas_mi.plugins.wavelength_sampling import WavelengthSampler
+from solas_mi.plugins.wavelength_sampling import WavelengthSampler, lanes
 
 INTEGRATORS = ("path", "volpath", "aov")  # Mitsuba's integrators that render through the lens
 
@@ -134,10 +139,10 @@ class LensSensor(mi.Sensor):
         return mi.Point2f((sample2.x - 0.5) * (self.width * self.pitch_mm), (0.5 - sample2.y) * (self.height * self.pitch_mm))
 
     def sample_wavelengths(self, si, sample, active=True):
-        """One wavelength from the response in all four lanes, and its weight 1/p(λ)."""
+        """One wavelength from the response in all four lanes (none in a mono variant), and its weight 1/p(λ)."""
         lam, index = self.sample_wavelength(sample, active)
         inv_pdf = self.wavelengths.weight(index, active)
-        return (mi.Spectrum(lam), mi.Spectrum(inv_pdf)) if mi.is_spectral else (mi.Spectrum(0.0), mi.Spectrum(1.0))
+        return lanes(lam), mi.Spectrum(inv_pdf)
 
     def sample_ray(self, time, sample1, sample2, sample3, active=True):
         """A camera ray for Mitsuba's integrators: `pupil_ray` with the weight 1/p(λ) of its wavelength."""
@@ -154,7 +159,7 @@ class LensSensor(mi.Sensor):
         target, weight = self.pupil.sample(film, sample3, active)
         origin = mi.Point3f(film.x, film.y, self.image_z)
         d = mi.Point3f(target.x, target.y, self.pupil.plane_z) - origin
-        ray = mi.Ray3f(origin, dr.normalize(d), time, mi.Spectrum(lam) if mi.is_spectral else mi.Spectrum(0.0))
+        ray = mi.Ray3f(origin, dr.normalize(d), time, lanes(lam))
         return ray, mi.Spectrum(weight * self.norm) & active
 
     def sample_ray_differential(self, time, sample1, sample2, sample3, active=True):

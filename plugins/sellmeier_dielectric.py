@@ -7,6 +7,7 @@ Sellmeier formula, or a model glass's two-term fit).
 | `int_glass` | string | —    | "AIR"      | glass on the side opposite the normal (the interior) |
 | `ext_glass` | string | —    | "AIR"      | glass on the normal's side                           |
 | `fresnel`   | string | —    | "transmit" | Fresnel losses: "transmit", "sample" or "off"        |
+| `wavelength`| float  | nm   | 587.5618   | the wavelength of the non-spectral (mono) variants   |
 
 Glass names are those of lens files: "N-BK7", "SCHOTT:F2", "OHARA:S-LAH59", "model:1.5168/64.17", "AIR"
 (a bare name that two vendors use, such as "F2", is refused).
@@ -28,8 +29,10 @@ for one of them alone returns it every time with its own weight, as Mitsuba's `d
 reflection R (1 under total internal reflection; with "off", 1 only there), transmission 1 − R
 (with "off", 1; 0 under total internal reflection), radiance transmission times (n₂/n₁)².
 
-Wavelengths: solas-mi's sensors carry one wavelength (nm) in all four spectral lanes, and lane 0's
-index serves all four. A stock camera (`perspective`, …) carries four different wavelengths that
+Wavelengths: a mono variant carries none; the index is taken at `wavelength` (default the helium d
+line), which solas-mi's scenes set to the camera response's one wavelength (`solas_mi.render.scene`).
+In the spectral variants `wavelength` is unused: solas-mi's sensors carry one wavelength (nm) in all
+four spectral lanes, and lane 0's index serves all four. A stock camera (`perspective`, …) carries four different wavelengths that
 refract into four directions. The interface then follows one lane, chosen uniformly from `sample1`,
 and weighs it by 4 and the others by 0 (pbrt-v4's `SampledWavelengths::TerminateSecondary`, made
 per interface: M. Pharr, W. Jakob, G. Humphreys, "Physically Based Rendering", 4th ed., MIT Press,
@@ -49,6 +52,7 @@ from solas_mi.errors import SolasError
 from solas_mi.optics.glass import resolve
 
 FRESNEL_MODES = ("transmit", "sample", "off")
+D_LINE_NM = 587.5618  # helium d line: the default wavelength of the non-spectral variants
 
 
 class SellmeierDielectric(mi.BSDF):
@@ -61,14 +65,17 @@ class SellmeierDielectric(mi.BSDF):
         self.fresnel = str(props.get("fresnel", "transmit"))
         if self.fresnel not in FRESNEL_MODES:
             raise SolasError(f"sellmeier_dielectric fresnel {self.fresnel!r} must be one of {', '.join(FRESNEL_MODES)}")
+        self.wavelength = float(props.get("wavelength", D_LINE_NM))
+        if not self.wavelength > 0:
+            raise SolasError(f"sellmeier_dielectric wavelength {props.get('wavelength')!r} must be positive (nm)")
         reflection = mi.BSDFFlags.DeltaReflection | mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide
         transmission = mi.BSDFFlags.DeltaTransmission | mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide
         self.m_components = [reflection, transmission]
         self.m_flags = reflection | transmission
 
     def eta(self, wavelength) -> mi.Float:
-        """n_int / n_ext at `wavelength` (nm; 587.6 nm in the non-spectral variants)."""
-        um = mi.Float(wavelength) * 1e-3 if mi.is_spectral else mi.Float(0.5876)
+        """n_int / n_ext at `wavelength` (nm; the `wavelength` parameter in the non-spectral variants)."""
+        um = mi.Float(wavelength if mi.is_spectral else self.wavelength) * 1e-3
         return self.int_glass.index_formula(um, dr.sqrt) / self.ext_glass.index_formula(um, dr.sqrt)
 
     def sample(self, ctx, si, sample1, sample2, active=True):
@@ -139,7 +146,8 @@ class SellmeierDielectric(mi.BSDF):
         pass
 
     def to_string(self) -> str:
-        return f"SellmeierDielectric[int={self.int_glass.name}, ext={self.ext_glass.name}, fresnel={self.fresnel}]"
+        return (f"SellmeierDielectric[int={self.int_glass.name}, ext={self.ext_glass.name}, fresnel={self.fresnel}"
+                + ("]" if mi.is_spectral else f", {self.wavelength:g} nm]"))
 
 
 def register() -> None:

@@ -1,5 +1,8 @@
 """One wavelength per path drawn from a camera response (`solas_mi.render.response`), for the sensors
-that look through a lens (in every Mitsuba variant; `tables` holds the lookups). Wavelengths in nm."""
+that look through a lens (in every Mitsuba variant; `tables` holds the lookups). Wavelengths in nm.
+
+A mono variant's rays carry no wavelength: there the response must have one (`render.mitsuba.check_variant`),
+the sensors trace the lens at it, and the rays leave with none (`lanes`)."""
 from __future__ import annotations
 
 import drjit as dr
@@ -7,6 +10,12 @@ import mitsuba as mi
 import numpy as np
 
 from solas_mi.plugins.tables import lookup, table
+from solas_mi.render.mitsuba import check_variant
+
+
+def lanes(lam: mi.Float):
+    """A ray's wavelengths: `lam` (nm) in all four lanes in a spectral variant, none in a mono one."""
+    return mi.Spectrum(lam) if mi.is_spectral else mi.Color0f()
 
 
 class WavelengthSampler:
@@ -14,6 +23,7 @@ class WavelengthSampler:
 
     def __init__(self, response) -> None:
         r = response
+        check_variant(mi.variant(), r)
         self.distribution = mi.DiscreteDistribution(table(r.probability))
         self.lo, self.hi = table(r.lo_nm), table(r.hi_nm)
         # 1/p(λ): the bin's width over its probability (a line: 1 over its probability)

@@ -84,18 +84,18 @@ def run_batch_render(args: argparse.Namespace) -> int:
     workers = _workers(args.workers)
     if args.dry_run:
         from ..budget import size_text
-        from ..render.mitsuba import default_variant
         from .degrade import check_workers
-        from .render import estimate, plan_render
+        from .render import batch_variant, estimate, plan_render
 
         n = check_workers(workers)
         p = plan_render(args.inputs, args.output, **_sweep(args))
         need = estimate(p, n if args.dask is None else 1)
         where = f"Dask at {args.dask}" if args.dask else f"{n} local worker process(es)"
+        variant = batch_variant(args.lens, args.response, args.variant)
         swept = ", ".join(f"{k} ({len(v)} values)" for k, v in p.manifest.header["sweep"].items()) or "nothing"
         print("1. no PSF grid (a direct render through the lens)")
         print(f"2. render {len(p.todo)} of {len(p.jobs)} items ({len(p.jobs) - len(p.todo)} already finished, "
-              f"skipped; swept: {swept}) with Mitsuba {args.variant or default_variant()}, on {where}")
+              f"skipped; swept: {swept}) with Mitsuba {variant}, on {where}")
         print(f"3. write EXR + PNG per item and {p.manifest.path}")
         print(f"estimate: about {need['seconds']:.1f} s ({need['samples']:.3g} samples), peak memory about "
               f"{size_text(need['peak_bytes'])}")
@@ -183,6 +183,7 @@ def register(subparsers: Any) -> None:
     r.add_argument("--fresnel", choices=("transmit", "sample", "off"), default="transmit", help="images: Fresnel losses")
     r.add_argument("--seed", type=int, default=0, help="the batch's base seed (each item's seed derives from it)")
     r.add_argument("--variant", choices=VARIANTS,
-                   help="Mitsuba variant (default: cuda_ad_spectral with a GPU, else llvm_ad_spectral)")
+                   help="Mitsuba variant of every item (default: cuda_ad_spectral with a GPU, else "
+                        "llvm_ad_spectral; a mono one needs a response of one wavelength)")
     _add_runner_options(r)
     r.set_defaults(run=run_batch_render)

@@ -9,12 +9,13 @@ value), e.g. `street_solas-doublet_focus1000_spp64.exr`. Each item's seed is der
 and the batch's base seed, so a re-run, another worker or Dask render it identically; the seed and
 the sweep point are in the manifest and in the EXR's metadata. No PSF grid is computed.
 
-Mitsuba variant: the spectral JIT variant (`render.mitsuba.default_variant`) for every job, also one
-with a single wavelength (response mono:λ). A mono variant cannot serve our plugins: lens_camera
-refuses non-spectral variants (it needs each path's wavelength to trace the lens), the lens as
-geometry (sellmeier_dielectric) takes 587.6 nm in them whatever the response, and a mono variant
-collapses the scene's spectra to luminance instead of evaluating them at λ. The spectral variant at
-one wavelength costs little more: every lane carries the same wavelength.
+Mitsuba variant (`render.mitsuba.variant_for`): the spectral JIT variant for every item, also at a
+response of one wavelength (mono:λ): the mono variant is measured no faster (images render in
+solas-mi's loop, which takes the same CPU time in mono; scene files render 1.5× slower in mono on the
+street scene, `benchmarks/bench_mono.py`), and it turns a scene file's RGB and spectral data into
+luminance instead of evaluating them at λ. A `variant` given is used for every item: a mono one
+needs a response of one wavelength, and renders images exactly as the spectral one, scene files
+alike only where their spectra are grey. The manifest's header and each EXR record the variant.
 """
 from __future__ import annotations
 
@@ -176,6 +177,17 @@ def estimate(p: RenderPlan, workers: int) -> dict[str, float]:
             "peak_bytes": min(workers, max(1, len(p.todo))) * peak}
 
 
+def batch_variant(lens, response: str, variant: str | None) -> str:
+    """The Mitsuba variant of a batch's items (`render.mitsuba.variant_for`): `variant` when given,
+    SolasError unless it serves the response of every lens of `lens`; else the spectral one."""
+    from ..optics.lens import Lens
+    from ..render import response as responses
+    from ..render.mitsuba import variant_for
+
+    parsed = [responses.parse(response, Lens.load(str(v)).wavelengths_nm) for v in _values("lens", lens)]
+    return ", ".join(sorted({variant_for(r, variant) for r in parsed}))
+
+
 def render_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *, lens: str | Sequence[str],
                  focus_distance=None, sensor="1280x960", pitch_um=None, spp=64, response: str = "srgb",
                  fov_deg: float | None = None, boundary: str = "edge", fresnel: str = "transmit", seed: int = 0,
@@ -189,7 +201,6 @@ def render_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathL
     the batch's base seed. `workers` local processes (default: the cores), or the Dask scheduler at
     `dask` ("local": a LocalCluster for this batch). A failed item is recorded; the others go on."""
     from ..budget import check_memory
-    from ..render.mitsuba import default_variant
     from .runner import run_batch
 
     start = time.perf_counter()
@@ -199,11 +210,11 @@ def render_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathL
                     spp=spp, response=response, fov_deg=fov_deg, boundary=boundary, fresnel=fresnel, seed=seed)
     check_memory(f"batch of {len(p.todo)} renders on {n} workers", estimate(p, n if dask is None else 1)["peak_bytes"],
                  force)
-    variant = variant or default_variant()
+    chosen = batch_variant(lens, response, variant)
     # each local worker (and each Dask worker of a LocalCluster) gets its share of the cores, so that
     # the local and the Dask runs render with the same thread count (identical sums)
     threads = max(1, (os.cpu_count() or 1) // n) if dask in (None, "local") else None
-    p.manifest.header.update({"variant": variant, "response": response, "fov_deg": fov_deg, "boundary": boundary,
+    p.manifest.header.update({"variant": chosen, "response": response, "fov_deg": fov_deg, "boundary": boundary,
                               "fresnel": fresnel, "seed": seed, "threads_per_worker": threads,
                               "runner": {"dask": dask} if dask is not None else {"workers": n}})
     settings = {"variant": variant, "fov_deg": fov_deg, "boundary": boundary, "fresnel": fresnel, "threads": threads,

@@ -60,7 +60,9 @@ def register(sub: Any) -> None:
     p.add_argument("--spp", type=int, default=64, help="lens render samples per pixel (default 64)")
     p.add_argument("--spp-ideal", type=int, default=64, help="ideal image samples per pixel (default 64)")
     p.add_argument("--near-focus", type=float, help="near focus distance in m (default: the lens's framing)")
-    p.add_argument("--variant", choices=VARIANTS, help="Mitsuba variant (default: CUDA where it works, else LLVM)")
+    p.add_argument("--variant", choices=VARIANTS,
+                   help="Mitsuba variant (default: CUDA where it works, else LLVM, spectral; the grey scene renders "
+                        "alike in a mono one)")
     p.set_defaults(run=run_street)
     p = exp.add_parser("street-scene", help="write the procedural street scene (Mitsuba XML and textures)",
                        description="Write street.xml and textures/ (the same bytes every time).")

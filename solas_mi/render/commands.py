@@ -165,8 +165,9 @@ def _add_render_options(p: argparse.ArgumentParser, spp_default: int | None) -> 
     from .mitsuba import VARIANTS
 
     p.add_argument("--spp", type=int, default=spp_default, help="samples per pixel")
-    p.add_argument("--variant", choices=VARIANTS, help="Mitsuba variant (default: cuda_ad_spectral with a GPU, "
-                                                       "else llvm_ad_spectral)")
+    p.add_argument("--variant", choices=VARIANTS,
+                   help="Mitsuba variant (default: cuda_ad_spectral with a GPU, else llvm_ad_spectral; a mono "
+                        "variant needs a response of one wavelength, mono:<nm>)")
     p.add_argument("--seed", type=int, default=0)
     p.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
     p.add_argument("-o", "--output", required=True, help="output OpenEXR file (linear)")

@@ -13,7 +13,7 @@ from ..optics.camera import MAPPINGS, Camera, camera_for
 from ..optics.paraxial import paraxial
 from . import response as responses
 from .loop import Render, render
-from .mitsuba import load_scene
+from .mitsuba import load_scene, variant_for
 from .scene import DEFAULT_RINGS, write_scene
 
 
@@ -48,7 +48,9 @@ def render_image(lens, image: str | np.ndarray, sensor: tuple[int, int] = (960, 
     if mapping not in MAPPINGS:
         raise SolasError(f"mapping {mapping!r} must be one of {', '.join(MAPPINGS)}")
     # the user's mistakes, named here rather than inside the scene's plugins
-    responses.check_lens(responses.parse(response, lens.wavelengths_nm), lens)
+    parsed = responses.parse(response, lens.wavelengths_nm)
+    responses.check_lens(parsed, lens)
+    variant = variant_for(parsed, variant)
     if not isinstance(image, np.ndarray):
         read_image(image)
     with tempfile.TemporaryDirectory(prefix="solas-scene-") as tmp:

@@ -55,7 +55,25 @@ def _components(scene):
     objects = [e for e in emitters if type(e).__name__ == "ImageObject"]
     if len(objects) != 1:
         raise SolasError(f"the scene needs exactly one image_object emitter (has {len(objects)})")
+    _check_mono(scene, sensor, objects[0])
     return sensor, objects[0]
+
+
+def _check_mono(scene, sensor, emitter) -> None:
+    """In a mono variant the glasses and the object take their `wavelength` parameter: SolasError unless
+    it is the sensor's response's one wavelength (nm)."""
+    import mitsuba as mi
+
+    lam = sensor.response.single_wavelength
+    if mi.is_spectral or lam is None:
+        return
+    used = {("image_object", emitter.wavelength)} | {
+        ("sellmeier_dielectric", s.bsdf().wavelength) for s in scene.shapes() if hasattr(s.bsdf(), "wavelength")}
+    wrong = sorted(f"{name} at {w:g} nm" for name, w in used if abs(w - lam) > 1e-6 * lam)
+    if wrong:
+        raise SolasError(f"Mitsuba variant {mi.variant()} renders one wavelength, the response's {lam:g} nm, but "
+                         f"the scene takes {', '.join(wrong)}: set the plugins' `wavelength` to {lam:g} "
+                         "(the scene's <default name=\"wavelength\">)")
 
 
 def continue_ray(si, ray, wo_local):

@@ -1,8 +1,17 @@
 """Mitsuba for solas-mi: the variant, the plugins registered for it, and loading a scene file.
 
-Variants are spectral (float32): `llvm_ad_spectral` by default, `cuda_ad_spectral` where a CUDA
-device works, `scalar_spectral` for small reference renders. The solas-mi plugins (`plugins/`,
-installed as `solas_mi.plugins`) are registered once for each variant, whoever set it.
+Variants (float32): spectral — `llvm_ad_spectral` by default, `cuda_ad_spectral` where a CUDA device
+works, `scalar_spectral` for small reference renders — and, on request, mono — `llvm_ad_mono`,
+`cuda_ad_mono` — for a job of one wavelength (`variant_for`: why mono is not the default). The
+solas-mi plugins (`plugins/`, installed as `solas_mi.plugins`) are registered once for each variant,
+whoever set it.
+
+A mono variant carries no wavelength: the plugins take the response's one wavelength instead (the
+lens sensors trace the lens at it, `sellmeier_dielectric` and `image_object` their `wavelength`
+parameter, written by `scene`), and Mitsuba's own plugins turn RGB and spectral data into luminance.
+Mono therefore equals spectral at λ only where the scene's spectra are grey (flat): the image-object
+scene (its emitter picks the image channel of λ's band) and scenes of grey data, e.g. the street
+experiment. RGB variants are refused: the lens needs a wavelength.
 
     mi = solas_mi.mitsuba()                      # the variant set, the plugins registered
     scene = mi.load_file("scenes/solas_doublet/scene.xml")
@@ -13,7 +22,7 @@ from __future__ import annotations
 from ..errors import SolasError, plugin_error
 from ..llvm import select_libllvm
 
-VARIANTS = ("llvm_ad_spectral", "scalar_spectral", "cuda_ad_spectral")
+VARIANTS = ("llvm_ad_spectral", "scalar_spectral", "cuda_ad_spectral", "llvm_ad_mono", "cuda_ad_mono")
 _registered: set[str] = set()  # variants whose plugin classes are registered
 
 
@@ -25,12 +34,47 @@ def default_variant() -> str:
     return "cuda_ad_spectral" if dr.has_backend(dr.JitBackend.CUDA) else "llvm_ad_spectral"
 
 
+def spectral(variant: str) -> bool:
+    """Whether `variant` carries wavelengths (a spectral variant)."""
+    return "spectral" in variant
+
+
+def check_variant(variant: str, response) -> None:
+    """SolasError unless `variant` is a known one that can render `response`
+    (`render.response.Response`): a non-spectral variant needs a response of one wavelength."""
+    check_name(variant)
+    if not spectral(variant) and response.single_wavelength is None:
+        raise SolasError(f"Mitsuba variant {variant} is not spectral: it renders one wavelength, and camera response "
+                         f"{response.name} has more (use a spectral variant, or a response mono:<nm>)")
+
+
+def variant_for(response, variant: str | None = None) -> str:
+    """The Mitsuba variant of a job at camera response `response` (`render.response.Response`):
+    `variant` when given (the user's --variant, checked by `check_variant`), else the spectral JIT
+    variant (`default_variant`), also at one wavelength. The mono variant is measured no faster there
+    (`benchmarks/bench_mono.py`, README): solas-mi's loop uses one lane of the spectral variant's four
+    and takes the same CPU time in mono, and Mitsuba's integrators render the street scene 1.5× slower
+    in mono (its hdrfilm costs more than the spectral variant's one-channel specfilm). A mono variant
+    renders the same image at λ where the scene's spectra are grey (the image-object scene, the
+    street experiment); elsewhere it turns RGB and spectral data into luminance."""
+    if variant is None:
+        return default_variant()
+    check_variant(variant, response)
+    return variant
+
+
+def check_name(variant: str) -> None:
+    """SolasError unless `variant` is one of VARIANTS (an RGB variant named as such)."""
+    if variant not in VARIANTS:
+        why = " (RGB variants cannot trace the lens: it needs a wavelength)" if "rgb" in str(variant) else ""
+        raise SolasError(f"variant {variant!r} must be one of {', '.join(VARIANTS)}{why}")
+
+
 def mitsuba(variant: str | None = None):
     """The `mitsuba` module with `variant` set (default: `default_variant`) and the solas-mi plugins
     registered for it (`solas_mi.mitsuba`, the entry for Python users)."""
     variant = variant or default_variant()
-    if variant not in VARIANTS:
-        raise SolasError(f"variant {variant!r} must be one of {', '.join(VARIANTS)}")
+    check_name(variant)
     select_libllvm()
     import mitsuba as mi
 

@@ -50,6 +50,12 @@ class Response:
         lam = self.lo_nm[i] + np.clip(frac, 0.0, 1.0) * (self.hi_nm[i] - self.lo_nm[i])
         return lam, self.weights[i]
 
+    @property
+    def single_wavelength(self) -> float | None:
+        """The response's one wavelength (nm) when it samples only one (mono:λ, lines:λ), else None."""
+        one = len(self.lo_nm) == 1 and self.lo_nm[0] == self.hi_nm[0]
+        return float(self.lo_nm[0]) if one else None
+
     def meta(self) -> dict:
         """Name, channels and sampled wavelength range (nm) for a render's metadata."""
         return {"response": self.name, "channels": list(self.channels),
@@ -155,6 +161,13 @@ def parse(text: str, lens_wavelengths_nm) -> Response:
     if kind == "table" and arg:
         return table(arg)
     _bad(text, "unknown response")
+
+
+def one_wavelength(text: str, lens_wavelengths_nm) -> float | None:
+    """The one wavelength (nm) of the response named `text` (`Response.single_wavelength`), without
+    reading a table's file or the colour-matching functions: only "mono" and "lines" can have one."""
+    kind = str(text).partition(":")[0].strip().lower()
+    return parse(text, lens_wavelengths_nm).single_wavelength if kind in ("mono", "lines") else None
 
 
 def check_lens(response: Response, lens) -> None:

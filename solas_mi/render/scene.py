@@ -21,6 +21,7 @@ from ..imageio import atomic_path, write_text
 from ..optics.camera import BOUNDARIES, Camera, camera_for
 from ..optics.lens import Lens, sag_slope
 from ..optics.lens import sag as asphere_sag
+from . import response as responses
 
 SPAWN_OFFSET_MM = 1e-4  # a continued ray starts this far (mm) along its own direction (`loop.continue_ray`)
 MIN_GAP_MM = 10 * SPAWN_OFFSET_MM  # closest two refracting surfaces of the mesh scene may come
@@ -186,23 +187,28 @@ def path_depth(lens: Lens, ghosts: bool) -> int:
 
 
 def scene_xml(lens_file: str, parts: list[Part], camera: Camera, image: str, spp: int, response: str,
-              boundary: str, fresnel: str, max_depth: int, mapping: str = "rectilinear") -> str:
+              boundary: str, fresnel: str, max_depth: int, mapping: str = "rectilinear",
+              wavelength_nm: float | None = None) -> str:
     """Mitsuba 3 scene XML; meshes are referenced as meshes/<part>.ply beside it. Every number a user
-    may want to change is a <default> at the top. The integrator is Mitsuba's `path` with `max_depth`
-    interactions (`mi.render`); solas-mi's loop reads only the sensor, the object, the shapes and the
+    may want to change is a <default> at the top. `wavelength_nm`, the response's one wavelength
+    (nm; None: it has more), is the glasses' and the object's `wavelength` for the mono variants.
+    The integrator is Mitsuba's `path` with `max_depth` interactions (`mi.render`); solas-mi's loop reads only the sensor, the object, the shapes and the
     sampler's count. The sampler is `independent`, the one that takes any count as given: `multijitter`
     has 2.4× less noise in 40-px blocks under `mi.render` but rounds the count (128 → 132) and kills the
     process with a floating-point exception on a count of 0."""
+    mono = '' if wavelength_nm is None else '<float name="wavelength" value="$wavelength"/>'
     shapes = []
     for p in parts:
         if p.int_glass is None:
             bsdf = '<ref id="absorber"/>'
         else:
             bsdf = (f'<bsdf type="sellmeier_dielectric"><string name="ext_glass" value="{p.ext_glass}"/>'
-                    f'<string name="int_glass" value="{p.int_glass}"/><string name="fresnel" value="$fresnel"/></bsdf>')
+                    f'<string name="int_glass" value="{p.int_glass}"/><string name="fresnel" value="$fresnel"/>{mono}</bsdf>')
         shapes.append(f'    <shape type="ply" id="{p.name}">\n        <string name="filename" value="meshes/{p.name}.ply"/>\n'
                       f'        {bsdf}\n    </shape>')
     shapes_text = "\n".join(shapes)
+    wavelength_default = "" if wavelength_nm is None else \
+        f'\n    <default name="wavelength" value="{wavelength_nm!r}"/>  <!-- nm: the response\'s, for mono variants -->'
     return f"""<?xml version="1.0" encoding="utf-8"?>
 <!-- solas-mi lens scene: render with `solas-mi render THIS.xml -o out.exr` (lengths in mm, pitch in um), or in
      Python: `mi = solas_mi.mitsuba(); mi.render(mi.load_file("THIS.xml"))` (Mitsuba's path integrator below).
@@ -212,7 +218,7 @@ def scene_xml(lens_file: str, parts: list[Part], camera: Camera, image: str, spp
     <default name="width" value="{camera.width}"/>
     <default name="height" value="{camera.height}"/>
     <default name="pitch_um" value="{camera.pitch_um!r}"/>
-    <default name="response" value="{response}"/>
+    <default name="response" value="{response}"/>{wavelength_default}
     <default name="image" value="{image}"/>
     <default name="fov_deg" value="{camera.fov_deg!r}"/>
     <default name="boundary" value="{boundary}"/>
@@ -243,7 +249,7 @@ def scene_xml(lens_file: str, parts: list[Part], camera: Camera, image: str, spp
         <string name="filename" value="$image"/>
         <float name="fov_deg" value="$fov_deg"/>
         <string name="boundary" value="$boundary"/>
-        <string name="mapping" value="$mapping"/>
+        <string name="mapping" value="$mapping"/>{mono and chr(10) + 8 * ' ' + mono}
     </emitter>
 
     <bsdf type="diffuse" id="absorber">
@@ -278,7 +284,8 @@ def write_scene(lens: Lens, out_dir: str | os.PathLike, image: str, camera: Came
                 fresnel: str = "transmit", name: str = "scene.xml", mapping: str = "rectilinear") -> Path:
     """Write `name`, meshes/*.ply and the lens file (`lens_file`: a copy of its source, or the lens
     as changed in memory) for `lens` into out_dir, so that the directory is self-contained; returns
-    the XML path. `mapping`: the image object's projection (plugins/image_object.py)."""
+    the XML path. `mapping`: the image object's projection (plugins/image_object.py). A response of
+    one wavelength is also written as the glasses' and the object's `wavelength` (mono variants)."""
     import shutil
 
     if boundary not in BOUNDARIES:
@@ -298,7 +305,7 @@ def write_scene(lens: Lens, out_dir: str | os.PathLike, image: str, camera: Came
         held = copy
     # deep enough for ghosts whatever `fresnel` is set to later: a path without them ends sooner anyway
     xml = scene_xml(held.name, parts, camera, image, spp, response, boundary, fresnel, path_depth(lens, ghosts=True),
-                    mapping)
+                    mapping, responses.one_wavelength(response, lens.wavelengths_nm))
     path = out / name
     write_text(path, xml)
     return path

@@ -5,7 +5,8 @@ by the natural-scene SFR on the same edges, per annulus, beside the MTF50 the PS
 Steps (each timed, wall-clock seconds):
 
 (a) ideal: the scene through a `perspective` camera with the lens's field (±field_deg across the
-    width), a one-channel film at the lens's primary wavelength (a ±2 nm band: the scene is grey);
+    width), a one-channel film at the lens's primary wavelength (the scene is grey: the mono variant's
+    film, or in a spectral variant a specfilm of a ±2 nm band);
     depth: the distance (m) along each pixel's ray (`aov`), to tell near objects from far ones.
 (b) the PSF grid (geometric, one wavelength, normalised "none", nodes at the centres of COLS×ROWS
     blocks as in the cross-validation) and `convolution.methods.degrade` of the ideal image: interp
@@ -14,6 +15,8 @@ Steps (each timed, wall-clock seconds):
     its file says: a far subject is not at infinity, and the doublet's defocus depends on it).
 (c) the scene through `lens_camera` (same pose, film and sampler; `mono` at the primary wavelength),
     focused at infinity and at the framing's near focus distance.
+Every render runs in the settings' variant, by default the spectral one (`render.mitsuba.variant_for`:
+the mono variant renders this grey scene alike, 1.5× slower).
 (d) NS-SFR (`metrics.nssfr`) of every degraded image against the ideal one, on the edges found in the
     ideal one, per annulus: all edges and the far ones (every pixel of the ROI beyond FAR_M).
 (e) relative error maps (interp − render)/RMS(render) for both renders; RMS of the error on near
@@ -86,9 +89,10 @@ class Outcome:
     meta: dict = field(default_factory=dict)
 
 
-def experiment_scene(source: Path, out: Path, primary_nm: float, depth: bool = False) -> Path:
-    """The street scene as the experiment renders it, written to `out`: a one-channel specfilm of a
-    ±2 nm band at `primary_nm` (or, `depth`, an `aov` depth integrator), texture paths absolute."""
+def experiment_scene(source: Path, out: Path, primary_nm: float, depth: bool = False, spectral: bool = True) -> Path:
+    """The street scene as the experiment renders it, written to `out`: a one-channel film at
+    `primary_nm` — for a `spectral` variant a specfilm of a ±2 nm band, else the scene's own film
+    (Mitsuba's luminance) — or, `depth`, an `aov` depth integrator; texture paths absolute."""
     from ...imageio import write_text
 
     if not source.is_file():
@@ -104,6 +108,8 @@ def experiment_scene(source: Path, out: Path, primary_nm: float, depth: bool = F
         aov = ET.Element("integrator", {"type": "aov"})
         ET.SubElement(aov, "string", {"name": "aovs", "value": "depth:depth"})
         root.insert(0, aov)
+    elif not spectral:
+        ET.SubElement(film, "string", {"name": "pixel_format", "value": "luminance"})  # Mitsuba's mono film
     else:
         film.set("type", "specfilm")
         band = ", ".join(f"{primary_nm + d:g}:{v:g}" for d, v in BAND)
@@ -137,6 +143,8 @@ def run(lens, out: str | Path, settings: Settings | None = None, log=print) -> O
     from ...optics.camera import pinhole_focal_mm
     from ...optics.illumination import axis_irradiance, ideal_irradiance
     from ...psf.grid import psf_grid
+    from ...render import response as responses
+    from ...render.mitsuba import spectral, variant_for
     from ...render.user_scene import default_pitch_um
     from ...validation.inputs import tangent_cos3
 
@@ -159,11 +167,13 @@ def run(lens, out: str | Path, settings: Settings | None = None, log=print) -> O
         log(f"street: {name}: {seconds[name]:.1f} s")
         return value
 
-    xml = experiment_scene(s.scene, out, primary)
+    variant = variant_for(responses.mono(primary), s.variant)  # grey scene: a mono variant given renders it alike
+    xml = experiment_scene(s.scene, out, primary, spectral=spectral(variant))
     depth_xml = experiment_scene(s.scene, out, primary, depth=True)
     params = fr.params(2 * fov, w, h, s.spp_ideal)
-    ideal = timed("(a) ideal image", _render, xml, s.variant, None, params, s.spp_ideal, log)[..., 0] / BAND_NM
-    depth = timed("(a) depth map", _render, depth_xml, s.variant, None, params, s.spp_depth, log)[..., -1]
+    band = BAND_NM if spectral(variant) else 1.0
+    ideal = timed("(a) ideal image", _render, xml, variant, None, params, s.spp_ideal, log)[..., 0] / band
+    depth = timed("(a) depth map", _render, depth_xml, variant, None, params, s.spp_depth, log)[..., -1]
     depth = np.where(depth > 0, depth, np.inf).astype(np.float32)
 
     pixel_um = default_pitch_um(lens, fov, "x", w, h)  # the lens camera's pixel, matched to the field
@@ -188,14 +198,14 @@ def run(lens, out: str | Path, settings: Settings | None = None, log=print) -> O
     images[far_name] = timed(f"(b) {far_name}", degrade, weighted, far_grid, "interp", "edge") / np.float32(k)
     lens_params = {key: v for key, v in params.items() if key != "fov"} | {"spp": str(s.spp_lens)}
     render_options = {"response": f"mono:{primary:g}", "pitch_um": pixel_um}
-    images["render infinity"] = timed("(c) lens render, focus at infinity", _render, xml, s.variant, lens,
+    images["render infinity"] = timed("(c) lens render, focus at infinity", _render, xml, variant, lens,
                                       lens_params, s.spp_lens, log, **render_options)[..., 0]
     images[f"render {near_focus:g} m"] = timed(
-        f"(c) lens render, focus at {near_focus:g} m", _render, xml, s.variant, lens, lens_params, s.spp_lens,
+        f"(c) lens render, focus at {near_focus:g} m", _render, xml, variant, lens, lens_params, s.spp_lens,
         log, focus_distance=near_focus, **render_options)[..., 0]
     for name, img in images.items():
         stem = name.replace(" ", "_")
-        write_exr(out / f"{stem}.exr", image_channels(img), {"lens": lens.name, "image": name})
+        write_exr(out / f"{stem}.exr", image_channels(img), {"lens": lens.name, "image": name, "variant": variant})
         write_png(out / f"{stem}.png", np.clip(img / 0.9, 0, 1))
     write_exr(out / "depth.exr", {"Z": depth}, {"lens": lens.name, "unit": "m", "sky": "inf"})
     lay = layout(grids[s.interp_grid], w, h)
@@ -203,7 +213,7 @@ def run(lens, out: str | Path, settings: Settings | None = None, log=print) -> O
             "framing": params, "near_focus_m": near_focus, "far_m": FAR_M,
             "far_subject_m": fr.far_m, "unit_k": k,
             "pixel_pitch_um": lay.camera.pitch_um, "spp": {"ideal": s.spp_ideal, "lens": s.spp_lens,
-                                                          "depth": s.spp_depth}}
+                                                          "depth": s.spp_depth}, "variant": variant}
     outcome = Outcome(images, depth, seconds=seconds, meta=meta)
     predictors = {"infinity": grids[s.interp_grid], f"{fr.far_m:g} m": far_grid}
     rows = timed("(d, e) NS-SFR, predictions and error maps", measure, outcome, predictors, lay, near_focus, out)
