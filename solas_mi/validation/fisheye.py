@@ -115,9 +115,9 @@ def compare_fisheye(lens: Lens, env: np.ndarray, fov_deg: float, size: int, pitc
                   seed=seed).image[..., 0] for seed in (0, 1)]
     direct = 0.5 * (runs[0] + runs[1])
     sensor_mm = (size * pitch_um * 1e-3,) * 2
-    g = timed("psf grid", psf_grid, lens, grid, [w], pitch_um=pitch_um / 8 if psf_pitch_um is None else psf_pitch_um,
-              size=psf_size,
-              pupil_samples=pupil_samples, method=method, layout="sensor", sensor_mm=sensor_mm)
+    psf_pitch = pitch_um / 8 if psf_pitch_um is None else psf_pitch_um
+    g = timed("psf grid", psf_grid, lens, grid, [w], pitch_um=psf_pitch, size=psf_size, pupil_samples=pupil_samples,
+              method=method, layout="sensor", sensor_mm=sensor_mm)
     ideal = timed("ideal image", ideal_sensor_image, lens, env, fov_deg, size, pitch_um, w)
     convolved = timed("convolution", degrade, ideal, g, dtype=np.float64)
     mean = float(direct.mean())
@@ -168,8 +168,7 @@ def crossval_fisheye(lens: Lens, env: np.ndarray, out: str | Path, fov_deg: floa
         "x 2 seeds")
     r = compare_fisheye(lens, env, fov_deg, size, pitch, grid, spp)
     meta = {"lens": lens.name, "lens_hash": lens.hash, "fov_deg": fov_deg, "mapping": "equidistant",
-            "defocus_mm": defocus_mm,
-            "sensor_px": size, "pitch_um": pitch, "grid": list(grid), "spp_per_seed": spp, "seeds": 2,
+            "defocus_mm": defocus_mm, "sensor_px": size, "pitch_um": pitch, "grid": list(grid), "spp_per_seed": spp, "seeds": 2,
             "wavelength_nm": lens.primary_wavelength, "rms_error": r.rms_error, "rms_noise": r.rms_noise,
             "rms_error_denoised": float(np.sqrt(max(r.rms_error ** 2 - r.rms_noise ** 2, 0.0))),
             "rms_ideal": float(np.sqrt(np.mean((r.ideal - r.direct) ** 2)) / r.direct.mean()),
