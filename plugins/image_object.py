@@ -68,8 +68,8 @@ from solas_mi.errors import SolasError
 from solas_mi.imageio import read_image
 from solas_mi.optics.camera import BOUNDARIES, MAPPINGS
 from solas_mi.plugins.scene_probe import calling_render
-from solas_mi.plugins.sellmeier_dielectric import D_LINE_NM
 from solas_mi.plugins.tables import lookup, table, zeros
+from solas_mi.plugins.wavelength_sampling import mono_wavelength
 from solas_mi.render.response import RGB_BANDS_NM
 
 SPECTRUM_NM = (mi.MI_CIE_MIN, mi.MI_CIE_MAX)  # light tracing samples wavelengths uniformly here
@@ -151,9 +151,7 @@ class ImageObject(mi.Emitter):
         self.fov_deg = float(props.get("fov_deg", 2.0))
         distance = props.get("distance_mm", 0.0)
         self.distance = float(distance) if distance else math.inf
-        self.wavelength = float(props.get("wavelength", D_LINE_NM))
-        if not self.wavelength > 0:
-            raise SolasError(f"image_object wavelength {props.get('wavelength')!r} must be positive (nm)")
+        self.wavelength = mono_wavelength(props, "image_object")
         self.mapping = str(props.get("mapping", "rectilinear"))
         if self.mapping not in MAPPINGS:
             raise SolasError(f"image_object mapping {self.mapping!r} must be one of {', '.join(MAPPINGS)}")
@@ -219,8 +217,7 @@ class ImageObject(mi.Emitter):
             t = (-self.distance - o.z) / d.z
             tx, ty = (o.x + t * d.x) / self.distance, (o.y + t * d.y) / self.distance
             tx, ty = -tx, -ty  # a point at +x on the plane sends light of field −x
-        u = tx / self.tan_pitch + self.width / 2  # continuous texel coordinates
-        v = self.height / 2 - ty / self.tan_pitch
+        u, v = self._texel_uv(tx, ty)
         channel = self._channel(wavelengths[0] if mi.is_spectral else self.wavelength)
         if self.mapping == "rectilinear":
             active = active & (d.z < 0)
@@ -246,11 +243,15 @@ class ImageObject(mi.Emitter):
 
     # ---- Mitsuba's Emitter interface (stock integrators), the object at infinity ----
 
+    def _texel_uv(self, a, b):
+        """Continuous texel coordinates (u, v) of image-plane point (a, b)."""
+        return a / self.tan_pitch + self.width / 2, self.height / 2 - b / self.tan_pitch
+
     def _tangent(self, d: mi.Vector3f):
         """Continuous texel coordinates (u, v) of direction d (toward the object), and whether the
         mapping covers it (rectilinear: d.z < 0)."""
         a, b, covered = plane_point(self.mapping, -d.x, -d.y, -d.z)
-        return a / self.tan_pitch + self.width / 2, self.height / 2 - b / self.tan_pitch, covered
+        return (*self._texel_uv(a, b), covered)
 
     def _lanes(self, u, v, wavelengths, active) -> mi.Spectrum:
         """Radiance of texel coordinates (u, v), each spectral lane in the band of its own wavelength."""
@@ -304,7 +305,7 @@ class ImageObject(mi.Emitter):
         self._at_infinity()
         d = dr.normalize(ds.d)
         a, b, front = plane_point(self.mapping, -d.x, -d.y, -d.z)
-        u, v = a / self.tan_pitch + self.width / 2, self.height / 2 - b / self.tan_pitch
+        u, v = self._texel_uv(a, b)
         inside = front & (u >= 0) & (u < self.width) & (v >= 0) & (v < self.height) & active
         index = mi.UInt32(dr.clip(dr.floor(v), 0, self.height - 1)) * self.width + \
             mi.UInt32(dr.clip(dr.floor(u), 0, self.width - 1))

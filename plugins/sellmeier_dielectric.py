@@ -50,9 +50,9 @@ import mitsuba as mi
 
 from solas_mi.errors import SolasError
 from solas_mi.optics.glass import resolve
+from solas_mi.plugins.wavelength_sampling import mono_wavelength
 
 FRESNEL_MODES = ("transmit", "sample", "off")
-D_LINE_NM = 587.5618  # helium d line: the default wavelength of the non-spectral variants
 
 
 class SellmeierDielectric(mi.BSDF):
@@ -65,9 +65,7 @@ class SellmeierDielectric(mi.BSDF):
         self.fresnel = str(props.get("fresnel", "transmit"))
         if self.fresnel not in FRESNEL_MODES:
             raise SolasError(f"sellmeier_dielectric fresnel {self.fresnel!r} must be one of {', '.join(FRESNEL_MODES)}")
-        self.wavelength = float(props.get("wavelength", D_LINE_NM))
-        if not self.wavelength > 0:
-            raise SolasError(f"sellmeier_dielectric wavelength {props.get('wavelength')!r} must be positive (nm)")
+        self.wavelength = mono_wavelength(props, "sellmeier_dielectric")
         reflection = mi.BSDFFlags.DeltaReflection | mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide
         transmission = mi.BSDFFlags.DeltaTransmission | mi.BSDFFlags.FrontSide | mi.BSDFFlags.BackSide
         self.m_components = [reflection, transmission]

@@ -9,8 +9,19 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
+from solas_mi.errors import SolasError
+from solas_mi.optics.glass import LINE_D
 from solas_mi.plugins.tables import lookup, table
 from solas_mi.render.mitsuba import check_variant
+
+
+def mono_wavelength(props: mi.Properties, plugin: str) -> float:
+    """A plugin's `wavelength` parameter (nm; default the d line, `optics.glass.LINE_D`): the one
+    wavelength of a mono variant. SolasError unless positive."""
+    value = float(props.get("wavelength", LINE_D))
+    if not value > 0:
+        raise SolasError(f"{plugin} wavelength {props.get('wavelength')!r} must be positive (nm)")
+    return value
 
 
 def lanes(lam: mi.Float):

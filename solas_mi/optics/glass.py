@@ -204,11 +204,11 @@ def match(nd: float, vd: float, nd_tol: float = MATCH_ND, vd_tol: float = MATCH_
     values (the vendor's catalogue numbers, which patents quote) or by their formula's, best first: by
     the larger of |Δn_d|/nd_tol and |ΔV_d|/vd_tol (the smaller of the stated and formula scores), then
     the formula's score, then the key."""
-    entries = _entries(catalog)
+    catalogue = load_catalog(catalog)
     found = []
     for key, n, v in _abbe_table(catalog):
-        e = entries[key]
-        sn, sv = e.get("nd", n), e.get("vd", v)
+        g = catalogue[key]
+        sn, sv = (n if g.nd is None else g.nd), (v if g.vd is None else g.vd)
         stated = max(abs(sn - nd) / nd_tol, abs(sv - vd) / vd_tol)
         formula = max(abs(n - nd) / nd_tol, abs(v - vd) / vd_tol)
         if min(stated, formula) <= 1.0:
