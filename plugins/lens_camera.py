@@ -11,11 +11,14 @@ sensor; the scene sees only the rays that leave the lens's first surface.
 | `fresnel`        | string    | —           | "off"           | "transmit": weight by each refraction's unpolarised|
 |                  |           |             |                 | Fresnel transmittance; "off": lossless surfaces    |
 | `to_world`       | transform | world units | identity        | the camera's frame: looks along local +z, +y up    |
-| (film)           | film      | pixels      | hdrfilm 768×576 | its width and height: the sensor's columns, rows   |
+| (film)           | film      | pixels      | hdrfilm 768×576 | its width and height: the sensor's columns, rows;  |
+|                  |           |             |                 | its crop window (`crop_offset_x`, …): those drawn  |
 | (sampler)        | sampler   | —           | independent, 4  | the samples per pixel                              |
 
 `traverse` exposes `pitch_um`, `world_unit_mm` and `focus_distance` (world units; inf: infinity),
 read-only (the pupil bounds and the image plane are built from them), and the film and sampler.
+The lens, response, film (and its crop window), pupil and wavelengths are `lens_film.LensFilm`'s,
+shared with `lens_sensor`.
 
 Geometry: the origin of `to_world` is the vertex of the lens's surface 1, the lens's axis its local
 +z (`look_at` works as for `perspective`). The image is upright, as `perspective` renders it (row 0
@@ -50,8 +53,6 @@ tracing (`ptracer`) cannot connect to a sensor behind a lens: `sample_direction`
 """
 from __future__ import annotations
 
-import math
-
 import drjit as dr
 import mitsuba as mi
 import numpy as np
@@ -61,23 +62,11 @@ from solas_mi.optics import tracer as T
 from solas_mi.optics.exit_pupil import passes, reversed_lens
 from solas_mi.optics.focus import focused
 from solas_mi.optics.lens import Lens
+from solas_mi.plugins.lens_film import LensFilm, positive
 from solas_mi.plugins.pupil_sampling import PupilSampler
-from solas_mi.plugins.scene_files import load_lens, load_response
-from solas_mi.plugins.wavelength_sampling import WavelengthSampler, lanes
+from solas_mi.plugins.wavelength_sampling import lanes
 
 FRESNEL = ("off", "transmit")
-
-
-def _positive(props: mi.Properties, name: str, default: float, unit: str, infinite: bool = False) -> float:
-    """A positive, finite (or, if `infinite`, also inf) float property (SolasError naming it otherwise)."""
-    value = props.get(name, default)
-    try:
-        value = float(value)
-    except (TypeError, ValueError):
-        value = math.nan
-    if not ((math.isfinite(value) or (infinite and value == math.inf)) and value > 0):
-        raise SolasError(f"lens_camera: {name} {props.get(name)!r} must be a positive number ({unit})")
-    return value
 
 
 def on_axis_solid_angle(lens: Lens, sampler: PupilSampler, wavelength_nm: float, grid: int = 512) -> float:
@@ -93,58 +82,43 @@ def on_axis_solid_angle(lens: Lens, sampler: PupilSampler, wavelength_nm: float,
     return float((ok * cos4).sum() / (dz * dz) * (u1 - u0) * (v1 - v0) / grid ** 2)
 
 
-class LensCamera(mi.Sensor):
-    """The `lens_camera` sensor (parameters: the module docstring)."""
+class LensCamera(LensFilm):
+    """The `lens_camera` sensor (parameters: the module docstring; the film, lens, response, pupil and
+    wavelengths: `lens_film.LensFilm`)."""
 
     def __init__(self, props: mi.Properties) -> None:
-        super().__init__(props)
-        lens = load_lens(props)
-        self.pitch_um = _positive(props, "pitch_um", 5.0, "µm")
-        self.world_unit_mm = _positive(props, "world_unit_mm", 1000.0, "mm per world unit")
+        super().__init__(props, "lens_camera", "srgb",
+                         "an integrator that starts paths at the camera (path, volpath, aov, direct)")
         self.fresnel = str(props.get("fresnel", "off"))
         if self.fresnel not in FRESNEL:
             raise SolasError(f"lens_camera: fresnel {self.fresnel!r} must be one of {', '.join(FRESNEL)}")
-        if "focus_distance" in props:
-            distance = _positive(props, "focus_distance", 1.0, "world units, in front of surface 1; inf", True)
-            try:
-                lens = focused(lens, distance * self.world_unit_mm)
-            except SolasError as exc:
-                raise SolasError(f"lens_camera: focus_distance {distance:g} (world units of {self.world_unit_mm:g} "
-                                 f"mm): {exc}") from None
-        self.lens = lens
-        self.focus_distance = lens.object_distance / self.world_unit_mm
-        self.response = load_response(props, lens, "srgb")
-        self.pitch_mm = self.pitch_um * 1e-3
-        self.width, self.height = (int(v) for v in self.film().size())
-        self.crop_offset = [int(v) for v in self.film().crop_offset()]
-        self.crop_size = [int(v) for v in self.film().crop_size()]
-        half_diag = 0.5 * self.pitch_mm * math.hypot(self.width, self.height)
-        r = self.response
-        self.pupil = PupilSampler(lens, half_diag, sorted({float(r.lo_nm.min()), float(r.hi_nm.max()),
-                                                           *lens.wavelengths_nm}))
-        solid_angle = on_axis_solid_angle(lens, self.pupil, lens.primary_wavelength)
+        self.focus_distance = self.lens.object_distance / self.world_unit_mm
+        solid_angle = on_axis_solid_angle(self.lens, self.pupil, self.lens.primary_wavelength)
         if not solid_angle > 0:
-            raise SolasError(f"lens_camera: no ray from the image centre passes lens {lens.name}")
+            raise SolasError(f"lens_camera: no ray from the image centre passes lens {self.lens.name}")
         self.norm = 1.0 / solid_angle
-        self.reversed = reversed_lens(lens)
-        self.last_vertex_z = float(lens.vertex_z[-1])
-        self.wavelengths = WavelengthSampler(r)
+        self.reversed = reversed_lens(self.lens)
+        self.last_vertex_z = float(self.lens.vertex_z[-1])
 
-    def sample_wavelengths(self, si, sample, active=True):
-        """One wavelength (nm) from the response in all four lanes (none in a mono variant), and its
-        weight 1/p(λ)."""
-        lam, index = self.wavelengths.sample(sample, active)
-        return lanes(lam), mi.Spectrum(self.wavelengths.weight(index, active))
+    def prepared(self, lens: Lens, props: mi.Properties) -> Lens:
+        """The lens focused at `focus_distance` (world units of `world_unit_mm`), if given."""
+        self.world_unit_mm = positive(props, "world_unit_mm", 1000.0, "mm per world unit", "lens_camera")
+        if "focus_distance" not in props:
+            return lens
+        distance = positive(props, "focus_distance", 1.0, "world units, in front of surface 1; inf", "lens_camera",
+                            True)
+        try:
+            return focused(lens, distance * self.world_unit_mm)
+        except SolasError as exc:
+            raise SolasError(f"lens_camera: focus_distance {distance:g} (world units of {self.world_unit_mm:g} "
+                             f"mm): {exc}") from None
 
     def sample_ray(self, time, sample1, sample2, sample3, active=True):
         """The ray leaving surface 1 toward the scene (world units) and its weight (module docstring)."""
-        lam, index = self.wavelengths.sample(sample1, active)
+        lam, index = self.sample_wavelength(sample1, active)
         inv_pdf = self.wavelengths.weight(index, active)
-        # film point, lens frame (mm): row 0 at +y, column 0 at −x, the lens inverting the image;
-        # Mitsuba's integrators pass sample2 in [0, 1]² over the film's crop window
-        col = dr.fma(sample2.x, self.crop_size[0], self.crop_offset[0])
-        row = dr.fma(sample2.y, self.crop_size[1], self.crop_offset[1])
-        film = mi.Point2f((col - 0.5 * self.width) * self.pitch_mm, (0.5 * self.height - row) * self.pitch_mm)
+        # film point, lens frame (mm): row 0 at +y, column 0 at −x, the lens inverting the image
+        film = self.film_point(sample2)
         target, weight = self.pupil.sample(film, sample3, active)
         f64 = dr.float64_array_t(mi.Float)
         # the reversed lens: x, y kept, z mirrored; the film is its object, the pupil plane its z = 0
@@ -164,30 +138,12 @@ class LensCamera(mi.Sensor):
         weight = dr.select(active & mi.Bool(passed), weight, 0.0)
         return ray, mi.Spectrum(weight * inv_pdf)
 
-    def sample_ray_differential(self, time, sample1, sample2, sample3, active=True):
-        ray, weight = self.sample_ray(time, sample1, sample2, sample3, active)
-        return mi.RayDifferential3f(ray), weight
-
-    def sample_direction(self, it, sample, active=True):
-        raise SolasError("lens_camera: light tracing cannot connect to a sensor behind a lens; use an "
-                         "integrator that starts paths at the camera (path, volpath, aov, direct)")
-
-    def pdf_direction(self, it, ds, active=True):
-        return self.sample_direction(it, None, active)
-
-    def eval_direction(self, it, ds, active=True):
-        return self.sample_direction(it, None, active)
-
     def sample_position(self, time, sample, active=True):
         return self.sample_direction(None, None, active)
 
-    def eval(self, si, active=True):
-        return mi.Spectrum(0.0)  # the camera emits nothing and cannot be hit
-
     def bbox(self):
         """The lens and film, in world units."""
-        reach = max(max(s.semi_diameter for s in self.lens.surfaces),
-                    0.5 * self.pitch_mm * max(self.width, self.height))
+        reach = max(max(s.semi_diameter for s in self.lens.surfaces), *self.film_half_mm)
         corners = np.array([[sx * reach, sy * reach, sz * self.lens.image_z, self.world_unit_mm]
                             for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 0)]) / self.world_unit_mm
         world = corners @ np.array(self.world_transform().matrix, dtype=np.float64).reshape(4, 4).T
@@ -195,13 +151,11 @@ class LensCamera(mi.Sensor):
 
     def traverse(self, callback) -> None:
         super().traverse(callback)
-        callback.put("pitch_um", self.pitch_um, mi.ParamFlags.ReadOnly)
         callback.put("world_unit_mm", self.world_unit_mm, mi.ParamFlags.ReadOnly)
         callback.put("focus_distance", self.focus_distance, mi.ParamFlags.ReadOnly)
 
     def to_string(self) -> str:
-        return (f"LensCamera[{self.lens.name}, {self.width}x{self.height} px of {self.pitch_um:g} um, "
-                f"focus {self.focus_distance:g}, response {self.response.name}, fresnel {self.fresnel}]")
+        return self.describe(f"focus {self.focus_distance:g}", f"fresnel {self.fresnel}")
 
 
 def register() -> None:

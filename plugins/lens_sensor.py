@@ -6,11 +6,16 @@
 | `pitch_um` | float   | µm      | 5.0              | pixel pitch                                            |
 | `fov_deg`  | float   | degrees | the lens's field | half the horizontal field the input image spans        |
 | `response` | string  | —       | "lines"          | camera response (`solas_mi.render.response.parse`)     |
-| (film)     | film    | pixels  | hdrfilm 768×576  | its width and height are the sensor's columns and rows |
+| (film)     | film    | pixels  | hdrfilm 768×576  | its width and height are the sensor's columns and rows;|
+|            |         |         |                  | its crop window (`crop_offset_x`, …): the pixels drawn |
 | (sampler)  | sampler | —       | independent, 4   | its sample_count is `solas-mi render`'s default spp    |
 
 `traverse` exposes `pitch_um` and `fov_deg`, read-only (the exit-pupil bounds and the irradiance
-scale are built from them), and the film and sampler as children.
+scale are built from them), and the film and sampler as children. `pitch_um` must be a positive
+number (SolasError naming it otherwise).
+
+The lens, response, film (and its crop window: a cropped render is exactly those pixels of the whole
+one), pupil and wavelengths are `lens_film.LensFilm`'s, shared with `lens_camera`.
 
 `lens` goes through Mitsuba's file resolver first; the lens must be focused at infinity (a near
 object is `image_object`'s `distance_mm`). `fov_deg` sets the ideal camera's pinhole focal length (a lens of polar fields, a fisheye, uses its
@@ -55,8 +60,6 @@ film row 0 is +y.
 """
 from __future__ import annotations
 
-import math
-
 import drjit as dr
 import mitsuba as mi
 import numpy as np
@@ -64,47 +67,33 @@ import numpy as np
 from solas_mi.errors import SolasError
 from solas_mi.optics.camera import pinhole_focal_mm
 from solas_mi.optics.illumination import ideal_irradiance, image_scales
+from solas_mi.optics.lens import Lens
 from solas_mi.optics.paraxial import paraxial
-from solas_mi.plugins.pupil_sampling import PupilSampler
-from solas_mi.plugins.scene_files import load_lens, load_response
+from solas_mi.plugins.lens_film import LensFilm
 from solas_mi.plugins.scene_probe import calling_render, integrator_name
 from solas_mi.plugins.tables import lookup, table, zeros
-from solas_mi.plugins.wavelength_sampling import WavelengthSampler, lanes
+from solas_mi.plugins.wavelength_sampling import lanes
 
 INTEGRATORS = ("path", "volpath", "aov")  # Mitsuba's integrators that render through the lens
 
 
-class LensSensor(mi.Sensor):
-    """The `lens_sensor` sensor (parameters: the module docstring)."""
+class LensSensor(LensFilm):
+    """The `lens_sensor` sensor (parameters: the module docstring; the film, lens, response, pupil and
+    wavelengths: `lens_film.LensFilm`)."""
 
     def __init__(self, props: mi.Properties) -> None:
-        super().__init__(props)
-        self.lens = load_lens(props)
-        if not self.lens.at_infinity:
-            raise SolasError(f"lens_sensor: lens {self.lens.name} has a finite object; the sensor needs a lens "
-                             "focused at infinity (put a near object in the scene with image_object's distance_mm)")
-        self.pitch_um = float(props.get("pitch_um", 5.0))
+        super().__init__(props, "lens_sensor", "lines",
+                         f"the integrators {', '.join(INTEGRATORS)} or solas-mi's render loop")
         self.fov_deg = float(props.get("fov_deg", self.lens.field_deg))
-        self.pitch_mm = self.pitch_um * 1e-3
-        if not self.pitch_mm > 0:
-            raise SolasError(f"lens_sensor: pitch_um {self.pitch_mm * 1e3!r} must be positive")
-        self.response = load_response(props, self.lens, "lines")
-        self.width, self.height = (int(v) for v in self.film().size())
-        self.image_z = self.lens.image_z
-        half_diag = 0.5 * self.pitch_mm * math.hypot(self.width, self.height)
-        self.pupil = PupilSampler(self.lens, half_diag, sorted({float(self.response.lo_nm.min()),
-                                                                float(self.response.hi_nm.max()),
-                                                                *self.lens.wavelengths_nm}))
         # a lens of polar fields (a fisheye) has no pinhole image: its units are those of the paraxial camera
         self.focal_mm = paraxial(self.lens).efl_mm if self.lens.polar_field else pinhole_focal_mm(self.lens, self.fov_deg)
         self.norm = 1.0 / ideal_irradiance(self.lens, self.focal_mm)
-        heights, radial, tangential = image_scales(self.lens, half_diag, self.lens.primary_wavelength)
+        heights, radial, tangential = image_scales(self.lens, self.half_diagonal_mm, self.lens.primary_wavelength)
         self.scale_step = float(heights[1] - heights[0]) if heights[-1] > 0 else 1.0
         self.inv_radial, self.inv_tangential = table(1.0 / radial), table(1.0 / tangential)
         self.scale_rows = len(heights)
         self.max_footprint = float(self.pitch_mm / min(radial.min(), tangential.min()))
         r = self.response
-        self.wavelengths = WavelengthSampler(r)
         self.checked = set()  # ids of the integrators found to render through the lens
         self.channel_table = table(r.weights)
         self.channels = len(r.channels)
@@ -112,9 +101,12 @@ class LensSensor(mi.Sensor):
         lines = np.all(r.lo_nm == r.hi_nm) and np.allclose(r.probability, 1.0 / len(r.probability))
         self.discrete_lines = len(r.probability) if lines else 0
 
-    def sample_wavelength(self, sample1: mi.Float, active=True):
-        """Wavelength (nm) of a path and the bin it came from."""
-        return self.wavelengths.sample(sample1, active)
+    def prepared(self, lens: Lens, props: mi.Properties) -> Lens:
+        """The lens, which must be focused at infinity (SolasError otherwise)."""
+        if not lens.at_infinity:
+            raise SolasError(f"lens_sensor: lens {lens.name} has a finite object; the sensor needs a lens "
+                             "focused at infinity (put a near object in the scene with image_object's distance_mm)")
+        return lens
 
     def channel_weights(self, index: mi.UInt32, active=True) -> list[mi.Float]:
         """Per-channel weight response_c(λ)/p(λ) of the wavelength bin `index`."""
@@ -134,16 +126,6 @@ class LensSensor(mi.Sensor):
         return mi.Vector2f(self.pitch_mm * (c2 * inv_r + (1.0 - c2) * inv_t),
                            self.pitch_mm * ((1.0 - c2) * inv_r + c2 * inv_t))
 
-    def film_point(self, sample2: mi.Point2f) -> mi.Point2f:
-        """Image-plane point (mm) of a film sample in [0, 1]² (row 0 at +y)."""
-        return mi.Point2f((sample2.x - 0.5) * (self.width * self.pitch_mm), (0.5 - sample2.y) * (self.height * self.pitch_mm))
-
-    def sample_wavelengths(self, si, sample, active=True):
-        """One wavelength from the response in all four lanes (none in a mono variant), and its weight 1/p(λ)."""
-        lam, index = self.sample_wavelength(sample, active)
-        inv_pdf = self.wavelengths.weight(index, active)
-        return lanes(lam), mi.Spectrum(inv_pdf)
-
     def sample_ray(self, time, sample1, sample2, sample3, active=True):
         """A camera ray for Mitsuba's integrators: `pupil_ray` with the weight 1/p(λ) of its wavelength."""
         self.check_integrator()
@@ -162,10 +144,6 @@ class LensSensor(mi.Sensor):
         ray = mi.Ray3f(origin, dr.normalize(d), time, lanes(lam))
         return ray, mi.Spectrum(weight * self.norm) & active
 
-    def sample_ray_differential(self, time, sample1, sample2, sample3, active=True):
-        ray, weight = self.sample_ray(time, sample1, sample2, sample3, active)
-        return mi.RayDifferential3f(ray), weight
-
     def check_integrator(self) -> None:
         """SolasError unless the calling render's integrator can see the scene through the lens."""
         _, integrator = calling_render()
@@ -179,17 +157,10 @@ class LensSensor(mi.Sensor):
 
     def sample_direction(self, it, sample, active=True):
         self.check_integrator()
-        raise SolasError("lens_sensor: light tracing cannot connect to a sensor behind a lens; "
-                         f"use the integrators {', '.join(INTEGRATORS)} or solas-mi's render loop")
-
-    def pdf_direction(self, it, ds, active=True):
-        return self.sample_direction(it, None, active)
-
-    def eval_direction(self, it, ds, active=True):
-        return self.sample_direction(it, None, active)
+        return super().sample_direction(it, sample, active)
 
     def sample_position(self, time, sample, active=True):
-        """A point of the film, uniform over its area (mm²), facing the lens."""
+        """A point of the film's crop window, uniform over its area (mm²), facing the lens."""
         film = self.film_point(sample)
         ps = zeros(mi.PositionSample3f)
         ps.p = mi.Point3f(film.x, film.y, self.image_z)
@@ -200,24 +171,12 @@ class LensSensor(mi.Sensor):
     def pdf_position(self, ps, active=True):
         return dr.select(active, self.pdf_area(), 0.0)
 
-    def pdf_area(self) -> float:
-        return 1.0 / (self.width * self.height * self.pitch_mm ** 2)
-
-    def eval(self, si, active=True):
-        return mi.Spectrum(0.0)  # the film emits nothing and cannot be hit
-
-    def bbox(self):
-        half = 0.5 * self.pitch_mm * mi.ScalarVector2f(self.width, self.height)
-        return mi.ScalarBoundingBox3f([-half.x, -half.y, self.image_z], [half.x, half.y, self.image_z])
-
     def traverse(self, callback) -> None:
         super().traverse(callback)
-        callback.put("pitch_um", self.pitch_um, mi.ParamFlags.ReadOnly)
         callback.put("fov_deg", self.fov_deg, mi.ParamFlags.ReadOnly)
 
     def to_string(self) -> str:
-        return (f"LensSensor[{self.lens.name}, {self.width}x{self.height} px of {self.pitch_mm * 1e3:g} um, "
-                f"response {self.response.name}]")
+        return self.describe()
 
 
 def register() -> None:

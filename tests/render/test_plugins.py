@@ -51,7 +51,7 @@ def test_plugins_expose_their_documented_parameters(mi, plugins):
 @pytest.mark.parametrize("plugin, message", [
     ({"type": "sellmeier_dielectric", "fresnel": "ghost"}, "fresnel 'ghost' must be one of transmit, sample, off"),
     ({"type": "image_object", "boundary": "wrap"}, "boundary 'wrap' must be one of edge, reflect, zero"),
-    ({"type": "lens_sensor", "pitch_um": -1.0}, "pitch_um -1.0 must be positive"),
+    ({"type": "lens_sensor", "pitch_um": -1.0}, "lens_sensor: pitch_um -1.0 must be a positive number \\(µm\\)"),
 ])
 def test_bad_parameters_are_named(mi, plugin, message):
     with pytest.raises(RuntimeError, match=message):
