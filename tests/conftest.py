@@ -8,9 +8,9 @@
   spectral variant of this machine (llvm_ad_spectral, scalar_spectral). `in_variant` is the same as a
   context manager, for fixtures of a wider scope. The variant is process-wide state: every test finds
   again after it the variant it started with (`_keep_the_mitsuba_variant`, also for tests that switch
-  it through the API, e.g. `render_image(variant=...)`). A CUDA variant without a device is skipped.
+  it through the API, e.g. `render_image(variant=...)`; only the first variant ever set stays, Mitsuba
+  having no way to unset it). A CUDA variant without a device is skipped.
 - Synthetic PSF grids without the tracer: `synthetic_grid` (`SyntheticGrids`).
-- Running the command line: `cli` (exit status, stdout, stderr of `solas_mi.cli.main`).
 """
 import contextlib
 import copy
