@@ -1,45 +1,19 @@
-"""Synthetic PSF grids (no tracer) and direct reference operations shared by the convolution tests,
-as the `synthetic` fixture."""
+"""Synthetic PSF grids (no tracer; built by the shared `synthetic_grid`, tests/conftest.py) and direct
+reference operations shared by the convolution tests, as the `synthetic` fixture."""
 import math
 
 import numpy as np
 import pytest
 
-from solas_mi.psf.grid import PSFGrid, field_nodes
-
 
 class Synthetic:
-    """Helpers for building grids and checking convolutions; `focal_mm` is the synthetic pinhole focal length."""
+    """Helpers for building grids and checking convolutions; `focal_mm` is the synthetic pinhole focal
+    length, `make_grid` the shared grid builder's `from_psfs`."""
 
-    focal_mm = 100.0
-
-    @staticmethod
-    def pixel_um(width: int, fov: float = 2.0) -> float:
-        return 2e3 * Synthetic.focal_mm * math.tan(math.radians(fov)) / width
-
-    @staticmethod
-    def gaussian(size: int, sigma_um: float, pitch_um: float) -> np.ndarray:
-        x = (np.arange(size) - size // 2) * pitch_um
-        g = np.exp(-0.5 * (x[None, :] ** 2 + x[:, None] ** 2) / sigma_um ** 2)
-        return g / g.sum()
-
-    @staticmethod
-    def make_grid(psfs, pitch_um, offsets_um=None, field=(2.0, 2.0), wavelengths=None, normalization="sum",
-                  sampling="centers") -> PSFGrid:
-        """A PSFGrid without the tracer: psfs (n_wavelengths, ny, nx, s, s); chief rays = the ideal image
-        points + offsets_um (n_wavelengths, ny, nx, 2) µm (x right, y up)."""
-        psfs = np.asarray(psfs, dtype=np.float32)
-        nw, ny, nx = psfs.shape[:3]
-        fx = field_nodes(nx, field[0], sampling)
-        fy = field_nodes(ny, field[1], sampling)[::-1]
-        fields = np.stack(np.meshgrid(fx, fy), axis=-1)
-        chief = np.repeat(Synthetic.focal_mm * np.tan(np.radians(fields))[None], nw, axis=0)
-        if offsets_um is not None:
-            chief = chief + np.asarray(offsets_um, dtype=np.float64) * 1e-3
-        meta = {"normalization": normalization, "field_range_deg": list(field), "field_sampling": sampling,
-                "pinhole_focal_mm": Synthetic.focal_mm, "reference_wavelength_nm": 531.0}
-        wl = tuple(wavelengths) if wavelengths else tuple(531.0 + 50.0 * k for k in range(nw))
-        return PSFGrid(psfs, fields, chief, wl, float(pitch_um), meta)
+    def __init__(self, grids):
+        self.grids = grids
+        self.focal_mm, self.pixel_um, self.gaussian, self.make_grid = (grids.focal_mm, grids.pixel_um,
+                                                                       grids.gaussian, grids.from_psfs)
 
     @staticmethod
     def reference_convolution(image: np.ndarray, kernel: np.ndarray, shift, boundary="edge") -> np.ndarray:
@@ -62,18 +36,17 @@ class Synthetic:
         r, c = np.indices(image.shape)
         return np.array([(image * c).sum(), (image * r).sum()]) / image.sum()
 
-    @staticmethod
-    def varied_grid(rng, width, ny=8, nx=8, pitch_div=4, max_offset_px=1.0, normalization="sum", transmission=None):
+    def varied_grid(self, rng, width, ny=8, nx=8, pitch_div=4, max_offset_px=1.0, normalization="sum", transmission=None):
         """Gaussian PSFs of random widths (0.5–4 px) and random chief-ray offsets on an 8×8 grid."""
-        pix = Synthetic.pixel_um(width)
+        pix = self.pixel_um(width)
         pitch = pix / pitch_div
         size = 2 * int(math.ceil(8 * pitch_div)) + 1  # ±8 px
         sig = rng.uniform(0.5, 4.0, (ny, nx)) * pix
-        psfs = np.stack([[Synthetic.gaussian(size, s, pitch) for s in row] for row in sig])[None]
+        psfs = np.stack([[self.gaussian(size, s, pitch) for s in row] for row in sig])[None]
         if transmission is not None:
             psfs = psfs * (transmission / pitch ** 2)[None, :, :, None, None]
         off = rng.uniform(-max_offset_px, max_offset_px, (1, ny, nx, 2)) * pix
-        return Synthetic.make_grid(psfs, pitch, off, normalization=normalization)
+        return self.make_grid(psfs, pitch, off, normalization=normalization)
 
     @staticmethod
     def smooth_texture(rng, h, w):
@@ -84,11 +57,10 @@ class Synthetic:
             img += np.cos(k[0] * x + k[1] * y + rng.uniform(0, 2 * np.pi))
         return 0.5 + 0.5 * img / np.abs(img).max()
 
-    @staticmethod
-    def small_grid(**kw):
-        return Synthetic.make_grid(np.broadcast_to(Synthetic.gaussian(9, 2.0, 1.0), (1, 4, 4, 9, 9)), 1.0, **kw)
+    def small_grid(self, **kw):
+        return self.grids((1, 4, 4), pitch_um=1.0, size=9, sigma_um=2.0, **kw)
 
 
 @pytest.fixture(scope="session")
-def synthetic() -> Synthetic:
-    return Synthetic
+def synthetic(synthetic_grid) -> Synthetic:
+    return Synthetic(synthetic_grid)

@@ -38,11 +38,6 @@ def test_a_glass_slab_seen_by_a_stock_camera_passes_white_light_unchanged(varian
     assert np.abs(ratio - 1).max() < (0.03 if variant == "llvm_ad_spectral" else 0.08), ratio
 
 
-@pytest.fixture(scope="module")
-def mi():
-    return solas_mi.mitsuba("llvm_ad_spectral")
-
-
 def _interaction(mi, wavelengths, cos_theta=0.8):
     si = mi.SurfaceInteraction3f()
     si.wi = mi.Vector3f(math.sqrt(1 - cos_theta ** 2), 0.0, cos_theta)

@@ -7,16 +7,9 @@ import math
 import numpy as np
 import pytest
 
-import solas_mi
-
 N = 1 << 18
 # images the mapping covers wholly (12 × 20 texels: the height spans 0.6 of the width)
 CASES = [("rectilinear", 60.0), ("equidistant", 100.0), ("equisolid", 110.0), ("equirectangular", 140.0)]
-
-
-@pytest.fixture(scope="module")
-def mi():
-    return solas_mi.mitsuba("llvm_ad_spectral")
 
 
 def _emitter(mi, tmp_path, mapping, fov):

@@ -17,11 +17,6 @@ PITCH_UM = 2.0
 EDGE_W, EDGE_H = 96, 8
 
 
-@pytest.fixture(scope="module")
-def mi():
-    return solas_mi.mitsuba("llvm_ad_spectral")
-
-
 def _camera(mi, width, height, pitch_um, response="mono:531", **extra):
     """A lens_camera dict on a luminance hdrfilm with a box filter."""
     film = {"type": "hdrfilm", "width": width, "height": height, "pixel_format": "luminance",

@@ -6,15 +6,9 @@ import numpy as np
 import pytest
 
 from solas_mi.optics.camera import pinhole_focal_mm
-from solas_mi.render.mitsuba import mitsuba
 
 
-@pytest.fixture(scope="module")
-def mi():
-    return mitsuba("llvm_ad_spectral")
-
-
-@pytest.fixture(scope="module")
+@pytest.fixture
 def plugins(mi):
     """Each plugin with its default parameters (the object's image from Python: a 2×4 grey 0.5)."""
     image = mi.TensorXf(np.full((2, 4), 0.5, dtype=np.float32))

@@ -4,12 +4,10 @@ import pytest
 
 from solas_mi.errors import SolasError
 from solas_mi.render import stock
-from solas_mi.render.mitsuba import mitsuba
 
 
-@pytest.fixture(scope="module")
-def white_sky():
-    mi = mitsuba("llvm_ad_spectral")
+@pytest.fixture
+def white_sky(mi):
     return mi.load_dict({"type": "scene", "integrator": {"type": "path"}, "emitter": {"type": "constant"},
                          "sensor": {"type": "perspective", "fov": 30,
                                     "film": {"type": "hdrfilm", "width": 32, "height": 24}}})

@@ -20,11 +20,6 @@ from solas_mi.render.psf import lens_geometry
 BAND_531 = {"type": "spectrum", "value": [(529.0, 0.0), (530.0, 1.0), (532.0, 1.0), (533.0, 0.0)]}
 
 
-@pytest.fixture(scope="module")
-def mi():
-    return solas_mi.mitsuba("llvm_ad_spectral")
-
-
 def film(width: int, height: int) -> dict:
     """A one-channel specfilm of the 531 nm line (a line has no density: hdrfilm cannot weigh it)."""
     return {"type": "specfilm", "width": width, "height": height, "rfilter": {"type": "box"}, "Y": BAND_531}
