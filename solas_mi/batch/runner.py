@@ -51,8 +51,9 @@ def check_dask(dask: str | None) -> None:
         ok = (parts.scheme in DASK_SCHEMES and bool(parts.hostname) and port is not None and 0 < port
               and parts.path in ("", "/") and not parts.query and not parts.fragment)
     if not ok:
-        raise SolasError(f"--dask {dask!r} must be the address of a Dask scheduler, tcp://HOST:PORT (or "
-                         f"{', '.join(s + '://' for s in DASK_SCHEMES[1:])} HOST:PORT), or local for a LocalCluster")
+        raise SolasError(f"--dask {dask!r} must be a scheduler address, tcp://HOST:PORT of a running `dask "
+                         f"scheduler` (or {', '.join(s + '://' for s in DASK_SCHEMES[1:])} HOST:PORT), or local for "
+                         "a LocalCluster")
 
 
 def _interrupt(signum, frame) -> None:

@@ -194,7 +194,7 @@ def test_a_bad_dask_address_is_refused_before_any_work(render_inputs, tmp_path, 
     from the scheduler client once the items start."""
     from solas_mi.batch.runner import check_dask
 
-    with pytest.raises(SolasError, match=r"must be the address of a Dask scheduler, tcp://HOST:PORT .* or local"):
+    with pytest.raises(SolasError, match=r"must be a scheduler address, tcp://HOST:PORT .* or local"):
         render_batch([render_inputs.images / "frame000.png"], tmp_path / "never", lens="solas-doublet", spp=1,
                      dask=address)
     assert not (tmp_path / "never").exists()

@@ -44,7 +44,7 @@ OUTPUT_FLAGS = {"help", "output", "png", "force"}  # where a render is written, 
     (["render-image", "solas-doublet", "{tmp}/photo.png", "--spp", "many", "-o", "{tmp}/x.exr"],
      "--spp 'many' must be an integer"),
     (["batch", "render", "{tmp}/photo.png", "--lens", "solas-doublet", "-o", "{tmp}/out", "--dask", "not a url"],
-     "--dask 'not a url' must be the address of a Dask scheduler, tcp://HOST:PORT"),
+     "--dask 'not a url' must be a scheduler address, tcp://HOST:PORT"),
 ])
 def test_bad_settings_are_one_line_before_any_work(tmp_path, capsys, argv, message):
     Image.fromarray(np.full((24, 32), 128, np.uint8)).save(tmp_path / "photo.png")
