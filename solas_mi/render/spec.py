@@ -79,6 +79,8 @@ class RenderSpec:
         set_("sensor", parse_wxh(tuple(self.sensor) if isinstance(self.sensor, list) else self.sensor, "sensor"))
         for name in ("pitch_um", "fov_deg", "focus_distance"):
             set_(name, _optional_positive(name, getattr(self, name), allow_inf=name == "focus_distance"))
+        if self.fov_deg is not None and not self.fov_deg < 180.0:  # a fisheye's environment image spans the most
+            raise SolasError(f"fov_deg {self.fov_deg!r} must be below 180 degrees (half the field the image spans)")
         if not isinstance(self.response, str) or not self.response.strip():
             raise SolasError(f"camera response {self.response!r} must be srgb, lines, mono:<nm> or table:<file.csv>")
         for name in ("boundary", "fresnel", "mapping"):

@@ -111,6 +111,7 @@ def test_render_settings_checked_once_and_kept_in_the_manifest_form():
                          ({"boundary": "wrap"}, "boundary 'wrap' must be one of"),
                          ({"pitch_um": -1.0}, "pitch_um -1.0 must be a positive number"),
                          ({"fov_deg": math.inf}, "fov_deg inf must be a positive number"),
+                         ({"fov_deg": 180}, "fov_deg 180.0 must be below 180 degrees"),
                          ({"variant": "llvm_ad_rgb"}, "RGB variants cannot trace the lens"),
                          ({"sensor": (0, 4)}, "sensor (0, 4)"), ({"response": ""}, "camera response ''")]:
         with pytest.raises(SolasError, match=message.replace("(", r"\(").replace(")", r"\)")):
