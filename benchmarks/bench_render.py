@@ -35,8 +35,10 @@ from solas_mi.resources import resource_dir
 def noise_table(lens, image, camera, spps, response):
     rows = []
     for spp in spps:
-        a = render_image(lens, image, sensor=(240, 320), pitch_um=camera.pitch_um, spp=spp, response=response, seed=1).image
-        b = render_image(lens, image, sensor=(240, 320), pitch_um=camera.pitch_um, spp=spp, response=response, seed=2).image
+        a = render_image(lens, image, sensor=(240, 320), pitch_um=camera.pitch_um, spp=spp, response=response,
+                         seed=1).image
+        b = render_image(lens, image, sensor=(240, 320), pitch_um=camera.pitch_um, spp=spp, response=response,
+                         seed=2).image
         noise = np.sqrt(np.mean((a - b) ** 2) / 2) / np.sqrt(np.mean((0.5 * (a + b)) ** 2))
         rows.append((spp, noise))
         print(f"  {response} spp {spp}: noise {noise * 100:.2f} %", flush=True)
