@@ -34,7 +34,8 @@ def image_job(lens):
 
     def run(variant: str) -> tuple[float, float]:
         start, cpu = time.perf_counter(), time.process_time()
-        render_image(lens, image, (480, 640), None, 64, "mono:450", fresnel="transmit", variant=variant, seed=1)
+        render_image(lens, image, sensor=(480, 640), spp=64, response="mono:450", fresnel="transmit", variant=variant,
+                     seed=1)
         return time.perf_counter() - start, time.process_time() - cpu
 
     return "render-image, doublet, 640×480, 64 spp, mono:450", run

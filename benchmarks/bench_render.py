@@ -35,8 +35,10 @@ from solas_mi.resources import resource_dir
 def noise_table(lens, image, camera, spps, response):
     rows = []
     for spp in spps:
-        a = render_image(lens, image, (240, 320), camera.pitch_um, spp, response, seed=1).image
-        b = render_image(lens, image, (240, 320), camera.pitch_um, spp, response, seed=2).image
+        a = render_image(lens, image, sensor=(240, 320), pitch_um=camera.pitch_um, spp=spp, response=response,
+                         seed=1).image
+        b = render_image(lens, image, sensor=(240, 320), pitch_um=camera.pitch_um, spp=spp, response=response,
+                         seed=2).image
         noise = np.sqrt(np.mean((a - b) ** 2) / 2) / np.sqrt(np.mean((0.5 * (a + b)) ** 2))
         rows.append((spp, noise))
         print(f"  {response} spp {spp}: noise {noise * 100:.2f} %", flush=True)
@@ -89,10 +91,10 @@ def main() -> None:
     lens = Lens.load("solas-doublet")
     image = read_image(resource_dir("scenes") / "images" / "rocket.png")
     camera = camera_for(lens)
-    render_image(lens, image, (96, 128), spp=4, response="lines")  # compile the kernels once
+    render_image(lens, image, sensor=(96, 128), spp=4, response="lines")  # compile the kernels once
     rates = {}
     for response in ("lines", "srgb"):
-        r = render_image(lens, image, (960, 1280), spp=16 if args.quick else 64, response=response)
+        r = render_image(lens, image, sensor=(960, 1280), spp=16 if args.quick else 64, response=response)
         rates[response] = 1280 * 960 * r.spp / r.meta["cpu_seconds"] * os.cpu_count()  # contention-proof
         cores = os.cpu_count()
         print(f"1280x960 {response} {r.spp} spp: {r.seconds:.1f} s wall, {r.samples_per_second / 1e6:.2f} M samples/s; "
@@ -126,7 +128,8 @@ def main() -> None:
                     rms = math.sqrt(np.average((dx - cx) ** 2 + (dy - cy) ** 2, weights=pw))
                     worst_c = max(worst_c, math.hypot(p.meta["centroid_um"][0] - cx, p.meta["centroid_um"][1] - cy))
                     worst_r = max(worst_r, abs(p.meta["rms_radius_um"] / rms - 1))
-        r = render_image(lens, image, (240, 320), camera.pitch_um, 64, "lines", rings=rings)
+        r = render_image(lens, image, sensor=(240, 320), pitch_um=camera.pitch_um, spp=64, response="lines",
+                         rings=rings)
         print(f"| {rings} | {worst_c:.3f} | {worst_r * 100:.3f} % | {r.samples_per_second / 1e6:.2f} |", flush=True)
 
 

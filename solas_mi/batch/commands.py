@@ -62,47 +62,45 @@ def _report(command: str, result, extra: str = "") -> int:
     return 1 if result.failed else 0
 
 
-def _list(text: str | None, name: str, kind=str) -> list:
-    """A comma-separated sweep "a,b,c" (None: [None])."""
-    if text is None:
-        return [None]
-    values = [v.strip() for v in text.split(",")]
-    try:
-        return [kind(v) for v in values if v]
-    except ValueError:
-        raise SolasError(f"{name} {text!r} must be a comma-separated list of {kind.__name__} values") from None
+# the render settings `batch render` takes: every one of `render-image`'s, and a scene file's focus distance
+RENDER_SETTINGS = ("sensor", "pitch_um", "fov_deg", "response", "boundary", "fresnel", "rings", "mapping", "spp",
+                   "variant", "seed", "focus_distance")
 
 
-def _sweep(args: argparse.Namespace) -> dict[str, Any]:
-    return {"lens": args.lens, "focus_distance": _list(args.focus_distance, "--focus-distance"),
-            "sensor": _list(args.sensor, "--sensor"), "pitch_um": _list(args.pitch_um, "--pitch-um", float),
-            "spp": _list(args.spp, "--spp", int), "response": args.response, "fov_deg": args.fov_deg,
-            "boundary": args.boundary, "fresnel": args.fresnel, "seed": args.seed}
+def _render_spec(args: argparse.Namespace):
+    """The batch's RenderSpec and its sweep (`batch.render.SWEEP`'s fields given lists) from the flags."""
+    from ..render.spec import spec_from_args
+    from .render import SWEEP
+
+    return spec_from_args(args, RENDER_SETTINGS, sweep=SWEEP[1:])
 
 
 def run_batch_render(args: argparse.Namespace) -> int:
+    from .runner import check_dask
+
     workers = _workers(args.workers)
+    check_dask(args.dask)
+    spec, sweep = _render_spec(args)
     if args.dry_run:
         from ..budget import size_text
         from .degrade import check_workers
         from .render import batch_variant, estimate, plan_render
 
         n = check_workers(workers)
-        p = plan_render(args.inputs, args.output, **_sweep(args))
+        p = plan_render(args.inputs, args.output, lens=args.lens, spec=spec, **sweep)
         need = estimate(p, n if args.dask is None else 1)
         where = f"Dask at {args.dask}" if args.dask else f"{n} local worker process(es)"
-        variant = batch_variant(args.lens, args.response, args.variant)
         swept = ", ".join(f"{k} ({len(v)} values)" for k, v in p.manifest.header["sweep"].items()) or "nothing"
         print("1. no PSF grid (a direct render through the lens)")
         print(f"2. render {len(p.todo)} of {len(p.jobs)} items ({len(p.jobs) - len(p.todo)} already finished, "
-              f"skipped; swept: {swept}) with Mitsuba {variant}, on {where}")
+              f"skipped; swept: {swept}) with Mitsuba {batch_variant(p)}, on {where}")
         print(f"3. write EXR + PNG per item and {p.manifest.path}")
         print(f"estimate: about {need['seconds']:.1f} s ({need['samples']:.3g} samples), peak memory about "
               f"{size_text(need['peak_bytes'])}")
         return 0
     from .render import render_batch
 
-    result = render_batch(args.inputs, args.output, **_sweep(args), variant=args.variant, workers=workers,
+    result = render_batch(args.inputs, args.output, lens=args.lens, spec=spec, **sweep, workers=workers,
                           dask=args.dask, force=args.force, progress=not args.quiet)
     return _report("render", result)
 
@@ -135,8 +133,8 @@ def register(subparsers: Any) -> None:
     from ..convolution.kernels import BOUNDARIES
     from ..convolution.methods import DEFAULT_METHOD, METHODS
     from ..psf.commands import add_grid_options
-    from ..render.mitsuba import VARIANTS
-    from ..render.scene import BOUNDARIES as RENDER_BOUNDARIES
+    from ..render.spec import add_spec_flags
+    from .render import SWEEP
 
     batch = subparsers.add_parser("batch", help="many images at once, on local processes or a Dask cluster",
                                   description="Batch work, resumable, with a manifest batch.json in the output "
@@ -170,20 +168,6 @@ def register(subparsers: Any) -> None:
     r.add_argument("inputs", nargs="+", metavar="INPUT", help="images or scene XML files, folders of them, or globs")
     r.add_argument("--lens", action="append", required=True,
                    help="shipped lens name or .toml file; repeat to sweep over lenses")
-    r.add_argument("--focus-distance", metavar="D[,D…]", help="scene files: focus distances in world units "
-                                                              "(inf: infinity; default: the lens file's)")
-    r.add_argument("--sensor", default="1280x960", metavar="WxH[,WxH…]", help="images: sensor pixels")
-    r.add_argument("--pitch-um", metavar="P[,P…]", help="pixel pitch in µm (default: the field spans the sensor)")
-    r.add_argument("--spp", default="64", metavar="N[,N…]", help="samples per pixel")
-    r.add_argument("--response", default="srgb", help="camera response: srgb, lines, mono:<nm>, table:<file.csv>")
-    r.add_argument("--fov-deg", type=float, help="images: half the horizontal field the image spans "
-                                                 "(default: the lens's)")
-    r.add_argument("--boundary", choices=RENDER_BOUNDARIES, default="edge",
-                   help="images: the object outside the image")
-    r.add_argument("--fresnel", choices=("transmit", "sample", "off"), default="transmit", help="images: Fresnel losses")
-    r.add_argument("--seed", type=int, default=0, help="the batch's base seed (each item's seed derives from it)")
-    r.add_argument("--variant", choices=VARIANTS,
-                   help="Mitsuba variant of every item (default: cuda_ad_spectral with a GPU, else "
-                        "llvm_ad_spectral; a mono one needs a response of one wavelength)")
+    add_spec_flags(r, RENDER_SETTINGS, sweep=SWEEP[1:])
     _add_runner_options(r)
     r.set_defaults(run=run_batch_render)

@@ -18,6 +18,7 @@ from typing import Any, Iterable
 from ..errors import SolasError
 from .cache import GridCache, canonical_options, file_hash
 from .jobs import MANIFEST, Job, Manifest, expand_inputs, plan
+from .runner import check_dask
 
 # seconds per image value (H·W·C) on one core of the 2-core benchmark machine, reading, degrading
 # (interp) and writing included (benchmarks/bench_batch.py: 1280×960 RGB, 32×32 grid)
@@ -64,11 +65,6 @@ def check_workers(workers: int | None) -> int:
     if isinstance(n, bool) or not isinstance(n, int) or n < 1:
         raise SolasError(f"workers {workers!r} must be a whole number >= 1")
     return n
-
-
-def check_dask(dask: str | None) -> None:
-    if dask is not None and (not isinstance(dask, str) or not dask.strip()):
-        raise SolasError(f"dask {dask!r} must be a scheduler address (tcp://HOST:PORT) or local")
 
 
 def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *,

@@ -27,24 +27,29 @@ import os
 import time
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Iterable, Sequence
+from typing import Any, Iterable, Sequence
 
 from ..errors import SolasError
-from .degrade import BatchResult, check_dask, check_workers
+from ..render.spec import RenderSpec
+from .degrade import BatchResult, check_workers
 from .jobs import IMAGE_SUFFIXES, MANIFEST, Job, Manifest, expand_inputs
+from .runner import check_dask
 from .work import SCENE_SUFFIXES
 
-SWEEP = ("lens", "focus_distance", "sensor", "pitch_um", "spp")
+SWEEP = ("lens", "focus_distance", "sensor", "pitch_um", "spp")  # lens, then RenderSpec fields
 SEEDS = 4096  # seeds 0…4095: the render passes' seeds (seed·1000003 + pass) stay within 32 bits
+MAX_BASE_SEED = 2**31 - 1
 
 
 @dataclass
 class RenderPlan:
-    """What a render batch will do: its items (skipped ones marked) and the batch's identity."""
+    """What a render batch will do: its items (skipped ones marked) and the batch's identity; `spec`
+    the settings every item shares (its sweep fields at their first values, its seed the batch's base)."""
 
     jobs: list[Job]
     manifest: Manifest
     key: str
+    spec: RenderSpec
 
     @property
     def todo(self) -> list[int]:
@@ -52,30 +57,16 @@ class RenderPlan:
 
 
 def _values(name: str, given) -> list:
-    values = list(given) if isinstance(given, (list, tuple)) else [given]
+    values = list(given) if isinstance(given, (list, tuple)) and not (name == "sensor" and _is_pair(given)) \
+        else [given]
     if not values:
         raise SolasError(f"{name} needs at least one value")
     return values
 
 
-def _focus(value) -> float | None:
-    """A focus distance (world units of the scene; "inf" for infinity), or None: the lens file's."""
-    if value is None:
-        return None
-    try:
-        d = float(value)
-    except (TypeError, ValueError):
-        d = -1.0
-    if not d > 0:
-        raise SolasError(f"focus distance {value!r} must be a positive number of world units or inf")
-    return d
-
-
-def _sensor(value) -> tuple[int, int]:
-    """(rows, columns) from "COLSxROWS" or a (rows, columns) pair."""
-    from ..options import parse_wxh
-
-    return tuple(int(v) for v in value) if isinstance(value, (list, tuple)) else parse_wxh(str(value), "--sensor")
+def _is_pair(value) -> bool:
+    """A (rows, columns) pair of integers: one sensor, not a list of sensors."""
+    return len(value) == 2 and all(isinstance(v, int) for v in value)
 
 
 def _label(name: str, value, lens_names: dict[str, str]) -> str:
@@ -96,42 +87,35 @@ def seed_of(name: str, base_seed: int) -> int:
     return int.from_bytes(digest[:4], "little") % SEEDS
 
 
-def plan_render(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *, lens, focus_distance=None,
-                sensor="1280x960", pitch_um=None, spp=64, response: str = "srgb", fov_deg: float | None = None,
-                boundary: str = "edge", fresnel: str = "transmit", seed: int = 0) -> RenderPlan:
-    """Check everything a render batch needs before any work and find what a former run finished.
-    `lens`, `focus_distance`, `sensor`, `pitch_um` and `spp` are one value or a list of values (the
-    sweep)."""
-    from ..optics.lens import Lens
-    from ..outputs import output_folder
-    from ..render import response as responses
+def batch_spec(spec: RenderSpec | None, settings: dict[str, Any]) -> tuple[RenderSpec, dict[str, list]]:
+    """The batch's shared RenderSpec (`spec` with `settings` changed; a sweep field given a list holds
+    its first value) and the values of each sweep field (checked, each as the spec holds it)."""
+    base = spec or RenderSpec()
+    axes = {name: _values(name.replace("_", " "), settings.pop(name, getattr(base, name))) for name in SWEEP[1:]}
+    base = base.replace(**settings, **{name: values[0] for name, values in axes.items()})
+    if not 0 <= base.seed <= MAX_BASE_SEED:
+        raise SolasError(f"seed {base.seed!r} must be a whole number from 0 to 2^31 - 1")
+    return base, {name: [getattr(base.replace(**{name: v}), name) for v in values] for name, values in axes.items()}
 
-    if isinstance(seed, bool) or not isinstance(seed, int) or not 0 <= seed < 2 ** 31:
-        raise SolasError(f"seed {seed!r} must be a whole number from 0 to 2^31 - 1")
-    out_dir = output_folder(output_dir).resolve()
-    files = expand_inputs(inputs, IMAGE_SUFFIXES + SCENE_SUFFIXES)
-    lenses = {str(v): Lens.load(str(v)) for v in _values("lens", lens)}
-    for one in lenses.values():
-        responses.check_lens(responses.parse(response, one.wavelengths_nm), one)
-    axes = {"lens": list(lenses), "focus_distance": [_focus(v) for v in _values("focus distance", focus_distance)],
-            "sensor": [_sensor(v) for v in _values("sensor", sensor)],
-            "pitch_um": [None if v is None else float(v) for v in _values("pitch", pitch_um)],
-            "spp": _values("spp", spp)}
-    for n in axes["spp"]:
-        if isinstance(n, bool) or not isinstance(n, int) or not 1 <= n <= 1 << 20:
-            raise SolasError(f"samples per pixel {n!r} must be a whole number from 1 to {1 << 20}")
+
+def _check_inputs(files: list[Path], axes: dict[str, list]) -> None:
+    """Refuse a sweep that does not apply to the inputs given."""
     scenes = [f for f in files if f.suffix.lower() in SCENE_SUFFIXES]
     if axes["focus_distance"] != [None] and len(scenes) < len(files):
         raise SolasError("a focus distance sets the lens camera of scene files; image inputs lie on the lens's "
                          "object plane: give them without --focus-distance, or as a separate batch")
     if len(axes["sensor"]) > 1 and scenes:
         raise SolasError("a scene file's film sets its sensor; sweep --sensor over image inputs only")
+
+
+def _jobs(files: list[Path], out_dir: Path, base: RenderSpec, axes: dict[str, list], lenses: dict) -> list[Job]:
+    """One item per input and sweep point, named by its input and swept values, seeded by its name."""
     swept = [name for name in SWEEP if len(axes[name]) > 1]
     names = {k: v.name for k, v in lenses.items()}
     jobs, seen, sources = [], {}, set(files)
     for path, point in itertools.product(files, itertools.product(*(axes[name] for name in SWEEP))):
-        params = dict(zip(SWEEP, point))
-        stem = "_".join([path.stem, *(_label(name, params[name], names) for name in swept)])
+        values = dict(zip(SWEEP, point))
+        stem = "_".join([path.stem, *(_label(name, values[name], names) for name in swept)])
         output = out_dir / f"{stem}.exr"
         if output in seen:
             raise SolasError(f"inputs {str(seen[output])!r} and {str(path)!r} would both write {output}; "
@@ -139,19 +123,48 @@ def plan_render(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLi
         if output in sources or output.with_suffix(".png") in sources:
             raise SolasError(f"output {output} would replace an input of the same name; choose another -o")
         seen[output] = path
-        one = lenses[params["lens"]]
-        params.update(lens_name=one.name, lens_hash=one.hash, response=response, sensor=list(params["sensor"]))
-        if params["focus_distance"] is not None and math.isinf(params["focus_distance"]):
-            params["focus_distance"] = "inf"  # JSON has no infinity; Mitsuba reads "inf"
-        jobs.append(Job(str(path), str(output), str(output.with_suffix(".png")), kind="render",
-                        seed=seed_of(stem, seed), params=params))
+        lens = values.pop("lens")
+        item = base.replace(**values, seed=seed_of(stem, base.seed))
+        params = {"lens": lens, "lens_name": lenses[lens].name, "lens_hash": lenses[lens].hash, **item.as_dict()}
+        jobs.append(Job(str(path), str(output), str(output.with_suffix(".png")), kind="render", seed=item.seed,
+                        params=params))
+    return jobs
+
+
+def plan_render(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *, lens,
+                spec: RenderSpec | None = None, **settings) -> RenderPlan:
+    """Check everything a render batch needs before any work and find what a former run finished.
+    `lens` is one value or a list (the sweep); `settings` are RenderSpec fields changing `spec`, of
+    which `focus_distance`, `sensor`, `pitch_um` and `spp` also take a list of values (the sweep);
+    `seed` is the batch's base seed (each item's derives from it and the item's name)."""
+    from ..optics.lens import Lens
+    from ..outputs import output_folder
+    from ..render import response as responses
+
+    base, axes = batch_spec(spec, settings)
+    out_dir = output_folder(output_dir).resolve()
+    files = expand_inputs(inputs, IMAGE_SUFFIXES + SCENE_SUFFIXES)
+    lenses = {str(v): Lens.load(str(v)) for v in _values("lens", lens)}
+    for one in lenses.values():
+        responses.check_lens(responses.parse(base.response, one.wavelengths_nm), one)
+    axes["lens"] = list(lenses)
+    _check_inputs(files, axes)
+    jobs = _jobs(files, out_dir, base, axes, lenses)
     # the settings every item shares; each item is matched on its input, output and sweep point, so a
     # sweep grown by a value redoes only the new items
-    key = hashlib.sha256(json.dumps(["render", fov_deg, boundary, fresnel, seed]).encode()).hexdigest()[:16]
-    manifest = Manifest(out_dir / MANIFEST, {"version": 1, "kind": "render", "batch_id": key,
-                                             "sweep": {name: axes[name] for name in swept}}, jobs)
+    shared = {k: v for k, v in base.as_dict().items() if k not in SWEEP}
+    key = hashlib.sha256(json.dumps(["render", shared]).encode()).hexdigest()[:16]
+    sweep = {name: _json_axis(name, axes[name]) for name in SWEEP if len(axes[name]) > 1}
+    manifest = Manifest(out_dir / MANIFEST, {"version": 1, "kind": "render", "batch_id": key, "sweep": sweep}, jobs)
     manifest.resume(key)
-    return RenderPlan(jobs, manifest, key)
+    return RenderPlan(jobs, manifest, key, base)
+
+
+def _json_axis(name: str, values: list) -> list:
+    """A sweep axis as the manifest holds it (the items' form: sensors as lists, infinity as "inf")."""
+    if name == "lens":
+        return values
+    return [RenderSpec().replace(**{name: v}).as_dict()[name] for v in values]
 
 
 def estimate(p: RenderPlan, workers: int) -> dict[str, float]:
@@ -177,28 +190,28 @@ def estimate(p: RenderPlan, workers: int) -> dict[str, float]:
             "peak_bytes": min(workers, max(1, len(p.todo))) * peak}
 
 
-def batch_variant(lens, response: str, variant: str | None) -> str:
-    """The Mitsuba variant of a batch's items (`render.mitsuba.variant_for`): `variant` when given,
-    SolasError unless it serves the response of every lens of `lens`; else the spectral one."""
+def batch_variant(p: RenderPlan) -> str:
+    """The Mitsuba variant of a batch's items (`render.mitsuba.variant_for`): the spec's variant when
+    given, SolasError unless it serves the response of every lens of the batch; else the spectral one."""
     from ..optics.lens import Lens
     from ..render import response as responses
     from ..render.mitsuba import variant_for
 
-    parsed = [responses.parse(response, Lens.load(str(v)).wavelengths_nm) for v in _values("lens", lens)]
-    return ", ".join(sorted({variant_for(r, variant) for r in parsed}))
+    hashes = {job.params["lens"]: None for job in p.jobs}
+    parsed = [responses.parse(p.spec.response, Lens.load(name).wavelengths_nm) for name in hashes]
+    return ", ".join(sorted({variant_for(r, p.spec.variant) for r in parsed}))
 
 
 def render_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *, lens: str | Sequence[str],
-                 focus_distance=None, sensor="1280x960", pitch_um=None, spp=64, response: str = "srgb",
-                 fov_deg: float | None = None, boundary: str = "edge", fresnel: str = "transmit", seed: int = 0,
-                 variant: str | None = None, workers: int | None = None, dask: str | None = None,
-                 force: bool = False, progress: bool = True) -> BatchResult:
+                 spec: RenderSpec | None = None, workers: int | None = None, dask: str | None = None,
+                 force: bool = False, progress: bool = True, **settings) -> BatchResult:
     """Render every input of `inputs` (images and Mitsuba scene XML files: files, folders, glob
     patterns) through `lens` (a shipped name or .toml file) into `output_dir` (one EXR + PNG per item,
     `batch.json` beside them), at every point of the sweep: `lens`, `focus_distance` (scene units;
-    scenes only), `sensor` ("COLSxROWS"; images only), `pitch_um` (µm) and `spp` each take one value
-    or a list. `response`, `fov_deg`, `boundary`, `fresnel` as in `render.image.render_image`; `seed`
-    the batch's base seed. `workers` local processes (default: the cores), or the Dask scheduler at
+    scenes only), `sensor` ("COLSxROWS" or (rows, columns); images only), `pitch_um` (µm) and `spp`
+    each take one value or a list. `spec` and the other `settings` (`render.spec.RenderSpec`: response,
+    fov_deg, boundary, fresnel, rings, mapping, variant) as in `render.image.render_image`; `seed` the
+    batch's base seed. `workers` local processes (default: the cores), or the Dask scheduler at
     `dask` ("local": a LocalCluster for this batch). A failed item is recorded; the others go on."""
     from ..budget import check_memory
     from .runner import run_batch
@@ -206,18 +219,17 @@ def render_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathL
     start = time.perf_counter()
     n = check_workers(workers)
     check_dask(dask)
-    p = plan_render(inputs, output_dir, lens=lens, focus_distance=focus_distance, sensor=sensor, pitch_um=pitch_um,
-                    spp=spp, response=response, fov_deg=fov_deg, boundary=boundary, fresnel=fresnel, seed=seed)
+    p = plan_render(inputs, output_dir, lens=lens, spec=spec, **settings)
     check_memory(f"batch of {len(p.todo)} renders on {n} workers", estimate(p, n if dask is None else 1)["peak_bytes"],
                  force)
-    chosen = batch_variant(lens, response, variant)
+    chosen = batch_variant(p)
     # each local worker (and each Dask worker of a LocalCluster) gets its share of the cores, so that
     # the local and the Dask runs render with the same thread count (identical sums)
     threads = max(1, (os.cpu_count() or 1) // n) if dask in (None, "local") else None
-    p.manifest.header.update({"variant": chosen, "response": response, "fov_deg": fov_deg, "boundary": boundary,
-                              "fresnel": fresnel, "seed": seed, "threads_per_worker": threads,
+    p.manifest.header.update({"variant": chosen, "settings": {k: v for k, v in p.spec.as_dict().items()
+                                                              if k not in SWEEP},
+                              "threads_per_worker": threads,
                               "runner": {"dask": dask} if dask is not None else {"workers": n}})
-    settings = {"variant": variant, "fov_deg": fov_deg, "boundary": boundary, "fresnel": fresnel, "threads": threads,
-                "batch": {"id": p.key, "manifest": str(p.manifest.path)}}
+    settings = {"threads": threads, "batch": {"id": p.key, "manifest": str(p.manifest.path)}}
     run_batch(p.manifest, p.todo, None, None, settings, n, dask, "render" if progress else None)
     return BatchResult(p.jobs, p.manifest.path, None, "none", time.perf_counter() - start)

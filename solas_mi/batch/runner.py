@@ -28,8 +28,32 @@ if TYPE_CHECKING:
     from ..psf.grid import PSFGrid
     from .jobs import Manifest
 
+DASK_SCHEMES = ("tcp", "tls", "ucx")  # the comm protocols of distributed that take HOST:PORT
 MAX_ATTEMPTS = 3
 STOP_WAIT_S = 10.0  # how long interrupted workers get to remove their temporary files
+
+
+def check_dask(dask: str | None) -> None:
+    """Nothing, or SolasError unless `dask` (None: local processes) is "local" or a scheduler address
+    SCHEME://HOST:PORT (tcp, tls, ...) or HOST:PORT, the port a number from 1 to 65535: checked before
+    any work, since the scheduler is only reached when the items start."""
+    from urllib.parse import urlsplit
+
+    if dask is None or dask == "local":
+        return
+    ok = isinstance(dask, str) and not any(c.isspace() for c in dask)
+    if ok:
+        parts = urlsplit(dask if "://" in dask else f"tcp://{dask}")
+        try:
+            port = parts.port
+        except ValueError:
+            port = None
+        ok = (parts.scheme in DASK_SCHEMES and bool(parts.hostname) and port is not None and 0 < port
+              and parts.path in ("", "/") and not parts.query and not parts.fragment)
+    if not ok:
+        raise SolasError(f"--dask {dask!r} must be a scheduler address, tcp://HOST:PORT of a running `dask "
+                         f"scheduler` (or {', '.join(s + '://' for s in DASK_SCHEMES[1:])} HOST:PORT), or local for "
+                         "a LocalCluster")
 
 
 def _interrupt(signum, frame) -> None:

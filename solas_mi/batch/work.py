@@ -50,14 +50,17 @@ def _degrade(job: Job, grid: "PSFGrid", grid_path: str, settings: dict[str, Any]
 
 
 def _render(job: Job, settings: dict[str, Any]) -> None:
-    """Render the item at its sweep point `job.params` with its seed; EXR (metadata: the batch, seed,
-    sweep point, Mitsuba variant) + PNG written together, atomically."""
+    """Render the item at its settings `job.params` (its lens and `render.spec.RenderSpec`, its own
+    seed included); EXR (metadata: the batch, seed, settings, Mitsuba variant) + PNG written together,
+    atomically."""
     from pathlib import Path
 
     from ..optics.lens import Lens
     from ..outputs import data_and_preview, written_together
+    from ..render.spec import RenderSpec
 
     p = job.params
+    spec = RenderSpec.from_dict(p)
     if settings.get("threads"):
         import drjit as dr
 
@@ -68,16 +71,14 @@ def _render(job: Job, settings: dict[str, Any]) -> None:
         from ..render.stock import render_scene
         from ..render.user_scene import load
 
-        scene = load(job.input, settings["variant"], lens, pitch_um=p["pitch_um"], focus_distance=p["focus_distance"],
-                     response=p["response"])
-        result = render_scene(scene, p["spp"], seed=job.seed)
+        scene = load(job.input, spec.variant, lens, pitch_um=spec.pitch_um, focus_distance=spec.focus_distance,
+                     response=spec.response)
+        result = render_scene(scene, spec.spp, seed=spec.seed)
         result.meta.update(scene=job.input, lens=lens.name, lens_hash=lens.hash)
     else:
         from ..render.image import render_image
 
-        result = render_image(lens, job.input, tuple(p["sensor"]), p["pitch_um"], p["spp"], p["response"],
-                              settings["fov_deg"], settings["boundary"], settings["fresnel"], None, settings["variant"],
-                              job.seed)
+        result = render_image(lens, job.input, spec)
         result.meta["image"] = job.input
     result.meta["batch"] = {**settings["batch"], "seed": job.seed, "params": p}
     with written_together(output, png) as (tmp_data, tmp_png):

@@ -29,7 +29,7 @@ from skimage.feature import canny
 from ..errors import SolasError
 from .annuli import ANNULI, ANNULUS_NAMES, annulus_index, corner_radius, radius_fraction
 from .esfr import EsfrResult, esfr, matlab_round
-from .roi import Roi, crop, luminance
+from .roi import Roi, crop, linear_pixels, luminance
 
 CONTRAST_BANDS: dict[str, tuple[float, float]] = {"automotive": (0.1, 0.9), "chart": (0.55, 0.65)}
 ANGLE_RANGE_DEG = (2.5, 42.5)
@@ -265,7 +265,7 @@ def natural_scene_sfr(
     contrast: str = "automotive",
     full_scale: float | None = 1.0,
 ) -> NsSfrReport:
-    """NS-SFR of a linear image (H×W or H×W×C); with `compare`, the same ROIs in a second image.
+    """NS-SFR of a linear image (H×W[×C] floats, ≥ MIN_ROI_PX a side); with `compare`, the same ROIs in another.
 
     annuli: "automotive" (0.24 / 0.6 / 1.0 R) or "equal-area"; contrast: "automotive" (0.1, 0.9) or
     "chart" (0.55, 0.65) band of (p95 − p5)/(p95 + p5); full_scale: saturation level (None: none);
@@ -275,13 +275,37 @@ def natural_scene_sfr(
         raise SolasError(f"annuli scheme {annuli!r} is not supported: allowed {', '.join(ANNULI)}")
     if contrast not in CONTRAST_BANDS:
         raise SolasError(f"contrast band {contrast!r} is not supported: allowed {', '.join(CONTRAST_BANDS)}")
-    if compare is not None and compare.shape[:2] != image.shape[:2]:
-        raise SolasError(
-            f"comparison image is {compare.shape[1]}×{compare.shape[0]} px, the image is "
-            f"{image.shape[1]}×{image.shape[0]} px: they must be the same size"
-        )
-    c_lo, c_hi = CONTRAST_BANDS[contrast]
+    image = linear_pixels(image, "image")
+    if compare is not None:
+        compare = linear_pixels(compare, "comparison image")
+        if compare.shape[:2] != image.shape[:2]:
+            raise SolasError(
+                f"comparison image is {compare.shape[1]}×{compare.shape[0]} px, the image is "
+                f"{image.shape[1]}×{image.shape[0]} px: they must be the same size"
+            )
     rejected: Counter[str] = Counter()
+    found = _edge_rois(image, mode, contrast, full_scale, rejected)
+    measured = _measured(found, image.shape[:2], annuli, compare, mode, full_scale, rejected)
+    edges_r = (0.0, *ANNULI[annuli])
+
+    def stats(pick: str) -> list[AnnulusStats]:
+        return [
+            AnnulusStats.of(name, edges_r[i], edges_r[i + 1],
+                            [getattr(m, pick) for m in measured if m.annulus == i])
+            for i, name in enumerate(ANNULUS_NAMES)
+        ]
+
+    return NsSfrReport(
+        shape=image.shape[:2], scheme=annuli, mode=str(mode), rois=measured, before=stats("before"),
+        after=stats("after") if compare is not None else None, rejected=dict(rejected),
+    )
+
+
+def _edge_rois(image: np.ndarray, mode: str, contrast: str, full_scale: float | None,
+               rejected: Counter[str]) -> list[tuple[Roi, EsfrResult]]:
+    """The edge ROIs of `image` whose e-SFR passes the NS-SFR tests (contrast band, angle, curve, and
+    no outlier MTF50 far below the others'); each rejection counted in `rejected` by its reason."""
+    c_lo, c_hi = CONTRAST_BANDS[contrast]
     found: list[tuple[Roi, EsfrResult]] = []
     for roi in find_edge_rois(luminance(image)):
         res = esfr(crop(image, roi), mode=mode, full_scale=full_scale)
@@ -305,15 +329,19 @@ def natural_scene_sfr(
         if low:
             rejected[f"MTF50 below {MIN_MTF50} cy/px in a sharper image"] += len(low)
             found = [f for f in found if f[1].mtf50 >= floor]
+    return found
 
-    height, width = image.shape[:2]
-    bounds = ANNULI[annuli]
+
+def _measured(found: list[tuple[Roi, EsfrResult]], shape: tuple[int, int], annuli: str, compare: np.ndarray | None,
+              mode: str, full_scale: float | None, rejected: Counter[str]) -> list[RoiMeasurement]:
+    """Each ROI of `found` placed in its annulus of an image of `shape` (rows, columns), with the same
+    ROI's e-SFR in `compare` when given (a ROI invalid there is counted in `rejected` and dropped)."""
+    height, width = shape
     measured: list[RoiMeasurement] = []
     for roi, res in found:
         x, y, w, h = roi
         r = float(radius_fraction(x + (w - 1) / 2, y + (h - 1) / 2, height, width))
-        ring = int(annulus_index(r, annuli))
-        m = RoiMeasurement(roi, r, ring, res)
+        m = RoiMeasurement(roi, r, int(annulus_index(r, annuli)), res)
         if compare is not None:
             after = esfr(crop(compare, roi), mode=mode, full_scale=full_scale)
             if not after.valid or after.mtf50 is None:
@@ -321,20 +349,7 @@ def natural_scene_sfr(
                 continue
             m.after = after
         measured.append(m)
-
-    edges_r = (0.0, *bounds)
-
-    def stats(pick: str) -> list[AnnulusStats]:
-        return [
-            AnnulusStats.of(name, edges_r[i], edges_r[i + 1],
-                            [getattr(m, pick) for m in measured if m.annulus == i])
-            for i, name in enumerate(ANNULUS_NAMES)
-        ]
-
-    return NsSfrReport(
-        shape=(height, width), scheme=annuli, mode=str(mode), rois=measured, before=stats("before"),
-        after=stats("after") if compare is not None else None, rejected=dict(rejected),
-    )
+    return measured
 
 
 def plot_report(report: NsSfrReport, image: np.ndarray, path: str | os.PathLike) -> None:

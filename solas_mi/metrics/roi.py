@@ -23,6 +23,24 @@ STEP_THRESHOLD = 0.02  # gradient run threshold, fraction of the step per px
 STEP_SMOOTHING_PX = (2.0, 1.5)  # Gaussian sd (rows, columns) of the step test's gradient
 
 
+def linear_pixels(image, what: str) -> np.ndarray:
+    """`image` (H×W, H×W×1, H×W×3 or H×W×4) as an array of finite linear floats at least MIN_ROI_PX a side, or a
+    SolasError naming `what` ("ROI", "image") and what is wrong with it."""
+    data = np.asarray(image)
+    if not np.issubdtype(data.dtype, np.floating):
+        raise SolasError(
+            f"{what} has {data.dtype} values: pass linear floats (decode integer sRGB images with "
+            "solas_mi.imageio.read_image or srgb_decode)"
+        )
+    if data.ndim < 2 or min(data.shape[:2]) < MIN_ROI_PX:
+        raise SolasError(f"{what} shape {data.shape} is too small: both sides must be ≥ {MIN_ROI_PX} px")
+    if data.ndim > 3 or (data.ndim == 3 and data.shape[2] not in (1, 3, 4)):
+        raise SolasError(f"{what} shape {data.shape} is not H×W, H×W×1, H×W×3 or H×W×4")
+    if not np.all(np.isfinite(data)):
+        raise SolasError(f"{what} holds NaN or infinite values: only finite pixel values are allowed")
+    return data
+
+
 def luminance(image: np.ndarray, channel: int | None = None) -> np.ndarray:
     """2-D float64 luminance Y = 0.213 R + 0.715 G + 0.072 B of linear values (H×W, H×W×1, H×W×3 or
     H×W×4: alpha is ignored), or one channel (0 R, 1 G, 2 B) of a colour image."""

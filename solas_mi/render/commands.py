@@ -7,10 +7,9 @@ import sys
 from pathlib import Path
 
 from ..errors import SolasError
-from ..options import parse_wxh
+from .spec import MAX_SPP, add_spec_flags, spec_from_args
 
 DEFAULT_IMAGE = "images/rocket.png"  # under the shipped scenes directory
-MAX_SPP = 1 << 20
 BYTES_PER_SAMPLE = 80  # a pass's wavefront (measured: 1.1 GB peak for 12.6 M samples in one pass)
 SAMPLES_PER_SECOND_PER_CORE = 0.9e6  # measured on the bundled image, `lines` (README: 1.8–2 M/s on 2 cores)
 
@@ -60,6 +59,12 @@ def _copy_beside(path: Path, out: Path) -> str:
     return path.name
 
 
+SCENE_SETTINGS = ("sensor", "pitch_um", "fov_deg", "response", "boundary", "fresnel", "rings", "spp")
+# every setting but a scene file's focus distance
+IMAGE_SETTINGS = ("sensor", "pitch_um", "fov_deg", "response", "boundary", "fresnel", "rings", "mapping", "spp",
+                  "variant", "seed")
+
+
 def _scene(args) -> int:
     from ..optics.camera import camera_for
     from ..optics.lens import Lens
@@ -68,20 +73,18 @@ def _scene(args) -> int:
     from .scene import write_scene
 
     out = output_folder(args.output)
+    spec, _ = spec_from_args(args, SCENE_SETTINGS)
     lens = Lens.load(args.lens)
-    _check_spp(args.spp)
-    parse(args.response, lens.wavelengths_nm)  # a bad response is refused now, not when the scene renders
-    camera = camera_for(lens, parse_wxh(args.sensor, "--sensor"), args.fov_deg, args.pitch_um)
+    parse(spec.response, lens.wavelengths_nm)  # a bad response is refused now, not when the scene renders
+    camera = camera_for(lens, spec.sensor, spec.fov_deg, spec.pitch_um)
     out.mkdir(parents=True, exist_ok=True)
     image = Path(args.image or _default_image())
     if not image.is_file():
         raise SolasError(f"no such image file: {image}")
-    response = args.response
-    kind, sep, table = response.partition(":")
+    kind, sep, table = spec.response.partition(":")
     if kind.strip().lower() == "table" and table:  # the table travels with the scene, like the image
-        response = f"{kind}{sep}{_copy_beside(Path(table), out)}"
-    xml = write_scene(lens, out, _copy_beside(image, out), camera, args.rings, args.spp, response, args.boundary,
-                      args.fresnel)
+        spec = spec.replace(response=f"{kind}{sep}{_copy_beside(Path(table), out)}")
+    xml = write_scene(lens, out, _copy_beside(image, out), camera, spec)
     print(f"wrote {xml} (meshes in {out / 'meshes'}); render it with: solas-mi render {xml} -o out.exr")
     return 0
 
@@ -116,20 +119,21 @@ def _render(args) -> int:
     if lens is not None and args.integrator == "solas":
         raise SolasError("--integrator solas renders lens_sensor scenes (from `solas-mi scene`); with --lens the "
                          "scene's own integrator renders it")
-    scene = load(args.scene, args.variant, lens, params, pitch_um=args.pitch_um, focus_distance=args.focus_distance,
+    run, _ = spec_from_args(args, ("variant", "seed"))
+    scene = load(args.scene, run.variant, lens, params, pitch_um=args.pitch_um, focus_distance=args.focus_distance,
                  response=args.response)
-    spp = args.spp or int(scene.sensors()[0].sampler().sample_count())
+    spp = args.spp if args.spp is not None else int(scene.sensors()[0].sampler().sample_count())
     width, height = (int(v) for v in scene.sensors()[0].film().crop_size())
     _check_render(width, height, spp, args.force)
     loop = args.integrator == "solas" or (args.integrator == "auto" and lens is None and _image_scene(scene))
     if loop:
         from .loop import render
 
-        result = render(scene, spp, seed=args.seed, progress=_progress)
+        result = render(scene, spp, seed=run.seed, progress=_progress)
     else:
         from .stock import render_scene
 
-        result = render_scene(scene, spp, seed=args.seed, progress=_progress)
+        result = render_scene(scene, spp, seed=run.seed, progress=_progress)
     result.meta["scene"] = str(args.scene)
     if lens is not None:
         result.meta.update(lens=lens.name, lens_hash=lens.hash)
@@ -151,41 +155,19 @@ def _render_image(args) -> int:
     from .image import render_image
 
     data_file, png = data_and_preview(args.output, args.png, inputs=[args.image])
-    rows, cols = parse_wxh(args.sensor, "--sensor")
-    _check_render(cols, rows, args.spp, args.force)
+    spec, _ = spec_from_args(args, IMAGE_SETTINGS)
+    rows, cols = spec.sensor
+    _check_render(cols, rows, spec.spp, args.force)
     lens = Lens.load(args.lens)
-    result = render_image(lens, args.image, parse_wxh(args.sensor, "--sensor"), args.pitch_um, args.spp,
-                          args.response, args.fov_deg, args.boundary, args.fresnel, args.rings, args.variant,
-                          args.seed, progress=_progress, mapping=args.mapping)
+    result = render_image(lens, args.image, spec, progress=_progress)
     result.meta["image"] = str(args.image)
     return _write(result, data_file, png)
 
 
-def _add_render_options(p: argparse.ArgumentParser, spp_default: int | None) -> None:
-    from .mitsuba import VARIANTS
-
-    p.add_argument("--spp", type=int, default=spp_default, help="samples per pixel")
-    p.add_argument("--variant", choices=VARIANTS,
-                   help="Mitsuba variant (default: cuda_ad_spectral with a GPU, else llvm_ad_spectral; a mono "
-                        "variant needs a response of one wavelength, mono:<nm>)")
-    p.add_argument("--seed", type=int, default=0)
+def _add_output_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
     p.add_argument("-o", "--output", required=True, help="output OpenEXR file (linear)")
     p.add_argument("--png", help="sRGB PNG for viewing (default: beside the EXR)")
-
-
-def _add_camera_options(p: argparse.ArgumentParser) -> None:
-    from .scene import BOUNDARIES, DEFAULT_RINGS
-
-    p.add_argument("--sensor", default="1280x960", help="sensor pixels, columns x rows")
-    p.add_argument("--pitch-um", type=float, help="pixel pitch (µm; default: the sensor's width spans the field)")
-    p.add_argument("--fov-deg", type=float, help="half the horizontal field the image spans (default: the lens's)")
-    p.add_argument("--response", default="srgb", help="camera response: srgb, lines, mono:<nm>, table:<file.csv>")
-    p.add_argument("--boundary", choices=BOUNDARIES, default="edge", help="the object outside the image: "
-                   "edge (repeat the border), reflect, zero (black)")
-    p.add_argument("--fresnel", choices=("transmit", "sample", "off"), default="transmit",
-                   help="Fresnel losses: transmit (weight by transmittance), sample (ghost paths too), off")
-    p.add_argument("--rings", type=int, default=DEFAULT_RINGS, help="rings of each cap mesh")
 
 
 def register(sub) -> None:
@@ -193,8 +175,7 @@ def register(sub) -> None:
     scene.add_argument("lens", help="shipped lens name (solas-doublet) or a .toml lens file")
     scene.add_argument("-o", "--output", required=True, help="output directory")
     scene.add_argument("--image", help="input image (copied beside the scene; default: the bundled photograph)")
-    scene.add_argument("--spp", type=int, default=64, help="samples per pixel written into the scene")
-    _add_camera_options(scene)
+    add_spec_flags(scene, SCENE_SETTINGS)
     scene.set_defaults(run=_scene)
 
     render = sub.add_parser(
@@ -215,17 +196,14 @@ def register(sub) -> None:
                         help="auto (default): solas-mi's stratified loop for scenes of `solas-mi scene`, the "
                              "scene's own integrator for any other; scene: the scene's own (path where it has "
                              "none); solas: the loop (lens_sensor + image_object scenes)")
-    _add_render_options(render, None)
+    render.add_argument("--spp", type=int, help="samples per pixel (default: the scene's)")
+    add_spec_flags(render, ("variant", "seed"))
+    _add_output_options(render)
     render.set_defaults(run=_render)
 
     image = sub.add_parser("render-image", help="render an input image through the lens geometry")
     image.add_argument("lens", help="shipped lens name (solas-doublet) or a .toml lens file")
     image.add_argument("image", help="input image (PNG/JPEG: sRGB; EXR: linear)")
-    _add_camera_options(image)
-    from ..optics.camera import MAPPINGS
-
-    image.add_argument("--mapping", choices=MAPPINGS, default=MAPPINGS[0],
-                       help="projection of the input image at infinity: rectilinear, or for wide and fisheye lenses "
-                            "equidistant, equisolid, equirectangular (an environment image spanning +-fov-deg)")
-    _add_render_options(image, 64)
+    add_spec_flags(image, IMAGE_SETTINGS)
+    _add_output_options(image)
     image.set_defaults(run=_render_image)

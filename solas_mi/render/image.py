@@ -9,12 +9,13 @@ import numpy as np
 
 from ..errors import SolasError
 from ..imageio import image_channels, read_image, write_exr
-from ..optics.camera import MAPPINGS, Camera, camera_for
+from ..optics.camera import Camera, camera_for
 from ..optics.paraxial import paraxial
 from . import response as responses
 from .loop import Render, render
 from .mitsuba import load_scene, variant_for
-from .scene import DEFAULT_RINGS, write_scene
+from .scene import write_scene
+from .spec import RenderSpec
 
 
 def fisheye_camera(lens, sensor: tuple[int, int], fov_deg: float | None, pitch_um: float | None) -> Camera:
@@ -31,26 +32,28 @@ def fisheye_camera(lens, sensor: tuple[int, int], fov_deg: float | None, pitch_u
     return Camera(cols, rows, float(pitch_um), paraxial(lens).efl_mm, fov, lens.primary_wavelength, "sensor")
 
 
-def render_image(lens, image: str | np.ndarray, sensor: tuple[int, int] = (960, 1280), pitch_um: float | None = None,
-                 spp: int = 64, response: str = "srgb", fov_deg: float | None = None, boundary: str = "edge",
-                 fresnel: str = "transmit", rings: int | None = None, variant: str | None = None, seed: int = 0,
-                 progress=None, mapping: str = "rectilinear") -> Render:
-    """Render an input image (a path, or a linear H×W[×3] array) through `lens` onto a sensor of
-    (rows, columns) pixels of `pitch_um` µm, `spp` samples per pixel. The image's width spans
-    ±`fov_deg` degrees (default: ±lens.field_deg) and the sensor's width the same field unless
-    `pitch_um` is given (`solas_mi.optics.camera`). `response`, `boundary` and `fresnel` are the
-    plugins' parameters; `rings` per cap mesh (default `scene.DEFAULT_RINGS`). `mapping` is the input
-    image's projection (plugins/image_object.py): for a lens of polar fields (a fisheye) the image is
-    an environment image spanning ±`fov_deg` in that mapping, the sensor is just pixels of `pitch_um`
-    (default: the sensor's width spans the lens's image circle) and the distortion is the lens's own."""
-    camera = fisheye_camera(lens, sensor, fov_deg, pitch_um) if lens.polar_field else camera_for(lens, sensor, fov_deg,
-                                                                                                  pitch_um)
-    if mapping not in MAPPINGS:
-        raise SolasError(f"mapping {mapping!r} must be one of {', '.join(MAPPINGS)}")
+def render_image(lens, image: str | np.ndarray, spec: RenderSpec | None = None, *, progress=None,
+                 **settings) -> Render:
+    """Render an input image (a path, or a linear H×W[×3] array) through `lens` as `spec` says
+    (`render.spec.RenderSpec`, default its defaults, with `settings` — its field names, e.g.
+    sensor=(rows, cols), spp=16 — changed): onto a sensor of (rows, columns) pixels of `pitch_um` µm,
+    `spp` samples per pixel. The image's width spans ±`fov_deg` degrees (default: ±lens.field_deg)
+    and the sensor's width the same field unless `pitch_um` is given (`solas_mi.optics.camera`).
+    `response`, `boundary` and `fresnel` are the plugins' parameters; `rings` per cap mesh. `mapping`
+    is the input image's projection (plugins/image_object.py): for a lens of polar fields (a fisheye)
+    the image is an environment image spanning ±`fov_deg` in that mapping, the sensor is just pixels
+    of `pitch_um` (default: the sensor's width spans the lens's image circle) and the distortion is
+    the lens's own. `progress(done, total)` is told the samples per pixel done."""
+    spec = (spec or RenderSpec()).replace(**settings)
+    if spec.focus_distance is not None:
+        raise SolasError("a focus distance sets the lens camera of a scene file; an image lies on the lens's object "
+                         "plane: render it without one")
+    camera = fisheye_camera(lens, spec.sensor, spec.fov_deg, spec.pitch_um) if lens.polar_field else camera_for(
+        lens, spec.sensor, spec.fov_deg, spec.pitch_um)
     # the user's mistakes, named here rather than inside the scene's plugins
-    parsed = responses.parse(response, lens.wavelengths_nm)
+    parsed = responses.parse(spec.response, lens.wavelengths_nm)
     responses.check_lens(parsed, lens)
-    variant = variant_for(parsed, variant)
+    variant = variant_for(parsed, spec.variant)
     if not isinstance(image, np.ndarray):
         read_image(image)
     with tempfile.TemporaryDirectory(prefix="solas-scene-") as tmp:
@@ -58,12 +61,10 @@ def render_image(lens, image: str | np.ndarray, sensor: tuple[int, int] = (960, 
             path = str(Path(tmp) / "object.exr")
             write_exr(path, image_channels(np.asarray(image, dtype=np.float32)))
             image = path
-        xml = write_scene(lens, tmp, str(Path(image).resolve()), camera, rings or DEFAULT_RINGS, spp, response,
-                          boundary, fresnel, mapping=mapping)
+        xml = write_scene(lens, tmp, str(Path(image).resolve()), camera, spec)
         scene = load_scene(xml, variant)
-        result = render(scene, spp, seed=seed, progress=progress)
+        result = render(scene, spec.spp, seed=spec.seed, progress=progress)
     result.meta.update(camera.meta())
-    result.meta.update({"lens": lens.name, "lens_hash": lens.hash, "boundary": boundary, "fresnel": fresnel,
-                        "mapping": mapping,
-                        "cap_rings": rings or DEFAULT_RINGS})
+    result.meta.update({"lens": lens.name, "lens_hash": lens.hash, "boundary": spec.boundary, "fresnel": spec.fresnel,
+                        "mapping": spec.mapping, "cap_rings": spec.rings, "render_spec": spec.as_dict()})
     return result

@@ -63,13 +63,18 @@ class Response:
 
 
 def lines(wavelengths_nm) -> Response:
-    """One channel per wavelength; channels ordered longest first (R, G, B for three)."""
+    """One channel per wavelength (nm, distinct); channels ordered longest first (R, G, B for three)."""
     w = np.sort(np.asarray(wavelengths_nm, dtype=np.float64))[::-1]
     n = len(w)
     names = ("R", "G", "B") if n == 3 else tuple(f"{x:g}nm" for x in w)
+    text = "lines:" + ",".join(f"{x:g}" for x in w)
     if not n:
         _bad("lines", "no wavelengths")
-    return Response("lines:" + ",".join(f"{x:g}" for x in w), names, w, w, np.full(n, 1.0 / n), np.eye(n) * n)
+    if not np.all(np.isfinite(w) & (w > 0)):
+        _bad(text, "the wavelengths must be positive numbers of nm")
+    if len({f"{x:g}" for x in w}) < n:  # two channels of one name: the image file would keep one of them
+        _bad(text, "each wavelength must differ from the others (one channel each)")
+    return Response(text, names, w, w, np.full(n, 1.0 / n), np.eye(n) * n)
 
 
 def mono(wavelength_nm: float) -> Response:
@@ -147,7 +152,11 @@ def parse(text: str, lens_wavelengths_nm) -> Response:
     kind, _, arg = str(text).partition(":")
     kind = kind.strip().lower()
     if kind == "lines":
-        return lines([float(v) for v in arg.split(",")] if arg.strip() else lens_wavelengths_nm)
+        try:
+            given = [float(v) for v in arg.split(",")] if arg.strip() else None
+        except ValueError:
+            _bad(text, "lines needs comma-separated wavelengths in nm, e.g. lines:630,531,465")
+        return lines(lens_wavelengths_nm if given is None else given)
     if kind == "srgb" and not arg:
         return srgb()
     if kind == "mono":

@@ -18,21 +18,14 @@ import numpy as np
 
 from ..errors import SolasError
 from ..imageio import atomic_path, write_text
-from ..optics.camera import BOUNDARIES, Camera, camera_for
+from ..optics.camera import Camera, camera_for
 from ..optics.lens import Lens, sag_slope
 from ..optics.lens import sag as asphere_sag
 from . import response as responses
+from .spec import DEFAULT_RINGS, RenderSpec, check_rings
 
 SPAWN_OFFSET_MM = 1e-4  # a continued ray starts this far (mm) along its own direction (`loop.continue_ray`)
 MIN_GAP_MM = 10 * SPAWN_OFFSET_MM  # closest two refracting surfaces of the mesh scene may come
-DEFAULT_RINGS = 32  # scene PSFs match the tracer to 0.04 µm / 0.2 %; denser meshes render slower (README)
-
-
-def check_rings(rings: int) -> int:
-    """`rings` (rings per cap mesh), or SolasError unless it is an integer in 2..4096."""
-    if not (isinstance(rings, int) and 2 <= rings <= 4096):
-        raise SolasError(f"cap rings {rings!r} must be an integer in 2..4096")
-    return rings
 
 
 def cap_mesh(radius: float, vertex_z: float, semi_diameter: float, rings: int, conic: float = 0.0,
@@ -186,17 +179,9 @@ def path_depth(lens: Lens, ghosts: bool) -> int:
     return 3 * refracting + 2 if ghosts else refracting + 2
 
 
-def scene_xml(lens_file: str, parts: list[Part], camera: Camera, image: str, spp: int, response: str,
-              boundary: str, fresnel: str, max_depth: int, mapping: str = "rectilinear",
-              wavelength_nm: float | None = None) -> str:
-    """Mitsuba 3 scene XML; meshes are referenced as meshes/<part>.ply beside it. Every number a user
-    may want to change is a <default> at the top. `wavelength_nm`, the response's one wavelength
-    (nm; None: it has more), is the glasses' and the object's `wavelength` for the mono variants.
-    The integrator is Mitsuba's `path` with `max_depth` interactions (`mi.render`); solas-mi's loop reads only the sensor, the object, the shapes and the
-    sampler's count. The sampler is `independent`, the one that takes any count as given: `multijitter`
-    has 2.4× less noise in 40-px blocks under `mi.render` but rounds the count (128 → 132) and kills the
-    process with a floating-point exception on a count of 0."""
-    mono = '' if wavelength_nm is None else '<float name="wavelength" value="$wavelength"/>'
+def _shapes_xml(parts: list[Part], mono: str) -> str:
+    """The <shape> elements of `parts`: a `sellmeier_dielectric` between its two glasses (with the mono
+    variants' `wavelength` element `mono`, or ""), or the absorber."""
     shapes = []
     for p in parts:
         if p.int_glass is None:
@@ -206,25 +191,43 @@ def scene_xml(lens_file: str, parts: list[Part], camera: Camera, image: str, spp
                     f'<string name="int_glass" value="{p.int_glass}"/><string name="fresnel" value="$fresnel"/>{mono}</bsdf>')
         shapes.append(f'    <shape type="ply" id="{p.name}">\n        <string name="filename" value="meshes/{p.name}.ply"/>\n'
                       f'        {bsdf}\n    </shape>')
-    shapes_text = "\n".join(shapes)
+    return "\n".join(shapes)
+
+
+def _defaults_xml(camera: Camera, spec: RenderSpec, image: str, max_depth: int, wavelength_nm: float | None) -> str:
+    """The <default> lines at the top of the scene: every number a user may want to change."""
     wavelength_default = "" if wavelength_nm is None else \
         f'\n    <default name="wavelength" value="{wavelength_nm!r}"/>  <!-- nm: the response\'s, for mono variants -->'
+    return f"""    <default name="spp" value="{spec.spp}"/>
+    <default name="width" value="{camera.width}"/>
+    <default name="height" value="{camera.height}"/>
+    <default name="pitch_um" value="{camera.pitch_um!r}"/>
+    <default name="response" value="{spec.response}"/>{wavelength_default}
+    <default name="image" value="{image}"/>
+    <default name="fov_deg" value="{camera.fov_deg!r}"/>
+    <default name="boundary" value="{spec.boundary}"/>
+    <default name="mapping" value="{spec.mapping}"/>
+    <default name="fresnel" value="{spec.fresnel}"/>
+    <default name="max_depth" value="{max_depth}"/>"""
+
+
+def scene_xml(lens_file: str, parts: list[Part], camera: Camera, image: str, spec: RenderSpec, max_depth: int,
+              wavelength_nm: float | None = None) -> str:
+    """Mitsuba 3 scene XML; meshes are referenced as meshes/<part>.ply beside it. Every number a user
+    may want to change is a <default> at the top (`spec`'s spp, response, boundary, mapping, fresnel).
+    `wavelength_nm`, the response's one wavelength (nm; None: it has more), is the glasses' and the
+    object's `wavelength` for the mono variants.
+    The integrator is Mitsuba's `path` with `max_depth` interactions (`mi.render`); solas-mi's loop reads only the sensor, the object, the shapes and the
+    sampler's count. The sampler is `independent`, the one that takes any count as given: `multijitter`
+    has 2.4× less noise in 40-px blocks under `mi.render` but rounds the count (128 → 132) and kills the
+    process with a floating-point exception on a count of 0."""
+    mono = '' if wavelength_nm is None else '<float name="wavelength" value="$wavelength"/>'
     return f"""<?xml version="1.0" encoding="utf-8"?>
 <!-- solas-mi lens scene: render with `solas-mi render THIS.xml -o out.exr` (lengths in mm, pitch in um), or in
      Python: `mi = solas_mi.mitsuba(); mi.render(mi.load_file("THIS.xml"))` (Mitsuba's path integrator below).
      Pixel values are image irradiance in units of the ideal camera's: an ideal lossless lens returns the image. -->
 <scene version="3.0.0">
-    <default name="spp" value="{spp}"/>
-    <default name="width" value="{camera.width}"/>
-    <default name="height" value="{camera.height}"/>
-    <default name="pitch_um" value="{camera.pitch_um!r}"/>
-    <default name="response" value="{response}"/>{wavelength_default}
-    <default name="image" value="{image}"/>
-    <default name="fov_deg" value="{camera.fov_deg!r}"/>
-    <default name="boundary" value="{boundary}"/>
-    <default name="mapping" value="{mapping}"/>
-    <default name="fresnel" value="{fresnel}"/>
-    <default name="max_depth" value="{max_depth}"/>
+{_defaults_xml(camera, spec, image, max_depth, wavelength_nm)}
 
     <integrator type="path">
         <integer name="max_depth" value="$max_depth"/>
@@ -256,18 +259,32 @@ def scene_xml(lens_file: str, parts: list[Part], camera: Camera, image: str, spp
         <rgb name="reflectance" value="0"/>
     </bsdf>
 
-{shapes_text}
+{_shapes_xml(parts, mono)}
 </scene>
 """
 
 
+_READS_AS: dict[tuple[str, str], Lens] = {}  # (file, SHA-256 of its bytes) → the lens it reads as
+
+
+def _reads_as(source: Path) -> Lens:
+    """The lens that the file `source` reads as, parsed once per content of the file (a render's
+    caller has loaded it already; the scene's sensor parses its own copy)."""
+    import hashlib
+
+    key = (str(source.resolve()), hashlib.sha256(source.read_bytes()).hexdigest())
+    if key not in _READS_AS:
+        _READS_AS[key] = Lens.load(source)
+    return _READS_AS[key]
+
+
 def lens_file(lens: Lens, folder: str | os.PathLike | None = None) -> Path:
     """A file that holds exactly `lens`, for a scene's sensor to load: its source file when that still
-    reads as this very lens (every field equal), else the lens written as TOML into `folder` (a lens changed in
-    memory — refocused, edited with `dataclasses.replace` — or built with `Lens.from_dict`). Without a
-    folder such a lens is a SolasError, never its source file's lens in its place."""
+    reads as this very lens (every field equal), else the lens written as TOML into
+    `folder` (a lens changed in memory — refocused, edited with `dataclasses.replace` — or built with
+    `Lens.from_dict`). Without a folder such a lens is a SolasError, never its source file's lens in its place."""
     source = Path(lens.source) if lens.source else None
-    if source is not None and source.is_file() and Lens.load(source) == lens:
+    if source is not None and source.is_file() and _reads_as(source) == lens:
         return source
     if folder is None:
         raise SolasError(f"lens {lens.name} differs from its file {lens.source or '(none)'}; save it "
@@ -280,20 +297,20 @@ def lens_file(lens: Lens, folder: str | os.PathLike | None = None) -> Path:
 
 
 def write_scene(lens: Lens, out_dir: str | os.PathLike, image: str, camera: Camera | None = None,
-                rings: int = DEFAULT_RINGS, spp: int = 64, response: str = "srgb", boundary: str = "edge",
-                fresnel: str = "transmit", name: str = "scene.xml", mapping: str = "rectilinear") -> Path:
+                spec: RenderSpec | None = None, *, name: str = "scene.xml", **settings) -> Path:
     """Write `name`, meshes/*.ply and the lens file (`lens_file`: a copy of its source, or the lens
     as changed in memory) for `lens` into out_dir, so that the directory is self-contained; returns
-    the XML path. `mapping`: the image object's projection (plugins/image_object.py). A response of
-    one wavelength is also written as the glasses' and the object's `wavelength` (mono variants)."""
+    the XML path. `spec` (`render.spec.RenderSpec`, default its defaults, with `settings` — its field
+    names — changed) gives the rings per cap mesh, spp, response, boundary, fresnel and the image
+    object's projection `mapping` (plugins/image_object.py). A response of one wavelength is also
+    written as the glasses' and the object's `wavelength` (mono variants)."""
     import shutil
 
-    if boundary not in BOUNDARIES:
-        raise SolasError(f"boundary {boundary!r} must be one of {', '.join(BOUNDARIES)}")
+    spec = (spec or RenderSpec()).replace(**settings)
     camera = camera or camera_for(lens)
     out = Path(out_dir)
     (out / "meshes").mkdir(parents=True, exist_ok=True)
-    parts = lens_parts(lens, rings)
+    parts = lens_parts(lens, spec.rings)
     for p in parts:
         write_ply(out / "meshes" / f"{p.name}.ply", *p.mesh)
     held = lens_file(lens, out)
@@ -304,8 +321,8 @@ def write_scene(lens: Lens, out_dir: str | os.PathLike, image: str, camera: Came
                 shutil.copyfile(held, tmp)
         held = copy
     # deep enough for ghosts whatever `fresnel` is set to later: a path without them ends sooner anyway
-    xml = scene_xml(held.name, parts, camera, image, spp, response, boundary, fresnel, path_depth(lens, ghosts=True),
-                    mapping, responses.one_wavelength(response, lens.wavelengths_nm))
+    xml = scene_xml(held.name, parts, camera, image, spec, path_depth(lens, ghosts=True),
+                    responses.one_wavelength(spec.response, lens.wavelengths_nm))
     path = out / name
     write_text(path, xml)
     return path

@@ -94,23 +94,55 @@ def crossval(lens, image: np.ndarray, out: str | Path | None, spp: int = 1024, s
     if out_dir is not None:
         out_dir.mkdir(parents=True, exist_ok=True)
     common = {"lens": lens.name, "lens_hash": lens.hash, "fov_deg": fov, "sensor": [w, h], "boundary": boundary}
+    ref, var_map = _reference(lens, image, out_dir, common, spp, seeds, variant, reuse, log)
+    log(f"crossval: reference noise {100 * ref.noise / ref.rms:.3f} % of RMS")
+    rows, grids, scale = _case_rows(lens, image, parsed, ref, var_map, common, out_dir, log)
+    if baseline:
+        err = compare(ideal(image, fov, scale), ref.image, ref.noise, var_map)
+        rows.append(Row("ideal (no blur)", "none", "—", "—", 0.0, 0.0, err))
+    if ref.renders:  # one of the reference's own renders against the other(s): what the render's noise costs
+        half = compare(ref.renders[0], np.mean(ref.renders[1:], axis=0))
+        rows.append(Row(f"render {ref.spp // seeds} spp (vs the other seed{'s' if seeds > 2 else ''})", "render",
+                        "—", "—", 0.0, ref.seconds / seeds, half, spp=ref.spp // seeds))
+    meta = dict(common, reference_spp=ref.spp, reference_seeds=seeds, reference_seconds=ref.seconds,
+                reference_noise_rel=ref.noise / ref.rms, render_units_k=[float(k) for k in scale],
+                psf_sampling={k: {"pitch_um": p, "size": s} for k, (p, s) in PSF_SAMPLING.items()},
+                fraunhofer_window={f"{b[0]}x{b[1]}": g.meta.get("window_captured_fraction")
+                                   for (kind, b), (g, _) in grids.items() if kind == "fraunhofer"},
+                rows=[r.flat() for r in rows])
+    if out_dir is not None:
+        _write_tables(out_dir, rows, ref, seeds, meta)
+    return CrossvalResult(rows, ref, meta)
+
+
+def _reference(lens, image: np.ndarray, out_dir: Path | None, common: dict, spp: int, seeds: int,
+               variant: str | None, reuse: bool, log):
+    """(the reference, its per-pixel noise variance map): `out_dir`/reference.exr when `reuse` finds it
+    rendered with the same settings, else rendered now (and written there)."""
     expect = dict(common, spp=spp // seeds * seeds, seeds=seeds, response="lines", fresnel="off")
     stored = read_reference(out_dir / "reference.exr", expect) if reuse and out_dir is not None else None
     if stored is not None:
         ref, var_map = stored
         log(f"crossval: reusing {out_dir / 'reference.exr'} ({ref.spp} spp, rendered in {ref.seconds:.1f} s)")
-    else:
-        log(f"crossval: {w}x{h} px, reference {spp} spp in {seeds} renders")
-        ref = reference(lens, image, spp, fov, seeds, boundary, variant)
-        var_map = noise_variance_map(ref.renders)
-        if out_dir is not None:
-            write_reference(out_dir / "reference.exr", ref, var_map, common)
-    ref_rms = ref.rms
-    log(f"crossval: reference noise {100 * ref.noise / ref_rms:.3f} % of RMS")
+        return ref, var_map
+    w, h = common["sensor"]
+    log(f"crossval: {w}x{h} px, reference {spp} spp in {seeds} renders")
+    ref = reference(lens, image, spp, common["fov_deg"], seeds, common["boundary"], variant)
+    var_map = noise_variance_map(ref.renders)
+    if out_dir is not None:
+        write_reference(out_dir / "reference.exr", ref, var_map, common)
+    return ref, var_map
+
+
+def _case_rows(lens, image: np.ndarray, cases: list, ref, var_map, common: dict, out_dir: Path | None, log):
+    """(a Row per convolution case against the reference, the PSF grids by (kind, blocks) with their
+    seconds, the render units `grid_units`); each case's image and error map written to `out_dir`."""
+    w, h = common["sensor"]
+    fov, boundary = common["fov_deg"], common["boundary"]
     grids: dict[tuple[str, tuple[int, int]], tuple[Any, float]] = {}
     rows: list[Row] = []
     scale = None
-    for case in parsed:
+    for case in cases:
         key = (case.kind, case.blocks)
         if key not in grids:
             grids[key] = psf_grid_for(lens, case.kind, case.blocks, w, h, fov)
@@ -127,27 +159,17 @@ def crossval(lens, image: np.ndarray, out: str | Path | None, spp: int = 1024, s
             stem = case.name.replace(":", "_")
             m = dict(common, case=case.name, psf_seconds=psf_s, conv_seconds=conv_s)
             write_rgb_exr(out_dir / f"{stem}.exr", img, m)
-            write_error_map(out_dir, stem, img, ref.image, ref_rms, m)
-    if baseline:
-        err = compare(ideal(image, fov, scale), ref.image, ref.noise, var_map)
-        rows.append(Row("ideal (no blur)", "none", "—", "—", 0.0, 0.0, err))
-    if ref.renders:  # one of the reference's own renders against the other(s): what the render's noise costs
-        half = compare(ref.renders[0], np.mean(ref.renders[1:], axis=0))
-        rows.append(Row(f"render {ref.spp // seeds} spp (vs the other seed{'s' if seeds > 2 else ''})", "render",
-                        "—", "—", 0.0, ref.seconds / seeds, half, spp=ref.spp // seeds))
-    meta = dict(common, reference_spp=ref.spp, reference_seeds=seeds, reference_seconds=ref.seconds,
-                reference_noise_rel=ref.noise / ref_rms, render_units_k=[float(k) for k in scale],
-                psf_sampling={k: {"pitch_um": p, "size": s} for k, (p, s) in PSF_SAMPLING.items()},
-                fraunhofer_window={f"{b[0]}x{b[1]}": g.meta.get("window_captured_fraction")
-                                   for (kind, b), (g, _) in grids.items() if kind == "fraunhofer"},
-                rows=[r.flat() for r in rows])
-    if out_dir is not None:
-        from ..imageio import write_text
+            write_error_map(out_dir, stem, img, ref.image, ref.rms, m)
+    return rows, grids, scale
 
-        note = (f"Reference: mean of {seeds} direct renders, {ref.spp} spp in all ({ref.seconds:.1f} s), noise "
-                f"{100 * ref.noise / ref_rms:.3f} % of RMS(reference); \"− noise\" and the annuli remove it in "
-                "quadrature. PSF s: computing the PSF grid; run s: the convolution (or render).")
-        write_text(out_dir / "table.md", crossval_markdown(rows, note))
-        write_text(out_dir / "table.csv", csv_text(rows))
-        write_text(out_dir / "crossval.json", json.dumps(meta, indent=1))
-    return CrossvalResult(rows, ref, meta)
+
+def _write_tables(out_dir: Path, rows: list, ref, seeds: int, meta: dict) -> None:
+    """table.md, table.csv and crossval.json into `out_dir`."""
+    from ..imageio import write_text
+
+    note = (f"Reference: mean of {seeds} direct renders, {ref.spp} spp in all ({ref.seconds:.1f} s), noise "
+            f"{100 * ref.noise / ref.rms:.3f} % of RMS(reference); \"− noise\" and the annuli remove it in "
+            "quadrature. PSF s: computing the PSF grid; run s: the convolution (or render).")
+    write_text(out_dir / "table.md", crossval_markdown(rows, note))
+    write_text(out_dir / "table.csv", csv_text(rows))
+    write_text(out_dir / "crossval.json", json.dumps(meta, indent=1))

@@ -63,6 +63,21 @@ def error_vs_time(lens, image: np.ndarray, out: str | Path | None, ref_spp: int 
     def err(img) -> Errors:
         return compare(img, ref.image, ref.noise, var_map)
 
+    rows, scale = _convolution_rows(lens, image, kind, patch_grids, interp_grids, fov, boundary, repeats, err, log)
+    for k, spp in enumerate(render_spp):
+        r = render(lens, image, int(spp), 7 + k, fov, boundary, variant)
+        rows.append(Row(f"render {spp} spp", "render", "—", "—", 0.0, r.seconds, err(r.image), spp=int(spp)))
+        log(f"error-vs-time: render {spp} spp: {100 * rows[-1].errors.rel_rmse_denoised:.3f} %, {r.seconds:.1f} s")
+    if out_dir is not None:
+        _write_report(out_dir, lens, rows, ref, seeds, kind, fov, boundary, repeats, scale, (w, h))
+    return rows
+
+
+def _convolution_rows(lens, image: np.ndarray, kind: str, patch_grids, interp_grids, fov: float, boundary: str,
+                      repeats: int, err, log) -> tuple[list[Row], Any]:
+    """(a Row per patch and interp grid: its PSF grid's seconds, the median of `repeats` convolutions
+    and the error `err(image)`; the render units `grid_units`). One PSF grid per block count."""
+    h, w = image.shape[:2]
     rows: list[Row] = []
     scale = None
     cases = [("patch", g) for g in patch_grids] + [("interp", g) for g in interp_grids]
@@ -81,24 +96,26 @@ def error_vs_time(lens, image: np.ndarray, out: str | Path | None, ref_spp: int 
         rows.append(Row(name, method, kind, f"{blocks[0]}x{blocks[1]}", psf_s, statistics.median(times), err(img)))
         log(f"error-vs-time: {name}: {100 * rows[-1].errors.rel_rmse_denoised:.3f} %, PSF {psf_s:.2f} s, "
             f"convolution {rows[-1].conv_seconds:.3f} s")
-    for k, spp in enumerate(render_spp):
-        r = render(lens, image, int(spp), 7 + k, fov, boundary, variant)
-        rows.append(Row(f"render {spp} spp", "render", "—", "—", 0.0, r.seconds, err(r.image), spp=int(spp)))
-        log(f"error-vs-time: render {spp} spp: {100 * rows[-1].errors.rel_rmse_denoised:.3f} %, {r.seconds:.1f} s")
-    if out_dir is not None:
-        note = (f"{w}x{h} px, {kind} PSFs. Reference: mean of {seeds} direct renders, {ref.spp} spp in all "
-                f"({ref.seconds:.1f} s), noise {100 * ref.noise / ref_rms:.3f} % of RMS(reference), removed in "
-                f"quadrature in \"− noise\" and the annuli. PSF s: computing the PSF grid (once per lens); run s: "
-                f"the convolution (median of {repeats}) or the render.")
-        write_text(out_dir / "table.md", error_vs_time_markdown(rows, note))
-        write_text(out_dir / "table.csv", csv_text(rows))
-        plot(rows, out_dir / "error_vs_time.png", f"{lens.name}, {w}x{h} px: error against the converged render")
-        write_text(out_dir / "report.json", json.dumps({
-            "lens": lens.name, "lens_hash": lens.hash, "sensor": [w, h], "fov_deg": fov, "psf": kind,
-            "boundary": boundary, "reference_spp": ref.spp, "reference_seeds": seeds,
-            "reference_seconds": ref.seconds, "reference_noise_rel": ref.noise / ref_rms,
-            "render_units_k": [float(v) for v in scale], "rows": [r.flat() for r in rows]}, indent=1))
-    return rows
+    return rows, scale
+
+
+def _write_report(out_dir: Path, lens, rows: list[Row], ref, seeds: int, kind: str, fov: float, boundary: str,
+                  repeats: int, scale, size: tuple[int, int]) -> None:
+    """table.md, table.csv, error_vs_time.png and report.json into `out_dir`; `size` (width, height) px."""
+    w, h = size
+    ref_rms = ref.rms
+    note = (f"{w}x{h} px, {kind} PSFs. Reference: mean of {seeds} direct renders, {ref.spp} spp in all "
+            f"({ref.seconds:.1f} s), noise {100 * ref.noise / ref_rms:.3f} % of RMS(reference), removed in "
+            f"quadrature in \"− noise\" and the annuli. PSF s: computing the PSF grid (once per lens); run s: "
+            f"the convolution (median of {repeats}) or the render.")
+    write_text(out_dir / "table.md", error_vs_time_markdown(rows, note))
+    write_text(out_dir / "table.csv", csv_text(rows))
+    plot(rows, out_dir / "error_vs_time.png", f"{lens.name}, {w}x{h} px: error against the converged render")
+    write_text(out_dir / "report.json", json.dumps({
+        "lens": lens.name, "lens_hash": lens.hash, "sensor": [w, h], "fov_deg": fov, "psf": kind,
+        "boundary": boundary, "reference_spp": ref.spp, "reference_seeds": seeds,
+        "reference_seconds": ref.seconds, "reference_noise_rel": ref.noise / ref_rms,
+        "render_units_k": [float(v) for v in scale], "rows": [r.flat() for r in rows]}, indent=1))
 
 
 def plot(rows: list[Row], path: Path, title: str) -> None:

@@ -110,9 +110,9 @@ def compare_fisheye(lens: Lens, env: np.ndarray, fov_deg: float, size: int, pitc
         seconds[name] = seconds.get(name, 0.0) + time.perf_counter() - start
         return value
 
-    runs = [timed("render", render_image, lens, env, (size, size), pitch_um, spp=spp, response=f"mono:{w!r}",
-                  fov_deg=fov_deg, fresnel="off", mapping="equidistant", variant="llvm_ad_spectral",
-                  seed=seed).image[..., 0] for seed in (0, 1)]
+    runs = [timed("render", render_image, lens, env, sensor=(size, size), pitch_um=pitch_um, spp=spp,
+                  response=f"mono:{w!r}", fov_deg=fov_deg, fresnel="off", mapping="equidistant",
+                  variant="llvm_ad_spectral", seed=seed).image[..., 0] for seed in (0, 1)]
     direct = 0.5 * (runs[0] + runs[1])
     sensor_mm = (size * pitch_um * 1e-3,) * 2
     psf_pitch = pitch_um / 8 if psf_pitch_um is None else psf_pitch_um

@@ -34,14 +34,30 @@ def denoise(err: float, noise: float) -> float:
     return math.sqrt(max(0.0, err * err - noise * noise))
 
 
+SSIM_WINDOW_PX = 7  # scikit-image's structural_similarity window
+
+
+def _pixels(values, what: str) -> np.ndarray:
+    """`values` as a float64 H×W×C array of finite numbers at least SSIM_WINDOW_PX a side, or SolasError."""
+    try:
+        a = np.asarray(values, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise SolasError(f"the {what} must be an H×W×C array of numbers, not {type(values).__name__}") from None
+    if a.ndim != 3 or min(a.shape[:2]) < SSIM_WINDOW_PX:
+        raise SolasError(f"the {what}'s shape {a.shape} must be H×W×C (channels last), at least "
+                         f"{SSIM_WINDOW_PX} px a side (SSIM's window)")
+    if not np.all(np.isfinite(a)):
+        raise SolasError(f"the {what} holds NaN or infinite values: only finite pixel values are allowed")
+    return a
+
+
 def compare(image: np.ndarray, ref: np.ndarray, ref_noise: float = 0.0, noise_map: np.ndarray | None = None
             ) -> Errors:
     """Errors of `image` against `ref` (same shape). ref_noise: the reference's RMS noise (absolute);
     noise_map: its per-pixel variance estimate (for the annuli; default uniform)."""
     from skimage.metrics import peak_signal_noise_ratio, structural_similarity
 
-    image = np.asarray(image, dtype=np.float64)
-    ref = np.asarray(ref, dtype=np.float64)
+    image, ref = _pixels(image, "image"), _pixels(ref, "reference")
     if image.shape != ref.shape:
         raise SolasError(f"image shape {image.shape} differs from the reference's {ref.shape}")
     diff2 = (image - ref) ** 2

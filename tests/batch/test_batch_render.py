@@ -185,3 +185,18 @@ def test_dry_run_names_the_stages_and_what_is_finished(render_inputs, tmp_path, 
     capsys.readouterr()
     assert main(argv + ["--dry-run"]) == 0
     assert "render 0 of 2 items (2 already finished" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("address", ["not a url", "http://host:8786", "tcp://host", "tcp://host:99999", "host:port",
+                                     "", "tcp://host:8786/path"])
+def test_a_bad_dask_address_is_refused_before_any_work(render_inputs, tmp_path, address):
+    """Named with the forms allowed, before the plan (nothing written) rather than as a traceback
+    from the scheduler client once the items start."""
+    from solas_mi.batch.runner import check_dask
+
+    with pytest.raises(SolasError, match=r"must be a scheduler address, tcp://HOST:PORT .* or local"):
+        render_batch([render_inputs.images / "frame000.png"], tmp_path / "never", lens="solas-doublet", spp=1,
+                     dask=address)
+    assert not (tmp_path / "never").exists()
+    for good in ("local", "tcp://127.0.0.1:8786", "tls://scheduler.example:8786", "10.0.0.5:8786", None):
+        check_dask(good)

@@ -169,3 +169,8 @@ def test_user_errors():
     bad[3, 3] = np.nan
     with pytest.raises(SolasError, match="NaN"):
         esfr(bad)
+    for odd, message in [(np.zeros((0, 0)), "too small"), (np.zeros((1, 1)), "too small"), ([], "too small"),
+                         ("roi", "pass linear floats"), (None, "pass linear floats"),
+                         (np.full((16, 16), np.inf), "NaN or infinite")]:
+        with pytest.raises(SolasError, match=message):
+            esfr(odd)

@@ -2,6 +2,7 @@
 import math
 
 import imageio.v3 as iio
+import numpy as np
 import pytest
 
 from solas_mi.errors import SolasError
@@ -91,3 +92,19 @@ def test_plot_is_written(tmp_path, sharp, degraded):
     img = iio.imread(out)
     assert img.shape[:2] == (520, 1300)
     assert [p.name for p in tmp_path.iterdir()] == ["fig5.png"]
+
+
+@pytest.mark.parametrize("image, message", [
+    (np.array([]), "too small"), (np.zeros((0, 0)), "too small"), (np.zeros((1, 1)), "too small"),
+    (np.full((64, 64), np.nan), "NaN or infinite"), (np.full((64, 64), np.inf), "NaN or infinite"),
+    ([[0.5] * 64] * 3, "too small"), ("photo.png", "pass linear floats"), (None, "pass linear floats"),
+    (np.zeros((64, 64), np.uint8), "pass linear floats"), (np.zeros((64, 64, 2)), "H×W×1, H×W×3 or H×W×4"),
+])
+def test_odd_images_are_refused_by_name(image, message):
+    """Not an image of linear values an edge could be measured in: a SolasError saying so, never a
+    TypeError or IndexError, nor a report of no ROIs as if the image had been measured."""
+    with pytest.raises(SolasError, match=message):
+        natural_scene_sfr(image)
+    if image is not None:  # None: no comparison
+        with pytest.raises(SolasError, match="comparison image"):
+            natural_scene_sfr(np.zeros((64, 64)), compare=image)

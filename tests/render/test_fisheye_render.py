@@ -25,7 +25,7 @@ def dot_image(fields_deg) -> np.ndarray:
 def test_dots_land_on_the_chief_rays_out_to_90_degrees():
     lens = Lens.load("nikkor-fisheye")
     fields = np.array([[0.0, 0.0], [0.0, 45.0], [0.0, 75.0], [0.0, 90.0], [90.0, 0.0], [-63.5, -63.5]])
-    r = render_image(lens, dot_image(fields), (SENSOR, SENSOR), PITCH_UM, spp=256, response="mono:587.5618",
+    r = render_image(lens, dot_image(fields), sensor=(SENSOR, SENSOR), pitch_um=PITCH_UM, spp=256, response="mono:587.5618",
                      fov_deg=FOV_DEG, mapping="equidistant", variant="llvm_ad_spectral")
     img = r.image[..., 0].astype(np.float64)
     xy = chief_rays(lens, fields, np.full(len(fields), 587.5618)).image_xy
@@ -46,7 +46,7 @@ def test_dots_land_on_the_chief_rays_out_to_90_degrees():
 def test_wide_mappings_are_for_objects_at_infinity_and_named():
     lens = Lens.load("nikkor-fisheye")
     with pytest.raises(SolasError, match="mapping 'fisheye' must be one of"):
-        render_image(lens, np.ones((4, 4)), (4, 4), PITCH_UM, spp=1, mapping="fisheye")
+        render_image(lens, np.ones((4, 4)), sensor=(4, 4), pitch_um=PITCH_UM, spp=1, mapping="fisheye")
 
 
 def test_a_3d_scene_through_the_fisheye_lens_camera(tmp_path):

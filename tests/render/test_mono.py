@@ -79,15 +79,15 @@ def test_the_loop_refuses_plugins_at_another_wavelength(doublet, tmp_path):
     from solas_mi.render.scene import write_scene
 
     write_exr(tmp_path / "object.exr", image_channels(_object()))
-    xml = write_scene(doublet, tmp_path, str(tmp_path / "object.exr"), camera_for(doublet, (6, 8)), 8, 4,
-                      f"mono:{LAMBDA_NM:g}")
+    xml = write_scene(doublet, tmp_path, str(tmp_path / "object.exr"), camera_for(doublet, (6, 8)), rings=8, spp=4,
+                      response=f"mono:{LAMBDA_NM:g}")
     text = xml.read_text()
     assert text.count('<float name="wavelength" value="$wavelength"/>') == 4  # three glass caps and the object
     assert '<default name="wavelength" value="450.0"/>' in text
     scene = load_scene(xml, "llvm_ad_mono", wavelength=600)
     with pytest.raises(SolasError, match=r"450 nm.*image_object at 600 nm, sellmeier_dielectric at 600 nm"):
         render(scene, 4)
-    srgb = write_scene(doublet, tmp_path / "srgb", str(tmp_path / "object.exr"), camera_for(doublet, (6, 8)), 8, 4)
+    srgb = write_scene(doublet, tmp_path / "srgb", str(tmp_path / "object.exr"), camera_for(doublet, (6, 8)), rings=8, spp=4)
     assert "wavelength" not in srgb.read_text()  # more than one wavelength: the plugins' default
 
 

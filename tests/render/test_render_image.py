@@ -19,7 +19,7 @@ def test_white_object_relative_illumination(doublet):
     """A uniform white object renders the tracer's irradiance (image side, exact) and its
     transmitted-energy view (pupil transmission × cos³θ × J(0)/J) across the field within 1 %."""
     camera = camera_for(doublet, (6, 8))
-    r = render_image(doublet, np.ones((6, 8)), (6, 8), spp=1024, response="mono:531", fresnel="off",
+    r = render_image(doublet, np.ones((6, 8)), sensor=(6, 8), spp=1024, response="mono:531", fresnel="off",
                      variant="llvm_ad_spectral")
     x, y = np.meshgrid(camera.pixel_x_mm(), camera.pixel_y_mm())
     pts = np.stack([x.ravel(), y.ravel()], -1)
@@ -36,9 +36,9 @@ def test_white_object_relative_illumination(doublet):
 
 
 def test_white_object_never_exceeds_the_lens_transmission(doublet):
-    lossless = render_image(doublet, np.ones((6, 8)), (6, 8), spp=192, response="lines", fresnel="off",
+    lossless = render_image(doublet, np.ones((6, 8)), sensor=(6, 8), spp=192, response="lines", fresnel="off",
                             variant="llvm_ad_spectral").image
-    real = render_image(doublet, np.ones((6, 8)), (6, 8), spp=192, response="lines", fresnel="transmit",
+    real = render_image(doublet, np.ones((6, 8)), sensor=(6, 8), spp=192, response="lines", fresnel="transmit",
                         variant="llvm_ad_spectral").image
     camera = camera_for(doublet, (6, 8))
     # a lossless lens gives at most its on-axis irradiance (in the ideal camera's unit: (f'/f)² × sin²u'/tan²u')
@@ -57,7 +57,7 @@ def test_dot_lands_where_the_tracer_says(doublet):
     col = int(math.floor(math.tan(math.radians(2.0)) / t + 360))
     image[11:13, col] = 1.0  # two texels straddling y = 0
     field = np.degrees(np.arctan((col + 0.5 - 360) * t))
-    r = render_image(doublet, image, (24, 720), fov_deg=fov, spp=64, response="mono:531", fresnel="off",
+    r = render_image(doublet, image, sensor=(24, 720), fov_deg=fov, spp=64, response="mono:531", fresnel="off",
                      variant="llvm_ad_spectral")
     img = r.image[..., 0]
     x, y = np.meshgrid(camera.pixel_x_mm(), camera.pixel_y_mm())
@@ -71,6 +71,11 @@ def test_dot_lands_where_the_tracer_says(doublet):
 
 def test_bad_inputs(doublet):
     with pytest.raises(SolasError, match="camera response"):
-        render_image(doublet, np.ones((6, 8)), (6, 8), spp=4, response="infrared", variant="llvm_ad_spectral")
+        render_image(doublet, np.ones((6, 8)), sensor=(6, 8), spp=4, response="infrared", variant="llvm_ad_spectral")
     with pytest.raises(SolasError, match="boundary"):
-        render_image(doublet, np.ones((6, 8)), (6, 8), spp=4, boundary="wrap", variant="llvm_ad_spectral")
+        render_image(doublet, np.ones((6, 8)), sensor=(6, 8), spp=4, boundary="wrap", variant="llvm_ad_spectral")
+    # a user's value is never replaced: 0 rings was silently 32
+    with pytest.raises(SolasError, match="cap rings 0 must be an integer from 2"):
+        render_image(doublet, np.ones((6, 8)), sensor=(6, 8), spp=4, rings=0, variant="llvm_ad_spectral")
+    with pytest.raises(SolasError, match="focus distance sets the lens camera of a scene file"):
+        render_image(doublet, np.ones((6, 8)), sensor=(6, 8), spp=4, focus_distance=500.0)

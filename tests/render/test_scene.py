@@ -89,3 +89,27 @@ def test_a_user_scene_names_the_lens_changed_in_memory(tmp_path, doublet):
     named = [e.get("value") for e in ET.fromstring(text).iter("string") if e.get("name") == "lens"]
     assert Lens.load(named[0]).hash == near.hash
     assert Lens.load(named[0]).hash != doublet.hash
+
+
+def test_the_lens_file_is_parsed_once_per_content(tmp_path, doublet, monkeypatch):
+    """A render's caller has loaded its lens: checking that the lens still is its file's parses that
+    file once, not at every render, and again as soon as the file changes (never a stale answer)."""
+    import shutil
+
+    from solas_mi import Lens
+    from solas_mi.render.scene import lens_file
+
+    source = tmp_path / "doublet.toml"
+    shutil.copyfile(doublet.source, source)
+    lens = Lens.load(source)
+    parsed = []
+    load = Lens.load.__func__
+    monkeypatch.setattr(Lens, "load", classmethod(lambda cls, path: parsed.append(path) or load(cls, path)))
+    assert [lens_file(lens, tmp_path / "a"), lens_file(lens, tmp_path / "b")] == [source, source]
+    assert parsed == [source]
+    text = source.read_text()
+    source.write_text(text + "\n# edited\n")
+    assert lens_file(lens, tmp_path / "c") == source and len(parsed) == 2  # same lens, new content: parsed again
+    assert "thickness = 6.0" in text
+    source.write_text(text.replace("thickness = 6.0", "thickness = 7.0", 1))  # same size, at once
+    assert lens_file(lens, tmp_path / "d").parent == tmp_path / "d"  # the file no longer holds this lens

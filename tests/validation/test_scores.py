@@ -25,3 +25,17 @@ def test_compare_known_errors_and_noise_removal():
     assert denoise(0.01, 0.02) == 0.0
     with pytest.raises(SolasError, match="shape"):
         compare(ref[:10], ref)
+
+
+@pytest.mark.parametrize("odd, message", [
+    (np.zeros((0, 0, 3)), "at least 7 px"), (np.ones((60, 80)), "H×W×C"), ("image", "array of numbers"),
+    (np.full((60, 80, 3), np.nan), "NaN or infinite"), (None, "H×W×C"),
+])
+def test_odd_images_are_refused_by_name(odd, message):
+    """An image SSIM cannot read (no channel axis: its width would be taken for channels, too small for
+    its window, not numbers, not finite): a SolasError naming it, for either argument."""
+    ref = 0.2 + np.random.default_rng(2).random((60, 80, 3))
+    with pytest.raises(SolasError, match=message):
+        compare(odd, ref)
+    with pytest.raises(SolasError, match=message.replace("the image", "the reference")):
+        compare(ref, odd)

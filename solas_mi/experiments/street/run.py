@@ -134,88 +134,136 @@ def _render(xml: Path, variant, lens, params: dict, spp: int, log, **lens_option
     return render_scene(scene, spp, progress=progress).image
 
 
+class _Steps:
+    """The experiment's shared state: its lens, settings, output folder, framing and field, the
+    Mitsuba variant, and each timed step's seconds (`timed`, logged)."""
+
+    def __init__(self, lens, out: Path, s: Settings, log):
+        from ...render import response as responses
+        from ...render.mitsuba import variant_for
+        from ...render.user_scene import default_pitch_um
+
+        self.lens, self.out, self.s, self.log = lens, out, s, log
+        self.fr = framing(lens)
+        self.near_focus = s.near_focus_m or self.fr.near_focus_m
+        self.fov = float(lens.field_deg)
+        self.w, self.h = s.width, s.height
+        self.primary = float(lens.primary_wavelength)
+        self.seconds: dict[str, float] = {}
+        # grey scene: a mono variant given renders it alike
+        self.variant = variant_for(responses.mono(self.primary), s.variant)
+        self.pixel_um = default_pitch_um(lens, self.fov, "x", self.w, self.h)  # the lens camera's, matched to the field
+        self.params = self.fr.params(2 * self.fov, self.w, self.h, s.spp_ideal)
+
+    def timed(self, name: str, fn, *args, **kwargs):
+        self.log(f"street: {name} ...")
+        start = time.perf_counter()
+        value = fn(*args, **kwargs)
+        self.seconds[name] = time.perf_counter() - start
+        self.log(f"street: {name}: {self.seconds[name]:.1f} s")
+        return value
+
+
 def run(lens, out: str | Path, settings: Settings | None = None, log=print) -> Outcome:
     """The experiment on `lens` (a Lens), its images and depth map written to `out` as EXR and PNG
     and the tables (street.md, .csv, .json), figure-5 plots and error maps (`measure`)."""
     from ...convolution.kernels import layout
-    from ...convolution.methods import degrade
-    from ...imageio import image_channels, write_exr, write_png
     from ...optics.camera import pinhole_focal_mm
     from ...optics.illumination import axis_irradiance, ideal_irradiance
-    from ...psf.grid import psf_grid
-    from ...render import response as responses
-    from ...render.mitsuba import spectral, variant_for
-    from ...render.user_scene import default_pitch_um
-    from ...validation.inputs import tangent_cos3
 
     s = settings or Settings()
     s.check()
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    fr = framing(lens)
-    near_focus = s.near_focus_m or fr.near_focus_m
-    fov = float(lens.field_deg)
-    w, h = s.width, s.height
-    primary = float(lens.primary_wavelength)
-    seconds: dict[str, float] = {}
-
-    def timed(name: str, fn, *args, **kwargs):
-        log(f"street: {name} ...")
-        start = time.perf_counter()
-        value = fn(*args, **kwargs)
-        seconds[name] = time.perf_counter() - start
-        log(f"street: {name}: {seconds[name]:.1f} s")
-        return value
-
-    variant = variant_for(responses.mono(primary), s.variant)  # grey scene: a mono variant given renders it alike
-    xml = experiment_scene(s.scene, out, primary, spectral=spectral(variant))
-    depth_xml = experiment_scene(s.scene, out, primary, depth=True)
-    params = fr.params(2 * fov, w, h, s.spp_ideal)
-    band = BAND_NM if spectral(variant) else 1.0
-    ideal = timed("(a) ideal image", _render, xml, variant, None, params, s.spp_ideal, log)[..., 0] / band
-    depth = timed("(a) depth map", _render, depth_xml, variant, None, params, s.spp_depth, log)[..., -1]
-    depth = np.where(depth > 0, depth, np.inf).astype(np.float32)
-
-    pixel_um = default_pitch_um(lens, fov, "x", w, h)  # the lens camera's pixel, matched to the field
-    field_range = (fov, math.degrees(math.atan(math.tan(math.radians(fov)) * h / w)))  # the image's y edge
-
-    def grid_for(subject, blocks: tuple[int, int], label: str):
-        return timed(f"(b) PSF grid {blocks[0]}x{blocks[1]}{label}", psf_grid, subject, grid=(blocks[1], blocks[0]),
-                     wavelengths_nm=[primary], field_range_deg=field_range, method="geometric",
-                     normalization="none", pitch_um=pixel_um / 8, size=160)
-
-    grids = {blocks: grid_for(lens, blocks, "") for blocks in dict.fromkeys((s.interp_grid, *s.patch_grids))}
-    # the far subject's PSFs, the lens focused as its file says
-    far_grid = grid_for(replace(lens, object_distance=1e3 * fr.far_m), s.interp_grid, f", object at {fr.far_m:g} m")
-    k = axis_irradiance(lens, primary) / ideal_irradiance(lens, pinhole_focal_mm(lens, fov), primary)
-    weighted = ideal * tangent_cos3(w, h, fov)
-    images = {"ideal": ideal}
-    cases = [("interp", s.interp_grid)] + [("patch", b) for b in s.patch_grids]
-    for method, blocks in cases:
-        name = f"{method} {blocks[0]}x{blocks[1]}"
-        images[name] = timed(f"(b) {name}", degrade, weighted, grids[blocks], method, "edge") / np.float32(k)
-    far_name = f"interp {s.interp_grid[0]}x{s.interp_grid[1]} at {fr.far_m:g} m"
-    images[far_name] = timed(f"(b) {far_name}", degrade, weighted, far_grid, "interp", "edge") / np.float32(k)
-    lens_params = {key: v for key, v in params.items() if key != "fov"} | {"spp": str(s.spp_lens)}
-    render_options = {"response": f"mono:{primary:g}", "pitch_um": pixel_um}
-    images["render infinity"] = timed("(c) lens render, focus at infinity", _render, xml, variant, lens,
-                                      lens_params, s.spp_lens, log, **render_options)[..., 0]
-    images[f"render {near_focus:g} m"] = timed(
-        f"(c) lens render, focus at {near_focus:g} m", _render, xml, variant, lens, lens_params, s.spp_lens,
-        log, focus_distance=near_focus, **render_options)[..., 0]
-    for name, img in images.items():
-        stem = name.replace(" ", "_")
-        write_exr(out / f"{stem}.exr", image_channels(img), {"lens": lens.name, "image": name, "variant": variant})
-        write_png(out / f"{stem}.png", np.clip(img / 0.9, 0, 1))
-    write_exr(out / "depth.exr", {"Z": depth}, {"lens": lens.name, "unit": "m", "sky": "inf"})
-    lay = layout(grids[s.interp_grid], w, h)
-    meta = {"lens": lens.name, "lens_hash": lens.hash, "size": [w, h], "field_deg": fov, "wavelength_nm": primary,
-            "framing": params, "near_focus_m": near_focus, "far_m": FAR_M,
-            "far_subject_m": fr.far_m, "unit_k": k,
+    st = _Steps(lens, out, s, log)
+    xml, ideal, depth = _ideal_and_depth(st)
+    grids, far_grid = _psf_grids(st)
+    k = axis_irradiance(lens, st.primary) / ideal_irradiance(lens, pinhole_focal_mm(lens, st.fov), st.primary)
+    images = {"ideal": ideal, **_convolved(st, ideal, grids, far_grid, k), **_lens_renders(st, xml)}
+    _write_images(st, images, depth)
+    lay = layout(grids[s.interp_grid], st.w, st.h)
+    meta = {"lens": lens.name, "lens_hash": lens.hash, "size": [st.w, st.h], "field_deg": st.fov,
+            "wavelength_nm": st.primary, "framing": st.params, "near_focus_m": st.near_focus, "far_m": FAR_M,
+            "far_subject_m": st.fr.far_m, "unit_k": k,
             "pixel_pitch_um": lay.camera.pitch_um, "spp": {"ideal": s.spp_ideal, "lens": s.spp_lens,
-                                                          "depth": s.spp_depth}, "variant": variant}
-    outcome = Outcome(images, depth, seconds=seconds, meta=meta)
-    predictors = {"infinity": grids[s.interp_grid], f"{fr.far_m:g} m": far_grid}
-    rows = timed("(d, e) NS-SFR, predictions and error maps", measure, outcome, predictors, lay, near_focus, out)
+                                                          "depth": s.spp_depth}, "variant": st.variant}
+    outcome = Outcome(images, depth, seconds=st.seconds, meta=meta)
+    predictors = {"infinity": grids[s.interp_grid], f"{st.fr.far_m:g} m": far_grid}
+    rows = st.timed("(d, e) NS-SFR, predictions and error maps", measure, outcome, predictors, lay, st.near_focus,
+                    out)
     write_tables(out, rows, outcome)
     return outcome
+
+
+def _ideal_and_depth(st: _Steps) -> tuple[Path, np.ndarray, np.ndarray]:
+    """(a) the scene as the experiment renders it, its ideal (pinhole) image and its depth map (m, inf: sky)."""
+    from ...render.mitsuba import spectral
+
+    s = st.s
+    xml = experiment_scene(s.scene, st.out, st.primary, spectral=spectral(st.variant))
+    depth_xml = experiment_scene(s.scene, st.out, st.primary, depth=True)
+    band = BAND_NM if spectral(st.variant) else 1.0
+    ideal = st.timed("(a) ideal image", _render, xml, st.variant, None, st.params, s.spp_ideal, st.log)[..., 0] / band
+    depth = st.timed("(a) depth map", _render, depth_xml, st.variant, None, st.params, s.spp_depth, st.log)[..., -1]
+    return xml, ideal, np.where(depth > 0, depth, np.inf).astype(np.float32)
+
+
+def _psf_grids(st: _Steps) -> tuple[dict, object]:
+    """(b) the PSF grids of every grid size, and the far subject's (the lens focused as its file says)."""
+    from ...psf.grid import psf_grid
+
+    s, fov = st.s, st.fov
+    field_range = (fov, math.degrees(math.atan(math.tan(math.radians(fov)) * st.h / st.w)))  # the image's y edge
+
+    def grid_for(subject, blocks: tuple[int, int], label: str):
+        return st.timed(f"(b) PSF grid {blocks[0]}x{blocks[1]}{label}", psf_grid, subject,
+                        grid=(blocks[1], blocks[0]), wavelengths_nm=[st.primary], field_range_deg=field_range,
+                        method="geometric", normalization="none", pitch_um=st.pixel_um / 8, size=160)
+
+    grids = {blocks: grid_for(st.lens, blocks, "") for blocks in dict.fromkeys((s.interp_grid, *s.patch_grids))}
+    far_grid = grid_for(replace(st.lens, object_distance=1e3 * st.fr.far_m), s.interp_grid,
+                        f", object at {st.fr.far_m:g} m")
+    return grids, far_grid
+
+
+def _convolved(st: _Steps, ideal: np.ndarray, grids: dict, far_grid, k: float) -> dict[str, np.ndarray]:
+    """(b) the ideal image (weighted by cos³) degraded by each grid, in units of the lens's axis
+    irradiance `k` times the ideal camera's; the far subject's grid too."""
+    from ...convolution.methods import degrade
+    from ...validation.inputs import tangent_cos3
+
+    s = st.s
+    weighted = ideal * tangent_cos3(st.w, st.h, st.fov)
+    images = {}
+    for method, blocks in [("interp", s.interp_grid)] + [("patch", b) for b in s.patch_grids]:
+        name = f"{method} {blocks[0]}x{blocks[1]}"
+        images[name] = st.timed(f"(b) {name}", degrade, weighted, grids[blocks], method, "edge") / np.float32(k)
+    far_name = f"interp {s.interp_grid[0]}x{s.interp_grid[1]} at {st.fr.far_m:g} m"
+    images[far_name] = st.timed(f"(b) {far_name}", degrade, weighted, far_grid, "interp", "edge") / np.float32(k)
+    return images
+
+
+def _lens_renders(st: _Steps, xml: Path) -> dict[str, np.ndarray]:
+    """(c) the scene through the lens camera, focused at infinity and at the near focus."""
+    s = st.s
+    lens_params = {key: v for key, v in st.params.items() if key != "fov"} | {"spp": str(s.spp_lens)}
+    render_options = {"response": f"mono:{st.primary:g}", "pitch_um": st.pixel_um}
+    return {
+        "render infinity": st.timed("(c) lens render, focus at infinity", _render, xml, st.variant, st.lens,
+                                    lens_params, s.spp_lens, st.log, **render_options)[..., 0],
+        f"render {st.near_focus:g} m": st.timed(
+            f"(c) lens render, focus at {st.near_focus:g} m", _render, xml, st.variant, st.lens, lens_params,
+            s.spp_lens, st.log, focus_distance=st.near_focus, **render_options)[..., 0],
+    }
+
+
+def _write_images(st: _Steps, images: dict[str, np.ndarray], depth: np.ndarray) -> None:
+    """Every image as EXR and PNG (÷ 0.9, clipped), and the depth map as EXR, into the output folder."""
+    from ...imageio import image_channels, write_exr, write_png
+
+    for name, img in images.items():
+        stem = name.replace(" ", "_")
+        write_exr(st.out / f"{stem}.exr", image_channels(img), {"lens": st.lens.name, "image": name,
+                                                                "variant": st.variant})
+        write_png(st.out / f"{stem}.png", np.clip(img / 0.9, 0, 1))
+    write_exr(st.out / "depth.exr", {"Z": depth}, {"lens": st.lens.name, "unit": "m", "sky": "inf"})

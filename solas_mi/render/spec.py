@@ -1,0 +1,195 @@
+"""The settings of a render through a lens as one typed value: `RenderSpec` (frozen, checked when
+built). `render_image`, `write_scene` and the render batch take it; the commands build it in one
+place (`spec_from_args`) from flags that are made from its fields (`add_spec_flags`), so a render
+option is added by adding one field here: its default, its check and its flag.
+
+A batch sweeps over some of its fields with `dataclasses.replace`; each item's settings are
+`as_dict()` in the manifest and read back with `from_dict`. Light: no Mitsuba or Dr.Jit here.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass, field, fields, replace
+from typing import Any
+
+from ..errors import SolasError
+from ..optics.camera import BOUNDARIES, MAPPINGS
+from ..options import parse_wxh
+from .mitsuba import VARIANTS, check_name
+
+FRESNEL_MODES = ("transmit", "sample", "off")  # plugins/sellmeier_dielectric.py's
+DEFAULT_RINGS = 32  # scene PSFs match the tracer to 0.04 µm / 0.2 %; denser meshes render slower (README)
+# rings per cap mesh: 4·rings² vertices each. Measured (solas-doublet, meshes built and written, 2 cores):
+# 256 rings 0.6 s, 39 MB of PLY, 0.26 GB peak; 512 rings 2.8 s, 157 MB, 0.86 GB; 1024 rings 10 s, 629 MB,
+# 3.3 GB; 4096 rings would be 16x that (53 GB). The scene PSFs converged long before (32: 0.2 %, README)
+MIN_RINGS, MAX_RINGS = 2, 512
+MAX_SPP = 1 << 20
+MAX_SEED = 2**32 - 1  # Mitsuba's samplers take 32-bit seeds
+
+
+def _flag(help_text: str, default=None, *, parse=None, choices=None, metavar=None):
+    """A field with its command-line flag: its help, how its text is read (`parse`), its choices."""
+    return field(default=default, metadata={"help": help_text, "parse": parse, "choices": choices,
+                                            "metavar": metavar})
+
+
+def _sensor(text: str) -> tuple[int, int]:
+    return parse_wxh(text, "--sensor")
+
+
+def _focus(text: str) -> float:
+    try:
+        return float(text)
+    except ValueError:
+        raise SolasError(f"focus distance {text!r} must be a positive number of world units or inf") from None
+
+
+@dataclass(frozen=True)
+class RenderSpec:
+    """How to render through a lens. `sensor` (rows, columns) pixels of `pitch_um` µm (None: the
+    sensor's width spans the field); the input image spans ±`fov_deg` degrees (None: the lens's);
+    `response`, `boundary`, `fresnel` and `mapping` are the plugins' parameters; `rings` per cap mesh;
+    `spp` samples per pixel; `variant` the Mitsuba variant (None: `render.mitsuba.variant_for`'s);
+    `seed` the sampler's; `focus_distance` (world units, inf allowed; None: the lens file's) sets the
+    lens camera of a scene file (`render.user_scene`), not an image's render."""
+
+    sensor: tuple[int, int] = _flag("sensor pixels, columns x rows", (960, 1280), parse=_sensor, metavar="WxH")
+    pitch_um: float | None = _flag("pixel pitch (µm; default: the sensor's width spans the field)", parse=float,
+                                   metavar="P")
+    fov_deg: float | None = _flag("half the horizontal field the image spans (degrees; default: the lens's)",
+                                  parse=float)
+    response: str = _flag("camera response: srgb, lines, mono:<nm>, table:<file.csv>", "srgb")
+    boundary: str = _flag("the object outside the image: edge (repeat the border), reflect, zero (black)", "edge",
+                          choices=BOUNDARIES)
+    fresnel: str = _flag("Fresnel losses: transmit (weight by transmittance), sample (ghost paths too), off",
+                         "transmit", choices=FRESNEL_MODES)
+    rings: int = _flag(f"rings of each cap mesh ({MIN_RINGS}..{MAX_RINGS})", DEFAULT_RINGS, parse=int)
+    mapping: str = _flag("projection of the input image at infinity: rectilinear, or for wide and fisheye lenses "
+                         "equidistant, equisolid, equirectangular (an environment image spanning +-fov-deg)",
+                         "rectilinear", choices=MAPPINGS)
+    spp: int = _flag("samples per pixel", 64, parse=int, metavar="N")
+    variant: str | None = _flag("Mitsuba variant (default: cuda_ad_spectral with a GPU, else llvm_ad_spectral; a "
+                                "mono variant needs a response of one wavelength, mono:<nm>)", choices=VARIANTS)
+    seed: int = _flag("the sampler's seed (a batch's base seed: each item's derives from it)", 0, parse=int)
+    focus_distance: float | None = _flag("scene files: focus distance in world units (inf: infinity; default: the "
+                                         "lens file's image plane)", parse=_focus, metavar="D")
+
+    def __post_init__(self) -> None:
+        set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731 (frozen: normalised once)
+        set_("sensor", parse_wxh(tuple(self.sensor) if isinstance(self.sensor, list) else self.sensor, "sensor"))
+        for name in ("pitch_um", "fov_deg", "focus_distance"):
+            set_(name, _optional_positive(name, getattr(self, name), allow_inf=name == "focus_distance"))
+        if self.fov_deg is not None and not self.fov_deg < 180.0:  # a fisheye's environment image spans the most
+            raise SolasError(f"fov_deg {self.fov_deg!r} must be below 180 degrees (half the field the image spans)")
+        if not isinstance(self.response, str) or not self.response.strip():
+            raise SolasError(f"camera response {self.response!r} must be srgb, lines, mono:<nm> or table:<file.csv>")
+        for name in ("boundary", "fresnel", "mapping"):
+            allowed = fields_by_name()[name].metadata["choices"]
+            if getattr(self, name) not in allowed:
+                raise SolasError(f"{name} {getattr(self, name)!r} must be one of {', '.join(allowed)}")
+        check_rings(self.rings)
+        _check_int("samples per pixel", self.spp, 1, MAX_SPP)
+        _check_int("seed", self.seed, 0, MAX_SEED)
+        if self.variant is not None:
+            check_name(self.variant)
+
+    def replace(self, **changes) -> RenderSpec:
+        """A copy with `changes` (field names), checked; SolasError naming an unknown setting."""
+        unknown = set(changes) - set(fields_by_name())
+        if unknown:
+            raise SolasError(f"unknown render setting(s) {', '.join(sorted(unknown))}: the settings are "
+                             f"{', '.join(fields_by_name())}")
+        return replace(self, **changes)
+
+    def as_dict(self) -> dict[str, Any]:
+        """JSON-ready fields (sensor as [rows, columns], an infinite focus distance as "inf")."""
+        out = asdict(self)
+        out["sensor"] = list(self.sensor)
+        if self.focus_distance is not None and math.isinf(self.focus_distance):
+            out["focus_distance"] = "inf"  # JSON has no infinity; Mitsuba reads "inf"
+        return out
+
+    @classmethod
+    def from_dict(cls, values: dict[str, Any]) -> RenderSpec:
+        """The spec of `as_dict` (keys that are not settings ignored)."""
+        known = {k: v for k, v in values.items() if k in fields_by_name()}
+        if known.get("focus_distance") == "inf":
+            known["focus_distance"] = math.inf
+        return cls(**known)
+
+
+def fields_by_name() -> dict[str, Any]:
+    """The dataclass fields of RenderSpec by name, in order."""
+    return {f.name: f for f in fields(RenderSpec)}
+
+
+def check_rings(rings) -> int:
+    """`rings` (rings per cap mesh), or SolasError unless it is an integer in MIN_RINGS..MAX_RINGS."""
+    _check_int("cap rings", rings, MIN_RINGS, MAX_RINGS,
+               why=f" (a cap mesh has 4·rings² vertices: {MAX_RINGS} rings are 1 M per cap)")
+    return rings
+
+
+def _check_int(what: str, value, low: int, high: int, why: str = "") -> None:
+    if isinstance(value, bool) or not isinstance(value, int) or not low <= value <= high:
+        raise SolasError(f"{what} {value!r} must be an integer from {low} to {high}{why}")
+
+
+def _optional_positive(name: str, value, allow_inf: bool = False) -> float | None:
+    if value is None:
+        return None
+    try:
+        number = float(value)
+    except (TypeError, ValueError):
+        number = math.nan
+    if not number > 0 or (math.isinf(number) and not allow_inf):
+        raise SolasError(f"{name} {value!r} must be a positive number" + (" or inf" if allow_inf else "") +
+                         " (or not given)")
+    return number
+
+
+def add_spec_flags(parser, names, sweep: tuple[str, ...] = ()) -> None:
+    """Add the flags of the RenderSpec fields `names` to `parser` (--pitch-um for pitch_um), with no
+    argparse default (the spec's holds); a field of `sweep` takes a comma-separated list."""
+    by_name = fields_by_name()
+    for name in names:
+        f, meta = by_name[name], by_name[name].metadata
+        default = f.default
+        shown = f"{default[1]}x{default[0]}" if name == "sensor" else default
+        help_text = meta["help"] + ("" if default is None or "default" in meta["help"] else f" (default: {shown})")
+        metavar = meta["metavar"]
+        if name in sweep:
+            metavar = f"{metavar or name.upper()}[,{metavar or name.upper()}…]"
+            help_text += "; a comma-separated list sweeps over it"
+        parser.add_argument("--" + name.replace("_", "-"), dest=name, metavar=metavar,
+                            choices=None if name in sweep else meta["choices"], help=help_text)
+
+
+def _read(name: str, text):
+    """The value of flag text `text` for field `name` (SolasError naming the flag when it does not read)."""
+    parse = fields_by_name()[name].metadata["parse"]
+    if parse is None or not isinstance(text, str):
+        return text
+    try:
+        return parse(text)
+    except ValueError:
+        kind = "an integer" if parse is int else "a number"
+        raise SolasError(f"--{name.replace('_', '-')} {text!r} must be {kind}") from None
+
+
+def spec_from_args(args, names, sweep: tuple[str, ...] = ()) -> tuple[RenderSpec, dict[str, list]]:
+    """The RenderSpec of the flags `names` given in `args` (the others at their defaults), and for each
+    field of `sweep` given, its list of values (the spec holding the first)."""
+    given, swept = {}, {}
+    for name in names:
+        text = getattr(args, name, None)
+        if text is None:
+            continue
+        if name in sweep:
+            values = [_read(name, v.strip()) for v in str(text).split(",") if v.strip()]
+            if not values:
+                raise SolasError(f"--{name.replace('_', '-')} {text!r} needs at least one value")
+            swept[name], given[name] = values, values[0]
+        else:
+            given[name] = _read(name, text)
+    return RenderSpec(**given), swept
