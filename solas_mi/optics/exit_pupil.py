@@ -37,7 +37,7 @@ def reversed_lens(lens: Lens) -> Lens:
         rev.append(Surface(s[i].label, -s[i].radius, thickness, s[i].diameter, materials[i], before[i], s[i].stop,
                            s[i].conic, tuple(-a for a in s[i].aspheric)))
     return replace(lens, name=lens.name + " (reversed)", surfaces=tuple(rev), object_distance=s[-1].thickness,
-                   object_glass=s[-1].glass, memo={})
+                   object_glass=s[-1].glass)
 
 
 @dataclass(frozen=True)

@@ -18,7 +18,7 @@ def focused(lens: Lens, distance_mm: float) -> Lens:
     image plane (the last surface's thickness) moved to keep that object in focus."""
     if not (isinstance(distance_mm, (int, float)) and distance_mm > 0 and not math.isnan(distance_mm)):
         raise SolasError(f"focus distance {distance_mm!r} mm must be a positive number (math.inf: at infinity)")
-    target = replace(lens, object_distance=float(distance_mm), memo={})
+    target = replace(lens, object_distance=float(distance_mm))
     shift = paraxial(target).focus_z_mm - paraxial(lens).focus_z_mm
     last = lens.surfaces[-1]
     thickness = last.thickness + shift

@@ -11,7 +11,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -154,8 +154,6 @@ class Lens:
     field_deg: float = 0.0
     description: str = ""
     source: str = ""
-    # results derived from the (immutable) prescription, memoised by the analyses that compute them
-    memo: dict = field(default_factory=dict, repr=False, compare=False)
 
     # ------------------------------------------------------------------ loading
     @classmethod

@@ -7,6 +7,7 @@ McGraw-Hill, 2008, ch. 2–3.
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import asdict, dataclass
 
@@ -70,14 +71,17 @@ def _object_ray(lens: Lens, wavelength_nm: float, y_obj: float, u0: float) -> tu
 def paraxial(lens: Lens, wavelength_nm: float | None = None, fields_deg: list[float] | None = None) -> Paraxial:
     """Paraxial data (EFL, pupils, f/#, image offset, chief rays) of `lens` at `wavelength_nm`
     (default: its primary wavelength), with chief rays at `fields_deg` (default: 0 and the lens's
-    field). Results for the default fields are memoised on the lens."""
+    field). Results for the default fields are memoised by the lens's content (every field of the
+    frozen `Lens` takes part in its equality and hash), so a changed lens always gets fresh data."""
     wl = lens.check_wavelength(wavelength_nm if wavelength_nm is not None else lens.primary_wavelength)
     if fields_deg is not None:
         return _paraxial(lens, wl, fields_deg)
-    memo = lens.memo.setdefault("paraxial", {})
-    if wl not in memo:
-        memo[wl] = _paraxial(lens, wl)
-    return memo[wl]
+    return _memoised(lens, wl)
+
+
+@functools.lru_cache(maxsize=256)
+def _memoised(lens: Lens, wavelength_nm: float) -> Paraxial:
+    return _paraxial(lens, wavelength_nm)
 
 
 def _paraxial(lens: Lens, wavelength_nm: float, fields_deg: list[float] | None = None) -> Paraxial:
