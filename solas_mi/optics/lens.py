@@ -23,10 +23,9 @@ from ..imageio import write_text
 from ..resources import resource_dir
 from . import glass as glass_mod
 from . import lens_toml, pbrt_dat, zemax
+from .fields import FieldType, field_type_for
 
 LENS_DIR = "lenses"
-# Lenses whose field reaches this (degrees) take polar fields: see `Lens.polar_field`
-POLAR_FIELD_DEG = 89.0
 # Lens file formats besides our TOML: text → lens-file dictionary, and Lens → text
 READERS = {".zmx": zemax.read_spec, ".dat": pbrt_dat.read_spec}
 WRITERS = {".toml": lens_toml.dumps, ".zmx": zemax.dumps, ".dat": pbrt_dat.dumps}
@@ -88,22 +87,6 @@ def _table(spec: dict, key: str, where: str) -> dict:
     if not isinstance(value, dict):
         raise SolasError(f"{where}: {key} = {value!r} must be a table ([{key}])")
     return value
-
-
-def check_field(field_deg, polar: bool = False) -> tuple[float, float]:
-    """A field angle (x, y) in degrees as two floats, each finite and within ±89°; a polar field
-    (`Lens.polar_field`) instead has a polar angle hypot(x, y) below 180°."""
-    try:
-        fx, fy = (float(v) for v in field_deg)
-    except (TypeError, ValueError):
-        raise SolasError(f"field {field_deg!r} must be two angles (x, y) in degrees") from None
-    if polar and math.isfinite(fx) and math.isfinite(fy):
-        if math.hypot(fx, fy) >= 180:
-            raise SolasError(f"field ({fx:g}, {fy:g}) deg: the polar angle hypot(x, y) must be below 180 deg")
-        return fx, fy
-    if not (math.isfinite(fx) and math.isfinite(fy)) or abs(fx) >= 89 or abs(fy) >= 89:
-        raise SolasError(f"field ({fx:g}, {fy:g}) deg: each angle must be finite and below 89 deg in magnitude")
-    return fx, fy
 
 
 @dataclass(frozen=True)
@@ -286,12 +269,7 @@ class Lens:
                 raise SolasError(f"{ident}: thickness {s.thickness:g} mm is negative; thicknesses must be >= 0")
             if s.glass is not glass_mod.AIR and s.thickness == 0:
                 raise SolasError(f"{ident}: thickness 0 mm inside glass {s.material}; glass needs a positive thickness")
-        first = self.surfaces[0]
-        if self.polar_field and not first.is_sphere:
-            raise SolasError(f"{where}: surface 1 ({first.label}) is a conic or asphere; a lens of polar fields "
-                             f"(field_deg {self.field_deg:g} >= {POLAR_FIELD_DEG:g}) takes rays from the side of its "
-                             "first surface, which solas-mi intersects as a whole sphere only: make surface 1 "
-                             f"spherical or flat, or set field_deg below {POLAR_FIELD_DEG:g}")
+        self.field_type.check_lens(self, where)
         last = self.surfaces[-1]
         if last.thickness <= 0:
             raise SolasError(f"{where}: surface {len(self.surfaces)} ({last.label}): distance to the image "
@@ -322,12 +300,10 @@ class Lens:
         return float(self.vertex_z[-1] + self.surfaces[-1].thickness)
 
     @property
-    def polar_field(self) -> bool:
-        """Whether fields (x, y) in degrees are polar: the incoming direction has polar angle
-        θ = hypot(x, y) from the axis and azimuth atan2(y, x), which reaches 90° and beyond. True for
-        lenses whose `field_deg` is at least POLAR_FIELD_DEG; the others take field tangents
-        (direction ∝ (tan x, tan y, 1)). On the x and y axes both forms name the same direction."""
-        return self.field_deg >= POLAR_FIELD_DEG
+    def field_type(self) -> FieldType:
+        """What a field (x, y) in degrees means for this lens (`fields`): angle fields (tangents), or
+        polar fields for a lens whose `field_deg` reaches `fields.POLAR_FIELD_DEG`."""
+        return field_type_for(self.field_deg)
 
     @property
     def at_infinity(self) -> bool:

@@ -36,13 +36,9 @@ class Bundle:
         self.n_fields = len(field_deg)
         self.per_field = per_field
         self.index = dr.arange(T.UInt32, self.n_fields * per_field) // per_field
-        if lens.polar_field:  # direction-based fields, up to and beyond 90°
-            d = T.polar_directions(field_deg)
-            self.direction = tuple(T.gather(d[:, i], self.index) for i in range(3))
-        else:
-            self.direction = None
-            tan = T.field_tangents(field_deg)
-            self.tan_x, self.tan_y = T.gather(tan[:, 0], self.index), T.gather(tan[:, 1], self.index)
+        # per ray: field tangents (x, y), or the unit direction (x, y, z) of polar fields
+        incoming = lens.field_type.incoming(field_deg)
+        self.incoming = tuple(T.gather(incoming[:, i], self.index) for i in range(incoming.shape[1]))
         self.wavelength_um = T.gather(np.asarray(wavelength_nm) / 1000.0, self.index)
         pts = T.object_points(lens, field_deg)
         self.object_point = None if pts is None else (T.gather(pts[:, 0], self.index), T.gather(pts[:, 1], self.index))
@@ -55,9 +51,9 @@ class Bundle:
         return T.gather(values, self.index)
 
     def trace(self, ex: T.F, ey: T.F) -> T.Traced:
-        if self.direction is not None:
-            return T.trace(self.lens, T.launch_direction(self.lens, *self.direction, ex, ey), self.wavelength_um)
-        rays = T.launch(self.lens, self.tan_x, self.tan_y, ex, ey, self.object_point)
+        if self.lens.field_type.sideways:  # directions up to and beyond 90°, object at infinity
+            return T.trace(self.lens, T.launch_direction(self.lens, *self.incoming, ex, ey), self.wavelength_um)
+        rays = T.launch(self.lens, *self.incoming, ex, ey, self.object_point)
         return T.trace(self.lens, rays, self.wavelength_um)
 
 
@@ -161,7 +157,7 @@ def chief_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> 
     field_deg = np.atleast_2d(np.asarray(field_deg, dtype=np.float64))
     wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(field_deg),))
     b = Bundle(lens, field_deg, wavelength_nm, 1)
-    e0 = _continued_aim(lens, field_deg, wavelength_nm) if lens.polar_field else _paraxial_aim(lens, field_deg)
+    e0 = _continued_aim(lens, field_deg, wavelength_nm) if lens.field_type.sideways else _paraxial_aim(lens, field_deg)
     zero = dr.zeros(T.F, b.n_fields)
     ex, ey, tr, conv = aim(b, _stop_target, T.F(e0[:, 0]), T.F(e0[:, 1]), zero, zero)
     px, py, _ = T.to_plane(tr, lens.image_z)
@@ -199,7 +195,7 @@ def stop_rim(rim: Bundle, chief: ChiefRays, accept=None) -> tuple[np.ndarray, np
     def at(scale: np.ndarray):
         gx, gy = T.F(r_stop * scale * np.cos(phi)), T.F(r_stop * scale * np.sin(phi))
         ex, ey = rim.per_ray(chief.entrance[:, 0]) + gx * ratio, rim.per_ray(chief.entrance[:, 1]) + gy * ratio
-        if lens.polar_field:  # wide fields: the pupil is squeezed and tilted; grow the aim out from the chief ray
+        if lens.field_type.sideways:  # wide fields: the pupil is squeezed and tilted; grow the aim out from the chief ray
             ex, ey = rim.per_ray(chief.entrance[:, 0]), rim.per_ray(chief.entrance[:, 1])
             for k in range(1, RIM_STEPS):
                 ex, ey, _, _ = aim(rim, _stop_target, ex, ey, gx * (k / RIM_STEPS), gy * (k / RIM_STEPS))

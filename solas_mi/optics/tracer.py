@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..llvm import import_drjit
+from .fields import ANGLE
 from .lens import Lens, sag, sag_slope
 from .paraxial import paraxial
 
@@ -145,14 +146,6 @@ def _sphere_from_launch(c, x, y, wz, dx, dy, dz):
     return wz, cc / (b + dr.sqrt(dr.maximum(disc, 0.0))), (disc >= 0) & (b > 0)
 
 
-def polar_directions(field_deg: np.ndarray) -> np.ndarray:
-    """(…, 2) polar fields in degrees (`Lens.polar_field`: polar angle θ = hypot(x, y), azimuth
-    atan2(y, x)) → (…, 3) unit directions of the incoming collimated rays."""
-    f = np.radians(np.asarray(field_deg, dtype=np.float64))
-    theta, phi = np.hypot(f[..., 0], f[..., 1]), np.arctan2(f[..., 1], f[..., 0])
-    return np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=-1)
-
-
 def launch_direction(lens: Lens, dx: F, dy: F, dz: F, ex: F, ey: F) -> Rays:
     """Collimated rays of unit direction (dx, dy, dz), any polar angle up to 180° (object at infinity),
     and entrance coordinates (ex, ey), mm: the ray starts on the plane perpendicular to d through
@@ -195,7 +188,7 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False) -> Tr
     for k, (s, zv) in enumerate(zip(lens.surfaces, lens.vertex_z)):
         # move to the vertex plane first: the sphere equation is then solved from nearby, free of the
         # cancellation that a distant start point (a finite object far away) would bring into B² − cC
-        if k == 0 and lens.polar_field and s.curvature != 0.0 and s.is_sphere:  # rays from the side or behind
+        if k == 0 and lens.field_type.sideways and s.curvature != 0.0 and s.is_sphere:  # rays from the side or behind
             c = _opaque(s.curvature, ftype)
             lz, t, hit = _sphere_from_launch(c, x, y, z - _opaque(zv, ftype), dx, dy, dz)
             ok &= hit
@@ -294,7 +287,7 @@ def to_sphere(traced: Traced, cx: F, cy: F, cz: F, radius: F) -> tuple[F, F, F, 
 
 def field_tangents(field_deg: np.ndarray) -> np.ndarray:
     """(…, 2) field angles in degrees → tangents."""
-    return np.tan(np.radians(np.asarray(field_deg, dtype=np.float64)))
+    return ANGLE.incoming(field_deg)
 
 
 def object_points(lens: Lens, field_deg: np.ndarray) -> np.ndarray | None:
@@ -320,5 +313,5 @@ def to_numpy(*values) -> tuple[np.ndarray, ...]:
     return tuple(np.asarray(v) for v in values)
 
 
-__all__ = ["Rays", "Traced", "launch", "launch_direction", "polar_directions", "trace", "to_plane", "to_sphere", "field_tangents", "object_points",
+__all__ = ["Rays", "Traced", "launch", "launch_direction", "trace", "to_plane", "to_sphere", "field_tangents", "object_points",
            "gather", "to_numpy", "refractive_index", "launch_plane_z"]

@@ -43,8 +43,8 @@ def render_image(lens, image: str | np.ndarray, sensor: tuple[int, int] = (960, 
     image's projection (plugins/image_object.py): for a lens of polar fields (a fisheye) the image is
     an environment image spanning ±`fov_deg` in that mapping, the sensor is just pixels of `pitch_um`
     (default: the sensor's width spans the lens's image circle) and the distortion is the lens's own."""
-    camera = fisheye_camera(lens, sensor, fov_deg, pitch_um) if lens.polar_field else camera_for(lens, sensor, fov_deg,
-                                                                                                  pitch_um)
+    camera = (camera_for(lens, sensor, fov_deg, pitch_um) if lens.field_type.pinhole
+              else fisheye_camera(lens, sensor, fov_deg, pitch_um))
     if mapping not in MAPPINGS:
         raise SolasError(f"mapping {mapping!r} must be one of {', '.join(MAPPINGS)}")
     # the user's mistakes, named here rather than inside the scene's plugins

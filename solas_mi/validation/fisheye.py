@@ -99,7 +99,7 @@ def compare_fisheye(lens: Lens, env: np.ndarray, fov_deg: float, size: int, pitc
     the lens does."""
     from ..render.image import render_image
 
-    if not lens.polar_field:
+    if lens.field_type.pinhole:
         raise SolasError(f"lens {lens.name} has tangent fields; the fisheye comparison needs a lens of polar fields")
     w = lens.primary_wavelength if wavelength_nm is None else lens.check_wavelength(wavelength_nm)
     seconds: dict[str, float] = {}

@@ -207,7 +207,7 @@ def _opd_precision(lens: Lens, wl: float) -> Case:
 def _exit_pupil(lens: Lens, wl: float) -> Case:
     from ..optics.camera import camera_for
 
-    if lens.polar_field:  # the image circle
+    if not lens.field_type.pinhole:  # the image circle
         r_max = float(np.hypot(*chief_rays(lens, [[0.0, lens.field_deg]], [wl]).image_xy[0]))
     else:
         camera = camera_for(lens)
