@@ -11,6 +11,7 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -36,6 +37,21 @@ KEYS = {
     "object": ("distance", "material"),
     "image": ("diameter",),
 }
+
+
+def _shipped_dir() -> Path:
+    return resource_dir("scenes") / LENS_DIR
+
+
+def shipped_lenses() -> list[str]:
+    """Names of the lenses that ship with solas-mi (`Lens.load` takes them)."""
+    return sorted(p.stem.replace("_", "-") for p in _shipped_dir().glob("*.toml"))
+
+
+def check_lens(lens) -> None:
+    """SolasError unless `lens` is a Lens (analyses take `Lens.load(name or path)`)."""
+    if not isinstance(lens, Lens):
+        raise SolasError(f"lens {lens!r} must be a Lens: Lens.load(a shipped name or a lens file)")
 
 
 def sag(r2, curvature: float, conic: float = 0.0, aspheric: tuple[float, ...] = (), sqrt=np.sqrt, maximum=np.maximum):
@@ -141,13 +157,23 @@ class Lens:
     # ------------------------------------------------------------------ loading
     @classmethod
     def load(cls, name_or_path: str | Path) -> "Lens":
-        """A lens by shipped name (e.g. "solas-doublet") or by path to a TOML lens file."""
-        path = Path(name_or_path)
-        if not path.suffix:
-            path = resource_dir("scenes") / LENS_DIR / (str(name_or_path).replace("-", "_") + ".toml")
+        """A lens by shipped name (e.g. "solas-doublet") or by path to a lens file (.toml, .zmx, .dat):
+        a name holding a path separator or an extension is a path."""
+        if not isinstance(name_or_path, (str, os.PathLike)):
+            raise SolasError(f"lens {name_or_path!r} must be a shipped lens name ({', '.join(shipped_lenses())}) "
+                             f"or a path to a lens file ({', '.join(WRITERS)})")
+        given = os.fspath(name_or_path)
+        path = Path(given)
+        if not path.suffix and not any(sep and sep in given for sep in (os.sep, os.altsep, "/")):
+            path = _shipped_dir() / (given.replace("-", "_") + ".toml")
             if not path.is_file():
-                shipped = sorted(p.stem.replace("_", "-") for p in (path.parent).glob("*.toml"))
-                raise SolasError(f"unknown lens {str(name_or_path)!r}; shipped lenses: {', '.join(shipped)}, or a path to a lens file (.toml, .zmx, .dat)")
+                raise SolasError(f"unknown lens {given!r}; shipped lenses: {', '.join(shipped_lenses())}, or a path "
+                                 f"to a lens file ({', '.join(WRITERS)})")
+        if path.suffix.lower() not in WRITERS:
+            what = f"unknown extension {path.suffix!r}" if path.suffix else "no lens extension"
+            raise SolasError(f"lens file {given!r} has {what}; allowed: {', '.join(WRITERS)}")
+        if path.is_dir():
+            raise SolasError(f"lens file {given!r} is a folder, not a lens file")
         if not path.is_file():
             raise SolasError(f"lens file {str(path)!r} does not exist")
         if path.suffix.lower() in READERS:
@@ -163,6 +189,8 @@ class Lens:
                 spec = tomllib.load(f)
         except tomllib.TOMLDecodeError as exc:
             raise SolasError(f"lens file {path}: not valid TOML: {exc}") from exc
+        except OSError as exc:
+            raise SolasError(f"lens file {path}: cannot be read: {exc}") from None
         except UnicodeDecodeError:
             raise SolasError(f"lens file {path} is not UTF-8 text; a lens file is TOML text") from None
         return cls.from_dict(spec, source=str(path))

@@ -14,7 +14,7 @@ from dataclasses import asdict, dataclass
 import numpy as np
 
 from ..errors import SolasError
-from .lens import Lens
+from .lens import Lens, check_lens
 
 
 @dataclass(frozen=True)
@@ -73,10 +73,24 @@ def paraxial(lens: Lens, wavelength_nm: float | None = None, fields_deg: list[fl
     (default: its primary wavelength), with chief rays at `fields_deg` (default: 0 and the lens's
     field). Results for the default fields are memoised by the lens's content (every field of the
     frozen `Lens` takes part in its equality and hash), so a changed lens always gets fresh data."""
+    check_lens(lens)
     wl = lens.check_wavelength(wavelength_nm if wavelength_nm is not None else lens.primary_wavelength)
     if fields_deg is not None:
-        return _paraxial(lens, wl, fields_deg)
+        return _paraxial(lens, wl, _check_fields(fields_deg))
     return _memoised(lens, wl)
+
+
+def _check_fields(fields_deg) -> list[float]:
+    """y field angles (degrees) as floats, each finite and below 180° in magnitude."""
+    try:
+        fields = [float(f) for f in fields_deg if not isinstance(f, (bool, str))]
+        ok = len(fields) == len(fields_deg) and all(abs(f) < 180.0 for f in fields)
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise SolasError(f"fields {fields_deg!r} must be a list of y field angles in degrees, each finite and below "
+                         "180 in magnitude")
+    return fields
 
 
 @functools.lru_cache(maxsize=256)
