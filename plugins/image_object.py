@@ -33,7 +33,7 @@ which is the field of light coming from there.
 beyond 90°. With w = −d the light's direction of travel, θ its angle from the axis and φ its azimuth,
 the image-plane point (in units where the width spans ±P(fov_deg)) is "rectilinear" tan θ (cos φ,
 sin φ) (w_z > 0 only; the default), "equidistant" θ (cos φ, sin φ) (the polar fields of wide lenses,
-`Lens.polar_field`: field (x, y) deg sits at (x, y) in radians), "equisolid" 2 sin(θ/2) (cos φ,
+`fields.PolarField`: field (x, y) deg sits at (x, y) in radians), "equisolid" 2 sin(θ/2) (cos φ,
 sin φ) (equal area), or "equirectangular" (longitude atan2(w_x, w_z), latitude asin(w_y)), an
 environment map (`plane_point`, and its inverse `plane_direction`).
 

@@ -86,7 +86,7 @@ class LensSensor(LensFilm):
                          f"the integrators {', '.join(INTEGRATORS)} or solas-mi's render loop")
         self.fov_deg = float(props.get("fov_deg", self.lens.field_deg))
         # a lens of polar fields (a fisheye) has no pinhole image: its units are those of the paraxial camera
-        self.focal_mm = paraxial(self.lens).efl_mm if self.lens.polar_field else pinhole_focal_mm(self.lens, self.fov_deg)
+        self.focal_mm = pinhole_focal_mm(self.lens, self.fov_deg) if self.lens.field_type.pinhole else paraxial(self.lens).efl_mm
         self.norm = 1.0 / ideal_irradiance(self.lens, self.focal_mm)
         heights, radial, tangential = image_scales(self.lens, self.half_diagonal_mm, self.lens.primary_wavelength)
         self.scale_step = float(heights[1] - heights[0]) if heights[-1] > 0 else 1.0

@@ -33,7 +33,8 @@ def run_lens_info(args) -> int:
         p["real_chief_ray_image_height_mm"] = real.image_xy[:, 1].tolist()
         rows.append(p)
     info = {"lens": lens.name, "hash": lens.hash, "source": lens.source, "stop_surface": lens.stop_index + 1,
-            "image_z_mm": lens.image_z, "image_diameter_mm": lens.image_diameter, "per_wavelength": rows}
+            "image_z_mm": lens.image_z, "image_diameter_mm": lens.image_diameter, "field_type": lens.field_type.name,
+            "per_wavelength": rows}
     table = None
     if args.fields or lens.field_deg > 0:  # the given fields, else 0 … the lens's half field
         table = distortion(lens, sorted({abs(f) for f in fields} | {0.0}) if args.fields else None)
@@ -43,6 +44,7 @@ def run_lens_info(args) -> int:
         return 0
     print(f"{lens.name}  ({lens.description})  hash {lens.hash}")
     print(f"stop: surface {lens.stop_index + 1}; image plane z = {lens.image_z:.6f} mm, diameter {lens.image_diameter:g} mm")
+    print(f"fields: {lens.field_type.description}")
     print(f"{'quantity':36s}" + "".join(f"{w:>12g} nm" for w in wavelengths))
     for key, label in _ROWS:
         print(f"{label:36s}" + "".join(f"{r[key]:15.6f}" for r in rows))

@@ -37,7 +37,7 @@ def reversed_lens(lens: Lens) -> Lens:
         rev.append(Surface(s[i].label, -s[i].radius, thickness, s[i].diameter, materials[i], before[i], s[i].stop,
                            s[i].conic, tuple(-a for a in s[i].aspheric)))
     return replace(lens, name=lens.name + " (reversed)", surfaces=tuple(rev), object_distance=s[-1].thickness,
-                   object_glass=s[-1].glass, memo={})
+                   object_glass=s[-1].glass)
 
 
 @dataclass(frozen=True)
@@ -85,67 +85,96 @@ def pupil_bounds(lens: Lens, max_radius_mm: float, wavelengths_nm=None, radii: i
     a disc and a ring) and bisection the rim beyond it, to 1e-9 mm. The bound is the box of the rim
     points, widened by the most a convex rim can bulge between neighbouring directions."""
     rev = reversed_lens(lens)
-    last = lens.surfaces[-1]
-    # a ray leaves through a point of the last surface's clear aperture; seen from a film point at radius
-    # r, thickness T below the vertex plane, a point at height ρ and sag z projects onto that plane at
-    # r + T/(T − z)·(ρ − r): within ρ of the axis for z = 0 and within s·ρ + |1 − s|·r at the rim,
-    # s = T/(T − sag) (> 1 for a rim bent toward the film, < 1 for one bent away, a ball lens's)
-    rho, sag = last.semi_diameter, float(last.sag(last.semi_diameter))
-    s_rim = last.thickness / max(last.thickness - sag, 1e-9)
-    reach = 1.05 * max(rho, s_rim * rho + abs(1.0 - s_rim) * max_radius_mm)
+    reach = _reach(lens, max_radius_mm)
     step = 2.0 * reach / coarse
     g = -reach + (np.arange(coarse) + 0.5) * step
-    gx, gy = (a.ravel() for a in np.meshgrid(g, g))
+    grid = tuple(a.ravel() for a in np.meshgrid(g, g))
     radius = np.linspace(0.0, max_radius_mm, radii) * (1.0 + 1.0 / radii)  # the last row lies past the corner
     phi = 2.0 * np.pi * np.arange(directions) / directions
-    lo_u = np.full(radii, np.inf)
-    hi_u, lo_v, hi_v = -lo_u, lo_u.copy(), -lo_u
-    elliptical = np.ones(radii, dtype=bool)
     seen = np.zeros(radii, dtype=bool)
     rim_u, rim_v = [], []
     for w in (lens.wavelengths_nm if wavelengths_nm is None else wavelengths_nm):
-        ok = passes(rev, np.repeat(radius, len(gx)), 0.0, np.tile(gx, radii), np.tile(gy, radii), w).reshape(radii, -1)
-        count = np.maximum(ok.sum(axis=1), 1)
-        cu, cv = (ok * gx).sum(axis=1) / count, (ok * gy).sum(axis=1) / count
-        empty = np.flatnonzero(~ok.any(axis=1))
-        if len(empty):  # a sliver of pupil (heavy vignetting at the field's edge) can fall between coarse points
-            fu, fv = (a.ravel() for a in np.meshgrid(*2 * [-reach + (np.arange(FINE) + 0.5) * (2.0 * reach / FINE)]))
-            fine = passes(rev, np.repeat(radius[empty], len(fu)), 0.0, np.tile(fu, len(empty)), np.tile(fv, len(empty)),
-                          w).reshape(len(empty), -1)
-            n = np.maximum(fine.sum(axis=1), 1)
-            cu[empty], cv[empty] = (fine * fu).sum(axis=1) / n, (fine * fv).sum(axis=1) / n
-            ok[empty, 0] = fine.any(axis=1)  # marks the rows seen
-        seen |= ok.any(axis=1)
-        r_all = np.repeat(radius, directions)
-        cos, sin = np.tile(np.cos(phi), radii), np.tile(np.sin(phi), radii)
-        # march in from beyond the aperture to the outermost passing sample of each direction, so a pupil
-        # that is not convex (a disc and a ring, a crescent) keeps its outer rim; then bisect to it
-        t = np.linspace(0.0, 3.0 * reach, MARCH + 1)
-        su = np.repeat(cu, directions)[:, None] + t * cos[:, None]
-        sv = np.repeat(cv, directions)[:, None] + t * sin[:, None]
-        hit = passes(rev, np.repeat(r_all, MARCH + 1), 0.0, su.ravel(), sv.ravel(), w).reshape(radii, directions, -1)
-        last_in = np.where(hit.any(axis=-1), MARCH - np.argmax(hit[..., ::-1], axis=-1), 0)
-        inside, outside = t[np.minimum(last_in, MARCH)], t[np.minimum(last_in + 1, MARCH)]
-        for _ in range(42):
-            mid = 0.5 * (inside + outside).ravel()
-            p = passes(rev, r_all, 0.0, np.repeat(cu, directions) + mid * cos, np.repeat(cv, directions) + mid * sin, w)
-            p = p.reshape(radii, directions) & ok.any(axis=1)[:, None]
-            inside, outside = np.where(p, mid.reshape(radii, -1), inside), np.where(p, outside, mid.reshape(radii, -1))
-        u = cu[:, None] + inside * np.cos(phi)
-        v = cv[:, None] + inside * np.sin(phi)
+        cu, cv, lit = _centroids(rev, radius, grid, reach, w)
+        seen |= lit
+        u, v = _rim(rev, radius, cu, cv, lit, phi, reach, w)
         rim_u.append(u)
         rim_v.append(v)
-        lo_u, hi_u = np.minimum(lo_u, u.min(axis=1)), np.maximum(hi_u, u.max(axis=1))
-        lo_v, hi_v = np.minimum(lo_v, v.min(axis=1)), np.maximum(hi_v, v.max(axis=1))
+    bounds, elliptical = _box(np.array(rim_u), np.array(rim_v), directions)
+    bounds[~seen] = 0.0  # nothing reaches these film radii
+    return PupilBounds(radius, bounds, elliptical & seen, float(lens.vertex_z[-1]))
+
+
+def _reach(lens: Lens, max_radius_mm: float) -> float:
+    """Half width (mm) of a square on the last vertex plane that holds every ray leaving the lens toward
+    film radii up to max_radius_mm. A ray leaves through a point of the last surface's clear aperture;
+    seen from a film point at radius r, thickness T below the vertex plane, a point at height ρ and
+    sag z projects onto that plane at r + T/(T − z)·(ρ − r): within ρ of the axis for z = 0 and within
+    s·ρ + |1 − s|·r at the rim, s = T/(T − sag) (> 1 for a rim bent toward the film, < 1 for one bent
+    away, a ball lens's)."""
+    last = lens.surfaces[-1]
+    rho, sag = last.semi_diameter, float(last.sag(last.semi_diameter))
+    s_rim = last.thickness / max(last.thickness - sag, 1e-9)
+    return 1.05 * max(rho, s_rim * rho + abs(1.0 - s_rim) * max_radius_mm)
+
+
+def _centroids(rev: Lens, radius: np.ndarray, grid: tuple[np.ndarray, np.ndarray], reach: float, w: float
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per film radius, the centroid (u, v) (mm) of the passing points of the coarse `grid`, and
+    whether any ray passes (a row the coarse grid misses is searched on a FINE grid)."""
+    gx, gy = grid
+    radii = len(radius)
+    ok = passes(rev, np.repeat(radius, len(gx)), 0.0, np.tile(gx, radii), np.tile(gy, radii), w).reshape(radii, -1)
+    count = np.maximum(ok.sum(axis=1), 1)
+    cu, cv = (ok * gx).sum(axis=1) / count, (ok * gy).sum(axis=1) / count
+    lit = ok.any(axis=1)
+    empty = np.flatnonzero(~lit)
+    if len(empty):  # a sliver of pupil (heavy vignetting at the field's edge) can fall between coarse points
+        fu, fv = (a.ravel() for a in np.meshgrid(*2 * [-reach + (np.arange(FINE) + 0.5) * (2.0 * reach / FINE)]))
+        fine = passes(rev, np.repeat(radius[empty], len(fu)), 0.0, np.tile(fu, len(empty)), np.tile(fv, len(empty)),
+                      w).reshape(len(empty), -1)
+        n = np.maximum(fine.sum(axis=1), 1)
+        cu[empty], cv[empty] = (fine * fu).sum(axis=1) / n, (fine * fv).sum(axis=1) / n
+        lit[empty] = fine.any(axis=1)
+    return cu, cv, lit
+
+
+def _rim(rev: Lens, radius: np.ndarray, cu: np.ndarray, cv: np.ndarray, lit: np.ndarray, phi: np.ndarray,
+         reach: float, w: float) -> tuple[np.ndarray, np.ndarray]:
+    """Rim points (u, v) (radii, directions) (mm) of the pupil along directions `phi` from its centroid
+    (cu, cv): a march in from beyond the aperture to the outermost passing sample of each direction, so
+    a pupil that is not convex (a disc and a ring, a crescent) keeps its outer rim; then bisection to it."""
+    radii, directions = len(radius), len(phi)
+    r_all = np.repeat(radius, directions)
+    cos, sin = np.tile(np.cos(phi), radii), np.tile(np.sin(phi), radii)
+    t = np.linspace(0.0, 3.0 * reach, MARCH + 1)
+    su = np.repeat(cu, directions)[:, None] + t * cos[:, None]
+    sv = np.repeat(cv, directions)[:, None] + t * sin[:, None]
+    hit = passes(rev, np.repeat(r_all, MARCH + 1), 0.0, su.ravel(), sv.ravel(), w).reshape(radii, directions, -1)
+    last_in = np.where(hit.any(axis=-1), MARCH - np.argmax(hit[..., ::-1], axis=-1), 0)
+    inside, outside = t[np.minimum(last_in, MARCH)], t[np.minimum(last_in + 1, MARCH)]
+    for _ in range(42):
+        mid = 0.5 * (inside + outside).ravel()
+        p = passes(rev, r_all, 0.0, np.repeat(cu, directions) + mid * cos, np.repeat(cv, directions) + mid * sin, w)
+        p = p.reshape(radii, directions) & lit[:, None]
+        inside, outside = np.where(p, mid.reshape(radii, -1), inside), np.where(p, outside, mid.reshape(radii, -1))
+    return cu[:, None] + inside * np.cos(phi), cv[:, None] + inside * np.sin(phi)
+
+
+def _box(rim_u: np.ndarray, rim_v: np.ndarray, directions: int) -> tuple[np.ndarray, np.ndarray]:
+    """Bounds (radii, 4) u0, u1, v0, v1 (mm) of the rim points (wavelengths, radii, directions), widened
+    by the most a convex rim can bulge between two of them, and whether the box's inscribed ellipse
+    holds every rim point."""
+    lo_u, hi_u = rim_u.min(axis=(0, 2)), rim_u.max(axis=(0, 2))
+    lo_v, hi_v = rim_v.min(axis=(0, 2)), rim_v.max(axis=(0, 2))
     # a convex rim between two rim points Δφ apart bulges at most ρ(1 − cos(Δφ/2)) beyond their chord
     size = np.maximum(hi_u - lo_u, hi_v - lo_v)
     margin = size * (1.0 - np.cos(np.pi / directions)) + 1e-6
     bounds = np.stack([lo_u - margin, hi_u + margin, lo_v - margin, hi_v + margin], axis=-1)
-    bounds[~seen] = 0.0  # nothing reaches these film radii
     cu, cv = 0.5 * (bounds[:, 0] + bounds[:, 1]), 0.5 * (bounds[:, 2] + bounds[:, 3])
     au, av = 0.5 * (bounds[:, 1] - bounds[:, 0]), 0.5 * (bounds[:, 3] - bounds[:, 2])
+    elliptical = np.ones(len(bounds), dtype=bool)
     for u, v in zip(rim_u, rim_v):
         e = ((u - cu[:, None]) / np.maximum(au - margin, 1e-12)[:, None]) ** 2 + \
             ((v - cv[:, None]) / np.maximum(av - margin, 1e-12)[:, None]) ** 2
         elliptical &= (e <= 1.0 + 1e-9).all(axis=1)
-    return PupilBounds(radius, bounds, elliptical & seen, float(lens.vertex_z[-1]))
+    return bounds, elliptical

@@ -6,19 +6,22 @@ focus offset (an image plane set inside paraxial focus, say) is kept. Lengths in
 from __future__ import annotations
 
 import math
+import numbers
 from dataclasses import replace
 
 from ..errors import SolasError
-from .lens import Lens
+from .lens import Lens, check_lens
 from .paraxial import paraxial
 
 
 def focused(lens: Lens, distance_mm: float) -> Lens:
     """`lens` with its object `distance_mm` in front of surface 1 (math.inf: at infinity) and its
     image plane (the last surface's thickness) moved to keep that object in focus."""
-    if not (isinstance(distance_mm, (int, float)) and distance_mm > 0 and not math.isnan(distance_mm)):
+    check_lens(lens)
+    if (not isinstance(distance_mm, numbers.Real) or isinstance(distance_mm, bool) or math.isnan(distance_mm)
+            or not distance_mm > 0):
         raise SolasError(f"focus distance {distance_mm!r} mm must be a positive number (math.inf: at infinity)")
-    target = replace(lens, object_distance=float(distance_mm), memo={})
+    target = replace(lens, object_distance=float(distance_mm))
     shift = paraxial(target).focus_z_mm - paraxial(lens).focus_z_mm
     last = lens.surfaces[-1]
     thickness = last.thickness + shift

@@ -83,7 +83,7 @@ def relative_illumination(lens: Lens, field_deg: np.ndarray, wavelength_nm: floa
     lens.check_wavelength(wavelength_nm)
     fields = np.vstack([np.zeros((1, 2)), field_deg])
     transmission = pupil_function(lens, fields, np.full(len(fields), wavelength_nm), pupil_samples).transmission
-    if lens.polar_field:  # fields to 90° and beyond: per solid angle, sinθ dθ dφ onto h dh dφ
+    if lens.field_type.sideways:  # fields to 90° and beyond: per solid angle, sinθ dθ dφ onto h dh dφ
         scale = _polar_scale(lens, fields, wavelength_nm)
         return transmission[1:] / transmission[0] * scale[0] / scale[1:]
     tan = np.tan(np.radians(field_deg))

@@ -11,7 +11,8 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-from dataclasses import dataclass, field
+import os
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
@@ -23,10 +24,9 @@ from ..imageio import write_text
 from ..resources import resource_dir
 from . import glass as glass_mod
 from . import lens_toml, pbrt_dat, zemax
+from .fields import FieldType, field_type_for
 
 LENS_DIR = "lenses"
-# Lenses whose field reaches this (degrees) take polar fields: see `Lens.polar_field`
-POLAR_FIELD_DEG = 89.0
 # Lens file formats besides our TOML: text → lens-file dictionary, and Lens → text
 READERS = {".zmx": zemax.read_spec, ".dat": pbrt_dat.read_spec}
 WRITERS = {".toml": lens_toml.dumps, ".zmx": zemax.dumps, ".dat": pbrt_dat.dumps}
@@ -37,6 +37,21 @@ KEYS = {
     "object": ("distance", "material"),
     "image": ("diameter",),
 }
+
+
+def _shipped_dir() -> Path:
+    return resource_dir("scenes") / LENS_DIR
+
+
+def shipped_lenses() -> list[str]:
+    """Names of the lenses that ship with solas-mi (`Lens.load` takes them)."""
+    return sorted(p.stem.replace("_", "-") for p in _shipped_dir().glob("*.toml"))
+
+
+def check_lens(lens) -> None:
+    """SolasError unless `lens` is a Lens (analyses take `Lens.load(name or path)`)."""
+    if not isinstance(lens, Lens):
+        raise SolasError(f"lens {lens!r} must be a Lens: Lens.load(a shipped name or a lens file)")
 
 
 def sag(r2, curvature: float, conic: float = 0.0, aspheric: tuple[float, ...] = (), sqrt=np.sqrt, maximum=np.maximum):
@@ -90,22 +105,6 @@ def _table(spec: dict, key: str, where: str) -> dict:
     return value
 
 
-def check_field(field_deg, polar: bool = False) -> tuple[float, float]:
-    """A field angle (x, y) in degrees as two floats, each finite and within ±89°; a polar field
-    (`Lens.polar_field`) instead has a polar angle hypot(x, y) below 180°."""
-    try:
-        fx, fy = (float(v) for v in field_deg)
-    except (TypeError, ValueError):
-        raise SolasError(f"field {field_deg!r} must be two angles (x, y) in degrees") from None
-    if polar and math.isfinite(fx) and math.isfinite(fy):
-        if math.hypot(fx, fy) >= 180:
-            raise SolasError(f"field ({fx:g}, {fy:g}) deg: the polar angle hypot(x, y) must be below 180 deg")
-        return fx, fy
-    if not (math.isfinite(fx) and math.isfinite(fy)) or abs(fx) >= 89 or abs(fy) >= 89:
-        raise SolasError(f"field ({fx:g}, {fy:g}) deg: each angle must be finite and below 89 deg in magnitude")
-    return fx, fy
-
-
 @dataclass(frozen=True)
 class Surface:
     """One sequential surface; `material` fills the space after it, `thickness` reaches the next."""
@@ -154,19 +153,27 @@ class Lens:
     field_deg: float = 0.0
     description: str = ""
     source: str = ""
-    # results derived from the (immutable) prescription, memoised by the analyses that compute them
-    memo: dict = field(default_factory=dict, repr=False, compare=False)
 
     # ------------------------------------------------------------------ loading
     @classmethod
     def load(cls, name_or_path: str | Path) -> "Lens":
-        """A lens by shipped name (e.g. "solas-doublet") or by path to a TOML lens file."""
-        path = Path(name_or_path)
-        if not path.suffix:
-            path = resource_dir("scenes") / LENS_DIR / (str(name_or_path).replace("-", "_") + ".toml")
+        """A lens by shipped name (e.g. "solas-doublet") or by path to a lens file (.toml, .zmx, .dat):
+        a name holding a path separator or an extension is a path."""
+        if not isinstance(name_or_path, (str, os.PathLike)):
+            raise SolasError(f"lens {name_or_path!r} must be a shipped lens name ({', '.join(shipped_lenses())}) "
+                             f"or a path to a lens file ({', '.join(WRITERS)})")
+        given = os.fspath(name_or_path)
+        path = Path(given)
+        if not path.suffix and not any(sep and sep in given for sep in (os.sep, os.altsep, "/")):
+            path = _shipped_dir() / (given.replace("-", "_") + ".toml")
             if not path.is_file():
-                shipped = sorted(p.stem.replace("_", "-") for p in (path.parent).glob("*.toml"))
-                raise SolasError(f"unknown lens {str(name_or_path)!r}; shipped lenses: {', '.join(shipped)}, or a path to a lens file (.toml, .zmx, .dat)")
+                raise SolasError(f"unknown lens {given!r}; shipped lenses: {', '.join(shipped_lenses())}, or a path "
+                                 f"to a lens file ({', '.join(WRITERS)})")
+        if path.suffix.lower() not in WRITERS:
+            what = f"unknown extension {path.suffix!r}" if path.suffix else "no lens extension"
+            raise SolasError(f"lens file {given!r} has {what}; allowed: {', '.join(WRITERS)}")
+        if path.is_dir():
+            raise SolasError(f"lens file {given!r} is a folder, not a lens file")
         if not path.is_file():
             raise SolasError(f"lens file {str(path)!r} does not exist")
         if path.suffix.lower() in READERS:
@@ -182,6 +189,8 @@ class Lens:
                 spec = tomllib.load(f)
         except tomllib.TOMLDecodeError as exc:
             raise SolasError(f"lens file {path}: not valid TOML: {exc}") from exc
+        except OSError as exc:
+            raise SolasError(f"lens file {path}: cannot be read: {exc}") from None
         except UnicodeDecodeError:
             raise SolasError(f"lens file {path} is not UTF-8 text; a lens file is TOML text") from None
         return cls.from_dict(spec, source=str(path))
@@ -288,12 +297,7 @@ class Lens:
                 raise SolasError(f"{ident}: thickness {s.thickness:g} mm is negative; thicknesses must be >= 0")
             if s.glass is not glass_mod.AIR and s.thickness == 0:
                 raise SolasError(f"{ident}: thickness 0 mm inside glass {s.material}; glass needs a positive thickness")
-        first = self.surfaces[0]
-        if self.polar_field and not first.is_sphere:
-            raise SolasError(f"{where}: surface 1 ({first.label}) is a conic or asphere; a lens of polar fields "
-                             f"(field_deg {self.field_deg:g} >= {POLAR_FIELD_DEG:g}) takes rays from the side of its "
-                             "first surface, which solas-mi intersects as a whole sphere only: make surface 1 "
-                             f"spherical or flat, or set field_deg below {POLAR_FIELD_DEG:g}")
+        self.field_type.check_lens(self, where)
         last = self.surfaces[-1]
         if last.thickness <= 0:
             raise SolasError(f"{where}: surface {len(self.surfaces)} ({last.label}): distance to the image "
@@ -324,12 +328,10 @@ class Lens:
         return float(self.vertex_z[-1] + self.surfaces[-1].thickness)
 
     @property
-    def polar_field(self) -> bool:
-        """Whether fields (x, y) in degrees are polar: the incoming direction has polar angle
-        θ = hypot(x, y) from the axis and azimuth atan2(y, x), which reaches 90° and beyond. True for
-        lenses whose `field_deg` is at least POLAR_FIELD_DEG; the others take field tangents
-        (direction ∝ (tan x, tan y, 1)). On the x and y axes both forms name the same direction."""
-        return self.field_deg >= POLAR_FIELD_DEG
+    def field_type(self) -> FieldType:
+        """What a field (x, y) in degrees means for this lens (`fields`): angle fields (tangents), or
+        polar fields for a lens whose `field_deg` reaches `fields.POLAR_FIELD_DEG`."""
+        return field_type_for(self.field_deg)
 
     @property
     def at_infinity(self) -> bool:

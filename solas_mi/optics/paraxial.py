@@ -7,13 +7,14 @@ McGraw-Hill, 2008, ch. 2–3.
 """
 from __future__ import annotations
 
+import functools
 import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
 
 from ..errors import SolasError
-from .lens import Lens
+from .lens import Lens, check_lens
 
 
 @dataclass(frozen=True)
@@ -70,77 +71,51 @@ def _object_ray(lens: Lens, wavelength_nm: float, y_obj: float, u0: float) -> tu
 def paraxial(lens: Lens, wavelength_nm: float | None = None, fields_deg: list[float] | None = None) -> Paraxial:
     """Paraxial data (EFL, pupils, f/#, image offset, chief rays) of `lens` at `wavelength_nm`
     (default: its primary wavelength), with chief rays at `fields_deg` (default: 0 and the lens's
-    field). Results for the default fields are memoised on the lens."""
+    field). Results for the default fields are memoised by the lens's content (every field of the
+    frozen `Lens` takes part in its equality and hash), so a changed lens always gets fresh data."""
+    check_lens(lens)
     wl = lens.check_wavelength(wavelength_nm if wavelength_nm is not None else lens.primary_wavelength)
     if fields_deg is not None:
-        return _paraxial(lens, wl, fields_deg)
-    memo = lens.memo.setdefault("paraxial", {})
-    if wl not in memo:
-        memo[wl] = _paraxial(lens, wl)
-    return memo[wl]
+        return _paraxial(lens, wl, _check_fields(fields_deg))
+    return _memoised(lens, wl)
+
+
+def _check_fields(fields_deg) -> list[float]:
+    """y field angles (degrees) as floats, each finite and below 180° in magnitude."""
+    try:
+        fields = [float(f) for f in fields_deg if not isinstance(f, (bool, str))]
+        ok = len(fields) == len(fields_deg) and all(abs(f) < 180.0 for f in fields)
+    except (TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise SolasError(f"fields {fields_deg!r} must be a list of y field angles in degrees, each finite and below "
+                         "180 in magnitude")
+    return fields
+
+
+@functools.lru_cache(maxsize=256)
+def _memoised(lens: Lens, wavelength_nm: float) -> Paraxial:
+    return _paraxial(lens, wavelength_nm)
 
 
 def _paraxial(lens: Lens, wavelength_nm: float, fields_deg: list[float] | None = None) -> Paraxial:
     wavelength_nm = lens.check_wavelength(wavelength_nm)
     n = lens.indices(wavelength_nm)
     z = lens.vertex_z
-    s = lens.stop_index
     last = len(lens.surfaces) - 1
-    r_stop = lens.surfaces[s].semi_diameter
 
     # Two base rays at surface 1: a = (y=1, u=0), b = (y=0, u=1); every ray is a mix of them.
     ya, ua = ynu_trace(lens, wavelength_nm, 1.0, 0.0)
     yb, ub = ynu_trace(lens, wavelength_nm, 0.0, 1.0)
     efl = -1.0 / (n[-1] * ua[-1]) if ua[-1] != 0 else math.inf  # 1/power: n'u' = −y1·power
-
-    # Entrance pupil: the object-space chief ray (slope 1) crosses the axis where y_stop = 0.
-    y1_chief = -yb[s] / ya[s]  # height at surface 1 of the slope-1 ray through the stop centre
-    ep_z = z[0] - y1_chief  # y(z) = y1 + (z − z1) = 0
-    ep_radius = r_stop / abs(ya[s])  # parallel rays: height at the pupil equals height at surface 1
-
-    # Exit pupil: the image of the stop by the surfaces after it.
-    if s == last:
-        xp_z, xp_radius = z[s], r_stop
-    else:
-        # chief ray leaves the stop centre with slope 1; rim ray leaves the stop edge with slope 0
-        yc, uc = _from_stop(lens, wavelength_nm, 0.0, 1.0)
-        yr, ur = _from_stop(lens, wavelength_nm, r_stop, 0.0)
-        xp_z = z[last] - yc[last] / uc[last]
-        xp_radius = abs(yr[last] + ur[last] * (xp_z - z[last]))
-
-    # Marginal ray from the axial object point through the stop edge.
-    if lens.at_infinity:
-        ym, um = ya * (r_stop / ya[s]), ua * (r_stop / ya[s])
-        obj_z = -math.inf
-    else:
-        d = lens.object_distance
-        # ray from the axial object point with slope 1 → height at stop; scale to the stop edge
-        y0, u0 = _object_ray(lens, wavelength_nm, 0.0, 1.0)
-        scale = r_stop / y0[s]
-        ym, um = y0 * scale, u0 * scale
-        obj_z = -d
-    if um[last] == 0:
-        raise SolasError(f"lens {lens.name} forms no image at {wavelength_nm:g} nm: rays from an object point leave "
-                         "it parallel (no optical power, or the object in the front focal plane)")
+    ep_z, ep_radius, xp_z, xp_radius = _pupils(lens, wavelength_nm, ya, yb)
+    ym, um, obj_z = _marginal_ray(lens, wavelength_nm, ya, ua)
     focus_z = z[last] - ym[last] / um[last]
     refracting = [k for k in range(last + 1) if n[k + 1] != n[k]]
     bfd = focus_z - z[refracting[-1] if refracting else last]
     image_z = lens.image_z
-
     fields = list(fields_deg) if fields_deg is not None else [0.0, lens.field_deg]
-    heights = []
-    for f in fields:
-        if abs(f) >= 90.0:  # a polar field at or beyond 90°: its paraxial image lies at infinity
-            heights.append(math.copysign(math.inf, f))
-            continue
-        slope = math.tan(math.radians(f))
-        if lens.at_infinity:
-            y, u = ynu_trace(lens, wavelength_nm, slope * (z[0] - ep_z), slope)
-        else:
-            # chief ray: from the object point toward the entrance pupil centre
-            y_obj = -slope * (ep_z - obj_z)
-            y, u = _object_ray(lens, wavelength_nm, y_obj, slope)
-        heights.append(float(y[last] + u[last] * (image_z - z[last])))
+    heights = [_chief_height(lens, wavelength_nm, f, ep_z, obj_z) for f in fields]
 
     epd = 2.0 * ep_radius
     return Paraxial(
@@ -160,6 +135,65 @@ def _paraxial(lens: Lens, wavelength_nm: float, fields_deg: list[float] | None =
         fields_deg=tuple(float(f) for f in fields),
         chief_ray_image_height_mm=tuple(heights),
     )
+
+
+def _pupils(lens: Lens, wavelength_nm: float, ya: np.ndarray, yb: np.ndarray) -> tuple[float, float, float, float]:
+    """Entrance pupil z and radius, exit pupil z and radius (mm), from the heights of the base rays
+    a = (y=1, u=0) and b = (y=0, u=1) at surface 1."""
+    z = lens.vertex_z
+    s = lens.stop_index
+    last = len(lens.surfaces) - 1
+    r_stop = lens.surfaces[s].semi_diameter
+    # Entrance pupil: the object-space chief ray (slope 1) crosses the axis where y_stop = 0.
+    y1_chief = -yb[s] / ya[s]  # height at surface 1 of the slope-1 ray through the stop centre
+    ep_z = z[0] - y1_chief  # y(z) = y1 + (z − z1) = 0
+    ep_radius = r_stop / abs(ya[s])  # parallel rays: height at the pupil equals height at surface 1
+    # Exit pupil: the image of the stop by the surfaces after it.
+    if s == last:
+        return ep_z, ep_radius, z[s], r_stop
+    # chief ray leaves the stop centre with slope 1; rim ray leaves the stop edge with slope 0
+    yc, uc = _from_stop(lens, wavelength_nm, 0.0, 1.0)
+    yr, ur = _from_stop(lens, wavelength_nm, r_stop, 0.0)
+    xp_z = z[last] - yc[last] / uc[last]
+    return ep_z, ep_radius, xp_z, abs(yr[last] + ur[last] * (xp_z - z[last]))
+
+
+def _marginal_ray(lens: Lens, wavelength_nm: float, ya: np.ndarray, ua: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray, float]:
+    """Heights and slopes of the marginal ray (from the axial object point through the stop edge), and
+    the object's z (mm); SolasError when it leaves the lens parallel (no image)."""
+    s = lens.stop_index
+    r_stop = lens.surfaces[s].semi_diameter
+    if lens.at_infinity:
+        ym, um = ya * (r_stop / ya[s]), ua * (r_stop / ya[s])
+        obj_z = -math.inf
+    else:
+        # ray from the axial object point with slope 1 → height at stop; scale to the stop edge
+        y0, u0 = _object_ray(lens, wavelength_nm, 0.0, 1.0)
+        scale = r_stop / y0[s]
+        ym, um = y0 * scale, u0 * scale
+        obj_z = -lens.object_distance
+    if um[-1] == 0:
+        raise SolasError(f"lens {lens.name} forms no image at {wavelength_nm:g} nm: rays from an object point leave "
+                         "it parallel (no optical power, or the object in the front focal plane)")
+    return ym, um, obj_z
+
+
+def _chief_height(lens: Lens, wavelength_nm: float, field_deg: float, ep_z: float, obj_z: float) -> float:
+    """Image-plane height (mm) of the paraxial chief ray of field `field_deg` (toward the entrance pupil
+    centre at `ep_z`; from the object point at `obj_z` for a finite object)."""
+    if abs(field_deg) >= 90.0:  # a polar field at or beyond 90°: its paraxial image lies at infinity
+        return math.copysign(math.inf, field_deg)
+    z = lens.vertex_z
+    last = len(lens.surfaces) - 1
+    slope = math.tan(math.radians(field_deg))
+    if lens.at_infinity:
+        y, u = ynu_trace(lens, wavelength_nm, slope * (z[0] - ep_z), slope)
+    else:
+        # chief ray: from the object point toward the entrance pupil centre
+        y_obj = -slope * (ep_z - obj_z)
+        y, u = _object_ray(lens, wavelength_nm, y_obj, slope)
+    return float(y[last] + u[last] * (lens.image_z - z[last]))
 
 
 def _from_stop(lens: Lens, wavelength_nm: float, y_stop: float, u_after: float) -> tuple[np.ndarray, np.ndarray]:

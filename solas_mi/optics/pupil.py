@@ -36,13 +36,9 @@ class Bundle:
         self.n_fields = len(field_deg)
         self.per_field = per_field
         self.index = dr.arange(T.UInt32, self.n_fields * per_field) // per_field
-        if lens.polar_field:  # direction-based fields, up to and beyond 90°
-            d = T.polar_directions(field_deg)
-            self.direction = tuple(T.gather(d[:, i], self.index) for i in range(3))
-        else:
-            self.direction = None
-            tan = T.field_tangents(field_deg)
-            self.tan_x, self.tan_y = T.gather(tan[:, 0], self.index), T.gather(tan[:, 1], self.index)
+        # per ray: field tangents (x, y), or the unit direction (x, y, z) of polar fields
+        incoming = lens.field_type.incoming(field_deg)
+        self.incoming = tuple(T.gather(incoming[:, i], self.index) for i in range(incoming.shape[1]))
         self.wavelength_um = T.gather(np.asarray(wavelength_nm) / 1000.0, self.index)
         pts = T.object_points(lens, field_deg)
         self.object_point = None if pts is None else (T.gather(pts[:, 0], self.index), T.gather(pts[:, 1], self.index))
@@ -55,9 +51,9 @@ class Bundle:
         return T.gather(values, self.index)
 
     def trace(self, ex: T.F, ey: T.F) -> T.Traced:
-        if self.direction is not None:
-            return T.trace(self.lens, T.launch_direction(self.lens, *self.direction, ex, ey), self.wavelength_um)
-        rays = T.launch(self.lens, self.tan_x, self.tan_y, ex, ey, self.object_point)
+        if self.lens.field_type.sideways:  # directions up to and beyond 90°, object at infinity
+            return T.trace(self.lens, T.launch_direction(self.lens, *self.incoming, ex, ey), self.wavelength_um)
+        rays = T.launch(self.lens, *self.incoming, ex, ey, self.object_point)
         return T.trace(self.lens, rays, self.wavelength_um)
 
 
@@ -161,7 +157,7 @@ def chief_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> 
     field_deg = np.atleast_2d(np.asarray(field_deg, dtype=np.float64))
     wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(field_deg),))
     b = Bundle(lens, field_deg, wavelength_nm, 1)
-    e0 = _continued_aim(lens, field_deg, wavelength_nm) if lens.polar_field else _paraxial_aim(lens, field_deg)
+    e0 = _continued_aim(lens, field_deg, wavelength_nm) if lens.field_type.sideways else _paraxial_aim(lens, field_deg)
     zero = dr.zeros(T.F, b.n_fields)
     ex, ey, tr, conv = aim(b, _stop_target, T.F(e0[:, 0]), T.F(e0[:, 1]), zero, zero)
     px, py, _ = T.to_plane(tr, lens.image_z)
@@ -199,7 +195,7 @@ def stop_rim(rim: Bundle, chief: ChiefRays, accept=None) -> tuple[np.ndarray, np
     def at(scale: np.ndarray):
         gx, gy = T.F(r_stop * scale * np.cos(phi)), T.F(r_stop * scale * np.sin(phi))
         ex, ey = rim.per_ray(chief.entrance[:, 0]) + gx * ratio, rim.per_ray(chief.entrance[:, 1]) + gy * ratio
-        if lens.polar_field:  # wide fields: the pupil is squeezed and tilted; grow the aim out from the chief ray
+        if lens.field_type.sideways:  # wide fields: the pupil is squeezed and tilted; grow the aim out from the chief ray
             ex, ey = rim.per_ray(chief.entrance[:, 0]), rim.per_ray(chief.entrance[:, 1])
             for k in range(1, RIM_STEPS):
                 ex, ey, _, _ = aim(rim, _stop_target, ex, ey, gx * (k / RIM_STEPS), gy * (k / RIM_STEPS))
@@ -280,59 +276,10 @@ def pupil_function(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray,
     nf = len(field_deg)
     wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (nf,)).copy()
     chief = chief_rays(lens, field_deg, wavelength_nm)
+    alpha, beta, affine = _pupil_grid(lens, field_deg, wavelength_nm, chief, samples)
+    opd, ok, clipped, sx, sy, ex, ey = _grid_rays(lens, field_deg, wavelength_nm, chief, alpha, beta, affine)
 
-    def sphere_target_for(b: Bundle):
-        cx, cy = b.per_ray(chief.image_xy[:, 0]), b.per_ray(chief.image_xy[:, 1])
-        radius = b.per_ray(chief.sphere_radius)
-        cz = lens.image_z
-
-        def target(tr: T.Traced):
-            x, y, z, opl, hit = T.to_sphere(tr, cx, cy, cz, radius)
-            return (x - cx) / radius, (y - cy) / radius, tr.ok & hit
-
-        return target
-
-    # 1. Rim of the stop → extent of the pupil in (α, β) and an affine entrance map.
-    rim = Bundle(lens, field_deg, wavelength_nm, RIM_RAYS)
-    rim_target = sphere_target_for(rim)
-    rex, rey, rtr, rok = stop_rim(rim, chief, accept=lambda tr: rim_target(tr)[2])
-    ra, rb = (a.reshape(nf, RIM_RAYS) for a in T.to_numpy(*rim_target(rtr)[:2]))
-    if not rok.any(axis=1).all():
-        bad = field_deg[~rok.any(axis=1)][0]
-        raise SolasError(f"no real ray reaches the stop's rim for field ({bad[0]:g}, {bad[1]:g}) deg; "
-                         "the lens is not usable there")
-    ca, cb = chief.sphere_point[:, 0], chief.sphere_point[:, 1]
-    alpha = np.empty((nf, samples))
-    beta = np.empty((nf, samples))
-    affine = np.empty((nf, 3, 2))
-    for f in range(nf):
-        m = rok[f]
-        a_rel, b_rel = ra[f, m] - ca[f], rb[f, m] - cb[f]
-        for grid, lo, hi in ((alpha, a_rel.min(), a_rel.max()), (beta, b_rel.min(), b_rel.max())):
-            half = 0.5 * (hi - lo) * (1.0 + 2.0 / samples) * 1.01
-            mid = 0.5 * (hi + lo)
-            grid[f] = mid + half * np.linspace(-1.0, 1.0, samples)
-        design = np.stack([np.ones(m.sum()), a_rel, b_rel], axis=1)
-        affine[f], *_ = np.linalg.lstsq(design, np.stack([rex[f, m], rey[f, m]], axis=1), rcond=None)
-
-    # 2. The grid: aim every ray at its (α, β).
-    per = samples * samples
-    g = Bundle(lens, field_deg, wavelength_nm, per)
-    ta = np.broadcast_to(alpha[:, None, :], (nf, samples, samples))
-    tb = np.broadcast_to(beta[:, :, None], (nf, samples, samples))
-    ex0 = affine[:, 0, 0, None, None] + affine[:, 1, 0, None, None] * ta + affine[:, 2, 0, None, None] * tb
-    ey0 = affine[:, 0, 1, None, None] + affine[:, 1, 1, None, None] * ta + affine[:, 2, 1, None, None] * tb
-    goal_a = T.F((ta + ca[:, None, None]).ravel())
-    goal_b = T.F((tb + cb[:, None, None]).ravel())
-    gex, gey, gtr, gconv = aim(g, sphere_target_for(g), T.F(ex0.ravel()), T.F(ey0.ravel()), goal_a, goal_b)
-    cx, cy = g.per_ray(chief.image_xy[:, 0]), g.per_ray(chief.image_xy[:, 1])
-    _, _, _, opl, hit = T.to_sphere(gtr, cx, cy, lens.image_z, g.per_ray(chief.sphere_radius))
-    shape = (nf, samples, samples)
-    opl, ok, clipped, sx, sy, ex, ey = (a.reshape(shape) for a in T.to_numpy(
-        opl, gconv & hit, gtr.clipped_by, gtr.stop_x, gtr.stop_y, gex, gey))
-    opd = opl - chief.opl[:, None, None]
-
-    # 3. Amplitude: power density × |∂e/∂(α,β)|, stop edge anti-aliased by the covered cell fraction.
+    # Amplitude: power density × |∂e/∂(α,β)|, stop edge anti-aliased by the covered cell fraction.
     r_stop = lens.surfaces[lens.stop_index].semi_diameter
     da = (alpha[:, 1] - alpha[:, 0])[:, None, None]
     db = (beta[:, 1] - beta[:, 0])[:, None, None]
@@ -356,3 +303,68 @@ def pupil_function(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray,
     opd = np.where(coverages > 0, opd, 0.0)
     return PupilFunction(alpha, beta, opd, powers, coverages, chief, wavelength_nm, vignetted)
 
+
+def _sphere_target(lens: Lens, b: Bundle, chief: ChiefRays):
+    """The aim target of `b`'s rays: direction cosines (α, β) of their point on each field's reference
+    sphere, seen from the chief ray's image point."""
+    cx, cy = b.per_ray(chief.image_xy[:, 0]), b.per_ray(chief.image_xy[:, 1])
+    radius = b.per_ray(chief.sphere_radius)
+    cz = lens.image_z
+
+    def target(tr: T.Traced):
+        x, y, z, opl, hit = T.to_sphere(tr, cx, cy, cz, radius)
+        return (x - cx) / radius, (y - cy) / radius, tr.ok & hit
+
+    return target
+
+
+def _pupil_grid(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chief: ChiefRays, samples: int
+                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The rim of the stop → per field the (α, β) grid (n, N) each, relative to the chief ray, that holds
+    the pupil, and an affine map (n, 3, 2) from (1, α, β) to entrance coordinates (the grid's first aim)."""
+    nf = len(field_deg)
+    rim = Bundle(lens, field_deg, wavelength_nm, RIM_RAYS)
+    rim_target = _sphere_target(lens, rim, chief)
+    rex, rey, rtr, rok = stop_rim(rim, chief, accept=lambda tr: rim_target(tr)[2])
+    ra, rb = (a.reshape(nf, RIM_RAYS) for a in T.to_numpy(*rim_target(rtr)[:2]))
+    if not rok.any(axis=1).all():
+        bad = field_deg[~rok.any(axis=1)][0]
+        raise SolasError(f"no real ray reaches the stop's rim for field ({bad[0]:g}, {bad[1]:g}) deg; "
+                         "the lens is not usable there")
+    ca, cb = chief.sphere_point[:, 0], chief.sphere_point[:, 1]
+    alpha = np.empty((nf, samples))
+    beta = np.empty((nf, samples))
+    affine = np.empty((nf, 3, 2))
+    for f in range(nf):
+        m = rok[f]
+        a_rel, b_rel = ra[f, m] - ca[f], rb[f, m] - cb[f]
+        for grid, lo, hi in ((alpha, a_rel.min(), a_rel.max()), (beta, b_rel.min(), b_rel.max())):
+            half = 0.5 * (hi - lo) * (1.0 + 2.0 / samples) * 1.01
+            mid = 0.5 * (hi + lo)
+            grid[f] = mid + half * np.linspace(-1.0, 1.0, samples)
+        design = np.stack([np.ones(m.sum()), a_rel, b_rel], axis=1)
+        affine[f], *_ = np.linalg.lstsq(design, np.stack([rex[f, m], rey[f, m]], axis=1), rcond=None)
+    return alpha, beta, affine
+
+
+def _grid_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chief: ChiefRays, alpha: np.ndarray,
+               beta: np.ndarray, affine: np.ndarray) -> tuple[np.ndarray, ...]:
+    """Every grid ray aimed at its (α, β): per field (n, N, N) its OPD to the chief ray (mm), whether it
+    converged and reached the sphere, the surface that clipped it (1-based, 0: none), its stop crossing
+    (mm) and its entrance coordinates (mm)."""
+    nf, samples = alpha.shape
+    g = Bundle(lens, field_deg, wavelength_nm, samples * samples)
+    ca, cb = chief.sphere_point[:, 0], chief.sphere_point[:, 1]
+    ta = np.broadcast_to(alpha[:, None, :], (nf, samples, samples))
+    tb = np.broadcast_to(beta[:, :, None], (nf, samples, samples))
+    ex0 = affine[:, 0, 0, None, None] + affine[:, 1, 0, None, None] * ta + affine[:, 2, 0, None, None] * tb
+    ey0 = affine[:, 0, 1, None, None] + affine[:, 1, 1, None, None] * ta + affine[:, 2, 1, None, None] * tb
+    goal_a = T.F((ta + ca[:, None, None]).ravel())
+    goal_b = T.F((tb + cb[:, None, None]).ravel())
+    gex, gey, gtr, gconv = aim(g, _sphere_target(lens, g, chief), T.F(ex0.ravel()), T.F(ey0.ravel()), goal_a, goal_b)
+    cx, cy = g.per_ray(chief.image_xy[:, 0]), g.per_ray(chief.image_xy[:, 1])
+    _, _, _, opl, hit = T.to_sphere(gtr, cx, cy, lens.image_z, g.per_ray(chief.sphere_radius))
+    shape = (nf, samples, samples)
+    opl, ok, clipped, sx, sy, ex, ey = (a.reshape(shape) for a in T.to_numpy(
+        opl, gconv & hit, gtr.clipped_by, gtr.stop_x, gtr.stop_y, gex, gey))
+    return opl - chief.opl[:, None, None], ok, clipped, sx, sy, ex, ey

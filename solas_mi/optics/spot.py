@@ -9,7 +9,7 @@ import numpy as np
 from ..errors import SolasError
 from . import pupil as P
 from . import tracer as T
-from .lens import Lens, check_field
+from .lens import Lens
 
 PATTERNS = ("hexapolar", "grid")
 
@@ -61,7 +61,7 @@ def spot(lens: Lens, field_deg, wavelength_nm: float, pattern: str = "hexapolar"
     Rays on `pattern` fill the real entrance pupil about the real chief ray (aimed through the stop
     centre): the disc reaching the nearest of the real rays aimed at the stop's rim."""
     wavelength_nm = lens.check_wavelength(wavelength_nm)
-    field = np.array([check_field(field_deg, lens.polar_field)])
+    field = np.array([lens.field_type.check(field_deg)])
     points = pupil_pattern(pattern, density)
     wl = np.array([wavelength_nm])
     chief = P.chief_rays(lens, field, wl)

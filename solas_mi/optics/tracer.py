@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..llvm import import_drjit
+from .fields import ANGLE
 from .lens import Lens, sag, sag_slope
 from .paraxial import paraxial
 
@@ -145,14 +146,6 @@ def _sphere_from_launch(c, x, y, wz, dx, dy, dz):
     return wz, cc / (b + dr.sqrt(dr.maximum(disc, 0.0))), (disc >= 0) & (b > 0)
 
 
-def polar_directions(field_deg: np.ndarray) -> np.ndarray:
-    """(…, 2) polar fields in degrees (`Lens.polar_field`: polar angle θ = hypot(x, y), azimuth
-    atan2(y, x)) → (…, 3) unit directions of the incoming collimated rays."""
-    f = np.radians(np.asarray(field_deg, dtype=np.float64))
-    theta, phi = np.hypot(f[..., 0], f[..., 1]), np.arctan2(f[..., 1], f[..., 0])
-    return np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], axis=-1)
-
-
 def launch_direction(lens: Lens, dx: F, dy: F, dz: F, ex: F, ey: F) -> Rays:
     """Collimated rays of unit direction (dx, dy, dz), any polar angle up to 180° (object at infinity),
     and entrance coordinates (ex, ey), mm: the ray starts on the plane perpendicular to d through
@@ -193,32 +186,9 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False) -> Tr
     n_before = refractive_index(lens.object_glass, wavelength_um)
     opl = opl * n_before  # a launch's geometric path in object space
     for k, (s, zv) in enumerate(zip(lens.surfaces, lens.vertex_z)):
-        # move to the vertex plane first: the sphere equation is then solved from nearby, free of the
-        # cancellation that a distant start point (a finite object far away) would bring into B² − cC
-        if k == 0 and lens.polar_field and s.curvature != 0.0 and s.is_sphere:  # rays from the side or behind
-            c = _opaque(s.curvature, ftype)
-            lz, t, hit = _sphere_from_launch(c, x, y, z - _opaque(zv, ftype), dx, dy, dz)
-            ok &= hit
-        else:
-            t0 = (_opaque(zv, ftype) - z) / dz
-            ok &= dz > 0
-            x, y = dr.fma(t0, dx, x), dr.fma(t0, dy, y)
-            lz = dr.zeros(ftype, dr.width(x))
-            opl = dr.fma(n_before, t0, opl)
-            if s.curvature == 0.0 and s.is_sphere:
-                t = dr.zeros(ftype, dr.width(x))
-            else:
-                c = _opaque(s.curvature, ftype)
-                b = dz - c * (x * dx + y * dy)
-                cc = c * (x * x + y * y)
-                # conic: A t² − 2B t + C = 0 with A = c (1 + k dz²) (= c for a sphere)
-                disc = b * b - (c if s.conic == 0.0 else c * (1.0 + s.conic * dz * dz)) * cc
-                hit = (disc >= 0) & (b > 0)
-                # cancellation-free root nearest the vertex: t = C / (B + sqrt(B² − AC))
-                t = cc / (b + dr.sqrt(dr.maximum(disc, 0.0)))
-                if any(s.aspheric):
-                    t, hit = _asphere_hit(s, x, y, dx, dy, dz, dr.select(hit, t, 0.0))
-                ok &= hit
+        sideways = k == 0 and lens.field_type.sideways  # rays from the side or behind
+        x, y, lz, t, opl, hit = _to_surface(s, zv, Rays(x, y, z, dx, dy, dz, opl), n_before, sideways, ftype)
+        ok &= hit
         x, y, lz = dr.fma(t, dx, x), dr.fma(t, dy, y), dr.fma(t, dz, lz)
         opl = dr.fma(n_before, t, opl)
         r2 = x * x + y * y
@@ -228,29 +198,71 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False) -> Tr
             stop_x, stop_y = x, y
         n_after = refractive_index(s.glass, wavelength_um)
         if s.glass != (lens.surfaces[k - 1].glass if k else lens.object_glass):
-            if s.curvature == 0.0 and s.is_sphere:
-                nx, ny, nz = dr.zeros(ftype, 1), dr.zeros(ftype, 1), dr.ones(ftype, 1)
-            elif s.is_sphere:
-                nx, ny, nz = -c * x, -c * y, 1.0 - c * lz
-            else:  # exact even-asphere normal (−2x s', −2y s', 1) / |…|
-                slope = 2.0 * sag_slope(r2, s.curvature, s.conic, s.aspheric, dr.sqrt, dr.maximum)
-                nz = dr.rsqrt(dr.fma(slope * slope, r2, 1.0))
-                nx, ny = -slope * x * nz, -slope * y * nz
-            mu = n_before / n_after
-            cosi = dx * nx + dy * ny + dz * nz
-            k2 = 1.0 - mu * mu * (1.0 - cosi * cosi)
+            (dx, dy, dz), k2, factor = _refract(s, x, y, lz, r2, (dx, dy, dz), n_before / n_after, fresnel, ftype)
             tir |= k2 < 0
             ok &= k2 >= 0
-            cost = dr.sqrt(dr.maximum(k2, 0.0))
             if fresnel:
-                rs = (mu * cosi - cost) / (mu * cosi + cost)
-                rp = (cosi - mu * cost) / (cosi + mu * cost)
-                transmittance = transmittance * (1.0 - 0.5 * (rs * rs + rp * rp))
-            g = cost - mu * cosi
-            dx, dy, dz = dr.fma(mu, dx, g * nx), dr.fma(mu, dy, g * ny), dr.fma(mu, dz, g * nz)
+                transmittance = transmittance * factor
         z = lz + _opaque(zv, ftype)
         n_before = n_after
     return Traced(Rays(x, y, z, dx, dy, dz, opl), ok, tir, clipped, stop_x, stop_y, n_before, transmittance)
+
+
+def _to_surface(s, zv: float, rays: Rays, n_before: F, sideways: bool, ftype):
+    """Rays (global frame) to surface `s` with its vertex at z = `zv`: (x, y, lz, t, opl, hit), the
+    ray's point (x, y, lz relative to the vertex) from which the surface lies t (mm) along it, the optical
+    path to that point and whether the surface is met. Rays are first moved to the vertex plane, so
+    the sphere equation is solved from nearby, free of the cancellation that a distant start point (a
+    finite object far away) would bring into B² − cC; `sideways` rays (polar fields at surface 1) meet a
+    curved sphere from where they are."""
+    x, y, z, dx, dy, dz, opl = rays.x, rays.y, rays.z, rays.dx, rays.dy, rays.dz, rays.opl
+    if sideways and s.curvature != 0.0 and s.is_sphere:
+        lz, t, hit = _sphere_from_launch(_opaque(s.curvature, ftype), x, y, z - _opaque(zv, ftype), dx, dy, dz)
+        return x, y, lz, t, opl, hit
+    t0 = (_opaque(zv, ftype) - z) / dz
+    hit = dz > 0
+    x, y = dr.fma(t0, dx, x), dr.fma(t0, dy, y)
+    lz = dr.zeros(ftype, dr.width(x))
+    opl = dr.fma(n_before, t0, opl)
+    if s.curvature == 0.0 and s.is_sphere:
+        return x, y, lz, dr.zeros(ftype, dr.width(x)), opl, hit
+    c = _opaque(s.curvature, ftype)
+    b = dz - c * (x * dx + y * dy)
+    cc = c * (x * x + y * y)
+    # conic: A t² − 2B t + C = 0 with A = c (1 + k dz²) (= c for a sphere)
+    disc = b * b - (c if s.conic == 0.0 else c * (1.0 + s.conic * dz * dz)) * cc
+    on = (disc >= 0) & (b > 0)
+    # cancellation-free root nearest the vertex: t = C / (B + sqrt(B² − AC))
+    t = cc / (b + dr.sqrt(dr.maximum(disc, 0.0)))
+    if any(s.aspheric):
+        t, on = _asphere_hit(s, x, y, dx, dy, dz, dr.select(on, t, 0.0))
+    return x, y, lz, t, opl, hit & on
+
+
+def _refract(s, x, y, lz, r2, d, mu, fresnel: bool, ftype):
+    """Directions after refraction at surface `s` (point x, y, lz in its vertex frame, r2 = x² + y²) of
+    unit directions `d` with index ratio `mu` = n_before / n_after: (new directions, k2 (negative:
+    total internal reflection), the unpolarised Fresnel transmittance when `fresnel`, else None)."""
+    dx, dy, dz = d
+    if s.curvature == 0.0 and s.is_sphere:
+        nx, ny, nz = dr.zeros(ftype, 1), dr.zeros(ftype, 1), dr.ones(ftype, 1)
+    elif s.is_sphere:
+        c = _opaque(s.curvature, ftype)
+        nx, ny, nz = -c * x, -c * y, 1.0 - c * lz
+    else:  # exact even-asphere normal (−2x s', −2y s', 1) / |…|
+        slope = 2.0 * sag_slope(r2, s.curvature, s.conic, s.aspheric, dr.sqrt, dr.maximum)
+        nz = dr.rsqrt(dr.fma(slope * slope, r2, 1.0))
+        nx, ny = -slope * x * nz, -slope * y * nz
+    cosi = dx * nx + dy * ny + dz * nz
+    k2 = 1.0 - mu * mu * (1.0 - cosi * cosi)
+    cost = dr.sqrt(dr.maximum(k2, 0.0))
+    factor = None
+    if fresnel:
+        rs = (mu * cosi - cost) / (mu * cosi + cost)
+        rp = (cosi - mu * cost) / (cosi + mu * cost)
+        factor = 1.0 - 0.5 * (rs * rs + rp * rp)
+    g = cost - mu * cosi
+    return (dr.fma(mu, dx, g * nx), dr.fma(mu, dy, g * ny), dr.fma(mu, dz, g * nz)), k2, factor
 
 
 def _asphere_hit(s, x, y, dx, dy, dz, t):
@@ -294,7 +306,7 @@ def to_sphere(traced: Traced, cx: F, cy: F, cz: F, radius: F) -> tuple[F, F, F, 
 
 def field_tangents(field_deg: np.ndarray) -> np.ndarray:
     """(…, 2) field angles in degrees → tangents."""
-    return np.tan(np.radians(np.asarray(field_deg, dtype=np.float64)))
+    return ANGLE.incoming(field_deg)
 
 
 def object_points(lens: Lens, field_deg: np.ndarray) -> np.ndarray | None:
@@ -320,5 +332,5 @@ def to_numpy(*values) -> tuple[np.ndarray, ...]:
     return tuple(np.asarray(v) for v in values)
 
 
-__all__ = ["Rays", "Traced", "launch", "launch_direction", "polar_directions", "trace", "to_plane", "to_sphere", "field_tangents", "object_points",
+__all__ = ["Rays", "Traced", "launch", "launch_direction", "trace", "to_plane", "to_sphere", "field_tangents", "object_points",
            "gather", "to_numpy", "refractive_index", "launch_plane_z"]

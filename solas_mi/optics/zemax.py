@@ -72,50 +72,73 @@ def read_spec(text: str, where: str) -> dict:
         raise SolasError(f"{where}: UNIT {unit[0]!r} is not supported; allowed: {', '.join(UNITS)}")
     if len(blocks) < 3:
         raise SolasError(f"{where}: {len(blocks)} SURF blocks; a lens needs the object, a surface and the image")
-    spec: dict = {"surface": []}
+    spec: dict = {}
     name = " ".join((top.get("NAME") or [[]])[0])
     if name:
         spec["name"] = name
-    obj_z = (blocks[0].get("DISZ") or [["INFINITY"]])[0][0]
-    spec["object"] = {"distance": "infinity" if obj_z.upper().startswith("INF")
-                      else _floats([obj_z], f"{where}: object DISZ")[0] * scale}
     gcat = tuple(GCAT_VENDORS[c.upper()] for line in top.get("GCAT", []) for c in line if c.upper() in GCAT_VENDORS)
-    if "GLAS" in blocks[0]:
-        spec["object"]["material"] = _material(blocks[0]["GLAS"][0], f"{where}: SURF 0 (object)", gcat)
-    for i, b in enumerate(blocks[1:-1], start=1):
-        ident = f"{where}: SURF {i} (line {b['line']})"
-        kind = (b.get("TYPE") or [["STANDARD"]])[0][0].upper()
-        if kind not in SURFACE_TYPES:
-            raise SolasError(f"{ident}: surface TYPE {kind} is not supported; allowed: {', '.join(SURFACE_TYPES)}")
-        curv = _floats((b.get("CURV") or [["0"]])[0][:1], f"{ident}: CURV")[0] / scale
-        thickness = (b.get("DISZ") or [["0"]])[0][0]
-        if thickness.upper().startswith("INF"):
-            raise SolasError(f"{ident}: DISZ INFINITY inside the lens; only the object may be at infinity")
-        if "DIAM" not in b:
-            raise SolasError(f"{ident}: no DIAM (semi-diameter); every surface needs its clear aperture")
-        row = {"label": " ".join((b.get("COMM") or [[f"SURF {i}"]])[0]) or f"SURF {i}",
-               "radius": 0.0 if curv == 0 else 1.0 / curv,
-               "thickness": _floats([thickness], f"{ident}: DISZ")[0] * scale,
-               "diameter": 2.0 * _floats(b["DIAM"][0][:1], f"{ident}: DIAM")[0] * scale,
-               "material": _material(b["GLAS"][0], ident, gcat) if "GLAS" in b else "AIR"}
-        conic = _floats((b.get("CONI") or [["0"]])[0][:1], f"{ident}: CONI")[0]
-        if conic:
-            row["conic"] = conic
-        if kind == "EVENASPH":
-            parm = {int(p[0]): _floats(p[1:2], f"{ident}: PARM")[0] for p in b.get("PARM", []) if p}
-            if parm.get(1, 0.0):
-                raise SolasError(f"{ident}: PARM 1 (the r² term) = {parm[1]:g}; only A4 and higher are modelled "
-                                 "(fold the r² term into CURV)")
-            terms = [parm.get(k, 0.0) * scale ** (1 - 2 * k) for k in range(2, 9)]
-            while terms and terms[-1] == 0.0:
-                terms.pop()
-            if terms:
-                row["aspheric"] = terms
-        if "STOP" in b:
-            row["stop"] = True
-        spec["surface"].append(row)
+    spec["object"] = _object(blocks[0], scale, gcat, where)
+    spec["surface"] = [_surface(b, i, scale, gcat, where) for i, b in enumerate(blocks[1:-1], start=1)]
     if "DIAM" in blocks[-1]:
         spec["image"] = {"diameter": 2.0 * _floats(blocks[-1]["DIAM"][0][:1], f"{where}: image DIAM")[0] * scale}
+    spec.update(_wavelengths_and_field(top, where))
+    return spec
+
+
+def _object(block: dict, scale: float, gcat: tuple[str, ...], where: str) -> dict:
+    """The [object] table of SURF 0: its distance (mm, or "infinity") and material."""
+    obj_z = (block.get("DISZ") or [["INFINITY"]])[0][0]
+    obj: dict = {"distance": "infinity" if obj_z.upper().startswith("INF")
+                 else _floats([obj_z], f"{where}: object DISZ")[0] * scale}
+    if "GLAS" in block:
+        obj["material"] = _material(block["GLAS"][0], f"{where}: SURF 0 (object)", gcat)
+    return obj
+
+
+def _surface(b: dict, i: int, scale: float, gcat: tuple[str, ...], where: str) -> dict:
+    """The [[surface]] table of SURF block `i` (lengths scaled to mm)."""
+    ident = f"{where}: SURF {i} (line {b['line']})"
+    kind = (b.get("TYPE") or [["STANDARD"]])[0][0].upper()
+    if kind not in SURFACE_TYPES:
+        raise SolasError(f"{ident}: surface TYPE {kind} is not supported; allowed: {', '.join(SURFACE_TYPES)}")
+    curv = _floats((b.get("CURV") or [["0"]])[0][:1], f"{ident}: CURV")[0] / scale
+    thickness = (b.get("DISZ") or [["0"]])[0][0]
+    if thickness.upper().startswith("INF"):
+        raise SolasError(f"{ident}: DISZ INFINITY inside the lens; only the object may be at infinity")
+    if "DIAM" not in b:
+        raise SolasError(f"{ident}: no DIAM (semi-diameter); every surface needs its clear aperture")
+    row = {"label": " ".join((b.get("COMM") or [[f"SURF {i}"]])[0]) or f"SURF {i}",
+           "radius": 0.0 if curv == 0 else 1.0 / curv,
+           "thickness": _floats([thickness], f"{ident}: DISZ")[0] * scale,
+           "diameter": 2.0 * _floats(b["DIAM"][0][:1], f"{ident}: DIAM")[0] * scale,
+           "material": _material(b["GLAS"][0], ident, gcat) if "GLAS" in b else "AIR"}
+    conic = _floats((b.get("CONI") or [["0"]])[0][:1], f"{ident}: CONI")[0]
+    if conic:
+        row["conic"] = conic
+    if kind == "EVENASPH":
+        terms = _aspheric(b, scale, ident)
+        if terms:
+            row["aspheric"] = terms
+    if "STOP" in b:
+        row["stop"] = True
+    return row
+
+
+def _aspheric(b: dict, scale: float, ident: str) -> list[float]:
+    """[A4, A6, …] (mm^(1−2i)) of an EVENASPH block's PARM lines, trailing zeros dropped."""
+    parm = {int(p[0]): _floats(p[1:2], f"{ident}: PARM")[0] for p in b.get("PARM", []) if p}
+    if parm.get(1, 0.0):
+        raise SolasError(f"{ident}: PARM 1 (the r² term) = {parm[1]:g}; only A4 and higher are modelled "
+                         "(fold the r² term into CURV)")
+    terms = [parm.get(k, 0.0) * scale ** (1 - 2 * k) for k in range(2, 9)]
+    while terms and terms[-1] == 0.0:
+        terms.pop()
+    return terms
+
+
+def _wavelengths_and_field(top: dict, where: str) -> dict:
+    """wavelengths_nm (WAVM, else WAVL) and field_deg (the largest angle field) of the header."""
+    spec: dict = {}
     waves = [w[1] for w in top.get("WAVM", []) if len(w) > 1] or [w for line in top.get("WAVL", []) for w in line]
     waves = list(dict.fromkeys(_floats(waves, f"{where}: WAVM/WAVL")))
     if waves:

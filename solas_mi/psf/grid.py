@@ -20,7 +20,8 @@ import numpy as np
 from ..errors import SolasError
 from ..imageio import read_exr, write_exr, write_png
 from ..optics.camera import pinhole_focal_mm
-from ..optics.lens import Lens, check_field
+from ..optics.fields import ANGLE
+from ..optics.lens import Lens
 from ..options import parse_wxh
 from . import base as S
 from .methods import DEFAULT_METHOD, METHODS, check_method, compute
@@ -166,7 +167,7 @@ def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=No
     elif layout == "field":
         if field_range_deg is None:
             field_range_deg = lens.field_deg
-        hx, hy = check_field((field_range_deg, field_range_deg) if np.isscalar(field_range_deg) else field_range_deg)
+        hx, hy = ANGLE.check((field_range_deg, field_range_deg) if np.isscalar(field_range_deg) else field_range_deg)
         if hx < 0 or hy < 0:
             raise SolasError(f"field range ({hx:g}, {hy:g}) deg must be non-negative (half ranges)")
         fx = field_nodes(nx, hx, field_sampling)

@@ -17,7 +17,6 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SolasError
-from ..optics.lens import check_field
 from .base import (
     DEFAULT_GEOMETRIC_RAYS,
     DEFAULT_PITCH_UM,
@@ -94,7 +93,7 @@ def psf(lens, field_deg, wavelength_nm, *, weights=None, pitch_um: float = DEFAU
     (polychromatic: the power-weighted sum of the monochromatic PSFs). meta["energy_in_grid"] is the
     fraction of the transmitted light inside the window and meta["warnings"] what looked doubtful;
     `auto_window` doubles `size` until the window holds `base.WINDOW_ENERGY_LIMIT` of the light."""
-    field = check_field(field_deg, lens.polar_field)
+    field = lens.field_type.check(field_deg)
     check_grid(pitch_um, size)
     sampling = check_method(method, pupil_samples, rays)
     check_normalization(normalization)

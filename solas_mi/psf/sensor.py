@@ -15,7 +15,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import SolasError
-from ..optics.lens import POLAR_FIELD_DEG, Lens
+from ..optics.lens import Lens
 
 TABLE_STEPS = 256  # polar angles in the h(θ) table
 REACH = 1.05  # the table runs to this multiple of the lens's field (capped below 180° or 89°)
@@ -34,7 +34,7 @@ def height_table(lens: Lens, wavelength_nm: float) -> tuple[np.ndarray, np.ndarr
     axis to REACH × the lens's field, stopping before heights stop increasing."""
     from ..optics.pupil import chief_rays  # Dr.Jit: loaded only when a grid is computed
 
-    top = min(REACH * lens.field_deg, 179.0 if lens.polar_field else POLAR_FIELD_DEG - 0.5)
+    top = min(REACH * lens.field_deg, lens.field_type.largest_deg)
     theta = np.linspace(0.0, top, TABLE_STEPS)
     h = chief_rays(lens, np.stack([np.zeros_like(theta), theta], axis=-1), np.full(len(theta), wavelength_nm)).image_xy[:, 1]
     rising = np.flatnonzero(np.diff(h) <= 0)
@@ -55,10 +55,7 @@ def fields_for_points(lens: Lens, points_mm: np.ndarray, wavelength_nm: float) -
     t = np.radians(np.interp(r, h, theta))
     with np.errstate(invalid="ignore", divide="ignore"):
         c, s = np.where(r > 0, ax / r, 1.0), np.where(r > 0, ay / r, 0.0)
-    if lens.polar_field:
-        fx, fy = np.degrees(t * c), np.degrees(t * s)
-    else:
-        fx, fy = np.degrees(np.arctan(np.tan(t) * c)), np.degrees(np.arctan(np.tan(t) * s))
+    fx, fy = lens.field_type.field_of(t, c, s)
     return np.stack([np.copysign(fx, p[..., 0]), np.copysign(fy, p[..., 1])], axis=-1)
 
 

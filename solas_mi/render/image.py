@@ -48,8 +48,8 @@ def render_image(lens, image: str | np.ndarray, spec: RenderSpec | None = None, 
     if spec.focus_distance is not None:
         raise SolasError("a focus distance sets the lens camera of a scene file; an image lies on the lens's object "
                          "plane: render it without one")
-    camera = fisheye_camera(lens, spec.sensor, spec.fov_deg, spec.pitch_um) if lens.polar_field else camera_for(
-        lens, spec.sensor, spec.fov_deg, spec.pitch_um)
+    camera = (camera_for(lens, spec.sensor, spec.fov_deg, spec.pitch_um) if lens.field_type.pinhole
+              else fisheye_camera(lens, spec.sensor, spec.fov_deg, spec.pitch_um))
     # the user's mistakes, named here rather than inside the scene's plugins
     parsed = responses.parse(spec.response, lens.wavelengths_nm)
     responses.check_lens(parsed, lens)

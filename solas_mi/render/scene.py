@@ -163,10 +163,10 @@ def lens_parts(lens: Lens, rings: int = DEFAULT_RINGS) -> list[Part]:
         if s.glass != before:
             parts.append(Part(f"surface{k}", cap_mesh(s.radius, zv, s.semi_diameter, rings, s.conic, s.aspheric),
                               before_name, s.material))
-        if not (k == 1 and lens.polar_field):
+        if not (k == 1 and lens.field_type.sideways):
             parts.append(Part(f"aperture{k}", annulus_mesh(zr, s.semi_diameter, outer)))
         before, before_name = s.glass, s.material
-    start = rim_z[1] if lens.polar_field and len(rim_z) > 1 else min(rim_z) - 1.0
+    start = rim_z[1] if lens.field_type.sideways and len(rim_z) > 1 else min(rim_z) - 1.0
     parts.append(Part("barrel", tube_mesh(outer, start, lens.image_z)))
     return parts
 

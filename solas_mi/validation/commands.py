@@ -47,7 +47,7 @@ def _say(text: str) -> None:
 
 def run_crossval(args: argparse.Namespace) -> int:
     lens = Lens.load(args.lens)
-    if lens.polar_field:
+    if not lens.field_type.pinhole:
         return _crossval_fisheye(args, lens)
     given = [name for name, value in (("--size", args.size), ("--pitch-um", args.pitch_um), ("--grid", args.grid))
              if value is not None] + ["--defocus-mm"] * (args.defocus_mm != 0.0)

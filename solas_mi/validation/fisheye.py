@@ -99,7 +99,7 @@ def compare_fisheye(lens: Lens, env: np.ndarray, fov_deg: float, size: int, pitc
     the lens does."""
     from ..render.image import render_image
 
-    if not lens.polar_field:
+    if lens.field_type.pinhole:
         raise SolasError(f"lens {lens.name} has tangent fields; the fisheye comparison needs a lens of polar fields")
     w = lens.primary_wavelength if wavelength_nm is None else lens.check_wavelength(wavelength_nm)
     seconds: dict[str, float] = {}
@@ -142,8 +142,7 @@ def defocused(lens: Lens, defocus_mm: float) -> Lens:
     if not (np.isfinite(defocus_mm) and last.thickness + defocus_mm > 0):
         raise SolasError(f"defocus {defocus_mm:g} mm must be finite and leave the image plane behind the last "
                          f"surface (its distance is {last.thickness:g} mm)")
-    return replace(lens, surfaces=lens.surfaces[:-1] + (replace(last, thickness=last.thickness + defocus_mm),),
-                   memo={})
+    return replace(lens, surfaces=lens.surfaces[:-1] + (replace(last, thickness=last.thickness + defocus_mm),))
 
 
 def crossval_fisheye(lens: Lens, env: np.ndarray, out: str | Path, fov_deg: float, size: int = 64,

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..optics.lens import Lens, check_field
+from ..optics.lens import Lens
 from ..optics.pupil import chief_rays
 from ..psf import base as S
 from ..psf.geometric import bin_hits
@@ -22,7 +22,7 @@ def scene_psf(scene, lens: Lens, field_deg, wavelength_nm: float, pitch_um: floa
     """Geometric PSF (unit sum) of field (x, y) degrees at one wavelength through `scene`'s geometry.
     meta holds the rays' landing centroid and RMS radius (µm from the chief ray) and the transmitted
     power (fraction of the on-axis entrance-pupil power)."""
-    field = np.array([check_field(field_deg, lens.polar_field)])
+    field = np.array([lens.field_type.check(field_deg)])
     S.check_grid(pitch_um, size)
     wl = np.array([lens.check_wavelength(wavelength_nm)])
     chief = chief_rays(lens, field, wl)

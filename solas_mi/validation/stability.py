@@ -123,12 +123,12 @@ def _beyond(lens: Lens, wl: float) -> Case:
 
 
 def _distances(lens: Lens, field: tuple, wl: float) -> list[Case]:
-    at_infinity = psf(replace(lens, object_distance=math.inf, memo={}), field, wl, size=96)
+    at_infinity = psf(replace(lens, object_distance=math.inf), field, wl, size=96)
     ref_t = None
     cases = []
     for d in FAR_DISTANCES_MM:
         try:
-            p = psf(replace(lens, object_distance=d, memo={}), field, wl, size=96)
+            p = psf(replace(lens, object_distance=d), field, wl, size=96)
         except SolasError as exc:
             cases.append(Case(f"object at {d:g} mm", "finite or a clear refusal", f"refused: {exc}",
                               "object" in str(exc) or "field" in str(exc)))
@@ -169,10 +169,8 @@ def _glass_limits(lens: Lens) -> list[Case]:
 
 def _near_flat(lens: Lens, wl: float) -> Case:
     k = next((i for i, s in enumerate(lens.surfaces) if s.radius == 0.0), 0)
-    flat = replace(lens, surfaces=tuple(replace(s, radius=0.0) if i == k else s for i, s in enumerate(lens.surfaces)),
-                   memo={})
-    near = replace(flat, surfaces=tuple(replace(s, radius=1e12) if i == k else s for i, s in enumerate(flat.surfaces)),
-                   memo={})
+    flat = replace(lens, surfaces=tuple(replace(s, radius=0.0) if i == k else s for i, s in enumerate(lens.surfaces)))
+    near = replace(flat, surfaces=tuple(replace(s, radius=1e12) if i == k else s for i, s in enumerate(flat.surfaces)))
     fields = np.array([[0.0, 0.0], [0.0, lens.field_deg]])
     a, b = (chief_rays(x, fields, np.full(2, wl)).image_xy for x in (flat, near))
     diff = float(np.abs(a - b).max())
@@ -209,7 +207,7 @@ def _opd_precision(lens: Lens, wl: float) -> Case:
 def _exit_pupil(lens: Lens, wl: float) -> Case:
     from ..optics.camera import camera_for
 
-    if lens.polar_field:  # the image circle
+    if not lens.field_type.pinhole:  # the image circle
         r_max = float(np.hypot(*chief_rays(lens, [[0.0, lens.field_deg]], [wl]).image_xy[0]))
     else:
         camera = camera_for(lens)
