@@ -9,19 +9,24 @@ import pytest
 
 from solas_mi import SolasError
 
-# the peak resident size of this process's own memory (VmHWM; ru_maxrss would also count what the
-# forked parent held before exec)
+# `solas-mi degrade` with a given number of worker threads: its estimate, then the peak resident size of
+# its own memory (VmHWM; ru_maxrss would also count what the forked parent held before exec)
 PEAK = """
 import sys
+import solas_mi.convolution.kernels as kernels
+kernels.workers = lambda: int(sys.argv[4])
 from solas_mi.cli import main
+from solas_mi.convolution.output import peak_bytes
+from solas_mi.imageio import image_size
+from solas_mi.psf.grid import PSFGrid
+print(peak_bytes(sys.argv[1], *image_size(sys.argv[1]), PSFGrid.read(sys.argv[2]).data.nbytes))
 assert main(["degrade", sys.argv[1], "--psf-grid", sys.argv[2], "-o", sys.argv[3]]) == 0
 print(next(int(t.split()[1]) * 1024 for t in open("/proc/self/status") if t.startswith("VmHWM:")))
 """
 
 
-@pytest.mark.parametrize("suffix", [".png", ".exr"])
-def test_the_memory_estimate_covers_the_peak(doublet, tmp_path, suffix):
-    from solas_mi.convolution.output import peak_bytes
+@pytest.mark.parametrize("suffix, threads", [(".png", 2), (".exr", 2), (".png", 8), (".exr", 8)])
+def test_the_memory_estimate_covers_the_peak(doublet, tmp_path, suffix, threads):
     from solas_mi.imageio import write_exr, write_png
     from solas_mi.psf.grid import psf_grid
 
@@ -34,10 +39,9 @@ def test_the_memory_estimate_covers_the_peak(doublet, tmp_path, suffix):
         write_png(path, image)
     else:
         write_exr(path, {c: image[..., i] for i, c in enumerate("RGB")})
-    out = subprocess.run([sys.executable, "-c", PEAK, str(path), str(tmp_path / "grid.exr"), str(tmp_path / "o.exr")],
-                         capture_output=True, text=True, check=True)
-    peak = int(out.stdout.split()[-1])
-    estimate = peak_bytes(path, rows, cols, 3, grid.data.nbytes)
+    out = subprocess.run([sys.executable, "-c", PEAK, str(path), str(tmp_path / "grid.exr"), str(tmp_path / "o.exr"),
+                          str(threads)], capture_output=True, text=True, check=True).stdout.split()
+    estimate, peak = float(out[0]), int(out[-1])
     assert peak <= estimate <= 1.5 * peak, f"estimate {estimate / 1e6:.0f} MB, peak {peak / 1e6:.0f} MB"
 
 
