@@ -32,7 +32,7 @@ def in_process(lens: Lens) -> float:
 
 def command(folder: Path) -> float:
     start = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "solas_mi", "psf-grid", "solas-doublet", "--grid", "32x32", "--wavelengths",
+    subprocess.run([sys.executable, "-m", "solas_mi", "psf-grid", "solas-doublet", "--grid", "32x32", "--wavelengths-nm",
                     "656,531,486", "--pitch-um", "0.5", "--size", "160", "-o", str(folder / "grid.exr")],
                    check=True, capture_output=True)
     return time.perf_counter() - start

@@ -13,6 +13,7 @@ Machines, 2025 (its BK7/F2 doublet, PSF grids, patch convolution and annulus MTF
 """
 from __future__ import annotations
 
+from . import render  # noqa: F401  (registers the render stage's PSF method "render": `psf.registry`)
 from .errors import SolasError
 from .lazy import lazy_exports
 

@@ -31,10 +31,10 @@ def run(out: Path) -> None:
     psfs = out / "psf"
     for field in (0, 2, -2):
         for wl in (486, 531, 656):
-            cli(["psf", "solas-doublet", "--field-deg", f"0,{field}", "--wavelength-nm", str(wl), "--pitch-um", "0.5",
+            cli(["psf", "solas-doublet", "--field-deg", f"0,{field}", "--wavelengths-nm", str(wl), "--pitch-um", "0.5",
                  "--size", "160", "--normalize", "peak", "-o", str(psfs / f"psf_{field:+d}deg_{wl}nm.exr")])
     for grid in ("8x8", "32x32"):
-        cli(["psf-grid", "solas-doublet", "--grid", grid, "--wavelengths", "656,531,486", "--pitch-um", "0.5",
+        cli(["psf-grid", "solas-doublet", "--grid", grid, "--wavelengths-nm", "656,531,486", "--pitch-um", "0.5",
              "--size", "160", "--png", "-o", str(out / f"psf_grid_{grid}.exr")])
     degraded = degrade(out)
     edge = out / "sfr" / "edge_5deg_sigma1px.png"

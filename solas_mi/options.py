@@ -22,6 +22,18 @@ def parse_wxh(text: str | tuple[int, int], what: str, minimum: int = 1) -> tuple
     return rows, cols
 
 
+def parse_size_mm(text: str, what: str) -> tuple[float, float]:
+    """"WxH" in mm (e.g. "23.6x15.8") → (width, height): a physical size, unlike `parse_wxh`'s pixel
+    counts (which it returns as rows, columns)."""
+    parts = str(text).lower().replace("×", "x").split("x")
+    try:
+        if len(parts) != 2:
+            raise ValueError
+        return float(parts[0]), float(parts[1])
+    except ValueError:
+        raise SolasError(f"{what} {text!r} must look like 23.6x15.8 (width x height in mm)") from None
+
+
 def floats(text: str, what: str) -> list[float]:
     """Comma-separated numbers."""
     try:

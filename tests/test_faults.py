@@ -76,7 +76,7 @@ def test_terminated_during_the_write_keeps_the_old_files(tmp_path):
             "    os.kill(os.getpid(), signal.SIGTERM)\n"
             "io.write_exr = dying\n"
             "from solas_mi.cli import main\n"
-            "sys.exit(main(['psf', 'solas-doublet', '--field-deg', '0,2', '--wavelength-nm', '531', '--size', '32',"
+            "sys.exit(main(['psf', 'solas-doublet', '--field-deg', '0,2', '--wavelengths-nm', '531', '--size', '32',"
             " '-o', 'psf.exr']))\n")
     p = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=120)
     assert p.returncode == 143, p.stderr
@@ -99,7 +99,7 @@ def test_terminated_render_leaves_no_scene_folder(tmp_path):
 
 def test_full_disk_is_a_clear_error(tmp_path, capsys):
     with tmpfs(tmp_path / "small", "size=64k") as disk:
-        err = one_line_error(capsys, ["psf", "solas-doublet", "--field-deg", "0,2", "--wavelength-nm", "531",
+        err = one_line_error(capsys, ["psf", "solas-doublet", "--field-deg", "0,2", "--wavelengths-nm", "531",
                                       "--size", "200", "-o", disk / "p.exr"])
         assert f"cannot write {disk / 'p.exr'}: No space left on device" in err
         assert list(disk.iterdir()) == []
@@ -133,7 +133,7 @@ def test_output_never_replaces_an_input(tmp_path, capsys, grid):
 
 
 def test_data_is_always_exr(tmp_path, capsys):
-    err = one_line_error(capsys, ["psf", "solas-doublet", "--field-deg", "0,2", "--wavelength-nm", "531",
+    err = one_line_error(capsys, ["psf", "solas-doublet", "--field-deg", "0,2", "--wavelengths-nm", "531",
                                   "-o", tmp_path / "x.png"])
     assert "must end in .exr" in err and "x.exr (a PNG preview is written beside it)" in err
     assert list(tmp_path.iterdir()) == []
@@ -149,7 +149,7 @@ def test_special_outputs_are_refused(tmp_path, capsys, kind):
     if kind == "symlink":
         (tmp_path / "real.exr").write_bytes(b"keep")
         target.symlink_to(tmp_path / "real.exr")
-    err = one_line_error(capsys, ["psf", "solas-doublet", "--field-deg", "0,2", "--wavelength-nm", "531",
+    err = one_line_error(capsys, ["psf", "solas-doublet", "--field-deg", "0,2", "--wavelengths-nm", "531",
                                   "-o", target])
     assert {"folder": "is a folder", "symlink": "is a symbolic link", "fifo": "is not a regular file"}[kind] in err
     if kind == "symlink":
@@ -157,7 +157,7 @@ def test_special_outputs_are_refused(tmp_path, capsys, kind):
 
 
 def test_concurrent_writers_leave_one_whole_file(tmp_path):
-    args = ["psf", "solas-doublet", "--field-deg", "0,2", "--wavelength-nm", "531", "--size", "64", "-o", "p.exr"]
+    args = ["psf", "solas-doublet", "--field-deg", "0,2", "--wavelengths-nm", "531", "--size", "64", "-o", "p.exr"]
     procs = [solas(*args, cwd=tmp_path) for _ in range(2)]
     assert [p.wait(timeout=120) for p in procs] == [0, 0]
     assert sorted(f.name for f in tmp_path.iterdir()) == ["p.exr", "p.png"]

@@ -14,11 +14,11 @@ from typing import Any
 from ..errors import SolasError
 
 
-def _grid_options(args: argparse.Namespace) -> dict[str, Any]:
-    return {"grid": args.grid, "wavelengths": args.wavelengths, "field_range_deg": args.field_range_deg,
-            "field_sampling": args.field_sampling, "pitch_um": args.pitch_um, "size": args.size,
-            "method": args.psf_method, "normalize": args.normalize, "pupil_samples": args.pupil_samples,
-            "rays": args.rays, "auto_window": args.auto_window}
+def _grid_spec(args: argparse.Namespace):
+    """The grid's spec from the `psf-grid` options (with --lens), else None."""
+    from ..psf.spec import from_args
+
+    return from_args(args) if args.lens else None
 
 
 def _dry_run(args: argparse.Namespace) -> int:
@@ -27,7 +27,7 @@ def _dry_run(args: argparse.Namespace) -> int:
 
     workers = check_workers(_workers(args.workers))
     p = plan_batch(args.inputs, args.output, psf_grid=args.psf_grid, lens=args.lens,
-                   grid_options=_grid_options(args) if args.lens else None, method=args.method,
+                   grid_spec=_grid_spec(args), method=args.method,
                    boundary=args.boundary, linear=args.linear, cache=args.cache)
     need = estimate(p, workers if args.dask is None else 1)
     where = f"Dask at {args.dask}" if args.dask else f"{workers} local worker process(es)"
@@ -48,7 +48,7 @@ def run_batch_degrade(args: argparse.Namespace) -> int:
     from .degrade import degrade_batch
 
     result = degrade_batch(args.inputs, args.output, psf_grid=args.psf_grid, lens=args.lens,
-                           grid_options=_grid_options(args) if args.lens else None, method=args.method,
+                           grid_spec=_grid_spec(args), method=args.method,
                            boundary=args.boundary, linear=args.linear, workers=_workers(args.workers), dask=args.dask,
                            cache=args.cache, force=args.force, progress=not args.quiet)
     return _report("degrade", result, f" (grid: {result.grid_source})")
@@ -132,7 +132,7 @@ def register(subparsers: Any) -> None:
     """Add `batch` and its `degrade` and `render`."""
     from ..convolution.kernels import BOUNDARIES
     from ..convolution.methods import DEFAULT_METHOD, METHODS
-    from ..psf.commands import add_grid_options
+    from ..psf.spec import add_options as add_grid_options
     from ..render.spec import add_spec_flags
     from .render import SWEEP
 
@@ -154,7 +154,7 @@ def register(subparsers: Any) -> None:
     p.add_argument("--linear", action="store_true", help="PNG/JPEG values are already linear: do not decode sRGB")
     p.add_argument("--cache", metavar="DIR", help="PSF-grid cache (default: the user's cache folder)/psf-grids")
     _add_runner_options(p)
-    add_grid_options(p.add_argument_group("grid options (with --lens; those of `solas-mi psf-grid`)"), "--psf-method")
+    add_grid_options(p.add_argument_group("grid options (with --lens; those of `solas-mi psf-grid`)"))
     p.set_defaults(run=run_batch_degrade)
 
     r = sub.add_parser(

@@ -16,7 +16,7 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from ..errors import SolasError
-from .cache import GridCache, canonical_options, file_hash
+from .cache import GridCache, file_hash
 from .jobs import MANIFEST, Job, Manifest, expand_inputs, plan
 from .runner import check_dask
 
@@ -35,7 +35,7 @@ class BatchPlan:
     grid_path: Path
     grid_source: str  # "given", "cache hit" or "to compute"
     lens: Any = None
-    options: dict[str, Any] | None = None
+    spec: Any = None  # the grid's `psf.spec.GridSpec` when computed from the lens
 
     @property
     def todo(self) -> list[int]:
@@ -68,7 +68,7 @@ def check_workers(workers: int | None) -> int:
 
 
 def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *,
-               psf_grid: str | os.PathLike | None = None, lens=None, grid_options: dict[str, Any] | None = None,
+               psf_grid: str | os.PathLike | None = None, lens=None, grid_spec=None,
                method: str = "interp", boundary: str = "edge", linear: bool = False,
                cache: GridCache | str | os.PathLike | None = None) -> BatchPlan:
     """Check everything a batch needs before any work and find what a former run finished."""
@@ -82,7 +82,7 @@ def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLik
         raise SolasError("give either a PSF grid file or a lens to compute one from, not both and not neither")
     out_dir = output_folder(output_dir).resolve()
     jobs = plan(expand_inputs(inputs), out_dir)
-    options = None
+    spec = None
     if psf_grid is not None:
         grid_path = Path(psf_grid).resolve()
         if not grid_path.is_file():
@@ -90,44 +90,47 @@ def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLik
         grid_id, source = file_hash(grid_path), "given"
     else:
         from ..optics.lens import Lens
+        from ..psf.spec import GridSpec
 
         lens = lens if isinstance(lens, Lens) else Lens.load(str(lens))
         cache = cache if isinstance(cache, GridCache) else GridCache(cache)
-        options = canonical_options(grid_options)
-        grid_path = cache.path(lens, options)
+        spec = GridSpec() if grid_spec is None else grid_spec
+        if not isinstance(spec, GridSpec):
+            raise SolasError(f"grid_spec {grid_spec!r} must be a solas_mi.psf.spec.GridSpec")
+        grid_path = cache.path(lens, spec)
         grid_id, source = grid_path.stem, "cache hit" if grid_path.is_file() else "to compute"
     key = hashlib.sha256(json.dumps([grid_id, method, boundary, linear]).encode()).hexdigest()[:16]
     manifest = Manifest(out_dir / MANIFEST, {"version": 1, "kind": "degrade", "batch_id": key}, jobs)
     manifest.resume(key)
-    return BatchPlan(jobs, manifest, key, grid_path, source, lens, options)
+    return BatchPlan(jobs, manifest, key, grid_path, source, lens, spec)
 
 
 def estimate(p: BatchPlan, workers: int) -> dict[str, float]:
     """Rough seconds and peak memory (bytes, all workers) of the items still to do."""
-    from ..convolution.output import BYTES_PER_VALUE
+    from ..convolution.output import peak_bytes
     from ..imageio import image_size
 
-    values = [max(1, r * c * ch) for r, c, ch in (image_size(p.jobs[i].input) for i in p.todo)]
-    if p.options is None:
+    sizes = [(p.jobs[i].input, image_size(p.jobs[i].input)) for i in p.todo]
+    values = [max(1, r * c * ch) for _, (r, c, ch) in sizes]
+    if p.spec is None:
         grid_bytes = p.grid_path.stat().st_size  # float32 mosaics, stored uncompressed
     else:
-        cols, rows = (int(v) for v in p.options["grid"].split("x"))
-        grid_bytes = 4 * rows * cols * p.options["size"] ** 2 * len(p.options["wavelengths"] or p.lens.wavelengths_nm)
-    per_worker = BYTES_PER_VALUE * max(values, default=0) + 2 * grid_bytes
+        rows, cols = p.spec.grid
+        grid_bytes = 4 * rows * cols * p.spec.size ** 2 * len(p.spec.wavelengths_nm or p.lens.wavelengths_nm)
+    # each worker: its largest image's peak (which holds a grid); the parent holds one grid more
+    per_worker = max((peak_bytes(path, r, c, ch, grid_bytes) for path, (r, c, ch) in sizes), default=0.0)
     return {"seconds": SECONDS_PER_VALUE * sum(values) / min(workers, max(1, len(values))),
-            "peak_bytes": min(workers, max(1, len(values))) * per_worker, "grid_bytes": grid_bytes}
+            "peak_bytes": min(workers, max(1, len(values))) * per_worker + grid_bytes, "grid_bytes": grid_bytes}
 
 
 def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *,
-                  psf_grid: str | os.PathLike | None = None, lens=None, grid_options: dict[str, Any] | None = None,
-                  method: str = "interp", boundary: str = "edge", linear: bool = False, workers: int | None = None,
+                  psf_grid: str | os.PathLike | None = None, lens=None, grid_spec=None, method: str = "interp", boundary: str = "edge", linear: bool = False, workers: int | None = None,
                   dask: str | None = None, cache: GridCache | str | os.PathLike | None = None, force: bool = False,
                   progress: bool = True) -> BatchResult:
     """Degrade every image of `inputs` (files, folders, glob patterns) into `output_dir` (one EXR +
     PNG per input, `batch.json` beside them) with the grid `psf_grid` (an EXR file) or one computed
-    from `lens` (a Lens or its name / file) with `grid_options` (those of `psf_grid`: grid "8x8",
-    wavelengths, field_range_deg, field_sampling, pitch_um, size, method, normalize, pupil_samples,
-    rays, auto_window), cached in `cache` (a GridCache or folder). `workers` local processes (default:
+    from `lens` (a Lens or its name / file) with `grid_spec` (a `psf.spec.GridSpec`; default: its
+    defaults), cached in `cache` (a GridCache or folder). `workers` local processes (default:
     the cores), or the Dask scheduler at `dask` ("local": a LocalCluster for this batch). An item
     that fails is recorded and the others go on."""
     from ..budget import check_memory
@@ -137,15 +140,15 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
     n = check_workers(workers)
     check_dask(dask)
     cache = cache if isinstance(cache, GridCache) or psf_grid is not None else GridCache(cache)
-    p = plan_batch(inputs, output_dir, psf_grid=psf_grid, lens=lens, grid_options=grid_options, method=method,
+    p = plan_batch(inputs, output_dir, psf_grid=psf_grid, lens=lens, grid_spec=grid_spec, method=method,
                    boundary=boundary, linear=linear, cache=cache)
     need = estimate(p, n if dask is None else 1)
     check_memory(f"batch of {len(p.todo)} images on {n} workers", need["peak_bytes"], force)
     header: dict[str, Any] = {"method": method, "boundary": boundary, "linear": linear}
     if p.lens is not None:
-        p.grid_path, hit, seconds = cache.get(p.lens, p.options)
+        p.grid_path, hit, seconds = cache.get(p.lens, p.spec)
         header["grid_source"], header["grid_seconds"] = "cache hit" if hit else "computed", seconds
-        header["grid_options"] = p.options
+        header["grid_spec"] = p.spec.canonical()
     else:
         header["grid_source"] = "given"
     grid = PSFGrid.read(str(p.grid_path))

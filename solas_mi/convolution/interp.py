@@ -89,8 +89,9 @@ def convolve_channel(channel: np.ndarray, grid: PSFGrid, lay: Layout, wavelength
     return acc[edge:edge + height, edge:edge + width].copy()
 
 
-def describe(lay: Layout, radius: int, shift_max: int) -> dict:
-    margin = radius + shift_max
+def describe(lay: Layout, radius: int, wavelengths: list[int]) -> dict:
+    """The nodes that took part (`methods.ConvolutionMethod.describe`)."""
+    margin = radius + lay.max_shift(wavelengths)
     rows = hats(lay.row_knots, -margin, lay.camera.height + 2 * margin)[0]
     cols = hats(lay.col_knots, -margin, lay.camera.width + 2 * margin)[0]
     return {"nodes": [len(cols), len(rows)], "node_columns": cols.tolist(), "node_rows": rows.tolist(),

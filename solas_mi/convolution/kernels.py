@@ -44,6 +44,10 @@ from ..psf.grid import PSFGrid
 _PAD_MODES = {"edge": "edge", "zero": "constant", "reflect": "symmetric"}
 COVER_TOLERANCE = 0.1  # the image may reach this fraction of a node spacing beyond the outermost node's cell
 TILE_SAMPLES = 1 << 20  # samples per batch of FFT tiles (≈4 MB in float32): bounds memory, fits caches
+# widest pixel kernel (2R+1 px): a PSF window spanning more of the image than this means the grid does
+# not match the image (a tiny field range makes each PSF sample many pixels wide); the padded planes and
+# FFT tiles grow with its square (a 2049-px kernel: tiles of about 2500² px, 25 MB each in float32)
+MAX_KERNEL_PX = 2049
 
 
 def check_boundary(boundary: str) -> str:
@@ -161,6 +165,21 @@ def check_covers(knots: np.ndarray, extent: int, axis: str) -> None:
         raise SolasError(f"the PSF grid does not cover the image: its {axis} nodes reach pixel {what} "
                          f"{knots[0] - first / 2:.1f} … {knots[-1] + last / 2:.1f}, the image spans -0.5 … "
                          f"{extent - 0.5:g}; regenerate the grid with a larger --field-range-deg")
+
+
+def check_kernel(grid: PSFGrid, lay: Layout) -> int:
+    """The kernel radius R (pixels) of `grid` on the image of `lay`; SolasError, before anything is
+    allocated, when the kernel would be wider than MAX_KERNEL_PX."""
+    radius = kernel_radius(grid.size, lay.q)
+    if 2 * radius + 1 > MAX_KERNEL_PX:
+        cam = lay.camera
+        padded_gb = 4 * (cam.width + 2 * radius) * (cam.height + 2 * radius) / 1e9
+        raise SolasError(f"the PSF grid's {grid.size}-sample windows of {grid.pitch_um:g} um span "
+                         f"{grid.size * lay.q:.4g} pixels of this {cam.width}x{cam.height} image, whose pixels are "
+                         f"{cam.pitch_um:.4g} um (PSF pitch {lay.q:.4g} px): kernels of {2 * radius + 1} px exceed "
+                         f"{MAX_KERNEL_PX} px (padded planes of about {padded_gb:.3g} GB); the grid's field range is "
+                         "far smaller than the image's — use a grid that spans it")
+    return radius
 
 
 def tent_cdf(t: np.ndarray) -> np.ndarray:

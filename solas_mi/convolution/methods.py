@@ -1,5 +1,6 @@
-"""The convolution methods by name (`METHODS`, the one list every caller uses) and `degrade`: an
-image seen through a lens, by spatially variant convolution with its PSF grid.
+"""The convolution methods by name (`METHODS`: name → `ConvolutionMethod`, the one list every caller
+uses) and `degrade`, their one dispatcher: an image seen through a lens, by spatially variant
+convolution with its PSF grid.
 
 The input image is the ideal (pinhole) image of the scene spanning the grid's ±x field range; its
 pixel grid is the sensor (`kernels.grid_camera`).
@@ -7,8 +8,9 @@ pixel grid is the sensor (`kernels.grid_camera`).
 from __future__ import annotations
 
 import time
+from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Callable
 
 import numpy as np
 
@@ -16,18 +18,37 @@ from ..blas import single_threaded_blas
 from ..errors import SolasError
 from ..imageio import check_finite
 from . import interp, patch
-from .kernels import channel_wavelengths, check_boundary, kernel_radius, layout
+from .kernels import channel_wavelengths, check_boundary, check_kernel, layout
 
 if TYPE_CHECKING:
     from ..psf.grid import PSFGrid
 
-# each method's module has SUMMARY, convolve_channel(channel, grid, layout, wavelength, boundary, dtype), describe
-METHODS = {"interp": interp, "patch": patch}
+
+
+@dataclass(frozen=True)
+class ConvolutionMethod:
+    """A convolution method: its functions, one summary line and its reference."""
+
+    name: str
+    # (channel (H, W), grid, kernels.Layout, grid wavelength index, boundary, dtype) -> degraded channel
+    convolve_channel: Callable
+    # (kernels.Layout, kernel radius R in pixels, grid wavelength indices used) -> metadata of what was done
+    describe: Callable
+    summary: str
+    reference: str
+
+
+METHODS: dict[str, ConvolutionMethod] = {m.name: m for m in (
+    ConvolutionMethod("interp", interp.convolve_channel, interp.describe, interp.SUMMARY,
+                      "J. G. Nagy and D. P. O'Leary, SIAM J. Sci. Comput. 19(4), 1998"),
+    ConvolutionMethod("patch", patch.convolve_channel, patch.describe, patch.SUMMARY,
+                      "the SOLAS paper (IS&T Electronic Imaging, 2025): one PSF per block"),
+)}
 DEFAULT_METHOD = "interp"
 
 
 def check_method(method: str) -> str:
-    if method not in METHODS:
+    if not isinstance(method, str) or method not in METHODS:
         raise SolasError(f"convolution method {method!r} must be one of {', '.join(METHODS)}")
     return method
 
@@ -52,6 +73,8 @@ def degrade(image: np.ndarray, grid: "PSFGrid | str", method: str = DEFAULT_METH
         raise SolasError(f"dtype {dtype} must be float32 or float64")
     if isinstance(grid, (str, Path)):
         grid = PSFGrid.read(str(grid))
+    if not isinstance(grid, PSFGrid):
+        raise SolasError(f"grid {type(grid).__name__} must be a PSFGrid or the path of its EXR file")
     image = np.asarray(image)
     if image.ndim not in (2, 3) or image.size == 0 or not np.issubdtype(image.dtype, np.number):
         raise SolasError(f"image of shape {image.shape} must be a non-empty H×W or H×W×C array of numbers")
@@ -59,16 +82,16 @@ def degrade(image: np.ndarray, grid: "PSFGrid | str", method: str = DEFAULT_METH
     height, width, nchan = planes.shape
     wavelengths = channel_wavelengths(grid, nchan)
     lay = layout(grid, width, height)
-    module = METHODS[method]
+    radius = check_kernel(grid, lay)  # before any allocation
+    m = METHODS[method]
     start = time.perf_counter()
     out = np.empty(planes.shape, dtype=dtype)
     with single_threaded_blas():
         for c, k in enumerate(wavelengths):
-            out[..., c] = module.convolve_channel(planes[..., c], grid, lay, k, boundary, dtype)
+            out[..., c] = m.convolve_channel(planes[..., c], grid, lay, k, boundary, dtype)
             if progress is not None:
                 progress(c + 1, nchan)
     if meta is not None:
-        radius = kernel_radius(grid.size, lay.q)
         meta.update({
             "method": method, "boundary": boundary, "camera": lay.camera.meta(),
             "channel_wavelengths_nm": [grid.wavelengths_nm[k] for k in wavelengths],
@@ -76,6 +99,5 @@ def degrade(image: np.ndarray, grid: "PSFGrid | str", method: str = DEFAULT_METH
             "max_chief_ray_offset_px": float(np.abs(lay.offsets[sorted(set(wavelengths))]).max()),
             "seconds": time.perf_counter() - start,
         })
-        meta.update(interp.describe(lay, radius, lay.max_shift(wavelengths)) if module is interp
-                    else patch.describe(lay))
+        meta.update(m.describe(lay, radius, wavelengths))
     return out if image.ndim == 3 else out[..., 0]

@@ -10,9 +10,32 @@ from .methods import degrade
 if TYPE_CHECKING:
     from ..psf.grid import PSFGrid
 
-# input float64 + its sRGB decoding + padded planes and output (measured: 10 GB for 14000×12000×3)
-BYTES_PER_VALUE = 24
+# Peak memory of degrading one image, from the peak resident size (VmHWM) of `solas-mi degrade` on
+# 1000², 2000² and 4000×3000 RGB images, both methods, an 8×8×3 grid of 160 px: the larger of two phases.
+# Reading: a PNG/JPEG/TIFF (8-bit data, float64 copies for scaling and sRGB decoding) peaks at 41–42 B
+# per image value (H·W·C), whatever the threads; an EXR (float32 channels, a float64 image) less than
+# its convolution. Convolving: the float64 image, float32 planes, padding and output, 16–20 B per value,
+# and the FFT batches in flight, which grow with the worker threads (measured 31–36 MB more per thread
+# from 1 to 8; up to 44 MB more on a busy machine, where more batches wait in flight).
+READ_BYTES_PER_VALUE = {"exr": 20, "other": 44}
+CONVOLVE_BYTES_PER_VALUE = 22
+FFT_BYTES_PER_SAMPLE = 24  # per sample of the two batches of TILE_SAMPLES in flight per worker thread
+TILE_SAMPLES_PER_PIXEL = 4  # a channel's tiles hold each pixel up to 4 times (interp's hats; patch's once)
+FIXED_BYTES = 80e6  # the interpreter, NumPy and the package's modules (measured 78 MB with a 20 MB grid read)
 GRID_META_KEYS = ("lens", "lens_hash", "method", "normalization", "field_range_deg", "field_sampling", "layout", "sensor_mm")
+
+
+def peak_bytes(image_path: str | Path, rows: int, cols: int, channels: int, grid_bytes: int) -> float:
+    """Peak memory (bytes) of degrading the rows×cols×channels image file `image_path` with a grid of
+    `grid_bytes` of PSFs: the fixed part, the grid and the larger of reading the image (by file type)
+    and convolving it (its buffers and the FFT batches in flight, two per worker thread)."""
+    from .kernels import TILE_SAMPLES, workers
+
+    values = rows * cols * max(channels, 1)
+    read = READ_BYTES_PER_VALUE["exr" if Path(image_path).suffix.lower() == ".exr" else "other"] * values
+    in_flight = min(2 * workers() * TILE_SAMPLES, TILE_SAMPLES_PER_PIXEL * rows * cols)  # a channel's tiles at most
+    convolve = CONVOLVE_BYTES_PER_VALUE * values + FFT_BYTES_PER_SAMPLE * in_flight
+    return FIXED_BYTES + grid_bytes + max(read, convolve)
 
 
 def degrade_file(image_path: str | Path, grid: "PSFGrid", grid_path: str | Path, output: Path, png: Path,
@@ -28,7 +51,7 @@ def degrade_file(image_path: str | Path, grid: "PSFGrid", grid_path: str | Path,
     from ..outputs import written_together
 
     rows, cols, channels = image_size(image_path)
-    check_memory(f"degrade {cols}x{rows}", BYTES_PER_VALUE * rows * cols * max(channels, 1), force)
+    check_memory(f"degrade {cols}x{rows}", peak_bytes(image_path, rows, cols, channels, grid.data.nbytes), force)
     image = read_image(image_path, linearize=not linear)
     meta: dict[str, Any] = {}
     out = degrade(image, grid, method, boundary, meta=meta, progress=progress)

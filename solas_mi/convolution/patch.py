@@ -77,7 +77,9 @@ def convolve_channel(channel: np.ndarray, grid: PSFGrid, lay: Layout, wavelength
     return out
 
 
-def describe(lay: Layout) -> dict:
+def describe(lay: Layout, radius: int, wavelengths: list[int]) -> dict:
+    """The blocks and their nodes (`methods.ConvolutionMethod.describe`; the kernel radius and the
+    wavelengths do not change them)."""
     rows, cols = block_layout(lay)
     return {"blocks": [len(cols), len(rows)],
             "block_columns": [[n, a, b] for n, a, b in cols], "block_rows": [[m, a, b] for m, a, b in rows],

@@ -24,7 +24,7 @@ def run_lens_info(args) -> int:
     from .pupil import chief_rays  # loads Dr.Jit
 
     lens = Lens.load(args.lens)
-    wavelengths = floats(args.wavelengths, "--wavelengths") if args.wavelengths else list(lens.wavelengths_nm)
+    wavelengths = floats(args.wavelengths_nm, "--wavelengths-nm") if args.wavelengths_nm else list(lens.wavelengths_nm)
     fields = floats(args.fields, "--fields") if args.fields else [0.0, lens.field_deg, -lens.field_deg]
     rows = []
     for w in wavelengths:
@@ -80,7 +80,7 @@ def register(sub: Any) -> None:
     info = lens.add_parser("info", help="paraxial data: EFL, BFD, pupils, f/#, chief rays, distortion and "
                            "relative illumination")
     add_lens_argument(info)
-    info.add_argument("--wavelengths", help="nm, comma-separated (default: the lens file's)")
+    info.add_argument("--wavelengths-nm", help="nm, comma-separated (default: the lens file's)")
     info.add_argument("--fields", help="y field angles in degrees, comma-separated")
     info.add_argument("--json", action="store_true")
     info.set_defaults(run=run_lens_info)

@@ -1,12 +1,15 @@
 """Point spread functions: the conventions every PSF shares (`base`), one module per method
-(`fraunhofer`, `geometric`), the registry naming them (`methods`, with `psf` for one field), PSF
-grids over the field (`grid`) and the `psf` / `psf-grid` commands (`commands`).
+(`fraunhofer`, `geometric`), the registry naming them with their own options (`registry`; a later
+stage registers its own, as render does "render"), `psf` for one field (`methods`), PSF grids over
+the field (`grid`) and their options as one value (`spec.GridSpec`), and the `psf` / `psf-grid`
+commands (`commands`).
 
     psf(lens, (0, 2), 531.0, pitch_um=0.5, size=160)              # one PSF
     psf_grid(lens, grid=(32, 32), wavelengths_nm=[656, 531, 486])  # PSFGrid; .write / PSFGrid.read
+    psf_grid(lens, GridSpec(grid=(24, 32), method="geometric", rays=256))
 """
 from ..lazy import lazy_exports
 
-__all__ = ["METHODS", "PSF", "PSFGrid", "psf", "psf_grid"]
-__getattr__ = lazy_exports(__name__, {"METHODS": ".methods", "PSF": ".base", "PSFGrid": ".grid", "psf": ".methods",
-                                      "psf_grid": ".grid"})
+__all__ = ["METHODS", "PSF", "GridSpec", "PSFGrid", "psf", "psf_grid"]
+__getattr__ = lazy_exports(__name__, {"METHODS": ".registry", "PSF": ".base", "GridSpec": ".spec", "PSFGrid": ".grid",
+                                      "psf": ".methods", "psf_grid": ".grid"})

@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
 
@@ -24,8 +24,6 @@ VALUE_MEANING = {
 }
 DEFAULT_PITCH_UM = 0.5
 DEFAULT_SIZE = 160
-DEFAULT_PUPIL_SAMPLES = 128
-DEFAULT_GEOMETRIC_RAYS = 512
 
 
 @dataclass
@@ -72,8 +70,9 @@ class PSF:
         write_png(path, self.data / max(float(self.data.max()), 1e-300))
 
 
-class Computed(NamedTuple):
-    """What a PSF method computes for n field/wavelength pairs."""
+@dataclass(frozen=True, kw_only=True)
+class Computed:
+    """What a PSF method computes for n field/wavelength pairs (`registry`), by name."""
 
     data: np.ndarray  # (n, size, size) PSFs in 1/µm² (irradiance per µm² / on-axis entrance-pupil power)
     chief: Any  # optics.pupil.ChiefRays of the pairs
@@ -152,14 +151,35 @@ MAX_SIZE = 8192  # pixels
 
 
 def check_grid(pitch_um: float, size: int) -> None:
-    if not isinstance(size, (int, np.integer)) or not 2 <= size <= MAX_SIZE:
+    if not isinstance(size, (int, np.integer)) or isinstance(size, bool) or not 2 <= size <= MAX_SIZE:
         raise SolasError(f"PSF size {size!r} must be an integer from 2 to {MAX_SIZE} pixels")
-    if not isinstance(pitch_um, (int, float)) or not math.isfinite(pitch_um) or pitch_um <= 0:
+    if (not isinstance(pitch_um, (int, float, np.integer, np.floating)) or isinstance(pitch_um, bool)
+            or not math.isfinite(pitch_um) or pitch_um <= 0):
         raise SolasError(f"PSF pitch {pitch_um!r} µm must be a positive number")
 
 
+def check_lens(lens) -> None:
+    from ..optics.lens import Lens
+
+    if not isinstance(lens, Lens):
+        raise SolasError(f"lens {lens!r} must be a Lens (solas_mi.Lens.load(a shipped name or a lens file))")
+
+
+def check_wavelengths(lens, wavelength_nm) -> tuple[float, ...]:
+    """One wavelength (nm, a number) or a sequence of them, each checked against the lens's glasses."""
+    if isinstance(wavelength_nm, np.ndarray):
+        values = wavelength_nm.ravel().tolist()
+    elif isinstance(wavelength_nm, (list, tuple)):
+        values = list(wavelength_nm)
+    else:
+        values = [wavelength_nm]
+    if not values:
+        raise SolasError("at least one wavelength (nm) is needed")
+    return tuple(lens.check_wavelength(w) for w in values)
+
+
 def check_normalization(how: str) -> None:
-    if how not in NORMALIZATIONS:
+    if not isinstance(how, str) or how not in NORMALIZATIONS:
         raise SolasError(f"normalization {how!r} must be one of {', '.join(NORMALIZATIONS)}")
 
 

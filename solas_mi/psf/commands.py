@@ -5,17 +5,9 @@ import sys
 from typing import Any
 
 from ..errors import SolasError
-from ..options import add_lens_argument, floats, parse_wxh
+from ..options import add_lens_argument, floats
 from ..outputs import data_and_preview, written_together
-from .base import (
-    DEFAULT_GEOMETRIC_RAYS,
-    DEFAULT_PITCH_UM,
-    DEFAULT_PUPIL_SAMPLES,
-    DEFAULT_SIZE,
-    NORMALIZATIONS,
-    WINDOW_ENERGY_LIMIT,
-)
-from .methods import DEFAULT_METHOD, METHODS
+from .spec import add_options, from_args, given
 
 
 def _field(text: str) -> tuple[float, float]:
@@ -49,11 +41,9 @@ def run_psf(args) -> int:
 
     data_file, png = data_and_preview(args.output, args.png)
     lens = Lens.load(args.lens)
-    wavelengths = floats(args.wavelength_nm, "--wavelength-nm")
+    wavelengths = floats(args.wavelengths_nm, "--wavelengths-nm")
     weights = floats(args.weights, "--weights") if args.weights else None
-    p = psf(lens, _field(args.field_deg), wavelengths, weights=weights, pitch_um=args.pitch_um, size=args.size,
-            method=args.method, normalization=args.normalize, pupil_samples=args.pupil_samples, rays=args.rays,
-            auto_window=args.auto_window)
+    p = psf(lens, _field(args.field_deg), wavelengths, weights=weights, **given(args, psf_only=True))
     _finish("psf", p, data_file, png, "")
     return 0
 
@@ -67,69 +57,20 @@ def run_psf_grid(args) -> int:
     data_file, png = data_and_preview(args.output, args.png or None)
     png = png if args.png is not None else None
     lens = Lens.load(args.lens)
-    grid = parse_wxh(args.grid, "--grid")
-    wavelengths = floats(args.wavelengths, "--wavelengths") if args.wavelengths else None
-    count = (len(wavelengths) if wavelengths else len(lens.wavelengths_nm)) * grid[0] * grid[1]
+    spec = from_args(args)
+    count = len(spec.wavelengths_nm or lens.wavelengths_nm) * spec.grid[0] * spec.grid[1]
     # the float32 PSFs, their mosaics and the PNG when written, and a batch of complex fields
-    need = 3 * 4 * count * args.size ** 2 + 64 * 64 * (args.size + 1) ** 2
-    check_memory(f"psf-grid of {count} PSFs of {args.size}x{args.size}", need, args.force,
+    need = 3 * 4 * count * spec.size ** 2 + 64 * 64 * (spec.size + 1) ** 2
+    check_memory(f"psf-grid of {count} PSFs of {spec.size}x{spec.size}", need, args.force,
                  "fewer nodes or a smaller --size")
-    rng = floats(args.field_range_deg, "--field-range-deg") if args.field_range_deg else None
-    if rng is not None and len(rng) not in (1, 2):
-        raise SolasError(f"--field-range-deg {args.field_range_deg!r} must be one value or X,Y")
 
     def progress(done: int, total: int) -> None:
         print(f"\r{done}/{total} PSFs", end="", file=sys.stderr, flush=True)
 
-    g = psf_grid(lens, grid=grid, wavelengths_nm=wavelengths,
-                 field_range_deg=None if rng is None else (rng[0], rng[-1]), pitch_um=args.pitch_um,
-                 size=args.size, method=args.method, normalization=args.normalize,
-                 pupil_samples=args.pupil_samples, rays=args.rays, field_sampling=args.field_sampling,
-                 progress=progress, auto_window=args.auto_window, layout=args.layout,
-                 sensor_mm=parse_sensor_mm(args.sensor_mm))
+    g = psf_grid(lens, spec, progress=progress)
     print(file=sys.stderr)
     _finish("psf-grid", g, data_file, png, f" ({g.meta['seconds']:.1f} s)")
     return 0
-
-
-def parse_sensor_mm(text: str | None) -> tuple[float, float] | None:
-    """--sensor-mm "23.6x15.8" (mm) → (width, height); None when absent."""
-    if text is None:
-        return None
-    parts = str(text).lower().split("x")
-    try:
-        if len(parts) != 2:
-            raise ValueError
-        return float(parts[0]), float(parts[1])
-    except ValueError:
-        raise SolasError(f"--sensor-mm {text!r} must look like 23.6x15.8 (width x height in mm)") from None
-
-
-def add_sampling_options(p, method_flag: str = "--method") -> None:
-    """How PSFs are computed and sampled: pitch, size, method (`method_flag`: a command whose --method
-    means something else names it --psf-method), normalisation, pupil samples, rays, auto window."""
-    p.add_argument("--pitch-um", type=float, default=DEFAULT_PITCH_UM, help="image-plane pixel pitch (µm)")
-    p.add_argument("--size", type=int, default=DEFAULT_SIZE, help="PSF width and height (pixels)")
-    p.add_argument(method_flag, choices=list(METHODS), default=DEFAULT_METHOD, help="PSF method")
-    p.add_argument("--normalize", choices=NORMALIZATIONS, default="sum")
-    p.add_argument("--pupil-samples", type=int, default=DEFAULT_PUPIL_SAMPLES, help="Fraunhofer pupil grid N×N")
-    p.add_argument("--rays", type=int, default=DEFAULT_GEOMETRIC_RAYS, help="geometric: rays×rays per PSF")
-    p.add_argument("--auto-window", action="store_true",
-                   help=f"double --size until each window holds {100 * WINDOW_ENERGY_LIMIT:g} %% of the light")
-
-
-def add_grid_options(p, method_flag: str = "--method") -> None:
-    """The options that define a PSF grid (`psf-grid`, and batch jobs that compute one)."""
-    from .grid import FIELD_SAMPLINGS, LAYOUTS
-
-    p.add_argument("--grid", default="8x8", help="columns x rows of field nodes")
-    p.add_argument("--wavelengths", help="nm, comma-separated (default: the lens file's)")
-    p.add_argument("--field-range-deg", help="half range X[,Y] in degrees (default: the lens file's field)")
-    p.add_argument("--field-sampling", choices=FIELD_SAMPLINGS, default=FIELD_SAMPLINGS[0])
-    p.add_argument("--layout", choices=LAYOUTS, default=LAYOUTS[0],
-                   help="field: nodes on field angles; sensor: nodes on sensor positions (wide and fisheye lenses)")
-    p.add_argument("--sensor-mm", help="sensor WxH in mm for --layout sensor (default: the square in the image circle)")
-    add_sampling_options(p, method_flag)
 
 
 def _add_outputs(p) -> None:
@@ -142,15 +83,15 @@ def register(sub: Any) -> None:
     psf = sub.add_parser("psf", help="one PSF (Fraunhofer or geometric) as OpenEXR + PNG")
     add_lens_argument(psf)
     psf.add_argument("--field-deg", required=True, help="X,Y field angle in degrees")
-    psf.add_argument("--wavelength-nm", required=True, help="one wavelength, or several for a polychromatic PSF")
+    psf.add_argument("--wavelengths-nm", required=True, help="one wavelength, or several for a polychromatic PSF")
     psf.add_argument("--weights", help="weights of the wavelengths (default: equal)")
-    add_sampling_options(psf)
+    add_options(psf, psf_only=True)
     _add_outputs(psf)
     psf.set_defaults(run=run_psf)
 
     grid = sub.add_parser("psf-grid", help="PSFs on a field grid, one stack per wavelength, as OpenEXR (+ PNG mosaic with --png)")
     add_lens_argument(grid)
-    add_grid_options(grid)
+    add_options(grid)
     grid.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
     grid.add_argument("-o", "--output", required=True, help="output OpenEXR file")
     grid.add_argument("--png", nargs="?", const="", metavar="PNG",

@@ -21,16 +21,17 @@ from .base import Computed, centring_warnings, grid_offsets, window_centres_um
 from .geometric import light_offsets_um
 
 
-def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int, samples: int,
-            shared_origin: bool = False) -> Computed:
-    """Fraunhofer PSFs of field/wavelength pairs from their pupil functions on samples×samples grids
-    (`methods.compute`)."""
-    pf = pupil_function(lens, field_deg, wavelength_nm, samples)
+def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int, *,
+            shared_origin: bool = False, pupil_samples: int) -> Computed:
+    """Fraunhofer PSFs of field/wavelength pairs from their pupil functions on pupil_samples² grids
+    (the method "fraunhofer" of `registry`)."""
+    pf = pupil_function(lens, field_deg, wavelength_nm, pupil_samples)
     light = light_offsets_um(lens, field_deg, wavelength_nm, pf.chief)
     center = window_centres_um(pf.chief, light, shared_origin)
-    return Computed(fraunhofer(pf, pitch_um, size, center), pf.chief, pf.transmission, pf.vignetted_by,
-                    tuple(sampling_warnings(pf, pitch_um, size, np.atleast_2d(field_deg))
-                          + centring_warnings(pf.chief, light, field_deg)), center)
+    return Computed(data=fraunhofer(pf, pitch_um, size, center), chief=pf.chief, transmission=pf.transmission,
+                    vignetted_by=pf.vignetted_by, centre_um=center,
+                    warnings=tuple(sampling_warnings(pf, pitch_um, size, np.atleast_2d(field_deg))
+                                   + centring_warnings(pf.chief, light, field_deg)))
 
 
 def sampling_warnings(pf: PupilFunction, pitch_um: float, size: int, field_deg: np.ndarray) -> list[str]:

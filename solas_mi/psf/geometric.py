@@ -7,20 +7,21 @@ from ..optics import pupil as P
 from ..optics import tracer as T
 from ..optics.lens import Lens
 from ..optics.pupil import ChiefRays
-from .base import DEFAULT_GEOMETRIC_RAYS, Computed, centring_warnings, window_centres_um
+from .base import Computed, centring_warnings, window_centres_um
 
 _BATCH_RAYS = 1 << 20  # rays traced at once
 
 
-def compute(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int, rays: int,
-            shared_origin: bool = False) -> Computed:
-    """Geometric PSFs of field/wavelength pairs from rays×rays entrance grids (`methods.compute`)."""
+def compute(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int, *,
+            shared_origin: bool = False, rays: int) -> Computed:
+    """Geometric PSFs of field/wavelength pairs from rays×rays entrance grids (the method "geometric" of
+    `registry`)."""
     chief = P.chief_rays(lens, field_deg, wavelength_nm)
     light = light_offsets_um(lens, field_deg, wavelength_nm, chief)
     center = window_centres_um(chief, light, shared_origin)
     data, _, transmission = geometric(lens, field_deg, wavelength_nm, pitch_um, size, rays, chief, center)
-    return Computed(data, chief, transmission, [[] for _ in range(len(field_deg))],
-                    tuple(centring_warnings(chief, light, field_deg)), center)
+    return Computed(data=data, chief=chief, transmission=transmission, vignetted_by=[[] for _ in field_deg],
+                    warnings=tuple(centring_warnings(chief, light, field_deg)), centre_um=center)
 
 
 def light_offsets_um(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chief: ChiefRays,
@@ -40,7 +41,7 @@ def light_offsets_um(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarra
 
 
 def geometric(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int,
-              rays: int = DEFAULT_GEOMETRIC_RAYS, chief: ChiefRays | None = None,
+              rays: int, chief: ChiefRays | None = None,
               center_um: np.ndarray | None = None) -> tuple[np.ndarray, ChiefRays, np.ndarray]:
     """Geometric PSFs (n, size, size) in 1/µm²: rays on a rays×rays grid over the entrance pupil,
     binned on the image-plane grid (each bin holds the power that lands in that pixel); also the

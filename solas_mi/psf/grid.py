@@ -12,23 +12,20 @@ The SOLAS paper's PSF maps are such grids (8×8 over the doublet's ±2°; see th
 """
 from __future__ import annotations
 
+import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 from ..errors import SolasError
 from ..imageio import read_exr, write_exr, write_png
 from ..optics.camera import pinhole_focal_mm
-from ..optics.fields import ANGLE
 from ..optics.lens import Lens
-from ..options import parse_wxh
 from . import base as S
-from .methods import DEFAULT_METHOD, METHODS, check_method, compute
-from .sensor import check_sensor_mm, default_sensor_mm, fields_for_points, node_mm
-
-FIELD_SAMPLINGS = ("centers", "edges")
-LAYOUTS = ("field", "sensor")  # nodes on field angles (tangents), or on sensor positions (`psf.sensor`)
+from .methods import compute, method_options
+from .sensor import default_sensor_mm, fields_for_points, node_mm
+from .spec import FIELD_SAMPLINGS, LAYOUTS, GridSpec
 MOSAIC_PX = 2048  # the preview mosaic is block-averaged to fit this (a 32×32 grid of 160 px: 64 px a PSF)
 _FIELDS_PER_BATCH = 64
 
@@ -76,20 +73,21 @@ class PSFGrid:
 
     @classmethod
     def read(cls, path: str) -> "PSFGrid":
-        """Read a grid written by `write`."""
+        """Read a grid written by `write`; SolasError naming the file and the field for damaged metadata."""
         channels, meta = read_exr(path)
-        if "grid" not in meta:
+        if not isinstance(meta, dict) or "grid" not in meta:
             raise SolasError(f"{path} is not a solas-mi PSF grid (no grid metadata)")
-        ny, nx = meta["grid"]
-        s = meta["size"]
-        wl = [float(w) for w in meta["wavelengths_nm"]]
+        ny, nx, s, wl = check_grid_meta(path, meta)
         stacks = []
         for w in wl:
-            m = channels[f"psf_{w:g}nm"]
+            m = channels.get(f"psf_{w:g}nm")
+            if m is None or m.shape != (ny * s, nx * s):
+                raise SolasError(f"PSF grid {path}: channel psf_{w:g}nm is " + ("missing" if m is None else
+                                 f"{m.shape[1]}x{m.shape[0]} px") + f"; the metadata need {nx * s}x{ny * s} px")
             stacks.append(m.reshape(ny, s, nx, s).transpose(0, 2, 1, 3))
         rest = {k: v for k, v in meta.items() if k not in ("pitch_um", "wavelengths_nm", "fields_deg", "chief_ray_mm")}
-        return cls(np.stack(stacks), np.array(meta["fields_deg"]), np.array(meta["chief_ray_mm"]), tuple(wl),
-                   float(meta["pitch_um"]), rest)
+        return cls(np.stack(stacks), _meta_array(path, meta, "fields_deg", (ny, nx, 2)),
+                   _meta_array(path, meta, "chief_ray_mm", (len(wl), ny, nx, 2)), wl, float(meta["pitch_um"]), rest)
 
     def write_png(self, path: str) -> None:
         """A mosaic for viewing, at most MOSAIC_PX wide and high: each PSF block-averaged down to fit
@@ -106,6 +104,63 @@ class PSFGrid:
         else:
             image = np.mean(mosaics, axis=0)
         write_png(path, image)
+
+
+def check_grid_meta(path, meta: dict) -> tuple[int, int, int, tuple[float, ...]]:
+    """Every metadata field a grid's users read, checked: (rows, columns, size, wavelengths)."""
+    def bad(key: str, want: str):
+        return SolasError(f"PSF grid {path}: metadata field {key} = {str(meta.get(key, '(missing)'))[:60]} "
+                          f"must be {want}")
+
+    grid, size = meta.get("grid"), meta.get("size")
+    if not (isinstance(grid, list) and len(grid) == 2 and all(_whole(v) and v >= 1 for v in grid)):
+        raise bad("grid", "[rows, columns], positive integers")
+    if not (_whole(size) and 2 <= size <= S.MAX_SIZE):
+        raise bad("size", f"an integer from 2 to {S.MAX_SIZE} (pixels)")
+    wl = meta.get("wavelengths_nm")
+    if not (isinstance(wl, list) and wl and all(_real(w) and w > 0 for w in wl) and len(set(wl)) == len(wl)):
+        raise bad("wavelengths_nm", "a list of distinct positive numbers (nm)")
+    for key in ("pitch_um", *(k for k in ("pinhole_focal_mm", "reference_wavelength_nm") if k in meta)):
+        if not (_real(meta.get(key)) and meta[key] > 0):
+            raise bad(key, "a positive number")
+    if meta.get("normalization", "sum") not in S.NORMALIZATIONS:
+        raise bad("normalization", f"one of {', '.join(S.NORMALIZATIONS)}")
+    if meta.get("layout", "field") not in LAYOUTS:
+        raise bad("layout", f"one of {', '.join(LAYOUTS)}")
+    ny, nx = grid
+    if meta.get("layout") == "sensor":
+        _meta_array(path, meta, "sensor_mm", (2,), positive=True)
+        _meta_array(path, meta, "node_mm", (ny, nx, 2))
+        if "reference_wavelength_nm" not in meta:
+            raise bad("reference_wavelength_nm", "a positive number")
+    elif "field_range_deg" in meta:
+        if (_meta_array(path, meta, "field_range_deg", (2,)) < 0).any():
+            raise bad("field_range_deg", "two non-negative half ranges (deg)")
+    for key in ("transmission", "energy_in_window"):
+        if key in meta:
+            _meta_array(path, meta, key, (len(wl), ny, nx))
+    return ny, nx, size, tuple(float(w) for w in wl)
+
+
+def _whole(v) -> bool:
+    return isinstance(v, int) and not isinstance(v, bool)
+
+
+def _real(v) -> bool:
+    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
+
+
+def _meta_array(path, meta: dict, key: str, shape: tuple[int, ...], positive: bool = False) -> np.ndarray:
+    """meta[key] as a float64 array of `shape`, finite (and positive); SolasError naming file and field."""
+    try:
+        a = np.asarray(meta[key], dtype=np.float64)
+        ok = a.shape == shape and bool(np.isfinite(a).all()) and (not positive or bool((a > 0).all()))
+    except (KeyError, TypeError, ValueError):
+        ok = False
+    if not ok:
+        raise SolasError(f"PSF grid {path}: metadata field {key} = {str(meta.get(key, '(missing)'))[:60]} must be "
+                         f"{'x'.join(map(str, shape))} finite{' positive' if positive else ''} numbers")
+    return a
 
 
 def tile(stack: np.ndarray) -> np.ndarray:
@@ -136,104 +191,133 @@ def symmetry_classes(fields: np.ndarray, decimals: int = 12):
     return canon, which.ravel(), swap, sign
 
 
-def psf_grid(lens: Lens, grid: tuple[int, int] | str = (8, 8), wavelengths_nm=None,
-             field_range_deg: tuple[float, float] | float | None = None, pitch_um: float = S.DEFAULT_PITCH_UM,
-             size: int = S.DEFAULT_SIZE,
-             method: str = DEFAULT_METHOD, normalization: str = "sum", pupil_samples: int = S.DEFAULT_PUPIL_SAMPLES,
-             rays: int = S.DEFAULT_GEOMETRIC_RAYS, field_sampling: str = "centers", progress=None,
-             auto_window: bool = False, layout: str = "field", sensor_mm: tuple[float, float] | None = None) -> PSFGrid:
-    """PSFs on a field grid ("columns x rows" text or a (rows, columns) tuple) spanning
-    ±field_range_deg (x, y) (default: the lens's field in both). meta["energy_in_window"] holds each
-    PSF's fraction of its transmitted light inside the window and meta["warnings"] what looked
-    doubtful; `auto_window` doubles `size` until every window holds `base.WINDOW_ENERGY_LIMIT`.
+def psf_grid(lens: Lens, spec: GridSpec | None = None, progress=None, **options) -> PSFGrid:
+    """PSFs on a field grid as `spec` says (a `GridSpec`; or its fields as keywords, e.g.
+    `psf_grid(lens, grid=(24, 32), wavelengths_nm=[656, 531, 486])`, which also override a given
+    spec's). `progress(done, total)` is called after each batch of PSFs.
 
-    layout "sensor" (`psf.sensor`) puts the nodes at the cell centres of a sensor_mm = (width, height)
-    mm sensor instead (default: the square in the lens's image circle), each with the field whose chief
-    ray lands there; meta["node_mm"] holds the nodes' image points and field_range_deg is unused."""
-    ny, nx = parse_wxh(grid, "grid")
-    S.check_grid(pitch_um, size)
-    sampling = check_method(method, pupil_samples, rays)
-    S.check_normalization(normalization)
-    wl = tuple(float(w) for w in (wavelengths_nm if wavelengths_nm is not None else lens.wavelengths_nm))
-    if not wl:
-        raise SolasError("at least one wavelength is needed")
-    for w in wl:
-        lens.check_wavelength(w)
-    if layout == "sensor":
-        sensor_mm = default_sensor_mm(lens) if sensor_mm is None else check_sensor_mm(sensor_mm)
+    layout "field": nodes spanning ±field_range_deg (x, y) (default: the lens's field in both);
+    layout "sensor" (`psf.sensor`): nodes at the cell centres of a sensor_mm = (width, height) mm sensor
+    (default: the square in the lens's image circle), each with the field whose chief ray lands there;
+    meta["node_mm"] holds the nodes' image points. meta["energy_in_window"] holds each PSF's fraction of
+    its transmitted light inside the window and meta["warnings"] what looked doubtful; `auto_window`
+    doubles the size until every window holds `base.WINDOW_ENERGY_LIMIT`."""
+    S.check_lens(lens)
+    if spec is not None and not isinstance(spec, GridSpec):
+        raise SolasError(f"spec {spec!r} must be a GridSpec (or give its options as keywords)")
+    spec = GridSpec(**options) if spec is None else replace(spec, **options)
+    wl = S.check_wavelengths(lens, spec.wavelengths_nm if spec.wavelengths_nm is not None else lens.wavelengths_nm)
+    fields, placement = grid_fields(lens, spec)
+    size = spec.size
+    while True:  # auto_window: the whole grid again at twice the size until every window holds enough
+        start = time.perf_counter()
+        nodes = compute_nodes(lens, spec, wl, fields.reshape(-1, 2), size, progress)
+        if not (spec.auto_window and nodes.energy.min() < S.WINDOW_ENERGY_LIMIT and 2 * size <= S.MAX_SIZE):
+            break
+        size *= 2
+    meta = grid_meta(lens, spec, wl, fields, nodes, size, placement)
+    meta["seconds"] = time.perf_counter() - start
+    ny, nx = spec.grid
+    return PSFGrid(nodes.data, fields, nodes.chief.reshape(len(wl), ny, nx, 2), wl, spec.pitch_um, meta)
+
+
+def grid_fields(lens: Lens, spec: GridSpec) -> tuple[np.ndarray, dict]:
+    """The fields (ny, nx, 2) in degrees of the grid's nodes, and the metadata of their placement."""
+    ny, nx = spec.grid
+    if spec.layout == "sensor":
+        sensor_mm = default_sensor_mm(lens) if spec.sensor_mm is None else spec.sensor_mm
         nodes = node_mm(sensor_mm, ny, nx)
-        fields = fields_for_points(lens, nodes, lens.primary_wavelength)
-        hx = hy = 0.0
-    elif layout == "field":
-        if field_range_deg is None:
-            field_range_deg = lens.field_deg
-        hx, hy = ANGLE.check((field_range_deg, field_range_deg) if np.isscalar(field_range_deg) else field_range_deg)
-        if hx < 0 or hy < 0:
-            raise SolasError(f"field range ({hx:g}, {hy:g}) deg must be non-negative (half ranges)")
-        fx = field_nodes(nx, hx, field_sampling)
-        fy = field_nodes(ny, hy, field_sampling)[::-1]  # row 0 = top = largest y
-        fields = np.stack(np.meshgrid(fx, fy), axis=-1)  # (ny, nx, 2)
-    else:
-        raise SolasError(f"grid layout {layout!r} must be one of {', '.join(LAYOUTS)}")
-    flat = fields.reshape(-1, 2)
+        return fields_for_points(lens, nodes, lens.primary_wavelength), {
+            "layout": "sensor", "reference_wavelength_nm": lens.primary_wavelength, "sensor_mm": list(sensor_mm),
+            "node_mm": nodes.tolist(),
+            "grid_orientation": "grid row 0 = top (largest y) of the sensor, column 0 = left"}
+    hx, hy = lens.field_deg, lens.field_deg
+    if spec.field_range_deg is not None:
+        hx, hy = spec.field_range_deg
+    fx = field_nodes(nx, hx, spec.field_sampling)
+    fy = field_nodes(ny, hy, spec.field_sampling)[::-1]  # row 0 = top = largest y
+    placement = {"layout": "field", "field_sampling": spec.field_sampling, "field_range_deg": [hx, hy],
+                 "grid_orientation": "grid row 0 = largest y field, column 0 = smallest x field"}
+    if hx > 0:  # the ideal image an input spanning ±hx horizontally stands for (`optics.camera`)
+        placement.update(pinhole_focal_mm=pinhole_focal_mm(lens, hx), reference_wavelength_nm=lens.primary_wavelength)
+    return np.stack(np.meshgrid(fx, fy), axis=-1), placement
+
+
+@dataclass(frozen=True)
+class Nodes:
+    """What `compute_nodes` gives: the PSFs and, per wavelength and node (flat), their data."""
+
+    data: np.ndarray  # (n_wavelengths, ny, nx, size, size), normalised
+    chief: np.ndarray  # (n_wavelengths, n, 2) image point at each PSF's origin pixel, mm
+    transmission: np.ndarray  # (n_wavelengths, n)
+    energy: np.ndarray  # (n_wavelengths, n) fraction of the transmitted light inside the window
+    vignetting: tuple[int, ...]  # surfaces that block part of some pupil
+    doubts: tuple[str, ...]  # the methods' warnings, each once
+
+
+def compute_nodes(lens: Lens, spec: GridSpec, wl: tuple[float, ...], flat: np.ndarray, size: int,
+                  progress=None) -> Nodes:
+    """The PSFs of fields `flat` (n, 2) at wavelengths `wl`, size×size: each distinct |field| pair
+    (`symmetry_classes`) computed once, in batches, and mirrored onto its nodes."""
+    ny, nx = spec.grid
     n = len(flat)
     canon, which, swap, sign = symmetry_classes(flat)
     odd = 2 * (size // 2) + 1  # symmetric about the origin pixel, so mirrors stay on the grid
     # stored as the EXR's mosaics (wavelength, row, y, column, x), the layout `read` gives too, so that
     # writing needs no copy; `data` (wavelength, row, column, y, x) is a view of it
     data = np.zeros((len(wl), ny, size, nx, size), dtype=np.float32).transpose(0, 1, 3, 2, 4)
-    chief = np.zeros((len(wl), n, 2))
-    transmission = np.zeros((len(wl), n))
-    energy = np.zeros((len(wl), n))
+    chief, transmission, energy = np.zeros((len(wl), n, 2)), np.zeros((len(wl), n)), np.zeros((len(wl), n))
     vignetting: set[int] = set()
     doubts: list[str] = []
-    start = time.perf_counter()
     for k, w in enumerate(wl):
         for a in range(0, len(canon), _FIELDS_PER_BATCH):
             b = min(len(canon), a + _FIELDS_PER_BATCH)
-            psfs, cr, tr, vig, warned, centre_um = compute(lens, canon[a:b], np.full(b - a, w), pitch_um, odd, method,
-                                                           pupil_samples, rays)
-            vignetting.update(s for v in vig for s in v)
-            doubts.extend(d for d in warned if d not in doubts)
-            for c in range(a, b):
-                for i in np.flatnonzero(which == c):
-                    p = psfs[c - a]
-                    xy = cr.image_xy[c - a] + (0.0 if centre_um is None else centre_um[c - a] * 1e-3)
-                    if swap[i]:
-                        p, xy = p[::-1, ::-1].T, xy[::-1]
-                    if sign[i, 0] < 0:
-                        p = p[:, ::-1]
-                    if sign[i, 1] < 0:
-                        p = p[::-1, :]
-                    data[k, i // nx, i % nx] = S.normalize(p[:size, :size], normalization)
-                    chief[k, i] = xy * sign[i]
-                    transmission[k, i] = tr[c - a]
-                    energy[k, i] = S.window_energy(p[:size, :size], pitch_um, tr[c - a])
+            c = compute(lens, canon[a:b], np.full(b - a, w), spec.pitch_um, odd, spec.method,
+                        **spec.sampling_options())
+            vignetting.update(s for v in c.vignetted_by for s in v)
+            doubts.extend(d for d in c.warnings if d not in doubts)
+            for j in range(b - a):
+                xy = c.chief.image_xy[j] + (0.0 if c.centre_um is None else c.centre_um[j] * 1e-3)
+                for i in np.flatnonzero(which == a + j):
+                    p, xy_i = mirrored(c.data[j], xy, swap[i], sign[i])
+                    data[k, i // nx, i % nx] = S.normalize(p[:size, :size], spec.normalization)
+                    chief[k, i] = xy_i * sign[i]
+                    transmission[k, i] = c.transmission[j]
+                    energy[k, i] = S.window_energy(p[:size, :size], spec.pitch_um, c.transmission[j])
             if progress is not None:
                 progress(k * len(canon) + b, len(wl) * len(canon))
-    lit = transmission > 0
-    meta = S.describe(lens, method, normalization, {METHODS[method].sampling: sampling}, size)
-    meta.update({"layout": layout, "reference_wavelength_nm": lens.primary_wavelength, "sensor_mm": list(sensor_mm),
-                 "node_mm": nodes.tolist()}
-                if layout == "sensor" else {"layout": layout, "field_sampling": field_sampling, "field_range_deg": [hx, hy]})
+    return Nodes(data, chief, transmission, energy, tuple(sorted(vignetting)), tuple(doubts))
+
+
+def mirrored(p: np.ndarray, xy: np.ndarray, swap: bool, sign: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """A canonical field's PSF and origin (x, y) turned to a node's: transposed where x and y swap, then
+    mirrored where a sign is negative (the origin's signs are applied by the caller)."""
+    if swap:
+        p, xy = p[::-1, ::-1].T, xy[::-1]
+    if sign[0] < 0:
+        p = p[:, ::-1]
+    if sign[1] < 0:
+        p = p[::-1, :]
+    return p, xy
+
+
+def grid_meta(lens: Lens, spec: GridSpec, wl: tuple[float, ...], fields: np.ndarray, nodes: Nodes, size: int,
+              placement: dict) -> dict:
+    """The grid's metadata: the lens, method and sampling (`base.describe`), the spec, the nodes'
+    placement, transmission, window energy and warnings."""
+    ny, nx = spec.grid
+    n = ny * nx
+    lit = nodes.transmission > 0
+    meta = S.describe(lens, spec.method, spec.normalization, method_options(spec.method, spec.sampling_options()), size)
+    meta.update(placement)
+    dark = [] if lit.all() else [f"{int((~lit).sum())} of {lit.size} PSFs receive no light (every ray blocked): "
+                                 "they are zero"]
     meta.update({
-        "grid_orientation": "grid row 0 = largest y field, column 0 = smallest x field",
-        "transmission": transmission.reshape(len(wl), ny, nx).tolist(),
-        "energy_in_window": energy.reshape(len(wl), ny, nx).tolist(),
-        "vignetted_by_surfaces": sorted(vignetting),
-        "warnings": [*doubts, *S.window_warnings(energy[lit], np.broadcast_to(flat, (len(wl), n, 2))[lit], size,
-                                                  pitch_um)] + ([f"{int((~lit).sum())} of {lit.size} PSFs receive no "
-                                                                 "light (every ray blocked): they are zero"]
-                                                                if not lit.all() else []),
-        "seconds": time.perf_counter() - start,
+        "grid_spec": spec.canonical(),
+        "transmission": nodes.transmission.reshape(len(wl), ny, nx).tolist(),
+        "energy_in_window": nodes.energy.reshape(len(wl), ny, nx).tolist(),
+        "vignetted_by_surfaces": list(nodes.vignetting),
+        "warnings": [*nodes.doubts, *S.window_warnings(nodes.energy[lit], np.broadcast_to(
+            fields.reshape(-1, 2), (len(wl), n, 2))[lit], size, spec.pitch_um), *dark],
     })
-    if layout == "sensor":
-        meta["grid_orientation"] = "grid row 0 = top (largest y) of the sensor, column 0 = left"
-    if hx > 0:  # the ideal image an input spanning ±hx horizontally stands for (`optics.camera`)
-        meta.update(pinhole_focal_mm=pinhole_focal_mm(lens, hx), reference_wavelength_nm=lens.primary_wavelength)
-    if auto_window and energy.min() < S.WINDOW_ENERGY_LIMIT and 2 * size <= S.MAX_SIZE:
-        return psf_grid(lens, (ny, nx), wl, field_range_deg if layout == "sensor" else (hx, hy), pitch_um, 2 * size,
-                        method, normalization, pupil_samples, rays, field_sampling, progress, auto_window=True,
-                        layout=layout, sensor_mm=sensor_mm)
-    return PSFGrid(data, fields, chief.reshape(len(wl), ny, nx, 2), wl,
-                   float(pitch_um), meta)
+    return meta

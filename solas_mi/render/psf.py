@@ -85,9 +85,10 @@ def scene_hits(scene, lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, ra
     return hits
 
 
-def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int, rays: int,
-            shared_origin: bool = False) -> Computed:
-    """PSFs of field/wavelength pairs recorded through the Mitsuba scene (`psf.methods.compute`)."""
+def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int, *,
+            shared_origin: bool = False, rays: int) -> Computed:
+    """PSFs of field/wavelength pairs recorded through the Mitsuba scene (the PSF method "render",
+    registered in `psf.registry` by this stage's package)."""
     field_deg = np.atleast_2d(np.asarray(field_deg, dtype=np.float64))
     wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(field_deg),)).copy()
     chief = P.chief_rays(lens, field_deg, wavelength_nm)
@@ -95,5 +96,5 @@ def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: fl
     light = light_offsets_um(lens, field_deg, wavelength_nm, chief)
     center = window_centres_um(chief, light, shared_origin)
     data, transmission = bin_hits(hits, pitch_um, size, center)
-    return Computed(data, chief, transmission, [[] for _ in range(len(field_deg))],
-                    tuple(centring_warnings(chief, light, field_deg)), center)
+    return Computed(data=data, chief=chief, transmission=transmission, vignetted_by=[[] for _ in field_deg],
+                    warnings=tuple(centring_warnings(chief, light, field_deg)), centre_um=center)

@@ -116,8 +116,8 @@ def compare_fisheye(lens: Lens, env: np.ndarray, fov_deg: float, size: int, pitc
     direct = 0.5 * (runs[0] + runs[1])
     sensor_mm = (size * pitch_um * 1e-3,) * 2
     psf_pitch = pitch_um / 8 if psf_pitch_um is None else psf_pitch_um
-    g = timed("psf grid", psf_grid, lens, grid, [w], pitch_um=psf_pitch, size=psf_size, pupil_samples=pupil_samples,
-              method=method, layout="sensor", sensor_mm=sensor_mm)
+    g = timed("psf grid", psf_grid, lens, grid=grid, wavelengths_nm=[w], pitch_um=psf_pitch, size=psf_size,
+              pupil_samples=pupil_samples, method=method, layout="sensor", sensor_mm=sensor_mm)
     ideal = timed("ideal image", ideal_sensor_image, lens, env, fov_deg, size, pitch_um, w)
     convolved = timed("convolution", degrade, ideal, g, dtype=np.float64)
     mean = float(direct.mean())

@@ -14,11 +14,12 @@ from ..optics.lens import Lens
 from ..optics.pupil import chief_rays
 from ..psf import base as S
 from ..psf.geometric import bin_hits
+from ..psf.registry import DEFAULT_GEOMETRIC_RAYS
 from ..render.psf import scene_hits
 
 
 def scene_psf(scene, lens: Lens, field_deg, wavelength_nm: float, pitch_um: float = S.DEFAULT_PITCH_UM,
-              size: int = S.DEFAULT_SIZE, rays: int = S.DEFAULT_GEOMETRIC_RAYS) -> S.PSF:
+              size: int = S.DEFAULT_SIZE, rays: int = DEFAULT_GEOMETRIC_RAYS) -> S.PSF:
     """Geometric PSF (unit sum) of field (x, y) degrees at one wavelength through `scene`'s geometry.
     meta holds the rays' landing centroid and RMS radius (µm from the chief ray) and the transmitted
     power (fraction of the on-axis entrance-pupil power)."""

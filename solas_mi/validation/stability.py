@@ -22,10 +22,11 @@ from ..optics.exit_pupil import passes, pupil_bounds, reversed_lens
 from ..optics.lens import Lens
 from ..optics.paraxial import paraxial
 from ..optics.pupil import Bundle, chief_rays, pupil_function
-from ..psf.base import DEFAULT_PITCH_UM, DEFAULT_PUPIL_SAMPLES, DEFAULT_SIZE, WINDOW_ENERGY_LIMIT
+from ..psf.base import DEFAULT_PITCH_UM, DEFAULT_SIZE, WINDOW_ENERGY_LIMIT
 from ..psf.fraunhofer import sampling_warnings
 from ..psf.geometric import geometric
 from ..psf.methods import psf
+from ..psf.registry import DEFAULT_PUPIL_SAMPLES
 
 SAMPLING_TOLERANCE = 0.02  # of the PSF's peak: default pupil sampling against twice the samples
 FAR_TOLERANCE = 1e-3  # of the peak: an object beyond 1e9 mm against the object at infinity

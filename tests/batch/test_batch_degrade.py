@@ -93,21 +93,23 @@ def test_dask_local_and_local_processes_give_identical_outputs(batch_inputs):
 
 def test_the_grid_is_computed_once_and_cached(batch_inputs, doublet):
     from solas_mi.batch import GridCache, degrade_batch
+    from solas_mi.psf.spec import GridSpec
 
     batch_inputs.write(3)
     cache = GridCache(batch_inputs.root / "cache")
-    options = {"grid": "4x4", "size": 32, "pupil_samples": 32}
-    first = degrade_batch([batch_inputs.images], batch_inputs.root / "a", lens=doublet, grid_options=options,
+    options = {"grid": (4, 4), "size": 32, "pupil_samples": 32}
+    first = degrade_batch([batch_inputs.images], batch_inputs.root / "a", lens=doublet, grid_spec=GridSpec(**options),
                           cache=cache, workers=2, progress=False)
     assert (cache.misses, cache.hits) == (1, 0) and first.grid_source == "computed" and not first.failed
     second = degrade_batch([batch_inputs.images], batch_inputs.root / "b", lens="solas-doublet",
-                           grid_options={**options, "method": "fraunhofer"}, cache=cache, workers=1, progress=False)
+                           grid_spec=GridSpec(**options, method="fraunhofer"), cache=cache, workers=1, progress=False)
     assert (cache.misses, cache.hits) == (1, 1) and second.grid_source == "cache hit"
     assert len(list(cache.folder.iterdir())) == 1
     m = manifest(batch_inputs.root / "b")
-    assert m["lens_hash"] == doublet.hash and m["grid_options"]["grid"] == "4x4"
-    degrade_batch([batch_inputs.images], batch_inputs.root / "c", lens=doublet, grid_options={**options, "size": 48},
-                  cache=cache, workers=1, progress=False)
+    assert m["lens_hash"] == doublet.hash and m["grid_spec"] == GridSpec(**options).canonical()
+    assert m["grid_spec"]["grid"] == [4, 4]
+    degrade_batch([batch_inputs.images], batch_inputs.root / "c", lens=doublet,
+                  grid_spec=GridSpec(**{**options, "size": 48}), cache=cache, workers=1, progress=False)
     assert (cache.misses, cache.hits) == (2, 1)  # another sampling option: another grid
 
 
@@ -199,3 +201,74 @@ def test_temporary_files_of_killed_workers_are_removed(batch_inputs):
     result = degrade_batch([batch_inputs.images], out, psf_grid=batch_inputs.grid, workers=1, progress=False)
     assert result.count("done") == 2
     assert sorted(p.name for p in out.iterdir() if p.name.startswith(".")) == [".notes.txt"]
+
+
+def _planned_grid(capsys, argv) -> str:
+    """The grid file `batch degrade --dry-run` plans (its stage 1 line)."""
+    assert main([*argv, "--dry-run"]) == 0
+    (line,) = [t for t in capsys.readouterr().out.splitlines() if t.startswith("1. PSF grid: ")]
+    return line.split(": ", 1)[1].split(" (")[0]
+
+
+def test_a_fisheye_sensor_layout_is_not_dropped_by_the_batch(batch_inputs, capsys):
+    """--layout/--sensor-mm used to be parsed and dropped: the batch planned the field-layout grid."""
+    batch_inputs.write(1)
+    argv = ["batch", "degrade", str(batch_inputs.images), "--lens", "nikkor-fisheye", "--grid", "3x3", "-o",
+            str(batch_inputs.root / "out"), "--cache", str(batch_inputs.root / "cache")]
+    plain = _planned_grid(capsys, argv)
+    sensor = _planned_grid(capsys, [*argv, "--layout", "sensor", "--sensor-mm", "19x19"])
+    assert sensor != plain
+    assert sensor != _planned_grid(capsys, [*argv, "--layout", "sensor"])  # the sensor size counts too
+
+
+# per flag of `psf-grid`: the options it needs to matter, and a value other than the default
+FLAG_VARIANTS = {
+    "--grid": ([], "2x1"),
+    "--wavelengths-nm": ([], "486"),
+    "--layout": ([], "sensor"),
+    "--field-range-deg": ([], "1,0.5"),
+    "--field-sampling": ([], "edges"),
+    "--sensor-mm": (["--layout", "sensor"], "3x2"),
+    "--pitch-um": ([], "3"),
+    "--size": ([], "20"),
+    "--psf-method": ([], "geometric"),
+    "--pupil-samples": ([], "24"),
+    "--rays": (["--psf-method", "geometric"], "12"),
+    "--normalize": ([], "peak"),
+    "--auto-window": ([], None),
+}
+NOT_GRID_OPTIONS = {"lens", "output", "png", "force", "help"}
+
+
+def test_every_psf_grid_flag_reaches_the_cache_key_and_the_grid(batch_inputs, capsys, doublet):
+    """Each option `psf-grid` defines (read from its parser) changes the grid file a batch plans, and
+    the grid computed from the batch's spec."""
+    import argparse
+
+    from solas_mi.cli import build_parser
+    from solas_mi.psf.grid import psf_grid
+    from solas_mi.psf.spec import from_args
+
+    sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    flags = {max(a.option_strings, key=len) if a.option_strings else a.dest
+             for a in sub.choices["psf-grid"]._actions}
+    flags = {f for f in flags if f.lstrip("-") not in NOT_GRID_OPTIONS}
+    assert flags == set(FLAG_VARIANTS), "a psf-grid flag without a variant here (or a variant of no flag)"
+    batch_inputs.write(1)
+    base = ["--grid", "1x2", "--wavelengths-nm", "531", "--size", "16", "--pitch-um", "2", "--pupil-samples", "16",
+            "--rays", "8"]
+    argv = ["batch", "degrade", str(batch_inputs.images), "--lens", "solas-doublet", "-o",
+            str(batch_inputs.root / "out"), "--cache", str(batch_inputs.root / "cache")]
+
+    def spec_of(options):
+        args = sub.choices["batch"].parse_args(["degrade", "x", "--lens", "l", "-o", "o", *options])
+        return from_args(args)
+
+    for flag, (context, value) in sorted(FLAG_VARIANTS.items()):
+        before = [*base, *context]
+        after = [*before, flag] + ([] if value is None else [value])
+        assert _planned_grid(capsys, [*argv, *before]) != _planned_grid(capsys, [*argv, *after]), flag
+        a, b = psf_grid(doublet, spec_of(before)), psf_grid(doublet, spec_of(after))
+        assert b.meta["grid_spec"] == spec_of(after).canonical() != a.meta["grid_spec"], flag
+        assert a.data.shape != b.data.shape or not np.array_equal(a.data, b.data), flag
+        assert a.data.sum() > 0 and b.data.sum() > 0, flag

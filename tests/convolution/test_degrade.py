@@ -174,7 +174,7 @@ def test_interp_blends_the_offsets_of_the_nodes(synthetic):
 
 @pytest.fixture(scope="module")
 def doublet_grid(doublet):
-    return psf_grid(doublet, grid="4x4", size=64, pitch_um=1.0, pupil_samples=32, wavelengths_nm=[656, 531, 486])
+    return psf_grid(doublet, grid=(4, 4), size=64, pitch_um=1.0, pupil_samples=32, wavelengths_nm=[656, 531, 486])
 
 
 def tracer_centroids(lens, cam, field, synthetic) -> np.ndarray:

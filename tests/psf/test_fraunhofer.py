@@ -7,9 +7,9 @@ from scipy.special import j1
 
 from solas_mi import Lens, paraxial
 from solas_mi.optics import pupil as P
-from solas_mi.psf import base as S
 from solas_mi.psf import psf
 from solas_mi.psf.fraunhofer import fraunhofer
+from solas_mi.psf.registry import DEFAULT_PUPIL_SAMPLES
 
 
 @pytest.fixture(scope="module")
@@ -52,6 +52,6 @@ def test_parseval_discrete(doublet):
 @pytest.mark.parametrize("field", [0.0, 2.0])
 def test_pupil_sampling_converges(doublet, field):
     """Doubling the default pupil sampling changes the PSF by < 1e-3 RMSE of the peak."""
-    a = psf(doublet, (0, field), 486.0, pupil_samples=S.DEFAULT_PUPIL_SAMPLES).data
-    b = psf(doublet, (0, field), 486.0, pupil_samples=2 * S.DEFAULT_PUPIL_SAMPLES).data
+    a = psf(doublet, (0, field), 486.0, pupil_samples=DEFAULT_PUPIL_SAMPLES).data
+    b = psf(doublet, (0, field), 486.0, pupil_samples=2 * DEFAULT_PUPIL_SAMPLES).data
     assert np.sqrt(np.mean((a - b) ** 2)) < 1e-3 * b.max()

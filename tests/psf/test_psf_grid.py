@@ -41,7 +41,7 @@ def test_field_nodes():
 
 
 @pytest.mark.parametrize("kwargs, match", [
-    (dict(grid=(0, 1)), r"grid \(0, 1\) must look like 32x24"),
+    (dict(grid=(0, 1)), r"grid \(0, 1\) must be \(rows, columns\), each an integer >= 1"),
     (dict(field_range_deg=(1.0, 2.0, 3.0)), r"field \(1.0, 2.0, 3.0\) must be two angles"),
     (dict(field_range_deg=(-1.0, 2.0)), r"field range \(-1, 2\) deg must be non-negative"),
     (dict(normalization="max"), "normalization 'max' must be one of"),

@@ -35,7 +35,7 @@ def test_render_psf_matches_the_tracer(doublet_spec, distance):
 
 def test_psf_command_with_the_render_method(tmp_path, capsys):
     out = tmp_path / "psf.exr"
-    assert main(["psf", "solas-doublet", "--field-deg", "0,2", "--wavelength-nm", "531", "--method", "render",
+    assert main(["psf", "solas-doublet", "--field-deg", "0,2", "--wavelengths-nm", "531", "--psf-method", "render",
                  "--rays", "128", "--size", "40", "--pitch-um", "2", "-o", str(out)]) == 0
     channels, meta = read_exr(out)
     assert meta["method"] == "render" and meta["sampling"] == {"rays": 128}

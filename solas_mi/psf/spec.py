@@ -1,0 +1,194 @@
+"""`GridSpec`: every option of a PSF grid as one frozen, validated value, defined once: `psf_grid`
+takes it, the command line builds it (`add_options` / `from_args`: one flag per field, read from the
+field's metadata, so adding an option is one edit here), the batch's grid cache hashes its canonical
+form with the lens's hash and records it beside the grid.
+
+Conventions: grid (rows, columns) of nodes (the command line's "COLSxROWS" text is converted by
+`options.parse_wxh`); wavelengths in nm (None: the lens file's); field range in degrees as half
+ranges (x, y) (None: the lens's field in both); sensor size (width, height) in mm; pitch in µm;
+size in pixels.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from dataclasses import asdict, dataclass, field, fields
+from numbers import Real
+
+from ..errors import SolasError
+from ..options import floats, parse_size_mm, parse_wxh
+from .base import DEFAULT_PITCH_UM, DEFAULT_SIZE, NORMALIZATIONS, WINDOW_ENERGY_LIMIT, check_grid, check_normalization
+from .registry import DEFAULT_METHOD, METHODS, PUPIL_SAMPLES, RAYS, check_method, method_options
+
+FIELD_SAMPLINGS = ("centers", "edges")
+LAYOUTS = ("field", "sensor")  # nodes on field angles (tangents), or on sensor positions (`psf.sensor`)
+
+
+def _option(default, flag: str, help: str, *, parse=None, type=None, choices=None, psf: bool = False):
+    """A GridSpec field and its command-line flag: `parse` turns the flag's text into the value (else
+    argparse's `type`); `psf`: the single-PSF command `psf` takes it too."""
+    return field(default=default, metadata={"flag": flag, "help": help, "parse": parse, "type": type,
+                                            "choices": choices, "psf": psf})
+
+
+def _range(text: str) -> tuple[float, float]:
+    values = floats(text, "--field-range-deg")
+    if len(values) not in (1, 2):
+        raise SolasError(f"--field-range-deg {text!r} must be one value or X,Y")
+    return values[0], values[-1]
+
+
+@dataclass(frozen=True)
+class GridSpec:
+    """What a PSF grid is: nodes, wavelengths, sampling, method. Validated on construction."""
+
+    grid: tuple[int, int] = _option((8, 8), "--grid", "COLSxROWS field nodes", parse=lambda t: parse_wxh(t, "--grid"))
+    wavelengths_nm: tuple[float, ...] | None = _option(
+        None, "--wavelengths-nm", "nm, comma-separated (default: the lens file's)",
+        parse=lambda t: tuple(floats(t, "--wavelengths-nm")))
+    layout: str = _option(LAYOUTS[0], "--layout", "field: nodes on field angles; sensor: nodes on sensor positions "
+                                                  "(wide and fisheye lenses)", choices=LAYOUTS)
+    field_range_deg: tuple[float, float] | None = _option(
+        None, "--field-range-deg", "half range X[,Y] in degrees (default: the lens file's field)", parse=_range)
+    field_sampling: str = _option(FIELD_SAMPLINGS[0], "--field-sampling", "nodes at cell centres or spanning the "
+                                                                          "range's ends", choices=FIELD_SAMPLINGS)
+    sensor_mm: tuple[float, float] | None = _option(
+        None, "--sensor-mm", "sensor WxH in mm for --layout sensor (default: the square in the image circle)",
+        parse=lambda t: parse_size_mm(t, "--sensor-mm"))
+    pitch_um: float = _option(DEFAULT_PITCH_UM, "--pitch-um", "image-plane pixel pitch (µm)", type=float, psf=True)
+    size: int = _option(DEFAULT_SIZE, "--size", "PSF width and height (pixels)", type=int, psf=True)
+    method: str = _option(DEFAULT_METHOD, "--psf-method", "PSF method", choices=lambda: tuple(METHODS), psf=True)
+    pupil_samples: int = _option(PUPIL_SAMPLES.default, "--pupil-samples", "fraunhofer: pupil grid N×N", type=int,
+                                 psf=True)
+    rays: int = _option(RAYS.default, "--rays", "geometric, render: rays×rays per PSF", type=int, psf=True)
+    normalization: str = _option(NORMALIZATIONS[0], "--normalize", "PSF values", choices=NORMALIZATIONS, psf=True)
+    auto_window: bool = _option(False, "--auto-window", f"double --size until each window holds "
+                                                        f"{100 * WINDOW_ENERGY_LIMIT:g} %% of the light", psf=True)
+
+    def __post_init__(self):
+        set_ = object.__setattr__
+        set_(self, "grid", _rows_cols(self.grid))
+        set_(self, "wavelengths_nm", _wavelengths(self.wavelengths_nm))
+        _choice(self.layout, LAYOUTS, "grid layout")
+        _choice(self.field_sampling, FIELD_SAMPLINGS, "field sampling")
+        if self.layout == "sensor" and self.field_range_deg is not None:
+            raise SolasError(f"field range {self.field_range_deg!r} deg is for layout field; a sensor layout's "
+                             "nodes are set by its sensor size (sensor_mm)")
+        if self.layout == "field" and self.sensor_mm is not None:
+            raise SolasError(f"sensor size {self.sensor_mm!r} mm is for layout sensor (nodes on sensor positions)")
+        set_(self, "field_range_deg", _half_ranges(self.field_range_deg))
+        if self.sensor_mm is not None:
+            from .sensor import check_sensor_mm
+
+            set_(self, "sensor_mm", check_sensor_mm(self.sensor_mm))
+        check_grid(self.pitch_um, self.size)
+        set_(self, "pitch_um", float(self.pitch_um))
+        set_(self, "size", int(self.size))
+        check_method(self.method)
+        method_options(self.method, self.sampling_options())
+        check_normalization(self.normalization)
+        if not isinstance(self.auto_window, bool):
+            raise SolasError(f"auto_window {self.auto_window!r} must be True or False")
+
+    def sampling_options(self) -> dict[str, int]:
+        """The PSF methods' own options (`registry.method_options` keeps those of `method`)."""
+        return {"pupil_samples": self.pupil_samples, "rays": self.rays}
+
+    def canonical(self) -> dict:
+        """The options that make the grid, as plain JSON values: equal grids, equal forms (options
+        a layout or method does not use are left out)."""
+        out = asdict(self)
+        for name in ("field_range_deg", "field_sampling") if self.layout == "sensor" else ("sensor_mm",):
+            del out[name]
+        for name in set(self.sampling_options()) - set(method_options(self.method, self.sampling_options())):
+            del out[name]
+        return json.loads(json.dumps(out))
+
+    def key(self, lens_hash: str) -> str:
+        """16 hex digits that identify the grid of the lens with this hash."""
+        text = json.dumps({"lens_hash": lens_hash, **self.canonical()}, sort_keys=True)
+        return hashlib.sha256(text.encode()).hexdigest()[:16]
+
+
+def _rows_cols(value) -> tuple[int, int]:
+    ok = isinstance(value, (tuple, list)) and len(value) == 2 and all(
+        isinstance(v, int) and not isinstance(v, bool) and v >= 1 for v in value)
+    if not ok:
+        raise SolasError(f"grid {value!r} must be (rows, columns), each an integer >= 1 (the command line's "
+                         "--grid COLSxROWS is converted to it)")
+    return int(value[0]), int(value[1])
+
+
+def _number(value, what: str) -> float:
+    if not isinstance(value, Real) or isinstance(value, bool) or not math.isfinite(value):
+        raise SolasError(f"{what} {value!r} must be a finite number")
+    return float(value)
+
+
+def _wavelengths(value) -> tuple[float, ...] | None:
+    """None, one wavelength (nm) or a sequence of them; each a positive number (the lens checks its glasses)."""
+    if value is None:
+        return None
+    values = (value,) if isinstance(value, Real) else value
+    if isinstance(values, (str, bytes)) or not hasattr(values, "__iter__"):
+        raise SolasError(f"wavelengths {value!r} must be a number or a sequence of numbers (nm)")
+    out = tuple(_number(v, "wavelength (nm)") for v in values)
+    if not out or min(out) <= 0:
+        raise SolasError(f"wavelengths {value!r} must be one or more positive numbers (nm)")
+    return out
+
+
+def _half_ranges(value) -> tuple[float, float] | None:
+    """None, or one half range (both axes) or (x, y), degrees, non-negative and below 89."""
+    if value is None:
+        return None
+    from ..optics.fields import ANGLE
+
+    hx, hy = ANGLE.check((value, value) if isinstance(value, Real) else value)
+    if hx < 0 or hy < 0:
+        raise SolasError(f"field range ({hx:g}, {hy:g}) deg must be non-negative (half ranges)")
+    return hx, hy
+
+
+def _choice(value, allowed: tuple[str, ...], what: str) -> None:
+    if not isinstance(value, str) or value not in allowed:
+        raise SolasError(f"{what} {value!r} must be one of {', '.join(allowed)}")
+
+
+def _dest(f) -> str:
+    return f.metadata["flag"].lstrip("-").replace("-", "_")
+
+
+def add_options(p, psf_only: bool = False) -> None:
+    """One flag per GridSpec field (`psf_only`: those the single-PSF command takes), defaults unset
+    (None: GridSpec's, or `psf`'s, apply)."""
+    for f in fields(GridSpec):
+        m = f.metadata
+        if psf_only and not m["psf"]:
+            continue
+        default = "" if f.default is None else f" (default: {_shown(f.default)})"
+        if isinstance(f.default, bool):
+            p.add_argument(m["flag"], dest=_dest(f), action="store_true", default=None, help=m["help"])
+        else:
+            choices = m["choices"]() if callable(m["choices"]) else m["choices"]  # methods: those registered now
+            p.add_argument(m["flag"], dest=_dest(f), type=m["type"], choices=choices, help=m["help"] + default)
+
+
+def _shown(value) -> str:
+    return f"{value[1]}x{value[0]}" if isinstance(value, tuple) else str(value)
+
+
+def given(args, psf_only: bool = False) -> dict:
+    """The GridSpec options given on the command line (`add_options`), parsed: name → value."""
+    out = {}
+    for f in fields(GridSpec):
+        value = getattr(args, _dest(f), None)
+        if value is not None and (f.metadata["psf"] or not psf_only):
+            out[f.name] = f.metadata["parse"](value) if f.metadata["parse"] else value
+    return out
+
+
+def from_args(args) -> GridSpec:
+    """The GridSpec of a command's parsed arguments (`add_options`)."""
+    return GridSpec(**given(args))
