@@ -220,3 +220,39 @@ def test_runaway_jobs_are_refused_before_they_start(tmp_path, capsys, argv, mess
     start = time.perf_counter()
     assert message in one_line_error(capsys, [*argv, "-o", tmp_path / "x.exr"])
     assert time.perf_counter() - start < 2.0 and list(tmp_path.iterdir()) == []
+
+
+# ------------------------------------------------------------------ odd values the probe of every command found
+
+@pytest.mark.parametrize("argv, says", [
+    (["sfr-target", "--size", "64x64", "--noise", "nan"], "noise nan must be a finite number"),
+    (["sfr-target", "--size", "64x64", "--noise", "inf"], "noise inf must be a finite number"),
+    (["sfr-target", "--size", "64x64", "--sigma-px", "inf"], "--sigma-px inf must be a finite number"),
+    (["sfr-target", "--size", "64x64", "--angle-deg", "nan"], "--angle-deg nan must be a finite angle"),
+    (["scene", "solas-doublet", "--sensor", "0x0"], "--sensor '0x0' must look like 32x24"),
+    (["psf-grid", "solas-doublet", "--wavelengths-nm", "531,531"], "must differ from each other"),
+])
+def test_odd_values_are_one_clear_line(tmp_path, capsys, argv, says):
+    out = tmp_path / ("t.png" if argv[0] == "sfr-target" else "scene" if argv[0] == "scene" else "g.exr")
+    err = one_line_error(capsys, [*argv, "-o", out])
+    assert says in err
+    assert not out.exists()
+
+
+def test_a_damaged_grid_field_is_named_without_its_whole_value(tmp_path, capsys):
+    from solas_mi.psf.grid import psf_grid
+
+    grid = tmp_path / "grid.exr"
+    psf_grid(_doublet(), grid=(3, 3), size=32).write(str(grid))
+    channels, meta = read_exr(grid)
+    meta["grid"] = [4, 4]  # the PSF mosaics and the arrays of the metadata are 3x3
+    write_exr(grid, channels, meta)
+    err = one_line_error(capsys, ["degrade", PHOTO, "--psf-grid", grid, "-o", tmp_path / "d.exr"])
+    assert "metadata field" in err and len(err) < 400, err
+    assert "the fields grid, size and wavelengths_nm give" in err  # why a sound array's shape is wrong
+
+
+def _doublet():
+    from solas_mi.optics.lens import Lens
+
+    return Lens.load("solas-doublet")

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import math
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
@@ -155,8 +156,10 @@ def run_sfr_target(args: argparse.Namespace) -> int:
     if out.suffix.lower() not in (".png", ".exr"):
         raise SolasError(f"output {args.output!r} must end in .png (8-bit sRGB) or .exr (linear float)")
     check_target(out)
-    if not args.sigma_px >= 0:
-        raise SolasError(f"--sigma-px {args.sigma_px} must be ≥ 0")
+    if not 0 <= args.sigma_px < math.inf:
+        raise SolasError(f"--sigma-px {args.sigma_px} must be a finite number ≥ 0")
+    if not math.isfinite(args.angle_deg):
+        raise SolasError(f"--angle-deg {args.angle_deg} must be a finite angle (degrees)")
     if not (0 <= args.low <= 1 and 0 <= args.high <= 1):
         raise SolasError(f"--low {args.low} and --high {args.high} must lie in [0, 1] (linear levels)")
     if args.low == args.high:

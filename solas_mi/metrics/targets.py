@@ -90,8 +90,8 @@ def _finish(
         raise SolasError(f"encoding {encoding!r} is not supported: allowed {', '.join(ENCODINGS)}")
     if bit_depth not in (None, 8, 16):
         raise SolasError(f"bit depth {bit_depth} is not supported: allowed None (float), 8, 16")
-    if noise < 0:
-        raise SolasError(f"noise {noise} must be ≥ 0 (sd as a fraction of the step)")
+    if not (isinstance(noise, (int, float)) and 0 <= noise < math.inf):
+        raise SolasError(f"noise {noise!r} must be a finite number ≥ 0 (sd as a fraction of the step)")
     img = low + (high - low) * field_
     if noise > 0:
         img = img + np.random.default_rng(seed).normal(0.0, noise * abs(high - low), img.shape)

@@ -109,8 +109,7 @@ class PSFGrid:
 def check_grid_meta(path, meta: dict) -> tuple[int, int, int, tuple[float, ...]]:
     """Every metadata field a grid's users read, checked: (rows, columns, size, wavelengths)."""
     def bad(key: str, want: str):
-        return SolasError(f"PSF grid {path}: metadata field {key} = {str(meta.get(key, '(missing)'))[:60]} "
-                          f"must be {want}")
+        return _bad_field(path, meta, key, want)
 
     grid, size = meta.get("grid"), meta.get("size")
     if not (isinstance(grid, list) and len(grid) == 2 and all(_whole(v) and v >= 1 for v in grid)):
@@ -158,9 +157,16 @@ def _meta_array(path, meta: dict, key: str, shape: tuple[int, ...], positive: bo
     except (KeyError, TypeError, ValueError):
         ok = False
     if not ok:
-        raise SolasError(f"PSF grid {path}: metadata field {key} = {str(meta.get(key, '(missing)'))[:60]} must be "
-                         f"{'x'.join(map(str, shape))} finite{' positive' if positive else ''} numbers")
+        raise _bad_field(path, meta, key, f"{'x'.join(map(str, shape))} finite{' positive' if positive else ''} "
+                                          "numbers (the shape the fields grid, size and wavelengths_nm give)")
     return a
+
+
+def _bad_field(path, meta: dict, key: str, want: str) -> SolasError:
+    """The error for a damaged metadata field: the file, the field, the start of its value, what is due."""
+    value = str(meta[key]) if key in meta else "(missing)"
+    shown = value if len(value) <= 60 else value[:57] + "..."
+    return SolasError(f"PSF grid {path}: metadata field {key} = {shown} must be {want}")
 
 
 def tile(stack: np.ndarray) -> np.ndarray:

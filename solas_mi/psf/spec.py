@@ -136,6 +136,8 @@ def _wavelengths(value) -> tuple[float, ...] | None:
     out = tuple(_number(v, "wavelength (nm)") for v in values)
     if not out or min(out) <= 0:
         raise SolasError(f"wavelengths {value!r} must be one or more positive numbers (nm)")
+    if len({f"{w:g}" for w in out}) != len(out):  # each names a channel of the grid file (psf_531nm)
+        raise SolasError(f"wavelengths {value!r} must differ from each other (to 6 digits): each is a channel")
     return out
 
 

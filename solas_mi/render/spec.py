@@ -172,6 +172,8 @@ def _read(name: str, text):
         return text
     try:
         return parse(text)
+    except SolasError:  # a parser's own message (e.g. a sensor's WxH) names the value and what is allowed
+        raise
     except ValueError:
         kind = "an integer" if parse is int else "a number"
         raise SolasError(f"--{name.replace('_', '-')} {text!r} must be {kind}") from None
