@@ -16,7 +16,8 @@ sensor; the scene sees only the rays that leave the lens's first surface.
 | (sampler)        | sampler   | —           | independent, 4  | the samples per pixel                              |
 
 `traverse` exposes `pitch_um`, `world_unit_mm` and `focus_distance` (world units; inf: infinity),
-read-only (the pupil bounds and the image plane are built from them), and the film and sampler.
+read-only (the pupil bounds and the image plane are built from them), the film and sampler, and
+`to_world`, updatable: a moving camera's frames render without reloading the scene.
 The lens, response, film (and its crop window), pupil and wavelengths are `lens_film.LensFilm`'s,
 shared with `lens_sensor`.
 
@@ -40,7 +41,10 @@ pupil weight × 1/p(λ) × the Fresnel transmittance, scaled so that the pixel v
 irradiance in units of a lossless lens's on-axis irradiance from radiance 1: a uniform white scene
 is 1 at the image centre (less with `fresnel` "transmit") and falls off with the lens's relative
 illumination. `hdrfilm` develops a continuous response ("srgb", "table:") with Mitsuba's CIE tables;
-lines ("lines", "mono:λ") have no density and need `specfilm`.
+lines ("lines", "mono:λ") have no density and need `specfilm`: "lines" under an `hdrfilm` of a
+spectral variant is refused (SolasError naming both ways out). Rays blocked by the lens (past the
+image circle, at a stop, by total internal reflection) leave the vertex along the axis with weight 0:
+every ray is finite.
 
 Variants: spectral, or mono for a response of one wavelength (mono:λ): the lens is traced at λ and
 the scene's RGB and spectral data become Mitsuba's luminance, so a mono render equals the spectral
@@ -89,6 +93,7 @@ class LensCamera(LensFilm):
     def __init__(self, props: mi.Properties) -> None:
         super().__init__(props, "lens_camera", "srgb",
                          "an integrator that starts paths at the camera (path, volpath, aov, direct)")
+        self.check_film()
         self.fresnel = str(props.get("fresnel", "off"))
         if self.fresnel not in FRESNEL:
             raise SolasError(f"lens_camera: fresnel {self.fresnel!r} must be one of {', '.join(FRESNEL)}")
@@ -99,6 +104,16 @@ class LensCamera(LensFilm):
         self.norm = 1.0 / solid_angle
         self.reversed = reversed_lens(self.lens)
         self.last_vertex_z = float(self.lens.vertex_z[-1])
+
+    def check_film(self) -> None:
+        """SolasError for lines (no density) under an `hdrfilm` of a spectral variant: the film would
+        develop them with the CIE observer as if they were a continuous spectrum (nearly black)."""
+        r = self.response
+        if (mi.is_spectral and self.film().class_name() == "HDRFilm" and bool((r.hi_nm == r.lo_nm).any())
+                and r.single_wavelength is None):
+            raise SolasError(f"lens_camera: response {r.name!r} has lines, which an hdrfilm cannot develop (they "
+                             "have no spectral density); use a specfilm with one sensitivity per line, or a "
+                             "continuous response (srgb, table:<file.csv>)")
 
     def prepared(self, lens: Lens, props: mi.Properties) -> Lens:
         """The lens focused at `focus_distance` (world units of `world_unit_mm`), if given."""
@@ -131,11 +146,16 @@ class LensCamera(LensFilm):
         origin = mi.Point3f(mi.Float(out.x * scale), mi.Float(-out.y * scale),
                             mi.Float((out.z - self.last_vertex_z) * scale))
         direction = mi.Vector3f(mi.Float(out.dx), mi.Float(-out.dy), mi.Float(out.dz))
+        # a blocked ray (past the image circle, TIR) may hold NaN: it leaves from the vertex along the
+        # axis with weight 0, so that no integrator multiplies 0 by a NaN radiance
+        passed = mi.Bool(passed) & dr.all(dr.isfinite(origin)) & dr.all(dr.isfinite(direction))
+        origin = dr.select(passed, origin, mi.Point3f(0.0))
+        direction = dr.select(passed, direction, mi.Vector3f(0.0, 0.0, 1.0))
         # origin and direction apart: `transform @ ray` fails in a mono variant once a spectral one ran (Mitsuba 3.9)
         to_world = self.world_transform()
         ray = mi.Ray3f(to_world @ origin, to_world @ direction, time, lanes(lam))
         weight = weight * self.norm * mi.Float(traced.transmittance)
-        weight = dr.select(active & mi.Bool(passed), weight, 0.0)
+        weight = dr.select(active & passed, weight, 0.0)
         return ray, mi.Spectrum(weight * inv_pdf)
 
     def sample_position(self, time, sample, active=True):
@@ -153,6 +173,7 @@ class LensCamera(LensFilm):
         super().traverse(callback)
         callback.put("world_unit_mm", self.world_unit_mm, mi.ParamFlags.ReadOnly)
         callback.put("focus_distance", self.focus_distance, mi.ParamFlags.ReadOnly)
+        callback.put("to_world", self.m_to_world, mi.ParamFlags.NonDifferentiable)
 
     def to_string(self) -> str:
         return self.describe(f"focus {self.focus_distance:g}", f"fresnel {self.fresnel}")

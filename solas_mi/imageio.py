@@ -70,12 +70,17 @@ def srgb_decode(encoded: np.ndarray) -> np.ndarray:
 
 
 def write_exr(path: str | os.PathLike, channels: dict[str, np.ndarray], meta: dict | None = None,
-              compress: bool = True) -> None:
+              compress: bool = True, infinite: bool = False) -> None:
     """Write float32 channels (equal 2-D shapes, row 0 = top) and JSON metadata to an OpenEXR file.
 
-    `compress=False` skips ZIP compression, for data that does not compress (PSF grids)."""
+    `compress=False` skips ZIP compression, for data that does not compress (PSF grids). A NaN (or,
+    unless `infinite`, e.g. a depth map's sky, an infinite value) is a SolasError before anything is
+    written (`check_finite`)."""
     import OpenEXR
 
+    for name, channel in channels.items():
+        values = np.nan_to_num(channel, nan=np.nan, posinf=0.0, neginf=0.0) if infinite else channel
+        check_finite(np.asarray(values), f"{path}: channel {name}")
     compression = OpenEXR.ZIP_COMPRESSION if compress else OpenEXR.NO_COMPRESSION
     header = {"compression": compression, "type": OpenEXR.scanlineimage}
     if meta is not None:
@@ -123,6 +128,7 @@ def write_png(path: str | os.PathLike, image: np.ndarray, *, encoded: bool = Fal
     """Write a linear [0, 1] image (H×W or H×W×3) as 8-bit sRGB PNG; `encoded=True` skips the encoding."""
     import imageio.v3 as iio
 
+    check_finite(np.asarray(image), str(path))
     if encoded:
         data = np.round(np.clip(image, 0.0, 1.0) * 255.0).astype(np.uint8)
     else:

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import math
 import shutil
 import sys
 from pathlib import Path
@@ -114,14 +115,17 @@ def _render(args) -> int:
             raise SolasError(f"--set {item!r} must look like name=value (a <default> of the scene)")
         params[key] = value
     lens = Lens.load(args.lens) if args.lens else None
-    if lens is None and (args.pitch_um is not None or args.focus_distance is not None):
-        raise SolasError("--pitch-um and --focus-distance set the lens camera: give --lens too")
+    if lens is None and any(v is not None for v in (args.pitch_um, args.focus_distance, args.world_unit_mm)):
+        raise SolasError("--pitch-um, --focus-distance and --world-unit-mm set the lens camera: give --lens too")
     if lens is not None and args.integrator == "solas":
         raise SolasError("--integrator solas renders lens_sensor scenes (from `solas-mi scene`); with --lens the "
                          "scene's own integrator renders it")
     run, _ = spec_from_args(args, ("variant", "seed"))
-    scene = load(args.scene, run.variant, lens, params, pitch_um=args.pitch_um, focus_distance=args.focus_distance,
-                 response=args.response)
+    notes = []
+    scene = load(args.scene, run.variant, lens, params, notes, pitch_um=args.pitch_um,
+                 focus_distance=_focus(args.focus_distance), response=args.response, world_unit_mm=args.world_unit_mm)
+    for note in notes:
+        print(f"render: {note}", file=sys.stderr)
     spp = args.spp if args.spp is not None else int(scene.sensors()[0].sampler().sample_count())
     width, height = (int(v) for v in scene.sensors()[0].film().crop_size())
     _check_render(width, height, spp, args.force)
@@ -136,8 +140,23 @@ def _render(args) -> int:
         result = render_scene(scene, spp, seed=run.seed, progress=_progress)
     result.meta["scene"] = str(args.scene)
     if lens is not None:
-        result.meta.update(lens=lens.name, lens_hash=lens.hash)
+        from .user_scene import camera_meta
+
+        result.meta.update(lens=lens.name, lens_hash=lens.hash, **camera_meta(scene))
     return _write(result, data_file, png)
+
+
+def _focus(text: str | None) -> float | str | None:
+    """--focus-distance: world units (a positive number, inf) or "auto"."""
+    if text is None or text == "auto":
+        return text
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not value > 0:
+        raise SolasError(f"--focus-distance {text!r} must be a positive distance in world units, inf, or auto")
+    return value
 
 
 def _write(result, data_file, png) -> int:
@@ -189,8 +208,11 @@ def register(sub) -> None:
     render.add_argument("--lens", help="replace the scene's perspective camera by this lens (shipped name or .toml)")
     render.add_argument("--pitch-um", type=float, help="with --lens: pixel pitch in µm (default: the lens's field "
                                                        "matches the perspective camera's fov)")
-    render.add_argument("--focus-distance", type=float, help="with --lens: focus distance in world units "
-                                                             "(default: the lens file's image plane)")
+    render.add_argument("--focus-distance", help="with --lens: focus distance in world units, or auto (the depth "
+                                                 "at the image centre); default: a thinlens camera's, else the "
+                                                 "lens file's image plane")
+    render.add_argument("--world-unit-mm", type=float, help="with --lens: one world unit of the scene in mm "
+                                                            "(default 1000: metres)")
     render.add_argument("--response", help="with --lens: camera response (srgb, lines, mono:<nm>, table:<file.csv>)")
     render.add_argument("--integrator", choices=INTEGRATORS, default=INTEGRATORS[0],
                         help="auto (default): solas-mi's stratified loop for scenes of `solas-mi scene`, the "

@@ -1,17 +1,27 @@
-"""A user's Mitsuba scene file prepared for rendering: the scene's own integrator (stock `path` where it
-has none) and, with a lens, its `perspective` (or `thinlens`) sensor replaced by a `lens_camera` at the
-same pose (`to_world`), with the same film and sampler.
+"""A user's Mitsuba scene file prepared for rendering, read by Mitsuba's own parser (`mi.parser`): its
+includes, its `<default>`s wherever they are and the user's parameters (`--set`, declared or not, as
+`mi.load_file` takes them) resolved as Mitsuba resolves them. Only what must change is changed: a
+stock `path` integrator where the scene (includes and all) has none, and, with a lens, its first
+sensor (a `perspective` or `thinlens`) becomes a `lens_camera` that keeps its `id`, `to_world`,
+shutter, film (size after the parameters, crop window, rfilter), sampler and medium.
+
+Why the parser rather than the XML text or the loaded scene: the parsed nodes are the scene exactly
+as Mitsuba will build it (an include's sensor, a film size from a parameter), yet still properties
+that can be changed before anything is built, so the scene is built once, with the lens camera.
 
 The default pixel pitch makes the real lens's field match the perspective camera's: the real chief ray
 of the field half-angle along the camera's `fov_axis` (x, y or the diagonal) lands at the film's edge
-there, at the lens's primary wavelength (distortion elsewhere is the lens's own). Lengths in the scene
-are world units; the lens camera converts with `world_unit_mm` (default 1000: metres).
+there, at the lens's primary wavelength (distortion elsewhere is the lens's own). The camera's field is
+Mitsuba's own (`fov`, or `focal_length`, or neither: its default), read from a perspective camera built
+from the sensor's properties. Lengths in the scene are world units; the lens camera converts with
+`world_unit_mm` (default 1000: metres). The focus: the user's, else a `thinlens`'s `focus_distance`,
+else the lens file's; "auto" focuses on the scene's depth at the image centre (one ray along the axis).
+A `thinlens`'s aperture is reported, not used: the real lens has its own stop.
 """
 from __future__ import annotations
 
 import math
 import tempfile
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
@@ -20,57 +30,69 @@ from ..errors import SolasError, plugin_error
 from .scene import lens_file
 
 SWAPPABLE = ("perspective", "thinlens")
-FILM_35MM_WIDTH_MM = 36.0  # Mitsuba's `focal_length` is a 35 mm-equivalent
+FILM_DEFAULT = (768, 576)  # Mitsuba's film size when the scene names none
+CAMERA_ONLY = ("fov", "focal_length", "fov_axis", "near_clip", "far_clip", "focus_distance", "aperture_radius",
+               "principal_point_offset_x", "principal_point_offset_y")  # what the lens camera replaces
 
 
-def _value(element: ET.Element, defaults: dict[str, str]) -> str:
-    value = element.get("value", "")
-    return defaults.get(value[1:], value) if value.startswith("$") else value
-
-
-def _property(sensor: ET.Element, name: str, defaults: dict[str, str]) -> str | None:
-    for child in sensor:
-        if child.get("name") == name:
-            return _value(child, defaults)
-    return None
-
-
-def _film_size(sensor: ET.Element, defaults: dict[str, str]) -> tuple[int, int]:
-    film = sensor.find("film")
-    size = {"width": 768, "height": 576}  # Mitsuba's film defaults
-    if film is not None:
-        for child in film:
-            if child.get("name") in size:
-                size[child.get("name")] = int(float(_value(child, defaults)))
-    return size["width"], size["height"]
-
-
-def scene_film_size(xml_path: str | Path) -> tuple[int, int]:
-    """(width, height) pixels of the film of the first sensor of the scene file `xml_path`."""
+def _parse(mi, xml_path: str | Path, params: dict | None):
+    """(config, state) of Mitsuba's parser for the scene file with `params` (the scene's folder on the
+    file resolver while the caller instantiates)."""
+    path = Path(xml_path)
+    if not path.is_file():
+        raise SolasError(f"no such scene file: {path}")
+    config = mi.parser.ParserConfig(mi.variant())
     try:
-        root = ET.parse(xml_path).getroot()
-    except (OSError, ET.ParseError) as exc:
-        raise SolasError(f"scene {xml_path} cannot be read as XML: {exc}") from None
-    sensor = root.find("sensor")
-    defaults = {d.get("name"): d.get("value") for d in root.iter("default")}
-    return _film_size(sensor if sensor is not None else ET.Element("sensor"), defaults)
+        return config, mi.parser.parse_file(config, str(path), **{k: str(v) for k, v in (params or {}).items()})
+    except RuntimeError as exc:
+        raise plugin_error(exc, f"cannot read scene {path}") from None
 
 
-def field_half_angle(sensor: ET.Element, defaults: dict[str, str]) -> tuple[float, str]:
-    """(half field in degrees, axis "x" | "y" | "diagonal") of a perspective sensor element."""
-    fov, focal = _property(sensor, "fov", defaults), _property(sensor, "focal_length", defaults)
-    axis = (_property(sensor, "fov_axis", defaults) or "x").lower()
-    width, height = _film_size(sensor, defaults)
+def _children(state, node) -> list:
+    """The nodes `node` holds (its film, sampler, medium, …)."""
+    refs = [node.props[k] for k in node.props.keys()]
+    return [state.nodes[r.index()] for r in refs if type(r).__name__ == "ResolvedReference"]
+
+
+def _film(mi, state, sensor):
+    films = [n for n in _children(state, sensor) if n.type == mi.ObjectType.Film]
+    return films[0] if films else None
+
+
+def scene_film_size(xml_path: str | Path, params: dict | None = None) -> tuple[int, int]:
+    """(width, height) pixels of the film of the first sensor of the scene file `xml_path`."""
+    from .mitsuba import mitsuba
+
+    mi = mitsuba()
+    config, state = _parse(mi, xml_path, params)
+    sensors = [n for n in state.nodes if n.type == mi.ObjectType.Sensor]
+    film = _film(mi, state, sensors[0]) if sensors else None
+    return _size(film)
+
+
+def _size(film) -> tuple[int, int]:
+    if film is None:
+        return FILM_DEFAULT
+    return (int(film.props.get("width", FILM_DEFAULT[0])), int(film.props.get("height", FILM_DEFAULT[1])))
+
+
+def field_half_angle(mi, sensor, width: int, height: int) -> tuple[float, str]:
+    """(half field in degrees, axis "x" | "y" | "diagonal") of a perspective sensor node, as Mitsuba
+    computes it (a perspective camera built from its fov, focal_length and fov_axis)."""
+    props = {k: sensor.props[k] for k in ("fov", "focal_length", "fov_axis") if k in sensor.props}
+    axis = str(props.get("fov_axis", "x")).lower()
     if axis in ("smaller", "larger"):
         axis = "x" if (width <= height) == (axis == "smaller") else "y"
     if axis not in ("x", "y", "diagonal"):
         raise SolasError(f"sensor fov_axis {axis!r} must be one of x, y, diagonal, smaller, larger")
-    if fov is not None:
-        return 0.5 * float(fov), axis
-    if focal is not None:  # 35 mm-equivalent focal length across the film's width
-        f = float(focal.lower().removesuffix("mm"))
-        return math.degrees(math.atan(0.5 * FILM_35MM_WIDTH_MM / f)), "x"
-    raise SolasError("the scene's sensor has neither fov nor focal_length; give --pitch-um")
+    try:
+        camera = mi.load_dict({"type": "perspective", **props,
+                               "film": {"type": "hdrfilm", "width": width, "height": height}})
+    except RuntimeError as exc:
+        raise plugin_error(exc, "the scene's camera") from None
+    t = math.tan(math.radians(0.5 * float(mi.traverse(camera)["x_fov"][0])))
+    t *= {"x": 1.0, "y": height / width, "diagonal": math.hypot(width, height) / width}[axis]
+    return math.degrees(math.atan(t)), axis
 
 
 def default_pitch_um(lens, half_deg: float, axis: str, width: int, height: int) -> float:
@@ -93,74 +115,111 @@ def default_pitch_um(lens, half_deg: float, axis: str, width: int, height: int) 
     return 2e3 * float(np.hypot(*xy)) / span
 
 
-def scene_text(xml_path: str | Path, lens=None, pitch_um: float | None = None, focus_distance: float | None = None,
-               response: str | None = None, world_unit_mm: float | None = None,
-               lens_folder: str | Path | None = None) -> str:
-    """The scene XML at `xml_path` as text, with a `path` integrator if it has none and, given `lens`,
-    its first sensor replaced by a `lens_camera` at the same `to_world`, film and sampler, naming a
-    file that holds the lens (`render.scene.lens_file`: written into `lens_folder` when the lens was
-    changed in memory)."""
-    path = Path(xml_path)
-    if not path.is_file():
-        raise SolasError(f"no such scene file: {path}")
-    try:
-        root = ET.parse(path).getroot()
-    except ET.ParseError as exc:
-        raise SolasError(f"scene {path} is not valid XML: {exc}") from None
-    if root.find("integrator") is None:
-        root.insert(0, ET.Element("integrator", {"type": "path"}))
-    if lens is not None:
-        _swap_sensor(root, path, lens, pitch_um, focus_distance, response, world_unit_mm, lens_folder)
-    return ET.tostring(root, encoding="unicode")
-
-
-def _swap_sensor(root: ET.Element, path: Path, lens, pitch_um, focus_distance, response, world_unit_mm,
-                 lens_folder) -> None:
-    defaults = {d.get("name"): d.get("value") for d in root.iter("default")}
-    sensors = root.findall("sensor")
+def _first_sensor(mi, state, path):
+    sensors = [n for n in state.nodes if n.type == mi.ObjectType.Sensor]
     if not sensors:
-        raise SolasError(f"scene {path} has no <sensor>; add a perspective camera where the lens should be")
-    old = sensors[0]
-    kind = old.get("type")
+        raise SolasError(f"scene {path} has no <sensor> (includes read); add a perspective camera where the lens "
+                         "should be")
+    kind = sensors[0].props.plugin_name()
     if kind not in SWAPPABLE:
         raise SolasError(f"the scene's sensor is {kind!r}; --lens replaces a {' or '.join(SWAPPABLE)} camera")
-    held = lens_file(lens, lens_folder)
-    width, height = _film_size(old, defaults)
+    return sensors[0]
+
+
+def _add_integrator(mi, state) -> None:
+    """A stock `path` integrator where the scene has none (Mitsuba would render nothing)."""
+    if any(n.type == mi.ObjectType.Integrator for n in state.nodes):
+        return
+    node = mi.parser.SceneNode()
+    node.type = mi.ObjectType.Integrator
+    node.props.set_plugin_name("path")
+    state.nodes.append(node)
+    state.root.props["_solas_integrator"] = mi.Properties.ResolvedReference(len(state.nodes) - 1)
+
+
+def _swap_sensor(mi, state, path, lens, held: Path, options: dict, notes: list) -> None:
+    """Make the first sensor a lens_camera (`options`: pitch_um, focus_distance, response, world_unit_mm)."""
+    old = _first_sensor(mi, state, path)
+    props = old.props
+    width, height = _size(_film(mi, state, old))
+    pitch_um = options.get("pitch_um")
     if pitch_um is None:
-        pitch_um = default_pitch_um(lens, *field_half_angle(old, defaults), width, height)
+        pitch_um = default_pitch_um(lens, *field_half_angle(mi, old, width, height), width, height)
     elif not (isinstance(pitch_um, (int, float)) and 0.0 < pitch_um < 1e4):
         raise SolasError(f"pixel pitch {pitch_um!r} um must be a positive number below 1e4")
-    new = ET.Element("sensor", {"type": "lens_camera"})
-    ET.SubElement(new, "string", {"name": "lens", "value": str(held.resolve())})
-    ET.SubElement(new, "float", {"name": "pitch_um", "value": repr(float(pitch_um))})
-    for name, value, tag in (("focus_distance", focus_distance, "float"), ("world_unit_mm", world_unit_mm, "float"),
-                             ("response", response, "string")):
-        if value is not None:
-            ET.SubElement(new, tag, {"name": name, "value": str(value)})
-    for child in old:
-        if child.tag in ("transform", "film", "sampler") or (child.tag == "ref" and child.get("name") is None):
-            new.append(child)
-    root[list(root).index(old)] = new
+    focus = options.get("focus_distance")
+    if focus is None and props.plugin_name() == "thinlens" and "focus_distance" in props:
+        focus = float(props["focus_distance"])
+        notes.append(f"focus distance {focus:g} from the scene's thinlens camera")
+    if props.plugin_name() == "thinlens":
+        notes.append(f"the scene's thinlens aperture_radius {props.get('aperture_radius', 0.02)!r} is not used: "
+                     f"the lens {lens.name} has its own stop")
+    for name in CAMERA_ONLY:
+        if name in props:
+            del props[name]
+    props.set_plugin_name("lens_camera")
+    props["lens"] = str(held.resolve())
+    props["pitch_um"] = float(pitch_um)
+    for name in ("world_unit_mm", "response"):
+        if options.get(name) is not None:
+            props[name] = options[name] if name == "response" else float(options[name])
+    if focus is not None and focus != "auto":
+        props["focus_distance"] = float(focus)
 
 
-def load(xml_path: str | Path, variant: str | None = None, lens=None, params: dict | None = None, **lens_options):
-    """The scene of `scene_text` loaded in Mitsuba (plugins registered), relative paths resolved from
-    the scene file's folder; `params` fill its <default> values."""
+def _centre_depth(scene) -> float:
+    """Distance (world units) from the camera's origin along its axis to the scene (inf: nothing)."""
+    import drjit as dr
+    import mitsuba as mi
+
+    to_world = scene.sensors()[0].world_transform()
+    ray = mi.Ray3f(to_world @ mi.Point3f(0.0), dr.normalize(to_world @ mi.Vector3f(0.0, 0.0, 1.0)))
+    si = scene.ray_intersect(ray)
+    t = float(np.array(si.t).ravel()[0])
+    return t if np.isfinite(t) and t > 0 else math.inf
+
+
+def load(xml_path: str | Path, variant: str | None = None, lens=None, params: dict | None = None,
+         notes: list | None = None, **lens_options):
+    """The scene file `xml_path` loaded in Mitsuba (plugins registered) with `params` (as `mi.load_file`
+    takes them), relative paths from the scene's folder: a path integrator where it has none and, given
+    `lens`, its first sensor a lens_camera (`lens_options`: pitch_um, focus_distance (world units or
+    "auto"), response, world_unit_mm). What was carried over from the scene's camera is appended to
+    `notes`."""
     from .mitsuba import mitsuba
 
-    with tempfile.TemporaryDirectory(prefix="solas-lens-") as folder:  # the lens camera reads its lens while loading
-        text = scene_text(xml_path, lens, lens_folder=folder, **lens_options)
-        defaults = sorted(d.get("name") for d in ET.fromstring(text).iter("default"))
-        unknown = sorted(set(params or {}) - set(defaults))
-        if unknown:
-            raise SolasError(f"scene {xml_path} has no <default> named {', '.join(unknown)}; "
-                             f"its defaults: {', '.join(defaults) or 'none'}")
-        mi = mitsuba(variant)
-        resolver = mi.file_resolver()
-        resolver.prepend(str(Path(xml_path).resolve().parent))
-        try:
-            return mi.load_string(text, **{k: str(v) for k, v in (params or {}).items()})
-        except RuntimeError as exc:
-            raise plugin_error(exc, f"cannot load scene {xml_path}") from None
-        finally:
-            del resolver[0]
+    mi = mitsuba(variant)
+    notes = [] if notes is None else notes
+    resolver = mi.file_resolver()
+    resolver.prepend(str(Path(xml_path).resolve().parent))
+    try:
+        with tempfile.TemporaryDirectory(prefix="solas-lens-") as folder:  # the lens camera reads its lens while loading
+            held = lens_file(lens, folder) if lens is not None else None
+            scene = _built(mi, xml_path, params, lens, held, lens_options, notes)
+            if lens is not None and lens_options.get("focus_distance") == "auto":
+                depth = _centre_depth(scene)
+                notes.append(f"focus distance {depth:g} (auto: the scene's depth at the image centre)")
+                scene = _built(mi, xml_path, params, lens, held, dict(lens_options, focus_distance=depth), [])
+            return scene
+    finally:
+        del resolver[0]
+
+
+def _built(mi, xml_path, params, lens, held, lens_options, notes):
+    """Parsed, changed (integrator, sensor), transformed and built as `mi.load_file` does."""
+    config, state = _parse(mi, xml_path, params)
+    _add_integrator(mi, state)
+    if lens is not None:
+        _swap_sensor(mi, state, xml_path, lens, held, lens_options, notes)
+    try:
+        mi.parser.transform_all(config, state)
+        return mi.parser.instantiate(config, state)
+    except RuntimeError as exc:
+        raise plugin_error(exc, f"cannot load scene {xml_path}") from None
+
+
+def camera_meta(scene) -> dict:
+    """The lens camera's pitch (µm), focus distance and world unit (mm) for a render's metadata."""
+    sensor = scene.sensors()[0]
+    return {"pitch_um": sensor.pitch_um, "focus_distance": sensor.focus_distance,
+            "world_unit_mm": sensor.world_unit_mm}

@@ -26,6 +26,16 @@ def test_the_generator_wrote_the_shipped_scene_byte_for_byte(tmp_path):
     assert sum(len(b) for b in written.values()) < 3e6  # small enough for the repository
 
 
+def test_the_shipped_scene_defaults_to_the_doublets_view():
+    """Rendered as it is (its own <default>s), street.xml frames the experiment's doublet view, rolled."""
+    import xml.etree.ElementTree as ET
+
+    defaults = {d.get("name"): d.get("value") for d in ET.parse(SCENE).getroot().iter("default")}
+    expected = NARROW.params(float(defaults["fov"]), int(defaults["width"]), int(defaults["height"]),
+                             int(defaults["spp"]))
+    assert defaults == expected and NARROW.roll_deg != 0
+
+
 def test_framings_by_lens_and_by_field(doublet, triplet):
     assert framing(doublet) is FRAMINGS["solas-doublet"] is NARROW
     assert framing(triplet) is FRAMINGS["cooke-triplet"] is WIDE

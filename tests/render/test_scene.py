@@ -74,21 +74,17 @@ def test_a_lens_changed_in_memory_is_the_lens_the_scene_loads(tmp_path, doublet)
 
 
 def test_a_user_scene_names_the_lens_changed_in_memory(tmp_path, doublet):
-    import xml.etree.ElementTree as ET
-
-    from solas_mi import Lens
     from solas_mi.optics.focus import focused
-    from solas_mi.render.user_scene import scene_text
+    from solas_mi.render.user_scene import load
 
     scene = tmp_path / "scene.xml"
     scene.write_text('<scene version="3.0.0"><sensor type="perspective"><float name="fov" value="4"/>'
                      '<film type="hdrfilm"><integer name="width" value="64"/><integer name="height" value="48"/>'
                      '</film></sensor></scene>')
     near = focused(doublet, 2000.0)
-    text = scene_text(scene, near, lens_folder=tmp_path)
-    named = [e.get("value") for e in ET.fromstring(text).iter("string") if e.get("name") == "lens"]
-    assert Lens.load(named[0]).hash == near.hash
-    assert Lens.load(named[0]).hash != doublet.hash
+    held = load(scene, "llvm_ad_spectral", near).sensors()[0].lens
+    assert held.hash == near.hash
+    assert held.hash != doublet.hash
 
 
 def test_the_lens_file_is_parsed_once_per_content(tmp_path, doublet, monkeypatch):

@@ -266,4 +266,5 @@ def _write_images(st: _Steps, images: dict[str, np.ndarray], depth: np.ndarray) 
         write_exr(st.out / f"{stem}.exr", image_channels(img), {"lens": st.lens.name, "image": name,
                                                                 "variant": st.variant})
         write_png(st.out / f"{stem}.png", np.clip(img / 0.9, 0, 1))
-    write_exr(st.out / "depth.exr", {"Z": depth}, {"lens": st.lens.name, "unit": "m", "sky": "inf"})
+    write_exr(st.out / "depth.exr", {"Z": depth}, {"lens": st.lens.name, "unit": "m", "sky": "inf"},
+              infinite=True)

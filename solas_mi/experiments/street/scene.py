@@ -206,13 +206,15 @@ def _street_furniture(rng: np.random.Generator, shapes: list[Shape]) -> None:
 
 
 def scene_xml(shapes: list[Shape]) -> str:
-    """The scene file's text: integrator, sensor (pose and field as <default>s), sky and shapes."""
+    """The scene file's text: integrator, sensor (pose and field as <default>s: by default the doublet's
+    framing, `framings.NARROW`, so the file as it is frames the experiment's view), sky and shapes."""
+    from .framings import NARROW
+
+    defaults = NARROW.params(4.0, 1280, 960, 16)  # the doublet's view, rolled, as the experiment renders it
     out = ['<scene version="3.0.0">',
            '    <!-- written by solas_mi.experiments.street.scene: regenerate, do not edit -->',
-           '    <default name="width" value="1280"/>', '    <default name="height" value="960"/>',
-           '    <default name="spp" value="16"/>', '    <default name="fov" value="4"/>',
-           '    <default name="origin" value="0, 1.4, 0"/>', '    <default name="target" value="0, 1.4, 1"/>',
-           '    <default name="up" value="0, 1, 0"/>',
+           *(f'    <default name="{k}" value="{defaults[k]}"/>'
+             for k in ("width", "height", "spp", "fov", "origin", "target", "up")),
            '    <integrator type="path"><integer name="max_depth" value="1"/></integrator>',
            '    <sensor type="perspective">', '        <float name="fov" value="$fov"/>',
            '        <string name="fov_axis" value="x"/>',
