@@ -41,6 +41,15 @@ def tmpfs(path: Path, options: str):
         subprocess.run(["umount", str(path)], capture_output=True)
 
 
+def foreign_exr(path: Path, channels: dict) -> None:
+    """An EXR as other tools write it, NaN and infinities included (ours refuse to write those)."""
+    import OpenEXR
+
+    header = {"compression": OpenEXR.ZIP_COMPRESSION, "type": OpenEXR.scanlineimage}
+    with OpenEXR.File(header, {k: np.ascontiguousarray(v, dtype=np.float32) for k, v in channels.items()}) as f:
+        f.write(str(path))
+
+
 def one_line_error(capsys, argv) -> str:
     capsys.readouterr()  # what fixtures printed
     assert main([str(a) for a in argv]) == 2
@@ -171,7 +180,7 @@ def test_nan_pixels_are_refused_with_count_and_position(tmp_path, capsys, grid):
     image = np.full((96, 128, 3), 0.5)
     image[10, 20, 1] = np.nan
     image[50, 60, 0] = np.inf
-    write_exr(tmp_path / "nan.exr", {"R": image[..., 0], "G": image[..., 1], "B": image[..., 2]})
+    foreign_exr(tmp_path / "nan.exr", {"R": image[..., 0], "G": image[..., 1], "B": image[..., 2]})
     err = one_line_error(capsys, ["degrade", tmp_path / "nan.exr", "--psf-grid", grid, "-o", tmp_path / "o.exr"])
     assert "2 values are NaN or infinite (the first at row 10, column 20, channel 1)" in err
 
