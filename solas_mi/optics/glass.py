@@ -88,6 +88,11 @@ class Glass:
             n2 = n2 + bi * l2 / (l2 - ci)
         return sqrt(n2)
 
+    @property
+    def dispersive(self) -> bool:
+        """Whether the index changes with wavelength (air and a model glass of n_d alone do not)."""
+        return self.kind != "air" and (self.kind != "model" or self.coefficients[1][0] != 0)
+
     def abbe(self) -> tuple[float, float]:
         """(n_d, V_d) computed from the dispersion formula."""
         nd, nf, nc = (float(self.index(w)) for w in (LINE_D, LINE_F, LINE_C))

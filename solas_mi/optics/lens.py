@@ -334,6 +334,12 @@ class Lens:
         return field_type_for(self.field_deg)
 
     @property
+    def dispersive(self) -> bool:
+        """Whether any medium's index depends on wavelength: a lens read without dispersion data (a
+        pbrt table of n_d alone) focuses every colour alike, which `lens info` and PSF metadata state."""
+        return any(g.dispersive for g in (self.object_glass, *(s.glass for s in self.surfaces)))
+
+    @property
     def at_infinity(self) -> bool:
         return math.isinf(self.object_distance)
 
