@@ -43,11 +43,13 @@ class Bundle:
         """Per-field values spread over the bundle's rays."""
         return T.gather(values, self.index)
 
-    def trace(self, ex: T.F, ey: T.F) -> T.Traced:
+    def trace(self, ex: T.F, ey: T.F, heights: list | None = None) -> T.Traced:
+        """The rays of entrance coordinates (ex, ey) traced; `heights`: see `tracer.trace`."""
         if self.lens.field_type.sideways:  # directions up to and beyond 90°, object at infinity
-            return T.trace(self.lens, T.launch_direction(self.lens, *self.incoming, ex, ey), self.wavelength_um)
-        rays = T.launch(self.lens, *self.incoming, ex, ey, self.object_point)
-        return T.trace(self.lens, rays, self.wavelength_um)
+            rays = T.launch_direction(self.lens, *self.incoming, ex, ey)
+        else:
+            rays = T.launch(self.lens, *self.incoming, ex, ey, self.object_point)
+        return T.trace(self.lens, rays, self.wavelength_um, heights=heights)
 
 
 def aim(bundle: Bundle, target, ex: T.F, ey: T.F, goal_x: T.F, goal_y: T.F, max_iter: int = 60):
