@@ -9,6 +9,7 @@ A lens is data; analyses take it as their first argument: `paraxial(lens, 531.0)
 `spot(lens, (0, 2), 531.0)` (also exported by `solas_mi` itself).
 """
 from ..lazy import lazy_exports
+from . import zemax  # noqa: F401 - adds the .zmx reader and writer to formats.READERS / WRITERS
 
 __all__ = ["Lens"]
 __getattr__ = lazy_exports(__name__, {"Lens": ".lens"})

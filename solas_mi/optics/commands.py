@@ -34,7 +34,7 @@ def run_lens_info(args) -> int:
         rows.append(p)
     info = {"lens": lens.name, "hash": lens.hash, "source": lens.source, "stop_surface": lens.stop_index + 1,
             "image_z_mm": lens.image_z, "image_diameter_mm": lens.image_diameter, "field_type": lens.field_type.name,
-            "per_wavelength": rows}
+            "dispersion": lens.dispersive, "per_wavelength": rows}
     table = None
     if args.fields or lens.field_deg > 0:  # the given fields, else 0 … the lens's half field
         table = distortion(lens, sorted({abs(f) for f in fields} | {0.0}) if args.fields else None)
@@ -45,6 +45,8 @@ def run_lens_info(args) -> int:
     print(f"{lens.name}  ({lens.description})  hash {lens.hash}")
     print(f"stop: surface {lens.stop_index + 1}; image plane z = {lens.image_z:.6f} mm, diameter {lens.image_diameter:g} mm")
     print(f"fields: {lens.field_type.description}")
+    if not lens.dispersive:
+        print("glass: no dispersion data (every medium a constant index): the columns of every wavelength agree")
     print(f"{'quantity':36s}" + "".join(f"{w:>12g} nm" for w in wavelengths))
     for key, label in _ROWS:
         print(f"{label:36s}" + "".join(f"{r[key]:15.6f}" for r in rows))

@@ -88,6 +88,11 @@ class Glass:
             n2 = n2 + bi * l2 / (l2 - ci)
         return sqrt(n2)
 
+    @property
+    def dispersive(self) -> bool:
+        """Whether the index changes with wavelength (air and a model glass of n_d alone do not)."""
+        return self.kind != "air" and (self.kind != "model" or self.coefficients[1][0] != 0)
+
     def abbe(self) -> tuple[float, float]:
         """(n_d, V_d) computed from the dispersion formula."""
         nd, nf, nc = (float(self.index(w)) for w in (LINE_D, LINE_F, LINE_C))
@@ -154,10 +159,16 @@ def candidates(name: str, catalog: str | None = None) -> list[str]:
     return sorted(set(_aliases(catalog).get(name.strip().upper(), [])))
 
 
-def resolve(name: str, catalog: str | None = None) -> Glass:
+def vendors(catalog: str | None = None) -> list[str]:
+    """The vendors of the catalogue, sorted."""
+    return sorted({k.split(":", 1)[0] for k in load_catalog(catalog)})
+
+
+def resolve(name: str, catalog: str | None = None, prefer: tuple[str, ...] = ()) -> Glass:
     """The one glass that `name` means: "AIR", a catalogue name ("N-BK7", "SCHOTT:F2", "OHARA:S-LAH59",
-    "BK7"), "model:n_d/V_d" or "model:n_d". Unknown or ambiguous names raise SolasError (an ambiguous
-    one lists the entries it may mean)."""
+    "BK7"), "model:n_d/V_d" or "model:n_d". A name several vendors use means the entry of the first
+    vendor in `prefer` that has exactly one of that name. Unknown or ambiguous names raise SolasError
+    (an ambiguous one lists the entries it may mean)."""
     if not isinstance(name, str) or not name.strip():
         raise SolasError(f"glass name {name!r} must be a non-empty string")
     if name.strip().upper() == "AIR":
@@ -170,12 +181,16 @@ def resolve(name: str, catalog: str | None = None) -> Glass:
         names = _aliases(catalog)
         close = difflib.get_close_matches(name.strip().upper(), names, n=5, cutoff=0.8)
         hint = f"; close: {', '.join(sorted({k for c in close for k in names[c]}))}" if close else ""
-        vendors = sorted({k.split(":", 1)[0] for k in load_catalog(catalog)})
         raise SolasError(
             f"unknown glass {name!r}{hint}; allowed: AIR, a catalogue glass ({len(load_catalog(catalog))} of "
-            f"{', '.join(vendors)}, as VENDOR:NAME or a name that only one of them uses), or model:n_d/V_d "
+            f"{', '.join(vendors(catalog))}, as VENDOR:NAME or a name that only one of them uses), or model:n_d/V_d "
             "(e.g. model:1.62/36.4)"
         )
+    for vendor in prefer if len(keys) > 1 else ():
+        mine = [k for k in keys if k.split(":", 1)[0] == vendor]
+        if len(mine) == 1:
+            keys = mine
+            break
     if len(keys) > 1:
         raise SolasError(f"glass name {name!r} is ambiguous: it matches {', '.join(keys)}; use one of those")
     return load_catalog(catalog)[keys[0]]

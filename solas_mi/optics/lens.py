@@ -23,16 +23,13 @@ from ..errors import SolasError
 from ..imageio import write_text
 from ..resources import resource_dir
 from . import glass as glass_mod
-from . import lens_toml, pbrt_dat, zemax
+from .formats import READERS, WRITERS, decode_text, listed
 from .fields import FieldType, field_type_for
 
 LENS_DIR = "lenses"
-# Lens file formats besides our TOML: text → lens-file dictionary, and Lens → text
-READERS = {".zmx": zemax.read_spec, ".dat": pbrt_dat.read_spec}
-WRITERS = {".toml": lens_toml.dumps, ".zmx": zemax.dumps, ".dat": pbrt_dat.dumps}
 # What a lens file may hold (anything else is a mistake worth naming, e.g. a surface type we do not model)
 KEYS = {
-    "lens": ("name", "description", "wavelengths_nm", "field_deg", "surface", "object", "image"),
+    "lens": ("name", "description", "wavelengths_nm", "field_deg", "catalogues", "surface", "object", "image"),
     "surface": ("label", "radius", "thickness", "diameter", "material", "stop", "conic", "aspheric"),
     "object": ("distance", "material"),
     "image": ("diameter",),
@@ -97,6 +94,17 @@ def _number(table: dict, key: str, where: str, unit: str, default: float | None 
     return float(value)
 
 
+def _catalogues(spec: dict, where: str) -> tuple[str, ...]:
+    """The lens file's `catalogues`: vendors, most preferred first, whose entry a glass name that several
+    vendors use means (as a Zemax file's GCAT line)."""
+    value = spec.get("catalogues", [])
+    vendors = glass_mod.vendors()
+    if not isinstance(value, list) or not all(isinstance(v, str) and v.upper() in vendors for v in value):
+        raise SolasError(f"{where}: catalogues = {value!r} must be a list of vendors, most preferred first; "
+                         f"allowed: {', '.join(vendors)}")
+    return tuple(v.upper() for v in value)
+
+
 def _table(spec: dict, key: str, where: str) -> dict:
     """spec[key] as a table ({} when absent)."""
     value = spec.get(key, {})
@@ -139,6 +147,30 @@ class Surface:
         return sag(r * r, self.curvature, self.conic, self.aspheric)
 
 
+def _surface(row: dict, i: int, where: str, catalogues: tuple[str, ...]) -> "Surface":
+    """Surface `i` (1-based) of a lens file's [[surface]] table, checked."""
+    label = str(row.get("label", f"surface {i}"))
+    ident = f"{where}: surface {i} ({label})"
+    _check_keys(row, "surface", ident)
+    stop = row.get("stop", False)
+    if not isinstance(stop, bool):
+        raise SolasError(f"{ident}: stop = {stop!r} must be true or false (a TOML boolean, unquoted)")
+    radius, thickness, diameter = (_number(row, key, ident, "mm") for key in ("radius", "thickness", "diameter"))
+    conic = _number(row, "conic", ident, "conic constant k, dimensionless", 0.0)
+    aspheric = row.get("aspheric", [])
+    if (not isinstance(aspheric, list) or len(aspheric) > 12
+            or not all(isinstance(a, (int, float)) and not isinstance(a, bool) and math.isfinite(a) for a in aspheric)):
+        raise SolasError(f"{ident}: aspheric = {aspheric!r} must be a list of at most 12 finite numbers "
+                         "[A4, A6, ...] (mm^(1-2i))")
+    material = row.get("material", "AIR")
+    try:
+        g = glass_mod.resolve(material, prefer=catalogues)
+    except SolasError as exc:
+        raise SolasError(f"{ident}: {exc}") from None
+    return Surface(label, radius, thickness, diameter, str(material), g, stop, conic,
+                   tuple(float(a) for a in aspheric))
+
+
 @dataclass(frozen=True)
 class Lens:
     """A sequential lens: data only. Load with `Lens.load("solas-doublet")` or a path to a lens file;
@@ -153,6 +185,7 @@ class Lens:
     field_deg: float = 0.0
     description: str = ""
     source: str = ""
+    catalogues: tuple[str, ...] = ()  # vendors whose entry a glass name shared by several vendors means, first first
 
     # ------------------------------------------------------------------ loading
     @classmethod
@@ -161,17 +194,17 @@ class Lens:
         a name holding a path separator or an extension is a path."""
         if not isinstance(name_or_path, (str, os.PathLike)):
             raise SolasError(f"lens {name_or_path!r} must be a shipped lens name ({', '.join(shipped_lenses())}) "
-                             f"or a path to a lens file ({', '.join(WRITERS)})")
+                             f"or a path to a lens file ({listed(READERS.keys() | {'.toml'})})")
         given = os.fspath(name_or_path)
         path = Path(given)
         if not path.suffix and not any(sep and sep in given for sep in (os.sep, os.altsep, "/")):
             path = _shipped_dir() / (given.replace("-", "_") + ".toml")
             if not path.is_file():
                 raise SolasError(f"unknown lens {given!r}; shipped lenses: {', '.join(shipped_lenses())}, or a path "
-                                 f"to a lens file ({', '.join(WRITERS)})")
-        if path.suffix.lower() not in WRITERS:
+                                 f"to a lens file ({listed(READERS.keys() | {'.toml'})})")
+        if path.suffix.lower() not in READERS.keys() | {".toml"}:
             what = f"unknown extension {path.suffix!r}" if path.suffix else "no lens extension"
-            raise SolasError(f"lens file {given!r} has {what}; allowed: {', '.join(WRITERS)}")
+            raise SolasError(f"lens file {given!r} has {what}; allowed: {listed(READERS.keys() | {'.toml'})}")
         if path.is_dir():
             raise SolasError(f"lens file {given!r} is a folder, not a lens file")
         if not path.is_file():
@@ -181,8 +214,7 @@ class Lens:
                 data = path.read_bytes()
             except OSError as exc:
                 raise SolasError(f"lens file {path}: cannot be read: {exc}") from None
-            # OpticStudio writes UTF-16 with a byte-order mark; older files and tables are ASCII
-            text = data.decode("utf-16") if data[:2] in (b"\xff\xfe", b"\xfe\xff") else data.decode("latin-1")
+            text = decode_text(data)
             return cls.from_dict(READERS[path.suffix.lower()](text, str(path)), source=str(path))
         try:
             with open(path, "rb") as f:
@@ -202,7 +234,7 @@ class Lens:
         writer = WRITERS.get(path.suffix.lower())
         if writer is None:
             raise SolasError(f"lens file {str(path)!r}: unknown extension {path.suffix!r}; "
-                             f"allowed: {', '.join(WRITERS)}")
+                             f"allowed: {listed(WRITERS)}")
         write_text(path, writer(self))
         return path
 
@@ -217,28 +249,8 @@ class Lens:
         if not all(isinstance(r, dict) for r in rows):
             raise SolasError(f"{where}: surface = {rows!r}: each surface must be a table ([[surface]] with radius, "
                              "thickness, ...)")
-        surfaces = []
-        for i, row in enumerate(rows, start=1):
-            label = str(row.get("label", f"surface {i}"))
-            ident = f"{where}: surface {i} ({label})"
-            _check_keys(row, "surface", ident)
-            stop = row.get("stop", False)
-            if not isinstance(stop, bool):
-                raise SolasError(f"{ident}: stop = {stop!r} must be true or false (a TOML boolean, unquoted)")
-            radius, thickness, diameter = (_number(row, key, ident, "mm") for key in ("radius", "thickness", "diameter"))
-            conic = _number(row, "conic", ident, "conic constant k, dimensionless", 0.0)
-            aspheric = row.get("aspheric", [])
-            if (not isinstance(aspheric, list) or len(aspheric) > 12
-                    or not all(isinstance(a, (int, float)) and not isinstance(a, bool) and math.isfinite(a) for a in aspheric)):
-                raise SolasError(f"{ident}: aspheric = {aspheric!r} must be a list of at most 12 finite numbers "
-                                 "[A4, A6, ...] (mm^(1-2i))")
-            material = row.get("material", "AIR")
-            try:
-                g = glass_mod.resolve(material)
-            except SolasError as exc:
-                raise SolasError(f"{ident}: {exc}") from None
-            surfaces.append(Surface(label, radius, thickness, diameter, str(material), g, stop, conic,
-                                    tuple(float(a) for a in aspheric)))
+        catalogues = _catalogues(spec, where)
+        surfaces = [_surface(row, i, where, catalogues) for i, row in enumerate(rows, start=1)]
         obj, image = _table(spec, "object", where), _table(spec, "image", where)
         _check_keys(obj, "object", f"{where}: object")
         _check_keys(image, "image", f"{where}: image")
@@ -248,7 +260,7 @@ class Lens:
         elif not isinstance(distance, (int, float)) or isinstance(distance, bool) or not 0 < distance < math.inf:
             raise SolasError(f"{where}: object distance {distance!r} must be a positive number (mm) or \"infinity\"")
         try:
-            object_glass = glass_mod.resolve(obj.get("material", "AIR"))
+            object_glass = glass_mod.resolve(obj.get("material", "AIR"), prefer=catalogues)
         except SolasError as exc:
             raise SolasError(f"{where}: object: {exc}") from None
         wavelengths = spec.get("wavelengths_nm", [486.0, 531.0, 656.0])
@@ -264,6 +276,7 @@ class Lens:
             field_deg=_number(spec, "field_deg", where, "degrees", 0.0),
             description=str(spec.get("description", "")),
             source=source,
+            catalogues=catalogues,
         )
         lens._validate(where)
         return lens
@@ -332,6 +345,12 @@ class Lens:
         """What a field (x, y) in degrees means for this lens (`fields`): angle fields (tangents), or
         polar fields for a lens whose `field_deg` reaches `fields.POLAR_FIELD_DEG`."""
         return field_type_for(self.field_deg)
+
+    @property
+    def dispersive(self) -> bool:
+        """Whether any medium's index depends on wavelength: a lens read without dispersion data (a
+        pbrt table of n_d alone) focuses every colour alike, which `lens info` and PSF metadata state."""
+        return any(g.dispersive for g in (self.object_glass, *(s.glass for s in self.surfaces)))
 
     @property
     def at_infinity(self) -> bool:

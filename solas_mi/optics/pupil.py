@@ -1,6 +1,7 @@
-"""Real-ray aiming and the pupil function on the exit-pupil reference sphere.
+"""Chief rays and the pupil function on the exit-pupil reference sphere (the aim itself: `aiming`).
 
-For each field, the chief ray is aimed through the stop centre; the reference sphere is centred on
+For each field, the chief ray is aimed through the stop centre (`aiming.chief_aim` says where a wide
+field's aim starts, and where no ray reaches the centre, the passing ray nearest it); the reference sphere is centred on
 the chief ray's image point P0 and passes through the chief ray's crossing of the paraxial exit-pupil
 plane. The pupil is sampled on a regular grid of direction cosines (α, β) of the vector from P0 to the
 sphere point, each ray found by Newton iteration on its entrance coordinates, so the Fraunhofer
@@ -16,127 +17,15 @@ import numpy as np
 from ..errors import SolasError
 from . import tracer as T
 from .lens import Lens
+from .aiming import Bundle, chief_aim, continued_aim, nearest_passing, stop_target, aim
 from .paraxial import paraxial
 
+__all__ = ["Bundle", "aim", "ChiefRays", "chief_rays", "widest_field", "stop_rim", "PupilFunction", "pupil_function",
+           "entrance_power", "nearest_passing"]
 dr = T.dr
 RIM_RAYS = 32
-_HALVINGS = 6  # a Newton step that loses its ray is halved up to this many times
 RIM_BISECTIONS = 30  # a rim ray moved inside the stop's rim: its radius to 1e-9 of the rim's
 RIM_STEPS = 8  # lenses of polar fields: steps of the rim aim from the stop centre out to the rim
-_STEP = 1e-5  # mm, finite-difference step in entrance coordinates
-POLAR_STEP_DEG = 2.0  # largest step of the polar angle when continuing a chief-ray aim outward
-_TOL = 1e-13  # convergence of aimed quantities (mm at the stop, direction cosines on the sphere)
-
-
-class Bundle:
-    """`per_field` rays for each of a batch of fields (degrees, (n, 2)) and wavelengths (nm, (n,))."""
-
-    def __init__(self, lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, per_field: int):
-        self.lens = lens
-        self.n_fields = len(field_deg)
-        self.per_field = per_field
-        self.index = dr.arange(T.UInt32, self.n_fields * per_field) // per_field
-        # per ray: field tangents (x, y), or the unit direction (x, y, z) of polar fields
-        incoming = lens.field_type.incoming(field_deg)
-        self.incoming = tuple(T.gather(incoming[:, i], self.index) for i in range(incoming.shape[1]))
-        self.wavelength_um = T.gather(np.asarray(wavelength_nm) / 1000.0, self.index)
-        pts = T.object_points(lens, field_deg)
-        self.object_point = None if pts is None else (T.gather(pts[:, 0], self.index), T.gather(pts[:, 1], self.index))
-        # what a converged aim can reach: rays launched from a far object carry its coordinates'
-        # rounding (≈ 1e-17 of the distance, measured: 4e-8 mm at 1e12 mm) into every crossing
-        self.tolerance = 1e3 * _TOL + (0.0 if lens.at_infinity else 1e-17 * lens.object_distance)
-
-    def per_ray(self, values: np.ndarray) -> T.F:
-        """Per-field values spread over the bundle's rays."""
-        return T.gather(values, self.index)
-
-    def trace(self, ex: T.F, ey: T.F) -> T.Traced:
-        if self.lens.field_type.sideways:  # directions up to and beyond 90°, object at infinity
-            return T.trace(self.lens, T.launch_direction(self.lens, *self.incoming, ex, ey), self.wavelength_um)
-        rays = T.launch(self.lens, *self.incoming, ex, ey, self.object_point)
-        return T.trace(self.lens, rays, self.wavelength_um)
-
-
-def aim(bundle: Bundle, target, ex: T.F, ey: T.F, goal_x: T.F, goal_y: T.F, max_iter: int = 60):
-    """Newton iteration on entrance coordinates so that target(traced) → (goal_x, goal_y).
-
-    `target(traced)` returns (gx, gy, ok). The Jacobian is taken by finite differences and reused
-    (chord method), and taken again where a residual stops falling; a step that would leave the rays
-    that pass (into total internal reflection, past a surface's edge) is halved; the iteration ends when
-    every ray's residual is below _TOL or has not fallen for a few steps, or after `max_iter`. A ray counts as
-    converged when its residual is within the precision the launch allows (`Bundle.tolerance`).
-    Returns (ex, ey, traced at the solution, converged mask)."""
-    def residual(ax, ay):
-        tr = bundle.trace(ax, ay)
-        gx, gy, ok = target(tr)
-        return gx - goal_x, gy - goal_y, ok, tr
-
-    def jacobian(ax, ay, rx, ry):
-        px, py, _, _ = residual(ax + _STEP, ay)
-        qx, qy, _, _ = residual(ax, ay + _STEP)
-        j = ((px - rx) / _STEP, (qx - rx) / _STEP, (py - ry) / _STEP, (qy - ry) / _STEP)
-        dr.eval(*j)
-        return j
-
-    rx, ry, ok, tr = residual(ex, ey)
-    j11, j12, j21, j22 = jacobian(ex, ey, rx, ry)
-    best = np.full(dr.width(rx), np.inf)  # per ray, so a batch's stiff rays do not stop the others
-    stalled = np.zeros(dr.width(rx), dtype=np.int64)
-    for _ in range(max_iter):
-        det = j11 * j22 - j12 * j21
-        step_x = (j22 * rx - j12 * ry) / det
-        step_y = (-j21 * rx + j11 * ry) / det
-        good = ok & dr.isfinite(step_x) & dr.isfinite(step_y)
-        for _ in range(_HALVINGS + 1):
-            nx, ny = dr.select(good, ex - step_x, ex), dr.select(good, ey - step_y, ey)
-            nrx, nry, nok, ntr = residual(nx, ny)
-            lost = good & ~nok  # the step left the rays that pass (total internal reflection, a missed surface)
-            dr.eval(nx, ny, nrx, nry, nok, lost)
-            if not dr.any(lost):
-                break
-            step_x, step_y = dr.select(lost, 0.5 * step_x, step_x), dr.select(lost, 0.5 * step_y, step_y)
-        ex, ey, rx, ry, ok, tr = nx, ny, nrx, nry, nok, ntr
-        err = np.abs(np.asarray(dr.select(ok, dr.maximum(dr.abs(rx), dr.abs(ry)), 0.0)))
-        stalled = np.where(err > 0.5 * best, stalled + 1, 0)
-        best = np.minimum(best, err)
-        active = (err >= _TOL) & (stalled < 4)  # stalled 4 times: at the floor of what the arithmetic resolves
-        if not active.any():
-            break
-        if (active & (stalled == 2)).any():  # the chord has stopped working: a fresh Jacobian where the rays are now
-            j11, j12, j21, j22 = jacobian(ex, ey, rx, ry)
-    converged = ok & (dr.maximum(dr.abs(rx), dr.abs(ry)) < bundle.tolerance)
-    return ex, ey, tr, converged
-
-
-def _stop_target(tr: T.Traced):
-    return tr.stop_x, tr.stop_y, tr.ok
-
-
-def _continued_aim(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> np.ndarray:
-    """Entrance coordinates (n, 2) of the real chief ray for polar fields, found by continuation: the
-    polar angle grows from 0 in steps of at most POLAR_STEP_DEG, each aim starting from the last
-    solution, so the aim follows the entrance pupil as it moves and tilts (no paraxial guess)."""
-    steps = max(1, math.ceil(float(np.hypot(field_deg[:, 0], field_deg[:, 1]).max()) / POLAR_STEP_DEG))
-    e = np.zeros((len(field_deg), 2))
-    zero = dr.zeros(T.F, len(field_deg))
-    for k in range(1, steps + 1):
-        b = Bundle(lens, field_deg * (k / steps), wavelength_nm, 1)
-        ex, ey, _, _ = aim(b, _stop_target, T.F(e[:, 0]), T.F(e[:, 1]), zero, zero)
-        e = np.stack(T.to_numpy(ex, ey), axis=-1)
-    return e
-
-
-def _paraxial_aim(lens: Lens, field_deg: np.ndarray) -> np.ndarray:
-    """Entrance coordinates (n, 2) of the paraxial chief ray (through the entrance-pupil centre)."""
-    ep_z = paraxial(lens).entrance_pupil_z_mm
-    tan = T.field_tangents(field_deg)
-    if lens.at_infinity:
-        # the ray through the pupil centre, in launch-plane coordinates: project (0, 0, ep_z − z0)
-        _, (_, _, e1z), (_, _, e2z) = T.beam_basis(tan[:, 0], tan[:, 1], np.sqrt)
-        span = ep_z - T.launch_plane_z(lens)
-        return np.stack([span * e1z, span * e2z], axis=-1)
-    pts = T.object_points(lens, field_deg)
-    return pts * (1.0 - lens.object_distance / (ep_z + lens.object_distance))
 
 
 @dataclass
@@ -149,7 +38,7 @@ class ChiefRays:
     opl: np.ndarray  # (n,) optical path to the reference sphere
     sphere_point: np.ndarray  # (n, 2) (α, β) of the chief ray's sphere point: (Q0 − P0) / R
     n_image: np.ndarray  # (n,)
-    vignetted: np.ndarray  # (n,) bool: an aperture blocks the chief ray itself
+    vignetted: np.ndarray  # (n,) bool: an aperture blocks the chief ray itself, or none reaches the stop centre
 
 
 def chief_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> ChiefRays:
@@ -157,9 +46,8 @@ def chief_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> 
     field_deg = np.atleast_2d(np.asarray(field_deg, dtype=np.float64))
     wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(field_deg),))
     b = Bundle(lens, field_deg, wavelength_nm, 1)
-    e0 = _continued_aim(lens, field_deg, wavelength_nm) if lens.field_type.sideways else _paraxial_aim(lens, field_deg)
-    zero = dr.zeros(T.F, b.n_fields)
-    ex, ey, tr, conv = aim(b, _stop_target, T.F(e0[:, 0]), T.F(e0[:, 1]), zero, zero)
+    e0, goal = chief_aim(lens, b)
+    ex, ey, tr, conv = aim(b, stop_target, T.F(e0[:, 0]), T.F(e0[:, 1]), T.F(goal[:, 0]), T.F(goal[:, 1]))
     px, py, _ = T.to_plane(tr, lens.image_z)
     xp_z = np.array([paraxial(lens, w).exit_pupil_z_mm for w in wavelength_nm])
     qx, qy, qopl = T.to_plane(tr, b.per_ray(xp_z))
@@ -168,7 +56,7 @@ def chief_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> 
         ex, ey, px, py, radius, qopl, (qx - px) / radius, (qy - py) / radius, tr.n_image, conv, tr.clipped_by)
     if not conv.all():
         bad = field_deg[~conv][0]
-        raise SolasError(f"no real ray of {wavelength_nm[~conv][0]:g} nm reaches the stop centre for field "
+        raise SolasError(f"no real ray of {wavelength_nm[~conv][0]:g} nm reaches the stop for field "
                          f"({bad[0]:g}, {bad[1]:g}) deg; the lens does not image that field")
     return ChiefRays(
         entrance=np.stack([ex, ey], axis=-1),
@@ -177,8 +65,19 @@ def chief_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> 
         opl=qopl,
         sphere_point=np.stack([sa, sb], axis=-1),
         n_image=np.broadcast_to(n_image, (b.n_fields,)).copy(),
-        vignetted=clipped != 0,
+        vignetted=(clipped != 0) | (np.hypot(*goal.T) > 0),
     )
+
+
+def widest_field(lens: Lens, wavelength_nm: float, samples: int = 45) -> float:
+    """The widest field (degrees, on the y axis, up to what the lens's field type allows) whose chief ray
+    reaches the stop centre and passes every aperture: for lenses whose file states no field."""
+    top = lens.field_type.largest_deg
+    reached = float(continued_aim(lens, np.array([[0.0, top]]), np.array([wavelength_nm]))[1][0])
+    fields = np.linspace(0.0, reached * top, samples)
+    chief = chief_rays(lens, np.stack([np.zeros(samples), fields], axis=-1), np.full(samples, wavelength_nm))
+    clear = np.flatnonzero(np.cumprod(~chief.vignetted))
+    return float(fields[clear[-1]])
 
 
 def stop_rim(rim: Bundle, chief: ChiefRays, accept=None) -> tuple[np.ndarray, np.ndarray, T.Traced, np.ndarray]:
@@ -198,8 +97,8 @@ def stop_rim(rim: Bundle, chief: ChiefRays, accept=None) -> tuple[np.ndarray, np
         if lens.field_type.sideways:  # wide fields: the pupil is squeezed and tilted; grow the aim out from the chief ray
             ex, ey = rim.per_ray(chief.entrance[:, 0]), rim.per_ray(chief.entrance[:, 1])
             for k in range(1, RIM_STEPS):
-                ex, ey, _, _ = aim(rim, _stop_target, ex, ey, gx * (k / RIM_STEPS), gy * (k / RIM_STEPS))
-        ex, ey, tr, ok = aim(rim, _stop_target, ex, ey, gx, gy)
+                ex, ey, _, _ = aim(rim, stop_target, ex, ey, gx * (k / RIM_STEPS), gy * (k / RIM_STEPS))
+        ex, ey, tr, ok = aim(rim, stop_target, ex, ey, gx, gy)
         return ex, ey, tr, T.to_numpy(ok & accept(tr) if accept is not None else ok)[0]
 
     ex, ey, tr, ok = at(np.ones(len(phi)))

@@ -172,10 +172,11 @@ def launch_direction(lens: Lens, dx: F, dy: F, dz: F, ex: F, ey: F) -> Rays:
     return Rays(x, y, z, dx + 0.0 * ex, dy + 0.0 * ex, dz + 0.0 * ex, dr.zeros(ftype, dr.width(x)))
 
 
-def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False) -> Traced:
+def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False, heights: list | None = None) -> Traced:
     """Trace `rays` (in object space, before surface 1) through every surface of `lens`, in the array
     type of the rays (see the module docstring); with `fresnel`, also the product of the unpolarised
-    Fresnel transmittances (1 − (r_s² + r_p²)/2) of every refraction."""
+    Fresnel transmittances (1 − (r_s² + r_p²)/2) of every refraction; a `heights` list receives each
+    surface's squared ray height x² + y² (mm², for automatic clear apertures)."""
     x, y, z, dx, dy, dz, opl = rays.x, rays.y, rays.z, rays.dx, rays.dy, rays.dz, rays.opl
     ftype, utype, btype = _types(x)
     ok = dr.full(btype, True, dr.width(x))
@@ -192,6 +193,8 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False) -> Tr
         x, y, lz = dr.fma(t, dx, x), dr.fma(t, dy, y), dr.fma(t, dz, lz)
         opl = dr.fma(n_before, t, opl)
         r2 = x * x + y * y
+        if heights is not None:
+            heights.append(r2)
         blocked = r2 > _opaque((s.semi_diameter * (1.0 + _RIM_SLACK)) ** 2, ftype)
         clipped = dr.select((clipped == 0) & blocked, utype(k + 1), clipped)
         if s.stop:

@@ -1,32 +1,65 @@
 """Zemax OpticStudio sequential lens files (.zmx, text): read into our lens-file dictionary (what
-`Lens.from_dict` takes) and written from a `Lens`.
+`Lens.from_dict` takes) and written from a `Lens`, registered as the `.zmx` entries of `formats.READERS`
+and `WRITERS`.
 
-Read: SURF blocks of TYPE STANDARD and EVENASPH (CURV in 1/unit, DISZ, CONI, PARM 2… = A4, A6, … of
-the even asphere; PARM 1, the r² term, must be 0), STOP, DIAM (the semi-diameter), COMM (the label),
-GLAS names resolved through our catalogue (unknown names fail naming the glass; a name that several
-vendors use is taken from the vendor that GCAT lists, else it fails listing them; on SURF 0 the
-object's medium) and model glass (`GLAS ___BLANK 1 0 n_d V_d …`, V_d 0 for a constant index); UNIT (MM, CM, IN, METER) scales every
-length to mm; angle fields (YFLN/XFLN with FTYP 0) give the half field; WAVM (or WAVL) the
-wavelengths (µm in the file, nm here); surface 0's DISZ the object distance (INFINITY). Surface 0 is
-the object, the last SURF the image plane (its DIAM the image semi-diameter). Other surface types,
-mirrors and other field types are refused, naming them.
+Read as the author meant it:
+- Encodings as OpticStudio writes them: UTF-16 with or without a byte-order mark, UTF-8, else Latin-1
+  (`formats.decode_text`); written as UTF-8 text, names and labels on one line each (control characters become
+  spaces: a name cannot add a line).
+- Surfaces: TYPE STANDARD, EVENASPH (PARM 2… = A4, A6, …; PARM 1, the r² term, must be 0), ODDASPH (PARM
+  k the r^k coefficient: the even ones from r⁴ up are kept; r² and odd terms are refused naming the
+  surface), COORDBRK when it is a pure axial shift (its DISZ added to the gap) or undone by the next
+  coordinate break; flat air surfaces without a clear aperture of their own (dummies) are dropped,
+  their thickness added to the gap. STOP, COMM (the label), CONI, CURV (1/unit), DISZ.
+- Clear apertures: DIAM (the semi-diameter); where absent or 0, Zemax's automatic semi-diameter:
+  the largest height of the real chief and marginal (stop-rim) rays of every field and wavelength.
+- Glass: GLAS names through our catalogue; a name several vendors use is taken from the vendors GCAT
+  lists, or from SCHOTT, Zemax's default, when the file lists none (the description says so; the
+  lens's `catalogues` holds them); model glass `GLAS ___BLANK 1 0 n_d V_d …` (V_d 0 or absent: a
+  constant index); on SURF 0 the object's medium.
+- System aperture, which sets the stop's size as in Zemax (the stop's DIAM only with FLOA): ENPD
+  (entrance-pupil diameter), FNUM x 0 (image-space F/# = EFL / EPD), OBNA x 0 (object-space NA, finite
+  objects), FLOA (float by stop size).
+- Fields (XFLN/YFLN, FTYP's first number): 0 angle, 1 object height, 2 paraxial image height, 3 real
+  image height (the field whose real chief ray lands there); field_deg is the widest as an angle.
+- UNIT (MM, CM, IN, METER) scales every length to mm; WAVM (or WAVL) the wavelengths (µm in the file),
+  PWAV the one the aperture and field solves use; surface 0's DISZ the object distance. The last SURF
+  is the image plane (its DIAM the image semi-diameter).
+Mirrors, gratings, toroids, tilted or decentred coordinate breaks and other surface types are
+refused naming the surface and the feature.
 """
 from __future__ import annotations
 
+import math
+import re
+
 from ..errors import SolasError
 from . import glass as glass_mod
+from . import zemax_solves
+from .formats import READERS, WRITERS
 
 UNITS = {"MM": 1.0, "CM": 10.0, "IN": 25.4, "METER": 1000.0, "M": 1000.0}
-SURFACE_TYPES = ("STANDARD", "EVENASPH")
+SURFACE_TYPES = ("STANDARD", "EVENASPH", "ODDASPH", "COORDBRK")
+FIELD_TYPES = {"0": "angle", "1": "object height", "2": "paraxial image height", "3": "real image height"}
 # GCAT catalogue names → our vendors (Zemax's NIKON catalogue is Hikari's glass).
 GCAT_VENDORS = {**{v: v for v in glass_mod.VENDORS}, "NIKON": "HIKARI", "NIKON-HIKARI": "HIKARI"}
+DEFAULT_CATALOGUE = "SCHOTT"  # what OpticStudio uses for a file that names no catalogue
+_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029]")
+
+
+def one_line(text: str) -> str:
+    """`text` with every line break and control character made a space: what a .zmx line may hold."""
+    return _CONTROL.sub(" ", text)
 
 
 def _floats(tokens: list[str], where: str) -> list[float]:
     try:
-        return [float(t) for t in tokens]
+        values = [float(t) for t in tokens]
     except ValueError:
         raise SolasError(f"{where}: expected numbers, got {' '.join(tokens)!r}") from None
+    if not all(math.isfinite(v) for v in values):
+        raise SolasError(f"{where}: {' '.join(tokens)!r} must be finite numbers")
+    return values
 
 
 def _blocks(text: str, where: str) -> tuple[dict, list[dict]]:
@@ -49,18 +82,34 @@ def _blocks(text: str, where: str) -> tuple[dict, list[dict]]:
     return top, surfaces
 
 
-def _material(glas: list[str], ident: str, gcat: tuple[str, ...] = ()) -> str:
-    """Our material name for a GLAS line's tokens; `gcat`: our vendors that the file's GCAT line lists,
-    which pick among catalogue entries of the same name."""
+def _material(glas: list[str], ident: str, gcat: tuple[str, ...]) -> str:
+    """Our material name for a GLAS line's tokens; `gcat`: our vendors that the file's GCAT line lists
+    (or the default), which pick among catalogue entries of the same name."""
     name = glas[0] if glas else ""
     if name.upper() == "MIRROR":
         raise SolasError(f"{ident}: GLAS MIRROR: mirrors are not supported (refracting surfaces only)")
     if name.upper() == "___BLANK":
-        nd, vd = _floats(glas[3:5], f"{ident}: model glass GLAS ___BLANK")
-        return f"model:{nd!r}" if vd == 0 else f"model:{nd!r}/{vd!r}"
+        if len(glas) < 4:
+            raise SolasError(f"{ident}: model glass GLAS ___BLANK needs n_d (and V_d): "
+                             f"'___BLANK 1 0 n_d V_d', got {' '.join(glas)!r}")
+        nd, *vd = _floats(glas[3:5], f"{ident}: model glass GLAS ___BLANK n_d V_d")
+        if not 1.0 < nd < 3.0 or (vd and vd[0] and not 5.0 < vd[0] < 150.0):
+            raise SolasError(f"{ident}: model glass n_d {nd:g}" + (f", V_d {vd[0]:g}" if vd else "")
+                             + ": n_d must lie in (1, 3) and V_d in (5, 150) (or 0: no dispersion)")
+        return f"model:{nd!r}" if not vd or vd[0] == 0 else f"model:{nd!r}/{vd[0]!r}"
     keys = glass_mod.candidates(name) if name and name.upper() != "AIR" else []
-    listed = [k for k in keys if k.split(":", 1)[0] in gcat]
-    return listed[0] if len(keys) > 1 and len(listed) == 1 else name
+    for vendor in gcat:  # the catalogues in the order the file lists them
+        listed = [k for k in keys if k.split(":", 1)[0] == vendor]
+        if len(keys) > 1 and len(listed) == 1:
+            return listed[0]
+    return name
+
+
+def _catalogues(top: dict) -> tuple[tuple[str, ...], bool]:
+    """Our vendors of the GCAT line, in its order (Zemax's default when none), and whether defaulted."""
+    named = [c.upper() for line in top.get("GCAT", []) for c in line]
+    gcat = tuple(dict.fromkeys(GCAT_VENDORS[c] for c in named if c in GCAT_VENDORS))
+    return (gcat, False) if named else ((DEFAULT_CATALOGUE,), True)
 
 
 def read_spec(text: str, where: str) -> dict:
@@ -73,16 +122,23 @@ def read_spec(text: str, where: str) -> dict:
     if len(blocks) < 3:
         raise SolasError(f"{where}: {len(blocks)} SURF blocks; a lens needs the object, a surface and the image")
     spec: dict = {}
-    name = " ".join((top.get("NAME") or [[]])[0])
+    name = one_line(" ".join((top.get("NAME") or [[]])[0])).strip()
     if name:
         spec["name"] = name
-    gcat = tuple(GCAT_VENDORS[c.upper()] for line in top.get("GCAT", []) for c in line if c.upper() in GCAT_VENDORS)
+    gcat, defaulted = _catalogues(top)
+    spec["catalogues"] = list(gcat)
+    if defaulted:
+        spec["description"] = (f"glass names resolved in {DEFAULT_CATALOGUE}'s catalogue first, OpticStudio's "
+                               "default (the file names no GCAT)")
     spec["object"] = _object(blocks[0], scale, gcat, where)
-    spec["surface"] = [_surface(b, i, scale, gcat, where) for i, b in enumerate(blocks[1:-1], start=1)]
+    rows = [_surface(b, i, scale, gcat, where) for i, b in enumerate(blocks[1:-1], start=1)]
+    spec["surface"] = _fold(rows, where)
     if "DIAM" in blocks[-1]:
-        spec["image"] = {"diameter": 2.0 * _floats(blocks[-1]["DIAM"][0][:1], f"{where}: image DIAM")[0] * scale}
-    spec.update(_wavelengths_and_field(top, where))
-    return spec
+        semi = _floats(blocks[-1]["DIAM"][0][:1], f"{where}: image DIAM")[0] * scale
+        if semi > 0:
+            spec["image"] = {"diameter": 2.0 * semi}
+    spec.update(_wavelengths(top, where))
+    return zemax_solves.solve(spec, _aperture(top, scale, where), _fields(top, scale, where), _primary(top, spec), where)
 
 
 def _object(block: dict, scale: float, gcat: tuple[str, ...], where: str) -> dict:
@@ -96,27 +152,30 @@ def _object(block: dict, scale: float, gcat: tuple[str, ...], where: str) -> dic
 
 
 def _surface(b: dict, i: int, scale: float, gcat: tuple[str, ...], where: str) -> dict:
-    """The [[surface]] table of SURF block `i` (lengths scaled to mm)."""
+    """The [[surface]] table of SURF block `i` (lengths scaled to mm); "diameter" None where Zemax
+    computes it (no DIAM, or 0); a coordinate break's parameters under "break"."""
     ident = f"{where}: SURF {i} (line {b['line']})"
     kind = (b.get("TYPE") or [["STANDARD"]])[0][0].upper()
     if kind not in SURFACE_TYPES:
-        raise SolasError(f"{ident}: surface TYPE {kind} is not supported; allowed: {', '.join(SURFACE_TYPES)}")
+        raise SolasError(f"{ident}: surface TYPE {kind} is not supported; allowed: {', '.join(SURFACE_TYPES)} "
+                         "(rotationally symmetric refracting surfaces)")
     curv = _floats((b.get("CURV") or [["0"]])[0][:1], f"{ident}: CURV")[0] / scale
     thickness = (b.get("DISZ") or [["0"]])[0][0]
     if thickness.upper().startswith("INF"):
         raise SolasError(f"{ident}: DISZ INFINITY inside the lens; only the object may be at infinity")
-    if "DIAM" not in b:
-        raise SolasError(f"{ident}: no DIAM (semi-diameter); every surface needs its clear aperture")
-    row = {"label": " ".join((b.get("COMM") or [[f"SURF {i}"]])[0]) or f"SURF {i}",
+    semi = _floats(b["DIAM"][0][:1], f"{ident}: DIAM")[0] * scale if "DIAM" in b else 0.0
+    row = {"label": one_line(" ".join((b.get("COMM") or [[]])[0])).strip() or f"SURF {i}",
            "radius": 0.0 if curv == 0 else 1.0 / curv,
            "thickness": _floats([thickness], f"{ident}: DISZ")[0] * scale,
-           "diameter": 2.0 * _floats(b["DIAM"][0][:1], f"{ident}: DIAM")[0] * scale,
-           "material": _material(b["GLAS"][0], ident, gcat) if "GLAS" in b else "AIR"}
+           "diameter": 2.0 * semi if semi > 0 else None,
+           "material": _material(b["GLAS"][0], ident, gcat) if "GLAS" in b else "AIR", "ident": ident}
     conic = _floats((b.get("CONI") or [["0"]])[0][:1], f"{ident}: CONI")[0]
     if conic:
         row["conic"] = conic
-    if kind == "EVENASPH":
-        terms = _aspheric(b, scale, ident)
+    if kind == "COORDBRK":
+        row["break"] = _parameters(b, ident)
+    elif kind in ("EVENASPH", "ODDASPH"):
+        terms = _aspheric(b, scale, ident) if kind == "EVENASPH" else _odd_aspheric(b, scale, ident)
         if terms:
             row["aspheric"] = terms
     if "STOP" in b:
@@ -124,58 +183,162 @@ def _surface(b: dict, i: int, scale: float, gcat: tuple[str, ...], where: str) -
     return row
 
 
+def _parameters(b: dict, ident: str) -> dict[int, float]:
+    return {int(p[0]): _floats(p[1:2], f"{ident}: PARM {p[0]}")[0] for p in b.get("PARM", []) if len(p) > 1}
+
+
 def _aspheric(b: dict, scale: float, ident: str) -> list[float]:
     """[A4, A6, …] (mm^(1−2i)) of an EVENASPH block's PARM lines, trailing zeros dropped."""
-    parm = {int(p[0]): _floats(p[1:2], f"{ident}: PARM")[0] for p in b.get("PARM", []) if p}
+    parm = _parameters(b, ident)
     if parm.get(1, 0.0):
         raise SolasError(f"{ident}: PARM 1 (the r² term) = {parm[1]:g}; only A4 and higher are modelled "
                          "(fold the r² term into CURV)")
-    terms = [parm.get(k, 0.0) * scale ** (1 - 2 * k) for k in range(2, 9)]
+    return _trim([parm.get(k, 0.0) * scale ** (1 - 2 * k) for k in range(2, 9)])
+
+
+def _odd_aspheric(b: dict, scale: float, ident: str) -> list[float]:
+    """[A4, A6, A8] of an ODDASPH block (PARM k: the r^k coefficient); r² and odd terms refused."""
+    parm = _parameters(b, ident)
+    other = {k: v for k, v in parm.items() if v and (k % 2 or k == 2)}
+    if other:
+        k = min(other)
+        raise SolasError(f"{ident}: ODDASPH PARM {k} (the r^{k} term) = {other[k]:g}; only even terms from r⁴ "
+                         "up are modelled (odd and r² terms are not)")
+    return _trim([parm.get(k, 0.0) * scale ** (1 - k) for k in range(4, 9, 2)])
+
+
+def _trim(terms: list[float]) -> list[float]:
     while terms and terms[-1] == 0.0:
         terms.pop()
     return terms
 
 
-def _wavelengths_and_field(top: dict, where: str) -> dict:
-    """wavelengths_nm (WAVM, else WAVL) and field_deg (the largest angle field) of the header."""
-    spec: dict = {}
+def _fold(rows: list[dict], where: str) -> list[dict]:
+    """Rows without coordinate breaks and dummies: a pure axial break, a pair of breaks that undo each
+    other, and a flat air surface with no clear aperture of its own give their thickness to the row
+    before (or to the object's gap: refused, as the object distance would change)."""
+    out: list[dict] = []
+    i = 0
+    while i < len(rows):
+        row = rows[i]
+        if "break" in row:
+            shift = _break_shift(rows, i)
+            span = 2 if shift is None else 1
+            moved = row["thickness"] + (rows[i + 1]["thickness"] if shift is None else 0.0)
+            if not out:
+                raise SolasError(f"{row['ident']}: a coordinate break before the first surface is not supported")
+            out[-1]["thickness"] += moved
+            i += span
+            continue
+        air_before = not out or out[-1]["material"].upper() == "AIR"
+        dummy = (row["radius"] == 0 and not row.get("stop") and not row.get("aspheric") and row["diameter"] is None
+                 and row["material"].upper() == "AIR" and air_before and out)
+        if dummy:
+            out[-1]["thickness"] += row["thickness"]
+        else:
+            out.append(row)
+        i += 1
+    for row in out:
+        row.pop("ident")
+    return out
+
+
+def _break_shift(rows: list[dict], i: int) -> float | None:
+    """0.0 for a coordinate break that only moves along the axis; None when the next row is a break
+    that undoes it (no thickness between them); else SolasError naming the break."""
+    row = rows[i]
+    p = row["break"]
+    moves = [p.get(k, 0.0) for k in range(1, 6)]
+    if not any(moves):
+        return 0.0
+    nxt = rows[i + 1] if i + 1 < len(rows) else {}
+    q = nxt.get("break")
+    if q is not None and row["thickness"] == 0:
+        back = [q.get(k, 0.0) for k in range(1, 6)]
+        reordered = p.get(6, 0.0) != q.get(6, 0.0)
+        several = sum(1 for v in moves if v) > 1
+        if back == [-v for v in moves] and (reordered or not several):
+            return None
+    raise SolasError(f"{row['ident']}: COORDBRK decentres or tilts the axis (decenter x, y {moves[0]:g}, "
+                     f"{moves[1]:g}; tilt x, y, z {moves[2]:g}, {moves[3]:g}, {moves[4]:g}); only rotationally "
+                     "symmetric systems are supported (axial shifts, or breaks undone by the next)")
+
+
+def _wavelengths(top: dict, where: str) -> dict:
+    """wavelengths_nm (WAVM, else WAVL) of the header."""
     waves = [w[1] for w in top.get("WAVM", []) if len(w) > 1] or [w for line in top.get("WAVL", []) for w in line]
     waves = list(dict.fromkeys(_floats(waves, f"{where}: WAVM/WAVL")))
-    if waves:
-        spec["wavelengths_nm"] = [w * 1000.0 for w in waves]
+    return {"wavelengths_nm": [w * 1000.0 for w in waves]} if waves else {}
+
+
+def _primary(top: dict, spec: dict) -> float | None:
+    """The primary wavelength (nm): PWAV's entry of WAVM, else None (the lens's middle one)."""
+    index = {int(w[0]): float(w[1]) * 1000.0 for w in top.get("WAVM", []) if len(w) > 1}
+    pwav = (top.get("PWAV") or [["1"]])[0][:1] or ["1"]
+    try:
+        return index.get(int(pwav[0])) if spec.get("wavelengths_nm") else None
+    except ValueError:
+        return None
+
+
+def _aperture(top: dict, scale: float, where: str) -> tuple[str, float]:
+    """The system aperture: ("float", 0), ("epd", mm), ("fnum", F/#) or ("na", NA)."""
+    if "FLOA" in top:
+        return "float", 0.0
+    for key, kind, unit in (("ENPD", "epd", scale), ("FNUM", "fnum", 1.0), ("OBNA", "na", 1.0)):
+        if key in top:
+            value, *mode = _floats(top[key][0][:2], f"{where}: {key}") or [0.0]
+            if mode and mode[0] != 0:
+                name = "paraxial working F/#" if key == "FNUM" else "object cone angle"
+                raise SolasError(f"{where}: {key} {' '.join(top[key][0][:2])}: the system aperture type {name} "
+                                 "is not supported; allowed: entrance pupil diameter (ENPD), image-space F/# "
+                                 "(FNUM x 0), object-space NA (OBNA x 0), float by stop size (FLOA)")
+            if not value > 0:
+                raise SolasError(f"{where}: {key} {value:g} must be positive")
+            return kind, value * unit
+    return "float", 0.0
+
+
+def _fields(top: dict, scale: float, where: str) -> tuple[str, list[float]]:
+    """The field type (FIELD_TYPES' values) and the radial size of each field (degrees or mm)."""
     ftype = (top.get("FTYP") or [["0"]])[0][:1] or ["0"]
-    fields = [_floats(t, f"{where}: {k}") for k in ("XFLN", "YFLN") for t in top.get(k, [])]
-    if fields and ftype[0] == "0":
-        xs, ys = (fields[0], fields[1]) if len(fields) == 2 else ([0.0] * len(fields[0]), fields[0])
-        spec["field_deg"] = max((x * x + y * y) ** 0.5 for x, y in zip(xs, ys))
-    elif fields and any(v for f in fields for v in f):
-        raise SolasError(f"{where}: FTYP {ftype[0]}: only angle fields (FTYP 0) are supported")
-    return spec
+    if ftype[0] not in FIELD_TYPES:
+        raise SolasError(f"{where}: FTYP {ftype[0]}: field type not supported; allowed: "
+                         + ", ".join(f"{k} ({v})" for k, v in FIELD_TYPES.items()))
+    kind = FIELD_TYPES[ftype[0]]
+    count = _floats((top.get("FTYP") or [["0", "0", "0"]])[0][2:3] or ["0"], f"{where}: FTYP")[0]
+    xs = _floats((top.get("XFLN") or [[]])[0], f"{where}: XFLN")
+    ys = _floats((top.get("YFLN") or [[]])[0], f"{where}: YFLN")
+    n = int(count) if count > 0 else max(len(xs), len(ys))
+    xs, ys = (v + [0.0] * (n - len(v)) for v in (xs[:n], ys[:n]))
+    unit = 1.0 if kind == "angle" else scale
+    return kind, [math.hypot(x, y) * unit for x, y in zip(xs, ys)]
 
 
 def dumps(lens) -> str:
     """The .zmx text of `lens` (a `solas_mi.optics.lens.Lens`): UNIT MM, the aperture floating on the
     stop's DIAM, angle fields 0 and the half field, the lens's wavelengths; GCAT lists the vendors of
     its catalogue glasses and GLAS their names in those catalogues (the full VENDOR:NAME where two
-    of the listed vendors use the same name)."""
+    of the listed vendors use the same name). Names and labels are written on one line each."""
     def number(v: float) -> str:
         return repr(float(v))
 
     def glas(g) -> list[str]:
         if g.kind == "air":
             return []
+        nd, vd = (g.coefficients[0][0], 0.0) if g.kind == "model" and g.coefficients[1][0] == 0 else g.abbe()
+        nd, vd = float(f"{nd:.12g}"), float(f"{vd:.12g}")  # the formula's rounding noise is no digit of n_d
         if g.kind == "model":
-            nd, vd = (g.coefficients[0][0], 0.0) if g.coefficients[1][0] == 0 else g.abbe()
             return [f"  GLAS ___BLANK 1 0 {number(nd)} {number(vd)} 0 0 0 0 0 0"]
         bare = g.name.split(":", 1)[-1]
         same = [k for k in glass_mod.candidates(bare) if k.split(":", 1)[0] in vendors]
         name = bare if same == [g.name] else g.name
-        return [f"  GLAS {name} 0 0 {number(g.abbe()[0])} {number(g.abbe()[1])} 0 0 0 0 0 0"]
+        return [f"  GLAS {name} 0 0 {number(nd)} {number(vd)} 0 0 0 0 0 0"]
 
     glasses = [lens.object_glass, *(s.glass for s in lens.surfaces)]
     vendors = list(dict.fromkeys(g.name.split(":", 1)[0] for g in glasses if g.kind not in ("air", "model")))
 
-    out = ["VERS 190513 80 123457 L123457", "MODE SEQ", f"NAME {lens.name}", "PFIL 0 0 0",
+    out = ["VERS 190513 80 123457 L123457", "MODE SEQ", f"NAME {one_line(lens.name)}", "PFIL 0 0 0",
            "UNIT MM X W X CM MR CPMM", *([f"GCAT {' '.join(vendors)}"] if vendors else []),
            "FLOA", "FTYP 0 0 2 %d 0 0 0" % len(lens.wavelengths_nm),
            "XFLN 0 0", f"YFLN 0 {number(lens.field_deg)}"]
@@ -184,8 +347,8 @@ def dumps(lens) -> str:
     distance = "INFINITY" if lens.at_infinity else number(lens.object_distance)
     out += ["SURF 0", "  TYPE STANDARD", "  CURV 0.0", f"  DISZ {distance}", *glas(lens.object_glass)]
     for i, s in enumerate(lens.surfaces, start=1):
-        out += [f"SURF {i}", f"  TYPE {'STANDARD' if not any(s.aspheric) else 'EVENASPH'}", f"  COMM {s.label}",
-                f"  CURV {number(s.curvature)}"]
+        out += [f"SURF {i}", f"  TYPE {'STANDARD' if not any(s.aspheric) else 'EVENASPH'}",
+                f"  COMM {one_line(s.label)}", f"  CURV {number(s.curvature)}"]
         out += [f"  PARM {k} {number(a)}" for k, a in enumerate(s.aspheric, start=2)]
         out += ["  STOP"] if s.stop else []
         out += [f"  DISZ {number(s.thickness)}", *glas(s.glass), f"  DIAM {number(s.semi_diameter)} 1 0 0 1 \"\""]
@@ -193,3 +356,7 @@ def dumps(lens) -> str:
     out += [f"SURF {len(lens.surfaces) + 1}", "  TYPE STANDARD", "  CURV 0.0", "  DISZ 0",
             f"  DIAM {number(lens.image_diameter / 2.0)} 1 0 0 1 \"\""]
     return "\n".join(out) + "\n"
+
+
+READERS[".zmx"] = read_spec
+WRITERS[".zmx"] = dumps

@@ -196,7 +196,8 @@ def describe(lens, method: str, normalization: str, sampling: dict, size: int) -
     """The metadata every PSF output carries: lens, method, sampling (its parameter and value) and
     array conventions."""
     return {
-        "lens": lens.name, "lens_hash": lens.hash, "lens_source": lens.source, "method": method,
+        "lens": lens.name, "lens_hash": lens.hash, "lens_source": lens.source, "lens_dispersion": lens.dispersive,
+        "method": method,
         "normalization": normalization, "values": VALUE_MEANING[normalization], "sampling": dict(sampling),
         "origin_pixel": [size // 2, size // 2],
         "orientation": "row 0 = top (largest y), column 0 = left (smallest x)",

@@ -21,7 +21,7 @@ from ..optics import tracer as T
 from ..optics.exit_pupil import passes, pupil_bounds, reversed_lens
 from ..optics.lens import Lens
 from ..optics.paraxial import paraxial
-from ..optics.pupil import Bundle, chief_rays, pupil_function
+from ..optics.pupil import Bundle, chief_rays, pupil_function, widest_field
 from ..psf.base import DEFAULT_PITCH_UM, DEFAULT_SIZE, WINDOW_ENERGY_LIMIT
 from ..psf.fraunhofer import sampling_warnings
 from ..psf.geometric import geometric
@@ -231,8 +231,14 @@ def _exit_pupil(lens: Lens, wl: float) -> Case:
 
 def check_stability(lens: Lens, progress=None) -> list[Case]:
     """Every case for `lens` at its primary wavelength (see the module docstring); `progress(name)` is
-    called before each group. An unexpected exception is a failed case, not a crash."""
+    called before each group. An unexpected exception is a failed case, not a crash. A lens whose file
+    states no field (a pbrt table) is checked at the widest field it images (`pupil.widest_field`)."""
     wl = lens.primary_wavelength
+    cases = []
+    if lens.field_deg == 0:
+        lens = replace(lens, field_deg=widest_field(lens, wl))
+        cases.append(Case("field of a lens that states none", "the widest field whose chief ray passes",
+                          f"{lens.field_deg:.3f} deg", lens.field_deg > 0))
     full = (0.0, lens.field_deg)
     fields = np.array([[0.0, 0.0], [0.0, 0.7 * lens.field_deg], [0.0, lens.field_deg]])
     groups = [
@@ -247,7 +253,6 @@ def check_stability(lens: Lens, progress=None) -> list[Case]:
         ("OPD precision", lambda: [_opd_precision(lens, wl)]),
         ("exit pupil", lambda: [_exit_pupil(lens, wl)]),
     ]
-    cases = []
     for name, run in groups:
         if progress is not None:
             progress(name)

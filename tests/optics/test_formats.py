@@ -80,7 +80,8 @@ def test_aspheric_round_trip_and_units(tmp_path):
     (tmp_path / "singlet.zmx").write_text(ZMX.format(glass="N-BK7"))
     lens = Lens.load(tmp_path / "singlet.zmx")
     s1, s2 = lens.surfaces
-    assert (s1.radius, s1.thickness, s1.diameter, s1.stop) == pytest.approx((50.0, 6.0, 24.0, True))
+    # the system aperture (ENPD 2 cm) sizes the stop, surface 1, as in Zemax: its DIAM 1.2 cm is not the pupil
+    assert (s1.radius, s1.thickness, s1.diameter, s1.stop) == pytest.approx((50.0, 6.0, 20.0, True))
     assert s2.radius == pytest.approx(-500.0) and s2.conic == -1.5
     assert s2.aspheric == pytest.approx((1e-3 * 10 ** -3, -2e-5 * 10 ** -5))  # A4 in cm⁻³ → mm⁻³, A6 in cm⁻⁵ → mm⁻⁵
     assert lens.wavelengths_nm == pytest.approx((486.1327, 587.5618, 656.2725)) and lens.field_deg == 10.0
@@ -121,9 +122,14 @@ def test_other_vendors_glass_names_load(name, key, tmp_path):
 
 
 def test_gcat_picks_the_vendor_of_a_shared_name(tmp_path):
-    """"F2" is SCHOTT's, CDGM's and HIKARI's: the file's GCAT line says which; without one it fails."""
+    """"F2" is SCHOTT's, CDGM's and HIKARI's: the file's GCAT line says which; without one, SCHOTT, as
+    OpticStudio's default (stated in the description); a GCAT naming none of them leaves it ambiguous."""
     path = tmp_path / "f2.zmx"
     path.write_text(ZMX.format(glass="F2"))
+    lens = Lens.load(path)
+    assert lens.surfaces[0].glass.name == "SCHOTT:F2" and lens.catalogues == ("SCHOTT",)
+    assert "SCHOTT" in lens.description and "default" in lens.description
+    path.write_text(ZMX.format(glass="F2").replace("ENPD 2", "ENPD 2\nGCAT OHARA"))
     with pytest.raises(SolasError, match=r"glass name 'F2' is ambiguous: it matches CDGM:F2, HIKARI:F2, SCHOTT:F2"):
         Lens.load(path)
     for gcat, key in [("SCHOTT", "SCHOTT:F2"), ("OHARA CDGM", "CDGM:F2"), ("NIKON HOYA", "HIKARI:F2")]:

@@ -1,0 +1,205 @@
+"""Zemax files as their authors meant them, each feature in a file written here and checked against
+numbers derived by hand: the thick-lens formulas of a singlet of constant index, and a meridional
+real-ray trace written out below (Snell's law at spheres, in two dimensions, independent of the tracer)."""
+import math
+
+import numpy as np
+import pytest
+
+from solas_mi import Lens, SolasError
+from solas_mi.optics import pupil as P
+from solas_mi.optics.paraxial import paraxial
+
+N = 1.5  # the singlet's constant index (model glass without dispersion)
+R1, R2, T1 = 60.0, -240.0, 8.0  # mm
+# thick lens: 1/f = (n − 1)(1/R1 − 1/R2 + (n − 1) t / (n R1 R2)); BFD = f (1 − (n − 1) t / (n R1))
+EFL = 1.0 / ((N - 1) * (1 / R1 - 1 / R2 + (N - 1) * T1 / (N * R1 * R2)))
+BFD = EFL * (1 - (N - 1) * T1 / (N * R1))
+WL = 0.55  # µm
+
+
+def zmx(*, aperture="ENPD 20", fields="FTYP 0 0 2 1 0 0 0\nXFLN 0 0\nYFLN 0 10", obj="INFINITY", s1="DIAM 12 1",
+        s2="DIAM 14 1", extra="", header=""):
+    """A singlet, stop on surface 1, image plane at the paraxial focus; pieces replaceable."""
+    return f"""VERS 190513 80 123457 L123457
+MODE SEQ
+NAME singlet
+{header}UNIT MM X W X CM MR CPMM
+{aperture}
+{fields}
+WAVM 1 {WL} 1
+PWAV 1
+SURF 0
+  TYPE STANDARD
+  CURV 0.0
+  DISZ {obj}
+SURF 1
+  STOP
+  TYPE STANDARD
+  CURV {1 / R1!r}
+  DISZ {T1}
+  GLAS ___BLANK 1 0 {N} 0 0 0 0 0 0
+  {s1}
+SURF 2
+  TYPE STANDARD
+  CURV {1 / R2!r}
+  DISZ {BFD!r}
+  {s2}
+{extra}SURF 9
+  TYPE STANDARD
+  CURV 0.0
+  DISZ 0
+"""
+
+
+def load(tmp_path, text, name="lens.zmx", encoding="utf-8"):
+    path = tmp_path / name
+    path.write_bytes(text.encode(encoding))
+    return Lens.load(path)
+
+
+def hand_trace(theta_deg, y_stop, surfaces=((1 / R1, T1, N), (1 / R2, BFD, 1.0))):
+    """A meridional real ray of angle θ meeting surface 1 (the stop) at height y_stop: its heights at each
+    surface and on the image plane."""
+    u = math.radians(theta_deg)
+    c = surfaces[0][0]
+    sag = c * y_stop ** 2 / (1 + math.sqrt(1 - (c * y_stop) ** 2))
+    y, z, dy, dz, n = y_stop - math.tan(u) * (10.0 + sag), -10.0, math.sin(u), math.cos(u), 1.0
+    heights, vertex = [], 0.0
+    for c, t, n2 in surfaces:
+        # ray p + s d meets c|p − v|² − 2 (p_z − v_z) = 0
+        pz = z - vertex
+        b = dz - c * (y * dy + pz * dz)
+        cc = c * (y * y + pz * pz) - 2 * pz
+        s = cc / (b + math.sqrt(b * b - c * cc))
+        y, z = y + s * dy, z + s * dz
+        ny, nz = -c * y, 1 - c * (z - vertex)
+        norm = math.hypot(ny, nz)
+        ny, nz = ny / norm, nz / norm
+        cosi = dy * ny + dz * nz
+        mu = n / n2
+        cost = math.sqrt(1 - mu * mu * (1 - cosi * cosi))
+        dy, dz = mu * dy + (cost - mu * cosi) * ny, mu * dz + (cost - mu * cosi) * nz
+        heights.append(y)
+        vertex += t
+        n = n2
+    return heights, y + (vertex - z) / dz * dy
+
+
+def test_the_singlet_is_the_thick_lens_of_the_formulas(tmp_path):
+    lens = load(tmp_path, zmx())
+    p = paraxial(lens, WL * 1000)
+    assert p.efl_mm == pytest.approx(EFL, rel=1e-12) and p.bfd_mm == pytest.approx(BFD, rel=1e-12)
+    assert lens.surfaces[0].diameter == pytest.approx(20.0, rel=1e-12)  # ENPD 20, the stop at surface 1
+    assert not lens.dispersive
+
+
+@pytest.mark.parametrize("aperture, epd", [
+    ("ENPD 15", 15.0),  # the stop's DIAM 12 (24 mm) does not win
+    ("FNUM 4 0", EFL / 4.0),  # image-space F/# = EFL / EPD
+    ("FLOA\nENPD 15", 24.0),  # float by stop size: the stop's DIAM
+])
+def test_aperture_types_size_the_stop(tmp_path, aperture, epd):
+    lens = load(tmp_path, zmx(aperture=aperture))
+    p = paraxial(lens, WL * 1000)
+    assert p.entrance_pupil_diameter_mm == pytest.approx(epd, rel=1e-12)
+    assert p.f_number == pytest.approx(EFL / epd, rel=1e-12)
+
+
+def test_object_space_na(tmp_path):
+    # finite object 500 mm before the stop (surface 1): the marginal ray's n sin u = NA
+    lens = load(tmp_path, zmx(aperture="OBNA 0.02 0", obj="500"))
+    assert lens.surfaces[0].semi_diameter == pytest.approx(500.0 * math.tan(math.asin(0.02)), rel=1e-12)
+    with pytest.raises(SolasError, match="object-space NA needs a finite object"):
+        load(tmp_path, zmx(aperture="OBNA 0.02 0"))
+    with pytest.raises(SolasError, match="paraxial working F/# is not supported"):
+        load(tmp_path, zmx(aperture="FNUM 4 1"))
+
+
+def test_field_types(tmp_path):
+    # 1: object height h at 500 mm before the entrance pupil (the stop, surface 1): tan θ = h / 500
+    lens = load(tmp_path, zmx(fields="FTYP 1 0 2 1 0 0 0\nXFLN 0 0\nYFLN 0 30", obj="500"))
+    assert lens.field_deg == pytest.approx(math.degrees(math.atan(30 / 500)), rel=1e-12)
+    # 2: paraxial image height at the focus of a distant object: h' = f tan θ
+    lens = load(tmp_path, zmx(fields="FTYP 2 0 2 1 0 0 0\nXFLN 0 3\nYFLN 0 4"))
+    assert lens.field_deg == pytest.approx(math.degrees(math.atan(5 / EFL)), rel=1e-12)
+    # 3: real image height: the hand-traced chief ray (through the stop centre) of that angle lands there
+    lens = load(tmp_path, zmx(fields="FTYP 3 0 2 1 0 0 0\nXFLN 0 0\nYFLN 0 20", s1="DIAM 0 0", s2="DIAM 0 0"))
+    assert hand_trace(lens.field_deg, 0.0)[1] == pytest.approx(20.0, rel=1e-10)
+    assert abs(lens.field_deg - math.degrees(math.atan(20 / EFL))) > 0.01  # not the paraxial angle
+    with pytest.raises(SolasError, match="FTYP 4: field type not supported"):
+        load(tmp_path, zmx(fields="FTYP 4 0 2 1 0 0 0\nXFLN 0 0\nYFLN 0 20"))
+
+
+def test_automatic_semi_diameters(tmp_path):
+    """No DIAM (or DIAM 0): the largest height of the chief and stop-rim rays of every field; at the
+    stop its rim, behind it the meridional rim ray of the full field, traced by hand."""
+    lens = load(tmp_path, zmx(s1="", s2="DIAM 0 0"))
+    s1, s2 = lens.surfaces
+    assert s1.semi_diameter == pytest.approx(10.0, rel=1e-12)
+    lower = abs(hand_trace(10.0, -10.0)[0][1])
+    upper = abs(hand_trace(10.0, 10.0)[0][1])
+    assert s2.semi_diameter == pytest.approx(max(lower, upper), rel=1e-9)
+    chief = P.chief_rays(lens, [[0.0, 10.0]], [WL * 1000])
+    assert not chief.vignetted.any()
+
+
+def test_dummy_surfaces_and_axial_coordinate_breaks(tmp_path):
+    base = load(tmp_path, zmx())
+    dummy = "SURF 3\n  TYPE STANDARD\n  CURV 0\n  DISZ 0\n  DIAM 0 0\n"
+    axial = "SURF 4\n  TYPE COORDBRK\n  DISZ 0\n  PARM 1 0\n  PARM 3 0\n"
+    undo = ("SURF 5\n  TYPE COORDBRK\n  DISZ 0\n  PARM 3 12.5\n  PARM 1 0.5\n"
+            "SURF 6\n  TYPE COORDBRK\n  DISZ 0\n  PARM 3 -12.5\n  PARM 1 -0.5\n  PARM 6 1\n")
+    text = zmx(extra=dummy + axial + undo).replace(f"DISZ {BFD!r}", f"DISZ {BFD - 7!r}").replace(
+        "SURF 4\n  TYPE COORDBRK\n  DISZ 0", "SURF 4\n  TYPE COORDBRK\n  DISZ 7")
+    lens = load(tmp_path, text)
+    assert len(lens.surfaces) == 2 and lens.surfaces[1].thickness == pytest.approx(BFD, rel=1e-12)
+    assert paraxial(lens, WL * 1000).efl_mm == pytest.approx(paraxial(base, WL * 1000).efl_mm, rel=1e-12)
+    tilted = zmx(extra="SURF 3\n  TYPE COORDBRK\n  DISZ 0\n  PARM 3 5\n")
+    with pytest.raises(SolasError, match=r"SURF 3 \(line \d+\): COORDBRK decentres or tilts the axis"):
+        load(tmp_path, tilted)
+
+
+def test_odd_asphere_even_terms(tmp_path):
+    even = zmx(s2="DIAM 14 1").replace("SURF 2\n  TYPE STANDARD", "SURF 2\n  TYPE EVENASPH\n  PARM 2 1e-6\n  PARM 3 -2e-9")
+    odd = zmx(s2="DIAM 14 1").replace("SURF 2\n  TYPE STANDARD", "SURF 2\n  TYPE ODDASPH\n  PARM 4 1e-6\n  PARM 6 -2e-9")
+    a, b = load(tmp_path, even, "even.zmx"), load(tmp_path, odd, "odd.zmx")
+    assert a.surfaces[1].aspheric == b.surfaces[1].aspheric == (1e-6, -2e-9)
+    with pytest.raises(SolasError, match=r"SURF 2 \(line \d+\): ODDASPH PARM 3 \(the r\^3 term\)"):
+        load(tmp_path, odd.replace("PARM 4 1e-6", "PARM 3 1e-5"))
+
+
+@pytest.mark.parametrize("encoding", ["utf-16", "utf-16-le", "utf-16-be", "latin-1", "utf-8"])
+def test_encodings(tmp_path, encoding):
+    """OpticStudio's Unicode files (UTF-16, with or without a byte-order mark) and ANSI ones."""
+    lens = load(tmp_path, zmx().replace("NAME singlet", "NAME Ø18 mm singlet"), encoding=encoding)
+    assert lens.name == "Ø18 mm singlet"
+    assert paraxial(lens, WL * 1000).efl_mm == pytest.approx(EFL, rel=1e-12)
+
+
+def test_names_round_trip_on_one_line(tmp_path):
+    lens = load(tmp_path, zmx().replace("NAME singlet", "NAME Ø18 mm ½ singlet"))
+    assert Lens.load(lens.save(tmp_path / "back.zmx")).name == "Ø18 mm ½ singlet"
+    from dataclasses import replace
+    evil = replace(lens, name="x\nUNIT IN\nNAME y")
+    text = evil.save(tmp_path / "evil.zmx").read_text()
+    assert not any(line.startswith("UNIT IN") for line in text.splitlines())
+    back = Lens.load(tmp_path / "evil.zmx")
+    assert back.surfaces[0].radius == pytest.approx(R1) and "\n" not in back.name
+
+
+def test_model_glass_writes_its_digits(tmp_path):
+    lens = load(tmp_path, zmx().replace(f"___BLANK 1 0 {N} 0", "___BLANK 1 0 1.699 30.1"))
+    assert lens.surfaces[0].glass.name == "model:1.699/30.1"
+    text = lens.save(tmp_path / "back.zmx").read_text()
+    assert "___BLANK 1 0 1.699 30.1 " in text
+    assert Lens.load(tmp_path / "back.zmx").surfaces[0].glass.name == "model:1.699/30.1"
+
+
+def test_model_glass_given_by_n_d_alone_and_bad_numbers(tmp_path):
+    lens = load(tmp_path, zmx().replace(f"___BLANK 1 0 {N} 0 0 0 0 0 0", "___BLANK 1 0 1.62"))
+    assert lens.surfaces[0].glass.name == "model:1.62"
+    with pytest.raises(SolasError, match=r"SURF 1 \(line \d+\): model glass GLAS ___BLANK n_d V_d: 'nan 0' must be finite"):
+        load(tmp_path, zmx().replace(f"___BLANK 1 0 {N} 0", "___BLANK 1 0 nan 0"))
+    with pytest.raises(SolasError, match=r"needs n_d"):
+        load(tmp_path, zmx().replace(f"___BLANK 1 0 {N} 0 0 0 0 0 0", "___BLANK 1 0"))
