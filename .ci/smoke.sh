@@ -39,8 +39,8 @@ step "lens list / lens info"
 "$S" lens list | grep -q "solas-doublet"
 "$S" lens info solas-doublet --json > info.json
 step "psf, psf-grid"
-"$S" psf solas-doublet --field-deg 0,2 --wavelengths-nm 531 --pitch-um 0.5 --size 64 -o psf.exr
-"$S" psf-grid solas-doublet --grid 4x4 --wavelengths-nm 656,531,486 --psf-method geometric --size 64 -o grid.exr
+"$S" psf solas-doublet --field-deg 0,2 --wavelengths-nm 531 --pitch-um 0.5 -o psf.exr
+"$S" psf-grid solas-doublet --grid 4x4 --wavelengths-nm 656,531,486 --psf-method geometric --size 64 --pitch-um 2 -o grid.exr
 step "degrade, render-image"
 photo=$("$PYI" -c 'from solas_mi.resources import resource_dir; print(resource_dir("scenes") / "images" / "rocket.png")')
 "$S" degrade "$photo" --psf-grid grid.exr -o degraded.exr
