@@ -378,9 +378,7 @@ def plot_report(report: NsSfrReport, image: np.ndarray, path: str | os.PathLike)
         ax_img.add_patch(Rectangle((x - 0.5, y - 0.5), w, h, fill=False, color=colours[m.annulus], lw=1))
     ax_img.set_xlim(-0.5, width - 0.5)
     ax_img.set_ylim(height - 0.5, -0.5)
-    ax_img.set_title(f"edge ROIs in {report.scheme} annuli")
-    ax_img.set_xlabel("x (px)")
-    ax_img.set_ylabel("y (px)")
+    ax_img.set(title=f"edge ROIs in {report.scheme} annuli", xlabel="x (px)", ylabel="y (px)")
     after = report.after or [None] * len(report.before)
     for stats, post, colour in zip(report.before, after, colours):
         if stats.curve is None:
