@@ -6,7 +6,7 @@ STAMP  := $(VENV)/.installed
 SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 OUT    ?= out
 
-.PHONY: setup llvm demo test bench clean
+.PHONY: setup llvm demo test bench bench-all docs smoke clean
 
 setup: llvm $(STAMP)
 
@@ -31,8 +31,24 @@ demo: setup
 test: setup
 	$(PY) -m pytest -q
 
+# `make bench`: the quick set (a few minutes); `make bench-all`: every benchmark (over an hour on 2 cores);
+# `make bench BENCH=bench_convolution` runs one. Results land in benchmarks/results/ (the docs include them).
 bench: setup
-	$(PY) benchmarks/run_all.py
+	$(PY) benchmarks/run_all.py $(BENCH)
+
+bench-all: setup
+	$(PY) benchmarks/run_all.py --all
+
+# The documentation site in site/: every example of the README and the guide run as written (outputs
+# checked where stated), then `mkdocs build --strict` (any warning is an error); the CLI and API
+# reference pages are generated from the code by docs/tools/hooks.py at each build.
+docs: setup
+	$(PY) docs/tools/run_examples.py README.md docs/guide
+	NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict --site-dir site
+
+# The wheel in a fresh environment outside the repository (.ci/smoke.sh)
+smoke: setup
+	PYTHON=$(PYTHON) bash .ci/smoke.sh
 
 clean:
-	rm -rf $(VENV) $(OUT) .pytest_cache
+	rm -rf $(VENV) $(OUT) .pytest_cache site build

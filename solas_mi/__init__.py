@@ -16,9 +16,10 @@ from __future__ import annotations
 from . import render  # noqa: F401  (registers the render stage's PSF method "render": `psf.registry`)
 from .errors import SolasError
 from .lazy import lazy_exports
+from .resources import installed_version as _installed_version
 
 __all__ = ["Lens", "SolasError", "mitsuba", "paraxial", "spot"]
-__version__ = "0.1.0"
+__version__ = _installed_version()
 
 # `from solas_mi import Lens, paraxial, spot`; PSFs: `from solas_mi.psf import psf, psf_grid, PSFGrid`;
 # Mitsuba with the plugins: `mi = solas_mi.mitsuba(); mi.render(mi.load_file("scene.xml"))`

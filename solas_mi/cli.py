@@ -15,8 +15,27 @@ DESCRIPTION = ("Physically based lens simulation: PSFs ray-traced through a real
                "them or rendered through the lens in Mitsuba 3, and the result measured.")
 
 
+class DefaultsFormatter(argparse.HelpFormatter):
+    """Help that states every option's default: "(default: X)" is added where the text does not already
+    say its default and there is one (not for flags, whose default is off, nor for options without one)."""
+
+    def _get_help_string(self, action: argparse.Action) -> str:
+        text = action.help or ""
+        default = action.default
+        if ("default" in text.lower() or default in (None, False, argparse.SUPPRESS)
+                or not action.option_strings or isinstance(action, argparse._StoreTrueAction)):
+            return text
+        shown = ",".join(map(str, default)) if isinstance(default, (list, tuple)) else default
+        return f"{text} (default: {str(shown).replace('%', '%%')})"
+
+
 class Parser(argparse.ArgumentParser):
-    """argparse, with a usage error on one line that says where the usage is (sub-commands inherit it)."""
+    """argparse, with a usage error on one line that says where the usage is, and the defaults in every
+    help text (sub-commands inherit both)."""
+
+    def __init__(self, *args, **kwargs):
+        kwargs.setdefault("formatter_class", DefaultsFormatter)
+        super().__init__(*args, **kwargs)
 
     def error(self, message: str):
         self.exit(2, f"{self.prog}: error: {message} (see {self.prog} --help)\n")
@@ -40,6 +59,16 @@ def build_parser() -> argparse.ArgumentParser:
     for area in (optics, psf, convolution, render, metrics, validation, batch, experiments):
         area.register(sub)
     return parser
+
+
+def iter_commands(parser: argparse.ArgumentParser, path: tuple[str, ...] = ()):
+    """(command path, parser) for `parser` and every sub-command below it, in the order of the help
+    (the CLI reference of the documentation and the help tests walk it)."""
+    yield path, parser
+    for action in parser._actions:
+        if isinstance(action, argparse._SubParsersAction):
+            for name, sub in action.choices.items():
+                yield from iter_commands(sub, (*path, name))
 
 
 class Terminated(KeyboardInterrupt):

@@ -66,6 +66,6 @@ def register(sub: Any) -> None:
     p.set_defaults(run=run_street)
     p = exp.add_parser("street-scene", help="write the procedural street scene (Mitsuba XML and textures)",
                        description="Write street.xml and textures/ (the same bytes every time).")
-    p.add_argument("-o", "--output", default=str(resource_dir("scenes") / "street"),
-                   help="output folder (default: the shipped scenes/street)")
+    p.add_argument("-o", "--output", default="street",
+                   help="output folder; the shipped copy is %s" % (resource_dir("scenes") / "street"))
     p.set_defaults(run=run_street_scene)

@@ -378,7 +378,7 @@ def plot_report(report: NsSfrReport, image: np.ndarray, path: str | os.PathLike)
         ax_img.add_patch(Rectangle((x - 0.5, y - 0.5), w, h, fill=False, color=colours[m.annulus], lw=1))
     ax_img.set_xlim(-0.5, width - 0.5)
     ax_img.set_ylim(height - 0.5, -0.5)
-    ax_img.set_title(f"edge ROIs in {report.scheme} annuli")
+    ax_img.set(title=f"edge ROIs in {report.scheme} annuli", xlabel="x (px)", ylabel="y (px)")
     after = report.after or [None] * len(report.before)
     for stats, post, colour in zip(report.before, after, colours):
         if stats.curve is None:
@@ -392,7 +392,7 @@ def plot_report(report: NsSfrReport, image: np.ndarray, path: str | os.PathLike)
     ax_sfr.set_xlim(0, 0.5)
     ax_sfr.set_ylim(0, 1.1)
     ax_sfr.set_xlabel("frequency (cy/px)")
-    ax_sfr.set_ylabel("mean SFR")
+    ax_sfr.set_ylabel("mean SFR (modulation, 1 at 0 cy/px)")
     ax_sfr.set_title("mean SFR per annulus (solid: image, dashed: comparison)")
     if ax_sfr.get_legend_handles_labels()[0]:  # no curves when no edge was measured
         ax_sfr.legend(fontsize=8)

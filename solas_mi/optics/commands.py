@@ -67,6 +67,27 @@ def run_lens_info(args) -> int:
     return 0
 
 
+def run_lens_list(args) -> int:
+    """The shipped lenses: name, source (the file's description), EFL and f/# at the primary wavelength,
+    half field."""
+    from .lens import Lens, shipped_lenses
+    from .paraxial import paraxial
+
+    rows = []
+    for name in shipped_lenses():
+        lens = Lens.load(name)
+        p = paraxial(lens, lens.primary_wavelength)
+        rows.append({"name": name, "source": lens.description, "efl_mm": p.efl_mm, "f_number": p.f_number,
+                     "field_deg": lens.field_deg, "wavelength_nm": lens.primary_wavelength})
+    if args.json:
+        print(json.dumps(rows, indent=2))
+        return 0
+    print(f"{'name':20s}{'EFL (mm)':>10s}{'f/#':>7s}{'field (deg)':>13s}  source")
+    for r in rows:
+        print(f"{r['name']:20s}{r['efl_mm']:10.2f}{r['f_number']:7.2f}{r['field_deg']:13g}  {r['source']}")
+    return 0
+
+
 def run_lens_convert(args) -> int:
     from .lens import Lens
 
@@ -77,8 +98,11 @@ def run_lens_convert(args) -> int:
 
 
 def register(sub: Any) -> None:
-    """Add `lens info`."""
+    """Add `lens list`, `lens info` and `lens convert`."""
     lens = sub.add_parser("lens", help="lens data").add_subparsers(dest="lens_command", metavar="COMMAND", required=True)
+    shipped = lens.add_parser("list", help="the shipped lenses: name, EFL, f/# (primary wavelength), half field, source")
+    shipped.add_argument("--json", action="store_true", help="as JSON")
+    shipped.set_defaults(run=run_lens_list)
     info = lens.add_parser("info", help="paraxial data: EFL, BFD, pupils, f/#, chief rays, distortion and "
                            "relative illumination")
     add_lens_argument(info)

@@ -1,0 +1,160 @@
+"""Run the examples of the README and the user guide, as a reader would, and check their stated output.
+
+Every fenced ```sh and ```python block of the given Markdown files (folders: their *.md) runs, in the
+order of the page, in a fresh temporary folder per page that holds a link to the repository's scenes/
+(so `scenes/images/rocket.png` works as it does from the repository root), with this environment's
+`solas-mi` first on PATH. Other fences (xml, toml, text) are not run. Checks and marks, as HTML
+comments that the site does not show:
+
+- `<!-- example: expect "TEXT" -->` after a block: its output must contain TEXT;
+- in Python, `EXPRESSION  # → VALUE` on a line: the expression must give VALUE (to the printed digits
+  for a number, else its repr or str);
+- `<!-- example: slow -->` before a block: left out by --quick;
+- `<!-- example: skip REASON -->` before a block: never run here (say why: `make test` runs itself).
+
+A block fails when it exits non-zero, misses a stated output, or prints a warning (": warning:").
+
+    python docs/tools/run_examples.py README.md docs/guide [--quick] [--keep]
+"""
+from __future__ import annotations
+
+import argparse
+import ast
+import os
+import re
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parents[2]
+FENCE = re.compile(r"^```(\w+)[^\n]*\n(.*?)^```\s*$", re.M | re.S)
+MARK = re.compile(r"<!--\s*example:\s*(expect|slow|skip)\s*(.*?)\s*-->")
+RUN = {"sh": "sh", "bash": "sh", "python": "python"}
+EXPECT = "# → "
+CHECK = '''
+def __expect(value, stated, where):
+    text = str(value)
+    if text == stated or repr(value) == stated:
+        return
+    try:
+        number, digits = float(stated), len(stated.partition(".")[2]) if "." in stated else 0
+        if abs(float(value) - number) <= 0.5 * 10 ** -digits * (1 + 1e-9):
+            return
+    except (TypeError, ValueError):
+        pass
+    raise SystemExit(f"{where}: gave {text}, the page states {stated}")
+'''
+
+
+@dataclass
+class Example:
+    page: Path
+    line: int
+    language: str
+    code: str
+    expect: list[str] = field(default_factory=list)
+    slow: bool = False
+    skip: str = ""
+
+
+def examples(page: Path) -> list[Example]:
+    """The runnable blocks of `page` with their marks."""
+    text = page.read_text(encoding="utf-8")
+    found: list[Example] = []
+    pending: dict = {}
+    spans = sorted([(m.start(), "fence", m) for m in FENCE.finditer(text)] +
+                   [(m.start(), "mark", m) for m in MARK.finditer(text)], key=lambda s: s[0])
+    for start, kind, m in spans:
+        if kind == "mark":
+            what, arg = m.group(1), m.group(2)
+            if what == "expect":
+                if not found:
+                    raise SystemExit(f"{page}: an expect mark before any example")
+                found[-1].expect.append(arg.strip('"'))
+            else:
+                pending[what] = arg or True
+        elif m.group(1) in RUN:
+            found.append(Example(page, text.count("\n", 0, start) + 1, RUN[m.group(1)], m.group(2),
+                                 slow=bool(pending.get("slow")), skip=str(pending.get("skip") or "")))
+            pending = {}
+        else:
+            pending = {}
+    return found
+
+
+def python_source(example: Example) -> str:
+    """The block with each `EXPR  # → VALUE` line turned into a check."""
+    lines = [CHECK]
+    for i, line in enumerate(example.code.splitlines()):
+        code, sep, stated = line.partition(EXPECT)
+        if sep:
+            ast.parse(code.strip(), mode="eval")  # a statement stated to give a value is a mistake of the page
+            indent = code[: len(code) - len(code.lstrip())]
+            where = f"{example.page.name}:{example.line + 1 + i}"
+            line = f"{indent}__expect({code.strip()}, {stated.strip()!r}, {where!r})"
+        lines.append(line)
+    return "\n".join(lines) + "\n"
+
+
+def run(example: Example, folder: Path, env: dict) -> tuple[bool, str, float]:
+    start = time.perf_counter()
+    if example.language == "python":
+        script = folder / f"_example_{example.line}.py"
+        script.write_text(python_source(example), encoding="utf-8")
+        command = [sys.executable, script.name]
+    else:
+        command = ["bash", "-e", "-o", "pipefail", "-c", example.code]
+    done = subprocess.run(command, cwd=folder, env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    output = done.stdout
+    missing = [e for e in example.expect if e not in output]
+    warned = ": warning:" in output  # a recipe on a page must run without warnings
+    ok = done.returncode == 0 and not missing and not warned
+    if missing:
+        output += f"\n(the page states output containing {missing})"
+    if warned:
+        output += "\n(a recipe on a page must run without warnings)"
+    return ok, output, time.perf_counter() - start
+
+
+def run_page(page: Path, quick: bool, keep: bool) -> int:
+    """Run one page's examples in order in a fresh folder; the number that failed."""
+    env = dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}",
+               MPLBACKEND="Agg")
+    folder = Path(tempfile.mkdtemp(prefix=f"solas-mi-docs-{page.stem}-"))
+    (folder / "scenes").symlink_to(REPO / "scenes")
+    failed = 0
+    for ex in examples(page):
+        where = f"{os.path.relpath(page, REPO)}:{ex.line}"
+        if ex.skip or (quick and ex.slow):
+            print(f"  skip {where} ({ex.skip or 'slow'})")
+            continue
+        ok, output, seconds = run(ex, folder, env)
+        print(f"  {'ok  ' if ok else 'FAIL'} {where} ({ex.language}, {seconds:.1f} s)", flush=True)
+        if not ok:
+            failed += 1
+            print("    " + output.strip().replace("\n", "\n    "))
+    if not keep:
+        subprocess.run(["rm", "-rf", str(folder)], check=False)
+    return failed
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("paths", nargs="+", type=Path, help="Markdown files or folders of them")
+    ap.add_argument("--quick", action="store_true", help="leave out the blocks marked slow")
+    ap.add_argument("--keep", action="store_true", help="keep each page's folder (its path is printed)")
+    args = ap.parse_args(argv)
+    pages = [p for path in args.paths for p in (sorted(path.glob("*.md")) if path.is_dir() else [path])]
+    start, failed = time.perf_counter(), 0
+    for page in pages:
+        print(f"{page}:", flush=True)
+        failed += run_page(page.resolve(), args.quick, args.keep)
+    print(f"examples: {failed} failed, {time.perf_counter() - start:.0f} s")
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,91 @@
+"""Packaging and documentation facts that a user meets first: the licence, dependency ranges that
+accept the lock (and no exact pins), a truthful requires-python, the README as a short front door
+whose examples the docs run, and a site whose every page exists."""
+import re
+import sys
+import tomllib
+from pathlib import Path
+
+import pytest
+from packaging.requirements import Requirement
+from packaging.specifiers import SpecifierSet
+
+ROOT = Path(__file__).resolve().parents[1]
+PYPROJECT = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
+LOCK = {}
+for line in (ROOT / "requirements.lock").read_text().splitlines():
+    if line and not line.startswith("#"):
+        name, _, version = line.partition("==")
+        LOCK[name.lower().replace("_", "-")] = version
+
+sys.path.insert(0, str(ROOT / "docs" / "tools"))
+import run_examples  # noqa: E402
+
+
+def test_licence_is_the_declared_one():
+    text = (ROOT / "LICENSE").read_text()
+    assert PYPROJECT["license"] == "BSD-3-Clause"
+    assert "BSD 3-Clause License" in text and "the solas-mi developers" in text
+    assert "Neither the name of the copyright holder" in text  # the third clause
+
+
+@pytest.mark.parametrize("requirement", PYPROJECT["dependencies"])
+def test_dependencies_are_ranges_that_accept_the_lock(requirement):
+    req = Requirement(requirement)
+    assert not any(s.operator in ("==", "===") for s in req.specifier), f"{requirement}: pin it in requirements.lock"
+    locked = LOCK[req.name.lower()]
+    assert req.specifier.contains(locked, prereleases=True), f"{requirement} refuses the locked {locked}"
+
+
+def test_mitsuba_floor_and_python():
+    mitsuba = next(Requirement(r) for r in PYPROJECT["dependencies"] if r.startswith("mitsuba"))
+    assert not mitsuba.specifier.contains("3.8.0") and mitsuba.specifier.contains("3.9.0")
+    assert SpecifierSet(PYPROJECT["requires-python"]).contains(".".join(map(str, sys.version_info[:3])))
+    assert not SpecifierSet(PYPROJECT["requires-python"]).contains("3.10.0")  # the locked numpy has no 3.10 build
+
+
+def test_docs_tools_are_locked():
+    assert {"mkdocs", "mkdocs-material", "mkdocstrings", "mkdocstrings-python", "build"} <= set(LOCK)
+
+
+def test_typed_and_changelog():
+    assert (ROOT / "solas_mi" / "py.typed").is_file()
+    assert "py.typed" in tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]["solas_mi"]
+    assert "## [Unreleased]" in (ROOT / "CHANGELOG.md").read_text()
+
+
+def test_readme_is_a_short_front_door():
+    text = (ROOT / "README.md").read_text()
+    assert len(text.splitlines()) <= 200
+    assert "## Contents" in text
+    first = run_examples.FENCE.search(text).group(2).split("\n")
+    assert first[0].startswith("make demo") and first[1].startswith("make test")
+    for target in re.findall(r"\]\(((?:docs/|CHANGELOG|LICENSE)[^)#]*)", text):
+        assert (ROOT / target).exists(), f"README links to {target}, which does not exist"
+
+
+def test_every_readme_and_guide_example_is_run_or_says_why_not():
+    pages = [ROOT / "README.md", *sorted((ROOT / "docs" / "guide").glob("*.md"))]
+    found = [ex for page in pages for ex in run_examples.examples(page)]
+    assert len(found) >= 15
+    skipped = [ex for ex in found if ex.skip]
+    assert all(len(ex.skip) > 20 for ex in skipped) and len(skipped) <= 1  # only `make demo` / `make test`
+    stated = sum(bool(ex.expect) for ex in found) + sum(run_examples.EXPECT in ex.code for ex in found)
+    assert stated >= 6
+
+
+def test_example_runner_checks_what_a_page_states(tmp_path):
+    page = tmp_path / "page.md"
+    page.write_text("```python\nx = 2\nx + 1  # → 4\n```\n\n```sh\necho hello\n```\n\n<!-- example: expect \"bye\" -->\n"
+                    "\n<!-- example: skip not here, for a reason -->\n\n```sh\nexit 3\n```\n")
+    assert run_examples.run_page(page, quick=False, keep=False) == 2  # the wrong value and the missing output
+    page.write_text("```python\nx = 2\nx + 0.3  # → 2.2\n```\n\n```sh\necho hello bye\n```\n\n<!-- example: expect \"bye\" -->\n")
+    assert run_examples.run_page(page, quick=False, keep=False) == 1  # 2.3 is not 2.2 to the printed digit
+
+
+def test_every_page_of_the_site_exists():
+    nav = re.findall(r":\s*([\w/.-]+\.md)\s*$", (ROOT / "mkdocs.yml").read_text(), re.M)
+    generated = {"reference/cli.md", "reference/api.md"}  # docs/tools/hooks.py writes them at each build
+    assert len(nav) >= 20
+    for page in nav:
+        assert page in generated or (ROOT / "docs" / page).is_file(), page
