@@ -50,11 +50,14 @@ class Bundle:
         """Per-field values spread over the bundle's rays."""
         return T.gather(values, self.index)
 
-    def trace(self, ex: T.F, ey: T.F) -> T.Traced:
+    def launch(self, ex: T.F, ey: T.F) -> T.Rays:
+        """The bundle's rays at entrance coordinates (ex, ey), in the lens's field type."""
         if self.lens.field_type.sideways:  # directions up to and beyond 90°, object at infinity
-            return T.trace(self.lens, T.launch_direction(self.lens, *self.incoming, ex, ey), self.wavelength_um)
-        rays = T.launch(self.lens, *self.incoming, ex, ey, self.object_point)
-        return T.trace(self.lens, rays, self.wavelength_um)
+            return T.launch_direction(self.lens, *self.incoming, ex, ey)
+        return T.launch(self.lens, *self.incoming, ex, ey, self.object_point)
+
+    def trace(self, ex: T.F, ey: T.F) -> T.Traced:
+        return T.trace(self.lens, self.launch(ex, ey), self.wavelength_um)
 
 
 def aim(bundle: Bundle, target, ex: T.F, ey: T.F, goal_x: T.F, goal_y: T.F, max_iter: int = 60):
