@@ -16,22 +16,60 @@ import math
 import numpy as np
 
 from ..blas import single_threaded_blas
-from ..optics.pupil import PupilFunction, pupil_function
+from ..optics.pupil import PupilFunction, pupil_functions
 from .base import Computed, centring_warnings, grid_offsets, window_centres_um
 from .geometric import light_offsets_um
 
 
 def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int, *,
-            shared_origin: bool = False, pupil_samples: int) -> Computed:
+            shared_origin: bool = False, pupil_samples: int, most: int) -> Computed:
     """Fraunhofer PSFs of field/wavelength pairs from their pupil functions on pupil_samples² grids
-    (the method "fraunhofer" of `registry`)."""
-    pf = pupil_function(lens, field_deg, wavelength_nm, pupil_samples)
+    (the method "fraunhofer" of `registry`, which gives `most`, the largest pupil samples allowed)."""
+    pf, coarse = pupil_functions(lens, field_deg, wavelength_nm, (pupil_samples, coarse_samples(pupil_samples)))
     light = light_offsets_um(lens, field_deg, wavelength_nm, pf.chief)
     center = window_centres_um(pf.chief, light, shared_origin)
-    return Computed(data=fraunhofer(pf, pitch_um, size, center), chief=pf.chief, transmission=pf.transmission,
-                    vignetted_by=pf.vignetted_by, centre_um=center,
-                    warnings=tuple(sampling_warnings(pf, pitch_um, size, np.atleast_2d(field_deg))
-                                   + centring_warnings(pf.chief, light, field_deg)))
+    data = fraunhofer(pf, pitch_um, size, center)
+    error = error_estimate(data, fraunhofer(coarse, pitch_um, size, center), pupil_samples)
+    fields = np.atleast_2d(field_deg)
+    return Computed(data=data, chief=pf.chief, transmission=pf.transmission, vignetted_by=pf.vignetted_by,
+                    centre_um=center, warnings=tuple(sampling_warnings(pf, pitch_um, size, fields)
+                                                     + convergence_warnings(error, pupil_samples, most, fields,
+                                                                          pf.wavelength_nm)
+                                                     + centring_warnings(pf.chief, light, field_deg)))
+
+
+ERROR_LIMIT = 0.02  # largest PSF error (fraction of its peak) left unflagged: check-stability's criterion
+
+
+def coarse_samples(samples: int) -> int:
+    """The pupil grid of the error estimate: two thirds as fine."""
+    return max(4, (2 * samples) // 3)
+
+
+def error_estimate(data: np.ndarray, coarse: np.ndarray, samples: int) -> np.ndarray:
+    """Per PSF, its error as a fraction of its peak, from the same PSF on a coarser pupil grid: the
+    error falls as 1/N² (measured: 9.8 %, 2.2 %, 0.9 % of peak at 256, 512, 768 samples on the doublet
+    at f/3.33), so the fine one's is |fine − coarse| / ((N/Nc)² − 1) (Richardson)."""
+    ratio = samples / coarse_samples(samples)
+    peak = np.maximum(data.max(axis=(1, 2)), 1e-300)
+    return np.abs(data - coarse).max(axis=(1, 2)) / peak / (ratio * ratio - 1.0)
+
+
+def convergence_warnings(error: np.ndarray, samples: int, most: int, field_deg: np.ndarray,
+                         wavelength_nm: np.ndarray) -> list[str]:
+    """A warning naming the worst PSF whose estimated error exceeds ERROR_LIMIT of its peak, with the
+    pupil samples that bring it within (error ∝ 1/N²), or saying that `most` samples cannot."""
+    if not (error > ERROR_LIMIT).any():
+        return []
+    i = int(np.argmax(error))
+    need = int(math.ceil(samples * math.sqrt(error[i] / ERROR_LIMIT) * 1.15 / 8) * 8)
+    head = (f"the PSF at field ({field_deg[i, 0]:g}, {field_deg[i, 1]:g}) deg, {wavelength_nm[i]:g} nm is about "
+            f"{100 * error[i]:.1f} % of its peak off its converged value with {samples} pupil samples "
+            f"(limit {100 * ERROR_LIMIT:g} %)")
+    if need <= most:
+        return [f"{head}; use --pupil-samples {need} or more"]
+    return [f"{head}; that needs about {need} pupil samples, beyond the {most} maximum: use "
+            "--psf-method geometric (the wavefront is far from diffraction-limited)"]
 
 
 def sampling_warnings(pf: PupilFunction, pitch_um: float, size: int, field_deg: np.ndarray) -> list[str]:
