@@ -18,7 +18,7 @@ import numpy as np
 from ..blas import single_threaded_blas
 from ..optics.pupil import PupilFunction, pupil_functions
 from .base import Computed, centring_warnings, grid_offsets, window_centres_um
-from .geometric import light_offsets_um
+from .geometric import entrance_grid_hits, geometric, light_offsets_um
 
 
 def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int, *,
@@ -31,11 +31,59 @@ def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: fl
     data = fraunhofer(pf, pitch_um, size, center)
     error = error_estimate(data, fraunhofer(coarse, pitch_um, size, center), pupil_samples)
     fields = np.atleast_2d(field_deg)
-    return Computed(data=data, chief=pf.chief, transmission=pf.transmission, vignetted_by=pf.vignetted_by,
-                    centre_um=center, warnings=tuple(sampling_warnings(pf, pitch_um, size, fields)
+    transmission = pf.transmission.copy()
+    folded, fold_warnings = caustic_fallback(lens, pf, data, transmission, pitch_um, size, center, fields)
+    error[folded] = 0.0  # those PSFs are the geometric method's
+    return Computed(data=data, chief=pf.chief, transmission=transmission, vignetted_by=pf.vignetted_by,
+                    centre_um=center, warnings=tuple(sampling_warnings(pf, pitch_um, size, fields, ~folded)
                                                      + convergence_warnings(error, pupil_samples, most, fields,
                                                                           pf.wavelength_nm)
-                                                     + centring_warnings(pf.chief, light, field_deg)))
+                                                     + fold_warnings + centring_warnings(pf.chief, light, field_deg)))
+
+
+FOLD_POWER = 20.0  # a pupil cell's power above this many times the median: the pupil may fold (a caustic)
+FOLD_TRANSMISSION = 0.05  # ... confirmed where the transmission differs from a ray count by this fraction
+FOLD_CHECK_RAYS = 128  # rays per side of that count
+FOLD_RAYS = 512  # rays per side of the geometric PSF that replaces a folded pupil's
+
+
+def caustic_fallback(lens, pf: PupilFunction, data: np.ndarray, transmission: np.ndarray, pitch_um: float,
+                     size: int, center: np.ndarray | None, field_deg: np.ndarray) -> tuple[np.ndarray, list[str]]:
+    """Near a pupil caustic (rays close to total internal reflection: the map from pupil grid to entrance
+    folds, the power per cell grows without bound) the pupil function's integral is wrong (Cooke triplet at
+    31°: transmission 1.09 against 0.39). Such fields, found by their power peak and confirmed by a ray
+    count, get the geometric method's PSF and transmission in `data` and `transmission` (in place); returns
+    which fields and a warning naming them."""
+    full = pf.coverage >= 1
+    median = np.array([np.median(p[m]) if m.any() else 0.0 for p, m in zip(pf.power, full)])
+    peak = np.where(full, pf.power, 0.0).max(axis=(1, 2))
+    suspect = np.flatnonzero(peak > FOLD_POWER * np.maximum(median, 1e-300))
+    if not len(suspect):
+        return np.zeros(len(data), dtype=bool), []
+    wl, chief = pf.wavelength_nm[suspect], _chief_subset(pf.chief, suspect)
+    counted = np.array([w.sum() for *_, w in entrance_grid_hits(lens, field_deg[suspect], wl, FOLD_CHECK_RAYS, chief)])
+    off = np.abs(transmission[suspect] - counted) > FOLD_TRANSMISSION * counted
+    folded, chief = suspect[off], _chief_subset(pf.chief, suspect[off])
+    if not len(folded):
+        return np.zeros(len(data), dtype=bool), []
+    i = folded[0]
+    text = (f"the pupil folds over a caustic at field ({field_deg[i, 0]:g}, {field_deg[i, 1]:g}) deg, "
+            f"{pf.wavelength_nm[i]:g} nm (rays near total internal reflection; Fraunhofer transmission "
+            f"{transmission[i]:.3g} against {counted[off][0]:.3g} by ray count): the PSF of {len(folded)} "
+            f"field(s) is the geometric method's ({FOLD_RAYS} x {FOLD_RAYS} rays), without diffraction")
+    sub = None if center is None else center[folded]
+    data[folded], _, transmission[folded] = geometric(lens, field_deg[folded], pf.wavelength_nm[folded], pitch_um, size,
+                                                      FOLD_RAYS, chief, sub)
+    mask = np.zeros(len(data), dtype=bool)
+    mask[folded] = True
+    return mask, [text]
+
+
+def _chief_subset(chief, index: np.ndarray):
+    """The chief rays of the fields `index`."""
+    from dataclasses import fields, replace
+
+    return replace(chief, **{f.name: getattr(chief, f.name)[index] for f in fields(chief)})
 
 
 ERROR_LIMIT = 0.02  # largest PSF error (fraction of its peak) left unflagged: check-stability's criterion
@@ -72,10 +120,12 @@ def convergence_warnings(error: np.ndarray, samples: int, most: int, field_deg: 
             "--psf-method geometric (the wavefront is far from diffraction-limited)"]
 
 
-def sampling_warnings(pf: PupilFunction, pitch_um: float, size: int, field_deg: np.ndarray) -> list[str]:
+def sampling_warnings(pf: PupilFunction, pitch_um: float, size: int, field_deg: np.ndarray,
+                      keep: np.ndarray | None = None) -> list[str]:
     """Where the pupil grid cannot carry the wavefront: a phase step above π between neighbouring
     cells (the wavefront is under-sampled), or a PSF period λ'/Δα shorter than the window (copies of
-    the PSF fold into it). Each names the worst field and the pupil samples that would do."""
+    the PSF fold into it). Each names the worst field and the pupil samples that would do; fields
+    not in `keep` (a mask; default all) are left out."""
     n = pf.alpha.shape[1]
     lam_nm = pf.wavelength_nm[:, None, None]
     phase = 2.0 * math.pi / (lam_nm * 1e-6) * pf.opd_mm
@@ -87,6 +137,8 @@ def sampling_warnings(pf: PupilFunction, pitch_um: float, size: int, field_deg: 
         steps = np.maximum(steps, np.where(both, step, 0.0).max(axis=(1, 2)))
     period_um = (pf.wavelength_nm * 1e-3 / pf.chief.n_image) / np.minimum(pf.alpha[:, 1] - pf.alpha[:, 0],
                                                                           pf.beta[:, 1] - pf.beta[:, 0])
+    if keep is not None:
+        steps, period_um = np.where(keep, steps, 0.0), np.where(keep, period_um, np.inf)
     window_um = size * pitch_um
     need = np.maximum(n * steps / (0.5 * math.pi), n * window_um / period_um)
     out = []
