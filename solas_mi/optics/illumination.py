@@ -14,6 +14,7 @@ wherever they cross the last vertex plane (a wide-angle's steep rays far outside
 from __future__ import annotations
 
 import math
+import warnings
 
 import numpy as np
 
@@ -144,15 +145,45 @@ def _polar_scale(lens: Lens, field_deg: np.ndarray, wavelength_nm: float) -> np.
 def image_scales(lens: Lens, max_height_mm: float, wavelength_nm: float, samples: int = 64):
     """Radial and tangential image scales of the chief ray (mm per unit field tangent) at image
     heights 0…max_height_mm: (heights, dh/dt, h/t). Their reciprocals turn a length on the image plane
-    into a width in field tangent (a pixel's footprint on the object)."""
+    into a width in field tangent (a pixel's footprint on the object). Where the film reaches past the
+    lens's image (no chief ray beyond some field) the table ends at the last field that has one, and a
+    warning names it: a render shows the dark corners a real camera shows."""
     from .pupil import chief_rays
 
     f0 = math.sqrt(float(_jacobian(lens, np.zeros((1, 2)), wavelength_nm)[0]))
-    t_max = 1.05 * max_height_mm / f0  # past the farthest height, distortion being small
+    wanted = 1.05 * max_height_mm / f0  # past the farthest height, distortion being small
+    t_max = _last_chief_tangent(lens, wanted, wavelength_nm)
     t = np.linspace(0.0, t_max, samples)
-    tt = np.concatenate([t, t + _STEP])
+    # differences forward, or backward where chief rays end at t_max
+    tt = np.concatenate([t, t + _STEP if t_max == wanted else np.maximum(t - _STEP, 0.0)])
     h = chief_rays(lens, np.stack([np.degrees(np.arctan(tt)), np.zeros_like(tt)], -1),
                    np.full(len(tt), wavelength_nm)).image_xy[:, 0]
-    radial = (h[samples:] - h[:samples]) / _STEP
+    dt = tt[samples:] - t
+    radial = (h[samples:] - h[:samples]) / np.where(dt != 0, dt, 1.0)
+    radial[0] = radial[0] if dt[0] != 0 else radial[1]
     tangential = np.concatenate([[radial[0]], h[1:samples] / t[1:]])
+    if t_max < wanted and h[samples - 1] < max_height_mm:
+        warnings.warn(f"lens {lens.name} images fields to {math.degrees(math.atan(t_max)):.4g} deg only (image "
+                      f"height {h[samples - 1]:.4g} mm) at {wavelength_nm:g} nm, the film reaches {max_height_mm:.4g} mm: "
+                      "beyond, the render is dark, as a real camera's corners", stacklevel=2)
     return h[:samples], radial, tangential
+
+
+def _last_chief_tangent(lens: Lens, t_max: float, wavelength_nm: float, bisections: int = 40) -> float:
+    """t_max, or where chief rays end before it the largest field tangent (along x) that has one."""
+    from .pupil import chief_rays
+
+    def exists(t: float) -> bool:
+        try:
+            chief_rays(lens, [[math.degrees(math.atan(t)), 0.0]], [wavelength_nm])
+        except SolasError:
+            return False
+        return True
+
+    if exists(t_max):
+        return t_max
+    lo, hi = 0.0, t_max
+    for _ in range(bisections):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if exists(mid) else (lo, mid)
+    return lo
