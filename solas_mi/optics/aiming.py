@@ -43,13 +43,15 @@ class Bundle:
         """Per-field values spread over the bundle's rays."""
         return T.gather(values, self.index)
 
+    def launch(self, ex: T.F, ey: T.F) -> T.Rays:
+        """The bundle's rays at entrance coordinates (ex, ey), in the lens's field type."""
+        if self.lens.field_type.sideways:  # directions up to and beyond 90°, object at infinity
+            return T.launch_direction(self.lens, *self.incoming, ex, ey)
+        return T.launch(self.lens, *self.incoming, ex, ey, self.object_point)
+
     def trace(self, ex: T.F, ey: T.F, heights: list | None = None) -> T.Traced:
         """The rays of entrance coordinates (ex, ey) traced; `heights`: see `tracer.trace`."""
-        if self.lens.field_type.sideways:  # directions up to and beyond 90°, object at infinity
-            rays = T.launch_direction(self.lens, *self.incoming, ex, ey)
-        else:
-            rays = T.launch(self.lens, *self.incoming, ex, ey, self.object_point)
-        return T.trace(self.lens, rays, self.wavelength_um, heights=heights)
+        return T.trace(self.lens, self.launch(ex, ey), self.wavelength_um, heights=heights)
 
 
 def aim(bundle: Bundle, target, ex: T.F, ey: T.F, goal_x: T.F, goal_y: T.F, max_iter: int = 60):

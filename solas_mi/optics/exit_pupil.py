@@ -15,6 +15,7 @@ through the reversed lens in Float64, rather than by testing rays over the rear 
 """
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -23,6 +24,8 @@ from .lens import Lens, Surface
 
 FINE = 512  # points per side of the search for a pupil the coarse grid missed
 MARCH = 48  # samples along each direction from the pupil's centroid to three times the aperture's reach
+CHECK = 256  # points per side of the grid over the aperture's reach that checks the bounds at CHECK_RADII film radii
+CHECK_RADII = 9
 
 
 def reversed_lens(lens: Lens) -> Lens:
@@ -85,7 +88,7 @@ def pupil_bounds(lens: Lens, max_radius_mm: float, wavelengths_nm=None, radii: i
     a disc and a ring) and bisection the rim beyond it, to 1e-9 mm. The bound is the box of the rim
     points, widened by the most a convex rim can bulge between neighbouring directions."""
     rev = reversed_lens(lens)
-    reach = _reach(lens, max_radius_mm)
+    reach = exit_reach(lens, max_radius_mm)
     step = 2.0 * reach / coarse
     g = -reach + (np.arange(coarse) + 0.5) * step
     grid = tuple(a.ravel() for a in np.meshgrid(g, g))
@@ -101,10 +104,37 @@ def pupil_bounds(lens: Lens, max_radius_mm: float, wavelengths_nm=None, radii: i
         rim_v.append(v)
     bounds, elliptical = _box(np.array(rim_u), np.array(rim_v), directions)
     bounds[~seen] = 0.0  # nothing reaches these film radii
+    escaped, cell = _check(rev, radius, bounds, reach, lens.wavelengths_nm if wavelengths_nm is None else wavelengths_nm)
+    if escaped.any():  # rays outside: every row widened by the most any missed, and a grid cell
+        bounds += (escaped + cell) * (escaped > 0) * np.array([-1.0, 1.0, -1.0, 1.0])
+        elliptical[:] = False
+    if escaped.max() > 2.0 * cell:  # more than the rim's rounding: a part of the pupil the march stepped over
+        warnings.warn(f"the exit-pupil bounds of {lens.name} missed a thin part of the pupil (rays up to "
+                      f"{escaped.max():.3g} mm outside); widened to hold every checked ray", stacklevel=2)
     return PupilBounds(radius, bounds, elliptical & seen, float(lens.vertex_z[-1]))
 
 
-def _reach(lens: Lens, max_radius_mm: float) -> float:
+def _check(rev: Lens, radius: np.ndarray, bounds: np.ndarray, reach: float, wavelengths_nm) -> tuple[np.ndarray, float]:
+    """The most (mm, ≥ 0) by which rays that leave the lens pass outside the bounds (u0, u1, v0, v1 sides),
+    over a CHECK² grid on ±reach at CHECK_RADII film radii (a thin ring that the march stepped over;
+    zeros where every checked ray lies inside), and the grid's cell (mm)."""
+    step = 2.0 * reach / CHECK
+    g = -reach + (np.arange(CHECK) + 0.5) * step
+    gu, gv = (a.ravel() for a in np.meshgrid(g, g))
+    out = np.zeros(4)
+    for i in np.unique(np.linspace(0, len(radius) - 1, CHECK_RADII).astype(int)):
+        u0, u1, v0, v1 = bounds[i]
+        for w in wavelengths_nm:
+            ok = passes(rev, np.full(len(gu), radius[i]), 0.0, gu, gv, w)
+            u, v = gu[ok], gv[ok]
+            if not len(u):
+                continue
+            miss = np.array([u0 - u.min(), u.max() - u1, v0 - v.min(), v.max() - v1])
+            out = np.maximum(out, miss)
+    return out, step
+
+
+def exit_reach(lens: Lens, max_radius_mm: float) -> float:
     """Half width (mm) of a square on the last vertex plane that holds every ray leaving the lens toward
     film radii up to max_radius_mm. A ray leaves through a point of the last surface's clear aperture;
     seen from a film point at radius r, thickness T below the vertex plane, a point at height ρ and

@@ -171,11 +171,23 @@ def _power_density(lens: Lens, wavelength_nm: float) -> float:
 def pupil_function(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, samples: int) -> PupilFunction:
     """Pupil function on an N×N (α, β) grid (N = `samples`, checked by `psf.methods.check_method`) for each
     field/wavelength pair."""
+    return pupil_functions(lens, field_deg, wavelength_nm, (samples,))[0]
+
+
+def pupil_functions(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, samples) -> list[PupilFunction]:
+    """`pupil_function` at each of several grid sizes `samples`, sharing the chief rays and the rim."""
     field_deg = np.atleast_2d(np.asarray(field_deg, dtype=np.float64))
-    nf = len(field_deg)
-    wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (nf,)).copy()
+    wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(field_deg),)).copy()
     chief = chief_rays(lens, field_deg, wavelength_nm)
-    alpha, beta, affine = _pupil_grid(lens, field_deg, wavelength_nm, chief, samples)
+    rim = _sphere_rim(lens, field_deg, wavelength_nm, chief)
+    return [_sampled_pupil(lens, field_deg, wavelength_nm, chief, _pupil_grid(chief, rim, n)) for n in samples]
+
+
+def _sampled_pupil(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chief: ChiefRays, grid
+                   ) -> PupilFunction:
+    """The pupil function on the (α, β) grid (alpha, beta, affine) of `_pupil_grid`."""
+    nf = len(field_deg)
+    alpha, beta, affine = grid
     opd, ok, clipped, sx, sy, ex, ey = _grid_rays(lens, field_deg, wavelength_nm, chief, alpha, beta, affine)
 
     # Amplitude: power density × |∂e/∂(α,β)|, stop edge anti-aliased by the covered cell fraction.
@@ -217,10 +229,9 @@ def _sphere_target(lens: Lens, b: Bundle, chief: ChiefRays):
     return target
 
 
-def _pupil_grid(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chief: ChiefRays, samples: int
-                ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The rim of the stop → per field the (α, β) grid (n, N) each, relative to the chief ray, that holds
-    the pupil, and an affine map (n, 3, 2) from (1, α, β) to entrance coordinates (the grid's first aim)."""
+def _sphere_rim(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chief: ChiefRays):
+    """The rim of the stop seen on each field's reference sphere: entrance coordinates (n, RIM_RAYS)
+    each, (α, β) relative to the chief ray, and which rim rays passed; SolasError for a field none passes."""
     nf = len(field_deg)
     rim = Bundle(lens, field_deg, wavelength_nm, RIM_RAYS)
     rim_target = _sphere_target(lens, rim, chief)
@@ -230,13 +241,21 @@ def _pupil_grid(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, ch
         bad = field_deg[~rok.any(axis=1)][0]
         raise SolasError(f"no real ray reaches the stop's rim for field ({bad[0]:g}, {bad[1]:g}) deg; "
                          "the lens is not usable there")
-    ca, cb = chief.sphere_point[:, 0], chief.sphere_point[:, 1]
+    return rex, rey, ra - chief.sphere_point[:, 0:1], rb - chief.sphere_point[:, 1:2], rok
+
+
+def _pupil_grid(chief: ChiefRays, rim, samples: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The rim of the stop (`_sphere_rim`) → per field the (α, β) grid (n, N) each, relative to the chief
+    ray, that holds the pupil, and an affine map (n, 3, 2) from (1, α, β) to entrance coordinates (the
+    grid's first aim)."""
+    rex, rey, ra, rb, rok = rim
+    nf = len(rex)
     alpha = np.empty((nf, samples))
     beta = np.empty((nf, samples))
     affine = np.empty((nf, 3, 2))
     for f in range(nf):
         m = rok[f]
-        a_rel, b_rel = ra[f, m] - ca[f], rb[f, m] - cb[f]
+        a_rel, b_rel = ra[f, m], rb[f, m]
         for grid, lo, hi in ((alpha, a_rel.min(), a_rel.max()), (beta, b_rel.min(), b_rel.max())):
             half = 0.5 * (hi - lo) * (1.0 + 2.0 / samples) * 1.01
             mid = 0.5 * (hi + lo)

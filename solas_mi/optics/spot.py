@@ -16,23 +16,35 @@ PATTERNS = ("hexapolar", "grid")
 
 @dataclass
 class Spot:
-    """Ray intersections with the image plane relative to the chief ray (µm)."""
+    """Ray intersections with the image plane (µm) relative to `origin_mm`: the chief ray's image
+    point, or where the chief ray is blocked but light passes, the centroid of that light."""
 
     x_um: np.ndarray
     y_um: np.ndarray
     chief_ray_mm: tuple[float, float]
     launched: int  # rays launched
     vignetted: int  # rays blocked by an aperture or failing geometrically
+    origin_mm: tuple[float, float] | None = None  # None: the chief ray's image point
+
+    @property
+    def centre(self) -> str:
+        return "chief ray" if self.origin_mm is None else "centroid of the arriving light (the chief ray is blocked)"
 
     @property
     def centroid_um(self) -> tuple[float, float]:
         return float(self.x_um.mean()), float(self.y_um.mean())
 
+    def _chief_um(self) -> tuple[float, float]:
+        """The chief ray's image point relative to the origin (µm)."""
+        if self.origin_mm is None:
+            return 0.0, 0.0
+        return ((self.chief_ray_mm[0] - self.origin_mm[0]) * 1e3, (self.chief_ray_mm[1] - self.origin_mm[1]) * 1e3)
+
     def rms_radius_um(self, reference: str = "centroid") -> float:
         """RMS radius about the centroid or the chief ray (µm)."""
         if reference not in ("centroid", "chief"):
             raise SolasError(f"spot reference {reference!r} must be 'centroid' or 'chief'")
-        cx, cy = self.centroid_um if reference == "centroid" else (0.0, 0.0)
+        cx, cy = self.centroid_um if reference == "centroid" else self._chief_um()
         return float(np.sqrt(np.mean((self.x_um - cx) ** 2 + (self.y_um - cy) ** 2)))
 
 
@@ -59,21 +71,51 @@ def spot(lens: Lens, field_deg, wavelength_nm: float, pattern: str = "hexapolar"
     """Spot diagram at the image plane, every aperture clipping.
 
     Rays on `pattern` fill the real entrance pupil about the real chief ray (aimed through the stop
-    centre): the disc reaching the nearest of the real rays aimed at the stop's rim."""
+    centre): the disc reaching the nearest of the real rays aimed at the stop's rim. Where an aperture
+    blocks the chief ray itself, they fill the disc about the part of the pupil whose light arrives
+    (`_light_disc`), and the spot is given about the centroid of that light."""
     wavelength_nm = lens.check_wavelength(wavelength_nm)
     field = np.array([lens.field_type.check(field_deg)])
     points = pupil_pattern(pattern, density)
     wl = np.array([wavelength_nm])
     chief = P.chief_rays(lens, field, wl)
     ex, ey, _, ok = P.stop_rim(P.Bundle(lens, field, wl, P.RIM_RAYS), chief)
-    radius = float(np.hypot(ex - chief.entrance[0, 0], ey - chief.entrance[0, 1])[ok].min())
+    reach = np.hypot(ex - chief.entrance[0, 0], ey - chief.entrance[0, 1])
+    centre, radius = chief.entrance[0], float(reach[ok].min())
+    if chief.vignetted[0]:
+        centre, radius = _light_disc(lens, field, wl, chief.entrance[0], float(reach.max()))
     b = P.Bundle(lens, field, wl, len(points))
-    tr = b.trace(T.F(chief.entrance[0, 0] + radius * points[:, 0]), T.F(chief.entrance[0, 1] + radius * points[:, 1]))
-    x, y, _ = T.to_plane(tr, lens.image_z)
-    keep, x, y = T.to_numpy(tr.ok & (tr.clipped_by == 0), x, y)
+    x, y, keep = _image_hits(b, centre[0] + radius * points[:, 0], centre[1] + radius * points[:, 1], lens.image_z)
     if not keep.any():
         raise SolasError(f"no ray of {wavelength_nm:g} nm through the pupil reaches the image for field "
                          f"({field[0, 0]:g}, {field[0, 1]:g}) deg: every one is blocked")
     x0, y0 = chief.image_xy[0]
-    return Spot((x[keep] - x0) * 1e3, (y[keep] - y0) * 1e3, (float(x0), float(y0)),
-                len(points), int((~keep).sum()))
+    origin = (float(x[keep].mean()), float(y[keep].mean())) if chief.vignetted[0] else None
+    ox, oy = origin or (x0, y0)
+    return Spot((x[keep] - ox) * 1e3, (y[keep] - oy) * 1e3, (float(x0), float(y0)), len(points),
+                int((~keep).sum()), origin)
+
+
+LIGHT_PROBE = 96  # points per side of the grid that finds the part of a blocked chief ray's pupil that passes
+
+
+def _image_hits(b: P.Bundle, ex: np.ndarray, ey: np.ndarray, image_z: float):
+    """Image-plane points (mm) of the bundle's rays at entrance coordinates ex, ey, and which arrive."""
+    tr = b.trace(T.F(ex), T.F(ey))
+    x, y, _ = T.to_plane(tr, image_z)
+    keep, x, y = T.to_numpy(tr.ok & (tr.clipped_by == 0), x, y)
+    return x, y, keep
+
+
+def _light_disc(lens: Lens, field: np.ndarray, wl: np.ndarray, chief_entrance: np.ndarray, reach: float):
+    """Centre (2,) and radius (mm) of the entrance disc holding the rays that arrive, from a
+    LIGHT_PROBE² grid over the square ±`reach` about the chief ray's entrance point (the pupil's rim
+    seen from it); the disc reaches half a probe cell past the outermost arriving probe."""
+    g = (np.arange(LIGHT_PROBE) + 0.5) / LIGHT_PROBE * 2.0 - 1.0
+    gx, gy = (chief_entrance[i] + reach * a.ravel() for i, a in enumerate(np.meshgrid(g, g)))
+    _, _, keep = _image_hits(P.Bundle(lens, field, wl, len(gx)), gx, gy, lens.image_z)
+    if not keep.any():
+        return chief_entrance, reach
+    centre = np.array([gx[keep].mean(), gy[keep].mean()])
+    cell = 2.0 * reach / LIGHT_PROBE
+    return centre, float(np.hypot(gx[keep] - centre[0], gy[keep] - centre[1]).max() + cell)

@@ -92,7 +92,7 @@ def method_options(name: str, options: dict) -> dict[str, int]:
 def _fraunhofer(*args, **kwargs):
     from .fraunhofer import compute
 
-    return compute(*args, **kwargs)
+    return compute(*args, most=MAX_SAMPLING, **kwargs)
 
 
 def _geometric(*args, **kwargs):

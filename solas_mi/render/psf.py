@@ -52,15 +52,13 @@ def scene_hits(scene, lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, ra
 
     sampler = mi.load_dict({"type": "independent"})
     ctx = mi.BSDFContext(mi.TransportMode.Importance)
-    tan = T.field_tangents(field_deg)
-    points = T.object_points(lens, field_deg)
     hits = []
     for sl, ex, ey, power in entrance_grid(lens, field_deg, wavelength_nm, rays, chief):
         for j, f in enumerate(range(sl.start, sl.stop)):
             n = rays * rays
-            obj = None if points is None else (T.F(np.full(n, points[f, 0])), T.F(np.full(n, points[f, 1])))
-            start = T.launch(lens, T.F(np.full(n, tan[f, 0])), T.F(np.full(n, tan[f, 1])), T.F(ex[j].ravel()),
-                             T.F(ey[j].ravel()), obj)
+            # launched as the tracer launches the lens's fields (tangents, or polar directions)
+            start = P.Bundle(lens, field_deg[f:f + 1], wavelength_nm[f:f + 1], n).launch(T.F(ex[j].ravel()),
+                                                                                         T.F(ey[j].ravel()))
             x, y, z, dx, dy, dz = T.to_numpy(start.x, start.y, start.z, start.dx, start.dy, start.dz)
             ray = mi.Ray3f(mi.Point3f(x, y, z), mi.Vector3f(dx, dy, dz), 0.0, mi.Spectrum(float(wavelength_nm[f])))
             sampler.seed(f, n)

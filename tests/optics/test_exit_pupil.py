@@ -34,3 +34,31 @@ def test_every_passing_ray_lies_inside_the_bound(name):
         u0, u1, v0, v1, _ = table.at(np.array(r))
         assert ok.any()
         assert (gx[ok] >= u0).all() and (gx[ok] <= u1).all() and (gy[ok] >= v0).all() and (gy[ok] <= v1).all()
+
+
+def test_bounds_hold_a_thin_ring_the_march_steps_over(monkeypatch):
+    """A pupil of a disc and a thin ring outside it (here drawn into `passes`: 2.56-2.59 mm about the
+    axis, around the doublet's 2.5 mm disc): the march from outside (steps of 0.16 mm) steps over the
+    ring and bisects onto the disc, so the sensors would lose the ring's light; the check on a grid of
+    rays at build time finds it, widens the bounds and warns."""
+    import numpy as np
+
+    from solas_mi import Lens
+    from solas_mi.optics import exit_pupil as E
+
+    real = E.passes
+
+    def with_ring(rev, x, y, ex, ey, w):
+        d = np.hypot(ex, ey)
+        return real(rev, x, y, ex, ey, w) | ((d > 2.56) & (d < 2.59))
+
+    monkeypatch.setattr(E, "passes", with_ring)
+    lens = Lens.load("solas-doublet")
+    with pytest.warns(UserWarning, match="missed a thin part of the pupil"):
+        b = E.pupil_bounds(lens, 1.0, [531.0], radii=8)
+    g = np.linspace(-3.0, 3.0, 1201)
+    gu, gv = (a.ravel() for a in np.meshgrid(g, g))
+    for r in (0.0, 0.5, 1.0):
+        ok = with_ring(E.reversed_lens(lens), r, 0.0, gu, gv, 531.0)
+        u0, u1, v0, v1, _ = b.at(np.array(r))
+        assert ok.any() and np.all((gu[ok] >= u0) & (gu[ok] <= u1) & (gv[ok] >= v0) & (gv[ok] <= v1))

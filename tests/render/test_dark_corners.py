@@ -1,0 +1,31 @@
+"""A render whose film reaches past the lens's image shows the dark corners a real camera shows, with
+a warning naming the field the lens covers (it was refused: 'the lens does not image that field')."""
+import numpy as np
+import pytest
+
+from solas_mi import Lens
+from solas_mi.optics.illumination import image_scales
+from solas_mi.render.image import render_image
+from solas_mi.render.spec import RenderSpec
+
+
+def test_a_film_wider_than_the_doublet_s_image_has_dark_corners():
+    """38.4 mm of film (±10.9°) behind the doublet, whose chief rays end at 9.65°."""
+    with pytest.warns(UserWarning, match=r"images fields to 9\.6\d deg only"):
+        r = render_image(Lens.load("solas-doublet"), "scenes/images/rocket.png",
+                         RenderSpec(sensor=(24, 32), pitch_um=1200, spp=4))
+    a = np.asarray(r.image)
+    assert np.isfinite(a).all()
+    assert np.all(a[:2, :2] == 0) and np.all(a[-2:, -2:] == 0)  # the corners: no light
+    assert a[8:16, 12:20].sum() > 0
+
+
+def test_image_scales_end_where_the_chief_rays_do():
+    """Within the image the table is today's; past it, it stops at the last field with a chief ray."""
+    lens = Lens.load("cooke-triplet")
+    h, radial, tangential = image_scales(lens, 25.0, 587.5618)
+    with pytest.warns(UserWarning, match=r"images fields to 31\.\d+ deg only"):
+        h_far, radial_far, tangential_far = image_scales(lens, 40.0, 587.5618)
+    assert h_far[-1] < 40.0 and h_far[-1] > h[-1]
+    assert np.all(np.isfinite(radial_far)) and np.all(radial_far > 0) and np.all(tangential_far > 0)
+    assert np.interp(20.0, h_far, radial_far) == pytest.approx(np.interp(20.0, h, radial), rel=1e-3)
