@@ -146,8 +146,9 @@ def image_scales(lens: Lens, max_height_mm: float, wavelength_nm: float, samples
     """Radial and tangential image scales of the chief ray (mm per unit field tangent) at image
     heights 0…max_height_mm: (heights, dh/dt, h/t). Their reciprocals turn a length on the image plane
     into a width in field tangent (a pixel's footprint on the object). Where the film reaches past the
-    lens's image (no chief ray beyond some field) the table ends at the last field that has one, and a
-    warning names it: a render shows the dark corners a real camera shows."""
+    lens's image (no chief ray through the stop centre beyond some field) the table ends at the last field
+    that has one; where it reaches past the last chief ray that passes every aperture, a warning names
+    that field: a render shows the dark corners a real camera shows."""
     from .pupil import chief_rays
 
     f0 = math.sqrt(float(_jacobian(lens, np.zeros((1, 2)), wavelength_nm)[0]))
@@ -156,29 +157,33 @@ def image_scales(lens: Lens, max_height_mm: float, wavelength_nm: float, samples
     t = np.linspace(0.0, t_max, samples)
     # differences forward, or backward where chief rays end at t_max
     tt = np.concatenate([t, t + _STEP if t_max == wanted else np.maximum(t - _STEP, 0.0)])
-    h = chief_rays(lens, np.stack([np.degrees(np.arctan(tt)), np.zeros_like(tt)], -1),
-                   np.full(len(tt), wavelength_nm)).image_xy[:, 0]
+    chief = chief_rays(lens, np.stack([np.degrees(np.arctan(tt)), np.zeros_like(tt)], -1), np.full(len(tt), wavelength_nm))
+    h = chief.image_xy[:, 0]
     dt = tt[samples:] - t
     radial = (h[samples:] - h[:samples]) / np.where(dt != 0, dt, 1.0)
     radial[0] = radial[0] if dt[0] != 0 else radial[1]
     tangential = np.concatenate([[radial[0]], h[1:samples] / t[1:]])
-    if t_max < wanted and h[samples - 1] < max_height_mm:
-        warnings.warn(f"lens {lens.name} images fields to {math.degrees(math.atan(t_max)):.4g} deg only (image "
-                      f"height {h[samples - 1]:.4g} mm) at {wavelength_nm:g} nm, the film reaches {max_height_mm:.4g} mm: "
-                      "beyond, the render is dark, as a real camera's corners", stacklevel=2)
+    clear = np.flatnonzero(np.cumprod(~chief.vignetted[:samples]))  # chief rays that pass every aperture
+    last = clear[-1] if len(clear) else 0
+    if h[last] < max_height_mm:
+        warnings.warn(f"lens {lens.name}'s chief rays pass every aperture up to field "
+                      f"{math.degrees(math.atan(t[last])):.4g} deg (image height {h[last]:.4g} mm) at {wavelength_nm:g} "
+                      f"nm and the film reaches {max_height_mm:.4g} mm: beyond, the image darkens to the dark corners "
+                      "a real camera shows", stacklevel=2)
     return h[:samples], radial, tangential
 
 
 def _last_chief_tangent(lens: Lens, t_max: float, wavelength_nm: float, bisections: int = 40) -> float:
-    """t_max, or where chief rays end before it the largest field tangent (along x) that has one."""
+    """t_max, or where chief rays through the stop centre end before it the largest field tangent (along
+    x) that has one: beyond, a field's light (if any) lands where no chief ray maps it."""
     from .pupil import chief_rays
 
-    def exists(t: float) -> bool:
+    def exists(t: float) -> bool:  # a ray through the stop centre (a substitute nearest it maps nothing)
         try:
-            chief_rays(lens, [[math.degrees(math.atan(t)), 0.0]], [wavelength_nm])
+            chief = chief_rays(lens, [[math.degrees(math.atan(t)), 0.0]], [wavelength_nm])
         except SolasError:
             return False
-        return True
+        return not bool(chief.off_centre[0])
 
     if exists(t_max):
         return t_max

@@ -39,6 +39,7 @@ class ChiefRays:
     sphere_point: np.ndarray  # (n, 2) (α, β) of the chief ray's sphere point: (Q0 − P0) / R
     n_image: np.ndarray  # (n,)
     vignetted: np.ndarray  # (n,) bool: an aperture blocks the chief ray itself, or none reaches the stop centre
+    off_centre: np.ndarray  # (n,) bool: no ray reaches the stop centre; the ray is the passing one nearest it
 
 
 def chief_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> ChiefRays:
@@ -66,6 +67,7 @@ def chief_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> 
         sphere_point=np.stack([sa, sb], axis=-1),
         n_image=np.broadcast_to(n_image, (b.n_fields,)).copy(),
         vignetted=(clipped != 0) | (np.hypot(*goal.T) > 0),
+        off_centre=np.hypot(*goal.T) > 0,
     )
 
 
