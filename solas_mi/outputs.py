@@ -11,11 +11,35 @@ or interruption.
 from __future__ import annotations
 
 import os
+import re
 from contextlib import ExitStack, contextmanager
 from pathlib import Path
 from typing import Iterable, Iterator
 
 from .errors import SolasError
+
+_UNSAFE = re.compile(r"[^A-Za-z0-9._+=-]+")
+NAME_MAX = 120  # characters of a name component (file systems allow 255 bytes; room for suffixes)
+
+
+def safe_name(text: object, fallback: str = "item") -> str:
+    """`text` (a lens name, an item name, a sweep value: user data) as one safe file-name component:
+    every run of characters other than letters, digits and . _ + = - becomes "_" (so no separator,
+    NUL, newline or space), no leading dot (no hidden file, no "." or ".."), at most NAME_MAX
+    characters; `fallback` when nothing is left."""
+    name = _UNSAFE.sub("_", str(text)).lstrip("._")[:NAME_MAX].rstrip("_") if text is not None else ""
+    return name or fallback
+
+
+def inside(folder: str | os.PathLike, name: str) -> Path:
+    """`folder`/`name`, SolasError unless it lies directly inside `folder` after resolution (symbolic
+    links and ".." followed): where an output named from user data may be written."""
+    base = Path(folder).resolve()
+    path = base / name
+    if path.resolve().parent != base:
+        raise SolasError(f"output name {name!r} leads outside the folder {base}; names derived from "
+                         "user data must be plain file names")
+    return path
 
 
 def _same(a: Path, b: Path) -> bool:

@@ -13,6 +13,7 @@ import time
 from pathlib import Path
 
 from ..errors import SolasError
+from ..outputs import inside, safe_name
 
 
 def default_cache_dir() -> Path:
@@ -42,8 +43,9 @@ class GridCache:
 
     def path(self, lens, spec) -> Path:
         """Where the grid of `lens` with `spec` (a `psf.spec.GridSpec`) is kept: named by the lens and
-        the hash of the lens's hash and the spec's canonical form."""
-        return self.folder / f"{lens.name}-{spec.key(lens.hash)}.exr"
+        the hash of the lens's hash and the spec's canonical form (the name made a safe file name: a
+        lens file's name is user data)."""
+        return inside(self.folder, f"{safe_name(lens.name, 'lens')}-{spec.key(lens.hash)}.exr")
 
     def get(self, lens, spec, progress=None) -> tuple[Path, bool, float]:
         """(path of the grid of `lens` with `spec`, whether it came from the cache, seconds spent computing it)."""

@@ -18,6 +18,7 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from ..errors import SolasError
+from ..outputs import inside, safe_name
 
 MANIFEST = "batch.json"
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".exr")
@@ -98,7 +99,7 @@ def plan(inputs: list[Path], out_dir: Path) -> list[Job]:
     jobs, seen = [], {}
     sources = set(inputs)
     for path in inputs:
-        output = out_dir / f"{path.stem}.exr"
+        output = inside(out_dir, f"{safe_name(path.stem)}.exr")
         if output in seen:
             raise SolasError(f"inputs {str(seen[output])!r} and {str(path)!r} would both write {output}; "
                              "give them different names or run them as separate batches")

@@ -30,6 +30,7 @@ from pathlib import Path
 from typing import Any, Iterable, Sequence
 
 from ..errors import SolasError
+from ..outputs import inside, safe_name
 from ..render.spec import RenderSpec
 from .degrade import BatchResult, check_workers
 from .jobs import IMAGE_SUFFIXES, MANIFEST, Job, Manifest, expand_inputs
@@ -71,7 +72,7 @@ def _is_pair(value) -> bool:
 
 def _label(name: str, value, lens_names: dict[str, str]) -> str:
     if name == "lens":
-        return lens_names[value]
+        return safe_name(lens_names[value], "lens")
     if name == "focus_distance":
         return "focus" + ("inf" if math.isinf(value) else f"{value:g}")
     if name == "sensor":
@@ -115,8 +116,8 @@ def _jobs(files: list[Path], out_dir: Path, base: RenderSpec, axes: dict[str, li
     jobs, seen, sources = [], {}, set(files)
     for path, point in itertools.product(files, itertools.product(*(axes[name] for name in SWEEP))):
         values = dict(zip(SWEEP, point))
-        stem = "_".join([path.stem, *(_label(name, values[name], names) for name in swept)])
-        output = out_dir / f"{stem}.exr"
+        stem = safe_name("_".join([safe_name(path.stem), *(_label(name, values[name], names) for name in swept)]))
+        output = inside(out_dir, f"{stem}.exr")
         if output in seen:
             raise SolasError(f"inputs {str(seen[output])!r} and {str(path)!r} would both write {output}; "
                              "give them different names or run them as separate batches")

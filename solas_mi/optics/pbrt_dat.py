@@ -102,7 +102,9 @@ def dumps(lens) -> str:
     bad = [i for i, s in enumerate(lens.surfaces, start=1) if not s.is_sphere]
     if bad:
         raise SolasError(f"lens {lens.name}: surface {bad[0]} is aspheric; a .dat lens table holds spheres only")
-    lines = [f"# {lens.name}: lens table written by solas-mi", "# radius thickness n_d aperture V_d (mm)"]
+    from .lens_toml import text
+
+    lines = [f"# {text(lens.name)}: lens table written by solas-mi", "# radius thickness n_d aperture V_d (mm)"]
     flat_air = [i for i, s in enumerate(lens.surfaces) if s.radius == 0 and s.glass.kind == "air"
                 and (i == 0 or lens.surfaces[i - 1].glass.kind == "air")]
     if flat_air != [lens.stop_index]:
