@@ -1,0 +1,83 @@
+"""Every command that writes takes the one output check (`outputs.check_target`), `lens convert`
+included; text we write is escaped (a name cannot add a line or a key); an error quotes at most the
+name of a file a scene points to, never its content."""
+import dataclasses
+import os
+import shutil
+import subprocess
+import sys
+
+import pytest
+
+from solas_mi.cli import main
+from solas_mi.optics.lens import Lens
+from solas_mi.optics.paraxial import paraxial
+
+
+def shipped_file(name="solas-doublet"):
+    return Lens.load(name).source
+
+
+@pytest.fixture
+def lens_copy(tmp_path):
+    d = tmp_path / "d"
+    d.mkdir()
+    path = d / "x.toml"
+    shutil.copy(shipped_file(), path)
+    with open(path, "a") as f:
+        f.write("# a comment the converter would drop\n")
+    return path
+
+
+@pytest.mark.parametrize("spelling", ["{p}", "{d}/../d/x.toml", "{d}/./x.toml"])
+def test_lens_convert_never_rewrites_its_input(lens_copy, spelling, capsys):
+    before = lens_copy.read_bytes()
+    out = spelling.format(p=lens_copy, d=lens_copy.parent)
+    assert main(["lens", "convert", str(lens_copy), "-o", out]) == 2
+    assert "input of this command" in capsys.readouterr().err
+    assert lens_copy.read_bytes() == before
+
+
+def test_lens_convert_never_replaces_a_link_a_folder_or_a_device(lens_copy, tmp_path, capsys):
+    target = tmp_path / "target.zmx"
+    target.write_text("keep")
+    link = tmp_path / "link.zmx"
+    link.symlink_to(target)
+    for out, kind in ((link, "symbolic link"), (tmp_path, "folder"), ("/dev/null", "not a regular file")):
+        assert main(["lens", "convert", str(lens_copy), "-o", str(out)]) == 2
+        assert kind in capsys.readouterr().err
+    assert link.is_symlink() and target.read_text() == "keep"
+
+
+NAMES = ["two\nlines", 'a "quote"', "close ] bracket", "hash # sign", "back\\slash", "del\x7fchar",
+         'x"\nname = "evil']
+
+
+@pytest.mark.parametrize("ext", [".toml", ".dat"])
+@pytest.mark.parametrize("name", NAMES)
+def test_a_name_written_into_a_lens_file_reads_back_as_written(doublet, name, ext, tmp_path):
+    lens = dataclasses.replace(doublet, name=name, description=name)
+    path = lens.save(tmp_path / f"lens{ext}")
+    plain = doublet.save(tmp_path / f"plain{ext}")
+    back = Lens.load(path)
+    assert len(back.surfaces) == len(doublet.surfaces)
+    assert paraxial(back).efl_mm == paraxial(Lens.load(plain)).efl_mm
+    if ext == ".toml":
+        assert (back.name, back.description) == (name, name)
+    assert path.read_text().count("\n") == plain.read_text().count("\n")  # no line added
+
+
+SECRET = "root:$6$s3cr3t-hash-never-printed:19000:0:99999:7:::"
+
+
+@pytest.mark.parametrize("content", [f"first line\n{SECRET}\n", f"{SECRET}\n1,2,3,4\n", "1,2,3,4\n" + SECRET,
+                                     "\xff\xfe" + SECRET])
+def test_a_response_table_is_never_quoted(tmp_path, content):
+    from solas_mi.errors import SolasError
+    from solas_mi.render.response import parse
+
+    secret = tmp_path / "shadow"
+    secret.write_bytes(content.encode("latin-1"))
+    with pytest.raises(SolasError) as info:
+        parse(f"table:{secret}", [486.1, 587.6, 656.3])
+    assert "shadow" in str(info.value) and "s3cr3t" not in str(info.value)
