@@ -81,3 +81,18 @@ def test_a_response_table_is_never_quoted(tmp_path, content):
     with pytest.raises(SolasError) as info:
         parse(f"table:{secret}", [486.1, 587.6, 656.3])
     assert "shadow" in str(info.value) and "s3cr3t" not in str(info.value)
+
+
+def test_scene_folders_of_killed_renders_are_removed_by_the_next(tmp_path, monkeypatch):
+    import tempfile
+
+    from solas_mi.render.image import SCENE_PREFIX, remove_stale_scenes
+
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    dead = subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True)
+    stale = tmp_path / f"{SCENE_PREFIX}{int(dead.stdout)}-abcd1234"
+    live = tmp_path / f"{SCENE_PREFIX}{os.getppid()}-abcd1234"
+    for folder in (stale, live):
+        (folder / "meshes").mkdir(parents=True)
+        (folder / "scene.xml").write_text("<scene/>")
+    assert remove_stale_scenes() == 1 and not stale.exists() and live.is_dir()

@@ -2,6 +2,8 @@
 directory with the image as its object, loaded (`mitsuba`) and rendered (`loop`)."""
 from __future__ import annotations
 
+import os
+import shutil
 import tempfile
 from pathlib import Path
 
@@ -16,6 +18,26 @@ from .loop import Render, render
 from .mitsuba import load_scene, variant_for
 from .scene import write_scene
 from .spec import RenderSpec
+
+SCENE_PREFIX = "solas-scene-"  # + the process id: $TMPDIR/solas-scene-PID-XXXXXXXX, one per image render
+
+
+def remove_stale_scenes() -> int:
+    """Remove the temporary scene folders that renders killed outright (SIGKILL, out of memory) left in
+    $TMPDIR: those of processes that no longer run. The number removed."""
+    removed = 0
+    for folder in Path(tempfile.gettempdir()).glob(f"{SCENE_PREFIX}*-*"):
+        pid = folder.name[len(SCENE_PREFIX):].split("-", 1)[0]
+        if not pid.isdigit() or int(pid) == os.getpid() or not folder.is_dir() or folder.is_symlink():
+            continue
+        try:
+            os.kill(int(pid), 0)
+        except ProcessLookupError:
+            shutil.rmtree(folder, ignore_errors=True)
+            removed += 1
+        except OSError:  # alive, another user's
+            pass
+    return removed
 
 
 def fisheye_camera(lens, sensor: tuple[int, int], fov_deg: float | None, pitch_um: float | None) -> Camera:
@@ -56,7 +78,8 @@ def render_image(lens, image: str | np.ndarray, spec: RenderSpec | None = None, 
     variant = variant_for(parsed, spec.variant)
     if not isinstance(image, np.ndarray):
         read_image(image)
-    with tempfile.TemporaryDirectory(prefix="solas-scene-") as tmp:
+    remove_stale_scenes()
+    with tempfile.TemporaryDirectory(prefix=f"{SCENE_PREFIX}{os.getpid()}-") as tmp:
         if isinstance(image, np.ndarray):
             path = str(Path(tmp) / "object.exr")
             write_exr(path, image_channels(np.asarray(image, dtype=np.float32)))
