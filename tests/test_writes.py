@@ -96,3 +96,13 @@ def test_scene_folders_of_killed_renders_are_removed_by_the_next(tmp_path, monke
         (folder / "meshes").mkdir(parents=True)
         (folder / "scene.xml").write_text("<scene/>")
     assert remove_stale_scenes() == 1 and not stale.exists() and live.is_dir()
+
+
+@pytest.mark.parametrize("extra, message", [(["--spp", "100000000"], "samples per pixel 100000000"),
+                                            (["--spp-ideal", "0"], "samples per pixel 0"),
+                                            (["--size", "100000x100000"], "render 100000x100000 needs about")])
+def test_the_street_experiment_checks_its_renders_before_any_work(tmp_path, capsys, extra, message):
+    out = tmp_path / "street"
+    assert main(["experiment", "street", "-o", str(out), *extra]) == 2
+    err = capsys.readouterr().err
+    assert message in err and err.count("\n") == 1 and not out.exists()
