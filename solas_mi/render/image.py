@@ -72,6 +72,10 @@ def render_image(lens, image: str | np.ndarray, spec: RenderSpec | None = None, 
                          "plane: render it without one")
     camera = (camera_for(lens, spec.sensor, spec.fov_deg, spec.pitch_um) if lens.field_type.pinhole
               else fisheye_camera(lens, spec.sensor, spec.fov_deg, spec.pitch_um))
+    if spec.mapping == "rectilinear" and camera.fov_deg >= 90.0:  # tan θ changes sign: the input would mirror
+        raise SolasError(f"a rectilinear input spans less than ±90 deg and this one would span ±{camera.fov_deg:g} deg; "
+                         "give --fov-deg below 90 or a mapping that reaches past 90 deg (equidistant, equisolid, "
+                         "equirectangular)")
     # the user's mistakes, named here rather than inside the scene's plugins
     parsed = responses.parse(spec.response, lens.wavelengths_nm)
     responses.check_lens(parsed, lens)
