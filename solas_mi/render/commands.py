@@ -120,8 +120,14 @@ def _render(args) -> int:
         raise SolasError("--integrator solas renders lens_sensor scenes (from `solas-mi scene`); with --lens the "
                          "scene's own integrator renders it")
     run, _ = spec_from_args(args, ("variant", "seed"))
-    scene = load(args.scene, run.variant, lens, params, pitch_um=args.pitch_um, focus_distance=args.focus_distance,
-                 response=args.response)
+    try:
+        scene = load(args.scene, run.variant, lens, params, pitch_um=args.pitch_um,
+                     focus_distance=args.focus_distance, response=args.response)
+    except (ValueError, ZeroDivisionError) as exc:  # the camera's numbers as the lens camera reads them
+        if lens is None:
+            raise
+        raise SolasError(f"scene {args.scene}: its camera's film size and field must be numbers (a film of at least "
+                         f"1x1 px) for the lens camera to replace it: {type(exc).__name__}: {exc}") from None
     spp = args.spp if args.spp is not None else int(scene.sensors()[0].sampler().sample_count())
     width, height = (int(v) for v in scene.sensors()[0].film().crop_size())
     _check_render(width, height, spp, args.force)
