@@ -85,7 +85,7 @@ def pupil_bounds(lens: Lens, max_radius_mm: float, wavelengths_nm=None, radii: i
     a disc and a ring) and bisection the rim beyond it, to 1e-9 mm. The bound is the box of the rim
     points, widened by the most a convex rim can bulge between neighbouring directions."""
     rev = reversed_lens(lens)
-    reach = exit_reach(lens, max_radius_mm)
+    reach = _reach(lens, max_radius_mm)
     step = 2.0 * reach / coarse
     g = -reach + (np.arange(coarse) + 0.5) * step
     grid = tuple(a.ravel() for a in np.meshgrid(g, g))
@@ -104,7 +104,7 @@ def pupil_bounds(lens: Lens, max_radius_mm: float, wavelengths_nm=None, radii: i
     return PupilBounds(radius, bounds, elliptical & seen, float(lens.vertex_z[-1]))
 
 
-def exit_reach(lens: Lens, max_radius_mm: float) -> float:
+def _reach(lens: Lens, max_radius_mm: float) -> float:
     """Half width (mm) of a square on the last vertex plane that holds every ray leaving the lens toward
     film radii up to max_radius_mm. A ray leaves through a point of the last surface's clear aperture;
     seen from a film point at radius r, thickness T below the vertex plane, a point at height ρ and

@@ -6,10 +6,9 @@ E(θ) = L · A(θ) · dω/dA_image, with A(θ) the transmitted cross-section of 
 (the pupil's transmission × the paraxial entrance-pupil area) and dω/dA_image = cos³θ / J(θ), where
 J = |∂(x, y)/∂(tan θx, tan θy)| of the chief ray's image point; `relative_illumination` gives
 E(θ)/E(0) in this form. Rays through the rim of a beam map with a slightly different J than its
-chief ray (by ≈ u'², 0.4 % for the doublet, and more off axis), and a blurred image (a ball lens)
-takes light from fields far from the chief ray's, so `irradiance` integrates exactly on the image
-side instead: E = L ∫ cos θ dω over the directions from the image point that leave through the lens,
-wherever they cross the last vertex plane (a wide-angle's steep rays far outside the last aperture).
+chief ray (by ≈ u'², 0.4 % for the doublet, and more off axis), so `irradiance` integrates exactly on
+the image side instead: E = L ∫ cos θ dω over the directions from the image point that leave
+through the lens.
 """
 from __future__ import annotations
 
@@ -41,54 +40,24 @@ def _jacobian(lens: Lens, field_deg: np.ndarray, wavelength_nm: float) -> np.nda
 
 def irradiance(lens: Lens, image_xy: np.ndarray, wavelength_nm: float, samples: int = 512) -> np.ndarray:
     """E / L (steradians) of a lossless lens at image points (n, 2) in mm: ∫ cos θ dω over the rays
-    from each point that pass every aperture (the lens traced backwards), on a samples² grid over the
-    part of the last surface's vertex plane where they cross it. Where that is comes from a coarse
-    grid (COARSE² points) over the square that holds every ray leaving the lens toward the point
-    (`exit_pupil.exit_reach`: steep rays cross the plane far outside the last surface's aperture)."""
-    from .exit_pupil import reversed_lens
+    from each point that pass every aperture, on a samples² grid over the last surface's vertex plane
+    (the lens traced backwards)."""
+    from .exit_pupil import passes, reversed_lens
 
     if not lens.at_infinity:
         raise SolasError("image irradiance is defined here for objects at infinity only")
     rev = reversed_lens(lens)
+    reach = 1.05 * lens.surfaces[-1].semi_diameter
+    step = 2.0 * reach / samples
+    g = -reach + (np.arange(samples) + 0.5) * step
+    ex, ey = (a.ravel() for a in np.meshgrid(g, g))
     dz = lens.surfaces[-1].thickness
     out = []
     for x, y in np.atleast_2d(np.asarray(image_xy, dtype=np.float64)):
-        box = _lit_box(lens, rev, x, y, wavelength_nm)
-        out.append(0.0 if box is None else _projected_solid_angle(rev, x, y, box, dz, samples, wavelength_nm))
+        ok = passes(rev, x, y, ex, ey, wavelength_nm)
+        cos2 = dz * dz / ((ex - x) ** 2 + (ey - y) ** 2 + dz * dz)
+        out.append(np.sum((cos2 * cos2)[ok]) * step * step / (dz * dz))
     return np.array(out)
-
-
-COARSE = 128  # points per side of the grid that finds where an image point's rays leave the lens
-
-
-def _lit_box(lens: Lens, rev: Lens, x: float, y: float, wavelength_nm: float):
-    """(u0, u1, v0, v1) (mm) on the last vertex plane holding the rays from image point (x, y) that
-    leave the lens, widened by a coarse cell each side; None where none does."""
-    from .exit_pupil import exit_reach, passes
-
-    reach = exit_reach(lens, math.hypot(x, y))
-    step = 2.0 * reach / COARSE
-    g = -reach + (np.arange(COARSE) + 0.5) * step
-    ex, ey = (a.ravel() for a in np.meshgrid(g, g))
-    ok = passes(rev, x, y, ex, ey, wavelength_nm)
-    if not ok.any():
-        return None
-    return ex[ok].min() - step, ex[ok].max() + step, ey[ok].min() - step, ey[ok].max() + step
-
-
-def _projected_solid_angle(rev: Lens, x: float, y: float, box, dz: float, samples: int, wavelength_nm: float
-                           ) -> float:
-    """∫ cos θ dω (sr) over the rays from (x, y) through `box` on the plane dz above it that pass:
-    dω cos θ = cos⁴θ dA / dz² on the plane, by the midpoint rule on samples² points."""
-    from .exit_pupil import passes
-
-    u0, u1, v0, v1 = box
-    du, dv = (u1 - u0) / samples, (v1 - v0) / samples
-    ex, ey = (a.ravel() for a in np.meshgrid(u0 + (np.arange(samples) + 0.5) * du,
-                                             v0 + (np.arange(samples) + 0.5) * dv))
-    ok = passes(rev, x, y, ex, ey, wavelength_nm)
-    cos2 = dz * dz / ((ex - x) ** 2 + (ey - y) ** 2 + dz * dz)
-    return float(np.sum((cos2 * cos2)[ok]) * du * dv / (dz * dz))
 
 
 def axis_irradiance(lens: Lens, wavelength_nm: float) -> float:
