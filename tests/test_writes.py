@@ -106,3 +106,17 @@ def test_the_street_experiment_checks_its_renders_before_any_work(tmp_path, caps
     assert main(["experiment", "street", "-o", str(out), *extra]) == 2
     err = capsys.readouterr().err
     assert message in err and err.count("\n") == 1 and not out.exists()
+
+
+def test_paths_and_names_written_into_scene_xml_cannot_add_elements(doublet, tmp_path):
+    import xml.etree.ElementTree as ET
+
+    from solas_mi.render.scene import write_scene
+
+    image = str(tmp_path / 'a"b<c&d\nx"/><emitter type="constant"/><x y=".exr')
+    response = 'table:r"s.csv'
+    xml = write_scene(doublet, tmp_path / "scene", image, response=response)
+    root = ET.parse(xml).getroot()
+    defaults = {d.get("name"): d.get("value") for d in root.iter("default")}
+    assert defaults["image"] == image and defaults["response"] == response
+    assert not list(root.iter("emitter")) or all(e.get("type") != "constant" for e in root.iter("emitter"))
