@@ -98,8 +98,8 @@ def output_folder(path: str | os.PathLike) -> Path:
 
 
 LOCK = ".solas-mi.lock"
-# `imageio.atomic_path`'s temporaries: ".NAME.XXXXXXXX.SUFFIX" (mkstemp's 8 characters), nested ones alike
-_TEMPORARY = re.compile(r"^\.(?P<name>.+)\.[a-z0-9_]{8}(?P<suffix>\.(exr|png|json))$")
+# `imageio.atomic_path`'s temporaries: ".NAME.PID.XXXXXXXX.SUFFIX" (mkstemp's 8 characters), nested ones alike
+_TEMPORARY = re.compile(r"^\.(?P<name>.+?)(\.\d+)?\.[a-z0-9_]{8}(?P<suffix>\.(exr|png|json))$")
 
 
 def remove_temporaries(folder: str | os.PathLike) -> int:

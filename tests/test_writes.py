@@ -120,3 +120,16 @@ def test_paths_and_names_written_into_scene_xml_cannot_add_elements(doublet, tmp
     defaults = {d.get("name"): d.get("value") for d in root.iter("default")}
     assert defaults["image"] == image and defaults["response"] == response
     assert not list(root.iter("emitter")) or all(e.get("type") != "constant" for e in root.iter("emitter"))
+
+
+def test_temporaries_of_a_killed_writer_are_removed_by_the_next_write(lens_copy, tmp_path, capsys):
+    dead = int(subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
+                              text=True).stdout)
+    stale = tmp_path / f".out.zmx.{dead}.k1lled00.zmx"
+    live = tmp_path / f".out.zmx.{os.getppid()}.wr1t1ng0.zmx"  # a writer still running: kept
+    other = tmp_path / f".other.zmx.{dead}.k1lled00.zmx"  # another target's: its own next write removes it
+    for f in (stale, live, other):
+        f.write_text("half a file")
+    assert main(["lens", "convert", str(lens_copy), "-o", str(tmp_path / "out.zmx")]) == 0
+    assert not stale.exists() and live.exists() and other.exists()
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out.zmx.") and p != live]

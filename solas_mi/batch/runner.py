@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any, Callable
 
 from ..errors import SolasError
 from .jobs import Job
+from .. import imageio
 from . import work
 from .work import run_job
 
@@ -67,6 +68,7 @@ def _serve(conn, grid_path: str | None, settings: dict[str, Any]) -> None:
     from ..psf.grid import PSFGrid
 
     signal.signal(signal.SIGTERM, _interrupt)  # interrupted, not killed: temporary files are removed
+    imageio.SWEEP_STALE = False  # the batch swept the folder it holds (`run_batch`)
     try:
         grid = PSFGrid.read(grid_path) if grid_path is not None else None
         while (job := conn.recv()) is not None:
