@@ -153,7 +153,7 @@ def hold_folder(folder: str | os.PathLike, what: str) -> Iterator[Path]:
                      f"{time.strftime('%Y-%m-%dT%H:%M:%S%z')})\n".encode())
         yield folder
     finally:
-        os.unlink(folder / LOCK)
+        (folder / LOCK).unlink(missing_ok=True)
         os.close(fd)
 
 

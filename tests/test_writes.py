@@ -133,3 +133,13 @@ def test_temporaries_of_a_killed_writer_are_removed_by_the_next_write(lens_copy,
     assert main(["lens", "convert", str(lens_copy), "-o", str(tmp_path / "out.zmx")]) == 0
     assert not stale.exists() and live.exists() and other.exists()
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out.zmx.") and p != live]
+
+
+def test_a_lens_file_written_into_a_scene_folder_is_named_plainly(doublet, tmp_path):
+    from solas_mi.render.scene import lens_file
+
+    odd = tmp_path / "src" / "two\nlines ..x.toml"
+    odd.parent.mkdir()
+    changed = dataclasses.replace(doublet, source=str(odd), description="changed in memory")
+    held = lens_file(changed, tmp_path / "scene")
+    assert held.parent == (tmp_path / "scene").resolve() and "\n" not in held.name and " " not in held.name

@@ -21,6 +21,7 @@ from ..imageio import atomic_path, write_text
 from ..optics.camera import Camera, camera_for
 from ..optics.lens import Lens, sag_slope
 from ..optics.lens import sag as asphere_sag
+from ..outputs import inside, safe_name
 from . import response as responses
 from .spec import DEFAULT_RINGS, RenderSpec, check_rings
 
@@ -297,7 +298,7 @@ def lens_file(lens: Lens, folder: str | os.PathLike | None = None) -> Path:
     if folder is None:
         raise SolasError(f"lens {lens.name} differs from its file {lens.source or '(none)'}; save it "
                          "(Lens.save) and load it from there to render it")
-    path = Path(folder) / f"{(source.stem if source is not None else 'lens')}_{lens.hash}.toml"
+    path = inside(folder, f"{safe_name(source.stem if source is not None else 'lens', 'lens')}_{lens.hash}.toml")
     lens.save(path)
     if Lens.load(path).hash != lens.hash:  # the TOML writer keeps every number: a miss is a bug, not noise
         raise SolasError(f"lens {lens.name} did not survive writing to {path}")
