@@ -11,15 +11,35 @@ LARGE = 1 << 30  # jobs above this announce their estimate on stderr
 
 
 def available_memory() -> int | None:
-    """Memory available to a new job (bytes), from /proc/meminfo; None where that cannot be read."""
+    """Memory available to a new job (bytes): the machine's (MemAvailable, /proc/meminfo), and no more
+    than this process may still map under its address-space limit (RLIMIT_AS, `ulimit -v`: the limit
+    less its VmSize); None where neither can be read."""
+    free = None
     try:
         with open("/proc/meminfo") as f:
             for line in f:
                 if line.startswith("MemAvailable:"):
-                    return int(line.split()[1]) * 1024
+                    free = int(line.split()[1]) * 1024
+                    break
     except OSError:
+        pass
+    room = _address_space_left()
+    return room if free is None else free if room is None else min(free, room)
+
+
+def _address_space_left() -> int | None:
+    """Bytes this process may still map under RLIMIT_AS; None without a limit."""
+    import resource
+
+    limit = resource.getrlimit(resource.RLIMIT_AS)[0]
+    if limit == resource.RLIM_INFINITY:
         return None
-    return None
+    try:
+        with open("/proc/self/status") as f:
+            used = next(int(line.split()[1]) * 1024 for line in f if line.startswith("VmSize:"))
+    except (OSError, StopIteration):
+        used = 0
+    return max(0, limit - used)
 
 
 def size_text(n: float) -> str:

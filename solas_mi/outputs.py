@@ -11,11 +11,35 @@ or interruption.
 from __future__ import annotations
 
 import os
+import re
 from contextlib import ExitStack, contextmanager
 from pathlib import Path
 from typing import Iterable, Iterator
 
 from .errors import SolasError
+
+_UNSAFE = re.compile(r"[^A-Za-z0-9._+=-]+")
+NAME_MAX = 120  # characters of a name component (file systems allow 255 bytes; room for suffixes)
+
+
+def safe_name(text: object, fallback: str = "item") -> str:
+    """`text` (a lens name, an item name, a sweep value: user data) as one safe file-name component:
+    every run of characters other than letters, digits and . _ + = - becomes "_" (so no separator,
+    NUL, newline or space), no leading dot (no hidden file, no "." or ".."), at most NAME_MAX
+    characters; `fallback` when nothing is left."""
+    name = _UNSAFE.sub("_", str(text)).lstrip("._")[:NAME_MAX].rstrip("_") if text is not None else ""
+    return name or fallback
+
+
+def inside(folder: str | os.PathLike, name: str) -> Path:
+    """`folder`/`name`, SolasError unless it lies directly inside `folder` after resolution (symbolic
+    links and ".." followed): where an output named from user data may be written."""
+    base = Path(folder).resolve()
+    path = base / name
+    if path.resolve().parent != base:
+        raise SolasError(f"output name {name!r} leads outside the folder {base}; names derived from "
+                         "user data must be plain file names")
+    return path
 
 
 def _same(a: Path, b: Path) -> bool:
@@ -71,6 +95,66 @@ def output_folder(path: str | os.PathLike) -> Path:
         raise SolasError(f"output folder {str(path)!r} exists and is not a folder")
     _writable_folder(p / "x")
     return p
+
+
+LOCK = ".solas-mi.lock"
+# `imageio.atomic_path`'s temporaries: ".NAME.PID.XXXXXXXX.SUFFIX" (mkstemp's 8 characters), nested ones alike
+_TEMPORARY = re.compile(r"^\.(?P<name>.+?)(\.\d+)?\.[a-z0-9_]{8}(?P<suffix>\.(exr|png|json))$")
+
+
+def remove_temporaries(folder: str | os.PathLike) -> int:
+    """Remove the hidden temporary files (`imageio.atomic_path`) that a killed writer left in `folder`;
+    the number removed. Call it only while holding the folder (`hold_folder`): a live writer's
+    temporaries look the same."""
+    removed = 0
+    for path in Path(folder).iterdir() if Path(folder).is_dir() else ():
+        m = _TEMPORARY.match(path.name)
+        if m and m["name"].lower().endswith(m["suffix"]) and path.is_file() and not path.is_symlink():
+            path.unlink(missing_ok=True)
+            removed += 1
+    return removed
+
+
+def _holder(fd: int) -> str:
+    os.lseek(fd, 0, os.SEEK_SET)
+    return os.read(fd, 512).decode("utf-8", "replace").strip() or "another process"
+
+
+@contextmanager
+def hold_folder(folder: str | os.PathLike, what: str) -> Iterator[Path]:
+    """Hold `folder` (created if need be) for the block: its lock file (LOCK, an advisory `flock`,
+    released by the system if the process dies) names the holder, `what` with its process id, host
+    and start time. SolasError naming the holder when another process holds it. The lock file is
+    removed at the end."""
+    import fcntl
+    import socket
+    import time
+
+    folder = Path(folder)
+    try:
+        folder.mkdir(parents=True, exist_ok=True)
+        while True:
+            fd = os.open(folder / LOCK, os.O_RDWR | os.O_CREAT, 0o644)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                holder = _holder(fd)
+                os.close(fd)
+                raise SolasError(f"output folder {folder} is in use by {holder}; wait for it to end or give "
+                                 "another output folder") from None
+            if os.path.exists(folder / LOCK) and os.stat(folder / LOCK).st_ino == os.fstat(fd).st_ino:
+                break
+            os.close(fd)  # the holder before removed the file as this process opened it: open it anew
+    except OSError as exc:
+        raise SolasError(f"cannot hold output folder {folder}: {exc.strerror or exc}") from None
+    try:
+        os.ftruncate(fd, 0)
+        os.write(fd, f"{what} (process {os.getpid()} on {socket.gethostname()}, since "
+                     f"{time.strftime('%Y-%m-%dT%H:%M:%S%z')})\n".encode())
+        yield folder
+    finally:
+        (folder / LOCK).unlink(missing_ok=True)
+        os.close(fd)
 
 
 @contextmanager

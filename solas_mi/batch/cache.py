@@ -1,6 +1,9 @@
 """PSF grids computed from a lens, cached on disk by the lens's hash and the grid's spec
 (`psf.spec.GridSpec`, its canonical form: every option that makes the grid), so that a repeated
-batch (or a second batch with the same lens and spec) reuses its grid.
+batch (or a second batch with the same lens and spec) reuses its grid. Each entry has a record beside
+it (`NAME.exr.json`: its key — the lens's hash and the spec's canonical form — and its SHA-256); an
+entry is reused only when its record matches the lens, the spec and the file's content, so a changed,
+swapped or truncated entry is computed again, never passed off as the lens's grid.
 
 The default folder is the user's cache directory (`platformdirs`), e.g. ~/.cache/solas-mi/psf-grids.
 `hits` and `misses` count what this cache object served.
@@ -8,11 +11,14 @@ The default folder is the user's cache directory (`platformdirs`), e.g. ~/.cache
 from __future__ import annotations
 
 import hashlib
+import json
 import os
+import sys
 import time
 from pathlib import Path
 
 from ..errors import SolasError
+from ..outputs import inside, safe_name
 
 
 def default_cache_dir() -> Path:
@@ -21,13 +27,13 @@ def default_cache_dir() -> Path:
     return Path(user_cache_dir("solas-mi")) / "psf-grids"
 
 
-def file_hash(path: str | os.PathLike) -> str:
-    """The first 16 hex digits of the file's SHA-256."""
+def file_hash(path: str | os.PathLike, full: bool = False) -> str:
+    """The first 16 hex digits of the file's SHA-256 (all 64 when `full`)."""
     digest = hashlib.sha256()
     with open(path, "rb") as f:
         for chunk in iter(lambda: f.read(1 << 20), b""):
             digest.update(chunk)
-    return digest.hexdigest()[:16]
+    return digest.hexdigest() if full else digest.hexdigest()[:16]
 
 
 class GridCache:
@@ -42,17 +48,41 @@ class GridCache:
 
     def path(self, lens, spec) -> Path:
         """Where the grid of `lens` with `spec` (a `psf.spec.GridSpec`) is kept: named by the lens and
-        the hash of the lens's hash and the spec's canonical form."""
-        return self.folder / f"{lens.name}-{spec.key(lens.hash)}.exr"
+        the hash of the lens's hash and the spec's canonical form (the name made a safe file name: a
+        lens file's name is user data)."""
+        return inside(self.folder, f"{safe_name(lens.name, 'lens')}-{spec.key(lens.hash)}.exr")
+
+    @staticmethod
+    def entry_key(lens, spec) -> dict:
+        """What an entry is the grid of: the lens's hash and the spec's canonical form."""
+        return {"lens_hash": lens.hash, "grid_spec": spec.canonical()}
+
+    def check(self, path: Path, lens, spec) -> str | None:
+        """None when the entry at `path` is the grid of `lens` with `spec`, whole (its record beside it,
+        `NAME.exr.json`, holds its key and its SHA-256, both matching); else why it is not."""
+        try:
+            record = json.loads(Path(f"{path}.json").read_text())
+        except (OSError, ValueError):
+            return "it has no readable record of its key and checksum"
+        if not isinstance(record, dict) or record.get("key") != json.loads(json.dumps(self.entry_key(lens, spec))):
+            return "its record names another lens or grid options"
+        if record.get("sha256") != file_hash(path, full=True):
+            return "its content does not match its checksum (changed or truncated)"
+        return None
 
     def get(self, lens, spec, progress=None) -> tuple[Path, bool, float]:
-        """(path of the grid of `lens` with `spec`, whether it came from the cache, seconds spent computing it)."""
+        """(path of the grid of `lens` with `spec`, whether it came from the cache, seconds spent computing
+        it). An entry that fails its check (`check`) is said so on stderr and computed again."""
+        from ..imageio import write_text
         from ..psf.grid import psf_grid
 
         path = self.path(lens, spec)
         if path.is_file():
-            self.hits += 1
-            return path, True, 0.0
+            why = self.check(path, lens, spec)
+            if why is None:
+                self.hits += 1
+                return path, True, 0.0
+            print(f"cache entry {path} is not reused: {why}; computing the grid again", file=sys.stderr, flush=True)
         self.misses += 1
         start = time.perf_counter()
         grid = psf_grid(lens, spec, progress=progress)  # its metadata holds the spec (meta["grid_spec"])
@@ -61,4 +91,6 @@ class GridCache:
         except OSError as exc:
             raise SolasError(f"cannot create cache folder {self.folder}: {exc.strerror or exc}") from None
         grid.write(str(path))  # atomic: a concurrent batch computing the same grid writes the same file
+        write_text(f"{path}.json", json.dumps({"key": self.entry_key(lens, spec), "sha256": file_hash(path, full=True)},
+                                              indent=1) + "\n")
         return path, False, time.perf_counter() - start

@@ -25,7 +25,7 @@ def _dry_run(args: argparse.Namespace) -> int:
     from ..budget import size_text
     from .degrade import check_workers, estimate, plan_batch
 
-    workers = check_workers(_workers(args.workers))
+    workers = check_workers(_workers(args.workers), args.dask)
     p = plan_batch(args.inputs, args.output, psf_grid=args.psf_grid, lens=args.lens,
                    grid_spec=_grid_spec(args), method=args.method,
                    boundary=args.boundary, linear=args.linear, cache=args.cache)
@@ -86,7 +86,7 @@ def run_batch_render(args: argparse.Namespace) -> int:
         from .degrade import check_workers
         from .render import batch_variant, estimate, plan_render
 
-        n = check_workers(workers)
+        n = check_workers(workers, args.dask)
         p = plan_render(args.inputs, args.output, lens=args.lens, spec=spec, **sweep)
         need = estimate(p, n if args.dask is None else 1)
         where = f"Dask at {args.dask}" if args.dask else f"{n} local worker process(es)"

@@ -10,6 +10,7 @@ from __future__ import annotations
 import hashlib
 import json
 import os
+import sys
 import time
 from dataclasses import dataclass
 from pathlib import Path
@@ -23,6 +24,10 @@ from .runner import check_dask
 # seconds per image value (H·W·C) on one core of the 2-core benchmark machine, reading, degrading
 # (interp) and writing included (benchmarks/bench_batch.py: 1280×960 RGB, 32×32 grid)
 SECONDS_PER_VALUE = 2.0e-7
+# a worker process's own memory before its first item (VmRSS of a spawned process with the modules an
+# item imports, measured: degrade — numpy, OpenEXR, the convolution — 37 MB; render — Mitsuba with its
+# spectral variant set — 110 MB), added to each worker's items' peak in the estimates
+WORKER_BYTES = {"degrade": 37e6, "render": 110e6}
 
 
 @dataclass
@@ -60,10 +65,19 @@ class BatchResult:
         return sum(job.status == status for job in self.jobs)
 
 
-def check_workers(workers: int | None) -> int:
-    n = (os.cpu_count() or 1) if workers is None else workers
+def check_workers(workers: int | None, dask: str | None = None) -> int:
+    """The number of worker processes: `workers` (default: the cores), SolasError unless a whole number
+    >= 1; processes of this machine (local ones, a Dask LocalCluster) capped at its cores, said so on
+    stderr (more processes than cores only add their memory, WORKER_BYTES each, and no speed)."""
+    cores = os.cpu_count() or 1
+    n = cores if workers is None else workers
     if isinstance(n, bool) or not isinstance(n, int) or n < 1:
         raise SolasError(f"workers {workers!r} must be a whole number >= 1")
+    if n > cores and dask in (None, "local"):
+        print(f"--workers {n}: using {cores}, the cores of this machine (each worker costs about "
+              f"{WORKER_BYTES['degrade'] / 1e6:.0f}-{WORKER_BYTES['render'] / 1e6:.0f} MB before its first item)",
+              file=sys.stderr, flush=True)
+        n = cores
     return n
 
 
@@ -98,7 +112,8 @@ def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLik
         if not isinstance(spec, GridSpec):
             raise SolasError(f"grid_spec {grid_spec!r} must be a solas_mi.psf.spec.GridSpec")
         grid_path = cache.path(lens, spec)
-        grid_id, source = grid_path.stem, "cache hit" if grid_path.is_file() else "to compute"
+        hit = grid_path.is_file() and cache.check(grid_path, lens, spec) is None
+        grid_id, source = grid_path.stem, "cache hit" if hit else "to compute"
     key = hashlib.sha256(json.dumps([grid_id, method, boundary, linear]).encode()).hexdigest()[:16]
     manifest = Manifest(out_dir / MANIFEST, {"version": 1, "kind": "degrade", "batch_id": key}, jobs)
     manifest.resume(key)
@@ -120,7 +135,8 @@ def estimate(p: BatchPlan, workers: int) -> dict[str, float]:
     # each worker: its largest image's peak (which holds a grid); the parent holds one grid more
     per_worker = max((peak_bytes(path, r, c, ch, grid_bytes) for path, (r, c, ch) in sizes), default=0.0)
     return {"seconds": SECONDS_PER_VALUE * sum(values) / min(workers, max(1, len(values))),
-            "peak_bytes": min(workers, max(1, len(values))) * per_worker + grid_bytes, "grid_bytes": grid_bytes}
+            "peak_bytes": min(workers, max(1, len(values))) * (per_worker + WORKER_BYTES["degrade"]) + grid_bytes,
+            "grid_bytes": grid_bytes}
 
 
 def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *,
@@ -137,8 +153,8 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
     from ..psf.grid import PSFGrid
 
     start = time.perf_counter()
-    n = check_workers(workers)
     check_dask(dask)
+    n = check_workers(workers, dask)
     cache = cache if isinstance(cache, GridCache) or psf_grid is not None else GridCache(cache)
     p = plan_batch(inputs, output_dir, psf_grid=psf_grid, lens=lens, grid_spec=grid_spec, method=method,
                    boundary=boundary, linear=linear, cache=cache)

@@ -3,7 +3,8 @@
 An item (`Job`) is one unit of work with its inputs and outputs; `kind` names what it does
 ("degrade", or "render" with its `seed` and the `params` of its sweep point). The manifest,
 `batch.json` in the output folder, records each item's status ("pending", "done", "skipped",
-"failed"), timings, seed, error and the outputs' sizes and times, beside what the whole batch
+"failed", "interrupted"), timings, seed, error, the input's checksum and the outputs' sizes, times and
+checksums (SHA-256: what a re-run checks before it skips an item), beside what the whole batch
 shares (the grid's hash, the lens's hash, the method). It is rewritten atomically, so it is valid
 JSON whenever it is read, also after the batch was killed.
 """
@@ -18,6 +19,8 @@ from pathlib import Path
 from typing import Any, Iterable
 
 from ..errors import SolasError
+from ..outputs import inside, safe_name
+from .cache import file_hash
 
 MANIFEST = "batch.json"
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".exr")
@@ -38,34 +41,26 @@ class Job:
     error: str | None = None
     seconds: float | None = None
     attempts: int = 0
-    outputs: dict[str, list[int]] = field(default_factory=dict)  # path → [size, mtime_ns] when finished
+    outputs: dict[str, list] = field(default_factory=dict)  # path → [size, mtime_ns, sha256/16] when finished
+    input_hash: str | None = None  # the input's SHA-256 (16 hex digits) when finished
     params: dict[str, Any] = field(default_factory=dict)
 
     def stamp(self) -> None:
-        """Record the finished outputs' sizes and modification times (how a re-run knows them)."""
-        self.outputs = {p: [(s := os.stat(p)).st_size, s.st_mtime_ns] for p in (self.output, self.png)}
+        """Record the finished outputs' sizes, modification times and checksums and the input's
+        checksum (how a re-run knows them)."""
+        self.outputs = {p: [(s := os.stat(p)).st_size, s.st_mtime_ns, file_hash(p)] for p in (self.output, self.png)}
+        self.input_hash = file_hash(self.input)
 
     def finished(self) -> bool:
-        """Both outputs are there, as this batch wrote them (same sizes and times)."""
+        """Both outputs are there as this batch wrote them (same sizes, times and SHA-256 checksums;
+        the record names exactly this item's two outputs), made from this very input (its content's
+        SHA-256: an input replaced by another file of the same name is done again)."""
         try:
-            return bool(self.outputs) and all(
-                [(s := os.stat(p)).st_size, s.st_mtime_ns] == list(v) for p, v in self.outputs.items())
+            return set(self.outputs) == {self.output, self.png} and all(
+                [(s := os.stat(p)).st_size, s.st_mtime_ns, file_hash(p)] == list(v) for p, v in self.outputs.items()) \
+                and self.input_hash == file_hash(self.input)
         except OSError:
             return False
-
-
-def remove_leftovers(folder: Path, jobs: list[Job]) -> int:
-    """Remove the temporary files (`imageio.atomic_path`: ".NAME.XXXXXXXX.SUFFIX") that a worker killed
-    while writing left beside the outputs of `jobs` in `folder`; the number removed."""
-    names = {Path(p).name for job in jobs for p in (job.output, job.png)}
-    removed = 0
-    for path in folder.iterdir() if folder.is_dir() else ():
-        # ".NAME.XXXXXXXX.SUFFIX", or nested (a writer's own temporary beside the batch's: "..NAME.X.SUFFIX.Y.SUFFIX")
-        if path.name.startswith(".") and any(path.name.lstrip(".").startswith(n + ".") for n in names) \
-                and path.is_file():
-            path.unlink(missing_ok=True)
-            removed += 1
-    return removed
 
 
 def expand_inputs(inputs: Iterable[str | os.PathLike], suffixes: tuple[str, ...] = IMAGE_SUFFIXES) -> list[Path]:
@@ -86,7 +81,10 @@ def expand_inputs(inputs: Iterable[str | os.PathLike], suffixes: tuple[str, ...]
         if not matches:
             raise SolasError(f"input {text!r} holds no input files ({', '.join(suffixes)})")
         found.extend(matches)
-    unique = list(dict.fromkeys(p.resolve() for p in found))
+    given: dict[Path, Path] = {}  # each file once (by its target), under the name given (a link keeps its name)
+    for p in found:
+        given.setdefault(p.resolve(), Path(os.path.abspath(p)))
+    unique = list(given.values())
     if not unique:
         raise SolasError("no input images given")
     return unique
@@ -98,7 +96,7 @@ def plan(inputs: list[Path], out_dir: Path) -> list[Job]:
     jobs, seen = [], {}
     sources = set(inputs)
     for path in inputs:
-        output = out_dir / f"{path.stem}.exr"
+        output = inside(out_dir, f"{safe_name(path.stem)}.exr")
         if output in seen:
             raise SolasError(f"inputs {str(seen[output])!r} and {str(path)!r} would both write {output}; "
                              "give them different names or run them as separate batches")
@@ -138,12 +136,12 @@ class Manifest:
         for job in self.jobs:
             before = done.get((job.input, job.output))
             if before is not None and before.get("params", {}) == json.loads(json.dumps(job.params)):
-                job.outputs = before.get("outputs", {})
-                if job.finished():
+                job.outputs, job.input_hash = before.get("outputs") or {}, before.get("input_hash")
+                if isinstance(job.outputs, dict) and job.finished():
                     job.status, job.seconds, job.seed = "skipped", before.get("seconds"), before.get("seed")
                     skipped += 1
                 else:
-                    job.outputs = {}
+                    job.outputs, job.input_hash = {}, None
         return skipped
 
     def summary(self) -> dict[str, int]:

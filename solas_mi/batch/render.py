@@ -30,8 +30,9 @@ from pathlib import Path
 from typing import Any, Iterable, Sequence
 
 from ..errors import SolasError
+from ..outputs import inside, safe_name
 from ..render.spec import RenderSpec
-from .degrade import BatchResult, check_workers
+from .degrade import WORKER_BYTES, BatchResult, check_workers
 from .jobs import IMAGE_SUFFIXES, MANIFEST, Job, Manifest, expand_inputs
 from .runner import check_dask
 from .work import SCENE_SUFFIXES
@@ -71,7 +72,7 @@ def _is_pair(value) -> bool:
 
 def _label(name: str, value, lens_names: dict[str, str]) -> str:
     if name == "lens":
-        return lens_names[value]
+        return safe_name(lens_names[value], "lens")
     if name == "focus_distance":
         return "focus" + ("inf" if math.isinf(value) else f"{value:g}")
     if name == "sensor":
@@ -115,8 +116,8 @@ def _jobs(files: list[Path], out_dir: Path, base: RenderSpec, axes: dict[str, li
     jobs, seen, sources = [], {}, set(files)
     for path, point in itertools.product(files, itertools.product(*(axes[name] for name in SWEEP))):
         values = dict(zip(SWEEP, point))
-        stem = "_".join([path.stem, *(_label(name, values[name], names) for name in swept)])
-        output = out_dir / f"{stem}.exr"
+        stem = safe_name("_".join([safe_name(path.stem), *(_label(name, values[name], names) for name in swept)]))
+        output = inside(out_dir, f"{stem}.exr")
         if output in seen:
             raise SolasError(f"inputs {str(seen[output])!r} and {str(path)!r} would both write {output}; "
                              "give them different names or run them as separate batches")
@@ -187,7 +188,7 @@ def estimate(p: RenderPlan, workers: int) -> dict[str, float]:
         peak = max(peak, max(rows * cols, SAMPLES_PER_PASS) * BYTES_PER_SAMPLE + 48 * rows * cols)
     cores = os.cpu_count() or 1
     return {"seconds": samples / (SAMPLES_PER_SECOND_PER_CORE * cores), "samples": samples,
-            "peak_bytes": min(workers, max(1, len(p.todo))) * peak}
+            "peak_bytes": min(workers, max(1, len(p.todo))) * (peak + WORKER_BYTES["render"])}
 
 
 def batch_variant(p: RenderPlan) -> str:
@@ -217,8 +218,8 @@ def render_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathL
     from .runner import run_batch
 
     start = time.perf_counter()
-    n = check_workers(workers)
     check_dask(dask)
+    n = check_workers(workers, dask)
     p = plan_render(inputs, output_dir, lens=lens, spec=spec, **settings)
     check_memory(f"batch of {len(p.todo)} renders on {n} workers", estimate(p, n if dask is None else 1)["peak_bytes"],
                  force)

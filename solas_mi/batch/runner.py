@@ -22,6 +22,8 @@ from typing import TYPE_CHECKING, Any, Callable
 
 from ..errors import SolasError
 from .jobs import Job
+from .. import imageio
+from . import work
 from .work import run_job
 
 if TYPE_CHECKING:
@@ -57,6 +59,7 @@ def check_dask(dask: str | None) -> None:
 
 
 def _interrupt(signum, frame) -> None:
+    work.STOPPING = True  # an item failing from here on was interrupted (`work.run_job`)
     raise KeyboardInterrupt()
 
 
@@ -65,10 +68,13 @@ def _serve(conn, grid_path: str | None, settings: dict[str, Any]) -> None:
     from ..psf.grid import PSFGrid
 
     signal.signal(signal.SIGTERM, _interrupt)  # interrupted, not killed: temporary files are removed
+    imageio.SWEEP_STALE = False  # the batch swept the folder it holds (`run_batch`)
     try:
         grid = PSFGrid.read(grid_path) if grid_path is not None else None
         while (job := conn.recv()) is not None:
             conn.send(run_job(job, grid, grid_path, settings))
+            if work.STOPPING:  # the item was interrupted (and said so): end now
+                break
     except (KeyboardInterrupt, EOFError):
         pass
 
@@ -162,7 +168,10 @@ def run_local(jobs: list[Job], todo: list[int], grid_path: str | None, settings:
         for w in pool:
             w.stop(now=interrupted)
             result = w.last_result()
-            if result is not None and w.index is not None:  # finished just as the batch was interrupted
+            if w.index is not None and result is None:  # its worker stopped before it ended
+                result = jobs[w.index]
+                result.status, result.error = "interrupted", "the batch was interrupted"
+            if result is not None and w.index is not None:  # finished (or stopped) as the batch was interrupted
                 on_done(w.index, result)
 
 
@@ -209,31 +218,34 @@ def run_batch(manifest: "Manifest", todo: list[int], grid: "PSFGrid | None", gri
               settings: dict[str, Any], workers: int, dask: str | None, progress: str | None) -> None:
     """Items `todo` of `manifest.jobs` on `workers` local processes or the Dask scheduler `dask`, the
     manifest saved as they finish (and at the end, also when interrupted), a progress bar of the unit
-    `progress` ("image", "render"; None: no bar); the temporary files of killed workers removed."""
-    from .jobs import remove_leftovers
+    `progress` ("image", "render"; None: no bar). The output folder is held for the whole run
+    (`outputs.hold_folder`: a second batch on it is refused, naming this one); the temporary files
+    that killed runs or workers left there are removed before and after."""
+    from ..outputs import hold_folder, remove_temporaries
 
     jobs = manifest.jobs
-    manifest.path.parent.mkdir(parents=True, exist_ok=True)
-    manifest.save()
-    bar = None
-    if progress:
-        from tqdm import tqdm
-
-        bar = tqdm(total=len(jobs), initial=len(jobs) - len(todo), unit=progress, desc=manifest.header.get("kind"))
-
-    def on_done(i: int, job: Job) -> None:
-        jobs[i] = job
-        manifest.save(force=False)
-        if bar is not None:
-            bar.update()
-
-    try:
-        if todo and dask is None:
-            run_local(jobs, todo, grid_path, settings, workers, on_done)
-        elif todo:
-            run_dask(jobs, todo, grid, grid_path, settings, dask, workers, on_done)
-    finally:
-        if bar is not None:
-            bar.close()
-        remove_leftovers(manifest.path.parent, jobs)  # a worker killed while writing cannot remove its own
+    with hold_folder(manifest.path.parent, f"batch {manifest.header.get('kind')} {manifest.header.get('batch_id')}"):
+        remove_temporaries(manifest.path.parent)
         manifest.save()
+        bar = None
+        if progress:
+            from tqdm import tqdm
+
+            bar = tqdm(total=len(jobs), initial=len(jobs) - len(todo), unit=progress, desc=manifest.header.get("kind"))
+
+        def on_done(i: int, job: Job) -> None:
+            jobs[i] = job
+            manifest.save(force=False)
+            if bar is not None:
+                bar.update()
+
+        try:
+            if todo and dask is None:
+                run_local(jobs, todo, grid_path, settings, workers, on_done)
+            elif todo:
+                run_dask(jobs, todo, grid, grid_path, settings, dask, workers, on_done)
+        finally:
+            if bar is not None:
+                bar.close()
+            remove_temporaries(manifest.path.parent)  # a worker killed while writing cannot remove its own
+            manifest.save()

@@ -15,6 +15,7 @@ if TYPE_CHECKING:
     from ..psf.grid import PSFGrid
 
 SCENE_SUFFIXES = (".xml",)
+STOPPING = False  # set when this worker process is told to stop: an item failing then was interrupted
 
 
 def run_job(job: Job, grid: "PSFGrid | None", grid_path: str | None, settings: dict[str, Any]) -> Job:
@@ -35,6 +36,10 @@ def run_job(job: Job, grid: "PSFGrid | None", grid_path: str | None, settings: d
         job.status, job.error = "failed", str(exc)
     except Exception as exc:  # one bad item never stops the batch (MemoryError included)
         job.status, job.error = "failed", f"{type(exc).__name__}: {exc}"
+    except KeyboardInterrupt:
+        job.status, job.error = "interrupted", "the batch was interrupted"
+    if STOPPING and job.status == "failed":  # the stop surfaced inside a library (a scene load) as its error
+        job.status, job.error = "interrupted", "the batch was interrupted"
     job.seconds = time.perf_counter() - start
     return job
 

@@ -17,11 +17,14 @@ def _say(text: str) -> None:
 
 def run_street(args: argparse.Namespace) -> int:
     from ..optics.lens import Lens
+    from ..render.commands import check_render
     from .street.run import Settings, run
 
     out = output_folder(args.output)
     lens = Lens.load(args.lens)
     height, width = parse_wxh(args.size, "--size")
+    for spp in (args.spp_ideal, args.spp):  # its renders: refused when absurd or too large, announced when long
+        check_render(width, height, spp, False)
     settings = Settings(width=width, height=height, spp_ideal=args.spp_ideal, spp_lens=args.spp,
                         near_focus_m=args.near_focus, variant=args.variant)
     outcome = run(lens, out, settings, log=_say)

@@ -89,10 +89,11 @@ def run_lens_list(args) -> int:
 
 
 def run_lens_convert(args) -> int:
+    from ..outputs import check_target
     from .lens import Lens
 
     lens = Lens.load(args.lens)
-    out = lens.save(args.output)
+    out = lens.save(check_target(args.output, [lens.source] if lens.source else []))
     print(f"wrote {out} ({lens.name}: {len(lens.surfaces)} surfaces, hash {lens.hash})")
     return 0
 

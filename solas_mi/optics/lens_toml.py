@@ -15,12 +15,19 @@ def _value(v) -> str:
         return repr(float(v))
     if isinstance(v, (list, tuple)):
         return "[" + ", ".join(_value(x) for x in v) + "]"
-    return json.dumps(str(v), ensure_ascii=False)  # a JSON string is a valid TOML basic string
+    return text(v)
+
+
+def text(v) -> str:
+    """`v` as one quoted, escaped string (a TOML basic string, also JSON): no line break, quote or
+    control character of the value can end it or add a line or a key (DEL, which JSON leaves raw and
+    TOML forbids, escaped too)."""
+    return json.dumps(str(v), ensure_ascii=False).replace("\x7f", "\\u007f")
 
 
 def dumps(lens) -> str:
     """The TOML text of `lens` (a `solas_mi.optics.lens.Lens`)."""
-    lines = [f"# {lens.name}: lens file written by solas-mi (lengths in mm, wavelengths in nm)",
+    lines = [f"# {text(lens.name)}: lens file written by solas-mi (lengths in mm, wavelengths in nm)",
              f"name = {_value(lens.name)}"]
     if lens.description:
         lines.append(f"description = {_value(lens.description)}")

@@ -20,7 +20,7 @@ def _check_spp(spp) -> None:
         raise SolasError(f"samples per pixel {spp!r} must be an integer from 1 to {MAX_SPP}")
 
 
-def _check_render(width: int, height: int, spp: int, force: bool) -> None:
+def check_render(width: int, height: int, spp: int, force: bool) -> None:
     """Refuse an absurd spp or a render that cannot fit in memory; announce a long one on stderr."""
     import os
 
@@ -122,13 +122,22 @@ def _render(args) -> int:
                          "scene's own integrator renders it")
     run, _ = spec_from_args(args, ("variant", "seed"))
     notes = []
-    scene = load(args.scene, run.variant, lens, params, notes, pitch_um=args.pitch_um,
-                 focus_distance=_focus(args.focus_distance), response=args.response, world_unit_mm=args.world_unit_mm)
+    try:
+        scene = load(args.scene, run.variant, lens, params, notes, pitch_um=args.pitch_um,
+                     focus_distance=_focus(args.focus_distance), response=args.response,
+                     world_unit_mm=args.world_unit_mm)
+    except SolasError:
+        raise
+    except (ValueError, ZeroDivisionError) as exc:  # the camera's numbers as the lens camera reads them
+        if lens is None:
+            raise
+        raise SolasError(f"scene {args.scene}: its camera's film size and field must be numbers (a film of at least "
+                         f"1x1 px) for the lens camera to replace it: {type(exc).__name__}: {exc}") from None
     for note in notes:
         print(f"render: {note}", file=sys.stderr)
     spp = args.spp if args.spp is not None else int(scene.sensors()[0].sampler().sample_count())
     width, height = (int(v) for v in scene.sensors()[0].film().crop_size())
-    _check_render(width, height, spp, args.force)
+    check_render(width, height, spp, args.force)
     loop = args.integrator == "solas" or (args.integrator == "auto" and lens is None and _image_scene(scene))
     if loop:
         from .loop import render
@@ -176,7 +185,7 @@ def _render_image(args) -> int:
     data_file, png = data_and_preview(args.output, args.png, inputs=[args.image])
     spec, _ = spec_from_args(args, IMAGE_SETTINGS)
     rows, cols = spec.sensor
-    _check_render(cols, rows, spec.spp, args.force)
+    check_render(cols, rows, spec.spp, args.force)
     lens = Lens.load(args.lens)
     result = render_image(lens, args.image, spec, progress=_progress)
     result.meta["image"] = str(args.image)

@@ -2,6 +2,8 @@
 directory with the image as its object, loaded (`mitsuba`) and rendered (`loop`)."""
 from __future__ import annotations
 
+import os
+import shutil
 import tempfile
 from pathlib import Path
 
@@ -16,6 +18,26 @@ from .loop import Render, render
 from .mitsuba import load_scene, variant_for
 from .scene import write_scene
 from .spec import RenderSpec
+
+SCENE_PREFIX = "solas-scene-"  # + the process id: $TMPDIR/solas-scene-PID-XXXXXXXX, one per image render
+
+
+def remove_stale_scenes() -> int:
+    """Remove the temporary scene folders that renders killed outright (SIGKILL, out of memory) left in
+    $TMPDIR: those of processes that no longer run. The number removed."""
+    removed = 0
+    for folder in Path(tempfile.gettempdir()).glob(f"{SCENE_PREFIX}*-*"):
+        pid = folder.name[len(SCENE_PREFIX):].split("-", 1)[0]
+        if not pid.isdigit() or int(pid) == os.getpid() or not folder.is_dir() or folder.is_symlink():
+            continue
+        try:
+            os.kill(int(pid), 0)
+        except ProcessLookupError:
+            shutil.rmtree(folder, ignore_errors=True)
+            removed += 1
+        except OSError:  # alive, another user's
+            pass
+    return removed
 
 
 def fisheye_camera(lens, sensor: tuple[int, int], fov_deg: float | None, pitch_um: float | None) -> Camera:
@@ -50,13 +72,18 @@ def render_image(lens, image: str | np.ndarray, spec: RenderSpec | None = None, 
                          "plane: render it without one")
     camera = (camera_for(lens, spec.sensor, spec.fov_deg, spec.pitch_um) if lens.field_type.pinhole
               else fisheye_camera(lens, spec.sensor, spec.fov_deg, spec.pitch_um))
+    if spec.mapping == "rectilinear" and camera.fov_deg >= 90.0:  # tan θ changes sign: the input would mirror
+        raise SolasError(f"a rectilinear input spans less than ±90 deg and this one would span ±{camera.fov_deg:g} deg; "
+                         "give --fov-deg below 90 or a mapping that reaches past 90 deg (equidistant, equisolid, "
+                         "equirectangular)")
     # the user's mistakes, named here rather than inside the scene's plugins
     parsed = responses.parse(spec.response, lens.wavelengths_nm)
     responses.check_lens(parsed, lens)
     variant = variant_for(parsed, spec.variant)
     if not isinstance(image, np.ndarray):
         read_image(image)
-    with tempfile.TemporaryDirectory(prefix="solas-scene-") as tmp:
+    remove_stale_scenes()
+    with tempfile.TemporaryDirectory(prefix=f"{SCENE_PREFIX}{os.getpid()}-") as tmp:
         if isinstance(image, np.ndarray):
             path = str(Path(tmp) / "object.exr")
             write_exr(path, image_channels(np.asarray(image, dtype=np.float32)))

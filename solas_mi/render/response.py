@@ -130,8 +130,11 @@ def table(path: str) -> Response:
         if rows and not _numbers(rows[0]):
             rows = rows[1:]  # a header line of column names
         data = np.loadtxt(rows, delimiter=",", ndmin=2)
-    except (OSError, ValueError) as exc:  # UnicodeDecodeError is a ValueError
-        raise SolasError(f"camera response table {path!r}: {exc}") from None
+    except OSError as exc:
+        raise SolasError(f"camera response table {path!r}: {exc.strerror or 'cannot be read'}") from None
+    except ValueError:  # UnicodeDecodeError is one; never quote the file's text (a scene may name any file)
+        raise SolasError(f"camera response table {path!r} is not a CSV table of numbers (rows 'wavelength_nm, "
+                         "r, g, b', one header line allowed)") from None
     if data.shape[1] != 4 or len(data) < 2:
         raise SolasError(f"camera response table {path!r} must have rows 'wavelength_nm, r, g, b' "
                          f"(got {data.shape[1]} columns, {len(data)} rows)")

@@ -21,6 +21,7 @@ from ..imageio import atomic_path, write_text
 from ..optics.camera import Camera, camera_for
 from ..optics.lens import Lens, sag_slope
 from ..optics.lens import sag as asphere_sag
+from ..outputs import inside, safe_name
 from . import response as responses
 from .spec import DEFAULT_RINGS, RenderSpec, check_rings
 
@@ -179,6 +180,14 @@ def path_depth(lens: Lens, ghosts: bool) -> int:
     return 3 * refracting + 2 if ghosts else refracting + 2
 
 
+def xml_attr(text) -> str:
+    """`text` escaped for an XML attribute value in double quotes (a path or name is user data: a quote,
+    "<", "&" or a line break in it cannot end the value or add an element)."""
+    from xml.sax.saxutils import escape
+
+    return escape(str(text), {'"': "&quot;", "\n": "&#10;", "\r": "&#13;", "\t": "&#9;"})
+
+
 def _shapes_xml(parts: list[Part], mono: str) -> str:
     """The <shape> elements of `parts`: a `sellmeier_dielectric` between its two glasses (with the mono
     variants' `wavelength` element `mono`, or ""), or the absorber."""
@@ -187,8 +196,8 @@ def _shapes_xml(parts: list[Part], mono: str) -> str:
         if p.int_glass is None:
             bsdf = '<ref id="absorber"/>'
         else:
-            bsdf = (f'<bsdf type="sellmeier_dielectric"><string name="ext_glass" value="{p.ext_glass}"/>'
-                    f'<string name="int_glass" value="{p.int_glass}"/><string name="fresnel" value="$fresnel"/>{mono}</bsdf>')
+            bsdf = (f'<bsdf type="sellmeier_dielectric"><string name="ext_glass" value="{xml_attr(p.ext_glass)}"/>'
+                    f'<string name="int_glass" value="{xml_attr(p.int_glass)}"/><string name="fresnel" value="$fresnel"/>{mono}</bsdf>')
         shapes.append(f'    <shape type="ply" id="{p.name}">\n        <string name="filename" value="meshes/{p.name}.ply"/>\n'
                       f'        {bsdf}\n    </shape>')
     return "\n".join(shapes)
@@ -202,8 +211,8 @@ def _defaults_xml(camera: Camera, spec: RenderSpec, image: str, max_depth: int, 
     <default name="width" value="{camera.width}"/>
     <default name="height" value="{camera.height}"/>
     <default name="pitch_um" value="{camera.pitch_um!r}"/>
-    <default name="response" value="{spec.response}"/>{wavelength_default}
-    <default name="image" value="{image}"/>
+    <default name="response" value="{xml_attr(spec.response)}"/>{wavelength_default}
+    <default name="image" value="{xml_attr(image)}"/>
     <default name="fov_deg" value="{camera.fov_deg!r}"/>
     <default name="boundary" value="{spec.boundary}"/>
     <default name="mapping" value="{spec.mapping}"/>
@@ -234,7 +243,7 @@ def scene_xml(lens_file: str, parts: list[Part], camera: Camera, image: str, spe
     </integrator>
 
     <sensor type="lens_sensor" id="sensor">
-        <string name="lens" value="{lens_file}"/>
+        <string name="lens" value="{xml_attr(lens_file)}"/>
         <float name="pitch_um" value="$pitch_um"/>
         <float name="fov_deg" value="$fov_deg"/>
         <string name="response" value="$response"/>
@@ -289,7 +298,7 @@ def lens_file(lens: Lens, folder: str | os.PathLike | None = None) -> Path:
     if folder is None:
         raise SolasError(f"lens {lens.name} differs from its file {lens.source or '(none)'}; save it "
                          "(Lens.save) and load it from there to render it")
-    path = Path(folder) / f"{(source.stem if source is not None else 'lens')}_{lens.hash}.toml"
+    path = inside(folder, f"{safe_name(source.stem if source is not None else 'lens', 'lens')}_{lens.hash}.toml")
     lens.save(path)
     if Lens.load(path).hash != lens.hash:  # the TOML writer keeps every number: a miss is a bug, not noise
         raise SolasError(f"lens {lens.name} did not survive writing to {path}")

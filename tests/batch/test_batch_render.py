@@ -168,6 +168,8 @@ def test_sigterm_midway_leaves_no_partial_render(batch_inputs):
     written = {str(f) for f in out.glob("*.exr")}
     assert 1 <= len(done) and done <= written and len(written) < 12 and len(written - done) <= 2
     assert not [f for f in out.iterdir() if f.name.startswith(".")]
+    # an item its worker held is recorded as interrupted (done again on a re-run), never as failed
+    assert {i["status"] for i in m["items"]} <= {"done", "pending", "interrupted"}, m["items"]
     for f in written:
         data, meta = read_exr(f)
         assert data["R"].shape == (48, 64) and meta["spp"] == 64 and Path(f).with_suffix(".png").is_file()

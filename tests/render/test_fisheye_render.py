@@ -77,3 +77,11 @@ def test_a_3d_scene_through_the_fisheye_lens_camera(tmp_path):
         assert img[ring].sum() > 0.01 * img.sum() / len(balls), f"no light near the {angle:g} deg ring"
         found = (img * ring * radius).sum() / (img * ring).sum()
         assert abs(found - expected) < 1.0, (angle, found, expected)
+
+
+@pytest.mark.parametrize("fov", [90.0, 100.0, None])
+def test_a_rectilinear_input_past_90_degrees_is_refused(fov):
+    """tan θ changes sign past 90°: a rectilinear input there would be mirrored, never rendered so."""
+    lens = Lens.load("nikkor-fisheye")  # its field: 90°
+    with pytest.raises(SolasError, match="rectilinear input spans less than ±90 deg"):
+        render_image(lens, np.ones((4, 4)), sensor=(4, 4), pitch_um=PITCH_UM, spp=1, fov_deg=fov, mapping="rectilinear")

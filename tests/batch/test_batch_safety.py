@@ -1,0 +1,214 @@
+"""Names from user data are never paths: a lens name, an input's name or a sweep value cannot make a
+batch or the PSF-grid cache write outside its folder (`outputs.safe_name`, `outputs.inside`)."""
+import dataclasses
+import os
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from solas_mi.batch.cache import GridCache
+from solas_mi.batch.jobs import expand_inputs, plan
+from solas_mi.batch.render import plan_render
+from solas_mi.errors import SolasError
+from solas_mi.optics.lens import Lens
+from solas_mi.outputs import inside, safe_name
+from solas_mi.psf.grid import PSFGrid
+from solas_mi.psf.spec import GridSpec
+
+HOSTILE = ["../../escape", "/etc/passwd", "a/b\\c", "nul\0byte", "new\nline", "..", ".hidden", "", "x" * 400]
+
+
+@pytest.mark.parametrize("text", HOSTILE)
+def test_a_safe_name_is_one_plain_component(text, tmp_path):
+    name = safe_name(text)
+    assert name and len(name) <= 120 and not name.startswith(".")
+    assert not set(name) & set("/\\\0\n\r ")
+    assert inside(tmp_path, name + ".exr").parent == tmp_path.resolve()
+
+
+@pytest.mark.parametrize("name", ["../x", "/abs/x", "a/../../x"])
+def test_inside_refuses_a_path_leaving_its_folder(name, tmp_path):
+    with pytest.raises(SolasError, match="outside the folder"):
+        inside(tmp_path, name)
+
+
+def hostile_lens(doublet, folder: Path, name: str, file: str) -> Path:
+    return dataclasses.replace(doublet, name=name).save(folder / file)
+
+
+@pytest.mark.parametrize("name", ["../../escaped", "/tmp/abs", "sub/dir", "nul\0x", "two\nlines"])
+def test_a_lens_name_cannot_lead_batch_render_outputs_out(name, doublet, batch_inputs):
+    batch_inputs.write(1, shape=(24, 32))
+    a = hostile_lens(doublet, batch_inputs.root, name, "a.toml")
+    assert Lens.load(a).name == name  # the name survives the file (escaped), and is still hostile
+    out = batch_inputs.root / "deep" / "out"
+    p = plan_render([batch_inputs.images], out, lens=[str(a), "solas-doublet"], sensor=(24, 32), spp=1)
+    for job in p.jobs:
+        for target in (job.output, job.png):
+            assert Path(target).parent == out.resolve() and "\n" not in target and "\0" not in target
+
+
+@pytest.mark.parametrize("name", ["../../escaped", "/tmp/abs", "sub/dir", "nul\0x", "two\nlines"])
+def test_a_lens_name_cannot_lead_the_cache_out(name, doublet, tmp_path):
+    lens = Lens.load(hostile_lens(doublet, tmp_path, name, "a.toml"))
+    cache = GridCache(tmp_path / "cache")
+    path = cache.path(lens, GridSpec())
+    assert path.parent == cache.folder and not set(path.name) & set("/\0\n")
+
+
+def test_an_input_named_with_a_newline_gives_a_plain_output_name(tmp_path):
+    src = tmp_path / "in"
+    src.mkdir()
+    (src / "a\nb.png").write_bytes(b"x")
+    (job,) = plan(expand_inputs([src]), tmp_path / "out")
+    assert Path(job.output).name == "a_b.exr" and Path(job.output).parent == tmp_path / "out"
+
+
+def test_a_cache_entry_is_reused_only_when_it_is_the_lens_grid_whole(doublet, triplet, tmp_path, capsys):
+    import shutil
+
+    cache = GridCache(tmp_path / "cache")
+    spec = GridSpec(grid=(2, 2), size=16, pupil_samples=16)
+    a, hit, _ = cache.get(doublet, spec)
+    b, _, _ = cache.get(triplet, spec)
+    assert not hit and cache.get(doublet, spec)[1] and (cache.hits, cache.misses) == (1, 2)
+    good = PSFGrid.read(str(a)).data
+
+    def same(path):
+        return np.array_equal(PSFGrid.read(str(path)).data, good)
+
+    shutil.copy(b, a)  # another lens's grid in the doublet's place
+    path, hit, _ = cache.get(doublet, spec)
+    assert not hit and "not reused" in capsys.readouterr().err and same(path)
+    shutil.copy(b, a)
+    shutil.copy(f"{b}.json", f"{a}.json")  # both the grid and its record swapped
+    assert not cache.get(doublet, spec)[1] and same(a)
+    a.write_bytes(a.read_bytes()[:-1000])  # truncated
+    assert not cache.get(doublet, spec)[1] and "truncated" in capsys.readouterr().err and same(a)
+
+
+def degrade_twice(batch_inputs, change, inputs=None):
+    """Degrade the frames, `change(out)` the folder, degrade again: the second run's manifest."""
+    import json
+
+    from solas_mi.batch import degrade_batch
+
+    out = batch_inputs.root / "out"
+    run = lambda: degrade_batch(inputs or [batch_inputs.images], out, psf_grid=batch_inputs.grid, workers=1,  # noqa: E731
+                                progress=False)
+    first = run()
+    assert not first.failed
+    change(out)
+    second = run()
+    return out, {Path(j.output).name: j.status for j in second.jobs}, json.loads((out / "batch.json").read_text())
+
+
+def test_an_input_replaced_by_another_image_of_its_name_is_done_again(batch_inputs):
+    frames = batch_inputs.write(2)
+    from solas_mi.imageio import read_exr, write_png
+
+    old = {}
+
+    def replace(out):
+        old["data"] = read_exr(out / "frame000.exr")[0]
+        write_png(frames[0], np.random.default_rng(7).random((48, 64, 3)))
+        os.utime(frames[0], ns=(frames[1].stat().st_atime_ns, frames[1].stat().st_mtime_ns))
+
+    out, status, _ = degrade_twice(batch_inputs, replace)
+    assert status == {"frame000.exr": "done", "frame001.exr": "skipped"}
+    new = read_exr(out / "frame000.exr")[0]
+    assert any(not np.array_equal(new[c], old["data"][c]) for c in new)
+
+
+def test_a_manifest_pointing_an_item_at_another_items_files_is_not_believed(batch_inputs):
+    import json
+
+    batch_inputs.write(2)
+
+    def edit(out):
+        m = json.loads((out / "batch.json").read_text())
+        m["items"][0]["outputs"] = m["items"][1]["outputs"]
+        (out / "batch.json").write_text(json.dumps(m))
+        (out / "frame000.exr").unlink()
+
+    out, status, _ = degrade_twice(batch_inputs, edit)
+    assert status == {"frame000.exr": "done", "frame001.exr": "skipped"} and (out / "frame000.exr").is_file()
+
+
+def test_an_output_changed_in_place_keeping_size_and_time_is_done_again(batch_inputs):
+    batch_inputs.write(1)
+
+    def tamper(out):
+        exr = out / "frame000.exr"
+        st = exr.stat()
+        data = bytearray(exr.read_bytes())
+        data[-8:] = bytes(8)
+        exr.write_bytes(bytes(data))
+        os.utime(exr, ns=(st.st_atime_ns, st.st_mtime_ns))
+
+    _, status, _ = degrade_twice(batch_inputs, tamper)
+    assert status == {"frame000.exr": "done"}
+
+
+def test_a_linked_input_keeps_its_name(batch_inputs, tmp_path):
+    (frame,) = batch_inputs.write(1)
+    link = tmp_path / "alias.png"
+    link.symlink_to(frame)
+    out, status, m = degrade_twice(batch_inputs, lambda out: None, inputs=[link])
+    assert status == {"alias.exr": "skipped"} and m["items"][0]["input"] == str(link)
+
+
+def test_two_batches_on_one_folder_the_second_is_refused_naming_the_first(batch_inputs, tmp_path):
+    import json
+    import signal
+    import subprocess
+    import sys
+    import time
+
+    from solas_mi.batch import degrade_batch
+
+    batch_inputs.write(16, shape=(240, 320))
+    out = tmp_path / "out"
+    other = tmp_path / "other"
+    other.mkdir()
+    (other / "mine.png").write_bytes((batch_inputs.images / "frame000.png").read_bytes())
+    first = subprocess.Popen([sys.executable, "-m", "solas_mi", "batch", "degrade", str(batch_inputs.images),
+                              "--psf-grid", str(batch_inputs.grid), "-o", str(out), "--workers", "1", "--quiet"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    deadline = time.monotonic() + 60
+    while not list(out.glob("[!.]*.exr")) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    with pytest.raises(SolasError, match=f"in use by batch degrade .*process {first.pid}"):
+        degrade_batch([other], out, psf_grid=batch_inputs.grid, workers=1, progress=False)
+    first.send_signal(signal.SIGKILL)  # killed outright: its lock goes with it, its temporaries stay
+    first.communicate(timeout=60)
+    (out / ".frame015.exr.k1lled00.exr").write_bytes(b"half an EXR")  # as a killed writer leaves them
+    second = degrade_batch([other], out, psf_grid=batch_inputs.grid, workers=1, progress=False)
+    assert second.count("done") == 1
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]  # its temporaries and the lock gone
+    assert json.loads((out / "batch.json").read_text())["summary"] == {"done": 1}
+
+
+def test_workers_are_capped_at_the_cores_and_cost_their_memory(batch_inputs, capsys):
+    from solas_mi.batch.degrade import WORKER_BYTES, check_workers, estimate, plan_batch
+
+    assert check_workers(300) == os.cpu_count() and "using" in capsys.readouterr().err
+    assert check_workers(300, "tcp://host:8786") == 300  # a remote cluster's workers are its own
+    batch_inputs.write(3)
+    p = plan_batch([batch_inputs.images], batch_inputs.root / "o", psf_grid=batch_inputs.grid)
+    one, three = estimate(p, 1)["peak_bytes"], estimate(p, 3)["peak_bytes"]
+    assert three - one >= 2 * WORKER_BYTES["degrade"]
+
+
+def test_an_address_space_limit_bounds_the_free_memory(tmp_path):
+    import subprocess
+    import sys
+
+    code = ("import resource; from solas_mi.budget import available_memory, check_memory\n"
+            "used = int(open('/proc/self/status').read().split('VmSize:')[1].split()[0]) * 1024\n"
+            "resource.setrlimit(resource.RLIMIT_AS, (used + (300 << 20), resource.RLIM_INFINITY))\n"
+            "assert available_memory() <= 300 << 20, available_memory()\n"
+            "check_memory('job', 1e9)\n")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
+    assert run.returncode == 1 and "SolasError" in run.stderr and "needs about 1.0 GB" in run.stderr, run.stderr
