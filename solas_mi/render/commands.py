@@ -126,8 +126,10 @@ def _render(args) -> int:
         scene = load(args.scene, run.variant, lens, params, notes, pitch_um=args.pitch_um,
                      focus_distance=_focus(args.focus_distance), response=args.response,
                      world_unit_mm=args.world_unit_mm)
-    except SolasError:
-        raise
+    except SolasError as exc:  # named by its scene, once
+        if str(args.scene) in str(exc):
+            raise
+        raise SolasError(f"scene {args.scene}: {exc}") from None
     except (ValueError, ZeroDivisionError) as exc:  # the camera's numbers as the lens camera reads them
         if lens is None:
             raise

@@ -107,12 +107,14 @@ def default_pitch_um(lens, half_deg: float, axis: str, width: int, height: int) 
     t = math.tan(math.radians(half_deg))
     field = np.degrees(np.arctan(np.array([[t * direction[0], t * direction[1]]])))
     try:
-        xy = chief_rays(lens, field, np.array([lens.primary_wavelength])).image_xy[0]
+        chief = chief_rays(lens, field, np.array([lens.primary_wavelength]))
+        if chief.vignetted[0]:  # no light along it: its image height frames nothing
+            raise SolasError("its chief ray there is blocked by an aperture")
     except SolasError as exc:
         raise SolasError(f"the scene's camera sees ±{half_deg:g} deg along {axis} and lens {lens.name} cannot image "
                          f"that field ({exc}); narrow the camera's fov, or give --pitch-um for a film that the "
-                         "lens's field covers") from None
-    return 2e3 * float(np.hypot(*xy)) / span
+                         "lens's field covers (beyond it, the dark corners a real camera shows)") from None
+    return 2e3 * float(np.hypot(*chief.image_xy[0])) / span
 
 
 def _first_sensor(mi, state, path):
