@@ -47,7 +47,7 @@ class GridCache:
 
     def get(self, lens, spec, progress=None) -> tuple[Path, bool, float]:
         """(path of the grid of `lens` with `spec`, whether it came from the cache, seconds spent computing it)."""
-        from ..psf.grid import psf_grid
+        from ..psf.depth import make_grid
 
         path = self.path(lens, spec)
         if path.is_file():
@@ -55,7 +55,7 @@ class GridCache:
             return path, True, 0.0
         self.misses += 1
         start = time.perf_counter()
-        grid = psf_grid(lens, spec, progress=progress)  # its metadata holds the spec (meta["grid_spec"])
+        grid = make_grid(lens, spec, progress=progress)  # its metadata holds the spec (meta["grid_spec"])
         try:
             self.folder.mkdir(parents=True, exist_ok=True)
         except OSError as exc:
