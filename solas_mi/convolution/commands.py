@@ -18,10 +18,11 @@ LARGE_IMAGE_VALUES = 4096 * 3072 * 3  # beyond 4K (≈ 1.7 s) the command report
 def run_degrade(args: argparse.Namespace) -> int:
     from ..imageio import image_size
     from ..outputs import data_and_preview
-    from ..psf.grid import PSFGrid
+    from ..psf.depth import read_grid
     from .output import degrade_file
 
-    output, png = data_and_preview(args.output, args.png, inputs=[args.image, args.psf_grid])
+    output, png = data_and_preview(args.output, args.png, inputs=[args.image, args.psf_grid]
+                                   + ([args.depth] if args.depth else []))
     check_method(args.method)
     rows, cols, channels = image_size(args.image)
     large = rows * cols * channels > LARGE_IMAGE_VALUES
@@ -30,15 +31,17 @@ def run_degrade(args: argparse.Namespace) -> int:
         if large:  # a large image takes long enough to want a sign of life
             print(f"\rdegrade: channel {done}/{total}", end="\n" if done == total else "", file=sys.stderr, flush=True)
 
-    meta = degrade_file(args.image, PSFGrid.read(args.psf_grid), args.psf_grid, output, png, args.method,
-                        args.boundary, linear=args.linear, force=args.force, progress=progress)
+    meta = degrade_file(args.image, read_grid(args.psf_grid), args.psf_grid, output, png, args.method,
+                        args.boundary, linear=args.linear, force=args.force, depth=args.depth,
+                        occlusion=args.occlusion, progress=progress)
     height, width = meta["output_shape"][:2]
-    print(f"wrote {output} and {png} ({args.method}, {width}x{height} px, {meta['seconds']:.2f} s)")
+    print(f"wrote {output} and {png} ({args.method}{', depth-aware' if args.depth else ''}, {width}x{height} px, {meta['seconds']:.2f} s)")
     return 0
 
 
 def register(subparsers: Any) -> None:
     """Add the `degrade` subcommand."""
+    from .depth import OCCLUSIONS
     from .kernels import BOUNDARIES
 
     p = subparsers.add_parser(
@@ -57,6 +60,13 @@ def register(subparsers: Any) -> None:
     p.add_argument("--boundary", choices=BOUNDARIES, default=BOUNDARIES[0],
                    help="padding outside the image, never wrapped around: edge (default) replicates the border "
                         "pixels, zero pads with black, reflect mirrors the image about its border")
+    p.add_argument("--depth", metavar="DEPTH.exr", help="the image's depth map (OpenEXR, metres along the optical "
+                   "axis, inf: sky; one channel or Z/depth/Y) with a grid over object distance (psf-grid "
+                   "--distances-m): PSFs interpolated in field and in 1/distance")
+    p.add_argument("--occlusion", choices=OCCLUSIONS, default=OCCLUSIONS[0],
+                   help="with --depth: filled (default): layers composited far to near, the background hidden "
+                        "behind near objects extrapolated from around them; layered: without that; none: layers "
+                        "added (no occlusion)")
     p.add_argument("--linear", action="store_true", help="PNG/JPEG values are already linear: do not decode sRGB")
     p.add_argument("-o", "--output", required=True, metavar="OUT.exr", help="output OpenEXR (linear)")
     p.add_argument("--png", help="sRGB PNG for viewing (default: beside the EXR)")

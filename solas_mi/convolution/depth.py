@@ -67,7 +67,7 @@ def layer_weights(inverse: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, n
 
 
 def degrade_depth(image: np.ndarray, depth_m: np.ndarray, grid, boundary: str = "edge", *,
-                  occlusion: str = "layered", dtype=np.float32, meta: dict | None = None,
+                  occlusion: str = "filled", dtype=np.float32, meta: dict | None = None,
                   progress=None) -> np.ndarray:
     """The linear image (H, W) or (H, W, C) with its depth map (H, W, metres) seen through the lens of
     `grid` (a `psf.depth.DepthGrid`): `interp` per layer, composited as `occlusion` says."""

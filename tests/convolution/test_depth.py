@@ -89,3 +89,23 @@ def test_bad_depth_maps_are_refused(grids):
             degrade_depth(img, bad, grids["inf"])
     with pytest.raises(SolasError, match="occlusion"):
         degrade_depth(img, np.ones((H, W)), grids["inf"], occlusion="z")
+
+
+def test_degrade_command_with_a_depth_map(grids, tmp_path):
+    from solas_mi.cli import main
+    from solas_mi.imageio import image_channels, read_exr, read_image, write_exr
+
+    g = grids["inf"]
+    far, mask, near, _ = scene()
+    img, depth = far * (1 - mask) + near * mask, np.where(mask > 0, 10.0, np.inf)
+    g.write(str(tmp_path / "g.exr"))
+    write_exr(tmp_path / "img.exr", image_channels(img), {})
+    write_exr(tmp_path / "d.exr", {"Z": depth.astype(np.float32)}, {})
+    args = ["degrade", str(tmp_path / "img.exr"), "--psf-grid", str(tmp_path / "g.exr"), "-o", str(tmp_path / "o.exr")]
+    assert main(args + ["--depth", str(tmp_path / "d.exr")]) == 0
+    out = read_image(tmp_path / "o.exr")
+    want = degrade_depth(read_image(tmp_path / "img.exr"), depth, g)
+    assert np.allclose(out, want, atol=1e-6)
+    assert read_exr(tmp_path / "o.exr")[1]["occlusion"] == "filled"
+    assert main(args) == 2  # a grid over distance without a depth map
+    assert main(args + ["--depth", str(tmp_path / "d.exr"), "--method", "patch"]) == 2
