@@ -68,9 +68,10 @@ def layer_weights(inverse: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, n
 
 def degrade_depth(image: np.ndarray, depth_m: np.ndarray, grid, boundary: str = "edge", *,
                   occlusion: str = "filled", dtype=np.float32, meta: dict | None = None,
-                  progress=None) -> np.ndarray:
+                  progress=None, frame=None) -> np.ndarray:
     """The linear image (H, W) or (H, W, C) with its depth map (H, W, metres) seen through the lens of
-    `grid` (a `psf.depth.DepthGrid`): `interp` per layer, composited as `occlusion` says."""
+    `grid` (a `psf.depth.DepthGrid`): `interp` per layer, composited as `occlusion` says; `frame`: the
+    frame's camera (`convolution.methods.degrade`)."""
     from ..psf.depth import DepthGrid
 
     if not isinstance(grid, DepthGrid):
@@ -85,7 +86,7 @@ def degrade_depth(image: np.ndarray, depth_m: np.ndarray, grid, boundary: str = 
     height, width, nchan = planes.shape
     depth = check_depth(depth_m, (height, width))
     wavelengths = channel_wavelengths(grid.layers[0], nchan)
-    lays = [layout(g, width, height) for g in grid.layers]
+    lays = [layout(g, width, height, frame) for g in grid.layers]
     radius = max(check_kernel(g, lay) for g, lay in zip(grid.layers, lays))
     nodes = grid.inverse
     weights, slab = layer_weights(np.where(np.isinf(depth), 0.0, 1.0 / depth), nodes)
@@ -102,6 +103,8 @@ def degrade_depth(image: np.ndarray, depth_m: np.ndarray, grid, boundary: str = 
         meta.update(depth_meta(grid, depth, weights, occlusion, boundary, time.perf_counter() - start))
         meta.update({"camera": lays[0].camera.meta(), "kernel_size_px": 2 * radius + 1,
                      "channel_wavelengths_nm": [grid.wavelengths_nm[k] for k in wavelengths]})
+        if frame is not None:
+            meta["frame_camera"] = frame.meta(width, height)
     return out if image.ndim == 3 else out[..., 0]
 
 

@@ -60,12 +60,14 @@ def read_depth(path: str | Path) -> np.ndarray:
 def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path: str | Path, output: Path, png: Path,
                  method: str, boundary: str, *, linear: bool = False, force: bool = False,
                  extra_meta: dict[str, Any] | None = None, depth: str | Path | None = None,
-                 occlusion: str = "filled", progress: Callable[[int, int], None] | None = None) -> dict[str, Any]:
+                 occlusion: str = "filled", frame=None,
+                 progress: Callable[[int, int], None] | None = None) -> dict[str, Any]:
     """Degrade the image file `image_path` by `grid` (read from `grid_path`, named in the metadata) and
     write `output` (EXR) and `png` together or not at all; returns the output's metadata.
     `linear`: PNG/JPEG values are already linear (not sRGB-decoded); `force`: run even when the
     estimated memory exceeds what is free; `extra_meta` is added to the metadata. `depth`: the EXR
-    depth map (m) of the image, with a grid over object distance (`convolution.depth`, `occlusion`)."""
+    depth map (m) of the image, with a grid over object distance (`convolution.depth`, `occlusion`);
+    `frame`: the frame's camera (`optics.frame.FrameCamera`)."""
     from ..budget import check_memory
     from ..imageio import image_channels, image_size, read_image, write_exr, write_png
     from ..outputs import written_together
@@ -82,11 +84,12 @@ def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path:
     image = read_image(image_path, linearize=not linear)
     meta: dict[str, Any] = {}
     if depth is None:
-        out = degrade(image, grid, method, boundary, meta=meta, progress=progress)
+        out = degrade(image, grid, method, boundary, meta=meta, progress=progress, frame=frame)
     elif method != "interp":
         raise SolasError(f"method {method!r}: a depth map is convolved with interp per depth layer only")
     else:
-        out = degrade_depth(image, read_depth(depth), grid, boundary, occlusion=occlusion, meta=meta, progress=progress)
+        out = degrade_depth(image, read_depth(depth), grid, boundary, occlusion=occlusion, meta=meta, progress=progress,
+                            frame=frame)
         meta["depth_map"] = str(depth)
     first = layers[0]
     meta.update({"input": str(image_path), "input_encoding": "linear" if linear or
