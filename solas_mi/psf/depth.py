@@ -49,6 +49,12 @@ class DepthGrid:
     def nbytes(self) -> int:
         return sum(g.data.nbytes for g in self.layers)
 
+    def subset(self, indices: list[int]) -> "DepthGrid":
+        """The grid of the nodes `indices` only (far to near), sharing their PSFs."""
+        if not indices or sorted(set(indices)) != list(indices) or not 0 <= indices[0] <= indices[-1] < len(self.layers):
+            raise SolasError(f"node indices {indices!r} must be increasing indices of the {len(self.layers)} nodes")
+        return DepthGrid([self.layers[i] for i in indices], tuple(self.distances_m[i] for i in indices), self.meta)
+
     def write_png(self, path: str) -> None:
         """The nearest node's mosaic for viewing (`PSFGrid.write_png`): the most defocused one when the
         lens is focused far."""
@@ -99,9 +105,17 @@ def _distances(path, values: list) -> tuple[float, ...]:
     return out
 
 
-def depth_grid(lens, spec: GridSpec, progress=None) -> DepthGrid:
+def depth_grid(lens, spec: GridSpec, progress=None, camera_focal_mm: float | None = None,
+               viewpoint_mm: float | None = None) -> DepthGrid:
     """The field grid of `spec` at each of its object distances (`spec.distances_m`, m), the lens's
-    image plane kept. `progress(done, total)` counts PSFs over all distances."""
+    image plane kept. `progress(done, total)` counts PSFs over all distances. `camera_focal_mm`: the
+    pinhole focal length that places every node on the image (default: the farthest node's); e.g.
+    that of the lens focused at infinity, when the frames' sensor pitch was set for it and the lens
+    has been refocused since (its change of magnification then comes in as chief-ray offsets).
+    `viewpoint_mm`: where the frame's pinhole sat, mm behind surface 1's vertex along the axis (None:
+    at the lens's entrance pupil, where a real camera's projection centre is); elsewhere, a node's
+    field is the direction of its object point as seen from there (`from_viewpoint`): the parallax
+    between the two viewpoints, which grows as objects come nearer, is then carried by the nodes."""
     if spec.distances_m is None:
         raise SolasError("a grid over object distance needs distances (GridSpec.distances_m / --distances-m)")
     start = time.perf_counter()
@@ -111,16 +125,34 @@ def depth_grid(lens, spec: GridSpec, progress=None) -> DepthGrid:
     for i, d in enumerate(spec.distances_m):
         step = None if progress is None else (lambda done, total, i=i: progress(i * total + done, n * total))
         layers.append(psf_grid(at_distance(lens, d), one, progress=step))
-    focal = layers[0].meta.get("pinhole_focal_mm")
-    for g in layers[1:]:  # one camera for every node: the farthest node's
-        if focal is not None:
+    focal = layers[0].meta.get("pinhole_focal_mm") if camera_focal_mm is None else float(camera_focal_mm)
+    for g in layers:  # one camera for every node
+        if focal is not None and focal != g.meta["pinhole_focal_mm"]:
             g.meta["pinhole_focal_mm_own"] = g.meta["pinhole_focal_mm"]
             g.meta["pinhole_focal_mm"] = focal
+    if viewpoint_mm is not None:
+        for d, g in zip(spec.distances_m, layers):
+            from_viewpoint(lens, g, d, float(viewpoint_mm))
     warnings = [f"at {d:g} m: {w}" for d, g in zip(spec.distances_m, layers) for w in g.meta["warnings"]]
     meta = {"lens": lens.name, "lens_hash": lens.hash, "grid_spec": spec.canonical(), "warnings": warnings,
             "focus": "the lens's image plane as its file says at every distance",
             "seconds": time.perf_counter() - start}
     return DepthGrid(layers, spec.distances_m, meta)
+
+
+def from_viewpoint(lens, grid: PSFGrid, distance_m: float, viewpoint_mm: float) -> None:
+    """The fields of `grid` (objects `distance_m` in front of surface 1, fields seen from the entrance
+    pupil) turned into the directions seen from `viewpoint_mm` behind surface 1:
+    tan θ' = tan θ · (d + z_ep) / (d + viewpoint)."""
+    if math.isinf(distance_m):
+        return
+    from ..optics.paraxial import paraxial
+
+    d = 1e3 * distance_m
+    factor = (d + paraxial(lens).entrance_pupil_z_mm) / (d + viewpoint_mm)
+    grid.fields_deg = np.degrees(np.arctan(np.tan(np.radians(grid.fields_deg)) * factor))
+    grid.meta.update(viewpoint_mm=viewpoint_mm, fields="directions seen from the viewpoint, viewpoint_mm behind "
+                     "surface 1 (fields_deg); the PSFs are those of the same object points")
 
 
 def at_distance(lens, distance_m: float):
