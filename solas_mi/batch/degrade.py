@@ -70,7 +70,7 @@ def check_workers(workers: int | None) -> int:
 def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *,
                psf_grid: str | os.PathLike | None = None, lens=None, grid_spec=None,
                method: str = "interp", boundary: str = "edge", linear: bool = False,
-               cache: GridCache | str | os.PathLike | None = None) -> BatchPlan:
+               cache: GridCache | str | os.PathLike | None = None, output_format: str = "exr") -> BatchPlan:
     """Check everything a batch needs before any work and find what a former run finished."""
     from ..convolution.kernels import check_boundary
     from ..convolution.methods import check_method
@@ -81,7 +81,8 @@ def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLik
     if (psf_grid is None) == (lens is None):
         raise SolasError("give either a PSF grid file or a lens to compute one from, not both and not neither")
     out_dir = output_folder(output_dir).resolve()
-    jobs = plan(expand_inputs(inputs), out_dir)
+    roots: dict[Path, Path] = {}  # folders are read as trees, their structure kept in the output folder
+    jobs = plan(expand_inputs(inputs, roots=roots), out_dir, roots)
     spec = None
     if psf_grid is not None:
         grid_path = Path(psf_grid).resolve()
@@ -99,7 +100,8 @@ def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLik
             raise SolasError(f"grid_spec {grid_spec!r} must be a solas_mi.psf.spec.GridSpec")
         grid_path = cache.path(lens, spec)
         grid_id, source = grid_path.stem, "cache hit" if grid_path.is_file() else "to compute"
-    key = hashlib.sha256(json.dumps([grid_id, method, boundary, linear]).encode()).hexdigest()[:16]
+    identity = [grid_id, method, boundary, linear] + ([output_format] if output_format != "exr" else [])
+    key = hashlib.sha256(json.dumps(identity).encode()).hexdigest()[:16]
     manifest = Manifest(out_dir / MANIFEST, {"version": 1, "kind": "degrade", "batch_id": key}, jobs)
     manifest.resume(key)
     return BatchPlan(jobs, manifest, key, grid_path, source, lens, spec)
@@ -126,13 +128,14 @@ def estimate(p: BatchPlan, workers: int) -> dict[str, float]:
 def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *,
                   psf_grid: str | os.PathLike | None = None, lens=None, grid_spec=None, method: str = "interp", boundary: str = "edge", linear: bool = False, workers: int | None = None,
                   dask: str | None = None, cache: GridCache | str | os.PathLike | None = None, force: bool = False,
-                  progress: bool = True) -> BatchResult:
+                  progress: bool = True, output_format: str = "exr") -> BatchResult:
     """Degrade every image of `inputs` (files, folders, glob patterns) into `output_dir` (one EXR +
     PNG per input, `batch.json` beside them) with the grid `psf_grid` (an EXR file) or one computed
     from `lens` (a Lens or its name / file) with `grid_spec` (a `psf.spec.GridSpec`; default: its
     defaults), cached in `cache` (a GridCache or folder). `workers` local processes (default:
     the cores), or the Dask scheduler at `dask` ("local": a LocalCluster for this batch). An item
-    that fails is recorded and the others go on."""
+    that fails is recorded and the others go on. `output_format`: float or half EXR
+    (`convolution.output.OUTPUT_FORMATS`)."""
     from ..budget import check_memory
     from ..psf.grid import PSFGrid
 
@@ -141,10 +144,14 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
     check_dask(dask)
     cache = cache if isinstance(cache, GridCache) or psf_grid is not None else GridCache(cache)
     p = plan_batch(inputs, output_dir, psf_grid=psf_grid, lens=lens, grid_spec=grid_spec, method=method,
-                   boundary=boundary, linear=linear, cache=cache)
+                   boundary=boundary, linear=linear, cache=cache, output_format=output_format)
     need = estimate(p, n if dask is None else 1)
     check_memory(f"batch of {len(p.todo)} images on {n} workers", need["peak_bytes"], force)
-    header: dict[str, Any] = {"method": method, "boundary": boundary, "linear": linear}
+    from ..convolution.output import OUTPUT_FORMATS
+
+    if output_format not in OUTPUT_FORMATS:
+        raise SolasError(f"output format {output_format!r} must be one of {', '.join(OUTPUT_FORMATS)}")
+    header: dict[str, Any] = {"method": method, "boundary": boundary, "linear": linear, "format": output_format}
     if p.lens is not None:
         p.grid_path, hit, seconds = cache.get(p.lens, p.spec)
         header["grid_source"], header["grid_seconds"] = "cache hit" if hit else "computed", seconds
@@ -156,7 +163,7 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
                    "lens": grid.meta.get("lens"), "lens_hash": grid.meta.get("lens_hash"),
                    "runner": {"dask": dask} if dask is not None else {"workers": n}})
     p.manifest.header.update(header)
-    settings = {"method": method, "boundary": boundary, "linear": linear, "force": force,
+    settings = {"method": method, "boundary": boundary, "linear": linear, "force": force, "format": output_format,
                 "batch": {"id": p.key, "manifest": str(p.manifest.path), "grid_hash": header["grid_hash"],
                           "lens_hash": header["lens_hash"]}}
     from .runner import run_batch

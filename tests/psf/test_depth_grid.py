@@ -61,3 +61,20 @@ def test_nodes_are_the_lens_at_each_distance_with_its_image_plane(doublet, tmp_p
         PSFGrid.read(path)
     at_inf.write(str(tmp_path / "one.exr"))
     assert isinstance(read_grid(str(tmp_path / "one.exr")), PSFGrid)
+
+
+def test_subset_camera_and_viewpoint(doublet):
+    from solas_mi.optics.paraxial import paraxial
+
+    spec = GridSpec(**SMALL, distances_m=(math.inf, 20.0, 10.0))
+    plain = depth_grid(doublet, spec)
+    g = depth_grid(doublet, spec, camera_focal_mm=123.0, viewpoint_mm=0.0)
+    assert all(L.meta["pinhole_focal_mm"] == 123.0 for L in g.layers)
+    assert np.array_equal(g.layers[0].fields_deg, plain.layers[0].fields_deg)  # infinity: no parallax
+    ep = paraxial(doublet).entrance_pupil_z_mm
+    factor = (10e3 + ep) / 10e3  # seen from surface 1 instead of the entrance pupil
+    assert np.allclose(np.tan(np.radians(g.layers[2].fields_deg)), np.tan(np.radians(plain.layers[2].fields_deg)) * factor)
+    sub = plain.subset([0, 2])
+    assert sub.distances_m == (math.inf, 10.0) and sub.layers[1] is plain.layers[2]
+    with pytest.raises(SolasError, match="indices"):
+        plain.subset([2, 0])
