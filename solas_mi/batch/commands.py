@@ -31,7 +31,8 @@ def _dry_run(args: argparse.Namespace) -> int:
     workers = check_workers(_workers(args.workers))
     p = plan_batch(args.inputs, args.output, psf_grid=args.psf_grid, lens=args.lens,
                    grid_spec=_grid_spec(args), method=args.method,
-                   boundary=args.boundary, linear=args.linear, cache=args.cache, output_format=args.format)
+                   boundary=args.boundary, linear=args.linear, cache=args.cache, output_format=args.format,
+                   depth_pattern=args.depth_pattern)
     need = estimate(p, workers if args.dask is None else 1)
     where = f"Dask at {args.dask}" if args.dask else f"{workers} local worker process(es)"
     skipped = len(p.jobs) - len(p.todo)
@@ -53,7 +54,8 @@ def run_batch_degrade(args: argparse.Namespace) -> int:
     result = degrade_batch(args.inputs, args.output, psf_grid=args.psf_grid, lens=args.lens,
                            grid_spec=_grid_spec(args), method=args.method,
                            boundary=args.boundary, linear=args.linear, workers=_workers(args.workers), dask=args.dask,
-                           cache=args.cache, force=args.force, progress=not args.quiet, output_format=args.format)
+                           cache=args.cache, force=args.force, progress=not args.quiet, output_format=args.format,
+                           depth_pattern=args.depth_pattern, occlusion=args.occlusion)
     return _report("degrade", result, f" (grid: {result.grid_source})")
 
 
@@ -135,6 +137,7 @@ def register(subparsers: Any) -> None:
     """Add `batch` and its `degrade` and `render`."""
     from ..convolution.kernels import BOUNDARIES
     from ..convolution.methods import DEFAULT_METHOD, METHODS
+    from ..convolution.depth import OCCLUSIONS
     from ..convolution.output import OUTPUT_FORMATS
     from ..psf.spec import add_options as add_grid_options
     from ..render.spec import add_spec_flags
@@ -158,6 +161,10 @@ def register(subparsers: Any) -> None:
     p.add_argument("--linear", action="store_true", help="PNG/JPEG values are already linear: do not decode sRGB")
     p.add_argument("--format", choices=OUTPUT_FORMATS, default=OUTPUT_FORMATS[0],
                    help="output data: exr (float, default) or exr-half (half floats, half the size)")
+    p.add_argument("--depth-pattern", metavar="{stem}_depth.exr",
+                   help="each image's depth map beside it (metres), with a grid over object distance (--distances-m): "
+                        "`degrade --depth` per image")
+    p.add_argument("--occlusion", choices=OCCLUSIONS, default=OCCLUSIONS[0], help="with --depth-pattern: as degrade's")
     p.add_argument("--cache", metavar="DIR", help="PSF-grid cache (default: the user's cache folder)/psf-grids")
     _add_runner_options(p)
     add_grid_options(p.add_argument_group("grid options (with --lens; those of `solas-mi psf-grid`; --grid "

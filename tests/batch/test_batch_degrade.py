@@ -318,3 +318,30 @@ def test_a_batch_from_a_lens_defaults_to_the_accuracy_tables_grid():
     assert _grid_spec(args).grid == BATCH_GRID == (32, 32)
     args = sub.choices["batch"].parse_args(["degrade", "x", "--lens", "solas-doublet", "-o", "o", "--grid", "8x6"])
     assert _grid_spec(args).grid == (6, 8)
+
+
+def test_a_batch_with_depth_maps_by_name_pattern(tmp_path, doublet):
+    from solas_mi.batch.degrade import degrade_batch
+    from solas_mi.convolution.depth import degrade_depth
+    from solas_mi.imageio import image_channels, read_image, write_exr
+    from solas_mi.psf.depth import depth_grid
+    from solas_mi.psf.spec import GridSpec
+
+    g = depth_grid(doublet, GridSpec(grid=(3, 4), wavelengths_nm=[531.0], size=32, pitch_um=4.0, method="geometric",
+                                     rays=32, distances_m=(float("inf"), 10.0)))
+    g.write(str(tmp_path / "g.exr"))
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    img = np.random.default_rng(0).random((48, 64))
+    depth = np.where(np.arange(64)[None, :] < 32, 10.0, np.inf) * np.ones((48, 1))
+    write_exr(folder / "a.exr", image_channels(img), {})
+    write_exr(folder / "a_depth.exr", {"Z": depth.astype(np.float32)}, {})
+    result = degrade_batch([folder], tmp_path / "out", psf_grid=tmp_path / "g.exr", workers=1, progress=False,
+                           depth_pattern="{stem}_depth.exr")
+    assert [j.status for j in result.jobs] == ["done"]  # the depth map is not an input of its own
+    out = read_image(tmp_path / "out" / "a.exr")
+    assert np.allclose(out, degrade_depth(read_image(folder / "a.exr"), depth, g), atol=1e-6)
+    (folder / "b.exr").write_bytes((folder / "a.exr").read_bytes())
+    with pytest.raises(__import__("solas_mi").SolasError, match="no depth map"):
+        degrade_batch([folder], tmp_path / "out2", psf_grid=tmp_path / "g.exr", workers=1,
+                      depth_pattern="{stem}_depth.exr")
