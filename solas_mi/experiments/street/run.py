@@ -22,6 +22,8 @@ the mono variant renders this grey scene alike, 1.5× slower).
 (e) relative error maps (interp − render)/RMS(render) for both renders; RMS of the error on near
     pixels (depth < 1.5 × near focus) and far pixels (beyond FAR_M or sky) separately.
 (f) the run time of each step.
+(g) the depth-aware convolution (`depth`): grids over object distance for both focus settings, as
+    depth nodes are added, against both renders with their noise removed (a second seed of each).
 
 Units: the convolution takes the ideal image (radiance) to irradiance in units of the ideal camera's
 (`validation.engines.convolve`) and divides by k = axis irradiance / ideal irradiance, the lens
