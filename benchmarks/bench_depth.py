@@ -5,8 +5,8 @@ Run: .venv/bin/python benchmarks/bench_depth.py [--repeats 3] [--nodes 8]
 The doublet's grid over distance (32×24 field nodes over ±2° × ±1.5°, 656/531/486 nm, geometric, 160×160
 at 0.5 µm — the single-distance benchmark's kernel size; nodes evenly spaced in 1/distance from
 infinity to 5 m) is computed once and cached in out/bench/. The frame: a street-like depth map (the
-ground from 5 m at the bottom row to 200 m at the horizon, a facade at 140 m above it, a box at 12 m
-and a post at 25 m). Prints the medians (s), the cores other processes used meanwhile (timings are
+ground from 200 m at the horizon to 5 m at the bottom row, evenly in 1/distance, a facade at 140 m
+above it, a box at 12 m and a post at 25 m). Prints the medians (s), the cores other processes used meanwhile (timings are
 only good near 0) and the grid's computing time when it was computed.
 """
 from __future__ import annotations
@@ -28,10 +28,11 @@ W, H = 1280, 960
 
 
 def depth_map() -> np.ndarray:
-    """Street-like depth (m): ground below the horizon (row H/2), a facade at 140 m above, a box, a post."""
-    rows = np.arange(H)[:, None] + 0.5 - H / 2
-    ground = np.where(rows > 0, 1.4 / np.maximum(rows, 1e-9) * (H / 2) / math.tan(math.radians(1.5)), np.inf)
-    d = np.broadcast_to(np.minimum(np.clip(ground, 5.0, 200.0), 140.0), (H, W)).copy()
+    """Street-like depth (m): the ground below the horizon (row H/2), from 200 m there to 5 m at the bottom
+    row evenly in 1/distance (every node gets pixels), a facade at 140 m above, a box at 12 m, a post at 25 m."""
+    below = np.clip((np.arange(H)[:, None] + 0.5 - H / 2) / (H / 2), 0.0, 1.0)
+    ground = 1.0 / (1 / 200 + below * (1 / 5 - 1 / 200))
+    d = np.broadcast_to(np.where(below > 0, ground, 140.0), (H, W)).copy()
     d[300:800, 100:400] = 12.0  # a box
     d[:, 900:930] = 25.0  # a post
     return d
