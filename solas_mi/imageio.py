@@ -107,12 +107,12 @@ def srgb_decode(encoded: np.ndarray) -> np.ndarray:
 
 
 def write_exr(path: str | os.PathLike, channels: dict[str, np.ndarray], meta: dict | None = None,
-              compress: bool = True, infinite: bool = False) -> None:
+              compress: bool = True, infinite: bool = False, half: bool = False) -> None:
     """Write float32 channels (equal 2-D shapes, row 0 = top) and JSON metadata to an OpenEXR file.
 
-    `compress=False` skips ZIP compression, for data that does not compress (PSF grids). A NaN (or,
-    unless `infinite`, e.g. a depth map's sky, an infinite value) is a SolasError before anything is
-    written (`check_finite`)."""
+    `compress=False` skips ZIP compression, for data that does not compress (PSF grids); `half`
+    stores half floats (11-bit mantissa, 6e-5 … 65504). A NaN (or, unless `infinite`, e.g. a depth
+    map's sky, an infinite value) is a SolasError before anything is written (`check_finite`)."""
     import OpenEXR
 
     for name, channel in channels.items():
@@ -122,7 +122,7 @@ def write_exr(path: str | os.PathLike, channels: dict[str, np.ndarray], meta: di
     header = {"compression": compression, "type": OpenEXR.scanlineimage}
     if meta is not None:
         header[META_KEY] = json.dumps(meta)
-    data = {name: np.ascontiguousarray(a, dtype=np.float32) for name, a in channels.items()}
+    data = {name: np.ascontiguousarray(a, dtype=np.float16 if half else np.float32) for name, a in channels.items()}
     with atomic_path(path) as tmp:
         with OpenEXR.File(header, data) as f:
             f.write(tmp)

@@ -74,7 +74,7 @@ class GridCache:
         """(path of the grid of `lens` with `spec`, whether it came from the cache, seconds spent computing
         it). An entry that fails its check (`check`) is said so on stderr and computed again."""
         from ..imageio import write_text
-        from ..psf.grid import psf_grid
+        from ..psf.depth import make_grid
 
         path = self.path(lens, spec)
         if path.is_file():
@@ -85,7 +85,7 @@ class GridCache:
             print(f"cache entry {path} is not reused: {why}; computing the grid again", file=sys.stderr, flush=True)
         self.misses += 1
         start = time.perf_counter()
-        grid = psf_grid(lens, spec, progress=progress)  # its metadata holds the spec (meta["grid_spec"])
+        grid = make_grid(lens, spec, progress=progress)  # its metadata holds the spec (meta["grid_spec"])
         try:
             self.folder.mkdir(parents=True, exist_ok=True)
         except OSError as exc:

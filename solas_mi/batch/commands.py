@@ -14,11 +14,14 @@ from typing import Any
 from ..errors import SolasError
 
 
-def _grid_spec(args: argparse.Namespace):
-    """The grid's spec from the `psf-grid` options (with --lens), else None."""
-    from ..psf.spec import from_args
+BATCH_GRID = (32, 32)  # rows, columns: the accuracy tables' interp 32×24 on a 4:3 frame (README)
 
-    return from_args(args) if args.lens else None
+
+def _grid_spec(args: argparse.Namespace):
+    """The grid's spec from the `psf-grid` options (with --lens; --grid defaults to BATCH_GRID), else None."""
+    from ..psf.spec import GridSpec, given
+
+    return GridSpec(**{"grid": BATCH_GRID, **given(args)}) if args.lens else None
 
 
 def _dry_run(args: argparse.Namespace) -> int:
@@ -28,7 +31,8 @@ def _dry_run(args: argparse.Namespace) -> int:
     workers = check_workers(_workers(args.workers), args.dask)
     p = plan_batch(args.inputs, args.output, psf_grid=args.psf_grid, lens=args.lens,
                    grid_spec=_grid_spec(args), method=args.method,
-                   boundary=args.boundary, linear=args.linear, cache=args.cache)
+                   boundary=args.boundary, linear=args.linear, cache=args.cache, output_format=args.format,
+                   depth_pattern=args.depth_pattern)
     need = estimate(p, workers if args.dask is None else 1)
     where = f"Dask at {args.dask}" if args.dask else f"{workers} local worker process(es)"
     skipped = len(p.jobs) - len(p.todo)
@@ -50,7 +54,8 @@ def run_batch_degrade(args: argparse.Namespace) -> int:
     result = degrade_batch(args.inputs, args.output, psf_grid=args.psf_grid, lens=args.lens,
                            grid_spec=_grid_spec(args), method=args.method,
                            boundary=args.boundary, linear=args.linear, workers=_workers(args.workers), dask=args.dask,
-                           cache=args.cache, force=args.force, progress=not args.quiet)
+                           cache=args.cache, force=args.force, progress=not args.quiet, output_format=args.format,
+                           depth_pattern=args.depth_pattern, occlusion=args.occlusion)
     return _report("degrade", result, f" (grid: {result.grid_source})")
 
 
@@ -132,6 +137,8 @@ def register(subparsers: Any) -> None:
     """Add `batch` and its `degrade` and `render`."""
     from ..convolution.kernels import BOUNDARIES
     from ..convolution.methods import DEFAULT_METHOD, METHODS
+    from ..convolution.depth import OCCLUSIONS
+    from ..convolution.output import OUTPUT_FORMATS
     from ..psf.spec import add_options as add_grid_options
     from ..render.spec import add_spec_flags
     from .render import SWEEP
@@ -152,9 +159,16 @@ def register(subparsers: Any) -> None:
     p.add_argument("--method", choices=list(METHODS), default=DEFAULT_METHOD, help="convolution method")
     p.add_argument("--boundary", choices=BOUNDARIES, default=BOUNDARIES[0], help="padding outside the image")
     p.add_argument("--linear", action="store_true", help="PNG/JPEG values are already linear: do not decode sRGB")
+    p.add_argument("--format", choices=OUTPUT_FORMATS, default=OUTPUT_FORMATS[0],
+                   help="output data: exr (float, default) or exr-half (half floats, half the size)")
+    p.add_argument("--depth-pattern", metavar="{stem}_depth.exr",
+                   help="each image's depth map beside it (metres), with a grid over object distance (--distances-m): "
+                        "`degrade --depth` per image")
+    p.add_argument("--occlusion", choices=OCCLUSIONS, default=OCCLUSIONS[0], help="with --depth-pattern: as degrade's")
     p.add_argument("--cache", metavar="DIR", help="PSF-grid cache (default: the user's cache folder)/psf-grids")
     _add_runner_options(p)
-    add_grid_options(p.add_argument_group("grid options (with --lens; those of `solas-mi psf-grid`)"))
+    add_grid_options(p.add_argument_group("grid options (with --lens; those of `solas-mi psf-grid`; --grid "
+                                          "defaults to 32x32 here, the accuracy tables' interp grid)"))
     p.set_defaults(run=run_batch_degrade)
 
     r = sub.add_parser(

@@ -84,7 +84,8 @@ def check_workers(workers: int | None, dask: str | None = None) -> int:
 def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *,
                psf_grid: str | os.PathLike | None = None, lens=None, grid_spec=None,
                method: str = "interp", boundary: str = "edge", linear: bool = False,
-               cache: GridCache | str | os.PathLike | None = None) -> BatchPlan:
+               cache: GridCache | str | os.PathLike | None = None, output_format: str = "exr",
+               depth_pattern: str | None = None) -> BatchPlan:
     """Check everything a batch needs before any work and find what a former run finished."""
     from ..convolution.kernels import check_boundary
     from ..convolution.methods import check_method
@@ -95,7 +96,17 @@ def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLik
     if (psf_grid is None) == (lens is None):
         raise SolasError("give either a PSF grid file or a lens to compute one from, not both and not neither")
     out_dir = output_folder(output_dir).resolve()
-    jobs = plan(expand_inputs(inputs), out_dir)
+    roots: dict[Path, Path] = {}  # folders are read as trees, their structure kept in the output folder
+    files = expand_inputs(inputs, roots=roots)
+    depths = {f: depth_file(f, depth_pattern) for f in files} if depth_pattern is not None else {}
+    images = [f for f in files if f not in set(depths.values())]  # depth maps are no inputs
+    missing = [str(depths[f]) for f in images if depths and not depths[f].is_file()]
+    if missing:
+        raise SolasError(f"{len(missing)} image(s) have no depth map by the pattern {depth_pattern!r}, e.g. {missing[0]}")
+    jobs = plan(images, out_dir, roots)
+    for job in jobs:
+        if depths:
+            job.params["depth"] = str(depths[Path(job.input)])
     spec = None
     if psf_grid is not None:
         grid_path = Path(psf_grid).resolve()
@@ -114,10 +125,20 @@ def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLik
         grid_path = cache.path(lens, spec)
         hit = grid_path.is_file() and cache.check(grid_path, lens, spec) is None
         grid_id, source = grid_path.stem, "cache hit" if hit else "to compute"
-    key = hashlib.sha256(json.dumps([grid_id, method, boundary, linear]).encode()).hexdigest()[:16]
+    identity = [grid_id, method, boundary, linear] + ([output_format] if output_format != "exr" else []) + (
+        [depth_pattern] if depth_pattern is not None else [])
+    key = hashlib.sha256(json.dumps(identity).encode()).hexdigest()[:16]
     manifest = Manifest(out_dir / MANIFEST, {"version": 1, "kind": "degrade", "batch_id": key}, jobs)
     manifest.resume(key)
     return BatchPlan(jobs, manifest, key, grid_path, source, lens, spec)
+
+
+def depth_file(image: Path, pattern: str) -> Path:
+    """The depth map of `image` by `pattern` ({stem}: the image's name without suffix), beside it."""
+    if "{stem}" not in pattern or "/" in pattern or not pattern.lower().endswith(".exr"):
+        raise SolasError(f"depth pattern {pattern!r} must be a file name with {{stem}} ending in .exr, "
+                         "e.g. {stem}_depth.exr (beside each image)")
+    return image.with_name(pattern.replace("{stem}", image.stem))
 
 
 def estimate(p: BatchPlan, workers: int) -> dict[str, float]:
@@ -131,7 +152,8 @@ def estimate(p: BatchPlan, workers: int) -> dict[str, float]:
         grid_bytes = p.grid_path.stat().st_size  # float32 mosaics, stored uncompressed
     else:
         rows, cols = p.spec.grid
-        grid_bytes = 4 * rows * cols * p.spec.size ** 2 * len(p.spec.wavelengths_nm or p.lens.wavelengths_nm)
+        grid_bytes = 4 * rows * cols * p.spec.size ** 2 * len(p.spec.wavelengths_nm or p.lens.wavelengths_nm) * len(
+            p.spec.distances_m or [0])
     # each worker: its largest image's peak (which holds a grid); the parent holds one grid more
     per_worker = max((peak_bytes(path, r, c, ch, grid_bytes) for path, (r, c, ch) in sizes), default=0.0)
     return {"seconds": SECONDS_PER_VALUE * sum(values) / min(workers, max(1, len(values))),
@@ -142,37 +164,46 @@ def estimate(p: BatchPlan, workers: int) -> dict[str, float]:
 def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *,
                   psf_grid: str | os.PathLike | None = None, lens=None, grid_spec=None, method: str = "interp", boundary: str = "edge", linear: bool = False, workers: int | None = None,
                   dask: str | None = None, cache: GridCache | str | os.PathLike | None = None, force: bool = False,
-                  progress: bool = True) -> BatchResult:
+                  progress: bool = True, output_format: str = "exr", depth_pattern: str | None = None,
+                  occlusion: str = "filled") -> BatchResult:
     """Degrade every image of `inputs` (files, folders, glob patterns) into `output_dir` (one EXR +
     PNG per input, `batch.json` beside them) with the grid `psf_grid` (an EXR file) or one computed
     from `lens` (a Lens or its name / file) with `grid_spec` (a `psf.spec.GridSpec`; default: its
     defaults), cached in `cache` (a GridCache or folder). `workers` local processes (default:
     the cores), or the Dask scheduler at `dask` ("local": a LocalCluster for this batch). An item
-    that fails is recorded and the others go on."""
+    that fails is recorded and the others go on. `output_format`: float or half EXR
+    (`convolution.output.OUTPUT_FORMATS`). `depth_pattern` (e.g. "{stem}_depth.exr"): each image's
+    depth map beside it, with a grid over object distance (`degrade --depth`, `occlusion`)."""
     from ..budget import check_memory
-    from ..psf.grid import PSFGrid
+    from ..psf.depth import read_grid
 
     start = time.perf_counter()
     check_dask(dask)
     n = check_workers(workers, dask)
     cache = cache if isinstance(cache, GridCache) or psf_grid is not None else GridCache(cache)
     p = plan_batch(inputs, output_dir, psf_grid=psf_grid, lens=lens, grid_spec=grid_spec, method=method,
-                   boundary=boundary, linear=linear, cache=cache)
+                   boundary=boundary, linear=linear, cache=cache, output_format=output_format,
+                   depth_pattern=depth_pattern)
     need = estimate(p, n if dask is None else 1)
     check_memory(f"batch of {len(p.todo)} images on {n} workers", need["peak_bytes"], force)
-    header: dict[str, Any] = {"method": method, "boundary": boundary, "linear": linear}
+    from ..convolution.output import OUTPUT_FORMATS
+
+    if output_format not in OUTPUT_FORMATS:
+        raise SolasError(f"output format {output_format!r} must be one of {', '.join(OUTPUT_FORMATS)}")
+    header: dict[str, Any] = {"method": method, "boundary": boundary, "linear": linear, "format": output_format}
     if p.lens is not None:
         p.grid_path, hit, seconds = cache.get(p.lens, p.spec)
         header["grid_source"], header["grid_seconds"] = "cache hit" if hit else "computed", seconds
         header["grid_spec"] = p.spec.canonical()
     else:
         header["grid_source"] = "given"
-    grid = PSFGrid.read(str(p.grid_path))
+    grid = read_grid(str(p.grid_path))
     header.update({"psf_grid": str(p.grid_path), "grid_hash": file_hash(p.grid_path),
                    "lens": grid.meta.get("lens"), "lens_hash": grid.meta.get("lens_hash"),
                    "runner": {"dask": dask} if dask is not None else {"workers": n}})
     p.manifest.header.update(header)
-    settings = {"method": method, "boundary": boundary, "linear": linear, "force": force,
+    settings = {"method": method, "boundary": boundary, "linear": linear, "force": force, "format": output_format,
+                "occlusion": occlusion,
                 "batch": {"id": p.key, "manifest": str(p.manifest.path), "grid_hash": header["grid_hash"],
                           "lens_hash": header["lens_hash"]}}
     from .runner import run_batch

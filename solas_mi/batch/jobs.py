@@ -63,15 +63,20 @@ class Job:
             return False
 
 
-def expand_inputs(inputs: Iterable[str | os.PathLike], suffixes: tuple[str, ...] = IMAGE_SUFFIXES) -> list[Path]:
-    """Files from files, folders (their files ending in `suffixes`, sorted, not recursive) and glob
-    patterns; each once, in the order given. SolasError naming an input that matches nothing."""
+def expand_inputs(inputs: Iterable[str | os.PathLike], suffixes: tuple[str, ...] = IMAGE_SUFFIXES,
+                  roots: dict[Path, Path] | None = None) -> list[Path]:
+    """Files from files, folders (their files ending in `suffixes`, sorted; with `roots`, the whole
+    folder tree, each file's folder given recorded in `roots`) and glob patterns; each once, in the
+    order given. SolasError naming an input that matches nothing."""
     found: list[Path] = []
     for item in inputs:
         text = str(item)
         path = Path(text)
         if path.is_dir():
-            matches = sorted(p for p in path.iterdir() if p.suffix.lower() in suffixes and p.is_file())
+            files = path.rglob("*") if roots is not None else path.iterdir()
+            matches = sorted(p for p in files if p.suffix.lower() in suffixes and p.is_file())
+            if roots is not None:
+                roots.update({p.resolve(): path.resolve() for p in matches})
         elif path.exists():
             matches = [path]
         elif glob.has_magic(text):
@@ -90,13 +95,15 @@ def expand_inputs(inputs: Iterable[str | os.PathLike], suffixes: tuple[str, ...]
     return unique
 
 
-def plan(inputs: list[Path], out_dir: Path) -> list[Job]:
-    """One degrade job per input: OUT_DIR/<name>.exr + .png. SolasError when two inputs would write
-    the same output or an output would replace an input."""
+def plan(inputs: list[Path], out_dir: Path, roots: dict[Path, Path] | None = None) -> list[Job]:
+    """One degrade job per input: OUT_DIR/<name>.exr + .png, or, for a file found in a folder tree
+    (`roots`: file → the folder given), OUT_DIR/<its path in the tree>.exr. SolasError when two inputs
+    would write the same output or an output would replace an input."""
     jobs, seen = [], {}
     sources = set(inputs)
     for path in inputs:
-        output = inside(out_dir, f"{safe_name(path.stem)}.exr")
+        below = path.relative_to(roots[path]).parent if roots and path in roots else Path()
+        output = inside(out_dir.joinpath(*(safe_name(part) for part in below.parts)), f"{safe_name(path.stem)}.exr")
         if output in seen:
             raise SolasError(f"inputs {str(seen[output])!r} and {str(path)!r} would both write {output}; "
                              "give them different names or run them as separate batches")

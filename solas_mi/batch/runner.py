@@ -65,12 +65,12 @@ def _interrupt(signum, frame) -> None:
 
 def _serve(conn, grid_path: str | None, settings: dict[str, Any]) -> None:
     """A local worker process: read the grid (if any) once, then do the items sent until None comes."""
-    from ..psf.grid import PSFGrid
+    from ..psf.depth import read_grid
 
     signal.signal(signal.SIGTERM, _interrupt)  # interrupted, not killed: temporary files are removed
     imageio.SWEEP_STALE = False  # the batch swept the folder it holds (`run_batch`)
     try:
-        grid = PSFGrid.read(grid_path) if grid_path is not None else None
+        grid = read_grid(grid_path) if grid_path is not None else None  # over field, or field and distance
         while (job := conn.recv()) is not None:
             conn.send(run_job(job, grid, grid_path, settings))
             if work.STOPPING:  # the item was interrupted (and said so): end now

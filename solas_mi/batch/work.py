@@ -49,8 +49,10 @@ def _degrade(job: Job, grid: "PSFGrid", grid_path: str, settings: dict[str, Any]
     from ..outputs import data_and_preview
 
     output, png = data_and_preview(job.output, job.png, inputs=[job.input, grid_path])
+    output.parent.mkdir(parents=True, exist_ok=True)  # a folder tree's sub-folder
     degrade_file(job.input, grid, grid_path, output, png, settings["method"], settings["boundary"],
-                 linear=settings["linear"], force=settings["force"],
+                 linear=settings["linear"], force=settings["force"], output_format=settings.get("format", "exr"),
+                 depth=job.params.get("depth"), occlusion=settings.get("occlusion", "filled"),
                  extra_meta={"batch": {**settings["batch"], "seed": job.seed}})
 
 

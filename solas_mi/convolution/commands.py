@@ -18,10 +18,12 @@ LARGE_IMAGE_VALUES = 4096 * 3072 * 3  # beyond 4K (≈ 1.7 s) the command report
 def run_degrade(args: argparse.Namespace) -> int:
     from ..imageio import image_size
     from ..outputs import data_and_preview
-    from ..psf.grid import PSFGrid
+    from ..optics.frame import parse_frame
+    from ..psf.depth import read_grid
     from .output import degrade_file
 
-    output, png = data_and_preview(args.output, args.png, inputs=[args.image, args.psf_grid])
+    output, png = data_and_preview(args.output, args.png, inputs=[args.image, args.psf_grid]
+                                   + ([args.depth] if args.depth else []))
     check_method(args.method)
     rows, cols, channels = image_size(args.image)
     large = rows * cols * channels > LARGE_IMAGE_VALUES
@@ -30,15 +32,31 @@ def run_degrade(args: argparse.Namespace) -> int:
         if large:  # a large image takes long enough to want a sign of life
             print(f"\rdegrade: channel {done}/{total}", end="\n" if done == total else "", file=sys.stderr, flush=True)
 
-    meta = degrade_file(args.image, PSFGrid.read(args.psf_grid), args.psf_grid, output, png, args.method,
-                        args.boundary, linear=args.linear, force=args.force, progress=progress)
+    meta = degrade_file(args.image, read_grid(args.psf_grid), args.psf_grid, output, png, args.method,
+                        args.boundary, linear=args.linear, force=args.force, depth=args.depth,
+                        occlusion=args.occlusion, frame=parse_frame(args.fov_deg, args.fov_axis, args.intrinsics,
+                                                                    args.fisheye), progress=progress)
     height, width = meta["output_shape"][:2]
-    print(f"wrote {output} and {png} ({args.method}, {width}x{height} px, {meta['seconds']:.2f} s)")
+    print(f"wrote {output} and {png} ({args.method}{', depth-aware' if args.depth else ''}, {width}x{height} px, {meta['seconds']:.2f} s)")
     return 0
+
+
+def add_frame_options(p) -> None:
+    """The frame's camera (`optics.frame`): one of --fov-deg (with --fov-axis), --intrinsics, --fisheye;
+    none: the image spans the grid's x field range."""
+    from ..optics.frame import FISHEYE, FOV_AXES
+
+    p.add_argument("--fov-deg", type=float, help="the frame's half field of view (deg) across --fov-axis, axis at its centre")
+    p.add_argument("--fov-axis", choices=FOV_AXES, default="x", help="what --fov-deg spans (default: x, the width)")
+    p.add_argument("--intrinsics", metavar="FX,FY,CX,CY", help="the frame's pinhole intrinsics (pixels)")
+    p.add_argument("--fisheye", metavar="MODEL:FX,FY,CX,CY,C1,...",
+                   help=f"the frame's fisheye calibration, MODEL one of {', '.join(FISHEYE)} (k1..k4; a1..a4[,aspect])"
+                        ": its field is checked against the lens's")
 
 
 def register(subparsers: Any) -> None:
     """Add the `degrade` subcommand."""
+    from .depth import OCCLUSIONS
     from .kernels import BOUNDARIES
 
     p = subparsers.add_parser(
@@ -57,6 +75,14 @@ def register(subparsers: Any) -> None:
     p.add_argument("--boundary", choices=BOUNDARIES, default=BOUNDARIES[0],
                    help="padding outside the image, never wrapped around: edge (default) replicates the border "
                         "pixels, zero pads with black, reflect mirrors the image about its border")
+    p.add_argument("--depth", metavar="DEPTH.exr", help="the image's depth map (OpenEXR, metres along the optical "
+                   "axis, inf: sky; one channel or Z/depth/Y) with a grid over object distance (psf-grid "
+                   "--distances-m): PSFs interpolated in field and in 1/distance")
+    p.add_argument("--occlusion", choices=OCCLUSIONS, default=OCCLUSIONS[0],
+                   help="with --depth: filled (default): layers composited far to near, the background hidden "
+                        "behind near objects extrapolated from around them; layered: without that; none: layers "
+                        "added (no occlusion)")
+    add_frame_options(p)
     p.add_argument("--linear", action="store_true", help="PNG/JPEG values are already linear: do not decode sRGB")
     p.add_argument("-o", "--output", required=True, metavar="OUT.exr", help="output OpenEXR (linear)")
     p.add_argument("--png", help="sRGB PNG for viewing (default: beside the EXR)")

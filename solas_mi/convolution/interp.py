@@ -78,8 +78,12 @@ def convolve_channel(channel: np.ndarray, grid: PSFGrid, lay: Layout, wavelength
 
     def work(sl: slice):
         m, n = mi[sl], ni[sl]
-        kernels, shift = node_kernels(grid, lay, wavelength, rows[m], cols[n], radius, dtype)
         tiles = windows[row_lo[m], col_lo[n]] * row_w[m][:, :, None] * col_w[n][:, None, :]
+        lit = tiles.reshape(len(tiles), -1).any(axis=1)  # a black tile adds nothing (a depth layer's are many)
+        if not lit.any():
+            return (), ()
+        m, n, tiles = m[lit], n[lit], tiles[lit]
+        kernels, shift = node_kernels(grid, lay, wavelength, rows[m], cols[n], radius, dtype)
         at = np.stack([row_lo[m], col_lo[n]], axis=1) - margin - radius + shift + edge
         return at, fft_convolve(tiles, kernels, shape)
 

@@ -39,6 +39,7 @@ import numpy as np
 
 from ..errors import SolasError
 from ..optics.camera import BOUNDARIES, Camera
+from ..optics.frame import FISHEYE, FrameCamera
 from ..psf.grid import PSFGrid
 
 _PAD_MODES = {"edge": "edge", "zero": "constant", "reflect": "symmetric"}
@@ -56,16 +57,44 @@ def check_boundary(boundary: str) -> str:
     return boundary
 
 
-def grid_camera(grid: PSFGrid, width: int, height: int) -> Camera:
-    """The camera whose sensor is a width×height input image spanning the grid's ±x field range."""
+def grid_camera(grid: PSFGrid, width: int, height: int, frame: FrameCamera | None = None) -> Camera:
+    """The camera whose sensor is a width×height input image spanning the grid's ±x field range, or,
+    given the frame's camera (`optics.frame`), the pinhole frame's: one pixel is 1/fx of a tangent, so
+    the sensor's pitch is pinhole_focal_mm / fx, the axis at (cx, cy)."""
     meta = grid.meta
     if "pinhole_focal_mm" not in meta or "reference_wavelength_nm" not in meta:
         raise SolasError("the PSF grid has no pinhole_focal_mm/reference_wavelength_nm metadata (written by an "
                          "older version, or with a zero x field range): regenerate it with `solas-mi psf-grid`")
     fov = float(meta["field_range_deg"][0])
     focal = float(meta["pinhole_focal_mm"])
-    pitch_um = 2e3 * focal * math.tan(math.radians(fov)) / width
-    return Camera(int(width), int(height), pitch_um, focal, fov, float(meta["reference_wavelength_nm"]))
+    if frame is None:
+        pitch_um = 2e3 * focal * math.tan(math.radians(fov)) / width
+        return Camera(int(width), int(height), pitch_um, focal, fov, float(meta["reference_wavelength_nm"]))
+    check_frame_covered(grid, frame, width, height)
+    if frame.model in FISHEYE:
+        raise SolasError(f"a {frame.model} frame lies within the lens's field, but its pixels are not the ideal "
+                         "(rectilinear) image the convolution takes: resample it to a pinhole frame first")
+    fx, fy, cx, cy = frame.pinhole(width, height)
+    if abs(fx / fy - 1) > 1e-3:
+        raise SolasError(f"frame intrinsics fx {fx:g}, fy {fy:g} px: the sensor's pixels are square; resample the "
+                         "frame so that fx = fy")
+    return Camera(int(width), int(height), 1e3 * focal / fx, focal, math.degrees(math.atan((width / 2) / fx)),
+                  float(meta["reference_wavelength_nm"]), principal=(float(cx), float(cy)))
+
+
+def check_frame_covered(grid: PSFGrid, frame: FrameCamera, width: int, height: int) -> None:
+    """SolasError with the numbers when the frame's field reaches beyond the grid's nodes' cells."""
+    f = np.asarray(grid.fields_deg, dtype=np.float64)
+    reach = []
+    for nodes in (f[0, :, 0], f[::-1, 0, 1]):
+        half = 0.5 * (nodes[-1] - nodes[0]) / max(len(nodes) - 1, 1) if len(nodes) > 1 else math.inf
+        reach.append(max(abs(nodes[0]), abs(nodes[-1])) + half * (1 + 2 * COVER_TOLERANCE))
+    ex, ey = frame.extent_deg(width, height)
+    if ex > reach[0] or ey > reach[1]:
+        raise SolasError(f"the {width}x{height} frame ({frame.model} camera) spans field angles up to {ex:.4g} deg "
+                         f"in x and {ey:.4g} deg in y; the lens's PSF grid covers {reach[0]:.4g} x {reach[1]:.4g} "
+                         f"deg (lens {grid.meta.get('lens')}): the lens "
+                         "does not cover this frame; give the frame's true camera or a lens with a wider field")
 
 
 def channel_wavelengths(grid: PSFGrid, channels: int) -> list[int]:
@@ -109,14 +138,17 @@ class Layout:
         return int(np.abs(np.rint(self.offsets[sorted(set(wavelengths))])).max())
 
 
-def layout(grid: PSFGrid, width: int, height: int) -> Layout:
-    """Node positions and offsets of `grid` on a width×height image; fails if the grid's nodes are not
-    a tensor product of x and y fields or do not cover the image."""
+def layout(grid: PSFGrid, width: int, height: int, frame: FrameCamera | None = None) -> Layout:
+    """Node positions and offsets of `grid` on a width×height image (taken by the camera `frame`; None:
+    spanning the grid's x field range); fails if the grid's nodes are not a tensor product of x and y
+    fields or do not cover the image."""
     if width < 1 or height < 1:
         raise SolasError(f"image size {width}x{height} must be at least 1x1")
     if grid.meta.get("layout") == "sensor":
+        if frame is not None:
+            raise SolasError("a PSF grid laid out on the sensor takes the sensor image itself: no frame camera")
         return sensor_layout(grid, width, height)
-    camera = grid_camera(grid, width, height)
+    camera = grid_camera(grid, width, height, frame)
     f = np.asarray(grid.fields_deg, dtype=np.float64)
     if not (np.allclose(f[:, :, 0], f[:1, :, 0], rtol=0, atol=1e-9)
             and np.allclose(f[:, :, 1], f[:, :1, 1], rtol=0, atol=1e-9)):

@@ -54,7 +54,7 @@ def check_method(method: str) -> str:
 
 
 def degrade(image: np.ndarray, grid: "PSFGrid | str", method: str = DEFAULT_METHOD, boundary: str = "edge", *,
-            dtype=np.float32, meta: dict | None = None, progress=None) -> np.ndarray:
+            dtype=np.float32, meta: dict | None = None, progress=None, frame=None) -> np.ndarray:
     """The linear image (H, W) or (H, W, C) seen through the lens of `grid` (a PSFGrid or its EXR path).
 
     method "interp" (default): PSFs interpolated bilinearly between nodes, seamless; "patch": the
@@ -63,7 +63,8 @@ def degrade(image: np.ndarray, grid: "PSFGrid | str", method: str = DEFAULT_METH
     wavelengths longest first (R, G, B ← 656, 531, 486 nm); a one-wavelength grid serves all.
     Returns an array of the image's shape in `dtype` (float32 or float64); `meta`, if given, is
     filled with what was done (camera, channels, blocks or nodes); `progress(done, total)` is called
-    after each channel."""
+    after each channel. `frame`: the frame's camera (`optics.frame.FrameCamera`; None: the image spans
+    the grid's x field range)."""
     from ..psf.grid import PSFGrid
 
     check_method(method)
@@ -81,7 +82,7 @@ def degrade(image: np.ndarray, grid: "PSFGrid | str", method: str = DEFAULT_METH
     planes = check_finite(image[..., None] if image.ndim == 2 else image, "image")  # a NaN would spread
     height, width, nchan = planes.shape
     wavelengths = channel_wavelengths(grid, nchan)
-    lay = layout(grid, width, height)
+    lay = layout(grid, width, height, frame)
     radius = check_kernel(grid, lay)  # before any allocation
     m = METHODS[method]
     start = time.perf_counter()
@@ -99,5 +100,7 @@ def degrade(image: np.ndarray, grid: "PSFGrid | str", method: str = DEFAULT_METH
             "max_chief_ray_offset_px": float(np.abs(lay.offsets[sorted(set(wavelengths))]).max()),
             "seconds": time.perf_counter() - start,
         })
+        if frame is not None:
+            meta["frame_camera"] = frame.meta(width, height)
         meta.update(m.describe(lay, radius, wavelengths))
     return out if image.ndim == 3 else out[..., 0]

@@ -5,9 +5,14 @@ from __future__ import annotations
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Callable
 
+import numpy as np
+
+from ..errors import SolasError
+from .depth import degrade_depth
 from .methods import degrade
 
 if TYPE_CHECKING:
+    from ..psf.depth import DepthGrid
     from ..psf.grid import PSFGrid
 
 # Peak memory of degrading one image, from the peak resident size (VmHWM) of `solas-mi degrade` on
@@ -22,6 +27,14 @@ CONVOLVE_BYTES_PER_VALUE = 22
 FFT_BYTES_PER_SAMPLE = 24  # per sample of the two batches of TILE_SAMPLES in flight per worker thread
 TILE_SAMPLES_PER_PIXEL = 4  # a channel's tiles hold each pixel up to 4 times (interp's hats; patch's once)
 FIXED_BYTES = 80e6  # the interpreter, NumPy and the package's modules (measured 78 MB with a 20 MB grid read)
+# the brightness convention of `degrade` beside `render-image`'s (README "PSF-grid convolution"), in every output
+BRIGHTNESS = ("degrade: a sum-normalised grid (the default) keeps the input's brightness everywhere (no Fresnel loss, no "
+              "relative illumination); a grid written with --normalize none carries the lens's transmission relative "
+              "to its axis (vignetting), the axis staying 1. render-image: irradiance in the ideal camera's units, "
+              "with Fresnel losses (--fresnel transmit, its default) and relative illumination: about 0.90 of the "
+              "input on the doublet's axis (Fresnel 0.90 x pupil scale 1.0097), less toward the corners")
+OUTPUT_FORMATS = ("exr", "exr-half")  # float32 OpenEXR (14 MB a 1280×960 RGB frame uncompressed), half floats
+HALF_MAX = 65504.0
 GRID_META_KEYS = ("lens", "lens_hash", "method", "normalization", "field_range_deg", "field_sampling", "layout", "sensor_mm")
 
 
@@ -38,36 +51,76 @@ def peak_bytes(image_path: str | Path, rows: int, cols: int, channels: int, grid
     return FIXED_BYTES + grid_bytes + max(read, convolve)
 
 
-def degrade_file(image_path: str | Path, grid: "PSFGrid", grid_path: str | Path, output: Path, png: Path,
+def read_depth(path: str | Path) -> np.ndarray:
+    """A depth map (m) from an EXR file: its one channel, or its channel Z, depth or Y."""
+    from ..imageio import read_exr
+
+    if Path(path).suffix.lower() != ".exr":
+        raise SolasError(f"depth map {str(path)!r} must be an OpenEXR file of distances in metres")
+    channels, _ = read_exr(path)
+    names = [n for n in ("Z", "depth", "Y") if n in channels] or (list(channels) if len(channels) == 1 else [])
+    if not names:
+        raise SolasError(f"depth map {path} has channels {', '.join(sorted(channels))}: it must have one channel, "
+                         "or one named Z, depth or Y (metres)")
+    return channels[names[0]]
+
+
+def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path: str | Path, output: Path, png: Path,
                  method: str, boundary: str, *, linear: bool = False, force: bool = False,
-                 extra_meta: dict[str, Any] | None = None,
+                 extra_meta: dict[str, Any] | None = None, depth: str | Path | None = None,
+                 occlusion: str = "filled", frame=None, output_format: str = "exr",
                  progress: Callable[[int, int], None] | None = None) -> dict[str, Any]:
     """Degrade the image file `image_path` by `grid` (read from `grid_path`, named in the metadata) and
     write `output` (EXR) and `png` together or not at all; returns the output's metadata.
     `linear`: PNG/JPEG values are already linear (not sRGB-decoded); `force`: run even when the
-    estimated memory exceeds what is free; `extra_meta` is added to the metadata."""
+    estimated memory exceeds what is free; `extra_meta` is added to the metadata. `depth`: the EXR
+    depth map (m) of the image, with a grid over object distance (`convolution.depth`, `occlusion`);
+    `frame`: the frame's camera (`optics.frame.FrameCamera`); `output_format`: one of OUTPUT_FORMATS."""
     from ..budget import check_memory
     from ..imageio import image_channels, image_size, read_image, write_exr, write_png
     from ..outputs import written_together
+    from ..psf.depth import DepthGrid
 
+    if output_format not in OUTPUT_FORMATS:
+        raise SolasError(f"output format {output_format!r} must be one of {', '.join(OUTPUT_FORMATS)}")
+    if (depth is not None) != isinstance(grid, DepthGrid):
+        raise SolasError(f"PSF grid {grid_path}: " + ("a depth map needs a grid over object distance (psf-grid "
+                         "--distances-m)" if depth is not None else "a grid over object distance needs the image's "
+                         "depth map (--depth)"))
     rows, cols, channels = image_size(image_path)
-    check_memory(f"degrade {cols}x{rows}", peak_bytes(image_path, rows, cols, channels, grid.data.nbytes), force)
+    layers = grid.layers if depth is not None else [grid]
+    need = peak_bytes(image_path, rows, cols, channels, sum(g.data.nbytes for g in layers)) + 9 * len(layers) * rows * cols
+    check_memory(f"degrade {cols}x{rows}", need, force)
     image = read_image(image_path, linearize=not linear)
     meta: dict[str, Any] = {}
-    out = degrade(image, grid, method, boundary, meta=meta, progress=progress)
+    if depth is None:
+        out = degrade(image, grid, method, boundary, meta=meta, progress=progress, frame=frame)
+    elif method != "interp":
+        raise SolasError(f"method {method!r}: a depth map is convolved with interp per depth layer only")
+    else:
+        out = degrade_depth(image, read_depth(depth), grid, boundary, occlusion=occlusion, meta=meta, progress=progress,
+                            frame=frame)
+        meta["depth_map"] = str(depth)
+    first = layers[0]
     meta.update({"input": str(image_path), "input_encoding": "linear" if linear or
                  Path(image_path).suffix.lower() == ".exr" else "sRGB, decoded to linear",
                  "psf_grid": str(grid_path),
-                 "psf_grid_meta": {key: grid.meta.get(key) for key in GRID_META_KEYS},
-                 "psf_grid_shape": list(grid.shape), "psf_pitch_um": grid.pitch_um, "psf_size": grid.size,
-                 "values": "mean irradiance over each pixel, in the units of the linear input"})
+                 "psf_grid_meta": {key: first.meta.get(key) for key in GRID_META_KEYS},
+                 "psf_grid_shape": list(first.shape), "psf_pitch_um": first.pitch_um, "psf_size": first.size,
+                 "values": "mean irradiance over each pixel, in the units of the linear input",
+                 "brightness": BRIGHTNESS})
     meta.update(extra_meta or {})
     names = None if out.ndim == 2 or out.shape[-1] == 3 else \
         [f"C{c:02d}_{meta['channel_wavelengths_nm'][c]:g}nm" for c in range(out.shape[-1])]
     view = out if out.ndim == 2 or out.shape[-1] == 3 else out.mean(axis=-1)
+    half = output_format == "exr-half"
+    if half and float(np.abs(out).max()) > HALF_MAX:
+        raise SolasError(f"{image_path}: degraded values up to {float(np.abs(out).max()):.4g} exceed half floats' "
+                         f"{HALF_MAX:g}: write float EXR (output format exr)")
+    meta["output_format"] = output_format
     # both files appear together or not at all
     with written_together(output, png) as (tmp_exr, tmp_png):
-        write_exr(tmp_exr, image_channels(out, names), meta)
+        write_exr(tmp_exr, image_channels(out, names), meta, half=half)
         write_png(tmp_png, view)
     meta["output_shape"] = list(out.shape)
     return meta

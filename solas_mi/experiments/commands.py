@@ -7,7 +7,7 @@ import argparse
 import sys
 from typing import Any
 
-from ..options import parse_wxh
+from ..options import parse_wxh, positive_ints
 from ..outputs import output_folder
 
 
@@ -25,8 +25,9 @@ def run_street(args: argparse.Namespace) -> int:
     height, width = parse_wxh(args.size, "--size")
     for spp in (args.spp_ideal, args.spp):  # its renders: refused when absurd or too large, announced when long
         check_render(width, height, spp, False)
+    layers = () if args.depth_layers.strip().lower() == "none" else positive_ints(args.depth_layers, "--depth-layers")
     settings = Settings(width=width, height=height, spp_ideal=args.spp_ideal, spp_lens=args.spp,
-                        near_focus_m=args.near_focus, variant=args.variant)
+                        near_focus_m=args.near_focus, variant=args.variant, depth_layers=layers)
     outcome = run(lens, out, settings, log=_say)
     print((out / "street.md").read_text())
     print(f"wrote {out}/street.md, street.csv, street.json, fig5_*.png, error_*.png and the images "
@@ -63,6 +64,9 @@ def register(sub: Any) -> None:
     p.add_argument("--spp", type=int, default=64, help="lens render samples per pixel (default 64)")
     p.add_argument("--spp-ideal", type=int, default=64, help="ideal image samples per pixel (default 64)")
     p.add_argument("--near-focus", type=float, help="near focus distance in m (default: the lens's framing)")
+    p.add_argument("--depth-layers", default="1,2,4,8,16",
+                   help="step (g), the depth-aware convolution: intervals between depth nodes, each dividing the "
+                        "largest (default 1,2,4,8,16); none: skip it")
     p.add_argument("--variant", choices=VARIANTS,
                    help="Mitsuba variant (default: CUDA where it works, else LLVM, spectral; the grey scene renders "
                         "alike in a mono one)")

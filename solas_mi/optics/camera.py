@@ -44,6 +44,11 @@ class Camera:
     # "rectilinear": the input image is the ideal pinhole image above; "sensor": it is already the
     # sensor image in the lens's own projection (PSF grids laid out on the sensor; focal_mm, fov_deg unused)
     projection: str = "rectilinear"
+    principal: tuple[float, float] | None = None  # (column, row) of the axis; None: the centre (W/2 − ½, H/2 − ½)
+
+    @property
+    def centre(self) -> tuple[float, float]:
+        return self.principal if self.principal is not None else (self.width / 2 - 0.5, self.height / 2 - 0.5)
 
     @property
     def pitch_mm(self) -> float:
@@ -65,7 +70,8 @@ class Camera:
         """Ideal image points of fields (…, 2) as (column, row) pixel coordinates (continuous; the centre
         of pixel (c, r) is (c, r))."""
         xy = self.ideal_mm(field_deg) / self.pitch_mm
-        return np.stack([xy[..., 0] + self.width / 2 - 0.5, self.height / 2 - 0.5 - xy[..., 1]], axis=-1)
+        cx, cy = self.centre
+        return np.stack([xy[..., 0] + cx, cy - xy[..., 1]], axis=-1)
 
     def input_tangent_pitch(self, input_width: int, fov_deg: float | None = None) -> float:
         """Tangent-space size of one pixel of an input image `input_width` wide spanning ±fov_deg."""
@@ -78,7 +84,7 @@ class Camera:
                     "projection": "sensor: the input image is the sensor image in the lens's own projection; PSF grid "
                                   "nodes sit at their chief rays' image points"}
         return {"sensor": [self.width, self.height], "pitch_um": self.pitch_um, "pinhole_focal_mm": self.focal_mm,
-                "fov_deg": self.fov_deg, "reference_wavelength_nm": self.wavelength_nm,
+                "fov_deg": self.fov_deg, "reference_wavelength_nm": self.wavelength_nm, "principal_px": list(self.centre),
                 "projection": "rectilinear: ideal point = pinhole_focal_mm * (tan x, tan y); image width spans "
                               "+-fov_deg"}
 

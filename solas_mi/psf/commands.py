@@ -51,14 +51,14 @@ def run_psf(args) -> int:
 def run_psf_grid(args) -> int:
     from ..budget import check_memory
     from ..optics.lens import Lens
-    from .grid import psf_grid
+    from .depth import make_grid
 
     # the mosaic preview only when asked: a 32×32 grid's costs about 0.9 s (block means + a 2048² PNG)
     data_file, png = data_and_preview(args.output, args.png or None)
     png = png if args.png is not None else None
     lens = Lens.load(args.lens)
     spec = from_args(args)
-    count = len(spec.wavelengths_nm or lens.wavelengths_nm) * spec.grid[0] * spec.grid[1]
+    count = len(spec.wavelengths_nm or lens.wavelengths_nm) * spec.grid[0] * spec.grid[1] * len(spec.distances_m or [0])
     # the float32 PSFs, their mosaics and the PNG when written, and a batch of complex fields
     need = 3 * 4 * count * spec.size ** 2 + 64 * 64 * (spec.size + 1) ** 2
     check_memory(f"psf-grid of {count} PSFs of {spec.size}x{spec.size}", need, args.force,
@@ -67,7 +67,7 @@ def run_psf_grid(args) -> int:
     def progress(done: int, total: int) -> None:
         print(f"\r{done}/{total} PSFs", end="", file=sys.stderr, flush=True)
 
-    g = psf_grid(lens, spec, progress=progress)
+    g = make_grid(lens, spec, progress=progress)
     print(file=sys.stderr)
     _finish("psf-grid", g, data_file, png, f" ({g.meta['seconds']:.1f} s)")
     return 0

@@ -75,6 +75,14 @@ class PSFGrid:
     def read(cls, path: str) -> "PSFGrid":
         """Read a grid written by `write`; SolasError naming the file and the field for damaged metadata."""
         channels, meta = read_exr(path)
+        if isinstance(meta, dict) and "layers" in meta:
+            raise SolasError(f"{path} is a PSF grid over object distance (`psf.depth.DepthGrid`): read it with "
+                             "psf.depth.read_grid, use it with a depth map (degrade --depth)")
+        return cls.from_channels(path, channels, meta)
+
+    @classmethod
+    def from_channels(cls, path, channels: dict, meta) -> "PSFGrid":
+        """The grid of an EXR file's channels and metadata (`read`); `path` names it in errors."""
         if not isinstance(meta, dict) or "grid" not in meta:
             raise SolasError(f"{path} is not a solas-mi PSF grid (no grid metadata)")
         ny, nx, s, wl = check_grid_meta(path, meta)
@@ -212,6 +220,9 @@ def psf_grid(lens: Lens, spec: GridSpec | None = None, progress=None, **options)
     if spec is not None and not isinstance(spec, GridSpec):
         raise SolasError(f"spec {spec!r} must be a GridSpec (or give its options as keywords)")
     spec = GridSpec(**options) if spec is None else replace(spec, **options)
+    if spec.distances_m is not None:
+        raise SolasError(f"distances {list(spec.distances_m)} m make a grid over object distance: use "
+                         "psf.depth.depth_grid (psf_grid is for the lens file's object distance)")
     wl = S.check_wavelengths(lens, spec.wavelengths_nm if spec.wavelengths_nm is not None else lens.wavelengths_nm)
     fields, placement = grid_fields(lens, spec)
     size = spec.size

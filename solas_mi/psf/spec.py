@@ -65,6 +65,10 @@ class GridSpec:
     normalization: str = _option(NORMALIZATIONS[0], "--normalize", "PSF values", choices=NORMALIZATIONS, psf=True)
     auto_window: bool = _option(False, "--auto-window", f"double --size until each window holds "
                                                         f"{100 * WINDOW_ENERGY_LIMIT:g} %% of the light", psf=True)
+    distances_m: tuple[float, ...] | None = _option(
+        None, "--distances-m", "object distances (m) of a grid over field and distance, comma-separated (inf: "
+                               "infinity), or N:NEAR for N nodes spaced evenly in 1/distance from infinity to NEAR "
+                               "(default: the lens file's object distance only)", parse=lambda t: parse_distances(t))
 
     def __post_init__(self):
         set_ = object.__setattr__
@@ -90,6 +94,7 @@ class GridSpec:
         check_normalization(self.normalization)
         if not isinstance(self.auto_window, bool):
             raise SolasError(f"auto_window {self.auto_window!r} must be True or False")
+        set_(self, "distances_m", check_distances(self.distances_m))
 
     def sampling_options(self) -> dict[str, int]:
         """The PSF methods' own options (`registry.method_options` keeps those of `method`)."""
@@ -101,6 +106,10 @@ class GridSpec:
         out = asdict(self)
         for name in ("field_range_deg", "field_sampling") if self.layout == "sensor" else ("sensor_mm",):
             del out[name]
+        if self.distances_m is None:
+            del out["distances_m"]  # the key of a grid at one distance stays what it was
+        else:
+            out["distances_m"] = [d if math.isfinite(d) else "inf" for d in self.distances_m]
         for name in set(self.sampling_options()) - set(method_options(self.method, self.sampling_options())):
             del out[name]
         return json.loads(json.dumps(out))
@@ -139,6 +148,46 @@ def _wavelengths(value) -> tuple[float, ...] | None:
     if len({f"{w:g}" for w in out}) != len(out):  # each names a channel of the grid file (psf_531nm)
         raise SolasError(f"wavelengths {value!r} must differ from each other (to 6 digits): each is a channel")
     return out
+
+
+def inverse_spaced(count: int, near_m: float) -> tuple[float, ...]:
+    """`count` object distances (m) spaced evenly in 1/distance, where defocus is linear, from infinity
+    to `near_m`, far to near (one node: infinity)."""
+    if not (isinstance(count, int) and count >= 1):
+        raise SolasError(f"depth node count {count!r} must be a whole number >= 1")
+    near = _number(near_m, "nearest distance (m)")
+    if near <= 0:
+        raise SolasError(f"nearest distance {near_m!r} m must be positive")
+    return tuple(math.inf if k == 0 else near * (count - 1) / k for k in range(count))
+
+
+def parse_distances(text: str) -> tuple[float, ...]:
+    """--distances-m: "inf,40,20,10" (m, far to near) or "N:NEAR" (`inverse_spaced`)."""
+    if ":" in text:
+        count, _, near = text.partition(":")
+        try:
+            return inverse_spaced(int(count), float(near))
+        except ValueError:
+            raise SolasError(f"--distances-m {text!r} must be N:NEAR (N nodes, NEAR in metres) or distances "
+                             "in m, comma-separated") from None
+    return tuple(floats(text, "--distances-m"))
+
+
+def check_distances(value) -> tuple[float, ...] | None:
+    """None, or object distances (m), positive (inf allowed), distinct, sorted far to near."""
+    if value is None:
+        return None
+    values = (value,) if isinstance(value, Real) else value
+    if isinstance(values, (str, bytes)) or not hasattr(values, "__iter__"):
+        raise SolasError(f"distances {value!r} must be a sequence of distances (m)")
+    out = []
+    for v in values:
+        if not isinstance(v, Real) or isinstance(v, bool) or math.isnan(v) or not v > 0:
+            raise SolasError(f"distance {v!r} m must be a positive number (inf: infinity)")
+        out.append(float(v))
+    if not out or len(set(out)) != len(out):
+        raise SolasError(f"distances {value!r} m must be one or more distinct distances")
+    return tuple(sorted(out, reverse=True))
 
 
 def _half_ranges(value) -> tuple[float, float] | None:

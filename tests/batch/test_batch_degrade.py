@@ -237,6 +237,7 @@ FLAG_VARIANTS = {
     "--rays": (["--psf-method", "geometric"], "12"),
     "--normalize": ([], "peak"),
     "--auto-window": ([], None),
+    "--distances-m": ([], "inf,10"),
 }
 NOT_GRID_OPTIONS = {"lens", "output", "png", "force", "help"}
 
@@ -247,7 +248,7 @@ def test_every_psf_grid_flag_reaches_the_cache_key_and_the_grid(batch_inputs, ca
     import argparse
 
     from solas_mi.cli import build_parser
-    from solas_mi.psf.grid import psf_grid
+    from solas_mi.psf.depth import make_grid
     from solas_mi.psf.spec import from_args
 
     sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
@@ -269,7 +270,79 @@ def test_every_psf_grid_flag_reaches_the_cache_key_and_the_grid(batch_inputs, ca
         before = [*base, *context]
         after = [*before, flag] + ([] if value is None else [value])
         assert _planned_grid(capsys, [*argv, *before]) != _planned_grid(capsys, [*argv, *after]), flag
-        a, b = psf_grid(doublet, spec_of(before)), psf_grid(doublet, spec_of(after))
+        a, b = make_grid(doublet, spec_of(before)), make_grid(doublet, spec_of(after))
         assert b.meta["grid_spec"] == spec_of(after).canonical() != a.meta["grid_spec"], flag
-        assert a.data.shape != b.data.shape or not np.array_equal(a.data, b.data), flag
-        assert a.data.sum() > 0 and b.data.sum() > 0, flag
+        a, b = _psfs(a), _psfs(b)
+        assert a.shape != b.shape or not np.array_equal(a, b), flag
+        assert a.sum() > 0 and b.sum() > 0, flag
+
+
+def _psfs(grid) -> np.ndarray:
+    """A grid's PSFs, those of every object distance of a grid over distance."""
+    return np.stack([g.data for g in grid.layers]) if hasattr(grid, "layers") else grid.data
+
+
+def test_a_folder_tree_keeps_its_structure_and_half_floats_halve_the_output(batch_inputs):
+    from solas_mi.batch.degrade import degrade_batch
+    from solas_mi.imageio import read_exr, read_image
+
+    batch_inputs.write(1)
+    sub = batch_inputs.images / "cam_left" / "seq1"
+    sub.mkdir(parents=True)
+    (sub / "frame000.png").write_bytes((batch_inputs.images / "frame000.png").read_bytes())
+    out = batch_inputs.root / "out"
+    degrade_batch([batch_inputs.images], out, psf_grid=batch_inputs.grid, workers=1, progress=False)
+    full = out / "frame000.exr"
+    nested = out / "cam_left" / "seq1" / "frame000.exr"
+    assert full.is_file() and nested.is_file() and nested.with_suffix(".png").is_file()
+    assert np.array_equal(read_image(full), read_image(nested))  # same input, same output, its own folder
+    half = batch_inputs.root / "half"
+    degrade_batch([batch_inputs.images], half, psf_grid=batch_inputs.grid, workers=1, progress=False,
+                  output_format="exr-half")
+    channels, meta = read_exr(half / "frame000.exr")
+    assert channels["R"].dtype == np.float16 and meta["output_format"] == "exr-half"
+    assert np.allclose(read_image(half / "frame000.exr"), read_image(full), rtol=1e-3, atol=1e-4)
+    from solas_mi import SolasError
+
+    with pytest.raises(SolasError, match="output format"):
+        degrade_batch([batch_inputs.images], half, psf_grid=batch_inputs.grid, workers=1, output_format="png8")
+
+
+def test_a_batch_from_a_lens_defaults_to_the_accuracy_tables_grid():
+    import argparse
+
+    from solas_mi.batch.commands import BATCH_GRID, _grid_spec
+    from solas_mi.cli import build_parser
+
+    sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
+    args = sub.choices["batch"].parse_args(["degrade", "x", "--lens", "solas-doublet", "-o", "o"])
+    assert _grid_spec(args).grid == BATCH_GRID == (32, 32)
+    args = sub.choices["batch"].parse_args(["degrade", "x", "--lens", "solas-doublet", "-o", "o", "--grid", "8x6"])
+    assert _grid_spec(args).grid == (6, 8)
+
+
+def test_a_batch_with_depth_maps_by_name_pattern(tmp_path, doublet):
+    from solas_mi.batch.degrade import degrade_batch
+    from solas_mi.convolution.depth import degrade_depth
+    from solas_mi.imageio import image_channels, read_image, write_exr
+    from solas_mi.psf.depth import depth_grid
+    from solas_mi.psf.spec import GridSpec
+
+    g = depth_grid(doublet, GridSpec(grid=(3, 4), wavelengths_nm=[531.0], size=32, pitch_um=4.0, method="geometric",
+                                     rays=32, distances_m=(float("inf"), 10.0)))
+    g.write(str(tmp_path / "g.exr"))
+    folder = tmp_path / "frames"
+    folder.mkdir()
+    img = np.random.default_rng(0).random((48, 64))
+    depth = np.where(np.arange(64)[None, :] < 32, 10.0, np.inf) * np.ones((48, 1))
+    write_exr(folder / "a.exr", image_channels(img), {})
+    write_exr(folder / "a_depth.exr", {"Z": depth.astype(np.float32)}, {})
+    result = degrade_batch([folder], tmp_path / "out", psf_grid=tmp_path / "g.exr", workers=1, progress=False,
+                           depth_pattern="{stem}_depth.exr")
+    assert [j.status for j in result.jobs] == ["done"]  # the depth map is not an input of its own
+    out = read_image(tmp_path / "out" / "a.exr")
+    assert np.allclose(out, degrade_depth(read_image(folder / "a.exr"), depth, g), atol=1e-6)
+    (folder / "b.exr").write_bytes((folder / "a.exr").read_bytes())
+    with pytest.raises(__import__("solas_mi").SolasError, match="no depth map"):
+        degrade_batch([folder], tmp_path / "out2", psf_grid=tmp_path / "g.exr", workers=1,
+                      depth_pattern="{stem}_depth.exr")

@@ -62,20 +62,28 @@ def test_the_doublets_ideal_view_has_edges_in_every_annulus(doublet, tmp_path):
 def test_the_experiment_end_to_end(tmp_path):
     out = tmp_path / "street"
     assert main(["experiment", "street", "-o", str(out), "--size", "160x120", "--spp", "16", "--spp-ideal", "4",
-                 "--variant", "llvm_ad_spectral"]) == 0
+                 "--variant", "llvm_ad_spectral", "--depth-layers", "1,2"]) == 0
     for name in ("street.md", "street.csv", "street.json", "ideal.exr", "depth.exr", "interp_32x24.exr",
                  "patch_8x6.exr", "patch_32x24.exr", "render_infinity.exr", "render_20_m.exr",
                  "fig5_interp_32x24.png", "error_interp_32x24_vs_render_20_m.png", "interp_32x24_at_140_m.exr"):
         assert (out / name).is_file(), name
     report = json.loads((out / "street.json").read_text())
     assert {r["image"] for r in report["sfr"]} == {"interp 32x24", "patch 8x6", "patch 32x24", "render infinity",
-                                                   "render 20 m", "interp 32x24 at 140 m"}
+                                                   "render 20 m", "interp 32x24 at 140 m",
+                                                   "depth-aware interp 16x12, 3 nodes, focus infinity",
+                                                   "depth-aware interp 16x12, 3 nodes, focus 20 m"}
     assert set(report["seconds"]) >= {"(a) ideal image", "(c) lens render, focus at 20 m"}
     infinity, near = (report["errors"][f"interp 32x24 vs render {f}"] for f in ("infinity", "20 m"))
     assert near["rel_rmse_near"] < near["rel_rmse_far"]  # focused at 20 m: the near post sharp, the far field not
     # the convolution (objects at infinity) fits the near post better when the lens is focused on it, and the
     # far field better when it is focused at infinity
     assert near["rel_rmse_near"] < infinity["rel_rmse_near"] and infinity["rel_rmse_far"] < near["rel_rmse_far"]
+    # (g) focused at 20 m, the depth-aware convolution (PSFs of the refocused lens per depth) fits the far field
+    # far better than the single grid of the lens focused as its file says, and as well as the near objects
+    depth = report["errors"]["depth-aware interp 16x12, 3 nodes, focus 20 m vs render 20 m"]
+    assert depth["rel_rmse_far"] < 0.5 * near["rel_rmse_far"]
+    assert {e["nodes"] for n, e in report["errors"].items() if n.startswith("depth-aware")} == {1, 2, 3}
+    assert "render noise removed" in (out / "street.md").read_text()
     assert not list(out.glob(".*"))  # no temporary file left
 
 

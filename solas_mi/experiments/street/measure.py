@@ -95,6 +95,10 @@ def _fmt(v, digits: int = 3) -> str:
     return "—" if v is None else f"{v:.{digits}f}" if isinstance(v, float) else str(v)
 
 
+def _pct(v) -> str:
+    return "—" if v is None else f"{100 * v:.2f} %"
+
+
 def write_tables(out: Path, rows: list[dict], outcome) -> None:
     """street.md (SFR table, error table, step times), street.csv (the SFR table), street.json (all)."""
     from ...imageio import write_text
@@ -107,9 +111,14 @@ def write_tables(out: Path, rows: list[dict], outcome) -> None:
     md += ["", "| convolution vs render | rel. RMSE: all | near | far | near px | far px |",
            "|---|---:|---:|---:|---:|---:|"]
     for name, e in outcome.errors.items():
-        parts = ["—" if e[k] is None else f"{100 * e[k]:.2f} %"
-                 for k in ("rel_rmse_all", "rel_rmse_near", "rel_rmse_far")]
+        parts = [_pct(e[k]) for k in ("rel_rmse_all", "rel_rmse_near", "rel_rmse_far")]
         md.append(f"| {name} | " + " | ".join(parts) + f" | {e['near_pixels']} | {e['far_pixels']} |")
+    layered = {n: e for n, e in outcome.errors.items() if "intervals" in e}
+    if layered:  # step (g): error against the number of depth layers and run time, render noise removed
+        md += ["", "| depth-aware convolution (render noise removed) | nodes | near | far | near, raw | far, raw | "
+               "seconds |", "|---|---:|---:|---:|---:|---:|---:|"]
+        md += [f"| {n} | {e['nodes']} | " + " | ".join(_pct(e[k]) for k in ("rel_rmse_near", "rel_rmse_far",
+               "rel_rmse_near_raw", "rel_rmse_far_raw")) + f" | {e['seconds']:.2f} |" for n, e in layered.items()]
     md += ["", "| step | seconds |", "|---|---:|"] + [f"| {k} | {v:.1f} |" for k, v in outcome.seconds.items()]
     write_text(out / "street.md", "\n".join(md) + "\n")
     csv = [",".join(columns)] + [",".join("" if r[c] is None else str(r[c]) for c in columns) for r in rows]

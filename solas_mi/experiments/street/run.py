@@ -22,6 +22,8 @@ the mono variant renders this grey scene alike, 1.5× slower).
 (e) relative error maps (interp − render)/RMS(render) for both renders; RMS of the error on near
     pixels (depth < 1.5 × near focus) and far pixels (beyond FAR_M or sky) separately.
 (f) the run time of each step.
+(g) the depth-aware convolution (`depth`): grids over object distance for both focus settings, as
+    depth nodes are added, against both renders with their noise removed (a second seed of each).
 
 Units: the convolution takes the ideal image (radiance) to irradiance in units of the ideal camera's
 (`validation.engines.convolve`) and divides by k = axis irradiance / ideal irradiance, the lens
@@ -40,6 +42,7 @@ import numpy as np
 from ...errors import SolasError
 from ...resources import resource_dir
 from .framings import framing
+from .depth import LAYERS, check_layers, depth_rows
 from .measure import FAR_M, measure, write_tables
 
 PATCH_GRIDS = ((8, 6), (32, 24))
@@ -64,6 +67,7 @@ class Settings:
     near_focus_m: float | None = None
     variant: str | None = None
     scene: Path = SCENE
+    depth_layers: tuple[int, ...] = LAYERS  # intervals between depth nodes of step (g); () skips it
 
     def check(self) -> None:
         for name in ("width", "height", "spp_ideal", "spp_lens", "spp_depth"):
@@ -74,6 +78,8 @@ class Settings:
             raise SolasError(f"image size {self.width}x{self.height} must be at least 32x32 px")
         if self.near_focus_m is not None and not self.near_focus_m > 0:
             raise SolasError(f"near focus {self.near_focus_m!r} m must be a positive distance")
+        if self.depth_layers:
+            check_layers(self.depth_layers)
 
 
 @dataclass
@@ -119,7 +125,7 @@ def experiment_scene(source: Path, out: Path, primary_nm: float, depth: bool = F
     return path
 
 
-def _render(xml: Path, variant, lens, params: dict, spp: int, log, **lens_options) -> np.ndarray:
+def _render(xml: Path, variant, lens, params: dict, spp: int, log, seed: int = 0, **lens_options) -> np.ndarray:
     from ...render.stock import render_scene
     from ...render.user_scene import load
 
@@ -131,7 +137,7 @@ def _render(xml: Path, variant, lens, params: dict, spp: int, log, **lens_option
             quarters.add(4 * done // total)
             log(f"  {done}/{total} spp")
 
-    return render_scene(scene, spp, progress=progress).image
+    return render_scene(scene, spp, seed=seed, progress=progress).image
 
 
 class _Steps:
@@ -180,6 +186,7 @@ def run(lens, out: str | Path, settings: Settings | None = None, log=print) -> O
     grids, far_grid = _psf_grids(st)
     k = axis_irradiance(lens, st.primary) / ideal_irradiance(lens, pinhole_focal_mm(lens, st.fov), st.primary)
     images = {"ideal": ideal, **_convolved(st, ideal, grids, far_grid, k), **_lens_renders(st, xml)}
+    depth_errors = _depth_aware(st, xml, images, depth, k) if s.depth_layers else {}
     _write_images(st, images, depth)
     lay = layout(grids[s.interp_grid], st.w, st.h)
     meta = {"lens": lens.name, "lens_hash": lens.hash, "size": [st.w, st.h], "field_deg": st.fov,
@@ -191,8 +198,27 @@ def run(lens, out: str | Path, settings: Settings | None = None, log=print) -> O
     predictors = {"infinity": grids[s.interp_grid], f"{st.fr.far_m:g} m": far_grid}
     rows = st.timed("(d, e) NS-SFR, predictions and error maps", measure, outcome, predictors, lay, st.near_focus,
                     out)
+    outcome.errors.update(depth_errors)
     write_tables(out, rows, outcome)
     return outcome
+
+
+def _depth_aware(st: _Steps, xml: Path, images: dict, depth: np.ndarray, k: float) -> dict:
+    """(g) the depth-aware convolution against both renders, their noise removed with a second seed's
+    renders (`depth.depth_rows`); its images are added to `images`, its error rows returned."""
+    from ...validation.inputs import tangent_cos3
+
+    second = _lens_renders(st, xml, seed=1)
+    renders = {label: (images[f"render {label}"], second[f"render {label}"])
+               for label in ("infinity", f"{st.near_focus:g} m")}
+    near, far = depth < 1.5 * st.near_focus, depth > FAR_M
+    field_range = (st.fov, math.degrees(math.atan(math.tan(math.radians(st.fov)) * st.h / st.w)))
+    new, rows = depth_rows(st, images["ideal"] * tangent_cos3(st.w, st.h, st.fov),
+                           depth, k, renders, near, far, field_range)
+    for row in rows.values():
+        row.update(near_m=1.5 * st.near_focus, far_m=FAR_M)
+    images.update(new)
+    return rows
 
 
 def _ideal_and_depth(st: _Steps) -> tuple[Path, np.ndarray, np.ndarray]:
@@ -243,17 +269,18 @@ def _convolved(st: _Steps, ideal: np.ndarray, grids: dict, far_grid, k: float) -
     return images
 
 
-def _lens_renders(st: _Steps, xml: Path) -> dict[str, np.ndarray]:
-    """(c) the scene through the lens camera, focused at infinity and at the near focus."""
+def _lens_renders(st: _Steps, xml: Path, seed: int = 0) -> dict[str, np.ndarray]:
+    """(c) the scene through the lens camera, focused at infinity and at the near focus (sampler `seed`)."""
     s = st.s
     lens_params = {key: v for key, v in st.params.items() if key != "fov"} | {"spp": str(s.spp_lens)}
     render_options = {"response": f"mono:{st.primary:g}", "pitch_um": st.pixel_um}
+    note = f", seed {seed}" if seed else ""
     return {
-        "render infinity": st.timed("(c) lens render, focus at infinity", _render, xml, st.variant, st.lens,
-                                    lens_params, s.spp_lens, st.log, **render_options)[..., 0],
+        "render infinity": st.timed(f"(c) lens render, focus at infinity{note}", _render, xml, st.variant, st.lens,
+                                    lens_params, s.spp_lens, st.log, seed, **render_options)[..., 0],
         f"render {st.near_focus:g} m": st.timed(
-            f"(c) lens render, focus at {st.near_focus:g} m", _render, xml, st.variant, st.lens, lens_params,
-            s.spp_lens, st.log, focus_distance=st.near_focus, **render_options)[..., 0],
+            f"(c) lens render, focus at {st.near_focus:g} m{note}", _render, xml, st.variant, st.lens, lens_params,
+            s.spp_lens, st.log, seed, focus_distance=st.near_focus, **render_options)[..., 0],
     }
 
 

@@ -1,0 +1,111 @@
+"""The depth-aware convolution (`convolution.depth`): planes at one depth against the single-distance
+grid, and a depth edge against the exact layered construction (the hidden background known)."""
+import math
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from solas_mi import SolasError
+from solas_mi.convolution import interp
+from solas_mi.convolution.depth import degrade_depth, layer_weights
+from solas_mi.convolution.kernels import layout
+from solas_mi.convolution.methods import degrade
+from solas_mi.optics.focus import focused
+from solas_mi.psf.depth import depth_grid
+from solas_mi.psf.spec import GridSpec
+
+W, H = 384, 288
+SPEC = dict(grid=(4, 4), wavelengths_nm=[531.0], size=64, pitch_um=4.0, method="geometric", rays=64)
+
+
+@pytest.fixture(scope="module")
+def grids(doublet):
+    """Focused at infinity (the file) and at 10 m, nodes at infinity, 20 and 10 m."""
+    spec = GridSpec(**SPEC, distances_m=(math.inf, 20.0, 10.0))
+    return {"inf": depth_grid(doublet, spec), "10 m": depth_grid(focused(doublet, 10e3), spec)}
+
+
+def scene():
+    y, x = np.mgrid[:H, :W]
+    far = 0.5 + 0.4 * np.sign(np.sin(x / 5.0) * np.sin(y / 7.0))  # everywhere, also behind the near plane
+    mask = (x < W // 2).astype(np.float64)
+    near = 0.2 + 0.1 * np.sin(y / 9.0)
+    return far, mask, near, np.abs(x - W // 2) < 30
+
+
+def test_hat_weights_in_inverse_distance():
+    nodes = np.array([0.0, 0.05, 0.1])
+    w, slab = layer_weights(np.array([0.0, 0.025, 0.05, 0.075, 0.2]), nodes)
+    assert np.allclose(w.sum(axis=0), 1)
+    assert np.allclose(w[:, 1], [0.5, 0.5, 0]) and np.allclose(w[:, 4], [0, 0, 1])
+    assert slab.tolist() == [0, 0, 1, 1, 2]
+
+
+@pytest.mark.parametrize("focus", ["inf", "10 m"])
+@pytest.mark.parametrize("node", [0, 1, 2])
+def test_a_plane_at_a_node_is_that_nodes_single_distance_result(grids, focus, node):
+    g = grids[focus]
+    img = scene()[0]
+    out = degrade_depth(img, np.full((H, W), g.distances_m[node]), g)
+    assert np.array_equal(out, degrade(img, g.layers[node], "interp"))
+
+
+def test_a_plane_between_nodes_is_the_psf_interpolated_in_inverse_distance(grids):
+    g = grids["inf"]
+    img = scene()[0]
+    out = degrade_depth(img, np.full((H, W), 1 / 0.075), g)  # halfway between 20 and 10 m in 1/d
+    half = 0.5 * degrade(img, g.layers[1], "interp") + 0.5 * degrade(img, g.layers[2], "interp")
+    assert np.allclose(out, half, atol=1e-6)
+
+
+def edge_errors(g) -> dict:
+    """RMS error near a depth edge (near plane at 10 m left, far textured plane at infinity) against the
+    layered construction with the hidden background known, per occlusion rule, relative to its RMS."""
+    far, mask, near, band = scene()
+    unit = replace(g.layers[2], meta={**g.layers[2].meta, "normalization": "peak"})
+    cover = np.clip(interp.convolve_channel(mask.astype(np.float32), unit, layout(unit, W, H), 0, "edge",
+                                            np.float32), 0, 1)
+    ref = degrade(far, g.layers[0], "interp") * (1 - cover) + degrade(mask * near, g.layers[2], "interp")
+    img, depth = far * (1 - mask) + near * mask, np.where(mask > 0, 10.0, np.inf)
+    rms = np.sqrt(np.mean(ref[band] ** 2))
+    return {o: float(np.sqrt(np.mean((degrade_depth(img, depth, g, occlusion=o) - ref)[band] ** 2)) / rms)
+            for o in ("filled", "layered", "none")}
+
+
+@pytest.mark.parametrize("focus", ["inf", "10 m"])
+def test_occlusion_at_a_depth_edge(grids, focus):
+    e = edge_errors(grids[focus])
+    print(focus, {k: f"{100 * v:.2f} %" for k, v in e.items()})
+    assert e["filled"] < 0.7 * min(e["layered"], e["none"])
+    assert e["none"] > 0.02  # the edge is a real test: without occlusion the error is large
+
+
+def test_bad_depth_maps_are_refused(grids):
+    img = scene()[0]
+    for bad, what in ((np.zeros((H, W)), "positive"), (np.full((H, W), np.nan), "positive"),
+                      (np.ones((H, W + 1)), "image's")):
+        with pytest.raises(SolasError, match=what):
+            degrade_depth(img, bad, grids["inf"])
+    with pytest.raises(SolasError, match="occlusion"):
+        degrade_depth(img, np.ones((H, W)), grids["inf"], occlusion="z")
+
+
+def test_degrade_command_with_a_depth_map(grids, tmp_path):
+    from solas_mi.cli import main
+    from solas_mi.imageio import image_channels, read_exr, read_image, write_exr
+
+    g = grids["inf"]
+    far, mask, near, _ = scene()
+    img, depth = far * (1 - mask) + near * mask, np.where(mask > 0, 10.0, np.inf)
+    g.write(str(tmp_path / "g.exr"))
+    write_exr(tmp_path / "img.exr", image_channels(img), {})
+    write_exr(tmp_path / "d.exr", {"Z": depth.astype(np.float32)}, {})
+    args = ["degrade", str(tmp_path / "img.exr"), "--psf-grid", str(tmp_path / "g.exr"), "-o", str(tmp_path / "o.exr")]
+    assert main(args + ["--depth", str(tmp_path / "d.exr")]) == 0
+    out = read_image(tmp_path / "o.exr")
+    want = degrade_depth(read_image(tmp_path / "img.exr"), depth, g)
+    assert np.allclose(out, want, atol=1e-6)
+    assert read_exr(tmp_path / "o.exr")[1]["occlusion"] == "filled"
+    assert main(args) == 2  # a grid over distance without a depth map
+    assert main(args + ["--depth", str(tmp_path / "d.exr"), "--method", "patch"]) == 2
