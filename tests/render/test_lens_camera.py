@@ -226,3 +226,42 @@ def test_a_scene_in_millimetres_shows_the_predicted_depth_of_field(mi, doublet):
     assert 2 * r > 10 * pitch  # a defocus, not the lens's own blur
     assert abs(measured / traced - 1) < 0.03, (measured, traced)
     assert abs(measured / disc - 1) < 0.15, (measured, disc)
+
+
+def test_wavelengths_of_a_pixel_are_stratified_where_the_wavefront_is_mitsubas(mi):
+    """`stratified`: in Mitsuba's wavefront (sample i = sample i mod n of pixel i div n) the k-th
+    sample of each pixel moves into the k-th of n strata; any other layout keeps the samples."""
+    sensor = mi.load_dict(_camera(mi, 4, 3, 40.0, response="srgb"))
+    n, rng = 8, np.random.default_rng(2)
+    i = np.arange(12 * n)
+    pixel = i // n
+    sample2 = mi.Point2f((pixel % 4 + rng.uniform(size=i.size)) / 4, (pixel // 4 + rng.uniform(size=i.size)) / 3)
+    u = rng.uniform(size=i.size)
+    out = np.array(sensor.stratified(mi.Float(u), sample2))
+    assert np.allclose(out, (i % n + u) / n, atol=1e-6)
+    shuffled = mi.Point2f(np.array(sample2.x)[::-1], np.array(sample2.y)[::-1])
+    assert np.allclose(np.array(sensor.stratified(mi.Float(u), shuffled)), u)
+
+
+def test_stratified_wavelengths_cut_the_colour_noise_without_bias(mi):
+    """A uniform orange sky through the lens at 16 spp: the colour noise (pixel RMS of each channel over
+    the channels' mean, against the 16-seed mean) with the wavelengths stratified per pixel at most
+    0.7 × that of independent ones (measured 0.10 ×), and the centre pixels' mean the sky's colour
+    (the lens lossless, its relative illumination 1 there): within 1 % (3 % for the noisier
+    independent wavelengths)."""
+    def renders(stratify: bool):
+        camera = _camera(mi, 16, 12, 40.0, response="srgb", stratify_wavelengths=stratify,
+                         film={"pixel_format": "rgb"})
+        scene = mi.load_dict({"type": "scene", "integrator": {"type": "path"}, "sensor": camera,
+                              "sky": {"type": "constant", "radiance": {"type": "rgb", "value": [0.8, 0.3, 0.1]}}})
+        return np.array([np.array(mi.render(scene, spp=16, seed=s)) for s in range(16)])
+
+    noise, centre = [], []
+    for stratify in (True, False):
+        images = renders(stratify)
+        mean = images.mean(axis=0)
+        noise.append(np.sqrt(np.mean((images - mean) ** 2)) / mean.mean())
+        centre.append(mean[4:8, 6:10].mean(axis=(0, 1)))
+    assert noise[0] < 0.7 * noise[1], noise
+    assert centre[0] == pytest.approx([0.8, 0.3, 0.1], rel=0.01)  # the sky's colour: no bias
+    assert centre[1] == pytest.approx([0.8, 0.3, 0.1], rel=0.03)  # independent: noisier
