@@ -73,6 +73,7 @@ from solas_mi.optics.focus import focused
 from solas_mi.optics.lens import Lens
 from solas_mi.plugins.lens_film import LensFilm, positive
 from solas_mi.plugins.pupil_sampling import PupilSampler
+from solas_mi.plugins.scene_probe import calling_render
 from solas_mi.plugins.wavelength_sampling import lanes
 
 FRESNEL = ("off", "transmit")
@@ -137,8 +138,8 @@ class LensCamera(LensFilm):
     def stratified(self, sample1, sample2):
         """The wavelength sample of the k-th of a pixel's n samples moved into the k-th of n strata,
         (k + sample1)/n, where the wavefront is Mitsuba's (`SamplingIntegrator`: sample i of the
-        wavefront is sample i mod n of pixel i div n, row-major over the crop window), checked on the
-        film samples themselves; else `sample1` unchanged (scalar variants, a symbolic scope, any
+        wavefront is sample i mod n of pixel i div n, row-major over the crop window;
+        `mitsubas_wavefront`); else `sample1` unchanged (scalar variants, a symbolic scope, any
         other layout, `stratify_wavelengths` false). Either way each wavelength sample is uniform: an
         unbiased estimate."""
         pixels = self.width * self.height
@@ -149,11 +150,23 @@ class LensCamera(LensFilm):
         count = dr.opaque(mi.UInt32, n)  # one kernel for every spp
         i = dr.arange(mi.UInt32, n * pixels)
         pixel = i // count
-        col, row = mi.Float(pixel % self.width), mi.Float(pixel // self.width)
-        x, y = sample2.x * self.width, sample2.y * self.height
-        if not dr.all((x >= col - 1e-3) & (x <= col + 1.001) & (y >= row - 1e-3) & (y <= row + 1.001)):
+        if not self.mitsubas_wavefront(pixel, sample2):
             return sample1
         return (mi.Float(i - pixel * count) + dr.clip(sample1, 0.0, 1.0 - 2 ** -24)) / mi.Float(count)
+
+    def mitsubas_wavefront(self, pixel, sample2) -> bool:
+        """Whether the film samples `sample2` lie in the pixels `pixel` (row-major over the crop window):
+        taken as true for Mitsuba's own integrators (C++, and Python ones of `mitsuba.ad`: all lay out
+        the wavefront so, `sample_rays`) on a film without a border, else checked on the values (an
+        evaluation, which splits the render's kernel)."""
+        if self.film().sample_border():
+            return False
+        _, integrator = calling_render()
+        if integrator is not None and type(integrator).__module__.startswith("mitsuba"):
+            return True
+        col, row = mi.Float(pixel % self.width), mi.Float(pixel // self.width)
+        x, y = sample2.x * self.width, sample2.y * self.height
+        return bool(dr.all((x >= col - 1e-3) & (x <= col + 1.001) & (y >= row - 1e-3) & (y <= row + 1.001)))
 
     def sample_ray(self, time, sample1, sample2, sample3, active=True):
         """The ray leaving surface 1 toward the scene (world units) and its weight (module docstring)."""
