@@ -10,6 +10,7 @@ of direction) or on a plane at a finite distance.
 | `distance_mm` | float  | mm      | 0 (at infinity) | the image on the plane z = −distance_mm instead         |
 | `mapping`     | string | —       | "rectilinear"   | projection of the image at infinity (below)             |
 | `scale`       | float  | —       | 1.0             | radiance multiplier                                     |
+| `spectrum`    | string | —       | "srgb"          | RGB as a spectrum: "srgb" (Mitsuba's) or "bands" (below)|
 | `wavelength`  | float  | nm      | 587.5618        | the wavelength of the non-spectral (mono) variants      |
 
 `traverse` exposes `scale` (differentiable; in the JIT variants `mi.traverse` edits it without reloading
@@ -21,10 +22,20 @@ renders radiance 1 as irradiance 1 of the ideal camera). The image's width spans
 horizontally, square pixels in tangent space (`solas_mi.optics.camera`); a texel is constant over its
 square (nearest neighbour, the model the PSF-grid convolution uses). Outside the image "edge" repeats the border
 texels, "reflect" mirrors about the border, "zero" is black. At a finite distance the plane is
-centred on the axis and spans ±distance_mm·tan(fov_deg) across its width. RGB becomes a spectrum of
-three bands (`solas_mi.render.response.RGB_BANDS_NM`): blue below 500 nm, green to 590 nm, red above;
-each spectral lane takes the band of its own wavelength. A mono variant carries no wavelength: the
-band is that of `wavelength`, which solas-mi's scenes set to the camera response's one wavelength.
+centred on the axis and spans ±distance_mm·tan(fov_deg) across its width.
+
+`spectrum` "srgb" (the colour convention of every render path, README "Colour"): a texel of linear
+sRGB c emits what a Mitsuba emitter of `rgb` radiance c emits, Mitsuba's smooth spectrum of c
+(`mi.srgb_model_fetch` of c/s, s = 2·max(c), evaluated by the sigmoid of `mi.srgb_model_eval`, times
+s; W. Jakob, J. Hanika, "A Low-Dimensional Function Space for Efficient Spectral Upsampling",
+Computer Graphics Forum 38(2), 2019) times D65 of luminance 1 (`mi.cie_d65`): Mitsuba's `hdrfilm`,
+and the "srgb" response, develop it back to c. "bands": three bands
+(`solas_mi.render.response.RGB_BANDS_NM`): blue below 500 nm, green to 590 nm, red above, each the
+texel's channel: the model of the line responses ("lines", "mono:λ") and of the PSF-grid
+convolution, which sees channel R at the red line (solas-mi's scenes write "bands" for them).
+Each spectral lane takes the value at its own wavelength. A mono variant carries no wavelength:
+the value is that at `wavelength`, which solas-mi's scenes set to the camera response's one
+wavelength.
 
 Rays arriving here travel away from the lens (−z): a direction d has tangents (d_x/d_z, d_y/d_z),
 which is the field of light coming from there.
@@ -53,8 +64,10 @@ loop (`radiance`); in a stock render `eval` stops with a SolasError. There, put 
 `rectangle` with an `area` emitter whose `radiance` is a `bitmap` texture (`filter_type` "nearest";
 a linear EXR), `to_world` = scale(x = −distance_mm·tan(fov_deg), y = +that × height/width), then
 translate(z = −distance_mm): the mirrored x puts image column 0 at +x, where the lens images it on the
-left. `bitmap` turns RGB into Mitsuba's smooth spectra, not the three bands above, so only grey
-images render alike (within 0.4 % in tests/render/test_stock_integrators.py).
+left. `bitmap` turns RGB into Mitsuba's smooth spectra, as `spectrum` "srgb" does, but Mitsuba 3.9's
+`area` emitter does not multiply a bitmap by D65 (its `envmap` and `rgb` radiance do): such a
+rectangle renders the image × hdrfilm's flat-spectrum white (1.206, 0.949, 0.910) (and a bitmap clips
+values above 1), tests/render/test_stock_integrators.py.
 """
 from __future__ import annotations
 
@@ -67,12 +80,14 @@ import numpy as np
 from solas_mi.errors import SolasError
 from solas_mi.imageio import read_image
 from solas_mi.optics.camera import BOUNDARIES, MAPPINGS
+from solas_mi.plugins.rgb_spectrum import sigmoid, upsampled
 from solas_mi.plugins.scene_probe import calling_render
 from solas_mi.plugins.tables import lookup, table, zeros
 from solas_mi.plugins.wavelength_sampling import mono_wavelength
 from solas_mi.render.response import RGB_BANDS_NM
 
 SPECTRUM_NM = (mi.MI_CIE_MIN, mi.MI_CIE_MAX)  # light tracing samples wavelengths uniformly here
+SPECTRA = ("srgb", "bands")
 
 
 def half_width(mapping: str, fov_deg: float) -> float:
@@ -167,7 +182,14 @@ class ImageObject(mi.Emitter):
         if rgb.ndim != 3 or rgb.shape[-1] != 3:
             raise SolasError(f"image_object: image of shape {rgb.shape} must be H x W (grey) or H x W x 3 (RGB)")
         self.height, self.width = rgb.shape[:2]
-        self.texels = table(rgb)
+        self.spectrum = str(props.get("spectrum", "srgb"))
+        if self.spectrum not in SPECTRA:
+            raise SolasError(f"image_object spectrum {self.spectrum!r} must be one of {', '.join(SPECTRA)}")
+        if self.spectrum == "srgb":
+            coeff, scale = upsampled(rgb)
+            self.texels, self.texel_scale = table(coeff), table(scale)
+        else:
+            self.texels = table(rgb)
         self.scale = mi.Float(float(props.get("scale", 1.0)))
         self.tan_pitch = half_width(self.mapping, self.fov_deg) / (self.width / 2)  # image-plane units per texel
         weights = np.maximum(rgb, 0.0).sum(axis=-1).ravel()
@@ -202,9 +224,6 @@ class ImageObject(mi.Emitter):
             self.set_scene(scene)
         return self.bsphere
 
-    def _channel(self, lam) -> mi.UInt32:
-        """RGB channel of the band of wavelength `lam` (nm)."""
-        return mi.UInt32(dr.select(lam < RGB_BANDS_NM[0], 2, dr.select(lam < RGB_BANDS_NM[1], 1, 0)))
 
     def radiance(self, o: mi.Point3f, d: mi.Vector3f, wavelengths, active=True, footprint=None) -> mi.Spectrum:
         """Radiance toward the lens along the ray (o, d) that left the lens; one value in every lane.
@@ -218,11 +237,11 @@ class ImageObject(mi.Emitter):
             tx, ty = (o.x + t * d.x) / self.distance, (o.y + t * d.y) / self.distance
             tx, ty = -tx, -ty  # a point at +x on the plane sends light of field −x
         u, v = self._texel_uv(tx, ty)
-        channel = self._channel(wavelengths[0] if mi.is_spectral else self.wavelength)
+        lam = wavelengths[0] if mi.is_spectral else self.wavelength
         if self.mapping == "rectilinear":
             active = active & (d.z < 0)
         if footprint is None:
-            return mi.Spectrum(self._texel(dr.floor(u), dr.floor(v), channel, active))
+            return mi.Spectrum(self._texel(dr.floor(u), dr.floor(v), lam, active))
         hu, hv = 0.5 * footprint.x / self.tan_pitch, 0.5 * footprint.y / self.tan_pitch
         u0, v0 = dr.floor(u - hu), dr.floor(v - hv)
         total = mi.Float(0.0)
@@ -231,15 +250,21 @@ class ImageObject(mi.Emitter):
             for i in range(3):
                 wu = dr.maximum(dr.minimum(u0 + i + 1, u + hu) - dr.maximum(u0 + i, u - hu), 0.0)
                 w = wu * wv
-                total += w * self._texel(u0 + i, v0 + j, channel, active & (w > 0))
+                total += w * self._texel(u0 + i, v0 + j, lam, active & (w > 0))
         return mi.Spectrum(total / (4.0 * hu * hv))
 
-    def _texel(self, u: mi.Float, v: mi.Float, channel: mi.UInt32, active) -> mi.Float:
-        """Value of texel (column u, row v) (integral floats), folded by the boundary rule."""
+    def _texel(self, u: mi.Float, v: mi.Float, lam, active) -> mi.Float:
+        """Radiance at wavelength `lam` (nm) of texel (column u, row v) (integral floats), folded by the
+        boundary rule (`spectrum`: the module docstring)."""
         col, ok_c = _fold(mi.Int32(u), self.width, self.boundary)
         row, ok_r = _fold(mi.Int32(v), self.height, self.boundary)
-        index = (mi.UInt32(row) * self.width + mi.UInt32(col)) * 3 + channel
-        return lookup(self.texels, index, active & ok_c & ok_r) * self.scale
+        index, active = mi.UInt32(row) * self.width + mi.UInt32(col), active & ok_c & ok_r
+        if self.spectrum == "bands":
+            channel = dr.select(lam < RGB_BANDS_NM[0], 2, dr.select(lam < RGB_BANDS_NM[1], 1, 0))
+            return lookup(self.texels, index * 3 + mi.UInt32(channel), active) * self.scale
+        s = lookup(self.texel_scale, index, active)
+        c0, c1, c2 = (lookup(self.texels, index * 3 + k, active) for k in range(3))
+        return dr.select(s > 0, sigmoid(c0, c1, c2, lam) * s, 0.0) * mi.cie_d65(lam) * self.scale
 
     # ---- Mitsuba's Emitter interface (stock integrators), the object at infinity ----
 
@@ -254,12 +279,12 @@ class ImageObject(mi.Emitter):
         return (*self._texel_uv(a, b), covered)
 
     def _lanes(self, u, v, wavelengths, active) -> mi.Spectrum:
-        """Radiance of texel coordinates (u, v), each spectral lane in the band of its own wavelength."""
+        """Radiance of texel coordinates (u, v), each spectral lane at its own wavelength."""
         if not mi.is_spectral:
-            return mi.Spectrum(self._texel(dr.floor(u), dr.floor(v), self._channel(self.wavelength), active))
+            return mi.Spectrum(self._texel(dr.floor(u), dr.floor(v), self.wavelength, active))
         value = mi.Spectrum(0.0)
         for i in range(4):
-            value[i] = self._texel(dr.floor(u), dr.floor(v), self._channel(wavelengths[i]), active)
+            value[i] = self._texel(dr.floor(u), dr.floor(v), wavelengths[i], active)
         return value
 
     def _at_infinity(self) -> None:
@@ -354,7 +379,7 @@ class ImageObject(mi.Emitter):
     def to_string(self) -> str:
         where = "infinity" if math.isinf(self.distance) else f"{self.distance:g} mm"
         return (f"ImageObject[{self.width}x{self.height}, fov=+-{self.fov_deg:g} deg, {self.mapping}, at {where}, "
-                f"{self.boundary}]")
+                f"{self.boundary}, {self.spectrum}]")
 
 
 def register() -> None:

@@ -11,6 +11,7 @@ sensor; the scene sees only the rays that leave the lens's first surface.
 | `fresnel`        | string    | —           | "off"           | "transmit": weight by each refraction's unpolarised|
 |                  |           |             |                 | Fresnel transmittance; "off": lossless surfaces    |
 | `to_world`       | transform | world units | identity        | the camera's frame: looks along local +z, +y up    |
+| `stratify_wavelengths` | boolean | —     | true            | stratify the wavelengths of a pixel's samples      |
 | (film)           | film      | pixels      | hdrfilm 768×576 | its width and height: the sensor's columns, rows;  |
 |                  |           |             |                 | its crop window (`crop_offset_x`, …): those drawn  |
 | (sampler)        | sampler   | —           | independent, 4  | the samples per pixel                              |
@@ -30,7 +31,11 @@ an object that far in front of surface 1 is in focus (`solas_mi.optics.focus.foc
 image shift from the lens file's own object distance, whose image plane is the default).
 
 Each sample takes one wavelength from the camera response (`solas_mi.render.response`), carried in
-all four spectral lanes (with dispersion a path has one wavelength), a point in its pixel, and a
+all four spectral lanes (with dispersion a path has one wavelength), the wavelengths of a pixel's
+n samples stratified (one in each n-th of the response's distribution, `stratified`: Mitsuba's
+integrators give the k-th sample of every pixel its place k in the wavefront; with independent
+wavelengths the colour noise was 2–4× the perspective camera's, benchmarks/bench_lens_camera_noise.py),
+a point in its pixel, and a
 point inside the exit-pupil bound of that film position (`pupil_sampling.PupilSampler`, weight
 A·cos⁴θ/d² as pbrt-v4's RealisticCamera). The ray is traced backward through the lens (image side
 to object side) by the Float64 sequential tracer (`solas_mi.optics.tracer`, on the reversed lens of
@@ -68,6 +73,7 @@ from solas_mi.optics.focus import focused
 from solas_mi.optics.lens import Lens
 from solas_mi.plugins.lens_film import LensFilm, positive
 from solas_mi.plugins.pupil_sampling import PupilSampler
+from solas_mi.plugins.scene_probe import calling_render
 from solas_mi.plugins.wavelength_sampling import lanes
 
 FRESNEL = ("off", "transmit")
@@ -94,6 +100,7 @@ class LensCamera(LensFilm):
         super().__init__(props, "lens_camera", "srgb",
                          "an integrator that starts paths at the camera (path, volpath, aov, direct)")
         self.check_film()
+        self.stratify = bool(props.get("stratify_wavelengths", True))
         self.fresnel = str(props.get("fresnel", "off"))
         if self.fresnel not in FRESNEL:
             raise SolasError(f"lens_camera: fresnel {self.fresnel!r} must be one of {', '.join(FRESNEL)}")
@@ -128,9 +135,42 @@ class LensCamera(LensFilm):
             raise SolasError(f"lens_camera: focus_distance {distance:g} (world units of {self.world_unit_mm:g} "
                              f"mm): {exc}") from None
 
+    def stratified(self, sample1, sample2):
+        """The wavelength sample of the k-th of a pixel's n samples moved into the k-th of n strata,
+        (k + sample1)/n, where the wavefront is Mitsuba's (`SamplingIntegrator`: sample i of the
+        wavefront is sample i mod n of pixel i div n, row-major over the crop window;
+        `mitsubas_wavefront`); else `sample1` unchanged (scalar variants, a symbolic scope, any
+        other layout, `stratify_wavelengths` false). Either way each wavelength sample is uniform: an
+        unbiased estimate."""
+        pixels = self.width * self.height
+        n = dr.width(sample1) // pixels if dr.is_jit_v(mi.Float) and self.stratify else 0
+        if n < 2 or n * pixels != dr.width(sample1) or dr.width(sample2) != n * pixels or \
+                dr.flag(dr.JitFlag.SymbolicScope):
+            return sample1
+        count = dr.opaque(mi.UInt32, n)  # one kernel for every spp
+        i = dr.arange(mi.UInt32, n * pixels)
+        pixel = i // count
+        if not self.mitsubas_wavefront(pixel, sample2):
+            return sample1
+        return (mi.Float(i - pixel * count) + dr.clip(sample1, 0.0, 1.0 - 2 ** -24)) / mi.Float(count)
+
+    def mitsubas_wavefront(self, pixel, sample2) -> bool:
+        """Whether the film samples `sample2` lie in the pixels `pixel` (row-major over the crop window):
+        taken as true for Mitsuba's own integrators (C++, and Python ones of `mitsuba.ad`: all lay out
+        the wavefront so, `sample_rays`) on a film without a border, else checked on the values (an
+        evaluation, which splits the render's kernel)."""
+        if self.film().sample_border():
+            return False
+        _, integrator = calling_render()
+        if integrator is not None and type(integrator).__module__.startswith("mitsuba"):
+            return True
+        col, row = mi.Float(pixel % self.width), mi.Float(pixel // self.width)
+        x, y = sample2.x * self.width, sample2.y * self.height
+        return bool(dr.all((x >= col - 1e-3) & (x <= col + 1.001) & (y >= row - 1e-3) & (y <= row + 1.001)))
+
     def sample_ray(self, time, sample1, sample2, sample3, active=True):
         """The ray leaving surface 1 toward the scene (world units) and its weight (module docstring)."""
-        lam, index = self.sample_wavelength(sample1, active)
+        lam, index = self.sample_wavelength(self.stratified(sample1, sample2), active)
         inv_pdf = self.wavelengths.weight(index, active)
         # film point, lens frame (mm): row 0 at +y, column 0 at −x, the lens inverting the image
         film = self.film_point(sample2)

@@ -38,6 +38,7 @@ import mitsuba as mi
 from solas_mi.errors import SolasError
 from solas_mi.optics.lens import Lens
 from solas_mi.plugins.pupil_sampling import PupilSampler
+from solas_mi.plugins.scene_probe import calling_render, integrator_name
 from solas_mi.plugins.scene_files import load_lens, load_response
 from solas_mi.plugins.wavelength_sampling import WavelengthSampler, lanes
 
@@ -110,7 +111,12 @@ class LensFilm(mi.Sensor):
         return mi.RayDifferential3f(ray), weight
 
     def sample_direction(self, it, sample, active=True):
-        raise SolasError(f"{self.plugin}: light tracing cannot connect to a sensor behind a lens; use {self.instead}")
+        """Light tracing's connection to the camera: refused, naming the calling render's integrator."""
+        _, integrator = calling_render()
+        name = "light tracing" if integrator is None else f"integrator {integrator_name(integrator)!r}"
+        raise SolasError(f"{self.plugin}: {name} traces paths from the lights and must connect them to the camera "
+                         f"through the lens's glass, which no ray can do (the film has no direct view of the "
+                         f"scene); use {self.instead}")
 
     def pdf_direction(self, it, ds, active=True):
         return self.sample_direction(it, None, active)

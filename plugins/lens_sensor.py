@@ -28,10 +28,9 @@ weights and ignores the film's other settings. Mitsuba's own integrators develop
 with the sample weight of `sample_ray` = the pupil weight below × 1/p(λ) (`sample_wavelengths`: p is
 the response's density in nm⁻¹, or a line's probability): `hdrfilm` then converts a continuous
 response ("srgb", "table:") with Mitsuba's CIE 1931 tables over the response's range (srgb: 380–780
-nm) and without the response's white balance (a flat spectrum of radiance 1 gives Mitsuba's
-(1.206, 0.949, 0.910), not (1, 1, 1)), and `specfilm` with one sensitivity per line, zero at the
-other lines, returns each line's value for "lines" and "mono" (lines have no density: `hdrfilm`
-cannot integrate them).
+nm), as the "srgb" response does in the loop (README "Colour"), and `specfilm` with one
+sensitivity per line, zero at the other lines, returns each line's value for "lines" and "mono"
+(lines have no density: `hdrfilm` cannot integrate them).
 
 Integrators: the sensor sees the scene only through the lens, so Mitsuba's `path`, `volpath` and
 `aov` render it (and solas-mi's loop); others (`direct`, `ptracer`, …) stop with a SolasError naming

@@ -5,14 +5,18 @@ response_c(λ)/p(λ), so the expected pixel value of channel c is ∫ response_c
 
 - "lines": one wavelength per channel, the lens's design wavelengths (R = longest): the camera the
   PSF-grid convolution assumes (656/531/486 nm for the doublet); "lines:λ1,λ2,…" names them (nm).
-- "srgb": linear sRGB from the CIE 1931 2° colour-matching functions, balanced so a flat spectrum
-  of radiance 1 gives (1, 1, 1).
+- "srgb": linear sRGB (D65) exactly as Mitsuba's `hdrfilm` develops a spectrum: its CIE 1931
+  colour-matching functions over its Y normalisation, then its XYZ → sRGB matrix. The D65
+  illuminant of luminance 1 (`mi.cie_d65`, what an RGB emitter of (1, 1, 1) emits) gives (1, 1, 1);
+  a flat spectrum of radiance 1 gives (1.206, 0.949, 0.910). Sampled over 380–780 nm (the tails
+  to 360 and 830 nm, which the film counts, hold 0.1 % of a flat spectrum's X, Y and Z).
 - "mono:λ": one channel at a fixed wavelength λ (nm).
-- "table:FILE.csv": a camera's RGB sensitivities, rows "wavelength_nm, r, g, b", balanced like srgb.
+- "table:FILE.csv": a camera's RGB sensitivities, rows "wavelength_nm, r, g, b", white-balanced so
+  that D65 of luminance 1 gives (1, 1, 1), as under "srgb".
 
 References: the CIE 1931 2° standard observer's colour-matching functions (CIE 015:2018,
-"Colorimetry", 4th ed.) and the sRGB primaries (IEC 61966-2-1:1999), both as tabulated by
-colour-science (`colour.MSDS_CMFS`, `colour.models.RGB_COLOURSPACE_sRGB`).
+"Colorimetry", 4th ed.), the D65 illuminant and the sRGB primaries (IEC 61966-2-1:1999), as
+tabulated by Mitsuba 3 (`mi.cie1931_xyz`, `mi.cie_d65`, `mi.xyz_to_srgb`), which its films use.
 """
 from __future__ import annotations
 
@@ -83,16 +87,34 @@ def mono(wavelength_nm: float) -> Response:
     return Response(f"mono:{wavelength_nm:g}", ("Y",), w, w, np.ones(1), np.ones((1, 1)))
 
 
-def _balanced(name: str, lam: np.ndarray, rgb: np.ndarray) -> Response:
-    """Tabulated sensitivities at 1 nm steps → response with p ∝ Σ|response| and unit white balance."""
+def _mitsuba():
+    """Mitsuba's scalar RGB module: its colour tables without choosing the process's variant."""
+    from ..llvm import select_libllvm
+
+    select_libllvm()
+    import mitsuba
+
+    return mitsuba.scalar_rgb
+
+
+def _d65(lam: np.ndarray) -> np.ndarray:
+    """Mitsuba's D65 illuminant of luminance 1 at `lam` (nm; 0 outside its 360–830 nm)."""
+    m = _mitsuba()
+    return np.array([m.cie_d65(float(x)) for x in lam])
+
+
+def _tabulated(name: str, lam: np.ndarray, rgb: np.ndarray, balance: bool) -> Response:
+    """Tabulated sensitivities (1 nm steps) → response with p ∝ Σ|response|; with `balance`, scaled so
+    that D65 of luminance 1 gives (1, 1, 1)."""
     step = np.diff(lam)
     if not (np.all(step > 0)):
         raise SolasError(f"{name}: wavelengths must increase")
     centre = 0.5 * (rgb[1:] + rgb[:-1])
-    white = (centre * step[:, None]).sum(axis=0)
-    if np.any(white <= 0):
-        raise SolasError(f"{name}: a channel has no positive response (flat-spectrum white {white.tolist()})")
-    centre = centre / white
+    if balance:
+        white = (centre * (0.5 * (_d65(lam[1:]) + _d65(lam[:-1])) * step)[:, None]).sum(axis=0)
+        if np.any(white <= 0):
+            raise SolasError(f"{name}: a channel has no positive response (D65 white {white.tolist()})")
+        centre = centre / white
     density = np.abs(centre).sum(axis=1)
     prob = density * step
     prob /= prob.sum()
@@ -102,15 +124,12 @@ def _balanced(name: str, lam: np.ndarray, rgb: np.ndarray) -> Response:
 
 
 def srgb() -> Response:
-    """Linear sRGB from the CIE 1931 2° colour-matching functions over 380–780 nm, white-balanced."""
-    import colour
-
-    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
-    lam = np.asarray(cmfs.wavelengths, dtype=np.float64)
-    keep = (lam >= SRGB_RANGE_NM[0]) & (lam <= SRGB_RANGE_NM[1])
-    xyz = np.asarray(cmfs.values, dtype=np.float64)[keep]
-    rgb = xyz @ np.asarray(colour.models.RGB_COLOURSPACE_sRGB.matrix_XYZ_to_RGB).T
-    return _balanced("srgb", lam[keep], rgb)
+    """Linear sRGB as Mitsuba's hdrfilm develops it (module docstring), over 380–780 nm at 1 nm."""
+    m = _mitsuba()
+    lam = np.arange(SRGB_RANGE_NM[0], SRGB_RANGE_NM[1] + 0.5)
+    xyz = np.array([list(m.cie1931_xyz(float(x))) for x in lam]) * m.MI_CIE_Y_NORMALIZATION
+    to_srgb = np.array([list(m.xyz_to_srgb(m.ScalarColor3f(*e))) for e in np.eye(3)]).T
+    return _tabulated("srgb", lam, xyz @ to_srgb.T, balance=False)
 
 
 def _numbers(line: str) -> bool:
@@ -123,7 +142,7 @@ def _numbers(line: str) -> bool:
 
 def table(path: str) -> Response:
     """A camera's RGB sensitivities from a CSV file of rows "wavelength_nm, r, g, b" (one header line
-    of column names and "#" comment lines allowed), white-balanced."""
+    of column names and "#" comment lines allowed), white-balanced for D65."""
     try:
         with open(path, encoding="utf-8") as f:
             rows = [line for line in f if line.strip() and not line.lstrip().startswith("#")]
@@ -143,7 +162,7 @@ def table(path: str) -> Response:
         raise SolasError(f"camera response table {path!r}: data row {row} holds a value that is not a finite number")
     if np.any(data[:, 1:] < 0):
         raise SolasError(f"camera response table {path!r}: sensitivities must be >= 0")
-    return _balanced(f"table:{Path(path).name}", data[:, 0], data[:, 1:])
+    return _tabulated(f"table:{Path(path).name}", data[:, 0], data[:, 1:], balance=True)
 
 
 def _bad(text: str, why: str):
@@ -180,6 +199,13 @@ def one_wavelength(text: str, lens_wavelengths_nm) -> float | None:
     reading a table's file or the colour-matching functions: only "mono" and "lines" can have one."""
     kind = str(text).partition(":")[0].strip().lower()
     return parse(text, lens_wavelengths_nm).single_wavelength if kind in ("mono", "lines") else None
+
+
+def object_spectrum(text: str) -> str:
+    """The `image_object` spectrum (plugins/image_object.py) for the response named `text`: "bands"
+    for the line responses (lines, mono), whose channel c sees the image's channel c as the PSF-grid
+    convolution does; "srgb" (Mitsuba's smooth spectra, the colour convention) for the rest."""
+    return "bands" if str(text).partition(":")[0].strip().lower() in ("lines", "mono") else "srgb"
 
 
 def check_lens(response: Response, lens) -> None:

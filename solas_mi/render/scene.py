@@ -212,6 +212,7 @@ def _defaults_xml(camera: Camera, spec: RenderSpec, image: str, max_depth: int, 
     <default name="height" value="{camera.height}"/>
     <default name="pitch_um" value="{camera.pitch_um!r}"/>
     <default name="response" value="{xml_attr(spec.response)}"/>{wavelength_default}
+    <default name="spectrum" value="{responses.object_spectrum(spec.response)}"/>  <!-- the image's RGB as a spectrum -->
     <default name="image" value="{xml_attr(image)}"/>
     <default name="fov_deg" value="{camera.fov_deg!r}"/>
     <default name="boundary" value="{spec.boundary}"/>
@@ -261,7 +262,8 @@ def scene_xml(lens_file: str, parts: list[Part], camera: Camera, image: str, spe
         <string name="filename" value="$image"/>
         <float name="fov_deg" value="$fov_deg"/>
         <string name="boundary" value="$boundary"/>
-        <string name="mapping" value="$mapping"/>{mono and chr(10) + 8 * ' ' + mono}
+        <string name="mapping" value="$mapping"/>
+        <string name="spectrum" value="$spectrum"/>{mono and chr(10) + 8 * ' ' + mono}
     </emitter>
 
     <bsdf type="diffuse" id="absorber">

@@ -33,7 +33,9 @@ def test_sellmeier_dielectric_defaults(plugins):
 def test_image_object_defaults(plugins):
     emitter = plugins["image_object"]
     assert emitter.fov_deg == 2.0 and emitter.boundary == "edge" and math.isinf(emitter.distance)
-    assert (emitter.width, emitter.height) == (4, 2) and np.allclose(np.asarray(emitter.texels), 0.5)  # scale 1
+    # grey 0.5 as Mitsuba upsamples it: the flat spectrum 0.5 (coefficients 0, 0, 0 of 0.5 × s, s = 1); scale 1
+    assert (emitter.width, emitter.height) == (4, 2) and emitter.spectrum == "srgb"
+    assert np.allclose(np.asarray(emitter.texel_scale), 1.0) and np.allclose(np.asarray(emitter.texels), 0.0)
 
 
 def test_plugins_expose_their_documented_parameters(mi, plugins):

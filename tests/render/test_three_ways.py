@@ -44,7 +44,8 @@ def test_lens_camera_sees_the_image_scene_as_the_loop_does(mi, doublet, tmp_path
         "type": "scene", "integrator": {"type": "path", "max_depth": 2},
         "sensor": {"type": "lens_camera", "pitch_um": cam.pitch_um, "response": "mono:531",
                    "to_world": looking_back(mi), "film": film(64, 48)},
-        "object": {"type": "image_object", "filename": str(tmp_path / "image.exr"), "fov_deg": cam.fov_deg}})
+        "object": {"type": "image_object", "filename": str(tmp_path / "image.exr"), "fov_deg": cam.fov_deg,
+                   "spectrum": "bands"}})  # the line responses' object, as render_image writes it for mono:531
     seen = np.array(mi.render(scene, spp=256, seed=3))[::-1, ::-1, 0] * units(doublet, cam.focal_mm)
     reference = loop.image[..., 0]
     assert seen.mean() == pytest.approx(reference.mean(), rel=3e-3)
