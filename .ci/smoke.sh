@@ -36,7 +36,7 @@ assert (scenes / "lenses" / "solas_doublet.toml").is_file(), scenes
 PY
 "$S" --version | grep -qx "solas-mi $("$PYI" -c 'from importlib.metadata import version; print(version("solas-mi"))')"
 step "lens list / lens info"
-"$S" lens list | grep -q "solas-doublet"
+"$S" lens list > list.txt && grep -q "solas-doublet" list.txt  # no pipe: grep -q closing it early is SIGPIPE
 "$S" lens info solas-doublet --json > info.json
 step "psf, psf-grid"
 "$S" psf solas-doublet --field-deg 0,2 --wavelengths-nm 531 --pitch-um 0.5 -o psf.exr
