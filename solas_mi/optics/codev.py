@@ -4,7 +4,8 @@ registered as the `.seq` entry of `formats.READERS`. The rotationally symmetric 
 - Commands one per line or separated by `;`; `!` starts a comment; quoted strings ('…' or "…") are one
   token. Keywords are case-insensitive.
 - Surfaces: SO (the object: radius, thickness = object distance, ≥ 1e10 is at infinity, glass), S and
-  STO (radius or curvature, thickness, glass; STO is the stop), SI (the image). Per surface after it:
+  STO (radius or curvature, thickness, glass; STO is the stop), SI (the image); STO alone marks the
+  surface before it, STO Sn surface n. Per surface after it:
   RDY (radius), CUY (curvature), THI, GLA, CIR (the clear semi-aperture; on SI the image's), STO (this
   surface is the stop), SLB (its label), SPH (spherical: no aspheric terms), CON or ASP with K (conic)
   and A, B, C, … J (the r⁴, r⁶, … r²⁰ coefficients), PIM (the thickness that puts the image plane at
@@ -133,6 +134,7 @@ class _Reader:
         self.where = where
         self.system: dict[str, list[str]] = {}
         self.rows: list[dict] = []  # SO, the surfaces, SI: raw values in lens units
+        self.stop_at: int | None = None  # STO Sn: the stop is surface n
         self.radius_mode = False  # CODE V's default: S lines give curvatures unless RDM says radii
 
     def ident(self, line: int) -> str:
@@ -154,7 +156,9 @@ class _Reader:
 
     def command(self, key: str, args: list[str], line: int) -> None:
         ident = self.ident(line)
-        if key in ("SO", "S", "STO", "SI") and (key != "STO" or args or not self.rows):
+        if key == "STO" and args and re.fullmatch(r"[Ss]\d+", args[0]):
+            self.stop_at = int(args[0][1:])
+        elif key in ("SO", "S", "STO", "SI") and (key != "STO" or args or not self.rows):
             self.surface(key, args, ident)
         elif key in ("RDM", "CUM"):
             self.radius_mode = key == "RDM" and (not args or args[0].upper() not in ("N", "NO"))
@@ -219,6 +223,11 @@ def read_spec(text: str, where: str) -> dict:
     reader = _Reader(where)
     reader.read(text)
     system, rows = reader.system, reader.rows
+    if reader.stop_at is not None:
+        if not 1 <= reader.stop_at < len(rows) - 1:
+            raise SolasError(f"{where}: STO S{reader.stop_at}: the lens has surfaces S1 to S{len(rows) - 2}")
+        for k, row in enumerate(rows):
+            row["stop"] = k == reader.stop_at
     if len(rows) < 3 or rows[0]["kind"] != "SO" or rows[-1]["kind"] != "SI":
         raise SolasError(f"{where}: a lens needs SO (the object), at least one surface (S or STO) and SI "
                          f"(the image), in that order; got {' '.join(r['kind'] for r in rows) or 'no surfaces'}")

@@ -87,6 +87,12 @@ def test_doublet_is_the_shipped_doublet(tmp_path):
     assert [s.diameter for s in lens.surfaces] == [s.diameter for s in toml.surfaces]
     assert lens.surfaces[0].label == "Surface 1"
     same_lens(lens, toml, [0.0, 1.0, 2.0])
+    # the stop marked on the line after its surface, or named by number: the same lens
+    for mark in ("S 0.0 39.496\n  STO", "S 0.0 39.496\nSTO S4"):
+        other = load(tmp_path, DOUBLET.replace("STO 0.0 39.496", mark), "other.seq")
+        same_lens(other, toml, [0.0, 2.0])
+    with pytest.raises(SolasError, match="STO S7: the lens has surfaces S1 to S4"):
+        load(tmp_path, DOUBLET.replace("STO 0.0 39.496", "S 0.0 39.496\nSTO S7"))
 
 
 def test_doublet_against_a_hand_paraxial_trace(tmp_path):
