@@ -46,16 +46,15 @@ APERTURES = {"EPD": "epd", "FNO": "fnum", "NAO": "na"}
 IGNORED = frozenset("LEN GO END INI WTW WTF VUY VLY VUX VLX DOR CCY CCX THC GLC".split())
 SYSTEM = ("TIT", "TITLE", "DIM", "WL", "REF", "XAN", "XOB", "XIM", "XRI", *FIELDS, *APERTURES)
 DECENTRES = ("XDE", "YDE", "ZDE", "ADE", "BDE", "CDE")
-REFUSED = {**dict.fromkeys(("XDE", "YDE", "ZDE", "ADE", "BDE", "CDE", "DAR", "BEN", "REV", "RET", "DEC"),
+REFUSED = {**dict.fromkeys(("XDE", "YDE", "ZDE", "ADE", "BDE", "CDE", "DAR", "BEN", "REV", "RET"),
                            "decentred or tilted surfaces"),
            "REFL": "mirrors", "DOE": "diffractive surfaces", "HOE": "holographic surfaces",
-           "HCO": "holographic surfaces", "SPS": "special surface shapes", "TOR": "toric surfaces",
+           "HCO": "holographic surfaces", "SPS": "special surface shapes",
            "YTO": "toric surfaces", "XTO": "toric surfaces", "RDX": "anamorphic surfaces (an x radius)",
            "CUX": "anamorphic surfaces (an x curvature)", "REX": "rectangular apertures",
            "REY": "rectangular apertures", "ELX": "elliptical apertures", "ELY": "elliptical apertures",
            "OBS": "obscurations", "ZOO": "zoom positions", "PRV": "private glass catalogues",
-           "NA": "an image-space NA aperture (use EPD, FNO or NAO)", "TEL": "telecentric object space",
-           "INF": "afocal systems", "GRT": "gratings", "GRO": "gratings", "GRS": "gratings"}
+           "NA": "image-space NA apertures (use EPD, FNO or NAO)", "TEL": "telecentric object spaces"}
 _MODEL = re.compile(r"^(\d*\.?\d+):(\d*\.?\d+)$")
 _CODE = re.compile(r"^(\d{6})\.(\d{2,6})$")
 
