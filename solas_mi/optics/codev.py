@@ -34,6 +34,7 @@ from ..errors import SolasError
 from . import glass as glass_mod
 from . import zemax_solves
 from .formats import READERS
+from .formats import floats as _numbers
 from .lens import Lens
 from .paraxial import paraxial
 from .zemax import GCAT_VENDORS
@@ -80,16 +81,6 @@ def _commands(text: str):
             tokens = []
     if tokens:
         yield number, tokens
-
-
-def _numbers(tokens: list[str], where: str) -> list[float]:
-    try:
-        values = [float(t) for t in tokens]
-    except ValueError:
-        raise SolasError(f"{where}: expected numbers, got {' '.join(tokens)!r}") from None
-    if not all(math.isfinite(v) for v in values):
-        raise SolasError(f"{where}: {' '.join(tokens)!r} must be finite numbers")
-    return values
 
 
 def _unquote(token: str) -> str:
