@@ -4,6 +4,9 @@ are decoded. Our TOML is read by `Lens.load` itself.
 """
 from __future__ import annotations
 
+import math
+
+from ..errors import SolasError
 from . import lens_toml, pbrt_dat
 
 # Lens file formats, in the order messages list them
@@ -29,6 +32,17 @@ def decode_text(data: bytes) -> str:
         return data.decode("utf-8-sig")
     except UnicodeDecodeError:
         return data.decode("latin-1")
+
+
+def floats(tokens: list[str], where: str) -> list[float]:
+    """The numbers of a line's tokens (other programs' lens files), finite; else SolasError naming `where`."""
+    try:
+        values = [float(t) for t in tokens]
+    except ValueError:
+        raise SolasError(f"{where}: expected numbers, got {' '.join(tokens)!r}") from None
+    if not all(math.isfinite(v) for v in values):
+        raise SolasError(f"{where}: {' '.join(tokens)!r} must be finite numbers")
+    return values
 
 
 def listed(formats) -> str:

@@ -37,6 +37,7 @@ from ..errors import SolasError
 from . import glass as glass_mod
 from . import zemax_solves
 from .formats import READERS, WRITERS
+from .formats import floats as _floats
 
 UNITS = {"MM": 1.0, "CM": 10.0, "IN": 25.4, "METER": 1000.0, "M": 1000.0}
 SURFACE_TYPES = ("STANDARD", "EVENASPH", "ODDASPH", "COORDBRK")
@@ -50,16 +51,6 @@ _CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029]")
 def one_line(text: str) -> str:
     """`text` with every line break and control character made a space: what a .zmx line may hold."""
     return _CONTROL.sub(" ", text)
-
-
-def _floats(tokens: list[str], where: str) -> list[float]:
-    try:
-        values = [float(t) for t in tokens]
-    except ValueError:
-        raise SolasError(f"{where}: expected numbers, got {' '.join(tokens)!r}") from None
-    if not all(math.isfinite(v) for v in values):
-        raise SolasError(f"{where}: {' '.join(tokens)!r} must be finite numbers")
-    return values
 
 
 def _blocks(text: str, where: str) -> tuple[dict, list[dict]]:

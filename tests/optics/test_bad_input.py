@@ -22,14 +22,14 @@ def test_shipped_lenses_are_the_shipped_folder():
 @pytest.mark.parametrize("value", [None, 5, [], 1.5, {"lens": "solas-doublet"}, b"solas-doublet"])
 def test_a_lens_is_a_name_or_a_path(value):
     with pytest.raises(SolasError, match=r"must be a shipped lens name \(.*solas-doublet.*\) or a path to a lens file "
-                                         r"\(\.toml, \.zmx, \.dat\)") as err:
+                                         r"\(\.toml, \.zmx, \.seq, \.dat\)") as err:
         Lens.load(value)
     assert repr(value) in str(err.value)
 
 
 @pytest.mark.parametrize("given, message", [
-    ("/etc/passwd", "lens file '/etc/passwd' has no lens extension; allowed: .toml, .zmx, .dat"),
-    ("{tmp}/lens.txt", "has unknown extension '.txt'; allowed: .toml, .zmx, .dat"),
+    ("/etc/passwd", "lens file '/etc/passwd' has no lens extension; allowed: .toml, .zmx, .seq, .dat"),
+    ("{tmp}/lens.txt", "has unknown extension '.txt'; allowed: .toml, .zmx, .seq, .dat"),
     ("{tmp}/folder.toml", "is a folder, not a lens file"),
     ("{tmp}/missing.zmx", "missing.zmx' does not exist"),
     ("sub/solas-doublet", "has no lens extension"),  # a path, even one that ends in a shipped name
@@ -84,7 +84,7 @@ def test_focused_takes_numpy_distances(doublet):
 
 
 @pytest.mark.parametrize("argv, message", [
-    (["lens", "info", "/etc/passwd"], "lens file '/etc/passwd' has no lens extension; allowed: .toml, .zmx, .dat"),
+    (["lens", "info", "/etc/passwd"], "lens file '/etc/passwd' has no lens extension; allowed: .toml, .zmx, .seq, .dat"),
     (["lens", "info", "no-such-lens"], "shipped lenses: cooke-triplet, "),
     (["lens", "info", "{tmp}/folder.toml"], "is a folder, not a lens file"),
     (["lens", "info", "solas-doublet", "--fields", "0,nan"], "must be a list of y field angles in degrees"),

@@ -1,0 +1,322 @@
+"""CODE V sequence files (.seq, text): read into our lens-file dictionary (what `Lens.from_dict` takes),
+registered as the `.seq` entry of `formats.READERS`. The rotationally symmetric refracting subset:
+
+- Commands one per line or separated by `;`; `!` starts a comment; quoted strings ('…' or "…") are one
+  token. Keywords are case-insensitive.
+- Surfaces: SO (the object: radius, thickness = object distance, ≥ 1e10 is at infinity, glass), S and
+  STO (radius or curvature, thickness, glass; STO is the stop), SI (the image); STO alone marks the
+  surface before it, STO Sn surface n. Per surface after it:
+  RDY (radius), CUY (curvature), THI, GLA, CIR (the clear semi-aperture; on SI the image's), STO (this
+  surface is the stop), SLB (its label), SPH (spherical: no aspheric terms), CON or ASP with K (conic)
+  and A, B, C, … J (the r⁴, r⁶, … r²⁰ coefficients), PIM (the thickness that puts the image plane at
+  the paraxial image). RDM (or RDM Y) / RDM N or CUM: the S lines give radii or curvatures (CODE V's
+default without RDM: curvatures).
+- Glass: catalogue names as CODE V writes them, NAME_VENDOR (SCHOTT, OHARA, HOYA, CDGM, SUMITA, HIKARI
+  or NIKON; hyphens may be left out: NBK7_SCHOTT is N-BK7) or a bare name; model glass "n_d:V_d" or the
+  six-digit code "nnnnnn.vvvvvv" (n_d = 1.nnnnnn, V_d = vv.vvvv); the object space's on SO.
+- System: TIT (the name), DIM M / C / I (mm, cm, inches), WL (nm) and REF (the reference one), the
+  system aperture EPD (entrance-pupil diameter), FNO (the paraxial F/#, EFL / EPD: distant objects
+only, CODE V's working F/# of a near object is refused), NAO (object-space
+  NA), none: the stop's CIR; fields YAN/XAN (degrees), YOB/XOB (object heights), YIM/XIM (paraxial
+  image heights) or YRI/XRI (real image heights), solved as Zemax's are (`zemax_solves`); surfaces
+  without CIR get the automatic semi-diameter.
+Weights, vignetting factors, optimisation codes and view settings are read past (IGNORED). What
+cannot be represented is refused naming the surface and the feature: decentres and tilts, mirrors,
+diffractive, holographic, toric and anamorphic surfaces, rectangular or elliptical apertures,
+obscurations, zoom positions, private catalogues; and any command not listed here.
+"""
+from __future__ import annotations
+
+import math
+import re
+
+from ..errors import SolasError
+from . import glass as glass_mod
+from . import zemax_solves
+from .formats import READERS
+from .formats import floats as _numbers
+from .lens import Lens
+from .paraxial import paraxial
+from .zemax import GCAT_VENDORS
+
+UNITS = {"M": 1.0, "C": 10.0, "I": 25.4}
+INFINITE_OBJECT = 1e10  # an object distance at least this (in lens units) is at infinity, as CODE V takes it
+ASPHERIC = "ABCDEFGHJ"  # the coefficients of r⁴, r⁶, … r²⁰
+FIELDS = {"YAN": "angle", "YOB": "object height", "YIM": "paraxial image height", "YRI": "real image height"}
+APERTURES = {"EPD": "epd", "FNO": "fnum", "NAO": "na"}
+IGNORED = frozenset("LEN GO END INI WTW WTF VUY VLY VUX VLX DOR CCY CCX THC GLC".split())
+SYSTEM = ("TIT", "TITLE", "DIM", "WL", "REF", "XAN", "XOB", "XIM", "XRI", *FIELDS, *APERTURES)
+DECENTRES = ("XDE", "YDE", "ZDE", "ADE", "BDE", "CDE")
+REFUSED = {**dict.fromkeys(("XDE", "YDE", "ZDE", "ADE", "BDE", "CDE", "DAR", "BEN", "REV", "RET"),
+                           "decentred or tilted surfaces"),
+           "REFL": "mirrors", "DOE": "diffractive surfaces", "HOE": "holographic surfaces",
+           "HCO": "holographic surfaces", "SPS": "special surface shapes",
+           "YTO": "toric surfaces", "XTO": "toric surfaces", "RDX": "anamorphic surfaces (an x radius)",
+           "CUX": "anamorphic surfaces (an x curvature)", "REX": "rectangular apertures",
+           "REY": "rectangular apertures", "ELX": "elliptical apertures", "ELY": "elliptical apertures",
+           "OBS": "obscurations", "ZOO": "zoom positions", "PRV": "private glass catalogues",
+           "NA": "image-space NA apertures (use EPD, FNO or NAO)", "TEL": "telecentric object spaces"}
+_MODEL = re.compile(r"^(\d*\.?\d+):(\d*\.?\d+)$")
+_CODE = re.compile(r"^(\d{6})\.(\d{2,6})$")
+
+
+def _commands(text: str):
+    """(line number, [tokens]) of each command: `;` separates, `!` comments, quotes group, a line ending
+    in `&` goes on on the next."""
+    token = re.compile(r"'[^']*'|\"[^\"]*\"|;|!|&|[^\s;!&'\"]+")
+    tokens: list[str] = []
+    for number, raw in enumerate(text.splitlines(), start=1):
+        found = token.findall(raw)
+        found = found[:found.index("!")] if "!" in found else found
+        going_on = found[-1:] == ["&"]
+        for t in found[:-1] if going_on else found:
+            if t == ";":
+                if tokens:
+                    yield number, tokens
+                tokens = []
+            elif t != "&":
+                tokens.append(t)
+        if tokens and not going_on:
+            yield number, tokens
+            tokens = []
+    if tokens:
+        yield number, tokens
+
+
+def _unquote(token: str) -> str:
+    return token[1:-1] if token[:1] in "'\"" and token[-1:] == token[:1] and len(token) > 1 else token
+
+
+def material(token: str, ident: str) -> str:
+    """Our material name for a CODE V glass: NAME_VENDOR, a bare name, "n_d:V_d" or "nnnnnn.vvvvvv"."""
+    name = _unquote(token).strip()
+    model, code = _MODEL.match(name), _CODE.match(name)
+    if model or code:
+        nd, vd = ((float(model[1]), float(model[2])) if model
+                  else (1.0 + int(code[1]) / 1e6, float(code[2][:2] + "." + code[2][2:])))
+        if not 1.0 < nd < 3.0 or (vd and not 5.0 < vd < 150.0):
+            raise SolasError(f"{ident}: model glass {name!r}: n_d {nd:g} must lie in (1, 3) and V_d {vd:g} in "
+                             "(5, 150) (or 0: no dispersion)")
+        return f"model:{nd!r}" if vd == 0 else f"model:{nd!r}/{vd!r}"
+    if name.upper() == "REFL":
+        raise SolasError(f"{ident}: GLA REFL: mirrors are not supported (refracting surfaces only)")
+    bare, _, vendor = name.rpartition("_")
+    if not bare or vendor.upper() not in GCAT_VENDORS:
+        return name or "AIR"
+    ours = GCAT_VENDORS[vendor.upper()]
+    key = f"{ours}:{bare.upper()}"
+    if glass_mod.candidates(key):
+        return key
+    squeeze = re.sub(r"[\s\-]", "", bare).upper()
+    same = [k for k in glass_mod.candidates(squeeze) if k.split(":", 1)[0] == ours]
+    same = same or [k for k in glass_mod.load_catalog() if k.split(":", 1)[0] == ours
+                    and re.sub(r"[\s\-]", "", k.split(":", 1)[1]).upper() == squeeze]
+    if len(same) == 1:
+        return same[0]
+    raise SolasError(f"{ident}: glass {name!r}: {ours} has no glass {bare!r} in our catalogue"
+                     + (f" (several match: {', '.join(same)})" if same else ""))
+
+
+class _Reader:
+    """The state of a .seq file being read: the system settings and the surfaces so far."""
+
+    def __init__(self, where: str):
+        self.where = where
+        self.system: dict[str, list[str]] = {}
+        self.rows: list[dict] = []  # SO, the surfaces, SI: raw values in lens units
+        self.stop_at: int | None = None  # STO Sn: the stop is surface n
+        self.radius_mode = False  # CODE V's default: S lines give curvatures unless RDM says radii
+
+    def ident(self, line: int) -> str:
+        if not self.rows:
+            return f"{self.where}: line {line}"
+        kind = self.rows[-1]["kind"]
+        i = len(self.rows) - 1
+        return f"{self.where}: line {line}, surface {'SO' if kind == 'SO' else ('SI' if kind == 'SI' else f'S{i}')}"
+
+    def read(self, text: str) -> None:
+        for line, tokens in _commands(text):
+            key, args = tokens[0].upper(), tokens[1:]
+            if key in REFUSED:
+                if key in DECENTRES and args and _numbers(args[:1], self.ident(line)) == [0.0]:
+                    continue  # a zero decentre or tilt changes nothing
+                raise SolasError(f"{self.ident(line)}: {key}: {REFUSED[key]} are not supported "
+                                 "(rotationally symmetric refracting systems only)")
+            self.command(key, args, line)
+
+    def command(self, key: str, args: list[str], line: int) -> None:
+        ident = self.ident(line)
+        if key == "STO" and args and re.fullmatch(r"[Ss]\d+", args[0]):
+            self.stop_at = int(args[0][1:])
+        elif key in ("SO", "S", "STO", "SI") and (key != "STO" or args or not self.rows):
+            self.surface(key, args, ident)
+        elif key in ("RDM", "CUM"):
+            self.radius_mode = key == "RDM" and (not args or args[0].upper() not in ("N", "NO"))
+        elif key in IGNORED:
+            return
+        elif key in SYSTEM:
+            self.system[key] = args
+        elif not self.rows:
+            raise SolasError(f"{ident}: command {key} is not supported (or needs a surface before it)")
+        else:
+            self.modify(self.rows[-1], key, args, ident)
+
+    def surface(self, key: str, args: list[str], ident: str) -> None:
+        row: dict = {"kind": key, "curv": 0.0, "thi": 0.0, "glass": "AIR", "ident": ident}
+        values = _numbers(args[:2], f"{ident}: {key}")
+        if values:
+            self.modify(row, "RDY" if self.radius_mode else "CUY", args[:1], ident)
+        if len(values) > 1:
+            row["thi"] = values[1]
+        if len(args) > 2:
+            row["glass"] = material(args[2], ident)
+        if key == "STO":
+            row["stop"] = True
+        self.rows.append(row)
+
+    def modify(self, row: dict, key: str, args: list[str], ident: str) -> None:  # long: one branch per command
+        if key in ("RDY", "CUY", "THI", "CIR", "K", *ASPHERIC):
+            value = _numbers(args[:1], f"{ident}: {key}") if args else []
+            if not value:
+                raise SolasError(f"{ident}: {key} needs a value")
+            v = value[0]
+            if key == "RDY":
+                row["curv"] = 0.0 if v == 0 else 1.0 / v
+            elif key == "CUY":
+                row["curv"] = v
+            elif key == "THI":
+                row["thi"] = v
+            elif key == "CIR":
+                row["cir"] = v
+            elif key == "K":
+                row["conic"] = v
+            else:
+                row.setdefault("asp", {})[ASPHERIC.index(key)] = v
+        elif key == "GLA":
+            row["glass"] = material(args[0], ident) if args else "AIR"
+        elif key == "STO":
+            row["stop"] = True
+        elif key == "SLB":
+            row["label"] = _unquote(" ".join(args))
+        elif key == "PIM":
+            row["pim"] = True
+        elif key == "SPH":
+            row.pop("asp", None)
+            row.pop("conic", None)
+        elif key not in ("ASP", "CON"):
+            raise SolasError(f"{ident}: command {key} is not supported (rotationally symmetric refracting "
+                             "surfaces: RDY, CUY, THI, GLA, CIR, STO, SLB, SPH, CON, ASP with K and A…J, PIM)")
+
+
+def read_spec(text: str, where: str) -> dict:
+    """The lens-file dictionary of a .seq text; `where` names it in messages."""
+    reader = _Reader(where)
+    reader.read(text)
+    system, rows = reader.system, reader.rows
+    if reader.stop_at is not None:
+        if not 1 <= reader.stop_at < len(rows) - 1:
+            raise SolasError(f"{where}: STO S{reader.stop_at}: the lens has surfaces S1 to S{len(rows) - 2}")
+        for k, row in enumerate(rows):
+            row["stop"] = k == reader.stop_at
+    if len(rows) < 3 or rows[0]["kind"] != "SO" or rows[-1]["kind"] != "SI":
+        raise SolasError(f"{where}: a lens needs SO (the object), at least one surface (S or STO) and SI "
+                         f"(the image), in that order; got {' '.join(r['kind'] for r in rows) or 'no surfaces'}")
+    inner = [r for r in rows[1:-1] if r["kind"] in ("SO", "SI")]
+    if inner:
+        raise SolasError(f"{inner[0]['ident']}: {inner[0]['kind']} inside the lens (SO first, SI last)")
+    dim = (system.get("DIM") or ["M"])[0].upper()[:1]
+    if dim not in UNITS:
+        raise SolasError(f"{where}: DIM {system['DIM'][0]!r} is not supported; allowed: M (mm), C (cm), I (inches)")
+    scale = UNITS[dim]
+    spec: dict = {"object": _object(rows[0], scale)}
+    title = " ".join(_unquote(t) for t in system.get("TIT", system.get("TITLE", []))).strip()
+    if title:
+        spec["name"] = title
+    spec["surface"] = [_surface(r, i, scale) for i, r in enumerate(rows[1:-1], start=1)]
+    if rows[-1].get("cir", 0) > 0:
+        spec["image"] = {"diameter": 2.0 * rows[-1]["cir"] * scale}
+    waves = _numbers(system.get("WL", []), f"{where}: WL")
+    if waves:
+        spec["wavelengths_nm"] = list(dict.fromkeys(waves))
+    primary = _primary(system, waves, where)
+    pim = [min(i, len(rows) - 3) for i, r in enumerate(rows[1:]) if r.get("pim")]  # on SI: the last gap
+    if pim:
+        _image_solve(spec, pim[-1], primary, where)
+    aperture = _aperture(system, scale, where)
+    if aperture[0] == "fnum" and spec["object"]["distance"] != "infinity":
+        raise SolasError(f"{where}: FNO with a near object (CODE V's working F/#) is not supported; give EPD or NAO")
+    return zemax_solves.solve(spec, aperture, _fields(system, scale, where), primary, where)
+
+
+def _object(row: dict, scale: float) -> dict:
+    obj: dict = {"distance": "infinity" if abs(row["thi"]) >= INFINITE_OBJECT else row["thi"] * scale}
+    if row["glass"].upper() != "AIR":
+        obj["material"] = row["glass"]
+    return obj
+
+
+def _surface(row: dict, i: int, scale: float) -> dict:
+    """The [[surface]] table of a surface row, lengths in mm; "diameter" None without CIR (automatic)."""
+    curv = row["curv"] / scale
+    out = {"label": row.get("label") or f"S{i}", "radius": 0.0 if curv == 0 else 1.0 / curv,
+           "thickness": row["thi"] * scale, "material": row["glass"],
+           "diameter": 2.0 * row["cir"] * scale if row.get("cir", 0) > 0 else None}
+    if row.get("conic"):
+        out["conic"] = row["conic"]
+    terms = [row.get("asp", {}).get(k, 0.0) * scale ** (-3 - 2 * k) for k in range(len(ASPHERIC))]
+    while terms and terms[-1] == 0.0:
+        terms.pop()
+    if terms:
+        out["aspheric"] = terms
+    if row.get("stop"):
+        out["stop"] = True
+    return out
+
+
+def _primary(system: dict, waves: list[float], where: str) -> float | None:
+    """The reference wavelength (nm): REF's entry of WL (1-based), else None (the lens's middle one)."""
+    if "REF" not in system or not waves:
+        return None
+    ref = _numbers(system["REF"][:1], f"{where}: REF")
+    if not ref or ref[0] != int(ref[0]) or not 1 <= ref[0] <= len(waves):
+        raise SolasError(f"{where}: REF {' '.join(system['REF'])!r} must name one of the {len(waves)} WL entries")
+    return waves[int(ref[0]) - 1]
+
+
+def _image_solve(spec: dict, k: int, primary: float | None, where: str) -> None:
+    """PIM on surface k: its thickness set so that the image plane lies at the paraxial image."""
+    rows = [{**r, "diameter": r["diameter"] or 1.0} for r in spec["surface"]]
+    lens = Lens.from_dict({**spec, "surface": rows}, source=where)
+    p = paraxial(lens, primary or lens.primary_wavelength)
+    spec["surface"][k]["thickness"] -= p.image_offset_mm
+
+
+def _aperture(system: dict, scale: float, where: str) -> tuple[str, float]:
+    """The system aperture: ("epd", mm), ("fnum", F/#), ("na", NA), or ("float", 0): the stop's CIR."""
+    given = [k for k in APERTURES if k in system]
+    if len(given) > 1:
+        raise SolasError(f"{where}: {' and '.join(given)} both set the system aperture; give one")
+    if not given:
+        return "float", 0.0
+    value = _numbers(system[given[0]][:1], f"{where}: {given[0]}")
+    if not value or not value[0] > 0:
+        raise SolasError(f"{where}: {given[0]} {' '.join(system[given[0]])!r} must be a positive number")
+    return APERTURES[given[0]], value[0] * (scale if given[0] == "EPD" else 1.0)
+
+
+def _fields(system: dict, scale: float, where: str) -> tuple[str, list[float]]:
+    """The field type (`zemax_solves`' kinds) and each field's radial size (degrees or mm)."""
+    given = [k for k in FIELDS if k in system or "X" + k[1:] in system]
+    if len(given) > 1:
+        raise SolasError(f"{where}: fields given as both {' and '.join(given)}; give one kind")
+    if not given:
+        return "angle", []
+    y = _numbers(system.get(given[0], []), f"{where}: {given[0]}")
+    x = _numbers(system.get("X" + given[0][1:], []), f"{where}: X{given[0][1:]}")
+    n = max(len(x), len(y))
+    x, y = x + [0.0] * (n - len(x)), y + [0.0] * (n - len(y))
+    unit = 1.0 if given[0] == "YAN" else scale
+    return FIELDS[given[0]], [math.hypot(a, b) * unit for a, b in zip(x, y)]
+
+
+READERS[".seq"] = read_spec

@@ -1,0 +1,273 @@
+"""CODE V sequence files (.seq): the shipped lenses re-expressed in CODE V syntax load as the same lens
+(EFL, BFD, f/#, real chief rays to 1e-9), and a first-order trace written out here (y–nu, from the
+catalogue's indices, independent of `paraxial`) gives the doublet's EFL and BFD; units, curvature
+mode, aspheres, model glass and the system-aperture and field types each in a file written here."""
+import math
+
+import numpy as np
+import pytest
+
+from solas_mi import Lens, SolasError
+from solas_mi.optics import glass as G
+from solas_mi.optics import pupil as P
+from solas_mi.optics.paraxial import paraxial
+
+DOUBLET = """! The SOLAS paper doublet (scenes/lenses/solas_doublet.toml) in CODE V syntax
+LEN NEW
+RDM
+TIT 'solas doublet (CODE V)'
+DIM M
+WL 486.0 531.0 656.0
+REF 2
+WTW 1 2 1
+INI 'SOL'
+XAN 0.0 0.0 ; YAN 0.0 2.0
+WTF 1 1
+SO 0.0 1e+11
+S 92.847 6.0 'N-BK7_SCHOTT'
+  CIR 15.0
+  SLB 'Surface 1'
+S -30.716 3.0 F2_SCHOTT; CIR 15 ; CCY 0; THC 0
+S -78.197 57.376
+  CIR 15.0
+STO 0.0 39.496   ! the stop: its CIR sets the aperture (no EPD)
+  CIR 2.5
+SI 0.0 0.0
+  CIR 10.0
+GO
+"""
+
+TRIPLET = """RDM;LEN "Cooke triplet"
+TITLE 'cooke triplet (CODE V)'
+EPD {epd!r}
+DIM M
+WL 656.2725 587.5618 486.1327
+REF 2
+YAN 0 14 20
+SO 0 1e20
+S 22.01359 3.25896 NSK16_SCHOTT
+CIR 10
+S -435.7604 6.007551
+CIR 10
+S -22.21328 0.9999746
+GLA F2_SCHOTT
+CIR 8
+S 20.29192 4.750409
+STO
+S 79.68364 2.952076 'N-SK16_SCHOTT'; CIR 8
+S -18.3783 42.20778; CIR 8
+SI 0 0; CIR 18
+"""
+
+
+def load(tmp_path, text, name="lens.seq"):
+    path = tmp_path / name
+    path.write_text(text)
+    return Lens.load(path)
+
+
+def same_lens(a, b, fields):
+    """EFL, BFD, f/#, the surfaces and the real chief rays of `fields` at every wavelength agree to 1e-9."""
+    for wl in a.wavelengths_nm:
+        pa, pb = paraxial(a, wl), paraxial(b, wl)
+        for key in ("efl_mm", "bfd_mm", "f_number", "entrance_pupil_diameter_mm", "exit_pupil_z_mm"):
+            assert getattr(pa, key) == pytest.approx(getattr(pb, key), rel=1e-9), key
+        xy = [[0.0, f] for f in fields]
+        ca, cb = P.chief_rays(a, xy, [wl] * len(xy)), P.chief_rays(b, xy, [wl] * len(xy))
+        np.testing.assert_allclose(ca.image_xy, cb.image_xy, rtol=1e-9, atol=1e-12)
+    assert [s.glass.name for s in a.surfaces] == [s.glass.name for s in b.surfaces]
+    assert [s.stop for s in a.surfaces] == [s.stop for s in b.surfaces]
+
+
+def test_doublet_is_the_shipped_doublet(tmp_path):
+    lens, toml = load(tmp_path, DOUBLET), Lens.load("solas-doublet")
+    assert lens.name == "solas doublet (CODE V)" and lens.at_infinity
+    assert lens.wavelengths_nm == toml.wavelengths_nm and lens.primary_wavelength == 531.0
+    assert lens.field_deg == 2.0 and lens.image_diameter == 20.0
+    assert [s.diameter for s in lens.surfaces] == [s.diameter for s in toml.surfaces]
+    assert lens.surfaces[0].label == "Surface 1"
+    same_lens(lens, toml, [0.0, 1.0, 2.0])
+    # the stop marked on the line after its surface, or named by number: the same lens
+    for mark in ("S 0.0 39.496\n  STO", "S 0.0 39.496\nSTO S4"):
+        other = load(tmp_path, DOUBLET.replace("STO 0.0 39.496", mark), "other.seq")
+        same_lens(other, toml, [0.0, 2.0])
+    with pytest.raises(SolasError, match="STO S7: the lens has surfaces S1 to S4"):
+        load(tmp_path, DOUBLET.replace("STO 0.0 39.496", "S 0.0 39.496\nSTO S7"))
+
+
+def test_doublet_against_a_hand_paraxial_trace(tmp_path):
+    """y–nu trace of a ray parallel to the axis: EFL = y1 / −u', BFD = y_last / −u'."""
+    lens = load(tmp_path, DOUBLET)
+    wl = 531.0
+    n = [1.0, G.resolve("SCHOTT:N-BK7").index(wl), G.resolve("SCHOTT:F2").index(wl), 1.0]
+    radii, gaps = (92.847, -30.716, -78.197), (6.0, 3.0)
+    y, nu = 1.0, 0.0
+    for k, r in enumerate(radii):
+        nu -= y * (n[k + 1] - n[k]) / r
+        if k < len(gaps):
+            y += gaps[k] * nu / n[k + 1]
+    p = paraxial(lens, wl)
+    assert p.efl_mm == pytest.approx(-1.0 / nu, rel=1e-12)
+    assert p.bfd_mm == pytest.approx(-y / nu, rel=1e-12)
+    assert p.f_number == pytest.approx(-1.0 / nu / p.entrance_pupil_diameter_mm, rel=1e-12)
+
+
+def test_triplet_is_the_shipped_triplet(tmp_path):
+    toml = Lens.load("cooke-triplet")
+    epd = paraxial(toml, toml.primary_wavelength).entrance_pupil_diameter_mm
+    lens = load(tmp_path, TRIPLET.format(epd=epd))
+    assert lens.field_deg == 20.0 and lens.surfaces[3].stop
+    assert lens.surfaces[3].diameter == pytest.approx(toml.surfaces[3].diameter, rel=1e-12)  # EPD sized the stop
+    same_lens(lens, toml, [0.0, 14.0, 20.0])
+    # FNO: the image-space F/# = EFL / EPD gives the same stop
+    fno = paraxial(toml, toml.primary_wavelength).f_number
+    by_fno = load(tmp_path, TRIPLET.format(epd=epd).replace(f"EPD {epd!r}", f"FNO {fno!r}"))
+    assert by_fno.surfaces[3].diameter == pytest.approx(toml.surfaces[3].diameter, rel=1e-12)
+
+
+N, R1, R2, T1 = 1.5, 60.0, -240.0, 8.0
+EFL = 1.0 / ((N - 1) * (1 / R1 - 1 / R2 + (N - 1) * T1 / (N * R1 * R2)))
+BFD = EFL * (1 - (N - 1) * T1 / (N * R1))
+
+
+def singlet(scale=1.0, dim="M", mode="RDM", first=R1, second="", system="EPD 20\nYAN 0 10", last="PIM", glass="1.5:0"):
+    """A singlet of constant index in lens units (mm / scale), stop on surface 1, PIM to the focus."""
+    return f"""{mode}
+DIM {dim}
+WL 550
+{system}
+SO 0 1e10
+STO {first / scale!r} {T1 / scale!r} {glass}
+S {R2 / scale!r} 1.0
+{second}{last}
+SI 0 0
+"""
+
+
+@pytest.mark.parametrize("dim, scale", [("M", 1.0), ("C", 10.0), ("I", 25.4)])
+def test_units_and_the_paraxial_image_solve(tmp_path, dim, scale):
+    text = singlet(scale, dim, system=f"EPD {20 / scale!r}\nYAN 0 10")
+    lens = load(tmp_path, text)
+    p = paraxial(lens, 550.0)
+    assert p.efl_mm == pytest.approx(EFL, rel=1e-12) and p.bfd_mm == pytest.approx(BFD, rel=1e-12)
+    assert lens.surfaces[1].thickness == pytest.approx(BFD, rel=1e-12)  # PIM: the image at the focus
+    assert p.entrance_pupil_diameter_mm == pytest.approx(20.0, rel=1e-12)
+    assert not lens.dispersive
+
+
+def test_curvature_mode_and_per_surface_commands(tmp_path):
+    """CUM: S lines give curvatures; RDY, CUY, THI and GLA on lines of their own give the same lens."""
+    base = load(tmp_path, singlet(), "a.seq")
+    cum = singlet(mode="CUM").replace(f"STO {R1!r}", f"STO {1 / R1!r}").replace(f"S {R2!r}", f"S {1 / R2!r}")
+    split = singlet().replace(f"STO {R1!r} {T1!r} 1.5:0", f"STO 0 0\nRDY {R1!r}\nTHI {T1!r}\nGLA 1.5:0").replace(
+        f"S {R2!r} 1.0", f"S; CUY {1 / R2!r}; THI 1")
+    for text in (cum, split):
+        other = load(tmp_path, text, "b.seq")
+        assert [s.radius for s in other.surfaces] == pytest.approx([s.radius for s in base.surfaces], rel=1e-12)
+        assert [s.thickness for s in other.surfaces] == pytest.approx([s.thickness for s in base.surfaces], rel=1e-12)
+        assert other.surfaces[0].stop and other.surfaces[0].glass.name == "model:1.5"
+
+
+def test_aspheric_terms_and_units(tmp_path):
+    asp = "ASP\nK -0.5\nA 1e-6\nB -2e-9\nD 3e-15\n"
+    mm = load(tmp_path, singlet(second=asp), "mm.seq")
+    s = mm.surfaces[1]
+    assert s.conic == -0.5 and s.aspheric == (1e-6, -2e-9, 0.0, 3e-15)
+    cm = load(tmp_path, singlet(10.0, "C", system="EPD 2\nYAN 0 10",
+                                second="ASP\nK -0.5\nA 1e-3\nB -2e-4\nD 3e-5\n"), "cm.seq")
+    # A (r⁴) scales as length⁻³, B as length⁻⁵, D (r¹⁰) as length⁻⁹
+    assert cm.surfaces[1].aspheric == pytest.approx((1e-6, -2e-9, 0.0, 3e-14), rel=1e-12)
+    sph = load(tmp_path, singlet(second=asp + "SPH\n"), "sph.seq")
+    assert not any(sph.surfaces[1].aspheric) and sph.surfaces[1].conic == 0.0
+
+
+@pytest.mark.parametrize("token, name", [("1.699:30.1", "model:1.699/30.1"), ("699000.301000", "model:1.699/30.1"),
+                                         ("'517000.642000'", "model:1.517/64.2"), ("1.62:0", "model:1.62")])
+def test_model_glass(tmp_path, token, name):
+    assert load(tmp_path, singlet(glass=token)).surfaces[0].glass.name == name
+
+
+def test_field_types(tmp_path):
+    # YOB: object height h, the object 500 mm before the stop (surface 1): tan θ = h / 500
+    text = singlet(system="EPD 20\nYOB 0 30").replace("SO 0 1e10", "SO 0 500")
+    assert load(tmp_path, text).field_deg == pytest.approx(math.degrees(math.atan(30 / 500)), rel=1e-12)
+    # YIM: paraxial image height of a distant object, h' = f tan θ; XIM and YIM combine radially
+    lens = load(tmp_path, singlet(system="EPD 20\nXIM 0 3\nYIM 0 4"))
+    assert lens.field_deg == pytest.approx(math.degrees(math.atan(5 / EFL)), rel=1e-12)
+    # YRI: the real chief ray lands there
+    lens = load(tmp_path, singlet(system="EPD 20\nYRI 0 20"))
+    hit = P.chief_rays(lens, [[0.0, lens.field_deg]], [550.0]).image_xy[0, 1]
+    assert abs(hit) == pytest.approx(20.0, rel=1e-10)
+    # NAO: the object-space NA of the marginal ray
+    text = singlet(system="NAO 0.02\nYAN 0 1").replace("SO 0 1e10", "SO 0 500")
+    assert load(tmp_path, text).surfaces[0].semi_diameter == pytest.approx(500 * math.tan(math.asin(0.02)), rel=1e-12)
+
+
+@pytest.mark.parametrize("insert, match", [
+    ("XDE 0.5\n", r"line \d+, surface S2: XDE: decentred or tilted surfaces are not supported"),
+    ("ADE 1\n", "ADE: decentred or tilted"),
+    ("REFL\n", "REFL: mirrors"),
+    ("DOE\n", "DOE: diffractive surfaces"),
+    ("RDX 50\n", "RDX: anamorphic"),
+    ("YTO\n", "YTO: toric surfaces"),
+    ("FOO 1\n", "command FOO is not supported"),
+    ("GLA XYZ_SCHOTT\n", "SCHOTT has no glass 'XYZ'"),
+])
+def test_refusals_name_the_surface_and_feature(tmp_path, insert, match):
+    with pytest.raises(SolasError, match=match):
+        load(tmp_path, singlet(second=insert))
+
+
+def test_zero_decentres_pass_and_bad_structure(tmp_path):
+    base = load(tmp_path, singlet(), "a.seq")
+    zero = load(tmp_path, singlet(second="XDE 0\nADE 0.0\n"), "b.seq")
+    assert paraxial(zero, 550.0).efl_mm == paraxial(base, 550.0).efl_mm
+    with pytest.raises(SolasError, match="EPD and FNO both set"):
+        load(tmp_path, singlet(system="EPD 20\nFNO 4\nYAN 0 1"))
+    with pytest.raises(SolasError, match="needs SO"):
+        load(tmp_path, "SO 0 1e10\nS 10 1\n")
+    with pytest.raises(SolasError, match="DIM .X. is not supported"):
+        load(tmp_path, singlet(dim="X"))
+
+
+def test_what_code_v_writes(tmp_path):
+    """Commands fused by `;`, a line continued with `&`, CODE V's 0.1E+14 infinity, the stop marked on the
+    line after its surface, a six-digit glass code, an asphere's terms two to a line, comments."""
+    text = f"""RDM;LEN       "VERSION: 2023.03       LENS VERSION: 89"
+TITLE 'singlet'
+EPD   20.0
+DIM   M
+WL    550.0
+REF   1
+YAN   0.0 5.0 &
+      10.0
+DOR   1.15 1.05
+SO    0.0 0.1E+14
+S     {R1!r} {T1!r} 500000.000000 ; CIR 12.5
+  STO
+S     {R2!r} {BFD!r}
+  ASP
+  K  0.0
+  A  1.0E-07 ; B -2.0E-11 ! a comment
+SI    0.0 0.0
+GO
+"""
+    lens = load(tmp_path, text)
+    p = paraxial(lens, 550.0)
+    assert lens.surfaces[0].stop and lens.surfaces[0].glass.name == "model:1.5"
+    assert p.efl_mm == pytest.approx(EFL, rel=1e-12) and p.entrance_pupil_diameter_mm == pytest.approx(20.0, rel=1e-12)
+    assert lens.field_deg == 10.0 and lens.surfaces[1].aspheric == (1e-7, -2e-11)
+    # without RDM the S lines give curvatures (CODE V's default)
+    cum = load(tmp_path, text.replace("RDM;LEN", "LEN").replace(f"S     {R1!r}", f"S     {1 / R1!r}")
+               .replace(f"S     {R2!r}", f"S     {1 / R2!r}"), "cum.seq")
+    assert [s.radius for s in cum.surfaces] == pytest.approx([R1, R2], rel=1e-12)
+
+
+@pytest.mark.parametrize("change, match", [
+    (("SO 0 1e10", "SO 0 500"), "FNO with a near object"),
+    (("SI 0 0", "SI 0 0\nPRV\nPWL 550\n'X' 1.5\nEND"), "PRV: private glass catalogues"),
+    (("STO", "ZOO 2\nSTO"), "ZOO: zoom positions"),
+])
+def test_refused_systems(tmp_path, change, match):
+    with pytest.raises(SolasError, match=match):
+        load(tmp_path, singlet(system="FNO 4\nYAN 0 1").replace(*change))
