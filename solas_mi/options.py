@@ -44,7 +44,7 @@ def floats(text: str, what: str) -> list[float]:
 
 def add_lens_argument(p) -> None:
     """The positional LENS argument of every command that takes a lens."""
-    p.add_argument("lens", help="shipped lens name (solas-doublet, cooke-triplet, ...) or a lens file (.toml, .zmx, .dat)")
+    p.add_argument("lens", help="shipped lens name (solas-doublet, cooke-triplet, ...) or a lens file (.toml, .zmx, .seq, .dat)")
 
 
 def positive_ints(text: str, what: str) -> tuple[int, ...]:

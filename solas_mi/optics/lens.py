@@ -1,5 +1,5 @@
 """A lens prescription: surfaces, glass, object and image plane, loaded from a TOML lens file
-(or a Zemax .zmx or pbrt .dat lens table, read by `zemax` and `pbrt_dat`).
+(or a Zemax .zmx, CODE V .seq or pbrt .dat lens table, read by `zemax`, `codev` and `pbrt_dat`).
 
 Lengths in mm, wavelengths in nm, field angles in degrees. +z is the optical axis toward the image;
 surface 1's vertex is at z = 0. A surface is a sphere, or an even asphere: sag
@@ -190,7 +190,7 @@ class Lens:
     # ------------------------------------------------------------------ loading
     @classmethod
     def load(cls, name_or_path: str | Path) -> "Lens":
-        """A lens by shipped name (e.g. "solas-doublet") or by path to a lens file (.toml, .zmx, .dat):
+        """A lens by shipped name (e.g. "solas-doublet") or by path to a lens file (.toml, .zmx, .seq, .dat):
         a name holding a path separator or an extension is a path."""
         if not isinstance(name_or_path, (str, os.PathLike)):
             raise SolasError(f"lens {name_or_path!r} must be a shipped lens name ({', '.join(shipped_lenses())}) "
