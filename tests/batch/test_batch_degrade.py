@@ -336,7 +336,7 @@ def test_a_batch_with_depth_maps_by_name_pattern(tmp_path, doublet):
     img = np.random.default_rng(0).random((48, 64))
     depth = np.where(np.arange(64)[None, :] < 32, 10.0, np.inf) * np.ones((48, 1))
     write_exr(folder / "a.exr", image_channels(img), {})
-    write_exr(folder / "a_depth.exr", {"Z": depth.astype(np.float32)}, {})
+    write_exr(folder / "a_depth.exr", {"Z": depth.astype(np.float32)}, {}, infinite=True)  # the sky: inf
     result = degrade_batch([folder], tmp_path / "out", psf_grid=tmp_path / "g.exr", workers=1, progress=False,
                            depth_pattern="{stem}_depth.exr")
     assert [j.status for j in result.jobs] == ["done"]  # the depth map is not an input of its own

@@ -100,7 +100,7 @@ def test_degrade_command_with_a_depth_map(grids, tmp_path):
     img, depth = far * (1 - mask) + near * mask, np.where(mask > 0, 10.0, np.inf)
     g.write(str(tmp_path / "g.exr"))
     write_exr(tmp_path / "img.exr", image_channels(img), {})
-    write_exr(tmp_path / "d.exr", {"Z": depth.astype(np.float32)}, {})
+    write_exr(tmp_path / "d.exr", {"Z": depth.astype(np.float32)}, {}, infinite=True)  # the sky: inf
     args = ["degrade", str(tmp_path / "img.exr"), "--psf-grid", str(tmp_path / "g.exr"), "-o", str(tmp_path / "o.exr")]
     assert main(args + ["--depth", str(tmp_path / "d.exr")]) == 0
     out = read_image(tmp_path / "o.exr")
