@@ -94,10 +94,15 @@ def mitsuba(variant: str | None = None):
 
 
 def load_scene(path: str, variant: str | None = None, **params):
-    """Load a scene XML (lengths in mm) with the solas-mi plugins; `params` fill its <default> values."""
+    """Load a scene XML (lengths in mm) with the solas-mi plugins; `params` fill its <default> values.
+
+    Loaded on the calling thread (`parallel=False`): the plugins trace the lens with Dr.Jit when they
+    are built (exit-pupil bounds, image scales), and built on Mitsuba's loader threads one such trace
+    crashed the process (a segmentation fault in `tracer.trace` under `lens_sensor`, seen once in a
+    full test run). The scenes' own meshes are few, so the parallel build saves little."""
     mi = mitsuba(variant)
     try:
-        return mi.load_file(str(path), **{k: str(v) for k, v in params.items()})
+        return mi.load_file(str(path), parallel=False, **{k: str(v) for k, v in params.items()})
     except RuntimeError as exc:
         raise plugin_error(exc, f"cannot load scene {path}") from None
 

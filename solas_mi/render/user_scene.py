@@ -42,6 +42,7 @@ def _parse(mi, xml_path: str | Path, params: dict | None):
     if not path.is_file():
         raise SolasError(f"no such scene file: {path}")
     config = mi.parser.ParserConfig(mi.variant())
+    config.parallel = False  # our plugins trace with Dr.Jit when built: on the calling thread (`mitsuba.load_scene`)
     try:
         return config, mi.parser.parse_file(config, str(path), **{k: str(v) for k, v in (params or {}).items()})
     except RuntimeError as exc:
