@@ -165,7 +165,7 @@ def image_scales(lens: Lens, max_height_mm: float, wavelength_nm: float, samples
     tangential = np.concatenate([[radial[0]], h[1:samples] / t[1:]])
     clear = np.flatnonzero(np.cumprod(~chief.vignetted[:samples]))  # chief rays that pass every aperture
     last = clear[-1] if len(clear) else 0
-    if h[last] < max_height_mm:
+    if (t_max < wanted or last < samples - 1) and h[last] < max_height_mm:  # cut short by the lens, not the table
         warnings.warn(f"lens {lens.name}'s chief rays pass every aperture up to field "
                       f"{math.degrees(math.atan(t[last])):.4g} deg (image height {h[last]:.4g} mm) at {wavelength_nm:g} "
                       f"nm and the film reaches {max_height_mm:.4g} mm: beyond, the image darkens to the dark corners "
