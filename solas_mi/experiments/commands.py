@@ -20,12 +20,12 @@ def run_street(args: argparse.Namespace) -> int:
     from ..render.commands import check_render
     from .street.run import Settings, run
 
-    out = output_folder(args.output)
     lens = Lens.load(args.lens)
     height, width = parse_wxh(args.size, "--size")
     for spp in (args.spp_ideal, args.spp):  # its renders: refused when absurd or too large, announced when long
-        check_render(width, height, spp, False)
+        check_render(width, height, spp, args.force)
     layers = () if args.depth_layers.strip().lower() == "none" else positive_ints(args.depth_layers, "--depth-layers")
+    out = output_folder(args.output)  # made once the settings are known to be sound
     settings = Settings(width=width, height=height, spp_ideal=args.spp_ideal, spp_lens=args.spp,
                         near_focus_m=args.near_focus, variant=args.variant, depth_layers=layers)
     outcome = run(lens, out, settings, log=_say)
@@ -63,6 +63,7 @@ def register(sub: Any) -> None:
     p.add_argument("--size", default="1280x960", help="image WIDTHxHEIGHT in px (default 1280x960)")
     p.add_argument("--spp", type=int, default=64, help="lens render samples per pixel (default 64)")
     p.add_argument("--spp-ideal", type=int, default=64, help="ideal image samples per pixel (default 64)")
+    p.add_argument("--force", action="store_true", help="render even when the estimated memory exceeds what is free")
     p.add_argument("--near-focus", type=float, help="near focus distance in m (default: the lens's framing)")
     p.add_argument("--depth-layers", default="1,2,4,8,16",
                    help="step (g), the depth-aware convolution: intervals between depth nodes, each dividing the "

@@ -94,3 +94,13 @@ def test_bad_settings(tmp_path, doublet):
         Settings(near_focus_m=-1.0).check()
     with pytest.raises(SolasError, match="no street scene"):
         run(doublet, tmp_path, Settings(width=64, height=48, scene=tmp_path / "none.xml"))
+
+
+def test_a_street_too_large_is_refused_before_its_folder_is_made(tmp_path, capsys):
+    from solas_mi.cli import main
+
+    out = tmp_path / "street"
+    assert main(["experiment", "street", "-o", str(out), "--size", "100000x100000", "--spp", "1"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--force" in err, err
+    assert not out.exists()  # nothing made for a run that never started
