@@ -122,19 +122,9 @@ def _render(args) -> int:
                          "scene's own integrator renders it")
     run, _ = spec_from_args(args, ("variant", "seed"))
     notes = []
-    try:
-        scene = load(args.scene, run.variant, lens, params, notes, pitch_um=args.pitch_um,
-                     focus_distance=_focus(args.focus_distance), response=args.response,
-                     world_unit_mm=args.world_unit_mm)
-    except SolasError as exc:  # named by its scene, once
-        if str(args.scene) in str(exc):
-            raise
-        raise SolasError(f"scene {args.scene}: {exc}") from None
-    except (ValueError, ZeroDivisionError) as exc:  # the camera's numbers as the lens camera reads them
-        if lens is None:
-            raise
-        raise SolasError(f"scene {args.scene}: its camera's film size and field must be numbers (a film of at least "
-                         f"1x1 px) for the lens camera to replace it: {type(exc).__name__}: {exc}") from None
+    focus = _focus(args.focus_distance)
+    scene = load(args.scene, run.variant, lens, params, notes, pitch_um=args.pitch_um, focus_distance=focus,
+                 response=args.response, world_unit_mm=args.world_unit_mm)
     for note in notes:
         print(f"render: {note}", file=sys.stderr)
     spp = args.spp if args.spp is not None else int(scene.sensors()[0].sampler().sample_count())

@@ -204,6 +204,15 @@ def load(xml_path: str | Path, variant: str | None = None, lens=None, params: di
                 notes.append(f"focus distance {depth:g} (auto: the scene's depth at the image centre)")
                 scene = _built(mi, xml_path, params, lens, held, dict(lens_options, focus_distance=depth), [])
             return scene
+    except SolasError as exc:  # named by its scene, once
+        if str(xml_path) in str(exc):
+            raise
+        raise SolasError(f"scene {xml_path}: {exc}") from None
+    except (ValueError, ZeroDivisionError) as exc:  # the camera's numbers as the lens camera reads them
+        if lens is None:
+            raise
+        raise SolasError(f"scene {xml_path}: its camera's film size and field must be numbers (a film of at least "
+                         f"1x1 px) for the lens camera to replace it: {type(exc).__name__}: {exc}") from None
     finally:
         del resolver[0]
 
