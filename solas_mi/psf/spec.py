@@ -135,14 +135,21 @@ def _number(value, what: str) -> float:
     return float(value)
 
 
+def _one_or_many(value, allowed: str, what: str):
+    """One number as a sequence of one, or a sequence as given; SolasError (naming `what` and the
+    `allowed` form) for text or anything else that is not iterable."""
+    values = (value,) if isinstance(value, Real) else value
+    if isinstance(values, (str, bytes)) or not hasattr(values, "__iter__"):
+        raise SolasError(f"{what} {value!r} must be {allowed}")
+    return values
+
+
 def _wavelengths(value) -> tuple[float, ...] | None:
     """None, one wavelength (nm) or a sequence of them; each a positive number (the lens checks its glasses)."""
     if value is None:
         return None
-    values = (value,) if isinstance(value, Real) else value
-    if isinstance(values, (str, bytes)) or not hasattr(values, "__iter__"):
-        raise SolasError(f"wavelengths {value!r} must be a number or a sequence of numbers (nm)")
-    out = tuple(_number(v, "wavelength (nm)") for v in values)
+    out = tuple(_number(v, "wavelength (nm)") for v in _one_or_many(value, "a number or a sequence of numbers (nm)",
+                                                                      "wavelengths"))
     if not out or min(out) <= 0:
         raise SolasError(f"wavelengths {value!r} must be one or more positive numbers (nm)")
     if len({f"{w:g}" for w in out}) != len(out):  # each names a channel of the grid file (psf_531nm)
@@ -166,10 +173,11 @@ def parse_distances(text: str) -> tuple[float, ...]:
     if ":" in text:
         count, _, near = text.partition(":")
         try:
-            return inverse_spaced(int(count), float(near))
+            count, near = int(count), float(near)
         except ValueError:
             raise SolasError(f"--distances-m {text!r} must be N:NEAR (N nodes, NEAR in metres) or distances "
                              "in m, comma-separated") from None
+        return inverse_spaced(count, near)  # its own message for a count or distance out of range
     return tuple(floats(text, "--distances-m"))
 
 
@@ -177,11 +185,8 @@ def check_distances(value) -> tuple[float, ...] | None:
     """None, or object distances (m), positive (inf allowed), distinct, sorted far to near."""
     if value is None:
         return None
-    values = (value,) if isinstance(value, Real) else value
-    if isinstance(values, (str, bytes)) or not hasattr(values, "__iter__"):
-        raise SolasError(f"distances {value!r} must be a sequence of distances (m)")
     out = []
-    for v in values:
+    for v in _one_or_many(value, "a sequence of distances (m)", "distances"):
         if not isinstance(v, Real) or isinstance(v, bool) or math.isnan(v) or not v > 0:
             raise SolasError(f"distance {v!r} m must be a positive number (inf: infinity)")
         out.append(float(v))

@@ -85,3 +85,12 @@ def test_each_method_has_its_own_options_and_the_render_stage_registers_its_own(
     assert method_options("fraunhofer", {"pupil_samples": 64, "rays": 9}) == {"pupil_samples": 64}
     assert method_options("geometric", {}) == {"rays": 512}
     assert "render" in METHODS and METHODS["render"].options == METHODS["geometric"].options
+
+
+@pytest.mark.parametrize("text, says", [("0:5", "depth node count 0"), ("3:-1", "nearest distance -1.0 m"),
+                                        ("x:5", "must be N:NEAR")])
+def test_distances_text_names_what_is_wrong(text, says):
+    from solas_mi.psf.spec import parse_distances
+
+    with pytest.raises(SolasError, match=says):
+        parse_distances(text)
