@@ -51,8 +51,8 @@ import mitsuba as mi
 from solas_mi.errors import SolasError
 from solas_mi.optics.glass import resolve
 from solas_mi.plugins.wavelength_sampling import mono_wavelength
+from solas_mi.render.spec import FRESNEL_MODES
 
-FRESNEL_MODES = ("transmit", "sample", "off")
 
 
 class SellmeierDielectric(mi.BSDF):

@@ -17,7 +17,7 @@ from ..optics.camera import BOUNDARIES, MAPPINGS
 from ..options import parse_wxh
 from .mitsuba import VARIANTS, check_name
 
-FRESNEL_MODES = ("transmit", "sample", "off")  # plugins/sellmeier_dielectric.py's
+FRESNEL_MODES = ("transmit", "sample", "off")  # sellmeier_dielectric's `fresnel` (it reads them from here)
 DEFAULT_RINGS = 32  # scene PSFs match the tracer to 0.04 µm / 0.2 %; denser meshes render slower (README)
 # rings per cap mesh: 4·rings² vertices each. Measured (solas-doublet, meshes built and written, 2 cores):
 # 256 rings 0.6 s, 39 MB of PLY, 0.26 GB peak; 512 rings 2.8 s, 157 MB, 0.86 GB; 1024 rings 10 s, 629 MB,
