@@ -60,8 +60,10 @@ def scene_hits(scene, lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, ra
             start = P.Bundle(lens, field_deg[f:f + 1], wavelength_nm[f:f + 1], n).launch(T.F(ex[j].ravel()),
                                                                                          T.F(ey[j].ravel()))
             x, y, z, dx, dy, dz = T.to_numpy(start.x, start.y, start.z, start.dx, start.dy, start.dz)
-            ray = mi.Ray3f(mi.Point3f(x, y, z), mi.Vector3f(dx, dy, dz), 0.0, mi.Spectrum(float(wavelength_nm[f])))
-            sampler.seed(f, n)
+            # field index and wavelength as opaque kernel inputs: one compiled kernel serves every field
+            wavelength = mi.Spectrum(dr.opaque(mi.Float, float(wavelength_nm[f])))
+            ray = mi.Ray3f(mi.Point3f(x, y, z), mi.Vector3f(dx, dy, dz), 0.0, wavelength)
+            sampler.seed(dr.opaque(mi.UInt32, f), n)
             weight, active = mi.Float(1.0), mi.Bool(True)
             out_o, out_d, out_w = mi.Point3f(0.0), mi.Vector3f(0.0), mi.Float(0.0)
             for _ in range(2 * len(lens.surfaces) + 2):
