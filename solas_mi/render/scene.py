@@ -34,11 +34,10 @@ def cap_mesh(radius: float, vertex_z: float, semi_diameter: float, rings: int, c
     """A spherical cap (flat disk if radius is 0), or the even asphere of `conic` and `aspheric` (the
     lens file's sag, `optics.lens.sag`): vertices (n, 3), unit normals (n, 3) facing −z,
     faces (m, 3) wound so that their geometric normals face −z too. `rings` rings of 4·rings
-    segments; ring radii are uniform in r. Spokes sit half a segment off the axes and diagonals,
-    where regular ray grids would graze the shared edges."""
+    segments (`rim_phi`); ring radii are uniform in r. Its last 4·rings vertices are the rim."""
     segments = 4 * rings
     r = semi_diameter * np.arange(1, rings + 1) / rings
-    phi = 2.0 * math.pi * (np.arange(segments) + 0.5) / segments
+    phi = rim_phi(rings)
     rr, pp = np.meshgrid(r, phi, indexing="ij")
     x = np.concatenate([[0.0], (rr * np.cos(pp)).ravel()])
     y = np.concatenate([[0.0], (rr * np.sin(pp)).ravel()])
@@ -68,28 +67,65 @@ def cap_mesh(radius: float, vertex_z: float, semi_diameter: float, rings: int, c
     return vertices, normals, _wind(vertices, normals, np.concatenate(faces))
 
 
-def annulus_mesh(z: float, inner: float, outer: float, segments: int = 256):
-    """A flat ring at z between radii inner and outer (mm)."""
-    phi = 2.0 * math.pi * np.arange(segments) / segments
-    ring = [np.stack([rad * np.cos(phi), rad * np.sin(phi), np.full(segments, z)], axis=-1) for rad in (inner, outer)]
-    vertices = np.concatenate(ring)
-    j = np.arange(segments)
-    k = (j + 1) % segments
-    faces = np.concatenate([np.stack([j, segments + j, segments + k], -1), np.stack([j, segments + k, k], -1)])
+def rim_phi(rings: int) -> np.ndarray:
+    """Azimuths of the 4·rings rim vertices of a cap (and of the annuli and barrel that meet it), so
+    that no spoke lies on an axis or a diagonal, where a regular grid of rays would run along the shared
+    edges: half a segment off them for an even count, a quarter for an odd one (whose diagonals fall
+    on a spoke half a segment off)."""
+    segments = 4 * rings
+    return 2.0 * math.pi * (np.arange(segments) + (0.5 if rings % 2 == 0 else 0.25)) / segments
+
+
+def circle(radius: float, z: float, phi: np.ndarray) -> np.ndarray:
+    """Vertices (n, 3) on the circle of `radius` at z, at azimuths `phi`: every mesh computes a shared
+    ring here, so two meshes meeting on it hold bit-identical vertices."""
+    return np.stack([radius * np.cos(phi), radius * np.sin(phi), np.full(len(phi), z)], axis=-1)
+
+
+def annulus_mesh(inner: np.ndarray, outer: np.ndarray):
+    """A ring between the closed polygons `inner` and `outer` ((n, 3) each, vertex j of one facing
+    vertex j of the other), normals −z. Given the cap's own rim vertices and the barrel's ring, it
+    shares their edges: no ray passes between the meshes."""
+    n = len(inner)
+    j = np.arange(n)
+    k = (j + 1) % n
+    faces = np.concatenate([np.stack([j, n + j, n + k], -1), np.stack([j, n + k, k], -1)])
+    vertices = np.concatenate([inner, outer])
     normals = np.tile([0.0, 0.0, -1.0], (len(vertices), 1))
     return vertices, normals, _wind(vertices, normals, faces)
 
 
-def tube_mesh(radius: float, z0: float, z1: float, segments: int = 256):
-    """An open cylinder of `radius` from z0 to z1 (mm), normals facing the axis."""
-    phi = 2.0 * math.pi * np.arange(segments) / segments
-    vertices = np.concatenate([np.stack([radius * np.cos(phi), radius * np.sin(phi), np.full(segments, z)], -1)
-                               for z in (z0, z1)])
+def tube_mesh(radius: float, z_levels, phi: np.ndarray):
+    """An open cylinder of `radius` through the sorted `z_levels` (mm), a vertex ring at each (where the
+    annuli meet it, so none ends on an edge's middle), normals facing the axis."""
+    n = len(phi)
+    vertices = np.concatenate([circle(radius, z, phi) for z in z_levels])
     normals = -vertices * np.array([1.0, 1.0, 0.0]) / radius
-    j = np.arange(segments)
-    k = (j + 1) % segments
-    faces = np.concatenate([np.stack([j, segments + j, segments + k], -1), np.stack([j, segments + k, k], -1)])
+    j = np.arange(n)
+    k = (j + 1) % n
+    faces = np.concatenate([np.concatenate([np.stack([a + j, a + n + j, a + n + k], -1),
+                                            np.stack([a + j, a + n + k, a + k], -1)])
+                            for a in range(0, n * (len(z_levels) - 1), n)])
     return vertices, normals, _wind(vertices, normals, faces)
+
+
+def joined(*meshes):
+    """One mesh of several (vertices, normals, faces) meshes."""
+    offsets = np.cumsum([0] + [len(m[0]) for m in meshes[:-1]])
+    return (np.concatenate([m[0] for m in meshes]), np.concatenate([m[1] for m in meshes]),
+            np.concatenate([m[2] + o for m, o in zip(meshes, offsets)]).astype(np.int32))
+
+
+def absorber_ring(rim: np.ndarray, radius: float, outer: float, z: float, phi: np.ndarray):
+    """The absorbing annulus of an aperture of `radius` at z out to the barrel's `outer` radius, two
+    layers: one between `rim` (the cap's own rim vertices, or the stop's circle) and the barrel's ring,
+    sharing their edges; and one turned half a segment, from the polygon circumscribing the aperture's
+    circle, so it covers no glass. Mitsuba's CPU ray tracer (Embree, not in its robust mode) lets about one
+    ray in a million through a shared edge; the two layers' edges cross instead of coinciding, so a ray
+    let through one layer's edge meets the other's face."""
+    turn = phi + math.pi / len(phi)
+    return joined(annulus_mesh(rim, circle(outer, z, phi)),
+                  annulus_mesh(circle(radius / math.cos(math.pi / len(phi)), z, turn), circle(outer, z, turn)))
 
 
 def _wind(vertices: np.ndarray, normals: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -155,20 +191,27 @@ def lens_parts(lens: Lens, rings: int = DEFAULT_RINGS) -> list[Part]:
     check_gaps(lens)
     parts = []
     outer = 2.0 * max(s.semi_diameter for s in lens.surfaces) + 10.0
+    phi = rim_phi(rings)
     before = lens.object_glass
     before_name = "AIR" if lens.object_glass.kind == "air" else lens.object_glass.name
-    rim_z = []
+    rim_z, ring_z = [], []
     for k, (s, zv) in enumerate(zip(lens.surfaces, lens.vertex_z), start=1):
         zr = zv + float(s.sag(s.semi_diameter))
         rim_z.append(zr)
+        rim = circle(s.semi_diameter, zr, phi)
         if s.glass != before:
-            parts.append(Part(f"surface{k}", cap_mesh(s.radius, zv, s.semi_diameter, rings, s.conic, s.aspheric),
-                              before_name, s.material))
+            cap = cap_mesh(s.radius, zv, s.semi_diameter, rings, s.conic, s.aspheric)
+            rim = cap[0][-len(phi):]
+            parts.append(Part(f"surface{k}", cap, before_name, s.material))
         if not (k == 1 and lens.field_type.sideways):
-            parts.append(Part(f"aperture{k}", annulus_mesh(zr, s.semi_diameter, outer)))
+            parts.append(Part(f"aperture{k}", absorber_ring(rim, s.semi_diameter, outer, zr, phi)))
+            ring_z.append(zr)
         before, before_name = s.glass, s.material
     start = rim_z[1] if lens.field_type.sideways and len(rim_z) > 1 else min(rim_z) - 1.0
-    parts.append(Part("barrel", tube_mesh(outer, start, lens.image_z)))
+    levels = sorted({start, lens.image_z, *(z for z in ring_z if z > start)})
+    turn = phi + math.pi / len(phi)  # a second, circumscribing layer turned half a segment (`absorber_ring`)
+    parts.append(Part("barrel", joined(tube_mesh(outer, levels, phi),
+                                       tube_mesh(outer / math.cos(math.pi / len(phi)), levels, turn))))
     return parts
 
 
