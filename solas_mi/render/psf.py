@@ -20,13 +20,14 @@ from ..optics import tracer as T
 from ..psf.base import Computed, centring_warnings, window_centres_um
 from ..psf.geometric import bin_hits, entrance_grid, light_offsets_um
 from .loop import continue_ray
-from .scene import DEFAULT_RINGS, lens_parts, write_ply
+from .scene import lens_parts, write_ply
 
 VARIANT = "llvm_ad_spectral"
 
 
-def lens_geometry(lens, rings: int = DEFAULT_RINGS, **extra):
-    """The lens as a Mitsuba scene (mm, lens file's frame): cap meshes with `sellmeier_dielectric` (no
+def lens_geometry(lens, rings: int | None = None, **extra):
+    """The lens as a Mitsuba scene (mm, lens file's frame): cap meshes of `rings` rings (None:
+    `render.mesh.mesh_rings`'s) with `sellmeier_dielectric` (no
     Fresnel losses) and absorbing apertures, no sensor image and no texture; `extra` scene entries
     (a sensor, an integrator, objects) are added as given."""
     from .mitsuba import mitsuba

@@ -1,4 +1,4 @@
-"""A lens as Mitsuba geometry: every refracting surface a triangle-mesh cap (sphere or even asphere) with vertex
+"""A lens as Mitsuba geometry (the meshes: `render.mesh`): every refracting surface a triangle-mesh cap (sphere or even asphere) with vertex
 normals carrying its two glasses (`sellmeier_dielectric`), every clear aperture and the stop an
 absorbing annulus, a barrel closing the sides, the `lens_sensor` on the image plane and the input
 image as `image_object`.
@@ -19,139 +19,14 @@ import numpy as np
 from ..errors import SolasError
 from ..imageio import atomic_path, write_text
 from ..optics.camera import Camera, camera_for
-from ..optics.lens import Lens, sag_slope
-from ..optics.lens import sag as asphere_sag
+from ..optics.lens import Lens
 from ..outputs import inside, safe_name
 from . import response as responses
-from .spec import DEFAULT_RINGS, RenderSpec, check_rings
+from .mesh import absorber_ring, cap_mesh, circle, joined, mesh_rings, rim_phi, tube_mesh, write_ply
+from .spec import RenderSpec, check_rings
 
 SPAWN_OFFSET_MM = 1e-4  # a continued ray starts this far (mm) along its own direction (`loop.continue_ray`)
 MIN_GAP_MM = 10 * SPAWN_OFFSET_MM  # closest two refracting surfaces of the mesh scene may come
-
-
-def cap_mesh(radius: float, vertex_z: float, semi_diameter: float, rings: int, conic: float = 0.0,
-             aspheric: tuple[float, ...] = ()):
-    """A spherical cap (flat disk if radius is 0), or the even asphere of `conic` and `aspheric` (the
-    lens file's sag, `optics.lens.sag`): vertices (n, 3), unit normals (n, 3) facing −z,
-    faces (m, 3) wound so that their geometric normals face −z too. `rings` rings of 4·rings
-    segments (`rim_phi`); ring radii are uniform in r. Its last 4·rings vertices are the rim."""
-    segments = 4 * rings
-    r = semi_diameter * np.arange(1, rings + 1) / rings
-    phi = rim_phi(rings)
-    rr, pp = np.meshgrid(r, phi, indexing="ij")
-    x = np.concatenate([[0.0], (rr * np.cos(pp)).ravel()])
-    y = np.concatenate([[0.0], (rr * np.sin(pp)).ravel()])
-    if conic != 0.0 or any(aspheric):
-        c, rho2 = (1.0 / radius if radius else 0.0), x * x + y * y
-        z = vertex_z + asphere_sag(rho2, c, conic, aspheric)
-        slope = 2.0 * sag_slope(rho2, c, conic, aspheric)
-        normals = np.stack([slope * x, slope * y, -np.ones_like(x)], axis=-1)
-        normals /= np.linalg.norm(normals, axis=-1, keepdims=True)
-    elif radius == 0.0:
-        z = np.full_like(x, vertex_z)
-        normals = np.tile([0.0, 0.0, -1.0], (len(x), 1))
-    else:
-        c = 1.0 / radius
-        rho2 = x * x + y * y
-        sag = c * rho2 / (1.0 + np.sqrt(1.0 - c * c * rho2))
-        z = vertex_z + sag
-        normals = np.stack([x, y, z - (vertex_z + radius)], axis=-1) / radius
-    faces = []
-    ring = lambda i, j: 1 + i * segments + (j % segments)  # noqa: E731
-    j = np.arange(segments)
-    faces.append(np.stack([np.zeros(segments, int), ring(0, j), ring(0, j + 1)], axis=-1))
-    for i in range(rings - 1):
-        a, b, c2, d = ring(i, j), ring(i, j + 1), ring(i + 1, j), ring(i + 1, j + 1)
-        faces += [np.stack([a, c2, d], axis=-1), np.stack([a, d, b], axis=-1)]
-    vertices = np.stack([x, y, z], axis=-1)
-    return vertices, normals, _wind(vertices, normals, np.concatenate(faces))
-
-
-def rim_phi(rings: int) -> np.ndarray:
-    """Azimuths of the 4·rings rim vertices of a cap (and of the annuli and barrel that meet it), so
-    that no spoke lies on an axis or a diagonal, where a regular grid of rays would run along the shared
-    edges: half a segment off them for an even count, a quarter for an odd one (whose diagonals fall
-    on a spoke half a segment off)."""
-    segments = 4 * rings
-    return 2.0 * math.pi * (np.arange(segments) + (0.5 if rings % 2 == 0 else 0.25)) / segments
-
-
-def circle(radius: float, z: float, phi: np.ndarray) -> np.ndarray:
-    """Vertices (n, 3) on the circle of `radius` at z, at azimuths `phi`: every mesh computes a shared
-    ring here, so two meshes meeting on it hold bit-identical vertices."""
-    return np.stack([radius * np.cos(phi), radius * np.sin(phi), np.full(len(phi), z)], axis=-1)
-
-
-def annulus_mesh(inner: np.ndarray, outer: np.ndarray):
-    """A ring between the closed polygons `inner` and `outer` ((n, 3) each, vertex j of one facing
-    vertex j of the other), normals −z. Given the cap's own rim vertices and the barrel's ring, it
-    shares their edges: no ray passes between the meshes."""
-    n = len(inner)
-    j = np.arange(n)
-    k = (j + 1) % n
-    faces = np.concatenate([np.stack([j, n + j, n + k], -1), np.stack([j, n + k, k], -1)])
-    vertices = np.concatenate([inner, outer])
-    normals = np.tile([0.0, 0.0, -1.0], (len(vertices), 1))
-    return vertices, normals, _wind(vertices, normals, faces)
-
-
-def tube_mesh(radius: float, z_levels, phi: np.ndarray):
-    """An open cylinder of `radius` through the sorted `z_levels` (mm), a vertex ring at each (where the
-    annuli meet it, so none ends on an edge's middle), normals facing the axis."""
-    n = len(phi)
-    vertices = np.concatenate([circle(radius, z, phi) for z in z_levels])
-    normals = -vertices * np.array([1.0, 1.0, 0.0]) / radius
-    j = np.arange(n)
-    k = (j + 1) % n
-    faces = np.concatenate([np.concatenate([np.stack([a + j, a + n + j, a + n + k], -1),
-                                            np.stack([a + j, a + n + k, a + k], -1)])
-                            for a in range(0, n * (len(z_levels) - 1), n)])
-    return vertices, normals, _wind(vertices, normals, faces)
-
-
-def joined(*meshes):
-    """One mesh of several (vertices, normals, faces) meshes."""
-    offsets = np.cumsum([0] + [len(m[0]) for m in meshes[:-1]])
-    return (np.concatenate([m[0] for m in meshes]), np.concatenate([m[1] for m in meshes]),
-            np.concatenate([m[2] + o for m, o in zip(meshes, offsets)]).astype(np.int32))
-
-
-def absorber_ring(rim: np.ndarray, radius: float, outer: float, z: float, phi: np.ndarray):
-    """The absorbing annulus of an aperture of `radius` at z out to the barrel's `outer` radius, two
-    layers: one between `rim` (the cap's own rim vertices, or the stop's circle) and the barrel's ring,
-    sharing their edges; and one turned half a segment, from the polygon circumscribing the aperture's
-    circle, so it covers no glass. Mitsuba's CPU ray tracer (Embree, not in its robust mode) lets about one
-    ray in a million through a shared edge; the two layers' edges cross instead of coinciding, so a ray
-    let through one layer's edge meets the other's face."""
-    turn = phi + math.pi / len(phi)
-    return joined(annulus_mesh(rim, circle(outer, z, phi)),
-                  annulus_mesh(circle(radius / math.cos(math.pi / len(phi)), z, turn), circle(outer, z, turn)))
-
-
-def _wind(vertices: np.ndarray, normals: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Faces reordered where needed so each geometric normal agrees with its vertex normals."""
-    v0, v1, v2 = (vertices[faces[:, k]] for k in range(3))
-    geo = np.cross(v1 - v0, v2 - v0)
-    flip = np.einsum("ij,ij->i", geo, normals[faces].sum(axis=1)) < 0
-    out = faces.copy()
-    out[flip] = out[flip][:, ::-1]
-    return out.astype(np.int32)
-
-
-def write_ply(path: str | os.PathLike, vertices: np.ndarray, normals: np.ndarray, faces: np.ndarray) -> None:
-    """Binary little-endian PLY with vertex normals (what Mitsuba's `ply` shape reads)."""
-    header = ("ply\nformat binary_little_endian 1.0\n"
-              f"element vertex {len(vertices)}\n"
-              "property float x\nproperty float y\nproperty float z\n"
-              "property float nx\nproperty float ny\nproperty float nz\n"
-              f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n")
-    vert = np.concatenate([vertices, normals], axis=1).astype("<f4")
-    face = np.zeros(len(faces), dtype=[("n", "u1"), ("i", "<i4", (3,))])
-    face["n"], face["i"] = 3, faces
-    with atomic_path(path) as tmp, open(tmp, "wb") as f:
-        f.write(header.encode("ascii"))
-        f.write(vert.tobytes())
-        f.write(face.tobytes())
 
 
 @dataclass(frozen=True)
@@ -181,13 +56,18 @@ def check_gaps(lens: Lens) -> None:
                              "psf-grid and the lens_camera take this lens as it is)")
 
 
-def lens_parts(lens: Lens, rings: int = DEFAULT_RINGS) -> list[Part]:
+def resolve_rings(lens: Lens, rings: int | None) -> int:
+    """`rings` checked, or for None the count `mesh_rings` chooses for `lens`."""
+    return mesh_rings(lens) if rings is None else check_rings(rings)
+
+
+def lens_parts(lens: Lens, rings: int | None = None) -> list[Part]:
     """Caps for refracting surfaces, absorbing annuli around every clear aperture (and the stop), and
     a barrel closing the sides from the first aperture to the image plane. A lens of polar fields (a
     fisheye) takes light from 90° and beyond, which reaches its front element from the side and from
     behind its vertex: that element stands proud of the mount, with no annulus and the barrel starting
-    at the second surface's rim."""
-    check_rings(rings)
+    at the second surface's rim. `rings` per cap (None: `mesh_rings`)."""
+    rings = resolve_rings(lens, rings)
     check_gaps(lens)
     parts = []
     outer = 2.0 * max(s.semi_diameter for s in lens.surfaces) + 10.0
