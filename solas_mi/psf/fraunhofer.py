@@ -57,7 +57,9 @@ def caustic_fallback(lens, pf: PupilFunction, data: np.ndarray, transmission: np
     full = pf.coverage >= 1
     median = np.array([np.median(p[m]) if m.any() else 0.0 for p, m in zip(pf.power, full)])
     peak = np.where(full, pf.power, 0.0).max(axis=(1, 2))
-    suspect = np.flatnonzero(peak > FOLD_POWER * np.maximum(median, 1e-300))
+    # a field whose chief ray is lost (Cooke at 32°: totally reflected) has its pupil built about a
+    # substitute ray; its integral is checked too (transmission 0.015 against 0.079 by ray count)
+    suspect = np.flatnonzero((peak > FOLD_POWER * np.maximum(median, 1e-300)) | pf.chief.vignetted)
     if not len(suspect):
         return np.zeros(len(data), dtype=bool), []
     wl, chief = pf.wavelength_nm[suspect], _chief_subset(pf.chief, suspect)
@@ -67,8 +69,9 @@ def caustic_fallback(lens, pf: PupilFunction, data: np.ndarray, transmission: np
     if not len(folded):
         return np.zeros(len(data), dtype=bool), []
     i = folded[0]
-    text = (f"the pupil folds over a caustic at field ({field_deg[i, 0]:g}, {field_deg[i, 1]:g}) deg, "
-            f"{pf.wavelength_nm[i]:g} nm (rays near total internal reflection; Fraunhofer transmission "
+    text = (f"the pupil function fails at field ({field_deg[i, 0]:g}, {field_deg[i, 1]:g}) deg, "
+            f"{pf.wavelength_nm[i]:g} nm (it folds over a caustic, rays near total internal reflection, or is "
+            f"built about a substitute for a lost chief ray; Fraunhofer transmission "
             f"{transmission[i]:.3g} against {counted[off][0]:.3g} by ray count): the PSF of {len(folded)} "
             f"field(s) is the geometric method's ({FOLD_RAYS} x {FOLD_RAYS} rays), without diffraction")
     sub = None if center is None else center[folded]

@@ -61,16 +61,19 @@ def resolve_rings(lens: Lens, rings: int | None) -> int:
     return mesh_rings(lens) if rings is None else check_rings(rings)
 
 
-def lens_parts(lens: Lens, rings: int | None = None) -> list[Part]:
+def lens_parts(lens: Lens, rings: int | None = None, image_radius: float = 0.0) -> list[Part]:
     """Caps for refracting surfaces, absorbing annuli around every clear aperture (and the stop), and
     a barrel closing the sides from the first aperture to the image plane. A lens of polar fields (a
     fisheye) takes light from 90° and beyond, which reaches its front element from the side and from
     behind its vertex: that element stands proud of the mount, with no annulus and the barrel starting
-    at the second surface's rim. `rings` per cap (None: `mesh_rings`)."""
+    at the second surface's rim. `rings` per cap (None: `mesh_rings`). The barrel's radius is twice the
+    largest clear aperture plus 10 mm, or more to hold the image plane out to `image_radius` mm (the
+    sensor's corners, a PSF's window): a barrel narrower than the image cut off the light that arrives
+    there (Cooke triplet at 32°: its light lands 31 mm off axis, outside a 30 mm barrel)."""
     rings = resolve_rings(lens, rings)
     check_gaps(lens)
     parts = []
-    outer = 2.0 * max(s.semi_diameter for s in lens.surfaces) + 10.0
+    outer = max(2.0 * max(s.semi_diameter for s in lens.surfaces) + 10.0, 1.05 * image_radius + 1.0)
     phi = rim_phi(rings)
     before = lens.object_glass
     before_name = "AIR" if lens.object_glass.kind == "air" else lens.object_glass.name
@@ -244,7 +247,8 @@ def write_scene(lens: Lens, out_dir: str | os.PathLike, image: str, camera: Came
     camera = camera or camera_for(lens)
     out = Path(out_dir)
     (out / "meshes").mkdir(parents=True, exist_ok=True)
-    parts = lens_parts(lens, spec.rings)
+    corner = math.hypot(np.abs(camera.pixel_x_mm()).max(), np.abs(camera.pixel_y_mm()).max()) + camera.pitch_mm
+    parts = lens_parts(lens, spec.rings, corner)
     for p in parts:
         write_ply(out / "meshes" / f"{p.name}.ply", *p.mesh)
     held = lens_file(lens, out)
