@@ -135,13 +135,18 @@ def mesh_blur_um(lens: Lens, rings: int) -> float:
 
 def mesh_rings(lens: Lens) -> int:
     """The ring count that keeps `mesh_blur_um` below MESH_BLUR_OF_AIRY of the Airy radius 1.22·λ·N
-    (the lens's shortest wavelength, its working f-number): at least AUTO_MIN_RINGS (the count before it was chosen), at most
-    MAX_RINGS."""
+    (the lens's shortest wavelength, its working f-number): at least AUTO_MIN_RINGS (the count before it
+    was chosen), at most MAX_RINGS. A lens without a paraxial image (afocal) keeps AUTO_MIN_RINGS."""
+    from ..errors import SolasError
     from ..optics.paraxial import paraxial
 
-    airy_um = 1.22 * min(lens.wavelengths_nm) * 1e-3 * paraxial(lens).working_f_number
-    need = _REFERENCE_RINGS * math.sqrt(mesh_blur_um(lens, _REFERENCE_RINGS) / (MESH_BLUR_OF_AIRY * airy_um))
-    return int(min(MAX_RINGS, max(AUTO_MIN_RINGS, math.ceil(need))))
+    try:
+        airy_um = 1.22 * min(lens.wavelengths_nm) * 1e-3 * paraxial(lens).working_f_number
+        blur = mesh_blur_um(lens, _REFERENCE_RINGS)
+    except SolasError:
+        return AUTO_MIN_RINGS
+    need = _REFERENCE_RINGS * math.sqrt(blur / (MESH_BLUR_OF_AIRY * airy_um)) if airy_um > 0 else math.inf
+    return int(min(MAX_RINGS, max(AUTO_MIN_RINGS, math.ceil(need)))) if math.isfinite(need) else AUTO_MIN_RINGS
 
 
 def rim_phi(rings: int) -> np.ndarray:
