@@ -108,7 +108,8 @@ def window_warnings(energy: np.ndarray, fields_deg: np.ndarray, size: int, pitch
                 "normalised PSFs hide the rest; enlarge --size or --pitch-um (or --auto-window)"]
     return [f"the PSF at field ({fx:g}, {fy:g}) deg holds {100 * energy[i]:.1f} % of the transmitted light in its "
             f"window ({_count(high)} above {100 / WINDOW_ENERGY_LIMIT:.0f} %): aliasing from an under-sampled "
-            "pupil; raise --pupil-samples"]
+            "pupil; raise --pupil-samples as the sampling warning advises (its --psf-method geometric where "
+            "no allowed count resolves the wavefront)"]
 
 
 def _count(mask: np.ndarray) -> str:

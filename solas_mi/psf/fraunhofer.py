@@ -34,10 +34,11 @@ def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: fl
     transmission = pf.transmission.copy()
     folded, fold_warnings = caustic_fallback(lens, pf, data, transmission, pitch_um, size, center, fields)
     error[folded] = 0.0  # those PSFs are the geometric method's
+    resolved = np.where(error > ERROR_LIMIT, sampling_need(pf, pitch_um, size, ~folded)[2], 0.0)
     return Computed(data=data, chief=pf.chief, transmission=transmission, vignetted_by=pf.vignetted_by,
-                    centre_um=center, warnings=tuple(sampling_warnings(pf, pitch_um, size, fields, ~folded)
+                    centre_um=center, warnings=tuple(sampling_warnings(pf, pitch_um, size, fields, ~folded, most)
                                                      + convergence_warnings(error, pupil_samples, most, fields,
-                                                                          pf.wavelength_nm)
+                                                                          pf.wavelength_nm, resolved.max())
                                                      + fold_warnings + centring_warnings(pf.chief, light, field_deg)))
 
 
@@ -57,7 +58,9 @@ def caustic_fallback(lens, pf: PupilFunction, data: np.ndarray, transmission: np
     full = pf.coverage >= 1
     median = np.array([np.median(p[m]) if m.any() else 0.0 for p, m in zip(pf.power, full)])
     peak = np.where(full, pf.power, 0.0).max(axis=(1, 2))
-    suspect = np.flatnonzero(peak > FOLD_POWER * np.maximum(median, 1e-300))
+    # a field whose chief ray is lost (Cooke at 32°: totally reflected) has its pupil built about a
+    # substitute ray; its integral is checked too (transmission 0.015 against 0.079 by ray count)
+    suspect = np.flatnonzero((peak > FOLD_POWER * np.maximum(median, 1e-300)) | pf.chief.vignetted)
     if not len(suspect):
         return np.zeros(len(data), dtype=bool), []
     wl, chief = pf.wavelength_nm[suspect], _chief_subset(pf.chief, suspect)
@@ -67,8 +70,9 @@ def caustic_fallback(lens, pf: PupilFunction, data: np.ndarray, transmission: np
     if not len(folded):
         return np.zeros(len(data), dtype=bool), []
     i = folded[0]
-    text = (f"the pupil folds over a caustic at field ({field_deg[i, 0]:g}, {field_deg[i, 1]:g}) deg, "
-            f"{pf.wavelength_nm[i]:g} nm (rays near total internal reflection; Fraunhofer transmission "
+    text = (f"the pupil function fails at field ({field_deg[i, 0]:g}, {field_deg[i, 1]:g}) deg, "
+            f"{pf.wavelength_nm[i]:g} nm (it folds over a caustic, rays near total internal reflection, or is "
+            f"built about a substitute for a lost chief ray; Fraunhofer transmission "
             f"{transmission[i]:.3g} against {counted[off][0]:.3g} by ray count): the PSF of {len(folded)} "
             f"field(s) is the geometric method's ({FOLD_RAYS} x {FOLD_RAYS} rays), without diffraction")
     sub = None if center is None else center[folded]
@@ -104,13 +108,14 @@ def error_estimate(data: np.ndarray, coarse: np.ndarray, samples: int) -> np.nda
 
 
 def convergence_warnings(error: np.ndarray, samples: int, most: int, field_deg: np.ndarray,
-                         wavelength_nm: np.ndarray) -> list[str]:
+                         wavelength_nm: np.ndarray, floor: float = 0.0) -> list[str]:
     """A warning naming the worst PSF whose estimated error exceeds ERROR_LIMIT of its peak, with the
-    pupil samples that bring it within (error ∝ 1/N²), or saying that `most` samples cannot."""
+    pupil samples that bring it within (error ∝ 1/N²; at least `floor`, the count that resolves the
+    wavefront: the 1/N² estimate holds only once it is resolved), or saying that `most` samples cannot."""
     if not (error > ERROR_LIMIT).any():
         return []
     i = int(np.argmax(error))
-    need = int(math.ceil(samples * math.sqrt(error[i] / ERROR_LIMIT) * 1.15 / 8) * 8)
+    need = max(int(math.ceil(samples * math.sqrt(error[i] / ERROR_LIMIT) * 1.15 / 8) * 8), int(floor))
     head = (f"the PSF at field ({field_deg[i, 0]:g}, {field_deg[i, 1]:g}) deg, {wavelength_nm[i]:g} nm is about "
             f"{100 * error[i]:.1f} % of its peak off its converged value with {samples} pupil samples "
             f"(limit {100 * ERROR_LIMIT:g} %)")
@@ -120,12 +125,11 @@ def convergence_warnings(error: np.ndarray, samples: int, most: int, field_deg: 
             "--psf-method geometric (the wavefront is far from diffraction-limited)"]
 
 
-def sampling_warnings(pf: PupilFunction, pitch_um: float, size: int, field_deg: np.ndarray,
-                      keep: np.ndarray | None = None) -> list[str]:
-    """Where the pupil grid cannot carry the wavefront: a phase step above π between neighbouring
-    cells (the wavefront is under-sampled), or a PSF period λ'/Δα shorter than the window (copies of
-    the PSF fold into it). Each names the worst field and the pupil samples that would do; fields
-    not in `keep` (a mask; default all) are left out."""
+def sampling_need(pf: PupilFunction, pitch_um: float, size: int, keep: np.ndarray | None = None
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per field: the largest phase step (rad) between neighbouring pupil cells, the PSF period λ'/Δα
+    (µm), and the pupil samples that would keep every step within π/2 and the period beyond the
+    window. Fields not in `keep` (a mask; default all) need nothing."""
     n = pf.alpha.shape[1]
     lam_nm = pf.wavelength_nm[:, None, None]
     phase = 2.0 * math.pi / (lam_nm * 1e-6) * pf.opd_mm
@@ -139,19 +143,32 @@ def sampling_warnings(pf: PupilFunction, pitch_um: float, size: int, field_deg: 
                                                                           pf.beta[:, 1] - pf.beta[:, 0])
     if keep is not None:
         steps, period_um = np.where(keep, steps, 0.0), np.where(keep, period_um, np.inf)
+    need = np.maximum(n * steps / (0.5 * math.pi), n * size * pitch_um / period_um)
+    return steps, period_um, np.ceil(need / 8) * 8
+
+
+def sampling_warnings(pf: PupilFunction, pitch_um: float, size: int, field_deg: np.ndarray,
+                      keep: np.ndarray | None = None, most: int | None = None) -> list[str]:
+    """Where the pupil grid cannot carry the wavefront: a phase step above π between neighbouring
+    cells (the wavefront is under-sampled), or a PSF period λ'/Δα shorter than the window (copies of
+    the PSF fold into it). Each names the worst field and the pupil samples that would do, or, where
+    that is beyond `most` (the most allowed), the geometric method; fields not in `keep` (a mask;
+    default all) are left out."""
+    n = pf.alpha.shape[1]
+    steps, period_um, need = sampling_need(pf, pitch_um, size, keep)
     window_um = size * pitch_um
-    need = np.maximum(n * steps / (0.5 * math.pi), n * window_um / period_um)
+    advice = (f"use --pupil-samples {int(need.max())} or more" if most is None or need.max() <= most else
+              f"that needs about {int(need.max())} pupil samples, beyond the {most} maximum: use --psf-method "
+              "geometric (the wavefront is far from diffraction-limited)")
     out = []
     if (steps > math.pi).any():
         i = int(np.argmax(steps))
         out.append(f"pupil samples {n} under-resolve the wavefront at field ({field_deg[i, 0]:g}, {field_deg[i, 1]:g}) "
-                   f"deg, {pf.wavelength_nm[i]:g} nm: phase steps up to {steps[i]:.1f} rad per cell (> pi); use "
-                   f"--pupil-samples {int(math.ceil(need.max() / 8) * 8)} or more")
+                   f"deg, {pf.wavelength_nm[i]:g} nm: phase steps up to {steps[i]:.1f} rad per cell (> pi); {advice}")
     if (period_um < window_um).any():
         i = int(np.argmin(period_um))
         out.append(f"the {window_um:g} um window is wider than the PSF period {period_um[i]:.1f} um of {n} pupil samples "
-                   f"at field ({field_deg[i, 0]:g}, {field_deg[i, 1]:g}) deg: copies of the PSF fold in; use "
-                   f"--pupil-samples {int(math.ceil(need.max() / 8) * 8)} or more")
+                   f"at field ({field_deg[i, 0]:g}, {field_deg[i, 1]:g}) deg: copies of the PSF fold in; {advice}")
     return out
 
 

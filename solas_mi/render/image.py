@@ -16,7 +16,7 @@ from ..optics.paraxial import paraxial
 from . import response as responses
 from .loop import Render, render
 from .mitsuba import load_scene, variant_for
-from .scene import write_scene
+from .scene import resolve_rings, write_scene
 from .spec import RenderSpec
 
 SCENE_PREFIX = "solas-scene-"  # + the process id: $TMPDIR/solas-scene-PID-XXXXXXXX, one per image render
@@ -93,5 +93,5 @@ def render_image(lens, image: str | np.ndarray, spec: RenderSpec | None = None, 
         result = render(scene, spec.spp, seed=spec.seed, progress=progress)
     result.meta.update(camera.meta())
     result.meta.update({"lens": lens.name, "lens_hash": lens.hash, "boundary": spec.boundary, "fresnel": spec.fresnel,
-                        "mapping": spec.mapping, "cap_rings": spec.rings, "render_spec": spec.as_dict()})
+                        "mapping": spec.mapping, "cap_rings": resolve_rings(lens, spec.rings), "render_spec": spec.as_dict()})
     return result

@@ -20,13 +20,14 @@ from ..optics import tracer as T
 from ..psf.base import Computed, centring_warnings, window_centres_um
 from ..psf.geometric import bin_hits, entrance_grid, light_offsets_um
 from .loop import continue_ray
-from .scene import DEFAULT_RINGS, lens_parts, write_ply
+from .scene import lens_parts, write_ply
 
 VARIANT = "llvm_ad_spectral"
 
 
-def lens_geometry(lens, rings: int = DEFAULT_RINGS, **extra):
-    """The lens as a Mitsuba scene (mm, lens file's frame): cap meshes with `sellmeier_dielectric` (no
+def lens_geometry(lens, rings: int | None = None, image_radius: float = 0.0, **extra):
+    """The lens as a Mitsuba scene (mm, lens file's frame): cap meshes of `rings` rings (None:
+    `render.mesh.mesh_rings`'s), a barrel holding the image plane out to `image_radius` mm, with `sellmeier_dielectric` (no
     Fresnel losses) and absorbing apertures, no sensor image and no texture; `extra` scene entries
     (a sensor, an integrator, objects) are added as given."""
     from .mitsuba import mitsuba
@@ -34,7 +35,7 @@ def lens_geometry(lens, rings: int = DEFAULT_RINGS, **extra):
     mi = mitsuba(VARIANT)
     scene = {"type": "scene", "absorber": {"type": "diffuse", "reflectance": {"type": "rgb", "value": 0.0}}, **extra}
     with tempfile.TemporaryDirectory(prefix="solas-lens-") as tmp:
-        for part in lens_parts(lens, rings):
+        for part in lens_parts(lens, rings, image_radius):
             path = Path(tmp) / f"{part.name}.ply"
             write_ply(path, *part.mesh)
             bsdf = {"type": "ref", "id": "absorber"} if part.int_glass is None else {
@@ -92,9 +93,10 @@ def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: fl
     field_deg = np.atleast_2d(np.asarray(field_deg, dtype=np.float64))
     wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(field_deg),)).copy()
     chief = P.chief_rays(lens, field_deg, wavelength_nm)
-    hits = scene_hits(lens_geometry(lens), lens, field_deg, wavelength_nm, rays, chief)
     light = light_offsets_um(lens, field_deg, wavelength_nm, chief)
     center = window_centres_um(chief, light, shared_origin)
+    reach = np.hypot(*(chief.image_xy + (0.0 if center is None else center * 1e-3)).T).max() + size * pitch_um * 1e-3
+    hits = scene_hits(lens_geometry(lens, image_radius=float(reach)), lens, field_deg, wavelength_nm, rays, chief)
     data, transmission = bin_hits(hits, pitch_um, size, center)
     return Computed(data=data, chief=chief, transmission=transmission, vignetted_by=[[] for _ in field_deg],
                     warnings=tuple(centring_warnings(chief, light, field_deg)), centre_um=center)

@@ -1,4 +1,4 @@
-"""A lens as Mitsuba geometry: every refracting surface a triangle-mesh cap (sphere or even asphere) with vertex
+"""A lens as Mitsuba geometry (the meshes: `render.mesh`): every refracting surface a triangle-mesh cap (sphere or even asphere) with vertex
 normals carrying its two glasses (`sellmeier_dielectric`), every clear aperture and the stop an
 absorbing annulus, a barrel closing the sides, the `lens_sensor` on the image plane and the input
 image as `image_object`.
@@ -19,103 +19,14 @@ import numpy as np
 from ..errors import SolasError
 from ..imageio import atomic_path, write_text
 from ..optics.camera import Camera, camera_for
-from ..optics.lens import Lens, sag_slope
-from ..optics.lens import sag as asphere_sag
+from ..optics.lens import Lens
 from ..outputs import inside, safe_name
 from . import response as responses
-from .spec import DEFAULT_RINGS, RenderSpec, check_rings
+from .mesh import absorber_ring, cap_mesh, circle, joined, mesh_rings, rim_phi, tube_mesh, write_ply
+from .spec import RenderSpec, check_rings
 
 SPAWN_OFFSET_MM = 1e-4  # a continued ray starts this far (mm) along its own direction (`loop.continue_ray`)
 MIN_GAP_MM = 10 * SPAWN_OFFSET_MM  # closest two refracting surfaces of the mesh scene may come
-
-
-def cap_mesh(radius: float, vertex_z: float, semi_diameter: float, rings: int, conic: float = 0.0,
-             aspheric: tuple[float, ...] = ()):
-    """A spherical cap (flat disk if radius is 0), or the even asphere of `conic` and `aspheric` (the
-    lens file's sag, `optics.lens.sag`): vertices (n, 3), unit normals (n, 3) facing −z,
-    faces (m, 3) wound so that their geometric normals face −z too. `rings` rings of 4·rings
-    segments; ring radii are uniform in r. Spokes sit half a segment off the axes and diagonals,
-    where regular ray grids would graze the shared edges."""
-    segments = 4 * rings
-    r = semi_diameter * np.arange(1, rings + 1) / rings
-    phi = 2.0 * math.pi * (np.arange(segments) + 0.5) / segments
-    rr, pp = np.meshgrid(r, phi, indexing="ij")
-    x = np.concatenate([[0.0], (rr * np.cos(pp)).ravel()])
-    y = np.concatenate([[0.0], (rr * np.sin(pp)).ravel()])
-    if conic != 0.0 or any(aspheric):
-        c, rho2 = (1.0 / radius if radius else 0.0), x * x + y * y
-        z = vertex_z + asphere_sag(rho2, c, conic, aspheric)
-        slope = 2.0 * sag_slope(rho2, c, conic, aspheric)
-        normals = np.stack([slope * x, slope * y, -np.ones_like(x)], axis=-1)
-        normals /= np.linalg.norm(normals, axis=-1, keepdims=True)
-    elif radius == 0.0:
-        z = np.full_like(x, vertex_z)
-        normals = np.tile([0.0, 0.0, -1.0], (len(x), 1))
-    else:
-        c = 1.0 / radius
-        rho2 = x * x + y * y
-        sag = c * rho2 / (1.0 + np.sqrt(1.0 - c * c * rho2))
-        z = vertex_z + sag
-        normals = np.stack([x, y, z - (vertex_z + radius)], axis=-1) / radius
-    faces = []
-    ring = lambda i, j: 1 + i * segments + (j % segments)  # noqa: E731
-    j = np.arange(segments)
-    faces.append(np.stack([np.zeros(segments, int), ring(0, j), ring(0, j + 1)], axis=-1))
-    for i in range(rings - 1):
-        a, b, c2, d = ring(i, j), ring(i, j + 1), ring(i + 1, j), ring(i + 1, j + 1)
-        faces += [np.stack([a, c2, d], axis=-1), np.stack([a, d, b], axis=-1)]
-    vertices = np.stack([x, y, z], axis=-1)
-    return vertices, normals, _wind(vertices, normals, np.concatenate(faces))
-
-
-def annulus_mesh(z: float, inner: float, outer: float, segments: int = 256):
-    """A flat ring at z between radii inner and outer (mm)."""
-    phi = 2.0 * math.pi * np.arange(segments) / segments
-    ring = [np.stack([rad * np.cos(phi), rad * np.sin(phi), np.full(segments, z)], axis=-1) for rad in (inner, outer)]
-    vertices = np.concatenate(ring)
-    j = np.arange(segments)
-    k = (j + 1) % segments
-    faces = np.concatenate([np.stack([j, segments + j, segments + k], -1), np.stack([j, segments + k, k], -1)])
-    normals = np.tile([0.0, 0.0, -1.0], (len(vertices), 1))
-    return vertices, normals, _wind(vertices, normals, faces)
-
-
-def tube_mesh(radius: float, z0: float, z1: float, segments: int = 256):
-    """An open cylinder of `radius` from z0 to z1 (mm), normals facing the axis."""
-    phi = 2.0 * math.pi * np.arange(segments) / segments
-    vertices = np.concatenate([np.stack([radius * np.cos(phi), radius * np.sin(phi), np.full(segments, z)], -1)
-                               for z in (z0, z1)])
-    normals = -vertices * np.array([1.0, 1.0, 0.0]) / radius
-    j = np.arange(segments)
-    k = (j + 1) % segments
-    faces = np.concatenate([np.stack([j, segments + j, segments + k], -1), np.stack([j, segments + k, k], -1)])
-    return vertices, normals, _wind(vertices, normals, faces)
-
-
-def _wind(vertices: np.ndarray, normals: np.ndarray, faces: np.ndarray) -> np.ndarray:
-    """Faces reordered where needed so each geometric normal agrees with its vertex normals."""
-    v0, v1, v2 = (vertices[faces[:, k]] for k in range(3))
-    geo = np.cross(v1 - v0, v2 - v0)
-    flip = np.einsum("ij,ij->i", geo, normals[faces].sum(axis=1)) < 0
-    out = faces.copy()
-    out[flip] = out[flip][:, ::-1]
-    return out.astype(np.int32)
-
-
-def write_ply(path: str | os.PathLike, vertices: np.ndarray, normals: np.ndarray, faces: np.ndarray) -> None:
-    """Binary little-endian PLY with vertex normals (what Mitsuba's `ply` shape reads)."""
-    header = ("ply\nformat binary_little_endian 1.0\n"
-              f"element vertex {len(vertices)}\n"
-              "property float x\nproperty float y\nproperty float z\n"
-              "property float nx\nproperty float ny\nproperty float nz\n"
-              f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n")
-    vert = np.concatenate([vertices, normals], axis=1).astype("<f4")
-    face = np.zeros(len(faces), dtype=[("n", "u1"), ("i", "<i4", (3,))])
-    face["n"], face["i"] = 3, faces
-    with atomic_path(path) as tmp, open(tmp, "wb") as f:
-        f.write(header.encode("ascii"))
-        f.write(vert.tobytes())
-        f.write(face.tobytes())
 
 
 @dataclass(frozen=True)
@@ -145,30 +56,45 @@ def check_gaps(lens: Lens) -> None:
                              "psf-grid and the lens_camera take this lens as it is)")
 
 
-def lens_parts(lens: Lens, rings: int = DEFAULT_RINGS) -> list[Part]:
+def resolve_rings(lens: Lens, rings: int | None) -> int:
+    """`rings` checked, or for None the count `mesh_rings` chooses for `lens`."""
+    return mesh_rings(lens) if rings is None else check_rings(rings)
+
+
+def lens_parts(lens: Lens, rings: int | None = None, image_radius: float = 0.0) -> list[Part]:
     """Caps for refracting surfaces, absorbing annuli around every clear aperture (and the stop), and
     a barrel closing the sides from the first aperture to the image plane. A lens of polar fields (a
     fisheye) takes light from 90° and beyond, which reaches its front element from the side and from
     behind its vertex: that element stands proud of the mount, with no annulus and the barrel starting
-    at the second surface's rim."""
-    check_rings(rings)
+    at the second surface's rim. `rings` per cap (None: `mesh_rings`). The barrel's radius is twice the
+    largest clear aperture plus 10 mm, or more to hold the image plane out to `image_radius` mm (the
+    sensor's corners, a PSF's window): a barrel narrower than the image cut off the light that arrives
+    there (Cooke triplet at 32°: its light lands 31 mm off axis, outside a 30 mm barrel)."""
+    rings = resolve_rings(lens, rings)
     check_gaps(lens)
     parts = []
-    outer = 2.0 * max(s.semi_diameter for s in lens.surfaces) + 10.0
+    outer = max(2.0 * max(s.semi_diameter for s in lens.surfaces) + 10.0, 1.05 * image_radius + 1.0)
+    phi = rim_phi(rings)
     before = lens.object_glass
     before_name = "AIR" if lens.object_glass.kind == "air" else lens.object_glass.name
-    rim_z = []
+    rim_z, ring_z = [], []
     for k, (s, zv) in enumerate(zip(lens.surfaces, lens.vertex_z), start=1):
         zr = zv + float(s.sag(s.semi_diameter))
         rim_z.append(zr)
+        rim = circle(s.semi_diameter, zr, phi)
         if s.glass != before:
-            parts.append(Part(f"surface{k}", cap_mesh(s.radius, zv, s.semi_diameter, rings, s.conic, s.aspheric),
-                              before_name, s.material))
+            cap = cap_mesh(s.radius, zv, s.semi_diameter, rings, s.conic, s.aspheric)
+            rim = cap[0][-len(phi):]
+            parts.append(Part(f"surface{k}", cap, before_name, s.material))
         if not (k == 1 and lens.field_type.sideways):
-            parts.append(Part(f"aperture{k}", annulus_mesh(zr, s.semi_diameter, outer)))
+            parts.append(Part(f"aperture{k}", absorber_ring(rim, s.semi_diameter, outer, zr, phi)))
+            ring_z.append(zr)
         before, before_name = s.glass, s.material
     start = rim_z[1] if lens.field_type.sideways and len(rim_z) > 1 else min(rim_z) - 1.0
-    parts.append(Part("barrel", tube_mesh(outer, start, lens.image_z)))
+    levels = sorted({start, lens.image_z, *(z for z in ring_z if z > start)})
+    turn = phi + math.pi / len(phi)  # a second, circumscribing layer turned half a segment (`absorber_ring`)
+    parts.append(Part("barrel", joined(tube_mesh(outer, levels, phi),
+                                       tube_mesh(outer / math.cos(math.pi / len(phi)), levels, turn))))
     return parts
 
 
@@ -321,7 +247,8 @@ def write_scene(lens: Lens, out_dir: str | os.PathLike, image: str, camera: Came
     camera = camera or camera_for(lens)
     out = Path(out_dir)
     (out / "meshes").mkdir(parents=True, exist_ok=True)
-    parts = lens_parts(lens, spec.rings)
+    corner = math.hypot(np.abs(camera.pixel_x_mm()).max(), np.abs(camera.pixel_y_mm()).max()) + camera.pitch_mm
+    parts = lens_parts(lens, spec.rings, corner)
     for p in parts:
         write_ply(out / "meshes" / f"{p.name}.ply", *p.mesh)
     held = lens_file(lens, out)

@@ -18,7 +18,7 @@ from ..options import parse_wxh
 from .mitsuba import VARIANTS, check_name
 
 FRESNEL_MODES = ("transmit", "sample", "off")  # sellmeier_dielectric's `fresnel` (it reads them from here)
-DEFAULT_RINGS = 32  # scene PSFs match the tracer to 0.04 µm / 0.2 %; denser meshes render slower (README)
+AUTO_MIN_RINGS = 32  # the fewest rings the automatic count (`render.mesh.mesh_rings`) gives; denser meshes render slower
 # rings per cap mesh: 4·rings² vertices each. Measured (solas-doublet, meshes built and written, 2 cores):
 # 256 rings 0.6 s, 39 MB of PLY, 0.26 GB peak; 512 rings 2.8 s, 157 MB, 0.86 GB; 1024 rings 10 s, 629 MB,
 # 3.3 GB; 4096 rings would be 16x that (53 GB). The scene PSFs converged long before (32: 0.2 %, README)
@@ -48,7 +48,7 @@ def _focus(text: str) -> float:
 class RenderSpec:
     """How to render through a lens. `sensor` (rows, columns) pixels of `pitch_um` µm (None: the
     sensor's width spans the field); the input image spans ±`fov_deg` degrees (None: the lens's);
-    `response`, `boundary`, `fresnel` and `mapping` are the plugins' parameters; `rings` per cap mesh;
+    `response`, `boundary`, `fresnel` and `mapping` are the plugins' parameters; `rings` per cap mesh (None: `render.mesh.mesh_rings`'s);
     `spp` samples per pixel; `variant` the Mitsuba variant (None: `render.mitsuba.variant_for`'s);
     `seed` the sampler's; `focus_distance` (world units, inf allowed; None: the lens file's) sets the
     lens camera of a scene file (`render.user_scene`), not an image's render."""
@@ -63,7 +63,8 @@ class RenderSpec:
                           choices=BOUNDARIES)
     fresnel: str = _flag("Fresnel losses: transmit (weight by transmittance), sample (ghost paths too), off",
                          "transmit", choices=FRESNEL_MODES)
-    rings: int = _flag(f"rings of each cap mesh ({MIN_RINGS}..{MAX_RINGS})", DEFAULT_RINGS, parse=int)
+    rings: int | None = _flag(f"rings of each cap mesh ({MIN_RINGS}..{MAX_RINGS}; default: from the lens, so that the "
+                              "meshes blur a point by under a quarter of the Airy radius)", parse=int)
     mapping: str = _flag("projection of the input image at infinity: rectilinear, or for wide and fisheye lenses "
                          "equidistant, equisolid, equirectangular (an environment image spanning +-fov-deg)",
                          "rectilinear", choices=MAPPINGS)
@@ -87,7 +88,8 @@ class RenderSpec:
             allowed = fields_by_name()[name].metadata["choices"]
             if getattr(self, name) not in allowed:
                 raise SolasError(f"{name} {getattr(self, name)!r} must be one of {', '.join(allowed)}")
-        check_rings(self.rings)
+        if self.rings is not None:
+            check_rings(self.rings)
         _check_int("samples per pixel", self.spp, 1, MAX_SPP)
         _check_int("seed", self.seed, 0, MAX_SEED)
         if self.variant is not None:

@@ -26,7 +26,7 @@ from ..psf.base import DEFAULT_PITCH_UM, DEFAULT_SIZE, WINDOW_ENERGY_LIMIT
 from ..psf.fraunhofer import sampling_warnings
 from ..psf.geometric import geometric
 from ..psf.methods import psf
-from ..psf.registry import DEFAULT_PUPIL_SAMPLES
+from ..psf.registry import DEFAULT_PUPIL_SAMPLES, MAX_SAMPLING
 
 SAMPLING_TOLERANCE = 0.02  # of the PSF's peak: default pupil sampling against twice the samples
 FAR_TOLERANCE = 1e-3  # of the peak: an object beyond 1e9 mm against the object at infinity
@@ -86,7 +86,7 @@ def _transmission(lens: Lens, fields: np.ndarray, wl: float) -> Case:
     pf = pupil_function(lens, fields, np.full(len(fields), wl), DEFAULT_PUPIL_SAMPLES)
     rays = geometric(lens, fields, np.full(len(fields), wl), 2.0, 32, rays=400)[2]
     rel = np.abs(pf.transmission / rays - 1.0)
-    flagged = bool(sampling_warnings(pf, DEFAULT_PITCH_UM, DEFAULT_SIZE, fields))
+    flagged = bool(sampling_warnings(pf, DEFAULT_PITCH_UM, DEFAULT_SIZE, fields, most=MAX_SAMPLING))
     seen = ", ".join(f"{f[1]:g}°: {w:.4f}/{r:.4f}" for f, w, r in zip(fields, pf.transmission, rays))
     return Case("wave vs ray transmission", "within 1 % at 0, 0.7 and 1.0 of the field (TIR, vignetting), or the "
                 "pupil flagged", seen + (" (flagged)" if flagged else ""), bool(rel.max() < 0.01) or flagged)

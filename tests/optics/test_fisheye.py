@@ -169,17 +169,17 @@ def test_rim_rays_fill_the_stop_out_to_90_degrees(fisheye):
     assert np.ptp(ex, axis=-1)[-1] > 1.2 * np.ptp(ex, axis=-1)[0]
 
 
-def test_relative_illumination_of_polar_fields_is_the_tangent_form(doublet_spec):
+def test_chief_ray_illumination_of_polar_fields_is_the_tangent_form(doublet_spec):
     """Per solid angle (polar fields: h·dh/dθ / sin θ) and per tangent area (cos³θ · J(0)/J) are the
     same radiometry: the doublet read with polar fields gives its relative illumination to 3e-4 (the
     finite differences differ: a one-sided step in θ against a central one in tan θ)."""
-    from solas_mi.optics.illumination import relative_illumination
+    from solas_mi.optics.illumination import chief_ray_illumination
 
     polar = Lens.from_dict(dict(doublet_spec, field_deg=89.0))
     assert polar.field_type is POLAR
     fields = np.array([[0.0, 1.0], [0.0, 2.0], [1.5, 0.0]])
-    expected = relative_illumination(Lens.from_dict(doublet_spec), fields, 531.0)
-    assert relative_illumination(polar, fields, 531.0) == pytest.approx(expected, abs=3e-4)
+    expected = chief_ray_illumination(Lens.from_dict(doublet_spec), fields, 531.0)
+    assert chief_ray_illumination(polar, fields, 531.0) == pytest.approx(expected, abs=3e-4)
 
 
 def test_lens_info_of_the_fisheye_names_its_projection(capsys):

@@ -56,3 +56,25 @@ def test_a_count_beyond_the_maximum_says_so():
 
     (text,) = convergence_warnings(np.array([0.5]), 2048, 4096, np.zeros((1, 2)), np.array([531.0]))
     assert "beyond the 4096 maximum" in text and "--psf-method geometric" in text
+
+
+def test_advice_beyond_the_largest_pupil_grid_is_the_geometric_method():
+    """The steep singlet's rim rays meet total internal reflection; its wavefront steps 1700 rad per
+    cell of 128 pupil samples, and the Fraunhofer transmission is off the ray count. The warnings
+    advised 140544 samples (beyond the 4096 allowed), and the error estimate 1648, which still leaves
+    steps of 130 rad per cell. Every count advised is now one that resolves the wavefront and is allowed,
+    or the geometric method; following that advice gives the ray count's transmission."""
+    from pathlib import Path
+
+    from solas_mi.psf.geometric import geometric
+    from solas_mi.psf.registry import MAX_SAMPLING
+
+    lens = Lens.load(Path(__file__).parents[1] / "data" / "stiff" / "steep_singlet.toml")
+    wl = lens.wavelengths_nm[0]
+    p = psf(lens, (0, 0), wl, normalization="none", size=64, pitch_um=1.0)
+    text = " ".join(p.meta["warnings"])
+    advised = [int(n) for n in re.findall(r"--pupil-samples (\d+)", text)]
+    assert all(n <= MAX_SAMPLING for n in advised) and "--psf-method geometric" in text
+    g = psf(lens, (0, 0), wl, method="geometric", normalization="none", size=64, pitch_um=1.0)
+    rays = geometric(lens, np.array([[0.0, 0.0]]), np.array([wl]), 2.0, 32, rays=800)[2][0]
+    assert g.meta["transmission"] == pytest.approx(rays, rel=0.005)
