@@ -208,7 +208,8 @@ def symmetry_classes(fields: np.ndarray, decimals: int = 12):
 def psf_grid(lens: Lens, spec: GridSpec | None = None, progress=None, **options) -> PSFGrid:
     """PSFs on a field grid as `spec` says (a `GridSpec`; or its fields as keywords, e.g.
     `psf_grid(lens, grid=(24, 32), wavelengths_nm=[656, 531, 486])`, which also override a given
-    spec's). `progress(done, total)` is called after each batch of PSFs.
+    spec's). `progress(done, total)` is called after each batch of PSFs, counting the grid's PSFs
+    (nodes × wavelengths, mirrored ones included).
 
     layout "field": nodes spanning ±field_range_deg (x, y) (default: the lens's field in both);
     layout "sensor" (`psf.sensor`): nodes at the cell centres of a sensor_mm = (width, height) mm sensor
@@ -301,8 +302,8 @@ def compute_nodes(lens: Lens, spec: GridSpec, wl: tuple[float, ...], flat: np.nd
                     chief[k, i] = xy_i * sign[i]
                     transmission[k, i] = c.transmission[j]
                     energy[k, i] = S.window_energy(p[:size, :size], spec.pitch_um, c.transmission[j])
-            if progress is not None:
-                progress(k * len(canon) + b, len(wl) * len(canon))
+            if progress is not None:  # in nodes: the PSFs of the grid, mirrored ones included
+                progress(k * n + int(np.count_nonzero(which < b)), len(wl) * n)
     return Nodes(data, chief, transmission, energy, tuple(sorted(vignetting)), tuple(doubts))
 
 

@@ -21,6 +21,7 @@ from ..convolution.kernels import check_boundary
 from ..errors import SolasError
 from ..metrics.annuli import ANNULI, corner_radius
 from ..optics.camera import check_fov
+from ..progress import Progress
 from .engines import PSF_SAMPLING, Case, convolve, grid_units, ideal, psf_grid_for
 from .reference import Reference, check_reference, noise_variance_map, read_reference, reference, write_reference
 from .scores import compare
@@ -127,7 +128,8 @@ def _reference(lens, image: np.ndarray, out_dir: Path | None, common: dict, spp:
         return ref, var_map
     w, h = common["sensor"]
     log(f"crossval: {w}x{h} px, reference {spp} spp in {seeds} renders")
-    ref = reference(lens, image, spp, common["fov_deg"], seeds, common["boundary"], variant)
+    with Progress("crossval: reference", spp // seeds * seeds, "spp") as bar:
+        ref = reference(lens, image, spp, common["fov_deg"], seeds, common["boundary"], variant, progress=bar)
     var_map = noise_variance_map(ref.renders)
     if out_dir is not None:
         write_reference(out_dir / "reference.exr", ref, var_map, common)
