@@ -19,7 +19,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..errors import SolasError
-from ..imageio import read_exr, write_exr, write_png
+from ..imageio import read_exr, write_exr
 from ..optics.camera import pinhole_focal_mm
 from ..optics.lens import Lens
 from . import base as S
@@ -98,6 +98,12 @@ class PSFGrid:
                    _meta_array(path, meta, "chief_ray_mm", (len(wl), ny, nx, 2)), wl, float(meta["pitch_um"]), rest)
 
     def write_png(self, path: str) -> None:
+        """The mosaic for viewing (`preview`) as a PNG plot with axes in field degrees (`psf.preview`)."""
+        from .preview import plot_grid
+
+        plot_grid(self, self.preview(), path)
+
+    def preview(self) -> np.ndarray:
         """A mosaic for viewing, at most MOSAIC_PX wide and high: each PSF block-averaged down to fit
         and scaled to its peak; three wavelengths → R, G, B (longest red)."""
         ny, nx = self.shape
@@ -111,7 +117,7 @@ class PSFGrid:
             image = np.stack([mosaics[i] for i in order], axis=-1)
         else:
             image = np.mean(mosaics, axis=0)
-        write_png(path, image)
+        return image
 
 
 def check_grid_meta(path, meta: dict) -> tuple[int, int, int, tuple[float, ...]]:
