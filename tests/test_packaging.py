@@ -74,6 +74,30 @@ def test_every_readme_and_guide_example_is_run_or_says_why_not():
     assert stated >= 6
 
 
+def test_every_example_of_the_site_is_run_or_says_why_not():
+    """Beyond the README and the guide (details, lens files, validation, benchmarks, reference, developer
+    guide): each block with commands runs, or carries a skip mark with its reason; none is in a fence
+    the runner passes over (a ```text block of commands would be left out silently)."""
+    found = [ex for page in sorted((ROOT / "docs").rglob("*.md")) if "guide" not in page.parts
+             for ex in run_examples.examples(page)]
+    unmarked = [f"{ex.page.name}:{ex.line}" for ex in found if ex.language == "text" and not ex.skip]
+    assert not unmarked, f"commands in fences that are not run: {unmarked}"
+    assert all(len(ex.skip) >= run_examples.MIN_REASON for ex in found if ex.skip)
+    assert sum(not ex.skip for ex in found) >= 9  # reference, plugins, render, sharpness, street
+
+
+def test_the_runner_leaves_no_command_out_silently(tmp_path):
+    page = tmp_path / "page.md"
+    page.write_text("```text\nsolas-mi lens list\n```\n\n```text\na diagram ─► of words\n```\n")
+    assert [ex.language for ex in run_examples.examples(page)] == ["text"]
+    assert run_examples.run_page(page, quick=False, keep=False) == 1
+    page.write_text("<!-- example: skip it needs the reader's own frames -->\n\n```text\nsolas-mi lens list\n```\n")
+    assert run_examples.run_page(page, quick=False, keep=False) == 0
+    page.write_text("<!-- example: skip -->\n\n```sh\nsolas-mi lens list\n```\n")
+    with pytest.raises(SystemExit, match="needs its reason"):
+        run_examples.examples(page)
+
+
 def test_example_runner_checks_what_a_page_states(tmp_path):
     page = tmp_path / "page.md"
     page.write_text("```python\nx = 2\nx + 1  # → 4\n```\n\n```sh\necho hello\n```\n\n<!-- example: expect \"bye\" -->\n"
