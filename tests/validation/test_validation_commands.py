@@ -24,3 +24,10 @@ def test_commands_register_and_parse():
 def test_bad_values_are_a_solas_error():
     with pytest.raises(SolasError, match="comma-separated"):
         positive_ints("3,x", "--spp")
+
+
+def test_the_steps_of_a_long_run_go_to_stderr(capsys):
+    """stdout holds the results (the tables that benchmarks/run_all.py records), the steps stderr."""
+    commands._say("crossval: reference noise 0.2 % of RMS")
+    out, err = capsys.readouterr()
+    assert out == "" and err == "crossval: reference noise 0.2 % of RMS\n"
