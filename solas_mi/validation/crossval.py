@@ -62,9 +62,10 @@ def heat_png(path: Path, data: np.ndarray, title: str, vmax: float = 0.05) -> No
     for f in ANNULI["automotive"][:-1]:
         ax.add_patch(Circle(((w - 1) / 2, (h - 1) / 2), f * corner_radius(h, w), fill=False, color="cyan", lw=0.8,
                             ls="--"))
-    ax.set_title(title, fontsize=9)
-    ax.set_axis_off()
-    fig.colorbar(im, ax=ax, fraction=0.03, pad=0.01, format=lambda v, _: f"{100 * v:.0f} %")
+    ax.set(title=title, xlabel="x (px)", ylabel="y (px)")
+    ax.title.set_fontsize(9)
+    bar = fig.colorbar(im, ax=ax, fraction=0.03, pad=0.01, format=lambda v, _: f"{100 * v:.0f} %")
+    bar.set_label("error, % of the reference's RMS")
     fig.tight_layout()
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png")
