@@ -39,12 +39,17 @@ bench: setup
 bench-all: setup
 	$(PY) benchmarks/run_all.py --all
 
-# The documentation site in site/: every example of the README and the guide run as written (outputs
-# checked where stated), then `mkdocs build --strict` (any warning is an error); the CLI and API
-# reference pages are generated from the code by docs/tools/hooks.py at each build.
+# The documentation site in site/: every table of the benchmark and validation pages included from
+# benchmarks/results/ (docs/tools/check_pages.py), every example of the README and the site run as
+# written (outputs checked where stated; a block not run says why), then `mkdocs build --strict`
+# (any warning is an error); the CLI and API reference pages are generated from the code by
+# docs/tools/hooks.py at each build, and docs/tools/check_reference.py checks that the built site
+# documents every command, public function and class, and plugin.
 docs: setup
-	$(PY) docs/tools/run_examples.py README.md docs/guide
+	$(PY) docs/tools/check_pages.py
+	$(PY) docs/tools/run_examples.py README.md docs
 	NO_MKDOCS_2_WARNING=1 $(PY) -m mkdocs build --strict --site-dir site
+	$(PY) docs/tools/check_reference.py site
 
 # The wheel in a fresh environment outside the repository (.ci/smoke.sh)
 smoke: setup

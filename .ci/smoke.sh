@@ -40,11 +40,17 @@ step "lens list / lens info"
 "$S" lens info solas-doublet --json > info.json
 step "psf, psf-grid"
 "$S" psf solas-doublet --field-deg 0,2 --wavelengths-nm 531 --pitch-um 0.5 -o psf.exr
-"$S" psf-grid solas-doublet --grid 4x4 --wavelengths-nm 656,531,486 --psf-method geometric --size 64 --pitch-um 2 -o grid.exr
+"$S" psf-grid solas-doublet --grid 4x4 --wavelengths-nm 656,531,486 --psf-method geometric --size 64 --pitch-um 2 \
+  -o grid.exr 2> grid.log
+# progress in a log: a few plain lines, no carriage returns, counting the grid's 4x4x3 PSFs
+grep "^psf-grid:" grid.log | tail -n 1 | grep -q "^psf-grid: 48/48 PSFs (100 %" && [ "$(grep -c '^psf-grid:' grid.log)" -le 4 ] \
+  && ! grep -q $'\r' grid.log || { echo "smoke: psf-grid progress in a log:"; cat -A grid.log; exit 1; }
 step "degrade, render-image"
 photo=$("$PYI" -c 'from solas_mi.resources import resource_dir; print(resource_dir("scenes") / "images" / "rocket.png")')
 "$S" degrade "$photo" --psf-grid grid.exr -o degraded.exr
-"$S" render-image solas-doublet "$photo" --sensor 64x48 --spp 4 -o rendered.exr
+"$S" render-image solas-doublet "$photo" --sensor 64x48 --spp 4 -o rendered.exr 2> render.log
+[ "$(grep -c '^render: ' render.log)" -le 4 ] && grep -q "^render: 4/4 spp (100 %" render.log && ! grep -q $'\r' render.log \
+  || { echo "smoke: render progress in a log:"; cat -A render.log; exit 1; }
 step "a scene through lens_camera"
 cat > tiny.xml <<'XML'
 <scene version="3.0.0">

@@ -1,5 +1,6 @@
-"""Run benchmarks and record their output in benchmarks/results/<name>.md (the documentation's benchmark
-and validation pages include those files, so no number there is pasted by hand).
+"""Run benchmarks and validation commands and record their output in benchmarks/results/<name>.md (the
+documentation's benchmark and validation pages include those files, so no number there is pasted by
+hand; `docs/tools/check_pages.py` checks that every table on those pages is such an include).
 
     python benchmarks/run_all.py                   # the quick set (a few minutes on 2 cores): `make bench`
     python benchmarks/run_all.py bench_convolution # one benchmark, by name
@@ -11,42 +12,69 @@ import argparse
 import datetime
 import os
 import platform
+import re
+import shlex
 import subprocess
 import sys
 from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
+ANSI = re.compile(r"\x1b\[[0-9;]*m")  # terminal colours (Mitsuba's log) kept out of the Markdown
+# Validation runs of the command line whose tables the validation pages include: name → the
+# solas-mi arguments (run as `python -m solas_mi`, from the repository root).
+COMMANDS = {
+    "check_stability_solas-doublet": ["check-stability", "solas-doublet"],
+    "check_stability_cooke-triplet": ["check-stability", "cooke-triplet"],
+    "crossval_headline": ["crossval", "solas-doublet", "scenes/images/rocket.png", "-o", "out/bench/crossval",
+                          "--spp", "768"],
+}
 # name → arguments of the quick run; the quick set is what `make bench` runs
-QUICK = {"bench_psf_grid": ["--repeats", "3", "--skip-grid"], "bench_esfr": []}
+QUICK = {"bench_psf_grid": ["--repeats", "3"], "bench_esfr": [], "bench_anchors": [],
+         "check_stability_solas-doublet": COMMANDS["check_stability_solas-doublet"],
+         "check_stability_cooke-triplet": COMMANDS["check_stability_cooke-triplet"]}
 
 
 def run(name: str, arguments: list[str]) -> None:
-    """Run one benchmark, echo its output, and write it with the command and machine to results/NAME.md
-    (under a temporary name first: a failed run leaves the previous results as they were)."""
-    command = [sys.executable, str(HERE / f"{name}.py"), *arguments]
+    """Run one benchmark or validation command, echo its output, and write it with the command and
+    machine to results/NAME.md (under a temporary name first: a failed run leaves the previous results
+    as they were)."""
+    if name in COMMANDS:
+        command, shown = [sys.executable, "-m", "solas_mi", *arguments], " ".join(["solas-mi", *arguments])
+    else:
+        command = [sys.executable, str(HERE / f"{name}.py"), *arguments]
+        shown = " ".join(["python", f"benchmarks/{name}.py", *arguments])
     print(f"\n## {name}\n", flush=True)
-    done = subprocess.run(command, check=True, stdout=subprocess.PIPE, text=True)
+    load = os.getloadavg()[0]  # timings on a shared machine depend on the other jobs: recorded beside them
+    done = subprocess.run(command, check=True, stdout=subprocess.PIPE, text=True, cwd=HERE.parent)
     print(done.stdout, flush=True)
-    shown = " ".join(["python", f"benchmarks/{name}.py", *arguments])
     header = (f"<!-- written by benchmarks/run_all.py; do not edit -->\n"
-              f"`{shown}`, {datetime.date.today().isoformat()}, {platform.machine()} with {os.cpu_count()} cores:\n\n")
+              f"`{shown}`, {datetime.date.today().isoformat()}, {platform.machine()} with {os.cpu_count()} cores, "
+              f"load average {load:.1f} before the run:\n\n")
     RESULTS.mkdir(exist_ok=True)
     tmp = RESULTS / f".{name}.md.tmp"
-    tmp.write_text(header + done.stdout.strip() + "\n", encoding="utf-8")
+    text = ANSI.sub("", done.stdout).replace(f"{HERE.parent}/", "")  # paths as from the repository root
+    tmp.write_text(header + text.strip() + "\n", encoding="utf-8")
     tmp.replace(RESULTS / f"{name}.md")
 
 
 def main(argv: list[str] | None = None) -> int:
-    every = sorted(p.stem for p in HERE.glob("bench_*.py"))
+    every = sorted(p.stem for p in HERE.glob("bench_*.py")) + list(COMMANDS)
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("names", nargs="*", help=f"benchmarks to run (default: the quick set {', '.join(QUICK)})")
     ap.add_argument("--all", action="store_true", help="run every benchmark with its default arguments")
+    ap.add_argument("--arguments", help="the arguments of the one benchmark named, in place of its quick "
+                    "set's or default ones (e.g. --arguments='--repeats 2')")
     args = ap.parse_args(argv)
+    if args.arguments is not None and len(args.names) != 1:
+        ap.error("--arguments needs exactly one benchmark named")
     unknown = sorted(set(args.names) - set(every))
     if unknown:
         ap.error(f"unknown benchmark {', '.join(unknown)}; there are: {', '.join(every)}")
-    chosen = {n: [] for n in every} if args.all else {n: QUICK.get(n, []) for n in args.names} or QUICK
+    defaults = {**{n: [] for n in every}, **COMMANDS}
+    chosen = defaults if args.all else {n: QUICK.get(n, defaults[n]) for n in args.names} or QUICK
+    if args.arguments is not None:
+        chosen = {args.names[0]: shlex.split(args.arguments)}
     for name, arguments in chosen.items():
         run(name, arguments)
     return 0

@@ -19,6 +19,8 @@ for line in (ROOT / "requirements.lock").read_text().splitlines():
         LOCK[name.lower().replace("_", "-")] = version
 
 sys.path.insert(0, str(ROOT / "docs" / "tools"))
+import check_pages  # noqa: E402
+import check_reference  # noqa: E402
 import run_examples  # noqa: E402
 
 
@@ -72,6 +74,64 @@ def test_every_readme_and_guide_example_is_run_or_says_why_not():
     assert all(len(ex.skip) > 20 for ex in skipped) and len(skipped) <= 1  # only `make demo` / `make test`
     stated = sum(bool(ex.expect) for ex in found) + sum(run_examples.EXPECT in ex.code for ex in found)
     assert stated >= 6
+
+
+def test_every_example_of_the_site_is_run_or_says_why_not():
+    """Beyond the README and the guide (details, lens files, validation, benchmarks, reference, developer
+    guide): each block with commands runs, or carries a skip mark with its reason; none is in a fence
+    the runner passes over (a ```text block of commands would be left out silently)."""
+    found = [ex for page in sorted((ROOT / "docs").rglob("*.md")) if "guide" not in page.parts
+             for ex in run_examples.examples(page)]
+    unmarked = [f"{ex.page.name}:{ex.line}" for ex in found if ex.language == "text" and not ex.skip]
+    assert not unmarked, f"commands in fences that are not run: {unmarked}"
+    assert all(len(ex.skip) >= run_examples.MIN_REASON for ex in found if ex.skip)
+    assert sum(not ex.skip for ex in found) >= 9  # reference, plugins, render, sharpness, street
+
+
+def test_the_runner_leaves_no_command_out_silently(tmp_path):
+    page = tmp_path / "page.md"
+    page.write_text("```text\nsolas-mi lens list\n```\n\n```text\na diagram ─► of words\n```\n")
+    assert [ex.language for ex in run_examples.examples(page)] == ["text"]
+    assert run_examples.run_page(page, quick=False, keep=False) == 1
+    page.write_text("<!-- example: skip it needs the reader's own frames -->\n\n```text\nsolas-mi lens list\n```\n")
+    assert run_examples.run_page(page, quick=False, keep=False) == 0
+    page.write_text("<!-- example: skip -->\n\n```sh\nsolas-mi lens list\n```\n")
+    with pytest.raises(SystemExit, match="needs its reason"):
+        run_examples.examples(page)
+
+
+def test_benchmark_and_validation_tables_come_from_results_files():
+    problems, included, recorded = [], [], []
+    for page in check_pages.pages(list(check_pages.DEFAULT_PAGES)):
+        p, i, r = check_pages.check(page)
+        problems, included, recorded = problems + p, included + i, recorded + r
+    assert not problems
+    # recorded: KrakenOS (a side environment of its own) and the 16-min crossval headline, until it is re-run
+    assert len(included) >= 8 and len(recorded) <= 2
+
+
+def test_the_table_check_can_fail(tmp_path):
+    page = tmp_path / "page.md"
+    page.write_text('| a | b |\n|---|---|\n| 1 | 2 |\n\n--8<-- "benchmarks/results/nothing.md"\n\n'
+                    '--8<-- "README.md"\n\n<!-- table: recorded -->\n\n| c |\n|---|\n\n'
+                    '<!-- table: recorded by a tool that runs elsewhere -->\n\n| d |\n|---|\n\n```\n| e |\n```\n')
+    problems, included, recorded = check_pages.check(page)
+    assert [p.split(": ", 1)[1][:24] for p in problems] == [
+        "a table typed into the p", "includes benchmarks/resu", "includes README.md, not ", "a recorded table needs i"]
+    assert included == [] and len(recorded) == 1
+
+
+def test_the_reference_check_finds_what_a_site_leaves_out(tmp_path):
+    """`make docs` runs docs/tools/check_reference.py on the built site; on a site whose reference
+    pages are empty it names every command, public function and plugin missing."""
+    for page in ("api", "cli", "plugins"):
+        (tmp_path / "reference" / page).mkdir(parents=True)
+        (tmp_path / "reference" / page / "index.html").write_text("<html></html>")
+    assert "solas_mi.psf.grid.psf_grid" in check_reference.missing_api(tmp_path)
+    assert "plugins.lens_camera.LensCamera" in check_reference.missing_api(tmp_path)
+    assert "solas-mi lens list" in check_reference.missing_commands(tmp_path)
+    assert "lens_camera: its documentation rendered" in check_reference.missing_plugins(tmp_path)
+    assert check_reference.main([str(tmp_path)]) == 1
 
 
 def test_example_runner_checks_what_a_page_states(tmp_path):

@@ -10,11 +10,15 @@ comments that the site does not show:
 - in Python, `EXPRESSION  # → VALUE` on a line: the expression must give VALUE (to the printed digits
   for a number, else its repr or str);
 - `<!-- example: slow -->` before a block: left out by --quick;
-- `<!-- example: skip REASON -->` before a block: never run here (say why: `make test` runs itself).
+- `<!-- example: skip REASON -->` before a block: never run here; the reason is required (say why:
+  `make test` runs itself, an hour-long benchmark, inputs only the reader has) and listed in the summary.
 
-A block fails when it exits non-zero, misses a stated output, or prints a warning (": warning:").
+A block fails when it exits non-zero, misses a stated output, or prints a warning (": warning:"). No
+runnable block is left out silently: a fence of another language (text, none) whose lines read as
+commands (`solas-mi …`, `make …`, `python …`, `from solas_mi …`) fails unless it is marked skip
+with its reason — write it as ```sh or ```python to have it run.
 
-    python docs/tools/run_examples.py README.md docs/guide [--quick] [--keep]
+    python docs/tools/run_examples.py README.md docs [--quick] [--keep]
 """
 from __future__ import annotations
 
@@ -33,6 +37,10 @@ REPO = Path(__file__).resolve().parents[2]
 FENCE = re.compile(r"^```(\w+)[^\n]*\n(.*?)^```\s*$", re.M | re.S)
 MARK = re.compile(r"<!--\s*example:\s*(expect|slow|skip)\s*(.*?)\s*-->")
 RUN = {"sh": "sh", "bash": "sh", "python": "python"}
+# a line of a non-run fence that reads as a command or Python a reader would run
+COMMAND_LINE = re.compile(r"^\s*(\$ |solas-mi |make |python3? |\.venv/|dask |from solas_mi|import solas_mi)", re.M)
+FENCE_ANY = re.compile(r"^```(\w*)[^\n]*\n(.*?)^```\s*$", re.M | re.S)
+MIN_REASON = 15  # characters: a skip says why
 EXPECT = "# → "
 CHECK = '''
 def __expect(value, stated, where):
@@ -65,7 +73,7 @@ def examples(page: Path) -> list[Example]:
     text = page.read_text(encoding="utf-8")
     found: list[Example] = []
     pending: dict = {}
-    spans = sorted([(m.start(), "fence", m) for m in FENCE.finditer(text)] +
+    spans = sorted([(m.start(), "fence", m) for m in FENCE_ANY.finditer(text)] +
                    [(m.start(), "mark", m) for m in MARK.finditer(text)], key=lambda s: s[0])
     for start, kind, m in spans:
         if kind == "mark":
@@ -75,9 +83,12 @@ def examples(page: Path) -> list[Example]:
                     raise SystemExit(f"{page}: an expect mark before any example")
                 found[-1].expect.append(arg.strip('"'))
             else:
+                if what == "skip" and len(arg) < MIN_REASON:
+                    raise SystemExit(f"{page}:{text.count(chr(10), 0, start) + 1}: a skip mark needs its reason")
                 pending[what] = arg or True
-        elif m.group(1) in RUN:
-            found.append(Example(page, text.count("\n", 0, start) + 1, RUN[m.group(1)], m.group(2),
+        elif m.group(1) in RUN or COMMAND_LINE.search(m.group(2)):
+            language = RUN.get(m.group(1), "text")
+            found.append(Example(page, text.count("\n", 0, start) + 1, language, m.group(2),
                                  slow=bool(pending.get("slow")), skip=str(pending.get("skip") or "")))
             pending = {}
         else:
@@ -131,6 +142,11 @@ def run_page(page: Path, quick: bool, keep: bool) -> int:
         if ex.skip or (quick and ex.slow):
             print(f"  skip {where} ({ex.skip or 'slow'})")
             continue
+        if ex.language == "text":
+            failed += 1
+            print(f"  FAIL {where}: commands in a fence that is not run; write it as ```sh or ```python, or mark it "
+                  "<!-- example: skip REASON -->")
+            continue
         ok, output, seconds = run(ex, folder, env)
         print(f"  {'ok  ' if ok else 'FAIL'} {where} ({ex.language}, {seconds:.1f} s)", flush=True)
         if not ok:
@@ -147,7 +163,7 @@ def main(argv: list[str] | None = None) -> int:
     ap.add_argument("--quick", action="store_true", help="leave out the blocks marked slow")
     ap.add_argument("--keep", action="store_true", help="keep each page's folder (its path is printed)")
     args = ap.parse_args(argv)
-    pages = [p for path in args.paths for p in (sorted(path.glob("*.md")) if path.is_dir() else [path])]
+    pages = [p for path in args.paths for p in (sorted(path.rglob("*.md")) if path.is_dir() else [path])]
     start, failed = time.perf_counter(), 0
     for page in pages:
         print(f"{page}:", flush=True)

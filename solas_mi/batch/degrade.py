@@ -187,12 +187,14 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
     need = estimate(p, n if dask is None else 1)
     check_memory(f"batch of {len(p.todo)} images on {n} workers", need["peak_bytes"], force)
     from ..convolution.output import OUTPUT_FORMATS
+    from ..progress import Progress
 
     if output_format not in OUTPUT_FORMATS:
         raise SolasError(f"output format {output_format!r} must be one of {', '.join(OUTPUT_FORMATS)}")
     header: dict[str, Any] = {"method": method, "boundary": boundary, "linear": linear, "format": output_format}
     if p.lens is not None:
-        p.grid_path, hit, seconds = cache.get(p.lens, p.spec)
+        with Progress("psf-grid", None, "PSFs", enabled=progress) as bar:  # shown only when it is computed
+            p.grid_path, hit, seconds = cache.get(p.lens, p.spec, progress=bar)
         header["grid_source"], header["grid_seconds"] = "cache hit" if hit else "computed", seconds
         header["grid_spec"] = p.spec.canonical()
     else:

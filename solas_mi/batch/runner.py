@@ -222,22 +222,19 @@ def run_batch(manifest: "Manifest", todo: list[int], grid: "PSFGrid | None", gri
     (`outputs.hold_folder`: a second batch on it is refused, naming this one); the temporary files
     that killed runs or workers left there are removed before and after."""
     from ..outputs import hold_folder, remove_temporaries
+    from ..progress import Progress
 
     jobs = manifest.jobs
     with hold_folder(manifest.path.parent, f"batch {manifest.header.get('kind')} {manifest.header.get('batch_id')}"):
         remove_temporaries(manifest.path.parent)
         manifest.save()
-        bar = None
-        if progress:
-            from tqdm import tqdm
-
-            bar = tqdm(total=len(jobs), initial=len(jobs) - len(todo), unit=progress, desc=manifest.header.get("kind"))
+        bar = Progress(f"batch {manifest.header.get('kind')}", len(jobs), f"{progress}s",
+                       initial=len(jobs) - len(todo), enabled=bool(progress))
 
         def on_done(i: int, job: Job) -> None:
             jobs[i] = job
             manifest.save(force=False)
-            if bar is not None:
-                bar.update()
+            bar.update()
 
         try:
             if todo and dask is None:
@@ -245,7 +242,6 @@ def run_batch(manifest: "Manifest", todo: list[int], grid: "PSFGrid | None", gri
             elif todo:
                 run_dask(jobs, todo, grid, grid_path, settings, dask, workers, on_done)
         finally:
-            if bar is not None:
-                bar.close()
+            bar.close()
             remove_temporaries(manifest.path.parent)  # a worker killed while writing cannot remove its own
             manifest.save()

@@ -7,7 +7,6 @@ pixel grid is the sensor (`kernels.grid_camera`). PNG/JPEG input is sRGB-decoded
 from __future__ import annotations
 
 import argparse
-import sys
 from typing import Any
 
 from .methods import DEFAULT_METHOD, METHODS, check_method
@@ -19,6 +18,7 @@ def run_degrade(args: argparse.Namespace) -> int:
     from ..imageio import image_size
     from ..outputs import data_and_preview
     from ..optics.frame import parse_frame
+    from ..progress import Progress
     from ..psf.depth import read_grid
     from .output import degrade_file
 
@@ -28,14 +28,12 @@ def run_degrade(args: argparse.Namespace) -> int:
     rows, cols, channels = image_size(args.image)
     large = rows * cols * channels > LARGE_IMAGE_VALUES
 
-    def progress(done: int, total: int) -> None:
-        if large:  # a large image takes long enough to want a sign of life
-            print(f"\rdegrade: channel {done}/{total}", end="\n" if done == total else "", file=sys.stderr, flush=True)
-
-    meta = degrade_file(args.image, read_grid(args.psf_grid), args.psf_grid, output, png, args.method,
-                        args.boundary, linear=args.linear, force=args.force, depth=args.depth,
-                        occlusion=args.occlusion, frame=parse_frame(args.fov_deg, args.fov_axis, args.intrinsics,
-                                                                    args.fisheye), progress=progress)
+    # a large image takes long enough to want a sign of life
+    with Progress("degrade", channels, "channels", enabled=large) as bar:
+        meta = degrade_file(args.image, read_grid(args.psf_grid), args.psf_grid, output, png, args.method,
+                            args.boundary, linear=args.linear, force=args.force, depth=args.depth,
+                            occlusion=args.occlusion, frame=parse_frame(args.fov_deg, args.fov_axis, args.intrinsics,
+                                                                        args.fisheye), progress=bar)
     height, width = meta["output_shape"][:2]
     print(f"wrote {output} and {png} ({args.method}{', depth-aware' if args.depth else ''}, {width}x{height} px, {meta['seconds']:.2f} s)")
     return 0

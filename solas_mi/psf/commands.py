@@ -7,6 +7,7 @@ from typing import Any
 from ..errors import SolasError
 from ..options import add_lens_argument, floats
 from ..outputs import data_and_preview, written_together
+from ..progress import Progress
 from .spec import add_options, from_args, given
 
 
@@ -64,11 +65,8 @@ def run_psf_grid(args) -> int:
     check_memory(f"psf-grid of {count} PSFs of {spec.size}x{spec.size}", need, args.force,
                  "fewer nodes or a smaller --size")
 
-    def progress(done: int, total: int) -> None:
-        print(f"\r{done}/{total} PSFs", end="", file=sys.stderr, flush=True)
-
-    g = make_grid(lens, spec, progress=progress)
-    print(file=sys.stderr)
+    with Progress("psf-grid", count, "PSFs") as bar:  # nodes × wavelengths × distances, mirrored ones included
+        g = make_grid(lens, spec, progress=bar)
     _finish("psf-grid", g, data_file, png, f" ({g.meta['seconds']:.1f} s)")
     return 0
 

@@ -19,7 +19,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..errors import SolasError
-from ..imageio import read_exr, write_exr, write_png
+from ..imageio import read_exr, write_exr
 from ..optics.camera import pinhole_focal_mm
 from ..optics.lens import Lens
 from . import base as S
@@ -98,6 +98,12 @@ class PSFGrid:
                    _meta_array(path, meta, "chief_ray_mm", (len(wl), ny, nx, 2)), wl, float(meta["pitch_um"]), rest)
 
     def write_png(self, path: str) -> None:
+        """The mosaic for viewing (`preview`) as a PNG plot with axes in field degrees (`psf.preview`)."""
+        from .preview import plot_grid
+
+        plot_grid(self, self.preview(), path)
+
+    def preview(self) -> np.ndarray:
         """A mosaic for viewing, at most MOSAIC_PX wide and high: each PSF block-averaged down to fit
         and scaled to its peak; three wavelengths → R, G, B (longest red)."""
         ny, nx = self.shape
@@ -111,7 +117,7 @@ class PSFGrid:
             image = np.stack([mosaics[i] for i in order], axis=-1)
         else:
             image = np.mean(mosaics, axis=0)
-        write_png(path, image)
+        return image
 
 
 def check_grid_meta(path, meta: dict) -> tuple[int, int, int, tuple[float, ...]]:
@@ -208,7 +214,8 @@ def symmetry_classes(fields: np.ndarray, decimals: int = 12):
 def psf_grid(lens: Lens, spec: GridSpec | None = None, progress=None, **options) -> PSFGrid:
     """PSFs on a field grid as `spec` says (a `GridSpec`; or its fields as keywords, e.g.
     `psf_grid(lens, grid=(24, 32), wavelengths_nm=[656, 531, 486])`, which also override a given
-    spec's). `progress(done, total)` is called after each batch of PSFs.
+    spec's). `progress(done, total)` is called after each batch of PSFs, counting the grid's PSFs
+    (nodes × wavelengths, mirrored ones included).
 
     layout "field": nodes spanning ±field_range_deg (x, y) (default: the lens's field in both);
     layout "sensor" (`psf.sensor`): nodes at the cell centres of a sensor_mm = (width, height) mm sensor
@@ -301,8 +308,8 @@ def compute_nodes(lens: Lens, spec: GridSpec, wl: tuple[float, ...], flat: np.nd
                     chief[k, i] = xy_i * sign[i]
                     transmission[k, i] = c.transmission[j]
                     energy[k, i] = S.window_energy(p[:size, :size], spec.pitch_um, c.transmission[j])
-            if progress is not None:
-                progress(k * len(canon) + b, len(wl) * len(canon))
+            if progress is not None:  # in nodes: the PSFs of the grid, mirrored ones included
+                progress(k * n + int(np.count_nonzero(which < b)), len(wl) * n)
     return Nodes(data, chief, transmission, energy, tuple(sorted(vignetting)), tuple(doubts))
 
 

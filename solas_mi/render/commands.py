@@ -37,11 +37,11 @@ def check_render(width: int, height: int, spp: int, force: bool) -> None:
               file=sys.stderr, flush=True)
 
 
-def _progress(done: float, total: int) -> None:
-    """Samples per pixel done (a fraction while a large image's bands are traced) of `total`."""
-    print(f"\rrender: {done:.4g}/{total} spp ({100.0 * done / total:.0f} %)", end="", file=sys.stderr, flush=True)
-    if done == total:
-        print(file=sys.stderr)
+def _progress(spp: int):
+    """The render's progress in samples per pixel (a fraction while a large image's bands are traced)."""
+    from ..progress import Progress
+
+    return Progress("render", spp, "spp")
 
 
 def _default_image() -> str:
@@ -134,11 +134,13 @@ def _render(args) -> int:
     if loop:
         from .loop import render
 
-        result = render(scene, spp, seed=run.seed, progress=_progress)
+        with _progress(spp) as bar:
+            result = render(scene, spp, seed=run.seed, progress=bar)
     else:
         from .stock import render_scene
 
-        result = render_scene(scene, spp, seed=run.seed, progress=_progress)
+        with _progress(spp) as bar:
+            result = render_scene(scene, spp, seed=run.seed, progress=bar)
     result.meta["scene"] = str(args.scene)
     if lens is not None:
         from .user_scene import camera_meta
@@ -179,7 +181,8 @@ def _render_image(args) -> int:
     rows, cols = spec.sensor
     check_render(cols, rows, spec.spp, args.force)
     lens = Lens.load(args.lens)
-    result = render_image(lens, args.image, spec, progress=_progress)
+    with _progress(spec.spp) as bar:
+        result = render_image(lens, args.image, spec, progress=bar)
     result.meta["image"] = str(args.image)
     return _write(result, data_file, png)
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 from pathlib import Path
 from typing import Any
 
@@ -42,7 +43,8 @@ def _lens_and_image(args: argparse.Namespace):
 
 
 def _say(text: str) -> None:
-    print(text, flush=True)
+    """A step of a long run, on stderr: stdout holds the results (the tables), as for every command."""
+    print(text, file=sys.stderr, flush=True)
 
 
 def run_crossval(args: argparse.Namespace) -> int:
@@ -109,7 +111,6 @@ def run_error_vs_time(args: argparse.Namespace) -> int:
 
 def run_check_stability(args: argparse.Namespace) -> int:
     import json
-    import sys
 
     from .stability import check_stability, markdown
 

@@ -21,6 +21,7 @@ from ..convolution.kernels import check_boundary
 from ..errors import SolasError
 from ..metrics.annuli import ANNULI, corner_radius
 from ..optics.camera import check_fov
+from ..progress import Progress
 from .engines import PSF_SAMPLING, Case, convolve, grid_units, ideal, psf_grid_for
 from .reference import Reference, check_reference, noise_variance_map, read_reference, reference, write_reference
 from .scores import compare
@@ -61,9 +62,10 @@ def heat_png(path: Path, data: np.ndarray, title: str, vmax: float = 0.05) -> No
     for f in ANNULI["automotive"][:-1]:
         ax.add_patch(Circle(((w - 1) / 2, (h - 1) / 2), f * corner_radius(h, w), fill=False, color="cyan", lw=0.8,
                             ls="--"))
-    ax.set_title(title, fontsize=9)
-    ax.set_axis_off()
-    fig.colorbar(im, ax=ax, fraction=0.03, pad=0.01, format=lambda v, _: f"{100 * v:.0f} %")
+    ax.set(title=title, xlabel="x (px)", ylabel="y (px)")
+    ax.title.set_fontsize(9)
+    bar = fig.colorbar(im, ax=ax, fraction=0.03, pad=0.01, format=lambda v, _: f"{100 * v:.0f} %")
+    bar.set_label("error, % of the reference's RMS")
     fig.tight_layout()
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png")
@@ -127,7 +129,8 @@ def _reference(lens, image: np.ndarray, out_dir: Path | None, common: dict, spp:
         return ref, var_map
     w, h = common["sensor"]
     log(f"crossval: {w}x{h} px, reference {spp} spp in {seeds} renders")
-    ref = reference(lens, image, spp, common["fov_deg"], seeds, common["boundary"], variant)
+    with Progress("crossval: reference", spp // seeds * seeds, "spp") as bar:
+        ref = reference(lens, image, spp, common["fov_deg"], seeds, common["boundary"], variant, progress=bar)
     var_map = noise_variance_map(ref.renders)
     if out_dir is not None:
         write_reference(out_dir / "reference.exr", ref, var_map, common)

@@ -24,6 +24,7 @@ from ..convolution.kernels import check_boundary
 from ..errors import SolasError
 from ..imageio import write_text
 from ..optics.camera import check_fov
+from ..progress import Progress
 from .engines import check_kind, convolve, grid_units, psf_grid_for, render
 from .reference import check_reference, noise_variance_map, reference
 from .scores import Errors, compare
@@ -55,7 +56,8 @@ def error_vs_time(lens, image: np.ndarray, out: str | Path | None, ref_spp: int 
     render(lens, image[: max(8, h // 8), : max(8, w // 8)], 3, 0, fov, boundary, variant)
 
     log(f"error-vs-time: {w}x{h} px, reference {ref_spp} spp in {seeds} renders")
-    ref = reference(lens, image, ref_spp, fov, seeds, boundary, variant)
+    with Progress("error-vs-time: reference", ref_spp // seeds * seeds, "spp") as bar:
+        ref = reference(lens, image, ref_spp, fov, seeds, boundary, variant, progress=bar)
     ref_rms = ref.rms
     var_map = noise_variance_map(ref.renders)
     log(f"error-vs-time: reference {ref.seconds:.1f} s, noise {100 * ref.noise / ref_rms:.3f} %")

@@ -44,12 +44,14 @@ def check_reference(spp: int, seeds: int) -> None:
 
 def reference(lens, image: np.ndarray, spp: int, fov_deg: float, seeds: int = 2, boundary: str = "edge",
               variant: str | None = None, first_seed: int = 1001, progress=None) -> Reference:
-    """Mean of `seeds` renders of spp/seeds samples each, with its noise estimated from their spread."""
+    """Mean of `seeds` renders of spp/seeds samples each, with its noise estimated from their spread;
+    `progress(done, total)` is told the samples per pixel done over all of them."""
     check_reference(spp, seeds)
     per = spp // seeds
     images, seconds = [], 0.0
     for k in range(seeds):
-        r = render(lens, image, per, first_seed + k, fov_deg, boundary, variant, progress)
+        step = None if progress is None else (lambda done, total, k=k: progress(k * per + done, per * seeds))
+        r = render(lens, image, per, first_seed + k, fov_deg, boundary, variant, step)
         images.append(r.image.astype(np.float64))
         seconds += r.seconds
     stack = np.stack(images)

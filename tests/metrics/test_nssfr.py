@@ -94,6 +94,21 @@ def test_plot_is_written(tmp_path, sharp, degraded):
     assert [p.name for p in tmp_path.iterdir()] == ["fig5.png"]
 
 
+def test_plot_axes_are_labelled_with_units(tmp_path, sharp, degraded, monkeypatch):
+    """Figure 5's axes, read from the figure as it is saved: the image in pixels, the SFR against
+    frequency in cycles per pixel."""
+    from matplotlib.figure import Figure
+
+    saved = []
+    save = Figure.savefig
+    monkeypatch.setattr(Figure, "savefig", lambda fig, *a, **k: (saved.append(fig), save(fig, *a, **k))[1])
+    plot_report(natural_scene_sfr(sharp, compare=degraded), sharp, tmp_path / "fig5.png")
+    image, sfr = saved[0].axes
+    assert (image.get_xlabel(), image.get_ylabel()) == ("x (px)", "y (px)")
+    assert sfr.get_xlabel() == "frequency (cy/px)" and sfr.get_ylabel().startswith("mean SFR (modulation")
+    assert all(ax.get_title() for ax in (image, sfr))
+
+
 @pytest.mark.parametrize("image, message", [
     (np.array([]), "too small"), (np.zeros((0, 0)), "too small"), (np.zeros((1, 1)), "too small"),
     (np.full((64, 64), np.nan), "NaN or infinite"), (np.full((64, 64), np.inf), "NaN or infinite"),

@@ -69,15 +69,32 @@ def test_grid_symmetry_reuse_is_exact(doublet, method):
 def test_the_preview_mosaic_is_bounded(doublet, tmp_path, monkeypatch):
     """The PNG is for looking: PSFs are block-averaged until the mosaic fits MOSAIC_PX, each tile still
     scaled to its own peak."""
-    import imageio.v3 as iio
-
     from solas_mi.psf import grid as grid_module
 
     g = psf_grid(doublet, grid=(2, 3), wavelengths_nm=[486.0, 531.0, 656.0], size=48, pupil_samples=32)
-    g.write_png(tmp_path / "full.png")
-    assert iio.imread(tmp_path / "full.png").shape == (96, 144, 3)
+    assert g.preview().shape == (96, 144, 3)
     monkeypatch.setattr(grid_module, "MOSAIC_PX", 64)
-    g.write_png(tmp_path / "small.png")
-    small = iio.imread(tmp_path / "small.png")
+    small = g.preview()
     assert small.shape == (2 * 16, 3 * 16, 3)  # 48 px PSFs averaged by 3 to fit 3 across 64 px
-    assert small.reshape(2, 16, 3, 16, 3).max(axis=(1, 3)).min() == 255  # every tile keeps its peak
+    assert small.reshape(2, 16, 3, 16, 3).max(axis=(1, 3)).min() == 1.0  # every tile keeps its peak
+    g.write_png(tmp_path / "small.png")
+    assert (tmp_path / "small.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_the_preview_png_has_labelled_axes_in_field_degrees(doublet, tmp_path, monkeypatch):
+    """The mosaic's axes name what they show with units (field degrees at the node centres), and the
+    title the tiles' physical width; read from the figure as it is saved."""
+    from matplotlib.figure import Figure
+
+    saved = []
+    save = Figure.savefig
+    monkeypatch.setattr(Figure, "savefig", lambda fig, *a, **k: (saved.append(fig), save(fig, *a, **k))[1])
+    g = psf_grid(doublet, grid=(3, 4), wavelengths_nm=[531.0], size=32, pitch_um=2.0, pupil_samples=32)
+    g.write_png(tmp_path / "grid.png")
+    (ax,) = saved[0].axes
+    assert ax.get_xlabel().startswith("field x (deg)") and ax.get_ylabel() == "field y (deg)"
+    xs = [float(t.get_text()) for t in ax.get_xticklabels()]
+    ys = [float(t.get_text()) for t in ax.get_yticklabels()]
+    assert xs == pytest.approx(g.fields_deg[1, :, 0], abs=5e-3) and ys == pytest.approx(g.fields_deg[:, 2, 1], abs=5e-3)
+    assert "32 px × 2 µm = 64 µm" in ax.get_title()
+    assert (tmp_path / "grid.png").is_file()

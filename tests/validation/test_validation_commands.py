@@ -24,3 +24,28 @@ def test_commands_register_and_parse():
 def test_bad_values_are_a_solas_error():
     with pytest.raises(SolasError, match="comma-separated"):
         positive_ints("3,x", "--spp")
+
+
+def test_the_steps_of_a_long_run_go_to_stderr(capsys):
+    """stdout holds the results (the tables that benchmarks/run_all.py records), the steps stderr."""
+    commands._say("crossval: reference noise 0.2 % of RMS")
+    out, err = capsys.readouterr()
+    assert out == "" and err == "crossval: reference noise 0.2 % of RMS\n"
+
+
+def test_error_maps_label_their_axes_and_scale(tmp_path, monkeypatch):
+    """The heat maps of crossval and the street experiment, read from the figure as it is saved: image
+    axes in pixels, the colour scale in per cent of the reference's RMS."""
+    import numpy as np
+    from matplotlib.figure import Figure
+
+    from solas_mi.validation.crossval import heat_png
+
+    saved = []
+    save = Figure.savefig
+    monkeypatch.setattr(Figure, "savefig", lambda fig, *a, **k: (saved.append(fig), save(fig, *a, **k))[1])
+    heat_png(tmp_path / "e.png", np.full((24, 32), 0.01), "case: |image − reference| / RMS(reference)")
+    image, scale = saved[0].axes
+    assert (image.get_xlabel(), image.get_ylabel()) == ("x (px)", "y (px)") and image.get_title().startswith("case")
+    assert scale.get_ylabel() == "error, % of the reference's RMS"
+    assert (tmp_path / "e.png").is_file()

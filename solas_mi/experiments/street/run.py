@@ -125,19 +125,14 @@ def experiment_scene(source: Path, out: Path, primary_nm: float, depth: bool = F
     return path
 
 
-def _render(xml: Path, variant, lens, params: dict, spp: int, log, seed: int = 0, **lens_options) -> np.ndarray:
+def _render(xml: Path, variant, lens, params: dict, spp: int, seed: int = 0, **lens_options) -> np.ndarray:
+    from ...progress import Progress
     from ...render.stock import render_scene
     from ...render.user_scene import load
 
     scene = load(xml, variant, lens, params, **lens_options)
-    quarters = set()
-
-    def progress(done: int, total: int) -> None:  # a line at each quarter
-        if 4 * done // total not in quarters:
-            quarters.add(4 * done // total)
-            log(f"  {done}/{total} spp")
-
-    return render_scene(scene, spp, seed=seed, progress=progress).image
+    with Progress(f"street: render {xml.stem}", spp, "spp") as bar:
+        return render_scene(scene, spp, seed=seed, progress=bar).image
 
 
 class _Steps:
@@ -229,8 +224,8 @@ def _ideal_and_depth(st: _Steps) -> tuple[Path, np.ndarray, np.ndarray]:
     xml = experiment_scene(s.scene, st.out, st.primary, spectral=spectral(st.variant))
     depth_xml = experiment_scene(s.scene, st.out, st.primary, depth=True)
     band = BAND_NM if spectral(st.variant) else 1.0
-    ideal = st.timed("(a) ideal image", _render, xml, st.variant, None, st.params, s.spp_ideal, st.log)[..., 0] / band
-    depth = st.timed("(a) depth map", _render, depth_xml, st.variant, None, st.params, s.spp_depth, st.log)[..., -1]
+    ideal = st.timed("(a) ideal image", _render, xml, st.variant, None, st.params, s.spp_ideal)[..., 0] / band
+    depth = st.timed("(a) depth map", _render, depth_xml, st.variant, None, st.params, s.spp_depth)[..., -1]
     return xml, ideal, np.where(depth > 0, depth, np.inf).astype(np.float32)
 
 
@@ -277,10 +272,10 @@ def _lens_renders(st: _Steps, xml: Path, seed: int = 0) -> dict[str, np.ndarray]
     note = f", seed {seed}" if seed else ""
     return {
         "render infinity": st.timed(f"(c) lens render, focus at infinity{note}", _render, xml, st.variant, st.lens,
-                                    lens_params, s.spp_lens, st.log, seed, **render_options)[..., 0],
+                                    lens_params, s.spp_lens, seed, **render_options)[..., 0],
         f"render {st.near_focus:g} m": st.timed(
             f"(c) lens render, focus at {st.near_focus:g} m{note}", _render, xml, st.variant, st.lens, lens_params,
-            s.spp_lens, st.log, seed, focus_distance=st.near_focus, **render_options)[..., 0],
+            s.spp_lens, seed, focus_distance=st.near_focus, **render_options)[..., 0],
     }
 
 

@@ -1,0 +1,87 @@
+"""Progress of the long jobs (renders, PSF grids, degrades, batches, experiments, cross-validation), the
+one policy for all of them: a live tqdm bar when the stream is a terminal; anywhere else (a log file,
+a pipe, a CI log) a few plain lines, one when each quarter of the work is passed (and one at least
+every `QUIET_S` seconds of a very long job), so that a log holds about four lines, not one line of
+hundreds of carriage-return updates.
+
+    with Progress("psf-grid", total, "PSF") as bar:
+        psf_grid(lens, spec, progress=bar)     # the library's `progress(done, total)` callbacks
+"""
+from __future__ import annotations
+
+import sys
+import time
+
+QUARTERS = 4  # plain lines: one as each quarter of the work is passed
+QUIET_S = 600.0  # and at least one per this many seconds
+
+
+def _is_terminal(stream) -> bool:
+    try:
+        return bool(stream.isatty())
+    except (AttributeError, ValueError):  # no isatty, or a closed stream
+        return False
+
+
+def _count(value: float) -> str:
+    return f"{value:.4g}" if value != int(value) else f"{int(value)}"
+
+
+class Progress:
+    """`done` of `total` `unit`s of the job `desc`, told by calling it as `progress(done, total)` (the
+    callback the library's long functions take; `total` may change the announced total) or by
+    `update(n)`; `close()`, or the end of its with block, ends it. `enabled=False`: silent."""
+
+    def __init__(self, desc: str, total: float | None, unit: str, *, initial: float = 0, stream=None,
+                 enabled: bool = True):
+        self.stream = sys.stderr if stream is None else stream
+        self.desc, self.total, self.unit, self.done = desc, total, unit, initial
+        self.enabled = enabled
+        self._bar = None
+        self._start = self._said_at = time.monotonic()
+        self._quarter = self._quarter_of(initial)
+        if enabled and _is_terminal(self.stream):
+            from tqdm import tqdm
+
+            self._bar = tqdm(total=total, initial=initial, unit=unit, desc=desc, file=self.stream, dynamic_ncols=True)
+
+    def _quarter_of(self, done: float) -> int:
+        return int(QUARTERS * done / self.total) if self.total else 0
+
+    def __call__(self, done: float, total: float | None = None) -> None:
+        if total is not None and total != self.total:
+            self.total = total
+            if self._bar is not None:
+                self._bar.total = total
+        self.update(done - self.done)
+
+    def update(self, n: float = 1) -> None:
+        self.done += n
+        if not self.enabled:
+            return
+        if self._bar is not None:
+            self._bar.update(n)
+            return
+        now, quarter = time.monotonic(), self._quarter_of(self.done)
+        if quarter > self._quarter or now - self._said_at >= QUIET_S:
+            self._quarter, self._said_at = quarter, now
+            self.line(now)
+
+    def line(self, now: float | None = None) -> None:
+        """The plain line: `desc: done/total unit (percent, seconds)`."""
+        seconds = (time.monotonic() if now is None else now) - self._start
+        of = f"/{_count(self.total)}" if self.total else ""
+        percent = f"{100.0 * self.done / self.total:.0f} %, " if self.total else ""
+        print(f"{self.desc}: {_count(self.done)}{of} {self.unit} ({percent}{seconds:.1f} s)", file=self.stream,
+              flush=True)
+
+    def close(self) -> None:
+        if self._bar is not None:
+            self._bar.close()
+            self._bar = None
+
+    def __enter__(self) -> "Progress":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()

@@ -1,0 +1,49 @@
+"""The PSF grid's PNG for viewing: its mosaic (`PSFGrid.preview`) drawn as a plot whose axes say where
+each PSF is — the field angle of its node in degrees — and whose title gives the tiles' physical size
+in µm, the wavelengths and the scaling (each PSF to its own peak). matplotlib is imported only here."""
+from __future__ import annotations
+
+import os
+
+import numpy as np
+
+MAX_TICKS = 9  # node labels per axis; a larger grid labels every k-th node
+
+
+def _ticks(count: int, tile: int) -> tuple[np.ndarray, np.ndarray]:
+    """(indices of the labelled nodes, their centres in mosaic pixels)."""
+    nodes = np.unique(np.linspace(0, count - 1, min(count, MAX_TICKS)).round().astype(int))
+    return nodes, (nodes + 0.5) * tile
+
+
+def colour_note(wavelengths_nm) -> str:
+    """How the wavelengths are shown: three as R, G, B (longest red), else their mean in grey."""
+    names = ", ".join(f"{w:g}" for w in sorted(wavelengths_nm, reverse=True))
+    return f"R, G, B = {names} nm" if len(wavelengths_nm) == 3 else f"grey: mean of {names} nm"
+
+
+def plot_grid(grid, image: np.ndarray, path: str | os.PathLike, dpi: int = 100) -> None:
+    """Write `image` (the mosaic of `grid`, linear [0, 1], H×W or H×W×3) to `path` as a PNG with its
+    axes in field degrees (node centres labelled) and a title naming tile size, pitch and wavelengths."""
+    from matplotlib.figure import Figure
+
+    from ..imageio import atomic_path, check_finite, srgb_encode
+
+    check_finite(np.asarray(image), str(path))
+    height, width = image.shape[:2]
+    ny, nx = grid.shape
+    shown = np.clip(srgb_encode(np.clip(image, 0.0, 1.0)), 0.0, 1.0)
+    wide, high = max(width, 560) + 110, height + 110  # the margins hold labels and title
+    fig = Figure(figsize=(wide / dpi, high / dpi), dpi=dpi)
+    ax = fig.add_axes((80 / wide, 55 / high, (wide - 110) / wide, height / high))
+    ax.imshow(shown, cmap="gray", vmin=0, vmax=1, interpolation="nearest", extent=(0, width, height, 0))
+    cols, x_at = _ticks(nx, width // nx)
+    rows, y_at = _ticks(ny, height // ny)
+    ax.set_xticks(x_at, [f"{grid.fields_deg[ny // 2, c, 0]:.3g}" for c in cols])
+    ax.set_yticks(y_at, [f"{grid.fields_deg[r, nx // 2, 1]:.3g}" for r in rows])
+    ax.set_xlabel("field x (deg), node centres")
+    ax.set_ylabel("field y (deg)")
+    ax.set_title(f"{ny}×{nx} nodes, each PSF {grid.size} px × {grid.pitch_um:g} µm = {grid.size * grid.pitch_um:g} µm "
+                 f"wide, scaled to its peak; {colour_note(grid.wavelengths_nm)}", fontsize=8)
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, format="png", dpi=dpi)

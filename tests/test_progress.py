@@ -1,0 +1,73 @@
+"""Progress of long jobs (solas_mi.progress): a live bar on a terminal, a few plain lines in a log, and
+counts that are what they say (a PSF grid counts its PSFs, mirrored ones included)."""
+import io
+import re
+import subprocess
+import sys
+
+from solas_mi.progress import QUARTERS, Progress
+from solas_mi.resources import resource_dir
+
+PHOTO = resource_dir("scenes") / "images" / "rocket.png"
+
+
+class Terminal(io.StringIO):
+    def isatty(self):
+        return True
+
+
+def test_a_log_gets_a_line_per_quarter_however_many_updates():
+    log = io.StringIO()
+    with Progress("render", 192, "spp", stream=log) as bar:
+        for done in range(1, 193):
+            bar(done, 192)
+    lines = log.getvalue().splitlines()
+    assert len(lines) == QUARTERS and "\r" not in log.getvalue()
+    assert lines[-1].startswith("render: 192/192 spp (100 %")
+
+
+def test_fractions_and_a_total_told_later():
+    log = io.StringIO()
+    bar = Progress("psf-grid", None, "PSFs", stream=log)
+    for k in range(1, 11):
+        bar(k * 4.8, 48)
+    bar.close()
+    assert log.getvalue().splitlines()[-1].startswith("psf-grid: 48/48 PSFs (100 %")
+
+
+def test_a_terminal_gets_a_live_bar_and_disabled_is_silent():
+    tty, log = Terminal(), io.StringIO()
+    with Progress("batch", 10, "images", stream=tty) as live, Progress("x", 10, "images", stream=log,
+                                                                       enabled=False) as quiet:
+        for _ in range(10):
+            live.update()
+            quiet.update()
+    assert "\r" in tty.getvalue() and "10/10" in tty.getvalue()
+    assert log.getvalue() == "" and quiet.done == 10
+
+
+def _stderr_lines(tmp_path, *args) -> list[str]:
+    """The command's stderr as written to a file (not a terminal), split on newlines and carriage returns."""
+    log = tmp_path / "log.txt"
+    with open(log, "w") as f:
+        subprocess.run([sys.executable, "-m", "solas_mi", *map(str, args)], cwd=tmp_path, stdout=subprocess.DEVNULL,
+                       stderr=f, check=True, timeout=300)
+    return re.split(r"[\r\n]+", log.read_text().strip())
+
+
+def test_psf_grid_in_a_log_counts_every_psf(tmp_path):
+    # 4×4 nodes at 3 wavelengths: 48 PSFs, of which the mirror symmetry computes only a few
+    lines = _stderr_lines(tmp_path, "psf-grid", "solas-doublet", "--grid", "4x4", "--size", "32", "--pitch-um", "2",
+                          "--wavelengths-nm", "486,588,656", "-o", "g.exr")
+    progress = [line for line in lines if line.startswith("psf-grid:")]
+    assert 1 <= len(progress) <= QUARTERS, lines
+    assert re.match(r"psf-grid: 48/48 PSFs \(100 %", progress[-1]), progress
+
+
+def test_render_in_a_log_writes_a_few_lines(tmp_path):
+    # 160×120 px at 640 spp: six passes of the loop (2^21 samples each), each one a progress update
+    lines = _stderr_lines(tmp_path, "render-image", "solas-doublet", PHOTO, "--sensor", "160x120", "--spp", "640",
+                          "-o", "r.exr")
+    progress = [line for line in lines if line.startswith("render:")]
+    assert 1 <= len(progress) <= QUARTERS, lines
+    assert progress[-1].startswith("render: 640/640 spp (100 %"), progress
