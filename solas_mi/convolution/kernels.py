@@ -111,12 +111,14 @@ def channel_wavelengths(grid: PSFGrid, channels: int) -> list[int]:
 
 
 def psf_scale(grid: PSFGrid) -> np.ndarray:
-    """Factor (n_wavelengths, ny, nx) that turns the stored PSFs into sample weights (energy per sample)."""
+    """Factor (n_wavelengths, ny, nx) that turns the stored PSFs into sample weights (energy per sample),
+    times meta["flux_scale"] where a grid has one (not for "peak": unit sum)."""
     how = grid.meta.get("normalization", "sum")
+    flux = float(grid.meta.get("flux_scale", 1.0))  # a depth node seen from another viewpoint (`psf.depth`)
     if how == "sum":
-        return np.ones(grid.data.shape[:3])
+        return np.full(grid.data.shape[:3], flux)
     if how == "none":  # irradiance per µm²: weights sum to the transmitted fraction
-        return np.full(grid.data.shape[:3], grid.pitch_um ** 2)
+        return np.full(grid.data.shape[:3], flux * grid.pitch_um ** 2)
     if how == "peak":  # no energy scale kept: unit sum
         total = grid.data.sum(axis=(-2, -1), dtype=np.float64)
         return 1.0 / np.where(total > 0, total, 1.0)
