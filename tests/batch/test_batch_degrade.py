@@ -346,3 +346,28 @@ def test_a_batch_with_depth_maps_by_name_pattern(tmp_path, doublet):
     with pytest.raises(__import__("solas_mi").SolasError, match="no depth map"):
         degrade_batch([folder], tmp_path / "out2", psf_grid=tmp_path / "g.exr", workers=1,
                       depth_pattern="{stem}_depth.exr")
+
+
+def test_the_frames_camera_applies_to_every_item(batch_inputs, capsys):
+    """`batch degrade` takes `degrade`'s frame-camera options: each item comes out as `degrade` makes it
+    with the same camera (a ±1° frame on the ±2° grid: larger blur per pixel), its metadata says so;
+    a frame wider than the lens's field fails every item with the numbers."""
+    from solas_mi.imageio import read_exr
+
+    (first, *_) = batch_inputs.write(2)
+    out, narrow = batch_inputs.root / "out", ["--fov-deg", "1", "--fov-axis", "x"]
+    base = ["--psf-grid", str(batch_inputs.grid), "--workers", "1", "--quiet"]
+    assert main(["batch", "degrade", str(batch_inputs.images), "-o", str(out), *base, *narrow]) == 0
+    assert main(["degrade", str(first), "--psf-grid", str(batch_inputs.grid), "-o", str(batch_inputs.root / "one.exr"),
+                 *narrow]) == 0
+    assert main(["batch", "degrade", str(batch_inputs.images), "-o", str(batch_inputs.root / "plain"), *base]) == 0
+    ch, meta = read_exr(out / "frame000.exr")
+    one, plain = read_exr(batch_inputs.root / "one.exr")[0], read_exr(batch_inputs.root / "plain" / "frame000.exr")[0]
+    assert all(np.array_equal(ch[c], one[c]) for c in "RGB")
+    assert not np.allclose(ch["G"], plain["G"], atol=1e-4)
+    assert meta["frame_camera"]["fov_deg"] == 1.0 and manifest(out)["frame_camera"]["model"] == "fov"
+    capsys.readouterr()
+    wide = batch_inputs.root / "wide"
+    assert main(["batch", "degrade", str(batch_inputs.images), "-o", str(wide), *base, "--fov-deg", "5"]) == 1
+    assert "does not cover this frame" in capsys.readouterr().err
+    assert manifest(wide)["summary"] == {"failed": 2}
