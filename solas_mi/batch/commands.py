@@ -40,7 +40,8 @@ def _dry_run(args: argparse.Namespace) -> int:
     print(f"1. PSF grid: {p.grid_path} ({p.grid_source}{then})")
     print(f"2. degrade {len(p.todo)} of {len(p.jobs)} images ({skipped} already finished, skipped) "
           f"with {args.method}, boundary {args.boundary}, on {where}")
-    print(f"3. write EXR + PNG per image and {p.manifest.path}")
+    files = "16-bit PNG + JSON" if args.format == "png16" else "EXR + PNG"
+    print(f"3. write {files} per image and {p.manifest.path}")
     print(f"estimate: about {need['seconds']:.1f} s of degrading (after the grid), peak memory about "
           f"{size_text(need['peak_bytes'])} (grid {size_text(need['grid_bytes'])} per worker)")
     return 0
@@ -168,7 +169,8 @@ def register(subparsers: Any) -> None:
     p.add_argument("--boundary", choices=BOUNDARIES, default=BOUNDARIES[0], help="padding outside the image")
     p.add_argument("--linear", action="store_true", help="PNG/JPEG values are already linear: do not decode sRGB")
     p.add_argument("--format", choices=OUTPUT_FORMATS, default=OUTPUT_FORMATS[0],
-                   help="output data: exr (float, default) or exr-half (half floats, half the size)")
+                   help="output data: exr (float, default), exr-half (half floats, half the size) or png16 "
+                        "(16-bit sRGB PNG, values clipped to [0, 1], its metadata in <name>.json beside it)")
     p.add_argument("--depth-pattern", metavar="{stem}_depth.exr",
                    help="each image's depth map beside it (metres), with a grid over object distance (--distances-m): "
                         "`degrade --depth` per image")

@@ -103,7 +103,11 @@ def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLik
     missing = [str(depths[f]) for f in images if depths and not depths[f].is_file()]
     if missing:
         raise SolasError(f"{len(missing)} image(s) have no depth map by the pattern {depth_pattern!r}, e.g. {missing[0]}")
-    jobs = plan(images, out_dir, roots)
+    from ..convolution.output import OUTPUT_FILES
+
+    if output_format not in OUTPUT_FILES:
+        raise SolasError(f"output format {output_format!r} must be one of {', '.join(OUTPUT_FILES)}")
+    jobs = plan(images, out_dir, roots, OUTPUT_FILES[output_format])
     for job in jobs:
         if depths:
             job.params["depth"] = str(depths[Path(job.input)])
@@ -187,10 +191,6 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
                    depth_pattern=depth_pattern, frame=frame)
     need = estimate(p, n if dask is None else 1)
     check_memory(f"batch of {len(p.todo)} images on {n} workers", need["peak_bytes"], force)
-    from ..convolution.output import OUTPUT_FORMATS
-
-    if output_format not in OUTPUT_FORMATS:
-        raise SolasError(f"output format {output_format!r} must be one of {', '.join(OUTPUT_FORMATS)}")
     header: dict[str, Any] = {"method": method, "boundary": boundary, "linear": linear, "format": output_format,
                               **({"frame_camera": asdict(frame)} if frame is not None else {})}
     if p.lens is not None:

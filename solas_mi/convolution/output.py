@@ -33,7 +33,10 @@ BRIGHTNESS = ("degrade: a sum-normalised grid (the default) keeps the input's br
               "to its axis (vignetting), the axis staying 1. render-image: irradiance in the ideal camera's units, "
               "with Fresnel losses (--fresnel transmit, its default) and relative illumination: about 0.90 of the "
               "input on the doublet's axis (Fresnel 0.90 x pupil scale 1.0097), less toward the corners")
-OUTPUT_FORMATS = ("exr", "exr-half")  # float32 OpenEXR (14 MB a 1280×960 RGB frame uncompressed), half floats
+# float32 OpenEXR (14 MB a 1280×960 RGB frame uncompressed), half floats, or a 16-bit sRGB PNG (its own
+# preview; its metadata in a JSON file beside it): OUTPUT_FILES gives each one's two files' suffixes
+OUTPUT_FILES = {"exr": (".exr", ".png"), "exr-half": (".exr", ".png"), "png16": (".png", ".json")}
+OUTPUT_FORMATS = tuple(OUTPUT_FILES)
 HALF_MAX = 65504.0
 GRID_META_KEYS = ("lens", "lens_hash", "method", "normalization", "field_range_deg", "field_sampling", "layout", "sensor_mm")
 
@@ -119,8 +122,23 @@ def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path:
                          f"{HALF_MAX:g}: write float EXR (output format exr)")
     meta["output_format"] = output_format
     # both files appear together or not at all
-    with written_together(output, png) as (tmp_exr, tmp_png):
-        write_exr(tmp_exr, image_channels(out, names), meta, half=half)
-        write_png(tmp_png, view)
+    with written_together(output, png) as (tmp_data, tmp_second):
+        if output_format == "png16":  # `png` is the metadata's JSON file here (OUTPUT_FILES)
+            write_png16_with_meta(tmp_data, tmp_second, out if names is None else view, meta)
+        else:
+            write_exr(tmp_data, image_channels(out, names), meta, half=half)
+            write_png(tmp_second, view)
     meta["output_shape"] = list(out.shape)
     return meta
+
+
+def write_png16_with_meta(path: str, meta_path: str, image: np.ndarray, meta: dict) -> None:
+    """`image` as a 16-bit sRGB PNG (more than 3 channels: their mean, as the preview) and `meta` as JSON,
+    saying how many values were clipped to [0, 1] and how to read the file back to linear values."""
+    import json
+
+    from ..imageio import write_png16, write_text
+
+    meta["png16"] = {"clipped_values": write_png16(path, image), "encoding": "sRGB, 16 bits; values clipped to "
+                     "[0, 1]; read back linear with solas_mi.imageio.read_image (within 2e-5)"}
+    write_text(meta_path, json.dumps(meta, indent=1, default=str) + "\n")

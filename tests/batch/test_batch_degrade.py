@@ -371,3 +371,27 @@ def test_the_frames_camera_applies_to_every_item(batch_inputs, capsys):
     assert main(["batch", "degrade", str(batch_inputs.images), "-o", str(wide), *base, "--fov-deg", "5"]) == 1
     assert "does not cover this frame" in capsys.readouterr().err
     assert manifest(wide)["summary"] == {"failed": 2}
+
+
+def test_16_bit_png_output(batch_inputs):
+    """--format png16: each item a 16-bit sRGB PNG (no 8-bit preview beside it) that reads back as the
+    float EXR's values clipped to [0, 1], to within 2e-5, and its metadata in a JSON file."""
+    from solas_mi.imageio import read_exr, read_image
+
+    batch_inputs.write(2)
+    base = [str(batch_inputs.images), "--psf-grid", str(batch_inputs.grid), "--workers", "1", "--quiet"]
+    out, exr = batch_inputs.root / "png16", batch_inputs.root / "exr"
+    assert main(["batch", "degrade", *base, "-o", str(out), "--format", "png16"]) == 0
+    assert main(["batch", "degrade", *base, "-o", str(exr)]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["batch.json", "frame000.json", "frame000.png", "frame001.json",
+                                                       "frame001.png"]
+    with open(out / "frame000.png", "rb") as f:
+        assert f.read(25)[24] == 16  # the IHDR's bit depth
+    ch = read_exr(exr / "frame000.exr")[0]
+    want = np.clip(np.stack([ch[c] for c in "RGB"], axis=-1), 0, 1)
+    assert np.abs(read_image(out / "frame000.png") - want).max() < 2e-5
+    meta = json.loads((out / "frame000.json").read_text())
+    assert meta["output_format"] == "png16" and meta["png16"]["clipped_values"] == int(np.sum(want != np.stack(
+        [ch[c] for c in "RGB"], axis=-1)))
+    assert main(["batch", "degrade", *base, "-o", str(out), "--format", "png16"]) == 0  # finished: skipped
+    assert manifest(out)["summary"] == {"skipped": 2}
