@@ -47,7 +47,7 @@ from . import interp
 from .kernels import channel_wavelengths, check_boundary, check_kernel, layout
 
 OCCLUSIONS = ("filled", "layered", "none")
-CLEAR_PX = 2.0  # a fill takes its light from pixels this far beyond a silhouette (antialiased depth and colour there are mixed)
+CLEAR_PX = 2  # a fill takes its light from pixels more than this (in x or y) beyond a silhouette (antialiased depth and colour there are mixed)
 SUMMARY = "PSFs interpolated in field and in 1/distance from a depth map, composited far to near"
 
 
@@ -158,7 +158,7 @@ def fill_plans(weights: np.ndarray, slab: np.ndarray, radius: int) -> dict:
     depth at the silhouette, whose light is partly in layer s, is passed over), whose light continues
     behind it;
     keyed by layer k, the (hidden, source) pairs of every slab nearer than k (`fill_hidden`)."""
-    from scipy.ndimage import distance_transform_edt
+    from scipy.ndimage import distance_transform_edt, minimum_filter
 
     pairs, h, w = [], *slab.shape
     for s in range(1, len(weights)):
@@ -169,7 +169,7 @@ def fill_plans(weights: np.ndarray, slab: np.ndarray, radius: int) -> dict:
         r0, c0 = max(0, rows[0] - 2 * radius - 1), max(0, cols[0] - 2 * radius - 1)
         box = (slice(r0, min(h, rows[-1] + 2 * radius + 2)), slice(c0, min(w, cols[-1] + 2 * radius + 2)))
         behind = slab[box] < s
-        farther = behind & (distance_transform_edt(behind) > CLEAR_PX)  # past the silhouette's mixed pixels
+        farther = minimum_filter(behind, size=2 * CLEAR_PX + 1)  # past the silhouette's mixed pixels
         if not farther.any():
             continue
         distance, (r, c) = distance_transform_edt(~farther, return_indices=True)
