@@ -47,7 +47,7 @@ from . import interp
 from .kernels import channel_wavelengths, check_boundary, check_kernel, layout
 
 OCCLUSIONS = ("filled", "layered", "none")
-CLEAR_PX = 2  # a fill takes its light from pixels more than this (in x or y) beyond a silhouette (antialiased depth and colour there are mixed)
+CLEAR_PX = 2  # a fill takes its light from pixels more than this beyond a silhouette (antialiased depth and colour there are mixed)
 SUMMARY = "PSFs interpolated in field and in 1/distance from a depth map, composited far to near"
 
 
@@ -161,6 +161,8 @@ def fill_plans(weights: np.ndarray, slab: np.ndarray, radius: int) -> dict:
     from scipy.ndimage import distance_transform_edt, minimum_filter
 
     pairs, h, w = [], *slab.shape
+    y, x = np.mgrid[-CLEAR_PX:CLEAR_PX + 1, -CLEAR_PX:CLEAR_PX + 1]
+    disk = x * x + y * y <= CLEAR_PX * CLEAR_PX  # every pixel within CLEAR_PX lies behind s
     for s in range(1, len(weights)):
         mine = slab == s
         rows, cols = np.flatnonzero(mine.any(axis=1)), np.flatnonzero(mine.any(axis=0))
@@ -169,7 +171,7 @@ def fill_plans(weights: np.ndarray, slab: np.ndarray, radius: int) -> dict:
         r0, c0 = max(0, rows[0] - 2 * radius - 1), max(0, cols[0] - 2 * radius - 1)
         box = (slice(r0, min(h, rows[-1] + 2 * radius + 2)), slice(c0, min(w, cols[-1] + 2 * radius + 2)))
         behind = slab[box] < s
-        farther = minimum_filter(behind, size=2 * CLEAR_PX + 1)  # past the silhouette's mixed pixels
+        farther = minimum_filter(behind, footprint=disk)  # past the silhouette's mixed pixels
         if not farther.any():
             continue
         distance, (r, c) = distance_transform_edt(~farther, return_indices=True)
