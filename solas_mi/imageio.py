@@ -174,6 +174,21 @@ def write_png(path: str | os.PathLike, image: np.ndarray, *, encoded: bool = Fal
         iio.imwrite(tmp, data, extension=".png", compress_level=1)  # fast zlib: viewing copies only
 
 
+def write_png16(path: str | os.PathLike, image: np.ndarray) -> int:
+    """Write a linear image (H×W or H×W×3) as 16-bit sRGB PNG (`read_image` decodes it back to within
+    half a step of 1/65535); values outside [0, 1] are clipped: returns how many were."""
+    import png  # pypng: Pillow, behind imageio, writes no 16-bit RGB
+
+    image = check_finite(np.asarray(image, dtype=np.float64), str(path))
+    clipped = int(np.count_nonzero((image < 0.0) | (image > 1.0)))
+    data = np.round(srgb_encode(np.clip(image, 0.0, 1.0)) * 65535.0).astype(np.uint16)
+    height, width = data.shape[:2]
+    planes = 1 if data.ndim == 2 else data.shape[2]
+    with atomic_path(path) as tmp, open(tmp, "wb") as f:
+        png.Writer(width, height, greyscale=planes == 1, bitdepth=16).write(f, data.reshape(height, width * planes))
+    return clipped
+
+
 # The channel names read as an RGB image, in order; or one layer's LAYER.R, LAYER.G, LAYER.B.
 RGB_SPELLINGS = (("R", "G", "B"), ("r", "g", "b"))
 GREY_SPELLINGS = ("Y", "y", "L", "l")

@@ -32,7 +32,7 @@ def _dry_run(args: argparse.Namespace) -> int:
     p = plan_batch(args.inputs, args.output, psf_grid=args.psf_grid, lens=args.lens,
                    grid_spec=_grid_spec(args), method=args.method,
                    boundary=args.boundary, linear=args.linear, cache=args.cache, output_format=args.format,
-                   depth_pattern=args.depth_pattern)
+                   depth_pattern=args.depth_pattern, frame=_frame(args))
     need = estimate(p, workers if args.dask is None else 1)
     where = f"Dask at {args.dask}" if args.dask else f"{workers} local worker process(es)"
     skipped = len(p.jobs) - len(p.todo)
@@ -40,7 +40,8 @@ def _dry_run(args: argparse.Namespace) -> int:
     print(f"1. PSF grid: {p.grid_path} ({p.grid_source}{then})")
     print(f"2. degrade {len(p.todo)} of {len(p.jobs)} images ({skipped} already finished, skipped) "
           f"with {args.method}, boundary {args.boundary}, on {where}")
-    print(f"3. write EXR + PNG per image and {p.manifest.path}")
+    files = "16-bit PNG + JSON" if args.format == "png16" else "EXR + PNG"
+    print(f"3. write {files} per image and {p.manifest.path}")
     print(f"estimate: about {need['seconds']:.1f} s of degrading (after the grid), peak memory about "
           f"{size_text(need['peak_bytes'])} (grid {size_text(need['grid_bytes'])} per worker)")
     return 0
@@ -55,8 +56,15 @@ def run_batch_degrade(args: argparse.Namespace) -> int:
                            grid_spec=_grid_spec(args), method=args.method,
                            boundary=args.boundary, linear=args.linear, workers=_workers(args.workers), dask=args.dask,
                            cache=args.cache, force=args.force, progress=not args.quiet, output_format=args.format,
-                           depth_pattern=args.depth_pattern, occlusion=args.occlusion)
+                           depth_pattern=args.depth_pattern, occlusion=args.occlusion, frame=_frame(args))
     return _report("degrade", result, f" (grid: {result.grid_source})")
+
+
+def _frame(args: argparse.Namespace):
+    """The frames' camera from `degrade`'s options (`convolution.commands.add_frame_options`), or None."""
+    from ..optics.frame import parse_frame
+
+    return parse_frame(args.fov_deg, args.fov_axis, args.intrinsics, args.fisheye)
 
 
 def _report(command: str, result, extra: str = "") -> int:
@@ -135,6 +143,7 @@ def _add_runner_options(p: argparse.ArgumentParser) -> None:
 
 def register(subparsers: Any) -> None:
     """Add `batch` and its `degrade` and `render`."""
+    from ..convolution.commands import add_frame_options
     from ..convolution.kernels import BOUNDARIES
     from ..convolution.methods import DEFAULT_METHOD, METHODS
     from ..convolution.depth import OCCLUSIONS
@@ -160,11 +169,13 @@ def register(subparsers: Any) -> None:
     p.add_argument("--boundary", choices=BOUNDARIES, default=BOUNDARIES[0], help="padding outside the image")
     p.add_argument("--linear", action="store_true", help="PNG/JPEG values are already linear: do not decode sRGB")
     p.add_argument("--format", choices=OUTPUT_FORMATS, default=OUTPUT_FORMATS[0],
-                   help="output data: exr (float, default) or exr-half (half floats, half the size)")
+                   help="output data: exr (float, default), exr-half (half floats, half the size) or png16 "
+                        "(16-bit sRGB PNG, values clipped to [0, 1], its metadata in <name>.json beside it)")
     p.add_argument("--depth-pattern", metavar="{stem}_depth.exr",
                    help="each image's depth map beside it (metres), with a grid over object distance (--distances-m): "
                         "`degrade --depth` per image")
     p.add_argument("--occlusion", choices=OCCLUSIONS, default=OCCLUSIONS[0], help="with --depth-pattern: as degrade's")
+    add_frame_options(p.add_argument_group("the frames' camera (as degrade's; every input taken by it)"))
     p.add_argument("--cache", metavar="DIR", help="PSF-grid cache (default: the user's cache folder)/psf-grids")
     _add_runner_options(p)
     add_grid_options(p.add_argument_group("grid options (with --lens; those of `solas-mi psf-grid`; --grid "

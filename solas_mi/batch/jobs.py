@@ -95,23 +95,26 @@ def expand_inputs(inputs: Iterable[str | os.PathLike], suffixes: tuple[str, ...]
     return unique
 
 
-def plan(inputs: list[Path], out_dir: Path, roots: dict[Path, Path] | None = None) -> list[Job]:
-    """One degrade job per input: OUT_DIR/<name>.exr + .png, or, for a file found in a folder tree
-    (`roots`: file → the folder given), OUT_DIR/<its path in the tree>.exr. SolasError when two inputs
-    would write the same output or an output would replace an input."""
+def plan(inputs: list[Path], out_dir: Path, roots: dict[Path, Path] | None = None,
+         suffixes: tuple[str, str] = (".exr", ".png")) -> list[Job]:
+    """One degrade job per input: OUT_DIR/<name>.exr + .png (or the two `suffixes`: data, then preview
+    or metadata), or, for a file found in a folder tree (`roots`: file → the folder given), OUT_DIR/<its
+    path in the tree>.exr. SolasError when two inputs would write the same output or an output would
+    replace an input."""
     jobs, seen = [], {}
     sources = set(inputs)
     for path in inputs:
         below = path.relative_to(roots[path]).parent if roots and path in roots else Path()
-        output = inside(out_dir.joinpath(*(safe_name(part) for part in below.parts)), f"{safe_name(path.stem)}.exr")
+        output = inside(out_dir.joinpath(*(safe_name(part) for part in below.parts)),
+                        f"{safe_name(path.stem)}{suffixes[0]}")
         if output in seen:
             raise SolasError(f"inputs {str(seen[output])!r} and {str(path)!r} would both write {output}; "
                              "give them different names or run them as separate batches")
         seen[output] = path
-        for target in (output, output.with_suffix(".png")):
+        for target in (output, output.with_suffix(suffixes[1])):
             if target in sources:
                 raise SolasError(f"output {target} would replace the input of the same name; choose another -o")
-        jobs.append(Job(str(path), str(output), str(output.with_suffix(".png"))))
+        jobs.append(Job(str(path), str(output), str(output.with_suffix(suffixes[1]))))
     return jobs
 
 

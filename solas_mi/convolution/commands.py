@@ -78,7 +78,7 @@ def register(subparsers: Any) -> None:
                    "--distances-m): PSFs interpolated in field and in 1/distance")
     p.add_argument("--occlusion", choices=OCCLUSIONS, default=OCCLUSIONS[0],
                    help="with --depth: filled (default): layers composited far to near, the background hidden "
-                        "behind near objects extrapolated from around them; layered: without that; none: layers "
+                        "behind near objects continued from their silhouettes; layered: without that; none: layers "
                         "added (no occlusion)")
     add_frame_options(p)
     p.add_argument("--linear", action="store_true", help="PNG/JPEG values are already linear: do not decode sRGB")

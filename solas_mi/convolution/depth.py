@@ -8,18 +8,26 @@ field grid by `interp` (PSFs interpolated bilinearly in field): so every pixel's
 in field and, linearly, in 1/distance, where defocus is linear. A plane at one node's distance gives
 exactly that node's single-distance `interp` result.
 
-Occlusion ("layered", the default): the layers are composited far to near. Slab k holds the pixels
+Occlusion ("layered"): the layers are composited far to near. Slab k holds the pixels
 with u_k ≤ u < u_{k+1} (the last one everything nearer): each of them is nearer than all the light of
 layers 0 … k−1 (which comes from pixels with u < u_k), so before layer k's light is added, the light
 gathered so far is multiplied by 1 − C_k, C_k the slab's coverage blurred by node k's PSFs (kernels of
 unit sum, the middle wavelength's for every channel; slabs are disjoint, so coverages add): a
-defocused near object hides the background behind its blur instead of being added onto it. Light of
-a pixel split between layers is not dimmed by its own slab (it is not nearer than itself), so a
-plane at any one depth comes out as with the interpolated PSF alone. What layering cannot know is
-the background hidden behind a near object: where the background is blurred more than the near
-object (a lens focused near), the background's blur is missing its hidden part at the edge (dark by
-up to half the background there). "none": the layers are added, no occlusion (each pixel's light
-spreads through everything nearer), for comparison.
+defocused near object hides the background behind its blur instead of being added onto it (the rays
+reaching a pixel cross a near plane in its PSF's footprint, so the blocked fraction is the coverage
+blurred by the near PSF). Light of a pixel split between layers is not dimmed by its own slab (it is
+not nearer than itself), so a plane at any one depth comes out as with the interpolated PSF alone.
+
+"filled" (the default) adds what layering cannot know: the background hidden behind a near object,
+which its blurred edge lets through. Each pixel of slab s up to 2R from its silhouette (R the kernel
+radius) takes, in every layer behind s, that layer's share of the light of its nearest pixel lying
+wholly behind s and more than CLEAR_PX from the silhouette (`fill_plans`): textures meeting the edge
+run on behind it, and the silhouette's antialiased pixels (mixed depth and colour) are passed over.
+Measured on the street experiment (1280×960, lens focused at infinity, near pixels within 2 % inside):
+a box mean of the visible light around instead left a 4-px band along the edges (near 5.5 % against
+1.3 % far); at a synthetic edge with stripes crossing it, 3.4 % against 0.00 %.
+"none": the layers are added, no occlusion (each pixel's light spreads through everything nearer),
+for comparison.
 
 Depth: metres from the camera along the optical axis (z), +inf for the sky; a pixel nearer than the
 nearest node takes its PSFs (and farther than the farthest, the farthest's), counted in the metadata.
@@ -39,6 +47,7 @@ from . import interp
 from .kernels import channel_wavelengths, check_boundary, check_kernel, layout
 
 OCCLUSIONS = ("filled", "layered", "none")
+CLEAR_PX = 2  # a fill takes its light from pixels more than this beyond a silhouette (antialiased depth and colour there are mixed)
 SUMMARY = "PSFs interpolated in field and in 1/distance from a depth map, composited far to near"
 
 
@@ -130,7 +139,7 @@ def composite(plane: np.ndarray, weights: np.ndarray, fills: dict, cover: dict, 
               boundary: str, dtype) -> np.ndarray:
     """One channel: each layer's light convolved by its node's grid and added far to near, the light
     gathered so far dimmed by each nearer slab's coverage (none in `cover`: no occlusion); a layer in
-    `fills` (`fill_plans`) has its light behind nearer objects extrapolated first (`fill_hidden`)."""
+    `fills` (`fill_plans`) has its light behind nearer objects continued first (`fill_hidden`)."""
     acc = np.zeros(plane.shape, dtype=dtype)
     for k, g in enumerate(grid.layers):
         if k in cover:
@@ -138,49 +147,54 @@ def composite(plane: np.ndarray, weights: np.ndarray, fills: dict, cover: dict, 
         if weights[k].any():
             light = (plane * weights[k]).astype(dtype)
             if k in fills:
-                fill_hidden(light, *fills[k])
+                fill_hidden(light, plane, weights[k], *fills[k])
             acc += interp.convolve_channel(light, g, lays[k], wavelength, boundary, dtype)
     return acc
 
 
-def box_sum(a: np.ndarray, r: int) -> np.ndarray:
-    """Sum of `a` over the (2r+1)² square around each pixel (zero outside), by cumulative sums."""
-    for axis in (0, 1):
-        c = np.cumsum(np.pad(a, [(r + 1, r) if i == axis else (0, 0) for i in range(2)]), axis=axis)
-        n = a.shape[axis]
-        a = np.take(c, np.arange(2 * r + 1, n + 2 * r + 1), axis=axis) - np.take(c, np.arange(n), axis=axis)
-    return a
-
-
 def fill_plans(weights: np.ndarray, slab: np.ndarray, radius: int) -> dict:
-    """For each layer with light next to pixels where something nearer hides it: the crop (rows,
-    columns) holding those pixels and the visible light within reach, its visible mask, and the
-    mask twice box-filtered (channel-independent parts of `fill_hidden`)."""
-    plans, reach = {}, 2 * radius + 1
-    h, w = slab.shape
-    for k in range(len(weights) - 1):
-        rows, cols = np.flatnonzero(weights[k].any(axis=1)), np.flatnonzero(weights[k].any(axis=0))
+    """Where each slab s ≥ 1 hides farther light: its pixels up to 2·radius from a farther pixel (flat
+    indices) and, for each, the nearest farther pixel (all its light in layers < s: a pixel of mixed
+    depth at the silhouette, whose light is partly in layer s, is passed over), whose light continues
+    behind it;
+    keyed by layer k, the (hidden, source) pairs of every slab nearer than k (`fill_hidden`)."""
+    from scipy.ndimage import distance_transform_edt, minimum_filter
+
+    pairs, h, w = [], *slab.shape
+    y, x = np.mgrid[-CLEAR_PX:CLEAR_PX + 1, -CLEAR_PX:CLEAR_PX + 1]
+    disk = x * x + y * y <= CLEAR_PX * CLEAR_PX  # every pixel within CLEAR_PX lies behind s
+    for s in range(1, len(weights)):
+        mine = slab == s
+        rows, cols = np.flatnonzero(mine.any(axis=1)), np.flatnonzero(mine.any(axis=0))
         if not len(rows):
             continue
-        box = (slice(max(0, rows[0] - 2 * reach), min(h, rows[-1] + 2 * reach + 1)),
-               slice(max(0, cols[0] - 2 * reach), min(w, cols[-1] + 2 * reach + 1)))
-        visible = slab[box] <= k
-        if visible.all():
+        r0, c0 = max(0, rows[0] - 2 * radius - 1), max(0, cols[0] - 2 * radius - 1)
+        box = (slice(r0, min(h, rows[-1] + 2 * radius + 2)), slice(c0, min(w, cols[-1] + 2 * radius + 2)))
+        behind = slab[box] < s
+        farther = minimum_filter(behind, footprint=disk)  # past the silhouette's mixed pixels
+        if not farther.any():
             continue
-        den = box_sum(box_sum(visible.astype(np.float32), radius), radius)
-        plans[k] = (box, visible, den, radius)
+        distance, (r, c) = distance_transform_edt(~farther, return_indices=True)
+        hidden = mine[box] & (distance <= 2 * radius)
+        at = np.nonzero(hidden)
+        pairs.append((s, np.ravel_multi_index((at[0] + r0, at[1] + c0), (h, w)),
+                      np.ravel_multi_index((r[hidden] + r0, c[hidden] + c0), (h, w))))
+    plans = {}
+    for k in range(len(weights) - 1):
+        nearer = [(p, q) for s, p, q in pairs if s > k]
+        if nearer and weights[k].any():
+            plans[k] = (np.concatenate([p for p, _ in nearer]), np.concatenate([q for _, q in nearer]))
     return plans
 
 
-def fill_hidden(light: np.ndarray, box: tuple, visible: np.ndarray, den: np.ndarray, radius: int) -> None:
-    """A layer's light (H, W), in place: within `box`, the pixels where it is hidden (not `visible`:
-    something nearer sits there) filled, up to about 2·radius pixels in, with the mean of its visible
-    light around them (a normalised box filter applied twice): the background a near object's blur
-    lets through."""
-    part = light[box]
-    num = box_sum(box_sum(np.where(visible, part, 0).astype(np.float32), radius), radius)
-    filled = np.divide(num, den, out=np.zeros_like(num), where=den > 1e-6 * (2 * radius + 1) ** 4)
-    light[box] = np.where(visible, part, filled)
+def fill_hidden(light: np.ndarray, plane: np.ndarray, weight: np.ndarray, hidden: np.ndarray,
+                source: np.ndarray) -> None:
+    """A layer's light (H, W), in place: each pixel where something nearer hides it (`hidden`, flat
+    indices) given the layer's share of the light of its nearest farther pixel (`source`): the
+    background a near object's blur lets through, continued from the object's silhouette (the
+    textures that meet it run on behind it; every layer takes its share of the same pixel, so the
+    hidden background sums to that pixel's light)."""
+    light.flat[hidden] = plane.flat[source] * weight.flat[source]
 
 
 def depth_meta(grid, depth: np.ndarray, weights: np.ndarray, occlusion: str, boundary: str, seconds: float) -> dict:

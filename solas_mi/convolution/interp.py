@@ -73,16 +73,11 @@ def convolve_channel(channel: np.ndarray, grid: PSFGrid, lay: Layout, wavelength
     # accumulator: image pixel p at index p + edge; a tile's result index j is pixel lo − margin + j − R + shift
     edge = margin + radius + shift_max
     acc = np.zeros((height + 2 * edge + shape[0], width + 2 * edge + shape[1]), dtype=dtype)
-    mi, ni = np.meshgrid(np.arange(len(rows)), np.arange(len(cols)), indexing="ij")
-    mi, ni = mi.ravel(), ni.ravel()
+    mi, ni = lit_nodes(padded, row_lo, col_lo, ly, lx)  # a black tile adds nothing (a depth layer's are many)
 
     def work(sl: slice):
         m, n = mi[sl], ni[sl]
         tiles = windows[row_lo[m], col_lo[n]] * row_w[m][:, :, None] * col_w[n][:, None, :]
-        lit = tiles.reshape(len(tiles), -1).any(axis=1)  # a black tile adds nothing (a depth layer's are many)
-        if not lit.any():
-            return (), ()
-        m, n, tiles = m[lit], n[lit], tiles[lit]
         kernels, shift = node_kernels(grid, lay, wavelength, rows[m], cols[n], radius, dtype)
         at = np.stack([row_lo[m], col_lo[n]], axis=1) - margin - radius + shift + edge
         return at, fft_convolve(tiles, kernels, shape)
@@ -91,6 +86,24 @@ def convolve_channel(channel: np.ndarray, grid: PSFGrid, lay: Layout, wavelength
         for (r, c), res in zip(at, result):
             acc[r:r + shape[0], c:c + shape[1]] += res
     return acc[edge:edge + height, edge:edge + width].copy()
+
+
+def lit_nodes(padded: np.ndarray, row_lo: np.ndarray, col_lo: np.ndarray, ly: int, lx: int, block: int = 8
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """Row and column indices of the nodes whose ly×lx window of `padded` (from row_lo, col_lo) may hold a
+    non-zero value: a summed-area table of the block×block blocks holding any (a few extra nodes at
+    most, whose tiles add zeros; the table is 1/block² of the image). Only their tiles are cut and
+    convolved."""
+    h, w = -(-padded.shape[0] // block), -(-padded.shape[1] // block)
+    nz = np.zeros((h * block, w * block), dtype=bool)
+    np.not_equal(padded, 0, out=nz[:padded.shape[0], :padded.shape[1]])
+    table = np.zeros((h + 1, w + 1), dtype=np.int64)
+    table[1:, 1:] = nz.reshape(h, block, w, block).any(axis=(1, 3)).cumsum(axis=0).cumsum(axis=1)
+    r0, r1 = (row_lo // block)[:, None], ((row_lo + ly - 1) // block + 1)[:, None]
+    c0, c1 = (col_lo // block)[None, :], ((col_lo + lx - 1) // block + 1)[None, :]
+    count = table[np.minimum(r1, h), np.minimum(c1, w)] - table[r0, np.minimum(c1, w)] - table[np.minimum(r1, h), c0] \
+        + table[r0, c0]
+    return np.nonzero(count > 0)
 
 
 def describe(lay: Layout, radius: int, wavelengths: list[int]) -> dict:

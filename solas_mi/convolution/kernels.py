@@ -110,15 +110,17 @@ def channel_wavelengths(grid: PSFGrid, channels: int) -> list[int]:
                      "wavelength")
 
 
-def psf_scale(grid: PSFGrid) -> np.ndarray:
-    """Factor (n_wavelengths, ny, nx) that turns the stored PSFs into sample weights (energy per sample)."""
+def psf_scale(grid: PSFGrid, wavelength: int, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
+    """Factor (n,) that turns the stored PSFs of nodes (rows[i], cols[i]) at one wavelength into sample
+    weights (energy per sample), times meta["flux_scale"] where a grid has one (not for "peak": unit sum)."""
     how = grid.meta.get("normalization", "sum")
+    flux = float(grid.meta.get("flux_scale", 1.0))  # a depth node seen from another viewpoint (`psf.depth`)
     if how == "sum":
-        return np.ones(grid.data.shape[:3])
+        return np.full(len(rows), flux)
     if how == "none":  # irradiance per µm²: weights sum to the transmitted fraction
-        return np.full(grid.data.shape[:3], grid.pitch_um ** 2)
-    if how == "peak":  # no energy scale kept: unit sum
-        total = grid.data.sum(axis=(-2, -1), dtype=np.float64)
+        return np.full(len(rows), flux * grid.pitch_um ** 2)
+    if how == "peak":  # no energy scale kept: unit sum (of these nodes' PSFs only: a batch's, not the grid's)
+        total = grid.data[wavelength, rows, cols].sum(axis=(-2, -1), dtype=np.float64)
         return 1.0 / np.where(total > 0, total, 1.0)
     raise SolasError(f"PSF grid normalization {how!r} must be sum, none or peak")
 
@@ -261,7 +263,7 @@ def pixel_kernels(psfs: np.ndarray, q: float, offsets: np.ndarray, scale: np.nda
 def node_kernels(grid: PSFGrid, lay: Layout, wavelength: int, rows: np.ndarray, cols: np.ndarray, radius: int,
                  dtype=np.float64) -> tuple[np.ndarray, np.ndarray]:
     """Pixel kernels and shifts of the grid nodes (rows[i], cols[i]) for one wavelength index."""
-    scale = psf_scale(grid)[wavelength, rows, cols]
+    scale = psf_scale(grid, wavelength, rows, cols)
     return pixel_kernels(grid.data[wavelength, rows, cols], lay.q, lay.offsets[wavelength, rows, cols], scale,
                          radius, dtype)
 

@@ -33,7 +33,10 @@ BRIGHTNESS = ("degrade: a sum-normalised grid (the default) keeps the input's br
               "to its axis (vignetting), the axis staying 1. render-image: irradiance in the ideal camera's units, "
               "with Fresnel losses (--fresnel transmit, its default) and relative illumination: about 0.90 of the "
               "input on the doublet's axis (Fresnel 0.90 x pupil scale 1.0097), less toward the corners")
-OUTPUT_FORMATS = ("exr", "exr-half")  # float32 OpenEXR (14 MB a 1280×960 RGB frame uncompressed), half floats
+# float32 OpenEXR (14 MB a 1280×960 RGB frame uncompressed), half floats, or a 16-bit sRGB PNG (its own
+# preview; its metadata in a JSON file beside it): OUTPUT_FILES gives each one's two files' suffixes
+OUTPUT_FILES = {"exr": (".exr", ".png"), "exr-half": (".exr", ".png"), "png16": (".png", ".json")}
+OUTPUT_FORMATS = tuple(OUTPUT_FILES)
 HALF_MAX = 65504.0
 GRID_META_KEYS = ("lens", "lens_hash", "method", "normalization", "field_range_deg", "field_sampling", "layout", "sensor_mm")
 
@@ -77,8 +80,7 @@ def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path:
     depth map (m) of the image, with a grid over object distance (`convolution.depth`, `occlusion`);
     `frame`: the frame's camera (`optics.frame.FrameCamera`); `output_format`: one of OUTPUT_FORMATS."""
     from ..budget import check_memory
-    from ..imageio import image_channels, image_size, read_image, write_exr, write_png
-    from ..outputs import written_together
+    from ..imageio import image_size, read_image
     from ..psf.depth import DepthGrid
 
     if output_format not in OUTPUT_FORMATS:
@@ -112,15 +114,40 @@ def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path:
     meta.update(extra_meta or {})
     names = None if out.ndim == 2 or out.shape[-1] == 3 else \
         [f"C{c:02d}_{meta['channel_wavelengths_nm'][c]:g}nm" for c in range(out.shape[-1])]
+    write_output(output, png, out, names, meta, output_format, image_path)
+    meta["output_shape"] = list(out.shape)
+    return meta
+
+
+def write_output(output: Path, second: Path, out: np.ndarray, names: list[str] | None, meta: dict,
+                 output_format: str, image_path) -> None:
+    """The degraded image `out` (channel `names`, None: grey or RGB) and its metadata as `output_format`
+    says (OUTPUT_FILES): the EXR and its PNG preview, or the 16-bit PNG and its JSON; both files appear
+    together or not at all."""
+    from ..imageio import image_channels, write_exr, write_png
+    from ..outputs import written_together
+
     view = out if out.ndim == 2 or out.shape[-1] == 3 else out.mean(axis=-1)
     half = output_format == "exr-half"
     if half and float(np.abs(out).max()) > HALF_MAX:
         raise SolasError(f"{image_path}: degraded values up to {float(np.abs(out).max()):.4g} exceed half floats' "
                          f"{HALF_MAX:g}: write float EXR (output format exr)")
     meta["output_format"] = output_format
-    # both files appear together or not at all
-    with written_together(output, png) as (tmp_exr, tmp_png):
-        write_exr(tmp_exr, image_channels(out, names), meta, half=half)
-        write_png(tmp_png, view)
-    meta["output_shape"] = list(out.shape)
-    return meta
+    with written_together(output, second) as (tmp_data, tmp_second):
+        if output_format == "png16":
+            write_png16_with_meta(tmp_data, tmp_second, out if names is None else view, meta)
+        else:
+            write_exr(tmp_data, image_channels(out, names), meta, half=half)
+            write_png(tmp_second, view)
+
+
+def write_png16_with_meta(path: str, meta_path: str, image: np.ndarray, meta: dict) -> None:
+    """`image` as a 16-bit sRGB PNG (more than 3 channels: their mean, as the preview) and `meta` as JSON,
+    saying how many values were clipped to [0, 1] and how to read the file back to linear values."""
+    import json
+
+    from ..imageio import write_png16, write_text
+
+    meta["png16"] = {"clipped_values": write_png16(path, image), "encoding": "sRGB, 16 bits; values clipped to "
+                     "[0, 1]; read back linear with solas_mi.imageio.read_image (within 2e-5)"}
+    write_text(meta_path, json.dumps(meta, indent=1, default=str) + "\n")

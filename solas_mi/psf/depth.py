@@ -143,7 +143,8 @@ def depth_grid(lens, spec: GridSpec, progress=None, camera_focal_mm: float | Non
 def from_viewpoint(lens, grid: PSFGrid, distance_m: float, viewpoint_mm: float) -> None:
     """The fields of `grid` (objects `distance_m` in front of surface 1, fields seen from the entrance
     pupil) turned into the directions seen from `viewpoint_mm` behind surface 1:
-    tan θ' = tan θ · (d + z_ep) / (d + viewpoint)."""
+    tan θ' = tan θ · (d + z_ep) / (d + viewpoint); and the light each frame pixel sends through the lens
+    scaled by ((d + viewpoint)/(d + z_ep))² (meta["flux_scale"], applied by `convolution.kernels.psf_scale`)."""
     if math.isinf(distance_m):
         return
     from ..optics.paraxial import paraxial
@@ -151,8 +152,11 @@ def from_viewpoint(lens, grid: PSFGrid, distance_m: float, viewpoint_mm: float) 
     d = 1e3 * distance_m
     factor = (d + paraxial(lens).entrance_pupil_z_mm) / (d + viewpoint_mm)
     grid.fields_deg = np.degrees(np.arctan(np.tan(np.radians(grid.fields_deg)) * factor))
-    grid.meta.update(viewpoint_mm=viewpoint_mm, fields="directions seen from the viewpoint, viewpoint_mm behind "
-                     "surface 1 (fields_deg); the PSFs are those of the same object points")
+    grid.meta.update(viewpoint_mm=viewpoint_mm, flux_scale=factor ** -2,
+                     fields="directions seen from the viewpoint, viewpoint_mm behind surface 1 (fields_deg); the "
+                     "PSFs are those of the same object points; flux_scale: the light the lens collects from what "
+                     "one frame pixel sees, against an object at infinity: the pixel's patch grows as (d + "
+                     "viewpoint)², the pupil's solid angle falls as 1/(d + entrance pupil)²")
 
 
 def at_distance(lens, distance_m: float):

@@ -346,3 +346,52 @@ def test_a_batch_with_depth_maps_by_name_pattern(tmp_path, doublet):
     with pytest.raises(__import__("solas_mi").SolasError, match="no depth map"):
         degrade_batch([folder], tmp_path / "out2", psf_grid=tmp_path / "g.exr", workers=1,
                       depth_pattern="{stem}_depth.exr")
+
+
+def test_the_frames_camera_applies_to_every_item(batch_inputs, capsys):
+    """`batch degrade` takes `degrade`'s frame-camera options: each item comes out as `degrade` makes it
+    with the same camera (a ±1° frame on the ±2° grid: larger blur per pixel), its metadata says so;
+    a frame wider than the lens's field fails every item with the numbers."""
+    from solas_mi.imageio import read_exr
+
+    (first, *_) = batch_inputs.write(2)
+    out, narrow = batch_inputs.root / "out", ["--fov-deg", "1", "--fov-axis", "x"]
+    base = ["--psf-grid", str(batch_inputs.grid), "--workers", "1", "--quiet"]
+    assert main(["batch", "degrade", str(batch_inputs.images), "-o", str(out), *base, *narrow]) == 0
+    assert main(["degrade", str(first), "--psf-grid", str(batch_inputs.grid), "-o", str(batch_inputs.root / "one.exr"),
+                 *narrow]) == 0
+    assert main(["batch", "degrade", str(batch_inputs.images), "-o", str(batch_inputs.root / "plain"), *base]) == 0
+    ch, meta = read_exr(out / "frame000.exr")
+    one, plain = read_exr(batch_inputs.root / "one.exr")[0], read_exr(batch_inputs.root / "plain" / "frame000.exr")[0]
+    assert all(np.array_equal(ch[c], one[c]) for c in "RGB")
+    assert not np.allclose(ch["G"], plain["G"], atol=1e-4)
+    assert meta["frame_camera"]["fov_deg"] == 1.0 and manifest(out)["frame_camera"]["model"] == "fov"
+    capsys.readouterr()
+    wide = batch_inputs.root / "wide"
+    assert main(["batch", "degrade", str(batch_inputs.images), "-o", str(wide), *base, "--fov-deg", "5"]) == 1
+    assert "does not cover this frame" in capsys.readouterr().err
+    assert manifest(wide)["summary"] == {"failed": 2}
+
+
+def test_16_bit_png_output(batch_inputs):
+    """--format png16: each item a 16-bit sRGB PNG (no 8-bit preview beside it) that reads back as the
+    float EXR's values clipped to [0, 1], to within 2e-5, and its metadata in a JSON file."""
+    from solas_mi.imageio import read_exr, read_image
+
+    batch_inputs.write(2)
+    base = [str(batch_inputs.images), "--psf-grid", str(batch_inputs.grid), "--workers", "1", "--quiet"]
+    out, exr = batch_inputs.root / "png16", batch_inputs.root / "exr"
+    assert main(["batch", "degrade", *base, "-o", str(out), "--format", "png16"]) == 0
+    assert main(["batch", "degrade", *base, "-o", str(exr)]) == 0
+    assert sorted(p.name for p in out.iterdir()) == ["batch.json", "frame000.json", "frame000.png", "frame001.json",
+                                                       "frame001.png"]
+    with open(out / "frame000.png", "rb") as f:
+        assert f.read(25)[24] == 16  # the IHDR's bit depth
+    ch = read_exr(exr / "frame000.exr")[0]
+    want = np.clip(np.stack([ch[c] for c in "RGB"], axis=-1), 0, 1)
+    assert np.abs(read_image(out / "frame000.png") - want).max() < 2e-5
+    meta = json.loads((out / "frame000.json").read_text())
+    assert meta["output_format"] == "png16" and meta["png16"]["clipped_values"] == int(np.sum(want != np.stack(
+        [ch[c] for c in "RGB"], axis=-1)))
+    assert main(["batch", "degrade", *base, "-o", str(out), "--format", "png16"]) == 0  # finished: skipped
+    assert manifest(out)["summary"] == {"skipped": 2}

@@ -34,3 +34,19 @@ def test_layer_counts_must_nest():
     for bad in ((3, 4), (), (2, 1), (0, 2)):
         with pytest.raises(SolasError, match="depth layers"):
             check_layers(bad)
+
+
+def test_a_refocused_render_is_in_its_own_focus_unit(doublet, variant_scalar_spectral):
+    """The lens camera's unit is the lossless lens's on-axis irradiance at its focus (the exit pupil's
+    solid angle seen from the film centre, integrated over the pupil): refocused at 20 m, the doublet's
+    film lies 1.3 % further from the exit pupil and its unit is 2.5 % less, which the paraxial ratio
+    (N/N')² gives to 1e-3 (the convolution divided by the file focus's unit came out 2.4 % dark)."""
+    from solas_mi.experiments.street.depth import focus_unit
+    from solas_mi.optics.focus import focused
+    from solas_mi.plugins.lens_camera import on_axis_solid_angle
+    from solas_mi.plugins.pupil_sampling import PupilSampler
+
+    lenses = (doublet, focused(doublet, 20e3))
+    omega = [on_axis_solid_angle(lens, PupilSampler(lens, 0.5, [531.0]), 531.0) for lens in lenses]
+    assert focus_unit(*lenses, 531.0) == pytest.approx(omega[1] / omega[0], rel=1e-3)
+    assert omega[1] / omega[0] < 0.98

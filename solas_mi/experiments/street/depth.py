@@ -10,10 +10,17 @@ rows), PSF pitch = pixel / 4 and DEPTH_PSF_SIZE samples: a 64-px window, which h
 nearest objects (the doublet focused at infinity: ≈ 44 px at 7 m; the 160-sample window of the
 single-distance grids spans 20 px).
 
+Units: each render is in its own focus's lens-camera unit (the refocused lens's on-axis irradiance is
+(N/N')² of the file's, N the exit pupil's working f-number: 2.5 % less at 20 m for the doublet), so each
+focus's convolution is divided by k times that (`focus_unit`).
+
 Depth: the depth map is the distance along each pixel's ray; the grids' object distance is along the
 axis, z = t·cos θ. Errors: relative RMSE (image − mean of the two renders)/RMS(render) over near
 (closer than 1.5 × the near focus) and far (beyond FAR_M) pixels, the renders' noise removed in
-quadrature: the per-pixel variance of the mean of two seeds is (r1 − r2)²/4.
+quadrature: the per-pixel variance of the mean of two seeds is (r1 − r2)²/4. Near and far by both the
+ideal depth map and the render's own (the depth scene through the lens camera: the mean distance along
+each pixel's rays): a pixel at a silhouette that one calls near and the other not mixes both sides'
+light and is neither (the ideal map's classes alone: the "…_pinhole_depth" fields).
 """
 from __future__ import annotations
 
@@ -68,10 +75,11 @@ def check_layers(layers) -> tuple[int, ...]:
     return out
 
 
-def depth_rows(st, weighted: np.ndarray, depth: np.ndarray, k: float, renders: dict, near: np.ndarray,
-               far: np.ndarray, field_range: tuple[float, float]) -> tuple[dict, dict]:
+def depth_rows(st, weighted: np.ndarray, depth: np.ndarray, k: float, renders: dict, masks: dict,
+               field_range: tuple[float, float]) -> tuple[dict, dict]:
     """(images, error rows) of the depth-aware convolution for each focus ("infinity", the near focus)
-    and each count of intervals in st.s.depth_layers; `renders`: focus label → (seed 0, seed 1) renders."""
+    and each count of intervals in st.s.depth_layers; `renders`: focus label → (seed 0, seed 1) renders;
+    `masks`: focus label → near and far by the ideal depth map, then by the render's own (`masked`)."""
     from ...optics.focus import focused
     from ...psf.spec import inverse_spaced
 
@@ -82,23 +90,46 @@ def depth_rows(st, weighted: np.ndarray, depth: np.ndarray, k: float, renders: d
     images, rows = {}, {}
     lenses = {"infinity": st.lens, f"{st.near_focus:g} m": focused(st.lens, 1e3 * st.near_focus)}
     for label, lens in lenses.items():
+        unit = k * focus_unit(st.lens, lens, st.primary)
         full = st.timed(f"(g) PSF grids over {len(nodes)} distances, focus {label}", _grid, st, lens, nodes,
                         field_range)
         for count in (0, *layers):
             step = layers[-1] // count if count else None
             grid = full.subset(list(range(0, len(nodes), step)) if step else [0])
             name = f"depth-aware interp {DEPTH_GRID[0]}x{DEPTH_GRID[1]}, {count + 1} nodes, focus {label}"
-            image, seconds = _convolve(weighted, z, grid, k)
-            rows[f"{name} vs render {label}"] = dict(denoised_errors(image, renders[label], near, far),
-                                                     intervals=count, nodes=count + 1, seconds=seconds,
-                                                     nearest_node_m=nearest)
+            image, seconds = _convolve(weighted, z, grid, unit)
+            rows[f"{name} vs render {label}"] = dict(masked(image, renders[label], *masks[label]), intervals=count,
+                                                     nodes=count + 1, seconds=seconds, nearest_node_m=nearest,
+                                                     unit_k=unit)
             if count == layers[-1]:
                 images[name] = image
-                plain, seconds = _convolve(weighted, z, grid, k, "none")
+                plain, seconds = _convolve(weighted, z, grid, unit, "none")
                 rows[f"{name}, no occlusion vs render {label}"] = dict(
-                    denoised_errors(plain, renders[label], near, far), intervals=count, nodes=count + 1,
+                    masked(plain, renders[label], *masks[label]), intervals=count, nodes=count + 1,
                     seconds=seconds, occlusion="none")
     return images, rows
+
+
+def masked(image: np.ndarray, renders: tuple, near: np.ndarray, far: np.ndarray, near_lens: np.ndarray,
+           far_lens: np.ndarray) -> dict:
+    """`denoised_errors` on the pixels both the ideal depth map (`near`, `far`) and the render's own
+    (`near_lens`, `far_lens`: by the mean distance along each pixel's rays through the lens) call near or
+    far (a pixel at a silhouette whose light mixes both sides is neither), and on the ideal map's alone
+    ("…_pinhole_depth")."""
+    both = denoised_errors(image, renders, near & near_lens, far & far_lens)
+    alone = denoised_errors(image, renders, near, far)
+    return dict(both, near_far="by the ideal depth map and the render's own (through the lens) alike",
+                **{f"{key}_pinhole_depth": alone[key] for key in ("rel_rmse_near", "rel_rmse_far", "near_pixels",
+                                                                  "far_pixels")})
+
+
+def focus_unit(lens, refocused, wavelength_nm: float) -> float:
+    """The lens camera's unit (a lossless lens's on-axis irradiance: the exit pupil's solid angle seen
+    from the film centre) of `refocused` against that of `lens`: (N / N')², N the exit pupil's working
+    f-number (image plane − exit pupil over its diameter), which grows as the image plane moves back."""
+    from ...optics.paraxial import paraxial
+
+    return (paraxial(lens, wavelength_nm).exit_pupil_f_number / paraxial(refocused, wavelength_nm).exit_pupil_f_number) ** 2
 
 
 def _grid(st, lens, nodes, field_range):

@@ -116,9 +116,12 @@ def write_tables(out: Path, rows: list[dict], outcome) -> None:
     layered = {n: e for n, e in outcome.errors.items() if "intervals" in e}
     if layered:  # step (g): error against the number of depth layers and run time, render noise removed
         md += ["", "| depth-aware convolution (render noise removed) | nodes | near | far | near, raw | far, raw | "
-               "seconds |", "|---|---:|---:|---:|---:|---:|---:|"]
-        md += [f"| {n} | {e['nodes']} | " + " | ".join(_pct(e[k]) for k in ("rel_rmse_near", "rel_rmse_far",
-               "rel_rmse_near_raw", "rel_rmse_far_raw")) + f" | {e['seconds']:.2f} |" for n, e in layered.items()]
+               "near, pinhole depth | far, pinhole depth | seconds |", "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
+        md += [f"| {n} | {e['nodes']} | " + " | ".join(_pct(e.get(k)) for k in (
+               "rel_rmse_near", "rel_rmse_far", "rel_rmse_near_raw", "rel_rmse_far_raw", "rel_rmse_near_pinhole_depth",
+               "rel_rmse_far_pinhole_depth")) + f" | {e['seconds']:.2f} |" for n, e in layered.items()]
+        md += ["", "Near and far: pixels both the ideal depth map and the render's own (through the lens) put nearer "
+               "than near_m or beyond far_m; pinhole depth: by the ideal depth map alone."]
     md += ["", "| step | seconds |", "|---|---:|"] + [f"| {k} | {v:.1f} |" for k, v in outcome.seconds.items()]
     write_text(out / "street.md", "\n".join(md) + "\n")
     csv = [",".join(columns)] + [",".join("" if r[c] is None else str(r[c]) for c in columns) for r in rows]

@@ -23,7 +23,8 @@ the mono variant renders this grey scene alike, 1.5× slower).
     pixels (depth < 1.5 × near focus) and far pixels (beyond FAR_M or sky) separately.
 (f) the run time of each step.
 (g) the depth-aware convolution (`depth`): grids over object distance for both focus settings, as
-    depth nodes are added, against both renders with their noise removed (a second seed of each).
+    depth nodes are added, against both renders with their noise removed (a second seed of each); near
+    and far by the ideal depth map and by the render's own (the depth scene through the lens camera).
 
 Units: the convolution takes the ideal image (radiance) to irradiance in units of the ideal camera's
 (`validation.engines.convolve`) and divides by k = axis irradiance / ideal irradiance, the lens
@@ -200,18 +201,23 @@ def run(lens, out: str | Path, settings: Settings | None = None, log=print) -> O
 
 def _depth_aware(st: _Steps, xml: Path, images: dict, depth: np.ndarray, k: float) -> dict:
     """(g) the depth-aware convolution against both renders, their noise removed with a second seed's
-    renders (`depth.depth_rows`); its images are added to `images`, its error rows returned."""
+    renders (`depth.depth_rows`); near and far pixels are those both the ideal camera's depth map and the
+    render's own (`_lens_renders(depth=True)`) put nearer than 1.5 × the near focus, or beyond FAR_M;
+    its images are added to `images`, its error rows returned."""
     from ...validation.inputs import tangent_cos3
 
     second = _lens_renders(st, xml, seed=1)
-    renders = {label: (images[f"render {label}"], second[f"render {label}"])
-               for label in ("infinity", f"{st.near_focus:g} m")}
-    near, far = depth < 1.5 * st.near_focus, depth > FAR_M
+    through = _lens_renders(st, st.out / "depth.xml", depth=True)
+    labels = ("infinity", f"{st.near_focus:g} m")
+    renders = {label: (images[f"render {label}"], second[f"render {label}"]) for label in labels}
+    near_m = 1.5 * st.near_focus
+    masks = {label: (depth < near_m, depth > FAR_M, through[f"render {label}"] < near_m,
+                     through[f"render {label}"] > FAR_M) for label in labels}
     field_range = (st.fov, math.degrees(math.atan(math.tan(math.radians(st.fov)) * st.h / st.w)))
-    new, rows = depth_rows(st, images["ideal"] * tangent_cos3(st.w, st.h, st.fov),
-                           depth, k, renders, near, far, field_range)
+    new, rows = depth_rows(st, images["ideal"] * tangent_cos3(st.w, st.h, st.fov), depth, k, renders, masks,
+                           field_range)
     for row in rows.values():
-        row.update(near_m=1.5 * st.near_focus, far_m=FAR_M)
+        row.update(near_m=near_m, far_m=FAR_M)
     images.update(new)
     return rows
 
@@ -264,18 +270,22 @@ def _convolved(st: _Steps, ideal: np.ndarray, grids: dict, far_grid, k: float) -
     return images
 
 
-def _lens_renders(st: _Steps, xml: Path, seed: int = 0) -> dict[str, np.ndarray]:
-    """(c) the scene through the lens camera, focused at infinity and at the near focus (sampler `seed`)."""
+def _lens_renders(st: _Steps, xml: Path, seed: int = 0, depth: bool = False) -> dict[str, np.ndarray]:
+    """(c) the scene through the lens camera, focused at infinity and at the near focus (sampler `seed`);
+    `depth`: the depth scene's (`experiment_scene`), the mean distance along each pixel's rays through
+    the lens (st.s.spp_depth samples)."""
     s = st.s
-    lens_params = {key: v for key, v in st.params.items() if key != "fov"} | {"spp": str(s.spp_lens)}
+    spp = s.spp_depth if depth else s.spp_lens
+    lens_params = {key: v for key, v in st.params.items() if key != "fov"} | {"spp": str(spp)}
     render_options = {"response": f"mono:{st.primary:g}", "pitch_um": st.pixel_um}
-    note = f", seed {seed}" if seed else ""
+    note = (", seed " + str(seed) if seed else "") + (", depth" if depth else "")
+    channel = -1 if depth else 0
     return {
         "render infinity": st.timed(f"(c) lens render, focus at infinity{note}", _render, xml, st.variant, st.lens,
-                                    lens_params, s.spp_lens, seed, **render_options)[..., 0],
+                                    lens_params, spp, seed, **render_options)[..., channel],
         f"render {st.near_focus:g} m": st.timed(
             f"(c) lens render, focus at {st.near_focus:g} m{note}", _render, xml, st.variant, st.lens, lens_params,
-            s.spp_lens, seed, focus_distance=st.near_focus, **render_options)[..., 0],
+            spp, seed, focus_distance=st.near_focus, **render_options)[..., channel],
     }
 
 
