@@ -19,8 +19,9 @@ import numpy as np
 from ..errors import SolasError
 from ..imageio import atomic_path, write_text
 from ..optics.camera import Camera, camera_for
-from ..optics.lens import Lens, sag_slope
-from ..optics.lens import sag as asphere_sag
+from ..optics.lens import Lens
+from ..optics.sag import sag_slope
+from ..optics.sag import sag as asphere_sag
 from ..outputs import inside, safe_name
 from . import response as responses
 from .spec import DEFAULT_RINGS, RenderSpec, check_rings
@@ -30,8 +31,8 @@ MIN_GAP_MM = 10 * SPAWN_OFFSET_MM  # closest two refracting surfaces of the mesh
 
 
 def cap_mesh(radius: float, vertex_z: float, semi_diameter: float, rings: int, conic: float = 0.0,
-             aspheric: tuple[float, ...] = ()):
-    """A spherical cap (flat disk if radius is 0), or the even asphere of `conic` and `aspheric` (the
+             aspheric: tuple[float, ...] = (), qbfs: tuple[float, ...] = (), norm_radius: float = 1.0):
+    """A spherical cap (flat disk if radius is 0), or the asphere of `conic`, `aspheric` and `qbfs` (the
     lens file's sag, `optics.lens.sag`): vertices (n, 3), unit normals (n, 3) facing −z,
     faces (m, 3) wound so that their geometric normals face −z too. `rings` rings of 4·rings
     segments; ring radii are uniform in r. Spokes sit half a segment off the axes and diagonals,
@@ -42,10 +43,10 @@ def cap_mesh(radius: float, vertex_z: float, semi_diameter: float, rings: int, c
     rr, pp = np.meshgrid(r, phi, indexing="ij")
     x = np.concatenate([[0.0], (rr * np.cos(pp)).ravel()])
     y = np.concatenate([[0.0], (rr * np.sin(pp)).ravel()])
-    if conic != 0.0 or any(aspheric):
+    if conic != 0.0 or any(aspheric) or any(qbfs):
         c, rho2 = (1.0 / radius if radius else 0.0), x * x + y * y
-        z = vertex_z + asphere_sag(rho2, c, conic, aspheric)
-        slope = 2.0 * sag_slope(rho2, c, conic, aspheric)
+        z = vertex_z + asphere_sag(rho2, c, conic, aspheric, qbfs=qbfs, norm_radius=norm_radius)
+        slope = 2.0 * sag_slope(rho2, c, conic, aspheric, qbfs=qbfs, norm_radius=norm_radius)
         normals = np.stack([slope * x, slope * y, -np.ones_like(x)], axis=-1)
         normals /= np.linalg.norm(normals, axis=-1, keepdims=True)
     elif radius == 0.0:
@@ -162,7 +163,8 @@ def lens_parts(lens: Lens, rings: int = DEFAULT_RINGS) -> list[Part]:
         zr = zv + float(s.sag(s.semi_diameter))
         rim_z.append(zr)
         if s.glass != before:
-            parts.append(Part(f"surface{k}", cap_mesh(s.radius, zv, s.semi_diameter, rings, s.conic, s.aspheric),
+            parts.append(Part(f"surface{k}", cap_mesh(s.radius, zv, s.semi_diameter, rings, s.conic, s.aspheric, s.qbfs,
+                                                        s.norm_radius),
                               before_name, s.material))
         if not (k == 1 and lens.field_type.sideways):
             parts.append(Part(f"aperture{k}", annulus_mesh(zr, s.semi_diameter, outer)))
