@@ -271,3 +271,33 @@ GO
 def test_refused_systems(tmp_path, change, match):
     with pytest.raises(SolasError, match=match):
         load(tmp_path, singlet(system="FNO 4\nYAN 0 1").replace(*change))
+
+
+def test_what_code_v_exports_also_hold(tmp_path):
+    """Met in public .seq files: TEM at the catalogue's temperature, a zero CUF, CIR EDG (the edge
+    aperture, drawn only), DER lines after SI, the object at 'inf', a three-digit glass code: the same
+    lens as without them."""
+    base = load(tmp_path, singlet(glass="500.600"), "a.seq")
+    assert base.surfaces[0].glass.name == "model:1.5/60"
+    text = singlet(glass="500.600").replace("WL 550", "WL 550\nTEM 20.0").replace("SO 0 1e10", "SO 0 inf")
+    text = text.replace("PIM", "PIM\nCUF 0.0\nCIR EDG 30").replace("SI 0 0", "SI 0 0\nDER VAL I1 0.1")
+    lens = load(tmp_path, text, "b.seq")
+    assert lens.at_infinity and lens.surfaces == base.surfaces
+
+
+@pytest.mark.parametrize("change, match", [
+    (("WL 550", "WL 550\nTEM 60"), "TEM '60'.*20-25 °C"),
+    (("PIM", "PIM\nCUF 0.01"), "CUF: fringe curvatures"),
+    (("PIM", "PIM\nCIR OBS 2"), "CIR OBS: obscurations"),
+])
+def test_what_code_v_exports_refused(tmp_path, change, match):
+    with pytest.raises(SolasError, match=match):
+        load(tmp_path, singlet().replace(*change))
+
+
+def test_without_sto_the_stop_is_surface_1(tmp_path):
+    """CODE V's default stop is surface 1, and the lens's description says so."""
+    marked = load(tmp_path, singlet(), "a.seq")
+    unmarked = load(tmp_path, singlet().replace("STO ", "S "), "b.seq")
+    assert unmarked.surfaces == marked.surfaces
+    assert "stop is surface 1" in unmarked.description and "stop" not in marked.description
