@@ -22,8 +22,8 @@ only, CODE V's working F/# of a near object is refused), NAO (object-space
   NA), none: the stop's CIR; fields YAN/XAN (degrees), YOB/XOB (object heights), YIM/XIM (paraxial
   image heights) or YRI/XRI (real image heights), solved as Zemax's are (`zemax_solves`); surfaces
   without CIR get the automatic semi-diameter.
-Weights, vignetting factors, optimisation codes, DER values and view settings are read past
-(IGNORED); a zero CUF (fringe curvature) or decentre changes nothing. What
+Vignetting factors VUY/VLY/VUX/VLX shape the beam the automatic semi-diameters follow (`zemax_solves`).
+Weights, optimisation codes, DER values and view settings are read past (IGNORED); a zero CUF (fringe curvature) or decentre changes nothing. What
 cannot be represented is refused naming the surface and the feature: decentres and tilts, mirrors,
 diffractive, holographic, toric and anamorphic surfaces, rectangular or elliptical apertures,
 obscurations, zoom positions, private catalogues; and any command not listed here.
@@ -47,9 +47,10 @@ INFINITE_OBJECT = 1e10  # an object distance at least this (in lens units) is at
 ASPHERIC = "ABCDEFGHJ"  # the coefficients of r⁴, r⁶, … r²⁰
 FIELDS = {"YAN": "angle", "YOB": "object height", "YIM": "paraxial image height", "YRI": "real image height"}
 APERTURES = {"EPD": "epd", "FNO": "fnum", "NAO": "na"}
-IGNORED = frozenset("LEN GO END INI WTW WTF VUY VLY VUX VLX DOR CCY CCX THC GLC DER".split())
+IGNORED = frozenset("LEN GO END INI WTW WTF DOR CCY CCX THC GLC DER".split())
+VIGNETTING = ("VUX", "VLX", "VUY", "VLY")  # the pupil's fraction cut off per field: +x, −x, +y, −y
 CATALOGUE_TEMPERATURE_C = (20.0, 25.0)  # the glass data hold at the vendors' reference temperatures, 20-25 °C
-SYSTEM = ("TIT", "TITLE", "DIM", "WL", "REF", "XAN", "XOB", "XIM", "XRI", *FIELDS, *APERTURES)
+SYSTEM = ("TIT", "TITLE", "DIM", "WL", "REF", "XAN", "XOB", "XIM", "XRI", *FIELDS, *APERTURES, *VIGNETTING)
 ZERO_IS_NOTHING = ("XDE", "YDE", "ZDE", "ADE", "BDE", "CDE", "CUF")
 REFUSED = {**dict.fromkeys(("XDE", "YDE", "ZDE", "ADE", "BDE", "CDE", "DAR", "BEN", "REV", "RET"),
                            "decentred or tilted surfaces"),
@@ -272,7 +273,20 @@ def read_spec(text: str, where: str) -> dict:
     aperture = _aperture(system, scale, where)
     if aperture[0] == "fnum" and spec["object"]["distance"] != "infinity":
         raise SolasError(f"{where}: FNO with a near object (CODE V's working F/#) is not supported; give EPD or NAO")
-    return zemax_solves.solve(spec, aperture, _fields(system, scale, where), primary, where)
+    fields = _fields(system, scale, where)
+    return zemax_solves.solve(spec, aperture, fields, primary, where, _vignetting(system, len(fields[1]), where))
+
+
+def _vignetting(system: dict, count: int, where: str) -> list[tuple[float, ...]] | None:
+    """Per field, the VUX, VLX, VUY, VLY factors (0 where not given); None when the file gives none."""
+    given = {k: _numbers(system[k], f"{where}: {k}") for k in VIGNETTING if k in system}
+    if not given:
+        return None
+    for k, values in given.items():
+        if len(values) > count or not all(-1.0 < v < 1.0 for v in values):
+            raise SolasError(f"{where}: {k} {' '.join(system[k])!r}: one factor in (-1, 1) per field ({count} fields)")
+    return [tuple(given.get(k, [])[i] if i < len(given.get(k, [])) else 0.0 for k in VIGNETTING)
+            for i in range(count)]
 
 
 def _object(row: dict, scale: float) -> dict:

@@ -301,3 +301,30 @@ def test_without_sto_the_stop_is_surface_1(tmp_path):
     unmarked = load(tmp_path, singlet().replace("STO ", "S "), "b.seq")
     assert unmarked.surfaces == marked.surfaces
     assert "stop is surface 1" in unmarked.description and "stop" not in marked.description
+
+
+def test_vignetting_factors_shape_the_automatic_apertures(tmp_path):
+    """Vignetting factors of 0.5 on every side at every field squeeze the beam at the stop to half its
+    radius: the automatic semi-diameters are those of the same lens with half the entrance pupil."""
+    lens = f"""RDM
+WL 550
+YAN 0 8 12
+SO 0 1e10
+S 40 5 1.6:40
+S -120 10
+S 0 10
+STO
+S -40 4 1.6:40
+S 60 30
+SI 0 0
+"""
+    half = "VUX 0.5 0.5 0.5\nVLX 0.5 0.5 0.5\nVUY 0.5 0.5 0.5\nVLY 0.5 0.5 0.5\n"
+    vignetted = load(tmp_path, "EPD 16\n" + half + lens, "a.seq")
+    smaller = load(tmp_path, "EPD 8\n" + lens, "b.seq")
+    full = load(tmp_path, "EPD 16\n" + lens, "c.seq")
+    for k in (0, 1, 3, 4):
+        assert vignetted.surfaces[k].diameter == pytest.approx(smaller.surfaces[k].diameter, rel=1e-9)
+        assert vignetted.surfaces[k].diameter < full.surfaces[k].diameter
+    assert vignetted.surfaces[2].diameter == pytest.approx(full.surfaces[2].diameter, rel=1e-12)  # the stop
+    with pytest.raises(SolasError, match="VUY '0.5 1.2'"):
+        load(tmp_path, "EPD 16\nVUY 0.5 1.2\n" + lens, "d.seq")
