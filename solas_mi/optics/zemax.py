@@ -23,7 +23,9 @@ Read as the author meant it:
   (entrance-pupil diameter), FNUM x 0 (image-space F/# = EFL / EPD), OBNA x 0 (object-space NA, finite
   objects), FLOA (float by stop size).
 - Fields (XFLN/YFLN, FTYP's first number): 0 angle, 1 object height, 2 paraxial image height, 3 real
-  image height (the field whose real chief ray lands there); field_deg is the widest as an angle.
+  image height (the field whose real chief ray lands there); field_deg is the widest as an angle. The
+  vignetting factors VDXN/VCXN/VDYN/VCYN (decentre, compression) shape the beam automatic
+  semi-diameters follow.
 - UNIT (MM, CM, IN, METER) scales every length to mm; WAVM (or WAVL) the wavelengths (µm in the file),
   PWAV the one the aperture and field solves use; surface 0's DISZ the object distance. The last SURF
   is the image plane (its DIAM the image semi-diameter).
@@ -132,7 +134,21 @@ def read_spec(text: str, where: str) -> dict:
         if semi > 0:
             spec["image"] = {"diameter": 2.0 * semi}
     spec.update(_wavelengths(top, where))
-    return zemax_solves.solve(spec, _aperture(top, scale, where), _fields(top, scale, where), _primary(top, spec), where)
+    fields = _fields(top, scale, where)
+    return zemax_solves.solve(spec, _aperture(top, scale, where), fields, _primary(top, spec), where,
+                              _vignetting(top, len(fields[1]), where))
+
+
+def _vignetting(top: dict, count: int, where: str) -> list[tuple[float, ...]] | None:
+    """Per field, the pupil's fractions (+x, −x, +y, −y) cut off by the VDXN/VCXN/VDYN/VCYN factors (the
+    pupil coordinate p becomes VD + (1 − VC) p); None when all are 0."""
+    row = {k: _floats((top.get(k) or [[]])[0][:count], f"{where}: {k}") for k in ("VDXN", "VCXN", "VDYN", "VCYN")}
+    row = {k: v + [0.0] * (count - len(v)) for k, v in row.items()}
+    cuts = [(row["VCXN"][i] - row["VDXN"][i], row["VCXN"][i] + row["VDXN"][i],
+             row["VCYN"][i] - row["VDYN"][i], row["VCYN"][i] + row["VDYN"][i]) for i in range(count)]
+    if any(not -1.0 < c < 1.0 for cut in cuts for c in cut):
+        raise SolasError(f"{where}: vignetting factors VDXN/VCXN/VDYN/VCYN leave no pupil at some field: {cuts}")
+    return cuts if any(any(cut) for cut in cuts) else None
 
 
 def _object(block: dict, scale: float, gcat: tuple[str, ...], where: str) -> dict:
