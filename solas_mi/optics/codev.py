@@ -132,6 +132,7 @@ class _Reader:
         self.rows: list[dict] = []  # SO, the surfaces, SI: raw values in lens units
         self.stop_at: int | None = None  # STO Sn: the stop is surface n
         self.radius_mode = False  # CODE V's default: S lines give curvatures unless RDM says radii
+        self.mode_given = False  # whether RDM or CUM said which
 
     def ident(self, line: int) -> str:
         if not self.rows:
@@ -158,6 +159,7 @@ class _Reader:
             self.surface(key, args, ident)
         elif key in ("RDM", "CUM"):
             self.radius_mode = key == "RDM" and (not args or args[0].upper() not in ("N", "NO"))
+            self.mode_given = True
         elif key in IGNORED:
             return
         elif key == "TEM":
@@ -274,7 +276,13 @@ def read_spec(text: str, where: str) -> dict:
     if aperture[0] == "fnum" and spec["object"]["distance"] != "infinity":
         raise SolasError(f"{where}: FNO with a near object (CODE V's working F/#) is not supported; give EPD or NAO")
     fields = _fields(system, scale, where)
-    return zemax_solves.solve(spec, aperture, fields, primary, where, _vignetting(system, len(fields[1]), where))
+    try:
+        return zemax_solves.solve(spec, aperture, fields, primary, where, _vignetting(system, len(fields[1]), where))
+    except SolasError as exc:
+        if reader.mode_given or not any(r["curv"] for r in rows):
+            raise
+        raise SolasError(f"{exc} (the file has no RDM: its S lines were read as curvatures, CODE V's default; "
+                         "if they are radii, add RDM)") from None
 
 
 def _vignetting(system: dict, count: int, where: str) -> list[tuple[float, ...]] | None:

@@ -328,3 +328,11 @@ SI 0 0
     assert vignetted.surfaces[2].diameter == pytest.approx(full.surfaces[2].diameter, rel=1e-12)  # the stop
     with pytest.raises(SolasError, match="VUY '0.5 1.2'"):
         load(tmp_path, "EPD 16\nVUY 0.5 1.2\n" + lens, "d.seq")
+
+
+def test_a_lens_without_rdm_that_fails_says_how_it_was_read(tmp_path):
+    """Without RDM the S lines are curvatures (CODE V's default); a file written in radii then images
+    nothing, and the refusal says how it was read and what to add."""
+    text = singlet(mode="").replace("SO 0 1e10", "SO 0 1e10")
+    with pytest.raises(SolasError, match="no RDM: its S lines were read as curvatures.*add RDM"):
+        load(tmp_path, text.replace("PIM", ""))
