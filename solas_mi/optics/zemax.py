@@ -23,9 +23,8 @@ Read as the author meant it:
   (entrance-pupil diameter), FNUM x 0 (image-space F/# = EFL / EPD), OBNA x 0 (object-space NA, finite
   objects), FLOA (float by stop size).
 - Fields (XFLN/YFLN, FTYP's first number): 0 angle, 1 object height, 2 paraxial image height, 3 real
-  image height (the field whose real chief ray lands there); field_deg is the widest as an angle. The
-  vignetting factors VDXN/VCXN/VDYN/VCYN (decentre, compression) shape the beam automatic
-  semi-diameters follow.
+  image height (the field whose real chief ray lands there); field_deg is the widest as an angle.
+  Vignetting factors VDXN/VCXN/VDYN/VCYN shape the beam automatic semi-diameters follow.
 - UNIT (MM, CM, IN, METER) scales every length to mm; WAVM (or WAVL) the wavelengths (µm in the file),
   PWAV the one the aperture and field solves use; surface 0's DISZ the object distance. The last SURF
   is the image plane (its DIAM the image semi-diameter).
@@ -142,10 +141,9 @@ def read_spec(text: str, where: str) -> dict:
 def _vignetting(top: dict, count: int, where: str) -> list[tuple[float, ...]] | None:
     """Per field, the pupil's fractions (+x, −x, +y, −y) cut off by the VDXN/VCXN/VDYN/VCYN factors (the
     pupil coordinate p becomes VD + (1 − VC) p); None when all are 0."""
-    row = {k: _floats((top.get(k) or [[]])[0][:count], f"{where}: {k}") for k in ("VDXN", "VCXN", "VDYN", "VCYN")}
-    row = {k: v + [0.0] * (count - len(v)) for k, v in row.items()}
-    cuts = [(row["VCXN"][i] - row["VDXN"][i], row["VCXN"][i] + row["VDXN"][i],
-             row["VCYN"][i] - row["VDYN"][i], row["VCYN"][i] + row["VDYN"][i]) for i in range(count)]
+    dx, cx, dy, cy = ([*_floats((top.get(k) or [[]])[0][:count], f"{where}: {k}"), *[0.0] * count][:count]
+                      for k in ("VDXN", "VCXN", "VDYN", "VCYN"))
+    cuts = [(cx[i] - dx[i], cx[i] + dx[i], cy[i] - dy[i], cy[i] + dy[i]) for i in range(count)]
     if any(not -1.0 < c < 1.0 for cut in cuts for c in cut):
         raise SolasError(f"{where}: vignetting factors VDXN/VCXN/VDYN/VCYN leave no pupil at some field: {cuts}")
     return cuts if any(any(cut) for cut in cuts) else None
@@ -228,12 +226,10 @@ def _q_type(b: dict, scale: float, ident: str) -> dict:
         raise SolasError(f"{ident}: QED_TYPE with type (XDAT 1) {kind:g} and {count:g} terms (XDAT 2); allowed: "
                          "type 0 (Qbfs) or 1 (Qcon), 0 to 12 terms")
     terms = _trim([xdat.get(4 + m, 0.0) * scale for m in range(int(count))])
-    if not terms:
-        return {}
-    if not radius > 0:
+    if terms and not radius > 0:
         raise SolasError(f"{ident}: QED_TYPE normalisation radius (XDAT 3) {radius:g} must be positive")
-    if kind == 1.0:
-        return {"aspheric": _trim(forbes.qcon_to_even(tuple(terms), radius))}
+    if not terms or kind == 1.0:
+        return {"aspheric": _trim(forbes.qcon_to_even(tuple(terms), radius))} if terms else {}
     return {"qbfs": terms, "norm_radius": radius}
 
 
