@@ -3,24 +3,27 @@ registered as the `.seq` entry of `formats.READERS`. The rotationally symmetric 
 
 - Commands one per line or separated by `;`; `!` starts a comment; quoted strings ('…' or "…") are one
   token. Keywords are case-insensitive.
-- Surfaces: SO (the object: radius, thickness = object distance, ≥ 1e10 is at infinity, glass), S and
+- Surfaces: SO (the object: radius, thickness = object distance, ≥ 1e10 or INF is at infinity, glass), S and
   STO (radius or curvature, thickness, glass; STO is the stop), SI (the image); STO alone marks the
   surface before it, STO Sn surface n. Per surface after it:
   RDY (radius), CUY (curvature), THI, GLA, CIR (the clear semi-aperture; on SI the image's), STO (this
   surface is the stop), SLB (its label), SPH (spherical: no aspheric terms), CON or ASP with K (conic)
   and A, B, C, … J (the r⁴, r⁶, … r²⁰ coefficients), PIM (the thickness that puts the image plane at
   the paraxial image). RDM (or RDM Y) / RDM N or CUM: the S lines give radii or curvatures (CODE V's
-default without RDM: curvatures).
+default without RDM: curvatures). Without any STO the stop is surface 1 (CODE V's default; the
+description says so). CIR EDG (the edge aperture, drawn only) is read past; CIR OBS and HOL refused.
 - Glass: catalogue names as CODE V writes them, NAME_VENDOR (SCHOTT, OHARA, HOYA, CDGM, SUMITA, HIKARI
   or NIKON; hyphens may be left out: NBK7_SCHOTT is N-BK7) or a bare name; model glass "n_d:V_d" or the
-  six-digit code "nnnnnn.vvvvvv" (n_d = 1.nnnnnn, V_d = vv.vvvv); the object space's on SO.
+  code "nnnnnn.vvvvvv" or "nnn.vvv" (n_d = 1.nnnnnn, V_d = vv.vvvv); the object space's on SO. TEM
+  within 20-25 °C (the glass data's reference temperatures) is read past, other temperatures refused.
 - System: TIT (the name), DIM M / C / I (mm, cm, inches), WL (nm) and REF (the reference one), the
   system aperture EPD (entrance-pupil diameter), FNO (the paraxial F/#, EFL / EPD: distant objects
 only, CODE V's working F/# of a near object is refused), NAO (object-space
   NA), none: the stop's CIR; fields YAN/XAN (degrees), YOB/XOB (object heights), YIM/XIM (paraxial
   image heights) or YRI/XRI (real image heights), solved as Zemax's are (`zemax_solves`); surfaces
   without CIR get the automatic semi-diameter.
-Weights, vignetting factors, optimisation codes and view settings are read past (IGNORED). What
+Vignetting factors VUY/VLY/VUX/VLX shape the beam the automatic semi-diameters follow (`zemax_solves`).
+Weights, optimisation codes, DER values and view settings are read past (IGNORED); a zero CUF (fringe curvature) or decentre changes nothing. What
 cannot be represented is refused naming the surface and the feature: decentres and tilts, mirrors,
 diffractive, holographic, toric and anamorphic surfaces, rectangular or elliptical apertures,
 obscurations, zoom positions, private catalogues; and any command not listed here.
@@ -44,9 +47,11 @@ INFINITE_OBJECT = 1e10  # an object distance at least this (in lens units) is at
 ASPHERIC = "ABCDEFGHJ"  # the coefficients of r⁴, r⁶, … r²⁰
 FIELDS = {"YAN": "angle", "YOB": "object height", "YIM": "paraxial image height", "YRI": "real image height"}
 APERTURES = {"EPD": "epd", "FNO": "fnum", "NAO": "na"}
-IGNORED = frozenset("LEN GO END INI WTW WTF VUY VLY VUX VLX DOR CCY CCX THC GLC".split())
-SYSTEM = ("TIT", "TITLE", "DIM", "WL", "REF", "XAN", "XOB", "XIM", "XRI", *FIELDS, *APERTURES)
-DECENTRES = ("XDE", "YDE", "ZDE", "ADE", "BDE", "CDE")
+IGNORED = frozenset("LEN GO END INI WTW WTF DOR CCY CCX THC GLC DER".split())
+VIGNETTING = ("VUX", "VLX", "VUY", "VLY")  # the pupil's fraction cut off per field: +x, −x, +y, −y
+CATALOGUE_TEMPERATURE_C = (20.0, 25.0)  # the glass data hold at the vendors' reference temperatures, 20-25 °C
+SYSTEM = ("TIT", "TITLE", "DIM", "WL", "REF", "XAN", "XOB", "XIM", "XRI", *FIELDS, *APERTURES, *VIGNETTING)
+ZERO_IS_NOTHING = ("XDE", "YDE", "ZDE", "ADE", "BDE", "CDE", "CUF")
 REFUSED = {**dict.fromkeys(("XDE", "YDE", "ZDE", "ADE", "BDE", "CDE", "DAR", "BEN", "REV", "RET"),
                            "decentred or tilted surfaces"),
            "REFL": "mirrors", "DOE": "diffractive surfaces", "HOE": "holographic surfaces",
@@ -55,9 +60,10 @@ REFUSED = {**dict.fromkeys(("XDE", "YDE", "ZDE", "ADE", "BDE", "CDE", "DAR", "BE
            "CUX": "anamorphic surfaces (an x curvature)", "REX": "rectangular apertures",
            "REY": "rectangular apertures", "ELX": "elliptical apertures", "ELY": "elliptical apertures",
            "OBS": "obscurations", "ZOO": "zoom positions", "PRV": "private glass catalogues",
-           "NA": "image-space NA apertures (use EPD, FNO or NAO)", "TEL": "telecentric object spaces"}
+           "NA": "image-space NA apertures (use EPD, FNO or NAO)", "TEL": "telecentric object spaces",
+           "CUF": "fringe curvatures"}
 _MODEL = re.compile(r"^(\d*\.?\d+):(\d*\.?\d+)$")
-_CODE = re.compile(r"^(\d{6})\.(\d{2,6})$")
+_CODE = re.compile(r"^(\d{3}|\d{6})\.(\d{2,6})$")
 
 
 def _commands(text: str):
@@ -93,7 +99,7 @@ def material(token: str, ident: str) -> str:
     model, code = _MODEL.match(name), _CODE.match(name)
     if model or code:
         nd, vd = ((float(model[1]), float(model[2])) if model
-                  else (1.0 + int(code[1]) / 1e6, float(code[2][:2] + "." + code[2][2:])))
+                  else (1.0 + int(code[1]) / 10 ** len(code[1]), float(code[2][:2] + "." + code[2][2:])))
         if not 1.0 < nd < 3.0 or (vd and not 5.0 < vd < 150.0):
             raise SolasError(f"{ident}: model glass {name!r}: n_d {nd:g} must lie in (1, 3) and V_d {vd:g} in "
                              "(5, 150) (or 0: no dispersion)")
@@ -126,6 +132,7 @@ class _Reader:
         self.rows: list[dict] = []  # SO, the surfaces, SI: raw values in lens units
         self.stop_at: int | None = None  # STO Sn: the stop is surface n
         self.radius_mode = False  # CODE V's default: S lines give curvatures unless RDM says radii
+        self.mode_given = False  # whether RDM or CUM said which
 
     def ident(self, line: int) -> str:
         if not self.rows:
@@ -138,8 +145,8 @@ class _Reader:
         for line, tokens in _commands(text):
             key, args = tokens[0].upper(), tokens[1:]
             if key in REFUSED:
-                if key in DECENTRES and args and _numbers(args[:1], self.ident(line)) == [0.0]:
-                    continue  # a zero decentre or tilt changes nothing
+                if key in ZERO_IS_NOTHING and args and _numbers(args[:1], self.ident(line)) == [0.0]:
+                    continue  # a zero decentre, tilt or fringe curvature changes nothing
                 raise SolasError(f"{self.ident(line)}: {key}: {REFUSED[key]} are not supported "
                                  "(rotationally symmetric refracting systems only)")
             self.command(key, args, line)
@@ -152,8 +159,11 @@ class _Reader:
             self.surface(key, args, ident)
         elif key in ("RDM", "CUM"):
             self.radius_mode = key == "RDM" and (not args or args[0].upper() not in ("N", "NO"))
+            self.mode_given = True
         elif key in IGNORED:
             return
+        elif key == "TEM":
+            self.temperature(args, ident)
         elif key in SYSTEM:
             self.system[key] = args
         elif not self.rows:
@@ -161,8 +171,20 @@ class _Reader:
         else:
             self.modify(self.rows[-1], key, args, ident)
 
+    @staticmethod
+    def temperature(args: list[str], ident: str) -> None:
+        """TEM: read past within the catalogue's reference temperatures; refused elsewhere (the indices
+        would be wrong)."""
+        value = _numbers(args[:1], f"{ident}: TEM")
+        lo, hi = CATALOGUE_TEMPERATURE_C
+        if not value or not lo <= value[0] <= hi:
+            raise SolasError(f"{ident}: TEM {' '.join(args)!r}: glass data hold at {lo:g}-{hi:g} °C; other "
+                             "temperatures are not supported")
+
     def surface(self, key: str, args: list[str], ident: str) -> None:
         row: dict = {"kind": key, "curv": 0.0, "thi": 0.0, "glass": "AIR", "ident": ident}
+        if key == "SO" and args[1:2] and args[1].upper() in ("INF", "INFINITY"):
+            args = [args[0], repr(INFINITE_OBJECT), *args[2:]]  # an object at infinity, spelt out
         values = _numbers(args[:2], f"{ident}: {key}")
         if values:
             self.modify(row, "RDY" if self.radius_mode else "CUY", args[:1], ident)
@@ -175,7 +197,10 @@ class _Reader:
         self.rows.append(row)
 
     def modify(self, row: dict, key: str, args: list[str], ident: str) -> None:  # long: one branch per command
-        if key in ("RDY", "CUY", "THI", "CIR", "K", *ASPHERIC):
+        if key == "CIR" and args[:1] and args[0].upper() in ("EDG", "OBS", "HOL"):
+            if args[0].upper() != "EDG":  # EDG: the edge (mechanical) aperture, drawn only
+                raise SolasError(f"{ident}: CIR {args[0].upper()}: obscurations and holes are not supported")
+        elif key in ("RDY", "CUY", "THI", "CIR", "K", *ASPHERIC):
             value = _numbers(args[:1], f"{ident}: {key}") if args else []
             if not value:
                 raise SolasError(f"{ident}: {key} needs a value")
@@ -221,6 +246,9 @@ def read_spec(text: str, where: str) -> dict:
     if len(rows) < 3 or rows[0]["kind"] != "SO" or rows[-1]["kind"] != "SI":
         raise SolasError(f"{where}: a lens needs SO (the object), at least one surface (S or STO) and SI "
                          f"(the image), in that order; got {' '.join(r['kind'] for r in rows) or 'no surfaces'}")
+    default_stop = not any(r.get("stop") for r in rows[1:-1])
+    if default_stop:  # CODE V's default: surface 1 is the stop
+        rows[1]["stop"] = True
     inner = [r for r in rows[1:-1] if r["kind"] in ("SO", "SI")]
     if inner:
         raise SolasError(f"{inner[0]['ident']}: {inner[0]['kind']} inside the lens (SO first, SI last)")
@@ -232,6 +260,8 @@ def read_spec(text: str, where: str) -> dict:
     title = " ".join(_unquote(t) for t in system.get("TIT", system.get("TITLE", []))).strip()
     if title:
         spec["name"] = title
+    if default_stop:
+        spec["description"] = "no STO in the file: the stop is surface 1, CODE V's default"
     spec["surface"] = [_surface(r, i, scale) for i, r in enumerate(rows[1:-1], start=1)]
     if rows[-1].get("cir", 0) > 0:
         spec["image"] = {"diameter": 2.0 * rows[-1]["cir"] * scale}
@@ -245,7 +275,26 @@ def read_spec(text: str, where: str) -> dict:
     aperture = _aperture(system, scale, where)
     if aperture[0] == "fnum" and spec["object"]["distance"] != "infinity":
         raise SolasError(f"{where}: FNO with a near object (CODE V's working F/#) is not supported; give EPD or NAO")
-    return zemax_solves.solve(spec, aperture, _fields(system, scale, where), primary, where)
+    fields = _fields(system, scale, where)
+    try:
+        return zemax_solves.solve(spec, aperture, fields, primary, where, _vignetting(system, len(fields[1]), where))
+    except SolasError as exc:
+        if reader.mode_given or not any(r["curv"] for r in rows):
+            raise
+        raise SolasError(f"{exc} (the file has no RDM: its S lines were read as curvatures, CODE V's default; "
+                         "if they are radii, add RDM)") from None
+
+
+def _vignetting(system: dict, count: int, where: str) -> list[tuple[float, ...]] | None:
+    """Per field, the VUX, VLX, VUY, VLY factors (0 where not given); None when the file gives none."""
+    given = {k: _numbers(system[k], f"{where}: {k}") for k in VIGNETTING if k in system}
+    if not given:
+        return None
+    for k, values in given.items():
+        if len(values) > count or not all(-1.0 < v < 1.0 for v in values):
+            raise SolasError(f"{where}: {k} {' '.join(system[k])!r}: one factor in (-1, 1) per field ({count} fields)")
+    return [tuple(given.get(k, [])[i] if i < len(given.get(k, [])) else 0.0 for k in VIGNETTING)
+            for i in range(count)]
 
 
 def _object(row: dict, scale: float) -> dict:

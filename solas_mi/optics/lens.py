@@ -4,7 +4,8 @@
 Lengths in mm, wavelengths in nm, field angles in degrees. +z is the optical axis toward the image;
 surface 1's vertex is at z = 0. A surface is a sphere, or an even asphere: sag
 z(r) = c r² / (1 + √(1 − (1 + k) c² r²)) + Σ_i A_2i r^2i (i ≥ 2) with c = 1/radius, k = `conic` and
-`aspheric` = [A4, A6, …] (mm^(1−2i)).
+`aspheric` = [A4, A6, …] (mm^(1−2i)), plus Forbes' Qbfs departure φ u²(1 − u²) Σ a_m Q_m^bfs(u²) with
+`qbfs` = [a0, a1, …] (mm) and u = r / `norm_radius` (`forbes`).
 """
 from __future__ import annotations
 
@@ -22,7 +23,9 @@ import tomllib
 from ..errors import SolasError
 from ..imageio import write_text
 from ..resources import resource_dir
+from . import forbes
 from . import glass as glass_mod
+from .sag import sag
 from .formats import READERS, WRITERS, decode_text, listed
 from .fields import FieldType, field_type_for
 
@@ -30,7 +33,8 @@ LENS_DIR = "lenses"
 # What a lens file may hold (anything else is a mistake worth naming, e.g. a surface type we do not model)
 KEYS = {
     "lens": ("name", "description", "wavelengths_nm", "field_deg", "catalogues", "surface", "object", "image"),
-    "surface": ("label", "radius", "thickness", "diameter", "material", "stop", "conic", "aspheric"),
+    "surface": ("label", "radius", "thickness", "diameter", "material", "stop", "conic", "aspheric", "qbfs",
+                "norm_radius"),
     "object": ("distance", "material"),
     "image": ("diameter",),
 }
@@ -49,30 +53,6 @@ def check_lens(lens) -> None:
     """SolasError unless `lens` is a Lens (analyses take `Lens.load(name or path)`)."""
     if not isinstance(lens, Lens):
         raise SolasError(f"lens {lens!r} must be a Lens: Lens.load(a shipped name or a lens file)")
-
-
-def sag(r2, curvature: float, conic: float = 0.0, aspheric: tuple[float, ...] = (), sqrt=np.sqrt, maximum=np.maximum):
-    """Even-asphere sag z (mm) at squared radial distance r2 (mm²), for any array type given its `sqrt`
-    and `maximum` (NumPy, Dr.Jit); beyond a conic's rim (1 − (1 + k) c² r² < 0) the root is taken as 0."""
-    c = curvature
-    z = c * r2 / (1.0 + sqrt(maximum(1.0 - (1.0 + conic) * c * c * r2, 0.0)))
-    power = r2 * r2
-    for a in aspheric:
-        z = z + a * power
-        power = power * r2
-    return z
-
-
-def sag_slope(r2, curvature: float, conic: float = 0.0, aspheric: tuple[float, ...] = (), sqrt=np.sqrt,
-              maximum=np.maximum):
-    """dz/d(r²) of `sag` (1/mm): the surface normal is (−2x·s', −2y·s', 1), normalised."""
-    c = curvature
-    slope = 0.5 * c / sqrt(maximum(1.0 - (1.0 + conic) * c * c * r2, 1e-300))
-    power = r2
-    for i, a in enumerate(aspheric, start=2):
-        slope = slope + i * a * power
-        power = power * r2
-    return slope
 
 
 def _check_keys(table: dict, kind: str, where: str) -> None:
@@ -126,11 +106,25 @@ class Surface:
     stop: bool = False
     conic: float = 0.0  # k: 0 sphere, −1 paraboloid, < −1 hyperboloid
     aspheric: tuple[float, ...] = ()  # A4, A6, … (mm^(1−2i)) of the even asphere
+    qbfs: tuple[float, ...] = ()  # a0, a1, … (mm) of Forbes' Qbfs departure
+    norm_radius: float = 1.0  # ρ (mm): the Qbfs terms' u = r/ρ
 
     @property
     def is_sphere(self) -> bool:
         """A sphere or plane (no conic, no polynomial terms)."""
-        return self.conic == 0.0 and not any(self.aspheric)
+        return self.conic == 0.0 and not any(self.aspheric) and not any(self.qbfs)
+
+    @property
+    def shape(self) -> dict:
+        """The keyword arguments of `sag` and `sag_slope` that describe this surface."""
+        return {"curvature": self.curvature, "conic": self.conic, "aspheric": self.aspheric, "qbfs": self.qbfs,
+                "norm_radius": self.norm_radius}
+
+    @property
+    def paraxial_curvature(self) -> float:
+        """1/mm: the vertex curvature, c + 2 Σ a_m Q_m^bfs(0)/ρ² where Qbfs terms bend the vertex too."""
+        bend = forbes.qbfs_sum(0.0, self.qbfs)[0] if any(self.qbfs) else 0.0
+        return self.curvature + 2.0 * bend / self.norm_radius ** 2
 
     @property
     def curvature(self) -> float:
@@ -144,7 +138,7 @@ class Surface:
     def sag(self, r: np.ndarray | float) -> np.ndarray | float:
         """Surface z relative to its vertex at radial distance r (mm)."""
         r = np.asarray(r, dtype=np.float64)
-        return sag(r * r, self.curvature, self.conic, self.aspheric)
+        return sag(r * r, **self.shape)
 
 
 def _surface(row: dict, i: int, where: str, catalogues: tuple[str, ...]) -> "Surface":
@@ -157,18 +151,27 @@ def _surface(row: dict, i: int, where: str, catalogues: tuple[str, ...]) -> "Sur
         raise SolasError(f"{ident}: stop = {stop!r} must be true or false (a TOML boolean, unquoted)")
     radius, thickness, diameter = (_number(row, key, ident, "mm") for key in ("radius", "thickness", "diameter"))
     conic = _number(row, "conic", ident, "conic constant k, dimensionless", 0.0)
-    aspheric = row.get("aspheric", [])
-    if (not isinstance(aspheric, list) or len(aspheric) > 12
-            or not all(isinstance(a, (int, float)) and not isinstance(a, bool) and math.isfinite(a) for a in aspheric)):
-        raise SolasError(f"{ident}: aspheric = {aspheric!r} must be a list of at most 12 finite numbers "
-                         "[A4, A6, ...] (mm^(1-2i))")
+    aspheric = _terms(row, "aspheric", ident, "[A4, A6, ...] (mm^(1-2i))")
+    qbfs = _terms(row, "qbfs", ident, "[a0, a1, ...] of Forbes' Qbfs polynomials (mm)")
+    norm_radius = _number(row, "norm_radius", ident, "mm, the Qbfs normalisation radius", 0.0 if qbfs else 1.0)
+    if qbfs and not norm_radius > 0:
+        raise SolasError(f"{ident}: qbfs needs norm_radius, a positive number (mm), the radius where u = 1; "
+                         f"got {row.get('norm_radius')!r}")
     material = row.get("material", "AIR")
     try:
         g = glass_mod.resolve(material, prefer=catalogues)
     except SolasError as exc:
         raise SolasError(f"{ident}: {exc}") from None
-    return Surface(label, radius, thickness, diameter, str(material), g, stop, conic,
-                   tuple(float(a) for a in aspheric))
+    return Surface(label, radius, thickness, diameter, str(material), g, stop, conic, aspheric, qbfs, norm_radius)
+
+
+def _terms(row: dict, key: str, ident: str, meaning: str) -> tuple[float, ...]:
+    """row[key], a list of at most 12 finite numbers, as a tuple (() when absent)."""
+    terms = row.get(key, [])
+    if (not isinstance(terms, list) or len(terms) > 12
+            or not all(isinstance(a, (int, float)) and not isinstance(a, bool) and math.isfinite(a) for a in terms)):
+        raise SolasError(f"{ident}: {key} = {terms!r} must be a list of at most 12 finite numbers {meaning}")
+    return tuple(float(a) for a in terms)
 
 
 @dataclass(frozen=True)
@@ -366,7 +369,8 @@ class Lens:
         content = {
             "object": [self.object_distance if math.isfinite(self.object_distance) else "inf", self.object_glass.name],
             "surfaces": [[s.radius, s.thickness, s.diameter, s.glass.name, s.glass.coefficients, s.stop]
-                         + ([] if s.is_sphere else [s.conic, list(s.aspheric)]) for s in self.surfaces],
+                         + ([] if s.is_sphere else [s.conic, list(s.aspheric)])
+                         + ([list(s.qbfs), s.norm_radius] if any(s.qbfs) else []) for s in self.surfaces],
         }
         return hashlib.sha256(json.dumps(content, sort_keys=True).encode()).hexdigest()[:16]
 

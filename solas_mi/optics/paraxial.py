@@ -57,7 +57,7 @@ def ynu_trace(lens: Lens, wavelength_nm: float, y1: float, u0: float, start: int
         if k > start:
             height = height + slope * (z[k] - z[k - 1])
         s = lens.surfaces[k]
-        power = (n[k + 1] - n[k]) * s.curvature
+        power = (n[k + 1] - n[k]) * s.paraxial_curvature
         slope = (n[k] * slope - height * power) / n[k + 1]
         y[k], u[k] = height, slope
     return y, u

@@ -82,19 +82,26 @@ def widest_field(lens: Lens, wavelength_nm: float, samples: int = 45) -> float:
     return float(fields[clear[-1]])
 
 
-def stop_rim(rim: Bundle, chief: ChiefRays, accept=None) -> tuple[np.ndarray, np.ndarray, T.Traced, np.ndarray]:
+def stop_rim(rim: Bundle, chief: ChiefRays, accept=None, vignetting: np.ndarray | None = None,
+             ) -> tuple[np.ndarray, np.ndarray, T.Traced, np.ndarray]:
     """Rays aimed at RIM_RAYS points of the stop's rim for each field of the `rim` bundle: entrance
     coordinates (n, RIM_RAYS) each, the trace, and which passed. Where the ray to the rim fails (total
     internal reflection, a surface missed, or `accept(traced)` false) the pupil's edge lies inside the
-    rim: that ray is moved in, by bisection of its radius at the stop, to the outermost one that passes."""
+    rim: that ray is moved in, by bisection of its radius at the stop, to the outermost one that passes.
+    `vignetting` (n, 4): per field the fractions (+x, −x, +y, −y) of the stop's radius cut off, as a lens
+    file's vignetting factors give them (the rim squeezed to an ellipse of those four half-axes)."""
     lens = rim.lens
     r_stop = lens.surfaces[lens.stop_index].semi_diameter
     phi = np.tile(np.linspace(0.0, 2.0 * math.pi, RIM_RAYS, endpoint=False), rim.n_fields)
+    cos, sin = np.cos(phi), np.sin(phi)
+    if vignetting is not None:  # the rim's ellipse: its points scaled per side
+        v = np.repeat(np.asarray(vignetting, dtype=np.float64), RIM_RAYS, axis=0)
+        cos, sin = cos * (1.0 - np.where(cos >= 0, v[:, 0], v[:, 1])), sin * (1.0 - np.where(sin >= 0, v[:, 2], v[:, 3]))
     # start from the chief ray, scaled by the paraxial entrance-pupil/stop size ratio
     ratio = paraxial(lens).entrance_pupil_diameter_mm / (2.0 * r_stop)
 
     def at(scale: np.ndarray):
-        gx, gy = T.F(r_stop * scale * np.cos(phi)), T.F(r_stop * scale * np.sin(phi))
+        gx, gy = T.F(r_stop * scale * cos), T.F(r_stop * scale * sin)
         ex, ey = rim.per_ray(chief.entrance[:, 0]) + gx * ratio, rim.per_ray(chief.entrance[:, 1]) + gy * ratio
         if lens.field_type.sideways:  # wide fields: the pupil is squeezed and tilted; grow the aim out from the chief ray
             ex, ey = rim.per_ray(chief.entrance[:, 0]), rim.per_ray(chief.entrance[:, 1])

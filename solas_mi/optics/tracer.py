@@ -22,7 +22,8 @@ import numpy as np
 
 from ..llvm import import_drjit
 from .fields import ANGLE
-from .lens import Lens, sag, sag_slope
+from .lens import Lens
+from .sag import sag, sag_slope
 from .paraxial import paraxial
 
 dr = import_drjit()
@@ -237,7 +238,7 @@ def _to_surface(s, zv: float, rays: Rays, n_before: F, sideways: bool, ftype):
     on = (disc >= 0) & (b > 0)
     # cancellation-free root nearest the vertex: t = C / (B + sqrt(B² − AC))
     t = cc / (b + dr.sqrt(dr.maximum(disc, 0.0)))
-    if any(s.aspheric):
+    if any(s.aspheric) or any(s.qbfs):
         t, on = _asphere_hit(s, x, y, dx, dy, dz, dr.select(on, t, 0.0))
     return x, y, lz, t, opl, hit & on
 
@@ -253,7 +254,7 @@ def _refract(s, x, y, lz, r2, d, mu, fresnel: bool, ftype):
         c = _opaque(s.curvature, ftype)
         nx, ny, nz = -c * x, -c * y, 1.0 - c * lz
     else:  # exact even-asphere normal (−2x s', −2y s', 1) / |…|
-        slope = 2.0 * sag_slope(r2, s.curvature, s.conic, s.aspheric, dr.sqrt, dr.maximum)
+        slope = 2.0 * sag_slope(r2, **s.shape, sqrt=dr.sqrt, maximum=dr.maximum)
         nz = dr.rsqrt(dr.fma(slope * slope, r2, 1.0))
         nx, ny = -slope * x * nz, -slope * y * nz
     cosi = dx * nx + dy * ny + dz * nz
@@ -275,13 +276,13 @@ def _asphere_hit(s, x, y, dx, dy, dz, t):
     for _ in range(ASPHERE_ITERATIONS):
         px, py = dr.fma(t, dx, x), dr.fma(t, dy, y)
         r2 = px * px + py * py
-        f = t * dz - sag(r2, s.curvature, s.conic, s.aspheric, dr.sqrt, dr.maximum)
-        df = dz - 2.0 * sag_slope(r2, s.curvature, s.conic, s.aspheric, dr.sqrt, dr.maximum) * (px * dx + py * dy)
+        f = t * dz - sag(r2, **s.shape, sqrt=dr.sqrt, maximum=dr.maximum)
+        df = dz - 2.0 * sag_slope(r2, **s.shape, sqrt=dr.sqrt, maximum=dr.maximum) * (px * dx + py * dy)
         t = t - f / df
     px, py = dr.fma(t, dx, x), dr.fma(t, dy, y)
     r2 = px * px + py * py
-    residual = t * dz - sag(r2, s.curvature, s.conic, s.aspheric, dr.sqrt, dr.maximum)
-    inside = (1.0 + s.conic) * s.curvature ** 2 * r2 <= 1.0
+    residual = t * dz - sag(r2, **s.shape, sqrt=dr.sqrt, maximum=dr.maximum)
+    inside = (1.0 + s.conic) * s.curvature ** 2 * r2 <= 1.0  # (also within the Qbfs factor's, k c² r² ≤ 1)
     return t, inside & (dr.abs(residual) < ASPHERE_TOL_MM) & dr.isfinite(t)
 
 

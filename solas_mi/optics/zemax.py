@@ -8,7 +8,9 @@ Read as the author meant it:
   spaces: a name cannot add a line).
 - Surfaces: TYPE STANDARD, EVENASPH (PARM 2… = A4, A6, …; PARM 1, the r² term, must be 0), ODDASPH (PARM
   k the r^k coefficient: the even ones from r⁴ up are kept; r² and odd terms are refused naming the
-  surface), COORDBRK when it is a pure axial shift (its DISZ added to the gap) or undone by the next
+  surface), QED_TYPE (OpticStudio's Q-type asphere: XDAT 1 the type, 0 Qbfs or 1 Qcon, XDAT 2 the number
+  of terms, XDAT 3 the normalisation radius, XDAT 4… a0, a1, …; Qbfs kept as such, Qcon rewritten exactly
+  as even-asphere terms, `forbes`), COORDBRK when it is a pure axial shift (its DISZ added to the gap) or undone by the next
   coordinate break; flat air surfaces without a clear aperture of their own (dummies) are dropped,
   their thickness added to the gap. STOP, COMM (the label), CONI, CURV (1/unit), DISZ.
 - Clear apertures: DIAM (the semi-diameter); where absent or 0, Zemax's automatic semi-diameter:
@@ -22,6 +24,7 @@ Read as the author meant it:
   objects), FLOA (float by stop size).
 - Fields (XFLN/YFLN, FTYP's first number): 0 angle, 1 object height, 2 paraxial image height, 3 real
   image height (the field whose real chief ray lands there); field_deg is the widest as an angle.
+  Vignetting factors VDXN/VCXN/VDYN/VCYN shape the beam automatic semi-diameters follow.
 - UNIT (MM, CM, IN, METER) scales every length to mm; WAVM (or WAVL) the wavelengths (µm in the file),
   PWAV the one the aperture and field solves use; surface 0's DISZ the object distance. The last SURF
   is the image plane (its DIAM the image semi-diameter).
@@ -34,13 +37,14 @@ import math
 import re
 
 from ..errors import SolasError
+from . import forbes
 from . import glass as glass_mod
 from . import zemax_solves
 from .formats import READERS, WRITERS
 from .formats import floats as _floats
 
 UNITS = {"MM": 1.0, "CM": 10.0, "IN": 25.4, "METER": 1000.0, "M": 1000.0}
-SURFACE_TYPES = ("STANDARD", "EVENASPH", "ODDASPH", "COORDBRK")
+SURFACE_TYPES = ("STANDARD", "EVENASPH", "ODDASPH", "QED_TYPE", "COORDBRK")
 FIELD_TYPES = {"0": "angle", "1": "object height", "2": "paraxial image height", "3": "real image height"}
 # GCAT catalogue names → our vendors (Zemax's NIKON catalogue is Hikari's glass).
 GCAT_VENDORS = {**{v: v for v in glass_mod.VENDORS}, "NIKON": "HIKARI", "NIKON-HIKARI": "HIKARI"}
@@ -129,7 +133,20 @@ def read_spec(text: str, where: str) -> dict:
         if semi > 0:
             spec["image"] = {"diameter": 2.0 * semi}
     spec.update(_wavelengths(top, where))
-    return zemax_solves.solve(spec, _aperture(top, scale, where), _fields(top, scale, where), _primary(top, spec), where)
+    fields = _fields(top, scale, where)
+    return zemax_solves.solve(spec, _aperture(top, scale, where), fields, _primary(top, spec), where,
+                              _vignetting(top, len(fields[1]), where))
+
+
+def _vignetting(top: dict, count: int, where: str) -> list[tuple[float, ...]] | None:
+    """Per field, the pupil's fractions (+x, −x, +y, −y) cut off by the VDXN/VCXN/VDYN/VCYN factors (the
+    pupil coordinate p becomes VD + (1 − VC) p); None when all are 0."""
+    dx, cx, dy, cy = ([*_floats((top.get(k) or [[]])[0][:count], f"{where}: {k}"), *[0.0] * count][:count]
+                      for k in ("VDXN", "VCXN", "VDYN", "VCYN"))
+    cuts = [(cx[i] - dx[i], cx[i] + dx[i], cy[i] - dy[i], cy[i] + dy[i]) for i in range(count)]
+    if any(not -1.0 < c < 1.0 for cut in cuts for c in cut):
+        raise SolasError(f"{where}: vignetting factors VDXN/VCXN/VDYN/VCYN leave no pupil at some field: {cuts}")
+    return cuts if any(any(cut) for cut in cuts) else None
 
 
 def _object(block: dict, scale: float, gcat: tuple[str, ...], where: str) -> dict:
@@ -169,6 +186,8 @@ def _surface(b: dict, i: int, scale: float, gcat: tuple[str, ...], where: str) -
         terms = _aspheric(b, scale, ident) if kind == "EVENASPH" else _odd_aspheric(b, scale, ident)
         if terms:
             row["aspheric"] = terms
+    elif kind == "QED_TYPE":
+        row.update(_q_type(b, scale, ident))
     if "STOP" in b:
         row["stop"] = True
     return row
@@ -198,6 +217,22 @@ def _odd_aspheric(b: dict, scale: float, ident: str) -> list[float]:
     return _trim([parm.get(k, 0.0) * scale ** (1 - k) for k in range(4, 9, 2)])
 
 
+def _q_type(b: dict, scale: float, ident: str) -> dict:
+    """The row entries of a QED_TYPE block: {"qbfs", "norm_radius"} (type 0) or {"aspheric"} (type 1,
+    Qcon, an even asphere exactly); {} when every coefficient is 0."""
+    xdat = {int(p[0]): _floats(p[1:2], f"{ident}: XDAT {p[0]}")[0] for p in b.get("XDAT", []) if len(p) > 1}
+    kind, count, radius = xdat.get(1, 0.0), xdat.get(2, 0.0), xdat.get(3, 0.0) * scale
+    if kind not in (0.0, 1.0) or count != int(count) or not 0 <= count <= 12:
+        raise SolasError(f"{ident}: QED_TYPE with type (XDAT 1) {kind:g} and {count:g} terms (XDAT 2); allowed: "
+                         "type 0 (Qbfs) or 1 (Qcon), 0 to 12 terms")
+    terms = _trim([xdat.get(4 + m, 0.0) * scale for m in range(int(count))])
+    if terms and not radius > 0:
+        raise SolasError(f"{ident}: QED_TYPE normalisation radius (XDAT 3) {radius:g} must be positive")
+    if not terms or kind == 1.0:
+        return {"aspheric": _trim(forbes.qcon_to_even(tuple(terms), radius))} if terms else {}
+    return {"qbfs": terms, "norm_radius": radius}
+
+
 def _trim(terms: list[float]) -> list[float]:
     while terms and terms[-1] == 0.0:
         terms.pop()
@@ -222,7 +257,8 @@ def _fold(rows: list[dict], where: str) -> list[dict]:
             i += span
             continue
         air_before = not out or out[-1]["material"].upper() == "AIR"
-        dummy = (row["radius"] == 0 and not row.get("stop") and not row.get("aspheric") and row["diameter"] is None
+        dummy = (row["radius"] == 0 and not row.get("stop") and not row.get("aspheric") and not row.get("qbfs")
+                 and row["diameter"] is None
                  and row["material"].upper() == "AIR" and air_before and out)
         if dummy:
             out[-1]["thickness"] += row["thickness"]
@@ -338,15 +374,26 @@ def dumps(lens) -> str:
     distance = "INFINITY" if lens.at_infinity else number(lens.object_distance)
     out += ["SURF 0", "  TYPE STANDARD", "  CURV 0.0", f"  DISZ {distance}", *glas(lens.object_glass)]
     for i, s in enumerate(lens.surfaces, start=1):
-        out += [f"SURF {i}", f"  TYPE {'STANDARD' if not any(s.aspheric) else 'EVENASPH'}",
-                f"  COMM {one_line(s.label)}", f"  CURV {number(s.curvature)}"]
+        out += [f"SURF {i}", f"  TYPE {_surface_type(s, i)}", f"  COMM {one_line(s.label)}",
+                f"  CURV {number(s.curvature)}"]
         out += [f"  PARM {k} {number(a)}" for k, a in enumerate(s.aspheric, start=2)]
+        if any(s.qbfs):
+            out += [f"  XDAT {k} {number(v)}" for k, v in
+                    enumerate((0.0, float(len(s.qbfs)), s.norm_radius, *s.qbfs), start=1)]
         out += ["  STOP"] if s.stop else []
         out += [f"  DISZ {number(s.thickness)}", *glas(s.glass), f"  DIAM {number(s.semi_diameter)} 1 0 0 1 \"\""]
         out += [f"  CONI {number(s.conic)}"] if s.conic else []
     out += [f"SURF {len(lens.surfaces) + 1}", "  TYPE STANDARD", "  CURV 0.0", "  DISZ 0",
             f"  DIAM {number(lens.image_diameter / 2.0)} 1 0 0 1 \"\""]
     return "\n".join(out) + "\n"
+
+
+def _surface_type(s, i: int) -> str:
+    """The TYPE of surface `i` in a .zmx file; SolasError for Qbfs and even-asphere terms together."""
+    if any(s.qbfs) and any(s.aspheric):
+        raise SolasError(f"surface {i} ({s.label}): Qbfs and even-asphere terms together have no .zmx surface "
+                         "type; save it as .toml")
+    return "QED_TYPE" if any(s.qbfs) else "EVENASPH" if any(s.aspheric) else "STANDARD"
 
 
 READERS[".zmx"] = read_spec

@@ -9,7 +9,8 @@ object-space n sin u of the paraxial marginal ray, finite objects) — and the f
 sizes) with kind "angle" (degrees), "object height", "paraxial image height" or "real image height"
 (mm). It returns the dictionary with every diameter set and field_deg the widest field as an angle.
 Automatic semi-diameters: the largest height at each surface of the real chief ray and the rays aimed
-at the stop's rim of every field and wavelength, so no aperture but the stop's cuts the beam.
+at the stop's rim of every field and wavelength, so no aperture but the stop's cuts the beam; where the
+file gives vignetting factors, at the rim squeezed by them (CODE V's VUY/VLY/VUX/VLX, taken at the stop).
 """
 from __future__ import annotations
 
@@ -28,7 +29,9 @@ _SECANT_STEPS = 40  # real-image-height fields: secant steps on the field angle
 
 
 def solve(spec: dict, aperture: tuple[str, float], fields: tuple[str, list[float]], primary_nm: float | None,
-          where: str) -> dict:
+          where: str, vignetting: list[tuple[float, float, float, float]] | None = None) -> dict:
+    """`spec` solved (module docstring); `vignetting`: per field of `fields`, the fractions (+x, −x, +y, −y)
+    of the pupil that the file's vignetting factors cut off, which the automatic semi-diameters then follow."""
     rows = spec["surface"]
     auto = [i for i, r in enumerate(rows) if r["diameter"] is None]
     stop = next((i for i, r in enumerate(rows) if r.get("stop")), None)
@@ -47,9 +50,10 @@ def solve(spec: dict, aperture: tuple[str, float], fields: tuple[str, list[float
     lens = _stop_sized(lens, aperture, wl, where)
     field_deg = _angles(lens, fields, wl, where)
     lens = replace(lens, field_deg=max(field_deg, default=0.0))
-    semi = _automatic(lens, auto, field_deg, where) if auto else {}
+    cuts = dict(zip(field_deg, vignetting or []))
+    semi = _automatic(lens, auto, field_deg, where, cuts) if auto else {}
     for i, r in enumerate(rows):
-        r["diameter"] = 2.0 * semi[i] if i in semi else lens.surfaces[i].diameter
+        r["diameter"] = 2.0 * semi[i] if i in semi and i != stop else lens.surfaces[i].diameter  # the stop: as sized
     spec["field_deg"] = lens.field_deg
     return spec
 
@@ -129,9 +133,11 @@ def _real_heights(lens: Lens, heights: list[float], guess: list[float], wl: floa
                      f"(closest {fa[bad] + want[bad]:g} mm at {a[bad]:g} deg)")
 
 
-def _automatic(lens: Lens, auto: list[int], field_deg: list[float], where: str) -> dict[int, float]:
+def _automatic(lens: Lens, auto: list[int], field_deg: list[float], where: str,
+               cuts: dict[float, tuple[float, float, float, float]]) -> dict[int, float]:
     """Semi-diameters (mm) of the `auto` surfaces: the largest height there of the real chief and stop-rim
-    rays of every field (on the y axis: the lens is rotationally symmetric) and wavelength."""
+    rays of every field (on the y axis: the lens is rotationally symmetric) and wavelength; the rim of a
+    field in `cuts` squeezed by its vignetting factors."""
     from . import tracer as T
     from .pupil import RIM_RAYS, Bundle, chief_rays, stop_rim
 
@@ -140,7 +146,8 @@ def _automatic(lens: Lens, auto: list[int], field_deg: list[float], where: str) 
     waves = np.array([w for _ in thetas for w in lens.wavelengths_nm])
     chief = chief_rays(lens, fields, waves)
     rim = Bundle(lens, fields, waves, RIM_RAYS)
-    ex, ey, _, ok = stop_rim(rim, chief)
+    ex, ey, _, ok = stop_rim(rim, chief, vignetting=[cuts.get(t, (0.0,) * 4) for t in thetas
+                                                     for _ in lens.wavelengths_nm] if cuts else None)
     reach = np.zeros(len(lens.surfaces))
     for e, b, passed in ((chief.entrance, Bundle(lens, fields, waves, 1), np.ones(len(fields), bool)),
                          (np.stack([ex.ravel(), ey.ravel()], axis=-1), rim, ok.ravel())):

@@ -12,15 +12,16 @@ import os
 import numpy as np
 
 from ..imageio import atomic_path
-from ..optics.lens import Lens, sag_slope
-from ..optics.lens import sag as asphere_sag
+from ..optics.lens import Lens
+from ..optics.sag import sag as asphere_sag
+from ..optics.sag import sag_slope
 from .spec import AUTO_MIN_RINGS, MAX_RINGS
 
 
 def cap_mesh(radius: float, vertex_z: float, semi_diameter: float, rings: int, conic: float = 0.0,
-             aspheric: tuple[float, ...] = ()):
-    """A spherical cap (flat disk if radius is 0), or the even asphere of `conic` and `aspheric` (the
-    lens file's sag, `optics.lens.sag`): vertices (n, 3), unit normals (n, 3) facing −z,
+             aspheric: tuple[float, ...] = (), qbfs: tuple[float, ...] = (), norm_radius: float = 1.0):
+    """A spherical cap (flat disk if radius is 0), or the asphere of `conic`, `aspheric` and Forbes
+    `qbfs` terms over `norm_radius` (the lens file's sag, `optics.sag.sag`): vertices (n, 3), unit normals (n, 3) facing −z,
     faces (m, 3) wound so that their geometric normals face −z too. `rings` rings of 4·rings
     segments (`rim_phi`); ring radii are uniform in r. Its last 4·rings vertices are the rim."""
     segments = 4 * rings
@@ -29,10 +30,10 @@ def cap_mesh(radius: float, vertex_z: float, semi_diameter: float, rings: int, c
     rr, pp = np.meshgrid(r, phi, indexing="ij")
     x = np.concatenate([[0.0], (rr * np.cos(pp)).ravel()])
     y = np.concatenate([[0.0], (rr * np.sin(pp)).ravel()])
-    if conic != 0.0 or any(aspheric):
+    if conic != 0.0 or any(aspheric) or any(qbfs):
         c, rho2 = (1.0 / radius if radius else 0.0), x * x + y * y
-        z = vertex_z + asphere_sag(rho2, c, conic, aspheric)
-        slope = 2.0 * sag_slope(rho2, c, conic, aspheric)
+        z = vertex_z + asphere_sag(rho2, c, conic, aspheric, qbfs=qbfs, norm_radius=norm_radius)
+        slope = 2.0 * sag_slope(rho2, c, conic, aspheric, qbfs=qbfs, norm_radius=norm_radius)
         normals = np.stack([slope * x, slope * y, -np.ones_like(x)], axis=-1)
         normals /= np.linalg.norm(normals, axis=-1, keepdims=True)
     elif radius == 0.0:
@@ -64,17 +65,17 @@ def _cap_errors(s, zv: float, rings: int) -> tuple[np.ndarray, np.ndarray, np.nd
     centroid and three edge-side points of every triangle: the radius r (mm), the mesh's depth error δz
     (mm), the angle (rad) between the shading normal (vertex normals interpolated, as Mitsuba does) and
     the surface's normal there, and the triangle's area (mm², the weight)."""
-    v, n, f = cap_mesh(s.radius, zv, s.semi_diameter, rings, s.conic, s.aspheric)
+    v, n, f = cap_mesh(s.radius, zv, s.semi_diameter, rings, s.conic, s.aspheric, s.qbfs, s.norm_radius)
     out = []
     for lam in ((1 / 3, 1 / 3, 1 / 3), (0.5, 0.25, 0.25), (0.25, 0.5, 0.25), (0.25, 0.25, 0.5)):
         p = sum(w * v[f[:, i]] for i, w in enumerate(lam))
         m = sum(w * n[f[:, i]] for i, w in enumerate(lam))
         m /= np.linalg.norm(m, axis=-1, keepdims=True)
         rho2 = p[:, 0] ** 2 + p[:, 1] ** 2
-        slope = 2.0 * sag_slope(rho2, s.curvature, s.conic, s.aspheric)
+        slope = 2.0 * sag_slope(rho2, **s.shape)
         true = np.stack([slope * p[:, 0], slope * p[:, 1], -np.ones_like(rho2)], axis=-1)
         true /= np.linalg.norm(true, axis=-1, keepdims=True)
-        dz = p[:, 2] - zv - asphere_sag(rho2, s.curvature, s.conic, s.aspheric)
+        dz = p[:, 2] - zv - asphere_sag(rho2, **s.shape)
         out.append((np.sqrt(rho2), dz, np.linalg.norm(np.cross(m, true), axis=-1)))
     area = 0.5 * np.linalg.norm(np.cross(v[f[:, 1]] - v[f[:, 0]], v[f[:, 2]] - v[f[:, 0]]), axis=-1)
     r, dz, dn = (np.concatenate([o[i] for o in out]) for i in range(3))
@@ -89,7 +90,7 @@ def _surface_blur_mm2(s, zv: float, n1: float, n2: float, beam: float, slope_per
     sideways shift and of a tilt from the surface's vertex plane to the image (`mesh_blur_um`)."""
     r, dz, dn, w = _cap_errors(s, zv, _REFERENCE_RINGS)
     w = np.where(r <= beam, w, 0.0)
-    normal = np.arctan(2.0 * r * sag_slope(r * r, s.curvature, s.conic, s.aspheric))  # its tilt, radially
+    normal = np.arctan(2.0 * r * sag_slope(r * r, **s.shape))  # its tilt, radially
     before = np.arctan(slope_per_mm * r)
     i = before + normal
     sin_out = n1 * np.sin(i) / n2

@@ -83,7 +83,7 @@ def lens_parts(lens: Lens, rings: int | None = None, image_radius: float = 0.0) 
         rim_z.append(zr)
         rim = circle(s.semi_diameter, zr, phi)
         if s.glass != before:
-            cap = cap_mesh(s.radius, zv, s.semi_diameter, rings, s.conic, s.aspheric)
+            cap = cap_mesh(s.radius, zv, s.semi_diameter, rings, s.conic, s.aspheric, s.qbfs, s.norm_radius)
             rim = cap[0][-len(phi):]
             parts.append(Part(f"surface{k}", cap, before_name, s.material))
         if not (k == 1 and lens.field_type.sideways):

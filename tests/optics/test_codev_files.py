@@ -271,3 +271,68 @@ GO
 def test_refused_systems(tmp_path, change, match):
     with pytest.raises(SolasError, match=match):
         load(tmp_path, singlet(system="FNO 4\nYAN 0 1").replace(*change))
+
+
+def test_what_code_v_exports_also_hold(tmp_path):
+    """Met in public .seq files: TEM at the catalogue's temperature, a zero CUF, CIR EDG (the edge
+    aperture, drawn only), DER lines after SI, the object at 'inf', a three-digit glass code: the same
+    lens as without them."""
+    base = load(tmp_path, singlet(glass="500.600"), "a.seq")
+    assert base.surfaces[0].glass.name == "model:1.5/60"
+    text = singlet(glass="500.600").replace("WL 550", "WL 550\nTEM 20.0").replace("SO 0 1e10", "SO 0 inf")
+    text = text.replace("PIM", "PIM\nCUF 0.0\nCIR EDG 30").replace("SI 0 0", "SI 0 0\nDER VAL I1 0.1")
+    lens = load(tmp_path, text, "b.seq")
+    assert lens.at_infinity and lens.surfaces == base.surfaces
+
+
+@pytest.mark.parametrize("change, match", [
+    (("WL 550", "WL 550\nTEM 60"), "TEM '60'.*20-25 °C"),
+    (("PIM", "PIM\nCUF 0.01"), "CUF: fringe curvatures"),
+    (("PIM", "PIM\nCIR OBS 2"), "CIR OBS: obscurations"),
+])
+def test_what_code_v_exports_refused(tmp_path, change, match):
+    with pytest.raises(SolasError, match=match):
+        load(tmp_path, singlet().replace(*change))
+
+
+def test_without_sto_the_stop_is_surface_1(tmp_path):
+    """CODE V's default stop is surface 1, and the lens's description says so."""
+    marked = load(tmp_path, singlet(), "a.seq")
+    unmarked = load(tmp_path, singlet().replace("STO ", "S "), "b.seq")
+    assert unmarked.surfaces == marked.surfaces
+    assert "stop is surface 1" in unmarked.description and "stop" not in marked.description
+
+
+def test_vignetting_factors_shape_the_automatic_apertures(tmp_path):
+    """Vignetting factors of 0.5 on every side at every field squeeze the beam at the stop to half its
+    radius: the automatic semi-diameters are those of the same lens with half the entrance pupil."""
+    lens = f"""RDM
+WL 550
+YAN 0 8 12
+SO 0 1e10
+S 40 5 1.6:40
+S -120 10
+S 0 10
+STO
+S -40 4 1.6:40
+S 60 30
+SI 0 0
+"""
+    half = "VUX 0.5 0.5 0.5\nVLX 0.5 0.5 0.5\nVUY 0.5 0.5 0.5\nVLY 0.5 0.5 0.5\n"
+    vignetted = load(tmp_path, "EPD 16\n" + half + lens, "a.seq")
+    smaller = load(tmp_path, "EPD 8\n" + lens, "b.seq")
+    full = load(tmp_path, "EPD 16\n" + lens, "c.seq")
+    for k in (0, 1, 3, 4):
+        assert vignetted.surfaces[k].diameter == pytest.approx(smaller.surfaces[k].diameter, rel=1e-9)
+        assert vignetted.surfaces[k].diameter < full.surfaces[k].diameter
+    assert vignetted.surfaces[2].diameter == pytest.approx(full.surfaces[2].diameter, rel=1e-12)  # the stop
+    with pytest.raises(SolasError, match="VUY '0.5 1.2'"):
+        load(tmp_path, "EPD 16\nVUY 0.5 1.2\n" + lens, "d.seq")
+
+
+def test_a_lens_without_rdm_that_fails_says_how_it_was_read(tmp_path):
+    """Without RDM the S lines are curvatures (CODE V's default); a file written in radii then images
+    nothing, and the refusal says how it was read and what to add."""
+    text = singlet(mode="").replace("SO 0 1e10", "SO 0 1e10")
+    with pytest.raises(SolasError, match="no RDM: its S lines were read as curvatures.*add RDM"):
+        load(tmp_path, text.replace("PIM", ""))

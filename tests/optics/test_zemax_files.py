@@ -203,3 +203,22 @@ def test_model_glass_given_by_n_d_alone_and_bad_numbers(tmp_path):
         load(tmp_path, zmx().replace(f"___BLANK 1 0 {N} 0", "___BLANK 1 0 nan 0"))
     with pytest.raises(SolasError, match=r"needs n_d"):
         load(tmp_path, zmx().replace(f"___BLANK 1 0 {N} 0 0 0 0 0 0", "___BLANK 1 0"))
+
+
+def test_vignetting_factors_shape_the_automatic_apertures(tmp_path):
+    """VCXN/VCYN 0.5 at every field (compression: the pupil coordinate p becomes 0.5 p) squeeze the beam
+    to half the pupil: surface 2's automatic semi-diameter is that of the lens with half the ENPD; a
+    decentre VDYN moves the squeezed beam, so the upper and lower cuts differ."""
+    fields = "FTYP 0 0 2 1 0 0 0\nXFLN 0 0\nYFLN 0 10\n"
+    vignetted = load(tmp_path, zmx(fields=fields + "VCXN 0.5 0.5\nVCYN 0.5 0.5", s2="DIAM 0 0"), "a.zmx")
+    smaller = load(tmp_path, zmx(aperture="ENPD 10", fields=fields, s2="DIAM 0 0"), "b.zmx")
+    full = load(tmp_path, zmx(fields=fields, s2="DIAM 0 0"), "c.zmx")
+    assert vignetted.surfaces[1].diameter == pytest.approx(smaller.surfaces[1].diameter, rel=1e-9)
+    assert vignetted.surfaces[1].diameter < full.surfaces[1].diameter
+    assert vignetted.surfaces[0].diameter == pytest.approx(20.0, rel=1e-12)  # the stop keeps ENPD 20
+    up, down = (load(tmp_path, zmx(fields=fields + f"VDYN 0 {d}\nVCYN 0 0.3", s2="DIAM 0 0"), "d.zmx")
+                for d in (0.3, -0.3))  # the pupil moved up (cut below) or down (cut above, at the widest ray)
+    assert up.surfaces[1].diameter == pytest.approx(full.surfaces[1].diameter, rel=1e-12)
+    assert smaller.surfaces[1].diameter < down.surfaces[1].diameter < full.surfaces[1].diameter
+    with pytest.raises(SolasError, match="leave no pupil"):
+        load(tmp_path, zmx(fields=fields + "VCYN 0 1.5", s2="DIAM 0 0"), "e.zmx")

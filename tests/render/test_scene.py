@@ -109,3 +109,18 @@ def test_the_lens_file_is_parsed_once_per_content(tmp_path, doublet, monkeypatch
     assert "thickness = 6.0" in text
     source.write_text(text.replace("thickness = 6.0", "thickness = 7.0", 1))  # same size, at once
     assert lens_file(lens, tmp_path / "d").parent == tmp_path / "d"  # the file no longer holds this lens
+
+
+def test_cap_mesh_of_a_qbfs_surface_lies_on_its_sag():
+    """A Forbes Qbfs surface becomes a mesh on its own sag (not the base conic's), normals from its slope."""
+    from solas_mi.optics.sag import sag
+    qbfs, rho = (0.05, -0.02, 0.01), 9.0
+    v, n, _ = cap_mesh(30.0, 2.0, 9.0, 16, -0.7, (), qbfs, rho)
+    r2 = v[:, 0] ** 2 + v[:, 1] ** 2
+    assert np.abs(v[:, 2] - 2.0 - sag(r2, 1 / 30.0, -0.7, qbfs=qbfs, norm_radius=rho)).max() < 1e-14
+    assert np.abs(v[:, 2] - 2.0 - sag(r2, 1 / 30.0, -0.7)).max() > 1e-3  # the Qbfs terms move it
+    h = 1e-5
+    r = np.sqrt(r2[1:])
+    dz = (sag((r + h) ** 2, 1 / 30.0, -0.7, qbfs=qbfs, norm_radius=rho)
+          - sag((r - h) ** 2, 1 / 30.0, -0.7, qbfs=qbfs, norm_radius=rho)) / (2 * h)
+    assert np.abs(-n[1:, 2] * dz - np.hypot(n[1:, 0], n[1:, 1])).max() < 1e-7  # |n_r| / |n_z| = dz/dr
