@@ -99,7 +99,7 @@ def scene_dict(mi, name: str, sensor: dict, folder: Path) -> dict:
     return scene
 
 
-def cameras(mi, lens: Lens, width: int, height: int, independent: bool) -> dict:
+def cameras(mi, lens: Lens, width: int, height: int, independent: bool, lane_tolerance: float | None = None) -> dict:
     from solas_mi.optics.paraxial import paraxial
 
     pitch_um = FILM_WIDTH_MM / width * 1e3
@@ -110,6 +110,8 @@ def cameras(mi, lens: Lens, width: int, height: int, independent: bool) -> dict:
                    "focus_distance": 2.0, "film": film, "sampler": sampler}
     if independent:
         lens_camera["stratify_wavelengths"] = False
+    if lane_tolerance is not None:
+        lens_camera["lane_tolerance"] = lane_tolerance
     return {"lens_camera": lens_camera,
             "perspective": {"type": "perspective", "fov": fov, "fov_axis": "x", "film": film, "sampler": sampler}}
 
@@ -140,6 +142,7 @@ def main() -> None:
     parser.add_argument("--size", default="128x96")
     parser.add_argument("--scenes", default="room,env,glass")
     parser.add_argument("--independent-wavelengths", action="store_true")
+    parser.add_argument("--lane-tolerance", type=float, default=None)
     args = parser.parse_args()
     import solas_mi
 
@@ -152,7 +155,7 @@ def main() -> None:
     print(f"|---|---|{'---|' * len(spps)}---|")
     for name in args.scenes.split(","):
         results = {}
-        for cam, sensor in cameras(mi, lens, width, height, args.independent_wavelengths).items():
+        for cam, sensor in cameras(mi, lens, width, height, args.independent_wavelengths, args.lane_tolerance).items():
             scene = mi.load_dict(scene_dict(mi, name, sensor, folder))
             mi.render(scene, spp=spps[0], seed=0)  # warm-up: kernels compiled
             results[cam] = measure(mi, scene, spps, args.repeats)
