@@ -1,7 +1,7 @@
 """RGB noise against time: `lens_camera` against Mitsuba's `perspective` camera on three small scenes.
 
 Run: .venv/bin/python benchmarks/bench_lens_camera_noise.py [--repeats 3] [--spp 4,8,16,32] [--size 128x96]
-     [--independent-wavelengths]
+     [--independent-wavelengths] [--lane-tolerance EPS]
 Scenes (written here, world in metres, srgb camera, hdrfilm, `independent` sampler):
 - room: a diffuse box (red and green side walls, white floor, ceiling and back) lit by a ceiling
   light, two diffuse blocks inside (`path`, depth 6);
@@ -17,7 +17,8 @@ over seeds), and wall-clock seconds of `mi.render` (median, kernels compiled by 
 cameras run in the same process, one after the other. The time to equal noise, with noise ∝
 (time)^(−1/2) at the largest spp: lens seconds × (lens noise / perspective noise)² / perspective
 seconds. `--independent-wavelengths` switches the lens
-camera's per-pixel stratification of wavelengths off (the previous behaviour) for comparison.
+camera's per-pixel stratification of wavelengths off for comparison; `--lane-tolerance` sets its
+`lane_tolerance` (0: no path shared among the spectral lanes; default: the plugin's).
 """
 from __future__ import annotations
 

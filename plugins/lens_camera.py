@@ -12,7 +12,7 @@ sensor; the scene sees only the rays that leave the lens's first surface.
 |                  |           |             |                 | Fresnel transmittance; "off": lossless surfaces    |
 | `to_world`       | transform | world units | identity        | the camera's frame: looks along local +z, +y up    |
 | `stratify_wavelengths` | boolean | —     | true            | stratify the wavelengths of a pixel's samples      |
-| `lane_tolerance` | float     | pixels      | 0.1             | ε: how alike the spectral lanes' rays must leave   |
+| `lane_tolerance` | float     | pixels      | 0.25            | ε: how alike the spectral lanes' rays must leave   |
 |                  |           |             |                 | the lens to share a path (0: never)                |
 | (film)           | film      | pixels      | hdrfilm 768×576 | its width and height: the sensor's columns, rows;  |
 |                  |           |             |                 | its crop window (`crop_offset_x`, …): those drawn  |
@@ -140,7 +140,7 @@ class LensCamera(LensFilm):
         response's shortest and longest wavelengths leave the lens within ε α in direction plus origin
         over the focus distance, and within ε D/2 in origin."""
         try:
-            eps = float(props.get("lane_tolerance", 0.1))
+            eps = float(props.get("lane_tolerance", 0.25))
         except (TypeError, ValueError):
             eps = math.nan
         if not eps >= 0:

@@ -274,10 +274,10 @@ def _seeds(mi, scene, spp, seeds):
 
 def test_lanes_that_leave_alike_share_a_path_without_bias(mi):
     """An orange sky and a blue ball through the doublet at a coarse pitch (400 µm: the lanes leave the
-    lens within 0.1 of a pixel's footprint): sharing the path among the four lanes (`lane_tolerance`
-    0.1) gives at most 0.7 × the RGB noise of the hero lane alone (0; measured 0.55 ×: the rest is the
-    ball's path noise), and the same
-    mean image: every pixel within 4 standard errors, the channels' means within 1 %."""
+    lens within a fraction of a pixel's footprint): sharing the path among the four lanes
+    (`lane_tolerance` 0.25, the default) gives at most 0.7 × the RGB noise of the hero lane alone (0;
+    measured 0.55 ×: the rest is the ball's path noise), and the same mean image: every pixel within
+    4 standard errors, the channels' means within 1 %."""
     def scene(tolerance):
         camera = _camera(mi, 16, 12, 400.0, response="srgb", lane_tolerance=tolerance, focus_distance=1.0,
                          film={"pixel_format": "rgb"})
@@ -287,7 +287,7 @@ def test_lanes_that_leave_alike_share_a_path_without_bias(mi):
                                       "bsdf": {"type": "diffuse",
                                                "reflectance": {"type": "rgb", "value": [0.1, 0.3, 0.8]}}}})
 
-    shared, hero = (_seeds(mi, scene(t), 16, 16) for t in (0.1, 0.0))
+    shared, hero = (_seeds(mi, scene(t), 16, 16) for t in (0.25, 0.0))
     noise = [np.sqrt(np.mean((x - x.mean(axis=0)) ** 2)) / x.mean() for x in (shared, hero)]
     assert noise[0] < 0.7 * noise[1], noise
     error = np.sqrt((shared.var(axis=0) + hero.var(axis=0)) / len(shared))
@@ -297,9 +297,10 @@ def test_lanes_that_leave_alike_share_a_path_without_bias(mi):
 
 def test_the_fisheyes_lateral_colour_survives_the_lane_sharing(mi):
     """A white vertical stripe 40° off the fisheye's axis at a 12 µm pitch: its red image lies 1.7 px
-    from its blue one (lateral colour). With the lanes shared where alike (default) the offset is the
-    hero lane's alone within 0.2 px; sharing every path (`lane_tolerance` 1e9, what a camera with one
-    ray for the four lanes would do) loses it (measured 0.04 px): the test can tell."""
+    from its blue one (lateral colour). With the lanes shared where alike (default, 0.25) the offset is
+    the hero lane's alone within 0.2 px (measured 1.69 against 1.71 px); sharing every path
+    (`lane_tolerance` 1e9, what a camera with one ray for the four lanes would do) loses it (measured
+    0.04 px): the test can tell."""
     th = math.radians(40.0)
     stripe = {"type": "rectangle", "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [1.0, 1.0, 1.0]}},
               "to_world": mi.ScalarTransform4f().translate([math.sin(th), 0, math.cos(th)])
@@ -315,7 +316,7 @@ def test_the_fisheyes_lateral_colour_survives_the_lane_sharing(mi):
         centroid = (profile * np.arange(len(profile))[:, None]).sum(axis=0) / profile.sum(axis=0)
         return centroid[0] - centroid[2]
 
-    shared, hero, everywhere = (offset(t) for t in (0.1, 0.0, 1e9))
+    shared, hero, everywhere = (offset(t) for t in (0.25, 0.0, 1e9))
     assert hero > 1.0, hero
     assert shared == pytest.approx(hero, abs=0.2)
     assert abs(everywhere) < 0.3, everywhere
