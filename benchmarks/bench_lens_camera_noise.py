@@ -1,7 +1,7 @@
 """RGB noise against time: `lens_camera` against Mitsuba's `perspective` camera on three small scenes.
 
 Run: .venv/bin/python benchmarks/bench_lens_camera_noise.py [--repeats 3] [--spp 4,8,16,32] [--size 128x96]
-     [--independent-wavelengths]
+     [--independent-wavelengths] [--lane-tolerance EPS]
 Scenes (written here, world in metres, srgb camera, hdrfilm, `independent` sampler):
 - room: a diffuse box (red and green side walls, white floor, ceiling and back) lit by a ceiling
   light, two diffuse blocks inside (`path`, depth 6);
@@ -17,7 +17,8 @@ over seeds), and wall-clock seconds of `mi.render` (median, kernels compiled by 
 cameras run in the same process, one after the other. The time to equal noise, with noise ∝
 (time)^(−1/2) at the largest spp: lens seconds × (lens noise / perspective noise)² / perspective
 seconds. `--independent-wavelengths` switches the lens
-camera's per-pixel stratification of wavelengths off (the previous behaviour) for comparison.
+camera's per-pixel stratification of wavelengths off for comparison; `--lane-tolerance` sets its
+`lane_tolerance` (0: no path shared among the spectral lanes; default: the plugin's).
 """
 from __future__ import annotations
 
@@ -99,7 +100,7 @@ def scene_dict(mi, name: str, sensor: dict, folder: Path) -> dict:
     return scene
 
 
-def cameras(mi, lens: Lens, width: int, height: int, independent: bool) -> dict:
+def cameras(mi, lens: Lens, width: int, height: int, independent: bool, lane_tolerance: float | None = None) -> dict:
     from solas_mi.optics.paraxial import paraxial
 
     pitch_um = FILM_WIDTH_MM / width * 1e3
@@ -110,6 +111,8 @@ def cameras(mi, lens: Lens, width: int, height: int, independent: bool) -> dict:
                    "focus_distance": 2.0, "film": film, "sampler": sampler}
     if independent:
         lens_camera["stratify_wavelengths"] = False
+    if lane_tolerance is not None:
+        lens_camera["lane_tolerance"] = lane_tolerance
     return {"lens_camera": lens_camera,
             "perspective": {"type": "perspective", "fov": fov, "fov_axis": "x", "film": film, "sampler": sampler}}
 
@@ -140,6 +143,7 @@ def main() -> None:
     parser.add_argument("--size", default="128x96")
     parser.add_argument("--scenes", default="room,env,glass")
     parser.add_argument("--independent-wavelengths", action="store_true")
+    parser.add_argument("--lane-tolerance", type=float, default=None)
     args = parser.parse_args()
     import solas_mi
 
@@ -152,7 +156,7 @@ def main() -> None:
     print(f"|---|---|{'---|' * len(spps)}---|")
     for name in args.scenes.split(","):
         results = {}
-        for cam, sensor in cameras(mi, lens, width, height, args.independent_wavelengths).items():
+        for cam, sensor in cameras(mi, lens, width, height, args.independent_wavelengths, args.lane_tolerance).items():
             scene = mi.load_dict(scene_dict(mi, name, sensor, folder))
             mi.render(scene, spp=spps[0], seed=0)  # warm-up: kernels compiled
             results[cam] = measure(mi, scene, spps, args.repeats)

@@ -12,6 +12,8 @@ sensor; the scene sees only the rays that leave the lens's first surface.
 |                  |           |             |                 | Fresnel transmittance; "off": lossless surfaces    |
 | `to_world`       | transform | world units | identity        | the camera's frame: looks along local +z, +y up    |
 | `stratify_wavelengths` | boolean | —     | true            | stratify the wavelengths of a pixel's samples      |
+| `lane_tolerance` | float     | pixels      | 0.25            | ε: how alike the spectral lanes' rays must leave   |
+|                  |           |             |                 | the lens to share a path (0: never)                |
 | (film)           | film      | pixels      | hdrfilm 768×576 | its width and height: the sensor's columns, rows;  |
 |                  |           |             |                 | its crop window (`crop_offset_x`, …): those drawn  |
 | (sampler)        | sampler   | —           | independent, 4  | the samples per pixel                              |
@@ -30,17 +32,28 @@ vertex. `focus_distance` focuses the lens as a unit: the whole lens moves agains
 an object that far in front of surface 1 is in focus (`solas_mi.optics.focus.focused`: the paraxial
 image shift from the lens file's own object distance, whose image plane is the default).
 
-Each sample takes one wavelength from the camera response (`solas_mi.render.response`), carried in
-all four spectral lanes (with dispersion a path has one wavelength), the wavelengths of a pixel's
-n samples stratified (one in each n-th of the response's distribution, `stratified`: Mitsuba's
-integrators give the k-th sample of every pixel its place k in the wavefront; with independent
-wavelengths the colour noise was 2–4× the perspective camera's, benchmarks/bench_lens_camera_noise.py),
-a point in its pixel, and a
+Each sample takes four wavelengths from the camera response (`solas_mi.render.response`), one per
+spectral lane, lane i in the i-th quarter of the response's distribution, and a hero lane: the hero's
+sample is stratified per pixel (one in each n-th of the response for a pixel's n samples,
+`stratified`: Mitsuba's integrators give the k-th sample of every pixel its place k in the wavefront;
+with independent wavelengths the colour noise was 2–4× the perspective camera's), its quarter is the
+hero lane and its place in that quarter the other lanes' place in theirs. All four lanes are traced
+from the same film point and pupil point. The hero's ray leaves for the scene carrying the lanes
+that leave the lens alike it (with dispersion, lanes leave apart): each such lane i weighted by its
+own pupil weight, 1/p(λ_i) and transmittance, × 4/|G_i| (G_i: the lanes alike lane i, itself
+included), the others 0. Every lane is hero equally often, so each lane's estimate is unbiased (the
+hero-wavelength scheme where no lane is alike another: 4 × the hero's weight); where all are alike
+the path is shared as by Mitsuba's own cameras. Two lanes are alike where both pass and
+|Δdirection| + |Δorigin|/F ≤ ε α and |Δorigin| ≤ ε D/2 (α = pitch/efl: a pixel's angular footprint,
+paraxially; F: the focus distance; D: the entrance pupil's diameter): the shared ray then lies within
+2 ε of the larger of a pixel's footprint and the defocus blur D |1/z − 1/F| of its own at every depth z
+beyond F/2, and within ε of the blur, plus ε α, nearer (Δorigin/z ≤ ε D (1/z − 1/F) for z ≤ F/2). A
+point in its pixel, and a
 point inside the exit-pupil bound of that film position (`pupil_sampling.PupilSampler`, weight
 A·cos⁴θ/d² as pbrt-v4's RealisticCamera). The ray is traced backward through the lens (image side
 to object side) by the Float64 sequential tracer (`solas_mi.optics.tracer`, on the reversed lens of
 `solas_mi.optics.exit_pupil`) in the Float64 type of the variant (Python floats in the scalar ones):
-exact spheres and planes, Sellmeier n(λ) per path, every clear aperture and the stop clip, total
+exact spheres and planes, Sellmeier n(λ) per lane, every clear aperture and the stop clip, total
 internal reflection ends the ray; a blocked ray has weight 0. The weight of `sample_ray` is the
 pupil weight × 1/p(λ) × the Fresnel transmittance, scaled so that the pixel value is the image
 irradiance in units of a lossless lens's on-axis irradiance from radiance 1: a uniform white scene
@@ -62,6 +75,8 @@ tracing (`ptracer`) cannot connect to a sensor behind a lens: `sample_direction`
 """
 from __future__ import annotations
 
+import math
+
 import drjit as dr
 import mitsuba as mi
 import numpy as np
@@ -70,6 +85,7 @@ from solas_mi.errors import SolasError
 from solas_mi.optics import tracer as T
 from solas_mi.optics.exit_pupil import passes, reversed_lens
 from solas_mi.optics.focus import focused
+from solas_mi.optics.paraxial import paraxial
 from solas_mi.optics.lens import Lens
 from solas_mi.plugins.lens_film import LensFilm, positive
 from solas_mi.plugins.pupil_sampling import PupilSampler
@@ -77,6 +93,12 @@ from solas_mi.plugins.scene_probe import calling_render
 from solas_mi.plugins.wavelength_sampling import lanes
 
 FRESNEL = ("off", "transmit")
+
+
+def pick(values: list, index):
+    """values[index] per ray (an index array of 0…3 over a list of four)."""
+    return dr.select(index == 0, values[0], dr.select(index == 1, values[1],
+                                                      dr.select(index == 2, values[2], values[3])))
 
 
 def on_axis_solid_angle(lens: Lens, sampler: PupilSampler, wavelength_nm: float, grid: int = 512) -> float:
@@ -111,6 +133,35 @@ class LensCamera(LensFilm):
         self.norm = 1.0 / solid_angle
         self.reversed = reversed_lens(self.lens)
         self.last_vertex_z = float(self.lens.vertex_z[-1])
+        self.lane_tolerances(props)
+
+    def lane_tolerances(self, props: mi.Properties) -> None:
+        """Where the lanes share a path (module docstring): the pupil table's rows whose rays at the
+        response's shortest and longest wavelengths leave the lens within ε α in direction plus origin
+        over the focus distance, and within ε D/2 in origin."""
+        try:
+            eps = float(props.get("lane_tolerance", 0.25))
+        except (TypeError, ValueError):
+            eps = math.nan
+        if not eps >= 0:
+            raise SolasError(f"lens_camera: lane_tolerance {props.get('lane_tolerance')!r} must be a number >= 0 "
+                             "(a fraction of a pixel's angular footprint; 0: every path the hero lane's)")
+        self.lane_tolerance = eps
+        p = paraxial(self.lens)
+        self.angle_tolerance = eps * self.pitch_mm / abs(p.efl_mm)
+        self.origin_tolerance = 0.5 * eps * p.entrance_pupil_diameter_mm / self.world_unit_mm
+        self.inv_focus = 0.0 if math.isinf(self.focus_distance) else 1.0 / self.focus_distance
+
+    def alike(self, origins, directions, passed) -> list[list]:
+        """alike[i][j]: lanes i and j both passed and leave the lens within `lane_tolerance` of each
+        other (module docstring; symmetric, and a passed lane is alike itself)."""
+        near = [[passed[i] if i == j else None for j in range(4)] for i in range(4)]
+        for i in range(4):
+            for j in range(i + 1, 4):
+                gap = dr.norm(origins[i] - origins[j])
+                near[i][j] = near[j][i] = passed[i] & passed[j] & (gap <= self.origin_tolerance) & \
+                    (dr.norm(directions[i] - directions[j]) + gap * self.inv_focus <= self.angle_tolerance)
+        return near
 
     def check_film(self) -> None:
         """SolasError for lines (no density) under an `hdrfilm` of a spectral variant: the film would
@@ -168,35 +219,64 @@ class LensCamera(LensFilm):
         x, y = sample2.x * self.width, sample2.y * self.height
         return bool(dr.all((x >= col - 1e-3) & (x <= col + 1.001) & (y >= row - 1e-3) & (y <= row + 1.001)))
 
-    def sample_ray(self, time, sample1, sample2, sample3, active=True):
-        """The ray leaving surface 1 toward the scene (world units) and its weight (module docstring)."""
-        lam, index = self.sample_wavelength(self.stratified(sample1, sample2), active)
-        inv_pdf = self.wavelengths.weight(index, active)
-        # film point, lens frame (mm): row 0 at +y, column 0 at −x, the lens inverting the image
-        film = self.film_point(sample2)
-        target, weight = self.pupil.sample(film, sample3, active)
+    def traced(self, film, target, lam):
+        """The ray from film point `film` toward pupil point `target` (mm) at wavelength(s) `lam` (nm),
+        traced through the lens: its origin on surface 1 and direction in the camera frame (world units),
+        whether it passed, and its Fresnel transmittance. A blocked ray (past the image circle, TIR) may
+        hold NaN: it leaves from the vertex along the axis, so that no integrator multiplies its weight 0
+        by a NaN radiance."""
         f64 = dr.float64_array_t(mi.Float)
         # the reversed lens: x, y kept, z mirrored; the film is its object, the pupil plane its z = 0
         rays = T.launch(self.reversed, None, None, f64(target.x), f64(target.y), (f64(film.x), f64(film.y)))
         traced = T.trace(self.reversed, rays, f64(lam) * 1e-3, fresnel=self.fresnel == "transmit")
         out = traced.rays
-        passed = traced.ok & (traced.clipped_by == 0)
         # camera frame (x, −y, −z of the lens frame): looks along +z, upright; surface 1 at the origin
         scale = 1.0 / self.world_unit_mm
         origin = mi.Point3f(mi.Float(out.x * scale), mi.Float(-out.y * scale),
                             mi.Float((out.z - self.last_vertex_z) * scale))
         direction = mi.Vector3f(mi.Float(out.dx), mi.Float(-out.dy), mi.Float(out.dz))
-        # a blocked ray (past the image circle, TIR) may hold NaN: it leaves from the vertex along the
-        # axis with weight 0, so that no integrator multiplies 0 by a NaN radiance
-        passed = mi.Bool(passed) & dr.all(dr.isfinite(origin)) & dr.all(dr.isfinite(direction))
+        passed = mi.Bool(traced.ok & (traced.clipped_by == 0)) & dr.all(dr.isfinite(origin)) & \
+            dr.all(dr.isfinite(direction))
         origin = dr.select(passed, origin, mi.Point3f(0.0))
         direction = dr.select(passed, direction, mi.Vector3f(0.0, 0.0, 1.0))
+        return origin, direction, passed, mi.Float(traced.transmittance)
+
+    def lane_samples(self, sample1, sample2):
+        """The lanes' samples of the response's distribution, and the hero lane (module docstring): the
+        hero's `stratified` sample t, its quarter h = ⌊4t⌋, and the other lanes i at (4t − h + i)/4;
+        one lane, `sample1`, in a mono variant."""
+        if not mi.is_spectral:
+            return [sample1], 0
+        t = self.stratified(sample1, sample2)
+        hero = dr.minimum(mi.UInt32(t * 4.0), 3)
+        base = dr.fma(mi.Float(hero), -0.25, t) * 4.0
+        return [dr.select(hero == i, t, (base + i) * 0.25) for i in range(4)], hero
+
+    def sample_ray(self, time, sample1, sample2, sample3, active=True):
+        """The ray leaving surface 1 toward the scene (world units) and its weight (module docstring):
+        the four lanes traced from one film point and pupil point, the hero's ray carrying those that
+        leave the lens alike it."""
+        film = self.film_point(sample2)
+        target, weight = self.pupil.sample(film, sample3, active)
+        samples, hero = self.lane_samples(sample1, sample2)
+        lams, origins, directions, passed, weights = [], [], [], [], []
+        for sample in samples:
+            lam, index = self.sample_wavelength(sample, active)
+            origin, direction, ok, transmittance = self.traced(film, target, lam)
+            for values, value in zip((lams, origins, directions, passed), (lam, origin, direction, ok)):
+                values.append(value)
+            w = weight * self.norm * transmittance * self.wavelengths.weight(index, active)
+            weights.append(dr.select(active & ok, w, 0.0))
+        if mi.is_spectral:  # lane i carried where alike the hero, weighted 4 / (the lanes alike lane i)
+            near = self.alike(origins, directions, passed)
+            counts = [dr.maximum(sum(dr.select(x, 1.0, 0.0) for x in row), 1.0) for row in near]
+            weights = [dr.select(pick(near[i], hero), 4.0 * w / counts[i], 0.0) for i, w in enumerate(weights)]
+            origins, directions = [pick(origins, hero)], [pick(directions, hero)]
         # origin and direction apart: `transform @ ray` fails in a mono variant once a spectral one ran (Mitsuba 3.9)
         to_world = self.world_transform()
-        ray = mi.Ray3f(to_world @ origin, to_world @ direction, time, lanes(lam))
-        weight = weight * self.norm * mi.Float(traced.transmittance)
-        weight = dr.select(active & passed, weight, 0.0)
-        return ray, mi.Spectrum(weight * inv_pdf)
+        ray = mi.Ray3f(to_world @ origins[0], to_world @ directions[0], time,
+                       mi.Spectrum(*lams) if mi.is_spectral else lanes(lams[0]))
+        return ray, mi.Spectrum(*weights) if mi.is_spectral else mi.Spectrum(weights[0])
 
     def sample_position(self, time, sample, active=True):
         return self.sample_direction(None, None, active)

@@ -55,14 +55,25 @@ class PupilBounds:
     plane_z: float
 
     def at(self, r: np.ndarray) -> np.ndarray:
-        """Conservative bounds (…, 5) at film radii r: the union of the two enclosing table rows
-        (radius_mm[i] ≤ r < radius_mm[i + 1]; a radius on a row takes that row and the next), and 1
-        where both rows are elliptical."""
+        """Conservative bounds (…, 5) at film radii r, from the two enclosing table rows (radius_mm[i]
+        ≤ r < radius_mm[i + 1]; a radius on a row takes that row and the next): the union of their
+        rectangles, and 0; or, where both rows are elliptical, the box of an ellipse holding both
+        rows' ellipses, and 1. Ellipses (c_k, semi-axes a_k) lie inside the ellipse of centre c, the
+        rows' mean, and semi-axes (1 + m)·max a_k, m the largest |(c_k − c)/max a_k|: a point
+        c_k + a_k w (|w| ≤ 1) is c + (c_k − c) + a_k w, of norm ≤ m + 1 in units of max a_k."""
         i = np.clip(np.searchsorted(self.radius_mm, r, side="right") - 1, 0, len(self.radius_mm) - 2)
         a, b = self.bounds_mm[i], self.bounds_mm[i + 1]
-        return np.stack([np.minimum(a[..., 0], b[..., 0]), np.maximum(a[..., 1], b[..., 1]),
-                         np.minimum(a[..., 2], b[..., 2]), np.maximum(a[..., 3], b[..., 3]),
-                         self.elliptical[i] & self.elliptical[i + 1]], axis=-1)
+        box = np.stack([np.minimum(a[..., 0], b[..., 0]), np.maximum(a[..., 1], b[..., 1]),
+                        np.minimum(a[..., 2], b[..., 2]), np.maximum(a[..., 3], b[..., 3])], axis=-1)
+        centre = [0.5 * (a[..., 0:3:2] + a[..., 1:4:2]), 0.5 * (b[..., 0:3:2] + b[..., 1:4:2])]  # (u, v) each
+        semi = np.maximum(0.5 * (a[..., 1:4:2] - a[..., 0:3:2]), 0.5 * (b[..., 1:4:2] - b[..., 0:3:2]))
+        c = 0.5 * (centre[0] + centre[1])
+        m = np.linalg.norm((centre[0] - c) / np.maximum(semi, 1e-300), axis=-1)
+        semi = semi * (1.0 + m)[..., None]
+        ellipse = np.stack([c[..., 0] - semi[..., 0], c[..., 0] + semi[..., 0], c[..., 1] - semi[..., 1],
+                            c[..., 1] + semi[..., 1]], axis=-1)
+        both = (self.elliptical[i] & self.elliptical[i + 1])[..., None]
+        return np.concatenate([np.where(both, ellipse, box), both.astype(float)], axis=-1)
 
 
 def passes(rev: Lens, x: np.ndarray, y: np.ndarray, ex: np.ndarray, ey: np.ndarray, wavelength_nm: float
@@ -105,24 +116,32 @@ def pupil_bounds(lens: Lens, max_radius_mm: float, wavelengths_nm=None, radii: i
         rim_v.append(v)
     bounds, elliptical = _box(np.array(rim_u), np.array(rim_v), directions)
     bounds[~seen] = 0.0  # nothing reaches these film radii
-    escaped, cell = _check(rev, radius, bounds, reach, lens.wavelengths_nm if wavelengths_nm is None else wavelengths_nm)
-    if escaped.any():  # rays outside: every row widened by the most any missed, and a grid cell
-        bounds += (escaped + cell) * (escaped > 0) * np.array([-1.0, 1.0, -1.0, 1.0])
-        elliptical[:] = False
+    escaped, cell, excess = _check(rev, radius, bounds, elliptical, reach,
+                                   lens.wavelengths_nm if wavelengths_nm is None else wavelengths_nm)
+    ellipse = (elliptical & seen)[:, None]
+    if excess > 1.0:  # rays outside an ellipse (a cat's eye's corner between rim points): every ellipse grown
+        centre, half = 0.5 * (bounds[:, 0::2] + bounds[:, 1::2]), 0.5 * (bounds[:, 1::2] - bounds[:, 0::2])
+        half = np.where(ellipse, half * excess + cell, half)
+        bounds = np.stack([centre[:, 0] - half[:, 0], centre[:, 0] + half[:, 0], centre[:, 1] - half[:, 1],
+                           centre[:, 1] + half[:, 1]], axis=-1)
+    if escaped.any():  # rays outside a rectangle: every rectangle widened by the most any missed, and a grid cell
+        bounds += np.where(ellipse, 0.0, (escaped + cell) * (escaped > 0) * np.array([-1.0, 1.0, -1.0, 1.0]))
     if escaped.max() > 2.0 * cell:  # more than the rim's rounding: a part of the pupil the march stepped over
         warnings.warn(f"the exit-pupil bounds of {lens.name} missed a thin part of the pupil (rays up to "
                       f"{escaped.max():.3g} mm outside); widened to hold every checked ray", stacklevel=2)
     return PupilBounds(radius, bounds, elliptical & seen, float(lens.vertex_z[-1]))
 
 
-def _check(rev: Lens, radius: np.ndarray, bounds: np.ndarray, reach: float, wavelengths_nm) -> tuple[np.ndarray, float]:
+def _check(rev: Lens, radius: np.ndarray, bounds: np.ndarray, elliptical: np.ndarray, reach: float, wavelengths_nm
+           ) -> tuple[np.ndarray, float, float]:
     """The most (mm, ≥ 0) by which rays that leave the lens pass outside the bounds (u0, u1, v0, v1 sides),
     over a CHECK² grid on ±reach at CHECK_RADII film radii (a thin ring that the march stepped over;
-    zeros where every checked ray lies inside), and the grid's cell (mm)."""
+    zeros where every checked ray lies inside), the grid's cell (mm), and the most by which the
+    ellipse of an elliptical row must grow (a factor of its semi-axes, ≥ 1) to hold them."""
     step = 2.0 * reach / CHECK
     g = -reach + (np.arange(CHECK) + 0.5) * step
     gu, gv = (a.ravel() for a in np.meshgrid(g, g))
-    out = np.zeros(4)
+    out, excess = np.zeros(4), 1.0
     for i in np.unique(np.linspace(0, len(radius) - 1, CHECK_RADII).astype(int)):
         u0, u1, v0, v1 = bounds[i]
         for w in wavelengths_nm:
@@ -132,7 +151,9 @@ def _check(rev: Lens, radius: np.ndarray, bounds: np.ndarray, reach: float, wave
                 continue
             miss = np.array([u0 - u.min(), u.max() - u1, v0 - v.min(), v.max() - v1])
             out = np.maximum(out, miss)
-    return out, step
+            e = ((2.0 * u - u0 - u1) / (u1 - u0)) ** 2 + ((2.0 * v - v0 - v1) / (v1 - v0)) ** 2
+            excess = max(excess, float(np.sqrt(e.max())) if elliptical[i] else 1.0)
+    return out, step, excess
 
 
 def exit_reach(lens: Lens, max_radius_mm: float) -> float:
@@ -193,19 +214,19 @@ def _rim(rev: Lens, radius: np.ndarray, cu: np.ndarray, cv: np.ndarray, lit: np.
 
 def _box(rim_u: np.ndarray, rim_v: np.ndarray, directions: int) -> tuple[np.ndarray, np.ndarray]:
     """Bounds (radii, 4) u0, u1, v0, v1 (mm) of the rim points (wavelengths, radii, directions), widened
-    by the most a convex rim can bulge between two of them, and whether the box's inscribed ellipse
-    holds every rim point."""
+    by the most a convex rim can bulge between two of them, and whether they are elliptical: the
+    box's centred ellipse, grown until it holds every rim point (and widened like the box), has less
+    area than the box (then the bounds are that ellipse's box: the rectangle holds the pupil too)."""
     lo_u, hi_u = rim_u.min(axis=(0, 2)), rim_u.max(axis=(0, 2))
     lo_v, hi_v = rim_v.min(axis=(0, 2)), rim_v.max(axis=(0, 2))
     # a convex rim between two rim points Δφ apart bulges at most ρ(1 − cos(Δφ/2)) beyond their chord
     size = np.maximum(hi_u - lo_u, hi_v - lo_v)
     margin = size * (1.0 - np.cos(np.pi / directions)) + 1e-6
-    bounds = np.stack([lo_u - margin, hi_u + margin, lo_v - margin, hi_v + margin], axis=-1)
-    cu, cv = 0.5 * (bounds[:, 0] + bounds[:, 1]), 0.5 * (bounds[:, 2] + bounds[:, 3])
-    au, av = 0.5 * (bounds[:, 1] - bounds[:, 0]), 0.5 * (bounds[:, 3] - bounds[:, 2])
-    elliptical = np.ones(len(bounds), dtype=bool)
-    for u, v in zip(rim_u, rim_v):
-        e = ((u - cu[:, None]) / np.maximum(au - margin, 1e-12)[:, None]) ** 2 + \
-            ((v - cv[:, None]) / np.maximum(av - margin, 1e-12)[:, None]) ** 2
-        elliptical &= (e <= 1.0 + 1e-9).all(axis=1)
-    return bounds, elliptical
+    cu, cv = 0.5 * (lo_u + hi_u), 0.5 * (lo_v + hi_v)
+    au, av = np.maximum(0.5 * (hi_u - lo_u), 1e-12), np.maximum(0.5 * (hi_v - lo_v), 1e-12)
+    e = ((rim_u - cu[:, None]) / au[:, None]) ** 2 + ((rim_v - cv[:, None]) / av[:, None]) ** 2
+    grow = np.sqrt(np.maximum(e.max(axis=(0, 2)), 1.0)) * (1.0 + 1e-9)
+    eu, ev = grow * au + margin, grow * av + margin
+    elliptical = 0.25 * np.pi * eu * ev < (au + margin) * (av + margin)
+    half_u, half_v = np.where(elliptical, eu, au + margin), np.where(elliptical, ev, av + margin)
+    return np.stack([cu - half_u, cu + half_u, cv - half_v, cv + half_v], axis=-1), elliptical

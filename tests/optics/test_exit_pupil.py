@@ -18,10 +18,11 @@ def test_a_radius_takes_its_row_and_the_next():
     assert table.at(np.array(0.0))[:4].tolist() == [-2, 2, -2, 2]
 
 
-@pytest.mark.parametrize("name", ["solas-doublet", "cooke-triplet"])
+@pytest.mark.parametrize("name", ["solas-doublet", "cooke-triplet", "double_gauss_50mm"])
 def test_every_passing_ray_lies_inside_the_bound(name):
     """Rays from film points between the table's rows toward a fine grid on the last vertex plane: all
-    that leave the lens fall inside the bound at that radius."""
+    that leave the lens fall inside the bound at that radius (inside its ellipse where it is one: the
+    double Gauss's vignetted cat's eye included)."""
     lens = Lens.load(name)
     half = 0.5 * lens.image_diameter if lens.image_diameter else 3.0
     table = pupil_bounds(lens, half, wavelengths_nm=[lens.primary_wavelength], radii=16)
@@ -31,9 +32,25 @@ def test_every_passing_ray_lies_inside_the_bound(name):
     gx, gy = (a.ravel() for a in np.meshgrid(g, g))
     for r in (table.radius_mm[3] + 0.37 * (table.radius_mm[4] - table.radius_mm[3]), table.radius_mm[-2]):
         ok = passes(rev, np.full(len(gx), r), 0.0, gx, gy, lens.primary_wavelength)
-        u0, u1, v0, v1, _ = table.at(np.array(r))
+        u0, u1, v0, v1, elliptical = table.at(np.array(r))
         assert ok.any()
         assert (gx[ok] >= u0).all() and (gx[ok] <= u1).all() and (gy[ok] >= v0).all() and (gy[ok] <= v1).all()
+        if elliptical:
+            e = ((2 * gx[ok] - u0 - u1) / (u1 - u0)) ** 2 + ((2 * gy[ok] - v0 - v1) / (v1 - v0)) ** 2
+            assert e.max() <= 1.0, (r, e.max())
+
+
+def test_the_ellipse_between_two_rows_holds_both():
+    """Rows' ellipses with different centres: the bound between them is an ellipse holding both (the
+    inscribed ellipse of their boxes' union would cut the first circle's top)."""
+    table = PupilBounds(np.array([0.0, 1.0]), np.array([[-1.0, 1.0, -1.0, 1.0], [0.0, 2.0, -1.0, 1.0]]),
+                        np.ones(2, dtype=bool), 0.0)
+    u0, u1, v0, v1, elliptical = table.at(np.array(0.5))
+    assert elliptical == 1
+    phi = np.linspace(0, 2 * np.pi, 721)
+    for cu in (0.0, 1.0):
+        u, v = cu + np.cos(phi), np.sin(phi)
+        assert (((2 * u - u0 - u1) / (u1 - u0)) ** 2 + ((2 * v - v0 - v1) / (v1 - v0)) ** 2).max() <= 1 + 1e-12
 
 
 def test_bounds_hold_a_thin_ring_the_march_steps_over(monkeypatch):
