@@ -1,0 +1,93 @@
+"""Every long step answers a signal within about a second: renders run in passes of bounded time
+(`render.loop.STEPS_PER_PASS`, `render.stock.SAMPLES_PER_PASS`, the render PSF's ray chunks) and a
+signal is answered between them; an interruption that a library reports as its own error (a scene's
+plugin interrupted while Mitsuba loads it) is still an interruption, not an error."""
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from solas_mi.cli import main
+from solas_mi.errors import SolasError, plugin_error
+from solas_mi.resources import resource_dir
+
+PHOTO = resource_dir("scenes") / "images" / "rocket.png"
+STOP_S = 2.0  # a signal answered within about a second (a pass), with room for a loaded machine
+
+
+def solas(*args, cwd) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "solas_mi", *map(str, args)], cwd=cwd, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=dict(os.environ, TMPDIR=str(cwd)))
+
+
+def stop(p: subprocess.Popen, sig) -> tuple[float, str]:
+    """Seconds from `sig` to the process's end, and its stderr."""
+    start = time.monotonic()
+    p.send_signal(sig)
+    _, err = p.communicate(timeout=120)
+    return time.monotonic() - start, err
+
+
+def test_an_interruption_reported_by_a_library_is_an_interruption(tmp_path, monkeypatch, capsys):
+    """SIGTERM arriving while Mitsuba builds a scene's plugin: Mitsuba turns the exception into its own
+    error, which would read as a scene that cannot load (exit 2); it is the interruption (exit 143)."""
+    from solas_mi.render import user_scene
+
+    def loading(*args, **kwargs):
+        try:
+            os.kill(os.getpid(), signal.SIGTERM)  # raised in the plugin's constructor, as Mitsuba calls it
+            time.sleep(5)
+        except BaseException as exc:  # Mitsuba's parser: any exception of a plugin becomes a RuntimeError
+            raise plugin_error(RuntimeError(f"failed to instantiate: {type(exc).__name__}"), "cannot load scene")
+        raise SolasError("not interrupted")
+
+    monkeypatch.setattr(user_scene, "load", loading)
+    scene = resource_dir("scenes") / "solas_doublet" / "scene.xml"
+    assert main(["render", str(scene), "--spp", "4", "-o", str(tmp_path / "r.exr")]) == 143
+    err = capsys.readouterr().err
+    assert "terminated; no output was left half-written" in err and "cannot load" not in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.slow
+def test_batch_render_stops_within_a_pass(tmp_path):
+    """SIGTERM in the middle of the second of three long items: the batch ends within STOP_S, the item
+    is recorded interrupted (the third pending), the first done, and nothing half-written is left."""
+    images = tmp_path / "images"
+    images.mkdir()
+    for k in range(3):
+        (images / f"f{k}.png").write_bytes(PHOTO.read_bytes())
+    out = tmp_path / "out"
+    p = solas("batch", "render", images, "--lens", "solas-doublet", "--sensor", "320x240", "--spp", "96", "-o", out,
+              "--workers", "1", "--quiet", cwd=tmp_path)
+    deadline = time.monotonic() + 300
+    while not (out / "f0.exr").exists() and p.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    time.sleep(1.0)  # into the second item's passes
+    assert p.poll() is None, "the batch ended before it could be interrupted"
+    seconds, err = stop(p, signal.SIGTERM)
+    assert p.returncode == 143, err
+    assert seconds < STOP_S, f"{seconds:.2f} s from SIGTERM to the end"
+    items = {Path(i["input"]).name: i["status"] for i in json.loads((out / "batch.json").read_text())["items"]}
+    assert items == {"f0.png": "done", "f1.png": "interrupted", "f2.png": "pending"}, items
+    assert sorted(f.name for f in out.iterdir()) == ["batch.json", "f0.exr", "f0.png"]
+    assert not [f for f in tmp_path.iterdir() if f.name.startswith("solas-")]  # no scene folder left
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_render_psf_stops_within_a_chunk(tmp_path, sig, code):
+    """The render PSF traces 9 M rays a field; a signal while it traces ends it within STOP_S."""
+    p = solas("psf", "solas-doublet", "--psf-method", "render", "--rays", "3000", "--field-deg", "0,5",
+              "--wavelengths-nm", "550", "--size", "64", "-o", "p.exr", cwd=tmp_path)
+    time.sleep(8.0)  # past the start (imports, the lens's chief rays, the entrance grid) into the tracing
+    assert p.poll() is None, "the PSF was finished before it could be interrupted"
+    seconds, err = stop(p, sig)
+    assert p.returncode == code and "no output was left half-written" in err, err
+    assert seconds < STOP_S, f"{seconds:.2f} s from the signal to the end"
+    assert list(tmp_path.iterdir()) == []
