@@ -49,6 +49,30 @@ def _parse(mi, xml_path: str | Path, params: dict | None):
         raise plugin_error(exc, f"cannot read scene {path}") from None
 
 
+def scene_files(xml_path: str | Path, params: dict | None = None) -> list[Path]:
+    """The files the scene file `xml_path` reads, sorted: itself, its includes and every existing file a
+    string property names (meshes, textures, environment maps, spectra, response tables, lens files),
+    resolved as Mitsuba resolves them (the scene's folder first)."""
+    import sys
+
+    from .mitsuba import mitsuba
+
+    current = sys.modules.get("mitsuba")
+    mi = mitsuba(current.variant() if current is not None else None)  # any variant parses: keep the one set
+    resolver = mi.file_resolver()
+    resolver.prepend(str(Path(xml_path).resolve().parent))
+    try:
+        _, state = _parse(mi, xml_path, params)
+        found = {Path(xml_path).resolve()} | {Path(str(resolver.resolve(f))).resolve() for f in state.files}
+        for node in state.nodes:
+            for value in (node.props[key] for key in node.props.keys()):
+                if isinstance(value, str) and value and (path := Path(str(resolver.resolve(value)))).is_file():
+                    found.add(path.resolve())
+    finally:
+        del resolver[0]
+    return sorted(found)
+
+
 def _children(state, node) -> list:
     """The nodes `node` holds (its film, sampler, medium, …)."""
     refs = [node.props[k] for k in node.props.keys()]
