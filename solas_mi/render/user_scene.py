@@ -31,6 +31,7 @@ from .scene import lens_file
 
 SWAPPABLE = ("perspective", "thinlens")
 FILM_DEFAULT = (768, 576)  # Mitsuba's film size when the scene names none
+MAX_HALF_FIELD_DEG = 89.0  # a perspective camera's half field the lens camera takes (tan θ finite)
 CAMERA_ONLY = ("fov", "focal_length", "fov_axis", "near_clip", "far_clip", "focus_distance", "aperture_radius",
                "principal_point_offset_x", "principal_point_offset_y")  # what the lens camera replaces
 
@@ -124,8 +125,8 @@ def default_pitch_um(lens, half_deg: float, axis: str, width: int, height: int) 
     """Pixel pitch (µm) whose film edge along `axis` meets the real chief ray of `half_deg`."""
     from ..optics.pupil import chief_rays
 
-    if not 0.0 < half_deg < 89.0:
-        raise SolasError(f"the scene's camera half field {half_deg:g} deg must lie in (0, 89) degrees")
+    if not 0.0 < half_deg < MAX_HALF_FIELD_DEG:
+        raise SolasError(f"the scene's camera half field {half_deg:g} deg must lie in (0, {MAX_HALF_FIELD_DEG:g}) degrees")
     span = {"x": width, "y": height, "diagonal": math.hypot(width, height)}[axis]
     direction = {"x": (1.0, 0.0), "y": (0.0, 1.0), "diagonal": (width / math.hypot(width, height),
                                                                    height / math.hypot(width, height))}[axis]
