@@ -63,12 +63,13 @@ def test_batch_render_stops_within_a_pass(tmp_path):
     for k in range(3):
         (images / f"f{k}.png").write_bytes(PHOTO.read_bytes())
     out = tmp_path / "out"
-    p = solas("batch", "render", images, "--lens", "solas-doublet", "--sensor", "320x240", "--spp", "96", "-o", out,
+    # 14 interactions a path: one pass of the former 2^21 samples took 3-10 s
+    p = solas("batch", "render", images, "--lens", "wide-angle-22mm", "--sensor", "160x120", "--spp", "128", "-o", out,
               "--workers", "1", "--quiet", cwd=tmp_path)
     deadline = time.monotonic() + 300
     while not (out / "f0.exr").exists() and p.poll() is None and time.monotonic() < deadline:
         time.sleep(0.05)
-    time.sleep(1.0)  # into the second item's passes
+    time.sleep(2.0)  # past the second item's scene load, into its passes
     assert p.poll() is None, "the batch ended before it could be interrupted"
     seconds, err = stop(p, signal.SIGTERM)
     assert p.returncode == 143, err
@@ -82,10 +83,11 @@ def test_batch_render_stops_within_a_pass(tmp_path):
 @pytest.mark.slow
 @pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
 def test_render_psf_stops_within_a_chunk(tmp_path, sig, code):
-    """The render PSF traces 9 M rays a field; a signal while it traces ends it within STOP_S."""
-    p = solas("psf", "solas-doublet", "--psf-method", "render", "--rays", "3000", "--field-deg", "0,5",
-              "--wavelengths-nm", "550", "--size", "64", "-o", "p.exr", cwd=tmp_path)
-    time.sleep(8.0)  # past the start (imports, the lens's chief rays, the entrance grid) into the tracing
+    """The render PSF traces 9 M rays at each of three wavelengths (one wavefront each before: 10-40 s); a
+    signal while it traces ends it within STOP_S."""
+    p = solas("psf", "solas-doublet", "--psf-method", "render", "--rays", "3000", "--field-deg", "0,1",
+              "--wavelengths-nm", "486,550,656", "--size", "64", "-o", "p.exr", cwd=tmp_path)
+    time.sleep(12.0)  # past the start (imports, the lens's chief rays, the entrance grid) into the tracing
     assert p.poll() is None, "the PSF was finished before it could be interrupted"
     seconds, err = stop(p, sig)
     assert p.returncode == code and "no output was left half-written" in err, err

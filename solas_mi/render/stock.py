@@ -18,7 +18,7 @@ from .loop import Render
 from .mitsuba import check_run, pass_seed
 
 # bounds the memory of one wavefront, and its time: a signal is answered between passes (a pass is at least one
-# sample per pixel: 0.5-1.5 s at 1280x960 through the doublet, `docs/details/interruptions.md`)
+# sample per pixel: `docs/details/render.md`, "Interruptions")
 SAMPLES_PER_PASS = 1 << 20
 
 
