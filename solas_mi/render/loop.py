@@ -25,7 +25,7 @@ _SAMPLES_PER_PASS = 1 << 21  # samples traced at once at most: bounds a pass's m
 # path steps (samples × interactions per path) traced at once at most: bounds a pass's time, between passes a
 # signal (Ctrl-C, SIGTERM) is answered (`docs/details/render.md`, "Interruptions"). Sized
 # from the lens, not from a measured time, so a render's passes, and so its image, are the same on any machine.
-STEPS_PER_PASS = 1 << 20
+STEPS_PER_PASS = 1 << 19
 
 
 @dataclass
