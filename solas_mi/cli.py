@@ -75,18 +75,32 @@ class Terminated(KeyboardInterrupt):
     """SIGTERM, raised where the program is so that every `finally` and context manager runs."""
 
 
-def _terminate(signum, frame) -> None:
-    raise Terminated()
+_SIGNALLED: list[int] = []  # the signals this run received: a library (a scene's plugin) may report one as its error
+
+
+def _stop(signum, frame) -> None:
+    _SIGNALLED.append(signum)
+    raise Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+
+
+def _handlers() -> dict:
+    """Our handlers for SIGTERM and (unless it is ignored, as in a background job) SIGINT; the former ones."""
+    if threading.current_thread() is not threading.main_thread():
+        return {}
+    ours = [signal.SIGTERM] + [signal.SIGINT] * (signal.getsignal(signal.SIGINT) is signal.default_int_handler)
+    return {sig: signal.signal(sig, _stop) for sig in ours}
 
 
 def main(argv: list[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
-    main_thread = threading.current_thread() is threading.main_thread()
-    previous = signal.signal(signal.SIGTERM, _terminate) if main_thread else None
+    _SIGNALLED.clear()
+    previous = _handlers()
     try:
         return int(args.run(args) or 0)
     except SolasError as exc:
+        if _SIGNALLED:  # the interruption surfaced inside a library as its error
+            return _stopped(args.command)
         print(f"solas-mi {args.command}: error: {exc}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # the reader of stdout has gone (`| head`): stop quietly, as Unix tools do
@@ -95,12 +109,18 @@ def main(argv: list[str] | None = None) -> int:
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 141
     except KeyboardInterrupt as exc:
-        how = "terminated" if isinstance(exc, Terminated) else "interrupted"
-        print(f"\nsolas-mi {args.command}: {how}; no output was left half-written", file=sys.stderr)
-        return 143 if isinstance(exc, Terminated) else 130
+        return _stopped(args.command, isinstance(exc, Terminated))
     finally:
-        if previous is not None:  # None: not ours to restore (not the main thread, or set outside Python)
-            signal.signal(signal.SIGTERM, previous)
+        for sig, handler in previous.items():
+            if handler is not None:  # None: set outside Python, not ours to restore
+                signal.signal(sig, handler)
+
+
+def _stopped(command: str, terminated: bool = False) -> int:
+    terminated = terminated or signal.SIGTERM in _SIGNALLED
+    how = "terminated" if terminated else "interrupted"
+    print(f"\nsolas-mi {command}: {how}; no output was left half-written", file=sys.stderr)
+    return 143 if terminated else 130
 
 
 if __name__ == "__main__":

@@ -160,10 +160,13 @@ def hold_folder(folder: str | os.PathLike, what: str) -> Iterator[Path]:
 @contextmanager
 def written_together(*paths: Path) -> Iterator[tuple[str, ...]]:
     """Temporary paths for `paths`, renamed onto them together when the block succeeds; on an error
-    or an interruption none of the targets changes and the temporary files are removed."""
+    or an interruption none of the targets changes and the temporary files are removed. Two processes
+    writing the same targets at once: each target ends whole, from the one that renamed last, and the
+    renames of each hold their folders (`_renaming`), so a data file and its preview come from one writer."""
     from .imageio import atomic_path
 
     with ExitStack() as stack:
+        held = stack.enter_context(_renaming(Path(p).parent for p in paths))  # released after the renames
         tmps = tuple(stack.enter_context(atomic_path(p)) for p in paths)
         try:
             yield tmps
@@ -172,3 +175,31 @@ def written_together(*paths: Path) -> Iterator[tuple[str, ...]]:
             for tmp, target in zip(tmps, paths):
                 message = message.replace(tmp, str(target))
             raise SolasError(message) from None
+        held()  # the stack now renames each temporary onto its target, in these folders' hold
+
+
+@contextmanager
+def _renaming(folders: Iterable[Path]) -> Iterator:
+    """A function that holds `folders` (an exclusive `flock` on each, in sorted order; no file is made)
+    until the block ends; folders that cannot be locked (a file system without locks) are passed over."""
+    import fcntl
+
+    fds: list[int] = []
+
+    def hold() -> None:
+        for folder in sorted({os.path.abspath(f or ".") for f in folders}):
+            try:
+                fd = os.open(folder, os.O_RDONLY | os.O_DIRECTORY)
+            except OSError:
+                continue
+            fds.append(fd)
+            try:
+                fcntl.flock(fd, fcntl.LOCK_EX)
+            except OSError:
+                pass
+
+    try:
+        yield hold
+    finally:
+        for fd in fds:
+            os.close(fd)  # releases its lock

@@ -6,6 +6,7 @@ import os
 import shutil
 import subprocess
 import sys
+from pathlib import Path
 
 import pytest
 
@@ -143,3 +144,58 @@ def test_a_lens_file_written_into_a_scene_folder_is_named_plainly(doublet, tmp_p
     changed = dataclasses.replace(doublet, source=str(odd), description="changed in memory")
     held = lens_file(changed, tmp_path / "scene")
     assert held.parent == (tmp_path / "scene").resolve() and "\n" not in held.name and " " not in held.name
+
+
+def test_two_writers_of_one_output_pair_leave_one_writers_pair_whole(tmp_path, monkeypatch):
+    """Single-file commands take no folder lock: two writers of the same EXR + PNG at once. The first
+    is held between its two renames while the second writes: each file ends whole, the pair comes from
+    one writer (not the data of one and the preview of the other), neither's temporaries are removed
+    by the other, and none is left."""
+    import threading
+
+    from solas_mi.outputs import written_together
+
+    targets = (tmp_path / "r.exr", tmp_path / "r.png")
+    real_replace = os.replace
+    first_renamed, second_done = threading.Event(), threading.Event()
+
+    def replace(src, dst):
+        real_replace(src, dst)
+        if threading.current_thread().name == "first" and not first_renamed.is_set():
+            first_renamed.set()
+            second_done.wait(2.0)  # the second writer renames here unless the first holds the folder
+
+    monkeypatch.setattr(os, "replace", replace)
+
+    def write(tag: str) -> None:
+        with written_together(*targets) as tmps:
+            for tmp in tmps:
+                Path(tmp).write_text(f"{tag} " * 1000)
+        if tag == "second":
+            second_done.set()
+
+    first = threading.Thread(target=write, args=("first",), name="first")
+    first.start()
+    assert first_renamed.wait(30)
+    second = threading.Thread(target=write, args=("second",), name="second")
+    second.start()
+    first.join(30)
+    second.join(30)
+    contents = {p.read_text() for p in targets}
+    assert contents in ({"first " * 1000}, {"second " * 1000}), [c[:7] for c in contents]
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["r.exr", "r.png"]
+
+
+def test_two_commands_writing_one_output_at_once_both_succeed(tmp_path):
+    """Two real processes writing one -o at once: neither removes the other's temporaries (each
+    carries its live writer's process id), both succeed, and what is left is one whole EXR and PNG."""
+    from solas_mi.imageio import read_exr
+
+    runs = [subprocess.Popen([sys.executable, "-m", "solas_mi", "psf", "solas-doublet", "--field-deg", field,
+                              "--wavelengths-nm", "531", "--size", "48", "-o", "p.exr"], cwd=tmp_path,
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) for field in ("0,0", "0,1")]
+    for p in runs:
+        _, err = p.communicate(timeout=120)
+        assert p.returncode == 0, err
+    data, meta = read_exr(tmp_path / "p.exr")
+    assert data and sorted(f.name for f in tmp_path.iterdir()) == ["p.exr", "p.png"]

@@ -24,6 +24,7 @@ from .cache import file_hash
 
 MANIFEST = "batch.json"
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".exr")
+SCENE_SUFFIXES = (".xml",)  # Mitsuba scene files (render items)
 SAVE_EVERY_S = 1.0  # the manifest is rewritten at most this often while items finish (and at the end)
 
 
@@ -42,14 +43,32 @@ class Job:
     seconds: float | None = None
     attempts: int = 0
     outputs: dict[str, list] = field(default_factory=dict)  # path → [size, mtime_ns, sha256/16] when finished
-    input_hash: str | None = None  # the input's SHA-256 (16 hex digits) when finished
+    input_hash: str | None = None  # the input's SHA-256 (16 hex digits; a scene's with the files it reads) when finished
     params: dict[str, Any] = field(default_factory=dict)
 
     def stamp(self) -> None:
         """Record the finished outputs' sizes, modification times and checksums and the input's
         checksum (how a re-run knows them)."""
         self.outputs = {p: [(s := os.stat(p)).st_size, s.st_mtime_ns, file_hash(p)] for p in (self.output, self.png)}
-        self.input_hash = file_hash(self.input)
+        self.input_hash = self.input_digest()
+
+    def input_digest(self) -> str:
+        """The input's SHA-256 (16 hex digits); a scene file's covers every file it reads (includes,
+        meshes, textures, ...: `render.user_scene.scene_files`), named and hashed, so that a texture
+        replaced under the same name is an input changed."""
+        if self.kind != "render" or Path(self.input).suffix.lower() not in SCENE_SUFFIXES:
+            return file_hash(self.input)
+        import hashlib
+
+        from ..render.user_scene import scene_files
+
+        digest = hashlib.sha256()
+        for path in scene_files(self.input):
+            try:
+                digest.update(f"{path}\0{file_hash(path)}\n".encode())
+            except OSError:  # unreadable to us (its render failed or did without): its name stands for it
+                digest.update(f"{path}\0unreadable\n".encode())
+        return digest.hexdigest()[:16]
 
     def finished(self) -> bool:
         """Both outputs are there as this batch wrote them (same sizes, times and SHA-256 checksums;
@@ -58,8 +77,8 @@ class Job:
         try:
             return set(self.outputs) == {self.output, self.png} and all(
                 [(s := os.stat(p)).st_size, s.st_mtime_ns, file_hash(p)] == list(v) for p, v in self.outputs.items()) \
-                and self.input_hash == file_hash(self.input)
-        except OSError:
+                and self.input_hash == self.input_digest()
+        except (OSError, SolasError):  # an output or input gone, a scene that no longer reads
             return False
 
 

@@ -33,9 +33,8 @@ from ..errors import SolasError
 from ..outputs import inside, safe_name
 from ..render.spec import RenderSpec
 from .degrade import WORKER_BYTES, BatchResult, check_workers
-from .jobs import IMAGE_SUFFIXES, MANIFEST, Job, Manifest, expand_inputs
+from .jobs import IMAGE_SUFFIXES, MANIFEST, SCENE_SUFFIXES, Job, Manifest, expand_inputs
 from .runner import check_dask
-from .work import SCENE_SUFFIXES
 
 SWEEP = ("lens", "focus_distance", "sensor", "pitch_um", "spp")  # lens, then RenderSpec fields
 SEEDS = 4096  # seeds 0…4095: the render passes' seeds (seed·1000003 + pass) stay within 32 bits

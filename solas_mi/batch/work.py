@@ -9,12 +9,11 @@ import time
 from typing import TYPE_CHECKING, Any
 
 from ..errors import SolasError
-from .jobs import Job
+from .jobs import SCENE_SUFFIXES, Job
 
 if TYPE_CHECKING:
     from ..psf.grid import PSFGrid
 
-SCENE_SUFFIXES = (".xml",)
 STOPPING = False  # set when this worker process is told to stop: an item failing then was interrupted
 
 

@@ -178,6 +178,9 @@ def resolve(name: str, catalog: str | None = None, prefer: tuple[str, ...] = ())
     m = _MODEL_RE.match(name)
     if m:
         return model_glass(float(m.group(1)), None if m.group(2) is None else float(m.group(2)))
+    if re.match(r"\s*model\s*:", name, re.IGNORECASE):  # a model glass whose numbers do not read (nan, text)
+        raise SolasError(f"model glass {name!r} must read model:n_d/V_d or model:n_d with finite numbers, n_d in "
+                         "(1, 3) and V_d in (5, 150) (e.g. model:1.62/36.4)")
     keys = candidates(name, catalog)
     if not keys:
         names = _aliases(catalog)

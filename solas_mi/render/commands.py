@@ -25,7 +25,7 @@ def check_render(width: int, height: int, spp: int, force: bool) -> None:
     import os
 
     from ..budget import check_memory
-    from .stock import SAMPLES_PER_PASS  # the larger pass of the two engines (the loop's is half of it)
+    from .stock import SAMPLES_PER_PASS  # the larger pass of the two engines (the loop's is at most half of it)
 
     _check_spp(spp)
     pixels = width * height

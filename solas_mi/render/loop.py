@@ -21,7 +21,11 @@ from ..errors import SolasError
 from .mitsuba import check_run, pass_seed
 from .scene import SPAWN_OFFSET_MM, path_depth
 
-_SAMPLES_PER_PASS = 1 << 21  # samples traced at once: bounds a pass's memory and time (~1 s: Ctrl-C waits no longer)
+_SAMPLES_PER_PASS = 1 << 21  # samples traced at once at most: bounds a pass's memory
+# path steps (samples × interactions per path) traced at once at most: bounds a pass's time, between passes a
+# signal (Ctrl-C, SIGTERM) is answered (`docs/details/render.md`, "Interruptions"). Sized
+# from the lens, not from a measured time, so a render's passes, and so its image, are the same on any machine.
+STEPS_PER_PASS = 1 << 19
 
 
 @dataclass
@@ -105,11 +109,11 @@ def render(scene, spp: int, seed: int = 0, max_depth: int | None = None, progres
                          "(each line needs its own samples)")
     width, height, nc = sensor.width, sensor.height, sensor.channels
     depth = max_depth if max_depth is not None else _max_depth(scene, sensor.lens)
-    pixels = width * height
-    per_pass = max(1, min(spp, _SAMPLES_PER_PASS // pixels))
+    pixels, samples = width * height, min(_SAMPLES_PER_PASS, STEPS_PER_PASS // depth)
+    per_pass = max(1, min(spp, samples // pixels))
     passes = math.ceil(spp / per_pass)
     # an image larger than a pass is traced in bands of rows, so a pass stays bounded in memory and time
-    band = pixels if not dr.is_jit_v(mi.Float) else max(width, _SAMPLES_PER_PASS // width * width)
+    band = pixels if not dr.is_jit_v(mi.Float) else max(width, samples // width * width)
     accum = np.zeros(pixels * nc, dtype=np.float64)
     start, cpu = time.perf_counter(), time.process_time()
     done, k = 0, 0
@@ -151,16 +155,14 @@ def _pass(mi, dr, scene, sensor, emitter, spp: int, first: int, total: int, base
     width, height, nc = sensor.width, sensor.height, sensor.channels
     n = pixels * spp
     total_samples = total
-    # the values that change from pass to pass (and the user's seed) enter the kernels as opaque
-    # variables, not literals: every pass then reuses one compiled kernel (a literal per pass compiled
-    # a kernel per pass, about 1 s each on CUDA)
-    seed, base, first, first_pixel = (dr.opaque(mi.UInt32, v) for v in (seed, base, first, first_pixel))
 
     sampler = mi.load_dict({"type": "independent", "sample_count": spp})
-    sampler.seed(seed, n)
-    idx = dr.arange(mi.UInt32, n)
-    pixel = idx // spp + first_pixel
-    s = idx % spp + first  # the sample's index in its pixel's stratified set of `total`
+    sampler.seed(dr.opaque(mi.UInt32, seed), n)
+    # what changes from pass to pass (and seed to seed) is opaque, not a literal: the passes run one
+    # compiled kernel (a literal per pass compiled a kernel per pass, about 1 s each on CUDA)
+    idx, per_pixel, base = dr.arange(mi.UInt32, n), dr.opaque(mi.UInt32, spp), dr.opaque(mi.UInt32, base)
+    pixel = idx // per_pixel + dr.opaque(mi.UInt32, first_pixel)
+    s = idx % per_pixel + dr.opaque(mi.UInt32, first)  # the sample's index in its pixel's stratified set of `total`
     lines = sensor.discrete_lines
     if lines:  # each line gets its own stratified set, so every channel sees a stratified pupil
         band = s % lines
@@ -195,7 +197,7 @@ def _pass(mi, dr, scene, sensor, emitter, spp: int, first: int, total: int, base
         ray = continue_ray(si, ray, bs.wo)
     out = dr.zeros(mi.Float, pixels * nc)
     for c, w in enumerate(sensor.channel_weights(band)):
-        dr.scatter_reduce(dr.ReduceOp.Add, out, radiance * w, (pixel - first_pixel) * nc + c)
+        dr.scatter_reduce(dr.ReduceOp.Add, out, radiance * w, idx // per_pixel * nc + c)
     dr.eval(out)
     return np.asarray(out, dtype=np.float64) * 1.0  # the pass's sum over its samples
 

@@ -19,7 +19,7 @@ from ..optics import pupil as P
 from ..optics import tracer as T
 from ..psf.base import Computed, centring_warnings, window_centres_um
 from ..psf.geometric import bin_hits, entrance_grid, light_offsets_um
-from .loop import continue_ray
+from .loop import STEPS_PER_PASS, continue_ray
 from .scene import lens_parts, write_ply
 
 VARIANT = "llvm_ad_spectral"
@@ -47,43 +47,54 @@ def lens_geometry(lens, rings: int | None = None, image_radius: float = 0.0, **e
 
 def scene_hits(scene, lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, rays: int, chief: P.ChiefRays):
     """Per field: image-plane offsets (µm) from the chief ray of the entrance-grid rays that cross the
-    scene's lens, and each one's power (fraction of the on-axis entrance-pupil power)."""
-    import drjit as dr
+    scene's lens, and each one's power (fraction of the on-axis entrance-pupil power). A field's rays
+    are traced in chunks of bounded time (`loop.STEPS_PER_PASS`): a signal is answered between them."""
     import mitsuba as mi
 
     sampler = mi.load_dict({"type": "independent"})
-    ctx = mi.BSDFContext(mi.TransportMode.Importance)
+    depth = 2 * len(lens.surfaces) + 2
+    chunk = max(1, STEPS_PER_PASS // depth)
     hits = []
     for sl, ex, ey, power in entrance_grid(lens, field_deg, wavelength_nm, rays, chief):
         for j, f in enumerate(range(sl.start, sl.stop)):
-            n = rays * rays
-            # launched as the tracer launches the lens's fields (tangents, or polar directions)
-            start = P.Bundle(lens, field_deg[f:f + 1], wavelength_nm[f:f + 1], n).launch(T.F(ex[j].ravel()),
-                                                                                         T.F(ey[j].ravel()))
-            x, y, z, dx, dy, dz = T.to_numpy(start.x, start.y, start.z, start.dx, start.dy, start.dz)
-            # field index and wavelength as opaque kernel inputs: one compiled kernel serves every field
-            wavelength = mi.Spectrum(dr.opaque(mi.Float, float(wavelength_nm[f])))
-            ray = mi.Ray3f(mi.Point3f(x, y, z), mi.Vector3f(dx, dy, dz), 0.0, wavelength)
-            sampler.seed(dr.opaque(mi.UInt32, f), n)
-            weight, active = mi.Float(1.0), mi.Bool(True)
-            out_o, out_d, out_w = mi.Point3f(0.0), mi.Vector3f(0.0), mi.Float(0.0)
-            for _ in range(2 * len(lens.surfaces) + 2):
-                si = scene.ray_intersect(ray, active)
-                escaped = active & ~si.is_valid()
-                out_o, out_d = dr.select(escaped, ray.o, out_o), dr.select(escaped, ray.d, out_d)
-                out_w = dr.select(escaped, weight, out_w)
-                active &= si.is_valid()
-                bs, bw = si.bsdf(ray).sample(ctx, si, sampler.next_1d(active), sampler.next_2d(active), active)
-                weight *= bw[0]
-                active &= weight != 0.0
-                ray = continue_ray(si, ray, bs.wo)
-            ox, oy, oz, vx, vy, vz, w = (np.asarray(a, dtype=np.float64) for a in
-                                         (out_o.x, out_o.y, out_o.z, out_d.x, out_d.y, out_d.z, out_w))
+            exf, eyf = ex[j].ravel(), ey[j].ravel()
+            out = [_exits(scene, lens, sampler, field_deg[f:f + 1], wavelength_nm[f:f + 1], f, depth,
+                          exf[k:k + chunk], eyf[k:k + chunk]) for k in range(0, len(exf), chunk)]
+            ox, oy, oz, vx, vy, vz, w = (np.concatenate(a) for a in zip(*out))
             keep = (vz > 0) & (w > 0)
             s = (lens.image_z - oz[keep]) / vz[keep]
             hits.append(((ox[keep] + s * vx[keep] - chief.image_xy[f, 0]) * 1e3,
                          (oy[keep] + s * vy[keep] - chief.image_xy[f, 1]) * 1e3, power[j][keep] * w[keep]))
     return hits
+
+
+def _exits(scene, lens, sampler, field_deg, wavelength_nm, f: int, depth: int, ex: np.ndarray, ey: np.ndarray):
+    """Where the rays of entrance points ex, ey (mm) of field `f` leave the scene's lens: origins,
+    directions and weights (numpy), launched as the tracer launches the lens's fields (tangents, or
+    polar directions); the field's seed and wavelength are opaque, so every chunk runs one kernel."""
+    import drjit as dr
+    import mitsuba as mi
+
+    n = len(ex)
+    start = P.Bundle(lens, field_deg, wavelength_nm, n).launch(T.F(ex), T.F(ey))
+    x, y, z, dx, dy, dz = T.to_numpy(start.x, start.y, start.z, start.dx, start.dy, start.dz)
+    ray = mi.Ray3f(mi.Point3f(x, y, z), mi.Vector3f(dx, dy, dz), 0.0,
+                   mi.Spectrum(dr.opaque(mi.Float, float(wavelength_nm[0]))))
+    sampler.seed(dr.opaque(mi.UInt32, f), n)
+    ctx = mi.BSDFContext(mi.TransportMode.Importance)
+    weight, active = mi.Float(1.0), mi.Bool(True)
+    out_o, out_d, out_w = mi.Point3f(0.0), mi.Vector3f(0.0), mi.Float(0.0)
+    for _ in range(depth):
+        si = scene.ray_intersect(ray, active)
+        escaped = active & ~si.is_valid()
+        out_o, out_d = dr.select(escaped, ray.o, out_o), dr.select(escaped, ray.d, out_d)
+        out_w = dr.select(escaped, weight, out_w)
+        active &= si.is_valid()
+        bs, bw = si.bsdf(ray).sample(ctx, si, sampler.next_1d(active), sampler.next_2d(active), active)
+        weight *= bw[0]
+        active &= weight != 0.0
+        ray = continue_ray(si, ray, bs.wo)
+    return [np.asarray(a, dtype=np.float64) for a in (out_o.x, out_o.y, out_o.z, out_d.x, out_d.y, out_d.z, out_w)]
 
 
 def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int, *,

@@ -17,7 +17,9 @@ from ..errors import plugin_error
 from .loop import Render
 from .mitsuba import check_run, pass_seed
 
-SAMPLES_PER_PASS = 1 << 22  # bounds the memory of one wavefront
+# bounds the memory of one wavefront, and its time: a signal is answered between passes (a pass is at least one
+# sample per pixel: `docs/details/render.md`, "Interruptions")
+SAMPLES_PER_PASS = 1 << 20
 
 
 def render_scene(scene, spp: int, seed: int = 0, progress=None) -> Render:

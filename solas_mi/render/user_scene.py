@@ -31,6 +31,7 @@ from .scene import lens_file
 
 SWAPPABLE = ("perspective", "thinlens")
 FILM_DEFAULT = (768, 576)  # Mitsuba's film size when the scene names none
+MAX_HALF_FIELD_DEG = 89.0  # a perspective camera's half field the lens camera takes (tan θ finite)
 CAMERA_ONLY = ("fov", "focal_length", "fov_axis", "near_clip", "far_clip", "focus_distance", "aperture_radius",
                "principal_point_offset_x", "principal_point_offset_y")  # what the lens camera replaces
 
@@ -47,6 +48,30 @@ def _parse(mi, xml_path: str | Path, params: dict | None):
         return config, mi.parser.parse_file(config, str(path), **{k: str(v) for k, v in (params or {}).items()})
     except RuntimeError as exc:
         raise plugin_error(exc, f"cannot read scene {path}") from None
+
+
+def scene_files(xml_path: str | Path, params: dict | None = None) -> list[Path]:
+    """The files the scene file `xml_path` reads, sorted: itself, its includes and every existing file a
+    string property names (meshes, textures, environment maps, spectra, response tables, lens files),
+    resolved as Mitsuba resolves them (the scene's folder first)."""
+    import sys
+
+    from .mitsuba import mitsuba
+
+    current = sys.modules.get("mitsuba")
+    mi = mitsuba(current.variant() if current is not None else None)  # any variant parses: keep the one set
+    resolver = mi.file_resolver()
+    resolver.prepend(str(Path(xml_path).resolve().parent))
+    try:
+        _, state = _parse(mi, xml_path, params)
+        found = {Path(xml_path).resolve()} | {Path(str(resolver.resolve(f))).resolve() for f in state.files}
+        for node in state.nodes:
+            for value in (node.props[key] for key in node.props.keys()):
+                if isinstance(value, str) and value and (path := Path(str(resolver.resolve(value)))).is_file():
+                    found.add(path.resolve())
+    finally:
+        del resolver[0]
+    return sorted(found)
 
 
 def _children(state, node) -> list:
@@ -100,8 +125,8 @@ def default_pitch_um(lens, half_deg: float, axis: str, width: int, height: int) 
     """Pixel pitch (µm) whose film edge along `axis` meets the real chief ray of `half_deg`."""
     from ..optics.pupil import chief_rays
 
-    if not 0.0 < half_deg < 89.0:
-        raise SolasError(f"the scene's camera half field {half_deg:g} deg must lie in (0, 89) degrees")
+    if not 0.0 < half_deg < MAX_HALF_FIELD_DEG:
+        raise SolasError(f"the scene's camera half field {half_deg:g} deg must lie in (0, {MAX_HALF_FIELD_DEG:g}) degrees")
     span = {"x": width, "y": height, "diagonal": math.hypot(width, height)}[axis]
     direction = {"x": (1.0, 0.0), "y": (0.0, 1.0), "diagonal": (width / math.hypot(width, height),
                                                                    height / math.hypot(width, height))}[axis]

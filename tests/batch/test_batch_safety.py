@@ -212,3 +212,52 @@ def test_an_address_space_limit_bounds_the_free_memory(tmp_path):
             "check_memory('job', 1e9)\n")
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert run.returncode == 1 and "SolasError" in run.stderr and "needs about 1.0 GB" in run.stderr, run.stderr
+
+
+TEXTURED = """<scene version="3.0.0">
+    <sensor type="perspective">
+        <float name="fov" value="4"/>
+        <transform name="to_world"><lookat origin="0, 0, -5" target="0, 0, 0" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="12"/></film>
+    </sensor>
+    <include filename="parts/ball.xml"/>
+    <emitter type="constant"/>
+</scene>"""
+BALL = """<scene version="3.0.0">
+    <shape type="sphere">
+        <bsdf type="diffuse"><texture type="bitmap" name="reflectance"><string name="filename"
+            value="textures/skin.png"/></texture></bsdf>
+    </shape>
+</scene>"""
+
+
+def test_a_scene_whose_texture_or_include_changed_is_rendered_again(tmp_path):
+    """Resume covers what a scene file reads: a texture replaced under its name (size and time kept) or
+    an include edited renders the item again; the scene's own file unchanged."""
+    from solas_mi.batch.render import render_batch
+    from solas_mi.imageio import read_exr, write_png
+
+    (tmp_path / "parts").mkdir()
+    (tmp_path / "textures").mkdir()
+    scene, texture, include = tmp_path / "ball.xml", tmp_path / "textures" / "skin.png", tmp_path / "parts" / "ball.xml"
+    scene.write_text(TEXTURED)
+    include.write_text(BALL)
+    write_png(texture, np.full((8, 8, 3), 0.2))
+
+    def run():
+        result = render_batch([scene], tmp_path / "out", lens="solas-doublet", spp=2, workers=1, progress=False)
+        (job,) = result.jobs
+        assert job.status in ("done", "skipped"), job.error
+        return job.status, read_exr(tmp_path / "out" / "ball.exr")[0]["R"]
+
+    assert run()[0] == "done"
+    assert run()[0] == "skipped"
+    dark = run()[1]
+    st = texture.stat()
+    write_png(texture, np.full((8, 8, 3), 0.9))  # another texture, same name and time
+    os.utime(texture, ns=(st.st_atime_ns, st.st_mtime_ns))
+    status, bright = run()
+    assert status == "done" and bright.mean() > 2 * dark.mean()
+    include.write_text(BALL.replace('<shape type="sphere">', '<shape type="sphere"><float name="radius" value="0.9"/>'))
+    assert run()[0] == "done"
+    assert run()[0] == "skipped"

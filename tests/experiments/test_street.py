@@ -104,3 +104,16 @@ def test_a_street_too_large_is_refused_before_its_folder_is_made(tmp_path, capsy
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "--force" in err, err
     assert not out.exists()  # nothing made for a run that never started
+
+
+def test_a_fisheye_is_refused_naming_why_and_what_to_do_instead(tmp_path, capsys):
+    """The experiment's ideal image is a pinhole camera's of the lens's field: a fisheye's ±90 deg is
+    refused in one line that names the fisheye and the commands that render one, before any folder."""
+    from solas_mi.cli import main
+
+    out = tmp_path / "street"
+    assert main(["experiment", "street", "--lens", "nikkor-fisheye", "-o", str(out), "--size", "64x48", "--spp", "4",
+                 "--spp-ideal", "4", "--depth-layers", "none"]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "fisheye" in err and "pinhole" in err and "render-image" in err, err
+    assert not out.exists()

@@ -133,7 +133,7 @@ def test_outside_valid_range(wavelength):
 
 
 def test_malformed_model_glass():
-    with pytest.raises(SolasError, match="unknown glass 'model:1.2.3/40'"):
+    with pytest.raises(SolasError, match=r"model glass 'model:1.2.3/40' must read model:n_d/V_d"):  # not "unknown glass"
         glass.resolve("model:1.2.3/40")
 
 

@@ -41,3 +41,12 @@ def test_a_glass_comment_left_behind_by_an_edit_is_an_error(doublet_spec, tmp_pa
     path.write_text(path.read_text().replace(" 1.5168 ", " 1.6 "))
     with pytest.raises(SolasError, match="row 1: n_d 1.6 differs from its glass comment"):
         Lens.load(path)
+
+
+@pytest.mark.parametrize("name", ["model:nan/64", "model:1.5/nan", "model : inf", "MODEL:abc/60"])
+def test_a_model_glass_whose_numbers_do_not_read_is_named_as_a_model_glass(doublet_spec, name):
+    """Not "unknown glass" with the catalogue's list: the model glass, and what its numbers must be."""
+    doublet_spec["surface"][0]["material"] = name
+    with pytest.raises(SolasError, match=r"model glass .* must read model:n_d/V_d") as info:
+        Lens.from_dict(doublet_spec)
+    assert "unknown glass" not in str(info.value)

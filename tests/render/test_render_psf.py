@@ -67,3 +67,13 @@ def test_render_psf_launches_polar_fields_as_the_tracer_does():
     (c_scene, r_scene), (c_ray, r_ray) = moments(scene), moments(ray)
     assert np.abs(c_scene - c_ray).max() < 1.0  # µm
     assert r_scene == pytest.approx(r_ray, rel=0.03)
+
+
+def test_chunked_rays_give_the_same_psf(doublet, monkeypatch):
+    """A field's rays traced in chunks (so a signal is answered between them) give the PSF of one wavefront."""
+    from solas_mi.render import psf as render_psf
+
+    whole = psf(doublet, (0, 2), 531.0, method="render", normalization="none", **KW)
+    monkeypatch.setattr(render_psf, "STEPS_PER_PASS", 10 * 1000)  # 1000 rays a chunk: 66 chunks
+    chunked = psf(doublet, (0, 2), 531.0, method="render", normalization="none", **KW)
+    assert np.allclose(chunked.data, whole.data, rtol=1e-6, atol=1e-9 * whole.data.max())

@@ -151,14 +151,16 @@ def test_a_finite_distance_object_as_a_rectangle_renders_like_image_object(mi, t
                  '</emitter></shape>')
     (tmp_path / "stock.xml").write_text(text[:start] + rectangle + text[end:])
     size = {"width": "64", "height": "48", "pitch_um": str(5.429042104233675 * 20)}
-    loop = render(mi.load_file(str(tmp_path / "loop.xml"), boundary="zero", **size), 64, seed=1).image  # black outside
+    # 256 spp: the loop's own noise well below the tolerance (64 spp: 0.43-0.52 % over seeds 1-4, in passes of
+    # any size; the stock render's ~0.45 % is most of it)
+    loop = render(mi.load_file(str(tmp_path / "loop.xml"), boundary="zero", **size), 256, seed=1).image  # black outside
     stock = np.array(mi.render(mi.load_file(str(tmp_path / "stock.xml"), **size), spp=512, seed=1))
     stock /= _flat_white(mi, 380.0, 780.0)  # Mitsuba 3.9's area emitter takes a bitmap without D65: a flat spectrum
 
     def quadrants(img):
         return img.reshape(2, 24, 2, 32, 3).mean(axis=(1, 3))
 
-    assert np.allclose(quadrants(stock), quadrants(loop), rtol=0.005)  # measured: 0.39 % at most
+    assert np.allclose(quadrants(stock), quadrants(loop), rtol=0.005)  # measured: 0.43-0.47 % (seeds 1-4)
 
 
 @pytest.mark.parametrize("integrator", ["path", "ptracer"])

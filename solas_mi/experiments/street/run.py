@@ -166,6 +166,20 @@ class _Steps:
         return value
 
 
+def check_lens(lens) -> None:
+    """SolasError unless a perspective camera can frame the lens's field: the experiment's ideal image is
+    a pinhole camera's of the lens's field (±field_deg across the width), which a fisheye's polar
+    fields (to ±90 deg and past) are not."""
+    from ...render.user_scene import MAX_HALF_FIELD_DEG as MAX_FIELD_DEG
+
+    if not lens.field_type.pinhole or not 0 < lens.field_deg < MAX_FIELD_DEG:
+        kind = "a fisheye (polar fields)" if not lens.field_type.pinhole else "a lens"
+        raise SolasError(f"experiment street compares a lens with the ideal pinhole (perspective) camera of its field, "
+                         f"and lens {lens.name} is {kind} of ±{lens.field_deg:g} deg, which no pinhole camera frames "
+                         f"(its field must lie below {MAX_FIELD_DEG:g} deg); run the experiment on a rectilinear "
+                         "lens, and render the fisheye with `solas-mi render-image` or `solas-mi render SCENE --lens`")
+
+
 def run(lens, out: str | Path, settings: Settings | None = None, log=print) -> Outcome:
     """The experiment on `lens` (a Lens), its images and depth map written to `out` as EXR and PNG
     and the tables (street.md, .csv, .json), figure-5 plots and error maps (`measure`)."""
@@ -175,6 +189,7 @@ def run(lens, out: str | Path, settings: Settings | None = None, log=print) -> O
 
     s = settings or Settings()
     s.check()
+    check_lens(lens)
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     st = _Steps(lens, out, s, log)

@@ -1,0 +1,109 @@
+"""Every long step answers a signal within about a second: renders run in passes of bounded time
+(`render.loop.STEPS_PER_PASS`, `render.stock.SAMPLES_PER_PASS`, the render PSF's ray chunks) and a
+signal is answered between them; an interruption that a library reports as its own error (a scene's
+plugin interrupted while Mitsuba loads it) is still an interruption, not an error."""
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import pytest
+
+from solas_mi.cli import main
+from solas_mi.errors import SolasError, plugin_error
+from solas_mi.resources import resource_dir
+
+PHOTO = resource_dir("scenes") / "images" / "rocket.png"
+STOP_S = 2.0  # a signal answered within about a second (a pass), with room for a loaded machine
+
+
+def solas(*args, cwd) -> subprocess.Popen:
+    return subprocess.Popen([sys.executable, "-m", "solas_mi", *map(str, args)], cwd=cwd, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, env=dict(os.environ, TMPDIR=str(cwd)))
+
+
+def stop(p: subprocess.Popen, sig) -> tuple[float, str]:
+    """Seconds from `sig` to the process's end, and its stderr."""
+    start = time.monotonic()
+    p.send_signal(sig)
+    _, err = p.communicate(timeout=120)
+    return time.monotonic() - start, err
+
+
+def test_an_interruption_reported_by_a_library_is_an_interruption(tmp_path, monkeypatch, capsys):
+    """SIGTERM arriving while Mitsuba builds a scene's plugin: Mitsuba turns the exception into its own
+    error, which would read as a scene that cannot load (exit 2); it is the interruption (exit 143)."""
+    from solas_mi.render import user_scene
+
+    def loading(*args, **kwargs):
+        try:
+            os.kill(os.getpid(), signal.SIGTERM)  # raised in the plugin's constructor, as Mitsuba calls it
+            time.sleep(5)
+        except BaseException as exc:  # Mitsuba's parser: any exception of a plugin becomes a RuntimeError
+            raise plugin_error(RuntimeError(f"failed to instantiate: {type(exc).__name__}"), "cannot load scene")
+        raise SolasError("not interrupted")
+
+    monkeypatch.setattr(user_scene, "load", loading)
+    scene = resource_dir("scenes") / "solas_doublet" / "scene.xml"
+    assert main(["render", str(scene), "--spp", "4", "-o", str(tmp_path / "r.exr")]) == 143
+    err = capsys.readouterr().err
+    assert "terminated; no output was left half-written" in err and "cannot load" not in err, err
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.slow
+def test_batch_render_stops_within_a_pass(tmp_path):
+    """SIGTERM 8 s into the second of two items (a short one, then a long one): the batch ends within
+    STOP_S, the long item is recorded interrupted, the short one done, and nothing half-written is left.
+    The lens's paths take 14 interactions: one pass of the former 2^21 samples took 3-25 s."""
+    image = tmp_path / "f.png"
+    image.write_bytes(PHOTO.read_bytes())
+    out = tmp_path / "out"
+    p = solas("batch", "render", image, "--lens", "wide-angle-22mm", "--sensor", "160x120", "--spp", "16,256", "-o", out,
+              "--workers", "1", "--quiet", cwd=tmp_path)
+    deadline = time.monotonic() + 300
+    while not (out / "f_spp16.exr").exists() and p.poll() is None and time.monotonic() < deadline:
+        time.sleep(0.05)
+    time.sleep(8.0)  # past the second item's scene load and first compile, into its passes
+    assert p.poll() is None, "the batch ended before it could be interrupted"
+    seconds, err = stop(p, signal.SIGTERM)
+    assert p.returncode == 143, err
+    assert seconds < STOP_S, f"{seconds:.2f} s from SIGTERM to the end"
+    items = {Path(i["output"]).name: i["status"] for i in json.loads((out / "batch.json").read_text())["items"]}
+    assert items == {"f_spp16.exr": "done", "f_spp256.exr": "interrupted"}, items
+    assert sorted(f.name for f in out.iterdir()) == ["batch.json", "f_spp16.exr", "f_spp16.png"]
+    assert not [f for f in tmp_path.iterdir() if f.name.startswith("solas-")]  # no scene folder left
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_render_psf_stops_within_a_chunk(tmp_path, sig, code):
+    """The render PSF traces 9 M rays at each of three wavelengths (one wavefront each before: 10-40 s); a
+    signal while it traces ends it within STOP_S."""
+    p = solas("psf", "solas-doublet", "--psf-method", "render", "--rays", "3000", "--field-deg", "0,1",
+              "--wavelengths-nm", "486,550,656", "--size", "64", "-o", "p.exr", cwd=tmp_path)
+    time.sleep(12.0)  # past the start (imports, the lens's chief rays, the entrance grid) into the tracing
+    assert p.poll() is None, "the PSF was finished before it could be interrupted"
+    seconds, err = stop(p, sig)
+    assert p.returncode == code and "no output was left half-written" in err, err
+    assert seconds < STOP_S, f"{seconds:.2f} s from the signal to the end"
+    assert list(tmp_path.iterdir()) == []
+
+
+@pytest.mark.slow
+def test_render_image_stops_within_a_pass(tmp_path):
+    """A signal one second after the first progress report (the first pass done: the scene loaded and
+    its kernel compiled) ends the render within STOP_S. The lens's paths take 14 interactions: a pass
+    of the former 2^21 samples took 3-25 s (10.5 s from Ctrl-C to the end, measured)."""
+    p = solas("render-image", "wide-angle-22mm", PHOTO, "--fov-deg", "30", "--sensor", "160x120", "--spp", "1024",
+              "-o", "r.exr", cwd=tmp_path)
+    assert p.stderr.read(1), "no progress report"
+    time.sleep(1.0)
+    assert p.poll() is None, "the render was finished before it could be interrupted"
+    seconds, err = stop(p, signal.SIGINT)
+    assert p.returncode == 130 and "no output was left half-written" in err, err
+    assert seconds < STOP_S, f"{seconds:.2f} s from the signal to the end"
+    assert list(tmp_path.iterdir()) == []
