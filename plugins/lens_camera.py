@@ -153,7 +153,7 @@ class LensCamera(LensFilm):
         self.inv_focus = 0.0 if math.isinf(self.focus_distance) else 1.0 / self.focus_distance
 
     def alike(self, origins, directions, passed) -> list[list]:
-        """alike[i][j]: lanes i and j both passed and leave the lens within `lane_tolerance` of each
+        """`alike[i][j]`: lanes i and j both passed and leave the lens within `lane_tolerance` of each
         other (module docstring; symmetric, and a passed lane is alike itself)."""
         near = [[passed[i] if i == j else None for j in range(4)] for i in range(4)]
         for i in range(4):
