@@ -114,5 +114,5 @@ def test_bounds_hold_the_ring_of_a_real_disc_and_ring_pupil(monkeypatch):
 
     with pytest.warns(UserWarning, match="missed a thin part of the pupil"):
         assert held(E.pupil_bounds(lens, 1.0, radii=8)) > 0.995
-    monkeypatch.setattr(E, "_check", lambda rev, radius, bounds, reach, w: (np.zeros(4), 1.0))
+    monkeypatch.setattr(E, "_check", lambda rev, radius, bounds, elliptical, reach, w: (np.zeros(4), 1.0, 1.0))
     assert held(E.pupil_bounds(lens, 1.0, radii=8)) < 0.8
