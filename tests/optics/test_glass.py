@@ -15,12 +15,13 @@ SCHOTT = {
 # (FDS18-W, FC5), OHARA, CDGM, HIKARI 5e-7 / 5e-5 (the database states their n_d / V_d to 6 decimals,
 # from the formulas), SUMITA 3.8e-5 / 0.23 (K-PSFn214(M), K-CaFK95: V_d stated to 0.1, looser fits).
 # MISC: fused silica's data-sheet n_d 1.4585 / V_d 67.8 against Malitson's formula (1.45846 / 67.82), to the
-# sheets' last digit. An entry `fitted` to a data sheet's table of 4-decimal indices (SCHOTT:B270): n_d within
+# sheets' last digit; CORNING's C79-80 (Corning's own HPFS 7980 formula) against the same sheet values (1.458467 /
+# 67.795), to the same digit. An entry `fitted` to a data sheet's table of 4-decimal indices (SCHOTT:B270): n_d within
 # half that digit, V_d within what ±5e-5 in n_F and n_C allows (±1e-4 in n_F − n_C ≈ 0.0089: ±0.7).
 TOLERANCE = {"SCHOTT": (1e-5, 0.01), "HOYA": (1e-5, 0.01), "OHARA": (1e-6, 1e-4), "CDGM": (1e-6, 1e-4),
-             "HIKARI": (1e-6, 1e-4), "SUMITA": (4e-5, 0.25), "MISC": (5e-5, 0.05)}
+             "HIKARI": (1e-6, 1e-4), "SUMITA": (4e-5, 0.25), "MISC": (5e-5, 0.05), "CORNING": (5e-5, 0.05)}
 FITTED = (5e-5, 0.7)
-COUNTS = {"SCHOTT": 157, "OHARA": 410, "HOYA": 190, "CDGM": 314, "SUMITA": 176, "HIKARI": 363, "MISC": 1}
+COUNTS = {"SCHOTT": 157, "OHARA": 410, "HOYA": 190, "CDGM": 314, "SUMITA": 176, "HIKARI": 363, "MISC": 1, "CORNING": 1}
 
 
 @pytest.mark.parametrize("name", sorted(SCHOTT))
@@ -111,7 +112,7 @@ def test_model_glass_has_given_nd_vd():
 
 def test_unknown_glass_is_named():
     with pytest.raises(SolasError, match=r"unknown glass 'N-BK8'; close: .*SCHOTT:N-BK7.*; allowed: AIR, a catalogue "
-                                         r"glass \(1611 of CDGM, HIKARI, HOYA, MISC, OHARA, SCHOTT, SUMITA"):
+                                         r"glass \(1612 of CDGM, CORNING, HIKARI, HOYA, MISC, OHARA, SCHOTT, SUMITA"):
         glass.resolve("N-BK8")
 
 
@@ -172,3 +173,21 @@ def test_b270_and_fused_silica():
     assert 1.5 < silica.index(248.0) < 1.52
     with pytest.raises(SolasError, match="valid range"):
         b270.index(400.0)
+
+
+def test_corning_7980_is_fused_silica():
+    """C79-80 (OpticStudio's name of Corning HPFS 7980) follows Corning's Sellmeier formula, typed here from
+    the sheet, and agrees with Malitson's independent measurement of fused silica (MISC:SILICA) to 2e-5 in the
+    visible and near infrared, 5e-5 at 248 nm; it is offered over 185-1100 nm."""
+    c7980 = glass.resolve("C79-80")
+    assert c7980.name == "CORNING:C79-80" and glass.resolve("corning:c79-80") is c7980
+    b, c = (0.683740494, 0.420323613, 0.58502748), (0.00460352869, 0.0133968856, 64.4932732)
+    for nm in (193.368, 587.5618, 1064.0):
+        l2 = (nm / 1000) ** 2
+        assert c7980.index(nm) == pytest.approx((1 + sum(bi * l2 / (l2 - ci) for bi, ci in zip(b, c))) ** 0.5, abs=1e-15)
+    silica = glass.resolve("SILICA")
+    visible = np.linspace(400.0, 1100.0, 36)
+    assert np.max(np.abs(c7980.index(visible) - silica.index(visible))) < 2e-5
+    assert abs(c7980.index(248.3) - silica.index(248.3)) < 6e-5
+    with pytest.raises(SolasError, match="outside glass CORNING:C79-80's valid range 185-1100 nm"):
+        c7980.index(1550.0)
