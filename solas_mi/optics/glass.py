@@ -3,7 +3,8 @@
 Indices are relative to air; AIR has index 1. Wavelengths are in nm.
 
 The catalogue: one TOML file per vendor (`data/glass_<vendor>.toml`: SCHOTT, OHARA, HOYA, CDGM,
-SUMITA, HIKARI; CORNING; the moulders LIGHTPATH and RPO; the optical plastics of ZEON and OSAKAGASCHEMICAL;
+SUMITA, HIKARI; CORNING; the moulders LIGHTPATH and RPO; the optical plastics of ZEON, OSAKAGASCHEMICAL and
+ANGSTROMLINK;
 and MISC for materials of no vendor, such as fused silica and PMMA), numbers from the refractiveindex.info
 database (public domain), which took them from the vendors' Zemax catalogues or the literature, or from
 OpticStudio's catalogues of those names (their formulas, ranges and n_d / V_d); each file's header says which and when (an entry marked `fitted` is our fit to a data
@@ -33,7 +34,7 @@ from ..errors import SolasError
 CATALOG_DIR = Path(__file__).parent / "data"
 # The vendors' catalogue files, read in this order (the order names no preference).
 VENDORS = ("SCHOTT", "OHARA", "HOYA", "CDGM", "SUMITA", "HIKARI", "CORNING", "LIGHTPATH", "RPO", "ZEON",
-           "OSAKAGASCHEMICAL", "MISC")
+           "OSAKAGASCHEMICAL", "ANGSTROMLINK", "MISC")
 # Fraunhofer lines (nm) defining n_d and V_d.
 LINE_D, LINE_F, LINE_C = 587.5618, 486.1327, 656.2725
 # Range (nm) over which a model glass's two-term dispersion is offered.

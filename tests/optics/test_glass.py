@@ -15,16 +15,17 @@ SCHOTT = {
 # (FDS18-W, FC5), OHARA, CDGM, HIKARI 5e-7 / 5e-5 (the database states their n_d / V_d to 6 decimals,
 # from the formulas), SUMITA 3.8e-5 / 0.23 (K-PSFn214(M), K-CaFK95: V_d stated to 0.1, looser fits).
 # MISC: fused silica's data-sheet n_d 1.4585 / V_d 67.8 against Malitson's formula (1.45846 / 67.82), to the
-# sheets' last digit. The OpticStudio catalogues CORNING, LIGHTPATH, RPO, ZEON, OSAKAGASCHEMICAL and MISC's plastics
+# sheets' last digit. The OpticStudio catalogues CORNING, LIGHTPATH, RPO, ZEON, OSAKAGASCHEMICAL, ANGSTROMLINK and MISC's plastics
 # state n_d / V_d to 6 decimals from their formulas: worst 5e-7 / 5e-7 (MISC's plastics are held to MISC's tolerance).
 # An entry `fitted` to a data sheet's table of 4-decimal indices (SCHOTT:B270): n_d within
 # half that digit, V_d within what ±5e-5 in n_F and n_C allows (±1e-4 in n_F − n_C ≈ 0.0089: ±0.7).
 TOLERANCE = {"SCHOTT": (1e-5, 0.01), "HOYA": (1e-5, 0.01), "OHARA": (1e-6, 1e-4), "CDGM": (1e-6, 1e-4),
              "HIKARI": (1e-6, 1e-4), "SUMITA": (4e-5, 0.25), "MISC": (5e-5, 0.05), "CORNING": (1e-6, 1e-4),
-             "LIGHTPATH": (1e-6, 1e-4), "RPO": (1e-6, 1e-4), "ZEON": (1e-6, 1e-4), "OSAKAGASCHEMICAL": (1e-6, 1e-4)}
+             "LIGHTPATH": (1e-6, 1e-4), "RPO": (1e-6, 1e-4), "ZEON": (1e-6, 1e-4), "OSAKAGASCHEMICAL": (1e-6, 1e-4),
+             "ANGSTROMLINK": (1e-6, 1e-4)}
 FITTED = (5e-5, 0.7)
 COUNTS = {"SCHOTT": 157, "OHARA": 410, "HOYA": 190, "CDGM": 314, "SUMITA": 176, "HIKARI": 363, "MISC": 7, "CORNING": 1,
-          "LIGHTPATH": 9, "RPO": 38, "ZEON": 9, "OSAKAGASCHEMICAL": 3}
+          "LIGHTPATH": 9, "RPO": 38, "ZEON": 9, "OSAKAGASCHEMICAL": 3, "ANGSTROMLINK": 3}
 
 
 @pytest.mark.parametrize("name", sorted(SCHOTT))
@@ -115,7 +116,7 @@ def test_model_glass_has_given_nd_vd():
 
 def test_unknown_glass_is_named():
     with pytest.raises(SolasError, match=r"unknown glass 'N-BK8'; close: .*SCHOTT:N-BK7.*; allowed: AIR, a catalogue "
-                                         r"glass \(1677 of CDGM, CORNING, HIKARI, HOYA, LIGHTPATH, MISC, OHARA, "
+                                         r"glass \(1680 of ANGSTROMLINK, CDGM, CORNING, HIKARI, HOYA, LIGHTPATH, MISC, OHARA, "
                                          r"OSAKAGASCHEMICAL, RPO, SCHOTT, SUMITA, ZEON"):
         glass.resolve("N-BK8")
 
@@ -206,6 +207,7 @@ MOULDED = {"LIGHTPATH:D-ZK3M": "CDGM:D-ZK3", "RPO:L-TIM28_MOLD": "OHARA:L-TIM28"
     ("D-ZK3M", "LIGHTPATH:D-ZK3M"), ("L-TIM28_MOLD", "RPO:L-TIM28_MOLD"), ("C79-80", "CORNING:C79-80"),
     ("E48R", "ZEON:E48R"), ("OKP4HT", "OSAKAGASCHEMICAL:OKP4HT"), ("PMMA", "MISC:PMMA"), ("POLYCARB", "MISC:POLYCARB"),
     ("POLYSTYR", "MISC:POLYSTYR"), ("COC", "MISC:COC"), ("F_SILICA", "MISC:SILICA"), ("L-TIM28", "OHARA:L-TIM28"),
+    ("AL-6263-(OKP4HT)", "ANGSTROMLINK:AL-6263-(OKP4HT)"),
 ])
 def test_plastics_and_moulded_glass_names(name, key):
     """The names OpticStudio files use for plastics and moulded glass resolve by themselves (no vendor shares
@@ -230,7 +232,7 @@ def test_plastic_crowns_and_flints_and_their_index_with_temperature():
     for name in ("PMMA", "E48R", "COC", "330R"):
         nd, vd = glass.resolve(name).abbe()
         assert 1.49 < nd < 1.54 and 55.0 < vd < 58.0, name
-    for name in ("POLYCARB", "POLYSTYR", "OKP4HT", "OKP4"):
+    for name in ("POLYCARB", "POLYSTYR", "OKP4HT", "OKP4", "AL-6263-(OKP4HT)", "AL-6261-(OKP4)"):
         nd, vd = glass.resolve(name).abbe()
         assert 1.58 < nd < 1.64 and 23.0 < vd < 31.0, name
     temps = [-15, 0, 25, 40, 60, 80]

@@ -244,15 +244,15 @@ def test_corning_fused_silica_loads(tmp_path, header):
 
 def test_every_plastic_and_moulded_glass_loads_by_its_zemax_name(tmp_path):
     """A singlet naming each glass of the moulders' and plastics' catalogues (LIGHTPATH, RPO, ZEON,
-    OSAKAGASCHEMICAL, CORNING, MISC's plastics) by its OpticStudio name, in a file without GCAT and in one with
+    OSAKAGASCHEMICAL, ANGSTROMLINK, CORNING, MISC's plastics) by its OpticStudio name, in a file without GCAT and in one with
     GCAT naming the vendor (as Thorlabs' files of LightPath lenses write GCAT LIGHTPATH SCHOTT), loads that
     glass; its EFL is the thick-lens formula's at the glass's index."""
     from solas_mi.optics import glass
 
     keys = [k for k in glass.load_catalog() if k.split(":")[0] in ("LIGHTPATH", "RPO", "ZEON", "OSAKAGASCHEMICAL",
-                                                                      "CORNING")]
+                                                                      "ANGSTROMLINK", "CORNING")]
     keys += [f"MISC:{n}" for n in ("PMMA", "POLYCARB", "POLYSTYR", "ACRYLIC", "SAN", "COC")]
-    assert len(keys) == 66
+    assert len(keys) == 69
     for key in keys:
         vendor, name = key.split(":")
         glas = f"GLAS {name} 0 0 1.5 50 0 0 0 0 0 0"
