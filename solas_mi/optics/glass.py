@@ -2,15 +2,14 @@
 
 Indices are relative to air; AIR has index 1. Wavelengths are in nm.
 
-The catalogue: one TOML file per vendor (`data/glass_<vendor>.toml`: SCHOTT, OHARA, HOYA, CDGM,
-SUMITA, HIKARI; CORNING; the moulders LIGHTPATH and RPO; the optical plastics of ZEON, OSAKAGASCHEMICAL and
-ANGSTROMLINK;
-and MISC for materials of no vendor, such as fused silica and PMMA), numbers from the refractiveindex.info
-database (public domain), which took them from the vendors' Zemax catalogues or the literature, or from
-OpticStudio's catalogues of those names (their formulas, ranges and n_d / V_d); each file's header says which and when (an entry marked `fitted` is our fit to a data
-sheet's table of indices). Entries are named
-"VENDOR:NAME"; a bare name (or an alias such as "BK7") must mean exactly one entry. Loaded on first
-use and cached.
+The catalogue: one TOML file per vendor (`data/glass_<vendor>.toml`: SCHOTT, OHARA, HOYA, CDGM, SUMITA,
+HIKARI; CORNING; the moulders LIGHTPATH and RPO; the optical plastics of ZEON, OSAKAGASCHEMICAL and
+ANGSTROMLINK; and MISC for materials of no vendor, such as fused silica and PMMA), numbers from the
+refractiveindex.info database (public domain), which took them from the vendors' Zemax catalogues or the
+literature, or from OpticStudio's catalogues of those names (their formulas, ranges and n_d / V_d); each
+file's header says which and when (an entry marked `fitted` is our fit to a data sheet's table of
+indices). Entries are named "VENDOR:NAME"; a bare name (or an alias such as "BK7") must mean exactly one
+entry. Loaded on first use and cached.
 
 References: the Sellmeier formula n² = 1 + Σ B λ²/(λ² − C) and the power series n² = Σ K λ^P (the
 Schott / Hoya / Sumita / Hikari formulas, refractiveindex.info's "formula 3") with the vendors' valid

@@ -15,8 +15,9 @@ SCHOTT = {
 # (FDS18-W, FC5), OHARA, CDGM, HIKARI 5e-7 / 5e-5 (the database states their n_d / V_d to 6 decimals,
 # from the formulas), SUMITA 3.8e-5 / 0.23 (K-PSFn214(M), K-CaFK95: V_d stated to 0.1, looser fits).
 # MISC: fused silica's data-sheet n_d 1.4585 / V_d 67.8 against Malitson's formula (1.45846 / 67.82), to the
-# sheets' last digit. The OpticStudio catalogues CORNING, LIGHTPATH, RPO, ZEON, OSAKAGASCHEMICAL, ANGSTROMLINK and MISC's plastics
-# state n_d / V_d to 6 decimals from their formulas: worst 5e-7 / 5e-7 (MISC's plastics are held to MISC's tolerance).
+# sheets' last digit. The OpticStudio catalogues CORNING, LIGHTPATH, RPO, ZEON, OSAKAGASCHEMICAL, ANGSTROMLINK and
+# MISC's plastics state n_d / V_d to 6 decimals from their formulas: worst 5e-7 / 5e-7 (MISC's plastics are held to
+# MISC's tolerance).
 # An entry `fitted` to a data sheet's table of 4-decimal indices (SCHOTT:B270): n_d within
 # half that digit, V_d within what ±5e-5 in n_F and n_C allows (±1e-4 in n_F − n_C ≈ 0.0089: ±0.7).
 TOLERANCE = {"SCHOTT": (1e-5, 0.01), "HOYA": (1e-5, 0.01), "OHARA": (1e-6, 1e-4), "CDGM": (1e-6, 1e-4),
@@ -116,8 +117,8 @@ def test_model_glass_has_given_nd_vd():
 
 def test_unknown_glass_is_named():
     with pytest.raises(SolasError, match=r"unknown glass 'N-BK8'; close: .*SCHOTT:N-BK7.*; allowed: AIR, a catalogue "
-                                         r"glass \(1680 of ANGSTROMLINK, CDGM, CORNING, HIKARI, HOYA, LIGHTPATH, MISC, OHARA, "
-                                         r"OSAKAGASCHEMICAL, RPO, SCHOTT, SUMITA, ZEON"):
+                                         r"glass \(1680 of ANGSTROMLINK, CDGM, CORNING, HIKARI, HOYA, LIGHTPATH, "
+                                         r"MISC, OHARA, OSAKAGASCHEMICAL, RPO, SCHOTT, SUMITA, ZEON"):
         glass.resolve("N-BK8")
 
 
@@ -189,7 +190,8 @@ def test_corning_7980_is_fused_silica():
     b, c = (0.683740494, 0.420323613, 0.58502748), (0.00460352869, 0.0133968856, 64.4932732)
     for nm in (193.368, 587.5618, 1064.0):
         l2 = (nm / 1000) ** 2
-        assert c7980.index(nm) == pytest.approx((1 + sum(bi * l2 / (l2 - ci) for bi, ci in zip(b, c))) ** 0.5, abs=1e-15)
+        n = (1 + sum(bi * l2 / (l2 - ci) for bi, ci in zip(b, c))) ** 0.5
+        assert c7980.index(nm) == pytest.approx(n, abs=1e-15)
     silica = glass.resolve("SILICA")
     visible = np.linspace(400.0, 1100.0, 36)
     assert np.max(np.abs(c7980.index(visible) - silica.index(visible))) < 2e-5

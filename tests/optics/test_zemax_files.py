@@ -229,7 +229,8 @@ def test_corning_fused_silica_loads(tmp_path, header):
     """OpticStudio's name of Corning HPFS 7980, C79-80, loads with or without its catalogue in GCAT; the
     singlet's EFL is the thick-lens formula's at the index of Corning's Sellmeier formula, typed here; it
     is written back as GCAT CORNING, GLAS C79-80."""
-    text = zmx(header=header).replace("GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0", "GLAS C79-80 0 0 1.458464 67.82 0 0 0 0 0 0")
+    glas = "GLAS C79-80 0 0 1.458464 67.82 0 0 0 0 0 0"
+    text = zmx(header=header).replace("GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0", glas)
     lens = load(tmp_path, text)
     assert lens.surfaces[0].glass.name == "CORNING:C79-80" and lens.dispersive
     l2 = WL ** 2
@@ -244,9 +245,9 @@ def test_corning_fused_silica_loads(tmp_path, header):
 
 def test_every_plastic_and_moulded_glass_loads_by_its_zemax_name(tmp_path):
     """A singlet naming each glass of the moulders' and plastics' catalogues (LIGHTPATH, RPO, ZEON,
-    OSAKAGASCHEMICAL, ANGSTROMLINK, CORNING, MISC's plastics) by its OpticStudio name, in a file without GCAT and in one with
-    GCAT naming the vendor (as Thorlabs' files of LightPath lenses write GCAT LIGHTPATH SCHOTT), loads that
-    glass; its EFL is the thick-lens formula's at the glass's index."""
+    OSAKAGASCHEMICAL, ANGSTROMLINK, CORNING, MISC's plastics) by its OpticStudio name, in a file without GCAT
+    and in one with GCAT naming the vendor (as Thorlabs' files of LightPath lenses write GCAT LIGHTPATH
+    SCHOTT), loads that glass; its EFL is the thick-lens formula's at the glass's index."""
     from solas_mi.optics import glass
 
     keys = [k for k in glass.load_catalog() if k.split(":")[0] in ("LIGHTPATH", "RPO", "ZEON", "OSAKAGASCHEMICAL",
