@@ -25,7 +25,8 @@ def run_lens_info(args) -> int:
 
     lens = Lens.load(args.lens)
     wavelengths = floats(args.wavelengths_nm, "--wavelengths-nm") if args.wavelengths_nm else list(lens.wavelengths_nm)
-    fields = floats(args.fields, "--fields") if args.fields else [0.0, lens.field_deg, -lens.field_deg]
+    half = [lens.field_deg, -lens.field_deg] if lens.field_deg else []  # none for a lens that states no field
+    fields = floats(args.fields, "--fields") if args.fields else [0.0, *half]
     rows = []
     for w in wavelengths:
         p = paraxial(lens, w, fields).as_dict()
@@ -50,7 +51,7 @@ def run_lens_info(args) -> int:
     print(f"{'quantity':36s}" + "".join(f"{w:>12g} nm" for w in wavelengths))
     for key, label in _ROWS:
         print(f"{label:36s}" + "".join(f"{r[key]:15.6f}" for r in rows))
-    for i, f in enumerate(fields):
+    for i, f in enumerate(f + 0.0 for f in fields):  # + 0.0: −0 reads 0
         print(f"{f'chief ray y at {f:g} deg, paraxial (mm)':36s}" + "".join(f"{r['chief_ray_image_height_mm'][i]:15.6f}" for r in rows))
         print(f"{f'chief ray y at {f:g} deg, real (mm)':36s}" + "".join(f"{r['real_chief_ray_image_height_mm'][i]:15.6f}" for r in rows))
     if table:

@@ -2,13 +2,14 @@
 
 Indices are relative to air; AIR has index 1. Wavelengths are in nm.
 
-The catalogue: one TOML file per vendor (`data/glass_<vendor>.toml`: SCHOTT, OHARA, HOYA, CDGM,
-SUMITA, HIKARI, and MISC for materials of no vendor, such as fused silica), numbers from the
-refractiveindex.info database (public domain), which took them from the vendors' Zemax catalogues or
-the literature; each file's header says which and when (an entry marked `fitted` is our fit to a data
-sheet's table of indices). Entries are named
-"VENDOR:NAME"; a bare name (or an alias such as "BK7") must mean exactly one entry. Loaded on first
-use and cached.
+The catalogue: one TOML file per vendor (`data/glass_<vendor>.toml`: SCHOTT, OHARA, HOYA, CDGM, SUMITA,
+HIKARI; CORNING; the moulders LIGHTPATH and RPO; the optical plastics of ZEON, OSAKAGASCHEMICAL and
+ANGSTROMLINK; and MISC for materials of no vendor, such as fused silica and PMMA), numbers from the
+refractiveindex.info database (public domain), which took them from the vendors' Zemax catalogues or the
+literature, or from OpticStudio's catalogues of those names (their formulas, ranges and n_d / V_d); each
+file's header says which and when (an entry marked `fitted` is our fit to a data sheet's table of
+indices). Entries are named "VENDOR:NAME"; a bare name (or an alias such as "BK7") must mean exactly one
+entry. Loaded on first use and cached.
 
 References: the Sellmeier formula n² = 1 + Σ B λ²/(λ² − C) and the power series n² = Σ K λ^P (the
 Schott / Hoya / Sumita / Hikari formulas, refractiveindex.info's "formula 3") with the vendors' valid
@@ -31,7 +32,8 @@ from ..errors import SolasError
 
 CATALOG_DIR = Path(__file__).parent / "data"
 # The vendors' catalogue files, read in this order (the order names no preference).
-VENDORS = ("SCHOTT", "OHARA", "HOYA", "CDGM", "SUMITA", "HIKARI", "MISC")
+VENDORS = ("SCHOTT", "OHARA", "HOYA", "CDGM", "SUMITA", "HIKARI", "CORNING", "LIGHTPATH", "RPO", "ZEON",
+           "OSAKAGASCHEMICAL", "ANGSTROMLINK", "MISC")
 # Fraunhofer lines (nm) defining n_d and V_d.
 LINE_D, LINE_F, LINE_C = 587.5618, 486.1327, 656.2725
 # Range (nm) over which a model glass's two-term dispersion is offered.

@@ -15,12 +15,18 @@ SCHOTT = {
 # (FDS18-W, FC5), OHARA, CDGM, HIKARI 5e-7 / 5e-5 (the database states their n_d / V_d to 6 decimals,
 # from the formulas), SUMITA 3.8e-5 / 0.23 (K-PSFn214(M), K-CaFK95: V_d stated to 0.1, looser fits).
 # MISC: fused silica's data-sheet n_d 1.4585 / V_d 67.8 against Malitson's formula (1.45846 / 67.82), to the
-# sheets' last digit. An entry `fitted` to a data sheet's table of 4-decimal indices (SCHOTT:B270): n_d within
+# sheets' last digit. The OpticStudio catalogues CORNING, LIGHTPATH, RPO, ZEON, OSAKAGASCHEMICAL, ANGSTROMLINK and
+# MISC's plastics state n_d / V_d to 6 decimals from their formulas: worst 5e-7 / 5e-7 (MISC's plastics are held to
+# MISC's tolerance).
+# An entry `fitted` to a data sheet's table of 4-decimal indices (SCHOTT:B270): n_d within
 # half that digit, V_d within what ±5e-5 in n_F and n_C allows (±1e-4 in n_F − n_C ≈ 0.0089: ±0.7).
 TOLERANCE = {"SCHOTT": (1e-5, 0.01), "HOYA": (1e-5, 0.01), "OHARA": (1e-6, 1e-4), "CDGM": (1e-6, 1e-4),
-             "HIKARI": (1e-6, 1e-4), "SUMITA": (4e-5, 0.25), "MISC": (5e-5, 0.05)}
+             "HIKARI": (1e-6, 1e-4), "SUMITA": (4e-5, 0.25), "MISC": (5e-5, 0.05), "CORNING": (1e-6, 1e-4),
+             "LIGHTPATH": (1e-6, 1e-4), "RPO": (1e-6, 1e-4), "ZEON": (1e-6, 1e-4), "OSAKAGASCHEMICAL": (1e-6, 1e-4),
+             "ANGSTROMLINK": (1e-6, 1e-4)}
 FITTED = (5e-5, 0.7)
-COUNTS = {"SCHOTT": 157, "OHARA": 410, "HOYA": 190, "CDGM": 314, "SUMITA": 176, "HIKARI": 363, "MISC": 1}
+COUNTS = {"SCHOTT": 157, "OHARA": 410, "HOYA": 190, "CDGM": 314, "SUMITA": 176, "HIKARI": 363, "MISC": 7, "CORNING": 1,
+          "LIGHTPATH": 9, "RPO": 38, "ZEON": 9, "OSAKAGASCHEMICAL": 3, "ANGSTROMLINK": 3}
 
 
 @pytest.mark.parametrize("name", sorted(SCHOTT))
@@ -111,7 +117,8 @@ def test_model_glass_has_given_nd_vd():
 
 def test_unknown_glass_is_named():
     with pytest.raises(SolasError, match=r"unknown glass 'N-BK8'; close: .*SCHOTT:N-BK7.*; allowed: AIR, a catalogue "
-                                         r"glass \(1611 of CDGM, HIKARI, HOYA, MISC, OHARA, SCHOTT, SUMITA"):
+                                         r"glass \(1680 of ANGSTROMLINK, CDGM, CORNING, HIKARI, HOYA, LIGHTPATH, "
+                                         r"MISC, OHARA, OSAKAGASCHEMICAL, RPO, SCHOTT, SUMITA, ZEON"):
         glass.resolve("N-BK8")
 
 
@@ -172,3 +179,65 @@ def test_b270_and_fused_silica():
     assert 1.5 < silica.index(248.0) < 1.52
     with pytest.raises(SolasError, match="valid range"):
         b270.index(400.0)
+
+
+def test_corning_7980_is_fused_silica():
+    """C79-80 (OpticStudio's name of Corning HPFS 7980) follows Corning's Sellmeier formula, typed here from
+    the sheet, and agrees with Malitson's independent measurement of fused silica (MISC:SILICA) to 2e-5 in the
+    visible and near infrared, 5e-5 at 248 nm; it is offered over 185-1120 nm, OpticStudio's range."""
+    c7980 = glass.resolve("C79-80")
+    assert c7980.name == "CORNING:C79-80" and glass.resolve("corning:c79-80") is c7980
+    b, c = (0.683740494, 0.420323613, 0.58502748), (0.00460352869, 0.0133968856, 64.4932732)
+    for nm in (193.368, 587.5618, 1064.0):
+        l2 = (nm / 1000) ** 2
+        n = (1 + sum(bi * l2 / (l2 - ci) for bi, ci in zip(b, c))) ** 0.5
+        assert c7980.index(nm) == pytest.approx(n, abs=1e-15)
+    silica = glass.resolve("SILICA")
+    visible = np.linspace(400.0, 1100.0, 36)
+    assert np.max(np.abs(c7980.index(visible) - silica.index(visible))) < 2e-5
+    assert abs(c7980.index(248.3) - silica.index(248.3)) < 6e-5
+    with pytest.raises(SolasError, match="outside glass CORNING:C79-80's valid range 185-1120 nm"):
+        c7980.index(1550.0)
+
+
+# Moulded glass as its moulder's catalogue gives it (after moulding) and the glass it is moulded from.
+MOULDED = {"LIGHTPATH:D-ZK3M": "CDGM:D-ZK3", "RPO:L-TIM28_MOLD": "OHARA:L-TIM28", "RPO:N-BK7_MOLD": "SCHOTT:N-BK7",
+           "RPO:S-LAL12_MOLD": "OHARA:S-LAL12", "RPO:P-SK57_MOLD": "SCHOTT:P-SK57", "RPO:TAF1_MOLD": "HOYA:TAF1"}
+
+
+@pytest.mark.parametrize("name, key", [
+    ("D-ZK3M", "LIGHTPATH:D-ZK3M"), ("L-TIM28_MOLD", "RPO:L-TIM28_MOLD"), ("C79-80", "CORNING:C79-80"),
+    ("E48R", "ZEON:E48R"), ("OKP4HT", "OSAKAGASCHEMICAL:OKP4HT"), ("PMMA", "MISC:PMMA"), ("POLYCARB", "MISC:POLYCARB"),
+    ("POLYSTYR", "MISC:POLYSTYR"), ("COC", "MISC:COC"), ("F_SILICA", "MISC:SILICA"), ("L-TIM28", "OHARA:L-TIM28"),
+    ("AL-6263-(OKP4HT)", "ANGSTROMLINK:AL-6263-(OKP4HT)"),
+])
+def test_plastics_and_moulded_glass_names(name, key):
+    """The names OpticStudio files use for plastics and moulded glass resolve by themselves (no vendor shares
+    them), the moulded variants without taking the name of the glass they are moulded from."""
+    assert glass.resolve(name).name == key
+
+
+@pytest.mark.parametrize("moulded", sorted(MOULDED))
+def test_moulding_lowers_the_index(moulded):
+    """Moulding (fast cooling through the transformation range) lowers a glass's index by a few 1e-3 and
+    leaves its dispersion nearly as it was: each moulded entry's n_d lies 1e-3 to 1e-2 below its parent's,
+    its V_d within 1 of it."""
+    nd, vd = glass.resolve(moulded).abbe()
+    nd0, vd0 = glass.resolve(MOULDED[moulded]).abbe()
+    assert 1e-3 < nd0 - nd < 1e-2 and abs(vd - vd0) < 1.0
+
+
+def test_plastic_crowns_and_flints_and_their_index_with_temperature():
+    """Optical plastics: the acrylic PMMA and the cyclo-olefin E48R are low-index crowns (n_d 1.49-1.54, V_d
+    55-58), polycarbonate, polystyrene and OKP4HT flints (n_d 1.58-1.64, V_d 23-31); ZEON's K26R entries for
+    -15 … 80 °C fall in index with temperature at about -1e-4 /K, a plastic's dn/dT (glass: ~1e-6 /K)."""
+    for name in ("PMMA", "E48R", "COC", "330R"):
+        nd, vd = glass.resolve(name).abbe()
+        assert 1.49 < nd < 1.54 and 55.0 < vd < 58.0, name
+    for name in ("POLYCARB", "POLYSTYR", "OKP4HT", "OKP4", "AL-6263-(OKP4HT)", "AL-6261-(OKP4)"):
+        nd, vd = glass.resolve(name).abbe()
+        assert 1.58 < nd < 1.64 and 23.0 < vd < 31.0, name
+    temps = [-15, 0, 25, 40, 60, 80]
+    nd = [glass.resolve(f"K26R_{t}").index(glass.LINE_D) for t in temps]
+    slopes = np.diff(nd) / np.diff(temps)
+    assert np.all(slopes < 0) and np.all(np.abs(slopes + 1.05e-4) < 0.3e-4)

@@ -67,3 +67,24 @@ def test_projection_fit_beyond_90_degrees_leaves_out_rectilinear():
     assert fits["rectilinear"][1] == np.inf and closest_projection(fits) == "equisolid"
     with pytest.raises(SolasError, match=r"projection fit needs field angles in \[0, 180\) deg, one at least nonzero"):
         fit_projections([0.0, 0.0], [0.0, 0.0])
+
+
+def test_lens_info_of_a_lens_without_field_shows_the_axis_once(tmp_path, capsys):
+    """A pbrt-style table states no field: `lens info` shows the chief ray on the axis once (not once per
+    ± half field, nor at "-0 deg"); fields given on the command line stay as given, -0 reading 0."""
+    import json
+
+    from solas_mi.cli import main
+
+    path = tmp_path / "singlet.dat"
+    path.write_text("# a singlet behind its stop, pbrt style\n0.0 5.0 1.0 10.0\n60.0 8.0 1.5 20.0\n-240.0 100.0 1.0 20.0\n")
+    assert main(["lens", "info", str(path)]) == 0
+    out = capsys.readouterr().out
+    assert out.count("chief ray y at 0 deg, paraxial") == 1 and out.count("chief ray y at 0 deg, real") == 1
+    assert "-0 deg" not in out
+    assert main(["lens", "info", str(path), "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)["per_wavelength"]
+    assert rows and all(r["fields_deg"] == [0.0] and len(r["real_chief_ray_image_height_mm"]) == 1 for r in rows)
+    assert main(["lens", "info", str(path), "--fields=-0,5,5"]) == 0
+    out = capsys.readouterr().out
+    assert "-0 deg" not in out and out.count("chief ray y at 5 deg, real") == 2

@@ -222,3 +222,44 @@ def test_vignetting_factors_shape_the_automatic_apertures(tmp_path):
     assert smaller.surfaces[1].diameter < down.surfaces[1].diameter < full.surfaces[1].diameter
     with pytest.raises(SolasError, match="leave no pupil"):
         load(tmp_path, zmx(fields=fields + "VCYN 0 1.5", s2="DIAM 0 0"), "e.zmx")
+
+
+@pytest.mark.parametrize("header", ["", "GCAT CORNING\n", "GCAT SCHOTT CORNING\n"])
+def test_corning_fused_silica_loads(tmp_path, header):
+    """OpticStudio's name of Corning HPFS 7980, C79-80, loads with or without its catalogue in GCAT; the
+    singlet's EFL is the thick-lens formula's at the index of Corning's Sellmeier formula, typed here; it
+    is written back as GCAT CORNING, GLAS C79-80."""
+    glas = "GLAS C79-80 0 0 1.458464 67.82 0 0 0 0 0 0"
+    text = zmx(header=header).replace("GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0", glas)
+    lens = load(tmp_path, text)
+    assert lens.surfaces[0].glass.name == "CORNING:C79-80" and lens.dispersive
+    l2 = WL ** 2
+    n = (1 + sum(b * l2 / (l2 - c) for b, c in [(0.683740494, 0.00460352869), (0.420323613, 0.0133968856),
+                                                 (0.58502748, 64.4932732)])) ** 0.5
+    efl = 1.0 / ((n - 1) * (1 / R1 - 1 / R2 + (n - 1) * T1 / (n * R1 * R2)))
+    assert paraxial(lens, WL * 1000).efl_mm == pytest.approx(efl, rel=1e-12)
+    saved = lens.save(tmp_path / "again.zmx")
+    assert "GCAT CORNING" in saved.read_text() and "GLAS C79-80 " in saved.read_text()
+    assert Lens.load(saved).surfaces[0].glass.name == "CORNING:C79-80"
+
+
+def test_every_plastic_and_moulded_glass_loads_by_its_zemax_name(tmp_path):
+    """A singlet naming each glass of the moulders' and plastics' catalogues (LIGHTPATH, RPO, ZEON,
+    OSAKAGASCHEMICAL, ANGSTROMLINK, CORNING, MISC's plastics) by its OpticStudio name, in a file without GCAT
+    and in one with GCAT naming the vendor (as Thorlabs' files of LightPath lenses write GCAT LIGHTPATH
+    SCHOTT), loads that glass; its EFL is the thick-lens formula's at the glass's index."""
+    from solas_mi.optics import glass
+
+    keys = [k for k in glass.load_catalog() if k.split(":")[0] in ("LIGHTPATH", "RPO", "ZEON", "OSAKAGASCHEMICAL",
+                                                                      "ANGSTROMLINK", "CORNING")]
+    keys += [f"MISC:{n}" for n in ("PMMA", "POLYCARB", "POLYSTYR", "ACRYLIC", "SAN", "COC")]
+    assert len(keys) == 69
+    for key in keys:
+        vendor, name = key.split(":")
+        glas = f"GLAS {name} 0 0 1.5 50 0 0 0 0 0 0"
+        for header in ("", f"GCAT {vendor} SCHOTT\n"):
+            lens = load(tmp_path, zmx(header=header).replace("GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0", glas))
+            assert lens.surfaces[0].glass.name == key
+        n = glass.resolve(key).index(WL * 1000)
+        efl = 1.0 / ((n - 1) * (1 / R1 - 1 / R2 + (n - 1) * T1 / (n * R1 * R2)))
+        assert paraxial(lens, WL * 1000).efl_mm == pytest.approx(efl, rel=1e-12), key
