@@ -14,7 +14,8 @@ focused at the scene) and `perspective` with the lens's horizontal field, the sa
 camera and scene: a reference at 32 × the largest spp, then renders at each spp (`repeats` seeds):
 relative RGB noise = RMS(render − reference) / RMS(reference) over all pixels and channels (median
 over seeds), and wall-clock seconds of `mi.render` (median, kernels compiled by a warm-up). Both
-cameras run in the same process, one after the other. The time to equal noise, with noise ∝
+cameras run in the same process, their renders interleaved (each seed renders both in turn: a change
+in the machine's load reaches both alike). The time to equal noise, with noise ∝
 (time)^(−1/2) at the largest spp: lens seconds × (lens noise / perspective noise)² / perspective
 seconds. `--independent-wavelengths` switches the lens
 camera's per-pixel stratification of wavelengths off for comparison; `--lane-tolerance` sets its
@@ -121,18 +122,23 @@ def noise(image: np.ndarray, reference: np.ndarray) -> float:
     return float(np.sqrt(np.mean((image - reference) ** 2)) / np.sqrt(np.mean(reference ** 2)))
 
 
-def measure(mi, scene, spps, repeats: int) -> list[tuple[int, float, float]]:
-    """(spp, median relative noise, median seconds) per spp, against a reference at 32 × max spp."""
-    reference = np.mean([np.array(mi.render(scene, spp=4 * max(spps), seed=1000 + s)) for s in range(8)], axis=0)
-    rows = []
+def measure(mi, scenes: dict, spps, repeats: int) -> dict:
+    """Per camera: (spp, median relative noise, median seconds) per spp, against a reference at 32 × max
+    spp; the cameras' renders interleaved (each seed renders every camera in turn), so that a change
+    in the machine's load reaches both alike."""
+    references = {cam: np.mean([np.array(mi.render(scene, spp=4 * max(spps), seed=1000 + s)) for s in range(8)],
+                               axis=0) for cam, scene in scenes.items()}
+    rows = {cam: [] for cam in scenes}
     for spp in spps:
-        noises, seconds = [], []
+        noises, seconds = {cam: [] for cam in scenes}, {cam: [] for cam in scenes}
         for r in range(repeats):
-            start = time.perf_counter()
-            image = np.array(mi.render(scene, spp=spp, seed=r + 1))
-            seconds.append(time.perf_counter() - start)
-            noises.append(noise(image, reference))
-        rows.append((spp, median(noises), median(seconds)))
+            for cam, scene in scenes.items():
+                start = time.perf_counter()
+                image = np.array(mi.render(scene, spp=spp, seed=r + 1))
+                seconds[cam].append(time.perf_counter() - start)
+                noises[cam].append(noise(image, references[cam]))
+        for cam in scenes:
+            rows[cam].append((spp, median(noises[cam]), median(seconds[cam])))
     return rows
 
 
@@ -155,11 +161,11 @@ def main() -> None:
     print(f"| scene | camera | {' | '.join(f'{s} spp noise / s' for s in spps)} | time to equal noise |")
     print(f"|---|---|{'---|' * len(spps)}---|")
     for name in args.scenes.split(","):
-        results = {}
-        for cam, sensor in cameras(mi, lens, width, height, args.independent_wavelengths, args.lane_tolerance).items():
-            scene = mi.load_dict(scene_dict(mi, name, sensor, folder))
+        scenes = {cam: mi.load_dict(scene_dict(mi, name, sensor, folder)) for cam, sensor in
+                  cameras(mi, lens, width, height, args.independent_wavelengths, args.lane_tolerance).items()}
+        for scene in scenes.values():
             mi.render(scene, spp=spps[0], seed=0)  # warm-up: kernels compiled
-            results[cam] = measure(mi, scene, spps, args.repeats)
+        results = measure(mi, scenes, spps, args.repeats)
         (_, n_lens, t_lens), (_, n_persp, t_persp) = results["lens_camera"][-1], results["perspective"][-1]
         ratio = t_lens * (n_lens / n_persp) ** 2 / t_persp
         for cam, rows in results.items():

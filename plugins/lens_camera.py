@@ -33,7 +33,9 @@ an object that far in front of surface 1 is in focus (`solas_mi.optics.focus.foc
 image shift from the lens file's own object distance, whose image plane is the default).
 
 Each sample takes four wavelengths from the camera response (`solas_mi.render.response`), one per
-spectral lane, lane i in the i-th quarter of the response's distribution, and a hero lane: the hero's
+spectral lane, lane i in the i-th quarter of the response's distribution (a continuous response's
+through its quantile table, `WavelengthSampler.sample_quantile`: no search of its bins, 1/p(λ) that
+table's own density), and a hero lane: the hero's
 sample is stratified per pixel (one in each n-th of the response for a pixel's n samples,
 `stratified`: Mitsuba's integrators give the k-th sample of every pixel its place k in the wavefront;
 with independent wavelengths the colour noise was 2–4× the perspective camera's), its quarter is the
@@ -61,8 +63,9 @@ is 1 at the image centre (less with `fresnel` "transmit") and falls off with the
 illumination. `hdrfilm` develops a continuous response ("srgb", "table:") with Mitsuba's CIE tables;
 lines ("lines", "mono:λ") have no density and need `specfilm`: "lines" under an `hdrfilm` of a
 spectral variant is refused (SolasError naming both ways out). Rays blocked by the lens (past the
-image circle, at a stop, by total internal reflection) leave the vertex along the axis with weight 0:
-every ray is finite.
+image circle, at a stop, by total internal reflection) leave the vertex along the axis with weight 0
+and `maxt` 0: every ray is finite, and the scene traces no path for them (an `aov` integrator reads
+them as misses).
 
 Variants: spectral, or mono for a response of one wavelength (mono:λ): the lens is traced at λ and
 the scene's RGB and spectral data become Mitsuba's luminance, so a mono render equals the spectral
@@ -261,11 +264,11 @@ class LensCamera(LensFilm):
         samples, hero = self.lane_samples(sample1, sample2)
         lams, origins, directions, passed, weights = [], [], [], [], []
         for sample in samples:
-            lam, index = self.sample_wavelength(sample, active)
+            lam, inverse_pdf = self.wavelengths.sample_quantile(sample, active)
             origin, direction, ok, transmittance = self.traced(film, target, lam)
             for values, value in zip((lams, origins, directions, passed), (lam, origin, direction, ok)):
                 values.append(value)
-            w = weight * self.norm * transmittance * self.wavelengths.weight(index, active)
+            w = weight * self.norm * transmittance * inverse_pdf
             weights.append(dr.select(active & ok, w, 0.0))
         if mi.is_spectral:  # lane i carried where alike the hero, weighted 4 / (the lanes alike lane i)
             near = self.alike(origins, directions, passed)
@@ -276,6 +279,8 @@ class LensCamera(LensFilm):
         to_world = self.world_transform()
         ray = mi.Ray3f(to_world @ origins[0], to_world @ directions[0], time,
                        mi.Spectrum(*lams) if mi.is_spectral else lanes(lams[0]))
+        # a blocked hero carries no lane (`alike`): its path would add 0, so it meets nothing
+        ray.maxt = dr.select(pick(passed, hero) if mi.is_spectral else passed[0], ray.maxt, 0.0)
         return ray, mi.Spectrum(*weights) if mi.is_spectral else mi.Spectrum(weights[0])
 
     def sample_position(self, time, sample, active=True):
