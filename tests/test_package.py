@@ -18,10 +18,11 @@ ALLOWED = {
     "psf": {"optics"},
     "convolution": {"optics", "psf"},
     "render": {"optics", "psf"},  # the Mitsuba plugins (plugins/, installed as solas_mi.plugins) are part of it
+    "sensor": set(),  # irradiance → RAW: after the engines, needing none of them
     "metrics": set(),
-    "validation": {"optics", "psf", "convolution", "render", "metrics"},
-    "batch": {"optics", "psf", "convolution", "render", "metrics"},
-    "experiments": {"optics", "psf", "convolution", "render", "metrics", "validation"},
+    "validation": {"optics", "psf", "convolution", "render", "sensor", "metrics"},
+    "batch": {"optics", "psf", "convolution", "render", "sensor", "metrics"},
+    "experiments": {"optics", "psf", "convolution", "render", "sensor", "metrics", "validation"},
 }
 
 
