@@ -1,4 +1,6 @@
 """The sensor's CFA sites, its determinism for a seed and its checks of bad values."""
+import re
+
 import numpy as np
 import pytest
 
@@ -65,7 +67,7 @@ def test_raw_is_one_channel_within_the_adc():
 def test_bad_values_name_the_field_and_what_is_allowed(field, value, allowed):
     with pytest.raises(SolasError, match=field if field != "cfa" else "colour filter array") as caught:
         SensorModel(**{field: value})
-    assert __import__("re").search(allowed, str(caught.value)), str(caught.value)
+    assert re.search(allowed, str(caught.value)), str(caught.value)
 
 
 def test_from_dict_refuses_unknown_names():
