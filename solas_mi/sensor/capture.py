@@ -9,6 +9,7 @@ seed shares it; the temporal noise comes from (seed, frame).
 """
 import numpy as np
 
+from ..errors import SolasError
 from .cfa import mosaic
 from .exposure import photons
 from .model import SensorModel
@@ -32,11 +33,18 @@ def fixed_pattern(model: SensorModel, shape: tuple[int, int], seed: int) -> tupl
 def capture(model: SensorModel, irradiance: np.ndarray, exposure_s: float, seed: int, frame: int = 0) -> np.ndarray:
     """The RAW frame (H, W, uint16 DN) the sensor gives for an irradiance image (H, W, 3) in W/m² exposed
     `exposure_s` seconds: frame `frame` of seed `seed` (same seed and frame, same frame)."""
+    for name, value in (("seed", seed), ("frame", frame)):
+        if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < 0:
+            raise SolasError(f"sensor {name} {value!r} must be an integer >= 0")
     mu_e = mean_electrons(model, irradiance, exposure_s)
+    # past the full well the count is clipped anyway: capping the Poisson means at 2 × full well + 1000
+    # keeps them within NumPy's Poisson range (the Chernoff bound puts the chance that the well then
+    # fails to fill below e⁻⁷⁰⁰)
+    cap = 2.0 * model.full_well_e + 1000.0
     gain, offset = fixed_pattern(model, mu_e.shape, seed)
     rng = np.random.default_rng([seed, 1, frame])
-    electrons = rng.poisson(gain * mu_e).astype(np.float64)
-    electrons += rng.poisson(model.dark_current_e_s * exposure_s, mu_e.shape)
+    electrons = rng.poisson(np.minimum(gain * mu_e, cap)).astype(np.float64)
+    electrons += rng.poisson(min(model.dark_current_e_s * exposure_s, cap), mu_e.shape)
     np.minimum(electrons, model.full_well_e, out=electrons)
     electrons += offset + model.read_noise_e * rng.standard_normal(mu_e.shape)
     dn = np.rint(model.gain_dn_per_e * electrons + model.black_level_dn)

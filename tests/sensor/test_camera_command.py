@@ -56,6 +56,7 @@ def test_radiance_through_the_camera_equation(inputs):
     (TOML, ["--exposure-ms", "0"], "--exposure-ms 0.0 must be > 0"),
     (TOML, ["--transmission", "0.5"], "--transmission applies with --f-number"),
     (TOML, ["--f-number", "0"], "f-number 0.0 must be"),
+    (TOML, ["--seed", "-1"], "sensor seed -1 must be an integer >= 0"),
 ])
 def test_bad_input_is_one_line_and_writes_nothing(inputs, capsys, toml, extra, message):
     folder, _ = inputs

@@ -56,6 +56,19 @@ def test_raw_is_one_channel_within_the_adc():
     assert raw.shape == (8, 6) and raw.dtype == np.uint16 and raw.max() <= 1023
 
 
+def test_light_far_past_the_full_well_saturates():
+    """Irradiance of 1e12 W/m² (about 1e21 photons, past NumPy's Poisson range) fills the well."""
+    model = SensorModel(read_noise_e=0.0, dsnu_e=0.0, dark_current_e_s=1e25)
+    raw = capture(model, np.full((4, 4, 3), 1e12), 1.0, seed=0)
+    assert np.all(raw == model.black_level_dn + round(model.gain_dn_per_e * model.full_well_e))
+
+
+@pytest.mark.parametrize("name, value", [("seed", -1), ("frame", -2), ("seed", 1.5)])
+def test_bad_seed_or_frame(name, value):
+    with pytest.raises(SolasError, match=f"sensor {name} {value} must be an integer >= 0"):
+        capture(SensorModel(), np.zeros((2, 2, 3)), 0.01, **{"seed": 0, name: value})
+
+
 @pytest.mark.parametrize("field, value, allowed", [
     ("pixel_pitch_um", 0.0, "> 0"), ("pixel_pitch_um", float("nan"), "> 0"), ("qe_g", 1.2, r"\(0, 1\]"),
     ("qe_c", -0.1, "> 0"), ("read_noise_e", -1.0, ">= 0"), ("dark_current_e_s", float("inf"), ">= 0"),
