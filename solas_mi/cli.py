@@ -50,13 +50,14 @@ def build_parser() -> argparse.ArgumentParser:
     from .optics import commands as optics
     from .psf import commands as psf
     from .render import commands as render
+    from .sensor import commands as sensor
     from .validation import commands as validation
 
     parser = Parser(prog="solas-mi", description=DESCRIPTION)
     parser.add_argument("--version", action="version", version=f"solas-mi {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    # in the order of the data: lens → PSFs → convolution; lens → scene → render; images → metrics; checks
-    for area in (optics, psf, convolution, render, metrics, validation, batch, experiments):
+    # in the order of the data: lens → PSFs → convolution; lens → scene → render; irradiance → sensor; images → metrics; checks
+    for area in (optics, psf, convolution, render, sensor, metrics, validation, batch, experiments):
         area.register(sub)
     return parser
 

@@ -18,10 +18,11 @@ ALLOWED = {
     "psf": {"optics"},
     "convolution": {"optics", "psf"},
     "render": {"optics", "psf"},  # the Mitsuba plugins (plugins/, installed as solas_mi.plugins) are part of it
+    "sensor": set(),  # irradiance → RAW: after the engines, needing none of them
     "metrics": set(),
-    "validation": {"optics", "psf", "convolution", "render", "metrics"},
-    "batch": {"optics", "psf", "convolution", "render", "metrics"},
-    "experiments": {"optics", "psf", "convolution", "render", "metrics", "validation"},
+    "validation": {"optics", "psf", "convolution", "render", "sensor", "metrics"},
+    "batch": {"optics", "psf", "convolution", "render", "sensor", "metrics"},
+    "experiments": {"optics", "psf", "convolution", "render", "sensor", "metrics", "validation"},
 }
 
 
@@ -193,6 +194,7 @@ def test_stages_import_only_downward():
     ("solas_mi.psf.methods", ("drjit", "mitsuba", "matplotlib")),
     ("solas_mi.render.commands", ("drjit", "mitsuba", "matplotlib")),
     ("solas_mi.render.response", ("drjit", "mitsuba", "matplotlib")),
+    ("solas_mi.sensor.commands", ("numpy", "OpenEXR", "drjit", "mitsuba")),
     ("solas_mi.metrics.commands", ("scipy", "skimage", "matplotlib")),
     ("solas_mi.batch.commands", ("dask", "distributed", "tqdm", "drjit", "matplotlib")),
     ("solas_mi", ("drjit", "mitsuba", "matplotlib", "numpy")),

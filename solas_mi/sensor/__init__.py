@@ -1,0 +1,9 @@
+"""The sensor: image-plane irradiance → a one-channel RAW frame, following EMVA 1288 (release 4.0).
+
+- `exposure`: irradiance (W/m²) and exposure time → photons per pixel; scene radiance → image
+  irradiance through the camera equation (f-number, transmission).
+- `model`: `SensorModel`, the sensor's parameters, validated on construction.
+- `cfa`: colour filter array patterns (RGGB and its turns, RCCB, RCCC) and the mosaic.
+- `capture`: photons → electrons → digital numbers with shot, dark and read noise, PRNU, DSNU,
+  full well, conversion gain, ADC bit depth and black level; deterministic for a seed.
+"""

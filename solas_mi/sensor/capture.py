@@ -1,0 +1,51 @@
+"""A RAW frame from an irradiance image: the sensor's signal chain, deterministic for a seed.
+
+Per pixel (EMVA 1288 release 4.0, section 2): the mean photo-electrons μ_e = η μ_p of the pixel's
+filter (cfa.mosaic of exposure.photons with the quantum efficiencies η), times the pixel's PRNU gain;
+photo-electrons and dark electrons are Poisson; the well holds at most the full well; the readout
+adds the pixel's DSNU offset and Gaussian read noise; the ADC gives y = round(K e + black) clipped to
+[0, 2^bits − 1]. The fixed pattern (PRNU, DSNU) comes from the seed alone, so every frame of one
+seed shares it; the temporal noise comes from (seed, frame).
+"""
+import numpy as np
+
+from ..errors import SolasError
+from .cfa import mosaic
+from .exposure import photons
+from .model import SensorModel
+
+
+def mean_electrons(model: SensorModel, irradiance: np.ndarray, exposure_s: float) -> np.ndarray:
+    """The noise-free photo-electrons of each pixel (H, W) of an irradiance image (H, W, 3) in W/m²,
+    before PRNU and the full well."""
+    mu_p = photons(irradiance, exposure_s, model.pixel_pitch_um, model.wavelengths_nm)
+    return mosaic(mu_p, model.cfa, model.quantum_efficiency())
+
+
+def fixed_pattern(model: SensorModel, shape: tuple[int, int], seed: int) -> tuple[np.ndarray, np.ndarray]:
+    """The per-pixel gain (mean 1, spread `prnu`) and offset (e⁻, mean 0, spread `dsnu_e`) of seed `seed`."""
+    rng = np.random.default_rng([seed, 0])
+    gain = 1.0 + model.prnu * rng.standard_normal(shape)
+    offset = model.dsnu_e * rng.standard_normal(shape)
+    return np.clip(gain, 0.0, None), offset
+
+
+def capture(model: SensorModel, irradiance: np.ndarray, exposure_s: float, seed: int, frame: int = 0) -> np.ndarray:
+    """The RAW frame (H, W, uint16 DN) the sensor gives for an irradiance image (H, W, 3) in W/m² exposed
+    `exposure_s` seconds: frame `frame` of seed `seed` (same seed and frame, same frame)."""
+    for name, value in (("seed", seed), ("frame", frame)):
+        if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < 0:
+            raise SolasError(f"sensor {name} {value!r} must be an integer >= 0")
+    mu_e = mean_electrons(model, irradiance, exposure_s)
+    # past the full well the count is clipped anyway: capping the Poisson means at 2 × full well + 1000
+    # keeps them within NumPy's Poisson range (the Chernoff bound puts the chance that the well then
+    # fails to fill below e⁻⁷⁰⁰)
+    cap = 2.0 * model.full_well_e + 1000.0
+    gain, offset = fixed_pattern(model, mu_e.shape, seed)
+    rng = np.random.default_rng([seed, 1, frame])
+    electrons = rng.poisson(np.minimum(gain * mu_e, cap)).astype(np.float64)
+    electrons += rng.poisson(min(model.dark_current_e_s * exposure_s, cap), mu_e.shape)
+    np.minimum(electrons, model.full_well_e, out=electrons)
+    electrons += offset + model.read_noise_e * rng.standard_normal(mu_e.shape)
+    dn = np.rint(model.gain_dn_per_e * electrons + model.black_level_dn)
+    return np.clip(dn, 0, model.white_level_dn).astype(np.uint16)

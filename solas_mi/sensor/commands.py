@@ -1,0 +1,73 @@
+"""Command line of the sensor: `camera`, an irradiance (or radiance) image → the sensor's RAW frame.
+
+NumPy, OpenEXR and the sensor modules are imported when the command runs."""
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from ..errors import SolasError
+
+
+def _irradiance(args: argparse.Namespace):
+    """The input image as image-plane irradiance (H, W, 3) in W/m²: its R, G, B channels times --scale,
+    through the camera equation when --f-number is given (the image is then radiance, W/m²/sr)."""
+    import numpy as np
+
+    from ..imageio import check_finite, read_exr
+    from .exposure import image_irradiance
+
+    channels, _ = read_exr(args.image)
+    missing = [c for c in "RGB" if c not in channels]
+    if missing:
+        raise SolasError(f"{args.image}: channels {', '.join(missing)} missing; the sensor needs R, G and B "
+                         f"(found {', '.join(sorted(channels))})")
+    if not args.scale > 0:
+        raise SolasError(f"--scale {args.scale} must be > 0")
+    image = check_finite(np.stack([channels[c] for c in "RGB"], axis=-1).astype(np.float64), args.image) * args.scale
+    if args.f_number is None:
+        if args.transmission != 1.0:
+            raise SolasError("--transmission applies with --f-number (the image is then radiance); give both")
+        return image
+    return image_irradiance(image, args.f_number, args.transmission)
+
+
+def run_camera(args: argparse.Namespace) -> int:
+    """Write the RAW frame (one channel "RAW", DN) with the model, seed and exposure in the metadata."""
+    from ..imageio import write_exr
+    from ..outputs import check_target
+    from .capture import capture
+    from .files import describe, load_sensor
+
+    check_target(args.output, [args.image, args.sensor_model])
+    model = load_sensor(args.sensor_model)
+    if not args.exposure_ms > 0:
+        raise SolasError(f"--exposure-ms {args.exposure_ms} must be > 0")
+    raw = capture(model, _irradiance(args), args.exposure_ms * 1e-3, args.seed)
+    meta = {"kind": "sensor RAW", "unit": "DN", "sensor": describe(model), "seed": args.seed,
+            "exposure_ms": args.exposure_ms, "scale": args.scale, "f_number": args.f_number,
+            "transmission": args.transmission, "input": str(args.image)}
+    write_exr(args.output, {"RAW": raw.astype("float32")}, meta)
+    print(f"{args.output}: {raw.shape[1]}x{raw.shape[0]} RAW ({model.cfa}, {model.bit_depth} bit), "
+          f"mean {raw.mean():.1f} DN, {int((raw >= model.white_level_dn).sum())} pixels at the white level")
+    return 0
+
+
+def register(subparsers: Any) -> None:
+    """Add the `camera` subcommand."""
+    p = subparsers.add_parser(
+        "camera", help="sensor RAW of an irradiance image (EMVA 1288 noise model, CFA, ADC)",
+        description="The RAW frame a sensor gives for an image-plane irradiance image: photons through the "
+                    "CFA's quantum efficiencies, shot/dark/read noise, PRNU/DSNU, full well, conversion gain, "
+                    "ADC. Written as one EXR channel RAW (DN) with the sensor model and seed in its metadata.")
+    p.add_argument("image", help="EXR with R, G, B channels: irradiance in W/m² (times --scale), or radiance "
+                                 "in W/m²/sr with --f-number")
+    p.add_argument("--sensor-model", required=True, metavar="FILE.toml", help="TOML file with a [sensor] table")
+    p.add_argument("--exposure-ms", type=float, required=True, help="exposure time in ms")
+    p.add_argument("--seed", type=int, default=0, help="seed of the noise and fixed pattern (default 0)")
+    p.add_argument("--scale", type=float, default=1.0, help="W/m² (or W/m²/sr) per unit of the image (default 1)")
+    p.add_argument("--f-number", type=float, default=None,
+                   help="the image is radiance: image irradiance E = π T L / (4 N²) (default: none, the image is irradiance)")
+    p.add_argument("--transmission", type=float, default=1.0, help="lens transmission T with --f-number (default 1)")
+    p.add_argument("-o", "--output", required=True, metavar="OUT.exr", help="RAW frame to write")
+    p.set_defaults(run=run_camera)

@@ -1,0 +1,44 @@
+"""From light on the image plane to photons per pixel (EMVA 1288 release 4.0, section 2.1, eq. 1).
+
+A pixel of area A exposed for t to irradiance E (W/m²) of wavelength λ collects on average
+    μ_p = A E t / (h c / λ) = A E t λ / (h c)
+photons. The package's images (render or convolution) are scene-referred: a pixel holds the radiance
+L of what it sees (relative illumination of the lens already applied by the engine). The camera
+equation turns radiance into image irradiance for an f-number N and lens transmission T:
+    E = π T L / (4 N²)
+(object at infinity; the cos⁴ fall-off is the engine's, not repeated here).
+"""
+import numpy as np
+
+from ..errors import SolasError
+
+PLANCK = 6.62607015e-34  # J s (SI, exact)
+LIGHT_SPEED = 299_792_458.0  # m/s (SI, exact)
+
+
+def image_irradiance(radiance: np.ndarray, f_number: float, transmission: float = 1.0) -> np.ndarray:
+    """Image-plane irradiance (W/m²) of scene radiance `radiance` (W/m²/sr) through a lens of f-number
+    `f_number` and transmission `transmission`: E = π T L / (4 N²)."""
+    if not f_number > 0 or not np.isfinite(f_number):
+        raise SolasError(f"f-number {f_number!r} must be a finite number > 0")
+    if not 0 < transmission <= 1:
+        raise SolasError(f"lens transmission {transmission!r} must be in (0, 1]")
+    return np.pi * transmission * np.asarray(radiance, dtype=np.float64) / (4.0 * f_number**2)
+
+
+def photons(irradiance: np.ndarray, exposure_s: float, pixel_pitch_um: float,
+            wavelengths_nm: tuple[float, ...]) -> np.ndarray:
+    """Mean photons per pixel μ_p = A E t λ / (h c) of an irradiance image (H, W, C) in W/m², channel c
+    at wavelength `wavelengths_nm[c]`, for a square pixel of pitch `pixel_pitch_um` and exposure
+    `exposure_s` seconds."""
+    image = np.asarray(irradiance, dtype=np.float64)
+    if image.ndim != 3 or image.shape[2] != len(wavelengths_nm):
+        raise SolasError(f"irradiance image of shape {image.shape} must be (height, width, "
+                         f"{len(wavelengths_nm)}): one channel per sensor wavelength")
+    if not np.all(np.isfinite(image)) or np.any(image < 0):
+        raise SolasError("irradiance image must hold finite values >= 0")
+    if not exposure_s >= 0 or not np.isfinite(exposure_s):
+        raise SolasError(f"exposure time {exposure_s!r} s must be a finite number >= 0")
+    area = (pixel_pitch_um * 1e-6) ** 2
+    energy = PLANCK * LIGHT_SPEED / (np.asarray(wavelengths_nm, dtype=np.float64) * 1e-9)  # J per photon
+    return image * (area * exposure_s / energy)

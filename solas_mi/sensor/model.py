@@ -1,0 +1,114 @@
+"""`SensorModel`: the parameters of a camera sensor in the terms of EMVA 1288 (release 4.0), checked on
+construction, and the photon-transfer predictions they make.
+
+Temporal noise in electrons: shot noise of the photo-electrons (variance μ_e), dark current (Poisson,
+mean and variance i_d t) and read noise σ_r (Gaussian), so σ_d² = σ_r² + i_d t. The conversion gain K
+(DN/e⁻) and the ADC's rounding (σ_q² = 1/12 DN²) give the photon-transfer line (EMVA 1288 eq. 6)
+    σ_y² = K² σ_d² + σ_q² + K (μ_y − μ_y.dark),   μ_y.dark = black + K i_d t,
+and the SNR (eq. 15) SNR = μ_e / sqrt(σ_d² + σ_q²/K² + μ_e). PRNU (relative spread of the per-pixel
+gain) and DSNU (spread of the per-pixel offset, e⁻) are spatial: fixed by the seed, not temporal.
+"""
+import math
+from dataclasses import dataclass, fields
+
+from ..errors import SolasError
+from .cfa import check_pattern
+
+QUANTISATION_VARIANCE = 1.0 / 12.0  # DN², uniform rounding (EMVA 1288 eq. 5)
+
+
+def _positive(value, field: str, what: str) -> None:
+    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value) or value <= 0:
+        raise SolasError(f"sensor {field} = {value!r} must be a finite number > 0 ({what})")
+
+
+def _non_negative(value, field: str, what: str) -> None:
+    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value) or value < 0:
+        raise SolasError(f"sensor {field} = {value!r} must be a finite number >= 0 ({what})")
+
+
+@dataclass(frozen=True)
+class SensorModel:
+    """A sensor: pixel pitch, quantum efficiency per filter (R, G, B, clear), the representative
+    wavelength of the image's three channels, noise, full well, conversion gain, ADC and CFA."""
+    pixel_pitch_um: float = 3.0
+    qe_r: float = 0.6
+    qe_g: float = 0.7
+    qe_b: float = 0.5
+    qe_c: float = 0.8
+    wavelengths_nm: tuple[float, float, float] = (610.0, 540.0, 465.0)
+    dark_current_e_s: float = 10.0
+    read_noise_e: float = 3.0
+    prnu: float = 0.01
+    dsnu_e: float = 1.0
+    full_well_e: float = 10000.0
+    gain_dn_per_e: float = 0.25
+    bit_depth: int = 12
+    black_level_dn: int = 64
+    cfa: str = "RGGB"
+
+    def __post_init__(self):
+        _positive(self.pixel_pitch_um, "pixel_pitch_um", "the pixel pitch in µm")
+        for name in ("qe_r", "qe_g", "qe_b", "qe_c"):
+            value = getattr(self, name)
+            _positive(value, name, "a quantum efficiency")
+            if value > 1:
+                raise SolasError(f"sensor {name} = {value!r} must be in (0, 1] (a quantum efficiency)")
+        if not isinstance(self.wavelengths_nm, (tuple, list)) or len(self.wavelengths_nm) != 3:
+            raise SolasError(f"sensor wavelengths_nm = {self.wavelengths_nm!r} must be three wavelengths (R, G, B) in nm")
+        for value in self.wavelengths_nm:
+            _positive(value, "wavelengths_nm", "a wavelength in nm")
+        object.__setattr__(self, "wavelengths_nm", tuple(float(v) for v in self.wavelengths_nm))
+        _non_negative(self.dark_current_e_s, "dark_current_e_s", "the dark current in e⁻/s")
+        _non_negative(self.read_noise_e, "read_noise_e", "the read noise in e⁻ rms")
+        _non_negative(self.prnu, "prnu", "the relative spread of the pixel gain, e.g. 0.01 for 1 %")
+        if self.prnu >= 1:
+            raise SolasError(f"sensor prnu = {self.prnu!r} must be in [0, 1) (the relative spread of the pixel gain)")
+        _non_negative(self.dsnu_e, "dsnu_e", "the spread of the pixel offset in e⁻")
+        _positive(self.full_well_e, "full_well_e", "the full-well capacity in e⁻")
+        _positive(self.gain_dn_per_e, "gain_dn_per_e", "the conversion gain in DN/e⁻")
+        self._check_adc()
+        check_pattern(self.cfa)
+
+    def _check_adc(self) -> None:
+        if not isinstance(self.bit_depth, int) or isinstance(self.bit_depth, bool) or not 8 <= self.bit_depth <= 16:
+            raise SolasError(f"sensor bit_depth = {self.bit_depth!r} must be an integer from 8 to 16")
+        top = self.white_level_dn
+        if not isinstance(self.black_level_dn, int) or isinstance(self.black_level_dn, bool) \
+                or not 0 <= self.black_level_dn < top:
+            raise SolasError(f"sensor black_level_dn = {self.black_level_dn!r} must be an integer from 0 to {top - 1} "
+                             f"(below the {self.bit_depth}-bit ADC's white level)")
+
+    @classmethod
+    def from_dict(cls, values: dict) -> "SensorModel":
+        """A model from a mapping of field names (a TOML table); an unknown name is an error."""
+        known = {f.name for f in fields(cls)}
+        unknown = sorted(set(values) - known)
+        if unknown:
+            raise SolasError(f"unknown sensor parameter(s) {', '.join(unknown)}; allowed: {', '.join(sorted(known))}")
+        return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in values.items()})
+
+    @property
+    def white_level_dn(self) -> int:
+        return 2**self.bit_depth - 1
+
+    def quantum_efficiency(self) -> dict[str, float]:
+        return {"R": self.qe_r, "G": self.qe_g, "B": self.qe_b, "C": self.qe_c}
+
+    def dark_variance_e2(self, exposure_s: float) -> float:
+        """σ_d² = σ_r² + i_d t: the temporal dark noise in e⁻²."""
+        return self.read_noise_e**2 + self.dark_current_e_s * exposure_s
+
+    def dark_mean_dn(self, exposure_s: float) -> float:
+        """μ_y.dark = black + K i_d t (DN)."""
+        return self.black_level_dn + self.gain_dn_per_e * self.dark_current_e_s * exposure_s
+
+    def temporal_variance_dn2(self, mean_dn: float, exposure_s: float) -> float:
+        """EMVA 1288 eq. 6: σ_y² = K² σ_d² + σ_q² + K (μ_y − μ_y.dark) below saturation."""
+        k = self.gain_dn_per_e
+        return k * k * self.dark_variance_e2(exposure_s) + QUANTISATION_VARIANCE + k * (mean_dn - self.dark_mean_dn(exposure_s))
+
+    def snr(self, electrons: float, exposure_s: float) -> float:
+        """EMVA 1288 eq. 15: SNR = μ_e / sqrt(σ_d² + σ_q²/K² + μ_e) for μ_e photo-electrons."""
+        noise = self.dark_variance_e2(exposure_s) + QUANTISATION_VARIANCE / self.gain_dn_per_e**2 + electrons
+        return electrons / math.sqrt(noise)

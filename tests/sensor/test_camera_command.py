@@ -1,0 +1,77 @@
+"""`solas-mi camera`: an EXR of irradiance (or radiance with --f-number) → the RAW frame, the sensor
+described in a TOML file, the model and seed in the metadata, bad input refused with nothing written."""
+import re
+
+import numpy as np
+import pytest
+
+from solas_mi.cli import main
+from solas_mi.imageio import read_exr, write_exr
+from solas_mi.sensor.capture import capture
+from solas_mi.sensor.files import load_sensor
+from solas_mi.sensor.model import SensorModel
+
+TOML = """[sensor]
+pixel_pitch_um = 2.0
+cfa = "RCCB"
+read_noise_e = 2.0
+wavelengths_nm = [600, 530, 460]
+"""
+
+
+@pytest.fixture
+def inputs(tmp_path):
+    image = np.empty((24, 32, 3), dtype=np.float32)
+    image[...] = (0.02, 0.03, 0.01)
+    write_exr(tmp_path / "in.exr", dict(zip("RGB", np.moveaxis(image, -1, 0))))
+    (tmp_path / "sensor.toml").write_text(TOML)
+    return tmp_path, image.astype(np.float64)
+
+
+def test_raw_with_model_and_seed(inputs):
+    folder, image = inputs
+    assert main(["camera", str(folder / "in.exr"), "--sensor-model", str(folder / "sensor.toml"),
+                 "--exposure-ms", "5", "--seed", "11", "-o", str(folder / "raw.exr")]) == 0
+    channels, meta = read_exr(folder / "raw.exr")
+    model = SensorModel(pixel_pitch_um=2.0, cfa="RCCB", read_noise_e=2.0, wavelengths_nm=(600, 530, 460))
+    assert list(channels) == ["RAW"] and np.array_equal(channels["RAW"], capture(model, image, 0.005, 11))
+    assert meta["seed"] == 11 and meta["exposure_ms"] == 5 and meta["unit"] == "DN"
+    assert SensorModel.from_dict(meta["sensor"]) == model
+
+
+def test_radiance_through_the_camera_equation(inputs):
+    """With --f-number the image is radiance: the RAW equals the capture of π T L / (4 N²)."""
+    folder, image = inputs
+    assert main(["camera", str(folder / "in.exr"), "--sensor-model", str(folder / "sensor.toml"), "--exposure-ms",
+                 "5", "--f-number", "2.8", "--transmission", "0.9", "--scale", "100", "-o", str(folder / "raw.exr")]) == 0
+    expected = capture(load_sensor(folder / "sensor.toml"), np.pi * 0.9 * 100 * image / (4 * 2.8**2), 0.005, 0)
+    assert np.array_equal(read_exr(folder / "raw.exr")[0]["RAW"], expected)
+
+
+@pytest.mark.parametrize("toml, extra, message", [
+    ("[sensor]\nfull_wel = 10\n", [], "unknown sensor parameter.*full_wel"),
+    ("[sensor]\nbit_depth = 20\n", [], "bit_depth = 20 must be an integer from 8 to 16"),
+    ("[sensors]\n", [], "must hold one \\[sensor\\] table"),
+    ("[sensor\n", [], "is not valid TOML"),
+    (TOML, ["--exposure-ms", "0"], "--exposure-ms 0.0 must be > 0"),
+    (TOML, ["--transmission", "0.5"], "--transmission applies with --f-number"),
+    (TOML, ["--f-number", "0"], "f-number 0.0 must be"),
+    (TOML, ["--seed", "-1"], "sensor seed -1 must be an integer >= 0"),
+])
+def test_bad_input_is_one_line_and_writes_nothing(inputs, capsys, toml, extra, message):
+    folder, _ = inputs
+    (folder / "sensor.toml").write_text(toml)
+    argv = ["camera", str(folder / "in.exr"), "--sensor-model", str(folder / "sensor.toml"), "--exposure-ms", "5",
+            *extra, "-o", str(folder / "raw.exr")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1
+    assert re.search(message, err), err
+    assert sorted(p.name for p in folder.iterdir()) == ["in.exr", "sensor.toml"]
+
+
+def test_output_may_not_be_the_input(inputs, capsys):
+    folder, _ = inputs
+    assert main(["camera", str(folder / "in.exr"), "--sensor-model", str(folder / "sensor.toml"),
+                 "--exposure-ms", "5", "-o", str(folder / "in.exr")]) == 2
+    assert "is an input" in capsys.readouterr().err
