@@ -26,6 +26,9 @@ def image_irradiance(radiance: np.ndarray, f_number: float, transmission: float 
     return np.pi * transmission * np.asarray(radiance, dtype=np.float64) / (4.0 * f_number**2)
 
 
+ROUND_OFF = 1e-5  # negative values down to this fraction of the image's largest are round-off (read as 0)
+
+
 def photons(irradiance: np.ndarray, exposure_s: float, pixel_pitch_um: float,
             wavelengths_nm: tuple[float, ...]) -> np.ndarray:
     """Mean photons per pixel μ_p = A E t λ / (h c) of an irradiance image (H, W, C) in W/m², channel c
@@ -35,8 +38,16 @@ def photons(irradiance: np.ndarray, exposure_s: float, pixel_pitch_um: float,
     if image.ndim != 3 or image.shape[2] != len(wavelengths_nm):
         raise SolasError(f"irradiance image of shape {image.shape} must be (height, width, "
                          f"{len(wavelengths_nm)}): one channel per sensor wavelength")
-    if not np.all(np.isfinite(image)) or np.any(image < 0):
-        raise SolasError("irradiance image must hold finite values >= 0")
+    if not np.all(np.isfinite(image)):
+        raise SolasError(f"irradiance image holds {np.count_nonzero(~np.isfinite(image))} non-finite values; "
+                         "it must hold finite values >= 0")
+    # an FFT convolution leaves round-off around zero in dark regions: read as no light; more is an error
+    floor = -ROUND_OFF * float(np.abs(image).max(initial=0.0))
+    if np.any(image < floor):
+        raise SolasError(f"irradiance image holds {np.count_nonzero(image < floor)} values below zero (least "
+                         f"{image.min():.3g}); it must hold values >= 0 (down to -{ROUND_OFF:g} of its largest "
+                         "value are read as round-off and taken as 0)")
+    image = np.maximum(image, 0.0)
     if not exposure_s >= 0 or not np.isfinite(exposure_s):
         raise SolasError(f"exposure time {exposure_s!r} s must be a finite number >= 0")
     area = (pixel_pitch_um * 1e-6) ** 2

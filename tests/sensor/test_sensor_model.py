@@ -91,7 +91,9 @@ def test_from_dict_refuses_unknown_names():
 
 @pytest.mark.parametrize("call, match", [
     (lambda: photons(np.ones((2, 2)), 1.0, 3.0, (500.0, 500.0, 500.0)), "must be \\(height, width, 3\\)"),
-    (lambda: photons(np.full((2, 2, 3), np.nan), 1.0, 3.0, (500.0,) * 3), "finite values >= 0"),
+    (lambda: photons(np.full((2, 2, 3), np.nan), 1.0, 3.0, (500.0,) * 3), "12 non-finite values"),
+    (lambda: photons(np.stack([np.full((2, 2), -1e-3), np.ones((2, 2)), np.ones((2, 2))], -1), 1.0, 3.0, (500.0,) * 3),
+     "4 values below zero \\(least -0.001\\)"),
     (lambda: photons(np.ones((2, 2, 3)), -1.0, 3.0, (500.0,) * 3), "exposure time -1.0 s"),
     (lambda: image_irradiance(np.ones(2), 0.0), "f-number 0.0"),
     (lambda: image_irradiance(np.ones(2), 2.0, 1.5), "transmission 1.5"),
@@ -99,3 +101,12 @@ def test_from_dict_refuses_unknown_names():
 def test_bad_inputs(call, match):
     with pytest.raises(SolasError, match=match):
         call()
+
+
+def test_round_off_below_zero_reads_as_no_light():
+    """An FFT convolution's output holds round-off around zero in dark regions (down to -1e-5 of its
+    largest value): read as 0 photons, not refused."""
+    image = np.ones((2, 2, 3))
+    image[0, 0, 1] = -3e-6
+    out = photons(image, 1.0, 3.0, (500.0,) * 3)
+    assert out[0, 0, 1] == 0.0 and out[1, 1, 1] > 0.0
