@@ -50,6 +50,16 @@ def test_docs_tools_are_locked():
     assert {"mkdocs", "mkdocs-material", "mkdocstrings", "mkdocstrings-python", "build"} <= set(LOCK)
 
 
+def test_every_package_folder_is_in_the_wheel():
+    """The wheel's package list is written out in pyproject.toml: a new stage folder left out of it
+    imports in the repository and fails once installed (the sensor stage did, caught by the smoke run)."""
+    setuptools = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    mapped = {ROOT / path: name for name, path in setuptools.get("package-dir", {}).items()}
+    folders = {mapped.get(p.parent, ".".join(p.parent.relative_to(ROOT).parts))
+               for p in ROOT.glob("solas_mi/**/__init__.py")} | set(mapped.values())
+    assert folders == set(setuptools["packages"]), folders ^ set(setuptools["packages"])
+
+
 def test_typed_and_changelog():
     assert (ROOT / "solas_mi" / "py.typed").is_file()
     assert "py.typed" in tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]["solas_mi"]
