@@ -17,14 +17,11 @@ from .cfa import check_pattern
 QUANTISATION_VARIANCE = 1.0 / 12.0  # DN², uniform rounding (EMVA 1288 eq. 5)
 
 
-def _positive(value, field: str, what: str) -> None:
-    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value) or value <= 0:
-        raise SolasError(f"sensor {field} = {value!r} must be a finite number > 0 ({what})")
-
-
-def _non_negative(value, field: str, what: str) -> None:
-    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value) or value < 0:
-        raise SolasError(f"sensor {field} = {value!r} must be a finite number >= 0 ({what})")
+def _number(value, field: str, what: str, *, zero: bool = False) -> None:
+    """SolasError unless `value` is a finite real number > 0 (>= 0 where `zero`)."""
+    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value) \
+            or value < 0 or (value == 0 and not zero):
+        raise SolasError(f"sensor {field} = {value!r} must be a finite number {'>=' if zero else '>'} 0 ({what})")
 
 
 @dataclass(frozen=True)
@@ -48,25 +45,25 @@ class SensorModel:
     cfa: str = "RGGB"
 
     def __post_init__(self):
-        _positive(self.pixel_pitch_um, "pixel_pitch_um", "the pixel pitch in µm")
+        _number(self.pixel_pitch_um, "pixel_pitch_um", "the pixel pitch in µm")
         for name in ("qe_r", "qe_g", "qe_b", "qe_c"):
             value = getattr(self, name)
-            _positive(value, name, "a quantum efficiency")
+            _number(value, name, "a quantum efficiency")
             if value > 1:
                 raise SolasError(f"sensor {name} = {value!r} must be in (0, 1] (a quantum efficiency)")
         if not isinstance(self.wavelengths_nm, (tuple, list)) or len(self.wavelengths_nm) != 3:
             raise SolasError(f"sensor wavelengths_nm = {self.wavelengths_nm!r} must be three wavelengths (R, G, B) in nm")
         for value in self.wavelengths_nm:
-            _positive(value, "wavelengths_nm", "a wavelength in nm")
+            _number(value, "wavelengths_nm", "a wavelength in nm")
         object.__setattr__(self, "wavelengths_nm", tuple(float(v) for v in self.wavelengths_nm))
-        _non_negative(self.dark_current_e_s, "dark_current_e_s", "the dark current in e⁻/s")
-        _non_negative(self.read_noise_e, "read_noise_e", "the read noise in e⁻ rms")
-        _non_negative(self.prnu, "prnu", "the relative spread of the pixel gain, e.g. 0.01 for 1 %")
+        _number(self.dark_current_e_s, "dark_current_e_s", "the dark current in e⁻/s", zero=True)
+        _number(self.read_noise_e, "read_noise_e", "the read noise in e⁻ rms", zero=True)
+        _number(self.prnu, "prnu", "the relative spread of the pixel gain, e.g. 0.01 for 1 %", zero=True)
         if self.prnu >= 1:
             raise SolasError(f"sensor prnu = {self.prnu!r} must be in [0, 1) (the relative spread of the pixel gain)")
-        _non_negative(self.dsnu_e, "dsnu_e", "the spread of the pixel offset in e⁻")
-        _positive(self.full_well_e, "full_well_e", "the full-well capacity in e⁻")
-        _positive(self.gain_dn_per_e, "gain_dn_per_e", "the conversion gain in DN/e⁻")
+        _number(self.dsnu_e, "dsnu_e", "the spread of the pixel offset in e⁻", zero=True)
+        _number(self.full_well_e, "full_well_e", "the full-well capacity in e⁻")
+        _number(self.gain_dn_per_e, "gain_dn_per_e", "the conversion gain in DN/e⁻")
         self._check_adc()
         check_pattern(self.cfa)
 
