@@ -18,7 +18,7 @@ ALLOWED = {
     "psf": {"optics"},
     "convolution": {"optics", "psf"},
     "render": {"optics", "psf"},  # the Mitsuba plugins (plugins/, installed as solas_mi.plugins) are part of it
-    "sensor": set(),  # irradiance → RAW: after the engines, needing none of them
+    "sensor": {"render"},  # irradiance → RAW, after the engines: reads an RGB image as a spectrum as the render does
     "metrics": set(),
     "validation": {"optics", "psf", "convolution", "render", "sensor", "metrics"},
     "batch": {"optics", "psf", "convolution", "render", "sensor", "metrics"},

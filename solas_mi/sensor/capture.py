@@ -1,7 +1,9 @@
 """A RAW frame from an irradiance image: the sensor's signal chain, deterministic for a seed.
 
 Per pixel (EMVA 1288 release 4.0, section 2): the mean photo-electrons μ_e = η μ_p of the pixel's
-filter (cfa.mosaic of exposure.photons with the quantum efficiencies η), times the pixel's PRNU gain;
+filter (cfa.mosaic of exposure.photons with the effective quantum efficiencies Q[f, c] of the `qe`
+module: η_f of the scalar model, or a QE curve's photon-weighted mean over each channel's band), times
+the pixel's PRNU gain;
 photo-electrons and dark electrons are Poisson; the well holds at most the full well; the readout
 adds the pixel's DSNU offset and Gaussian read noise; the ADC gives y = round(K e + black) clipped to
 [0, 2^bits − 1]. The fixed pattern (PRNU, DSNU) comes from the seed alone, so every frame of one
@@ -18,8 +20,8 @@ from .model import SensorModel
 def mean_electrons(model: SensorModel, irradiance: np.ndarray, exposure_s: float) -> np.ndarray:
     """The noise-free photo-electrons of each pixel (H, W) of an irradiance image (H, W, 3) in W/m²,
     before PRNU and the full well."""
-    mu_p = photons(irradiance, exposure_s, model.pixel_pitch_um, model.wavelengths_nm)
-    return mosaic(mu_p, model.cfa, model.quantum_efficiency())
+    mu_p = photons(irradiance, exposure_s, model.pixel_pitch_um, model.channel_wavelengths_nm)
+    return mosaic(mu_p, model.cfa, model.effective_qe())
 
 
 def fixed_pattern(model: SensorModel, shape: tuple[int, int], seed: int) -> tuple[np.ndarray, np.ndarray]:

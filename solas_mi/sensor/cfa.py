@@ -2,7 +2,8 @@
 
 A pattern names the 2×2 tile row by row ("RGGB": R at (0, 0), G at (0, 1) and (1, 0), B at (1, 1)).
 R, G and B sites sample the image's channels 0, 1 and 2; a clear site (C, of RCCB and RCCC, the
-automotive patterns) has no colour filter and collects all three.
+automotive patterns) has no colour filter and collects all three (`CHANNELS`: the scalar model; a QE
+curve also gives each filter what it passes of the other channels, `qe`).
 """
 import numpy as np
 
@@ -26,13 +27,13 @@ def site_map(pattern: str, shape: tuple[int, int]) -> np.ndarray:
     return np.tile(tile, ((height + 1) // 2, (width + 1) // 2))[:height, :width]
 
 
-def mosaic(image: np.ndarray, pattern: str, weights: dict[str, float]) -> np.ndarray:
-    """One channel per pixel of a (H, W, 3) image: each site takes the sum of the channels its filter
-    collects, times the filter's weight `weights[filter]` (the quantum efficiency)."""
+def mosaic(image: np.ndarray, pattern: str, weights: np.ndarray) -> np.ndarray:
+    """One value per pixel of a (H, W, 3) image: a site of filter f takes Σ_c weights[f, c] image[..., c]
+    (`weights` 4 × 3, rows in FILTERS order: the effective quantum efficiency, `qe` module)."""
     sites = site_map(pattern, image.shape[:2])
     out = np.zeros(image.shape[:2], dtype=np.float64)
-    for index, name in enumerate(FILTERS):
+    for index in range(len(FILTERS)):
         here = sites == index
         if here.any():
-            out[here] = weights[name] * image[here][:, list(CHANNELS[name])].sum(axis=1)
+            out[here] = image[here] @ weights[index]
     return out

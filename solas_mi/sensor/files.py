@@ -1,21 +1,55 @@
-"""A sensor described in a small TOML file: a `[sensor]` table of `SensorModel`'s field names, e.g.
+"""A sensor described in a small TOML file, or one of the presets shipped with the package: a
+`[sensor]` table of `SensorModel`'s field names, e.g.
 
     [sensor]
     pixel_pitch_um = 3.0
     qe_r = 0.55
     cfa = "RCCB"
 
-Fields left out take `SensorModel`'s values; `describe` lists every value used (the RAW's metadata)."""
+Fields left out take `SensorModel`'s values; `describe` lists every value used (the RAW's metadata).
+Instead of `qe_r`, `qe_g`, `qe_b`, `qe_c` and `wavelengths_nm`, a sensor may give its filters' quantum
+efficiency against wavelength (`qe.QECurve`): `qe_curve = "curve.csv"` (a CSV file beside the TOML
+file, `qe.read_csv`) or a `[sensor.qe_curve]` table of columns `wavelength_nm`, `R`, `G`, `B`, `C`.
+
+`load_sensor(name_or_path)` takes a preset's name (`preset_names`: the TOML files of
+`solas_mi/sensor/presets/`, each citing its sources) or the path of a TOML file (a name ending in
+".toml" or holding a path separator)."""
+import os
 import tomllib
 from dataclasses import asdict
 from pathlib import Path
 
 from ..errors import SolasError
 from .model import SensorModel
+from .qe import read_csv
+
+PRESETS = Path(__file__).resolve().parent / "presets"
 
 
-def load_sensor(path: str | Path) -> SensorModel:
-    """The `SensorModel` of the `[sensor]` table of TOML file `path`."""
+def preset_names() -> list[str]:
+    """The names of the shipped sensor presets, sorted."""
+    return sorted(p.stem for p in PRESETS.glob("*.toml"))
+
+
+def preset_title(name: str) -> str:
+    """The first line of preset `name`'s file, a comment naming the sensor (without the "# ")."""
+    first = (PRESETS / f"{name}.toml").read_text(encoding="utf-8").splitlines()[0]
+    return first.lstrip("# ").strip()
+
+
+def _path(name_or_path: str | Path) -> Path:
+    """The TOML file of a preset name or a path (module docstring)."""
+    text = str(name_or_path)
+    if isinstance(name_or_path, Path) or text.endswith(".toml") or os.sep in text or "/" in text:
+        return Path(name_or_path)
+    if text not in preset_names():
+        raise SolasError(f"sensor model {text!r} is neither a preset ({', '.join(preset_names())}) nor a .toml file")
+    return PRESETS / f"{text}.toml"
+
+
+def load_sensor(name_or_path: str | Path) -> SensorModel:
+    """The `SensorModel` of a preset's name or of the `[sensor]` table of TOML file `name_or_path`."""
+    path = _path(name_or_path)
     try:
         with open(path, "rb") as f:
             data = tomllib.load(f)
@@ -26,12 +60,17 @@ def load_sensor(path: str | Path) -> SensorModel:
     if not isinstance(data.get("sensor"), dict) or set(data) != {"sensor"}:
         raise SolasError(f"sensor model {str(path)!r} must hold one [sensor] table (and nothing else); "
                          f"found {', '.join(sorted(data)) or 'nothing'}")
+    values = dict(data["sensor"])
     try:
-        return SensorModel.from_dict(data["sensor"])
+        if isinstance(values.get("qe_curve"), str):  # a CSV file, relative to the TOML file
+            values["qe_curve"] = read_csv(path.parent / values["qe_curve"]).table()
+        return SensorModel.from_dict(values)
     except SolasError as exc:
         raise SolasError(f"sensor model {str(path)!r}: {exc}") from None
 
 
 def describe(model: SensorModel) -> dict:
-    """Every parameter of `model` (JSON-ready), for metadata."""
-    return {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(model).items()}
+    """Every parameter of `model` (JSON-ready; a QE curve as its table of columns), for metadata."""
+    values = {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(model).items() if k != "qe_curve"}
+    values["qe_curve"] = None if model.qe_curve is None else model.qe_curve.table()
+    return values

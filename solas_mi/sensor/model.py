@@ -11,10 +11,15 @@ gain) and DSNU (spread of the per-pixel offset, e⁻) are spatial: fixed by the 
 import math
 from dataclasses import dataclass, fields
 
+import numpy as np
+
 from ..errors import SolasError
 from .cfa import check_pattern
+from .qe import BAND_CENTRES_NM, QECurve, scalar_effective_qe
 
 QUANTISATION_VARIANCE = 1.0 / 12.0  # DN², uniform rounding (EMVA 1288 eq. 5)
+# the scalar quantum efficiencies and channel wavelengths (nm) of a sensor described without a QE curve
+SCALAR_DEFAULTS = {"qe_r": 0.6, "qe_g": 0.7, "qe_b": 0.5, "qe_c": 0.8, "wavelengths_nm": (610.0, 540.0, 465.0)}
 
 
 def _number(value, field: str, what: str, *, zero: bool = False) -> None:
@@ -26,14 +31,15 @@ def _number(value, field: str, what: str, *, zero: bool = False) -> None:
 
 @dataclass(frozen=True)
 class SensorModel:
-    """A sensor: pixel pitch, quantum efficiency per filter (R, G, B, clear), the representative
-    wavelength of the image's three channels, noise, full well, conversion gain, ADC and CFA."""
+    """A sensor: pixel pitch, quantum efficiency per filter (R, G, B, clear) with the representative
+    wavelength of the image's three channels, or instead a QE curve per filter (`qe.QECurve`), noise,
+    full well, conversion gain, ADC and CFA. The scalar fields left out take `SCALAR_DEFAULTS`."""
     pixel_pitch_um: float = 3.0
-    qe_r: float = 0.6
-    qe_g: float = 0.7
-    qe_b: float = 0.5
-    qe_c: float = 0.8
-    wavelengths_nm: tuple[float, float, float] = (610.0, 540.0, 465.0)
+    qe_r: float | None = None  # default 0.6 (SCALAR_DEFAULTS), None with a qe_curve
+    qe_g: float | None = None  # 0.7
+    qe_b: float | None = None  # 0.5
+    qe_c: float | None = None  # 0.8
+    wavelengths_nm: tuple[float, float, float] | None = None  # (610, 540, 465)
     dark_current_e_s: float = 10.0
     read_noise_e: float = 3.0
     prnu: float = 0.01
@@ -43,19 +49,17 @@ class SensorModel:
     bit_depth: int = 12
     black_level_dn: int = 64
     cfa: str = "RGGB"
+    qe_curve: QECurve | None = None
 
     def __post_init__(self):
         _number(self.pixel_pitch_um, "pixel_pitch_um", "the pixel pitch in µm")
-        for name in ("qe_r", "qe_g", "qe_b", "qe_c"):
-            value = getattr(self, name)
-            _number(value, name, "a quantum efficiency")
-            if value > 1:
-                raise SolasError(f"sensor {name} = {value!r} must be in (0, 1] (a quantum efficiency)")
-        if not isinstance(self.wavelengths_nm, (tuple, list)) or len(self.wavelengths_nm) != 3:
-            raise SolasError(f"sensor wavelengths_nm = {self.wavelengths_nm!r} must be three wavelengths (R, G, B) in nm")
-        for value in self.wavelengths_nm:
-            _number(value, "wavelengths_nm", "a wavelength in nm")
-        object.__setattr__(self, "wavelengths_nm", tuple(float(v) for v in self.wavelengths_nm))
+        if self.qe_curve is None:
+            self._check_scalar_qe()
+        elif not isinstance(self.qe_curve, QECurve):
+            raise SolasError(f"sensor qe_curve must be a QECurve, got {type(self.qe_curve).__name__}")
+        elif given := [name for name in SCALAR_DEFAULTS if getattr(self, name) is not None]:
+            raise SolasError(f"sensor qe_curve and {', '.join(given)} both given: a QE curve replaces the scalar "
+                             f"quantum efficiencies and sets the channel wavelengths; give one or the other")
         _number(self.dark_current_e_s, "dark_current_e_s", "the dark current in e⁻/s", zero=True)
         _number(self.read_noise_e, "read_noise_e", "the read noise in e⁻ rms", zero=True)
         _number(self.prnu, "prnu", "the relative spread of the pixel gain, e.g. 0.01 for 1 %", zero=True)
@@ -66,6 +70,24 @@ class SensorModel:
         _number(self.gain_dn_per_e, "gain_dn_per_e", "the conversion gain in DN/e⁻")
         self._check_adc()
         check_pattern(self.cfa)
+        if self.qe_curve is not None:
+            self.qe_curve.check_filters(self.cfa)
+
+    def _check_scalar_qe(self) -> None:
+        """Fill the scalar fields left out with their defaults and check them."""
+        for name, default in SCALAR_DEFAULTS.items():
+            if getattr(self, name) is None:
+                object.__setattr__(self, name, default)
+        for name in ("qe_r", "qe_g", "qe_b", "qe_c"):
+            value = getattr(self, name)
+            _number(value, name, "a quantum efficiency")
+            if value > 1:
+                raise SolasError(f"sensor {name} = {value!r} must be in (0, 1] (a quantum efficiency)")
+        if not isinstance(self.wavelengths_nm, (tuple, list)) or len(self.wavelengths_nm) != 3:
+            raise SolasError(f"sensor wavelengths_nm = {self.wavelengths_nm!r} must be three wavelengths (R, G, B) in nm")
+        for value in self.wavelengths_nm:
+            _number(value, "wavelengths_nm", "a wavelength in nm")
+        object.__setattr__(self, "wavelengths_nm", tuple(float(v) for v in self.wavelengths_nm))
 
     def _check_adc(self) -> None:
         if not isinstance(self.bit_depth, int) or isinstance(self.bit_depth, bool) or not 8 <= self.bit_depth <= 16:
@@ -83,14 +105,27 @@ class SensorModel:
         unknown = sorted(set(values) - known)
         if unknown:
             raise SolasError(f"unknown sensor parameter(s) {', '.join(unknown)}; allowed: {', '.join(sorted(known))}")
-        return cls(**{k: tuple(v) if isinstance(v, list) else v for k, v in values.items()})
+        values = {k: tuple(v) if isinstance(v, list) else v for k, v in values.items() if v is not None}
+        if "qe_curve" in values:
+            values["qe_curve"] = QECurve.from_table(values["qe_curve"], "sensor qe_curve")
+        return cls(**values)
 
     @property
     def white_level_dn(self) -> int:
         return 2**self.bit_depth - 1
 
-    def quantum_efficiency(self) -> dict[str, float]:
-        return {"R": self.qe_r, "G": self.qe_g, "B": self.qe_b, "C": self.qe_c}
+    @property
+    def channel_wavelengths_nm(self) -> tuple[float, float, float]:
+        """The wavelength (nm) that stands for each image channel R, G, B: `wavelengths_nm`, or with a QE
+        curve the centres of the channels' bands (`qe` module)."""
+        return self.wavelengths_nm if self.qe_curve is None else BAND_CENTRES_NM
+
+    def effective_qe(self) -> np.ndarray:
+        """Q[f, c] (4 × 3, filters in `cfa.FILTERS` order, channels R, G, B): the electrons per photon of
+        channel c (at `channel_wavelengths_nm`) on a pixel of filter f (`qe` module)."""
+        if self.qe_curve is None:
+            return scalar_effective_qe({"R": self.qe_r, "G": self.qe_g, "B": self.qe_b, "C": self.qe_c})
+        return self.qe_curve.effective_qe(set(self.cfa))
 
     def dark_variance_e2(self, exposure_s: float) -> float:
         """σ_d² = σ_r² + i_d t: the temporal dark noise in e⁻²."""
