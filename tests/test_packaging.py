@@ -1,6 +1,7 @@
 """Packaging and documentation facts that a user meets first: the licence, dependency ranges that
 accept the lock (and no exact pins), a truthful requires-python, the README as a short front door
 whose examples the docs run, and a site whose every page exists."""
+import fnmatch
 import re
 import sys
 import tomllib
@@ -58,6 +59,22 @@ def test_every_package_folder_is_in_the_wheel():
     folders = {mapped.get(p.parent, ".".join(p.parent.relative_to(ROOT).parts))
                for p in ROOT.glob("solas_mi/**/__init__.py")} | set(mapped.values())
     assert folders == set(setuptools["packages"]), folders ^ set(setuptools["packages"])
+
+
+def test_every_data_file_is_in_the_wheel():
+    """A data file beside a package's modules (lens data, sensor presets, scenes) ships only where
+    pyproject's package-data names it: left out, it loads in the repository and is missing once installed."""
+    setuptools = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
+    folders = {ROOT / setuptools.get("package-dir", {}).get(name, name.replace(".", "/")): name
+               for name in setuptools["packages"]}
+    for path in [p for folder in set(folders) for p in folder.rglob("*") if p.is_file()]:
+        if path.suffix in (".py", ".pyc") or "__pycache__" in path.parts:
+            continue
+        owner = max((f for f in folders if f in path.parents), key=lambda f: len(f.parts))
+        patterns = setuptools["package-data"].get(folders[owner], [])
+        relative = path.relative_to(owner).as_posix()
+        assert any(fnmatch.fnmatch(relative, pattern) for pattern in patterns), \
+            f"{path.relative_to(ROOT)} is not in {folders[owner]}'s package-data {patterns}"
 
 
 def test_typed_and_changelog():

@@ -1,4 +1,5 @@
-"""Command line of the sensor: `camera`, an irradiance (or radiance) image → the sensor's RAW frame.
+"""Command line of the sensor: `camera`, an irradiance (or radiance) image → the sensor's RAW frame;
+`sensors`, the shipped sensor presets.
 
 NumPy, OpenEXR and the sensor modules are imported when the command runs."""
 from __future__ import annotations
@@ -44,7 +45,8 @@ def run_camera(args: argparse.Namespace) -> int:
     if not args.exposure_ms > 0:
         raise SolasError(f"--exposure-ms {args.exposure_ms} must be > 0")
     raw = capture(model, _irradiance(args), args.exposure_ms * 1e-3, args.seed)
-    meta = {"kind": "sensor RAW", "unit": "DN", "sensor": describe(model), "seed": args.seed,
+    meta = {"kind": "sensor RAW", "unit": "DN", "sensor_model": str(args.sensor_model), "sensor": describe(model),
+            "seed": args.seed,
             "exposure_ms": args.exposure_ms, "scale": args.scale, "f_number": args.f_number,
             "transmission": args.transmission, "input": str(args.image)}
     write_exr(args.output, {"RAW": raw.astype("float32")}, meta)
@@ -53,8 +55,18 @@ def run_camera(args: argparse.Namespace) -> int:
     return 0
 
 
+def run_sensors(args: argparse.Namespace) -> int:
+    """List the presets: name, then the sensor and where its values come from (the file's first line)."""
+    from .files import PRESETS, preset_names, preset_title
+
+    for name in preset_names():
+        print(f"{name:12s} {preset_title(name)}")
+    print(f"(each file in {PRESETS} cites its sources; use a name with camera --sensor-model)")
+    return 0
+
+
 def register(subparsers: Any) -> None:
-    """Add the `camera` subcommand."""
+    """Add the `camera` and `sensors` subcommands."""
     p = subparsers.add_parser(
         "camera", help="sensor RAW of an irradiance image (EMVA 1288 noise model, CFA, ADC)",
         description="The RAW frame a sensor gives for an image-plane irradiance image: photons through the "
@@ -62,7 +74,8 @@ def register(subparsers: Any) -> None:
                     "ADC. Written as one EXR channel RAW (DN) with the sensor model and seed in its metadata.")
     p.add_argument("image", help="EXR with R, G, B channels: irradiance in W/m² (times --scale), or radiance "
                                  "in W/m²/sr with --f-number")
-    p.add_argument("--sensor-model", required=True, metavar="FILE.toml", help="TOML file with a [sensor] table")
+    p.add_argument("--sensor-model", required=True, metavar="PRESET|FILE.toml",
+                   help="a sensor preset's name (solas-mi sensors lists them) or a TOML file with a [sensor] table")
     p.add_argument("--exposure-ms", type=float, required=True, help="exposure time in ms")
     p.add_argument("--seed", type=int, default=0, help="seed of the noise and fixed pattern (default 0)")
     p.add_argument("--scale", type=float, default=1.0, help="W/m² (or W/m²/sr) per unit of the image (default 1)")
@@ -71,3 +84,7 @@ def register(subparsers: Any) -> None:
     p.add_argument("--transmission", type=float, default=1.0, help="lens transmission T with --f-number (default 1)")
     p.add_argument("-o", "--output", required=True, metavar="OUT.exr", help="RAW frame to write")
     p.set_defaults(run=run_camera)
+    p = subparsers.add_parser("sensors", help="list the sensor presets (camera --sensor-model NAME)",
+                              description="The sensor presets shipped with solas-mi, from public data sheets; each "
+                                          "preset's file cites its sources and names the values that are assumptions.")
+    p.set_defaults(run=run_sensors)
