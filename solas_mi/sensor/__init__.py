@@ -4,6 +4,8 @@
   irradiance through the camera equation (f-number, transmission).
 - `model`: `SensorModel`, the sensor's parameters, validated on construction.
 - `cfa`: colour filter array patterns (RGGB and its turns, RCCB, RCCC) and the mosaic.
+- `qe`: quantum efficiency curves, and the effective QE with which each filter sees each channel.
+- `files`: a sensor in a TOML file, or a preset from `presets/` (public data sheets, sources cited).
 - `capture`: photons → electrons → digital numbers with shot, dark and read noise, PRNU, DSNU,
   full well, conversion gain, ADC bit depth and black level; deterministic for a seed.
 """
