@@ -34,8 +34,10 @@ VALID = "labels.valid"
 ID_MASK = (1 << 24) - 1  # ids below 2^24: exact in a float32 channel
 
 
-def parse_labels(text: str | None) -> tuple[str, ...]:
-    """The labels of a comma-separated list ("depth,instance"), in `LABELS` order; () for None or ""."""
+def parse_labels(given) -> tuple[str, ...]:
+    """The labels of a comma-separated list ("depth,instance") or a sequence of names, in `LABELS` order;
+    () for None or ""."""
+    text = given if isinstance(given, str) or given is None else ",".join(map(str, given))
     names = [t.strip().lower() for t in (text or "").split(",") if t.strip()]
     bad = [n for n in names if n not in LABELS]
     if bad:
@@ -95,13 +97,13 @@ def chief_rays(sensor):
 
 
 def render_labels(scene, kinds) -> tuple[dict[str, np.ndarray], dict]:
-    """The label layers `kinds` (of `LABELS`) of a scene seen by its `lens_camera`, each H×W float32,
+    """The label layers `kinds` (of `LABELS`, as `parse_labels` reads them) of a scene seen by its `lens_camera`, each H×W float32,
     with `labels.valid`, and their metadata (module docstring)."""
     import drjit as dr
     import mitsuba as mi
 
     sensor = _sensor(scene)
-    kinds = tuple(kinds)
+    kinds = parse_labels(kinds)
     origin, direction, passed, lam = chief_rays(sensor)
     to_world = sensor.world_transform()
     si = scene.ray_intersect(mi.Ray3f(to_world @ origin, to_world @ direction), passed)

@@ -110,11 +110,11 @@ def test_instance_edges_are_the_image_edges_across_the_field(mi, tmp_path, name)
 @pytest.mark.parametrize("name", ["nikkor-fisheye", "wide-angle-22mm"])
 def test_label_edges_land_on_the_tracers_chief_rays(mi, tmp_path, name):
     """An independent route: strips whose edges lie at known angles, far away; along the image's middle
-    row (one row of 2 um pixels at y = 0), where the instance label changes against the image height
+    row (one row of 1 um pixels at y = 0), where the instance label changes against the image height
     of the optics tracer's real chief ray at that field (its distortion)."""
     lens = Lens.load(name)
     angles = [5.0, 20.0, 35.0, 60.0, 80.0] if "fisheye" in name else [5.0, 15.0, 25.0, 35.0]
-    d, pitch_um = 1e4, 2.0
+    d, pitch_um = 1e4, 1.0
     shapes = [patch(f"strip{k}", at_angle(a, d), at_angle(a + 2.0, d), -1.0, 1.0, d) for k, a in enumerate(angles)]
     width = int(2 * 1.05 * max(np.hypot(*chief_rays(lens, [[a + 2.0, 0.0]], [LAMBDA]).image_xy[0])
                                for a in angles) / (pitch_um * 1e-3))
@@ -179,3 +179,28 @@ def test_label_names_are_checked():
 def test_ids_are_stable_and_never_the_background():
     assert instance_id("car") == instance_id("car") != instance_id("cars")
     assert all(0 < instance_id(f"s{k}") < 2 ** 24 for k in range(1000))
+
+
+def test_render_labels_command_writes_the_layers_beside_the_image(mi, tmp_path, capsys):
+    """`solas-mi render SCENE --lens LENS --labels …`: the EXR holds the image's channels and the label
+    layers, its metadata the id table and boxes; without a lens camera, or for an image, refused in one line."""
+    from solas_mi.cli import main
+    from solas_mi.imageio import read_exr
+    from solas_mi.render.image import render_image
+
+    xml = scene_file(tmp_path / "two.xml", [patch("left", 0.5, 2.0, -0.5, 0.5, 5.0), patch("wall", -9, 9, -9, 9, 8.0,
+                                                                                        emit=False)], 32, 24)
+    out = tmp_path / "out.exr"
+    assert main(["render", xml, "--lens", "wide-angle-22mm", "--pitch-um", "700", "--spp", "2",
+                 "--labels", "instance,normal,depth", "-o", str(out)]) == 0
+    data, meta = read_exr(out)
+    assert set(data) == {"R", "G", "B", "depth.Z", "normal.X", "normal.Y", "normal.Z", "instance.id", "labels.valid"}
+    assert (tmp_path / "out.png").is_file()
+    labels = meta["labels"]
+    assert labels["kinds"] == ["depth", "normal", "instance"] and set(labels["boxes"]) == {"left", "wall"}
+    x0, y0, x1, y1 = labels["boxes"]["left"]["box"]
+    assert x1 <= 16 and np.all(data["instance.id"][y0:y1, x0:x1].max() == instance_id("left"))  # camera +x: image left
+    assert main(["render", xml, "--labels", "depth", "--spp", "1", "-o", str(tmp_path / "no.exr")]) == 2
+    assert "labels are traced through a lens_camera" in capsys.readouterr().err
+    with pytest.raises(SolasError, match="no scene to label"):
+        render_image(Lens.load("solas-doublet"), np.ones((4, 4)), sensor=(4, 4), spp=1, labels="depth")
