@@ -82,29 +82,34 @@ LENSES = {
 
 @pytest.mark.parametrize("name", LENSES)
 def test_instance_edges_are_the_image_edges_across_the_field(mi, tmp_path, name):
-    """Glowing patches 10 m away over the field: each patch's edges in the rendered image (box pixels,
-    64 spp) against those of its instance coverage (8×8 chief rays per pixel), along every row and column
-    through the patch (`edge`): within 0.5 px everywhere."""
+    """Glowing patches 10 m away over the field, an unlit wall 100 m away: each patch's edges in the
+    rendered image (box pixels, 64 spp) against those of its instance coverage (8×8 chief rays per
+    pixel), along every row and column through the patch (`edge`): within 0.5 px everywhere; the
+    depth's edges (nearer than 50 m) are the instance's."""
     pitch, (w, h), patches = LENSES[name]
     lens = Lens.load(name)
     d = 10.0
     shapes = [patch(n, at_angle(x0, d), at_angle(x1, d), at_angle(y0, d), at_angle(y1, d), d)
-              for n, x0, x1, y0, y1 in patches]
+              for n, x0, x1, y0, y1 in patches] + [patch("wall", -1e4, 1e4, -1e4, 1e4, 10 * d, emit=False)]  # unlit
     image_scene = load(scene_file(tmp_path / "image.xml", shapes, w, h), "llvm_ad_spectral", lens, pitch_um=pitch,
                        response=MONO)
     image = render_scene(image_scene, 64).image[..., 0].astype(np.float64)
     fine = load(scene_file(tmp_path / "fine.xml", shapes, w * SUB, h * SUB), "llvm_ad_spectral", lens,
                 pitch_um=pitch / SUB, response=MONO)
-    layers, meta = render_labels(fine, ("instance",))
+    layers, meta = render_labels(fine, ("depth", "instance"))
+    near = np.where(layers["depth.Z"] < 5 * d, 1.0, 0.0)  # the patches (ranges up to 3 d) before the wall (10 d)
     worst = 0.0
     for n, *_ in patches:
-        offsets = np.abs(edge_offsets(image, coverage(layers["instance.id"], instance_id(n))))
+        cover = coverage(layers["instance.id"], instance_id(n))
+        offsets = np.abs(edge_offsets(image, cover))
         print(f"{name} {n}: {len(offsets)} edge crossings, max offset {offsets.max():.3f} px, mean "
               f"{offsets.mean():.3f} px")
         assert len(offsets) >= 8
         worst = max(worst, offsets.max())
+        depth_cover = coverage(np.where(cover.repeat(SUB, 0).repeat(SUB, 1) > 0, near, 0.0), 1.0)
+        np.testing.assert_allclose(edge_offsets(cover, depth_cover), 0.0, atol=1e-6)  # the depth's edges too
     assert worst < 0.5
-    assert set(meta["boxes"]) == {p[0] for p in patches}
+    assert set(meta["boxes"]) == {p[0] for p in patches} | {"wall"}
 
 
 @pytest.mark.parametrize("name", ["nikkor-fisheye", "wide-angle-22mm"])
