@@ -4,14 +4,15 @@ of the stop (`optics.aiming.film_chief_aim`, traced by the camera's own `traced`
 crisp (one ray per pixel, no blur) and distorted exactly as the image is: the same lens, the same
 film geometry, the same camera frame.
 
-Layers (EXR `layer.channel` names, float32, beside the image's channels):
+Layers (EXR `layer.channel` names, float32, beside the image's channels; 0 where nothing is met):
 
-| layer | channels | value | where nothing is met |
-|---|---|---|---|
-| `depth` | `Z` | range: distance (world units) from the lens's paraxial entrance-pupil centre on the axis to the point the chief ray meets | 0 |
-| `normal` | `X`, `Y`, `Z` | the shading normal there, unit, world frame, as Mitsuba gives it (not turned toward the camera) | 0 |
-| `instance` | `id` | the shape's id: `instance_id` of its name (the scene's `id`; an unnamed shape `_shape<k>`, k its place in the scene's shape list) | 0 |
-| `labels` | `valid` | 1 where the chief ray passes the lens and meets the scene, else 0 | — |
+- `depth.Z`: range, the distance (world units) from the lens's paraxial entrance-pupil centre on the
+  axis to the point the chief ray meets;
+- `normal.X`, `normal.Y`, `normal.Z`: the unit shading normal there, world frame, as Mitsuba gives it
+  (not turned toward the camera);
+- `instance.id`: the shape's id, `instance_id` of its name (its `id` in the scene; an unnamed shape
+  `_shape<k>`, k its place in the scene's shape list);
+- `labels.valid`, always: 1 where the chief ray passes the lens and meets the scene, else 0.
 
 An instance id is a 24-bit hash of the shape's name (exact in float32, never 0), so a shape keeps its
 id from frame to frame and scene to scene; the metadata's `instances` table maps each id met to its
@@ -97,8 +98,8 @@ def chief_rays(sensor):
 
 
 def render_labels(scene, kinds) -> tuple[dict[str, np.ndarray], dict]:
-    """The label layers `kinds` (of `LABELS`, as `parse_labels` reads them) of a scene seen by its `lens_camera`, each H×W float32,
-    with `labels.valid`, and their metadata (module docstring)."""
+    """The label layers `kinds` (of `LABELS`, as `parse_labels` reads them) of a scene seen by its
+    `lens_camera`, each H×W float32, with `labels.valid`, and their metadata (module docstring)."""
     import drjit as dr
     import mitsuba as mi
 
