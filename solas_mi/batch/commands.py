@@ -75,9 +75,9 @@ def _report(command: str, result, extra: str = "") -> int:
     return 1 if result.failed else 0
 
 
-# the render settings `batch render` takes: every one of `render-image`'s, and a scene file's focus distance
+# the render settings `batch render` takes: every one of `render-image`'s, and a scene file's focus distance and labels
 RENDER_SETTINGS = ("sensor", "pitch_um", "fov_deg", "response", "boundary", "fresnel", "rings", "mapping", "spp",
-                   "variant", "seed", "focus_distance")
+                   "variant", "seed", "focus_distance", "labels")
 
 
 def _render_spec(args: argparse.Namespace):

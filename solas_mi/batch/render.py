@@ -98,12 +98,14 @@ def batch_spec(spec: RenderSpec | None, settings: dict[str, Any]) -> tuple[Rende
     return base, {name: [getattr(base.replace(**{name: v}), name) for v in values] for name, values in axes.items()}
 
 
-def _check_inputs(files: list[Path], axes: dict[str, list]) -> None:
+def _check_inputs(files: list[Path], base: RenderSpec, axes: dict[str, list]) -> None:
     """Refuse a sweep that does not apply to the inputs given."""
     scenes = [f for f in files if f.suffix.lower() in SCENE_SUFFIXES]
-    if axes["focus_distance"] != [None] and len(scenes) < len(files):
-        raise SolasError("a focus distance sets the lens camera of scene files; image inputs lie on the lens's "
-                         "object plane: give them without --focus-distance, or as a separate batch")
+    for given, what, flag in ((axes["focus_distance"] != [None], "a focus distance sets", "--focus-distance"),
+                              (bool(base.labels), "labels are traced through", "--labels")):
+        if given and len(scenes) < len(files):
+            raise SolasError(f"{what} the lens camera of scene files; image inputs lie on the lens's object plane: "
+                             f"give them without {flag}, or as a separate batch")
     if len(axes["sensor"]) > 1 and scenes:
         raise SolasError("a scene file's film sets its sensor; sweep --sensor over image inputs only")
 
@@ -148,7 +150,7 @@ def plan_render(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLi
     for one in lenses.values():
         responses.check_lens(responses.parse(base.response, one.wavelengths_nm), one)
     axes["lens"] = list(lenses)
-    _check_inputs(files, axes)
+    _check_inputs(files, base, axes)
     jobs = _jobs(files, out_dir, base, axes, lenses)
     # the settings every item shares; each item is matched on its input, output and sweep point, so a
     # sweep grown by a value redoes only the new items

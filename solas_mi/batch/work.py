@@ -82,7 +82,7 @@ def _render(job: Job, settings: dict[str, Any]) -> None:
 
         scene = load(job.input, spec.variant, lens, pitch_um=spec.pitch_um, focus_distance=spec.focus_distance,
                      response=spec.response)
-        result = render_scene(scene, spec.spp, seed=spec.seed)
+        result = render_scene(scene, spec.spp, seed=spec.seed, labels=spec.labels)
         result.meta.update(scene=job.input, lens=lens.name, lens_hash=lens.hash)
     else:
         from ..render.image import render_image

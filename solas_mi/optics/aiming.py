@@ -190,3 +190,32 @@ def nearest_passing(lens: Lens, field_deg: np.ndarray, wavelength_nm: float, sam
     return (ex[k], ey[k]), (sx[k], sy[k])
 
 
+
+
+class _FilmBundle:
+    """Rays of the reversed lens (`exit_pupil.reversed_lens`) from film points (x, y) mm, one per point,
+    for `aim`: their entrance coordinates are points on the last surface's vertex plane."""
+
+    def __init__(self, rev: Lens, x: np.ndarray, y: np.ndarray, wavelength_nm: float):
+        self.lens, self.x, self.y = rev, T.F(x), T.F(y)
+        self.wavelength_um = T.F(np.full(len(x), wavelength_nm * 1e-3))
+        self.tolerance = 1e3 * _TOL
+
+    def trace(self, ex: T.F, ey: T.F, heights: list | None = None) -> T.Traced:
+        zero = 0.0 * ex
+        return T.trace(self.lens, T.launch(self.lens, zero, zero, ex, ey, (self.x, self.y)), self.wavelength_um,
+                       heights=heights)
+
+
+def film_chief_aim(rev: Lens, x: np.ndarray, y: np.ndarray, wavelength_nm: float) -> tuple[np.ndarray, ...]:
+    """The chief rays of film points (x, y) mm, traced backward: for each, the point (ex, ey) on the last
+    surface's vertex plane that the ray from the film point aims at so that it crosses the stop centre
+    (`rev`: the reversed lens), and whether it was found (the ray passes and meets the centre within
+    1e-10 mm). The aim starts at the paraxial exit pupil's centre: the paraxial chief ray."""
+    ep_z, od = paraxial(rev).entrance_pupil_z_mm, rev.object_distance
+    shrink = 1.0 - od / (ep_z + od)
+    b = _FilmBundle(rev, x, y, wavelength_nm)
+    zero = T.F(np.zeros(len(x)))
+    ex, ey, tr, converged = aim(b, stop_target, T.F(x * shrink), T.F(y * shrink), zero, zero)
+    ex, ey, converged, clipped = T.to_numpy(ex, ey, converged, tr.clipped_by)
+    return ex, ey, converged & (clipped == 0)

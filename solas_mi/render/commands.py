@@ -62,6 +62,7 @@ def _copy_beside(path: Path, out: Path) -> str:
 
 SCENE_SETTINGS = ("sensor", "pitch_um", "fov_deg", "response", "boundary", "fresnel", "rings", "spp")
 # every setting but a scene file's focus distance
+SCENE_FILE_SETTINGS = ("variant", "seed", "labels")  # `render`'s own (its lens camera's come from its flags)
 IMAGE_SETTINGS = ("sensor", "pitch_um", "fov_deg", "response", "boundary", "fresnel", "rings", "mapping", "spp",
                   "variant", "seed")
 
@@ -120,7 +121,7 @@ def _render(args) -> int:
     if lens is not None and args.integrator == "solas":
         raise SolasError("--integrator solas renders lens_sensor scenes (from `solas-mi scene`); with --lens the "
                          "scene's own integrator renders it")
-    run, _ = spec_from_args(args, ("variant", "seed"))
+    run, _ = spec_from_args(args, SCENE_FILE_SETTINGS)
     notes = []
     focus = _focus(args.focus_distance)
     scene = load(args.scene, run.variant, lens, params, notes, pitch_um=args.pitch_um, focus_distance=focus,
@@ -131,6 +132,8 @@ def _render(args) -> int:
     width, height = (int(v) for v in scene.sensors()[0].film().crop_size())
     check_render(width, height, spp, args.force)
     loop = args.integrator == "solas" or (args.integrator == "auto" and lens is None and _image_scene(scene))
+    if loop and run.labels:
+        raise SolasError("--labels are traced through a lens camera: give --lens, or a scene with a lens_camera")
     if loop:
         from .loop import render
 
@@ -140,7 +143,7 @@ def _render(args) -> int:
         from .stock import render_scene
 
         with _progress(spp) as bar:
-            result = render_scene(scene, spp, seed=run.seed, progress=bar)
+            result = render_scene(scene, spp, seed=run.seed, progress=bar, labels=run.labels)
     result.meta["scene"] = str(args.scene)
     if lens is not None:
         from .user_scene import camera_meta
@@ -223,7 +226,7 @@ def register(sub) -> None:
                              "scene's own integrator for any other; scene: the scene's own (path where it has "
                              "none); solas: the loop (lens_sensor + image_object scenes)")
     render.add_argument("--spp", type=int, help="samples per pixel (default: the scene's)")
-    add_spec_flags(render, ("variant", "seed"))
+    add_spec_flags(render, SCENE_FILE_SETTINGS)
     _add_output_options(render)
     render.set_defaults(run=_render)
 

@@ -70,6 +70,9 @@ def render_image(lens, image: str | np.ndarray, spec: RenderSpec | None = None, 
     if spec.focus_distance is not None:
         raise SolasError("a focus distance sets the lens camera of a scene file; an image lies on the lens's object "
                          "plane: render it without one")
+    if spec.labels:
+        raise SolasError(f"labels ({spec.labels}) are traced through the lens camera of a scene file; an image has "
+                         "no scene to label: render it without them")
     camera = (camera_for(lens, spec.sensor, spec.fov_deg, spec.pitch_um) if lens.field_type.pinhole
               else fisheye_camera(lens, spec.sensor, spec.fov_deg, spec.pitch_um))
     if spec.mapping == "rectilinear" and camera.fov_deg >= 90.0:  # tan θ changes sign: the input would mirror

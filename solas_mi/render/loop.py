@@ -31,7 +31,8 @@ STEPS_PER_PASS = 1 << 19
 @dataclass
 class Render:
     """A rendered image (H×W×C, float32, image orientation; irradiance in units of the ideal camera's)
-    and what produced it: `spp` samples per pixel in `seconds` (wall clock, s)."""
+    and what produced it: `spp` samples per pixel in `seconds` (wall clock, s); `layers`: more H×W
+    channels written beside the image's (the labels, `render.labels`)."""
 
     image: np.ndarray
     channels: tuple[str, ...]
@@ -39,6 +40,7 @@ class Render:
     seconds: float
     samples_per_second: float
     meta: dict = field(default_factory=dict)
+    layers: dict = field(default_factory=dict)
 
     def write(self, path: str, png: str | None = None) -> str:
         """OpenEXR (linear, one channel per response channel, metadata in the header) and an sRGB PNG
@@ -46,7 +48,7 @@ class Render:
         from ..imageio import write_exr, write_png
 
         meta = dict(self.meta, spp=self.spp, samples_per_second=self.samples_per_second)
-        write_exr(path, {c: self.image[..., k] for k, c in enumerate(self.channels)}, meta)
+        write_exr(path, {**{c: self.image[..., k] for k, c in enumerate(self.channels)}, **self.layers}, meta)
         png = png or str(Path(path).with_suffix(".png"))
         write_png(png, self.image[..., 0] if self.image.shape[-1] == 1 else self.image)
         return png

@@ -15,6 +15,7 @@ from typing import Any
 from ..errors import SolasError
 from ..optics.camera import BOUNDARIES, MAPPINGS
 from ..options import parse_wxh
+from .labels import LABELS, parse_labels
 from .mitsuba import VARIANTS, check_name
 
 FRESNEL_MODES = ("transmit", "sample", "off")  # sellmeier_dielectric's `fresnel` (it reads them from here)
@@ -51,7 +52,8 @@ class RenderSpec:
     `response`, `boundary`, `fresnel` and `mapping` are the plugins' parameters; `rings` per cap mesh (None: `render.mesh.mesh_rings`'s);
     `spp` samples per pixel; `variant` the Mitsuba variant (None: `render.mitsuba.variant_for`'s);
     `seed` the sampler's; `focus_distance` (world units, inf allowed; None: the lens file's) sets the
-    lens camera of a scene file (`render.user_scene`), not an image's render."""
+    lens camera of a scene file (`render.user_scene`), not an image's render; so do `labels`
+    (`render.labels`: their names, comma-separated, in `LABELS` order; "": none)."""
 
     sensor: tuple[int, int] = _flag("sensor pixels, columns x rows", (960, 1280), parse=_sensor, metavar="WxH")
     pitch_um: float | None = _flag("pixel pitch (µm; default: the sensor's width spans the field)", parse=float,
@@ -74,6 +76,8 @@ class RenderSpec:
     seed: int = _flag("the sampler's seed (a batch's base seed: each item's derives from it)", 0, parse=int)
     focus_distance: float | None = _flag("scene files: focus distance in world units (inf: infinity; default: the "
                                          "lens file's image plane)", parse=_focus, metavar="D")
+    labels: str = _flag(f"scene files through a lens: label layers traced along each pixel's chief ray into the EXR, "
+                        f"comma-separated: {', '.join(LABELS)} (default: none)", "", metavar="LIST")
 
     def __post_init__(self) -> None:
         set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731 (frozen: normalised once)
@@ -88,6 +92,7 @@ class RenderSpec:
             allowed = fields_by_name()[name].metadata["choices"]
             if getattr(self, name) not in allowed:
                 raise SolasError(f"{name} {getattr(self, name)!r} must be one of {', '.join(allowed)}")
+        set_("labels", ",".join(parse_labels(self.labels)))
         if self.rings is not None:
             check_rings(self.rings)
         _check_int("samples per pixel", self.spp, 1, MAX_SPP)

@@ -22,11 +22,18 @@ from .mitsuba import check_run, pass_seed
 SAMPLES_PER_PASS = 1 << 20
 
 
-def render_scene(scene, spp: int, seed: int = 0, progress=None) -> Render:
-    """Render `scene` (loaded by `mitsuba.load_scene`) with its own integrator and `spp` samples per pixel."""
+def render_scene(scene, spp: int, seed: int = 0, progress=None, labels=()) -> Render:
+    """Render `scene` (loaded by `mitsuba.load_scene`) with its own integrator and `spp` samples per pixel;
+    `labels` (names or "depth,normal,instance": `render.labels`, through the scene's lens_camera) become
+    the result's `layers`, their metadata its meta's "labels"."""
     import mitsuba as mi
 
     check_run(spp, seed)
+    layers, label_meta = {}, None  # traced first: a scene without a lens camera is refused before its render
+    if labels:
+        from .labels import render_labels
+
+        layers, label_meta = render_labels(scene, labels)
     sensor = scene.sensors()[0]
     film = sensor.film()
     width, height = (int(v) for v in film.crop_size())
@@ -50,6 +57,9 @@ def render_scene(scene, spp: int, seed: int = 0, progress=None) -> Render:
     seconds = time.perf_counter() - start
     image = (total / spp).astype(np.float32)
     integrator = str(scene.integrator()).split("[", 1)[0]
-    return Render(image, tuple(names), spp, seconds, width * height * spp / seconds,
-                  {"variant": mi.variant(), "integrator": integrator, "sensor": str(sensor).split("[", 1)[0],
-                   "passes": passes, "seconds": seconds})
+    result = Render(image, tuple(names), spp, seconds, width * height * spp / seconds,
+                    {"variant": mi.variant(), "integrator": integrator, "sensor": str(sensor).split("[", 1)[0],
+                     "passes": passes, "seconds": seconds})
+    if labels:
+        result.layers, result.meta["labels"] = layers, label_meta
+    return result

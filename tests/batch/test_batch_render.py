@@ -202,3 +202,28 @@ def test_a_bad_dask_address_is_refused_before_any_work(render_inputs, tmp_path, 
     assert not (tmp_path / "never").exists()
     for good in ("local", "tcp://127.0.0.1:8786", "tls://scheduler.example:8786", "10.0.0.5:8786", None):
         check_dask(good)
+
+
+def test_labels_of_a_scene_batch_are_layers_recorded_in_the_manifest(render_inputs, tmp_path):
+    """`--labels depth,instance`: each scene item's EXR holds the layers beside its image (the sphere 4 m
+    in front of the camera: the depth at the centre from the lens's entrance pupil), the option is in
+    the manifest's settings and its items, and part of the batch's identity; image inputs are refused."""
+    from solas_mi import Lens, paraxial
+
+    scene = render_inputs.images / "sphere.xml"
+    out = tmp_path / "labels"
+    argv = ["batch", "render", str(scene), "--lens", "solas-doublet", "--spp", "2", "--labels", "instance,depth",
+            "-o", str(out), "--workers", "1", "--quiet"]
+    assert main(argv) == 0
+    data, meta = read_exr(out / "sphere.exr")
+    assert {"depth.Z", "instance.id", "labels.valid"} <= set(data) and "normal.X" not in data
+    lens = Lens.load("solas-doublet")
+    expected = 4.0 + (paraxial(lens).entrance_pupil_z_mm - lens.vertex_z[0]) * 1e-3
+    assert abs(data["depth.Z"][8, 12] / expected - 1.0) < 1e-3
+    assert meta["labels"]["kinds"] == ["depth", "instance"] and meta["batch"]["params"]["labels"] == "depth,instance"
+    m = manifest(out)
+    assert m["settings"]["labels"] == "depth,instance" and m["items"][0]["params"]["labels"] == "depth,instance"
+    plain = plan_render([scene], tmp_path / "plain", lens="solas-doublet", spp=2)
+    assert plain.key != m["batch_id"]
+    with pytest.raises(SolasError, match="labels are traced through the lens camera of scene files"):
+        plan_render([render_inputs.images / "frame000.png"], tmp_path / "x", lens="solas-doublet", labels="depth")

@@ -1,0 +1,159 @@
+"""Labels through the lens: depth, surface normal and instance id of each pixel of a `lens_camera`
+render, found along the pixel centre's chief ray, the real ray from the film point through the centre
+of the stop (`optics.aiming.film_chief_aim`, traced by the camera's own `traced`). The labels are
+crisp (one ray per pixel, no blur) and distorted exactly as the image is: the same lens, the same
+film geometry, the same camera frame.
+
+Layers (EXR `layer.channel` names, float32, beside the image's channels; 0 where nothing is met):
+
+- `depth.Z`: range, the distance (world units) from the lens's paraxial entrance-pupil centre on the
+  axis to the point the chief ray meets;
+- `normal.X`, `normal.Y`, `normal.Z`: the unit shading normal there, world frame, as Mitsuba gives it
+  (not turned toward the camera);
+- `instance.id`: the shape's id, `instance_id` of its name (its `id` in the scene; an unnamed shape
+  `_shape<k>`, k its place in the scene's shape list);
+- `labels.valid`, always: 1 where the chief ray passes the lens and meets the scene, else 0.
+
+An instance id is a 24-bit hash of the shape's name (exact in float32, never 0), so a shape keeps its
+id from frame to frame and scene to scene; the metadata's `instances` table maps each id met to its
+name and `boxes` gives each named shape's pixel bounds [x0, y0, x1, y1) (columns, rows; end
+exclusive) and pixel count. The chief ray is traced at the response's one wavelength, else at the
+lens's primary wavelength; a pixel whose chief ray no aim reaches (past the image circle, blocked) is
+not valid. No NaN or inf is written.
+"""
+from __future__ import annotations
+
+import zlib
+
+import numpy as np
+
+from ..errors import SolasError
+
+LABELS = ("depth", "normal", "instance")
+LAYERS = {"depth": ("depth.Z",), "normal": ("normal.X", "normal.Y", "normal.Z"), "instance": ("instance.id",)}
+VALID = "labels.valid"
+ID_MASK = (1 << 24) - 1  # ids below 2^24: exact in a float32 channel
+
+
+def parse_labels(given) -> tuple[str, ...]:
+    """The labels of a comma-separated list ("depth,instance") or a sequence of names, in `LABELS` order;
+    () for None or ""."""
+    text = given if isinstance(given, str) or given is None else ",".join(map(str, given))
+    names = [t.strip().lower() for t in (text or "").split(",") if t.strip()]
+    bad = [n for n in names if n not in LABELS]
+    if bad:
+        raise SolasError(f"labels {', '.join(map(repr, bad))} must be among {', '.join(LABELS)} (comma-separated)")
+    return tuple(n for n in LABELS if n in names)
+
+
+def instance_id(name: str) -> int:
+    """A shape's instance id: CRC-32 of its name in 24 bits, 0 (the background's) mapped to 1."""
+    return (zlib.crc32(name.encode("utf-8")) & ID_MASK) or 1
+
+
+def shape_names(scene) -> list[str]:
+    """Each shape's name: its `id`, or `_shape<k>` for an unnamed one (k: its place in `scene.shapes()`)."""
+    return [shape.id() or f"_shape{k}" for k, shape in enumerate(scene.shapes())]
+
+
+def _instance_ids(names: list[str]) -> list[int]:
+    """The ids of `names`; a SolasError where two names share one."""
+    ids, seen = [instance_id(n) for n in names], {}
+    for name, i in zip(names, ids):
+        if seen.setdefault(i, name) != name:
+            raise SolasError(f"shapes {seen[i]!r} and {name!r} hash to the same instance id {i}: rename one")
+    return ids
+
+
+def _sensor(scene):
+    import drjit as dr
+    import mitsuba as mi
+
+    sensor = scene.sensors()[0]
+    if type(sensor).__name__ != "LensCamera":
+        raise SolasError(f"labels are traced through a lens_camera; the scene's sensor is {type(sensor).__name__} "
+                         "(render with --lens)")
+    if not dr.is_jit_v(mi.Float):
+        raise SolasError(f"labels need a vectorised Mitsuba variant (llvm_ad_*, cuda_ad_*), not {mi.variant()}")
+    return sensor
+
+
+def chief_rays(sensor):
+    """The chief ray of each pixel centre of `sensor` (a `lens_camera`; row-major over its crop window),
+    leaving surface 1: origin, direction (camera frame, world units) and whether it passed."""
+    import drjit as dr
+    import mitsuba as mi
+
+    from ..optics.aiming import film_chief_aim
+
+    w, h = sensor.width, sensor.height
+    i = dr.arange(mi.UInt32, w * h)
+    film = sensor.film_point(mi.Point2f((mi.Float(i % w) + 0.5) / w, (mi.Float(i // w) + 0.5) / h))
+    lam = sensor.response.single_wavelength or sensor.lens.primary_wavelength
+    x, y = (np.asarray(v, dtype=np.float64) for v in (film.x, film.y))
+    ex, ey, found = film_chief_aim(sensor.reversed, x, y, lam)
+    target = mi.Point2f(np.where(found, ex, 0.0), np.where(found, ey, 0.0))
+    origin, direction, passed, _ = sensor.traced(film, target, mi.Float(lam))
+    return origin, direction, passed & mi.Bool(found), lam
+
+
+def render_labels(scene, kinds) -> tuple[dict[str, np.ndarray], dict]:
+    """The label layers `kinds` (of `LABELS`, as `parse_labels` reads them) of a scene seen by its
+    `lens_camera`, each H×W float32, with `labels.valid`, and their metadata (module docstring)."""
+    import drjit as dr
+    import mitsuba as mi
+
+    sensor = _sensor(scene)
+    kinds = parse_labels(kinds)
+    origin, direction, passed, lam = chief_rays(sensor)
+    to_world = sensor.world_transform()
+    si = scene.ray_intersect(mi.Ray3f(to_world @ origin, to_world @ direction), passed)
+    valid = passed & si.is_valid()
+    size = (sensor.height, sensor.width)
+
+    def layer(value):
+        return np.asarray(dr.select(valid, value, 0.0), dtype=np.float32).reshape(size)
+
+    layers = {VALID: layer(mi.Float(1.0))}
+    pupil_z = -float(_entrance_pupil_mm(sensor.lens)) / sensor.world_unit_mm  # camera frame: +z toward the scene
+    if "depth" in kinds:
+        layers["depth.Z"] = layer(dr.norm(si.p - to_world @ mi.Point3f(0.0, 0.0, pupil_z)))
+    if "normal" in kinds:
+        n = si.sh_frame.n
+        layers.update({name: layer(v) for name, v in zip(LAYERS["normal"], (n.x, n.y, n.z))})
+    meta = {"kinds": list(kinds), "wavelength_nm": float(lam),
+            "depth": "range (world units) from the entrance-pupil centre to the point the pixel centre's chief "
+                     "ray meets; 0 where labels.valid is 0",
+            "entrance_pupil_z": pupil_z}
+    if "instance" in kinds:
+        names = shape_names(scene)
+        ids = _instance_ids(names)
+        value = mi.Float(0.0)
+        for item, i in zip(scene.shapes(), ids):
+            value = dr.select(si.shape == mi.ShapePtr(item), float(i), value)
+        layers["instance.id"] = layer(value)
+        meta.update(_instances(layers["instance.id"], names, ids, scene))
+    meta["layers"] = sorted(layers)
+    return layers, meta
+
+
+def _entrance_pupil_mm(lens) -> float:
+    """The paraxial entrance pupil's distance behind surface 1's vertex (mm, along the lens's axis)."""
+    from ..optics.paraxial import paraxial
+
+    return paraxial(lens).entrance_pupil_z_mm - float(lens.vertex_z[0])
+
+
+def _instances(ids: np.ndarray, names: list[str], id_list: list[int], scene) -> dict:
+    """The `instances` table (id → name) of the ids met, and `boxes` of the named shapes met."""
+    met = set(np.unique(ids).astype(np.int64).tolist()) - {0}
+    table, boxes = {}, {}
+    for shape, name, i in zip(scene.shapes(), names, id_list):
+        if i not in met:
+            continue
+        table[str(i)] = name
+        if shape.id():
+            rows, cols = np.nonzero(ids == i)
+            boxes[name] = {"id": i, "box": [int(cols.min()), int(rows.min()), int(cols.max()) + 1,
+                                            int(rows.max()) + 1], "pixels": int(len(rows))}
+    return {"instances": table, "boxes": boxes}

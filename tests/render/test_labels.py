@@ -1,0 +1,211 @@
+"""Labels through the lens (`render.labels`): depth, normal and instance layers traced along each
+pixel's chief ray line up with the rendered image, with the optics tracer's chief rays and with the
+scene's geometry."""
+import numpy as np
+import pytest
+
+from solas_mi import Lens, SolasError
+from solas_mi.optics.paraxial import paraxial
+from solas_mi.optics.pupil import chief_rays
+from solas_mi.render.labels import instance_id, parse_labels, render_labels
+from solas_mi.render.stock import render_scene
+from solas_mi.render.user_scene import load
+
+LAMBDA = 587.5618
+MONO = f"mono:{LAMBDA}"
+SUB = 8  # label sub-pixels per pixel side, for the labels' coverage of a pixel
+
+
+def patch(name: str, x0: float, x1: float, y0: float, y1: float, z: float, emit: bool = True) -> str:
+    """A named rectangle [x0, x1] × [y0, y1] at depth z facing the camera (at the origin, looking along +z)."""
+    body = '<emitter type="area"><rgb name="radiance" value="1"/></emitter>' if emit else '<bsdf type="diffuse"/>'
+    return (f'<shape type="rectangle" id="{name}"><transform name="to_world"><scale x="{(x1 - x0) / 2}" '
+            f'y="{(y1 - y0) / 2}"/><rotate y="1" angle="180"/><translate x="{(x0 + x1) / 2}" y="{(y0 + y1) / 2}" '
+            f'z="{z}"/></transform>{body}</shape>')
+
+
+def scene_file(path, shapes: list[str], width: int, height: int) -> str:
+    """A scene of `shapes` seen by a perspective camera (replaced by the lens camera), a box pixel filter,
+    and a path integrator that sees only what glows (no noise of light transport)."""
+    path.write_text(
+        '<scene version="3.0.0"><integrator type="path"><integer name="max_depth" value="1"/></integrator>'
+        '<sensor type="perspective"><float name="fov" value="60"/><transform name="to_world"><lookat '
+        'origin="0,0,0" target="0,0,1" up="0,1,0"/></transform><film type="hdrfilm"><integer name="width" '
+        f'value="{width}"/><integer name="height" value="{height}"/><rfilter type="box"/></film></sensor>'
+        f'{"".join(shapes)}</scene>')
+    return str(path)
+
+
+def at_angle(deg: float, distance: float) -> float:
+    """The x (or y) on the plane z = distance seen `deg` off the axis."""
+    return distance * np.tan(np.radians(deg))
+
+
+def edge(profile: np.ndarray, inside: int) -> float:
+    """Where a line's step from 0 (at index 0) to its level (from index `inside` on: the mean of the next
+    3 pixels) lies, in pixels from the line's start: `inside` less the sum of the profile before it over
+    the level (exact for box pixels of a sharp edge, and for any blur symmetric about it)."""
+    level = profile[inside:inside + 3].mean()
+    return inside - float(profile[:inside].sum()) / level
+
+
+def edge_offsets(image: np.ndarray, cover: np.ndarray) -> list[float]:
+    """Per row and column fully crossing a patch (its corners' rows and columns left out), the offsets
+    (px) of its two edges along that line in the image from those of the labels' coverage."""
+    offsets = []
+    for img, cov in ((image, cover), (image.T, cover.T)):
+        lines = np.flatnonzero(cov.max(axis=1) >= 1.0)
+        for r in lines[1:-1]:
+            touched, full = np.flatnonzero(cov[r] > 0.0), np.flatnonzero(cov[r] >= 1.0)
+            start, stop = max(touched[0] - 3, 0), touched[-1] + 3  # this patch alone, not its neighbours
+            for sl, inside in ((slice(start, None), full[0] - start), (slice(stop, None, -1), stop - full[-1])):
+                offsets.append(edge(img[r][sl], inside) - edge(cov[r][sl], inside))
+    return offsets
+
+
+def coverage(ids: np.ndarray, shape_id: int) -> np.ndarray:
+    """The fraction of each pixel's SUB × SUB label samples on the shape."""
+    h, w = ids.shape[0] // SUB, ids.shape[1] // SUB
+    return (ids == shape_id).reshape(h, SUB, w, SUB).mean(axis=(1, 3))
+
+
+# lens, pixel pitch (um), sensor (w, h), patches: (name, field x0, x1, y0, y1 in degrees)
+LENSES = {
+    "nikkor-fisheye": (300.0, (96, 72), [("centre", -8, 8, -6, 6), ("right", 30, 48, -10, 10),
+                                        ("left", -70, -55, -8, 8), ("top", -10, 10, 35, 55),
+                                        ("corner", -50, -35, -50, -35)]),
+    "wide-angle-22mm": (360.0, (96, 72), [("centre", -6, 6, -5, 5), ("right", 20, 32, -6, 6),
+                                         ("left", -34, -26, -5, 5), ("top", -6, 6, 18, 26),
+                                         ("corner", 24, 34, -24, -16)]),
+}
+
+
+@pytest.mark.parametrize("name", LENSES)
+def test_instance_edges_are_the_image_edges_across_the_field(mi, tmp_path, name):
+    """Glowing patches 10 m away over the field, an unlit wall 100 m away: each patch's edges in the
+    rendered image (box pixels, 64 spp) against those of its instance coverage (8×8 chief rays per
+    pixel), along every row and column through the patch (`edge`): within 0.5 px everywhere; the
+    depth's edges (nearer than 50 m) are the instance's."""
+    pitch, (w, h), patches = LENSES[name]
+    lens = Lens.load(name)
+    d = 10.0
+    shapes = [patch(n, at_angle(x0, d), at_angle(x1, d), at_angle(y0, d), at_angle(y1, d), d)
+              for n, x0, x1, y0, y1 in patches] + [patch("wall", -1e4, 1e4, -1e4, 1e4, 10 * d, emit=False)]  # unlit
+    image_scene = load(scene_file(tmp_path / "image.xml", shapes, w, h), "llvm_ad_spectral", lens, pitch_um=pitch,
+                       response=MONO)
+    image = render_scene(image_scene, 64).image[..., 0].astype(np.float64)
+    fine = load(scene_file(tmp_path / "fine.xml", shapes, w * SUB, h * SUB), "llvm_ad_spectral", lens,
+                pitch_um=pitch / SUB, response=MONO)
+    layers, meta = render_labels(fine, ("depth", "instance"))
+    near = np.where(layers["depth.Z"] < 5 * d, 1.0, 0.0)  # the patches (ranges up to 3 d) before the wall (10 d)
+    worst = 0.0
+    for n, *_ in patches:
+        cover = coverage(layers["instance.id"], instance_id(n))
+        offsets = np.abs(edge_offsets(image, cover))
+        print(f"{name} {n}: {len(offsets)} edge crossings, max offset {offsets.max():.3f} px, mean "
+              f"{offsets.mean():.3f} px")
+        assert len(offsets) >= 8
+        worst = max(worst, offsets.max())
+        depth_cover = coverage(np.where(cover.repeat(SUB, 0).repeat(SUB, 1) > 0, near, 0.0), 1.0)
+        np.testing.assert_allclose(edge_offsets(cover, depth_cover), 0.0, atol=1e-6)  # the depth's edges too
+    assert worst < 0.5
+    assert set(meta["boxes"]) == {p[0] for p in patches} | {"wall"}
+
+
+@pytest.mark.parametrize("name", ["nikkor-fisheye", "wide-angle-22mm"])
+def test_label_edges_land_on_the_tracers_chief_rays(mi, tmp_path, name):
+    """An independent route: strips whose edges lie at known angles, far away; along the image's middle
+    row (one row of 1 um pixels at y = 0), where the instance label changes against the image height
+    of the optics tracer's real chief ray at that field (its distortion)."""
+    lens = Lens.load(name)
+    angles = [5.0, 20.0, 35.0, 60.0, 80.0] if "fisheye" in name else [5.0, 15.0, 25.0, 35.0]
+    d, pitch_um = 1e4, 1.0
+    shapes = [patch(f"strip{k}", at_angle(a, d), at_angle(a + 2.0, d), -1.0, 1.0, d) for k, a in enumerate(angles)]
+    width = int(2 * 1.05 * max(np.hypot(*chief_rays(lens, [[a + 2.0, 0.0]], [LAMBDA]).image_xy[0])
+                               for a in angles) / (pitch_um * 1e-3))
+    scene = load(scene_file(tmp_path / "strips.xml", shapes, width, 1), "llvm_ad_spectral", lens, pitch_um=pitch_um,
+                 response=MONO)
+    ids = render_labels(scene, ("instance",))[0]["instance.id"][0]
+    heights = np.abs(chief_rays(lens, [[a, 0.0] for a in angles], np.full(len(angles), LAMBDA)).image_xy[:, 0])
+    for k, (a, expected) in enumerate(zip(angles, heights)):
+        on = np.flatnonzero(ids == instance_id(f"strip{k}"))
+        inner = on.max() + 1 if on.mean() < width / 2 else on.min()  # the pixel edge nearer the axis
+        found = abs(inner - width / 2) * pitch_um * 1e-3  # mm from the axis
+        print(f"{name} {a:g} deg: label edge {found:.4f} mm, chief ray {expected:.4f} mm")
+        assert abs(found - expected) <= 0.6 * pitch_um * 1e-3, (a, found, expected)
+
+
+@pytest.mark.parametrize("name", ["wide-angle-22mm", "nikkor-fisheye", "double-gauss-50mm"])
+def test_depth_at_the_centre_is_the_distance_from_the_entrance_pupil(mi, tmp_path, name):
+    """A wall at z = 5 m (from surface 1's vertex): the depth at the centre pixel (odd film, on the axis) is
+    5 m plus the paraxial entrance pupil's distance behind surface 1, within 0.1 %; off the axis, the
+    depth grows as the wall is met obliquely; normals face along the wall's; every pixel's id is the wall's."""
+    lens = Lens.load(name)
+    d = 5.0
+    scene = load(scene_file(tmp_path / "wall.xml", [patch("wall", -50, 50, -50, 50, d, emit=False)], 33, 25),
+                 "llvm_ad_spectral", lens, pitch_um=200.0, response=MONO)
+    layers, meta = render_labels(scene, ("depth", "normal", "instance"))
+    p = paraxial(lens)
+    expected = d + (p.entrance_pupil_z_mm - lens.vertex_z[0]) * 1e-3
+    depth = layers["depth.Z"]
+    print(f"{name}: depth at the centre {depth[12, 16]:.6f}, expected {expected:.6f} "
+          f"({depth[12, 16] / expected - 1.0:+.2e})")
+    assert abs(depth[12, 16] / expected - 1.0) < 1e-3, (depth[12, 16], expected)
+    assert depth[12, 0] > depth[12, 16] and depth[0, 16] > depth[12, 16]
+    assert np.all(layers["labels.valid"] == 1.0)
+    np.testing.assert_allclose(layers["normal.Z"], -1.0, atol=1e-6)
+    assert np.all(layers["instance.id"] == instance_id("wall"))
+    assert meta["instances"] == {str(instance_id("wall")): "wall"}
+    assert meta["boxes"]["wall"] == {"id": instance_id("wall"), "box": [0, 0, 33, 25], "pixels": 33 * 25}
+
+
+def test_background_and_past_the_image_circle_are_zero_and_not_valid(mi, tmp_path):
+    """The fisheye's film reaches past its image circle, and nothing surrounds the patch: no label is NaN
+    or inf; where no chief ray passes or nothing is met, every layer is 0 and not valid."""
+    lens = Lens.load("nikkor-fisheye")
+    scene = load(scene_file(tmp_path / "one.xml", [patch("p", -1, 1, -1, 1, 10.0)], 40, 30), "llvm_ad_spectral",
+                 lens, pitch_um=900.0, response=MONO)
+    layers, meta = render_labels(scene, ("depth", "normal", "instance"))
+    for layer in layers.values():
+        assert np.all(np.isfinite(layer))
+    valid = layers["labels.valid"] == 1.0
+    assert valid[15, 20] and not valid[0, 0] and 0 < valid.sum() < 100
+    for layer in layers.values():
+        assert np.all(layer[~valid] == 0.0)
+
+
+def test_label_names_are_checked():
+    assert parse_labels("instance, depth") == ("depth", "instance")
+    assert parse_labels(None) == ()
+    with pytest.raises(SolasError, match="'colour' must be among depth, normal, instance"):
+        parse_labels("depth,colour")
+
+
+def test_ids_are_stable_and_never_the_background():
+    assert instance_id("car") == instance_id("car") != instance_id("cars")
+    assert all(0 < instance_id(f"s{k}") < 2 ** 24 for k in range(1000))
+
+
+def test_render_labels_command_writes_the_layers_beside_the_image(mi, tmp_path, capsys):
+    """`solas-mi render SCENE --lens LENS --labels …`: the EXR holds the image's channels and the label
+    layers, its metadata the id table and boxes; without a lens camera, or for an image, refused in one line."""
+    from solas_mi.cli import main
+    from solas_mi.imageio import read_exr
+    from solas_mi.render.image import render_image
+
+    xml = scene_file(tmp_path / "two.xml", [patch("left", 0.5, 2.0, -0.5, 0.5, 5.0), patch("wall", -9, 9, -9, 9, 8.0,
+                                                                                        emit=False)], 32, 24)
+    out = tmp_path / "out.exr"
+    assert main(["render", xml, "--lens", "wide-angle-22mm", "--pitch-um", "700", "--spp", "2",
+                 "--labels", "instance,normal,depth", "-o", str(out)]) == 0
+    data, meta = read_exr(out)
+    assert set(data) == {"R", "G", "B", "depth.Z", "normal.X", "normal.Y", "normal.Z", "instance.id", "labels.valid"}
+    assert (tmp_path / "out.png").is_file()
+    labels = meta["labels"]
+    assert labels["kinds"] == ["depth", "normal", "instance"] and set(labels["boxes"]) == {"left", "wall"}
+    x0, y0, x1, y1 = labels["boxes"]["left"]["box"]
+    assert x1 <= 16 and np.all(data["instance.id"][y0:y1, x0:x1].max() == instance_id("left"))  # camera +x: image left
+    assert main(["render", xml, "--labels", "depth", "--spp", "1", "-o", str(tmp_path / "no.exr")]) == 2
+    assert "labels are traced through a lens_camera" in capsys.readouterr().err
+    with pytest.raises(SolasError, match="no scene to label"):
+        render_image(Lens.load("solas-doublet"), np.ones((4, 4)), sensor=(4, 4), spp=1, labels="depth")
