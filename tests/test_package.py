@@ -19,10 +19,11 @@ ALLOWED = {
     "convolution": {"optics", "psf"},
     "render": {"optics", "psf"},  # the Mitsuba plugins (plugins/, installed as solas_mi.plugins) are part of it
     "sensor": set(),  # irradiance → RAW: after the engines, needing none of them
+    "isp": {"sensor"},  # RAW → 8-bit frame: the image processor, after the sensor
     "metrics": set(),
-    "validation": {"optics", "psf", "convolution", "render", "sensor", "metrics"},
-    "batch": {"optics", "psf", "convolution", "render", "sensor", "metrics"},
-    "experiments": {"optics", "psf", "convolution", "render", "sensor", "metrics", "validation"},
+    "validation": {"optics", "psf", "convolution", "render", "sensor", "isp", "metrics"},
+    "batch": {"optics", "psf", "convolution", "render", "sensor", "isp", "metrics"},
+    "experiments": {"optics", "psf", "convolution", "render", "sensor", "isp", "metrics", "validation"},
 }
 
 
