@@ -196,6 +196,8 @@ def test_stages_import_only_downward():
     ("solas_mi.render.commands", ("drjit", "mitsuba", "matplotlib")),
     ("solas_mi.render.response", ("drjit", "mitsuba", "matplotlib")),
     ("solas_mi.sensor.commands", ("numpy", "OpenEXR", "drjit", "mitsuba")),
+    ("solas_mi.isp.commands", ("numpy", "OpenEXR", "colour_demosaicing", "drjit", "mitsuba")),
+    ("solas_mi.isp.demosaic", ("colour_demosaicing", "colour", "scipy")),
     ("solas_mi.metrics.commands", ("scipy", "skimage", "matplotlib")),
     ("solas_mi.batch.commands", ("dask", "distributed", "tqdm", "drjit", "matplotlib")),
     ("solas_mi", ("drjit", "mitsuba", "matplotlib", "numpy")),

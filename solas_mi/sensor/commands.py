@@ -32,14 +32,11 @@ def _irradiance(args: argparse.Namespace):
     return image_irradiance(image, args.f_number, args.transmission)
 
 
-def run_camera(args: argparse.Namespace) -> int:
-    """Write the RAW frame (one channel "RAW", DN) with the model, seed and exposure in the metadata."""
-    from ..imageio import write_exr
-    from ..outputs import check_target
+def raw_frame(args: argparse.Namespace):
+    """The RAW frame (H, W, uint16 DN) of the command's image, its `SensorModel` and its metadata."""
     from .capture import capture
     from .files import describe, load_sensor
 
-    check_target(args.output, [args.image, args.sensor_model])
     model = load_sensor(args.sensor_model)
     if not args.exposure_ms > 0:
         raise SolasError(f"--exposure-ms {args.exposure_ms} must be > 0")
@@ -47,9 +44,23 @@ def run_camera(args: argparse.Namespace) -> int:
     meta = {"kind": "sensor RAW", "unit": "DN", "sensor": describe(model), "seed": args.seed,
             "exposure_ms": args.exposure_ms, "scale": args.scale, "f_number": args.f_number,
             "transmission": args.transmission, "input": str(args.image)}
-    write_exr(args.output, {"RAW": raw.astype("float32")}, meta)
+    return raw, model, meta
+
+
+def report(args: argparse.Namespace, raw, model) -> None:
     print(f"{args.output}: {raw.shape[1]}x{raw.shape[0]} RAW ({model.cfa}, {model.bit_depth} bit), "
           f"mean {raw.mean():.1f} DN, {int((raw >= model.white_level_dn).sum())} pixels at the white level")
+
+
+def run_camera(args: argparse.Namespace) -> int:
+    """Write the RAW frame (one channel "RAW", DN) with the model, seed and exposure in the metadata."""
+    from ..imageio import write_exr
+    from ..outputs import check_target
+
+    check_target(args.output, [args.image, args.sensor_model])
+    raw, model, meta = raw_frame(args)
+    write_exr(args.output, {"RAW": raw.astype("float32")}, meta)
+    report(args, raw, model)
     return 0
 
 
