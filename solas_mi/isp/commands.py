@@ -16,18 +16,15 @@ def run_camera(args: argparse.Namespace) -> int:
 
     if args.isp is None:
         return sensor.run_camera(args)
-    from ..imageio import write_exr, write_png
-    from ..outputs import data_and_preview, written_together
+    from ..outputs import data_and_preview
+    from .camera import write_frame
     from .pipeline import develop, load_isp
 
     isp = load_isp(args.isp)
     data, png = data_and_preview(args.output, None, [args.image, args.sensor_model, args.isp])
     raw, model, meta = sensor.raw_frame(args)
     frame, developed = develop(raw, model, isp)
-    meta.update(developed, developed_frame=png.name)
-    with written_together(data, png) as (tmp_data, tmp_png):
-        write_exr(tmp_data, {"RAW": raw.astype("float32")}, meta)
-        write_png(tmp_png, frame / 255.0, encoded=True)
+    write_frame(data, raw, frame, {**meta, **developed})
     sensor.report(args, raw, model)
     print(f"{png}: developed 8-bit sRGB frame ({', '.join(developed['stages'])})")
     return 0
@@ -41,3 +38,33 @@ def register(subparsers: Any) -> None:
                         "colour correction, tone curve): 'default' or a TOML file with an [isp] table; the 8-bit "
                         "sRGB frame is written beside OUT.exr as OUT.png (default: RAW only)")
     p.set_defaults(run=run_camera)
+
+
+def add_camera_options(p: argparse.ArgumentParser, seed: bool) -> None:
+    """A batch's camera options: --sensor-model, --exposure-ms, --isp (and --seed where `seed`)."""
+    g = p.add_argument_group("the camera: each frame (its values read as W/m² of image irradiance) through a sensor "
+                             "and image processor, its RAW written as <name>_raw.exr and, with --isp, the developed "
+                             "frame as <name>_raw.png")
+    g.add_argument("--sensor-model", metavar="FILE.toml", help="the sensor (a TOML file with a [sensor] table)")
+    g.add_argument("--exposure-ms", type=float, help="exposure time in ms (with --sensor-model)")
+    g.add_argument("--isp", metavar="default|FILE.toml",
+                   help="develop each RAW: 'default' or a TOML file with an [isp] table (with --sensor-model)")
+    if seed:
+        g.add_argument("--seed", type=int, default=0,
+                       help="the sensor's seed: its fixed pattern, and with each frame's name its noise (default 0)")
+
+
+def camera_from_args(args: argparse.Namespace, seed: int):
+    """The `isp.camera.Camera` of the options, or None without --sensor-model."""
+    from ..errors import SolasError
+
+    if args.sensor_model is None:
+        given = [flag for flag, value in (("--exposure-ms", args.exposure_ms), ("--isp", args.isp)) if value is not None]
+        if given:
+            raise SolasError(f"{' and '.join(given)} go(es) with --sensor-model; give the sensor too")
+        return None
+    if args.exposure_ms is None:
+        raise SolasError("--sensor-model needs --exposure-ms (the exposure time in ms)")
+    from .camera import load_camera
+
+    return load_camera(args.sensor_model, args.exposure_ms, args.isp, seed)

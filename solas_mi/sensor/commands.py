@@ -9,22 +9,28 @@ from typing import Any
 from ..errors import SolasError
 
 
-def _irradiance(args: argparse.Namespace):
-    """The input image as image-plane irradiance (H, W, 3) in W/m²: its R, G, B channels times --scale,
-    through the camera equation when --f-number is given (the image is then radiance, W/m²/sr)."""
+def read_rgb(path):
+    """The R, G, B channels (H, W, 3, float64) of an EXR file, finite; SolasError naming what is missing."""
     import numpy as np
 
     from ..imageio import check_finite, read_exr
-    from .exposure import image_irradiance
 
-    channels, _ = read_exr(args.image)
+    channels, _ = read_exr(path)
     missing = [c for c in "RGB" if c not in channels]
     if missing:
-        raise SolasError(f"{args.image}: channels {', '.join(missing)} missing; the sensor needs R, G and B "
+        raise SolasError(f"{path}: channels {', '.join(missing)} missing; the sensor needs R, G and B "
                          f"(found {', '.join(sorted(channels))})")
+    return check_finite(np.stack([channels[c] for c in "RGB"], axis=-1).astype(np.float64), str(path))
+
+
+def _irradiance(args: argparse.Namespace):
+    """The input image as image-plane irradiance (H, W, 3) in W/m²: its R, G, B channels times --scale,
+    through the camera equation when --f-number is given (the image is then radiance, W/m²/sr)."""
+    from .exposure import image_irradiance
+
     if not args.scale > 0:
         raise SolasError(f"--scale {args.scale} must be > 0")
-    image = check_finite(np.stack([channels[c] for c in "RGB"], axis=-1).astype(np.float64), args.image) * args.scale
+    image = read_rgb(args.image) * args.scale
     if args.f_number is None:
         if args.transmission != 1.0:
             raise SolasError("--transmission applies with --f-number (the image is then radiance); give both")

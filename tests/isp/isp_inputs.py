@@ -31,10 +31,11 @@ def chart_linear() -> np.ndarray:
     Ohta") under CIE D65, a perfect white of Y = 1."""
     import colour
 
+    shape = colour.SpectralShape(360, 780, 5)  # every spectrum on one grid (colour aligns them, with a warning, else)
     sds = colour.SDS_COLOURCHECKERS["ColorChecker N Ohta"]
-    d65 = colour.SDS_ILLUMINANTS["D65"]
-    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"]
-    xyz = np.array([colour.sd_to_XYZ(sd, cmfs, d65) for sd in sds.values()]) / 100.0
+    d65 = colour.SDS_ILLUMINANTS["D65"].copy().align(shape)
+    cmfs = colour.MSDS_CMFS["CIE 1931 2 Degree Standard Observer"].copy().align(shape)
+    xyz = np.array([colour.sd_to_XYZ(sd.copy().align(shape), cmfs, d65) for sd in sds.values()]) / 100.0
     white = colour.CCS_ILLUMINANTS["CIE 1931 2 Degree Standard Observer"]["D65"]
     return colour.XYZ_to_RGB(xyz, colour.RGB_COLOURSPACES["sRGB"], white, apply_cctf_decoding=False)
 
