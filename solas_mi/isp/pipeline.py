@@ -22,13 +22,13 @@ table of its fields, e.g.
 """
 from __future__ import annotations
 
-import tomllib
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import SolasError
+from ..options import toml_table
 from ..sensor.model import SensorModel
 from . import black, ccm, demosaic, tone, white
 
@@ -86,19 +86,11 @@ def load_isp(text: str | Path) -> ISP:
     """The `ISP` named ``default``, or that of the ``[isp]`` table of TOML file `text`."""
     if str(text) == DEFAULT:
         return ISP()
+    if not Path(text).is_file():
+        raise SolasError(f"isp {str(text)!r} must be 'default' or a TOML file with an [isp] table (no such file)")
+    values = toml_table(text, "isp", "isp file")
     try:
-        with open(text, "rb") as f:
-            data = tomllib.load(f)
-    except OSError as exc:
-        raise SolasError(f"isp {str(text)!r} must be 'default' or a TOML file with an [isp] table: "
-                         f"{exc.strerror or 'cannot be read'}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise SolasError(f"isp file {str(text)!r} is not valid TOML: {exc}") from None
-    if set(data) != {"isp"} or not isinstance(data["isp"], dict):
-        raise SolasError(f"isp file {str(text)!r} must hold one [isp] table (and nothing else); "
-                         f"found {', '.join(sorted(data)) or 'nothing'}")
-    try:
-        return ISP.from_dict(data["isp"])
+        return ISP.from_dict(values)
     except SolasError as exc:
         raise SolasError(f"isp file {str(text)!r}: {exc}") from None
 

@@ -6,28 +6,19 @@
     cfa = "RCCB"
 
 Fields left out take `SensorModel`'s values; `describe` lists every value used (the RAW's metadata)."""
-import tomllib
 from dataclasses import asdict
 from pathlib import Path
 
 from ..errors import SolasError
+from ..options import toml_table
 from .model import SensorModel
 
 
 def load_sensor(path: str | Path) -> SensorModel:
     """The `SensorModel` of the `[sensor]` table of TOML file `path`."""
+    values = toml_table(path, "sensor", "sensor model")
     try:
-        with open(path, "rb") as f:
-            data = tomllib.load(f)
-    except OSError as exc:
-        raise SolasError(f"sensor model {str(path)!r}: {exc.strerror or 'cannot be read'}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise SolasError(f"sensor model {str(path)!r} is not valid TOML: {exc}") from None
-    if not isinstance(data.get("sensor"), dict) or set(data) != {"sensor"}:
-        raise SolasError(f"sensor model {str(path)!r} must hold one [sensor] table (and nothing else); "
-                         f"found {', '.join(sorted(data)) or 'nothing'}")
-    try:
-        return SensorModel.from_dict(data["sensor"])
+        return SensorModel.from_dict(values)
     except SolasError as exc:
         raise SolasError(f"sensor model {str(path)!r}: {exc}") from None
 
