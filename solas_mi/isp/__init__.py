@@ -8,7 +8,9 @@ the metadata (after the sensor, before the metrics in the import order).
 - `ccm`: the colour correction matrix, from the sensor's channel responses or given.
 - `tone`: the tone curve (sRGB OETF, a gamma, none) and the 8-bit frame.
 - `pipeline`: `ISP`, the processor's description (``default`` or a small TOML), and `develop`.
+- `camera`: `Camera`, a sensor, exposure, processor and seed that a batch's frames go through.
 """
 from ..lazy import lazy_exports
 
-__getattr__ = lazy_exports(__name__, {"ISP": ".pipeline", "develop": ".pipeline", "load_isp": ".pipeline"})
+__getattr__ = lazy_exports(__name__, {"ISP": ".pipeline", "develop": ".pipeline", "load_isp": ".pipeline",
+                                      "Camera": ".camera", "load_camera": ".camera"})
