@@ -46,6 +46,7 @@ def build_parser() -> argparse.ArgumentParser:
     from .batch import commands as batch
     from .convolution import commands as convolution
     from .experiments import commands as experiments
+    from .isp import commands as isp
     from .metrics import commands as metrics
     from .optics import commands as optics
     from .psf import commands as psf
@@ -56,8 +57,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser = Parser(prog="solas-mi", description=DESCRIPTION)
     parser.add_argument("--version", action="version", version=f"solas-mi {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    # in the order of the data: lens → PSFs → convolution; lens → scene → render; irradiance → sensor; images → metrics; checks
-    for area in (optics, psf, convolution, render, sensor, metrics, validation, batch, experiments):
+    # in the order of the data: lens → PSFs → convolution; lens → scene → render; irradiance → sensor → image processor (adds --isp to camera); images → metrics; checks
+    for area in (optics, psf, convolution, render, sensor, isp, metrics, validation, batch, experiments):
         area.register(sub)
     return parser
 

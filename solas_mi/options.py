@@ -75,3 +75,21 @@ def add_image_input_options(p, boundaries, variants) -> None:
     p.add_argument("--boundary", choices=boundaries, default="edge", help="padding / object outside the image")
     p.add_argument("--linear", action="store_true", help="PNG/JPEG values are already linear")
     p.add_argument("--variant", choices=variants, help="Mitsuba variant of the render")
+
+
+def toml_table(path, table: str, what: str) -> dict:
+    """The one `[table]` of the TOML file `path` (and nothing else in it); `what` names the file in the
+    one-line errors (e.g. "sensor model")."""
+    import tomllib
+
+    try:
+        with open(path, "rb") as f:
+            data = tomllib.load(f)
+    except OSError as exc:
+        raise SolasError(f"{what} {str(path)!r}: {exc.strerror or 'cannot be read'}") from None
+    except tomllib.TOMLDecodeError as exc:
+        raise SolasError(f"{what} {str(path)!r} is not valid TOML: {exc}") from None
+    if not isinstance(data.get(table), dict) or set(data) != {table}:
+        raise SolasError(f"{what} {str(path)!r} must hold one [{table}] table (and nothing else); "
+                         f"found {', '.join(sorted(data)) or 'nothing'}")
+    return data[table]

@@ -19,10 +19,11 @@ ALLOWED = {
     "convolution": {"optics", "psf"},
     "render": {"optics", "psf"},  # the Mitsuba plugins (plugins/, installed as solas_mi.plugins) are part of it
     "sensor": {"render"},  # irradiance → RAW, after the engines: reads an RGB image as a spectrum as the render does
+    "isp": {"sensor"},  # RAW → 8-bit frame: the image processor, after the sensor
     "metrics": set(),
-    "validation": {"optics", "psf", "convolution", "render", "sensor", "metrics"},
-    "batch": {"optics", "psf", "convolution", "render", "sensor", "metrics"},
-    "experiments": {"optics", "psf", "convolution", "render", "sensor", "metrics", "validation"},
+    "validation": {"optics", "psf", "convolution", "render", "sensor", "isp", "metrics"},
+    "batch": {"optics", "psf", "convolution", "render", "sensor", "isp", "metrics"},
+    "experiments": {"optics", "psf", "convolution", "render", "sensor", "isp", "metrics", "validation"},
 }
 
 
@@ -195,6 +196,8 @@ def test_stages_import_only_downward():
     ("solas_mi.render.commands", ("drjit", "mitsuba", "matplotlib")),
     ("solas_mi.render.response", ("drjit", "mitsuba", "matplotlib")),
     ("solas_mi.sensor.commands", ("numpy", "OpenEXR", "drjit", "mitsuba")),
+    ("solas_mi.isp.commands", ("numpy", "OpenEXR", "colour_demosaicing", "drjit", "mitsuba")),
+    ("solas_mi.isp.demosaic", ("colour_demosaicing", "colour", "scipy")),
     ("solas_mi.metrics.commands", ("scipy", "skimage", "matplotlib")),
     ("solas_mi.batch.commands", ("dask", "distributed", "tqdm", "drjit", "matplotlib")),
     ("solas_mi", ("drjit", "mitsuba", "matplotlib", "numpy")),

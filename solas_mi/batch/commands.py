@@ -12,6 +12,7 @@ import sys
 from typing import Any
 
 from ..errors import SolasError
+from ..isp.commands import add_camera_options, camera_from_args
 
 
 BATCH_GRID = (32, 32)  # rows, columns: the accuracy tables' interp 32×24 on a 4:3 frame (README)
@@ -32,7 +33,7 @@ def _dry_run(args: argparse.Namespace) -> int:
     p = plan_batch(args.inputs, args.output, psf_grid=args.psf_grid, lens=args.lens,
                    grid_spec=_grid_spec(args), method=args.method,
                    boundary=args.boundary, linear=args.linear, cache=args.cache, output_format=args.format,
-                   depth_pattern=args.depth_pattern, frame=_frame(args))
+                   depth_pattern=args.depth_pattern, frame=_frame(args), camera=camera_from_args(args, args.seed))
     need = estimate(p, workers if args.dask is None else 1)
     where = f"Dask at {args.dask}" if args.dask else f"{workers} local worker process(es)"
     skipped = len(p.jobs) - len(p.todo)
@@ -41,7 +42,7 @@ def _dry_run(args: argparse.Namespace) -> int:
     print(f"2. degrade {len(p.todo)} of {len(p.jobs)} images ({skipped} already finished, skipped) "
           f"with {args.method}, boundary {args.boundary}, on {where}")
     files = "16-bit PNG + JSON" if args.format == "png16" else "EXR + PNG"
-    print(f"3. write {files} per image and {p.manifest.path}")
+    print(f"3. write {files}{_camera_files(p.jobs)} per image and {p.manifest.path}")
     print(f"estimate: about {need['seconds']:.1f} s of degrading (after the grid), peak memory about "
           f"{size_text(need['peak_bytes'])} (grid {size_text(need['grid_bytes'])} per worker)")
     return 0
@@ -56,8 +57,15 @@ def run_batch_degrade(args: argparse.Namespace) -> int:
                            grid_spec=_grid_spec(args), method=args.method,
                            boundary=args.boundary, linear=args.linear, workers=_workers(args.workers), dask=args.dask,
                            cache=args.cache, force=args.force, progress=not args.quiet, output_format=args.format,
-                           depth_pattern=args.depth_pattern, occlusion=args.occlusion, frame=_frame(args))
+                           depth_pattern=args.depth_pattern, occlusion=args.occlusion, frame=_frame(args),
+                           camera=camera_from_args(args, args.seed))
     return _report("degrade", result, f" (grid: {result.grid_source})")
+
+
+def _camera_files(jobs) -> str:
+    """What the camera adds per item (its RAW, developed frame), for the dry run's list."""
+    extras = jobs[0].extras if jobs else []
+    return "".join([" + RAW EXR", " + developed PNG"][:len(extras)])
 
 
 def _frame(args: argparse.Namespace):
@@ -94,27 +102,28 @@ def run_batch_render(args: argparse.Namespace) -> int:
     workers = _workers(args.workers)
     check_dask(args.dask)
     spec, sweep = _render_spec(args)
+    camera = camera_from_args(args, spec.seed)
     if args.dry_run:
         from ..budget import size_text
         from .degrade import check_workers
         from .render import batch_variant, estimate, plan_render
 
         n = check_workers(workers, args.dask)
-        p = plan_render(args.inputs, args.output, lens=args.lens, spec=spec, **sweep)
+        p = plan_render(args.inputs, args.output, lens=args.lens, spec=spec, camera=camera, **sweep)
         need = estimate(p, n if args.dask is None else 1)
         where = f"Dask at {args.dask}" if args.dask else f"{n} local worker process(es)"
         swept = ", ".join(f"{k} ({len(v)} values)" for k, v in p.manifest.header["sweep"].items()) or "nothing"
         print("1. no PSF grid (a direct render through the lens)")
         print(f"2. render {len(p.todo)} of {len(p.jobs)} items ({len(p.jobs) - len(p.todo)} already finished, "
               f"skipped; swept: {swept}) with Mitsuba {batch_variant(p)}, on {where}")
-        print(f"3. write EXR + PNG per item and {p.manifest.path}")
+        print(f"3. write EXR + PNG{_camera_files(p.jobs)} per item and {p.manifest.path}")
         print(f"estimate: about {need['seconds']:.1f} s ({need['samples']:.3g} samples), peak memory about "
               f"{size_text(need['peak_bytes'])}")
         return 0
     from .render import render_batch
 
     result = render_batch(args.inputs, args.output, lens=args.lens, spec=spec, **sweep, workers=workers,
-                          dask=args.dask, force=args.force, progress=not args.quiet)
+                          dask=args.dask, force=args.force, progress=not args.quiet, camera=camera)
     return _report("render", result)
 
 
@@ -176,6 +185,7 @@ def register(subparsers: Any) -> None:
                         "`degrade --depth` per image")
     p.add_argument("--occlusion", choices=OCCLUSIONS, default=OCCLUSIONS[0], help="with --depth-pattern: as degrade's")
     add_frame_options(p.add_argument_group("the frames' camera (as degrade's; every input taken by it)"))
+    add_camera_options(p, seed=True)
     p.add_argument("--cache", metavar="DIR", help="PSF-grid cache (default: the user's cache folder)/psf-grids")
     _add_runner_options(p)
     add_grid_options(p.add_argument_group("grid options (with --lens; those of `solas-mi psf-grid`; --grid "
@@ -194,5 +204,6 @@ def register(subparsers: Any) -> None:
     r.add_argument("--lens", action="append", required=True,
                    help="shipped lens name or .toml file; repeat to sweep over lenses")
     add_spec_flags(r, RENDER_SETTINGS, sweep=SWEEP[1:])
+    add_camera_options(r, seed=False)  # the sensor's seed is the batch's --seed
     _add_runner_options(r)
     r.set_defaults(run=run_batch_render)

@@ -18,7 +18,7 @@ from typing import Any, Iterable
 
 from ..errors import SolasError
 from .cache import GridCache, file_hash
-from .jobs import MANIFEST, Job, Manifest, expand_inputs, plan
+from .jobs import MANIFEST, Job, Manifest, add_outputs, expand_inputs, plan
 from .runner import check_dask
 
 # seconds per image value (H·W·C) on one core of the 2-core benchmark machine, reading, degrading
@@ -85,7 +85,7 @@ def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLik
                psf_grid: str | os.PathLike | None = None, lens=None, grid_spec=None,
                method: str = "interp", boundary: str = "edge", linear: bool = False,
                cache: GridCache | str | os.PathLike | None = None, output_format: str = "exr",
-               depth_pattern: str | None = None, frame=None) -> BatchPlan:
+               depth_pattern: str | None = None, frame=None, camera=None) -> BatchPlan:
     """Check everything a batch needs before any work and find what a former run finished."""
     from ..convolution.kernels import check_boundary
     from ..convolution.methods import check_method
@@ -108,6 +108,7 @@ def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLik
     if output_format not in OUTPUT_FILES:
         raise SolasError(f"output format {output_format!r} must be one of {', '.join(OUTPUT_FILES)}")
     jobs = plan(images, out_dir, roots, OUTPUT_FILES[output_format])
+    with_camera(jobs, camera, files, output_format)
     for job in jobs:
         if depths:
             job.params["depth"] = str(depths[Path(job.input)])
@@ -130,11 +131,26 @@ def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLik
         hit = grid_path.is_file() and cache.check(grid_path, lens, spec) is None
         grid_id, source = grid_path.stem, "cache hit" if hit else "to compute"
     identity = [grid_id, method, boundary, linear] + ([output_format] if output_format != "exr" else []) + (
-        [depth_pattern] if depth_pattern is not None else []) + ([asdict(frame)] if frame is not None else [])
+        [depth_pattern] if depth_pattern is not None else []) + ([asdict(frame)] if frame is not None else []) + (
+        [camera.describe()] if camera is not None else [])
     key = hashlib.sha256(json.dumps(identity).encode()).hexdigest()[:16]
     manifest = Manifest(out_dir / MANIFEST, {"version": 1, "kind": "degrade", "batch_id": key}, jobs)
     manifest.resume(key)
     return BatchPlan(jobs, manifest, key, grid_path, source, lens, spec)
+
+
+def with_camera(jobs: list[Job], camera, sources, output_format: str = "exr") -> None:
+    """The camera's outputs (`isp.camera.Camera`: RAW, developed frame) added to each item; None: none."""
+    if camera is None:
+        return
+    from ..isp.camera import Camera, camera_outputs
+
+    if not isinstance(camera, Camera):
+        raise SolasError(f"camera {camera!r} must be a solas_mi.isp.camera.Camera")
+    if output_format == "png16":
+        raise SolasError("a camera reads each item's irradiance from its EXR: write exr or exr-half, not png16 "
+                         "(16-bit sRGB, clipped to [0, 1])")
+    add_outputs(jobs, lambda output: camera_outputs(output, camera), sources)
 
 
 def depth_file(image: Path, pattern: str) -> Path:
@@ -169,7 +185,7 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
                   psf_grid: str | os.PathLike | None = None, lens=None, grid_spec=None, method: str = "interp", boundary: str = "edge", linear: bool = False, workers: int | None = None,
                   dask: str | None = None, cache: GridCache | str | os.PathLike | None = None, force: bool = False,
                   progress: bool = True, output_format: str = "exr", depth_pattern: str | None = None,
-                  occlusion: str = "filled", frame=None) -> BatchResult:
+                  occlusion: str = "filled", frame=None, camera=None) -> BatchResult:
     """Degrade every image of `inputs` (files, folders, glob patterns) into `output_dir` (one EXR +
     PNG per input, `batch.json` beside them) with the grid `psf_grid` (an EXR file) or one computed
     from `lens` (a Lens or its name / file) with `grid_spec` (a `psf.spec.GridSpec`; default: its
@@ -178,7 +194,9 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
     that fails is recorded and the others go on. `output_format`: float or half EXR
     (`convolution.output.OUTPUT_FORMATS`). `depth_pattern` (e.g. "{stem}_depth.exr"): each image's
     depth map beside it, with a grid over object distance (`degrade --depth`, `occlusion`). `frame`: the
-    camera every input was taken with (`optics.frame.FrameCamera`, as `degrade`'s)."""
+    camera every input was taken with (`optics.frame.FrameCamera`, as `degrade`'s). `camera`: each
+    degraded frame (its values read as W/m²) through a sensor and image processor (`isp.camera.Camera`),
+    its RAW and developed frame beside it (`<name>_raw.exr`, `<name>_raw.png`)."""
     from ..budget import check_memory
     from ..psf.depth import read_grid
 
@@ -188,7 +206,7 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
     cache = cache if isinstance(cache, GridCache) or psf_grid is not None else GridCache(cache)
     p = plan_batch(inputs, output_dir, psf_grid=psf_grid, lens=lens, grid_spec=grid_spec, method=method,
                    boundary=boundary, linear=linear, cache=cache, output_format=output_format,
-                   depth_pattern=depth_pattern, frame=frame)
+                   depth_pattern=depth_pattern, frame=frame, camera=camera)
     need = estimate(p, n if dask is None else 1)
     check_memory(f"batch of {len(p.todo)} images on {n} workers", need["peak_bytes"], force)
     from ..convolution.output import OUTPUT_FORMATS
@@ -197,7 +215,8 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
     if output_format not in OUTPUT_FORMATS:
         raise SolasError(f"output format {output_format!r} must be one of {', '.join(OUTPUT_FORMATS)}")
     header: dict[str, Any] = {"method": method, "boundary": boundary, "linear": linear, "format": output_format,
-                              **({"frame_camera": asdict(frame)} if frame is not None else {})}
+                              **({"frame_camera": asdict(frame)} if frame is not None else {}),
+                              **({"camera": camera.describe()} if camera is not None else {})}
     if p.lens is not None:
         with Progress("psf-grid", None, "PSFs", enabled=progress) as bar:  # shown only when it is computed
             p.grid_path, hit, seconds = cache.get(p.lens, p.spec, progress=bar)
@@ -211,7 +230,7 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
                    "runner": {"dask": dask} if dask is not None else {"workers": n}})
     p.manifest.header.update(header)
     settings = {"method": method, "boundary": boundary, "linear": linear, "force": force, "format": output_format,
-                "occlusion": occlusion, "frame": frame,
+                "occlusion": occlusion, "frame": frame, "camera": camera,
                 "batch": {"id": p.key, "manifest": str(p.manifest.path), "grid_hash": header["grid_hash"],
                           "lens_hash": header["lens_hash"]}}
     from .runner import run_batch

@@ -16,7 +16,7 @@ import os
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Callable, Iterable
 
 from ..errors import SolasError
 from ..outputs import inside, safe_name
@@ -45,11 +45,16 @@ class Job:
     outputs: dict[str, list] = field(default_factory=dict)  # path → [size, mtime_ns, sha256/16] when finished
     input_hash: str | None = None  # the input's SHA-256 (16 hex digits; a scene's with the files it reads) when finished
     params: dict[str, Any] = field(default_factory=dict)
+    extras: list[str] = field(default_factory=list)  # more outputs: the camera's RAW and developed frame
+
+    def paths(self) -> tuple[str, ...]:
+        """Every output of the item."""
+        return (self.output, self.png, *self.extras)
 
     def stamp(self) -> None:
         """Record the finished outputs' sizes, modification times and checksums and the input's
         checksum (how a re-run knows them)."""
-        self.outputs = {p: [(s := os.stat(p)).st_size, s.st_mtime_ns, file_hash(p)] for p in (self.output, self.png)}
+        self.outputs = {p: [(s := os.stat(p)).st_size, s.st_mtime_ns, file_hash(p)] for p in self.paths()}
         self.input_hash = self.input_digest()
 
     def input_digest(self) -> str:
@@ -71,11 +76,11 @@ class Job:
         return digest.hexdigest()[:16]
 
     def finished(self) -> bool:
-        """Both outputs are there as this batch wrote them (same sizes, times and SHA-256 checksums;
-        the record names exactly this item's two outputs), made from this very input (its content's
-        SHA-256: an input replaced by another file of the same name is done again)."""
+        """Every output is there as this batch wrote it (same sizes, times and SHA-256 checksums; the
+        record names exactly this item's outputs), made from this very input (its content's SHA-256: an
+        input replaced by another file of the same name is done again)."""
         try:
-            return set(self.outputs) == {self.output, self.png} and all(
+            return set(self.outputs) == set(self.paths()) and all(
                 [(s := os.stat(p)).st_size, s.st_mtime_ns, file_hash(p)] == list(v) for p, v in self.outputs.items()) \
                 and self.input_hash == self.input_digest()
         except (OSError, SolasError):  # an output or input gone, a scene that no longer reads
@@ -135,6 +140,21 @@ def plan(inputs: list[Path], out_dir: Path, roots: dict[Path, Path] | None = Non
                 raise SolasError(f"output {target} would replace the input of the same name; choose another -o")
         jobs.append(Job(str(path), str(output), str(output.with_suffix(suffixes[1]))))
     return jobs
+
+
+def add_outputs(jobs: list[Job], more: Callable[[str], list[str]], sources: Iterable[str | os.PathLike]) -> None:
+    """Give each job the outputs `more(job.output)` besides its two; SolasError when one would be
+    another item's output or an input."""
+    taken = {p: job.input for job in jobs for p in (job.output, job.png)}
+    inputs = {str(Path(s)) for s in sources}
+    for job in jobs:
+        job.extras = more(job.output)
+        for path in job.extras:
+            if path in taken or path in inputs:
+                raise SolasError(f"output {path} of {job.input!r} would replace "
+                                 f"{'an input' if path in inputs else 'an output of ' + repr(taken[path])}; "
+                                 "rename the input or run it as a separate batch")
+            taken[path] = job.input
 
 
 class Manifest:

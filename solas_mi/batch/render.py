@@ -32,7 +32,7 @@ from typing import Any, Iterable, Sequence
 from ..errors import SolasError
 from ..outputs import inside, safe_name
 from ..render.spec import RenderSpec
-from .degrade import WORKER_BYTES, BatchResult, check_workers
+from .degrade import WORKER_BYTES, BatchResult, check_workers, with_camera
 from .jobs import IMAGE_SUFFIXES, MANIFEST, SCENE_SUFFIXES, Job, Manifest, expand_inputs
 from .runner import check_dask
 
@@ -134,7 +134,7 @@ def _jobs(files: list[Path], out_dir: Path, base: RenderSpec, axes: dict[str, li
 
 
 def plan_render(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *, lens,
-                spec: RenderSpec | None = None, **settings) -> RenderPlan:
+                spec: RenderSpec | None = None, camera=None, **settings) -> RenderPlan:
     """Check everything a render batch needs before any work and find what a former run finished.
     `lens` is one value or a list (the sweep); `settings` are RenderSpec fields changing `spec`, of
     which `focus_distance`, `sensor`, `pitch_um` and `spp` also take a list of values (the sweep);
@@ -152,9 +152,12 @@ def plan_render(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLi
     axes["lens"] = list(lenses)
     _check_inputs(files, base, axes)
     jobs = _jobs(files, out_dir, base, axes, lenses)
+    with_camera(jobs, camera, files)
     # the settings every item shares; each item is matched on its input, output and sweep point, so a
     # sweep grown by a value redoes only the new items
     shared = {k: v for k, v in base.as_dict().items() if k not in SWEEP}
+    if camera is not None:
+        shared["camera"] = camera.describe()
     key = hashlib.sha256(json.dumps(["render", shared]).encode()).hexdigest()[:16]
     sweep = {name: _json_axis(name, axes[name]) for name in SWEEP if len(axes[name]) > 1}
     manifest = Manifest(out_dir / MANIFEST, {"version": 1, "kind": "render", "batch_id": key, "sweep": sweep}, jobs)
@@ -206,7 +209,7 @@ def batch_variant(p: RenderPlan) -> str:
 
 def render_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *, lens: str | Sequence[str],
                  spec: RenderSpec | None = None, workers: int | None = None, dask: str | None = None,
-                 force: bool = False, progress: bool = True, **settings) -> BatchResult:
+                 force: bool = False, progress: bool = True, camera=None, **settings) -> BatchResult:
     """Render every input of `inputs` (images and Mitsuba scene XML files: files, folders, glob
     patterns) through `lens` (a shipped name or .toml file) into `output_dir` (one EXR + PNG per item,
     `batch.json` beside them), at every point of the sweep: `lens`, `focus_distance` (scene units;
@@ -214,14 +217,16 @@ def render_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathL
     each take one value or a list. `spec` and the other `settings` (`render.spec.RenderSpec`: response,
     fov_deg, boundary, fresnel, rings, mapping, variant) as in `render.image.render_image`; `seed` the
     batch's base seed. `workers` local processes (default: the cores), or the Dask scheduler at
-    `dask` ("local": a LocalCluster for this batch). A failed item is recorded; the others go on."""
+    `dask` ("local": a LocalCluster for this batch). A failed item is recorded; the others go on.
+    `camera` (`isp.camera.Camera`): each rendered frame through a sensor and image processor, its RAW
+    and developed frame beside it, seeded by the camera's seed and the item's name."""
     from ..budget import check_memory
     from .runner import run_batch
 
     start = time.perf_counter()
     check_dask(dask)
     n = check_workers(workers, dask)
-    p = plan_render(inputs, output_dir, lens=lens, spec=spec, **settings)
+    p = plan_render(inputs, output_dir, lens=lens, spec=spec, camera=camera, **settings)
     check_memory(f"batch of {len(p.todo)} renders on {n} workers", estimate(p, n if dask is None else 1)["peak_bytes"],
                  force)
     chosen = batch_variant(p)
@@ -231,7 +236,8 @@ def render_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathL
     p.manifest.header.update({"variant": chosen, "settings": {k: v for k, v in p.spec.as_dict().items()
                                                               if k not in SWEEP},
                               "threads_per_worker": threads,
+                              **({"camera": camera.describe()} if camera is not None else {}),
                               "runner": {"dask": dask} if dask is not None else {"workers": n}})
-    settings = {"threads": threads, "batch": {"id": p.key, "manifest": str(p.manifest.path)}}
+    settings = {"threads": threads, "camera": camera, "batch": {"id": p.key, "manifest": str(p.manifest.path)}}
     run_batch(p.manifest, p.todo, None, None, settings, n, dask, "render" if progress else None)
     return BatchResult(p.jobs, p.manifest.path, None, "none", time.perf_counter() - start)

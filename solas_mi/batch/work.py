@@ -29,6 +29,8 @@ def run_job(job: Job, grid: "PSFGrid | None", grid_path: str | None, settings: d
             _render(job, settings)
         else:
             raise SolasError(f"item kind {job.kind!r} must be degrade or render")
+        if settings.get("camera") is not None:
+            _shoot(job, settings)
         job.stamp()
         job.status, job.error = "done", None
     except SolasError as exc:
@@ -56,6 +58,27 @@ def _degrade(job: Job, grid: "PSFGrid", grid_path: str, settings: dict[str, Any]
                  linear=settings["linear"], force=settings["force"], output_format=settings.get("format", "exr"),
                  depth=job.params.get("depth"), occlusion=settings.get("occlusion", "filled"), frame=settings.get("frame"),
                  extra_meta={"batch": {**settings["batch"], "seed": job.seed}})
+
+
+def _shoot(job: Job, settings: dict[str, Any]) -> None:
+    """The item's output (image-plane irradiance, W/m²) through the batch's camera: its RAW EXR (and
+    developed frame) beside it, the frame named by its output's stem (`isp.camera`)."""
+    from pathlib import Path
+
+    import numpy as np
+
+    from ..isp.camera import write_frame
+    from ..sensor.commands import read_rgb
+
+    camera = settings["camera"]
+    image = read_rgb(job.output)
+    # a spectral render's RGB is negative where a sample's colour lies outside the RGB gamut (few spp,
+    # saturated colours): no light for the sensor, counted in the metadata
+    negative = int(np.count_nonzero(image < 0.0))
+    raw, frame, meta = camera.shoot(np.maximum(image, 0.0), Path(job.output).stem)
+    meta.update(input=job.output, batch={**settings["batch"], "seed": job.seed},
+                negative_values_taken_as_zero={"count": negative, "least": float(min(image.min(), 0.0))})
+    write_frame(job.extras[0], raw, frame, meta)
 
 
 def _render(job: Job, settings: dict[str, Any]) -> None:

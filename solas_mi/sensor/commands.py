@@ -10,22 +10,28 @@ from typing import Any
 from ..errors import SolasError
 
 
-def _irradiance(args: argparse.Namespace):
-    """The input image as image-plane irradiance (H, W, 3) in W/m²: its R, G, B channels times --scale,
-    through the camera equation when --f-number is given (the image is then radiance, W/m²/sr)."""
+def read_rgb(path):
+    """The R, G, B channels (H, W, 3, float64) of an EXR file, finite; SolasError naming what is missing."""
     import numpy as np
 
     from ..imageio import check_finite, read_exr
-    from .exposure import image_irradiance
 
-    channels, _ = read_exr(args.image)
+    channels, _ = read_exr(path)
     missing = [c for c in "RGB" if c not in channels]
     if missing:
-        raise SolasError(f"{args.image}: channels {', '.join(missing)} missing; the sensor needs R, G and B "
+        raise SolasError(f"{path}: channels {', '.join(missing)} missing; the sensor needs R, G and B "
                          f"(found {', '.join(sorted(channels))})")
+    return check_finite(np.stack([channels[c] for c in "RGB"], axis=-1).astype(np.float64), str(path))
+
+
+def _irradiance(args: argparse.Namespace):
+    """The input image as image-plane irradiance (H, W, 3) in W/m²: its R, G, B channels times --scale,
+    through the camera equation when --f-number is given (the image is then radiance, W/m²/sr)."""
+    from .exposure import image_irradiance
+
     if not args.scale > 0:
         raise SolasError(f"--scale {args.scale} must be > 0")
-    image = check_finite(np.stack([channels[c] for c in "RGB"], axis=-1).astype(np.float64), args.image) * args.scale
+    image = read_rgb(args.image) * args.scale
     if args.f_number is None:
         if args.transmission != 1.0:
             raise SolasError("--transmission applies with --f-number (the image is then radiance); give both")
@@ -33,14 +39,11 @@ def _irradiance(args: argparse.Namespace):
     return image_irradiance(image, args.f_number, args.transmission)
 
 
-def run_camera(args: argparse.Namespace) -> int:
-    """Write the RAW frame (one channel "RAW", DN) with the model, seed and exposure in the metadata."""
-    from ..imageio import write_exr
-    from ..outputs import check_target
+def raw_frame(args: argparse.Namespace):
+    """The RAW frame (H, W, uint16 DN) of the command's image, its `SensorModel` and its metadata."""
     from .capture import capture
     from .files import describe, load_sensor
 
-    check_target(args.output, [args.image, args.sensor_model])
     model = load_sensor(args.sensor_model)
     if not args.exposure_ms > 0:
         raise SolasError(f"--exposure-ms {args.exposure_ms} must be > 0")
@@ -49,9 +52,23 @@ def run_camera(args: argparse.Namespace) -> int:
             "seed": args.seed,
             "exposure_ms": args.exposure_ms, "scale": args.scale, "f_number": args.f_number,
             "transmission": args.transmission, "input": str(args.image)}
-    write_exr(args.output, {"RAW": raw.astype("float32")}, meta)
+    return raw, model, meta
+
+
+def report(args: argparse.Namespace, raw, model) -> None:
     print(f"{args.output}: {raw.shape[1]}x{raw.shape[0]} RAW ({model.cfa}, {model.bit_depth} bit), "
           f"mean {raw.mean():.1f} DN, {int((raw >= model.white_level_dn).sum())} pixels at the white level")
+
+
+def run_camera(args: argparse.Namespace) -> int:
+    """Write the RAW frame (one channel "RAW", DN) with the model, seed and exposure in the metadata."""
+    from ..imageio import write_exr
+    from ..outputs import check_target
+
+    check_target(args.output, [args.image, args.sensor_model])
+    raw, model, meta = raw_frame(args)
+    write_exr(args.output, {"RAW": raw.astype("float32")}, meta)
+    report(args, raw, model)
     return 0
 
 

@@ -15,11 +15,11 @@ file, `qe.read_csv`) or a `[sensor.qe_curve]` table of columns `wavelength_nm`, 
 `solas_mi/sensor/presets/`, each citing its sources) or the path of a TOML file (a name ending in
 ".toml" or holding a path separator)."""
 import os
-import tomllib
 from dataclasses import asdict
 from pathlib import Path
 
 from ..errors import SolasError
+from ..options import toml_table
 from .model import SensorModel
 from .qe import read_csv
 
@@ -50,17 +50,7 @@ def _path(name_or_path: str | Path) -> Path:
 def load_sensor(name_or_path: str | Path) -> SensorModel:
     """The `SensorModel` of a preset's name or of the `[sensor]` table of TOML file `name_or_path`."""
     path = _path(name_or_path)
-    try:
-        with open(path, "rb") as f:
-            data = tomllib.load(f)
-    except OSError as exc:
-        raise SolasError(f"sensor model {str(path)!r}: {exc.strerror or 'cannot be read'}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise SolasError(f"sensor model {str(path)!r} is not valid TOML: {exc}") from None
-    if not isinstance(data.get("sensor"), dict) or set(data) != {"sensor"}:
-        raise SolasError(f"sensor model {str(path)!r} must hold one [sensor] table (and nothing else); "
-                         f"found {', '.join(sorted(data)) or 'nothing'}")
-    values = dict(data["sensor"])
+    values = dict(toml_table(path, "sensor", "sensor model"))
     try:
         if isinstance(values.get("qe_curve"), str):  # a CSV file, relative to the TOML file
             values["qe_curve"] = read_csv(path.parent / values["qe_curve"]).table()

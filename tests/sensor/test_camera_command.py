@@ -75,3 +75,30 @@ def test_output_may_not_be_the_input(inputs, capsys):
     assert main(["camera", str(folder / "in.exr"), "--sensor-model", str(folder / "sensor.toml"),
                  "--exposure-ms", "5", "-o", str(folder / "in.exr")]) == 2
     assert "is an input" in capsys.readouterr().err
+
+
+def test_developed_frame_beside_the_raw(inputs, tmp_path):
+    """--isp default: the RAW EXR as without it, the developed frame OUT.png beside it equals `develop`
+    of that RAW, and the metadata names every stage."""
+    import imageio.v3 as iio
+
+    from solas_mi.isp.pipeline import develop
+
+    folder, image = inputs
+    args = ["camera", str(folder / "in.exr"), "--sensor-model", str(folder / "sensor.toml"), "--exposure-ms", "5"]
+    assert main([*args, "-o", str(folder / "raw.exr")]) == 0
+    assert main([*args, "--isp", "default", "-o", str(folder / "cam.exr")]) == 0
+    channels, meta = read_exr(folder / "cam.exr")
+    assert np.array_equal(channels["RAW"], read_exr(folder / "raw.exr")[0]["RAW"])
+    frame, developed = develop(channels["RAW"], load_sensor(folder / "sensor.toml"))
+    assert np.array_equal(iio.imread(folder / "cam.png"), frame)
+    assert meta["developed_frame"] == "cam.png" and meta["stages"] == developed["stages"]
+    assert list(meta["stages"]) == ["black_level", "white_balance", "demosaic", "ccm", "tone"]
+
+
+def test_bad_isp_writes_nothing(inputs, capsys):
+    folder, _ = inputs
+    code = main(["camera", str(folder / "in.exr"), "--sensor-model", str(folder / "sensor.toml"), "--exposure-ms",
+                 "5", "--isp", str(folder / "missing.toml"), "-o", str(folder / "cam.exr")])
+    assert code == 2 and "must be 'default' or a TOML file" in capsys.readouterr().err
+    assert not (folder / "cam.exr").exists() and not (folder / "cam.png").exists()

@@ -1,0 +1,67 @@
+"""Speed of the camera stage: a 1280×960 irradiance frame through the sensor (`sensor.capture`: shot,
+dark and read noise, PRNU/DSNU, full well, ADC) and the image processor (`isp.develop`: black level,
+white balance, demosaicing, CCM, sRGB tone curve), as a batch item does after its render or degrade.
+
+Run: .venv/bin/python benchmarks/bench_sensor_isp.py [--repeats 7]
+Prints, per case, the median and the spread of the runs (s), frames per second, the cores other
+processes used meanwhile (timings are only good near 0), and the share of a degrade batch item's time
+(batch.degrade.SECONDS_PER_VALUE per value of an RGB frame: reading, degrading, writing).
+"""
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_convolution import busy_seconds, test_image  # noqa: E402
+
+W, H = 1280, 960
+EXPOSURE_S = 2.5e-4  # the test image's values (0…1) read as W/m²: 2300–3100 photons per channel at 1 (2 µm pixels)
+
+
+def cases():
+    from solas_mi.isp.pipeline import ISP, develop
+    from solas_mi.sensor.capture import capture
+    from solas_mi.sensor.model import SensorModel
+
+    image = test_image(W, H)
+    out = {}
+    for cfa in ("RGGB", "RCCB"):
+        model = SensorModel(cfa=cfa, pixel_pitch_um=2.0)
+        raw = capture(model, image, EXPOSURE_S, 0)
+        out[f"sensor ({cfa})"] = lambda m=model: capture(m, image, EXPOSURE_S, 0, 1)
+        for method in ("bilinear", "Malvar2004", "Menon2007"):
+            isp = ISP(demosaic=method)
+            out[f"isp {method} ({cfa})"] = lambda r=raw, m=model, i=isp: develop(r, m, i)
+        out[f"sensor + isp default ({cfa})"] = lambda m=model: develop(capture(m, image, EXPOSURE_S, 0, 1), m)
+    return out
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    parser.add_argument("--repeats", type=int, default=7)
+    args = parser.parse_args()
+    from solas_mi.batch.degrade import SECONDS_PER_VALUE
+
+    degrade_s = SECONDS_PER_VALUE * W * H * 3
+    print(f"{W}×{H} frame; a degrade batch item of this size: {degrade_s:.2f} s (SECONDS_PER_VALUE)\n")
+    print("| case | median (s) | runs min–max (s) | frames/s | share of a degrade item | other processes' load (cores) |")
+    print("|---|---|---|---|---|---|")
+    for name, run in cases().items():
+        run()  # warm-up: imports, the demosaicer's first call
+        times, busy = [], 0.0
+        for _ in range(args.repeats):
+            b0, t0 = busy_seconds(), time.perf_counter()
+            run()
+            times.append(time.perf_counter() - t0)
+            busy += busy_seconds() - b0 - times[-1]
+        median = statistics.median(times)
+        print(f"| {name} | {median:.3f} | {min(times):.3f}–{max(times):.3f} | {1 / median:.1f} | "
+              f"{median / degrade_s:.0%} | {max(busy / sum(times), 0.0):.2f} |")
+
+
+if __name__ == "__main__":
+    main()

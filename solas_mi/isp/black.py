@@ -1,0 +1,22 @@
+"""Black level: the RAW's digital numbers → the signal above black, as a fraction of the sensor's
+saturation signal.
+
+    s = (y − black) / y_sat,    y_sat = min(K · full well, white − black)
+
+(K the conversion gain in DN/e⁻; the well or the ADC, whichever fills first, saturates the pixel), so
+1.0 is a saturated pixel. Without this stage the RAW is only scaled, s = y / y_sat, and the black level
+stays in the signal (a raised floor in the frame)."""
+import numpy as np
+
+from ..sensor.model import SensorModel
+
+
+def saturation_dn(model: SensorModel) -> float:
+    """y_sat: the signal above black (DN) of a saturated pixel."""
+    return float(min(model.gain_dn_per_e * model.full_well_e, model.white_level_dn - model.black_level_dn))
+
+
+def subtract_black(raw: np.ndarray, model: SensorModel, *, enabled: bool = True) -> np.ndarray:
+    """The signal (float64, 1.0 = saturation) of a RAW frame in DN; `enabled=False` keeps the black level."""
+    black = model.black_level_dn if enabled else 0.0
+    return (np.asarray(raw, dtype=np.float64) - black) / saturation_dn(model)

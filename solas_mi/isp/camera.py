@@ -1,0 +1,99 @@
+"""`Camera`: the sensor and image processor every frame of a batch goes through, and how a frame is
+shot: the RAW of frame `name` (the item's output name) from the camera's seed and that name, so that
+a frame comes out the same whatever the order of the run, a resumed run or a Dask worker.
+
+The sensor's fixed pattern (PRNU, DSNU) comes from the seed alone, as one camera's would; the
+temporal noise from (seed, frame number), the frame number a hash of the frame's name."""
+from __future__ import annotations
+
+import hashlib
+import math
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import SolasError
+from ..sensor.model import SensorModel
+from .pipeline import ISP
+
+MAX_SEED = 2**31 - 1
+
+
+@dataclass(frozen=True)
+class Camera:
+    """A sensor exposed `exposure_ms` (the frame's values read as W/m² of image irradiance), its seed,
+    and the image processor (None: RAW only)."""
+
+    sensor: SensorModel
+    exposure_ms: float
+    isp: ISP | None = None
+    seed: int = 0
+
+    def __post_init__(self):
+        if not isinstance(self.sensor, SensorModel):
+            raise SolasError(f"camera sensor {self.sensor!r} must be a solas_mi.sensor.model.SensorModel")
+        if isinstance(self.exposure_ms, bool) or not isinstance(self.exposure_ms, (int, float)) \
+                or not math.isfinite(self.exposure_ms) or self.exposure_ms <= 0:
+            raise SolasError(f"exposure {self.exposure_ms!r} ms must be a finite number > 0")
+        if self.isp is not None and not isinstance(self.isp, ISP):
+            raise SolasError(f"camera isp {self.isp!r} must be a solas_mi.isp.pipeline.ISP or None")
+        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or not 0 <= self.seed <= MAX_SEED:
+            raise SolasError(f"sensor seed {self.seed!r} must be a whole number from 0 to 2^31 - 1")
+
+    def describe(self) -> dict:
+        """Every value (JSON-ready): for metadata, manifests and the batch's identity."""
+        from ..sensor.files import describe
+
+        return {"sensor": describe(self.sensor), "exposure_ms": self.exposure_ms, "seed": self.seed,
+                "isp": None if self.isp is None else self.isp.describe()}
+
+    def shoot(self, irradiance: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray | None, dict]:
+        """The RAW (H, W, uint16 DN) of frame `name`, the developed 8-bit frame (None without an isp)
+        and the metadata: the camera, the frame's name and number, the stages."""
+        from ..sensor.capture import capture
+        from .pipeline import develop
+
+        number = frame_number(name)
+        raw = capture(self.sensor, irradiance, self.exposure_ms * 1e-3, self.seed, number)
+        meta = {"kind": "sensor RAW", "unit": "DN", "camera": self.describe(), "frame": name, "frame_number": number}
+        if self.isp is None:
+            return raw, None, meta
+        frame, developed = develop(raw, self.sensor, self.isp)
+        return raw, frame, {**meta, **developed}
+
+
+def frame_number(name: str) -> int:
+    """The frame number of the frame named `name` (56 bits of its SHA-256)."""
+    return int.from_bytes(hashlib.sha256(name.encode()).digest()[:7], "little")
+
+
+def camera_outputs(output: str | Path, camera: Camera | None) -> list[str]:
+    """The files the camera adds beside an item's output OUT/<name>.exr: OUT/<name>_raw.exr, and with an
+    image processor the developed frame OUT/<name>_raw.png beside it (as `solas-mi camera` names it)."""
+    if camera is None:
+        return []
+    raw = Path(output).with_name(Path(output).stem + "_raw.exr")
+    return [str(raw)] + ([str(raw.with_suffix(".png"))] if camera.isp is not None else [])
+
+
+def write_frame(raw_path: str | Path, raw: np.ndarray, frame: np.ndarray | None, meta: dict) -> None:
+    """The RAW EXR (channel RAW, DN) and the developed frame's PNG beside it, together or neither."""
+    from ..imageio import write_exr, write_png
+    from ..outputs import written_together
+
+    paths = [Path(raw_path)] + ([Path(raw_path).with_suffix(".png")] if frame is not None else [])
+    if frame is not None:
+        meta = {**meta, "developed_frame": paths[1].name}
+    with written_together(*paths) as tmps:
+        write_exr(tmps[0], {"RAW": raw.astype(np.float32)}, meta)
+        if frame is not None:
+            write_png(tmps[1], frame / 255.0, encoded=True)
+
+
+def load_camera(sensor_model: str, exposure_ms: float, isp: str | None = None, seed: int = 0) -> Camera:
+    """The camera of the command line's --sensor-model, --exposure-ms, --isp and seed."""
+    from ..sensor.files import load_sensor
+    from .pipeline import load_isp
+
+    return Camera(load_sensor(sensor_model), exposure_ms, None if isp is None else load_isp(isp), seed)

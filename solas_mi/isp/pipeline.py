@@ -1,0 +1,142 @@
+"""`ISP`: the image processor's description, and `develop`, a RAW frame → an 8-bit sRGB frame.
+
+The stages, in order, each optional and named in the metadata:
+
+1. black level (`black`): the signal above black as a fraction of saturation;
+2. white balance (`white`): one gain per filter on the mosaic;
+3. demosaicing (`demosaic`): three channels per pixel (``none``: the mosaic as a grey frame);
+4. colour correction (`ccm`): the sensor's matrix, a given one, or none;
+5. tone curve (`tone`): sRGB OETF, a gamma or none, then 8 bits.
+
+An `ISP` is written ``default`` (every field's default) or as a small TOML file with an ``[isp]``
+table of its fields, e.g.
+
+    [isp]
+    white_balance = "grey-card"   # daylight, grey-world, grey-card, none, or gains {R = 1.9, G = 1, B = 1.5}
+    grey_card = [100, 80, 140, 120]  # x0, y0, x1, y1 (pixels) with grey-card
+    demosaic = "Menon2007"        # bilinear, Malvar2004, Menon2007, none
+    demosaic_options = {refining_step = false}
+    ccm = "sensor"                # sensor, none, or [[...], [...], [...]]
+    tone = "gamma"                # srgb, gamma, none
+    gamma = 2.2
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field, fields
+from pathlib import Path
+
+import numpy as np
+
+from ..errors import SolasError
+from ..options import toml_table
+from ..sensor.model import SensorModel
+from . import black, ccm, demosaic, tone, white
+
+DEFAULT = "default"
+
+
+@dataclass(frozen=True)
+class ISP:
+    """The image processor: each stage's choice (see the module's docstring)."""
+
+    black_level: bool = True
+    white_balance: str | dict = "daylight"
+    grey_card: tuple[int, int, int, int] | None = None
+    demosaic: str = demosaic.DEFAULT_METHOD
+    demosaic_options: dict = field(default_factory=dict)
+    ccm: str | tuple = "sensor"
+    tone: str = "srgb"
+    gamma: float = 2.2
+
+    def __post_init__(self):
+        if not isinstance(self.black_level, bool):
+            raise SolasError(f"isp black_level {self.black_level!r} must be true or false")
+        if isinstance(self.white_balance, str) and self.white_balance not in white.METHODS[:3] + white.METHODS[4:]:
+            raise SolasError(f"isp white_balance {self.white_balance!r} must be one of daylight, grey-world, "
+                             "grey-card, none, or a table of gains per filter")
+        if (self.white_balance == "grey-card") != (self.grey_card is not None):
+            raise SolasError("isp grey_card (x0, y0, x1, y1) goes with white_balance = \"grey-card\", and only with it")
+        if self.grey_card is not None:
+            object.__setattr__(self, "grey_card", tuple(self.grey_card))
+        if self.demosaic != "none":
+            demosaic.check_method(self.demosaic, self.demosaic_options)
+        elif self.ccm != "none" or self.demosaic_options:
+            raise SolasError("isp demosaic = \"none\" gives a grey frame: it takes ccm = \"none\" and no demosaic_options")
+        if not isinstance(self.ccm, str):
+            object.__setattr__(self, "ccm", tuple(map(tuple, ccm.check_matrix(self.ccm))))
+        elif self.ccm not in ("sensor", "none"):
+            raise SolasError(f"isp ccm {self.ccm!r} must be sensor, none, or a 3 × 3 matrix")
+        tone.check_curve(self.tone, self.gamma)
+
+    @classmethod
+    def from_dict(cls, values: dict) -> ISP:
+        known = [f.name for f in fields(cls)]
+        unknown = sorted(set(values) - set(known))
+        if unknown:
+            raise SolasError(f"unknown isp option(s) {', '.join(unknown)}; allowed: {', '.join(known)}")
+        return cls(**values)
+
+    def describe(self) -> dict:
+        """Every field (JSON-ready)."""
+        return {k: list(map(list, v)) if k == "ccm" and isinstance(v, tuple) else list(v) if isinstance(v, tuple) else v
+                for k, v in asdict(self).items()}
+
+
+def load_isp(text: str | Path) -> ISP:
+    """The `ISP` named ``default``, or that of the ``[isp]`` table of TOML file `text`."""
+    if str(text) == DEFAULT:
+        return ISP()
+    if not Path(text).is_file():
+        raise SolasError(f"isp {str(text)!r} must be 'default' or a TOML file with an [isp] table (no such file)")
+    values = toml_table(text, "isp", "isp file")
+    try:
+        return ISP.from_dict(values)
+    except SolasError as exc:
+        raise SolasError(f"isp file {str(text)!r}: {exc}") from None
+
+
+def _gains(isp: ISP, signal: np.ndarray, model: SensorModel) -> dict[str, float]:
+    method = isp.white_balance
+    if isinstance(method, dict):
+        return white.check_given(method, model.cfa)
+    if method == "daylight":
+        return white.daylight_gains(model)
+    if method == "none":
+        return white.check_given({f: 1.0 for f in set(model.cfa)}, model.cfa)
+    return white.measured_gains(signal, model.cfa, isp.grey_card)
+
+
+def develop(raw: np.ndarray, model: SensorModel, isp: ISP = ISP()) -> tuple[np.ndarray, dict]:
+    """The 8-bit frame (H, W, 3 uint8) of a RAW frame (H, W, DN) of sensor `model`, and the metadata
+    naming every stage with the values it used."""
+    stages = {"black_level": {"subtracted": isp.black_level, "black_dn": model.black_level_dn,
+                              "saturation_dn": black.saturation_dn(model)}}
+    signal = black.subtract_black(raw, model, enabled=isp.black_level)
+    gains = _gains(isp, signal, model)
+    stages["white_balance"] = {"method": "given" if isinstance(isp.white_balance, dict) else isp.white_balance,
+                               "gains": gains, **({"grey_card": list(isp.grey_card)} if isp.grey_card else {})}
+    signal = white.apply_gains(signal, model.cfa, gains)
+    if isp.demosaic == "none":
+        image = np.repeat(signal[..., None], 3, axis=-1)
+    else:
+        image = demosaic.demosaic(signal, model.cfa, isp.demosaic, **isp.demosaic_options)
+    stages["demosaic"] = {"method": isp.demosaic, "options": dict(isp.demosaic_options),
+                          "cfa": model.cfa, "channels": list(demosaic.slots(model.cfa)[1])}
+    matrix = _matrix(isp, model)
+    if matrix is not None:
+        image = ccm.correct(image, matrix)
+    stages["ccm"] = {"method": isp.ccm if isinstance(isp.ccm, str) else "given",
+                     "matrix": None if matrix is None else matrix.tolist()}
+    clipped = int(np.count_nonzero((image < 0.0) | (image > 1.0)))
+    frame = tone.to_8bit(tone.encode(image, isp.tone, isp.gamma))
+    stages["tone"] = {"curve": isp.tone, **({"gamma": isp.gamma} if isp.tone == "gamma" else {}),
+                      "values_clipped": clipped, "bits": 8}
+    return frame, {"isp": isp.describe(), "stages": stages}
+
+
+def _matrix(isp: ISP, model: SensorModel) -> np.ndarray | None:
+    if isp.ccm == "none":
+        return None
+    if isp.ccm == "sensor":
+        return ccm.sensor_matrix(model, white.channel_gains(model.cfa, white.daylight_gains(model)))
+    return np.array(isp.ccm)

@@ -1,0 +1,124 @@
+"""Batches through a camera (`--sensor-model`, `--exposure-ms`, `--isp`): each item's RAW and developed
+frame beside it, seeded by the batch's seed and the frame's name (not its place in the run), the camera
+in the outputs, the manifest and the batch's identity; resume, Dask and the options' errors."""
+import json
+
+import imageio.v3 as iio
+import numpy as np
+import pytest
+
+from solas_mi.batch import degrade_batch
+from solas_mi.batch.render import render_batch
+from solas_mi.cli import main
+from solas_mi.imageio import read_exr
+from solas_mi.isp.camera import Camera, frame_number, load_camera
+from solas_mi.isp.pipeline import ISP, develop
+from solas_mi.sensor.capture import capture
+from solas_mi.sensor.commands import read_rgb
+from solas_mi.sensor.model import SensorModel
+
+SENSOR = '[sensor]\ncfa = "RCCB"\npixel_pitch_um = 2.0\n'
+EXPOSURE_MS = 0.25  # the frames' values (0…1) read as W/m²: 2300–3100 photons per channel at 1 (2 µm pixels)
+
+
+def manifest(folder):
+    return json.loads((folder / "batch.json").read_text())
+
+
+@pytest.fixture
+def camera_inputs(batch_inputs):
+    batch_inputs.write(3)
+    (batch_inputs.root / "sensor.toml").write_text(SENSOR)
+    return batch_inputs
+
+
+def _argv(inputs, out, *extra):
+    return ["batch", "degrade", str(inputs.images), "--psf-grid", str(inputs.grid), "-o", str(out), "--workers", "1",
+            "--quiet", "--sensor-model", str(inputs.root / "sensor.toml"), "--exposure-ms", str(EXPOSURE_MS), *extra]
+
+
+def test_degrade_batch_writes_each_frames_raw_and_developed_frame(camera_inputs):
+    out = camera_inputs.root / "out"
+    assert main(_argv(camera_inputs, out, "--isp", "default", "--seed", "5")) == 0
+    m = manifest(out)
+    model = SensorModel(cfa="RCCB", pixel_pitch_um=2.0)
+    assert m["camera"]["seed"] == 5 and m["camera"]["isp"] == ISP().describe()
+    assert SensorModel.from_dict(m["camera"]["sensor"]) == model
+    for item in m["items"]:
+        stem = item["output"][:-4]
+        assert set(item["outputs"]) == {item["output"], item["png"], f"{stem}_raw.exr", f"{stem}_raw.png"}
+        channels, meta = read_exr(f"{stem}_raw.exr")
+        name = stem.rsplit("/", 1)[-1]
+        expected = capture(model, read_rgb(item["output"]), EXPOSURE_MS * 1e-3, 5, frame_number(name))
+        assert np.array_equal(channels["RAW"], expected) and 0 < expected.mean() < model.white_level_dn
+        assert meta["frame"] == name and meta["batch"]["id"] == m["batch_id"]
+        assert np.array_equal(iio.imread(f"{stem}_raw.png"), develop(expected, model, ISP())[0])
+    # a re-run skips every item; a developed frame removed is made again
+    assert main(_argv(camera_inputs, out, "--isp", "default", "--seed", "5")) == 0
+    assert manifest(out)["summary"] == {"skipped": 3}
+    (out / "frame001_raw.png").unlink()
+    assert main(_argv(camera_inputs, out, "--isp", "default", "--seed", "5")) == 0
+    assert manifest(out)["summary"] == {"skipped": 2, "done": 1}
+
+
+def test_frames_depend_on_seed_and_name_not_on_the_run(camera_inputs):
+    """One input alone gives the frame it gave among three; another seed, another frame (and another
+    batch identity); without the camera, yet another identity."""
+    root = camera_inputs.root
+    camera = load_camera(str(root / "sensor.toml"), EXPOSURE_MS, None, 2)
+    all_three = degrade_batch([camera_inputs.images], root / "all", psf_grid=camera_inputs.grid, workers=2,
+                              progress=False, camera=camera)
+    alone = degrade_batch([camera_inputs.images / "frame002.png"], root / "alone", psf_grid=camera_inputs.grid,
+                          workers=1, progress=False, camera=camera)
+    other = degrade_batch([camera_inputs.images / "frame002.png"], root / "other", psf_grid=camera_inputs.grid,
+                          workers=1, progress=False, camera=Camera(camera.sensor, EXPOSURE_MS, None, 3))
+    plain = degrade_batch([camera_inputs.images / "frame002.png"], root / "plain", psf_grid=camera_inputs.grid,
+                          workers=1, progress=False)
+    raw = {k: read_exr(root / k / "frame002_raw.exr")[0]["RAW"] for k in ("all", "alone", "other")}
+    assert np.array_equal(raw["all"], raw["alone"]) and not np.array_equal(raw["alone"], raw["other"])
+    assert not (root / "all" / "frame002_raw.png").exists()  # no isp: the RAW only
+    assert len({manifest(r.manifest.parent)["batch_id"] for r in (all_three, alone, other, plain)}) == 3
+    assert manifest(root / "all")["batch_id"] == manifest(root / "alone")["batch_id"]
+
+
+@pytest.mark.slow
+def test_dask_gives_the_same_frames(camera_inputs):
+    camera = load_camera(str(camera_inputs.root / "sensor.toml"), EXPOSURE_MS, "default", 0)
+    for where, dask in (("local", None), ("dask", "local")):
+        degrade_batch([camera_inputs.images], camera_inputs.root / where, psf_grid=camera_inputs.grid, workers=1,
+                      dask=dask, progress=False, camera=camera)
+    for name in ("frame000_raw.exr", "frame000_raw.png", "frame002_raw.exr"):
+        assert (camera_inputs.root / "local" / name).read_bytes() == (camera_inputs.root / "dask" / name).read_bytes() \
+            or name.endswith(".exr") and np.array_equal(read_exr(camera_inputs.root / "local" / name)[0]["RAW"],
+                                                         read_exr(camera_inputs.root / "dask" / name)[0]["RAW"])
+
+
+def test_render_batch_through_the_camera(camera_inputs, tmp_path):
+    camera = load_camera(str(camera_inputs.root / "sensor.toml"), EXPOSURE_MS, "default", 7)
+    result = render_batch([camera_inputs.images / "frame000.png"], tmp_path / "r", lens="solas-doublet",
+                          sensor="16x12", spp=1, workers=1, progress=False, camera=camera, seed=7)
+    (job,) = result.jobs
+    assert job.status == "done", job.error
+    channels, meta = read_exr(tmp_path / "r" / "frame000_raw.exr")
+    assert channels["RAW"].shape == (12, 16) and meta["camera"]["seed"] == 7
+    # one spectral sample per pixel: RGB outside the gamut, negative, read as no light and counted
+    assert meta["negative_values_taken_as_zero"]["count"] >= 0
+    assert manifest(tmp_path / "r")["camera"] == camera.describe()
+    assert iio.imread(tmp_path / "r" / "frame000_raw.png").shape == (12, 16, 3)
+
+
+@pytest.mark.parametrize("extra, message", [
+    (["--isp", "default"], "--isp go\\(es\\) with --sensor-model"),
+    (["--sensor-model", "S"], "--sensor-model needs --exposure-ms"),
+    (["--sensor-model", "S", "--exposure-ms", "1", "--format", "png16"], "not png16"),
+    (["--sensor-model", "S", "--exposure-ms", "0"], "exposure 0.0 ms must be a finite number > 0"),
+])
+def test_camera_options_refused(camera_inputs, extra, message, capsys):
+    extra = [str(camera_inputs.root / "sensor.toml") if e == "S" else e for e in extra]
+    argv = ["batch", "degrade", str(camera_inputs.images), "--psf-grid", str(camera_inputs.grid), "-o",
+            str(camera_inputs.root / "never"), "--quiet", *extra]
+    assert main(argv) == 2
+    import re
+
+    assert re.search(message, capsys.readouterr().err)
+    assert not (camera_inputs.root / "never" / "frame000.exr").exists()
