@@ -44,7 +44,8 @@ from ..blas import single_threaded_blas
 from ..errors import SolasError
 from ..imageio import check_finite
 from . import interp
-from .kernels import channel_wavelengths, check_boundary, check_kernel, layout
+from .curved import frame_layout
+from .kernels import channel_wavelengths, check_boundary, check_kernel
 
 OCCLUSIONS = ("filled", "layered", "none")
 CLEAR_PX = 2  # a fill takes its light from pixels more than this beyond a silhouette (antialiased depth and colour there are mixed)
@@ -95,7 +96,7 @@ def degrade_depth(image: np.ndarray, depth_m: np.ndarray, grid, boundary: str = 
     height, width, nchan = planes.shape
     depth = check_depth(depth_m, (height, width))
     wavelengths = channel_wavelengths(grid.layers[0], nchan)
-    lays = [layout(g, width, height, frame) for g in grid.layers]
+    lays = [frame_layout(g, width, height, frame) for g in grid.layers]
     radius = max(check_kernel(g, lay) for g, lay in zip(grid.layers, lays))
     nodes = grid.inverse
     weights, slab = layer_weights(np.where(np.isinf(depth), 0.0, 1.0 / depth), nodes)
