@@ -67,6 +67,19 @@ class FrameCamera:
         f = half / math.tan(math.radians(self.fov_deg))
         return f, f, width / 2 - 0.5, height / 2 - 0.5
 
+    def focal_px(self) -> float:
+        """The focal length in pixels on the axis: fx (pixels per unit tangent, or per radian in a fisheye);
+        a polynomial's a1. SolasError for "fov" (it depends on the frame's width) and for fx ≠ fy."""
+        if self.model == "fov":
+            raise SolasError("a frame given by --fov-deg has its focal length in pixels only with its width: give "
+                             "--intrinsics FX,FY,CX,CY (or --fisheye)")
+        if self.model == "polynomial":
+            return float(self.coefficients[0])
+        fx, fy = self.intrinsics[:2]
+        if abs(fx / fy - 1) > 1e-3:
+            raise SolasError(f"frame intrinsics fx {fx:g}, fy {fy:g} px: one focal length needs square pixels")
+        return float(fx)
+
     def tangents(self, cols: np.ndarray, rows: np.ndarray, width: int, height: int, clamp: bool = False
                  ) -> tuple[np.ndarray, np.ndarray]:
         """The direction (tan_x, tan_y) of pixel positions (cols, rows) (continuous); positions beyond a fisheye
