@@ -59,7 +59,7 @@ def run_batch_degrade(args: argparse.Namespace) -> int:
                            boundary=args.boundary, linear=args.linear, workers=_workers(args.workers), dask=args.dask,
                            cache=args.cache, force=args.force, progress=not args.quiet, output_format=args.format,
                            depth_pattern=args.depth_pattern, occlusion=args.occlusion, frame=_frame(args),
-                           scale_lens=args.scale_lens)
+                           scale_lens=args.scale_lens, silhouette=args.silhouette)
     return _report("degrade", result, f" (grid: {result.grid_source})")
 
 
@@ -149,7 +149,7 @@ def register(subparsers: Any) -> None:
     from ..convolution.commands import add_frame_options
     from ..convolution.kernels import BOUNDARIES
     from ..convolution.methods import DEFAULT_METHOD, METHODS
-    from ..convolution.depth import OCCLUSIONS
+    from ..convolution.depth import OCCLUSIONS, SILHOUETTES
     from ..convolution.output import OUTPUT_FORMATS
     from ..psf.spec import add_options as add_grid_options
     from ..render.spec import add_spec_flags
@@ -178,6 +178,7 @@ def register(subparsers: Any) -> None:
                    help="each image's depth map beside it (metres), with a grid over object distance (--distances-m): "
                         "`degrade --depth` per image")
     p.add_argument("--occlusion", choices=OCCLUSIONS, default=OCCLUSIONS[0], help="with --depth-pattern: as degrade's")
+    p.add_argument("--silhouette", choices=SILHOUETTES, default=SILHOUETTES[0], help="with --depth-pattern: as degrade's")
     frames = p.add_argument_group("the frames' camera (as degrade's; every input taken by it)")
     add_frame_options(frames)
     frames.add_argument("--scale-lens", type=float, metavar="PIXEL_UM",

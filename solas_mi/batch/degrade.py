@@ -189,7 +189,8 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
                   psf_grid: str | os.PathLike | None = None, lens=None, grid_spec=None, method: str = "interp", boundary: str = "edge", linear: bool = False, workers: int | None = None,
                   dask: str | None = None, cache: GridCache | str | os.PathLike | None = None, force: bool = False,
                   progress: bool = True, output_format: str = "exr", depth_pattern: str | None = None,
-                  occlusion: str = "filled", frame=None, scale_lens: float | None = None) -> BatchResult:
+                  occlusion: str = "filled", frame=None, scale_lens: float | None = None,
+                  silhouette: str = "nearest") -> BatchResult:
     """Degrade every image of `inputs` (files, folders, glob patterns) into `output_dir` (one EXR +
     PNG per input, `batch.json` beside them) with the grid `psf_grid` (an EXR file) or one computed
     from `lens` (a Lens or its name / file) with `grid_spec` (a `psf.spec.GridSpec`; default: its
@@ -197,7 +198,7 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
     the cores), or the Dask scheduler at `dask` ("local": a LocalCluster for this batch). An item
     that fails is recorded and the others go on. `output_format`: float or half EXR
     (`convolution.output.OUTPUT_FORMATS`). `depth_pattern` (e.g. "{stem}_depth.exr"): each image's
-    depth map beside it, with a grid over object distance (`degrade --depth`, `occlusion`). `frame`: the
+    depth map beside it, with a grid over object distance (`degrade --depth`, `occlusion`, `silhouette`). `frame`: the
     camera every input was taken with (`optics.frame.FrameCamera`, as `degrade`'s); `scale_lens`: that
     camera's pixel pitch (µm), the lens scaled to its focal length (`scaled_lens`), stated in the metadata."""
     from ..budget import check_memory
@@ -234,7 +235,7 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
                    "runner": {"dask": dask} if dask is not None else {"workers": n}})
     p.manifest.header.update(header)
     settings = {"method": method, "boundary": boundary, "linear": linear, "force": force, "format": output_format,
-                "occlusion": occlusion, "frame": frame,
+                "occlusion": occlusion, "silhouette": silhouette, "frame": frame,
                 "batch": {"id": p.key, "manifest": str(p.manifest.path), "grid_hash": header["grid_hash"],
                           "lens_hash": header["lens_hash"], **({"lens_scale": scale} if scale else {})}}
     from .runner import run_batch
