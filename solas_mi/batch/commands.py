@@ -33,7 +33,8 @@ def _dry_run(args: argparse.Namespace) -> int:
     p = plan_batch(args.inputs, args.output, psf_grid=args.psf_grid, lens=lens,
                    grid_spec=_grid_spec(args), method=args.method,
                    boundary=args.boundary, linear=args.linear, cache=args.cache, output_format=args.format,
-                   depth_pattern=args.depth_pattern, frame=_frame(args))
+                   depth_pattern=args.depth_pattern, frame=_frame(args),
+                   depth_options=(args.occlusion, args.silhouette))
     need = estimate(p, workers if args.dask is None else 1)
     where = f"Dask at {args.dask}" if args.dask else f"{workers} local worker process(es)"
     skipped = len(p.jobs) - len(p.todo)
@@ -178,7 +179,8 @@ def register(subparsers: Any) -> None:
                    help="each image's depth map beside it (metres), with a grid over object distance (--distances-m): "
                         "`degrade --depth` per image")
     p.add_argument("--occlusion", choices=OCCLUSIONS, default=OCCLUSIONS[0], help="with --depth-pattern: as degrade's")
-    p.add_argument("--silhouette", choices=SILHOUETTES, default=SILHOUETTES[0], help="with --depth-pattern: as degrade's")
+    p.add_argument("--silhouette", choices=SILHOUETTES, default=SILHOUETTES[0],
+                   help="with --depth-pattern: as degrade's")
     frames = p.add_argument_group("the frames' camera (as degrade's; every input taken by it)")
     add_frame_options(frames)
     frames.add_argument("--scale-lens", type=float, metavar="PIXEL_UM",

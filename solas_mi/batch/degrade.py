@@ -85,8 +85,10 @@ def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLik
                psf_grid: str | os.PathLike | None = None, lens=None, grid_spec=None,
                method: str = "interp", boundary: str = "edge", linear: bool = False,
                cache: GridCache | str | os.PathLike | None = None, output_format: str = "exr",
-               depth_pattern: str | None = None, frame=None) -> BatchPlan:
-    """Check everything a batch needs before any work and find what a former run finished."""
+               depth_pattern: str | None = None, frame=None, depth_options: tuple[str, ...] = ("filled", "nearest")
+               ) -> BatchPlan:
+    """Check everything a batch needs before any work and find what a former run finished; `depth_options`:
+    the occlusion and silhouette rules, part of a depth batch's identity."""
     from ..convolution.kernels import check_boundary
     from ..convolution.methods import check_method
     from ..outputs import output_folder
@@ -130,7 +132,8 @@ def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLik
         hit = grid_path.is_file() and cache.check(grid_path, lens, spec) is None
         grid_id, source = grid_path.stem, "cache hit" if hit else "to compute"
     identity = [grid_id, method, boundary, linear] + ([output_format] if output_format != "exr" else []) + (
-        [depth_pattern] if depth_pattern is not None else []) + ([asdict(frame)] if frame is not None else [])
+        [depth_pattern, *depth_options] if depth_pattern is not None else []) + (
+        [asdict(frame)] if frame is not None else [])
     key = hashlib.sha256(json.dumps(identity).encode()).hexdigest()[:16]
     manifest = Manifest(out_dir / MANIFEST, {"version": 1, "kind": "degrade", "batch_id": key}, jobs)
     manifest.resume(key)
@@ -211,7 +214,7 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
     lens, scale = scaled_lens(lens, frame, scale_lens, grid_spec)
     p = plan_batch(inputs, output_dir, psf_grid=psf_grid, lens=lens, grid_spec=grid_spec, method=method,
                    boundary=boundary, linear=linear, cache=cache, output_format=output_format,
-                   depth_pattern=depth_pattern, frame=frame)
+                   depth_pattern=depth_pattern, frame=frame, depth_options=(occlusion, silhouette))
     need = estimate(p, n if dask is None else 1)
     check_memory(f"batch of {len(p.todo)} images on {n} workers", need["peak_bytes"], force)
     from ..convolution.output import OUTPUT_FORMATS

@@ -371,6 +371,11 @@ def test_a_batch_with_depth_maps_by_name_pattern(tmp_path, doublet):
     assert [j.status for j in result.jobs] == ["done"]  # the depth map is not an input of its own
     out = read_image(tmp_path / "out" / "a.exr")
     assert np.allclose(out, degrade_depth(read_image(folder / "a.exr"), depth, g), atol=1e-6)
+    again = degrade_batch([folder], tmp_path / "out", psf_grid=tmp_path / "g.exr", workers=1, progress=False,
+                          depth_pattern="{stem}_depth.exr", occlusion="none")
+    assert [j.status for j in again.jobs] == ["done"]  # another occlusion rule: not the former run's items
+    assert np.allclose(read_image(tmp_path / "out" / "a.exr"),
+                       degrade_depth(read_image(folder / "a.exr"), depth, g, occlusion="none"), atol=1e-6)
     (folder / "b.exr").write_bytes((folder / "a.exr").read_bytes())
     with pytest.raises(__import__("solas_mi").SolasError, match="no depth map"):
         degrade_batch([folder], tmp_path / "out2", psf_grid=tmp_path / "g.exr", workers=1,
