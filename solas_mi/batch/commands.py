@@ -179,8 +179,7 @@ def register(subparsers: Any) -> None:
                    help="each image's depth map beside it (metres), with a grid over object distance (--distances-m): "
                         "`degrade --depth` per image")
     p.add_argument("--occlusion", choices=OCCLUSIONS, default=OCCLUSIONS[0], help="with --depth-pattern: as degrade's")
-    p.add_argument("--silhouette", choices=SILHOUETTES, default=SILHOUETTES[0],
-                   help="with --depth-pattern: as degrade's")
+    p.add_argument("--silhouette", choices=SILHOUETTES, default=SILHOUETTES[0], help="with --depth-pattern: as degrade's")
     frames = p.add_argument_group("the frames' camera (as degrade's; every input taken by it)")
     add_frame_options(frames)
     frames.add_argument("--scale-lens", type=float, metavar="PIXEL_UM",
