@@ -13,7 +13,7 @@ clamped beyond the outermost: a partition of unity, continuous, so no seams). Th
 
 each term over the bounding box of the node's support (found from the pixels' field cells), convolved
 by FFT and added in place. A pinhole frame given this way gives `interp`'s result to the difference
-between hats linear in angle and linear in tan θ (tests/convolution/test_fisheye.py).
+between hats linear in angle and linear in tan θ (tests/convolution/test_fisheye_frames.py).
 
 Each node's kernel in frame pixels. The frame's calibration says where each direction lands; the lens
 says how light from one direction spreads on its sensor (mm, around its chief ray). The spread is

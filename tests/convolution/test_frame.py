@@ -76,8 +76,9 @@ def test_frames_the_grid_does_not_take_are_refused_with_numbers(grid, frame, wha
 
 
 def test_a_fisheye_frame_the_lens_covers_is_degraded(grid):
-    """Refused until fisheye frames were laid out in field angle (`convolution.curved`, tests/convolution/
-    test_fisheye.py); on the axis an equidistant frame is the pinhole frame of the same focal length."""
+    """Refused until fisheye frames were laid out in field angle (`convolution.curved`,
+    tests/convolution/test_fisheye_frames.py); on the axis an equidistant frame is the pinhole frame of the
+    same focal length."""
     point = np.zeros((H, W))
     point[120, 160] = 1.0
     fisheye = degrade(point, grid, frame=FrameCamera("kannala-brandt", intrinsics=(20000.0, 20000.0, 160.0, 120.0),
