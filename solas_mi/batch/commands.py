@@ -27,18 +27,21 @@ def _grid_spec(args: argparse.Namespace):
 
 def _dry_run(args: argparse.Namespace) -> int:
     from ..budget import size_text
-    from .degrade import check_workers, estimate, plan_batch
+    from .degrade import check_workers, estimate, plan_batch, scaled_lens
 
     workers = check_workers(_workers(args.workers), args.dask)
-    p = plan_batch(args.inputs, args.output, psf_grid=args.psf_grid, lens=args.lens,
+    lens, scale = scaled_lens(args.lens, _frame(args), args.scale_lens, _grid_spec(args))
+    p = plan_batch(args.inputs, args.output, psf_grid=args.psf_grid, lens=lens,
                    grid_spec=_grid_spec(args), method=args.method,
                    boundary=args.boundary, linear=args.linear, cache=args.cache, output_format=args.format,
-                   depth_pattern=args.depth_pattern, frame=_frame(args), camera=camera_from_args(args, args.seed))
+                   depth_pattern=args.depth_pattern, frame=_frame(args),
+                   depth_options=(args.occlusion, args.silhouette), camera=camera_from_args(args, args.seed))
     need = estimate(p, workers if args.dask is None else 1)
     where = f"Dask at {args.dask}" if args.dask else f"{workers} local worker process(es)"
     skipped = len(p.jobs) - len(p.todo)
     then = "; computed once, then cached" if p.grid_source == "to compute" else ""
-    print(f"1. PSF grid: {p.grid_path} ({p.grid_source}{then})")
+    scaled = f"; lens scaled x{scale['factor']:.4g} to EFL {scale['efl_mm'][1]:.4g} mm" if scale else ""
+    print(f"1. PSF grid: {p.grid_path} ({p.grid_source}{then}{scaled})")
     print(f"2. degrade {len(p.todo)} of {len(p.jobs)} images ({skipped} already finished, skipped) "
           f"with {args.method}, boundary {args.boundary}, on {where}")
     files = "16-bit PNG + JSON" if args.format == "png16" else "EXR + PNG"
@@ -58,6 +61,7 @@ def run_batch_degrade(args: argparse.Namespace) -> int:
                            boundary=args.boundary, linear=args.linear, workers=_workers(args.workers), dask=args.dask,
                            cache=args.cache, force=args.force, progress=not args.quiet, output_format=args.format,
                            depth_pattern=args.depth_pattern, occlusion=args.occlusion, frame=_frame(args),
+                           scale_lens=args.scale_lens, silhouette=args.silhouette,
                            camera=camera_from_args(args, args.seed))
     return _report("degrade", result, f" (grid: {result.grid_source})")
 
@@ -155,7 +159,7 @@ def register(subparsers: Any) -> None:
     from ..convolution.commands import add_frame_options
     from ..convolution.kernels import BOUNDARIES
     from ..convolution.methods import DEFAULT_METHOD, METHODS
-    from ..convolution.depth import OCCLUSIONS
+    from ..convolution.depth import OCCLUSIONS, SILHOUETTES
     from ..convolution.output import OUTPUT_FORMATS
     from ..psf.spec import add_options as add_grid_options
     from ..render.spec import add_spec_flags
@@ -184,7 +188,12 @@ def register(subparsers: Any) -> None:
                    help="each image's depth map beside it (metres), with a grid over object distance (--distances-m): "
                         "`degrade --depth` per image")
     p.add_argument("--occlusion", choices=OCCLUSIONS, default=OCCLUSIONS[0], help="with --depth-pattern: as degrade's")
-    add_frame_options(p.add_argument_group("the frames' camera (as degrade's; every input taken by it)"))
+    p.add_argument("--silhouette", choices=SILHOUETTES, default=SILHOUETTES[0], help="with --depth-pattern: as degrade's")
+    frames = p.add_argument_group("the frames' camera (as degrade's; every input taken by it)")
+    add_frame_options(frames)
+    frames.add_argument("--scale-lens", type=float, metavar="PIXEL_UM",
+                        help="with --lens and --intrinsics/--fisheye: the camera's pixel pitch (µm); the lens scaled "
+                             "to its focal length fx x PIXEL_UM, f-number kept, stated in the metadata")
     add_camera_options(p, seed=True)
     p.add_argument("--cache", metavar="DIR", help="PSF-grid cache (default: the user's cache folder)/psf-grids")
     _add_runner_options(p)

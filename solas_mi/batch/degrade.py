@@ -85,8 +85,10 @@ def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLik
                psf_grid: str | os.PathLike | None = None, lens=None, grid_spec=None,
                method: str = "interp", boundary: str = "edge", linear: bool = False,
                cache: GridCache | str | os.PathLike | None = None, output_format: str = "exr",
-               depth_pattern: str | None = None, frame=None, camera=None) -> BatchPlan:
-    """Check everything a batch needs before any work and find what a former run finished."""
+               depth_pattern: str | None = None, frame=None, depth_options: tuple[str, ...] = ("filled", "nearest"),
+               camera=None) -> BatchPlan:
+    """Check everything a batch needs before any work and find what a former run finished; `depth_options`:
+    the occlusion and silhouette rules, part of a depth batch's identity."""
     from ..convolution.kernels import check_boundary
     from ..convolution.methods import check_method
     from ..outputs import output_folder
@@ -131,8 +133,8 @@ def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLik
         hit = grid_path.is_file() and cache.check(grid_path, lens, spec) is None
         grid_id, source = grid_path.stem, "cache hit" if hit else "to compute"
     identity = [grid_id, method, boundary, linear] + ([output_format] if output_format != "exr" else []) + (
-        [depth_pattern] if depth_pattern is not None else []) + ([asdict(frame)] if frame is not None else []) + (
-        [camera.describe()] if camera is not None else [])
+        [depth_pattern, *depth_options] if depth_pattern is not None else []) + (
+        [asdict(frame)] if frame is not None else []) + ([camera.describe()] if camera is not None else [])
     key = hashlib.sha256(json.dumps(identity).encode()).hexdigest()[:16]
     manifest = Manifest(out_dir / MANIFEST, {"version": 1, "kind": "degrade", "batch_id": key}, jobs)
     manifest.resume(key)
@@ -181,11 +183,32 @@ def estimate(p: BatchPlan, workers: int) -> dict[str, float]:
             "grid_bytes": grid_bytes}
 
 
+def scaled_lens(lens, frame, pixel_um: float | None, spec=None) -> tuple[Any, dict | None]:
+    """The batch's lens scaled to the frames' camera (`optics.scale.scaled_to_focal`: its pinhole focal
+    length over the grid's x field range (`spec`, a GridSpec; None: the lens's field) the camera's focal
+    length in pixels × `pixel_um`) and what was done; unchanged (and None) without `pixel_um`."""
+    if pixel_um is None:
+        return lens, None
+    from ..optics.lens import Lens
+    from ..optics.scale import scaled_to_focal
+
+    if lens is None:
+        raise SolasError("scaling the lens (--scale-lens) needs the lens the grid is computed from: give --lens, "
+                         "not --psf-grid")
+    if frame is None:
+        raise SolasError("scaling the lens (--scale-lens) needs the frames' camera: give --intrinsics or --fisheye")
+    lens = lens if isinstance(lens, Lens) else Lens.load(str(lens))
+    field = spec.field_range_deg[0] if spec is not None and spec.field_range_deg else lens.field_deg
+    sensor = spec is not None and spec.layout == "sensor"  # no pinhole: the paraxial image scale
+    return scaled_to_focal(lens, frame.focal_px(), pixel_um, None if sensor or not field else field)
+
+
 def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *,
                   psf_grid: str | os.PathLike | None = None, lens=None, grid_spec=None, method: str = "interp", boundary: str = "edge", linear: bool = False, workers: int | None = None,
                   dask: str | None = None, cache: GridCache | str | os.PathLike | None = None, force: bool = False,
                   progress: bool = True, output_format: str = "exr", depth_pattern: str | None = None,
-                  occlusion: str = "filled", frame=None, camera=None) -> BatchResult:
+                  occlusion: str = "filled", frame=None, scale_lens: float | None = None,
+                  silhouette: str = "nearest", camera=None) -> BatchResult:
     """Degrade every image of `inputs` (files, folders, glob patterns) into `output_dir` (one EXR +
     PNG per input, `batch.json` beside them) with the grid `psf_grid` (an EXR file) or one computed
     from `lens` (a Lens or its name / file) with `grid_spec` (a `psf.spec.GridSpec`; default: its
@@ -193,8 +216,9 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
     the cores), or the Dask scheduler at `dask` ("local": a LocalCluster for this batch). An item
     that fails is recorded and the others go on. `output_format`: float or half EXR
     (`convolution.output.OUTPUT_FORMATS`). `depth_pattern` (e.g. "{stem}_depth.exr"): each image's
-    depth map beside it, with a grid over object distance (`degrade --depth`, `occlusion`). `frame`: the
-    camera every input was taken with (`optics.frame.FrameCamera`, as `degrade`'s). `camera`: each
+    depth map beside it, with a grid over object distance (`degrade --depth`, `occlusion`, `silhouette`). `frame`: the
+    camera every input was taken with (`optics.frame.FrameCamera`, as `degrade`'s); `scale_lens`: that
+    camera's pixel pitch (µm), the lens scaled to its focal length (`scaled_lens`), stated in the metadata. `camera`: each
     degraded frame (its values read as W/m²) through a sensor and image processor (`isp.camera.Camera`),
     its RAW and developed frame beside it (`<name>_raw.exr`, `<name>_raw.png`)."""
     from ..budget import check_memory
@@ -204,9 +228,10 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
     check_dask(dask)
     n = check_workers(workers, dask)
     cache = cache if isinstance(cache, GridCache) or psf_grid is not None else GridCache(cache)
+    lens, scale = scaled_lens(lens, frame, scale_lens, grid_spec)
     p = plan_batch(inputs, output_dir, psf_grid=psf_grid, lens=lens, grid_spec=grid_spec, method=method,
                    boundary=boundary, linear=linear, cache=cache, output_format=output_format,
-                   depth_pattern=depth_pattern, frame=frame, camera=camera)
+                   depth_pattern=depth_pattern, frame=frame, depth_options=(occlusion, silhouette), camera=camera)
     need = estimate(p, n if dask is None else 1)
     check_memory(f"batch of {len(p.todo)} images on {n} workers", need["peak_bytes"], force)
     from ..convolution.output import OUTPUT_FORMATS
@@ -216,6 +241,7 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
         raise SolasError(f"output format {output_format!r} must be one of {', '.join(OUTPUT_FORMATS)}")
     header: dict[str, Any] = {"method": method, "boundary": boundary, "linear": linear, "format": output_format,
                               **({"frame_camera": asdict(frame)} if frame is not None else {}),
+                              **({"lens_scale": scale} if scale is not None else {}),
                               **({"camera": camera.describe()} if camera is not None else {})}
     if p.lens is not None:
         with Progress("psf-grid", None, "PSFs", enabled=progress) as bar:  # shown only when it is computed
@@ -230,9 +256,9 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
                    "runner": {"dask": dask} if dask is not None else {"workers": n}})
     p.manifest.header.update(header)
     settings = {"method": method, "boundary": boundary, "linear": linear, "force": force, "format": output_format,
-                "occlusion": occlusion, "frame": frame, "camera": camera,
+                "occlusion": occlusion, "silhouette": silhouette, "frame": frame, "camera": camera,
                 "batch": {"id": p.key, "manifest": str(p.manifest.path), "grid_hash": header["grid_hash"],
-                          "lens_hash": header["lens_hash"]}}
+                          "lens_hash": header["lens_hash"], **({"lens_scale": scale} if scale else {})}}
     from .runner import run_batch
 
     run_batch(p.manifest, p.todo, grid, str(p.grid_path), settings, n, dask, "image" if progress else None)

@@ -57,6 +57,7 @@ def _degrade(job: Job, grid: "PSFGrid", grid_path: str, settings: dict[str, Any]
     degrade_file(job.input, grid, grid_path, output, png, settings["method"], settings["boundary"],
                  linear=settings["linear"], force=settings["force"], output_format=settings.get("format", "exr"),
                  depth=job.params.get("depth"), occlusion=settings.get("occlusion", "filled"), frame=settings.get("frame"),
+                 silhouette=settings.get("silhouette", "nearest"),
                  extra_meta={"batch": {**settings["batch"], "seed": job.seed}})
 
 

@@ -32,7 +32,7 @@ def run_degrade(args: argparse.Namespace) -> int:
     with Progress("degrade", channels, "channels", enabled=large) as bar:
         meta = degrade_file(args.image, read_grid(args.psf_grid), args.psf_grid, output, png, args.method,
                             args.boundary, linear=args.linear, force=args.force, depth=args.depth,
-                            occlusion=args.occlusion, frame=parse_frame(args.fov_deg, args.fov_axis, args.intrinsics,
+                            occlusion=args.occlusion, silhouette=args.silhouette, frame=parse_frame(args.fov_deg, args.fov_axis, args.intrinsics,
                                                                         args.fisheye), progress=bar)
     height, width = meta["output_shape"][:2]
     print(f"wrote {output} and {png} ({args.method}{', depth-aware' if args.depth else ''}, {width}x{height} px, {meta['seconds']:.2f} s)")
@@ -54,7 +54,7 @@ def add_frame_options(p) -> None:
 
 def register(subparsers: Any) -> None:
     """Add the `degrade` subcommand."""
-    from .depth import OCCLUSIONS
+    from .depth import OCCLUSIONS, SILHOUETTES
     from .kernels import BOUNDARIES
 
     p = subparsers.add_parser(
@@ -80,6 +80,9 @@ def register(subparsers: Any) -> None:
                    help="with --depth: filled (default): layers composited far to near, the background hidden "
                         "behind near objects continued from their silhouettes; layered: without that; none: layers "
                         "added (no occlusion)")
+    p.add_argument("--silhouette", choices=SILHOUETTES, default=SILHOUETTES[0],
+                   help="with --depth: nearest (default): a silhouette's pixels of mixed (antialiased) depth take the "
+                        "nearest depth around them; as-given: the map's depths")
     add_frame_options(p)
     p.add_argument("--linear", action="store_true", help="PNG/JPEG values are already linear: do not decode sRGB")
     p.add_argument("-o", "--output", required=True, metavar="OUT.exr", help="output OpenEXR (linear)")

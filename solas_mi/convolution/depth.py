@@ -29,6 +29,17 @@ a box mean of the visible light around instead left a 4-px band along the edges 
 "none": the layers are added, no occlusion (each pixel's light spreads through everything nearer),
 for comparison.
 
+Silhouettes ("nearest", the default): a renderer's depth map is antialiased like its image, so a pixel
+that a near object partly covers has a depth between the object's and the background's (an average:
+the object at 20 m before a wall at 60 m gives 40 m), which puts its light, the near object's share
+included, on a layer of its own between them. Such a pixel — its 3×3 neighbourhood spans more than
+SILHOUETTE_RATIO in depth and its own depth is not within FAR_END of the neighbourhood's farthest (a
+pixel wholly behind the silhouette keeps its depth) — takes the nearest depth around it: its light is
+blurred by and hidden behind as the near object's, whose coverage its colour holds. Measured on the
+street experiment (1280×960, 17 nodes, render noise removed), near/far error by the ideal depth map
+alone: focus ∞ 1.96 % / 1.08 % → 0.88 % / 0.96 %; focus 20 m 2.22 % / 2.00 % → 1.16 % / 1.51 %
+("as-given" keeps the map's depths; the metadata counts the pixels moved).
+
 Depth: metres from the camera along the optical axis (z), +inf for the sky; a pixel nearer than the
 nearest node takes its PSFs (and farther than the farthest, the farthest's), counted in the metadata.
 Only the tiles of a layer that hold light are convolved (`interp`): a layer's cost is that of the part
@@ -44,9 +55,13 @@ from ..blas import single_threaded_blas
 from ..errors import SolasError
 from ..imageio import check_finite
 from . import interp
-from .kernels import channel_wavelengths, check_boundary, check_kernel, layout
+from .curved import frame_layout
+from .kernels import channel_wavelengths, check_boundary, check_kernel
 
 OCCLUSIONS = ("filled", "layered", "none")
+SILHOUETTES = ("nearest", "as-given")  # a silhouette's mixed-depth pixels: the nearest depth around them, or as given
+SILHOUETTE_RATIO = 1.2  # a 3×3 neighbourhood spanning more than this in depth holds a silhouette
+FAR_END = 1.05  # a pixel within this of its neighbourhood's farthest depth lies wholly behind the silhouette
 CLEAR_PX = 2  # a fill takes its light from pixels more than this beyond a silhouette (antialiased depth and colour there are mixed)
 SUMMARY = "PSFs interpolated in field and in 1/distance from a depth map, composited far to near"
 
@@ -66,6 +81,19 @@ def check_depth(depth: np.ndarray, shape: tuple[int, int]) -> np.ndarray:
     return d
 
 
+def silhouette_depth(depth: np.ndarray, silhouette: str = "nearest") -> tuple[np.ndarray, int]:
+    """The depth map with a silhouette's mixed pixels at the nearest depth of their 3×3 neighbourhood
+    ("nearest"; module docstring), and how many moved; "as-given": unchanged."""
+    from scipy.ndimage import maximum_filter, minimum_filter
+
+    if silhouette == "as-given":
+        return depth, 0
+    lo, hi = minimum_filter(depth, 3, mode="nearest"), maximum_filter(depth, 3, mode="nearest")
+    with np.errstate(invalid="ignore"):  # inf against inf: the sky, no silhouette
+        mixed = (hi > SILHOUETTE_RATIO * lo) & (depth * FAR_END < hi) & (lo < depth)
+    return np.where(mixed, lo, depth), int(mixed.sum())
+
+
 def layer_weights(inverse: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Hat weights (L, H, W) in 1/distance of each node, clamped at the ends, and each pixel's slab
     index (H, W): k where nodes[k] ≤ u < nodes[k+1] (0 below the first node, L−1 from the last on)."""
@@ -77,25 +105,28 @@ def layer_weights(inverse: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, n
 
 def degrade_depth(image: np.ndarray, depth_m: np.ndarray, grid, boundary: str = "edge", *,
                   occlusion: str = "filled", dtype=np.float32, meta: dict | None = None,
-                  progress=None, frame=None) -> np.ndarray:
+                  progress=None, frame=None, silhouette: str = "nearest") -> np.ndarray:
     """The linear image (H, W) or (H, W, C) with its depth map (H, W, metres) seen through the lens of
-    `grid` (a `psf.depth.DepthGrid`): `interp` per layer, composited as `occlusion` says; `frame`: the
-    frame's camera (`convolution.methods.degrade`)."""
+    `grid` (a `psf.depth.DepthGrid`): `interp` per layer, composited as `occlusion` says, a silhouette's
+    mixed-depth pixels as `silhouette` says (SILHOUETTES); `frame`: the frame's camera
+    (`convolution.methods.degrade`)."""
     from ..psf.depth import DepthGrid
 
     if not isinstance(grid, DepthGrid):
         raise SolasError(f"grid {type(grid).__name__} must be a PSF grid over object distance (psf.depth.DepthGrid)")
     if occlusion not in OCCLUSIONS:
         raise SolasError(f"occlusion {occlusion!r} must be one of {', '.join(OCCLUSIONS)}")
+    if silhouette not in SILHOUETTES:
+        raise SolasError(f"silhouette {silhouette!r} must be one of {', '.join(SILHOUETTES)}")
     check_boundary(boundary)
     image = np.asarray(image)
     if image.ndim not in (2, 3) or image.size == 0 or not np.issubdtype(image.dtype, np.number):
         raise SolasError(f"image of shape {image.shape} must be a non-empty H×W or H×W×C array of numbers")
     planes = check_finite(image[..., None] if image.ndim == 2 else image, "image")
     height, width, nchan = planes.shape
-    depth = check_depth(depth_m, (height, width))
+    depth, moved = silhouette_depth(check_depth(depth_m, (height, width)), silhouette)
     wavelengths = channel_wavelengths(grid.layers[0], nchan)
-    lays = [layout(g, width, height, frame) for g in grid.layers]
+    lays = [frame_layout(g, width, height, frame) for g in grid.layers]
     radius = max(check_kernel(g, lay) for g, lay in zip(grid.layers, lays))
     nodes = grid.inverse
     weights, slab = layer_weights(np.where(np.isinf(depth), 0.0, 1.0 / depth), nodes)
@@ -109,7 +140,8 @@ def degrade_depth(image: np.ndarray, depth_m: np.ndarray, grid, boundary: str = 
             if progress is not None:
                 progress(c + 1, nchan)
     if meta is not None:
-        meta.update(depth_meta(grid, depth, weights, occlusion, boundary, time.perf_counter() - start))
+        meta.update(depth_meta(grid, depth, weights, occlusion, boundary, time.perf_counter() - start),
+                    silhouette=silhouette, silhouette_pixels_moved=moved)
         meta.update({"camera": lays[0].camera.meta(), "kernel_size_px": 2 * radius + 1,
                      "channel_wavelengths_nm": [grid.wavelengths_nm[k] for k in wavelengths]})
         if frame is not None:

@@ -34,6 +34,7 @@ import math
 import numpy as np
 
 from ..psf.grid import PSFGrid
+from . import curved
 from .kernels import Layout, batches, fast_len, fft_convolve, kernel_radius, node_kernels, pad, parallel_map
 
 SUMMARY = "PSFs interpolated bilinearly between grid nodes at every pixel: no seams"
@@ -59,7 +60,10 @@ def hats(knots: np.ndarray, first: int, count: int) -> tuple[np.ndarray, np.ndar
 
 def convolve_channel(channel: np.ndarray, grid: PSFGrid, lay: Layout, wavelength: int, boundary: str,
                      dtype=np.float32) -> np.ndarray:
-    """One channel (H, W) degraded with bilinearly interpolated PSFs of grid wavelength `wavelength`."""
+    """One channel (H, W) degraded with bilinearly interpolated PSFs of grid wavelength `wavelength` (in
+    field angle on a fisheye frame's layout: `curved`)."""
+    if isinstance(lay, curved.CurvedLayout):
+        return curved.convolve_channel(channel, grid, lay, wavelength, boundary, dtype)
     height, width = channel.shape
     radius = kernel_radius(grid.size, lay.q)
     shift_max = lay.max_shift([wavelength])
@@ -108,6 +112,8 @@ def lit_nodes(padded: np.ndarray, row_lo: np.ndarray, col_lo: np.ndarray, ly: in
 
 def describe(lay: Layout, radius: int, wavelengths: list[int]) -> dict:
     """The nodes that took part (`methods.ConvolutionMethod.describe`)."""
+    if isinstance(lay, curved.CurvedLayout):
+        return curved.describe(lay, radius, wavelengths)
     margin = radius + lay.max_shift(wavelengths)
     rows = hats(lay.row_knots, -margin, lay.camera.height + 2 * margin)[0]
     cols = hats(lay.col_knots, -margin, lay.camera.width + 2 * margin)[0]

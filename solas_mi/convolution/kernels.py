@@ -72,8 +72,8 @@ def grid_camera(grid: PSFGrid, width: int, height: int, frame: FrameCamera | Non
         return Camera(int(width), int(height), pitch_um, focal, fov, float(meta["reference_wavelength_nm"]))
     check_frame_covered(grid, frame, width, height)
     if frame.model in FISHEYE:
-        raise SolasError(f"a {frame.model} frame lies within the lens's field, but its pixels are not the ideal "
-                         "(rectilinear) image the convolution takes: resample it to a pinhole frame first")
+        raise SolasError(f"a {frame.model} frame's pixels are not a rectilinear image: lay the grid out with "
+                         "convolution.curved.frame_layout")
     fx, fy, cx, cy = frame.pinhole(width, height)
     if abs(fx / fy - 1) > 1e-3:
         raise SolasError(f"frame intrinsics fx {fx:g}, fy {fy:g} px: the sensor's pixels are square; resample the "

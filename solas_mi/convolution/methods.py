@@ -18,7 +18,8 @@ from ..blas import single_threaded_blas
 from ..errors import SolasError
 from ..imageio import check_finite
 from . import interp, patch
-from .kernels import channel_wavelengths, check_boundary, check_kernel, layout
+from .curved import CurvedLayout, frame_layout
+from .kernels import channel_wavelengths, check_boundary, check_kernel
 
 if TYPE_CHECKING:
     from ..psf.grid import PSFGrid
@@ -82,7 +83,10 @@ def degrade(image: np.ndarray, grid: "PSFGrid | str", method: str = DEFAULT_METH
     planes = check_finite(image[..., None] if image.ndim == 2 else image, "image")  # a NaN would spread
     height, width, nchan = planes.shape
     wavelengths = channel_wavelengths(grid, nchan)
-    lay = layout(grid, width, height, frame)
+    lay = frame_layout(grid, width, height, frame)
+    if isinstance(lay, CurvedLayout) and method != "interp":
+        raise SolasError(f"a {frame.model} frame is degraded by interp (PSFs interpolated in field angle at every "
+                         f"pixel), not {method}: its blocks of pixels are not blocks of field")
     radius = check_kernel(grid, lay)  # before any allocation
     m = METHODS[method]
     start = time.perf_counter()

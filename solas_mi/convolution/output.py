@@ -72,13 +72,14 @@ def read_depth(path: str | Path) -> np.ndarray:
 def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path: str | Path, output: Path, png: Path,
                  method: str, boundary: str, *, linear: bool = False, force: bool = False,
                  extra_meta: dict[str, Any] | None = None, depth: str | Path | None = None,
-                 occlusion: str = "filled", frame=None, output_format: str = "exr",
+                 occlusion: str = "filled", frame=None, output_format: str = "exr", silhouette: str = "nearest",
                  progress: Callable[[int, int], None] | None = None) -> dict[str, Any]:
     """Degrade the image file `image_path` by `grid` (read from `grid_path`, named in the metadata) and
     write `output` (EXR) and `png` together or not at all; returns the output's metadata.
     `linear`: PNG/JPEG values are already linear (not sRGB-decoded); `force`: run even when the
     estimated memory exceeds what is free; `extra_meta` is added to the metadata. `depth`: the EXR
-    depth map (m) of the image, with a grid over object distance (`convolution.depth`, `occlusion`);
+    depth map (m) of the image, with a grid over object distance (`convolution.depth`, `occlusion`,
+    `silhouette`);
     `frame`: the frame's camera (`optics.frame.FrameCamera`); `output_format`: one of OUTPUT_FORMATS."""
     from ..budget import check_memory
     from ..imageio import image_size, read_image
@@ -102,7 +103,7 @@ def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path:
         raise SolasError(f"method {method!r}: a depth map is convolved with interp per depth layer only")
     else:
         out = degrade_depth(image, read_depth(depth), grid, boundary, occlusion=occlusion, meta=meta, progress=progress,
-                            frame=frame)
+                            frame=frame, silhouette=silhouette)
         meta["depth_map"] = str(depth)
     first = layers[0]
     meta.update({"input": str(image_path), "input_encoding": "linear" if linear or

@@ -42,7 +42,8 @@ class Camera:
     fov_deg: float  # half the horizontal field the default input image spans
     wavelength_nm: float  # reference wavelength of focal_mm
     # "rectilinear": the input image is the ideal pinhole image above; "sensor": it is already the
-    # sensor image in the lens's own projection (PSF grids laid out on the sensor; focal_mm, fov_deg unused)
+    # sensor image in the lens's own projection (PSF grids laid out on the sensor; focal_mm, fov_deg unused);
+    # "frame": a fisheye frame's pixels, mapped to field angles by its calibration (`convolution.curved`)
     projection: str = "rectilinear"
     principal: tuple[float, float] | None = None  # (column, row) of the axis; None: the centre (W/2 − ½, H/2 − ½)
 
@@ -83,6 +84,11 @@ class Camera:
                     "reference_wavelength_nm": self.wavelength_nm,
                     "projection": "sensor: the input image is the sensor image in the lens's own projection; PSF grid "
                                   "nodes sit at their chief rays' image points"}
+        if self.projection == "frame":
+            return {"sensor": [self.width, self.height], "pitch_um_at_axis": self.pitch_um,
+                    "pinhole_focal_mm": self.focal_mm, "reference_wavelength_nm": self.wavelength_nm,
+                    "principal_px": list(self.centre),
+                    "projection": "frame: each pixel's field angle from the frame's camera (frame_camera)"}
         return {"sensor": [self.width, self.height], "pitch_um": self.pitch_um, "pinhole_focal_mm": self.focal_mm,
                 "fov_deg": self.fov_deg, "reference_wavelength_nm": self.wavelength_nm, "principal_px": list(self.centre),
                 "projection": "rectilinear: ideal point = pinhole_focal_mm * (tan x, tan y); image width spans "

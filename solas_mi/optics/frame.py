@@ -67,8 +67,23 @@ class FrameCamera:
         f = half / math.tan(math.radians(self.fov_deg))
         return f, f, width / 2 - 0.5, height / 2 - 0.5
 
-    def tangents(self, cols: np.ndarray, rows: np.ndarray, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
-        """The direction (tan_x, tan_y) of pixel positions (cols, rows) (continuous)."""
+    def focal_px(self) -> float:
+        """The focal length in pixels on the axis: fx (pixels per unit tangent, or per radian in a fisheye);
+        a polynomial's a1. SolasError for "fov" (it depends on the frame's width) and for fx ≠ fy."""
+        if self.model == "fov":
+            raise SolasError("a frame given by --fov-deg has its focal length in pixels only with its width: give "
+                             "--intrinsics FX,FY,CX,CY (or --fisheye)")
+        if self.model == "polynomial":
+            return float(self.coefficients[0])
+        fx, fy = self.intrinsics[:2]
+        if abs(fx / fy - 1) > 1e-3:
+            raise SolasError(f"frame intrinsics fx {fx:g}, fy {fy:g} px: one focal length needs square pixels")
+        return float(fx)
+
+    def tangents(self, cols: np.ndarray, rows: np.ndarray, width: int, height: int, clamp: bool = False
+                 ) -> tuple[np.ndarray, np.ndarray]:
+        """The direction (tan_x, tan_y) of pixel positions (cols, rows) (continuous); positions beyond a fisheye
+        model's 90 deg are refused, or with `clamp` taken at 90 deg (padding around a frame)."""
         if self.model not in FISHEYE:
             fx, fy, cx, cy = self.pinhole(width, height)
             return (np.asarray(cols) - cx) / fx, (cy - np.asarray(rows)) / fy
@@ -76,14 +91,29 @@ class FrameCamera:
         if self.model == "kannala-brandt":
             dx, dy = (np.asarray(cols) - cx) / fx, (np.asarray(rows) - cy) / fy
             theta = _invert(lambda t: t * (1 + sum(k * t ** (2 * i + 2) for i, k in enumerate(self.coefficients))),
-                            np.hypot(dx, dy))
+                            np.hypot(dx, dy), clamp)
         else:
             a, aspect = self.coefficients[:4], (self.coefficients[4] if len(self.coefficients) > 4 else 1.0)
             dx, dy = np.asarray(cols) - cx, (np.asarray(rows) - cy) / aspect
-            theta = _invert(lambda t: sum(c * t ** (i + 1) for i, c in enumerate(a)), np.hypot(dx, dy))
+            theta = _invert(lambda t: sum(c * t ** (i + 1) for i, c in enumerate(a)), np.hypot(dx, dy), clamp)
         r = np.hypot(dx, dy)
         scale = np.divide(np.tan(np.minimum(theta, math.radians(89.9))), r, out=np.zeros_like(r), where=r > 0)
         return dx * scale, -dy * scale
+
+    def pixels(self, tan_x: np.ndarray, tan_y: np.ndarray, width: int, height: int) -> tuple[np.ndarray, np.ndarray]:
+        """The pixel position (columns, rows) (continuous) of directions (tan_x, tan_y): `tangents` inverted."""
+        tan_x, tan_y = np.asarray(tan_x, dtype=np.float64), np.asarray(tan_y, dtype=np.float64)
+        if self.model not in FISHEYE:
+            fx, fy, cx, cy = self.pinhole(width, height)
+            return cx + fx * tan_x, cy - fy * tan_y
+        fx, fy, cx, cy = self.intrinsics
+        theta, phi = np.arctan(np.hypot(tan_x, tan_y)), np.arctan2(tan_y, tan_x)
+        if self.model == "kannala-brandt":
+            r = theta * (1 + sum(k * theta ** (2 * i + 2) for i, k in enumerate(self.coefficients)))
+            return cx + fx * r * np.cos(phi), cy - fy * r * np.sin(phi)
+        a, aspect = self.coefficients[:4], (self.coefficients[4] if len(self.coefficients) > 4 else 1.0)
+        r = sum(c * theta ** (i + 1) for i, c in enumerate(a))
+        return cx + r * np.cos(phi), cy - aspect * r * np.sin(phi)
 
     def extent_deg(self, width: int, height: int) -> tuple[float, float]:
         """The largest |θx| and |θy| (degrees) of the frame's pixels, at their outer edges."""
@@ -103,14 +133,15 @@ class FrameCamera:
         return out
 
 
-def _invert(fn, radius: np.ndarray) -> np.ndarray:
-    """θ in [0, π/2] with fn(θ) = radius, fn increasing there (a table, interpolated); SolasError if it is not."""
+def _invert(fn, radius: np.ndarray, clamp: bool = False) -> np.ndarray:
+    """θ in [0, π/2] with fn(θ) = radius, fn increasing there (a table, interpolated); SolasError if it is not,
+    or if a radius lies beyond fn(π/2) (with `clamp`: π/2 there)."""
     t = np.linspace(0.0, math.pi / 2, 4097)
     r = fn(t)
     if not np.all(np.diff(r) > 0):
         raise SolasError("the fisheye model's radius does not grow with the angle from the axis up to 90 deg: "
                          "check its coefficients")
-    if np.max(radius) > r[-1]:
+    if np.max(radius) > r[-1] and not clamp:
         raise SolasError(f"a pixel lies {float(np.max(radius)):.4g} from the axis, beyond the model's 90 deg "
                          f"({r[-1]:.4g}): the frame reaches past 90 deg, which no lens of solas-mi covers")
     return np.interp(radius, r, t)

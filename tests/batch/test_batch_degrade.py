@@ -113,6 +113,35 @@ def test_the_grid_is_computed_once_and_cached(batch_inputs, doublet):
     assert (cache.misses, cache.hits) == (2, 1)  # another sampling option: another grid
 
 
+def test_the_lens_scaled_to_the_frames_camera_is_stated(batch_inputs, doublet, capsys):
+    """--scale-lens 5: the doublet scaled so that its focal length is fx × 5 µm; its grid, the pixel pitch of
+    every output and the metadata follow (the scaling laws: tests/convolution/test_scale_lens.py)."""
+    from solas_mi.batch import GridCache, degrade_batch
+    from solas_mi.imageio import read_exr
+    from solas_mi.optics.frame import FrameCamera
+    from solas_mi.psf.spec import GridSpec
+
+    batch_inputs.write(1)
+    fx = 32 / np.tan(np.radians(1.5))  # the 64-px frames span ±1.5°
+    frame = FrameCamera("pinhole", intrinsics=(fx, fx, 31.5, 23.5))
+    spec = GridSpec(grid=(3, 3), size=32, method="geometric", rays=32, pitch_um=0.5)
+    out = degrade_batch([batch_inputs.images], batch_inputs.root / "s", lens=doublet, grid_spec=spec, frame=frame,
+                        scale_lens=5.0, cache=GridCache(batch_inputs.root / "cache"), workers=1, progress=False)
+    assert not out.failed
+    scale = manifest(batch_inputs.root / "s")["lens_scale"]
+    # the doublet's pinhole focal length meeting its real chief ray at its 2° field: 99.50 mm
+    assert scale["factor"] == pytest.approx(fx * 5e-3 / 99.499, rel=1e-4) and scale["pixel_um"] == 5.0
+    assert manifest(batch_inputs.root / "s")["lens_hash"] != doublet.hash
+    _, meta = read_exr(batch_inputs.root / "s" / "frame000.exr")
+    assert meta["camera"]["pitch_um"] == pytest.approx(5.0, rel=1e-3) and meta["batch"]["lens_scale"] == scale
+    argv = ["batch", "degrade", str(batch_inputs.images), "-o", str(batch_inputs.root / "t"), "--scale-lens", "5"]
+    for extra, what in ((["--psf-grid", str(batch_inputs.grid), "--intrinsics", "1000,1000,31.5,23.5"], "give --lens"),
+                        (["--lens", "solas-doublet", "--fov-deg", "1.5"], "give --intrinsics"),
+                        (["--lens", "solas-doublet"], "frames' camera")):
+        assert main([*argv, *extra]) == 2
+        assert what in capsys.readouterr().err
+
+
 def test_dry_run_says_what_is_reused_and_does_nothing(batch_inputs, capsys):
     batch_inputs.write(3)
     out = batch_inputs.root / "out"
@@ -342,6 +371,11 @@ def test_a_batch_with_depth_maps_by_name_pattern(tmp_path, doublet):
     assert [j.status for j in result.jobs] == ["done"]  # the depth map is not an input of its own
     out = read_image(tmp_path / "out" / "a.exr")
     assert np.allclose(out, degrade_depth(read_image(folder / "a.exr"), depth, g), atol=1e-6)
+    again = degrade_batch([folder], tmp_path / "out", psf_grid=tmp_path / "g.exr", workers=1, progress=False,
+                          depth_pattern="{stem}_depth.exr", occlusion="none")
+    assert [j.status for j in again.jobs] == ["done"]  # another occlusion rule: not the former run's items
+    assert np.allclose(read_image(tmp_path / "out" / "a.exr"),
+                       degrade_depth(read_image(folder / "a.exr"), depth, g, occlusion="none"), atol=1e-6)
     (folder / "b.exr").write_bytes((folder / "a.exr").read_bytes())
     with pytest.raises(__import__("solas_mi").SolasError, match="no depth map"):
         degrade_batch([folder], tmp_path / "out2", psf_grid=tmp_path / "g.exr", workers=1,

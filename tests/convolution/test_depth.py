@@ -127,8 +127,10 @@ def stripes_edge_errors(g, mixed: bool) -> dict:
         img[:, W // 2] = 0.5 * (far[:, W // 2] + near[:, W // 2])
         depth[:, W // 2] = 40.0  # a far pixel's depth (inf) does not average: a far wall's at 200 m would give 19 m
     rms = np.sqrt(np.mean(ref[band] ** 2))
-    return {o: float(np.sqrt(np.mean((degrade_depth(img, depth, g, occlusion=o) - ref)[band] ** 2)) / rms)
-            for o in ("filled", "layered")}
+    # the map's depths as given: this reference counts the mixed column as far (the silhouette rule, which
+    # moves it to the near plane, has its own reference: test_a_silhouettes_mixed_pixels_take_the_near_depth)
+    return {o: float(np.sqrt(np.mean((degrade_depth(img, depth, g, occlusion=o, silhouette="as-given") - ref)[band]
+                                     ** 2)) / rms) for o in ("filled", "layered")}
 
 
 @pytest.mark.parametrize("focus", ["inf", "10 m"])
@@ -162,3 +164,34 @@ def test_a_uniform_plane_is_as_bright_from_any_viewpoint(doublet):
                   for v in (0.0, None)]
         assert centre[0] / centre[1] == pytest.approx(1.0, abs=2e-3), (d, centre)
     assert seen[0.0].layers[1].meta["flux_scale"] < 0.975
+
+
+@pytest.mark.parametrize("focus", ["inf", "10 m"])
+def test_a_silhouettes_mixed_pixels_take_the_near_depth(grids, focus):
+    """A renderer's antialiased silhouette: the near plane covers half of the edge column, whose colour is
+    the mean of both sides and whose depth lies between them. The reference is the layered construction
+    with that half coverage; taking the nearest depth around such pixels ("nearest") comes closer to it
+    than the map's in-between depth ("as-given"), and a map without mixed pixels is left alone."""
+    from solas_mi.convolution.depth import silhouette_depth
+
+    g = grids[focus]
+    _, mask, near, band = scene()
+    far = 0.5 + 0.4 * np.sign(np.sin(np.mgrid[:H, :W][0] / 6.0))
+    cover_px = mask.copy()
+    cover_px[:, W // 2] = 0.5
+    unit = replace(g.layers[2], meta={**g.layers[2].meta, "normalization": "peak"})
+    cover = np.clip(interp.convolve_channel(cover_px.astype(np.float32), unit, layout(unit, W, H), 0, "edge",
+                                            np.float32), 0, 1)
+    ref = degrade(far, g.layers[0], "interp") * (1 - cover) + degrade(cover_px * near, g.layers[2], "interp")
+    img = far * (1 - cover_px) + near * cover_px
+    depth = np.where(mask > 0, 10.0, np.inf)
+    assert silhouette_depth(depth)[1] == 0  # a clean edge: nothing moves
+    ramp = np.broadcast_to(np.geomspace(5.0, 500.0, H)[:, None], (H, W))  # the ground: 1.6 % a row
+    assert silhouette_depth(ramp)[1] == 0
+    depth[:, W // 2] = 40.0
+    assert silhouette_depth(depth)[1] == H
+    rms = np.sqrt(np.mean(ref[band] ** 2))
+    e = {s: float(np.sqrt(np.mean((degrade_depth(img, depth, g, silhouette=s) - ref)[band] ** 2)) / rms)
+         for s in ("nearest", "as-given")}
+    print(focus, {k: f"{100 * v:.2f} %" for k, v in e.items()})
+    assert e["nearest"] < 0.3 * e["as-given"]  # measured 0.50 % against 2.90 % (inf), 0.49 % against 4.18 % (10 m)

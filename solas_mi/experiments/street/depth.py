@@ -103,10 +103,12 @@ def depth_rows(st, weighted: np.ndarray, depth: np.ndarray, k: float, renders: d
                                                      unit_k=unit)
             if count == layers[-1]:
                 images[name] = image
-                plain, seconds = _convolve(weighted, z, grid, unit, "none")
-                rows[f"{name}, no occlusion vs render {label}"] = dict(
-                    masked(plain, renders[label], *masks[label]), intervals=count, nodes=count + 1,
-                    seconds=seconds, occlusion="none")
+                for suffix, options in ((", no occlusion", {"occlusion": "none"}),
+                                        (", silhouettes' depth as given", {"silhouette": "as-given"})):
+                    other, seconds = _convolve(weighted, z, grid, unit, **options)
+                    rows[f"{name}{suffix} vs render {label}"] = dict(
+                        masked(other, renders[label], *masks[label]), intervals=count, nodes=count + 1,
+                        seconds=seconds, **options)
     return images, rows
 
 
@@ -147,9 +149,10 @@ def _grid(st, lens, nodes, field_range):
     return depth_grid(lens, spec, camera_focal_mm=pinhole_focal_mm(st.lens, st.fov), viewpoint_mm=0.0)
 
 
-def _convolve(weighted: np.ndarray, z: np.ndarray, grid, k: float, occlusion: str = "filled"):
+def _convolve(weighted: np.ndarray, z: np.ndarray, grid, k: float, occlusion: str = "filled",
+              silhouette: str = "nearest"):
     from ...convolution.depth import degrade_depth
 
     start = time.perf_counter()
-    image = degrade_depth(weighted, z, grid, "edge", occlusion=occlusion) / np.float32(k)
+    image = degrade_depth(weighted, z, grid, "edge", occlusion=occlusion, silhouette=silhouette) / np.float32(k)
     return image, time.perf_counter() - start
