@@ -154,21 +154,15 @@ def _add_runner_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
-def register(subparsers: Any) -> None:
-    """Add `batch` and its `degrade` and `render`."""
+def _add_degrade(sub: Any) -> None:
+    """Add `batch degrade`."""
     from ..convolution.commands import add_frame_options
     from ..convolution.kernels import BOUNDARIES
     from ..convolution.methods import DEFAULT_METHOD, METHODS
     from ..convolution.depth import OCCLUSIONS, SILHOUETTES
     from ..convolution.output import OUTPUT_FORMATS
     from ..psf.spec import add_options as add_grid_options
-    from ..render.spec import add_spec_flags
-    from .render import SWEEP
 
-    batch = subparsers.add_parser("batch", help="many images at once, on local processes or a Dask cluster",
-                                  description="Batch work, resumable, with a manifest batch.json in the output "
-                                              "folder.")
-    sub = batch.add_subparsers(dest="batch_command", metavar="COMMAND", required=True)
     p = sub.add_parser(
         "degrade", help="degrade images (files, folders, glob patterns) with one PSF grid",
         description="Degrade every input image with one PSF grid — a given file, or computed once from --lens "
@@ -200,6 +194,18 @@ def register(subparsers: Any) -> None:
     add_grid_options(p.add_argument_group("grid options (with --lens; those of `solas-mi psf-grid`; --grid "
                                           "defaults to 32x32 here, the accuracy tables' interp grid)"))
     p.set_defaults(run=run_batch_degrade)
+
+
+def register(subparsers: Any) -> None:
+    """Add `batch` and its `degrade` and `render`."""
+    from ..render.spec import add_spec_flags
+    from .render import SWEEP
+
+    batch = subparsers.add_parser("batch", help="many images at once, on local processes or a Dask cluster",
+                                  description="Batch work, resumable, with a manifest batch.json in the output "
+                                              "folder.")
+    sub = batch.add_subparsers(dest="batch_command", metavar="COMMAND", required=True)
+    _add_degrade(sub)
 
     r = sub.add_parser(
         "render", help="render images and scene files through a lens, swept over lenses, focus, sensor, spp",
