@@ -112,8 +112,20 @@ def test_object_space_na(tmp_path):
     assert lens.surfaces[0].semi_diameter == pytest.approx(500.0 * math.tan(math.asin(0.02)), rel=1e-12)
     with pytest.raises(SolasError, match="object-space NA needs a finite object"):
         load(tmp_path, zmx(aperture="OBNA 0.02 0"))
-    with pytest.raises(SolasError, match="paraxial working F/# is not supported"):
-        load(tmp_path, zmx(aperture="FNUM 4 1"))
+    with pytest.raises(SolasError, match="system aperture type not supported; allowed: .* paraxial working F/# "
+                                         r"\(FNUM x 1\)"):
+        load(tmp_path, zmx(aperture="FNUM 4 2"))
+
+
+def test_paraxial_working_f_number(tmp_path):
+    """FNUM x 1, the paraxial working F/# 1 / (2 n' u'): the marginal ray from the axial object point 500 mm
+    before the stop (surface 1), traced by hand (y–nu: n' u' = n u − y φ), leaves at u' = 1 / (2 · 4)."""
+    lens = load(tmp_path, zmx(aperture="FNUM 4 1", obj="500"))
+    u = (1.0 / 500.0 - (N - 1) / R1) / N  # a ray through the stop at height 1
+    leaving = N * u - (1.0 + T1 * u) * (1 - N) / R2
+    p = paraxial(lens, WL * 1000)
+    assert p.entrance_pupil_diameter_mm == pytest.approx(2.0 / (2.0 * 4.0 * abs(leaving)), rel=1e-12)
+    assert p.working_f_number == pytest.approx(4.0, rel=1e-12)
 
 
 def test_field_types(tmp_path):
@@ -253,7 +265,7 @@ def test_every_plastic_and_moulded_glass_loads_by_its_zemax_name(tmp_path):
     keys = [k for k in glass.load_catalog() if k.split(":")[0] in ("LIGHTPATH", "RPO", "ZEON", "OSAKAGASCHEMICAL",
                                                                       "ANGSTROMLINK", "CORNING")]
     keys += [f"MISC:{n}" for n in ("PMMA", "POLYCARB", "POLYSTYR", "ACRYLIC", "SAN", "COC")]
-    assert len(keys) == 69
+    assert len(keys) == 70
     for key in keys:
         vendor, name = key.split(":")
         glas = f"GLAS {name} 0 0 1.5 50 0 0 0 0 0 0"
