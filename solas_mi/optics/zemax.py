@@ -11,7 +11,8 @@ Read as the author meant it:
   surface), QED_TYPE (OpticStudio's Q-type asphere: XDAT 1 the type, 0 Qbfs or 1 Qcon, XDAT 2 the number
   of terms, XDAT 3 the normalisation radius, XDAT 4… a0, a1, …; Qbfs kept as such, Qcon rewritten exactly
   as even-asphere terms, `forbes`), COORDBRK when it is a pure axial shift (its DISZ added to the gap) or undone by the next
-  coordinate break; flat air surfaces without a clear aperture of their own (dummies) are dropped,
+  coordinate break; flat air surfaces without a clear aperture of their own (no DIAM, or DIAM's solve type
+  0, automatic: it cuts no ray) (dummies) are dropped,
   their thickness added to the gap. STOP, COMM (the label), CONI, CURV (1/unit), DISZ.
 - Clear apertures: DIAM (the semi-diameter); where absent or 0, Zemax's automatic semi-diameter:
   the largest height of the real chief and marginal (stop-rim) rays of every field and wavelength.
@@ -173,7 +174,8 @@ def _surface(b: dict, i: int, scale: float, gcat: tuple[str, ...], where: str) -
            "radius": 0.0 if curv == 0 else 1.0 / curv,
            "thickness": _floats([thickness], f"{ident}: DISZ")[0] * scale,
            "diameter": 2.0 * semi if semi > 0 else None,
-           "material": _material(b["GLAS"][0], ident, gcat) if "GLAS" in b else "AIR", "ident": ident}
+           "material": _material(b["GLAS"][0], ident, gcat) if "GLAS" in b else "AIR", "ident": ident,
+           "auto": semi <= 0 or b["DIAM"][0][1:2] == ["0"]}  # DIAM's solve type 0: Zemax's automatic aperture
     conic = _floats((b.get("CONI") or [["0"]])[0][:1], f"{ident}: CONI")[0]
     if conic:
         row["conic"] = conic
@@ -255,16 +257,14 @@ def _fold(rows: list[dict], where: str) -> list[dict]:
             continue
         air_before = not out or out[-1]["material"].upper() == "AIR"
         dummy = (row["radius"] == 0 and not row.get("stop") and not row.get("aspheric") and not row.get("qbfs")
-                 and row["diameter"] is None
+                 and (row["diameter"] is None or row["auto"])
                  and row["material"].upper() == "AIR" and air_before and out)
         if dummy:
             out[-1]["thickness"] += row["thickness"]
         else:
             out.append(row)
         i += 1
-    for row in out:
-        row.pop("ident")
-    return out
+    return [{k: v for k, v in row.items() if k not in ("ident", "auto")} for row in out]
 
 
 def _break_shift(rows: list[dict], i: int) -> float | None:

@@ -172,6 +172,21 @@ def test_dummy_surfaces_and_axial_coordinate_breaks(tmp_path):
         load(tmp_path, tilted)
 
 
+def test_dummy_with_zemax_automatic_aperture_and_a_negative_gap(tmp_path):
+    """A flat air surface whose DIAM has solve type 0 (Zemax's automatic semi-diameter, the value only its
+    last computation: it cuts no ray) is a dummy, even when a negative gap leads to it (met in published
+    files: the lens's back face, 3 mm back to a dummy, 3 mm + BFD on to the image); its thickness joins the
+    gap before, which leaves the same lens: BFD and EFL of the thick-lens formulas."""
+    dummy = f"SURF 3\n  TYPE STANDARD\n  CURV 0\n  DISZ {3.0 + BFD!r}\n  DIAM 9.87654321 0 0 0 1 \"\"\n"
+    lens = load(tmp_path, zmx(extra=dummy).replace(f"DISZ {BFD!r}", "DISZ -3.0"))
+    p = paraxial(lens, WL * 1000)
+    assert len(lens.surfaces) == 2 and lens.surfaces[1].thickness == pytest.approx(BFD, rel=1e-12)
+    assert p.efl_mm == pytest.approx(EFL, rel=1e-12) and p.bfd_mm == pytest.approx(BFD, rel=1e-12)
+    fixed = dummy.replace("9.87654321 0", "9.87654321 1")  # solve type 1: the user's aperture, a real surface
+    with pytest.raises(SolasError, match=r"surface 2 \(SURF 2\): thickness -3 mm is negative"):
+        load(tmp_path, zmx(extra=fixed).replace(f"DISZ {BFD!r}", "DISZ -3.0"))
+
+
 def test_odd_asphere_even_terms(tmp_path):
     even = zmx(s2="DIAM 14 1").replace("SURF 2\n  TYPE STANDARD", "SURF 2\n  TYPE EVENASPH\n  PARM 2 1e-6\n  PARM 3 -2e-9")
     odd = zmx(s2="DIAM 14 1").replace("SURF 2\n  TYPE STANDARD", "SURF 2\n  TYPE ODDASPH\n  PARM 4 1e-6\n  PARM 6 -2e-9")
