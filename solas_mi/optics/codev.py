@@ -17,8 +17,8 @@ description says so). CIR EDG (the edge aperture, drawn only) is read past; CIR 
   code "nnnnnn.vvvvvv" or "nnn.vvv" (n_d = 1.nnnnnn, V_d = vv.vvvv); the object space's on SO. TEM
   within 20-25 °C (the glass data's reference temperatures) is read past, other temperatures refused.
 - System: TIT (the name), DIM M / C / I (mm, cm, inches), WL (nm) and REF (the reference one), the
-  system aperture EPD (entrance-pupil diameter), FNO (the paraxial F/#, EFL / EPD: distant objects
-only, CODE V's working F/# of a near object is refused), NAO (object-space
+  system aperture EPD (entrance-pupil diameter), FNO (the image-space F/#: EFL / EPD for a distant object,
+  the paraxial working F/# 1 / (2 n' u') for a near one), NAO (object-space
   NA), none: the stop's CIR; fields YAN/XAN (degrees), YOB/XOB (object heights), YIM/XIM (paraxial
   image heights) or YRI/XRI (real image heights), solved as Zemax's are (`zemax_solves`); surfaces
   without CIR get the automatic semi-diameter.
@@ -34,13 +34,12 @@ import math
 import re
 
 from ..errors import SolasError
-from . import glass as glass_mod
 from . import zemax_solves
+from .codev_glass import PrivateCatalogue, material, unquote
 from .formats import READERS
 from .formats import floats as _numbers
 from .lens import Lens
 from .paraxial import paraxial
-from .zemax import GCAT_VENDORS
 
 UNITS = {"M": 1.0, "C": 10.0, "I": 25.4}
 INFINITE_OBJECT = 1e10  # an object distance at least this (in lens units) is at infinity, as CODE V takes it
@@ -54,16 +53,14 @@ SYSTEM = ("TIT", "TITLE", "DIM", "WL", "REF", "XAN", "XOB", "XIM", "XRI", *FIELD
 ZERO_IS_NOTHING = ("XDE", "YDE", "ZDE", "ADE", "BDE", "CDE", "CUF")
 REFUSED = {**dict.fromkeys(("XDE", "YDE", "ZDE", "ADE", "BDE", "CDE", "DAR", "BEN", "REV", "RET"),
                            "decentred or tilted surfaces"),
-           "REFL": "mirrors", "DOE": "diffractive surfaces", "HOE": "holographic surfaces",
+           "REFL": "mirrors", "DOE": "diffractive surfaces", "DIF": "diffractive surfaces", "HOE": "holographic surfaces",
            "HCO": "holographic surfaces", "SPS": "special surface shapes",
            "YTO": "toric surfaces", "XTO": "toric surfaces", "RDX": "anamorphic surfaces (an x radius)",
            "CUX": "anamorphic surfaces (an x curvature)", "REX": "rectangular apertures",
            "REY": "rectangular apertures", "ELX": "elliptical apertures", "ELY": "elliptical apertures",
-           "OBS": "obscurations", "ZOO": "zoom positions", "PRV": "private glass catalogues",
+           "OBS": "obscurations", "ZOO": "zoom positions",
            "NA": "image-space NA apertures (use EPD, FNO or NAO)", "TEL": "telecentric object spaces",
            "CUF": "fringe curvatures"}
-_MODEL = re.compile(r"^(\d*\.?\d+):(\d*\.?\d+)$")
-_CODE = re.compile(r"^(\d{3}|\d{6})\.(\d{2,6})$")
 
 
 def _commands(text: str):
@@ -89,40 +86,6 @@ def _commands(text: str):
         yield number, tokens
 
 
-def _unquote(token: str) -> str:
-    return token[1:-1] if token[:1] in "'\"" and token[-1:] == token[:1] and len(token) > 1 else token
-
-
-def material(token: str, ident: str) -> str:
-    """Our material name for a CODE V glass: NAME_VENDOR, a bare name, "n_d:V_d" or "nnnnnn.vvvvvv"."""
-    name = _unquote(token).strip()
-    model, code = _MODEL.match(name), _CODE.match(name)
-    if model or code:
-        nd, vd = ((float(model[1]), float(model[2])) if model
-                  else (1.0 + int(code[1]) / 10 ** len(code[1]), float(code[2][:2] + "." + code[2][2:])))
-        if not 1.0 < nd < 3.0 or (vd and not 5.0 < vd < 150.0):
-            raise SolasError(f"{ident}: model glass {name!r}: n_d {nd:g} must lie in (1, 3) and V_d {vd:g} in "
-                             "(5, 150) (or 0: no dispersion)")
-        return f"model:{nd!r}" if vd == 0 else f"model:{nd!r}/{vd!r}"
-    if name.upper() == "REFL":
-        raise SolasError(f"{ident}: GLA REFL: mirrors are not supported (refracting surfaces only)")
-    bare, _, vendor = name.rpartition("_")
-    if not bare or vendor.upper() not in GCAT_VENDORS:
-        return name or "AIR"
-    ours = GCAT_VENDORS[vendor.upper()]
-    key = f"{ours}:{bare.upper()}"
-    if glass_mod.candidates(key):
-        return key
-    squeeze = re.sub(r"[\s\-]", "", bare).upper()
-    same = [k for k in glass_mod.candidates(squeeze) if k.split(":", 1)[0] == ours]
-    same = same or [k for k in glass_mod.load_catalog() if k.split(":", 1)[0] == ours
-                    and re.sub(r"[\s\-]", "", k.split(":", 1)[1]).upper() == squeeze]
-    if len(same) == 1:
-        return same[0]
-    raise SolasError(f"{ident}: glass {name!r}: {ours} has no glass {bare!r} in our catalogue"
-                     + (f" (several match: {', '.join(same)})" if same else ""))
-
-
 class _Reader:
     """The state of a .seq file being read: the system settings and the surfaces so far."""
 
@@ -133,6 +96,8 @@ class _Reader:
         self.stop_at: int | None = None  # STO Sn: the stop is surface n
         self.radius_mode = False  # CODE V's default: S lines give curvatures unless RDM says radii
         self.mode_given = False  # whether RDM or CUM said which
+        self.private: PrivateCatalogue | None = None  # inside PRV … END
+        self.materials: dict[str, dict] = {}  # the private glasses, as [materials] tables
 
     def ident(self, line: int) -> str:
         if not self.rows:
@@ -144,6 +109,14 @@ class _Reader:
     def read(self, text: str) -> None:
         for line, tokens in _commands(text):
             key, args = tokens[0].upper(), tokens[1:]
+            if self.private is not None:
+                if self.private.read(key, tokens, f"{self.where}: line {line}, PRV"):
+                    self.materials.update(self.private.glasses)
+                    self.private = None
+                continue
+            if key == "PRV":
+                self.private = PrivateCatalogue()
+                continue
             if key in REFUSED:
                 if key in ZERO_IS_NOTHING and args and _numbers(args[:1], self.ident(line)) == [0.0]:
                     continue  # a zero decentre, tilt or fringe curvature changes nothing
@@ -191,7 +164,7 @@ class _Reader:
         if len(values) > 1:
             row["thi"] = values[1]
         if len(args) > 2:
-            row["glass"] = material(args[2], ident)
+            row["glass"] = material(args[2], ident, self.materials)
         if key == "STO":
             row["stop"] = True
         self.rows.append(row)
@@ -218,11 +191,11 @@ class _Reader:
             else:
                 row.setdefault("asp", {})[ASPHERIC.index(key)] = v
         elif key == "GLA":
-            row["glass"] = material(args[0], ident) if args else "AIR"
+            row["glass"] = material(args[0], ident, self.materials) if args else "AIR"
         elif key == "STO":
             row["stop"] = True
         elif key == "SLB":
-            row["label"] = _unquote(" ".join(args))
+            row["label"] = unquote(" ".join(args))
         elif key == "PIM":
             row["pim"] = True
         elif key == "SPH":
@@ -238,6 +211,8 @@ def read_spec(text: str, where: str) -> dict:
     reader = _Reader(where)
     reader.read(text)
     system, rows = reader.system, reader.rows
+    if reader.private is not None:
+        raise SolasError(f"{where}: PRV (a private glass catalogue) has no END")
     if reader.stop_at is not None:
         if not 1 <= reader.stop_at < len(rows) - 1:
             raise SolasError(f"{where}: STO S{reader.stop_at}: the lens has surfaces S1 to S{len(rows) - 2}")
@@ -257,7 +232,9 @@ def read_spec(text: str, where: str) -> dict:
         raise SolasError(f"{where}: DIM {system['DIM'][0]!r} is not supported; allowed: M (mm), C (cm), I (inches)")
     scale = UNITS[dim]
     spec: dict = {"object": _object(rows[0], scale)}
-    title = " ".join(_unquote(t) for t in system.get("TIT", system.get("TITLE", []))).strip()
+    if reader.materials:
+        spec["materials"] = reader.materials
+    title = " ".join(unquote(t) for t in system.get("TIT", system.get("TITLE", []))).strip()
     if title:
         spec["name"] = title
     if default_stop:
@@ -274,7 +251,7 @@ def read_spec(text: str, where: str) -> dict:
         _image_solve(spec, pim[-1], primary, where)
     aperture = _aperture(system, scale, where)
     if aperture[0] == "fnum" and spec["object"]["distance"] != "infinity":
-        raise SolasError(f"{where}: FNO with a near object (CODE V's working F/#) is not supported; give EPD or NAO")
+        aperture = ("working fnum", aperture[1])  # CODE V's FNO: the working F/# at the object's conjugate
     fields = _fields(system, scale, where)
     try:
         return zemax_solves.solve(spec, aperture, fields, primary, where, _vignetting(system, len(fields[1]), where))

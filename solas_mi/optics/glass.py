@@ -47,8 +47,10 @@ MATCH_ND, MATCH_VD = 5e-5, 0.05
 @dataclass(frozen=True)
 class Glass:
     """A refractive medium. `kind` is "sellmeier" (coefficients (B, C)), "polynomial" (coefficients
-    (K, P): n² = Σ K λ^P, P even integers), "model" or "air". `nd`, `vd`: a catalogue glass's stated
-    values (None for others)."""
+    (K, P): n² = Σ K λ^P, P even integers), "conrady" (coefficients ((A0, A1, A2), ()): n = A0 + A1/λ +
+    A2/λ^3.5, the Zemax AGF's formula 5), "table" (coefficients (wavelengths in nm, increasing, and
+    indices): a lens file's own material, a natural cubic spline in 1/λ² through its points), "model" or "air". `nd`, `vd`: a
+    catalogue glass's stated values (None for others)."""
 
     name: str
     kind: str
@@ -67,17 +69,22 @@ class Glass:
                 f"wavelength {float(np.atleast_1d(bad)[0]):.10g} nm is outside glass {self.name}'s "
                 f"valid range {lo:g}-{hi:g} nm"
             )
-        n = self.index_formula(wl / 1000.0, np.sqrt)
+        n = np.asarray(self.index_formula(wl / 1000.0, np.sqrt))
         return float(n) if n.ndim == 0 else n
 
-    def index_formula(self, wavelength_um, sqrt: Callable):
-        """n(λ) with λ in µm for any array type (NumPy, Dr.Jit) given its `sqrt`; no range check."""
+    def index_formula(self, wavelength_um, sqrt: Callable, select: Callable = np.where):
+        """n(λ) with λ in µm for any array type (NumPy, Dr.Jit) given its `sqrt` and `select(mask, a, b)`
+        (a table's spline picks its piece); no range check."""
         if self.kind == "air":
             return wavelength_um * 0.0 + 1.0
         a, b = self.coefficients
         l2 = wavelength_um * wavelength_um
         if self.kind == "model":
             return a[0] + b[0] / l2
+        if self.kind == "conrady":
+            return a[0] + a[1] / wavelength_um + a[2] / (l2 * wavelength_um * sqrt(wavelength_um))
+        if self.kind == "table":
+            return _spline(a, b, wavelength_um, select)
         if self.kind == "polynomial":
             n2 = wavelength_um * 0.0
             inv = 1.0 / l2
@@ -104,6 +111,61 @@ class Glass:
 
 
 AIR = Glass("AIR", "air")
+
+
+@lru_cache(maxsize=64)
+def _pieces(wavelengths_nm: tuple[float, ...], index: tuple[float, ...]) -> tuple[tuple[float, ...], ...]:
+    """The natural cubic spline through (1/λ², n) (λ µm; in 1/λ² an index is nearly straight, as Cauchy's
+    formula says): per piece (x_i, n_i, slope, curvature / 2, cubic), x increasing."""
+    x, y = (1000.0 / np.asarray(wavelengths_nm)) ** 2, np.asarray(index, dtype=np.float64)
+    x, y = x[::-1], y[::-1]
+    m, h = len(x), np.diff(x)
+    second = np.zeros(m)
+    if m > 2:  # the second derivatives: zero at both ends, continuous slopes inside
+        system = np.diag(2.0 * (h[:-1] + h[1:])) + np.diag(h[1:-1], 1) + np.diag(h[1:-1], -1)
+        second[1:-1] = np.linalg.solve(system, 6.0 * np.diff(np.diff(y) / h))
+    slope = np.diff(y) / h - h * (2.0 * second[:-1] + second[1:]) / 6.0
+    cubic = (second[1:] - second[:-1]) / (6.0 * h)
+    return tuple(tuple(map(float, piece)) for piece in zip(x[:-1], y[:-1], slope, second[:-1] / 2.0, cubic))
+
+
+def _spline(wavelengths_nm, index, wavelength_um, select: Callable):
+    """A table's index at `wavelength_um`: its spline piece's cubic (the first and last pieces reach past
+    the ends; `Glass.index` keeps wavelengths within the table)."""
+    x, n = 1.0 / (wavelength_um * wavelength_um), None
+    for x0, y0, b, c, d in _pieces(tuple(wavelengths_nm), tuple(index)):
+        t = x - x0
+        value = y0 + t * (b + t * (c + t * d))
+        n = value if n is None else select(x >= x0, value, n)
+    return n
+
+
+def own_material(name: str, entry: dict, where: str) -> Glass:
+    """A lens file's own material `name` (its [materials] table): a table of indices (`wavelengths_nm`,
+    `index`: the spline through them, offered over their span) or a formula with a catalogue entry's
+    keys (B and C, K and P, or conrady; with range_nm)."""
+    ident = f"{where}: material {name!r}"
+    if not isinstance(entry, dict):
+        raise SolasError(f"{ident} must be a table: wavelengths_nm and index, or a formula (B/C, K/P or conrady) "
+                         "with range_nm")
+    if "index" in entry or "wavelengths_nm" in entry:
+        wl, n = entry.get("wavelengths_nm"), entry.get("index")
+        good = (isinstance(wl, list) and isinstance(n, list) and len(wl) == len(n) >= 1
+                and all(isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v) for v in wl + n))
+        if not good or any(b <= a for a, b in zip(wl, wl[1:])) or not all(w > 0 for w in wl) \
+                or not all(1.0 < v < 5.0 for v in n):
+            raise SolasError(f"{ident}: wavelengths_nm = {wl!r}, index = {n!r}: give lists of the same length, "
+                             "wavelengths (nm) positive and increasing, indices in (1, 5)")
+        if len(wl) == 1:  # one index: no dispersion
+            return Glass(name, "model", ((float(n[0]),), (0.0,)), (0.0, float("inf")))
+        return Glass(name, "table", (tuple(map(float, wl)), tuple(map(float, n))), (float(wl[0]), float(wl[-1])))
+    try:
+        g = _glass(name, entry)
+        g.abbe() if g.range_nm[0] <= LINE_F and g.range_nm[1] >= LINE_C else g.index(g.range_nm[0])
+    except (KeyError, TypeError, ValueError) as exc:
+        raise SolasError(f"{ident}: {exc!s} is missing or wrong; give B and C (Sellmeier), K and P (power "
+                         "series) or conrady (A0, A1, A2), each with range_nm = [lo, hi] (nm)") from None
+    return g
 
 
 def model_glass(nd: float, vd: float | None = None) -> Glass:
@@ -137,6 +199,8 @@ def _entries(path: str | None) -> dict:
 
 
 def _glass(key: str, e: dict) -> Glass:
+    if "conrady" in e:
+        return Glass(key, "conrady", (tuple(e["conrady"]), ()), tuple(e["range_nm"]), e.get("nd"), e.get("vd"))
     if "K" in e:
         return Glass(key, "polynomial", (tuple(e["K"]), tuple(e["P"])), tuple(e["range_nm"]), e.get("nd"), e.get("vd"))
     return Glass(key, "sellmeier", (tuple(e["B"]), tuple(e["C"])), tuple(e["range_nm"]), e.get("nd"), e.get("vd"))
@@ -168,13 +232,16 @@ def vendors(catalog: str | None = None) -> list[str]:
     return sorted({k.split(":", 1)[0] for k in load_catalog(catalog)})
 
 
-def resolve(name: str, catalog: str | None = None, prefer: tuple[str, ...] = ()) -> Glass:
-    """The one glass that `name` means: "AIR", a catalogue name ("N-BK7", "SCHOTT:F2", "OHARA:S-LAH59",
-    "BK7"), "model:n_d/V_d" or "model:n_d". A name several vendors use means the entry of the first
-    vendor in `prefer` that has exactly one of that name. Unknown or ambiguous names raise SolasError
-    (an ambiguous one lists the entries it may mean)."""
+def resolve(name: str, catalog: str | None = None, prefer: tuple[str, ...] = (),
+            own: dict[str, Glass] | None = None) -> Glass:
+    """The one glass that `name` means: a lens file's own material (`own`, by name), "AIR", a catalogue
+    name ("N-BK7", "SCHOTT:F2", "OHARA:S-LAH59", "BK7"), "model:n_d/V_d" or "model:n_d". A name several
+    vendors use means the entry of the first vendor in `prefer` that has exactly one of that name.
+    Unknown or ambiguous names raise SolasError (an ambiguous one lists the entries it may mean)."""
     if not isinstance(name, str) or not name.strip():
         raise SolasError(f"glass name {name!r} must be a non-empty string")
+    if own and name in own:
+        return own[name]
     if name.strip().upper() == "AIR":
         return AIR
     m = _MODEL_RE.match(name)

@@ -32,7 +32,8 @@ from .fields import FieldType, field_type_for
 LENS_DIR = "lenses"
 # What a lens file may hold (anything else is a mistake worth naming, e.g. a surface type we do not model)
 KEYS = {
-    "lens": ("name", "description", "wavelengths_nm", "field_deg", "catalogues", "surface", "object", "image"),
+    "lens": ("name", "description", "wavelengths_nm", "field_deg", "catalogues", "materials", "surface", "object",
+             "image"),
     "surface": ("label", "radius", "thickness", "diameter", "material", "stop", "conic", "aspheric", "qbfs",
                 "norm_radius"),
     "object": ("distance", "material"),
@@ -83,6 +84,12 @@ def _catalogues(spec: dict, where: str) -> tuple[str, ...]:
         raise SolasError(f"{where}: catalogues = {value!r} must be a list of vendors, most preferred first; "
                          f"allowed: {', '.join(vendors)}")
     return tuple(v.upper() for v in value)
+
+
+def _own_materials(spec: dict, where: str) -> dict[str, glass_mod.Glass]:
+    """The lens file's own materials ([materials.NAME] tables, e.g. a CODE V file's private catalogue), by name."""
+    return {str(name): glass_mod.own_material(str(name), entry, where)
+            for name, entry in _table(spec, "materials", where).items()}
 
 
 def _table(spec: dict, key: str, where: str) -> dict:
@@ -141,7 +148,7 @@ class Surface:
         return sag(r * r, **self.shape)
 
 
-def _surface(row: dict, i: int, where: str, catalogues: tuple[str, ...]) -> "Surface":
+def _surface(row: dict, i: int, where: str, catalogues: tuple[str, ...], own: dict) -> "Surface":
     """Surface `i` (1-based) of a lens file's [[surface]] table, checked."""
     label = str(row.get("label", f"surface {i}"))
     ident = f"{where}: surface {i} ({label})"
@@ -159,7 +166,7 @@ def _surface(row: dict, i: int, where: str, catalogues: tuple[str, ...]) -> "Sur
                          f"got {row.get('norm_radius')!r}")
     material = row.get("material", "AIR")
     try:
-        g = glass_mod.resolve(material, prefer=catalogues)
+        g = glass_mod.resolve(material, prefer=catalogues, own=own)
     except SolasError as exc:
         raise SolasError(f"{ident}: {exc}") from None
     return Surface(label, radius, thickness, diameter, str(material), g, stop, conic, aspheric, qbfs, norm_radius)
@@ -189,6 +196,7 @@ class Lens:
     description: str = ""
     source: str = ""
     catalogues: tuple[str, ...] = ()  # vendors whose entry a glass name shared by several vendors means, first first
+    materials: tuple[glass_mod.Glass, ...] = ()  # the lens file's own materials, which its surfaces name
 
     # ------------------------------------------------------------------ loading
     @classmethod
@@ -252,8 +260,8 @@ class Lens:
         if not all(isinstance(r, dict) for r in rows):
             raise SolasError(f"{where}: surface = {rows!r}: each surface must be a table ([[surface]] with radius, "
                              "thickness, ...)")
-        catalogues = _catalogues(spec, where)
-        surfaces = [_surface(row, i, where, catalogues) for i, row in enumerate(rows, start=1)]
+        catalogues, own = _catalogues(spec, where), _own_materials(spec, where)
+        surfaces = [_surface(row, i, where, catalogues, own) for i, row in enumerate(rows, start=1)]
         obj, image = _table(spec, "object", where), _table(spec, "image", where)
         _check_keys(obj, "object", f"{where}: object")
         _check_keys(image, "image", f"{where}: image")
@@ -263,7 +271,7 @@ class Lens:
         elif not isinstance(distance, (int, float)) or isinstance(distance, bool) or not 0 < distance < math.inf:
             raise SolasError(f"{where}: object distance {distance!r} must be a positive number (mm) or \"infinity\"")
         try:
-            object_glass = glass_mod.resolve(obj.get("material", "AIR"), prefer=catalogues)
+            object_glass = glass_mod.resolve(obj.get("material", "AIR"), prefer=catalogues, own=own)
         except SolasError as exc:
             raise SolasError(f"{where}: object: {exc}") from None
         wavelengths = spec.get("wavelengths_nm", [486.0, 531.0, 656.0])
@@ -280,6 +288,7 @@ class Lens:
             description=str(spec.get("description", "")),
             source=source,
             catalogues=catalogues,
+            materials=tuple(own.values()),
         )
         lens._validate(where)
         return lens

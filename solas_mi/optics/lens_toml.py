@@ -25,14 +25,29 @@ def text(v) -> str:
     return json.dumps(str(v), ensure_ascii=False).replace("\x7f", "\\u007f")
 
 
+def _material(g) -> list[str]:
+    """The keys of a lens file's own material `g` (a `glass.Glass`) in its [materials.NAME] table."""
+    a, b = g.coefficients
+    if g.kind == "table":
+        return [f"wavelengths_nm = {_value(a)}", f"index = {_value(b)}"]
+    if g.kind == "model":  # a one-entry table: one index, no dispersion
+        return ["wavelengths_nm = [587.5618]", f"index = {_value(a)}"]
+    keys = {"sellmeier": ("B", "C"), "polynomial": ("K", "P"), "conrady": ("conrady",)}[g.kind]
+    return [f"{k} = {_value(v)}" for k, v in zip(keys, (a, b))] + [f"range_nm = {_value(g.range_nm)}"]
+
+
 def dumps(lens) -> str:
     """The TOML text of `lens` (a `solas_mi.optics.lens.Lens`)."""
     lines = [f"# {text(lens.name)}: lens file written by solas-mi (lengths in mm, wavelengths in nm)",
              f"name = {_value(lens.name)}"]
     if lens.description:
         lines.append(f"description = {_value(lens.description)}")
-    lines += [f"wavelengths_nm = {_value(lens.wavelengths_nm)}", f"field_deg = {_value(lens.field_deg)}", "",
-              "[object]",
+    lines += [f"wavelengths_nm = {_value(lens.wavelengths_nm)}", f"field_deg = {_value(lens.field_deg)}"]
+    if lens.catalogues:
+        lines.append(f"catalogues = {_value(lens.catalogues)}")
+    for g in lens.materials:
+        lines += ["", f"[materials.{text(g.name)}]", *_material(g)]
+    lines += ["", "[object]",
               f"distance = {_value('infinity') if math.isinf(lens.object_distance) else _value(lens.object_distance)}"]
     if lens.object_glass.kind != "air":
         lines.append(f"material = {_value(lens.object_glass.name)}")

@@ -76,7 +76,7 @@ def _types(value) -> tuple[type, type, type]:
 
 def refractive_index(glass, wavelength_um: F) -> F:
     """n(λ) as a Dr.Jit array (λ in µm)."""
-    return glass.index_formula(wavelength_um, dr.sqrt)
+    return glass.index_formula(wavelength_um, dr.sqrt, dr.select)
 
 
 def launch_plane_z(lens: Lens) -> float:

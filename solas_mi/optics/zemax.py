@@ -11,7 +11,8 @@ Read as the author meant it:
   surface), QED_TYPE (OpticStudio's Q-type asphere: XDAT 1 the type, 0 Qbfs or 1 Qcon, XDAT 2 the number
   of terms, XDAT 3 the normalisation radius, XDAT 4… a0, a1, …; Qbfs kept as such, Qcon rewritten exactly
   as even-asphere terms, `forbes`), COORDBRK when it is a pure axial shift (its DISZ added to the gap) or undone by the next
-  coordinate break; flat air surfaces without a clear aperture of their own (dummies) are dropped,
+  coordinate break; flat air surfaces without a clear aperture of their own (no DIAM, or DIAM's solve type
+  0, automatic: it cuts no ray) (dummies) are dropped,
   their thickness added to the gap. STOP, COMM (the label), CONI, CURV (1/unit), DISZ.
 - Clear apertures: DIAM (the semi-diameter); where absent or 0, Zemax's automatic semi-diameter:
   the largest height of the real chief and marginal (stop-rim) rays of every field and wavelength.
@@ -20,8 +21,8 @@ Read as the author meant it:
   lens's `catalogues` holds them); model glass `GLAS ___BLANK 1 0 n_d V_d …` (V_d 0 or absent: a
   constant index); on SURF 0 the object's medium.
 - System aperture, which sets the stop's size as in Zemax (the stop's DIAM only with FLOA): ENPD
-  (entrance-pupil diameter), FNUM x 0 (image-space F/# = EFL / EPD), OBNA x 0 (object-space NA, finite
-  objects), FLOA (float by stop size).
+  (entrance-pupil diameter), FNUM x 0 (image-space F/# = EFL / EPD), FNUM x 1 (paraxial working F/#),
+  OBNA x 0 (object-space NA, finite objects), FLOA (float by stop size).
 - Fields (XFLN/YFLN, FTYP's first number): 0 angle, 1 object height, 2 paraxial image height, 3 real
   image height (the field whose real chief ray lands there); field_deg is the widest as an angle.
   Vignetting factors VDXN/VCXN/VDYN/VCYN shape the beam automatic semi-diameters follow.
@@ -116,12 +117,9 @@ def read_spec(text: str, where: str) -> dict:
         raise SolasError(f"{where}: UNIT {unit[0]!r} is not supported; allowed: {', '.join(UNITS)}")
     if len(blocks) < 3:
         raise SolasError(f"{where}: {len(blocks)} SURF blocks; a lens needs the object, a surface and the image")
-    spec: dict = {}
     name = one_line(" ".join((top.get("NAME") or [[]])[0])).strip()
-    if name:
-        spec["name"] = name
     gcat, defaulted = _catalogues(top)
-    spec["catalogues"] = list(gcat)
+    spec: dict = {**({"name": name} if name else {}), "catalogues": list(gcat)}
     if defaulted:
         spec["description"] = (f"glass names resolved in {DEFAULT_CATALOGUE}'s catalogue first, OpticStudio's "
                                "default (the file names no GCAT)")
@@ -176,7 +174,8 @@ def _surface(b: dict, i: int, scale: float, gcat: tuple[str, ...], where: str) -
            "radius": 0.0 if curv == 0 else 1.0 / curv,
            "thickness": _floats([thickness], f"{ident}: DISZ")[0] * scale,
            "diameter": 2.0 * semi if semi > 0 else None,
-           "material": _material(b["GLAS"][0], ident, gcat) if "GLAS" in b else "AIR", "ident": ident}
+           "material": _material(b["GLAS"][0], ident, gcat) if "GLAS" in b else "AIR", "ident": ident,
+           "auto": semi <= 0 or b["DIAM"][0][1:2] == ["0"]}  # DIAM's solve type 0: Zemax's automatic aperture
     conic = _floats((b.get("CONI") or [["0"]])[0][:1], f"{ident}: CONI")[0]
     if conic:
         row["conic"] = conic
@@ -258,16 +257,14 @@ def _fold(rows: list[dict], where: str) -> list[dict]:
             continue
         air_before = not out or out[-1]["material"].upper() == "AIR"
         dummy = (row["radius"] == 0 and not row.get("stop") and not row.get("aspheric") and not row.get("qbfs")
-                 and row["diameter"] is None
+                 and (row["diameter"] is None or row["auto"])
                  and row["material"].upper() == "AIR" and air_before and out)
         if dummy:
             out[-1]["thickness"] += row["thickness"]
         else:
             out.append(row)
         i += 1
-    for row in out:
-        row.pop("ident")
-    return out
+    return [{k: v for k, v in row.items() if k not in ("ident", "auto")} for row in out]
 
 
 def _break_shift(rows: list[dict], i: int) -> float | None:
@@ -309,17 +306,17 @@ def _primary(top: dict, spec: dict) -> float | None:
 
 
 def _aperture(top: dict, scale: float, where: str) -> tuple[str, float]:
-    """The system aperture: ("float", 0), ("epd", mm), ("fnum", F/#) or ("na", NA)."""
+    """The system aperture: ("float", 0), ("epd", mm), ("fnum", F/#), ("working fnum", F/#) or ("na", NA)."""
     if "FLOA" in top:
         return "float", 0.0
-    for key, kind, unit in (("ENPD", "epd", scale), ("FNUM", "fnum", 1.0), ("OBNA", "na", 1.0)):
+    for key, kinds, unit in (("ENPD", ("epd",), scale), ("FNUM", ("fnum", "working fnum"), 1.0), ("OBNA", ("na",), 1.0)):
         if key in top:
             value, *mode = _floats(top[key][0][:2], f"{where}: {key}") or [0.0]
-            if mode and mode[0] != 0:
-                name = "paraxial working F/#" if key == "FNUM" else "object cone angle"
-                raise SolasError(f"{where}: {key} {' '.join(top[key][0][:2])}: the system aperture type {name} "
-                                 "is not supported; allowed: entrance pupil diameter (ENPD), image-space F/# "
-                                 "(FNUM x 0), object-space NA (OBNA x 0), float by stop size (FLOA)")
+            kind = dict(enumerate(kinds)).get(mode[0] if mode else 0)
+            if kind is None:
+                raise SolasError(f"{where}: {key} {' '.join(top[key][0][:2])}: system aperture type not supported; "
+                                 "allowed: entrance pupil diameter (ENPD), image-space F/# (FNUM x 0), paraxial "
+                                 "working F/# (FNUM x 1), object-space NA (OBNA x 0), float by stop size (FLOA)")
             if not value > 0:
                 raise SolasError(f"{where}: {key} {value:g} must be positive")
             return kind, value * unit
@@ -353,6 +350,9 @@ def dumps(lens) -> str:
     def glas(g) -> list[str]:
         if g.kind == "air":
             return []
+        if g in lens.materials:
+            raise SolasError(f"lens {lens.name}: material {g.name!r} is the lens file's own ([materials]); .zmx "
+                             "names catalogue or model glass only; save it as .toml")
         nd, vd = (g.coefficients[0][0], 0.0) if g.kind == "model" and g.coefficients[1][0] == 0 else g.abbe()
         nd, vd = float(f"{nd:.12g}"), float(f"{vd:.12g}")  # the formula's rounding noise is no digit of n_d
         if g.kind == "model":

@@ -4,7 +4,8 @@ clear semi-diameters. Used by the readers of other programs' files (`zemax`, `co
 
 `solve(spec, aperture, fields, primary_nm, where)` takes a lens-file dictionary whose surfaces may hold
 `"diameter": None` (automatic), the aperture as (kind, value) — ("float", 0) keeps the stop's own
-diameter, ("epd", mm), ("fnum", image-space F/# = EFL / EPD at the primary wavelength), ("na",
+diameter, ("epd", mm), ("fnum", image-space F/# = EFL / EPD at the primary wavelength), ("working fnum", the paraxial working
+F/# 1 / (2 n' u') of the marginal ray from the axial object point), ("na",
 object-space n sin u of the paraxial marginal ray, finite objects) — and the fields as (kind, radial
 sizes) with kind "angle" (degrees), "object height", "paraxial image height" or "real image height"
 (mm). It returns the dictionary with every diameter set and field_deg the widest field as an angle.
@@ -77,6 +78,8 @@ def _stop_sized(lens: Lens, aperture: tuple[str, float], wl: float, where: str) 
         epd = value
     elif kind == "fnum":
         epd = abs(p.efl_mm) / value
+    elif kind == "working fnum":  # 1 / (2 n' u') of the paraxial marginal ray, u' in proportion to the pupil
+        epd = p.entrance_pupil_diameter_mm * p.working_f_number / value
     else:
         if lens.at_infinity:
             raise SolasError(f"{where}: an object-space NA needs a finite object; the object is at infinity")

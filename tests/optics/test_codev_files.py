@@ -264,9 +264,10 @@ GO
 
 
 @pytest.mark.parametrize("change, match", [
-    (("SO 0 1e10", "SO 0 500"), "FNO with a near object"),
-    (("SI 0 0", "SI 0 0\nPRV\nPWL 550\n'X' 1.5\nEND"), "PRV: private glass catalogues"),
     (("STO", "ZOO 2\nSTO"), "ZOO: zoom positions"),
+    (("SO 0 1e10", "PRV\nPWL 550 600\n'X' 1.5\nEND\nSO 0 1e10"), "one index per PWL wavelength \\(2\\)"),
+    (("SO 0 1e10", "PRV\nPWL 550\n'X' SEL 1 2 3\nEND\nSO 0 1e10"), "other dispersion formulas are not supported"),
+    (("SI 0 0", "SI 0 0\nPRV\nPWL 550\n'X' 1.5"), "PRV \\(a private glass catalogue\\) has no END"),
 ])
 def test_refused_systems(tmp_path, change, match):
     with pytest.raises(SolasError, match=match):
@@ -336,3 +337,80 @@ def test_a_lens_without_rdm_that_fails_says_how_it_was_read(tmp_path):
     text = singlet(mode="").replace("SO 0 1e10", "SO 0 1e10")
     with pytest.raises(SolasError, match="no RDM: its S lines were read as curvatures.*add RDM"):
         load(tmp_path, text.replace("PIM", ""))
+
+
+def test_fno_with_a_near_object_is_the_working_f_number(tmp_path):
+    """CODE V's FNO of a near object is the paraxial working F/# 1 / (2 n' u'): the marginal ray from the
+    axial object point 500 mm away, traced by hand (y–nu) through the singlet, leaves at u' = 1 / (2 · 4)."""
+    lens = load(tmp_path, singlet(system="FNO 4\nYAN 0 1").replace("SO 0 1e10", "SO 0 500"))
+
+    def leaving_slope(y1):  # n' u' = n u − y φ at each surface, the stop (surface 1) the entrance pupil
+        u = (y1 / 500.0 - y1 * (N - 1) / R1) / N
+        return N * u - (y1 + T1 * u) * (1 - N) / R2
+
+    epd = 2.0 * 1.0 / (2.0 * 4.0 * abs(leaving_slope(1.0)))  # u' is linear in the stop height
+    p = paraxial(lens, 550.0)
+    assert p.entrance_pupil_diameter_mm == pytest.approx(epd, rel=1e-12)
+    assert p.working_f_number == pytest.approx(4.0, rel=1e-12)
+    assert p.f_number < 3.3  # not EFL / EPD = 4, which a distant object's FNO states
+
+
+PRIVATE = """RDM
+WL 486.1327 587.5618 656.2725
+REF 2
+EPD 20
+YAN 0 5
+PRV
+  PWL {pwl}
+  'MYGLASS' {index}
+  'GLUE' LAU 2.36390625 0.0 0.025493134 -0.000580235 -0.349933e-5 0.445404e-7
+END
+SO 0 1e10
+STO 60.0 8.0 {glass}
+S -240.0 1.0
+PIM
+SI 0 0
+"""
+
+
+def test_private_glass_catalogue(tmp_path):
+    """PRV … END: a glass given as indices at the PWL wavelengths (here N-BK7's, every 25 nm from 400 to
+    1000 nm, listed out of order) is the spline through them: the table's own indices at its wavelengths, N-BK7's
+    to 2e-8 at the d, F and C lines, and the lens traces as the same lens in N-BK7 to 4e-8 in EFL there; LAU, the Laurent series
+    n² = A0 + A1 λ² + A2 λ⁻² + … (λ µm), by hand. The lens carries them as its own materials ([materials]):
+    written to TOML and read back, the same lens; .zmx, which cannot name them, refuses."""
+    bk7 = G.resolve("N-BK7")
+    pwl = [float(w) for w in range(1000, 399, -25)]
+    text = PRIVATE.format(pwl=" ".join(map(repr, pwl)), index=" ".join(repr(float(bk7.index(w))) for w in pwl),
+                          glass="MYGLASS")
+    lens = load(tmp_path, text)
+    ref = load(tmp_path, text.replace("STO 60.0 8.0 MYGLASS", "STO 60.0 8.0 NBK7_SCHOTT"), "ref.seq")
+    own = lens.surfaces[0].glass
+    assert own.kind == "table" and [g.name for g in lens.materials] == ["MYGLASS", "GLUE"]
+    assert own.index(np.array(pwl)) == pytest.approx(bk7.index(np.array(pwl)), abs=1e-15)
+    for w in (486.1327, 587.5618, 656.2725):
+        assert own.index(w) == pytest.approx(bk7.index(w), abs=2e-8)  # the spline's own error
+        assert paraxial(lens, w).efl_mm == pytest.approx(paraxial(ref, w).efl_mm, rel=4e-8)  # Δn / (n − 1)
+    glue, lam = lens.materials[1], 0.5875618
+    a = (2.36390625, 0.0, 0.025493134, -0.000580235, -0.349933e-5, 0.445404e-7)
+    hand = math.sqrt(a[0] + a[1] * lam ** 2 + sum(k * lam ** (-2 * i) for i, k in enumerate(a[2:], start=1)))
+    assert glue.index(587.5618) == pytest.approx(hand, abs=1e-15)
+    with pytest.raises(SolasError, match="outside glass MYGLASS's valid range 400-1000 nm"):
+        own.index(1064.0)
+    back = Lens.load(lens.save(tmp_path / "back.toml"))
+    assert back.materials == lens.materials and back.hash == lens.hash
+    with pytest.raises(SolasError, match="material 'MYGLASS' is the lens file's own"):
+        lens.save(tmp_path / "back.zmx")
+
+
+def test_private_glass_in_the_dr_jit_tracer(tmp_path):
+    """The tracer's index of a table material (Dr.Jit, each ray its wavelength) is the NumPy spline's."""
+    import drjit as dr  # noqa: PLC0415 - the tracer's array type
+
+    from solas_mi.optics.tracer import refractive_index  # noqa: PLC0415
+
+    own = G.own_material("T", {"wavelengths_nm": [400.0, 500.0, 550.0, 700.0, 900.0],
+                               "index": [1.53, 1.52, 1.517, 1.512, 1.509]}, "test")
+    waves = np.linspace(400.0, 900.0, 41)
+    traced = refractive_index(own, dr.llvm.Float64(waves / 1000.0))
+    assert np.asarray(traced) == pytest.approx(own.index(waves), abs=1e-15)

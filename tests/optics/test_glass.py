@@ -25,8 +25,8 @@ TOLERANCE = {"SCHOTT": (1e-5, 0.01), "HOYA": (1e-5, 0.01), "OHARA": (1e-6, 1e-4)
              "LIGHTPATH": (1e-6, 1e-4), "RPO": (1e-6, 1e-4), "ZEON": (1e-6, 1e-4), "OSAKAGASCHEMICAL": (1e-6, 1e-4),
              "ANGSTROMLINK": (1e-6, 1e-4)}
 FITTED = (5e-5, 0.7)
-COUNTS = {"SCHOTT": 157, "OHARA": 410, "HOYA": 190, "CDGM": 314, "SUMITA": 176, "HIKARI": 363, "MISC": 7, "CORNING": 1,
-          "LIGHTPATH": 9, "RPO": 38, "ZEON": 9, "OSAKAGASCHEMICAL": 3, "ANGSTROMLINK": 3}
+COUNTS = {"SCHOTT": 157, "OHARA": 410, "HOYA": 190, "CDGM": 314, "SUMITA": 176, "HIKARI": 363, "MISC": 9, "CORNING": 1,
+          "LIGHTPATH": 10, "RPO": 38, "ZEON": 9, "OSAKAGASCHEMICAL": 3, "ANGSTROMLINK": 3}
 
 
 @pytest.mark.parametrize("name", sorted(SCHOTT))
@@ -52,7 +52,7 @@ def test_every_entry_reproduces_its_stated_nd_vd(vendor):
 
 def test_catalogue_formulas_and_names():
     cat = glass.load_catalog()
-    assert {g.kind for g in cat.values()} == {"sellmeier", "polynomial"}
+    assert {g.kind for g in cat.values()} == {"sellmeier", "polynomial", "conrady"}
     assert all(key.split(":", 1)[0] in glass.VENDORS and key == g.name for key, g in cat.items())
     for key, g in cat.items():  # every range covers the d, F and C lines and the formulas are finite there
         assert g.range_nm[0] <= glass.LINE_F and g.range_nm[1] >= glass.LINE_C, key
@@ -117,7 +117,7 @@ def test_model_glass_has_given_nd_vd():
 
 def test_unknown_glass_is_named():
     with pytest.raises(SolasError, match=r"unknown glass 'N-BK8'; close: .*SCHOTT:N-BK7.*; allowed: AIR, a catalogue "
-                                         r"glass \(1680 of ANGSTROMLINK, CDGM, CORNING, HIKARI, HOYA, LIGHTPATH, "
+                                         r"glass \(1683 of ANGSTROMLINK, CDGM, CORNING, HIKARI, HOYA, LIGHTPATH, "
                                          r"MISC, OHARA, OSAKAGASCHEMICAL, RPO, SCHOTT, SUMITA, ZEON"):
         glass.resolve("N-BK8")
 
@@ -241,3 +241,40 @@ def test_plastic_crowns_and_flints_and_their_index_with_temperature():
     nd = [glass.resolve(f"K26R_{t}").index(glass.LINE_D) for t in temps]
     slopes = np.diff(nd) / np.diff(temps)
     assert np.all(slopes < 0) and np.all(np.abs(slopes + 1.05e-4) < 0.3e-4)
+
+
+def test_calcium_fluoride_daimon():
+    """CAF2_DAIMON-20 (the name optiland's files give Daimon and Masumura's 20 °C formula) follows their
+    Sellmeier formula, typed here from the paper, and agrees with Malitson's independent measurement of CaF2
+    (1963, 24 °C; CaF2's index falls about 1e-5 per kelvin) to 5e-5 over 400-1000 nm and in V_d to 0.3."""
+    caf2 = glass.resolve("CAF2_DAIMON-20")
+    assert caf2.name == "MISC:CAF2_DAIMON-20"
+    b, c = (0.443749998, 0.444930066, 0.150133991, 8.85319946), (0.00178027854, 0.00788536061, 0.0124119491,
+                                                                  2752.28175)
+    for nm in (157.6, 587.5618, 2000.0):
+        l2 = (nm / 1000) ** 2
+        assert caf2.index(nm) == pytest.approx((1 + sum(bi * l2 / (l2 - ci) for bi, ci in zip(b, c))) ** 0.5,
+                                               abs=1e-15)
+    malitson = glass.Glass("CaF2 Malitson", "sellmeier", ((0.5675888, 0.4710914, 3.8484723),
+                                                          (0.050263605 ** 2, 0.1003909 ** 2, 34.649040 ** 2)))
+    misc = glass.resolve("CAF2")  # OpticStudio's MISC CAF2: Malitson's formula, its C_i squared to 7 digits
+    assert misc.name == "MISC:CAF2" and misc.index(587.5618) == pytest.approx(malitson.index(587.5618), abs=2e-7)
+    visible = np.linspace(400.0, 1000.0, 31)
+    assert np.max(np.abs(caf2.index(visible) - malitson.index(visible))) < 5e-5
+    assert abs(caf2.abbe()[1] - malitson.abbe()[1]) < 0.3
+
+
+def test_conrady_formula():
+    """LightPath's NICHIA_MELT1, the Zemax AGF's formula 5 (Conrady, n = A0 + A1/λ + A2/λ^3.5), against the
+    formula by hand, and on Dr.Jit arrays (the tracer's path) the same."""
+    import drjit as dr  # noqa: PLC0415 - the tracer's array type
+
+    g = glass.resolve("NICHIA_MELT1")
+    assert g.kind == "conrady" and g.name == "LIGHTPATH:NICHIA_MELT1"
+    a = (1.47444837, 0.0103147698, 0.00026742387)
+    for nm in (400.0, 587.5618, 1550.0):
+        lam = nm / 1000
+        assert g.index(nm) == pytest.approx(a[0] + a[1] / lam + a[2] / lam ** 3.5, abs=1e-15)
+    waves = np.linspace(400.0, 1000.0, 7)
+    traced = np.asarray(g.index_formula(dr.llvm.Float64(waves / 1000), dr.sqrt, dr.select))
+    assert traced == pytest.approx(g.index(waves), abs=1e-15)

@@ -112,8 +112,20 @@ def test_object_space_na(tmp_path):
     assert lens.surfaces[0].semi_diameter == pytest.approx(500.0 * math.tan(math.asin(0.02)), rel=1e-12)
     with pytest.raises(SolasError, match="object-space NA needs a finite object"):
         load(tmp_path, zmx(aperture="OBNA 0.02 0"))
-    with pytest.raises(SolasError, match="paraxial working F/# is not supported"):
-        load(tmp_path, zmx(aperture="FNUM 4 1"))
+    with pytest.raises(SolasError, match="system aperture type not supported; allowed: .* paraxial working F/# "
+                                         r"\(FNUM x 1\)"):
+        load(tmp_path, zmx(aperture="FNUM 4 2"))
+
+
+def test_paraxial_working_f_number(tmp_path):
+    """FNUM x 1, the paraxial working F/# 1 / (2 n' u'): the marginal ray from the axial object point 500 mm
+    before the stop (surface 1), traced by hand (y–nu: n' u' = n u − y φ), leaves at u' = 1 / (2 · 4)."""
+    lens = load(tmp_path, zmx(aperture="FNUM 4 1", obj="500"))
+    u = (1.0 / 500.0 - (N - 1) / R1) / N  # a ray through the stop at height 1
+    leaving = N * u - (1.0 + T1 * u) * (1 - N) / R2
+    p = paraxial(lens, WL * 1000)
+    assert p.entrance_pupil_diameter_mm == pytest.approx(2.0 / (2.0 * 4.0 * abs(leaving)), rel=1e-12)
+    assert p.working_f_number == pytest.approx(4.0, rel=1e-12)
 
 
 def test_field_types(tmp_path):
@@ -158,6 +170,21 @@ def test_dummy_surfaces_and_axial_coordinate_breaks(tmp_path):
     tilted = zmx(extra="SURF 3\n  TYPE COORDBRK\n  DISZ 0\n  PARM 3 5\n")
     with pytest.raises(SolasError, match=r"SURF 3 \(line \d+\): COORDBRK decentres or tilts the axis"):
         load(tmp_path, tilted)
+
+
+def test_dummy_with_zemax_automatic_aperture_and_a_negative_gap(tmp_path):
+    """A flat air surface whose DIAM has solve type 0 (Zemax's automatic semi-diameter, the value only its
+    last computation: it cuts no ray) is a dummy, even when a negative gap leads to it (met in published
+    files: the lens's back face, 3 mm back to a dummy, 3 mm + BFD on to the image); its thickness joins the
+    gap before, which leaves the same lens: BFD and EFL of the thick-lens formulas."""
+    dummy = f"SURF 3\n  TYPE STANDARD\n  CURV 0\n  DISZ {3.0 + BFD!r}\n  DIAM 9.87654321 0 0 0 1 \"\"\n"
+    lens = load(tmp_path, zmx(extra=dummy).replace(f"DISZ {BFD!r}", "DISZ -3.0"))
+    p = paraxial(lens, WL * 1000)
+    assert len(lens.surfaces) == 2 and lens.surfaces[1].thickness == pytest.approx(BFD, rel=1e-12)
+    assert p.efl_mm == pytest.approx(EFL, rel=1e-12) and p.bfd_mm == pytest.approx(BFD, rel=1e-12)
+    fixed = dummy.replace("9.87654321 0", "9.87654321 1")  # solve type 1: the user's aperture, a real surface
+    with pytest.raises(SolasError, match=r"surface 2 \(SURF 2\): thickness -3 mm is negative"):
+        load(tmp_path, zmx(extra=fixed).replace(f"DISZ {BFD!r}", "DISZ -3.0"))
 
 
 def test_odd_asphere_even_terms(tmp_path):
@@ -253,7 +280,7 @@ def test_every_plastic_and_moulded_glass_loads_by_its_zemax_name(tmp_path):
     keys = [k for k in glass.load_catalog() if k.split(":")[0] in ("LIGHTPATH", "RPO", "ZEON", "OSAKAGASCHEMICAL",
                                                                       "ANGSTROMLINK", "CORNING")]
     keys += [f"MISC:{n}" for n in ("PMMA", "POLYCARB", "POLYSTYR", "ACRYLIC", "SAN", "COC")]
-    assert len(keys) == 69
+    assert len(keys) == 70
     for key in keys:
         vendor, name = key.split(":")
         glas = f"GLAS {name} 0 0 1.5 50 0 0 0 0 0 0"
