@@ -1,6 +1,8 @@
 """Labels through the lens (`render.labels`): depth, normal and instance layers traced along each
 pixel's chief ray line up with the rendered image, with the optics tracer's chief rays and with the
 scene's geometry."""
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -14,6 +16,12 @@ from solas_mi.render.user_scene import load
 LAMBDA = 587.5618
 MONO = f"mono:{LAMBDA}"
 SUB = 8  # label sub-pixels per pixel side, for the labels' coverage of a pixel
+# a small aperture far ahead of the stop: past 5.7 deg it blocks the chief ray while part of the beam passes
+VIGNETTING = Path(__file__).parents[1] / "data" / "stiff" / "vignetting_front.toml"
+
+
+def lens_named(name: str) -> Lens:
+    return Lens.load(VIGNETTING if name == "vignetting-front" else name)
 
 
 def patch(name: str, x0: float, x1: float, y0: float, y1: float, z: float, emit: bool = True) -> str:
@@ -77,6 +85,9 @@ LENSES = {
     "wide-angle-22mm": (360.0, (96, 72), [("centre", -6, 6, -5, 5), ("right", 20, 32, -6, 6),
                                          ("left", -34, -26, -5, 5), ("top", -6, 6, 18, 26),
                                          ("corner", 24, 34, -24, -16)]),
+    # patches in the zone where the chief ray is blocked (labels along the beam's centre) and one inside it
+    "vignetting-front": (520.0, (64, 48), [("centre", -3, 3, -2, 2), ("right", 6.5, 8.5, -2, 2),
+                                          ("left", -8.5, -6.2, -1.5, 1.5), ("corner", 5.5, 8, 4, 6)]),
 }
 
 
@@ -87,7 +98,7 @@ def test_instance_edges_are_the_image_edges_across_the_field(mi, tmp_path, name)
     pixel), along every row and column through the patch (`edge`): within 0.5 px everywhere; the
     depth's edges (nearer than 50 m) are the instance's."""
     pitch, (w, h), patches = LENSES[name]
-    lens = Lens.load(name)
+    lens = lens_named(name)
     d = 10.0
     shapes = [patch(n, at_angle(x0, d), at_angle(x1, d), at_angle(y0, d), at_angle(y1, d), d)
               for n, x0, x1, y0, y1 in patches] + [patch("wall", -1e4, 1e4, -1e4, 1e4, 10 * d, emit=False)]  # unlit
@@ -209,3 +220,24 @@ def test_render_labels_command_writes_the_layers_beside_the_image(mi, tmp_path, 
     assert "labels are traced through a lens_camera" in capsys.readouterr().err
     with pytest.raises(SolasError, match="no scene to label"):
         render_image(Lens.load("solas-doublet"), np.ones((4, 4)), sensor=(4, 4), spp=1, labels="depth")
+
+
+@pytest.mark.parametrize("name, pitch", [("vignetting-front", 1040.0), ("nikkor-fisheye", 900.0)])
+def test_labels_are_valid_wherever_the_image_has_light(mi, tmp_path, name, pitch):
+    """A glowing dome all around: wherever the rendered image (64 spp) has light above 1e-3 of its peak,
+    the labels are valid, also where an aperture before the stop blocks the chief ray (the vignetting
+    lens past 5.7 deg: labels along the centre of the beam that passes) and in pixels at the rim of the
+    fisheye's image circle whose centre sees no light but whose area does; the metadata counts them."""
+    dome = ('<shape type="sphere" id="dome"><float name="radius" value="1000"/><boolean name="flip_normals" '
+            'value="true"/><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>')
+    scene = load(scene_file(tmp_path / "dome.xml", [dome], 32, 24), "llvm_ad_spectral", lens_named(name),
+                 pitch_um=pitch, response=MONO)
+    image = np.abs(render_scene(scene, 64).image.astype(np.float64)).sum(axis=-1)
+    layers, meta = render_labels(scene, ("depth", "instance"))
+    lit, valid = image > 1e-3 * image.max(), layers["labels.valid"] == 1.0
+    print(f"{name}: {lit.sum()} lit pixels, {valid.sum()} valid, {meta.get('beam_centre_pixels')} along the beam's "
+          f"centre, {(lit & ~valid).sum()} lit but not valid")
+    assert not np.any(lit & ~valid)
+    assert 0 < meta["beam_centre_pixels"] < valid.sum()
+    assert np.all(layers["depth.Z"][valid] > 900.0) and np.all(layers["instance.id"][valid] == instance_id("dome"))
+    assert np.all(layers["depth.Z"][~valid] == 0.0)
