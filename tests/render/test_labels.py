@@ -57,16 +57,19 @@ def edge(profile: np.ndarray, inside: int) -> float:
     return inside - float(profile[:inside].sum()) / level
 
 
-def edge_offsets(image: np.ndarray, cover: np.ndarray) -> list[float]:
-    """Per row and column fully crossing a patch (its corners' rows and columns left out), the offsets
-    (px) of its two edges along that line in the image from those of the labels' coverage."""
+def edge_offsets(image: np.ndarray, cover: np.ndarray, blur: int = 0) -> list[float]:
+    """Per row and column fully crossing a patch (its corners' rows and columns left out, and `blur` more
+    at each end), the offsets (px) of its two edges along that line in the image from those of the
+    labels' coverage; the level and the profile's start taken `blur` pixels further from the edge."""
     offsets = []
     for img, cov in ((image, cover), (image.T, cover.T)):
         lines = np.flatnonzero(cov.max(axis=1) >= 1.0)
-        for r in lines[1:-1]:
+        for r in lines[1 + blur:len(lines) - 1 - blur]:
             touched, full = np.flatnonzero(cov[r] > 0.0), np.flatnonzero(cov[r] >= 1.0)
-            start, stop = max(touched[0] - 3, 0), touched[-1] + 3  # this patch alone, not its neighbours
-            for sl, inside in ((slice(start, None), full[0] - start), (slice(stop, None, -1), stop - full[-1])):
+            start, stop = max(touched[0] - 3 - blur, 0), touched[-1] + 3 + blur  # this patch alone
+            assert stop < len(cov[r]) and full[-1] - full[0] >= 2 * blur + 2  # the level clear of both blurs
+            for sl, inside in ((slice(start, None), full[0] - start + blur),
+                               (slice(stop, None, -1), stop - full[-1] + blur)):
                 offsets.append(edge(img[r][sl], inside) - edge(cov[r][sl], inside))
     return offsets
 
@@ -241,3 +244,41 @@ def test_labels_are_valid_wherever_the_image_has_light(mi, tmp_path, name, pitch
     assert 0 < meta["beam_centre_pixels"] < valid.sum()
     assert np.all(layers["depth.Z"][valid] > 900.0) and np.all(layers["instance.id"][valid] == instance_id("dome"))
     assert np.all(layers["depth.Z"][~valid] == 0.0)
+
+
+# lens, pixel pitch (um), sensor (w, h), patch distance (m), patches: (name, field x0, x1, y0, y1 in degrees)
+DEFOCUSED = {
+    "wide-angle-22mm": (360.0, (96, 64), 0.15, [("right", 12, 26, -9, 9), ("corner", -30, -16, 5, 20)]),
+    # wholly past 5.7 deg, where the front aperture blocks the chief ray: the labels follow the beam's centre
+    "vignetting-front": (520.0, (104, 48), 0.7, [("right", 6.8, 11.8, -4, 4), ("left", -11.8, -6.8, -4, 4)]),
+}
+
+
+@pytest.mark.parametrize("name", DEFOCUSED)
+def test_a_defocused_edge_is_centred_on_the_label_edge(mi, tmp_path, name):
+    """The lens focused at infinity, glowing patches near it (blurred over 1-3 px), the image divided by
+    that of a glowing wall at their distance (the fall-off of the light across a blur taken out): each
+    edge's place in the image, the centroid of its blur, against the label's edge, along every row and
+    column through the patch: within 0.5 px off the axis, where the chief ray passes (wide angle) and where
+    the front aperture blocks it (the vignetting lens: labels along the passing beam's centroid)."""
+    pitch, (w, h), d, patches = DEFOCUSED[name]
+    lens, blur = lens_named(name), 4
+
+    def image(shapes, tag):
+        scene = load(scene_file(tmp_path / f"{tag}.xml", shapes, w, h), "llvm_ad_spectral", lens, pitch_um=pitch,
+                     response=MONO)
+        return render_scene(scene, 1024).image.astype(np.float64).sum(axis=-1)
+
+    shapes = [patch(n, at_angle(x0, d), at_angle(x1, d), at_angle(y0, d), at_angle(y1, d), d)
+              for n, x0, x1, y0, y1 in patches]
+    flat = image([patch("flat", -100 * d, 100 * d, -100 * d, 100 * d, d)], "flat")
+    seen = image(shapes, "patches") / np.where(flat > 0.0, flat, 1.0)
+    fine = load(scene_file(tmp_path / "fine.xml", shapes, w * SUB, h * SUB), "llvm_ad_spectral", lens,
+                pitch_um=pitch / SUB, response=MONO)
+    layers, meta = render_labels(fine, ("instance",))
+    assert (meta["beam_centre_pixels"] > 0) == (name == "vignetting-front")
+    for n, *_ in patches:
+        offsets = np.abs(edge_offsets(seen, coverage(layers["instance.id"], instance_id(n)), blur))
+        print(f"{name} {n}: {len(offsets)} edge crossings, max offset {offsets.max():.3f} px, mean "
+              f"{offsets.mean():.3f} px; {meta['beam_centre_pixels']} label pixels along the beam's centre")
+        assert len(offsets) >= 8 and offsets.max() < 0.5
