@@ -17,7 +17,8 @@ LAMBDA = 587.5618
 MONO = f"mono:{LAMBDA}"
 SUB = 8  # label sub-pixels per pixel side, for the labels' coverage of a pixel
 # a small aperture far ahead of the stop: past 5.7 deg it blocks the chief ray while part of the beam passes
-VIGNETTING = Path(__file__).parents[1] / "data" / "stiff" / "vignetting_front.toml"
+DATA = Path(__file__).parents[1] / "data"
+VIGNETTING = DATA / "stiff" / "vignetting_front.toml"
 
 
 def lens_named(name: str) -> Lens:
@@ -149,15 +150,17 @@ def test_label_edges_land_on_the_tracers_chief_rays(mi, tmp_path, name):
         assert abs(found - expected) <= 0.6 * pitch_um * 1e-3, (a, found, expected)
 
 
-@pytest.mark.parametrize("name", ["wide-angle-22mm", "nikkor-fisheye", "double-gauss-50mm"])
-def test_depth_at_the_centre_is_the_distance_from_the_entrance_pupil(mi, tmp_path, name):
+@pytest.mark.parametrize("name, pitch", [("wide-angle-22mm", 200.0), ("nikkor-fisheye", 200.0),
+                                         ("double-gauss-50mm", 200.0), ("fast-asphere", 20.0)])
+def test_depth_at_the_centre_is_the_distance_from_the_entrance_pupil(mi, tmp_path, name, pitch):
     """A wall at z = 5 m (from surface 1's vertex): the depth at the centre pixel (odd film, on the axis) is
     5 m plus the paraxial entrance pupil's distance behind surface 1, within 0.1 %; off the axis, the
-    depth grows as the wall is met obliquely; normals face along the wall's; every pixel's id is the wall's."""
-    lens = Lens.load(name)
+    depth grows as the wall is met obliquely; normals face along the wall's; every pixel's id is the wall's.
+    The fast asphere's film is its paraxial focus: the reversed lens has no paraxial image of it."""
+    lens = Lens.load(DATA / "fast_asphere.toml") if name == "fast-asphere" else Lens.load(name)
     d = 5.0
     scene = load(scene_file(tmp_path / "wall.xml", [patch("wall", -50, 50, -50, 50, d, emit=False)], 33, 25),
-                 "llvm_ad_spectral", lens, pitch_um=200.0, response=MONO)
+                 "llvm_ad_spectral", lens, pitch_um=pitch, response=MONO)
     layers, meta = render_labels(scene, ("depth", "normal", "instance"))
     p = paraxial(lens)
     expected = d + (p.entrance_pupil_z_mm - lens.vertex_z[0]) * 1e-3
