@@ -35,8 +35,10 @@ from ..errors import SolasError
 LABELS = ("depth", "normal", "instance")
 LAYERS = {"depth": ("depth.Z",), "normal": ("normal.X", "normal.Y", "normal.Z"), "instance": ("instance.id",)}
 VALID = "labels.valid"
-BEAM_GRID = 16  # pupil samples per side of the beam of a pixel whose chief ray is blocked
-FILM_GRID = 4  # film points per side of a pixel none of whose centre's rays passes
+# the beams tried where a pixel's chief ray is blocked, until one passes: (film points, pupil samples) per
+# side; the pixel centre's with a coarse and then a fine pupil grid (a sliver of a beam at the edge of the
+# field), then from points across the pixel (a pixel at the rim of a fisheye's image circle)
+BEAMS = ((1, 8), (1, 24), (4, 8))
 ID_MASK = (1 << 24) - 1  # ids below 2^24: exact in a float32 channel
 
 
@@ -99,17 +101,20 @@ def chief_rays(sensor):
     x, y = (np.asarray(v, dtype=np.float64) for v in (film.x, film.y))
     ex, ey, found = film_chief_aim(sensor.reversed, x, y, lam)
     ex, ey = np.where(found, ex, 0.0), np.where(found, ey, 0.0)
-    passed = found & np.asarray(sensor.traced(film, mi.Point2f(ex, ey), mi.Float(lam))[2])
-    start_x, start_y, chief = x.copy(), y.copy(), passed.copy()  # where each label ray leaves the film
-    # a blocked chief ray: the centre of the beam from the pixel centre, else from the whole pixel
-    for spread in (0.0, sensor.pitch_mm):
+    chief = sensor.traced(film, mi.Point2f(ex, ey), mi.Float(lam))
+    passed = found & np.asarray(chief[2])
+    start_x, start_y, through_chief = x.copy(), y.copy(), passed.copy()  # where each label ray leaves the film
+    for film_side, pupil_side in BEAMS:  # a blocked chief ray: the centre of the beam that passes
+        spread = sensor.pitch_mm if film_side > 1 else 0.0
         todo = np.flatnonzero(~passed & _may_pass(sensor, x, y, spread))
-        *centre, through = beam_centres(sensor, x[todo], y[todo], lam, spread)
+        *centre, through = beam_centres(sensor, x[todo], y[todo], lam, (film_side, pupil_side), spread)
         for values, got in zip((start_x, start_y, ex, ey), centre):
             values[todo[through]] = got[through]
         passed[todo] = through
-    origin, direction, ok, _ = sensor.traced(mi.Point2f(start_x, start_y), mi.Point2f(ex, ey), mi.Float(lam))
-    return origin, direction, ok & mi.Bool(passed), lam, int(passed.sum() - chief.sum())
+    centred = int(passed.sum() - through_chief.sum())
+    if centred:
+        chief = sensor.traced(mi.Point2f(start_x, start_y), mi.Point2f(ex, ey), mi.Float(lam))
+    return chief[0], chief[1], chief[2] & mi.Bool(passed), lam, centred
 
 
 def _may_pass(sensor, x: np.ndarray, y: np.ndarray, spread: float) -> np.ndarray:
@@ -124,22 +129,20 @@ def _may_pass(sensor, x: np.ndarray, y: np.ndarray, spread: float) -> np.ndarray
     return np.hypot(x, y) - spread / np.sqrt(2.0) <= reach
 
 
-def beam_centres(sensor, x: np.ndarray, y: np.ndarray, lam: float, spread: float = 0.0):
+def beam_centres(sensor, x: np.ndarray, y: np.ndarray, lam: float, sides: tuple[int, int], spread: float = 0.0):
     """For film points (x, y) mm whose chief ray is blocked, the ray through the centre of the beam that
     passes: its film point, its point on the plane `sensor.pupil` samples (mm), and whether any ray
-    passes. The beam: BEAM_GRID² pupil samples from each of FILM_GRID² film points over a square `spread`
-    mm wide (one, the point itself, for 0). Its centre is the centroid of the passing rays' film and
+    passes. The beam: sides[1]² pupil samples from each of sides[0]² film points over a square `spread`
+    mm wide (for one, the point itself). Its centre is the centroid of the passing rays' film and
     pupil points, each ray weighted as the render weighs it (pupil weight × transmittance): the mean of
     the rays that make the pixel's image, so an edge's place in the image (the centroid of its blur) is
     where that ray meets it. Where the centroid's own ray is blocked (a beam that is not convex), the
     passing sample nearest it stands in."""
     out = [np.zeros(len(x)) for _ in range(4)] + [np.zeros(len(x), dtype=bool)]
-    side = FILM_GRID if spread > 0.0 else 1
-    per = side * side * BEAM_GRID * BEAM_GRID
-    chunk = max(1, (1 << 21) // per)
+    chunk = max(1, (1 << 21) // (sides[0] * sides[1]) ** 2)
     for start in range(0, len(x), chunk):
         part = slice(start, start + chunk)
-        for values, got in zip(out, _beam_centres(sensor, x[part], y[part], lam, spread, side)):
+        for values, got in zip(out, _beam_centres(sensor, x[part], y[part], lam, spread, sides)):
             values[part] = got
     return tuple(out)
 
@@ -150,13 +153,13 @@ def _grid(side: int) -> tuple[np.ndarray, np.ndarray]:
     return tuple(a.ravel() for a in np.meshgrid(u, u))
 
 
-def _beam_centres(sensor, x, y, lam, spread, side):
+def _beam_centres(sensor, x, y, lam, spread, sides):
     """`beam_centres` of one chunk of film points."""
     import drjit as dr
     import mitsuba as mi
 
     n = len(x)
-    (fu, fv), (su, sv) = _grid(side), _grid(BEAM_GRID)
+    (fu, fv), (su, sv) = _grid(sides[0]), _grid(sides[1])
     k = len(su)
     shape = (n, len(fu) * k)
     fx = (np.repeat(x, len(fu) * k) + np.tile(np.repeat(fu - 0.5, k), n) * spread).reshape(shape)
