@@ -6,6 +6,9 @@ nearest it. Lengths in mm, fields in degrees, wavelengths in nm.
 """
 from __future__ import annotations
 
+import math
+from dataclasses import replace
+
 import numpy as np
 
 from . import tracer as T
@@ -211,8 +214,11 @@ def film_chief_aim(rev: Lens, x: np.ndarray, y: np.ndarray, wavelength_nm: float
     """The chief rays of film points (x, y) mm, traced backward: for each, the point (ex, ey) on the last
     surface's vertex plane that the ray from the film point aims at so that it crosses the stop centre
     (`rev`: the reversed lens), and whether it was found (the ray passes and meets the centre within
-    1e-10 mm). The aim starts at the paraxial exit pupil's centre: the paraxial chief ray."""
-    ep_z, od = paraxial(rev).entrance_pupil_z_mm, rev.object_distance
+    1e-10 mm). The aim starts at the paraxial exit pupil's centre: the paraxial chief ray. (The pupil is
+    found with the reversed lens's object at infinity: it does not depend on the object, and a film in the
+    reversed lens's front focal plane, a lens focused at infinity onto its paraxial focus, has no paraxial
+    image to find it from.)"""
+    ep_z, od = paraxial(replace(rev, object_distance=math.inf)).entrance_pupil_z_mm, rev.object_distance
     shrink = 1.0 - od / (ep_z + od)
     b = _FilmBundle(rev, x, y, wavelength_nm)
     zero = T.F(np.zeros(len(x)))

@@ -2,7 +2,9 @@
 render, found along the pixel centre's chief ray, the real ray from the film point through the centre
 of the stop (`optics.aiming.film_chief_aim`, traced by the camera's own `traced`). The labels are
 crisp (one ray per pixel, no blur) and distorted exactly as the image is: the same lens, the same
-film geometry, the same camera frame.
+film geometry, the same camera frame. Where an aperture blocks the chief ray but other rays of the
+pixel pass (vignetting; the rim of a fisheye's image circle), the label ray is the centre of the beam
+that passes (`beam_centres`), and the metadata's `beam_centre_pixels` counts those pixels.
 
 Layers (EXR `layer.channel` names, float32, beside the image's channels; 0 where nothing is met):
 
@@ -12,14 +14,15 @@ Layers (EXR `layer.channel` names, float32, beside the image's channels; 0 where
   (not turned toward the camera);
 - `instance.id`: the shape's id, `instance_id` of its name (its `id` in the scene; an unnamed shape
   `_shape<k>`, k its place in the scene's shape list);
-- `labels.valid`, always: 1 where the chief ray passes the lens and meets the scene, else 0.
+- `labels.valid`, always: 1 where a ray of the pixel passes the lens and the label ray meets the scene,
+  else 0.
 
 An instance id is a 24-bit hash of the shape's name (exact in float32, never 0), so a shape keeps its
 id from frame to frame and scene to scene; the metadata's `instances` table maps each id met to its
 name and `boxes` gives each named shape's pixel bounds [x0, y0, x1, y1) (columns, rows; end
 exclusive) and pixel count. The chief ray is traced at the response's one wavelength, else at the
-lens's primary wavelength; a pixel whose chief ray no aim reaches (past the image circle, blocked) is
-not valid. No NaN or inf is written.
+lens's primary wavelength; a pixel none of whose rays passes (past the image circle) is not valid.
+No NaN or inf is written.
 """
 from __future__ import annotations
 
@@ -32,6 +35,10 @@ from ..errors import SolasError
 LABELS = ("depth", "normal", "instance")
 LAYERS = {"depth": ("depth.Z",), "normal": ("normal.X", "normal.Y", "normal.Z"), "instance": ("instance.id",)}
 VALID = "labels.valid"
+# the beams tried where a pixel's chief ray is blocked, until one passes: (film points, pupil samples) per
+# side; the pixel centre's with a coarse and then a fine pupil grid (a sliver of a beam at the edge of the
+# field), then from points across the pixel (a pixel at the rim of a fisheye's image circle)
+BEAMS = ((1, 8), (1, 24), (4, 8))
 ID_MASK = (1 << 24) - 1  # ids below 2^24: exact in a float32 channel
 
 
@@ -79,8 +86,9 @@ def _sensor(scene):
 
 
 def chief_rays(sensor):
-    """The chief ray of each pixel centre of `sensor` (a `lens_camera`; row-major over its crop window),
-    leaving surface 1: origin, direction (camera frame, world units) and whether it passed."""
+    """The label ray of each pixel of `sensor` (a `lens_camera`; row-major over its crop window), leaving
+    surface 1: origin, direction (camera frame, world units), whether it passed, the wavelength, and how
+    many pixels took their beam's centre (`beam_centres`) for a blocked chief ray."""
     import drjit as dr
     import mitsuba as mi
 
@@ -92,9 +100,83 @@ def chief_rays(sensor):
     lam = sensor.response.single_wavelength or sensor.lens.primary_wavelength
     x, y = (np.asarray(v, dtype=np.float64) for v in (film.x, film.y))
     ex, ey, found = film_chief_aim(sensor.reversed, x, y, lam)
-    target = mi.Point2f(np.where(found, ex, 0.0), np.where(found, ey, 0.0))
-    origin, direction, passed, _ = sensor.traced(film, target, mi.Float(lam))
-    return origin, direction, passed & mi.Bool(found), lam
+    ex, ey = np.where(found, ex, 0.0), np.where(found, ey, 0.0)
+    chief = sensor.traced(film, mi.Point2f(ex, ey), mi.Float(lam))
+    passed = found & np.asarray(chief[2])
+    start_x, start_y, through_chief = x.copy(), y.copy(), passed.copy()  # where each label ray leaves the film
+    for film_side, pupil_side in BEAMS:  # a blocked chief ray: the centre of the beam that passes
+        spread = sensor.pitch_mm if film_side > 1 else 0.0
+        todo = np.flatnonzero(~passed & _may_pass(sensor, x, y, spread))
+        *centre, through = beam_centres(sensor, x[todo], y[todo], lam, (film_side, pupil_side), spread)
+        for values, got in zip((start_x, start_y, ex, ey), centre):
+            values[todo[through]] = got[through]
+        passed[todo] = through
+    centred = int(passed.sum() - through_chief.sum())
+    if centred:
+        chief = sensor.traced(mi.Point2f(start_x, start_y), mi.Point2f(ex, ey), mi.Float(lam))
+    return chief[0], chief[1], chief[2] & mi.Bool(passed), lam, centred
+
+
+def _may_pass(sensor, x: np.ndarray, y: np.ndarray, spread: float) -> np.ndarray:
+    """Whether a film point of the square `spread` mm wide (a pixel, for its pitch) about (x, y) may lie
+    at a film radius that the exit-pupil bounds say light reaches."""
+    bounds = sensor.pupil.bounds
+    area = (bounds.bounds_mm[:, 1] - bounds.bounds_mm[:, 0]) * (bounds.bounds_mm[:, 3] - bounds.bounds_mm[:, 2])
+    lit = np.flatnonzero(area > 0.0)
+    if len(lit) == 0:
+        return np.zeros(len(x), dtype=bool)
+    reach = bounds.radius_mm[min(lit.max() + 1, len(bounds.radius_mm) - 1)]
+    return np.hypot(x, y) - spread / np.sqrt(2.0) <= reach
+
+
+def beam_centres(sensor, x: np.ndarray, y: np.ndarray, lam: float, sides: tuple[int, int], spread: float = 0.0):
+    """For film points (x, y) mm whose chief ray is blocked, the ray through the centre of the beam that
+    passes: its film point, its point on the plane `sensor.pupil` samples (mm), and whether any ray
+    passes. The beam: sides[1]² pupil samples from each of sides[0]² film points over a square `spread`
+    mm wide (for one, the point itself). Its centre is the centroid of the passing rays' film and
+    pupil points, each ray weighted as the render weighs it (pupil weight × transmittance): the mean of
+    the rays that make the pixel's image, so an edge's place in the image (the centroid of its blur) is
+    where that ray meets it. Where the centroid's own ray is blocked (a beam that is not convex), the
+    passing sample nearest it stands in."""
+    out = [np.zeros(len(x)) for _ in range(4)] + [np.zeros(len(x), dtype=bool)]
+    chunk = max(1, (1 << 21) // (sides[0] * sides[1]) ** 2)
+    for start in range(0, len(x), chunk):
+        part = slice(start, start + chunk)
+        for values, got in zip(out, _beam_centres(sensor, x[part], y[part], lam, spread, sides)):
+            values[part] = got
+    return tuple(out)
+
+
+def _grid(side: int) -> tuple[np.ndarray, np.ndarray]:
+    """Cell centres of a side × side grid over [0, 1]², raveled."""
+    u = (np.arange(side) + 0.5) / side
+    return tuple(a.ravel() for a in np.meshgrid(u, u))
+
+
+def _beam_centres(sensor, x, y, lam, spread, sides):
+    """`beam_centres` of one chunk of film points."""
+    import drjit as dr
+    import mitsuba as mi
+
+    n = len(x)
+    (fu, fv), (su, sv) = _grid(sides[0]), _grid(sides[1])
+    k = len(su)
+    shape = (n, len(fu) * k)
+    fx = (np.repeat(x, len(fu) * k) + np.tile(np.repeat(fu - 0.5, k), n) * spread).reshape(shape)
+    fy = (np.repeat(y, len(fu) * k) - np.tile(np.repeat(fv - 0.5, k), n) * spread).reshape(shape)
+    film = mi.Point2f(fx.ravel(), fy.ravel())
+    target, weight = sensor.pupil.sample(film, mi.Point2f(np.tile(su, n * len(fu)), np.tile(sv, n * len(fu))))
+    passed, transmittance = sensor.traced(film, target, mi.Float(lam))[2:]
+    wt = np.asarray(dr.select(passed, weight * transmittance, 0.0), dtype=np.float64).reshape(shape)
+    px, py = (np.asarray(v, dtype=np.float64).reshape(shape) for v in (target.x, target.y))
+    total = wt.sum(axis=1)
+    through = total > 0.0
+    centre = [(wt * v).sum(axis=1) / np.where(through, total, 1.0) for v in (fx, fy, px, py)]
+    centre_passes = np.asarray(sensor.traced(mi.Point2f(*centre[:2]), mi.Point2f(*centre[2:]), mi.Float(lam))[2])
+    far = sum(np.square(v - c[:, None]) for v, c in zip((fx, fy, px, py), centre))
+    nearest = np.argmin(np.where(wt > 0.0, far, np.inf), axis=1)
+    rows = np.arange(n)
+    return [np.where(centre_passes, c, v[rows, nearest]) for c, v in zip(centre, (fx, fy, px, py))] + [through]
 
 
 def render_labels(scene, kinds) -> tuple[dict[str, np.ndarray], dict]:
@@ -105,7 +187,7 @@ def render_labels(scene, kinds) -> tuple[dict[str, np.ndarray], dict]:
 
     sensor = _sensor(scene)
     kinds = parse_labels(kinds)
-    origin, direction, passed, lam = chief_rays(sensor)
+    origin, direction, passed, lam, centred = chief_rays(sensor)
     to_world = sensor.world_transform()
     si = scene.ray_intersect(mi.Ray3f(to_world @ origin, to_world @ direction), passed)
     valid = passed & si.is_valid()
@@ -123,8 +205,8 @@ def render_labels(scene, kinds) -> tuple[dict[str, np.ndarray], dict]:
         layers.update({name: layer(v) for name, v in zip(LAYERS["normal"], (n.x, n.y, n.z))})
     meta = {"kinds": list(kinds), "wavelength_nm": float(lam),
             "depth": "range (world units) from the entrance-pupil centre to the point the pixel centre's chief "
-                     "ray meets; 0 where labels.valid is 0",
-            "entrance_pupil_z": pupil_z}
+                     "ray (where it is blocked, the passing beam's centre ray) meets; 0 where labels.valid is 0",
+            "entrance_pupil_z": pupil_z, "beam_centre_pixels": centred}
     if "instance" in kinds:
         names = shape_names(scene)
         ids = _instance_ids(names)

@@ -1,6 +1,8 @@
 """Labels through the lens (`render.labels`): depth, normal and instance layers traced along each
 pixel's chief ray line up with the rendered image, with the optics tracer's chief rays and with the
 scene's geometry."""
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -14,6 +16,13 @@ from solas_mi.render.user_scene import load
 LAMBDA = 587.5618
 MONO = f"mono:{LAMBDA}"
 SUB = 8  # label sub-pixels per pixel side, for the labels' coverage of a pixel
+# a small aperture far ahead of the stop: past 5.7 deg it blocks the chief ray while part of the beam passes
+DATA = Path(__file__).parents[1] / "data"
+VIGNETTING = DATA / "stiff" / "vignetting_front.toml"
+
+
+def lens_named(name: str) -> Lens:
+    return Lens.load(VIGNETTING if name == "vignetting-front" else name)
 
 
 def patch(name: str, x0: float, x1: float, y0: float, y1: float, z: float, emit: bool = True) -> str:
@@ -49,16 +58,19 @@ def edge(profile: np.ndarray, inside: int) -> float:
     return inside - float(profile[:inside].sum()) / level
 
 
-def edge_offsets(image: np.ndarray, cover: np.ndarray) -> list[float]:
-    """Per row and column fully crossing a patch (its corners' rows and columns left out), the offsets
-    (px) of its two edges along that line in the image from those of the labels' coverage."""
+def edge_offsets(image: np.ndarray, cover: np.ndarray, blur: int = 0) -> list[float]:
+    """Per row and column fully crossing a patch (its corners' rows and columns left out, and `blur` more
+    at each end), the offsets (px) of its two edges along that line in the image from those of the
+    labels' coverage; the level and the profile's start taken `blur` pixels further from the edge."""
     offsets = []
     for img, cov in ((image, cover), (image.T, cover.T)):
         lines = np.flatnonzero(cov.max(axis=1) >= 1.0)
-        for r in lines[1:-1]:
+        for r in lines[1 + blur:len(lines) - 1 - blur]:
             touched, full = np.flatnonzero(cov[r] > 0.0), np.flatnonzero(cov[r] >= 1.0)
-            start, stop = max(touched[0] - 3, 0), touched[-1] + 3  # this patch alone, not its neighbours
-            for sl, inside in ((slice(start, None), full[0] - start), (slice(stop, None, -1), stop - full[-1])):
+            start, stop = max(touched[0] - 3 - blur, 0), touched[-1] + 3 + blur  # this patch alone
+            assert stop < len(cov[r]) and full[-1] - full[0] >= 2 * blur + 2  # the level clear of both blurs
+            for sl, inside in ((slice(start, None), full[0] - start + blur),
+                               (slice(stop, None, -1), stop - full[-1] + blur)):
                 offsets.append(edge(img[r][sl], inside) - edge(cov[r][sl], inside))
     return offsets
 
@@ -77,6 +89,9 @@ LENSES = {
     "wide-angle-22mm": (360.0, (96, 72), [("centre", -6, 6, -5, 5), ("right", 20, 32, -6, 6),
                                          ("left", -34, -26, -5, 5), ("top", -6, 6, 18, 26),
                                          ("corner", 24, 34, -24, -16)]),
+    # patches in the zone where the chief ray is blocked (labels along the beam's centre) and one inside it
+    "vignetting-front": (520.0, (64, 48), [("centre", -3, 3, -2, 2), ("right", 6.5, 8.5, -2, 2),
+                                          ("left", -8.5, -6.2, -1.5, 1.5), ("corner", 5.5, 8, 4, 6)]),
 }
 
 
@@ -87,7 +102,7 @@ def test_instance_edges_are_the_image_edges_across_the_field(mi, tmp_path, name)
     pixel), along every row and column through the patch (`edge`): within 0.5 px everywhere; the
     depth's edges (nearer than 50 m) are the instance's."""
     pitch, (w, h), patches = LENSES[name]
-    lens = Lens.load(name)
+    lens = lens_named(name)
     d = 10.0
     shapes = [patch(n, at_angle(x0, d), at_angle(x1, d), at_angle(y0, d), at_angle(y1, d), d)
               for n, x0, x1, y0, y1 in patches] + [patch("wall", -1e4, 1e4, -1e4, 1e4, 10 * d, emit=False)]  # unlit
@@ -135,15 +150,17 @@ def test_label_edges_land_on_the_tracers_chief_rays(mi, tmp_path, name):
         assert abs(found - expected) <= 0.6 * pitch_um * 1e-3, (a, found, expected)
 
 
-@pytest.mark.parametrize("name", ["wide-angle-22mm", "nikkor-fisheye", "double-gauss-50mm"])
-def test_depth_at_the_centre_is_the_distance_from_the_entrance_pupil(mi, tmp_path, name):
+@pytest.mark.parametrize("name, pitch", [("wide-angle-22mm", 200.0), ("nikkor-fisheye", 200.0),
+                                         ("double-gauss-50mm", 200.0), ("fast-asphere", 20.0)])
+def test_depth_at_the_centre_is_the_distance_from_the_entrance_pupil(mi, tmp_path, name, pitch):
     """A wall at z = 5 m (from surface 1's vertex): the depth at the centre pixel (odd film, on the axis) is
     5 m plus the paraxial entrance pupil's distance behind surface 1, within 0.1 %; off the axis, the
-    depth grows as the wall is met obliquely; normals face along the wall's; every pixel's id is the wall's."""
-    lens = Lens.load(name)
+    depth grows as the wall is met obliquely; normals face along the wall's; every pixel's id is the wall's.
+    The fast asphere's film is its paraxial focus: the reversed lens has no paraxial image of it."""
+    lens = Lens.load(DATA / "fast_asphere.toml") if name == "fast-asphere" else Lens.load(name)
     d = 5.0
     scene = load(scene_file(tmp_path / "wall.xml", [patch("wall", -50, 50, -50, 50, d, emit=False)], 33, 25),
-                 "llvm_ad_spectral", lens, pitch_um=200.0, response=MONO)
+                 "llvm_ad_spectral", lens, pitch_um=pitch, response=MONO)
     layers, meta = render_labels(scene, ("depth", "normal", "instance"))
     p = paraxial(lens)
     expected = d + (p.entrance_pupil_z_mm - lens.vertex_z[0]) * 1e-3
@@ -209,3 +226,62 @@ def test_render_labels_command_writes_the_layers_beside_the_image(mi, tmp_path, 
     assert "labels are traced through a lens_camera" in capsys.readouterr().err
     with pytest.raises(SolasError, match="no scene to label"):
         render_image(Lens.load("solas-doublet"), np.ones((4, 4)), sensor=(4, 4), spp=1, labels="depth")
+
+
+@pytest.mark.parametrize("name, pitch", [("vignetting-front", 1040.0), ("nikkor-fisheye", 900.0)])
+def test_labels_are_valid_wherever_the_image_has_light(mi, tmp_path, name, pitch):
+    """A glowing dome all around: wherever the rendered image (64 spp) has light above 1e-3 of its peak,
+    the labels are valid, also where an aperture before the stop blocks the chief ray (the vignetting
+    lens past 5.7 deg: labels along the centre of the beam that passes) and in pixels at the rim of the
+    fisheye's image circle whose centre sees no light but whose area does; the metadata counts them."""
+    dome = ('<shape type="sphere" id="dome"><float name="radius" value="1000"/><boolean name="flip_normals" '
+            'value="true"/><emitter type="area"><rgb name="radiance" value="1"/></emitter></shape>')
+    scene = load(scene_file(tmp_path / "dome.xml", [dome], 32, 24), "llvm_ad_spectral", lens_named(name),
+                 pitch_um=pitch, response=MONO)
+    image = np.abs(render_scene(scene, 64).image.astype(np.float64)).sum(axis=-1)
+    layers, meta = render_labels(scene, ("depth", "instance"))
+    lit, valid = image > 1e-3 * image.max(), layers["labels.valid"] == 1.0
+    print(f"{name}: {lit.sum()} lit pixels, {valid.sum()} valid, {meta.get('beam_centre_pixels')} along the beam's "
+          f"centre, {(lit & ~valid).sum()} lit but not valid")
+    assert not np.any(lit & ~valid)
+    assert 0 < meta["beam_centre_pixels"] < valid.sum()
+    assert np.all(layers["depth.Z"][valid] > 900.0) and np.all(layers["instance.id"][valid] == instance_id("dome"))
+    assert np.all(layers["depth.Z"][~valid] == 0.0)
+
+
+# lens, pixel pitch (um), sensor (w, h), patch distance (m), patches: (name, field x0, x1, y0, y1 in degrees)
+DEFOCUSED = {
+    "wide-angle-22mm": (360.0, (96, 64), 0.15, [("right", 12, 26, -9, 9), ("corner", -30, -16, 5, 20)]),
+    # wholly past 5.7 deg, where the front aperture blocks the chief ray: the labels follow the beam's centre
+    "vignetting-front": (520.0, (104, 48), 0.7, [("right", 6.8, 11.8, -4, 4), ("left", -11.8, -6.8, -4, 4)]),
+}
+
+
+@pytest.mark.parametrize("name", DEFOCUSED)
+def test_a_defocused_edge_is_centred_on_the_label_edge(mi, tmp_path, name):
+    """The lens focused at infinity, glowing patches near it (blurred over 1-3 px), the image divided by
+    that of a glowing wall at their distance (the fall-off of the light across a blur taken out): each
+    edge's place in the image, the centroid of its blur, against the label's edge, along every row and
+    column through the patch: within 0.5 px off the axis, where the chief ray passes (wide angle) and where
+    the front aperture blocks it (the vignetting lens: labels along the passing beam's centroid)."""
+    pitch, (w, h), d, patches = DEFOCUSED[name]
+    lens, blur = lens_named(name), 4
+
+    def image(shapes, tag):
+        scene = load(scene_file(tmp_path / f"{tag}.xml", shapes, w, h), "llvm_ad_spectral", lens, pitch_um=pitch,
+                     response=MONO)
+        return render_scene(scene, 1024).image.astype(np.float64).sum(axis=-1)
+
+    shapes = [patch(n, at_angle(x0, d), at_angle(x1, d), at_angle(y0, d), at_angle(y1, d), d)
+              for n, x0, x1, y0, y1 in patches]
+    flat = image([patch("flat", -100 * d, 100 * d, -100 * d, 100 * d, d)], "flat")
+    seen = image(shapes, "patches") / np.where(flat > 0.0, flat, 1.0)
+    fine = load(scene_file(tmp_path / "fine.xml", shapes, w * SUB, h * SUB), "llvm_ad_spectral", lens,
+                pitch_um=pitch / SUB, response=MONO)
+    layers, meta = render_labels(fine, ("instance",))
+    assert (meta["beam_centre_pixels"] > 0) == (name == "vignetting-front")
+    for n, *_ in patches:
+        offsets = np.abs(edge_offsets(seen, coverage(layers["instance.id"], instance_id(n)), blur))
+        print(f"{name} {n}: {len(offsets)} edge crossings, max offset {offsets.max():.3f} px, mean "
+              f"{offsets.mean():.3f} px; {meta['beam_centre_pixels']} label pixels along the beam's centre")
+        assert len(offsets) >= 8 and offsets.max() < 0.5
