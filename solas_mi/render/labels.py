@@ -13,7 +13,7 @@ Layers (EXR `layer.channel` names, float32, beside the image's channels; 0 where
 - `normal.X`, `normal.Y`, `normal.Z`: the unit shading normal there, world frame, as Mitsuba gives it
   (not turned toward the camera);
 - `instance.id`: the shape's id, `instance_id` of its name (its `id` in the scene; an unnamed shape
-  `_shape<k>`, k its place in the scene's shape list);
+  `_shape_<key>`, a hash of its bounding box and primitive count, `shape_names`);
 - `labels.valid`, always: 1 where a ray of the pixel passes the lens and the label ray meets the scene,
   else 0.
 
@@ -59,8 +59,21 @@ def instance_id(name: str) -> int:
 
 
 def shape_names(scene) -> list[str]:
-    """Each shape's name: its `id`, or `_shape<k>` for an unnamed one (k: its place in `scene.shapes()`)."""
-    return [shape.id() or f"_shape{k}" for k, shape in enumerate(scene.shapes())]
+    """Each shape's name: its `id`, or for an unnamed one `_shape_<key>`, `key` a hash of its world
+    bounding box (5 significant digits) and primitive count, with `#2`, `#3`, … for unnamed shapes alike
+    in both. Not the shape's place in `scene.shapes()`: that order differs between the LLVM and CUDA
+    variants (and may between loads), and with it the ids of a frame."""
+    names, seen = [], {}
+    for shape in scene.shapes():
+        if shape.id():
+            names.append(shape.id())
+            continue
+        box = shape.bbox()
+        key = ",".join(f"{float(v):.5g}" for v in (*box.min, *box.max)) + f";{shape.primitive_count()}"
+        base = f"_shape_{zlib.crc32(key.encode('ascii')):08x}"
+        seen[base] = seen.get(base, 0) + 1
+        names.append(base if seen[base] == 1 else f"{base}#{seen[base]}")
+    return names
 
 
 def _instance_ids(names: list[str]) -> list[int]:

@@ -191,6 +191,24 @@ def test_background_and_past_the_image_circle_are_zero_and_not_valid(mi, tmp_pat
         assert np.all(layer[~valid] == 0.0)
 
 
+def test_unnamed_shapes_keep_their_ids_whatever_their_order(mi, tmp_path):
+    """An unnamed shape's instance id follows its geometry, not its place in the scene's shape list (which
+    differs between the LLVM and CUDA variants): the same patches listed in the other order get the same
+    ids at the same pixels, and two patches get two ids."""
+    unnamed = [patch("", -3, -1, -1, 1, 10.0).replace(' id=""', ""), patch("", 1, 3, -1, 1, 10.0).replace(' id=""', "")]
+    lens = Lens.load("wide-angle-22mm")
+    found = []
+    for tag, shapes in (("ab", unnamed), ("ba", unnamed[::-1])):
+        scene = load(scene_file(tmp_path / f"{tag}.xml", shapes, 40, 30), "llvm_ad_spectral", lens, pitch_um=400.0,
+                     response=MONO)
+        layers, meta = render_labels(scene, ("instance",))
+        found.append((layers["instance.id"], meta["instances"]))
+    (ids_ab, table_ab), (ids_ba, table_ba) = found
+    assert len(table_ab) == 2 and table_ab == table_ba
+    np.testing.assert_array_equal(ids_ab, ids_ba)
+    assert all(name.startswith("_shape_") for name in table_ab.values())
+
+
 def test_label_names_are_checked():
     assert parse_labels("instance, depth") == ("depth", "instance")
     assert parse_labels(None) == ()
