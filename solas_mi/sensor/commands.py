@@ -25,13 +25,14 @@ def read_rgb(path):
 
 
 def _irradiance(args: argparse.Namespace):
-    """The input image as image-plane irradiance (H, W, 3) in W/m²: its R, G, B channels times --scale,
+    """The input image as image-plane irradiance (H, W, 3) in W/m²: its R, G, B channels times --scale
+    (negative values read as no light, `exposure.negatives_as_no_light`, counted in `args.negative`),
     through the camera equation when --f-number is given (the image is then radiance, W/m²/sr)."""
-    from .exposure import image_irradiance
+    from .exposure import image_irradiance, negatives_as_no_light
 
     if not args.scale > 0:
         raise SolasError(f"--scale {args.scale} must be > 0")
-    image = read_rgb(args.image) * args.scale
+    image, args.negative = negatives_as_no_light(read_rgb(args.image) * args.scale, str(args.image))
     if args.f_number is None:
         if args.transmission != 1.0:
             raise SolasError("--transmission applies with --f-number (the image is then radiance); give both")
@@ -51,7 +52,8 @@ def raw_frame(args: argparse.Namespace):
     meta = {"kind": "sensor RAW", "unit": "DN", "sensor_model": str(args.sensor_model), "sensor": describe(model),
             "seed": args.seed,
             "exposure_ms": args.exposure_ms, "scale": args.scale, "f_number": args.f_number,
-            "transmission": args.transmission, "input": str(args.image)}
+            "transmission": args.transmission, "input": str(args.image),
+            "negative_values_taken_as_zero": args.negative}
     return raw, model, meta
 
 

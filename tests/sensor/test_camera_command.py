@@ -102,3 +102,23 @@ def test_bad_isp_writes_nothing(inputs, capsys):
                  "5", "--isp", str(folder / "missing.toml"), "-o", str(folder / "cam.exr")])
     assert code == 2 and "must be 'default' or a TOML file" in capsys.readouterr().err
     assert not (folder / "cam.exr").exists() and not (folder / "cam.png").exists()
+
+
+def test_negative_values_are_no_light_as_in_a_batch(inputs, capsys):
+    """A spectral render's RGB is negative outside the gamut: `camera` reads those values as no light
+    (as a batch's camera does, one rule: `exposure.negatives_as_no_light`), the RAW equals the capture
+    of the image with them at 0, their count in the metadata and a one-line notice on stderr."""
+    folder, image = inputs
+    image[3, 4, 2] = -0.004
+    image[5, 6, 0] = -1e-8  # round-off: counted, no notice of its own
+    write_exr(folder / "neg.exr", dict(zip("RGB", np.moveaxis(image.astype(np.float32), -1, 0))))
+    assert main(["camera", str(folder / "neg.exr"), "--sensor-model", str(folder / "sensor.toml"),
+                 "--exposure-ms", "5", "-o", str(folder / "raw.exr")]) == 0
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and re.search("1 values below zero \\(least -0.004.*read as no light", err[0]), err
+    channels, meta = read_exr(folder / "raw.exr")
+    expected = capture(load_sensor(folder / "sensor.toml"), np.maximum(image.astype(np.float32), 0.0), 0.005, 0)
+    assert np.array_equal(channels["RAW"], expected)
+    negative = meta["negative_values_taken_as_zero"]
+    assert negative["count"] == 2 and negative["beyond_round_off"] == 1
+    assert negative["least"] == pytest.approx(-0.004)
