@@ -57,6 +57,8 @@ def test_radiance_through_the_camera_equation(inputs):
     (TOML, ["--transmission", "0.5"], "--transmission applies with --f-number"),
     (TOML, ["--f-number", "0"], "f-number 0.0 must be"),
     (TOML, ["--seed", "-1"], "sensor seed -1 must be an integer >= 0"),
+    (TOML, ["--exposure-ms", "inf"], "--exposure-ms inf must be > 0 and finite"),
+    (TOML, ["--exposure-ms", "nan"], "--exposure-ms nan must be > 0 and finite"),
 ])
 def test_bad_input_is_one_line_and_writes_nothing(inputs, capsys, toml, extra, message):
     folder, _ = inputs
@@ -122,3 +124,50 @@ def test_negative_values_are_no_light_as_in_a_batch(inputs, capsys):
     negative = meta["negative_values_taken_as_zero"]
     assert negative["count"] == 2 and negative["beyond_round_off"] == 1
     assert negative["least"] == pytest.approx(-0.004)
+
+
+def _odd_inputs(folder):
+    """Inputs a newcomer may give `camera`: a PNG, a grey one-channel EXR, an EXR with a NaN."""
+    import OpenEXR
+
+    grey = np.full((6, 8), 0.5, np.float32)
+    write_exr(folder / "grey.exr", {"Y": grey})
+    nan = grey.copy()
+    nan[2, 3] = np.nan  # our writer refuses NaN: written with OpenEXR itself, as another tool would
+    OpenEXR.File({"type": OpenEXR.scanlineimage, "compression": OpenEXR.ZIP_COMPRESSION},
+                 {"R": grey, "G": nan, "B": grey}).write(str(folder / "nan.exr"))
+    (folder / "photo.png").write_bytes(b"\x89PNG\r\n\x1a\n")
+
+
+@pytest.mark.parametrize("image, output, message", [
+    ("photo.png", "raw.exr", "photo.png: the sensor reads an OpenEXR image of linear irradiance .*not a .png file; "
+                             "give the EXR of a render"),
+    ("grey.exr", "raw.exr", "channels R, G, B missing; the sensor needs R, G and B \\(found Y\\)"),
+    ("nan.exr", "raw.exr", "1 values are NaN or infinite \\(the first at row 2, column 3, channel 1\\)"),
+    ("in.exr", "raw.png", "raw.png' must end in .exr"),
+])
+def test_odd_inputs_are_one_line_and_write_nothing(inputs, capsys, image, output, message):
+    """Without --isp too, the RAW goes to an .exr (a .png name held EXR data); a PNG input is named as
+    such, not as an unreadable EXR."""
+    folder, _ = inputs
+    _odd_inputs(folder)
+    before = sorted(p.name for p in folder.iterdir())
+    assert main(["camera", str(folder / image), "--sensor-model", str(folder / "sensor.toml"), "--exposure-ms", "5",
+                 "-o", str(folder / output)]) == 2
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and re.search(message, err), err
+    assert sorted(p.name for p in folder.iterdir()) == before
+
+
+def test_huge_exposure_saturates(inputs, capsys):
+    """An exposure of 10⁶ s fills every well (here below the ADC's white level: 10000 e⁻ × 0.25 DN/e⁻ +
+    64): the RAW at the full well, every pixel reported saturated (not "0 at the white level")."""
+    folder, _ = inputs
+    assert main(["camera", str(folder / "in.exr"), "--sensor-model", str(folder / "sensor.toml"),
+                 "--exposure-ms", "1e9", "-o", str(folder / "raw.exr")]) == 0
+    raw = read_exr(folder / "raw.exr")[0]["RAW"]
+    assert np.abs(raw - (64 + 2500)).max() <= 3
+    assert f"{raw.size} pixels saturated" in capsys.readouterr().out
+    assert main(["camera", str(folder / "in.exr"), "--sensor-model", str(folder / "sensor.toml"),
+                 "--exposure-ms", "5", "-o", str(folder / "dim.exr")]) == 0
+    assert " 0 pixels saturated" in capsys.readouterr().out
