@@ -58,6 +58,7 @@ def test_radiance_through_the_camera_equation(inputs):
     (TOML, ["--f-number", "0"], "f-number 0.0 must be"),
     (TOML, ["--seed", "-1"], "sensor seed -1 must be an integer >= 0"),
     (TOML, ["--exposure-ms", "inf"], "--exposure-ms inf must be > 0 and finite"),
+    (TOML, ["--seed", "2147483648"], "sensor seed 2147483648 must be an integer >= 0 and at most 2\\^31 - 1"),
     (TOML, ["--exposure-ms", "nan"], "--exposure-ms nan must be > 0 and finite"),
 ])
 def test_bad_input_is_one_line_and_writes_nothing(inputs, capsys, toml, extra, message):
@@ -171,3 +172,20 @@ def test_huge_exposure_saturates(inputs, capsys):
     assert main(["camera", str(folder / "in.exr"), "--sensor-model", str(folder / "sensor.toml"),
                  "--exposure-ms", "5", "-o", str(folder / "dim.exr")]) == 0
     assert " 0 pixels saturated" in capsys.readouterr().out
+
+
+def test_labelled_render_with_a_preset(inputs):
+    """An EXR with label layers beside R, G, B (as `render --labels` writes): `camera --sensor-model
+    PRESET --exposure-ms T --isp default --seed S` reads R, G, B only; the RAW holds one channel (the
+    labels stay in the render's EXR, not carried over)."""
+    folder, image = inputs
+    layers = {"depth.Z": np.full(image.shape[:2], 12.5, np.float32), "instance.id": np.full(image.shape[:2], 7.0, np.float32),
+              "labels.valid": np.ones(image.shape[:2], np.float32)}
+    write_exr(folder / "labelled.exr", {**dict(zip("RGB", np.moveaxis(image.astype(np.float32), -1, 0))), **layers},
+              {"labels": {"kinds": ["depth", "instance"]}})
+    assert main(["camera", str(folder / "labelled.exr"), "--sensor-model", "imx490", "--exposure-ms", "2",
+                 "--isp", "default", "--seed", "4", "-o", str(folder / "out.exr")]) == 0
+    channels, meta = read_exr(folder / "out.exr")
+    assert list(channels) == ["RAW"] and meta["sensor_model"] == "imx490" and meta["seed"] == 4
+    assert np.array_equal(channels["RAW"], capture(load_sensor("imx490"), image, 0.002, 4))
+    assert (folder / "out.png").is_file()
