@@ -36,8 +36,8 @@ def _irradiance(args: argparse.Namespace):
     through the camera equation when --f-number is given (the image is then radiance, W/m²/sr)."""
     from .exposure import image_irradiance, negatives_as_no_light
 
-    if not args.scale > 0:
-        raise SolasError(f"--scale {args.scale} must be > 0")
+    if not 0 < args.scale < math.inf:
+        raise SolasError(f"--scale {args.scale} must be > 0 and finite")
     image, args.negative = negatives_as_no_light(read_rgb(args.image) * args.scale, str(args.image))
     if args.f_number is None:
         if args.transmission != 1.0:

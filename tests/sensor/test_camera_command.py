@@ -60,6 +60,8 @@ def test_radiance_through_the_camera_equation(inputs):
     (TOML, ["--exposure-ms", "inf"], "--exposure-ms inf must be > 0 and finite"),
     (TOML, ["--seed", "2147483648"], "sensor seed 2147483648 must be an integer >= 0 and at most 2\\^31 - 1"),
     (TOML, ["--exposure-ms", "nan"], "--exposure-ms nan must be > 0 and finite"),
+    (TOML, ["--scale", "inf"], "--scale inf must be > 0 and finite"),
+    (TOML, ["--scale", "-2"], "--scale -2.0 must be > 0"),
 ])
 def test_bad_input_is_one_line_and_writes_nothing(inputs, capsys, toml, extra, message):
     folder, _ = inputs
