@@ -1,7 +1,8 @@
 """`make demo`: the bundled doublet's paraxial table, its nine PSFs and 8×8 / 32×32 PSF grids; the
 bundled photograph rendered through the doublet's glass and degraded by the PSF grids (patch 8×6,
 patch 32×24, interp) with a comparison sheet; a slanted-edge target of known MTF measured by the
-e-SFR."""
+e-SFR; the street scene through the doublet, a sensor preset and the image processor, on a sheet beside
+its depth and instance layers."""
 from __future__ import annotations
 
 import argparse
@@ -14,6 +15,11 @@ from .imageio import atomic_path, read_image
 from .resources import resource_dir
 
 DEMO_SPP = 192  # 64 per colour line: ≈ 2.5 % noise, ≈ 2 min on two cores
+# the camera step: the street scene framed along the street (the doublet's field is ±4 deg), small and
+# few spp (≈ 30 s on two cores), through an automotive sensor preset and the default processor
+STREET_SET = ("width=480", "height=360", "fov=8", "target=0, 2, 140")
+STREET_SPP = 32
+STREET_SENSOR, STREET_EXPOSURE_MS = "ar0132at", "1"
 
 
 def cli(argv: list[str]) -> None:
@@ -40,10 +46,12 @@ def run(out: Path) -> None:
     edge = out / "sfr" / "edge_5deg_sigma1px.png"
     cli(["sfr-target", "-o", str(edge), "--angle-deg", "5", "--sigma-px", "1", "--size", "128x128"])
     cli(["sfr", str(edge)])
+    camera = camera_frame(out)
     cli(["experiment", "street", "--lens", "solas-doublet", "-o", str(out / "street")])
     print(json.dumps({"results": str(out.resolve()), "paraxial": "lens_info.txt", "psfs": "psf/*.exr|png",
                       "grids": "psf_grid_8x8.exr|png, psf_grid_32x32.exr|png", **degraded,
                       "slanted edge": "sfr/edge_5deg_sigma1px.png",
+                      **camera,
                       "street experiment": "street/street.md (table), street/fig5_render_infinity.png (plot)"},
                      indent=2))
 
@@ -73,6 +81,69 @@ def degrade(out: Path) -> dict:
                      % DEMO_SPP)
     return {"direct render": "degraded/rocket_render.exr|png", "convolutions": "degraded/rocket_{patch_8x6,"
             "patch_32x24,interp}.exr|png", "comparison sheet": "degraded/comparison.png"}
+
+
+def camera_frame(out: Path) -> dict:
+    """The street scene through the doublet with its labels, then through a sensor preset and the
+    default image processor (`solas-mi camera`), and a sheet of the frame beside its depth and instance
+    layers."""
+    from .imageio import read_exr
+
+    d = out / "camera"
+    render, raw = d / "street_render.exr", d / "street_raw.exr"
+    sets = [a for value in STREET_SET for a in ("--set", value)]
+    cli(["render", str(resource_dir("scenes") / "street" / "street.xml"), "--lens", "solas-doublet", *sets,
+         "--spp", str(STREET_SPP), "--labels", "depth,normal,instance", "-o", str(render)])
+    cli(["camera", str(render), "--sensor-model", STREET_SENSOR, "--exposure-ms", STREET_EXPOSURE_MS,
+         "--isp", "default", "-o", str(raw)])
+    channels, meta = read_exr(render)
+    camera_sheet(channels, meta["labels"], read_image(raw.with_suffix(".png"), linearize=False), d / "camera_sheet.png",
+                 f"street scene, solas-doublet ({STREET_SPP} spp) → {STREET_SENSOR} ({STREET_EXPOSURE_MS} ms) "
+                 "→ default image processor; labels along each pixel's chief ray")
+    return {"camera": "camera/street_render.exr|png (irradiance + depth, normal, instance layers), "
+                      "camera/street_raw.exr|png (RAW, developed frame)",
+            "camera sheet": "camera/camera_sheet.png"}
+
+
+def camera_sheet(channels: dict, labels: dict, frame, path: Path, title: str) -> None:
+    """One row: the lens's irradiance image, the developed frame, the depth layer (colour-mapped, its
+    range on the colour bar) and the instance layer (a colour per id, the scene's named shapes boxed)."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+    import numpy as np
+    from matplotlib.patches import Rectangle
+
+    from .imageio import srgb_encode
+
+    valid = channels["labels.valid"] > 0
+    depth = np.where(valid, channels["depth.Z"], np.nan)
+    ids = np.unique(channels["instance.id"], return_inverse=True)[1].reshape(valid.shape)
+    linear = np.stack([channels[c] for c in "RGB"], axis=-1)
+    fig, axes = plt.subplots(1, 4, figsize=(18, 4.4))
+    axes[0].imshow(np.clip(srgb_encode(np.clip(linear / linear.max(), 0.0, None)), 0.0, 1.0))
+    axes[0].set_title("through the lens (irradiance, scaled)")
+    axes[1].imshow(frame)
+    axes[1].set_title("sensor + image processor (8-bit sRGB)")
+    shown = axes[2].imshow(depth, cmap="viridis")
+    fig.colorbar(shown, ax=axes[2], fraction=0.04, label="range (m)")
+    axes[2].set_title(f"depth: {np.nanmin(depth):.1f} to {np.nanmax(depth):.1f} m")
+    axes[3].imshow(np.ma.masked_where(~valid, ids % 20), cmap="tab20", vmin=0, vmax=19, interpolation="nearest")
+    for name, box in labels.get("boxes", {}).items():
+        x0, y0, x1, y1 = box["box"]
+        axes[3].add_patch(Rectangle((x0 - 0.5, y0 - 0.5), x1 - x0, y1 - y0, fill=False, edgecolor="white"))
+        axes[3].text(x0, y0, name, color="white", fontsize=7, va="bottom")
+    axes[3].set_title(f"instances: {len(labels.get('instances', {}))} shapes, "
+                      f"{len(labels.get('boxes', {}))} named (boxed)")
+    for ax in axes:
+        ax.set_xticks([])
+        ax.set_yticks([])
+    fig.suptitle(title, fontsize=11)
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=100, format="png")
+    plt.close(fig)
 
 
 def main() -> None:

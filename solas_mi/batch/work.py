@@ -66,19 +66,15 @@ def _shoot(job: Job, settings: dict[str, Any]) -> None:
     developed frame) beside it, the frame named by its output's stem (`isp.camera`)."""
     from pathlib import Path
 
-    import numpy as np
-
     from ..isp.camera import write_frame
     from ..sensor.commands import read_rgb
+    from ..sensor.exposure import negatives_as_no_light
 
     camera = settings["camera"]
-    image = read_rgb(job.output)
-    # a spectral render's RGB is negative where a sample's colour lies outside the RGB gamut (few spp,
-    # saturated colours): no light for the sensor, counted in the metadata
-    negative = int(np.count_nonzero(image < 0.0))
-    raw, frame, meta = camera.shoot(np.maximum(image, 0.0), Path(job.output).stem)
+    image, negative = negatives_as_no_light(read_rgb(job.output), job.output)
+    raw, frame, meta = camera.shoot(image, Path(job.output).stem)
     meta.update(input=job.output, batch={**settings["batch"], "seed": job.seed},
-                negative_values_taken_as_zero={"count": negative, "least": float(min(image.min(), 0.0))})
+                negative_values_taken_as_zero=negative)
     write_frame(job.extras[0], raw, frame, meta)
 
 

@@ -13,7 +13,7 @@ from ..sensor.model import SensorModel
 
 def saturation_dn(model: SensorModel) -> float:
     """y_sat: the signal above black (DN) of a saturated pixel."""
-    return float(min(model.gain_dn_per_e * model.full_well_e, model.white_level_dn - model.black_level_dn))
+    return model.saturation_dn
 
 
 def subtract_black(raw: np.ndarray, model: SensorModel, *, enabled: bool = True) -> np.ndarray:

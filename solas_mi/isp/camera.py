@@ -14,10 +14,9 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import SolasError
+from ..sensor.capture import MAX_SEED
 from ..sensor.model import SensorModel
 from .pipeline import ISP
-
-MAX_SEED = 2**31 - 1
 
 
 @dataclass(frozen=True)

@@ -45,7 +45,8 @@ def add_camera_options(p: argparse.ArgumentParser, seed: bool) -> None:
     g = p.add_argument_group("the camera: each frame (its values read as W/m² of image irradiance) through a sensor "
                              "and image processor, its RAW written as <name>_raw.exr and, with --isp, the developed "
                              "frame as <name>_raw.png")
-    g.add_argument("--sensor-model", metavar="FILE.toml", help="the sensor (a TOML file with a [sensor] table)")
+    g.add_argument("--sensor-model", metavar="PRESET|FILE.toml",
+                   help="the sensor: a preset's name (solas-mi sensors lists them) or a TOML file with a [sensor] table")
     g.add_argument("--exposure-ms", type=float, help="exposure time in ms (with --sensor-model)")
     g.add_argument("--isp", metavar="default|FILE.toml",
                    help="develop each RAW: 'default' or a TOML file with an [isp] table (with --sensor-model)")

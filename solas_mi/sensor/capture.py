@@ -16,6 +16,8 @@ from .cfa import mosaic
 from .exposure import photons
 from .model import SensorModel
 
+MAX_SEED = 2**31 - 1  # a camera's seed (a batch's too), its frames' numbers 56 bits (`isp.camera`)
+
 
 def mean_electrons(model: SensorModel, irradiance: np.ndarray, exposure_s: float) -> np.ndarray:
     """The noise-free photo-electrons of each pixel (H, W) of an irradiance image (H, W, 3) in W/m²,
@@ -37,7 +39,10 @@ def capture(model: SensorModel, irradiance: np.ndarray, exposure_s: float, seed:
     `exposure_s` seconds: frame `frame` of seed `seed` (same seed and frame, same frame)."""
     for name, value in (("seed", seed), ("frame", frame)):
         if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < 0:
-            raise SolasError(f"sensor {name} {value!r} must be an integer >= 0")
+            raise SolasError(f"sensor {name} {value!r} must be an integer >= 0"
+                             + (" and at most 2^31 - 1" if name == "seed" else ""))
+    if seed > MAX_SEED:
+        raise SolasError(f"sensor seed {seed!r} must be an integer >= 0 and at most 2^31 - 1")
     mu_e = mean_electrons(model, irradiance, exposure_s)
     # past the full well the count is clipped anyway: capping the Poisson means at 2 × full well + 1000
     # keeps them within NumPy's Poisson range (the Chernoff bound puts the chance that the well then

@@ -5,6 +5,8 @@ NumPy, OpenEXR and the sensor modules are imported when the command runs."""
 from __future__ import annotations
 
 import argparse
+import math
+from pathlib import Path
 from typing import Any
 
 from ..errors import SolasError
@@ -16,6 +18,10 @@ def read_rgb(path):
 
     from ..imageio import check_finite, read_exr
 
+    if Path(path).suffix.lower() != ".exr":
+        raise SolasError(f"{path}: the sensor reads an OpenEXR image of linear irradiance (R, G, B), not a "
+                         f"{Path(path).suffix or 'suffix-less'} file; give the EXR of a render, render-image or "
+                         "degrade (a photograph: through a lens first, e.g. render-image LENS PHOTO -o OUT.exr)")
     channels, _ = read_exr(path)
     missing = [c for c in "RGB" if c not in channels]
     if missing:
@@ -25,13 +31,14 @@ def read_rgb(path):
 
 
 def _irradiance(args: argparse.Namespace):
-    """The input image as image-plane irradiance (H, W, 3) in W/m²: its R, G, B channels times --scale,
+    """The input image as image-plane irradiance (H, W, 3) in W/m²: its R, G, B channels times --scale
+    (negative values read as no light, `exposure.negatives_as_no_light`, counted in `args.negative`),
     through the camera equation when --f-number is given (the image is then radiance, W/m²/sr)."""
-    from .exposure import image_irradiance
+    from .exposure import image_irradiance, negatives_as_no_light
 
-    if not args.scale > 0:
-        raise SolasError(f"--scale {args.scale} must be > 0")
-    image = read_rgb(args.image) * args.scale
+    if not 0 < args.scale < math.inf:
+        raise SolasError(f"--scale {args.scale} must be > 0 and finite")
+    image, args.negative = negatives_as_no_light(read_rgb(args.image) * args.scale, str(args.image))
     if args.f_number is None:
         if args.transmission != 1.0:
             raise SolasError("--transmission applies with --f-number (the image is then radiance); give both")
@@ -45,27 +52,28 @@ def raw_frame(args: argparse.Namespace):
     from .files import describe, load_sensor
 
     model = load_sensor(args.sensor_model)
-    if not args.exposure_ms > 0:
-        raise SolasError(f"--exposure-ms {args.exposure_ms} must be > 0")
+    if not 0 < args.exposure_ms < math.inf:
+        raise SolasError(f"--exposure-ms {args.exposure_ms} must be > 0 and finite")
     raw = capture(model, _irradiance(args), args.exposure_ms * 1e-3, args.seed)
     meta = {"kind": "sensor RAW", "unit": "DN", "sensor_model": str(args.sensor_model), "sensor": describe(model),
             "seed": args.seed,
             "exposure_ms": args.exposure_ms, "scale": args.scale, "f_number": args.f_number,
-            "transmission": args.transmission, "input": str(args.image)}
+            "transmission": args.transmission, "input": str(args.image),
+            "negative_values_taken_as_zero": args.negative}
     return raw, model, meta
 
 
 def report(args: argparse.Namespace, raw, model) -> None:
     print(f"{args.output}: {raw.shape[1]}x{raw.shape[0]} RAW ({model.cfa}, {model.bit_depth} bit), "
-          f"mean {raw.mean():.1f} DN, {int((raw >= model.white_level_dn).sum())} pixels at the white level")
+          f"mean {raw.mean():.1f} DN, {int(model.saturated(raw).sum())} pixels saturated (full well or white level)")
 
 
 def run_camera(args: argparse.Namespace) -> int:
     """Write the RAW frame (one channel "RAW", DN) with the model, seed and exposure in the metadata."""
     from ..imageio import write_exr
-    from ..outputs import check_target
+    from ..outputs import data_and_preview
 
-    check_target(args.output, [args.image, args.sensor_model])
+    data_and_preview(args.output, None, [args.image, args.sensor_model])  # OUT.exr, as with --isp
     raw, model, meta = raw_frame(args)
     write_exr(args.output, {"RAW": raw.astype("float32")}, meta)
     report(args, raw, model)

@@ -29,6 +29,24 @@ def image_irradiance(radiance: np.ndarray, f_number: float, transmission: float 
 ROUND_OFF = 1e-5  # negative values down to this fraction of the image's largest are round-off (read as 0)
 
 
+def negatives_as_no_light(image: np.ndarray, what: str) -> tuple[np.ndarray, dict]:
+    """The one rule of the camera commands (`solas-mi camera`, a batch's camera) for negative values of
+    an input image: read as no light (0), their count and least value returned for the RAW's metadata.
+    A spectral render's RGB is negative where a sample's colour lies outside the RGB gamut (few spp,
+    saturated colours); an FFT convolution leaves round-off around zero. Values below the round-off
+    (-ROUND_OFF of the image's largest) are also named in a one-line notice on stderr."""
+    import sys
+
+    floor = -ROUND_OFF * float(np.abs(image).max(initial=0.0))
+    beyond = int(np.count_nonzero(image < floor))
+    if beyond:
+        print(f"notice: {what}: {beyond} values below zero (least {image.min():.3g}, outside the RGB gamut or "
+              "not light) read as no light; counted in the RAW's metadata", file=sys.stderr)
+    info = {"count": int(np.count_nonzero(image < 0.0)), "beyond_round_off": beyond,
+            "least": float(min(image.min(initial=0.0), 0.0)), "round_off": ROUND_OFF}
+    return np.maximum(image, 0.0), info
+
+
 def photons(irradiance: np.ndarray, exposure_s: float, pixel_pitch_um: float,
             wavelengths_nm: tuple[float, ...]) -> np.ndarray:
     """Mean photons per pixel μ_p = A E t λ / (h c) of an irradiance image (H, W, C) in W/m², channel c

@@ -115,6 +115,18 @@ class SensorModel:
         return 2**self.bit_depth - 1
 
     @property
+    def saturation_dn(self) -> float:
+        """y_sat: the signal above black (DN) of a saturated pixel, min(K · full well, white − black): the
+        well or the ADC, whichever fills first."""
+        return float(min(self.gain_dn_per_e * self.full_well_e, self.white_level_dn - self.black_level_dn))
+
+    def saturated(self, raw: np.ndarray) -> np.ndarray:
+        """Where a RAW frame (DN) is saturated: within 3 σ of the readout noise (read noise and DSNU) and
+        the rounding of the saturation level."""
+        spread = 3.0 * self.gain_dn_per_e * float(np.hypot(self.read_noise_e, self.dsnu_e)) + 1.0
+        return np.asarray(raw) >= self.black_level_dn + self.saturation_dn - spread
+
+    @property
     def channel_wavelengths_nm(self) -> tuple[float, float, float]:
         """The wavelength (nm) that stands for each image channel R, G, B: `wavelengths_nm`, or with a QE
         curve the centres of the channels' bands (`qe` module)."""

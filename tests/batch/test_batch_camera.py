@@ -122,3 +122,25 @@ def test_camera_options_refused(camera_inputs, extra, message, capsys):
 
     assert re.search(message, capsys.readouterr().err)
     assert not (camera_inputs.root / "never" / "frame000.exr").exists()
+
+
+def test_a_preset_by_name_from_the_cli_and_python(camera_inputs, tmp_path):
+    """`batch degrade ... --sensor-model imx490` (a shipped preset's name, not a file) from the command
+    line, and `load_camera("imx490", ...)` from Python: the same RAW frames, the preset's model in the
+    manifest."""
+    from solas_mi.sensor.files import load_sensor
+
+    argv = _argv(camera_inputs, tmp_path / "cli", "--seed", "3")
+    argv[argv.index("--sensor-model") + 1] = "imx490"
+    assert main(argv) == 0
+    preset = load_sensor("imx490")
+    assert SensorModel.from_dict(manifest(tmp_path / "cli")["camera"]["sensor"]) == preset
+    camera = load_camera("imx490", EXPOSURE_MS, None, 3)
+    assert camera.sensor == preset
+    result = degrade_batch([camera_inputs.images], tmp_path / "py", psf_grid=camera_inputs.grid, workers=1,
+                           progress=False, camera=camera)
+    assert [job.status for job in result.jobs] == ["done"] * 3
+    for name in ("frame000", "frame001", "frame002"):
+        raw = read_exr(tmp_path / "cli" / f"{name}_raw.exr")[0]["RAW"]
+        assert np.array_equal(raw, read_exr(tmp_path / "py" / f"{name}_raw.exr")[0]["RAW"])
+        assert raw.mean() > preset.black_level_dn + 10  # light reached the sensor

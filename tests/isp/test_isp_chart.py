@@ -69,3 +69,31 @@ def test_grey_card_is_neutral(cfa):
 
     assert chroma(ISP(white_balance="grey-card", grey_card=(16, 16, 48, 48))) < 1.0
     assert chroma(ISP(white_balance="none")) > 10.0
+
+
+def _cross_talk_curve():
+    """QE curves of overlapping Gaussian filters on a 3 % floor (each filter passes its neighbours'
+    bands: Q[R, G] ≈ Q[R, R], as in `sensor.qe`), and a clear filter passing every band."""
+    from solas_mi.sensor.qe import QECurve
+
+    lam = np.arange(380.0, 781.0, 10.0)
+
+    def bump(peak, width, height):
+        return (0.03 + height * np.exp(-0.5 * ((lam - peak) / width) ** 2)).tolist()
+
+    return QECurve.from_table({"wavelength_nm": lam.tolist(), "R": bump(610, 45, 0.45), "G": bump(535, 40, 0.6),
+                               "B": bump(460, 35, 0.5), "C": bump(540, 150, 0.8)})
+
+
+@pytest.mark.parametrize("cfa", ["RGGB", "RCCB"])
+def test_chart_through_qe_curves_with_cross_talk(cfa):
+    """A sensor whose filters pass each other's bands (QE curves, `sensor.qe`): the sensor's CCM undoes
+    the cross-talk, every patch within BOUND_DE (measured worst 0.34, mean 0.16, as for the scalar
+    sensors); without the CCM the chart's colours are far off (measured worst 12.4 for RGGB)."""
+    model = SensorModel(cfa=cfa, qe_curve=_cross_talk_curve())
+    qe = model.effective_qe()
+    assert qe[0, 1] > 0.5 * qe[0, 0] and qe[2, 1] > 0.1 * qe[2, 2]  # the cross-talk is real
+    frame, _, truth = _develop_chart(model, ISP())
+    assert delta_e(patch_means(frame / 255.0), patch_means(truth)).max() < BOUND_DE
+    frame, _, truth = _develop_chart(model, ISP(ccm="none"))
+    assert delta_e(patch_means(frame / 255.0), patch_means(truth)).max() > 5
