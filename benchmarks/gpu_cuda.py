@@ -25,6 +25,8 @@ JOBS = {
     "render-image, solas-doublet, 1280×960, 256 spp": ["render-image", "solas-doublet", str(IMAGE), "--sensor",
                                                         "1280x960", "--spp", "256"],
     "render street.xml --lens solas-doublet, 64 spp": ["render", str(STREET), "--lens", "solas-doublet", "--spp", "64"],
+    "render street.xml --lens solas-doublet --labels depth,normal,instance, 64 spp": [
+        "render", str(STREET), "--lens", "solas-doublet", "--spp", "64", "--labels", "depth,normal,instance"],
 }
 
 

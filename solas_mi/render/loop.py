@@ -26,6 +26,14 @@ _SAMPLES_PER_PASS = 1 << 21  # samples traced at once at most: bounds a pass's m
 # signal (Ctrl-C, SIGTERM) is answered (`docs/details/render.md`, "Interruptions"). Sized
 # from the lens, not from a measured time, so a render's passes, and so its image, are the same on any machine.
 STEPS_PER_PASS = 1 << 19
+# A GPU traces 2^19 steps in a few ms, less than a pass's launch and Python overhead: the CUDA variants take
+# 16 times as many (a 1280x960 render at 256 spp on an H200: 28 s in 2^19-step passes, `benchmarks/gpu_cuda.py`).
+GPU_STEPS_PER_PASS = 1 << 23
+
+
+def steps_per_pass(variant: str) -> int:
+    """The path steps a pass traces at most in Mitsuba variant `variant`."""
+    return GPU_STEPS_PER_PASS if variant.startswith("cuda") else STEPS_PER_PASS
 
 
 @dataclass
@@ -111,7 +119,7 @@ def render(scene, spp: int, seed: int = 0, max_depth: int | None = None, progres
                          "(each line needs its own samples)")
     width, height, nc = sensor.width, sensor.height, sensor.channels
     depth = max_depth if max_depth is not None else _max_depth(scene, sensor.lens)
-    pixels, samples = width * height, min(_SAMPLES_PER_PASS, STEPS_PER_PASS // depth)
+    pixels, samples = width * height, min(_SAMPLES_PER_PASS, steps_per_pass(mi.variant()) // depth)
     per_pass = max(1, min(spp, samples // pixels))
     passes = math.ceil(spp / per_pass)
     # an image larger than a pass is traced in bands of rows, so a pass stays bounded in memory and time

@@ -19,7 +19,7 @@ from ..optics import pupil as P
 from ..optics import tracer as T
 from ..psf.base import Computed, centring_warnings, window_centres_um
 from ..psf.geometric import bin_hits, entrance_grid, light_offsets_um
-from .loop import STEPS_PER_PASS, continue_ray
+from .loop import continue_ray, steps_per_pass
 from .scene import lens_parts, write_ply
 
 VARIANT = "llvm_ad_spectral"
@@ -48,12 +48,12 @@ def lens_geometry(lens, rings: int | None = None, image_radius: float = 0.0, **e
 def scene_hits(scene, lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, rays: int, chief: P.ChiefRays):
     """Per field: image-plane offsets (µm) from the chief ray of the entrance-grid rays that cross the
     scene's lens, and each one's power (fraction of the on-axis entrance-pupil power). A field's rays
-    are traced in chunks of bounded time (`loop.STEPS_PER_PASS`): a signal is answered between them."""
+    are traced in chunks of bounded time (`loop.steps_per_pass`): a signal is answered between them."""
     import mitsuba as mi
 
     sampler = mi.load_dict({"type": "independent"})
     depth = 2 * len(lens.surfaces) + 2
-    chunk = max(1, STEPS_PER_PASS // depth)
+    chunk = max(1, steps_per_pass(mi.variant()) // depth)
     hits = []
     for sl, ex, ey, power in entrance_grid(lens, field_deg, wavelength_nm, rays, chief):
         for j, f in enumerate(range(sl.start, sl.stop)):

@@ -74,6 +74,6 @@ def test_chunked_rays_give_the_same_psf(doublet, monkeypatch):
     from solas_mi.render import psf as render_psf
 
     whole = psf(doublet, (0, 2), 531.0, method="render", normalization="none", **KW)
-    monkeypatch.setattr(render_psf, "STEPS_PER_PASS", 10 * 1000)  # 1000 rays a chunk: 66 chunks
+    monkeypatch.setattr(render_psf, "steps_per_pass", lambda variant: 10 * 1000)  # 1000 rays a chunk: 66 chunks
     chunked = psf(doublet, (0, 2), 531.0, method="render", normalization="none", **KW)
     assert np.allclose(chunked.data, whole.data, rtol=1e-6, atol=1e-9 * whole.data.max())
