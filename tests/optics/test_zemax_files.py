@@ -290,3 +290,23 @@ def test_every_plastic_and_moulded_glass_loads_by_its_zemax_name(tmp_path):
         n = glass.resolve(key).index(WL * 1000)
         efl = 1.0 / ((n - 1) * (1 / R1 - 1 / R2 + (n - 1) * T1 / (n * R1 * R2)))
         assert paraxial(lens, WL * 1000).efl_mm == pytest.approx(efl, rel=1e-12), key
+
+
+@pytest.mark.parametrize("header", ["", "GCAT SCHOTT\n", "GCAT SCHOTT CDGM\n"])
+def test_obsolete_schott_glass_loads_and_a_shared_name_keeps_its_current_glass(tmp_path, header):
+    """A file naming SCHOTT's obsolete LAK33 loads it (OpticStudio's SCHOTT catalogue carries it: n_d 1.753977,
+    V_d 52.430467, typed here); its EFL is the thick-lens formula's at that glass's index at 550 nm from
+    its Sellmeier coefficients, typed here. F4, which CDGM sells and SCHOTT made, stays CDGM's F4 whatever
+    GCAT says (as before SCHOTT's obsolete glasses were added), and the written file names the obsolete
+    glass so that it reads back the same."""
+    glas = "GLAS LAK33 0 0 1.753977 52.430467 0 0 0 0 0 0"
+    lens = load(tmp_path, zmx(header=header).replace("GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0", glas))
+    assert lens.surfaces[0].glass.name == "SCHOTT:LAK33"
+    l2 = WL ** 2
+    n = (1 + sum(b * l2 / (l2 - c) for b, c in [(1.45796869, 0.0068054528), (0.555403936, 0.0225253283),
+                                                 (1.19938794, 82.7543327)])) ** 0.5
+    efl = 1.0 / ((n - 1) * (1 / R1 - 1 / R2 + (n - 1) * T1 / (n * R1 * R2)))
+    assert paraxial(lens, WL * 1000).efl_mm == pytest.approx(efl, rel=1e-12)
+    assert Lens.load(lens.save(tmp_path / "again.zmx")).surfaces[0].glass.name == "SCHOTT:LAK33"
+    f4 = load(tmp_path, zmx(header=header).replace("GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0", "GLAS F4 0 0 1.62 36 0 0"))
+    assert f4.surfaces[0].glass.name == "CDGM:F4"
