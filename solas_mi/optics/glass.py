@@ -9,7 +9,8 @@ refractiveindex.info database (public domain), which took them from the vendors'
 literature, or from OpticStudio's catalogues of those names (their formulas, ranges and n_d / V_d); each
 file's header says which and when (an entry marked `fitted` is our fit to a data sheet's table of
 indices). Entries are named "VENDOR:NAME"; a bare name (or an alias such as "BK7") must mean exactly one
-entry. Loaded on first use and cached.
+entry; an entry marked `by_name` (SCHOTT's obsolete LAK33, ... from OpticStudio's catalogue) answers to its
+bare name only where no other entry has it, and never to a table's n_d / V_d. Loaded on first use and cached.
 
 References: the Sellmeier formula n² = 1 + Σ B λ²/(λ² − C) and the power series n² = Σ K λ^P (the
 Schott / Hoya / Sumita / Hikari formulas, refractiveindex.info's "formula 3") with the vendors' valid
@@ -222,9 +223,23 @@ def _aliases(path: str | None = None) -> dict[str, list[str]]:
     return names
 
 
+@lru_cache(maxsize=4)
+def _by_name(path: str | None = None) -> frozenset[str]:
+    """The keys of the entries marked `by_name` (SCHOTT's obsolete glasses of OpticStudio's catalogue)."""
+    return frozenset(key for key, e in _entries(path).items() if e.get("by_name"))
+
+
+def _current_first(keys: list[str], catalog: str | None) -> list[str]:
+    """`keys` less the `by_name` entries, unless all are: a name that a glass of the current catalogues
+    has means that glass, an obsolete one only where none answers to it."""
+    gone = _by_name(catalog)
+    return [k for k in keys if k not in gone] or keys
+
+
 def candidates(name: str, catalog: str | None = None) -> list[str]:
-    """The catalogue keys that `name` (a full key, bare name or alias, any case) may mean."""
-    return sorted(set(_aliases(catalog).get(name.strip().upper(), [])))
+    """The catalogue keys that `name` (a full key, bare name or alias, any case) may mean: `by_name`
+    entries (SCHOTT's obsolete ones) only where no other entry has that name."""
+    return _current_first(sorted(set(_aliases(catalog).get(name.strip().upper(), []))), catalog)
 
 
 def vendors(catalog: str | None = None) -> list[str]:
@@ -292,11 +307,14 @@ def match(nd: float, vd: float, nd_tol: float = MATCH_ND, vd_tol: float = MATCH_
     """The catalogue glasses within `nd_tol` in n_d and `vd_tol` in V_d of the given ones, by their stated
     values (the vendor's catalogue numbers, which patents quote) or by their formula's, best first: by
     the larger of |Δn_d|/nd_tol and |ΔV_d|/vd_tol (the smaller of the stated and formula scores), then
-    the formula's score, then the key."""
-    catalogue = load_catalog(catalog)
+    the formula's score, then the key. Entries marked `by_name` (glasses that only a lens file naming them
+    should get, such as SCHOTT's obsolete ones) are left out."""
+    catalogue, entries = load_catalog(catalog), _entries(catalog)
     found = []
     for key, n, v in _abbe_table(catalog):
         g = catalogue[key]
+        if entries[key].get("by_name"):
+            continue
         sn, sv = (n if g.nd is None else g.nd), (v if g.vd is None else g.vd)
         stated = max(abs(sn - nd) / nd_tol, abs(sv - vd) / vd_tol)
         formula = max(abs(n - nd) / nd_tol, abs(v - vd) / vd_tol)

@@ -311,10 +311,8 @@ class Lens:
             if s.diameter <= 0:
                 raise SolasError(f"{ident}: diameter {s.diameter:g} mm must be positive")
             if s.radius != 0 and s.conic == 0 and s.semi_diameter >= abs(s.radius):
-                raise SolasError(
-                    f"{ident}: clear semi-diameter {s.semi_diameter:g} mm is not smaller than |radius| "
-                    f"{abs(s.radius):g} mm; the sphere cannot hold that aperture"
-                )
+                raise SolasError(f"{ident}: clear semi-diameter {s.semi_diameter:g} mm is not smaller than |radius| "
+                                 f"{abs(s.radius):g} mm; the sphere cannot hold that aperture")
             if s.conic != 0 and (1.0 + s.conic) * (s.curvature * s.semi_diameter) ** 2 >= 1.0:
                 raise SolasError(f"{ident}: conic {s.conic:g} with radius {s.radius:g} mm closes before the clear "
                                  f"semi-diameter {s.semi_diameter:g} mm; the conic cannot hold that aperture")
@@ -327,15 +325,20 @@ class Lens:
         if last.thickness <= 0:
             raise SolasError(f"{where}: surface {len(self.surfaces)} ({last.label}): distance to the image "
                              f"{last.thickness:g} mm must be positive")
+        # A flat stop in air refracts nothing: the sequential trace checks each ray where its line crosses the
+        # plane, even inside a neighbouring face's sag (Zemax's stop "on" a lens surface), as OpticStudio does.
+        media = (self.object_glass, *(s.glass for s in self.surfaces))
+        plane = [s.stop and s.radius == 0 and not (s.aspheric or s.qbfs) and s.glass is m is glass_mod.AIR
+                 for s, m in zip(self.surfaces, media)]
         for i, (a, b) in enumerate(zip(self.surfaces[:-1], self.surfaces[1:]), start=1):
+            if plane[i - 1] or plane[i]:
+                continue
             r = np.linspace(0.0, min(a.semi_diameter, b.semi_diameter), 257)
             gap = a.thickness + b.sag(r) - a.sag(r)
             if np.any(gap < -1e-12) or (a.glass is not glass_mod.AIR and np.any(gap <= 0)):
                 k = int(np.argmin(gap))
-                raise SolasError(
-                    f"{where}: surfaces {i} ({a.label}) and {i + 1} ({b.label}) cross: their sags meet at "
-                    f"r = {r[k]:.3f} mm (gap {gap[k]:.4f} mm with thickness {a.thickness:g} mm)"
-                )
+                raise SolasError(f"{where}: surfaces {i} ({a.label}) and {i + 1} ({b.label}) cross: their sags meet at "
+                                 f"r = {r[k]:.3f} mm (gap {gap[k]:.4f} mm with thickness {a.thickness:g} mm)")
 
     # ------------------------------------------------------------------ geometry
     @property

@@ -25,7 +25,7 @@ TOLERANCE = {"SCHOTT": (1e-5, 0.01), "HOYA": (1e-5, 0.01), "OHARA": (1e-6, 1e-4)
              "LIGHTPATH": (1e-6, 1e-4), "RPO": (1e-6, 1e-4), "ZEON": (1e-6, 1e-4), "OSAKAGASCHEMICAL": (1e-6, 1e-4),
              "ANGSTROMLINK": (1e-6, 1e-4)}
 FITTED = (5e-5, 0.7)
-COUNTS = {"SCHOTT": 157, "OHARA": 410, "HOYA": 190, "CDGM": 314, "SUMITA": 176, "HIKARI": 363, "MISC": 9, "CORNING": 1,
+COUNTS = {"SCHOTT": 356, "OHARA": 410, "HOYA": 190, "CDGM": 314, "SUMITA": 176, "HIKARI": 363, "MISC": 9, "CORNING": 1,
           "LIGHTPATH": 10, "RPO": 38, "ZEON": 9, "OSAKAGASCHEMICAL": 3, "ANGSTROMLINK": 3}
 
 
@@ -117,7 +117,7 @@ def test_model_glass_has_given_nd_vd():
 
 def test_unknown_glass_is_named():
     with pytest.raises(SolasError, match=r"unknown glass 'N-BK8'; close: .*SCHOTT:N-BK7.*; allowed: AIR, a catalogue "
-                                         r"glass \(1683 of ANGSTROMLINK, CDGM, CORNING, HIKARI, HOYA, LIGHTPATH, "
+                                         r"glass \(1882 of ANGSTROMLINK, CDGM, CORNING, HIKARI, HOYA, LIGHTPATH, "
                                          r"MISC, OHARA, OSAKAGASCHEMICAL, RPO, SCHOTT, SUMITA, ZEON"):
         glass.resolve("N-BK8")
 
@@ -167,8 +167,9 @@ def test_discontinued_glasses_are_kept_and_say_so():
 
 def test_b270_and_fused_silica():
     """B270 (SCHOTT's sheet crown) follows its data sheet's indices, typed here from the sheet (August 1993),
-    to its 4 decimals, and is offered over the sheet's range alone; fused silica (Malitson's formula) reaches
-    248 nm, where lithography lenses work."""
+    to its 4 decimals, and is offered over OpticStudio's range for it, 334-2500 nm (920 nm, where COTS
+    near-infrared lenses work, included), refused below; fused silica (Malitson's formula) reaches 248 nm,
+    where lithography lenses work."""
     b270 = glass.resolve("B270")
     assert b270.name == "SCHOTT:B270"
     sheet = {435.83: 1.5341, 479.99: 1.5297, 486.13: 1.5292, 546.07: 1.5251, 587.56: 1.5230, 589.29: 1.5229,
@@ -177,8 +178,75 @@ def test_b270_and_fused_silica():
     silica = glass.resolve("SILICA")
     assert silica.name == "MISC:SILICA" and glass.resolve("FUSED-SILICA") is silica
     assert 1.5 < silica.index(248.0) < 1.52
-    with pytest.raises(SolasError, match="valid range"):
-        b270.index(400.0)
+    with pytest.raises(SolasError, match=r"wavelength 300 nm is outside glass SCHOTT:B270's valid range 334-2500 nm"):
+        b270.index(300.0)
+
+
+def test_b270_in_the_near_infrared_keeps_opticstudios_dispersion():
+    """Past the sheet, B270 is OpticStudio's formula (its SCHOTT catalogue: n² = Σ K λ^P over 334-2500 nm,
+    coefficients typed here) less a constant offset: the index difference between them is the same at
+    920, 1064 and 1550 nm as at the d line to 1e-6 (the constant K0 alone was fitted), and its dispersion
+    is a crown's: n falls with λ, below n_C."""
+    k = (2.286575, -8.7334582e-3, 1.1742884e-2, 2.9041756e-4, -1.2506695e-5, 9.2646253e-7)
+    def opticstudio(nm):
+        lam = nm / 1000.0
+        return np.sqrt(sum(c * lam ** p for c, p in zip(k, (0, 2, -2, -4, -6, -8))))
+    b270 = glass.resolve("B270")
+    # n² differs by the constant ΔK0, so n differs by ΔK0 / (n + n'): nearly constant, exactly so in n².
+    shift = b270.index(587.5618) ** 2 - opticstudio(587.5618) ** 2
+    for nm in (334.0, 920.0, 1064.0, 1550.0, 2500.0):
+        assert b270.index(nm) ** 2 - opticstudio(nm) ** 2 == pytest.approx(shift, abs=1e-12)
+    assert -3e-4 < shift < -2.5e-4  # the sheet lies about 1e-4 in n below OpticStudio's formula
+    assert b270.index(920.0) < b270.index(656.27) < b270.index(435.83)
+
+
+def test_obsolete_schott_glasses_answer_to_their_names_only_where_no_other_glass_does():
+    """OpticStudio's SCHOTT catalogue's obsolete glasses (LAK33, BAF3, F4, ...) load by name; a name that a
+    glass of the current catalogues also has keeps meaning that glass (CDGM's F4, with SCHOTT preferred
+    too, as before they were added), the obsolete one being reachable by its full key; a table's n_d / V_d
+    is never matched to one. Values typed from SCHOTT's catalogue of 2008 (n_d, V_d)."""
+    lak33 = glass.resolve("LAK33")
+    assert lak33.name == "SCHOTT:LAK33"
+    assert lak33.abbe() == pytest.approx((1.753977, 52.430467), abs=(1e-5))
+    assert glass._entries(None)["SCHOTT:LAK33"]["discontinued"].startswith("obsolete")
+    assert glass.candidates("F4") == ["CDGM:F4"]
+    assert glass.resolve("F4", prefer=("SCHOTT",)).name == "CDGM:F4"
+    assert glass.resolve("SCHOTT:F4").name == "SCHOTT:F4"
+    assert glass.resolve("BAF3").name == "HIKARI:BAF3"  # the same melt data as SCHOTT's obsolete BAF3
+    baf3 = glass.load_catalog()["SCHOTT:BAF3"]
+    assert "SCHOTT:BAF3" not in [m.key for m in glass.match(*baf3.abbe())]
+    assert glass.material_for(1.753977, 52.430467).startswith("model:")  # only LAK33 and N-LAK33 have these
+
+
+def test_table_matching_is_unchanged_by_the_obsolete_glasses(tmp_path):
+    """Every catalogue glass's stated (n_d, V_d) and every shipped lens written as a .dat table and read
+    back get the same material as from a catalogue without the `by_name` entries."""
+    from solas_mi.optics import pbrt_dat
+    from solas_mi.optics.lens import Lens
+    import tomllib
+    entries = glass._entries(None)
+    kept = {k: e for k, e in entries.items() if not e.get("by_name")}
+    assert len(entries) - len(kept) == 199
+    lines = ["[glass]"] + [f'"{k}" = {_inline(e)}' for k, e in kept.items()]
+    current = tmp_path / "current.toml"
+    current.write_text("\n".join(lines) + "\n", encoding="utf-8")
+    assert tomllib.loads(current.read_text(encoding="utf-8"))["glass"].keys() == kept.keys()
+    for key, g in glass.load_catalog().items():
+        if g.nd is not None and key in kept:
+            assert glass.material_for(g.nd, g.vd) == glass.material_for(g.nd, g.vd, catalog=str(current)), key
+    for name in ("cooke_triplet", "double_gauss_50mm", "nikkor_fisheye", "solas_doublet", "wide_angle_22mm"):
+        spec = pbrt_dat.read_spec(pbrt_dat.dumps(Lens.load(name)), name)
+        for row in spec["surface"]:
+            material = row.get("material", "AIR")
+            assert material.startswith(("model:", "AIR")) or material in kept, (name, material)
+
+
+def _inline(entry: dict) -> str:
+    """A catalogue entry as a TOML inline table."""
+    def value(v):
+        return "[" + ", ".join(value(x) for x in v) + "]" if isinstance(v, list) else (
+            '"' + v.replace('"', '\\"') + '"' if isinstance(v, str) else ("true" if v is True else repr(v)))
+    return "{" + ", ".join(f"{k} = {value(v)}" for k, v in entry.items()) + "}"
 
 
 def test_corning_7980_is_fused_silica():

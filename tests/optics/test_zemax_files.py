@@ -290,3 +290,51 @@ def test_every_plastic_and_moulded_glass_loads_by_its_zemax_name(tmp_path):
         n = glass.resolve(key).index(WL * 1000)
         efl = 1.0 / ((n - 1) * (1 / R1 - 1 / R2 + (n - 1) * T1 / (n * R1 * R2)))
         assert paraxial(lens, WL * 1000).efl_mm == pytest.approx(efl, rel=1e-12), key
+
+
+@pytest.mark.parametrize("header", ["", "GCAT SCHOTT\n", "GCAT SCHOTT CDGM\n"])
+def test_obsolete_schott_glass_loads_and_a_shared_name_keeps_its_current_glass(tmp_path, header):
+    """A file naming SCHOTT's obsolete LAK33 loads it (OpticStudio's SCHOTT catalogue carries it: n_d 1.753977,
+    V_d 52.430467, typed here); its EFL is the thick-lens formula's at that glass's index at 550 nm from
+    its Sellmeier coefficients, typed here. F4, which CDGM sells and SCHOTT made, stays CDGM's F4 whatever
+    GCAT says (as before SCHOTT's obsolete glasses were added), and the written file names the obsolete
+    glass so that it reads back the same."""
+    glas = "GLAS LAK33 0 0 1.753977 52.430467 0 0 0 0 0 0"
+    lens = load(tmp_path, zmx(header=header).replace("GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0", glas))
+    assert lens.surfaces[0].glass.name == "SCHOTT:LAK33"
+    l2 = WL ** 2
+    n = (1 + sum(b * l2 / (l2 - c) for b, c in [(1.45796869, 0.0068054528), (0.555403936, 0.0225253283),
+                                                 (1.19938794, 82.7543327)])) ** 0.5
+    efl = 1.0 / ((n - 1) * (1 / R1 - 1 / R2 + (n - 1) * T1 / (n * R1 * R2)))
+    assert paraxial(lens, WL * 1000).efl_mm == pytest.approx(efl, rel=1e-12)
+    assert Lens.load(lens.save(tmp_path / "again.zmx")).surfaces[0].glass.name == "SCHOTT:LAK33"
+    f4 = load(tmp_path, zmx(header=header).replace("GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0", "GLAS F4 0 0 1.62 36 0 0"))
+    assert f4.surfaces[0].glass.name == "CDGM:F4"
+
+
+def test_flat_stop_on_a_concave_face(tmp_path):
+    """Zemax's stop "on" a lens surface: a flat stop 7e-7 mm before a concave face (R −40 mm), whose sag
+    reaches 0.31 mm in front of the stop's plane at the stop's rim (r = 5 mm). The stop refracts nothing,
+    so a sequential trace checks each ray where its straight line crosses the plane, as OpticStudio does:
+    the lens loads, its EFL is the thick-lens formula's, and its real chief ray (through the stop centre,
+    the face's vertex to 7e-7 mm) lands where the hand trace of the same prescription puts it. The same
+    crossing stays refused where the stop plane refracts (glass after it) or where two faces cross."""
+    r1, r2, t = -40.0, -15.0, 8.0
+    efl = 1.0 / ((N - 1) * (1 / r1 - 1 / r2 + (N - 1) * t / (N * r1 * r2)))
+    bfd = efl * (1 - (N - 1) * t / (N * r1))
+    stop = "SURF 1\n  STOP\n  TYPE STANDARD\n  CURV 0.0\n  DISZ 7e-07\n  DIAM 5 0 0 0 1 \"\"\n"
+    text = zmx(aperture="ENPD 10", s2="DIAM 8 1").replace("SURF 2\n", "SURF 3\n").replace(
+        "SURF 1\n  STOP\n", stop + "SURF 2\n").replace(f"CURV {1 / R1!r}", f"CURV {1 / r1!r}").replace(
+        f"CURV {1 / R2!r}", f"CURV {1 / r2!r}").replace(f"DISZ {T1}", f"DISZ {t}").replace(
+        f"DISZ {BFD!r}", f"DISZ {bfd!r}").replace("DIAM 12 1", "DIAM 8 1")
+    lens = load(tmp_path, text)
+    assert [s.stop for s in lens.surfaces] == [True, False, False]
+    assert lens.surfaces[1].sag(5.0) < -0.3  # the face is in front of the stop's plane over its rim
+    assert paraxial(lens, WL * 1000).efl_mm == pytest.approx(efl, rel=1e-9)
+    chief = P.chief_rays(lens, [[0.0, 10.0]], [WL * 1000])
+    image = hand_trace(10.0, 0.0, surfaces=((1 / r1, t, N), (1 / r2, bfd, 1.0)))[1]
+    assert chief.image_xy[0, 1] == pytest.approx(image, rel=1e-6)
+    with pytest.raises(SolasError, match=r"surfaces 1 \(SURF 1\) and 2 \(SURF 2\) cross"):
+        load(tmp_path, text.replace("  DISZ 7e-07\n", "  DISZ 7e-07\n  GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0\n"))
+    with pytest.raises(SolasError, match=r"surfaces 1 \(SURF 1\) and 2 \(SURF 2\) cross"):
+        load(tmp_path, text.replace("  CURV 0.0\n  DISZ 7e-07", f"  CURV {1 / 200!r}\n  DISZ 7e-07"))
