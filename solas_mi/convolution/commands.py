@@ -64,7 +64,10 @@ def register(subparsers: Any) -> None:
                     "R, G, B use the grid's wavelengths longest first (656, 531, 486 nm); a one-wavelength grid "
                     "serves every channel. PSFs are resampled to the pixel pitch exactly (PSF samples and "
                     "pixel areas integrated), centred on each wavelength's real chief ray (distortion and "
-                    "lateral colour are kept). Writes linear OpenEXR and an sRGB PNG beside it.")
+                    "lateral colour are kept). Writes linear OpenEXR and an sRGB PNG beside it. One frame with its "
+                    "intrinsics and a lens to scale to them (--scale-lens): `solas-mi batch degrade FRAME --lens "
+                    "LENS --intrinsics FX,FY,CX,CY --scale-lens PIXEL_UM -o DIR`, a batch of one that computes "
+                    "the scaled lens's grid.")
     p.add_argument("image", help="PNG/JPEG (sRGB, decoded unless --linear) or EXR (linear)")
     p.add_argument("--psf-grid", required=True, metavar="GRID.exr", help="PSF grid written by `solas-mi psf-grid`")
     p.add_argument("--method", choices=list(METHODS), default=DEFAULT_METHOD,

@@ -429,3 +429,27 @@ def test_16_bit_png_output(batch_inputs):
         [ch[c] for c in "RGB"], axis=-1)))
     assert main(["batch", "degrade", *base, "-o", str(out), "--format", "png16"]) == 0  # finished: skipped
     assert manifest(out)["summary"] == {"skipped": 2}
+
+
+def test_one_frame_with_its_intrinsics_and_a_scaled_lens_is_a_batch_of_one(batch_inputs, doublet, capsys):
+    """`degrade` takes a computed grid; the path it names for one frame and a lens scaled to the frame's
+    intrinsics (`batch degrade FRAME --lens … --intrinsics … --scale-lens …`) takes a single file and writes
+    that frame's output with the scaling stated."""
+    from solas_mi.imageio import read_exr
+
+    with pytest.raises(SystemExit):
+        main(["degrade", "--help"])
+    helptext = " ".join(capsys.readouterr().out.split())
+    assert "solas-mi batch degrade FRAME --lens LENS --intrinsics FX,FY,CX,CY --scale-lens PIXEL_UM" in helptext
+    frame = batch_inputs.write(1)[0]
+    fx = 32 / np.tan(np.radians(1.5))
+    out = batch_inputs.root / "one"
+    argv = ["batch", "degrade", str(frame), "--lens", "solas-doublet", "--intrinsics", f"{fx},{fx},31.5,23.5",
+            "--scale-lens", "5", "--grid", "3x3", "--size", "32", "--psf-method", "geometric", "--rays", "32",
+            "--pitch-um", "0.5", "--cache", str(batch_inputs.root / "cache"), "--workers", "1", "--quiet", "-o", str(out)]
+    assert main(argv) == 0, capsys.readouterr().err
+    channels, meta = read_exr(out / "frame000.exr")
+    assert all(c.shape == (48, 64) and np.isfinite(c).all() for c in channels.values())
+    assert meta["batch"]["lens_scale"]["pixel_um"] == 5.0
+    assert meta["batch"]["lens_scale"]["factor"] == pytest.approx(fx * 5e-3 / 99.499, rel=1e-4)
+    assert sorted(p.name for p in out.iterdir() if p.suffix in (".exr", ".png")) == ["frame000.exr", "frame000.png"]
