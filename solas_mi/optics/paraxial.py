@@ -149,6 +149,10 @@ def _pupils(lens: Lens, wavelength_nm: float, ya: np.ndarray, yb: np.ndarray
     s = lens.stop_index
     last = len(lens.surfaces) - 1
     r_stop = lens.surfaces[s].semi_diameter
+    if ya[s] == 0:  # rays parallel to the axis all cross the stop's centre
+        raise SolasError(f"lens {lens.name}: the stop (surface {s + 1}) lies in the rear focal plane of the surfaces "
+                         f"before it at {wavelength_nm:g} nm, so the entrance pupil is at infinity (telecentric in "
+                         "object space), which the ray aiming does not model; move the stop")
     # Entrance pupil: the object-space chief ray (slope 1) crosses the axis where y_stop = 0.
     y1_chief = -yb[s] / ya[s]  # height at surface 1 of the slope-1 ray through the stop centre
     ep_z = z[0] - y1_chief  # y(z) = y1 + (z − z1) = 0

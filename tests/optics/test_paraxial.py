@@ -105,3 +105,19 @@ def test_exit_pupil_f_number_of_a_lens_telecentric_in_image_space():
     plain = (near.image_z_mm - near.exit_pupil_z_mm) / near.exit_pupil_diameter_mm
     assert abs(near.exit_pupil_z_mm) > 1e6 and plain == pytest.approx(10.0, rel=1e-6)
     assert near.exit_pupil_f_number == pytest.approx(plain, rel=1e-9)
+
+
+def test_a_lens_telecentric_in_object_space_is_refused_saying_so():
+    """The stop in the rear focal plane (98 mm behind the plano-convex lens above) puts the entrance pupil
+    at infinity: the pupil and ray aiming divided by zero and the lens was refused as imaging no field."""
+    from solas_mi import Lens
+    from solas_mi.errors import SolasError
+
+    lens = Lens.from_dict({"surface": [
+        {"radius": 50.0, "thickness": 3.0, "diameter": 30.0, "material": "model:1.5"},
+        {"radius": 0.0, "thickness": 98.0, "diameter": 30.0, "material": "AIR"},
+        {"radius": 0.0, "thickness": 60.0, "diameter": 4.0, "material": "AIR", "stop": True}],
+        "object": {"distance": 300.0}})
+    with pytest.raises(SolasError, match=r"stop \(surface 3\) lies in the rear focal plane .* entrance pupil is at "
+                                         r"infinity \(telecentric in object space\)"):
+        paraxial(lens, 587.5618)
