@@ -143,7 +143,7 @@ def _pupils(lens: Lens, wavelength_nm: float, ya: np.ndarray, yb: np.ndarray
     image plane, (image z − exit pupil z) / exit pupil diameter, from the heights of the base rays
     a = (y=1, u=0) and b = (y=0, u=1) at surface 1. The f-number is written with the slope u_c of the
     chief ray leaving the last surface, sign(u_c)·(y_c + u_c·t)/(2|y_r u_c − u_r y_c|) (t: last surface
-    to image, r the stop's rim ray), which stays finite where the exit pupil is at infinity (a lens
+    to image, r the stop's rim ray; the denominator by the Lagrange invariant, exact), which stays finite where the exit pupil is at infinity (a lens
     telecentric in image space: −1/(2 u_r), where the ratio of its two infinities read NaN)."""
     z = lens.vertex_z
     s = lens.stop_index
@@ -167,7 +167,8 @@ def _pupils(lens: Lens, wavelength_nm: float, ya: np.ndarray, yb: np.ndarray
     with np.errstate(divide="ignore"):  # an exit pupil at infinity (uc = 0): z and radius infinite, said so
         xp_z = z[last] - yc / uc if uc != 0 else -math.inf * np.sign(yc)
         xp_radius = abs(yr + ur * (xp_z - z[last])) if uc != 0 else math.inf
-    f_number = math.copysign(1.0, uc) * (yc + uc * (lens.image_z - z[last])) / (2.0 * abs(yr * uc - ur * yc))
+    n = lens.indices(wavelength_nm)  # n·(y_r u_c − u_r y_c) is the Lagrange invariant: n_stop·r_stop at the stop
+    f_number = math.copysign(1.0, uc) * (yc + uc * (lens.image_z - z[last])) * n[last + 1] / (2.0 * r_stop * n[s + 1])
     return ep_z, ep_radius, xp_z, xp_radius, f_number
 
 
