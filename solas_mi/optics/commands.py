@@ -61,7 +61,9 @@ def run_lens_info(args) -> int:
         for row in zip(table.field_deg, table.image_height_mm, table.rectilinear_height_mm, table.distortion_percent,
                        table.relative_illumination):
             rect, percent = ("-", "-") if row[2] is None else (f"{row[2]:.6f}", f"{row[3]:.4f}")
-            print(f"{row[0]:12.3f}{row[1]:14.6f}{rect:>16s}{percent:>14s}{row[4]:13.4f}")
+            print(f"{row[0]:12.3f}{row[1]:14.6f}{rect:>16s}{percent:>14s}{'-' if row[4] is None else f'{row[4]:.4f}':>13s}")
+        if table.illumination_note:
+            print(f"rel. illum. '-': {table.illumination_note}")
         print("projection fits (focal mm, RMS residual mm): " + ", ".join(
             f"{k} {f:.4f} / {r:.2e}" if f is not None else f"{k} undefined beyond 90 deg"
             for k, (f, r) in table.projection_fits.items()))

@@ -58,9 +58,10 @@ class Distortion:
     image_height_mm: list[float]  # real chief ray
     rectilinear_height_mm: list[float | None]  # EFL · tanθ (None from 90°)
     distortion_percent: list[float | None]  # (h − EFL tanθ) / (EFL tanθ) · 100; 0 on the axis, None from 90°
-    relative_illumination: list[float]  # E(θ)/E(0)
+    relative_illumination: list[float | None]  # E(θ)/E(0); None where undefined (illumination_note says why)
     projection: str  # the closest projection
     projection_fits: dict[str, list[float | None]]  # name → [focal length mm, RMS residual mm]; None: undefined
+    illumination_note: str = ""  # why relative_illumination is None, if it is
 
     def as_dict(self) -> dict:
         return asdict(self)
@@ -84,7 +85,12 @@ def distortion(lens: Lens, field_deg=None, wavelength_nm: float | None = None, s
     efl = paraxial(lens, wl).efl_mm
     rect = [efl * math.tan(math.radians(abs(a))) if abs(a) < 90 else None for a in angles]
     percent = [None if r is None else (hi - r) / r * 100.0 if r > 0 else 0.0 for hi, r in zip(h, rect)]
-    ri = relative_illumination(lens, fields, wl)
+    try:
+        ri = relative_illumination(lens, fields, wl).tolist()
+    except SolasError as exc:  # the table is still whole; the column says why it is empty
+        ri, note = [None] * len(angles), str(exc)
+    else:
+        note = ""
     fits = fit_projections(np.abs(angles), h)
-    return Distortion(wl, angles.tolist(), h.tolist(), rect, percent, ri.tolist(), closest_projection(fits),
-                      {k: [x if math.isfinite(x) else None for x in v] for k, v in fits.items()})
+    return Distortion(wl, angles.tolist(), h.tolist(), rect, percent, ri, closest_projection(fits),
+                      {k: [x if math.isfinite(x) else None for x in v] for k, v in fits.items()}, note)

@@ -61,21 +61,52 @@ def irradiance(lens: Lens, image_xy: np.ndarray, wavelength_nm: float, samples: 
 
 
 COARSE = 128  # points per side of the grid that finds where an image point's rays leave the lens
+FEW = 16  # passing points of the coarse grid below which it is laid again, finer, over what they found
 
 
 def _lit_box(lens: Lens, rev: Lens, x: float, y: float, wavelength_nm: float):
     """(u0, u1, v0, v1) (mm) on the last vertex plane holding the rays from image point (x, y) that
-    leave the lens, widened by a coarse cell each side; None where none does."""
-    from .exit_pupil import exit_reach, passes
+    leave the lens, widened by a coarse cell each side; None where none does. A beam whose footprint
+    there is far smaller than a coarse cell (an image plane just behind the last surface, far from
+    focus: COTS-0002-01's, 0.2 mm behind it, is lit through a disc of 0.02 mm in a 6 mm square) is
+    found again on a second grid: over the first one's few points or, where it found none, over the
+    paraxial beam's footprint (the cone from the image point to the exit pupil) widened threefold."""
+    from .exit_pupil import exit_reach
 
     reach = exit_reach(lens, math.hypot(x, y))
-    step = 2.0 * reach / COARSE
-    g = -reach + (np.arange(COARSE) + 0.5) * step
-    ex, ey = (a.ravel() for a in np.meshgrid(g, g))
+    box = (-reach, reach, -reach, reach)
+    found = _coarse_hits(rev, x, y, box, wavelength_nm)
+    if found is None or found[1] < FEW:
+        fine = _footprint_box(lens, x, y, wavelength_nm) if found is None else found[0]
+        found = _coarse_hits(rev, x, y, fine, wavelength_nm) or found
+    return None if found is None else found[0]
+
+
+def _coarse_hits(rev: Lens, x: float, y: float, box, wavelength_nm: float):
+    """(the box of the passing points of a COARSE² grid over `box`, widened by a cell each side, their
+    count), or None where none passes."""
+    from .exit_pupil import passes
+
+    u0, u1, v0, v1 = box
+    du, dv = (u1 - u0) / COARSE, (v1 - v0) / COARSE
+    ex, ey = (a.ravel() for a in np.meshgrid(u0 + (np.arange(COARSE) + 0.5) * du, v0 + (np.arange(COARSE) + 0.5) * dv))
     ok = passes(rev, x, y, ex, ey, wavelength_nm)
     if not ok.any():
         return None
-    return ex[ok].min() - step, ex[ok].max() + step, ey[ok].min() - step, ey[ok].max() + step
+    return (ex[ok].min() - du, ex[ok].max() + du, ey[ok].min() - dv, ey[ok].max() + dv), int(ok.sum())
+
+
+def _footprint_box(lens: Lens, x: float, y: float, wavelength_nm: float):
+    """A square (mm) on the last vertex plane, thickness dz above image point (x, y), three times the
+    paraxial beam's footprint there: the cone to the exit pupil (z_p, half width dz / 2N, N its f-number
+    from the image plane) centred on (x, y)·(1 + dz / (z_p − z_image))."""
+    px = paraxial(lens, wavelength_nm)
+    dz = lens.surfaces[-1].thickness
+    to_pupil = px.exit_pupil_z_mm - px.image_z_mm
+    scale = 1.0 + dz / to_pupil if math.isfinite(to_pupil) and to_pupil != 0 else 1.0
+    f_number = abs(px.exit_pupil_f_number)
+    half = 3.0 * dz / (2.0 * f_number if math.isfinite(f_number) and f_number > 0 else 1.0) + 1e-9
+    return x * scale - half, x * scale + half, y * scale - half, y * scale + half
 
 
 def _projected_solid_angle(rev: Lens, x: float, y: float, box, dz: float, samples: int, wavelength_nm: float
@@ -122,7 +153,16 @@ def relative_illumination(lens: Lens, field_deg: np.ndarray, wavelength_nm: floa
         return chief_ray_illumination(lens, field_deg, wavelength_nm, pupil_samples)
     fields = np.vstack([np.zeros((1, 2)), field_deg])
     e = irradiance(lens, chief_rays(lens, fields, np.full(len(fields), wavelength_nm)).image_xy, wavelength_nm)
+    _check_axis_lit(lens, e[0], wavelength_nm)
     return e[1:] / e[0]
+
+
+def _check_axis_lit(lens: Lens, axis: float, wavelength_nm: float) -> None:
+    """E(θ)/E(0) is undefined where no light reaches the image's centre (an obscured axis)."""
+    if not axis > 0:
+        raise SolasError(f"lens {lens.name}: no light reaches the centre of the image at {wavelength_nm:g} nm "
+                         "(every ray toward it is stopped by an aperture), so the relative illumination "
+                         "E(θ)/E(0) is undefined")
 
 
 def chief_ray_illumination(lens: Lens, field_deg: np.ndarray, wavelength_nm: float, pupil_samples: int = 128
@@ -137,6 +177,7 @@ def chief_ray_illumination(lens: Lens, field_deg: np.ndarray, wavelength_nm: flo
     lens.check_wavelength(wavelength_nm)
     fields = np.vstack([np.zeros((1, 2)), field_deg])
     transmission = pupil_function(lens, fields, np.full(len(fields), wavelength_nm), pupil_samples).transmission
+    _check_axis_lit(lens, transmission[0], wavelength_nm)
     if lens.field_type.sideways:  # fields to 90° and beyond: per solid angle, sinθ dθ dφ onto h dh dφ
         scale = _polar_scale(lens, fields, wavelength_nm)
         return transmission[1:] / transmission[0] * scale[0] / scale[1:]

@@ -30,6 +30,7 @@ from .formats import READERS, WRITERS, decode_text, listed
 from .fields import FieldType, field_type_for
 
 LENS_DIR = "lenses"
+_VIRTUAL = ": the image plane lies before the last surface, a virtual image (a diverging lens's focus) that no film records"
 # What a lens file may hold (anything else is a mistake worth naming, e.g. a surface type we do not model)
 KEYS = {
     "lens": ("name", "description", "wavelengths_nm", "field_deg", "catalogues", "materials", "surface", "object",
@@ -316,15 +317,14 @@ class Lens:
             if s.conic != 0 and (1.0 + s.conic) * (s.curvature * s.semi_diameter) ** 2 >= 1.0:
                 raise SolasError(f"{ident}: conic {s.conic:g} with radius {s.radius:g} mm closes before the clear "
                                  f"semi-diameter {s.semi_diameter:g} mm; the conic cannot hold that aperture")
-            if s.thickness < 0:
+            if s.thickness < 0 and i < len(self.surfaces):
                 raise SolasError(f"{ident}: thickness {s.thickness:g} mm is negative; thicknesses must be >= 0")
             if s.glass is not glass_mod.AIR and s.thickness == 0:
                 raise SolasError(f"{ident}: thickness 0 mm inside glass {s.material}; glass needs a positive thickness")
         self.field_type.check_lens(self, where)
         last = self.surfaces[-1]
         if last.thickness <= 0:
-            raise SolasError(f"{where}: surface {len(self.surfaces)} ({last.label}): distance to the image "
-                             f"{last.thickness:g} mm must be positive")
+            raise SolasError(f"{where}: surface {len(self.surfaces)} ({last.label}): distance to the image {last.thickness:g} mm must be positive" + _VIRTUAL * (last.thickness < 0))
         # A flat stop in air refracts nothing: the sequential trace checks each ray where its line crosses the
         # plane, even inside a neighbouring face's sag (Zemax's stop "on" a lens surface), as OpticStudio does.
         media = (self.object_glass, *(s.glass for s in self.surfaces))

@@ -108,7 +108,7 @@ def _paraxial(lens: Lens, wavelength_nm: float, fields_deg: list[float] | None =
     ya, ua = ynu_trace(lens, wavelength_nm, 1.0, 0.0)
     yb, ub = ynu_trace(lens, wavelength_nm, 0.0, 1.0)
     efl = -1.0 / (n[-1] * ua[-1]) if ua[-1] != 0 else math.inf  # 1/power: n'u' = −y1·power
-    ep_z, ep_radius, xp_z, xp_radius = _pupils(lens, wavelength_nm, ya, yb)
+    ep_z, ep_radius, xp_z, xp_radius, xp_f_number = _pupils(lens, wavelength_nm, ya, yb)
     ym, um, obj_z = _marginal_ray(lens, wavelength_nm, ya, ua)
     focus_z = z[last] - ym[last] / um[last]
     refracting = [k for k in range(last + 1) if n[k + 1] != n[k]]
@@ -131,31 +131,45 @@ def _paraxial(lens: Lens, wavelength_nm: float, fields_deg: list[float] | None =
         exit_pupil_diameter_mm=float(2.0 * xp_radius),
         f_number=float(efl / epd),
         working_f_number=float(1.0 / (2.0 * n[-1] * abs(um[last]))),
-        exit_pupil_f_number=float((image_z - xp_z) / (2.0 * xp_radius)),
+        exit_pupil_f_number=float(xp_f_number),
         fields_deg=tuple(float(f) for f in fields),
         chief_ray_image_height_mm=tuple(heights),
     )
 
 
-def _pupils(lens: Lens, wavelength_nm: float, ya: np.ndarray, yb: np.ndarray) -> tuple[float, float, float, float]:
-    """Entrance pupil z and radius, exit pupil z and radius (mm), from the heights of the base rays
-    a = (y=1, u=0) and b = (y=0, u=1) at surface 1."""
+def _pupils(lens: Lens, wavelength_nm: float, ya: np.ndarray, yb: np.ndarray
+            ) -> tuple[float, float, float, float, float]:
+    """Entrance pupil z and radius, exit pupil z and radius (mm), and the exit pupil's f-number from the
+    image plane, (image z − exit pupil z) / exit pupil diameter, from the heights of the base rays
+    a = (y=1, u=0) and b = (y=0, u=1) at surface 1. The f-number is written with the slope u_c of the
+    chief ray leaving the last surface, sign(u_c)·(y_c + u_c·t)/(2|y_r u_c − u_r y_c|) (t: last surface
+    to image, r the stop's rim ray; the denominator by the Lagrange invariant, exact), which stays finite where the exit pupil is at infinity (a lens
+    telecentric in image space: −1/(2 u_r), where the ratio of its two infinities read NaN)."""
     z = lens.vertex_z
     s = lens.stop_index
     last = len(lens.surfaces) - 1
     r_stop = lens.surfaces[s].semi_diameter
+    if ya[s] == 0:  # rays parallel to the axis all cross the stop's centre
+        raise SolasError(f"lens {lens.name}: the stop (surface {s + 1}) lies in the rear focal plane of the surfaces "
+                         f"before it at {wavelength_nm:g} nm, so the entrance pupil is at infinity (telecentric in "
+                         "object space), which the ray aiming does not model; move the stop")
     # Entrance pupil: the object-space chief ray (slope 1) crosses the axis where y_stop = 0.
     y1_chief = -yb[s] / ya[s]  # height at surface 1 of the slope-1 ray through the stop centre
     ep_z = z[0] - y1_chief  # y(z) = y1 + (z − z1) = 0
     ep_radius = r_stop / abs(ya[s])  # parallel rays: height at the pupil equals height at surface 1
     # Exit pupil: the image of the stop by the surfaces after it.
     if s == last:
-        return ep_z, ep_radius, z[s], r_stop
+        return ep_z, ep_radius, z[s], r_stop, (lens.image_z - z[s]) / (2.0 * r_stop)
     # chief ray leaves the stop centre with slope 1; rim ray leaves the stop edge with slope 0
     yc, uc = _from_stop(lens, wavelength_nm, 0.0, 1.0)
     yr, ur = _from_stop(lens, wavelength_nm, r_stop, 0.0)
-    xp_z = z[last] - yc[last] / uc[last]
-    return ep_z, ep_radius, xp_z, abs(yr[last] + ur[last] * (xp_z - z[last]))
+    yc, uc, yr, ur = yc[last], uc[last], yr[last], ur[last]
+    with np.errstate(divide="ignore"):  # an exit pupil at infinity (uc = 0): z and radius infinite, said so
+        xp_z = z[last] - yc / uc if uc != 0 else -math.inf * np.sign(yc)
+        xp_radius = abs(yr + ur * (xp_z - z[last])) if uc != 0 else math.inf
+    n = lens.indices(wavelength_nm)  # n·(y_r u_c − u_r y_c) is the Lagrange invariant: n_stop·r_stop at the stop
+    f_number = math.copysign(1.0, uc) * (yc + uc * (lens.image_z - z[last])) * n[last + 1] / (2.0 * r_stop * n[s + 1])
+    return ep_z, ep_radius, xp_z, xp_radius, f_number
 
 
 def _marginal_ray(lens: Lens, wavelength_nm: float, ya: np.ndarray, ua: np.ndarray

@@ -37,8 +37,9 @@ def solve(spec: dict, aperture: tuple[str, float], fields: tuple[str, list[float
     auto = [i for i, r in enumerate(rows) if r["diameter"] is None]
     stop = next((i for i, r in enumerate(rows) if r.get("stop")), None)
     if aperture[0] == "float" and stop is not None and rows[stop]["diameter"] is None:
-        raise SolasError(f"{where}: the aperture floats on the stop (surface {stop + 1}), which has no "
-                         "diameter: give its DIAM or a system aperture (ENPD, FNUM)")
+        raise SolasError(f"{where}: the system aperture floats by stop size (FLOA) on the stop, surface {stop + 1} "
+                         f"({rows[stop].get('label', '')}), which has no DIAM: the beam's size is then "
+                         "undefined; give the stop's DIAM or a system aperture (ENPD, FNUM)")
     if not auto and aperture[0] == "float" and fields[0] == "angle":
         spec["field_deg"] = max(fields[1], default=0.0)
         return spec

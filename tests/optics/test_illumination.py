@@ -96,3 +96,41 @@ def test_relative_illumination_of_a_ball_lens_is_the_sky_s():
     ri = relative_illumination(lens, fields, w)
     assert ri == pytest.approx(sky[1:] / sky[0], rel=0.08)
     assert np.all(np.abs(chief_ray_illumination(lens, fields, w) / (sky[1:] / sky[0]) - 1) > 0.3)
+
+
+def test_image_plane_just_behind_the_last_surface():
+    """tests/data/window_near_image.toml: the beam toward an image point 0.2 mm behind the window
+    crosses its vertex plane through a disc of ≈ 0.02 mm, which the 128² search grid over the
+    window's 12 mm missed: E(0) was 0 and every relative illumination NaN (COTS-0002-01 in `lens
+    info`). E(0) against the paraxial cone to the exit pupil, π sin²u' (the axis point, inside the
+    defocused beam, sees the whole exit pupil); off axis against the chief-ray form."""
+    import math
+    from pathlib import Path
+
+    from solas_mi.optics.illumination import axis_irradiance
+    from solas_mi.optics.paraxial import paraxial
+
+    lens = Lens.load(str(Path(__file__).parents[1] / "data" / "window_near_image.toml"))
+    w = lens.primary_wavelength
+    p = paraxial(lens, w)
+    u = math.atan(0.5 * p.exit_pupil_diameter_mm / (p.image_z_mm - p.exit_pupil_z_mm))
+    assert axis_irradiance(lens, w) == pytest.approx(math.pi * math.sin(u) ** 2, rel=5e-3)
+    fields = np.array([[0.0, 1.5], [0.0, 3.0]])
+    ri = relative_illumination(lens, fields, w)
+    assert np.all(np.isfinite(ri))
+    assert ri == pytest.approx(chief_ray_illumination(lens, fields, w), rel=1e-3)
+
+
+def test_relative_illumination_of_an_unlit_axis_is_refused():
+    """E(θ)/E(0) with no light at the centre is no number: an error saying so, never a NaN."""
+    from solas_mi.errors import SolasError
+    from solas_mi.optics import illumination
+
+    lens = Lens.load("solas-doublet")
+    real = illumination.irradiance
+    try:
+        illumination.irradiance = lambda *a, **k: np.zeros(len(np.atleast_2d(a[1])))
+        with pytest.raises(SolasError, match="undefined"):
+            relative_illumination(lens, np.array([[0.0, 1.0]]), lens.primary_wavelength)
+    finally:
+        illumination.irradiance = real

@@ -1,4 +1,5 @@
 """`solas-mi lens info` (optics.commands)."""
+import numpy as np
 import pytest
 
 # DESIGN.md: facts about the SOLAS doublet that independent tools agree on.
@@ -88,3 +89,20 @@ def test_lens_info_of_a_lens_without_field_shows_the_axis_once(tmp_path, capsys)
     assert main(["lens", "info", str(path), "--fields=-0,5,5"]) == 0
     out = capsys.readouterr().out
     assert "-0 deg" not in out and out.count("chief ray y at 5 deg, real") == 2
+
+
+def test_lens_info_says_why_the_illumination_is_undefined(monkeypatch, capsys):
+    """Where no light reaches the image's centre E(θ)/E(0) is no number: the table shows '-' and the
+    reason (it printed NaN), the JSON holds null, and the rest of the table stays."""
+    import json
+
+    from solas_mi.cli import main
+    from solas_mi.optics import illumination
+
+    monkeypatch.setattr(illumination, "irradiance", lambda lens, xy, *a, **k: np.zeros(len(np.atleast_2d(xy))))
+    assert main(["lens", "info", "solas-doublet"]) == 0
+    out = capsys.readouterr().out
+    assert "nan" not in out.lower() and "rel. illum. '-': lens solas-doublet: no light reaches the centre" in out
+    assert main(["lens", "info", "solas-doublet", "--json"]) == 0
+    table = json.loads(capsys.readouterr().out)["distortion"]
+    assert table["relative_illumination"] == [None] * len(table["field_deg"]) and table["image_height_mm"][-1] > 0

@@ -84,3 +84,40 @@ def test_far_finite_object_approaches_infinity(doublet_spec):
     # same intensity; a collimated beam of the same irradiance does not lose it
     cos2 = np.cos(np.radians([0.0, 2.0])) ** 2
     assert t_far == pytest.approx(t_inf * cos2, rel=2e-4)
+
+
+def test_exit_pupil_f_number_of_a_lens_telecentric_in_image_space():
+    """The stop in the front focal plane of a plano-convex lens (f = R/(n − 1) = 100 mm, its principal
+    plane on the curved vertex) puts the exit pupil at infinity: (image − pupil)/D was ∞/∞, NaN in `lens
+    info`. The beam toward the image then has slope r_stop/f, f-number f/(2 r_stop) = 10; and a stop 1 µm
+    nearer, whose pupil is at a finite distance, gives the same in the plain ratio."""
+    from solas_mi import Lens
+
+    def lens(stop_gap):
+        return Lens.from_dict({"surface": [
+            {"radius": 0.0, "thickness": stop_gap, "diameter": 10.0, "material": "AIR", "stop": True},
+            {"radius": 50.0, "thickness": 3.0, "diameter": 20.0, "material": "model:1.5"},
+            {"radius": 0.0, "thickness": 100.0, "diameter": 20.0, "material": "AIR"}]})
+
+    p = paraxial(lens(100.0), 587.5618)
+    assert p.exit_pupil_f_number == pytest.approx(10.0, rel=1e-12)
+    near = paraxial(lens(100.0 - 1e-3), 587.5618)
+    plain = (near.image_z_mm - near.exit_pupil_z_mm) / near.exit_pupil_diameter_mm
+    assert abs(near.exit_pupil_z_mm) > 1e6 and plain == pytest.approx(10.0, rel=1e-6)
+    assert near.exit_pupil_f_number == pytest.approx(plain, rel=1e-9)
+
+
+def test_a_lens_telecentric_in_object_space_is_refused_saying_so():
+    """The stop in the rear focal plane (98 mm behind the plano-convex lens above) puts the entrance pupil
+    at infinity: the pupil and ray aiming divided by zero and the lens was refused as imaging no field."""
+    from solas_mi import Lens
+    from solas_mi.errors import SolasError
+
+    lens = Lens.from_dict({"surface": [
+        {"radius": 50.0, "thickness": 3.0, "diameter": 30.0, "material": "model:1.5"},
+        {"radius": 0.0, "thickness": 98.0, "diameter": 30.0, "material": "AIR"},
+        {"radius": 0.0, "thickness": 60.0, "diameter": 4.0, "material": "AIR", "stop": True}],
+        "object": {"distance": 300.0}})
+    with pytest.raises(SolasError, match=r"stop \(surface 3\) lies in the rear focal plane .* entrance pupil is at "
+                                         r"infinity \(telecentric in object space\)"):
+        paraxial(lens, 587.5618)

@@ -24,7 +24,7 @@ def test_pupils_of_a_stop_on_surface_1_are_the_stop():
     w = lens.primary_wavelength
     ya, _ = ynu_trace(lens, w, 1.0, 0.0)
     yb, _ = ynu_trace(lens, w, 0.0, 1.0)
-    ep_z, ep_radius, _, _ = _pupils(lens, w, ya, yb)
+    ep_z, ep_radius, _, _, _ = _pupils(lens, w, ya, yb)
     assert ep_z == 0.0 and ep_radius == 10.0
 
 
@@ -33,8 +33,9 @@ def test_pupils_of_a_last_stop_are_its_exit_pupil():
     w = lens.primary_wavelength
     ya, _ = ynu_trace(lens, w, 1.0, 0.0)
     yb, _ = ynu_trace(lens, w, 0.0, 1.0)
-    _, _, xp_z, xp_radius = _pupils(lens, w, ya, yb)
+    _, _, xp_z, xp_radius, xp_f_number = _pupils(lens, w, ya, yb)
     assert xp_z == lens.vertex_z[-1] and xp_radius == 5.0
+    assert xp_f_number == (lens.image_z - xp_z) / 10.0
 
 
 @pytest.mark.parametrize("distance", ["infinity", 400.0])

@@ -338,3 +338,22 @@ def test_flat_stop_on_a_concave_face(tmp_path):
         load(tmp_path, text.replace("  DISZ 7e-07\n", "  DISZ 7e-07\n  GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0\n"))
     with pytest.raises(SolasError, match=r"surfaces 1 \(SURF 1\) and 2 \(SURF 2\) cross"):
         load(tmp_path, text.replace("  CURV 0.0\n  DISZ 7e-07", f"  CURV {1 / 200!r}\n  DISZ 7e-07"))
+
+
+def test_image_plane_before_the_last_surface(tmp_path):
+    """A negative distance to the image (a diverging singlet's file, its image plane on the virtual focus
+    6.56 mm before its back face: OpticStudio traces rays backwards to it) is a virtual image: refused
+    with that reason, not as a negative air gap."""
+    with pytest.raises(SolasError, match=r"surface 2 \(SURF 2\): distance to the image -5 mm must be positive: "
+                                         r"the image plane lies before the last surface, a virtual image"):
+        load(tmp_path, zmx().replace(f"DISZ {BFD!r}", "DISZ -5.0"))
+
+
+def test_float_by_stop_size_on_a_stop_without_diameter(tmp_path):
+    """FLOA takes the beam's size from the stop's DIAM: a stop without one leaves it undefined (ef35mm_f2.0
+    of a public corpus): refused naming FLOA and the stop; the same stop under ENPD loads, its size the
+    system aperture's (20 mm: the stop is the first surface)."""
+    with pytest.raises(SolasError, match=r"floats by stop size \(FLOA\) on the stop, surface 1 \(SURF 1\), which "
+                                         r"has no DIAM"):
+        load(tmp_path, zmx(aperture="FLOA", s1=""))
+    assert load(tmp_path, zmx(s1="")).surfaces[0].diameter == pytest.approx(20.0)
