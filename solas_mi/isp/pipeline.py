@@ -51,7 +51,8 @@ class ISP:
     def __post_init__(self):
         if not isinstance(self.black_level, bool):
             raise SolasError(f"isp black_level {self.black_level!r} must be true or false")
-        if isinstance(self.white_balance, str) and self.white_balance not in white.METHODS[:3] + white.METHODS[4:]:
+        named = tuple(m for m in white.METHODS if m != "given")  # "given" is written as a table of gains
+        if isinstance(self.white_balance, str) and self.white_balance not in named:
             raise SolasError(f"isp white_balance {self.white_balance!r} must be one of daylight, grey-world, "
                              "grey-card, none, or a table of gains per filter")
         if (self.white_balance == "grey-card") != (self.grey_card is not None):
