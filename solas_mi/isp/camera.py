@@ -14,7 +14,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import SolasError
-from ..sensor.capture import MAX_SEED
+from ..sensor.capture import check_seed
 from ..sensor.model import SensorModel
 from .pipeline import ISP
 
@@ -37,8 +37,7 @@ class Camera:
             raise SolasError(f"exposure {self.exposure_ms!r} ms must be a finite number > 0")
         if self.isp is not None and not isinstance(self.isp, ISP):
             raise SolasError(f"camera isp {self.isp!r} must be a solas_mi.isp.pipeline.ISP or None")
-        if isinstance(self.seed, bool) or not isinstance(self.seed, int) or not 0 <= self.seed <= MAX_SEED:
-            raise SolasError(f"sensor seed {self.seed!r} must be a whole number from 0 to 2^31 - 1")
+        check_seed(self.seed)
 
     def describe(self) -> dict:
         """Every value (JSON-ready): for metadata, manifests and the batch's identity."""

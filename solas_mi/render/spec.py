@@ -16,7 +16,7 @@ from ..errors import SolasError
 from ..optics.camera import BOUNDARIES, MAPPINGS
 from ..options import parse_wxh
 from .labels import LABELS, parse_labels
-from .mitsuba import VARIANTS, check_name
+from .mitsuba import MAX_SEED, VARIANTS, check_name
 
 FRESNEL_MODES = ("transmit", "sample", "off")  # sellmeier_dielectric's `fresnel` (it reads them from here)
 AUTO_MIN_RINGS = 32  # the fewest rings the automatic count (`render.mesh.mesh_rings`) gives; denser meshes render slower
@@ -25,7 +25,6 @@ AUTO_MIN_RINGS = 32  # the fewest rings the automatic count (`render.mesh.mesh_r
 # 3.3 GB; 4096 rings would be 16x that (53 GB). The scene PSFs converged long before (32: 0.2 %, README)
 MIN_RINGS, MAX_RINGS = 2, 512
 MAX_SPP = 1 << 20
-MAX_SEED = 2**32 - 1  # Mitsuba's samplers take 32-bit seeds
 
 
 def _flag(help_text: str, default=None, *, parse=None, choices=None, metavar=None):

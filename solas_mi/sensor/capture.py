@@ -34,15 +34,22 @@ def fixed_pattern(model: SensorModel, shape: tuple[int, int], seed: int) -> tupl
     return np.clip(gain, 0.0, None), offset
 
 
+def _whole(value) -> bool:
+    return isinstance(value, (int, np.integer)) and not isinstance(value, bool) and value >= 0
+
+
+def check_seed(seed) -> None:
+    """SolasError unless `seed` is a sensor's seed: an integer from 0 to `MAX_SEED`."""
+    if not _whole(seed) or seed > MAX_SEED:
+        raise SolasError(f"sensor seed {seed!r} must be an integer >= 0 and at most 2^31 - 1")
+
+
 def capture(model: SensorModel, irradiance: np.ndarray, exposure_s: float, seed: int, frame: int = 0) -> np.ndarray:
     """The RAW frame (H, W, uint16 DN) the sensor gives for an irradiance image (H, W, 3) in W/m² exposed
     `exposure_s` seconds: frame `frame` of seed `seed` (same seed and frame, same frame)."""
-    for name, value in (("seed", seed), ("frame", frame)):
-        if not isinstance(value, (int, np.integer)) or isinstance(value, bool) or value < 0:
-            raise SolasError(f"sensor {name} {value!r} must be an integer >= 0"
-                             + (" and at most 2^31 - 1" if name == "seed" else ""))
-    if seed > MAX_SEED:
-        raise SolasError(f"sensor seed {seed!r} must be an integer >= 0 and at most 2^31 - 1")
+    check_seed(seed)
+    if not _whole(frame):
+        raise SolasError(f"sensor frame {frame!r} must be an integer >= 0")
     mu_e = mean_electrons(model, irradiance, exposure_s)
     # past the full well the count is clipped anyway: capping the Poisson means at 2 × full well + 1000
     # keeps them within NumPy's Poisson range (the Chernoff bound puts the chance that the well then

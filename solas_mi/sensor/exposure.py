@@ -29,6 +29,11 @@ def image_irradiance(radiance: np.ndarray, f_number: float, transmission: float 
 ROUND_OFF = 1e-5  # negative values down to this fraction of the image's largest are round-off (read as 0)
 
 
+def round_off_floor(image: np.ndarray) -> float:
+    """The least value of `image` still read as round-off around zero: -ROUND_OFF of its largest magnitude."""
+    return -ROUND_OFF * float(np.abs(image).max(initial=0.0))
+
+
 def negatives_as_no_light(image: np.ndarray, what: str) -> tuple[np.ndarray, dict]:
     """The one rule of the camera commands (`solas-mi camera`, a batch's camera) for negative values of
     an input image: read as no light (0), their count and least value returned for the RAW's metadata.
@@ -37,7 +42,7 @@ def negatives_as_no_light(image: np.ndarray, what: str) -> tuple[np.ndarray, dic
     (-ROUND_OFF of the image's largest) are also named in a one-line notice on stderr."""
     import sys
 
-    floor = -ROUND_OFF * float(np.abs(image).max(initial=0.0))
+    floor = round_off_floor(image)
     beyond = int(np.count_nonzero(image < floor))
     if beyond:
         print(f"notice: {what}: {beyond} values below zero (least {image.min():.3g}, outside the RGB gamut or "
@@ -60,7 +65,7 @@ def photons(irradiance: np.ndarray, exposure_s: float, pixel_pitch_um: float,
         raise SolasError(f"irradiance image holds {np.count_nonzero(~np.isfinite(image))} non-finite values; "
                          "it must hold finite values >= 0")
     # an FFT convolution leaves round-off around zero in dark regions: read as no light; more is an error
-    floor = -ROUND_OFF * float(np.abs(image).max(initial=0.0))
+    floor = round_off_floor(image)
     if np.any(image < floor):
         raise SolasError(f"irradiance image holds {np.count_nonzero(image < floor)} values below zero (least "
                          f"{image.min():.3g}); it must hold values >= 0 (down to -{ROUND_OFF:g} of its largest "
