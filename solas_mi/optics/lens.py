@@ -6,6 +6,11 @@ surface 1's vertex is at z = 0. A surface is a sphere, or an even asphere: sag
 z(r) = c r² / (1 + √(1 − (1 + k) c² r²)) + Σ_i A_2i r^2i (i ≥ 2) with c = 1/radius, k = `conic` and
 `aspheric` = [A4, A6, …] (mm^(1−2i)), plus Forbes' Qbfs departure φ u²(1 − u²) Σ a_m Q_m^bfs(u²) with
 `qbfs` = [a0, a1, …] (mm) and u = r / `norm_radius` (`forbes`).
+
+A surface with `focal_length` (mm) is an ideal thin lens (Zemax's `TYPE PARAXIAL`): flat, it bends
+every ray by n'·t' = n·t − h/f (t the direction tangents dx/dz, dy/dz, h the height where the ray meets
+it, n and n' the indices before and after), so it images every object point stigmatically, finite
+conjugates too; it adds the optical path that makes the pencil it images perfect (`tracer`).
 """
 from __future__ import annotations
 
@@ -36,7 +41,7 @@ KEYS = {
     "lens": ("name", "description", "wavelengths_nm", "field_deg", "catalogues", "materials", "surface", "object",
              "image"),
     "surface": ("label", "radius", "thickness", "diameter", "material", "stop", "conic", "aspheric", "qbfs",
-                "norm_radius"),
+                "norm_radius", "focal_length"),
     "object": ("distance", "material"),
     "image": ("diameter",),
 }
@@ -116,6 +121,12 @@ class Surface:
     aspheric: tuple[float, ...] = ()  # A4, A6, … (mm^(1−2i)) of the even asphere
     qbfs: tuple[float, ...] = ()  # a0, a1, … (mm) of Forbes' Qbfs departure
     norm_radius: float = 1.0  # ρ (mm): the Qbfs terms' u = r/ρ
+    focal_length: float | None = None  # mm: an ideal thin lens (flat, n'·t' = n·t − h/f); None: a real surface
+
+    @property
+    def ideal(self) -> bool:
+        """Whether this is an ideal thin lens (`focal_length`), which bends rays without a glass change."""
+        return self.focal_length is not None
 
     @property
     def is_sphere(self) -> bool:
@@ -165,12 +176,28 @@ def _surface(row: dict, i: int, where: str, catalogues: tuple[str, ...], own: di
     if qbfs and not norm_radius > 0:
         raise SolasError(f"{ident}: qbfs needs norm_radius, a positive number (mm), the radius where u = 1; "
                          f"got {row.get('norm_radius')!r}")
+    focal_length = _focal_length(row, ident, radius, conic, aspheric, qbfs)
     material = row.get("material", "AIR")
     try:
         g = glass_mod.resolve(material, prefer=catalogues, own=own)
     except SolasError as exc:
         raise SolasError(f"{ident}: {exc}") from None
-    return Surface(label, radius, thickness, diameter, str(material), g, stop, conic, aspheric, qbfs, norm_radius)
+    return Surface(label, radius, thickness, diameter, str(material), g, stop, conic, aspheric, qbfs, norm_radius,
+                   focal_length)
+
+
+def _focal_length(row: dict, ident: str, radius: float, conic: float, aspheric: tuple, qbfs: tuple) -> float | None:
+    """row's `focal_length` (mm; None when absent): an ideal thin lens, finite, nonzero and flat."""
+    if "focal_length" not in row:
+        return None
+    f = _number(row, "focal_length", ident, "mm, an ideal thin lens's focal length")
+    if f == 0.0:
+        raise SolasError(f"{ident}: focal_length = {row['focal_length']!r} must be a finite nonzero number (mm; "
+                         "negative for a diverging ideal lens)")
+    if radius != 0.0 or conic != 0.0 or any(aspheric) or any(qbfs):
+        raise SolasError(f"{ident}: an ideal thin lens (focal_length) is flat: radius must be 0 and conic, aspheric "
+                         f"and qbfs absent (got radius {radius:g} mm)")
+    return f
 
 
 def _terms(row: dict, key: str, ident: str, meaning: str) -> tuple[float, ...]:
@@ -270,7 +297,10 @@ class Lens:
         if isinstance(distance, str) and distance.strip().lower() in ("inf", "infinity"):
             distance = math.inf
         elif not isinstance(distance, (int, float)) or isinstance(distance, bool) or not 0 < distance < math.inf:
-            raise SolasError(f"{where}: object distance {distance!r} must be a positive number (mm) or \"infinity\"")
+            virtual = isinstance(distance, (int, float)) and not isinstance(distance, bool) and distance < 0
+            raise SolasError(f"{where}: object distance {distance!r} must be a positive number (mm) or \"infinity\""
+                             + ("; a negative one, a virtual object behind surface 1 (light converging toward it), is "
+                                "not modelled" if virtual else ""))
         try:
             object_glass = glass_mod.resolve(obj.get("material", "AIR"), prefer=catalogues, own=own)
         except SolasError as exc:
@@ -382,7 +412,8 @@ class Lens:
             "object": [self.object_distance if math.isfinite(self.object_distance) else "inf", self.object_glass.name],
             "surfaces": [[s.radius, s.thickness, s.diameter, s.glass.name, s.glass.coefficients, s.stop]
                          + ([] if s.is_sphere else [s.conic, list(s.aspheric)])
-                         + ([list(s.qbfs), s.norm_radius] if any(s.qbfs) else []) for s in self.surfaces],
+                         + ([list(s.qbfs), s.norm_radius] if any(s.qbfs) else [])
+                         + ([{"focal_length": s.focal_length}] if s.ideal else []) for s in self.surfaces],
         }
         return hashlib.sha256(json.dumps(content, sort_keys=True).encode()).hexdigest()[:16]
 

@@ -169,7 +169,7 @@ def _glass_limits(lens: Lens) -> list[Case]:
 
 
 def _near_flat(lens: Lens, wl: float) -> Case:
-    k = next((i for i, s in enumerate(lens.surfaces) if s.radius == 0.0), 0)
+    k = next((i for i, s in enumerate(lens.surfaces) if s.radius == 0.0 and not s.ideal), 0)
     flat = replace(lens, surfaces=tuple(replace(s, radius=0.0) if i == k else s for i, s in enumerate(lens.surfaces)))
     near = replace(flat, surfaces=tuple(replace(s, radius=1e12) if i == k else s for i, s in enumerate(flat.surfaces)))
     fields = np.array([[0.0, 0.0], [0.0, lens.field_deg]])
