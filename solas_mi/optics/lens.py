@@ -5,19 +5,14 @@ Lengths in mm, wavelengths in nm, field angles in degrees. +z is the optical axi
 surface 1's vertex is at z = 0. A surface is a sphere, or an even asphere: sag
 z(r) = c r² / (1 + √(1 − (1 + k) c² r²)) + Σ_i A_2i r^2i (i ≥ 2) with c = 1/radius, k = `conic` and
 `aspheric` = [A4, A6, …] (mm^(1−2i)), plus Forbes' Qbfs departure φ u²(1 − u²) Σ a_m Q_m^bfs(u²) with
-`qbfs` = [a0, a1, …] (mm) and u = r / `norm_radius` (`forbes`).
-
-A surface with `focal_length` (mm) is an ideal thin lens (Zemax's `TYPE PARAXIAL`): flat, it bends
-every ray by n'·t' = n·t − h/f (t the direction tangents dx/dz, dy/dz, h the height where the ray meets
-it, n and n' the indices before and after), so it images every object point stigmatically, finite
-conjugates too; it adds the optical path that makes the pencil it images perfect (`tracer`).
+`qbfs` = [a0, a1, …] (mm) and u = r / `norm_radius` (`forbes`). A flat surface with `focal_length` (mm)
+is an ideal thin lens (`ideal`).
 """
 from __future__ import annotations
 
 import hashlib
 import json
 import math
-import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -27,15 +22,14 @@ import tomllib
 
 from ..errors import SolasError
 from ..imageio import write_text
-from ..resources import resource_dir
-from . import forbes
+from . import forbes, ideal as ideal_mod
 from . import glass as glass_mod
 from .sag import sag
-from .formats import READERS, WRITERS, decode_text, listed
+from .formats import READERS, WRITERS, decode_text, lens_path, listed, shipped_lenses  # noqa: F401 (shipped_lenses: re-exported)
 from .fields import FieldType, field_type_for
 
-LENS_DIR = "lenses"
 _VIRTUAL = ": the image plane lies before the last surface, a virtual image (a diverging lens's focus) that no film records"
+_VIRTUAL_OBJECT = "; a negative one, a virtual object behind surface 1 (light converging toward it), is not modelled"
 # What a lens file may hold (anything else is a mistake worth naming, e.g. a surface type we do not model)
 KEYS = {
     "lens": ("name", "description", "wavelengths_nm", "field_deg", "catalogues", "materials", "surface", "object",
@@ -45,15 +39,6 @@ KEYS = {
     "object": ("distance", "material"),
     "image": ("diameter",),
 }
-
-
-def _shipped_dir() -> Path:
-    return resource_dir("scenes") / LENS_DIR
-
-
-def shipped_lenses() -> list[str]:
-    """Names of the lenses that ship with solas-mi (`Lens.load` takes them)."""
-    return sorted(p.stem.replace("_", "-") for p in _shipped_dir().glob("*.toml"))
 
 
 def check_lens(lens) -> None:
@@ -121,7 +106,7 @@ class Surface:
     aspheric: tuple[float, ...] = ()  # A4, A6, … (mm^(1−2i)) of the even asphere
     qbfs: tuple[float, ...] = ()  # a0, a1, … (mm) of Forbes' Qbfs departure
     norm_radius: float = 1.0  # ρ (mm): the Qbfs terms' u = r/ρ
-    focal_length: float | None = None  # mm: an ideal thin lens (flat, n'·t' = n·t − h/f); None: a real surface
+    focal_length: float | None = None  # mm: an ideal thin lens (n'·t' = n·t − h/f, `ideal`); None: a real surface
 
     @property
     def ideal(self) -> bool:
@@ -176,7 +161,8 @@ def _surface(row: dict, i: int, where: str, catalogues: tuple[str, ...], own: di
     if qbfs and not norm_radius > 0:
         raise SolasError(f"{ident}: qbfs needs norm_radius, a positive number (mm), the radius where u = 1; "
                          f"got {row.get('norm_radius')!r}")
-    focal_length = _focal_length(row, ident, radius, conic, aspheric, qbfs)
+    focal_length = (ideal_mod.check(row["focal_length"], ident, radius == conic == 0 and not any(aspheric + qbfs))
+                    if "focal_length" in row else None)
     material = row.get("material", "AIR")
     try:
         g = glass_mod.resolve(material, prefer=catalogues, own=own)
@@ -184,20 +170,6 @@ def _surface(row: dict, i: int, where: str, catalogues: tuple[str, ...], own: di
         raise SolasError(f"{ident}: {exc}") from None
     return Surface(label, radius, thickness, diameter, str(material), g, stop, conic, aspheric, qbfs, norm_radius,
                    focal_length)
-
-
-def _focal_length(row: dict, ident: str, radius: float, conic: float, aspheric: tuple, qbfs: tuple) -> float | None:
-    """row's `focal_length` (mm; None when absent): an ideal thin lens, finite, nonzero and flat."""
-    if "focal_length" not in row:
-        return None
-    f = _number(row, "focal_length", ident, "mm, an ideal thin lens's focal length")
-    if f == 0.0:
-        raise SolasError(f"{ident}: focal_length = {row['focal_length']!r} must be a finite nonzero number (mm; "
-                         "negative for a diverging ideal lens)")
-    if radius != 0.0 or conic != 0.0 or any(aspheric) or any(qbfs):
-        raise SolasError(f"{ident}: an ideal thin lens (focal_length) is flat: radius must be 0 and conic, aspheric "
-                         f"and qbfs absent (got radius {radius:g} mm)")
-    return f
 
 
 def _terms(row: dict, key: str, ident: str, meaning: str) -> tuple[float, ...]:
@@ -231,23 +203,7 @@ class Lens:
     def load(cls, name_or_path: str | Path) -> "Lens":
         """A lens by shipped name (e.g. "solas-doublet") or by path to a lens file (.toml, .zmx, .seq, .dat):
         a name holding a path separator or an extension is a path."""
-        if not isinstance(name_or_path, (str, os.PathLike)):
-            raise SolasError(f"lens {name_or_path!r} must be a shipped lens name ({', '.join(shipped_lenses())}) "
-                             f"or a path to a lens file ({listed(READERS.keys() | {'.toml'})})")
-        given = os.fspath(name_or_path)
-        path = Path(given)
-        if not path.suffix and not any(sep and sep in given for sep in (os.sep, os.altsep, "/")):
-            path = _shipped_dir() / (given.replace("-", "_") + ".toml")
-            if not path.is_file():
-                raise SolasError(f"unknown lens {given!r}; shipped lenses: {', '.join(shipped_lenses())}, or a path "
-                                 f"to a lens file ({listed(READERS.keys() | {'.toml'})})")
-        if path.suffix.lower() not in READERS.keys() | {".toml"}:
-            what = f"unknown extension {path.suffix!r}" if path.suffix else "no lens extension"
-            raise SolasError(f"lens file {given!r} has {what}; allowed: {listed(READERS.keys() | {'.toml'})}")
-        if path.is_dir():
-            raise SolasError(f"lens file {given!r} is a folder, not a lens file")
-        if not path.is_file():
-            raise SolasError(f"lens file {str(path)!r} does not exist")
+        path = lens_path(name_or_path)
         if path.suffix.lower() in READERS:
             try:
                 data = path.read_bytes()
@@ -297,10 +253,8 @@ class Lens:
         if isinstance(distance, str) and distance.strip().lower() in ("inf", "infinity"):
             distance = math.inf
         elif not isinstance(distance, (int, float)) or isinstance(distance, bool) or not 0 < distance < math.inf:
-            virtual = isinstance(distance, (int, float)) and not isinstance(distance, bool) and distance < 0
             raise SolasError(f"{where}: object distance {distance!r} must be a positive number (mm) or \"infinity\""
-                             + ("; a negative one, a virtual object behind surface 1 (light converging toward it), is "
-                                "not modelled" if virtual else ""))
+                             + _VIRTUAL_OBJECT * (isinstance(distance, (int, float)) and distance < 0))
         try:
             object_glass = glass_mod.resolve(obj.get("material", "AIR"), prefer=catalogues, own=own)
         except SolasError as exc:

@@ -1,7 +1,7 @@
 """Sequential ray tracer in Dr.Jit Float64 (LLVM): exact spheres, planes, conics (closed form) and
 even aspheres (Newton's method from the conic root, exact normal), Snell's law per wavelength,
 clipping at every clear aperture and the stop, total internal reflection flagged, optical path length
-accumulated.
+accumulated; ideal thin lenses bend rays and add the path that images their pencil perfectly (`ideal`).
 
 Rays are vectorised Dr.Jit arrays; nothing here loops over rays in Python. `launch` and `trace` work on
 the array type of the rays they are given: `drjit.llvm.Float64` (the default `F`, for the analyses),
@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..llvm import import_drjit
+from . import ideal
 from .fields import ANGLE
 from .lens import Lens
 from .sag import sag, sag_slope
@@ -203,7 +204,8 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False, heigh
             stop_x, stop_y = x, y
         n_after = refractive_index(s.glass, wavelength_um)
         if s.ideal:
-            (dx, dy, dz), delta = _ideal(s, x, y, (dx, dy, dz), n_before, n_after, conjugates[k], ftype)
+            (dx, dy, dz), delta = ideal.deflect(x, y, (dx, dy, dz), n_before, n_after, _opaque(1.0 / s.focal_length, ftype),
+                                                _opaque(conjugates[k], ftype), dr.sqrt)
             opl = opl + delta
         elif s.glass != (lens.surfaces[k - 1].glass if k else lens.object_glass):
             (dx, dy, dz), k2, factor = _refract(s, x, y, lz, r2, (dx, dy, dz), n_before / n_after, fresnel, ftype)
@@ -271,33 +273,6 @@ def _refract(s, x, y, lz, r2, d, mu, fresnel: bool, ftype):
         factor = 1.0 - 0.5 * (rs * rs + rp * rp)
     g = cost - mu * cosi
     return (dr.fma(mu, dx, g * nx), dr.fma(mu, dy, g * ny), dr.fma(mu, dz, g * nz)), k2, factor
-
-
-def _ideal(s, x, y, d, n, n_after, conjugate: float, ftype):
-    """Directions after the ideal thin lens `s` of rays meeting it at (x, y) (its vertex frame) with unit
-    directions `d`, n·t → n'·t' = n·t − h/f on the direction tangents t, and the optical path it adds:
-    δ = n' g(h, t', w') − n g(h, t, w), with w (`conjugate`, `paraxial.ideal_conjugates`) and
-    w' = (n w + 1/f)/n' the signed inverse distances to the object point whose pencil it images and to
-    that point's image. The incoming path of a ray of that pencil, less the path of the ray through the
-    vertex, is −n g(h, t, w), the outgoing one to the image point −n' g(h, t', w') (`_pencil_path`), so
-    every ray of it reaches the image point with the same optical path: a perfect image of that pencil."""
-    dx, dy, dz = d
-    inv_f = _opaque(1.0 / s.focal_length, ftype)
-    tx, ty = dx / dz, dy / dz
-    ux, uy = (n * tx - x * inv_f) / n_after, (n * ty - y * inv_f) / n_after
-    w = _opaque(conjugate, ftype)
-    delta = n_after * _pencil_path(x, y, ux, uy, (n * w + inv_f) / n_after) - n * _pencil_path(x, y, tx, ty, w)
-    inv = dr.rsqrt(ux * ux + uy * uy + 1.0)
-    return (ux * inv, uy * inv, inv), delta
-
-
-def _pencil_path(x, y, tx, ty, w):
-    """σ(|Q| − |Q − h|) for the point Q = (h + z t, z) where the line through h = (x, y, 0) of tangents t
-    meets the plane z = 1/w, σ the sign of z: (2 t·h + w|h|²)/(√(|t + w h|² + 1) + √(|t|² + 1)), free of
-    cancellation, and H·d (d the unit direction) when the point is at infinity (w = 0)."""
-    ax, ay = tx + w * x, ty + w * y
-    return (2.0 * (tx * x + ty * y) + w * (x * x + y * y)) / (dr.sqrt(ax * ax + ay * ay + 1.0)
-                                                              + dr.sqrt(tx * tx + ty * ty + 1.0))
 
 
 def _asphere_hit(s, x, y, dx, dy, dz, t):

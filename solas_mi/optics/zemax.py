@@ -11,9 +11,7 @@ Read as the author meant it:
   surface), QED_TYPE (OpticStudio's Q-type asphere: XDAT 1 the type, 0 Qbfs or 1 Qcon, XDAT 2 the number
   of terms, XDAT 3 the normalisation radius, XDAT 4… a0, a1, …; Qbfs kept as such, Qcon rewritten exactly
   as even-asphere terms, `forbes`), COORDBRK when it is a pure axial shift (its DISZ added to the gap) or undone by the next
-  coordinate break; PARAXIAL, Zemax's ideal thin lens (PARM 1 the focal length, `focal_length`; PARM 2
-  the OPD mode: 1, perfect, as we trace it; 0, integrate, is read as perfect too and the description
-  says so; its CURV is ignored, as Zemax does); flat air surfaces without a clear aperture of their own (no DIAM, or DIAM's solve type
+  coordinate break; PARAXIAL, the ideal thin lens (`ideal`: PARM 1 the focal length, PARM 2 the OPD mode); flat air surfaces without a clear aperture of their own (no DIAM, or DIAM's solve type
   0, automatic: it cuts no ray) (dummies) are dropped,
   their thickness added to the gap. STOP, COMM (the label), CONI, CURV (1/unit), DISZ.
 - Clear apertures: DIAM (the semi-diameter); where absent or 0, Zemax's automatic semi-diameter:
@@ -37,13 +35,12 @@ refused naming the surface and the feature.
 from __future__ import annotations
 
 import math
-import re
 
 from ..errors import SolasError
-from . import forbes
+from . import forbes, ideal
 from . import glass as glass_mod
 from . import zemax_solves
-from .formats import READERS, WRITERS
+from .formats import READERS, WRITERS, one_line
 from .formats import floats as _floats
 
 UNITS = {"MM": 1.0, "CM": 10.0, "IN": 25.4, "METER": 1000.0, "M": 1000.0}
@@ -52,12 +49,6 @@ FIELD_TYPES = {"0": "angle", "1": "object height", "2": "paraxial image height",
 # GCAT catalogue names → our vendors (Zemax's NIKON catalogue is Hikari's glass).
 GCAT_VENDORS = {**{v: v for v in glass_mod.VENDORS}, "NIKON": "HIKARI", "NIKON-HIKARI": "HIKARI"}
 DEFAULT_CATALOGUE = "SCHOTT"  # what OpticStudio uses for a file that names no catalogue
-_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029]")
-
-
-def one_line(text: str) -> str:
-    """`text` with every line break and control character made a space: what a .zmx line may hold."""
-    return _CONTROL.sub(" ", text)
 
 
 def _blocks(text: str, where: str) -> tuple[dict, list[dict]]:
@@ -127,11 +118,7 @@ def read_spec(text: str, where: str) -> dict:
                                "default (the file names no GCAT)")
     spec["object"] = _object(blocks[0], scale, gcat, where)
     rows = [_surface(b, i, scale, gcat, where) for i, b in enumerate(blocks[1:-1], start=1)]
-    integrate = [r["label"] for r in rows if r.get("opd_mode", 1) != 1]
-    if integrate:
-        spec["description"] = "; ".join(filter(None, (spec.get("description"), (
-            f"ideal lens {', '.join(integrate)}: OPD mode integrate (PARM 2 0) read as perfect (OPD mode 1): its "
-            "pencil is imaged without aberration"))))
+    spec.update(ideal.zemax_notes(rows, spec.get("description")))
     spec["surface"] = _fold(rows, where)
     if "DIAM" in blocks[-1]:
         semi = _floats(blocks[-1]["DIAM"][0][:1], f"{where}: image DIAM")[0] * scale
@@ -195,18 +182,10 @@ def _surface(b: dict, i: int, scale: float, gcat: tuple[str, ...], where: str) -
     elif kind == "QED_TYPE":
         row.update(_q_type(b, scale, ident))
     elif kind == "PARAXIAL":
-        row.update(_ideal_lens(b, scale, ident))
+        row.update(ideal.from_zemax(_parameters(b, ident), scale, ident))
     if "STOP" in b:
         row["stop"] = True
     return row
-
-
-def _ideal_lens(b: dict, scale: float, ident: str) -> dict:
-    """The row entries of a PARAXIAL block: flat, its focal length (PARM 1) and OPD mode (PARM 2)."""
-    parm = _parameters(b, ident)
-    if not parm.get(1):
-        raise SolasError(f"{ident}: PARAXIAL focal length (PARM 1) {parm.get(1, 0.0):g} must be nonzero")
-    return {"radius": 0.0, "focal_length": parm[1] * scale, "opd_mode": parm.get(2, 0.0)}
 
 
 def _parameters(b: dict, ident: str) -> dict[int, float]:
@@ -273,8 +252,7 @@ def _fold(rows: list[dict], where: str) -> list[dict]:
             i += span
             continue
         air_before = not out or out[-1]["material"].upper() == "AIR"
-        dummy = (row["radius"] == 0 and not row.get("stop") and not row.get("aspheric") and not row.get("qbfs")
-                 and "focal_length" not in row
+        dummy = (row["radius"] == 0 and not row.get("stop") and not row.get("aspheric") and not row.get("qbfs") and "focal_length" not in row
                  and (row["diameter"] is None or row["auto"])
                  and row["material"].upper() == "AIR" and air_before and out)
         if dummy:
@@ -394,8 +372,7 @@ def dumps(lens) -> str:
     for i, s in enumerate(lens.surfaces, start=1):
         out += [f"SURF {i}", f"  TYPE {_surface_type(s, i)}", f"  COMM {one_line(s.label)}",
                 f"  CURV {number(s.curvature)}"]
-        out += [f"  PARM {k} {number(a)}" for k, a in enumerate(s.aspheric, start=2)]
-        out += [f"  PARM 1 {number(s.focal_length)}", "  PARM 2 1"] if s.ideal else []
+        out += [f"  PARM {k} {number(a)}" for k, a in enumerate(s.aspheric, start=2)] + ideal.to_zemax(s.focal_length)
         if any(s.qbfs):
             out += [f"  XDAT {k} {number(v)}" for k, v in
                     enumerate((0.0, float(len(s.qbfs)), s.norm_radius, *s.qbfs), start=1)]

@@ -200,7 +200,8 @@ def test_reversed_lens_keeps_the_ideal_lens():
 
 @pytest.mark.parametrize("row, match", [
     ({"focal_length": 0.0}, "focal_length = 0.0 must be a finite nonzero number"),
-    ({"focal_length": "50"}, "focal_length = '50' must be a finite number"),
+    ({"focal_length": "50"}, "focal_length = '50' must be a finite nonzero number"),
+    ({"focal_length": float("nan")}, "focal_length = nan must be a finite nonzero number"),
     ({"focal_length": 50.0, "radius": 100.0}, "an ideal thin lens \\(focal_length\\) is flat"),
     ({"focal_length": 50.0, "conic": -1.0}, "an ideal thin lens \\(focal_length\\) is flat"),
 ])
