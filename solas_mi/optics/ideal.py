@@ -58,6 +58,23 @@ def zemax_notes(rows: list[dict], description: str | None) -> dict:
     return {"description": "; ".join(filter(None, (description, *notes)))} if notes else {}
 
 
+def metadata(lens) -> dict:
+    """{"ideal_lens_path": what the optical path of `lens`'s ideal lenses means}, {} when it has none: exact
+    where only ideal lenses and non-dispersive media come before one, else approximate (module docstring)."""
+    ideal = [k for k, s in enumerate(lens.surfaces) if s.ideal]
+    if not ideal:
+        return {}
+    media = (lens.object_glass, *(s.glass for s in lens.surfaces))
+    rough = [k + 1 for k in ideal if any(g.dispersive for g in media[:k + 1])
+             or any(not s.ideal and media[j + 1] != media[j] for j, s in enumerate(lens.surfaces[:k]))]
+    where = ", ".join(str(k + 1) for k in ideal)
+    return {"ideal_lens_path": f"surface {where}: ideal thin lens, its optical path the one that images its pencil "
+            "perfectly (Zemax's OPD mode 1), " + ("exact" if not rough else
+            f"approximate at surface {', '.join(map(str, rough))}: the pencil it meets is aberrated by the surfaces "
+            "before it, or focused elsewhere at other wavelengths, and its path is the perfect one for the "
+            "paraxial conjugate at the primary wavelength")}
+
+
 def deflect(x, y, d, n, n_after, inv_f, w, sqrt):
     """Directions after an ideal lens of power `inv_f` (1/mm) of rays meeting it at (x, y) (its vertex
     frame) with unit directions `d` (dz > 0) from index `n` into `n_after`, and the optical path δ it
@@ -80,4 +97,4 @@ def _pencil_path(x, y, tx, ty, w, sqrt):
                                                               + sqrt(tx * tx + ty * ty + 1.0))
 
 
-__all__ = ["check", "deflect", "from_zemax", "to_zemax", "zemax_notes", "INTEGRATE"]
+__all__ = ["check", "deflect", "metadata", "from_zemax", "to_zemax", "zemax_notes", "INTEGRATE"]

@@ -222,3 +222,19 @@ def test_a_virtual_object_is_refused_by_name():
     with pytest.raises(SolasError, match="a virtual object behind surface 1 .* is not modelled"):
         Lens.from_dict({"object": {"distance": -53.4}, "surface": [
             {"radius": 0.0, "thickness": 50.0, "diameter": 10.0, "stop": True, "focal_length": 50.0}]})
+
+
+def test_metadata_says_where_the_ideal_lens_path_is_exact():
+    """Exact for an ideal lens with only ideal lenses and air before it; approximate behind a real singlet
+    (the pencil it meets is aberrated); in the PSF metadata, absent for a lens without one."""
+    exact = psf(_ideal(50.0, diameter=4.0), (0.0, 0.0), WL, size=32).meta["ideal_lens_path"]
+    assert exact.startswith("surface 1: ideal thin lens") and exact.endswith("exact")
+    behind = Lens.from_dict({"surface": [
+        {"radius": 40.0, "thickness": 6.0, "diameter": 20.0, "material": "N-BK7"},
+        {"radius": 0.0, "thickness": 5.0, "diameter": 20.0},
+        {"radius": 0.0, "thickness": 30.0, "diameter": 10.0, "stop": True, "focal_length": 120.0}]})
+    assert "approximate at surface 3" in psf(behind, (0.0, 0.0), 550.0, size=32).meta["ideal_lens_path"]
+    singlet = Lens.from_dict({"surface": [
+        {"radius": 40.0, "thickness": 6.0, "diameter": 20.0, "material": "N-BK7", "stop": True},
+        {"radius": 0.0, "thickness": 60.0, "diameter": 20.0}]})
+    assert "ideal_lens_path" not in psf(singlet, (0.0, 0.0), 550.0, size=32).meta
