@@ -238,3 +238,11 @@ def test_metadata_says_where_the_ideal_lens_path_is_exact():
         {"radius": 40.0, "thickness": 6.0, "diameter": 20.0, "material": "N-BK7", "stop": True},
         {"radius": 0.0, "thickness": 60.0, "diameter": 20.0}]})
     assert "ideal_lens_path" not in psf(singlet, (0.0, 0.0), 550.0, size=32).meta
+
+
+def test_a_scaled_lens_scales_its_ideal_lens():
+    from solas_mi.optics.scale import scaled
+
+    lens = _ideal(50.0, field=5.0)
+    assert scaled(lens, 2.0).surfaces[0].focal_length == 100.0
+    assert paraxial(scaled(lens, 2.0)).efl_mm == pytest.approx(100.0, rel=1e-14)
