@@ -1,13 +1,20 @@
 """The lens file formats: which reader turns a file's text into the lens-file dictionary
 (`Lens.from_dict`), which writer turns a `Lens` into text, by extension, and how other programs' files
-are decoded. Our TOML is read by `Lens.load` itself.
+are decoded; which file a lens name or path means (`lens_path`). Our TOML is read by `Lens.load` itself.
 """
 from __future__ import annotations
 
 import math
+import os
+import re
+from pathlib import Path
 
 from ..errors import SolasError
+from ..resources import resource_dir
 from . import lens_toml, pbrt_dat
+
+LENS_DIR = "lenses"
+_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029]")
 
 # Lens file formats, in the order messages list them
 FORMATS = (".toml", ".zmx", ".seq", ".dat")
@@ -34,6 +41,12 @@ def decode_text(data: bytes) -> str:
         return data.decode("latin-1")
 
 
+def one_line(text: str) -> str:
+    """`text` with every line break and control character made a space: what a line of another program's
+    lens file may hold."""
+    return _CONTROL.sub(" ", text)
+
+
 def floats(tokens: list[str], where: str) -> list[float]:
     """The numbers of a line's tokens (other programs' lens files), finite; else SolasError naming `where`."""
     try:
@@ -48,3 +61,35 @@ def floats(tokens: list[str], where: str) -> list[float]:
 def listed(formats) -> str:
     """The extensions of `formats` that FORMATS lists, in its order, comma-separated."""
     return ", ".join(e for e in FORMATS if e in formats)
+
+
+def _shipped_dir() -> Path:
+    return resource_dir("scenes") / LENS_DIR
+
+
+def shipped_lenses() -> list[str]:
+    """Names of the lenses that ship with solas-mi (`Lens.load` takes them)."""
+    return sorted(p.stem.replace("_", "-") for p in _shipped_dir().glob("*.toml"))
+
+
+def lens_path(name_or_path) -> Path:
+    """The lens file a shipped name (e.g. "solas-doublet") or a path means, checked to exist and to have a
+    lens extension: a name holding a path separator or an extension is a path."""
+    if not isinstance(name_or_path, (str, os.PathLike)):
+        raise SolasError(f"lens {name_or_path!r} must be a shipped lens name ({', '.join(shipped_lenses())}) "
+                         f"or a path to a lens file ({listed(READERS.keys() | {'.toml'})})")
+    given = os.fspath(name_or_path)
+    path = Path(given)
+    if not path.suffix and not any(sep and sep in given for sep in (os.sep, os.altsep, "/")):
+        path = _shipped_dir() / (given.replace("-", "_") + ".toml")
+        if not path.is_file():
+            raise SolasError(f"unknown lens {given!r}; shipped lenses: {', '.join(shipped_lenses())}, or a path "
+                             f"to a lens file ({listed(READERS.keys() | {'.toml'})})")
+    if path.suffix.lower() not in READERS.keys() | {".toml"}:
+        what = f"unknown extension {path.suffix!r}" if path.suffix else "no lens extension"
+        raise SolasError(f"lens file {given!r} has {what}; allowed: {listed(READERS.keys() | {'.toml'})}")
+    if path.is_dir():
+        raise SolasError(f"lens file {given!r} is a folder, not a lens file")
+    if not path.is_file():
+        raise SolasError(f"lens file {str(path)!r} does not exist")
+    return path

@@ -5,14 +5,14 @@ Lengths in mm, wavelengths in nm, field angles in degrees. +z is the optical axi
 surface 1's vertex is at z = 0. A surface is a sphere, or an even asphere: sag
 z(r) = c r² / (1 + √(1 − (1 + k) c² r²)) + Σ_i A_2i r^2i (i ≥ 2) with c = 1/radius, k = `conic` and
 `aspheric` = [A4, A6, …] (mm^(1−2i)), plus Forbes' Qbfs departure φ u²(1 − u²) Σ a_m Q_m^bfs(u²) with
-`qbfs` = [a0, a1, …] (mm) and u = r / `norm_radius` (`forbes`).
+`qbfs` = [a0, a1, …] (mm) and u = r / `norm_radius` (`forbes`). A flat surface with `focal_length` (mm)
+is an ideal thin lens (`ideal`).
 """
 from __future__ import annotations
 
 import hashlib
 import json
 import math
-import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -22,33 +22,23 @@ import tomllib
 
 from ..errors import SolasError
 from ..imageio import write_text
-from ..resources import resource_dir
-from . import forbes
+from . import forbes, ideal as ideal_mod
 from . import glass as glass_mod
 from .sag import sag
-from .formats import READERS, WRITERS, decode_text, listed
+from .formats import READERS, WRITERS, decode_text, lens_path, listed, shipped_lenses  # noqa: F401 (shipped_lenses: re-exported)
 from .fields import FieldType, field_type_for
 
-LENS_DIR = "lenses"
 _VIRTUAL = ": the image plane lies before the last surface, a virtual image (a diverging lens's focus) that no film records"
+_VIRTUAL_OBJECT = "; a negative one, a virtual object behind surface 1 (light converging toward it), is not modelled"
 # What a lens file may hold (anything else is a mistake worth naming, e.g. a surface type we do not model)
 KEYS = {
     "lens": ("name", "description", "wavelengths_nm", "field_deg", "catalogues", "materials", "surface", "object",
              "image"),
     "surface": ("label", "radius", "thickness", "diameter", "material", "stop", "conic", "aspheric", "qbfs",
-                "norm_radius"),
+                "norm_radius", "focal_length"),
     "object": ("distance", "material"),
     "image": ("diameter",),
 }
-
-
-def _shipped_dir() -> Path:
-    return resource_dir("scenes") / LENS_DIR
-
-
-def shipped_lenses() -> list[str]:
-    """Names of the lenses that ship with solas-mi (`Lens.load` takes them)."""
-    return sorted(p.stem.replace("_", "-") for p in _shipped_dir().glob("*.toml"))
 
 
 def check_lens(lens) -> None:
@@ -116,6 +106,12 @@ class Surface:
     aspheric: tuple[float, ...] = ()  # A4, A6, … (mm^(1−2i)) of the even asphere
     qbfs: tuple[float, ...] = ()  # a0, a1, … (mm) of Forbes' Qbfs departure
     norm_radius: float = 1.0  # ρ (mm): the Qbfs terms' u = r/ρ
+    focal_length: float | None = None  # mm: an ideal thin lens (n'·t' = n·t − h/f, `ideal`); None: a real surface
+
+    @property
+    def ideal(self) -> bool:
+        """Whether this is an ideal thin lens (`focal_length`), which bends rays without a glass change."""
+        return self.focal_length is not None
 
     @property
     def is_sphere(self) -> bool:
@@ -165,12 +161,15 @@ def _surface(row: dict, i: int, where: str, catalogues: tuple[str, ...], own: di
     if qbfs and not norm_radius > 0:
         raise SolasError(f"{ident}: qbfs needs norm_radius, a positive number (mm), the radius where u = 1; "
                          f"got {row.get('norm_radius')!r}")
+    focal_length = (ideal_mod.check(row["focal_length"], ident, radius == conic == 0 and not any(aspheric + qbfs))
+                    if "focal_length" in row else None)
     material = row.get("material", "AIR")
     try:
         g = glass_mod.resolve(material, prefer=catalogues, own=own)
     except SolasError as exc:
         raise SolasError(f"{ident}: {exc}") from None
-    return Surface(label, radius, thickness, diameter, str(material), g, stop, conic, aspheric, qbfs, norm_radius)
+    return Surface(label, radius, thickness, diameter, str(material), g, stop, conic, aspheric, qbfs, norm_radius,
+                   focal_length)
 
 
 def _terms(row: dict, key: str, ident: str, meaning: str) -> tuple[float, ...]:
@@ -204,23 +203,7 @@ class Lens:
     def load(cls, name_or_path: str | Path) -> "Lens":
         """A lens by shipped name (e.g. "solas-doublet") or by path to a lens file (.toml, .zmx, .seq, .dat):
         a name holding a path separator or an extension is a path."""
-        if not isinstance(name_or_path, (str, os.PathLike)):
-            raise SolasError(f"lens {name_or_path!r} must be a shipped lens name ({', '.join(shipped_lenses())}) "
-                             f"or a path to a lens file ({listed(READERS.keys() | {'.toml'})})")
-        given = os.fspath(name_or_path)
-        path = Path(given)
-        if not path.suffix and not any(sep and sep in given for sep in (os.sep, os.altsep, "/")):
-            path = _shipped_dir() / (given.replace("-", "_") + ".toml")
-            if not path.is_file():
-                raise SolasError(f"unknown lens {given!r}; shipped lenses: {', '.join(shipped_lenses())}, or a path "
-                                 f"to a lens file ({listed(READERS.keys() | {'.toml'})})")
-        if path.suffix.lower() not in READERS.keys() | {".toml"}:
-            what = f"unknown extension {path.suffix!r}" if path.suffix else "no lens extension"
-            raise SolasError(f"lens file {given!r} has {what}; allowed: {listed(READERS.keys() | {'.toml'})}")
-        if path.is_dir():
-            raise SolasError(f"lens file {given!r} is a folder, not a lens file")
-        if not path.is_file():
-            raise SolasError(f"lens file {str(path)!r} does not exist")
+        path = lens_path(name_or_path)
         if path.suffix.lower() in READERS:
             try:
                 data = path.read_bytes()
@@ -270,7 +253,8 @@ class Lens:
         if isinstance(distance, str) and distance.strip().lower() in ("inf", "infinity"):
             distance = math.inf
         elif not isinstance(distance, (int, float)) or isinstance(distance, bool) or not 0 < distance < math.inf:
-            raise SolasError(f"{where}: object distance {distance!r} must be a positive number (mm) or \"infinity\"")
+            raise SolasError(f"{where}: object distance {distance!r} must be a positive number (mm) or \"infinity\""
+                             + _VIRTUAL_OBJECT * (isinstance(distance, (int, float)) and distance < 0))
         try:
             object_glass = glass_mod.resolve(obj.get("material", "AIR"), prefer=catalogues, own=own)
         except SolasError as exc:
@@ -382,7 +366,8 @@ class Lens:
             "object": [self.object_distance if math.isfinite(self.object_distance) else "inf", self.object_glass.name],
             "surfaces": [[s.radius, s.thickness, s.diameter, s.glass.name, s.glass.coefficients, s.stop]
                          + ([] if s.is_sphere else [s.conic, list(s.aspheric)])
-                         + ([list(s.qbfs), s.norm_radius] if any(s.qbfs) else []) for s in self.surfaces],
+                         + ([list(s.qbfs), s.norm_radius] if any(s.qbfs) else [])
+                         + ([{"focal_length": s.focal_length}] if s.ideal else []) for s in self.surfaces],
         }
         return hashlib.sha256(json.dumps(content, sort_keys=True).encode()).hexdigest()[:16]
 

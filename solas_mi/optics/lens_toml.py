@@ -57,6 +57,8 @@ def dumps(lens) -> str:
             lines.append(f"conic = {_value(s.conic)}")
         if any(s.aspheric):
             lines.append(f"aspheric = {_value(s.aspheric)}")
+        if s.ideal:
+            lines.append(f"focal_length = {_value(s.focal_length)}")
         if any(s.qbfs):
             lines += [f"qbfs = {_value(s.qbfs)}", f"norm_radius = {_value(s.norm_radius)}"]
         lines += [f"thickness = {_value(s.thickness)}", f"diameter = {_value(s.diameter)}",

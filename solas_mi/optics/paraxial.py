@@ -57,10 +57,22 @@ def ynu_trace(lens: Lens, wavelength_nm: float, y1: float, u0: float, start: int
         if k > start:
             height = height + slope * (z[k] - z[k - 1])
         s = lens.surfaces[k]
-        power = (n[k + 1] - n[k]) * s.paraxial_curvature
+        power = (n[k + 1] - n[k]) * s.paraxial_curvature + (1.0 / s.focal_length if s.ideal else 0.0)
         slope = (n[k] * slope - height * power) / n[k + 1]
         y[k], u[k] = height, slope
     return y, u
+
+
+@functools.lru_cache(maxsize=64)
+def ideal_conjugates(lens: Lens) -> dict[int, float]:
+    """Per ideal thin lens (surface index k → w, 1/mm): the signed inverse distance from it to the paraxial
+    image of the object formed by the surfaces before it, at the primary wavelength (0: at infinity;
+    negative: a real point in front of it). That point is the conjugate whose pencil the ideal lens
+    makes perfect (`tracer`); an ideal lens at an intermediate image (marginal height 0) takes 0."""
+    wl = lens.primary_wavelength
+    y, u = ynu_trace(lens, wl, 1.0, 0.0) if lens.at_infinity else _object_ray(lens, wl, 0.0, 1.0)
+    before = np.concatenate([[0.0 if lens.at_infinity else 1.0], u[:-1]])
+    return {k: (-float(before[k] / y[k]) if y[k] != 0 else 0.0) for k, s in enumerate(lens.surfaces) if s.ideal}
 
 
 def _object_ray(lens: Lens, wavelength_nm: float, y_obj: float, u0: float) -> tuple[np.ndarray, np.ndarray]:
@@ -111,7 +123,7 @@ def _paraxial(lens: Lens, wavelength_nm: float, fields_deg: list[float] | None =
     ep_z, ep_radius, xp_z, xp_radius, xp_f_number = _pupils(lens, wavelength_nm, ya, yb)
     ym, um, obj_z = _marginal_ray(lens, wavelength_nm, ya, ua)
     focus_z = z[last] - ym[last] / um[last]
-    refracting = [k for k in range(last + 1) if n[k + 1] != n[k]]
+    refracting = [k for k in range(last + 1) if n[k + 1] != n[k] or lens.surfaces[k].ideal]
     bfd = focus_z - z[refracting[-1] if refracting else last]
     image_z = lens.image_z
     fields = list(fields_deg) if fields_deg is not None else [0.0, lens.field_deg]

@@ -138,6 +138,10 @@ def dumps(lens) -> str:
     five columns, n_d and V_d of each glass from its dispersion formula (0 for air)."""
     if not lens.at_infinity:
         raise SolasError(f"lens {lens.name}: a .dat lens table holds no object distance; its object is at infinity")
+    ideal = [i for i, s in enumerate(lens.surfaces, start=1) if s.ideal]
+    if ideal:
+        raise SolasError(f"lens {lens.name}: surface {ideal[0]} is an ideal thin lens (focal_length); a .dat lens "
+                         "table holds spheres only; save it as .toml or .zmx")
     bad = [i for i, s in enumerate(lens.surfaces, start=1) if not s.is_sphere]
     if bad:
         raise SolasError(f"lens {lens.name}: surface {bad[0]} is aspheric; a .dat lens table holds spheres only")

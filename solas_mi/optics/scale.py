@@ -29,7 +29,8 @@ def scaled(lens: Lens, factor: float) -> Lens:
 def _surface(surface: Surface, s: float) -> Surface:
     return replace(surface, radius=surface.radius * s, thickness=surface.thickness * s, diameter=surface.diameter * s,
                    aspheric=tuple(a * s ** (1 - 2 * (i + 2)) for i, a in enumerate(surface.aspheric)),
-                   qbfs=tuple(a * s for a in surface.qbfs), norm_radius=surface.norm_radius * s)
+                   qbfs=tuple(a * s for a in surface.qbfs), norm_radius=surface.norm_radius * s,
+                   focal_length=None if surface.focal_length is None else surface.focal_length * s)
 
 
 def image_scale_mm(lens: Lens) -> float:

@@ -1,7 +1,7 @@
 """Sequential ray tracer in Dr.Jit Float64 (LLVM): exact spheres, planes, conics (closed form) and
 even aspheres (Newton's method from the conic root, exact normal), Snell's law per wavelength,
 clipping at every clear aperture and the stop, total internal reflection flagged, optical path length
-accumulated.
+accumulated; ideal thin lenses bend rays and add the path that images their pencil perfectly (`ideal`).
 
 Rays are vectorised Dr.Jit arrays; nothing here loops over rays in Python. `launch` and `trace` work on
 the array type of the rays they are given: `drjit.llvm.Float64` (the default `F`, for the analyses),
@@ -21,10 +21,11 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..llvm import import_drjit
+from . import ideal
 from .fields import ANGLE
 from .lens import Lens
 from .sag import sag, sag_slope
-from .paraxial import paraxial
+from .paraxial import ideal_conjugates, paraxial
 
 dr = import_drjit()
 from drjit.llvm import Bool, Float64, UInt32  # noqa: E402
@@ -187,6 +188,7 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False, heigh
     stop_x = stop_y = None
     n_before = refractive_index(lens.object_glass, wavelength_um)
     opl = opl * n_before  # a launch's geometric path in object space
+    conjugates = ideal_conjugates(lens) if any(s.ideal for s in lens.surfaces) else {}
     for k, (s, zv) in enumerate(zip(lens.surfaces, lens.vertex_z)):
         sideways = k == 0 and lens.field_type.sideways  # rays from the side or behind
         x, y, lz, t, opl, hit = _to_surface(s, zv, Rays(x, y, z, dx, dy, dz, opl), n_before, sideways, ftype)
@@ -201,7 +203,11 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False, heigh
         if s.stop:
             stop_x, stop_y = x, y
         n_after = refractive_index(s.glass, wavelength_um)
-        if s.glass != (lens.surfaces[k - 1].glass if k else lens.object_glass):
+        if s.ideal:
+            (dx, dy, dz), delta = ideal.deflect(x, y, (dx, dy, dz), n_before, n_after, _opaque(1.0 / s.focal_length, ftype),
+                                                _opaque(conjugates[k], ftype), dr.sqrt)
+            opl = opl + delta
+        elif s.glass != (lens.surfaces[k - 1].glass if k else lens.object_glass):
             (dx, dy, dz), k2, factor = _refract(s, x, y, lz, r2, (dx, dy, dz), n_before / n_after, fresnel, ftype)
             tir |= k2 < 0
             ok &= k2 >= 0

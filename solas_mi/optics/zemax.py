@@ -11,7 +11,7 @@ Read as the author meant it:
   surface), QED_TYPE (OpticStudio's Q-type asphere: XDAT 1 the type, 0 Qbfs or 1 Qcon, XDAT 2 the number
   of terms, XDAT 3 the normalisation radius, XDAT 4… a0, a1, …; Qbfs kept as such, Qcon rewritten exactly
   as even-asphere terms, `forbes`), COORDBRK when it is a pure axial shift (its DISZ added to the gap) or undone by the next
-  coordinate break; flat air surfaces without a clear aperture of their own (no DIAM, or DIAM's solve type
+  coordinate break; PARAXIAL, the ideal thin lens (`ideal`: PARM 1 the focal length, PARM 2 the OPD mode); flat air surfaces without a clear aperture of their own (no DIAM, or DIAM's solve type
   0, automatic: it cuts no ray) (dummies) are dropped,
   their thickness added to the gap. STOP, COMM (the label), CONI, CURV (1/unit), DISZ.
 - Clear apertures: DIAM (the semi-diameter); where absent or 0, Zemax's automatic semi-diameter:
@@ -35,27 +35,20 @@ refused naming the surface and the feature.
 from __future__ import annotations
 
 import math
-import re
 
 from ..errors import SolasError
-from . import forbes
+from . import forbes, ideal
 from . import glass as glass_mod
 from . import zemax_solves
-from .formats import READERS, WRITERS
+from .formats import READERS, WRITERS, one_line
 from .formats import floats as _floats
 
 UNITS = {"MM": 1.0, "CM": 10.0, "IN": 25.4, "METER": 1000.0, "M": 1000.0}
-SURFACE_TYPES = ("STANDARD", "EVENASPH", "ODDASPH", "QED_TYPE", "COORDBRK")
+SURFACE_TYPES = ("STANDARD", "EVENASPH", "ODDASPH", "QED_TYPE", "COORDBRK", "PARAXIAL")
 FIELD_TYPES = {"0": "angle", "1": "object height", "2": "paraxial image height", "3": "real image height"}
 # GCAT catalogue names → our vendors (Zemax's NIKON catalogue is Hikari's glass).
 GCAT_VENDORS = {**{v: v for v in glass_mod.VENDORS}, "NIKON": "HIKARI", "NIKON-HIKARI": "HIKARI"}
 DEFAULT_CATALOGUE = "SCHOTT"  # what OpticStudio uses for a file that names no catalogue
-_CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029]")
-
-
-def one_line(text: str) -> str:
-    """`text` with every line break and control character made a space: what a .zmx line may hold."""
-    return _CONTROL.sub(" ", text)
 
 
 def _blocks(text: str, where: str) -> tuple[dict, list[dict]]:
@@ -125,6 +118,7 @@ def read_spec(text: str, where: str) -> dict:
                                "default (the file names no GCAT)")
     spec["object"] = _object(blocks[0], scale, gcat, where)
     rows = [_surface(b, i, scale, gcat, where) for i, b in enumerate(blocks[1:-1], start=1)]
+    spec.update(ideal.zemax_notes(rows, spec.get("description")))
     spec["surface"] = _fold(rows, where)
     if "DIAM" in blocks[-1]:
         semi = _floats(blocks[-1]["DIAM"][0][:1], f"{where}: image DIAM")[0] * scale
@@ -187,6 +181,8 @@ def _surface(b: dict, i: int, scale: float, gcat: tuple[str, ...], where: str) -
             row["aspheric"] = terms
     elif kind == "QED_TYPE":
         row.update(_q_type(b, scale, ident))
+    elif kind == "PARAXIAL":
+        row.update(ideal.from_zemax(_parameters(b, ident), scale, ident))
     if "STOP" in b:
         row["stop"] = True
     return row
@@ -256,7 +252,7 @@ def _fold(rows: list[dict], where: str) -> list[dict]:
             i += span
             continue
         air_before = not out or out[-1]["material"].upper() == "AIR"
-        dummy = (row["radius"] == 0 and not row.get("stop") and not row.get("aspheric") and not row.get("qbfs")
+        dummy = (row["radius"] == 0 and not row.get("stop") and not row.get("aspheric") and not row.get("qbfs") and "focal_length" not in row
                  and (row["diameter"] is None or row["auto"])
                  and row["material"].upper() == "AIR" and air_before and out)
         if dummy:
@@ -264,7 +260,7 @@ def _fold(rows: list[dict], where: str) -> list[dict]:
         else:
             out.append(row)
         i += 1
-    return [{k: v for k, v in row.items() if k not in ("ident", "auto")} for row in out]
+    return [{k: v for k, v in row.items() if k not in ("ident", "auto", "opd_mode")} for row in out]
 
 
 def _break_shift(rows: list[dict], i: int) -> float | None:
@@ -376,7 +372,7 @@ def dumps(lens) -> str:
     for i, s in enumerate(lens.surfaces, start=1):
         out += [f"SURF {i}", f"  TYPE {_surface_type(s, i)}", f"  COMM {one_line(s.label)}",
                 f"  CURV {number(s.curvature)}"]
-        out += [f"  PARM {k} {number(a)}" for k, a in enumerate(s.aspheric, start=2)]
+        out += [f"  PARM {k} {number(a)}" for k, a in enumerate(s.aspheric, start=2)] + ideal.to_zemax(s.focal_length)
         if any(s.qbfs):
             out += [f"  XDAT {k} {number(v)}" for k, v in
                     enumerate((0.0, float(len(s.qbfs)), s.norm_radius, *s.qbfs), start=1)]
@@ -393,7 +389,7 @@ def _surface_type(s, i: int) -> str:
     if any(s.qbfs) and any(s.aspheric):
         raise SolasError(f"surface {i} ({s.label}): Qbfs and even-asphere terms together have no .zmx surface "
                          "type; save it as .toml")
-    return "QED_TYPE" if any(s.qbfs) else "EVENASPH" if any(s.aspheric) else "STANDARD"
+    return "PARAXIAL" if s.ideal else "QED_TYPE" if any(s.qbfs) else "EVENASPH" if any(s.aspheric) else "STANDARD"
 
 
 READERS[".zmx"] = read_spec

@@ -70,6 +70,11 @@ def lens_parts(lens: Lens, rings: int | None = None, image_radius: float = 0.0) 
     largest clear aperture plus 10 mm, or more to hold the image plane out to `image_radius` mm (the
     sensor's corners, a PSF's window): a barrel narrower than the image cut off the light that arrives
     there (Cooke triplet at 32°: its light lands 31 mm off axis, outside a 30 mm barrel)."""
+    ideal = next((k for k, s in enumerate(lens.surfaces, start=1) if s.ideal), None)
+    if ideal is not None:
+        raise SolasError(f"surface {ideal} of lens {lens.name} is an ideal thin lens (focal_length), which has no glass "
+                         "to build as Mitsuba geometry; trace it instead: the lens camera (a scene file's sensor, "
+                         "`render.user_scene`) or a tracer PSF method (fraunhofer, geometric)")
     rings = resolve_rings(lens, rings)
     check_gaps(lens)
     parts = []

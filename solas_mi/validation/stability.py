@@ -154,6 +154,8 @@ def _glass_limits(lens: Lens) -> list[Case]:
     glasses = {s.glass for s in lens.surfaces} | {lens.object_glass}
     lo = max(g.range_nm[0] for g in glasses)
     hi = min(g.range_nm[1] for g in glasses)
+    if lo == 0.0 and math.isinf(hi):  # air and ideal lenses alone: no wavelength limit to try
+        return [Case("glass limits", "none where no medium has a range", "every medium holds at every wavelength", True)]
     cases = []
     for w in (lo, hi):
         efl = paraxial(lens, w).efl_mm
@@ -169,7 +171,10 @@ def _glass_limits(lens: Lens) -> list[Case]:
 
 
 def _near_flat(lens: Lens, wl: float) -> Case:
-    k = next((i for i, s in enumerate(lens.surfaces) if s.radius == 0.0), 0)
+    real = [i for i, s in enumerate(lens.surfaces) if not s.ideal]
+    if not real:
+        return Case("near-flat surface", "none in a lens of ideal lenses alone", "no surface to bend", True)
+    k = next((i for i in real if lens.surfaces[i].radius == 0.0), real[0])
     flat = replace(lens, surfaces=tuple(replace(s, radius=0.0) if i == k else s for i, s in enumerate(lens.surfaces)))
     near = replace(flat, surfaces=tuple(replace(s, radius=1e12) if i == k else s for i, s in enumerate(flat.surfaces)))
     fields = np.array([[0.0, 0.0], [0.0, lens.field_deg]])
