@@ -68,12 +68,15 @@ def test_an_input_named_with_a_newline_gives_a_plain_output_name(tmp_path):
 def test_a_cache_entry_is_reused_only_when_it_is_the_lens_grid_whole(doublet, triplet, tmp_path, capsys):
     import shutil
 
+    from strict_json import strict_loads
+
     cache = GridCache(tmp_path / "cache")
     spec = GridSpec(grid=(2, 2), size=16, pupil_samples=16)
     a, hit, _ = cache.get(doublet, spec)
     b, _, _ = cache.get(triplet, spec)
     assert not hit and cache.get(doublet, spec)[1] and (cache.hits, cache.misses) == (1, 2)
     good = PSFGrid.read(str(a)).data
+    assert strict_loads(Path(f"{a}.json").read_text())["key"]["lens_hash"] == doublet.hash  # its record
 
     def same(path):
         return np.array_equal(PSFGrid.read(str(path)).data, good)

@@ -108,6 +108,18 @@ def test_lens_info_says_why_the_illumination_is_undefined(monkeypatch, capsys):
     assert table["relative_illumination"] == [None] * len(table["field_deg"]) and table["image_height_mm"][-1] > 0
 
 
+def test_lens_list_json_is_strict(capsys):
+    from strict_json import strict_loads
+
+    from solas_mi.cli import main
+    from solas_mi.optics.lens import shipped_lenses
+
+    assert main(["lens", "list", "--json"]) == 0
+    rows = strict_loads(capsys.readouterr().out)
+    assert [r["name"] for r in rows] == list(shipped_lenses())
+    assert next(r for r in rows if r["name"] == "solas-doublet")["efl_mm"] == pytest.approx(99.95, abs=0.01)
+
+
 TELECENTRIC = """name = "image-telecentric"
 [[surface]]
 radius = 0.0
