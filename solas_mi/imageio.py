@@ -121,7 +121,10 @@ def write_exr(path: str | os.PathLike, channels: dict[str, np.ndarray], meta: di
     compression = OpenEXR.ZIP_COMPRESSION if compress else OpenEXR.NO_COMPRESSION
     header = {"compression": compression, "type": OpenEXR.scanlineimage}
     if meta is not None:
-        header[META_KEY] = jsonio.dumps(meta)
+        try:
+            header[META_KEY] = jsonio.dumps(meta)
+        except SolasError as exc:
+            raise SolasError(f"{path}: metadata: {exc}") from None
     data = {name: np.ascontiguousarray(a, dtype=np.float16 if half else np.float32) for name, a in channels.items()}
     with atomic_path(path) as tmp:
         with OpenEXR.File(header, data) as f:

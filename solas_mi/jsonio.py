@@ -25,14 +25,14 @@ INFINITY = "inf"  # how an infinite number is written; "-inf" below zero
 _OLD_TOKENS = {"Infinity": INFINITY, "-Infinity": "-" + INFINITY, "NaN": math.nan}
 
 
-def plain(value: Any, where: str = "") -> Any:
+def _plain(value: Any, where: str = "") -> Any:
     """`value` with every infinite number (Python or NumPy float, in dicts, lists and tuples) as "inf"
     or "-inf" and NumPy numbers as Python ones; SolasError naming the key of a NaN (`where`: the
     path so far)."""
     if isinstance(value, dict):
-        return {k: plain(v, f"{where}.{k}" if where else str(k)) for k, v in value.items()}
+        return {k: _plain(v, f"{where}.{k}" if where else str(k)) for k, v in value.items()}
     if isinstance(value, (list, tuple)):
-        return [plain(v, f"{where}[{i}]") for i, v in enumerate(value)]
+        return [_plain(v, f"{where}[{i}]") for i, v in enumerate(value)]
     if isinstance(value, numbers.Integral) and not isinstance(value, int):
         return int(value)  # a NumPy integer
     if isinstance(value, numbers.Real) and not isinstance(value, int):
@@ -49,7 +49,7 @@ def plain(value: Any, where: str = "") -> Any:
 def dumps(value: Any, **options) -> str:
     """`value` as strict JSON text (`json.dumps` `options`: indent, sort_keys, default …): infinities
     as "inf"/"-inf", NumPy numbers as numbers, SolasError naming the key of a NaN."""
-    return json.dumps(plain(value), allow_nan=False, **options)
+    return json.dumps(_plain(value), allow_nan=False, **options)
 
 
 def loads(text: str | bytes) -> Any:

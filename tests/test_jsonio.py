@@ -41,7 +41,7 @@ def test_exr_metadata_with_a_nan_is_refused_before_anything_is_written(tmp_path)
     from solas_mi.imageio import read_exr, write_exr
 
     path = tmp_path / "m.exr"
-    with pytest.raises(SolasError, match=r"noise\.rms is NaN"):
+    with pytest.raises(SolasError, match=r"m\.exr: metadata: noise\.rms is NaN"):
         write_exr(path, {"Y": np.zeros((2, 2), np.float32)}, {"noise": {"rms": math.nan}})
     assert list(tmp_path.iterdir()) == []
     write_exr(path, {"Y": np.zeros((2, 2), np.float32)}, {"object_distance": math.inf})
