@@ -11,7 +11,6 @@ Prints a Markdown table.
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import resource
 import statistics
@@ -23,6 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
+from solas_mi import jsonio
 from solas_mi.psf import psf_grid
 
 CACHE = Path(__file__).resolve().parent.parent / "out" / "bench"
@@ -112,7 +112,7 @@ def main() -> None:
     ap.add_argument("--tries", type=int, default=1, help="runs of a case at most (the least loaded is shown)")
     args = ap.parse_args()
     if args.case:
-        print(json.dumps(run_case(args.case, args.repeats)))
+        print(jsonio.dumps(run_case(args.case, args.repeats)))
         return
     for grid in sorted({CASES[c][0] for c in args.cases.split(",")}):
         grid_path(grid)
@@ -125,7 +125,7 @@ def main() -> None:
         for _ in range(args.tries):  # a shared machine: retry while other processes load it
             out = subprocess.run([sys.executable, __file__, "--case", name, "--repeats", str(args.repeats)],
                                  check=True, capture_output=True, text=True).stdout
-            r = json.loads(out.strip().splitlines()[-1])
+            r = jsonio.loads(out.strip().splitlines()[-1])
             if best is None or r["other_load_cores"] < best["other_load_cores"]:
                 best = r
             if r["other_load_cores"] <= args.max_other_load:

@@ -364,7 +364,7 @@ def main():
         cases=cases,
     )
     with open(os.path.join(args.out, "README.json"), "w") as f:
-        json.dump(readme, f, indent=1)
+        json.dump(readme, f, indent=1, allow_nan=False)  # strict JSON: no NaN/Infinity tokens
     print("wrote", os.path.join(args.out, "krakenos_psfs.npz"), "in %.1f s" % t_total)
 
 

@@ -19,7 +19,6 @@ Several minutes on 2 cores (four 64-spp renders, three field grids over 17 dista
 """
 from __future__ import annotations
 
-import json
 import math
 import sys
 import time
@@ -28,6 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
+from solas_mi import jsonio
 from solas_mi.experiments.street import depth as D
 from solas_mi.experiments.street import run as R
 from solas_mi.experiments.street.measure import FAR_M
@@ -89,7 +89,7 @@ def main(size: str = "1280x960", out: str = "out/street_far_error") -> dict:
             rows[label] = row
             print(label, " ".join(f"{key} {100 * row[key]:.2f} %" for key in KEYS), flush=True)
         del grid
-    (out_dir / "far_error.json").write_text(json.dumps(dict(size=[w, h], variants=rows), indent=1))
+    (out_dir / "far_error.json").write_text(jsonio.dumps(dict(size=[w, h], variants=rows), indent=1))
     return rows
 
 

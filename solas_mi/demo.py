@@ -6,10 +6,10 @@ its depth and instance layers."""
 from __future__ import annotations
 
 import argparse
-import json
 from contextlib import redirect_stdout
 from pathlib import Path
 
+from . import jsonio
 from .cli import main as solas_mi
 from .imageio import atomic_path, read_image
 from .resources import resource_dir
@@ -48,7 +48,7 @@ def run(out: Path) -> None:
     cli(["sfr", str(edge)])
     camera = camera_frame(out)
     cli(["experiment", "street", "--lens", "solas-doublet", "-o", str(out / "street")])
-    print(json.dumps({"results": str(out.resolve()), "paraxial": "lens_info.txt", "psfs": "psf/*.exr|png",
+    print(jsonio.dumps({"results": str(out.resolve()), "paraxial": "lens_info.txt", "psfs": "psf/*.exr|png",
                       "grids": "psf_grid_8x8.exr|png, psf_grid_32x32.exr|png", **degraded,
                       "slanted edge": "sfr/edge_5deg_sigma1px.png",
                       **camera,

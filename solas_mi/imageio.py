@@ -4,7 +4,6 @@ Every writer is atomic: it writes a temporary file beside the target and renames
 """
 from __future__ import annotations
 
-import json
 import os
 import tempfile
 import warnings
@@ -15,6 +14,7 @@ from typing import Iterator
 
 import numpy as np
 
+from . import jsonio
 from .errors import SolasError
 
 META_KEY = "solas_mi"
@@ -121,7 +121,10 @@ def write_exr(path: str | os.PathLike, channels: dict[str, np.ndarray], meta: di
     compression = OpenEXR.ZIP_COMPRESSION if compress else OpenEXR.NO_COMPRESSION
     header = {"compression": compression, "type": OpenEXR.scanlineimage}
     if meta is not None:
-        header[META_KEY] = json.dumps(meta)
+        try:
+            header[META_KEY] = jsonio.dumps(meta)
+        except SolasError as exc:
+            raise SolasError(f"{path}: metadata: {exc}") from None
     data = {name: np.ascontiguousarray(a, dtype=np.float16 if half else np.float32) for name, a in channels.items()}
     with atomic_path(path) as tmp:
         with OpenEXR.File(header, data) as f:
@@ -154,7 +157,7 @@ def read_exr(path: str | os.PathLike) -> tuple[dict[str, np.ndarray], dict]:
         with OpenEXR.File(str(path), separate_channels=True) as f:
             header = f.header()
             # read the metadata before the pixels: loading channels rebuilds the header dictionary
-            meta = json.loads(header[META_KEY]) if META_KEY in header else {}
+            meta = jsonio.loads(header[META_KEY]) if META_KEY in header else {}
             channels = {name: np.array(c.pixels) for name, c in f.channels().items()}
     except (RuntimeError, OSError, ValueError) as exc:  # not an EXR, truncated, bad metadata
         raise SolasError(f"cannot read {path} as OpenEXR: {str(exc).splitlines()[0] if str(exc) else exc}") from None

@@ -3,6 +3,7 @@ errors as one line naming the bad value."""
 import numpy as np
 import pytest
 from PIL import Image
+from strict_json import strict_loads
 
 from solas_mi import __version__
 from solas_mi.cli import main
@@ -67,4 +68,4 @@ def test_no_measurement_says_so_on_stderr(tmp_path, capsys):
     PHOTO_SMALL.save(tmp_path / "flat.png")
     assert main(["sfr", str(tmp_path / "flat.png"), "--json"]) == 1
     out, err = capsys.readouterr()
-    assert '"results": []' in out and "no valid edge measured" in err
+    assert strict_loads(out)["results"] == [] and "no valid edge measured" in err

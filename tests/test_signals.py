@@ -2,7 +2,6 @@
 (`render.loop.STEPS_PER_PASS`, `render.stock.SAMPLES_PER_PASS`, the render PSF's ray chunks) and a
 signal is answered between them; an interruption that a library reports as its own error (a scene's
 plugin interrupted while Mitsuba loads it) is still an interruption, not an error."""
-import json
 import os
 import signal
 import subprocess
@@ -11,6 +10,7 @@ import time
 from pathlib import Path
 
 import pytest
+from strict_json import strict_loads
 
 from solas_mi.cli import main
 from solas_mi.errors import SolasError, plugin_error
@@ -72,7 +72,7 @@ def test_batch_render_stops_within_a_pass(tmp_path):
     seconds, err = stop(p, signal.SIGTERM)
     assert p.returncode == 143, err
     assert seconds < STOP_S, f"{seconds:.2f} s from SIGTERM to the end"
-    items = {Path(i["output"]).name: i["status"] for i in json.loads((out / "batch.json").read_text())["items"]}
+    items = {Path(i["output"]).name: i["status"] for i in strict_loads((out / "batch.json").read_text())["items"]}
     assert items == {"f_spp16.exr": "done", "f_spp256.exr": "interrupted"}, items
     assert sorted(f.name for f in out.iterdir()) == ["batch.json", "f_spp16.exr", "f_spp16.png"]
     assert not [f for f in tmp_path.iterdir() if f.name.startswith("solas-")]  # no scene folder left

@@ -11,12 +11,12 @@ The default folder is the user's cache directory (`platformdirs`), e.g. ~/.cache
 from __future__ import annotations
 
 import hashlib
-import json
 import os
 import sys
 import time
 from pathlib import Path
 
+from .. import jsonio
 from ..errors import SolasError
 from ..outputs import inside, safe_name
 
@@ -61,10 +61,10 @@ class GridCache:
         """None when the entry at `path` is the grid of `lens` with `spec`, whole (its record beside it,
         `NAME.exr.json`, holds its key and its SHA-256, both matching); else why it is not."""
         try:
-            record = json.loads(Path(f"{path}.json").read_text())
+            record = jsonio.loads(Path(f"{path}.json").read_text())
         except (OSError, ValueError):
             return "it has no readable record of its key and checksum"
-        if not isinstance(record, dict) or record.get("key") != json.loads(json.dumps(self.entry_key(lens, spec))):
+        if not isinstance(record, dict) or record.get("key") != jsonio.loads(jsonio.dumps(self.entry_key(lens, spec))):
             return "its record names another lens or grid options"
         if record.get("sha256") != file_hash(path, full=True):
             return "its content does not match its checksum (changed or truncated)"
@@ -91,6 +91,6 @@ class GridCache:
         except OSError as exc:
             raise SolasError(f"cannot create cache folder {self.folder}: {exc.strerror or exc}") from None
         grid.write(str(path))  # atomic: a concurrent batch computing the same grid writes the same file
-        write_text(f"{path}.json", json.dumps({"key": self.entry_key(lens, spec), "sha256": file_hash(path, full=True)},
+        write_text(f"{path}.json", jsonio.dumps({"key": self.entry_key(lens, spec), "sha256": file_hash(path, full=True)},
                                               indent=1) + "\n")
         return path, False, time.perf_counter() - start

@@ -11,13 +11,13 @@ JSON whenever it is read, also after the batch was killed.
 from __future__ import annotations
 
 import glob
-import json
 import os
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any, Callable, Iterable
 
+from .. import jsonio
 from ..errors import SolasError
 from ..outputs import inside, safe_name
 from .cache import file_hash
@@ -168,7 +168,7 @@ class Manifest:
     def previous(path: Path) -> dict[str, Any]:
         """The manifest a former run left (empty when there is none or it cannot be read)."""
         try:
-            data = json.loads(path.read_text())
+            data = jsonio.loads(path.read_text())
             return data if isinstance(data, dict) else {}
         except (OSError, ValueError):
             return {}
@@ -184,7 +184,7 @@ class Manifest:
         skipped = 0
         for job in self.jobs:
             before = done.get((job.input, job.output))
-            if before is not None and before.get("params", {}) == json.loads(json.dumps(job.params)):
+            if before is not None and before.get("params", {}) == jsonio.loads(jsonio.dumps(job.params)):
                 job.outputs, job.input_hash = before.get("outputs") or {}, before.get("input_hash")
                 if isinstance(job.outputs, dict) and job.finished():
                     job.status, job.seconds, job.seed = "skipped", before.get("seconds"), before.get("seed")
@@ -208,5 +208,5 @@ class Manifest:
             return
         data = {**self.header, "updated": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "summary": self.summary(),
                 "items": [asdict(job) for job in self.jobs]}
-        write_text(self.path, json.dumps(data, indent=1) + "\n")
+        write_text(self.path, jsonio.dumps(data, indent=1) + "\n")
         self._saved = now

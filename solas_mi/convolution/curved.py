@@ -39,7 +39,7 @@ from ..errors import SolasError
 from ..optics.camera import Camera
 from ..optics.frame import FISHEYE, FrameCamera
 from ..psf.grid import PSFGrid
-from .kernels import (Layout, batches, check_frame_covered, fast_len, fft_convolve, kernel_radius, layout, pad,
+from .kernels import (Layout, batches, check_frame_covered, fast_len, fft_convolve, hat, kernel_radius, layout, pad,
                       parallel_map, psf_scale)
 
 SUMMARY = "PSFs interpolated bilinearly in field angle at every pixel of a fisheye frame, drawn in its pixels"
@@ -191,13 +191,12 @@ def convolve_channel(channel: np.ndarray, grid: PSFGrid, lay: CurvedLayout, wave
     inside[:height + 2 * margin, :width + 2 * margin] = True
     edge = margin + radius + shift_max
     acc = np.zeros((height + 2 * edge + shape[0], width + 2 * edge + shape[1]), dtype=dtype)
-    eye_x, eye_y = np.eye(len(lay.col_knots)), np.eye(len(lay.row_knots))
 
     def work(sl: slice):
         tiles = np.empty((sl.stop - sl.start, ly, lx), dtype=dtype)
         for t, (i, j, (r0, c0)) in enumerate(zip(rows[sl], cols[sl], lo[sl])):
             box = (slice(r0, r0 + ly), slice(c0, c0 + lx))
-            w = hat(field[0][box], lay.col_knots, eye_x[j]) * hat(field[1][box], lay.row_knots, eye_y[i])
+            w = hat(field[0][box], lay.col_knots, j) * hat(field[1][box], lay.row_knots, i)
             tiles[t] = padded[box] * (w * inside[box])
         kernels, shift = node_kernels(grid, lay, wavelength, rows[sl], cols[sl], radius, dtype)
         return lo[sl] - margin - radius + shift + edge, fft_convolve(tiles, kernels, shape)
@@ -206,11 +205,6 @@ def convolve_channel(channel: np.ndarray, grid: PSFGrid, lay: CurvedLayout, wave
         for (r, c), res in zip(at, result):
             acc[r:r + shape[0], c:c + shape[1]] += res
     return acc[edge:edge + height, edge:edge + width].copy()
-
-
-def hat(values: np.ndarray, knots: np.ndarray, unit: np.ndarray) -> np.ndarray:
-    """The hat weight of the node whose row of the identity is `unit` at `values` (clamped at the ends)."""
-    return np.interp(values, knots, unit) if len(knots) > 1 else np.ones_like(values)
 
 
 def describe(lay: CurvedLayout, radius: int, wavelengths: list[int]) -> dict:

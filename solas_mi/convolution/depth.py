@@ -56,7 +56,7 @@ from ..errors import SolasError
 from ..imageio import check_finite
 from . import interp
 from .curved import frame_layout
-from .kernels import channel_wavelengths, check_boundary, check_kernel
+from .kernels import channel_wavelengths, check_boundary, check_kernel, hats_at
 
 OCCLUSIONS = ("filled", "layered", "none")
 SILHOUETTES = ("nearest", "as-given")  # a silhouette's mixed-depth pixels: the nearest depth around them, or as given
@@ -97,8 +97,7 @@ def silhouette_depth(depth: np.ndarray, silhouette: str = "nearest") -> tuple[np
 def layer_weights(inverse: np.ndarray, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Hat weights (L, H, W) in 1/distance of each node, clamped at the ends, and each pixel's slab
     index (H, W): k where nodes[k] ≤ u < nodes[k+1] (0 below the first node, L−1 from the last on)."""
-    eye = np.eye(len(nodes))
-    w = np.stack([np.interp(inverse, nodes, e) for e in eye]) if len(nodes) > 1 else np.ones((1, *inverse.shape))
+    w = hats_at(inverse, nodes)
     slab = np.clip(np.searchsorted(nodes, inverse, side="right") - 1, 0, len(nodes) - 1)
     return w, slab
 

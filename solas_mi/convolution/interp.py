@@ -35,7 +35,8 @@ import numpy as np
 
 from ..psf.grid import PSFGrid
 from . import curved
-from .kernels import Layout, batches, fast_len, fft_convolve, kernel_radius, node_kernels, pad, parallel_map
+from .kernels import (Layout, batches, fast_len, fft_convolve, hats_at, kernel_radius, node_kernels, pad,
+                      parallel_map)
 
 SUMMARY = "PSFs interpolated bilinearly between grid nodes at every pixel: no seams"
 
@@ -45,9 +46,7 @@ def hats(knots: np.ndarray, first: int, count: int) -> tuple[np.ndarray, np.ndar
 
     Returns the indices of the nodes with any weight there, each one's first pixel of support (relative
     to `first`), its weights over a common window of L pixels from there, and L."""
-    x = first + np.arange(count, dtype=np.float64)
-    eye = np.eye(len(knots))
-    w = np.stack([np.interp(x, knots, e) for e in eye])  # np.interp clamps: a partition of unity
+    w = hats_at(first + np.arange(count, dtype=np.float64), knots)  # clamped: a partition of unity
     used = np.flatnonzero(w.max(axis=1) > 0)
     nz = w[used] > 0
     lo = np.argmax(nz, axis=1)

@@ -216,6 +216,21 @@ def check_kernel(grid: PSFGrid, lay: Layout) -> int:
     return radius
 
 
+def hat(x: np.ndarray, knots: np.ndarray, node: int) -> np.ndarray:
+    """The hat (tent) weight of node `node` of the increasing `knots` at the points `x` (float64): 1 at
+    its knot, falling linearly to 0 at its neighbours', the end nodes held at 1 beyond the ends, so
+    that the weights of all the nodes sum to 1 (linear interpolation between nodes, clamped); one
+    knot: 1 everywhere. The weights of the PSF grid's nodes across the field and across depth."""
+    unit = np.zeros(len(knots))
+    unit[node] = 1.0
+    return np.interp(x, knots, unit)
+
+
+def hats_at(x: np.ndarray, knots: np.ndarray) -> np.ndarray:
+    """Every node's `hat` weight at `x`: (len(knots), *x.shape)."""
+    return np.stack([hat(x, knots, k) for k in range(len(knots))])
+
+
 def tent_cdf(t: np.ndarray) -> np.ndarray:
     """∫_{−∞}^{t} max(0, 1 − |u|) du = 1/2 + t − t·|t|/2 for |t| ≤ 1 (t is overwritten)."""
     np.clip(t, -1.0, 1.0, out=t)

@@ -146,10 +146,9 @@ def write_output(output: Path, second: Path, out: np.ndarray, names: list[str] |
 def write_png16_with_meta(path: str, meta_path: str, image: np.ndarray, meta: dict) -> None:
     """`image` as a 16-bit sRGB PNG (more than 3 channels: their mean, as the preview) and `meta` as JSON,
     saying how many values were clipped to [0, 1] and how to read the file back to linear values."""
-    import json
-
+    from .. import jsonio
     from ..imageio import write_png16, write_text
 
     meta["png16"] = {"clipped_values": write_png16(path, image), "encoding": "sRGB, 16 bits; values clipped to "
                      "[0, 1]; read back linear with solas_mi.imageio.read_image (within 2e-5)"}
-    write_text(meta_path, json.dumps(meta, indent=1, default=str) + "\n")
+    write_text(meta_path, jsonio.dumps(meta, indent=1, default=str) + "\n")

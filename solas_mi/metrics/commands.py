@@ -6,12 +6,12 @@ the parser costs the other commands nothing; they validate --mode, --annuli and 
 from __future__ import annotations
 
 import argparse
-import json
 import math
 import sys
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from .. import jsonio
 from ..errors import SolasError
 from ..options import parse_wxh
 
@@ -69,7 +69,7 @@ def run_sfr(args: argparse.Namespace) -> int:
     results = [(roi, esfr(crop(image, roi), mode=args.mode, full_scale=full_scale, channel=channel))
                for roi in rois]
     if args.json:
-        print(json.dumps({
+        print(jsonio.dumps({
             "image": args.image, "mode": args.mode, "rois_from": "user" if args.roi else "auto",
             "results": [{"roi": list(roi), **res.to_dict()} for roi, res in results],
         }, indent=1))
@@ -130,7 +130,7 @@ def run_ss_sfr(args: argparse.Namespace) -> int:
     if args.plot:
         plot_report(report, image, args.plot)
     if args.json:
-        print(json.dumps({"image": args.image, "compare": args.compare, **report.to_dict()}, indent=1))
+        print(jsonio.dumps({"image": args.image, "compare": args.compare, **report.to_dict()}, indent=1))
     else:
         what = f"{args.image} vs {args.compare}" if args.compare else args.image
         print(f"{what}: natural-scene SFR, {len(report.rois)} edge ROIs, MTF50 in cy/px "

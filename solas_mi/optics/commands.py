@@ -3,11 +3,11 @@ table (image height vs field, closest projection) of a lens, as a table or JSON;
 `solas-mi lens convert`: a lens file in another format (.toml, .zmx, .dat)."""
 from __future__ import annotations
 
-import json
 from typing import Any
 
 import numpy as np
 
+from .. import jsonio
 from ..options import add_lens_argument, floats
 from . import ideal
 
@@ -42,7 +42,7 @@ def run_lens_info(args) -> int:
         table = distortion(lens, sorted({abs(f) for f in fields} | {0.0}) if args.fields else None)
     info["distortion"] = table.as_dict() if table else None
     if args.json:
-        print(json.dumps(info, indent=2))
+        print(jsonio.dumps(info, indent=2))
         return 0
     print(f"{lens.name}  ({lens.description})  hash {lens.hash}")
     print(f"stop: surface {lens.stop_index + 1}; image plane z = {lens.image_z:.6f} mm, diameter {lens.image_diameter:g} mm")
@@ -86,7 +86,7 @@ def run_lens_list(args) -> int:
         rows.append({"name": name, "source": lens.description, "efl_mm": p.efl_mm, "f_number": p.f_number,
                      "field_deg": lens.field_deg, "wavelength_nm": lens.primary_wavelength})
     if args.json:
-        print(json.dumps(rows, indent=2))
+        print(jsonio.dumps(rows, indent=2))
         return 0
     print(f"{'name':20s}{'EFL (mm)':>10s}{'f/#':>7s}{'field (deg)':>13s}  source")
     for r in rows:

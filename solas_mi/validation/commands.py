@@ -5,11 +5,11 @@ come from `options.add_image_input_options`."""
 from __future__ import annotations
 
 import argparse
-import json
 import sys
 from pathlib import Path
 from typing import Any
 
+from .. import jsonio
 from ..convolution.kernels import BOUNDARIES
 from ..errors import SolasError
 from ..optics.lens import Lens
@@ -92,7 +92,7 @@ def _crossval_fisheye(args: argparse.Namespace, lens) -> int:
     env = load_input(args.image, linear=args.linear).mean(axis=-1)
     spp = 256 if args.spp is None else args.spp
     crossval_fisheye(lens, env, args.output, fov, size, args.pitch_um, grid, spp, args.defocus_mm, log=_say)
-    print(fisheye_markdown(json.loads((Path(args.output) / "crossval.json").read_text())))
+    print(fisheye_markdown(jsonio.loads((Path(args.output) / "crossval.json").read_text())))
     print(f"wrote {args.output}/table.md, crossval.json, direct.exr, convolved.exr, ideal.exr, error.exr, error.png")
     return 0
 
@@ -110,14 +110,12 @@ def run_error_vs_time(args: argparse.Namespace) -> int:
 
 
 def run_check_stability(args: argparse.Namespace) -> int:
-    import json
-
     from .stability import check_stability, markdown
 
     lens = Lens.load(args.lens)
     cases = check_stability(lens, progress=lambda name: print(f"check-stability: {name}", file=sys.stderr, flush=True))
     if args.json:
-        print(json.dumps({"lens": lens.name, "lens_hash": lens.hash, "passed": all(c.passed for c in cases),
+        print(jsonio.dumps({"lens": lens.name, "lens_hash": lens.hash, "passed": all(c.passed for c in cases),
                           "cases": [c.to_dict() for c in cases]}, indent=1))
     else:
         print(markdown(lens, cases))

@@ -10,13 +10,13 @@ and its magnitude as a heat-map PNG with the annuli (`metrics.annuli`) drawn.
 """
 from __future__ import annotations
 
-import json
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from .. import jsonio
 from ..convolution.kernels import check_boundary
 from ..errors import SolasError
 from ..metrics.annuli import ANNULI, corner_radius
@@ -175,4 +175,4 @@ def _write_tables(out_dir: Path, rows: list, ref, seeds: int, meta: dict) -> Non
             "quadrature. PSF s: computing the PSF grid; run s: the convolution (or render).")
     write_text(out_dir / "table.md", crossval_markdown(rows, note))
     write_text(out_dir / "table.csv", csv_text(rows))
-    write_text(out_dir / "crossval.json", json.dumps(meta, indent=1))
+    write_text(out_dir / "crossval.json", jsonio.dumps(meta, indent=1))

@@ -13,13 +13,13 @@ Outputs: table.md, table.csv, error_vs_time.png (log x: seconds; y: relative RMS
 """
 from __future__ import annotations
 
-import json
 import statistics
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
+from .. import jsonio
 from ..convolution.kernels import check_boundary
 from ..errors import SolasError
 from ..imageio import write_text
@@ -113,7 +113,7 @@ def _write_report(out_dir: Path, lens, rows: list[Row], ref, seeds: int, kind: s
     write_text(out_dir / "table.md", error_vs_time_markdown(rows, note))
     write_text(out_dir / "table.csv", csv_text(rows))
     plot(rows, out_dir / "error_vs_time.png", f"{lens.name}, {w}x{h} px: error against the converged render")
-    write_text(out_dir / "report.json", json.dumps({
+    write_text(out_dir / "report.json", jsonio.dumps({
         "lens": lens.name, "lens_hash": lens.hash, "sensor": [w, h], "fov_deg": fov, "psf": kind,
         "boundary": boundary, "reference_spp": ref.spp, "reference_seeds": seeds,
         "reference_seconds": ref.seconds, "reference_noise_rel": ref.noise / ref_rms,

@@ -13,13 +13,13 @@ pitch in µm, angles in degrees.
 """
 from __future__ import annotations
 
-import json
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
 
 import numpy as np
 
+from .. import jsonio
 from ..convolution.methods import degrade
 from ..errors import SolasError
 from ..optics.illumination import ideal_irradiance, irradiance
@@ -178,7 +178,7 @@ def crossval_fisheye(lens: Lens, env: np.ndarray, out: str | Path, fov_deg: floa
     write_exr(out_dir / "error.exr", {"Y": rel.astype(np.float32)}, dict(meta, values="(convolved - direct) / mean"))
     heat_png(out_dir / "error.png", np.abs(rel), f"{lens.name}: |convolved − direct| / mean(direct)")
     write_text(out_dir / "table.md", fisheye_markdown(meta))
-    write_text(out_dir / "crossval.json", json.dumps(meta, indent=1))
+    write_text(out_dir / "crossval.json", jsonio.dumps(meta, indent=1))
     return r
 
 

@@ -1,11 +1,11 @@
 """Batches through a camera (`--sensor-model`, `--exposure-ms`, `--isp`): each item's RAW and developed
 frame beside it, seeded by the batch's seed and the frame's name (not its place in the run), the camera
 in the outputs, the manifest and the batch's identity; resume, Dask and the options' errors."""
-import json
 
 import imageio.v3 as iio
 import numpy as np
 import pytest
+from strict_json import strict_loads
 
 from solas_mi.batch import degrade_batch
 from solas_mi.batch.render import render_batch
@@ -22,7 +22,7 @@ EXPOSURE_MS = 0.25  # the frames' values (0…1) read as W/m²: 2300–3100 phot
 
 
 def manifest(folder):
-    return json.loads((folder / "batch.json").read_text())
+    return strict_loads((folder / "batch.json").read_text())
 
 
 @pytest.fixture

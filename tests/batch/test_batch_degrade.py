@@ -1,6 +1,5 @@
 """`solas-mi batch degrade` and `degrade_batch`: failures reported per item, resuming, interruption,
 local processes against Dask, the PSF-grid cache, argument errors."""
-import json
 import os
 import signal
 import subprocess
@@ -9,12 +8,13 @@ import time
 
 import numpy as np
 import pytest
+from strict_json import strict_loads
 
 from solas_mi.cli import main
 
 
 def manifest(folder):
-    return json.loads((folder / "batch.json").read_text())
+    return strict_loads((folder / "batch.json").read_text())
 
 
 def test_one_corrupt_item_is_reported_and_a_rerun_skips_the_rest(batch_inputs, capsys):
@@ -424,7 +424,7 @@ def test_16_bit_png_output(batch_inputs):
     ch = read_exr(exr / "frame000.exr")[0]
     want = np.clip(np.stack([ch[c] for c in "RGB"], axis=-1), 0, 1)
     assert np.abs(read_image(out / "frame000.png") - want).max() < 2e-5
-    meta = json.loads((out / "frame000.json").read_text())
+    meta = strict_loads((out / "frame000.json").read_text())
     assert meta["output_format"] == "png16" and meta["png16"]["clipped_values"] == int(np.sum(want != np.stack(
         [ch[c] for c in "RGB"], axis=-1)))
     assert main(["batch", "degrade", *base, "-o", str(out), "--format", "png16"]) == 0  # finished: skipped

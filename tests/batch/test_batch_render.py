@@ -1,6 +1,5 @@
 """`solas-mi batch render` and `render_batch`: images and scene files through a lens, a failed item
 reported, resuming, the sweep's product, seeds, local processes against Dask. Tiny sensors, few spp."""
-import json
 import signal
 import subprocess
 import sys
@@ -9,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from strict_json import strict_loads
 
 from solas_mi.batch.render import plan_render, render_batch, seed_of
 from solas_mi.cli import main
@@ -28,7 +28,7 @@ SCENE = """<scene version="3.0.0">
 
 
 def manifest(folder):
-    return json.loads((folder / "batch.json").read_text())
+    return strict_loads((folder / "batch.json").read_text())
 
 
 @pytest.fixture

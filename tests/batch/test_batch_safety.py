@@ -68,12 +68,15 @@ def test_an_input_named_with_a_newline_gives_a_plain_output_name(tmp_path):
 def test_a_cache_entry_is_reused_only_when_it_is_the_lens_grid_whole(doublet, triplet, tmp_path, capsys):
     import shutil
 
+    from strict_json import strict_loads
+
     cache = GridCache(tmp_path / "cache")
     spec = GridSpec(grid=(2, 2), size=16, pupil_samples=16)
     a, hit, _ = cache.get(doublet, spec)
     b, _, _ = cache.get(triplet, spec)
     assert not hit and cache.get(doublet, spec)[1] and (cache.hits, cache.misses) == (1, 2)
     good = PSFGrid.read(str(a)).data
+    assert strict_loads(Path(f"{a}.json").read_text())["key"]["lens_hash"] == doublet.hash  # its record
 
     def same(path):
         return np.array_equal(PSFGrid.read(str(path)).data, good)
@@ -90,7 +93,7 @@ def test_a_cache_entry_is_reused_only_when_it_is_the_lens_grid_whole(doublet, tr
 
 def degrade_twice(batch_inputs, change, inputs=None):
     """Degrade the frames, `change(out)` the folder, degrade again: the second run's manifest."""
-    import json
+    from strict_json import strict_loads
 
     from solas_mi.batch import degrade_batch
 
@@ -101,7 +104,7 @@ def degrade_twice(batch_inputs, change, inputs=None):
     assert not first.failed
     change(out)
     second = run()
-    return out, {Path(j.output).name: j.status for j in second.jobs}, json.loads((out / "batch.json").read_text())
+    return out, {Path(j.output).name: j.status for j in second.jobs}, strict_loads((out / "batch.json").read_text())
 
 
 def test_an_input_replaced_by_another_image_of_its_name_is_done_again(batch_inputs):
@@ -124,10 +127,12 @@ def test_an_input_replaced_by_another_image_of_its_name_is_done_again(batch_inpu
 def test_a_manifest_pointing_an_item_at_another_items_files_is_not_believed(batch_inputs):
     import json
 
+    from strict_json import strict_loads
+
     batch_inputs.write(2)
 
     def edit(out):
-        m = json.loads((out / "batch.json").read_text())
+        m = strict_loads((out / "batch.json").read_text())
         m["items"][0]["outputs"] = m["items"][1]["outputs"]
         (out / "batch.json").write_text(json.dumps(m))
         (out / "frame000.exr").unlink()
@@ -160,11 +165,12 @@ def test_a_linked_input_keeps_its_name(batch_inputs, tmp_path):
 
 
 def test_two_batches_on_one_folder_the_second_is_refused_naming_the_first(batch_inputs, tmp_path):
-    import json
     import signal
     import subprocess
     import sys
     import time
+
+    from strict_json import strict_loads
 
     from solas_mi.batch import degrade_batch
 
@@ -187,7 +193,7 @@ def test_two_batches_on_one_folder_the_second_is_refused_naming_the_first(batch_
     second = degrade_batch([other], out, psf_grid=batch_inputs.grid, workers=1, progress=False)
     assert second.count("done") == 1
     assert not [p for p in out.iterdir() if p.name.startswith(".")]  # its temporaries and the lock gone
-    assert json.loads((out / "batch.json").read_text())["summary"] == {"done": 1}
+    assert strict_loads((out / "batch.json").read_text())["summary"] == {"done": 1}
 
 
 def test_workers_are_capped_at_the_cores_and_cost_their_memory(batch_inputs, capsys):

@@ -2,11 +2,11 @@
 doublet's ideal 1280×960 view has enough slanted edges in every annulus; the experiment runs end to end
 at a tiny size and shows the depth-dependent blur (the lens focused near matches the convolution on near
 objects and not on far ones; focused at infinity the other way round)."""
-import json
 from pathlib import Path
 from types import SimpleNamespace
 
 import pytest
+from strict_json import strict_loads
 
 from solas_mi.cli import main
 from solas_mi.errors import SolasError
@@ -67,7 +67,7 @@ def test_the_experiment_end_to_end(tmp_path):
                  "patch_8x6.exr", "patch_32x24.exr", "render_infinity.exr", "render_20_m.exr",
                  "fig5_interp_32x24.png", "error_interp_32x24_vs_render_20_m.png", "interp_32x24_at_140_m.exr"):
         assert (out / name).is_file(), name
-    report = json.loads((out / "street.json").read_text())
+    report = strict_loads((out / "street.json").read_text())
     assert {r["image"] for r in report["sfr"]} == {"interp 32x24", "patch 8x6", "patch 32x24", "render infinity",
                                                    "render 20 m", "interp 32x24 at 140 m",
                                                    "depth-aware interp 16x12, 3 nodes, focus infinity",

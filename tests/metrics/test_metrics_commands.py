@@ -1,7 +1,7 @@
 """The `sfr`, `ss-sfr` and `sfr-target` commands."""
-import json
 
 import pytest
+from strict_json import strict_loads
 
 from solas_mi.cli import main
 from solas_mi.imageio import write_exr
@@ -10,7 +10,7 @@ from solas_mi.metrics.targets import analytic_mtf50
 
 def run_json(capsys, *argv):
     code = main(list(argv))
-    return code, json.loads(capsys.readouterr().out)
+    return code, strict_loads(capsys.readouterr().out)
 
 
 def test_target_png_then_auto_sfr(tmp_path, capsys):

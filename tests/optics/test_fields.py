@@ -77,9 +77,9 @@ def test_each_kind_checks_its_own_limits():
 
 
 def test_lens_info_names_the_field_type(capsys):
-    import json
+    from strict_json import strict_loads
 
     from solas_mi.cli import main
 
     assert main(["lens", "info", "nikkor-fisheye", "--json", "--fields", "0,30"]) == 0
-    assert json.loads(capsys.readouterr().out)["field_type"] == "polar"
+    assert strict_loads(capsys.readouterr().out)["field_type"] == "polar"

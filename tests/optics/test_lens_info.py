@@ -6,12 +6,12 @@ import pytest
 
 
 def test_cli_lens_info_json(capsys):
-    import json
+    from strict_json import strict_loads
 
     from solas_mi.cli import main
 
     assert main(["lens", "info", "solas-doublet", "--json"]) == 0
-    info = json.loads(capsys.readouterr().out)
+    info = strict_loads(capsys.readouterr().out)
     rows = {r["wavelength_nm"]: r for r in info["per_wavelength"]}
     assert rows[531.0]["efl_mm"] == pytest.approx(99.9468, abs=1e-3)
     assert rows[531.0]["real_chief_ray_image_height_mm"][1] == pytest.approx(3.4745, abs=1e-3)
@@ -21,14 +21,14 @@ def test_cli_lens_info_json(capsys):
 def test_lens_info_carries_distortion_and_illumination(name, capsys):
     """Both lenses are rectilinear; the table's heights are the real chief rays' and its distortion is
     their departure from EFL·tanθ; the illumination falls steadily off the axis."""
-    import json
+    from strict_json import strict_loads
 
     import numpy as np
 
     from solas_mi.cli import main
 
     assert main(["lens", "info", name, "--json"]) == 0
-    info = json.loads(capsys.readouterr().out)
+    info = strict_loads(capsys.readouterr().out)
     d = info["distortion"]
     assert d["projection"] == "rectilinear"
     theta = np.radians(d["field_deg"])
@@ -73,7 +73,7 @@ def test_projection_fit_beyond_90_degrees_leaves_out_rectilinear():
 def test_lens_info_of_a_lens_without_field_shows_the_axis_once(tmp_path, capsys):
     """A pbrt-style table states no field: `lens info` shows the chief ray on the axis once (not once per
     ± half field, nor at "-0 deg"); fields given on the command line stay as given, -0 reading 0."""
-    import json
+    from strict_json import strict_loads
 
     from solas_mi.cli import main
 
@@ -84,7 +84,7 @@ def test_lens_info_of_a_lens_without_field_shows_the_axis_once(tmp_path, capsys)
     assert out.count("chief ray y at 0 deg, paraxial") == 1 and out.count("chief ray y at 0 deg, real") == 1
     assert "-0 deg" not in out
     assert main(["lens", "info", str(path), "--json"]) == 0
-    rows = json.loads(capsys.readouterr().out)["per_wavelength"]
+    rows = strict_loads(capsys.readouterr().out)["per_wavelength"]
     assert rows and all(r["fields_deg"] == [0.0] and len(r["real_chief_ray_image_height_mm"]) == 1 for r in rows)
     assert main(["lens", "info", str(path), "--fields=-0,5,5"]) == 0
     out = capsys.readouterr().out
@@ -94,7 +94,7 @@ def test_lens_info_of_a_lens_without_field_shows_the_axis_once(tmp_path, capsys)
 def test_lens_info_says_why_the_illumination_is_undefined(monkeypatch, capsys):
     """Where no light reaches the image's centre E(θ)/E(0) is no number: the table shows '-' and the
     reason (it printed NaN), the JSON holds null, and the rest of the table stays."""
-    import json
+    from strict_json import strict_loads
 
     from solas_mi.cli import main
     from solas_mi.optics import illumination
@@ -104,5 +104,56 @@ def test_lens_info_says_why_the_illumination_is_undefined(monkeypatch, capsys):
     out = capsys.readouterr().out
     assert "nan" not in out.lower() and "rel. illum. '-': lens solas-doublet: no light reaches the centre" in out
     assert main(["lens", "info", "solas-doublet", "--json"]) == 0
-    table = json.loads(capsys.readouterr().out)["distortion"]
+    table = strict_loads(capsys.readouterr().out)["distortion"]
     assert table["relative_illumination"] == [None] * len(table["field_deg"]) and table["image_height_mm"][-1] > 0
+
+
+def test_lens_list_json_is_strict(capsys):
+    from strict_json import strict_loads
+
+    from solas_mi.cli import main
+    from solas_mi.optics.lens import shipped_lenses
+
+    assert main(["lens", "list", "--json"]) == 0
+    rows = strict_loads(capsys.readouterr().out)
+    assert [r["name"] for r in rows] == list(shipped_lenses())
+    assert next(r for r in rows if r["name"] == "solas-doublet")["efl_mm"] == pytest.approx(99.95, abs=0.01)
+
+
+TELECENTRIC = """name = "image-telecentric"
+[[surface]]
+radius = 0.0
+thickness = 100.0
+diameter = 10.0
+material = "AIR"
+stop = true
+[[surface]]
+radius = 50.0
+thickness = 3.0
+diameter = 20.0
+material = "model:1.5"
+[[surface]]
+radius = 0.0
+thickness = 100.0
+diameter = 20.0
+material = "AIR"
+"""
+
+
+def test_lens_info_json_of_an_image_telecentric_lens_is_strict(tmp_path, capsys):
+    """The stop in the front focal plane (f = R/(n − 1) = 100 mm) puts the exit pupil at infinity: `lens
+    info --json` wrote `Infinity`, which JSON.parse, Go and serde refuse; it writes "inf" (the table
+    prints inf), which float() reads back as the infinity."""
+    from strict_json import strict_loads
+
+    from solas_mi.cli import main
+
+    path = tmp_path / "telecentric.toml"
+    path.write_text(TELECENTRIC)
+    assert main(["lens", "info", str(path), "--json"]) == 0
+    rows = strict_loads(capsys.readouterr().out)["per_wavelength"]
+    for row in rows:
+        assert row["exit_pupil_z_mm"] in ("inf", "-inf") and row["exit_pupil_diameter_mm"] in ("inf", "-inf")
+        assert abs(float(row["exit_pupil_z_mm"])) == np.inf and row["exit_pupil_f_number"] == pytest.approx(10.0)
+    assert main(["lens", "info", str(path)]) == 0
+    assert "inf" in next(line for line in capsys.readouterr().out.splitlines() if line.startswith("exit pupil z"))

@@ -73,7 +73,7 @@ def test_widest_field_of_a_lens_without_one(table, fisheye):
 
 
 def test_lens_info_says_a_lens_has_no_dispersion(table, fisheye, capsys):
-    import json
+    from strict_json import strict_loads
 
     from solas_mi.cli import main
 
@@ -81,9 +81,9 @@ def test_lens_info_says_a_lens_has_no_dispersion(table, fisheye, capsys):
     assert main(["lens", "info", table.source, "--fields", "0,60"]) == 0
     assert "no dispersion data" in capsys.readouterr().out
     assert main(["lens", "info", table.source, "--fields", "0,20", "--json"]) == 0
-    assert json.loads(capsys.readouterr().out)["dispersion"] is False
+    assert strict_loads(capsys.readouterr().out)["dispersion"] is False
     assert main(["lens", "info", "nikkor-fisheye", "--fields", "0,20", "--json"]) == 0
-    assert json.loads(capsys.readouterr().out)["dispersion"] is True
+    assert strict_loads(capsys.readouterr().out)["dispersion"] is True
 
 
 @pytest.mark.slow

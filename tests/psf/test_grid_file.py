@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from solas_mi import SolasError
-from solas_mi.imageio import read_exr, write_exr
+from solas_mi.imageio import META_KEY, read_exr
 from solas_mi.psf.grid import PSFGrid, psf_grid
 
 
@@ -19,11 +19,18 @@ def grid_file(tmp_path_factory, doublet):
 
 
 def damaged(grid_file, tmp_path, change) -> str:
-    """A copy of the grid file whose channels and metadata `change(channels, meta)` altered."""
+    """A copy of the grid file whose channels and metadata `change(channels, meta)` altered, written as
+    another writer may (Python's json: a NaN or an infinity as a bare token; `write_exr` refuses a NaN)."""
+    import json
+
+    import OpenEXR
+
     channels, meta = read_exr(grid_file)
     change(channels, meta)
     path = tmp_path / "damaged.exr"
-    write_exr(path, channels, meta, compress=False)
+    header = {"compression": OpenEXR.NO_COMPRESSION, "type": OpenEXR.scanlineimage, META_KEY: json.dumps(meta)}
+    with OpenEXR.File(header, {k: np.ascontiguousarray(v, dtype=np.float32) for k, v in channels.items()}) as f:
+        f.write(str(path))
     return str(path)
 
 

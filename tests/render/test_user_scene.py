@@ -237,3 +237,18 @@ def test_render_metadata_holds_pitch_focus_and_unit(included, tmp_path):
                  "-o", str(out)]) == 0
     meta = read_exr(out)[1]
     assert meta["pitch_um"] == 40.0 and meta["focus_distance"] == 170.0 and meta["world_unit_mm"] == 10.0
+
+
+def test_render_metadata_of_a_lens_focused_at_infinity_is_strict_json(included, tmp_path):
+    """--focus-distance inf: the EXR header said "focus_distance": Infinity, which no JSON reader but
+    Python's accepts; it says "inf", and our reader gives back the infinite distance."""
+    from strict_json import exr_meta
+
+    from solas_mi.cli import main
+    from solas_mi.imageio import read_exr
+
+    out = tmp_path / "out.exr"
+    assert main(["render", str(included), "--lens", "solas-doublet", "--set", "depth=2", "--set", "width=16",
+                 "--set", "height=12", "--spp", "1", "--focus-distance", "inf", "-o", str(out)]) == 0
+    assert exr_meta(out)["focus_distance"] == "inf"
+    assert float(read_exr(out)[1]["focus_distance"]) == math.inf

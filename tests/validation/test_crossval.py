@@ -1,4 +1,6 @@
 """Cross-validation of the PSF-grid convolution against the direct render (`solas_mi.validation.crossval`)."""
+from strict_json import strict_loads
+
 from solas_mi.validation.crossval import crossval
 from solas_mi.validation.inputs import load_input
 
@@ -27,4 +29,5 @@ def test_interp_agrees_with_the_converged_render(doublet, tmp_path):
                  "interp_geometric_32x24_error.exr", "interp_geometric_32x24_error.png"):
         assert (tmp_path / name).is_file(), name
     assert "interp:geometric:32x24" in (tmp_path / "table.md").read_text()
+    assert strict_loads((tmp_path / "crossval.json").read_text())["reference_noise_rel"] == noise
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".")]  # nothing half-written

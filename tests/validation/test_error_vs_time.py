@@ -1,6 +1,7 @@
 """Error against run time (`solas_mi.validation.error_vs_time`), on a tiny image."""
 import numpy as np
 import pytest
+from strict_json import strict_loads
 
 from solas_mi.errors import SolasError
 from solas_mi.validation.error_vs_time import error_vs_time
@@ -15,6 +16,8 @@ def test_error_vs_time_writes_every_case(doublet, tmp_path):
     assert all(np.isfinite(r.errors.rel_rmse) and r.errors.rel_rmse > 0 for r in rows)
     assert sorted(p.name for p in tmp_path.iterdir()) == ["error_vs_time.png", "report.json", "table.csv", "table.md"]
     assert "| interp 4x3 |" in (tmp_path / "table.md").read_text()
+    report = strict_loads((tmp_path / "report.json").read_text())
+    assert [r["name"] for r in report["rows"]] == [r.name for r in rows]
 
 
 def test_bad_settings_are_a_solas_error(doublet):

@@ -1,9 +1,8 @@
 """Cross-validation for the fisheye: an equidistant environment image rendered directly through the
 lens geometry against its ideal sensor image degraded by the lens's own sensor-space PSF grid."""
-import json
-
 import numpy as np
 import pytest
+from strict_json import strict_loads
 
 from solas_mi import Lens, SolasError
 from solas_mi.validation.fisheye import compare_fisheye
@@ -65,7 +64,7 @@ def test_crossval_command_on_the_fisheye(tmp_path, capsys):
     out = tmp_path / "cv"
     assert main(["crossval", "nikkor-fisheye", str(tmp_path / "env.exr"), "-o", str(out), "--fov-deg", str(FOV_DEG),
                  "--size", "24", "--spp", "32", "--grid", "3x3", "--defocus-mm", "2"]) == 0
-    meta = json.loads((out / "crossval.json").read_text())
+    meta = strict_loads((out / "crossval.json").read_text())
     direct, convolved = (read_exr(out / f"{name}.exr")[0]["Y"].astype(np.float64) for name in ("direct", "convolved"))
     rms = np.sqrt(np.mean((convolved - direct) ** 2)) / direct.mean()
     assert abs(rms / meta["rms_error"] - 1.0) < 1e-3

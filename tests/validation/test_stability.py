@@ -4,6 +4,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from strict_json import strict_loads
 
 from solas_mi import Lens
 from solas_mi.cli import main
@@ -68,6 +69,7 @@ def test_the_command_prints_the_table_and_fails_on_a_failed_case(capsys, monkeyp
     assert main(["check-stability", "solas-doublet", "--json"]) == 1
     out, err = capsys.readouterr()
     assert '"passed": false' in out and "1 case(s) failed: centring" in err
+    assert strict_loads(out)["passed"] is False
 
 
 @pytest.mark.parametrize("method", ["fraunhofer", "geometric"])

@@ -9,11 +9,11 @@ the PSF grid (`prediction`) on the same ROIs. MTF50 in cy/px.
 """
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 import numpy as np
 
+from ... import jsonio
 from ...metrics.annuli import ANNULUS_NAMES
 from .prediction import edge_normal_deg, predicted_mtf50
 
@@ -126,5 +126,5 @@ def write_tables(out: Path, rows: list[dict], outcome) -> None:
     write_text(out / "street.md", "\n".join(md) + "\n")
     csv = [",".join(columns)] + [",".join("" if r[c] is None else str(r[c]) for c in columns) for r in rows]
     write_text(out / "street.csv", "\n".join(csv) + "\n")
-    write_text(out / "street.json", json.dumps(dict(outcome.meta, sfr=rows, errors=outcome.errors,
+    write_text(out / "street.json", jsonio.dumps(dict(outcome.meta, sfr=rows, errors=outcome.errors,
                                                     seconds=outcome.seconds), indent=1))
