@@ -9,8 +9,10 @@ registered as the `.seq` entry of `formats.READERS`. The rotationally symmetric 
   RDY (radius), CUY (curvature), THI, GLA, CIR (the clear semi-aperture; on SI the image's), STO (this
   surface is the stop), SLB (its label), SPH (spherical: no aspheric terms), CON or ASP with K (conic)
   and A, B, C, … J (the r⁴, r⁶, … r²⁰ coefficients), PIM (the thickness that puts the image plane at
-  the paraxial image). RDM (or RDM Y) / RDM N or CUM: the S lines give radii or curvatures (CODE V's
-default without RDM: curvatures). Without any STO the stop is surface 1 (CODE V's default; the
+  the paraxial image). RDM (or RDM Y) / RDM N or CUM: the S lines give radii or curvatures. A file saying
+  neither is read in radii, as CODE V shows lens data and as the public hand-written files (and optiland)
+  take them; ray-optics reads curvatures. Where the radii form no real image (a negative focal length, a
+  virtual image, no field imaged) and curvatures do, curvatures are taken; the description says which. Without any STO the stop is surface 1 (CODE V's default; the
 description says so). CIR EDG (the edge aperture, drawn only) is read past; CIR OBS and HOL refused.
 - Glass: catalogue names as CODE V writes them, NAME_VENDOR (SCHOTT, OHARA, HOYA, CDGM, SUMITA, HIKARI
   or NIKON; hyphens may be left out: NBK7_SCHOTT is N-BK7) or a bare name; model glass "n_d:V_d" or the
@@ -42,6 +44,7 @@ from .lens import Lens
 from .paraxial import paraxial
 
 UNITS = {"M": 1.0, "C": 10.0, "I": 25.4}
+RADII_DEFAULT = "as CODE V's lens data shows them and hand-written files give them"
 INFINITE_OBJECT = 1e10  # an object distance at least this (in lens units) is at infinity, as CODE V takes it
 ASPHERIC = "ABCDEFGHJ"  # the coefficients of r⁴, r⁶, … r²⁰
 FIELDS = {"YAN": "angle", "YOB": "object height", "YIM": "paraxial image height", "YRI": "real image height"}
@@ -89,13 +92,14 @@ def _commands(text: str):
 class _Reader:
     """The state of a .seq file being read: the system settings and the surfaces so far."""
 
-    def __init__(self, where: str):
+    def __init__(self, where: str, radius_mode: bool = True):
         self.where = where
         self.system: dict[str, list[str]] = {}
         self.rows: list[dict] = []  # SO, the surfaces, SI: raw values in lens units
         self.stop_at: int | None = None  # STO Sn: the stop is surface n
-        self.radius_mode = False  # CODE V's default: S lines give curvatures unless RDM says radii
+        self.radius_mode = radius_mode  # S lines give radii (RDM Y) or curvatures (RDM N, CUM)
         self.mode_given = False  # whether RDM or CUM said which
+        self.s_values = False  # whether an S line gives a nonzero radius or curvature
         self.private: PrivateCatalogue | None = None  # inside PRV … END
         self.materials: dict[str, dict] = {}  # the private glasses, as [materials] tables
 
@@ -161,6 +165,7 @@ class _Reader:
         values = _numbers(args[:2], f"{ident}: {key}")
         if values:
             self.modify(row, "RDY" if self.radius_mode else "CUY", args[:1], ident)
+            self.s_values = self.s_values or values[0] != 0.0
         if len(values) > 1:
             row["thi"] = values[1]
         if len(args) > 2:
@@ -207,12 +212,57 @@ class _Reader:
 
 
 def read_spec(text: str, where: str) -> dict:
-    """The lens-file dictionary of a .seq text; `where` names it in messages."""
-    reader = _Reader(where)
+    """The lens-file dictionary of a .seq text; `where` names it in messages. A file that says neither RDM nor
+    CUM is read in radii (module docstring); where that lens forms no real image and the same lines read as
+    curvatures do, those are taken. The description says which."""
+    reader = _read(text, where, radius_mode=True)
+    if reader.mode_given or not reader.s_values:
+        return _spec(reader, where)
+    first: SolasError | None = None
+    try:
+        spec = _spec(reader, where)
+        if _real_image(spec, where):
+            return _noted(spec, f"no RDM in the file: its S lines read as radii, {RADII_DEFAULT}")
+    except SolasError as exc:
+        first = exc
+    try:
+        other = _spec(_read(text, where, radius_mode=False), where)
+        if _real_image(other, where):
+            return _noted(other, "no RDM in the file: its S lines read as radii form no real image, as curvatures "
+                                 "(RDM N) they do: read as curvatures; add RDM or RDM N to say which")
+    except SolasError as exc:
+        if first is not None and str(exc) == str(first):
+            raise first from None  # the same fault either way: not the radii's
+    if first is None:  # neither reading forms a real image: the radii stand, as the description says
+        return _noted(spec, f"no RDM in the file: its S lines read as radii, {RADII_DEFAULT}")
+    raise SolasError(f"{first} (the file has no RDM: its S lines were read as radii, {RADII_DEFAULT}; "
+                     "if they are curvatures, add RDM N)") from None
+
+
+def _read(text: str, where: str, radius_mode: bool) -> _Reader:
+    """The file's commands read, S lines in radii or curvatures where the file says neither."""
+    reader = _Reader(where, radius_mode)
     reader.read(text)
-    system, rows = reader.system, reader.rows
     if reader.private is not None:
         raise SolasError(f"{where}: PRV (a private glass catalogue) has no END")
+    return reader
+
+
+def _real_image(spec: dict, where: str) -> bool:
+    """Whether the lens of `spec` has a positive focal length and a paraxial image behind its last surface."""
+    lens = Lens.from_dict(spec, source=where)
+    p = paraxial(lens, lens.primary_wavelength)
+    return bool(p.efl_mm > 0 and p.focus_z_mm > lens.vertex_z[-1])
+
+
+def _noted(spec: dict, note: str) -> dict:
+    spec["description"] = "; ".join(filter(None, (spec.get("description"), note)))
+    return spec
+
+
+def _spec(reader: _Reader, where: str) -> dict:
+    """The lens-file dictionary of the commands `reader` read."""
+    system, rows = reader.system, reader.rows
     if reader.stop_at is not None:
         if not 1 <= reader.stop_at < len(rows) - 1:
             raise SolasError(f"{where}: STO S{reader.stop_at}: the lens has surfaces S1 to S{len(rows) - 2}")
@@ -253,13 +303,7 @@ def read_spec(text: str, where: str) -> dict:
     if aperture[0] == "fnum" and spec["object"]["distance"] != "infinity":
         aperture = ("working fnum", aperture[1])  # CODE V's FNO: the working F/# at the object's conjugate
     fields = _fields(system, scale, where)
-    try:
-        return zemax_solves.solve(spec, aperture, fields, primary, where, _vignetting(system, len(fields[1]), where))
-    except SolasError as exc:
-        if reader.mode_given or not any(r["curv"] for r in rows):
-            raise
-        raise SolasError(f"{exc} (the file has no RDM: its S lines were read as curvatures, CODE V's default; "
-                         "if they are radii, add RDM)") from None
+    return zemax_solves.solve(spec, aperture, fields, primary, where, _vignetting(system, len(fields[1]), where))
 
 
 def _vignetting(system: dict, count: int, where: str) -> list[tuple[float, ...]] | None:
