@@ -49,7 +49,9 @@ INFINITE_OBJECT = 1e10  # an object distance at least this (in lens units) is at
 ASPHERIC = "ABCDEFGHJ"  # the coefficients of r⁴, r⁶, … r²⁰
 FIELDS = {"YAN": "angle", "YOB": "object height", "YIM": "paraxial image height", "YRI": "real image height"}
 APERTURES = {"EPD": "epd", "FNO": "fnum", "NAO": "na"}
-IGNORED = frozenset("LEN GO END INI WTW WTF DOR CCY CCX THC GLC DER".split())
+# optimisation codes: CCY/CCX (curvature), THC (thickness), GLC (glass), KC (conic), AC … JC (the aspheric
+# coefficients A … J); each says whether its value varies, not what it is
+IGNORED = frozenset("LEN GO END INI WTW WTF DOR CCY CCX THC GLC DER KC".split() + [k + "C" for k in ASPHERIC])
 VIGNETTING = ("VUX", "VLX", "VUY", "VLY")  # the pupil's fraction cut off per field: +x, −x, +y, −y
 CATALOGUE_TEMPERATURE_C = (20.0, 25.0)  # the glass data hold at the vendors' reference temperatures, 20-25 °C
 SYSTEM = ("TIT", "TITLE", "DIM", "WL", "REF", "XAN", "XOB", "XIM", "XRI", *FIELDS, *APERTURES, *VIGNETTING)

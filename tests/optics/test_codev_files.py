@@ -179,6 +179,11 @@ def test_aspheric_terms_and_units(tmp_path):
     assert cm.surfaces[1].aspheric == pytest.approx((1e-6, -2e-9, 0.0, 3e-14), rel=1e-12)
     sph = load(tmp_path, singlet(second=asp + "SPH\n"), "sph.seq")
     assert not any(sph.surfaces[1].aspheric) and sph.surfaces[1].conic == 0.0
+    # the optimisation codes of the conic and of each coefficient (KC, AC … JC, as CODE V writes them for
+    # variables and frozen values alike) say nothing of the surface: the same lens
+    coded = load(tmp_path, singlet(second="ASP\nK -0.5; KC 100\nA 1e-6; AC 100\nB -2e-9; BC 0\nD 3e-15\n"
+                                          "CC 0; DC 100; EC 0; FC 0; GC 0; HC 0; JC 0\n"), "coded.seq")
+    assert coded.surfaces == mm.surfaces
 
 
 @pytest.mark.parametrize("token, name", [("1.699:30.1", "model:1.699/30.1"), ("699000.301000", "model:1.699/30.1"),
