@@ -12,8 +12,8 @@ registered as the `.seq` entry of `formats.READERS`. The rotationally symmetric 
   the paraxial image). RDM (or RDM Y) / RDM N or CUM: the S lines give radii or curvatures. A file saying
   neither is read in radii, as CODE V shows lens data and as the public hand-written files (and optiland)
   take them; ray-optics reads curvatures. Where the radii form no real image (a negative focal length, a
-  virtual image, no field imaged) and curvatures do, curvatures are taken; the description says which. Without any STO the stop is surface 1 (CODE V's default; the
-description says so). CIR EDG (the edge aperture, drawn only) is read past; CIR OBS and HOL refused.
+  virtual image, no field imaged) and curvatures do, curvatures are taken; the description says which.
+  Without any STO the stop is surface 1 (CODE V's default; the description says so). CIR EDG (the edge aperture, drawn only) is read past; CIR OBS and HOL refused.
 - Glass: catalogue names as CODE V writes them, NAME_VENDOR (SCHOTT, OHARA, HOYA, CDGM, SUMITA, HIKARI
   or NIKON; hyphens may be left out: NBK7_SCHOTT is N-BK7) or a bare name; model glass "n_d:V_d" or the
   code "nnnnnn.vvvvvv" or "nnn.vvv" (n_d = 1.nnnnnn, V_d = vv.vvvv); the object space's on SO. TEM
@@ -25,7 +25,8 @@ description says so). CIR EDG (the edge aperture, drawn only) is read past; CIR 
   image heights) or YRI/XRI (real image heights), solved as Zemax's are (`zemax_solves`); surfaces
   without CIR get the automatic semi-diameter.
 Vignetting factors VUY/VLY/VUX/VLX shape the beam the automatic semi-diameters follow (`zemax_solves`).
-Weights, optimisation codes, DER values and view settings are read past (IGNORED); a zero CUF (fringe curvature) or decentre changes nothing. What
+Weights, optimisation codes, surface identifiers (UID), tolerances, DER values and view settings are read
+past (IGNORED); a zero CUF (fringe curvature) or decentre changes nothing. What
 cannot be represented is refused naming the surface and the feature: decentres and tilts, mirrors,
 diffractive, holographic, toric and anamorphic surfaces, rectangular or elliptical apertures,
 obscurations, zoom positions, private catalogues; and any command not listed here.
@@ -50,8 +51,10 @@ ASPHERIC = "ABCDEFGHJ"  # the coefficients of r⁴, r⁶, … r²⁰
 FIELDS = {"YAN": "angle", "YOB": "object height", "YIM": "paraxial image height", "YRI": "real image height"}
 APERTURES = {"EPD": "epd", "FNO": "fnum", "NAO": "na"}
 # optimisation codes: CCY/CCX (curvature), THC (thickness), GLC (glass), KC (conic), AC … JC (the aspheric
-# coefficients A … J); each says whether its value varies, not what it is
-IGNORED = frozenset("LEN GO END INI WTW WTF DOR CCY CCX THC GLC DER KC".split() + [k + "C" for k in ASPHERIC])
+# coefficients A … J); each says whether its value varies, not what it is. UID: a surface's identifier
+# (CODE V 2026 writes one per surface); CMP, DSX, DSY, BTX, BTY: compensators and tolerances
+IGNORED = frozenset("LEN GO END INI WTW WTF DOR CCY CCX THC GLC DER KC UID CMP DSX DSY BTX BTY".split()
+                    + [k + "C" for k in ASPHERIC])
 VIGNETTING = ("VUX", "VLX", "VUY", "VLY")  # the pupil's fraction cut off per field: +x, −x, +y, −y
 CATALOGUE_TEMPERATURE_C = (20.0, 25.0)  # the glass data hold at the vendors' reference temperatures, 20-25 °C
 SYSTEM = ("TIT", "TITLE", "DIM", "WL", "REF", "XAN", "XOB", "XIM", "XRI", *FIELDS, *APERTURES, *VIGNETTING)

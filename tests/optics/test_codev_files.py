@@ -184,6 +184,9 @@ def test_aspheric_terms_and_units(tmp_path):
     coded = load(tmp_path, singlet(second="ASP\nK -0.5; KC 100\nA 1e-6; AC 100\nB -2e-9; BC 0\nD 3e-15\n"
                                           "CC 0; DC 100; EC 0; FC 0; GC 0; HC 0; JC 0\n"), "coded.seq")
     assert coded.surfaces == mm.surfaces
+    # a surface identifier on each surface (UID, as CODE V 2026 writes) and tolerances name no change
+    tagged = singlet(second=asp).replace("SI 0 0", 'SI 0 0\nUID S0 "a1"\nUID S1 "b2"\nDSX S1 0.01\nBTY S2 0.02')
+    assert load(tmp_path, tagged, "tagged.seq").surfaces == mm.surfaces
 
 
 @pytest.mark.parametrize("token, name", [("1.699:30.1", "model:1.699/30.1"), ("699000.301000", "model:1.699/30.1"),
