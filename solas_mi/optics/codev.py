@@ -2,7 +2,8 @@
 registered as the `.seq` entry of `formats.READERS`. The rotationally symmetric refracting subset:
 
 - Commands one per line or separated by `;`; `!` starts a comment; quoted strings ('…' or "…") are one
-  token. Keywords are case-insensitive.
+  token. Keywords are case-insensitive and, as in CODE V, known by their first three letters (STOP is
+  STO).
 - Surfaces: SO (the object: radius, thickness = object distance, ≥ 1e10 or INF is at infinity, glass), S and
   STO (radius or curvature, thickness, glass; STO is the stop), SI (the image); STO alone marks the
   surface before it, STO Sn surface n. Per surface after it:
@@ -26,7 +27,7 @@ registered as the `.seq` entry of `formats.READERS`. The rotationally symmetric 
   without CIR get the automatic semi-diameter.
 Vignetting factors VUY/VLY/VUX/VLX shape the beam the automatic semi-diameters follow (`zemax_solves`).
 Weights, optimisation codes, surface identifiers (UID), tolerances, DER values and view settings are read
-past (IGNORED); a zero CUF (fringe curvature) or decentre changes nothing. What
+past (`codev_syntax.IGNORED`); a zero CUF (fringe curvature) or decentre changes nothing. What
 cannot be represented is refused naming the surface and the feature: decentres and tilts, mirrors,
 diffractive, holographic, toric and anamorphic surfaces, rectangular or elliptical apertures,
 obscurations, zoom positions, private catalogues; and any command not listed here.
@@ -39,6 +40,8 @@ import re
 from ..errors import SolasError
 from . import zemax_solves
 from .codev_glass import PrivateCatalogue, material, unquote
+from .codev_syntax import (APERTURES, ASPHERIC, FIELDS, IGNORED, REFUSED, SYSTEM, VIGNETTING, ZERO_IS_NOTHING,
+                           command, commands)
 from .formats import READERS
 from .formats import floats as _numbers
 from .lens import Lens
@@ -47,51 +50,7 @@ from .paraxial import paraxial
 UNITS = {"M": 1.0, "C": 10.0, "I": 25.4}
 RADII_DEFAULT = "as CODE V's lens data shows them and hand-written files give them"
 INFINITE_OBJECT = 1e10  # an object distance at least this (in lens units) is at infinity, as CODE V takes it
-ASPHERIC = "ABCDEFGHJ"  # the coefficients of r⁴, r⁶, … r²⁰
-FIELDS = {"YAN": "angle", "YOB": "object height", "YIM": "paraxial image height", "YRI": "real image height"}
-APERTURES = {"EPD": "epd", "FNO": "fnum", "NAO": "na"}
-# optimisation codes: CCY/CCX (curvature), THC (thickness), GLC (glass), KC (conic), AC … JC (the aspheric
-# coefficients A … J); each says whether its value varies, not what it is. UID: a surface's identifier
-# (CODE V 2026 writes one per surface); CMP, DSX, DSY, BTX, BTY: compensators and tolerances
-IGNORED = frozenset("LEN GO END INI WTW WTF DOR CCY CCX THC GLC DER KC UID CMP DSX DSY BTX BTY".split()
-                    + [k + "C" for k in ASPHERIC])
-VIGNETTING = ("VUX", "VLX", "VUY", "VLY")  # the pupil's fraction cut off per field: +x, −x, +y, −y
 CATALOGUE_TEMPERATURE_C = (20.0, 25.0)  # the glass data hold at the vendors' reference temperatures, 20-25 °C
-SYSTEM = ("TIT", "TITLE", "DIM", "WL", "REF", "XAN", "XOB", "XIM", "XRI", *FIELDS, *APERTURES, *VIGNETTING)
-ZERO_IS_NOTHING = ("XDE", "YDE", "ZDE", "ADE", "BDE", "CDE", "CUF")
-REFUSED = {**dict.fromkeys(("XDE", "YDE", "ZDE", "ADE", "BDE", "CDE", "DAR", "BEN", "REV", "RET"),
-                           "decentred or tilted surfaces"),
-           "REFL": "mirrors", "DOE": "diffractive surfaces", "DIF": "diffractive surfaces", "HOE": "holographic surfaces",
-           "HCO": "holographic surfaces", "SPS": "special surface shapes",
-           "YTO": "toric surfaces", "XTO": "toric surfaces", "RDX": "anamorphic surfaces (an x radius)",
-           "CUX": "anamorphic surfaces (an x curvature)", "REX": "rectangular apertures",
-           "REY": "rectangular apertures", "ELX": "elliptical apertures", "ELY": "elliptical apertures",
-           "OBS": "obscurations", "ZOO": "zoom positions",
-           "NA": "image-space NA apertures (use EPD, FNO or NAO)", "TEL": "telecentric object spaces",
-           "CUF": "fringe curvatures"}
-
-
-def _commands(text: str):
-    """(line number, [tokens]) of each command: `;` separates, `!` comments, quotes group, a line ending
-    in `&` goes on on the next."""
-    token = re.compile(r"'[^']*'|\"[^\"]*\"|;|!|&|[^\s;!&'\"]+")
-    tokens: list[str] = []
-    for number, raw in enumerate(text.splitlines(), start=1):
-        found = token.findall(raw)
-        found = found[:found.index("!")] if "!" in found else found
-        going_on = found[-1:] == ["&"]
-        for t in found[:-1] if going_on else found:
-            if t == ";":
-                if tokens:
-                    yield number, tokens
-                tokens = []
-            elif t != "&":
-                tokens.append(t)
-        if tokens and not going_on:
-            yield number, tokens
-            tokens = []
-    if tokens:
-        yield number, tokens
 
 
 class _Reader:
@@ -116,7 +75,7 @@ class _Reader:
         return f"{self.where}: line {line}, surface {'SO' if kind == 'SO' else ('SI' if kind == 'SI' else f'S{i}')}"
 
     def read(self, text: str) -> None:
-        for line, tokens in _commands(text):
+        for line, tokens in commands(text):
             key, args = tokens[0].upper(), tokens[1:]
             if self.private is not None:
                 if self.private.read(key, tokens, f"{self.where}: line {line}, PRV"):
@@ -126,6 +85,7 @@ class _Reader:
             if key == "PRV":
                 self.private = PrivateCatalogue()
                 continue
+            key = command(key)
             if key in REFUSED:
                 if key in ZERO_IS_NOTHING and args and _numbers(args[:1], self.ident(line)) == [0.0]:
                     continue  # a zero decentre, tilt or fringe curvature changes nothing

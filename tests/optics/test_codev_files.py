@@ -313,6 +313,21 @@ def test_without_sto_the_stop_is_surface_1(tmp_path):
     assert "stop is surface 1" in unmarked.description and "stop" not in marked.description
 
 
+def test_commands_by_their_first_three_letters(tmp_path):
+    """CODE V knows a command by its first three letters: STOP on a line of its own marks the stop as STO
+    does, TITLE and TEMPERATURE are TIT and TEM; a word beginning with a refused command (REFLECT) is
+    refused as that one, not read as REF (the reference wavelength)."""
+    marked = load(tmp_path, singlet(), "a.seq")
+    words = singlet(system="EPD 20\nYAN 0 10\nTITLE 'words'\nTEMPERATURE 20").replace(
+        f"STO {R1!r}", f"S {R1!r}").replace(f"S {R2!r} 1.0", f"STOP\nS {R2!r} 1.0")
+    worded = load(tmp_path, words, "b.seq")
+    assert worded.surfaces == marked.surfaces and worded.name == "words"
+    with pytest.raises(SolasError, match="REFL: mirrors are not supported"):
+        load(tmp_path, singlet().replace("PIM", "PIM\nREFLECT"), "c.seq")
+    with pytest.raises(SolasError, match="command NAME is not supported"):
+        load(tmp_path, singlet().replace("PIM", "PIM\nNAME 1"), "d.seq")
+
+
 def test_vignetting_factors_shape_the_automatic_apertures(tmp_path):
     """Vignetting factors of 0.5 on every side at every field squeeze the beam at the stop to half its
     radius: the automatic semi-diameters are those of the same lens with half the entrance pupil."""
