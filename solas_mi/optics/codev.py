@@ -67,11 +67,12 @@ class _Reader:
         self.private: PrivateCatalogue | None = None  # inside PRV … END
         self.materials: dict[str, dict] = {}  # the private glasses, as [materials] tables
 
-    def ident(self, line: int) -> str:
-        if not self.rows:
+    def ident(self, line: int, new: str | None = None) -> str:
+        """Where a command stands: its line and the surface it acts on (`new`: the kind of the surface the
+        line itself begins, SO, S, STO or SI)."""
+        if not self.rows and new is None:
             return f"{self.where}: line {line}"
-        kind = self.rows[-1]["kind"]
-        i = len(self.rows) - 1
+        kind, i = (new, len(self.rows)) if new else (self.rows[-1]["kind"], len(self.rows) - 1)
         return f"{self.where}: line {line}, surface {'SO' if kind == 'SO' else ('SI' if kind == 'SI' else f'S{i}')}"
 
     def read(self, text: str) -> None:
@@ -98,7 +99,7 @@ class _Reader:
         if key == "STO" and args and re.fullmatch(r"[Ss]\d+", args[0]):
             self.stop_at = int(args[0][1:])
         elif key in ("SO", "S", "STO", "SI") and (key != "STO" or args or not self.rows):
-            self.surface(key, args, ident)
+            self.surface(key, args, self.ident(line, key))
         elif key in ("RDM", "CUM"):
             self.radius_mode = key == "RDM" and (not args or args[0].upper() not in ("N", "NO"))
             self.mode_given = True
