@@ -2,16 +2,19 @@
 registered as the `.seq` entry of `formats.READERS`. The rotationally symmetric refracting subset:
 
 - Commands one per line or separated by `;`; `!` starts a comment; quoted strings ('…' or "…") are one
-  token. Keywords are case-insensitive.
+  token. Keywords are case-insensitive and, as in CODE V, known by their first three letters (STOP is
+  STO).
 - Surfaces: SO (the object: radius, thickness = object distance, ≥ 1e10 or INF is at infinity, glass), S and
   STO (radius or curvature, thickness, glass; STO is the stop), SI (the image); STO alone marks the
   surface before it, STO Sn surface n. Per surface after it:
   RDY (radius), CUY (curvature), THI, GLA, CIR (the clear semi-aperture; on SI the image's), STO (this
   surface is the stop), SLB (its label), SPH (spherical: no aspheric terms), CON or ASP with K (conic)
   and A, B, C, … J (the r⁴, r⁶, … r²⁰ coefficients), PIM (the thickness that puts the image plane at
-  the paraxial image). RDM (or RDM Y) / RDM N or CUM: the S lines give radii or curvatures (CODE V's
-default without RDM: curvatures). Without any STO the stop is surface 1 (CODE V's default; the
-description says so). CIR EDG (the edge aperture, drawn only) is read past; CIR OBS and HOL refused.
+  the paraxial image). RDM (or RDM Y) / RDM N or CUM: the S lines give radii or curvatures. A file saying
+  neither is read in radii, as CODE V shows lens data and as the public hand-written files (and optiland)
+  take them; ray-optics reads curvatures. Where the radii form no real image (a negative focal length, a
+  virtual image, no field imaged) and curvatures do, curvatures are taken; the description says which.
+  Without any STO the stop is surface 1 (CODE V's default; the description says so). CIR EDG (the edge aperture, drawn only) is read past; CIR OBS and HOL refused.
 - Glass: catalogue names as CODE V writes them, NAME_VENDOR (SCHOTT, OHARA, HOYA, CDGM, SUMITA, HIKARI
   or NIKON; hyphens may be left out: NBK7_SCHOTT is N-BK7) or a bare name; model glass "n_d:V_d" or the
   code "nnnnnn.vvvvvv" or "nnn.vvv" (n_d = 1.nnnnnn, V_d = vv.vvvv); the object space's on SO. TEM
@@ -23,7 +26,8 @@ description says so). CIR EDG (the edge aperture, drawn only) is read past; CIR 
   image heights) or YRI/XRI (real image heights), solved as Zemax's are (`zemax_solves`); surfaces
   without CIR get the automatic semi-diameter.
 Vignetting factors VUY/VLY/VUX/VLX shape the beam the automatic semi-diameters follow (`zemax_solves`).
-Weights, optimisation codes, DER values and view settings are read past (IGNORED); a zero CUF (fringe curvature) or decentre changes nothing. What
+Weights, optimisation codes, surface identifiers (UID), tolerances, DER values and view settings are read
+past (`codev_syntax.IGNORED`); a zero CUF (fringe curvature) or decentre changes nothing. What
 cannot be represented is refused naming the surface and the feature: decentres and tilts, mirrors,
 diffractive, holographic, toric and anamorphic surfaces, rectangular or elliptical apertures,
 obscurations, zoom positions, private catalogues; and any command not listed here.
@@ -36,78 +40,43 @@ import re
 from ..errors import SolasError
 from . import zemax_solves
 from .codev_glass import PrivateCatalogue, material, unquote
+from .codev_syntax import (APERTURES, ASPHERIC, FIELDS, IGNORED, REFUSED, SYSTEM, VIGNETTING, ZERO_IS_NOTHING,
+                           command, commands)
 from .formats import READERS
 from .formats import floats as _numbers
 from .lens import Lens
 from .paraxial import paraxial
 
 UNITS = {"M": 1.0, "C": 10.0, "I": 25.4}
+RADII_DEFAULT = "as CODE V's lens data shows them and hand-written files give them"
 INFINITE_OBJECT = 1e10  # an object distance at least this (in lens units) is at infinity, as CODE V takes it
-ASPHERIC = "ABCDEFGHJ"  # the coefficients of r⁴, r⁶, … r²⁰
-FIELDS = {"YAN": "angle", "YOB": "object height", "YIM": "paraxial image height", "YRI": "real image height"}
-APERTURES = {"EPD": "epd", "FNO": "fnum", "NAO": "na"}
-IGNORED = frozenset("LEN GO END INI WTW WTF DOR CCY CCX THC GLC DER".split())
-VIGNETTING = ("VUX", "VLX", "VUY", "VLY")  # the pupil's fraction cut off per field: +x, −x, +y, −y
 CATALOGUE_TEMPERATURE_C = (20.0, 25.0)  # the glass data hold at the vendors' reference temperatures, 20-25 °C
-SYSTEM = ("TIT", "TITLE", "DIM", "WL", "REF", "XAN", "XOB", "XIM", "XRI", *FIELDS, *APERTURES, *VIGNETTING)
-ZERO_IS_NOTHING = ("XDE", "YDE", "ZDE", "ADE", "BDE", "CDE", "CUF")
-REFUSED = {**dict.fromkeys(("XDE", "YDE", "ZDE", "ADE", "BDE", "CDE", "DAR", "BEN", "REV", "RET"),
-                           "decentred or tilted surfaces"),
-           "REFL": "mirrors", "DOE": "diffractive surfaces", "DIF": "diffractive surfaces", "HOE": "holographic surfaces",
-           "HCO": "holographic surfaces", "SPS": "special surface shapes",
-           "YTO": "toric surfaces", "XTO": "toric surfaces", "RDX": "anamorphic surfaces (an x radius)",
-           "CUX": "anamorphic surfaces (an x curvature)", "REX": "rectangular apertures",
-           "REY": "rectangular apertures", "ELX": "elliptical apertures", "ELY": "elliptical apertures",
-           "OBS": "obscurations", "ZOO": "zoom positions",
-           "NA": "image-space NA apertures (use EPD, FNO or NAO)", "TEL": "telecentric object spaces",
-           "CUF": "fringe curvatures"}
-
-
-def _commands(text: str):
-    """(line number, [tokens]) of each command: `;` separates, `!` comments, quotes group, a line ending
-    in `&` goes on on the next."""
-    token = re.compile(r"'[^']*'|\"[^\"]*\"|;|!|&|[^\s;!&'\"]+")
-    tokens: list[str] = []
-    for number, raw in enumerate(text.splitlines(), start=1):
-        found = token.findall(raw)
-        found = found[:found.index("!")] if "!" in found else found
-        going_on = found[-1:] == ["&"]
-        for t in found[:-1] if going_on else found:
-            if t == ";":
-                if tokens:
-                    yield number, tokens
-                tokens = []
-            elif t != "&":
-                tokens.append(t)
-        if tokens and not going_on:
-            yield number, tokens
-            tokens = []
-    if tokens:
-        yield number, tokens
 
 
 class _Reader:
     """The state of a .seq file being read: the system settings and the surfaces so far."""
 
-    def __init__(self, where: str):
+    def __init__(self, where: str, radius_mode: bool = True):
         self.where = where
         self.system: dict[str, list[str]] = {}
         self.rows: list[dict] = []  # SO, the surfaces, SI: raw values in lens units
         self.stop_at: int | None = None  # STO Sn: the stop is surface n
-        self.radius_mode = False  # CODE V's default: S lines give curvatures unless RDM says radii
+        self.radius_mode = radius_mode  # S lines give radii (RDM Y) or curvatures (RDM N, CUM)
         self.mode_given = False  # whether RDM or CUM said which
+        self.s_values = False  # whether an S line gives a nonzero radius or curvature
         self.private: PrivateCatalogue | None = None  # inside PRV … END
         self.materials: dict[str, dict] = {}  # the private glasses, as [materials] tables
 
-    def ident(self, line: int) -> str:
-        if not self.rows:
+    def ident(self, line: int, new: str | None = None) -> str:
+        """Where a command stands: its line and the surface it acts on (`new`: the kind of the surface the
+        line itself begins, SO, S, STO or SI)."""
+        if not self.rows and new is None:
             return f"{self.where}: line {line}"
-        kind = self.rows[-1]["kind"]
-        i = len(self.rows) - 1
+        kind, i = (new, len(self.rows)) if new else (self.rows[-1]["kind"], len(self.rows) - 1)
         return f"{self.where}: line {line}, surface {'SO' if kind == 'SO' else ('SI' if kind == 'SI' else f'S{i}')}"
 
     def read(self, text: str) -> None:
-        for line, tokens in _commands(text):
+        for line, tokens in commands(text):
             key, args = tokens[0].upper(), tokens[1:]
             if self.private is not None:
                 if self.private.read(key, tokens, f"{self.where}: line {line}, PRV"):
@@ -117,6 +86,7 @@ class _Reader:
             if key == "PRV":
                 self.private = PrivateCatalogue()
                 continue
+            key = command(key)
             if key in REFUSED:
                 if key in ZERO_IS_NOTHING and args and _numbers(args[:1], self.ident(line)) == [0.0]:
                     continue  # a zero decentre, tilt or fringe curvature changes nothing
@@ -129,7 +99,7 @@ class _Reader:
         if key == "STO" and args and re.fullmatch(r"[Ss]\d+", args[0]):
             self.stop_at = int(args[0][1:])
         elif key in ("SO", "S", "STO", "SI") and (key != "STO" or args or not self.rows):
-            self.surface(key, args, ident)
+            self.surface(key, args, self.ident(line, key))
         elif key in ("RDM", "CUM"):
             self.radius_mode = key == "RDM" and (not args or args[0].upper() not in ("N", "NO"))
             self.mode_given = True
@@ -161,6 +131,7 @@ class _Reader:
         values = _numbers(args[:2], f"{ident}: {key}")
         if values:
             self.modify(row, "RDY" if self.radius_mode else "CUY", args[:1], ident)
+            self.s_values = self.s_values or values[0] != 0.0
         if len(values) > 1:
             row["thi"] = values[1]
         if len(args) > 2:
@@ -207,12 +178,57 @@ class _Reader:
 
 
 def read_spec(text: str, where: str) -> dict:
-    """The lens-file dictionary of a .seq text; `where` names it in messages."""
-    reader = _Reader(where)
+    """The lens-file dictionary of a .seq text; `where` names it in messages. A file that says neither RDM nor
+    CUM is read in radii (module docstring); where that lens forms no real image and the same lines read as
+    curvatures do, those are taken. The description says which."""
+    reader = _read(text, where, radius_mode=True)
+    if reader.mode_given or not reader.s_values:
+        return _spec(reader, where)
+    first: SolasError | None = None
+    try:
+        spec = _spec(reader, where)
+        if _real_image(spec, where):
+            return _noted(spec, f"no RDM in the file: its S lines read as radii, {RADII_DEFAULT}")
+    except SolasError as exc:
+        first = exc
+    try:
+        other = _spec(_read(text, where, radius_mode=False), where)
+        if _real_image(other, where):
+            return _noted(other, "no RDM in the file: its S lines read as radii form no real image, as curvatures "
+                                 "(RDM N) they do: read as curvatures; add RDM or RDM N to say which")
+    except SolasError as exc:
+        if first is not None and str(exc) == str(first):
+            raise first from None  # the same fault either way: not the radii's
+    if first is None:  # neither reading forms a real image: the radii stand, as the description says
+        return _noted(spec, f"no RDM in the file: its S lines read as radii, {RADII_DEFAULT}")
+    raise SolasError(f"{first} (the file has no RDM: its S lines were read as radii, {RADII_DEFAULT}; "
+                     "if they are curvatures, add RDM N)") from None
+
+
+def _read(text: str, where: str, radius_mode: bool) -> _Reader:
+    """The file's commands read, S lines in radii or curvatures where the file says neither."""
+    reader = _Reader(where, radius_mode)
     reader.read(text)
-    system, rows = reader.system, reader.rows
     if reader.private is not None:
         raise SolasError(f"{where}: PRV (a private glass catalogue) has no END")
+    return reader
+
+
+def _real_image(spec: dict, where: str) -> bool:
+    """Whether the lens of `spec` has a positive focal length and a paraxial image behind its last surface."""
+    lens = Lens.from_dict(spec, source=where)
+    p = paraxial(lens, lens.primary_wavelength)
+    return bool(p.efl_mm > 0 and p.focus_z_mm > lens.vertex_z[-1])
+
+
+def _noted(spec: dict, note: str) -> dict:
+    spec["description"] = "; ".join(filter(None, (spec.get("description"), note)))
+    return spec
+
+
+def _spec(reader: _Reader, where: str) -> dict:
+    """The lens-file dictionary of the commands `reader` read."""
+    system, rows = reader.system, reader.rows
     if reader.stop_at is not None:
         if not 1 <= reader.stop_at < len(rows) - 1:
             raise SolasError(f"{where}: STO S{reader.stop_at}: the lens has surfaces S1 to S{len(rows) - 2}")
@@ -253,13 +269,7 @@ def read_spec(text: str, where: str) -> dict:
     if aperture[0] == "fnum" and spec["object"]["distance"] != "infinity":
         aperture = ("working fnum", aperture[1])  # CODE V's FNO: the working F/# at the object's conjugate
     fields = _fields(system, scale, where)
-    try:
-        return zemax_solves.solve(spec, aperture, fields, primary, where, _vignetting(system, len(fields[1]), where))
-    except SolasError as exc:
-        if reader.mode_given or not any(r["curv"] for r in rows):
-            raise
-        raise SolasError(f"{exc} (the file has no RDM: its S lines were read as curvatures, CODE V's default; "
-                         "if they are radii, add RDM)") from None
+    return zemax_solves.solve(spec, aperture, fields, primary, where, _vignetting(system, len(fields[1]), where))
 
 
 def _vignetting(system: dict, count: int, where: str) -> list[tuple[float, ...]] | None:

@@ -179,6 +179,14 @@ def test_aspheric_terms_and_units(tmp_path):
     assert cm.surfaces[1].aspheric == pytest.approx((1e-6, -2e-9, 0.0, 3e-14), rel=1e-12)
     sph = load(tmp_path, singlet(second=asp + "SPH\n"), "sph.seq")
     assert not any(sph.surfaces[1].aspheric) and sph.surfaces[1].conic == 0.0
+    # the optimisation codes of the conic and of each coefficient (KC, AC … JC, as CODE V writes them for
+    # variables and frozen values alike) say nothing of the surface: the same lens
+    coded = load(tmp_path, singlet(second="ASP\nK -0.5; KC 100\nA 1e-6; AC 100\nB -2e-9; BC 0\nD 3e-15\n"
+                                          "CC 0; DC 100; EC 0; FC 0; GC 0; HC 0; JC 0\n"), "coded.seq")
+    assert coded.surfaces == mm.surfaces
+    # a surface identifier on each surface (UID, as CODE V 2026 writes) and tolerances name no change
+    tagged = singlet(second=asp).replace("SI 0 0", 'SI 0 0\nUID S0 "a1"\nUID S1 "b2"\nDSX S1 0.01\nBTY S2 0.02')
+    assert load(tmp_path, tagged, "tagged.seq").surfaces == mm.surfaces
 
 
 @pytest.mark.parametrize("token, name", [("1.699:30.1", "model:1.699/30.1"), ("699000.301000", "model:1.699/30.1"),
@@ -205,6 +213,7 @@ def test_field_types(tmp_path):
 
 @pytest.mark.parametrize("insert, match", [
     ("XDE 0.5\n", r"line \d+, surface S2: XDE: decentred or tilted surfaces are not supported"),
+    ("S -240.0 1.0 XYZ_SCHOTT\n", r"line \d+, surface S3: glass .XYZ_SCHOTT."),  # the surface its own line begins
     ("ADE 1\n", "ADE: decentred or tilted"),
     ("REFL\n", "REFL: mirrors"),
     ("DOE\n", "DOE: diffractive surfaces"),
@@ -257,10 +266,11 @@ GO
     assert lens.surfaces[0].stop and lens.surfaces[0].glass.name == "model:1.5"
     assert p.efl_mm == pytest.approx(EFL, rel=1e-12) and p.entrance_pupil_diameter_mm == pytest.approx(20.0, rel=1e-12)
     assert lens.field_deg == 10.0 and lens.surfaces[1].aspheric == (1e-7, -2e-11)
-    # without RDM the S lines give curvatures (CODE V's default)
+    # without RDM, S lines of curvatures (as radii of 0.017 mm they form no real image) are read as curvatures
     cum = load(tmp_path, text.replace("RDM;LEN", "LEN").replace(f"S     {R1!r}", f"S     {1 / R1!r}")
                .replace(f"S     {R2!r}", f"S     {1 / R2!r}"), "cum.seq")
     assert [s.radius for s in cum.surfaces] == pytest.approx([R1, R2], rel=1e-12)
+    assert "read as curvatures" in cum.description
 
 
 @pytest.mark.parametrize("change, match", [
@@ -304,6 +314,21 @@ def test_without_sto_the_stop_is_surface_1(tmp_path):
     assert "stop is surface 1" in unmarked.description and "stop" not in marked.description
 
 
+def test_commands_by_their_first_three_letters(tmp_path):
+    """CODE V knows a command by its first three letters: STOP on a line of its own marks the stop as STO
+    does, TITLE and TEMPERATURE are TIT and TEM; a word beginning with a refused command (REFLECT) is
+    refused as that one, not read as REF (the reference wavelength)."""
+    marked = load(tmp_path, singlet(), "a.seq")
+    words = singlet(system="EPD 20\nYAN 0 10\nTITLE 'words'\nTEMPERATURE 20").replace(
+        f"STO {R1!r}", f"S {R1!r}").replace(f"S {R2!r} 1.0", f"STOP\nS {R2!r} 1.0")
+    worded = load(tmp_path, words, "b.seq")
+    assert worded.surfaces == marked.surfaces and worded.name == "words"
+    with pytest.raises(SolasError, match="REFL: mirrors are not supported"):
+        load(tmp_path, singlet().replace("PIM", "PIM\nREFLECT"), "c.seq")
+    with pytest.raises(SolasError, match="command NAME is not supported"):
+        load(tmp_path, singlet().replace("PIM", "PIM\nNAME 1"), "d.seq")
+
+
 def test_vignetting_factors_shape_the_automatic_apertures(tmp_path):
     """Vignetting factors of 0.5 on every side at every field squeeze the beam at the stop to half its
     radius: the automatic semi-diameters are those of the same lens with half the entrance pupil."""
@@ -331,12 +356,45 @@ SI 0 0
         load(tmp_path, "EPD 16\nVUY 0.5 1.2\n" + lens, "d.seq")
 
 
-def test_a_lens_without_rdm_that_fails_says_how_it_was_read(tmp_path):
-    """Without RDM the S lines are curvatures (CODE V's default); a file written in radii then images
-    nothing, and the refusal says how it was read and what to add."""
-    text = singlet(mode="").replace("SO 0 1e10", "SO 0 1e10")
-    with pytest.raises(SolasError, match="no RDM: its S lines were read as curvatures.*add RDM"):
-        load(tmp_path, text.replace("PIM", ""))
+def test_without_rdm_the_s_lines_are_radii(tmp_path):
+    """A file saying neither RDM nor CUM is read in radii (as CODE V shows lens data and hand-written files
+    give it): the singlet in radii without RDM is the singlet of the thick-lens formula, and its
+    description says how it was read."""
+    lens = load(tmp_path, singlet(mode=""))
+    p = paraxial(lens, 550.0)
+    assert [s.radius for s in lens.surfaces] == [R1, R2]
+    assert p.efl_mm == pytest.approx(EFL, rel=1e-12) and p.bfd_mm == pytest.approx(BFD, rel=1e-12)
+    assert "no RDM in the file: its S lines read as radii" in lens.description
+    assert "RDM" not in load(tmp_path, singlet(), "rdm.seq").description  # RDM said so: nothing to note
+
+
+@pytest.mark.parametrize("first, second", [(R1, R2), (-R2, -R1)])
+def test_without_rdm_curvatures_are_taken_where_radii_form_no_real_image(tmp_path, first, second):
+    """The same singlet written in curvatures without RDM: as radii (1/60 mm and -1/240 mm) the lens forms
+    no real image, as curvatures it is the singlet of the thick-lens formula; the description says so.
+    Both orientations (the radii reading of the reversed singlet is a diverging lens, of the first one
+    a lens that images no field)."""
+    n_first, n_second = 1 / first, 1 / second
+    text = singlet(mode="", first=n_first, system="EPD 20\nYAN 0 10").replace(f"S {R2!r} 1.0", f"S {n_second!r} 1.0")
+    lens = load(tmp_path, text)
+    efl = 1.0 / ((N - 1) * (1 / first - 1 / second + (N - 1) * T1 / (N * first * second)))
+    assert [s.radius for s in lens.surfaces] == pytest.approx([first, second], rel=1e-12)
+    assert paraxial(lens, 550.0).efl_mm == pytest.approx(efl, rel=1e-12)
+    assert "as curvatures (RDM N) they do: read as curvatures" in lens.description
+    with pytest.raises(SolasError):  # CUM said otherwise: no fallback
+        load(tmp_path, "RDM\n" + text, "rdm.seq")
+
+
+def test_a_lens_without_rdm_that_fails_both_ways_says_how_it_was_read(tmp_path):
+    """Read as radii (-1/60 mm, 1/240 mm) the file images nothing, and as curvatures it is a diverging
+    lens: the refusal says how it was read and what to add if the S lines are curvatures. A fault that is
+    the same either way has no such hint."""
+    text = singlet(mode="", first=-1 / R1).replace(f"S {R2!r} 1.0", f"S {-1 / R2!r} 1.0").replace("PIM", "")
+    with pytest.raises(SolasError, match="no RDM: its S lines were read as radii.*if they are curvatures, add RDM N"):
+        load(tmp_path, text)
+    with pytest.raises(SolasError, match="needs SO") as refused:
+        load(tmp_path, "SO 0 1e10\nS 10 1\n", "b.seq")
+    assert "RDM" not in str(refused.value)
 
 
 def test_fno_with_a_near_object_is_the_working_f_number(tmp_path):
