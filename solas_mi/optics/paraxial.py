@@ -64,15 +64,16 @@ def ynu_trace(lens: Lens, wavelength_nm: float, y1: float, u0: float, start: int
 
 
 @functools.lru_cache(maxsize=64)
-def ideal_conjugates(lens: Lens) -> dict[int, float]:
+def ideal_conjugates(lens: Lens) -> dict[int, float | None]:
     """Per ideal thin lens (surface index k → w, 1/mm): the signed inverse distance from it to the paraxial
     image of the object formed by the surfaces before it, at the primary wavelength (0: at infinity;
     negative: a real point in front of it). That point is the conjugate whose pencil the ideal lens
-    makes perfect (`tracer`); an ideal lens at an intermediate image (marginal height 0) takes 0."""
+    makes perfect (`tracer`); an ideal lens at that point (marginal height 0: an intermediate image, or a
+    virtual object on it) takes None (`ideal.deflect`)."""
     wl = lens.primary_wavelength
     y, u = ynu_trace(lens, wl, 1.0, 0.0) if lens.at_infinity else _object_ray(lens, wl, 0.0, 1.0)
     before = np.concatenate([[0.0 if lens.at_infinity else 1.0], u[:-1]])
-    return {k: (-float(before[k] / y[k]) if y[k] != 0 else 0.0) for k, s in enumerate(lens.surfaces) if s.ideal}
+    return {k: (-float(before[k] / y[k]) if y[k] != 0 else None) for k, s in enumerate(lens.surfaces) if s.ideal}
 
 
 def _object_ray(lens: Lens, wavelength_nm: float, y_obj: float, u0: float) -> tuple[np.ndarray, np.ndarray]:

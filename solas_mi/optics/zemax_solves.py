@@ -103,7 +103,9 @@ def _angles(lens: Lens, fields: tuple[str, list[float]], wl: float, where: str) 
     if kind == "object height":
         if lens.at_infinity:
             raise SolasError(f"{where}: object-height fields need a finite object; the object is at infinity")
-        return [math.degrees(math.atan(h / (p.entrance_pupil_z_mm + lens.object_distance))) for h in sizes]
+        # the chief ray's slope between the object point and the entrance pupil, as a magnitude: a virtual
+        # object (behind surface 1) lies beyond the pupil, where that distance is negative
+        return [math.degrees(math.atan(h / abs(p.entrance_pupil_z_mm + lens.object_distance))) for h in sizes]
     per_tan = p.chief_ray_image_height_mm[0]  # the paraxial image height is linear in the field's tangent
     guess = [math.degrees(math.atan(h / abs(per_tan))) for h in sizes]
     return guess if kind == "paraxial image height" else _real_heights(lens, sizes, guess, wl, where)
