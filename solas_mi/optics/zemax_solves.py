@@ -87,7 +87,7 @@ def _stop_sized(lens: Lens, aperture: tuple[str, float], wl: float, where: str) 
         n0 = float(lens.object_glass.index(wl))
         if not value < n0:
             raise SolasError(f"{where}: object-space NA {value:g} must be below the object space's index {n0:g}")
-        epd = 2.0 * math.tan(math.asin(value / n0)) * (p.entrance_pupil_z_mm + lens.object_distance)
+        epd = 2.0 * math.tan(math.asin(value / n0)) * abs(p.entrance_pupil_z_mm + lens.object_distance)  # virtual too
     k = lens.stop_index
     stop = lens.surfaces[k]
     scaled = replace(stop, diameter=stop.diameter * epd / p.entrance_pupil_diameter_mm)

@@ -201,3 +201,49 @@ def test_the_mesh_scene_refuses_a_virtual_object_by_name():
     with pytest.raises(SolasError, match="the mesh scene: lens .* has a virtual object, 30 mm behind surface 1 .*"
                                          "no scene in front of the lens"):
         lens_parts(_singlet()[0])
+
+
+ZMX = """VERS 190513 80 123457 L123457
+MODE SEQ
+UNIT MM X W X CM MR CPMM
+OBNA 0.02 0
+FTYP 1 0 2 1 0 0 0
+XFLN 0 0
+YFLN 0 20
+WAVM 1 0.55 1
+PWAV 1
+SURF 0
+  TYPE STANDARD
+  CURV 0.0
+  DISZ -500
+SURF 1
+  STOP
+  TYPE STANDARD
+  CURV 0.0
+  DISZ 50
+SURF 2
+  TYPE PARAXIAL
+  PARM 1 100
+  DISZ {image!r}
+  DIAM 30 1
+SURF 3
+  TYPE STANDARD
+  CURV 0.0
+  DISZ 0
+"""
+
+
+def test_a_zemax_file_with_a_virtual_object_sizes_its_pupil_and_fields(tmp_path):
+    """DISZ −500 on SURF 0: the object-space NA 0.02 makes the stop's semi-diameter 500·tan(asin 0.02) (the
+    cone converging on the point behind it), and the 20 mm object-height field the angle atan(20/500) toward
+    the entrance pupil, positive, whose object point lies 20 mm off the axis."""
+    s2 = 1.0 / (1.0 / 450.0 + 1.0 / 100.0)  # the ideal lens 50 mm on sees the object 450 mm behind it
+    (tmp_path / "virtual.zmx").write_text(ZMX.replace("{image!r}", repr(s2)))
+    lens = Lens.load(tmp_path / "virtual.zmx")
+    assert lens.object_distance == -500.0
+    assert lens.surfaces[0].semi_diameter == pytest.approx(500.0 * math.tan(math.asin(0.02)), rel=1e-12)
+    assert lens.field_deg == pytest.approx(math.degrees(math.atan(20.0 / 500.0)), rel=1e-12)
+    assert abs(T.object_points(lens, np.array([[0.0, lens.field_deg]]))[0, 1]) == pytest.approx(20.0, rel=1e-12)
+    p = paraxial(lens)  # 1/s' = 1/450 + 1/100, m = s'/450
+    assert p.focus_z_mm == pytest.approx(50.0 + s2, rel=1e-13)
+    assert abs(p.chief_ray_image_height_mm[1]) == pytest.approx(20.0 * s2 / 450.0, rel=1e-12)
