@@ -76,6 +76,16 @@ def ideal_conjugates(lens: Lens) -> dict[int, float | None]:
     return {k: (-float(before[k] / y[k]) if y[k] != 0 else None) for k, s in enumerate(lens.surfaces) if s.ideal}
 
 
+def pupil_distance(lens: Lens, ep_z: float) -> float:
+    """mm from a finite object to the entrance pupil at `ep_z` (negative where the pupil lies beyond a virtual
+    object); SolasError where the object lies in the pupil, as every chief ray meets there."""
+    distance = ep_z + lens.object_distance
+    if abs(distance) <= 1e-9 * abs(lens.object_distance):
+        raise SolasError(f"lens {lens.name}: the object lies in the entrance pupil ({ep_z:g} mm from surface 1), "
+                         "where every chief ray meets: a field names no object point; move the object or the stop")
+    return distance
+
+
 def _object_ray(lens: Lens, wavelength_nm: float, y_obj: float, u0: float) -> tuple[np.ndarray, np.ndarray]:
     """A ray leaving the object plane at height `y_obj` with slope `u0` (finite objects)."""
     return ynu_trace(lens, wavelength_nm, y_obj + u0 * lens.object_distance, u0)
@@ -197,6 +207,8 @@ def _marginal_ray(lens: Lens, wavelength_nm: float, ya: np.ndarray, ua: np.ndarr
     else:
         # ray from the axial object point with slope 1 → height at stop; scale to the stop edge
         y0, u0 = _object_ray(lens, wavelength_nm, 0.0, 1.0)
+        if y0[s] == 0:  # the object's image lies on the stop: the object in the entrance pupil
+            pupil_distance(lens, -lens.object_distance)
         scale = r_stop / y0[s]
         ym, um = y0 * scale, u0 * scale
         obj_z = -lens.object_distance

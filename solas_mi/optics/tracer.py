@@ -25,7 +25,7 @@ from . import ideal
 from .fields import ANGLE
 from .lens import Lens
 from .sag import sag, sag_slope
-from .paraxial import ideal_conjugates, paraxial
+from .paraxial import ideal_conjugates, paraxial, pupil_distance
 
 dr = import_drjit()
 from drjit.llvm import Bool, Float64, UInt32  # noqa: E402
@@ -330,8 +330,7 @@ def object_points(lens: Lens, field_deg: np.ndarray) -> np.ndarray | None:
     """
     if lens.at_infinity:
         return None
-    ep_z = paraxial(lens).entrance_pupil_z_mm
-    return -field_tangents(field_deg) * (ep_z + lens.object_distance)
+    return -field_tangents(field_deg) * pupil_distance(lens, paraxial(lens).entrance_pupil_z_mm)
 
 
 def gather(values: np.ndarray, index: UInt32) -> F:

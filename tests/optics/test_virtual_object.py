@@ -247,3 +247,13 @@ def test_a_zemax_file_with_a_virtual_object_sizes_its_pupil_and_fields(tmp_path)
     p = paraxial(lens)  # 1/s' = 1/450 + 1/100, m = s'/450
     assert p.focus_z_mm == pytest.approx(50.0 + s2, rel=1e-13)
     assert abs(p.chief_ray_image_height_mm[1]) == pytest.approx(20.0 * s2 / 450.0, rel=1e-12)
+
+
+def test_an_object_in_the_entrance_pupil_is_refused_by_name(tmp_path):
+    """The stop 40 mm behind surface 1 and the virtual object on it: every chief ray meets the object point,
+    so an object-height field names no angle (it divided by zero) and a field angle no object point."""
+    text = ZMX.replace("DISZ -500", "DISZ -40").replace("  STOP\n", "").replace(
+        "  TYPE PARAXIAL", "  STOP\n  TYPE PARAXIAL").replace("OBNA 0.02 0", "ENPD 10").replace("{image!r}", "80")
+    (tmp_path / "pupil.zmx").write_text(text.replace("DISZ 50", "DISZ 40"))
+    with pytest.raises(SolasError, match=r"the object lies in the entrance pupil \(40 mm from surface 1\)"):
+        Lens.load(tmp_path / "pupil.zmx")
