@@ -85,7 +85,7 @@ import mitsuba as mi
 import numpy as np
 
 from solas_mi.errors import SolasError
-from solas_mi.optics import tracer as T
+from solas_mi.optics import tracer as T, virtual_object
 from solas_mi.optics.exit_pupil import passes, reversed_lens
 from solas_mi.optics.focus import focused
 from solas_mi.optics.paraxial import paraxial
@@ -180,6 +180,8 @@ class LensCamera(LensFilm):
         """The lens focused at `focus_distance` (world units of `world_unit_mm`), if given."""
         self.world_unit_mm = positive(props, "world_unit_mm", 1000.0, "mm per world unit", "lens_camera")
         if "focus_distance" not in props:
+            virtual_object.check_real(lens, "lens_camera", "give focus_distance to focus it on the scene, or "
+                                      "trace it instead (lens info, psf)")
             return lens
         distance = positive(props, "focus_distance", 1.0, "world units, in front of surface 1; inf", "lens_camera",
                             True)

@@ -40,7 +40,7 @@ class Bundle:
         self.object_point = None if pts is None else (T.gather(pts[:, 0], self.index), T.gather(pts[:, 1], self.index))
         # what a converged aim can reach: rays launched from a far object carry its coordinates'
         # rounding (≈ 1e-17 of the distance, measured: 4e-8 mm at 1e12 mm) into every crossing
-        self.tolerance = 1e3 * _TOL + (0.0 if lens.at_infinity else 1e-17 * lens.object_distance)
+        self.tolerance = 1e3 * _TOL + (0.0 if lens.at_infinity else 1e-17 * abs(lens.object_distance))
 
     def per_ray(self, values: np.ndarray) -> T.F:
         """Per-field values spread over the bundle's rays."""

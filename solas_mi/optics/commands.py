@@ -9,7 +9,7 @@ import numpy as np
 
 from .. import jsonio
 from ..options import add_lens_argument, floats
-from . import ideal
+from . import ideal, virtual_object
 
 _ROWS = [("efl_mm", "EFL (mm)"), ("bfd_mm", "BFD (mm)"), ("entrance_pupil_diameter_mm", "EPD (mm)"),
          ("entrance_pupil_z_mm", "entrance pupil z (mm)"), ("exit_pupil_diameter_mm", "exit pupil D (mm)"),
@@ -36,7 +36,7 @@ def run_lens_info(args) -> int:
         rows.append(p)
     info = {"lens": lens.name, "hash": lens.hash, "source": lens.source, "stop_surface": lens.stop_index + 1,
             "image_z_mm": lens.image_z, "image_diameter_mm": lens.image_diameter, "field_type": lens.field_type.name,
-            "dispersion": lens.dispersive, **ideal.metadata(lens), "per_wavelength": rows}
+            "dispersion": lens.dispersive, **virtual_object.metadata(lens), **ideal.metadata(lens), "per_wavelength": rows}
     table = None
     if args.fields or lens.field_deg > 0:  # the given fields, else 0 … the lens's half field
         table = distortion(lens, sorted({abs(f) for f in fields} | {0.0}) if args.fields else None)
@@ -49,6 +49,8 @@ def run_lens_info(args) -> int:
     print(f"fields: {lens.field_type.description}")
     if not lens.dispersive:
         print("glass: no dispersion data (every medium a constant index): the columns of every wavelength agree")
+    if lens.virtual_object:
+        print(f"object: virtual, {virtual_object.metadata(lens)['virtual_object']}")
     if ideal.metadata(lens):
         print(f"ideal lens: {ideal.metadata(lens)['ideal_lens_path']}")
     print(f"{'quantity':36s}" + "".join(f"{w:>12g} nm" for w in wavelengths))

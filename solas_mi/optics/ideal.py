@@ -10,7 +10,9 @@ signed inverse distances to the object point whose pencil it images and to that 
 plane z = 1/w (σ its sign). Every ray of the pencil from that point then reaches its image with the
 same optical path: the pencil is imaged without aberration (Zemax's OPD mode 1, "perfect"). w is the
 paraxial image of the lens's object by the surfaces before the ideal lens, at the primary wavelength
-(`paraxial.ideal_conjugates`; 0 at infinity), so δ is exact for a pencil that meets the ideal lens
+(`paraxial.ideal_conjugates`; 0 at infinity; None where that point lies on the lens, as a virtual object
+or an intermediate image there: every ray of its pencil meets the lens at one point h, and δ takes g's limit
+there, the constant (n' − n)|h|), so δ is exact for a pencil that meets the ideal lens
 stigmatic at that point (an ideal lens in front, or only ideal lenses before it, at any object
 distance) and approximate for a pencil already aberrated by real surfaces or at other wavelengths
 focused elsewhere. Zemax's OPD mode 0 (integrate the path over the pupil) is read as perfect too, and
@@ -78,12 +80,16 @@ def metadata(lens) -> dict:
 def deflect(x, y, d, n, n_after, inv_f, w, sqrt):
     """Directions after an ideal lens of power `inv_f` (1/mm) of rays meeting it at (x, y) (its vertex
     frame) with unit directions `d` (dz > 0) from index `n` into `n_after`, and the optical path δ it
-    adds for the pencil from the point at signed inverse distance `w` (module docstring)."""
+    adds for the pencil from the point at signed inverse distance `w` (None: a point on the lens; module
+    docstring)."""
     dx, dy, dz = d
     tx, ty = dx / dz, dy / dz
     ux, uy = (n * tx - x * inv_f) / n_after, (n * ty - y * inv_f) / n_after
-    delta = (n_after * _pencil_path(x, y, ux, uy, (n * w + inv_f) / n_after, sqrt)
-             - n * _pencil_path(x, y, tx, ty, w, sqrt))
+    if w is None:  # the pencil's point on the lens: g → |h| for the rays in and out, a constant per pencil
+        delta = (n_after - n) * sqrt(x * x + y * y)
+    else:
+        delta = (n_after * _pencil_path(x, y, ux, uy, (n * w + inv_f) / n_after, sqrt)
+                 - n * _pencil_path(x, y, tx, ty, w, sqrt))
     inv = 1.0 / sqrt(ux * ux + uy * uy + 1.0)
     return (ux * inv, uy * inv, inv), delta
 

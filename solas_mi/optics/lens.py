@@ -29,7 +29,6 @@ from .formats import READERS, WRITERS, decode_text, lens_path, listed, shipped_l
 from .fields import FieldType, field_type_for
 
 _VIRTUAL = ": the image plane lies before the last surface, a virtual image (a diverging lens's focus) that no film records"
-_VIRTUAL_OBJECT = "; a negative one, a virtual object behind surface 1 (light converging toward it), is not modelled"
 # What a lens file may hold (anything else is a mistake worth naming, e.g. a surface type we do not model)
 KEYS = {
     "lens": ("name", "description", "wavelengths_nm", "field_deg", "catalogues", "materials", "surface", "object",
@@ -252,9 +251,10 @@ class Lens:
         distance = obj.get("distance", "infinity")
         if isinstance(distance, str) and distance.strip().lower() in ("inf", "infinity"):
             distance = math.inf
-        elif not isinstance(distance, (int, float)) or isinstance(distance, bool) or not 0 < distance < math.inf:
-            raise SolasError(f"{where}: object distance {distance!r} must be a positive number (mm) or \"infinity\""
-                             + _VIRTUAL_OBJECT * (isinstance(distance, (int, float)) and distance < 0))
+        elif (not isinstance(distance, (int, float)) or isinstance(distance, bool) or not math.isfinite(distance)
+              or distance == 0):
+            raise SolasError(f"{where}: object distance {distance!r} must be a non-zero number (mm; negative: a "
+                             "virtual object behind surface 1, light converging toward it) or \"infinity\"")
         try:
             object_glass = glass_mod.resolve(obj.get("material", "AIR"), prefer=catalogues, own=own)
         except SolasError as exc:
@@ -354,6 +354,11 @@ class Lens:
     @property
     def at_infinity(self) -> bool:
         return math.isinf(self.object_distance)
+
+    @property
+    def virtual_object(self) -> bool:
+        """Whether the object lies behind surface 1 (a negative `object_distance`; `virtual_object`)."""
+        return self.object_distance < 0
 
     def indices(self, wavelength_nm: float) -> np.ndarray:
         """Refractive index of the object space and after each surface at `wavelength_nm`."""

@@ -64,15 +64,26 @@ def ynu_trace(lens: Lens, wavelength_nm: float, y1: float, u0: float, start: int
 
 
 @functools.lru_cache(maxsize=64)
-def ideal_conjugates(lens: Lens) -> dict[int, float]:
+def ideal_conjugates(lens: Lens) -> dict[int, float | None]:
     """Per ideal thin lens (surface index k → w, 1/mm): the signed inverse distance from it to the paraxial
     image of the object formed by the surfaces before it, at the primary wavelength (0: at infinity;
     negative: a real point in front of it). That point is the conjugate whose pencil the ideal lens
-    makes perfect (`tracer`); an ideal lens at an intermediate image (marginal height 0) takes 0."""
+    makes perfect (`tracer`); an ideal lens at that point (marginal height 0: an intermediate image, or a
+    virtual object on it) takes None (`ideal.deflect`)."""
     wl = lens.primary_wavelength
     y, u = ynu_trace(lens, wl, 1.0, 0.0) if lens.at_infinity else _object_ray(lens, wl, 0.0, 1.0)
     before = np.concatenate([[0.0 if lens.at_infinity else 1.0], u[:-1]])
-    return {k: (-float(before[k] / y[k]) if y[k] != 0 else 0.0) for k, s in enumerate(lens.surfaces) if s.ideal}
+    return {k: (-float(before[k] / y[k]) if y[k] != 0 else None) for k, s in enumerate(lens.surfaces) if s.ideal}
+
+
+def pupil_distance(lens: Lens, ep_z: float) -> float:
+    """mm from a finite object to the entrance pupil at `ep_z` (negative where the pupil lies beyond a virtual
+    object); SolasError where the object lies in the pupil, as every chief ray meets there."""
+    distance = ep_z + lens.object_distance
+    if abs(distance) <= 1e-9 * abs(lens.object_distance):
+        raise SolasError(f"lens {lens.name}: the object lies in the entrance pupil ({ep_z:g} mm from surface 1), "
+                         "where every chief ray meets: a field names no object point; move the object or the stop")
+    return distance
 
 
 def _object_ray(lens: Lens, wavelength_nm: float, y_obj: float, u0: float) -> tuple[np.ndarray, np.ndarray]:
@@ -196,6 +207,8 @@ def _marginal_ray(lens: Lens, wavelength_nm: float, ya: np.ndarray, ua: np.ndarr
     else:
         # ray from the axial object point with slope 1 → height at stop; scale to the stop edge
         y0, u0 = _object_ray(lens, wavelength_nm, 0.0, 1.0)
+        if y0[s] == 0:  # the object's image lies on the stop: the object in the entrance pupil
+            pupil_distance(lens, -lens.object_distance)
         scale = r_stop / y0[s]
         ym, um = y0 * scale, u0 * scale
         obj_z = -lens.object_distance

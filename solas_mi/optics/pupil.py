@@ -163,7 +163,7 @@ def entrance_power(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray,
         return np.broadcast_to(density, np.shape(ex))
     pts = T.object_points(lens, field_deg).reshape((-1, 2) + (1,) * (np.ndim(ex) - 1))
     dist2 = (ex - pts[:, 0]) ** 2 + (ey - pts[:, 1]) ** 2 + lens.object_distance ** 2
-    return density * lens.object_distance ** 3 / dist2 ** 1.5
+    return density * abs(lens.object_distance) ** 3 / dist2 ** 1.5  # a virtual object's converging cone alike
 
 
 def _power_density(lens: Lens, wavelength_nm: float) -> float:

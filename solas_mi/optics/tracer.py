@@ -25,7 +25,7 @@ from . import ideal
 from .fields import ANGLE
 from .lens import Lens
 from .sag import sag, sag_slope
-from .paraxial import ideal_conjugates, paraxial
+from .paraxial import ideal_conjugates, paraxial, pupil_distance
 
 dr = import_drjit()
 from drjit.llvm import Bool, Float64, UInt32  # noqa: E402
@@ -101,8 +101,9 @@ def launch(lens: Lens, tan_x: F, tan_y: F, ex: F, ey: F, object_point: tuple[F, 
 
     Object at infinity: the ray starts on the plane through (0, 0, launch_plane_z) perpendicular to
     the field direction, at (ex, ey) in that plane's basis (e1 ⟂ y, e2 = d × e1); OPL starts at 0 there.
-    Finite object: the ray leaves `object_point` (x, y at z = −distance) aiming at (ex, ey, 0); a far
-    one starts where it crosses the plane z = launch_plane_z, with the geometric path from the object
+    Finite object: the ray leaves `object_point` (x, y at z = −distance) aiming at (ex, ey, 0) (a virtual
+    object, distance < 0: the ray along that line, converging toward the point behind surface 1); a far
+    or virtual one starts where it crosses the plane z = launch_plane_z, with the geometric path from the object
     point less the radius of the sphere about that point through (0, 0, launch_plane_z) as its OPL
     (`trace` scales it by the object-space index): a constant per object point, so OPDs keep their
     meaning while no path of the object's distance enters the sums.
@@ -117,7 +118,7 @@ def launch(lens: Lens, tan_x: F, tan_y: F, ex: F, ey: F, object_point: tuple[F, 
         return Rays(x, y, z, dx, dy, dz, dr.zeros(ftype, dr.width(x)))
     ox, oy = object_point
     zs = launch_plane_z(lens)
-    if -lens.object_distance >= zs:  # a near object (a film, in a reversed lens): start at the point itself
+    if -zs >= lens.object_distance > 0:  # a near object (a film, in a reversed lens): start at the point itself
         oz = _opaque(-lens.object_distance, ftype)
         vx, vy, vz = ex - ox, ey - oy, -oz + 0.0 * ex
         inv = dr.rsqrt(vx * vx + vy * vy + vz * vz)
@@ -125,7 +126,9 @@ def launch(lens: Lens, tan_x: F, tan_y: F, ex: F, ey: F, object_point: tuple[F, 
                     dr.zeros(ftype, dr.width(ex)))
     # A far object: start on the plane z = zs, with the path from the object point measured from the
     # sphere about it through (0, 0, zs): s − R = (s² − R²)/(s + R), free of the cancellation that two
-    # paths of up to 1e12 mm would leave (0.1 µm of noise, a fifth of a wave).
+    # paths of up to 1e12 mm would leave (0.1 µm of noise, a fifth of a wave). A virtual object (d < 0,
+    # behind surface 1): the same line through the object point and (ex, ey, 0), travelling toward the
+    # point, whose converging wave reaches the sphere of radius s before that of radius R: the path R − s.
     d, z0 = _opaque(lens.object_distance, ftype), _opaque(zs, ftype)
     sx, sy = (ex - ox) / d, (ey - oy) / d  # slopes toward (ex, ey, 0)
     x, y = dr.fma(z0, sx, ex), dr.fma(z0, sy, ey)
@@ -133,7 +136,7 @@ def launch(lens: Lens, tan_x: F, tan_y: F, ex: F, ey: F, object_point: tuple[F, 
     s_len = dr.sqrt((x - ox) * (x - ox) + (y - oy) * (y - oy) + h * h)
     r_len = dr.sqrt(ox * ox + oy * oy + h * h)
     inv = dr.rsqrt(sx * sx + sy * sy + 1.0)
-    opl = (x * (x - 2.0 * ox) + y * (y - 2.0 * oy)) / (s_len + r_len)
+    opl = (x * (x - 2.0 * ox) + y * (y - 2.0 * oy)) / (s_len + r_len) * (-1.0 if lens.virtual_object else 1.0)
     return Rays(x, y, z0 + 0.0 * ex, sx * inv, sy * inv, inv, opl)
 
 
@@ -205,7 +208,8 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False, heigh
         n_after = refractive_index(s.glass, wavelength_um)
         if s.ideal:
             (dx, dy, dz), delta = ideal.deflect(x, y, (dx, dy, dz), n_before, n_after, _opaque(1.0 / s.focal_length, ftype),
-                                                _opaque(conjugates[k], ftype), dr.sqrt)
+                                                None if conjugates[k] is None else _opaque(conjugates[k], ftype),
+                                                dr.sqrt)
             opl = opl + delta
         elif s.glass != (lens.surfaces[k - 1].glass if k else lens.object_glass):
             (dx, dy, dz), k2, factor = _refract(s, x, y, lz, r2, (dx, dy, dz), n_before / n_after, fresnel, ftype)
@@ -326,8 +330,7 @@ def object_points(lens: Lens, field_deg: np.ndarray) -> np.ndarray | None:
     """
     if lens.at_infinity:
         return None
-    ep_z = paraxial(lens).entrance_pupil_z_mm
-    return -field_tangents(field_deg) * (ep_z + lens.object_distance)
+    return -field_tangents(field_deg) * pupil_distance(lens, paraxial(lens).entrance_pupil_z_mm)
 
 
 def gather(values: np.ndarray, index: UInt32) -> F:

@@ -22,7 +22,7 @@ import numpy as np
 
 from ..errors import SolasError
 from .lens import Lens
-from .paraxial import paraxial
+from .paraxial import paraxial, pupil_distance
 
 _OPEN = 0.999  # a provisional automatic aperture: this fraction of the sphere's radius
 _FLAT_OPEN_MM = 1e4  # … or this, for flat and aspheric surfaces
@@ -87,7 +87,7 @@ def _stop_sized(lens: Lens, aperture: tuple[str, float], wl: float, where: str) 
         n0 = float(lens.object_glass.index(wl))
         if not value < n0:
             raise SolasError(f"{where}: object-space NA {value:g} must be below the object space's index {n0:g}")
-        epd = 2.0 * math.tan(math.asin(value / n0)) * (p.entrance_pupil_z_mm + lens.object_distance)
+        epd = 2.0 * math.tan(math.asin(value / n0)) * abs(pupil_distance(lens, p.entrance_pupil_z_mm))  # virtual too
     k = lens.stop_index
     stop = lens.surfaces[k]
     scaled = replace(stop, diameter=stop.diameter * epd / p.entrance_pupil_diameter_mm)
@@ -103,7 +103,9 @@ def _angles(lens: Lens, fields: tuple[str, list[float]], wl: float, where: str) 
     if kind == "object height":
         if lens.at_infinity:
             raise SolasError(f"{where}: object-height fields need a finite object; the object is at infinity")
-        return [math.degrees(math.atan(h / (p.entrance_pupil_z_mm + lens.object_distance))) for h in sizes]
+        # the chief ray's slope between the object point and the entrance pupil, as a magnitude: a virtual
+        # object (behind surface 1) lies beyond the pupil, where that distance is negative
+        return [math.degrees(math.atan(h / abs(pupil_distance(lens, p.entrance_pupil_z_mm)))) for h in sizes]
     per_tan = p.chief_ray_image_height_mm[0]  # the paraxial image height is linear in the field's tangent
     guess = [math.degrees(math.atan(h / abs(per_tan))) for h in sizes]
     return guess if kind == "paraxial image height" else _real_heights(lens, sizes, guess, wl, where)

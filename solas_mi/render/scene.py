@@ -19,6 +19,7 @@ import numpy as np
 from ..errors import SolasError
 from ..imageio import atomic_path, write_text
 from ..optics.camera import Camera, camera_for
+from ..optics import virtual_object
 from ..optics.lens import Lens
 from ..outputs import inside, safe_name
 from . import response as responses
@@ -75,6 +76,7 @@ def lens_parts(lens: Lens, rings: int | None = None, image_radius: float = 0.0) 
         raise SolasError(f"surface {ideal} of lens {lens.name} is an ideal thin lens (focal_length), which has no glass "
                          "to build as Mitsuba geometry; trace it instead: the lens camera (a scene file's sensor, "
                          "`render.user_scene`) or a tracer PSF method (fraunhofer, geometric)")
+    virtual_object.check_real(lens, "the mesh scene")
     rings = resolve_rings(lens, rings)
     check_gaps(lens)
     parts = []

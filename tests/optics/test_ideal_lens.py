@@ -218,10 +218,12 @@ def test_writers_that_cannot_hold_it_refuse(tmp_path):
     assert not (tmp_path / "ideal.dat").exists()
 
 
-def test_a_virtual_object_is_refused_by_name():
-    with pytest.raises(SolasError, match="a virtual object behind surface 1 .* is not modelled"):
-        Lens.from_dict({"object": {"distance": -53.4}, "surface": [
-            {"radius": 0.0, "thickness": 50.0, "diameter": 10.0, "stop": True, "focal_length": 50.0}]})
+def test_a_virtual_object_before_an_ideal_lens_loads():
+    """Once refused, now traced (test_virtual_object): an object 53.4 mm behind the lens, 1/s' = 1/53.4 + 1/50."""
+    lens = Lens.from_dict({"object": {"distance": -53.4}, "surface": [
+        {"radius": 0.0, "thickness": 50.0, "diameter": 10.0, "stop": True, "focal_length": 50.0}]})
+    assert lens.virtual_object
+    assert paraxial(lens, WL).focus_z_mm == pytest.approx(1.0 / (1.0 / 53.4 + 1.0 / 50.0), rel=1e-14)
 
 
 def test_metadata_says_where_the_ideal_lens_path_is_exact():
