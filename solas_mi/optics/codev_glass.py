@@ -30,10 +30,10 @@ def material(token: str, ident: str, own: dict | None = None) -> str:
     if model or code:
         nd, vd = ((float(model[1]), float(model[2])) if model
                   else (1.0 + int(code[1]) / 10 ** len(code[1]), float(code[2][:2] + "." + code[2][2:])))
-        if not 1.0 < nd < 3.0 or (vd and not 5.0 < vd < 150.0):
-            raise SolasError(f"{ident}: model glass {name!r}: n_d {nd:g} must lie in (1, 3) and V_d {vd:g} in "
-                             "(5, 150) (or 0: no dispersion)")
-        return f"model:{nd!r}" if vd == 0 else f"model:{nd!r}/{vd!r}"
+        try:
+            return glass_mod.model_name(nd, vd)
+        except SolasError as exc:
+            raise SolasError(f"{ident}: {name!r}: {exc} (V_d 0: no dispersion)") from None
     if name.upper() == "REFL":
         raise SolasError(f"{ident}: GLA REFL: mirrors are not supported (refracting surfaces only)")
     bare, _, vendor = name.rpartition("_")

@@ -39,6 +39,9 @@ VENDORS = ("SCHOTT", "OHARA", "HOYA", "CDGM", "SUMITA", "HIKARI", "CORNING", "LI
 LINE_D, LINE_F, LINE_C = 587.5618, 486.1327, 656.2725
 # Range (nm) over which a model glass's two-term dispersion is offered.
 MODEL_RANGE_NM = (365.0, 1014.0)
+# A constant index (a model medium without dispersion, relative to air) holds at every wavelength; below 1
+# are media thinner than air (vacuum 0.99973, helium, as a lithography lens's purge gas).
+CONSTANT_RANGE = (0.9, 3.0)
 _NUMBER = r"([0-9]+(?:\.[0-9]*)?|\.[0-9]+)"
 _MODEL_RE = re.compile(rf"^\s*model\s*:\s*{_NUMBER}\s*(?:/\s*{_NUMBER}\s*)?$", re.IGNORECASE)
 # A catalogue glass stands for a table's (n_d, V_d) when both agree within these (its formula's values).
@@ -173,15 +176,23 @@ def model_glass(nd: float, vd: float | None = None) -> Glass:
     """Model glass with exactly the given n_d and V_d: n(λ) = A + B/λ² (Cauchy's two terms); without
     V_d, the constant index n_d (no dispersion)."""
     if vd is None:
-        if not 1.0 < nd < 3.0:
-            raise SolasError(f"model glass n_d={nd:g}: n_d must lie in (1, 3)")
-        return Glass(f"model:{nd:g}", "model", ((nd,), (0.0,)), MODEL_RANGE_NM)
+        if not CONSTANT_RANGE[0] < nd < CONSTANT_RANGE[1]:
+            raise SolasError(f"model glass n_d={nd:g}: a constant index must lie in {CONSTANT_RANGE} (below 1: a "
+                             "medium thinner than air, such as vacuum 0.99973 or helium)")
+        return Glass(f"model:{nd:g}", "model", ((nd,), (0.0,)))
     if not (1.0 < nd < 3.0) or not (5.0 < vd < 150.0):
         raise SolasError(f"model glass n_d={nd:g}, V_d={vd:g}: n_d must lie in (1, 3) and V_d in (5, 150)")
     inv = lambda nm: 1.0 / (nm / 1000.0) ** 2  # noqa: E731 - µm⁻²
     b = (nd - 1.0) / vd / (inv(LINE_F) - inv(LINE_C))
     a = nd - b * inv(LINE_D)
     return Glass(f"model:{nd:g}/{vd:g}", "model", ((a,), (b,)), MODEL_RANGE_NM)
+
+
+def model_name(nd: float, vd: float | None = None) -> str:
+    """The material name of the model glass of `nd` and `vd` (None or 0: a constant index), as a lens
+    file's reader writes it, checked as `model_glass` checks it."""
+    model_glass(nd, vd or None)
+    return f"model:{nd!r}" if not vd else f"model:{nd!r}/{vd!r}"
 
 
 def catalog_files() -> list[Path]:
@@ -264,7 +275,7 @@ def resolve(name: str, catalog: str | None = None, prefer: tuple[str, ...] = (),
         return model_glass(float(m.group(1)), None if m.group(2) is None else float(m.group(2)))
     if re.match(r"\s*model\s*:", name, re.IGNORECASE):  # a model glass whose numbers do not read (nan, text)
         raise SolasError(f"model glass {name!r} must read model:n_d/V_d or model:n_d with finite numbers, n_d in "
-                         "(1, 3) and V_d in (5, 150) (e.g. model:1.62/36.4)")
+                         f"(1, 3) and V_d in (5, 150), or a constant n_d in {CONSTANT_RANGE} (e.g. model:1.62/36.4)")
     keys = candidates(name, catalog)
     if not keys:
         names = _aliases(catalog)

@@ -82,10 +82,10 @@ def _material(glas: list[str], ident: str, gcat: tuple[str, ...]) -> str:
             raise SolasError(f"{ident}: model glass GLAS ___BLANK needs n_d (and V_d): "
                              f"'___BLANK 1 0 n_d V_d', got {' '.join(glas)!r}")
         nd, *vd = _floats(glas[3:5], f"{ident}: model glass GLAS ___BLANK n_d V_d")
-        if not 1.0 < nd < 3.0 or (vd and vd[0] and not 5.0 < vd[0] < 150.0):
-            raise SolasError(f"{ident}: model glass n_d {nd:g}" + (f", V_d {vd[0]:g}" if vd else "")
-                             + ": n_d must lie in (1, 3) and V_d in (5, 150) (or 0: no dispersion)")
-        return f"model:{nd!r}" if not vd or vd[0] == 0 else f"model:{nd!r}/{vd[0]!r}"
+        try:
+            return glass_mod.model_name(nd, vd[0] if vd else None)
+        except SolasError as exc:
+            raise SolasError(f"{ident}: {exc} (V_d 0: no dispersion)") from None
     keys = glass_mod.candidates(name) if name and name.upper() != "AIR" else []
     for vendor in gcat:  # the catalogues in the order the file lists them
         listed = [k for k in keys if k.split(":", 1)[0] == vendor]

@@ -357,3 +357,25 @@ def test_float_by_stop_size_on_a_stop_without_diameter(tmp_path):
                                          r"has no DIAM"):
         load(tmp_path, zmx(aperture="FLOA", s1=""))
     assert load(tmp_path, zmx(s1="")).surfaces[0].diameter == pytest.approx(20.0)
+
+
+def test_constant_index_media_hold_at_every_wavelength_and_below_air(tmp_path):
+    """A lithography lens's way (fused silica 1.5602889 at 193.304 nm in a purge gas of 0.999712, indices
+    relative to air, each a model glass without dispersion): the singlet's power is the thick-lens formula
+    with index differences, φ = (n − m)(c1 − c2) + (n − m)² t c1 c2 / n, at a wavelength outside the
+    dispersive model glass's range."""
+    n, m, wl = 1.5602889, 0.999712, 193.304
+    text = zmx(obj="100").replace("WAVM 1 0.55 1", f"WAVM 1 {wl / 1000!r} 1").replace(
+        f"___BLANK 1 0 {N} 0", f"___BLANK 1 0 {n} 0")
+    text = text.replace("  DISZ 100\n", f"  DISZ 100\n  GLAS ___BLANK 1 0 {m} 0 0 0 0 0 0\n")
+    text = text.replace(f"  DISZ {BFD!r}\n", f"  DISZ {BFD!r}\n  GLAS ___BLANK 1 0 {m} 0 0 0 0 0 0\n")
+    lens = load(tmp_path, text)
+    assert lens.object_glass.index(wl) == m and lens.surfaces[1].glass.index(wl) == m
+    c1, c2 = 1 / R1, 1 / R2
+    power = (n - m) * (c1 - c2) + (n - m) ** 2 * T1 * c1 * c2 / n
+    assert paraxial(lens, wl).efl_mm == pytest.approx(1 / power, rel=1e-12)
+    with pytest.raises(SolasError, match=r"SURF 1 \(line \d+\): model glass n_d=0.5: a constant index must lie in "
+                                         r"\(0.9, 3.0\)"):
+        load(tmp_path, zmx().replace(f"___BLANK 1 0 {N} 0", "___BLANK 1 0 0.5 0"))
+    with pytest.raises(SolasError, match=r"n_d must lie in \(1, 3\) and V_d in \(5, 150\)"):
+        load(tmp_path, zmx().replace(f"___BLANK 1 0 {N} 0", "___BLANK 1 0 0.999712 40"))
