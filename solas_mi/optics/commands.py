@@ -54,7 +54,9 @@ def run_lens_info(args) -> int:
     if ideal.metadata(lens):
         print(f"ideal lens: {ideal.metadata(lens)['ideal_lens_path']}")
     print(f"{'quantity':36s}" + "".join(f"{w:>12g} nm" for w in wavelengths))
-    for key, label in _ROWS:
+    image_space = [("efl_image_space_mm", "EFL in image space, n'·EFL (mm)")] * any(
+        r["efl_image_space_mm"] != r["efl_mm"] for r in rows)  # only where the image medium is not air
+    for key, label in _ROWS[:1] + image_space + _ROWS[1:]:
         print(f"{label:36s}" + "".join(f"{r[key]:15.6f}" for r in rows))
     for i, f in enumerate(f + 0.0 for f in fields):  # + 0.0: −0 reads 0
         print(f"{f'chief ray y at {f:g} deg, paraxial (mm)':36s}" + "".join(f"{r['chief_ray_image_height_mm'][i]:15.6f}" for r in rows))

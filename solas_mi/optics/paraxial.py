@@ -22,7 +22,8 @@ class Paraxial:
     """Paraxial data at one wavelength (mm unless named otherwise)."""
 
     wavelength_nm: float
-    efl_mm: float
+    efl_mm: float  # 1/power: the EFL in air (Zemax's "in air"), object and image heights' scale
+    efl_image_space_mm: float  # n'/power: the EFL in the image medium (Zemax's "in image space", optiland's f2)
     bfd_mm: float  # from the last refracting surface (the medium changes there) to the paraxial focus
     focus_z_mm: float  # paraxial image of the object
     image_z_mm: float  # the lens file's image plane
@@ -144,6 +145,7 @@ def _paraxial(lens: Lens, wavelength_nm: float, fields_deg: list[float] | None =
     return Paraxial(
         wavelength_nm=wavelength_nm,
         efl_mm=float(efl),
+        efl_image_space_mm=float(n[-1] * efl),
         bfd_mm=float(bfd),
         focus_z_mm=float(focus_z),
         image_z_mm=float(image_z),

@@ -2,7 +2,7 @@
 import numpy as np
 import pytest
 
-from solas_mi import paraxial, spot
+from solas_mi import Lens, paraxial, spot
 
 # DESIGN.md: facts about the SOLAS doublet that independent tools agree on.
 
@@ -121,3 +121,19 @@ def test_a_lens_telecentric_in_object_space_is_refused_saying_so():
     with pytest.raises(SolasError, match=r"stop \(surface 3\) lies in the rear focal plane .* entrance pupil is at "
                                          r"infinity \(telecentric in object space\)"):
         paraxial(lens, 587.5618)
+
+
+def test_efl_in_image_space_is_the_rear_focal_length_in_the_image_medium():
+    """A singlet focusing into water (a constant index n' = 1.333, as a lens on a sensor under a liquid):
+    power φ = (n − 1) c1 + (n' − n) c2 − (n − 1)(n' − n) c1 c2 t / n, EFL in air 1/φ, in image space n'/φ
+    (Zemax's "in image space", optiland's f2); `lens info` shows the row only where they differ."""
+    n, n_img, c1, c2, t = 1.5, 1.333, 1 / 30.0, -1 / 80.0, 5.0
+    phi = (n - 1) * c1 + (n_img - n) * c2 - (n - 1) * (n_img - n) * c1 * c2 * t / n
+    lens = Lens.from_dict({"surface": [
+        {"radius": 30.0, "thickness": t, "diameter": 12.0, "material": "model:1.5", "stop": True},
+        {"radius": -80.0, "thickness": 40.0, "diameter": 12.0, "material": "model:1.333"}]})
+    p = paraxial(lens, 550.0)
+    assert p.efl_mm == pytest.approx(1 / phi, rel=1e-12)
+    assert p.efl_image_space_mm == pytest.approx(n_img / phi, rel=1e-12)
+    air = Lens.load("solas-doublet")
+    assert paraxial(air, 550.0).efl_image_space_mm == paraxial(air, 550.0).efl_mm
