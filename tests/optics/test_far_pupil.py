@@ -73,7 +73,7 @@ def test_a_real_collimator_s_far_pupil_matches_a_ray_count_and_its_fold_is_named
     3° (128 samples). Its spherical aberration folds the pupil at 3° (the map from pupil to reference
     sphere turns back within the passing beam): the Fraunhofer PSF says so and takes the ray count's
     transmission (1.10: more light than the paraxial on-axis pupil, the aberrated collimator gathers it)."""
-    lens = Lens.load(STIFF / "collimated_double_gauss_real.toml")
+    lens = Lens.load(STIFF.parent / "collimated_double_gauss_real.toml")
     wl = lens.primary_wavelength
     fields = np.array([[0.0, 0.0], [0.0, 2.1], [0.0, 3.0]])
     waves = np.full(3, wl)

@@ -95,7 +95,7 @@ def test_a_near_flat_face_is_held_to_its_curvature_s_first_order_effect():
     """The real collimator's flat face, 92 mm from the object where the beam is 50 mm wide, moves the
     chief ray by 1.77e-9 mm when bent to R = 1e12 mm: the curvature's own effect (1.77e-5 mm at 1e8,
     1.77e-3 at 1e6, linear in 1/R to 1e-3), not round-off; the case failed against a flat 1e-9 mm."""
-    case = stability._near_flat(Lens.load(STIFF / "collimated_double_gauss_real.toml"), 587.5618)
+    case = stability._near_flat(Lens.load(STIFF.parent / "collimated_double_gauss_real.toml"), 587.5618)
     assert case.passed, case.observed
     assert float(case.observed.split("effect ")[1].split(" mm")[0]) > 1e-9  # the old bound could not hold
 
@@ -104,7 +104,7 @@ def test_an_object_that_passes_no_light_from_infinity_is_compared_with_that_refu
     """The real collimator focuses an object at infinity inside the double Gauss: no light reaches the
     image, and the PSF of infinity, the far objects' reference, is refused. The group ended in the
     exception as one failed case; now each far object is checked against the refusal (refused too)."""
-    cases = stability._distances(Lens.load(STIFF / "collimated_double_gauss_real.toml"), (0.0, 2.1), 587.5618)
+    cases = stability._distances(Lens.load(STIFF.parent / "collimated_double_gauss_real.toml"), (0.0, 2.1), 587.5618)
     assert len(cases) == len(stability.FAR_DISTANCES_MM)
     assert all(c.passed for c in cases), [c.to_dict() for c in cases if not c.passed]
     assert all("refused" in c.observed for c in cases[3:])
@@ -118,7 +118,7 @@ def test_a_field_no_ray_reaches_the_stop_centre_from_is_confirmed_by_a_scan(monk
     fails when the scan finds one that the aim missed."""
     from dataclasses import replace
 
-    lens = replace(Lens.load(STIFF / "collimated_double_gauss_real.toml"), field_deg=4.5)
+    lens = replace(Lens.load(STIFF.parent / "collimated_double_gauss_real.toml"), field_deg=4.5)
     case = stability._chief(lens, 587.5618)
     assert case.passed and "no ray reaches the centre" in case.observed and "agrees" in case.observed, case.observed
     doublet = Lens.load("solas-doublet")
