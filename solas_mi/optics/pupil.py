@@ -98,7 +98,7 @@ def stop_rim(rim: Bundle, chief: ChiefRays, accept=None, vignetting: np.ndarray 
         v = np.repeat(np.asarray(vignetting, dtype=np.float64), RIM_RAYS, axis=0)
         cos, sin = cos * (1.0 - np.where(cos >= 0, v[:, 0], v[:, 1])), sin * (1.0 - np.where(sin >= 0, v[:, 2], v[:, 3]))
     # start from the chief ray, scaled by the paraxial entrance-pupil/stop size ratio
-    ratio = paraxial(lens).entrance_pupil_diameter_mm / (2.0 * r_stop)
+    ratio = entrance_pupil_footprint(lens) / r_stop
 
     def at(scale: np.ndarray):
         gx, gy = T.F(r_stop * scale * cos), T.F(r_stop * scale * sin)
@@ -121,6 +121,18 @@ def stop_rim(rim: Bundle, chief: ChiefRays, accept=None, vignetting: np.ndarray 
     shape = (rim.n_fields, RIM_RAYS)
     ex, ey = T.to_numpy(ex, ey)
     return ex.reshape(shape), ey.reshape(shape), tr, ok.reshape(shape)
+
+
+def entrance_pupil_footprint(lens: Lens) -> float:
+    """Radius (mm) of the paraxial on-axis beam in entrance coordinates: the entrance pupil's for an
+    object at infinity; for a finite object, the cone from the object point to the entrance pupil's rim
+    where it crosses the plane z = 0 that entrance coordinates lie in (the pupil far behind that plane,
+    or virtual, gives a footprint much smaller than the pupil)."""
+    p = paraxial(lens)
+    r_ep = 0.5 * p.entrance_pupil_diameter_mm
+    if lens.at_infinity:
+        return r_ep
+    return r_ep * abs(lens.object_distance / (p.entrance_pupil_z_mm + lens.object_distance))
 
 
 @dataclass
