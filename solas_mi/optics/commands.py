@@ -3,6 +3,7 @@ table (image height vs field, closest projection) of a lens, as a table or JSON;
 `solas-mi lens convert`: a lens file in another format (.toml, .zmx, .dat)."""
 from __future__ import annotations
 
+import sys
 from typing import Any
 
 import numpy as np
@@ -18,13 +19,28 @@ _ROWS = [("efl_mm", "EFL (mm)"), ("bfd_mm", "BFD (mm)"), ("entrance_pupil_diamet
          ("image_offset_mm", "image plane − paraxial focus (mm)")]
 
 
+def overlap_metadata(lens) -> dict:
+    """{"overlaps": the lens's overlapping surfaces, in words (`Lens.overlaps`)}, {} when none overlap."""
+    return {"overlaps": list(lens.overlaps)} if lens.overlaps else {}
+
+
+def load_lens(name: str):
+    """`Lens.load(name)` for a command's work, stating on stderr what of it overlaps (`Lens.overlaps`)."""
+    from .lens import Lens
+
+    lens = Lens.load(name)
+    for note in lens.overlaps:
+        print(f"warning: lens {lens.name}: {note}", file=sys.stderr)
+    return lens
+
+
 def run_lens_info(args) -> int:
     from .distortion import distortion
     from .lens import Lens
     from .paraxial import paraxial
     from .pupil import chief_rays  # loads Dr.Jit
 
-    lens = Lens.load(args.lens)
+    lens = load_lens(args.lens)
     wavelengths = floats(args.wavelengths_nm, "--wavelengths-nm") if args.wavelengths_nm else list(lens.wavelengths_nm)
     half = [lens.field_deg, -lens.field_deg] if lens.field_deg else []  # none for a lens that states no field
     fields = floats(args.fields, "--fields") if args.fields else [0.0, *half]
@@ -36,7 +52,8 @@ def run_lens_info(args) -> int:
         rows.append(p)
     info = {"lens": lens.name, "hash": lens.hash, "source": lens.source, "stop_surface": lens.stop_index + 1,
             "image_z_mm": lens.image_z, "image_diameter_mm": lens.image_diameter, "field_type": lens.field_type.name,
-            "dispersion": lens.dispersive, **ideal.metadata(lens), "per_wavelength": rows}
+            "dispersion": lens.dispersive, **ideal.metadata(lens), **overlap_metadata(lens),
+            "per_wavelength": rows}
     table = None
     if args.fields or lens.field_deg > 0:  # the given fields, else 0 … the lens's half field
         table = distortion(lens, sorted({abs(f) for f in fields} | {0.0}) if args.fields else None)
@@ -51,6 +68,8 @@ def run_lens_info(args) -> int:
         print("glass: no dispersion data (every medium a constant index): the columns of every wavelength agree")
     if ideal.metadata(lens):
         print(f"ideal lens: {ideal.metadata(lens)['ideal_lens_path']}")
+    for note in lens.overlaps:
+        print(f"overlap: {note}")
     print(f"{'quantity':36s}" + "".join(f"{w:>12g} nm" for w in wavelengths))
     for key, label in _ROWS:
         print(f"{label:36s}" + "".join(f"{r[key]:15.6f}" for r in rows))

@@ -75,6 +75,10 @@ def lens_parts(lens: Lens, rings: int | None = None, image_radius: float = 0.0) 
         raise SolasError(f"surface {ideal} of lens {lens.name} is an ideal thin lens (focal_length), which has no glass "
                          "to build as Mitsuba geometry; trace it instead: the lens camera (a scene file's sensor, "
                          "`render.user_scene`) or a tracer PSF method (fraunhofer, geometric)")
+    if lens.overlaps:
+        raise SolasError(f"lens {lens.name} cannot be built as Mitsuba geometry: {'; '.join(lens.overlaps)}. Trace it "
+                         "instead: the lens camera (a scene file's sensor, `render.user_scene`) or a tracer PSF method "
+                         "(fraunhofer, geometric)")
     rings = resolve_rings(lens, rings)
     check_gaps(lens)
     parts = []
