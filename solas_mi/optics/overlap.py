@@ -64,3 +64,12 @@ def _between(a, b, glass: bool) -> str | None:
         lo, hi = (mid, hi) if (gap(mid) < -tol) == neg[0] else (lo, mid)
     where = "overlap within" if neg[0] else "cross at"
     return f"{where} r = {lo:.4g} mm inside their clear apertures (thickness {a.thickness:g} mm)"
+
+
+def check_image_distance(lens, what: str) -> None:
+    """SolasError where `lens`'s image plane lies on its last surface: `what` samples the rays from an image
+    point over the last vertex plane, which then passes through the point, so that nothing is defined there."""
+    if lens.surfaces[-1].thickness == 0:
+        raise SolasError(f"lens {lens.name}: the image plane lies on the last surface (distance 0 mm), where {what}, "
+                         "sampled over the last vertex plane seen from the image point, is undefined; a tracer PSF "
+                         "method (fraunhofer, geometric) takes the lens as it is")
