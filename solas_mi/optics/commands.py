@@ -10,18 +10,13 @@ import numpy as np
 
 from .. import jsonio
 from ..options import add_lens_argument, floats
-from . import ideal
+from . import ideal, overlap
 
 _ROWS = [("efl_mm", "EFL (mm)"), ("bfd_mm", "BFD (mm)"), ("entrance_pupil_diameter_mm", "EPD (mm)"),
          ("entrance_pupil_z_mm", "entrance pupil z (mm)"), ("exit_pupil_diameter_mm", "exit pupil D (mm)"),
          ("exit_pupil_z_mm", "exit pupil z (mm)"), ("f_number", "f/# (EFL/EPD)"),
          ("working_f_number", "working f/#"), ("exit_pupil_f_number", "f/# (exit pupil → image)"),
          ("image_offset_mm", "image plane − paraxial focus (mm)")]
-
-
-def overlap_metadata(lens) -> dict:
-    """{"overlaps": the lens's overlapping surfaces, in words (`Lens.overlaps`)}, {} when none overlap."""
-    return {"overlaps": list(lens.overlaps)} if lens.overlaps else {}
 
 
 def load_lens(name: str):
@@ -52,7 +47,7 @@ def run_lens_info(args) -> int:
         rows.append(p)
     info = {"lens": lens.name, "hash": lens.hash, "source": lens.source, "stop_surface": lens.stop_index + 1,
             "image_z_mm": lens.image_z, "image_diameter_mm": lens.image_diameter, "field_type": lens.field_type.name,
-            "dispersion": lens.dispersive, **ideal.metadata(lens), **overlap_metadata(lens),
+            "dispersion": lens.dispersive, **ideal.metadata(lens), **overlap.metadata(lens),
             "per_wavelength": rows}
     table = None
     if args.fields or lens.field_deg > 0:  # the given fields, else 0 … the lens's half field

@@ -15,6 +15,12 @@ from . import glass as glass_mod
 SEQUENTIAL = "traced sequentially, as Zemax does; the lens cannot be built as solid geometry"
 
 
+def metadata(lens) -> dict:
+    """{"overlaps": `lens`'s overlaps in words (`Lens.overlaps`)} for PSF metadata and `lens info`; {} when
+    none overlap."""
+    return {"overlaps": list(lens.overlaps)} if lens.overlaps else {}
+
+
 def notes(lens, where: str) -> list[str]:
     """`Lens.overlaps` of `lens`, in words (`where` names the lens); SolasError for glass of thickness 0
     whose faces only touch (a missing thickness: no glass between its faces, nothing overlapping)."""

@@ -186,7 +186,7 @@ SURF 3
 
 def test_zemax_file_and_command_line(tmp_path, capsys):
     """The negative element as a .zmx: loaded, written back (.zmx, .toml) with its negative thickness, the
-    overlap stated by `lens info` (text and JSON) and as a warning where a command loads it; the mesh scene
+    overlap stated by `lens info` (text and JSON), PSF metadata and as a warning where a command loads it; the mesh scene
     refuses it, naming the surfaces and pointing to the tracer."""
     from strict_json import strict_loads
 
@@ -207,6 +207,9 @@ def test_zemax_file_and_command_line(tmp_path, capsys):
     assert "warning: lens overlap singlet: surfaces 1 (SURF 1) and 2 (SURF 2) overlap within r = " in err
     assert main(["lens", "info", str(path), "--json"]) == 0
     assert strict_loads(capsys.readouterr().out)["overlaps"] == list(lens.overlaps)
+    from solas_mi.psf import psf
+
+    assert psf(lens, (0.0, 0.0), WL, size=16).meta["overlaps"] == list(lens.overlaps)
     with pytest.raises(SolasError, match=r"lens overlap singlet cannot be built as Mitsuba geometry: surfaces 1 "
                                          r"\(SURF 1\) and 2 \(SURF 2\) overlap within .* the lens camera"):
         lens_parts(lens)
