@@ -11,6 +11,7 @@ import pytest
 
 from solas_mi import Lens, SolasError, paraxial
 from solas_mi.optics import tracer as T
+from solas_mi.optics.focus import focused
 
 N = 1.5  # model glass: one index at every wavelength
 WL = 550.0
@@ -118,7 +119,8 @@ def test_air_gap_crossing_at_the_rim():
 def test_image_on_a_flat_last_surface():
     """A plano-convex rod whose flat back face is its focus (t = n R / (n − 1)): the image plane at
     distance 0 from the last surface loads, named; EFL R/(n − 1), BFD 0; a real ray at 4 mm lands where the
-    single-surface hand trace puts it. What samples rays from an image point over the last vertex plane
+    single-surface hand trace puts it; focused at infinity it stays, at 1 m the image moves by Newton's
+    f²/(d − f) (in glass: the flat face's refraction leaves the paraxial shift in air the same). What samples rays from an image point over the last vertex plane
     (relative illumination, the lens camera's pupil bounds) refuses it by name."""
     from solas_mi.optics.exit_pupil import pupil_bounds
     from solas_mi.optics.illumination import irradiance
@@ -133,6 +135,10 @@ def test_image_on_a_flat_last_surface():
     assert lens.overlaps == ("the image plane lies on surface 2 (surface 2) (distance 0 mm): traced sequentially, "
                              "as Zemax does; the lens cannot be built as solid geometry",)
     assert _traced(lens, 4.0) == pytest.approx(_hand_ray(4.0, [(0.0, radius, N)], t), abs=1e-9)
+    assert focused(lens, math.inf).image_z == t  # focused where it is: the image stays on the surface
+    near = focused(lens, 1000.0)  # Newton: the image moves f² / (1000 − f) behind the focal point
+    f = radius / (N - 1)
+    assert near.surfaces[-1].thickness == pytest.approx(f * f / (1000.0 - f), rel=1e-9)
     for run in (lambda: irradiance(lens, np.zeros((1, 2)), WL), lambda: pupil_bounds(lens, 1.0)):
         with pytest.raises(SolasError, match=r"image plane lies on the last surface \(distance 0 mm\)"):
             run()
