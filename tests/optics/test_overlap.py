@@ -116,6 +116,20 @@ def test_air_gap_crossing_at_the_rim():
     assert _traced(lens, 18.0) == pytest.approx(hand, abs=1e-9)
 
 
+def _rod():
+    """A plano-convex rod (R 20 mm) whose flat back face, n R / (n − 1) = 60 mm behind, is its focus and image."""
+    return _lens([{"radius": 20.0, "thickness": N * 20.0 / (N - 1), "diameter": 12.0, "material": "model:1.5",
+                   "stop": True}, {"radius": 0.0, "thickness": 0.0, "diameter": 12.0}])
+
+
+def test_check_stability_expects_the_refusal_of_an_image_on_the_last_surface():
+    """check-stability's exit-pupil case, which samples over the last vertex plane, expects the refusal."""
+    from solas_mi.validation import stability
+
+    case = stability._exit_pupil(_rod(), WL)
+    assert case.passed and "the image plane lies on the last surface" in case.observed
+
+
 def test_image_on_a_flat_last_surface():
     """A plano-convex rod whose flat back face is its focus (t = n R / (n − 1)): the image plane at
     distance 0 from the last surface loads, named; EFL R/(n − 1), BFD 0; a real ray at 4 mm lands where the
@@ -125,10 +139,8 @@ def test_image_on_a_flat_last_surface():
     from solas_mi.optics.exit_pupil import pupil_bounds
     from solas_mi.optics.illumination import irradiance
 
-    radius = 20.0
+    lens, radius = _rod(), 20.0
     t = N * radius / (N - 1)
-    lens = _lens([{"radius": radius, "thickness": t, "diameter": 12.0, "material": "model:1.5", "stop": True},
-                  {"radius": 0.0, "thickness": 0.0, "diameter": 12.0}])
     p = paraxial(lens, WL)
     assert p.efl_mm == pytest.approx(radius / (N - 1), rel=1e-12) and p.bfd_mm == pytest.approx(0.0, abs=1e-12)
     assert lens.image_z == t
