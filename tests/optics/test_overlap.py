@@ -203,7 +203,8 @@ SURF 3
 
 
 def test_zemax_file_and_command_line(tmp_path, capsys):
-    """The negative element as a .zmx: loaded, written back (.zmx, .toml) with its negative thickness, the
+    """The negative element as a .zmx: loaded, written back (.zmx, .toml) with its negative thickness (a
+    pbrt .dat refused: pbrt steps only forward), the
     overlap stated by `lens info` (text and JSON), PSF metadata and as a warning where a command loads it; the mesh scene
     refuses it, naming the surfaces and pointing to the tracer."""
     from strict_json import strict_loads
@@ -219,6 +220,10 @@ def test_zemax_file_and_command_line(tmp_path, capsys):
     assert paraxial(lens, WL).efl_mm == pytest.approx(efl, rel=1e-12)
     for again in (Lens.load(lens.save(tmp_path / "again.zmx")), Lens.load(lens.save(tmp_path / "again.toml"))):
         assert again.surfaces[0].thickness == t and again.overlaps == lens.overlaps
+    with pytest.raises(SolasError, match=r"surfaces 1 \(SURF 1\) and 2 \(SURF 2\) overlap .*pbrt's realistic camera "
+                                         "steps only forward"):
+        lens.save(tmp_path / "again.dat")
+    assert not (tmp_path / "again.dat").exists()
     assert main(["lens", "info", str(path)]) == 0
     out, err = capsys.readouterr()
     assert "overlap: surfaces 1 (SURF 1) and 2 (SURF 2) overlap within r = " in out
