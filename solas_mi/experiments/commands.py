@@ -16,11 +16,11 @@ def _say(text: str) -> None:
 
 
 def run_street(args: argparse.Namespace) -> int:
-    from ..optics.lens import Lens
+    from ..optics.commands import load_lens
     from ..render.commands import check_render
     from .street.run import Settings, run
 
-    lens = Lens.load(args.lens)
+    lens = load_lens(args.lens)
     height, width = parse_wxh(args.size, "--size")
     for spp in (args.spp_ideal, args.spp):  # its renders: refused when absurd or too large, announced when long
         check_render(width, height, spp, args.force)

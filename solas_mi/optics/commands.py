@@ -3,13 +3,14 @@ table (image height vs field, closest projection) of a lens, as a table or JSON;
 `solas-mi lens convert`: a lens file in another format (.toml, .zmx, .dat)."""
 from __future__ import annotations
 
+import sys
 from typing import Any
 
 import numpy as np
 
 from .. import jsonio
 from ..options import add_lens_argument, floats
-from . import ideal, virtual_object
+from . import notes
 
 _ROWS = [("efl_mm", "EFL (mm)"), ("bfd_mm", "BFD (mm)"), ("entrance_pupil_diameter_mm", "EPD (mm)"),
          ("entrance_pupil_z_mm", "entrance pupil z (mm)"), ("exit_pupil_diameter_mm", "exit pupil D (mm)"),
@@ -18,13 +19,23 @@ _ROWS = [("efl_mm", "EFL (mm)"), ("bfd_mm", "BFD (mm)"), ("entrance_pupil_diamet
          ("image_offset_mm", "image plane − paraxial focus (mm)")]
 
 
+def load_lens(name: str):
+    """`Lens.load(name)` for a command's work, stating on stderr what of it overlaps (`Lens.overlaps`)."""
+    from .lens import Lens
+
+    lens = Lens.load(name)
+    for note in lens.overlaps:
+        print(f"warning: lens {lens.name}: {note}", file=sys.stderr)
+    return lens
+
+
 def run_lens_info(args) -> int:
     from .distortion import distortion
     from .lens import Lens
     from .paraxial import paraxial
     from .pupil import chief_rays  # loads Dr.Jit
 
-    lens = Lens.load(args.lens)
+    lens = load_lens(args.lens)
     wavelengths = floats(args.wavelengths_nm, "--wavelengths-nm") if args.wavelengths_nm else list(lens.wavelengths_nm)
     half = [lens.field_deg, -lens.field_deg] if lens.field_deg else []  # none for a lens that states no field
     fields = floats(args.fields, "--fields") if args.fields else [0.0, *half]
@@ -36,7 +47,7 @@ def run_lens_info(args) -> int:
         rows.append(p)
     info = {"lens": lens.name, "hash": lens.hash, "source": lens.source, "stop_surface": lens.stop_index + 1,
             "image_z_mm": lens.image_z, "image_diameter_mm": lens.image_diameter, "field_type": lens.field_type.name,
-            "dispersion": lens.dispersive, **virtual_object.metadata(lens), **ideal.metadata(lens), "per_wavelength": rows}
+            "dispersion": lens.dispersive, **notes.metadata(lens), "per_wavelength": rows}
     table = None
     if args.fields or lens.field_deg > 0:  # the given fields, else 0 … the lens's half field
         table = distortion(lens, sorted({abs(f) for f in fields} | {0.0}) if args.fields else None)
@@ -49,10 +60,11 @@ def run_lens_info(args) -> int:
     print(f"fields: {lens.field_type.description}")
     if not lens.dispersive:
         print("glass: no dispersion data (every medium a constant index): the columns of every wavelength agree")
-    if lens.virtual_object:
-        print(f"object: virtual, {virtual_object.metadata(lens)['virtual_object']}")
-    if ideal.metadata(lens):
-        print(f"ideal lens: {ideal.metadata(lens)['ideal_lens_path']}")
+    for key, label in (("virtual_object", "object: virtual, "), ("ideal_lens_path", "ideal lens: ")):
+        if key in info:
+            print(label + info[key])
+    for note in info.get("overlaps", []):
+        print(f"overlap: {note}")
     print(f"{'quantity':36s}" + "".join(f"{w:>12g} nm" for w in wavelengths))
     image_space = [("efl_image_space_mm", "EFL in image space, n'·EFL (mm)")] * any(
         r["efl_image_space_mm"] != r["efl_mm"] for r in rows)  # only where the image medium is not air

@@ -21,6 +21,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .lens import Lens, Surface
+from .overlap import check_image_distance
 
 FINE = 512  # points per side of the search for a pupil the coarse grid missed
 MARCH = 48  # samples along each direction from the pupil's centroid to three times the aperture's reach
@@ -99,6 +100,7 @@ def pupil_bounds(lens: Lens, max_radius_mm: float, wavelengths_nm=None, radii: i
     sample (a pupil need not be convex: strong aberration or total internal reflection can cut it into
     a disc and a ring) and bisection the rim beyond it, to 1e-9 mm. The bound is the box of the rim
     points, widened by the most a convex rim can bulge between neighbouring directions."""
+    check_image_distance(lens, "the exit pupil's bounds (the lens camera's pupil sampling)")
     rev = reversed_lens(lens)
     reach = exit_reach(lens, max_radius_mm)
     step = 2.0 * reach / coarse

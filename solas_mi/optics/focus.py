@@ -16,7 +16,7 @@ from .paraxial import paraxial
 
 def focused(lens: Lens, distance_mm: float) -> Lens:
     """`lens` with its object `distance_mm` in front of surface 1 (math.inf: at infinity) and its
-    image plane (the last surface's thickness) moved to keep that object in focus."""
+    image plane (the last surface's thickness, 0 where it lies on that surface) moved to keep that object in focus."""
     check_lens(lens)
     if (not isinstance(distance_mm, numbers.Real) or isinstance(distance_mm, bool) or math.isnan(distance_mm)
             or not distance_mm > 0):
@@ -25,7 +25,7 @@ def focused(lens: Lens, distance_mm: float) -> Lens:
     shift = paraxial(target).focus_z_mm - paraxial(lens).focus_z_mm
     last = lens.surfaces[-1]
     thickness = last.thickness + shift
-    if not (math.isfinite(thickness) and thickness > 0 and paraxial(target).efl_mm > 0
+    if not (math.isfinite(thickness) and thickness >= 0 and paraxial(target).efl_mm > 0
             and distance_mm > paraxial(target).efl_mm):
         raise SolasError(f"lens {lens.name} cannot focus on an object {distance_mm:g} mm in front of surface 1 "
                          f"(its real image would lie {thickness:g} mm behind the last surface); allowed: "

@@ -48,9 +48,11 @@ def irradiance(lens: Lens, image_xy: np.ndarray, wavelength_nm: float, samples: 
     grid (COARSE² points) over the square that holds every ray leaving the lens toward the point
     (`exit_pupil.exit_reach`: steep rays cross the plane far outside the last surface's aperture)."""
     from .exit_pupil import reversed_lens
+    from .overlap import check_image_distance
 
     if not lens.at_infinity:
         raise SolasError("image irradiance is defined here for objects at infinity only")
+    check_image_distance(lens, "the image irradiance")
     rev = reversed_lens(lens)
     dz = lens.surfaces[-1].thickness
     out = []

@@ -22,7 +22,7 @@ import tomllib
 
 from ..errors import SolasError
 from ..imageio import write_text
-from . import forbes, ideal as ideal_mod
+from . import forbes, ideal as ideal_mod, overlap
 from . import glass as glass_mod
 from .sag import sag
 from .formats import READERS, WRITERS, decode_text, lens_path, listed, shipped_lenses  # noqa: F401 (shipped_lenses: re-exported)
@@ -301,28 +301,18 @@ class Lens:
             if s.conic != 0 and (1.0 + s.conic) * (s.curvature * s.semi_diameter) ** 2 >= 1.0:
                 raise SolasError(f"{ident}: conic {s.conic:g} with radius {s.radius:g} mm closes before the clear "
                                  f"semi-diameter {s.semi_diameter:g} mm; the conic cannot hold that aperture")
-            if s.thickness < 0 and i < len(self.surfaces):
-                raise SolasError(f"{ident}: thickness {s.thickness:g} mm is negative; thicknesses must be >= 0")
-            if s.glass is not glass_mod.AIR and s.thickness == 0:
-                raise SolasError(f"{ident}: thickness 0 mm inside glass {s.material}; glass needs a positive thickness")
         self.field_type.check_lens(self, where)
         last = self.surfaces[-1]
-        if last.thickness <= 0:
-            raise SolasError(f"{where}: surface {len(self.surfaces)} ({last.label}): distance to the image {last.thickness:g} mm must be positive" + _VIRTUAL * (last.thickness < 0))
-        # A flat stop in air refracts nothing: the sequential trace checks each ray where its line crosses the
-        # plane, even inside a neighbouring face's sag (Zemax's stop "on" a lens surface), as OpticStudio does.
-        media = (self.object_glass, *(s.glass for s in self.surfaces))
-        plane = [s.stop and s.radius == 0 and not (s.aspheric or s.qbfs) and s.glass is m is glass_mod.AIR
-                 for s, m in zip(self.surfaces, media)]
-        for i, (a, b) in enumerate(zip(self.surfaces[:-1], self.surfaces[1:]), start=1):
-            if plane[i - 1] or plane[i]:
-                continue
-            r = np.linspace(0.0, min(a.semi_diameter, b.semi_diameter), 257)
-            gap = a.thickness + b.sag(r) - a.sag(r)
-            if np.any(gap < -1e-12) or (a.glass is not glass_mod.AIR and np.any(gap <= 0)):
-                k = int(np.argmin(gap))
-                raise SolasError(f"{where}: surfaces {i} ({a.label}) and {i + 1} ({b.label}) cross: their sags meet at "
-                                 f"r = {r[k]:.3f} mm (gap {gap[k]:.4f} mm with thickness {a.thickness:g} mm)")
+        if last.thickness < 0:
+            raise SolasError(f"{where}: surface {len(self.surfaces)} ({last.label}): distance to the image "
+                             f"{last.thickness:g} mm must be positive" + _VIRTUAL + "; 0 mm puts it on the last surface")
+        overlap.notes(self, where)
+
+    @property
+    def overlaps(self) -> tuple[str, ...]:
+        """What overlaps along the axis, one sentence each (`overlap`): faces that cross inside their clear
+        apertures, an image plane on the last surface; empty for a lens that can be built as solid geometry."""
+        return tuple(overlap.notes(self, self.source or "lens"))
 
     # ------------------------------------------------------------------ geometry
     @property

@@ -142,6 +142,10 @@ def dumps(lens) -> str:
     if ideal:
         raise SolasError(f"lens {lens.name}: surface {ideal[0]} is an ideal thin lens (focal_length); a .dat lens "
                          "table holds spheres only; save it as .toml or .zmx")
+    if lens.overlaps:  # pbrt's RealisticCamera drops a ray whose step to the next element is negative
+        raise SolasError(f"lens {lens.name}: {lens.overlaps[0].split(': traced')[0]}; pbrt's realistic camera "
+                         "steps only forward from surface to surface, so a .dat lens table cannot hold it; save it "
+                         "as .toml or .zmx")
     bad = [i for i, s in enumerate(lens.surfaces, start=1) if not s.is_sphere]
     if bad:
         raise SolasError(f"lens {lens.name}: surface {bad[0]} is aspheric; a .dat lens table holds spheres only")

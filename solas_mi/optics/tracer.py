@@ -81,9 +81,10 @@ def refractive_index(glass, wavelength_um: F) -> F:
 
 
 def launch_plane_z(lens: Lens) -> float:
-    """z (mm) of the point where collimated rays start: in front of every surface's sag."""
+    """z (mm) of the point where collimated rays start: in front of every surface's sag (also of a surface
+    whose vertex a negative thickness puts before surface 1's)."""
     reach = max(s.semi_diameter for s in lens.surfaces)
-    return -(2.0 * reach + 10.0)
+    return min(0.0, float(lens.vertex_z.min())) - (2.0 * reach + 10.0)
 
 
 def beam_basis(tan_x, tan_y, sqrt):

@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from ..errors import SolasError
-from ..optics import ideal, virtual_object
+from ..optics import notes
 
 NORMALIZATIONS = ("sum", "peak", "none")
 VALUE_MEANING = {
@@ -199,7 +199,7 @@ def describe(lens, method: str, normalization: str, sampling: dict, size: int) -
     array conventions."""
     return {
         "lens": lens.name, "lens_hash": lens.hash, "lens_source": lens.source, "lens_dispersion": lens.dispersive,
-        **virtual_object.metadata(lens), **ideal.metadata(lens),
+        **notes.metadata(lens),
         "method": method,
         "normalization": normalization, "values": VALUE_MEANING[normalization], "sampling": dict(sampling),
         "origin_pixel": [size // 2, size // 2],

@@ -37,11 +37,11 @@ def _finish(command: str, result, data_file, png, note: str) -> None:
 
 
 def run_psf(args) -> int:
-    from ..optics.lens import Lens
+    from ..optics.commands import load_lens
     from .methods import psf
 
     data_file, png = data_and_preview(args.output, args.png)
-    lens = Lens.load(args.lens)
+    lens = load_lens(args.lens)
     wavelengths = floats(args.wavelengths_nm, "--wavelengths-nm")
     weights = floats(args.weights, "--weights") if args.weights else None
     p = psf(lens, _field(args.field_deg), wavelengths, weights=weights, **given(args, psf_only=True))
@@ -51,13 +51,13 @@ def run_psf(args) -> int:
 
 def run_psf_grid(args) -> int:
     from ..budget import check_memory
-    from ..optics.lens import Lens
+    from ..optics.commands import load_lens
     from .depth import make_grid
 
     # the mosaic preview only when asked: a 32×32 grid's costs about 0.9 s (block means + a 2048² PNG)
     data_file, png = data_and_preview(args.output, args.png or None)
     png = png if args.png is not None else None
-    lens = Lens.load(args.lens)
+    lens = load_lens(args.lens)
     spec = from_args(args)
     count = len(spec.wavelengths_nm or lens.wavelengths_nm) * spec.grid[0] * spec.grid[1] * len(spec.distances_m or [0])
     # the float32 PSFs, their mosaics and the PNG when written, and a batch of complex fields

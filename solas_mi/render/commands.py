@@ -69,14 +69,14 @@ IMAGE_SETTINGS = ("sensor", "pitch_um", "fov_deg", "response", "boundary", "fres
 
 def _scene(args) -> int:
     from ..optics.camera import camera_for
-    from ..optics.lens import Lens
+    from ..optics.commands import load_lens
     from ..outputs import output_folder
     from .response import parse
     from .scene import write_scene
 
     out = output_folder(args.output)
     spec, _ = spec_from_args(args, SCENE_SETTINGS)
-    lens = Lens.load(args.lens)
+    lens = load_lens(args.lens)
     parse(spec.response, lens.wavelengths_nm)  # a bad response is refused now, not when the scene renders
     camera = camera_for(lens, spec.sensor, spec.fov_deg, spec.pitch_um)
     out.mkdir(parents=True, exist_ok=True)
@@ -104,7 +104,7 @@ def _image_scene(scene) -> bool:
 
 
 def _render(args) -> int:
-    from ..optics.lens import Lens
+    from ..optics.commands import load_lens
     from ..outputs import data_and_preview
     from .user_scene import load
 
@@ -115,7 +115,7 @@ def _render(args) -> int:
         if not sep or not key:
             raise SolasError(f"--set {item!r} must look like name=value (a <default> of the scene)")
         params[key] = value
-    lens = Lens.load(args.lens) if args.lens else None
+    lens = load_lens(args.lens) if args.lens else None
     if lens is None and any(v is not None for v in (args.pitch_um, args.focus_distance, args.world_unit_mm)):
         raise SolasError("--pitch-um, --focus-distance and --world-unit-mm set the lens camera: give --lens too")
     if lens is not None and args.integrator == "solas":
@@ -175,7 +175,7 @@ def _write(result, data_file, png) -> int:
 
 
 def _render_image(args) -> int:
-    from ..optics.lens import Lens
+    from ..optics.commands import load_lens
     from ..outputs import data_and_preview
     from .image import render_image
 
@@ -183,7 +183,7 @@ def _render_image(args) -> int:
     spec, _ = spec_from_args(args, IMAGE_SETTINGS)
     rows, cols = spec.sensor
     check_render(cols, rows, spec.spp, args.force)
-    lens = Lens.load(args.lens)
+    lens = load_lens(args.lens)
     with _progress(spec.spp) as bar:
         result = render_image(lens, args.image, spec, progress=bar)
     result.meta["image"] = str(args.image)

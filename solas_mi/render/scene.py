@@ -77,6 +77,10 @@ def lens_parts(lens: Lens, rings: int | None = None, image_radius: float = 0.0) 
                          "to build as Mitsuba geometry; trace it instead: the lens camera (a scene file's sensor, "
                          "`render.user_scene`) or a tracer PSF method (fraunhofer, geometric)")
     virtual_object.check_real(lens, "the mesh scene")
+    if lens.overlaps:
+        raise SolasError(f"lens {lens.name} cannot be built as Mitsuba geometry: {'; '.join(lens.overlaps)}. Trace it "
+                         "instead: the lens camera (a scene file's sensor, `render.user_scene`) or a tracer PSF method "
+                         "(fraunhofer, geometric)")
     rings = resolve_rings(lens, rings)
     check_gaps(lens)
     parts = []

@@ -12,7 +12,7 @@ from typing import Any
 from .. import jsonio
 from ..convolution.kernels import BOUNDARIES
 from ..errors import SolasError
-from ..optics.lens import Lens
+from ..optics.commands import load_lens
 from ..options import add_image_input_options, add_lens_argument, parse_wxh, positive_ints
 from ..outputs import output_folder
 from ..psf.methods import METHODS as PSF_METHODS
@@ -37,7 +37,7 @@ def _grids_text(grids) -> str:
 
 def _lens_and_image(args: argparse.Namespace):
     output_folder(args.output)
-    lens = Lens.load(args.lens)
+    lens = load_lens(args.lens)
     sensor = parse_wxh(args.sensor, "--sensor") if args.sensor else None
     return lens, load_input(args.image, sensor, args.scale, args.linear)
 
@@ -48,7 +48,7 @@ def _say(text: str) -> None:
 
 
 def run_crossval(args: argparse.Namespace) -> int:
-    lens = Lens.load(args.lens)
+    lens = load_lens(args.lens)
     if not lens.field_type.pinhole:
         return _crossval_fisheye(args, lens)
     given = [name for name, value in (("--size", args.size), ("--pitch-um", args.pitch_um), ("--grid", args.grid))
@@ -112,7 +112,7 @@ def run_error_vs_time(args: argparse.Namespace) -> int:
 def run_check_stability(args: argparse.Namespace) -> int:
     from .stability import check_stability, markdown
 
-    lens = Lens.load(args.lens)
+    lens = load_lens(args.lens)
     cases = check_stability(lens, progress=lambda name: print(f"check-stability: {name}", file=sys.stderr, flush=True))
     if args.json:
         print(jsonio.dumps({"lens": lens.name, "lens_hash": lens.hash, "passed": all(c.passed for c in cases),

@@ -255,6 +255,13 @@ def _opd_precision(lens: Lens, wl: float) -> Case:
 def _exit_pupil(lens: Lens, wl: float) -> Case:
     from ..optics.camera import camera_for
 
+    if lens.surfaces[-1].thickness == 0:  # the bound is sampled over the last vertex plane, through the film
+        try:
+            pupil_bounds(lens, 1.0, [wl], radii=2, directions=8)
+            seen, ok = "no refusal", False
+        except SolasError as exc:
+            seen, ok = f"refused: {str(exc).split(' (')[0]}", "image plane lies on the last surface" in str(exc)
+        return Case("render's exit-pupil bound", "a refusal naming the image on the last surface", seen, ok)
     if not lens.field_type.pinhole:  # the image circle
         r_max = float(np.hypot(*chief_rays(lens, [[0.0, lens.field_deg]], [wl]).image_xy[0]))
     else:

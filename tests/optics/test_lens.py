@@ -1,4 +1,5 @@
 import math
+import re
 
 import pytest
 
@@ -25,12 +26,20 @@ def _bad(spec, match):
 
 
 def test_negative_thickness(doublet_spec):
+    """A negative air gap loads, as Zemax traces it, and says what overlaps (`test_overlap` checks the optics)."""
     doublet_spec["surface"][2]["thickness"] = -1.0
-    _bad(doublet_spec, r"surface 3 \(Surface 3\): thickness -1 mm is negative")
+    notes = Lens.from_dict(doublet_spec, source="test.toml").overlaps
+    assert len(notes) == 1
+    assert re.match(r"surfaces 3 \(Surface 3\) and 4 \(Aperture stop\) overlap across their clear apertures .*"
+                    r"thickness -1 mm\): traced sequentially, as Zemax does", notes[0])
 
 
 def test_zero_glass_thickness(doublet_spec):
+    """Glass of thickness 0 whose faces only touch (here the same face twice) holds no glass and overlaps
+    nothing: refused. Where its faces cross (the biconvex element at thickness 0) it is an overlap, traced."""
     doublet_spec["surface"][0]["thickness"] = 0.0
+    assert "surfaces 1 (Surface 1) and 2 (Surface 2) cross at" in Lens.from_dict(doublet_spec).overlaps[0]
+    doublet_spec["surface"][1]["radius"] = doublet_spec["surface"][0]["radius"]
     _bad(doublet_spec, r"surface 1 \(Surface 1\): thickness 0 mm inside glass BK7")
 
 
@@ -40,8 +49,11 @@ def test_aperture_larger_than_sphere(doublet_spec):
 
 
 def test_crossing_sags(doublet_spec):
+    """Faces that cross inside their clear apertures load (Zemax traces them) and are named."""
+    assert Lens.from_dict(doublet_spec).overlaps == ()
     doublet_spec["surface"][0]["thickness"] = 2.0  # the biconvex element's edge thickness goes negative
-    _bad(doublet_spec, r"surfaces 1 \(Surface 1\) and 2 \(Surface 2\) cross")
+    notes = Lens.from_dict(doublet_spec).overlaps
+    assert len(notes) == 1 and notes[0].startswith("surfaces 1 (Surface 1) and 2 (Surface 2) cross at r = ")
 
 
 def test_missing_stop(doublet_spec):

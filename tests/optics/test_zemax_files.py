@@ -2,6 +2,7 @@
 numbers derived by hand: the thick-lens formulas of a singlet of constant index, and a meridional
 real-ray trace written out below (Snell's law at spheres, in two dimensions, independent of the tracer)."""
 import math
+import re
 
 import numpy as np
 import pytest
@@ -183,8 +184,11 @@ def test_dummy_with_zemax_automatic_aperture_and_a_negative_gap(tmp_path):
     assert len(lens.surfaces) == 2 and lens.surfaces[1].thickness == pytest.approx(BFD, rel=1e-12)
     assert p.efl_mm == pytest.approx(EFL, rel=1e-12) and p.bfd_mm == pytest.approx(BFD, rel=1e-12)
     fixed = dummy.replace("9.87654321 0", "9.87654321 1")  # solve type 1: the user's aperture, a real surface
-    with pytest.raises(SolasError, match=r"surface 2 \(SURF 2\): thickness -3 mm is negative"):
-        load(tmp_path, zmx(extra=fixed).replace(f"DISZ {BFD!r}", "DISZ -3.0"))
+    kept = load(tmp_path, zmx(extra=fixed).replace(f"DISZ {BFD!r}", "DISZ -3.0"))  # traced through the negative gap
+    assert len(kept.surfaces) == 3 and kept.surfaces[1].thickness == -3.0
+    assert re.match(r"surfaces 2 \(SURF 2\) and 3 \(SURF 3\) overlap .*thickness -3 mm", kept.overlaps[0])
+    q = paraxial(kept, WL * 1000)
+    assert q.efl_mm == pytest.approx(EFL, rel=1e-12) and q.bfd_mm == pytest.approx(BFD, rel=1e-12)
 
 
 def test_odd_asphere_even_terms(tmp_path):
@@ -318,7 +322,7 @@ def test_flat_stop_on_a_concave_face(tmp_path):
     so a sequential trace checks each ray where its straight line crosses the plane, as OpticStudio does:
     the lens loads, its EFL is the thick-lens formula's, and its real chief ray (through the stop centre,
     the face's vertex to 7e-7 mm) lands where the hand trace of the same prescription puts it. The same
-    crossing stays refused where the stop plane refracts (glass after it) or where two faces cross."""
+    crossing, where the stop plane refracts (glass after it) or where two faces cross, is an overlap: named."""
     r1, r2, t = -40.0, -15.0, 8.0
     efl = 1.0 / ((N - 1) * (1 / r1 - 1 / r2 + (N - 1) * t / (N * r1 * r2)))
     bfd = efl * (1 - (N - 1) * t / (N * r1))
@@ -334,10 +338,11 @@ def test_flat_stop_on_a_concave_face(tmp_path):
     chief = P.chief_rays(lens, [[0.0, 10.0]], [WL * 1000])
     image = hand_trace(10.0, 0.0, surfaces=((1 / r1, t, N), (1 / r2, bfd, 1.0)))[1]
     assert chief.image_xy[0, 1] == pytest.approx(image, rel=1e-6)
-    with pytest.raises(SolasError, match=r"surfaces 1 \(SURF 1\) and 2 \(SURF 2\) cross"):
-        load(tmp_path, text.replace("  DISZ 7e-07\n", "  DISZ 7e-07\n  GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0\n"))
-    with pytest.raises(SolasError, match=r"surfaces 1 \(SURF 1\) and 2 \(SURF 2\) cross"):
-        load(tmp_path, text.replace("  CURV 0.0\n  DISZ 7e-07", f"  CURV {1 / 200!r}\n  DISZ 7e-07"))
+    assert lens.overlaps == ()
+    for crossed in (text.replace("  DISZ 7e-07\n", "  DISZ 7e-07\n  GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0\n"),
+                    text.replace("  CURV 0.0\n  DISZ 7e-07", f"  CURV {1 / 200!r}\n  DISZ 7e-07")):
+        notes = load(tmp_path, crossed).overlaps  # traced as Zemax does, and named
+        assert len(notes) == 1 and notes[0].startswith("surfaces 1 (SURF 1) and 2 (SURF 2) cross at r = ")
 
 
 def test_image_plane_before_the_last_surface(tmp_path):
