@@ -25,7 +25,7 @@ def load_lens(name: str):
 
     lens = Lens.load(name)
     for note in lens.overlaps:
-        print(f"warning: lens {lens.name}: {note}", file=sys.stderr)
+        print(f"solas-mi: warning: lens {lens.name}: {note}", file=sys.stderr)
     return lens
 
 
