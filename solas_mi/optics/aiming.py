@@ -13,7 +13,7 @@ import numpy as np
 
 from . import tracer as T
 from .lens import Lens
-from .paraxial import paraxial
+from .paraxial import paraxial, pupil_distance
 
 dr = T.dr
 _HALVINGS = 6  # a Newton step that loses its ray is halved up to this many times
@@ -149,7 +149,7 @@ def _paraxial_aim(lens: Lens, field_deg: np.ndarray) -> np.ndarray:
         span = ep_z - T.launch_plane_z(lens)
         return np.stack([span * e1z, span * e2z], axis=-1)
     pts = T.object_points(lens, field_deg)
-    return pts * (1.0 - lens.object_distance / (ep_z + lens.object_distance))
+    return pts * (1.0 - lens.object_distance / pupil_distance(lens, ep_z))
 
 
 def chief_aim(lens: Lens, b: Bundle) -> tuple[np.ndarray, np.ndarray]:

@@ -18,7 +18,7 @@ from ..errors import SolasError
 from . import tracer as T
 from .lens import Lens
 from .aiming import Bundle, chief_aim, continued_aim, nearest_passing, stop_target, aim
-from .paraxial import paraxial
+from .paraxial import paraxial, pupil_distance
 
 __all__ = ["Bundle", "aim", "ChiefRays", "chief_rays", "widest_field", "stop_rim", "PupilFunction", "pupil_function",
            "entrance_power", "nearest_passing"]
@@ -132,7 +132,7 @@ def entrance_pupil_footprint(lens: Lens) -> float:
     r_ep = 0.5 * p.entrance_pupil_diameter_mm
     if lens.at_infinity:
         return r_ep
-    return r_ep * abs(lens.object_distance / (p.entrance_pupil_z_mm + lens.object_distance))
+    return r_ep * abs(lens.object_distance / pupil_distance(lens, p.entrance_pupil_z_mm))
 
 
 @dataclass
@@ -184,7 +184,7 @@ def _power_density(lens: Lens, wavelength_nm: float) -> float:
     r_ep = 0.5 * p.entrance_pupil_diameter_mm
     if lens.at_infinity:
         return 1.0 / (math.pi * r_ep ** 2)
-    half = math.atan(r_ep / (p.entrance_pupil_z_mm + lens.object_distance))
+    half = math.atan(r_ep / pupil_distance(lens, p.entrance_pupil_z_mm))
     solid = 4.0 * math.pi * math.sin(0.5 * half) ** 2  # = 2π(1 − cos θ), without its cancellation
     return 1.0 / (lens.object_distance ** 2 * solid)
 
