@@ -62,6 +62,24 @@ def resolve_rings(lens: Lens, rings: int | None) -> int:
     return mesh_rings(lens) if rings is None else check_rings(rings)
 
 
+# What traces a lens that solid geometry cannot hold.
+_TRACE_INSTEAD = ("the lens camera (a scene file's sensor, `render.user_scene`) or a tracer PSF method "
+                  "(fraunhofer, geometric)")
+
+
+def _check_buildable(lens: Lens) -> None:
+    """SolasError where `lens` has no solid geometry: an ideal thin lens, a virtual object, overlapping
+    surfaces; each message names what traces it instead."""
+    ideal = next((k for k, s in enumerate(lens.surfaces, start=1) if s.ideal), None)
+    if ideal is not None:
+        raise SolasError(f"surface {ideal} of lens {lens.name} is an ideal thin lens (focal_length), which has no glass "
+                         f"to build as Mitsuba geometry; trace it instead: {_TRACE_INSTEAD}")
+    virtual_object.check_real(lens, "the mesh scene")
+    if lens.overlaps:
+        raise SolasError(f"lens {lens.name} cannot be built as Mitsuba geometry: {'; '.join(lens.overlaps)}. Trace it "
+                         f"instead: {_TRACE_INSTEAD}")
+
+
 def lens_parts(lens: Lens, rings: int | None = None, image_radius: float = 0.0) -> list[Part]:
     """Caps for refracting surfaces, absorbing annuli around every clear aperture (and the stop), and
     a barrel closing the sides from the first aperture to the image plane. A lens of polar fields (a
@@ -71,16 +89,7 @@ def lens_parts(lens: Lens, rings: int | None = None, image_radius: float = 0.0) 
     largest clear aperture plus 10 mm, or more to hold the image plane out to `image_radius` mm (the
     sensor's corners, a PSF's window): a barrel narrower than the image cut off the light that arrives
     there (Cooke triplet at 32°: its light lands 31 mm off axis, outside a 30 mm barrel)."""
-    ideal = next((k for k, s in enumerate(lens.surfaces, start=1) if s.ideal), None)
-    if ideal is not None:
-        raise SolasError(f"surface {ideal} of lens {lens.name} is an ideal thin lens (focal_length), which has no glass "
-                         "to build as Mitsuba geometry; trace it instead: the lens camera (a scene file's sensor, "
-                         "`render.user_scene`) or a tracer PSF method (fraunhofer, geometric)")
-    virtual_object.check_real(lens, "the mesh scene")
-    if lens.overlaps:
-        raise SolasError(f"lens {lens.name} cannot be built as Mitsuba geometry: {'; '.join(lens.overlaps)}. Trace it "
-                         "instead: the lens camera (a scene file's sensor, `render.user_scene`) or a tracer PSF method "
-                         "(fraunhofer, geometric)")
+    _check_buildable(lens)
     rings = resolve_rings(lens, rings)
     check_gaps(lens)
     parts = []
