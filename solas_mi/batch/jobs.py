@@ -20,6 +20,7 @@ from typing import Any, Callable, Iterable
 from .. import jsonio
 from ..errors import SolasError
 from ..outputs import inside, safe_name
+from ..userfiles import read_text
 from .cache import file_hash
 
 MANIFEST = "batch.json"
@@ -168,7 +169,7 @@ class Manifest:
     def previous(path: Path) -> dict[str, Any]:
         """The manifest a former run left (empty when there is none or it cannot be read)."""
         try:
-            data = jsonio.loads(path.read_text())
+            data = jsonio.loads(read_text(path, "record"))
             return data if isinstance(data, dict) else {}
         except (OSError, ValueError):
             return {}

@@ -56,7 +56,7 @@ DEFAULT_METHOD = "Malvar2004"
 
 def check_method(name: str, options: dict | None = None) -> DemosaicMethod:
     """The method `name`, its `options` checked against its own (SolasError naming what is allowed)."""
-    if name not in METHODS:
+    if not isinstance(name, str) or name not in METHODS:
         raise SolasError(f"demosaicing method {name!r} must be one of {', '.join(METHODS)}")
     method = METHODS[name]
     unknown = sorted(set(options or {}) - set(method.options))

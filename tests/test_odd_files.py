@@ -1,0 +1,64 @@
+"""Every reader of a file a user or a file names, given what is no regular file under a name it takes:
+refused in time (`solas_mi.userfiles`). Before, a FIFO made each wait for ever and /dev/zero was read
+until memory ran out (--sensor-model /dev/zero: 2 GB in 14 s)."""
+import os
+
+import pytest
+from in_time import finished, refused
+
+
+@pytest.fixture
+def odd(tmp_path):
+    """A FIFO and a symbolic link to /dev/zero."""
+    os.mkfifo(tmp_path / "fifo")
+    os.symlink("/dev/zero", tmp_path / "zero")
+    return tmp_path
+
+
+def _named(path, suffix):
+    """A name ending in `suffix` for `path` (a FIFO or /dev/zero): a symbolic link beside it."""
+    link = path.with_name(path.name + "_link" + suffix)
+    os.symlink(path, link)
+    return link
+
+
+def _sensor_naming(path):
+    """The sensor of a file whose `qe_curve` names `path` (beside it)."""
+    from solas_mi.sensor.files import load_sensor
+
+    sensor = path.with_name("sensor.toml")
+    sensor.write_text(f'[sensor]\nqe_curve = "{path.name}"\n')
+    return load_sensor(sensor)
+
+
+def _readers():
+    from solas_mi.imageio import read_exr, read_image
+    from solas_mi.isp.pipeline import load_isp
+    from solas_mi.optics.lens import Lens
+    from solas_mi.render.response import table
+    from solas_mi.sensor.files import load_sensor
+    from solas_mi.sensor.qe import read_csv
+
+    return [(load_sensor, ".toml"), (load_isp, ".toml"), (read_csv, ".csv"), (_sensor_naming, ".csv"),
+            (table, ".csv"), (Lens.load, ".toml"), (Lens.load, ".zmx"), (Lens.load, ".seq"), (Lens.load, ".dat"),
+            (read_image, ".png"), (read_image, ".exr"), (read_exr, ".exr")]
+
+
+@pytest.mark.parametrize("target", ["fifo", "zero"])
+@pytest.mark.parametrize("index", range(len(_readers())))
+def test_every_reader_refuses_what_is_no_regular_file(odd, target, index):
+    """Each reader of a file a user or a file names (sensor model, ISP file, QE curve, camera response table,
+    lens files, images), given a FIFO or /dev/zero under a name it takes: refused in time, as no regular
+    file (before: a FIFO waited for ever, /dev/zero was read until memory ran out)."""
+    reader, suffix = _readers()[index]
+    assert "is not a regular file" in refused(reader, _named(odd / target, suffix))
+
+
+def test_readers_that_only_look_do_not_wait(odd):
+    """An image's header read for its size (before reading it) and a former batch's manifest: a FIFO
+    gives no size and no manifest, in time."""
+    from solas_mi.batch.jobs import Manifest
+    from solas_mi.imageio import image_size
+
+    assert finished(image_size, _named(odd / "fifo", ".png")) == {"value": (0, 0, 0)}
+    assert finished(Manifest.previous, odd / "fifo") == {"value": {}}
