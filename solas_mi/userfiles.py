@@ -34,6 +34,7 @@ LIMITS = {
     "scene file": 64 * MIB,  # a Mitsuba scene's XML
     "scene data file": 16384 * MIB,  # a mesh, texture or spectrum a scene names (Mitsuba reads it)
     "image file": 16384 * MIB,
+    "batch input": 16384 * MIB,  # an image or scene file given to a batch by name (then read as its kind)
 }
 MAX_NESTING = 16  # levels of tables and arrays in a TOML file (ours need 4)
 

@@ -31,6 +31,13 @@ def _sensor_naming(path):
     return load_sensor(sensor)
 
 
+def _batch_input(path):
+    """A batch's inputs, `path` given by name (hashed before it is read)."""
+    from solas_mi.batch.jobs import expand_inputs
+
+    return expand_inputs([path])
+
+
 def _readers():
     from solas_mi.imageio import read_exr, read_image
     from solas_mi.isp.pipeline import load_isp
@@ -41,14 +48,14 @@ def _readers():
 
     return [(load_sensor, ".toml"), (load_isp, ".toml"), (read_csv, ".csv"), (_sensor_naming, ".csv"),
             (table, ".csv"), (Lens.load, ".toml"), (Lens.load, ".zmx"), (Lens.load, ".seq"), (Lens.load, ".dat"),
-            (read_image, ".png"), (read_image, ".exr"), (read_exr, ".exr")]
+            (read_image, ".png"), (read_image, ".exr"), (read_exr, ".exr"), (_batch_input, ".png")]
 
 
 @pytest.mark.parametrize("target", ["fifo", "zero"])
 @pytest.mark.parametrize("index", range(len(_readers())))
 def test_every_reader_refuses_what_is_no_regular_file(odd, target, index):
     """Each reader of a file a user or a file names (sensor model, ISP file, QE curve, camera response table,
-    lens files, images), given a FIFO or /dev/zero under a name it takes: refused in time, as no regular
+    lens files, images, a batch's inputs), given a FIFO or /dev/zero under a name it takes: refused in time, as no regular
     file (before: a FIFO waited for ever, /dev/zero was read until memory ran out)."""
     reader, suffix = _readers()[index]
     assert "is not a regular file" in refused(reader, _named(odd / target, suffix))

@@ -20,7 +20,7 @@ from typing import Any, Callable, Iterable
 from .. import jsonio
 from ..errors import SolasError
 from ..outputs import inside, safe_name
-from ..userfiles import read_text
+from ..userfiles import check, read_text
 from .cache import file_hash
 
 MANIFEST = "batch.json"
@@ -103,7 +103,7 @@ def expand_inputs(inputs: Iterable[str | os.PathLike], suffixes: tuple[str, ...]
             if roots is not None:
                 roots.update({p.resolve(): path.resolve() for p in matches})
         elif path.exists():
-            matches = [path]
+            matches = [check(path, "batch input")]  # hashed before it is read: no FIFO nor device
         elif glob.has_magic(text):
             matches = sorted(Path(p) for p in glob.glob(text) if Path(p).is_file())
         else:

@@ -53,7 +53,7 @@ class ISP:
         if not isinstance(self.black_level, bool):
             raise SolasError(f"isp black_level {self.black_level!r} must be true or false")
         named = tuple(m for m in white.METHODS if m != "given")  # "given" is written as a table of gains
-        if isinstance(self.white_balance, str) and self.white_balance not in named:
+        if not isinstance(self.white_balance, dict) and self.white_balance not in named:  # true: not grey-world
             raise SolasError(f"isp white_balance {self.white_balance!r} must be one of daylight, grey-world, "
                              "grey-card, none, or a table of gains per filter")
         if (self.white_balance == "grey-card") != (self.grey_card is not None):

@@ -59,11 +59,18 @@ def test_odd_sensor_and_isp_files_are_one_line(folder, capsys, make, message, ro
     assert not (folder / "raw.exr").exists()
 
 
-@pytest.mark.parametrize("value", ["[1, 2]", "{a = 1}", "[]"])
-def test_an_isp_method_of_the_wrong_type_is_one_line(folder, capsys, value):
-    """`demosaic` given a list or a table (a valid TOML file, a wrong type): before, TypeError
-    (unhashable type) from the method lookup."""
-    (folder / "isp.toml").write_text(f"[isp]\ndemosaic = {value}\n")
+@pytest.mark.parametrize("key, value, message", [
+    ("demosaic", "[1, 2]", "demosaicing method [1, 2] must be one of"),
+    ("demosaic", "{a = 1}", "demosaicing method {'a': 1} must be one of"),
+    ("white_balance", "true", "white_balance True must be one of"),
+    ("white_balance", "[1, 2]", "white_balance [1, 2] must be one of"),
+    ("white_balance", "5", "white_balance 5 must be one of"),
+])
+def test_an_isp_method_of_the_wrong_type_is_one_line(folder, capsys, key, value, message):
+    """A method given a value of the wrong type (a valid TOML file): before, `demosaic` a list or a table
+    raised TypeError (unhashable type), and `white_balance = true` (or a number, a list) was taken as
+    grey-world, silently."""
+    (folder / "isp.toml").write_text(f"[isp]\n{key} = {value}\n")
     assert main(_camera(folder, folder / "sensor.toml", folder / "isp.toml")) == 2
     err = capsys.readouterr().err
-    assert len(err.strip().splitlines()) == 1 and "demosaicing method" in err and "must be one of" in err, err
+    assert len(err.strip().splitlines()) == 1 and message in err, err
