@@ -4,8 +4,18 @@ import re
 _QUOTED = re.compile(r'"([^"]*)"')
 
 
+MAX_WORD, MAX_MESSAGE = 200, 2000  # characters: a value quoted back from a file is cut, not printed whole
+_LONG_WORD = re.compile(r"\S{%d,}" % (MAX_WORD + 1))
+
+
 class SolasError(ValueError):
-    """A user error: the message names the bad value and what is allowed."""
+    """A user error: the message names the bad value and what is allowed. It holds at most MAX_MESSAGE
+    characters, none of its words more than MAX_WORD (the rest cut, "…"): a file's line of a megabyte
+    quoted back stays a line a terminal can show."""
+
+    def __init__(self, message: object = "") -> None:
+        text = _LONG_WORD.sub(lambda m: m[0][:MAX_WORD] + "…", str(message))
+        super().__init__(text if len(text) <= MAX_MESSAGE else text[:MAX_MESSAGE] + "…")
 
 
 def plugin_error(exc: BaseException, context: str, known: str | None = None) -> SolasError:

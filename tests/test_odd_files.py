@@ -69,3 +69,34 @@ def test_readers_that_only_look_do_not_wait(odd):
 
     assert finished(image_size, _named(odd / "fifo", ".png")) == {"value": (0, 0, 0)}
     assert finished(Manifest.previous, odd / "fifo") == {"value": {}}
+
+
+@pytest.mark.parametrize("name, text", [
+    ("sensor.toml", '[sensor]\ncfa = "{x}"\n'),
+    ("isp.toml", '[isp]\ntone = "{x}"\n'),
+    ("lens.toml", '[[surface]]\nradius = "{x}"\nthickness = 1\ndiameter = 1\nstop = true\n'),
+    ("lens.seq", "{x}\n"),
+    ("lens.dat", "{x}\n"),
+    ("lens.zmx", "SURF 0\n  DISZ INFINITY\nSURF 1\n  STOP\n  GLAS {x}\n  DIAM 1 1\nSURF 2\n"),
+])
+def test_a_huge_line_is_cut_in_the_error(tmp_path, name, text):
+    """A line of nearly a megabyte (within the files' bounds) quoted back in a refusal: cut to at most
+    MAX_WORD characters a word and MAX_MESSAGE in all (before: the whole line, a one-megabyte message)."""
+    from solas_mi.errors import MAX_MESSAGE, MAX_WORD
+    from solas_mi.isp.pipeline import load_isp
+    from solas_mi.optics.lens import Lens
+    from solas_mi.sensor.files import load_sensor
+
+    path = tmp_path / name
+    path.write_text(text.format(x="X" * 1_000_000))
+    load = {"sensor.toml": load_sensor, "isp.toml": load_isp}.get(name, Lens.load)
+    message = refused(load, path)
+    assert len(message) <= MAX_MESSAGE + 1 and str(path) in message, message[:300]
+    assert "X" * (MAX_WORD - 1) + "…" in message and "X" * (MAX_WORD + 1) not in message  # cut, the quote kept
+
+
+def test_a_message_of_many_words_is_cut():
+    from solas_mi.errors import MAX_MESSAGE, SolasError
+
+    message = str(SolasError("allowed: " + ", ".join(f"name{i}" for i in range(10_000))))
+    assert len(message) == MAX_MESSAGE + 1 and message.endswith("…") and message.startswith("allowed: name0, name1")
