@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import SolasError
-from ..sensor.auto_exposure import AUTO, AutoExposure
+from ..sensor.auto_exposure import AUTO, AutoExposure, exposure_seconds
 from ..sensor.capture import check_seed
 from ..sensor.model import SensorModel
 from .pipeline import ISP
@@ -65,14 +65,11 @@ class Camera:
         from .pipeline import develop
 
         number = frame_number(name)
-        exposure: dict = {}
-        if isinstance(self.exposure_ms, AutoExposure):
-            seconds, exposure["auto_exposure"] = self.exposure_ms.choose(self.sensor, irradiance)
-        else:
-            seconds = self.exposure_ms * 1e-3
+        seconds, chosen = exposure_seconds(self.exposure_ms, self.sensor, irradiance)
         raw = capture(self.sensor, irradiance, seconds, self.seed, number)
         meta = {"kind": "sensor RAW", "unit": "DN", "camera": self.describe(), "frame": name, "frame_number": number,
-                "exposure_ms": seconds * 1e3, **exposure}
+                "exposure_ms": seconds * 1e3 if chosen else self.exposure_ms,
+                **({"auto_exposure": chosen} if chosen else {})}
         if self.isp is None:
             return raw, None, meta
         frame, developed = develop(raw, self.sensor, self.isp)

@@ -55,6 +55,14 @@ class AutoExposure:
                          "exposure_ms": seconds * 1e3}
 
 
+def exposure_seconds(exposure: float | AutoExposure, model: SensorModel, irradiance: np.ndarray) -> tuple[float, dict]:
+    """The exposure (s) of a frame: `exposure` ms as given, or chosen from the irradiance (`AutoExposure`),
+    with what it was chosen from ({} when given)."""
+    if isinstance(exposure, AutoExposure):
+        return exposure.choose(model, irradiance)
+    return exposure * 1e-3, {}
+
+
 def parse_exposure(text, flag: str = "--exposure-ms") -> float | AutoExposure:
     """An exposure in ms (a number > 0, finite), or "auto" / "auto:P,F" (`AutoExposure`)."""
     if isinstance(text, AutoExposure):

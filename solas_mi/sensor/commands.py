@@ -58,9 +58,9 @@ def radiance_f_number(given: float | None, meta: dict, what: str) -> tuple[float
     own = meta.get("f_number") if isinstance(meta, dict) else None
     if given is not None:
         given = check_f_number(given, "--f-number")
-        differs = own is not None and own != given
-        notice = (f"{what}: --f-number {given:g} differs from the image's own f/{own:.4g} (its lens's, from its "
-                  "metadata); --f-number used") if differs else None
+        shown = f"f/{own:.4g}" if isinstance(own, (int, float)) and not isinstance(own, bool) else f"f_number {own!r}"
+        notice = (f"{what}: --f-number {given:g} differs from the image's own {shown} (its lens's, from its "
+                  "metadata); --f-number used") if own is not None and own != given else None
         return given, {"f_number": given, "f_number_source": "--f-number", "f_number_of_input": own}, notice
     if own is None:
         return None, {"f_number": None, "f_number_source": None}, None
@@ -89,9 +89,15 @@ def check_camera_memory(args: argparse.Namespace, develop_bytes_per_pixel: float
     from ..imageio import image_size
 
     rows, cols, channels = image_size(args.image)
-    read = READ_BYTES_PER_VALUE * channels + READ_BYTES_PER_PIXEL
-    need = FIXED_BYTES + rows * cols * max(read, RAW_BYTES_PER_PIXEL, develop_bytes_per_pixel)
+    need = FIXED_BYTES + frame_bytes(rows, cols, channels, develop_bytes_per_pixel)
     check_memory(f"camera {cols}x{rows}", need, args.force, "a smaller image")
+
+
+def frame_bytes(rows: int, cols: int, channels: int = 3, develop_bytes_per_pixel: float = 0.0) -> float:
+    """The camera's peak memory for a frame beyond its modules (bytes): the largest of the EXR read (of
+    `channels` channels), the sensor's chain and the image processor's (0: none)."""
+    read = READ_BYTES_PER_VALUE * channels + READ_BYTES_PER_PIXEL
+    return rows * cols * max(read, RAW_BYTES_PER_PIXEL, develop_bytes_per_pixel)
 
 
 def as_irradiance(image, meta: dict, what: str, scale: float = 1.0, f_number: float | None = None,
@@ -124,7 +130,7 @@ def as_irradiance(image, meta: dict, what: str, scale: float = 1.0, f_number: fl
 
 def raw_frame(args: argparse.Namespace, develop_bytes_per_pixel: float = 0.0):
     """The RAW frame (H, W, uint16 DN) of the command's image, its `SensorModel` and its metadata."""
-    from .auto_exposure import AutoExposure, parse_exposure
+    from .auto_exposure import exposure_seconds, parse_exposure
     from .capture import capture, check_frame, check_seed
     from .files import describe, load_sensor
 
@@ -138,12 +144,8 @@ def raw_frame(args: argparse.Namespace, develop_bytes_per_pixel: float = 0.0):
                                                 args.transmission)
     if notice:
         print(f"notice: {notice}", file=sys.stderr)
-    chosen = {}
-    if isinstance(exposure, AutoExposure):
-        seconds, chosen = exposure.choose(model, irradiance)
-        exposure_ms = seconds * 1e3
-    else:
-        exposure_ms, seconds = exposure, exposure * 1e-3
+    seconds, chosen = exposure_seconds(exposure, model, irradiance)
+    exposure_ms = exposure if not chosen else seconds * 1e3
     raw = capture(model, irradiance, seconds, args.seed, args.frame)
     fraction, warning = clipping_warning(model, raw, exposure_ms, str(args.output))
     if warning:

@@ -192,3 +192,17 @@ def test_scale_auto_exposure_and_saturation_warnings(camera_inputs, capsys):
         assert meta["auto_exposure"]["percentile"] == 99 and meta["camera"]["exposure_ms"] == "auto"
         assert meta["exposure_ms"] == pytest.approx(meta["auto_exposure"]["exposure_ms"])
         assert model.saturated(channels["RAW"]).mean() <= 0.01
+
+
+def test_the_estimate_counts_the_camera(camera_inputs, tmp_path):
+    """A 2000×1500 render batch through the camera and processor: the camera's peak (its measured bytes per
+    pixel, `sensor.commands.frame_bytes`) passes the render's own, and the estimate says it."""
+    from solas_mi.batch.degrade import WORKER_BYTES
+    from solas_mi.batch.render import estimate, plan_render
+    from solas_mi.isp.commands import DEVELOP_BYTES_PER_PIXEL
+    from solas_mi.sensor.commands import frame_bytes
+
+    camera = load_camera(str(camera_inputs.root / "sensor.toml"), EXPOSURE_MS, "default", 0)
+    p = plan_render([camera_inputs.images / "frame000.png"], tmp_path / "r", lens="solas-doublet", camera=camera,
+                    sensor="2000x1500", spp=1)
+    assert estimate(p, 1)["peak_bytes"] == frame_bytes(1500, 2000, 3, DEVELOP_BYTES_PER_PIXEL) + WORKER_BYTES["render"]

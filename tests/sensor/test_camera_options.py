@@ -235,3 +235,15 @@ def test_sensors_json_lists_every_preset(capsys):
     for entry in listed:
         assert entry["title"] == preset_title(entry["name"])
         assert entry["sensor"] == describe(load_sensor(entry["name"]))
+
+
+@pytest.mark.parametrize("own", ["x", 0.1, True])
+def test_an_odd_f_number_in_the_metadata_is_named(tmp_path, capsys, own):
+    """A header's f_number that no lens has is refused by name; a given --f-number reads the image anyway."""
+    _render_like(tmp_path, own)
+    argv = ["camera", str(tmp_path / "render.exr"), "--sensor-model", "imx490", "--exposure-ms", "5"]
+    assert main([*argv, "-o", str(tmp_path / "a.exr")]) == 2
+    err = capsys.readouterr().err
+    assert f"the f_number in its metadata {own!r} must be a number from 0.5" in err and len(err.splitlines()) == 1
+    assert main([*argv, "--f-number", "2", "-o", str(tmp_path / "b.exr")]) == 0
+    assert "--f-number 2 differs from the image's own" in capsys.readouterr().err
