@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from ..errors import SolasError
+from ..outputs import add_png_option
 from .spec import MAX_SPP, add_spec_flags, spec_from_args
 
 DEFAULT_IMAGE = "images/rocket.png"  # under the shipped scenes directory
@@ -193,12 +194,15 @@ def _render_image(args) -> int:
 def _add_output_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
     p.add_argument("-o", "--output", required=True, help="output OpenEXR file (linear)")
-    p.add_argument("--png", help="sRGB PNG for viewing (default: beside the EXR)")
+    add_png_option(p)
 
 
 def register(sub) -> None:
+    from ..optics.commands import add_lens_argument
+    from ..optics.formats import lens_help
+
     scene = sub.add_parser("scene", help="write a Mitsuba scene (XML + cap meshes) for a lens")
-    scene.add_argument("lens", help="shipped lens name (solas-doublet) or a .toml lens file")
+    add_lens_argument(scene)
     scene.add_argument("-o", "--output", required=True, help="output directory")
     scene.add_argument("--image", help="input image (copied beside the scene; default: the bundled photograph)")
     add_spec_flags(scene, SCENE_SETTINGS)
@@ -212,7 +216,7 @@ def register(sub) -> None:
     render.add_argument("scene", help="scene XML")
     render.add_argument("--set", action="append", metavar="NAME=VALUE",
                         help="override a <default> of the scene (e.g. --set image=other.png); repeatable")
-    render.add_argument("--lens", help="replace the scene's perspective camera by this lens (shipped name or .toml)")
+    render.add_argument("--lens", help=f"replace the scene's perspective camera by this lens: {lens_help()}")
     render.add_argument("--pitch-um", type=float, help="with --lens: pixel pitch in µm (default: the lens's field "
                                                        "matches the perspective camera's fov)")
     render.add_argument("--focus-distance", help="with --lens: focus distance in world units, or auto (the depth "
@@ -231,7 +235,7 @@ def register(sub) -> None:
     render.set_defaults(run=_render)
 
     image = sub.add_parser("render-image", help="render an input image through the lens geometry")
-    image.add_argument("lens", help="shipped lens name (solas-doublet) or a .toml lens file")
+    add_lens_argument(image)
     image.add_argument("image", help="input image (PNG/JPEG: sRGB; EXR: linear)")
     add_spec_flags(image, IMAGE_SETTINGS)
     _add_output_options(image)
