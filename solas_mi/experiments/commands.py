@@ -8,7 +8,7 @@ import sys
 from typing import Any
 
 from ..options import parse_wxh, positive_ints
-from ..outputs import output_folder
+from ..outputs import output_folder, safe_name
 
 
 def _say(text: str) -> None:
@@ -31,7 +31,7 @@ def run_street(args: argparse.Namespace) -> int:
     outcome = run(lens, out, settings, log=_say)
     print((out / "street.md").read_text())
     print(f"wrote {out}/street.md, street.csv, street.json, fig5_*.png, error_*.png and the images "
-          f"({', '.join(n.replace(' ', '_') for n in outcome.images)}, depth) as .exr and .png")
+          f"({', '.join(safe_name(n) for n in outcome.images)}, depth) as .exr and .png")
     return 0
 
 

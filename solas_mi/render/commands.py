@@ -22,7 +22,8 @@ def _check_spp(spp) -> None:
 
 
 def check_render(width: int, height: int, spp: int, force: bool) -> None:
-    """Refuse an absurd spp or a render that cannot fit in memory; announce a long one on stderr."""
+    """Refuse an absurd spp or a render that cannot fit in memory; announce a long one on stderr (how long
+    it takes depends on what else the machine runs: its progress tells the time left at the rate measured)."""
     import os
 
     from ..budget import check_memory
@@ -32,10 +33,9 @@ def check_render(width: int, height: int, spp: int, force: bool) -> None:
     pixels = width * height
     check_memory(f"render {width}x{height}", max(pixels, SAMPLES_PER_PASS) * BYTES_PER_SAMPLE + 48 * pixels, force,
                  "a smaller sensor")
-    seconds = pixels * spp / (SAMPLES_PER_SECOND_PER_CORE * (os.cpu_count() or 1))
-    if seconds > 60:
-        print(f"render {width}x{height} at {spp} spp: {pixels * spp:.3g} samples, about {seconds / 60:.0f} min",
-              file=sys.stderr, flush=True)
+    if pixels * spp > 60 * SAMPLES_PER_SECOND_PER_CORE * (os.cpu_count() or 1):  # a minute at least, idle
+        print(f"render {width}x{height} at {spp} spp: {pixels * spp:.3g} samples, a long render: its progress "
+              "tells the time left at the rate it measures", file=sys.stderr, flush=True)
 
 
 def _progress(spp: int):
