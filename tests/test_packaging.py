@@ -148,6 +148,27 @@ def test_the_table_check_can_fail(tmp_path):
     assert included == [] and len(recorded) == 1
 
 
+def test_the_benchmark_page_shows_no_raw_log():
+    """Every results file the benchmark and validation pages include is tables and text: no library's log
+    line (Mitsuba's "2026-11-26 00:16:11 WARN  [HDRFilm] ..." lines ran together into a paragraph there),
+    no two lines of text that Markdown would run together."""
+    log_line = re.compile(r"\d{4}-\d\d-\d\d \d\d:\d\d:\d\d +[A-Z]+ +\[")
+    for path in sorted((ROOT / "benchmarks" / "results").glob("*.md")):
+        lines = path.read_text(encoding="utf-8").splitlines()[check_pages.HEADER_LINES:]
+        assert not [line for line in lines if log_line.match(line)], path.name
+        assert not [b for a, b in zip(lines, lines[1:]) if a and b and not (a.startswith("|") and b.startswith("|"))], \
+            path.name
+
+
+def test_the_recorder_keeps_results_and_drops_logs():
+    recorded = check_pages.recorder().recorded
+    run = ("load average before: 1.2\n\x1b[33m2026-11-26 00:16:11 WARN  [HDRFilm] Monochrome mode enabled\x1b[0m\n"
+           f"wrote {ROOT}/out/x.exr\n| a | b |\n|---|---|\n| 1 | 2 |\nload average after: 1.0\n")
+    assert recorded(run) == ("load average before: 1.2\n\nwrote out/x.exr\n\n| a | b |\n|---|---|\n| 1 | 2 |\n\n"
+                             "load average after: 1.0\n")
+    assert recorded(recorded(run)) == recorded(run)
+
+
 def test_the_reference_check_finds_what_a_site_leaves_out(tmp_path):
     """`make docs` runs docs/tools/check_reference.py on the built site; on a site whose reference
     pages are empty it names every command, public function and plugin missing."""
