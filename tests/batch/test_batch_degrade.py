@@ -268,7 +268,7 @@ FLAG_VARIANTS = {
     "--auto-window": ([], None),
     "--distances-m": ([], "inf,10"),
 }
-NOT_GRID_OPTIONS = {"lens", "output", "png", "force", "help"}
+NOT_GRID_OPTIONS = {"lens", "output", "mosaic", "force", "help"}
 
 
 def test_every_psf_grid_flag_reaches_the_cache_key_and_the_grid(batch_inputs, capsys, doublet):
