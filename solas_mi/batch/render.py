@@ -212,7 +212,7 @@ def render_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathL
                  spec: RenderSpec | None = None, workers: int | None = None, dask: str | None = None,
                  force: bool = False, progress: bool = True, camera=None, **settings) -> BatchResult:
     """Render every input of `inputs` (images and Mitsuba scene XML files: files, folders, glob
-    patterns) through `lens` (a shipped name or .toml file) into `output_dir` (one EXR + PNG per item,
+    patterns) through `lens` (a shipped name or lens file) into `output_dir` (one EXR + PNG per item,
     `batch.json` beside them), at every point of the sweep: `lens`, `focus_distance` (scene units;
     scenes only), `sensor` ("COLSxROWS" or (rows, columns); images only), `pitch_um` (µm) and `spp`
     each take one value or a list. `spec` and the other `settings` (`render.spec.RenderSpec`: response,
