@@ -81,9 +81,19 @@ def _frame(args: argparse.Namespace):
     return parse_frame(args.fov_deg, args.fov_axis, args.intrinsics, args.fisheye)
 
 
+WARNINGS_SHOWN = 5  # items whose warnings are printed; the manifest holds every item's
+
+
 def _report(command: str, result, extra: str = "") -> int:
     for job in result.failed:
         print(f"solas-mi batch {command}: failed: {job.input} → {job.output}: {job.error}", file=sys.stderr)
+    warned = [job for job in result.jobs if job.warnings and job.status == "done"]
+    for job in warned[:WARNINGS_SHOWN]:
+        for text in job.warnings:
+            print(f"solas-mi batch {command}: warning: {text}", file=sys.stderr)
+    if len(warned) > WARNINGS_SHOWN:
+        print(f"solas-mi batch {command}: warning: {len(warned) - WARNINGS_SHOWN} more items warn likewise (each "
+              f"item's warnings are in {result.manifest})", file=sys.stderr)
     print(f"{result.count('done')} done, {result.count('skipped')} skipped, {len(result.failed)} failed "
           f"in {result.seconds:.1f} s{extra}; manifest {result.manifest}")
     return 1 if result.failed else 0
