@@ -2,7 +2,7 @@
 one policy for all of them: a live tqdm bar when the stream is a terminal; anywhere else (a log file,
 a pipe, a CI log) a few plain lines, one when each quarter of the work is passed (and one at least
 every `QUIET_S` seconds of a very long job), so that a log holds about four lines, not one line of
-hundreds of carriage-return updates.
+hundreds of carriage-return updates. Both estimate the time left from the rate measured so far.
 
     with Progress("psf-grid", total, "PSF") as bar:
         psf_grid(lens, spec, progress=bar)     # the library's `progress(done, total)` callbacks
@@ -21,6 +21,10 @@ def _is_terminal(stream) -> bool:
         return bool(stream.isatty())
     except (AttributeError, ValueError):  # no isatty, or a closed stream
         return False
+
+
+def _duration(seconds: float) -> str:
+    return f"{seconds:.0f} s" if seconds < 120 else f"{seconds / 60:.0f} min"
 
 
 def _count(value: float) -> str:
@@ -68,11 +72,14 @@ class Progress:
             self.line(now)
 
     def line(self, now: float | None = None) -> None:
-        """The plain line: `desc: done/total unit (percent, seconds)`."""
+        """The plain line: `desc: done/total unit (percent, seconds[, the time left at the rate so far])`."""
         seconds = (time.monotonic() if now is None else now) - self._start
         of = f"/{_count(self.total)}" if self.total else ""
         percent = f"{100.0 * self.done / self.total:.0f} %, " if self.total else ""
-        print(f"{self.desc}: {_count(self.done)}{of} {self.unit} ({percent}{seconds:.1f} s)", file=self.stream,
+        left = ""
+        if self.total and 0 < self.done < self.total:
+            left = f", about {_duration(seconds * (self.total - self.done) / self.done)} left at this rate"
+        print(f"{self.desc}: {_count(self.done)}{of} {self.unit} ({percent}{seconds:.1f} s{left})", file=self.stream,
               flush=True)
 
     def close(self) -> None:

@@ -25,8 +25,8 @@ from ..userfiles import read_bytes, read_toml
 from . import forbes, ideal as ideal_mod, overlap
 from . import glass as glass_mod
 from .sag import sag
-from .formats import (MAX_SURFACES, MAX_WAVELENGTHS, READERS, WRITERS, check_count, decode_text, lens_path, listed,
-                      shipped_lenses)  # noqa: F401 (shipped_lenses: re-exported)
+from .formats import (MAX_SURFACES, MAX_WAVELENGTHS, READERS, WRITERS, check_count, decode_text, lens_path,
+                      shipped_lenses, writable)  # noqa: F401 (shipped_lenses: re-exported)
 from .fields import FieldType, field_type_for
 
 NORM_RADIUS_MM = (1e-6, 1e6)  # the Qbfs normalisation radius a surface may have (1 nm to 1 km)
@@ -213,7 +213,7 @@ class Lens:
     # ------------------------------------------------------------------ loading
     @classmethod
     def load(cls, name_or_path: str | Path) -> "Lens":
-        """A lens by shipped name (e.g. "solas-doublet") or by path to a lens file (.toml, .zmx, .seq, .dat):
+        """A lens by shipped name (e.g. "solas-doublet") or by path to a lens file (`formats.readable()`):
         a name holding a path separator or an extension is a path."""
         path = lens_path(name_or_path)
         if path.suffix.lower() in READERS:
@@ -224,12 +224,12 @@ class Lens:
 
     def save(self, path: str | Path) -> Path:
         """Write the lens to `path` (written whole or not at all) in the format its extension names:
-        .toml (ours), .zmx (Zemax) or .dat (pbrt lens table)."""
+        one of `formats.writable()`."""
         path = Path(path)
         writer = WRITERS.get(path.suffix.lower())
         if writer is None:
             raise SolasError(f"lens file {str(path)!r}: unknown extension {path.suffix!r}; "
-                             f"allowed: {listed(WRITERS)}")
+                             f"allowed: {writable()}")
         write_text(path, writer(self))
         return path
 
