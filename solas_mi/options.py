@@ -4,6 +4,7 @@ from __future__ import annotations
 import re
 
 from .errors import SolasError
+from .userfiles import read_toml
 
 _WXH = re.compile(r"\s*(\d+)\s*[xX×]\s*(\d+)\s*")
 
@@ -72,17 +73,9 @@ def add_image_input_options(p, boundaries, variants) -> None:
 
 
 def toml_table(path, table: str, what: str) -> dict:
-    """The one `[table]` of the TOML file `path` (and nothing else in it); `what` names the file in the
-    one-line errors (e.g. "sensor model")."""
-    import tomllib
-
-    try:
-        with open(path, "rb") as f:
-            data = tomllib.load(f)
-    except OSError as exc:
-        raise SolasError(f"{what} {str(path)!r}: {exc.strerror or 'cannot be read'}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise SolasError(f"{what} {str(path)!r} is not valid TOML: {exc}") from None
+    """The one `[table]` of the TOML file `path` (and nothing else in it), read by `userfiles.read_toml`;
+    `what` is its kind there (e.g. "sensor model"), which names the file in the one-line errors."""
+    data = read_toml(path, what)
     if not isinstance(data.get(table), dict) or set(data) != {table}:
         raise SolasError(f"{what} {str(path)!r} must hold one [{table}] table (and nothing else); "
                          f"found {', '.join(sorted(data)) or 'nothing'}")

@@ -20,6 +20,7 @@ from typing import Any, Callable, Iterable
 from .. import jsonio
 from ..errors import SolasError
 from ..outputs import inside, safe_name
+from ..userfiles import check, read_text
 from .cache import file_hash
 
 MANIFEST = "batch.json"
@@ -103,7 +104,7 @@ def expand_inputs(inputs: Iterable[str | os.PathLike], suffixes: tuple[str, ...]
             if roots is not None:
                 roots.update({p.resolve(): path.resolve() for p in matches})
         elif path.exists():
-            matches = [path]
+            matches = [check(path, "batch input")]  # hashed before it is read: no FIFO nor device
         elif glob.has_magic(text):
             matches = sorted(Path(p) for p in glob.glob(text) if Path(p).is_file())
         else:
@@ -169,7 +170,7 @@ class Manifest:
     def previous(path: Path) -> dict[str, Any]:
         """The manifest a former run left (empty when there is none or it cannot be read)."""
         try:
-            data = jsonio.loads(path.read_text())
+            data = jsonio.loads(read_text(path, "record"))
             return data if isinstance(data, dict) else {}
         except (OSError, ValueError):
             return {}

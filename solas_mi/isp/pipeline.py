@@ -22,6 +22,7 @@ table of its fields, e.g.
 """
 from __future__ import annotations
 
+import os
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
@@ -93,7 +94,7 @@ def load_isp(text: str | Path) -> ISP:
     """The `ISP` named ``default``, or that of the ``[isp]`` table of TOML file `text`."""
     if str(text) == DEFAULT:
         return ISP()
-    if not Path(text).is_file():
+    if not os.path.lexists(text):
         raise SolasError(f"isp {str(text)!r} must be 'default' or a TOML file with an [isp] table (no such file)")
     values = toml_table(text, "isp", "isp file")
     try:

@@ -11,6 +11,7 @@ from pathlib import Path
 
 from ..errors import SolasError
 from ..resources import resource_dir
+from ..userfiles import check
 from . import lens_toml, pbrt_dat
 
 LENS_DIR = "lenses"
@@ -23,6 +24,25 @@ FORMATS = (".toml", ".zmx", ".seq", ".dat")
 # add themselves when `solas_mi.optics` is imported (the tracer imports this module).
 READERS = {".dat": pbrt_dat.read_spec}
 WRITERS = {".toml": lens_toml.dumps, ".dat": pbrt_dat.dumps}
+
+
+# The most a lens may hold, in every reader and in `Lens` itself. A trace is one Dr.Jit kernel through
+# every surface, whose compile time grows faster than the surfaces (`lens info`: 100 surfaces ~30 s on 2
+# cores, 300 ~4 min) and whose assembly recurses once per variable of a ray's chain of operations
+# (`jitc_var_traverse`, ~50 variables and ~5 KiB of stack a surface): ~1 600 surfaces overflow an 8 MiB
+# stack, a segmentation fault. The wavelengths and a file's fields each multiply the traces of `lens info`
+# and of the readers' solves (64 wavelengths and 200 fields of a .zmx with automatic apertures: ~10 s).
+# Real lenses: up to ~60 surfaces (lithography objectives ~80), 3 to 25 fields; the visible at 10 nm
+# steps is 41 wavelengths.
+MAX_SURFACES = 128
+MAX_WAVELENGTHS = 64
+MAX_FIELDS = 200
+
+
+def check_count(count: int, what: str, most: int, where: str) -> None:
+    """SolasError naming `where` unless `count` (of surfaces, wavelengths, fields: `what`) is at most `most`."""
+    if count > most:
+        raise SolasError(f"{where}: {count} {what}; a lens may have at most {most}")
 
 
 def decode_text(data: bytes) -> str:
@@ -108,8 +128,4 @@ def lens_path(name_or_path) -> Path:
     if path.suffix.lower() not in readable_formats():
         what = f"unknown extension {path.suffix!r}" if path.suffix else "no lens extension"
         raise SolasError(f"lens file {given!r} has {what}; allowed: {readable()}")
-    if path.is_dir():
-        raise SolasError(f"lens file {given!r} is a folder, not a lens file")
-    if not path.is_file():
-        raise SolasError(f"lens file {str(path)!r} does not exist")
-    return path
+    return check(path, "lens file")

@@ -73,6 +73,7 @@ def _scene(args) -> int:
     from ..optics.commands import load_lens
     from ..outputs import output_folder
     from .response import parse
+    from ..userfiles import check
     from .scene import write_scene
 
     out = output_folder(args.output)
@@ -81,9 +82,7 @@ def _scene(args) -> int:
     parse(spec.response, lens.wavelengths_nm)  # a bad response is refused now, not when the scene renders
     camera = camera_for(lens, spec.sensor, spec.fov_deg, spec.pitch_um)
     out.mkdir(parents=True, exist_ok=True)
-    image = Path(args.image or _default_image())
-    if not image.is_file():
-        raise SolasError(f"no such image file: {image}")
+    image = check(args.image or _default_image(), "image file")  # copied beside the scene: a regular file
     kind, sep, table = spec.response.partition(":")
     if kind.strip().lower() == "table" and table:  # the table travels with the scene, like the image
         spec = spec.replace(response=f"{kind}{sep}{_copy_beside(Path(table), out)}")

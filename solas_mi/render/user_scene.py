@@ -21,12 +21,15 @@ A `thinlens`'s aperture is reported, not used: the real lens has its own stop.
 from __future__ import annotations
 
 import math
+import os
 import tempfile
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import SolasError, plugin_error
+from ..userfiles import check, read_bytes
 from .scene import lens_file
 
 SWAPPABLE = ("perspective", "thinlens")
@@ -36,18 +39,50 @@ CAMERA_ONLY = ("fov", "focal_length", "fov_axis", "near_clip", "far_clip", "focu
                "principal_point_offset_x", "principal_point_offset_y")  # what the lens camera replaces
 
 
+def _scene_text(xml_path: str | Path) -> str:
+    """The text of the scene file and of the files it includes (as far as their names hold no parameter),
+    each checked to be a regular file within `userfiles`' bound before Mitsuba's parser opens it (a FIFO
+    would stop it for ever): what the user wrote, which Mitsuba's messages may quote (`plugin_error`)."""
+    texts, todo, seen = [], [Path(xml_path)], set()
+    while todo:
+        path = todo.pop()
+        data = read_bytes(path, "scene file")
+        seen.add(path.resolve())
+        texts.append(data.decode("utf-8", errors="replace"))
+        try:
+            root = ET.fromstring(data)
+        except ET.ParseError:  # Mitsuba's parser names the fault
+            continue
+        names = [e.get("filename", "") for e in root.iter("include")]
+        for name in (n for n in names if n and "$" not in n):  # a parameter's value: Mitsuba's to resolve
+            found = next((f / name for f in (path.parent, Path(xml_path).parent) if os.path.lexists(f / name)), None)
+            if found is not None and found.resolve() not in seen:
+                todo.append(found)
+    return "\n".join(texts)
+
+
 def _parse(mi, xml_path: str | Path, params: dict | None):
     """(config, state) of Mitsuba's parser for the scene file with `params` (the scene's folder on the
     file resolver while the caller instantiates)."""
     path = Path(xml_path)
-    if not path.is_file():
-        raise SolasError(f"no such scene file: {path}")
+    _scene_text(path)
     config = mi.parser.ParserConfig(mi.variant())
     config.parallel = False  # our plugins trace with Dr.Jit when built: on the calling thread (`mitsuba.load_scene`)
     try:
         return config, mi.parser.parse_file(config, str(path), **{k: str(v) for k, v in (params or {}).items()})
     except RuntimeError as exc:
-        raise plugin_error(exc, f"cannot read scene {path}") from None
+        raise plugin_error(exc, f"cannot read scene {path}", _scene_text(path)) from None
+
+
+def _check_data(mi, state) -> None:
+    """Every file a node names (`filename`: a mesh, texture, spectrum), as the file resolver finds it, a
+    regular file within `userfiles`' bound before Mitsuba reads it; a missing one Mitsuba names."""
+    resolver = mi.file_resolver()
+    for node in state.nodes:
+        if "filename" in node.props.keys() and isinstance(node.props["filename"], str):
+            path = Path(str(resolver.resolve(node.props["filename"])))
+            if os.path.lexists(path):
+                check(path, "scene data file")
 
 
 def scene_files(xml_path: str | Path, params: dict | None = None) -> list[Path]:
@@ -248,11 +283,12 @@ def _built(mi, xml_path, params, lens, held, lens_options, notes):
     _add_integrator(mi, state)
     if lens is not None:
         _swap_sensor(mi, state, xml_path, lens, held, lens_options, notes)
+    _check_data(mi, state)
     try:
         mi.parser.transform_all(config, state)
         return mi.parser.instantiate(config, state)
     except RuntimeError as exc:
-        raise plugin_error(exc, f"cannot load scene {xml_path}") from None
+        raise plugin_error(exc, f"cannot load scene {xml_path}", _scene_text(xml_path)) from None
 
 
 def camera_meta(scene) -> dict:

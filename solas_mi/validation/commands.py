@@ -15,6 +15,7 @@ from ..errors import SolasError
 from ..optics.commands import add_lens_argument, load_lens
 from ..options import add_image_input_options, parse_wxh, positive_ints
 from ..outputs import output_folder
+from ..userfiles import read_text
 from ..psf.methods import METHODS as PSF_METHODS
 from ..render.mitsuba import VARIANTS
 from .crossval import DEFAULT_CASES, crossval
@@ -92,7 +93,7 @@ def _crossval_fisheye(args: argparse.Namespace, lens) -> int:
     env = load_input(args.image, linear=args.linear).mean(axis=-1)
     spp = 256 if args.spp is None else args.spp
     crossval_fisheye(lens, env, args.output, fov, size, args.pitch_um, grid, spp, args.defocus_mm, log=_say)
-    print(fisheye_markdown(jsonio.loads((Path(args.output) / "crossval.json").read_text())))
+    print(fisheye_markdown(jsonio.loads(read_text(Path(args.output) / "crossval.json", "record"))))
     print(f"wrote {args.output}/table.md, crossval.json, direct.exr, convolved.exr, ideal.exr, error.exr, error.png")
     return 0
 
