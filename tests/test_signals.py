@@ -2,6 +2,7 @@
 (`render.loop.STEPS_PER_PASS`, `render.stock.SAMPLES_PER_PASS`, the render PSF's ray chunks) and a
 signal is answered between them; an interruption that a library reports as its own error (a scene's
 plugin interrupted while Mitsuba loads it) is still an interruption, not an error."""
+import importlib
 import os
 import signal
 import subprocess
@@ -12,6 +13,8 @@ from pathlib import Path
 import pytest
 from strict_json import strict_loads
 
+from solas_mi import cli
+from solas_mi.batch import runner, work
 from solas_mi.cli import main
 from solas_mi.errors import SolasError, plugin_error
 from solas_mi.resources import resource_dir
@@ -106,4 +109,60 @@ def test_render_image_stops_within_a_pass(tmp_path):
     seconds, err = stop(p, signal.SIGINT)
     assert p.returncode == 130 and "no output was left half-written" in err, err
     assert seconds < STOP_S, f"{seconds:.2f} s from the signal to the end"
+    assert list(tmp_path.iterdir()) == []
+
+
+def _module_that_signals(folder: Path, name: str, sig) -> None:
+    """A module whose body sends `sig` to its own process half-way and then goes on (`done` set last)."""
+    (folder / f"{name}.py").write_text("import os, signal\n"
+                                      f"os.kill(os.getpid(), signal.{sig.name})\n"
+                                      "later = [i * i for i in range(1000)]  # the handler runs by here\n"
+                                      "done = True\n")
+
+
+@pytest.mark.parametrize("handler, sig, exception", [
+    (cli._stop, signal.SIGINT, KeyboardInterrupt),
+    (cli._stop, signal.SIGTERM, cli.Terminated),
+    (runner._interrupt, signal.SIGTERM, KeyboardInterrupt),  # a batch's worker process
+])
+def test_a_signal_during_an_import_is_raised_once_the_import_is_whole(tmp_path, monkeypatch, handler, sig, exception):
+    """A signal arriving while a module is imported: the import finishes (the module whole, in
+    `sys.modules`) and the interruption is raised in the frame that imported it, before its next step.
+    Raised inside the import, it left a module half-made; Dr.Jit's extension turned it into an
+    ImportError (exit 1, see the next test)."""
+    name = f"signalling_{handler.__name__.strip('_')}_{sig.name.lower()}"
+    _module_that_signals(tmp_path, name, sig)
+    monkeypatch.syspath_prepend(str(tmp_path))
+    monkeypatch.setattr(work, "STOPPING", False)
+    trace = sys.gettrace()
+    previous = signal.signal(sig, handler)
+    steps = []
+    try:
+        with pytest.raises(exception):
+            importlib.import_module(name)
+            steps.append("after the import")
+    finally:
+        signal.signal(sig, previous)
+        module = sys.modules.pop(name, None)
+    assert module is not None and module.done and steps == []
+    assert sys.gettrace() is trace
+
+
+@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_a_signal_while_drjit_loads_is_an_interruption(tmp_path, sig, code):
+    """The signal delivered exactly while Dr.Jit's extension initialises (its C++ imports drjit.llvm):
+    exit 130 / 143 and nothing written; it was an ImportError, then a NameError in Dr.Jit (exit 1), the
+    race that testers hit by timing (Ctrl-C a few seconds into `psf-grid` on a loaded machine)."""
+    code_text = ("import os, signal, sys\n"
+                 "class SignalOnLookup:\n"
+                 "    def find_spec(self, name, path=None, target=None):\n"
+                 "        if name == 'drjit.llvm':\n"
+                 f"            os.kill(os.getpid(), signal.{sig.name})\n"
+                 "        return None\n"
+                 "sys.meta_path.insert(0, SignalOnLookup())\n"
+                 "from solas_mi.cli import main\n"
+                 "sys.exit(main(['psf-grid', 'solas-doublet', '--grid', '4x4', '--size', '32', '-o', 'g.exr']))\n")
+    p = subprocess.run([sys.executable, "-c", code_text], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert p.returncode == code and "Traceback" not in p.stderr, p.stderr
+    assert "no output was left half-written" in p.stderr
     assert list(tmp_path.iterdir()) == []

@@ -21,6 +21,7 @@ from multiprocessing.connection import wait
 from typing import TYPE_CHECKING, Any, Callable
 
 from ..errors import SolasError
+from ..interrupts import raise_outside_imports
 from .jobs import Job
 from .. import imageio
 from . import work
@@ -60,7 +61,7 @@ def check_dask(dask: str | None) -> None:
 
 def _interrupt(signum, frame) -> None:
     work.STOPPING = True  # an item failing from here on was interrupted (`work.run_job`)
-    raise KeyboardInterrupt()
+    raise_outside_imports(KeyboardInterrupt(), frame)
 
 
 def _serve(conn, grid_path: str | None, settings: dict[str, Any]) -> None:
