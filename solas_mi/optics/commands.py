@@ -131,7 +131,7 @@ def register(sub: Any) -> None:
     add_lens_argument(info)
     info.add_argument("--wavelengths-nm", help="nm, comma-separated (default: the lens file's)")
     info.add_argument("--fields", help="y field angles in degrees, comma-separated")
-    info.add_argument("--json", action="store_true")
+    info.add_argument("--json", action="store_true", help="print machine-readable JSON")
     info.set_defaults(run=run_lens_info)
     convert = lens.add_parser("convert", help="write a lens file in another format (.toml, .zmx, .dat by extension)")
     add_lens_argument(convert)
