@@ -1,6 +1,7 @@
 """`solas-mi batch degrade` and `degrade_batch`: failures reported per item, resuming, interruption,
 local processes against Dask, the PSF-grid cache, argument errors."""
 import os
+import re
 import signal
 import subprocess
 import sys
@@ -234,6 +235,29 @@ def test_temporary_files_of_killed_workers_are_removed(batch_inputs):
     assert sorted(p.name for p in out.iterdir() if p.name.startswith(".")) == [".notes.txt"]
 
 
+def test_dry_run_estimates_the_grid_and_says_whether_it_is_reused(batch_inputs, capsys):
+    """The grid is most of a batch's time: the dry run estimates it (it said only the degrading's) from
+    PSFs of this grid timed now, counting the PSFs to compute: a 4×4 grid of centred nodes has 3
+    distinct |x|, |y| pairs up to a swap ((1, 1), (1, 3), (3, 3) quarter-cells), so 3 × 3 wavelengths of
+    its 48 PSFs are computed; a second dry run after the batch says the cached grid is reused."""
+    batch_inputs.write(1)
+    argv = ["batch", "degrade", str(batch_inputs.images), "--lens", "solas-doublet", "--grid", "4x4", "--size", "32",
+            "-o", str(batch_inputs.root / "out"), "--cache", str(batch_inputs.root / "cache")]
+    assert main([*argv, "--dry-run"]) == 0
+    first, *_, estimate = capsys.readouterr().out.splitlines()
+    assert "(not in the cache: computed once, about " in first and "9 PSFs to compute of its 48" in first, first
+    assert re.search(r"as timed now on \d+ of its PSFs; then cached\)$", first), first
+    grid_s = float(re.search(r"about ([\d.e+-]+) s: ", first)[1])
+    total, of_grid, degrading = map(float, re.match(r"estimate: about ([\d.e+-]+) s \(([\d.e+-]+) s for the grid, "
+                                                    r"([\d.e+-]+) s of degrading\)", estimate).groups())
+    assert of_grid == pytest.approx(grid_s, rel=1e-2) and total == pytest.approx(grid_s + degrading, rel=1e-2)
+    assert main([*argv, "--quiet"]) == 0
+    capsys.readouterr()
+    assert main([*argv, "--dry-run"]) == 0
+    first, *_, estimate = capsys.readouterr().out.splitlines()
+    assert first.endswith("(in the cache: reused, nothing to compute)") and "(0 s for the grid, " in estimate
+
+
 def _planned_grid(capsys, argv) -> str:
     """The grid file `batch degrade --dry-run` plans (its stage 1 line)."""
     assert main([*argv, "--dry-run"]) == 0
@@ -246,7 +270,7 @@ def test_a_fisheye_sensor_layout_is_not_dropped_by_the_batch(batch_inputs, capsy
     batch_inputs.write(1)
     argv = ["batch", "degrade", str(batch_inputs.images), "--lens", "nikkor-fisheye", "--grid", "3x3", "-o",
             str(batch_inputs.root / "out"), "--cache", str(batch_inputs.root / "cache")]
-    plain = _planned_grid(capsys, argv)
+    plain = _planned_grid(capsys, [*argv, "--field-range-deg", "60"])  # ±90°, its field, has no pinhole image
     sensor = _planned_grid(capsys, [*argv, "--layout", "sensor", "--sensor-mm", "19x19"])
     assert sensor != plain
     assert sensor != _planned_grid(capsys, [*argv, "--layout", "sensor"])  # the sensor size counts too
