@@ -42,11 +42,6 @@ def floats(text: str, what: str) -> list[float]:
         raise SolasError(f"{what} {text!r} must be comma-separated numbers") from None
 
 
-def add_lens_argument(p) -> None:
-    """The positional LENS argument of every command that takes a lens."""
-    p.add_argument("lens", help="shipped lens name (solas-doublet, cooke-triplet, ...) or a lens file (.toml, .zmx, .seq, .dat)")
-
-
 def positive_ints(text: str, what: str) -> tuple[int, ...]:
     """Comma-separated positive integers, at least one."""
     try:
@@ -60,11 +55,10 @@ def positive_ints(text: str, what: str) -> tuple[int, ...]:
 
 def add_image_input_options(p, boundaries, variants) -> None:
     """The options of a command that degrades one input image both ways (PSF-grid convolution and
-    direct render) and compares them: LENS and IMAGE, -o DIR, --sensor | --scale, --seeds of the
+    direct render) and compares them, after its LENS (`optics.commands.add_lens_argument`): IMAGE, -o DIR, --sensor | --scale, --seeds of the
     reference render, --fov-deg, --boundary, --linear, --variant. `boundaries` and `variants` are the
     choices (`optics.camera.BOUNDARIES`, `render.mitsuba.VARIANTS`), given by the caller so that this
     module imports no stage."""
-    add_lens_argument(p)
     p.add_argument("image", help="input image, the ideal image spanning ±fov (PNG/JPEG sRGB, EXR linear)")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
     size = p.add_mutually_exclusive_group()

@@ -4,7 +4,7 @@ a pipe, a CI log) a few plain lines, one when each quarter of the work is passed
 about four lines, not one line of hundreds of carriage-return updates, and in a long job one at least
 every `QUIET_S` seconds, written by a thread of its own: also while the job reports nothing (a PSF
 grid reports after each batch of PSFs, which can take minutes; piped, a long grid's first line came
-after 14 minutes).
+after 14 minutes). Both estimate the time left from the rate measured so far.
 
     with Progress("psf-grid", total, "PSF") as bar:
         psf_grid(lens, spec, progress=bar)     # the library's `progress(done, total)` callbacks
@@ -24,6 +24,10 @@ def _is_terminal(stream) -> bool:
         return bool(stream.isatty())
     except (AttributeError, ValueError):  # no isatty, or a closed stream
         return False
+
+
+def _duration(seconds: float) -> str:
+    return f"{seconds:.0f} s" if seconds < 120 else f"{seconds / 60:.0f} min"
 
 
 def _count(value: float) -> str:
@@ -84,12 +88,16 @@ class Progress:
                     return
 
     def line(self) -> None:
-        """The plain line: `desc: done/total unit (percent, seconds)`."""
+        """The plain line: `desc: done/total unit (percent, seconds[, the time left at the rate so far])`."""
         with self._saying:
             self._said_at = now = time.monotonic()
+            seconds = now - self._start
             of = f"/{_count(self.total)}" if self.total else ""
             percent = f"{100.0 * self.done / self.total:.0f} %, " if self.total else ""
-            print(f"{self.desc}: {_count(self.done)}{of} {self.unit} ({percent}{now - self._start:.1f} s)",
+            left = ""
+            if self.total and 0 < self.done < self.total:
+                left = f", about {_duration(seconds * (self.total - self.done) / self.done)} left at this rate"
+            print(f"{self.desc}: {_count(self.done)}{of} {self.unit} ({percent}{seconds:.1f} s{left})",
                   file=self.stream, flush=True)
 
     def close(self) -> None:

@@ -178,11 +178,23 @@ def estimate(p: BatchPlan, workers: int) -> dict[str, float]:
         rows, cols = p.spec.grid
         grid_bytes = 4 * rows * cols * p.spec.size ** 2 * len(p.spec.wavelengths_nm or p.lens.wavelengths_nm) * len(
             p.spec.distances_m or [0])
-    # each worker: its largest image's peak (which holds a grid); the parent holds one grid more
-    per_worker = max((peak_bytes(path, r, c, ch, grid_bytes) for path, (r, c, ch) in sizes), default=0.0)
+    # each worker: its largest image's peak (which holds a grid; or its camera's); the parent holds one grid more
+    per_worker = max((max(peak_bytes(path, r, c, ch, grid_bytes), camera_bytes(p.jobs[i], r, c))
+                      for i, (path, (r, c, ch)) in zip(p.todo, sizes)), default=0.0)
     return {"seconds": SECONDS_PER_VALUE * sum(values) / min(workers, max(1, len(values))),
             "peak_bytes": min(workers, max(1, len(values))) * (per_worker + WORKER_BYTES["degrade"]) + grid_bytes,
             "grid_bytes": grid_bytes}
+
+
+def camera_bytes(job: Job, rows: int, cols: int) -> float:
+    """The peak memory of an item's camera stage (`sensor.commands.frame_bytes`, its RGB output read back;
+    with the image processor when it writes a developed frame); 0 without a camera."""
+    if not job.extras:
+        return 0.0
+    from ..isp.commands import DEVELOP_BYTES_PER_PIXEL
+    from ..sensor.commands import frame_bytes
+
+    return frame_bytes(rows, cols, 3, DEVELOP_BYTES_PER_PIXEL if len(job.extras) > 1 else 0.0)
 
 
 def scaled_lens(lens, frame, pixel_um: float | None, spec=None) -> tuple[Any, dict | None]:

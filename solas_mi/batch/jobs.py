@@ -57,6 +57,7 @@ class Job:
     input_hash: str | None = None  # the input's SHA-256 (16 hex digits; a scene's with the files it reads) when finished
     params: dict[str, Any] = field(default_factory=dict)
     extras: list[str] = field(default_factory=list)  # more outputs: the camera's RAW and developed frame
+    warnings: list[str] = field(default_factory=list)  # what the item's run warns of (a saturated RAW)
 
     def paths(self) -> tuple[str, ...]:
         """Every output of the item."""
@@ -239,6 +240,7 @@ class Manifest:
                 job.outputs, job.input_hash = before.get("outputs") or {}, before.get("input_hash")
                 if isinstance(job.outputs, dict) and job.finished():
                     job.status, job.seconds, job.seed = "skipped", before.get("seconds"), before.get("seed")
+                    job.warnings = list(before.get("warnings") or [])
                     skipped += 1
                 else:
                     job.outputs, job.input_hash = {}, None

@@ -19,7 +19,6 @@ if TYPE_CHECKING:
     from .nssfr import NsSfrReport
 
 CHANNELS = {"R": 0, "G": 1, "B": 2}
-TARGET_SHAPES = {"edge": "one slanted edge", "square": "a slanted dark square on the bright level, four edges"}
 
 
 def _fmt(value: float | None, digits: int = 4) -> str:
@@ -226,8 +225,9 @@ def register(subparsers: Any) -> None:
     p.add_argument("--angle-deg", type=float, default=5.0, help="edge tilt from vertical, degrees")
     p.add_argument("--sigma-px", type=float, default=1.0, help="Gaussian PSF sigma, px")
     p.add_argument("--size", default="128x128", help="WxH in px")
-    p.add_argument("--shape", choices=tuple(TARGET_SHAPES), default="edge",
-                   help="; ".join(f"{name}: {what}" for name, what in TARGET_SHAPES.items()))
+    p.add_argument("--shape", choices=("edge", "square"), default="edge",
+                   help="one slanted edge (--low left or below it, --high beyond), or a --low square at the centre, its side "
+                        "half the image's shorter side, turned by --angle-deg, on --high (four edges)")
     p.add_argument("--low", type=float, default=0.2, help="dark linear level")
     p.add_argument("--high", type=float, default=0.8, help="bright linear level")
     p.add_argument("--noise", type=float, default=0.0, help="Gaussian noise sd, fraction of the step")

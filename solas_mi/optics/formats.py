@@ -59,8 +59,28 @@ def floats(tokens: list[str], where: str) -> list[float]:
 
 
 def listed(formats) -> str:
-    """The extensions of `formats` that FORMATS lists, in its order, comma-separated."""
-    return ", ".join(e for e in FORMATS if e in formats)
+    """The extensions `formats`, comma-separated: in FORMATS's order, any it does not list after them."""
+    return ", ".join(sorted(formats, key=lambda e: (FORMATS.index(e) if e in FORMATS else len(FORMATS), e)))
+
+
+def readable_formats() -> set[str]:
+    """The lens file extensions `Lens.load` reads: our TOML and each registered reader's."""
+    return READERS.keys() | {".toml"}
+
+
+def readable() -> str:
+    """`readable_formats()`, comma-separated: what every message and help text that lists lens files says."""
+    return listed(readable_formats())
+
+
+def writable() -> str:
+    """The lens file extensions `Lens.save` writes (each registered writer's), comma-separated."""
+    return listed(WRITERS)
+
+
+def lens_help() -> str:
+    """What a lens argument or option takes, for help texts."""
+    return f"a shipped lens name (e.g. solas-doublet; `solas-mi lens list`) or a lens file ({readable()})"
 
 
 def _shipped_dir() -> Path:
@@ -77,17 +97,17 @@ def lens_path(name_or_path) -> Path:
     lens extension: a name holding a path separator or an extension is a path."""
     if not isinstance(name_or_path, (str, os.PathLike)):
         raise SolasError(f"lens {name_or_path!r} must be a shipped lens name ({', '.join(shipped_lenses())}) "
-                         f"or a path to a lens file ({listed(READERS.keys() | {'.toml'})})")
+                         f"or a path to a lens file ({readable()})")
     given = os.fspath(name_or_path)
     path = Path(given)
     if not path.suffix and not any(sep and sep in given for sep in (os.sep, os.altsep, "/")):
         path = _shipped_dir() / (given.replace("-", "_") + ".toml")
         if not path.is_file():
             raise SolasError(f"unknown lens {given!r}; shipped lenses: {', '.join(shipped_lenses())}, or a path "
-                             f"to a lens file ({listed(READERS.keys() | {'.toml'})})")
-    if path.suffix.lower() not in READERS.keys() | {".toml"}:
+                             f"to a lens file ({readable()})")
+    if path.suffix.lower() not in readable_formats():
         what = f"unknown extension {path.suffix!r}" if path.suffix else "no lens extension"
-        raise SolasError(f"lens file {given!r} has {what}; allowed: {listed(READERS.keys() | {'.toml'})}")
+        raise SolasError(f"lens file {given!r} has {what}; allowed: {readable()}")
     if path.is_dir():
         raise SolasError(f"lens file {given!r} is a folder, not a lens file")
     if not path.is_file():

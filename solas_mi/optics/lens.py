@@ -25,7 +25,7 @@ from ..imageio import write_text
 from . import forbes, ideal as ideal_mod, overlap
 from . import glass as glass_mod
 from .sag import sag
-from .formats import READERS, WRITERS, decode_text, lens_path, listed, shipped_lenses  # noqa: F401 (shipped_lenses: re-exported)
+from .formats import READERS, WRITERS, decode_text, lens_path, shipped_lenses, writable  # noqa: F401 (shipped_lenses: re-exported)
 from .fields import FieldType, field_type_for
 
 _VIRTUAL = ": the image plane lies before the last surface, a virtual image (a diverging lens's focus) that no film records"
@@ -200,7 +200,7 @@ class Lens:
     # ------------------------------------------------------------------ loading
     @classmethod
     def load(cls, name_or_path: str | Path) -> "Lens":
-        """A lens by shipped name (e.g. "solas-doublet") or by path to a lens file (.toml, .zmx, .seq, .dat):
+        """A lens by shipped name (e.g. "solas-doublet") or by path to a lens file (`formats.readable()`):
         a name holding a path separator or an extension is a path."""
         path = lens_path(name_or_path)
         if path.suffix.lower() in READERS:
@@ -223,12 +223,12 @@ class Lens:
 
     def save(self, path: str | Path) -> Path:
         """Write the lens to `path` (written whole or not at all) in the format its extension names:
-        .toml (ours), .zmx (Zemax) or .dat (pbrt lens table)."""
+        one of `formats.writable()`."""
         path = Path(path)
         writer = WRITERS.get(path.suffix.lower())
         if writer is None:
             raise SolasError(f"lens file {str(path)!r}: unknown extension {path.suffix!r}; "
-                             f"allowed: {listed(WRITERS)}")
+                             f"allowed: {writable()}")
         write_text(path, writer(self))
         return path
 

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from ..errors import SolasError
+from ..outputs import add_png_option
 from .spec import MAX_SPP, add_spec_flags, spec_from_args
 
 DEFAULT_IMAGE = "images/rocket.png"  # under the shipped scenes directory
@@ -21,7 +22,8 @@ def _check_spp(spp) -> None:
 
 
 def check_render(width: int, height: int, spp: int, force: bool) -> None:
-    """Refuse an absurd spp or a render that cannot fit in memory; announce a long one on stderr."""
+    """Refuse an absurd spp or a render that cannot fit in memory; announce a long one on stderr (how long
+    it takes depends on what else the machine runs: its progress tells the time left at the rate measured)."""
     import os
 
     from ..budget import check_memory
@@ -31,10 +33,9 @@ def check_render(width: int, height: int, spp: int, force: bool) -> None:
     pixels = width * height
     check_memory(f"render {width}x{height}", max(pixels, SAMPLES_PER_PASS) * BYTES_PER_SAMPLE + 48 * pixels, force,
                  "a smaller sensor")
-    seconds = pixels * spp / (SAMPLES_PER_SECOND_PER_CORE * (os.cpu_count() or 1))
-    if seconds > 60:
-        print(f"render {width}x{height} at {spp} spp: {pixels * spp:.3g} samples, about {seconds / 60:.0f} min",
-              file=sys.stderr, flush=True)
+    if pixels * spp > 60 * SAMPLES_PER_SECOND_PER_CORE * (os.cpu_count() or 1):  # a minute at least, idle
+        print(f"render {width}x{height} at {spp} spp: {pixels * spp:.3g} samples, a long render: its progress "
+              "tells the time left at the rate it measures", file=sys.stderr, flush=True)
 
 
 def _progress(spp: int):
@@ -193,12 +194,15 @@ def _render_image(args) -> int:
 def _add_output_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
     p.add_argument("-o", "--output", required=True, help="output OpenEXR file (linear)")
-    p.add_argument("--png", help="sRGB PNG for viewing (default: beside the EXR)")
+    add_png_option(p)
 
 
 def register(sub) -> None:
+    from ..optics.commands import add_lens_argument
+    from ..optics.formats import lens_help
+
     scene = sub.add_parser("scene", help="write a Mitsuba scene (XML + cap meshes) for a lens")
-    scene.add_argument("lens", help="shipped lens name (solas-doublet) or a .toml lens file")
+    add_lens_argument(scene)
     scene.add_argument("-o", "--output", required=True, help="output directory")
     scene.add_argument("--image", help="input image (copied beside the scene; default: the bundled photograph)")
     add_spec_flags(scene, SCENE_SETTINGS)
@@ -212,7 +216,7 @@ def register(sub) -> None:
     render.add_argument("scene", help="scene XML")
     render.add_argument("--set", action="append", metavar="NAME=VALUE",
                         help="override a <default> of the scene (e.g. --set image=other.png); repeatable")
-    render.add_argument("--lens", help="replace the scene's perspective camera by this lens (shipped name or .toml)")
+    render.add_argument("--lens", help=f"replace the scene's perspective camera by this lens: {lens_help()}")
     render.add_argument("--pitch-um", type=float, help="with --lens: pixel pitch in µm (default: the lens's field "
                                                        "matches the perspective camera's fov)")
     render.add_argument("--focus-distance", help="with --lens: focus distance in world units, or auto (the depth "
@@ -231,7 +235,7 @@ def register(sub) -> None:
     render.set_defaults(run=_render)
 
     image = sub.add_parser("render-image", help="render an input image through the lens geometry")
-    image.add_argument("lens", help="shipped lens name (solas-doublet) or a .toml lens file")
+    add_lens_argument(image)
     image.add_argument("image", help="input image (PNG/JPEG: sRGB; EXR: linear)")
     add_spec_flags(image, IMAGE_SETTINGS)
     _add_output_options(image)

@@ -256,7 +256,16 @@ def _built(mi, xml_path, params, lens, held, lens_options, notes):
 
 
 def camera_meta(scene) -> dict:
-    """The lens camera's pitch (µm), focus distance and world unit (mm) for a render's metadata."""
+    """The lens camera's pitch (µm), focus distance, world unit (mm) and f-number (`unit_f_number`) for a
+    render's metadata."""
     sensor = scene.sensors()[0]
     return {"pitch_um": sensor.pitch_um, "focus_distance": sensor.focus_distance,
-            "world_unit_mm": sensor.world_unit_mm}
+            "world_unit_mm": sensor.world_unit_mm, "f_number": unit_f_number(sensor)}
+
+
+def unit_f_number(sensor) -> float:
+    """The f-number N of a lens sensor's unit: a render's pixel value v is the image irradiance
+    E = π v / (4 N²) for radiance in the scene's units (the sensor's `norm` is 1 / its unit in sr: the
+    ideal camera's π r_EP² / f'² for `lens_sensor`, a lossless lens's on-axis irradiance per unit radiance
+    for `lens_camera`). What `solas-mi camera` reads a render through."""
+    return math.sqrt(math.pi * sensor.norm / 4.0)

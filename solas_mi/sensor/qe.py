@@ -84,6 +84,16 @@ class QECurve:
             raise SolasError(f"qe_curve has no column for filter(s) {', '.join(missing)} of the colour filter array "
                              f"(columns: {', '.join(self.filters)})")
 
+    def check_response(self, cfa_filters) -> None:
+        """SolasError unless every filter in `cfa_filters` has some quantum efficiency inside the channels'
+        bands (a filter blind there reads black whatever the light, and no colour matrix inverts it)."""
+        qe = self.effective_qe(cfa_filters)
+        blind = [f for f in sorted(set(cfa_filters), key=FILTERS.index) if not qe[FILTERS.index(f)].any()]
+        if blind:
+            raise SolasError(f"qe_curve: filter(s) {', '.join(blind)} of the colour filter array have zero quantum "
+                             f"efficiency over {SRGB_RANGE_NM[0]:g}–{SRGB_RANGE_NM[1]:g} nm (the bands of the image's "
+                             "R, G, B); each filter must respond somewhere in them")
+
     def effective_qe(self, cfa_filters) -> np.ndarray:
         """Q[f, c] (4 × 3, rows in `cfa.FILTERS` order): the photon-weighted mean QE of filter f over the
         band of channel c (module docstring). Every filter in `cfa_filters` needs a column."""

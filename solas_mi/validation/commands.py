@@ -1,7 +1,7 @@
 """`solas-mi crossval`, `solas-mi report error-vs-time` and `solas-mi check-stability`: the validation
 package's command line.
 The work is done by `crossval.crossval` and `error_vs_time.error_vs_time`; the options both take
-come from `options.add_image_input_options`."""
+come from `options.add_image_input_options`, after the LENS of `optics.commands.add_lens_argument`."""
 from __future__ import annotations
 
 import argparse
@@ -12,8 +12,8 @@ from typing import Any
 from .. import jsonio
 from ..convolution.kernels import BOUNDARIES
 from ..errors import SolasError
-from ..optics.commands import load_lens
-from ..options import add_image_input_options, add_lens_argument, parse_wxh, positive_ints
+from ..optics.commands import add_lens_argument, load_lens
+from ..options import add_image_input_options, parse_wxh, positive_ints
 from ..outputs import output_folder
 from ..psf.methods import METHODS as PSF_METHODS
 from ..render.mitsuba import VARIANTS
@@ -137,6 +137,12 @@ def run_check_stability(args: argparse.Namespace) -> int:
     return 1 if failed else 0
 
 
+def _add_image_inputs(p) -> None:
+    """LENS, then the options of a command that degrades an image both ways (`options.add_image_input_options`)."""
+    add_lens_argument(p)
+    add_image_input_options(p, BOUNDARIES, VARIANTS)
+
+
 def register(sub: Any) -> None:
     """Add the `crossval`, `report` (`report error-vs-time`) and `check-stability` subcommands."""
     p = sub.add_parser(
@@ -146,7 +152,7 @@ def register(sub: Any) -> None:
                     "geometric/Fraunhofer PSFs × grid), in the same units; write the images, per-pixel error "
                     "maps and a table of relative RMSE (whole image and centre/middle/edge annuli), PSNR, SSIM "
                     "and run times (PSF grid and convolution apart).")
-    add_image_input_options(p, BOUNDARIES, VARIANTS)
+    _add_image_inputs(p)
     p.add_argument("--spp", type=int, help="reference samples per pixel, all seeds together (default 1024; "
                                             "1280x960 takes ~13 min on 2 cores); a fisheye: per seed (default 256)")
     fisheye = p.add_argument_group(
@@ -174,7 +180,7 @@ def register(sub: Any) -> None:
         description="Relative RMSE against a converged direct render (noise removed) and run time of the paper's "
                     "patch convolution, the interp convolution on grids of increasing size and the direct render "
                     "at increasing spp; writes table.md, table.csv, error_vs_time.png (log x) and report.json.")
-    add_image_input_options(p, BOUNDARIES, VARIANTS)
+    _add_image_inputs(p)
     p.add_argument("--ref-spp", type=int, default=1536, help="reference spp, all seeds together (default 1536)")
     p.add_argument("--spp", help="render spp to time, comma-separated (default "
                                  + ",".join(map(str, DEFAULT_RENDER_SPP)) + ")")

@@ -293,7 +293,7 @@ FLAG_VARIANTS = {
     "--auto-window": ([], None),
     "--distances-m": ([], "inf,10"),
 }
-NOT_GRID_OPTIONS = {"lens", "output", "png", "force", "help"}
+NOT_GRID_OPTIONS = {"lens", "output", "mosaic", "force", "help"}
 
 
 def test_every_psf_grid_flag_reaches_the_cache_key_and_the_grid(batch_inputs, capsys, doublet):
@@ -363,15 +363,23 @@ def test_a_folder_tree_keeps_its_structure_and_half_floats_halve_the_output(batc
 
 
 def test_a_batch_from_a_lens_defaults_to_the_accuracy_tables_grid():
+    """The grid a batch computes without --grid is the accuracy tables' interp grid, and its help says
+    so: the default shown is the one the batch's spec takes."""
     import argparse
 
-    from solas_mi.batch.commands import BATCH_GRID, _grid_spec
+    from solas_mi.batch.commands import _grid_spec
     from solas_mi.cli import build_parser
 
-    sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
-    args = sub.choices["batch"].parse_args(["degrade", "x", "--lens", "solas-doublet", "-o", "o"])
-    assert _grid_spec(args).grid == BATCH_GRID == (32, 32)
-    args = sub.choices["batch"].parse_args(["degrade", "x", "--lens", "solas-doublet", "-o", "o", "--grid", "8x6"])
+    def subparsers(parser):
+        return next(a for a in parser._actions if isinstance(a, argparse._SubParsersAction)).choices
+
+    batch = subparsers(build_parser())["batch"]
+    args = batch.parse_args(["degrade", "x", "--lens", "solas-doublet", "-o", "o"])
+    rows, cols = _grid_spec(args).grid
+    assert (rows, cols) == (32, 32)
+    shown = " ".join(subparsers(batch)["degrade"].format_help().split())
+    assert f"--grid GRID COLSxROWS field nodes (default: {cols}x{rows})" in shown
+    args = batch.parse_args(["degrade", "x", "--lens", "solas-doublet", "-o", "o", "--grid", "8x6"])
     assert _grid_spec(args).grid == (6, 8)
 
 

@@ -105,11 +105,3 @@ def test_a_negative_noise_seed_is_one_line(tmp_path, capsys):
     assert "noise seed -1 must be a whole number ≥ 0" in err and err.count("\n") == 1, err
     assert not out.exists()
 
-
-def test_the_target_shapes_are_in_the_help():
-    from solas_mi.cli import build_parser, iter_commands
-    from solas_mi.metrics.commands import TARGET_SHAPES
-
-    (parser,) = [p for path, p in iter_commands(build_parser()) if path == ("sfr-target",)]
-    text = " ".join(parser.format_help().split())
-    assert all(f"{name}: {what}" in text for name, what in TARGET_SHAPES.items()), text

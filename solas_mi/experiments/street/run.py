@@ -41,6 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import SolasError
+from ...outputs import safe_name
 from ...resources import resource_dir
 from .framings import framing
 from .depth import LAYERS, check_layers, depth_rows
@@ -309,7 +310,7 @@ def _write_images(st: _Steps, images: dict[str, np.ndarray], depth: np.ndarray) 
     from ...imageio import image_channels, write_exr, write_png
 
     for name, img in images.items():
-        stem = name.replace(" ", "_")
+        stem = safe_name(name)
         write_exr(st.out / f"{stem}.exr", image_channels(img), {"lens": st.lens.name, "image": name,
                                                                 "variant": st.variant})
         write_png(st.out / f"{stem}.png", np.clip(img / 0.9, 0, 1))
