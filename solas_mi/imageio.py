@@ -258,6 +258,17 @@ def _plain_imageio() -> Iterator[None]:
         Image.MAX_IMAGE_PIXELS = limit
 
 
+def exr_channel_names(path: str | os.PathLike) -> list[str]:
+    """The channel names of an EXR file, read from its header only ([] where it cannot be read)."""
+    import OpenEXR
+
+    try:
+        with OpenEXR.File(str(path), header_only=True) as f:
+            return [c.name for c in f.header()["channels"]]
+    except Exception:  # unreadable: the reader names the problem
+        return []
+
+
 def image_size(path: str | os.PathLike) -> tuple[int, int, int]:
     """(rows, columns, channels) of an image file, read from its header only (0, 0, 0 where the
     header cannot be read: `read_image` will then say why)."""

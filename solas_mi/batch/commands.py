@@ -41,16 +41,28 @@ def _dry_run(args: argparse.Namespace) -> int:
     need = estimate(p, workers if args.dask is None else 1)
     where = f"Dask at {args.dask}" if args.dask else f"{workers} local worker process(es)"
     skipped = len(p.jobs) - len(p.todo)
-    then = "; computed once, then cached" if p.grid_source == "to compute" else ""
     scaled = f"; lens scaled x{scale['factor']:.4g} to EFL {scale['efl_mm'][1]:.4g} mm" if scale else ""
-    print(f"1. PSF grid: {p.grid_path} ({p.grid_source}{then}{scaled})")
+    grid_s, grid = _grid_plan(p)
+    print(f"1. PSF grid: {p.grid_path} ({grid}{scaled})")
     print(f"2. degrade {len(p.todo)} of {len(p.jobs)} images ({skipped} already finished, skipped) "
           f"with {args.method}, boundary {args.boundary}, on {where}")
     files = "16-bit PNG + JSON" if args.format == "png16" else "EXR + PNG"
     print(f"3. write {files}{_camera_files(p.jobs)} per image and {p.manifest.path}")
-    print(f"estimate: about {need['seconds']:.1f} s of degrading (after the grid), peak memory about "
-          f"{size_text(need['peak_bytes'])} (grid {size_text(need['grid_bytes'])} per worker)")
+    print(f"estimate: about {grid_s + need['seconds']:.3g} s ({grid_s:.3g} s for the grid, {need['seconds']:.3g} s of "
+          f"degrading), peak memory about {size_text(need['peak_bytes'])} (grid {size_text(need['grid_bytes'])} per "
+          "worker)")
     return 0
+
+
+def _grid_plan(p) -> tuple[float, str]:
+    """Seconds the batch's grid will take and what is done with it: reused (a file given, or a cache
+    entry of this lens and grid), or computed, its time measured on a few of its PSFs (`psf.cost`)."""
+    if p.grid_source != "to compute":
+        return 0.0, {"given": "given", "cache hit": "in the cache: reused, nothing to compute"}[p.grid_source]
+    from ..psf.cost import grid_cost
+
+    cost = grid_cost(p.lens, p.spec)
+    return cost.seconds, f"not in the cache: computed once, {cost.text()}; then cached"
 
 
 def run_batch_degrade(args: argparse.Namespace) -> int:

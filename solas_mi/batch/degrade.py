@@ -18,7 +18,7 @@ from typing import Any, Iterable
 
 from ..errors import SolasError
 from .cache import GridCache, file_hash
-from .jobs import MANIFEST, Job, Manifest, add_outputs, expand_inputs, plan
+from .jobs import MANIFEST, Job, Manifest, add_outputs, expand_inputs, plan, say_skipped
 from .runner import check_dask
 
 # seconds per image value (H·W·C) on one core of the 2-core benchmark machine, reading, degrading
@@ -99,9 +99,11 @@ def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLik
         raise SolasError("give either a PSF grid file or a lens to compute one from, not both and not neither")
     out_dir = output_folder(output_dir).resolve()
     roots: dict[Path, Path] = {}  # folders are read as trees, their structure kept in the output folder
-    files = expand_inputs(inputs, roots=roots)
+    labels: list[tuple[Path, str]] = []
+    files = expand_inputs(inputs, roots=roots, skipped=labels)
     depths = {f: depth_file(f, depth_pattern) for f in files} if depth_pattern is not None else {}
     images = [f for f in files if f not in set(depths.values())]  # depth maps are no inputs
+    say_skipped([(f, why) for f, why in labels if f not in set(depths.values())])  # those not the frames' depth maps
     missing = [str(depths[f]) for f in images if depths and not depths[f].is_file()]
     if missing:
         raise SolasError(f"{len(missing)} image(s) have no depth map by the pattern {depth_pattern!r}, e.g. {missing[0]}")

@@ -19,7 +19,7 @@ from ..userfiles import read_text
 from ..psf.methods import METHODS as PSF_METHODS
 from ..render.mitsuba import VARIANTS
 from .crossval import DEFAULT_CASES, crossval
-from .engines import parse_blocks
+from .engines import Case, parse_blocks
 from .error_vs_time import DEFAULT_INTERP_GRIDS, DEFAULT_PATCH_GRIDS, DEFAULT_RENDER_SPP, error_vs_time
 from .inputs import load_input
 from .tables import crossval_markdown, error_vs_time_markdown
@@ -30,6 +30,18 @@ FISHEYE_MARGIN_DEG = 5.0  # the environment reaches this far beyond a fisheye's 
 def block_grids(text: str, what: str) -> tuple[tuple[int, int], ...]:
     """Comma-separated COLSxROWS → ((columns, rows), ...)."""
     return tuple(parse_blocks(item, what) for item in text.split(",") if item.strip())
+
+
+def case_list(text: str | None) -> tuple[str, ...]:
+    """The cases `--cases` selects (None: DEFAULT_CASES), each checked (`engines.Case.parse`); SolasError
+    for a selection of no case or an empty entry (an empty selection ran every case)."""
+    if text is None:
+        return DEFAULT_CASES
+    cases = tuple(item.strip() for item in text.split(","))
+    if not all(cases):
+        raise SolasError(f"--cases {text!r} {'selects no case' if not any(cases) else 'has an empty entry'}; give "
+                         f"comma-separated METHOD:PSF:COLSxROWS (default: {','.join(DEFAULT_CASES)})")
+    return tuple(Case.parse(case).name for case in cases)
 
 
 def _grids_text(grids) -> str:
@@ -57,8 +69,8 @@ def run_crossval(args: argparse.Namespace) -> int:
     if given:
         raise SolasError(f"{', '.join(given)}: only for a lens of polar fields (a fisheye); {lens.name} has tangent "
                          "fields: give its sensor with --sensor or --scale and its grids with --cases")
+    cases = case_list(args.cases)
     lens, image = _lens_and_image(args)
-    cases = tuple(c for c in args.cases.split(",") if c.strip()) if args.cases else DEFAULT_CASES
     res = crossval(lens, image, args.output, 1024 if args.spp is None else args.spp, args.seeds, cases, args.fov_deg, args.boundary,
                    args.variant, reuse=args.reuse_reference, log=_say)
     print(crossval_markdown(res.rows))
