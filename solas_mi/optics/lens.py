@@ -25,7 +25,7 @@ from ..imageio import write_text
 from . import forbes, ideal as ideal_mod, overlap
 from . import glass as glass_mod
 from .sag import sag
-from .formats import READERS, WRITERS, decode_text, lens_path, listed, shipped_lenses  # noqa: F401 (shipped_lenses: re-exported)
+from .formats import READ_CHECKS, READERS, WRITERS, decode_text, lens_path, listed, shipped_lenses  # noqa: F401 (shipped_lenses: re-exported)
 from .fields import FieldType, field_type_for
 
 _VIRTUAL = ": the image plane lies before the last surface, a virtual image (a diverging lens's focus) that no film records"
@@ -209,7 +209,10 @@ class Lens:
             except OSError as exc:
                 raise SolasError(f"lens file {path}: cannot be read: {exc}") from None
             text = decode_text(data)
-            return cls.from_dict(READERS[path.suffix.lower()](text, str(path)), source=str(path))
+            lens = cls.from_dict(READERS[path.suffix.lower()](text, str(path)), source=str(path))
+            if path.suffix.lower() in READ_CHECKS:
+                READ_CHECKS[path.suffix.lower()](lens)
+            return lens
         try:
             with open(path, "rb") as f:
                 spec = tomllib.load(f)

@@ -17,6 +17,10 @@ from the sensor's properties. Lengths in the scene are world units; the lens cam
 `world_unit_mm` (default 1000: metres). The focus: the user's, else a `thinlens`'s `focus_distance`,
 else the lens file's; "auto" focuses on the scene's depth at the image centre (one ray along the axis).
 A `thinlens`'s aperture is reported, not used: the real lens has its own stop.
+
+Meshes are not merged (Mitsuba's parser by default joins all meshes of one material into one unnamed
+mesh, `merge_meshes`): each shape keeps its id, which the instance labels name. Measured on 3000
+rectangles of one material, 256×256 at 16 spp: the render is no slower unmerged (2.2 s against 2.5 s).
 """
 from __future__ import annotations
 
@@ -44,6 +48,7 @@ def _parse(mi, xml_path: str | Path, params: dict | None):
         raise SolasError(f"no such scene file: {path}")
     config = mi.parser.ParserConfig(mi.variant())
     config.parallel = False  # our plugins trace with Dr.Jit when built: on the calling thread (`mitsuba.load_scene`)
+    config.merge_meshes = False  # Mitsuba's default joins meshes of one material into one unnamed mesh: labels name each
     try:
         return config, mi.parser.parse_file(config, str(path), **{k: str(v) for k, v in (params or {}).items()})
     except RuntimeError as exc:
