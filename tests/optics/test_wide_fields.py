@@ -60,7 +60,7 @@ def test_polar_continuation_follows_the_pupil_to_where_light_stops(fisheye):
     assert np.all(np.diff(h) > 0) and 14.4 < h[0] and h[-1] < 15.0
     pf = P.pupil_function(fisheye, [[0.0, 98.0], [0.0, 105.0]], [LINE_D, LINE_D], 32)
     assert np.all(pf.transmission > 0)
-    with pytest.raises(SolasError, match="no real ray .* reaches the stop .* does not image"):
+    with pytest.raises(SolasError, match="no real ray .* passes the stop .* does not image"):
         _heights(fisheye, np.array([110.0]))
     assert P.nearest_passing(fisheye, np.array([0.0, 110.0]), LINE_D) is None
 
