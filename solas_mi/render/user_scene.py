@@ -102,9 +102,14 @@ def scene_film_size(xml_path: str | Path, params: dict | None = None) -> tuple[i
 
 
 def _size(film) -> tuple[int, int]:
+    """(width, height) pixels of a film node (Mitsuba's default where it names none); SolasError below 1x1."""
     if film is None:
         return FILM_DEFAULT
-    return (int(film.props.get("width", FILM_DEFAULT[0])), int(film.props.get("height", FILM_DEFAULT[1])))
+    size = (int(film.props.get("width", FILM_DEFAULT[0])), int(film.props.get("height", FILM_DEFAULT[1])))
+    if min(size) < 1:
+        raise SolasError(f"the scene's film is {size[0]}x{size[1]} px (after --set); its width and height must be at "
+                         "least 1 pixel")
+    return size
 
 
 def field_half_angle(mi, sensor, width: int, height: int) -> tuple[float, str]:
@@ -250,6 +255,8 @@ def load(xml_path: str | Path, variant: str | None = None, lens=None, params: di
 def _built(mi, xml_path, params, lens, held, lens_options, notes):
     """Parsed, changed (integrator, sensor), transformed and built as `mi.load_file` does."""
     config, state = _parse(mi, xml_path, params)
+    for sensor in (n for n in state.nodes if n.type == mi.ObjectType.Sensor):
+        _size(_film(mi, state, sensor))  # a film without pixels, named before Mitsuba divides by its size
     _add_integrator(mi, state)
     if lens is not None:
         _swap_sensor(mi, state, xml_path, lens, held, lens_options, notes)
