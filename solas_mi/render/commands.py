@@ -20,16 +20,20 @@ def _check_spp(spp) -> None:
         raise SolasError(f"samples per pixel {spp!r} must be an integer from 1 to {MAX_SPP}")
 
 
-def check_render(width: int, height: int, spp: int, force: bool) -> None:
-    """Refuse an absurd spp or a render that cannot fit in memory; announce a long one on stderr."""
+def check_render(width: int, height: int, spp: int, force: bool, labels=()) -> None:
+    """Refuse an absurd spp or a render that cannot fit in memory (its label layers, `labels`, counted);
+    announce a long one on stderr."""
     import os
 
     from ..budget import check_memory
+    from .labels import memory_bytes, parse_labels
     from .stock import SAMPLES_PER_PASS  # the larger pass of the two engines (the loop's is at most half of it)
 
     _check_spp(spp)
     pixels = width * height
-    check_memory(f"render {width}x{height}", max(pixels, SAMPLES_PER_PASS) * BYTES_PER_SAMPLE + 48 * pixels, force,
+    kinds = parse_labels(labels)
+    need = max(pixels, SAMPLES_PER_PASS) * BYTES_PER_SAMPLE + 48 * pixels + memory_bytes(pixels, kinds)
+    check_memory(f"render {width}x{height}" + (f" with labels {','.join(kinds)}" if kinds else ""), need, force,
                  "a smaller sensor")
     seconds = pixels * spp / (SAMPLES_PER_SECOND_PER_CORE * (os.cpu_count() or 1))
     if seconds > 60:
@@ -130,7 +134,7 @@ def _render(args) -> int:
         print(f"render: {note}", file=sys.stderr)
     spp = args.spp if args.spp is not None else int(scene.sensors()[0].sampler().sample_count())
     width, height = (int(v) for v in scene.sensors()[0].film().crop_size())
-    check_render(width, height, spp, args.force)
+    check_render(width, height, spp, args.force, run.labels)
     loop = args.integrator == "solas" or (args.integrator == "auto" and lens is None and _image_scene(scene))
     if loop and run.labels:
         raise SolasError("--labels are traced through a lens camera: give --lens, or a scene with a lens_camera")

@@ -385,3 +385,34 @@ def test_meshes_of_one_material_keep_their_own_ids(mi, tmp_path):
     np.testing.assert_array_equal(diffuse["instance.id"], glowing["instance.id"])
     for name in shapes:
         assert (diffuse["instance.id"] == instance_id(name)).sum() > 20
+
+
+def test_the_render_memory_estimate_counts_the_label_layers(mi, tmp_path, monkeypatch, capsys):
+    """`render --labels` said 1.5 GB and peaked at 3.0 GB: the estimate left the labels out. It now adds
+    the label rays' trace (measured ~100 B a pixel) and each channel the layers hold: it grows with the
+    layers as their arrays do (at least their own bytes, more for each channel), and a render that fits
+    without labels is refused with them where the memory does not hold both."""
+    from solas_mi import budget
+    from solas_mi.cli import main
+    from solas_mi.render.commands import check_render
+    from solas_mi.render.labels import memory_bytes
+
+    w, h = 40, 30
+    scene = load(scene_file(tmp_path / "wall.xml", [patch("wall", -9, 9, -9, 9, 8.0)], w, h), "llvm_ad_spectral",
+                 Lens.load("wide-angle-22mm"), pitch_um=700.0, response=MONO)
+    estimates, arrays = [], []
+    for kinds in ("", "depth", "depth,instance", "depth,normal,instance"):
+        layers = render_labels(scene, kinds)[0] if kinds else {}
+        estimates.append(memory_bytes(w * h, kinds))
+        arrays.append(sum(a.nbytes for a in layers.values()))
+        assert estimates[-1] >= arrays[-1]
+    assert estimates[0] == 0 and np.all(np.diff(estimates) > 0) and np.all(np.diff(estimates) >= np.diff(arrays))
+    size = 2000  # a film of 2000 x 1500: the base estimate and the labels' both about 400 MB
+    monkeypatch.setattr(budget, "available_memory", lambda: 600e6)
+    check_render(size, 1500, 1, False)
+    with pytest.raises(SolasError, match=r"render 2000x1500 with labels depth,normal,instance needs about"):
+        check_render(size, 1500, 1, False, "instance,normal,depth")
+    xml = scene_file(tmp_path / "big.xml", [patch("wall", -9, 9, -9, 9, 8.0)], size, 1500)
+    assert main(["render", xml, "--lens", "wide-angle-22mm", "--pitch-um", "30", "--spp", "1", "--labels", "depth",
+                 "-o", str(tmp_path / "big.exr")]) == 2
+    assert "with labels depth needs about" in capsys.readouterr().err
