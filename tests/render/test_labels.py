@@ -315,8 +315,8 @@ def test_shapegroup_instances_take_their_own_ids(mi, tmp_path):
     every pixel that meets an instance takes that instance's id (never the background's 0 with
     labels.valid 1), and each instance covers the pixels that the same two shapes placed one by one
     (the instance's transform written after their own) cover; an unnamed wall and a glowing patch keep
-    their ids in both scenes. At most 2 pixels of a mask may differ: an instance is intersected in its
-    own frame, in float32."""
+    their ids in both scenes; depth and normals are those of the shapes placed one by one. At most 2
+    pixels of a mask may differ: an instance is intersected in its own frame, in float32."""
     pole = patch("pole", -0.25, 0.25, -2.0, 1.0, 0.0, emit=False)
     knob = ('<shape type="sphere" id="knob"><float name="radius" value="0.5"/><transform name="to_world">'
             '<translate y="1.5"/></transform><bsdf type="diffuse"/></shape>')
@@ -332,7 +332,7 @@ def test_shapegroup_instances_take_their_own_ids(mi, tmp_path):
     for tag, shapes in (("instanced", instanced + common), ("flat", flat + common)):
         scene = load(scene_file(tmp_path / f"{tag}.xml", shapes, 40, 30), "llvm_ad_spectral", lens, pitch_um=400.0,
                      response=MONO)
-        found.append(render_labels(scene, ("instance",)))
+        found.append(render_labels(scene, ("depth", "normal", "instance")))
     (layers, meta), (flat_layers, flat_meta) = found
     ids, flat_ids, valid = layers["instance.id"], flat_layers["instance.id"], layers["labels.valid"] == 1.0
     assert not np.any(valid & (ids == 0.0)), "pixels that meet a shape labelled as the background"
@@ -347,6 +347,11 @@ def test_shapegroup_instances_take_their_own_ids(mi, tmp_path):
     for name in set(meta["instances"].values()) - {"left", unnamed[0]}:  # the wall and the lamp
         assert name in flat_meta["instances"].values()
         assert ((ids == instance_id(name)) != (flat_ids == instance_id(name))).sum() <= 2
+    placed = {instance_id(f"{side}.{p}"): instance_id(name) for side, name in (("left", "left"), ("right", unnamed[0]))
+              for p in ("pole", "knob")}
+    same = valid & (np.vectorize(lambda i: placed.get(int(i), int(i)))(flat_ids) == ids)
+    for name in ("depth.Z", "normal.X", "normal.Y", "normal.Z"):  # an instance's points and normals, in the world
+        np.testing.assert_allclose(layers[name][same], flat_layers[name][same], rtol=1e-4, atol=1e-4)
 
 
 def test_scenes_mitsuba_cannot_instance_are_refused_in_one_line(mi, tmp_path, capsys):
