@@ -10,12 +10,14 @@ Run: .venv/bin/python benchmarks/bench_mono.py [--repeats 5] [--jobs image,stree
 After one warm-up render per variant (kernels compiled), the variants alternate, `repeats` runs each,
 so both see the same load of the shared cores; the table gives medians, min–max, and the speed-up
 (spectral median / mono median) of wall-clock and of CPU seconds (the process's, all threads: less
-sensitive to other jobs on the cores). The 1-minute load average is printed before and after.
+sensitive to other jobs on the cores). The 1-minute load average is printed before and after, each round's
+times on stderr as it ends.
 """
 from __future__ import annotations
 
 import argparse
 import os
+import sys
 import tempfile
 import time
 from pathlib import Path
@@ -79,8 +81,9 @@ def main() -> None:
             for k in range(args.repeats):
                 for v in VARIANTS:
                     times[v].append(run(v))
-                print(f"  {name}, round {k + 1}: " + ", ".join(
-                    f"{v} {times[v][-1][0]:.2f} s ({times[v][-1][1]:.2f} s CPU)" for v in VARIANTS), flush=True)
+                print(f"  {name}, round {k + 1}: " + ", ".join(  # progress: stderr (stdout holds the results)
+                    f"{v} {times[v][-1][0]:.2f} s ({times[v][-1][1]:.2f} s CPU)" for v in VARIANTS), file=sys.stderr,
+                      flush=True)
             rows.append((name, times))
     print(f"load average after: {os.getloadavg()[0]:.2f}\n")
     print("| job | variant | wall median (s) | wall min–max (s) | speed-up | CPU median (s) | CPU min–max (s) | "

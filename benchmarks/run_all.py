@@ -21,6 +21,8 @@ from pathlib import Path
 HERE = Path(__file__).resolve().parent
 RESULTS = HERE / "results"
 ANSI = re.compile(r"\x1b\[[0-9;]*m")  # terminal colours (Mitsuba's log) kept out of the Markdown
+# Mitsuba's log lines ("2026-11-26 00:16:11 WARN  [HDRFilm] ..."), which it writes to stdout: echoed, not recorded
+LOG_LINE = re.compile(r"\d{4}-\d\d-\d\d \d\d:\d\d:\d\d +(TRACE|DEBUG|INFO|WARN|ERROR)\b.*")
 # Validation runs of the command line whose tables the validation pages include: name → the
 # solas-mi arguments (run as `python -m solas_mi`, from the repository root).
 COMMANDS = {
@@ -33,6 +35,25 @@ COMMANDS = {
 QUICK = {"bench_psf_grid": ["--repeats", "3"], "bench_esfr": [], "bench_anchors": [], "bench_sensor_isp": [],
          "check_stability_solas-doublet": COMMANDS["check_stability_solas-doublet"],
          "check_stability_cooke-triplet": COMMANDS["check_stability_cooke-triplet"]}
+
+
+def recorded(stdout: str) -> str:
+    """What a results file holds of a run's stdout: its tables and lines of text as Markdown, without the
+    log lines of the libraries it ran (`LOG_LINE`), terminal colours or this checkout's paths; each line of
+    text a paragraph of its own and each table a block (Markdown would run consecutive lines together)."""
+    kept = [line.rstrip() for line in ANSI.sub("", stdout).replace(f"{HERE.parent}/", "").splitlines()
+            if not LOG_LINE.fullmatch(line.strip())]
+    out: list[str] = []
+    for line in kept:
+        if line and out and out[-1] and not (_is_row(line) and _is_row(out[-1])):
+            out.append("")  # a line of text after another line, or a table's edge
+        if line or (out and out[-1]):
+            out.append(line)
+    return "\n".join(out).strip() + "\n"
+
+
+def _is_row(line: str) -> bool:
+    return line.lstrip().startswith("|")
 
 
 def run(name: str, arguments: list[str]) -> None:
@@ -53,8 +74,7 @@ def run(name: str, arguments: list[str]) -> None:
               f"load average {load:.1f} before the run:\n\n")
     RESULTS.mkdir(exist_ok=True)
     tmp = RESULTS / f".{name}.md.tmp"
-    text = ANSI.sub("", done.stdout).replace(f"{HERE.parent}/", "")  # paths as from the repository root
-    tmp.write_text(header + text.strip() + "\n", encoding="utf-8")
+    tmp.write_text(header + recorded(done.stdout), encoding="utf-8")
     tmp.replace(RESULTS / f"{name}.md")
 
 

@@ -2,24 +2,34 @@
 bundled photograph rendered through the doublet's glass and degraded by the PSF grids (patch 8×6,
 patch 32×24, interp) with a comparison sheet; a slanted-edge target of known MTF measured by the
 e-SFR; the street scene through the doublet, a sensor preset and the image processor, on a sheet beside
-its depth and instance layers."""
+its depth and instance layers; the street experiment. Each step is announced before it runs, with the
+files it writes (`steps`)."""
 from __future__ import annotations
 
 import argparse
 from contextlib import redirect_stdout
 from pathlib import Path
+from typing import Callable
 
 from . import jsonio
 from .cli import main as solas_mi
 from .imageio import atomic_path, read_image
+from .outputs import safe_name
 from .resources import resource_dir
 
-DEMO_SPP = 192  # 64 per colour line: ≈ 2.5 % noise, ≈ 2 min on two cores
+DEMO_SPP = 192  # 64 per colour line: ≈ 2.5 % noise; measured ≈ 2 min on two idle cores, far longer on busy ones
 # the camera step: the street scene framed along the street (the doublet's field is ±4 deg), small and
-# few spp (≈ 30 s on two cores), through an automotive sensor preset and the default processor
+# few spp, through an automotive sensor preset (its radiance read through the render's own f-number,
+# auto-exposed) and the default processor
 STREET_SET = ("width=480", "height=360", "fov=8", "target=0, 2, 140")
 STREET_SPP = 32
-STREET_SENSOR, STREET_EXPOSURE_MS = "ar0132at", "1"
+STREET_SENSOR, STREET_EXPOSURE_MS = "ar0132at", "auto"
+CAMERA_FILES = {"camera": "camera/street_render.exr|png (irradiance + depth, normal, instance layers), "
+                          "camera/street_raw.exr|png (RAW, developed frame)",
+                "camera sheet": "camera/camera_sheet.png"}  # what `camera_frame` writes
+PHOTO = "images/rocket.png"  # under the shipped scenes
+GRIDS = ("8x8", "32x32")
+CONVOLUTIONS = (("patch 8x6", "8x8", "patch"), ("patch 32x24", "32x32", "patch"), ("interp 32x32", "32x32", "interp"))
 
 
 def cli(argv: list[str]) -> None:
@@ -28,59 +38,97 @@ def cli(argv: list[str]) -> None:
         raise SystemExit(f"demo step failed: solas-mi {' '.join(argv)}")
 
 
+def steps() -> list[tuple[str, dict[str, str], Callable[[Path], None]]]:
+    """The demo's steps in order: what each does, what it writes (name → files under the results folder;
+    `a.exr|png`: a.exr and a.png) and the function that does it."""
+    return [
+        ("the doublet's paraxial table", {"paraxial": "lens_info.txt, lens_info.json"}, lens_info),
+        ("nine PSFs: fields 0, +2 and -2 deg at 486, 531 and 656 nm", {"psfs": "psf/psf_*deg_*nm.exr|png"}, psfs),
+        ("PSF grids " + " and ".join(GRIDS) + " at 656, 531 and 486 nm, each with its PNG mosaic",
+         {"grids": ", ".join(f"psf_grid_{g}.exr|png" for g in GRIDS)}, grids),
+        (f"the bundled photograph rendered through the doublet's glass at {DEMO_SPP} spp, one of the two long "
+         "steps: its progress reports the time left at the rate it measures",
+         {"direct render": "degraded/rocket_render.exr|png"}, render),
+        ("the photograph degraded by the PSF grids (" + ", ".join(c[0] for c in CONVOLUTIONS) + ") and a "
+         "comparison sheet of the four", {"convolutions": ", ".join(f"degraded/rocket_{safe_name(c[0])}.exr|png"
+                                                                    for c in CONVOLUTIONS),
+                                          "comparison sheet": "degraded/comparison.png"}, convolutions),
+        ("a slanted-edge target of known MTF, measured by the e-SFR", {"slanted edge": "sfr/edge_5deg_sigma1px.png"},
+         slanted_edge),
+        (f"the street scene through the doublet ({STREET_SPP} spp) with its labels, the {STREET_SENSOR} sensor and "
+         "the default image processor", CAMERA_FILES, camera_frame),
+        ("the street experiment (the SOLAS paper's natural-scene SFR), the other long step: renders through an "
+         "ideal camera and the lens focused at infinity and near, PSF grids and convolutions, each reported with "
+         "its time as it ends", {"street experiment": "street/street.md (table), street/fig5_*.png (plots), street/*.exr|png"},
+         street_experiment),
+    ]
+
+
 def run(out: Path) -> None:
+    """Every step, each announced before it runs with what it writes, then where the results are."""
     out.mkdir(parents=True, exist_ok=True)
+    every = steps()
+    written: dict[str, str] = {}
+    for k, (what, writes, step) in enumerate(every, start=1):
+        print(f"\n== demo step {k} of {len(every)}: {what}\n   writes (in {out}): {'; '.join(writes.values())}",
+              flush=True)
+        step(out)
+        written.update(writes)
+    print(jsonio.dumps({"results": str(out.resolve()), **written}, indent=2))
+
+
+def lens_info(out: Path) -> None:
     for name, extra in (("lens_info.txt", []), ("lens_info.json", ["--json"])):
         with atomic_path(out / name) as tmp, open(tmp, "w") as f, redirect_stdout(f):
             cli(["lens", "info", "solas-doublet", *extra])
     print((out / "lens_info.txt").read_text())
-    psfs = out / "psf"
+
+
+def psfs(out: Path) -> None:
     for field in (0, 2, -2):
         for wl in (486, 531, 656):
             cli(["psf", "solas-doublet", "--field-deg", f"0,{field}", "--wavelengths-nm", str(wl), "--pitch-um", "0.5",
-                 "--size", "160", "--normalize", "peak", "-o", str(psfs / f"psf_{field:+d}deg_{wl}nm.exr")])
-    for grid in ("8x8", "32x32"):
+                 "--size", "160", "--normalize", "peak", "-o", str(out / "psf" / f"psf_{field:+d}deg_{wl}nm.exr")])
+
+
+def grids(out: Path) -> None:
+    for grid in GRIDS:
         cli(["psf-grid", "solas-doublet", "--grid", grid, "--wavelengths-nm", "656,531,486", "--pitch-um", "0.5",
-             "--size", "160", "--png", "-o", str(out / f"psf_grid_{grid}.exr")])
-    degraded = degrade(out)
+             "--size", "160", "--mosaic", "-o", str(out / f"psf_grid_{grid}.exr")])
+
+
+def _photo() -> str:
+    return str(resource_dir("scenes") / PHOTO)
+
+
+def render(out: Path) -> None:
+    cli(["render-image", "solas-doublet", _photo(), "--response", "lines", "--spp", str(DEMO_SPP),
+         "-o", str(out / "degraded" / "rocket_render.exr")])
+
+
+def convolutions(out: Path) -> None:
+    """The photograph degraded by each PSF grid, and a comparison sheet of the direct render and the three."""
+    from .validation.sheet import comparison_sheet
+
+    d = out / "degraded"
+    files = {"direct render": d / "rocket_render.exr"}
+    for name, grid, method in CONVOLUTIONS:
+        files[name] = d / f"rocket_{safe_name(name)}.exr"
+        cli(["degrade", _photo(), "--psf-grid", str(out / f"psf_grid_{grid}.exr"), "--method", method,
+             "-o", str(files[name])])
+    comparison_sheet({"input (ideal camera)": read_image(_photo()), **{k: read_image(v) for k, v in files.items()}},
+                     d / "comparison.png", "SOLAS doublet: direct render (R/G/B = 656/531/486 nm, %d spp) and PSF-grid "
+                     "convolutions" % DEMO_SPP)
+
+
+def slanted_edge(out: Path) -> None:
     edge = out / "sfr" / "edge_5deg_sigma1px.png"
     cli(["sfr-target", "-o", str(edge), "--angle-deg", "5", "--sigma-px", "1", "--size", "128x128"])
     cli(["sfr", str(edge)])
-    camera = camera_frame(out)
+
+
+def street_experiment(out: Path) -> None:
     cli(["experiment", "street", "--lens", "solas-doublet", "-o", str(out / "street")])
-    print(jsonio.dumps({"results": str(out.resolve()), "paraxial": "lens_info.txt", "psfs": "psf/*.exr|png",
-                      "grids": "psf_grid_8x8.exr|png, psf_grid_32x32.exr|png", **degraded,
-                      "slanted edge": "sfr/edge_5deg_sigma1px.png",
-                      **camera,
-                      "street experiment": "street/street.md (table), street/fig5_render_infinity.png (plot)"},
-                     indent=2))
-
-
-def degrade(out: Path) -> dict:
-    """The bundled photograph through the doublet: direct render and the three convolutions, and a
-    comparison sheet of the four."""
-    from .validation.sheet import comparison_sheet
-
-    photo = str(resource_dir("scenes") / "images" / "rocket.png")
-    d = out / "degraded"
-    files = {
-        "direct render": d / "rocket_render.exr",
-        "patch 8x6": d / "rocket_patch_8x6.exr",
-        "patch 32x24": d / "rocket_patch_32x24.exr",
-        "interp 32x32": d / "rocket_interp.exr",
-    }
-    cli(["render-image", "solas-doublet", photo, "--response", "lines", "--spp", str(DEMO_SPP),
-         "-o", str(files["direct render"])])
-    for name, grid, method in (("patch 8x6", "8x8", "patch"), ("patch 32x24", "32x32", "patch"),
-                               ("interp 32x32", "32x32", "interp")):
-        cli(["degrade", photo, "--psf-grid", str(out / f"psf_grid_{grid}.exr"), "--method", method,
-             "-o", str(files[name])])
-    sheet = d / "comparison.png"
-    comparison_sheet({"input (ideal camera)": read_image(photo), **{k: read_image(v) for k, v in files.items()}},
-                     sheet, "SOLAS doublet: direct render (R/G/B = 656/531/486 nm, %d spp) and PSF-grid convolutions"
-                     % DEMO_SPP)
-    return {"direct render": "degraded/rocket_render.exr|png", "convolutions": "degraded/rocket_{patch_8x6,"
-            "patch_32x24,interp}.exr|png", "comparison sheet": "degraded/comparison.png"}
 
 
 def camera_frame(out: Path) -> dict:
@@ -98,16 +146,15 @@ def camera_frame(out: Path) -> dict:
          "--isp", "default", "-o", str(raw)])
     channels, meta = read_exr(render)
     camera_sheet(channels, meta["labels"], read_image(raw.with_suffix(".png"), linearize=False), d / "camera_sheet.png",
-                 f"street scene, solas-doublet ({STREET_SPP} spp) → {STREET_SENSOR} ({STREET_EXPOSURE_MS} ms) "
+                 f"street scene, solas-doublet ({STREET_SPP} spp) → {STREET_SENSOR} (exposure {STREET_EXPOSURE_MS}) "
                  "→ default image processor; labels along each pixel's chief ray")
-    return {"camera": "camera/street_render.exr|png (irradiance + depth, normal, instance layers), "
-                      "camera/street_raw.exr|png (RAW, developed frame)",
-            "camera sheet": "camera/camera_sheet.png"}
+    return CAMERA_FILES
 
 
-def camera_sheet(channels: dict, labels: dict, frame, path: Path, title: str) -> None:
+def camera_sheet(channels: dict, labels: dict, frame, path: Path, title: str) -> int:
     """One row: the lens's irradiance image, the developed frame, the depth layer (colour-mapped, its
-    range on the colour bar) and the instance layer (a colour per id, the scene's named shapes boxed)."""
+    range on the colour bar) and the instance layer (a colour per id, the scene's named shapes boxed: the
+    street names its cars, pedestrians, poles, signs and posts); the number of boxes drawn."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -130,12 +177,11 @@ def camera_sheet(channels: dict, labels: dict, frame, path: Path, title: str) ->
     fig.colorbar(shown, ax=axes[2], fraction=0.04, label="range (m)")
     axes[2].set_title(f"depth: {np.nanmin(depth):.1f} to {np.nanmax(depth):.1f} m")
     axes[3].imshow(np.ma.masked_where(~valid, ids % 20), cmap="tab20", vmin=0, vmax=19, interpolation="nearest")
+    boxes = [axes[3].add_patch(Rectangle((x0 - 0.5, y0 - 0.5), x1 - x0, y1 - y0, fill=False, edgecolor="white"))
+             for x0, y0, x1, y1 in (box["box"] for box in labels.get("boxes", {}).values())]
     for name, box in labels.get("boxes", {}).items():
-        x0, y0, x1, y1 = box["box"]
-        axes[3].add_patch(Rectangle((x0 - 0.5, y0 - 0.5), x1 - x0, y1 - y0, fill=False, edgecolor="white"))
-        axes[3].text(x0, y0, name, color="white", fontsize=7, va="bottom")
-    axes[3].set_title(f"instances: {len(labels.get('instances', {}))} shapes, "
-                      f"{len(labels.get('boxes', {}))} named (boxed)")
+        axes[3].text(box["box"][0], box["box"][1], name, color="white", fontsize=6, va="bottom")
+    axes[3].set_title(f"instances: {len(labels.get('instances', {}))} shapes, {len(boxes)} named (boxed)")
     for ax in axes:
         ax.set_xticks([])
         ax.set_yticks([])
@@ -144,6 +190,7 @@ def camera_sheet(channels: dict, labels: dict, frame, path: Path, title: str) ->
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=100, format="png")
     plt.close(fig)
+    return len(boxes)
 
 
 def main() -> None:

@@ -4,6 +4,7 @@ from __future__ import annotations
 import re
 
 from .errors import SolasError
+from .userfiles import read_toml
 
 _WXH = re.compile(r"\s*(\d+)\s*[xX×]\s*(\d+)\s*")
 
@@ -45,11 +46,6 @@ def floats(text: str, what: str) -> list[float]:
     return values
 
 
-def add_lens_argument(p) -> None:
-    """The positional LENS argument of every command that takes a lens."""
-    p.add_argument("lens", help="shipped lens name (solas-doublet, cooke-triplet, ...) or a lens file (.toml, .zmx, .seq, .dat)")
-
-
 def positive_ints(text: str, what: str) -> tuple[int, ...]:
     """Comma-separated positive integers, at least one."""
     try:
@@ -63,11 +59,10 @@ def positive_ints(text: str, what: str) -> tuple[int, ...]:
 
 def add_image_input_options(p, boundaries, variants) -> None:
     """The options of a command that degrades one input image both ways (PSF-grid convolution and
-    direct render) and compares them: LENS and IMAGE, -o DIR, --sensor | --scale, --seeds of the
+    direct render) and compares them, after its LENS (`optics.commands.add_lens_argument`): IMAGE, -o DIR, --sensor | --scale, --seeds of the
     reference render, --fov-deg, --boundary, --linear, --variant. `boundaries` and `variants` are the
     choices (`optics.camera.BOUNDARIES`, `render.mitsuba.VARIANTS`), given by the caller so that this
     module imports no stage."""
-    add_lens_argument(p)
     p.add_argument("image", help="input image, the ideal image spanning ±fov (PNG/JPEG sRGB, EXR linear)")
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output directory")
     size = p.add_mutually_exclusive_group()
@@ -81,17 +76,9 @@ def add_image_input_options(p, boundaries, variants) -> None:
 
 
 def toml_table(path, table: str, what: str) -> dict:
-    """The one `[table]` of the TOML file `path` (and nothing else in it); `what` names the file in the
-    one-line errors (e.g. "sensor model")."""
-    import tomllib
-
-    try:
-        with open(path, "rb") as f:
-            data = tomllib.load(f)
-    except OSError as exc:
-        raise SolasError(f"{what} {str(path)!r}: {exc.strerror or 'cannot be read'}") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise SolasError(f"{what} {str(path)!r} is not valid TOML: {exc}") from None
+    """The one `[table]` of the TOML file `path` (and nothing else in it), read by `userfiles.read_toml`;
+    `what` is its kind there (e.g. "sensor model"), which names the file in the one-line errors."""
+    data = read_toml(path, what)
     if not isinstance(data.get(table), dict) or set(data) != {table}:
         raise SolasError(f"{what} {str(path)!r} must hold one [{table}] table (and nothing else); "
                          f"found {', '.join(sorted(data)) or 'nothing'}")

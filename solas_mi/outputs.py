@@ -72,6 +72,13 @@ def check_target(path: str | os.PathLike, inputs: Iterable[str | os.PathLike] = 
     return p
 
 
+def add_png_option(p) -> None:
+    """--png, of every command that writes an OpenEXR image and its PNG preview: where the preview goes.
+    The preview is always written (`data_and_preview`); `psf-grid`'s optional mosaic is its --mosaic."""
+    p.add_argument("--png", metavar="PNG", help="where the sRGB PNG preview, always written, goes "
+                                                "(default: beside the EXR, of the same name)")
+
+
 def data_and_preview(output: str | os.PathLike, preview: str | os.PathLike | None = None,
                      inputs: Iterable[str | os.PathLike] = ()) -> tuple[Path, Path]:
     """The checked OpenEXR data path `output` and its PNG preview (default: beside it)."""

@@ -26,7 +26,7 @@ def test_version(capsys):
      "wavelength 2500.0001 nm is outside glass SCHOTT:N-BK7's valid range 300-2500 nm"),
     (["sfr", "{tmp}"], "is a folder, not an image file"),
     (["sfr", "{tmp}/garbage.png"], "cannot read image"),
-    (["lens", "info", "{tmp}/binary.toml"], "binary.toml is not UTF-8 text; a lens file is TOML text"),
+    (["lens", "info", "{tmp}/binary.toml"], "binary.toml' is not UTF-8 text (byte 1 is not UTF-8: Latin-1 or binary)"),
     (["psf", "solas-doublet", "--field-deg", "0,1", "--wavelengths-nm", "531", "--pupil-samples", "100000",
       "-o", "{tmp}/x.exr"], "pupil samples 100000 must be an integer from 8 to 4096"),
     (["render-image", "solas-doublet", "{tmp}/photo.png", "--sensor", "32x24", "--spp", "1", "--seed", "-1",

@@ -148,6 +148,27 @@ def test_the_table_check_can_fail(tmp_path):
     assert included == [] and len(recorded) == 1
 
 
+def test_the_benchmark_page_shows_no_raw_log():
+    """Every results file the benchmark and validation pages include is tables and text: no library's log
+    line (Mitsuba's "2026-11-26 00:16:11 WARN  [HDRFilm] ..." lines ran together into a paragraph there),
+    no two lines of text that Markdown would run together."""
+    log_line = re.compile(r"\d{4}-\d\d-\d\d \d\d:\d\d:\d\d +[A-Z]+ +\[")
+    for path in sorted((ROOT / "benchmarks" / "results").glob("*.md")):
+        lines = path.read_text(encoding="utf-8").splitlines()[check_pages.HEADER_LINES:]
+        assert not [line for line in lines if log_line.match(line)], path.name
+        assert not [b for a, b in zip(lines, lines[1:]) if a and b and not (a.startswith("|") and b.startswith("|"))], \
+            path.name
+
+
+def test_the_recorder_keeps_results_and_drops_logs():
+    recorded = check_pages.recorder().recorded
+    run = ("load average before: 1.2\n\x1b[33m2026-11-26 00:16:11 WARN  [HDRFilm] Monochrome mode enabled\x1b[0m\n"
+           f"wrote {ROOT}/out/x.exr\n| a | b |\n|---|---|\n| 1 | 2 |\nload average after: 1.0\n")
+    assert recorded(run) == ("load average before: 1.2\n\nwrote out/x.exr\n\n| a | b |\n|---|---|\n| 1 | 2 |\n\n"
+                             "load average after: 1.0\n")
+    assert recorded(recorded(run)) == recorded(run)
+
+
 def test_the_reference_check_finds_what_a_site_leaves_out(tmp_path):
     """`make docs` runs docs/tools/check_reference.py on the built site; on a site whose reference
     pages are empty it names every command, public function and plugin missing."""
@@ -168,6 +189,34 @@ def test_example_runner_checks_what_a_page_states(tmp_path):
     assert run_examples.run_page(page, quick=False, keep=False) == 2  # the wrong value and the missing output
     page.write_text("```python\nx = 2\nx + 0.3  # → 2.2\n```\n\n```sh\necho hello bye\n```\n\n<!-- example: expect \"bye\" -->\n")
     assert run_examples.run_page(page, quick=False, keep=False) == 1  # 2.3 is not 2.2 to the printed digit
+
+
+def test_the_home_page_leads_to_every_guide_and_in_depth_page():
+    """The home page's "I want to…" table names every page of the site's Guide and In depth sections (it had
+    no row for the sensor, the image processor or batches)."""
+    import yaml
+
+    nav = {next(iter(item)): next(iter(item.values())) for item in yaml.safe_load((ROOT / "mkdocs.yml").read_text())["nav"]}
+    pages = [next(iter(entry.values())) for section in ("Guide", "In depth") for entry in nav[section]]
+    home = set(re.findall(r"\]\(([\w/.-]+\.md)\)", (ROOT / "docs" / "index.md").read_text()))
+    assert len(pages) >= 10 and [page for page in pages if page not in home] == []
+
+
+def test_every_list_of_lens_file_formats_in_the_docs_is_whole():
+    """A line of the README or the site that lists lens file extensions lists those the readers are
+    registered for (`optics.formats.READERS`, and our TOML), or, about converting or writing, the writers'
+    (two pages left CODE V's .seq out)."""
+    from solas_mi.optics.formats import READERS, WRITERS
+
+    readable, lists = {".toml", *READERS}, 0
+    for page in [ROOT / "README.md", *sorted((ROOT / "docs").rglob("*.md"))]:
+        for number, line in enumerate(page.read_text(encoding="utf-8").splitlines(), start=1):
+            named = set(re.findall(r"(\.(?:toml|zmx|seq|dat))\b", line)) & readable
+            if len(named) >= 3:
+                lists += 1
+                whole = set(WRITERS) if re.search(r"convert|writ|save", line) else readable
+                assert named == whole, f"{page.relative_to(ROOT)}:{number}: {sorted(named)}, not {sorted(whole)}"
+    assert lists >= 4
 
 
 def test_every_page_of_the_site_exists():

@@ -2,16 +2,19 @@
 
 Every table on those pages must be an include of a results file that `benchmarks/run_all.py` wrote
 (`--8<-- "benchmarks/results/NAME.md"`, a file whose first line is run_all's header), never a table
-typed into the page. A table that no run here can make (one that needs another tool installed
-beside this one) is allowed only under `<!-- table: recorded REASON -->`, and is listed. Exit 1 on
-any problem.
+typed into the page; and each results file must be as run_all's recorder writes a run's output
+(`run_all.recorded`: no library's raw log, no lines of text Markdown would run together). A table that
+no run here can make (one that needs another tool installed beside this one) is allowed only under
+`<!-- table: recorded REASON -->`, and is listed. Exit 1 on any problem.
 
     python docs/tools/check_pages.py [PAGES ...]     # default: docs/benchmarks.md docs/validation
 """
 from __future__ import annotations
 
+import importlib.util
 import re
 import sys
+from functools import cache
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
@@ -21,6 +24,22 @@ HEADER = re.compile(r"<!-- written by benchmarks/(run_all|gpu_cuda)\.py; do not 
 INCLUDE = re.compile(r'^--8<--\s+"([^"]+)"\s*$')
 RECORDED = re.compile(r"^<!--\s*table:\s*recorded\s+(.*?)\s*-->$")
 MIN_REASON = 15  # characters: a recorded table says why no run makes it
+HEADER_LINES = 3  # of a results file: the marker, the command and machine, a blank line
+
+
+@cache
+def recorder():
+    """benchmarks/run_all.py, whose `recorded` says what a results file holds of a run's output."""
+    spec = importlib.util.spec_from_file_location("run_all", REPO / "benchmarks" / "run_all.py")
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def unrecorded(text: str) -> bool:
+    """Whether a results file's text holds more than, or other than, what the recorder keeps."""
+    body = "".join(text.splitlines(keepends=True)[HEADER_LINES:])
+    return recorder().recorded(body) != body
 
 
 def check(page: Path) -> tuple[list[str], list[str], list[str]]:
@@ -41,6 +60,9 @@ def check(page: Path) -> tuple[list[str], list[str], list[str]]:
                 problems.append(f"{where}: includes {m.group(1)}, which does not exist (run benchmarks/run_all.py)")
             elif not HEADER.fullmatch(target.read_text(encoding="utf-8").partition("\n")[0]):
                 problems.append(f"{where}: {m.group(1)} was not written by benchmarks/run_all.py")
+            elif unrecorded(target.read_text(encoding="utf-8")):
+                problems.append(f"{where}: {m.group(1)} holds what the recorder leaves out (a raw log, lines run "
+                                "together): record it again with benchmarks/run_all.py")
             else:
                 included.append(m.group(1))
         elif line.lstrip().startswith("|") and not fenced and (number == 1 or not lines[number - 2].lstrip().startswith("|")):

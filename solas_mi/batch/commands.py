@@ -15,14 +15,16 @@ from ..errors import SolasError
 from ..isp.commands import add_camera_options, camera_from_args
 
 
-BATCH_GRID = (32, 32)  # rows, columns: the accuracy tables' interp 32×24 on a 4:3 frame (README)
+# the grid options whose defaults differ from `psf-grid`'s: the grid (rows, columns), the accuracy tables'
+# interp 32×24 on a 4:3 frame (README)
+BATCH_GRID_DEFAULTS = {"grid": (32, 32)}
 
 
 def _grid_spec(args: argparse.Namespace):
-    """The grid's spec from the `psf-grid` options (with --lens; --grid defaults to BATCH_GRID), else None."""
+    """The grid's spec from the `psf-grid` options (with --lens; their defaults BATCH_GRID_DEFAULTS'), else None."""
     from ..psf.spec import GridSpec, given
 
-    return GridSpec(**{"grid": BATCH_GRID, **given(args)}) if args.lens else None
+    return GridSpec(**{**BATCH_GRID_DEFAULTS, **given(args)}) if args.lens else None
 
 
 def _dry_run(args: argparse.Namespace) -> int:
@@ -39,16 +41,28 @@ def _dry_run(args: argparse.Namespace) -> int:
     need = estimate(p, workers if args.dask is None else 1)
     where = f"Dask at {args.dask}" if args.dask else f"{workers} local worker process(es)"
     skipped = len(p.jobs) - len(p.todo)
-    then = "; computed once, then cached" if p.grid_source == "to compute" else ""
     scaled = f"; lens scaled x{scale['factor']:.4g} to EFL {scale['efl_mm'][1]:.4g} mm" if scale else ""
-    print(f"1. PSF grid: {p.grid_path} ({p.grid_source}{then}{scaled})")
+    grid_s, grid = _grid_plan(p)
+    print(f"1. PSF grid: {p.grid_path} ({grid}{scaled})")
     print(f"2. degrade {len(p.todo)} of {len(p.jobs)} images ({skipped} already finished, skipped) "
           f"with {args.method}, boundary {args.boundary}, on {where}")
     files = "16-bit PNG + JSON" if args.format == "png16" else "EXR + PNG"
     print(f"3. write {files}{_camera_files(p.jobs)} per image and {p.manifest.path}")
-    print(f"estimate: about {need['seconds']:.1f} s of degrading (after the grid), peak memory about "
-          f"{size_text(need['peak_bytes'])} (grid {size_text(need['grid_bytes'])} per worker)")
+    print(f"estimate: about {grid_s + need['seconds']:.3g} s ({grid_s:.3g} s for the grid, {need['seconds']:.3g} s of "
+          f"degrading), peak memory about {size_text(need['peak_bytes'])} (grid {size_text(need['grid_bytes'])} per "
+          "worker)")
     return 0
+
+
+def _grid_plan(p) -> tuple[float, str]:
+    """Seconds the batch's grid will take and what is done with it: reused (a file given, or a cache
+    entry of this lens and grid), or computed, its time measured on a few of its PSFs (`psf.cost`)."""
+    if p.grid_source != "to compute":
+        return 0.0, {"given": "given", "cache hit": "in the cache: reused, nothing to compute"}[p.grid_source]
+    from ..psf.cost import grid_cost
+
+    cost = grid_cost(p.lens, p.spec)
+    return cost.seconds, f"not in the cache: computed once, {cost.text()}; then cached"
 
 
 def run_batch_degrade(args: argparse.Namespace) -> int:
@@ -79,9 +93,19 @@ def _frame(args: argparse.Namespace):
     return parse_frame(args.fov_deg, args.fov_axis, args.intrinsics, args.fisheye)
 
 
+WARNINGS_SHOWN = 5  # items whose warnings are printed; the manifest holds every item's
+
+
 def _report(command: str, result, extra: str = "") -> int:
     for job in result.failed:
         print(f"solas-mi batch {command}: failed: {job.input} → {job.output}: {job.error}", file=sys.stderr)
+    warned = [job for job in result.jobs if job.warnings and job.status == "done"]
+    for job in warned[:WARNINGS_SHOWN]:
+        for text in job.warnings:
+            print(f"solas-mi batch {command}: warning: {text}", file=sys.stderr)
+    if len(warned) > WARNINGS_SHOWN:
+        print(f"solas-mi batch {command}: warning: {len(warned) - WARNINGS_SHOWN} more items warn likewise (each "
+              f"item's warnings are in {result.manifest})", file=sys.stderr)
     print(f"{result.count('done')} done, {result.count('skipped')} skipped, {len(result.failed)} failed "
           f"in {result.seconds:.1f} s{extra}; manifest {result.manifest}")
     return 1 if result.failed else 0
@@ -161,6 +185,7 @@ def _add_degrade(sub: Any) -> None:
     from ..convolution.methods import DEFAULT_METHOD, METHODS
     from ..convolution.depth import OCCLUSIONS, SILHOUETTES
     from ..convolution.output import OUTPUT_FORMATS
+    from ..optics.formats import lens_help
     from ..psf.spec import add_options as add_grid_options
 
     p = sub.add_parser(
@@ -171,7 +196,7 @@ def _add_degrade(sub: Any) -> None:
     p.add_argument("inputs", nargs="+", metavar="INPUT", help="image files, folders of images, or glob patterns")
     source = p.add_mutually_exclusive_group(required=True)
     source.add_argument("--psf-grid", metavar="GRID.exr", help="PSF grid written by `solas-mi psf-grid`")
-    source.add_argument("--lens", help="compute the grid from this lens (shipped name or .toml file)")
+    source.add_argument("--lens", help=f"compute the grid from this lens: {lens_help()}")
     p.add_argument("--method", choices=list(METHODS), default=DEFAULT_METHOD, help="convolution method")
     p.add_argument("--boundary", choices=BOUNDARIES, default=BOUNDARIES[0], help="padding outside the image")
     p.add_argument("--linear", action="store_true", help="PNG/JPEG values are already linear: do not decode sRGB")
@@ -191,13 +216,15 @@ def _add_degrade(sub: Any) -> None:
     add_camera_options(p, seed=True)
     p.add_argument("--cache", metavar="DIR", help="PSF-grid cache (default: the user's cache folder)/psf-grids")
     _add_runner_options(p)
-    add_grid_options(p.add_argument_group("grid options (with --lens; those of `solas-mi psf-grid`; --grid "
-                                          "defaults to 32x32 here, the accuracy tables' interp grid)"))
+    add_grid_options(p.add_argument_group("grid options (with --lens; those of `solas-mi psf-grid`, the grid "
+                                          "itself the accuracy tables' interp grid by default)"),
+                     defaults=BATCH_GRID_DEFAULTS)
     p.set_defaults(run=run_batch_degrade)
 
 
 def register(subparsers: Any) -> None:
     """Add `batch` and its `degrade` and `render`."""
+    from ..optics.formats import lens_help
     from ..render.spec import add_spec_flags
     from .render import SWEEP
 
@@ -217,7 +244,7 @@ def register(subparsers: Any) -> None:
                     "and the others go on (exit status 1).")
     r.add_argument("inputs", nargs="+", metavar="INPUT", help="images or scene XML files, folders of them, or globs")
     r.add_argument("--lens", action="append", required=True,
-                   help="shipped lens name or .toml file; repeat to sweep over lenses")
+                   help=f"{lens_help()}; repeat to sweep over lenses")
     add_spec_flags(r, RENDER_SETTINGS, sweep=SWEEP[1:])
     add_camera_options(r, seed=False)  # the sensor's seed is the batch's --seed
     _add_runner_options(r)

@@ -18,7 +18,7 @@ from typing import Any, Iterable
 
 from ..errors import SolasError
 from .cache import GridCache, file_hash
-from .jobs import MANIFEST, Job, Manifest, add_outputs, expand_inputs, plan
+from .jobs import MANIFEST, Job, Manifest, add_outputs, expand_inputs, plan, say_skipped
 from .runner import check_dask
 
 # seconds per image value (H·W·C) on one core of the 2-core benchmark machine, reading, degrading
@@ -99,9 +99,11 @@ def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLik
         raise SolasError("give either a PSF grid file or a lens to compute one from, not both and not neither")
     out_dir = output_folder(output_dir).resolve()
     roots: dict[Path, Path] = {}  # folders are read as trees, their structure kept in the output folder
-    files = expand_inputs(inputs, roots=roots)
+    labels: list[tuple[Path, str]] = []
+    files = expand_inputs(inputs, roots=roots, skipped=labels)
     depths = {f: depth_file(f, depth_pattern) for f in files} if depth_pattern is not None else {}
     images = [f for f in files if f not in set(depths.values())]  # depth maps are no inputs
+    say_skipped([(f, why) for f, why in labels if f not in set(depths.values())])  # those not the frames' depth maps
     missing = [str(depths[f]) for f in images if depths and not depths[f].is_file()]
     if missing:
         raise SolasError(f"{len(missing)} image(s) have no depth map by the pattern {depth_pattern!r}, e.g. {missing[0]}")
@@ -176,11 +178,23 @@ def estimate(p: BatchPlan, workers: int) -> dict[str, float]:
         rows, cols = p.spec.grid
         grid_bytes = 4 * rows * cols * p.spec.size ** 2 * len(p.spec.wavelengths_nm or p.lens.wavelengths_nm) * len(
             p.spec.distances_m or [0])
-    # each worker: its largest image's peak (which holds a grid); the parent holds one grid more
-    per_worker = max((peak_bytes(path, r, c, ch, grid_bytes) for path, (r, c, ch) in sizes), default=0.0)
+    # each worker: its largest image's peak (which holds a grid; or its camera's); the parent holds one grid more
+    per_worker = max((max(peak_bytes(path, r, c, ch, grid_bytes), camera_bytes(p.jobs[i], r, c))
+                      for i, (path, (r, c, ch)) in zip(p.todo, sizes)), default=0.0)
     return {"seconds": SECONDS_PER_VALUE * sum(values) / min(workers, max(1, len(values))),
             "peak_bytes": min(workers, max(1, len(values))) * (per_worker + WORKER_BYTES["degrade"]) + grid_bytes,
             "grid_bytes": grid_bytes}
+
+
+def camera_bytes(job: Job, rows: int, cols: int) -> float:
+    """The peak memory of an item's camera stage (`sensor.commands.frame_bytes`, its RGB output read back;
+    with the image processor when it writes a developed frame); 0 without a camera."""
+    if not job.extras:
+        return 0.0
+    from ..isp.commands import DEVELOP_BYTES_PER_PIXEL
+    from ..sensor.commands import frame_bytes
+
+    return frame_bytes(rows, cols, 3, DEVELOP_BYTES_PER_PIXEL if len(job.extras) > 1 else 0.0)
 
 
 def scaled_lens(lens, frame, pixel_um: float | None, spec=None) -> tuple[Any, dict | None]:

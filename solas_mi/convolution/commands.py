@@ -9,6 +9,7 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from ..outputs import add_png_option
 from .methods import DEFAULT_METHOD, METHODS, check_method
 
 LARGE_IMAGE_VALUES = 4096 * 3072 * 3  # beyond 4K (≈ 1.7 s) the command reports each channel
@@ -89,6 +90,6 @@ def register(subparsers: Any) -> None:
     add_frame_options(p)
     p.add_argument("--linear", action="store_true", help="PNG/JPEG values are already linear: do not decode sRGB")
     p.add_argument("-o", "--output", required=True, metavar="OUT.exr", help="output OpenEXR (linear)")
-    p.add_argument("--png", help="sRGB PNG for viewing (default: beside the EXR)")
+    add_png_option(p)
     p.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
     p.set_defaults(run=run_degrade)

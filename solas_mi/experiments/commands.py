@@ -8,7 +8,7 @@ import sys
 from typing import Any
 
 from ..options import parse_wxh, positive_ints
-from ..outputs import output_folder
+from ..outputs import output_folder, safe_name
 
 
 def _say(text: str) -> None:
@@ -31,7 +31,7 @@ def run_street(args: argparse.Namespace) -> int:
     outcome = run(lens, out, settings, log=_say)
     print((out / "street.md").read_text())
     print(f"wrote {out}/street.md, street.csv, street.json, fig5_*.png, error_*.png and the images "
-          f"({', '.join(n.replace(' ', '_') for n in outcome.images)}, depth) as .exr and .png")
+          f"({', '.join(safe_name(n) for n in outcome.images)}, depth) as .exr and .png")
     return 0
 
 
@@ -45,6 +45,7 @@ def run_street_scene(args: argparse.Namespace) -> int:
 
 def register(sub: Any) -> None:
     """Add the `experiment` subcommands."""
+    from ..optics.formats import lens_help
     from ..render.mitsuba import VARIANTS
     from ..resources import resource_dir
 
@@ -58,7 +59,7 @@ def register(sub: Any) -> None:
                     "image per annulus beside the PSF grid's predicted MTF50, and map the convolution's error "
                     "against the renders on near and far objects. Writes street.md/.csv/.json, figure-5 plots, "
                     "error maps and every image; step times on stderr and in the table.")
-    p.add_argument("--lens", default="solas-doublet", help="lens name or lens file (default solas-doublet)")
+    p.add_argument("--lens", default="solas-doublet", help=f"{lens_help()} (default solas-doublet)")
     p.add_argument("-o", "--output", required=True, help="output folder")
     p.add_argument("--size", default="1280x960", help="image WIDTHxHEIGHT in px (default 1280x960)")
     p.add_argument("--spp", type=int, default=64, help="lens render samples per pixel (default 64)")

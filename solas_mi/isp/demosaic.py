@@ -28,7 +28,8 @@ def slots(pattern: str) -> tuple[str, str]:
 
 @dataclass(frozen=True)
 class DemosaicMethod:
-    """A demosaicing method: the colour-demosaicing function's name, its own options, a reference."""
+    """A demosaicing method: the colour-demosaicing function's name, its own options (each a switch, true
+    or false), a reference."""
 
     name: str
     function: str
@@ -56,18 +57,37 @@ DEFAULT_METHOD = "Malvar2004"
 
 def check_method(name: str, options: dict | None = None) -> DemosaicMethod:
     """The method `name`, its `options` checked against its own (SolasError naming what is allowed)."""
-    if name not in METHODS:
+    if not isinstance(name, str) or name not in METHODS:
         raise SolasError(f"demosaicing method {name!r} must be one of {', '.join(METHODS)}")
     method = METHODS[name]
-    unknown = sorted(set(options or {}) - set(method.options))
+    options = {} if options is None else options
+    if not isinstance(options, dict):
+        raise SolasError(f"demosaicing options {options!r} must be a table of option = true/false "
+                         f"({name}'s options: {', '.join(method.options) or 'none'})")
+    unknown = sorted(set(options) - set(method.options))
     if unknown:
         raise SolasError(f"demosaicing method {name!r} takes no option {', '.join(unknown)} "
                          f"(its options: {', '.join(method.options) or 'none'})")
+    for key, value in options.items():
+        if not isinstance(value, bool):
+            raise SolasError(f"demosaicing option {key} = {value!r} must be true or false (a switch of {name})")
     return method
+
+
+MINIMUM_FRAME = 2  # rows and columns: one whole 2×2 tile of the pattern, a site of every filter
+
+
+def check_frame(shape: tuple[int, ...], what: str) -> None:
+    """SolasError unless a mosaic of `shape` holds a whole CFA tile (every filter's sites); `what` needs it."""
+    if len(shape) != 2 or min(shape) < MINIMUM_FRAME:
+        size = "x".join(str(n) for n in shape[::-1])
+        raise SolasError(f"{what} needs a frame of at least {MINIMUM_FRAME}x{MINIMUM_FRAME} pixels (one whole tile of "
+                         f"the colour filter array), got {size}")
 
 
 def demosaic(mosaic: np.ndarray, pattern: str, method: str = DEFAULT_METHOD, **options) -> np.ndarray:
     """The three channels (H, W, 3; filters `slots(pattern)[1]`) of a one-channel mosaic of `pattern`."""
     function = check_method(method, options).compute()
+    check_frame(mosaic.shape, f"demosaicing ({method})")
     bayer, _ = slots(pattern)
     return np.asarray(function(mosaic, bayer, **options), dtype=np.float64)

@@ -22,6 +22,7 @@ table of its fields, e.g.
 """
 from __future__ import annotations
 
+import os
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
@@ -51,23 +52,29 @@ class ISP:
     def __post_init__(self):
         if not isinstance(self.black_level, bool):
             raise SolasError(f"isp black_level {self.black_level!r} must be true or false")
-        named = tuple(m for m in white.METHODS if m != "given")  # "given" is written as a table of gains
-        if isinstance(self.white_balance, str) and self.white_balance not in named:
-            raise SolasError(f"isp white_balance {self.white_balance!r} must be one of daylight, grey-world, "
-                             "grey-card, none, or a table of gains per filter")
-        if (self.white_balance == "grey-card") != (self.grey_card is not None):
-            raise SolasError("isp grey_card (x0, y0, x1, y1) goes with white_balance = \"grey-card\", and only with it")
-        if self.grey_card is not None:
-            object.__setattr__(self, "grey_card", tuple(self.grey_card))
-        if self.demosaic != "none":
+        self._check_white_balance()
+        if not isinstance(self.demosaic, str) or self.demosaic != "none":
             demosaic.check_method(self.demosaic, self.demosaic_options)
-        elif self.ccm != "none" or self.demosaic_options:
+        elif self.ccm != "none" or self.demosaic_options != {}:
             raise SolasError("isp demosaic = \"none\" gives a grey frame: it takes ccm = \"none\" and no demosaic_options")
         if not isinstance(self.ccm, str):
             object.__setattr__(self, "ccm", tuple(map(tuple, ccm.check_matrix(self.ccm))))
         elif self.ccm not in ("sensor", "none"):
             raise SolasError(f"isp ccm {self.ccm!r} must be sensor, none, or a 3 × 3 matrix")
         tone.check_curve(self.tone, self.gamma)
+
+    def _check_white_balance(self) -> None:
+        """A method's name or a table of gains; a grey card's box with grey-card, and only with it."""
+        named = tuple(m for m in white.METHODS if m != "given")  # "given" is written as a table of gains
+        if isinstance(self.white_balance, dict):
+            white.check_gains(self.white_balance)
+        elif not isinstance(self.white_balance, str) or self.white_balance not in named:
+            raise SolasError(f"isp white_balance {self.white_balance!r} must be one of {', '.join(named)}, "
+                             "or a table of gains per filter")
+        if (self.white_balance == "grey-card") != (self.grey_card is not None):
+            raise SolasError("isp grey_card (x0, y0, x1, y1) goes with white_balance = \"grey-card\", and only with it")
+        if self.grey_card is not None:
+            object.__setattr__(self, "grey_card", white.check_box(self.grey_card))
 
     @classmethod
     def from_dict(cls, values: dict) -> ISP:
@@ -87,10 +94,13 @@ def load_isp(text: str | Path) -> ISP:
     """The `ISP` named ``default``, or that of the ``[isp]`` table of TOML file `text`."""
     if str(text) == DEFAULT:
         return ISP()
-    if not Path(text).is_file():
+    if not os.path.lexists(text):
         raise SolasError(f"isp {str(text)!r} must be 'default' or a TOML file with an [isp] table (no such file)")
     values = toml_table(text, "isp", "isp file")
     try:
+        if "gamma" in values and values.get("tone") != "gamma":
+            raise SolasError(f"isp gamma = {values['gamma']!r} goes with tone = \"gamma\" (tone here: "
+                             f"{values.get('tone', ISP.tone)!r}); give both, or neither")
         return ISP.from_dict(values)
     except SolasError as exc:
         raise SolasError(f"isp file {str(text)!r}: {exc}") from None

@@ -56,10 +56,13 @@ def run_sfr(args: argparse.Namespace) -> int:
     from ..imageio import read_image
     from .esfr import check_mode, esfr
     from .nssfr import CHART_MARGINS, find_edge_rois
-    from .roi import crop, luminance, parse_roi
+    from .roi import crop, is_grey, luminance, parse_roi
 
     check_mode(args.mode)
     image = read_image(args.image, linearize=not args.linear)
+    if args.channel is not None and is_grey(image):
+        raise SolasError(f"--channel {args.channel}: {args.image} is a grey image (one channel), it has no colour "
+                         "channels; measure it without --channel")
     full_scale = _full_scale(args)
     if args.roi:
         rois = [parse_roi(text) for text in args.roi]
@@ -222,7 +225,9 @@ def register(subparsers: Any) -> None:
     p.add_argument("--angle-deg", type=float, default=5.0, help="edge tilt from vertical, degrees")
     p.add_argument("--sigma-px", type=float, default=1.0, help="Gaussian PSF sigma, px")
     p.add_argument("--size", default="128x128", help="WxH in px")
-    p.add_argument("--shape", choices=("edge", "square"), default="edge")
+    p.add_argument("--shape", choices=("edge", "square"), default="edge",
+                   help="one slanted edge (--low left or below it, --high beyond), or a --low square at the centre, its side "
+                        "half the image's shorter side, turned by --angle-deg, on --high (four edges)")
     p.add_argument("--low", type=float, default=0.2, help="dark linear level")
     p.add_argument("--high", type=float, default=0.8, help="bright linear level")
     p.add_argument("--noise", type=float, default=0.0, help="Gaussian noise sd, fraction of the step")

@@ -92,6 +92,8 @@ def _finish(
         raise SolasError(f"bit depth {bit_depth} is not supported: allowed None (float), 8, 16")
     if not (isinstance(noise, (int, float)) and 0 <= noise < math.inf):
         raise SolasError(f"noise {noise!r} must be a finite number ≥ 0 (sd as a fraction of the step)")
+    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int) or seed < 0):
+        raise SolasError(f"noise seed {seed!r} must be a whole number ≥ 0 (or none: a fresh one)")
     img = low + (high - low) * field_
     if noise > 0:
         img = img + np.random.default_rng(seed).normal(0.0, noise * abs(high - low), img.shape)

@@ -42,7 +42,7 @@ from . import zemax_solves
 from .codev_glass import PrivateCatalogue, material, unquote
 from .codev_syntax import (APERTURES, ASPHERIC, FIELDS, IGNORED, REFUSED, SYSTEM, VIGNETTING, ZERO_IS_NOTHING,
                            command, commands)
-from .formats import READERS
+from .formats import MAX_FIELDS, READERS, check_count
 from .formats import floats as _numbers
 from .lens import Lens
 from .paraxial import paraxial
@@ -348,6 +348,7 @@ def _fields(system: dict, scale: float, where: str) -> tuple[str, list[float]]:
     y = _numbers(system.get(given[0], []), f"{where}: {given[0]}")
     x = _numbers(system.get("X" + given[0][1:], []), f"{where}: X{given[0][1:]}")
     n = max(len(x), len(y))
+    check_count(n, "fields", MAX_FIELDS, where)
     x, y = x + [0.0] * (n - len(x)), y + [0.0] * (n - len(y))
     unit = 1.0 if given[0] == "YAN" else scale
     return FIELDS[given[0]], [math.hypot(a, b) * unit for a, b in zip(x, y)]

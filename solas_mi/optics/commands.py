@@ -1,6 +1,7 @@
 """`solas-mi lens info`: paraxial data, real chief rays, and the distortion and relative illumination
 table (image height vs field, closest projection) of a lens, as a table or JSON;
-`solas-mi lens convert`: a lens file in another format (.toml, .zmx, .dat)."""
+`solas-mi lens convert`: a lens file in another format (`formats.writable()`); `add_lens_argument`, the LENS of
+every command that takes one."""
 from __future__ import annotations
 
 import sys
@@ -9,14 +10,20 @@ from typing import Any
 import numpy as np
 
 from .. import jsonio
-from ..options import add_lens_argument, floats
+from ..options import floats
 from . import notes
+from .formats import lens_help, writable
 
 _ROWS = [("efl_mm", "EFL (mm)"), ("bfd_mm", "BFD (mm)"), ("entrance_pupil_diameter_mm", "EPD (mm)"),
          ("entrance_pupil_z_mm", "entrance pupil z (mm)"), ("exit_pupil_diameter_mm", "exit pupil D (mm)"),
          ("exit_pupil_z_mm", "exit pupil z (mm)"), ("f_number", "f/# (EFL/EPD)"),
          ("working_f_number", "working f/#"), ("exit_pupil_f_number", "f/# (exit pupil → image)"),
          ("image_offset_mm", "image plane − paraxial focus (mm)")]
+
+
+def add_lens_argument(p) -> None:
+    """The positional LENS argument of every command that takes a lens."""
+    p.add_argument("lens", help=lens_help())
 
 
 def load_lens(name: str):
@@ -132,9 +139,10 @@ def register(sub: Any) -> None:
     add_lens_argument(info)
     info.add_argument("--wavelengths-nm", help="nm, comma-separated (default: the lens file's)")
     info.add_argument("--fields", help="y field angles in degrees, comma-separated")
-    info.add_argument("--json", action="store_true")
+    info.add_argument("--json", action="store_true", help="as JSON instead of the table: every value at full precision, each key naming its unit")
     info.set_defaults(run=run_lens_info)
-    convert = lens.add_parser("convert", help="write a lens file in another format (.toml, .zmx, .dat by extension)")
+    convert = lens.add_parser("convert", help=f"write a lens file in another format ({writable()}, by extension)")
     add_lens_argument(convert)
-    convert.add_argument("-o", "--output", required=True, help="the new lens file: .toml, .zmx (Zemax) or .dat (pbrt)")
+    convert.add_argument("-o", "--output", required=True, help=f"the new lens file, its format by its extension: "
+                                                                f"{writable()}")
     convert.set_defaults(run=run_lens_convert)

@@ -11,6 +11,7 @@ from pathlib import Path
 
 from ..errors import SolasError
 from ..resources import resource_dir
+from ..userfiles import check
 from . import lens_toml, pbrt_dat
 
 LENS_DIR = "lenses"
@@ -25,6 +26,25 @@ READERS = {".dat": pbrt_dat.read_spec}
 # What a lens read from a format must hold beyond any lens's checks: a .dat table, what pbrt can trace
 READ_CHECKS = {".dat": pbrt_dat.check_read}
 WRITERS = {".toml": lens_toml.dumps, ".dat": pbrt_dat.dumps}
+
+
+# The most a lens may hold, in every reader and in `Lens` itself. A trace is one Dr.Jit kernel through
+# every surface, whose compile time grows faster than the surfaces (`lens info`: 100 surfaces ~30 s on 2
+# cores, 300 ~4 min) and whose assembly recurses once per variable of a ray's chain of operations
+# (`jitc_var_traverse`, ~50 variables and ~5 KiB of stack a surface): ~1 600 surfaces overflow an 8 MiB
+# stack, a segmentation fault. The wavelengths and a file's fields each multiply the traces of `lens info`
+# and of the readers' solves (64 wavelengths and 200 fields of a .zmx with automatic apertures: ~10 s).
+# Real lenses: up to ~60 surfaces (lithography objectives ~80), 3 to 25 fields; the visible at 10 nm
+# steps is 41 wavelengths.
+MAX_SURFACES = 128
+MAX_WAVELENGTHS = 64
+MAX_FIELDS = 200
+
+
+def check_count(count: int, what: str, most: int, where: str) -> None:
+    """SolasError naming `where` unless `count` (of surfaces, wavelengths, fields: `what`) is at most `most`."""
+    if count > most:
+        raise SolasError(f"{where}: {count} {what}; a lens may have at most {most}")
 
 
 def decode_text(data: bytes) -> str:
@@ -61,8 +81,28 @@ def floats(tokens: list[str], where: str) -> list[float]:
 
 
 def listed(formats) -> str:
-    """The extensions of `formats` that FORMATS lists, in its order, comma-separated."""
-    return ", ".join(e for e in FORMATS if e in formats)
+    """The extensions `formats`, comma-separated: in FORMATS's order, any it does not list after them."""
+    return ", ".join(sorted(formats, key=lambda e: (FORMATS.index(e) if e in FORMATS else len(FORMATS), e)))
+
+
+def readable_formats() -> set[str]:
+    """The lens file extensions `Lens.load` reads: our TOML and each registered reader's."""
+    return READERS.keys() | {".toml"}
+
+
+def readable() -> str:
+    """`readable_formats()`, comma-separated: what every message and help text that lists lens files says."""
+    return listed(readable_formats())
+
+
+def writable() -> str:
+    """The lens file extensions `Lens.save` writes (each registered writer's), comma-separated."""
+    return listed(WRITERS)
+
+
+def lens_help() -> str:
+    """What a lens argument or option takes, for help texts."""
+    return f"a shipped lens name (e.g. solas-doublet; `solas-mi lens list`) or a lens file ({readable()})"
 
 
 def _shipped_dir() -> Path:
@@ -79,19 +119,15 @@ def lens_path(name_or_path) -> Path:
     lens extension: a name holding a path separator or an extension is a path."""
     if not isinstance(name_or_path, (str, os.PathLike)):
         raise SolasError(f"lens {name_or_path!r} must be a shipped lens name ({', '.join(shipped_lenses())}) "
-                         f"or a path to a lens file ({listed(READERS.keys() | {'.toml'})})")
+                         f"or a path to a lens file ({readable()})")
     given = os.fspath(name_or_path)
     path = Path(given)
     if not path.suffix and not any(sep and sep in given for sep in (os.sep, os.altsep, "/")):
         path = _shipped_dir() / (given.replace("-", "_") + ".toml")
         if not path.is_file():
             raise SolasError(f"unknown lens {given!r}; shipped lenses: {', '.join(shipped_lenses())}, or a path "
-                             f"to a lens file ({listed(READERS.keys() | {'.toml'})})")
-    if path.suffix.lower() not in READERS.keys() | {".toml"}:
+                             f"to a lens file ({readable()})")
+    if path.suffix.lower() not in readable_formats():
         what = f"unknown extension {path.suffix!r}" if path.suffix else "no lens extension"
-        raise SolasError(f"lens file {given!r} has {what}; allowed: {listed(READERS.keys() | {'.toml'})}")
-    if path.is_dir():
-        raise SolasError(f"lens file {given!r} is a folder, not a lens file")
-    if not path.is_file():
-        raise SolasError(f"lens file {str(path)!r} does not exist")
-    return path
+        raise SolasError(f"lens file {given!r} has {what}; allowed: {readable()}")
+    return check(path, "lens file")

@@ -29,9 +29,8 @@ Read as the author meant it:
   Vignetting factors VDXN/VCXN/VDYN/VCYN shape the beam automatic semi-diameters follow.
 - UNIT (MM, CM, IN, METER) scales every length to mm; WAVM (or WAVL) the wavelengths (µm in the file),
   PWAV the one the aperture and field solves use; surface 0's DISZ the object distance. The last SURF
-  is the image plane (its DIAM the image semi-diameter).
-Mirrors, gratings, toroids, tilted or decentred coordinate breaks and other surface types are
-refused naming the surface and the feature.
+  is the image plane (its DIAM the image semi-diameter). Mirrors, gratings, toroids, tilted or decentred
+  coordinate breaks and other surface types are refused naming the surface and the feature.
 """
 from __future__ import annotations
 
@@ -41,7 +40,7 @@ from ..errors import SolasError
 from . import forbes, ideal
 from . import glass as glass_mod
 from . import zemax_solves
-from .formats import READERS, WRITERS, one_line
+from .formats import MAX_FIELDS, READERS, WRITERS, check_count, one_line
 from .formats import floats as _floats
 
 UNITS = {"MM": 1.0, "CM": 10.0, "IN": 25.4, "METER": 1000.0, "M": 1000.0}
@@ -334,6 +333,7 @@ def _fields(top: dict, scale: float, where: str) -> tuple[str, list[float]]:
     xs = _floats((top.get("XFLN") or [[]])[0], f"{where}: XFLN")
     ys = _floats((top.get("YFLN") or [[]])[0], f"{where}: YFLN")
     n = int(count) if count > 0 else max(len(xs), len(ys))
+    check_count(n, "fields", MAX_FIELDS, where)
     xs, ys = (v + [0.0] * (n - len(v)) for v in (xs[:n], ys[:n]))
     unit = 1.0 if kind == "angle" else scale
     return kind, [math.hypot(x, y) * unit for x, y in zip(xs, ys)]

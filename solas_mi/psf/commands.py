@@ -5,10 +5,16 @@ import sys
 from typing import Any
 
 from ..errors import SolasError
-from ..options import add_lens_argument, floats
-from ..outputs import data_and_preview, written_together
+from ..optics.commands import add_lens_argument
+from ..options import floats
+from ..outputs import add_png_option, data_and_preview, written_together
 from ..progress import Progress
 from .spec import add_options, from_args, given
+
+
+# what --field-deg takes: its help and its message (one value is a field on the y axis, as `lens info --fields`
+# and a lens file's field_deg)
+FIELD_FORM = "X,Y in degrees, or one value Y (x = 0)"
 
 
 def _field(text: str) -> tuple[float, float]:
@@ -16,7 +22,7 @@ def _field(text: str) -> tuple[float, float]:
     if len(values) == 1:
         values = [0.0, values[0]]
     if len(values) != 2:
-        raise SolasError(f"--field-deg {text!r} must be X,Y in degrees (or one value, taken as Y)")
+        raise SolasError(f"--field-deg {text!r} must be {FIELD_FORM}")
     return values[0], values[1]
 
 
@@ -54,9 +60,9 @@ def run_psf_grid(args) -> int:
     from ..optics.commands import load_lens
     from .depth import make_grid
 
-    # the mosaic preview only when asked: a 32×32 grid's costs about 0.9 s (block means + a 2048² PNG)
-    data_file, png = data_and_preview(args.output, args.png or None)
-    png = png if args.png is not None else None
+    # the mosaic only when asked: a 32×32 grid's costs about 0.9 s (block means + a 2048² PNG)
+    data_file, png = data_and_preview(args.output, args.mosaic or None)
+    png = png if args.mosaic is not None else None
     lens = load_lens(args.lens)
     spec = from_args(args)
     count = len(spec.wavelengths_nm or lens.wavelengths_nm) * spec.grid[0] * spec.grid[1] * len(spec.distances_m or [0])
@@ -73,25 +79,27 @@ def run_psf_grid(args) -> int:
 
 def _add_outputs(p) -> None:
     p.add_argument("-o", "--output", required=True, help="output OpenEXR file")
-    p.add_argument("--png", help="PNG for viewing (default: beside the EXR)")
+    add_png_option(p)
 
 
 def register(sub: Any) -> None:
     """Add `psf` and `psf-grid`."""
     psf = sub.add_parser("psf", help="one PSF (Fraunhofer or geometric) as OpenEXR + PNG")
     add_lens_argument(psf)
-    psf.add_argument("--field-deg", required=True, help="X,Y field angle in degrees")
+    psf.add_argument("--field-deg", required=True, help=f"field angle: {FIELD_FORM}")
     psf.add_argument("--wavelengths-nm", required=True, help="one wavelength, or several for a polychromatic PSF")
     psf.add_argument("--weights", help="weights of the wavelengths (default: equal)")
     add_options(psf, psf_only=True)
     _add_outputs(psf)
     psf.set_defaults(run=run_psf)
 
-    grid = sub.add_parser("psf-grid", help="PSFs on a field grid, one stack per wavelength, as OpenEXR (+ PNG mosaic with --png)")
+    grid = sub.add_parser("psf-grid", help="PSFs on a field grid, one stack per wavelength, as OpenEXR (+ PNG mosaic "
+                                           "with --mosaic)")
     add_lens_argument(grid)
     add_options(grid)
     grid.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
     grid.add_argument("-o", "--output", required=True, help="output OpenEXR file")
-    grid.add_argument("--png", nargs="?", const="", metavar="PNG",
-                      help="also write a PNG mosaic for viewing (beside the EXR, or at PNG); default: none")
+    grid.add_argument("--mosaic", nargs="?", const="", metavar="PNG",
+                      help="also write the grid as a PNG mosaic for viewing, axes in field degrees (beside the EXR, "
+                           "of the same name, or at PNG); default: none (a 32x32 grid's takes about a second)")
     grid.set_defaults(run=run_psf_grid)

@@ -3,11 +3,14 @@ each PSF is — the field angle of its node in degrees — and whose title gives
 in µm, the wavelengths and the scaling (each PSF to its own peak). matplotlib is imported only here."""
 from __future__ import annotations
 
+import math
 import os
 
 import numpy as np
 
 MAX_TICKS = 9  # node labels per axis; a larger grid labels every k-th node
+MARGIN_PX = 8  # between the outermost label and the edge of the image
+MIN_SIDE_PX = 480  # a smaller mosaic is drawn at a whole multiple of its size, at least this on its longer side
 
 
 def _ticks(count: int, tile: int) -> tuple[np.ndarray, np.ndarray]:
@@ -33,9 +36,9 @@ def plot_grid(grid, image: np.ndarray, path: str | os.PathLike, dpi: int = 100) 
     height, width = image.shape[:2]
     ny, nx = grid.shape
     shown = np.clip(srgb_encode(np.clip(image, 0.0, 1.0)), 0.0, 1.0)
-    wide, high = max(width, 560) + 110, height + 110  # the margins hold labels and title
-    fig = Figure(figsize=(wide / dpi, high / dpi), dpi=dpi)
-    ax = fig.add_axes((80 / wide, 55 / high, (wide - 110) / wide, height / high))
+    zoom = max(1, -(-MIN_SIDE_PX // max(width, height)))  # a small mosaic drawn larger, each pixel a block
+    fig = Figure(dpi=dpi)
+    ax = fig.add_axes((0, 0, 1, 1))
     ax.imshow(shown, cmap="gray", vmin=0, vmax=1, interpolation="nearest", extent=(0, width, height, 0))
     cols, x_at = _ticks(nx, width // nx)
     rows, y_at = _ticks(ny, height // ny)
@@ -45,5 +48,21 @@ def plot_grid(grid, image: np.ndarray, path: str | os.PathLike, dpi: int = 100) 
     ax.set_ylabel("field y (deg)")
     ax.set_title(f"{ny}×{nx} nodes, each PSF {grid.size} px × {grid.pitch_um:g} µm = {grid.size * grid.pitch_um:g} µm "
                  f"wide, scaled to its peak; {colour_note(grid.wavelengths_nm)}", fontsize=8)
+    _fit_margins(fig, ax, zoom * width, zoom * height)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=dpi)
+
+
+def _fit_margins(fig, ax, width: int, height: int, pad: int = MARGIN_PX) -> None:
+    """Size the figure around `ax` (the mosaic, drawn `width` × `height` px) so that its tick labels, axis
+    labels and title lie inside it, `pad` px from each edge, whatever their length."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+    ax.set_position((0, 0, 1, 1))
+    fig.set_size_inches(width / fig.dpi, height / fig.dpi)
+    box = ax.get_tightbbox(FigureCanvasAgg(fig).get_renderer())  # in pixels, the axes at (0, 0, width, height)
+    left, bottom = pad - min(box.x0, 0.0), pad - min(box.y0, 0.0)
+    wide = math.ceil(left + max(box.x1, width) + pad)  # whole pixels: the PNG is this size
+    high = math.ceil(bottom + max(box.y1, height) + pad)
+    fig.set_size_inches(wide / fig.dpi, high / fig.dpi)
+    ax.set_position((left / wide, bottom / high, width / wide, height / high))

@@ -32,10 +32,13 @@ def _option(default, flag: str, help: str, *, parse=None, type=None, choices=Non
                                             "choices": choices, "psf": psf})
 
 
+RANGE_FORM = "X,Y in degrees, or one value for both"  # what --field-range-deg takes: its help and its message
+
+
 def _range(text: str) -> tuple[float, float]:
     values = floats(text, "--field-range-deg")
     if len(values) not in (1, 2):
-        raise SolasError(f"--field-range-deg {text!r} must be one value or X,Y")
+        raise SolasError(f"--field-range-deg {text!r} must be {RANGE_FORM}")
     return values[0], values[-1]
 
 
@@ -50,7 +53,7 @@ class GridSpec:
     layout: str = _option(LAYOUTS[0], "--layout", "field: nodes on field angles; sensor: nodes on sensor positions "
                                                   "(wide and fisheye lenses)", choices=LAYOUTS)
     field_range_deg: tuple[float, float] | None = _option(
-        None, "--field-range-deg", "half range X[,Y] in degrees (default: the lens file's field)", parse=_range)
+        None, "--field-range-deg", f"half range: {RANGE_FORM} (default: the lens file's field)", parse=_range)
     field_sampling: str = _option(FIELD_SAMPLINGS[0], "--field-sampling", "nodes at cell centres or spanning the "
                                                                           "range's ends", choices=FIELD_SAMPLINGS)
     sensor_mm: tuple[float, float] | None = _option(
@@ -216,14 +219,17 @@ def _dest(f) -> str:
     return f.metadata["flag"].lstrip("-").replace("-", "_")
 
 
-def add_options(p, psf_only: bool = False) -> None:
+def add_options(p, psf_only: bool = False, defaults: dict | None = None) -> None:
     """One flag per GridSpec field (`psf_only`: those the single-PSF command takes), defaults unset
-    (None: GridSpec's, or `psf`'s, apply)."""
+    (None: GridSpec's, or `psf`'s, apply; a command that applies its own, `defaults`: field name → value,
+    has them shown in its help)."""
+    defaults = defaults or {}
     for f in fields(GridSpec):
         m = f.metadata
         if psf_only and not m["psf"]:
             continue
-        default = "" if f.default is None else f" (default: {_shown(f.default)})"
+        value = defaults.get(f.name, f.default)
+        default = "" if value is None else f" (default: {_shown(value)})"
         if isinstance(f.default, bool):
             p.add_argument(m["flag"], dest=_dest(f), action="store_true", default=None, help=m["help"])
         else:

@@ -8,6 +8,7 @@ import sys
 from pathlib import Path
 
 from ..errors import SolasError
+from ..outputs import add_png_option
 from .spec import MAX_SPP, add_spec_flags, spec_from_args
 
 DEFAULT_IMAGE = "images/rocket.png"  # under the shipped scenes directory
@@ -22,7 +23,8 @@ def _check_spp(spp) -> None:
 
 def check_render(width: int, height: int, spp: int, force: bool, labels=()) -> None:
     """Refuse an absurd spp or a render that cannot fit in memory (its label layers, `labels`, counted);
-    announce a long one on stderr."""
+    announce a long one on stderr (how long it takes depends on what else the machine runs: its progress
+    tells the time left at the rate measured)."""
     import os
 
     from ..budget import check_memory
@@ -35,10 +37,9 @@ def check_render(width: int, height: int, spp: int, force: bool, labels=()) -> N
     need = max(pixels, SAMPLES_PER_PASS) * BYTES_PER_SAMPLE + 48 * pixels + memory_bytes(pixels, kinds)
     check_memory(f"render {width}x{height}" + (f" with labels {','.join(kinds)}" if kinds else ""), need, force,
                  "a smaller sensor")
-    seconds = pixels * spp / (SAMPLES_PER_SECOND_PER_CORE * (os.cpu_count() or 1))
-    if seconds > 60:
-        print(f"render {width}x{height} at {spp} spp: {pixels * spp:.3g} samples, about {seconds / 60:.0f} min",
-              file=sys.stderr, flush=True)
+    if pixels * spp > 60 * SAMPLES_PER_SECOND_PER_CORE * (os.cpu_count() or 1):  # a minute at least, idle
+        print(f"render {width}x{height} at {spp} spp: {pixels * spp:.3g} samples, a long render: its progress "
+              "tells the time left at the rate it measures", file=sys.stderr, flush=True)
 
 
 def _progress(spp: int):
@@ -76,6 +77,7 @@ def _scene(args) -> int:
     from ..optics.commands import load_lens
     from ..outputs import output_folder
     from .response import parse
+    from ..userfiles import check
     from .scene import write_scene
 
     out = output_folder(args.output)
@@ -84,9 +86,7 @@ def _scene(args) -> int:
     parse(spec.response, lens.wavelengths_nm)  # a bad response is refused now, not when the scene renders
     camera = camera_for(lens, spec.sensor, spec.fov_deg, spec.pitch_um)
     out.mkdir(parents=True, exist_ok=True)
-    image = Path(args.image or _default_image())
-    if not image.is_file():
-        raise SolasError(f"no such image file: {image}")
+    image = check(args.image or _default_image(), "image file")  # copied beside the scene: a regular file
     kind, sep, table = spec.response.partition(":")
     if kind.strip().lower() == "table" and table:  # the table travels with the scene, like the image
         spec = spec.replace(response=f"{kind}{sep}{_copy_beside(Path(table), out)}")
@@ -197,12 +197,15 @@ def _render_image(args) -> int:
 def _add_output_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
     p.add_argument("-o", "--output", required=True, help="output OpenEXR file (linear)")
-    p.add_argument("--png", help="sRGB PNG for viewing (default: beside the EXR)")
+    add_png_option(p)
 
 
 def register(sub) -> None:
+    from ..optics.commands import add_lens_argument
+    from ..optics.formats import lens_help
+
     scene = sub.add_parser("scene", help="write a Mitsuba scene (XML + cap meshes) for a lens")
-    scene.add_argument("lens", help="shipped lens name (solas-doublet) or a .toml lens file")
+    add_lens_argument(scene)
     scene.add_argument("-o", "--output", required=True, help="output directory")
     scene.add_argument("--image", help="input image (copied beside the scene; default: the bundled photograph)")
     add_spec_flags(scene, SCENE_SETTINGS)
@@ -216,7 +219,7 @@ def register(sub) -> None:
     render.add_argument("scene", help="scene XML")
     render.add_argument("--set", action="append", metavar="NAME=VALUE",
                         help="override a <default> of the scene (e.g. --set image=other.png); repeatable")
-    render.add_argument("--lens", help="replace the scene's perspective camera by this lens (shipped name or .toml)")
+    render.add_argument("--lens", help=f"replace the scene's perspective camera by this lens: {lens_help()}")
     render.add_argument("--pitch-um", type=float, help="with --lens: pixel pitch in µm (default: the lens's field "
                                                        "matches the perspective camera's fov)")
     render.add_argument("--focus-distance", help="with --lens: focus distance in world units, or auto (the depth "
@@ -235,7 +238,7 @@ def register(sub) -> None:
     render.set_defaults(run=_render)
 
     image = sub.add_parser("render-image", help="render an input image through the lens geometry")
-    image.add_argument("lens", help="shipped lens name (solas-doublet) or a .toml lens file")
+    add_lens_argument(image)
     image.add_argument("image", help="input image (PNG/JPEG: sRGB; EXR: linear)")
     add_spec_flags(image, IMAGE_SETTINGS)
     _add_output_options(image)

@@ -18,6 +18,7 @@ from .loop import Render, render
 from .mitsuba import load_scene, variant_for
 from .scene import resolve_rings, write_scene
 from .spec import RenderSpec
+from .user_scene import unit_f_number
 
 SCENE_PREFIX = "solas-scene-"  # + the process id: $TMPDIR/solas-scene-PID-XXXXXXXX, one per image render
 
@@ -92,7 +93,7 @@ def render_image(lens, image: str | np.ndarray, spec: RenderSpec | None = None, 
         xml = write_scene(lens, tmp, str(Path(image).resolve()), camera, spec)
         scene = load_scene(xml, variant)
         result = render(scene, spec.spp, seed=spec.seed, progress=progress)
-    result.meta.update(camera.meta())
+    result.meta.update(camera.meta(), f_number=unit_f_number(scene.sensors()[0]))
     result.meta.update({"lens": lens.name, "lens_hash": lens.hash, "boundary": spec.boundary, "fresnel": spec.fresnel,
                         "mapping": spec.mapping, "cap_rings": resolve_rings(lens, spec.rings), "render_spec": spec.as_dict()})
     return result

@@ -237,7 +237,9 @@ def _reads_as(source: Path) -> Lens:
     caller has loaded it already; the scene's sensor parses its own copy)."""
     import hashlib
 
-    key = (str(source.resolve()), hashlib.sha256(source.read_bytes()).hexdigest())
+    from ..userfiles import read_bytes
+
+    key = (str(source.resolve()), hashlib.sha256(read_bytes(source, "lens file")).hexdigest())
     if key not in _READS_AS:
         _READS_AS[key] = Lens.load(source)
     return _READS_AS[key]

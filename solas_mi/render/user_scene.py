@@ -25,12 +25,15 @@ rectangles of one material, 256×256 at 16 spp: the render is no slower unmerged
 from __future__ import annotations
 
 import math
+import os
 import tempfile
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import SolasError, plugin_error
+from ..userfiles import check, read_bytes
 from .scene import lens_file
 
 SWAPPABLE = ("perspective", "thinlens")
@@ -40,19 +43,51 @@ CAMERA_ONLY = ("fov", "focal_length", "fov_axis", "near_clip", "far_clip", "focu
                "principal_point_offset_x", "principal_point_offset_y")  # what the lens camera replaces
 
 
+def _scene_text(xml_path: str | Path) -> str:
+    """The text of the scene file and of the files it includes (as far as their names hold no parameter),
+    each checked to be a regular file within `userfiles`' bound before Mitsuba's parser opens it (a FIFO
+    would stop it for ever): what the user wrote, which Mitsuba's messages may quote (`plugin_error`)."""
+    texts, todo, seen = [], [Path(xml_path)], set()
+    while todo:
+        path = todo.pop()
+        data = read_bytes(path, "scene file")
+        seen.add(path.resolve())
+        texts.append(data.decode("utf-8", errors="replace"))
+        try:
+            root = ET.fromstring(data)
+        except ET.ParseError:  # Mitsuba's parser names the fault
+            continue
+        names = [e.get("filename", "") for e in root.iter("include")]
+        for name in (n for n in names if n and "$" not in n):  # a parameter's value: Mitsuba's to resolve
+            found = next((f / name for f in (path.parent, Path(xml_path).parent) if os.path.lexists(f / name)), None)
+            if found is not None and found.resolve() not in seen:
+                todo.append(found)
+    return "\n".join(texts)
+
+
 def _parse(mi, xml_path: str | Path, params: dict | None):
     """(config, state) of Mitsuba's parser for the scene file with `params` (the scene's folder on the
     file resolver while the caller instantiates)."""
     path = Path(xml_path)
-    if not path.is_file():
-        raise SolasError(f"no such scene file: {path}")
+    _scene_text(path)
     config = mi.parser.ParserConfig(mi.variant())
     config.parallel = False  # our plugins trace with Dr.Jit when built: on the calling thread (`mitsuba.load_scene`)
     config.merge_meshes = False  # Mitsuba's default joins meshes of one material into one unnamed mesh: labels name each
     try:
         return config, mi.parser.parse_file(config, str(path), **{k: str(v) for k, v in (params or {}).items()})
     except RuntimeError as exc:
-        raise plugin_error(exc, f"cannot read scene {path}") from None
+        raise plugin_error(exc, f"cannot read scene {path}", _scene_text(path)) from None
+
+
+def _check_data(mi, state) -> None:
+    """Every file a node names (`filename`: a mesh, texture, spectrum), as the file resolver finds it, a
+    regular file within `userfiles`' bound before Mitsuba reads it; a missing one Mitsuba names."""
+    resolver = mi.file_resolver()
+    for node in state.nodes:
+        if "filename" in node.props.keys() and isinstance(node.props["filename"], str):
+            path = Path(str(resolver.resolve(node.props["filename"])))
+            if os.path.lexists(path):
+                check(path, "scene data file")
 
 
 def scene_files(xml_path: str | Path, params: dict | None = None) -> list[Path]:
@@ -260,15 +295,25 @@ def _built(mi, xml_path, params, lens, held, lens_options, notes):
     _add_integrator(mi, state)
     if lens is not None:
         _swap_sensor(mi, state, xml_path, lens, held, lens_options, notes)
+    _check_data(mi, state)
     try:
         mi.parser.transform_all(config, state)
         return mi.parser.instantiate(config, state)
     except RuntimeError as exc:
-        raise plugin_error(exc, f"cannot load scene {xml_path}") from None
+        raise plugin_error(exc, f"cannot load scene {xml_path}", _scene_text(xml_path)) from None
 
 
 def camera_meta(scene) -> dict:
-    """The lens camera's pitch (µm), focus distance and world unit (mm) for a render's metadata."""
+    """The lens camera's pitch (µm), focus distance, world unit (mm) and f-number (`unit_f_number`) for a
+    render's metadata."""
     sensor = scene.sensors()[0]
     return {"pitch_um": sensor.pitch_um, "focus_distance": sensor.focus_distance,
-            "world_unit_mm": sensor.world_unit_mm}
+            "world_unit_mm": sensor.world_unit_mm, "f_number": unit_f_number(sensor)}
+
+
+def unit_f_number(sensor) -> float:
+    """The f-number N of a lens sensor's unit: a render's pixel value v is the image irradiance
+    E = π v / (4 N²) for radiance in the scene's units (the sensor's `norm` is 1 / its unit in sr: the
+    ideal camera's π r_EP² / f'² for `lens_sensor`, a lossless lens's on-axis irradiance per unit radiance
+    for `lens_camera`). What `solas-mi camera` reads a render through."""
+    return math.sqrt(math.pi * sensor.norm / 4.0)

@@ -21,6 +21,7 @@ from ..convolution.kernels import check_boundary
 from ..errors import SolasError
 from ..metrics.annuli import ANNULI, corner_radius
 from ..optics.camera import check_fov
+from ..outputs import safe_name
 from ..progress import Progress
 from .engines import PSF_SAMPLING, Case, convolve, grid_units, ideal, psf_grid_for
 from .reference import Reference, check_reference, noise_variance_map, read_reference, reference, write_reference
@@ -159,7 +160,7 @@ def _case_rows(lens, image: np.ndarray, cases: list, ref, var_map, common: dict,
         log(f"crossval: {case.name}: rel. RMSE {100 * err.rel_rmse:.3f} % ({100 * err.rel_rmse_denoised:.3f} % "
             f"without noise), PSF grid {psf_s:.1f} s, convolution {conv_s:.2f} s")
         if out_dir is not None:
-            stem = case.name.replace(":", "_")
+            stem = safe_name(case.name)
             m = dict(common, case=case.name, psf_seconds=psf_s, conv_seconds=conv_s)
             write_rgb_exr(out_dir / f"{stem}.exr", img, m)
             write_error_map(out_dir, stem, img, ref.image, ref.rms, m)

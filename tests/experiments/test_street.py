@@ -13,6 +13,7 @@ from solas_mi.errors import SolasError
 from solas_mi.experiments.street.framings import FRAMINGS, NARROW, WIDE, framing
 from solas_mi.experiments.street.run import SCENE, Settings, experiment_scene, run
 from solas_mi.experiments.street.scene import write_street
+from solas_mi.outputs import safe_name
 
 
 def files(folder: Path) -> dict[str, bytes]:
@@ -85,6 +86,9 @@ def test_the_experiment_end_to_end(tmp_path):
     assert {e["nodes"] for n, e in report["errors"].items() if n.startswith("depth-aware")} == {1, 2, 3}
     assert "render noise removed" in (out / "street.md").read_text()
     assert not list(out.glob(".*"))  # no temporary file left
+    # every name plain (the depth-aware images are named "…, 3 nodes, focus 20 m": no comma, no space)
+    assert [p.name for p in out.rglob("*") if safe_name(p.name) != p.name] == []
+    assert (out / "depth-aware_interp_16x12_3_nodes_focus_20_m.exr").is_file()
 
 
 def test_bad_settings(tmp_path, doublet):

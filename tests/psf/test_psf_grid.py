@@ -98,3 +98,35 @@ def test_the_preview_png_has_labelled_axes_in_field_degrees(doublet, tmp_path, m
     assert xs == pytest.approx(g.fields_deg[1, :, 0], abs=5e-3) and ys == pytest.approx(g.fields_deg[:, 2, 1], abs=5e-3)
     assert "32 px × 2 µm = 64 µm" in ax.get_title()
     assert (tmp_path / "grid.png").is_file()
+
+
+@pytest.mark.parametrize("nodes, tile", [(32, 20), (2, 16)])
+def test_every_label_of_the_mosaic_lies_inside_the_png(tmp_path, monkeypatch, nodes, tile):
+    """The tick labels (node fields such as -0.0625), the axis labels and the title of a large grid's
+    mosaic and of a tiny one lie wholly inside the saved PNG: none cut off at an edge."""
+    from types import SimpleNamespace
+
+    import imageio.v3 as iio
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    from solas_mi.psf.preview import plot_grid
+
+    saved = []
+    save = Figure.savefig
+    monkeypatch.setattr(Figure, "savefig", lambda fig, *a, **k: (saved.append(fig), save(fig, *a, **k))[1])
+    centres = (np.arange(nodes) + 0.5) * 4.0 / nodes - 2.0  # `centers` sampling of ±2 deg
+    fields = np.stack(np.meshgrid(centres, centres[::-1]), axis=-1)
+    grid = SimpleNamespace(shape=(nodes, nodes), fields_deg=fields, size=160, pitch_um=0.5,
+                           wavelengths_nm=(656.0, 531.0, 486.0))
+    plot_grid(grid, np.zeros((nodes * tile, nodes * tile, 3)), tmp_path / "mosaic.png")
+    (fig,) = saved
+    (ax,) = fig.axes
+    renderer = FigureCanvasAgg(fig).get_renderer()
+    height, width = iio.imread(tmp_path / "mosaic.png").shape[:2]
+    assert (width, height) == (round(fig.bbox.width), round(fig.bbox.height))
+    texts = [ax.title, ax.xaxis.label, ax.yaxis.label, *ax.get_xticklabels(), *ax.get_yticklabels()]
+    assert "-0.0625" in [t.get_text() for t in texts] or nodes == 2
+    for text in texts:
+        box = text.get_window_extent(renderer)
+        assert box.x0 >= 0 and box.y0 >= 0 and box.x1 <= width and box.y1 <= height, text.get_text()

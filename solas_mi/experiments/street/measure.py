@@ -15,6 +15,7 @@ import numpy as np
 
 from ... import jsonio
 from ...metrics.annuli import ANNULUS_NAMES
+from ...outputs import safe_name
 from .prediction import edge_normal_deg, predicted_mtf50
 
 FAR_M = 50.0  # objects beyond this distance (m) are the far field
@@ -77,14 +78,14 @@ def measure(outcome, grids: dict, lay, near_focus_m: float, out: Path) -> list[d
         predicted = {g: [known[m.roi][1][g] for m in rep.rois] for g in grids}
         outcome.reports[name] = rep
         rows += sfr_rows(name, rep, far, predicted)
-        plot_report(rep, ideal, out / f"fig5_{name.replace(' ', '_')}.png")
+        plot_report(rep, ideal, out / f"fig5_{safe_name(name)}.png")
     near = depth < 1.5 * near_focus_m
     far_px = depth > FAR_M
     for conv in [n for n in outcome.images if n.startswith("interp")]:
         for name in [n for n in outcome.images if n.startswith("render")]:
             stats = error_stats(outcome.images[conv], outcome.images[name], near, far_px)
             rel = stats.pop("map")
-            heat_png(out / f"error_{conv.replace(' ', '_')}_vs_{name.replace(' ', '_')}.png", np.abs(rel),
+            heat_png(out / f"error_{safe_name(conv)}_vs_{safe_name(name)}.png", np.abs(rel),
                      f"|{conv} − {name}| / RMS({name})", vmax=0.2)
             outcome.errors[f"{conv} vs {name}"] = dict(stats, near_m=1.5 * near_focus_m, far_m=FAR_M)
     outcome.meta.update(rejected={n: r.rejected for n, r in outcome.reports.items()})

@@ -41,6 +41,7 @@ from pathlib import Path
 import numpy as np
 
 from ...errors import SolasError
+from ...outputs import safe_name
 from ...resources import resource_dir
 from .framings import framing
 from .depth import LAYERS, check_layers, depth_rows
@@ -101,10 +102,11 @@ def experiment_scene(source: Path, out: Path, primary_nm: float, depth: bool = F
     `primary_nm` — for a `spectral` variant a specfilm of a ±2 nm band, else the scene's own film
     (Mitsuba's luminance) — or, `depth`, an `aov` depth integrator; texture paths absolute."""
     from ...imageio import write_text
+    from ...userfiles import read_bytes
 
     if not source.is_file():
         raise SolasError(f"no street scene at {source}; write it with `solas-mi experiment street-scene`")
-    root = ET.parse(source).getroot()
+    root = ET.fromstring(read_bytes(source, "scene file"))
     for tex in root.iter("texture"):
         for s in tex.iter("string"):
             if s.get("name") == "filename":
@@ -309,7 +311,7 @@ def _write_images(st: _Steps, images: dict[str, np.ndarray], depth: np.ndarray) 
     from ...imageio import image_channels, write_exr, write_png
 
     for name, img in images.items():
-        stem = name.replace(" ", "_")
+        stem = safe_name(name)
         write_exr(st.out / f"{stem}.exr", image_channels(img), {"lens": st.lens.name, "image": name,
                                                                 "variant": st.variant})
         write_png(st.out / f"{stem}.png", np.clip(img / 0.9, 0, 1))
