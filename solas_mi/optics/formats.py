@@ -23,6 +23,8 @@ FORMATS = (".toml", ".zmx", ".seq", ".dat")
 # programs' files (`zemax`: .zmx, `codev`: .seq), which solve apertures and fields with the tracer,
 # add themselves when `solas_mi.optics` is imported (the tracer imports this module).
 READERS = {".dat": pbrt_dat.read_spec}
+# What a lens read from a format must hold beyond any lens's checks: a .dat table, what pbrt can trace
+READ_CHECKS = {".dat": pbrt_dat.check_read}
 WRITERS = {".toml": lens_toml.dumps, ".dat": pbrt_dat.dumps}
 
 
