@@ -196,7 +196,8 @@ class OptionSpec:
         return out
 
     @classmethod
-    def from_args(cls, args, names=None, *, defaults: dict | None = None, **fields_):
+    def from_args(cls, args, names=None, *, defaults: dict | None = None, **built):
         """The spec of the flags `names` (None: all) given in `args`, the others at `defaults` (field name
-        → value: the command's own) or the spec's; `fields_`: the fields the command built itself."""
-        return cls(**{**(defaults or {}), **cls.given(args, names), **fields_})
+        → value: the command's own) or the spec's; `built`: the fields the command built itself (from
+        flags of their own)."""
+        return cls(**{**(defaults or {}), **cls.given(args, names), **built})

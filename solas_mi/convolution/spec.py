@@ -46,7 +46,8 @@ class DegradeSpec(OptionSpec):
     batch's lens scaled to its focal length (`batch.degrade.scaled_lens`); `camera`: each degraded
     frame of a batch through a sensor and image processor (`isp.camera.Camera`, checked by the batch:
     a later stage); `grid_spec`: the grid a batch computes from its lens (`psf.spec.GridSpec`; None:
-    its defaults). `degrade_file` (one image) uses the first seven and `frame`."""
+    its defaults). One image (`degrade_file`) takes method, boundary, linear, output format, occlusion,
+    silhouette and frame; the others are a batch's."""
 
     method: str = option(_method_help, DEFAULT_METHOD, choices=lambda: tuple(METHODS))
     boundary: str = option("padding outside the image, never wrapped around: edge (default) replicates the border "
@@ -64,8 +65,8 @@ class DegradeSpec(OptionSpec):
     silhouette: str = option(f"{DEPTH_WITH}: nearest (default): a silhouette's pixels of mixed (antialiased) depth "
                              "take the nearest depth around them; as-given: the map's depths", SILHOUETTES[0],
                              choices=SILHOUETTES)
-    scale_lens: float | None = option("with --lens and --intrinsics/--fisheye: the camera's pixel pitch (µm); the lens "
-                                      "scaled to its focal length fx x PIXEL_UM, f-number kept, stated in the "
+    scale_lens: float | None = option("with --lens and --intrinsics/--fisheye: the camera's pixel pitch (µm); the "
+                                      "lens scaled to its focal length fx x PIXEL_UM, f-number kept, stated in the "
                                       "metadata", parse=float, metavar="PIXEL_UM")
     frame: FrameCamera | None = None
     camera: Any = None

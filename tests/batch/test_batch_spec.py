@@ -52,7 +52,8 @@ def test_the_batch_identity_is_the_one_finished_batches_hold(batch_inputs, doubl
     grid_id = file_hash(batch_inputs.grid)
     keys = set()
     for given in options:
-        p = plan_batch([batch_inputs.images], batch_inputs.root / "out", DegradeSpec(**given), psf_grid=batch_inputs.grid)
+        p = plan_batch([batch_inputs.images], batch_inputs.root / "out", DegradeSpec(**given),
+                       psf_grid=batch_inputs.grid)
         assert p.key == former_identity(grid_id, **given), given
         keys.add(p.key)
     assert len(keys) == len(options)  # each option is part of the identity
