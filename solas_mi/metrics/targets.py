@@ -114,6 +114,8 @@ def _check_common(shape: tuple[int, int], sigma_px: float) -> None:
         raise SolasError(f"sigma {sigma_px} px must be ≥ 0")
 
 
+# many parameters: a synthetic target's independent knobs (geometry, blur, levels, noise, clipping, encoding), each
+# with its default and keyword-only past the first three: a caller sets the few it varies
 def slanted_edge(
     shape: tuple[int, int] = (128, 128),
     angle_deg: float = 5.0,

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from ..errors import SolasError
 from ..outputs import add_png_option
-from .spec import MAX_SPP, add_spec_flags, spec_from_args
+from .spec import MAX_SPP, RenderSpec
 
 DEFAULT_IMAGE = "images/rocket.png"  # under the shipped scenes directory
 BYTES_PER_SAMPLE = 80  # a pass's wavefront (measured: 1.1 GB peak for 12.6 M samples in one pass)
@@ -81,7 +81,7 @@ def _scene(args) -> int:
     from .scene import write_scene
 
     out = output_folder(args.output)
-    spec, _ = spec_from_args(args, SCENE_SETTINGS)
+    spec = RenderSpec.from_args(args, SCENE_SETTINGS)
     lens = load_lens(args.lens)
     parse(spec.response, lens.wavelengths_nm)  # a bad response is refused now, not when the scene renders
     camera = camera_for(lens, spec.sensor, spec.fov_deg, spec.pitch_um)
@@ -125,7 +125,7 @@ def _render(args) -> int:
     if lens is not None and args.integrator == "solas":
         raise SolasError("--integrator solas renders lens_sensor scenes (from `solas-mi scene`); with --lens the "
                          "scene's own integrator renders it")
-    run, _ = spec_from_args(args, SCENE_FILE_SETTINGS)
+    run = RenderSpec.from_args(args, SCENE_FILE_SETTINGS)
     notes = []
     focus = _focus(args.focus_distance)
     scene = load(args.scene, run.variant, lens, params, notes, pitch_um=args.pitch_um, focus_distance=focus,
@@ -184,7 +184,7 @@ def _render_image(args) -> int:
     from .image import render_image
 
     data_file, png = data_and_preview(args.output, args.png, inputs=[args.image])
-    spec, _ = spec_from_args(args, IMAGE_SETTINGS)
+    spec = RenderSpec.from_args(args, IMAGE_SETTINGS)
     rows, cols = spec.sensor
     check_render(cols, rows, spec.spp, args.force)
     lens = load_lens(args.lens)
@@ -208,7 +208,7 @@ def register(sub) -> None:
     add_lens_argument(scene)
     scene.add_argument("-o", "--output", required=True, help="output directory")
     scene.add_argument("--image", help="input image (copied beside the scene; default: the bundled photograph)")
-    add_spec_flags(scene, SCENE_SETTINGS)
+    RenderSpec.add_flags(scene, SCENE_SETTINGS)
     scene.set_defaults(run=_scene)
 
     render = sub.add_parser(
@@ -233,13 +233,13 @@ def register(sub) -> None:
                              "scene's own integrator for any other; scene: the scene's own (path where it has "
                              "none); solas: the loop (lens_sensor + image_object scenes)")
     render.add_argument("--spp", type=int, help="samples per pixel (default: the scene's)")
-    add_spec_flags(render, SCENE_FILE_SETTINGS)
+    RenderSpec.add_flags(render, SCENE_FILE_SETTINGS)
     _add_output_options(render)
     render.set_defaults(run=_render)
 
     image = sub.add_parser("render-image", help="render an input image through the lens geometry")
     add_lens_argument(image)
     image.add_argument("image", help="input image (PNG/JPEG: sRGB; EXR: linear)")
-    add_spec_flags(image, IMAGE_SETTINGS)
+    RenderSpec.add_flags(image, IMAGE_SETTINGS)
     _add_output_options(image)
     image.set_defaults(run=_render_image)

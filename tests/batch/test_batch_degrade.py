@@ -13,6 +13,7 @@ import pytest
 from strict_json import strict_loads
 
 from solas_mi.cli import main
+from solas_mi.convolution.spec import DegradeSpec
 
 
 def manifest(folder):
@@ -100,18 +101,20 @@ def test_the_grid_is_computed_once_and_cached(batch_inputs, doublet):
     batch_inputs.write(3)
     cache = GridCache(batch_inputs.root / "cache")
     options = {"grid": (4, 4), "size": 32, "pupil_samples": 32}
-    first = degrade_batch([batch_inputs.images], batch_inputs.root / "a", lens=doublet, grid_spec=GridSpec(**options),
-                          cache=cache, workers=2, progress=False)
+    first = degrade_batch([batch_inputs.images], batch_inputs.root / "a", DegradeSpec(grid_spec=GridSpec(**options)),
+                          lens=doublet, cache=cache, workers=2, progress=False)
     assert (cache.misses, cache.hits) == (1, 0) and first.grid_source == "computed" and not first.failed
-    second = degrade_batch([batch_inputs.images], batch_inputs.root / "b", lens="solas-doublet",
-                           grid_spec=GridSpec(**options, method="fraunhofer"), cache=cache, workers=1, progress=False)
+    second = degrade_batch([batch_inputs.images], batch_inputs.root / "b",
+                           DegradeSpec(grid_spec=GridSpec(**options, method="fraunhofer")), lens="solas-doublet",
+                           cache=cache, workers=1, progress=False)
     assert (cache.misses, cache.hits) == (1, 1) and second.grid_source == "cache hit"
     assert len(list(cache.folder.glob("*.exr"))) == 1 and len(list(cache.folder.iterdir())) == 2  # + its record
     m = manifest(batch_inputs.root / "b")
     assert m["lens_hash"] == doublet.hash and m["grid_spec"] == GridSpec(**options).canonical()
     assert m["grid_spec"]["grid"] == [4, 4]
-    degrade_batch([batch_inputs.images], batch_inputs.root / "c", lens=doublet,
-                  grid_spec=GridSpec(**{**options, "size": 48}), cache=cache, workers=1, progress=False)
+    degrade_batch([batch_inputs.images], batch_inputs.root / "c",
+                  DegradeSpec(grid_spec=GridSpec(**{**options, "size": 48})), lens=doublet, cache=cache, workers=1,
+                  progress=False)
     assert (cache.misses, cache.hits) == (2, 1)  # another sampling option: another grid
 
 
@@ -127,8 +130,9 @@ def test_the_lens_scaled_to_the_frames_camera_is_stated(batch_inputs, doublet, c
     fx = 32 / np.tan(np.radians(1.5))  # the 64-px frames span ±1.5°
     frame = FrameCamera("pinhole", intrinsics=(fx, fx, 31.5, 23.5))
     spec = GridSpec(grid=(3, 3), size=32, method="geometric", rays=32, pitch_um=0.5)
-    out = degrade_batch([batch_inputs.images], batch_inputs.root / "s", lens=doublet, grid_spec=spec, frame=frame,
-                        scale_lens=5.0, cache=GridCache(batch_inputs.root / "cache"), workers=1, progress=False)
+    out = degrade_batch([batch_inputs.images], batch_inputs.root / "s", DegradeSpec(grid_spec=spec, frame=frame,
+                        scale_lens=5.0), lens=doublet, cache=GridCache(batch_inputs.root / "cache"), workers=1,
+                        progress=False)
     assert not out.failed
     scale = manifest(batch_inputs.root / "s")["lens_scale"]
     # the doublet's pinhole focal length meeting its real chief ray at its 2° field: 99.50 mm
@@ -182,7 +186,7 @@ def test_a_dead_worker_loses_only_its_item(batch_inputs):
             victim.kill()
             killed.append(victim.pid)
 
-    settings = {"method": "interp", "boundary": "edge", "linear": False, "force": False, "batch": {}}
+    settings = {"spec": DegradeSpec(), "force": False, "batch": {}}
     run_local(jobs, list(range(len(jobs))), str(batch_inputs.grid), settings, 2, on_done)
     assert killed and all(job.status == "done" for job in jobs), [job.error for job in jobs]
     assert max(job.attempts for job in jobs) == 2  # the item the killed process held, done again
@@ -303,7 +307,7 @@ def test_every_psf_grid_flag_reaches_the_cache_key_and_the_grid(batch_inputs, ca
 
     from solas_mi.cli import build_parser
     from solas_mi.psf.depth import make_grid
-    from solas_mi.psf.spec import from_args
+    from solas_mi.psf.spec import GridSpec
 
     sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
     flags = {max(a.option_strings, key=len) if a.option_strings else a.dest
@@ -318,7 +322,7 @@ def test_every_psf_grid_flag_reaches_the_cache_key_and_the_grid(batch_inputs, ca
 
     def spec_of(options):
         args = sub.choices["batch"].parse_args(["degrade", "x", "--lens", "l", "-o", "o", *options])
-        return from_args(args)
+        return GridSpec.from_args(args)
 
     for flag, (context, value) in sorted(FLAG_VARIANTS.items()):
         before = [*base, *context]
@@ -351,15 +355,16 @@ def test_a_folder_tree_keeps_its_structure_and_half_floats_halve_the_output(batc
     assert full.is_file() and nested.is_file() and nested.with_suffix(".png").is_file()
     assert np.array_equal(read_image(full), read_image(nested))  # same input, same output, its own folder
     half = batch_inputs.root / "half"
-    degrade_batch([batch_inputs.images], half, psf_grid=batch_inputs.grid, workers=1, progress=False,
-                  output_format="exr-half")
+    degrade_batch([batch_inputs.images], half, DegradeSpec(output_format="exr-half"), psf_grid=batch_inputs.grid,
+                  workers=1, progress=False)
     channels, meta = read_exr(half / "frame000.exr")
     assert channels["R"].dtype == np.float16 and meta["output_format"] == "exr-half"
     assert np.allclose(read_image(half / "frame000.exr"), read_image(full), rtol=1e-3, atol=1e-4)
     from solas_mi import SolasError
 
     with pytest.raises(SolasError, match="output format"):
-        degrade_batch([batch_inputs.images], half, psf_grid=batch_inputs.grid, workers=1, output_format="png8")
+        degrade_batch([batch_inputs.images], half, DegradeSpec(output_format="png8"), psf_grid=batch_inputs.grid,
+                      workers=1)
 
 
 def test_a_batch_from_a_lens_defaults_to_the_accuracy_tables_grid():
@@ -367,7 +372,7 @@ def test_a_batch_from_a_lens_defaults_to_the_accuracy_tables_grid():
     so: the default shown is the one the batch's spec takes."""
     import argparse
 
-    from solas_mi.batch.commands import _grid_spec
+    from solas_mi.batch.commands import _degrade_spec
     from solas_mi.cli import build_parser
 
     def subparsers(parser):
@@ -375,12 +380,12 @@ def test_a_batch_from_a_lens_defaults_to_the_accuracy_tables_grid():
 
     batch = subparsers(build_parser())["batch"]
     args = batch.parse_args(["degrade", "x", "--lens", "solas-doublet", "-o", "o"])
-    rows, cols = _grid_spec(args).grid
+    rows, cols = _degrade_spec(args).grid_spec.grid
     assert (rows, cols) == (32, 32)
     shown = " ".join(subparsers(batch)["degrade"].format_help().split())
     assert f"--grid GRID COLSxROWS field nodes (default: {cols}x{rows})" in shown
     args = batch.parse_args(["degrade", "x", "--lens", "solas-doublet", "-o", "o", "--grid", "8x6"])
-    assert _grid_spec(args).grid == (6, 8)
+    assert _degrade_spec(args).grid_spec.grid == (6, 8)
 
 
 def test_a_batch_with_depth_maps_by_name_pattern(tmp_path, doublet):
@@ -399,20 +404,20 @@ def test_a_batch_with_depth_maps_by_name_pattern(tmp_path, doublet):
     depth = np.where(np.arange(64)[None, :] < 32, 10.0, np.inf) * np.ones((48, 1))
     write_exr(folder / "a.exr", image_channels(img), {})
     write_exr(folder / "a_depth.exr", {"Z": depth.astype(np.float32)}, {}, infinite=True)  # the sky: inf
-    result = degrade_batch([folder], tmp_path / "out", psf_grid=tmp_path / "g.exr", workers=1, progress=False,
-                           depth_pattern="{stem}_depth.exr")
+    result = degrade_batch([folder], tmp_path / "out", DegradeSpec(depth_pattern="{stem}_depth.exr"),
+                           psf_grid=tmp_path / "g.exr", workers=1, progress=False)
     assert [j.status for j in result.jobs] == ["done"]  # the depth map is not an input of its own
     out = read_image(tmp_path / "out" / "a.exr")
     assert np.allclose(out, degrade_depth(read_image(folder / "a.exr"), depth, g), atol=1e-6)
-    again = degrade_batch([folder], tmp_path / "out", psf_grid=tmp_path / "g.exr", workers=1, progress=False,
-                          depth_pattern="{stem}_depth.exr", occlusion="none")
+    again = degrade_batch([folder], tmp_path / "out", DegradeSpec(depth_pattern="{stem}_depth.exr", occlusion="none"),
+                          psf_grid=tmp_path / "g.exr", workers=1, progress=False)
     assert [j.status for j in again.jobs] == ["done"]  # another occlusion rule: not the former run's items
     assert np.allclose(read_image(tmp_path / "out" / "a.exr"),
                        degrade_depth(read_image(folder / "a.exr"), depth, g, occlusion="none"), atol=1e-6)
     (folder / "b.exr").write_bytes((folder / "a.exr").read_bytes())
     with pytest.raises(__import__("solas_mi").SolasError, match="no depth map"):
-        degrade_batch([folder], tmp_path / "out2", psf_grid=tmp_path / "g.exr", workers=1,
-                      depth_pattern="{stem}_depth.exr")
+        degrade_batch([folder], tmp_path / "out2", DegradeSpec(depth_pattern="{stem}_depth.exr"),
+                      psf_grid=tmp_path / "g.exr", workers=1)
 
 
 def test_the_frames_camera_applies_to_every_item(batch_inputs, capsys):
@@ -536,7 +541,7 @@ def test_depth_maps_by_the_pattern_are_used_not_skipped(batch_inputs, capsys, mo
     write_exr(frame.with_name("frame000_flow.exr"), {"R": np.ones((48, 64)), "G": np.ones((48, 64)),
                                                      "B": np.ones((48, 64))})
     monkeypatch.chdir(batch_inputs.root)  # the folder given as a relative path
-    p = plan_batch(["images"], "out", psf_grid=batch_inputs.grid, depth_pattern="{stem}_depth.exr")
+    p = plan_batch(["images"], "out", DegradeSpec(depth_pattern="{stem}_depth.exr"), psf_grid=batch_inputs.grid)
     assert [Path(j.params["depth"]).name for j in p.jobs] == ["frame000_depth.exr"]
     err = capsys.readouterr().err
     assert "skipped 1 label layer(s)" in err and "frame000_flow.exr (its name ends in 'flow')" in err, err
