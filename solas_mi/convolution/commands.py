@@ -71,9 +71,7 @@ def register(subparsers: Any) -> None:
                     "the scaled lens's grid.")
     p.add_argument("image", help="PNG/JPEG (sRGB, decoded unless --linear) or EXR (linear)")
     p.add_argument("--psf-grid", required=True, metavar="GRID.exr", help="PSF grid written by `solas-mi psf-grid`")
-    p.add_argument("--method", choices=list(METHODS), default=DEFAULT_METHOD,
-                   help="; ".join(f"{name}{' (default)' if name == DEFAULT_METHOD else ''}: {m.summary}"
-                                  for name, m in METHODS.items()))
+    p.add_argument("--method", choices=METHODS.names(), default=DEFAULT_METHOD, help=METHODS.help())
     p.add_argument("--boundary", choices=BOUNDARIES, default=BOUNDARIES[0],
                    help="padding outside the image, never wrapped around: edge (default) replicates the border "
                         "pixels, zero pads with black, reflect mirrors the image about its border")

@@ -62,9 +62,9 @@ class GridSpec:
     pitch_um: float = _option(DEFAULT_PITCH_UM, "--pitch-um", "image-plane pixel pitch (µm)", type=float, psf=True)
     size: int = _option(DEFAULT_SIZE, "--size", "PSF width and height (pixels)", type=int, psf=True)
     method: str = _option(DEFAULT_METHOD, "--psf-method", "PSF method", choices=lambda: tuple(METHODS), psf=True)
-    pupil_samples: int = _option(PUPIL_SAMPLES.default, "--pupil-samples", "fraunhofer: pupil grid N×N", type=int,
-                                 psf=True)
-    rays: int = _option(RAYS.default, "--rays", "geometric, render: rays×rays per PSF", type=int, psf=True)
+    pupil_samples: int = _option(PUPIL_SAMPLES.default, "--pupil-samples",
+                                 lambda: METHODS.option_help(PUPIL_SAMPLES.name), type=int, psf=True)
+    rays: int = _option(RAYS.default, "--rays", lambda: METHODS.option_help(RAYS.name), type=int, psf=True)
     normalization: str = _option(NORMALIZATIONS[0], "--normalize", "PSF values", choices=NORMALIZATIONS, psf=True)
     auto_window: bool = _option(False, "--auto-window", f"double --size until each window holds "
                                                         f"{100 * WINDOW_ENERGY_LIMIT:g} %% of the light", psf=True)
@@ -234,7 +234,8 @@ def add_options(p, psf_only: bool = False, defaults: dict | None = None) -> None
             p.add_argument(m["flag"], dest=_dest(f), action="store_true", default=None, help=m["help"])
         else:
             choices = m["choices"]() if callable(m["choices"]) else m["choices"]  # methods: those registered now
-            p.add_argument(m["flag"], dest=_dest(f), type=m["type"], choices=choices, help=m["help"] + default)
+            text = m["help"]() if callable(m["help"]) else m["help"]  # a method's option: the methods that take it
+            p.add_argument(m["flag"], dest=_dest(f), type=m["type"], choices=choices, help=text + default)
 
 
 def _shown(value) -> str:
