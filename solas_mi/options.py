@@ -36,11 +36,14 @@ def parse_size_mm(text: str, what: str) -> tuple[float, float]:
 
 
 def floats(text: str, what: str) -> list[float]:
-    """Comma-separated numbers."""
+    """Comma-separated numbers, at least one."""
     try:
-        return [float(v) for v in text.split(",") if v.strip()]
+        values = [float(v) for v in text.split(",") if v.strip()]
     except ValueError:
-        raise SolasError(f"{what} {text!r} must be comma-separated numbers") from None
+        values = []
+    if not values:
+        raise SolasError(f"{what} {text!r} must be one or more comma-separated numbers")
+    return values
 
 
 def positive_ints(text: str, what: str) -> tuple[int, ...]:

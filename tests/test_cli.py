@@ -19,7 +19,7 @@ def test_version(capsys):
 
 @pytest.mark.parametrize("argv, message", [
     (["psf", "solas-doublet", "--field-deg", "0,2", "--wavelengths-nm", "", "-o", "{tmp}/x.exr"],
-     "at least one wavelength (nm) is needed"),
+     "--wavelengths-nm '' must be one or more comma-separated numbers"),
     (["psf", "solas-doublet", "--field-deg", "0,89", "--wavelengths-nm", "531", "-o", "{tmp}/x.exr"],
      "field (0, 89) deg: each angle must be finite and below 89 deg in magnitude"),
     (["psf", "solas-doublet", "--field-deg", "0,1", "--wavelengths-nm", "2500.0001", "-o", "{tmp}/x.exr"],

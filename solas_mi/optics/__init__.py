@@ -21,8 +21,8 @@ __getattr__ = lazy_exports(__name__, {"Lens": ".lens"})
 READERS.register(".toml", read_toml_lens, summary="our TOML lens file: every key `Lens.from_dict` knows")
 READERS.register(".zmx", text_reader(zemax.read_spec), summary="Zemax OpticStudio sequential lens file (`zemax`)")
 READERS.register(".seq", text_reader(codev.read_spec), summary="CODE V sequence file (`codev`)")
-READERS.register(".dat", text_reader(pbrt_dat.read_spec), summary="pbrt lens table: radius, thickness, n_d, "
-                                                                   "aperture per row (`pbrt_dat`)")
+READERS.register(".dat", text_reader(pbrt_dat.read_spec), check=pbrt_dat.check_read,
+                 summary="pbrt lens table: radius, thickness, n_d, aperture per row (`pbrt_dat`)")
 WRITERS.register(".toml", lens_toml.dumps, summary="our TOML lens file, numbers in full: it reads back as the "
                                                    "same lens (`lens_toml`)")
 WRITERS.register(".zmx", zemax.dumps, summary="Zemax OpticStudio sequential lens file (`zemax`)")

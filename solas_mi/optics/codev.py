@@ -238,9 +238,7 @@ def _spec(reader: _Reader, where: str) -> dict:
     if len(rows) < 3 or rows[0]["kind"] != "SO" or rows[-1]["kind"] != "SI":
         raise SolasError(f"{where}: a lens needs SO (the object), at least one surface (S or STO) and SI "
                          f"(the image), in that order; got {' '.join(r['kind'] for r in rows) or 'no surfaces'}")
-    default_stop = not any(r.get("stop") for r in rows[1:-1])
-    if default_stop:  # CODE V's default: surface 1 is the stop
-        rows[1]["stop"] = True
+    stop_note = zemax_solves.default_stop(rows[1:-1], "STO", "CODE V's default")
     inner = [r for r in rows[1:-1] if r["kind"] in ("SO", "SI")]
     if inner:
         raise SolasError(f"{inner[0]['ident']}: {inner[0]['kind']} inside the lens (SO first, SI last)")
@@ -254,8 +252,8 @@ def _spec(reader: _Reader, where: str) -> dict:
     title = " ".join(unquote(t) for t in system.get("TIT", system.get("TITLE", []))).strip()
     if title:
         spec["name"] = title
-    if default_stop:
-        spec["description"] = "no STO in the file: the stop is surface 1, CODE V's default"
+    if stop_note:
+        spec["description"] = stop_note
     spec["surface"] = [_surface(r, i, scale) for i, r in enumerate(rows[1:-1], start=1)]
     if rows[-1].get("cir", 0) > 0:
         spec["image"] = {"diameter": 2.0 * rows[-1]["cir"] * scale}

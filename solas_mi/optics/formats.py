@@ -18,8 +18,9 @@ from ..userfiles import check, read_bytes, read_toml
 LENS_DIR = "lenses"
 _CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029]")
 
-# by extension, in the order messages list them: path → lens-file dictionary, and Lens → text. The readers
-# of other programs' files solve apertures and fields with the tracer, which imports this module: they are
+# by extension, in the order messages list them: path → lens-file dictionary (a reader's `check`: what a
+# lens read from that format must hold beyond any lens's checks), and Lens → text. The readers of other
+# programs' files solve apertures and fields with the tracer, which imports this module: they are
 # registered by `solas_mi.optics` itself (`__init__`), which Python runs before any of its modules is used.
 READERS = Registry("lens reader")
 WRITERS = Registry("lens writer")

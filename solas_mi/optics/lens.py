@@ -29,6 +29,10 @@ from .formats import (MAX_SURFACES, MAX_WAVELENGTHS, READERS, WRITERS, check_cou
 from .fields import FieldType, field_type_for
 
 NORM_RADIUS_MM = (1e-6, 1e6)  # the Qbfs normalisation radius a surface may have (1 nm to 1 km)
+# The longest length a lens file may give (mm): an object beyond it is at infinity to every digit (its image
+# lies f²/d ≈ 1e-11 mm from the focus of an f = 100 mm lens); a film 1e30 mm away rendered NaN, one at 1e300
+# overflowed lens info's projection fits.
+MAX_LENGTH_MM = 1e15
 _VIRTUAL = ": the image plane lies before the last surface, a virtual image (a diverging lens's focus) that no film records"
 # What a lens file may hold (anything else is a mistake worth naming, e.g. a surface type we do not model)
 KEYS = {
@@ -215,7 +219,11 @@ class Lens:
         """A lens by shipped name (e.g. "solas-doublet") or by path to a lens file (`formats.readable()`):
         a name holding a path separator or an extension is a path."""
         path = lens_path(name_or_path)
-        return cls.from_dict(READERS[path.suffix.lower()].function(path), source=str(path))
+        reader = READERS[path.suffix.lower()]
+        lens = cls.from_dict(reader.function(path), source=str(path))
+        if "check" in reader.extra:  # what a lens read from this format must hold beyond any lens's checks
+            reader.extra["check"](lens)
+        return lens
 
     def save(self, path: str | Path) -> Path:
         """Write the lens to `path` (written whole or not at all) in the format its extension names:
@@ -280,17 +288,24 @@ class Lens:
         for w in self.wavelengths_nm:
             if not w > 0:
                 raise SolasError(f"{where}: wavelengths_nm holds {w:g}; wavelengths must be positive (nm)")
-        if self.image_diameter < 0:
-            raise SolasError(f"{where}: image diameter {self.image_diameter:g} mm must be positive (or left out)")
+        if not 0 <= self.image_diameter <= MAX_LENGTH_MM:
+            raise SolasError(f"{where}: image diameter {self.image_diameter:g} mm must be positive, at most "
+                             f"{MAX_LENGTH_MM:g} mm (or left out)")
         stops = [i for i, s in enumerate(self.surfaces) if s.stop]
         if not stops:
             raise SolasError(f"{where}: no surface is marked as the aperture stop (set stop = true on one)")
         if len(stops) > 1:
             raise SolasError(f"{where}: surfaces {', '.join(str(i + 1) for i in stops)} are all marked stop; exactly one may be")
+        if not abs(self.object_distance) <= MAX_LENGTH_MM and math.isfinite(self.object_distance):
+            raise SolasError(f"{where}: object distance {self.object_distance:g} mm must lie within ±{MAX_LENGTH_MM:g} "
+                             "mm, or be \"infinity\" (a farther object is at infinity to every digit)")
         for i, s in enumerate(self.surfaces, start=1):
             ident = f"{where}: surface {i} ({s.label})"
-            if s.diameter <= 0:
-                raise SolasError(f"{ident}: diameter {s.diameter:g} mm must be positive")
+            if not 0 < s.diameter <= MAX_LENGTH_MM:
+                raise SolasError(f"{ident}: diameter {s.diameter:g} mm must be positive and at most {MAX_LENGTH_MM:g} mm")
+            if not abs(s.thickness) <= MAX_LENGTH_MM:
+                raise SolasError(f"{ident}: thickness {s.thickness:g} mm must lie within ±{MAX_LENGTH_MM:g} mm, the "
+                                 "longest length a lens file may give")
             if s.radius != 0 and s.conic == 0 and s.semi_diameter >= abs(s.radius):
                 raise SolasError(f"{ident}: clear semi-diameter {s.semi_diameter:g} mm is not smaller than |radius| "
                                  f"{abs(s.radius):g} mm; the sphere cannot hold that aperture")

@@ -21,17 +21,21 @@ def _check_spp(spp) -> None:
         raise SolasError(f"samples per pixel {spp!r} must be an integer from 1 to {MAX_SPP}")
 
 
-def check_render(width: int, height: int, spp: int, force: bool) -> None:
-    """Refuse an absurd spp or a render that cannot fit in memory; announce a long one on stderr (how long
-    it takes depends on what else the machine runs: its progress tells the time left at the rate measured)."""
+def check_render(width: int, height: int, spp: int, force: bool, labels=()) -> None:
+    """Refuse an absurd spp or a render that cannot fit in memory (its label layers, `labels`, counted);
+    announce a long one on stderr (how long it takes depends on what else the machine runs: its progress
+    tells the time left at the rate measured)."""
     import os
 
     from ..budget import check_memory
+    from .labels import memory_bytes, parse_labels
     from .stock import SAMPLES_PER_PASS  # the larger pass of the two engines (the loop's is at most half of it)
 
     _check_spp(spp)
     pixels = width * height
-    check_memory(f"render {width}x{height}", max(pixels, SAMPLES_PER_PASS) * BYTES_PER_SAMPLE + 48 * pixels, force,
+    kinds = parse_labels(labels)
+    need = max(pixels, SAMPLES_PER_PASS) * BYTES_PER_SAMPLE + 48 * pixels + memory_bytes(pixels, kinds)
+    check_memory(f"render {width}x{height}" + (f" with labels {','.join(kinds)}" if kinds else ""), need, force,
                  "a smaller sensor")
     if pixels * spp > 60 * SAMPLES_PER_SECOND_PER_CORE * (os.cpu_count() or 1):  # a minute at least, idle
         print(f"render {width}x{height} at {spp} spp: {pixels * spp:.3g} samples, a long render: its progress "
@@ -130,7 +134,7 @@ def _render(args) -> int:
         print(f"render: {note}", file=sys.stderr)
     spp = args.spp if args.spp is not None else int(scene.sensors()[0].sampler().sample_count())
     width, height = (int(v) for v in scene.sensors()[0].film().crop_size())
-    check_render(width, height, spp, args.force)
+    check_render(width, height, spp, args.force, run.labels)
     loop = args.integrator == "solas" or (args.integrator == "auto" and lens is None and _image_scene(scene))
     if loop and run.labels:
         raise SolasError("--labels are traced through a lens camera: give --lens, or a scene with a lens_camera")

@@ -17,6 +17,10 @@ from the sensor's properties. Lengths in the scene are world units; the lens cam
 `world_unit_mm` (default 1000: metres). The focus: the user's, else a `thinlens`'s `focus_distance`,
 else the lens file's; "auto" focuses on the scene's depth at the image centre (one ray along the axis).
 A `thinlens`'s aperture is reported, not used: the real lens has its own stop.
+
+Meshes are not merged (Mitsuba's parser by default joins all meshes of one material into one unnamed
+mesh, `merge_meshes`): each shape keeps its id, which the instance labels name. Measured on 3000
+rectangles of one material, 256×256 at 16 spp: the render is no slower unmerged (2.2 s against 2.5 s).
 """
 from __future__ import annotations
 
@@ -68,6 +72,7 @@ def _parse(mi, xml_path: str | Path, params: dict | None):
     _scene_text(path)
     config = mi.parser.ParserConfig(mi.variant())
     config.parallel = False  # our plugins trace with Dr.Jit when built: on the calling thread (`mitsuba.load_scene`)
+    config.merge_meshes = False  # Mitsuba's default joins meshes of one material into one unnamed mesh: labels name each
     try:
         return config, mi.parser.parse_file(config, str(path), **{k: str(v) for k, v in (params or {}).items()})
     except RuntimeError as exc:
@@ -132,9 +137,14 @@ def scene_film_size(xml_path: str | Path, params: dict | None = None) -> tuple[i
 
 
 def _size(film) -> tuple[int, int]:
+    """(width, height) pixels of a film node (Mitsuba's default where it names none); SolasError below 1x1."""
     if film is None:
         return FILM_DEFAULT
-    return (int(film.props.get("width", FILM_DEFAULT[0])), int(film.props.get("height", FILM_DEFAULT[1])))
+    size = (int(film.props.get("width", FILM_DEFAULT[0])), int(film.props.get("height", FILM_DEFAULT[1])))
+    if min(size) < 1:
+        raise SolasError(f"the scene's film is {size[0]}x{size[1]} px (after --set); its width and height must be at "
+                         "least 1 pixel")
+    return size
 
 
 def field_half_angle(mi, sensor, width: int, height: int) -> tuple[float, str]:
@@ -280,6 +290,8 @@ def load(xml_path: str | Path, variant: str | None = None, lens=None, params: di
 def _built(mi, xml_path, params, lens, held, lens_options, notes):
     """Parsed, changed (integrator, sensor), transformed and built as `mi.load_file` does."""
     config, state = _parse(mi, xml_path, params)
+    for sensor in (n for n in state.nodes if n.type == mi.ObjectType.Sensor):
+        _size(_film(mi, state, sensor))  # a film without pixels, named before Mitsuba divides by its size
     _add_integrator(mi, state)
     if lens is not None:
         _swap_sensor(mi, state, xml_path, lens, held, lens_options, notes)

@@ -177,8 +177,7 @@ def register(sub: Any) -> None:
     report = sub.add_parser("report", help="reports: error against run time").add_subparsers(
         dest="report_command", metavar="COMMAND", required=True)
     p = report.add_parser(
-        "error-vs-time",
-        help="error of the paper's patch convolution, of interp, and of the direct render against run time",
+        "error-vs-time", help="error of the patch and the interp convolution and of the direct render against run time",
         description="Relative RMSE against a converged direct render (noise removed) and run time of the paper's "
                     "patch convolution, the interp convolution on grids of increasing size and the direct render "
                     "at increasing spp; writes table.md, table.csv, error_vs_time.png (log x) and report.json.")

@@ -128,3 +128,23 @@ def test_render_spp_zero_is_refused_not_replaced_by_the_scenes(tmp_path, capsys)
     assert main(["render", str(tmp_path / "sphere.xml"), "--spp", "0", "-o", str(tmp_path / "x.exr")]) == 2
     assert "samples per pixel 0 must be an integer from 1" in capsys.readouterr().err
     assert not (tmp_path / "x.exr").exists()
+
+
+@pytest.mark.parametrize("size, extra, shown", [
+    ("0x0", [], "film is 0x0 px"),
+    ("$wx6", ["--set", "w=0"], "film is 0x6 px"),
+    ("$wx6", ["--set", "w=0", "--lens", "solas-doublet"], "the scene's film is 0x6 px (after --set)"),
+    ("8x0", ["--lens", "solas-doublet"], "the scene's film is 8x0 px (after --set)"),
+])
+def test_a_film_without_pixels_is_refused_in_one_line(tmp_path, capsys, size, extra, shown):
+    """A scene whose film has no pixels (its own width 0, or `--set width=0`), with or without --lens, ended in
+    a ZeroDivisionError traceback (or a message quoting one): refused in one line naming the size."""
+    width, height = size.split("x")
+    (tmp_path / "s.xml").write_text(
+        '<scene version="3.0.0"><default name="w" value="8"/><sensor type="perspective"><film type="hdrfilm">'
+        f'<integer name="width" value="{width}"/><integer name="height" value="{height}"/></film></sensor>'
+        '<shape type="sphere"/><emitter type="constant"/></scene>')
+    assert main(["render", str(tmp_path / "s.xml"), "--spp", "1", *extra, "-o", str(tmp_path / "x.exr")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and shown in err and "must be at least 1 pixel" in err, err
+    assert not (tmp_path / "x.exr").exists()
