@@ -62,7 +62,7 @@ def memory_bytes(pixels: int, kinds) -> int:
     kinds = parse_labels(kinds)
     if not kinds:
         return 0
-    channels = 1 + sum(len(LAYERS[k]) for k in kinds)
+    channels = 1 + sum(len(LABELS[k].extra["layers"]) for k in kinds)
     return pixels * (LABEL_RAY_BYTES + LABEL_CHANNEL_BYTES * channels)
 
 

@@ -81,7 +81,7 @@ def _check_buildable(lens: Lens, image_radius: float) -> None:
     if reach > FLOAT32_REACH_MM:
         raise SolasError(f"lens {lens.name} reaches {reach:g} mm from surface 1 (its image plane at {lens.image_z:g} "
                          f"mm, the film out to {image_radius:g} mm): the mesh scene's float32 geometry holds a point "
-                         f"to 1 µm within {FLOAT32_REACH_MM:g} mm only; trace it instead: {_TRACE_INSTEAD}")
+                         f"to 1 µm within {FLOAT32_REACH_MM:g} mm only; trace it instead: {_trace_instead()}")
     ideal = next((k for k, s in enumerate(lens.surfaces, start=1) if s.ideal), None)
     if ideal is not None:
         raise SolasError(f"surface {ideal} of lens {lens.name} is an ideal thin lens (focal_length), which has no glass "
