@@ -192,6 +192,7 @@ def test_stages_import_only_downward():
 
 @pytest.mark.parametrize("module, heavy", [
     ("solas_mi.cli", ("drjit", "mitsuba", "matplotlib")),
+    ("solas_mi.registry", ("numpy", "drjit", "mitsuba", "matplotlib")),  # the CLI builds its choices from it
     ("solas_mi.psf.base", ("drjit", "mitsuba", "matplotlib")),
     ("solas_mi.psf.methods", ("drjit", "mitsuba", "matplotlib")),
     ("solas_mi.render.commands", ("drjit", "mitsuba", "matplotlib")),
