@@ -108,8 +108,11 @@ class Registry:
         """Add `name` (a name is registered once; registering the same entry again does nothing). Without
         `function`, a decorator that registers the function it decorates and returns it."""
         if function is None:
-            return lambda f: (self.register(name, f, summary=summary, options=options, reference=reference,
-                                            **extra), f)[1]
+            def decorate(f: Callable) -> Callable:
+                self.register(name, f, summary=summary, options=options, reference=reference, **extra)
+                return f
+
+            return decorate
         entry = Entry(name, function, tuple(options), summary, reference, extra)
         if not isinstance(name, str) or not name.strip() or "\n" in summary or not summary.strip():
             raise SolasError(f"{self.kind} {name!r}: a name and a one-line summary are needed")
@@ -127,9 +130,11 @@ class Registry:
     __getitem__ = get
 
     def names(self) -> tuple[str, ...]:
+        """The names, in the order registered."""
         return tuple(self._entries)
 
     def items(self):
+        """(name, entry) pairs, in the order registered."""
         return self._entries.items()
 
     def __iter__(self) -> Iterator[str]:
