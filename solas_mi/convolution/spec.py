@@ -29,12 +29,6 @@ OUTPUT_FORMATS = tuple(OUTPUT_FILES)
 DEPTH_WITH = "with a depth map (degrade --depth, batch degrade --depth-pattern)"
 
 
-def _method_help() -> str:
-    """Each registered method and its summary, the default marked."""
-    return "; ".join(f"{name}{' (default)' if name == DEFAULT_METHOD else ''}: {m.summary}"
-                     for name, m in METHODS.items())
-
-
 @dataclass(frozen=True)
 class DegradeSpec(OptionSpec):
     """How images are degraded by a PSF grid: the convolution `method` and `boundary`; `linear`: PNG/JPEG
@@ -49,7 +43,7 @@ class DegradeSpec(OptionSpec):
     its defaults). One image (`degrade_file`) takes method, boundary, linear, output format, occlusion,
     silhouette and frame; the others are a batch's."""
 
-    method: str = option(_method_help, DEFAULT_METHOD, choices=lambda: tuple(METHODS))
+    method: str = option(METHODS.help, DEFAULT_METHOD, choices=METHODS.names)
     boundary: str = option("padding outside the image, never wrapped around: edge (default) replicates the border "
                            "pixels, zero pads with black, reflect mirrors the image about its border", BOUNDARIES[0],
                            choices=BOUNDARIES)

@@ -1,5 +1,6 @@
 """CODE V sequence files (.seq, text): read into our lens-file dictionary (what `Lens.from_dict` takes),
-registered as the `.seq` entry of `formats.READERS`. The rotationally symmetric refracting subset:
+registered (by `solas_mi.optics`) as the `.seq` entry of `formats.READERS`. The rotationally symmetric
+refracting subset:
 
 - Commands one per line or separated by `;`; `!` starts a comment; quoted strings ('…' or "…") are one
   token. Keywords are case-insensitive and, as in CODE V, known by their first three letters (STOP is
@@ -42,7 +43,7 @@ from . import zemax_solves
 from .codev_glass import PrivateCatalogue, material, unquote
 from .codev_syntax import (APERTURES, ASPHERIC, FIELDS, IGNORED, REFUSED, SYSTEM, VIGNETTING, ZERO_IS_NOTHING,
                            command, commands)
-from .formats import MAX_FIELDS, READERS, check_count
+from .formats import MAX_FIELDS, check_count
 from .formats import floats as _numbers
 from .lens import Lens
 from .paraxial import paraxial
@@ -353,5 +354,3 @@ def _fields(system: dict, scale: float, where: str) -> tuple[str, list[float]]:
     unit = 1.0 if given[0] == "YAN" else scale
     return FIELDS[given[0]], [math.hypot(a, b) * unit for a, b in zip(x, y)]
 
-
-READERS[".seq"] = read_spec

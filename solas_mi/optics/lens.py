@@ -1,5 +1,5 @@
-"""A lens prescription: surfaces, glass, object and image plane, loaded from a TOML lens file
-(or a Zemax .zmx, CODE V .seq or pbrt .dat lens table, read by `zemax`, `codev` and `pbrt_dat`).
+"""A lens prescription: surfaces, glass, object and image plane, loaded from a lens file (our TOML, or
+another program's: `formats.READERS`).
 
 Lengths in mm, wavelengths in nm, field angles in degrees. +z is the optical axis toward the image;
 surface 1's vertex is at z = 0. A surface is a sphere, or an even asphere: sag
@@ -21,12 +21,11 @@ import numpy as np
 
 from ..errors import SolasError
 from ..imageio import write_text
-from ..userfiles import read_bytes, read_toml
 from . import forbes, ideal as ideal_mod, overlap
 from . import glass as glass_mod
 from .sag import sag
-from .formats import (MAX_SURFACES, MAX_WAVELENGTHS, READ_CHECKS, READERS, WRITERS, check_count, decode_text,
-                      lens_path, shipped_lenses, writable)  # noqa: F401 (shipped_lenses: re-exported)
+from .formats import (MAX_SURFACES, MAX_WAVELENGTHS, READERS, WRITERS, check_count, lens_path, shipped_lenses,
+                      writable)  # noqa: F401 (shipped_lenses: re-exported)
 from .fields import FieldType, field_type_for
 
 NORM_RADIUS_MM = (1e-6, 1e6)  # the Qbfs normalisation radius a surface may have (1 nm to 1 km)
@@ -220,24 +219,20 @@ class Lens:
         """A lens by shipped name (e.g. "solas-doublet") or by path to a lens file (`formats.readable()`):
         a name holding a path separator or an extension is a path."""
         path = lens_path(name_or_path)
-        if path.suffix.lower() in READERS:
-            text = decode_text(read_bytes(path, "lens file"))
-            lens = cls.from_dict(READERS[path.suffix.lower()](text, str(path)), source=str(path))
-            if path.suffix.lower() in READ_CHECKS:
-                READ_CHECKS[path.suffix.lower()](lens)
-            return lens
-        spec = read_toml(path, "lens file")
-        return cls.from_dict(spec, source=str(path))
+        reader = READERS[path.suffix.lower()]
+        lens = cls.from_dict(reader.function(path), source=str(path))
+        if "check" in reader.extra:  # what a lens read from this format must hold beyond any lens's checks
+            reader.extra["check"](lens)
+        return lens
 
     def save(self, path: str | Path) -> Path:
         """Write the lens to `path` (written whole or not at all) in the format its extension names:
         one of `formats.writable()`."""
         path = Path(path)
-        writer = WRITERS.get(path.suffix.lower())
-        if writer is None:
+        if path.suffix.lower() not in WRITERS:
             raise SolasError(f"lens file {str(path)!r}: unknown extension {path.suffix!r}; "
                              f"allowed: {writable()}")
-        write_text(path, writer(self))
+        write_text(path, WRITERS[path.suffix.lower()].function(self))
         return path
 
     @classmethod

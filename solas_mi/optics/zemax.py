@@ -1,6 +1,6 @@
 """Zemax OpticStudio sequential lens files (.zmx, text): read into our lens-file dictionary (what
-`Lens.from_dict` takes) and written from a `Lens`, registered as the `.zmx` entries of `formats.READERS`
-and `WRITERS`.
+`Lens.from_dict` takes) and written from a `Lens`, registered (by `solas_mi.optics`) as the `.zmx`
+entries of `formats.READERS` and `WRITERS`.
 
 Read as the author meant it:
 - Encodings as OpticStudio writes them: UTF-16 with or without a byte-order mark, UTF-8, else Latin-1
@@ -40,7 +40,7 @@ from ..errors import SolasError
 from . import forbes, ideal
 from . import glass as glass_mod
 from . import zemax_solves
-from .formats import MAX_FIELDS, READERS, WRITERS, check_count, one_line
+from .formats import MAX_FIELDS, check_count, one_line
 from .formats import floats as _floats
 
 UNITS = {"MM": 1.0, "CM": 10.0, "IN": 25.4, "METER": 1000.0, "M": 1000.0}
@@ -395,6 +395,3 @@ def _surface_type(s, i: int) -> str:
                          "type; save it as .toml")
     return "PARAXIAL" if s.ideal else "QED_TYPE" if any(s.qbfs) else "EVENASPH" if any(s.aspheric) else "STANDARD"
 
-
-READERS[".zmx"] = read_spec
-WRITERS[".zmx"] = dumps

@@ -56,9 +56,9 @@ class GridSpec(OptionSpec):
         parse=lambda t: parse_size_mm(t, "--sensor-mm"))
     pitch_um: float = option("image-plane pixel pitch (µm)", DEFAULT_PITCH_UM, parse=float)
     size: int = option("PSF width and height (pixels)", DEFAULT_SIZE, parse=int)
-    method: str = option("PSF method", DEFAULT_METHOD, flag="--psf-method", choices=lambda: tuple(METHODS))
-    pupil_samples: int = option("fraunhofer: pupil grid N×N", PUPIL_SAMPLES.default, parse=int)
-    rays: int = option("geometric, render: rays×rays per PSF", RAYS.default, parse=int)
+    method: str = option("PSF method", DEFAULT_METHOD, flag="--psf-method", choices=METHODS.names)
+    pupil_samples: int = option(lambda: METHODS.option_help(PUPIL_SAMPLES.name), PUPIL_SAMPLES.default, parse=int)
+    rays: int = option(lambda: METHODS.option_help(RAYS.name), RAYS.default, parse=int)
     normalization: str = option("PSF values", NORMALIZATIONS[0], flag="--normalize", choices=NORMALIZATIONS)
     auto_window: bool = option(f"double --size until each window holds {100 * WINDOW_ENERGY_LIMIT:g} %% of the light",
                                False)

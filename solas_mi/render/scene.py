@@ -22,6 +22,7 @@ from ..optics.camera import Camera, camera_for
 from ..optics import virtual_object
 from ..optics.lens import Lens
 from ..outputs import inside, safe_name
+from ..psf.registry import METHODS
 from . import response as responses
 from .mesh import absorber_ring, cap_mesh, circle, joined, mesh_rings, rim_phi, tube_mesh, write_ply
 from .spec import RenderSpec, check_rings
@@ -63,9 +64,12 @@ def resolve_rings(lens: Lens, rings: int | None) -> int:
     return mesh_rings(lens) if rings is None else check_rings(rings)
 
 
-# What traces a lens that solid geometry cannot hold.
-_TRACE_INSTEAD = ("the lens camera (a scene file's sensor, `render.user_scene`) or a tracer PSF method "
-                  "(fraunhofer, geometric)")
+def _trace_instead() -> str:
+    """What traces a lens that solid geometry cannot hold: the lens camera, or a PSF method that traces the
+    lens itself (every one but those that build it as meshes)."""
+    tracers = [name for name, method in METHODS.items() if not method.extra.get("meshes")]
+    return (f"the lens camera (a scene file's sensor, `render.user_scene`) or a tracer PSF method "
+            f"({', '.join(tracers)})")
 
 
 def _check_buildable(lens: Lens, image_radius: float) -> None:
@@ -77,15 +81,15 @@ def _check_buildable(lens: Lens, image_radius: float) -> None:
     if reach > FLOAT32_REACH_MM:
         raise SolasError(f"lens {lens.name} reaches {reach:g} mm from surface 1 (its image plane at {lens.image_z:g} "
                          f"mm, the film out to {image_radius:g} mm): the mesh scene's float32 geometry holds a point "
-                         f"to 1 µm within {FLOAT32_REACH_MM:g} mm only; trace it instead: {_TRACE_INSTEAD}")
+                         f"to 1 µm within {FLOAT32_REACH_MM:g} mm only; trace it instead: {_trace_instead()}")
     ideal = next((k for k, s in enumerate(lens.surfaces, start=1) if s.ideal), None)
     if ideal is not None:
         raise SolasError(f"surface {ideal} of lens {lens.name} is an ideal thin lens (focal_length), which has no glass "
-                         f"to build as Mitsuba geometry; trace it instead: {_TRACE_INSTEAD}")
+                         f"to build as Mitsuba geometry; trace it instead: {_trace_instead()}")
     virtual_object.check_real(lens, "the mesh scene")
     if lens.overlaps:
         raise SolasError(f"lens {lens.name} cannot be built as Mitsuba geometry: {'; '.join(lens.overlaps)}. Trace it "
-                         f"instead: {_TRACE_INSTEAD}")
+                         f"instead: {_trace_instead()}")
 
 
 def lens_parts(lens: Lens, rings: int | None = None, image_radius: float = 0.0) -> list[Part]:

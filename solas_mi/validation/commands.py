@@ -149,8 +149,8 @@ def register(sub: Any) -> None:
     p = sub.add_parser(
         "crossval", help="cross-validate the PSF-grid convolution against the direct render",
         description="Degrade one image by the direct spectral render (the reference: lines response, no Fresnel, "
-                    "several seeds so that its noise is known) and by each convolution case (interp/patch × "
-                    "geometric/Fraunhofer PSFs × grid), in the same units; write the images, per-pixel error "
+                    "several seeds so that its noise is known) and by each convolution case (convolution method × "
+                    "PSF method × grid), in the same units; write the images, per-pixel error "
                     "maps and a table of relative RMSE (whole image and centre/middle/edge annuli), PSNR, SSIM "
                     "and run times (PSF grid and convolution apart).")
     _add_image_inputs(p)
@@ -177,7 +177,7 @@ def register(sub: Any) -> None:
     report = sub.add_parser("report", help="reports: error against run time").add_subparsers(
         dest="report_command", metavar="COMMAND", required=True)
     p = report.add_parser(
-        "error-vs-time", help="error of patch / interp convolution and of the direct render against run time",
+        "error-vs-time", help="error of the patch and the interp convolution and of the direct render against run time",
         description="Relative RMSE against a converged direct render (noise removed) and run time of the paper's "
                     "patch convolution, the interp convolution on grids of increasing size and the direct render "
                     "at increasing spp; writes table.md, table.csv, error_vs_time.png (log x) and report.json.")

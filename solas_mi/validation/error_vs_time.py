@@ -79,7 +79,7 @@ def error_vs_time(lens, image: np.ndarray, out: str | Path | None, ref_spp: int 
 
 def _convolution_rows(lens, image: np.ndarray, kind: str, patch_grids, interp_grids, fov: float, boundary: str,
                       repeats: int, err, log) -> tuple[list[Row], Any]:
-    """(a Row per patch and interp grid: its PSF grid's seconds, the median of `repeats` convolutions
+    """(a Row per grid of `patch_grids` and `interp_grids`: its PSF grid's seconds, the median of `repeats` convolutions
     and the error `err(image)`; the render units `grid_units`). One PSF grid per block count."""
     h, w = image.shape[:2]
     rows: list[Row] = []
