@@ -9,13 +9,14 @@ import pytest
 from solas_mi.batch.commands import _degrade_spec
 from solas_mi.cli import build_parser
 from solas_mi.convolution.commands import DEGRADE_OPTIONS
+from solas_mi.convolution.methods import METHODS
 from solas_mi.convolution.spec import DegradeSpec
 from solas_mi.errors import SolasError
 from solas_mi.optics.frame import FrameCamera
 
 
 @pytest.mark.parametrize("given, message", [
-    ({"method": "fft"}, "convolution method 'fft' must be one of interp, patch"),
+    ({"method": "fft"}, f"convolution method 'fft' must be one of {', '.join(METHODS.names())}"),
     ({"boundary": "wrap"}, "boundary 'wrap' must be one of edge, reflect, zero"),
     ({"linear": "yes"}, "linear 'yes' must be True or False"),
     ({"output_format": "png8"}, "output format 'png8' must be one of exr, exr-half, png16"),
