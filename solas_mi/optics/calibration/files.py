@@ -1,5 +1,5 @@
-"""A calibration in its ecosystem's file, and back: OpenCV FileStorage YAML or JSON (`opencv-pinhole`,
-`opencv-fisheye`, `unified` as OpenCV's omnidir writes it), OCamCalib's calib_results.txt (`ocamcalib`),
+"""A calibration in its ecosystem's file, and back: OpenCV FileStorage YAML or JSON (OpenCV's pinhole and
+fisheye models, and the unified model as OpenCV's omnidir writes it), OCamCalib's calib_results.txt,
 WoodScape's JSON (`woodscape`) and a Kalibr camera chain (`double-sphere`). Every file carries what it
 was fitted to (lens, wavelength, sensor, pitch, focus, residual) beside its parameters: a `solas_mi` map,
 or comments after OCamCalib's numbers (its reader stops before them).
@@ -137,18 +137,18 @@ def write_text(cal, suffix: str) -> str:
     return dumps_json(doc) if suffix == ".json" else dumps_yaml(doc)
 
 
-def _numbers(line: str, where: str) -> list[float]:
+def _numbers(line: str, where: str, number: int) -> list[float]:
     try:
         return [float(t) for t in line.split()]
     except ValueError:
-        raise SolasError(f"{where}: {line[:60]!r} must be numbers (OCamCalib calib_results.txt)") from None
+        raise SolasError(f"{where}: its line of numbers {number} holds other text (OCamCalib calib_results.txt)") from None
 
 
 def _read_ocam(text: str, where: str):
     rows = [ln for ln in text.splitlines() if ln.strip() and not ln.lstrip().startswith("#")]
     if len(rows) < 5:
         raise SolasError(f"{where}: an OCamCalib calib_results.txt has 5 lines of numbers; found {len(rows)}")
-    ss, inv, centre, affine, size = (_numbers(r, where) for r in rows[:5])
+    ss, inv, centre, affine, size = (_numbers(r, where, i) for i, r in enumerate(rows[:5], 1))
     if len(ss) < 3 or int(ss[0]) != len(ss) - 1 or len(ss) > 6 or len(centre) != 2 or len(affine) != 3 or len(size) != 2:
         raise SolasError(f"{where}: the OCamCalib numbers are not ss (its length first, at most 5 terms), invpol, "
                          "centre (row, column), affine (c, d, e), size (height, width)")
@@ -205,7 +205,7 @@ def read(path, expect: str | None = None):
     try:
         return _from_document(loads(text, where), where, expect)
     except (KeyError, TypeError, ValueError, AttributeError) as exc:
-        raise SolasError(f"{where}: {type(exc).__name__} {exc} reading its parameters") from None
+        raise SolasError(f"{where}: a parameter is missing or not a number ({type(exc).__name__})") from None
 
 
 def frame_camera(path, option: str):

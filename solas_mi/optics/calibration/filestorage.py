@@ -92,7 +92,7 @@ def _value(text: str, where: str):
     text = text.strip()
     if text.startswith("["):
         if not text.endswith("]"):
-            raise SolasError(f"{where}: a sequence {text[:40]!r} has no closing ]")
+            raise SolasError(f"{where}: a sequence has no closing ]")
         inner = text[1:-1].strip()
         return [_value(t, where) for t in _split(inner)] if inner else []
     if text[:1] in "\"'":
@@ -151,11 +151,11 @@ def loads(text: str, where: str) -> dict:
             raise SolasError(f"{where}: not a JSON document ({exc.msg} at line {exc.lineno})") from None
     root: dict = {}
     stack = [(-1, root)]
-    for line in _joined(text):
+    for number, line in enumerate(_joined(text), 1):
         indent = len(line) - len(line.lstrip())
         key, colon, rest = line.strip().partition(":")
         if not colon or not key or key.startswith("-"):
-            raise SolasError(f"{where}: line {line.strip()[:60]!r} is not a `key: value` of a FileStorage map")
+            raise SolasError(f"{where}: entry {number} is not a `key: value` of a FileStorage map")
         while stack[-1][0] >= indent:
             stack.pop()
         rest = rest.strip()

@@ -18,7 +18,7 @@ import numpy as np
 
 from ...errors import SolasError
 from .mapping import ChiefMap
-from .models import CameraModel, model as get_model
+from .models import MODELS, CameraModel, model as get_model
 
 FIT_SIDE = 64  # fit on about this many pixels along the sensor's longer side
 MAX_CONDITION = 1e10
@@ -123,10 +123,10 @@ def _drop_held(m: CameraModel, p, rms, free, held, xyz, uv, fixed):
 def check_holds(m: CameraModel, cmap: ChiefMap, widest_rad: float) -> None:
     """SolasError naming the model when the field reaches its `widest_deg`."""
     if math.degrees(widest_rad) >= m.widest_deg:
+        wider = [n for n in MODELS if get_model(n).widest_deg > math.degrees(widest_rad)]
         raise SolasError(f"calibration model {m.name} cannot hold the field of lens {cmap.lens.name} on this sensor: it "
                          f"reaches {math.degrees(widest_rad):.4g} deg from the axis, and {m.name} holds less than "
-                         f"{m.widest_deg:g} deg; choose a fisheye model (opencv-fisheye, ocamcalib, woodscape, "
-                         "double-sphere, unified)")
+                         f"{m.widest_deg:g} deg; choose a model that holds it: {', '.join(wider)}")
 
 
 def _check_fitted(m: CameraModel, values: dict, cmap: ChiefMap, widest_rad: float) -> None:
