@@ -42,6 +42,7 @@ class Calibration:
     pixels: int  # imaged pixels the residual was taken over
     mapping: dict = field(default_factory=dict)  # `ChiefMap.describe()`
     extra: dict = field(default_factory=dict)  # what a model's file needs beyond its values (OCamCalib's inverse)
+    projection: object = None  # (values, xyz) → pixels as the model's users compute them; None: the model's own
 
     def describe(self) -> dict:
         """The calibration as metadata (JSON values)."""
@@ -144,27 +145,32 @@ def _check_fitted(m: CameraModel, values: dict, cmap: ChiefMap, widest_rad: floa
                              "sensor reaches; choose another model")
 
 
-def residuals(m: CameraModel, values: dict, cmap: ChiefMap, project=None) -> dict:
-    """RMS and largest residual (px) of `values` over every pixel the lens images, where the largest lies
-    (pixel, polar angle), and how many pixels: blocks of CHUNK pixels, row by row. `project(values, xyz)`:
-    the projection the model's users compute (default: the model's)."""
+def residual_map(m: CameraModel, values: dict, cmap: ChiefMap, project=None) -> np.ndarray:
+    """The residual (px) of `values` at every pixel (H×W; NaN outside the image circle), in blocks of CHUNK
+    pixels. `project(values, xyz)`: the projection the model's users compute (default: the model's)."""
     project = m.project if project is None else project
     w, h = cmap.sensor.width, cmap.sensor.height
-    total, count, worst = 0.0, 0, (-1.0, (0.0, 0.0), 0.0)
+    out = np.full((h, w), np.nan)
     step = max(1, CHUNK // w)
     for r0 in range(0, h, step):
         c, r = np.meshgrid(np.arange(w, dtype=np.float64), np.arange(r0, min(h, r0 + step), dtype=np.float64))
         xyz, inside = cmap.directions(c.ravel(), r.ravel())
-        uv = np.stack([c.ravel(), r.ravel()], -1)[inside]
-        xyz = xyz[inside]
-        err = np.hypot(*(project(values, xyz) - uv).T)
-        err = np.where(np.isfinite(err), err, np.inf)
-        total, count = total + float(np.sum(err ** 2)), count + len(err)
-        if len(err) and err.max() > worst[0]:
-            k = int(np.argmax(err))
-            worst = (float(err[k]), tuple(float(v) for v in uv[k]), math.degrees(math.acos(min(1.0, xyz[k, 2]))))
-    return {"rms_px": math.sqrt(total / max(count, 1)), "max_px": worst[0], "max_at_px": list(worst[1]),
-            "max_at_deg": worst[2], "pixels": count}
+        err = np.full(inside.shape, np.nan)
+        err[inside] = np.hypot(*(project(values, xyz[inside]) - np.stack([c.ravel(), r.ravel()], -1)[inside]).T)
+        out[r0:r0 + c.shape[0]] = np.where(inside & ~np.isfinite(err), np.inf, err).reshape(c.shape)
+    return out
+
+
+def residuals(m: CameraModel, values: dict, cmap: ChiefMap, project=None) -> dict:
+    """RMS and largest residual (px) of `values` over every pixel the lens images, where the largest lies
+    (pixel, polar angle) and how many pixels (`residual_map`)."""
+    err = residual_map(m, values, cmap, project)
+    imaged = ~np.isnan(err)
+    k = np.unravel_index(int(np.argmax(np.where(imaged, err, -1.0))), err.shape)
+    xyz, _ = cmap.directions(np.array([float(k[1])]), np.array([float(k[0])]))
+    return {"rms_px": float(np.sqrt(np.mean(err[imaged] ** 2))), "max_px": float(err[k]),
+            "max_at_px": [float(k[1]), float(k[0])], "max_at_deg": math.degrees(math.acos(min(1.0, xyz[0, 2]))),
+            "pixels": int(imaged.sum())}
 
 
 def fit(cmap: ChiefMap, model_name: str) -> Calibration:
@@ -184,4 +190,4 @@ def fit(cmap: ChiefMap, model_name: str) -> Calibration:
     extra, project = extra_for(m, values, widest)
     stats = residuals(m, values, cmap, project)
     return Calibration(model_name, values, fitted, fixed, stats["rms_px"], stats["max_px"], stats["max_at_px"],
-                       stats["max_at_deg"], stats["pixels"], cmap.describe(), extra)
+                       stats["max_at_deg"], stats["pixels"], cmap.describe(), extra, project)
