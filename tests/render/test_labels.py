@@ -246,7 +246,7 @@ def test_ids_are_stable_and_never_the_background():
 
 def test_render_labels_command_writes_the_layers_beside_the_image(mi, tmp_path, capsys):
     """`solas-mi render SCENE --lens LENS --labels …`: the EXR holds the image's channels and the label
-    layers, its metadata the id table and boxes; without a lens camera, or for an image, refused in one line."""
+    layers, its metadata the id table and boxes, and the camera (lens, sensor, the calibration); without a lens camera, or for an image, refused in one line."""
     from solas_mi.cli import main
     from solas_mi.imageio import read_exr
     from solas_mi.render.image import render_image
@@ -255,8 +255,14 @@ def test_render_labels_command_writes_the_layers_beside_the_image(mi, tmp_path, 
                                                                                         emit=False)], 32, 24)
     out = tmp_path / "out.exr"
     assert main(["render", xml, "--lens", "wide-angle-22mm", "--pitch-um", "700", "--spp", "2",
-                 "--labels", "instance,normal,depth", "-o", str(out)]) == 0
+                 "--labels", "instance,normal,depth", "--calibration-model", "opencv-pinhole", "-o", str(out)]) == 0
     data, meta = read_exr(out)
+    camera = meta["camera"]  # every output says its camera: the lens, sensor, pitch, focus and the chosen model's fit
+    assert (camera["lens"], camera["sensor_px"], camera["pitch_um"]) == ("wide-angle-22mm", [32, 24], 700.0)
+    assert camera["focus_distance_mm"] == "inf" and camera["calibration"]["model"] == "opencv-pinhole"
+    efl_px = paraxial(Lens.load("wide-angle-22mm"), camera["wavelength_nm"]).efl_mm / 0.7
+    assert camera["calibration"]["parameters"]["fx"] == pytest.approx(efl_px, rel=1e-4)
+    assert camera["calibration"]["max_residual_px"] < 0.1
     assert set(data) == {"R", "G", "B", "depth.Z", "normal.X", "normal.Y", "normal.Z", "instance.id", "labels.valid"}
     assert (tmp_path / "out.png").is_file()
     labels = meta["labels"]

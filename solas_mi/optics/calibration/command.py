@@ -73,6 +73,13 @@ def run_calibrate(args) -> int:
     return 0
 
 
+def add_calibration_option(p) -> None:
+    """--calibration-model of the commands whose outputs record their camera (`describe_camera`)."""
+    p.add_argument("--calibration-model", choices=MODELS.names(), default=MODELS.default,
+                   help=f"the camera model whose fit to the lens the output's metadata records (default: "
+                        f"{MODELS.default}); see `solas-mi lens calibrate`")
+
+
 def register(lens_commands, add_lens_argument, load_lens) -> None:
     """Add `lens calibrate` to the `lens` subcommands (`optics.commands` gives its LENS argument and loader)."""
     p = lens_commands.add_parser(
