@@ -150,14 +150,20 @@ def _invert(fn, radius: np.ndarray, clamp: bool = False) -> np.ndarray:
 def parse_frame(fov: str | None = None, axis: str = "x", intrinsics: str | None = None,
                 fisheye: str | None = None) -> FrameCamera | None:
     """The command line's frame camera: --fov-deg (with --fov-axis), --intrinsics FX,FY,CX,CY or
-    --fisheye MODEL:FX,FY,CX,CY,C1,…; None when none is given."""
+    --fisheye MODEL:FX,FY,CX,CY,C1,…, or either as a calibration file (`calibration.files.frame_camera`: an
+    OpenCV pinhole file without distortion; an OpenCV fisheye or WoodScape file); None when none is given."""
     from ..options import floats
+    from .calibration.files import frame_camera
 
     given = [v for v in (fov, intrinsics, fisheye) if v is not None]
     if len(given) > 1:
         raise SolasError("give one frame camera: --fov-deg, --intrinsics or --fisheye")
     if fov is not None:
         return FrameCamera("fov", fov_deg=float(fov), fov_axis=axis)
+    if intrinsics is not None and _is_file(intrinsics):
+        return frame_camera(intrinsics, "--intrinsics")
+    if fisheye is not None and _is_file(fisheye):
+        return frame_camera(fisheye, "--fisheye")
     if intrinsics is not None:
         values = floats(intrinsics, "--intrinsics")
         if len(values) != 4:
@@ -171,3 +177,10 @@ def parse_frame(fov: str | None = None, axis: str = "x", intrinsics: str | None 
                              f"{', '.join(FISHEYE)}")
         return FrameCamera(model, intrinsics=tuple(values[:4]), coefficients=tuple(values[4:]))
     return None
+
+
+def _is_file(text: str) -> bool:
+    """Whether a frame option's text names a file (a calibration) rather than numbers."""
+    from pathlib import Path
+
+    return Path(text).suffix.lower() in (".yaml", ".yml", ".json", ".txt") and Path(text).exists()

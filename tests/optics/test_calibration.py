@@ -168,3 +168,17 @@ def test_bad_inputs_are_refused_by_name_and_nothing_is_written(tmp_path, capsys)
         assert main(["lens", "calibrate", *args, "-o", str(out)]) == 2
         assert named in capsys.readouterr().err
         assert list(tmp_path.iterdir()) == []
+
+
+def test_degrade_frame_options_take_the_written_file_as_the_numbers(tmp_path):
+    """`--fisheye FILE` gives the frame camera of `--fisheye kannala-brandt:FX,FY,CX,CY,K1..K4` with the file's
+    numbers, bit for bit (a fit of the fisheye lens's own mapping, written as OpenCV writes it)."""
+    from solas_mi.optics.frame import parse_frame
+
+    lens = Lens.load("nikkor-fisheye")
+    cal = fit(chief_map(lens, Sensor(COLUMNS, ROWS, film_pitch_um(lens, COLUMNS))), "opencv-fisheye")
+    path = tmp_path / "kb.yaml"
+    path.write_text(write_text(cal, ".yaml"))
+    v = cal.values
+    numbers = ",".join(repr(v[k]) for k in ("fx", "fy", "cx", "cy", "k1", "k2", "k3", "k4"))
+    assert parse_frame(fisheye=str(path)) == parse_frame(fisheye=f"kannala-brandt:{numbers}")
