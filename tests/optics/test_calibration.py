@@ -9,10 +9,11 @@ import pytest
 
 from solas_mi.errors import SolasError
 from solas_mi.optics.calibration import Sensor, chief_map
-from solas_mi.optics.calibration.files import frame_camera, read, write_text
+from solas_mi.optics.calibration.files import read, write_text
 from solas_mi.optics.calibration.fit import fit, fit_points
 from solas_mi.optics.calibration.models import MODELS, model
 from solas_mi.optics.camera import film_pitch_um
+from solas_mi.optics.frame import parse_frame
 from solas_mi.optics.lens import Lens, shipped_lenses
 from solas_mi.optics.pupil import chief_rays
 
@@ -138,7 +139,7 @@ def test_the_frame_options_read_the_files_as_the_model_projects(name, option, tm
     cal = Calibration(name, values, list(m.params), {}, 0.1, 0.2, [1.0, 2.0], 3.0, 4, {"sensor_px": [COLUMNS, ROWS]})
     path = tmp_path / f"c{m.formats[-1]}"
     path.write_text(write_text(cal, m.formats[-1]))
-    frame = frame_camera(path, option)
+    frame = parse_frame(**{option.lstrip("-"): str(path)})
     xyz = sphere(80.0)
     cols, rows = frame.pixels(xyz[:, 0] / xyz[:, 2], -xyz[:, 1] / xyz[:, 2], COLUMNS, ROWS)
     assert np.stack([cols, rows], -1) == pytest.approx(m.project(values, xyz), abs=1e-9)
@@ -147,7 +148,7 @@ def test_the_frame_options_read_the_files_as_the_model_projects(name, option, tm
         path.write_text(write_text(Calibration(name, values, [], {}, 0, 0, [0, 0], 0, 0, {"sensor_px": [1, 1]}),
                                    ".json"))
         with pytest.raises(SolasError, match="k1 0.1"):
-            frame_camera(path, option)
+            parse_frame(**{option.lstrip("-"): str(path)})
 
 
 def test_bad_inputs_are_refused_by_name_and_nothing_is_written(tmp_path, capsys):
@@ -173,8 +174,6 @@ def test_bad_inputs_are_refused_by_name_and_nothing_is_written(tmp_path, capsys)
 def test_degrade_frame_options_take_the_written_file_as_the_numbers(tmp_path):
     """`--fisheye FILE` gives the frame camera of `--fisheye kannala-brandt:FX,FY,CX,CY,K1..K4` with the file's
     numbers, bit for bit (a fit of the fisheye lens's own mapping, written as OpenCV writes it)."""
-    from solas_mi.optics.frame import parse_frame
-
     lens = Lens.load("nikkor-fisheye")
     cal = fit(chief_map(lens, Sensor(COLUMNS, ROWS, film_pitch_um(lens, COLUMNS))), "opencv-fisheye")
     path = tmp_path / "kb.yaml"

@@ -5,8 +5,8 @@ was fitted to (lens, wavelength, sensor, pitch, focus, residual) beside its para
 or comments after OCamCalib's numbers (its reader stops before them).
 
 `write_text(calibration, suffix)` is the file's text; `read(path)` gives (model, values, (width, height),
-metadata) of a file written by solas-mi or by the ecosystem's own tool; `frame_camera(path, option)` the
-frame's camera (`optics.frame.FrameCamera`) of a file that the frame options `--fisheye` and
+metadata) of a file written by solas-mi or by the ecosystem's own tool; `frame_numbers(path, option)` the
+frame's camera (`optics.frame.FrameCamera`'s numbers) of a file that the frame options `--fisheye` and
 `--intrinsics` take: the parameters as written, so the round trip is exact.
 """
 from __future__ import annotations
@@ -208,23 +208,21 @@ def read(path, expect: str | None = None):
         raise SolasError(f"{where}: a parameter is missing or not a number ({type(exc).__name__})") from None
 
 
-def frame_camera(path, option: str):
-    """The frame's camera (`optics.frame.FrameCamera`) of the calibration file `path` given to `option`
-    (--fisheye: an OpenCV fisheye or WoodScape file; --intrinsics: an OpenCV pinhole file without distortion)."""
-    from ..frame import FrameCamera
-
+def frame_numbers(path, option: str) -> tuple[str, tuple[float, ...], tuple[float, ...]]:
+    """The frame camera's model, intrinsics and coefficients (`optics.frame.FrameCamera`'s) of the calibration
+    file `path` given to `option` (--fisheye: an OpenCV fisheye or WoodScape file; --intrinsics: an OpenCV
+    pinhole file without distortion)."""
     model, v, _, _ = read(path, "opencv-fisheye" if option == "--fisheye" else "opencv-pinhole")
     if option == "--fisheye" and model == "opencv-fisheye":
-        return FrameCamera("kannala-brandt", intrinsics=(v["fx"], v["fy"], v["cx"], v["cy"]),
-                           coefficients=tuple(v[k] for k in ("k1", "k2", "k3", "k4")))
+        return "kannala-brandt", (v["fx"], v["fy"], v["cx"], v["cy"]), tuple(v[k] for k in ("k1", "k2", "k3", "k4"))
     if option == "--fisheye" and model == "woodscape":
-        return FrameCamera("polynomial", intrinsics=(v["k1"], v["k1"], v["cx"], v["cy"]),
-                           coefficients=tuple(v[k] for k in ("k1", "k2", "k3", "k4")) + (v["aspect_ratio"],))
+        return ("polynomial", (v["k1"], v["k1"], v["cx"], v["cy"]),
+                tuple(v[k] for k in ("k1", "k2", "k3", "k4")) + (v["aspect_ratio"],))
     if option == "--intrinsics" and model == "opencv-pinhole":
         bent = {k: v[k] for k in OPENCV_DISTORTION[model] if v[k] != 0.0}
         if bent:
             raise SolasError(f"{option} {str(path)!r}: its distortion ({', '.join(f'{k} {x:g}' for k, x in bent.items())})"
                              " is not a pinhole's; --intrinsics takes a calibration without distortion")
-        return FrameCamera("pinhole", intrinsics=(v["fx"], v["fy"], v["cx"], v["cy"]))
+        return "pinhole", (v["fx"], v["fy"], v["cx"], v["cy"]), ()
     takes = "opencv-fisheye, woodscape" if option == "--fisheye" else "opencv-pinhole"
     raise SolasError(f"{option} {str(path)!r} holds a {model} calibration; {option} takes {takes}")
