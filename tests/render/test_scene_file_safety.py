@@ -30,6 +30,31 @@ def test_a_mesh_error_quotes_nothing_of_the_mesh(tmp_path):
     assert "mesh.ply" in message and "invalid PLY header" in message  # what went wrong, and where
 
 
+MESH = '<shape type="ply"><string name="filename" value="{name}"/></shape>'
+SPECTRUM = '<bsdf type="diffuse" id="b"><spectrum name="reflectance" filename="{name}"/></bsdf>'
+
+
+@pytest.mark.parametrize("body, name, data", [
+    (MESH, "mesh.ply", SECRET.encode() + b"\0OTHER=x\n"),  # a token cut at a NUL, as in /proc/self/environ
+    (MESH, "mesh.ply", b'ply"' + SECRET.encode() + b" more\n"),  # a quote inside the token
+    (SPECTRUM, "spectrum.spd", f'{SECRET} "x" more\n'.encode()),  # a line of a spectrum file
+], ids=["token-cut-at-nul", "quote-in-token", "spectrum-line"])
+def test_what_mitsuba_quotes_of_a_named_file_is_left_out(tmp_path, body, name, data):
+    """Mitsuba quotes what it read without escaping it: a token cut at a NUL byte left its quote open
+    ("unknown token "SECRET_TOKEN=hunter2!", the first variable of /proc/self/environ), and a quote in the
+    file's text closed it early, so the rest of the line came out. The message ends at that quote."""
+    (tmp_path / name).write_bytes(data)
+    message = refused(load, _scene(tmp_path, body.format(name=name)), VARIANT)
+    assert "hunter2" not in message and "SECRET" not in message and "more" not in message, message
+    assert name in message  # the file is named
+
+
+def test_a_scene_that_is_no_xml_keeps_the_parser_s_reason(tmp_path):
+    (tmp_path / "scene.xml").write_text("not xml at all")
+    message = refused(load, tmp_path / "scene.xml", VARIANT)
+    assert "scene.xml" in message and "No document element found" in message
+
+
 def _render(scene, tmp_path) -> subprocess.CompletedProcess:
     """`solas-mi render` of `scene` in its own process: Mitsuba's parser, blocked on a FIFO, holds the
     interpreter, so only a process can be timed out."""
