@@ -95,16 +95,16 @@ def _handlers() -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
     _SIGNALLED.clear()
-    previous = _handlers()
+    previous = _handlers()  # from the start: building the parser imports every stage's commands (a second)
+    args = argparse.Namespace(command=None)
     try:
+        args = build_parser().parse_args(argv)
         return int(args.run(args) or 0)
     except SolasError as exc:
         if _SIGNALLED:  # the interruption surfaced inside a library as its error
             return _stopped(args.command)
-        print(f"solas-mi {args.command}: error: {exc}", file=sys.stderr)
+        print(f"{_prog(args.command)}: error: {exc}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # the reader of stdout has gone (`| head`): stop quietly, as Unix tools do
         import os
@@ -119,10 +119,15 @@ def main(argv: list[str] | None = None) -> int:
                 signal.signal(sig, handler)
 
 
-def _stopped(command: str, terminated: bool = False) -> int:
+def _prog(command: str | None) -> str:
+    """How messages name the program: solas-mi and its command (none yet while the parser is built)."""
+    return f"solas-mi {command}" if command else "solas-mi"
+
+
+def _stopped(command: str | None, terminated: bool = False) -> int:
     terminated = terminated or signal.SIGTERM in _SIGNALLED
     how = "terminated" if terminated else "interrupted"
-    print(f"\nsolas-mi {command}: {how}; no output was left half-written", file=sys.stderr)
+    print(f"\n{_prog(command)}: {how}; no output was left half-written", file=sys.stderr)
     return 143 if terminated else 130
 
 

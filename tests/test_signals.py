@@ -171,6 +171,26 @@ def test_a_signal_while_drjit_loads_is_an_interruption(tmp_path, sig, code):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_a_signal_while_the_commands_load_is_an_interruption(tmp_path, sig, code):
+    """Ctrl-C or SIGTERM in the first second, while the command line imports every stage's commands
+    (NumPy among them): exit 130 / 143 with one line. Our handlers came only after that: a
+    KeyboardInterrupt traceback of 20 lines (SIGINT), a silent kill (SIGTERM)."""
+    code_text = ("import os, signal, sys\n"
+                 "class SignalOnLookup:\n"
+                 "    def find_spec(self, name, path=None, target=None):\n"
+                 "        if name == 'numpy':\n"
+                 f"            os.kill(os.getpid(), signal.{sig.name})\n"
+                 "        return None\n"
+                 "sys.meta_path.insert(0, SignalOnLookup())\n"
+                 "from solas_mi.cli import main\n"
+                 "sys.exit(main(['sensors']))\n")
+    p = subprocess.run([sys.executable, "-c", code_text], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert p.returncode == code and "Traceback" not in p.stderr, p.stderr
+    assert p.stderr.strip().splitlines() == [f"solas-mi: {'interrupted' if code == 130 else 'terminated'}; no output "
+                                             "was left half-written"], p.stderr
+
+
 def _ends_late(ready, seconds: float) -> None:
     """A process that needs `seconds` to end once told (SIGTERM), as a worker ends its pass."""
     signal.signal(signal.SIGTERM, lambda *_: (time.sleep(seconds), os._exit(0)))
