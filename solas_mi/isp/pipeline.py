@@ -106,6 +106,14 @@ def load_isp(text: str | Path) -> ISP:
         raise SolasError(f"isp file {str(text)!r}: {exc}") from None
 
 
+def check_sensor(isp: ISP, model: SensorModel) -> None:
+    """SolasError before any frame is taken where `isp` cannot develop the frames of sensor `model`: white
+    balance gains given for other filters than its colour filter array's (develop would refuse every
+    frame, after its work)."""
+    if isinstance(isp.white_balance, dict):
+        white.check_given(isp.white_balance, model.cfa)
+
+
 def _gains(isp: ISP, signal: np.ndarray, model: SensorModel) -> dict[str, float]:
     method = isp.white_balance
     if isinstance(method, dict):

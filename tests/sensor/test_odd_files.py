@@ -133,6 +133,18 @@ def test_isp_values_of_the_wrong_type_are_named(folder, capsys, toml, says):
     assert code == 2 and re.search(says, err), err
 
 
+def test_gains_for_other_filters_are_refused_before_the_frame(folder, capsys, monkeypatch):
+    """White-balance gains naming G for an RCCB sensor: refused before the RAW is taken (develop refused
+    them after the sensor's work; a batch, every item after its convolution or render)."""
+    from solas_mi.sensor import capture
+
+    monkeypatch.setattr(capture, "capture", lambda *args, **kwargs: pytest.fail("a frame was taken"))
+    (folder / "sensor.toml").write_text('[sensor]\ncfa = "RCCB"\n')
+    (folder / "isp.toml").write_text("[isp]\nwhite_balance = {R = 1.9, G = 1, B = 1.5}\n")
+    code, err = camera(folder, capsys, str(folder / "sensor.toml"), str(folder / "isp.toml"))
+    assert code == 2 and "each filter of RCCB: R, B, C" in err
+
+
 def test_menon_refining_step_is_a_switch(folder, capsys):
     """refining_step = true and = false develop different frames (the option reaches the demosaicer)."""
     import imageio.v3 as iio
