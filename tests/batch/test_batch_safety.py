@@ -27,6 +27,19 @@ def test_a_safe_name_is_one_plain_component(text, tmp_path):
     assert inside(tmp_path, name + ".exr").parent == tmp_path.resolve()
 
 
+@pytest.mark.parametrize("text, name", [("ïrr ä", "ïrr_ä"), ("東京", "東京"), ("e\u0301te\u0301", "été"),
+                                        ("é" * 100, "é" * 60)], ids=["latin", "cjk", "decomposed", "long"])
+def test_a_safe_name_keeps_the_letters_of_every_script(text, name):
+    """Letters and digits of any script stay (they became "_", and a name of none "item": "ïrr ä.exr"
+    gave rr.exr, two CJK names one output, refused), within NAME_MAX bytes of UTF-8."""
+    assert safe_name(text) == name and len(name.encode()) <= 120
+
+
+def test_inputs_named_in_other_scripts_keep_their_names(tmp_path):
+    jobs = plan([tmp_path / "東京.png", tmp_path / "大阪.png", tmp_path / "café 1.png"], tmp_path / "out")
+    assert [Path(job.output).name for job in jobs] == ["東京.exr", "大阪.exr", "café_1.exr"]
+
+
 @pytest.mark.parametrize("name", ["../x", "/abs/x", "a/../../x"])
 def test_inside_refuses_a_path_leaving_its_folder(name, tmp_path):
     with pytest.raises(SolasError, match="outside the folder"):
