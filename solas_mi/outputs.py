@@ -135,7 +135,7 @@ def hold_folder(folder: str | os.PathLike, what: str) -> Iterator[Path]:
     """Hold `folder` (created if need be) for the block: its lock file (LOCK, an advisory `flock`,
     released by the system if the process dies) names the holder, `what` with its process id, host
     and start time. SolasError naming the holder when another process holds it. The lock file is
-    removed at the end."""
+    removed at the end where the folder allows it (the lock is the flock, released in any case)."""
     import fcntl
     import socket
     import time
@@ -163,7 +163,10 @@ def hold_folder(folder: str | os.PathLike, what: str) -> Iterator[Path]:
                      f"{time.strftime('%Y-%m-%dT%H:%M:%S%z')})\n".encode())
         yield folder
     finally:
-        (folder / LOCK).unlink(missing_ok=True)
+        try:
+            (folder / LOCK).unlink(missing_ok=True)
+        except OSError:  # the folder turned read-only: the file stays, unlocked (the next run takes it)
+            pass
         os.close(fd)
 
 
