@@ -49,6 +49,23 @@ def test_what_mitsuba_quotes_of_a_named_file_is_left_out(tmp_path, body, name, d
     assert name in message  # the file is named
 
 
+@pytest.mark.parametrize("name, text", [
+    ("lens.dat", f"{SECRET} 1 2 3\n"),  # the .dat reader quotes a row that is no numbers
+    ("lens.seq", f"{SECRET}\n"),  # the CODE V reader names an unknown command
+    ("lens.toml", f"{SECRET.replace('=', '_')} = 1\n"),  # the TOML reader names an unknown key
+], ids=["dat", "seq", "toml"])
+def test_a_lens_file_the_scene_names_is_not_quoted(tmp_path, name, text):
+    """A lens_camera's lens is a file the scene names: the lens readers' refusals quote the faulty line
+    (right for a lens file the user gives), so a shared scene could print a line of any .dat, .seq or
+    .toml file. The refusal names the file and the command that says why."""
+    (tmp_path / name).write_text(text)
+    sensor = (f'<sensor type="lens_camera"><string name="lens" value="{name}"/><float name="pitch_um" value="20"/>'
+              '<film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>')
+    message = refused(load, _scene(tmp_path, sensor), VARIANT)
+    assert "SECRET" not in message and "hunter2" not in message, message
+    assert name in message and "solas-mi lens info" in message
+
+
 def test_a_scene_that_is_no_xml_keeps_the_parser_s_reason(tmp_path):
     (tmp_path / "scene.xml").write_text("not xml at all")
     message = refused(load, tmp_path / "scene.xml", VARIANT)
