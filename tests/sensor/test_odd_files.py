@@ -65,6 +65,7 @@ def test_every_sensor_key_of_the_wrong_type_is_named(folder, capsys, key, value)
     ("wavelengths_nm", "[1, 2, 3]", r"\[380, 780\]"),
     ("wavelengths_nm", "[1e300, 1e300, 1e300]", r"\[380, 780\]"),
     ("cfa", "5", "must be one of RGGB"),
+    ("qe_curve", '""', "qe_curve = '' must name a CSV file"),  # "QE curve '<the sensor's folder>' is a folder"
 ])
 def test_sensor_values_outside_physics_are_refused(folder, capsys, key, value, allowed):
     code, err = camera(folder, capsys, _sensor(folder, f"[sensor]\n{key} = {value}\n"))
@@ -194,6 +195,8 @@ def test_the_smallest_whole_tile_is_developed(folder, capsys):
     (["--f-number", "0.3"], "f-number 0.3 must be a number from 0.5"),  # faster than any lens in air
     (["--scale", "1e300", "--exposure-ms", "1e300"], "more photons per pixel than a float64 holds"),
     (["--scale", "1e308"], "--scale 1e\\+308 times the image's largest value 1e\\+06 passes the largest float64"),
+    # auto-exposure meters one second of light: it said "an exposure of 1 s", which nobody gave
+    (["--scale", "1e300", "--exposure-ms", "auto"], "^solas-mi camera: error: auto-exposure: irradiance up to 1e\\+306"),
 ])
 def test_camera_values_that_overflowed_are_refused(folder, capsys, extra, says):
     write_exr(folder / "bright.exr", {c: np.full((4, 4), 1e6, np.float32) for c in "RGB"})
