@@ -1,6 +1,6 @@
 """The `solas-mi` command line. Each stage owns its sub-commands (`<stage>/commands.py`, a
 `register(subparsers)` each); this module only composes them, turns user errors into one line on
-stderr and exit status 2, and makes SIGTERM an interruption like Ctrl-C, so that temporary files
+stderr and exit status 2 (and a library's warning into one line, without its source line), and makes SIGTERM an interruption like Ctrl-C, so that temporary files
 and folders are removed and no output is left half-written (exit status 130 / 143)."""
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ import argparse
 import signal
 import sys
 import threading
+import warnings
 
 from .errors import SolasError
 from .interrupts import raise_outside_imports
@@ -98,6 +99,9 @@ def main(argv: list[str] | None = None) -> int:
     _SIGNALLED.clear()
     previous = _handlers()  # from the start: building the parser imports every stage's commands (a second)
     args = argparse.Namespace(command=None)
+    shown = warnings.showwarning
+    warnings.showwarning = lambda message, *where, **more: print(f"{_prog(args.command)}: warning: {message}",
+                                                                 file=sys.stderr)
     try:
         args = build_parser().parse_args(argv)
         return int(args.run(args) or 0)
@@ -114,6 +118,7 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt as exc:
         return _stopped(args.command, isinstance(exc, Terminated))
     finally:
+        warnings.showwarning = shown
         for sig, handler in previous.items():
             if handler is not None:  # None: set outside Python, not ours to restore
                 signal.signal(sig, handler)
