@@ -221,6 +221,25 @@ def test_interrupted_workers_are_stopped_together(tmp_path):
     assert took < (count - 1) * seconds, f"{took:.2f} s to stop {count} workers that take {seconds} s each"
 
 
+def test_the_first_worker_of_a_process_leaves_ctrl_c_to_the_batch(tmp_path):
+    """The first worker a process starts also starts multiprocessing's resource tracker, which unblocked
+    SIGINT as it ended (its own guard): that worker started with Ctrl-C live, and a Ctrl-C during its
+    start killed it (exit -SIGINT, the next test alone failed so). In a fresh interpreter, as a batch's."""
+    script = tmp_path / "first_worker.py"
+    script.write_text("import multiprocessing, os, signal, time\n"
+                      "from solas_mi.batch import runner\n"
+                      "if __name__ == '__main__':\n"
+                      "    worker = runner._Worker(multiprocessing.get_context('spawn'), None, {})\n"
+                      "    for _ in range(20):  # while it starts and while it waits for items\n"
+                      "        os.kill(worker.proc.pid, signal.SIGINT)\n"
+                      "        time.sleep(0.1)\n"
+                      "    alive = worker.proc.is_alive()\n"
+                      "    runner._stop_all([worker], now=False)\n"
+                      "    print(alive, worker.proc.exitcode)\n")
+    p = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert p.stdout.split() == ["True", "0"] and "Traceback" not in p.stderr, (p.stdout, p.stderr[-500:])
+
+
 def test_workers_leave_ctrl_c_to_the_batch(capfd):
     """A terminal's Ctrl-C reaches every process of the job, the workers too: a worker neither dies
     nor prints a traceback (one starting up printed one), and ends when the batch tells it to."""
