@@ -100,3 +100,21 @@ def test_every_flat_sensor_gives_the_frames_it_gave(name):
 def test_the_flat_presets_are_all_here():
     """Every preset of one linear readout is compared above (a preset that names stages is a new sensor)."""
     assert {"ar0132at", "imx255", "imx490", "kac12040", "mt9p001"} <= set(SENSORS)
+
+
+FLAT_FIELDS = ("dark_current_e_s", "read_noise_e", "prnu", "dsnu_e", "full_well_e", "gain_dn_per_e", "bit_depth",
+               "black_level_dn")
+
+
+def test_a_file_naming_the_stages_of_a_flat_sensor_gives_its_frames(tmp_path):
+    """A preset written as [sensor] (photon conversion) + one [[sensor.readout]] is the same sensor."""
+    flat = load_sensor("imx490")
+    lines = ["[sensor]", f"pixel_pitch_um = {flat.pixel_pitch_um!r}", f"cfa = {flat.cfa!r}".replace("'", '"')]
+    lines += [f"{name} = {getattr(flat, name)!r}" for name in ("qe_r", "qe_g", "qe_b", "qe_c")]
+    lines += [f"wavelengths_nm = {list(flat.wavelengths_nm)!r}", "[[sensor.readout]]"]
+    lines += [f"{name} = {getattr(flat, name)!r}" for name in FLAT_FIELDS]
+    (tmp_path / "staged.toml").write_text("\n".join(lines) + "\n", encoding="utf-8")
+    staged = load_sensor(tmp_path / "staged.toml")
+    assert not isinstance(staged, SensorModel) and [kind for kind, _ in staged.stages()] == ["photons", "readout"]
+    image = scene()
+    assert digest(capture(staged, image, 0.01, 3, 5)) == digest(legacy_capture(flat, image, 0.01, 3, 5))

@@ -1,0 +1,186 @@
+"""`SensorChain`: a sensor as an ordered list of stages, `STAGES` (a `solas_mi.registry.Registry`): the photon
+conversion (`photons`), one or more readouts (`readout`), the merge of an HDR sensor's readouts into one
+linear signal (`merge`) and the compander that squeezes it into the output's bits (`compander`). Each stage
+checks its own values, draws from its own named random stream (`readout`) and has its inverse in the image
+processor (`SensorChain.linear_dn`).
+
+A flat `[sensor]` table (`model.SensorModel`) is the chain photons → one readout (`chain_of`), and gives the
+frames it gave before the chain, bit for bit. A TOML file names the stages after the photon conversion's
+fields in `[sensor]`:
+
+    [[sensor.readout]]        # one table per readout, in order of falling response
+    name = "large-HCG"
+    gain_dn_per_e = 0.75
+    [sensor.merge]            # with two or more readouts
+    bits = 24
+    [sensor.compander]        # optional, after the merge
+    knees = [[0, 0], [2048, 2048], [16777215, 4095]]
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, fields
+
+import numpy as np
+
+from ..errors import SolasError
+from ..registry import Registry
+from . import emva
+from .compander import Compander
+from .merge import Merge
+from .photons import PhotonConversion
+from .qe import QECurve
+from .readout import Readout, check_charges, read_charges
+
+STAGES = Registry("sensor stage")
+STAGES.register("photons", PhotonConversion, summary="irradiance → mean photo-electrons: pixel pitch, colour filter "
+                "array, quantum efficiencies", reference="EMVA 1288 release 4.0, eqs. 1-2")
+STAGES.register("readout", Readout, summary="a photodiode's charge over an exposure read at a conversion gain into "
+                "an ADC: shot, dark and read noise, PRNU, DSNU, full well", reference="EMVA 1288 release 4.0, section 2")
+STAGES.register("merge", Merge, summary="the readouts' estimates, each below a threshold of its saturation, as one "
+                "linear signal of 16-24 bits")
+STAGES.register("compander", Compander, summary="piecewise-linear companding of the merged signal through knee "
+                "points to the output's bits; decompanded by the image processor")
+HEAD = "photons"  # the stage whose fields the [sensor] table itself holds
+
+
+@dataclass(frozen=True)
+class SensorChain:
+    """The stages of a sensor (module docstring): its photon conversion, readouts, merge and compander."""
+    photons: PhotonConversion
+    readouts: tuple[Readout, ...]
+    merge: Merge | None = None
+    compander: Compander | None = None
+
+    def __post_init__(self):
+        object.__setattr__(self, "readouts", tuple(self.readouts))
+        kinds = {"photons": (self.photons,), "readout": self.readouts, "merge": (self.merge,),
+                 "compander": (self.compander,)}
+        for kind, stages in kinds.items():
+            cls = STAGES[kind].function
+            if not all(stage is None or isinstance(stage, cls) for stage in stages):
+                raise SolasError(f"sensor {kind} must be a {cls.__name__}")
+        if not self.readouts or self.photons is None:
+            raise SolasError("a sensor's chain needs its photon conversion and at least one readout")
+        names = [r.name for r in self.readouts]
+        if len(set(names)) != len(names):
+            raise SolasError(f"sensor readout names {names} must differ (each names its own stream and frame)")
+        check_charges(self.readouts)
+        if (len(self.readouts) > 1) != (self.merge is not None):
+            raise SolasError(f"a sensor of {len(self.readouts)} readout(s) takes "
+                             f"{'a [sensor.merge] table' if len(self.readouts) > 1 else 'no merge'}: the merge "
+                             "makes one signal of two or more readouts")
+        if self.merge is not None:
+            self.merge.check_readouts(self.readouts)
+        if self.compander is not None and (self.merge is None or self.compander.top != self.merge.white_level_dn):
+            raise SolasError(f"sensor compander's last knee must sit at the merged signal's white level "
+                             f"({self.merge.white_level_dn if self.merge else 'no merge: a compander follows one'}), "
+                             f"not {self.compander.top}")
+
+    @classmethod
+    def from_dict(cls, values: dict) -> SensorChain:
+        """A chain from a `[sensor]` table naming its stages (module docstring); an unknown name is an error."""
+        values = dict(values)
+        readouts = values.pop("readout", None)
+        if not isinstance(readouts, list) or not all(isinstance(r, dict) for r in readouts):
+            raise SolasError("sensor readout must be [[sensor.readout]] tables, one per readout")
+        merge, compander = values.pop("merge", None), values.pop("compander", None)
+        head = set(PhotonConversion.field_names())
+        unknown = sorted(set(values) - head)
+        if unknown:
+            raise SolasError(f"unknown sensor parameter(s) {', '.join(unknown)}; allowed: "
+                             f"{', '.join(sorted(head | set(STAGES.names()) - {HEAD}))}")
+        values = {k: tuple(v) if isinstance(v, list) else v for k, v in values.items()}
+        if "qe_curve" in values:
+            values["qe_curve"] = QECurve.from_table(values["qe_curve"], "sensor qe_curve")
+        return cls(_made(PhotonConversion, values, HEAD), tuple(_made(Readout, r, "readout") for r in readouts),
+                   None if merge is None else _made(Merge, merge, "merge"),
+                   None if compander is None else _made(Compander, compander, "compander"))
+
+    def stages(self) -> list[tuple[str, object]]:
+        """(kind, stage) in the order of the chain."""
+        rest = [("merge", self.merge), ("compander", self.compander)]
+        return [(HEAD, self.photons), *(("readout", r) for r in self.readouts), *((k, s) for k, s in rest if s)]
+
+    def describe(self) -> dict:
+        """Every stage's values (JSON-ready), in order: the RAW's metadata."""
+        return {"stages": [{"stage": kind, **stage.describe()} for kind, stage in self.stages()]}
+
+    def readout_frames(self, irradiance: np.ndarray, exposure_s: float, seed: int, frame: int) -> list[np.ndarray]:
+        """Each readout's frame (H, W, uint16 DN) of an irradiance image (H, W, 3, W/m²) exposed `exposure_s`."""
+        mu_e = self.photons.mean_electrons(irradiance, exposure_s)
+        return read_charges(self.readouts, mu_e, exposure_s, seed, frame)
+
+    def output(self, frames: list[np.ndarray]) -> np.ndarray:
+        """The sensor's RAW of its readouts' frames: the one readout's, or merged (and companded)."""
+        if self.merge is None:
+            return frames[0]
+        merged = self.merge.merge(self.readouts, frames)
+        return merged if self.compander is None else self.compander.compand(merged)
+
+    # what the image processor and the commands read of a sensor (as of `SensorModel`)
+    @property
+    def cfa(self) -> str:
+        return self.photons.cfa
+
+    @property
+    def channel_wavelengths_nm(self) -> tuple[float, float, float]:
+        return self.photons.channel_wavelengths_nm
+
+    def effective_qe(self) -> np.ndarray:
+        return self.photons.effective_qe()
+
+    @property
+    def bit_depth(self) -> int:
+        """The RAW's bits: the readout's, the merged signal's or the compander's."""
+        return self.compander.bit_depth if self.compander else self.merge.bits if self.merge else self.readouts[0].bit_depth
+
+    @property
+    def black_level_dn(self) -> int:
+        """The RAW's black level: the readout's, none for a merged signal, or the compander's."""
+        return self.compander.black_level_dn if self.compander else 0 if self.merge else self.readouts[0].black_level_dn
+
+    @property
+    def saturation_dn(self) -> float:
+        """The linear signal above black (DN of the first readout) at saturation."""
+        return self.merge.saturation_dn(self.readouts) if self.merge else self.readouts[0].saturation_dn
+
+    @property
+    def saturation_e(self) -> float:
+        """The reference photodiode's photo-electrons at saturation (`auto_exposure`)."""
+        first = self.readouts[0]
+        return self.saturation_dn / (first.gain_dn_per_e * first.response)
+
+    @property
+    def dark_current_e_s(self) -> float:
+        """The first readout's dark current (e⁻/s)."""
+        return self.readouts[0].dark_current_e_s
+
+    def linear_dn(self, raw: np.ndarray) -> np.ndarray:
+        """The linear signal above black (float64, DN of the first readout) of a RAW: decompanded."""
+        if self.compander is not None:
+            return self.compander.decompand(raw)
+        return np.asarray(raw, dtype=np.float64) - self.black_level_dn
+
+    def saturated(self, raw: np.ndarray) -> np.ndarray:
+        """Where a RAW is saturated: the last readout within 3 σ of its readout noise of its saturation."""
+        last = self.readouts[-1]
+        spread = emva.saturation_spread_dn(last.gain_dn_per_e, last.read_noise_e, last.dsnu_e)
+        scale = self.saturation_dn / last.saturation_dn
+        return self.linear_dn(raw) >= self.saturation_dn - spread * scale
+
+
+def _made(cls, table, kind: str):
+    """A stage of `cls` from its TOML table; an unknown name is an error naming the stage's fields."""
+    if not isinstance(table, dict):
+        raise SolasError(f"sensor {kind} must be a table of {cls.__name__}'s fields")
+    known = [name for name in cls.__dataclass_fields__]
+    unknown = sorted(set(table) - set(known))
+    if unknown:
+        raise SolasError(f"unknown sensor {kind} parameter(s) {', '.join(unknown)}; allowed: {', '.join(known)}")
+    return cls(**table)
+
+
+def chain_of(model) -> SensorChain:
+    """The chain of a flat sensor (`model.SensorModel`): its photon conversion and its one readout."""
+    own = set(Readout.field_names()) & {f.name for f in fields(model)}  # noise, well, gain, ADC
+    return SensorChain(model.photons, (Readout(**{name: getattr(model, name) for name in own}),))
