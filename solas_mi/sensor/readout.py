@@ -95,6 +95,11 @@ class Readout:
         """y_sat: the signal above black (DN) at saturation, the well or the ADC, whichever fills first."""
         return emva.saturation_dn(self.gain_dn_per_e, self.full_well_e, self.white_level_dn, self.black_level_dn)
 
+    def dark_mean_dn(self, exposure_s: float) -> float:
+        """μ_y.dark = black + K i_d r t (DN) over the frame's exposure t."""
+        return emva.dark_mean_dn(self.black_level_dn, self.gain_dn_per_e, self.dark_current_e_s,
+                                 exposure_s * self.exposure_ratio)
+
     def dark_variance_e2(self, exposure_s: float) -> float:
         """σ_d² = σ_r² + i_d r t (e⁻²) over the frame's exposure t."""
         return emva.dark_variance_e2(self.read_noise_e, self.dark_current_e_s, exposure_s * self.exposure_ratio)
@@ -107,8 +112,8 @@ def check_charges(readouts: tuple[Readout, ...]) -> None:
         other = first.setdefault(r.charge, r)
         for name in SHARED:
             if getattr(r, name) != getattr(other, name):
-                raise SolasError(f"sensor readout {r.name!r}: {name} = {getattr(r, name)!r} differs from readout "
-                                 f"{other.name!r}'s {getattr(other, name)!r}; both read photodiode {r.photodiode!r} "
+                raise SolasError(f"sensor readout {r.name!r}: {name} = {getattr(r, name)!r} differs from the "
+                                 f"{getattr(other, name)!r} of readout {other.name!r}; both read photodiode {r.photodiode!r} "
                                  "over the same exposure (one charge), whose property it is")
 
 
