@@ -19,6 +19,7 @@ import numpy as np
 from ..errors import SolasError
 from ..sensor.auto_exposure import AUTO, AutoExposure, exposure_seconds
 from ..sensor.capture import check_seed
+from ..sensor.chain import SensorChain
 from ..sensor.model import SensorModel
 from .pipeline import ISP, check_sensor
 
@@ -29,15 +30,16 @@ class Camera:
     `scale` read as W/m² of image irradiance (radiance through the f-number a frame states), its seed, and
     the image processor (None: RAW only)."""
 
-    sensor: SensorModel
+    sensor: SensorModel | SensorChain
     exposure_ms: float | AutoExposure
     isp: ISP | None = None
     seed: int = 0
     scale: float = 1.0
 
     def __post_init__(self):
-        if not isinstance(self.sensor, SensorModel):
-            raise SolasError(f"camera sensor {self.sensor!r} must be a solas_mi.sensor.model.SensorModel")
+        if not isinstance(self.sensor, (SensorModel, SensorChain)):
+            raise SolasError(f"camera sensor {self.sensor!r} must be a solas_mi.sensor.model.SensorModel or a "
+                             "solas_mi.sensor.chain.SensorChain")
         if not isinstance(self.exposure_ms, AutoExposure) and (
                 isinstance(self.exposure_ms, bool) or not isinstance(self.exposure_ms, (int, float))
                 or not math.isfinite(self.exposure_ms) or self.exposure_ms <= 0):

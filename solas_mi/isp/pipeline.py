@@ -2,7 +2,8 @@
 
 The stages, in order, each optional and named in the metadata:
 
-1. black level (`black`): the signal above black as a fraction of saturation;
+1. black level (`black`): the signal above black as a fraction of saturation (an HDR sensor's RAW
+   decompanded first);
 2. white balance (`white.METHODS`): one gain per filter on the mosaic;
 3. demosaicing (`demosaic.METHODS`): three channels per pixel (``none``: the mosaic as a grey frame);
 4. colour correction (`ccm`): the sensor's matrix, a given one, or none;
@@ -30,6 +31,7 @@ import numpy as np
 
 from ..errors import SolasError
 from ..options import toml_table
+from ..sensor.chain import SensorChain
 from ..sensor.model import SensorModel
 from . import black, ccm, demosaic, tone, white
 from .tone import CURVES, GAMMA
@@ -120,11 +122,12 @@ def check_sensor(isp: ISP, model: SensorModel) -> None:
         white.check_given(isp.white_balance, model.cfa)
 
 
-def develop(raw: np.ndarray, model: SensorModel, isp: ISP = ISP()) -> tuple[np.ndarray, dict]:
+def develop(raw: np.ndarray, model: SensorModel | SensorChain, isp: ISP = ISP()) -> tuple[np.ndarray, dict]:
     """The 8-bit frame (H, W, 3 uint8) of a RAW frame (H, W, DN) of sensor `model`, and the metadata
     naming every stage with the values it used."""
     stages = {"black_level": {"subtracted": isp.black_level, "black_dn": model.black_level_dn,
-                              "saturation_dn": black.saturation_dn(model)}}
+                              "saturation_dn": black.saturation_dn(model),
+                              "decompanded_through": black.decompanded_through(model)}}
     signal = black.subtract_black(raw, model, enabled=isp.black_level)
     gains = white.METHODS[_white_balance(isp)].function(signal, model, isp)
     stages["white_balance"] = {"method": _white_balance(isp), "gains": gains,

@@ -79,6 +79,15 @@ class SensorModel:
         well or the ADC, whichever fills first."""
         return emva.saturation_dn(self.gain_dn_per_e, self.full_well_e, self.white_level_dn, self.black_level_dn)
 
+    @property
+    def saturation_e(self) -> float:
+        """The photo-electrons at saturation: y_sat / K."""
+        return self.saturation_dn / self.gain_dn_per_e
+
+    def linear_dn(self, raw: np.ndarray) -> np.ndarray:
+        """The signal above black (float64 DN) of a RAW frame (as `chain.SensorChain.linear_dn`)."""
+        return np.asarray(raw, dtype=np.float64) - self.black_level_dn
+
     def saturated(self, raw: np.ndarray) -> np.ndarray:
         """Where a RAW frame (DN) is saturated: within 3 σ of the readout noise (read noise and DSNU) and
         the rounding of the saturation level."""
