@@ -2,13 +2,17 @@
 stage named in the metadata, auto-exposure meters it, the image processor decompands and develops it, and a
 batch's camera takes it."""
 import json
+import math
 
 import numpy as np
+import pytest
 
 from solas_mi.cli import main
-from solas_mi.imageio import read_exr, write_exr
+from solas_mi.imageio import read_exr, srgb_encode, write_exr
 from solas_mi.isp.camera import Camera
 from solas_mi.isp.pipeline import ISP, develop
+from solas_mi.isp.tone import LOG_FLOOR, encode
+from solas_mi.sensor.auto_exposure import AutoExposure
 from solas_mi.sensor.capture import capture
 from solas_mi.sensor.chain import STAGES
 from solas_mi.sensor.files import PRESETS, load_sensor
@@ -83,3 +87,31 @@ def test_a_batch_camera_takes_an_hdr_sensor(tmp_path):
     raw, frame, meta = camera.shoot(image, "frame000")
     assert raw.dtype == np.uint32 and frame.shape == (16, 64, 3)
     assert meta["camera"]["sensor"]["stages"][-1] == {"stage": "merge", "bits": 24, "threshold": 0.9, "blend": 0.0}
+
+
+def test_reinhard_tone_maps_by_its_formula():
+    """Two grey levels a and b, half the frame each: log-average Ȳ = sqrt((a + δ)(b + δ)), L = 0.18 Y / Ȳ, the
+    brighter at L_w maps to 1."""
+    a, b = 1e-4, 0.4
+    image = np.concatenate([np.full((4, 4, 3), a), np.full((4, 4, 3), b)])
+    got = encode(image, "reinhard")
+    mean = math.sqrt((a + LOG_FLOOR) * (b + LOG_FLOOR))
+    low, high = 0.18 * a / mean, 0.18 * b / mean
+    expected = low * (1 + low / high**2) / (1 + low)
+    assert got[0, 0, 0] == pytest.approx(float(srgb_encode(np.array(expected))), rel=1e-9)
+    assert np.allclose(got[-1], 1.0)
+
+
+def test_an_hdr_frame_keeps_its_shadows_through_reinhard():
+    """A ramp over five decades exposed so that its top sits at 80 % of the merged signal's saturation: the
+    sRGB curve crushes its lower decades to black (codes <= 5), Reinhard's operator keeps them."""
+    sensor = load_sensor("imx490-hdr")
+    ramp = np.broadcast_to(np.geomspace(1e-3, 1e2, 256)[None, :, None], (8, 256, 3))
+    seconds, _ = AutoExposure(100.0, 0.8).choose(sensor, ramp)
+    raw = capture(sensor, ramp, seconds, 1)
+    crushed = {}
+    for curve in ("srgb", "reinhard"):
+        frame, meta = develop(raw, sensor, ISP(tone=curve, demosaic="none", ccm="none", white_balance="none"))
+        crushed[curve] = int(np.count_nonzero(frame[4, :, 1] <= 5))
+        assert meta["stages"]["tone"]["curve"] == curve
+    assert crushed["srgb"] > 100 and crushed["reinhard"] < crushed["srgb"] / 4
