@@ -22,6 +22,7 @@ so at each transition the SNR falls by the step from readout i to readout i + 1 
 """
 from __future__ import annotations
 
+import math
 from dataclasses import asdict, dataclass
 
 import numpy as np
@@ -67,6 +68,11 @@ class Merge:
                 raise SolasError(f"sensor readout {b.name!r} gives {gb:.6g} DN per reference photo-electron, not "
                                  f"less than readout {a.name!r} before it ({ga:.6g}): the merge takes the readouts "
                                  "in order of falling response (gain × sensitivity × exposure ratio)")
+        need = self.saturation_dn(readouts)
+        if need > self.white_level_dn:
+            raise SolasError(f"sensor merge bits = {self.bits} holds merged codes up to {self.white_level_dn}, below "
+                             f"the last readout's saturation ({need:.0f} in DN of the first readout); give bits >= "
+                             f"{math.ceil(math.log2(need + 1))}")
 
     def merge(self, readouts: tuple[Readout, ...], frames: list[np.ndarray]) -> np.ndarray:
         """The merged code (H, W, uint32) of the readouts' frames (module docstring)."""
@@ -84,9 +90,10 @@ class Merge:
         return np.clip(np.rint(merged), 0, self.white_level_dn).astype(np.uint32)
 
     def saturation_dn(self, readouts: tuple[Readout, ...]) -> float:
-        """The merged code at saturation: the last readout's saturation in merged DN (at most the white level)."""
+        """The merged code at saturation: the last readout's saturation in merged DN (within the merged
+        signal's bits: `check_readouts`)."""
         last, top = readouts[-1], readouts[0].gain_dn_per_e * readouts[0].response
-        return float(min(last.saturation_dn * top / (last.gain_dn_per_e * last.response), self.white_level_dn))
+        return float(last.saturation_dn * top / (last.gain_dn_per_e * last.response))
 
     def predicted_snr(self, readouts: tuple[Readout, ...], electrons: float, exposure_s: float) -> float:
         """The merged signal's SNR (no blending) for `electrons` mean photo-electrons of the reference

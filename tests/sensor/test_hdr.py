@@ -105,6 +105,20 @@ def test_the_merged_snr_dips_at_each_transition_as_predicted(name):
     assert len(dips) == {"split-pixel-dcg": 2, "multi-exposure": 2}[name] and max(dips) > 6.0
 
 
+@pytest.mark.parametrize("blend", [0.0, 0.2])
+def test_the_merged_signal_is_linear_in_the_light(blend):
+    """The merged mean is G_0 DN per reference photo-electron (plus the dark signal) over four decades, across
+    every transition, hard or blended: the readouts' estimates agree."""
+    chain = replace(SPLIT, merge=replace(SPLIT.merge, blend=blend))
+    first = chain.readouts[0]
+    dark = first.gain_dn_per_e * first.dark_current_e_s * EXPOSURE
+    for electrons in np.geomspace(100.0, 0.9 * chain.saturation_e, 13):
+        image = flat_field(chain, float(electrons))[:128, :128]
+        merged = green(capture(chain, image, EXPOSURE, 5, 0)).mean()
+        signal = electrons * first.gain_dn_per_e * first.response
+        assert merged == pytest.approx(signal + dark, rel=0.005), electrons
+
+
 KNEES = ((0, 0), (2048, 2048), (16384, 2560), (131072, 3072), (2**20 - 1, 4000))
 
 
@@ -155,6 +169,13 @@ def test_a_charge_has_its_own_stream():
 def test_a_chain_that_cannot_be_is_refused_by_name(change, message):
     with pytest.raises(SolasError, match=message):
         replace(SPLIT, **change)
+
+
+def test_a_merge_too_narrow_for_its_readouts_is_refused():
+    """Three exposures 16 × apart span 4031 × 256 DN of the first: 20 bits, not 16."""
+    with pytest.raises(SolasError, match=r"sensor merge bits = 16 holds merged codes up to 65535, below the last "
+                                         r"readout's saturation \(1031936 in DN of the first readout\); give bits >= 20"):
+        replace(EXPOSURES, merge=Merge(bits=16))
 
 
 def test_compander_knees_that_expand_are_refused():
