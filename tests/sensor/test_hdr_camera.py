@@ -115,3 +115,18 @@ def test_an_hdr_frame_keeps_its_shadows_through_reinhard():
         crushed[curve] = int(np.count_nonzero(frame[4, :, 1] <= 5))
         assert meta["stages"]["tone"]["curve"] == curve
     assert crushed["srgb"] > 100 and crushed["reinhard"] < crushed["srgb"] / 4
+
+
+def test_the_memory_check_counts_the_readouts(tmp_path, monkeypatch, capsys):
+    """An HDR sensor's chain holds more per pixel than one readout's: its merge and each further readout."""
+    from solas_mi import budget
+    from solas_mi.sensor import commands
+
+    write_exr(tmp_path / "big.exr", {c: np.full((1000, 1000), 0.01, dtype=np.float32) for c in "RGB"})
+    monkeypatch.setattr(budget, "available_memory", lambda: 64e6)
+    assert main(["camera", str(tmp_path / "big.exr"), "--sensor-model", "imx490-hdr", "--exposure-ms", "1",
+                 "-o", str(tmp_path / "x.exr")]) == 2
+    per_pixel = commands.RAW_BYTES_PER_PIXEL + commands.MERGE_BYTES_PER_PIXEL + 3 * commands.READOUT_BYTES_PER_PIXEL
+    need, flat = (commands.FIXED_BYTES + 1e6 * bytes_ for bytes_ in (per_pixel, commands.RAW_BYTES_PER_PIXEL))
+    assert budget.size_text(need) != budget.size_text(flat)
+    assert f"camera 1000x1000 needs about {budget.size_text(need)} of memory" in capsys.readouterr().err
