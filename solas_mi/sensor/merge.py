@@ -81,12 +81,12 @@ class Merge:
         signal, last = estimates[-1]
         merged = signal * (top / (last.gain_dn_per_e * last.response))
         for signal, r in reversed(estimates[:-1]):
-            fraction = signal / r.saturation_dn
+            estimate = signal * (top / (r.gain_dn_per_e * r.response))
             if self.blend:
-                weight = np.clip((self.threshold - fraction) / self.blend, 0.0, 1.0)
+                weight = np.clip((self.threshold * r.saturation_dn - signal) / (self.blend * r.saturation_dn), 0.0, 1.0)
+                merged = weight * estimate + (1.0 - weight) * merged
             else:
-                weight = (fraction < self.threshold).astype(np.float64)
-            merged = weight * (signal * (top / (r.gain_dn_per_e * r.response))) + (1.0 - weight) * merged
+                merged = np.where(signal < self.threshold * r.saturation_dn, estimate, merged)
         return np.clip(np.rint(merged), 0, self.white_level_dn).astype(np.uint32)
 
     def saturation_dn(self, readouts: tuple[Readout, ...]) -> float:

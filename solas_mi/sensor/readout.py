@@ -120,8 +120,14 @@ def check_charges(readouts: tuple[Readout, ...]) -> None:
 def fixed_pattern(readouts: list[Readout], shape: tuple[int, int], rng: np.random.Generator):
     """The fixed pattern of one charge from its stream: the photodiode's per-pixel gain (mean 1, spread `prnu`)
     and each readout's per-pixel offset (e⁻, mean 0, spread `dsnu_e`)."""
-    gain = np.clip(1.0 + readouts[0].prnu * rng.standard_normal(shape), 0.0, None)
-    return gain, [r.dsnu_e * rng.standard_normal(shape) for r in readouts]
+    gain = rng.standard_normal(shape)
+    gain *= readouts[0].prnu
+    gain += 1.0
+    offsets = []
+    for r in readouts:
+        offsets.append(rng.standard_normal(shape))
+        offsets[-1] *= r.dsnu_e
+    return np.clip(gain, 0.0, None, out=gain), offsets
 
 
 def charge_streams(index: int, charge: str, seed: int, frame: int):
@@ -148,13 +154,18 @@ def read_charges(readouts: tuple[Readout, ...], mu_e: np.ndarray, exposure_s: fl
         # fails to fill below e⁻⁷⁰⁰)
         cap = 2.0 * max(readouts[i].full_well_e for i in members) + 1000.0
         gain, offsets = fixed_pattern([readouts[i] for i in members], mu_e.shape, fixed)
-        electrons = temporal.poisson(np.minimum(gain * (mu_e * first.response), cap)).astype(np.float64)
+        gain *= mu_e if first.response == 1.0 else mu_e * first.response  # (x × 1.0 is x: skipped)
+        electrons = temporal.poisson(np.minimum(gain, cap, out=gain)).astype(np.float64)
         seconds = exposure_s * first.exposure_ratio
         electrons += temporal.poisson(min(first.dark_current_e_s * seconds, cap), mu_e.shape)
         for i, offset in zip(members, offsets):
             r = readouts[i]
             read = np.minimum(electrons, r.full_well_e)
-            read += offset + r.read_noise_e * temporal.standard_normal(mu_e.shape)
-            dn = np.rint(r.gain_dn_per_e * read + r.black_level_dn)
-            frames[i] = np.clip(dn, 0, r.white_level_dn).astype(np.uint16)
+            noise = temporal.standard_normal(mu_e.shape)
+            noise *= r.read_noise_e
+            noise += offset
+            read += noise
+            read *= r.gain_dn_per_e  # the ADC, in place: round(K e + black), clipped
+            read += r.black_level_dn
+            frames[i] = np.clip(np.rint(read, out=read), 0, r.white_level_dn, out=read).astype(np.uint16)
     return frames
