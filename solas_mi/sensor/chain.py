@@ -45,7 +45,26 @@ HEAD = "photons"  # the stage whose fields the [sensor] table itself holds
 
 @dataclass(frozen=True)
 class SensorChain:
-    """The stages of a sensor (module docstring): its photon conversion, readouts, merge and compander."""
+    """A sensor as its chain of stages ([the sensor](../details/sensor.md)), checked when built.
+
+    Parameters
+    ----------
+    photons : PhotonConversion
+        The photon conversion: pixel pitch, colour filter array, quantum efficiencies.
+    readouts : tuple of Readout
+        The readouts, in order of falling response (DN per reference photo-electron).
+    merge : Merge, optional
+        The merge of two or more readouts into one linear signal; none with one readout.
+    compander : Compander, optional
+        The companding of the merged signal to the output's bits.
+
+    Raises
+    ------
+    SolasError
+        For a stage of the wrong type, readouts of one name, readouts of one charge that disagree on its
+        photodiode, readouts out of order, a merge missing or too narrow, a compander that does not end at
+        the merged signal's white level.
+    """
     photons: PhotonConversion
     readouts: tuple[Readout, ...]
     merge: Merge | None = None
@@ -78,7 +97,24 @@ class SensorChain:
 
     @classmethod
     def from_dict(cls, values: dict) -> SensorChain:
-        """A chain from a `[sensor]` table naming its stages (module docstring); an unknown name is an error."""
+        """A chain from a ``[sensor]`` table naming its stages (module docstring).
+
+        Parameters
+        ----------
+        values : dict
+            The table: the photon conversion's fields, ``readout`` (a list of tables), ``merge`` and
+            ``compander`` (tables).
+
+        Returns
+        -------
+        SensorChain
+            The chain, checked.
+
+        Raises
+        ------
+        SolasError
+            For an unknown name, a stage's table of the wrong shape, or a bad value.
+        """
         values = dict(values)
         readouts = values.pop("readout", None)
         if not isinstance(readouts, list) or not all(isinstance(r, dict) for r in readouts):
@@ -97,21 +133,61 @@ class SensorChain:
                    None if compander is None else _made(Compander, compander, "compander"))
 
     def stages(self) -> list[tuple[str, object]]:
-        """(kind, stage) in the order of the chain."""
+        """The stages in the order of the chain.
+
+        Returns
+        -------
+        list of (str, object)
+            (kind in `STAGES`, stage) pairs.
+        """
         rest = [("merge", self.merge), ("compander", self.compander)]
         return [(HEAD, self.photons), *(("readout", r) for r in self.readouts), *((k, s) for k, s in rest if s)]
 
     def describe(self) -> dict:
-        """Every stage's values (JSON-ready), in order: the RAW's metadata."""
+        """Every stage's values, in order: the RAW's metadata.
+
+        Returns
+        -------
+        dict
+            ``{"stages": [...]}``, each stage's kind (``stage``) and values, JSON-ready.
+        """
         return {"stages": [{"stage": kind, **stage.describe()} for kind, stage in self.stages()]}
 
     def readout_frames(self, irradiance: np.ndarray, exposure_s: float, seed: int, frame: int) -> list[np.ndarray]:
-        """Each readout's frame (H, W, uint16 DN) of an irradiance image (H, W, 3, W/m²) exposed `exposure_s`."""
+        """Each readout's frame of an irradiance image, before any merge.
+
+        Parameters
+        ----------
+        irradiance : numpy.ndarray
+            (H, W, 3) image-plane irradiance (W/m²).
+        exposure_s : float
+            The frame's exposure time (s); a readout takes its `Readout.exposure_ratio` of it.
+        seed : int
+            The sensor's seed: its fixed pattern.
+        frame : int
+            The frame's number: its temporal noise.
+
+        Returns
+        -------
+        list of numpy.ndarray
+            (H, W) uint16 DN per readout, in the chain's order.
+        """
         mu_e = self.photons.mean_electrons(irradiance, exposure_s)
         return read_charges(self.readouts, mu_e, exposure_s, seed, frame)
 
     def output(self, frames: list[np.ndarray]) -> np.ndarray:
-        """The sensor's RAW of its readouts' frames: the one readout's, or merged (and companded)."""
+        """The sensor's RAW of its readouts' frames.
+
+        Parameters
+        ----------
+        frames : list of numpy.ndarray
+            Each readout's frame (`readout_frames`).
+
+        Returns
+        -------
+        numpy.ndarray
+            The one readout's frame, or the merged signal (uint32), or its companded codes (uint16).
+        """
         if self.merge is None:
             return frames[0]
         merged = self.merge.merge(self.readouts, frames)
@@ -120,13 +196,22 @@ class SensorChain:
     # what the image processor and the commands read of a sensor (as of `SensorModel`)
     @property
     def cfa(self) -> str:
+        """The colour filter array's pattern."""
         return self.photons.cfa
 
     @property
     def channel_wavelengths_nm(self) -> tuple[float, float, float]:
+        """The wavelength (nm) that stands for each image channel R, G, B."""
         return self.photons.channel_wavelengths_nm
 
     def effective_qe(self) -> np.ndarray:
+        """Q[f, c] (4 × 3): the electrons per photon of channel c on a pixel of filter f.
+
+        Returns
+        -------
+        numpy.ndarray
+            `PhotonConversion.effective_qe`.
+        """
         return self.photons.effective_qe()
 
     @property
@@ -156,13 +241,35 @@ class SensorChain:
         return self.readouts[0].dark_current_e_s
 
     def linear_dn(self, raw: np.ndarray) -> np.ndarray:
-        """The linear signal above black (float64, DN of the first readout) of a RAW: decompanded."""
+        """The linear signal above black of a RAW: decompanded (the image processor's inverse).
+
+        Parameters
+        ----------
+        raw : numpy.ndarray
+            A RAW frame of this sensor (DN).
+
+        Returns
+        -------
+        numpy.ndarray
+            float64, DN of the first readout above black.
+        """
         if self.compander is not None:
             return self.compander.decompand(raw)
         return np.asarray(raw, dtype=np.float64) - self.black_level_dn
 
     def saturated(self, raw: np.ndarray) -> np.ndarray:
-        """Where a RAW is saturated: the last readout within 3 σ of its readout noise of its saturation."""
+        """Where a RAW is saturated: the last readout within 3 σ of its readout noise of its saturation.
+
+        Parameters
+        ----------
+        raw : numpy.ndarray
+            A RAW frame of this sensor (DN).
+
+        Returns
+        -------
+        numpy.ndarray
+            bool, True where saturated.
+        """
         last = self.readouts[-1]
         spread = emva.saturation_spread_dn(last.gain_dn_per_e, last.read_noise_e, last.dsnu_e)
         scale = self.saturation_dn / last.saturation_dn

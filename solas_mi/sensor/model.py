@@ -85,7 +85,18 @@ class SensorModel:
         return self.saturation_dn / self.gain_dn_per_e
 
     def linear_dn(self, raw: np.ndarray) -> np.ndarray:
-        """The signal above black (float64 DN) of a RAW frame (as `chain.SensorChain.linear_dn`)."""
+        """The signal above black of a RAW frame (as `chain.SensorChain.linear_dn`).
+
+        Parameters
+        ----------
+        raw : numpy.ndarray
+            A RAW frame of this sensor (DN).
+
+        Returns
+        -------
+        numpy.ndarray
+            float64 DN above the black level.
+        """
         return np.asarray(raw, dtype=np.float64) - self.black_level_dn
 
     def saturated(self, raw: np.ndarray) -> np.ndarray:
