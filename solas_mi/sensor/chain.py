@@ -18,6 +18,7 @@ fields in `[sensor]`:
 """
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, fields
 
 import numpy as np
@@ -192,6 +193,35 @@ class SensorChain:
             return frames[0]
         merged = self.merge.merge(self.readouts, frames)
         return merged if self.compander is None else self.compander.compand(merged)
+
+    def predicted_snr(self, electrons: float, exposure_s: float) -> float:
+        """The SNR of the sensor's linear signal (decompanded) in closed form, for a flat field.
+
+        The readout in use's EMVA 1288 SNR (`Merge.predicted_snr`; eq. 15 with one readout), with the
+        compander's rounding added as the variance Δ²/12 of its segment's step Δ (merged DN), which holds
+        where the signal's noise spans a step or more.
+
+        Parameters
+        ----------
+        electrons : float
+            The reference photodiode's mean photo-electrons over the frame's exposure.
+        exposure_s : float
+            The frame's exposure time (s).
+
+        Returns
+        -------
+        float
+            The SNR (a ratio, not dB).
+        """
+        first = self.readouts[0]
+        if self.merge is None:
+            return emva.snr(electrons, first.gain_dn_per_e, first.dark_variance_e2(exposure_s))
+        snr = self.merge.predicted_snr(self.readouts, electrons, exposure_s)
+        if self.compander is None:
+            return snr
+        signal = electrons * first.gain_dn_per_e * first.response  # merged DN
+        step = float(self.compander.step(np.array([signal]))[0])
+        return signal / math.sqrt((signal / snr) ** 2 + step**2 / 12.0)
 
     # what the image processor and the commands read of a sensor (as of `SensorModel`)
     @property
