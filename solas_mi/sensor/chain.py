@@ -32,16 +32,20 @@ from .photons import PhotonConversion
 from .qe import QECurve
 from .readout import Readout, check_charges, read_charges
 
+# in the order of the chain; each entry's `field`: the SensorChain field that holds it (`many`: a tuple of them)
 STAGES = Registry("sensor stage")
-STAGES.register("photons", PhotonConversion, summary="irradiance → mean photo-electrons: pixel pitch, colour filter "
-                "array, quantum efficiencies", reference="EMVA 1288 release 4.0, eqs. 1-2")
-STAGES.register("readout", Readout, summary="a photodiode's charge over an exposure read at a conversion gain into "
-                "an ADC: shot, dark and read noise, PRNU, DSNU, full well", reference="EMVA 1288 release 4.0, section 2")
-STAGES.register("merge", Merge, summary="the readouts' estimates, each below a threshold of its saturation, as one "
-                "linear signal of 16-24 bits")
-STAGES.register("compander", Compander, summary="piecewise-linear companding of the merged signal through knee "
-                "points to the output's bits; decompanded by the image processor")
-HEAD = "photons"  # the stage whose fields the [sensor] table itself holds
+STAGES.register("photons", PhotonConversion, field="photons", many=False, reference="EMVA 1288 release 4.0, eqs. 1-2",
+                summary="irradiance → mean photo-electrons: pixel pitch, colour filter array, quantum efficiencies")
+STAGES.register("readout", Readout, field="readouts", many=True, reference="EMVA 1288 release 4.0, section 2",
+                summary="a photodiode's charge over an exposure read at a conversion gain into an ADC: shot, dark "
+                "and read noise, PRNU, DSNU, full well")
+STAGES.register("merge", Merge, field="merge", many=False,
+                summary="the readouts' estimates, each below a threshold of its saturation, as one linear signal of "
+                "16-24 bits")
+STAGES.register("compander", Compander, field="compander", many=False,
+                summary="piecewise-linear companding of the merged signal through knee points to the output's bits; "
+                "decompanded by the image processor")
+HEAD = STAGES.names()[0]  # the stage whose fields the [sensor] table itself holds
 
 
 @dataclass(frozen=True)
@@ -73,12 +77,11 @@ class SensorChain:
 
     def __post_init__(self):
         object.__setattr__(self, "readouts", tuple(self.readouts))
-        kinds = {"photons": (self.photons,), "readout": self.readouts, "merge": (self.merge,),
-                 "compander": (self.compander,)}
-        for kind, stages in kinds.items():
-            cls = STAGES[kind].function
-            if not all(stage is None or isinstance(stage, cls) for stage in stages):
-                raise SolasError(f"sensor {kind} must be a {cls.__name__}")
+        for kind, entry in STAGES.items():
+            value = getattr(self, entry.extra["field"])
+            if not all(stage is None or isinstance(stage, entry.function) for stage in (value if entry.extra["many"]
+                                                                                       else (value,))):
+                raise SolasError(f"sensor {kind} must be a {entry.function.__name__}")
         if not self.readouts or self.photons is None:
             raise SolasError("a sensor's chain needs its photon conversion and at least one readout")
         names = [r.name for r in self.readouts]
@@ -117,10 +120,9 @@ class SensorChain:
             For an unknown name, a stage's table of the wrong shape, or a bad value.
         """
         values = dict(values)
-        readouts = values.pop("readout", None)
-        if not isinstance(readouts, list) or not all(isinstance(r, dict) for r in readouts):
+        tables = {kind: values.pop(kind, None) for kind in STAGES if kind != HEAD}
+        if not isinstance(tables["readout"], list) or not all(isinstance(r, dict) for r in tables["readout"]):
             raise SolasError("sensor readout must be [[sensor.readout]] tables, one per readout")
-        merge, compander = values.pop("merge", None), values.pop("compander", None)
         head = set(PhotonConversion.field_names())
         unknown = sorted(set(values) - head)
         if unknown:
@@ -129,9 +131,12 @@ class SensorChain:
         values = {k: tuple(v) if isinstance(v, list) else v for k, v in values.items()}
         if "qe_curve" in values:
             values["qe_curve"] = QECurve.from_table(values["qe_curve"], "sensor qe_curve")
-        return cls(_made(PhotonConversion, values, HEAD), tuple(_made(Readout, r, "readout") for r in readouts),
-                   None if merge is None else _made(Merge, merge, "merge"),
-                   None if compander is None else _made(Compander, compander, "compander"))
+        stages = {STAGES[HEAD].extra["field"]: _made(HEAD, values)}
+        for kind, table in tables.items():
+            entry = STAGES[kind]
+            stages[entry.extra["field"]] = tuple(_made(kind, t) for t in table) if entry.extra["many"] else \
+                None if table is None else _made(kind, table)
+        return cls(**stages)
 
     def stages(self) -> list[tuple[str, object]]:
         """The stages in the order of the chain.
@@ -141,8 +146,11 @@ class SensorChain:
         list of (str, object)
             (kind in `STAGES`, stage) pairs.
         """
-        rest = [("merge", self.merge), ("compander", self.compander)]
-        return [(HEAD, self.photons), *(("readout", r) for r in self.readouts), *((k, s) for k, s in rest if s)]
+        out = []
+        for kind, entry in STAGES.items():
+            value = getattr(self, entry.extra["field"])
+            out += [(kind, stage) for stage in (value if entry.extra["many"] else (value,)) if stage is not None]
+        return out
 
     def describe(self) -> dict:
         """Every stage's values, in order: the RAW's metadata.
@@ -306,8 +314,9 @@ class SensorChain:
         return self.linear_dn(raw) >= self.saturation_dn - spread * scale
 
 
-def _made(cls, table, kind: str):
-    """A stage of `cls` from its TOML table; an unknown name is an error naming the stage's fields."""
+def _made(kind: str, table):
+    """A stage of kind `kind` from its TOML table; an unknown name is an error naming the stage's fields."""
+    cls = STAGES[kind].function
     if not isinstance(table, dict):
         raise SolasError(f"sensor {kind} must be a table of {cls.__name__}'s fields")
     known = [name for name in cls.__dataclass_fields__]
