@@ -231,6 +231,26 @@ class SensorChain:
         step = float(self.compander.step(np.array([signal]))[0])
         return signal / math.sqrt((signal / snr) ** 2 + step**2 / 12.0)
 
+    def dynamic_range_db(self, exposure_s: float) -> float:
+        """EMVA 1288's dynamic range, 20 log10(μ_e.sat / μ_e.min), of the reference photodiode's electrons.
+
+        μ_e.sat: where the last readout saturates (`saturation_e`); μ_e.min: the signal of SNR = 1 of the
+        first readout (`emva.threshold_electrons`; its merged estimates are codes already: no rounding).
+
+        Parameters
+        ----------
+        exposure_s : float
+            The frame's exposure time (s): the dark current's share of the noise floor.
+
+        Returns
+        -------
+        float
+            The dynamic range (dB).
+        """
+        first = self.readouts[0]
+        floor = emva.threshold_electrons(first.gain_dn_per_e, first.dark_variance_e2(exposure_s))
+        return 20.0 * math.log10(self.saturation_e * first.response / floor)
+
     # what the image processor and the commands read of a sensor (as of `SensorModel`)
     @property
     def cfa(self) -> str:
@@ -259,8 +279,8 @@ class SensorChain:
 
     @property
     def black_level_dn(self) -> int:
-        """The RAW's black level: the readout's, none for a merged signal, or the compander's."""
-        return self.compander.black_level_dn if self.compander else 0 if self.merge else self.readouts[0].black_level_dn
+        """The black level of the linear signal: the readout's, or the merged signal's (before companding)."""
+        return self.merge.black_level_dn if self.merge else self.readouts[0].black_level_dn
 
     @property
     def saturation_dn(self) -> float:
@@ -291,9 +311,8 @@ class SensorChain:
         numpy.ndarray
             float64, DN of the first readout above black.
         """
-        if self.compander is not None:
-            return self.compander.decompand(raw)
-        return np.asarray(raw, dtype=np.float64) - self.black_level_dn
+        linear = self.compander.decompand(raw) if self.compander is not None else np.asarray(raw, dtype=np.float64)
+        return linear - self.black_level_dn
 
     def saturated(self, raw: np.ndarray) -> np.ndarray:
         """Where a RAW is saturated: the last readout within 3 σ of its readout noise of its saturation.

@@ -114,7 +114,7 @@ def test_the_merged_signal_is_linear_in_the_light(blend):
     dark = first.gain_dn_per_e * first.dark_current_e_s * EXPOSURE
     for electrons in np.geomspace(100.0, 0.9 * chain.saturation_e, 13):
         image = flat_field(chain, float(electrons))[:128, :128]
-        merged = green(capture(chain, image, EXPOSURE, 5, 0)).mean()
+        merged = green(chain.linear_dn(capture(chain, image, EXPOSURE, 5, 0))).mean()
         signal = electrons * first.gain_dn_per_e * first.response
         assert merged == pytest.approx(signal + dark, rel=0.005), electrons
 
@@ -142,7 +142,7 @@ def test_a_companded_chain_decompands_to_its_merged_signal():
     merged = capture(EXPOSURES, image, EXPOSURE, 3, 4)
     raw = capture(companded, image, EXPOSURE, 3, 4)
     assert merged.dtype == np.uint32 and raw.dtype == np.uint16 and companded.bit_depth == 12
-    error = np.abs(companded.linear_dn(raw) - merged)
+    error = np.abs(companded.linear_dn(raw) - (merged.astype(np.float64) - EXPOSURES.merge.black_level_dn))
     assert np.all(error <= 0.5 * companded.compander.step(merged) + 1e-9)
 
 
@@ -191,7 +191,8 @@ def test_a_chain_that_cannot_be_is_refused_by_name(change, message):
 def test_a_merge_too_narrow_for_its_readouts_is_refused():
     """Three exposures 16 × apart span 4031 × 256 DN of the first: 20 bits, not 16."""
     with pytest.raises(SolasError, match=r"sensor merge bits = 16 holds merged codes up to 65535, below the last "
-                                         r"readout's saturation \(1031936 in DN of the first readout\); give bits >= 20"):
+                                         r"readout's saturation over black_level_dn \(1032000 in DN of the first "
+                                         r"readout\); give bits >= 20"):
         replace(EXPOSURES, merge=Merge(bits=16))
 
 
@@ -203,3 +204,17 @@ def test_compander_knees_that_expand_are_refused():
 def test_one_readout_predicts_the_flat_sensors_snr():
     flat = load_sensor("imx490")
     assert chain_of(flat).predicted_snr(1000.0, 0.01) == flat.snr(1000.0, 0.01)
+
+
+@pytest.mark.parametrize("name", list(CHAINS))
+def test_the_dynamic_range_spans_snr_1_to_saturation(name):
+    """EMVA 1288's dynamic range: the simulated merged SNR is 1 (0 dB) at μ_e.min within 0.15 dB (measured
+    0.01 and 0.02 dB), and the merged signal stops rising at μ_e.sat (the mean at 1.2 × is the saturation code);
+    the readouts after the first extend the first's range by more than 10 dB."""
+    chain = CHAINS[name]
+    floor = chain.saturation_e / 10 ** (chain.dynamic_range_db(EXPOSURE) / 20)
+    assert merged_snr_db(chain, floor) == pytest.approx(0.0, abs=0.15)
+    top = green(capture(chain, flat_field(chain, 1.2 * chain.saturation_e)[:64, :64], EXPOSURE, 1, 0))
+    assert top.mean() - chain.black_level_dn == pytest.approx(chain.saturation_dn, rel=0.01)
+    alone = SensorChain(chain.photons, chain.readouts[:1]).dynamic_range_db(EXPOSURE)  # the first readout's
+    assert chain.dynamic_range_db(EXPOSURE) > alone + 10.0

@@ -74,7 +74,7 @@ def test_the_image_processor_decompands_a_companded_raw(tmp_path):
     frame, developed = develop(raw, sensor, ISP(tone="none"))
     reference, _ = develop(capture(merged_sensor, image, 0.01, 2), merged_sensor, ISP(tone="none"))
     assert developed["stages"]["black_level"]["decompanded_through"] == KNEES
-    assert developed["stages"]["black_level"]["black_dn"] == 168
+    assert developed["stages"]["black_level"]["black_dn"] == 64  # the merged signal's, before companding
     assert np.abs(frame.astype(int) - reference).max() <= 1
     assert main(["camera", str(tmp_path / "in.exr"), "--sensor-model", str(path), "--exposure-ms", "10",
                  "--isp", "default", "-o", str(tmp_path / "raw.exr")]) == 0
@@ -86,7 +86,8 @@ def test_a_batch_camera_takes_an_hdr_sensor(tmp_path):
     camera = Camera(load_sensor("imx490-hdr"), 10.0, ISP(), seed=3)
     raw, frame, meta = camera.shoot(image, "frame000")
     assert raw.dtype == np.uint32 and frame.shape == (16, 64, 3)
-    assert meta["camera"]["sensor"]["stages"][-1] == {"stage": "merge", "bits": 24, "threshold": 0.9, "blend": 0.0}
+    assert meta["camera"]["sensor"]["stages"][-1] == {"stage": "merge", "bits": 24, "threshold": 0.9, "blend": 0.0,
+                                                     "black_level_dn": 64}
 
 
 def test_reinhard_tone_maps_by_its_formula():
