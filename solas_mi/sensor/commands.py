@@ -215,11 +215,14 @@ def register(subparsers: Any) -> None:
         "camera", help="sensor RAW of an irradiance image (EMVA 1288 noise model, CFA, ADC)",
         description="The RAW frame a sensor gives for an image-plane irradiance image: photons through the "
                     "CFA's quantum efficiencies, shot/dark/read noise, PRNU/DSNU, full well, conversion gain, "
-                    "ADC. Written as one EXR channel RAW (DN) with the sensor model and seed in its metadata.")
+                    "ADC; an HDR sensor's readouts (split pixels, dual conversion gain, multiple exposures) merged "
+                    "into one linear signal and companded. Written as one EXR channel RAW (DN) with the sensor's "
+                    "stages and seed in its metadata.")
     p.add_argument("image", help="EXR with R, G, B channels: irradiance in W/m² (times --scale), or radiance "
                                  "in W/m²/sr with --f-number (a render through a lens states its own f-number)")
     p.add_argument("--sensor-model", required=True, metavar="PRESET|FILE.toml",
-                   help="a sensor preset's name (solas-mi sensors lists them) or a TOML file with a [sensor] table")
+                   help="a sensor preset's name (solas-mi sensors lists them) or a TOML file with a [sensor] table "
+                        "(an HDR sensor's naming its stages in tables of their own, e.g. imx490-hdr)")
     add_exposure_option(p, required=True)
     p.add_argument("--seed", type=int, default=0, help="the sensor's seed: its fixed pattern (PRNU, DSNU) and, with "
                                                        "--frame, its temporal noise (default 0)")
