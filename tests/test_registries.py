@@ -25,7 +25,7 @@ SHIPPED = {
     "solas_mi.optics.formats.WRITERS": (".toml", ".zmx", ".dat"),
     "solas_mi.optics.calibration.models.MODELS": ("opencv-pinhole", "opencv-fisheye", "ocamcalib", "woodscape",
                                                   "double-sphere", "unified"),
-    "solas_mi.sensor.chain.STAGES": ("photons", "readout", "merge", "compander"),
+    "solas_mi.sensor.chain.STAGES": ("photons", "defects", "readout", "merge", "compander"),
 }
 
 # One of each registered in a fresh process, then looked for in the parser, the messages and the docs.

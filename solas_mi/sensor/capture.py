@@ -4,7 +4,8 @@ Per pixel (EMVA 1288 release 4.0, section 2): the mean photo-electrons μ_e = η
 filter (`photons.PhotonConversion`: cfa.mosaic of exposure.photons with the effective quantum efficiencies
 Q[f, c] of the `qe` module), then each readout (`readout`): the PRNU gain, Poisson photo-electrons and dark
 electrons, the full well, the DSNU offset and Gaussian read noise, the ADC y = round(K e + black) clipped to
-[0, 2^bits − 1]; an HDR sensor merges its readouts (`merge`) and compands the result (`compander`). The fixed
+[0, 2^bits − 1]; an HDR sensor merges its readouts (`merge`) and compands the result (`compander`); dead and
+hot pixels are a stage of their own (`defects`). The fixed
 pattern (PRNU, DSNU) comes from the seed alone, so every frame of one seed shares it; the temporal noise
 comes from (seed, frame). A flat sensor (`model.SensorModel`) is the chain of one readout (`chain.chain_of`).
 """

@@ -27,7 +27,9 @@ from ..errors import SolasError
 from ..registry import Registry
 from . import emva
 from .compander import Compander
+from .defects import Defects
 from .merge import Merge
+from .model import SensorModel
 from .photons import PhotonConversion
 from .qe import QECurve
 from .readout import Readout, check_charges, read_charges
@@ -36,6 +38,9 @@ from .readout import Readout, check_charges, read_charges
 STAGES = Registry("sensor stage")
 STAGES.register("photons", PhotonConversion, field="photons", many=False, reference="EMVA 1288 release 4.0, eqs. 1-2",
                 summary="irradiance → mean photo-electrons: pixel pitch, colour filter array, quantum efficiencies")
+STAGES.register("defects", Defects, field="defects", many=False,
+                summary="defect pixels fixed per sensor: dead ones, which collect no light, and hot ones, with "
+                "more dark current")
 STAGES.register("readout", Readout, field="readouts", many=True, reference="EMVA 1288 release 4.0, section 2",
                 summary="a photodiode's charge over an exposure read at a conversion gain into an ADC: shot, dark "
                 "and read noise, PRNU, DSNU, full well")
@@ -62,6 +67,8 @@ class SensorChain:
         The merge of two or more readouts into one linear signal; none with one readout.
     compander : Compander, optional
         The companding of the merged signal to the output's bits.
+    defects : Defects, optional
+        Dead and hot pixels.
 
     Raises
     ------
@@ -74,6 +81,7 @@ class SensorChain:
     readouts: tuple[Readout, ...]
     merge: Merge | None = None
     compander: Compander | None = None
+    defects: Defects | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "readouts", tuple(self.readouts))
@@ -121,21 +129,16 @@ class SensorChain:
         """
         values = dict(values)
         tables = {kind: values.pop(kind, None) for kind in STAGES if kind != HEAD}
-        if not isinstance(tables["readout"], list) or not all(isinstance(r, dict) for r in tables["readout"]):
+        readouts = tables.pop("readout")
+        if readouts is None:  # a flat sensor's table (one readout) with stages of its own, e.g. defects
+            flat = chain_of(SensorModel.from_dict(values))
+            stages = {"photons": flat.photons, "readouts": flat.readouts}
+        elif not isinstance(readouts, list) or not all(isinstance(r, dict) for r in readouts):
             raise SolasError("sensor readout must be [[sensor.readout]] tables, one per readout")
-        head = set(PhotonConversion.field_names())
-        unknown = sorted(set(values) - head)
-        if unknown:
-            raise SolasError(f"unknown sensor parameter(s) {', '.join(unknown)}; allowed: "
-                             f"{', '.join(sorted(head | set(STAGES.names()) - {HEAD}))}")
-        values = {k: tuple(v) if isinstance(v, list) else v for k, v in values.items()}
-        if "qe_curve" in values:
-            values["qe_curve"] = QECurve.from_table(values["qe_curve"], "sensor qe_curve")
-        stages = {STAGES[HEAD].extra["field"]: _made(HEAD, values)}
-        for kind, table in tables.items():
-            entry = STAGES[kind]
-            stages[entry.extra["field"]] = tuple(_made(kind, t) for t in table) if entry.extra["many"] else \
-                None if table is None else _made(kind, table)
+        else:
+            stages = {"photons": _photons(values), "readouts": tuple(_made("readout", r) for r in readouts)}
+        for kind, table in tables.items():  # the stages of one table each
+            stages[STAGES[kind].extra["field"]] = None if table is None else _made(kind, table)
         return cls(**stages)
 
     def stages(self) -> list[tuple[str, object]]:
@@ -182,7 +185,10 @@ class SensorChain:
             (H, W) uint16 DN per readout, in the chain's order.
         """
         mu_e = self.photons.mean_electrons(irradiance, exposure_s)
-        return read_charges(self.readouts, mu_e, exposure_s, seed, frame)
+        if self.defects is None:
+            return read_charges(self.readouts, mu_e, exposure_s, seed, frame)
+        return read_charges(self.readouts, mu_e, exposure_s, seed, frame,
+                            (self.defects, *self.defects.pixel_map(mu_e.shape, seed)))
 
     def output(self, frames: list[np.ndarray]) -> np.ndarray:
         """The sensor's RAW of its readouts' frames.
@@ -331,6 +337,19 @@ class SensorChain:
         spread = emva.saturation_spread_dn(last.gain_dn_per_e, last.read_noise_e, last.dsnu_e)
         scale = self.saturation_dn / last.saturation_dn
         return self.linear_dn(raw) >= self.saturation_dn - spread * scale
+
+
+def _photons(values: dict) -> PhotonConversion:
+    """The photon conversion of a `[sensor]` table whose readouts are tables of their own."""
+    head = set(PhotonConversion.field_names())
+    unknown = sorted(set(values) - head)
+    if unknown:
+        raise SolasError(f"unknown sensor parameter(s) {', '.join(unknown)}; allowed: "
+                         f"{', '.join(sorted(head | set(STAGES.names()) - {HEAD}))}")
+    values = {k: tuple(v) if isinstance(v, list) else v for k, v in values.items()}
+    if "qe_curve" in values:
+        values["qe_curve"] = QECurve.from_table(values["qe_curve"], "sensor qe_curve")
+    return _made(HEAD, values)
 
 
 def _made(kind: str, table):

@@ -138,10 +138,12 @@ def charge_streams(index: int, charge: str, seed: int, frame: int):
     return np.random.default_rng([seed, 2, key]), np.random.default_rng([seed, 3, key, frame])
 
 
-def read_charges(readouts: tuple[Readout, ...], mu_e: np.ndarray, exposure_s: float, seed: int,
-                 frame: int) -> list[np.ndarray]:
+def read_charges(readouts: tuple[Readout, ...], mu_e: np.ndarray, exposure_s: float, seed: int, frame: int,
+                 defects=None) -> list[np.ndarray]:
     """The frame (H, W, uint16 DN) of each readout, in order, for the pixels' mean photo-electrons `mu_e` of
-    the reference photodiode over the frame's exposure `exposure_s` (module docstring)."""
+    the reference photodiode over the frame's exposure `exposure_s` (module docstring); `defects`: the
+    sensor's `defects.Defects` with its dead and hot pixels (None: none). A dead pixel's photo-electrons are
+    dropped after they are drawn, so that the other pixels' draws stay as they were."""
     charges: dict[str, list[int]] = {}
     for i, r in enumerate(readouts):
         charges.setdefault(r.charge, []).append(i)
@@ -156,8 +158,13 @@ def read_charges(readouts: tuple[Readout, ...], mu_e: np.ndarray, exposure_s: fl
         gain, offsets = fixed_pattern([readouts[i] for i in members], mu_e.shape, fixed)
         gain *= mu_e if first.response == 1.0 else mu_e * first.response  # (x × 1.0 is x: skipped)
         electrons = temporal.poisson(np.minimum(gain, cap, out=gain)).astype(np.float64)
+        if defects is not None:
+            electrons[defects[1]] = 0.0  # dead: no photo-electrons
         seconds = exposure_s * first.exposure_ratio
         electrons += temporal.poisson(min(first.dark_current_e_s * seconds, cap), mu_e.shape)
+        if defects is not None:
+            stage, _, hot = defects
+            electrons[hot] += stage.hot_electrons(hot, seconds, cap, seed, frame, index)
         for i, offset in zip(members, offsets):
             r = readouts[i]
             read = np.minimum(electrons, r.full_well_e)

@@ -55,7 +55,7 @@ def test_a_name_is_printable_and_not_empty(folder, capsys, key):
 
 
 @pytest.mark.parametrize("text, message", [
-    ("[sensor]\n[sensor.merge]\nbits = 20\n", r"sensor readout must be \[\[sensor.readout\]\] tables"),
+    ("[sensor]\n[sensor.merge]\nbits = 20\n", r"a sensor of 1 readout\(s\) takes no merge"),
     ("[sensor]\n[sensor.readout]\nname = 'a'\n", r"sensor readout must be \[\[sensor.readout\]\] tables"),
     ("[sensor]\nmerge = 3\n[[sensor.readout]]\n[[sensor.readout]]\nname = 'b'\ngain_dn_per_e = 0.1\n",
      r"sensor merge must be a table of Merge's fields"),
