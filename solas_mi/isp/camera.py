@@ -65,7 +65,7 @@ class Camera:
         """The RAW (H, W, uint16 DN) of frame `name` of an irradiance image (W/m², `scale` applied), the
         developed 8-bit frame (None without an isp) and the metadata: the camera, the frame's name and
         number, its exposure, the fraction of its pixels saturated, the stages."""
-        from ..sensor.capture import capture
+        from ..sensor.capture import as_chain, capture
         from .pipeline import develop
 
         number = frame_number(name)
@@ -76,7 +76,8 @@ class Camera:
                 **({"auto_exposure": chosen} if chosen else {})}
         if self.isp is None:
             return raw, None, meta
-        frame, developed = develop(raw, self.sensor, self.isp)
+        defective = as_chain(self.sensor).defective_pixels(raw.shape, self.seed)
+        frame, developed = develop(raw, self.sensor, self.isp, defective)
         return raw, frame, {**meta, **developed}
 
 

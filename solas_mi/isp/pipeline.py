@@ -3,7 +3,7 @@
 The stages, in order, each optional and named in the metadata:
 
 1. black level (`black`): the signal above black as a fraction of saturation (an HDR sensor's RAW
-   decompanded first);
+   decompanded first), its defect pixels replaced by their neighbours' mean (`defects`);
 2. white balance (`white.METHODS`): one gain per filter on the mosaic;
 3. demosaicing (`demosaic.METHODS`): three channels per pixel (``none``: the mosaic as a grey frame);
 4. colour correction (`ccm`): the sensor's matrix, a given one, or none;
@@ -33,7 +33,7 @@ from ..errors import SolasError
 from ..options import toml_table
 from ..sensor.chain import SensorChain
 from ..sensor.model import SensorModel
-from . import black, ccm, demosaic, tone, white
+from . import black, ccm, defects, demosaic, tone, white
 from .tone import CURVES, GAMMA
 
 DEFAULT = "default"
@@ -44,6 +44,7 @@ class ISP:
     """The image processor: each stage's choice (see the module's docstring)."""
 
     black_level: bool = True
+    defect_correction: bool = True
     white_balance: str | dict = white.METHODS.default
     grey_card: tuple[int, int, int, int] | None = None
     demosaic: str = demosaic.DEFAULT_METHOD
@@ -53,8 +54,9 @@ class ISP:
     gamma: float = GAMMA.default
 
     def __post_init__(self):
-        if not isinstance(self.black_level, bool):
-            raise SolasError(f"isp black_level {self.black_level!r} must be true or false")
+        for name in ("black_level", "defect_correction"):
+            if not isinstance(getattr(self, name), bool):
+                raise SolasError(f"isp {name} {getattr(self, name)!r} must be true or false")
         self._check_white_balance()
         if not isinstance(self.demosaic, str) or self.demosaic != "none":
             demosaic.check_method(self.demosaic, self.demosaic_options)
@@ -122,13 +124,18 @@ def check_sensor(isp: ISP, model: SensorModel) -> None:
         white.check_given(isp.white_balance, model.cfa)
 
 
-def develop(raw: np.ndarray, model: SensorModel | SensorChain, isp: ISP = ISP()) -> tuple[np.ndarray, dict]:
+def develop(raw: np.ndarray, model: SensorModel | SensorChain, isp: ISP = ISP(),
+            defective: np.ndarray | None = None) -> tuple[np.ndarray, dict]:
     """The 8-bit frame (H, W, 3 uint8) of a RAW frame (H, W, DN) of sensor `model`, and the metadata
-    naming every stage with the values it used."""
+    naming every stage with the values it used; `defective`: the sensor's defect map (None: no defects)."""
     stages = {"black_level": {"subtracted": isp.black_level, "black_dn": model.black_level_dn,
                               "saturation_dn": black.saturation_dn(model),
                               "decompanded_through": black.decompanded_through(model)}}
     signal = black.subtract_black(raw, model, enabled=isp.black_level)
+    corrected = 0
+    if defective is not None and isp.defect_correction:
+        signal, corrected = defects.correct(signal, defective)
+    stages["black_level"]["defect_pixels_corrected"] = corrected
     gains = white.METHODS[_white_balance(isp)].function(signal, model, isp)
     stages["white_balance"] = {"method": _white_balance(isp), "gains": gains,
                                **({"grey_card": list(isp.grey_card)} if isp.grey_card else {})}

@@ -237,6 +237,26 @@ class SensorChain:
         step = float(self.compander.step(np.array([signal]))[0])
         return signal / math.sqrt((signal / snr) ** 2 + step**2 / 12.0)
 
+    def defective_pixels(self, shape: tuple[int, int], seed: int) -> np.ndarray | None:
+        """The defect map of sensor `seed` (its dead and hot pixels), as a camera's calibration stores it.
+
+        Parameters
+        ----------
+        shape : tuple of int
+            Rows and columns of the frame.
+        seed : int
+            Which sensor of this model (its fixed pattern and defects).
+
+        Returns
+        -------
+        numpy.ndarray or None
+            True at a defect pixel (`defects.Defects.pixel_map`: dead or hot); None without defects.
+        """
+        if self.defects is None:
+            return None
+        dead, hot = self.defects.pixel_map(shape, seed)
+        return dead | hot
+
     def dynamic_range_db(self, exposure_s: float) -> float:
         """EMVA 1288's dynamic range, 20 log10(μ_e.sat / μ_e.min), of the reference photodiode's electrons.
 

@@ -3,11 +3,13 @@ dark level whatever the light (EMVA 1288's μ_y.dark = black + K i_d t), hot pix
 would, in the fractions asked, fixed by the seed; every other pixel reads what it read without defects, bit
 for bit."""
 import math
+from dataclasses import replace
 
 import numpy as np
 import pytest
 
 from solas_mi.errors import SolasError
+from solas_mi.isp.pipeline import ISP, develop
 from solas_mi.sensor.capture import capture
 from solas_mi.sensor.defects import Defects
 from solas_mi.sensor.files import PRESETS, load_sensor
@@ -67,3 +69,19 @@ def test_the_defects_are_fixed_by_the_seed_in_the_fractions_asked(sensors):
 def test_bad_defects_are_refused_by_name(values, message):
     with pytest.raises(SolasError, match=message):
         Defects(**values)
+
+
+def test_the_image_processor_replaces_the_defect_pixels(sensors, tmp_path):
+    """Developed with the sensor's defect map, a flat field's dead and hot pixels take their same-filter
+    neighbours' mean: within the shot noise of the flat field; without the correction the dead ones are black."""
+    _, defective = sensors
+    image = np.full((*SHAPE, 3), 0.05)
+    raw = capture(defective, image, SECONDS, 7, 0)
+    where = defective.defective_pixels(SHAPE, 7)
+    plain = ISP(demosaic="none", ccm="none", white_balance="none", tone="none")
+    fixed, meta = develop(raw, defective, plain, where)
+    kept, _ = develop(raw, defective, replace(plain, defect_correction=False), where)
+    assert meta["stages"]["black_level"]["defect_pixels_corrected"] == int(where.sum())
+    assert np.count_nonzero(kept[where][:, 0] == 0) > 0.3 * where.sum()  # the dead ones, black
+    grey = fixed[..., 0].astype(float)
+    assert abs(grey[where].mean() - grey[~where].mean()) < 2.0  # the flat field's level, in 8-bit codes
