@@ -85,3 +85,15 @@ def test_the_image_processor_replaces_the_defect_pixels(sensors, tmp_path):
     assert np.count_nonzero(kept[where][:, 0] == 0) > 0.3 * where.sum()  # the dead ones, black
     grey = fixed[..., 0].astype(float)
     assert abs(grey[where].mean() - grey[~where].mean()) < 2.0  # the flat field's level, in 8-bit codes
+
+
+def test_camera_corrects_the_defects_of_its_sensor(sensors, tmp_path):
+    from solas_mi.cli import main
+    from solas_mi.imageio import read_exr, write_exr
+
+    write_exr(tmp_path / "in.exr", {c: np.full(SHAPE, 0.05, np.float32) for c in "RGB"})
+    assert main(["camera", str(tmp_path / "in.exr"), "--sensor-model", str(tmp_path / "defects.toml"),
+                 "--exposure-ms", "10", "--seed", "7", "--isp", "default", "-o", str(tmp_path / "raw.exr")]) == 0
+    _, meta = read_exr(tmp_path / "raw.exr")
+    assert meta["stages"]["black_level"]["defect_pixels_corrected"] == int(sensors[1].defective_pixels(SHAPE, 7).sum())
+    assert [s["stage"] for s in meta["sensor"]["stages"]][1] == "defects"
