@@ -1,8 +1,8 @@
 """`SensorChain`: a sensor as an ordered list of stages, `STAGES` (a `solas_mi.registry.Registry`): the photon
-conversion (`photons`), one or more readouts (`readout`), the merge of an HDR sensor's readouts into one
-linear signal (`merge`) and the compander that squeezes it into the output's bits (`compander`). Each stage
-checks its own values, draws from its own named random stream (`readout`) and has its inverse in the image
-processor (`SensorChain.linear_dn`).
+conversion, defect pixels, one or more readouts, the merge of an HDR sensor's readouts into one linear
+signal and the compander that squeezes it into the output's bits. Each stage checks its own values, draws
+from its own named random streams (`readout`, `defects`) and has its inverse in the image processor
+(`SensorChain.linear_dn`, `defective_pixels`).
 
 A flat `[sensor]` table (`model.SensorModel`) is the chain photons → one readout (`chain_of`), and gives the
 frames it gave before the chain, bit for bit. A TOML file names the stages after the photon conversion's
