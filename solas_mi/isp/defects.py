@@ -7,8 +7,11 @@ import numpy as np
 STEPS = ((-2, 0), (2, 0), (0, -2), (0, 2))  # the same filter's nearest sites of a 2 × 2 tile
 
 
-def correct(signal: np.ndarray, defective: np.ndarray) -> tuple[np.ndarray, int]:
-    """The signal (H, W) with each defect pixel replaced (module docstring), and how many were replaced."""
+def correct(signal: np.ndarray, defective: np.ndarray | None) -> tuple[np.ndarray, int]:
+    """The signal (H, W) with each defect pixel replaced (module docstring), and how many were replaced
+    (`defective` None: none)."""
+    if defective is None:
+        return signal, 0
     height, width = signal.shape
     total, count = np.zeros_like(signal), np.zeros(signal.shape, dtype=np.int64)
     for dy, dx in STEPS:

@@ -132,10 +132,8 @@ def develop(raw: np.ndarray, model: SensorModel | SensorChain, isp: ISP = ISP(),
                               "saturation_dn": black.saturation_dn(model),
                               "decompanded_through": black.decompanded_through(model)}}
     signal = black.subtract_black(raw, model, enabled=isp.black_level)
-    corrected = 0
-    if defective is not None and isp.defect_correction:
-        signal, corrected = defects.correct(signal, defective)
-    stages["black_level"]["defect_pixels_corrected"] = corrected
+    signal, stages["black_level"]["defect_pixels_corrected"] = defects.correct(
+        signal, defective if isp.defect_correction else None)
     gains = white.METHODS[_white_balance(isp)].function(signal, model, isp)
     stages["white_balance"] = {"method": _white_balance(isp), "gains": gains,
                                **({"grey_card": list(isp.grey_card)} if isp.grey_card else {})}
