@@ -88,7 +88,7 @@ import mitsuba as mi
 import numpy as np
 
 from solas_mi.errors import SolasError
-from solas_mi.optics import tracer as T, virtual_object
+from solas_mi.optics import tracer, virtual_object
 from solas_mi.optics.exit_pupil import passes, reversed_lens
 from solas_mi.optics.focus import focused
 from solas_mi.optics.paraxial import paraxial
@@ -101,10 +101,10 @@ from solas_mi.plugins.wavelength_sampling import lanes
 FRESNEL = ("off", "transmit")
 
 
-def pick(values: list, index):
-    """values[index] per ray (an index array of 0…3 over a list of four)."""
-    return dr.select(index == 0, values[0], dr.select(index == 1, values[1],
-                                                      dr.select(index == 2, values[2], values[3])))
+def select_lane(values: list, lane):
+    """values[lane] per ray: `lane` an index array of 0…3 over a list of four values."""
+    return dr.select(lane == 0, values[0], dr.select(lane == 1, values[1],
+                                                     dr.select(lane == 2, values[2], values[3])))
 
 
 def on_axis_solid_angle(lens: Lens, sampler: PupilSampler, wavelength_nm: float, grid: int = 512) -> float:
@@ -153,29 +153,29 @@ class LensCamera(LensFilm):
             raise SolasError(f"lens_camera: lane_tolerance {props.get('lane_tolerance')!r} must be a number >= 0 "
                              "(a fraction of a pixel's angular footprint; 0: every path the hero lane's)")
         self.lane_tolerance = eps
-        p = paraxial(self.lens)
-        self.angle_tolerance = eps * self.pitch_mm / abs(p.efl_mm)
-        self.origin_tolerance = 0.5 * eps * p.entrance_pupil_diameter_mm / self.world_unit_mm
+        first_order = paraxial(self.lens)
+        self.angle_tolerance = eps * self.pitch_mm / abs(first_order.efl_mm)
+        self.origin_tolerance = 0.5 * eps * first_order.entrance_pupil_diameter_mm / self.world_unit_mm
         self.inv_focus = 0.0 if math.isinf(self.focus_distance) else 1.0 / self.focus_distance
 
-    def alike(self, origins, directions, passed) -> list[list]:
-        """`alike[i][j]`: lanes i and j both passed and leave the lens within `lane_tolerance` of each
+    def lanes_together(self, origins, directions, passed) -> list[list]:
+        """`together[i][j]`: lanes i and j both passed and leave the lens within `lane_tolerance` of each
         other (module docstring; symmetric, and a passed lane is alike itself)."""
-        near = [[passed[i] if i == j else None for j in range(4)] for i in range(4)]
+        together = [[passed[i] if i == j else None for j in range(4)] for i in range(4)]
         for i in range(4):
             for j in range(i + 1, 4):
                 gap = dr.norm(origins[i] - origins[j])
-                near[i][j] = near[j][i] = passed[i] & passed[j] & (gap <= self.origin_tolerance) & \
+                together[i][j] = together[j][i] = passed[i] & passed[j] & (gap <= self.origin_tolerance) & \
                     (dr.norm(directions[i] - directions[j]) + gap * self.inv_focus <= self.angle_tolerance)
-        return near
+        return together
 
     def check_film(self) -> None:
         """SolasError for lines (no density) under an `hdrfilm` of a spectral variant: the film would
         develop them with the CIE observer as if they were a continuous spectrum (nearly black)."""
-        r = self.response
-        if (mi.is_spectral and self.film().class_name() == "HDRFilm" and bool((r.hi_nm == r.lo_nm).any())
-                and r.single_wavelength is None):
-            raise SolasError(f"lens_camera: response {r.name!r} has lines, which an hdrfilm cannot develop (they "
+        response = self.response
+        if (mi.is_spectral and self.film().class_name() == "HDRFilm"
+                and bool((response.hi_nm == response.lo_nm).any()) and response.single_wavelength is None):
+            raise SolasError(f"lens_camera: response {response.name!r} has lines, which an hdrfilm cannot develop (they "
                              "have no spectral density); use a specfilm with one sensitivity per line, or a "
                              "continuous response (srgb, table:<file.csv>)")
 
@@ -198,7 +198,7 @@ class LensCamera(LensFilm):
         """The wavelength sample of the k-th of a pixel's n samples moved into the k-th of n strata,
         (k + sample1)/n, where the wavefront is Mitsuba's (`SamplingIntegrator`: sample i of the
         wavefront is sample i mod n of pixel i div n, row-major over the crop window;
-        `mitsubas_wavefront`); else `sample1` unchanged (scalar variants, a symbolic scope, any
+        `samples_in_pixel_order`); else `sample1` unchanged (scalar variants, a symbolic scope, any
         other layout, `stratify_wavelengths` false). Either way each wavelength sample is uniform: an
         unbiased estimate."""
         pixels = self.width * self.height
@@ -209,11 +209,11 @@ class LensCamera(LensFilm):
         count = dr.opaque(mi.UInt32, n)  # one kernel for every spp
         i = dr.arange(mi.UInt32, n * pixels)
         pixel = i // count
-        if not self.mitsubas_wavefront(pixel, sample2):
+        if not self.samples_in_pixel_order(pixel, sample2):
             return sample1
         return (mi.Float(i - pixel * count) + dr.clip(sample1, 0.0, 1.0 - 2 ** -24)) / mi.Float(count)
 
-    def mitsubas_wavefront(self, pixel, sample2) -> bool:
+    def samples_in_pixel_order(self, pixel, sample2) -> bool:
         """Whether the film samples `sample2` lie in the pixels `pixel` (row-major over the crop window):
         taken as true for Mitsuba's own integrators (C++, and Python ones of `mitsuba.ad`: all lay out
         the wavefront so, `sample_rays`) on a film without a border, else checked on the values (an
@@ -227,7 +227,7 @@ class LensCamera(LensFilm):
         x, y = sample2.x * self.width, sample2.y * self.height
         return bool(dr.all((x >= col - 1e-3) & (x <= col + 1.001) & (y >= row - 1e-3) & (y <= row + 1.001)))
 
-    def traced(self, film, target, lam):
+    def exit_ray(self, film, target, lam):
         """The ray from film point `film` toward pupil point `target` (mm) at wavelength(s) `lam` (nm),
         traced through the lens: its origin on surface 1 and direction in the camera frame (world units),
         whether it passed, and its Fresnel transmittance. A blocked ray (past the image circle, TIR) may
@@ -235,19 +235,19 @@ class LensCamera(LensFilm):
         by a NaN radiance."""
         f64 = dr.float64_array_t(mi.Float)
         # the reversed lens: x, y kept, z mirrored; the film is its object, the pupil plane its z = 0
-        rays = T.launch(self.reversed, None, None, f64(target.x), f64(target.y), (f64(film.x), f64(film.y)))
-        traced = T.trace(self.reversed, rays, f64(lam) * 1e-3, fresnel=self.fresnel == "transmit")
-        out = traced.rays
+        rays = tracer.launch(self.reversed, None, None, f64(target.x), f64(target.y), (f64(film.x), f64(film.y)))
+        result = tracer.trace(self.reversed, rays, f64(lam) * 1e-3, fresnel=self.fresnel == "transmit")
+        leaving = result.rays
         # camera frame (x, −y, −z of the lens frame): looks along +z, upright; surface 1 at the origin
         scale = 1.0 / self.world_unit_mm
-        origin = mi.Point3f(mi.Float(out.x * scale), mi.Float(-out.y * scale),
-                            mi.Float((out.z - self.last_vertex_z) * scale))
-        direction = mi.Vector3f(mi.Float(out.dx), mi.Float(-out.dy), mi.Float(out.dz))
-        passed = mi.Bool(traced.ok & (traced.clipped_by == 0)) & dr.all(dr.isfinite(origin)) & \
+        origin = mi.Point3f(mi.Float(leaving.x * scale), mi.Float(-leaving.y * scale),
+                            mi.Float((leaving.z - self.last_vertex_z) * scale))
+        direction = mi.Vector3f(mi.Float(leaving.dx), mi.Float(-leaving.dy), mi.Float(leaving.dz))
+        passed = mi.Bool(result.ok & (result.clipped_by == 0)) & dr.all(dr.isfinite(origin)) & \
             dr.all(dr.isfinite(direction))
         origin = dr.select(passed, origin, mi.Point3f(0.0))
         direction = dr.select(passed, direction, mi.Vector3f(0.0, 0.0, 1.0))
-        return origin, direction, passed, mi.Float(traced.transmittance)
+        return origin, direction, passed, mi.Float(result.transmittance)
 
     def lane_samples(self, sample1, sample2):
         """The lanes' samples of the response's distribution, and the hero lane (module docstring): the
@@ -270,22 +270,23 @@ class LensCamera(LensFilm):
         lams, origins, directions, passed, weights = [], [], [], [], []
         for sample in samples:
             lam, inverse_pdf = self.wavelengths.sample_quantile(sample, active)
-            origin, direction, ok, transmittance = self.traced(film, target, lam)
+            origin, direction, ok, transmittance = self.exit_ray(film, target, lam)
             for values, value in zip((lams, origins, directions, passed), (lam, origin, direction, ok)):
                 values.append(value)
             w = weight * self.norm * transmittance * inverse_pdf
             weights.append(dr.select(active & ok, w, 0.0))
         if mi.is_spectral:  # lane i carried where alike the hero, weighted 4 / (the lanes alike lane i)
-            near = self.alike(origins, directions, passed)
-            counts = [dr.maximum(sum(dr.select(x, 1.0, 0.0) for x in row), 1.0) for row in near]
-            weights = [dr.select(pick(near[i], hero), 4.0 * w / counts[i], 0.0) for i, w in enumerate(weights)]
-            origins, directions = [pick(origins, hero)], [pick(directions, hero)]
+            together = self.lanes_together(origins, directions, passed)
+            counts = [dr.maximum(sum(dr.select(x, 1.0, 0.0) for x in row), 1.0) for row in together]
+            weights = [dr.select(select_lane(together[i], hero), 4.0 * w / counts[i], 0.0)
+                       for i, w in enumerate(weights)]
+            origins, directions = [select_lane(origins, hero)], [select_lane(directions, hero)]
         # origin and direction apart: `transform @ ray` fails in a mono variant once a spectral one ran (Mitsuba 3.9)
         to_world = self.world_transform()
         ray = mi.Ray3f(to_world @ origins[0], to_world @ directions[0], time,
                        mi.Spectrum(*lams) if mi.is_spectral else lanes(lams[0]))
-        # a blocked hero carries no lane (`alike`): its path would add 0, so it meets nothing
-        ray.maxt = dr.select(pick(passed, hero) if mi.is_spectral else passed[0], ray.maxt, 0.0)
+        # a blocked hero carries no lane (`lanes_together`): its path would add 0, so it meets nothing
+        ray.maxt = dr.select(select_lane(passed, hero) if mi.is_spectral else passed[0], ray.maxt, 0.0)
         return ray, mi.Spectrum(*weights) if mi.is_spectral else mi.Spectrum(weights[0])
 
     def sample_position(self, time, sample, active=True):

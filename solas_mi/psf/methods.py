@@ -37,14 +37,59 @@ def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: fl
     return METHODS[method].function(lens, field_deg, wavelength_nm, pitch_um, size, shared_origin=shared_origin, **own)
 
 
+# long: the public API's numpydoc docstring is half of it
 def psf(lens, field_deg, wavelength_nm, *, weights=None, pitch_um: float = DEFAULT_PITCH_UM,
         size: int = DEFAULT_SIZE, method: str = DEFAULT_METHOD, normalization: str = "sum", auto_window: bool = False,
         **options) -> PSF:
-    """The PSF at `field_deg` (x, y degrees) for one wavelength (nm) or several with `weights`
-    (polychromatic: the power-weighted sum of the monochromatic PSFs), by `method` with its own
-    `options` (those of every method in `registry.METHODS`; each takes its own). meta["energy_in_grid"]
-    is the fraction of the transmitted light inside the window and meta["warnings"] what looked
-    doubtful; `auto_window` doubles `size` until the window holds `base.WINDOW_ENERGY_LIMIT` of the light."""
+    """The PSF of one field, monochromatic or polychromatic.
+
+    Several wavelengths give the power-weighted sum of their PSFs, all on the first one's chief ray, so
+    lateral colour shows. The window is centred on the chief ray (where the chief ray is blocked, on the
+    centroid of the light that arrives); [PSFs in depth](../details/convolution.md).
+
+    Parameters
+    ----------
+    lens : Lens
+        The lens.
+    field_deg : float or (float, float)
+        The field: (x, y) degrees, or one value y.
+    wavelength_nm : float or sequence of float
+        One wavelength (nm), or several.
+    weights : sequence of float, optional
+        Power weights of the wavelengths; default: equal.
+    pitch_um : float, default 0.5
+        The pixel pitch on the image plane (µm).
+    size : int, default 160
+        Pixels per side.
+    method : str, default "fraunhofer"
+        A name of `registry.METHODS`.
+    normalization : str, default "sum"
+        One of `base.NORMALIZATIONS`.
+    auto_window : bool, default False
+        Double `size` until the window holds `base.WINDOW_ENERGY_LIMIT` of the transmitted light.
+    **options
+        The methods' own options (`registry.METHODS`: ``pupil_samples``, ``rays``); each method takes its
+        own and leaves the others.
+
+    Returns
+    -------
+    PSF
+        The PSF; ``meta["energy_in_grid"]`` is the window's share of the transmitted light and
+        ``meta["warnings"]`` what looked doubtful.
+
+    Raises
+    ------
+    SolasError
+        For a bad field, wavelength, weight, grid or option, or a field whose every ray is blocked.
+
+    Examples
+    --------
+    >>> from solas_mi import Lens
+    >>> from solas_mi.psf import psf
+    >>> one = psf(Lens.load("solas-doublet"), (0, 2), 531.0, size=64)
+    >>> one.data.shape, round(float(one.data.sum()), 6), one.method
+    ((64, 64), 1.0, 'fraunhofer')
+    """
     check_lens(lens)
     field = lens.field_type.check(field_deg)
     check_grid(pitch_um, size)
