@@ -23,6 +23,8 @@ SHIPPED = {
     "solas_mi.render.labels.LABELS": ("depth", "normal", "instance"),
     "solas_mi.optics.formats.READERS": (".toml", ".zmx", ".seq", ".dat"),
     "solas_mi.optics.formats.WRITERS": (".toml", ".zmx", ".dat"),
+    "solas_mi.optics.calibration.models.MODELS": ("opencv-pinhole", "opencv-fisheye", "ocamcalib", "woodscape",
+                                                  "double-sphere", "unified"),
 }
 
 # One of each registered in a fresh process, then looked for in the parser, the messages and the docs.

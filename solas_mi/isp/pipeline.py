@@ -189,6 +189,14 @@ def _white_balance(isp: ISP) -> str:
     return white.GIVEN if isinstance(isp.white_balance, dict) else isp.white_balance
 
 
+def check_sensor(isp: ISP, model: SensorModel) -> None:
+    """SolasError before any frame is taken where `isp` cannot develop the frames of sensor `model`: white
+    balance gains given for other filters than its colour filter array's (develop would refuse every
+    frame, after its work)."""
+    if isinstance(isp.white_balance, dict):
+        white.check_given(isp.white_balance, model.cfa)
+
+
 def develop(raw: np.ndarray, model: SensorModel, isp: ISP = ISP()) -> tuple[np.ndarray, dict]:
     """Develop a RAW frame into an 8-bit sRGB frame: black level, white balance, demosaic, CCM, tone.
 
