@@ -35,40 +35,28 @@ vertex. `focus_distance` focuses the lens as a unit: the whole lens moves agains
 an object that far in front of surface 1 is in focus (`solas_mi.optics.focus.focused`: the paraxial
 image shift from the lens file's own object distance, whose image plane is the default).
 
-Each sample takes four wavelengths from the camera response (`solas_mi.render.response`), one per
-spectral lane, lane i in the i-th quarter of the response's distribution (a continuous response's
-through its quantile table, `WavelengthSampler.sample_quantile`: no search of its bins, 1/p(λ) that
-table's own density), and a hero lane: the hero's
-sample is stratified per pixel (one in each n-th of the response for a pixel's n samples,
-`stratified`: Mitsuba's integrators give the k-th sample of every pixel its place k in the wavefront;
-with independent wavelengths the colour noise was 2–4× the perspective camera's), its quarter is the
-hero lane and its place in that quarter the other lanes' place in theirs. All four lanes are traced
-from the same film point and pupil point. The hero's ray leaves for the scene carrying the lanes
-that leave the lens alike it (with dispersion, lanes leave apart): each such lane i weighted by its
-own pupil weight, 1/p(λ_i) and transmittance, × 4/|G_i| (G_i: the lanes alike lane i, itself
-included), the others 0. Every lane is hero equally often, so each lane's estimate is unbiased (the
-hero-wavelength scheme where no lane is alike another: 4 × the hero's weight); where all are alike
-the path is shared as by Mitsuba's own cameras. Two lanes are alike where both pass and
-|Δdirection| + |Δorigin|/F ≤ ε α and |Δorigin| ≤ ε D/2 (α = pitch/efl: a pixel's angular footprint,
-paraxially; F: the focus distance; D: the entrance pupil's diameter): the shared ray then lies within
-2 ε of the larger of a pixel's footprint and the defocus blur D |1/z − 1/F| of its own at every depth z
-beyond F/2, and within ε of the blur, plus ε α, nearer (Δorigin/z ≤ ε D (1/z − 1/F) for z ≤ F/2). A
-point in its pixel, and a
-point inside the exit-pupil bound of that film position (`pupil_sampling.PupilSampler`, weight
-A·cos⁴θ/d² as pbrt-v4's RealisticCamera). The ray is traced backward through the lens (image side
-to object side) by the Float64 sequential tracer (`solas_mi.optics.tracer`, on the reversed lens of
-`solas_mi.optics.exit_pupil`) in the Float64 type of the variant (Python floats in the scalar ones):
-exact spheres and planes, Sellmeier n(λ) per lane, every clear aperture and the stop clip, total
-internal reflection ends the ray; a blocked ray has weight 0. The weight of `sample_ray` is the
-pupil weight × 1/p(λ) × the Fresnel transmittance, scaled so that the pixel value is the image
-irradiance in units of a lossless lens's on-axis irradiance from radiance 1: a uniform white scene
-is 1 at the image centre (less with `fresnel` "transmit") and falls off with the lens's relative
-illumination. `hdrfilm` develops a continuous response ("srgb", "table:") with Mitsuba's CIE tables;
-lines ("lines", "mono:λ") have no density and need `specfilm`: "lines" under an `hdrfilm` of a
-spectral variant is refused (SolasError naming both ways out). Rays blocked by the lens (past the
-image circle, at a stop, by total internal reflection) leave the vertex along the axis with weight 0
-and `maxt` 0: every ray is finite, and the scene traces no path for them (an `aov` integrator reads
-them as misses).
+How a sample is traced (why: [the lens camera's colour
+noise](../details/render.md#colour-noise-of-the-lens-camera)): a point in its pixel and a point inside
+the exit-pupil bound of that film position (`pupil_sampling.PupilSampler`, weight A·cos⁴θ/d² as
+pbrt-v4's RealisticCamera); four wavelengths from the camera response (`solas_mi.render.response`), one
+per spectral lane, lane i in the i-th quarter of the response's distribution
+(`WavelengthSampler.sample_quantile`), and a hero lane whose sample is stratified per pixel
+(`stratified`). All four lanes are traced backward through the lens (image side to object side) by the
+Float64 sequential tracer (`solas_mi.optics.tracer`, on the reversed lens of
+`solas_mi.optics.exit_pupil`): exact spheres and planes, Sellmeier n(λ) per lane, every clear aperture
+and the stop clip, total internal reflection ends the ray. The hero's ray leaves for the scene carrying
+the lanes that leave the lens within `lane_tolerance` of it (`lanes_together`), each weighted 4/(the
+lanes alike it), so every lane's estimate is unbiased.
+
+The weight of `sample_ray` is the pupil weight × 1/p(λ) × the Fresnel transmittance, scaled so that the
+pixel value is the image irradiance in units of a lossless lens's on-axis irradiance from radiance 1: a
+uniform white scene is 1 at the image centre (less with `fresnel` "transmit") and falls off with the
+lens's relative illumination. `hdrfilm` develops a continuous response ("srgb", "table:") with
+Mitsuba's CIE tables; lines ("lines", "mono:λ") have no density and need `specfilm`: "lines" under an
+`hdrfilm` of a spectral variant is refused (SolasError naming both ways out). Rays blocked by the lens
+(past the image circle, at a stop, by total internal reflection) leave the vertex along the axis with
+weight 0 and `maxt` 0: every ray is finite, and the scene traces no path for them (an `aov` integrator
+reads them as misses).
 
 Variants: spectral, or mono for a response of one wavelength (mono:λ): the lens is traced at λ and
 the scene's RGB and spectral data become Mitsuba's luminance, so a mono render equals the spectral
@@ -142,8 +130,8 @@ class LensCamera(LensFilm):
         self.lane_tolerances(props)
 
     def lane_tolerances(self, props: mi.Properties) -> None:
-        """Where the lanes share a path (module docstring): the pupil table's rows whose rays at the
-        response's shortest and longest wavelengths leave the lens within ε α in direction plus origin
+        """Where the lanes share a path (docs/details/render.md, "Colour noise of the lens camera"): rays at
+        the response's shortest and longest wavelengths leave the lens within ε α in direction plus origin
         over the focus distance, and within ε D/2 in origin."""
         try:
             eps = float(props.get("lane_tolerance", 0.25))
@@ -160,7 +148,8 @@ class LensCamera(LensFilm):
 
     def lanes_together(self, origins, directions, passed) -> list[list]:
         """`together[i][j]`: lanes i and j both passed and leave the lens within `lane_tolerance` of each
-        other (module docstring; symmetric, and a passed lane is alike itself)."""
+        other (the bound: docs/details/render.md, "Colour noise of the lens camera"; symmetric, and a passed
+        lane is alike itself)."""
         together = [[passed[i] if i == j else None for j in range(4)] for i in range(4)]
         for i in range(4):
             for j in range(i + 1, 4):
@@ -175,8 +164,8 @@ class LensCamera(LensFilm):
         response = self.response
         if (mi.is_spectral and self.film().class_name() == "HDRFilm"
                 and bool((response.hi_nm == response.lo_nm).any()) and response.single_wavelength is None):
-            raise SolasError(f"lens_camera: response {response.name!r} has lines, which an hdrfilm cannot develop (they "
-                             "have no spectral density); use a specfilm with one sensitivity per line, or a "
+            raise SolasError(f"lens_camera: response {response.name!r} has lines, which an hdrfilm cannot develop "
+                             "(they have no spectral density); use a specfilm with one sensitivity per line, or a "
                              "continuous response (srgb, table:<file.csv>)")
 
     def prepared(self, lens: Lens, props: mi.Properties) -> Lens:

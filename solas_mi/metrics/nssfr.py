@@ -60,48 +60,50 @@ def _segment_rois(
     height, width = mask.shape
     labels, _ = ndi.label(mask, structure=np.ones((3, 3), bool))
     out: list[Roi] = []
-    for lab, sl in enumerate(ndi.find_objects(labels), start=1):
-        if sl is None or sl[0].stop - sl[0].start < min_rows:
+    for label, box in enumerate(ndi.find_objects(labels), start=1):
+        if box is None or box[0].stop - box[0].start < min_rows:
             continue
-        rs, cs = sl
-        seg = labels[sl] == lab
-        has = seg.any(axis=1)
-        first = seg.argmax(axis=1) + cs.start
-        last = seg.shape[1] - 1 - seg[:, ::-1].argmax(axis=1) + cs.start
+        box_rows, box_cols = box
+        segment = labels[box] == label
+        row_has_edge = segment.any(axis=1)
+        first_col = segment.argmax(axis=1) + box_cols.start
+        last_col = segment.shape[1] - 1 - segment[:, ::-1].argmax(axis=1) + box_cols.start
 
-        def clean(r0: int, r1: int, m: int) -> tuple[int, int, int, int] | None:
-            while r1 - r0 >= min_rows:
-                rows = slice(r0 - rs.start, r1 - rs.start)
-                if not has[rows].any():
+        def clean(top: int, bottom: int, pad: int) -> tuple[int, int, int, int] | None:
+            """Rows top…bottom trimmed clear of other edges `pad` columns about it: (top, bottom, left, right)."""
+            while bottom - top >= min_rows:
+                rows = slice(top - box_rows.start, bottom - box_rows.start)
+                if not row_has_edge[rows].any():
                     return None
-                lo, hi = first[rows][has[rows]].min(), last[rows][has[rows]].max()
-                x0, x1 = max(0, lo - m), min(width, hi + 1 + m)
-                dirty = (edges[r0:r1, x0:x1] & (labels[r0:r1, x0:x1] != lab)).any(axis=1)
+                lo, hi = first_col[rows][row_has_edge[rows]].min(), last_col[rows][row_has_edge[rows]].max()
+                left, right = max(0, lo - pad), min(width, hi + 1 + pad)
+                dirty = (edges[top:bottom, left:right] & (labels[top:bottom, left:right] != label)).any(axis=1)
                 dirty = ndi.maximum_filter1d(dirty, 2 * ROW_GUARD_PX + 1, mode="constant")
                 if not dirty.any():
-                    if min(lo - x0, x1 - 1 - hi) < m // 2:
+                    if min(lo - left, right - 1 - hi) < pad // 2:
                         return None  # the edge runs too close to the image border
-                    return r0, r1, x0, x1
-                a, b = _longest_run(~dirty)
-                r0, r1 = r0 + a, r0 + b
+                    return top, bottom, left, right
+                run_start, run_stop = _longest_run(~dirty)
+                top, bottom = top + run_start, top + run_stop
             return None
 
-        spans = {m: clean(rs.start, rs.stop, m) for m in margins}
+        spans = {pad: clean(box_rows.start, box_rows.stop, pad) for pad in margins}
         narrow = spans[min(margins)]
         if narrow is None:
             continue
-        margin = max(m for m, s in spans.items() if s is not None and s[1] - s[0] >= 0.5 * (narrow[1] - narrow[0]))
-        r0, r1 = spans[margin][:2]
-        n_rows = r1 - r0
+        margin = max(pad for pad, span in spans.items()
+                     if span is not None and span[1] - span[0] >= 0.5 * (narrow[1] - narrow[0]))
+        top, bottom = spans[margin][:2]
+        n_rows = bottom - top
         if max_rows is None or n_rows <= max_rows:
-            starts = [r0]
+            starts = [top]
             size = n_rows
         else:
             count = math.ceil((n_rows - max_rows) / (max_rows / 2)) + 1
-            starts = [matlab_round(s) for s in np.linspace(r0, r1 - max_rows, count)]
+            starts = [matlab_round(start) for start in np.linspace(top, bottom - max_rows, count)]
             size = max_rows
-        for s in starts:
-            span = clean(s, s + size, margin)
+        for start in starts:
+            span = clean(start, start + size, margin)
             if span is not None:
                 y0, y1, x0, x1 = span
                 out.append((int(x0), int(y0), int(x1 - x0), int(y1 - y0)))

@@ -116,26 +116,27 @@ def spot(lens: Lens, field_deg, wavelength_nm: float, pattern: str = "hexapolar"
     centre, radius = chief.entrance[0], float(reach[ok].min())
     if chief.vignetted[0]:
         centre, radius = _light_disc(lens, field, wl, chief.entrance[0], float(reach.max()))
-    b = pupil.Bundle(lens, field, wl, len(points))
-    x, y, keep = _image_hits(b, centre[0] + radius * points[:, 0], centre[1] + radius * points[:, 1], lens.image_z)
+    bundle = pupil.Bundle(lens, field, wl, len(points))
+    x, y, keep = _image_hits(bundle, centre[0] + radius * points[:, 0], centre[1] + radius * points[:, 1],
+                             lens.image_z)
     if not keep.any():
         raise SolasError(f"no ray of {wavelength_nm:g} nm through the pupil reaches the image for field "
                          f"({field[0, 0]:g}, {field[0, 1]:g}) deg: every one is blocked")
-    x0, y0 = chief.image_xy[0]
+    chief_x, chief_y = chief.image_xy[0]
     origin = (float(x[keep].mean()), float(y[keep].mean())) if chief.vignetted[0] else None
-    ox, oy = origin or (x0, y0)
-    return Spot((x[keep] - ox) * 1e3, (y[keep] - oy) * 1e3, (float(x0), float(y0)), len(points),
+    origin_x, origin_y = origin or (chief_x, chief_y)
+    return Spot((x[keep] - origin_x) * 1e3, (y[keep] - origin_y) * 1e3, (float(chief_x), float(chief_y)), len(points),
                 int((~keep).sum()), origin)
 
 
 LIGHT_PROBE = 96  # points per side of the grid that finds the part of a blocked chief ray's pupil that passes
 
 
-def _image_hits(b: pupil.Bundle, ex: np.ndarray, ey: np.ndarray, image_z: float):
+def _image_hits(bundle: pupil.Bundle, ex: np.ndarray, ey: np.ndarray, image_z: float):
     """Image-plane points (mm) of the bundle's rays at entrance coordinates ex, ey, and which arrive."""
-    tr = b.trace(tracer.F(ex), tracer.F(ey))
-    x, y, _ = tracer.to_plane(tr, image_z)
-    keep, x, y = tracer.to_numpy(tr.ok & (tr.clipped_by == 0), x, y)
+    traced = bundle.trace(tracer.F(ex), tracer.F(ey))
+    x, y, _ = tracer.to_plane(traced, image_z)
+    keep, x, y = tracer.to_numpy(traced.ok & (traced.clipped_by == 0), x, y)
     return x, y, keep
 
 
