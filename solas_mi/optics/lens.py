@@ -23,8 +23,8 @@ from . import glass as glass_mod
 from .sag import sag  # noqa: F401 (re-exported)
 from .surface import (NORM_RADIUS_MM, Surface, check_keys, finite_number, lens_catalogues,  # noqa: F401 (NORM_RADIUS_MM:
                       lens_materials, subtable, surface_from_row)  # re-exported)
-from .formats import (MAX_SURFACES, MAX_WAVELENGTHS, READERS, WRITERS, check_count, lens_path, shipped_lenses,
-                      writable)  # noqa: F401 (shipped_lenses: re-exported)
+from .formats import (MAX_SURFACES, MAX_WAVELENGTHS, READERS, WRITERS, check_count, check_printable,
+                      lens_path, shipped_lenses, writable)  # noqa: F401 (shipped_lenses: re-exported)
 from .fields import FieldType, field_type_for
 
 # The longest length a lens file may give (mm): an object beyond it is at infinity to every digit (its image
@@ -105,8 +105,12 @@ class Lens:
 
     def __post_init__(self) -> None:
         """However it is built (a file, `from_dict`, this constructor, `dataclasses.replace`), a lens holds
-        at most `formats.MAX_SURFACES` surfaces and `MAX_WAVELENGTHS` wavelengths (why: `formats`)."""
+        at most `formats.MAX_SURFACES` surfaces and `MAX_WAVELENGTHS` wavelengths (why: `formats`), and
+        its texts are printable (`formats.check_printable`)."""
         _check_size(self.surfaces, self.wavelengths_nm, self.source or self.name)
+        for what, text in (("name", self.name), ("description", self.description),
+                           *(("surface label", s.label) for s in self.surfaces)):
+            check_printable(text, what, self.source or "lens")
 
     # ------------------------------------------------------------------ loading
     @classmethod
