@@ -43,8 +43,9 @@ bench-all: setup
 # benchmarks/results/ (docs/tools/check_pages.py), every example of the README and the site run as
 # written (outputs checked where stated; a block not run says why), then `mkdocs build --strict`
 # (any warning is an error); the CLI and API reference pages are generated from the code by
-# docs/tools/hooks.py at each build, and docs/tools/check_reference.py checks that the built site
-# documents every command, public function and class, and plugin.
+# docs/tools/hooks.py at each build (the docstrings' examples run with the pages'), and
+# docs/tools/check_reference.py checks that the built site documents every name of solas_mi's and each
+# subpackage's __all__, every command, public function and class, and plugin.
 docs: setup
 	$(PY) docs/tools/check_pages.py
 	$(PY) docs/tools/run_examples.py README.md docs

@@ -27,6 +27,8 @@ PUPIL_SAMPLES = Option("pupil_samples", int, DEFAULT_PUPIL_SAMPLES, "N×N pupil 
 RAYS = Option("rays", int, DEFAULT_GEOMETRIC_RAYS, "rays × rays per PSF", minimum=2, maximum=MAX_SAMPLING)
 
 METHODS = Registry("PSF method", default="fraunhofer")
+"""The PSF methods by name (a `solas_mi.registry.Registry`): each entry's function, its own options, a summary
+and a reference; the [table of methods](registries.md)."""
 DEFAULT_METHOD = METHODS.default
 check_method = METHODS.get
 method_options = METHODS.options  # (name, {keyword: value}) -> the method's own options, checked

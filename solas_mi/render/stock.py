@@ -22,10 +22,45 @@ from .mitsuba import check_run, pass_seed
 SAMPLES_PER_PASS = 1 << 20
 
 
+# long: the public API's numpydoc docstring is half of it
 def render_scene(scene, spp: int, seed: int = 0, progress=None, labels=()) -> Render:
-    """Render `scene` (loaded by `mitsuba.load_scene`) with its own integrator and `spp` samples per pixel;
-    `labels` (names of `render.labels.LABELS`, or them comma-separated, through the scene's lens_camera) become
-    the result's `layers`, their metadata its meta's "labels"."""
+    """Render a loaded Mitsuba scene with its own integrator, in passes of bounded memory.
+
+    Parameters
+    ----------
+    scene : mitsuba.Scene
+        The scene (`mitsuba.load_scene`).
+    spp : int
+        Samples per pixel.
+    seed : int, default 0
+        The sampler's seed (each pass's derives from it).
+    progress : callable, optional
+        Called as ``progress(done, total)`` with the samples per pixel done.
+    labels : str or sequence of str, default ()
+        Names of `render.labels.LABELS` (or them comma-separated), traced through the scene's
+        ``lens_camera``.
+
+    Returns
+    -------
+    Render
+        The film's channels; the labels as its `layers`, their metadata its meta's "labels".
+
+    Raises
+    ------
+    SolasError
+        For a bad spp or seed, labels of a scene without a lens camera, or a plugin's refusal (an
+        integrator that cannot see through a lens).
+
+    Examples
+    --------
+    >>> from pathlib import Path
+    >>> from solas_mi import Lens
+    >>> from solas_mi.render import render_scene, write_scene
+    >>> from solas_mi.render.mitsuba import load_scene
+    >>> xml = write_scene(Lens.load("solas-doublet"), "scene", str(Path("scenes/images/rocket.png").resolve()))
+    >>> render_scene(load_scene(str(xml), width=32, height=24), spp=4).image.shape
+    (24, 32, 3)
+    """
     import mitsuba as mi
 
     check_run(spp, seed)
