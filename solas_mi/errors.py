@@ -8,7 +8,7 @@ _CLOSES = " :;,.!?)]"  # what follows a closing quote in Mitsuba's messages (not
 
 
 MAX_WORD, MAX_MESSAGE = 200, 2000  # characters: a value quoted back from a file is cut, not printed whole
-_LONG_WORD = re.compile(r"\S{%d,}" % (MAX_WORD + 1))
+_LONG_WORD = re.compile(rf"\S{{{MAX_WORD + 1},}}")
 
 
 class SolasError(ValueError):

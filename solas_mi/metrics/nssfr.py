@@ -57,7 +57,7 @@ def _segment_rois(
     at least ROW_GUARD_PX rows from such pixels (isolation from texture and from the adjacent sides
     of a square); the ROI spans the segment's columns widened by the chosen margin each side.
     """
-    height, width = mask.shape
+    _height, width = mask.shape
     labels, _ = ndi.label(mask, structure=np.ones((3, 3), bool))
     out: list[Roi] = []
     for label, box in enumerate(ndi.find_objects(labels), start=1):

@@ -160,7 +160,7 @@ def _paraxial(lens: Lens, wavelength_nm: float, fields_deg: list[float] | None =
 
     # Two base rays at surface 1: a = (y=1, u=0), b = (y=0, u=1); every ray is a mix of them.
     ya, ua = ynu_trace(lens, wavelength_nm, 1.0, 0.0)
-    yb, ub = ynu_trace(lens, wavelength_nm, 0.0, 1.0)
+    yb, _ub = ynu_trace(lens, wavelength_nm, 0.0, 1.0)
     efl = -1.0 / (n[-1] * ua[-1]) if ua[-1] != 0 else math.inf  # 1/power: n'u' = −y1·power
     ep_z, ep_radius, xp_z, xp_radius, xp_f_number = _pupils(lens, wavelength_nm, ya, yb)
     ym, um, obj_z = _marginal_ray(lens, wavelength_nm, ya, ua)
