@@ -47,7 +47,7 @@ def plugin_error(exc: BaseException, context: str, known: str | None = None) -> 
     files), Mitsuba's text ends at its first quote of something the scene does not name
     (`_scene_quotes_only`): Mitsuba quotes what it read from a mesh or spectrum file ("unknown token …"),
     and a scene may name any file the user can read."""
-    cause = exc
+    cause: BaseException | None = exc
     while cause is not None:
         if isinstance(cause, SolasError):
             return SolasError(f"{context}: {cause}")

@@ -58,7 +58,7 @@ def ynu_trace(lens: Lens, wavelength_nm: float, y1: float, u0: float, start: int
         if k > start:
             height = height + slope * (z[k] - z[k - 1])
         s = lens.surfaces[k]
-        power = (n[k + 1] - n[k]) * s.paraxial_curvature + (1.0 / s.focal_length if s.ideal else 0.0)
+        power = (n[k + 1] - n[k]) * s.paraxial_curvature + (1.0 / s.focal_length if s.focal_length is not None else 0.0)
         slope = (n[k] * slope - height * power) / n[k + 1]
         y[k], u[k] = height, slope
     return y, u

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TypeGuard
 
 import numpy as np
 
@@ -242,7 +243,7 @@ def check_grid_meta(path, meta: dict) -> tuple[int, int, int, tuple[float, ...]]
     return ny, nx, size, tuple(float(w) for w in wl)
 
 
-def _whole(v) -> bool:
+def _whole(v) -> TypeGuard[int]:
     return isinstance(v, int) and not isinstance(v, bool)
 
 
