@@ -14,7 +14,7 @@ import numpy as np
 from ..errors import SolasError
 from .chain import SensorChain, chain_of
 from .model import SensorModel
-from .readout import charge_streams, fixed_pattern as charge_pattern
+from .readout import charge_pattern, charge_streams
 
 MAX_SEED = 2**31 - 1  # a camera's seed (a batch's too), its frames' numbers 56 bits (`isp.camera`)
 
@@ -68,8 +68,43 @@ def capture_readouts(sensor: SensorModel | SensorChain, irradiance: np.ndarray, 
 
 def capture(sensor: SensorModel | SensorChain, irradiance: np.ndarray, exposure_s: float, seed: int,
             frame: int = 0) -> np.ndarray:
-    """The RAW frame (H, W, DN: uint16, uint32 for a merged signal not companded) the sensor gives for an
-    irradiance image (H, W, 3) in W/m² exposed `exposure_s` seconds: frame `frame` of seed `seed` (same seed
-    and frame, same frame)."""
+    """The RAW frame a sensor gives for an image-plane irradiance image: photons → electrons → DN.
+
+    Shot, dark and read noise, PRNU and DSNU, full well, conversion gain, ADC and black level, through the
+    sensor's chain of stages (an HDR sensor's readouts merged and companded; [the sensor](../details/sensor.md));
+    the same seed and frame give the same frame.
+
+    Parameters
+    ----------
+    sensor : SensorModel or SensorChain
+        The sensor.
+    irradiance : numpy.ndarray
+        (H, W, 3) image-plane irradiance (W/m²) of the channels R, G, B.
+    exposure_s : float
+        The exposure time (s).
+    seed : int
+        The sensor's seed (0 to `MAX_SEED`): it fixes the pixels' gain and offset patterns.
+    frame : int, default 0
+        The frame's number: its temporal noise.
+
+    Returns
+    -------
+    numpy.ndarray
+        (H, W) DN, the mosaic of the sensor's CFA: uint16, or uint32 for a merged signal not companded.
+
+    Raises
+    ------
+    SolasError
+        For a bad seed or frame number.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from solas_mi.sensor import load_sensor
+    >>> from solas_mi.sensor.capture import capture
+    >>> raw = capture(load_sensor("ar0132at"), np.full((4, 6, 3), 0.1), 0.01, seed=1)
+    >>> raw.shape, raw.dtype.name
+    ((4, 6), 'uint16')
+    """
     chain = as_chain(sensor)
     return chain.output(capture_readouts(chain, irradiance, exposure_s, seed, frame))

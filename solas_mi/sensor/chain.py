@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
+from typing import Any
 
 import numpy as np
 
@@ -132,7 +133,7 @@ class SensorChain:
         readouts = tables.pop("readout")
         if readouts is None:  # a flat sensor's table (one readout) with stages of its own, e.g. defects
             flat = chain_of(SensorModel.from_dict(values))
-            stages = {"photons": flat.photons, "readouts": flat.readouts}
+            stages: dict[str, Any] = {"photons": flat.photons, "readouts": flat.readouts}
         elif not isinstance(readouts, list) or not all(isinstance(r, dict) for r in readouts):
             raise SolasError("sensor readout must be [[sensor.readout]] tables, one per readout")
         else:
@@ -141,7 +142,7 @@ class SensorChain:
             stages[STAGES[kind].extra["field"]] = None if table is None else _made(kind, table)
         return cls(**stages)
 
-    def stages(self) -> list[tuple[str, object]]:
+    def stages(self) -> list[tuple[str, Any]]:
         """The stages in the order of the chain.
 
         Returns
@@ -374,10 +375,10 @@ def _photons(values: dict) -> PhotonConversion:
 
 def _made(kind: str, table):
     """A stage of kind `kind` from its TOML table; an unknown name is an error naming the stage's fields."""
-    cls = STAGES[kind].function
+    cls: Any = STAGES[kind].function  # a stage's dataclass
     if not isinstance(table, dict):
         raise SolasError(f"sensor {kind} must be a table of {cls.__name__}'s fields")
-    known = [name for name in cls.__dataclass_fields__]
+    known = list(cls.__dataclass_fields__)
     unknown = sorted(set(table) - set(known))
     if unknown:
         raise SolasError(f"unknown sensor {kind} parameter(s) {', '.join(unknown)}; allowed: {', '.join(known)}")

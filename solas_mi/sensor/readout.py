@@ -117,7 +117,7 @@ def check_charges(readouts: tuple[Readout, ...]) -> None:
                                  "over the same exposure (one charge), whose property it is")
 
 
-def fixed_pattern(readouts: list[Readout], shape: tuple[int, int], rng: np.random.Generator):
+def charge_pattern(readouts: list[Readout], shape: tuple[int, int], rng: np.random.Generator):
     """The fixed pattern of one charge from its stream: the photodiode's per-pixel gain (mean 1, spread `prnu`)
     and each readout's per-pixel offset (e⁻, mean 0, spread `dsnu_e`)."""
     gain = rng.standard_normal(shape)
@@ -155,7 +155,7 @@ def read_charges(readouts: tuple[Readout, ...], mu_e: np.ndarray, exposure_s: fl
         # keeps them within NumPy's Poisson range (the Chernoff bound puts the chance that the well then
         # fails to fill below e⁻⁷⁰⁰)
         cap = 2.0 * max(readouts[i].full_well_e for i in members) + 1000.0
-        gain, offsets = fixed_pattern([readouts[i] for i in members], mu_e.shape, fixed)
+        gain, offsets = charge_pattern([readouts[i] for i in members], mu_e.shape, fixed)
         gain *= mu_e if first.response == 1.0 else mu_e * first.response  # (x × 1.0 is x: skipped)
         electrons = temporal.poisson(np.minimum(gain, cap, out=gain)).astype(np.float64)
         if defects is not None:

@@ -5,11 +5,10 @@ import re
 
 import numpy as np
 import pytest
+from test_odd_files import WRONG_TYPES, camera
 
 from solas_mi.imageio import write_exr
 from solas_mi.sensor.files import PRESETS
-
-from test_odd_files import WRONG_TYPES, camera
 
 HDR = (PRESETS / "imx490-hdr.toml").read_text(encoding="utf-8")
 READOUT_KEYS = ("name", "photodiode", "sensitivity", "exposure_ratio", "full_well_e", "read_noise_e",
