@@ -6,15 +6,8 @@ from its own named random streams (`readout`, `defects`) and has its inverse in 
 
 A flat `[sensor]` table (`model.SensorModel`) is the chain photons → one readout (`chain_of`), and gives the
 frames it gave before the chain, bit for bit. A TOML file names the stages after the photon conversion's
-fields in `[sensor]`:
-
-    [[sensor.readout]]        # one table per readout, in order of falling response
-    name = "large-HCG"
-    gain_dn_per_e = 0.75
-    [sensor.merge]            # with two or more readouts
-    bits = 24
-    [sensor.compander]        # optional, after the merge
-    knees = [[0, 0], [2048, 2048], [16777215, 4095]]
+fields in `[sensor]`: `[[sensor.readout]]` tables, one per readout in order of falling response, then
+`[sensor.merge]`, `[sensor.compander]`, `[sensor.defects]` (`STAGES`' keys; docs/details/sensor.md).
 """
 from __future__ import annotations
 
@@ -35,22 +28,28 @@ from .photons import PhotonConversion
 from .qe import QECurve
 from .readout import Readout, check_charges, read_charges
 
-# in the order of the chain; each entry's `field`: the SensorChain field that holds it (`many`: a tuple of them)
-STAGES = Registry("sensor stage")
-STAGES.register("photons", PhotonConversion, field="photons", many=False, reference="EMVA 1288 release 4.0, eqs. 1-2",
-                summary="irradiance → mean photo-electrons: pixel pitch, colour filter array, quantum efficiencies")
-STAGES.register("defects", Defects, field="defects", many=False,
-                summary="defect pixels fixed per sensor: dead ones, which collect no light, and hot ones, with "
-                "more dark current")
-STAGES.register("readout", Readout, field="readouts", many=True, reference="EMVA 1288 release 4.0, section 2",
-                summary="a photodiode's charge over an exposure read at a conversion gain into an ADC: shot, dark "
-                "and read noise, PRNU, DSNU, full well")
-STAGES.register("merge", Merge, field="merge", many=False,
-                summary="the readouts' estimates, each below a threshold of its saturation, as one linear signal of "
-                "16-24 bits")
-STAGES.register("compander", Compander, field="compander", many=False,
-                summary="piecewise-linear companding of the merged signal through knee points to the output's bits; "
-                "decompanded by the image processor")
+# in the order of the chain; each entry's `field`: the SensorChain field that holds it (`many`: a tuple of them),
+# `keys`: its TOML table's keys (the docs' table shows them)
+STAGES = Registry("sensor stage", shown=("keys",))
+
+
+def _stage(name: str, cls, **extra) -> None:
+    STAGES.register(name, cls, keys=tuple(f.name for f in fields(cls)), **extra)
+
+
+_stage("photons", PhotonConversion, field="photons", many=False, reference="EMVA 1288 release 4.0, eqs. 1-2",
+       summary="irradiance → mean photo-electrons: pixel pitch, colour filter array, quantum efficiencies (the "
+       "[sensor] table's own keys)")
+_stage("defects", Defects, field="defects", many=False,
+       summary="defect pixels fixed per sensor: dead ones, which collect no light, and hot ones, with more dark current")
+_stage("readout", Readout, field="readouts", many=True, reference="EMVA 1288 release 4.0, section 2",
+       summary="a photodiode's charge over an exposure read at a conversion gain into an ADC: shot, dark and read "
+       "noise, PRNU, DSNU, full well ([[sensor.readout]] tables, one per readout)")
+_stage("merge", Merge, field="merge", many=False,
+       summary="the readouts' estimates, each below a threshold of its saturation, as one linear signal of 16-24 bits")
+_stage("compander", Compander, field="compander", many=False,
+       summary="piecewise-linear companding of the merged signal through knee points to the output's bits; "
+       "decompanded by the image processor")
 HEAD = STAGES.names()[0]  # the stage whose fields the [sensor] table itself holds
 
 
