@@ -39,6 +39,13 @@ class Table:
         return out.getvalue()
 
 
+def defined(value) -> float | None:
+    """A number as a float, None where it is undefined (NaN: a ray that did not arrive, a curve that
+    never crosses), as the tables hold it."""
+    value = float(value)
+    return None if math.isnan(value) else value
+
+
 def _cell(value: Any) -> Any:
     """A number at full precision (repr of a float), anything else as it is."""
     if isinstance(value, float):

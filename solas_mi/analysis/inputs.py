@@ -119,3 +119,10 @@ def pixel(pitch_um, fill_factor) -> tuple[float | None, float]:
         return None, 1.0
     pixel_mtf(np.zeros(1), pitch_um, fill_factor)
     return float(pitch_um), float(fill_factor)
+
+
+def choice(value, choices: tuple[str, ...], what: str) -> str:
+    """`value`, one of `choices`."""
+    if value not in choices:
+        raise SolasError(f"{what} {value!r} must be one of {', '.join(choices)}")
+    return value

@@ -10,7 +10,7 @@ import numpy as np
 from ..metrics.mtf import mtf50, pixel_mtf
 from . import figures, inputs
 from . import options as O
-from .base import Result, Table
+from .base import Result, Table, defined
 from .mtf import CONVENTIONS, DIRECTIONS, lens_otf
 
 MTF50_SAMPLES = 401  # frequencies from 0 to the cut-off where MTF50 is looked for
@@ -85,9 +85,9 @@ class MTF50Field(Result):
             columns += ["tangential_cy_px", "sagittal_cy_px"]
         rows = []
         for f, values in zip(self.fields_deg, self.mtf50_cy_mm):
-            row = [f, *(_defined(v) for v in values)]
+            row = [f, *(defined(v) for v in values)]
             if self.pixel_pitch_um is not None:
-                row += [_defined(v * self.pixel_pitch_um * 1e-3) for v in values]
+                row += [defined(v * self.pixel_pitch_um * 1e-3) for v in values]
             rows.append(tuple(row))
         return Table(tuple(columns), tuple(rows))
 
@@ -101,10 +101,6 @@ class MTF50Field(Result):
         ax.grid(alpha=0.3)
         figures.legend(ax)
         return fig
-
-
-def _defined(value: float) -> float | None:
-    return None if np.isnan(value) else float(value)
 
 
 def mtf50_field(lens, field_samples: int = O.FIELD_SAMPLES, wavelengths_nm=None, weights=None,
