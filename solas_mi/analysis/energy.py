@@ -17,24 +17,36 @@ from . import options as O
 from .base import Result, Table
 
 RADII = 201  # radii from 0 to the largest
-PITCH_FRACTION = 0.25  # PSF pitch: this fraction of λN
-START_SIZE = 128  # PSF window before it grows
+PITCH_FRACTION = 0.1  # PSF pitch: this fraction of λN
+START_SIZE = 256  # PSF window before it grows
 GEOMETRIC_RAYS = 256
+NEAR, SUB = 24, 8  # pixels within NEAR pitches of the centre split into SUB × SUB points
 
 
 def cumulative(distance: np.ndarray, weight: np.ndarray, radii: np.ndarray, spread: float = 0.0) -> np.ndarray:
-    """The weight within each of `radii` (by `distance`: Euclidean for circles, Chebyshev for squares).
-    `spread` > 0: each weight is spread evenly over ±spread/2 about its distance (a pixel of that pitch
-    is not a point: without it the curve of a sampled PSF climbs in steps)."""
+    """The weight within each of `radii` (by `distance`: Euclidean for circles, Chebyshev for squares):
+    of points (`spread` 0), or of weights each spread evenly over ±spread/2 about its distance."""
     if spread <= 0:
         order = np.argsort(distance)
-        return np.interp(radii, distance[order], np.cumsum(weight[order]), left=0.0)
+        total = np.concatenate([[0.0], np.cumsum(weight[order])])
+        return total[np.searchsorted(distance[order], radii, side="right")]
     step = spread / 8.0
-    index = np.floor((distance + spread / 2.0) / step).astype(np.int64)
-    binned = np.bincount(index, weights=weight, minlength=int(radii[-1] / step) + 10)
-    spread_out = np.convolve(binned, np.ones(8) / 8.0)  # each bin's weight over the 8 bins above its start
-    edges = np.arange(1, len(spread_out) + 1) * step - spread / 2.0
-    return np.interp(radii, edges, np.cumsum(spread_out), left=0.0)
+    first = np.floor((distance - spread / 2.0) / step).astype(np.int64)  # the first bin each weight covers
+    low = min(int(first.min()), 0)
+    binned = np.convolve(np.bincount(first - low, weights=weight), np.ones(8) / 8.0)
+    upper = (np.arange(len(binned)) + low + 1) * step  # each bin's upper edge
+    return np.interp(radii, upper, np.cumsum(binned), left=0.0)
+
+
+def split(x: np.ndarray, y: np.ndarray, weight: np.ndarray, pitch: float):
+    """A PSF's pixel centres (x, y) and weights, as two sets: the pixels within NEAR pitches of the origin
+    as SUB × SUB points each, the others whole (a pixel is not a point: near the centre its extent
+    matters); each set with the spread of its points (`cumulative`)."""
+    near = np.hypot(x, y) < NEAR * pitch
+    offsets = ((np.arange(SUB) + 0.5) / SUB - 0.5) * pitch
+    ox, oy = (a.ravel() for a in np.meshgrid(offsets, offsets))
+    fine = ((x[near][:, None] + ox).ravel(), (y[near][:, None] + oy).ravel(), np.repeat(weight[near] / SUB ** 2, SUB * SUB))
+    return [(fine, pitch / SUB), ((x[~near], y[~near], weight[~near]), pitch)]
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -72,24 +84,30 @@ class Energy(Result):
         return fig
 
 
-def _diffraction(lens, field: float, wl: float, samples: int, pitch: float, reference: str):
-    """(distances (circle, square) in µm, weights) of the PSF's pixels, its pitch and its warnings."""
+def _diffraction(lens, field: float, wl: float, samples: int, pitch: float, reference: str, radii: np.ndarray):
+    """Encircled and ensquared energy (2, R) at `radii` of the diffraction PSF (pixels: `split`), and
+    its warnings."""
     p = psf(lens, (0.0, field), wl, pitch_um=pitch, size=START_SIZE, pupil_samples=samples, normalization="none",
             auto_window=True)
     weight = (p.data * pitch ** 2).ravel() / p.meta["transmission"]
-    x, y = np.meshgrid(p.x_um, p.y_um)
+    x, y = (a.ravel() for a in np.meshgrid(p.x_um, p.y_um))
     if reference == "centroid":
-        x, y = x - np.dot(weight, x.ravel()) / weight.sum(), y - np.dot(weight, y.ravel()) / weight.sum()
-    return (np.hypot(x, y).ravel(), np.maximum(abs(x), abs(y)).ravel()), weight, list(p.meta["warnings"])
+        x, y = x - np.dot(weight, x) / weight.sum(), y - np.dot(weight, y) / weight.sum()
+    parts = split(x, y, weight, pitch)
+    return np.array([sum(cumulative(measure(px, py), w, radii, spread) for (px, py, w), spread in parts)
+                     for measure in (np.hypot, lambda a, b: np.maximum(abs(a), abs(b)))]), list(p.meta["warnings"])
 
 
-def _geometric(lens, field: float, wl: float, reference: str):
-    """(distances (circle, square) in µm, weights) of rays on an entrance grid."""
+def _geometric(lens, field: float, wl: float, reference: str, radii: np.ndarray | None = None):
+    """Encircled and ensquared energy (2, R) at `radii` of rays on an entrance grid; without `radii`,
+    the radius holding 99.5 % of them."""
     fdeg = np.array([[0.0, field]])
     x, y, power = entrance_grid_hits(lens, fdeg, np.array([wl]), GEOMETRIC_RAYS, chief_rays(lens, fdeg, np.array([wl])))[0]
     if reference == "centroid":
         x, y = x - np.dot(power, x) / power.sum(), y - np.dot(power, y) / power.sum()
-    return (np.hypot(x, y), np.maximum(abs(x), abs(y))), power / power.sum()
+    if radii is None:
+        return float(np.percentile(np.hypot(x, y), 99.5))
+    return np.array([cumulative(d, power / power.sum(), radii) for d in (np.hypot(x, y), np.maximum(abs(x), abs(y)))])
 
 
 def encircled_energy(lens, fields_deg=None, wavelength_nm=None, pupil_samples: int = O.PUPIL_SAMPLES,
@@ -101,16 +119,14 @@ def encircled_energy(lens, fields_deg=None, wavelength_nm=None, pupil_samples: i
     samples = inputs.count(pupil_samples, "pupil samples", 16)
     inputs.choice(energy_reference, O.ENERGY_REFERENCES, "energy reference")
     pitch = PITCH_FRACTION * wl * 1e-3 * paraxial(lens, wl).working_f_number
-    spreads, warnings = [], []
-    for f in fields:
-        distances, weight, w = _diffraction(lens, f, wl, samples, pitch, energy_reference)
-        spreads.append(((distances, weight), _geometric(lens, f, wl, energy_reference)))
+    largest = max(max(_geometric(lens, f, wl, energy_reference) for f in fields) * 1.2, 5 * pitch / PITCH_FRACTION)
+    radii = np.linspace(0.0, largest, RADII)  # to 1.2 × the widest spot's 99.5 % radius, at least 5 λN
+    curves, warnings = np.empty((len(fields), 2, 2, RADII)), []
+    for i, f in enumerate(fields):
+        curves[i, :, 0], w = _diffraction(lens, f, wl, samples, pitch, energy_reference, radii)
+        curves[i, :, 1] = _geometric(lens, f, wl, energy_reference, radii)
         warnings += w
-    largest = max(np.percentile(d[0], 99.5) for pair in spreads for d, _ in pair[1:]) * 1.2
-    largest = max(largest, 5 * pitch / PITCH_FRACTION)  # at least 5 λN
-    radii = np.linspace(0.0, largest, RADII)
-    encircled = np.array([[cumulative(d[0], w, radii, s) for (d, w), s in zip(pair, (pitch, 0.0))] for pair in spreads])
-    ensquared = np.array([[cumulative(d[1], w, radii, s) for (d, w), s in zip(pair, (pitch, 0.0))] for pair in spreads])
+    encircled, ensquared = curves[:, 0], curves[:, 1]
     return Energy(name="encircled-energy", lens=lens.name, lens_hash=lens.hash, warnings=tuple(dict.fromkeys(warnings)),
                   conventions=("fields on +y (degrees); radius (circles) or half width (squares, sides along x and y) "
                                f"about the {energy_reference}, um", "fraction of the light reaching the image (the "

@@ -2,9 +2,11 @@
 
 Two orders and normalisations:
 
-- "fringe" (University of Arizona, as Zemax's Fringe and optiland's ZernikeFringe): terms grouped by
-  (n + m)/2, within a group by falling m, cos before sin; not normalised (each is 1 at the rim at
-  θ = 0 for cos terms): Z1 = 1, Z2 = ρ cos θ, Z3 = ρ sin θ, Z4 = 2ρ² − 1, …, Z9 = 6ρ⁴ − 6ρ² + 1;
+- "fringe" (University of Arizona): terms grouped by (n + |m|)/2, within a group by falling |m|, cos
+  before sin, j = (1 + (n + |m|)/2)² − 2|m| + (1 − sign m)/2; not normalised (each is 1 at the rim at
+  θ = 0 for cos terms): Z1 = 1, Z2 = ρ cos θ, Z3 = ρ sin θ, Z4 = 2ρ² − 1, …, Z9 = 6ρ⁴ − 6ρ² + 1, …,
+  Z36 = ρ¹⁰ spherical; Z1–Z36 as Zemax's Fringe and optiland's ZernikeFringe (Z37 is (6, 6) here and in
+  optiland, 12th-order spherical in Zemax);
 - "noll" (R. J. Noll, JOSA 66 (1976) 207; Zemax's Standard): ordered by n, then |m|, even j cos and odd
   j sin, each normalised to unit RMS over the disc: √(n+1) for m = 0, √(2(n+1)) otherwise.
 """
