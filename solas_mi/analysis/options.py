@@ -66,8 +66,9 @@ class Option:
         """Add this option to an argparse parser; its value stays None unless given (then the Python
         function's default applies, which the help states)."""
         default_text = "" if self.default is None else f" (default: {self.default})"
-        parser.add_argument(self.flag, dest=self.keyword, metavar=self.keyword.upper().split("_")[0],
-                            choices=self.choices or None, help=self.help + default_text)
+        metavar = None if self.choices else self.flag.lstrip("-").upper().replace("-", "_")
+        parser.add_argument(self.flag, dest=self.keyword, metavar=metavar, choices=self.choices or None,
+                            help=self.help + default_text)
 
     def value(self, args) -> Any:
         """The value of this option in parsed `args`, read; None when not given."""

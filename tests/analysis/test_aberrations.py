@@ -18,7 +18,7 @@ from solas_mi.analysis.zernike import fringe_index, noll_index, polynomial
 from solas_mi.errors import SolasError
 from solas_mi.optics.lens import Lens
 
-from .conftest import WL, ideal_lens
+from ideal_lenses import WL, ideal_lens
 
 
 def defocus_wavefront(h: np.ndarray, f: float, defocus: float) -> np.ndarray:

@@ -14,7 +14,7 @@ from solas_mi.errors import SolasError
 from solas_mi.metrics.mtf import pixel_mtf
 from solas_mi.psf import psf
 
-from .conftest import WL, ideal_lens, numerical_aperture
+from ideal_lenses import WL, ideal_lens, numerical_aperture
 
 
 def diffraction_limited(nu, cutoff):
