@@ -20,7 +20,9 @@ FOCUS_STEPS = 21  # image-plane positions of a through-focus MTF
 FAN_SAMPLES = 101  # pupil positions across a ray or OPD fan
 SPOT_RINGS = 12  # rings of the hexapolar pupil pattern of a spot diagram
 ZERNIKE_TERMS = 36  # Fringe Z1-Z36 is one set everywhere; Z37 differs (optiland: (6, 6), Zemax: rho^12)
-ZERNIKE_KINDS = ("fringe", "noll")
+ZERNIKE_KINDS = {"fringe": "University of Arizona order, not normalised: 1 at the rim",
+                 "noll": "Noll's order, each of unit RMS over the pupil"}
+ZERNIKE = "fringe"  # the default kind
 ENERGY_REFERENCES = ("centroid", "chief")
 FIELD_FRACTIONS = (0.0, 0.5, 0.7, 1.0)  # of the half field: the default fields of the analyses at chosen fields
 FREQUENCY_FRACTIONS = (0.125, 0.25, 0.5)  # of the diffraction cut-off: the default frequencies against field
@@ -117,9 +119,8 @@ OPTIONS = _options(
            "the pixels' sensitive fraction of their area, a centred square (with --pixel-pitch-um)"),
     Option("fan_samples", "--fan-samples", _int("--fan-samples"), FAN_SAMPLES, "pupil positions across each fan"),
     Option("rings", "--rings", _int("--rings"), SPOT_RINGS, "rings of the hexapolar pupil pattern"),
-    Option("zernike", "--zernike", str, ZERNIKE_KINDS[0],
-           "Zernike polynomials: fringe (University of Arizona order, peak 1 at the rim) or noll (Noll's order, "
-           "normalised to unit RMS over the pupil)", ZERNIKE_KINDS),
+    Option("zernike", "--zernike", str, ZERNIKE,
+           "Zernike polynomials: " + "; ".join(f"{k}: {v}" for k, v in ZERNIKE_KINDS.items()), tuple(ZERNIKE_KINDS)),
     Option("zernike_terms", "--zernike-terms", _int("--zernike-terms"), ZERNIKE_TERMS, "Zernike terms fitted"),
     Option("energy_reference", "--energy-reference", str, ENERGY_REFERENCES[0],
            "centre of the circles and squares: the PSF's centroid or the chief ray", ENERGY_REFERENCES),

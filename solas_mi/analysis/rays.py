@@ -30,9 +30,11 @@ class PupilRays:
     chief: ChiefRays
 
 
-def pupil_rays(lens, fields_deg, wavelengths_nm, px: np.ndarray, py: np.ndarray) -> PupilRays:
+def pupil_rays(lens, fields_deg, wavelengths_nm, px: np.ndarray, py: np.ndarray, sphere_radius_mm=None) -> PupilRays:
     """Rays at normalised pupil points `px`, `py` ((n, m) or (m,), shared) for the y fields `fields_deg`
-    (n,) at `wavelengths_nm` (n,)."""
+    (n,) at `wavelengths_nm` (n,). `sphere_radius_mm` (n,): another reference sphere's radius than the
+    chief ray's distance from its exit-pupil crossing (`optics.pupil.ChiefRays.sphere_radius`), to compare
+    with a tool that takes the axial exit-pupil point (optiland)."""
     fields = np.stack([np.zeros(len(fields_deg)), np.asarray(fields_deg, dtype=np.float64)], axis=-1)
     wl = np.asarray(wavelengths_nm, dtype=np.float64)
     n = len(fields)
@@ -43,9 +45,11 @@ def pupil_rays(lens, fields_deg, wavelengths_nm, px: np.ndarray, py: np.ndarray)
     _, _, tr, converged = stop_aim(b, chief, T.F(px.ravel() * r_stop), T.F(py.ravel() * r_stop))
     x, y, _ = T.to_plane(tr, lens.image_z)
     cx, cy = b.per_ray(chief.image_xy[:, 0]), b.per_ray(chief.image_xy[:, 1])
-    _, _, _, opl, hit = T.to_sphere(tr, cx, cy, lens.image_z, b.per_ray(chief.sphere_radius))
+    radius = chief.sphere_radius if sphere_radius_mm is None else np.asarray(sphere_radius_mm, dtype=np.float64)
+    _, _, _, opl, hit = T.to_sphere(tr, cx, cy, lens.image_z, b.per_ray(radius))
     r = tr.rays
     arrays = T.to_numpy(x, y, r.dx, r.dy, r.dz, opl, converged & tr.ok & (tr.clipped_by == 0) & hit)
     x, y, dx, dy, dz, opl, ok = (a.reshape(px.shape) for a in arrays)
-    waves = (chief.opl[:, None] - opl) / (wl[:, None] * 1e-6)
+    chief_opl = chief.opl + chief.n_image * (chief.sphere_radius - radius)  # along the chief ray, through the centre
+    waves = (chief_opl[:, None] - opl) / (wl[:, None] * 1e-6)
     return PupilRays(x, y, (dx, dy, dz), np.where(ok, waves, np.nan), ok.astype(bool), chief)

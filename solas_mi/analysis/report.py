@@ -36,7 +36,7 @@ def check_options(lens, options: dict) -> None:
               "frequency_cy_mm": lambda v: inputs.frequencies(lens, [v], wl),
               "max_frequency_cy_mm": lambda v: inputs.max_frequency(lens, v, wl),
               "focus_range_um": lambda v: inputs.focus_range(lens, v),
-              "zernike": lambda v: inputs.choice(v, O.ZERNIKE_KINDS, "Zernike kind"),
+              "zernike": lambda v: inputs.choice(v, tuple(O.ZERNIKE_KINDS), "Zernike kind"),
               "energy_reference": lambda v: inputs.choice(v, O.ENERGY_REFERENCES, "energy reference")}
     for key, value in given.items():
         checks.get(key, lambda v: None)(value)

@@ -13,6 +13,11 @@ from .base import Result, Table
 from .rays import pupil_rays
 from .zernike import fit, indices
 
+CONVENTIONS = ("fields on +y (degrees); normalised pupil coordinates: points of the stop (real ray aiming), 1 at its "
+               "rim; rows of the map: Py, columns: Px",
+               "W = OPL(chief) - OPL(ray) to the reference sphere about the chief ray's image point through the chief "
+               "ray's crossing of the paraxial exit-pupil plane, waves")
+
 
 @dataclass(frozen=True, kw_only=True)
 class Wavefront(Result):
@@ -67,7 +72,7 @@ class Wavefront(Result):
 
 
 def wavefront(lens, fields_deg=None, wavelength_nm=None, pupil_samples: int = O.PUPIL_SAMPLES,
-              zernike: str = O.ZERNIKE_KINDS[0], zernike_terms: int = O.ZERNIKE_TERMS) -> Wavefront:
+              zernike: str = O.ZERNIKE, zernike_terms: int = O.ZERNIKE_TERMS) -> Wavefront:
     """W over the pupil and its `zernike_terms` Zernike terms of kind `zernike` ("fringe" or "noll") at
     `fields_deg` and `wavelength_nm` (default the primary)."""
     fields = inputs.fields(lens, fields_deg)
@@ -80,16 +85,18 @@ def wavefront(lens, fields_deg=None, wavelength_nm=None, pupil_samples: int = O.
     rays = pupil_rays(lens, fields, np.full(len(fields), wl), px[inside], py[inside])
     maps = np.full((len(fields), n, n), np.nan)
     coefficients = np.empty((len(fields), len(terms)))
+    warnings = []
     for i in range(len(fields)):
         ok = rays.ok[i]
         maps[i][inside] = rays.wavefront_waves[i]
         coefficients[i] = fit(zernike, len(terms), px[inside][ok], py[inside][ok], rays.wavefront_waves[i][ok])
-    conventions = ("fields on +y (degrees); normalised pupil coordinates: points of the stop (real ray aiming), 1 at "
-                   "its rim; rows of the map: Py, columns: Px",
-                   "W = OPL(chief) - OPL(ray) to the reference sphere about the chief ray's image point, waves",
-                   f"Zernike terms: {zernike} ({'University of Arizona order, not normalised' if zernike == 'fringe' else 'Noll order, unit RMS'}), "
-                   "theta from +x toward +y, least-squares fit over the rays that arrive")
+        if not ok.all():
+            warnings.append(f"the pupil at {fields[i]:g} deg is vignetted ({100 * (1 - ok.mean()):.3g} % of the unit "
+                            "disc blocked): Zernike terms fitted over a cut pupil depend on where it is sampled")
+    conventions = (*CONVENTIONS, f"Zernike terms: {zernike} ({O.ZERNIKE_KINDS[zernike]}), theta from +x toward +y, least-squares "
+                   "fit over the rays that arrive")
     return Wavefront(name="wavefront", lens=lens.name, lens_hash=lens.hash, conventions=conventions,
+                     warnings=tuple(warnings),
                      inputs={"fields_deg": fields, "wavelength_nm": wl, "pupil_samples": n, "zernike": zernike,
                              "zernike_terms": len(terms)},
                      fields_deg=fields, wavelength_nm=wl, pupil=t, maps=maps, zernike=zernike,
