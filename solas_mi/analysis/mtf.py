@@ -77,14 +77,16 @@ def lens_otf(lens, fields, wavelengths, weights, freq, pupil_samples: int, aberr
 
 
 def _sampling_warnings(pf, fdeg, samples) -> list[str]:
-    """A warning where the pupil grid under-resolves the wavefront (a phase step above π/2 per cell)."""
+    """A warning where the pupil grid may under-resolve the wavefront (a phase step above π/2 per cell; the
+    MTF often converges sooner: the Double Gauss at 22°, 8 rad per cell at 256 samples, changed by under
+    1e-3 up to 1344)."""
     steps, _, need = sampling_need(pf, 1.0, 1)
     if not (steps > np.pi / 2).any():
         return []
     i = int(np.argmax(steps))
-    return [f"pupil samples {samples} under-resolve the wavefront at field {fdeg[i, 1]:g} deg, "
-            f"{pf.wavelength_nm[i]:g} nm (phase steps up to {steps[i]:.1f} rad per cell): the diffraction MTF there "
-            f"is unreliable; use --pupil-samples {int(max(need.max(), 2 * samples))} or compare the geometric MTF"]
+    return [f"pupil samples {samples} may under-resolve the wavefront at field {fdeg[i, 1]:g} deg, "
+            f"{pf.wavelength_nm[i]:g} nm (phase steps up to {steps[i]:.1f} rad per cell): check the diffraction MTF "
+            f"there with --pupil-samples {int(max(need.max(), 2 * samples))}"]
 
 
 def geometric_otf(lens, fields, wavelengths, weights, freq, rays: int) -> np.ndarray:

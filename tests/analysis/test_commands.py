@@ -97,3 +97,13 @@ def test_the_report_shows_every_analysis(tmp_path):
         assert (out / f"{name}.png").is_file() and f"src='{name}.png'" in index
         strict_loads((out / f"{name}.json").read_text())
     assert "not computed" not in index
+
+
+def test_the_guide_lists_every_analysis_as_the_registry_has_it():
+    """docs/guide/analyses.md's table: one row per registered analysis, its command and summary."""
+    import re
+    from pathlib import Path
+
+    page = (Path(__file__).resolve().parents[2] / "docs" / "guide" / "analyses.md").read_text()
+    rows = dict(re.findall(r"^\| `solas-mi lens ([\w-]+)` \| (.+?) \|$", page, re.M))
+    assert rows == {name: a.summary for name, a in ANALYSES.items()}
