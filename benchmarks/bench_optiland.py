@@ -91,7 +91,7 @@ def ours(lens, spec: dict) -> dict:
     c = field_curvature(within, field_samples=CURVE_FIELDS, wavelengths_nm=[wl])
     return {"chief": chief, "fan_y": y, "fan_x": x, "opd_y": rays.wavefront_waves[:, :n],
             "opd_x": rays.wavefront_waves[:, n:], "distortion": d, "curvature": c,
-            "otf": lambda freq: np.abs(lens_otf(lens, fields, (wl,), (1.0,), freq, 256)[0])}
+            "otf": lambda freq: np.abs(lens_otf(lens, fields, (wl,), (1.0,), freq, None)[0])}
 
 
 def axial_sphere(lens, spec: dict) -> np.ndarray:

@@ -110,13 +110,13 @@ def _geometric(lens, field: float, wl: float, reference: str, radii: np.ndarray 
     return np.array([cumulative(d, power / power.sum(), radii) for d in (np.hypot(x, y), np.maximum(abs(x), abs(y)))])
 
 
-def encircled_energy(lens, fields_deg=None, wavelength_nm=None, pupil_samples: int = O.PUPIL_SAMPLES,
+def encircled_energy(lens, fields_deg=None, wavelength_nm=None, pupil_samples: int | None = None,
                      energy_reference: str = O.ENERGY_REFERENCES[0]) -> Energy:
     """Encircled and ensquared energy against radius at `fields_deg`, `wavelength_nm` (default the
     primary), about the PSF's centroid or the chief ray (`energy_reference`)."""
     fields = inputs.fields(lens, fields_deg)
     wl = inputs.wavelength(lens, wavelength_nm)
-    samples = inputs.count(pupil_samples, "pupil samples", 16)
+    samples = inputs.pupil_samples(pupil_samples) or O.PUPIL_SAMPLES
     inputs.choice(energy_reference, O.ENERGY_REFERENCES, "energy reference")
     pitch = PITCH_FRACTION * wl * 1e-3 * paraxial(lens, wl).working_f_number
     largest = max(max(_geometric(lens, f, wl, energy_reference) for f in fields) * 1.2, 5 * pitch / PITCH_FRACTION)

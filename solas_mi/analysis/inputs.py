@@ -57,6 +57,12 @@ def count(value, what: str, least: int, most: int = 4096) -> int:
     return int(value)
 
 
+def pupil_samples(value) -> int | None:
+    """Pupil samples a side, 16 to options.MOST_PUPIL_SAMPLES; None (the default) stays None: the MTF then
+    takes options.PUPIL_SAMPLES, more where the wavefront needs them."""
+    return None if value is None else count(value, "pupil samples", 16, O.MOST_PUPIL_SAMPLES)
+
+
 def wavelengths(lens, wavelengths_nm, weights=None) -> tuple[tuple[float, ...], tuple[float, ...]]:
     """Wavelengths (nm; default the lens file's) and their weights summing to 1 (default equal)."""
     check_lens(lens)

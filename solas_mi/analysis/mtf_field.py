@@ -20,7 +20,7 @@ def _common(lens, field_samples, wavelengths_nm, weights, pupil_samples, pixel_p
     """The checked inputs every MTF-against-field analysis shares."""
     fields = inputs.field_range(lens, field_samples)
     wl, w8 = inputs.wavelengths(lens, wavelengths_nm, weights)
-    samples = inputs.count(pupil_samples, "pupil samples", 16)
+    samples = inputs.pupil_samples(pupil_samples)
     pitch, fill = inputs.pixel(pixel_pitch_um, fill_factor)
     return fields, wl, w8, samples, pitch, fill
 
@@ -54,7 +54,7 @@ class MTFField(Result):
 
 
 def mtf_field(lens, frequencies_cy_mm=None, field_samples: int = O.FIELD_SAMPLES, wavelengths_nm=None, weights=None,
-              pupil_samples: int = O.PUPIL_SAMPLES, pixel_pitch_um=None, fill_factor: float = 1.0) -> MTFField:
+              pupil_samples: int | None = None, pixel_pitch_um=None, fill_factor: float = 1.0) -> MTFField:
     """Diffraction MTF at `frequencies_cy_mm` against field (`field_samples` from 0 to the half field),
     tangential and sagittal."""
     fields, wl, w8, samples, pitch, fill = _common(lens, field_samples, wavelengths_nm, weights, pupil_samples,
@@ -104,7 +104,7 @@ class MTF50Field(Result):
 
 
 def mtf50_field(lens, field_samples: int = O.FIELD_SAMPLES, wavelengths_nm=None, weights=None,
-                pupil_samples: int = O.PUPIL_SAMPLES, pixel_pitch_um=None, fill_factor: float = 1.0) -> MTF50Field:
+                pupil_samples: int | None = None, pixel_pitch_um=None, fill_factor: float = 1.0) -> MTF50Field:
     """MTF50 (cycles/mm; with `pixel_pitch_um` also cycles/pixel) of the diffraction MTF against field,
     tangential and sagittal."""
     fields, wl, w8, samples, pitch, fill = _common(lens, field_samples, wavelengths_nm, weights, pupil_samples,

@@ -13,6 +13,7 @@ from ..options import floats
 
 # Defaults the Python functions and the commands share
 PUPIL_SAMPLES = 256  # N×N pupil grid of the diffraction MTF, the wavefront and the encircled energy
+MOST_PUPIL_SAMPLES = 2048  # the MTF's pupil grid where the wavefront needs more than PUPIL_SAMPLES (default)
 GEOMETRIC_RAYS = 128  # rays × rays over the entrance pupil of the geometric MTF
 FIELD_SAMPLES = 11  # field angles from 0 to the half field of the analyses against field
 FREQUENCY_SAMPLES = 101  # frequencies from 0 to the largest of an MTF curve
@@ -109,8 +110,9 @@ OPTIONS = _options(
            f"the image plane moves from -R to +R um about its place (default: {FOCUS_DEPTHS:g} lambda N^2, N the "
            "working f-number, lambda the primary wavelength)"),
     Option("focus_steps", "--focus-steps", _int("--focus-steps"), FOCUS_STEPS, "image-plane positions across the range"),
-    Option("pupil_samples", "--pupil-samples", _int("--pupil-samples"), PUPIL_SAMPLES,
-           "N x N samples of the pupil function"),
+    Option("pupil_samples", "--pupil-samples", _int("--pupil-samples"), None,
+           f"N x N samples of the pupil function (default: {PUPIL_SAMPLES}; for the MTF, more where a field's wavefront "
+           f"needs them, up to {MOST_PUPIL_SAMPLES})"),
     Option("rays", "--rays", _int("--rays"), GEOMETRIC_RAYS,
            "rays x rays over the entrance pupil of the geometric MTF"),
     Option("pixel_pitch_um", "--pixel-pitch-um", _float("--pixel-pitch-um"), None,

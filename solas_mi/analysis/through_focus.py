@@ -73,7 +73,7 @@ def _peak(z: np.ndarray, m: np.ndarray) -> float:
 
 
 def through_focus(lens, frequency_cy_mm=None, fields_deg=None, wavelengths_nm=None, weights=None,
-                  focus_range_um=None, focus_steps: int = O.FOCUS_STEPS, pupil_samples: int = O.PUPIL_SAMPLES,
+                  focus_range_um=None, focus_steps: int = O.FOCUS_STEPS, pupil_samples: int | None = None,
                   pixel_pitch_um=None, fill_factor: float = 1.0) -> ThroughFocus:
     """Diffraction MTF at `frequency_cy_mm` (default 1/4 of the cut-off) at `focus_steps` image-plane
     shifts across ±`focus_range_um` (default 8 λN²), tangential and sagittal, at `fields_deg`."""
@@ -85,7 +85,7 @@ def through_focus(lens, frequency_cy_mm=None, fields_deg=None, wavelengths_nm=No
         freq = inputs.frequencies(lens, [frequency_cy_mm], wl)[0]
     half = inputs.focus_range(lens, focus_range_um)
     steps = inputs.count(focus_steps, "focus steps", 3)
-    samples = inputs.count(pupil_samples, "pupil samples", 16)
+    samples = inputs.pupil_samples(pupil_samples)
     pitch, fill = inputs.pixel(pixel_pitch_um, fill_factor)
     shifts = np.linspace(-half, half, steps)
     lenses = [refocused(lens, z * 1e-3) for z in shifts]  # every position checked before any work

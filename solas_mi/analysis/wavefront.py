@@ -71,13 +71,13 @@ class Wavefront(Result):
         return fig
 
 
-def wavefront(lens, fields_deg=None, wavelength_nm=None, pupil_samples: int = O.PUPIL_SAMPLES,
+def wavefront(lens, fields_deg=None, wavelength_nm=None, pupil_samples: int | None = None,
               zernike: str = O.ZERNIKE, zernike_terms: int = O.ZERNIKE_TERMS) -> Wavefront:
     """W over the pupil and its `zernike_terms` Zernike terms of kind `zernike` ("fringe" or "noll") at
     `fields_deg` and `wavelength_nm` (default the primary)."""
     fields = inputs.fields(lens, fields_deg)
     wl = inputs.wavelength(lens, wavelength_nm)
-    n = inputs.count(pupil_samples, "pupil samples", 16)
+    n = inputs.pupil_samples(pupil_samples) or O.PUPIL_SAMPLES
     terms = indices(zernike, zernike_terms)
     t = np.linspace(-1.0, 1.0, n)
     px, py = np.meshgrid(t, t)

@@ -163,3 +163,25 @@ def test_mtf50_of_an_ideal_lens_is_where_the_closed_form_is_one_half():
 def test_bad_inputs_are_refused_by_name(cooke, call, words):
     with pytest.raises(SolasError, match=words.replace(".", r"\.").replace("(", r"\(")):
         call(cooke)
+
+
+@pytest.mark.slow
+def test_the_default_pupil_grid_grows_where_the_wavefront_needs_it():
+    """An ideal f/8 lens 12 mm out of focus (about 40 waves of defocus at the rim): 256 samples a side
+    leave phase steps of 4 rad a cell, which the default grid (None) refines to π/4; its MTF then follows
+    Hopkins' integral, and a fixed 256 says it may under-resolve."""
+    f, n, defocus = 100.0, 8.0, 12.0
+    r, big_r = f / n / 2.0, f + defocus
+    u = np.array([-r, f]) / math.hypot(r, f)
+    d = np.array([r, -big_r])
+    t = -(d @ u) - math.sqrt((d @ u) ** 2 - r * r)
+    q = np.array([r, 0.0]) + t * u
+    rim_waves = -(math.hypot(q[0], q[1] - f) - f) / (WL * 1e-6)
+    pupil_radius = q[0] / big_r
+    nu = np.linspace(0.0, 0.3 * 2 * pupil_radius / (WL * 1e-6), 25)
+    lens = ideal_lens(f, n, defocus)
+    refined, warnings = lens_otf(lens, (0.0,), (WL,), (1.0,), nu, None)
+    expected = np.abs(hopkins_defocus(nu * WL * 1e-6 / pupil_radius, rim_waves))
+    assert abs(rim_waves) > 35 and not warnings
+    assert np.abs(np.abs(refined[0, 0]) - expected).max() < 2e-3
+    assert "may under-resolve" in lens_otf(lens, (0.0,), (WL,), (1.0,), nu, 256)[1][0]
