@@ -41,7 +41,7 @@ class Fans(Result):
         return Table(("field_deg", "wavelength_nm", "pupil", f"tangential_{column}", f"sagittal_{column}"), rows)
 
     def plot(self):
-        fig, axes = figures.figure(self, 2 * len(self.fields_deg), size=(4.0, 2.8), sharey=True)
+        fig, axes = figures.figure(self, 2 * len(self.fields_deg), size=(4.0, 2.8), sharey="row")
         label = KINDS[self.name][1]
         for i, f in enumerate(self.fields_deg):
             for ax, data, direction, axis in ((axes[2 * i], self.tangential, "tangential", "Py"),
