@@ -36,7 +36,8 @@ HUYGENS_SIZE = 480  # the most pixels a side of its window
 GEOMETRIC_BAND = 0.03  # of the cut-off: where many waves of aberration leave diffraction little to change
 TOLERANCES = {  # the issue's: MTF 0.01, focus 1 um, distortion 1e-4 %, Zernike 1e-3 waves; rays 1 nm
     "chief ray height (mm)": 1e-6, "ray fan (um)": 1e-3, "field curvature (mm)": 1e-3, "distortion f-tan (%)": 1e-4,
-    "distortion f-theta (%)": 1e-4, "OPD fan (waves)": 1e-3, "Zernike fringe 1-36 (waves)": 1e-3, "MTF": 0.01,
+    "distortion f-theta (%)": 1e-4, "lateral colour (um)": 1e-3, "OPD fan (waves)": 1e-3,
+    "Zernike fringe 1-36 (waves)": 1e-3, "MTF": 0.01,
     "Zernike: sphere convention (waves)": np.inf,  # ours about our own sphere: what the convention alone makes
 }
 
@@ -57,6 +58,7 @@ def request(lens) -> dict:
                           "semi_diameter": s.semi_diameter, "stop": s.stop} for i, s in enumerate(lens.surfaces)],
             "epd_mm": paraxial(lens, wl).entrance_pupil_diameter_mm, "wavelength_nm": wl, "max_field_deg": top,
             "fields_deg": [f * top for f in FIELD_FRACTIONS], "curve_fields_deg": np.linspace(0, top, CURVE_FIELDS).tolist(),
+            "colour": [{"wavelength_nm": w, "index_after": lens.indices(w)[1:].tolist()} for w in (*lens.wavelengths_nm, wl)],
             "fan_pupil": FAN.tolist(), "zernike_rings": 32, "opd_fan_rays": len(FAN), "mtf_rays": 256, "mtf_grid": 512}
 
 
@@ -72,6 +74,7 @@ def run_optiland(python: str, requests: dict) -> dict:
 
 def ours(lens, spec: dict) -> dict:
     """solas-mi's numbers for what `spec` asks (`request`)."""
+    from solas_mi.analysis.colour import lateral_colour
     from solas_mi.analysis.distortion import distortion
     from solas_mi.analysis.field_curvature import field_curvature
     from solas_mi.analysis.mtf import lens_otf
@@ -89,8 +92,9 @@ def ours(lens, spec: dict) -> dict:
     within = replace(lens, field_deg=spec["max_field_deg"])  # the fisheye's 90 deg: 89 (`largest_field`)
     d = distortion(within, field_samples=CURVE_FIELDS, wavelength_nm=wl)
     c = field_curvature(within, field_samples=CURVE_FIELDS, wavelengths_nm=[wl])
+    colour = lateral_colour(within, field_samples=CURVE_FIELDS, wavelengths_nm=lens.wavelengths_nm)
     return {"chief": chief, "fan_y": y, "fan_x": x, "opd_y": rays.wavefront_waves[:, :n],
-            "opd_x": rays.wavefront_waves[:, n:], "distortion": d, "curvature": c,
+            "opd_x": rays.wavefront_waves[:, n:], "distortion": d, "curvature": c, "colour": colour.values,
             "otf": lambda freq: np.abs(lens_otf(lens, fields, (wl,), (1.0,), freq, None)[0])}
 
 
@@ -147,6 +151,8 @@ def differences(lens, spec: dict, theirs: dict) -> dict[str, float | None]:
            "Zernike: sphere convention (waves)": gap(zernike_at(lens, spec, points, None), theirs["zernike"]),
            "distortion f-tan (%)": gap(mine["distortion"].f_tan_percent[1:], theirs["f-tan"][1:]),  # 0 on the axis
            "distortion f-theta (%)": gap(mine["distortion"].f_theta_percent[1:], theirs["f-theta"][1:]),
+           "lateral colour (um)": gap(mine["colour"], 1e3 * (np.array(theirs["colour_chief_y_mm"][:-1])
+                                                             - theirs["colour_chief_y_mm"][-1])),
            "field curvature (mm)": gap(np.concatenate([mine["curvature"].tangential_mm[0], mine["curvature"].sagittal_mm[0]]),
                                        np.concatenate([theirs["tangential_mm"], theirs["sagittal_mm"]]))}
     freq, ours_mtf, their_mtf = mtf_curves(lens, spec, mine["otf"], theirs)

@@ -106,6 +106,20 @@ def distortion_and_curvature(optic, spec: dict) -> dict:
     return out
 
 
+def lateral_colour(optic, spec: dict) -> dict:
+    """Chief-ray heights (mm) at the fields of `spec["curve_fields_deg"]` at each wavelength of
+    `spec["colour"]` (each its own optic: constant-index media at that wavelength)."""
+    heights = []
+    for colour in spec["colour"]:
+        surfaces = [{**s, "index_after": n} for s, n in zip(spec["surfaces"], colour["index_after"])]
+        other = build({**spec, "surfaces": surfaces, "wavelength_nm": colour["wavelength_nm"]})
+        hy = np.array(spec["curve_fields_deg"]) / spec["max_field_deg"]
+        rays = other.trace_generic(Hx=np.zeros_like(hy), Hy=hy, Px=np.zeros_like(hy), Py=np.zeros_like(hy),
+                                   wavelength=colour["wavelength_nm"] * 1e-3)
+        heights.append(np.where(np.asarray(rays.i) > 0, np.asarray(rays.y), np.nan).tolist())
+    return {"colour_chief_y_mm": heights}
+
+
 def wavefront(optic, spec: dict) -> dict:
     """Fringe Zernike terms 1-36 (waves) and OPD fans (waves) at the fields."""
     from optiland.wavefront import OPDFan, ZernikeOPD
@@ -149,7 +163,7 @@ def main(argv: list[str]) -> int:
     for name, spec in request["lenses"].items():
         optic = build(spec)
         entry = {}
-        for part in (chief_and_fans, distortion_and_curvature, wavefront, mtf):
+        for part in (chief_and_fans, distortion_and_curvature, lateral_colour, wavefront, mtf):
             try:
                 entry.update(part(optic, spec))
             except Exception as exc:  # one part failing on one lens is reported, the rest go on
