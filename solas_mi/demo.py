@@ -19,11 +19,12 @@ from .resources import resource_dir
 
 DEMO_SPP = 192  # 64 per colour line: ≈ 2.5 % noise; measured ≈ 2 min on two idle cores, far longer on busy ones
 # the camera step: the street scene framed along the street (the doublet's field is ±4 deg), small and
-# few spp, through an automotive sensor preset and the default processor
+# few spp, through an automotive sensor preset (its radiance read through the render's own f-number,
+# auto-exposed) and the default processor
 STREET_SET = ("width=480", "height=360", "fov=8", "target=0, 2, 140")
 STREET_SPP = 32
-STREET_SENSOR, STREET_EXPOSURE_MS = "ar0132at", "1"
-CAMERA_FILES = {"camera": "camera/street_render.exr|png (irradiance + depth, normal, instance layers), "
+STREET_SENSOR, STREET_EXPOSURE_MS = "ar0132at", "auto"
+CAMERA_FILES = {"camera": "camera/street_render.exr|png (irradiance + every label's layers), "
                           "camera/street_raw.exr|png (RAW, developed frame)",
                 "camera sheet": "camera/camera_sheet.png"}  # what `camera_frame` writes
 PHOTO = "images/rocket.png"  # under the shipped scenes
@@ -135,24 +136,26 @@ def camera_frame(out: Path) -> dict:
     default image processor (`solas-mi camera`), and a sheet of the frame beside its depth and instance
     layers."""
     from .imageio import read_exr
+    from .render.labels import LABELS
 
     d = out / "camera"
     render, raw = d / "street_render.exr", d / "street_raw.exr"
     sets = [a for value in STREET_SET for a in ("--set", value)]
     cli(["render", str(resource_dir("scenes") / "street" / "street.xml"), "--lens", "solas-doublet", *sets,
-         "--spp", str(STREET_SPP), "--labels", "depth,normal,instance", "-o", str(render)])
+         "--spp", str(STREET_SPP), "--labels", ",".join(LABELS), "-o", str(render)])
     cli(["camera", str(render), "--sensor-model", STREET_SENSOR, "--exposure-ms", STREET_EXPOSURE_MS,
          "--isp", "default", "-o", str(raw)])
     channels, meta = read_exr(render)
     camera_sheet(channels, meta["labels"], read_image(raw.with_suffix(".png"), linearize=False), d / "camera_sheet.png",
-                 f"street scene, solas-doublet ({STREET_SPP} spp) → {STREET_SENSOR} ({STREET_EXPOSURE_MS} ms) "
+                 f"street scene, solas-doublet ({STREET_SPP} spp) → {STREET_SENSOR} (exposure {STREET_EXPOSURE_MS}) "
                  "→ default image processor; labels along each pixel's chief ray")
     return CAMERA_FILES
 
 
-def camera_sheet(channels: dict, labels: dict, frame, path: Path, title: str) -> None:
+def camera_sheet(channels: dict, labels: dict, frame, path: Path, title: str) -> int:
     """One row: the lens's irradiance image, the developed frame, the depth layer (colour-mapped, its
-    range on the colour bar) and the instance layer (a colour per id, the scene's named shapes boxed)."""
+    range on the colour bar) and the instance layer (a colour per id, the scene's named shapes boxed: the
+    street names its cars, pedestrians, poles, signs and posts); the number of boxes drawn."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -175,12 +178,11 @@ def camera_sheet(channels: dict, labels: dict, frame, path: Path, title: str) ->
     fig.colorbar(shown, ax=axes[2], fraction=0.04, label="range (m)")
     axes[2].set_title(f"depth: {np.nanmin(depth):.1f} to {np.nanmax(depth):.1f} m")
     axes[3].imshow(np.ma.masked_where(~valid, ids % 20), cmap="tab20", vmin=0, vmax=19, interpolation="nearest")
+    boxes = [axes[3].add_patch(Rectangle((x0 - 0.5, y0 - 0.5), x1 - x0, y1 - y0, fill=False, edgecolor="white"))
+             for x0, y0, x1, y1 in (box["box"] for box in labels.get("boxes", {}).values())]
     for name, box in labels.get("boxes", {}).items():
-        x0, y0, x1, y1 = box["box"]
-        axes[3].add_patch(Rectangle((x0 - 0.5, y0 - 0.5), x1 - x0, y1 - y0, fill=False, edgecolor="white"))
-        axes[3].text(x0, y0, name, color="white", fontsize=7, va="bottom")
-    axes[3].set_title(f"instances: {len(labels.get('instances', {}))} shapes, "
-                      f"{len(labels.get('boxes', {}))} named (boxed)")
+        axes[3].text(box["box"][0], box["box"][1], name, color="white", fontsize=6, va="bottom")
+    axes[3].set_title(f"instances: {len(labels.get('instances', {}))} shapes, {len(boxes)} named (boxed)")
     for ax in axes:
         ax.set_xticks([])
         ax.set_yticks([])
@@ -189,6 +191,7 @@ def camera_sheet(channels: dict, labels: dict, frame, path: Path, title: str) ->
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=100, format="png")
     plt.close(fig)
+    return len(boxes)
 
 
 def main() -> None:

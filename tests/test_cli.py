@@ -19,14 +19,14 @@ def test_version(capsys):
 
 @pytest.mark.parametrize("argv, message", [
     (["psf", "solas-doublet", "--field-deg", "0,2", "--wavelengths-nm", "", "-o", "{tmp}/x.exr"],
-     "at least one wavelength (nm) is needed"),
+     "--wavelengths-nm '' must be one or more comma-separated numbers"),
     (["psf", "solas-doublet", "--field-deg", "0,89", "--wavelengths-nm", "531", "-o", "{tmp}/x.exr"],
      "field (0, 89) deg: each angle must be finite and below 89 deg in magnitude"),
     (["psf", "solas-doublet", "--field-deg", "0,1", "--wavelengths-nm", "2500.0001", "-o", "{tmp}/x.exr"],
      "wavelength 2500.0001 nm is outside glass SCHOTT:N-BK7's valid range 300-2500 nm"),
     (["sfr", "{tmp}"], "is a folder, not an image file"),
     (["sfr", "{tmp}/garbage.png"], "cannot read image"),
-    (["lens", "info", "{tmp}/binary.toml"], "binary.toml is not UTF-8 text; a lens file is TOML text"),
+    (["lens", "info", "{tmp}/binary.toml"], "binary.toml' is not UTF-8 text (byte 1 is not UTF-8: Latin-1 or binary)"),
     (["psf", "solas-doublet", "--field-deg", "0,1", "--wavelengths-nm", "531", "--pupil-samples", "100000",
       "-o", "{tmp}/x.exr"], "pupil samples 100000 must be an integer from 8 to 4096"),
     (["render-image", "solas-doublet", "{tmp}/photo.png", "--sensor", "32x24", "--spp", "1", "--seed", "-1",
@@ -69,3 +69,20 @@ def test_no_measurement_says_so_on_stderr(tmp_path, capsys):
     assert main(["sfr", str(tmp_path / "flat.png"), "--json"]) == 1
     out, err = capsys.readouterr()
     assert strict_loads(out)["results"] == [] and "no valid edge measured" in err
+
+
+def test_a_library_warning_is_one_line(monkeypatch, capsys):
+    """A warning a stage raises with `warnings.warn` (the lens camera's dark corners, the exit-pupil
+    bounds) reads as the command's own warnings do; Python's format added the file, line and source
+    line that raised it ("lens_sensor.py:91: UserWarning: ...", then "  heights, radial, ... = ...")."""
+    import warnings
+
+    from solas_mi.sensor import commands
+
+    def warns(args):
+        warnings.warn("the film reaches past the lens's field", stacklevel=2)
+        return 0
+
+    monkeypatch.setattr(commands, "run_sensors", warns)
+    assert main(["sensors"]) == 0
+    assert capsys.readouterr().err.splitlines() == ["solas-mi sensors: warning: the film reaches past the lens's field"]

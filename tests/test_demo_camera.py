@@ -5,7 +5,7 @@ import imageio.v3 as iio
 import numpy as np
 
 from solas_mi import demo
-from solas_mi.imageio import read_exr
+from solas_mi.imageio import read_exr, read_image
 
 
 def test_camera_step(tmp_path, monkeypatch):
@@ -22,3 +22,8 @@ def test_camera_step(tmp_path, monkeypatch):
     assert iio.imread(tmp_path / "camera" / "street_raw.png").shape == (36, 48, 3)
     sheet = iio.imread(tmp_path / "camera" / "camera_sheet.png")
     assert sheet.shape[1] > 3 * sheet.shape[0]  # one row of four panels
+    # the street names its objects: the render boxes those it sees, and the sheet draws every box
+    boxes = render_meta["labels"]["boxes"]
+    assert boxes and all(name.split("_")[0] in {"car", "pedestrian", "pole", "post"} for name in boxes)
+    frame = read_image(tmp_path / "camera" / "street_raw.png", linearize=False)
+    assert demo.camera_sheet(render, render_meta["labels"], frame, tmp_path / "again.png", "t") == len(boxes)

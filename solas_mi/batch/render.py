@@ -32,7 +32,7 @@ from typing import Any, Iterable, Sequence
 from ..errors import SolasError
 from ..outputs import inside, safe_name
 from ..render.spec import RenderSpec
-from .degrade import WORKER_BYTES, BatchResult, check_workers, with_camera
+from .degrade import WORKER_BYTES, BatchResult, camera_bytes, check_workers, with_camera
 from .jobs import IMAGE_SUFFIXES, MANIFEST, SCENE_SUFFIXES, Job, Manifest, expand_inputs
 from .runner import check_dask
 
@@ -189,7 +189,8 @@ def estimate(p: RenderPlan, workers: int) -> dict[str, float]:
         else:
             rows, cols = job.params["sensor"]
         samples += rows * cols * job.params["spp"]
-        peak = max(peak, max(rows * cols, SAMPLES_PER_PASS) * BYTES_PER_SAMPLE + 48 * rows * cols)
+        peak = max(peak, max(rows * cols, SAMPLES_PER_PASS) * BYTES_PER_SAMPLE + 48 * rows * cols,
+                   camera_bytes(job, rows, cols))
     cores = os.cpu_count() or 1
     return {"seconds": samples / (SAMPLES_PER_SECOND_PER_CORE * cores), "samples": samples,
             "peak_bytes": min(workers, max(1, len(p.todo))) * (peak + WORKER_BYTES["render"])}

@@ -49,32 +49,33 @@ def _degrade(job: Job, grid: "PSFGrid", grid_path: str, settings: dict[str, Any]
     from ..convolution.output import degrade_file
     from ..outputs import check_target, data_and_preview
 
-    if settings.get("format") == "png16":  # a 16-bit PNG and its metadata's JSON (`plan`'s suffixes)
+    spec = settings["spec"]  # the batch's `convolution.spec.DegradeSpec`
+    if spec.output_format == "png16":  # a 16-bit PNG and its metadata's JSON (`plan`'s suffixes)
         output, png = (check_target(p, [job.input, grid_path]) for p in (job.output, job.png))
     else:
         output, png = data_and_preview(job.output, job.png, inputs=[job.input, grid_path])
     output.parent.mkdir(parents=True, exist_ok=True)  # a folder tree's sub-folder
-    degrade_file(job.input, grid, grid_path, output, png, settings["method"], settings["boundary"],
-                 linear=settings["linear"], force=settings["force"], output_format=settings.get("format", "exr"),
-                 depth=job.params.get("depth"), occlusion=settings.get("occlusion", "filled"), frame=settings.get("frame"),
-                 silhouette=settings.get("silhouette", "nearest"),
+    degrade_file(job.input, grid, grid_path, output, png, spec, force=settings["force"], depth=job.params.get("depth"),
                  extra_meta={"batch": {**settings["batch"], "seed": job.seed}})
 
 
 def _shoot(job: Job, settings: dict[str, Any]) -> None:
-    """The item's output (image-plane irradiance, W/m²) through the batch's camera: its RAW EXR (and
-    developed frame) beside it, the frame named by its output's stem (`isp.camera`)."""
+    """The item's output through the batch's camera, read as `solas-mi camera` reads it (image irradiance,
+    or radiance through the f-number it states, `sensor.commands.as_irradiance`): its RAW EXR (and
+    developed frame) beside it, the frame named by its output's stem (`isp.camera`); a warning on the item
+    where the RAW saturates (`sensor.commands.clipping_warning`)."""
     from pathlib import Path
 
     from ..isp.camera import write_frame
-    from ..sensor.commands import read_rgb
-    from ..sensor.exposure import negatives_as_no_light
+    from ..sensor.commands import as_irradiance, clipping_warning, read_input
 
     camera = settings["camera"]
-    image, negative = negatives_as_no_light(read_rgb(job.output), job.output)
-    raw, frame, meta = camera.shoot(image, Path(job.output).stem)
-    meta.update(input=job.output, batch={**settings["batch"], "seed": job.seed},
-                negative_values_taken_as_zero=negative)
+    image, own = read_input(job.output)
+    irradiance, reading, _ = as_irradiance(image, own, job.output, camera.scale)
+    raw, frame, meta = camera.shoot(irradiance, Path(job.output).stem)
+    fraction, warning = clipping_warning(camera.sensor, raw, meta["exposure_ms"], Path(job.extras[0]).name)
+    job.warnings = [warning] if warning else []
+    meta.update(input=job.output, batch={**settings["batch"], "seed": job.seed}, saturated_fraction=fraction, **reading)
     write_frame(job.extras[0], raw, frame, meta)
 
 
@@ -98,12 +99,12 @@ def _render(job: Job, settings: dict[str, Any]) -> None:
     lens = Lens.load(p["lens"])
     if Path(job.input).suffix.lower() in SCENE_SUFFIXES:
         from ..render.stock import render_scene
-        from ..render.user_scene import load
+        from ..render.user_scene import camera_meta, load
 
         scene = load(job.input, spec.variant, lens, pitch_um=spec.pitch_um, focus_distance=spec.focus_distance,
                      response=spec.response)
         result = render_scene(scene, spec.spp, seed=spec.seed, labels=spec.labels)
-        result.meta.update(scene=job.input, lens=lens.name, lens_hash=lens.hash)
+        result.meta.update(scene=job.input, lens=lens.name, lens_hash=lens.hash, **camera_meta(scene))
     else:
         from ..render.image import render_image
 

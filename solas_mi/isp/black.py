@@ -10,6 +10,11 @@ import numpy as np
 
 from ..sensor.model import SensorModel
 
+# the largest factor a later stage may apply (a white-balance gain, a colour matrix entry): one DN above black
+# is at least 1 / 65535 of the signal (a 16-bit ADC's range), so past this factor every pixel above black
+# saturates the frame (and the values stay far inside float64's range)
+GAIN_MAX = 65536.0
+
 
 def saturation_dn(model: SensorModel) -> float:
     """y_sat: the signal above black (DN) of a saturated pixel."""

@@ -1,6 +1,9 @@
 """`Camera`: the sensor and image processor every frame of a batch goes through, and how a frame is
 shot: the RAW of frame `name` (the item's output name) from the camera's seed and that name, so that
-a frame comes out the same whatever the order of the run, a resumed run or a Dask worker.
+a frame comes out the same whatever the order of the run, a resumed run or a Dask worker. A frame's
+values times `scale` are read as `solas-mi camera` reads them: image irradiance (W/m²), or radiance
+through the f-number the frame states (a render through a lens); the exposure is given, or chosen per
+frame from its light (`sensor.auto_exposure`).
 
 The sensor's fixed pattern (PRNU, DSNU) comes from the seed alone, as one camera's would; the
 temporal noise from (seed, frame number), the frame number a hash of the frame's name."""
@@ -14,47 +17,61 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import SolasError
+from ..sensor.auto_exposure import AUTO, AutoExposure, exposure_seconds
 from ..sensor.capture import check_seed
 from ..sensor.model import SensorModel
-from .pipeline import ISP
+from .pipeline import ISP, check_sensor
 
 
 @dataclass(frozen=True)
 class Camera:
-    """A sensor exposed `exposure_ms` (the frame's values read as W/m² of image irradiance), its seed,
-    and the image processor (None: RAW only)."""
+    """A sensor exposed `exposure_ms` (or an `AutoExposure`: chosen per frame), a frame's values times
+    `scale` read as W/m² of image irradiance (radiance through the f-number a frame states), its seed, and
+    the image processor (None: RAW only)."""
 
     sensor: SensorModel
-    exposure_ms: float
+    exposure_ms: float | AutoExposure
     isp: ISP | None = None
     seed: int = 0
+    scale: float = 1.0
 
     def __post_init__(self):
         if not isinstance(self.sensor, SensorModel):
             raise SolasError(f"camera sensor {self.sensor!r} must be a solas_mi.sensor.model.SensorModel")
-        if isinstance(self.exposure_ms, bool) or not isinstance(self.exposure_ms, (int, float)) \
-                or not math.isfinite(self.exposure_ms) or self.exposure_ms <= 0:
-            raise SolasError(f"exposure {self.exposure_ms!r} ms must be a finite number > 0")
+        if not isinstance(self.exposure_ms, AutoExposure) and (
+                isinstance(self.exposure_ms, bool) or not isinstance(self.exposure_ms, (int, float))
+                or not math.isfinite(self.exposure_ms) or self.exposure_ms <= 0):
+            raise SolasError(f"exposure {self.exposure_ms!r} ms must be a finite number > 0 or an AutoExposure")
+        if isinstance(self.scale, bool) or not isinstance(self.scale, (int, float)) or not 0 < self.scale < math.inf:
+            raise SolasError(f"camera scale {self.scale!r} must be a finite number > 0 (W/m² per unit of a frame)")
         if self.isp is not None and not isinstance(self.isp, ISP):
             raise SolasError(f"camera isp {self.isp!r} must be a solas_mi.isp.pipeline.ISP or None")
+        if self.isp is not None:
+            check_sensor(self.isp, self.sensor)
         check_seed(self.seed)
 
     def describe(self) -> dict:
         """Every value (JSON-ready): for metadata, manifests and the batch's identity."""
         from ..sensor.files import describe
 
-        return {"sensor": describe(self.sensor), "exposure_ms": self.exposure_ms, "seed": self.seed,
-                "isp": None if self.isp is None else self.isp.describe()}
+        auto = isinstance(self.exposure_ms, AutoExposure)
+        return {"sensor": describe(self.sensor), "exposure_ms": AUTO if auto else self.exposure_ms,
+                **({"auto_exposure": self.exposure_ms.describe()} if auto else {}), "scale": self.scale,
+                "seed": self.seed, "isp": None if self.isp is None else self.isp.describe()}
 
     def shoot(self, irradiance: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray | None, dict]:
-        """The RAW (H, W, uint16 DN) of frame `name`, the developed 8-bit frame (None without an isp)
-        and the metadata: the camera, the frame's name and number, the stages."""
+        """The RAW (H, W, uint16 DN) of frame `name` of an irradiance image (W/m², `scale` applied), the
+        developed 8-bit frame (None without an isp) and the metadata: the camera, the frame's name and
+        number, its exposure, the fraction of its pixels saturated, the stages."""
         from ..sensor.capture import capture
         from .pipeline import develop
 
         number = frame_number(name)
-        raw = capture(self.sensor, irradiance, self.exposure_ms * 1e-3, self.seed, number)
-        meta = {"kind": "sensor RAW", "unit": "DN", "camera": self.describe(), "frame": name, "frame_number": number}
+        seconds, chosen = exposure_seconds(self.exposure_ms, self.sensor, irradiance)
+        raw = capture(self.sensor, irradiance, seconds, self.seed, number)
+        meta = {"kind": "sensor RAW", "unit": "DN", "camera": self.describe(), "frame": name, "frame_number": number,
+                "exposure_ms": seconds * 1e3 if chosen else self.exposure_ms,
+                **({"auto_exposure": chosen} if chosen else {})}
         if self.isp is None:
             return raw, None, meta
         frame, developed = develop(raw, self.sensor, self.isp)
@@ -89,9 +106,10 @@ def write_frame(raw_path: str | Path, raw: np.ndarray, frame: np.ndarray | None,
             write_png(tmps[1], frame / 255.0, encoded=True)
 
 
-def load_camera(sensor_model: str, exposure_ms: float, isp: str | None = None, seed: int = 0) -> Camera:
-    """The camera of the command line's --sensor-model, --exposure-ms, --isp and seed."""
+def load_camera(sensor_model: str, exposure_ms: float | AutoExposure, isp: str | None = None, seed: int = 0,
+                scale: float = 1.0) -> Camera:
+    """The camera of the command line's --sensor-model, --exposure-ms, --isp, seed and --scale."""
     from ..sensor.files import load_sensor
     from .pipeline import load_isp
 
-    return Camera(load_sensor(sensor_model), exposure_ms, None if isp is None else load_isp(isp), seed)
+    return Camera(load_sensor(sensor_model), exposure_ms, None if isp is None else load_isp(isp), seed, scale)

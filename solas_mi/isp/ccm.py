@@ -22,6 +22,7 @@ import numpy as np
 from ..errors import SolasError
 from ..sensor.cfa import FILTERS
 from ..sensor.model import SensorModel
+from .black import GAIN_MAX
 from .demosaic import slots
 
 
@@ -41,13 +42,14 @@ def sensor_matrix(model: SensorModel, gains: np.ndarray) -> np.ndarray:
 
 
 def check_matrix(values) -> np.ndarray:
-    """A given 3 × 3 matrix of finite numbers (rows: output R, G, B)."""
-    try:
-        matrix = np.array(values, dtype=np.float64)
-    except (TypeError, ValueError):
-        matrix = np.empty(0)
-    if matrix.shape != (3, 3) or not np.all(np.isfinite(matrix)):
-        raise SolasError(f"colour correction matrix {values!r} must be 3 rows of 3 finite numbers")
+    """A given 3 × 3 matrix of numbers within ±GAIN_MAX (rows: output R, G, B)."""
+    sequence = (list, tuple, np.ndarray)
+    given = isinstance(values, sequence) and len(values) == 3 and all(
+        isinstance(row, sequence) and len(row) == 3 and all(
+            isinstance(v, (int, float, np.number)) and not isinstance(v, (bool, np.bool_)) for v in row) for row in values)
+    matrix = np.array(values, dtype=np.float64) if given else np.empty(0)
+    if not given or not np.all(np.abs(matrix) <= GAIN_MAX):
+        raise SolasError(f"colour correction matrix {values!r} must be 3 rows of 3 numbers within ±{GAIN_MAX:g}")
     return matrix
 
 

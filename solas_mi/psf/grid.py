@@ -27,7 +27,7 @@ from .methods import compute, method_options
 from .sensor import default_sensor_mm, fields_for_points, node_mm
 from .spec import FIELD_SAMPLINGS, LAYOUTS, GridSpec
 MOSAIC_PX = 2048  # the preview mosaic is block-averaged to fit this (a 32×32 grid of 160 px: 64 px a PSF)
-_FIELDS_PER_BATCH = 64
+FIELDS_PER_BATCH = 64
 
 
 @dataclass
@@ -294,8 +294,8 @@ def compute_nodes(lens: Lens, spec: GridSpec, wl: tuple[float, ...], flat: np.nd
     vignetting: set[int] = set()
     doubts: list[str] = []
     for k, w in enumerate(wl):
-        for a in range(0, len(canon), _FIELDS_PER_BATCH):
-            b = min(len(canon), a + _FIELDS_PER_BATCH)
+        for a in range(0, len(canon), FIELDS_PER_BATCH):
+            b = min(len(canon), a + FIELDS_PER_BATCH)
             c = compute(lens, canon[a:b], np.full(b - a, w), spec.pitch_um, odd, spec.method,
                         **spec.sampling_options())
             vignetting.update(s for v in c.vignetted_by for s in v)

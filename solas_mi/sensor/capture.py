@@ -44,12 +44,17 @@ def check_seed(seed) -> None:
         raise SolasError(f"sensor seed {seed!r} must be an integer >= 0 and at most 2^31 - 1")
 
 
+def check_frame(frame) -> None:
+    """SolasError unless `frame` is a frame number: an integer >= 0."""
+    if not _whole(frame):
+        raise SolasError(f"sensor frame {frame!r} must be an integer >= 0")
+
+
 def capture(model: SensorModel, irradiance: np.ndarray, exposure_s: float, seed: int, frame: int = 0) -> np.ndarray:
     """The RAW frame (H, W, uint16 DN) the sensor gives for an irradiance image (H, W, 3) in W/m² exposed
     `exposure_s` seconds: frame `frame` of seed `seed` (same seed and frame, same frame)."""
     check_seed(seed)
-    if not _whole(frame):
-        raise SolasError(f"sensor frame {frame!r} must be an integer >= 0")
+    check_frame(frame)
     mu_e = mean_electrons(model, irradiance, exposure_s)
     # past the full well the count is clipped anyway: capping the Poisson means at 2 × full well + 1000
     # keeps them within NumPy's Poisson range (the Chernoff bound puts the chance that the well then

@@ -15,8 +15,9 @@ CHANNELS = {"R": (0,), "G": (1,), "B": (2,), "C": (0, 1, 2)}  # the image channe
 
 
 def check_pattern(pattern: str) -> str:
-    if pattern not in PATTERNS:
-        raise SolasError(f"colour filter array {pattern!r} must be one of {', '.join(PATTERNS)}")
+    if not isinstance(pattern, str) or pattern not in PATTERNS:
+        raise SolasError(f"sensor cfa = {pattern!r} must be one of {', '.join(PATTERNS)} (the colour filter array's "
+                         "2×2 tile, row by row)")
     return pattern
 
 

@@ -16,11 +16,23 @@ PLANCK = 6.62607015e-34  # J s (SI, exact)
 LIGHT_SPEED = 299_792_458.0  # m/s (SI, exact)
 
 
+# f/0.5 is the fastest a lens in air can be (N = 1 / (2 NA), NA <= 1); f/1000 is past any pinhole camera's
+F_NUMBER_RANGE = (0.5, 1000.0)
+
+
+def check_f_number(f_number, what: str = "f-number") -> float:
+    """`f_number` as a float, or SolasError naming `what` unless it lies in F_NUMBER_RANGE."""
+    low, high = F_NUMBER_RANGE
+    if isinstance(f_number, bool) or not isinstance(f_number, (int, float)) or not low <= f_number <= high:
+        raise SolasError(f"{what} {f_number!r} must be a number from {low:g} (a lens in air: N = 1 / (2 NA)) "
+                         f"to {high:g} (past any pinhole camera)")
+    return float(f_number)
+
+
 def image_irradiance(radiance: np.ndarray, f_number: float, transmission: float = 1.0) -> np.ndarray:
     """Image-plane irradiance (W/m²) of scene radiance `radiance` (W/m²/sr) through a lens of f-number
     `f_number` and transmission `transmission`: E = π T L / (4 N²)."""
-    if not f_number > 0 or not np.isfinite(f_number):
-        raise SolasError(f"f-number {f_number!r} must be a finite number > 0")
+    check_f_number(f_number)
     if not 0 < transmission <= 1:
         raise SolasError(f"lens transmission {transmission!r} must be in (0, 1]")
     return np.pi * transmission * np.asarray(radiance, dtype=np.float64) / (4.0 * f_number**2)
@@ -75,4 +87,9 @@ def photons(irradiance: np.ndarray, exposure_s: float, pixel_pitch_um: float,
         raise SolasError(f"exposure time {exposure_s!r} s must be a finite number >= 0")
     area = (pixel_pitch_um * 1e-6) ** 2
     energy = PLANCK * LIGHT_SPEED / (np.asarray(wavelengths_nm, dtype=np.float64) * 1e-9)  # J per photon
-    return image * (area * exposure_s / energy)
+    with np.errstate(over="ignore", invalid="ignore"):
+        out = image * (area * exposure_s / energy)
+    if not np.all(np.isfinite(out)):
+        raise SolasError(f"an exposure of {exposure_s:g} s at up to {image.max():.3g} W/m² gives more photons per pixel "
+                         "than a float64 holds (1.8e308); give a shorter exposure or a smaller scale")
+    return out

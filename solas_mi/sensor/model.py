@@ -15,18 +15,39 @@ import numpy as np
 
 from ..errors import SolasError
 from .cfa import check_pattern
-from .qe import BAND_CENTRES_NM, QECurve, scalar_effective_qe
+from .qe import BAND_CENTRES_NM, SRGB_RANGE_NM, QECurve, scalar_effective_qe
 
 QUANTISATION_VARIANCE = 1.0 / 12.0  # DN², uniform rounding (EMVA 1288 eq. 5)
 # the scalar quantum efficiencies and channel wavelengths (nm) of a sensor described without a QE curve
 SCALAR_DEFAULTS = {"qe_r": 0.6, "qe_g": 0.7, "qe_b": 0.5, "qe_c": 0.8, "wavelengths_nm": (610.0, 540.0, 465.0)}
 
 
-def _number(value, field: str, what: str, *, zero: bool = False) -> None:
-    """SolasError unless `value` is a finite real number > 0 (>= 0 where `zero`)."""
-    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value) \
-            or value < 0 or (value == 0 and not zero):
-        raise SolasError(f"sensor {field} = {value!r} must be a finite number {'>=' if zero else '>'} 0 ({what})")
+# The range of each number (least, most, what it is): every sensor made lies far inside it, and within it
+# every value of the signal chain stays finite (photons per pixel, NumPy's Poisson means, DN).
+ELECTRONS_MAX = 1e9  # e⁻ (e⁻/s for the dark current): 1000 × the largest full wells made (scientific CCDs, ~1e6 e⁻)
+RANGES = {
+    "pixel_pitch_um": (0.1, 1000.0, "the pixel pitch in µm: from 0.1 µm, a quarter of violet light's wavelength, "
+                                    "to 1 mm, 5 × an X-ray flat panel's pixel"),
+    "dark_current_e_s": (0.0, ELECTRONS_MAX, "the dark current in e⁻/s"),
+    "read_noise_e": (0.0, ELECTRONS_MAX, "the read noise in e⁻ rms"),
+    "dsnu_e": (0.0, ELECTRONS_MAX, "the spread of the pixel offset in e⁻"),
+    "full_well_e": (1.0, ELECTRONS_MAX, "the full-well capacity in e⁻, at least one electron"),
+    "wavelengths_nm": (*SRGB_RANGE_NM, "a wavelength in nm within the visible range the RGB image stands for"),
+}
+
+
+def _number(value, field: str, least: float, most: float, what: str, *, open_low: bool = False,
+            open_high: bool = False) -> None:
+    """SolasError unless `value` is a real number in the interval from `least` to `most` (open at an end
+    where `open_low`, `open_high`)."""
+    number = isinstance(value, (int, float)) and not isinstance(value, bool) and math.isfinite(value)
+    if not number or value < least or value > most or (open_low and value == least) or (open_high and value == most):
+        interval = f"{'(' if open_low else '['}{least:g}, {most:g}{')' if open_high else ']'}"
+        raise SolasError(f"sensor {field} = {value!r} must be a number in {interval} ({what})")
+
+
+def _ranged(model, field: str) -> None:
+    _number(getattr(model, field), field, *RANGES[field])
 
 
 @dataclass(frozen=True)
@@ -52,7 +73,7 @@ class SensorModel:
     qe_curve: QECurve | None = None
 
     def __post_init__(self):
-        _number(self.pixel_pitch_um, "pixel_pitch_um", "the pixel pitch in µm")
+        _ranged(self, "pixel_pitch_um")
         if self.qe_curve is None:
             self._check_scalar_qe()
         elif not isinstance(self.qe_curve, QECurve):
@@ -60,18 +81,14 @@ class SensorModel:
         elif given := [name for name in SCALAR_DEFAULTS if getattr(self, name) is not None]:
             raise SolasError(f"sensor qe_curve and {', '.join(given)} both given: a QE curve replaces the scalar "
                              f"quantum efficiencies and sets the channel wavelengths; give one or the other")
-        _number(self.dark_current_e_s, "dark_current_e_s", "the dark current in e⁻/s", zero=True)
-        _number(self.read_noise_e, "read_noise_e", "the read noise in e⁻ rms", zero=True)
-        _number(self.prnu, "prnu", "the relative spread of the pixel gain, e.g. 0.01 for 1 %", zero=True)
-        if self.prnu >= 1:
-            raise SolasError(f"sensor prnu = {self.prnu!r} must be in [0, 1) (the relative spread of the pixel gain)")
-        _number(self.dsnu_e, "dsnu_e", "the spread of the pixel offset in e⁻", zero=True)
-        _number(self.full_well_e, "full_well_e", "the full-well capacity in e⁻")
-        _number(self.gain_dn_per_e, "gain_dn_per_e", "the conversion gain in DN/e⁻")
-        self._check_adc()
+        for name in ("dark_current_e_s", "read_noise_e", "dsnu_e", "full_well_e"):
+            _ranged(self, name)
+        _number(self.prnu, "prnu", 0.0, 1.0, "the relative spread of the pixel gain, e.g. 0.01 for 1 %", open_high=True)
         check_pattern(self.cfa)
+        self._check_adc()
         if self.qe_curve is not None:
             self.qe_curve.check_filters(self.cfa)
+            self.qe_curve.check_response(self.cfa)
 
     def _check_scalar_qe(self) -> None:
         """Fill the scalar fields left out with their defaults and check them."""
@@ -79,17 +96,16 @@ class SensorModel:
             if getattr(self, name) is None:
                 object.__setattr__(self, name, default)
         for name in ("qe_r", "qe_g", "qe_b", "qe_c"):
-            value = getattr(self, name)
-            _number(value, name, "a quantum efficiency")
-            if value > 1:
-                raise SolasError(f"sensor {name} = {value!r} must be in (0, 1] (a quantum efficiency)")
+            _number(getattr(self, name), name, 0.0, 1.0, "a quantum efficiency", open_low=True)
         if not isinstance(self.wavelengths_nm, (tuple, list)) or len(self.wavelengths_nm) != 3:
             raise SolasError(f"sensor wavelengths_nm = {self.wavelengths_nm!r} must be three wavelengths (R, G, B) in nm")
         for value in self.wavelengths_nm:
-            _number(value, "wavelengths_nm", "a wavelength in nm")
+            _number(value, "wavelengths_nm", *RANGES["wavelengths_nm"])
         object.__setattr__(self, "wavelengths_nm", tuple(float(v) for v in self.wavelengths_nm))
 
     def _check_adc(self) -> None:
+        """Bit depth, black level and conversion gain: the ADC's codes hold the signal, and the full well
+        spans at least one code (a smaller gain reads every pixel as black)."""
         if not isinstance(self.bit_depth, int) or isinstance(self.bit_depth, bool) or not 8 <= self.bit_depth <= 16:
             raise SolasError(f"sensor bit_depth = {self.bit_depth!r} must be an integer from 8 to 16")
         top = self.white_level_dn
@@ -97,6 +113,12 @@ class SensorModel:
                 or not 0 <= self.black_level_dn < top:
             raise SolasError(f"sensor black_level_dn = {self.black_level_dn!r} must be an integer from 0 to {top - 1} "
                              f"(below the {self.bit_depth}-bit ADC's white level)")
+        _number(self.gain_dn_per_e, "gain_dn_per_e", 0.0, float(top),
+                "the conversion gain in DN/e⁻, at most the ADC's white level: one electron fills the ADC", open_low=True)
+        if self.gain_dn_per_e * self.full_well_e < 1.0:
+            raise SolasError(f"sensor gain_dn_per_e = {self.gain_dn_per_e!r} times full_well_e = {self.full_well_e!r} "
+                             f"must be at least 1 DN (the full well spans at least one ADC code; else every pixel "
+                             "reads black)")
 
     @classmethod
     def from_dict(cls, values: dict) -> "SensorModel":

@@ -89,7 +89,7 @@ def test_a_perspective_without_fov_takes_mitsubas_default(tmp_path, doublet, mi)
 
 
 def test_missing_scene_file(tmp_path):
-    with pytest.raises(SolasError, match="no such scene file"):
+    with pytest.raises(SolasError, match="scene file .*none.xml. does not exist"):
         load(tmp_path / "none.xml", VARIANT)
 
 
@@ -227,9 +227,13 @@ def test_to_world_moved_by_traverse_renders_as_a_reload(included, doublet, mi):
     assert np.abs(shifted - original).max() > 0.1
 
 
-def test_render_metadata_holds_pitch_focus_and_unit(included, tmp_path):
+def test_render_metadata_holds_pitch_focus_and_unit(included, tmp_path, doublet):
+    """Also the f-number of the render's unit (what `solas-mi camera` reads it through): a lossless lens's
+    on-axis irradiance per unit radiance, π sin²θ' over the exit pupil (the cos⁴θ / d² integral over a
+    disc), so N = 1 / (2 sin θ'), θ' from the focused lens's paraxial exit pupil."""
     from solas_mi.cli import main
     from solas_mi.imageio import read_exr
+    from solas_mi.optics.paraxial import paraxial
 
     out = tmp_path / "out.exr"
     assert main(["render", str(included), "--lens", "solas-doublet", "--set", "depth=2", "--set", "focus=170", "--set", "width=16",
@@ -237,6 +241,10 @@ def test_render_metadata_holds_pitch_focus_and_unit(included, tmp_path):
                  "-o", str(out)]) == 0
     meta = read_exr(out)[1]
     assert meta["pitch_um"] == 40.0 and meta["focus_distance"] == 170.0 and meta["world_unit_mm"] == 10.0
+    lens = focused(doublet, 1700.0)
+    p = paraxial(lens, lens.primary_wavelength)
+    half_angle = math.atan(0.5 * p.exit_pupil_diameter_mm / abs(lens.image_z - p.exit_pupil_z_mm))
+    assert meta["f_number"] == pytest.approx(1.0 / (2.0 * math.sin(half_angle)), rel=1e-3)
 
 
 def test_render_metadata_of_a_lens_focused_at_infinity_is_strict_json(included, tmp_path):

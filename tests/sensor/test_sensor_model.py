@@ -8,7 +8,7 @@ from solas_mi.errors import SolasError
 from solas_mi.sensor.capture import capture, fixed_pattern, mean_electrons
 from solas_mi.sensor.cfa import PATTERNS
 from solas_mi.sensor.exposure import LIGHT_SPEED, PLANCK, image_irradiance, photons
-from solas_mi.sensor.model import SensorModel
+from solas_mi.sensor.model import ELECTRONS_MAX, SensorModel
 
 
 @pytest.mark.parametrize("pattern", PATTERNS)
@@ -57,8 +57,9 @@ def test_raw_is_one_channel_within_the_adc():
 
 
 def test_light_far_past_the_full_well_saturates():
-    """Irradiance of 1e12 W/m² (about 1e21 photons, past NumPy's Poisson range) fills the well."""
-    model = SensorModel(read_noise_e=0.0, dsnu_e=0.0, dark_current_e_s=1e25)
+    """Irradiance of 1e12 W/m² (about 1e21 photons, past NumPy's Poisson range) and the largest dark current
+    allowed fill the well."""
+    model = SensorModel(read_noise_e=0.0, dsnu_e=0.0, dark_current_e_s=ELECTRONS_MAX)
     raw = capture(model, np.full((4, 4, 3), 1e12), 1.0, seed=0)
     assert np.all(raw == model.black_level_dn + round(model.gain_dn_per_e * model.full_well_e))
 
@@ -70,12 +71,13 @@ def test_bad_seed_or_frame(name, value):
 
 
 @pytest.mark.parametrize("field, value, allowed", [
-    ("pixel_pitch_um", 0.0, "> 0"), ("pixel_pitch_um", float("nan"), "> 0"), ("qe_g", 1.2, r"\(0, 1\]"),
-    ("qe_c", -0.1, "> 0"), ("read_noise_e", -1.0, ">= 0"), ("dark_current_e_s", float("inf"), ">= 0"),
-    ("prnu", 1.0, r"\[0, 1\)"), ("dsnu_e", -2.0, ">= 0"), ("full_well_e", 0, "> 0"),
-    ("gain_dn_per_e", -0.1, "> 0"), ("bit_depth", 20, "from 8 to 16"), ("bit_depth", 12.0, "integer"),
-    ("black_level_dn", 4095, "from 0 to 4094"), ("black_level_dn", -1, "from 0"), ("cfa", "RGBW", "RGGB"),
-    ("wavelengths_nm", (500.0, 600.0), "three wavelengths"), ("wavelengths_nm", (500.0, 0.0, 600.0), "> 0"),
+    ("pixel_pitch_um", 0.0, r"in \[0.1, 1000\]"), ("pixel_pitch_um", float("nan"), r"in \[0.1, 1000\]"),
+    ("qe_g", 1.2, r"\(0, 1\]"), ("qe_c", -0.1, r"\(0, 1\]"), ("read_noise_e", -1.0, r"\[0, 1e\+09\]"),
+    ("dark_current_e_s", float("inf"), r"\[0, 1e\+09\]"), ("prnu", 1.0, r"\[0, 1\)"), ("dsnu_e", -2.0, r"\[0, 1e\+09\]"),
+    ("full_well_e", 0, r"\[1, 1e\+09\]"), ("gain_dn_per_e", -0.1, r"\(0, 4095\]"), ("bit_depth", 20, "from 8 to 16"),
+    ("bit_depth", 12.0, "integer"), ("black_level_dn", 4095, "from 0 to 4094"), ("black_level_dn", -1, "from 0"),
+    ("cfa", "RGBW", "RGGB"), ("wavelengths_nm", (500.0, 600.0), "three wavelengths"),
+    ("wavelengths_nm", (500.0, 0.0, 600.0), r"\[380, 780\]"),
 ])
 def test_bad_values_name_the_field_and_what_is_allowed(field, value, allowed):
     with pytest.raises(SolasError, match=field if field != "cfa" else "colour filter array") as caught:

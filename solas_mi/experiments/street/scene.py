@@ -37,12 +37,14 @@ TEXTURES = "textures"
 
 @dataclass(frozen=True)
 class Shape:
-    """One emitting shape: Mitsuba type, transform (XML lines), radiance (a grey value or a texture file)."""
+    """One emitting shape: Mitsuba type, transform (XML lines), radiance (a grey value or a texture file),
+    and its name (its `id` in the scene: labels box the named shapes; the street's objects have one)."""
 
     kind: str
     transform: tuple[str, ...]
     radiance: float | str
     extra: tuple[str, ...] = ()
+    name: str = ""
 
 
 def _f(v: float) -> str:
@@ -176,33 +178,36 @@ def _street_layout(rng: np.random.Generator) -> tuple[list[Shape], dict[str, np.
 
 
 def _street_furniture(rng: np.random.Generator, shapes: list[Shape]) -> None:
-    """Parked cars, poles with signs and pedestrians along both kerbs, posts on traffic islands."""
+    """Parked cars, poles with signs and pedestrians along both kerbs, posts on traffic islands: each
+    shape named after its object (car_3_cabin, pedestrian_2_head, ...)."""
     for i, z in enumerate((7.0, 13.0, 22.0, 34.0, 48.0, 63.0, 80.0, 98.0, 118.0)):  # parked cars
         side = 1 if i % 2 == 0 else -1
         x = side * (ROAD_HALF_M - 1.1)
         yaw = float(rng.uniform(-4, 4))
         body = float(rng.choice([0.06, 0.15, 0.55, 0.7]))
-        shapes.append(Shape("cube", _box((x, 0.65, z), (1.8, 0.8, 4.3), yaw), body))
-        shapes.append(Shape("cube", _box((x, 1.3, z - 0.2), (1.6, 0.55, 2.2), yaw), 0.1 if body > 0.3 else 0.5))
-        for dz in (-1.4, 1.4):
+        shapes.append(Shape("cube", _box((x, 0.65, z), (1.8, 0.8, 4.3), yaw), body, name=f"car_{i + 1}"))
+        shapes.append(Shape("cube", _box((x, 1.3, z - 0.2), (1.6, 0.55, 2.2), yaw), 0.1 if body > 0.3 else 0.5,
+                            name=f"car_{i + 1}_cabin"))
+        for end, dz in (("rear", -1.4), ("front", 1.4)):
             wheel = _cylinder((x - 0.92, 0.33, z + dz), (x + 0.92, 0.33, z + dz), 0.33)
-            shapes.append(Shape("cylinder", (), 0.04, wheel))
-    for x, z in ((0.05, 20.0), (2.1, 60.0)):  # posts on traffic islands
-        shapes.append(Shape("cylinder", (), 0.65, _cylinder((x, 0, z), (x, 3, z), 0.06)))
+            shapes.append(Shape("cylinder", (), 0.04, wheel, name=f"car_{i + 1}_wheels_{end}"))
+    for i, (x, z) in enumerate(((0.05, 20.0), (2.1, 60.0))):  # posts on traffic islands
+        shapes.append(Shape("cylinder", (), 0.65, _cylinder((x, 0, z), (x, 3, z), 0.06), name=f"post_{i + 1}"))
     kinds = ("parking", "warning", "stripes")
     for i, z in enumerate(np.arange(10.0, STREET_END_M - 5, 14.0)):  # poles, every other one with a sign
         side = -1 if i % 2 == 0 else 1
         x = side * (ROAD_HALF_M + 0.6)
-        shapes.append(Shape("cylinder", (), 0.12, _cylinder((x, 0, z), (x, 4.5, z), 0.06)))
+        shapes.append(Shape("cylinder", (), 0.12, _cylinder((x, 0, z), (x, 4.5, z), 0.06), name=f"pole_{i + 1}"))
         if i % 2 == 0:
             shapes.append(Shape("rectangle", _panel((x, 3.6, z - 0.08), (0.8, 0.8), "-z", float(rng.uniform(-6, 6))),
-                                f"sign_{kinds[i // 2 % 3]}.png"))
+                                f"sign_{kinds[i // 2 % 3]}.png", name=f"pole_{i + 1}_sign_{kinds[i // 2 % 3]}"))
     for i, z in enumerate((9.0, 17.0, 27.0, 41.0, 56.0, 72.0, 90.0, 108.0)):  # pedestrians
         side = 1 if i % 2 else -1
         x = side * (ROAD_HALF_M + 1.2 + float(rng.uniform(0, 1.5)))
         tone = float(rng.choice([0.05, 0.12, 0.6]))
-        shapes.append(Shape("cylinder", (), tone, _cylinder((x, 0.15, z), (x, 1.45, z), 0.22)))
-        shapes.append(Shape("sphere", (), 0.5, (_point("center", (x, 1.62, z)), '<float name="radius" value="0.13"/>')))
+        shapes.append(Shape("cylinder", (), tone, _cylinder((x, 0.15, z), (x, 1.45, z), 0.22), name=f"pedestrian_{i + 1}"))
+        shapes.append(Shape("sphere", (), 0.5, (_point("center", (x, 1.62, z)), '<float name="radius" value="0.13"/>'),
+                            name=f"pedestrian_{i + 1}_head"))
 
 
 def scene_xml(shapes: list[Shape]) -> str:
@@ -231,7 +236,7 @@ def scene_xml(shapes: list[Shape]) -> str:
                         'value="nearest"/><string name="wrap_mode" value="clamp"/></texture>')
         else:
             radiance = f'<spectrum name="radiance" value="{_f(s.radiance)}"/>'
-        out.append(f'    <shape type="{s.kind}">')
+        out.append(f'    <shape type="{s.kind}"' + (f' id="{s.name}"' if s.name else "") + ">")
         out += [f"        {line}" for line in s.extra]
         if s.transform:
             out.append('        <transform name="to_world">' + "".join(s.transform) + "</transform>")
