@@ -26,12 +26,12 @@ def _warn(result) -> None:
 
 def run_analysis(args) -> int:
     analysis = ANALYSES[args.lens_command]
-    options = command_options(args, analysis.options)
+    options = command_options(args, analysis.extra["keywords"])
     lens = load_lens(args.lens)
     from .base import output_paths
 
     output_paths(args.output)  # checked before the work
-    result = analysis.compute(lens, **options)
+    result = analysis.function(lens, **options)
     _warn(result)
     png, data, table = result.write(args.output)
     print(f"wrote {png}, {data}, {table}")
@@ -51,14 +51,14 @@ def run_report(args) -> int:
 def register(sub: Any) -> None:
     """Add `lens <analysis>` for each registered analysis and `lens report`."""
     group = _lens_group(sub)
-    for analysis in ANALYSES.values():
-        p = group.add_parser(analysis.name, help=analysis.summary,
+    for name, analysis in ANALYSES.items():
+        p = group.add_parser(name, help=analysis.summary,
                              description=f"{analysis.summary[0].upper()}{analysis.summary[1:]}. "
                                          f"Reference: {analysis.reference}.")
         add_lens_argument(p)
-        for key in analysis.options:
+        for key in analysis.extra["keywords"]:
             OPTIONS[key].add_to(p)
-        p.add_argument("-o", "--output", default=f"{analysis.name}.png",
+        p.add_argument("-o", "--output", default=f"{name}.png",
                        help="the figure (PNG); its numbers are written beside it as .json and .csv")
         p.set_defaults(run=run_analysis)
     report = group.add_parser("report", help="every lens analysis into one folder, with an index page (HTML)",

@@ -51,12 +51,12 @@ def report(lens, folder, progress: Callable[[str], None] | None = None, **option
     folder = output_folder(folder)
     sections = []
     with hold_folder(folder, f"solas-mi lens report {lens.name}"):
-        for analysis in ANALYSES.values():
+        for _, analysis in ANALYSES.items():
             if progress:
                 progress(analysis.name)
-            own = {k: v for k, v in options.items() if k in analysis.options and v is not None}
+            own = {k: v for k, v in options.items() if k in analysis.extra["keywords"] and v is not None}
             try:
-                result = analysis.compute(lens, **own)
+                result = analysis.function(lens, **own)
                 result.write(folder / f"{analysis.name}.png")
             except SolasError as exc:
                 print(f"solas-mi: lens report {lens.name}: {analysis.name} not computed: {exc}", file=sys.stderr)

@@ -31,7 +31,7 @@ def flags(parser) -> set[str]:
 @pytest.mark.parametrize("name", list(ANALYSES))
 def test_each_analysis_is_a_lens_command_with_its_registered_options(name):
     parser = COMMANDS[("lens", name)]
-    assert flags(parser) == {OPTIONS[k].flag for k in ANALYSES[name].options}
+    assert flags(parser) == {OPTIONS[k].flag for k in ANALYSES[name].extra["keywords"]}
     assert ANALYSES[name].summary[1:] in " ".join(parser.format_help().split())  # (its first letter capitalised)
 
 
