@@ -21,16 +21,32 @@ from ..errors import SolasError
 
 @dataclass(frozen=True)
 class Table:
-    """Rows of numbers (or None where a value is undefined) under `columns` (each name ends with its unit:
-    `_deg`, `_mm`, `_um`, `_cy_mm`, `_waves`; no unit: a ratio), and `summary`: named numbers of the
-    whole result (e.g. MTF50 per field), JSON-ready."""
+    """The numbers of an analysis as rows under named columns.
+
+    Parameters
+    ----------
+    columns : tuple of str
+        The column names, each ending with its unit (`_deg`, `_mm`, `_um`, `_cy_mm`, `_waves`; no unit: a
+        ratio).
+    rows : tuple of tuple
+        The rows, one value per column: a number, or None where it is undefined (a ray that did not arrive).
+    summary : dict
+        Named numbers of the whole result (MTF50 per field, RMS radii), JSON-ready.
+    """
 
     columns: tuple[str, ...]
     rows: tuple[tuple[Any, ...], ...]
     summary: dict = field(default_factory=dict)
 
     def csv(self) -> str:
-        """The rows as CSV text, a header of the column names; an undefined value is an empty cell."""
+        """The rows as CSV text.
+
+        Returns
+        -------
+        str
+            A header of the column names, then one line per row; an undefined value is an empty cell,
+            a float at full precision.
+        """
         out = io.StringIO()
         writer = csv.writer(out, lineterminator="\n")
         writer.writerow(self.columns)
@@ -55,7 +71,23 @@ def _cell(value: Any) -> Any:
 
 @dataclass(frozen=True, kw_only=True)
 class Result:
-    """What every analysis returns. `name`: the analysis (a key of `registry.ANALYSES`)."""
+    """What every analysis returns (a subclass adds its numbers as fields).
+
+    Parameters
+    ----------
+    name : str
+        The analysis, a name of `registry.ANALYSES`.
+    lens : str
+        The lens's name.
+    lens_hash : str
+        The lens's hash (`Lens.hash`).
+    inputs : dict
+        The options it was computed with, as resolved (defaults filled in).
+    conventions : tuple of str
+        What the numbers mean: directions, units, references.
+    warnings : tuple of str
+        What may make the numbers less than they seem (a vignetted pupil, a coarse grid).
+    """
 
     name: str
     lens: str
@@ -65,22 +97,53 @@ class Result:
     warnings: tuple[str, ...] = ()
 
     def table(self) -> Table:
+        """The numbers as a table.
+
+        Returns
+        -------
+        Table
+            Rows under columns named with their units, and the summary numbers.
+        """
         raise NotImplementedError
 
     def plot(self):
-        """A matplotlib Figure."""
+        """The figure of the analysis, made without pyplot (no window, no global state).
+
+        Returns
+        -------
+        matplotlib.figure.Figure
+            Its panels with axes labelled with units and legends, titled with the lens and the analysis.
+        """
         raise NotImplementedError
 
     def as_dict(self) -> dict:
-        """The whole result as JSON-ready values: what it is, its inputs and conventions, its table."""
+        """The whole result as JSON-ready values.
+
+        Returns
+        -------
+        dict
+            The analysis, lens, inputs, conventions, warnings, summary, columns and rows (undefined values
+            None).
+        """
         t = self.table()
         return {"analysis": self.name, "lens": self.lens, "lens_hash": self.lens_hash, "inputs": self.inputs,
                 "conventions": list(self.conventions), "warnings": list(self.warnings), "summary": t.summary,
                 "columns": list(t.columns), "rows": [list(r) for r in t.rows]}
 
     def write(self, png: str | Path) -> tuple[Path, Path, Path]:
-        """Write the figure to `png` and the numbers beside it (.json: `as_dict`, strict JSON; .csv: the
-        table), all three replaced together or none; the three paths."""
+        """Write the figure and its numbers beside it, all three replaced together or none.
+
+        Parameters
+        ----------
+        png : str or Path
+            The figure's path, ending in .png; the .json (`as_dict`, strict JSON) and .csv (`table`) go
+            beside it.
+
+        Returns
+        -------
+        tuple of Path
+            The PNG, JSON and CSV paths.
+        """
         return write_result(self, png)
 
 
