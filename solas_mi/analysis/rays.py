@@ -12,7 +12,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ..optics import tracer as T
+from ..optics import tracer
 from ..optics.pupil import Bundle, ChiefRays, chief_rays, stop_aim
 
 
@@ -42,13 +42,13 @@ def pupil_rays(lens, fields_deg, wavelengths_nm, px: np.ndarray, py: np.ndarray,
     chief = chief_rays(lens, fields, wl)
     b = Bundle(lens, fields, wl, px.shape[1])
     r_stop = lens.surfaces[lens.stop_index].semi_diameter
-    _, _, tr, converged = stop_aim(b, chief, T.F(px.ravel() * r_stop), T.F(py.ravel() * r_stop))
-    x, y, _ = T.to_plane(tr, lens.image_z)
+    _, _, tr, converged = stop_aim(b, chief, tracer.F(px.ravel() * r_stop), tracer.F(py.ravel() * r_stop))
+    x, y, _ = tracer.to_plane(tr, lens.image_z)
     cx, cy = b.per_ray(chief.image_xy[:, 0]), b.per_ray(chief.image_xy[:, 1])
     radius = chief.sphere_radius if sphere_radius_mm is None else np.asarray(sphere_radius_mm, dtype=np.float64)
-    _, _, _, opl, hit = T.to_sphere(tr, cx, cy, lens.image_z, b.per_ray(radius))
+    _, _, _, opl, hit = tracer.to_sphere(tr, cx, cy, lens.image_z, b.per_ray(radius))
     r = tr.rays
-    arrays = T.to_numpy(x, y, r.dx, r.dy, r.dz, opl, converged & tr.ok & (tr.clipped_by == 0) & hit)
+    arrays = tracer.to_numpy(x, y, r.dx, r.dy, r.dz, opl, converged & tr.ok & (tr.clipped_by == 0) & hit)
     x, y, dx, dy, dz, opl, ok = (a.reshape(px.shape) for a in arrays)
     chief_opl = chief.opl + chief.n_image * (chief.sphere_radius - radius)  # along the chief ray, through the centre
     waves = (chief_opl[:, None] - opl) / (wl[:, None] * 1e-6)
