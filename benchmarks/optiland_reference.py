@@ -158,7 +158,8 @@ def mtf(optic, spec: dict) -> dict:
 
 
 def main(argv: list[str]) -> int:
-    request = json.loads(open(argv[0]).read())
+    with open(argv[0]) as f:
+        request = json.load(f)
     results = {"optiland": version("optiland"), "numpy": version("numpy"), "lenses": {}}
     for name, spec in request["lenses"].items():
         optic = build(spec)

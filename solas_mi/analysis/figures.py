@@ -43,7 +43,7 @@ def wavelength_colour(wavelength_nm: float):
 
 def legend(ax, **kwargs) -> None:
     """A legend beside the axes when it has entries, in a small font."""
-    handles, labels = ax.get_legend_handles_labels()
+    handles, _ = ax.get_legend_handles_labels()
     if handles:
         ax.legend(fontsize="small", **kwargs)
 

@@ -5,8 +5,9 @@ derived from there. Light: imports neither NumPy nor the analyses.
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
 
 from ..errors import SolasError
 from ..options import floats

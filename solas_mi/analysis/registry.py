@@ -6,8 +6,8 @@ list are derived from it; a new analysis is one module (a function returning a `
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from importlib import import_module
-from typing import Callable
 
 from ..registry import Registry
 
@@ -16,6 +16,9 @@ _MTF = ("pupil_samples", "pixel_pitch_um", "fill_factor")  # how an MTF is compu
 _AGAINST_FIELD = ("field_samples", "wavelengths_nm")
 
 ANALYSES = Registry("lens analysis", shown=("keywords",))
+"""The lens analyses by name (a `solas_mi.registry.Registry`): each entry's function `f(lens, **options)`
+returning a `base.Result`, the option keywords it takes (`extra["keywords"]`, of `options.OPTIONS`), a
+summary and a reference; the [table of analyses](registries.md)."""
 
 
 def _loaded(module: str, function: str) -> Callable:

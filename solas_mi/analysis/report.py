@@ -6,14 +6,14 @@ from __future__ import annotations
 
 import html
 import sys
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
-from ..resources import installed_version
 from ..errors import SolasError
 from ..imageio import write_text
 from ..optics.paraxial import paraxial
 from ..outputs import hold_folder, output_folder
+from ..resources import installed_version
 from . import inputs
 from . import options as O
 from .registry import ANALYSES
@@ -51,7 +51,8 @@ def report(lens, folder, progress: Callable[[str], None] | None = None, **option
     folder = output_folder(folder)
     sections = []
     with hold_folder(folder, f"solas-mi lens report {lens.name}"):
-        for _, analysis in ANALYSES.items():
+        for name in ANALYSES:
+            analysis = ANALYSES[name]
             if progress:
                 progress(analysis.name)
             own = {k: v for k, v in options.items() if k in analysis.extra["keywords"] and v is not None}

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from ideal_lenses import WL, ideal_lens
 
 from solas_mi.analysis.distortion import distortion
 from solas_mi.analysis.energy import encircled_energy
@@ -17,8 +18,6 @@ from solas_mi.analysis.wavefront import wavefront
 from solas_mi.analysis.zernike import fringe_index, noll_index, polynomial
 from solas_mi.errors import SolasError
 from solas_mi.optics.lens import Lens
-
-from ideal_lenses import WL, ideal_lens
 
 
 def defocus_wavefront(h: np.ndarray, f: float, defocus: float) -> np.ndarray:

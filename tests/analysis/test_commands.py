@@ -4,12 +4,11 @@ name with nothing written, the report's index showing every analysis."""
 import csv
 
 import pytest
+from strict_json import strict_loads
 
 from solas_mi.analysis.options import OPTIONS
 from solas_mi.analysis.registry import ANALYSES
 from solas_mi.cli import build_parser, iter_commands, main
-
-from strict_json import strict_loads
 
 COMMANDS = dict(iter_commands(build_parser()))
 IDEAL = """name = "ideal"

@@ -6,6 +6,7 @@ import math
 
 import numpy as np
 import pytest
+from ideal_lenses import WL, ideal_lens, numerical_aperture
 
 from solas_mi.analysis.mtf import geometric_otf, lens_otf, mtf
 from solas_mi.analysis.mtf_field import mtf50_field, mtf_field
@@ -13,8 +14,6 @@ from solas_mi.analysis.through_focus import through_focus
 from solas_mi.errors import SolasError
 from solas_mi.metrics.mtf import pixel_mtf
 from solas_mi.psf import psf
-
-from ideal_lenses import WL, ideal_lens, numerical_aperture
 
 
 def diffraction_limited(nu, cutoff):
