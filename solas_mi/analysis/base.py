@@ -154,8 +154,7 @@ def output_paths(png: str | Path) -> tuple[Path, Path, Path]:
     png = Path(png)
     if png.suffix.lower() != ".png":
         raise SolasError(f"output {str(png)!r} must end in .png (its .json and .csv are written beside it)")
-    paths = (png, png.with_suffix(".json"), png.with_suffix(".csv"))
-    return tuple(check_target(p) for p in paths)
+    return check_target(png), check_target(png.with_suffix(".json")), check_target(png.with_suffix(".csv"))
 
 
 def write_result(result: Result, png: str | Path) -> tuple[Path, Path, Path]:
