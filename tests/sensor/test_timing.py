@@ -114,3 +114,22 @@ def test_shutter_from_a_sensor_table():
     assert sensor.shutter == Shutter("rolling", 1e-5)
     assert sensor.describe()["stages"][1] == {"stage": "shutter", "mode": "rolling", "line_time_s": 1e-5,
                                               "direction": "top-down", "time_samples": 64}
+
+
+def test_a_moving_scene_of_the_wrong_shape_is_named():
+    with pytest.raises(SolasError, match=r"moving scene's image at t = .* must be \(H, W, 3\)"):
+        capture(chain(Shutter("rolling", LINE_S)), lambda t: np.zeros((ROWS + (t > 0), 4, 3)), 1e-3, seed=1)
+
+
+@pytest.mark.parametrize("values, word", [((0.0, 0.5), "frequency_hz"), ((90.0, 1.5), "duty_cycle"),
+                                          ((90.0, 0.5, 1.0), "phase")])
+def test_bad_pwm_values_are_named(values, word):
+    with pytest.raises(SolasError, match=word):
+        PWMSource(*values)
+
+
+def test_on_time_of_a_window_is_the_duty_cycle_over_whole_periods():
+    source = PWMSource(100.0, 0.25, 0.3)
+    assert source.on_time(np.array([0.0]), np.array([0.05]))[0] == pytest.approx(5 * 0.25 * 0.01)
+    with pytest.raises(SolasError, match="least_on_s"):
+        source.visible_probability(1e-3, 2e-3)
