@@ -7,11 +7,13 @@ from __future__ import annotations
 import argparse
 import math
 import sys
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
 from ..errors import SolasError
 
+FLICKER_FORM = "X0,Y0,X1,Y1,HZ,DUTY[,PHASE]"  # the camera's --flicker: a box of pixels and its PWM source
 CLIPPED_WARNING = 0.01  # the fraction of a RAW's pixels at saturation past which a camera warns
 # the camera's peak memory (bytes), measured as the peak RSS of `solas-mi camera` on 2000×1500 frames of 3
 # and 10 channels against 8×8 ones: the modules (48 MB; 146 MB with the image processor's), the EXR read
@@ -25,6 +27,8 @@ RAW_BYTES_PER_PIXEL = 110.0
 # +25 B for four, +17 B for three exposures), rounded up: the merge's float64 estimate and weight, and each
 # further readout's frame and electrons
 MERGE_BYTES_PER_PIXEL, READOUT_BYTES_PER_PIXEL = 16.0, 8.0
+# --flicker's scene: its static image and its light, and the rows' average of them (float64 R, G, B each)
+FLICKER_BYTES_PER_PIXEL = 72.0
 
 
 def read_input(path):
@@ -95,6 +99,7 @@ def check_camera_memory(args: argparse.Namespace, develop_bytes_per_pixel: float
 
     rows, cols, channels = image_size(args.image)
     need = FIXED_BYTES + frame_bytes(rows, cols, channels, develop_bytes_per_pixel, readouts)
+    need += rows * cols * FLICKER_BYTES_PER_PIXEL if args.flicker is not None else 0.0
     check_memory(f"camera {cols}x{rows}", need, args.force, "a smaller image")
 
 
@@ -135,16 +140,35 @@ def as_irradiance(image, meta: dict, what: str, scale: float = 1.0, f_number: fl
     return image_irradiance(image, f_number, transmission), reading, notice
 
 
+def parse_flicker(text: str):
+    """The box (x0, y0, x1, y1: columns x0 to x1 − 1, rows y0 to y1 − 1) and the `timing.PWMSource` of a
+    `FLICKER_FORM` text, e.g. ``"10,20,30,40,90,0.1,0.5"``."""
+    from .timing import PWMSource
+
+    parts = text.split(",")
+    try:
+        box = tuple(int(p) for p in parts[:4])
+        numbers = [float(p) for p in parts[4:]]
+    except ValueError:
+        box, numbers = (), []
+    if len(box) != 4 or not 2 <= len(numbers) <= 3 or min(box[:2]) < 0 or box[2] <= box[0] or box[3] <= box[1]:
+        raise SolasError(f"--flicker {text!r} must be {FLICKER_FORM}: a box of whole pixels x0 < x1, y0 < y1 "
+                         "from 0, the PWM frequency (Hz), duty cycle and phase (fractions)")
+    return box, PWMSource(*numbers)
+
+
 def raw_frame(args: argparse.Namespace, develop_bytes_per_pixel: float = 0.0):
     """The RAW frame (H, W, uint16 DN) of the command's image, its `SensorModel` and its metadata."""
     from .auto_exposure import exposure_seconds, parse_exposure
     from .capture import as_chain, capture, check_frame, check_seed
     from .files import describe, load_sensor
+    from .timing import flickering_box
 
     model = load_sensor(args.sensor_model)
     exposure = parse_exposure(args.exposure_ms)
     check_seed(args.seed)
     check_frame(args.frame)
+    flicker = None if args.flicker is None else parse_flicker(args.flicker)
     check_camera_memory(args, develop_bytes_per_pixel, len(as_chain(model).readouts))
     image, meta_in = read_input(args.image)
     irradiance, reading, notice = as_irradiance(image, meta_in, str(args.image), args.scale, args.f_number,
@@ -153,13 +177,15 @@ def raw_frame(args: argparse.Namespace, develop_bytes_per_pixel: float = 0.0):
         print(f"notice: {notice}", file=sys.stderr)
     seconds, chosen = exposure_seconds(exposure, model, irradiance)
     exposure_ms = exposure if not chosen else seconds * 1e3
-    raw = capture(model, irradiance, seconds, args.seed, args.frame)
+    scene = irradiance if flicker is None else flickering_box(irradiance, *flicker)
+    raw = capture(model, scene, seconds, args.seed, args.frame)
     fraction, warning = clipping_warning(model, raw, exposure_ms, str(args.output))
     if warning:
         print(f"solas-mi camera: warning: {warning}", file=sys.stderr)
     meta = {"kind": "sensor RAW", "unit": "DN", "sensor_model": str(args.sensor_model), "sensor": describe(model),
             "seed": args.seed, "frame": args.frame, "exposure_ms": exposure_ms,
-            **({"auto_exposure": chosen} if chosen else {}), **reading,
+            **({"auto_exposure": chosen} if chosen else {}),
+            **({"flicker": {"box": list(flicker[0]), **asdict(flicker[1])}} if flicker else {}), **reading,
             "input": str(args.image), "saturated_fraction": fraction}
     return raw, model, meta
 
@@ -234,6 +260,11 @@ def register(subparsers: Any) -> None:
                    help="the image is radiance: image irradiance E = π T L / (4 N²) (default: the f-number a render "
                         "through a lens states in its metadata, else none: the image is irradiance)")
     p.add_argument("--transmission", type=float, default=1.0, help="lens transmission T of radiance (default 1)")
+    p.add_argument("--flicker", metavar=FLICKER_FORM,
+                   help="the pixels of columns X0 to X1 - 1 and rows Y0 to Y1 - 1 are light driven by pulse-width "
+                        "modulation at HZ with duty cycle DUTY and phase PHASE (fractions; default phase 0): each "
+                        "row sees it over its window of the exposure (the sensor's [sensor.shutter], global "
+                        "without one), e.g. an LED traffic light (default: none)")
     p.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
     p.add_argument("-o", "--output", required=True, metavar="OUT.exr", help="RAW frame to write")
     p.set_defaults(run=run_camera)

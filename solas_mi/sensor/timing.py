@@ -151,3 +151,13 @@ class FlickeringScene:
         share = self.source.on_time(starts, ends) / (ends - starts)
         return self.static + self.light * share[:, None, None]
 
+
+def flickering_box(image: np.ndarray, box: tuple[int, int, int, int], source: PWMSource) -> FlickeringScene:
+    """A scene whose pixels in `box` are the light of `source` (their irradiance while on) and the rest static."""
+    x0, y0, x1, y1 = box
+    if x1 > image.shape[1] or y1 > image.shape[0]:
+        raise SolasError(f"--flicker box {box} reaches past the image's {image.shape[1]} x {image.shape[0]} pixels")
+    static, light = image.copy(), np.zeros_like(image)
+    light[y0:y1, x0:x1] = image[y0:y1, x0:x1]
+    static[y0:y1, x0:x1] = 0.0
+    return FlickeringScene(static, light, source)

@@ -3,7 +3,9 @@ probability under a global and a rolling shutter, and a rolling shutter's lean o
 import numpy as np
 import pytest
 
+from solas_mi.cli import main
 from solas_mi.errors import SolasError
+from solas_mi.imageio import read_exr, write_exr
 from solas_mi.sensor.capture import capture
 from solas_mi.sensor.capture import as_chain
 from solas_mi.sensor.chain import SensorChain, chain_of
@@ -133,3 +135,52 @@ def test_on_time_of_a_window_is_the_duty_cycle_over_whole_periods():
     assert source.on_time(np.array([0.0]), np.array([0.05]))[0] == pytest.approx(5 * 0.25 * 0.01)
     with pytest.raises(SolasError, match="least_on_s"):
         source.visible_probability(1e-3, 2e-3)
+
+
+def camera(folder, *extra, toml="sensor.toml"):
+    assert main(["camera", str(folder / "in.exr"), "--sensor-model", str(folder / toml), "--exposure-ms", "1",
+                 "--seed", "5", "-o", str(folder / "raw.exr"), *extra]) == 0
+    return read_exr(folder / "raw.exr")
+
+
+@pytest.fixture
+def led(tmp_path):
+    image = np.full((ROWS, 16, 3), 2.0, dtype=np.float32)
+    write_exr(tmp_path / "in.exr", dict(zip("RGB", np.moveaxis(image, -1, 0))))
+    (tmp_path / "sensor.toml").write_text("[sensor]\npixel_pitch_um = 3.0\nfull_well_e = 100000\n")
+    (tmp_path / "rolling.toml").write_text("[sensor]\npixel_pitch_um = 3.0\nfull_well_e = 100000\n\n"
+                                           f"[sensor.shutter]\nmode = \"rolling\"\nline_time_s = {LINE_S}\n")
+    return tmp_path
+
+
+def test_camera_flicker_box_is_on_or_off_as_its_phase_says(led):
+    plain, _ = camera(led)
+    # 90 Hz at 10 %: on for the first 1.11 ms of the period, so over all of the 1 ms exposure at phase 0
+    on, meta = camera(led, "--flicker", "4,10,12,30,90,0.1,0")
+    assert np.array_equal(on["RAW"], plain["RAW"])
+    assert meta["flicker"] == {"box": [4, 10, 12, 30], "frequency_hz": 90.0, "duty_cycle": 0.1, "phase": 0.0}
+    off, _ = camera(led, "--flicker", "4,10,12,30,90,0.1,0.5")  # on from 5.6 ms: dark over the exposure
+    outside = np.ones(plain["RAW"].shape, bool)
+    outside[10:30, 4:12] = False
+    assert np.array_equal(off["RAW"][outside], plain["RAW"][outside])
+    black = load_sensor(led / "sensor.toml").black_level_dn
+    assert abs(off["RAW"][10:30, 4:12].mean() - black) < 2.0 < plain["RAW"][10:30, 4:12].mean() - black
+
+
+def test_camera_flicker_under_a_rolling_shutter_bands_the_rows(led):
+    # phase 0.95: on over the last 5 % of the period, 0.56 ms before the first row starts, through 0.56 ms
+    raw, _ = camera(led, "--flicker", "0,0,16,120,90,0.1,0.95", toml="rolling.toml")
+    source = PWMSource(90.0, 0.1, 0.95)
+    starts, ends = Shutter("rolling", LINE_S).windows(ROWS, 1e-3)
+    share = source.on_time(starts, ends) / 1e-3  # each row's share of the light: falls from 0.56 to 0
+    black = load_sensor(led / "sensor.toml").black_level_dn
+    rows = raw["RAW"].mean(axis=1) - black
+    assert np.corrcoef(rows, share)[0, 1] > 0.99 and share[0] > 0.5 and share[-1] == 0.0
+
+
+@pytest.mark.parametrize("value", ["1,2,3", "4,10,2,30,90,0.1", "a,b,c,d,90,0.1", "0,0,4,4,90", "0,0,4,4,-5,0.1",
+                                   "0,0,999,4,90,0.1"])
+def test_bad_flicker_is_one_line_and_writes_nothing(led, capsys, value):
+    assert main(["camera", str(led / "in.exr"), "--sensor-model", str(led / "sensor.toml"), "--exposure-ms", "1",
+                 "-o", str(led / "raw.exr"), "--flicker", value]) == 2
+    assert len(capsys.readouterr().err.strip().splitlines()) == 1 and not (led / "raw.exr").exists()
