@@ -6,8 +6,7 @@ import pytest
 from solas_mi.cli import main
 from solas_mi.errors import SolasError
 from solas_mi.imageio import read_exr, write_exr
-from solas_mi.sensor.capture import capture
-from solas_mi.sensor.capture import as_chain
+from solas_mi.sensor.capture import as_chain, capture
 from solas_mi.sensor.chain import SensorChain, chain_of
 from solas_mi.sensor.files import load_sensor
 from solas_mi.sensor.model import SensorModel
