@@ -27,8 +27,9 @@ RAW_BYTES_PER_PIXEL = 110.0
 # +25 B for four, +17 B for three exposures), rounded up: the merge's float64 estimate and weight, and each
 # further readout's frame and electrons
 MERGE_BYTES_PER_PIXEL, READOUT_BYTES_PER_PIXEL = 16.0, 8.0
-# --flicker's scene: its static image and its light, and the rows' average of them (float64 R, G, B each)
-FLICKER_BYTES_PER_PIXEL = 72.0
+# a scene in time (--flicker, --image-motion): two images of it (its static image and light, or one instant
+# and its weighted share) and the rows' average (float64 R, G, B each)
+TIMED_SCENE_BYTES_PER_PIXEL = 72.0
 
 
 def read_input(path):
@@ -99,7 +100,8 @@ def check_camera_memory(args: argparse.Namespace, develop_bytes_per_pixel: float
 
     rows, cols, channels = image_size(args.image)
     need = FIXED_BYTES + frame_bytes(rows, cols, channels, develop_bytes_per_pixel, readouts)
-    need += rows * cols * FLICKER_BYTES_PER_PIXEL if args.flicker is not None else 0.0
+    timed = args.flicker is not None or args.image_motion is not None
+    need += rows * cols * TIMED_SCENE_BYTES_PER_PIXEL if timed else 0.0
     check_memory(f"camera {cols}x{rows}", need, args.force, "a smaller image")
 
 
@@ -157,18 +159,40 @@ def parse_flicker(text: str):
     return box, PWMSource(*numbers)
 
 
+def parse_motion(text: str) -> tuple[float, float]:
+    """The velocity (px/s, right and down) of a ``VX,VY`` text."""
+    try:
+        velocity = tuple(float(p) for p in text.split(","))
+    except ValueError:
+        velocity = ()
+    if len(velocity) != 2 or not all(math.isfinite(v) for v in velocity):
+        raise SolasError(f"--image-motion {text!r} must be VX,VY: the image's speed in pixels per second, "
+                         "rightwards and downwards, two finite numbers")
+    return velocity[0], velocity[1]
+
+
+def timed_scene(args: argparse.Namespace):
+    """The parsed --flicker (box, source) or --image-motion (velocity) of the command, at most one of them;
+    None without."""
+    if args.flicker is not None and args.image_motion is not None:
+        raise SolasError("give --flicker or --image-motion, not both: a scene in time is one or the other here")
+    if args.flicker is not None:
+        return parse_flicker(args.flicker)
+    return None if args.image_motion is None else parse_motion(args.image_motion)
+
+
 def raw_frame(args: argparse.Namespace, develop_bytes_per_pixel: float = 0.0):
     """The RAW frame (H, W, uint16 DN) of the command's image, its `SensorModel` and its metadata."""
     from .auto_exposure import exposure_seconds, parse_exposure
     from .capture import as_chain, capture, check_frame, check_seed
     from .files import describe, load_sensor
-    from .timing import flickering_box
+    from .timing import flickering_box, moving_image
 
     model = load_sensor(args.sensor_model)
     exposure = parse_exposure(args.exposure_ms)
     check_seed(args.seed)
     check_frame(args.frame)
-    flicker = None if args.flicker is None else parse_flicker(args.flicker)
+    timed = timed_scene(args)
     check_camera_memory(args, develop_bytes_per_pixel, len(as_chain(model).readouts))
     image, meta_in = read_input(args.image)
     irradiance, reading, notice = as_irradiance(image, meta_in, str(args.image), args.scale, args.f_number,
@@ -177,7 +201,11 @@ def raw_frame(args: argparse.Namespace, develop_bytes_per_pixel: float = 0.0):
         print(f"notice: {notice}", file=sys.stderr)
     seconds, chosen = exposure_seconds(exposure, model, irradiance)
     exposure_ms = exposure if not chosen else seconds * 1e3
-    scene = irradiance if flicker is None else flickering_box(irradiance, *flicker)
+    scene = irradiance
+    if args.flicker is not None:
+        scene = flickering_box(irradiance, *timed)
+    elif args.image_motion is not None:
+        scene = moving_image(irradiance, timed)
     raw = capture(model, scene, seconds, args.seed, args.frame)
     fraction, warning = clipping_warning(model, raw, exposure_ms, str(args.output))
     if warning:
@@ -185,7 +213,8 @@ def raw_frame(args: argparse.Namespace, develop_bytes_per_pixel: float = 0.0):
     meta = {"kind": "sensor RAW", "unit": "DN", "sensor_model": str(args.sensor_model), "sensor": describe(model),
             "seed": args.seed, "frame": args.frame, "exposure_ms": exposure_ms,
             **({"auto_exposure": chosen} if chosen else {}),
-            **({"flicker": {"box": list(flicker[0]), **asdict(flicker[1])}} if flicker else {}), **reading,
+            **({"flicker": {"box": list(timed[0]), **asdict(timed[1])}} if args.flicker is not None else {}),
+            **({"image_motion_px_s": list(timed)} if args.image_motion is not None else {}), **reading,
             "input": str(args.image), "saturated_fraction": fraction}
     return raw, model, meta
 
@@ -265,6 +294,11 @@ def register(subparsers: Any) -> None:
                         "modulation at HZ with duty cycle DUTY and phase PHASE (fractions; default phase 0): each "
                         "row sees it over its window of the exposure (the sensor's [sensor.shutter], global "
                         "without one), e.g. an LED traffic light (default: none)")
+    p.add_argument("--image-motion", metavar="VX,VY",
+                   help="the image moves at VX, VY pixels per second (right, down) during the frame, e.g. a camera "
+                        "panning across a distant scene: each row sees it over its window of the exposure (a "
+                        "rolling shutter skews it, every shutter blurs it; sampled at the shutter's time_samples) "
+                        "(default: still)")
     p.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
     p.add_argument("-o", "--output", required=True, metavar="OUT.exr", help="RAW frame to write")
     p.set_defaults(run=run_camera)

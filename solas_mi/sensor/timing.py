@@ -161,3 +161,13 @@ def flickering_box(image: np.ndarray, box: tuple[int, int, int, int], source: PW
     light[y0:y1, x0:x1] = image[y0:y1, x0:x1]
     static[y0:y1, x0:x1] = 0.0
     return FlickeringScene(static, light, source)
+
+
+def moving_image(image: np.ndarray, velocity_px_s: tuple[float, float]):
+    """The scene ``scene(t)`` of an image moving at (vx, vy) pixels per second (right and down), e.g. a camera
+    panning across a distant scene: the image shifted by (vx t, vy t), interpolated linearly between pixels,
+    its edge pixels held past its borders."""
+    from scipy.ndimage import shift
+
+    vx, vy = velocity_px_s
+    return lambda t: shift(image, (vy * t, vx * t, 0.0), order=1, mode="nearest")

@@ -177,9 +177,27 @@ def test_camera_flicker_under_a_rolling_shutter_bands_the_rows(led):
     assert np.corrcoef(rows, share)[0, 1] > 0.99 and share[0] > 0.5 and share[-1] == 0.0
 
 
-@pytest.mark.parametrize("value", ["1,2,3", "4,10,2,30,90,0.1", "a,b,c,d,90,0.1", "0,0,4,4,90", "0,0,4,4,-5,0.1",
-                                   "0,0,999,4,90,0.1"])
-def test_bad_flicker_is_one_line_and_writes_nothing(led, capsys, value):
+def test_camera_image_motion_leans_a_bar_under_a_rolling_shutter(tmp_path):
+    image = bar(0.0)(0.0).astype(np.float32)  # the bar standing at x0 = 40
+    write_exr(tmp_path / "in.exr", dict(zip("RGB", np.moveaxis(image, -1, 0))))
+    sensor = "[sensor]\nread_noise_e = 3.0\nfull_well_e = 20000\ngain_dn_per_e = 0.2\n\n[sensor.shutter]\n"
+    (tmp_path / "rolling.toml").write_text(sensor + f"mode = \"rolling\"\nline_time_s = {LINE_S}\ntime_samples = 512\n")
+    speed = 20000.0
+    assert main(["camera", str(tmp_path / "in.exr"), "--sensor-model", str(tmp_path / "rolling.toml"),
+                 "--exposure-ms", "0.2", "--image-motion", f"{speed},0", "-o", str(tmp_path / "raw.exr")]) == 0
+    channels, meta = read_exr(tmp_path / "raw.exr")
+    raw = channels["RAW"].astype(np.float64) - load_sensor(tmp_path / "rolling.toml").black_level_dn
+    x = np.arange(raw.shape[1]) + 0.5
+    slope = np.polyfit(np.arange(ROWS), (raw * x).sum(axis=1) / raw.sum(axis=1), 1)[0]
+    assert slope * ROWS == pytest.approx(speed * LINE_S * ROWS, abs=0.5) and meta["image_motion_px_s"] == [speed, 0]
+
+
+BAD_FLICKER = ["1,2,3", "4,10,2,30,90,0.1", "a,b,c,d,90,0.1", "0,0,4,4,90", "0,0,4,4,-5,0.1", "0,0,999,4,90,0.1"]
+
+
+@pytest.mark.parametrize("extra", [["--flicker", value] for value in BAD_FLICKER] + [
+    ["--image-motion", "5"], ["--image-motion", "1,inf"], ["--image-motion", "1,2", "--flicker", "0,0,4,4,90,0.1"]])
+def test_bad_scene_in_time_is_one_line_and_writes_nothing(led, capsys, extra):
     assert main(["camera", str(led / "in.exr"), "--sensor-model", str(led / "sensor.toml"), "--exposure-ms", "1",
-                 "-o", str(led / "raw.exr"), "--flicker", value]) == 2
+                 "-o", str(led / "raw.exr"), *extra]) == 2
     assert len(capsys.readouterr().err.strip().splitlines()) == 1 and not (led / "raw.exr").exists()
