@@ -13,14 +13,12 @@ import numpy as np
 
 from . import tracer as T
 from .lens import Lens
+from .newton import TOL as _TOL, solve
 from .paraxial import paraxial, pupil_distance
 
 dr = T.dr
-_HALVINGS = 6  # a Newton step that loses its ray is halved up to this many times
-_STEP = 1e-5  # mm, finite-difference step in entrance coordinates
 POLAR_STEP_DEG = 2.0  # largest step of the field when continuing a chief-ray aim outward
 _MIN_STEP_DEG = 1e-3  # a continuation step that keeps losing its ray is halved down to this
-_TOL = 1e-13  # convergence of aimed quantities (mm at the stop, direction cosines on the sphere)
 
 
 class Bundle:
@@ -32,83 +30,56 @@ class Bundle:
         self.n_fields = len(field_deg)
         self.per_field = per_field
         self.index = dr.arange(T.UInt32, self.n_fields * per_field) // per_field
-        # per ray: field tangents (x, y), or the unit direction (x, y, z) of polar fields
-        incoming = lens.field_type.incoming(field_deg)
-        self.incoming = tuple(T.gather(incoming[:, i], self.index) for i in range(incoming.shape[1]))
-        self.wavelength_um = T.gather(np.asarray(wavelength_nm) / 1000.0, self.index)
-        pts = T.object_points(lens, field_deg)
-        self.object_point = None if pts is None else (T.gather(pts[:, 0], self.index), T.gather(pts[:, 1], self.index))
+        # per field: field tangents (x, y), or the unit direction (x, y, z) of polar fields
+        self._incoming = lens.field_type.incoming(field_deg)
+        self._object_points = T.object_points(lens, field_deg)
         # what a converged aim can reach: rays launched from a far object carry its coordinates'
         # rounding (≈ 1e-17 of the distance, measured: 4e-8 mm at 1e12 mm) into every crossing
         self.tolerance = 1e3 * _TOL + (0.0 if lens.at_infinity else 1e-17 * abs(lens.object_distance))
 
-    def per_ray(self, values: np.ndarray) -> T.F:
-        """Per-field values spread over the bundle's rays."""
-        return T.gather(values, self.index)
+    def per_ray(self, values: np.ndarray, rays: T.UInt32 | None = None) -> T.F:
+        """Per-field values spread over the bundle's rays (or the rays `rays`, a UInt32 index)."""
+        return T.gather(values, self.index if rays is None else rays // self.per_field)
 
-    def launch(self, ex: T.F, ey: T.F) -> T.Rays:
-        """The bundle's rays at entrance coordinates (ex, ey), in the lens's field type."""
+    def launch(self, ex: T.F, ey: T.F, rays: T.UInt32 | None = None) -> T.Rays:
+        """The bundle's rays (or the rays `rays`) at entrance coordinates (ex, ey), in the lens's field type."""
+        incoming = [self.per_ray(self._incoming[:, i], rays) for i in range(self._incoming.shape[1])]
         if self.lens.field_type.sideways:  # directions up to and beyond 90°, object at infinity
-            return T.launch_direction(self.lens, *self.incoming, ex, ey)
-        return T.launch(self.lens, *self.incoming, ex, ey, self.object_point)
+            return T.launch_direction(self.lens, *incoming, ex, ey)
+        pts = self._object_points
+        return T.launch(self.lens, *incoming, ex, ey,
+                        None if pts is None else (self.per_ray(pts[:, 0], rays), self.per_ray(pts[:, 1], rays)))
 
-    def trace(self, ex: T.F, ey: T.F, heights: list | None = None) -> T.Traced:
-        """The rays of entrance coordinates (ex, ey) traced; `heights`: see `tracer.trace`."""
-        return T.trace(self.lens, self.launch(ex, ey), self.wavelength_um, heights=heights)
+    def trace(self, ex: T.F, ey: T.F, heights: list | None = None, rays: T.UInt32 | None = None) -> T.Traced:
+        """The rays (or the rays `rays`) of entrance coordinates (ex, ey) traced; `heights`: see `tracer.trace`."""
+        wavelength_um = self.per_ray(np.asarray(self.bundle_wavelengths) / 1000.0, rays)
+        return T.trace(self.lens, self.launch(ex, ey, rays), wavelength_um, heights=heights)
 
 
-def aim(bundle: Bundle, target, ex: T.F, ey: T.F, goal_x: T.F, goal_y: T.F, max_iter: int = 60):
-    """Newton iteration on entrance coordinates so that target(traced) → (goal_x, goal_y).
+def aim(bundle: Bundle, target, ex: T.F, ey: T.F, goal_x: T.F, goal_y: T.F, max_iter: int = 60, jacobian=None):
+    """Newton iteration on entrance coordinates so that target(traced) → (goal_x, goal_y) (`newton`).
 
-    `target(traced)` returns (gx, gy, ok). The Jacobian is taken by finite differences and reused
-    (chord method), and taken again where a residual stops falling; a step that would leave the rays
-    that pass (into total internal reflection, past a surface's edge) is halved; the iteration ends when
-    every ray's residual is below _TOL or has not fallen for a few steps, or after `max_iter`. A ray counts as
-    converged when its residual is within the precision the launch allows (`Bundle.tolerance`).
-    Returns (ex, ey, traced at the solution, converged mask)."""
-    def residual(ax, ay):
-        tr = bundle.trace(ax, ay)
-        gx, gy, ok = target(tr)
-        return gx - goal_x, gy - goal_y, ok, tr
+    `target(traced, rays=None)` returns (gx, gy, ok) of the rays traced. The Jacobian (j11, j12, j21, j22) =
+    ∂(gx, gy)/∂(ex, ey) is `jacobian` where given (e.g. from neighbouring solutions), else taken by finite
+    differences; it is reused (chord method), and taken again for a ray whose residual stops falling; a
+    step that would leave the rays that pass (into total internal reflection, past a surface's edge) is
+    halved; a ray's iteration ends when its residual is below the tolerance or has not fallen for a few
+    steps, or after `max_iter`. A ray counts as converged when its residual is within the precision the
+    launch allows (`Bundle.tolerance`). Returns (ex, ey, traced at the solution, converged mask)."""
+    return aim_keeping(bundle, target, ex, ey, goal_x, goal_y, max_iter, jacobian)[:4]
 
-    def jacobian(ax, ay, rx, ry):
-        px, py, _, _ = residual(ax + _STEP, ay)
-        qx, qy, _, _ = residual(ax, ay + _STEP)
-        j = ((px - rx) / _STEP, (qx - rx) / _STEP, (py - ry) / _STEP, (qy - ry) / _STEP)
-        dr.eval(*j)
-        return j
 
-    rx, ry, ok, tr = residual(ex, ey)
-    j11, j12, j21, j22 = jacobian(ex, ey, rx, ry)
-    best = np.full(dr.width(rx), np.inf)  # per ray, so a batch's stiff rays do not stop the others
-    stalled = np.zeros(dr.width(rx), dtype=np.int64)
-    for _ in range(max_iter):
-        det = j11 * j22 - j12 * j21
-        step_x = (j22 * rx - j12 * ry) / det
-        step_y = (-j21 * rx + j11 * ry) / det
-        good = ok & dr.isfinite(step_x) & dr.isfinite(step_y)
-        for _ in range(_HALVINGS + 1):
-            nx, ny = dr.select(good, ex - step_x, ex), dr.select(good, ey - step_y, ey)
-            nrx, nry, nok, ntr = residual(nx, ny)
-            lost = good & ~nok  # the step left the rays that pass (total internal reflection, a missed surface)
-            dr.eval(nx, ny, nrx, nry, nok, lost)
-            if not dr.any(lost):
-                break
-            step_x, step_y = dr.select(lost, 0.5 * step_x, step_x), dr.select(lost, 0.5 * step_y, step_y)
-        ex, ey, rx, ry, ok, tr = nx, ny, nrx, nry, nok, ntr
-        err = np.abs(np.asarray(dr.select(ok, dr.maximum(dr.abs(rx), dr.abs(ry)), 0.0)))
-        stalled = np.where(err > 0.5 * best, stalled + 1, 0)
-        best = np.minimum(best, err)
-        active = (err >= _TOL) & (stalled < 4)  # stalled 4 times: at the floor of what the arithmetic resolves
-        if not active.any():
-            break
-        if (active & (stalled == 2)).any():  # the chord has stopped working: a fresh Jacobian where the rays are now
-            j11, j12, j21, j22 = jacobian(ex, ey, rx, ry)
+def aim_keeping(bundle: Bundle, target, ex: T.F, ey: T.F, goal_x: T.F, goal_y: T.F, max_iter: int = 60,
+                jacobian=None, keep=None):
+    """`aim`, and also `keep(traced)` (a tuple of arrays) evaluated with each step's trace, so that what
+    the caller needs of the rays at the solution costs no trace of its own: (ex, ey, traced, converged,
+    kept)."""
+    ex, ey, rx, ry, ok, kept = solve(bundle, target, ex, ey, goal_x, goal_y, max_iter, jacobian, keep)
     converged = ok & (dr.maximum(dr.abs(rx), dr.abs(ry)) < bundle.tolerance)
-    return ex, ey, tr, converged
+    return ex, ey, bundle.trace(ex, ey), converged, kept
 
 
-def stop_target(tr: T.Traced):
+def stop_target(tr: T.Traced, rays=None):
     return tr.stop_x, tr.stop_y, tr.ok
 
 
@@ -130,7 +101,7 @@ def continued_aim(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) 
         nxt = np.minimum(done + step, 1.0)[active]
         b = Bundle(lens, field_deg[active] * nxt[:, None], wavelength_nm[active], 1)
         zero = dr.zeros(T.F, int(active.sum()))
-        ex, ey, _, conv = aim(b, stop_target, T.F(e[active, 0]), T.F(e[active, 1]), zero, zero)
+        ex, ey, _, conv = aim(b, stop_target, T.array(e[active, 0]), T.array(e[active, 1]), zero, zero)
         ex, ey, conv = T.to_numpy(ex, ey, conv)
         idx = np.flatnonzero(active)
         e[idx[conv]] = np.stack([ex, ey], axis=-1)[conv]
@@ -165,7 +136,7 @@ def chief_aim(lens: Lens, b: Bundle) -> tuple[np.ndarray, np.ndarray]:
     else:
         e0 = _paraxial_aim(lens, fields)
         zero = dr.zeros(T.F, b.n_fields)
-        lost = ~T.to_numpy(aim(b, stop_target, T.F(e0[:, 0]), T.F(e0[:, 1]), zero, zero)[3])[0]
+        lost = ~T.to_numpy(aim(b, stop_target, T.array(e0[:, 0]), T.array(e0[:, 1]), zero, zero)[3])[0]
         if lost.any():
             e0[lost], reached = continued_aim(lens, fields[lost], waves[lost])
             lost[np.flatnonzero(lost)[reached >= 1.0]] = False
@@ -184,7 +155,7 @@ def nearest_passing(lens: Lens, field_deg: np.ndarray, wavelength_nm: float, sam
     g = np.linspace(-span, span, samples)
     ex, ey = (a.ravel() for a in np.meshgrid(g, g))
     b = Bundle(lens, np.tile(field_deg, (len(ex), 1)), np.full(len(ex), wavelength_nm), 1)
-    tr = b.trace(T.F(ex), T.F(ey))
+    tr = b.trace(T.array(ex), T.array(ey))
     ok, clipped, sx, sy = T.to_numpy(tr.ok, tr.clipped_by, tr.stop_x, tr.stop_y)
     passed = ok & ((clipped == 0) | (clipped > lens.stop_index + 1))
     if not passed.any():
@@ -200,14 +171,14 @@ class _FilmBundle:
     for `aim`: their entrance coordinates are points on the last surface's vertex plane."""
 
     def __init__(self, rev: Lens, x: np.ndarray, y: np.ndarray, wavelength_nm: float):
-        self.lens, self.x, self.y = rev, T.F(x), T.F(y)
-        self.wavelength_um = T.F(np.full(len(x), wavelength_nm * 1e-3))
+        self.lens, self.x, self.y = rev, T.array(x), T.array(y)
+        self.wavelength_um = T.array(np.full(len(x), wavelength_nm * 1e-3))
         self.tolerance = 1e3 * _TOL
 
-    def trace(self, ex: T.F, ey: T.F, heights: list | None = None) -> T.Traced:
+    def trace(self, ex: T.F, ey: T.F, heights: list | None = None, rays: T.UInt32 | None = None) -> T.Traced:
         zero = 0.0 * ex
-        return T.trace(self.lens, T.launch(self.lens, zero, zero, ex, ey, (self.x, self.y)), self.wavelength_um,
-                       heights=heights)
+        x, y, wavelength = (v if rays is None else dr.gather(T.F, v, rays) for v in (self.x, self.y, self.wavelength_um))
+        return T.trace(self.lens, T.launch(self.lens, zero, zero, ex, ey, (x, y)), wavelength, heights=heights)
 
 
 def film_chief_aim(rev: Lens, x: np.ndarray, y: np.ndarray, wavelength_nm: float) -> tuple[np.ndarray, ...]:
@@ -221,7 +192,7 @@ def film_chief_aim(rev: Lens, x: np.ndarray, y: np.ndarray, wavelength_nm: float
     ep_z, od = paraxial(replace(rev, object_distance=math.inf)).entrance_pupil_z_mm, rev.object_distance
     shrink = 1.0 - od / (ep_z + od)
     b = _FilmBundle(rev, x, y, wavelength_nm)
-    zero = T.F(np.zeros(len(x)))
-    ex, ey, tr, converged = aim(b, stop_target, T.F(x * shrink), T.F(y * shrink), zero, zero)
+    zero = dr.zeros(T.F, len(x))
+    ex, ey, tr, converged = aim(b, stop_target, T.array(x * shrink), T.array(y * shrink), zero, zero)
     ex, ey, converged, clipped = T.to_numpy(ex, ey, converged, tr.clipped_by)
     return ex, ey, converged & (clipped == 0)

@@ -91,7 +91,12 @@ WINDOW_ENERGY_LIMIT = 0.94
 
 def window_energy(data: np.ndarray, pitch_um: float, transmission: np.ndarray) -> np.ndarray:
     """Fraction of each PSF's transmitted power (…, size, size in 1/µm²) inside its window."""
-    return data.sum(axis=(-2, -1)) * pitch_um ** 2 / np.where(transmission > 0, transmission, 1.0)
+    return energy_of_sum(data.sum(axis=(-2, -1)), pitch_um, transmission)
+
+
+def energy_of_sum(total: np.ndarray, pitch_um: float, transmission: np.ndarray) -> np.ndarray:
+    """`window_energy` of PSFs whose window sums (1/µm²) are `total`."""
+    return total * pitch_um ** 2 / np.where(transmission > 0, transmission, 1.0)
 
 
 def window_warnings(energy: np.ndarray, fields_deg: np.ndarray, size: int, pitch_um: float) -> list[str]:

@@ -97,7 +97,7 @@ def entrance_grid_hits(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndar
     result = []
     for sl, ex, ey, power in entrance_grid(lens, field_deg, wavelength_nm, rays, chief):
         b = P.Bundle(lens, field_deg[sl], wavelength_nm[sl], rays * rays)
-        tr = b.trace(T.F(ex.ravel()), T.F(ey.ravel()))
+        tr = b.trace(T.array(ex.ravel()), T.array(ey.ravel()))
         x, y, _ = T.to_plane(tr, lens.image_z)
         keep, x, y = (a.reshape(-1, rays * rays) for a in T.to_numpy(tr.ok & (tr.clipped_by == 0), x, y))
         for j, f in enumerate(range(sl.start, sl.stop)):

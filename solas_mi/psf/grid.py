@@ -13,7 +13,9 @@ The SOLAS paper's PSF maps are such grids (8×8 over the doublet's ±2°; see th
 from __future__ import annotations
 
 import math
+import os
 import time
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field, replace
 
 import numpy as np
@@ -27,7 +29,6 @@ from .methods import compute, method_options
 from .sensor import default_sensor_mm, fields_for_points, node_mm
 from .spec import FIELD_SAMPLINGS, LAYOUTS, GridSpec
 MOSAIC_PX = 2048  # the preview mosaic is block-averaged to fit this (a 32×32 grid of 160 px: 64 px a PSF)
-_FIELDS_PER_BATCH = 64
 
 
 @dataclass
@@ -282,7 +283,8 @@ class Nodes:
 def compute_nodes(lens: Lens, spec: GridSpec, wl: tuple[float, ...], flat: np.ndarray, size: int,
                   progress=None) -> Nodes:
     """The PSFs of fields `flat` (n, 2) at wavelengths `wl`, size×size: each distinct |field| pair
-    (`symmetry_classes`) computed once, in batches, and mirrored onto its nodes."""
+    (`symmetry_classes`) computed once, a wavelength's at once (in batches of at most `BATCH_RAYS` pupil
+    rays), and mirrored onto its nodes."""
     ny, nx = spec.grid
     n = len(flat)
     canon, which, swap, sign = symmetry_classes(flat)
@@ -293,36 +295,73 @@ def compute_nodes(lens: Lens, spec: GridSpec, wl: tuple[float, ...], flat: np.nd
     chief, transmission, energy = np.zeros((len(wl), n, 2)), np.zeros((len(wl), n)), np.zeros((len(wl), n))
     vignetting: set[int] = set()
     doubts: list[str] = []
+    per_field = spec.pupil_samples ** 2 if spec.method == "fraunhofer" else spec.rays ** 2
+    batches = -(-len(canon) * per_field // BATCH_RAYS)
     for k, w in enumerate(wl):
-        for a in range(0, len(canon), _FIELDS_PER_BATCH):
-            b = min(len(canon), a + _FIELDS_PER_BATCH)
+        for part in np.array_split(np.arange(len(canon)), batches):
+            a, b = int(part[0]), int(part[-1]) + 1
             c = compute(lens, canon[a:b], np.full(b - a, w), spec.pitch_um, odd, spec.method,
                         **spec.sampling_options())
             vignetting.update(s for v in c.vignetted_by for s in v)
             doubts.extend(d for d in c.warnings if d not in doubts)
-            for j in range(b - a):
-                xy = c.chief.image_xy[j] + (0.0 if c.centre_um is None else c.centre_um[j] * 1e-3)
-                for i in np.flatnonzero(which == a + j):
-                    p, xy_i = mirrored(c.data[j], xy, swap[i], sign[i])
-                    data[k, i // nx, i % nx] = S.normalize(p[:size, :size], spec.normalization)
-                    chief[k, i] = xy_i * sign[i]
-                    transmission[k, i] = c.transmission[j]
-                    energy[k, i] = S.window_energy(p[:size, :size], spec.pitch_um, c.transmission[j])
+            nodes = np.flatnonzero((which >= a) & (which < b))
+            j = which[nodes] - a
+            xy = c.chief.image_xy[j] + (0.0 if c.centre_um is None else c.centre_um[j] * 1e-3)
+            chief[k, nodes] = np.where(swap[nodes, None], xy[:, ::-1], xy) * sign[nodes]
+            transmission[k, nodes] = c.transmission[j]
+            turns = np.stack([swap[nodes], sign[nodes, 0] < 0, sign[nodes, 1] < 0], axis=1)
+            energy[k, nodes] = place(c.data, c.transmission, nodes, j, turns, data[k], spec.normalization,
+                                     spec.pitch_um)
             if progress is not None:  # in nodes: the PSFs of the grid, mirrored ones included
                 progress(k * n + int(np.count_nonzero(which < b)), len(wl) * n)
     return Nodes(data, chief, transmission, energy, tuple(sorted(vignetting)), tuple(doubts))
 
 
-def mirrored(p: np.ndarray, xy: np.ndarray, swap: bool, sign: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """A canonical field's PSF and origin (x, y) turned to a node's: transposed where x and y swap, then
-    mirrored where a sign is negative (the origin's signs are applied by the caller)."""
+BATCH_RAYS = 1 << 22  # pupil rays of one batch of PSFs: about 0.5 GB of working arrays (measured: 3 x 136
+# PSFs of 128² rays, the doublet's 32x32 grid, peak RSS ...)
+
+
+def place(psfs: np.ndarray, transmission: np.ndarray, nodes: np.ndarray, source: np.ndarray, turns: np.ndarray,
+          out: np.ndarray, normalization: str, pitch_um: float) -> np.ndarray:
+    """Canonical PSFs `psfs` (m, odd, odd) turned onto grid nodes: node `nodes[i]` (row-major in `out`, (ny, nx,
+    size, size) float32) gets PSF `source[i]` turned by `turns[i]` (swap, flip x, flip y: `_turned`), cut to
+    size × size and normalised; in threads (NumPy lets go of the GIL). Returns each node's fraction of its
+    transmitted light in its window."""
+    nx, size = out.shape[1], out.shape[-1]
+    energy = np.empty(len(nodes))
+    jobs = []
+    for key in {tuple(t) for t in turns.tolist()}:
+        mine = np.flatnonzero((turns == key).all(axis=1))
+        turned = _turned(psfs, *key)[:, :size, :size]  # views: (m, size, size)
+        used = np.unique(source[mine])
+        sums, scale = np.zeros(len(psfs)), np.ones(len(psfs))
+        sums[used] = turned[used].sum(axis=(1, 2))
+        if normalization != "none":
+            scale[used] = sums[used] if normalization == "sum" else turned[used].max(axis=(1, 2))
+        scale = 1.0 / np.where(scale > 0, scale, 1.0)
+        energy[mine] = S.energy_of_sum(sums[source[mine]], pitch_um, transmission[source[mine]])
+        jobs += [(turned[source[i]], scale[source[i]], out[nodes[i] // nx, nodes[i] % nx]) for i in mine]
+
+    def run(part: list) -> None:
+        for psf, factor, into in part:
+            np.multiply(psf, factor, out=into, casting="same_kind")
+
+    workers = max(1, min(len(jobs), len(os.sched_getaffinity(0))))
+    with ThreadPoolExecutor(workers) as pool:
+        list(pool.map(run, [jobs[k::workers] for k in range(workers)]))
+    return energy
+
+
+def _turned(p: np.ndarray, swap: bool, flip_x: bool, flip_y: bool) -> np.ndarray:
+    """PSFs (…, y, x) transposed where x and y swap (about the centre pixel: flipped both ways, then
+    transposed), then mirrored left-right (`flip_x`) and top-bottom (`flip_y`): views."""
     if swap:
-        p, xy = p[::-1, ::-1].T, xy[::-1]
-    if sign[0] < 0:
-        p = p[:, ::-1]
-    if sign[1] < 0:
-        p = p[::-1, :]
-    return p, xy
+        p = p[..., ::-1, ::-1].swapaxes(-1, -2)
+    if flip_x:
+        p = p[..., :, ::-1]
+    if flip_y:
+        p = p[..., ::-1, :]
+    return p
 
 
 def grid_meta(lens: Lens, spec: GridSpec, wl: tuple[float, ...], fields: np.ndarray, nodes: Nodes, size: int,
