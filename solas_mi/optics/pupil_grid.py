@@ -110,8 +110,9 @@ def grid_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chie
                  for c in (0, 1)]  # the rim's affine map
         jacobian = None if solved is None else _next_level(*solved, m, guess)
         g = Bundle(lens, field_deg, wavelength_nm, m * m)
-        goal_a = T.array((a[:, None, :] + chief.sphere_point[:, 0, None, None] + 0.0 * b[:, :, None]).ravel())
-        goal_b = T.array((b[:, :, None] + chief.sphere_point[:, 1, None, None] + 0.0 * a[:, None, :]).ravel())
+        ray = dr.arange(T.UInt32, nf * m * m)  # the goals: each ray's (α, β) on the sphere, gathered per ray
+        goal_a = T.gather((a + chief.sphere_point[:, :1]).ravel(), g.index * m + ray % m)
+        goal_b = T.gather((b + chief.sphere_point[:, 1:]).ravel(), g.index * m + (ray // m) % m)
         keep = _kept(lens, g, chief) if m == samples else None
         ex, ey, tr, ok, kept = aim_keeping(g, sphere_target(lens, g, chief), T.array(guess[0]),
                                            T.array(guess[1]), goal_a, goal_b, jacobian=jacobian, keep=keep)

@@ -24,6 +24,7 @@ from ..errors import SolasError
 from ..imageio import read_exr, write_exr
 from ..optics.camera import pinhole_focal_mm
 from ..optics.lens import Lens
+from ..pages import small_pages
 from . import base as S
 from .methods import compute, method_options
 from .sensor import default_sensor_mm, fields_for_points, node_mm
@@ -236,7 +237,8 @@ def psf_grid(lens: Lens, spec: GridSpec | None = None, progress=None, **options)
     size = spec.size
     while True:  # auto_window: the whole grid again at twice the size until every window holds enough
         start = time.perf_counter()
-        nodes = compute_nodes(lens, spec, wl, fields.reshape(-1, 2), size, progress)
+        with small_pages():
+            nodes = compute_nodes(lens, spec, wl, fields.reshape(-1, 2), size, progress)
         if not (spec.auto_window and nodes.energy.min() < S.WINDOW_ENERGY_LIMIT and 2 * size <= S.MAX_SIZE):
             break
         size *= 2
@@ -329,6 +331,7 @@ def place(psfs: np.ndarray, transmission: np.ndarray, nodes: np.ndarray, source:
     transmitted light in its window."""
     nx, size = out.shape[1], out.shape[-1]
     energy = np.empty(len(nodes))
+    single = psfs.astype(np.float32)  # products in float32 (measured: a cast in the product holds the GIL)
     jobs = []
     for key in {tuple(t) for t in turns.tolist()}:
         mine = np.flatnonzero((turns == key).all(axis=1))
@@ -338,13 +341,14 @@ def place(psfs: np.ndarray, transmission: np.ndarray, nodes: np.ndarray, source:
         sums[used] = turned[used].sum(axis=(1, 2))
         if normalization != "none":
             scale[used] = sums[used] if normalization == "sum" else turned[used].max(axis=(1, 2))
-        scale = 1.0 / np.where(scale > 0, scale, 1.0)
+        scale = (1.0 / np.where(scale > 0, scale, 1.0)).astype(np.float32)
         energy[mine] = S.energy_of_sum(sums[source[mine]], pitch_um, transmission[source[mine]])
+        turned = _turned(single, *key)[:, :size, :size]
         jobs += [(turned[source[i]], scale[source[i]], out[nodes[i] // nx, nodes[i] % nx]) for i in mine]
 
     def run(part: list) -> None:
         for psf, factor, into in part:
-            np.multiply(psf, factor, out=into, casting="same_kind")
+            np.multiply(psf, factor, out=into)
 
     workers = max(1, min(len(jobs), len(os.sched_getaffinity(0))))
     with ThreadPoolExecutor(workers) as pool:
