@@ -41,11 +41,14 @@ def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: fl
     folded, fold_warnings = caustic_fallback(lens, pf, data, transmission, pitch_um, size, center, fields)
     error[folded] = 0.0  # those PSFs are the geometric method's
     resolved = np.where(error > ERROR_LIMIT, sampling_need(pf, pitch_um, size, ~folded)[2], 0.0)
+    warnings = []
+    for w in dict.fromkeys(pf.wavelength_nm.tolist()):  # each wavelength's worst PSF, as when computed alone
+        mine = pf.wavelength_nm == w
+        warnings += sampling_warnings(pf, pitch_um, size, fields, ~folded & mine, most) + convergence_warnings(
+            np.where(mine, error, 0.0), pupil_samples, most, fields, pf.wavelength_nm, resolved[mine].max())
     return Computed(data=data, chief=pf.chief, transmission=transmission, vignetted_by=pf.vignetted_by,
-                    centre_um=center, warnings=tuple(sampling_warnings(pf, pitch_um, size, fields, ~folded, most)
-                                                     + convergence_warnings(error, pupil_samples, most, fields,
-                                                                          pf.wavelength_nm, resolved.max())
-                                                     + fold_warnings + centring_warnings(pf.chief, light, field_deg)))
+                    centre_um=center, warnings=tuple(warnings + fold_warnings
+                                                     + centring_warnings(pf.chief, light, field_deg)))
 
 
 FOLD_POWER = 20.0  # a pupil cell's power above this many times the median: the pupil may fold (a caustic)

@@ -285,8 +285,8 @@ class Nodes:
 def compute_nodes(lens: Lens, spec: GridSpec, wl: tuple[float, ...], flat: np.ndarray, size: int,
                   progress=None) -> Nodes:
     """The PSFs of fields `flat` (n, 2) at wavelengths `wl`, size×size: each distinct |field| pair
-    (`symmetry_classes`) computed once, a wavelength's at once (in batches of at most `BATCH_RAYS` pupil
-    rays), and mirrored onto its nodes."""
+    (`symmetry_classes`) computed once, every wavelength's together in batches of at most `BATCH_RAYS` pupil
+    rays, and mirrored onto its nodes."""
     ny, nx = spec.grid
     n = len(flat)
     canon, which, swap, sign = symmetry_classes(flat)
@@ -297,30 +297,36 @@ def compute_nodes(lens: Lens, spec: GridSpec, wl: tuple[float, ...], flat: np.nd
     chief, transmission, energy = np.zeros((len(wl), n, 2)), np.zeros((len(wl), n)), np.zeros((len(wl), n))
     vignetting: set[int] = set()
     doubts: list[str] = []
+    # every (wavelength, canonical field) pair, in batches across wavelengths
+    pairs = np.stack(np.meshgrid(np.arange(len(wl)), np.arange(len(canon)), indexing="ij"), axis=-1).reshape(-1, 2)
     per_field = spec.pupil_samples ** 2 if spec.method == "fraunhofer" else spec.rays ** 2
-    batches = -(-len(canon) * per_field // BATCH_RAYS)
-    for k, w in enumerate(wl):
-        for part in np.array_split(np.arange(len(canon)), batches):
-            a, b = int(part[0]), int(part[-1]) + 1
-            c = compute(lens, canon[a:b], np.full(b - a, w), spec.pitch_um, odd, spec.method,
-                        **spec.sampling_options())
-            vignetting.update(s for v in c.vignetted_by for s in v)
-            doubts.extend(d for d in c.warnings if d not in doubts)
-            nodes = np.flatnonzero((which >= a) & (which < b))
-            j = which[nodes] - a
+    done = 0
+    for part in np.array_split(pairs, -(-len(pairs) * per_field // BATCH_RAYS)):
+        c = compute(lens, canon[part[:, 1]], np.asarray(wl)[part[:, 0]], spec.pitch_um, odd, spec.method,
+                    **spec.sampling_options())
+        vignetting.update(s for v in c.vignetted_by for s in v)
+        doubts.extend(d for d in c.warnings if d not in doubts)
+        for k in np.unique(part[:, 0]):
+            mine = np.flatnonzero(part[:, 0] == k)  # this wavelength's PSFs in the batch
+            lookup = np.full(len(canon), -1)
+            lookup[part[mine, 1]] = mine
+            nodes = np.flatnonzero(lookup[which] >= 0)
+            j = lookup[which[nodes]]
             xy = c.chief.image_xy[j] + (0.0 if c.centre_um is None else c.centre_um[j] * 1e-3)
             chief[k, nodes] = np.where(swap[nodes, None], xy[:, ::-1], xy) * sign[nodes]
             transmission[k, nodes] = c.transmission[j]
             turns = np.stack([swap[nodes], sign[nodes, 0] < 0, sign[nodes, 1] < 0], axis=1)
             energy[k, nodes] = place(c.data, c.transmission, nodes, j, turns, data[k], spec.normalization,
                                      spec.pitch_um)
-            if progress is not None:  # in nodes: the PSFs of the grid, mirrored ones included
-                progress(k * n + int(np.count_nonzero(which < b)), len(wl) * n)
+            done += len(nodes)
+        if progress is not None:  # in nodes: the PSFs of the grid, mirrored ones included
+            progress(done, len(wl) * n)
     return Nodes(data, chief, transmission, energy, tuple(sorted(vignetting)), tuple(doubts))
 
 
-BATCH_RAYS = 1 << 22  # pupil rays of one batch of PSFs: about 0.5 GB of working arrays (measured: 3 x 136
-# PSFs of 128² rays, the doublet's 32x32 grid, peak RSS ...)
+BATCH_RAYS = 1 << 20  # pupil rays of one batch of PSFs (64 of 128²): measured on the doublet's 32x32x3 grid,
+# 2^20 ran it in 0.6 s of Dr.Jit kernels against 1.1 s at 2^22 (working arrays that stay in cache, memory
+# that Dr.Jit reuses from batch to batch) and 1.2 s at 2^18 (more, smaller kernels)
 
 
 def place(psfs: np.ndarray, transmission: np.ndarray, nodes: np.ndarray, source: np.ndarray, turns: np.ndarray,
