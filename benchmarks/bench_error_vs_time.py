@@ -1,5 +1,5 @@
-"""Error against run time of the PSF-grid convolution (patch, interp) and the direct render, against a
-converged direct render of the doublet (`solas-mi report error-vs-time`).
+"""Error against run time of the PSF-grid convolution (the paper's patch method; interp) and the direct
+render, against a converged direct render of the doublet (`solas-mi report error-vs-time`).
 
 Run: .venv/bin/python benchmarks/bench_error_vs_time.py [--scale 0.5] [--ref-spp 1536] [--out DIR]
 Default: the bundled photograph at half size (640×480, spanning ±2°, pixel 10.9 µm), geometric PSFs,

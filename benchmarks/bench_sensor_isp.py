@@ -23,6 +23,7 @@ EXPOSURE_S = 2.5e-4  # the test image's values (0…1) read as W/m²: 2300–310
 
 
 def cases():
+    from solas_mi.isp.demosaic import METHODS
     from solas_mi.isp.pipeline import ISP, develop
     from solas_mi.sensor.capture import capture
     from solas_mi.sensor.model import SensorModel
@@ -33,7 +34,7 @@ def cases():
         model = SensorModel(cfa=cfa, pixel_pitch_um=2.0)
         raw = capture(model, image, EXPOSURE_S, 0)
         out[f"sensor ({cfa})"] = lambda m=model: capture(m, image, EXPOSURE_S, 0, 1)
-        for method in ("bilinear", "Malvar2004", "Menon2007"):
+        for method in METHODS:
             isp = ISP(demosaic=method)
             out[f"isp {method} ({cfa})"] = lambda r=raw, m=model, i=isp: develop(r, m, i)
         out[f"sensor + isp default ({cfa})"] = lambda m=model: develop(capture(m, image, EXPOSURE_S, 0, 1), m)

@@ -16,7 +16,10 @@ import tempfile
 import time
 from pathlib import Path
 
+from solas_mi.render.labels import LABELS
+
 ROOT = Path(__file__).resolve().parent.parent
+EVERY_LABEL = ",".join(LABELS)
 IMAGE = ROOT / "scenes" / "images" / "rocket.png"
 STREET = ROOT / "scenes" / "street" / "street.xml"
 JOBS = {
@@ -25,8 +28,8 @@ JOBS = {
     "render-image, solas-doublet, 1280×960, 256 spp": ["render-image", "solas-doublet", str(IMAGE), "--sensor",
                                                         "1280x960", "--spp", "256"],
     "render street.xml --lens solas-doublet, 64 spp": ["render", str(STREET), "--lens", "solas-doublet", "--spp", "64"],
-    "render street.xml --lens solas-doublet --labels depth,normal,instance, 64 spp": [
-        "render", str(STREET), "--lens", "solas-doublet", "--spp", "64", "--labels", "depth,normal,instance"],
+    f"render street.xml --lens solas-doublet --labels {EVERY_LABEL}, 64 spp": [
+        "render", str(STREET), "--lens", "solas-doublet", "--spp", "64", "--labels", EVERY_LABEL],
 }
 
 

@@ -4,7 +4,10 @@ sensor; the scene sees only the rays that leave the lens's first surface.
 | parameter        | type      | unit        | default         | meaning                                            |
 |------------------|-----------|-------------|-----------------|----------------------------------------------------|
 | `lens`           | string    | —           | "solas-doublet" | shipped lens name or lens-file path                |
-| `pitch_um`       | float     | µm          | 5.0             | pixel pitch                                        |
+| `pitch_um`       | float     | µm          | the film spans  | pixel pitch; default: the film's width spans the   |
+|                  |           |             | the lens's field| lens's ±field_deg (a fisheye: its image diameter), |
+|                  |           |             |                 | as `render-image` frames it; logged (Info) and     |
+|                  |           |             |                 | said by `to_string`; a lens without either refused |
 | `response`       | string    | —           | "srgb"          | camera response (`solas_mi.render.response.parse`) |
 | `focus_distance` | float     | world units | the lens file's | object distance in focus, in front of surface 1 (inf: infinity) |
 | `world_unit_mm`  | float     | mm          | 1000            | one world unit in mm (1000: the scene in metres)   |

@@ -11,7 +11,8 @@ Parameters read here, for both sensors (their module docstrings list them with t
 | parameter  | type    | unit   | default           | meaning                                             |
 |------------|---------|--------|-------------------|-----------------------------------------------------|
 | `lens`     | string  | —      | "solas-doublet"   | shipped lens name or lens-file path (`scene_files`) |
-| `pitch_um` | float   | µm     | 5.0               | pixel pitch                                         |
+| `pitch_um` | float   | µm     | the film spans    | pixel pitch; default: the film's width spans the    |
+|            |         |        | the field         | lens's field (logged; `to_string` says so)          |
 | `response` | string  | —      | the sensor's      | camera response (`solas_mi.render.response.parse`)  |
 | (film)     | film    | pixels | hdrfilm 768×576   | width × height: the film's columns × rows; its crop |
 |            |         |        |                   | window (`crop_offset_x`, …): the pixels rendered    |
@@ -36,6 +37,7 @@ import drjit as dr
 import mitsuba as mi
 
 from solas_mi.errors import SolasError
+from solas_mi.optics.camera import film_pitch_um
 from solas_mi.optics.lens import Lens
 from solas_mi.plugins.pupil_sampling import PupilSampler
 from solas_mi.plugins.scene_probe import calling_render, integrator_name
@@ -64,12 +66,12 @@ class LensFilm(mi.Sensor):
     def __init__(self, props: mi.Properties, plugin: str, response: str, instead: str) -> None:
         super().__init__(props)
         self.plugin, self.instead = plugin, instead
-        self.pitch_um = positive(props, "pitch_um", 5.0, "µm", plugin)
-        self.pitch_mm = self.pitch_um * 1e-3
         self.lens = self.prepared(load_lens(props), props)
         self.response = load_response(props, self.lens, response)
         film = self.film()
         self.film_size = tuple(int(v) for v in film.size())  # columns, rows of the whole film
+        self.pitch_um = self.film_pitch(props)
+        self.pitch_mm = self.pitch_um * 1e-3
         self.crop_offset = tuple(int(v) for v in film.crop_offset())
         self.crop_size = tuple(int(v) for v in film.crop_size())
         self.width, self.height = self.crop_size  # the rendered image's columns and rows
@@ -84,6 +86,28 @@ class LensFilm(mi.Sensor):
     def prepared(self, lens: Lens, props: mi.Properties) -> Lens:
         """The lens the sensor looks through, from the one its `lens` names (here: unchanged)."""
         return lens
+
+    def field_deg(self, props: mi.Properties) -> float:
+        """The half field (degrees) the film's width spans where no `pitch_um` is given: the lens's."""
+        return self.lens.field_deg
+
+    def film_pitch(self, props: mi.Properties) -> float:
+        """`pitch_um`, or where none is given the pitch whose film width spans `field_deg` (as Mitsuba's
+        cameras take the film's size and a field; `optics.camera.film_pitch_um`, render-image's default),
+        said in `pitch_note` (`to_string`) and Mitsuba's log; SolasError where the lens sets no field."""
+        if "pitch_um" in props:
+            self.pitch_note = "given"
+            return positive(props, "pitch_um", 1.0, "µm", self.plugin)
+        field = self.field_deg(props)
+        try:
+            pitch = film_pitch_um(self.lens, self.film_size[0], field)
+        except SolasError as exc:
+            raise SolasError(f"{self.plugin}: no pitch_um given, and lens {self.lens.name} sets none ({exc}); give "
+                             "pitch_um (µm)") from None
+        span = f"±{field:g} deg field" if self.lens.field_type.pinhole else f"image diameter {self.lens.image_diameter:g} mm"
+        self.pitch_note = f"derived: the film's {self.film_size[0]} px width spans lens {self.lens.name}'s {span}"
+        mi.Log(mi.LogLevel.Info, f"{self.plugin}: pitch_um {pitch:.6g} um, {self.pitch_note}")
+        return pitch
 
     def film_point(self, sample2: mi.Point2f) -> mi.Point2f:
         """Image-plane point (x, y) mm of a film sample in [0, 1]² over the crop window (row 0 at +y)."""
@@ -139,5 +163,6 @@ class LensFilm(mi.Sensor):
     def describe(self, *extra: str) -> str:
         """`to_string` of a sensor: its class, lens, film, response, then `extra`."""
         w, h = self.film_size
-        parts = (self.lens.name, f"{w}x{h} px of {self.pitch_um:g} um", f"response {self.response.name}", *extra)
+        parts = (self.lens.name, f"{w}x{h} px of {self.pitch_um:g} um ({self.pitch_note})", f"response {self.response.name}",
+                 *extra)
         return f"{type(self).__name__}[{', '.join(parts)}]"

@@ -3,7 +3,8 @@
 | parameter  | type    | unit    | default          | meaning                                                |
 |------------|---------|---------|------------------|--------------------------------------------------------|
 | `lens`     | string  | —       | "solas-doublet"  | shipped lens name or lens-file path                    |
-| `pitch_um` | float   | µm      | 5.0              | pixel pitch                                            |
+| `pitch_um` | float   | µm      | the film spans   | pixel pitch; default: the film's width spans ±`fov_deg`|
+|            |         |         | ±`fov_deg`       | (a fisheye: its image diameter), logged (Info)         |
 | `fov_deg`  | float   | degrees | the lens's field | half the horizontal field the input image spans        |
 | `response` | string  | —       | "lines"          | camera response (`solas_mi.render.response.parse`)     |
 | (film)     | film    | pixels  | hdrfilm 768×576  | its width and height are the sensor's columns and rows;|
@@ -83,7 +84,7 @@ class LensSensor(LensFilm):
     def __init__(self, props: mi.Properties) -> None:
         super().__init__(props, "lens_sensor", "lines",
                          f"the integrators {', '.join(INTEGRATORS)} or solas-mi's render loop")
-        self.fov_deg = float(props.get("fov_deg", self.lens.field_deg))
+        self.fov_deg = self.field_deg(props)
         # a lens of polar fields (a fisheye) has no pinhole image: its units are those of the paraxial camera
         self.focal_mm = pinhole_focal_mm(self.lens, self.fov_deg) if self.lens.field_type.pinhole else paraxial(self.lens).efl_mm
         self.norm = 1.0 / ideal_irradiance(self.lens, self.focal_mm)
@@ -99,6 +100,10 @@ class LensSensor(LensFilm):
         # a response of equally likely spectral lines (lines, mono) lets a render stratify by line
         lines = np.all(r.lo_nm == r.hi_nm) and np.allclose(r.probability, 1.0 / len(r.probability))
         self.discrete_lines = len(r.probability) if lines else 0
+
+    def field_deg(self, props: mi.Properties) -> float:
+        """The half field the input image spans, which the film's width spans where no `pitch_um` is given."""
+        return float(props.get("fov_deg", self.lens.field_deg))
 
     def prepared(self, lens: Lens, props: mi.Properties) -> Lens:
         """The lens, which must be focused at infinity (SolasError otherwise)."""

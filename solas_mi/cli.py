@@ -10,6 +10,7 @@ import sys
 import threading
 
 from .errors import SolasError
+from .interrupts import raise_outside_imports
 
 DESCRIPTION = ("Physically based lens simulation: PSFs ray-traced through a real lens, images degraded with "
                "them or rendered through the lens in Mitsuba 3, and the result measured.")
@@ -82,7 +83,7 @@ _SIGNALLED: list[int] = []  # the signals this run received: a library (a scene'
 
 def _stop(signum, frame) -> None:
     _SIGNALLED.append(signum)
-    raise Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+    raise_outside_imports(Terminated() if signum == signal.SIGTERM else KeyboardInterrupt(), frame)
 
 
 def _handlers() -> dict:

@@ -24,7 +24,7 @@ DEMO_SPP = 192  # 64 per colour line: ≈ 2.5 % noise; measured ≈ 2 min on two
 STREET_SET = ("width=480", "height=360", "fov=8", "target=0, 2, 140")
 STREET_SPP = 32
 STREET_SENSOR, STREET_EXPOSURE_MS = "ar0132at", "auto"
-CAMERA_FILES = {"camera": "camera/street_render.exr|png (irradiance + depth, normal, instance layers), "
+CAMERA_FILES = {"camera": "camera/street_render.exr|png (irradiance + every label's layers), "
                           "camera/street_raw.exr|png (RAW, developed frame)",
                 "camera sheet": "camera/camera_sheet.png"}  # what `camera_frame` writes
 PHOTO = "images/rocket.png"  # under the shipped scenes
@@ -136,12 +136,13 @@ def camera_frame(out: Path) -> dict:
     default image processor (`solas-mi camera`), and a sheet of the frame beside its depth and instance
     layers."""
     from .imageio import read_exr
+    from .render.labels import LABELS
 
     d = out / "camera"
     render, raw = d / "street_render.exr", d / "street_raw.exr"
     sets = [a for value in STREET_SET for a in ("--set", value)]
     cli(["render", str(resource_dir("scenes") / "street" / "street.xml"), "--lens", "solas-doublet", *sets,
-         "--spp", str(STREET_SPP), "--labels", "depth,normal,instance", "-o", str(render)])
+         "--spp", str(STREET_SPP), "--labels", ",".join(LABELS), "-o", str(render)])
     cli(["camera", str(render), "--sensor-model", STREET_SENSOR, "--exposure-ms", STREET_EXPOSURE_MS,
          "--isp", "default", "-o", str(raw)])
     channels, meta = read_exr(render)

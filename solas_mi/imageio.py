@@ -16,6 +16,7 @@ import numpy as np
 
 from . import jsonio
 from .errors import SolasError
+from .userfiles import check
 
 META_KEY = "solas_mi"
 # each write first removes the temporaries that killed writers of its target left (a scan of the
@@ -151,8 +152,7 @@ def read_exr(path: str | os.PathLike) -> tuple[dict[str, np.ndarray], dict]:
     """Channels (name → float32 2-D array) and the solas-mi metadata ({} if absent) of an EXR file."""
     import OpenEXR
 
-    if not Path(path).is_file():
-        raise SolasError(f"no such EXR file: {path}")
+    check(path, "image file")
     try:
         with OpenEXR.File(str(path), separate_channels=True) as f:
             header = f.header()
@@ -258,11 +258,23 @@ def _plain_imageio() -> Iterator[None]:
         Image.MAX_IMAGE_PIXELS = limit
 
 
+def exr_channel_names(path: str | os.PathLike) -> list[str]:
+    """The channel names of an EXR file, read from its header only ([] where it cannot be read)."""
+    import OpenEXR
+
+    try:
+        with OpenEXR.File(str(path), header_only=True) as f:
+            return [c.name for c in f.header()["channels"]]
+    except Exception:  # unreadable: the reader names the problem
+        return []
+
+
 def image_size(path: str | os.PathLike) -> tuple[int, int, int]:
     """(rows, columns, channels) of an image file, read from its header only (0, 0, 0 where the
     header cannot be read: `read_image` will then say why)."""
     path = Path(path)
     try:
+        check(path, "image file")  # a FIFO or device would hang the header's reader
         if path.suffix.lower() == ".exr":
             import OpenEXR
 
@@ -282,11 +294,7 @@ def read_image(path: str | os.PathLike, *, linearize: bool = True) -> np.ndarray
     """An image as float64 H×W or H×W×3: EXR as stored (linear; channels by name, `exr_image_channels`);
     PNG (8 or 16 bits), JPEG, TIFF scaled to [0, 1] and sRGB-decoded unless `linearize` is False; an
     alpha channel is dropped. SolasError for NaN or infinite values."""
-    path = Path(path)
-    if path.is_dir():
-        raise SolasError(f"{path} is a folder, not an image file")
-    if not path.is_file():
-        raise SolasError(f"no such image file: {path}")
+    path = check(path, "image file")
     if path.suffix.lower() == ".exr":
         channels, _ = read_exr(path)
         names = exr_image_channels(list(channels), path)

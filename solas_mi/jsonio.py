@@ -53,6 +53,12 @@ def dumps(value: Any, **options) -> str:
 
 
 def loads(text: str | bytes) -> Any:
-    """JSON text as Python values, the old tokens `Infinity`/`-Infinity` as "inf"/"-inf" (as written now)."""
-    return json.loads(text, parse_constant=_OLD_TOKENS.__getitem__)
+    """JSON text as Python values, the old tokens `Infinity`/`-Infinity` as "inf"/"-inf" (as written now);
+    SolasError (a ValueError, as `json`'s own errors) for arrays or objects nested deeper than Python's
+    parser goes."""
+    try:
+        return json.loads(text, parse_constant=_OLD_TOKENS.__getitem__)
+    except RecursionError:
+        raise SolasError("JSON nested deeper than the parser goes (thousands of levels): not a file solas-mi "
+                         "wrote") from None
 

@@ -1,8 +1,10 @@
 """Progress of the long jobs (renders, PSF grids, degrades, batches, experiments, cross-validation), the
 one policy for all of them: a live tqdm bar when the stream is a terminal; anywhere else (a log file,
-a pipe, a CI log) a few plain lines, one when each quarter of the work is passed (and one at least
-every `QUIET_S` seconds of a very long job), so that a log holds about four lines, not one line of
-hundreds of carriage-return updates. Both estimate the time left from the rate measured so far.
+a pipe, a CI log) a few plain lines, one when each quarter of the work is passed, so that a log holds
+about four lines, not one line of hundreds of carriage-return updates, and in a long job one at least
+every `QUIET_S` seconds, written by a thread of its own: also while the job reports nothing (a PSF
+grid reports after each batch of PSFs, which can take minutes; piped, a long grid's first line came
+after 14 minutes). Both estimate the time left from the rate measured so far.
 
     with Progress("psf-grid", total, "PSF") as bar:
         psf_grid(lens, spec, progress=bar)     # the library's `progress(done, total)` callbacks
@@ -10,10 +12,11 @@ hundreds of carriage-return updates. Both estimate the time left from the rate m
 from __future__ import annotations
 
 import sys
+import threading
 import time
 
 QUARTERS = 4  # plain lines: one as each quarter of the work is passed
-QUIET_S = 600.0  # and at least one per this many seconds
+QUIET_S = 60.0  # and at least one per this many seconds
 
 
 def _is_terminal(stream) -> bool:
@@ -44,10 +47,14 @@ class Progress:
         self._bar = None
         self._start = self._said_at = time.monotonic()
         self._quarter = self._quarter_of(initial)
+        self._saying = threading.Lock()  # one line at a time, from the job or from the quiet thread
+        self._closed = threading.Event()
         if enabled and _is_terminal(self.stream):
             from tqdm import tqdm
 
             self._bar = tqdm(total=total, initial=initial, unit=unit, desc=desc, file=self.stream, dynamic_ncols=True)
+        elif enabled:
+            threading.Thread(target=self._when_quiet, name=f"progress of {desc}", daemon=True).start()
 
     def _quarter_of(self, done: float) -> int:
         return int(QUARTERS * done / self.total) if self.total else 0
@@ -66,23 +73,35 @@ class Progress:
         if self._bar is not None:
             self._bar.update(n)
             return
-        now, quarter = time.monotonic(), self._quarter_of(self.done)
-        if quarter > self._quarter or now - self._said_at >= QUIET_S:
-            self._quarter, self._said_at = quarter, now
-            self.line(now)
+        quarter = self._quarter_of(self.done)
+        if quarter > self._quarter:
+            self._quarter = quarter
+            self.line()
 
-    def line(self, now: float | None = None) -> None:
+    def _when_quiet(self) -> None:
+        """The plain line whenever QUIET_S seconds pass without one, until the job ends."""
+        while not self._closed.wait(max(0.0, self._said_at + QUIET_S - time.monotonic())):
+            if time.monotonic() - self._said_at >= QUIET_S:
+                try:
+                    self.line()
+                except (OSError, ValueError):  # the stream closed under it: say nothing more
+                    return
+
+    def line(self) -> None:
         """The plain line: `desc: done/total unit (percent, seconds[, the time left at the rate so far])`."""
-        seconds = (time.monotonic() if now is None else now) - self._start
-        of = f"/{_count(self.total)}" if self.total else ""
-        percent = f"{100.0 * self.done / self.total:.0f} %, " if self.total else ""
-        left = ""
-        if self.total and 0 < self.done < self.total:
-            left = f", about {_duration(seconds * (self.total - self.done) / self.done)} left at this rate"
-        print(f"{self.desc}: {_count(self.done)}{of} {self.unit} ({percent}{seconds:.1f} s{left})", file=self.stream,
-              flush=True)
+        with self._saying:
+            self._said_at = now = time.monotonic()
+            seconds = now - self._start
+            of = f"/{_count(self.total)}" if self.total else ""
+            percent = f"{100.0 * self.done / self.total:.0f} %, " if self.total else ""
+            left = ""
+            if self.total and 0 < self.done < self.total:
+                left = f", about {_duration(seconds * (self.total - self.done) / self.done)} left at this rate"
+            print(f"{self.desc}: {_count(self.done)}{of} {self.unit} ({percent}{seconds:.1f} s{left})",
+                  file=self.stream, flush=True)
 
     def close(self) -> None:
+        self._closed.set()
         if self._bar is not None:
             self._bar.close()
             self._bar = None

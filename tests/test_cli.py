@@ -19,14 +19,14 @@ def test_version(capsys):
 
 @pytest.mark.parametrize("argv, message", [
     (["psf", "solas-doublet", "--field-deg", "0,2", "--wavelengths-nm", "", "-o", "{tmp}/x.exr"],
-     "at least one wavelength (nm) is needed"),
+     "--wavelengths-nm '' must be one or more comma-separated numbers"),
     (["psf", "solas-doublet", "--field-deg", "0,89", "--wavelengths-nm", "531", "-o", "{tmp}/x.exr"],
      "field (0, 89) deg: each angle must be finite and below 89 deg in magnitude"),
     (["psf", "solas-doublet", "--field-deg", "0,1", "--wavelengths-nm", "2500.0001", "-o", "{tmp}/x.exr"],
      "wavelength 2500.0001 nm is outside glass SCHOTT:N-BK7's valid range 300-2500 nm"),
     (["sfr", "{tmp}"], "is a folder, not an image file"),
     (["sfr", "{tmp}/garbage.png"], "cannot read image"),
-    (["lens", "info", "{tmp}/binary.toml"], "binary.toml is not UTF-8 text; a lens file is TOML text"),
+    (["lens", "info", "{tmp}/binary.toml"], "binary.toml' is not UTF-8 text (byte 1 is not UTF-8: Latin-1 or binary)"),
     (["psf", "solas-doublet", "--field-deg", "0,1", "--wavelengths-nm", "531", "--pupil-samples", "100000",
       "-o", "{tmp}/x.exr"], "pupil samples 100000 must be an integer from 8 to 4096"),
     (["render-image", "solas-doublet", "{tmp}/photo.png", "--sensor", "32x24", "--spp", "1", "--seed", "-1",

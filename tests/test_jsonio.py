@@ -73,3 +73,10 @@ def test_a_manifest_written_with_infinity_tokens_still_resumes_and_is_rewritten_
         assert manifest.resume("k") == 1 and job.status == "skipped"
         manifest.save()
         assert strict_loads(path.read_text())["items"][0]["params"]["focus_distance"] == "inf"
+
+
+def test_json_nested_beyond_the_parser_is_a_value_error():
+    """A manifest or record nested thousands deep (a damaged or hostile file): SolasError, a ValueError as
+    `json`'s own errors are, which the readers of such files catch (before: RecursionError)."""
+    with pytest.raises(SolasError, match="nested deeper than the parser goes"):
+        jsonio.loads("[" * 100_000 + "]" * 100_000)

@@ -99,3 +99,30 @@ def test_a_long_render_is_announced_without_a_duration_the_machine_may_not_keep(
     err = capsys.readouterr().err
     assert "1280x960 at 192 spp" in err and "time left at the rate it measures" in err
     assert not re.search(r"\d (min|s)\b", err), err
+
+
+def test_a_pipe_hears_from_a_job_that_reports_nothing_for_long():
+    """Progress piped (not a terminal): a line at least every QUIET_S seconds also while the job does
+    not report (a grid's batch of PSFs can take minutes; a long grid's first piped line came after 14
+    minutes). Here QUIET_S is 0.5 s and the job waits for its stdin: lines come while it waits."""
+    import select
+    import time
+
+    code = ("import sys\n"
+            "import solas_mi.progress as progress\n"
+            "progress.QUIET_S = 0.5\n"
+            "with progress.Progress('psf-grid', 10, 'PSFs') as bar:\n"
+            "    sys.stdin.readline()  # the job at work, reporting nothing\n"
+            "    bar(10)\n")
+    p = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    try:
+        start = time.monotonic()
+        heard = [p.stderr.readline() for _ in range(2) if select.select([p.stderr], [], [], 20)[0]]
+        waited = time.monotonic() - start
+        assert p.poll() is None, "the job ended before it was told to"
+        _, rest = p.communicate("go\n", timeout=60)
+    finally:
+        p.kill()
+    assert len(heard) == 2 and all(re.match(r"psf-grid: 0/10 PSFs \(0 %, \d+\.\d s\)$", h) for h in heard), heard
+    assert waited < 30, f"{waited:.1f} s for two lines at QUIET_S = 0.5 s"
+    assert rest.splitlines()[-1].startswith("psf-grid: 10/10 PSFs (100 %"), rest

@@ -2,11 +2,19 @@
 
 - reference/cli.md: every command's help, walked from `solas_mi.cli.build_parser()`;
 - reference/api.md: a mkdocstrings section for every module of the solas_mi package (its public
-  functions and classes, from their docstrings; read statically, nothing is imported).
+  functions and classes, from their docstrings; read statically, nothing is imported);
+- reference/registries.md: every registry's table (`solas_mi.registry.Registry.describe`): the methods,
+  formats and layers by name, with summaries, options and references;
+- in any page, `{{ names MODULE.REGISTRY }}` becomes that registry's names ("a, b, c"),
+  `{{ default MODULE.REGISTRY }}` its default and `{{ table MODULE.REGISTRY }}` its table: the lists of
+  names a page shows are the code's.
 """
 from __future__ import annotations
 
+import ast
+import importlib
 import os
+import re
 from pathlib import Path
 
 from mkdocs.structure.files import File
@@ -55,7 +63,60 @@ def api_reference() -> str:
     return "\n".join(parts)
 
 
+def registries() -> dict[str, object]:
+    """Every registry of the package, "module.NAME" → `Registry`: each module-level `NAME = Registry(...)`
+    found in the source, its module imported (which registers its entries; the command line's modules
+    are imported first, so that a later stage's entries in a lower stage's registry are there too)."""
+    from solas_mi.cli import build_parser
+
+    build_parser()
+    found = {}
+    for path in sorted((REPO / "solas_mi").rglob("*.py")):
+        for node in ast.parse(path.read_text(encoding="utf-8")).body:
+            call = node.value if isinstance(node, (ast.Assign, ast.AnnAssign)) else None
+            if isinstance(call, ast.Call) and getattr(call.func, "id", None) == "Registry":
+                parts = path.relative_to(REPO).with_suffix("").parts
+                module = ".".join(parts[:-1] if parts[-1] == "__init__" else parts)
+                targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+                for target in targets:
+                    found[f"{module}.{target.id}"] = getattr(importlib.import_module(module), target.id)
+    return found
+
+
+def registries_reference() -> str:
+    """Markdown of every registry's table, in the order of the package's stages."""
+    parts = ["# Methods, formats and layers\n",
+             "Generated from the registries at every build of this site (`solas_mi.registry.Registry`): every "
+             "list of names the package takes, each name with what it does, its own options and a reference. A "
+             "new entry is one `register` call ([extending](../develop/extending.md)).\n"]
+    for name, registry in registries().items():
+        default = f" Default: `{registry.default}`." if registry.default else ""
+        parts.append(f"## {registry.kind[0].upper()}{registry.kind[1:]}s\n\n`{name}`.{default}\n\n"
+                     f"{registry.describe()}\n")
+    return "\n".join(parts)
+
+
+MARKER = re.compile(r"\{\{\s*(names|table|default)\s+(solas_mi\.[\w.]+)\s*\}\}")
+
+
+def fill_markers(markdown: str) -> str:
+    """`markdown` with each `{{ names|default|table MODULE.REGISTRY }}` replaced by the registry's names,
+    default or table; an unknown registry is an error (the build stops)."""
+    def fill(match: re.Match) -> str:
+        module, _, attr = match[2].rpartition(".")
+        registry = getattr(importlib.import_module(module), attr)
+        return {"names": ", ".join(registry), "default": registry.default, "table": registry.describe()}[match[1]]
+
+    return MARKER.sub(fill, markdown)
+
+
 def on_files(files, config):
-    for uri, content in (("reference/cli.md", cli_reference()), ("reference/api.md", api_reference())):
+    pages = (("reference/cli.md", cli_reference()), ("reference/api.md", api_reference()),
+             ("reference/registries.md", registries_reference()))
+    for uri, content in pages:
         files.append(File.generated(config, uri, content=content))
     return files
+
+
+def on_page_markdown(markdown, page, config, files):
+    return fill_markers(markdown)

@@ -4,7 +4,7 @@ Dask cluster, resumable, with a manifest (`batch.json`) of every item (`jobs`), 
 (`cache`), one item's work (`work`), the executors (`runner`), the batches (`degrade`, `render`) and
 `solas-mi batch` (`commands`).
 
-    degrade_batch(["frames/"], "out/", lens="solas-doublet", grid_spec=GridSpec(grid=(8, 8)), workers=2)
+    degrade_batch(["frames/"], "out/", DegradeSpec(grid_spec=GridSpec(grid=(8, 8))), lens="solas-doublet", workers=2)
     render_batch(["frames/", "street.xml"], "out/", lens=["solas-doublet", "cooke-triplet"], spp=[16, 64])
 """
 from ..lazy import lazy_exports

@@ -19,6 +19,7 @@ from pathlib import Path
 from .. import jsonio
 from ..errors import SolasError
 from ..outputs import inside, safe_name
+from ..userfiles import read_text
 
 
 def default_cache_dir() -> Path:
@@ -61,7 +62,7 @@ class GridCache:
         """None when the entry at `path` is the grid of `lens` with `spec`, whole (its record beside it,
         `NAME.exr.json`, holds its key and its SHA-256, both matching); else why it is not."""
         try:
-            record = jsonio.loads(Path(f"{path}.json").read_text())
+            record = jsonio.loads(read_text(f"{path}.json", "record"))
         except (OSError, ValueError):
             return "it has no readable record of its key and checksum"
         if not isinstance(record, dict) or record.get("key") != jsonio.loads(jsonio.dumps(self.entry_key(lens, spec))):

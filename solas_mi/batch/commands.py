@@ -20,37 +20,56 @@ from ..isp.commands import add_camera_options, camera_from_args
 BATCH_GRID_DEFAULTS = {"grid": (32, 32)}
 
 
-def _grid_spec(args: argparse.Namespace):
-    """The grid's spec from the `psf-grid` options (with --lens; their defaults BATCH_GRID_DEFAULTS'), else None."""
-    from ..psf.spec import GridSpec, given
+# the DegradeSpec flags of `batch degrade`'s main group (--scale-lens is the frames' camera's; the frame, camera
+# and grid are built from their own flags)
+DEGRADE_OPTIONS = ("method", "boundary", "linear", "output_format", "depth_pattern", "occlusion", "silhouette")
 
-    return GridSpec(**{**BATCH_GRID_DEFAULTS, **given(args)}) if args.lens else None
+
+def _degrade_spec(args: argparse.Namespace):
+    """The batch's DegradeSpec from its flags: the frames' camera, the camera and, with --lens, the grid
+    (the `psf-grid` options, their defaults BATCH_GRID_DEFAULTS')."""
+    from ..convolution.commands import frame_from_args
+    from ..convolution.spec import DegradeSpec
+    from ..psf.spec import GridSpec
+
+    grid = GridSpec.from_args(args, defaults=BATCH_GRID_DEFAULTS) if args.lens else None
+    return DegradeSpec.from_args(args, frame=frame_from_args(args), camera=camera_from_args(args, args.seed),
+                                 grid_spec=grid)
 
 
 def _dry_run(args: argparse.Namespace) -> int:
     from ..budget import size_text
-    from .degrade import check_workers, estimate, plan_batch, scaled_lens
+    from .degrade import check_workers, estimate, plan_batch
 
     workers = check_workers(_workers(args.workers), args.dask)
-    lens, scale = scaled_lens(args.lens, _frame(args), args.scale_lens, _grid_spec(args))
-    p = plan_batch(args.inputs, args.output, psf_grid=args.psf_grid, lens=lens,
-                   grid_spec=_grid_spec(args), method=args.method,
-                   boundary=args.boundary, linear=args.linear, cache=args.cache, output_format=args.format,
-                   depth_pattern=args.depth_pattern, frame=_frame(args),
-                   depth_options=(args.occlusion, args.silhouette), camera=camera_from_args(args, args.seed))
+    p = plan_batch(args.inputs, args.output, _degrade_spec(args), psf_grid=args.psf_grid, lens=args.lens,
+                   cache=args.cache)
     need = estimate(p, workers if args.dask is None else 1)
     where = f"Dask at {args.dask}" if args.dask else f"{workers} local worker process(es)"
     skipped = len(p.jobs) - len(p.todo)
-    then = "; computed once, then cached" if p.grid_source == "to compute" else ""
+    scale = p.lens_scale
     scaled = f"; lens scaled x{scale['factor']:.4g} to EFL {scale['efl_mm'][1]:.4g} mm" if scale else ""
-    print(f"1. PSF grid: {p.grid_path} ({p.grid_source}{then}{scaled})")
+    grid_s, grid = _grid_plan(p)
+    print(f"1. PSF grid: {p.grid_path} ({grid}{scaled})")
     print(f"2. degrade {len(p.todo)} of {len(p.jobs)} images ({skipped} already finished, skipped) "
-          f"with {args.method}, boundary {args.boundary}, on {where}")
-    files = "16-bit PNG + JSON" if args.format == "png16" else "EXR + PNG"
+          f"with {p.spec.method}, boundary {p.spec.boundary}, on {where}")
+    files = "16-bit PNG + JSON" if p.spec.output_format == "png16" else "EXR + PNG"
     print(f"3. write {files}{_camera_files(p.jobs)} per image and {p.manifest.path}")
-    print(f"estimate: about {need['seconds']:.1f} s of degrading (after the grid), peak memory about "
-          f"{size_text(need['peak_bytes'])} (grid {size_text(need['grid_bytes'])} per worker)")
+    print(f"estimate: about {grid_s + need['seconds']:.3g} s ({grid_s:.3g} s for the grid, {need['seconds']:.3g} s of "
+          f"degrading), peak memory about {size_text(need['peak_bytes'])} (grid {size_text(need['grid_bytes'])} per "
+          "worker)")
     return 0
+
+
+def _grid_plan(p) -> tuple[float, str]:
+    """Seconds the batch's grid will take and what is done with it: reused (a file given, or a cache
+    entry of this lens and grid), or computed, its time measured on a few of its PSFs (`psf.cost`)."""
+    if p.grid_source != "to compute":
+        return 0.0, {"given": "given", "cache hit": "in the cache: reused, nothing to compute"}[p.grid_source]
+    from ..psf.cost import grid_cost
+
+    cost = grid_cost(p.lens, p.grid_spec)
+    return cost.seconds, f"not in the cache: computed once, {cost.text()}; then cached"
 
 
 def run_batch_degrade(args: argparse.Namespace) -> int:
@@ -58,13 +77,9 @@ def run_batch_degrade(args: argparse.Namespace) -> int:
         return _dry_run(args)
     from .degrade import degrade_batch
 
-    result = degrade_batch(args.inputs, args.output, psf_grid=args.psf_grid, lens=args.lens,
-                           grid_spec=_grid_spec(args), method=args.method,
-                           boundary=args.boundary, linear=args.linear, workers=_workers(args.workers), dask=args.dask,
-                           cache=args.cache, force=args.force, progress=not args.quiet, output_format=args.format,
-                           depth_pattern=args.depth_pattern, occlusion=args.occlusion, frame=_frame(args),
-                           scale_lens=args.scale_lens, silhouette=args.silhouette,
-                           camera=camera_from_args(args, args.seed))
+    result = degrade_batch(args.inputs, args.output, _degrade_spec(args), psf_grid=args.psf_grid, lens=args.lens,
+                           workers=_workers(args.workers), dask=args.dask, cache=args.cache, force=args.force,
+                           progress=not args.quiet)
     return _report("degrade", result, f" (grid: {result.grid_source})")
 
 
@@ -72,13 +87,6 @@ def _camera_files(jobs) -> str:
     """What the camera adds per item (its RAW, developed frame), for the dry run's list."""
     extras = jobs[0].extras if jobs else []
     return "".join([" + RAW EXR", " + developed PNG"][:len(extras)])
-
-
-def _frame(args: argparse.Namespace):
-    """The frames' camera from `degrade`'s options (`convolution.commands.add_frame_options`), or None."""
-    from ..optics.frame import parse_frame
-
-    return parse_frame(args.fov_deg, args.fov_axis, args.intrinsics, args.fisheye)
 
 
 WARNINGS_SHOWN = 5  # items whose warnings are printed; the manifest holds every item's
@@ -105,11 +113,14 @@ RENDER_SETTINGS = ("sensor", "pitch_um", "fov_deg", "response", "boundary", "fre
 
 
 def _render_spec(args: argparse.Namespace):
-    """The batch's RenderSpec and its sweep (`batch.render.SWEEP`'s fields given lists) from the flags."""
-    from ..render.spec import spec_from_args
+    """The batch's RenderSpec and its sweep (`batch.render.SWEEP`'s fields given lists) from the flags: the
+    spec holds each swept field's first value."""
+    from ..render.spec import RenderSpec
     from .render import SWEEP
 
-    return spec_from_args(args, RENDER_SETTINGS, sweep=SWEEP[1:])
+    values = RenderSpec.given(args, RENDER_SETTINGS, sweep=SWEEP[1:])
+    sweep = {name: values[name] for name in SWEEP[1:] if name in values}
+    return RenderSpec(**{**values, **{name: swept[0] for name, swept in sweep.items()}}), sweep
 
 
 def run_batch_render(args: argparse.Namespace) -> int:
@@ -169,12 +180,9 @@ def _add_runner_options(p: argparse.ArgumentParser) -> None:
 def _add_degrade(sub: Any) -> None:
     """Add `batch degrade`."""
     from ..convolution.commands import add_frame_options
-    from ..convolution.kernels import BOUNDARIES
-    from ..convolution.methods import DEFAULT_METHOD, METHODS
-    from ..convolution.depth import OCCLUSIONS, SILHOUETTES
-    from ..convolution.output import OUTPUT_FORMATS
+    from ..convolution.spec import DegradeSpec
     from ..optics.formats import lens_help
-    from ..psf.spec import add_options as add_grid_options
+    from ..psf.spec import GridSpec
 
     p = sub.add_parser(
         "degrade", help="degrade images (files, folders, glob patterns) with one PSF grid",
@@ -185,35 +193,23 @@ def _add_degrade(sub: Any) -> None:
     source = p.add_mutually_exclusive_group(required=True)
     source.add_argument("--psf-grid", metavar="GRID.exr", help="PSF grid written by `solas-mi psf-grid`")
     source.add_argument("--lens", help=f"compute the grid from this lens: {lens_help()}")
-    p.add_argument("--method", choices=list(METHODS), default=DEFAULT_METHOD, help="convolution method")
-    p.add_argument("--boundary", choices=BOUNDARIES, default=BOUNDARIES[0], help="padding outside the image")
-    p.add_argument("--linear", action="store_true", help="PNG/JPEG values are already linear: do not decode sRGB")
-    p.add_argument("--format", choices=OUTPUT_FORMATS, default=OUTPUT_FORMATS[0],
-                   help="output data: exr (float, default), exr-half (half floats, half the size) or png16 "
-                        "(16-bit sRGB PNG, values clipped to [0, 1], its metadata in <name>.json beside it)")
-    p.add_argument("--depth-pattern", metavar="{stem}_depth.exr",
-                   help="each image's depth map beside it (metres), with a grid over object distance (--distances-m): "
-                        "`degrade --depth` per image")
-    p.add_argument("--occlusion", choices=OCCLUSIONS, default=OCCLUSIONS[0], help="with --depth-pattern: as degrade's")
-    p.add_argument("--silhouette", choices=SILHOUETTES, default=SILHOUETTES[0], help="with --depth-pattern: as degrade's")
+    DegradeSpec.add_flags(p, DEGRADE_OPTIONS)
     frames = p.add_argument_group("the frames' camera (as degrade's; every input taken by it)")
     add_frame_options(frames)
-    frames.add_argument("--scale-lens", type=float, metavar="PIXEL_UM",
-                        help="with --lens and --intrinsics/--fisheye: the camera's pixel pitch (µm); the lens scaled "
-                             "to its focal length fx x PIXEL_UM, f-number kept, stated in the metadata")
+    DegradeSpec.add_flags(frames, ("scale_lens",))
     add_camera_options(p, seed=True)
     p.add_argument("--cache", metavar="DIR", help="PSF-grid cache (default: the user's cache folder)/psf-grids")
     _add_runner_options(p)
-    add_grid_options(p.add_argument_group("grid options (with --lens; those of `solas-mi psf-grid`, the grid "
-                                          "itself the accuracy tables' interp grid by default)"),
-                     defaults=BATCH_GRID_DEFAULTS)
+    GridSpec.add_flags(p.add_argument_group("grid options (with --lens; those of `solas-mi psf-grid`, the grid "
+                                            "itself the accuracy tables' interp grid by default)"),
+                       defaults=BATCH_GRID_DEFAULTS)
     p.set_defaults(run=run_batch_degrade)
 
 
 def register(subparsers: Any) -> None:
     """Add `batch` and its `degrade` and `render`."""
     from ..optics.formats import lens_help
-    from ..render.spec import add_spec_flags
+    from ..render.spec import RenderSpec
     from .render import SWEEP
 
     batch = subparsers.add_parser("batch", help="many images at once, on local processes or a Dask cluster",
@@ -233,7 +229,7 @@ def register(subparsers: Any) -> None:
     r.add_argument("inputs", nargs="+", metavar="INPUT", help="images or scene XML files, folders of them, or globs")
     r.add_argument("--lens", action="append", required=True,
                    help=f"{lens_help()}; repeat to sweep over lenses")
-    add_spec_flags(r, RENDER_SETTINGS, sweep=SWEEP[1:])
+    RenderSpec.add_flags(r, RENDER_SETTINGS, sweep=SWEEP[1:])
     add_camera_options(r, seed=False)  # the sensor's seed is the batch's --seed
     _add_runner_options(r)
     r.set_defaults(run=run_batch_render)

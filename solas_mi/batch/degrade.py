@@ -12,14 +12,17 @@ import json
 import os
 import sys
 import time
-from dataclasses import asdict, dataclass
+from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable
+from typing import TYPE_CHECKING, Any, Iterable
 
 from ..errors import SolasError
 from .cache import GridCache, file_hash
-from .jobs import MANIFEST, Job, Manifest, add_outputs, expand_inputs, plan
+from .jobs import MANIFEST, Job, Manifest, add_outputs, expand_inputs, plan, say_skipped
 from .runner import check_dask
+
+if TYPE_CHECKING:
+    from ..convolution.spec import DegradeSpec
 
 # seconds per image value (H·W·C) on one core of the 2-core benchmark machine, reading, degrading
 # (interp) and writing included (benchmarks/bench_batch.py: 1280×960 RGB, 32×32 grid)
@@ -32,15 +35,19 @@ WORKER_BYTES = {"degrade": 37e6, "render": 110e6}
 
 @dataclass
 class BatchPlan:
-    """What a batch will do: its items (skipped ones marked), the grid and where it comes from."""
+    """What a batch will do: its items (skipped ones marked), how it degrades them, the grid and where
+    it comes from."""
 
     jobs: list[Job]
     manifest: Manifest
-    key: str  # the batch's identity: the grid, method, boundary and input encoding
+    key: str  # the batch's identity: the grid and what the outputs depend on (`DegradeSpec.identity`)
+    spec: DegradeSpec
     grid_path: Path
     grid_source: str  # "given", "cache hit" or "to compute"
-    lens: Any = None
-    spec: Any = None  # the grid's `psf.spec.GridSpec` when computed from the lens
+    lens: Any = None  # the lens the grid is computed from (scaled to the frames' camera if asked)
+    grid_spec: Any = None  # the grid's `psf.spec.GridSpec` when computed from the lens
+    cache: GridCache | None = None  # where that grid is kept
+    lens_scale: dict | None = None  # what scaling the lens did (`scaled_lens`), or None
 
     @property
     def todo(self) -> list[int]:
@@ -81,64 +88,66 @@ def check_workers(workers: int | None, dask: str | None = None) -> int:
     return n
 
 
-def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *,
-               psf_grid: str | os.PathLike | None = None, lens=None, grid_spec=None,
-               method: str = "interp", boundary: str = "edge", linear: bool = False,
-               cache: GridCache | str | os.PathLike | None = None, output_format: str = "exr",
-               depth_pattern: str | None = None, frame=None, depth_options: tuple[str, ...] = ("filled", "nearest"),
-               camera=None) -> BatchPlan:
-    """Check everything a batch needs before any work and find what a former run finished; `depth_options`:
-    the occlusion and silhouette rules, part of a depth batch's identity."""
-    from ..convolution.kernels import check_boundary
-    from ..convolution.methods import check_method
+def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, spec: DegradeSpec | None = None, *,
+               psf_grid: str | os.PathLike | None = None, lens=None,
+               cache: GridCache | str | os.PathLike | None = None) -> BatchPlan:
+    """Check everything a batch needs before any work and find what a former run finished: the items of
+    `inputs` degraded into `output_dir` as `spec` says (a `convolution.spec.DegradeSpec`; None: its
+    defaults) by the grid file `psf_grid` or the grid of `lens` (scaled as `spec.scale_lens` says) and
+    `spec.grid_spec`, kept in `cache` (a GridCache or folder; None: the user's)."""
+    from ..convolution.spec import OUTPUT_FILES, DegradeSpec
     from ..outputs import output_folder
 
-    check_method(method)
-    check_boundary(boundary)
+    spec = DegradeSpec() if spec is None else spec
+    if not isinstance(spec, DegradeSpec):
+        raise SolasError(f"spec {spec!r} must be a solas_mi.convolution.spec.DegradeSpec")
     if (psf_grid is None) == (lens is None):
         raise SolasError("give either a PSF grid file or a lens to compute one from, not both and not neither")
+    if psf_grid is not None and spec.grid_spec is not None:
+        raise SolasError("grid_spec is for a grid computed from a lens; a PSF grid file given is used as it is")
+    lens, scale = scaled_lens(lens, spec)
     out_dir = output_folder(output_dir).resolve()
     roots: dict[Path, Path] = {}  # folders are read as trees, their structure kept in the output folder
-    files = expand_inputs(inputs, roots=roots)
-    depths = {f: depth_file(f, depth_pattern) for f in files} if depth_pattern is not None else {}
+    labels: list[tuple[Path, str]] = []
+    files = expand_inputs(inputs, roots=roots, skipped=labels)
+    pattern = spec.depth_pattern
+    depths = {f: depth_file(f, pattern) for f in files} if pattern is not None else {}
     images = [f for f in files if f not in set(depths.values())]  # depth maps are no inputs
+    say_skipped([(f, why) for f, why in labels if f not in set(depths.values())])  # those not the frames' depth maps
     missing = [str(depths[f]) for f in images if depths and not depths[f].is_file()]
     if missing:
-        raise SolasError(f"{len(missing)} image(s) have no depth map by the pattern {depth_pattern!r}, e.g. {missing[0]}")
-    from ..convolution.output import OUTPUT_FILES
-
-    if output_format not in OUTPUT_FILES:
-        raise SolasError(f"output format {output_format!r} must be one of {', '.join(OUTPUT_FILES)}")
-    jobs = plan(images, out_dir, roots, OUTPUT_FILES[output_format])
-    with_camera(jobs, camera, files, output_format)
+        raise SolasError(f"{len(missing)} image(s) have no depth map by the pattern {pattern!r}, e.g. {missing[0]}")
+    jobs = plan(images, out_dir, roots, OUTPUT_FILES[spec.output_format])
+    with_camera(jobs, spec.camera, files, spec.output_format)
     for job in jobs:
         if depths:
             job.params["depth"] = str(depths[Path(job.input)])
-    spec = None
+    grid_path, source, lens, grid_spec, cache = _grid_source(psf_grid, lens, spec.grid_spec, cache)
+    grid_id = file_hash(grid_path) if source == "given" else grid_path.stem
+    key = hashlib.sha256(json.dumps([grid_id, *spec.identity()]).encode()).hexdigest()[:16]
+    manifest = Manifest(out_dir / MANIFEST, {"version": 1, "kind": "degrade", "batch_id": key}, jobs)
+    manifest.resume(key)
+    return BatchPlan(jobs, manifest, key, spec, grid_path, source, lens, grid_spec, cache, scale)
+
+
+def _grid_source(psf_grid, lens, grid_spec, cache) -> tuple[Path, str, Any, Any, GridCache | None]:
+    """The batch's grid file, where it comes from ("given", "cache hit", "to compute") and, computed from
+    `lens` (a Lens or its name / file), the Lens, its GridSpec (`grid_spec`, None: the defaults) and the
+    GridCache."""
     if psf_grid is not None:
         grid_path = Path(psf_grid).resolve()
         if not grid_path.is_file():
             raise SolasError(f"PSF grid {str(psf_grid)!r} is not a file; give an EXR written by `solas-mi psf-grid`")
-        grid_id, source = file_hash(grid_path), "given"
-    else:
-        from ..optics.lens import Lens
-        from ..psf.spec import GridSpec
+        return grid_path, "given", None, None, None
+    from ..optics.lens import Lens
+    from ..psf.spec import GridSpec
 
-        lens = lens if isinstance(lens, Lens) else Lens.load(str(lens))
-        cache = cache if isinstance(cache, GridCache) else GridCache(cache)
-        spec = GridSpec() if grid_spec is None else grid_spec
-        if not isinstance(spec, GridSpec):
-            raise SolasError(f"grid_spec {grid_spec!r} must be a solas_mi.psf.spec.GridSpec")
-        grid_path = cache.path(lens, spec)
-        hit = grid_path.is_file() and cache.check(grid_path, lens, spec) is None
-        grid_id, source = grid_path.stem, "cache hit" if hit else "to compute"
-    identity = [grid_id, method, boundary, linear] + ([output_format] if output_format != "exr" else []) + (
-        [depth_pattern, *depth_options] if depth_pattern is not None else []) + (
-        [asdict(frame)] if frame is not None else []) + ([camera.describe()] if camera is not None else [])
-    key = hashlib.sha256(json.dumps(identity).encode()).hexdigest()[:16]
-    manifest = Manifest(out_dir / MANIFEST, {"version": 1, "kind": "degrade", "batch_id": key}, jobs)
-    manifest.resume(key)
-    return BatchPlan(jobs, manifest, key, grid_path, source, lens, spec)
+    lens = lens if isinstance(lens, Lens) else Lens.load(str(lens))
+    cache = cache if isinstance(cache, GridCache) else GridCache(cache)
+    grid_spec = GridSpec() if grid_spec is None else grid_spec
+    grid_path = cache.path(lens, grid_spec)
+    hit = grid_path.is_file() and cache.check(grid_path, lens, grid_spec) is None
+    return grid_path, "cache hit" if hit else "to compute", lens, grid_spec, cache
 
 
 def with_camera(jobs: list[Job], camera, sources, output_format: str = "exr") -> None:
@@ -156,10 +165,8 @@ def with_camera(jobs: list[Job], camera, sources, output_format: str = "exr") ->
 
 
 def depth_file(image: Path, pattern: str) -> Path:
-    """The depth map of `image` by `pattern` ({stem}: the image's name without suffix), beside it."""
-    if "{stem}" not in pattern or "/" in pattern or not pattern.lower().endswith(".exr"):
-        raise SolasError(f"depth pattern {pattern!r} must be a file name with {{stem}} ending in .exr, "
-                         "e.g. {stem}_depth.exr (beside each image)")
+    """The depth map of `image` by `pattern` ({stem}: the image's name without suffix; a pattern
+    `DegradeSpec` checked), beside it."""
     return image.with_name(pattern.replace("{stem}", image.stem))
 
 
@@ -170,12 +177,13 @@ def estimate(p: BatchPlan, workers: int) -> dict[str, float]:
 
     sizes = [(p.jobs[i].input, image_size(p.jobs[i].input)) for i in p.todo]
     values = [max(1, r * c * ch) for _, (r, c, ch) in sizes]
-    if p.spec is None:
+    g = p.grid_spec
+    if g is None:
         grid_bytes = p.grid_path.stat().st_size  # float32 mosaics, stored uncompressed
     else:
-        rows, cols = p.spec.grid
-        grid_bytes = 4 * rows * cols * p.spec.size ** 2 * len(p.spec.wavelengths_nm or p.lens.wavelengths_nm) * len(
-            p.spec.distances_m or [0])
+        rows, cols = g.grid
+        grid_bytes = 4 * rows * cols * g.size ** 2 * len(g.wavelengths_nm or p.lens.wavelengths_nm) * len(
+            g.distances_m or [0])
     # each worker: its largest image's peak (which holds a grid; or its camera's); the parent holds one grid more
     per_worker = max((max(peak_bytes(path, r, c, ch, grid_bytes), camera_bytes(p.jobs[i], r, c))
                       for i, (path, (r, c, ch)) in zip(p.todo, sizes)), default=0.0)
@@ -195,10 +203,12 @@ def camera_bytes(job: Job, rows: int, cols: int) -> float:
     return frame_bytes(rows, cols, 3, DEVELOP_BYTES_PER_PIXEL if len(job.extras) > 1 else 0.0)
 
 
-def scaled_lens(lens, frame, pixel_um: float | None, spec=None) -> tuple[Any, dict | None]:
-    """The batch's lens scaled to the frames' camera (`optics.scale.scaled_to_focal`: its pinhole focal
-    length over the grid's x field range (`spec`, a GridSpec; None: the lens's field) the camera's focal
-    length in pixels × `pixel_um`) and what was done; unchanged (and None) without `pixel_um`."""
+def scaled_lens(lens, spec: DegradeSpec) -> tuple[Any, dict | None]:
+    """The batch's lens scaled to the frames' camera `spec.frame` (`optics.scale.scaled_to_focal`: its
+    pinhole focal length over the x field range of `spec.grid_spec` (None: the lens's field) the camera's
+    focal length in pixels × `spec.scale_lens`) and what was done; unchanged (and None) without
+    `spec.scale_lens`."""
+    pixel_um, frame, grid = spec.scale_lens, spec.frame, spec.grid_spec
     if pixel_um is None:
         return lens, None
     from ..optics.lens import Lens
@@ -210,56 +220,39 @@ def scaled_lens(lens, frame, pixel_um: float | None, spec=None) -> tuple[Any, di
     if frame is None:
         raise SolasError("scaling the lens (--scale-lens) needs the frames' camera: give --intrinsics or --fisheye")
     lens = lens if isinstance(lens, Lens) else Lens.load(str(lens))
-    field = spec.field_range_deg[0] if spec is not None and spec.field_range_deg else lens.field_deg
-    sensor = spec is not None and spec.layout == "sensor"  # no pinhole: the paraxial image scale
+    field = grid.field_range_deg[0] if grid is not None and grid.field_range_deg else lens.field_deg
+    sensor = grid is not None and grid.layout == "sensor"  # no pinhole: the paraxial image scale
     return scaled_to_focal(lens, frame.focal_px(), pixel_um, None if sensor or not field else field)
 
 
-def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *,
-                  psf_grid: str | os.PathLike | None = None, lens=None, grid_spec=None, method: str = "interp", boundary: str = "edge", linear: bool = False, workers: int | None = None,
+def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, spec: DegradeSpec | None = None,
+                  *, psf_grid: str | os.PathLike | None = None, lens=None, workers: int | None = None,
                   dask: str | None = None, cache: GridCache | str | os.PathLike | None = None, force: bool = False,
-                  progress: bool = True, output_format: str = "exr", depth_pattern: str | None = None,
-                  occlusion: str = "filled", frame=None, scale_lens: float | None = None,
-                  silhouette: str = "nearest", camera=None) -> BatchResult:
+                  progress: bool = True) -> BatchResult:
     """Degrade every image of `inputs` (files, folders, glob patterns) into `output_dir` (one EXR +
-    PNG per input, `batch.json` beside them) with the grid `psf_grid` (an EXR file) or one computed
-    from `lens` (a Lens or its name / file) with `grid_spec` (a `psf.spec.GridSpec`; default: its
-    defaults), cached in `cache` (a GridCache or folder). `workers` local processes (default:
-    the cores), or the Dask scheduler at `dask` ("local": a LocalCluster for this batch). An item
-    that fails is recorded and the others go on. `output_format`: float or half EXR
-    (`convolution.output.OUTPUT_FORMATS`). `depth_pattern` (e.g. "{stem}_depth.exr"): each image's
-    depth map beside it, with a grid over object distance (`degrade --depth`, `occlusion`, `silhouette`). `frame`: the
-    camera every input was taken with (`optics.frame.FrameCamera`, as `degrade`'s); `scale_lens`: that
-    camera's pixel pitch (µm), the lens scaled to its focal length (`scaled_lens`), stated in the metadata. `camera`: each
-    degraded frame (its values read as W/m²) through a sensor and image processor (`isp.camera.Camera`),
-    its RAW and developed frame beside it (`<name>_raw.exr`, `<name>_raw.png`)."""
+    PNG per input, or as `spec.output_format` says; `batch.json` beside them) as `spec` says (a
+    `convolution.spec.DegradeSpec`: method, boundary, depth maps, the frames' camera, a camera stage...;
+    None: its defaults) with the grid `psf_grid` (an EXR file) or one computed from `lens` (a Lens or its
+    name / file) with `spec.grid_spec`, cached in `cache` (a GridCache or folder). `workers` local
+    processes (default: the cores), or the Dask scheduler at `dask` ("local": a LocalCluster for this
+    batch). An item that fails is recorded and the others go on."""
     from ..budget import check_memory
+    from ..progress import Progress
     from ..psf.depth import read_grid
+    from .runner import run_batch
 
     start = time.perf_counter()
     check_dask(dask)
     n = check_workers(workers, dask)
-    cache = cache if isinstance(cache, GridCache) or psf_grid is not None else GridCache(cache)
-    lens, scale = scaled_lens(lens, frame, scale_lens, grid_spec)
-    p = plan_batch(inputs, output_dir, psf_grid=psf_grid, lens=lens, grid_spec=grid_spec, method=method,
-                   boundary=boundary, linear=linear, cache=cache, output_format=output_format,
-                   depth_pattern=depth_pattern, frame=frame, depth_options=(occlusion, silhouette), camera=camera)
+    p = plan_batch(inputs, output_dir, spec, psf_grid=psf_grid, lens=lens, cache=cache)
     need = estimate(p, n if dask is None else 1)
     check_memory(f"batch of {len(p.todo)} images on {n} workers", need["peak_bytes"], force)
-    from ..convolution.output import OUTPUT_FORMATS
-    from ..progress import Progress
-
-    if output_format not in OUTPUT_FORMATS:
-        raise SolasError(f"output format {output_format!r} must be one of {', '.join(OUTPUT_FORMATS)}")
-    header: dict[str, Any] = {"method": method, "boundary": boundary, "linear": linear, "format": output_format,
-                              **({"frame_camera": asdict(frame)} if frame is not None else {}),
-                              **({"lens_scale": scale} if scale is not None else {}),
-                              **({"camera": camera.describe()} if camera is not None else {})}
+    header = p.spec.header(p.lens_scale)
     if p.lens is not None:
         with Progress("psf-grid", None, "PSFs", enabled=progress) as bar:  # shown only when it is computed
-            p.grid_path, hit, seconds = cache.get(p.lens, p.spec, progress=bar)
+            p.grid_path, hit, seconds = p.cache.get(p.lens, p.grid_spec, progress=bar)
         header["grid_source"], header["grid_seconds"] = "cache hit" if hit else "computed", seconds
-        header["grid_spec"] = p.spec.canonical()
+        header["grid_spec"] = p.grid_spec.canonical()
     else:
         header["grid_source"] = "given"
     grid = read_grid(str(p.grid_path))
@@ -267,11 +260,8 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
                    "lens": grid.meta.get("lens"), "lens_hash": grid.meta.get("lens_hash"),
                    "runner": {"dask": dask} if dask is not None else {"workers": n}})
     p.manifest.header.update(header)
-    settings = {"method": method, "boundary": boundary, "linear": linear, "force": force, "format": output_format,
-                "occlusion": occlusion, "silhouette": silhouette, "frame": frame, "camera": camera,
+    settings = {"spec": p.spec, "camera": p.spec.camera, "force": force,
                 "batch": {"id": p.key, "manifest": str(p.manifest.path), "grid_hash": header["grid_hash"],
-                          "lens_hash": header["lens_hash"], **({"lens_scale": scale} if scale else {})}}
-    from .runner import run_batch
-
+                          "lens_hash": header["lens_hash"], **({"lens_scale": p.lens_scale} if p.lens_scale else {})}}
     run_batch(p.manifest, p.todo, grid, str(p.grid_path), settings, n, dask, "image" if progress else None)
     return BatchResult(p.jobs, p.manifest.path, p.grid_path, header["grid_source"], time.perf_counter() - start)

@@ -12,6 +12,8 @@ from __future__ import annotations
 
 import glob
 import os
+import re
+import sys
 import time
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -20,12 +22,22 @@ from typing import Any, Callable, Iterable
 from .. import jsonio
 from ..errors import SolasError
 from ..outputs import inside, safe_name
+from ..render.labels import LABELS, VALID
+from ..userfiles import check, read_text
 from .cache import file_hash
 
 MANIFEST = "batch.json"
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".exr")
 SCENE_SUFFIXES = (".xml",)  # Mitsuba scene files (render items)
 SAVE_EVERY_S = 1.0  # the manifest is rewritten at most this often while items finish (and at the end)
+# The label layers that renderers and simulators write beside their frames (ours as EXR layers,
+# `render.labels`; CARLA, Kubric, AirSim as files): never frames. A file is one by the last word of its
+# name after any frame number (a_depth.exr, street_0001_seg.png, depth_00042.exr) or, for an EXR, by
+# its channels: every one a depth (Z, depth) or a label layer's (depth.Z, normal.X, labels.valid).
+LABEL_WORDS = (*LABELS, VALID.split(".")[0], "seg", "segmentation", "semantic", "instances", "normals", "flow")
+DEPTH_CHANNELS = ("z", "depth")
+_WORDS = re.compile(r"[^a-z0-9]+")
+SHOWN_SKIPPED = 5  # skipped label layers named in the note (then a count)
 
 
 @dataclass
@@ -88,29 +100,69 @@ class Job:
             return False
 
 
+def label_layer(path: Path) -> str | None:
+    """Why the image file `path` is a label layer written beside frames (`LABEL_WORDS`), not a frame;
+    None for a frame."""
+    words = [w for w in _WORDS.split(path.stem.lower()) if w]
+    while words and words[-1].isdigit():  # a frame number
+        words.pop()
+    if words and words[-1] in LABEL_WORDS:
+        return f"its name ends in {words[-1]!r}"
+    if path.suffix.lower() != ".exr":
+        return None
+    from ..imageio import exr_channel_names
+
+    names = exr_channel_names(path)
+    layers = [n.lower().rsplit(".", 1) for n in names]
+    if names and all(layer[0] in LABEL_WORDS if len(layer) == 2 else layer[0] in DEPTH_CHANNELS for layer in layers):
+        return f"its channels ({', '.join(names)}) are labels, no image"
+    return None
+
+
+def say_skipped(skipped: list[tuple[Path, str]]) -> None:
+    """Name on stderr the label layers (file, why) that a batch skipped."""
+    if skipped:
+        shown = "; ".join(f"{p.name} ({why})" for p, why in skipped[:SHOWN_SKIPPED])
+        more = f"; and {len(skipped) - SHOWN_SKIPPED} more" if len(skipped) > SHOWN_SKIPPED else ""
+        print(f"solas-mi batch: skipped {len(skipped)} label layer(s) (depth, segmentation, normal or flow maps), "
+              f"not frames: {shown}{more}", file=sys.stderr, flush=True)
+
+
 def expand_inputs(inputs: Iterable[str | os.PathLike], suffixes: tuple[str, ...] = IMAGE_SUFFIXES,
-                  roots: dict[Path, Path] | None = None) -> list[Path]:
+                  roots: dict[Path, Path] | None = None, skipped: list[tuple[Path, str]] | None = None) -> list[Path]:
     """Files from files, folders (their files ending in `suffixes`, sorted; with `roots`, the whole
     folder tree, each file's folder given recorded in `roots`) and glob patterns; each once, in the
-    order given. SolasError naming an input that matches nothing."""
+    order given. Label layers (`label_layer`) are no inputs: they are skipped, and added to `skipped`
+    as (file, why), or named on stderr (`say_skipped`) when no list is given. SolasError naming an
+    input that matches nothing, or only label layers."""
     found: list[Path] = []
+    labelled: list[tuple[Path, str]] = []
     for item in inputs:
         text = str(item)
         path = Path(text)
         if path.is_dir():
             files = path.rglob("*") if roots is not None else path.iterdir()
             matches = sorted(p for p in files if p.suffix.lower() in suffixes and p.is_file())
-            if roots is not None:
-                roots.update({p.resolve(): path.resolve() for p in matches})
         elif path.exists():
-            matches = [path]
+            matches = [check(path, "batch input")]  # hashed before it is read: no FIFO nor device
         elif glob.has_magic(text):
             matches = sorted(Path(p) for p in glob.glob(text) if Path(p).is_file())
         else:
             raise SolasError(f"input {text!r} is not a file, a folder or a glob pattern that matches files")
+        labels = [(p, why) for p in matches if p.suffix.lower() in IMAGE_SUFFIXES and (why := label_layer(p))]
+        matches = [p for p in matches if p not in {label for label, _ in labels}]
         if not matches:
-            raise SolasError(f"input {text!r} holds no input files ({', '.join(suffixes)})")
+            only = f"only label layers, no frames ({labels[0][0].name}: {labels[0][1]}); give the frames" if labels else \
+                f"no input files ({', '.join(suffixes)})"
+            raise SolasError(f"input {text!r} holds {only}")
+        if roots is not None and path.is_dir():
+            roots.update({p.resolve(): path.resolve() for p in matches})
+        labelled.extend((Path(os.path.abspath(p)), why) for p, why in labels)
         found.extend(matches)
+    if skipped is None:
+        say_skipped(labelled)
+    else:
+        skipped.extend(labelled)
     given: dict[Path, Path] = {}  # each file once (by its target), under the name given (a link keeps its name)
     for p in found:
         given.setdefault(p.resolve(), Path(os.path.abspath(p)))
@@ -169,7 +221,7 @@ class Manifest:
     def previous(path: Path) -> dict[str, Any]:
         """The manifest a former run left (empty when there is none or it cannot be read)."""
         try:
-            data = jsonio.loads(path.read_text())
+            data = jsonio.loads(read_text(path, "record"))
             return data if isinstance(data, dict) else {}
         except (OSError, ValueError):
             return {}

@@ -5,9 +5,12 @@ none), and hand each finished item (done or failed) to `on_done` as it comes.
 Local: `workers` spawned processes, each reading the grid file once and then taking one item at a
 time over its own pipe, so the batch always knows which item each process holds. A process that
 dies (killed, out of memory) loses only that item: it is retried in a fresh process up to
-MAX_ATTEMPTS times, then reported failed. Interrupted (Ctrl-C, SIGTERM), the workers are sent
-SIGTERM, which each turns into an interruption, so the temporary files of the item it was writing
-are removed and no partial output is left.
+MAX_ATTEMPTS times, then reported failed. Interrupted (Ctrl-C, SIGTERM), the batch sends every
+worker SIGTERM at once, then waits for them all (stopped one after another, the waits added up: a
+tester's batch took 7.2 s); each turns it into an interruption, so the temporary files of the item
+it was writing are removed and no partial output is left, and ends without the interpreter's
+teardown. The workers ignore Ctrl-C, which a terminal sends to every process of the job: the batch
+alone decides how they stop (a worker's own Ctrl-C during its start printed a traceback).
 
 Dask: the grid is scattered to every worker once; the scheduler retries an item whose worker died
 (`distributed.scheduler.allowed-failures`) and then reports it failed (KilledWorker).
@@ -15,12 +18,17 @@ Dask: the grid is scattered to every worker once; the scheduler retries an item 
 from __future__ import annotations
 
 import multiprocessing
+import os
 import signal
+import sys
+import time
 from collections import deque
+from contextlib import contextmanager
 from multiprocessing.connection import wait
 from typing import TYPE_CHECKING, Any, Callable
 
 from ..errors import SolasError
+from ..interrupts import raise_outside_imports
 from .jobs import Job
 from .. import imageio
 from . import work
@@ -60,7 +68,7 @@ def check_dask(dask: str | None) -> None:
 
 def _interrupt(signum, frame) -> None:
     work.STOPPING = True  # an item failing from here on was interrupted (`work.run_job`)
-    raise KeyboardInterrupt()
+    raise_outside_imports(KeyboardInterrupt(), frame)
 
 
 def _serve(conn, grid_path: str | None, settings: dict[str, Any]) -> None:
@@ -68,6 +76,8 @@ def _serve(conn, grid_path: str | None, settings: dict[str, Any]) -> None:
     from ..psf.depth import read_grid
 
     signal.signal(signal.SIGTERM, _interrupt)  # interrupted, not killed: temporary files are removed
+    signal.signal(signal.SIGINT, signal.SIG_IGN)  # the batch stops its workers (a Ctrl-C pending is dropped)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})  # blocked since its start (`_sigint_blocked`)
     imageio.SWEEP_STALE = False  # the batch swept the folder it holds (`run_batch`)
     try:
         grid = read_grid(grid_path) if grid_path is not None else None  # over field, or field and distance
@@ -77,13 +87,32 @@ def _serve(conn, grid_path: str | None, settings: dict[str, Any]) -> None:
                 break
     except (KeyboardInterrupt, EOFError):
         pass
+    sys.stdout.flush()
+    sys.stderr.flush()
+    # its items' files are written and their results sent: the interpreter's teardown (Dr.Jit's, Mitsuba's)
+    # has nothing to save, and took a second under load, which an interrupted batch waited for
+    os._exit(0)
+
+
+@contextmanager
+def _sigint_blocked():
+    """The block with SIGINT blocked in this thread: a process started in it starts so (the mask passes
+    through fork and exec) until `_serve` ignores it; this process still receives its own Ctrl-C
+    (through another thread, or when the block ends)."""
+    blocked = signal.SIGINT in signal.pthread_sigmask(signal.SIG_BLOCK, {signal.SIGINT})
+    try:
+        yield
+    finally:
+        if not blocked:
+            signal.pthread_sigmask(signal.SIG_UNBLOCK, {signal.SIGINT})
 
 
 class _Worker:
     def __init__(self, ctx, grid_path: str | None, settings: dict[str, Any]):
         self.conn, child = ctx.Pipe()
         self.proc = ctx.Process(target=_serve, args=(child, grid_path, settings), daemon=True)
-        self.proc.start()
+        with _sigint_blocked():
+            self.proc.start()
         child.close()
         self.index: int | None = None  # the item it holds
 
@@ -94,7 +123,8 @@ class _Worker:
         except OSError:  # the process has died: the loop sees it end and retries the item
             pass
 
-    def stop(self, now: bool) -> None:
+    def ask_to_stop(self, now: bool) -> None:
+        """SIGTERM when `now` (its item ends interrupted), else no more items (it ends when idle)."""
         if self.proc.is_alive():
             if now:
                 self.proc.terminate()
@@ -103,7 +133,10 @@ class _Worker:
                     self.conn.send(None)
                 except OSError:
                     self.proc.terminate()
-        self.proc.join(STOP_WAIT_S)
+
+    def wait_stopped(self, deadline: float) -> None:
+        """Wait for the process to end until `deadline` (`time.monotonic`), then kill it."""
+        self.proc.join(max(0.0, deadline - time.monotonic()))
         if self.proc.is_alive():
             self.proc.kill()
             self.proc.join()
@@ -116,6 +149,15 @@ class _Worker:
             result = None
         self.conn.close()
         return result if isinstance(result, Job) else None
+
+
+def _stop_all(pool: list[_Worker], now: bool) -> None:
+    """Ask every worker of `pool` to stop, then wait for them all together, STOP_WAIT_S at most."""
+    for w in pool:
+        w.ask_to_stop(now)
+    deadline = time.monotonic() + STOP_WAIT_S
+    for w in pool:
+        w.wait_stopped(deadline)
 
 
 def run_local(jobs: list[Job], todo: list[int], grid_path: str | None, settings: dict[str, Any], workers: int,
@@ -146,7 +188,7 @@ def run_local(jobs: list[Job], todo: list[int], grid_path: str | None, settings:
                 except (EOFError, OSError):  # the process died holding item i
                     jobs[i].attempts += 1
                     w.index = None
-                    w.stop(now=True)
+                    _stop_all([w], now=True)
                     w.conn.close()
                     code = w.proc.exitcode
                     pool[n] = w = _Worker(ctx, grid_path, settings)
@@ -165,8 +207,8 @@ def run_local(jobs: list[Job], todo: list[int], grid_path: str | None, settings:
                     w.give(i, jobs[i])
         interrupted = False
     finally:
+        _stop_all(pool, now=interrupted)
         for w in pool:
-            w.stop(now=interrupted)
             result = w.last_result()
             if w.index is not None and result is None:  # its worker stopped before it ended
                 result = jobs[w.index]
@@ -234,7 +276,8 @@ def run_batch(manifest: "Manifest", todo: list[int], grid: "PSFGrid | None", gri
         def on_done(i: int, job: Job) -> None:
             jobs[i] = job
             manifest.save(force=False)
-            bar.update()
+            if job.status != "interrupted":  # stopped, not done: not progress
+                bar.update()
 
         try:
             if todo and dask is None:

@@ -49,15 +49,13 @@ def _degrade(job: Job, grid: "PSFGrid", grid_path: str, settings: dict[str, Any]
     from ..convolution.output import degrade_file
     from ..outputs import check_target, data_and_preview
 
-    if settings.get("format") == "png16":  # a 16-bit PNG and its metadata's JSON (`plan`'s suffixes)
+    spec = settings["spec"]  # the batch's `convolution.spec.DegradeSpec`
+    if spec.output_format == "png16":  # a 16-bit PNG and its metadata's JSON (`plan`'s suffixes)
         output, png = (check_target(p, [job.input, grid_path]) for p in (job.output, job.png))
     else:
         output, png = data_and_preview(job.output, job.png, inputs=[job.input, grid_path])
     output.parent.mkdir(parents=True, exist_ok=True)  # a folder tree's sub-folder
-    degrade_file(job.input, grid, grid_path, output, png, settings["method"], settings["boundary"],
-                 linear=settings["linear"], force=settings["force"], output_format=settings.get("format", "exr"),
-                 depth=job.params.get("depth"), occlusion=settings.get("occlusion", "filled"), frame=settings.get("frame"),
-                 silhouette=settings.get("silhouette", "nearest"),
+    degrade_file(job.input, grid, grid_path, output, png, spec, force=settings["force"], depth=job.params.get("depth"),
                  extra_meta={"batch": {**settings["batch"], "seed": job.seed}})
 
 

@@ -10,33 +10,32 @@ import argparse
 from typing import Any
 
 from ..outputs import add_png_option
-from .methods import DEFAULT_METHOD, METHODS, check_method
 
 LARGE_IMAGE_VALUES = 4096 * 3072 * 3  # beyond 4K (≈ 1.7 s) the command reports each channel
+DEGRADE_OPTIONS = ("method", "boundary", "occlusion", "silhouette", "linear")  # the DegradeSpec fields `degrade` takes
 
 
 def run_degrade(args: argparse.Namespace) -> int:
     from ..imageio import image_size
     from ..outputs import data_and_preview
-    from ..optics.frame import parse_frame
     from ..progress import Progress
     from ..psf.depth import read_grid
     from .output import degrade_file
+    from .spec import DegradeSpec
 
     output, png = data_and_preview(args.output, args.png, inputs=[args.image, args.psf_grid]
                                    + ([args.depth] if args.depth else []))
-    check_method(args.method)
+    spec = DegradeSpec.from_args(args, DEGRADE_OPTIONS, frame=frame_from_args(args))
     rows, cols, channels = image_size(args.image)
     large = rows * cols * channels > LARGE_IMAGE_VALUES
 
     # a large image takes long enough to want a sign of life
     with Progress("degrade", channels, "channels", enabled=large) as bar:
-        meta = degrade_file(args.image, read_grid(args.psf_grid), args.psf_grid, output, png, args.method,
-                            args.boundary, linear=args.linear, force=args.force, depth=args.depth,
-                            occlusion=args.occlusion, silhouette=args.silhouette, frame=parse_frame(args.fov_deg, args.fov_axis, args.intrinsics,
-                                                                        args.fisheye), progress=bar)
+        meta = degrade_file(args.image, read_grid(args.psf_grid), args.psf_grid, output, png, spec, force=args.force,
+                            depth=args.depth, progress=bar)
     height, width = meta["output_shape"][:2]
-    print(f"wrote {output} and {png} ({args.method}{', depth-aware' if args.depth else ''}, {width}x{height} px, {meta['seconds']:.2f} s)")
+    print(f"wrote {output} and {png} ({spec.method}{', depth-aware' if args.depth else ''}, {width}x{height} px, "
+          f"{meta['seconds']:.2f} s)")
     return 0
 
 
@@ -53,10 +52,16 @@ def add_frame_options(p) -> None:
                         ": its field is checked against the lens's")
 
 
+def frame_from_args(args: argparse.Namespace):
+    """The frame's camera of the options of `add_frame_options` (`optics.frame.FrameCamera`), or None."""
+    from ..optics.frame import parse_frame
+
+    return parse_frame(args.fov_deg, args.fov_axis, args.intrinsics, args.fisheye)
+
+
 def register(subparsers: Any) -> None:
     """Add the `degrade` subcommand."""
-    from .depth import OCCLUSIONS, SILHOUETTES
-    from .kernels import BOUNDARIES
+    from .spec import DegradeSpec
 
     p = subparsers.add_parser(
         "degrade", help="degrade an image with a lens's spatially variant PSF grid (FFT convolution)",
@@ -71,24 +76,11 @@ def register(subparsers: Any) -> None:
                     "the scaled lens's grid.")
     p.add_argument("image", help="PNG/JPEG (sRGB, decoded unless --linear) or EXR (linear)")
     p.add_argument("--psf-grid", required=True, metavar="GRID.exr", help="PSF grid written by `solas-mi psf-grid`")
-    p.add_argument("--method", choices=list(METHODS), default=DEFAULT_METHOD,
-                   help="; ".join(f"{name}{' (default)' if name == DEFAULT_METHOD else ''}: {m.summary}"
-                                  for name, m in METHODS.items()))
-    p.add_argument("--boundary", choices=BOUNDARIES, default=BOUNDARIES[0],
-                   help="padding outside the image, never wrapped around: edge (default) replicates the border "
-                        "pixels, zero pads with black, reflect mirrors the image about its border")
     p.add_argument("--depth", metavar="DEPTH.exr", help="the image's depth map (OpenEXR, metres along the optical "
                    "axis, inf: sky; one channel or Z/depth/Y) with a grid over object distance (psf-grid "
                    "--distances-m): PSFs interpolated in field and in 1/distance")
-    p.add_argument("--occlusion", choices=OCCLUSIONS, default=OCCLUSIONS[0],
-                   help="with --depth: filled (default): layers composited far to near, the background hidden "
-                        "behind near objects continued from their silhouettes; layered: without that; none: layers "
-                        "added (no occlusion)")
-    p.add_argument("--silhouette", choices=SILHOUETTES, default=SILHOUETTES[0],
-                   help="with --depth: nearest (default): a silhouette's pixels of mixed (antialiased) depth take the "
-                        "nearest depth around them; as-given: the map's depths")
+    DegradeSpec.add_flags(p, DEGRADE_OPTIONS)
     add_frame_options(p)
-    p.add_argument("--linear", action="store_true", help="PNG/JPEG values are already linear: do not decode sRGB")
     p.add_argument("-o", "--output", required=True, metavar="OUT.exr", help="output OpenEXR (linear)")
     add_png_option(p)
     p.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")

@@ -1,4 +1,4 @@
-"""The convolution methods by name (`METHODS`: name → `ConvolutionMethod`, the one list every caller
+"""The convolution methods by name (`METHODS`, a `solas_mi.registry.Registry`: the one list every caller
 uses) and `degrade`, their one dispatcher: an image seen through a lens, by spatially variant
 convolution with its PSF grid.
 
@@ -8,15 +8,15 @@ pixel grid is the sensor (`kernels.grid_camera`).
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from ..blas import single_threaded_blas
 from ..errors import SolasError
 from ..imageio import check_finite
+from ..registry import Registry
 from . import interp, patch
 from .curved import CurvedLayout, frame_layout
 from .kernels import channel_wavelengths, check_boundary, check_kernel
@@ -25,43 +25,30 @@ if TYPE_CHECKING:
     from ..psf.grid import PSFGrid
 
 
-
-@dataclass(frozen=True)
-class ConvolutionMethod:
-    """A convolution method: its functions, one summary line and its reference."""
-
-    name: str
-    # (channel (H, W), grid, kernels.Layout, grid wavelength index, boundary, dtype) -> degraded channel
-    convolve_channel: Callable
-    # (kernels.Layout, kernel radius R in pixels, grid wavelength indices used) -> metadata of what was done
-    describe: Callable
-    summary: str
-    reference: str
-
-
-METHODS: dict[str, ConvolutionMethod] = {m.name: m for m in (
-    ConvolutionMethod("interp", interp.convolve_channel, interp.describe, interp.SUMMARY,
-                      "J. G. Nagy and D. P. O'Leary, SIAM J. Sci. Comput. 19(4), 1998"),
-    ConvolutionMethod("patch", patch.convolve_channel, patch.describe, patch.SUMMARY,
-                      "the SOLAS paper (IS&T Electronic Imaging, 2025): one PSF per block"),
-)}
-DEFAULT_METHOD = "interp"
+# name → the channel's convolution, (channel (H, W), grid, kernels.Layout, grid wavelength index, boundary,
+# dtype) -> degraded channel, with its `describe` (kernels.Layout, kernel radius R in pixels, grid wavelength
+# indices used) -> the metadata of what was done
+METHODS = Registry("convolution method", default="interp")
+METHODS.register("interp", interp.convolve_channel, describe=interp.describe, summary=interp.SUMMARY,
+                 reference="J. G. Nagy and D. P. O'Leary, SIAM J. Sci. Comput. 19(4), 1998")
+METHODS.register("patch", patch.convolve_channel, describe=patch.describe, summary=patch.SUMMARY,
+                 reference="the SOLAS paper (IS&T Electronic Imaging, 2025): one PSF per block")
+DEFAULT_METHOD = METHODS.default
 
 
 def check_method(method: str) -> str:
-    if not isinstance(method, str) or method not in METHODS:
-        raise SolasError(f"convolution method {method!r} must be one of {', '.join(METHODS)}")
-    return method
+    """`method`, a name of `METHODS`; a SolasError listing them."""
+    return METHODS.get(method).name
 
 
 def degrade(image: np.ndarray, grid: "PSFGrid | str", method: str = DEFAULT_METHOD, boundary: str = "edge", *,
             dtype=np.float32, meta: dict | None = None, progress=None, frame=None) -> np.ndarray:
     """The linear image (H, W) or (H, W, C) seen through the lens of `grid` (a PSFGrid or its EXR path).
 
-    method "interp" (default): PSFs interpolated bilinearly between nodes, seamless; "patch": the
-    SOLAS paper's one kernel per block. boundary: how the image is padded ("edge" replicates the
-    border, "zero", "reflect" mirrors); it is never wrapped around. Channels take the grid's
-    wavelengths longest first (R, G, B ← 656, 531, 486 nm); a one-wavelength grid serves all.
+    method: a name of `METHODS` (each one's summary says what it does). boundary: how the image is
+    padded ("edge" replicates the border, "zero", "reflect" mirrors); it is never wrapped around.
+    Channels take the grid's wavelengths longest first (R, G, B ← 656, 531, 486 nm); a one-wavelength
+    grid serves all.
     Returns an array of the image's shape in `dtype` (float32 or float64); `meta`, if given, is
     filled with what was done (camera, channels, blocks or nodes); `progress(done, total)` is called
     after each channel. `frame`: the frame's camera (`optics.frame.FrameCamera`; None: the image spans
@@ -93,7 +80,7 @@ def degrade(image: np.ndarray, grid: "PSFGrid | str", method: str = DEFAULT_METH
     out = np.empty(planes.shape, dtype=dtype)
     with single_threaded_blas():
         for c, k in enumerate(wavelengths):
-            out[..., c] = m.convolve_channel(planes[..., c], grid, lay, k, boundary, dtype)
+            out[..., c] = m.function(planes[..., c], grid, lay, k, boundary, dtype)
             if progress is not None:
                 progress(c + 1, nchan)
     if meta is not None:
@@ -106,5 +93,5 @@ def degrade(image: np.ndarray, grid: "PSFGrid | str", method: str = DEFAULT_METH
         })
         if frame is not None:
             meta["frame_camera"] = frame.meta(width, height)
-        meta.update(m.describe(lay, radius, wavelengths))
+        meta.update(m.extra["describe"](lay, radius, wavelengths))
     return out if image.ndim == 3 else out[..., 0]

@@ -10,6 +10,7 @@ import numpy as np
 from ..errors import SolasError
 from .depth import degrade_depth
 from .methods import degrade
+from .spec import DegradeSpec
 
 if TYPE_CHECKING:
     from ..psf.depth import DepthGrid
@@ -34,10 +35,6 @@ BRIGHTNESS = ("degrade: a sum-normalised grid (the default) keeps the input's br
               "to its axis (vignetting), the axis staying 1. render-image: irradiance in the ideal camera's units, "
               "with Fresnel losses (--fresnel transmit, its default) and relative illumination: about 0.90 of the "
               "input on the doublet's axis (Fresnel 0.90 x pupil scale 1.0097), less toward the corners")
-# float32 OpenEXR (14 MB a 1280×960 RGB frame uncompressed), half floats, or a 16-bit sRGB PNG (its own
-# preview; its metadata in a JSON file beside it): OUTPUT_FILES gives each one's two files' suffixes
-OUTPUT_FILES = {"exr": (".exr", ".png"), "exr-half": (".exr", ".png"), "png16": (".png", ".json")}
-OUTPUT_FORMATS = tuple(OUTPUT_FILES)
 HALF_MAX = 65504.0
 GRID_META_KEYS = ("lens", "lens_hash", "method", "normalization", "field_range_deg", "field_sampling", "layout", "sensor_mm")
 
@@ -70,23 +67,23 @@ def read_depth(path: str | Path) -> np.ndarray:
 
 
 def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path: str | Path, output: Path, png: Path,
-                 method: str, boundary: str, *, linear: bool = False, force: bool = False,
-                 extra_meta: dict[str, Any] | None = None, depth: str | Path | None = None,
-                 occlusion: str = "filled", frame=None, output_format: str = "exr", silhouette: str = "nearest",
-                 progress: Callable[[int, int], None] | None = None) -> dict[str, Any]:
-    """Degrade the image file `image_path` by `grid` (read from `grid_path`, named in the metadata) and
-    write `output` (EXR) and `png` together or not at all; returns the output's metadata.
-    `linear`: PNG/JPEG values are already linear (not sRGB-decoded); `force`: run even when the
-    estimated memory exceeds what is free; `extra_meta` is added to the metadata. `depth`: the EXR
-    depth map (m) of the image, with a grid over object distance (`convolution.depth`, `occlusion`,
-    `silhouette`);
-    `frame`: the frame's camera (`optics.frame.FrameCamera`); `output_format`: one of OUTPUT_FORMATS."""
+                 spec: DegradeSpec | None = None, *, force: bool = False, depth: str | Path | None = None,
+                 extra_meta: dict[str, Any] | None = None, progress: Callable[[int, int], None] | None = None
+                 ) -> dict[str, Any]:
+    """Degrade the image file `image_path` by `grid` (read from `grid_path`, named in the metadata) as
+    `spec` says (a `convolution.spec.DegradeSpec`: method, boundary, linear, output format, occlusion,
+    silhouette, frame camera; None: its defaults) and write `output` and `png` (`spec.OUTPUT_FILES`' two files)
+    together or not at all; returns the output's metadata. `force`: run even when the estimated memory
+    exceeds what is free; `depth`: the EXR depth map (m) of the image, with a grid over object distance
+    (`convolution.depth`); `extra_meta` is added to the metadata; `progress(done, total)` after each
+    channel."""
     from ..budget import check_memory
     from ..imageio import image_size, read_image
     from ..psf.depth import DepthGrid
 
-    if output_format not in OUTPUT_FORMATS:
-        raise SolasError(f"output format {output_format!r} must be one of {', '.join(OUTPUT_FORMATS)}")
+    spec = DegradeSpec() if spec is None else spec
+    if not isinstance(spec, DegradeSpec):
+        raise SolasError(f"spec {spec!r} must be a solas_mi.convolution.spec.DegradeSpec")
     if (depth is not None) != isinstance(grid, DepthGrid):
         raise SolasError(f"PSF grid {grid_path}: " + ("a depth map needs a grid over object distance (psf-grid "
                          "--distances-m)" if depth is not None else "a grid over object distance needs the image's "
@@ -95,18 +92,18 @@ def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path:
     layers = grid.layers if depth is not None else [grid]
     need = peak_bytes(image_path, rows, cols, channels, sum(g.data.nbytes for g in layers)) + 9 * len(layers) * rows * cols
     check_memory(f"degrade {cols}x{rows}", need, force)
-    image = read_image(image_path, linearize=not linear)
+    image = read_image(image_path, linearize=not spec.linear)
     meta: dict[str, Any] = {}
     if depth is None:
-        out = degrade(image, grid, method, boundary, meta=meta, progress=progress, frame=frame)
-    elif method != "interp":
-        raise SolasError(f"method {method!r}: a depth map is convolved with interp per depth layer only")
+        out = degrade(image, grid, spec.method, spec.boundary, meta=meta, progress=progress, frame=spec.frame)
+    elif spec.method != "interp":
+        raise SolasError(f"method {spec.method!r}: a depth map is convolved with interp per depth layer only")
     else:
-        out = degrade_depth(image, read_depth(depth), grid, boundary, occlusion=occlusion, meta=meta, progress=progress,
-                            frame=frame, silhouette=silhouette)
+        out = degrade_depth(image, read_depth(depth), grid, spec.boundary, occlusion=spec.occlusion, meta=meta,
+                            progress=progress, frame=spec.frame, silhouette=spec.silhouette)
         meta["depth_map"] = str(depth)
     first = layers[0]
-    meta.update({"input": str(image_path), "input_encoding": "linear" if linear or
+    meta.update({"input": str(image_path), "input_encoding": "linear" if spec.linear or
                  Path(image_path).suffix.lower() == ".exr" else "sRGB, decoded to linear",
                  "psf_grid": str(grid_path),
                  "psf_grid_meta": {key: first.meta.get(key) for key in GRID_META_KEYS},
@@ -116,7 +113,7 @@ def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path:
     meta.update(extra_meta or {})
     names = None if out.ndim == 2 or out.shape[-1] == 3 else \
         [f"C{c:02d}_{meta['channel_wavelengths_nm'][c]:g}nm" for c in range(out.shape[-1])]
-    write_output(output, png, out, names, meta, output_format, image_path)
+    write_output(output, png, out, names, meta, spec.output_format, image_path)
     meta["output_shape"] = list(out.shape)
     return meta
 
@@ -124,7 +121,7 @@ def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path:
 def write_output(output: Path, second: Path, out: np.ndarray, names: list[str] | None, meta: dict,
                  output_format: str, image_path) -> None:
     """The degraded image `out` (channel `names`, None: grey or RGB) and its metadata as `output_format`
-    says (OUTPUT_FILES): the EXR and its PNG preview, or the 16-bit PNG and its JSON; both files appear
+    says (`spec.OUTPUT_FILES`): the EXR and its PNG preview, or the 16-bit PNG and its JSON; both files appear
     together or not at all."""
     from ..imageio import image_channels, write_exr, write_png
     from ..outputs import written_together

@@ -2,11 +2,11 @@
 the metadata (after the sensor, before the metrics in the import order).
 
 - `black`: black-level subtraction, the signal scaled to the sensor's saturation (1.0 = saturated).
-- `white`: white-balance gains (the sensor's own daylight response, grey world, a grey card, given).
-- `demosaic`: demosaicing methods by name over the colour-demosaicing package (bilinear, Malvar2004,
-  Menon2007), one dispatcher routing each method's own options.
+- `white`: white-balance gains, their methods by name (`white.METHODS`).
+- `demosaic`: demosaicing methods by name (`demosaic.METHODS`) over the colour-demosaicing package, one
+  dispatcher routing each method's own options.
 - `ccm`: the colour correction matrix, from the sensor's channel responses or given.
-- `tone`: the tone curve (sRGB OETF, a gamma, none) and the 8-bit frame.
+- `tone`: the tone curves by name (`tone.CURVES`) and the 8-bit frame.
 - `pipeline`: `ISP`, the processor's description (``default`` or a small TOML), and `develop`.
 - `camera`: `Camera`, a sensor, exposure, processor and seed that a batch's frames go through.
 """

@@ -35,13 +35,22 @@ def run_camera(args: argparse.Namespace) -> int:
     return 0
 
 
+def stage_choices() -> str:
+    """What the method fields of an [isp] table take (their registries), for help texts."""
+    from . import demosaic, tone, white
+
+    return (f"white_balance: {', '.join(white.named())} or a table of gains; demosaic: {', '.join(demosaic.METHODS)} "
+            f"or none; tone: {', '.join(tone.CURVES)}")
+
+
 def register(subparsers: Any) -> None:
     """Add --isp to the sensor's `camera` command."""
     p = subparsers.choices["camera"]
     p.add_argument("--isp", default=None, metavar="default|FILE.toml",
                    help="develop the RAW through the image processor (black level, white balance, demosaicing, "
-                        "colour correction, tone curve): 'default' or a TOML file with an [isp] table; the 8-bit "
-                        "sRGB frame is written beside OUT.exr as OUT.png (default: RAW only)")
+                        f"colour correction, tone curve): 'default' or a TOML file with an [isp] table "
+                        f"({stage_choices()}); the 8-bit sRGB frame is written beside OUT.exr as OUT.png "
+                        "(default: RAW only)")
     p.set_defaults(run=run_camera)
 
 
@@ -58,7 +67,8 @@ def add_camera_options(p: argparse.ArgumentParser, seed: bool) -> None:
     g.add_argument("--scale", type=float, help="W/m² (or W/m²/sr) per unit of each frame (with --sensor-model; "
                                                "default 1)")
     g.add_argument("--isp", metavar="default|FILE.toml",
-                   help="develop each RAW: 'default' or a TOML file with an [isp] table (with --sensor-model)")
+                   help=f"develop each RAW: 'default' or a TOML file with an [isp] table ({stage_choices()}; "
+                        "with --sensor-model)")
     if seed:
         g.add_argument("--seed", type=int, default=0,
                        help="the sensor's seed: its fixed pattern, and with each frame's name its noise (default 0)")

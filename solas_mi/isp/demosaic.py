@@ -1,5 +1,6 @@
-"""Demosaicing methods by name over the colour-demosaicing package (Colour Developers), one
-dispatcher routing each method's own options, as colour-science's `*_METHODS` mappings do.
+"""Demosaicing methods by name (`METHODS`, a `solas_mi.registry.Registry`) over the colour-demosaicing
+package (Colour Developers), one dispatcher routing each method's own options, as colour-science's
+`*_METHODS` mappings do.
 
 The package demosaics Bayer arrays (RGGB and its turns). The automotive patterns go through it with
 the clear sites in the green sites' place: RCCB as RGGB, giving the channels (R, C, B); RCCC as
@@ -10,12 +11,11 @@ the clear signal. `slots` names the filter behind each output channel; the colou
 from __future__ import annotations
 
 import warnings
-from dataclasses import dataclass
-from typing import Callable
 
 import numpy as np
 
 from ..errors import SolasError
+from ..registry import Entry, Option, Registry
 
 # pattern → (the Bayer pattern the demosaicer is given, the filter behind each output channel)
 BAYER = {"RCCB": ("RGGB", "RCB"), "RCCC": ("RGGB", "RCC")}
@@ -26,51 +26,48 @@ def slots(pattern: str) -> tuple[str, str]:
     return BAYER.get(pattern, (pattern, "RGB"))
 
 
-@dataclass(frozen=True)
-class DemosaicMethod:
-    """A demosaicing method: the colour-demosaicing function's name, its own options (each a switch, true
-    or false), a reference."""
-
-    name: str
-    function: str
-    options: tuple[str, ...]
-    reference: str
-
-    def compute(self) -> Callable:
-        with warnings.catch_warnings():  # its modules import scipy.ndimage.filters, deprecated in SciPy
-            warnings.simplefilter("ignore", DeprecationWarning)
-            import colour_demosaicing
-
-        return getattr(colour_demosaicing, self.function)
+METHODS = Registry("demosaicing method", default="Malvar2004")
 
 
-METHODS = {m.name: m for m in (
-    DemosaicMethod("bilinear", "demosaicing_CFA_Bayer_bilinear", (),
-                   "bilinear interpolation of each channel's sites"),
-    DemosaicMethod("Malvar2004", "demosaicing_CFA_Bayer_Malvar2004", (),
-                   "Malvar, He and Cutler 2004, high-quality linear interpolation (ICASSP)"),
-    DemosaicMethod("Menon2007", "demosaicing_CFA_Bayer_Menon2007", ("refining_step",),
-                   "Menon, Andriani and Calvagno 2007, directional filtering and a posteriori decision (IEEE TIP)"),
-)}
-DEFAULT_METHOD = "Malvar2004"
+def _package():
+    """The colour-demosaicing package, imported on first use (it loads SciPy)."""
+    with warnings.catch_warnings():  # its modules import scipy.ndimage.filters, deprecated in SciPy
+        warnings.simplefilter("ignore", DeprecationWarning)
+        import colour_demosaicing
+
+    return colour_demosaicing
 
 
-def check_method(name: str, options: dict | None = None) -> DemosaicMethod:
+@METHODS.register("bilinear", summary="bilinear interpolation of each channel's sites")
+def _bilinear(mosaic, bayer):
+    return _package().demosaicing_CFA_Bayer_bilinear(mosaic, bayer)
+
+
+@METHODS.register("Malvar2004", summary="high-quality linear interpolation: bilinear corrected by the other "
+                                        "channels' gradients", reference="Malvar, He and Cutler 2004 (ICASSP)")
+def _malvar2004(mosaic, bayer):
+    return _package().demosaicing_CFA_Bayer_Malvar2004(mosaic, bayer)
+
+
+@METHODS.register("Menon2007", summary="directional filtering and a posteriori decision",
+                  reference="Menon, Andriani and Calvagno 2007 (IEEE TIP)",
+                  options=(Option("refining_step", bool, True, "a switch of Menon2007: refine the decided estimate",
+                                  label="demosaicing option refining_step ="),))
+def _menon2007(mosaic, bayer, **options):
+    return _package().demosaicing_CFA_Bayer_Menon2007(mosaic, bayer, **options)
+
+
+DEFAULT_METHOD = METHODS.default
+
+
+def check_method(name: str, options: dict | None = None) -> Entry:
     """The method `name`, its `options` checked against its own (SolasError naming what is allowed)."""
-    if not isinstance(name, str) or name not in METHODS:
-        raise SolasError(f"demosaicing method {name!r} must be one of {', '.join(METHODS)}")
-    method = METHODS[name]
+    method = METHODS.get(name)
     options = {} if options is None else options
     if not isinstance(options, dict):
         raise SolasError(f"demosaicing options {options!r} must be a table of option = true/false "
-                         f"({name}'s options: {', '.join(method.options) or 'none'})")
-    unknown = sorted(set(options) - set(method.options))
-    if unknown:
-        raise SolasError(f"demosaicing method {name!r} takes no option {', '.join(unknown)} "
-                         f"(its options: {', '.join(method.options) or 'none'})")
-    for key, value in options.items():
-        if not isinstance(value, bool):
-            raise SolasError(f"demosaicing option {key} = {value!r} must be true or false (a switch of {name})")
+                         f"({name}'s options: {', '.join(o.name for o in method.options) or 'none'})")
+    METHODS.options(name, options, strict=True)
     return method
 
 
@@ -87,7 +84,7 @@ def check_frame(shape: tuple[int, ...], what: str) -> None:
 
 def demosaic(mosaic: np.ndarray, pattern: str, method: str = DEFAULT_METHOD, **options) -> np.ndarray:
     """The three channels (H, W, 3; filters `slots(pattern)[1]`) of a one-channel mosaic of `pattern`."""
-    function = check_method(method, options).compute()
+    function = check_method(method, options).function
     check_frame(mosaic.shape, f"demosaicing ({method})")
     bayer, _ = slots(pattern)
     return np.asarray(function(mosaic, bayer, **options), dtype=np.float64)

@@ -3,25 +3,26 @@
 The stages, in order, each optional and named in the metadata:
 
 1. black level (`black`): the signal above black as a fraction of saturation;
-2. white balance (`white`): one gain per filter on the mosaic;
-3. demosaicing (`demosaic`): three channels per pixel (``none``: the mosaic as a grey frame);
+2. white balance (`white.METHODS`): one gain per filter on the mosaic;
+3. demosaicing (`demosaic.METHODS`): three channels per pixel (``none``: the mosaic as a grey frame);
 4. colour correction (`ccm`): the sensor's matrix, a given one, or none;
-5. tone curve (`tone`): sRGB OETF, a gamma or none, then 8 bits.
+5. tone curve (`tone.CURVES`), then 8 bits.
 
 An `ISP` is written ``default`` (every field's default) or as a small TOML file with an ``[isp]``
 table of its fields, e.g.
 
     [isp]
-    white_balance = "grey-card"   # daylight, grey-world, grey-card, none, or gains {R = 1.9, G = 1, B = 1.5}
+    white_balance = "grey-card"   # a name of white.METHODS, or gains {R = 1.9, G = 1, B = 1.5}
     grey_card = [100, 80, 140, 120]  # x0, y0, x1, y1 (pixels) with grey-card
-    demosaic = "Menon2007"        # bilinear, Malvar2004, Menon2007, none
-    demosaic_options = {refining_step = false}
+    demosaic = "Menon2007"        # a name of demosaic.METHODS, or none
+    demosaic_options = {refining_step = false}  # the method's own options
     ccm = "sensor"                # sensor, none, or [[...], [...], [...]]
-    tone = "gamma"                # srgb, gamma, none
-    gamma = 2.2
+    tone = "gamma"                # a name of tone.CURVES
+    gamma = 2.2                   # the gamma curve's option
 """
 from __future__ import annotations
 
+import os
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
 
@@ -31,6 +32,7 @@ from ..errors import SolasError
 from ..options import toml_table
 from ..sensor.model import SensorModel
 from . import black, ccm, demosaic, tone, white
+from .tone import CURVES, GAMMA
 
 DEFAULT = "default"
 
@@ -40,13 +42,13 @@ class ISP:
     """The image processor: each stage's choice (see the module's docstring)."""
 
     black_level: bool = True
-    white_balance: str | dict = "daylight"
+    white_balance: str | dict = white.METHODS.default
     grey_card: tuple[int, int, int, int] | None = None
     demosaic: str = demosaic.DEFAULT_METHOD
     demosaic_options: dict = field(default_factory=dict)
     ccm: str | tuple = "sensor"
-    tone: str = "srgb"
-    gamma: float = 2.2
+    tone: str = CURVES.default
+    gamma: float = GAMMA.default
 
     def __post_init__(self):
         if not isinstance(self.black_level, bool):
@@ -64,7 +66,7 @@ class ISP:
 
     def _check_white_balance(self) -> None:
         """A method's name or a table of gains; a grey card's box with grey-card, and only with it."""
-        named = tuple(m for m in white.METHODS if m != "given")  # "given" is written as a table of gains
+        named = white.named()
         if isinstance(self.white_balance, dict):
             white.check_gains(self.white_balance)
         elif not isinstance(self.white_balance, str) or self.white_balance not in named:
@@ -93,7 +95,7 @@ def load_isp(text: str | Path) -> ISP:
     """The `ISP` named ``default``, or that of the ``[isp]`` table of TOML file `text`."""
     if str(text) == DEFAULT:
         return ISP()
-    if not Path(text).is_file():
+    if not os.path.lexists(text):
         raise SolasError(f"isp {str(text)!r} must be 'default' or a TOML file with an [isp] table (no such file)")
     values = toml_table(text, "isp", "isp file")
     try:
@@ -105,15 +107,9 @@ def load_isp(text: str | Path) -> ISP:
         raise SolasError(f"isp file {str(text)!r}: {exc}") from None
 
 
-def _gains(isp: ISP, signal: np.ndarray, model: SensorModel) -> dict[str, float]:
-    method = isp.white_balance
-    if isinstance(method, dict):
-        return white.check_given(method, model.cfa)
-    if method == "daylight":
-        return white.daylight_gains(model)
-    if method == "none":
-        return white.check_given({f: 1.0 for f in set(model.cfa)}, model.cfa)
-    return white.measured_gains(signal, model.cfa, isp.grey_card)
+def _white_balance(isp: ISP) -> str:
+    """The name of the ISP's white-balance method (`white.METHODS`)."""
+    return white.GIVEN if isinstance(isp.white_balance, dict) else isp.white_balance
 
 
 def develop(raw: np.ndarray, model: SensorModel, isp: ISP = ISP()) -> tuple[np.ndarray, dict]:
@@ -122,9 +118,9 @@ def develop(raw: np.ndarray, model: SensorModel, isp: ISP = ISP()) -> tuple[np.n
     stages = {"black_level": {"subtracted": isp.black_level, "black_dn": model.black_level_dn,
                               "saturation_dn": black.saturation_dn(model)}}
     signal = black.subtract_black(raw, model, enabled=isp.black_level)
-    gains = _gains(isp, signal, model)
-    stages["white_balance"] = {"method": "given" if isinstance(isp.white_balance, dict) else isp.white_balance,
-                               "gains": gains, **({"grey_card": list(isp.grey_card)} if isp.grey_card else {})}
+    gains = white.METHODS[_white_balance(isp)].function(signal, model, isp)
+    stages["white_balance"] = {"method": _white_balance(isp), "gains": gains,
+                               **({"grey_card": list(isp.grey_card)} if isp.grey_card else {})}
     signal = white.apply_gains(signal, model.cfa, gains)
     if isp.demosaic == "none":
         image = np.repeat(signal[..., None], 3, axis=-1)
@@ -139,7 +135,8 @@ def develop(raw: np.ndarray, model: SensorModel, isp: ISP = ISP()) -> tuple[np.n
                      "matrix": None if matrix is None else matrix.tolist()}
     clipped = int(np.count_nonzero((image < 0.0) | (image > 1.0)))
     frame = tone.to_8bit(tone.encode(image, isp.tone, isp.gamma))
-    stages["tone"] = {"curve": isp.tone, **({"gamma": isp.gamma} if isp.tone == "gamma" else {}),
+    own = {o.name: getattr(isp, o.name) for o in CURVES[isp.tone].options}  # an ISP field per curve option
+    stages["tone"] = {"curve": isp.tone, **own,
                       "values_clipped": clipped, "bits": 8}
     return frame, {"isp": isp.describe(), "stages": stages}
 

@@ -1,32 +1,42 @@
 """The tone curve: linear values (1.0 = the top of the output range) → encoded [0, 1] → 8 bits.
 
-- ``srgb``: the sRGB OETF (IEC 61966-2-1): 12.92 x below 0.0031308, 1.055 x^(1/2.4) − 0.055 above;
-- ``gamma``: x^(1/γ) for a given γ (default 2.2);
-- ``none``: the linear values as they are.
-Values are clipped to [0, 1] first (highlights past saturation and negative values of the colour
-correction), then rounded to 8 bits."""
+The curves are `CURVES` (a `solas_mi.registry.Registry`: each curve's function of the clipped values, its
+own options, its formula as summary). Values are clipped to [0, 1] first (highlights past saturation and
+negative values of the colour correction), then rounded to 8 bits."""
 import numpy as np
 
-from ..errors import SolasError
 from ..imageio import srgb_encode
+from ..registry import Option, Registry
 
-CURVES = ("srgb", "gamma", "none")
+CURVES = Registry("tone curve", default="srgb")
+GAMMA = Option("gamma", float, 2.2, "the γ of x^(1/γ)", minimum=0, above=True, label="tone gamma")
+
+
+@CURVES.register("srgb", summary="the sRGB OETF: 12.92 x below 0.0031308, 1.055 x^(1/2.4) − 0.055 above",
+                 reference="IEC 61966-2-1")
+def _srgb(x):
+    return srgb_encode(x)
+
+
+@CURVES.register("gamma", options=(GAMMA,), summary="x^(1/γ) for a given γ")
+def _gamma(x, gamma):
+    return np.power(x, 1.0 / gamma)
+
+
+@CURVES.register("none", summary="the linear values as they are")
+def _none(x):
+    return x
 
 
 def check_curve(curve: str, gamma: float) -> None:
-    if curve not in CURVES:
-        raise SolasError(f"tone curve {curve!r} must be one of {', '.join(CURVES)}")
-    if not isinstance(gamma, (int, float)) or isinstance(gamma, bool) or not np.isfinite(gamma) or gamma <= 0:
-        raise SolasError(f"tone gamma {gamma!r} must be a finite number > 0")
+    CURVES.get(curve)
+    GAMMA.check(gamma)
 
 
-def encode(linear: np.ndarray, curve: str = "srgb", gamma: float = 2.2) -> np.ndarray:
+def encode(linear: np.ndarray, curve: str = CURVES.default, gamma: float = GAMMA.default) -> np.ndarray:
     """Encoded values in [0, 1] of linear values through `curve`."""
     check_curve(curve, gamma)
-    x = np.clip(linear, 0.0, 1.0)
-    if curve == "srgb":
-        return srgb_encode(x)
-    return np.power(x, 1.0 / gamma) if curve == "gamma" else x
+    return CURVES[curve].function(np.clip(linear, 0.0, 1.0), **CURVES.options(curve, {GAMMA.name: gamma}))
 
 
 def to_8bit(encoded: np.ndarray) -> np.ndarray:

@@ -1,24 +1,21 @@
 """White balance: one gain per filter, applied to the mosaic's sites before demosaicing; the reference
 filter (G, or C for the clear patterns: the middle demosaiced channel) keeps gain 1.
 
-Where the gains come from (`METHODS`):
-- ``daylight``: the sensor's own response to a white (equal R, G, B, the image's white): g_f = r_ref /
-  r_f with r_f = η_f Σ λ_c over the channels the filter passes (`ccm.responses`);
-- ``grey-world``: the frame averages to grey: g_f = mean_ref / mean_f over each filter's sites;
-- ``grey-card``: the same over a box (x0, y0, x1, y1) of pixels holding a grey card;
-- ``given``: gains from the user, one per filter of the pattern (the reference's is 1);
-- ``none``: gains of 1.
+Where the gains come from: `METHODS` (a `solas_mi.registry.Registry`), each method a function
+(signal above black, sensor model, the `pipeline.ISP`) → gain per filter, with its formula as summary.
 """
 import numpy as np
 
 from ..errors import SolasError
+from ..registry import Registry
 from ..sensor.cfa import FILTERS, site_map
 from ..sensor.model import SensorModel
 from .black import GAIN_MAX
 from .ccm import responses
 from .demosaic import MINIMUM_FRAME, check_frame, slots
 
-METHODS = ("daylight", "grey-world", "grey-card", "given", "none")
+METHODS = Registry("white balance method", default="daylight")
+GIVEN = "given"  # the method of gains the user gives: an ISP writes it as its table of gains, not by name
 
 
 def reference(pattern: str) -> str:
@@ -95,3 +92,36 @@ def apply_gains(signal: np.ndarray, pattern: str, gains: dict[str, float]) -> np
 def channel_gains(pattern: str, gains: dict[str, float]) -> np.ndarray:
     """The gains of the three demosaiced channels (their filters, `demosaic.slots`)."""
     return np.array([gains[f] for f in slots(pattern)[1]])
+
+
+@METHODS.register("daylight", summary="the sensor's own response to a white (equal R, G, B, the image's white): "
+                                      "g_f = r_ref / r_f with r_f = η_f Σ λ_c over the channels the filter passes")
+def _daylight(signal, model, isp):
+    return daylight_gains(model)
+
+
+@METHODS.register("grey-world", summary="the frame averages to grey: g_f = mean_ref / mean_f over each filter's sites")
+def _grey_world(signal, model, isp):
+    return measured_gains(signal, model.cfa)
+
+
+@METHODS.register("grey-card", summary="the same over a box (x0, y0, x1, y1) of pixels holding a grey card "
+                                       "(`grey_card`)")
+def _grey_card(signal, model, isp):
+    return measured_gains(signal, model.cfa, isp.grey_card)
+
+
+@METHODS.register(GIVEN, summary="gains from the user, one per filter of the pattern (the reference's is 1), "
+                                 "written as a table: {R = 1.9, G = 1, B = 1.5}", table=True)
+def _given(signal, model, isp):
+    return check_given(isp.white_balance, model.cfa)
+
+
+@METHODS.register("none", summary="gains of 1")
+def _none(signal, model, isp):
+    return check_given({f: 1.0 for f in set(model.cfa)}, model.cfa)
+
+
+def named() -> tuple[str, ...]:
+    """The methods an ISP names (the others it writes as a table: `GIVEN`)."""
+    return tuple(n for n, e in METHODS.items() if not e.extra.get("table"))

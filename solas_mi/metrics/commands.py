@@ -56,10 +56,13 @@ def run_sfr(args: argparse.Namespace) -> int:
     from ..imageio import read_image
     from .esfr import check_mode, esfr
     from .nssfr import CHART_MARGINS, find_edge_rois
-    from .roi import crop, luminance, parse_roi
+    from .roi import crop, is_grey, luminance, parse_roi
 
     check_mode(args.mode)
     image = read_image(args.image, linearize=not args.linear)
+    if args.channel is not None and is_grey(image):
+        raise SolasError(f"--channel {args.channel}: {args.image} is a grey image (one channel), it has no colour "
+                         "channels; measure it without --channel")
     full_scale = _full_scale(args)
     if args.roi:
         rois = [parse_roi(text) for text in args.roi]

@@ -41,20 +41,26 @@ def linear_pixels(image, what: str) -> np.ndarray:
     return data
 
 
+def is_grey(image: np.ndarray) -> bool:
+    """Whether an image (H×W, H×W×1, H×W×3 or H×W×4) has one channel, no colour ones."""
+    return image.ndim == 2 or image.shape[2] == 1
+
+
 def luminance(image: np.ndarray, channel: int | None = None) -> np.ndarray:
     """2-D float64 luminance Y = 0.213 R + 0.715 G + 0.072 B of linear values (H×W, H×W×1, H×W×3 or
     H×W×4: alpha is ignored), or one channel (0 R, 1 G, 2 B) of a colour image."""
     a = np.asarray(image, dtype=np.float64)
-    if a.ndim == 2:
-        return a
-    if a.ndim != 3 or a.shape[2] not in (1, 3, 4):
+    if a.ndim not in (2, 3) or (a.ndim == 3 and a.shape[2] not in (1, 3, 4)):
         raise SolasError(f"image shape {a.shape} is not H×W, H×W×1, H×W×3 or H×W×4")
+    if channel is not None and is_grey(a):
+        raise SolasError(f"channel {channel} asked of a grey image (one channel): it has no colour channels; "
+                         "measure its grey values (no channel)")
     if channel is not None:
-        if not 0 <= channel < min(a.shape[2], 3):
-            raise SolasError(f"channel {channel} does not exist: allowed 0…{min(a.shape[2], 3) - 1}")
+        if not 0 <= channel < 3:
+            raise SolasError(f"channel {channel} does not exist: allowed 0…2")
         return a[:, :, channel]
-    if a.shape[2] == 1:
-        return a[:, :, 0]
+    if is_grey(a):
+        return a.reshape(a.shape[:2])
     return a[:, :, 0] * LUMA_WEIGHTS[0] + a[:, :, 1] * LUMA_WEIGHTS[1] + a[:, :, 2] * LUMA_WEIGHTS[2]
 
 

@@ -92,6 +92,8 @@ def _finish(
         raise SolasError(f"bit depth {bit_depth} is not supported: allowed None (float), 8, 16")
     if not (isinstance(noise, (int, float)) and 0 <= noise < math.inf):
         raise SolasError(f"noise {noise!r} must be a finite number ≥ 0 (sd as a fraction of the step)")
+    if seed is not None and (isinstance(seed, bool) or not isinstance(seed, int) or seed < 0):
+        raise SolasError(f"noise seed {seed!r} must be a whole number ≥ 0 (or none: a fresh one)")
     img = low + (high - low) * field_
     if noise > 0:
         img = img + np.random.default_rng(seed).normal(0.0, noise * abs(high - low), img.shape)
@@ -112,6 +114,8 @@ def _check_common(shape: tuple[int, int], sigma_px: float) -> None:
         raise SolasError(f"sigma {sigma_px} px must be ≥ 0")
 
 
+# many parameters: a synthetic target's independent knobs (geometry, blur, levels, noise, clipping, encoding), each
+# with its default and keyword-only past the first three: a caller sets the few it varies
 def slanted_edge(
     shape: tuple[int, int] = (128, 128),
     angle_deg: float = 5.0,

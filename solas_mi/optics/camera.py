@@ -110,6 +110,19 @@ def pinhole_focal_mm(lens: Lens, fov_deg: float, wavelength_nm: float | None = N
     return x / math.tan(math.radians(fov_deg))
 
 
+def film_pitch_um(lens: Lens, columns: int, fov_deg: float | None = None, wavelength_nm: float | None = None) -> float:
+    """The pixel pitch (µm) of a film `columns` pixels wide that spans the lens's field: its width meets
+    the real chief rays of ±fov_deg (default: the lens's field) at `wavelength_nm` (default: the primary)
+    for a lens of pinhole fields; the lens's [image] diameter for one of polar fields (a fisheye).
+    SolasError where the lens sets none."""
+    if lens.field_type.pinhole:
+        fov = check_fov(lens.field_deg if fov_deg is None else fov_deg)
+        return 2e3 * pinhole_focal_mm(lens, fov, wavelength_nm) * math.tan(math.radians(fov)) / columns
+    if lens.image_diameter <= 0:
+        raise SolasError(f"lens {lens.name} has no [image] diameter: give the pixel pitch (um)")
+    return 1e3 * lens.image_diameter / columns
+
+
 def camera_for(lens: Lens, sensor: tuple[int, int] = DEFAULT_SENSOR, fov_deg: float | None = None,
                pitch_um: float | None = None, wavelength_nm: float | None = None) -> Camera:
     """The camera of `lens` with a sensor of (rows, columns) pixels. The default input image spans
@@ -120,7 +133,7 @@ def camera_for(lens: Lens, sensor: tuple[int, int] = DEFAULT_SENSOR, fov_deg: fl
     w = lens.primary_wavelength if wavelength_nm is None else lens.check_wavelength(wavelength_nm)
     focal = pinhole_focal_mm(lens, fov, w)
     if pitch_um is None:
-        pitch_um = 2e3 * focal * math.tan(math.radians(fov)) / cols
+        pitch_um = film_pitch_um(lens, cols, fov, w)
     elif not (isinstance(pitch_um, (int, float)) and 0.0 < pitch_um < 1e4):
         raise SolasError(f"pixel pitch {pitch_um!r} um must be a positive number below 1e4")
     return Camera(cols, rows, float(pitch_um), focal, fov, w)

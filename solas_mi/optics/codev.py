@@ -1,5 +1,6 @@
 """CODE V sequence files (.seq, text): read into our lens-file dictionary (what `Lens.from_dict` takes),
-registered as the `.seq` entry of `formats.READERS`. The rotationally symmetric refracting subset:
+registered (by `solas_mi.optics`) as the `.seq` entry of `formats.READERS`. The rotationally symmetric
+refracting subset:
 
 - Commands one per line or separated by `;`; `!` starts a comment; quoted strings ('…' or "…") are one
   token. Keywords are case-insensitive and, as in CODE V, known by their first three letters (STOP is
@@ -42,7 +43,7 @@ from . import zemax_solves
 from .codev_glass import PrivateCatalogue, material, unquote
 from .codev_syntax import (APERTURES, ASPHERIC, FIELDS, IGNORED, REFUSED, SYSTEM, VIGNETTING, ZERO_IS_NOTHING,
                            command, commands)
-from .formats import READERS
+from .formats import MAX_FIELDS, check_count
 from .formats import floats as _numbers
 from .lens import Lens
 from .paraxial import paraxial
@@ -237,9 +238,7 @@ def _spec(reader: _Reader, where: str) -> dict:
     if len(rows) < 3 or rows[0]["kind"] != "SO" or rows[-1]["kind"] != "SI":
         raise SolasError(f"{where}: a lens needs SO (the object), at least one surface (S or STO) and SI "
                          f"(the image), in that order; got {' '.join(r['kind'] for r in rows) or 'no surfaces'}")
-    default_stop = not any(r.get("stop") for r in rows[1:-1])
-    if default_stop:  # CODE V's default: surface 1 is the stop
-        rows[1]["stop"] = True
+    stop_note = zemax_solves.default_stop(rows[1:-1], "STO", "CODE V's default")
     inner = [r for r in rows[1:-1] if r["kind"] in ("SO", "SI")]
     if inner:
         raise SolasError(f"{inner[0]['ident']}: {inner[0]['kind']} inside the lens (SO first, SI last)")
@@ -253,8 +252,8 @@ def _spec(reader: _Reader, where: str) -> dict:
     title = " ".join(unquote(t) for t in system.get("TIT", system.get("TITLE", []))).strip()
     if title:
         spec["name"] = title
-    if default_stop:
-        spec["description"] = "no STO in the file: the stop is surface 1, CODE V's default"
+    if stop_note:
+        spec["description"] = stop_note
     spec["surface"] = [_surface(r, i, scale) for i, r in enumerate(rows[1:-1], start=1)]
     if rows[-1].get("cir", 0) > 0:
         spec["image"] = {"diameter": 2.0 * rows[-1]["cir"] * scale}
@@ -350,9 +349,8 @@ def _fields(system: dict, scale: float, where: str) -> tuple[str, list[float]]:
     y = _numbers(system.get(given[0], []), f"{where}: {given[0]}")
     x = _numbers(system.get("X" + given[0][1:], []), f"{where}: X{given[0][1:]}")
     n = max(len(x), len(y))
+    check_count(n, "fields", MAX_FIELDS, where)
     x, y = x + [0.0] * (n - len(x)), y + [0.0] * (n - len(y))
     unit = 1.0 if given[0] == "YAN" else scale
     return FIELDS[given[0]], [math.hypot(a, b) * unit for a, b in zip(x, y)]
 
-
-READERS[".seq"] = read_spec

@@ -43,9 +43,10 @@ def run_lens_info(args) -> int:
     from .pupil import chief_rays  # loads Dr.Jit
 
     lens = load_lens(args.lens)
-    wavelengths = floats(args.wavelengths_nm, "--wavelengths-nm") if args.wavelengths_nm else list(lens.wavelengths_nm)
+    wavelengths = (floats(args.wavelengths_nm, "--wavelengths-nm") if args.wavelengths_nm is not None
+                   else list(lens.wavelengths_nm))
     half = [lens.field_deg, -lens.field_deg] if lens.field_deg else []  # none for a lens that states no field
-    fields = floats(args.fields, "--fields") if args.fields else [0.0, *half]
+    fields = floats(args.fields, "--fields") if args.fields is not None else [0.0, *half]
     rows = []
     for w in wavelengths:
         p = paraxial(lens, w, fields).as_dict()

@@ -1,6 +1,7 @@
-"""The lens file formats: which reader turns a file's text into the lens-file dictionary
-(`Lens.from_dict`), which writer turns a `Lens` into text, by extension, and how other programs' files
-are decoded; which file a lens name or path means (`lens_path`). Our TOML is read by `Lens.load` itself.
+"""The lens file formats: `READERS`, extension → the reader that turns a file into the lens-file
+dictionary (`Lens.from_dict`), and `WRITERS`, extension → the writer that turns a `Lens` into text (each a
+`solas_mi.registry.Registry`, filled in one place: the package's `__init__`, before any module of it is
+used); how other programs' files are decoded; which file a lens name or path means (`lens_path`).
 """
 from __future__ import annotations
 
@@ -10,19 +11,52 @@ import re
 from pathlib import Path
 
 from ..errors import SolasError
+from ..registry import Registry
 from ..resources import resource_dir
-from . import lens_toml, pbrt_dat
+from ..userfiles import check, read_bytes, read_toml
 
 LENS_DIR = "lenses"
 _CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f\u2028\u2029]")
 
-# Lens file formats, in the order messages list them
-FORMATS = (".toml", ".zmx", ".seq", ".dat")
-# Formats besides our TOML: text → lens-file dictionary, and Lens → text. The readers of other
-# programs' files (`zemax`: .zmx, `codev`: .seq), which solve apertures and fields with the tracer,
-# add themselves when `solas_mi.optics` is imported (the tracer imports this module).
-READERS = {".dat": pbrt_dat.read_spec}
-WRITERS = {".toml": lens_toml.dumps, ".dat": pbrt_dat.dumps}
+# by extension, in the order messages list them: path → lens-file dictionary (a reader's `check`: what a
+# lens read from that format must hold beyond any lens's checks), and Lens → text. The readers of other
+# programs' files solve apertures and fields with the tracer, which imports this module: they are
+# registered by `solas_mi.optics` itself (`__init__`), which Python runs before any of its modules is used.
+READERS = Registry("lens reader")
+WRITERS = Registry("lens writer")
+
+
+def read_toml_lens(path: Path) -> dict:
+    """Our TOML lens file's dictionary."""
+    return read_toml(path, "lens file")
+
+
+def text_reader(read_spec):
+    """The reader of another program's lens file whose text `read_spec(text, where)` parses: the file
+    decoded as `decode_text` says."""
+    def read(path: Path) -> dict:
+        return read_spec(decode_text(read_bytes(path, "lens file")), str(path))
+
+    return read
+
+
+# The most a lens may hold, in every reader and in `Lens` itself. A trace is one Dr.Jit kernel through
+# every surface, whose compile time grows faster than the surfaces (`lens info`: 100 surfaces ~30 s on 2
+# cores, 300 ~4 min) and whose assembly recurses once per variable of a ray's chain of operations
+# (`jitc_var_traverse`, ~50 variables and ~5 KiB of stack a surface): ~1 600 surfaces overflow an 8 MiB
+# stack, a segmentation fault. The wavelengths and a file's fields each multiply the traces of `lens info`
+# and of the readers' solves (64 wavelengths and 200 fields of a .zmx with automatic apertures: ~10 s).
+# Real lenses: up to ~60 surfaces (lithography objectives ~80), 3 to 25 fields; the visible at 10 nm
+# steps is 41 wavelengths.
+MAX_SURFACES = 128
+MAX_WAVELENGTHS = 64
+MAX_FIELDS = 200
+
+
+def check_count(count: int, what: str, most: int, where: str) -> None:
+    """SolasError naming `where` unless `count` (of surfaces, wavelengths, fields: `what`) is at most `most`."""
+    if count > most:
+        raise SolasError(f"{where}: {count} {what}; a lens may have at most {most}")
 
 
 def decode_text(data: bytes) -> str:
@@ -58,24 +92,15 @@ def floats(tokens: list[str], where: str) -> list[float]:
     return values
 
 
-def listed(formats) -> str:
-    """The extensions `formats`, comma-separated: in FORMATS's order, any it does not list after them."""
-    return ", ".join(sorted(formats, key=lambda e: (FORMATS.index(e) if e in FORMATS else len(FORMATS), e)))
-
-
-def readable_formats() -> set[str]:
-    """The lens file extensions `Lens.load` reads: our TOML and each registered reader's."""
-    return READERS.keys() | {".toml"}
-
-
 def readable() -> str:
-    """`readable_formats()`, comma-separated: what every message and help text that lists lens files says."""
-    return listed(readable_formats())
+    """The lens file extensions `Lens.load` reads (`READERS`), comma-separated: what every message and help
+    text that lists lens files says."""
+    return ", ".join(READERS)
 
 
 def writable() -> str:
-    """The lens file extensions `Lens.save` writes (each registered writer's), comma-separated."""
-    return listed(WRITERS)
+    """The lens file extensions `Lens.save` writes (`WRITERS`), comma-separated."""
+    return ", ".join(WRITERS)
 
 
 def lens_help() -> str:
@@ -105,11 +130,7 @@ def lens_path(name_or_path) -> Path:
         if not path.is_file():
             raise SolasError(f"unknown lens {given!r}; shipped lenses: {', '.join(shipped_lenses())}, or a path "
                              f"to a lens file ({readable()})")
-    if path.suffix.lower() not in readable_formats():
+    if path.suffix.lower() not in READERS:
         what = f"unknown extension {path.suffix!r}" if path.suffix else "no lens extension"
         raise SolasError(f"lens file {given!r} has {what}; allowed: {readable()}")
-    if path.is_dir():
-        raise SolasError(f"lens file {given!r} is a folder, not a lens file")
-    if not path.is_file():
-        raise SolasError(f"lens file {str(path)!r} does not exist")
-    return path
+    return check(path, "lens file")

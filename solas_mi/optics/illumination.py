@@ -24,6 +24,7 @@ from .lens import Lens
 from .paraxial import paraxial
 
 _STEP = 1e-4  # tangent step of the finite differences
+EDGE_MARGIN = 1e-9  # relative: how far the image-scale table stays inside the last field with a chief ray
 _POLAR_STEP_DEG = 0.01  # polar-angle step of the finite differences of lenses with polar fields
 
 
@@ -272,4 +273,7 @@ def _last_chief_tangent(lens: Lens, t_max: float, wavelength_nm: float, bisectio
     for _ in range(bisections):
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if exists(mid) else (lo, mid)
-    return lo
+    # backed off the edge, where round-off decides whether the aim reaches the stop centre: the Cooke
+    # triplet's chief ray there fell to a substitute in the table's batch, its image height turned back and
+    # a negative footprint rendered the whole image black (--fov-deg 30)
+    return lo * (1.0 - EDGE_MARGIN)

@@ -1,5 +1,5 @@
-"""A lens prescription: surfaces, glass, object and image plane, loaded from a TOML lens file
-(or a Zemax .zmx, CODE V .seq or pbrt .dat lens table, read by `zemax`, `codev` and `pbrt_dat`).
+"""A lens prescription: surfaces, glass, object and image plane, loaded from a lens file (our TOML, or
+another program's: `formats.READERS`).
 
 Lengths in mm, wavelengths in nm, field angles in degrees. +z is the optical axis toward the image;
 surface 1's vertex is at z = 0. A surface is a sphere, or an even asphere: sag
@@ -18,16 +18,21 @@ from pathlib import Path
 from typing import Any
 
 import numpy as np
-import tomllib
 
 from ..errors import SolasError
 from ..imageio import write_text
 from . import forbes, ideal as ideal_mod, overlap
 from . import glass as glass_mod
 from .sag import sag
-from .formats import READERS, WRITERS, decode_text, lens_path, shipped_lenses, writable  # noqa: F401 (shipped_lenses: re-exported)
+from .formats import (MAX_SURFACES, MAX_WAVELENGTHS, READERS, WRITERS, check_count, lens_path, shipped_lenses,
+                      writable)  # noqa: F401 (shipped_lenses: re-exported)
 from .fields import FieldType, field_type_for
 
+NORM_RADIUS_MM = (1e-6, 1e6)  # the Qbfs normalisation radius a surface may have (1 nm to 1 km)
+# The longest length a lens file may give (mm): an object beyond it is at infinity to every digit (its image
+# lies f²/d ≈ 1e-11 mm from the focus of an f = 100 mm lens); a film 1e30 mm away rendered NaN, one at 1e300
+# overflowed lens info's projection fits.
+MAX_LENGTH_MM = 1e15
 _VIRTUAL = ": the image plane lies before the last surface, a virtual image (a diverging lens's focus) that no film records"
 # What a lens file may hold (anything else is a mistake worth naming, e.g. a surface type we do not model)
 KEYS = {
@@ -44,6 +49,12 @@ def check_lens(lens) -> None:
     """SolasError unless `lens` is a Lens (analyses take `Lens.load(name or path)`)."""
     if not isinstance(lens, Lens):
         raise SolasError(f"lens {lens!r} must be a Lens: Lens.load(a shipped name or a lens file)")
+
+
+def _check_size(surfaces, wavelengths, where: str) -> None:
+    """SolasError unless there are at most `formats.MAX_SURFACES` surfaces and `MAX_WAVELENGTHS` wavelengths."""
+    check_count(len(surfaces), "surfaces", MAX_SURFACES, where)
+    check_count(len(wavelengths), "wavelengths", MAX_WAVELENGTHS, where)
 
 
 def _check_keys(table: dict, kind: str, where: str) -> None:
@@ -157,9 +168,9 @@ def _surface(row: dict, i: int, where: str, catalogues: tuple[str, ...], own: di
     aspheric = _terms(row, "aspheric", ident, "[A4, A6, ...] (mm^(1-2i))")
     qbfs = _terms(row, "qbfs", ident, "[a0, a1, ...] of Forbes' Qbfs polynomials (mm)")
     norm_radius = _number(row, "norm_radius", ident, "mm, the Qbfs normalisation radius", 0.0 if qbfs else 1.0)
-    if qbfs and not norm_radius > 0:
-        raise SolasError(f"{ident}: qbfs needs norm_radius, a positive number (mm), the radius where u = 1; "
-                         f"got {row.get('norm_radius')!r}")
+    if not NORM_RADIUS_MM[0] <= norm_radius <= NORM_RADIUS_MM[1]:  # 0: a division by zero, 1e300: an overflow
+        raise SolasError(f"{ident}: {'qbfs needs ' if qbfs else ''}norm_radius, the radius where the Qbfs terms' "
+                         f"u = 1, from {NORM_RADIUS_MM[0]:g} to {NORM_RADIUS_MM[1]:g} mm; got {row.get('norm_radius')!r}")
     focal_length = (ideal_mod.check(row["focal_length"], ident, radius == conic == 0 and not any(aspheric + qbfs))
                     if "focal_length" in row else None)
     material = row.get("material", "AIR")
@@ -197,39 +208,31 @@ class Lens:
     catalogues: tuple[str, ...] = ()  # vendors whose entry a glass name shared by several vendors means, first first
     materials: tuple[glass_mod.Glass, ...] = ()  # the lens file's own materials, which its surfaces name
 
+    def __post_init__(self) -> None:
+        """However it is built (a file, `from_dict`, this constructor, `dataclasses.replace`), a lens holds
+        at most `formats.MAX_SURFACES` surfaces and `MAX_WAVELENGTHS` wavelengths (why: `formats`)."""
+        _check_size(self.surfaces, self.wavelengths_nm, self.source or self.name)
+
     # ------------------------------------------------------------------ loading
     @classmethod
     def load(cls, name_or_path: str | Path) -> "Lens":
         """A lens by shipped name (e.g. "solas-doublet") or by path to a lens file (`formats.readable()`):
         a name holding a path separator or an extension is a path."""
         path = lens_path(name_or_path)
-        if path.suffix.lower() in READERS:
-            try:
-                data = path.read_bytes()
-            except OSError as exc:
-                raise SolasError(f"lens file {path}: cannot be read: {exc}") from None
-            text = decode_text(data)
-            return cls.from_dict(READERS[path.suffix.lower()](text, str(path)), source=str(path))
-        try:
-            with open(path, "rb") as f:
-                spec = tomllib.load(f)
-        except tomllib.TOMLDecodeError as exc:
-            raise SolasError(f"lens file {path}: not valid TOML: {exc}") from exc
-        except OSError as exc:
-            raise SolasError(f"lens file {path}: cannot be read: {exc}") from None
-        except UnicodeDecodeError:
-            raise SolasError(f"lens file {path} is not UTF-8 text; a lens file is TOML text") from None
-        return cls.from_dict(spec, source=str(path))
+        reader = READERS[path.suffix.lower()]
+        lens = cls.from_dict(reader.function(path), source=str(path))
+        if "check" in reader.extra:  # what a lens read from this format must hold beyond any lens's checks
+            reader.extra["check"](lens)
+        return lens
 
     def save(self, path: str | Path) -> Path:
         """Write the lens to `path` (written whole or not at all) in the format its extension names:
         one of `formats.writable()`."""
         path = Path(path)
-        writer = WRITERS.get(path.suffix.lower())
-        if writer is None:
+        if path.suffix.lower() not in WRITERS:
             raise SolasError(f"lens file {str(path)!r}: unknown extension {path.suffix!r}; "
                              f"allowed: {writable()}")
-        write_text(path, writer(self))
+        write_text(path, WRITERS[path.suffix.lower()].function(self))
         return path
 
     @classmethod
@@ -243,6 +246,10 @@ class Lens:
         if not all(isinstance(r, dict) for r in rows):
             raise SolasError(f"{where}: surface = {rows!r}: each surface must be a table ([[surface]] with radius, "
                              "thickness, ...)")
+        wavelengths = spec.get("wavelengths_nm", [486.0, 531.0, 656.0])
+        if not isinstance(wavelengths, list) or not wavelengths:
+            raise SolasError(f"{where}: wavelengths_nm = {wavelengths!r} must be a non-empty list of numbers (nm)")
+        _check_size(rows, wavelengths, where)  # before any work on them
         catalogues, own = _catalogues(spec, where), _own_materials(spec, where)
         surfaces = [_surface(row, i, where, catalogues, own) for i, row in enumerate(rows, start=1)]
         obj, image = _table(spec, "object", where), _table(spec, "image", where)
@@ -259,9 +266,6 @@ class Lens:
             object_glass = glass_mod.resolve(obj.get("material", "AIR"), prefer=catalogues, own=own)
         except SolasError as exc:
             raise SolasError(f"{where}: object: {exc}") from None
-        wavelengths = spec.get("wavelengths_nm", [486.0, 531.0, 656.0])
-        if not isinstance(wavelengths, list) or not wavelengths:
-            raise SolasError(f"{where}: wavelengths_nm = {wavelengths!r} must be a non-empty list of numbers (nm)")
         lens = cls(
             name=str(spec.get("name", Path(source).stem if source else "lens")),
             surfaces=tuple(surfaces),
@@ -284,17 +288,24 @@ class Lens:
         for w in self.wavelengths_nm:
             if not w > 0:
                 raise SolasError(f"{where}: wavelengths_nm holds {w:g}; wavelengths must be positive (nm)")
-        if self.image_diameter < 0:
-            raise SolasError(f"{where}: image diameter {self.image_diameter:g} mm must be positive (or left out)")
+        if not 0 <= self.image_diameter <= MAX_LENGTH_MM:
+            raise SolasError(f"{where}: image diameter {self.image_diameter:g} mm must be positive, at most "
+                             f"{MAX_LENGTH_MM:g} mm (or left out)")
         stops = [i for i, s in enumerate(self.surfaces) if s.stop]
         if not stops:
             raise SolasError(f"{where}: no surface is marked as the aperture stop (set stop = true on one)")
         if len(stops) > 1:
             raise SolasError(f"{where}: surfaces {', '.join(str(i + 1) for i in stops)} are all marked stop; exactly one may be")
+        if not abs(self.object_distance) <= MAX_LENGTH_MM and math.isfinite(self.object_distance):
+            raise SolasError(f"{where}: object distance {self.object_distance:g} mm must lie within ±{MAX_LENGTH_MM:g} "
+                             "mm, or be \"infinity\" (a farther object is at infinity to every digit)")
         for i, s in enumerate(self.surfaces, start=1):
             ident = f"{where}: surface {i} ({s.label})"
-            if s.diameter <= 0:
-                raise SolasError(f"{ident}: diameter {s.diameter:g} mm must be positive")
+            if not 0 < s.diameter <= MAX_LENGTH_MM:
+                raise SolasError(f"{ident}: diameter {s.diameter:g} mm must be positive and at most {MAX_LENGTH_MM:g} mm")
+            if not abs(s.thickness) <= MAX_LENGTH_MM:
+                raise SolasError(f"{ident}: thickness {s.thickness:g} mm must lie within ±{MAX_LENGTH_MM:g} mm, the "
+                                 "longest length a lens file may give")
             if s.radius != 0 and s.conic == 0 and s.semi_diameter >= abs(s.radius):
                 raise SolasError(f"{ident}: clear semi-diameter {s.semi_diameter:g} mm is not smaller than |radius| "
                                  f"{abs(s.radius):g} mm; the sphere cannot hold that aperture")

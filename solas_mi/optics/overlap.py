@@ -77,5 +77,5 @@ def check_image_distance(lens, what: str) -> None:
     point over the last vertex plane, which then passes through the point, so that nothing is defined there."""
     if lens.surfaces[-1].thickness == 0:
         raise SolasError(f"lens {lens.name}: the image plane lies on the last surface (distance 0 mm), where {what}, "
-                         "sampled over the last vertex plane seen from the image point, is undefined; a tracer PSF "
-                         "method (fraunhofer, geometric) takes the lens as it is")
+                         "sampled over the last vertex plane seen from the image point, is undefined; a PSF method "
+                         "that traces the lens (`psf --psf-method`) takes it as it is")

@@ -133,6 +133,22 @@ def read_spec(text: str, where: str) -> dict:
             "wavelengths_nm": [glass_mod.LINE_F, glass_mod.LINE_D, glass_mod.LINE_C]}
 
 
+def check_steps(lens, where: str, then: str) -> None:
+    """SolasError naming the first of `lens`'s overlaps (`Lens.overlaps`: a negative step, faces that cross),
+    `then` said after it: pbrt's RealisticCamera drops a ray whose step to the next element is negative, so
+    no .dat table holds such a lens, whether written (`dumps`) or read (`check_read`)."""
+    if lens.overlaps:
+        raise SolasError(f"{where}: {lens.overlaps[0].split(': traced')[0]}; pbrt's realistic camera steps only "
+                         f"forward from surface to surface, so {then}")
+
+
+def check_read(lens) -> None:
+    """A lens read from a .dat table: refused where pbrt cannot trace it (`check_steps`), a damaged table
+    (as pbrt's unscaled dgauss.dat and telephoto.dat, whose spacing column is one row off)."""
+    check_steps(lens, f"lens file {lens.source}", "pbrt cannot trace this table: a damaged table (a thickness "
+                "column one row off reads so)")
+
+
 def dumps(lens) -> str:
     """The .dat text of `lens` (a `solas_mi.optics.lens.Lens`, object at infinity, spherical surfaces):
     five columns, n_d and V_d of each glass from its dispersion formula (0 for air)."""
@@ -142,10 +158,7 @@ def dumps(lens) -> str:
     if ideal:
         raise SolasError(f"lens {lens.name}: surface {ideal[0]} is an ideal thin lens (focal_length); a .dat lens "
                          "table holds spheres only; save it as .toml or .zmx")
-    if lens.overlaps:  # pbrt's RealisticCamera drops a ray whose step to the next element is negative
-        raise SolasError(f"lens {lens.name}: {lens.overlaps[0].split(': traced')[0]}; pbrt's realistic camera "
-                         "steps only forward from surface to surface, so a .dat lens table cannot hold it; save it "
-                         "as .toml or .zmx")
+    check_steps(lens, f"lens {lens.name}", "a .dat lens table cannot hold it; save it as .toml or .zmx")
     bad = [i for i, s in enumerate(lens.surfaces, start=1) if not s.is_sphere]
     if bad:
         raise SolasError(f"lens {lens.name}: surface {bad[0]} is aspheric; a .dat lens table holds spheres only")

@@ -54,6 +54,14 @@ def chief_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> 
     b = Bundle(lens, field_deg, wavelength_nm, 1)
     e0, goal = chief_aim(lens, b)
     ex, ey, tr, conv = aim(b, stop_target, T.array(e0[:, 0]), T.array(e0[:, 1]), T.array(goal[:, 0]), T.array(goal[:, 1]))
+    missed = np.flatnonzero(~T.to_numpy(conv)[0])
+    if len(missed):  # the aim at the stop centre can miss at the very edge of the fields it reaches (the Cooke
+        for f in missed:  # triplet at 31.842°): the passing ray nearest it, as where none reaches it; refused
+            found = nearest_passing(lens, field_deg[f], wavelength_nm[f])  # only where no ray passes the stop
+            if found is not None:
+                e0[f], goal[f] = found
+        ex, ey, tr, conv = aim(b, stop_target, T.array(e0[:, 0]), T.array(e0[:, 1]), T.array(goal[:, 0]),
+                               T.array(goal[:, 1]))
     px, py, _ = T.to_plane(tr, lens.image_z)
     distinct, which = np.unique(wavelength_nm, return_inverse=True)  # paraxial data once per wavelength
     xp_z = np.array([paraxial(lens, w).exit_pupil_z_mm for w in distinct])[which.ravel()]
@@ -63,7 +71,7 @@ def chief_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> 
         ex, ey, px, py, radius, qopl, (qx - px) / radius, (qy - py) / radius, tr.n_image, conv, tr.clipped_by)
     if not conv.all():
         bad = field_deg[~conv][0]
-        raise SolasError(f"no real ray of {wavelength_nm[~conv][0]:g} nm reaches the stop for field "
+        raise SolasError(f"no real ray of {wavelength_nm[~conv][0]:g} nm passes the stop for field "
                          f"({bad[0]:g}, {bad[1]:g}) deg; the lens does not image that field")
     return ChiefRays(
         entrance=np.stack([ex, ey], axis=-1),

@@ -1,6 +1,6 @@
 """Zemax OpticStudio sequential lens files (.zmx, text): read into our lens-file dictionary (what
-`Lens.from_dict` takes) and written from a `Lens`, registered as the `.zmx` entries of `formats.READERS`
-and `WRITERS`.
+`Lens.from_dict` takes) and written from a `Lens`, registered (by `solas_mi.optics`) as the `.zmx`
+entries of `formats.READERS` and `WRITERS`.
 
 Read as the author meant it:
 - Encodings as OpticStudio writes them: UTF-16 with or without a byte-order mark, UTF-8, else Latin-1
@@ -10,10 +10,11 @@ Read as the author meant it:
   k the r^k coefficient: the even ones from r⁴ up are kept; r² and odd terms are refused naming the
   surface), QED_TYPE (OpticStudio's Q-type asphere: XDAT 1 the type, 0 Qbfs or 1 Qcon, XDAT 2 the number
   of terms, XDAT 3 the normalisation radius, XDAT 4… a0, a1, …; Qbfs kept as such, Qcon rewritten exactly
-  as even-asphere terms, `forbes`), COORDBRK when it is a pure axial shift (its DISZ added to the gap) or undone by the next
-  coordinate break; PARAXIAL, the ideal thin lens (`ideal`: PARM 1 the focal length, PARM 2 the OPD mode); flat air surfaces without a clear aperture of their own (no DIAM, or DIAM's solve type
-  0, automatic: it cuts no ray) (dummies) are dropped,
-  their thickness added to the gap. STOP, COMM (the label), CONI, CURV (1/unit), DISZ.
+  as even-asphere terms, `forbes`), COORDBRK when it is a pure axial shift (its DISZ added to the gap) or
+  undone by the next coordinate break; PARAXIAL, the ideal thin lens (`ideal`: PARM 1 the focal length,
+  PARM 2 the OPD mode); flat air surfaces without a clear aperture of their own (no DIAM, or DIAM's solve
+  type 0, automatic: it cuts no ray) (dummies) are dropped, their thickness added to the gap. STOP (none:
+  surface 1, as in OpticStudio's new lens, said in the description), COMM (the label), CONI, CURV, DISZ.
 - Clear apertures: DIAM (the semi-diameter); where absent or 0, Zemax's automatic semi-diameter:
   the largest height of the real chief and marginal (stop-rim) rays of every field and wavelength.
 - Glass: GLAS names through our catalogue; a name several vendors use is taken from the vendors GCAT
@@ -22,15 +23,14 @@ Read as the author meant it:
   constant index); on SURF 0 the object's medium.
 - System aperture, which sets the stop's size as in Zemax (the stop's DIAM only with FLOA): ENPD
   (entrance-pupil diameter), FNUM x 0 (image-space F/# = EFL / EPD), FNUM x 1 (paraxial working F/#),
-  OBNA x 0 (object-space NA, finite objects), FLOA (float by stop size).
+  OBNA x 0 (object-space NA, finite objects), FLOA (float by stop size; also where none is named).
 - Fields (XFLN/YFLN, FTYP's first number): 0 angle, 1 object height, 2 paraxial image height, 3 real
   image height (the field whose real chief ray lands there); field_deg is the widest as an angle.
   Vignetting factors VDXN/VCXN/VDYN/VCYN shape the beam automatic semi-diameters follow.
 - UNIT (MM, CM, IN, METER) scales every length to mm; WAVM (or WAVL) the wavelengths (µm in the file),
   PWAV the one the aperture and field solves use; surface 0's DISZ the object distance. The last SURF
-  is the image plane (its DIAM the image semi-diameter).
-Mirrors, gratings, toroids, tilted or decentred coordinate breaks and other surface types are
-refused naming the surface and the feature.
+  is the image plane (its DIAM the image semi-diameter). Mirrors, gratings, toroids, tilted or decentred
+  coordinate breaks and other surface types are refused naming the surface and the feature.
 """
 from __future__ import annotations
 
@@ -40,7 +40,7 @@ from ..errors import SolasError
 from . import forbes, ideal
 from . import glass as glass_mod
 from . import zemax_solves
-from .formats import READERS, WRITERS, one_line
+from .formats import MAX_FIELDS, check_count, one_line
 from .formats import floats as _floats
 
 UNITS = {"MM": 1.0, "CM": 10.0, "IN": 25.4, "METER": 1000.0, "M": 1000.0}
@@ -113,11 +113,14 @@ def read_spec(text: str, where: str) -> dict:
     name = one_line(" ".join((top.get("NAME") or [[]])[0])).strip()
     gcat, defaulted = _catalogues(top)
     spec: dict = {**({"name": name} if name else {}), "catalogues": list(gcat)}
-    if defaulted:
-        spec["description"] = (f"glass names resolved in {DEFAULT_CATALOGUE}'s catalogue first, OpticStudio's "
-                               "default (the file names no GCAT)")
+    notes = [f"glass names resolved in {DEFAULT_CATALOGUE}'s catalogue first, OpticStudio's default (the file "
+             "names no GCAT)"] if defaulted else []
     spec["object"] = _object(blocks[0], scale, gcat, where)
     rows = [_surface(b, i, scale, gcat, where) for i, b in enumerate(blocks[1:-1], start=1)]
+    if "STOP" in blocks[0] or "STOP" in blocks[-1]:
+        raise SolasError(f"{where}: STOP on the object or the image surface; the aperture stop lies between them")
+    notes.append(zemax_solves.default_stop(rows, "STOP", "as in OpticStudio's new lens (OBJ, STO, IMA)"))
+    spec.update({"description": "; ".join(filter(None, notes))} if any(notes) else {})
     spec.update(ideal.zemax_notes(rows, spec.get("description")))
     spec["surface"] = _fold(rows, where)
     if "DIAM" in blocks[-1]:
@@ -330,6 +333,7 @@ def _fields(top: dict, scale: float, where: str) -> tuple[str, list[float]]:
     xs = _floats((top.get("XFLN") or [[]])[0], f"{where}: XFLN")
     ys = _floats((top.get("YFLN") or [[]])[0], f"{where}: YFLN")
     n = int(count) if count > 0 else max(len(xs), len(ys))
+    check_count(n, "fields", MAX_FIELDS, where)
     xs, ys = (v + [0.0] * (n - len(v)) for v in (xs[:n], ys[:n]))
     unit = 1.0 if kind == "angle" else scale
     return kind, [math.hypot(x, y) * unit for x, y in zip(xs, ys)]
@@ -391,6 +395,3 @@ def _surface_type(s, i: int) -> str:
                          "type; save it as .toml")
     return "PARAXIAL" if s.ideal else "QED_TYPE" if any(s.qbfs) else "EVENASPH" if any(s.aspheric) else "STANDARD"
 
-
-READERS[".zmx"] = read_spec
-WRITERS[".zmx"] = dumps

@@ -29,6 +29,15 @@ _FLAT_OPEN_MM = 1e4  # … or this, for flat and aspheric surfaces
 _SECANT_STEPS = 40  # real-image-height fields: secant steps on the field angle
 
 
+def default_stop(rows: list[dict], keyword: str, whose: str) -> str:
+    """Where no row of `rows` (the surfaces between object and image) is the stop, make surface 1 the stop,
+    as the program's new lens has it, and say so (the note for the description); "" where one is."""
+    if any(r.get("stop") for r in rows):
+        return ""
+    rows[0]["stop"] = True
+    return f"no {keyword} in the file: the stop is surface 1, {whose}"
+
+
 def solve(spec: dict, aperture: tuple[str, float], fields: tuple[str, list[float]], primary_nm: float | None,
           where: str, vignetting: list[tuple[float, float, float, float]] | None = None) -> dict:
     """`spec` solved (module docstring); `vignetting`: per field of `fields`, the fractions (+x, −x, +y, −y)
@@ -37,7 +46,8 @@ def solve(spec: dict, aperture: tuple[str, float], fields: tuple[str, list[float
     auto = [i for i, r in enumerate(rows) if r["diameter"] is None]
     stop = next((i for i, r in enumerate(rows) if r.get("stop")), None)
     if aperture[0] == "float" and stop is not None and rows[stop]["diameter"] is None:
-        raise SolasError(f"{where}: the system aperture floats by stop size (FLOA) on the stop, surface {stop + 1} "
+        raise SolasError(f"{where}: the system aperture floats by stop size (FLOA, or no aperture named) on the "
+                         f"stop, surface {stop + 1} "
                          f"({rows[stop].get('label', '')}), which has no DIAM: the beam's size is then "
                          "undefined; give the stop's DIAM or a system aperture (ENPD, FNUM)")
     if not auto and aperture[0] == "float" and fields[0] == "angle":

@@ -9,7 +9,7 @@ from ..optics.commands import add_lens_argument
 from ..options import floats
 from ..outputs import add_png_option, data_and_preview, written_together
 from ..progress import Progress
-from .spec import add_options, from_args, given
+from .spec import PSF_OPTIONS, GridSpec
 
 
 # what --field-deg takes: its help and its message (one value is a field on the y axis, as `lens info --fields`
@@ -50,7 +50,7 @@ def run_psf(args) -> int:
     lens = load_lens(args.lens)
     wavelengths = floats(args.wavelengths_nm, "--wavelengths-nm")
     weights = floats(args.weights, "--weights") if args.weights else None
-    p = psf(lens, _field(args.field_deg), wavelengths, weights=weights, **given(args, psf_only=True))
+    p = psf(lens, _field(args.field_deg), wavelengths, weights=weights, **GridSpec.given(args, PSF_OPTIONS))
     _finish("psf", p, data_file, png, "")
     return 0
 
@@ -64,7 +64,7 @@ def run_psf_grid(args) -> int:
     data_file, png = data_and_preview(args.output, args.mosaic or None)
     png = png if args.mosaic is not None else None
     lens = load_lens(args.lens)
-    spec = from_args(args)
+    spec = GridSpec.from_args(args)
     count = len(spec.wavelengths_nm or lens.wavelengths_nm) * spec.grid[0] * spec.grid[1] * len(spec.distances_m or [0])
     # the float32 PSFs, their mosaics and the PNG when written, and a batch of complex fields
     need = 3 * 4 * count * spec.size ** 2 + 64 * 64 * (spec.size + 1) ** 2
@@ -89,14 +89,14 @@ def register(sub: Any) -> None:
     psf.add_argument("--field-deg", required=True, help=f"field angle: {FIELD_FORM}")
     psf.add_argument("--wavelengths-nm", required=True, help="one wavelength, or several for a polychromatic PSF")
     psf.add_argument("--weights", help="weights of the wavelengths (default: equal)")
-    add_options(psf, psf_only=True)
+    GridSpec.add_flags(psf, PSF_OPTIONS)
     _add_outputs(psf)
     psf.set_defaults(run=run_psf)
 
     grid = sub.add_parser("psf-grid", help="PSFs on a field grid, one stack per wavelength, as OpenEXR (+ PNG mosaic "
                                            "with --mosaic)")
     add_lens_argument(grid)
-    add_options(grid)
+    GridSpec.add_flags(grid)
     grid.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
     grid.add_argument("-o", "--output", required=True, help="output OpenEXR file")
     grid.add_argument("--mosaic", nargs="?", const="", metavar="PNG",

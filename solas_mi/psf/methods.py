@@ -1,6 +1,6 @@
 """`psf`, the PSF at one field, and `compute`, the one dispatcher of the PSF methods of `registry`
-(`METHODS`: name → function and its own options), which every caller uses (`psf`, PSF grids, the
-cross-validation, the benchmarks).
+(`METHODS`, a `solas_mi.registry.Registry`: name → function and its own options), which every caller
+uses (`psf`, PSF grids, the cross-validation, the benchmarks).
 """
 from __future__ import annotations
 
@@ -32,9 +32,9 @@ def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: fl
             shared_origin: bool = False, **options) -> Computed:
     """Unnormalised PSFs (n, size, size) in 1/µm² for field/wavelength pairs by `method`, each grid's
     origin on its chief ray or, with `shared_origin`, all on the first one's. `options`: the methods'
-    own (pupil_samples, rays); those of other methods are ignored."""
+    own (`registry.METHODS`: each method's options); those of other methods are ignored."""
     own = method_options(method, options)
-    return METHODS[method].compute(lens, field_deg, wavelength_nm, pitch_um, size, shared_origin=shared_origin, **own)
+    return METHODS[method].function(lens, field_deg, wavelength_nm, pitch_um, size, shared_origin=shared_origin, **own)
 
 
 def psf(lens, field_deg, wavelength_nm, *, weights=None, pitch_um: float = DEFAULT_PITCH_UM,
@@ -42,7 +42,7 @@ def psf(lens, field_deg, wavelength_nm, *, weights=None, pitch_um: float = DEFAU
         **options) -> PSF:
     """The PSF at `field_deg` (x, y degrees) for one wavelength (nm) or several with `weights`
     (polychromatic: the power-weighted sum of the monochromatic PSFs), by `method` with its own
-    `options` (fraunhofer: pupil_samples; geometric, render: rays; `registry`). meta["energy_in_grid"]
+    `options` (those of every method in `registry.METHODS`; each takes its own). meta["energy_in_grid"]
     is the fraction of the transmitted light inside the window and meta["warnings"] what looked
     doubtful; `auto_window` doubles `size` until the window holds `base.WINDOW_ENERGY_LIMIT` of the light."""
     check_lens(lens)

@@ -1,7 +1,7 @@
 """`GridSpec`: every option of a PSF grid as one frozen, validated value, defined once: `psf_grid`
-takes it, the command line builds it (`add_options` / `from_args`: one flag per field, read from the
-field's metadata, so adding an option is one edit here), the batch's grid cache hashes its canonical
-form with the lens's hash and records it beside the grid.
+takes it, the command line builds it (`GridSpec.add_flags` / `GridSpec.from_args`: one flag per field,
+declared with it by `options.option`, so adding an option is one edit here), the batch's grid cache
+hashes its canonical form with the lens's hash and records it beside the grid.
 
 Conventions: grid (rows, columns) of nodes (the command line's "COLSxROWS" text is converted by
 `options.parse_wxh`); wavelengths in nm (None: the lens file's); field range in degrees as half
@@ -13,23 +13,18 @@ from __future__ import annotations
 import hashlib
 import json
 import math
-from dataclasses import asdict, dataclass, field, fields
+from dataclasses import asdict, dataclass
 from numbers import Real
 
 from ..errors import SolasError
-from ..options import floats, parse_size_mm, parse_wxh
+from ..options import OptionSpec, floats, option, parse_size_mm, parse_wxh, wxh_text
 from .base import DEFAULT_PITCH_UM, DEFAULT_SIZE, NORMALIZATIONS, WINDOW_ENERGY_LIMIT, check_grid, check_normalization
 from .registry import DEFAULT_METHOD, METHODS, PUPIL_SAMPLES, RAYS, check_method, method_options
 
 FIELD_SAMPLINGS = ("centers", "edges")
 LAYOUTS = ("field", "sensor")  # nodes on field angles (tangents), or on sensor positions (`psf.sensor`)
-
-
-def _option(default, flag: str, help: str, *, parse=None, type=None, choices=None, psf: bool = False):
-    """A GridSpec field and its command-line flag: `parse` turns the flag's text into the value (else
-    argparse's `type`); `psf`: the single-PSF command `psf` takes it too."""
-    return field(default=default, metadata={"flag": flag, "help": help, "parse": parse, "type": type,
-                                            "choices": choices, "psf": psf})
+# the options of one PSF, which the single-PSF command `psf` takes too
+PSF_OPTIONS = ("pitch_um", "size", "method", "pupil_samples", "rays", "normalization", "auto_window")
 
 
 RANGE_FORM = "X,Y in degrees, or one value for both"  # what --field-range-deg takes: its help and its message
@@ -43,35 +38,34 @@ def _range(text: str) -> tuple[float, float]:
 
 
 @dataclass(frozen=True)
-class GridSpec:
+class GridSpec(OptionSpec):
     """What a PSF grid is: nodes, wavelengths, sampling, method. Validated on construction."""
 
-    grid: tuple[int, int] = _option((8, 8), "--grid", "COLSxROWS field nodes", parse=lambda t: parse_wxh(t, "--grid"))
-    wavelengths_nm: tuple[float, ...] | None = _option(
-        None, "--wavelengths-nm", "nm, comma-separated (default: the lens file's)",
-        parse=lambda t: tuple(floats(t, "--wavelengths-nm")))
-    layout: str = _option(LAYOUTS[0], "--layout", "field: nodes on field angles; sensor: nodes on sensor positions "
-                                                  "(wide and fisheye lenses)", choices=LAYOUTS)
-    field_range_deg: tuple[float, float] | None = _option(
-        None, "--field-range-deg", f"half range: {RANGE_FORM} (default: the lens file's field)", parse=_range)
-    field_sampling: str = _option(FIELD_SAMPLINGS[0], "--field-sampling", "nodes at cell centres or spanning the "
-                                                                          "range's ends", choices=FIELD_SAMPLINGS)
-    sensor_mm: tuple[float, float] | None = _option(
-        None, "--sensor-mm", "sensor WxH in mm for --layout sensor (default: the square in the image circle)",
+    grid: tuple[int, int] = option("COLSxROWS field nodes", (8, 8), parse=lambda t: parse_wxh(t, "--grid"),
+                                   shown=wxh_text)
+    wavelengths_nm: tuple[float, ...] | None = option(
+        "nm, comma-separated (default: the lens file's)", parse=lambda t: tuple(floats(t, "--wavelengths-nm")))
+    layout: str = option("field: nodes on field angles; sensor: nodes on sensor positions (wide and fisheye lenses)",
+                         LAYOUTS[0], choices=LAYOUTS)
+    field_range_deg: tuple[float, float] | None = option(
+        f"half range: {RANGE_FORM} (default: the lens file's field)", parse=_range)
+    field_sampling: str = option("nodes at cell centres or spanning the range's ends", FIELD_SAMPLINGS[0],
+                                 choices=FIELD_SAMPLINGS)
+    sensor_mm: tuple[float, float] | None = option(
+        "sensor WxH in mm for --layout sensor (default: the square in the image circle)",
         parse=lambda t: parse_size_mm(t, "--sensor-mm"))
-    pitch_um: float = _option(DEFAULT_PITCH_UM, "--pitch-um", "image-plane pixel pitch (µm)", type=float, psf=True)
-    size: int = _option(DEFAULT_SIZE, "--size", "PSF width and height (pixels)", type=int, psf=True)
-    method: str = _option(DEFAULT_METHOD, "--psf-method", "PSF method", choices=lambda: tuple(METHODS), psf=True)
-    pupil_samples: int = _option(PUPIL_SAMPLES.default, "--pupil-samples", "fraunhofer: pupil grid N×N", type=int,
-                                 psf=True)
-    rays: int = _option(RAYS.default, "--rays", "geometric, render: rays×rays per PSF", type=int, psf=True)
-    normalization: str = _option(NORMALIZATIONS[0], "--normalize", "PSF values", choices=NORMALIZATIONS, psf=True)
-    auto_window: bool = _option(False, "--auto-window", f"double --size until each window holds "
-                                                        f"{100 * WINDOW_ENERGY_LIMIT:g} %% of the light", psf=True)
-    distances_m: tuple[float, ...] | None = _option(
-        None, "--distances-m", "object distances (m) of a grid over field and distance, comma-separated (inf: "
-                               "infinity), or N:NEAR for N nodes spaced evenly in 1/distance from infinity to NEAR "
-                               "(default: the lens file's object distance only)", parse=lambda t: parse_distances(t))
+    pitch_um: float = option("image-plane pixel pitch (µm)", DEFAULT_PITCH_UM, parse=float)
+    size: int = option("PSF width and height (pixels)", DEFAULT_SIZE, parse=int)
+    method: str = option("PSF method", DEFAULT_METHOD, flag="--psf-method", choices=METHODS.names)
+    pupil_samples: int = option(lambda: METHODS.option_help(PUPIL_SAMPLES.name), PUPIL_SAMPLES.default, parse=int)
+    rays: int = option(lambda: METHODS.option_help(RAYS.name), RAYS.default, parse=int)
+    normalization: str = option("PSF values", NORMALIZATIONS[0], flag="--normalize", choices=NORMALIZATIONS)
+    auto_window: bool = option(f"double --size until each window holds {100 * WINDOW_ENERGY_LIMIT:g} %% of the light",
+                               False)
+    distances_m: tuple[float, ...] | None = option(
+        "object distances (m) of a grid over field and distance, comma-separated (inf: infinity), or N:NEAR for N "
+        "nodes spaced evenly in 1/distance from infinity to NEAR (default: the lens file's object distance only)",
+        parse=lambda t: parse_distances(t))
 
     def __post_init__(self):
         set_ = object.__setattr__
@@ -213,44 +207,3 @@ def _half_ranges(value) -> tuple[float, float] | None:
 def _choice(value, allowed: tuple[str, ...], what: str) -> None:
     if not isinstance(value, str) or value not in allowed:
         raise SolasError(f"{what} {value!r} must be one of {', '.join(allowed)}")
-
-
-def _dest(f) -> str:
-    return f.metadata["flag"].lstrip("-").replace("-", "_")
-
-
-def add_options(p, psf_only: bool = False, defaults: dict | None = None) -> None:
-    """One flag per GridSpec field (`psf_only`: those the single-PSF command takes), defaults unset
-    (None: GridSpec's, or `psf`'s, apply; a command that applies its own, `defaults`: field name → value,
-    has them shown in its help)."""
-    defaults = defaults or {}
-    for f in fields(GridSpec):
-        m = f.metadata
-        if psf_only and not m["psf"]:
-            continue
-        value = defaults.get(f.name, f.default)
-        default = "" if value is None else f" (default: {_shown(value)})"
-        if isinstance(f.default, bool):
-            p.add_argument(m["flag"], dest=_dest(f), action="store_true", default=None, help=m["help"])
-        else:
-            choices = m["choices"]() if callable(m["choices"]) else m["choices"]  # methods: those registered now
-            p.add_argument(m["flag"], dest=_dest(f), type=m["type"], choices=choices, help=m["help"] + default)
-
-
-def _shown(value) -> str:
-    return f"{value[1]}x{value[0]}" if isinstance(value, tuple) else str(value)
-
-
-def given(args, psf_only: bool = False) -> dict:
-    """The GridSpec options given on the command line (`add_options`), parsed: name → value."""
-    out = {}
-    for f in fields(GridSpec):
-        value = getattr(args, _dest(f), None)
-        if value is not None and (f.metadata["psf"] or not psf_only):
-            out[f.name] = f.metadata["parse"](value) if f.metadata["parse"] else value
-    return out
-
-
-def from_args(args) -> GridSpec:
-    """The GridSpec of a command's parsed arguments (`add_options`)."""
-    return GridSpec(**given(args))

@@ -14,16 +14,14 @@ them for an input image (`render_image`). Beside them: `sampling` (stratified sa
     render_image(lens, "photo.png", sensor=(960, 1280), spp=64).write("out.exr")
     render_image(lens, "photo.png", RenderSpec(sensor=(960, 1280), response="lines", rings=64))
 """
-from ..psf.registry import RAYS, PSFMethod, register_method
+from ..psf.registry import METHODS, RAYS
 
 
+# this stage adds its PSF method to the registry of the lower stage (which imports nothing from here)
+@METHODS.register("render", options=(RAYS,), meshes=True,
+                  summary="the entrance-grid rays traced through the Mitsuba scene's lens meshes, binned per pixel")
 def _render_psfs(*args, **kwargs):
     """The PSF method "render" (`psf.registry`): `psf.compute`, imported when it computes (it loads Mitsuba)."""
     from .psf import compute
 
     return compute(*args, **kwargs)
-
-
-# this stage adds its PSF method to the registry of the lower stage (which imports nothing from here)
-register_method(PSFMethod("render", _render_psfs, (RAYS,), "the entrance-grid rays traced through the Mitsuba "
-                                                            "scene's lens meshes, binned per pixel"))

@@ -9,7 +9,7 @@ from pathlib import Path
 
 from ..errors import SolasError
 from ..outputs import add_png_option
-from .spec import MAX_SPP, add_spec_flags, spec_from_args
+from .spec import MAX_SPP, RenderSpec
 
 DEFAULT_IMAGE = "images/rocket.png"  # under the shipped scenes directory
 BYTES_PER_SAMPLE = 80  # a pass's wavefront (measured: 1.1 GB peak for 12.6 M samples in one pass)
@@ -21,17 +21,21 @@ def _check_spp(spp) -> None:
         raise SolasError(f"samples per pixel {spp!r} must be an integer from 1 to {MAX_SPP}")
 
 
-def check_render(width: int, height: int, spp: int, force: bool) -> None:
-    """Refuse an absurd spp or a render that cannot fit in memory; announce a long one on stderr (how long
-    it takes depends on what else the machine runs: its progress tells the time left at the rate measured)."""
+def check_render(width: int, height: int, spp: int, force: bool, labels=()) -> None:
+    """Refuse an absurd spp or a render that cannot fit in memory (its label layers, `labels`, counted);
+    announce a long one on stderr (how long it takes depends on what else the machine runs: its progress
+    tells the time left at the rate measured)."""
     import os
 
     from ..budget import check_memory
+    from .labels import memory_bytes, parse_labels
     from .stock import SAMPLES_PER_PASS  # the larger pass of the two engines (the loop's is at most half of it)
 
     _check_spp(spp)
     pixels = width * height
-    check_memory(f"render {width}x{height}", max(pixels, SAMPLES_PER_PASS) * BYTES_PER_SAMPLE + 48 * pixels, force,
+    kinds = parse_labels(labels)
+    need = max(pixels, SAMPLES_PER_PASS) * BYTES_PER_SAMPLE + 48 * pixels + memory_bytes(pixels, kinds)
+    check_memory(f"render {width}x{height}" + (f" with labels {','.join(kinds)}" if kinds else ""), need, force,
                  "a smaller sensor")
     if pixels * spp > 60 * SAMPLES_PER_SECOND_PER_CORE * (os.cpu_count() or 1):  # a minute at least, idle
         print(f"render {width}x{height} at {spp} spp: {pixels * spp:.3g} samples, a long render: its progress "
@@ -73,17 +77,16 @@ def _scene(args) -> int:
     from ..optics.commands import load_lens
     from ..outputs import output_folder
     from .response import parse
+    from ..userfiles import check
     from .scene import write_scene
 
     out = output_folder(args.output)
-    spec, _ = spec_from_args(args, SCENE_SETTINGS)
+    spec = RenderSpec.from_args(args, SCENE_SETTINGS)
     lens = load_lens(args.lens)
     parse(spec.response, lens.wavelengths_nm)  # a bad response is refused now, not when the scene renders
     camera = camera_for(lens, spec.sensor, spec.fov_deg, spec.pitch_um)
     out.mkdir(parents=True, exist_ok=True)
-    image = Path(args.image or _default_image())
-    if not image.is_file():
-        raise SolasError(f"no such image file: {image}")
+    image = check(args.image or _default_image(), "image file")  # copied beside the scene: a regular file
     kind, sep, table = spec.response.partition(":")
     if kind.strip().lower() == "table" and table:  # the table travels with the scene, like the image
         spec = spec.replace(response=f"{kind}{sep}{_copy_beside(Path(table), out)}")
@@ -122,7 +125,7 @@ def _render(args) -> int:
     if lens is not None and args.integrator == "solas":
         raise SolasError("--integrator solas renders lens_sensor scenes (from `solas-mi scene`); with --lens the "
                          "scene's own integrator renders it")
-    run, _ = spec_from_args(args, SCENE_FILE_SETTINGS)
+    run = RenderSpec.from_args(args, SCENE_FILE_SETTINGS)
     notes = []
     focus = _focus(args.focus_distance)
     scene = load(args.scene, run.variant, lens, params, notes, pitch_um=args.pitch_um, focus_distance=focus,
@@ -131,7 +134,7 @@ def _render(args) -> int:
         print(f"render: {note}", file=sys.stderr)
     spp = args.spp if args.spp is not None else int(scene.sensors()[0].sampler().sample_count())
     width, height = (int(v) for v in scene.sensors()[0].film().crop_size())
-    check_render(width, height, spp, args.force)
+    check_render(width, height, spp, args.force, run.labels)
     loop = args.integrator == "solas" or (args.integrator == "auto" and lens is None and _image_scene(scene))
     if loop and run.labels:
         raise SolasError("--labels are traced through a lens camera: give --lens, or a scene with a lens_camera")
@@ -181,7 +184,7 @@ def _render_image(args) -> int:
     from .image import render_image
 
     data_file, png = data_and_preview(args.output, args.png, inputs=[args.image])
-    spec, _ = spec_from_args(args, IMAGE_SETTINGS)
+    spec = RenderSpec.from_args(args, IMAGE_SETTINGS)
     rows, cols = spec.sensor
     check_render(cols, rows, spec.spp, args.force)
     lens = load_lens(args.lens)
@@ -205,7 +208,7 @@ def register(sub) -> None:
     add_lens_argument(scene)
     scene.add_argument("-o", "--output", required=True, help="output directory")
     scene.add_argument("--image", help="input image (copied beside the scene; default: the bundled photograph)")
-    add_spec_flags(scene, SCENE_SETTINGS)
+    RenderSpec.add_flags(scene, SCENE_SETTINGS)
     scene.set_defaults(run=_scene)
 
     render = sub.add_parser(
@@ -230,13 +233,13 @@ def register(sub) -> None:
                              "scene's own integrator for any other; scene: the scene's own (path where it has "
                              "none); solas: the loop (lens_sensor + image_object scenes)")
     render.add_argument("--spp", type=int, help="samples per pixel (default: the scene's)")
-    add_spec_flags(render, SCENE_FILE_SETTINGS)
+    RenderSpec.add_flags(render, SCENE_FILE_SETTINGS)
     _add_output_options(render)
     render.set_defaults(run=_render)
 
     image = sub.add_parser("render-image", help="render an input image through the lens geometry")
     add_lens_argument(image)
     image.add_argument("image", help="input image (PNG/JPEG: sRGB; EXR: linear)")
-    add_spec_flags(image, IMAGE_SETTINGS)
+    RenderSpec.add_flags(image, IMAGE_SETTINGS)
     _add_output_options(image)
     image.set_defaults(run=_render_image)

@@ -11,7 +11,7 @@ import numpy as np
 
 from ..errors import SolasError
 from ..imageio import image_channels, read_image, write_exr
-from ..optics.camera import Camera, camera_for
+from ..optics.camera import Camera, camera_for, film_pitch_um
 from ..optics.paraxial import paraxial
 from . import response as responses
 from .loop import Render, render
@@ -46,9 +46,7 @@ def fisheye_camera(lens, sensor: tuple[int, int], fov_deg: float | None, pitch_u
     width spans the lens's [image] diameter); the input spans ±fov_deg (default: the lens's field)."""
     rows, cols = sensor
     if pitch_um is None:
-        if lens.image_diameter <= 0:
-            raise SolasError(f"lens {lens.name} has no [image] diameter: give the pixel pitch (um)")
-        pitch_um = 1e3 * lens.image_diameter / cols
+        pitch_um = film_pitch_um(lens, cols)
     fov = lens.field_deg if fov_deg is None else float(fov_deg)
     if not (0.0 < pitch_um < 1e4) or not (0.0 < fov < 180.0):
         raise SolasError(f"pixel pitch {pitch_um!r} um must be in (0, 1e4) and fov {fov!r} deg in (0, 180)")

@@ -156,6 +156,8 @@ def _line_shares(total: int, lines: int) -> list[float]:
     return [total / (lines * len(range(c, total, lines))) for c in range(lines)]
 
 
+# many parameters: one traced wavefront's scene objects and its sample range, seeds and pixel band, each a scalar
+# that the kernel takes opaque (one compiled kernel for every pass)
 def _pass(mi, dr, scene, sensor, emitter, spp: int, first: int, total: int, base: int, seed: int, depth: int,
           first_pixel: int, pixels: int) -> np.ndarray:
     """Samples first…first+spp−1 of the stratified sets of `total` of pixels first_pixel… (`pixels` of
@@ -212,6 +214,7 @@ def _pass(mi, dr, scene, sensor, emitter, spp: int, first: int, total: int, base
     return np.asarray(out, dtype=np.float64) * 1.0  # the pass's sum over its samples
 
 
+# many parameters: `_pass`'s, without the pixel band (a scalar variant traces the whole image)
 def _pass_scalar(mi, dr, scene, sensor, emitter, spp: int, first: int, total: int, base: int, seed: int, depth: int
                  ) -> np.ndarray:
     """`_pass` one sample at a time, for the scalar reference variants: the same estimator with

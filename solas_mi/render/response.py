@@ -26,6 +26,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import SolasError
+from ..userfiles import read_text
 
 SRGB_RANGE_NM = (380.0, 780.0)
 # An RGB image as a spectrum: B below the first edge, G up to the second, R above (nm).
@@ -143,15 +144,13 @@ def _numbers(line: str) -> bool:
 def table(path: str) -> Response:
     """A camera's RGB sensitivities from a CSV file of rows "wavelength_nm, r, g, b" (one header line
     of column names and "#" comment lines allowed), white-balanced for D65."""
+    rows = [line for line in read_text(path, "camera response table").splitlines()
+            if line.strip() and not line.lstrip().startswith("#")]
+    if rows and not _numbers(rows[0]):
+        rows = rows[1:]  # a header line of column names
     try:
-        with open(path, encoding="utf-8") as f:
-            rows = [line for line in f if line.strip() and not line.lstrip().startswith("#")]
-        if rows and not _numbers(rows[0]):
-            rows = rows[1:]  # a header line of column names
         data = np.loadtxt(rows, delimiter=",", ndmin=2)
-    except OSError as exc:
-        raise SolasError(f"camera response table {path!r}: {exc.strerror or 'cannot be read'}") from None
-    except ValueError:  # UnicodeDecodeError is one; never quote the file's text (a scene may name any file)
+    except ValueError:  # never quote the file's text (a scene may name any file)
         raise SolasError(f"camera response table {path!r} is not a CSV table of numbers (rows 'wavelength_nm, "
                          "r, g, b', one header line allowed)") from None
     if data.shape[1] != 4 or len(data) < 2:

@@ -22,10 +22,12 @@ from ..optics.camera import Camera, camera_for
 from ..optics import virtual_object
 from ..optics.lens import Lens
 from ..outputs import inside, safe_name
+from ..psf.registry import METHODS
 from . import response as responses
 from .mesh import absorber_ring, cap_mesh, circle, joined, mesh_rings, rim_phi, tube_mesh, write_ply
 from .spec import RenderSpec, check_rings
 
+FLOAT32_REACH_MM = 2.0 ** 24 * 1e-3  # float32 holds a point this far (mm) from the origin to 1 µm
 SPAWN_OFFSET_MM = 1e-4  # a continued ray starts this far (mm) along its own direction (`loop.continue_ray`)
 MIN_GAP_MM = 10 * SPAWN_OFFSET_MM  # closest two refracting surfaces of the mesh scene may come
 
@@ -62,22 +64,32 @@ def resolve_rings(lens: Lens, rings: int | None) -> int:
     return mesh_rings(lens) if rings is None else check_rings(rings)
 
 
-# What traces a lens that solid geometry cannot hold.
-_TRACE_INSTEAD = ("the lens camera (a scene file's sensor, `render.user_scene`) or a tracer PSF method "
-                  "(fraunhofer, geometric)")
+def _trace_instead() -> str:
+    """What traces a lens that solid geometry cannot hold: the lens camera, or a PSF method that traces the
+    lens itself (every one but those that build it as meshes)."""
+    tracers = [name for name, method in METHODS.items() if not method.extra.get("meshes")]
+    return (f"the lens camera (a scene file's sensor, `render.user_scene`) or a tracer PSF method "
+            f"({', '.join(tracers)})")
 
 
-def _check_buildable(lens: Lens) -> None:
+def _check_buildable(lens: Lens, image_radius: float) -> None:
     """SolasError where `lens` has no solid geometry: an ideal thin lens, a virtual object, overlapping
-    surfaces; each message names what traces it instead."""
+    surfaces, or a part (a vertex, the image plane out to `image_radius`) farther from surface 1 than
+    float32 places to 1 µm (a film 1e7 mm away rendered the wrong colours, one at 1e12 mm black); each
+    message names what traces it instead."""
+    reach = max(abs(float(lens.image_z)), float(np.abs(lens.vertex_z).max()), image_radius)
+    if reach > FLOAT32_REACH_MM:
+        raise SolasError(f"lens {lens.name} reaches {reach:g} mm from surface 1 (its image plane at {lens.image_z:g} "
+                         f"mm, the film out to {image_radius:g} mm): the mesh scene's float32 geometry holds a point "
+                         f"to 1 µm within {FLOAT32_REACH_MM:g} mm only; trace it instead: {_trace_instead()}")
     ideal = next((k for k, s in enumerate(lens.surfaces, start=1) if s.ideal), None)
     if ideal is not None:
         raise SolasError(f"surface {ideal} of lens {lens.name} is an ideal thin lens (focal_length), which has no glass "
-                         f"to build as Mitsuba geometry; trace it instead: {_TRACE_INSTEAD}")
+                         f"to build as Mitsuba geometry; trace it instead: {_trace_instead()}")
     virtual_object.check_real(lens, "the mesh scene")
     if lens.overlaps:
         raise SolasError(f"lens {lens.name} cannot be built as Mitsuba geometry: {'; '.join(lens.overlaps)}. Trace it "
-                         f"instead: {_TRACE_INSTEAD}")
+                         f"instead: {_trace_instead()}")
 
 
 def lens_parts(lens: Lens, rings: int | None = None, image_radius: float = 0.0) -> list[Part]:
@@ -89,7 +101,7 @@ def lens_parts(lens: Lens, rings: int | None = None, image_radius: float = 0.0) 
     largest clear aperture plus 10 mm, or more to hold the image plane out to `image_radius` mm (the
     sensor's corners, a PSF's window): a barrel narrower than the image cut off the light that arrives
     there (Cooke triplet at 32°: its light lands 31 mm off axis, outside a 30 mm barrel)."""
-    _check_buildable(lens)
+    _check_buildable(lens, image_radius)
     rings = resolve_rings(lens, rings)
     check_gaps(lens)
     parts = []
@@ -229,7 +241,9 @@ def _reads_as(source: Path) -> Lens:
     caller has loaded it already; the scene's sensor parses its own copy)."""
     import hashlib
 
-    key = (str(source.resolve()), hashlib.sha256(source.read_bytes()).hexdigest())
+    from ..userfiles import read_bytes
+
+    key = (str(source.resolve()), hashlib.sha256(read_bytes(source, "lens file")).hexdigest())
     if key not in _READS_AS:
         _READS_AS[key] = Lens.load(source)
     return _READS_AS[key]

@@ -1,7 +1,8 @@
 """The settings of a render through a lens as one typed value: `RenderSpec` (frozen, checked when
 built). `render_image`, `write_scene` and the render batch take it; the commands build it in one
-place (`spec_from_args`) from flags that are made from its fields (`add_spec_flags`), so a render
-option is added by adding one field here: its default, its check and its flag.
+place (`RenderSpec.from_args`) from flags that are made from its fields (`RenderSpec.add_flags`,
+`options.OptionSpec`), so a render option is added by adding one field here: its default, its check
+and its flag.
 
 A batch sweeps over some of its fields with `dataclasses.replace`; each item's settings are
 `as_dict()` in the manifest and read back with `from_dict`. Light: no Mitsuba or Dr.Jit here.
@@ -9,12 +10,12 @@ A batch sweeps over some of its fields with `dataclasses.replace`; each item's s
 from __future__ import annotations
 
 import math
-from dataclasses import asdict, dataclass, field, fields, replace
+from dataclasses import asdict, dataclass, replace
 from typing import Any
 
 from ..errors import SolasError
 from ..optics.camera import BOUNDARIES, MAPPINGS
-from ..options import parse_wxh
+from ..options import OptionSpec, option, parse_wxh, wxh_text
 from .labels import LABELS, parse_labels
 from .mitsuba import MAX_SEED, VARIANTS, check_name
 
@@ -25,12 +26,6 @@ AUTO_MIN_RINGS = 32  # the fewest rings the automatic count (`render.mesh.mesh_r
 # 3.3 GB; 4096 rings would be 16x that (53 GB). The scene PSFs converged long before (32: 0.2 %, README)
 MIN_RINGS, MAX_RINGS = 2, 512
 MAX_SPP = 1 << 20
-
-
-def _flag(help_text: str, default=None, *, parse=None, choices=None, metavar=None):
-    """A field with its command-line flag: its help, how its text is read (`parse`), its choices."""
-    return field(default=default, metadata={"help": help_text, "parse": parse, "choices": choices,
-                                            "metavar": metavar})
 
 
 def _sensor(text: str) -> tuple[int, int]:
@@ -45,7 +40,7 @@ def _focus(text: str) -> float:
 
 
 @dataclass(frozen=True)
-class RenderSpec:
+class RenderSpec(OptionSpec):
     """How to render through a lens. `sensor` (rows, columns) pixels of `pitch_um` µm (None: the
     sensor's width spans the field); the input image spans ±`fov_deg` degrees (None: the lens's);
     `response`, `boundary`, `fresnel` and `mapping` are the plugins' parameters; `rings` per cap mesh (None: `render.mesh.mesh_rings`'s);
@@ -54,28 +49,29 @@ class RenderSpec:
     lens camera of a scene file (`render.user_scene`), not an image's render; so do `labels`
     (`render.labels`: their names, comma-separated, in `LABELS` order; "": none)."""
 
-    sensor: tuple[int, int] = _flag("sensor pixels, columns x rows", (960, 1280), parse=_sensor, metavar="WxH")
-    pitch_um: float | None = _flag("pixel pitch (µm; default: the sensor's width spans the field)", parse=float,
+    sensor: tuple[int, int] = option("sensor pixels, columns x rows", (960, 1280), parse=_sensor, metavar="WxH",
+                                     shown=wxh_text)
+    pitch_um: float | None = option("pixel pitch (µm; default: the sensor's width spans the field)", parse=float,
                                    metavar="P")
-    fov_deg: float | None = _flag("half the horizontal field the image spans (degrees; default: the lens's)",
+    fov_deg: float | None = option("half the horizontal field the image spans (degrees; default: the lens's)",
                                   parse=float)
-    response: str = _flag("camera response: srgb, lines, mono:<nm>, table:<file.csv>", "srgb")
-    boundary: str = _flag("the object outside the image: edge (repeat the border), reflect, zero (black)", "edge",
+    response: str = option("camera response: srgb, lines, mono:<nm>, table:<file.csv>", "srgb")
+    boundary: str = option("the object outside the image: edge (repeat the border), reflect, zero (black)", "edge",
                           choices=BOUNDARIES)
-    fresnel: str = _flag("Fresnel losses: transmit (weight by transmittance), sample (ghost paths too), off",
+    fresnel: str = option("Fresnel losses: transmit (weight by transmittance), sample (ghost paths too), off",
                          "transmit", choices=FRESNEL_MODES)
-    rings: int | None = _flag(f"rings of each cap mesh ({MIN_RINGS}..{MAX_RINGS}; default: from the lens, so that the "
+    rings: int | None = option(f"rings of each cap mesh ({MIN_RINGS}..{MAX_RINGS}; default: from the lens, so that the "
                               "meshes blur a point by under a quarter of the Airy radius)", parse=int)
-    mapping: str = _flag("projection of the input image at infinity: rectilinear, or for wide and fisheye lenses "
+    mapping: str = option("projection of the input image at infinity: rectilinear, or for wide and fisheye lenses "
                          "equidistant, equisolid, equirectangular (an environment image spanning +-fov-deg)",
                          "rectilinear", choices=MAPPINGS)
-    spp: int = _flag("samples per pixel", 64, parse=int, metavar="N")
-    variant: str | None = _flag("Mitsuba variant (default: cuda_ad_spectral with a GPU, else llvm_ad_spectral; a "
+    spp: int = option("samples per pixel", 64, parse=int, metavar="N")
+    variant: str | None = option("Mitsuba variant (default: cuda_ad_spectral with a GPU, else llvm_ad_spectral; a "
                                 "mono variant needs a response of one wavelength, mono:<nm>)", choices=VARIANTS)
-    seed: int = _flag("the sampler's seed (a batch's base seed: each item's derives from it)", 0, parse=int)
-    focus_distance: float | None = _flag("scene files: focus distance in world units (inf: infinity; default: the "
+    seed: int = option("the sampler's seed (a batch's base seed: each item's derives from it)", 0, parse=int)
+    focus_distance: float | None = option("scene files: focus distance in world units (inf: infinity; default: the "
                                          "lens file's image plane)", parse=_focus, metavar="D")
-    labels: str = _flag(f"scene files through a lens: label layers traced along each pixel's chief ray into the EXR, "
+    labels: str = option(f"scene files through a lens: label layers traced along each pixel's chief ray into the EXR, "
                         f"comma-separated: {', '.join(LABELS)} (default: none)", "", metavar="LIST")
 
     def __post_init__(self) -> None:
@@ -88,7 +84,7 @@ class RenderSpec:
         if not isinstance(self.response, str) or not self.response.strip():
             raise SolasError(f"camera response {self.response!r} must be srgb, lines, mono:<nm> or table:<file.csv>")
         for name in ("boundary", "fresnel", "mapping"):
-            allowed = fields_by_name()[name].metadata["choices"]
+            allowed = self.flags([name])[name].choices
             if getattr(self, name) not in allowed:
                 raise SolasError(f"{name} {getattr(self, name)!r} must be one of {', '.join(allowed)}")
         set_("labels", ",".join(parse_labels(self.labels)))
@@ -101,10 +97,10 @@ class RenderSpec:
 
     def replace(self, **changes) -> RenderSpec:
         """A copy with `changes` (field names), checked; SolasError naming an unknown setting."""
-        unknown = set(changes) - set(fields_by_name())
+        unknown = set(changes) - set(self.fields_by_name())
         if unknown:
             raise SolasError(f"unknown render setting(s) {', '.join(sorted(unknown))}: the settings are "
-                             f"{', '.join(fields_by_name())}")
+                             f"{', '.join(self.fields_by_name())}")
         return replace(self, **changes)
 
     def as_dict(self) -> dict[str, Any]:
@@ -118,15 +114,10 @@ class RenderSpec:
     @classmethod
     def from_dict(cls, values: dict[str, Any]) -> RenderSpec:
         """The spec of `as_dict` (keys that are not settings ignored)."""
-        known = {k: v for k, v in values.items() if k in fields_by_name()}
+        known = {k: v for k, v in values.items() if k in cls.fields_by_name()}
         if known.get("focus_distance") == "inf":
             known["focus_distance"] = math.inf
         return cls(**known)
-
-
-def fields_by_name() -> dict[str, Any]:
-    """The dataclass fields of RenderSpec by name, in order."""
-    return {f.name: f for f in fields(RenderSpec)}
 
 
 def check_rings(rings) -> int:
@@ -152,52 +143,3 @@ def _optional_positive(name: str, value, allow_inf: bool = False) -> float | Non
         raise SolasError(f"{name} {value!r} must be a positive number" + (" or inf" if allow_inf else "") +
                          " (or not given)")
     return number
-
-
-def add_spec_flags(parser, names, sweep: tuple[str, ...] = ()) -> None:
-    """Add the flags of the RenderSpec fields `names` to `parser` (--pitch-um for pitch_um), with no
-    argparse default (the spec's holds); a field of `sweep` takes a comma-separated list."""
-    by_name = fields_by_name()
-    for name in names:
-        f, meta = by_name[name], by_name[name].metadata
-        default = f.default
-        shown = f"{default[1]}x{default[0]}" if name == "sensor" else default
-        help_text = meta["help"] + ("" if default is None or "default" in meta["help"] else f" (default: {shown})")
-        metavar = meta["metavar"]
-        if name in sweep:
-            metavar = f"{metavar or name.upper()}[,{metavar or name.upper()}…]"
-            help_text += "; a comma-separated list sweeps over it"
-        parser.add_argument("--" + name.replace("_", "-"), dest=name, metavar=metavar,
-                            choices=None if name in sweep else meta["choices"], help=help_text)
-
-
-def _read(name: str, text):
-    """The value of flag text `text` for field `name` (SolasError naming the flag when it does not read)."""
-    parse = fields_by_name()[name].metadata["parse"]
-    if parse is None or not isinstance(text, str):
-        return text
-    try:
-        return parse(text)
-    except SolasError:  # a parser's own message (e.g. a sensor's WxH) names the value and what is allowed
-        raise
-    except ValueError:
-        kind = "an integer" if parse is int else "a number"
-        raise SolasError(f"--{name.replace('_', '-')} {text!r} must be {kind}") from None
-
-
-def spec_from_args(args, names, sweep: tuple[str, ...] = ()) -> tuple[RenderSpec, dict[str, list]]:
-    """The RenderSpec of the flags `names` given in `args` (the others at their defaults), and for each
-    field of `sweep` given, its list of values (the spec holding the first)."""
-    given, swept = {}, {}
-    for name in names:
-        text = getattr(args, name, None)
-        if text is None:
-            continue
-        if name in sweep:
-            values = [_read(name, v.strip()) for v in str(text).split(",") if v.strip()]
-            if not values:
-                raise SolasError(f"--{name.replace('_', '-')} {text!r} needs at least one value")
-            swept[name], given[name] = values, values[0]
-        else:
-            given[name] = _read(name, text)
-    return RenderSpec(**given), swept

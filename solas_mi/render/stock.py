@@ -24,7 +24,7 @@ SAMPLES_PER_PASS = 1 << 20
 
 def render_scene(scene, spp: int, seed: int = 0, progress=None, labels=()) -> Render:
     """Render `scene` (loaded by `mitsuba.load_scene`) with its own integrator and `spp` samples per pixel;
-    `labels` (names or "depth,normal,instance": `render.labels`, through the scene's lens_camera) become
+    `labels` (names of `render.labels.LABELS`, or them comma-separated, through the scene's lens_camera) become
     the result's `layers`, their metadata its meta's "labels"."""
     import mitsuba as mi
 

@@ -17,16 +17,23 @@ from the sensor's properties. Lengths in the scene are world units; the lens cam
 `world_unit_mm` (default 1000: metres). The focus: the user's, else a `thinlens`'s `focus_distance`,
 else the lens file's; "auto" focuses on the scene's depth at the image centre (one ray along the axis).
 A `thinlens`'s aperture is reported, not used: the real lens has its own stop.
+
+Meshes are not merged (Mitsuba's parser by default joins all meshes of one material into one unnamed
+mesh, `merge_meshes`): each shape keeps its id, which the instance labels name. Measured on 3000
+rectangles of one material, 256×256 at 16 spp: the render is no slower unmerged (2.2 s against 2.5 s).
 """
 from __future__ import annotations
 
 import math
+import os
 import tempfile
+import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 
 from ..errors import SolasError, plugin_error
+from ..userfiles import check, read_bytes
 from .scene import lens_file
 
 SWAPPABLE = ("perspective", "thinlens")
@@ -36,18 +43,51 @@ CAMERA_ONLY = ("fov", "focal_length", "fov_axis", "near_clip", "far_clip", "focu
                "principal_point_offset_x", "principal_point_offset_y")  # what the lens camera replaces
 
 
+def _scene_text(xml_path: str | Path) -> str:
+    """The text of the scene file and of the files it includes (as far as their names hold no parameter),
+    each checked to be a regular file within `userfiles`' bound before Mitsuba's parser opens it (a FIFO
+    would stop it for ever): what the user wrote, which Mitsuba's messages may quote (`plugin_error`)."""
+    texts, todo, seen = [], [Path(xml_path)], set()
+    while todo:
+        path = todo.pop()
+        data = read_bytes(path, "scene file")
+        seen.add(path.resolve())
+        texts.append(data.decode("utf-8", errors="replace"))
+        try:
+            root = ET.fromstring(data)
+        except ET.ParseError:  # Mitsuba's parser names the fault
+            continue
+        names = [e.get("filename", "") for e in root.iter("include")]
+        for name in (n for n in names if n and "$" not in n):  # a parameter's value: Mitsuba's to resolve
+            found = next((f / name for f in (path.parent, Path(xml_path).parent) if os.path.lexists(f / name)), None)
+            if found is not None and found.resolve() not in seen:
+                todo.append(found)
+    return "\n".join(texts)
+
+
 def _parse(mi, xml_path: str | Path, params: dict | None):
     """(config, state) of Mitsuba's parser for the scene file with `params` (the scene's folder on the
     file resolver while the caller instantiates)."""
     path = Path(xml_path)
-    if not path.is_file():
-        raise SolasError(f"no such scene file: {path}")
+    _scene_text(path)
     config = mi.parser.ParserConfig(mi.variant())
     config.parallel = False  # our plugins trace with Dr.Jit when built: on the calling thread (`mitsuba.load_scene`)
+    config.merge_meshes = False  # Mitsuba's default joins meshes of one material into one unnamed mesh: labels name each
     try:
         return config, mi.parser.parse_file(config, str(path), **{k: str(v) for k, v in (params or {}).items()})
     except RuntimeError as exc:
-        raise plugin_error(exc, f"cannot read scene {path}") from None
+        raise plugin_error(exc, f"cannot read scene {path}", _scene_text(path)) from None
+
+
+def _check_data(mi, state) -> None:
+    """Every file a node names (`filename`: a mesh, texture, spectrum), as the file resolver finds it, a
+    regular file within `userfiles`' bound before Mitsuba reads it; a missing one Mitsuba names."""
+    resolver = mi.file_resolver()
+    for node in state.nodes:
+        if "filename" in node.props.keys() and isinstance(node.props["filename"], str):
+            path = Path(str(resolver.resolve(node.props["filename"])))
+            if os.path.lexists(path):
+                check(path, "scene data file")
 
 
 def scene_files(xml_path: str | Path, params: dict | None = None) -> list[Path]:
@@ -97,9 +137,14 @@ def scene_film_size(xml_path: str | Path, params: dict | None = None) -> tuple[i
 
 
 def _size(film) -> tuple[int, int]:
+    """(width, height) pixels of a film node (Mitsuba's default where it names none); SolasError below 1x1."""
     if film is None:
         return FILM_DEFAULT
-    return (int(film.props.get("width", FILM_DEFAULT[0])), int(film.props.get("height", FILM_DEFAULT[1])))
+    size = (int(film.props.get("width", FILM_DEFAULT[0])), int(film.props.get("height", FILM_DEFAULT[1])))
+    if min(size) < 1:
+        raise SolasError(f"the scene's film is {size[0]}x{size[1]} px (after --set); its width and height must be at "
+                         "least 1 pixel")
+    return size
 
 
 def field_half_angle(mi, sensor, width: int, height: int) -> tuple[float, str]:
@@ -245,14 +290,17 @@ def load(xml_path: str | Path, variant: str | None = None, lens=None, params: di
 def _built(mi, xml_path, params, lens, held, lens_options, notes):
     """Parsed, changed (integrator, sensor), transformed and built as `mi.load_file` does."""
     config, state = _parse(mi, xml_path, params)
+    for sensor in (n for n in state.nodes if n.type == mi.ObjectType.Sensor):
+        _size(_film(mi, state, sensor))  # a film without pixels, named before Mitsuba divides by its size
     _add_integrator(mi, state)
     if lens is not None:
         _swap_sensor(mi, state, xml_path, lens, held, lens_options, notes)
+    _check_data(mi, state)
     try:
         mi.parser.transform_all(config, state)
         return mi.parser.instantiate(config, state)
     except RuntimeError as exc:
-        raise plugin_error(exc, f"cannot load scene {xml_path}") from None
+        raise plugin_error(exc, f"cannot load scene {xml_path}", _scene_text(xml_path)) from None
 
 
 def camera_meta(scene) -> dict:

@@ -30,6 +30,7 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import SolasError
+from ..userfiles import read_text
 from ..render.response import RGB_BANDS_NM, SRGB_RANGE_NM
 from .cfa import CHANNELS, FILTERS
 
@@ -135,19 +136,24 @@ def scalar_effective_qe(qe: dict[str, float]) -> np.ndarray:
 
 
 def read_csv(path: str | Path) -> QECurve:
-    """A curve from a CSV file: a header line naming the columns (wavelength_nm and filter letters, e.g.
-    "wavelength_nm,R,G,B,C"), then one row of numbers per wavelength; "#" lines are comments."""
+    """A curve from a CSV file (`userfiles.read_text`: a regular UTF-8 file of at most its bound): a header
+    line naming the columns (wavelength_nm and filter letters, e.g. "wavelength_nm,R,G,B,C"), then one row
+    of numbers per wavelength; "#" lines are comments. No message quotes the file (a sensor file may name
+    any file)."""
     where = f"QE curve {str(path)!r}"
+    rows = [line.strip() for line in read_text(path, "QE curve").splitlines()
+            if line.strip() and not line.lstrip().startswith("#")]
+    header = [name.strip() for name in rows[0].split(",")] if rows else []
+    allowed = (WAVELENGTH, *FILTERS)
+    bad = [i for i, name in enumerate(header, start=1) if name not in allowed or header.index(name) != i - 1]
+    if not rows or bad:
+        fault = f"header column {bad[0]} is not a column name or repeats one" if rows else "no lines"
+        raise SolasError(f"{where}: {fault}; the first line names distinct columns from {', '.join(allowed)}")
     try:
-        with open(path, encoding="utf-8") as f:
-            rows = [line.strip() for line in f if line.strip() and not line.lstrip().startswith("#")]
-        header = [name.strip() for name in rows[0].split(",")] if rows else []
         data = np.loadtxt(rows[1:], delimiter=",", ndmin=2) if len(rows) > 1 else np.zeros((0, len(header)))
-    except OSError as exc:
-        raise SolasError(f"{where}: {exc.strerror or 'cannot be read'}") from None
-    except ValueError:  # UnicodeDecodeError is one; never quote the file's text
+    except ValueError:
         raise SolasError(f"{where} is not a CSV table of numbers under a header line of column names "
                          f"({WAVELENGTH},R,G,B,C)") from None
-    if data.shape[1] != len(header) or len(set(header)) != len(header):
+    if data.shape[1] != len(header):
         raise SolasError(f"{where}: the header names {len(header)} distinct columns, the rows hold {data.shape[1]}")
     return QECurve.from_table({name: data[:, i].tolist() for i, name in enumerate(header)}, where)

@@ -15,10 +15,11 @@ from ..errors import SolasError
 from ..optics.commands import add_lens_argument, load_lens
 from ..options import add_image_input_options, parse_wxh, positive_ints
 from ..outputs import output_folder
+from ..userfiles import read_text
 from ..psf.methods import METHODS as PSF_METHODS
 from ..render.mitsuba import VARIANTS
 from .crossval import DEFAULT_CASES, crossval
-from .engines import parse_blocks
+from .engines import Case, parse_blocks
 from .error_vs_time import DEFAULT_INTERP_GRIDS, DEFAULT_PATCH_GRIDS, DEFAULT_RENDER_SPP, error_vs_time
 from .inputs import load_input
 from .tables import crossval_markdown, error_vs_time_markdown
@@ -29,6 +30,18 @@ FISHEYE_MARGIN_DEG = 5.0  # the environment reaches this far beyond a fisheye's 
 def block_grids(text: str, what: str) -> tuple[tuple[int, int], ...]:
     """Comma-separated COLSxROWS → ((columns, rows), ...)."""
     return tuple(parse_blocks(item, what) for item in text.split(",") if item.strip())
+
+
+def case_list(text: str | None) -> tuple[str, ...]:
+    """The cases `--cases` selects (None: DEFAULT_CASES), each checked (`engines.Case.parse`); SolasError
+    for a selection of no case or an empty entry (an empty selection ran every case)."""
+    if text is None:
+        return DEFAULT_CASES
+    cases = tuple(item.strip() for item in text.split(","))
+    if not all(cases):
+        raise SolasError(f"--cases {text!r} {'selects no case' if not any(cases) else 'has an empty entry'}; give "
+                         f"comma-separated METHOD:PSF:COLSxROWS (default: {','.join(DEFAULT_CASES)})")
+    return tuple(Case.parse(case).name for case in cases)
 
 
 def _grids_text(grids) -> str:
@@ -56,8 +69,8 @@ def run_crossval(args: argparse.Namespace) -> int:
     if given:
         raise SolasError(f"{', '.join(given)}: only for a lens of polar fields (a fisheye); {lens.name} has tangent "
                          "fields: give its sensor with --sensor or --scale and its grids with --cases")
+    cases = case_list(args.cases)
     lens, image = _lens_and_image(args)
-    cases = tuple(c for c in args.cases.split(",") if c.strip()) if args.cases else DEFAULT_CASES
     res = crossval(lens, image, args.output, 1024 if args.spp is None else args.spp, args.seeds, cases, args.fov_deg, args.boundary,
                    args.variant, reuse=args.reuse_reference, log=_say)
     print(crossval_markdown(res.rows))
@@ -92,7 +105,7 @@ def _crossval_fisheye(args: argparse.Namespace, lens) -> int:
     env = load_input(args.image, linear=args.linear).mean(axis=-1)
     spp = 256 if args.spp is None else args.spp
     crossval_fisheye(lens, env, args.output, fov, size, args.pitch_um, grid, spp, args.defocus_mm, log=_say)
-    print(fisheye_markdown(jsonio.loads((Path(args.output) / "crossval.json").read_text())))
+    print(fisheye_markdown(jsonio.loads(read_text(Path(args.output) / "crossval.json", "record"))))
     print(f"wrote {args.output}/table.md, crossval.json, direct.exr, convolved.exr, ideal.exr, error.exr, error.png")
     return 0
 
@@ -136,8 +149,8 @@ def register(sub: Any) -> None:
     p = sub.add_parser(
         "crossval", help="cross-validate the PSF-grid convolution against the direct render",
         description="Degrade one image by the direct spectral render (the reference: lines response, no Fresnel, "
-                    "several seeds so that its noise is known) and by each convolution case (interp/patch × "
-                    "geometric/Fraunhofer PSFs × grid), in the same units; write the images, per-pixel error "
+                    "several seeds so that its noise is known) and by each convolution case (convolution method × "
+                    "PSF method × grid), in the same units; write the images, per-pixel error "
                     "maps and a table of relative RMSE (whole image and centre/middle/edge annuli), PSNR, SSIM "
                     "and run times (PSF grid and convolution apart).")
     _add_image_inputs(p)
@@ -164,7 +177,7 @@ def register(sub: Any) -> None:
     report = sub.add_parser("report", help="reports: error against run time").add_subparsers(
         dest="report_command", metavar="COMMAND", required=True)
     p = report.add_parser(
-        "error-vs-time", help="error of patch / interp convolution and of the direct render against run time",
+        "error-vs-time", help="error of the patch and the interp convolution and of the direct render against run time",
         description="Relative RMSE against a converged direct render (noise removed) and run time of the paper's "
                     "patch convolution, the interp convolution on grids of increasing size and the direct render "
                     "at increasing spp; writes table.md, table.csv, error_vs_time.png (log x) and report.json.")

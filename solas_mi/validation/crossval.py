@@ -80,6 +80,8 @@ class CrossvalResult:
     meta: dict
 
 
+# many parameters: the comparison's settings, each a flag of `solas-mi crossval` with its default (the reference's spp
+# and seeds, the cases, field, boundary, variant, baseline, reuse of a reference)
 def crossval(lens, image: np.ndarray, out: str | Path | None, spp: int = 1024, seeds: int = 2,
              cases: tuple[str, ...] = DEFAULT_CASES, fov_deg: float | None = None, boundary: str = "edge",
              variant: str | None = None, baseline: bool = True, reuse: bool = False, log=print) -> CrossvalResult:

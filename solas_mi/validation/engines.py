@@ -74,7 +74,7 @@ def parse_blocks(text: str, what: str) -> tuple[int, int]:
 
 @dataclass
 class Case:
-    """One convolution case: method (interp/patch), PSF kind (geometric/fraunhofer), blocks (cols, rows)."""
+    """One convolution case: method (of `CONVOLUTION_METHODS`), PSF kind (of `PSF_METHODS`), blocks (cols, rows)."""
 
     method: str
     kind: str

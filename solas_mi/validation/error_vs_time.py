@@ -35,6 +35,8 @@ DEFAULT_INTERP_GRIDS = ((4, 3), (8, 6), (16, 12), (32, 24), (64, 48))  # (column
 DEFAULT_PATCH_GRIDS = ((8, 6), (32, 24))
 
 
+# many parameters: the experiment's settings, each a flag of `solas-mi error-vs-time` with its default (the
+# reference's spp and seeds, the renders' spp, the interp and patch grids, PSF kind, field, boundary, repeats, variant)
 def error_vs_time(lens, image: np.ndarray, out: str | Path | None, ref_spp: int = 1536, seeds: int = 2,
                   render_spp=DEFAULT_RENDER_SPP, interp_grids=DEFAULT_INTERP_GRIDS,
                   patch_grids=DEFAULT_PATCH_GRIDS, kind: str = "geometric", fov_deg: float | None = None,
@@ -71,13 +73,13 @@ def error_vs_time(lens, image: np.ndarray, out: str | Path | None, ref_spp: int 
         rows.append(Row(f"render {spp} spp", "render", "—", "—", 0.0, r.seconds, err(r.image), spp=int(spp)))
         log(f"error-vs-time: render {spp} spp: {100 * rows[-1].errors.rel_rmse_denoised:.3f} %, {r.seconds:.1f} s")
     if out_dir is not None:
-        _write_report(out_dir, lens, rows, ref, seeds, kind, fov, boundary, repeats, scale, (w, h))
+        _write_report(out_dir, lens, rows, ref, kind, fov, boundary, repeats, scale)
     return rows
 
 
 def _convolution_rows(lens, image: np.ndarray, kind: str, patch_grids, interp_grids, fov: float, boundary: str,
                       repeats: int, err, log) -> tuple[list[Row], Any]:
-    """(a Row per patch and interp grid: its PSF grid's seconds, the median of `repeats` convolutions
+    """(a Row per grid of `patch_grids` and `interp_grids`: its PSF grid's seconds, the median of `repeats` convolutions
     and the error `err(image)`; the render units `grid_units`). One PSF grid per block count."""
     h, w = image.shape[:2]
     rows: list[Row] = []
@@ -101,10 +103,12 @@ def _convolution_rows(lens, image: np.ndarray, kind: str, patch_grids, interp_gr
     return rows, scale
 
 
-def _write_report(out_dir: Path, lens, rows: list[Row], ref, seeds: int, kind: str, fov: float, boundary: str,
-                  repeats: int, scale, size: tuple[int, int]) -> None:
-    """table.md, table.csv, error_vs_time.png and report.json into `out_dir`; `size` (width, height) px."""
-    w, h = size
+def _write_report(out_dir: Path, lens, rows: list[Row], ref, kind: str, fov: float, boundary: str, repeats: int,
+                  scale) -> None:
+    """table.md, table.csv, error_vs_time.png and report.json into `out_dir`: the image's size and the
+    reference's seeds are the reference's (`ref`, its mean image and renders)."""
+    h, w = ref.image.shape[:2]
+    seeds = len(ref.renders)
     ref_rms = ref.rms
     note = (f"{w}x{h} px, {kind} PSFs. Reference: mean of {seeds} direct renders, {ref.spp} spp in all "
             f"({ref.seconds:.1f} s), noise {100 * ref.noise / ref_rms:.3f} % of RMS(reference), removed in "

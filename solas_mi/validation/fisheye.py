@@ -86,6 +86,8 @@ def ideal_sensor_image(lens: Lens, env: np.ndarray, fov_deg: float, size: int, p
     return value.reshape(size, SUBPIXELS, size, SUBPIXELS).mean(axis=(1, 3))
 
 
+# many parameters: the two sides of one comparison, each with its own sampling: the render's (size, pitch, spp,
+# wavelength) and the PSF grid's (nodes, PSF pitch and size, pupil samples, method)
 def compare_fisheye(lens: Lens, env: np.ndarray, fov_deg: float, size: int, pitch_um: float, grid: tuple[int, int],
                     spp: int, wavelength_nm: float | None = None, psf_pitch_um: float | None = None, psf_size: int = 64,
                     pupil_samples: int = 128, method: str = "geometric") -> FisheyeComparison:

@@ -283,16 +283,35 @@ def _exit_pupil(lens: Lens, wl: float) -> Case:
                 f"{outside} of {total} rays outside", outside == 0 and total > 0)
 
 
+def imaged_field(lens: Lens, wl: float) -> tuple[float, str]:
+    """A field (degrees) for a lens whose file states none, and how it was found: the widest field whose
+    chief ray passes its apertures (`pupil.widest_field`; a fisheye's table stops it short), or, where they
+    pass the chief ray of every field the field type allows (a cemented achromat's to 88.5 deg, where no
+    image forms), the paraxial field whose image height is the lens's largest clear semi-diameter (a lens's
+    image is about as large as the lens: 7.2 deg for an f = 100 mm achromat 25.4 mm across)."""
+    widest = widest_field(lens, wl)
+    if widest < lens.field_type.largest_deg:
+        return widest, "the widest field whose chief ray passes the apertures"
+    size = max(s.semi_diameter for s in lens.surfaces)
+    efl = abs(paraxial(lens, wl).efl_mm)
+    field = min(widest, math.degrees(math.atan(size / efl)))
+    return field, (f"the paraxial field of image height {size:g} mm, the largest clear semi-diameter, at EFL "
+                   f"{efl:.4g} mm (the apertures pass every field to {widest:g} deg)")
+
+
 def check_stability(lens: Lens, progress=None) -> list[Case]:
     """Every case for `lens` at its primary wavelength (see the module docstring); `progress(name)` is
     called before each group. An unexpected exception is a failed case, not a crash. A lens whose file
-    states no field (a pbrt table) is checked at the widest field it images (`pupil.widest_field`)."""
+    states no field (a pbrt table, a Zemax file without fields) is checked at a field it images
+    (`imaged_field`)."""
     wl = lens.primary_wavelength
     cases = []
     if lens.field_deg == 0:
-        lens = replace(lens, field_deg=widest_field(lens, wl))
-        cases.append(Case("field of a lens that states none", "the widest field whose chief ray passes",
-                          f"{lens.field_deg:.3f} deg", lens.field_deg > 0))
+        field, how = imaged_field(lens, wl)
+        lens = replace(lens, field_deg=field)
+        cases.append(Case("field of a lens that states none", "the widest field its apertures pass, or where they "
+                          "pass every field, the paraxial field as large as the lens", f"{field:.3f} deg: {how}",
+                          field > 0))
     full = (0.0, lens.field_deg)
     fields = np.array([[0.0, 0.0], [0.0, 0.7 * lens.field_deg], [0.0, lens.field_deg]])
     groups = [

@@ -10,6 +10,7 @@ from strict_json import strict_loads
 from solas_mi.batch import degrade_batch
 from solas_mi.batch.render import render_batch
 from solas_mi.cli import main
+from solas_mi.convolution.spec import DegradeSpec
 from solas_mi.imageio import read_exr
 from solas_mi.isp.camera import Camera, frame_number, load_camera
 from solas_mi.isp.pipeline import ISP, develop
@@ -67,11 +68,12 @@ def test_frames_depend_on_seed_and_name_not_on_the_run(camera_inputs):
     root = camera_inputs.root
     camera = load_camera(str(root / "sensor.toml"), EXPOSURE_MS, None, 2)
     all_three = degrade_batch([camera_inputs.images], root / "all", psf_grid=camera_inputs.grid, workers=2,
-                              progress=False, camera=camera)
+                              progress=False, spec=DegradeSpec(camera=camera))
     alone = degrade_batch([camera_inputs.images / "frame002.png"], root / "alone", psf_grid=camera_inputs.grid,
-                          workers=1, progress=False, camera=camera)
+                          workers=1, progress=False, spec=DegradeSpec(camera=camera))
     other = degrade_batch([camera_inputs.images / "frame002.png"], root / "other", psf_grid=camera_inputs.grid,
-                          workers=1, progress=False, camera=Camera(camera.sensor, EXPOSURE_MS, None, 3))
+                          workers=1, progress=False,
+                          spec=DegradeSpec(camera=Camera(camera.sensor, EXPOSURE_MS, None, 3)))
     plain = degrade_batch([camera_inputs.images / "frame002.png"], root / "plain", psf_grid=camera_inputs.grid,
                           workers=1, progress=False)
     raw = {k: read_exr(root / k / "frame002_raw.exr")[0]["RAW"] for k in ("all", "alone", "other")}
@@ -86,7 +88,7 @@ def test_dask_gives_the_same_frames(camera_inputs):
     camera = load_camera(str(camera_inputs.root / "sensor.toml"), EXPOSURE_MS, "default", 0)
     for where, dask in (("local", None), ("dask", "local")):
         degrade_batch([camera_inputs.images], camera_inputs.root / where, psf_grid=camera_inputs.grid, workers=1,
-                      dask=dask, progress=False, camera=camera)
+                      dask=dask, progress=False, spec=DegradeSpec(camera=camera))
     for name in ("frame000_raw.exr", "frame000_raw.png", "frame002_raw.exr"):
         assert (camera_inputs.root / "local" / name).read_bytes() == (camera_inputs.root / "dask" / name).read_bytes() \
             or name.endswith(".exr") and np.array_equal(read_exr(camera_inputs.root / "local" / name)[0]["RAW"],
@@ -148,7 +150,7 @@ def test_a_preset_by_name_from_the_cli_and_python(camera_inputs, tmp_path):
     camera = load_camera("imx490", EXPOSURE_MS, None, 3)
     assert camera.sensor == preset
     result = degrade_batch([camera_inputs.images], tmp_path / "py", psf_grid=camera_inputs.grid, workers=1,
-                           progress=False, camera=camera)
+                           progress=False, spec=DegradeSpec(camera=camera))
     assert [job.status for job in result.jobs] == ["done"] * 3
     for name in ("frame000", "frame001", "frame002"):
         raw = read_exr(tmp_path / "cli" / f"{name}_raw.exr")[0]["RAW"]

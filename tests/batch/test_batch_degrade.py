@@ -1,16 +1,19 @@
 """`solas-mi batch degrade` and `degrade_batch`: failures reported per item, resuming, interruption,
 local processes against Dask, the PSF-grid cache, argument errors."""
 import os
+import re
 import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 import pytest
 from strict_json import strict_loads
 
 from solas_mi.cli import main
+from solas_mi.convolution.spec import DegradeSpec
 
 
 def manifest(folder):
@@ -98,18 +101,20 @@ def test_the_grid_is_computed_once_and_cached(batch_inputs, doublet):
     batch_inputs.write(3)
     cache = GridCache(batch_inputs.root / "cache")
     options = {"grid": (4, 4), "size": 32, "pupil_samples": 32}
-    first = degrade_batch([batch_inputs.images], batch_inputs.root / "a", lens=doublet, grid_spec=GridSpec(**options),
-                          cache=cache, workers=2, progress=False)
+    first = degrade_batch([batch_inputs.images], batch_inputs.root / "a", DegradeSpec(grid_spec=GridSpec(**options)),
+                          lens=doublet, cache=cache, workers=2, progress=False)
     assert (cache.misses, cache.hits) == (1, 0) and first.grid_source == "computed" and not first.failed
-    second = degrade_batch([batch_inputs.images], batch_inputs.root / "b", lens="solas-doublet",
-                           grid_spec=GridSpec(**options, method="fraunhofer"), cache=cache, workers=1, progress=False)
+    second = degrade_batch([batch_inputs.images], batch_inputs.root / "b",
+                           DegradeSpec(grid_spec=GridSpec(**options, method="fraunhofer")), lens="solas-doublet",
+                           cache=cache, workers=1, progress=False)
     assert (cache.misses, cache.hits) == (1, 1) and second.grid_source == "cache hit"
     assert len(list(cache.folder.glob("*.exr"))) == 1 and len(list(cache.folder.iterdir())) == 2  # + its record
     m = manifest(batch_inputs.root / "b")
     assert m["lens_hash"] == doublet.hash and m["grid_spec"] == GridSpec(**options).canonical()
     assert m["grid_spec"]["grid"] == [4, 4]
-    degrade_batch([batch_inputs.images], batch_inputs.root / "c", lens=doublet,
-                  grid_spec=GridSpec(**{**options, "size": 48}), cache=cache, workers=1, progress=False)
+    degrade_batch([batch_inputs.images], batch_inputs.root / "c",
+                  DegradeSpec(grid_spec=GridSpec(**{**options, "size": 48})), lens=doublet, cache=cache, workers=1,
+                  progress=False)
     assert (cache.misses, cache.hits) == (2, 1)  # another sampling option: another grid
 
 
@@ -125,8 +130,9 @@ def test_the_lens_scaled_to_the_frames_camera_is_stated(batch_inputs, doublet, c
     fx = 32 / np.tan(np.radians(1.5))  # the 64-px frames span ±1.5°
     frame = FrameCamera("pinhole", intrinsics=(fx, fx, 31.5, 23.5))
     spec = GridSpec(grid=(3, 3), size=32, method="geometric", rays=32, pitch_um=0.5)
-    out = degrade_batch([batch_inputs.images], batch_inputs.root / "s", lens=doublet, grid_spec=spec, frame=frame,
-                        scale_lens=5.0, cache=GridCache(batch_inputs.root / "cache"), workers=1, progress=False)
+    out = degrade_batch([batch_inputs.images], batch_inputs.root / "s", DegradeSpec(grid_spec=spec, frame=frame,
+                        scale_lens=5.0), lens=doublet, cache=GridCache(batch_inputs.root / "cache"), workers=1,
+                        progress=False)
     assert not out.failed
     scale = manifest(batch_inputs.root / "s")["lens_scale"]
     # the doublet's pinhole focal length meeting its real chief ray at its 2° field: 99.50 mm
@@ -180,7 +186,7 @@ def test_a_dead_worker_loses_only_its_item(batch_inputs):
             victim.kill()
             killed.append(victim.pid)
 
-    settings = {"method": "interp", "boundary": "edge", "linear": False, "force": False, "batch": {}}
+    settings = {"spec": DegradeSpec(), "force": False, "batch": {}}
     run_local(jobs, list(range(len(jobs))), str(batch_inputs.grid), settings, 2, on_done)
     assert killed and all(job.status == "done" for job in jobs), [job.error for job in jobs]
     assert max(job.attempts for job in jobs) == 2  # the item the killed process held, done again
@@ -233,6 +239,29 @@ def test_temporary_files_of_killed_workers_are_removed(batch_inputs):
     assert sorted(p.name for p in out.iterdir() if p.name.startswith(".")) == [".notes.txt"]
 
 
+def test_dry_run_estimates_the_grid_and_says_whether_it_is_reused(batch_inputs, capsys):
+    """The grid is most of a batch's time: the dry run estimates it (it said only the degrading's) from
+    PSFs of this grid timed now, counting the PSFs to compute: a 4×4 grid of centred nodes has 3
+    distinct |x|, |y| pairs up to a swap ((1, 1), (1, 3), (3, 3) quarter-cells), so 3 × 3 wavelengths of
+    its 48 PSFs are computed; a second dry run after the batch says the cached grid is reused."""
+    batch_inputs.write(1)
+    argv = ["batch", "degrade", str(batch_inputs.images), "--lens", "solas-doublet", "--grid", "4x4", "--size", "32",
+            "-o", str(batch_inputs.root / "out"), "--cache", str(batch_inputs.root / "cache")]
+    assert main([*argv, "--dry-run"]) == 0
+    first, *_, estimate = capsys.readouterr().out.splitlines()
+    assert "(not in the cache: computed once, about " in first and "9 PSFs to compute of its 48" in first, first
+    assert re.search(r"as timed now on \d+ of its PSFs; then cached\)$", first), first
+    grid_s = float(re.search(r"about ([\d.e+-]+) s: ", first)[1])
+    total, of_grid, degrading = map(float, re.match(r"estimate: about ([\d.e+-]+) s \(([\d.e+-]+) s for the grid, "
+                                                    r"([\d.e+-]+) s of degrading\)", estimate).groups())
+    assert of_grid == pytest.approx(grid_s, rel=1e-2) and total == pytest.approx(grid_s + degrading, rel=1e-2)
+    assert main([*argv, "--quiet"]) == 0
+    capsys.readouterr()
+    assert main([*argv, "--dry-run"]) == 0
+    first, *_, estimate = capsys.readouterr().out.splitlines()
+    assert first.endswith("(in the cache: reused, nothing to compute)") and "(0 s for the grid, " in estimate
+
+
 def _planned_grid(capsys, argv) -> str:
     """The grid file `batch degrade --dry-run` plans (its stage 1 line)."""
     assert main([*argv, "--dry-run"]) == 0
@@ -245,7 +274,7 @@ def test_a_fisheye_sensor_layout_is_not_dropped_by_the_batch(batch_inputs, capsy
     batch_inputs.write(1)
     argv = ["batch", "degrade", str(batch_inputs.images), "--lens", "nikkor-fisheye", "--grid", "3x3", "-o",
             str(batch_inputs.root / "out"), "--cache", str(batch_inputs.root / "cache")]
-    plain = _planned_grid(capsys, argv)
+    plain = _planned_grid(capsys, [*argv, "--field-range-deg", "60"])  # ±90°, its field, has no pinhole image
     sensor = _planned_grid(capsys, [*argv, "--layout", "sensor", "--sensor-mm", "19x19"])
     assert sensor != plain
     assert sensor != _planned_grid(capsys, [*argv, "--layout", "sensor"])  # the sensor size counts too
@@ -278,7 +307,7 @@ def test_every_psf_grid_flag_reaches_the_cache_key_and_the_grid(batch_inputs, ca
 
     from solas_mi.cli import build_parser
     from solas_mi.psf.depth import make_grid
-    from solas_mi.psf.spec import from_args
+    from solas_mi.psf.spec import GridSpec
 
     sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
     flags = {max(a.option_strings, key=len) if a.option_strings else a.dest
@@ -293,7 +322,7 @@ def test_every_psf_grid_flag_reaches_the_cache_key_and_the_grid(batch_inputs, ca
 
     def spec_of(options):
         args = sub.choices["batch"].parse_args(["degrade", "x", "--lens", "l", "-o", "o", *options])
-        return from_args(args)
+        return GridSpec.from_args(args)
 
     for flag, (context, value) in sorted(FLAG_VARIANTS.items()):
         before = [*base, *context]
@@ -326,15 +355,16 @@ def test_a_folder_tree_keeps_its_structure_and_half_floats_halve_the_output(batc
     assert full.is_file() and nested.is_file() and nested.with_suffix(".png").is_file()
     assert np.array_equal(read_image(full), read_image(nested))  # same input, same output, its own folder
     half = batch_inputs.root / "half"
-    degrade_batch([batch_inputs.images], half, psf_grid=batch_inputs.grid, workers=1, progress=False,
-                  output_format="exr-half")
+    degrade_batch([batch_inputs.images], half, DegradeSpec(output_format="exr-half"), psf_grid=batch_inputs.grid,
+                  workers=1, progress=False)
     channels, meta = read_exr(half / "frame000.exr")
     assert channels["R"].dtype == np.float16 and meta["output_format"] == "exr-half"
     assert np.allclose(read_image(half / "frame000.exr"), read_image(full), rtol=1e-3, atol=1e-4)
     from solas_mi import SolasError
 
     with pytest.raises(SolasError, match="output format"):
-        degrade_batch([batch_inputs.images], half, psf_grid=batch_inputs.grid, workers=1, output_format="png8")
+        degrade_batch([batch_inputs.images], half, DegradeSpec(output_format="png8"), psf_grid=batch_inputs.grid,
+                      workers=1)
 
 
 def test_a_batch_from_a_lens_defaults_to_the_accuracy_tables_grid():
@@ -342,7 +372,7 @@ def test_a_batch_from_a_lens_defaults_to_the_accuracy_tables_grid():
     so: the default shown is the one the batch's spec takes."""
     import argparse
 
-    from solas_mi.batch.commands import _grid_spec
+    from solas_mi.batch.commands import _degrade_spec
     from solas_mi.cli import build_parser
 
     def subparsers(parser):
@@ -350,12 +380,12 @@ def test_a_batch_from_a_lens_defaults_to_the_accuracy_tables_grid():
 
     batch = subparsers(build_parser())["batch"]
     args = batch.parse_args(["degrade", "x", "--lens", "solas-doublet", "-o", "o"])
-    rows, cols = _grid_spec(args).grid
+    rows, cols = _degrade_spec(args).grid_spec.grid
     assert (rows, cols) == (32, 32)
     shown = " ".join(subparsers(batch)["degrade"].format_help().split())
     assert f"--grid GRID COLSxROWS field nodes (default: {cols}x{rows})" in shown
     args = batch.parse_args(["degrade", "x", "--lens", "solas-doublet", "-o", "o", "--grid", "8x6"])
-    assert _grid_spec(args).grid == (6, 8)
+    assert _degrade_spec(args).grid_spec.grid == (6, 8)
 
 
 def test_a_batch_with_depth_maps_by_name_pattern(tmp_path, doublet):
@@ -374,20 +404,20 @@ def test_a_batch_with_depth_maps_by_name_pattern(tmp_path, doublet):
     depth = np.where(np.arange(64)[None, :] < 32, 10.0, np.inf) * np.ones((48, 1))
     write_exr(folder / "a.exr", image_channels(img), {})
     write_exr(folder / "a_depth.exr", {"Z": depth.astype(np.float32)}, {}, infinite=True)  # the sky: inf
-    result = degrade_batch([folder], tmp_path / "out", psf_grid=tmp_path / "g.exr", workers=1, progress=False,
-                           depth_pattern="{stem}_depth.exr")
+    result = degrade_batch([folder], tmp_path / "out", DegradeSpec(depth_pattern="{stem}_depth.exr"),
+                           psf_grid=tmp_path / "g.exr", workers=1, progress=False)
     assert [j.status for j in result.jobs] == ["done"]  # the depth map is not an input of its own
     out = read_image(tmp_path / "out" / "a.exr")
     assert np.allclose(out, degrade_depth(read_image(folder / "a.exr"), depth, g), atol=1e-6)
-    again = degrade_batch([folder], tmp_path / "out", psf_grid=tmp_path / "g.exr", workers=1, progress=False,
-                          depth_pattern="{stem}_depth.exr", occlusion="none")
+    again = degrade_batch([folder], tmp_path / "out", DegradeSpec(depth_pattern="{stem}_depth.exr", occlusion="none"),
+                          psf_grid=tmp_path / "g.exr", workers=1, progress=False)
     assert [j.status for j in again.jobs] == ["done"]  # another occlusion rule: not the former run's items
     assert np.allclose(read_image(tmp_path / "out" / "a.exr"),
                        degrade_depth(read_image(folder / "a.exr"), depth, g, occlusion="none"), atol=1e-6)
     (folder / "b.exr").write_bytes((folder / "a.exr").read_bytes())
     with pytest.raises(__import__("solas_mi").SolasError, match="no depth map"):
-        degrade_batch([folder], tmp_path / "out2", psf_grid=tmp_path / "g.exr", workers=1,
-                      depth_pattern="{stem}_depth.exr")
+        degrade_batch([folder], tmp_path / "out2", DegradeSpec(depth_pattern="{stem}_depth.exr"),
+                      psf_grid=tmp_path / "g.exr", workers=1)
 
 
 def test_the_frames_camera_applies_to_every_item(batch_inputs, capsys):
@@ -461,3 +491,57 @@ def test_one_frame_with_its_intrinsics_and_a_scaled_lens_is_a_batch_of_one(batch
     assert meta["batch"]["lens_scale"]["pixel_um"] == 5.0
     assert meta["batch"]["lens_scale"]["factor"] == pytest.approx(fx * 5e-3 / 99.499, rel=1e-4)
     assert sorted(p.name for p in out.iterdir() if p.suffix in (".exr", ".png")) == ["frame000.exr", "frame000.png"]
+
+
+def test_label_layers_beside_frames_are_skipped_and_named(batch_inputs, capsys):
+    """A frames folder as simulators write it: each frame's depth map (sky at infinity), segmentation and
+    normals beside it, and an EXR holding only a depth channel or only label layers. Without
+    --depth-pattern the depth maps were degraded as frames and failed (exit 1): now no label layer is
+    an input, each is named on stderr with why."""
+    from solas_mi.imageio import write_exr, write_png
+
+    (frame,) = batch_inputs.write(1)
+    folder = batch_inputs.images
+    depth = np.where(np.arange(64)[None, :] < 32, 10.0, np.inf) * np.ones((48, 1))
+    write_exr(folder / "frame000_depth.exr", {"Z": depth}, infinite=True)
+    write_png(folder / "frame000_seg.png", np.zeros((48, 64, 3)))
+    write_png(folder / "normal_0000.png", np.full((48, 64, 3), 0.5))  # the layer first, then the frame number
+    write_exr(folder / "z.exr", {"depth": np.ones((48, 64))})
+    write_exr(folder / "render.exr", {"depth.Z": np.ones((48, 64)), "labels.valid": np.ones((48, 64))})
+    out = batch_inputs.root / "out"
+    assert main(["batch", "degrade", str(folder), "--psf-grid", str(batch_inputs.grid), "-o", str(out), "--quiet"]) == 0
+    items = strict_loads((out / "batch.json").read_text())["items"]
+    assert [(Path(i["input"]).name, i["status"]) for i in items] == [(frame.name, "done")]
+    err = capsys.readouterr().err
+    assert "skipped 5 label layer(s)" in err and "not frames" in err
+    for says in ("frame000_depth.exr (its name ends in 'depth')", "frame000_seg.png (its name ends in 'seg')",
+                 "normal_0000.png (its name ends in 'normal')", "z.exr (its channels (depth) are labels, no image)",
+                 "render.exr (its channels (depth.Z, labels.valid) are labels, no image)"):
+        assert says in err, err
+
+
+def test_a_folder_of_label_layers_only_is_refused(batch_inputs, capsys):
+    from solas_mi.imageio import write_exr
+
+    write_exr(batch_inputs.images / "a_depth.exr", {"Z": np.ones((48, 64))})
+    argv = ["batch", "degrade", str(batch_inputs.images), "--psf-grid", str(batch_inputs.grid), "-o",
+            str(batch_inputs.root / "out")]
+    assert main(argv) == 2
+    err = capsys.readouterr().err
+    assert "holds only label layers, no frames (a_depth.exr: its name ends in 'depth')" in err, err
+
+
+def test_depth_maps_by_the_pattern_are_used_not_skipped(batch_inputs, capsys, monkeypatch):
+    """With --depth-pattern the frames' depth maps are theirs (not named as skipped); other label layers are."""
+    from solas_mi.batch.degrade import plan_batch
+    from solas_mi.imageio import write_exr
+
+    (frame,) = batch_inputs.write(1)
+    write_exr(frame.with_name("frame000_depth.exr"), {"Z": np.ones((48, 64))})
+    write_exr(frame.with_name("frame000_flow.exr"), {"R": np.ones((48, 64)), "G": np.ones((48, 64)),
+                                                     "B": np.ones((48, 64))})
+    monkeypatch.chdir(batch_inputs.root)  # the folder given as a relative path
+    p = plan_batch(["images"], "out", DegradeSpec(depth_pattern="{stem}_depth.exr"), psf_grid=batch_inputs.grid)
+    assert [Path(j.params["depth"]).name for j in p.jobs] == ["frame000_depth.exr"]
+    err = capsys.readouterr().err
+    assert "skipped 1 label layer(s)" in err and "frame000_flow.exr (its name ends in 'flow')" in err, err

@@ -89,6 +89,15 @@ def test_colour_roi_uses_luminance_or_one_channel():
     rgb = np.stack([edge, 0.5 * edge + 0.2, 0.9 * edge], axis=-1)
     assert esfr(rgb).mtf50 == pytest.approx(esfr(edge).mtf50, rel=1e-6)
     assert esfr(rgb, channel=1).mtf50 == pytest.approx(esfr(edge).mtf50, rel=1e-6)
+    assert esfr(edge[..., None]).mtf50 == pytest.approx(esfr(edge).mtf50, rel=1e-6)
+
+
+@pytest.mark.parametrize("shape", ["HxW", "HxWx1"])
+def test_a_colour_channel_of_a_grey_roi_is_refused(shape):
+    """A grey ROI has no red channel: measuring its grey values instead was silently wrong."""
+    edge = slanted_edge((100, 100), 5.0, 1.0)
+    with pytest.raises(SolasError, match="channel 0 asked of a grey image"):
+        esfr(edge if shape == "HxW" else edge[..., None], channel=0)
 
 
 def test_zero_degree_edge_is_invalid_without_a_number():

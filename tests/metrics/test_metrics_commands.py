@@ -84,3 +84,24 @@ def test_ss_sfr_compare_json_and_plot(tmp_path, capsys, graded_scene):
     assert all("mtf50_after" in r for r in data["rois"])
     assert main(["ss-sfr", str(a), "--annuli", "equal-area"]) == 0
     assert "| centre | 0.00–0.58 |" in capsys.readouterr().out
+
+
+@pytest.mark.parametrize("suffix", ["png", "exr"])
+def test_a_colour_channel_of_a_grey_image_is_refused(tmp_path, capsys, suffix):
+    """`sfr --channel R` of a grey image measured its grey values and said nothing."""
+    out = tmp_path / f"edge.{suffix}"
+    assert main(["sfr-target", "-o", str(out)]) == 0
+    capsys.readouterr()
+    assert main(["sfr", str(out), "--channel", "R"]) == 2
+    err = capsys.readouterr().err
+    assert f"--channel R: {out} is a grey image (one channel)" in err and err.count("\n") == 1, err
+
+
+def test_a_negative_noise_seed_is_one_line(tmp_path, capsys):
+    """`sfr-target --seed=-1` was a traceback from NumPy."""
+    out = tmp_path / "edge.png"
+    assert main(["sfr-target", "-o", str(out), "--noise", "0.05", "--seed=-1"]) == 2
+    err = capsys.readouterr().err
+    assert "noise seed -1 must be a whole number ≥ 0" in err and err.count("\n") == 1, err
+    assert not out.exists()
+

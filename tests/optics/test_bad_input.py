@@ -97,3 +97,38 @@ def test_cli_lens_errors_are_one_line(tmp_path, capsys, argv, message):
     assert main([a.replace("{tmp}", str(tmp_path)) for a in argv]) == 2
     err = capsys.readouterr().err
     assert message in err and err.count("\n") == 1 and "Traceback" not in err
+
+
+@pytest.mark.parametrize("old, new, message", [
+    ("thickness = 39.496", "thickness = 1e30", r"surface 4 \(Aperture stop\): thickness 1e\+30 mm must lie within ±1e\+15"),
+    ("thickness = 39.496", "thickness = 1e300", r"surface 4 \(Aperture stop\): thickness 1e\+300 mm must lie within"),
+    ("thickness = 6.0", "thickness = -1e300", r"surface 1 \(Surface 1\): thickness -1e\+300 mm must lie within"),
+    ('distance = "infinity"', "distance = 1e300", r"object distance 1e\+300 mm must lie within ±1e\+15 mm, or be "),
+    ("diameter = 5.0", "diameter = 1e300", r"surface 4 \(Aperture stop\): diameter 1e\+300 mm must be positive and at "
+                                           r"most 1e\+15 mm"),
+])
+def test_lengths_beyond_any_lens_are_refused_by_name(tmp_path, capsys, old, new, message):
+    """An image 1e30 mm behind the stop rendered black (the lens camera NaN), DISZ 1e300 gave lens info a
+    TypeError, an object 1e300 mm away an OverflowError: a lens file's lengths are refused past 1e15 mm (an
+    object farther is at infinity to every digit), in one line naming the value."""
+    text = (resource_dir("scenes") / "lenses" / "solas_doublet.toml").read_text()
+    assert text.count(old) == 1
+    path = tmp_path / "far.toml"
+    path.write_text(text.replace(old, new))
+    with pytest.raises(SolasError, match=message):
+        Lens.load(path)
+    assert main(["lens", "info", str(path)]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "Traceback" not in err
+
+
+def test_a_zemax_image_distance_of_1e300_is_refused_by_name(tmp_path, capsys):
+    """The same through a .zmx with fields, where lens info ended in a TypeError."""
+    from test_zemax_files import BFD, zmx
+
+    path = tmp_path / "far.zmx"
+    text = zmx()
+    assert text.count(f"DISZ {BFD!r}") == 1
+    path.write_text(text.replace(f"DISZ {BFD!r}", "DISZ 1e300"))
+    assert main(["lens", "info", str(path)]) == 2
+    assert "thickness 1e+300 mm must lie within ±1e+15 mm" in capsys.readouterr().err

@@ -157,3 +157,15 @@ def test_lens_info_json_of_an_image_telecentric_lens_is_strict(tmp_path, capsys)
         assert abs(float(row["exit_pupil_z_mm"])) == np.inf and row["exit_pupil_f_number"] == pytest.approx(10.0)
     assert main(["lens", "info", str(path)]) == 0
     assert "inf" in next(line for line in capsys.readouterr().out.splitlines() if line.startswith("exit pupil z"))
+
+
+@pytest.mark.parametrize("flag", ["--wavelengths-nm", "--wavelengths", "--fields"])
+@pytest.mark.parametrize("value", [",", " , ", ""])
+def test_an_empty_list_is_an_error_naming_it(flag, value, capsys):
+    """`lens info --wavelengths ,` printed a table of no wavelength (and `--fields ,` one of no field):
+    an empty list is refused in one line naming the flag and the value."""
+    from solas_mi.cli import main
+
+    assert main(["lens", "info", "solas-doublet", flag, value]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and f"{value!r} must be one or more comma-separated numbers" in err, err

@@ -50,3 +50,19 @@ def test_a_model_glass_whose_numbers_do_not_read_is_named_as_a_model_glass(doubl
     with pytest.raises(SolasError, match=r"model glass .* must read model:n_d/V_d") as info:
         Lens.from_dict(doublet_spec)
     assert "unknown glass" not in str(info.value)
+
+
+def test_a_table_pbrt_cannot_trace_is_refused_naming_the_rows_and_the_step(tmp_path):
+    """A biconvex singlet and a stop, written with the spacing column one row off (pbrt's unscaled
+    dgauss.dat and telephoto.dat are so): the glass gets thickness 0, its faces cross, and pbrt's
+    realistic camera, which steps only forward, cannot trace it (its writer refuses such a lens, so does
+    ours): the table is refused naming rows 1 and 2 and the step, as the writer names them. The same rows
+    with the column in place load."""
+    right = "50.0 5.0 1.5 20.0\n-50.0 3.0 1.0 20.0\n0 45.0 1.0 10.0\n"
+    shifted = "50.0 0.0 1.5 20.0\n-50.0 5.0 1.0 20.0\n0 3.0 1.0 10.0\n"
+    (tmp_path / "right.dat").write_text(right)
+    (tmp_path / "shifted.dat").write_text(shifted)
+    assert not Lens.load(tmp_path / "right.dat").overlaps
+    with pytest.raises(SolasError, match=r"shifted.dat: surfaces 1 \(row 1\) and 2 \(row 2\) (cross|overlap) .*\(thickness 0 "
+                                         r"mm\); pbrt's realistic camera steps only forward.* damaged table"):
+        Lens.load(tmp_path / "shifted.dat")

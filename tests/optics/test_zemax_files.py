@@ -358,7 +358,8 @@ def test_float_by_stop_size_on_a_stop_without_diameter(tmp_path):
     """FLOA takes the beam's size from the stop's DIAM: a stop without one leaves it undefined (ef35mm_f2.0
     of a public corpus): refused naming FLOA and the stop; the same stop under ENPD loads, its size the
     system aperture's (20 mm: the stop is the first surface)."""
-    with pytest.raises(SolasError, match=r"floats by stop size \(FLOA\) on the stop, surface 1 \(SURF 1\), which "
+    with pytest.raises(SolasError, match=r"floats by stop size \(FLOA, or no aperture named\) on the stop, surface 1 "
+                                         r"\(SURF 1\), which "
                                          r"has no DIAM"):
         load(tmp_path, zmx(aperture="FLOA", s1=""))
     assert load(tmp_path, zmx(s1="")).surfaces[0].diameter == pytest.approx(20.0)
@@ -384,3 +385,23 @@ def test_constant_index_media_hold_at_every_wavelength_and_below_air(tmp_path):
         load(tmp_path, zmx().replace(f"___BLANK 1 0 {N} 0", "___BLANK 1 0 0.5 0"))
     with pytest.raises(SolasError, match=r"n_d must lie in \(1, 3\) and V_d in \(5, 150\)"):
         load(tmp_path, zmx().replace(f"___BLANK 1 0 {N} 0", "___BLANK 1 0 0.999712 40"))
+
+
+@pytest.mark.parametrize("aperture", ["FLOA", ""])
+def test_a_file_without_stop_takes_surface_1_as_opticstudio_does(tmp_path, aperture):
+    """A minimal file (optrace's public edge-case file is one) without a STOP line, surface 1 holding
+    DIAM 12 and surface 2 none: refused with "diameter = None must be a finite number". An OpticStudio lens
+    always has a stop, surface 1 in a new lens: it is read so, the description says so, and the stop's DIAM
+    12 is the semi-diameter that sizes the beam, floating by stop size or with no aperture named: the same
+    lens as with the STOP line (EPD 24 mm, the stop on the first surface). STOP on the object or the image
+    is refused by name."""
+    text = zmx(aperture=aperture, s2="")
+    assert "  STOP\n" in text
+    with_stop, without = load(tmp_path, text), load(tmp_path, text.replace("  STOP\n", ""), name="nostop.zmx")
+    assert without.stop_index == 0 and "no STOP in the file: the stop is surface 1" in without.description
+    assert without.surfaces[0].diameter == pytest.approx(24.0)
+    assert paraxial(without, WL * 1000).entrance_pupil_diameter_mm == pytest.approx(24.0, rel=1e-12)
+    assert [s.diameter for s in without.surfaces] == [s.diameter for s in with_stop.surfaces]
+    for where in ("SURF 0\n", "SURF 9\n"):
+        with pytest.raises(SolasError, match="STOP on the object or the image surface"):
+            load(tmp_path, text.replace("  STOP\n", "").replace(where, where + "  STOP\n"), name="bad.zmx")

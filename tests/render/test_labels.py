@@ -303,3 +303,121 @@ def test_a_defocused_edge_is_centred_on_the_label_edge(mi, tmp_path, name):
         print(f"{name} {n}: {len(offsets)} edge crossings, max offset {offsets.max():.3f} px, mean "
               f"{offsets.mean():.3f} px; {meta['beam_centre_pixels']} label pixels along the beam's centre")
         assert len(offsets) >= 8 and offsets.max() < 0.5
+
+
+def _placed(shape: str, ops: str) -> str:
+    """`shape` (one of `patch`'s, or any shape with one `to_world`) moved further by the transform `ops`."""
+    return shape.replace("</transform>", f"{ops}</transform>", 1)
+
+
+def test_shapegroup_instances_take_their_own_ids(mi, tmp_path):
+    """A shapegroup (a pole and a sphere) placed by two instances, one named and one unnamed, rotated:
+    every pixel that meets an instance takes that instance's id (never the background's 0 with
+    labels.valid 1), and each instance covers the pixels that the same two shapes placed one by one
+    (the instance's transform written after their own) cover; an unnamed wall and a glowing patch keep
+    their ids in both scenes; depth and normals are those of the shapes placed one by one. At most 2
+    pixels of a mask may differ: an instance is intersected in its own frame, in float32."""
+    pole = patch("pole", -0.25, 0.25, -2.0, 1.0, 0.0, emit=False)
+    knob = ('<shape type="sphere" id="knob"><float name="radius" value="0.5"/><transform name="to_world">'
+            '<translate y="1.5"/></transform><bsdf type="diffuse"/></shape>')
+    places = {"left": '<translate x="-2" z="10"/>', "": '<rotate z="1" angle="30"/><translate x="2" z="10"/>'}
+    common = [patch("lamp", -0.5, 0.5, -2.8, -2.3, 9.0), patch("", -9, 9, -9, 9, 12.0, emit=False).replace(' id=""', "")]
+    instanced = [f'<shape type="shapegroup" id="post">{pole}{knob}</shape>'] + [
+        f'<shape type="instance"{f" id={name!r}" if name else ""}><ref id="post"/><transform name="to_world">{ops}'
+        '</transform></shape>' for name, ops in places.items()]
+    flat = [_placed(s.replace(f'id="{part}"', f'id="{name or "right"}.{part}"'), ops)
+            for name, ops in places.items() for s, part in ((pole, "pole"), (knob, "knob"))]
+    lens = Lens.load("wide-angle-22mm")
+    found = []
+    for tag, shapes in (("instanced", instanced + common), ("flat", flat + common)):
+        scene = load(scene_file(tmp_path / f"{tag}.xml", shapes, 40, 30), "llvm_ad_spectral", lens, pitch_um=400.0,
+                     response=MONO)
+        found.append(render_labels(scene, ("depth", "normal", "instance")))
+    (layers, meta), (flat_layers, flat_meta) = found
+    ids, flat_ids, valid = layers["instance.id"], flat_layers["instance.id"], layers["labels.valid"] == 1.0
+    assert not np.any(valid & (ids == 0.0)), "pixels that meet a shape labelled as the background"
+    np.testing.assert_array_equal(valid, flat_layers["labels.valid"] == 1.0)
+    unnamed = [n for n in meta["instances"].values() if n.startswith("_instance_post_")]
+    assert len(unnamed) == 1 and "left" in meta["boxes"], meta["instances"]
+    for name in ("left", unnamed[0]):
+        parts = [instance_id(f"{'left' if name == 'left' else 'right'}.{p}") for p in ("pole", "knob")]
+        mine, theirs = ids == instance_id(name), np.isin(flat_ids, parts)
+        print(f"{name}: {mine.sum()} pixels, placed one by one {theirs.sum()}")
+        assert mine.sum() > 20 and (mine != theirs).sum() <= 2
+    for name in set(meta["instances"].values()) - {"left", unnamed[0]}:  # the wall and the lamp
+        assert name in flat_meta["instances"].values()
+        assert ((ids == instance_id(name)) != (flat_ids == instance_id(name))).sum() <= 2
+    placed = {instance_id(f"{side}.{p}"): instance_id(name) for side, name in (("left", "left"), ("right", unnamed[0]))
+              for p in ("pole", "knob")}
+    same = valid & (np.vectorize(lambda i: placed.get(int(i), int(i)))(flat_ids) == ids)
+    for name in ("depth.Z", "normal.X", "normal.Y", "normal.Z"):  # an instance's points and normals, in the world
+        np.testing.assert_allclose(layers[name][same], flat_layers[name][same], rtol=1e-4, atol=1e-4)
+
+
+def test_scenes_mitsuba_cannot_instance_are_refused_in_one_line(mi, tmp_path, capsys):
+    """A shapegroup inside a shapegroup, or holding an emitter: Mitsuba refuses to build either, and
+    `render --labels` says so in one line (exit 2)."""
+    from solas_mi.cli import main
+
+    inner = '<shape type="shapegroup" id="inner"><shape type="sphere"/></shape>'
+    cases = {"nested": inner + '<shape type="shapegroup" id="outer"><shape type="instance"><ref id="inner"/></shape>'
+                               '</shape><shape type="instance"><ref id="outer"/></shape>',
+             "emitter": '<shape type="shapegroup" id="lamp"><shape type="sphere"><emitter type="area"/></shape>'
+                        '</shape><shape type="instance"><ref id="lamp"/></shape>'}
+    for tag, shapes in cases.items():
+        xml = scene_file(tmp_path / f"{tag}.xml", [shapes], 8, 6)
+        assert main(["render", xml, "--lens", "wide-angle-22mm", "--pitch-um", "700", "--spp", "1",
+                     "--labels", "instance", "-o", str(tmp_path / f"{tag}.exr")]) == 2
+        err = capsys.readouterr().err.strip()
+        assert "\n" not in err and ("Nested instancing" in err or "Instancing of emitters" in err), err
+
+
+def test_meshes_of_one_material_keep_their_own_ids(mi, tmp_path):
+    """Two named rectangles and an unnamed wall sharing one diffuse material (which Mitsuba's parser by
+    default merges into one unnamed mesh): each keeps its own id over the pixels its rectangle covers,
+    as the same rectangles glowing (emitters, never merged) cover them."""
+    shapes = {"a": (-3.0, -1.0), "b": (1.0, 3.0)}
+    lens = Lens.load("wide-angle-22mm")
+    found = []
+    for emit in (False, True):
+        items = [patch(n, x0, x1, -1, 1, 10.0, emit=emit) for n, (x0, x1) in shapes.items()]
+        items.append(patch("", -9, 9, -9, 9, 12.0, emit=emit).replace(' id=""', ""))
+        scene = load(scene_file(tmp_path / f"{emit}.xml", items, 40, 30), "llvm_ad_spectral", lens, pitch_um=400.0,
+                     response=MONO)
+        found.append(render_labels(scene, ("instance",)))
+    (diffuse, meta), (glowing, glowing_meta) = found
+    assert meta["instances"] == glowing_meta["instances"] and len(meta["instances"]) == 3, meta["instances"]
+    np.testing.assert_array_equal(diffuse["instance.id"], glowing["instance.id"])
+    for name in shapes:
+        assert (diffuse["instance.id"] == instance_id(name)).sum() > 20
+
+
+def test_the_render_memory_estimate_counts_the_label_layers(mi, tmp_path, monkeypatch, capsys):
+    """`render --labels` said 1.5 GB and peaked at 3.0 GB: the estimate left the labels out. It now adds
+    the label rays' trace (measured ~100 B a pixel) and each channel the layers hold: it grows with the
+    layers as their arrays do (at least their own bytes, more for each channel), and a render that fits
+    without labels is refused with them where the memory does not hold both."""
+    from solas_mi import budget
+    from solas_mi.cli import main
+    from solas_mi.render.commands import check_render
+    from solas_mi.render.labels import memory_bytes
+
+    w, h = 40, 30
+    scene = load(scene_file(tmp_path / "wall.xml", [patch("wall", -9, 9, -9, 9, 8.0)], w, h), "llvm_ad_spectral",
+                 Lens.load("wide-angle-22mm"), pitch_um=700.0, response=MONO)
+    estimates, arrays = [], []
+    for kinds in ("", "depth", "depth,instance", "depth,normal,instance"):
+        layers = render_labels(scene, kinds)[0] if kinds else {}
+        estimates.append(memory_bytes(w * h, kinds))
+        arrays.append(sum(a.nbytes for a in layers.values()))
+        assert estimates[-1] >= arrays[-1]
+    assert estimates[0] == 0 and np.all(np.diff(estimates) > 0) and np.all(np.diff(estimates) >= np.diff(arrays))
+    size = 2000  # a film of 2000 x 1500: the base estimate and the labels' both about 400 MB
+    monkeypatch.setattr(budget, "available_memory", lambda: 600e6)
+    check_render(size, 1500, 1, False)
+    with pytest.raises(SolasError, match=r"render 2000x1500 with labels depth,normal,instance needs about"):
+        check_render(size, 1500, 1, False, "instance,normal,depth")
+    xml = scene_file(tmp_path / "big.xml", [patch("wall", -9, 9, -9, 9, 8.0)], size, 1500)
+    assert main(["render", xml, "--lens", "wide-angle-22mm", "--pitch-um", "30", "--spp", "1", "--labels", "depth",
+                 "-o", str(tmp_path / "big.exr")]) == 2
+    assert "with labels depth needs about" in capsys.readouterr().err

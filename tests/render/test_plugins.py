@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 from solas_mi.optics.camera import pinhole_focal_mm
+from solas_mi.optics.pupil import chief_rays
 
 
 @pytest.fixture
@@ -19,7 +20,9 @@ def plugins(mi):
 
 def test_lens_sensor_defaults(plugins, doublet):
     sensor = plugins["lens_sensor"]
-    assert sensor.lens.name == doublet.name and sensor.pitch_mm == pytest.approx(5e-3)
+    # no pitch_um: the film's 768 px width spans the field, where the real chief ray of ±2° lands
+    edge = chief_rays(doublet, [[doublet.field_deg, 0.0]], [doublet.primary_wavelength]).image_xy[0, 0]
+    assert sensor.lens.name == doublet.name and sensor.pitch_mm * 768 / 2 == pytest.approx(edge, rel=1e-9)
     assert sensor.focal_mm == pytest.approx(pinhole_focal_mm(doublet, doublet.field_deg))
     assert sensor.response.channels == ("R", "G", "B") and sensor.response.lo_nm.tolist() == [656.0, 531.0, 486.0]
     assert (sensor.width, sensor.height) == (768, 576) and sensor.sampler().sample_count() == 4
@@ -52,3 +55,37 @@ def test_plugins_expose_their_documented_parameters(mi, plugins):
 def test_bad_parameters_are_named(mi, plugin, message):
     with pytest.raises(RuntimeError, match=message):
         mi.load_dict(plugin)
+
+
+@pytest.mark.parametrize("lens, film", [("solas-doublet", (64, 48)), ("cooke-triplet", (40, 30)),
+                                        ("nikkor-fisheye", (64, 64))])
+def test_lens_camera_without_pitch_spans_the_lens_s_field(mi, lens, film):
+    """`lens_camera` loaded from Python without `pitch_um` took 5 µm, silently a ±0.9° crop of the scene
+    (the doublet's 768 px): as Mitsuba's cameras take the film's size and a field, the film's width now
+    spans the lens's field, where its real chief ray lands (a fisheye: its image diameter), and
+    `to_string` says the pitch was derived; a lens that states neither is refused naming pitch_um."""
+    from solas_mi import Lens
+
+    camera = mi.load_dict({"type": "lens_camera", "lens": lens, "film": {"type": "hdrfilm", "width": film[0],
+                                                                          "height": film[1]}})
+    optics = Lens.load(lens)
+    if optics.field_type.pinhole:
+        edge = chief_rays(optics, [[optics.field_deg, 0.0]], [optics.primary_wavelength]).image_xy[0, 0]
+    else:
+        edge = optics.image_diameter / 2
+    assert camera.pitch_mm * film[0] / 2 == pytest.approx(edge, rel=1e-9)
+    assert f"({camera.pitch_note})" in str(camera) and camera.pitch_note.startswith("derived: the film's")
+    given = mi.load_dict({"type": "lens_camera", "lens": lens, "pitch_um": 7.0})
+    assert given.pitch_um == 7.0 and given.pitch_note == "given"
+
+
+def test_lens_camera_of_a_lens_without_field_needs_a_pitch(mi, tmp_path):
+    from dataclasses import replace
+
+    from solas_mi import Lens
+
+    path = replace(Lens.load("solas-doublet"), field_deg=0.0).save(tmp_path / "nofield.toml")
+    with pytest.raises(RuntimeError, match=r"lens_camera: no pitch_um given, and lens solas-doublet sets none "
+                                           r"\(field of view 0(\.0)? deg .*\); give pitch_um"):
+        mi.load_dict({"type": "lens_camera", "lens": str(path)})
+    assert mi.load_dict({"type": "lens_camera", "lens": str(path), "pitch_um": 5.0}).pitch_um == 5.0

@@ -9,7 +9,7 @@ from PIL import Image
 from solas_mi.cli import main
 from solas_mi.errors import SolasError
 from solas_mi.imageio import read_exr
-from solas_mi.render.spec import MAX_RINGS, RenderSpec, fields_by_name
+from solas_mi.render.spec import MAX_RINGS, RenderSpec
 
 
 def test_scene_and_render_commands(tmp_path):
@@ -63,7 +63,7 @@ def _subparser(parser, *names):
 
 def _other_value(name: str, action) -> str:
     """A command-line value of setting `name` that is not its default."""
-    default = fields_by_name()[name].default
+    default = RenderSpec.fields_by_name()[name].default
     if action.choices:
         return next(c for c in action.choices if c != default)
     if name == "sensor":
@@ -80,17 +80,16 @@ def test_every_render_image_setting_reaches_the_batch_items(tmp_path):
     from solas_mi.batch.render import plan_render, seed_of
     from solas_mi.cli import build_parser
     from solas_mi.render.commands import IMAGE_SETTINGS
-    from solas_mi.render.spec import spec_from_args
 
     parser = build_parser()
     image_cmd, batch_cmd = _subparser(parser, "render-image"), _subparser(parser, "batch", "render")
     flags = {a.dest: a for a in image_cmd._actions if a.option_strings and a.dest not in OUTPUT_FLAGS}
-    assert set(flags) <= set(fields_by_name()) and set(flags) == set(IMAGE_SETTINGS)
+    assert set(flags) <= set(RenderSpec.fields_by_name()) and set(flags) == set(IMAGE_SETTINGS)
     Image.fromarray(np.full((24, 32), 128, np.uint8)).save(tmp_path / "photo.png")
     for dest, action in flags.items():
         given = [action.option_strings[-1], _other_value(dest, action)]
-        wanted, _ = spec_from_args(image_cmd.parse_args(["solas-doublet", "photo.png", "-o", "x.exr", *given]),
-                                   IMAGE_SETTINGS)
+        wanted = RenderSpec.from_args(image_cmd.parse_args(["solas-doublet", "photo.png", "-o", "x.exr", *given]),
+                                      IMAGE_SETTINGS)
         assert getattr(wanted, dest) != getattr(RenderSpec(), dest), dest
         args = batch_cmd.parse_args([str(tmp_path / "photo.png"), "--lens", "solas-doublet", "-o",
                                      str(tmp_path / "out"), *given])
@@ -127,4 +126,24 @@ def test_render_spp_zero_is_refused_not_replaced_by_the_scenes(tmp_path, capsys)
         '<integer name="height" value="6"/></film></sensor><shape type="sphere"/><emitter type="constant"/></scene>')
     assert main(["render", str(tmp_path / "sphere.xml"), "--spp", "0", "-o", str(tmp_path / "x.exr")]) == 2
     assert "samples per pixel 0 must be an integer from 1" in capsys.readouterr().err
+    assert not (tmp_path / "x.exr").exists()
+
+
+@pytest.mark.parametrize("size, extra, shown", [
+    ("0x0", [], "film is 0x0 px"),
+    ("$wx6", ["--set", "w=0"], "film is 0x6 px"),
+    ("$wx6", ["--set", "w=0", "--lens", "solas-doublet"], "the scene's film is 0x6 px (after --set)"),
+    ("8x0", ["--lens", "solas-doublet"], "the scene's film is 8x0 px (after --set)"),
+])
+def test_a_film_without_pixels_is_refused_in_one_line(tmp_path, capsys, size, extra, shown):
+    """A scene whose film has no pixels (its own width 0, or `--set width=0`), with or without --lens, ended in
+    a ZeroDivisionError traceback (or a message quoting one): refused in one line naming the size."""
+    width, height = size.split("x")
+    (tmp_path / "s.xml").write_text(
+        '<scene version="3.0.0"><default name="w" value="8"/><sensor type="perspective"><film type="hdrfilm">'
+        f'<integer name="width" value="{width}"/><integer name="height" value="{height}"/></film></sensor>'
+        '<shape type="sphere"/><emitter type="constant"/></scene>')
+    assert main(["render", str(tmp_path / "s.xml"), "--spp", "1", *extra, "-o", str(tmp_path / "x.exr")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and shown in err and "must be at least 1 pixel" in err, err
     assert not (tmp_path / "x.exr").exists()

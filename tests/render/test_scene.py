@@ -124,3 +124,26 @@ def test_cap_mesh_of_a_qbfs_surface_lies_on_its_sag():
     dz = (sag((r + h) ** 2, 1 / 30.0, -0.7, qbfs=qbfs, norm_radius=rho)
           - sag((r - h) ** 2, 1 / 30.0, -0.7, qbfs=qbfs, norm_radius=rho)) / (2 * h)
     assert np.abs(-n[1:, 2] * dz - np.hypot(n[1:, 0], n[1:, 1])).max() < 1e-7  # |n_r| / |n_z| = dz/dr
+
+
+@pytest.mark.parametrize("distance", [1e5, 1e12])
+def test_a_lens_farther_than_float32_holds_is_refused_by_the_mesh_scene(doublet, capsys, distance, tmp_path):
+    """The doublet's image plane moved 1e5 and 1e12 mm behind the stop: render-image's float32 geometry
+    rendered its film in the wrong colours (1e7 mm) and black (1e12 mm); float32 holds a point to 1 µm
+    only within 2^24 µm of the origin, so the mesh scene refuses it naming the reach and the tracers that
+    take it; the image plane 39.496 mm away builds."""
+    from dataclasses import replace
+
+    from solas_mi.cli import main
+    from solas_mi.render.scene import FLOAT32_REACH_MM
+
+    assert FLOAT32_REACH_MM == pytest.approx(2 ** 24 * 1e-3)
+    far = replace(doublet, surfaces=(*doublet.surfaces[:-1], replace(doublet.surfaces[-1], thickness=distance)))
+    with pytest.raises(SolasError, match=r"reaches .* mm from surface 1 .* float32 geometry holds a point to 1 µm "
+                                         r"within 16777.2 mm only; trace it instead"):
+        lens_parts(far)
+    assert lens_parts(doublet)
+    path = far.save(tmp_path / "far.toml")
+    assert main(["render-image", str(path), str(Path(__file__).parents[2] / "scenes" / "images" / "rocket.png"),
+                 "--sensor", "8x6", "--spp", "1", "-o", str(tmp_path / "far.exr")]) == 2
+    assert "float32 geometry" in capsys.readouterr().err and not (tmp_path / "far.exr").exists()

@@ -55,7 +55,7 @@ def test_a_preset_name_or_a_file(tmp_path):
     assert mine.cfa == "RCCB" and mine.full_well_e == load_sensor("imx490").full_well_e == 22000
     with pytest.raises(SolasError, match=r"'imx999' is neither a preset \(ar0132at, imx255, imx490, kac12040, mt9p001\)"):
         load_sensor("imx999")
-    with pytest.raises(SolasError, match="No such file"):
+    with pytest.raises(SolasError, match="sensor model .imx999.toml. does not exist"):
         load_sensor("imx999.toml")
 
 

@@ -97,7 +97,7 @@ def test_curve_in_a_toml_file_inline_and_csv(tmp_path):
      "non-decreasing"),
     ('[sensor.qe_curve]\nwavelength_nm = [400, 700]\nR = [0.5]\nG = [0.5, 0.5]\nB = [0.5, 0.5]\n', "all of one length"),
     ('[sensor.qe_curve]\nwavelength = [400, 700]\nR = [0.5, 0.5]\n', "wavelength unknown or wavelength_nm missing"),
-    ('qe_curve = "missing.csv"\n', "QE curve .*missing.csv.*No such file"),
+    ('qe_curve = "missing.csv"\n', "QE curve .*missing.csv.* does not exist"),
 ])
 def test_bad_curves_are_named(tmp_path, sensor, message):
     (tmp_path / "s.toml").write_text("[sensor]\n" + sensor)

@@ -134,3 +134,63 @@ def test_a_field_no_ray_reaches_the_stop_centre_from_is_confirmed_by_a_scan(monk
     monkeypatch.setattr(stability, "chief_rays", lost)
     case = stability._chief(doublet, 587.5618)
     assert not case.passed and "a scan finds one" in case.observed
+
+
+ACHROMAT = """VERS 190513 80 123457 L123457
+MODE SEQ
+NAME achromat f100 f5
+UNIT MM X W X CM MR CPMM
+ENPD 20
+WAVM 1 0.4861 1
+WAVM 2 0.5876 1
+WAVM 3 0.6563 1
+PWAV 2
+SURF 0
+  TYPE STANDARD
+  CURV 0.0
+  DISZ INFINITY
+SURF 1
+  STOP
+  TYPE STANDARD
+  CURV 0.01661
+  DISZ 6.0
+  GLAS N-BK7 0 0 1.5168 64.17
+  DIAM 12.7 1
+SURF 2
+  TYPE STANDARD
+  CURV -0.02283
+  DISZ 2.5
+  GLAS F2 0 0 1.62 36.37
+  DIAM 12.7 1
+SURF 3
+  TYPE STANDARD
+  CURV -0.00623
+  DISZ 95.62
+  DIAM 12.7 1
+SURF 4
+  TYPE STANDARD
+  CURV 0.0
+  DISZ 0
+"""
+
+
+def test_a_lens_without_a_field_is_checked_at_a_field_it_images(tmp_path):
+    """A cemented achromat (f = 100 mm, f/5, 25.4 mm across, stop on its front face) in a .zmx without
+    FIELD lines: its apertures pass the chief ray of every field to 88.5 deg, where no image forms, and
+    the check took that field (21 of 23 cases passed: an empty PSF window, NaN or unnormalised PSFs). It is
+    now checked at the paraxial field whose image height is its largest clear semi-diameter, atan(12.7 mm /
+    100 mm) within the EFL's 0.1 % of 100 mm, says so, and passes every case. A lens whose apertures stop
+    the chief ray (a front aperture, past about 5.7 deg) keeps the widest field they pass."""
+    path = tmp_path / "achromat.zmx"
+    path.write_text(ACHROMAT)
+    cases = check_stability(Lens.load(path))
+    field = cases[0]
+    assert field.name == "field of a lens that states none" and "paraxial field of image height 12.7 mm" in field.observed
+    assert float(field.observed.split(" deg")[0]) == pytest.approx(np.degrees(np.arctan(12.7 / 100.0)), rel=2e-3)
+    failed = [c.to_dict() for c in cases if not c.passed]
+    assert not failed, failed
+    from dataclasses import replace
+
+    front = replace(Lens.load(STIFF / "vignetting_front.toml"), field_deg=0.0)  # its front aperture stops the chief ray
+    field, how = stability.imaged_field(front, 587.5618)
+    assert how == "the widest field whose chief ray passes the apertures" and 0.0 < field <= 5.7

@@ -49,3 +49,21 @@ def test_error_maps_label_their_axes_and_scale(tmp_path, monkeypatch):
     assert (image.get_xlabel(), image.get_ylabel()) == ("x (px)", "y (px)") and image.get_title().startswith("case")
     assert scale.get_ylabel() == "error, % of the reference's RMS"
     assert (tmp_path / "e.png").is_file()
+
+
+@pytest.mark.parametrize("text, says", [("", "--cases '' selects no case"), (" , ", "--cases ' , ' selects no case"),
+                                        ("interp:geometric:4x3,", "has an empty entry")])
+def test_an_empty_case_selection_is_refused(monkeypatch, capsys, tmp_path, text, says):
+    """`--cases ''` ran every default case; an empty selection is an error naming it, before any work."""
+    from solas_mi.cli import main
+    from solas_mi.resources import resource_dir
+
+    def ran(*args, **kwargs):
+        raise AssertionError(f"crossval ran the cases {args[5]}")
+
+    monkeypatch.setattr(commands, "crossval", ran)
+    image = resource_dir("scenes") / "images" / "rocket.png"
+    assert main(["crossval", "solas-doublet", str(image), "-o", str(tmp_path / "cv"), "--cases", text]) == 2
+    err = capsys.readouterr().err
+    assert says in err and ",".join(commands.DEFAULT_CASES) in err and err.count("\n") == 1, err
+    assert not (tmp_path / "cv").exists()

@@ -102,10 +102,11 @@ def experiment_scene(source: Path, out: Path, primary_nm: float, depth: bool = F
     `primary_nm` — for a `spectral` variant a specfilm of a ±2 nm band, else the scene's own film
     (Mitsuba's luminance) — or, `depth`, an `aov` depth integrator; texture paths absolute."""
     from ...imageio import write_text
+    from ...userfiles import read_bytes
 
     if not source.is_file():
         raise SolasError(f"no street scene at {source}; write it with `solas-mi experiment street-scene`")
-    root = ET.parse(source).getroot()
+    root = ET.fromstring(read_bytes(source, "scene file"))
     for tex in root.iter("texture"):
         for s in tex.iter("string"):
             if s.get("name") == "filename":

@@ -1,0 +1,109 @@
+"""`DegradeSpec`: every option of degrading images by a PSF grid as one frozen value, checked when
+built, defined once: `degrade` and `batch degrade` make their flags from its fields and build it from
+them (`options.OptionSpec`: `DegradeSpec.add_flags`, `DegradeSpec.from_args`), `convolution.output.
+degrade_file` and the batch (`batch.degrade.degrade_batch`, `plan_batch`) take it, and a batch's
+manifest header and identity are made from it (`header`, `identity`).
+
+The frame's camera, a batch's camera and a batch's grid options are objects the commands build from
+several flags each (`commands.add_frame_options`, `isp.commands.add_camera_options`, the `psf-grid`
+flags): fields without a flag of their own.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import asdict, dataclass
+from typing import Any
+
+from ..errors import SolasError
+from ..optics.frame import FrameCamera
+from ..options import OptionSpec, option
+from ..psf.spec import GridSpec
+from .depth import OCCLUSIONS, SILHOUETTES
+from .kernels import BOUNDARIES, check_boundary
+from .methods import DEFAULT_METHOD, METHODS, check_method
+
+# float32 OpenEXR (14 MB a 1280×960 RGB frame uncompressed), half floats, or a 16-bit sRGB PNG (its own
+# preview; its metadata in a JSON file beside it): OUTPUT_FILES gives each one's two files' suffixes
+OUTPUT_FILES = {"exr": (".exr", ".png"), "exr-half": (".exr", ".png"), "png16": (".png", ".json")}
+OUTPUT_FORMATS = tuple(OUTPUT_FILES)
+DEPTH_WITH = "with a depth map (degrade --depth, batch degrade --depth-pattern)"
+
+
+@dataclass(frozen=True)
+class DegradeSpec(OptionSpec):
+    """How images are degraded by a PSF grid: the convolution `method` and `boundary`; `linear`: PNG/JPEG
+    values are already linear; `output_format` of a batch's items (one of
+    `OUTPUT_FORMATS`); a batch's `depth_pattern` (each image's depth map beside it,
+    e.g. "{stem}_depth.exr") and, with a depth map, the `occlusion` and `silhouette` rules
+    (`convolution.depth`); `frame`: the camera every input was taken with (`optics.frame.FrameCamera`;
+    None: the image spans the grid's x field range); `scale_lens`: that camera's pixel pitch (µm), the
+    batch's lens scaled to its focal length (`batch.degrade.scaled_lens`); `camera`: each degraded
+    frame of a batch through a sensor and image processor (`isp.camera.Camera`, checked by the batch:
+    a later stage); `grid_spec`: the grid a batch computes from its lens (`psf.spec.GridSpec`; None:
+    its defaults). One image (`degrade_file`) takes method, boundary, linear, output format, occlusion,
+    silhouette and frame; the others are a batch's."""
+
+    method: str = option(METHODS.help, DEFAULT_METHOD, choices=METHODS.names)
+    boundary: str = option("padding outside the image, never wrapped around: edge (default) replicates the border "
+                           "pixels, zero pads with black, reflect mirrors the image about its border", BOUNDARIES[0],
+                           choices=BOUNDARIES)
+    linear: bool = option("PNG/JPEG values are already linear: do not decode sRGB", False)
+    output_format: str = option("output data: exr (float, default), exr-half (half floats, half the size) or png16 "
+                                "(16-bit sRGB PNG, values clipped to [0, 1], its metadata in <name>.json beside it)",
+                                OUTPUT_FORMATS[0], flag="--format", choices=OUTPUT_FORMATS)
+    depth_pattern: str | None = option("each image's depth map beside it (metres), with a grid over object distance "
+                                       "(--distances-m): `degrade --depth` per image", metavar="{stem}_depth.exr")
+    occlusion: str = option(f"{DEPTH_WITH}: filled (default): layers composited far to near, the background hidden "
+                            "behind near objects continued from their silhouettes; layered: without that; none: "
+                            "layers added (no occlusion)", OCCLUSIONS[0], choices=OCCLUSIONS)
+    silhouette: str = option(f"{DEPTH_WITH}: nearest (default): a silhouette's pixels of mixed (antialiased) depth "
+                             "take the nearest depth around them; as-given: the map's depths", SILHOUETTES[0],
+                             choices=SILHOUETTES)
+    scale_lens: float | None = option("with --lens and --intrinsics/--fisheye: the camera's pixel pitch (µm); the "
+                                      "lens scaled to its focal length fx x PIXEL_UM, f-number kept, stated in the "
+                                      "metadata", parse=float, metavar="PIXEL_UM")
+    frame: FrameCamera | None = None
+    camera: Any = None
+    grid_spec: GridSpec | None = None
+
+    def __post_init__(self) -> None:
+        check_method(self.method)
+        check_boundary(self.boundary)
+        if not isinstance(self.linear, bool):
+            raise SolasError(f"linear {self.linear!r} must be True or False")
+        for name, allowed in (("output format", OUTPUT_FORMATS), ("occlusion", OCCLUSIONS),
+                              ("silhouette", SILHOUETTES)):
+            value = getattr(self, name.replace(" ", "_"))
+            if not isinstance(value, str) or value not in allowed:
+                raise SolasError(f"{name} {value!r} must be one of {', '.join(allowed)}")
+        pattern = self.depth_pattern
+        if pattern is not None and not (isinstance(pattern, str) and "{stem}" in pattern and "/" not in pattern
+                                         and pattern.lower().endswith(".exr")):
+            raise SolasError(f"depth pattern {pattern!r} must be a file name with {{stem}} ending in .exr, "
+                             "e.g. {stem}_depth.exr (beside each image)")
+        scale = self.scale_lens
+        if scale is not None and (isinstance(scale, bool) or not isinstance(scale, (int, float))
+                                  or not (math.isfinite(scale) and scale > 0)):
+            raise SolasError(f"scale_lens {scale!r} must be the camera's pixel pitch, a positive number of µm")
+        for name, kind in (("frame", FrameCamera), ("grid_spec", GridSpec)):
+            if getattr(self, name) is not None and not isinstance(getattr(self, name), kind):
+                raise SolasError(f"{name} {getattr(self, name)!r} must be a {kind.__module__}.{kind.__name__}")
+
+    def identity(self) -> list:
+        """What a batch's outputs depend on besides its grid, as JSON values, in the order and form a
+        batch's id has always hashed them (`batch.degrade.plan_batch`): a finished batch resumes only
+        under the same id, so an option joins only away from its default (the depth rules only with a
+        depth map)."""
+        return ([self.method, self.boundary, self.linear]
+                + ([self.output_format] if self.output_format != "exr" else [])
+                + ([self.depth_pattern, self.occlusion, self.silhouette] if self.depth_pattern is not None else [])
+                + ([asdict(self.frame)] if self.frame is not None else [])
+                + ([self.camera.describe()] if self.camera is not None else []))
+
+    def header(self, lens_scale: dict | None = None) -> dict[str, Any]:
+        """The options as a batch's manifest states them, with `lens_scale`, what scaling the lens did
+        (`batch.degrade.scaled_lens`; None: not scaled)."""
+        return {"method": self.method, "boundary": self.boundary, "linear": self.linear, "format": self.output_format,
+                **({"frame_camera": asdict(self.frame)} if self.frame is not None else {}),
+                **({"lens_scale": lens_scale} if lens_scale is not None else {}),
+                **({"camera": self.camera.describe()} if self.camera is not None else {})}
