@@ -87,12 +87,14 @@ def stages(images: Path, grid_path: Path, camera, repeats: int) -> dict[str, tup
 def batch(images: Path, grid_path: Path, camera, workers: int, repeats: int) -> tuple[float, float]:
     """(frames/s of the whole batch, median seconds an item takes in its worker), medians of the repeats."""
     from solas_mi.batch import degrade_batch
+    from solas_mi.convolution.spec import DegradeSpec
 
     rates, items = [], []
     for _ in range(repeats):
         out = WORK / "batch-out"
         shutil.rmtree(out, ignore_errors=True)
-        result = degrade_batch([images], out, psf_grid=grid_path, workers=workers, camera=camera, progress=False)
+        result = degrade_batch([images], out, DegradeSpec(camera=camera), psf_grid=grid_path, workers=workers,
+                               progress=False)
         assert not result.failed, result.failed[0].error
         rates.append(len(result.jobs) / result.seconds)
         items.extend(job.seconds for job in result.jobs)

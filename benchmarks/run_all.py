@@ -42,7 +42,8 @@ COMMANDS = {
                           "--spp", "768"],
 }
 # name → arguments of the quick run; the quick set is what `make bench` runs
-QUICK = {"bench_psf_grid": ["--repeats", "3"], "bench_esfr": [], "bench_anchors": [], "bench_sensor_isp": [],
+QUICK = {"bench_psf_grid": ["--repeats", "5"], "bench_dataset": [], "bench_esfr": [], "bench_anchors": [],
+         "bench_sensor_isp": [],
          "check_stability_solas-doublet": COMMANDS["check_stability_solas-doublet"],
          "check_stability_cooke-triplet": COMMANDS["check_stability_cooke-triplet"]}
 

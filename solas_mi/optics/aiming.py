@@ -70,11 +70,12 @@ def aim(bundle: Bundle, target, ex: T.F, ey: T.F, goal_x: T.F, goal_y: T.F, max_
 
 
 def aim_keeping(bundle: Bundle, target, ex: T.F, ey: T.F, goal_x: T.F, goal_y: T.F, max_iter: int = 60,
-                jacobian=None, keep=None):
-    """`aim`, and also `keep(traced)` (a tuple of arrays) evaluated with each step's trace, so that what
-    the caller needs of the rays at the solution costs no trace of its own: (ex, ey, traced, converged,
-    kept)."""
-    ex, ey, rx, ry, ok, kept = solve(bundle, target, ex, ey, goal_x, goal_y, max_iter, jacobian, keep)
+                jacobian=None, keep=None, unknown: T.UInt32 | None = None):
+    """`aim`, and also `keep(traced, rays=None)` (a tuple of arrays of the rays traced) evaluated with each
+    step's trace, so that what the caller needs of the rays at the solution costs no trace of its own;
+    `unknown`: the rays whose given `jacobian` is not known, taken by finite differences. Returns (ex, ey,
+    traced, converged, kept)."""
+    ex, ey, rx, ry, ok, kept = solve(bundle, target, ex, ey, goal_x, goal_y, max_iter, jacobian, keep, unknown)
     converged = ok & (dr.maximum(dr.abs(rx), dr.abs(ry)) < bundle.tolerance)
     return ex, ey, bundle.trace(ex, ey), converged, kept
 

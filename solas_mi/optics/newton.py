@@ -35,7 +35,7 @@ def put(dense, values, rays):
     return dense
 
 
-def solve(bundle, target, ex: T.F, ey: T.F, goal_x: T.F, goal_y: T.F, max_iter: int, jacobian, keep):
+def solve(bundle, target, ex: T.F, ey: T.F, goal_x: T.F, goal_y: T.F, max_iter: int, jacobian, keep, unknown=None):
     """The iteration of `aiming.aim_keeping`: (ex, ey, residual x, residual y, passed, kept)."""
     def residual(ax, ay, rays):
         tr = bundle.trace(ax, ay, rays=rays)
@@ -45,9 +45,8 @@ def solve(bundle, target, ex: T.F, ey: T.F, goal_x: T.F, goal_y: T.F, max_iter: 
     rx, ry, ok, _ = residual(ex, ey, None)
     dr.eval(ex, ey, rx, ry, ok)
     j = list(fd_jacobian(residual, ex, ey, rx, ry, None) if jacobian is None else jacobian)
-    unknown = ~dr.isfinite(j[0] * j[3] - j[1] * j[2])  # a given Jacobian's NaNs: taken by finite differences
-    if jacobian is not None and dr.any(unknown):
-        j = _refresh(residual, j, ex, ey, rx, ry, dr.compress(unknown))
+    if jacobian is not None and unknown is not None:  # where the given Jacobian is not known
+        j = _refresh(residual, j, ex, ey, rx, ry, unknown)
     best, stalled = dr.full(T.F, np.inf, dr.width(rx)), dr.zeros(T.UInt32, dr.width(rx))
     rays, kept = None, None
     for _ in range(max_iter):

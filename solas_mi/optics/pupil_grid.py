@@ -108,14 +108,15 @@ def grid_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chie
         guess = [np.add(affine[:, 0, c, None, None] + affine[:, 1, c, None, None] * a[:, None, :],
                         affine[:, 2, c, None, None] * b[:, :, None], out=T.aligned((nf, m, m), np.float64))
                  for c in (0, 1)]  # the rim's affine map
-        jacobian = None if solved is None else _next_level(*solved, m, guess)
+        jacobian, unknown = (None, None) if solved is None else _next_level(*solved, m, guess)
         g = Bundle(lens, field_deg, wavelength_nm, m * m)
         ray = dr.arange(T.UInt32, nf * m * m)  # the goals: each ray's (α, β) on the sphere, gathered per ray
         goal_a = T.gather((a + chief.sphere_point[:, :1]).ravel(), g.index * m + ray % m)
         goal_b = T.gather((b + chief.sphere_point[:, 1:]).ravel(), g.index * m + (ray // m) % m)
         keep = _kept(lens, g, chief) if m == samples else None
         ex, ey, tr, ok, kept = aim_keeping(g, sphere_target(lens, g, chief), T.array(guess[0]),
-                                           T.array(guess[1]), goal_a, goal_b, jacobian=jacobian, keep=keep)
+                                           T.array(guess[1]), goal_a, goal_b, jacobian=jacobian, keep=keep,
+                                           unknown=unknown)
         solved = [s.reshape(nf, m, m) for s in T.to_numpy(ex, ey, ok)], a, b
     return g, ex, ey, ok, kept
 
@@ -138,9 +139,9 @@ def _kept(lens: Lens, g: Bundle, chief):
 def _next_level(solved: list[np.ndarray], a: np.ndarray, b: np.ndarray, m: int, guess: list[np.ndarray]):
     """Interpolate a level's solution (`solved`: entrance coordinates and whether each converged, on the
     grids `a`, `b`) by cubic Lagrange polynomials onto the next level, m nodes per side: its first guess
-    (written into `guess`, two (n, m, m) arrays) and Newton Jacobian ∂(α, β)/∂(ex, ey) (four Dr.Jit arrays).
-    Nodes whose interpolation reaches a ray that did not converge keep their guess (the rim's affine map)
-    and get NaN: their Jacobian is taken by finite differences."""
+    (written into `guess`, two (n, m, m) arrays) and Newton Jacobian ∂(α, β)/∂(ex, ey) (four Dr.Jit arrays),
+    and the nodes whose interpolation reaches a ray that did not converge (a UInt32 index, or None): they
+    keep their guess (the rim's affine map), their Jacobian taken by finite differences."""
     (sx, sy, ok), nf, mc = solved, a.shape[0], a.shape[1]
     w, dw = lagrange(m, mc)
     both = np.concatenate([w, dw]).T  # (mc, 2m): values and slopes along α
@@ -157,14 +158,13 @@ def _next_level(solved: list[np.ndarray], a: np.ndarray, b: np.ndarray, m: int, 
             right32 = right.astype(np.float32)
             slopes += [np.matmul(weights, right32[..., part], out=T.aligned((nf, m, m), np.float32))
                        for weights, part in ((w32, slice(m, None)), (dw32, slice(None, m)))]  # per coarse step in α, β
-    for v in slopes if reach is not None else ():
-        v[reach] = np.nan
+    unknown = None if reach is None else T.array(np.flatnonzero(reach), T.UInt32)
     index = dr.arange(T.UInt32, nf * m * m) // (m * m)
     per_a, per_b = (T.gather((mc - 1) / (x[:, -1] - x[:, 0]), index) for x in (a, b))
     f32 = dr.float32_array_t(T.F)
     ex_a, ex_b, ey_a, ey_b = (T.F(T.array(v, f32)) * per for v, per in zip(slopes, (per_a, per_b, per_a, per_b)))
     det = ex_a * ey_b - ex_b * ey_a
-    return ey_b / det, -ex_b / det, -ey_a / det, ex_a / det
+    return (ey_b / det, -ex_b / det, -ey_a / det, ex_a / det), unknown
 
 
 def cells(lens: Lens, g: Bundle, ex: T.F, ey: T.F, ok: T.Bool, kept: tuple, alpha: np.ndarray, beta: np.ndarray,

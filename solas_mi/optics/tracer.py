@@ -335,12 +335,12 @@ def object_points(lens: Lens, field_deg: np.ndarray) -> np.ndarray | None:
 
 
 def array(values: np.ndarray, ftype=F):
-    """A NumPy array as a Dr.Jit array of `ftype` (Float64, or a Float32 type), in memory aligned for Dr.Jit's
+    """A NumPy array as a Dr.Jit array of `ftype` (Float64, a Float32 type or UInt32), in memory aligned for Dr.Jit's
     vector loads. (Dr.Jit maps a NumPy array in place and compiles the kernels that read it for the
     alignment of its address: kernels over NumPy's own memory were compiled afresh whenever an allocation
     happened to land differently, measured at 20-40 compilations of 10-100 ms in each 8x8 PSF grid.)"""
     values = np.asarray(values)
-    dtype = np.float64 if ftype is F else np.float32
+    dtype = np.uint32 if ftype is UInt32 else np.float64 if ftype is F else np.float32
     if not (values.dtype == dtype and values.flags.c_contiguous and values.ctypes.data % _ALIGN == 0):
         values = aligned(values.shape, dtype, values)
     return ftype(values.ravel())
