@@ -108,13 +108,13 @@ def place(psfs: np.ndarray, transmission: np.ndarray, nodes: np.ndarray, source:
     nx, size = out.shape[1], out.shape[-1]
     energy = np.empty(len(nodes))
     single = psfs.astype(np.float32)  # products in float32 (measured: a cast in the product holds the GIL)
+    flat, total = psfs.reshape(len(psfs), -1), psfs.sum(axis=(1, 2))
     jobs = []
     for key in {tuple(t) for t in turns.tolist()}:
         mine = np.flatnonzero((turns == key).all(axis=1))
         turned = _turned(psfs, *key)[:, :size, :size]  # views: (m, size, size)
         used = np.unique(source[mine])
-        sums, scale = np.zeros(len(psfs)), np.ones(len(psfs))
-        sums[used] = turned[used].sum(axis=(1, 2))
+        sums, scale = total - _cut(flat, psfs.shape[-1], size, key), np.ones(len(psfs))
         if normalization != "none":
             scale[used] = sums[used] if normalization == "sum" else turned[used].max(axis=(1, 2))
         scale = (1.0 / np.where(scale > 0, scale, 1.0)).astype(np.float32)
@@ -130,6 +130,16 @@ def place(psfs: np.ndarray, transmission: np.ndarray, nodes: np.ndarray, source:
     with ThreadPoolExecutor(workers) as pool:
         list(pool.map(run, [jobs[k::workers] for k in range(workers)]))
     return energy
+
+
+def _cut(flat: np.ndarray, odd: int, size: int, key: tuple) -> np.ndarray:
+    """Per PSF (rows of `flat`, odd² values) the sum of what cutting its turned window (`_turned` by `key`)
+    to size × size leaves out: its last row and column."""
+    if odd == size:
+        return np.zeros(len(flat))
+    where = _turned(np.arange(odd * odd).reshape(odd, odd), *key)
+    row, col = where[size:, :].ravel(), where[:size, size:].ravel()
+    return flat[:, row].sum(axis=1) + flat[:, col].sum(axis=1)
 
 
 def _turned(p: np.ndarray, swap: bool, flip_x: bool, flip_y: bool) -> np.ndarray:
