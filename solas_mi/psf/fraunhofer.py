@@ -12,15 +12,13 @@ R. J. Vanderbei, "Fast computation of Lyot-style coronagraph propagation", Optic
 from __future__ import annotations
 
 import math
-import os
-from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 
 from ..blas import single_threaded_blas
 from ..optics import tracer as T
 from ..optics.pupil import PupilFunction, Pupils
-from .base import Computed, centring_warnings, grid_offsets, window_centres_um
+from .base import Computed, centring_warnings, grid_offsets, in_threads, window_centres_um
 from .geometric import entrance_grid_hits, geometric, light_offsets_um
 
 dr = T.dr
@@ -220,9 +218,8 @@ def fraunhofer(pf: PupilFunction, pitch_um: float, size: int, center_um: np.ndar
         np.multiply(np.square(field_.real, dtype=np.float64) + np.square(field_.imag, dtype=np.float64), scale[f],
                     out=out[f])
 
-    workers = min(n, len(os.sched_getaffinity(0)))
-    with single_threaded_blas(), ThreadPoolExecutor(workers) as pool:  # many small products: a thread each, one
-        list(pool.map(product, range(n)))                                 # BLAS thread per product
+    with single_threaded_blas():  # many small products: one BLAS thread each, a thread per core
+        in_threads(product, list(range(n)))
     return out
 
 

@@ -9,8 +9,6 @@ computed on an odd window, symmetric about the chief ray, and mirrored.
 """
 from __future__ import annotations
 
-import os
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -122,13 +120,7 @@ def place(psfs: np.ndarray, transmission: np.ndarray, nodes: np.ndarray, source:
         turned = _turned(single, *key)[:, :size, :size]
         jobs += [(turned[source[i]], scale[source[i]], out[nodes[i] // nx, nodes[i] % nx]) for i in mine]
 
-    def run(part: list) -> None:
-        for psf, factor, into in part:
-            np.multiply(psf, factor, out=into)
-
-    workers = max(1, min(len(jobs), len(os.sched_getaffinity(0))))
-    with ThreadPoolExecutor(workers) as pool:
-        list(pool.map(run, [jobs[k::workers] for k in range(workers)]))
+    S.in_threads(lambda job: np.multiply(job[0], job[1], out=job[2]), jobs)
     return energy
 
 
