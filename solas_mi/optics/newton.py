@@ -1,5 +1,5 @@
 """Newton iteration of a bundle's entrance coordinates onto a target (`aiming.aim`), each step tracing only
-the rays still moving: a ray leaves the iteration when its residual is below _TOL or has stopped falling,
+the rays still moving: a ray leaves the iteration when its residual is below TOL or has stopped falling,
 and only its own state decides when (its Jacobian refreshed on its own, its step halved on its own), so a
 ray's solution does not depend on the other rays of its batch. (Measured on the double Gauss lens, whose
 vignetted rims hold a few rays that move for tens of steps: 175 traces of every ray of a 128² grid, where

@@ -97,8 +97,8 @@ def sphere_target(lens: Lens, b: Bundle, chief):
 def grid_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chief, alpha: np.ndarray,
               beta: np.ndarray, affine: np.ndarray):
     """Every node of the (α, β) grids aimed at its point of the reference sphere, coarse to fine
-    (`aim_levels`): the finest level's bundle, its rays traced at the solution, their entrance
-    coordinates and whether each converged and met the sphere (Dr.Jit arrays, [field, β, α] order)."""
+    (`aim_levels`): the finest level's bundle, its rays' entrance coordinates, whether each converged, and
+    what `_kept` keeps of them at the solution (Dr.Jit arrays, [field, β, α] order)."""
     nf, samples = alpha.shape
     levels = aim_levels(samples)
     solved = None
