@@ -118,10 +118,14 @@ def main() -> None:
     print(f"\nThe batch of {args.frames} frames (`batch degrade` with the camera; median of {args.repeats}); the stages "
           f"allow w workers min(w / seconds, {cores} cores / CPU seconds) frames/s:\n")
     print("| workers | frames/s | the stages allow | allowed / batch | s per item in a worker |\n|---|---|---|---|---|")
+    rates = {}
     for workers in (1, 2):
-        rate, item = batch(images, grid_path, camera, workers, args.repeats)
+        rates[workers], item = batch(images, grid_path, camera, workers, args.repeats)
         allowed = min(workers / wall, cores / cpu)
-        print(f"| {workers} | {rate:.3f} | {allowed:.3f} | {allowed / rate:.2f} (target ≤ {TARGET}) | {item:.2f} |")
+        print(f"| {workers} | {rates[workers]:.3f} | {allowed:.3f} | {allowed / rates[workers]:.2f} (target ≤ {TARGET}) "
+              f"| {item:.2f} |", flush=True)
+    print()  # the figures after the table, not between its rows
+    for workers, rate in rates.items():
         figure(f"dataset_batch_{workers}_workers", rate, "frames/s")
     figure("dataset_stage_sum", wall, "s")
 
