@@ -8,6 +8,7 @@ from solas_mi.optics import pupil as P
 from solas_mi.psf import fraunhofer as F
 from solas_mi.psf import psf_grid
 
+
 def estimated(monkeypatch, samples: int) -> list[int]:
     """The number of PSFs each pass of the error estimate (pupils of `coarse_samples(samples)`) estimates,
     recorded as a grid runs."""
