@@ -149,7 +149,8 @@ def compare(recorded_text: str, stdout: str, idle: bool) -> tuple[list[str], lis
     for key in sorted(set(old) & set(new)):
         (a, unit), (b, _) = old[key], new[key]
         change = worse(a, b, unit)
-        line = f"against the run of {when}: {key} {a:.4g} → {b:.4g} {unit} ({100 * change:+.0f} % worse)"
+        line = (f"against the run of {when}: {key} {a:.4g} → {b:.4g} {unit} "
+                f"({100 * abs(change):.0f} % {'worse' if change > 0 else 'better'})")
         if not both_idle:
             line += ", not judged (a run on a busy machine)"
         elif change > REGRESSION:

@@ -33,11 +33,13 @@ def test_a_run_on_a_busy_machine_is_marked():
 def test_a_regression_between_idle_runs_is_named():
     recorded = results("figure: grid_s = 0.40 s\n\nfigure: frames = 2.0 frames/s")
     lines, regressions = run_all.compare(recorded, "figure: grid_s = 0.50 s\nfigure: frames = 1.9 frames/s\n", True)
-    assert len(lines) == 2 and len(regressions) == 1 and "grid_s" in regressions[0] and "+25 %" in regressions[0]
+    assert len(lines) == 2 and len(regressions) == 1 and "grid_s" in regressions[0] and "25 % worse" in regressions[0]
     lines, regressions = run_all.compare(recorded, "figure: grid_s = 0.46 s\n", True)  # within 20 %
-    assert regressions == [] and "+15 %" in lines[0]
+    assert regressions == [] and "15 % worse" in lines[0]
     lines, regressions = run_all.compare(recorded, "figure: frames = 1.5 frames/s\n", True)  # a rate: higher is better
-    assert len(regressions) == 1 and "+33 %" in regressions[0]
+    assert len(regressions) == 1 and "33 % worse" in regressions[0]
+    lines, regressions = run_all.compare(recorded, "figure: grid_s = 0.20 s\n", True)  # faster: said so
+    assert regressions == [] and "50 % better" in lines[0]
 
 
 def test_a_busy_run_is_compared_but_not_judged():
