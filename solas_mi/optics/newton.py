@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from . import tracer as T
+from . import tracer
 
-dr = T.dr
+dr = tracer.dr
 HALVINGS = 6  # a Newton step that loses its ray is halved up to this many times
 FD_STEP = 1e-5  # mm, finite-difference step in entrance coordinates
 TOL = 1e-13  # convergence of aimed quantities (mm at the stop, direction cosines on the sphere)
@@ -35,7 +35,8 @@ def put(dense, values, rays):
     return dense
 
 
-def solve(bundle, target, ex: T.F, ey: T.F, goal_x: T.F, goal_y: T.F, max_iter: int, jacobian, keep, unknown=None):
+def solve(bundle, target, ex: tracer.F, ey: tracer.F, goal_x: tracer.F, goal_y: tracer.F, max_iter: int, jacobian, keep,
+          unknown=None):
     """The iteration of `aiming.aim_keeping`: (ex, ey, residual x, residual y, passed, kept)."""
     def residual(ax, ay, rays):
         tr = bundle.trace(ax, ay, rays=rays)
@@ -47,7 +48,7 @@ def solve(bundle, target, ex: T.F, ey: T.F, goal_x: T.F, goal_y: T.F, max_iter: 
     j = list(fd_jacobian(residual, ex, ey, rx, ry, None) if jacobian is None else jacobian)
     if jacobian is not None and unknown is not None:  # where the given Jacobian is not known
         j = _refresh(residual, j, ex, ey, rx, ry, unknown)
-    best, stalled = dr.full(T.F, np.inf, dr.width(rx)), dr.zeros(T.UInt32, dr.width(rx))
+    best, stalled = dr.full(tracer.F, np.inf, dr.width(rx)), dr.zeros(tracer.UInt32, dr.width(rx))
     rays, kept = None, None
     for _ in range(max_iter):
         step = _step([at(v, rays) for v in j], at(rx, rays), at(ry, rays))
@@ -71,9 +72,9 @@ def solve(bundle, target, ex: T.F, ey: T.F, goal_x: T.F, goal_y: T.F, max_iter: 
     return ex, ey, rx, ry, ok, kept
 
 
-def _within(rays, index: T.UInt32) -> T.UInt32:
+def _within(rays, index: tracer.UInt32) -> tracer.UInt32:
     """The rays at positions `index` of the subset `rays` (None: all)."""
-    return index if rays is None else dr.gather(T.UInt32, rays, index)
+    return index if rays is None else dr.gather(tracer.UInt32, rays, index)
 
 
 def _step(j, rx, ry):
@@ -94,7 +95,7 @@ def _trial(residual, keep, ex, ey, step, good, rays):
     dr.eval(*out, lost)
     if dr.any(lost):
         index = dr.compress(lost)  # positions (in `rays`) of the lost rays, with their steps and starts
-        sx, sy, bx, by = (dr.gather(T.F, v, index) for v in (step_x, step_y, ex, ey))
+        sx, sy, bx, by = (dr.gather(tracer.F, v, index) for v in (step_x, step_y, ex, ey))
         for _ in range(HALVINGS):
             sx, sy = 0.5 * sx, 0.5 * sy
             sub = _within(rays, index)
@@ -105,7 +106,7 @@ def _trial(residual, keep, ex, ey, step, good, rays):
             if dr.all(lok):
                 break
             still = dr.compress(~lok)
-            index, sx, sy, bx, by = dr.gather(T.UInt32, index, still), *(dr.gather(T.F, v, still)
+            index, sx, sy, bx, by = dr.gather(tracer.UInt32, index, still), *(dr.gather(tracer.F, v, still)
                                                                           for v in (sx, sy, bx, by))
     return (*out[:5], tuple(out[5:]))
 

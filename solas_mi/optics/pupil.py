@@ -15,15 +15,15 @@ from dataclasses import dataclass, fields as dataclass_fields
 import numpy as np
 
 from ..errors import SolasError
-from . import tracer as T
+from . import tracer
 from .lens import Lens
-from . import pupil_grid as G
+from . import pupil_grid
 from .aiming import Bundle, chief_aim, continued_aim, nearest_passing, stop_target, aim
 from .paraxial import paraxial, pupil_distance
 
 __all__ = ["Bundle", "aim", "ChiefRays", "chief_rays", "widest_field", "stop_rim", "PupilFunction", "pupil_function",
            "entrance_power", "nearest_passing", "Pupils"]
-dr = T.dr
+dr = tracer.dr
 RIM_RAYS = 32
 RIM_BISECTIONS = 30  # a rim ray moved inside the stop's rim: its radius to 1e-9 of the rim's
 RIM_STEPS = 8  # lenses of polar fields: steps of the rim aim from the stop centre out to the rim
@@ -53,21 +53,22 @@ def chief_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> 
     wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(field_deg),))
     b = Bundle(lens, field_deg, wavelength_nm, 1)
     e0, goal = chief_aim(lens, b)
-    ex, ey, tr, conv = aim(b, stop_target, T.array(e0[:, 0]), T.array(e0[:, 1]), T.array(goal[:, 0]), T.array(goal[:, 1]))
-    missed = np.flatnonzero(~T.to_numpy(conv)[0])
+    ex, ey, tr, conv = aim(b, stop_target, tracer.array(e0[:, 0]), tracer.array(e0[:, 1]),
+                           tracer.array(goal[:, 0]), tracer.array(goal[:, 1]))
+    missed = np.flatnonzero(~tracer.to_numpy(conv)[0])
     if len(missed):  # the aim at the stop centre can miss at the very edge of the fields it reaches (the Cooke
         for f in missed:  # triplet at 31.842°): the passing ray nearest it, as where none reaches it; refused
             found = nearest_passing(lens, field_deg[f], wavelength_nm[f])  # only where no ray passes the stop
             if found is not None:
                 e0[f], goal[f] = found
-        ex, ey, tr, conv = aim(b, stop_target, T.array(e0[:, 0]), T.array(e0[:, 1]), T.array(goal[:, 0]),
-                               T.array(goal[:, 1]))
-    px, py, _ = T.to_plane(tr, lens.image_z)
+        ex, ey, tr, conv = aim(b, stop_target, tracer.array(e0[:, 0]), tracer.array(e0[:, 1]), tracer.array(goal[:, 0]),
+                               tracer.array(goal[:, 1]))
+    px, py, _ = tracer.to_plane(tr, lens.image_z)
     distinct, which = np.unique(wavelength_nm, return_inverse=True)  # paraxial data once per wavelength
     xp_z = np.array([paraxial(lens, w).exit_pupil_z_mm for w in distinct])[which.ravel()]
-    qx, qy, qopl = T.to_plane(tr, b.per_ray(xp_z))
+    qx, qy, qopl = tracer.to_plane(tr, b.per_ray(xp_z))
     radius = dr.sqrt((qx - px) ** 2 + (qy - py) ** 2 + (b.per_ray(xp_z) - lens.image_z) ** 2)
-    ex, ey, px, py, radius, qopl, sa, sb, n_image, conv, clipped = T.to_numpy(
+    ex, ey, px, py, radius, qopl, sa, sb, n_image, conv, clipped = tracer.to_numpy(
         ex, ey, px, py, radius, qopl, (qx - px) / radius, (qy - py) / radius, tr.n_image, conv, tr.clipped_by)
     if not conv.all():
         bad = field_deg[~conv][0]
@@ -97,7 +98,7 @@ def widest_field(lens: Lens, wavelength_nm: float, samples: int = 45) -> float:
 
 
 def stop_rim(rim: Bundle, chief: ChiefRays, accept=None, vignetting: np.ndarray | None = None,
-             ) -> tuple[np.ndarray, np.ndarray, T.Traced, np.ndarray]:
+             ) -> tuple[np.ndarray, np.ndarray, tracer.Traced, np.ndarray]:
     """Rays aimed at RIM_RAYS points of the stop's rim for each field of the `rim` bundle: entrance
     coordinates (n, RIM_RAYS) each, the trace, and which passed. Where the ray to the rim fails (total
     internal reflection, a surface missed, or `accept(traced)` false) the pupil's edge lies inside the
@@ -115,14 +116,14 @@ def stop_rim(rim: Bundle, chief: ChiefRays, accept=None, vignetting: np.ndarray 
     ratio = entrance_pupil_footprint(lens) / r_stop
 
     def at(scale: np.ndarray):
-        gx, gy = T.array(r_stop * scale * cos), T.array(r_stop * scale * sin)
+        gx, gy = tracer.array(r_stop * scale * cos), tracer.array(r_stop * scale * sin)
         ex, ey = rim.per_ray(chief.entrance[:, 0]) + gx * ratio, rim.per_ray(chief.entrance[:, 1]) + gy * ratio
         if lens.field_type.sideways:  # wide fields: the pupil is squeezed and tilted; grow the aim out from the chief ray
             ex, ey = rim.per_ray(chief.entrance[:, 0]), rim.per_ray(chief.entrance[:, 1])
             for k in range(1, RIM_STEPS):
                 ex, ey, _, _ = aim(rim, stop_target, ex, ey, gx * (k / RIM_STEPS), gy * (k / RIM_STEPS))
         ex, ey, tr, ok = aim(rim, stop_target, ex, ey, gx, gy)
-        return ex, ey, tr, T.to_numpy(ok & accept(tr) if accept is not None else ok)[0]
+        return ex, ey, tr, tracer.to_numpy(ok & accept(tr) if accept is not None else ok)[0]
 
     ex, ey, tr, ok = at(np.ones(len(phi)))
     if not ok.all():
@@ -133,7 +134,7 @@ def stop_rim(rim: Bundle, chief: ChiefRays, accept=None, vignetting: np.ndarray 
             lo, hi = np.where(passed, mid, lo), np.where(passed, hi, mid)
         ex, ey, tr, ok = at(lo)
     shape = (rim.n_fields, RIM_RAYS)
-    ex, ey = T.to_numpy(ex, ey)
+    ex, ey = tracer.to_numpy(ex, ey)
     return ex.reshape(shape), ey.reshape(shape), tr, ok.reshape(shape)
 
 
@@ -188,7 +189,7 @@ def entrance_power(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray,
     density = power_densities(lens, wavelength_nm).reshape((-1,) + (1,) * (np.ndim(ex) - 1))
     if lens.at_infinity:
         return np.broadcast_to(density, np.shape(ex))
-    pts = T.object_points(lens, field_deg).reshape((-1, 2) + (1,) * (np.ndim(ex) - 1))
+    pts = tracer.object_points(lens, field_deg).reshape((-1, 2) + (1,) * (np.ndim(ex) - 1))
     return density * _obliquity(lens, ex - pts[:, 0], ey - pts[:, 1], np.sqrt)
 
 
@@ -244,19 +245,19 @@ class Pupils:
         lens, fields, waves, chief, rim = self.lens, self.field_deg, self.wavelength_nm, self.chief, self.rim
         if index is not None:
             fields, waves, chief, rim = fields[index], waves[index], chief.subset(index), tuple(r[index] for r in rim)
-        alpha, beta = G.grid_axes(rim, samples)
-        g, ex, ey, ok, kept = G.grid_rays(lens, fields, waves, chief, alpha, beta, G.affine_map(rim))
+        alpha, beta = pupil_grid.grid_axes(rim, samples)
+        g, ex, ey, ok, kept = pupil_grid.grid_rays(lens, fields, waves, chief, alpha, beta, pupil_grid.affine_map(rim))
         density = g.per_ray(power_densities(lens, waves))
         if lens.at_infinity:
             def power(ex, ey):
                 return density
         else:
-            pts = T.object_points(lens, fields)
+            pts = tracer.object_points(lens, fields)
 
             def power(ex, ey):
                 return density * _obliquity(lens, ex - g.per_ray(pts[:, 0]), ey - g.per_ray(pts[:, 1]), dr.sqrt)
         return PupilFunction(alpha, beta, chief=chief, wavelength_nm=waves,
-                             **G.cells(lens, g, ex, ey, ok, kept, alpha, beta, power))
+                             **pupil_grid.cells(lens, g, ex, ey, ok, kept, alpha, beta, power))
 
 
 def _sphere_rim(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chief: ChiefRays):
@@ -264,9 +265,9 @@ def _sphere_rim(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, ch
     each, (α, β) relative to the chief ray, and which rim rays passed; SolasError for a field none passes."""
     nf = len(field_deg)
     rim = Bundle(lens, field_deg, wavelength_nm, RIM_RAYS)
-    rim_target = G.sphere_target(lens, rim, chief)
+    rim_target = pupil_grid.sphere_target(lens, rim, chief)
     rex, rey, rtr, rok = stop_rim(rim, chief, accept=lambda tr: rim_target(tr)[2])
-    ra, rb = (a.reshape(nf, RIM_RAYS) for a in T.to_numpy(*rim_target(rtr)[:2]))
+    ra, rb = (a.reshape(nf, RIM_RAYS) for a in tracer.to_numpy(*rim_target(rtr)[:2]))
     if not rok.any(axis=1).all():
         bad = field_deg[~rok.any(axis=1)][0]
         raise SolasError(f"no real ray reaches the stop's rim for field ({bad[0]:g}, {bad[1]:g}) deg; "

@@ -20,11 +20,11 @@ import math
 import numpy as np
 
 from ..blas import single_threaded_blas
-from . import tracer as T
+from . import tracer
 from .aiming import Bundle, aim_keeping
 from .lens import Lens
 
-dr = T.dr
+dr = tracer.dr
 LEVEL_STEP = 4  # a coarser level has about a quarter of the nodes per side ...
 COARSEST = 17  # ... down to at most this many, aimed from the rim's affine map
 
@@ -86,9 +86,9 @@ def sphere_target(lens: Lens, b: Bundle, chief):
     radius = b.per_ray(chief.sphere_radius)
     cz = lens.image_z
 
-    def target(tr: T.Traced, rays=None):
-        sx, sy, r = (v if rays is None else dr.gather(T.F, v, rays) for v in (cx, cy, radius))
-        x, y, z, opl, hit = T.to_sphere(tr, sx, sy, cz, r)
+    def target(tr: tracer.Traced, rays=None):
+        sx, sy, r = (v if rays is None else dr.gather(tracer.F, v, rays) for v in (cx, cy, radius))
+        x, y, _z, _opl, hit = tracer.to_sphere(tr, sx, sy, cz, r)
         return (x - sx) / r, (y - sy) / r, tr.ok & hit
 
     return target
@@ -106,18 +106,18 @@ def grid_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chie
         a, b = (axis if m == samples else axis[:, :1] + (axis[:, -1:] - axis[:, :1]) * np.linspace(0.0, 1.0, m)
                 for axis in (alpha, beta))
         guess = [np.add(affine[:, 0, c, None, None] + affine[:, 1, c, None, None] * a[:, None, :],
-                        affine[:, 2, c, None, None] * b[:, :, None], out=T.aligned((nf, m, m), np.float64))
+                        affine[:, 2, c, None, None] * b[:, :, None], out=tracer.aligned((nf, m, m), np.float64))
                  for c in (0, 1)]  # the rim's affine map
         jacobian, unknown = (None, None) if solved is None else _next_level(*solved, m, guess)
         g = Bundle(lens, field_deg, wavelength_nm, m * m)
-        ray = dr.arange(T.UInt32, nf * m * m)  # the goals: each ray's (α, β) on the sphere, gathered per ray
-        goal_a = T.gather((a + chief.sphere_point[:, :1]).ravel(), g.index * m + ray % m)
-        goal_b = T.gather((b + chief.sphere_point[:, 1:]).ravel(), g.index * m + (ray // m) % m)
+        ray = dr.arange(tracer.UInt32, nf * m * m)  # the goals: each ray's (α, β) on the sphere, gathered per ray
+        goal_a = tracer.gather((a + chief.sphere_point[:, :1]).ravel(), g.index * m + ray % m)
+        goal_b = tracer.gather((b + chief.sphere_point[:, 1:]).ravel(), g.index * m + (ray // m) % m)
         keep = _kept(lens, g, chief) if m == samples else None
-        ex, ey, tr, ok, kept = aim_keeping(g, sphere_target(lens, g, chief), T.array(guess[0]),
-                                           T.array(guess[1]), goal_a, goal_b, jacobian=jacobian, keep=keep,
+        ex, ey, tr, ok, kept = aim_keeping(g, sphere_target(lens, g, chief), tracer.array(guess[0]),
+                                           tracer.array(guess[1]), goal_a, goal_b, jacobian=jacobian, keep=keep,
                                            unknown=unknown)
-        solved = [s.reshape(nf, m, m) for s in T.to_numpy(ex, ey, ok)], a, b
+        solved = [s.reshape(nf, m, m) for s in tracer.to_numpy(ex, ey, ok)], a, b
     return g, ex, ey, ok, kept
 
 
@@ -128,9 +128,9 @@ def _kept(lens: Lens, g: Bundle, chief):
     cx, cy = g.per_ray(chief.image_xy[:, 0]), g.per_ray(chief.image_xy[:, 1])
     radius, opl0 = g.per_ray(chief.sphere_radius), g.per_ray(chief.opl)
 
-    def keep(tr: T.Traced, rays=None):
-        sx, sy, r, o = (v if rays is None else dr.gather(T.F, v, rays) for v in (cx, cy, radius, opl0))
-        _, _, _, opl, hit = T.to_sphere(tr, sx, sy, lens.image_z, r)
+    def keep(tr: tracer.Traced, rays=None):
+        sx, sy, r, o = (v if rays is None else dr.gather(tracer.F, v, rays) for v in (cx, cy, radius, opl0))
+        _, _, _, opl, hit = tracer.to_sphere(tr, sx, sy, lens.image_z, r)
         return opl - o, hit, tr.clipped_by, tr.stop_x, tr.stop_y
 
     return keep
@@ -156,40 +156,41 @@ def _next_level(solved: list[np.ndarray], a: np.ndarray, b: np.ndarray, m: int, 
             else:
                 np.copyto(into, np.matmul(w, right[..., :m]), where=~reach)
             right32 = right.astype(np.float32)
-            slopes += [np.matmul(weights, right32[..., part], out=T.aligned((nf, m, m), np.float32))
+            slopes += [np.matmul(weights, right32[..., part], out=tracer.aligned((nf, m, m), np.float32))
                        for weights, part in ((w32, slice(m, None)), (dw32, slice(None, m)))]  # per coarse step in α, β
-    unknown = None if reach is None else T.array(np.flatnonzero(reach), T.UInt32)
-    index = dr.arange(T.UInt32, nf * m * m) // (m * m)
-    per_a, per_b = (T.gather((mc - 1) / (x[:, -1] - x[:, 0]), index) for x in (a, b))
-    f32 = dr.float32_array_t(T.F)
-    ex_a, ex_b, ey_a, ey_b = (T.F(T.array(v, f32)) * per for v, per in zip(slopes, (per_a, per_b, per_a, per_b)))
+    unknown = None if reach is None else tracer.array(np.flatnonzero(reach), tracer.UInt32)
+    index = dr.arange(tracer.UInt32, nf * m * m) // (m * m)
+    per_a, per_b = (tracer.gather((mc - 1) / (x[:, -1] - x[:, 0]), index) for x in (a, b))
+    f32 = dr.float32_array_t(tracer.F)
+    ex_a, ex_b, ey_a, ey_b = (tracer.F(tracer.array(v, f32)) * per
+                              for v, per in zip(slopes, (per_a, per_b, per_a, per_b)))
     det = ex_a * ey_b - ex_b * ey_a
     return (ey_b / det, -ex_b / det, -ey_a / det, ex_a / det), unknown
 
 
-def cells(lens: Lens, g: Bundle, ex: T.F, ey: T.F, ok: T.Bool, kept: tuple, alpha: np.ndarray, beta: np.ndarray,
-          power_density) -> dict:
+def cells(lens: Lens, g: Bundle, ex: tracer.F, ey: tracer.F, ok: tracer.Bool, kept: tuple, alpha: np.ndarray,
+          beta: np.ndarray, power_density) -> dict:
     """What each cell of the grids carries, from the rays of `grid_rays` (`kept`: their `_kept` values):
     NumPy arrays (n, N, N) power (per dα dβ, a fraction of the on-axis entrance-pupil power), coverage,
     opd_mm and the complex pupil (complex64); per field phase_step (rad, the largest between neighbouring
     cells inside the pupil) and vignetted_by (1-based surfaces that block part of the pupil).
     `power_density(ex, ey)` is the entrance power per mm² of the bundle's rays (`pupil.entrance_power`)."""
     nf, n = alpha.shape
-    idx = dr.arange(T.UInt32, nf * n * n)
+    idx = dr.arange(tracer.UInt32, nf * n * n)
     power, coverage, opd, blocked = _weights(lens, g, ex, ey, ok, kept, alpha, beta, power_density, idx)
     phase = g.per_ray(2.0 * math.pi / (g.bundle_wavelengths * 1e-6)) * opd
-    inside, step = coverage > 0, dr.zeros(T.F, nf * n * n)
+    inside, step = coverage > 0, dr.zeros(tracer.F, nf * n * n)
     for along, stride in ((idx % n, 1), ((idx // n) % n, n)):
         nxt = dr.minimum(idx + stride, nf * n * n - 1)
-        both = (along < n - 1) & inside & (dr.gather(T.F, coverage, nxt) > 0)
-        step = dr.maximum(step, dr.select(both, dr.abs(dr.gather(T.F, phase, nxt) - phase), 0.0))
+        both = (along < n - 1) & inside & (dr.gather(tracer.F, coverage, nxt) > 0)
+        step = dr.maximum(step, dr.select(both, dr.abs(dr.gather(tracer.F, phase, nxt) - phase), 0.0))
     amplitude = dr.sqrt(power) * coverage
     sin, cos = dr.sincos(phase)
-    f32 = dr.float32_array_t(T.F)
+    f32 = dr.float32_array_t(tracer.F)
     real, imag = f32(amplitude * cos), f32(amplitude * sin)
     steps = dr.block_reduce(dr.ReduceOp.Max, step, n * n)
     surfaces = len(lens.surfaces) + 1  # per field, the surfaces that block rays reaching the stop's opening
-    seen = dr.zeros(T.UInt32, nf * surfaces)
+    seen = dr.zeros(tracer.UInt32, nf * surfaces)
     dr.scatter(seen, 1, g.index * surfaces + blocked, blocked != 0)
     dr.eval(real, imag, steps, seen)
     shape = (nf, n, n)
@@ -202,8 +203,8 @@ def cells(lens: Lens, g: Bundle, ex: T.F, ey: T.F, ok: T.Bool, kept: tuple, alph
     }
 
 
-def _weights(lens: Lens, g: Bundle, ex: T.F, ey: T.F, ok: T.Bool, kept: tuple, alpha: np.ndarray, beta: np.ndarray,
-             power_density, idx: T.UInt32):
+def _weights(lens: Lens, g: Bundle, ex: tracer.F, ey: tracer.F, ok: tracer.Bool, kept: tuple, alpha: np.ndarray,
+             beta: np.ndarray, power_density, idx: tracer.UInt32):
     """Per cell (`cells`): power, coverage, optical path difference (0 outside the pupil) and the surface
     that blocks a ray reaching the stop's opening (0: none); evaluated."""
     n = alpha.shape[1]
@@ -211,15 +212,16 @@ def _weights(lens: Lens, g: Bundle, ex: T.F, ey: T.F, ok: T.Bool, kept: tuple, a
     ok = ok & hit
     col, row = idx % n, (idx // n) % n
 
-    def gradient(u: T.F, along: T.UInt32, stride: int) -> T.F:
+    def gradient(u: tracer.F, along: tracer.UInt32, stride: int) -> tracer.F:
         """∂u per grid step along rows (stride 1) or columns (stride n), as numpy.gradient takes it."""
         ahead, behind = dr.minimum(along + 1, n - 1), dr.select(along > 0, along - 1, 0)
         at = idx - along * stride
-        return (dr.gather(T.F, u, at + ahead * stride) - dr.gather(T.F, u, at + behind * stride)) / T.F(ahead - behind)
+        return ((dr.gather(tracer.F, u, at + ahead * stride) - dr.gather(tracer.F, u, at + behind * stride))
+                / tracer.F(ahead - behind))
 
     da, db = g.per_ray(alpha[:, 1] - alpha[:, 0]), g.per_ray(beta[:, 1] - beta[:, 0])
 
-    def jacobian(u: T.F, w: T.F) -> T.F:
+    def jacobian(u: tracer.F, w: tracer.F) -> tracer.F:
         """|∂(u, w)/∂(α, β)|."""
         du_da, du_db, dw_da, dw_db = gradient(u, col, 1), gradient(u, row, n), gradient(w, col, 1), gradient(w, row, n)
         return dr.abs(du_da * dw_db - du_db * dw_da) / (da * db)

@@ -16,12 +16,12 @@ import math
 import numpy as np
 
 from ..blas import single_threaded_blas
-from ..optics import tracer as T
+from ..optics import tracer
 from ..optics.pupil import PupilFunction, Pupils
 from .base import Computed, centring_warnings, grid_offsets, in_threads, window_centres_um
 from .geometric import entrance_grid_hits, geometric, light_offsets_um
 
-dr = T.dr
+dr = tracer.dr
 
 
 def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int, *,
@@ -227,11 +227,12 @@ def dft_kernels(k: np.ndarray, axis: np.ndarray, offsets: np.ndarray) -> np.ndar
     """exp(−i k_f a_fj o_fm) as complex64 (n, len(a), len(o)): one Dr.Jit kernel, the phase in float64."""
     n, na = axis.shape
     no = offsets.shape[1]
-    e = dr.arange(T.UInt32, n * na * no)
+    e = dr.arange(tracer.UInt32, n * na * no)
     f = e // (na * no)
-    x = T.gather(k, f) * T.gather(axis.ravel(), f * na + (e // no) % na) * T.gather(offsets.ravel(), f * no + e % no)
+    x = (tracer.gather(k, f) * tracer.gather(axis.ravel(), f * na + (e // no) % na)
+         * tracer.gather(offsets.ravel(), f * no + e % no))
     sin, cos = dr.sincos(x)
-    f32 = dr.float32_array_t(T.F)
+    f32 = dr.float32_array_t(tracer.F)
     real, imag = f32(cos), f32(-sin)
     dr.eval(real, imag)
     out = np.empty((n, na, no), dtype=np.complex64)

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..optics.lens import Lens
-from . import base as S
+from . import base
 from .methods import compute
 from .spec import GridSpec
 
@@ -116,11 +116,11 @@ def place(psfs: np.ndarray, transmission: np.ndarray, nodes: np.ndarray, source:
         if normalization != "none":
             scale[used] = sums[used] if normalization == "sum" else turned[used].max(axis=(1, 2))
         scale = (1.0 / np.where(scale > 0, scale, 1.0)).astype(np.float32)
-        energy[mine] = S.energy_of_sum(sums[source[mine]], pitch_um, transmission[source[mine]])
+        energy[mine] = base.energy_of_sum(sums[source[mine]], pitch_um, transmission[source[mine]])
         turned = _turned(single, *key)[:, :size, :size]
         jobs += [(turned[source[i]], scale[source[i]], out[nodes[i] // nx, nodes[i] % nx]) for i in mine]
 
-    S.in_threads(lambda job: np.multiply(job[0], job[1], out=job[2]), jobs)
+    base.in_threads(lambda job: np.multiply(job[0], job[1], out=job[2]), jobs)
     return energy
 
 

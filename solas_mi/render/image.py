@@ -53,18 +53,51 @@ def fisheye_camera(lens, sensor: tuple[int, int], fov_deg: float | None, pitch_u
     return Camera(cols, rows, float(pitch_um), paraxial(lens).efl_mm, fov, lens.primary_wavelength, "sensor")
 
 
+# long: the public API's numpydoc docstring is half of it
 def render_image(lens, image: str | np.ndarray, spec: RenderSpec | None = None, *, progress=None,
                  **settings) -> Render:
-    """Render an input image (a path, or a linear H×W[×3] array) through `lens` as `spec` says
-    (`render.spec.RenderSpec`, default its defaults, with `settings` — its field names, e.g.
-    sensor=(rows, cols), spp=16 — changed): onto a sensor of (rows, columns) pixels of `pitch_um` µm,
-    `spp` samples per pixel. The image's width spans ±`fov_deg` degrees (default: ±lens.field_deg)
-    and the sensor's width the same field unless `pitch_um` is given (`solas_mi.optics.camera`).
-    `response`, `boundary` and `fresnel` are the plugins' parameters; `rings` per cap mesh. `mapping`
-    is the input image's projection (plugins/image_object.py): for a lens of polar fields (a fisheye)
-    the image is an environment image spanning ±`fov_deg` in that mapping, the sensor is just pixels
-    of `pitch_um` (default: the sensor's width spans the lens's image circle) and the distortion is
-    the lens's own. `progress(done, total)` is told the samples per pixel done."""
+    """Render an input image through a lens in Mitsuba, the lens as geometry.
+
+    The image's width spans ±``fov_deg`` degrees and, unless ``pitch_um`` is given, so does the
+    sensor's (`solas_mi.optics.camera`). For a lens of polar fields (a fisheye) the image is an
+    environment image spanning ±``fov_deg`` in its ``mapping`` (`plugins/image_object.py`), the sensor is
+    just pixels and the distortion is the lens's own ([rendering through the lens](../details/render.md)).
+
+    Parameters
+    ----------
+    lens : Lens
+        The lens.
+    image : str or numpy.ndarray
+        An image file (PNG/JPEG: sRGB; EXR: linear), or a linear H×W[×3] array.
+    spec : RenderSpec, optional
+        The render's settings (`render.spec.RenderSpec`: sensor, pitch, field, response, boundary,
+        Fresnel, rings, mapping, spp, variant, seed); default: its defaults.
+    progress : callable, optional
+        Called as ``progress(done, total)`` with the samples per pixel done.
+    **settings
+        Fields of `RenderSpec` to change, e.g. ``sensor=(rows, columns)``, ``spp=16``.
+
+    Returns
+    -------
+    Render
+        The image (irradiance in units of the ideal camera's) and its metadata.
+
+    Raises
+    ------
+    SolasError
+        For a focus distance or labels (a scene file's settings), a rectilinear image spanning ±90° or
+        more, a response the lens or variant cannot take, or an image that cannot be read.
+
+    Examples
+    --------
+    >>> from solas_mi import Lens
+    >>> from solas_mi.render import render_image
+    >>> result = render_image(Lens.load("solas-doublet"), "scenes/images/rocket.png", sensor=(24, 32), spp=4)
+    >>> result.image.shape, result.channels
+    ((24, 32, 3), ('R', 'G', 'B'))
+    >>> result.write("rocket.exr")
+    'rocket.png'
+    """
     spec = (spec or RenderSpec()).replace(**settings)
     if spec.focus_distance is not None:
         raise SolasError("a focus distance sets the lens camera of a scene file; an image lies on the lens's object "
