@@ -19,8 +19,8 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_convolution import test_image  # noqa: E402
-from figures import figure  # noqa: E402
+from bench_convolution import test_image
+from figures import figure
 
 ROOT = Path(__file__).resolve().parent.parent
 WORK = ROOT / "out" / "bench" / "dataset"

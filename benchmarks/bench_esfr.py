@@ -9,17 +9,17 @@ import math
 import statistics
 import sys
 import time
+from collections.abc import Callable
 from pathlib import Path
-from typing import Callable
 
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from figures import figure  # noqa: E402
+from figures import figure
 
-from solas_mi.metrics.esfr import esfr  # noqa: E402
-from solas_mi.metrics.nssfr import natural_scene_sfr  # noqa: E402
-from solas_mi.metrics.targets import Square, slanted_edge, slanted_squares  # noqa: E402
+from solas_mi.metrics.esfr import esfr
+from solas_mi.metrics.nssfr import natural_scene_sfr
+from solas_mi.metrics.targets import Square, slanted_edge, slanted_squares
 
 
 def median_seconds(fn: Callable[[], object], runs: int) -> float:

@@ -21,14 +21,14 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from figures import figure  # noqa: E402
+from figures import figure
 
-from solas_mi import Lens  # noqa: E402
-from solas_mi.optics import pupil as P  # noqa: E402
-from solas_mi.psf import psf, psf_grid  # noqa: E402
-from solas_mi.psf.fraunhofer import fraunhofer  # noqa: E402
-from solas_mi.psf.methods import compute  # noqa: E402
-from solas_mi.psf.registry import DEFAULT_PUPIL_SAMPLES  # noqa: E402
+from solas_mi import Lens
+from solas_mi.optics import pupil as P
+from solas_mi.psf import psf, psf_grid
+from solas_mi.psf.fraunhofer import fraunhofer
+from solas_mi.psf.methods import compute
+from solas_mi.psf.registry import DEFAULT_PUPIL_SAMPLES
 
 FIELDS = np.array([[0.0, 0.0], [0.0, 2.0], [0.0, -2.0]] * 3)
 WAVELENGTHS = np.repeat([486.0, 531.0, 656.0], 3)

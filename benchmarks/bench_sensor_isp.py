@@ -18,8 +18,8 @@ import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_convolution import busy_seconds, test_image  # noqa: E402
-from figures import figure  # noqa: E402
+from bench_convolution import busy_seconds, test_image
+from figures import figure
 
 W, H = 1280, 960
 EXPOSURE_S = 2.5e-4  # the test image's values (0…1) read as W/m²: 2300–3100 photons per channel at 1 (2 µm pixels)

@@ -13,7 +13,8 @@ import numpy as np
 
 from . import tracer
 from .lens import Lens
-from .newton import TOL as _TOL, solve
+from .newton import TOL as _TOL
+from .newton import solve
 from .paraxial import paraxial, pupil_distance
 
 dr = tracer.dr

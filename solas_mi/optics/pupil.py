@@ -10,15 +10,15 @@ integral is an exact matrix DFT in (α, β). Lengths in mm.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields as dataclass_fields
+from dataclasses import dataclass
+from dataclasses import fields as dataclass_fields
 
 import numpy as np
 
 from ..errors import SolasError
-from . import tracer
+from . import pupil_grid, tracer
+from .aiming import Bundle, aim, chief_aim, continued_aim, nearest_passing, stop_target
 from .lens import Lens
-from . import pupil_grid
-from .aiming import Bundle, chief_aim, continued_aim, nearest_passing, stop_target, aim
 from .paraxial import paraxial, pupil_distance
 
 __all__ = ["Bundle", "aim", "ChiefRays", "chief_rays", "widest_field", "stop_rim", "PupilFunction", "pupil_function",
@@ -42,7 +42,7 @@ class ChiefRays:
     vignetted: np.ndarray  # (n,) bool: an aperture blocks the chief ray itself, or none reaches the stop centre
     off_centre: np.ndarray  # (n,) bool: no ray reaches the stop centre; the ray is the passing one nearest it
 
-    def subset(self, index: np.ndarray) -> "ChiefRays":
+    def subset(self, index: np.ndarray) -> ChiefRays:
         """The chief rays of the fields `index`."""
         return ChiefRays(**{f.name: getattr(self, f.name)[index] for f in dataclass_fields(self)})
 

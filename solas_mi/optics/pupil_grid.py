@@ -114,7 +114,7 @@ def grid_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chie
         goal_a = tracer.gather((a + chief.sphere_point[:, :1]).ravel(), g.index * m + ray % m)
         goal_b = tracer.gather((b + chief.sphere_point[:, 1:]).ravel(), g.index * m + (ray // m) % m)
         keep = _kept(lens, g, chief) if m == samples else None
-        ex, ey, tr, ok, kept = aim_keeping(g, sphere_target(lens, g, chief), tracer.array(guess[0]),
+        ex, ey, _traced, ok, kept = aim_keeping(g, sphere_target(lens, g, chief), tracer.array(guess[0]),
                                            tracer.array(guess[1]), goal_a, goal_b, jacobian=jacobian, keep=keep,
                                            unknown=unknown)
         solved = [s.reshape(nf, m, m) for s in tracer.to_numpy(ex, ey, ok)], a, b

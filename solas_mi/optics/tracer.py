@@ -24,8 +24,8 @@ from ..llvm import import_drjit
 from . import ideal
 from .fields import ANGLE
 from .lens import Lens
-from .sag import sag, sag_slope
 from .paraxial import ideal_conjugates, paraxial, pupil_distance
+from .sag import sag, sag_slope
 
 dr = import_drjit()
 from drjit.llvm import Bool, Float64, UInt32  # noqa: E402

@@ -23,8 +23,8 @@ import numpy as np
 from .base import check_wavelengths
 from .depth import at_distance
 from .grid import grid_fields
-from .nodes import batch_sizes, symmetry_classes
 from .methods import compute
+from .nodes import batch_sizes, symmetry_classes
 from .spec import GridSpec
 
 CALIBRATION_FIELDS = 8

@@ -3,8 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..optics import pupil
-from ..optics import tracer
+from ..optics import pupil, tracer
 from ..optics.lens import Lens
 from ..optics.pupil import ChiefRays
 from .base import Computed, centring_warnings, window_centres_um
