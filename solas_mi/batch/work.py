@@ -56,7 +56,7 @@ def _degrade(job: Job, grid: "PSFGrid", grid_path: str, settings: dict[str, Any]
         output, png = data_and_preview(job.output, job.png, inputs=[job.input, grid_path])
     output.parent.mkdir(parents=True, exist_ok=True)  # a folder tree's sub-folder
     degrade_file(job.input, grid, grid_path, output, png, spec, force=settings["force"], depth=job.params.get("depth"),
-                 extra_meta={"batch": {**settings["batch"], "seed": job.seed}})
+                 extra_meta={"batch": {**settings["batch"], "seed": job.seed}}, labels=job.params.get("labels"))
 
 
 def _shoot(job: Job, settings: dict[str, Any]) -> None:

@@ -15,6 +15,7 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 from ..errors import SolasError
+from ..labelkinds import KINDS, RULES, kinds_help, parse_label_files
 from ..optics.frame import FrameCamera
 from ..options import OptionSpec, option
 from ..psf.spec import GridSpec
@@ -35,9 +36,11 @@ class DegradeSpec(OptionSpec):
     values are already linear; `output_format` of a batch's items (one of
     `OUTPUT_FORMATS`); a batch's `depth_pattern` (each image's depth map beside it,
     e.g. "{stem}_depth.exr") and, with a depth map, the `occlusion` and `silhouette` rules
-    (`convolution.depth`); `frame`: the camera every input was taken with (`optics.frame.FrameCamera`;
-    None: the image spans the grid's x field range); `scale_lens`: that camera's pixel pitch (µm), the
-    batch's lens scaled to its focal length (`batch.degrade.scaled_lens`); `camera`: each degraded
+    (`convolution.depth`); a batch's `label_patterns` (each image's label files beside it, (kind,
+    pattern) pairs of `labelkinds.KINDS`, warped with it: `convolution.labels`); `frame`: the camera every
+    input was taken with (`optics.frame.FrameCamera`; None: the image spans the grid's x field range);
+    `scale_lens`: that camera's pixel pitch (µm), the batch's lens scaled to its focal length
+    (`batch.degrade.scaled_lens`); `camera`: each degraded
     frame of a batch through a sensor and image processor (`isp.camera.Camera`, checked by the batch:
     a later stage); `grid_spec`: the grid a batch computes from its lens (`psf.spec.GridSpec`; None:
     its defaults). One image (`degrade_file`) takes method, boundary, linear, output format, occlusion,
@@ -59,6 +62,12 @@ class DegradeSpec(OptionSpec):
     silhouette: str = option(f"{DEPTH_WITH}: nearest (default): a silhouette's pixels of mixed (antialiased) depth "
                              "take the nearest depth around them; as-given: the map's depths", SILHOUETTES[0],
                              choices=SILHOUETTES)
+    label_patterns: tuple[tuple[str, str], ...] | None = option(
+        lambda: f"each image's label files beside it, KIND=PATTERN[,KIND=PATTERN...] (KIND one of {kinds_help()}; "
+                "e.g. instance={stem}_instance.png): warped by the mapping the image goes "
+                "through, written beside its output (<name>.labels.exr, <name>.boxes.json); never taken as frames",
+        flag="--label-pattern", parse=lambda text: parse_label_files(text, "--label-pattern", pattern=True),
+        metavar="KIND={stem}_KIND.png", shown=lambda v: ",".join("=".join(p) for p in v))
     scale_lens: float | None = option("with --lens and --intrinsics/--fisheye: the camera's pixel pitch (µm); the "
                                       "lens scaled to its focal length fx x PIXEL_UM, f-number kept, stated in the "
                                       "metadata", parse=float, metavar="PIXEL_UM")
@@ -81,6 +90,9 @@ class DegradeSpec(OptionSpec):
                                          and pattern.lower().endswith(".exr")):
             raise SolasError(f"depth pattern {pattern!r} must be a file name with {{stem}} ending in .exr, "
                              "e.g. {stem}_depth.exr (beside each image)")
+        if self.label_patterns is not None:  # as `parse_label_files` reads them: (kind, pattern) pairs
+            object.__setattr__(self, "label_patterns", parse_label_files(self.label_patterns, "label patterns",
+                                                                         pattern=True))
         scale = self.scale_lens
         if scale is not None and (isinstance(scale, bool) or not isinstance(scale, (int, float))
                                   or not (math.isfinite(scale) and scale > 0)):
@@ -98,7 +110,8 @@ class DegradeSpec(OptionSpec):
                 + ([self.output_format] if self.output_format != "exr" else [])
                 + ([self.depth_pattern, self.occlusion, self.silhouette] if self.depth_pattern is not None else [])
                 + ([asdict(self.frame)] if self.frame is not None else [])
-                + ([self.camera.describe()] if self.camera is not None else []))
+                + ([self.camera.describe()] if self.camera is not None else [])
+                + ([dict(self.label_patterns)] if self.label_patterns else []))
 
     def header(self, lens_scale: dict | None = None) -> dict[str, Any]:
         """The options as a batch's manifest states them, with `lens_scale`, what scaling the lens did
@@ -106,4 +119,10 @@ class DegradeSpec(OptionSpec):
         return {"method": self.method, "boundary": self.boundary, "linear": self.linear, "format": self.output_format,
                 **({"frame_camera": asdict(self.frame)} if self.frame is not None else {}),
                 **({"lens_scale": lens_scale} if lens_scale is not None else {}),
-                **({"camera": self.camera.describe()} if self.camera is not None else {})}
+                **({"camera": self.camera.describe()} if self.camera is not None else {}),
+                **({"labels": self.labels_header()} if self.label_patterns else {})}
+
+    def labels_header(self) -> dict[str, dict[str, str]]:
+        """Each label kind a batch warps: its pattern and how it follows the mapping (`labelkinds.RULES`)."""
+        return {kind: {"pattern": pattern, "rule": KINDS[kind].extra["rule"], "how": RULES[KINDS[kind].extra["rule"]]}
+                for kind, pattern in self.label_patterns or ()}
