@@ -7,6 +7,8 @@ from pathlib import Path
 
 import mitsuba as mi
 
+from solas_mi.errors import SolasError
+from solas_mi.optics.formats import lens_path
 from solas_mi.optics.lens import Lens
 from solas_mi.render import response as responses
 
@@ -18,8 +20,17 @@ def resolved(name: str) -> str:
 
 
 def load_lens(props: mi.Properties) -> Lens:
-    """The lens of a sensor's `lens` property (default: the shipped doublet)."""
-    return Lens.load(resolved(str(props.get("lens", "solas-doublet"))))
+    """The lens of a sensor's `lens` property (default: the shipped doublet). A lens file the scene names
+    may be any file the user can read (a shared scene can name one), so a refusal of its text names the
+    file and the command that gives the reason, not what it holds: the lens readers quote a faulty line,
+    as they should for a file the user gives them. A missing or unreadable file, or another extension, is
+    refused naming only the file (`formats.lens_path`)."""
+    path = lens_path(resolved(str(props.get("lens", "solas-doublet"))))
+    try:
+        return Lens.load(path)
+    except SolasError:
+        raise SolasError(f"lens file {str(path)!r}, which the scene names, is not a lens solas-mi can use; "
+                         f"`solas-mi lens info {path}` says why") from None
 
 
 def load_response(props: mi.Properties, lens: Lens, default: str) -> responses.Response:

@@ -1,6 +1,6 @@
 """The `solas-mi` command line. Each stage owns its sub-commands (`<stage>/commands.py`, a
 `register(subparsers)` each); this module only composes them, turns user errors into one line on
-stderr and exit status 2, and makes SIGTERM an interruption like Ctrl-C, so that temporary files
+stderr and exit status 2 (and a library's warning into one line, without its source line), and makes SIGTERM an interruption like Ctrl-C, so that temporary files
 and folders are removed and no output is left half-written (exit status 130 / 143)."""
 from __future__ import annotations
 
@@ -8,6 +8,7 @@ import argparse
 import signal
 import sys
 import threading
+import warnings
 
 from .errors import SolasError
 from .interrupts import raise_outside_imports
@@ -95,16 +96,19 @@ def _handlers() -> dict:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
     _SIGNALLED.clear()
-    previous = _handlers()
+    previous = _handlers()  # from the start: building the parser imports every stage's commands (a second)
+    args = argparse.Namespace(command=None)
+    shown = warnings.showwarning
+    warnings.showwarning = lambda message, *where, **more: print(f"{_prog(args.command)}: warning: {message}",
+                                                                 file=sys.stderr)
     try:
+        args = build_parser().parse_args(argv)
         return int(args.run(args) or 0)
     except SolasError as exc:
         if _SIGNALLED:  # the interruption surfaced inside a library as its error
             return _stopped(args.command)
-        print(f"solas-mi {args.command}: error: {exc}", file=sys.stderr)
+        print(f"{_prog(args.command)}: error: {exc}", file=sys.stderr)
         return 2
     except BrokenPipeError:  # the reader of stdout has gone (`| head`): stop quietly, as Unix tools do
         import os
@@ -114,15 +118,21 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt as exc:
         return _stopped(args.command, isinstance(exc, Terminated))
     finally:
+        warnings.showwarning = shown
         for sig, handler in previous.items():
             if handler is not None:  # None: set outside Python, not ours to restore
                 signal.signal(sig, handler)
 
 
-def _stopped(command: str, terminated: bool = False) -> int:
+def _prog(command: str | None) -> str:
+    """How messages name the program: solas-mi and its command (none yet while the parser is built)."""
+    return f"solas-mi {command}" if command else "solas-mi"
+
+
+def _stopped(command: str | None, terminated: bool = False) -> int:
     terminated = terminated or signal.SIGTERM in _SIGNALLED
     how = "terminated" if terminated else "interrupted"
-    print(f"\nsolas-mi {command}: {how}; no output was left half-written", file=sys.stderr)
+    print(f"\n{_prog(command)}: {how}; no output was left half-written", file=sys.stderr)
     return 143 if terminated else 130
 
 

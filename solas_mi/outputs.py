@@ -12,22 +12,25 @@ from __future__ import annotations
 
 import os
 import re
+import unicodedata
 from contextlib import ExitStack, contextmanager
 from pathlib import Path
 from typing import Iterable, Iterator
 
 from .errors import SolasError
 
-_UNSAFE = re.compile(r"[^A-Za-z0-9._+=-]+")
-NAME_MAX = 120  # characters of a name component (file systems allow 255 bytes; room for suffixes)
+_UNSAFE = re.compile(r"[^\w.+=-]+")  # \w: the letters and digits of every script, and _
+NAME_MAX = 120  # UTF-8 bytes of a name component (file systems allow 255; room for suffixes)
 
 
 def safe_name(text: object, fallback: str = "item") -> str:
     """`text` (a lens name, an item name, a sweep value: user data) as one safe file-name component:
-    every run of characters other than letters, digits and . _ + = - becomes "_" (so no separator,
-    NUL, newline or space), no leading dot (no hidden file, no "." or ".."), at most NAME_MAX
-    characters; `fallback` when nothing is left."""
-    name = _UNSAFE.sub("_", str(text)).lstrip("._")[:NAME_MAX].rstrip("_") if text is not None else ""
+    every run of characters other than letters, digits (of any script: "café", "東京") and . _ + = -
+    becomes "_" (so no separator, NUL, newline, space or control character; accents composed first, NFC),
+    no leading dot (no hidden file, no "." or ".."), at most NAME_MAX bytes in UTF-8 (cut between characters); `fallback` when
+    nothing is left."""
+    name = _UNSAFE.sub("_", unicodedata.normalize("NFC", str(text))).lstrip("._") if text is not None else ""
+    name = name.encode("utf-8")[:NAME_MAX].decode("utf-8", errors="ignore").rstrip("_")
     return name or fallback
 
 
@@ -132,7 +135,7 @@ def hold_folder(folder: str | os.PathLike, what: str) -> Iterator[Path]:
     """Hold `folder` (created if need be) for the block: its lock file (LOCK, an advisory `flock`,
     released by the system if the process dies) names the holder, `what` with its process id, host
     and start time. SolasError naming the holder when another process holds it. The lock file is
-    removed at the end."""
+    removed at the end where the folder allows it (the lock is the flock, released in any case)."""
     import fcntl
     import socket
     import time
@@ -160,7 +163,10 @@ def hold_folder(folder: str | os.PathLike, what: str) -> Iterator[Path]:
                      f"{time.strftime('%Y-%m-%dT%H:%M:%S%z')})\n".encode())
         yield folder
     finally:
-        (folder / LOCK).unlink(missing_ok=True)
+        try:
+            (folder / LOCK).unlink(missing_ok=True)
+        except OSError:  # the folder turned read-only: the file stays, unlocked (the next run takes it)
+            pass
         os.close(fd)
 
 

@@ -69,3 +69,20 @@ def test_no_measurement_says_so_on_stderr(tmp_path, capsys):
     assert main(["sfr", str(tmp_path / "flat.png"), "--json"]) == 1
     out, err = capsys.readouterr()
     assert strict_loads(out)["results"] == [] and "no valid edge measured" in err
+
+
+def test_a_library_warning_is_one_line(monkeypatch, capsys):
+    """A warning a stage raises with `warnings.warn` (the lens camera's dark corners, the exit-pupil
+    bounds) reads as the command's own warnings do; Python's format added the file, line and source
+    line that raised it ("lens_sensor.py:91: UserWarning: ...", then "  heights, radial, ... = ...")."""
+    import warnings
+
+    from solas_mi.sensor import commands
+
+    def warns(args):
+        warnings.warn("the film reaches past the lens's field", stacklevel=2)
+        return 0
+
+    monkeypatch.setattr(commands, "run_sensors", warns)
+    assert main(["sensors"]) == 0
+    assert capsys.readouterr().err.splitlines() == ["solas-mi sensors: warning: the film reaches past the lens's field"]

@@ -24,6 +24,8 @@ SHIPPED = {
     "solas_mi.render.labels.LABELS": ("depth", "normal", "instance"),
     "solas_mi.optics.formats.READERS": (".toml", ".zmx", ".seq", ".dat"),
     "solas_mi.optics.formats.WRITERS": (".toml", ".zmx", ".dat"),
+    "solas_mi.optics.calibration.models.MODELS": ("opencv-pinhole", "opencv-fisheye", "ocamcalib", "woodscape",
+                                                  "double-sphere", "unified"),
 }
 
 # One of each registered in a fresh process, then looked for in the parser, the messages and the docs.
@@ -113,6 +115,7 @@ ALLOWED = {
     "tests/psf/test_caustic.py": "each PSF method at a totally reflected chief ray",
     "tests/psf/test_grid_spec.py": "pins the wording of the convolution method's message",
     "tests/render/test_labels.py": "every label through a lens, checked layer by layer; the labels' message",
+    "tests/render/test_scene_file_safety.py": "each lens reader's own refusal, named by a scene",
     "tests/sensor/test_odd_files.py": "the white-balance message; each demosaicing method on the smallest tile",
 }
 

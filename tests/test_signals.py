@@ -171,6 +171,26 @@ def test_a_signal_while_drjit_loads_is_an_interruption(tmp_path, sig, code):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("sig, code", [(signal.SIGINT, 130), (signal.SIGTERM, 143)])
+def test_a_signal_while_the_commands_load_is_an_interruption(tmp_path, sig, code):
+    """Ctrl-C or SIGTERM in the first second, while the command line imports every stage's commands
+    (NumPy among them): exit 130 / 143 with one line. Our handlers came only after that: a
+    KeyboardInterrupt traceback of 20 lines (SIGINT), a silent kill (SIGTERM)."""
+    code_text = ("import os, signal, sys\n"
+                 "class SignalOnLookup:\n"
+                 "    def find_spec(self, name, path=None, target=None):\n"
+                 "        if name == 'numpy':\n"
+                 f"            os.kill(os.getpid(), signal.{sig.name})\n"
+                 "        return None\n"
+                 "sys.meta_path.insert(0, SignalOnLookup())\n"
+                 "from solas_mi.cli import main\n"
+                 "sys.exit(main(['sensors']))\n")
+    p = subprocess.run([sys.executable, "-c", code_text], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert p.returncode == code and "Traceback" not in p.stderr, p.stderr
+    assert p.stderr.strip().splitlines() == [f"solas-mi: {'interrupted' if code == 130 else 'terminated'}; no output "
+                                             "was left half-written"], p.stderr
+
+
 def _ends_late(ready, seconds: float) -> None:
     """A process that needs `seconds` to end once told (SIGTERM), as a worker ends its pass."""
     signal.signal(signal.SIGTERM, lambda *_: (time.sleep(seconds), os._exit(0)))
@@ -199,6 +219,25 @@ def test_interrupted_workers_are_stopped_together(tmp_path):
     took = time.monotonic() - start
     assert all(w.proc.exitcode == 0 for w in pool)  # each ended by itself, none killed
     assert took < (count - 1) * seconds, f"{took:.2f} s to stop {count} workers that take {seconds} s each"
+
+
+def test_the_first_worker_of_a_process_leaves_ctrl_c_to_the_batch(tmp_path):
+    """The first worker a process starts also starts multiprocessing's resource tracker, which unblocked
+    SIGINT as it ended (its own guard): that worker started with Ctrl-C live, and a Ctrl-C during its
+    start killed it (exit -SIGINT, the next test alone failed so). In a fresh interpreter, as a batch's."""
+    script = tmp_path / "first_worker.py"
+    script.write_text("import multiprocessing, os, signal, time\n"
+                      "from solas_mi.batch import runner\n"
+                      "if __name__ == '__main__':\n"
+                      "    worker = runner._Worker(multiprocessing.get_context('spawn'), None, {})\n"
+                      "    for _ in range(20):  # while it starts and while it waits for items\n"
+                      "        os.kill(worker.proc.pid, signal.SIGINT)\n"
+                      "        time.sleep(0.1)\n"
+                      "    alive = worker.proc.is_alive()\n"
+                      "    runner._stop_all([worker], now=False)\n"
+                      "    print(alive, worker.proc.exitcode)\n")
+    p = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    assert p.stdout.split() == ["True", "0"] and "Traceback" not in p.stderr, (p.stdout, p.stderr[-500:])
 
 
 def test_workers_leave_ctrl_c_to_the_batch(capfd):

@@ -24,6 +24,7 @@ import sys
 import time
 from collections import deque
 from contextlib import contextmanager
+from multiprocessing import resource_tracker
 from multiprocessing.connection import wait
 from typing import TYPE_CHECKING, Any, Callable
 
@@ -111,6 +112,9 @@ class _Worker:
     def __init__(self, ctx, grid_path: str | None, settings: dict[str, Any]):
         self.conn, child = ctx.Pipe()
         self.proc = ctx.Process(target=_serve, args=(child, grid_path, settings), daemon=True)
+        # a process's first start also starts multiprocessing's resource tracker, which unblocks SIGINT as it
+        # ends (its guard of its own start): started first, it cannot undo the block the worker starts in
+        resource_tracker.ensure_running()
         with _sigint_blocked():
             self.proc.start()
         child.close()

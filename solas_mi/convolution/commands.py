@@ -52,10 +52,12 @@ def add_frame_options(p) -> None:
 
     p.add_argument("--fov-deg", type=float, help="the frame's half field of view (deg) across --fov-axis, axis at its centre")
     p.add_argument("--fov-axis", choices=FOV_AXES, default="x", help="what --fov-deg spans (default: x, the width)")
-    p.add_argument("--intrinsics", metavar="FX,FY,CX,CY", help="the frame's pinhole intrinsics (pixels)")
+    p.add_argument("--intrinsics", metavar="FX,FY,CX,CY", help="the frame's pinhole intrinsics (pixels), or an OpenCV "
+                                                               "calibration file without distortion (.yaml, .json)")
     p.add_argument("--fisheye", metavar="MODEL:FX,FY,CX,CY,C1,...",
                    help=f"the frame's fisheye calibration, MODEL one of {', '.join(FISHEYE)} (k1..k4; a1..a4[,aspect])"
-                        ": its field is checked against the lens's")
+                        ", or an OpenCV fisheye (.yaml, .json) or WoodScape (.json) calibration file (`solas-mi lens "
+                        "calibrate` writes them): its field is checked against the lens's")
 
 
 def frame_from_args(args: argparse.Namespace):

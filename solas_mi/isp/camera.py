@@ -20,7 +20,7 @@ from ..errors import SolasError
 from ..sensor.auto_exposure import AUTO, AutoExposure, exposure_seconds
 from ..sensor.capture import check_seed
 from ..sensor.model import SensorModel
-from .pipeline import ISP
+from .pipeline import ISP, check_sensor
 
 
 @dataclass(frozen=True)
@@ -46,6 +46,8 @@ class Camera:
             raise SolasError(f"camera scale {self.scale!r} must be a finite number > 0 (W/m² per unit of a frame)")
         if self.isp is not None and not isinstance(self.isp, ISP):
             raise SolasError(f"camera isp {self.isp!r} must be a solas_mi.isp.pipeline.ISP or None")
+        if self.isp is not None:
+            check_sensor(self.isp, self.sensor)
         check_seed(self.seed)
 
     def describe(self) -> dict:

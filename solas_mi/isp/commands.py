@@ -22,10 +22,12 @@ def run_camera(args: argparse.Namespace) -> int:
     if args.isp is None:
         return sensor.run_camera(args)
     from ..outputs import data_and_preview
+    from ..sensor.files import load_sensor
     from .camera import write_frame
-    from .pipeline import develop, load_isp
+    from .pipeline import check_sensor, develop, load_isp
 
     isp = load_isp(args.isp)
+    check_sensor(isp, load_sensor(args.sensor_model))  # before the frame is taken
     data, png = data_and_preview(args.output, None, [args.image, args.sensor_model, args.isp])
     raw, model, meta = sensor.raw_frame(args, DEVELOP_BYTES_PER_PIXEL)
     frame, developed = develop(raw, model, isp)

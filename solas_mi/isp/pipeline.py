@@ -112,6 +112,14 @@ def _white_balance(isp: ISP) -> str:
     return white.GIVEN if isinstance(isp.white_balance, dict) else isp.white_balance
 
 
+def check_sensor(isp: ISP, model: SensorModel) -> None:
+    """SolasError before any frame is taken where `isp` cannot develop the frames of sensor `model`: white
+    balance gains given for other filters than its colour filter array's (develop would refuse every
+    frame, after its work)."""
+    if isinstance(isp.white_balance, dict):
+        white.check_given(isp.white_balance, model.cfa)
+
+
 def develop(raw: np.ndarray, model: SensorModel, isp: ISP = ISP()) -> tuple[np.ndarray, dict]:
     """The 8-bit frame (H, W, 3 uint8) of a RAW frame (H, W, DN) of sensor `model`, and the metadata
     naming every stage with the values it used."""

@@ -43,7 +43,7 @@ from . import zemax_solves
 from .codev_glass import PrivateCatalogue, material, unquote
 from .codev_syntax import (APERTURES, ASPHERIC, FIELDS, IGNORED, REFUSED, SYSTEM, VIGNETTING, ZERO_IS_NOTHING,
                            command, commands)
-from .formats import MAX_FIELDS, check_count
+from .formats import MAX_FIELDS, check_count, one_line
 from .formats import floats as _numbers
 from .lens import Lens
 from .paraxial import paraxial
@@ -167,7 +167,7 @@ class _Reader:
         elif key == "STO":
             row["stop"] = True
         elif key == "SLB":
-            row["label"] = unquote(" ".join(args))
+            row["label"] = one_line(unquote(" ".join(args)))
         elif key == "PIM":
             row["pim"] = True
         elif key == "SPH":
@@ -249,7 +249,7 @@ def _spec(reader: _Reader, where: str) -> dict:
     spec: dict = {"object": _object(rows[0], scale)}
     if reader.materials:
         spec["materials"] = reader.materials
-    title = " ".join(unquote(t) for t in system.get("TIT", system.get("TITLE", []))).strip()
+    title = one_line(" ".join(unquote(t) for t in system.get("TIT", system.get("TITLE", [])))).strip()
     if title:
         spec["name"] = title
     if stop_note:

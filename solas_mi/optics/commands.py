@@ -1,7 +1,7 @@
 """`solas-mi lens info`: paraxial data, real chief rays, and the distortion and relative illumination
 table (image height vs field, closest projection) of a lens, as a table or JSON;
-`solas-mi lens convert`: a lens file in another format (`formats.writable()`); `add_lens_argument`, the LENS of
-every command that takes one."""
+`solas-mi lens convert`: a lens file in another format (`formats.writable()`); `solas-mi lens calibrate`
+(`calibration.command`); `add_lens_argument`, the LENS of every command that takes one."""
 from __future__ import annotations
 
 import sys
@@ -129,7 +129,7 @@ def run_lens_convert(args) -> int:
 
 
 def register(sub: Any) -> None:
-    """Add `lens list`, `lens info` and `lens convert`."""
+    """Add `lens list`, `lens info`, `lens convert` and `lens calibrate`."""
     lens = sub.add_parser("lens", help="lens data").add_subparsers(dest="lens_command", metavar="COMMAND", required=True)
     shipped = lens.add_parser("list", help="the shipped lenses: name, EFL, f/# (primary wavelength), half field, source")
     shipped.add_argument("--json", action="store_true", help="as JSON")
@@ -146,3 +146,6 @@ def register(sub: Any) -> None:
     convert.add_argument("-o", "--output", required=True, help=f"the new lens file, its format by its extension: "
                                                                 f"{writable()}")
     convert.set_defaults(run=run_lens_convert)
+    from .calibration.command import register as register_calibrate
+
+    register_calibrate(lens, add_lens_argument, load_lens)

@@ -75,6 +75,13 @@ def decode_text(data: bytes) -> str:
         return data.decode("latin-1")
 
 
+def check_printable(text: str, what: str, where: str) -> None:
+    """SolasError unless `text` (a lens's name, description or a surface's label: printed by `lens info` and in
+    metadata) holds no line break nor control character: an escape sequence would drive the terminal."""
+    if _CONTROL.search(text):
+        raise SolasError(f"{where}: the {what} {text!r} holds control characters; it must be printable text on one line")
+
+
 def one_line(text: str) -> str:
     """`text` with every line break and control character made a space: what a line of another program's
     lens file may hold."""

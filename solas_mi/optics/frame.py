@@ -150,14 +150,20 @@ def _invert(fn, radius: np.ndarray, clamp: bool = False) -> np.ndarray:
 def parse_frame(fov: str | None = None, axis: str = "x", intrinsics: str | None = None,
                 fisheye: str | None = None) -> FrameCamera | None:
     """The command line's frame camera: --fov-deg (with --fov-axis), --intrinsics FX,FY,CX,CY or
-    --fisheye MODEL:FX,FY,CX,CY,C1,…; None when none is given."""
+    --fisheye MODEL:FX,FY,CX,CY,C1,…, or either as a calibration file (`calibration.files.frame_numbers`: an
+    OpenCV pinhole file without distortion; an OpenCV fisheye or WoodScape file); None when none is given."""
     from ..options import floats
+    from .calibration.files import frame_numbers
 
     given = [v for v in (fov, intrinsics, fisheye) if v is not None]
     if len(given) > 1:
         raise SolasError("give one frame camera: --fov-deg, --intrinsics or --fisheye")
     if fov is not None:
         return FrameCamera("fov", fov_deg=float(fov), fov_axis=axis)
+    for option, text in (("--intrinsics", intrinsics), ("--fisheye", fisheye)):
+        if text is not None and _is_file(text):
+            model, numbers, coefficients = frame_numbers(text, option)
+            return FrameCamera(model, intrinsics=numbers, coefficients=coefficients)
     if intrinsics is not None:
         values = floats(intrinsics, "--intrinsics")
         if len(values) != 4:
@@ -171,3 +177,10 @@ def parse_frame(fov: str | None = None, axis: str = "x", intrinsics: str | None 
                              f"{', '.join(FISHEYE)}")
         return FrameCamera(model, intrinsics=tuple(values[:4]), coefficients=tuple(values[4:]))
     return None
+
+
+def _is_file(text: str) -> bool:
+    """Whether a frame option's text names a file (a calibration) rather than numbers."""
+    from pathlib import Path
+
+    return Path(text).suffix.lower() in (".yaml", ".yml", ".json", ".txt") and Path(text).exists()

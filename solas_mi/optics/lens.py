@@ -24,8 +24,8 @@ from ..imageio import write_text
 from . import forbes, ideal as ideal_mod, overlap
 from . import glass as glass_mod
 from .sag import sag
-from .formats import (MAX_SURFACES, MAX_WAVELENGTHS, READERS, WRITERS, check_count, lens_path, shipped_lenses,
-                      writable)  # noqa: F401 (shipped_lenses: re-exported)
+from .formats import (MAX_SURFACES, MAX_WAVELENGTHS, READERS, WRITERS, check_count, check_printable, lens_path,
+                      shipped_lenses, writable)  # noqa: F401 (shipped_lenses: re-exported)
 from .fields import FieldType, field_type_for
 
 NORM_RADIUS_MM = (1e-6, 1e6)  # the Qbfs normalisation radius a surface may have (1 nm to 1 km)
@@ -210,8 +210,12 @@ class Lens:
 
     def __post_init__(self) -> None:
         """However it is built (a file, `from_dict`, this constructor, `dataclasses.replace`), a lens holds
-        at most `formats.MAX_SURFACES` surfaces and `MAX_WAVELENGTHS` wavelengths (why: `formats`)."""
+        at most `formats.MAX_SURFACES` surfaces and `MAX_WAVELENGTHS` wavelengths (why: `formats`), and
+        its texts are printable (`formats.check_printable`)."""
         _check_size(self.surfaces, self.wavelengths_nm, self.source or self.name)
+        for what, text in (("name", self.name), ("description", self.description),
+                           *(("surface label", s.label) for s in self.surfaces)):
+            check_printable(text, what, self.source or "lens")
 
     # ------------------------------------------------------------------ loading
     @classmethod

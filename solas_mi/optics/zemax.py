@@ -365,7 +365,7 @@ def dumps(lens) -> str:
     glasses = [lens.object_glass, *(s.glass for s in lens.surfaces)]
     vendors = list(dict.fromkeys(g.name.split(":", 1)[0] for g in glasses if g.kind not in ("air", "model")))
 
-    out = ["VERS 190513 80 123457 L123457", "MODE SEQ", f"NAME {one_line(lens.name)}", "PFIL 0 0 0",
+    out = ["VERS 190513 80 123457 L123457", "MODE SEQ", f"NAME {lens.name}", "PFIL 0 0 0",
            "UNIT MM X W X CM MR CPMM", *([f"GCAT {' '.join(vendors)}"] if vendors else []),
            "FLOA", "FTYP 0 0 2 %d 0 0 0" % len(lens.wavelengths_nm),
            "XFLN 0 0", f"YFLN 0 {number(lens.field_deg)}"]
@@ -374,7 +374,7 @@ def dumps(lens) -> str:
     distance = "INFINITY" if lens.at_infinity else number(lens.object_distance)
     out += ["SURF 0", "  TYPE STANDARD", "  CURV 0.0", f"  DISZ {distance}", *glas(lens.object_glass)]
     for i, s in enumerate(lens.surfaces, start=1):
-        out += [f"SURF {i}", f"  TYPE {_surface_type(s, i)}", f"  COMM {one_line(s.label)}",
+        out += [f"SURF {i}", f"  TYPE {_surface_type(s, i)}", f"  COMM {s.label}",
                 f"  CURV {number(s.curvature)}"]
         out += [f"  PARM {k} {number(a)}" for k, a in enumerate(s.aspheric, start=2)] + ideal.to_zemax(s.focal_length)
         if any(s.qbfs):

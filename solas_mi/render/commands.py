@@ -153,7 +153,20 @@ def _render(args) -> int:
         from .user_scene import camera_meta
 
         result.meta.update(lens=lens.name, lens_hash=lens.hash, **camera_meta(scene))
+        result.meta["camera"] = lens_camera(scene, args.calibration_model)
     return _write(result, data_file, png)
+
+
+def lens_camera(scene, model: str) -> dict:
+    """The camera of a render through a lens_camera: lens (as focused), sensor, pitch, focus and the fit of
+    `model` to the lens's chief-ray mapping over the film (`optics.calibration.describe_camera`)."""
+    from ..optics.calibration import Sensor, describe_camera
+
+    sensor = scene.sensors()[0]
+    width, height = (int(v) for v in sensor.film().crop_size())
+    wavelength = sensor.response.single_wavelength or sensor.lens.primary_wavelength
+    return describe_camera(sensor.lens, Sensor(width, height, float(sensor.pitch_um)), model,
+                           wavelength_nm=float(wavelength))
 
 
 def _focus(text: str | None) -> float | str | None:
@@ -217,6 +230,9 @@ def register(sub) -> None:
                     "`solas-mi scene`, any scene holding a lens_sensor or lens_camera, or, with --lens, any "
                     "Mitsuba scene whose perspective camera is replaced by a lens_camera at the same pose.")
     render.add_argument("scene", help="scene XML")
+    from ..optics.calibration.command import add_calibration_option
+
+    add_calibration_option(render)
     render.add_argument("--set", action="append", metavar="NAME=VALUE",
                         help="override a <default> of the scene (e.g. --set image=other.png); repeatable")
     render.add_argument("--lens", help=f"replace the scene's perspective camera by this lens: {lens_help()}")

@@ -14,7 +14,8 @@ ray meets the scene, else 0.
 An instance id is a 24-bit hash of the shape's name (exact in float32, never 0), so a shape keeps its
 id from frame to frame and scene to scene; the metadata's `instances` table maps each id met to its
 name and `boxes` gives each named shape's pixel bounds [x0, y0, x1, y1) (columns, rows; end
-exclusive) and pixel count. The chief ray is traced at the response's one wavelength, else at the
+exclusive), pixel count and 3D box (`boxes_3d`: its world bounding box's corners in the camera frame and
+their pixels through the real lens). The chief ray is traced at the response's one wavelength, else at the
 lens's primary wavelength; a pixel none of whose rays passes (past the image circle) is not valid.
 No NaN or inf is written. A scene loaded with Mitsuba's default parser settings (`mi.load_file`) has
 its meshes of one material merged into one unnamed mesh, and so one id: load it with
@@ -300,8 +301,39 @@ def _instance(hit: Hit):
         met = hit.si.instance if is_instance(item) else hit.si.shape
         value = dr.select(met == mi.ShapePtr(item), float(i), value)
     layer = hit.layer(value)
+    about = _instances(layer, names, ids, hit.scene)
+    boxes_3d(hit, about["boxes"], {name: shape for name, shape in zip(names, hit.scene.shapes())})
     (name,) = LABELS["instance"].extra["layers"]
-    return {name: layer}, _instances(layer, names, ids, hit.scene)
+    return {name: layer}, about
+
+
+def boxes_3d(hit: Hit, boxes: dict, shapes: dict) -> None:
+    """Each named shape's 3D box beside its 2D one: the 8 corners of its world bounding box in the camera frame
+    of the calibration files (x right, y down, z forward; world units, from the entrance pupil's centre) and
+    their pixels through the real lens (`optics.calibration`: the lens's chief-ray mapping over the film; None
+    for a corner behind the lens or beyond the film's widest direction), corner k at (x, y, z) = box (min, max)[bits of k]."""
+    import mitsuba as mi
+
+    from ..optics.calibration import Sensor, chief_map
+
+    if not boxes:
+        return
+    sensor = _sensor(hit.scene)
+    cmap = chief_map(sensor.lens, Sensor(int(sensor.width), int(sensor.height), float(sensor.pitch_um)),
+                     float(sensor.response.single_wavelength or sensor.lens.primary_wavelength))
+    to_local = hit.to_world.inverse()
+    for name, box in boxes.items():
+        b = shapes[name].bbox()
+        lo, hi = [float(v) for v in b.min], [float(v) for v in b.max]
+        corners = np.array([[(lo, hi)[(k >> a) & 1][a] for a in range(3)] for k in range(8)])
+        local = to_local @ mi.Point3f(*corners.T)
+        xyz = np.stack([-np.asarray(local.x), -np.asarray(local.y), np.asarray(local.z) - hit.pupil_z], -1)
+        unit = xyz / np.linalg.norm(xyz, axis=1, keepdims=True)
+        uv = cmap.pixels(unit)
+        polar = np.arccos(np.clip(unit[:, 2], -1.0, 1.0))
+        seen = (polar <= cmap.top) & np.isfinite(uv).all(axis=1)
+        box["box_3d"] = {"corners_camera": xyz.tolist(),
+                         "corners_px": [p.tolist() if ok else None for p, ok in zip(uv, seen)]}
 
 
 def _entrance_pupil_mm(lens) -> float:

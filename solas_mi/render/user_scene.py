@@ -46,17 +46,22 @@ CAMERA_ONLY = ("fov", "focal_length", "fov_axis", "near_clip", "far_clip", "focu
 def _scene_text(xml_path: str | Path) -> str:
     """The text of the scene file and of the files it includes (as far as their names hold no parameter),
     each checked to be a regular file within `userfiles`' bound before Mitsuba's parser opens it (a FIFO
-    would stop it for ever): what the user wrote, which Mitsuba's messages may quote (`plugin_error`)."""
+    would stop it for ever): what the user wrote, which Mitsuba's messages may quote (`plugin_error`), with
+    the name of each file as an attribute (Mitsuba quotes the file it parses). An included file that is
+    no XML adds only its name: Mitsuba cannot parse it, and its text is not the scene's."""
     texts, todo, seen = [], [Path(xml_path)], set()
     while todo:
         path = todo.pop()
         data = read_bytes(path, "scene file")
         seen.add(path.resolve())
-        texts.append(data.decode("utf-8", errors="replace"))
+        texts.append(f'<file name="{path}"/>')
         try:
             root = ET.fromstring(data)
         except ET.ParseError:  # Mitsuba's parser names the fault
+            if path == Path(xml_path):  # the user's own scene file, as the user wrote it
+                texts.append(data.decode("utf-8", errors="replace"))
             continue
+        texts.append(data.decode("utf-8", errors="replace"))
         names = [e.get("filename", "") for e in root.iter("include")]
         for name in (n for n in names if n and "$" not in n):  # a parameter's value: Mitsuba's to resolve
             found = next((f / name for f in (path.parent, Path(xml_path).parent) if os.path.lexists(f / name)), None)

@@ -45,7 +45,12 @@ class AutoExposure:
         """The exposure (s) for an irradiance image (H, W, 3, W/m²), and what it was chosen from (metadata)."""
         from .capture import mean_electrons
 
-        rate = float(np.percentile(mean_electrons(model, irradiance, 1.0), self.percentile))
+        try:
+            per_second = mean_electrons(model, irradiance, 1.0)
+        except SolasError:  # the light of one second (an image checked finite and >= 0) passes a float64
+            raise SolasError(f"auto-exposure: irradiance up to {float(np.max(irradiance)):.3g} W/m² gives more "
+                             "photo-electrons per second than a float64 holds (1.8e308); give a smaller --scale") from None
+        rate = float(np.percentile(per_second, self.percentile))
         if not rate > 0:
             raise SolasError(f"auto-exposure: the {self.percentile:g}th percentile of the frame's pixels gets no light "
                              "(0 photo-electrons/s); give --exposure-ms in ms, or a lower percentile")

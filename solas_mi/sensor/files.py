@@ -53,6 +53,9 @@ def load_sensor(name_or_path: str | Path) -> SensorModel:
     values = dict(toml_table(path, "sensor", "sensor model"))
     try:
         if isinstance(values.get("qe_curve"), str):  # a CSV file, relative to the TOML file
+            if not values["qe_curve"].strip():  # else the sensor file's folder, refused as "a folder"
+                raise SolasError("sensor qe_curve = '' must name a CSV file (beside the sensor file) or be a "
+                                 "[sensor.qe_curve] table of columns")
             values["qe_curve"] = read_csv(path.parent / values["qe_curve"]).table()
         return SensorModel.from_dict(values)
     except SolasError as exc:

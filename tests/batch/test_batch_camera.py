@@ -124,9 +124,13 @@ def test_render_batch_through_the_camera(camera_inputs, tmp_path):
     (["--scale", "2"], "--scale go\\(es\\) with --sensor-model"),
     (["--sensor-model", "S", "--exposure-ms", "1", "--scale", "-1"], "scale -1.0 must be a finite number > 0"),
     (["--sensor-model", "S", "--exposure-ms", "auto:0,1"], "auto-exposure percentile 0.0 must be"),
+    # gains for a sensor's filters the RCCB sensor lacks: each item failed after its work (exit 1)
+    (["--sensor-model", "S", "--exposure-ms", "1", "--isp", "I"], "must give a number > 0 for each filter of RCCB"),
 ])
 def test_camera_options_refused(camera_inputs, extra, message, capsys):
-    extra = [str(camera_inputs.root / "sensor.toml") if e == "S" else e for e in extra]
+    (camera_inputs.root / "gains.toml").write_text("[isp]\nwhite_balance = {R = 1.9, G = 1, B = 1.5}\n")
+    files = {"S": "sensor.toml", "I": "gains.toml"}
+    extra = [str(camera_inputs.root / files[e]) if e in files else e for e in extra]
     argv = ["batch", "degrade", str(camera_inputs.images), "--psf-grid", str(camera_inputs.grid), "-o",
             str(camera_inputs.root / "never"), "--quiet", *extra]
     assert main(argv) == 2

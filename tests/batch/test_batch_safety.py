@@ -12,7 +12,7 @@ from solas_mi.batch.jobs import expand_inputs, plan
 from solas_mi.batch.render import plan_render
 from solas_mi.errors import SolasError
 from solas_mi.optics.lens import Lens
-from solas_mi.outputs import inside, safe_name
+from solas_mi.outputs import hold_folder, inside, safe_name
 from solas_mi.psf.grid import PSFGrid
 from solas_mi.psf.spec import GridSpec
 
@@ -25,6 +25,19 @@ def test_a_safe_name_is_one_plain_component(text, tmp_path):
     assert name and len(name) <= 120 and not name.startswith(".")
     assert not set(name) & set("/\\\0\n\r ")
     assert inside(tmp_path, name + ".exr").parent == tmp_path.resolve()
+
+
+@pytest.mark.parametrize("text, name", [("ïrr ä", "ïrr_ä"), ("東京", "東京"), ("e\u0301te\u0301", "été"),
+                                        ("é" * 100, "é" * 60)], ids=["latin", "cjk", "decomposed", "long"])
+def test_a_safe_name_keeps_the_letters_of_every_script(text, name):
+    """Letters and digits of any script stay (they became "_", and a name of none "item": "ïrr ä.exr"
+    gave rr.exr, two CJK names one output, refused), within NAME_MAX bytes of UTF-8."""
+    assert safe_name(text) == name and len(name.encode()) <= 120
+
+
+def test_inputs_named_in_other_scripts_keep_their_names(tmp_path):
+    jobs = plan([tmp_path / "東京.png", tmp_path / "大阪.png", tmp_path / "café 1.png"], tmp_path / "out")
+    assert [Path(job.output).name for job in jobs] == ["東京.exr", "大阪.exr", "café_1.exr"]
 
 
 @pytest.mark.parametrize("name", ["../x", "/abs/x", "a/../../x"])
@@ -194,6 +207,22 @@ def test_two_batches_on_one_folder_the_second_is_refused_naming_the_first(batch_
     assert second.count("done") == 1
     assert not [p for p in out.iterdir() if p.name.startswith(".")]  # its temporaries and the lock gone
     assert strict_loads((out / "batch.json").read_text())["summary"] == {"done": 1}
+
+
+def test_a_folder_that_turns_read_only_keeps_the_batch_s_error(tmp_path, monkeypatch):
+    """The output folder made read-only while a batch runs (a remount, chattr +i): the batch's own
+    one-line error (its manifest cannot be written), not a traceback of the lock file's removal; the
+    lock file left behind holds nothing."""
+    def read_only(path, *args, **kwargs):
+        raise PermissionError(1, "Operation not permitted", str(path))
+
+    with pytest.raises(SolasError, match="cannot write"):
+        with hold_folder(tmp_path / "out", "a batch"):
+            monkeypatch.setattr(os, "unlink", read_only)
+            raise SolasError("cannot write out/batch.json: Operation not permitted")
+    monkeypatch.undo()
+    with hold_folder(tmp_path / "out", "the next batch"):
+        pass
 
 
 def test_workers_are_capped_at_the_cores_and_cost_their_memory(batch_inputs, capsys):

@@ -7,6 +7,7 @@ from isp_inputs import ideal_raw, unit_irradiance
 from solas_mi.errors import SolasError
 from solas_mi.isp import black, ccm, tone, white
 from solas_mi.isp.demosaic import METHODS, demosaic
+from solas_mi.isp.camera import Camera
 from solas_mi.isp.pipeline import ISP, develop, load_isp
 from solas_mi.sensor.model import SensorModel
 
@@ -122,5 +123,8 @@ def test_bad_isp_refused(values, message):
 
 def test_given_gains_must_match_the_pattern():
     model = SensorModel(cfa="RCCB")
+    isp = ISP(white_balance={"R": 1.0, "G": 1.0, "B": 1.0})
     with pytest.raises(SolasError, match="one for each filter of RCCB: R, B, C|each filter of RCCB"):
-        develop(np.zeros((8, 8)), model, ISP(white_balance={"R": 1.0, "G": 1.0, "B": 1.0}))
+        develop(np.zeros((8, 8)), model, isp)
+    with pytest.raises(SolasError, match="each filter of RCCB"):  # a camera refuses it before any frame
+        Camera(model, 1.0, isp)

@@ -132,3 +132,26 @@ def test_a_zemax_image_distance_of_1e300_is_refused_by_name(tmp_path, capsys):
     path.write_text(text.replace(f"DISZ {BFD!r}", "DISZ 1e300"))
     assert main(["lens", "info", str(path)]) == 2
     assert "thickness 1e+300 mm must lie within ±1e+15 mm" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("key, text", [("name", "evil\x1b[31mRED"), ("description", "a\x1b]0;title\x07"),
+                                       ("name", "two\nlines")])
+def test_a_lens_text_that_would_drive_the_terminal_is_refused(tmp_path, key, text):
+    """`lens info` prints a lens's name and description: an escape sequence there would drive the terminal."""
+    path = tmp_path / "lens.toml"
+    source = (resource_dir("scenes") / "lenses" / "solas_doublet.toml").read_text()
+    lines = [f"{key} = {text!r}".replace("'", '"').replace("\\x", "\\u00") if line.startswith(f"{key} =") else line
+             for line in source.splitlines()]
+    path.write_text("\n".join(lines))
+    with pytest.raises(SolasError, match=f"the {key} .* holds control characters; it must be printable text"):
+        Lens.load(path)
+
+
+def test_control_characters_of_a_codev_title_become_spaces(tmp_path):
+    """CODE V files from Windows hold CP1252 quotes, which read as C1 control codes (the Zemax reader makes
+    them spaces too): the title loads, its control characters spaces."""
+    path = tmp_path / "lens.seq"
+    path.write_bytes(b"LEN\nTIT '\x93quoted\x94 lens'\nDIM M\nWL 587.6\nEPD 10\nYAN 0\nSO 0 1e10\nS 50 5 BK7_SCHOTT\n"
+                     b"STO\nS -50 45\nSI 0 0\nGO\n")
+    lens = Lens.load(path)
+    assert lens.name == "quoted  lens"

@@ -173,7 +173,30 @@ def test_depth_at_the_centre_is_the_distance_from_the_entrance_pupil(mi, tmp_pat
     np.testing.assert_allclose(layers["normal.Z"], -1.0, atol=1e-6)
     assert np.all(layers["instance.id"] == instance_id("wall"))
     assert meta["instances"] == {str(instance_id("wall")): "wall"}
-    assert meta["boxes"]["wall"] == {"id": instance_id("wall"), "box": [0, 0, 33, 25], "pixels": 33 * 25}
+    wall = dict(meta["boxes"]["wall"])
+    assert len(wall.pop("box_3d")["corners_camera"]) == 8
+    assert wall == {"id": instance_id("wall"), "box": [0, 0, 33, 25], "pixels": 33 * 25}
+
+
+@pytest.mark.parametrize("name", ["wide-angle-22mm", "nikkor-fisheye"])
+def test_3d_boxes_project_through_the_lens_onto_the_2d_boxes(mi, tmp_path, name):
+    """A far patch 5..15 deg right and 3..12 deg up, seen off the axis where the lens distorts: its 3D box's
+    corners (the camera frame, from the entrance pupil) projected through the lens's chief-ray mapping bound
+    the pixels its instance label covers (the 2D box, end exclusive) to within a pixel; a pinhole of the lens's
+    focal length would put them tens of pixels away."""
+    d, pitch = 1e3, 100.0
+    shapes = [patch("box", at_angle(-15.0, d), at_angle(-5.0, d), at_angle(3.0, d), at_angle(12.0, d), d)]
+    scene = load(scene_file(tmp_path / "box.xml", shapes, 161, 121), "llvm_ad_spectral", Lens.load(name),
+                 pitch_um=pitch, response=MONO)
+    meta = render_labels(scene, ("instance",))[1]["boxes"]["box"]
+    x0, y0, x1, y1 = meta["box"]
+    box = meta["box_3d"]
+    uv = np.array(box["corners_px"], dtype=np.float64)
+    assert np.array(box["corners_camera"])[:, 2] == pytest.approx(d + (paraxial(Lens.load(name)).entrance_pupil_z_mm
+                                                                       - Lens.load(name).vertex_z[0]) * 1e-3, rel=1e-6)
+    print(name, meta["box"], uv.min(axis=0), uv.max(axis=0))
+    assert abs(uv[:, 0].min() - (x0 - 0.5)) <= 1.0 and abs(uv[:, 0].max() - (x1 - 0.5)) <= 1.0
+    assert abs(uv[:, 1].min() - (y0 - 0.5)) <= 1.0 and abs(uv[:, 1].max() - (y1 - 0.5)) <= 1.0
 
 
 def test_background_and_past_the_image_circle_are_zero_and_not_valid(mi, tmp_path):
@@ -223,7 +246,7 @@ def test_ids_are_stable_and_never_the_background():
 
 def test_render_labels_command_writes_the_layers_beside_the_image(mi, tmp_path, capsys):
     """`solas-mi render SCENE --lens LENS --labels …`: the EXR holds the image's channels and the label
-    layers, its metadata the id table and boxes; without a lens camera, or for an image, refused in one line."""
+    layers, its metadata the id table and boxes, and the camera (lens, sensor, the calibration); without a lens camera, or for an image, refused in one line."""
     from solas_mi.cli import main
     from solas_mi.imageio import read_exr
     from solas_mi.render.image import render_image
@@ -232,8 +255,14 @@ def test_render_labels_command_writes_the_layers_beside_the_image(mi, tmp_path, 
                                                                                         emit=False)], 32, 24)
     out = tmp_path / "out.exr"
     assert main(["render", xml, "--lens", "wide-angle-22mm", "--pitch-um", "700", "--spp", "2",
-                 "--labels", "instance,normal,depth", "-o", str(out)]) == 0
+                 "--labels", "instance,normal,depth", "--calibration-model", "opencv-pinhole", "-o", str(out)]) == 0
     data, meta = read_exr(out)
+    camera = meta["camera"]  # every output says its camera: the lens, sensor, pitch, focus and the chosen model's fit
+    assert (camera["lens"], camera["sensor_px"], camera["pitch_um"]) == ("wide-angle-22mm", [32, 24], 700.0)
+    assert camera["focus_distance_mm"] == "inf" and camera["calibration"]["model"] == "opencv-pinhole"
+    efl_px = paraxial(Lens.load("wide-angle-22mm"), camera["wavelength_nm"]).efl_mm / 0.7
+    assert camera["calibration"]["parameters"]["fx"] == pytest.approx(efl_px, rel=1e-4)
+    assert camera["calibration"]["max_residual_px"] < 0.1
     assert set(data) == {"R", "G", "B", "depth.Z", "normal.X", "normal.Y", "normal.Z", "instance.id", "labels.valid"}
     assert (tmp_path / "out.png").is_file()
     labels = meta["labels"]

@@ -30,6 +30,48 @@ def test_a_mesh_error_quotes_nothing_of_the_mesh(tmp_path):
     assert "mesh.ply" in message and "invalid PLY header" in message  # what went wrong, and where
 
 
+MESH = '<shape type="ply"><string name="filename" value="{name}"/></shape>'
+SPECTRUM = '<bsdf type="diffuse" id="b"><spectrum name="reflectance" filename="{name}"/></bsdf>'
+
+
+@pytest.mark.parametrize("body, name, data", [
+    (MESH, "mesh.ply", SECRET.encode() + b"\0OTHER=x\n"),  # a token cut at a NUL, as in /proc/self/environ
+    (MESH, "mesh.ply", b'ply"' + SECRET.encode() + b" more\n"),  # a quote inside the token
+    (SPECTRUM, "spectrum.spd", f'{SECRET} "x" more\n'.encode()),  # a line of a spectrum file
+], ids=["token-cut-at-nul", "quote-in-token", "spectrum-line"])
+def test_what_mitsuba_quotes_of_a_named_file_is_left_out(tmp_path, body, name, data):
+    """Mitsuba quotes what it read without escaping it: a token cut at a NUL byte left its quote open
+    ("unknown token "SECRET_TOKEN=hunter2!", the first variable of /proc/self/environ), and a quote in the
+    file's text closed it early, so the rest of the line came out. The message ends at that quote."""
+    (tmp_path / name).write_bytes(data)
+    message = refused(load, _scene(tmp_path, body.format(name=name)), VARIANT)
+    assert "hunter2" not in message and "SECRET" not in message and "more" not in message, message
+    assert name in message  # the file is named
+
+
+@pytest.mark.parametrize("name, text", [
+    ("lens.dat", f"{SECRET} 1 2 3\n"),  # the .dat reader quotes a row that is no numbers
+    ("lens.seq", f"{SECRET}\n"),  # the CODE V reader names an unknown command
+    ("lens.toml", f"{SECRET.replace('=', '_')} = 1\n"),  # the TOML reader names an unknown key
+], ids=["dat", "seq", "toml"])
+def test_a_lens_file_the_scene_names_is_not_quoted(tmp_path, name, text):
+    """A lens_camera's lens is a file the scene names: the lens readers' refusals quote the faulty line
+    (right for a lens file the user gives), so a shared scene could print a line of any .dat, .seq or
+    .toml file. The refusal names the file and the command that says why."""
+    (tmp_path / name).write_text(text)
+    sensor = (f'<sensor type="lens_camera"><string name="lens" value="{name}"/><float name="pitch_um" value="20"/>'
+              '<film type="hdrfilm"><integer name="width" value="8"/><integer name="height" value="8"/></film></sensor>')
+    message = refused(load, _scene(tmp_path, sensor), VARIANT)
+    assert "SECRET" not in message and "hunter2" not in message, message
+    assert name in message and "solas-mi lens info" in message
+
+
+def test_a_scene_that_is_no_xml_keeps_the_parser_s_reason(tmp_path):
+    (tmp_path / "scene.xml").write_text("not xml at all")
+    message = refused(load, tmp_path / "scene.xml", VARIANT)
+    assert "scene.xml" in message and "No document element found" in message
+
+
 def _render(scene, tmp_path) -> subprocess.CompletedProcess:
     """`solas-mi render` of `scene` in its own process: Mitsuba's parser, blocked on a FIFO, holds the
     interpreter, so only a process can be timed out."""

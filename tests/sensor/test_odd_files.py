@@ -65,6 +65,7 @@ def test_every_sensor_key_of_the_wrong_type_is_named(folder, capsys, key, value)
     ("wavelengths_nm", "[1, 2, 3]", r"\[380, 780\]"),
     ("wavelengths_nm", "[1e300, 1e300, 1e300]", r"\[380, 780\]"),
     ("cfa", "5", "must be one of RGGB"),
+    ("qe_curve", '""', "qe_curve = '' must name a CSV file"),  # "QE curve '<the sensor's folder>' is a folder"
 ])
 def test_sensor_values_outside_physics_are_refused(folder, capsys, key, value, allowed):
     code, err = camera(folder, capsys, _sensor(folder, f"[sensor]\n{key} = {value}\n"))
@@ -133,6 +134,18 @@ def test_isp_values_of_the_wrong_type_are_named(folder, capsys, toml, says):
     assert code == 2 and re.search(says, err), err
 
 
+def test_gains_for_other_filters_are_refused_before_the_frame(folder, capsys, monkeypatch):
+    """White-balance gains naming G for an RCCB sensor: refused before the RAW is taken (develop refused
+    them after the sensor's work; a batch, every item after its convolution or render)."""
+    from solas_mi.sensor import capture
+
+    monkeypatch.setattr(capture, "capture", lambda *args, **kwargs: pytest.fail("a frame was taken"))
+    (folder / "sensor.toml").write_text('[sensor]\ncfa = "RCCB"\n')
+    (folder / "isp.toml").write_text("[isp]\nwhite_balance = {R = 1.9, G = 1, B = 1.5}\n")
+    code, err = camera(folder, capsys, str(folder / "sensor.toml"), str(folder / "isp.toml"))
+    assert code == 2 and "each filter of RCCB: R, B, C" in err
+
+
 def test_menon_refining_step_is_a_switch(folder, capsys):
     """refining_step = true and = false develop different frames (the option reaches the demosaicer)."""
     import imageio.v3 as iio
@@ -182,6 +195,8 @@ def test_the_smallest_whole_tile_is_developed(folder, capsys):
     (["--f-number", "0.3"], "f-number 0.3 must be a number from 0.5"),  # faster than any lens in air
     (["--scale", "1e300", "--exposure-ms", "1e300"], "more photons per pixel than a float64 holds"),
     (["--scale", "1e308"], "--scale 1e\\+308 times the image's largest value 1e\\+06 passes the largest float64"),
+    # auto-exposure meters one second of light: it said "an exposure of 1 s", which nobody gave
+    (["--scale", "1e300", "--exposure-ms", "auto"], "^solas-mi camera: error: auto-exposure: irradiance up to 1e\\+306"),
 ])
 def test_camera_values_that_overflowed_are_refused(folder, capsys, extra, says):
     write_exr(folder / "bright.exr", {c: np.full((4, 4), 1e6, np.float32) for c in "RGB"})
