@@ -9,13 +9,13 @@ source point, each with the probability of its bilinear weight, by a fixed order
 Rounding the source point instead moves a region by whole pixels: a shift of 0.3 px moved a disc's ids
 by 0 (picked: 0.3 within 0.1 px), and through the wide angle the warped discs' centroids lay up to 0.28 px
 (mean 0.17) from their light's in the degraded frame (picked: 0.13, mean 0.05;
-tests/convolution/test_labels.py). Depth is interpolated within a surface. A value is a property of the
-scene point the pixel sees, and the degraded frame sees each point along the same direction from the
-same centre as the input frame: the lens moves where a direction lands on the sensor, not the direction.
-So depth stays metres along the same optical axis (or the same range), a normal in the camera's or the
-world's frame stays the same vector; nothing is rotated, only the pixel that holds it moves. Optical
-flow is a displacement between two frames taken by the same lens: both its ends move, so its value is
-M(p + f) − M(p).
+tests/convolution/test_degrade_labels.py). Depth is interpolated within a surface. A value is a property
+of the scene point the pixel sees, and the degraded frame sees each point along the same direction from
+the same centre as the input frame: the lens moves where a direction lands on the sensor, not the
+direction. So depth stays metres along the same optical axis (or the same range), a normal in the
+camera's or the world's frame stays the same vector; nothing is rotated, only the pixel that holds it
+moves. Optical flow is a displacement between two frames taken by the same lens: both its ends move,
+so its value is M(p + f) − M(p).
 
 `labels.valid` is 1 where the source lies inside the input frame, 0 where it lies beyond its border:
 there the image shows what the convolution's boundary rule put beyond it (`edge`: the border repeated,
