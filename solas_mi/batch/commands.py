@@ -24,7 +24,7 @@ BATCH_GRID_DEFAULTS = {"grid": (32, 32)}
 # the DegradeSpec flags of `batch degrade`'s main group (--scale-lens is the frames' camera's; the frame, camera
 # and grid are built from their own flags)
 DEGRADE_OPTIONS = ("method", "boundary", "linear", "output_format", "depth_pattern", "label_patterns", "occlusion",
-                   "silhouette")
+                   "silhouette", "calibration_model")
 
 
 def _degrade_spec(args: argparse.Namespace):
@@ -153,7 +153,8 @@ def run_batch_render(args: argparse.Namespace) -> int:
     from .render import render_batch
 
     result = render_batch(args.inputs, args.output, lens=args.lens, spec=spec, **sweep, workers=workers,
-                          dask=args.dask, force=args.force, progress=not args.quiet, camera=camera)
+                          dask=args.dask, force=args.force, progress=not args.quiet, camera=camera,
+                          calibration_model=args.calibration_model)
     return _report("render", result)
 
 
@@ -211,6 +212,7 @@ def _add_degrade(sub: Any) -> None:
 
 def register(subparsers: Any) -> None:
     """Add `batch` and its `degrade` and `render`."""
+    from ..optics.calibration.command import add_calibration_option
     from ..optics.formats import lens_help
     from ..render.spec import RenderSpec
     from .render import SWEEP
@@ -233,6 +235,7 @@ def register(subparsers: Any) -> None:
     r.add_argument("--lens", action="append", required=True,
                    help=f"{lens_help()}; repeat to sweep over lenses")
     RenderSpec.add_flags(r, RENDER_SETTINGS, sweep=SWEEP[1:])
+    add_calibration_option(r)
     add_camera_options(r, seed=False)  # the sensor's seed is the batch's --seed
     _add_runner_options(r)
     r.set_defaults(run=run_batch_render)

@@ -257,6 +257,8 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
     processes (default: the cores), or the Dask scheduler at `dask` ("local": a LocalCluster for this
     batch). An item that fails is recorded and the others go on."""
     from ..budget import check_memory
+    from ..convolution.camera import frame_cameras
+    from ..imageio import image_size
     from ..progress import Progress
     from ..psf.depth import read_grid
     from .runner import run_batch
@@ -276,11 +278,14 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
     else:
         header["grid_source"] = "given"
     grid = read_grid(str(p.grid_path))
+    sizes = [image_size(job.input)[1::-1] for job in p.jobs]  # (0, 0): unreadable, the item will say why
+    cameras = frame_cameras(grid, [s for s in sizes if s[0]], p.spec.frame, p.spec.calibration_model,
+                            p.lens)  # one fit per frame size, here, not per frame
     header.update({"psf_grid": str(p.grid_path), "grid_hash": file_hash(p.grid_path),
                    "lens": grid.meta.get("lens"), "lens_hash": grid.meta.get("lens_hash"),
-                   "runner": {"dask": dask} if dask is not None else {"workers": n}})
+                   "degraded_camera": cameras, "runner": {"dask": dask} if dask is not None else {"workers": n}})
     p.manifest.header.update(header)
-    settings = {"spec": p.spec, "camera": p.spec.camera, "force": force,
+    settings = {"spec": p.spec, "camera": p.spec.camera, "force": force, "cameras": cameras,
                 "batch": {"id": p.key, "manifest": str(p.manifest.path), "grid_hash": header["grid_hash"],
                           "lens_hash": header["lens_hash"], **({"lens_scale": p.lens_scale} if p.lens_scale else {})}}
     run_batch(p.manifest, p.todo, grid, str(p.grid_path), settings, n, dask, "image" if progress else None)

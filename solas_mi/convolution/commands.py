@@ -7,12 +7,14 @@ pixel grid is the sensor (`kernels.grid_camera`). PNG/JPEG input is sRGB-decoded
 from __future__ import annotations
 
 import argparse
+import sys
 from typing import Any
 
 from ..outputs import add_png_option
 
 LARGE_IMAGE_VALUES = 4096 * 3072 * 3  # beyond 4K (≈ 1.7 s) the command reports each channel
-DEGRADE_OPTIONS = ("method", "boundary", "occlusion", "silhouette", "linear")  # the DegradeSpec fields `degrade` takes
+# the DegradeSpec fields `degrade` takes
+DEGRADE_OPTIONS = ("method", "boundary", "occlusion", "silhouette", "linear", "calibration_model")
 
 
 def run_degrade(args: argparse.Namespace) -> int:
@@ -21,6 +23,7 @@ def run_degrade(args: argparse.Namespace) -> int:
     from ..outputs import data_and_preview
     from ..progress import Progress
     from ..psf.depth import read_grid
+    from .camera import frame_camera
     from .output import degrade_file
     from .spec import DegradeSpec
 
@@ -30,11 +33,15 @@ def run_degrade(args: argparse.Namespace) -> int:
     spec = DegradeSpec.from_args(args, DEGRADE_OPTIONS, frame=frame_from_args(args))
     rows, cols, channels = image_size(args.image)
     large = rows * cols * channels > LARGE_IMAGE_VALUES
+    grid = read_grid(args.psf_grid)
+    camera = frame_camera(grid, cols, rows, spec.frame, spec.calibration_model)
+    if camera.get("calibration", True) is None:
+        print(f"degrade: no calibration in the metadata: {camera['no_calibration']}", file=sys.stderr)
 
     # a large image takes long enough to want a sign of life
     with Progress("degrade", channels, "channels", enabled=large) as bar:
-        meta = degrade_file(args.image, read_grid(args.psf_grid), args.psf_grid, output, png, spec, force=args.force,
-                            depth=args.depth, progress=bar, labels=labels)
+        meta = degrade_file(args.image, grid, args.psf_grid, output, png, spec, force=args.force,
+                            depth=args.depth, progress=bar, labels=labels, extra_meta={"camera": camera})
     height, width = meta["output_shape"][:2]
     print(f"wrote {output} and {png} ({spec.method}{', depth-aware' if args.depth else ''}, {width}x{height} px, "
           f"{meta['seconds']:.2f} s)")

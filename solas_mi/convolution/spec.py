@@ -17,6 +17,8 @@ from typing import Any
 from ..errors import SolasError
 from ..labelkinds import KINDS, RULES, kinds_help, parse_label_files
 from ..optics.frame import FrameCamera
+from ..optics.calibration.command import calibration_help
+from ..optics.calibration.models import MODELS
 from ..options import OptionSpec, option
 from ..psf.spec import GridSpec
 from .depth import OCCLUSIONS, SILHOUETTES
@@ -40,7 +42,8 @@ class DegradeSpec(OptionSpec):
     pattern) pairs of `labelkinds.KINDS`, warped with it: `convolution.labels`); `frame`: the camera every
     input was taken with (`optics.frame.FrameCamera`; None: the image spans the grid's x field range);
     `scale_lens`: that camera's pixel pitch (µm), the batch's lens scaled to its focal length
-    (`batch.degrade.scaled_lens`); `camera`: each degraded
+    (`batch.degrade.scaled_lens`); `calibration_model`: the camera model whose fit to the lens the degraded
+    frames' metadata records (`convolution.camera`); `camera`: each degraded
     frame of a batch through a sensor and image processor (`isp.camera.Camera`, checked by the batch:
     a later stage); `grid_spec`: the grid a batch computes from its lens (`psf.spec.GridSpec`; None:
     its defaults). One image (`degrade_file`) takes method, boundary, linear, output format, occlusion,
@@ -71,6 +74,7 @@ class DegradeSpec(OptionSpec):
     scale_lens: float | None = option("with --lens and --intrinsics/--fisheye: the camera's pixel pitch (µm); the "
                                       "lens scaled to its focal length fx x PIXEL_UM, f-number kept, stated in the "
                                       "metadata", parse=float, metavar="PIXEL_UM")
+    calibration_model: str = option(calibration_help, MODELS.default, choices=MODELS.names)
     frame: FrameCamera | None = None
     camera: Any = None
     grid_spec: GridSpec | None = None
@@ -81,7 +85,7 @@ class DegradeSpec(OptionSpec):
         if not isinstance(self.linear, bool):
             raise SolasError(f"linear {self.linear!r} must be True or False")
         for name, allowed in (("output format", OUTPUT_FORMATS), ("occlusion", OCCLUSIONS),
-                              ("silhouette", SILHOUETTES)):
+                              ("silhouette", SILHOUETTES), ("calibration model", tuple(MODELS.names()))):
             value = getattr(self, name.replace(" ", "_"))
             if not isinstance(value, str) or value not in allowed:
                 raise SolasError(f"{name} {value!r} must be one of {', '.join(allowed)}")
@@ -111,12 +115,14 @@ class DegradeSpec(OptionSpec):
                 + ([self.depth_pattern, self.occlusion, self.silhouette] if self.depth_pattern is not None else [])
                 + ([asdict(self.frame)] if self.frame is not None else [])
                 + ([self.camera.describe()] if self.camera is not None else [])
-                + ([dict(self.label_patterns)] if self.label_patterns else []))
+                + ([dict(self.label_patterns)] if self.label_patterns else [])
+                + ([self.calibration_model] if self.calibration_model != MODELS.default else []))
 
     def header(self, lens_scale: dict | None = None) -> dict[str, Any]:
         """The options as a batch's manifest states them, with `lens_scale`, what scaling the lens did
         (`batch.degrade.scaled_lens`; None: not scaled)."""
         return {"method": self.method, "boundary": self.boundary, "linear": self.linear, "format": self.output_format,
+                "calibration_model": self.calibration_model,
                 **({"frame_camera": asdict(self.frame)} if self.frame is not None else {}),
                 **({"lens_scale": lens_scale} if lens_scale is not None else {}),
                 **({"camera": self.camera.describe()} if self.camera is not None else {}),
