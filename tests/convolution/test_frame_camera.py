@@ -92,3 +92,18 @@ def test_a_grid_whose_lens_is_gone_says_so(wide, tmp_path):
         wide.meta.update(lens_source=Lens.load("wide-angle-22mm").source, lens="wide-angle-22mm")
     assert block["calibration"] is None and "lens_source" in block["no_calibration"]
     assert block["pitch_um"] == frame_camera(wide, W, H, None, None)["pitch_um"]
+
+
+def test_a_sensors_principal_point_is_two_finite_numbers():
+    """A calibration sensor's axis lands at its principal point: the table of chief rays reaches its farthest
+    corner from there; a principal point that is not two finite numbers is refused by name."""
+    import math
+
+    from solas_mi import SolasError
+    from solas_mi.optics.calibration import Sensor
+
+    assert Sensor(10, 8, 5.0, (2.0, 1.0)).reach_px() == pytest.approx(math.hypot(7, 6))
+    assert Sensor(10, 8, 5.0).centre == (4.5, 3.5)
+    for bad in ((math.nan, 0.0), (1.0,), ("a", 2.0)):
+        with pytest.raises(SolasError, match="principal point"):
+            Sensor(10, 8, 5.0, bad)
