@@ -71,7 +71,8 @@ def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path:
     silhouette, frame camera; None: its defaults) and write `output` and `png` (`spec.OUTPUT_FILES`' two files)
     together or not at all; returns the output's metadata. `force`: run even when the estimated memory
     exceeds what is free; `depth`: the EXR depth map (m) of the image, with a grid over object distance
-    (`convolution.depth`); `extra_meta` is added to the metadata; `progress(done, total)` after each
+    (`convolution.depth`); `extra_meta` is added to the metadata (its "camera", the fitted camera block of
+    `convolution.camera`, to the convolution's own "camera"); `progress(done, total)` after each
     channel; `labels`: the frame's label files (kind → file, `labelkinds.KINDS`), warped by the image's
     mapping and written beside `output` (`labels.label_outputs`) with the rest, all read and checked first."""
     from ..budget import check_memory
@@ -116,7 +117,10 @@ def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path:
                  "psf_grid_shape": list(first.shape), "psf_pitch_um": first.pitch_um, "psf_size": first.size,
                  "values": "mean irradiance over each pixel, in the units of the linear input",
                  "brightness": BRIGHTNESS})
-    meta.update(extra_meta or {})
+    extra = dict(extra_meta or {})
+    if "camera" in extra:  # the fitted camera block (`convolution.camera`) joins the convolution's own camera
+        meta["camera"] = {**meta.get("camera", {}), **extra.pop("camera")}
+    meta.update(extra)
     names = None if out.ndim == 2 or out.shape[-1] == 3 else \
         [f"C{c:02d}_{meta['channel_wavelengths_nm'][c]:g}nm" for c in range(out.shape[-1])]
     write_output(output, png, out, names, meta, spec.output_format, image_path, writers)

@@ -44,9 +44,9 @@ def test_a_batch_records_its_camera_fitted_once_per_frame_size(tmp_path, wide_gr
     cameras = manifest["degraded_camera"]
     assert sorted(cameras) == ["72x48", "96x64"] and manifest["calibration_model"] == "woodscape"
     for stem, (w, h) in sizes.items():
-        camera = read_exr(out / f"{stem}.exr")[1]["camera"]
-        assert camera == cameras[f"{w}x{h}"] and camera["sensor_px"] == [w, h]
-        assert camera["calibration"]["model"] == "woodscape"
+        camera = read_exr(out / f"{stem}.exr")[1]["camera"]  # the block beside the convolution's own camera
+        assert {k: camera[k] for k in cameras[f"{w}x{h}"]} == cameras[f"{w}x{h}"] and camera["sensor_px"] == [w, h]
+        assert camera["calibration"]["model"] == "woodscape" and camera["sensor"] == [w, h]
     expected = frame_camera(grid, 72, 48, None, "woodscape")  # what one frame of that size says
     assert cameras["72x48"]["calibration"]["parameters"] == pytest.approx(expected["calibration"]["parameters"])
 
@@ -59,8 +59,8 @@ def test_the_degrade_command_records_its_camera(tmp_path, wide_grid):
     write_png(tmp_path / "f.png", np.full((64, 96, 3), 0.5))
     out = tmp_path / "o.exr"
     assert main(["degrade", str(tmp_path / "f.png"), "--psf-grid", str(path), "-o", str(out)]) == 0
-    camera = read_exr(out)[1]["camera"]
-    assert camera == frame_camera(grid, 96, 64, None, MODELS.default)
+    camera, block = read_exr(out)[1]["camera"], frame_camera(grid, 96, 64, None, MODELS.default)
+    assert {k: camera[k] for k in block} == block and camera["projection"].startswith("rectilinear")
 
 
 def test_a_render_batch_records_each_sensors_camera_fitted_once(tmp_path, monkeypatch):
