@@ -283,7 +283,7 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
                             p.lens)  # one fit per frame size, here, not per frame
     header.update({"psf_grid": str(p.grid_path), "grid_hash": file_hash(p.grid_path),
                    "lens": grid.meta.get("lens"), "lens_hash": grid.meta.get("lens_hash"),
-                   "degraded_camera": cameras, "runner": {"dask": dask} if dask is not None else {"workers": n}})
+                   "cameras": cameras, "runner": {"dask": dask} if dask is not None else {"workers": n}})
     p.manifest.header.update(header)
     settings = {"spec": p.spec, "camera": p.spec.camera, "force": force, "cameras": cameras,
                 "batch": {"id": p.key, "manifest": str(p.manifest.path), "grid_hash": header["grid_hash"],

@@ -88,7 +88,7 @@ def test_a_batch_with_the_exported_kannala_brandt_file_gives_the_lenss_own_frame
     ids = discs()
     write_frame(tmp_path / "pinhole", (ids > 0).astype(float), ids)
     batch(tmp_path / "pinhole", tmp_path / "own")
-    camera = strict_loads((tmp_path / "own" / "batch.json").read_text())["degraded_camera"][f"{W}x{H}"]
+    camera = strict_loads((tmp_path / "own" / "batch.json").read_text())["cameras"][f"{W}x{H}"]
     kb = tmp_path / "kb.yaml"
     assert main(["lens", "calibrate", "wide-angle-22mm", "--model", "opencv-fisheye", "--sensor", f"{W}x{H}",
                  "--pitch-um", repr(camera["pitch_um"]), "-o", str(kb)]) == 0

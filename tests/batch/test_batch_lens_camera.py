@@ -41,7 +41,7 @@ def test_a_batch_records_its_camera_fitted_once_per_frame_size(tmp_path, wide_gr
                  "-o", str(out), "--workers", "2", "--quiet"]) == 0
     assert fits == ["woodscape", "woodscape"]  # two frame sizes, four frames
     manifest = strict_loads((out / "batch.json").read_text())
-    cameras = manifest["degraded_camera"]
+    cameras = manifest["cameras"]
     assert sorted(cameras) == ["72x48", "96x64"] and manifest["calibration_model"] == "woodscape"
     for stem, (w, h) in sizes.items():
         camera = read_exr(out / f"{stem}.exr")[1]["camera"]  # the block beside the convolution's own camera
