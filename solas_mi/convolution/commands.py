@@ -23,7 +23,6 @@ def run_degrade(args: argparse.Namespace) -> int:
     from ..outputs import data_and_preview
     from ..progress import Progress
     from ..psf.depth import read_grid
-    from .camera import frame_camera
     from .output import degrade_file
     from .spec import DegradeSpec
 
@@ -33,15 +32,13 @@ def run_degrade(args: argparse.Namespace) -> int:
     spec = DegradeSpec.from_args(args, DEGRADE_OPTIONS, frame=frame_from_args(args))
     rows, cols, channels = image_size(args.image)
     large = rows * cols * channels > LARGE_IMAGE_VALUES
-    grid = read_grid(args.psf_grid)
-    camera = frame_camera(grid, cols, rows, spec.frame, spec.calibration_model)
-    if camera.get("calibration", True) is None:
-        print(f"degrade: no calibration in the metadata: {camera['no_calibration']}", file=sys.stderr)
 
     # a large image takes long enough to want a sign of life
     with Progress("degrade", channels, "channels", enabled=large) as bar:
-        meta = degrade_file(args.image, grid, args.psf_grid, output, png, spec, force=args.force,
-                            depth=args.depth, progress=bar, labels=labels, extra_meta={"camera": camera})
+        meta = degrade_file(args.image, read_grid(args.psf_grid), args.psf_grid, output, png, spec, force=args.force,
+                            depth=args.depth, progress=bar, labels=labels, calibration_model=spec.calibration_model)
+    if meta["camera"].get("calibration", True) is None:
+        print(f"degrade: no calibration in the metadata: {meta['camera']['no_calibration']}", file=sys.stderr)
     height, width = meta["output_shape"][:2]
     print(f"wrote {output} and {png} ({spec.method}{', depth-aware' if args.depth else ''}, {width}x{height} px, "
           f"{meta['seconds']:.2f} s)")

@@ -65,7 +65,7 @@ def read_depth(path: str | Path) -> np.ndarray:
 def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path: str | Path, output: Path, png: Path,
                  spec: DegradeSpec | None = None, *, force: bool = False, depth: str | Path | None = None,
                  extra_meta: dict[str, Any] | None = None, progress: Callable[[int, int], None] | None = None,
-                 labels=None) -> dict[str, Any]:
+                 labels=None, calibration_model: str | None = None) -> dict[str, Any]:
     """Degrade the image file `image_path` by `grid` (read from `grid_path`, named in the metadata) as
     `spec` says (a `convolution.spec.DegradeSpec`: method, boundary, linear, output format, occlusion,
     silhouette, frame camera; None: its defaults) and write `output` and `png` (`spec.OUTPUT_FILES`' two files)
@@ -74,10 +74,13 @@ def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path:
     (`convolution.depth`); `extra_meta` is added to the metadata (its "camera", the fitted camera block of
     `convolution.camera`, to the convolution's own "camera"); `progress(done, total)` after each
     channel; `labels`: the frame's label files (kind → file, `labelkinds.KINDS`), warped by the image's
-    mapping and written beside `output` (`labels.label_outputs`) with the rest, all read and checked first."""
+    mapping and written beside `output` (`labels.label_outputs`) with the rest, all read and checked first;
+    `calibration_model`: the frame's camera block fitted here (`convolution.camera.frame_camera`, its memory
+    in the estimate; a batch fits it once and gives it in `extra_meta` instead)."""
     from ..budget import check_memory
     from ..imageio import image_size, read_image
     from ..psf.depth import DepthGrid
+    from .camera import fit_bytes, frame_camera
     from .labels import label_outputs, memory_bytes, read_labels
 
     spec = DegradeSpec() if spec is None else spec
@@ -94,8 +97,11 @@ def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path:
     for target in targets.values():
         check_target(target, [image_path, grid_path, depth, output, png, *files.values()], "labels output")
     need = peak_bytes(image_path, rows, cols, channels, sum(g.data.nbytes for g in layers)) + 9 * len(layers) * rows * cols
-    check_memory(f"degrade {cols}x{rows}", need + memory_bytes(rows * cols, files), force)
+    fitting = 0.0 if calibration_model is None else fit_bytes(rows * cols)
+    check_memory(f"degrade {cols}x{rows}", need + memory_bytes(rows * cols, files) + fitting, force)
     found = read_labels(files, (rows, cols), image_path)  # every label read and checked before any work
+    extra = {} if calibration_model is None else {"camera": frame_camera(grid, cols, rows, spec.frame, calibration_model)}
+    extra.update(extra_meta or {})
     image = read_image(image_path, linearize=not spec.linear)
     meta: dict[str, Any] = {}
     depth_m = None
@@ -109,7 +115,18 @@ def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path:
                             progress=progress, frame=spec.frame, silhouette=spec.silhouette)
         meta["depth_map"] = str(depth)
     writers = warped_labels(found, targets, grid, out.shape[:2], spec, depth_m, meta)
-    first = layers[0]
+    describe_item(meta, image_path, spec, grid_path, layers[0], extra)
+    names = None if out.ndim == 2 or out.shape[-1] == 3 else \
+        [f"C{c:02d}_{meta['channel_wavelengths_nm'][c]:g}nm" for c in range(out.shape[-1])]
+    write_output(output, png, out, names, meta, spec.output_format, image_path, writers)
+    meta["output_shape"] = list(out.shape)
+    return meta
+
+
+def describe_item(meta: dict, image_path, spec: DegradeSpec, grid_path, first, extra: dict) -> None:
+    """The degraded image's metadata `meta` completed: its input, the grid (`first`: its one grid, or its first
+    layer) and the brightness convention, then `extra` (its "camera", the fitted camera block of
+    `convolution.camera`, joining the convolution's own "camera")."""
     meta.update({"input": str(image_path), "input_encoding": "linear" if spec.linear or
                  Path(image_path).suffix.lower() == ".exr" else "sRGB, decoded to linear",
                  "psf_grid": str(grid_path),
@@ -117,15 +134,10 @@ def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path:
                  "psf_grid_shape": list(first.shape), "psf_pitch_um": first.pitch_um, "psf_size": first.size,
                  "values": "mean irradiance over each pixel, in the units of the linear input",
                  "brightness": BRIGHTNESS})
-    extra = dict(extra_meta or {})
-    if "camera" in extra:  # the fitted camera block (`convolution.camera`) joins the convolution's own camera
+    extra = dict(extra)
+    if "camera" in extra:
         meta["camera"] = {**meta.get("camera", {}), **extra.pop("camera")}
     meta.update(extra)
-    names = None if out.ndim == 2 or out.shape[-1] == 3 else \
-        [f"C{c:02d}_{meta['channel_wavelengths_nm'][c]:g}nm" for c in range(out.shape[-1])]
-    write_output(output, png, out, names, meta, spec.output_format, image_path, writers)
-    meta["output_shape"] = list(out.shape)
-    return meta
 
 
 def warped_labels(found: dict, targets: dict, grid, shape: tuple[int, int], spec: DegradeSpec,
