@@ -191,6 +191,7 @@ def with_labels(jobs: list[Job], patterns, sources) -> None:
 
 def estimate(p: BatchPlan, workers: int) -> dict[str, float]:
     """Rough seconds and peak memory (bytes, all workers) of the items still to do."""
+    from ..convolution.camera import fit_bytes
     from ..convolution.labels import memory_bytes
     from ..convolution.output import peak_bytes
     from ..imageio import image_size
@@ -204,11 +205,13 @@ def estimate(p: BatchPlan, workers: int) -> dict[str, float]:
         rows, cols = g.grid
         grid_bytes = 4 * rows * cols * g.size ** 2 * len(g.wavelengths_nm or p.lens.wavelengths_nm) * len(
             g.distances_m or [0])
-    # each worker: its largest image's peak (which holds a grid; or its camera's); the parent holds one grid more
+    # each worker: its largest image's peak (which holds a grid; or its camera's)
     per_worker = max((max(peak_bytes(path, r, c, ch, grid_bytes) + memory_bytes(r * c, p.jobs[i].params.get("labels", ())),
                           camera_bytes(p.jobs[i], r, c)) for i, (path, (r, c, ch)) in zip(p.todo, sizes)), default=0.0)
+    # the parent: one grid more, and its fits of the frames' camera blocks (`convolution.camera`)
+    parent = grid_bytes + fit_bytes(max((r * c for _, (r, c, _) in sizes), default=0))
     return {"seconds": SECONDS_PER_VALUE * sum(values) / min(workers, max(1, len(values))),
-            "peak_bytes": min(workers, max(1, len(values))) * (per_worker + WORKER_BYTES["degrade"]) + grid_bytes,
+            "peak_bytes": min(workers, max(1, len(values))) * (per_worker + WORKER_BYTES["degrade"]) + parent,
             "grid_bytes": grid_bytes}
 
 
