@@ -35,40 +35,28 @@ vertex. `focus_distance` focuses the lens as a unit: the whole lens moves agains
 an object that far in front of surface 1 is in focus (`solas_mi.optics.focus.focused`: the paraxial
 image shift from the lens file's own object distance, whose image plane is the default).
 
-Each sample takes four wavelengths from the camera response (`solas_mi.render.response`), one per
-spectral lane, lane i in the i-th quarter of the response's distribution (a continuous response's
-through its quantile table, `WavelengthSampler.sample_quantile`: no search of its bins, 1/p(λ) that
-table's own density), and a hero lane: the hero's
-sample is stratified per pixel (one in each n-th of the response for a pixel's n samples,
-`stratified`: Mitsuba's integrators give the k-th sample of every pixel its place k in the wavefront;
-with independent wavelengths the colour noise was 2–4× the perspective camera's), its quarter is the
-hero lane and its place in that quarter the other lanes' place in theirs. All four lanes are traced
-from the same film point and pupil point. The hero's ray leaves for the scene carrying the lanes
-that leave the lens alike it (with dispersion, lanes leave apart): each such lane i weighted by its
-own pupil weight, 1/p(λ_i) and transmittance, × 4/|G_i| (G_i: the lanes alike lane i, itself
-included), the others 0. Every lane is hero equally often, so each lane's estimate is unbiased (the
-hero-wavelength scheme where no lane is alike another: 4 × the hero's weight); where all are alike
-the path is shared as by Mitsuba's own cameras. Two lanes are alike where both pass and
-|Δdirection| + |Δorigin|/F ≤ ε α and |Δorigin| ≤ ε D/2 (α = pitch/efl: a pixel's angular footprint,
-paraxially; F: the focus distance; D: the entrance pupil's diameter): the shared ray then lies within
-2 ε of the larger of a pixel's footprint and the defocus blur D |1/z − 1/F| of its own at every depth z
-beyond F/2, and within ε of the blur, plus ε α, nearer (Δorigin/z ≤ ε D (1/z − 1/F) for z ≤ F/2). A
-point in its pixel, and a
-point inside the exit-pupil bound of that film position (`pupil_sampling.PupilSampler`, weight
-A·cos⁴θ/d² as pbrt-v4's RealisticCamera). The ray is traced backward through the lens (image side
-to object side) by the Float64 sequential tracer (`solas_mi.optics.tracer`, on the reversed lens of
-`solas_mi.optics.exit_pupil`) in the Float64 type of the variant (Python floats in the scalar ones):
-exact spheres and planes, Sellmeier n(λ) per lane, every clear aperture and the stop clip, total
-internal reflection ends the ray; a blocked ray has weight 0. The weight of `sample_ray` is the
-pupil weight × 1/p(λ) × the Fresnel transmittance, scaled so that the pixel value is the image
-irradiance in units of a lossless lens's on-axis irradiance from radiance 1: a uniform white scene
-is 1 at the image centre (less with `fresnel` "transmit") and falls off with the lens's relative
-illumination. `hdrfilm` develops a continuous response ("srgb", "table:") with Mitsuba's CIE tables;
-lines ("lines", "mono:λ") have no density and need `specfilm`: "lines" under an `hdrfilm` of a
-spectral variant is refused (SolasError naming both ways out). Rays blocked by the lens (past the
-image circle, at a stop, by total internal reflection) leave the vertex along the axis with weight 0
-and `maxt` 0: every ray is finite, and the scene traces no path for them (an `aov` integrator reads
-them as misses).
+How a sample is traced (why: [the lens camera's colour
+noise](../details/render.md#colour-noise-of-the-lens-camera)): a point in its pixel and a point inside
+the exit-pupil bound of that film position (`pupil_sampling.PupilSampler`, weight A·cos⁴θ/d² as
+pbrt-v4's RealisticCamera); four wavelengths from the camera response (`solas_mi.render.response`), one
+per spectral lane, lane i in the i-th quarter of the response's distribution
+(`WavelengthSampler.sample_quantile`), and a hero lane whose sample is stratified per pixel
+(`stratified`). All four lanes are traced backward through the lens (image side to object side) by the
+Float64 sequential tracer (`solas_mi.optics.tracer`, on the reversed lens of
+`solas_mi.optics.exit_pupil`): exact spheres and planes, Sellmeier n(λ) per lane, every clear aperture
+and the stop clip, total internal reflection ends the ray. The hero's ray leaves for the scene carrying
+the lanes that leave the lens within `lane_tolerance` of it (`lanes_together`), each weighted 4/(the
+lanes alike it), so every lane's estimate is unbiased.
+
+The weight of `sample_ray` is the pupil weight × 1/p(λ) × the Fresnel transmittance, scaled so that the
+pixel value is the image irradiance in units of a lossless lens's on-axis irradiance from radiance 1: a
+uniform white scene is 1 at the image centre (less with `fresnel` "transmit") and falls off with the
+lens's relative illumination. `hdrfilm` develops a continuous response ("srgb", "table:") with
+Mitsuba's CIE tables; lines ("lines", "mono:λ") have no density and need `specfilm`: "lines" under an
+`hdrfilm` of a spectral variant is refused (SolasError naming both ways out). Rays blocked by the lens
+(past the image circle, at a stop, by total internal reflection) leave the vertex along the axis with
+weight 0 and `maxt` 0: every ray is finite, and the scene traces no path for them (an `aov` integrator
+reads them as misses).
 
 Variants: spectral, or mono for a response of one wavelength (mono:λ): the lens is traced at λ and
 the scene's RGB and spectral data become Mitsuba's luminance, so a mono render equals the spectral
@@ -88,7 +76,7 @@ import mitsuba as mi
 import numpy as np
 
 from solas_mi.errors import SolasError
-from solas_mi.optics import tracer as T, virtual_object
+from solas_mi.optics import tracer, virtual_object
 from solas_mi.optics.exit_pupil import passes, reversed_lens
 from solas_mi.optics.focus import focused
 from solas_mi.optics.paraxial import paraxial
@@ -101,10 +89,10 @@ from solas_mi.plugins.wavelength_sampling import lanes
 FRESNEL = ("off", "transmit")
 
 
-def pick(values: list, index):
-    """values[index] per ray (an index array of 0…3 over a list of four)."""
-    return dr.select(index == 0, values[0], dr.select(index == 1, values[1],
-                                                      dr.select(index == 2, values[2], values[3])))
+def select_lane(values: list, lane):
+    """values[lane] per ray: `lane` an index array of 0…3 over a list of four values."""
+    return dr.select(lane == 0, values[0], dr.select(lane == 1, values[1],
+                                                     dr.select(lane == 2, values[2], values[3])))
 
 
 def on_axis_solid_angle(lens: Lens, sampler: PupilSampler, wavelength_nm: float, grid: int = 512) -> float:
@@ -142,8 +130,8 @@ class LensCamera(LensFilm):
         self.lane_tolerances(props)
 
     def lane_tolerances(self, props: mi.Properties) -> None:
-        """Where the lanes share a path (module docstring): the pupil table's rows whose rays at the
-        response's shortest and longest wavelengths leave the lens within ε α in direction plus origin
+        """Where the lanes share a path (docs/details/render.md, "Colour noise of the lens camera"): rays at
+        the response's shortest and longest wavelengths leave the lens within ε α in direction plus origin
         over the focus distance, and within ε D/2 in origin."""
         try:
             eps = float(props.get("lane_tolerance", 0.25))
@@ -153,30 +141,31 @@ class LensCamera(LensFilm):
             raise SolasError(f"lens_camera: lane_tolerance {props.get('lane_tolerance')!r} must be a number >= 0 "
                              "(a fraction of a pixel's angular footprint; 0: every path the hero lane's)")
         self.lane_tolerance = eps
-        p = paraxial(self.lens)
-        self.angle_tolerance = eps * self.pitch_mm / abs(p.efl_mm)
-        self.origin_tolerance = 0.5 * eps * p.entrance_pupil_diameter_mm / self.world_unit_mm
+        first_order = paraxial(self.lens)
+        self.angle_tolerance = eps * self.pitch_mm / abs(first_order.efl_mm)
+        self.origin_tolerance = 0.5 * eps * first_order.entrance_pupil_diameter_mm / self.world_unit_mm
         self.inv_focus = 0.0 if math.isinf(self.focus_distance) else 1.0 / self.focus_distance
 
-    def alike(self, origins, directions, passed) -> list[list]:
-        """`alike[i][j]`: lanes i and j both passed and leave the lens within `lane_tolerance` of each
-        other (module docstring; symmetric, and a passed lane is alike itself)."""
-        near = [[passed[i] if i == j else None for j in range(4)] for i in range(4)]
+    def lanes_together(self, origins, directions, passed) -> list[list]:
+        """`together[i][j]`: lanes i and j both passed and leave the lens within `lane_tolerance` of each
+        other (the bound: docs/details/render.md, "Colour noise of the lens camera"; symmetric, and a passed
+        lane is alike itself)."""
+        together = [[passed[i] if i == j else None for j in range(4)] for i in range(4)]
         for i in range(4):
             for j in range(i + 1, 4):
                 gap = dr.norm(origins[i] - origins[j])
-                near[i][j] = near[j][i] = passed[i] & passed[j] & (gap <= self.origin_tolerance) & \
+                together[i][j] = together[j][i] = passed[i] & passed[j] & (gap <= self.origin_tolerance) & \
                     (dr.norm(directions[i] - directions[j]) + gap * self.inv_focus <= self.angle_tolerance)
-        return near
+        return together
 
     def check_film(self) -> None:
         """SolasError for lines (no density) under an `hdrfilm` of a spectral variant: the film would
         develop them with the CIE observer as if they were a continuous spectrum (nearly black)."""
-        r = self.response
-        if (mi.is_spectral and self.film().class_name() == "HDRFilm" and bool((r.hi_nm == r.lo_nm).any())
-                and r.single_wavelength is None):
-            raise SolasError(f"lens_camera: response {r.name!r} has lines, which an hdrfilm cannot develop (they "
-                             "have no spectral density); use a specfilm with one sensitivity per line, or a "
+        response = self.response
+        if (mi.is_spectral and self.film().class_name() == "HDRFilm"
+                and bool((response.hi_nm == response.lo_nm).any()) and response.single_wavelength is None):
+            raise SolasError(f"lens_camera: response {response.name!r} has lines, which an hdrfilm cannot develop "
+                             "(they have no spectral density); use a specfilm with one sensitivity per line, or a "
                              "continuous response (srgb, table:<file.csv>)")
 
     def prepared(self, lens: Lens, props: mi.Properties) -> Lens:
@@ -198,7 +187,7 @@ class LensCamera(LensFilm):
         """The wavelength sample of the k-th of a pixel's n samples moved into the k-th of n strata,
         (k + sample1)/n, where the wavefront is Mitsuba's (`SamplingIntegrator`: sample i of the
         wavefront is sample i mod n of pixel i div n, row-major over the crop window;
-        `mitsubas_wavefront`); else `sample1` unchanged (scalar variants, a symbolic scope, any
+        `samples_in_pixel_order`); else `sample1` unchanged (scalar variants, a symbolic scope, any
         other layout, `stratify_wavelengths` false). Either way each wavelength sample is uniform: an
         unbiased estimate."""
         pixels = self.width * self.height
@@ -209,11 +198,11 @@ class LensCamera(LensFilm):
         count = dr.opaque(mi.UInt32, n)  # one kernel for every spp
         i = dr.arange(mi.UInt32, n * pixels)
         pixel = i // count
-        if not self.mitsubas_wavefront(pixel, sample2):
+        if not self.samples_in_pixel_order(pixel, sample2):
             return sample1
         return (mi.Float(i - pixel * count) + dr.clip(sample1, 0.0, 1.0 - 2 ** -24)) / mi.Float(count)
 
-    def mitsubas_wavefront(self, pixel, sample2) -> bool:
+    def samples_in_pixel_order(self, pixel, sample2) -> bool:
         """Whether the film samples `sample2` lie in the pixels `pixel` (row-major over the crop window):
         taken as true for Mitsuba's own integrators (C++, and Python ones of `mitsuba.ad`: all lay out
         the wavefront so, `sample_rays`) on a film without a border, else checked on the values (an
@@ -227,7 +216,7 @@ class LensCamera(LensFilm):
         x, y = sample2.x * self.width, sample2.y * self.height
         return bool(dr.all((x >= col - 1e-3) & (x <= col + 1.001) & (y >= row - 1e-3) & (y <= row + 1.001)))
 
-    def traced(self, film, target, lam):
+    def exit_ray(self, film, target, lam):
         """The ray from film point `film` toward pupil point `target` (mm) at wavelength(s) `lam` (nm),
         traced through the lens: its origin on surface 1 and direction in the camera frame (world units),
         whether it passed, and its Fresnel transmittance. A blocked ray (past the image circle, TIR) may
@@ -235,19 +224,19 @@ class LensCamera(LensFilm):
         by a NaN radiance."""
         f64 = dr.float64_array_t(mi.Float)
         # the reversed lens: x, y kept, z mirrored; the film is its object, the pupil plane its z = 0
-        rays = T.launch(self.reversed, None, None, f64(target.x), f64(target.y), (f64(film.x), f64(film.y)))
-        traced = T.trace(self.reversed, rays, f64(lam) * 1e-3, fresnel=self.fresnel == "transmit")
-        out = traced.rays
+        rays = tracer.launch(self.reversed, None, None, f64(target.x), f64(target.y), (f64(film.x), f64(film.y)))
+        result = tracer.trace(self.reversed, rays, f64(lam) * 1e-3, fresnel=self.fresnel == "transmit")
+        leaving = result.rays
         # camera frame (x, −y, −z of the lens frame): looks along +z, upright; surface 1 at the origin
         scale = 1.0 / self.world_unit_mm
-        origin = mi.Point3f(mi.Float(out.x * scale), mi.Float(-out.y * scale),
-                            mi.Float((out.z - self.last_vertex_z) * scale))
-        direction = mi.Vector3f(mi.Float(out.dx), mi.Float(-out.dy), mi.Float(out.dz))
-        passed = mi.Bool(traced.ok & (traced.clipped_by == 0)) & dr.all(dr.isfinite(origin)) & \
+        origin = mi.Point3f(mi.Float(leaving.x * scale), mi.Float(-leaving.y * scale),
+                            mi.Float((leaving.z - self.last_vertex_z) * scale))
+        direction = mi.Vector3f(mi.Float(leaving.dx), mi.Float(-leaving.dy), mi.Float(leaving.dz))
+        passed = mi.Bool(result.ok & (result.clipped_by == 0)) & dr.all(dr.isfinite(origin)) & \
             dr.all(dr.isfinite(direction))
         origin = dr.select(passed, origin, mi.Point3f(0.0))
         direction = dr.select(passed, direction, mi.Vector3f(0.0, 0.0, 1.0))
-        return origin, direction, passed, mi.Float(traced.transmittance)
+        return origin, direction, passed, mi.Float(result.transmittance)
 
     def lane_samples(self, sample1, sample2):
         """The lanes' samples of the response's distribution, and the hero lane (module docstring): the
@@ -270,22 +259,23 @@ class LensCamera(LensFilm):
         lams, origins, directions, passed, weights = [], [], [], [], []
         for sample in samples:
             lam, inverse_pdf = self.wavelengths.sample_quantile(sample, active)
-            origin, direction, ok, transmittance = self.traced(film, target, lam)
+            origin, direction, ok, transmittance = self.exit_ray(film, target, lam)
             for values, value in zip((lams, origins, directions, passed), (lam, origin, direction, ok)):
                 values.append(value)
             w = weight * self.norm * transmittance * inverse_pdf
             weights.append(dr.select(active & ok, w, 0.0))
         if mi.is_spectral:  # lane i carried where alike the hero, weighted 4 / (the lanes alike lane i)
-            near = self.alike(origins, directions, passed)
-            counts = [dr.maximum(sum(dr.select(x, 1.0, 0.0) for x in row), 1.0) for row in near]
-            weights = [dr.select(pick(near[i], hero), 4.0 * w / counts[i], 0.0) for i, w in enumerate(weights)]
-            origins, directions = [pick(origins, hero)], [pick(directions, hero)]
+            together = self.lanes_together(origins, directions, passed)
+            counts = [dr.maximum(sum(dr.select(x, 1.0, 0.0) for x in row), 1.0) for row in together]
+            weights = [dr.select(select_lane(together[i], hero), 4.0 * w / counts[i], 0.0)
+                       for i, w in enumerate(weights)]
+            origins, directions = [select_lane(origins, hero)], [select_lane(directions, hero)]
         # origin and direction apart: `transform @ ray` fails in a mono variant once a spectral one ran (Mitsuba 3.9)
         to_world = self.world_transform()
         ray = mi.Ray3f(to_world @ origins[0], to_world @ directions[0], time,
                        mi.Spectrum(*lams) if mi.is_spectral else lanes(lams[0]))
-        # a blocked hero carries no lane (`alike`): its path would add 0, so it meets nothing
-        ray.maxt = dr.select(pick(passed, hero) if mi.is_spectral else passed[0], ray.maxt, 0.0)
+        # a blocked hero carries no lane (`lanes_together`): its path would add 0, so it meets nothing
+        ray.maxt = dr.select(select_lane(passed, hero) if mi.is_spectral else passed[0], ray.maxt, 0.0)
         return ray, mi.Spectrum(*weights) if mi.is_spectral else mi.Spectrum(weights[0])
 
     def sample_position(self, time, sample, active=True):

@@ -8,13 +8,31 @@ _CLOSES = " :;,.!?)]"  # what follows a closing quote in Mitsuba's messages (not
 
 
 MAX_WORD, MAX_MESSAGE = 200, 2000  # characters: a value quoted back from a file is cut, not printed whole
-_LONG_WORD = re.compile(r"\S{%d,}" % (MAX_WORD + 1))
+_LONG_WORD = re.compile(rf"\S{{{MAX_WORD + 1},}}")
 
 
 class SolasError(ValueError):
-    """A user error: the message names the bad value and what is allowed. It holds at most MAX_MESSAGE
-    characters, none of its words more than MAX_WORD (the rest cut, "…"): a file's line of a megabyte
-    quoted back stays a line a terminal can show."""
+    """A user error: one line that names the bad value and what is allowed.
+
+    Every mistake of a caller (a value, a file, a setting) raises it; the command line prints it and
+    exits with status 2. A `ValueError`, so code that catches those catches it too.
+
+    Parameters
+    ----------
+    message : object, default ""
+        The message. It is kept to at most `MAX_MESSAGE` characters, none of its words more than
+        `MAX_WORD` (the rest cut, "…"): a file's line of a megabyte quoted back stays a line a
+        terminal can show.
+
+    Examples
+    --------
+    >>> from solas_mi import Lens, SolasError
+    >>> try:
+    ...     Lens.load("no-such-lens")
+    ... except SolasError as error:
+    ...     print(str(error).split(";")[0])
+    unknown lens 'no-such-lens'
+    """
 
     def __init__(self, message: object = "") -> None:
         text = _LONG_WORD.sub(lambda m: m[0][:MAX_WORD] + "…", str(message))
@@ -29,7 +47,7 @@ def plugin_error(exc: BaseException, context: str, known: str | None = None) -> 
     files), Mitsuba's text ends at its first quote of something the scene does not name
     (`_scene_quotes_only`): Mitsuba quotes what it read from a mesh or spectrum file ("unknown token …"),
     and a scene may name any file the user can read."""
-    cause = exc
+    cause: BaseException | None = exc
     while cause is not None:
         if isinstance(cause, SolasError):
             return SolasError(f"{context}: {cause}")

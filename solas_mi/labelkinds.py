@@ -203,7 +203,7 @@ def parse_label_files(text, what: str, pattern: bool = False) -> tuple[tuple[str
     for pair in pairs:
         kind, name = pair if isinstance(pair, tuple) and len(pair) == 2 else (pair, "")
         if kind not in KINDS or not isinstance(name, str) or not name:
-            raise SolasError(f"{what}: {str(kind)}={name} must be KIND=FILE with KIND one of {', '.join(KINDS)}")
+            raise SolasError(f"{what}: {kind!s}={name} must be KIND=FILE with KIND one of {', '.join(KINDS)}")
         if kind in out:
             raise SolasError(f"{what}: {kind} is given twice")
         files = KINDS[kind].extra["files"]

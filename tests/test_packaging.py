@@ -2,6 +2,7 @@
 accept the lock (and no exact pins), a truthful requires-python, the README as a short front door
 whose examples the docs run, and a site whose every page exists."""
 import fnmatch
+import itertools
 import re
 import sys
 import tomllib
@@ -33,7 +34,8 @@ def test_licence_is_the_declared_one():
     assert "Neither the name of the copyright holder" in text  # the third clause
 
 
-@pytest.mark.parametrize("requirement", PYPROJECT["dependencies"])
+@pytest.mark.parametrize("requirement", PYPROJECT["dependencies"]
+                         + [r for extra in PYPROJECT["optional-dependencies"].values() for r in extra])
 def test_dependencies_are_ranges_that_accept_the_lock(requirement):
     req = Requirement(requirement)
     assert not any(s.operator in ("==", "===") for s in req.specifier), f"{requirement}: pin it in requirements.lock"
@@ -157,7 +159,7 @@ def test_the_benchmark_page_shows_no_raw_log():
     for path in sorted((ROOT / "benchmarks" / "results").glob("*.md")):
         lines = path.read_text(encoding="utf-8").splitlines()[check_pages.HEADER_LINES:]
         assert not [line for line in lines if log_line.match(line)], path.name
-        assert not [b for a, b in zip(lines, lines[1:]) if a and b and not (a.startswith("|") and b.startswith("|"))], \
+        assert not [b for a, b in itertools.pairwise(lines) if a and b and not (a.startswith("|") and b.startswith("|"))], \
             path.name
 
 
@@ -227,3 +229,39 @@ def test_every_page_of_the_site_exists():
     assert len(nav) >= 20
     for page in nav:
         assert page in generated or (ROOT / "docs" / page).is_file(), page
+
+
+def test_the_reference_check_names_each_public_name_missing(tmp_path, monkeypatch):
+    """The public API (`hooks.public_api`: every name of solas_mi's and each subpackage's `__all__`) must be
+    on the built API page by the path of its definition; a package without `__all__` is named too."""
+    (tmp_path / "reference" / "api").mkdir(parents=True)
+    (tmp_path / "reference" / "api" / "index.html").write_text('<h4 id="solas_mi.optics.lens.Lens"></h4>')
+    missing = check_reference.missing_public(tmp_path)
+    assert "solas_mi.psf.psf_grid (solas_mi.psf.grid.psf_grid)" in missing
+    assert "solas_mi.convolution.DegradeSpec (solas_mi.convolution.spec.DegradeSpec)" in missing
+    assert not [m for m in missing if m.startswith(("solas_mi.Lens ", "solas_mi.optics.Lens "))]
+    real = hooks.declared_all
+    monkeypatch.setattr(hooks, "declared_all", lambda package: None if package == "solas_mi.isp" else real(package))
+    assert "solas_mi.isp: no __all__ (the package's public names)" in check_reference.missing_public(tmp_path)
+
+
+def test_the_public_api_resolves_through_lazy_exports():
+    """`hooks.defining_module` follows a package's imports and lazy exports to the module that defines a name."""
+    assert hooks.defining_module("solas_mi", "Lens") == "solas_mi.optics.lens"
+    assert hooks.defining_module("solas_mi", "SolasError") == "solas_mi.errors"
+    assert hooks.defining_module("solas_mi.psf", "PSFGrid") == "solas_mi.psf.grid_file"
+    with pytest.raises(LookupError, match="solas_mi.psf.nothing"):
+        hooks.defining_module("solas_mi.psf", "nothing")
+
+
+def test_the_docstring_examples_run_and_can_fail(tmp_path, monkeypatch):
+    """With the docs folder, run_examples runs the docstrings' Examples of the API reference's modules (doctest,
+    a fresh folder per module): a wrong stated output fails the module."""
+    assert {"solas_mi.optics.lens", "solas_mi.psf.grid"} <= set(run_examples.docstring_modules())
+    module = tmp_path / "stated_example.py"
+    monkeypatch.setenv("PYTHONPATH", str(tmp_path))
+    monkeypatch.setattr(run_examples, "docstring_modules", lambda: ["stated_example"])
+    module.write_text('def double(x):\n    """Twice x.\n\n    >>> double(2)\n    5\n    """\n    return 2 * x\n')
+    assert run_examples.run_docstrings(keep=False) == 1
+    module.write_text('def double(x):\n    """Twice x.\n\n    >>> double(2)\n    4\n    """\n    return 2 * x\n')
+    assert run_examples.run_docstrings(keep=False) == 0

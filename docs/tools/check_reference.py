@@ -1,6 +1,7 @@
-"""Check that the built site's reference covers the code: every command of the CLI, every public
-function and class of every module (solas_mi and its Mitsuba plugins), and every plugin with its
-parameter table, an XML and a dict example. Run after `mkdocs build` (reads site/).
+"""Check that the built site's reference covers the code: the public Python API (every name of
+`solas_mi.__all__` and of each subpackage's `__all__`, each package declaring one), every command of the
+CLI, every public function and class of every module (solas_mi and its Mitsuba plugins), and every
+plugin with its parameter table, an XML and a dict example. Run after `mkdocs build` (reads site/).
 
     python docs/tools/check_reference.py [SITE]        # default: site
 """
@@ -17,6 +18,31 @@ sys.path.insert(0, str(REPO))
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 
 
+def api_ids(site: Path) -> set[str]:
+    """The anchors of the built API reference page."""
+    return set(re.findall(r'id="([\w.]+)"', (site / "reference" / "api" / "index.html").read_text(encoding="utf-8")))
+
+
+def missing_public(site: Path) -> list[str]:
+    """Each name of a package's `__all__` without its entry on the API page ("package.name (where it is
+    defined)"), each package without `__all__`, and each name of an `__all__` that nothing defines."""
+    from hooks import declared_all, defining_module, packages
+
+    ids, missing = api_ids(site), []
+    for package in packages():
+        if declared_all(package) is None:
+            missing.append(f"{package}: no __all__ (the package's public names)")
+        for name in declared_all(package) or []:
+            try:
+                path = f"{defining_module(package, name)}.{name}"
+            except LookupError as exc:
+                missing.append(str(exc))
+                continue
+            if path not in ids:
+                missing.append(f"{package}.{name} ({path})")
+    return missing
+
+
 def public_names(path: Path) -> list[str]:
     """The module's public top-level functions and classes (no leading underscore)."""
     tree = ast.parse(path.read_text(encoding="utf-8"))
@@ -24,18 +50,11 @@ def public_names(path: Path) -> list[str]:
             and not node.name.startswith("_")]
 
 
-def module_path(name: str) -> Path:
-    """The source file of module `name` as the site names it (solas_mi.x.y or plugins.x)."""
-    base = REPO.joinpath(*name.split("."))
-    return base / "__init__.py" if base.is_dir() else base.with_suffix(".py")
-
-
 def missing_api(site: Path) -> list[str]:
-    from hooks import api_modules
+    from hooks import api_modules, module_file
 
-    page = (site / "reference" / "api" / "index.html").read_text(encoding="utf-8")
-    ids = set(re.findall(r'id="([\w.]+)"', page))
-    return [f"{name}.{member}" for _, name in api_modules() for member in public_names(module_path(name))
+    ids = api_ids(site)
+    return [f"{name}.{member}" for _, name in api_modules() for member in public_names(module_file(name))
             if f"{name}.{member}" not in ids]
 
 
@@ -70,7 +89,8 @@ def main(argv: list[str] | None = None) -> int:
     if not (site / "reference" / "api" / "index.html").is_file():
         print(f"{site}: no built site (run mkdocs build first)")
         return 1
-    problems = {"API (public functions and classes without an entry)": missing_api(site),
+    problems = {"public API (names of an __all__ without their entry)": missing_public(site),
+                "API (public functions and classes without an entry)": missing_api(site),
                 "CLI (commands without their help)": missing_commands(site),
                 "plugins": missing_plugins(site)}
     for what, names in problems.items():

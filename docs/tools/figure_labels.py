@@ -11,15 +11,15 @@ import sys
 import matplotlib
 
 matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
-import numpy as np  # noqa: E402
+import matplotlib.pyplot as plt
+import numpy as np
 
-from solas_mi import Lens  # noqa: E402
-from solas_mi.convolution.labels import warp_labels  # noqa: E402
-from solas_mi.convolution.mapping import mapping_for  # noqa: E402
-from solas_mi.convolution.methods import degrade  # noqa: E402
-from solas_mi.psf.grid import psf_grid  # noqa: E402
-from solas_mi.psf.spec import GridSpec  # noqa: E402
+from solas_mi import Lens
+from solas_mi.convolution.labels import warp_labels
+from solas_mi.convolution.mapping import mapping_for
+from solas_mi.convolution.methods import degrade
+from solas_mi.psf.grid import psf_grid
+from solas_mi.psf.spec import GridSpec
 
 W, H, R, CROP = 640, 432, 9, (slice(0, 96), slice(0, 144))
 

@@ -18,6 +18,11 @@ runnable block is left out silently: a fence of another language (text, none) wh
 commands (`solas-mi …`, `make …`, `python …`, `from solas_mi …`) fails unless it is marked skip
 with its reason — write it as ```sh or ```python to have it run.
 
+The site's API reference is generated from the docstrings (`hooks.py`), so with the docs folder the
+docstrings' Examples (numpydoc, `>>>` lines and their output) run too: each module's with `doctest`, in
+a fresh folder of its own like a page's; a module fails when an example's output differs from the
+docstring's or an example raises.
+
     python docs/tools/run_examples.py README.md docs [--quick] [--keep]
 """
 from __future__ import annotations
@@ -34,6 +39,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parents[2]
+DOCS = REPO / "docs"
 FENCE = re.compile(r"^```(\w+)[^\n]*\n(.*?)^```\s*$", re.M | re.S)
 MARK = re.compile(r"<!--\s*example:\s*(expect|slow|skip)\s*(.*?)\s*-->")
 RUN = {"sh": "sh", "bash": "sh", "python": "python"}
@@ -130,12 +136,22 @@ def run(example: Example, folder: Path, env: dict) -> tuple[bool, str, float]:
     return ok, output, time.perf_counter() - start
 
 
+def environment() -> dict:
+    """The examples' environment: this Python's `solas-mi` first on PATH, matplotlib without a display."""
+    return dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}",
+                MPLBACKEND="Agg")
+
+
+def fresh_folder(stem: str) -> Path:
+    """A new temporary folder holding a link to the repository's scenes/, as a reader's checkout has it."""
+    folder = Path(tempfile.mkdtemp(prefix=f"solas-mi-docs-{stem}-"))
+    (folder / "scenes").symlink_to(REPO / "scenes")
+    return folder
+
+
 def run_page(page: Path, quick: bool, keep: bool) -> int:
     """Run one page's examples in order in a fresh folder; the number that failed."""
-    env = dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}",
-               MPLBACKEND="Agg")
-    folder = Path(tempfile.mkdtemp(prefix=f"solas-mi-docs-{page.stem}-"))
-    (folder / "scenes").symlink_to(REPO / "scenes")
+    env, folder = environment(), fresh_folder(page.stem)
     failed = 0
     for ex in examples(page):
         where = f"{os.path.relpath(page, REPO)}:{ex.line}"
@@ -157,6 +173,39 @@ def run_page(page: Path, quick: bool, keep: bool) -> int:
     return failed
 
 
+DOCTEST = ("import doctest, importlib, sys; result = doctest.testmod(importlib.import_module({name!r}), "
+           "optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE); "
+           "print(f'{{result.attempted}} examples, {{result.failed}} failed'); sys.exit(1 if result.failed else 0)")
+
+
+def docstring_modules() -> list[str]:
+    """The modules of the API reference (`hooks.api_modules`) whose docstrings hold examples (`>>>`)."""
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from hooks import api_modules, module_file
+
+    return [name for _, name in api_modules() if ">>> " in module_file(name).read_text(encoding="utf-8")]
+
+
+def run_docstrings(keep: bool) -> int:
+    """Run the docstrings' examples of each module that has some, each module in a fresh folder; the number
+    of modules that failed."""
+    failed = 0
+    for name in docstring_modules():
+        folder, start = fresh_folder(name.rpartition(".")[2]), time.perf_counter()
+        done = subprocess.run([sys.executable, "-c", DOCTEST.format(name=name)], cwd=folder, env=environment(),
+                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        ok = done.returncode == 0 and ": warning:" not in done.stdout
+        summary = done.stdout.strip().splitlines()[-1] if done.stdout.strip() else ""
+        print(f"  {'ok  ' if ok else 'FAIL'} {name} (docstrings: {summary}, {time.perf_counter() - start:.1f} s)",
+              flush=True)
+        if not ok:
+            failed += 1
+            print("    " + done.stdout.strip().replace("\n", "\n    "))
+        if not keep:
+            subprocess.run(["rm", "-rf", str(folder)], check=False)
+    return failed
+
+
 def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("paths", nargs="+", type=Path, help="Markdown files or folders of them")
@@ -168,6 +217,9 @@ def main(argv: list[str] | None = None) -> int:
     for page in pages:
         print(f"{page}:", flush=True)
         failed += run_page(page.resolve(), args.quick, args.keep)
+    if DOCS in [path.resolve() for path in args.paths]:
+        print("docs/reference/api.md (generated from the docstrings):", flush=True)
+        failed += run_docstrings(args.keep)
     print(f"examples: {failed} failed, {time.perf_counter() - start:.0f} s")
     return 1 if failed else 0
 

@@ -38,7 +38,27 @@ def file_hash(path: str | os.PathLike, full: bool = False) -> str:
 
 
 class GridCache:
-    """PSF grids in `folder` (default: `default_cache_dir()`), one EXR per lens hash + spec."""
+    """A folder of PSF grids, one EXR per lens and grid options, each checked before it is reused.
+
+    Parameters
+    ----------
+    folder : str or PathLike, optional
+        The folder; default: `default_cache_dir()`.
+
+    Raises
+    ------
+    SolasError
+        For a path that exists and is not a folder.
+
+    Examples
+    --------
+    >>> from solas_mi import Lens
+    >>> from solas_mi.batch import GridCache
+    >>> from solas_mi.psf import GridSpec
+    >>> cache, lens, spec = GridCache("cache"), Lens.load("solas-doublet"), GridSpec(grid=(2, 2), size=32)
+    >>> [cache.get(lens, spec)[1] for _ in range(2)]  # computed, then from the cache
+    [False, True]
+    """
 
     def __init__(self, folder: str | os.PathLike | None = None):
         self.folder = (Path(folder) if folder is not None else default_cache_dir()).expanduser().resolve()
@@ -48,19 +68,59 @@ class GridCache:
         self.misses = 0
 
     def path(self, lens, spec) -> Path:
-        """Where the grid of `lens` with `spec` (a `psf.spec.GridSpec`) is kept: named by the lens and
-        the hash of the lens's hash and the spec's canonical form (the name made a safe file name: a
-        lens file's name is user data)."""
+        """Where the grid of a lens with some grid options is kept.
+
+        Parameters
+        ----------
+        lens : Lens
+            The lens.
+        spec : GridSpec
+            The grid's options.
+
+        Returns
+        -------
+        Path
+            In the folder, named by the lens (made a safe file name: a lens file's name is user data) and
+            the hash of the lens's hash and the spec's canonical form.
+        """
         return inside(self.folder, f"{safe_name(lens.name, 'lens')}-{spec.key(lens.hash)}.exr")
 
     @staticmethod
     def entry_key(lens, spec) -> dict:
-        """What an entry is the grid of: the lens's hash and the spec's canonical form."""
+        """What an entry is the grid of.
+
+        Parameters
+        ----------
+        lens : Lens
+            The lens.
+        spec : GridSpec
+            The grid's options.
+
+        Returns
+        -------
+        dict
+            The lens's hash and the spec's canonical form.
+        """
         return {"lens_hash": lens.hash, "grid_spec": spec.canonical()}
 
     def check(self, path: Path, lens, spec) -> str | None:
-        """None when the entry at `path` is the grid of `lens` with `spec`, whole (its record beside it,
-        `NAME.exr.json`, holds its key and its SHA-256, both matching); else why it is not."""
+        """Whether an entry is the grid of a lens with some options, whole.
+
+        Parameters
+        ----------
+        path : Path
+            The entry.
+        lens : Lens
+            The lens.
+        spec : GridSpec
+            The grid's options.
+
+        Returns
+        -------
+        str or None
+            None when its record beside it (``NAME.exr.json``) holds its key and its SHA-256, both
+            matching; else why it is not reused.
+        """
         try:
             record = jsonio.loads(read_text(f"{path}.json", "record"))
         except (OSError, ValueError):
@@ -72,8 +132,29 @@ class GridCache:
         return None
 
     def get(self, lens, spec, progress=None) -> tuple[Path, bool, float]:
-        """(path of the grid of `lens` with `spec`, whether it came from the cache, seconds spent computing
-        it). An entry that fails its check (`check`) is said so on stderr and computed again."""
+        """The grid of a lens with some options: from the cache, or computed and kept.
+
+        An entry that fails its check (`check`) is said so on stderr and computed again.
+
+        Parameters
+        ----------
+        lens : Lens
+            The lens.
+        spec : GridSpec
+            The grid's options.
+        progress : callable, optional
+            Told the PSFs done while the grid is computed (`psf.grid.psf_grid`).
+
+        Returns
+        -------
+        tuple
+            (the grid's path, whether it came from the cache, seconds spent computing it).
+
+        Raises
+        ------
+        SolasError
+            For a cache folder that cannot be created, or a grid that cannot be computed.
+        """
         from ..imageio import write_text
         from ..psf.depth import make_grid
 

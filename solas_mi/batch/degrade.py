@@ -248,17 +248,67 @@ def scaled_lens(lens, spec: DegradeSpec) -> tuple[Any, dict | None]:
     return scaled_to_focal(lens, frame.focal_px(), pixel_um, None if sensor or not field else field)
 
 
+# long: the public API's numpydoc docstring is half of it
 def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, spec: DegradeSpec | None = None,
                   *, psf_grid: str | os.PathLike | None = None, lens=None, workers: int | None = None,
                   dask: str | None = None, cache: GridCache | str | os.PathLike | None = None, force: bool = False,
                   progress: bool = True) -> BatchResult:
-    """Degrade every image of `inputs` (files, folders, glob patterns) into `output_dir` (one EXR +
-    PNG per input, or as `spec.output_format` says; `batch.json` beside them) as `spec` says (a
-    `convolution.spec.DegradeSpec`: method, boundary, depth maps, the frames' camera, a camera stage...;
-    None: its defaults) with the grid `psf_grid` (an EXR file) or one computed from `lens` (a Lens or its
-    name / file) with `spec.grid_spec`, cached in `cache` (a GridCache or folder). `workers` local
-    processes (default: the cores), or the Dask scheduler at `dask` ("local": a LocalCluster for this
-    batch). An item that fails is recorded and the others go on."""
+    """Degrade many images by one PSF grid, on local processes or a Dask cluster; resumable.
+
+    One EXR + PNG per input (or as ``spec.output_format`` says) and the manifest ``batch.json`` go into
+    `output_dir`. An item that fails is recorded and the others go on; a batch run again skips what a
+    former run finished ([batch work](../details/batch.md)). A script that calls it needs the main guard
+    (``if __name__ == "__main__":``): the workers are spawned processes.
+
+    Parameters
+    ----------
+    inputs : iterable of str or PathLike
+        Image files, folders and glob patterns.
+    output_dir : str or PathLike
+        Where the outputs go.
+    spec : DegradeSpec, optional
+        How (`convolution.spec.DegradeSpec`: method, boundary, depth maps, the frames' camera, a camera
+        stage, the grid's options); default: its defaults.
+    psf_grid : str or PathLike, optional
+        A PSF grid's EXR file; or give `lens`.
+    lens : Lens or str, optional
+        A lens (or its name or file) whose grid is computed with ``spec.grid_spec`` and cached.
+    workers : int, optional
+        Local processes; default: the cores.
+    dask : str, optional
+        A Dask scheduler's address, or "local" (a LocalCluster for this batch), instead of local processes.
+    cache : GridCache or str or PathLike, optional
+        The grid cache or its folder; default: `cache.default_cache_dir()`.
+    force : bool, default False
+        Run even when the estimated memory exceeds what is free.
+    progress : bool, default True
+        Show progress on stderr.
+
+    Returns
+    -------
+    BatchResult
+        Its items (`jobs`, each with its status), the manifest's path, the grid's path and where it came
+        from ("computed", "cache hit", "given").
+
+    Raises
+    ------
+    SolasError
+        For bad inputs, options, workers or scheduler, neither or both of a grid and a lens, or a batch that
+        would not fit in memory.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from solas_mi.batch import degrade_batch
+    >>> from solas_mi.convolution import DegradeSpec
+    >>> from solas_mi.imageio import write_png
+    >>> from solas_mi.psf import GridSpec
+    >>> write_png("frame.png", np.full((48, 64, 3), 0.5, np.float32))
+    >>> done = degrade_batch(["frame.png"], "degraded", DegradeSpec(grid_spec=GridSpec(grid=(2, 2), size=32)),
+    ...                      lens="solas-doublet", workers=1, cache="grids", progress=False)
+    >>> [job.status for job in done.jobs], done.grid_source
+    (['done'], 'computed')
+    """
     from ..budget import check_memory
     from ..convolution.camera import frame_cameras
     from ..imageio import image_size
@@ -274,6 +324,7 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
     check_memory(f"batch of {len(p.todo)} images on {n} workers", need["peak_bytes"], force)
     header = p.spec.header(p.lens_scale)
     if p.lens is not None:
+        assert p.cache is not None  # a lens's grid is kept in the cache (_grid_source)
         with Progress("psf-grid", None, "PSFs", enabled=progress) as bar:  # shown only when it is computed
             p.grid_path, hit, seconds = p.cache.get(p.lens, p.grid_spec, progress=bar)
         header["grid_source"], header["grid_seconds"] = "cache hit" if hit else "computed", seconds

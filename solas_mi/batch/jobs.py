@@ -21,8 +21,8 @@ from typing import Any, Callable, Iterable
 
 from .. import jsonio
 from ..errors import SolasError
-from ..outputs import inside, safe_name
 from ..labelkinds import KINDS, VALID
+from ..outputs import inside, safe_name
 from ..render.labels import LABELS
 from ..userfiles import check, read_text
 from .cache import file_hash
@@ -182,7 +182,8 @@ def plan(inputs: list[Path], out_dir: Path, roots: dict[Path, Path] | None = Non
     or metadata), or, for a file found in a folder tree (`roots`: file → the folder given), OUT_DIR/<its
     path in the tree>.exr. SolasError when two inputs would write the same output or an output would
     replace an input."""
-    jobs, seen = [], {}
+    jobs = []
+    seen: dict[Path, Path] = {}  # output → the input that writes it
     sources = set(inputs)
     for path in inputs:
         below = path.relative_to(roots[path]).parent if roots and path in roots else Path()
@@ -216,7 +217,17 @@ def add_outputs(jobs: list[Job], more: Callable[[str], list[str]], sources: Iter
 
 
 class Manifest:
-    """`batch.json`: what the batch shares (`header`) and its items, saved atomically."""
+    """A batch's record, ``batch.json``: what the batch shares and each item's state, saved atomically.
+
+    Parameters
+    ----------
+    path : Path
+        The file.
+    header : dict
+        What the batch shares (its id, options, grid, runner).
+    jobs : list of Job
+        Its items.
+    """
 
     def __init__(self, path: Path, header: dict[str, Any], jobs: list[Job]):
         self.path, self.header, self.jobs = path, header, jobs
@@ -224,7 +235,18 @@ class Manifest:
 
     @staticmethod
     def previous(path: Path) -> dict[str, Any]:
-        """The manifest a former run left (empty when there is none or it cannot be read)."""
+        """The manifest a former run left.
+
+        Parameters
+        ----------
+        path : Path
+            The file.
+
+        Returns
+        -------
+        dict
+            Its content; empty when there is none or it cannot be read.
+        """
         try:
             data = jsonio.loads(read_text(path, "record"))
             return data if isinstance(data, dict) else {}
@@ -232,8 +254,18 @@ class Manifest:
             return {}
 
     def resume(self, key: str) -> int:
-        """Mark "skipped" each job (same input, output and sweep point) that a former run of batch `key`
-        finished and whose outputs are unchanged; the number skipped."""
+        """Mark "skipped" each job that a former run of the same batch finished, its outputs unchanged.
+
+        Parameters
+        ----------
+        key : str
+            The batch's id: a former run of another batch finished nothing of this one.
+
+        Returns
+        -------
+        int
+            The jobs skipped (same input, output and sweep point).
+        """
         old = self.previous(self.path)
         if old.get("batch_id") != key:
             return 0
@@ -253,13 +285,26 @@ class Manifest:
         return skipped
 
     def summary(self) -> dict[str, int]:
+        """How many jobs are in each state.
+
+        Returns
+        -------
+        dict
+            State ("done", "failed", "skipped", ...) → count.
+        """
         counts: dict[str, int] = {}
         for job in self.jobs:
             counts[job.status] = counts.get(job.status, 0) + 1
         return counts
 
     def save(self, force: bool = True) -> None:
-        """Rewrite the manifest atomically (unless `force` is False and it was saved under a second ago)."""
+        """Rewrite the manifest atomically.
+
+        Parameters
+        ----------
+        force : bool, default True
+            False: not when it was saved under `SAVE_EVERY_S` ago.
+        """
         from ..imageio import write_text
 
         now = time.monotonic()

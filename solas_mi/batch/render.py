@@ -114,7 +114,8 @@ def _jobs(files: list[Path], out_dir: Path, base: RenderSpec, axes: dict[str, li
     """One item per input and sweep point, named by its input and swept values, seeded by its name."""
     swept = [name for name in SWEEP if len(axes[name]) > 1]
     names = {k: v.name for k, v in lenses.items()}
-    jobs, seen, sources = [], {}, set(files)
+    jobs, sources = [], set(files)
+    seen: dict[Path, Path] = {}  # output → the input that writes it
     for path, point in itertools.product(files, itertools.product(*(axes[name] for name in SWEEP))):
         values = dict(zip(SWEEP, point))
         stem = safe_name("_".join([safe_name(path.stem), *(_label(name, values[name], names) for name in swept)]))
@@ -178,7 +179,8 @@ def estimate(p: RenderPlan, workers: int) -> dict[str, float]:
     from ..render.stock import SAMPLES_PER_PASS
     from ..render.user_scene import scene_film_size
 
-    samples, peak = 0, 0
+    samples = 0
+    peak: float = 0
     for i in p.todo:
         job = p.jobs[i]
         if Path(job.input).suffix.lower() in SCENE_SUFFIXES:
@@ -231,23 +233,69 @@ def image_cameras(p: RenderPlan, model: str | None) -> dict[str, dict]:
     return out
 
 
+# long: the public API's numpydoc docstring is half of it
 # many parameters: the inputs, lens and spec, the runner's settings and what every output records (camera, calibration)
 def render_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *, lens: str | Sequence[str],
                  spec: RenderSpec | None = None, workers: int | None = None, dask: str | None = None,
                  force: bool = False, progress: bool = True, camera=None, calibration_model: str | None = None,
                  **settings) -> BatchResult:
-    """Render every input of `inputs` (images and Mitsuba scene XML files: files, folders, glob
-    patterns) through `lens` (a shipped name or lens file) into `output_dir` (one EXR + PNG per item,
-    `batch.json` beside them), at every point of the sweep: `lens`, `focus_distance` (scene units;
-    scenes only), `sensor` ("COLSxROWS" or (rows, columns); images only), `pitch_um` (µm) and `spp`
-    each take one value or a list. `spec` and the other `settings` (`render.spec.RenderSpec`: response,
-    fov_deg, boundary, fresnel, rings, mapping, variant) as in `render.image.render_image`; `seed` the
-    batch's base seed. `workers` local processes (default: the cores), or the Dask scheduler at
-    `dask` ("local": a LocalCluster for this batch). A failed item is recorded; the others go on.
-    `camera` (`isp.camera.Camera`): each rendered frame through a sensor and image processor, its RAW
-    and developed frame beside it, seeded by the camera's seed and the item's name. `calibration_model`: the
-    camera model whose fit to the lens each output's camera block records (None: none), fitted once per
-    lens and sensor (`image_cameras`), the manifest's `cameras` holding them."""
+    """Render many images and scene files through lenses, over a sweep, on local processes or Dask.
+
+    One EXR + PNG per item and the manifest ``batch.json`` go into `output_dir`; a failed item is
+    recorded and the others go on; a batch run again skips what a former run finished
+    ([batch work](../details/batch.md)). A script that calls it needs the main guard.
+
+    Parameters
+    ----------
+    inputs : iterable of str or PathLike
+        Images and Mitsuba scene XML files: files, folders, glob patterns.
+    output_dir : str or PathLike
+        Where the outputs go.
+    lens : str or sequence of str
+        A shipped lens's name or a lens file, or a list of them (swept).
+    spec : RenderSpec, optional
+        The renders' settings (`render.spec.RenderSpec`, as `render.image.render_image` takes them; its
+        `seed` the batch's base seed); default: its defaults.
+    workers : int, optional
+        Local processes; default: the cores.
+    dask : str, optional
+        A Dask scheduler's address, or "local" (a LocalCluster for this batch).
+    force : bool, default False
+        Run even when the estimated memory exceeds what is free.
+    progress : bool, default True
+        Show progress on stderr.
+    camera : isp.camera.Camera, optional
+        Each rendered frame through a sensor and image processor, its RAW and developed frame beside it,
+        seeded by the camera's seed and the item's name.
+    calibration_model : str, optional
+        The camera model (`optics.calibration.MODELS`) whose fit to the lens each output's camera block
+        records, fitted once per lens and sensor before any item (`image_cameras`; the manifest's
+        ``cameras`` holds them); default: none.
+    **settings
+        Fields of `RenderSpec` to change; ``focus_distance`` (scenes only), ``sensor`` (images only),
+        ``pitch_um`` and ``spp`` take one value or a list each (swept).
+
+    Returns
+    -------
+    BatchResult
+        Its items (`jobs`, each with its status and sweep point) and the manifest's path.
+
+    Raises
+    ------
+    SolasError
+        For bad inputs, settings, workers or scheduler, or a batch that would not fit in memory.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from solas_mi.batch import render_batch
+    >>> from solas_mi.imageio import write_png
+    >>> write_png("frame.png", np.full((48, 64, 3), 0.5, np.float32))
+    >>> done = render_batch(["frame.png"], "rendered", lens="solas-doublet", sensor=(24, 32), spp=[1, 2],
+    ...                     workers=1, progress=False)
+    >>> [(job.status, job.params["spp"]) for job in done.jobs]
+    [('done', 1), ('done', 2)]
+    """
     from ..budget import check_memory
     from .runner import run_batch
 

@@ -141,15 +141,13 @@ class Mapping:
 
     def _solve(self, cols: np.ndarray, rows: np.ndarray, sign: int) -> tuple[np.ndarray, np.ndarray, int]:
         """The fixed point x = (cols, rows) + sign·O(x), and the iterations it took."""
-        x, y = cols.copy(), rows.copy()
-        for n in range(1, MAX_ITERATIONS + 1):
+        x, y, iterations, change = cols.copy(), rows.copy(), 0, np.inf
+        while iterations < MAX_ITERATIONS and change >= TOLERANCE_PX:
             o = self.offsets(x, y)
             nx, ny = cols + sign * o[..., 0], rows + sign * o[..., 1]
             change = max(float(np.abs(nx - x).max(initial=0.0)), float(np.abs(ny - y).max(initial=0.0)))
-            x, y = nx, ny
-            if change < TOLERANCE_PX:
-                break
-        return x, y, n
+            x, y, iterations = nx, ny, iterations + 1
+        return x, y, iterations
 
     def sources(self) -> tuple[np.ndarray, np.ndarray, dict]:
         """The input point (columns, rows), each (H, W), that lands on each output pixel's centre, and how it

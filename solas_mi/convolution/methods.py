@@ -25,15 +25,17 @@ if TYPE_CHECKING:
     from ..psf.grid import PSFGrid
 
 
-# name → the channel's convolution, (channel (H, W), grid, kernels.Layout, grid wavelength index, boundary,
-# dtype) -> degraded channel, with its `describe` (kernels.Layout, kernel radius R in pixels, grid wavelength
-# indices used) -> the metadata of what was done
-METHODS = Registry("convolution method", default="interp")
+DEFAULT_METHOD = "interp"
+"""The convolution method taken when none is given."""
+METHODS = Registry("convolution method", default=DEFAULT_METHOD)
+"""The convolution methods by name (a `solas_mi.registry.Registry`; the [table of methods](registries.md)). Each
+entry's function convolves one channel, ``(channel (H, W), grid, kernels.Layout, grid wavelength index, boundary,
+dtype) -> degraded channel``, and its ``describe`` ``(kernels.Layout, kernel radius R in pixels, grid wavelength
+indices used)`` gives the metadata of what was done."""
 METHODS.register("interp", interp.convolve_channel, describe=interp.describe, summary=interp.SUMMARY,
                  reference="J. G. Nagy and D. P. O'Leary, SIAM J. Sci. Comput. 19(4), 1998")
 METHODS.register("patch", patch.convolve_channel, describe=patch.describe, summary=patch.SUMMARY,
                  reference="the SOLAS paper (IS&T Electronic Imaging, 2025): one PSF per block")
-DEFAULT_METHOD = METHODS.default
 
 
 def check_method(method: str) -> str:
@@ -41,18 +43,60 @@ def check_method(method: str) -> str:
     return METHODS.get(method).name
 
 
+# long: the public API's numpydoc docstring is half of it
 def degrade(image: np.ndarray, grid: "PSFGrid | str", method: str = DEFAULT_METHOD, boundary: str = "edge", *,
             dtype=np.float32, meta: dict | None = None, progress=None, frame=None) -> np.ndarray:
-    """The linear image (H, W) or (H, W, C) seen through the lens of `grid` (a PSFGrid or its EXR path).
+    """A linear image as the lens of a PSF grid sees it: spatially variant convolution.
 
-    method: a name of `METHODS` (each one's summary says what it does). boundary: how the image is
-    padded ("edge" replicates the border, "zero", "reflect" mirrors); it is never wrapped around.
-    Channels take the grid's wavelengths longest first (R, G, B ← 656, 531, 486 nm); a one-wavelength
-    grid serves all.
-    Returns an array of the image's shape in `dtype` (float32 or float64); `meta`, if given, is
-    filled with what was done (camera, channels, blocks or nodes); `progress(done, total)` is called
-    after each channel. `frame`: the frame's camera (`optics.frame.FrameCamera`; None: the image spans
-    the grid's x field range)."""
+    The image is the ideal image of the grid's field (`optics.camera`); channels take the grid's
+    wavelengths longest first (R, G, B ← 656, 531, 486 nm), a one-wavelength grid serving all
+    ([the convolution in depth](../details/convolution.md)).
+
+    Parameters
+    ----------
+    image : numpy.ndarray
+        (H, W) or (H, W, C) linear values.
+    grid : PSFGrid or str
+        The PSF grid, or the path of its EXR file.
+    method : str, default "interp"
+        A name of `METHODS` (each one's summary says what it does).
+    boundary : str, default "edge"
+        How the image is padded, never wrapped around: "edge" replicates the border, "zero" pads with
+        black, "reflect" mirrors.
+    dtype : numpy dtype, default float32
+        float32 or float64.
+    meta : dict, optional
+        Filled with what was done: camera, channels' wavelengths, kernel size, blocks or nodes.
+    progress : callable, optional
+        Called as ``progress(done, total)`` after each channel.
+    frame : FrameCamera, optional
+        The camera the frame was taken with (`optics.frame.FrameCamera`); default: the image spans the
+        grid's x field range.
+
+    Returns
+    -------
+    numpy.ndarray
+        The degraded image, of the image's shape, in `dtype`.
+
+    Raises
+    ------
+    SolasError
+        For a bad method, boundary, dtype, grid or image (empty, not numbers, NaN or infinite values),
+        a frame a method cannot take, or kernels too large for the image.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from solas_mi import Lens
+    >>> from solas_mi.convolution import degrade
+    >>> from solas_mi.psf import psf_grid
+    >>> grid = psf_grid(Lens.load("solas-doublet"), grid=(2, 2), size=32)
+    >>> point = np.zeros((48, 64, 3), np.float32)
+    >>> point[24, 32] = 1.0
+    >>> blurred = degrade(point, grid)
+    >>> blurred.shape, round(float(blurred.sum()), 4)
+    ((48, 64, 3), 3.0)
+    """
     from ..psf.grid import PSFGrid
 
     check_method(method)

@@ -16,9 +16,9 @@ from typing import Any
 
 from ..errors import SolasError
 from ..labelkinds import KINDS, RULES, kinds_help, parse_label_files
-from ..optics.frame import FrameCamera
 from ..optics.calibration.command import calibration_help
 from ..optics.calibration.models import MODELS
+from ..optics.frame import FrameCamera
 from ..options import OptionSpec, option
 from ..psf.spec import GridSpec
 from .depth import OCCLUSIONS, SILHOUETTES
@@ -34,20 +34,56 @@ DEPTH_WITH = "with a depth map (degrade --depth, batch degrade --depth-pattern)"
 
 @dataclass(frozen=True)
 class DegradeSpec(OptionSpec):
-    """How images are degraded by a PSF grid: the convolution `method` and `boundary`; `linear`: PNG/JPEG
-    values are already linear; `output_format` of a batch's items (one of
-    `OUTPUT_FORMATS`); a batch's `depth_pattern` (each image's depth map beside it,
-    e.g. "{stem}_depth.exr") and, with a depth map, the `occlusion` and `silhouette` rules
-    (`convolution.depth`); a batch's `label_patterns` (each image's label files beside it, (kind,
-    pattern) pairs of `labelkinds.KINDS`, warped with it: `convolution.labels`); `frame`: the camera every
-    input was taken with (`optics.frame.FrameCamera`; None: the image spans the grid's x field range);
-    `scale_lens`: that camera's pixel pitch (µm), the batch's lens scaled to its focal length
-    (`batch.degrade.scaled_lens`); `calibration_model`: the camera model whose fit to the lens the degraded
-    frames' metadata records (`convolution.camera`); `camera`: each degraded
-    frame of a batch through a sensor and image processor (`isp.camera.Camera`, checked by the batch:
-    a later stage); `grid_spec`: the grid a batch computes from its lens (`psf.spec.GridSpec`; None:
-    its defaults). One image (`degrade_file`) takes method, boundary, linear, output format, occlusion,
-    silhouette and frame; the others are a batch's."""
+    """How images are degraded by a PSF grid, checked when built.
+
+    ``solas-mi degrade`` and ``solas-mi batch degrade`` make their flags from its fields and build it
+    from them; one image (`output.degrade_file`) takes method, boundary, linear, output format,
+    occlusion, silhouette and frame; the others are a batch's (`solas_mi.batch.degrade_batch`).
+
+    Parameters
+    ----------
+    method : str, default "interp"
+        The convolution method, a name of `methods.METHODS`.
+    boundary : str, default "edge"
+        The padding outside the image, one of `kernels.BOUNDARIES`; never wrapped around.
+    linear : bool, default False
+        PNG/JPEG values are already linear (not sRGB-decoded).
+    output_format : str, default "exr"
+        A batch's items' data, one of `OUTPUT_FORMATS`.
+    depth_pattern : str, optional
+        A batch's depth map beside each image, e.g. "{stem}_depth.exr" (a grid over object distance).
+    occlusion : str, default "filled"
+        With a depth map, how layers are composited, one of `depth.OCCLUSIONS` (`convolution.depth`).
+    silhouette : str, default "nearest"
+        With a depth map, the depth of a silhouette's mixed pixels, one of `depth.SILHOUETTES`.
+    label_patterns : tuple of (str, str), optional
+        A batch's label files beside each image, (kind, pattern) pairs of `labelkinds.KINDS`, warped with it
+        (`convolution.labels`).
+    scale_lens : float, optional
+        A batch's camera's pixel pitch (µm): its lens scaled to the camera's focal length
+        (`batch.degrade.scaled_lens`).
+    calibration_model : str, default "opencv-fisheye"
+        The camera model whose fit to the lens the degraded frames' metadata records, a name of
+        `optics.calibration.MODELS` (`convolution.camera`).
+    frame : FrameCamera, optional
+        The camera every input was taken with (`optics.frame.FrameCamera`); default: the image spans the
+        grid's x field range.
+    camera : isp.camera.Camera, optional
+        A batch's sensor and image processor each degraded frame goes through (checked by the batch).
+    grid_spec : GridSpec, optional
+        The grid a batch computes from its lens (`psf.spec.GridSpec`); default: its defaults.
+
+    Raises
+    ------
+    SolasError
+        For a value that is not among its choices or of its kind.
+
+    Examples
+    --------
+    >>> from solas_mi.convolution import DegradeSpec
+    >>> DegradeSpec(method="patch").header()
+    {'method': 'patch', 'boundary': 'edge', 'linear': False, 'format': 'exr', 'calibration_model': 'opencv-fisheye'}
+    """
 
     method: str = option(METHODS.help, DEFAULT_METHOD, choices=METHODS.names)
     boundary: str = option("padding outside the image, never wrapped around: edge (default) replicates the border "
@@ -106,10 +142,15 @@ class DegradeSpec(OptionSpec):
                 raise SolasError(f"{name} {getattr(self, name)!r} must be a {kind.__module__}.{kind.__name__}")
 
     def identity(self) -> list:
-        """What a batch's outputs depend on besides its grid, as JSON values, in the order and form a
-        batch's id has always hashed them (`batch.degrade.plan_batch`): a finished batch resumes only
-        under the same id, so an option joins only away from its default (the depth rules only with a
-        depth map)."""
+        """What a batch's outputs depend on besides its grid.
+
+        Returns
+        -------
+        list
+            JSON values in the order and form a batch's id has always hashed them
+            (`batch.degrade.plan_batch`): a finished batch resumes only under the same id, so an option
+            joins only away from its default (the depth rules only with a depth map).
+        """
         return ([self.method, self.boundary, self.linear]
                 + ([self.output_format] if self.output_format != "exr" else [])
                 + ([self.depth_pattern, self.occlusion, self.silhouette] if self.depth_pattern is not None else [])
@@ -119,8 +160,19 @@ class DegradeSpec(OptionSpec):
                 + ([self.calibration_model] if self.calibration_model != MODELS.default else []))
 
     def header(self, lens_scale: dict | None = None) -> dict[str, Any]:
-        """The options as a batch's manifest states them, with `lens_scale`, what scaling the lens did
-        (`batch.degrade.scaled_lens`; None: not scaled)."""
+        """The options as a batch's manifest states them.
+
+        Parameters
+        ----------
+        lens_scale : dict, optional
+            What scaling the lens did (`batch.degrade.scaled_lens`); None: not scaled.
+
+        Returns
+        -------
+        dict
+            Method, boundary, linear, format, and the frame's camera, the lens's scale and the batch's camera
+            where given.
+        """
         return {"method": self.method, "boundary": self.boundary, "linear": self.linear, "format": self.output_format,
                 "calibration_model": self.calibration_model,
                 **({"frame_camera": asdict(self.frame)} if self.frame is not None else {}),
@@ -129,6 +181,12 @@ class DegradeSpec(OptionSpec):
                 **({"labels": self.labels_header()} if self.label_patterns else {})}
 
     def labels_header(self) -> dict[str, dict[str, str]]:
-        """Each label kind a batch warps: its pattern and how it follows the mapping (`labelkinds.RULES`)."""
+        """Each label kind a batch warps, as its manifest states them.
+
+        Returns
+        -------
+        dict
+            Kind → its pattern and how it follows the mapping (`labelkinds.RULES`).
+        """
         return {kind: {"pattern": pattern, "rule": KINDS[kind].extra["rule"], "how": RULES[KINDS[kind].extra["rule"]]}
                 for kind, pattern in self.label_patterns or ()}

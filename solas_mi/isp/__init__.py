@@ -12,5 +12,6 @@ the metadata (after the sensor, before the metrics in the import order).
 """
 from ..lazy import lazy_exports
 
+__all__ = ["Camera", "ISP", "develop", "load_camera", "load_isp"]
 __getattr__ = lazy_exports(__name__, {"ISP": ".pipeline", "develop": ".pipeline", "load_isp": ".pipeline",
                                       "Camera": ".camera", "load_camera": ".camera"})

@@ -25,9 +25,35 @@ from .pipeline import ISP, check_sensor
 
 @dataclass(frozen=True)
 class Camera:
-    """A sensor exposed `exposure_ms` (or an `AutoExposure`: chosen per frame), a frame's values times
-    `scale` read as W/m² of image irradiance (radiance through the f-number a frame states), its seed, and
-    the image processor (None: RAW only)."""
+    """The sensor and image processor every frame of a batch goes through, and how a frame is shot.
+
+    Parameters
+    ----------
+    sensor : SensorModel
+        The sensor.
+    exposure_ms : float or AutoExposure
+        The exposure time (ms), or an `sensor.auto_exposure.AutoExposure` (chosen per frame from its light).
+    isp : ISP, optional
+        The image processor; None: RAW only.
+    seed : int, default 0
+        The sensor's seed (its fixed pattern); each frame's temporal noise also takes the frame's name.
+    scale : float, default 1.0
+        A frame's values times `scale` are image irradiance in W/m² (radiance through the f-number a frame
+        states, for a render through a lens).
+
+    Raises
+    ------
+    SolasError
+        For a value of the wrong kind, a non-positive exposure or scale, or a bad seed.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from solas_mi.isp import load_camera
+    >>> raw, frame, meta = load_camera("ar0132at", 10.0, "default", seed=3).shoot(np.full((8, 12, 3), 0.2), "f1")
+    >>> raw.shape, frame.shape, meta["exposure_ms"]
+    ((8, 12), (8, 12, 3), 10.0)
+    """
 
     sensor: SensorModel
     exposure_ms: float | AutoExposure
@@ -51,18 +77,39 @@ class Camera:
         check_seed(self.seed)
 
     def describe(self) -> dict:
-        """Every value (JSON-ready): for metadata, manifests and the batch's identity."""
+        """Every value as JSON values: for metadata, manifests and the batch's identity.
+
+        Returns
+        -------
+        dict
+            The sensor's parameters, the exposure (and the automatic exposure's), scale, seed and processor.
+        """
         from ..sensor.files import describe
 
-        auto = isinstance(self.exposure_ms, AutoExposure)
-        return {"sensor": describe(self.sensor), "exposure_ms": AUTO if auto else self.exposure_ms,
-                **({"auto_exposure": self.exposure_ms.describe()} if auto else {}), "scale": self.scale,
+        auto = self.exposure_ms if isinstance(self.exposure_ms, AutoExposure) else None
+        return {"sensor": describe(self.sensor), "exposure_ms": AUTO if auto is not None else self.exposure_ms,
+                **({"auto_exposure": auto.describe()} if auto is not None else {}), "scale": self.scale,
                 "seed": self.seed, "isp": None if self.isp is None else self.isp.describe()}
 
     def shoot(self, irradiance: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray | None, dict]:
-        """The RAW (H, W, uint16 DN) of frame `name` of an irradiance image (W/m², `scale` applied), the
-        developed 8-bit frame (None without an isp) and the metadata: the camera, the frame's name and
-        number, its exposure, the fraction of its pixels saturated, the stages."""
+        """Shoot one frame: the RAW of an irradiance image, and the developed frame.
+
+        Parameters
+        ----------
+        irradiance : numpy.ndarray
+            (H, W, 3) values, times `scale` image irradiance in W/m².
+        name : str
+            The frame's name: with the seed it fixes the frame's noise, whatever the order of a run.
+
+        Returns
+        -------
+        raw : numpy.ndarray
+            (H, W) uint16 DN.
+        frame : numpy.ndarray or None
+            The developed (H, W, 3) uint8 frame; None without an image processor.
+        meta : dict
+            The camera, the frame's name and number, its exposure, the stages.
+        """
         from ..sensor.capture import capture
         from .pipeline import develop
 
@@ -108,7 +155,26 @@ def write_frame(raw_path: str | Path, raw: np.ndarray, frame: np.ndarray | None,
 
 def load_camera(sensor_model: str, exposure_ms: float | AutoExposure, isp: str | None = None, seed: int = 0,
                 scale: float = 1.0) -> Camera:
-    """The camera of the command line's --sensor-model, --exposure-ms, --isp, seed and --scale."""
+    """A camera as the command line gives it (--sensor-model, --exposure-ms, --isp, --seed, --scale).
+
+    Parameters
+    ----------
+    sensor_model : str
+        A sensor preset's name or a TOML file (`sensor.files.load_sensor`).
+    exposure_ms : float or AutoExposure
+        The exposure time (ms), or an automatic exposure.
+    isp : str, optional
+        "default" or an ISP TOML file (`pipeline.load_isp`); None: RAW only.
+    seed : int, default 0
+        The sensor's seed.
+    scale : float, default 1.0
+        A frame's values times `scale` are W/m².
+
+    Returns
+    -------
+    Camera
+        The camera, checked.
+    """
     from ..sensor.files import load_sensor
     from .pipeline import load_isp
 

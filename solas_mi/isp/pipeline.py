@@ -25,6 +25,7 @@ from __future__ import annotations
 import os
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -32,22 +33,54 @@ from ..errors import SolasError
 from ..options import toml_table
 from ..sensor.model import SensorModel
 from . import black, ccm, demosaic, tone, white
-from .tone import CURVES, GAMMA
+from .tone import CURVES, DEFAULT_CURVE, GAMMA
 
 DEFAULT = "default"
 
 
 @dataclass(frozen=True)
 class ISP:
-    """The image processor: each stage's choice (see the module's docstring)."""
+    """The image processor: each stage's choice, checked when built ([the image processor](../details/isp.md)).
+
+    Parameters
+    ----------
+    black_level : bool, default True
+        Subtract the black level (the signal becomes a fraction of saturation).
+    white_balance : str or dict, default: `white.METHODS`'s default
+        A name of `white.METHODS`, or gains per filter ({"R": 1.9, "G": 1.0, "B": 1.5}).
+    grey_card : (int, int, int, int), optional
+        The grey card's box x0, y0, x1, y1 (pixels), with white_balance "grey-card" only.
+    demosaic : str, default: `demosaic.METHODS`'s default
+        A name of `demosaic.METHODS`, or "none" (the mosaic as a grey frame).
+    demosaic_options : dict, optional
+        The demosaicing method's own options.
+    ccm : str or tuple, default "sensor"
+        The colour correction: "sensor" (from the sensor's channel responses), "none", or a 3 × 3 matrix.
+    tone : str, default: `tone.CURVES`'s default
+        A name of `tone.CURVES`.
+    gamma : float, default: the gamma curve's
+        The "gamma" curve's exponent.
+
+    Raises
+    ------
+    SolasError
+        For a name not in its registry, an option the method does not take, or options that do not go
+        together (a grey card without "grey-card", a CCM with demosaic "none").
+
+    Examples
+    --------
+    >>> from solas_mi.isp import ISP
+    >>> ISP(demosaic="bilinear", tone="gamma", gamma=2.4).describe()["gamma"]
+    2.4
+    """
 
     black_level: bool = True
-    white_balance: str | dict = white.METHODS.default
+    white_balance: str | dict = white.DEFAULT_METHOD
     grey_card: tuple[int, int, int, int] | None = None
     demosaic: str = demosaic.DEFAULT_METHOD
     demosaic_options: dict = field(default_factory=dict)
     ccm: str | tuple = "sensor"
-    tone: str = CURVES.default
+    tone: str = DEFAULT_CURVE
     gamma: float = GAMMA.default
 
     def __post_init__(self):
@@ -79,6 +112,23 @@ class ISP:
 
     @classmethod
     def from_dict(cls, values: dict) -> ISP:
+        """An image processor from a mapping of field names (an ``[isp]`` table).
+
+        Parameters
+        ----------
+        values : dict
+            Field name → value.
+
+        Returns
+        -------
+        ISP
+            The processor, checked.
+
+        Raises
+        ------
+        SolasError
+            For an unknown name or a bad value.
+        """
         known = [f.name for f in fields(cls)]
         unknown = sorted(set(values) - set(known))
         if unknown:
@@ -86,13 +136,41 @@ class ISP:
         return cls(**values)
 
     def describe(self) -> dict:
-        """Every field (JSON-ready)."""
+        """Every field as JSON values, for metadata.
+
+        Returns
+        -------
+        dict
+            Field name → value (tuples as lists).
+        """
         return {k: list(map(list, v)) if k == "ccm" and isinstance(v, tuple) else list(v) if isinstance(v, tuple) else v
                 for k, v in asdict(self).items()}
 
 
 def load_isp(text: str | Path) -> ISP:
-    """The `ISP` named ``default``, or that of the ``[isp]`` table of TOML file `text`."""
+    """An image processor: ``default``, or one from a TOML file.
+
+    Parameters
+    ----------
+    text : str or Path
+        "default" (every field's default), or a TOML file of one ``[isp]`` table of `ISP`'s fields.
+
+    Returns
+    -------
+    ISP
+        The processor, checked.
+
+    Raises
+    ------
+    SolasError
+        For a file that does not exist or cannot be read, or a bad value (naming the file).
+
+    Examples
+    --------
+    >>> from solas_mi.isp import ISP, load_isp
+    >>> load_isp("default") == ISP()
+    True
+    """
     if str(text) == DEFAULT:
         return ISP()
     if not os.path.lexists(text):
@@ -121,9 +199,35 @@ def check_sensor(isp: ISP, model: SensorModel) -> None:
 
 
 def develop(raw: np.ndarray, model: SensorModel, isp: ISP = ISP()) -> tuple[np.ndarray, dict]:
-    """The 8-bit frame (H, W, 3 uint8) of a RAW frame (H, W, DN) of sensor `model`, and the metadata
-    naming every stage with the values it used."""
-    stages = {"black_level": {"subtracted": isp.black_level, "black_dn": model.black_level_dn,
+    """Develop a RAW frame into an 8-bit sRGB frame: black level, white balance, demosaic, CCM, tone.
+
+    Parameters
+    ----------
+    raw : numpy.ndarray
+        (H, W) DN, the sensor's mosaic (`sensor.capture.capture`).
+    model : SensorModel
+        The sensor that took it.
+    isp : ISP, default ISP()
+        The image processor.
+
+    Returns
+    -------
+    frame : numpy.ndarray
+        (H, W, 3) uint8.
+    meta : dict
+        The processor and every stage with the values it used.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from solas_mi.isp import develop
+    >>> from solas_mi.sensor import load_sensor
+    >>> sensor = load_sensor("ar0132at")
+    >>> frame, meta = develop(np.full((8, 12), 2000, np.uint16), sensor)
+    >>> frame.shape, frame.dtype.name, sorted(meta["stages"])
+    ((8, 12, 3), 'uint8', ['black_level', 'ccm', 'demosaic', 'tone', 'white_balance'])
+    """
+    stages: dict[str, dict[str, Any]] = {"black_level": {"subtracted": isp.black_level, "black_dn": model.black_level_dn,
                               "saturation_dn": black.saturation_dn(model)}}
     signal = black.subtract_black(raw, model, enabled=isp.black_level)
     gains = white.METHODS[_white_balance(isp)].function(signal, model, isp)

@@ -7,28 +7,19 @@ is windowed and Fourier transformed. Mode "2023" follows ISO 12233:2023 as sfrma
 does (linear fit, Hamming window). What cannot be measured is flagged, never returned as a number.
 
 Units: positions in px, frequencies in cycles/px (cy/px) along the edge normal, angles in degrees.
-Input pixel values must be linear in scene luminance (decode sRGB before calling).
-
-References
-----------
-- ISO 12233:2023 (4th ed.), "Photography — Electronic still picture imaging — Resolution and spatial
-  frequency responses" (the 2023 mode).
-- ISO 12233:2017, "Photography — Electronic still picture imaging — Resolution and spatial frequency
-  responses" (the 2017 mode).
-- P. D. Burns, sfrmat5, the de-facto reference implementation of ISO 12233:2023, and sfrmat3 (the 2017
-  mode): the edge fits, the windows and the MATLAB-style rounding follow them.
+Input pixel values must be linear in scene luminance (decode sRGB before calling). The standards and
+sfrmat5/sfrmat3, which the edge fits, windows and rounding follow: docs/details/sharpness.md, References.
 """
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 from scipy import ndimage as ndi
 from scipy.special import fdtrc
 
 from ..errors import SolasError
+from .esfr_result import EsfrResult
 from .roi import STEP_ROW_LIMIT, clipped_fraction, linear_pixels, luminance, step_rows
 
 MODES: tuple[str, ...] = ("2023", "2017")
@@ -48,56 +39,6 @@ FIT_MOVE_PX = 0.1  # edge shift by the 5th-order terms that matters
 def matlab_round(x: float) -> int:
     """Round halves away from zero, as MATLAB's round does (Python rounds halves to even)."""
     return int(math.copysign(math.floor(abs(x) + 0.5), x))
-
-
-@dataclass
-class EsfrResult:
-    """e-SFR of one ROI with its diagnostics.
-
-    freq: cy/px along the edge normal (0 … 1/cos θ); sfr: normalised to 1 at f = 0.
-    mtf50 / mtf10: cy/px, None when invalid (see `reason`) or when the SFR does not fall to
-    0.5 / 0.1 below 0.5 cy/px (mtf50_reason "not found").
-    angle_deg: edge tilt θ from the axis it runs along (0–45°, more is warned); orientation: that axis
-    ("vertical": the edge runs top to bottom). Empty arrays and no numbers when invalid.
-    """
-
-    mode: str
-    valid: bool
-    reason: str | None = None
-    warnings: list[str] = field(default_factory=list)
-    freq: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    sfr: np.ndarray = field(default_factory=lambda: np.zeros(0))
-    mtf50: float | None = None
-    mtf10: float | None = None
-    mtf50_reason: str | None = None
-    angle_deg: float | None = None
-    orientation: str | None = None
-    contrast: float | None = None  # (p95 − p5)/(p95 + p5) of the denoised ROI
-    noise: float | None = None  # noise sd / step height
-    step_rows_fraction: float | None = None
-    rows_used: int | None = None
-    fit_order: int | None = None
-    fit_residual_px: float | None = None  # rms distance of row centroids from the fitted edge
-    empty_bins: int | None = None
-    clipped_fraction: float | None = None
-    lsf_width_px: float | None = None  # equivalent width ∫LSF / max LSF, along the normal
-    esf: np.ndarray = field(default_factory=lambda: np.zeros(0))  # 4× oversampled, bin = cos θ/4 px
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dict of the scalar results and diagnostics, with the SFR curve as
-        "freq_cy_px" and "sfr" (rounded to 6 decimals); the ESF is not included."""
-        out: dict[str, Any] = {
-            k: getattr(self, k)
-            for k in (
-                "mode", "valid", "reason", "warnings", "mtf50", "mtf10", "mtf50_reason",
-                "angle_deg", "orientation", "contrast", "noise", "step_rows_fraction",
-                "rows_used", "fit_order", "fit_residual_px", "empty_bins",
-                "clipped_fraction", "lsf_width_px",
-            )
-        }
-        out["freq_cy_px"] = [round(float(v), 6) for v in self.freq]
-        out["sfr"] = [round(float(v), 6) for v in self.sfr]
-        return out
 
 
 def check_mode(mode: str) -> None:
@@ -150,6 +91,7 @@ def _angle_warnings(theta: float) -> list[str]:
     return out
 
 
+# long: the public API's numpydoc docstring is half of it
 def esfr(
     roi: np.ndarray,
     *,
@@ -157,14 +99,41 @@ def esfr(
     full_scale: float | None = 1.0,
     channel: int | None = None,
 ) -> EsfrResult:
-    """e-SFR of a ROI holding one slanted edge that crosses two opposite borders.
+    """The ISO 12233 e-SFR of a ROI holding one slanted edge that crosses two opposite borders.
 
-    roi: H×W or H×W×C linear values (at least 8×8 px); full_scale: the saturation level (None: no
-    upper clip test); channel: measure one colour channel instead of luminance.
-    mode "2023": 5th-order edge fit, Tukey α = 1 windows (sfrmat5); "2017": linear fit, Hamming.
-    The result holds the SFR over frequencies in cy/px along the edge normal, MTF50 and MTF10 in cy/px
-    and the edge angle in degrees. The stages below each fill their part of the result, or its
-    `reason` when the ROI fails them (then the result is returned, not valid).
+    Each stage fills its part of the result, or its `reason` when the ROI fails it (the result is then
+    returned, not valid): what cannot be measured is flagged, never returned as a number.
+
+    Parameters
+    ----------
+    roi : numpy.ndarray
+        H×W or H×W×C values linear in scene luminance, at least 8×8 px.
+    mode : str, default "2023"
+        One of `MODES`: "2023", 5th-order edge fit and Tukey α = 1 windows (sfrmat5); "2017", linear fit
+        and Hamming (sfrmat3).
+    full_scale : float or None, default 1.0
+        The saturation level; None: no upper clip test.
+    channel : int, optional
+        Measure this colour channel instead of luminance.
+
+    Returns
+    -------
+    EsfrResult
+        The SFR over frequencies in cy/px along the edge normal, MTF50 and MTF10 (cy/px), the edge's angle
+        (degrees) and the diagnostics.
+
+    Raises
+    ------
+    SolasError
+        For an unknown mode, or a ROI that is not an image of finite values of at least 8×8 px.
+
+    Examples
+    --------
+    >>> from solas_mi.metrics import slanted_edge
+    >>> from solas_mi.metrics.esfr import esfr
+    >>> result = esfr(slanted_edge((100, 100), angle_deg=5.0, sigma_px=1.0))
+    >>> result.valid, round(result.mtf50, 3), round(result.angle_deg, 2)
+    (True, 0.18, 5.0)
     """
     check_mode(mode)
     data = linear_pixels(roi, "ROI")

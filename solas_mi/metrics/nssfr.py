@@ -1,34 +1,27 @@
 """Natural-scene SFR (NS-SFR, the SOLAS paper's SS-SFR): slanted edges found in an image, the e-SFR
 of each, and MTF50 statistics per radial annulus; a before/after comparison measures identical ROIs
-(spec §4). `plot_report` draws the SOLAS paper's figure 5.
+(spec §4), reported per annulus (`nssfr_report.NsSfrReport`). `plot_report` draws the SOLAS paper's
+figure 5.
 
 ROIs are (x, y, w, h) in px; radii are fractions of R, the centre-to-corner distance; MTF50 in cy/px.
-
-References
-----------
-- van Zwanenberg et al., natural-scene SFR (NS-SFR), JIST 65(6), 2021: edges found in the image,
-  ROIs selected and tested, an e-SFR per ROI, and the system estimate (mean MTF50 of the sharpest 10 %).
-- Jakab et al., "ARDÁN", IEEE Access, 2024: the automotive fisheye variant of NS-SFR.
-- D. Jakab, J. Barthel, A. Braun, R. Mohandas, B. M. Deegan, M. Kumbham, D. Molloy, F. Collins,
-  A. Scanlan and C. Eising, "SOLAS: Superpositioning an Optical Lens in Automotive Simulation",
-  IS&T International Symposium on Electronic Imaging, Autonomous Vehicles and Machines, 2025: the
-  SS-SFR per automotive annulus and its figure 5.
+The method follows van Zwanenberg et al.'s NS-SFR (JIST 65(6), 2021) and the SOLAS paper's SS-SFR; the
+references: docs/details/sharpness.md, References.
 """
 from __future__ import annotations
 
 import math
 import os
 from collections import Counter
-from dataclasses import dataclass, field
-from typing import Any, Sequence
+from typing import Sequence
 
 import numpy as np
 from scipy import ndimage as ndi
 from skimage.feature import canny
 
 from ..errors import SolasError
-from .annuli import ANNULI, ANNULUS_NAMES, annulus_index, corner_radius, radius_fraction
+from .annuli import ANNULI, ANNULUS_NAMES, annulus_index, radius_fraction
 from .esfr import EsfrResult, esfr, matlab_round
+from .nssfr_report import CURVE_FREQ, AnnulusStats, NsSfrReport, RoiMeasurement
 from .roi import Roi, crop, linear_pixels, luminance
 
 CONTRAST_BANDS: dict[str, tuple[float, float]] = {"automotive": (0.1, 0.9), "chart": (0.55, 0.65)}
@@ -38,7 +31,6 @@ MIN_MTF50 = 0.1  # cy/px; lower values are rejected unless the whole image is th
 POLY_ORDER = 4
 POLY_DEVIATION = 0.2  # SFR deviation from its 4th-order fit that counts as a bad frequency
 POLY_BAD_FRACTION = 0.1  # fraction of bad frequencies that rejects a curve
-CURVE_FREQ = np.linspace(0.0, 0.5, 51)  # cy/px, grid of the per-annulus mean SFR curves
 NS_MARGINS = (10,)  # px each side of an edge's bounding box (spec §4.3)
 CHART_MARGINS = (32, 24, 16, 10)  # widest first: chart ROIs as wide as the layout allows
 ROW_GUARD_PX = 10  # rows kept this far from rows where another edge enters the ROI
@@ -65,51 +57,53 @@ def _segment_rois(
     at least ROW_GUARD_PX rows from such pixels (isolation from texture and from the adjacent sides
     of a square); the ROI spans the segment's columns widened by the chosen margin each side.
     """
-    height, width = mask.shape
+    _height, width = mask.shape
     labels, _ = ndi.label(mask, structure=np.ones((3, 3), bool))
     out: list[Roi] = []
-    for lab, sl in enumerate(ndi.find_objects(labels), start=1):
-        if sl is None or sl[0].stop - sl[0].start < min_rows:
+    for label, box in enumerate(ndi.find_objects(labels), start=1):
+        if box is None or box[0].stop - box[0].start < min_rows:
             continue
-        rs, cs = sl
-        seg = labels[sl] == lab
-        has = seg.any(axis=1)
-        first = seg.argmax(axis=1) + cs.start
-        last = seg.shape[1] - 1 - seg[:, ::-1].argmax(axis=1) + cs.start
+        box_rows, box_cols = box
+        segment = labels[box] == label
+        row_has_edge = segment.any(axis=1)
+        first_col = segment.argmax(axis=1) + box_cols.start
+        last_col = segment.shape[1] - 1 - segment[:, ::-1].argmax(axis=1) + box_cols.start
 
-        def clean(r0: int, r1: int, m: int) -> tuple[int, int, int, int] | None:
-            while r1 - r0 >= min_rows:
-                rows = slice(r0 - rs.start, r1 - rs.start)
-                if not has[rows].any():
+        def clean(top: int, bottom: int, pad: int) -> tuple[int, int, int, int] | None:
+            """Rows top…bottom trimmed clear of other edges `pad` columns about it: (top, bottom, left, right)."""
+            while bottom - top >= min_rows:
+                rows = slice(top - box_rows.start, bottom - box_rows.start)
+                if not row_has_edge[rows].any():
                     return None
-                lo, hi = first[rows][has[rows]].min(), last[rows][has[rows]].max()
-                x0, x1 = max(0, lo - m), min(width, hi + 1 + m)
-                dirty = (edges[r0:r1, x0:x1] & (labels[r0:r1, x0:x1] != lab)).any(axis=1)
+                lo, hi = first_col[rows][row_has_edge[rows]].min(), last_col[rows][row_has_edge[rows]].max()
+                left, right = max(0, lo - pad), min(width, hi + 1 + pad)
+                dirty = (edges[top:bottom, left:right] & (labels[top:bottom, left:right] != label)).any(axis=1)
                 dirty = ndi.maximum_filter1d(dirty, 2 * ROW_GUARD_PX + 1, mode="constant")
                 if not dirty.any():
-                    if min(lo - x0, x1 - 1 - hi) < m // 2:
+                    if min(lo - left, right - 1 - hi) < pad // 2:
                         return None  # the edge runs too close to the image border
-                    return r0, r1, x0, x1
-                a, b = _longest_run(~dirty)
-                r0, r1 = r0 + a, r0 + b
+                    return top, bottom, left, right
+                run_start, run_stop = _longest_run(~dirty)
+                top, bottom = top + run_start, top + run_stop
             return None
 
-        spans = {m: clean(rs.start, rs.stop, m) for m in margins}
+        spans = {pad: clean(box_rows.start, box_rows.stop, pad) for pad in margins}
         narrow = spans[min(margins)]
         if narrow is None:
             continue
-        margin = max(m for m, s in spans.items() if s is not None and s[1] - s[0] >= 0.5 * (narrow[1] - narrow[0]))
-        r0, r1 = spans[margin][:2]
-        n_rows = r1 - r0
+        margin, widest = max(((pad, span) for pad, span in spans.items() if span is not None
+                              and span[1] - span[0] >= 0.5 * (narrow[1] - narrow[0])), key=lambda found: found[0])
+        top, bottom = widest[:2]
+        n_rows = bottom - top
         if max_rows is None or n_rows <= max_rows:
-            starts = [r0]
+            starts = [top]
             size = n_rows
         else:
             count = math.ceil((n_rows - max_rows) / (max_rows / 2)) + 1
-            starts = [matlab_round(s) for s in np.linspace(r0, r1 - max_rows, count)]
+            starts = [matlab_round(start) for start in np.linspace(top, bottom - max_rows, count)]
             size = max_rows
-        for s in starts:
-            span = clean(s, s + size, margin)
+        for start in starts:
+            span = clean(start, start + size, margin)
             if span is not None:
                 y0, y1, x0, x1 = span
                 out.append((int(x0), int(y0), int(x1 - x0), int(y1 - y0)))
@@ -156,106 +150,7 @@ def _curve_problem(res: EsfrResult) -> str | None:
     return None
 
 
-@dataclass
-class RoiMeasurement:
-    """One edge ROI: box (x, y, w, h) px, radius as a fraction of R, annulus index, results."""
-
-    roi: Roi
-    radius: float
-    annulus: int
-    before: EsfrResult
-    after: EsfrResult | None = None
-
-
-@dataclass
-class AnnulusStats:
-    """MTF50 statistics (cy/px) of one annulus r_inner ≤ r/R < r_outer; curve: mean SFR on CURVE_FREQ."""
-
-    name: str
-    r_inner: float
-    r_outer: float
-    count: int
-    mean_mtf50: float | None
-    median_mtf50: float | None
-    sharpest10_mtf50: float | None
-    curve: np.ndarray | None
-
-    @staticmethod
-    def of(name: str, r_inner: float, r_outer: float, results: list[EsfrResult]) -> "AnnulusStats":
-        """Statistics of the valid e-SFR results of one annulus (radii as fractions of R)."""
-        values = np.sort([r.mtf50 for r in results])[::-1]
-        if values.size == 0:
-            return AnnulusStats(name, r_inner, r_outer, 0, None, None, None, None)
-        top = values[: max(1, math.ceil(0.1 * values.size))]
-        curve = np.mean([np.interp(CURVE_FREQ, r.freq, r.sfr) for r in results], axis=0)
-        return AnnulusStats(
-            name, r_inner, r_outer, int(values.size), float(values.mean()), float(np.median(values)),
-            float(top.mean()), curve,
-        )
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dict: MTF50 values in cy/px, "mean_sfr" on CURVE_FREQ (rounded to 6 decimals)."""
-        return {
-            "name": self.name, "r_inner": self.r_inner, "r_outer": self.r_outer, "count": self.count,
-            "mean_mtf50": self.mean_mtf50, "median_mtf50": self.median_mtf50,
-            "sharpest10_mtf50": self.sharpest10_mtf50,
-            "mean_sfr": None if self.curve is None else [round(float(v), 6) for v in self.curve],
-        }
-
-
-@dataclass
-class NsSfrReport:
-    """Natural-scene SFR of one image, or of a before/after pair measured on the same ROIs.
-
-    shape: (rows, columns) px; scheme: the annuli scheme; before/after: statistics per annulus
-    (MTF50 in cy/px); rejected: count of rejected ROIs per reason.
-    """
-
-    shape: tuple[int, int]
-    scheme: str
-    mode: str
-    rois: list[RoiMeasurement]
-    before: list[AnnulusStats]
-    after: list[AnnulusStats] | None = None
-    rejected: dict[str, int] = field(default_factory=dict)
-
-    @property
-    def radius_px(self) -> float:
-        """R: distance from the image centre to a corner, px."""
-        return corner_radius(*self.shape[:2])
-
-    def mean_change(self) -> list[float | None]:
-        """Per annulus: mean of (after − before) MTF50 over identical ROIs, cy/px."""
-        if self.after is None:
-            raise SolasError("no comparison image was measured")
-        out: list[float | None] = []
-        for i in range(len(self.before)):
-            d = [m.after.mtf50 - m.before.mtf50 for m in self.rois if m.annulus == i and m.after]
-            out.append(float(np.mean(d)) if d else None)
-        return out
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dict: R in px, frequencies in cy/px, MTF50 in cy/px, angles in degrees, ROIs in px."""
-        out: dict[str, Any] = {
-            "shape": list(self.shape), "annuli_scheme": self.scheme, "mode": self.mode,
-            "radius_px": self.radius_px, "freq_cy_px": [round(float(f), 6) for f in CURVE_FREQ],
-            "annuli": [s.to_dict() for s in self.before], "rejected": self.rejected,
-        }
-        if self.after is not None:
-            out["annuli_after"] = [s.to_dict() for s in self.after]
-            out["mean_change_mtf50"] = self.mean_change()
-        out["rois"] = [
-            {
-                "roi": list(m.roi), "radius": round(m.radius, 4), "annulus": ANNULUS_NAMES[m.annulus],
-                "mtf50": m.before.mtf50, "angle_deg": m.before.angle_deg,
-                "orientation": m.before.orientation, "contrast": m.before.contrast,
-                **({"mtf50_after": m.after.mtf50} if m.after is not None else {}),
-            }
-            for m in self.rois
-        ]
-        return out
-
-
+# long: the public API's numpydoc docstring is half of it
 def natural_scene_sfr(
     image: np.ndarray,
     *,
@@ -265,11 +160,40 @@ def natural_scene_sfr(
     contrast: str = "automotive",
     full_scale: float | None = 1.0,
 ) -> NsSfrReport:
-    """NS-SFR of a linear image (H×W[×C] floats, ≥ MIN_ROI_PX a side); with `compare`, the same ROIs in another.
+    """The natural-scene SFR of an image: edges found, an e-SFR each, MTF50 statistics per annulus.
 
-    annuli: "automotive" (0.24 / 0.6 / 1.0 R) or "equal-area"; contrast: "automotive" (0.1, 0.9) or
-    "chart" (0.55, 0.65) band of (p95 − p5)/(p95 + p5); full_scale: saturation level (None: none);
-    mode: the e-SFR mode, "2023" or "2017". MTF50 statistics in cy/px.
+    Parameters
+    ----------
+    image : numpy.ndarray
+        H×W[×C] linear values, at least `roi.MIN_ROI_PX` a side.
+    compare : numpy.ndarray, optional
+        Another image of the same size, measured on the same ROIs (before/after).
+    annuli : str, default "automotive"
+        The annuli, a scheme of `annuli.ANNULI`: "automotive" (0.24 / 0.6 / 1.0 R) or "equal-area".
+    mode : str, default "2023"
+        The e-SFR mode (`esfr.MODES`).
+    contrast : str, default "automotive"
+        The band of (p95 − p5)/(p95 + p5) an edge's contrast must lie in, a key of `CONTRAST_BANDS`.
+    full_scale : float or None, default 1.0
+        The saturation level; None: none.
+
+    Returns
+    -------
+    NsSfrReport
+        The ROIs measured and MTF50 statistics (cy/px) per annulus, before and after; the ROIs rejected
+        per reason.
+
+    Raises
+    ------
+    SolasError
+        For an unknown scheme, band or mode, or images of different sizes or not images.
+
+    Examples
+    --------
+    >>> from solas_mi.metrics import natural_scene_sfr, slanted_edge
+    >>> report = natural_scene_sfr(slanted_edge((240, 320), 5.0, 1.0), compare=slanted_edge((240, 320), 5.0, 2.0))
+    >>> [(annulus.name, annulus.count) for annulus in report.before]
+    [('centre', 1), ('middle', 2), ('edge', 0)]
     """
     if annuli not in ANNULI:
         raise SolasError(f"annuli scheme {annuli!r} is not supported: allowed {', '.join(ANNULI)}")
@@ -309,11 +233,13 @@ def _edge_rois(image: np.ndarray, mode: str, contrast: str, full_scale: float | 
     found: list[tuple[Roi, EsfrResult]] = []
     for roi in find_edge_rois(luminance(image)):
         res = esfr(crop(image, roi), mode=mode, full_scale=full_scale)
-        if not res.valid:
+        edge_contrast, angle_deg = res.contrast, res.angle_deg  # both measured in a valid result
+        why: str | None
+        if not res.valid or edge_contrast is None or angle_deg is None:
             why = "invalid e-SFR"
-        elif not c_lo < res.contrast < c_hi:
+        elif not c_lo < edge_contrast < c_hi:
             why = f"contrast outside ({c_lo}, {c_hi})"
-        elif not ANGLE_RANGE_DEG[0] <= res.angle_deg <= ANGLE_RANGE_DEG[1]:
+        elif not ANGLE_RANGE_DEG[0] <= angle_deg <= ANGLE_RANGE_DEG[1]:
             why = f"angle outside {ANGLE_RANGE_DEG[0]}–{ANGLE_RANGE_DEG[1]}°"
         elif res.mtf50 is None:
             why = "MTF50 not found"
@@ -325,10 +251,10 @@ def _edge_rois(image: np.ndarray, mode: str, contrast: str, full_scale: float | 
             found.append((roi, res))
     if found:
         floor = min(MIN_MTF50, 0.5 * float(np.median([r.mtf50 for _, r in found])))
-        low = [f for f in found if f[1].mtf50 < floor]
+        low = [f for f in found if f[1].mtf50 < floor]  # type: ignore[operator]  # each found has an MTF50
         if low:
             rejected[f"MTF50 below {MIN_MTF50} cy/px in a sharper image"] += len(low)
-            found = [f for f in found if f[1].mtf50 >= floor]
+            found = [f for f in found if f[1].mtf50 >= floor]  # type: ignore[operator]  # each found has one
     return found
 
 
@@ -379,7 +305,7 @@ def plot_report(report: NsSfrReport, image: np.ndarray, path: str | os.PathLike)
     ax_img.set_xlim(-0.5, width - 0.5)
     ax_img.set_ylim(height - 0.5, -0.5)
     ax_img.set(title=f"edge ROIs in {report.scheme} annuli", xlabel="x (px)", ylabel="y (px)")
-    after = report.after or [None] * len(report.before)
+    after: Sequence[AnnulusStats | None] = report.after or [None] * len(report.before)
     for stats, post, colour in zip(report.before, after, colours):
         if stats.curve is None:
             continue

@@ -11,11 +11,11 @@ from dataclasses import replace
 
 import numpy as np
 
-from . import tracer as T
+from . import tracer
 from .lens import Lens
 from .paraxial import paraxial, pupil_distance
 
-dr = T.dr
+dr = tracer.dr
 _HALVINGS = 6  # a Newton step that loses its ray is halved up to this many times
 _STEP = 1e-5  # mm, finite-difference step in entrance coordinates
 POLAR_STEP_DEG = 2.0  # largest step of the field when continuing a chief-ray aim outward
@@ -31,33 +31,34 @@ class Bundle:
         self.bundle_fields, self.bundle_wavelengths = field_deg, np.broadcast_to(wavelength_nm, (len(field_deg),))
         self.n_fields = len(field_deg)
         self.per_field = per_field
-        self.index = dr.arange(T.UInt32, self.n_fields * per_field) // per_field
+        self.index = dr.arange(tracer.UInt32, self.n_fields * per_field) // per_field
         # per ray: field tangents (x, y), or the unit direction (x, y, z) of polar fields
         incoming = lens.field_type.incoming(field_deg)
-        self.incoming = tuple(T.gather(incoming[:, i], self.index) for i in range(incoming.shape[1]))
-        self.wavelength_um = T.gather(np.asarray(wavelength_nm) / 1000.0, self.index)
-        pts = T.object_points(lens, field_deg)
-        self.object_point = None if pts is None else (T.gather(pts[:, 0], self.index), T.gather(pts[:, 1], self.index))
+        self.incoming = tuple(tracer.gather(incoming[:, i], self.index) for i in range(incoming.shape[1]))
+        self.wavelength_um = tracer.gather(np.asarray(wavelength_nm) / 1000.0, self.index)
+        pts = tracer.object_points(lens, field_deg)
+        self.object_point = None if pts is None else (tracer.gather(pts[:, 0], self.index),
+                                                      tracer.gather(pts[:, 1], self.index))
         # what a converged aim can reach: rays launched from a far object carry its coordinates'
         # rounding (≈ 1e-17 of the distance, measured: 4e-8 mm at 1e12 mm) into every crossing
         self.tolerance = 1e3 * _TOL + (0.0 if lens.at_infinity else 1e-17 * abs(lens.object_distance))
 
-    def per_ray(self, values: np.ndarray) -> T.F:
+    def per_ray(self, values: np.ndarray) -> tracer.F:
         """Per-field values spread over the bundle's rays."""
-        return T.gather(values, self.index)
+        return tracer.gather(values, self.index)
 
-    def launch(self, ex: T.F, ey: T.F) -> T.Rays:
+    def launch(self, ex: tracer.F, ey: tracer.F) -> tracer.Rays:
         """The bundle's rays at entrance coordinates (ex, ey), in the lens's field type."""
         if self.lens.field_type.sideways:  # directions up to and beyond 90°, object at infinity
-            return T.launch_direction(self.lens, *self.incoming, ex, ey)
-        return T.launch(self.lens, *self.incoming, ex, ey, self.object_point)
+            return tracer.launch_direction(self.lens, *self.incoming, ex, ey)
+        return tracer.launch(self.lens, *self.incoming, ex, ey, self.object_point)
 
-    def trace(self, ex: T.F, ey: T.F, heights: list | None = None) -> T.Traced:
+    def trace(self, ex: tracer.F, ey: tracer.F, heights: list | None = None) -> tracer.Traced:
         """The rays of entrance coordinates (ex, ey) traced; `heights`: see `tracer.trace`."""
-        return T.trace(self.lens, self.launch(ex, ey), self.wavelength_um, heights=heights)
+        return tracer.trace(self.lens, self.launch(ex, ey), self.wavelength_um, heights=heights)
 
 
-def aim(bundle: Bundle, target, ex: T.F, ey: T.F, goal_x: T.F, goal_y: T.F, max_iter: int = 60):
+def aim(bundle: Bundle, target, ex: tracer.F, ey: tracer.F, goal_x: tracer.F, goal_y: tracer.F, max_iter: int = 60):
     """Newton iteration on entrance coordinates so that target(traced) → (goal_x, goal_y).
 
     `target(traced)` returns (gx, gy, ok). The Jacobian is taken by finite differences and reused
@@ -108,7 +109,7 @@ def aim(bundle: Bundle, target, ex: T.F, ey: T.F, goal_x: T.F, goal_y: T.F, max_
     return ex, ey, tr, converged
 
 
-def stop_target(tr: T.Traced):
+def stop_target(tr: tracer.Traced):
     return tr.stop_x, tr.stop_y, tr.ok
 
 
@@ -129,9 +130,9 @@ def continued_aim(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) 
             return e, done
         nxt = np.minimum(done + step, 1.0)[active]
         b = Bundle(lens, field_deg[active] * nxt[:, None], wavelength_nm[active], 1)
-        zero = dr.zeros(T.F, int(active.sum()))
-        ex, ey, _, conv = aim(b, stop_target, T.F(e[active, 0]), T.F(e[active, 1]), zero, zero)
-        ex, ey, conv = T.to_numpy(ex, ey, conv)
+        zero = dr.zeros(tracer.F, int(active.sum()))
+        ex, ey, _, conv = aim(b, stop_target, tracer.F(e[active, 0]), tracer.F(e[active, 1]), zero, zero)
+        ex, ey, conv = tracer.to_numpy(ex, ey, conv)
         idx = np.flatnonzero(active)
         e[idx[conv]] = np.stack([ex, ey], axis=-1)[conv]
         done[idx[conv]] = nxt[conv]
@@ -142,13 +143,13 @@ def continued_aim(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) 
 def _paraxial_aim(lens: Lens, field_deg: np.ndarray) -> np.ndarray:
     """Entrance coordinates (n, 2) of the paraxial chief ray (through the entrance-pupil centre)."""
     ep_z = paraxial(lens).entrance_pupil_z_mm
-    tan = T.field_tangents(field_deg)
+    tan = tracer.field_tangents(field_deg)
     if lens.at_infinity:
         # the ray through the pupil centre, in launch-plane coordinates: project (0, 0, ep_z − z0)
-        _, (_, _, e1z), (_, _, e2z) = T.beam_basis(tan[:, 0], tan[:, 1], np.sqrt)
-        span = ep_z - T.launch_plane_z(lens)
+        _, (_, _, e1z), (_, _, e2z) = tracer.beam_basis(tan[:, 0], tan[:, 1], np.sqrt)
+        span = ep_z - tracer.launch_plane_z(lens)
         return np.stack([span * e1z, span * e2z], axis=-1)
-    pts = T.object_points(lens, field_deg)
+    pts = tracer.object_points(lens, field_deg)
     return pts * (1.0 - lens.object_distance / pupil_distance(lens, ep_z))
 
 
@@ -164,8 +165,8 @@ def chief_aim(lens: Lens, b: Bundle) -> tuple[np.ndarray, np.ndarray]:
         lost = reached < 1.0
     else:
         e0 = _paraxial_aim(lens, fields)
-        zero = dr.zeros(T.F, b.n_fields)
-        lost = ~T.to_numpy(aim(b, stop_target, T.F(e0[:, 0]), T.F(e0[:, 1]), zero, zero)[3])[0]
+        zero = dr.zeros(tracer.F, b.n_fields)
+        lost = ~tracer.to_numpy(aim(b, stop_target, tracer.F(e0[:, 0]), tracer.F(e0[:, 1]), zero, zero)[3])[0]
         if lost.any():
             e0[lost], reached = continued_aim(lens, fields[lost], waves[lost])
             lost[np.flatnonzero(lost)[reached >= 1.0]] = False
@@ -180,12 +181,12 @@ def nearest_passing(lens: Lens, field_deg: np.ndarray, wavelength_nm: float, sam
     """Of a grid of rays of one field over every entrance point that can meet the lens, the one that passes
     the stop (and every aperture before it) nearest the stop centre: (its entrance coordinates, its stop
     crossing), or None when no ray of the field passes the stop."""
-    span = -T.launch_plane_z(lens) if lens.at_infinity else 2.0 * max(s.semi_diameter for s in lens.surfaces)
+    span = -tracer.launch_plane_z(lens) if lens.at_infinity else 2.0 * max(s.semi_diameter for s in lens.surfaces)
     g = np.linspace(-span, span, samples)
     ex, ey = (a.ravel() for a in np.meshgrid(g, g))
     b = Bundle(lens, np.tile(field_deg, (len(ex), 1)), np.full(len(ex), wavelength_nm), 1)
-    tr = b.trace(T.F(ex), T.F(ey))
-    ok, clipped, sx, sy = T.to_numpy(tr.ok, tr.clipped_by, tr.stop_x, tr.stop_y)
+    tr = b.trace(tracer.F(ex), tracer.F(ey))
+    ok, clipped, sx, sy = tracer.to_numpy(tr.ok, tr.clipped_by, tr.stop_x, tr.stop_y)
     passed = ok & ((clipped == 0) | (clipped > lens.stop_index + 1))
     if not passed.any():
         return None
@@ -200,14 +201,14 @@ class _FilmBundle:
     for `aim`: their entrance coordinates are points on the last surface's vertex plane."""
 
     def __init__(self, rev: Lens, x: np.ndarray, y: np.ndarray, wavelength_nm: float):
-        self.lens, self.x, self.y = rev, T.F(x), T.F(y)
-        self.wavelength_um = T.F(np.full(len(x), wavelength_nm * 1e-3))
+        self.lens, self.x, self.y = rev, tracer.F(x), tracer.F(y)
+        self.wavelength_um = tracer.F(np.full(len(x), wavelength_nm * 1e-3))
         self.tolerance = 1e3 * _TOL
 
-    def trace(self, ex: T.F, ey: T.F, heights: list | None = None) -> T.Traced:
+    def trace(self, ex: tracer.F, ey: tracer.F, heights: list | None = None) -> tracer.Traced:
         zero = 0.0 * ex
-        return T.trace(self.lens, T.launch(self.lens, zero, zero, ex, ey, (self.x, self.y)), self.wavelength_um,
-                       heights=heights)
+        return tracer.trace(self.lens, tracer.launch(self.lens, zero, zero, ex, ey, (self.x, self.y)),
+                            self.wavelength_um, heights=heights)
 
 
 def film_chief_aim(rev: Lens, x: np.ndarray, y: np.ndarray, wavelength_nm: float) -> tuple[np.ndarray, ...]:
@@ -221,7 +222,7 @@ def film_chief_aim(rev: Lens, x: np.ndarray, y: np.ndarray, wavelength_nm: float
     ep_z, od = paraxial(replace(rev, object_distance=math.inf)).entrance_pupil_z_mm, rev.object_distance
     shrink = 1.0 - od / (ep_z + od)
     b = _FilmBundle(rev, x, y, wavelength_nm)
-    zero = T.F(np.zeros(len(x)))
-    ex, ey, tr, converged = aim(b, stop_target, T.F(x * shrink), T.F(y * shrink), zero, zero)
-    ex, ey, converged, clipped = T.to_numpy(ex, ey, converged, tr.clipped_by)
+    zero = tracer.F(np.zeros(len(x)))
+    ex, ey, tr, converged = aim(b, stop_target, tracer.F(x * shrink), tracer.F(y * shrink), zero, zero)
+    ex, ey, converged, clipped = tracer.to_numpy(ex, ey, converged, tr.clipped_by)
     return ex, ey, converged & (clipped == 0)

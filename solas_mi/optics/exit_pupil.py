@@ -20,7 +20,8 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from .lens import Lens, Surface
+from .lens import Lens
+from .surface import Surface
 from .overlap import check_image_distance
 
 FINE = 512  # points per side of the search for a pupil the coarse grid missed
@@ -36,7 +37,7 @@ def reversed_lens(lens: Lens) -> Lens:
     before = [lens.object_glass] + [x.glass for x in s[:-1]]
     materials = ["AIR"] + [x.material for x in s[:-1]]
     rev = []
-    for j, i in enumerate(range(len(s) - 1, -1, -1)):
+    for i in range(len(s) - 1, -1, -1):
         thickness = s[i - 1].thickness if i > 0 else 1.0  # beyond the original first surface: unused
         rev.append(Surface(s[i].label, -s[i].radius, thickness, s[i].diameter, materials[i], before[i], s[i].stop,
                            s[i].conic, tuple(-a for a in s[i].aspheric), tuple(-a for a in s[i].qbfs),
@@ -81,13 +82,14 @@ def passes(rev: Lens, x: np.ndarray, y: np.ndarray, ex: np.ndarray, ey: np.ndarr
            ) -> np.ndarray:
     """Whether the ray from image point (x, y) toward (ex, ey) on the last vertex plane leaves the lens
     (`rev`: the `reversed_lens`)."""
-    from . import tracer as T
+    from . import tracer
 
     n = len(ex)
-    zero = T.F(np.zeros(n))
-    rays = T.launch(rev, zero, zero, T.F(ex), T.F(ey), (T.F(np.broadcast_to(x, n)), T.F(np.broadcast_to(y, n))))
-    tr = T.trace(rev, rays, T.F(np.full(n, wavelength_nm * 1e-3)))
-    ok, clipped = T.to_numpy(tr.ok, tr.clipped_by)
+    zero = tracer.F(np.zeros(n))
+    rays = tracer.launch(rev, zero, zero, tracer.F(ex), tracer.F(ey),
+                         (tracer.F(np.broadcast_to(x, n)), tracer.F(np.broadcast_to(y, n))))
+    tr = tracer.trace(rev, rays, tracer.F(np.full(n, wavelength_nm * 1e-3)))
+    ok, clipped = tracer.to_numpy(tr.ok, tr.clipped_by)
     return ok & (clipped == 0)
 
 

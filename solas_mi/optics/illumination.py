@@ -198,12 +198,12 @@ def _obliquity(lens: Lens, field_deg: np.ndarray, entrance: np.ndarray) -> np.nd
     already weighs each ray as a point source's power per area (cos³ of the ray's angle): a Lambertian
     object's radiance adds the cosine of the angle at which the chief ray (toward `entrance`, (n, 2))
     leaves it: the cos⁴ law (the ray's cos³ twice, cos⁶, made an ideal relay's 0.203 of cos⁴'s 0.344 at 40°)."""
-    from . import tracer as T
+    from . import tracer
 
     if lens.at_infinity:
         return (1.0 + (np.tan(np.radians(field_deg)) ** 2).sum(axis=1)) ** -1.5
     d = lens.object_distance
-    return d / np.sqrt(((entrance - T.object_points(lens, field_deg)) ** 2).sum(axis=1) + d * d)
+    return d / np.sqrt(((entrance - tracer.object_points(lens, field_deg)) ** 2).sum(axis=1) + d * d)
 
 
 def _polar_scale(lens: Lens, field_deg: np.ndarray, wavelength_nm: float) -> np.ndarray:

@@ -58,7 +58,7 @@ def ynu_trace(lens: Lens, wavelength_nm: float, y1: float, u0: float, start: int
         if k > start:
             height = height + slope * (z[k] - z[k - 1])
         s = lens.surfaces[k]
-        power = (n[k + 1] - n[k]) * s.paraxial_curvature + (1.0 / s.focal_length if s.ideal else 0.0)
+        power = (n[k + 1] - n[k]) * s.paraxial_curvature + (1.0 / s.focal_length if s.focal_length is not None else 0.0)
         slope = (n[k] * slope - height * power) / n[k + 1]
         y[k], u[k] = height, slope
     return y, u
@@ -93,10 +93,40 @@ def _object_ray(lens: Lens, wavelength_nm: float, y_obj: float, u0: float) -> tu
 
 
 def paraxial(lens: Lens, wavelength_nm: float | None = None, fields_deg: list[float] | None = None) -> Paraxial:
-    """Paraxial data (EFL, pupils, f/#, image offset, chief rays) of `lens` at `wavelength_nm`
-    (default: its primary wavelength), with chief rays at `fields_deg` (default: 0 and the lens's
-    field). Results for the default fields are memoised by the lens's content (every field of the
-    frozen `Lens` takes part in its equality and hash), so a changed lens always gets fresh data."""
+    """First-order data of a lens at one wavelength: focal lengths, pupils, f-numbers, chief rays.
+
+    From the y-nu paraxial ray trace. Results for the default fields are memoised by the lens's content
+    (every field of the frozen `Lens` takes part in its equality and hash), so a changed lens always gets
+    fresh data.
+
+    Parameters
+    ----------
+    lens : Lens
+        The lens.
+    wavelength_nm : float, optional
+        The wavelength (nm); default: the lens's primary wavelength.
+    fields_deg : list of float, optional
+        y field angles (degrees) of the chief rays; default: 0 and the lens's field.
+
+    Returns
+    -------
+    Paraxial
+        EFL, back focal distance, paraxial focus and image offset, entrance and exit pupils, f-numbers and
+        the chief rays' image heights (mm unless named otherwise).
+
+    Raises
+    ------
+    SolasError
+        For a lens that is not a `Lens`, a wavelength a glass does not take, fields that are not finite
+        angles below 180°, or a lens that forms no image.
+
+    Examples
+    --------
+    >>> from solas_mi import Lens, paraxial
+    >>> data = paraxial(Lens.load("solas-doublet"), 531.0)
+    >>> round(data.efl_mm, 4), round(data.f_number, 3), round(data.entrance_pupil_diameter_mm, 2)
+    (99.9468, 7.991, 12.51)
+    """
     check_lens(lens)
     wl = lens.check_wavelength(wavelength_nm if wavelength_nm is not None else lens.primary_wavelength)
     if fields_deg is not None:
@@ -130,7 +160,7 @@ def _paraxial(lens: Lens, wavelength_nm: float, fields_deg: list[float] | None =
 
     # Two base rays at surface 1: a = (y=1, u=0), b = (y=0, u=1); every ray is a mix of them.
     ya, ua = ynu_trace(lens, wavelength_nm, 1.0, 0.0)
-    yb, ub = ynu_trace(lens, wavelength_nm, 0.0, 1.0)
+    yb, _ub = ynu_trace(lens, wavelength_nm, 0.0, 1.0)
     efl = -1.0 / (n[-1] * ua[-1]) if ua[-1] != 0 else math.inf  # 1/power: n'u' = −y1·power
     ep_z, ep_radius, xp_z, xp_radius, xp_f_number = _pupils(lens, wavelength_nm, ya, yb)
     ym, um, obj_z = _marginal_ray(lens, wavelength_nm, ya, ua)

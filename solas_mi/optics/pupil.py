@@ -15,14 +15,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SolasError
-from . import tracer as T
+from . import tracer
 from .lens import Lens
 from .aiming import Bundle, chief_aim, continued_aim, nearest_passing, stop_target, aim
 from .paraxial import paraxial, pupil_distance
 
 __all__ = ["Bundle", "aim", "ChiefRays", "chief_rays", "widest_field", "stop_rim", "PupilFunction", "pupil_function",
            "entrance_power", "nearest_passing"]
-dr = T.dr
+dr = tracer.dr
 RIM_RAYS = 32
 RIM_BISECTIONS = 30  # a rim ray moved inside the stop's rim: its radius to 1e-9 of the rim's
 RIM_STEPS = 8  # lenses of polar fields: steps of the rim aim from the stop centre out to the rim
@@ -48,19 +48,21 @@ def chief_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> 
     wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(field_deg),))
     b = Bundle(lens, field_deg, wavelength_nm, 1)
     e0, goal = chief_aim(lens, b)
-    ex, ey, tr, conv = aim(b, stop_target, T.F(e0[:, 0]), T.F(e0[:, 1]), T.F(goal[:, 0]), T.F(goal[:, 1]))
-    missed = np.flatnonzero(~T.to_numpy(conv)[0])
+    ex, ey, tr, conv = aim(b, stop_target, tracer.F(e0[:, 0]), tracer.F(e0[:, 1]),
+                           tracer.F(goal[:, 0]), tracer.F(goal[:, 1]))
+    missed = np.flatnonzero(~tracer.to_numpy(conv)[0])
     if len(missed):  # the aim at the stop centre can miss at the very edge of the fields it reaches (the Cooke
         for f in missed:  # triplet at 31.842°): the passing ray nearest it, as where none reaches it; refused
             found = nearest_passing(lens, field_deg[f], wavelength_nm[f])  # only where no ray passes the stop
             if found is not None:
                 e0[f], goal[f] = found
-        ex, ey, tr, conv = aim(b, stop_target, T.F(e0[:, 0]), T.F(e0[:, 1]), T.F(goal[:, 0]), T.F(goal[:, 1]))
-    px, py, _ = T.to_plane(tr, lens.image_z)
+        ex, ey, tr, conv = aim(b, stop_target, tracer.F(e0[:, 0]), tracer.F(e0[:, 1]),
+                               tracer.F(goal[:, 0]), tracer.F(goal[:, 1]))
+    px, py, _ = tracer.to_plane(tr, lens.image_z)
     xp_z = np.array([paraxial(lens, w).exit_pupil_z_mm for w in wavelength_nm])
-    qx, qy, qopl = T.to_plane(tr, b.per_ray(xp_z))
+    qx, qy, qopl = tracer.to_plane(tr, b.per_ray(xp_z))
     radius = dr.sqrt((qx - px) ** 2 + (qy - py) ** 2 + (b.per_ray(xp_z) - lens.image_z) ** 2)
-    ex, ey, px, py, radius, qopl, sa, sb, n_image, conv, clipped = T.to_numpy(
+    ex, ey, px, py, radius, qopl, sa, sb, n_image, conv, clipped = tracer.to_numpy(
         ex, ey, px, py, radius, qopl, (qx - px) / radius, (qy - py) / radius, tr.n_image, conv, tr.clipped_by)
     if not conv.all():
         bad = field_deg[~conv][0]
@@ -90,7 +92,7 @@ def widest_field(lens: Lens, wavelength_nm: float, samples: int = 45) -> float:
 
 
 def stop_rim(rim: Bundle, chief: ChiefRays, accept=None, vignetting: np.ndarray | None = None,
-             ) -> tuple[np.ndarray, np.ndarray, T.Traced, np.ndarray]:
+             ) -> tuple[np.ndarray, np.ndarray, tracer.Traced, np.ndarray]:
     """Rays aimed at RIM_RAYS points of the stop's rim for each field of the `rim` bundle: entrance
     coordinates (n, RIM_RAYS) each, the trace, and which passed. Where the ray to the rim fails (total
     internal reflection, a surface missed, or `accept(traced)` false) the pupil's edge lies inside the
@@ -108,14 +110,14 @@ def stop_rim(rim: Bundle, chief: ChiefRays, accept=None, vignetting: np.ndarray 
     ratio = entrance_pupil_footprint(lens) / r_stop
 
     def at(scale: np.ndarray):
-        gx, gy = T.F(r_stop * scale * cos), T.F(r_stop * scale * sin)
+        gx, gy = tracer.F(r_stop * scale * cos), tracer.F(r_stop * scale * sin)
         ex, ey = rim.per_ray(chief.entrance[:, 0]) + gx * ratio, rim.per_ray(chief.entrance[:, 1]) + gy * ratio
         if lens.field_type.sideways:  # wide fields: the pupil is squeezed and tilted; grow the aim out from the chief ray
             ex, ey = rim.per_ray(chief.entrance[:, 0]), rim.per_ray(chief.entrance[:, 1])
             for k in range(1, RIM_STEPS):
                 ex, ey, _, _ = aim(rim, stop_target, ex, ey, gx * (k / RIM_STEPS), gy * (k / RIM_STEPS))
         ex, ey, tr, ok = aim(rim, stop_target, ex, ey, gx, gy)
-        return ex, ey, tr, T.to_numpy(ok & accept(tr) if accept is not None else ok)[0]
+        return ex, ey, tr, tracer.to_numpy(ok & accept(tr) if accept is not None else ok)[0]
 
     ex, ey, tr, ok = at(np.ones(len(phi)))
     if not ok.all():
@@ -126,7 +128,7 @@ def stop_rim(rim: Bundle, chief: ChiefRays, accept=None, vignetting: np.ndarray 
             lo, hi = np.where(passed, mid, lo), np.where(passed, hi, mid)
         ex, ey, tr, ok = at(lo)
     shape = (rim.n_fields, RIM_RAYS)
-    ex, ey = T.to_numpy(ex, ey)
+    ex, ey = tracer.to_numpy(ex, ey)
     return ex.reshape(shape), ey.reshape(shape), tr, ok.reshape(shape)
 
 
@@ -180,7 +182,7 @@ def entrance_power(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray,
     density = density.reshape((-1,) + (1,) * (np.ndim(ex) - 1))
     if lens.at_infinity:
         return np.broadcast_to(density, np.shape(ex))
-    pts = T.object_points(lens, field_deg).reshape((-1, 2) + (1,) * (np.ndim(ex) - 1))
+    pts = tracer.object_points(lens, field_deg).reshape((-1, 2) + (1,) * (np.ndim(ex) - 1))
     dist2 = (ex - pts[:, 0]) ** 2 + (ey - pts[:, 1]) ** 2 + lens.object_distance ** 2
     return density * abs(lens.object_distance) ** 3 / dist2 ** 1.5  # a virtual object's converging cone alike
 
@@ -250,8 +252,8 @@ def _sphere_target(lens: Lens, b: Bundle, chief: ChiefRays):
     radius = b.per_ray(chief.sphere_radius)
     cz = lens.image_z
 
-    def target(tr: T.Traced):
-        x, y, z, opl, hit = T.to_sphere(tr, cx, cy, cz, radius)
+    def target(tr: tracer.Traced):
+        x, y, _z, _opl, hit = tracer.to_sphere(tr, cx, cy, cz, radius)
         return (x - cx) / radius, (y - cy) / radius, tr.ok & hit
 
     return target
@@ -264,7 +266,7 @@ def _sphere_rim(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, ch
     rim = Bundle(lens, field_deg, wavelength_nm, RIM_RAYS)
     rim_target = _sphere_target(lens, rim, chief)
     rex, rey, rtr, rok = stop_rim(rim, chief, accept=lambda tr: rim_target(tr)[2])
-    ra, rb = (a.reshape(nf, RIM_RAYS) for a in T.to_numpy(*rim_target(rtr)[:2]))
+    ra, rb = (a.reshape(nf, RIM_RAYS) for a in tracer.to_numpy(*rim_target(rtr)[:2]))
     if not rok.any(axis=1).all():
         bad = field_deg[~rok.any(axis=1)][0]
         raise SolasError(f"no real ray reaches the stop's rim for field ({bad[0]:g}, {bad[1]:g}) deg; "
@@ -305,12 +307,13 @@ def _grid_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chi
     tb = np.broadcast_to(beta[:, :, None], (nf, samples, samples))
     ex0 = affine[:, 0, 0, None, None] + affine[:, 1, 0, None, None] * ta + affine[:, 2, 0, None, None] * tb
     ey0 = affine[:, 0, 1, None, None] + affine[:, 1, 1, None, None] * ta + affine[:, 2, 1, None, None] * tb
-    goal_a = T.F((ta + ca[:, None, None]).ravel())
-    goal_b = T.F((tb + cb[:, None, None]).ravel())
-    gex, gey, gtr, gconv = aim(g, _sphere_target(lens, g, chief), T.F(ex0.ravel()), T.F(ey0.ravel()), goal_a, goal_b)
+    goal_a = tracer.F((ta + ca[:, None, None]).ravel())
+    goal_b = tracer.F((tb + cb[:, None, None]).ravel())
+    gex, gey, gtr, gconv = aim(g, _sphere_target(lens, g, chief), tracer.F(ex0.ravel()), tracer.F(ey0.ravel()),
+                               goal_a, goal_b)
     cx, cy = g.per_ray(chief.image_xy[:, 0]), g.per_ray(chief.image_xy[:, 1])
-    _, _, _, opl, hit = T.to_sphere(gtr, cx, cy, lens.image_z, g.per_ray(chief.sphere_radius))
+    _, _, _, opl, hit = tracer.to_sphere(gtr, cx, cy, lens.image_z, g.per_ray(chief.sphere_radius))
     shape = (nf, samples, samples)
-    opl, ok, clipped, sx, sy, ex, ey = (a.reshape(shape) for a in T.to_numpy(
+    opl, ok, clipped, sx, sy, ex, ey = (a.reshape(shape) for a in tracer.to_numpy(
         opl, gconv & hit, gtr.clipped_by, gtr.stop_x, gtr.stop_y, gex, gey))
     return opl - chief.opl[:, None, None], ok, clipped, sx, sy, ex, ey

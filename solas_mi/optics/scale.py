@@ -14,7 +14,8 @@ import math
 from dataclasses import replace
 
 from ..errors import SolasError
-from .lens import Lens, Surface
+from .lens import Lens
+from .surface import Surface
 
 
 def scaled(lens: Lens, factor: float) -> Lens:

@@ -7,8 +7,8 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SolasError
-from . import pupil as P
-from . import tracer as T
+from . import pupil
+from . import tracer
 from .lens import Lens
 
 PATTERNS = ("hexapolar", "grid")
@@ -68,43 +68,76 @@ def pupil_pattern(pattern: str, density: int) -> np.ndarray:
 
 
 def spot(lens: Lens, field_deg, wavelength_nm: float, pattern: str = "hexapolar", density: int = 20) -> Spot:
-    """Spot diagram at the image plane, every aperture clipping.
+    """A spot diagram: real rays through the entrance pupil to the image plane, every aperture clipping.
 
     Rays on `pattern` fill the real entrance pupil about the real chief ray (aimed through the stop
     centre): the disc reaching the nearest of the real rays aimed at the stop's rim. Where an aperture
-    blocks the chief ray itself, they fill the disc about the part of the pupil whose light arrives
-    (`_light_disc`), and the spot is given about the centroid of that light."""
+    blocks the chief ray itself, they fill the disc about the part of the pupil whose light arrives,
+    and the spot is given about the centroid of that light.
+
+    Parameters
+    ----------
+    lens : Lens
+        The lens.
+    field_deg : float or (float, float)
+        The field: (x, y) degrees, or one value y.
+    wavelength_nm : float
+        The wavelength (nm).
+    pattern : str, default "hexapolar"
+        The pupil pattern, one of `PATTERNS`.
+    density : int, default 20
+        Rings of the hexapolar pattern, or points per side of the grid.
+
+    Returns
+    -------
+    Spot
+        The rays' image points (µm) about the chief ray's (or the light's centroid), with counts of
+        rays launched and blocked; `Spot.rms_radius_um` its RMS radius.
+
+    Raises
+    ------
+    SolasError
+        For a bad field, wavelength or pattern, or a field whose every ray is blocked.
+
+    Examples
+    --------
+    >>> from solas_mi import Lens, spot
+    >>> result = spot(Lens.load("solas-doublet"), (0, 2), 531.0)
+    >>> round(result.rms_radius_um(), 2), result.launched
+    (8.04, 1261)
+    """
     wavelength_nm = lens.check_wavelength(wavelength_nm)
     field = np.array([lens.field_type.check(field_deg)])
     points = pupil_pattern(pattern, density)
     wl = np.array([wavelength_nm])
-    chief = P.chief_rays(lens, field, wl)
-    ex, ey, _, ok = P.stop_rim(P.Bundle(lens, field, wl, P.RIM_RAYS), chief)
+    chief = pupil.chief_rays(lens, field, wl)
+    ex, ey, _, ok = pupil.stop_rim(pupil.Bundle(lens, field, wl, pupil.RIM_RAYS), chief)
     reach = np.hypot(ex - chief.entrance[0, 0], ey - chief.entrance[0, 1])
     centre, radius = chief.entrance[0], float(reach[ok].min())
     if chief.vignetted[0]:
         centre, radius = _light_disc(lens, field, wl, chief.entrance[0], float(reach.max()))
-    b = P.Bundle(lens, field, wl, len(points))
-    x, y, keep = _image_hits(b, centre[0] + radius * points[:, 0], centre[1] + radius * points[:, 1], lens.image_z)
+    bundle = pupil.Bundle(lens, field, wl, len(points))
+    x, y, keep = _image_hits(bundle, centre[0] + radius * points[:, 0], centre[1] + radius * points[:, 1],
+                             lens.image_z)
     if not keep.any():
         raise SolasError(f"no ray of {wavelength_nm:g} nm through the pupil reaches the image for field "
                          f"({field[0, 0]:g}, {field[0, 1]:g}) deg: every one is blocked")
-    x0, y0 = chief.image_xy[0]
+    chief_x, chief_y = chief.image_xy[0]
     origin = (float(x[keep].mean()), float(y[keep].mean())) if chief.vignetted[0] else None
-    ox, oy = origin or (x0, y0)
-    return Spot((x[keep] - ox) * 1e3, (y[keep] - oy) * 1e3, (float(x0), float(y0)), len(points),
+    origin_x, origin_y = origin or (chief_x, chief_y)
+    return Spot((x[keep] - origin_x) * 1e3, (y[keep] - origin_y) * 1e3, (float(chief_x), float(chief_y)), len(points),
                 int((~keep).sum()), origin)
 
 
 LIGHT_PROBE = 96  # points per side of the grid that finds the part of a blocked chief ray's pupil that passes
 
 
-def _image_hits(b: P.Bundle, ex: np.ndarray, ey: np.ndarray, image_z: float):
+def _image_hits(bundle: pupil.Bundle, ex: np.ndarray, ey: np.ndarray, image_z: float):
     """Image-plane points (mm) of the bundle's rays at entrance coordinates ex, ey, and which arrive."""
-    tr = b.trace(T.F(ex), T.F(ey))
-    x, y, _ = T.to_plane(tr, image_z)
-    keep, x, y = T.to_numpy(tr.ok & (tr.clipped_by == 0), x, y)
-    return x, y, keep
+    traced = bundle.trace(tracer.F(ex), tracer.F(ey))
+    x, y, _ = tracer.to_plane(traced, image_z)
+    keep, x_mm, y_mm = tracer.to_numpy(traced.ok & (traced.clipped_by == 0), x, y)
+    return x_mm, y_mm, keep
 
 
 def _light_disc(lens: Lens, field: np.ndarray, wl: np.ndarray, chief_entrance: np.ndarray, reach: float):
@@ -113,7 +146,7 @@ def _light_disc(lens: Lens, field: np.ndarray, wl: np.ndarray, chief_entrance: n
     seen from it); the disc reaches half a probe cell past the outermost arriving probe."""
     g = (np.arange(LIGHT_PROBE) + 0.5) / LIGHT_PROBE * 2.0 - 1.0
     gx, gy = (chief_entrance[i] + reach * a.ravel() for i, a in enumerate(np.meshgrid(g, g)))
-    _, _, keep = _image_hits(P.Bundle(lens, field, wl, len(gx)), gx, gy, lens.image_z)
+    _, _, keep = _image_hits(pupil.Bundle(lens, field, wl, len(gx)), gx, gy, lens.image_z)
     if not keep.any():
         return chief_entrance, reach
     centre = np.array([gx[keep].mean(), gy[keep].mean()])

@@ -154,7 +154,7 @@ def _automatic(lens: Lens, auto: list[int], field_deg: list[float], where: str,
     """Semi-diameters (mm) of the `auto` surfaces: the largest height there of the real chief and stop-rim
     rays of every field (on the y axis: the lens is rotationally symmetric) and wavelength; the rim of a
     field in `cuts` squeezed by its vignetting factors."""
-    from . import tracer as T
+    from . import tracer
     from .pupil import RIM_RAYS, Bundle, chief_rays, stop_rim
 
     thetas = sorted(set(field_deg) | {0.0})
@@ -168,8 +168,8 @@ def _automatic(lens: Lens, auto: list[int], field_deg: list[float], where: str,
     for e, b, passed in ((chief.entrance, Bundle(lens, fields, waves, 1), np.ones(len(fields), bool)),
                          (np.stack([ex.ravel(), ey.ravel()], axis=-1), rim, ok.ravel())):
         heights: list = []
-        tr = b.trace(T.F(e[:, 0]), T.F(e[:, 1]), heights=heights)
-        good, *r2 = T.to_numpy(tr.ok, *heights)
+        tr = b.trace(tracer.F(e[:, 0]), tracer.F(e[:, 1]), heights=heights)
+        good, *r2 = tracer.to_numpy(tr.ok, *heights)
         good &= passed
         if not good.any():
             raise SolasError(f"{where}: no real ray passes the lens; automatic semi-diameters cannot be found")

@@ -1,8 +1,8 @@
 """Point spread functions: the conventions every PSF shares (`base`), one module per method
 (`fraunhofer`, `geometric`), the registry naming them with their own options (`registry`; a later
 stage registers its own, as render does "render"), `psf` for one field (`methods`), PSF grids over
-the field (`grid`) and their options as one value (`spec.GridSpec`), and the `psf` / `psf-grid`
-commands (`commands`).
+the field (`grid`), their PSFs and file (`grid_file.PSFGrid`) and their options as one value
+(`spec.GridSpec`), and the `psf` / `psf-grid` commands (`commands`).
 
     psf(lens, (0, 2), 531.0, pitch_um=0.5, size=160)              # one PSF
     psf_grid(lens, grid=(32, 32), wavelengths_nm=[656, 531, 486])  # PSFGrid; .write / PSFGrid.read
@@ -11,5 +11,5 @@ commands (`commands`).
 from ..lazy import lazy_exports
 
 __all__ = ["METHODS", "PSF", "GridSpec", "PSFGrid", "psf", "psf_grid"]
-__getattr__ = lazy_exports(__name__, {"METHODS": ".registry", "PSF": ".base", "GridSpec": ".spec", "PSFGrid": ".grid",
+__getattr__ = lazy_exports(__name__, {"METHODS": ".registry", "PSF": ".base", "GridSpec": ".spec", "PSFGrid": ".grid_file",
                                       "psf": ".methods", "psf_grid": ".grid"})

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import SolasError
 from ..optics import notes
@@ -29,20 +30,47 @@ DEFAULT_SIZE = 160
 
 @dataclass
 class PSF:
-    """One PSF (2-D array, image orientation) and what it means."""
+    """One PSF and what it means, as `psf` computes it.
+
+    The grid convention is this module's: pixel (size//2, size//2) on the chief ray, row 0 the top.
+
+    Parameters
+    ----------
+    data : numpy.ndarray
+        (size, size) values in image orientation, as `normalization` says.
+    pitch_um : float
+        The pixel pitch on the image plane (µm).
+    field_deg : (float, float)
+        The field, (x, y) degrees.
+    wavelengths_nm : tuple of float
+        The wavelengths (nm) summed.
+    weights : tuple of float
+        Their power weights, summing to 1.
+    chief_ray_mm : (float, float)
+        The image-plane point (mm) at pixel (size//2, size//2): the first wavelength's chief ray.
+    method : str
+        The PSF method, a name of `registry.METHODS`.
+    normalization : str
+        One of `NORMALIZATIONS`: "sum" (unit sum), "peak" (unit peak) or "none" (irradiance per µm² as
+        a fraction of the on-axis entrance-pupil power).
+    meta : dict, optional
+        What else describes it: the lens, the method's options, the transmission, the window's share of
+        the light ("energy_in_grid"), warnings.
+    """
 
     data: np.ndarray
     pitch_um: float
     field_deg: tuple[float, float]
     wavelengths_nm: tuple[float, ...]
     weights: tuple[float, ...]
-    chief_ray_mm: tuple[float, float]  # image-plane point at pixel (size//2, size//2), first wavelength
+    chief_ray_mm: tuple[float, float]
     method: str
     normalization: str
     meta: dict = field(default_factory=dict)
 
     @property
     def size(self) -> int:
+        """Pixels per side."""
         return self.data.shape[0]
 
     @property
@@ -56,7 +84,13 @@ class PSF:
         return -grid_offsets(self.size, self.pitch_um)
 
     def write(self, path: str) -> None:
-        """Write as OpenEXR (channel "Y") with all metadata in the header."""
+        """Write the PSF as OpenEXR, whole or not at all: channel "Y", all metadata in the header.
+
+        Parameters
+        ----------
+        path : str
+            The file.
+        """
         from ..imageio import write_exr
 
         meta = dict(self.meta, field_deg=list(self.field_deg), wavelengths_nm=list(self.wavelengths_nm),
@@ -65,7 +99,13 @@ class PSF:
         write_exr(path, {"Y": self.data}, meta)
 
     def write_png(self, path: str) -> None:
-        """The PSF scaled to its peak, as an sRGB PNG for viewing."""
+        """Write the PSF scaled to its peak as an sRGB PNG, for viewing.
+
+        Parameters
+        ----------
+        path : str
+            The file.
+        """
         from ..imageio import write_png
 
         write_png(path, self.data / max(float(self.data.max()), 1e-300))
@@ -94,7 +134,7 @@ def window_energy(data: np.ndarray, pitch_um: float, transmission: np.ndarray) -
     return data.sum(axis=(-2, -1)) * pitch_um ** 2 / np.where(transmission > 0, transmission, 1.0)
 
 
-def window_warnings(energy: np.ndarray, fields_deg: np.ndarray, size: int, pitch_um: float) -> list[str]:
+def window_warnings(energy: ArrayLike, fields_deg: np.ndarray, size: int, pitch_um: float) -> list[str]:
     """A warning for the PSF whose window energy is furthest from 1, if any is outside the limits."""
     energy = np.asarray(energy, dtype=np.float64).ravel()
     fields = np.asarray(fields_deg, dtype=np.float64).reshape(-1, 2)

@@ -24,7 +24,8 @@ import numpy as np
 
 from ..errors import SolasError
 from ..imageio import read_exr, write_exr
-from .grid import PSFGrid, check_grid_meta, psf_grid
+from .grid import psf_grid
+from .grid_file import PSFGrid, check_grid_meta
 from .spec import GridSpec
 
 

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..optics import pupil as P
-from ..optics import tracer as T
+from ..optics import pupil
+from ..optics import tracer
 from ..optics.lens import Lens
 from ..optics.pupil import ChiefRays
 from .base import Computed, centring_warnings, window_centres_um
@@ -16,7 +16,7 @@ def compute(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_
             shared_origin: bool = False, rays: int) -> Computed:
     """Geometric PSFs of field/wavelength pairs from rays×rays entrance grids (the method "geometric" of
     `registry`)."""
-    chief = P.chief_rays(lens, field_deg, wavelength_nm)
+    chief = pupil.chief_rays(lens, field_deg, wavelength_nm)
     light = light_offsets_um(lens, field_deg, wavelength_nm, chief)
     center = window_centres_um(chief, light, shared_origin)
     data, _, transmission = geometric(lens, field_deg, wavelength_nm, pitch_um, size, rays, chief, center)
@@ -51,7 +51,7 @@ def geometric(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitc
     field_deg = np.atleast_2d(np.asarray(field_deg, dtype=np.float64))
     nf = len(field_deg)
     wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (nf,)).copy()
-    chief = chief or P.chief_rays(lens, field_deg, wavelength_nm)
+    chief = chief or pupil.chief_rays(lens, field_deg, wavelength_nm)
     data, transmission = bin_hits(entrance_grid_hits(lens, field_deg, wavelength_nm, rays, chief), pitch_um, size,
                                   center_um)
     return data, chief, transmission
@@ -86,7 +86,7 @@ def entrance_grid(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, 
         ex = (cx[:, None, None] + hw[:, None, None] * t[None, None, :]).repeat(rays, axis=1)
         ey = (cy[:, None, None] + hw[:, None, None] * t[None, :, None]).repeat(rays, axis=2)
         area = (2.0 * hw / rays) ** 2  # entrance area of one ray
-        power = P.entrance_power(lens, field_deg[sl], wavelength_nm[sl], ex, ey).reshape(-1, rays * rays)
+        power = pupil.entrance_power(lens, field_deg[sl], wavelength_nm[sl], ex, ey).reshape(-1, rays * rays)
         yield sl, ex, ey, power * area[:, None]
 
 
@@ -96,10 +96,10 @@ def entrance_grid_hits(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndar
     rays×rays entrance grid covering the pupil, and each ray's power (fraction of the on-axis pupil)."""
     result = []
     for sl, ex, ey, power in entrance_grid(lens, field_deg, wavelength_nm, rays, chief):
-        b = P.Bundle(lens, field_deg[sl], wavelength_nm[sl], rays * rays)
-        tr = b.trace(T.F(ex.ravel()), T.F(ey.ravel()))
-        x, y, _ = T.to_plane(tr, lens.image_z)
-        keep, x, y = (a.reshape(-1, rays * rays) for a in T.to_numpy(tr.ok & (tr.clipped_by == 0), x, y))
+        b = pupil.Bundle(lens, field_deg[sl], wavelength_nm[sl], rays * rays)
+        tr = b.trace(tracer.F(ex.ravel()), tracer.F(ey.ravel()))
+        x, y, _ = tracer.to_plane(tr, lens.image_z)
+        keep, x, y = (a.reshape(-1, rays * rays) for a in tracer.to_numpy(tr.ok & (tr.clipped_by == 0), x, y))
         for j, f in enumerate(range(sl.start, sl.stop)):
             m = keep[j]
             result.append(((x[j, m] - chief.image_xy[f, 0]) * 1e3, (y[j, m] - chief.image_xy[f, 1]) * 1e3,
@@ -109,6 +109,6 @@ def entrance_grid_hits(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndar
 
 def entrance_half_width(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chief: ChiefRays) -> np.ndarray:
     """Half-width (mm) of a square about the chief ray's entrance point that holds the whole pupil."""
-    ex, ey, _, _ = P.stop_rim(P.Bundle(lens, field_deg, wavelength_nm, P.RIM_RAYS), chief)
+    ex, ey, _, _ = pupil.stop_rim(pupil.Bundle(lens, field_deg, wavelength_nm, pupil.RIM_RAYS), chief)
     ex, ey = ex - chief.entrance[:, 0:1], ey - chief.entrance[:, 1:2]
     return np.maximum(np.abs(ex).max(axis=1), np.abs(ey).max(axis=1)) * 1.02

@@ -15,6 +15,7 @@ import json
 import math
 from dataclasses import asdict, dataclass
 from numbers import Real
+from typing import Any
 
 from ..errors import SolasError
 from ..options import OptionSpec, floats, option, parse_size_mm, parse_wxh, wxh_text
@@ -39,7 +40,57 @@ def _range(text: str) -> tuple[float, float]:
 
 @dataclass(frozen=True)
 class GridSpec(OptionSpec):
-    """What a PSF grid is: nodes, wavelengths, sampling, method. Validated on construction."""
+    """What a PSF grid is: its nodes, wavelengths, sampling and method, checked when built.
+
+    `psf_grid` takes it; ``solas-mi psf-grid`` makes one flag of each field (its help: the field's
+    meaning as the command line gives it) and builds it from them; a batch's grid cache keys on it.
+
+    Parameters
+    ----------
+    grid : (int, int), default (8, 8)
+        Nodes, (rows, columns).
+    wavelengths_nm : tuple of float, optional
+        The wavelengths (nm); default: the lens file's.
+    layout : str, default "field"
+        One of `LAYOUTS`: "field", nodes on field angles; "sensor", nodes on sensor positions (wide and
+        fisheye lenses, `psf.sensor`).
+    field_range_deg : (float, float), optional
+        The half ranges (x, y) in degrees the "field" layout spans; default: the lens's field in both.
+    field_sampling : str, default "centers"
+        One of `FIELD_SAMPLINGS`: nodes at the centres of equal cells, or spanning the range's ends.
+    sensor_mm : (float, float), optional
+        The sensor (width, height) in mm of the "sensor" layout; default: the square in the image circle.
+    pitch_um : float, default 0.5
+        The PSFs' pixel pitch on the image plane (µm).
+    size : int, default 160
+        Pixels per side of each PSF.
+    method : str, default "fraunhofer"
+        A name of `registry.METHODS`.
+    pupil_samples : int, default 128
+        "fraunhofer": the N×N pupil grid.
+    rays : int, default 512
+        "geometric", "render": rays × rays per PSF.
+    normalization : str, default "sum"
+        One of `base.NORMALIZATIONS`.
+    auto_window : bool, default False
+        Double `size` until every window holds `base.WINDOW_ENERGY_LIMIT` of its light.
+    distances_m : tuple of float, optional
+        Object distances (m; inf: infinity) of a grid over field and distance (`psf.depth`); default: the
+        lens file's object distance only.
+
+    Raises
+    ------
+    SolasError
+        For a value out of its range, a choice not among its choices, or options of different layouts
+        mixed (a field range with the sensor layout, a sensor size with the field layout).
+
+    Examples
+    --------
+    >>> from solas_mi.psf import GridSpec
+    >>> spec = GridSpec(grid=(4, 6), method="geometric", rays=128)
+    >>> spec.grid, spec.sampling_options()
+    ((4, 6), {'pupil_samples': 128, 'rays': 128})
+    """
 
     grid: tuple[int, int] = option("COLSxROWS field nodes", (8, 8), parse=lambda t: parse_wxh(t, "--grid"),
                                    shown=wxh_text)
@@ -93,13 +144,24 @@ class GridSpec(OptionSpec):
             raise SolasError(f"auto_window {self.auto_window!r} must be True or False")
         set_(self, "distances_m", check_distances(self.distances_m))
 
-    def sampling_options(self) -> dict[str, int]:
-        """The PSF methods' own options (`registry.method_options` keeps those of `method`)."""
+    def sampling_options(self) -> dict[str, Any]:
+        """The PSF methods' own options.
+
+        Returns
+        -------
+        dict
+            ``{"pupil_samples": ..., "rays": ...}``; `registry.method_options` keeps those of `method`.
+        """
         return {"pupil_samples": self.pupil_samples, "rays": self.rays}
 
     def canonical(self) -> dict:
-        """The options that make the grid, as plain JSON values: equal grids, equal forms (options
-        a layout or method does not use are left out)."""
+        """The options that make the grid, as plain JSON values: equal grids, equal forms.
+
+        Returns
+        -------
+        dict
+            Field name → value, the options the layout and method do not use left out.
+        """
         out = asdict(self)
         for name in ("field_range_deg", "field_sampling") if self.layout == "sensor" else ("sensor_mm",):
             del out[name]
@@ -112,7 +174,18 @@ class GridSpec(OptionSpec):
         return json.loads(json.dumps(out))
 
     def key(self, lens_hash: str) -> str:
-        """16 hex digits that identify the grid of the lens with this hash."""
+        """What identifies the grid of a lens with these options.
+
+        Parameters
+        ----------
+        lens_hash : str
+            The lens's `Lens.hash`.
+
+        Returns
+        -------
+        str
+            16 hex digits: a hash of `lens_hash` and `canonical`.
+        """
         text = json.dumps({"lens_hash": lens_hash, **self.canonical()}, sort_keys=True)
         return hashlib.sha256(text.encode()).hexdigest()[:16]
 
@@ -168,9 +241,9 @@ def inverse_spaced(count: int, near_m: float) -> tuple[float, ...]:
 def parse_distances(text: str) -> tuple[float, ...]:
     """--distances-m: "inf,40,20,10" (m, far to near) or "N:NEAR" (`inverse_spaced`)."""
     if ":" in text:
-        count, _, near = text.partition(":")
+        count_text, _, near_text = text.partition(":")
         try:
-            count, near = int(count), float(near)
+            count, near = int(count_text), float(near_text)
         except ValueError:
             raise SolasError(f"--distances-m {text!r} must be N:NEAR (N nodes, NEAR in metres) or distances "
                              "in m, comma-separated") from None
@@ -184,7 +257,7 @@ def check_distances(value) -> tuple[float, ...] | None:
         return None
     out = []
     for v in _one_or_many(value, "a sequence of distances (m)", "distances"):
-        if not isinstance(v, Real) or isinstance(v, bool) or math.isnan(v) or not v > 0:
+        if not isinstance(v, Real) or isinstance(v, bool) or math.isnan(v) or not float(v) > 0:
             raise SolasError(f"distance {v!r} m must be a positive number (inf: infinity)")
         out.append(float(v))
     if not out or len(set(out)) != len(out):

@@ -77,20 +77,57 @@ def image_sensor_key(lens, spec: RenderSpec) -> tuple[str, Camera, responses.Res
     return f"{lens.name} {camera.width}x{camera.height} {camera.pitch_um:.6g}um {wavelength:g}nm", camera, response
 
 
+# long: the public API's numpydoc docstring is half of it
 def render_image(lens, image: str | np.ndarray, spec: RenderSpec | None = None, *, progress=None,
                  calibration_model: str | None = None, camera_block: dict | None = None, **settings) -> Render:
-    """Render an input image (a path, or a linear H×W[×3] array) through `lens` as `spec` says
-    (`render.spec.RenderSpec`, default its defaults, with `settings` — its field names, e.g.
-    sensor=(rows, cols), spp=16 — changed): onto a sensor of (rows, columns) pixels of `pitch_um` µm,
-    `spp` samples per pixel. The image's width spans ±`fov_deg` degrees (default: ±lens.field_deg)
-    and the sensor's width the same field unless `pitch_um` is given (`solas_mi.optics.camera`).
-    `response`, `boundary` and `fresnel` are the plugins' parameters; `rings` per cap mesh. `mapping`
-    is the input image's projection (plugins/image_object.py): for a lens of polar fields (a fisheye)
-    the image is an environment image spanning ±`fov_deg` in that mapping, the sensor is just pixels
-    of `pitch_um` (default: the sensor's width spans the lens's image circle) and the distortion is
-    the lens's own. `progress(done, total)` is told the samples per pixel done. The metadata's "camera":
-    `camera_block` (a batch's, fitted once per sensor), else `image_camera` of `calibration_model` (None: no
-    camera block), fitted before the render (a model that cannot hold the field is refused before any work)."""
+    """Render an input image through a lens in Mitsuba, the lens as geometry.
+
+    The image's width spans ±``fov_deg`` degrees and, unless ``pitch_um`` is given, so does the
+    sensor's (`solas_mi.optics.camera`). For a lens of polar fields (a fisheye) the image is an
+    environment image spanning ±``fov_deg`` in its ``mapping`` (`plugins/image_object.py`), the sensor is
+    just pixels and the distortion is the lens's own ([rendering through the lens](../details/render.md)).
+
+    Parameters
+    ----------
+    lens : Lens
+        The lens.
+    image : str or numpy.ndarray
+        An image file (PNG/JPEG: sRGB; EXR: linear), or a linear H×W[×3] array.
+    spec : RenderSpec, optional
+        The render's settings (`render.spec.RenderSpec`: sensor, pitch, field, response, boundary,
+        Fresnel, rings, mapping, spp, variant, seed); default: its defaults.
+    progress : callable, optional
+        Called as ``progress(done, total)`` with the samples per pixel done.
+    calibration_model : str, optional
+        The camera model (`optics.calibration.MODELS`) whose fit to the lens over the sensor the metadata
+        records as "camera" (`image_camera`), fitted before the render (a model that cannot hold the field is
+        refused before any work); default: no camera block.
+    camera_block : dict, optional
+        The metadata's "camera" already fitted (a batch's, once per sensor), in place of fitting one here.
+    **settings
+        Fields of `RenderSpec` to change, e.g. ``sensor=(rows, columns)``, ``spp=16``.
+
+    Returns
+    -------
+    Render
+        The image (irradiance in units of the ideal camera's) and its metadata.
+
+    Raises
+    ------
+    SolasError
+        For a focus distance or labels (a scene file's settings), a rectilinear image spanning ±90° or
+        more, a response the lens or variant cannot take, or an image that cannot be read.
+
+    Examples
+    --------
+    >>> from solas_mi import Lens
+    >>> from solas_mi.render import render_image
+    >>> result = render_image(Lens.load("solas-doublet"), "scenes/images/rocket.png", sensor=(24, 32), spp=4)
+    >>> result.image.shape, result.channels
+    ((24, 32, 3), ('R', 'G', 'B'))
+    >>> result.write("rocket.exr")
+    'rocket.png'
+    """
     spec = (spec or RenderSpec()).replace(**settings)
     if spec.focus_distance is not None:
         raise SolasError("a focus distance sets the lens camera of a scene file; an image lies on the lens's object "

@@ -1,7 +1,7 @@
 """Labels through the lens: what each pixel of a `lens_camera` render sees (`LABELS`: its distance, the
 surface's orientation, which shape), found along the pixel centre's chief ray, the real ray from the
 film point through the centre of the stop (`optics.aiming.film_chief_aim`, traced by the camera's own
-`traced`). The labels are crisp (one ray per pixel, no blur) and distorted exactly as the image is: the
+`exit_ray`). The labels are crisp (one ray per pixel, no blur) and distorted exactly as the image is: the
 same lens, the same film geometry, the same camera frame. Where an aperture blocks the chief ray but other rays of the
 pixel pass (vignetting; the rim of a fisheye's image circle), the label ray is the centre of the beam
 that passes (`beam_centres`), and the metadata's `beam_centre_pixels` counts those pixels.
@@ -143,7 +143,7 @@ def chief_rays(sensor):
     x, y = (np.asarray(v, dtype=np.float64) for v in (film.x, film.y))
     ex, ey, found = film_chief_aim(sensor.reversed, x, y, lam)
     ex, ey = np.where(found, ex, 0.0), np.where(found, ey, 0.0)
-    chief = sensor.traced(film, mi.Point2f(ex, ey), mi.Float(lam))
+    chief = sensor.exit_ray(film, mi.Point2f(ex, ey), mi.Float(lam))
     passed = found & np.asarray(chief[2])
     start_x, start_y, through_chief = x.copy(), y.copy(), passed.copy()  # where each label ray leaves the film
     for film_side, pupil_side in BEAMS:  # a blocked chief ray: the centre of the beam that passes
@@ -155,7 +155,7 @@ def chief_rays(sensor):
         passed[todo] = through
     centred = int(passed.sum() - through_chief.sum())
     if centred:
-        chief = sensor.traced(mi.Point2f(start_x, start_y), mi.Point2f(ex, ey), mi.Float(lam))
+        chief = sensor.exit_ray(mi.Point2f(start_x, start_y), mi.Point2f(ex, ey), mi.Float(lam))
     return chief[0], chief[1], chief[2] & mi.Bool(passed), lam, centred
 
 
@@ -208,13 +208,13 @@ def _beam_centres(sensor, x, y, lam, spread, sides):
     fy = (np.repeat(y, len(fu) * k) - np.tile(np.repeat(fv - 0.5, k), n) * spread).reshape(shape)
     film = mi.Point2f(fx.ravel(), fy.ravel())
     target, weight = sensor.pupil.sample(film, mi.Point2f(np.tile(su, n * len(fu)), np.tile(sv, n * len(fu))))
-    passed, transmittance = sensor.traced(film, target, mi.Float(lam))[2:]
+    passed, transmittance = sensor.exit_ray(film, target, mi.Float(lam))[2:]
     wt = np.asarray(dr.select(passed, weight * transmittance, 0.0), dtype=np.float64).reshape(shape)
     px, py = (np.asarray(v, dtype=np.float64).reshape(shape) for v in (target.x, target.y))
     total = wt.sum(axis=1)
     through = total > 0.0
     centre = [(wt * v).sum(axis=1) / np.where(through, total, 1.0) for v in (fx, fy, px, py)]
-    centre_passes = np.asarray(sensor.traced(mi.Point2f(*centre[:2]), mi.Point2f(*centre[2:]), mi.Float(lam))[2])
+    centre_passes = np.asarray(sensor.exit_ray(mi.Point2f(*centre[:2]), mi.Point2f(*centre[2:]), mi.Float(lam))[2])
     far = sum(np.square(v - c[:, None]) for v, c in zip((fx, fy, px, py), centre))
     nearest = np.argmin(np.where(wt > 0.0, far, np.inf), axis=1)
     rows = np.arange(n)
@@ -302,7 +302,7 @@ def _instance(hit: Hit):
         value = dr.select(met == mi.ShapePtr(item), float(i), value)
     layer = hit.layer(value)
     about = _instances(layer, names, ids, hit.scene)
-    boxes_3d(hit, about["boxes"], {name: shape for name, shape in zip(names, hit.scene.shapes())})
+    boxes_3d(hit, about["boxes"], dict(zip(names, hit.scene.shapes())))
     (name,) = LABELS["instance"].extra["layers"]
     return {name: layer}, about
 

@@ -38,9 +38,26 @@ def steps_per_pass(variant: str) -> int:
 
 @dataclass
 class Render:
-    """A rendered image (H×W×C, float32, image orientation; irradiance in units of the ideal camera's)
-    and what produced it: `spp` samples per pixel in `seconds` (wall clock, s); `layers`: more H×W
-    channels written beside the image's (the labels, `render.labels`)."""
+    """A rendered image and what produced it.
+
+    Parameters
+    ----------
+    image : numpy.ndarray
+        H×W×C float32 in image orientation; a lens render's values are image irradiance in units of the
+        ideal camera's.
+    channels : tuple of str
+        The channels' names (the response's, or the film's).
+    spp : int
+        Samples per pixel.
+    seconds : float
+        The render's wall-clock time (s).
+    samples_per_second : float
+        Pixels × spp / seconds.
+    meta : dict, optional
+        What produced it: variant, lens, camera, settings.
+    layers : dict, optional
+        More H×W channels written beside the image's (the labels, `render.labels`), name → array.
+    """
 
     image: np.ndarray
     channels: tuple[str, ...]
@@ -51,8 +68,20 @@ class Render:
     layers: dict = field(default_factory=dict)
 
     def write(self, path: str, png: str | None = None) -> str:
-        """OpenEXR (linear, one channel per response channel, metadata in the header) and an sRGB PNG
-        beside it (or at `png`); returns the PNG's path."""
+        """Write the image as OpenEXR and an sRGB PNG, each whole or not at all.
+
+        Parameters
+        ----------
+        path : str
+            The EXR file: linear, one channel per response channel and the layers, metadata in the header.
+        png : str, optional
+            The PNG preview; default: beside the EXR, of the same name.
+
+        Returns
+        -------
+        str
+            The PNG's path.
+        """
         from ..imageio import write_exr, write_png
 
         meta = dict(self.meta, spp=self.spp, samples_per_second=self.samples_per_second)
@@ -117,26 +146,26 @@ def render(scene, spp: int, seed: int = 0, max_depth: int | None = None, progres
     if spp < max(sensor.discrete_lines, 1):
         raise SolasError(f"samples per pixel {spp} must be at least the response's {sensor.discrete_lines} lines "
                          "(each line needs its own samples)")
-    width, height, nc = sensor.width, sensor.height, sensor.channels
+    width, height, channels = sensor.width, sensor.height, sensor.channels
     depth = max_depth if max_depth is not None else _max_depth(scene, sensor.lens)
-    pixels, samples = width * height, min(_SAMPLES_PER_PASS, steps_per_pass(mi.variant()) // depth)
+    pixels, samples = width * height, min(_SAMPLES_PER_PASS, steps_per_pass(str(mi.variant())) // depth)
     per_pass = max(1, min(spp, samples // pixels))
     passes = math.ceil(spp / per_pass)
     # an image larger than a pass is traced in bands of rows, so a pass stays bounded in memory and time
     band = pixels if not dr.is_jit_v(mi.Float) else max(width, samples // width * width)
-    accum = np.zeros(pixels * nc, dtype=np.float64)
+    accum = np.zeros(pixels * channels, dtype=np.float64)
     start, cpu = time.perf_counter(), time.process_time()
-    done, k = 0, 0
+    done, pass_index = 0, 0
     for _ in range(passes):
         n_spp = min(per_pass, spp - done)
         for first in range(0, pixels, band):
             count = min(band, pixels - first)
-            k += 1
+            pass_index += 1
             if dr.is_jit_v(mi.Float):
-                accum[first * nc:(first + count) * nc] += _pass(mi, dr, scene, sensor, emitter, n_spp, done, spp,
-                                                                 seed, pass_seed(seed, k), depth, first, count)
+                accum[first * channels:(first + count) * channels] += _wavefront_pass(
+                    scene, sensor, emitter, n_spp, done, spp, seed, pass_seed(seed, pass_index), depth, first, count)
             else:
-                accum += _pass_scalar(mi, dr, scene, sensor, emitter, n_spp, done, spp, seed, pass_seed(seed, k),
+                accum += _scalar_pass(scene, sensor, emitter, n_spp, done, spp, seed, pass_seed(seed, pass_index),
                                       depth)
             if progress is not None and count < pixels:
                 progress(done + n_spp * (first + count) / pixels, spp)
@@ -144,7 +173,7 @@ def render(scene, spp: int, seed: int = 0, max_depth: int | None = None, progres
         if progress is not None and band >= pixels:
             progress(done, spp)
     seconds, cpu = time.perf_counter() - start, time.process_time() - cpu
-    image = (accum / spp).reshape(height, width, nc).astype(np.float32)
+    image = (accum / spp).reshape(height, width, channels).astype(np.float32)
     return Render(image, tuple(sensor.response.channels), spp, seconds, pixels * spp / seconds,
                   {"variant": mi.variant(), "spp": spp, "max_depth": depth, "seconds": seconds, "cpu_seconds": cpu,
                    **sensor.response.meta()})
@@ -158,41 +187,45 @@ def _line_shares(total: int, lines: int) -> list[float]:
 
 # many parameters: one traced wavefront's scene objects and its sample range, seeds and pixel band, each a scalar
 # that the kernel takes opaque (one compiled kernel for every pass)
-def _pass(mi, dr, scene, sensor, emitter, spp: int, first: int, total: int, base: int, seed: int, depth: int,
-          first_pixel: int, pixels: int) -> np.ndarray:
+def _wavefront_pass(scene, sensor, emitter, spp: int, first: int, total: int, base: int, seed: int, depth: int,
+                    first_pixel: int, pixels: int) -> np.ndarray:
     """Samples first…first+spp−1 of the stratified sets of `total` of pixels first_pixel… (`pixels` of
     them, row-major), traced as one wavefront; returns their per-pixel, per-channel sums."""
+    import drjit as dr
+    import mitsuba as mi
+
     from .sampling import cmj_2d, hash_seed, stratified_1d
 
-    width, height, nc = sensor.width, sensor.height, sensor.channels
-    n = pixels * spp
+    width, height, channels = sensor.width, sensor.height, sensor.channels
+    samples = pixels * spp
     total_samples = total
 
     sampler = mi.load_dict({"type": "independent", "sample_count": spp})
-    sampler.seed(dr.opaque(mi.UInt32, seed), n)
+    sampler.seed(dr.opaque(mi.UInt32, seed), samples)
     # what changes from pass to pass (and seed to seed) is opaque, not a literal: the passes run one
     # compiled kernel (a literal per pass compiled a kernel per pass, about 1 s each on CUDA)
-    idx, per_pixel, base = dr.arange(mi.UInt32, n), dr.opaque(mi.UInt32, spp), dr.opaque(mi.UInt32, base)
-    pixel = idx // per_pixel + dr.opaque(mi.UInt32, first_pixel)
-    s = idx % per_pixel + dr.opaque(mi.UInt32, first)  # the sample's index in its pixel's stratified set of `total`
+    index, per_pixel, seed_base = dr.arange(mi.UInt32, samples), dr.opaque(mi.UInt32, spp), dr.opaque(mi.UInt32, base)
+    pixel = index // per_pixel + dr.opaque(mi.UInt32, first_pixel)
+    # the sample's index in its pixel's stratified set of `total`
+    sample = index % per_pixel + dr.opaque(mi.UInt32, first)
     lines = sensor.discrete_lines
     if lines:  # each line gets its own stratified set, so every channel sees a stratified pupil
-        band = s % lines
-        s, total = s // lines, -(-total // lines)
-        s1 = (mi.Float(band) + 0.5) / lines
-        share = dr.gather(mi.Float, mi.Float(_line_shares(total_samples, lines)), band)
+        line = sample % lines
+        sample, total = sample // lines, -(-total // lines)
+        wavelength_sample = (mi.Float(line) + 0.5) / lines
+        share = dr.gather(mi.Float, mi.Float(_line_shares(total_samples, lines)), line)
     else:
-        s1 = stratified_1d(s, total, hash_seed(pixel, 2, base), sampler.next_1d())
+        wavelength_sample = stratified_1d(sample, total, hash_seed(pixel, 2, seed_base), sampler.next_1d())
         share = mi.Float(1.0)
     film = mi.Point2f(mi.Float(pixel % width), mi.Float(pixel // width))
     # a pixel that covers at most two texels is integrated exactly by the object's footprint filter
     filtered = sensor.max_footprint <= 2.0 * emitter.tan_pitch and emitter.mapping == "rectilinear"
-    jitter = mi.Point2f(0.5) if filtered else cmj_2d(s, total, hash_seed(pixel, 1, base), sampler.next_2d())
-    pos = (film + jitter) / mi.ScalarPoint2f(width, height)
+    jitter = mi.Point2f(0.5) if filtered else cmj_2d(sample, total, hash_seed(pixel, 1, seed_base), sampler.next_2d())
+    pos = (film + jitter) / mi.ScalarPoint2f(width, height)  # type: ignore[operator]  # Mitsuba's stubs lack this mix
     footprint = sensor.footprint(sensor.film_point(pos)) if filtered else None
-    aperture = cmj_2d(s, total, hash_seed(pixel, 3, base), sampler.next_2d())
-    ray, throughput = sensor.pupil_ray(0.0, s1, pos, aperture)
-    _, band = sensor.sample_wavelength(s1)
+    aperture = cmj_2d(sample, total, hash_seed(pixel, 3, seed_base), sampler.next_2d())
+    ray, throughput = sensor.pupil_ray(0.0, wavelength_sample, pos, aperture)
+    _, wavelength_bin = sensor.sample_wavelength(wavelength_sample)
     ctx = mi.BSDFContext()
     radiance = mi.Float(0.0)
     weight = throughput[0] * share
@@ -203,51 +236,54 @@ def _pass(mi, dr, scene, sensor, emitter, spp: int, first: int, total: int, base
         radiance += dr.select(escaped, weight * emitter.radiance(ray.o, ray.d, ray.wavelengths, escaped,
                                                                              footprint)[0], 0.0)
         active &= si.is_valid()
-        bs, bw = si.bsdf(ray).sample(ctx, si, sampler.next_1d(active), sampler.next_2d(active), active)
-        weight *= bw[0]
+        bsdf_sample, bsdf_weight = si.bsdf(ray).sample(ctx, si, sampler.next_1d(active), sampler.next_2d(active),
+                                                       active)
+        weight *= bsdf_weight[0]
         active &= weight != 0.0
-        ray = continue_ray(si, ray, bs.wo)
-    out = dr.zeros(mi.Float, pixels * nc)
-    for c, w in enumerate(sensor.channel_weights(band)):
-        dr.scatter_reduce(dr.ReduceOp.Add, out, radiance * w, idx // per_pixel * nc + c)
+        ray = continue_ray(si, ray, bsdf_sample.wo)
+    out = dr.zeros(mi.Float, pixels * channels)
+    for channel, channel_weight in enumerate(sensor.channel_weights(wavelength_bin)):
+        dr.scatter_reduce(dr.ReduceOp.Add, out, radiance * channel_weight, index // per_pixel * channels + channel)
     dr.eval(out)
     return np.asarray(out, dtype=np.float64) * 1.0  # the pass's sum over its samples
 
 
-# many parameters: `_pass`'s, without the pixel band (a scalar variant traces the whole image)
-def _pass_scalar(mi, dr, scene, sensor, emitter, spp: int, first: int, total: int, base: int, seed: int, depth: int
+def _scalar_pass(scene, sensor, emitter, spp: int, first: int, total: int, base: int, seed: int, depth: int
                  ) -> np.ndarray:
-    """`_pass` one sample at a time, for the scalar reference variants: the same estimator with
+    """`_wavefront_pass` one sample at a time, for the scalar reference variants: the same estimator with
     independent samples (no stratification), each line of a discrete response sampled equally often."""
-    width, height, nc = sensor.width, sensor.height, sensor.channels
+    import mitsuba as mi
+
+    width, height, channels = sensor.width, sensor.height, sensor.channels
     rng = np.random.default_rng([base, seed])
-    out = np.zeros(width * height * nc)
+    out = np.zeros(width * height * channels)
     lines = sensor.discrete_lines
     shares = _line_shares(total, lines) if lines else []
     filtered = sensor.max_footprint <= 2.0 * emitter.tan_pitch and emitter.mapping == "rectilinear"
     ctx = mi.BSDFContext()
     for pixel in range(width * height):
         for k in range(spp):
-            s = first + k
-            u = rng.random(8)
-            s1 = (s % lines + 0.5) / lines if lines else u[0]
-            share = shares[s % lines] if lines else 1.0
-            jitter = (0.5, 0.5) if filtered else (u[1], u[2])
+            sample = first + k
+            uniform = rng.random(8)
+            wavelength_sample = (sample % lines + 0.5) / lines if lines else uniform[0]
+            share = shares[sample % lines] if lines else 1.0
+            jitter = (0.5, 0.5) if filtered else (uniform[1], uniform[2])
             pos = mi.Point2f((pixel % width + jitter[0]) / width, (pixel // width + jitter[1]) / height)
             footprint = sensor.footprint(sensor.film_point(pos)) if filtered else None
-            ray, throughput = sensor.pupil_ray(0.0, s1, pos, mi.Point2f(u[3], u[4]))
-            _, band = sensor.sample_wavelength(s1)
+            ray, throughput = sensor.pupil_ray(0.0, wavelength_sample, pos, mi.Point2f(uniform[3], uniform[4]))
+            _, wavelength_bin = sensor.sample_wavelength(wavelength_sample)
             weight, radiance = throughput[0] * share, 0.0
             for _ in range(depth):
                 si = scene.ray_intersect(ray)
                 if not si.is_valid():
                     radiance = weight * emitter.radiance(ray.o, ray.d, ray.wavelengths, True, footprint)[0]
                     break
-                bs, bw = si.bsdf(ray).sample(ctx, si, float(rng.random()), mi.Point2f(rng.random(), rng.random()))
-                weight *= bw[0]
+                bsdf_sample, bsdf_weight = si.bsdf(ray).sample(ctx, si, float(rng.random()),
+                                                               mi.Point2f(rng.random(), rng.random()))
+                weight *= bsdf_weight[0]
                 if weight == 0.0:
                     break
-                ray = continue_ray(si, ray, bs.wo)
-            for c, w in enumerate(sensor.channel_weights(band)):
-                out[pixel * nc + c] += radiance * w
+                ray = continue_ray(si, ray, bsdf_sample.wo)
+            for channel, channel_weight in enumerate(sensor.channel_weights(wavelength_bin)):
+                out[pixel * channels + channel] += radiance * channel_weight
     return out

@@ -19,6 +19,8 @@ experiment. RGB variants are refused: the lens needs a wavelength.
 """
 from __future__ import annotations
 
+from pathlib import Path
+
 from ..errors import SolasError, plugin_error
 from ..llvm import select_libllvm
 
@@ -71,8 +73,36 @@ def check_name(variant: str) -> None:
 
 
 def mitsuba(variant: str | None = None):
-    """The `mitsuba` module with `variant` set (default: `default_variant`) and the solas-mi plugins
-    registered for it (`solas_mi.mitsuba`, the entry for Python users)."""
+    """Mitsuba with a variant set and the solas-mi plugins registered for it.
+
+    The entry for Python users: after it, a scene file or a `mi.load_dict` dictionary can name the
+    plugins (``lens_camera``, ``lens_sensor``, ``sellmeier_dielectric``, ``image_object``; the
+    [plugin reference](plugins.md)) like Mitsuba's own.
+
+    Parameters
+    ----------
+    variant : str, optional
+        The Mitsuba variant, one of `VARIANTS`; default: `default_variant()` (``cuda_ad_spectral``
+        where a GPU works, else ``llvm_ad_spectral``).
+
+    Returns
+    -------
+    module
+        The `mitsuba` module, its variant set.
+
+    Raises
+    ------
+    SolasError
+        For a variant not in `VARIANTS` or not in this Mitsuba build, or one that cannot start (a CUDA
+        variant without a working device).
+
+    Examples
+    --------
+    >>> import solas_mi
+    >>> mi = solas_mi.mitsuba("scalar_spectral")
+    >>> mi.variant()
+    'scalar_spectral'
+    """
     variant = variant or default_variant()
     check_name(variant)
     select_libllvm()
@@ -93,7 +123,7 @@ def mitsuba(variant: str | None = None):
     return mi
 
 
-def load_scene(path: str, variant: str | None = None, **params):
+def load_scene(path: str | Path, variant: str | None = None, **params):
     """Load a scene XML (lengths in mm) with the solas-mi plugins; `params` fill its <default> values.
 
     Loaded on the calling thread (`parallel=False`): the plugins trace the lens with Dr.Jit when they

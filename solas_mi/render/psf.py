@@ -15,8 +15,8 @@ from pathlib import Path
 
 import numpy as np
 
-from ..optics import pupil as P
-from ..optics import tracer as T
+from ..optics import pupil
+from ..optics import tracer
 from ..psf.base import Computed, centring_warnings, window_centres_um
 from ..psf.geometric import bin_hits, entrance_grid, light_offsets_um
 from .loop import continue_ray, steps_per_pass
@@ -45,7 +45,7 @@ def lens_geometry(lens, rings: int | None = None, image_radius: float = 0.0, **e
         return mi.load_dict(scene)  # the meshes are read here, before the folder goes
 
 
-def scene_hits(scene, lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, rays: int, chief: P.ChiefRays):
+def scene_hits(scene, lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, rays: int, chief: pupil.ChiefRays):
     """Per field: image-plane offsets (µm) from the chief ray of the entrance-grid rays that cross the
     scene's lens, and each one's power (fraction of the on-axis entrance-pupil power). A field's rays
     are traced in chunks of bounded time (`loop.steps_per_pass`): a signal is answered between them."""
@@ -76,8 +76,8 @@ def _exits(scene, lens, sampler, field_deg, wavelength_nm, f: int, depth: int, e
     import mitsuba as mi
 
     n = len(ex)
-    start = P.Bundle(lens, field_deg, wavelength_nm, n).launch(T.F(ex), T.F(ey))
-    x, y, z, dx, dy, dz = T.to_numpy(start.x, start.y, start.z, start.dx, start.dy, start.dz)
+    start = pupil.Bundle(lens, field_deg, wavelength_nm, n).launch(tracer.F(ex), tracer.F(ey))
+    x, y, z, dx, dy, dz = tracer.to_numpy(start.x, start.y, start.z, start.dx, start.dy, start.dz)
     ray = mi.Ray3f(mi.Point3f(x, y, z), mi.Vector3f(dx, dy, dz), 0.0,
                    mi.Spectrum(dr.opaque(mi.Float, float(wavelength_nm[0]))))
     sampler.seed(dr.opaque(mi.UInt32, f), n)
@@ -103,7 +103,7 @@ def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: fl
     registered in `psf.registry` by this stage's package)."""
     field_deg = np.atleast_2d(np.asarray(field_deg, dtype=np.float64))
     wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(field_deg),)).copy()
-    chief = P.chief_rays(lens, field_deg, wavelength_nm)
+    chief = pupil.chief_rays(lens, field_deg, wavelength_nm)
     light = light_offsets_um(lens, field_deg, wavelength_nm, chief)
     center = window_centres_um(chief, light, shared_origin)
     reach = np.hypot(*(chief.image_xy + (0.0 if center is None else center * 1e-3)).T).max() + size * pitch_um * 1e-3

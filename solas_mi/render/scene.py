@@ -9,6 +9,7 @@ Meshes are written as binary PLY beside the scene XML, so a scene directory is s
 """
 from __future__ import annotations
 
+import itertools
 import math
 import os
 from dataclasses import dataclass
@@ -47,7 +48,7 @@ def check_gaps(lens: Lens) -> None:
     apertures, than MIN_GAP_MM: a ray continued SPAWN_OFFSET_MM past one surface would skip the next."""
     caps = [k for k, s in enumerate(lens.surfaces)
             if s.glass != (lens.surfaces[k - 1].glass if k else lens.object_glass)]
-    for a, b in zip(caps[:-1], caps[1:]):
+    for a, b in itertools.pairwise(caps):
         sa, sb = lens.surfaces[a], lens.surfaces[b]
         r = np.linspace(0.0, min(sa.semi_diameter, sb.semi_diameter), 257)
         gap = lens.vertex_z[b] - lens.vertex_z[a] + sb.sag(r) - sa.sag(r)
@@ -267,14 +268,52 @@ def lens_file(lens: Lens, folder: str | os.PathLike | None = None) -> Path:
     return path
 
 
+# long: the public API's numpydoc docstring is half of it
 def write_scene(lens: Lens, out_dir: str | os.PathLike, image: str, camera: Camera | None = None,
                 spec: RenderSpec | None = None, *, name: str = "scene.xml", **settings) -> Path:
-    """Write `name`, meshes/*.ply and the lens file (`lens_file`: a copy of its source, or the lens
-    as changed in memory) for `lens` into out_dir, so that the directory is self-contained; returns
-    the XML path. `spec` (`render.spec.RenderSpec`, default its defaults, with `settings` — its field
-    names — changed) gives the rings per cap mesh, spp, response, boundary, fresnel and the image
-    object's projection `mapping` (plugins/image_object.py). A response of one wavelength is also
-    written as the glasses' and the object's `wavelength` (mono variants)."""
+    """Write a lens's Mitsuba scene into a folder, self-contained: the XML, the cap meshes and the lens file.
+
+    Render it with ``solas-mi render``, or `render_scene`. A response of one wavelength is also written as
+    the glasses' and the object's ``wavelength`` (mono variants).
+
+    Parameters
+    ----------
+    lens : Lens
+        The lens.
+    out_dir : str or PathLike
+        The folder: the XML, ``meshes/*.ply`` and the lens file (`lens_file`: a copy of its source, or the
+        lens as changed in memory).
+    image : str
+        The input image the scene's ``image_object`` shows (a path the scene reads).
+    camera : Camera, optional
+        The sensor and field (`optics.camera.Camera`); default: `optics.camera.camera_for(lens)`.
+    spec : RenderSpec, optional
+        Rings per cap mesh, spp, response, boundary, Fresnel and the image's ``mapping``; default: its
+        defaults.
+    name : str, default "scene.xml"
+        The XML's name.
+    **settings
+        Fields of `RenderSpec` to change.
+
+    Returns
+    -------
+    Path
+        The XML.
+
+    Raises
+    ------
+    SolasError
+        For a lens whose surfaces come too close for float32 meshes, a bad setting, or a lens that did
+        not survive writing.
+
+    Examples
+    --------
+    >>> from solas_mi import Lens
+    >>> from solas_mi.render import write_scene
+    >>> xml = write_scene(Lens.load("solas-doublet"), "scene", "rocket.png")
+    >>> xml.name, sorted(p.name for p in xml.parent.iterdir())
+    ('scene.xml', ['meshes', 'scene.xml', 'solas_doublet.toml'])
+    """
     import shutil
 
     spec = (spec or RenderSpec()).replace(**settings)

@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, replace
-from typing import Any
+from typing import Any, cast
 
 from ..errors import SolasError
 from ..optics.camera import BOUNDARIES, MAPPINGS
@@ -41,13 +41,53 @@ def _focus(text: str) -> float:
 
 @dataclass(frozen=True)
 class RenderSpec(OptionSpec):
-    """How to render through a lens. `sensor` (rows, columns) pixels of `pitch_um` µm (None: the
-    sensor's width spans the field); the input image spans ±`fov_deg` degrees (None: the lens's);
-    `response`, `boundary`, `fresnel` and `mapping` are the plugins' parameters; `rings` per cap mesh (None: `render.mesh.mesh_rings`'s);
-    `spp` samples per pixel; `variant` the Mitsuba variant (None: `render.mitsuba.variant_for`'s);
-    `seed` the sampler's; `focus_distance` (world units, inf allowed; None: the lens file's) sets the
-    lens camera of a scene file (`render.user_scene`), not an image's render; so do `labels`
-    (`render.labels`: their names, comma-separated, in `LABELS` order; "": none)."""
+    """How to render through a lens, checked when built.
+
+    `render_image`, `write_scene` and the render batch take it; the render commands make one flag of each
+    field and build it from them.
+
+    Parameters
+    ----------
+    sensor : (int, int), default (960, 1280)
+        The sensor's pixels, (rows, columns) (a list, or "COLSxROWS" text, is read as such).
+    pitch_um : float, optional
+        The pixel pitch (µm); default: the sensor's width spans the field.
+    fov_deg : float, optional
+        Half the horizontal field the input image spans (degrees, below 180); default: the lens's.
+    response : str, default "srgb"
+        The camera response: srgb, lines, mono:<nm>, table:<file.csv> (`render.response`).
+    boundary : str, default "edge"
+        The object outside the image, one of `optics.camera.BOUNDARIES`.
+    fresnel : str, default "transmit"
+        Fresnel losses, one of `FRESNEL_MODES`.
+    rings : int, optional
+        Rings of each cap mesh (`MIN_RINGS` to `MAX_RINGS`); default: `render.mesh.mesh_rings`'s.
+    mapping : str, default "rectilinear"
+        The input image's projection, one of `optics.camera.MAPPINGS`.
+    spp : int, default 64
+        Samples per pixel (1 to `MAX_SPP`).
+    variant : str, optional
+        The Mitsuba variant, one of `render.mitsuba.VARIANTS`; default: `render.mitsuba.variant_for`'s.
+    seed : int, default 0
+        The sampler's seed (a batch's base seed).
+    focus_distance : float, optional
+        A scene file's lens camera focused this far (world units, inf allowed; `render.user_scene`); not
+        an image's render. Default: the lens file's.
+    labels : str, default ""
+        A scene file's label layers (`render.labels`: names of `LABELS`, comma-separated); "": none.
+
+    Raises
+    ------
+    SolasError
+        For a value out of its range or not among its choices.
+
+    Examples
+    --------
+    >>> from solas_mi.render import RenderSpec
+    >>> spec = RenderSpec(sensor=(24, 32), spp=16)
+    >>> spec.replace(spp=4).as_dict()["spp"], spec.sensor
+    (4, (24, 32))
+    """
 
     sensor: tuple[int, int] = option("sensor pixels, columns x rows", (960, 1280), parse=_sensor, metavar="WxH",
                                      shown=wxh_text)
@@ -84,7 +124,7 @@ class RenderSpec(OptionSpec):
         if not isinstance(self.response, str) or not self.response.strip():
             raise SolasError(f"camera response {self.response!r} must be srgb, lines, mono:<nm> or table:<file.csv>")
         for name in ("boundary", "fresnel", "mapping"):
-            allowed = self.flags([name])[name].choices
+            allowed = cast(tuple, self.flags([name])[name].choices)  # these three flags' choices are tuples
             if getattr(self, name) not in allowed:
                 raise SolasError(f"{name} {getattr(self, name)!r} must be one of {', '.join(allowed)}")
         set_("labels", ",".join(parse_labels(self.labels)))
@@ -96,7 +136,23 @@ class RenderSpec(OptionSpec):
             check_name(self.variant)
 
     def replace(self, **changes) -> RenderSpec:
-        """A copy with `changes` (field names), checked; SolasError naming an unknown setting."""
+        """A copy with some fields changed, checked.
+
+        Parameters
+        ----------
+        **changes
+            Field name → value.
+
+        Returns
+        -------
+        RenderSpec
+            The copy.
+
+        Raises
+        ------
+        SolasError
+            For a name that is not a field, or a bad value.
+        """
         unknown = set(changes) - set(self.fields_by_name())
         if unknown:
             raise SolasError(f"unknown render setting(s) {', '.join(sorted(unknown))}: the settings are "
@@ -104,7 +160,13 @@ class RenderSpec(OptionSpec):
         return replace(self, **changes)
 
     def as_dict(self) -> dict[str, Any]:
-        """JSON-ready fields (sensor as [rows, columns], an infinite focus distance as "inf")."""
+        """The fields as JSON values (a batch's manifest).
+
+        Returns
+        -------
+        dict
+            Field name → value; the sensor as [rows, columns], an infinite focus distance as "inf".
+        """
         out = asdict(self)
         out["sensor"] = list(self.sensor)
         if self.focus_distance is not None and math.isinf(self.focus_distance):
@@ -113,7 +175,18 @@ class RenderSpec(OptionSpec):
 
     @classmethod
     def from_dict(cls, values: dict[str, Any]) -> RenderSpec:
-        """The spec of `as_dict` (keys that are not settings ignored)."""
+        """The spec of `as_dict`'s values.
+
+        Parameters
+        ----------
+        values : dict
+            Field name → value; keys that are not fields are ignored.
+
+        Returns
+        -------
+        RenderSpec
+            The spec, checked.
+        """
         known = {k: v for k, v in values.items() if k in cls.fields_by_name()}
         if known.get("focus_distance") == "inf":
             known["focus_distance"] = math.inf

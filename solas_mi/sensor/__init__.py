@@ -9,3 +9,8 @@
 - `capture`: photons → electrons → digital numbers with shot, dark and read noise, PRNU, DSNU,
   full well, conversion gain, ADC bit depth and black level; deterministic for a seed.
 """
+from ..lazy import lazy_exports
+
+# `capture.capture` is not exported here: its module's own name would hide it once imported
+__all__ = ["SensorModel", "load_sensor"]
+__getattr__ = lazy_exports(__name__, {"SensorModel": ".model", "load_sensor": ".files"})

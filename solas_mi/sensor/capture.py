@@ -51,8 +51,43 @@ def check_frame(frame) -> None:
 
 
 def capture(model: SensorModel, irradiance: np.ndarray, exposure_s: float, seed: int, frame: int = 0) -> np.ndarray:
-    """The RAW frame (H, W, uint16 DN) the sensor gives for an irradiance image (H, W, 3) in W/m² exposed
-    `exposure_s` seconds: frame `frame` of seed `seed` (same seed and frame, same frame)."""
+    """The RAW frame a sensor gives for an image-plane irradiance image: photons → electrons → DN.
+
+    Shot, dark and read noise, PRNU and DSNU, full well, conversion gain, ADC and black level
+    ([the sensor](../details/sensor.md)); the same seed and frame give the same frame.
+
+    Parameters
+    ----------
+    model : SensorModel
+        The sensor.
+    irradiance : numpy.ndarray
+        (H, W, 3) image-plane irradiance (W/m²) of the channels R, G, B.
+    exposure_s : float
+        The exposure time (s).
+    seed : int
+        The sensor's seed (0 to `MAX_SEED`): it fixes the pixels' gain and offset patterns.
+    frame : int, default 0
+        The frame's number: its temporal noise.
+
+    Returns
+    -------
+    numpy.ndarray
+        (H, W) uint16 DN, the mosaic of the sensor's CFA.
+
+    Raises
+    ------
+    SolasError
+        For a bad seed or frame number.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from solas_mi.sensor import load_sensor
+    >>> from solas_mi.sensor.capture import capture
+    >>> raw = capture(load_sensor("ar0132at"), np.full((4, 6, 3), 0.1), 0.01, seed=1)
+    >>> raw.shape, raw.dtype.name
+    ((4, 6), 'uint16')
+    """
     check_seed(seed)
     check_frame(frame)
     mu_e = mean_electrons(model, irradiance, exposure_s)

@@ -48,7 +48,32 @@ def _path(name_or_path: str | Path) -> Path:
 
 
 def load_sensor(name_or_path: str | Path) -> SensorModel:
-    """The `SensorModel` of a preset's name or of the `[sensor]` table of TOML file `name_or_path`."""
+    """A sensor from a shipped preset or a TOML file.
+
+    Parameters
+    ----------
+    name_or_path : str or Path
+        A preset's name (`preset_names`: ``solas-mi sensors``), or the path of a TOML file of one
+        ``[sensor]`` table of `SensorModel`'s field names (a name ending in ".toml" or holding a path
+        separator).
+
+    Returns
+    -------
+    SensorModel
+        The sensor, checked.
+
+    Raises
+    ------
+    SolasError
+        For an unknown preset, a file that cannot be read, or a bad value (naming the file).
+
+    Examples
+    --------
+    >>> from solas_mi.sensor import load_sensor
+    >>> sensor = load_sensor("ar0132at")
+    >>> sensor.pixel_pitch_um, sensor.cfa
+    (3.75, 'RGGB')
+    """
     path = _path(name_or_path)
     values = dict(toml_table(path, "sensor", "sensor model"))
     try:

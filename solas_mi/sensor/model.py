@@ -10,6 +10,7 @@ gain) and DSNU (spread of the per-pixel offset, e⁻) are spatial: fixed by the 
 """
 import math
 from dataclasses import dataclass, fields
+from typing import cast
 
 import numpy as np
 
@@ -52,15 +53,62 @@ def _ranged(model, field: str) -> None:
 
 @dataclass(frozen=True)
 class SensorModel:
-    """A sensor: pixel pitch, quantum efficiency per filter (R, G, B, clear) with the representative
-    wavelength of the image's three channels, or instead a QE curve per filter (`qe.QECurve`), noise,
-    full well, conversion gain, ADC and CFA. The scalar fields left out take `SCALAR_DEFAULTS`."""
+    """A camera sensor in the terms of EMVA 1288, checked when built ([the sensor](../details/sensor.md)).
+
+    Quantum efficiency is given per filter (R, G, B, clear) with the wavelength that stands for each of the
+    image's three channels, or instead as a QE curve per filter. The scalar fields left out take
+    `SCALAR_DEFAULTS`; `files.load_sensor` reads one from a preset or a TOML file.
+
+    Parameters
+    ----------
+    pixel_pitch_um : float, default 3.0
+        The pixel pitch (µm).
+    qe_r, qe_g, qe_b, qe_c : float, optional
+        Quantum efficiency of the R, G, B and clear filters, in (0, 1]; default 0.6, 0.7, 0.5, 0.8; none
+        with a `qe_curve`.
+    wavelengths_nm : (float, float, float), optional
+        The wavelengths (nm) that stand for the image's R, G, B; default (610, 540, 465); none with a
+        `qe_curve`.
+    dark_current_e_s : float, default 10.0
+        Dark current (e⁻/s).
+    read_noise_e : float, default 3.0
+        Read noise (e⁻ rms).
+    prnu : float, default 0.01
+        The relative spread of the pixel gain.
+    dsnu_e : float, default 1.0
+        The spread of the pixel offset (e⁻).
+    full_well_e : float, default 10000.0
+        The full-well capacity (e⁻).
+    gain_dn_per_e : float, default 0.25
+        The conversion gain K (DN/e⁻).
+    bit_depth : int, default 12
+        The ADC's bits, 8 to 16.
+    black_level_dn : int, default 64
+        The black level (DN).
+    cfa : str, default "RGGB"
+        The colour filter array's pattern (`cfa`).
+    qe_curve : QECurve, optional
+        The filters' quantum efficiency against wavelength (`qe.QECurve`).
+
+    Raises
+    ------
+    SolasError
+        For a value out of its range, a QE curve given with scalar efficiencies, or an ADC whose codes
+        cannot hold the signal.
+
+    Examples
+    --------
+    >>> from solas_mi.sensor import SensorModel
+    >>> sensor = SensorModel(read_noise_e=2.0)
+    >>> sensor.white_level_dn, round(sensor.snr(1000.0, exposure_s=0.01), 2)
+    (4095, 31.54)
+    """
     pixel_pitch_um: float = 3.0
-    qe_r: float | None = None  # default 0.6 (SCALAR_DEFAULTS), None with a qe_curve
-    qe_g: float | None = None  # 0.7
-    qe_b: float | None = None  # 0.5
-    qe_c: float | None = None  # 0.8
-    wavelengths_nm: tuple[float, float, float] | None = None  # (610, 540, 465)
+    qe_r: float | None = None
+    qe_g: float | None = None
+    qe_b: float | None = None
+    qe_c: float | None = None
+    wavelengths_nm: tuple[float, float, float] | None = None
     dark_current_e_s: float = 10.0
     read_noise_e: float = 3.0
     prnu: float = 0.01
@@ -122,7 +170,23 @@ class SensorModel:
 
     @classmethod
     def from_dict(cls, values: dict) -> "SensorModel":
-        """A model from a mapping of field names (a TOML table); an unknown name is an error."""
+        """A model from a mapping of field names (a TOML table).
+
+        Parameters
+        ----------
+        values : dict
+            Field name → value (lists for tuples, a QE curve as its table of columns).
+
+        Returns
+        -------
+        SensorModel
+            The model, checked.
+
+        Raises
+        ------
+        SolasError
+            For an unknown name or a bad value.
+        """
         known = {f.name for f in fields(cls)}
         unknown = sorted(set(values) - known)
         if unknown:
@@ -134,6 +198,7 @@ class SensorModel:
 
     @property
     def white_level_dn(self) -> int:
+        """The ADC's largest code (DN)."""
         return 2**self.bit_depth - 1
 
     @property
@@ -143,38 +208,105 @@ class SensorModel:
         return float(min(self.gain_dn_per_e * self.full_well_e, self.white_level_dn - self.black_level_dn))
 
     def saturated(self, raw: np.ndarray) -> np.ndarray:
-        """Where a RAW frame (DN) is saturated: within 3 σ of the readout noise (read noise and DSNU) and
-        the rounding of the saturation level."""
+        """Where a RAW frame is saturated.
+
+        Parameters
+        ----------
+        raw : numpy.ndarray
+            The RAW frame (DN).
+
+        Returns
+        -------
+        numpy.ndarray
+            True where within 3 σ of the readout noise (read noise and DSNU) and the rounding of the
+            saturation level.
+        """
         spread = 3.0 * self.gain_dn_per_e * float(np.hypot(self.read_noise_e, self.dsnu_e)) + 1.0
         return np.asarray(raw) >= self.black_level_dn + self.saturation_dn - spread
 
     @property
-    def channel_wavelengths_nm(self) -> tuple[float, float, float]:
+    def channel_wavelengths_nm(self) -> tuple[float, ...]:
         """The wavelength (nm) that stands for each image channel R, G, B: `wavelengths_nm`, or with a QE
         curve the centres of the channels' bands (`qe` module)."""
-        return self.wavelengths_nm if self.qe_curve is None else BAND_CENTRES_NM
+        return BAND_CENTRES_NM if self.wavelengths_nm is None else self.wavelengths_nm  # None with a QE curve
 
     def effective_qe(self) -> np.ndarray:
-        """Q[f, c] (4 × 3, filters in `cfa.FILTERS` order, channels R, G, B): the electrons per photon of
-        channel c (at `channel_wavelengths_nm`) on a pixel of filter f (`qe` module)."""
+        """The electrons per photon of each image channel on a pixel of each filter (`qe` module).
+
+        Returns
+        -------
+        numpy.ndarray
+            Q[f, c], 4 × 3: filters in `cfa.FILTERS` order, channels R, G, B (at
+            `channel_wavelengths_nm`).
+        """
         if self.qe_curve is None:
-            return scalar_effective_qe({"R": self.qe_r, "G": self.qe_g, "B": self.qe_b, "C": self.qe_c})
+            # without a QE curve, __post_init__ gave each scalar QE left out its default
+            return scalar_effective_qe(cast(dict[str, float], {"R": self.qe_r, "G": self.qe_g, "B": self.qe_b, "C": self.qe_c}))
         return self.qe_curve.effective_qe(set(self.cfa))
 
     def dark_variance_e2(self, exposure_s: float) -> float:
-        """σ_d² = σ_r² + i_d t: the temporal dark noise in e⁻²."""
+        """The temporal dark noise σ_d² = σ_r² + i_d t.
+
+        Parameters
+        ----------
+        exposure_s : float
+            The exposure time t (s).
+
+        Returns
+        -------
+        float
+            σ_d² (e⁻²).
+        """
         return self.read_noise_e**2 + self.dark_current_e_s * exposure_s
 
     def dark_mean_dn(self, exposure_s: float) -> float:
-        """μ_y.dark = black + K i_d t (DN)."""
+        """The mean dark signal μ_y.dark = black + K i_d t.
+
+        Parameters
+        ----------
+        exposure_s : float
+            The exposure time t (s).
+
+        Returns
+        -------
+        float
+            μ_y.dark (DN).
+        """
         return self.black_level_dn + self.gain_dn_per_e * self.dark_current_e_s * exposure_s
 
     def temporal_variance_dn2(self, mean_dn: float, exposure_s: float) -> float:
-        """EMVA 1288 eq. 6: σ_y² = K² σ_d² + σ_q² + K (μ_y − μ_y.dark) below saturation."""
+        """The temporal variance of a pixel's signal below saturation, EMVA 1288 eq. 6:
+        σ_y² = K² σ_d² + σ_q² + K (μ_y − μ_y.dark).
+
+        Parameters
+        ----------
+        mean_dn : float
+            The mean signal μ_y (DN).
+        exposure_s : float
+            The exposure time (s).
+
+        Returns
+        -------
+        float
+            σ_y² (DN²).
+        """
         k = self.gain_dn_per_e
         return k * k * self.dark_variance_e2(exposure_s) + QUANTISATION_VARIANCE + k * (mean_dn - self.dark_mean_dn(exposure_s))
 
     def snr(self, electrons: float, exposure_s: float) -> float:
-        """EMVA 1288 eq. 15: SNR = μ_e / sqrt(σ_d² + σ_q²/K² + μ_e) for μ_e photo-electrons."""
+        """The signal-to-noise ratio, EMVA 1288 eq. 15: SNR = μ_e / sqrt(σ_d² + σ_q²/K² + μ_e).
+
+        Parameters
+        ----------
+        electrons : float
+            The photo-electrons μ_e.
+        exposure_s : float
+            The exposure time (s).
+
+        Returns
+        -------
+        float
+            The SNR.
+        """
         noise = self.dark_variance_e2(exposure_s) + QUANTISATION_VARIANCE / self.gain_dn_per_e**2 + electrons
         return electrons / math.sqrt(noise)

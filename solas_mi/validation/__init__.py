@@ -9,3 +9,5 @@ error against run time) drive them, `commands` puts both on the command line. Be
 (geometric PSFs traced through the scene's geometry) and `sheet` (a side-by-side sheet of degraded
 images, the SOLAS paper's figure 4 layout).
 """
+
+__all__: list[str] = []  # run from the command line (its `commands`): no Python API of its own

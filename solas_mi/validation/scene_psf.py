@@ -12,19 +12,19 @@ import numpy as np
 
 from ..optics.lens import Lens
 from ..optics.pupil import chief_rays
-from ..psf import base as S
+from ..psf import base
 from ..psf.geometric import bin_hits
 from ..psf.registry import DEFAULT_GEOMETRIC_RAYS
 from ..render.psf import scene_hits
 
 
-def scene_psf(scene, lens: Lens, field_deg, wavelength_nm: float, pitch_um: float = S.DEFAULT_PITCH_UM,
-              size: int = S.DEFAULT_SIZE, rays: int = DEFAULT_GEOMETRIC_RAYS) -> S.PSF:
+def scene_psf(scene, lens: Lens, field_deg, wavelength_nm: float, pitch_um: float = base.DEFAULT_PITCH_UM,
+              size: int = base.DEFAULT_SIZE, rays: int = DEFAULT_GEOMETRIC_RAYS) -> base.PSF:
     """Geometric PSF (unit sum) of field (x, y) degrees at one wavelength through `scene`'s geometry.
     meta holds the rays' landing centroid and RMS radius (µm from the chief ray) and the transmitted
     power (fraction of the on-axis entrance-pupil power)."""
     field = np.array([lens.field_type.check(field_deg)])
-    S.check_grid(pitch_um, size)
+    base.check_grid(pitch_um, size)
     wl = np.array([lens.check_wavelength(wavelength_nm)])
     chief = chief_rays(lens, field, wl)
     hits = scene_hits(scene, lens, field, wl, rays, chief)
@@ -32,8 +32,8 @@ def scene_psf(scene, lens: Lens, field_deg, wavelength_nm: float, pitch_um: floa
     data, transmission = bin_hits(hits, pitch_um, size)
     cx, cy = np.average(px, weights=w), np.average(py, weights=w)
     rms = float(np.sqrt(np.average((px - cx) ** 2 + (py - cy) ** 2, weights=w)))
-    meta = S.describe(lens, "scene-geometric", "sum", {"rays": rays}, size)
+    meta = base.describe(lens, "scene-geometric", "sum", {"rays": rays}, size)
     meta.update({"centroid_um": [float(cx), float(cy)], "rms_radius_um": rms,
                  "transmission": float(transmission[0]), "chief_ray_mm": chief.image_xy[0].tolist()})
-    return S.PSF(S.normalize(data[0], "sum"), float(pitch_um), tuple(field[0]), (float(wl[0]),), (1.0,),
-                 tuple(chief.image_xy[0].tolist()), "scene-geometric", "sum", meta)
+    return base.PSF(base.normalize(data[0], "sum"), float(pitch_um), tuple(field[0]), (float(wl[0]),), (1.0,),
+                    tuple(chief.image_xy[0].tolist()), "scene-geometric", "sum", meta)

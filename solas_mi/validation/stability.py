@@ -17,7 +17,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from ..errors import SolasError
-from ..optics import tracer as T
+from ..optics import tracer
 from ..optics.exit_pupil import passes, pupil_bounds, reversed_lens
 from ..optics.lens import Lens
 from ..optics.paraxial import paraxial
@@ -106,8 +106,8 @@ def _centred(lens: Lens, field: tuple, wl: float) -> Case:
 def _chief(lens: Lens, wl: float) -> Case:
     fields = np.stack([np.zeros(11), np.linspace(0.0, lens.field_deg, 11)], axis=-1)
     chief = chief_rays(lens, fields, np.full(11, wl))
-    tr = Bundle(lens, fields, np.full(11, wl), 1).trace(T.F(chief.entrance[:, 0]), T.F(chief.entrance[:, 1]))
-    sx, sy = T.to_numpy(tr.stop_x, tr.stop_y)
+    tr = Bundle(lens, fields, np.full(11, wl), 1).trace(tracer.F(chief.entrance[:, 0]), tracer.F(chief.entrance[:, 1]))
+    sx, sy = tracer.to_numpy(tr.stop_x, tr.stop_y)
     miss = np.hypot(sx, sy)
     off = chief.off_centre
     seen = f"{miss[~off].max(initial=0.0):.1e} mm"
@@ -122,10 +122,11 @@ def _chief(lens: Lens, wl: float) -> Case:
 def _reaches_centre(lens: Lens, field: np.ndarray, wl: float) -> bool:
     """Whether some meridional ray of `field` (0, y) crosses the stop centre: its stop height changes sign
     between neighbours of a scan over every entrance point that can meet the lens (TIR and misses left out)."""
-    span = -T.launch_plane_z(lens) if lens.at_infinity else 2.0 * max(s.semi_diameter for s in lens.surfaces)
+    span = -tracer.launch_plane_z(lens) if lens.at_infinity else 2.0 * max(s.semi_diameter for s in lens.surfaces)
     ey = np.linspace(-span, span, CENTRE_SCAN)
-    tr = Bundle(lens, np.tile(field, (CENTRE_SCAN, 1)), np.full(CENTRE_SCAN, wl), 1).trace(T.F(0.0 * ey), T.F(ey))
-    ok, sy = T.to_numpy(tr.ok, tr.stop_y)
+    tr = Bundle(lens, np.tile(field, (CENTRE_SCAN, 1)), np.full(CENTRE_SCAN, wl), 1).trace(tracer.F(0.0 * ey),
+                                                                                        tracer.F(ey))
+    ok, sy = tracer.to_numpy(tr.ok, tr.stop_y)
     both = ok[1:] & ok[:-1]
     return bool(np.any(both & (np.sign(sy[1:]) != np.sign(sy[:-1]))))
 
@@ -232,10 +233,11 @@ def _concentric(lens: Lens, wl: float) -> Case:
         {"radius": 20.0, "thickness": 5.0, "diameter": 30.0, "material": glass, "stop": True},
         {"radius": 15.0, "thickness": 40.0, "diameter": 20.0}]})
     theta = np.linspace(-0.3, 0.3, 31)  # rad: collimated rays, each through the common centre z = 20
-    zero = T.F(np.zeros_like(theta))
-    rays = T.launch(shell, zero, T.F(np.tan(theta)), zero, T.F(-(20.0 - T.launch_plane_z(shell)) * np.sin(theta)))
-    tr = T.trace(shell, rays, T.F(np.full(len(theta), wl * 1e-3)))
-    dy, dz = T.to_numpy(tr.rays.dy, tr.rays.dz)
+    zero = tracer.F(np.zeros_like(theta))
+    rays = tracer.launch(shell, zero, tracer.F(np.tan(theta)), zero,
+                         tracer.F(-(20.0 - tracer.launch_plane_z(shell)) * np.sin(theta)))
+    tr = tracer.trace(shell, rays, tracer.F(np.full(len(theta), wl * 1e-3)))
+    dy, dz = tracer.to_numpy(tr.rays.dy, tr.rays.dz)
     dev = float(np.abs(np.arctan2(dy, dz) - theta).max())
     return Case("rays through a monocentric shell's centre", "undeviated within 1e-12 rad", f"{dev:.1e} rad",
                 dev < 1e-12)

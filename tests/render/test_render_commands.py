@@ -86,7 +86,7 @@ def test_every_render_image_setting_reaches_the_batch_items(tmp_path):
     image_cmd, batch_cmd = _subparser(parser, "render-image"), _subparser(parser, "batch", "render")
     flags = {a.dest: a for a in image_cmd._actions if a.option_strings and a.dest not in OUTPUT_FLAGS | RECORDED}
     assert set(flags) <= set(RenderSpec.fields_by_name()) and set(flags) == set(IMAGE_SETTINGS)
-    assert RECORDED <= {a.dest for a in batch_cmd._actions} & {a.dest for a in image_cmd._actions}
+    assert {a.dest for a in batch_cmd._actions} & {a.dest for a in image_cmd._actions} >= RECORDED
     Image.fromarray(np.full((24, 32), 128, np.uint8)).save(tmp_path / "photo.png")
     for dest, action in flags.items():
         given = [action.option_strings[-1], _other_value(dest, action)]

@@ -15,9 +15,34 @@ __all__ = ["MODELS", "Sensor", "ChiefMap", "chief_map", "calibrate", "describe_c
 
 
 def calibrate(lens, model: str, sensor: Sensor, wavelengths_nm=None, focus_distance_mm: float | None = None) -> list:
-    """`model` (of `MODELS`) fitted to `lens`'s chief-ray mapping over `sensor`, one `fit.Calibration` per
-    wavelength of `wavelengths_nm` (None: the lens's primary; several: lateral colour as one calibration
-    each), for an object `focus_distance_mm` in front of surface 1 (None: the lens file's; math.inf: infinity)."""
+    """Fit a camera model to a lens's chief-ray mapping over a sensor (``solas-mi lens calibrate``).
+
+    Parameters
+    ----------
+    lens : Lens
+        The lens.
+    model : str
+        A name of `MODELS`.
+    sensor : Sensor
+        The sensor.
+    wavelengths_nm : sequence of float, optional
+        One calibration per wavelength (lateral colour as one calibration each); default: the lens's primary.
+    focus_distance_mm : float, optional
+        The object's distance in front of surface 1 (mm; math.inf: infinity); default: the lens file's.
+
+    Returns
+    -------
+    list of fit.Calibration
+        One per wavelength: the model's fitted values and its residual (px).
+
+    Examples
+    --------
+    >>> from solas_mi import Lens
+    >>> from solas_mi.optics.calibration import Sensor, calibrate
+    >>> [fitted] = calibrate(Lens.load("solas-doublet"), "opencv-pinhole", Sensor(64, 48, 50.0))
+    >>> fitted.model, fitted.rms_px < 0.01
+    ('opencv-pinhole', True)
+    """
     from .fit import fit
 
     MODELS.get(model)
@@ -27,8 +52,27 @@ def calibrate(lens, model: str, sensor: Sensor, wavelengths_nm=None, focus_dista
 
 def describe_camera(lens, sensor: Sensor, model: str | None, focus_distance_mm: float | None = None,
                     wavelength_nm: float | None = None) -> dict:
-    """The camera an output was made with, as its metadata records it: lens, sensor, pitch, focus and the
-    fitted calibration of `model` (None: none fitted; `MODELS.default` is the command lines' default)."""
+    """The camera an output was made with, as its metadata records it.
+
+    Parameters
+    ----------
+    lens : Lens
+        The lens.
+    sensor : Sensor
+        The sensor.
+    model : str or None
+        The calibration model fitted (`MODELS`; its default is the command lines'); None: none.
+    focus_distance_mm : float, optional
+        The object's distance in front of surface 1 (mm); default: the lens file's.
+    wavelength_nm : float, optional
+        The wavelength (nm); default: the lens's primary.
+
+    Returns
+    -------
+    dict
+        Lens, sensor, pitch, focus ("inf" at infinity), the mapping's description and the fitted
+        calibration (without its mapping).
+    """
     cmap = chief_map(lens, sensor, wavelength_nm, focus_distance_mm)
     out = {**cmap.describe()}
     if model is not None:

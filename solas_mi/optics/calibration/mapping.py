@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -36,8 +37,28 @@ NEWTON_STEPS = 6
 
 @dataclass(frozen=True)
 class Sensor:
-    """A sensor of width × height pixels of pitch_um, the lens's axis landing at `principal` (column, row;
-    None: the sensor's centre)."""
+    """A sensor on the lens's axis, checked when built.
+
+    Parameters
+    ----------
+    width, height : int
+        Pixels, 1 to 65536 each.
+    pitch_um : float
+        The pixel pitch (µm), below 1e4.
+    principal : tuple of float, optional
+        (column, row) where the lens's axis lands (a frame's principal point); default: the sensor's centre.
+
+    Raises
+    ------
+    SolasError
+        For a size or pitch out of range, or a principal point that is not two finite numbers.
+
+    Examples
+    --------
+    >>> from solas_mi.optics.calibration import Sensor
+    >>> Sensor(64, 48, 50.0).describe()
+    {'sensor_px': [64, 48], 'pitch_um': 50.0, 'principal_px': [31.5, 23.5]}
+    """
 
     width: int
     height: int
@@ -64,34 +85,82 @@ class Sensor:
         return (self.width - 1) / 2.0, (self.height - 1) / 2.0
 
     def reach_px(self) -> float:
-        """The distance (pixels) from the axis to the sensor's farthest pixel centre."""
+        """How far the sensor reaches from the axis.
+
+        Returns
+        -------
+        float
+            The distance (pixels) from the axis to the sensor's farthest pixel centre.
+        """
         cx, cy = self.centre
         return max(math.hypot(c - cx, r - cy) for c in (0, self.width - 1) for r in (0, self.height - 1))
 
     def mm(self, cols: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Image-plane points (x right, y up; mm) of pixel positions."""
+        """Image-plane points of pixel positions.
+
+        Parameters
+        ----------
+        cols, rows : numpy.ndarray
+            Pixel positions (pixel (0, 0) the centre of the top-left pixel).
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            (x right, y up) in mm, the axis at 0.
+        """
         cx, cy = self.centre
         return (np.asarray(cols) - cx) * self.pitch_um * 1e-3, (cy - np.asarray(rows)) * self.pitch_um * 1e-3
 
     def describe(self) -> dict:
+        """The sensor as metadata records it.
+
+        Returns
+        -------
+        dict
+            Its size in pixels, pitch and principal point.
+        """
         return {"sensor_px": [self.width, self.height], "pitch_um": self.pitch_um,
                 "principal_px": list(self.centre)}
 
 
 @dataclass
 class ChiefMap:
-    """h(θ) of one lens at one wavelength over one sensor: the traced nodes, their spline, the image circle."""
+    """The chief-ray mapping h(θ) of one lens at one wavelength over one sensor, as `chief_map` traces it.
+
+    Parameters
+    ----------
+    lens : Lens
+        The lens (focused as the mapping was traced).
+    wavelength_nm : float
+        The wavelength (nm).
+    sensor : Sensor
+        The sensor.
+    focus_distance_mm : float
+        The object's distance in front of surface 1 (mm); math.inf: an object at infinity.
+    theta : numpy.ndarray
+        (NODES + 1,) polar angles (radians), 0 to the widest traced.
+    height_mm : numpy.ndarray
+        The chief rays' image heights (mm) there.
+    circle_mm : float or None
+        The image circle's radius (mm); None where every pixel lies inside it.
+    interpolation_error_px : float
+        The spline's largest error at the midpoints between nodes (pixels).
+    entrance_pupil_mm : float
+        The camera centre: the paraxial entrance pupil, this far behind surface 1's vertex (mm).
+    spline : object, optional
+        The cubic spline through the nodes (made when built).
+    """
 
     lens: Lens
     wavelength_nm: float
     sensor: Sensor
-    focus_distance_mm: float  # math.inf: an object at infinity
-    theta: np.ndarray  # (NODES + 1,) polar angles, radians, 0 … the top
-    height_mm: np.ndarray  # the chief rays' image heights there
-    circle_mm: float | None  # the image circle's radius, None where every pixel lies inside it
+    focus_distance_mm: float
+    theta: np.ndarray
+    height_mm: np.ndarray
+    circle_mm: float | None
     interpolation_error_px: float
-    entrance_pupil_mm: float  # the camera centre: the paraxial entrance pupil behind surface 1's vertex
-    spline: object = field(repr=False, default=None)
+    entrance_pupil_mm: float
+    spline: Any = field(repr=False, default=None)  # h(θ), scipy's CubicSpline (SciPy ships no types)
 
     def __post_init__(self):
         from scipy.interpolate import CubicSpline
@@ -102,10 +171,22 @@ class ChiefMap:
 
     @property
     def top(self) -> float:
+        """The widest polar angle traced (radians)."""
         return float(self.theta[-1])
 
     def theta_of(self, radius_mm: np.ndarray) -> np.ndarray:
-        """Polar angles (radians) whose chief rays land at `radius_mm` (within the table's heights)."""
+        """The polar angles whose chief rays land at some image heights: h's inverse (Newton on the spline).
+
+        Parameters
+        ----------
+        radius_mm : numpy.ndarray
+            Image heights (mm) within the table's.
+
+        Returns
+        -------
+        numpy.ndarray
+            Polar angles (radians).
+        """
         r = np.asarray(radius_mm, dtype=np.float64)
         t = np.interp(r, self.height_mm, self.theta)
         d = self.spline.derivative()
@@ -114,8 +195,20 @@ class ChiefMap:
         return t
 
     def directions(self, cols: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Unit directions (n, 3) (x right, y down, z forward) seen by pixel positions (n,), and whether the
-        lens images each (inside the image circle); directions of pixels outside are the axis's."""
+        """The directions pixels see.
+
+        Parameters
+        ----------
+        cols, rows : numpy.ndarray
+            (n,) pixel positions.
+
+        Returns
+        -------
+        directions : numpy.ndarray
+            (n, 3) unit vectors (x right, y down, z forward); a pixel outside the image circle gets the axis.
+        inside : numpy.ndarray
+            (n,) whether the lens images each (inside the image circle).
+        """
         x, y = self.sensor.mm(np.ravel(cols), np.ravel(rows))
         r = np.hypot(x, y)
         inside = r <= (self.circle_mm if self.circle_mm is not None else np.inf)
@@ -124,7 +217,18 @@ class ChiefMap:
         return np.stack([x * scale, -y * scale, np.cos(theta)], axis=-1), inside
 
     def pixels(self, xyz: np.ndarray) -> np.ndarray:
-        """Pixel positions (n, 2) of directions (n, 3) (camera frame) through the spline: the lens's mapping."""
+        """Where directions land: the lens's mapping through the spline.
+
+        Parameters
+        ----------
+        xyz : numpy.ndarray
+            (n, 3) directions in the camera frame.
+
+        Returns
+        -------
+        numpy.ndarray
+            (n, 2) pixel positions (column, row).
+        """
         xyz = np.asarray(xyz, dtype=np.float64)
         rho = np.hypot(xyz[:, 0], xyz[:, 1])
         h = self.spline(np.arctan2(rho, xyz[:, 2])) / (self.sensor.pitch_um * 1e-3)
@@ -133,14 +237,32 @@ class ChiefMap:
         return np.stack([cx + xyz[:, 0] * scale, cy + xyz[:, 1] * scale], axis=-1)
 
     def grid(self, stride: int = 1) -> tuple[np.ndarray, np.ndarray]:
-        """Pixel centres (columns, rows), every `stride`-th with the last row and column, raveled."""
+        """Pixel centres over the sensor.
+
+        Parameters
+        ----------
+        stride : int, default 1
+            Every `stride`-th column and row, the last ones included.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            (columns, rows), raveled.
+        """
         cs = np.unique(np.r_[np.arange(0, self.sensor.width, stride), self.sensor.width - 1])
         rs = np.unique(np.r_[np.arange(0, self.sensor.height, stride), self.sensor.height - 1])
         c, r = np.meshgrid(cs.astype(np.float64), rs.astype(np.float64))
         return c.ravel(), r.ravel()
 
     def describe(self) -> dict:
-        """What the mapping is, for the metadata of a calibration."""
+        """What the mapping is, for the metadata of a calibration.
+
+        Returns
+        -------
+        dict
+            Lens, wavelength, focus, sensor, camera centre, image circle (px), widest field (degrees) and the
+            interpolation error (px).
+        """
         px = self.sensor.pitch_um * 1e-3
         return {"lens": self.lens.name, "lens_hash": self.lens.hash, "wavelength_nm": self.wavelength_nm,
                 "focus_distance_mm": self.focus_distance_mm, **self.sensor.describe(),
@@ -197,11 +319,41 @@ def _refined(lens: Lens, wl: float, top: float) -> tuple[np.ndarray, np.ndarray]
 
 
 def chief_map(lens: Lens, sensor: Sensor, wavelength_nm: float | None = None,
-              focus_distance_mm: float = math.inf) -> ChiefMap:
-    """The chief-ray mapping of `lens` (focused on an object `focus_distance_mm` in front of surface 1 unless
-    math.inf; the lens file's own object distance stays where it is given as the file's) over `sensor` at
-    `wavelength_nm` (default: the lens's primary). SolasError where the lens images fewer than MIN_PIXELS
-    of the sensor's pixels."""
+              focus_distance_mm: float | None = math.inf) -> ChiefMap:
+    """Trace a lens's real chief-ray mapping over a sensor: which direction each pixel sees.
+
+    Parameters
+    ----------
+    lens : Lens
+        The lens.
+    sensor : Sensor
+        The sensor, centred on the axis.
+    wavelength_nm : float, optional
+        The wavelength (nm); default: the lens's primary.
+    focus_distance_mm : float or None, default inf
+        The lens focused on an object this far in front of surface 1 (mm); math.inf or None: at infinity, and the
+        lens file's own object distance where it gives one.
+
+    Returns
+    -------
+    ChiefMap
+        h(θ), its spline and the image circle.
+
+    Raises
+    ------
+    SolasError
+        For a sensor not a `Sensor`, a bad wavelength or focus, a lens imaging under `MIN_PIXELS` of its pixels.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> from solas_mi import Lens
+    >>> from solas_mi.optics.calibration import Sensor, chief_map
+    >>> mapping = chief_map(Lens.load("solas-doublet"), Sensor(64, 48, 50.0))
+    >>> directions, inside = mapping.directions(np.array([63.0]), np.array([23.5]))
+    >>> mapping.pixels(directions).round(4).tolist(), inside.tolist()
+    ([[63.0, 23.5]], [True])
+    """
     from ..focus import focused
     from ..paraxial import paraxial
 

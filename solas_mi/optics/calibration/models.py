@@ -18,6 +18,8 @@ import numpy as np
 from ...registry import Registry
 
 MODELS = Registry("calibration model", default="opencv-fisheye", shown=("formats",))
+"""The camera models a lens is calibrated to, by name (a `solas_mi.registry.Registry` of `CameraModel`s, with
+the file formats each is written as; the [table of models](registries.md))."""
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,166 @@
+"""One sequential surface of a lens (`Surface`) and the checks of a lens file's tables: the keys each
+table may hold (`KEYS`), numbers, and a [[surface]] row made into a `Surface` (`surface_from_row`), every
+mistake a SolasError naming the surface and what is allowed. `lens.Lens.from_dict` builds a lens of them.
+
+A surface is a sphere, or an even asphere: sag z(r) = c r² / (1 + √(1 − (1 + k) c² r²)) + Σ_i A_2i r^2i
+(i ≥ 2) with c = 1/radius, k = `conic` and `aspheric` = [A4, A6, …] (mm^(1−2i)), plus Forbes' Qbfs
+departure φ u²(1 − u²) Σ a_m Q_m^bfs(u²) with `qbfs` = [a0, a1, …] (mm) and u = r / `norm_radius`
+(`forbes`). A flat surface with `focal_length` (mm) is an ideal thin lens (`ideal`). Lengths in mm.
+"""
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..errors import SolasError
+from . import forbes, ideal as ideal_mod
+from . import glass as glass_mod
+from .sag import sag
+
+NORM_RADIUS_MM = (1e-6, 1e6)  # the Qbfs normalisation radius a surface may have (1 nm to 1 km)
+# What a lens file may hold (anything else is a mistake worth naming, e.g. a surface type we do not model)
+KEYS = {
+    "lens": ("name", "description", "wavelengths_nm", "field_deg", "catalogues", "materials", "surface", "object",
+             "image"),
+    "surface": ("label", "radius", "thickness", "diameter", "material", "stop", "conic", "aspheric", "qbfs",
+                "norm_radius", "focal_length"),
+    "object": ("distance", "material"),
+    "image": ("diameter",),
+}
+
+
+def check_keys(table: dict, kind: str, where: str) -> None:
+    """SolasError naming each key of `table` that a `kind` table ("lens", "surface", ...) may not hold."""
+    unknown = sorted(set(table) - set(KEYS[kind]))
+    if unknown:
+        raise SolasError(f"{where}: unknown {'key' if len(unknown) == 1 else 'keys'} {', '.join(unknown)} "
+                         f"in the {kind} table; allowed: {', '.join(KEYS[kind])}")
+
+
+def finite_number(table: dict, key: str, where: str, unit: str, default: float | None = None) -> float:
+    """table[key] as a finite float; SolasError naming the entry when missing or not a number."""
+    if key not in table:
+        if default is None:
+            raise SolasError(f"{where}: missing '{key}'")
+        return default
+    value = table[key]
+    if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value):
+        raise SolasError(f"{where}: {key} = {value!r} must be a finite number ({unit})")
+    return float(value)
+
+
+def subtable(spec: dict, key: str, where: str) -> dict:
+    """spec[key] as a table ({} when absent)."""
+    value = spec.get(key, {})
+    if not isinstance(value, dict):
+        raise SolasError(f"{where}: {key} = {value!r} must be a table ([{key}])")
+    return value
+
+
+def lens_catalogues(spec: dict, where: str) -> tuple[str, ...]:
+    """The lens file's `catalogues`: vendors, most preferred first, whose entry a glass name that several
+    vendors use means (as a Zemax file's GCAT line)."""
+    value = spec.get("catalogues", [])
+    vendors = glass_mod.vendors()
+    if not isinstance(value, list) or not all(isinstance(v, str) and v.upper() in vendors for v in value):
+        raise SolasError(f"{where}: catalogues = {value!r} must be a list of vendors, most preferred first; "
+                         f"allowed: {', '.join(vendors)}")
+    return tuple(v.upper() for v in value)
+
+
+def lens_materials(spec: dict, where: str) -> dict[str, glass_mod.Glass]:
+    """The lens file's own materials ([materials.NAME] tables, e.g. a CODE V file's private catalogue), by name."""
+    return {str(name): glass_mod.own_material(str(name), entry, where)
+            for name, entry in subtable(spec, "materials", where).items()}
+
+
+@dataclass(frozen=True)
+class Surface:
+    """One sequential surface; `material` fills the space after it, `thickness` reaches the next."""
+
+    label: str
+    radius: float  # mm; 0 = flat
+    thickness: float  # mm to the next surface (or to the image plane for the last one)
+    diameter: float  # clear diameter, mm
+    material: str
+    glass: glass_mod.Glass
+    stop: bool = False
+    conic: float = 0.0  # k: 0 sphere, −1 paraboloid, < −1 hyperboloid
+    aspheric: tuple[float, ...] = ()  # A4, A6, … (mm^(1−2i)) of the even asphere
+    qbfs: tuple[float, ...] = ()  # a0, a1, … (mm) of Forbes' Qbfs departure
+    norm_radius: float = 1.0  # ρ (mm): the Qbfs terms' u = r/ρ
+    focal_length: float | None = None  # mm: an ideal thin lens (n'·t' = n·t − h/f, `ideal`); None: a real surface
+
+    @property
+    def ideal(self) -> bool:
+        """Whether this is an ideal thin lens (`focal_length`), which bends rays without a glass change."""
+        return self.focal_length is not None
+
+    @property
+    def is_sphere(self) -> bool:
+        """A sphere or plane (no conic, no polynomial terms)."""
+        return self.conic == 0.0 and not any(self.aspheric) and not any(self.qbfs)
+
+    @property
+    def shape(self) -> dict:
+        """The keyword arguments of `sag` and `sag_slope` that describe this surface."""
+        return {"curvature": self.curvature, "conic": self.conic, "aspheric": self.aspheric, "qbfs": self.qbfs,
+                "norm_radius": self.norm_radius}
+
+    @property
+    def paraxial_curvature(self) -> float:
+        """1/mm: the vertex curvature, c + 2 Σ a_m Q_m^bfs(0)/ρ² where Qbfs terms bend the vertex too."""
+        bend = forbes.qbfs_sum(0.0, self.qbfs)[0] if any(self.qbfs) else 0.0
+        return self.curvature + 2.0 * bend / self.norm_radius ** 2
+
+    @property
+    def curvature(self) -> float:
+        """1/R in 1/mm (0 for a flat surface)."""
+        return 0.0 if self.radius == 0.0 else 1.0 / self.radius
+
+    @property
+    def semi_diameter(self) -> float:
+        return 0.5 * self.diameter
+
+    def sag(self, r: np.ndarray | float) -> np.ndarray | float:
+        """Surface z relative to its vertex at radial distance r (mm)."""
+        r = np.asarray(r, dtype=np.float64)
+        return sag(r * r, **self.shape)
+
+
+def surface_from_row(row: dict, i: int, where: str, catalogues: tuple[str, ...], own: dict) -> "Surface":
+    """Surface `i` (1-based) of a lens file's [[surface]] table, checked."""
+    label = str(row.get("label", f"surface {i}"))
+    ident = f"{where}: surface {i} ({label})"
+    check_keys(row, "surface", ident)
+    stop = row.get("stop", False)
+    if not isinstance(stop, bool):
+        raise SolasError(f"{ident}: stop = {stop!r} must be true or false (a TOML boolean, unquoted)")
+    radius, thickness, diameter = (finite_number(row, key, ident, "mm") for key in ("radius", "thickness", "diameter"))
+    conic = finite_number(row, "conic", ident, "conic constant k, dimensionless", 0.0)
+    aspheric = polynomial_terms(row, "aspheric", ident, "[A4, A6, ...] (mm^(1-2i))")
+    qbfs = polynomial_terms(row, "qbfs", ident, "[a0, a1, ...] of Forbes' Qbfs polynomials (mm)")
+    norm_radius = finite_number(row, "norm_radius", ident, "mm, the Qbfs normalisation radius", 0.0 if qbfs else 1.0)
+    if not NORM_RADIUS_MM[0] <= norm_radius <= NORM_RADIUS_MM[1]:  # 0: a division by zero, 1e300: an overflow
+        raise SolasError(f"{ident}: {'qbfs needs ' if qbfs else ''}norm_radius, the radius where the Qbfs terms' "
+                         f"u = 1, from {NORM_RADIUS_MM[0]:g} to {NORM_RADIUS_MM[1]:g} mm; got {row.get('norm_radius')!r}")
+    focal_length = (ideal_mod.check(row["focal_length"], ident, radius == conic == 0 and not any(aspheric + qbfs))
+                    if "focal_length" in row else None)
+    material = row.get("material", "AIR")
+    try:
+        g = glass_mod.resolve(material, prefer=catalogues, own=own)
+    except SolasError as exc:
+        raise SolasError(f"{ident}: {exc}") from None
+    return Surface(label, radius, thickness, diameter, str(material), g, stop, conic, aspheric, qbfs, norm_radius,
+                   focal_length)
+
+
+def polynomial_terms(row: dict, key: str, ident: str, meaning: str) -> tuple[float, ...]:
+    """row[key], a list of at most 12 finite numbers, as a tuple (() when absent)."""
+    terms = row.get(key, [])
+    if (not isinstance(terms, list) or len(terms) > 12
+            or not all(isinstance(a, (int, float)) and not isinstance(a, bool) and math.isfinite(a) for a in terms)):
+        raise SolasError(f"{ident}: {key} = {terms!r} must be a list of at most 12 finite numbers {meaning}")
+    return tuple(float(a) for a in terms)
