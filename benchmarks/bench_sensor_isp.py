@@ -1,6 +1,8 @@
 """Speed of the camera stage: a 1280×960 irradiance frame through the sensor (`sensor.capture`: shot,
 dark and read noise, PRNU/DSNU, full well, ADC) and the image processor (`isp.develop`: black level,
-white balance, demosaicing, CCM, sRGB tone curve), as a batch item does after its render or degrade.
+white balance, demosaicing, CCM, sRGB tone curve), as a batch item does after its render or degrade; and a
+1920×1080 frame through the HDR preset `imx490-hdr` (four readouts merged) against its single readout
+`imx490` (issue 42: at most 2×).
 
 Run: .venv/bin/python benchmarks/bench_sensor_isp.py [--repeats 7]
 Prints, per case, the median and the spread of the runs (s), frames per second, the cores other
@@ -19,6 +21,7 @@ sys.path.insert(0, str(Path(__file__).resolve().parent))
 from bench_convolution import busy_seconds, test_image  # noqa: E402
 
 W, H = 1280, 960
+FULL_HD = (1920, 1080)  # the HDR camera's frame (issue 42)
 EXPOSURE_S = 2.5e-4  # the test image's values (0…1) read as W/m²: 2300–3100 photons per channel at 1 (2 µm pixels)
 
 
@@ -26,6 +29,7 @@ def cases():
     from solas_mi.isp.demosaic import METHODS
     from solas_mi.isp.pipeline import ISP, develop
     from solas_mi.sensor.capture import capture
+    from solas_mi.sensor.files import load_sensor
     from solas_mi.sensor.model import SensorModel
 
     image = test_image(W, H)
@@ -38,6 +42,10 @@ def cases():
             isp = ISP(demosaic=method)
             out[f"isp {method} ({cfa})"] = lambda r=raw, m=model, i=isp: develop(r, m, i)
         out[f"sensor + isp default ({cfa})"] = lambda m=model: develop(capture(m, image, EXPOSURE_S, 0, 1), m)
+    full_hd = test_image(*FULL_HD)
+    for preset in ("imx490", "imx490-hdr"):
+        sensor = load_sensor(preset)
+        out[f"sensor {preset} {FULL_HD[0]}×{FULL_HD[1]}"] = lambda s=sensor: capture(s, full_hd, EXPOSURE_S, 0, 1)
     return out
 
 
