@@ -7,18 +7,21 @@ white balance, demosaicing, CCM, sRGB tone curve), as a batch item does after it
 Run: .venv/bin/python benchmarks/bench_sensor_isp.py [--repeats 7]
 Prints, per case, the median and the spread of the runs (s), frames per second, the cores other
 processes used meanwhile (timings are only good near 0), and the share of a degrade batch item's time
-(batch.degrade.SECONDS_PER_VALUE per value of an RGB frame: reading, degrading, writing).
+(batch.degrade.SECONDS_PER_VALUE per value of an RGB frame: reading, degrading, writing); and the figures
+`run_all.py` compares run to run (each case's median).
 """
 from __future__ import annotations
 
 import argparse
+import re
 import statistics
 import sys
 import time
 from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_convolution import busy_seconds, test_image  # noqa: E402
+from bench_convolution import busy_seconds, test_image
+from figures import figure
 
 W, H = 1280, 960
 FULL_HD = (1920, 1080)  # the HDR camera's frame (issue 42)
@@ -59,6 +62,7 @@ def main() -> None:
     print(f"{W}×{H} frame; a degrade batch item of this size: {degrade_s:.2f} s (SECONDS_PER_VALUE)\n")
     print("| case | median (s) | runs min–max (s) | frames/s | share of a degrade item | other processes' load (cores) |")
     print("|---|---|---|---|---|---|")
+    medians = {}
     for name, run in cases().items():
         run()  # warm-up: imports, the demosaicer's first call
         times, busy = [], 0.0
@@ -67,9 +71,12 @@ def main() -> None:
             run()
             times.append(time.perf_counter() - t0)
             busy += busy_seconds() - b0 - times[-1]
-        median = statistics.median(times)
+        median = medians[name] = statistics.median(times)
         print(f"| {name} | {median:.3f} | {min(times):.3f}–{max(times):.3f} | {1 / median:.1f} | "
               f"{median / degrade_s:.0%} | {max(busy / sum(times), 0.0):.2f} |")
+    print()
+    for name, median in medians.items():  # "sensor + isp default (RGGB)" → sensor_isp_default_rggb_s
+        figure(re.sub(r"[^a-z0-9]+", "_", name.lower()).strip("_") + "_s", median, "s")
 
 
 if __name__ == "__main__":

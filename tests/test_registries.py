@@ -20,6 +20,7 @@ SHIPPED = {
     "solas_mi.isp.demosaic.METHODS": ("bilinear", "Malvar2004", "Menon2007"),
     "solas_mi.isp.white.METHODS": ("daylight", "grey-world", "grey-card", "given", "none"),
     "solas_mi.isp.tone.CURVES": ("srgb", "gamma", "none", "reinhard"),
+    "solas_mi.labelkinds.KINDS": ("depth", "normal", "instance", "semantic", "mask", "flow", "boxes"),
     "solas_mi.render.labels.LABELS": ("depth", "normal", "instance"),
     "solas_mi.optics.formats.READERS": (".toml", ".zmx", ".seq", ".dat"),
     "solas_mi.optics.formats.WRITERS": (".toml", ".zmx", ".dat"),
