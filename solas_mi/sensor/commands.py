@@ -7,7 +7,6 @@ from __future__ import annotations
 import argparse
 import math
 import sys
-from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -100,8 +99,7 @@ def check_camera_memory(args: argparse.Namespace, develop_bytes_per_pixel: float
 
     rows, cols, channels = image_size(args.image)
     need = FIXED_BYTES + frame_bytes(rows, cols, channels, develop_bytes_per_pixel, readouts)
-    timed = args.flicker is not None or args.image_motion is not None
-    need += rows * cols * TIMED_SCENE_BYTES_PER_PIXEL if timed else 0.0
+    need += rows * cols * TIMED_SCENE_BYTES_PER_PIXEL if args.flicker or args.image_motion else 0.0
     check_memory(f"camera {cols}x{rows}", need, args.force, "a smaller image")
 
 
@@ -142,21 +140,19 @@ def as_irradiance(image, meta: dict, what: str, scale: float = 1.0, f_number: fl
     return image_irradiance(image, f_number, transmission), reading, notice
 
 
-def parse_flicker(text: str):
-    """The box (x0, y0, x1, y1: columns x0 to x1 − 1, rows y0 to y1 − 1) and the `timing.PWMSource` of a
-    `FLICKER_FORM` text, e.g. ``"10,20,30,40,90,0.1,0.5"``."""
-    from .timing import PWMSource
-
+def parse_flicker(text: str) -> tuple[tuple[int, int, int, int], tuple[float, ...]]:
+    """The box (x0, y0, x1, y1) and the PWM source's values (frequency, duty cycle[, phase]) of a `FLICKER_FORM`
+    text, e.g. ``"10,20,30,40,90,0.1,0.5"``."""
     parts = text.split(",")
     try:
         box = tuple(int(p) for p in parts[:4])
-        numbers = [float(p) for p in parts[4:]]
+        numbers = tuple(float(p) for p in parts[4:])
     except ValueError:
-        box, numbers = (), []
+        box, numbers = (), ()
     if len(box) != 4 or not 2 <= len(numbers) <= 3 or min(box[:2]) < 0 or box[2] <= box[0] or box[3] <= box[1]:
         raise SolasError(f"--flicker {text!r} must be {FLICKER_FORM}: a box of whole pixels x0 < x1, y0 < y1 "
                          "from 0, the PWM frequency (Hz), duty cycle and phase (fractions)")
-    return box, PWMSource(*numbers)
+    return (box[0], box[1], box[2], box[3]), numbers
 
 
 def parse_motion(text: str) -> tuple[float, float]:
@@ -172,13 +168,31 @@ def parse_motion(text: str) -> tuple[float, float]:
 
 
 def timed_scene(args: argparse.Namespace):
-    """The parsed --flicker (box, source) or --image-motion (velocity) of the command, at most one of them;
-    None without."""
+    """The `timing.SceneInTime` of the options --flicker and --image-motion (at most one); None without."""
+    if args.flicker is None and args.image_motion is None:
+        return None
     if args.flicker is not None and args.image_motion is not None:
         raise SolasError("give --flicker or --image-motion, not both: a scene in time is one or the other here")
+    from .timing import PWMSource, SceneInTime
+
     if args.flicker is not None:
-        return parse_flicker(args.flicker)
-    return None if args.image_motion is None else parse_motion(args.image_motion)
+        box, source = parse_flicker(args.flicker)
+        return SceneInTime(box=box, source=PWMSource(*source))
+    return SceneInTime(motion_px_s=parse_motion(args.image_motion))
+
+
+def add_time_options(p: Any) -> None:
+    """--flicker and --image-motion: a still image made a scene in time (`timing.SceneInTime`)."""
+    p.add_argument("--flicker", metavar=FLICKER_FORM,
+                   help="the pixels of columns X0 to X1 - 1 and rows Y0 to Y1 - 1 are light driven by pulse-width "
+                        "modulation at HZ with duty cycle DUTY and phase PHASE (fractions; default phase 0): each "
+                        "row sees it over its window of the exposure (the sensor's [sensor.shutter], global "
+                        "without one), e.g. an LED traffic light (default: none)")
+    p.add_argument("--image-motion", metavar="VX,VY",
+                   help="the image moves at VX, VY pixels per second (right, down) during the frame, e.g. a camera "
+                        "panning across a distant scene: each row sees it over its window of the exposure (a "
+                        "rolling shutter skews it, every shutter blurs it; sampled at the shutter's time_samples) "
+                        "(default: still)")
 
 
 def raw_frame(args: argparse.Namespace, develop_bytes_per_pixel: float = 0.0):
@@ -186,7 +200,6 @@ def raw_frame(args: argparse.Namespace, develop_bytes_per_pixel: float = 0.0):
     from .auto_exposure import exposure_seconds, parse_exposure
     from .capture import as_chain, capture, check_frame, check_seed
     from .files import describe, load_sensor
-    from .timing import flickering_box, moving_image
 
     model = load_sensor(args.sensor_model)
     exposure = parse_exposure(args.exposure_ms)
@@ -201,20 +214,14 @@ def raw_frame(args: argparse.Namespace, develop_bytes_per_pixel: float = 0.0):
         print(f"notice: {notice}", file=sys.stderr)
     seconds, chosen = exposure_seconds(exposure, model, irradiance)
     exposure_ms = exposure if not chosen else seconds * 1e3
-    scene = irradiance
-    if args.flicker is not None:
-        scene = flickering_box(irradiance, *timed)
-    elif args.image_motion is not None:
-        scene = moving_image(irradiance, timed)
-    raw = capture(model, scene, seconds, args.seed, args.frame)
+    raw = capture(model, irradiance if timed is None else timed.of(irradiance), seconds, args.seed, args.frame)
     fraction, warning = clipping_warning(model, raw, exposure_ms, str(args.output))
     if warning:
         print(f"solas-mi camera: warning: {warning}", file=sys.stderr)
     meta = {"kind": "sensor RAW", "unit": "DN", "sensor_model": str(args.sensor_model), "sensor": describe(model),
             "seed": args.seed, "frame": args.frame, "exposure_ms": exposure_ms,
             **({"auto_exposure": chosen} if chosen else {}),
-            **({"flicker": {"box": list(timed[0]), **asdict(timed[1])}} if args.flicker is not None else {}),
-            **({"image_motion_px_s": list(timed)} if args.image_motion is not None else {}), **reading,
+            **(timed.describe() if timed else {}), **reading,
             "input": str(args.image), "saturated_fraction": fraction}
     return raw, model, meta
 
@@ -289,16 +296,7 @@ def register(subparsers: Any) -> None:
                    help="the image is radiance: image irradiance E = π T L / (4 N²) (default: the f-number a render "
                         "through a lens states in its metadata, else none: the image is irradiance)")
     p.add_argument("--transmission", type=float, default=1.0, help="lens transmission T of radiance (default 1)")
-    p.add_argument("--flicker", metavar=FLICKER_FORM,
-                   help="the pixels of columns X0 to X1 - 1 and rows Y0 to Y1 - 1 are light driven by pulse-width "
-                        "modulation at HZ with duty cycle DUTY and phase PHASE (fractions; default phase 0): each "
-                        "row sees it over its window of the exposure (the sensor's [sensor.shutter], global "
-                        "without one), e.g. an LED traffic light (default: none)")
-    p.add_argument("--image-motion", metavar="VX,VY",
-                   help="the image moves at VX, VY pixels per second (right, down) during the frame, e.g. a camera "
-                        "panning across a distant scene: each row sees it over its window of the exposure (a "
-                        "rolling shutter skews it, every shutter blurs it; sampled at the shutter's time_samples) "
-                        "(default: still)")
+    add_time_options(p)
     p.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
     p.add_argument("-o", "--output", required=True, metavar="OUT.exr", help="RAW frame to write")
     p.set_defaults(run=run_camera)

@@ -171,3 +171,30 @@ def moving_image(image: np.ndarray, velocity_px_s: tuple[float, float]):
 
     vx, vy = velocity_px_s
     return lambda t: shift(image, (vy * t, vx * t, 0.0), order=1, mode="nearest")
+
+
+@dataclass(frozen=True)
+class SceneInTime:
+    """A still image made a scene in time, as the `camera` command's and a batch's camera's options give it:
+    the pixels of `box` (x0, y0, x1, y1: columns x0 to x1 − 1, rows y0 to y1 − 1) lit by `source`
+    (`flickering_box`), or the whole image moving at `motion_px_s` (`moving_image`); one or the other."""
+    box: tuple[int, int, int, int] | None = None
+    source: PWMSource | None = None
+    motion_px_s: tuple[float, float] | None = None
+
+    def __post_init__(self):
+        if (self.box is None) != (self.source is None) or (self.box is None) == (self.motion_px_s is None):
+            raise SolasError("a scene in time is a box of PWM-driven light (box and source) or the image's motion "
+                             "(motion_px_s), one of them")
+
+    def of(self, image: np.ndarray):
+        """The scene of an (H, W, 3) irradiance image: a `FlickeringScene` or a callable of time."""
+        if self.box is not None:
+            return flickering_box(image, self.box, self.source)
+        return moving_image(image, self.motion_px_s)
+
+    def describe(self) -> dict:
+        """For the RAW's metadata: ``flicker`` (the box and the source's values) or ``image_motion_px_s``."""
+        if self.box is not None:
+            return {"flicker": {"box": list(self.box), **asdict(self.source)}}
+        return {"image_motion_px_s": list(self.motion_px_s)}
