@@ -13,12 +13,15 @@ before. A scene that changes during the frame is given to `capture` in one of tw
 - a `FlickeringScene`: a static image plus light driven by a `PWMSource` over some pixels, whose rows'
   averages are exact (the closed-form on-time of each window).
 
+`SceneInTime` makes a still image one of these as the `camera` command's and a batch's camera's options
+say: a box of PWM-driven light (`flickering_box`) or the image moving at a velocity (`moving_image`).
+
 A PWM source of period T, duty cycle D and phase φ (a fraction of T) is on over [φT, φT + DT) of each period.
 Over uniformly random phases a window of length w overlaps its on-time by at least τ (≤ DT, w) with
 probability min(1, (DT + w − 2τ)/T) (`PWMSource.visible_probability`): the on-time over a window is a
 trapezoid in the phase, rising over τ, of length DT + w at its base. A rolling shutter's rows of a source
-spanning n rows see the union of their windows, w = t + (n − 1) L, so the source flickers less often than
-under a global shutter, but in bands.
+spanning n rows see the union of their windows, w = t + (n − 1) L, so the source is missed in fewer frames
+than under a global shutter, but shows in bands of rows.
 """
 from __future__ import annotations
 
