@@ -29,7 +29,7 @@ SHIPPED = {
     "solas_mi.analysis.registry.ANALYSES": ("mtf", "mtf-field", "mtf50-field", "through-focus", "field-curvature",
                                             "distortion", "lateral-colour", "relative-illumination", "ray-fan",
                                             "opd-fan", "wavefront", "spot-diagram", "encircled-energy"),
-    "solas_mi.sensor.chain.STAGES": ("photons", "defects", "readout", "merge", "compander"),
+    "solas_mi.sensor.chain.STAGES": ("photons", "shutter", "defects", "readout", "merge", "compander"),
 }
 
 # One of each registered in a fresh process, then looked for in the parser, the messages and the docs.
