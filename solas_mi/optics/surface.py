@@ -5,7 +5,8 @@ mistake a SolasError naming the surface and what is allowed. `lens.Lens.from_dic
 A surface is a sphere, or an even asphere: sag z(r) = c r² / (1 + √(1 − (1 + k) c² r²)) + Σ_i A_2i r^2i
 (i ≥ 2) with c = 1/radius, k = `conic` and `aspheric` = [A4, A6, …] (mm^(1−2i)), plus Forbes' Qbfs
 departure φ u²(1 − u²) Σ a_m Q_m^bfs(u²) with `qbfs` = [a0, a1, …] (mm) and u = r / `norm_radius`
-(`forbes`). A flat surface with `focal_length` (mm) is an ideal thin lens (`ideal`). Lengths in mm.
+(`forbes`). A flat surface with `focal_length` (mm) is an ideal thin lens (`ideal`); `coating`, its thin
+films (`coating`). Lengths in mm.
 """
 from __future__ import annotations
 
@@ -16,6 +17,7 @@ import numpy as np
 
 from ..errors import SolasError
 from . import forbes, ideal as ideal_mod
+from .coating import Coating, coating_from_table
 from . import glass as glass_mod
 from .sag import sag
 
@@ -25,7 +27,7 @@ KEYS = {
     "lens": ("name", "description", "wavelengths_nm", "field_deg", "catalogues", "materials", "surface", "object",
              "image"),
     "surface": ("label", "radius", "thickness", "diameter", "material", "stop", "conic", "aspheric", "qbfs",
-                "norm_radius", "focal_length"),
+                "norm_radius", "focal_length", "coating"),
     "object": ("distance", "material"),
     "image": ("diameter",),
 }
@@ -92,6 +94,7 @@ class Surface:
     qbfs: tuple[float, ...] = ()  # a0, a1, … (mm) of Forbes' Qbfs departure
     norm_radius: float = 1.0  # ρ (mm): the Qbfs terms' u = r/ρ
     focal_length: float | None = None  # mm: an ideal thin lens (n'·t' = n·t − h/f, `ideal`); None: a real surface
+    coating: Coating | None = None  # its thin films (`coating`); None: the bare interface
 
     @property
     def ideal(self) -> bool:
@@ -153,8 +156,9 @@ def surface_from_row(row: dict, i: int, where: str, catalogues: tuple[str, ...],
         g = glass_mod.resolve(material, prefer=catalogues, own=own)
     except SolasError as exc:
         raise SolasError(f"{ident}: {exc}") from None
+    coating = coating_from_table(row["coating"], ident) if "coating" in row else None
     return Surface(label, radius, thickness, diameter, str(material), g, stop, conic, aspheric, qbfs, norm_radius,
-                   focal_length)
+                   focal_length, coating)
 
 
 def polynomial_terms(row: dict, key: str, ident: str, meaning: str) -> tuple[float, ...]:
