@@ -17,11 +17,12 @@ Float32 leaves ~20 nm of OPD noise (DESIGN.md).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
 from ..llvm import import_drjit
-from . import ideal
+from . import coating, ideal
 from .fields import ANGLE
 from .lens import Lens
 from .sag import sag, sag_slope
@@ -60,7 +61,8 @@ class Traced:
     stop_x: F  # where the ray crosses the stop surface (mm)
     stop_y: F
     n_image: F  # refractive index of image space
-    transmittance: F | float = 1.0  # unpolarised Fresnel transmittance of every refraction (`trace(fresnel=True)`)
+    transmittance: F | float = 1.0  # unpolarised transmittance of every refraction, its coating's where it has one
+    # (`trace(fresnel=True)`)
 
 
 def _opaque(value: float, ftype=F) -> F:
@@ -181,7 +183,8 @@ def launch_direction(lens: Lens, dx: F, dy: F, dz: F, ex: F, ey: F) -> Rays:
 def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False, heights: list | None = None) -> Traced:
     """Trace `rays` (in object space, before surface 1) through every surface of `lens`, in the array
     type of the rays (see the module docstring); with `fresnel`, also the product of the unpolarised
-    Fresnel transmittances (1 − (r_s² + r_p²)/2) of every refraction; a `heights` list receives each
+    Fresnel transmittances (1 − (r_s² + r_p²)/2) of every refraction, a coated surface's coating's
+    (`coating_transmittance`) where it has one; a `heights` list receives each
     surface's squared ray height x² + y² (mm², for automatic clear apertures)."""
     x, y, z, dx, dy, dz, opl = rays.x, rays.y, rays.z, rays.dx, rays.dy, rays.dz, rays.opl
     ftype, utype, btype = _types(x)
@@ -213,7 +216,10 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False, heigh
                                                 dr.sqrt)
             opl = opl + delta
         elif s.glass != (lens.surfaces[k - 1].glass if k else lens.object_glass):
-            (dx, dy, dz), k2, factor = _refract(s, x, y, lz, r2, (dx, dy, dz), n_before / n_after, fresnel, ftype)
+            coated = (coating_transmittance(s.coating, lens.surfaces[k - 1].glass if k else lens.object_glass, s.glass,
+                                            wavelength_um, ftype) if fresnel and s.coating is not None else None)
+            (dx, dy, dz), k2, factor = _refract(s, x, y, lz, r2, (dx, dy, dz), n_before / n_after, fresnel, ftype,
+                                                coated)
             tir |= k2 < 0
             ok &= k2 >= 0
             if fresnel:
@@ -254,10 +260,11 @@ def _to_surface(s, zv: float, rays: Rays, n_before: F, sideways: bool, ftype):
     return x, y, lz, t, opl, hit & on
 
 
-def _refract(s, x, y, lz, r2, d, mu, fresnel: bool, ftype):
+def _refract(s, x, y, lz, r2, d, mu, fresnel: bool, ftype, coated=None):
     """Directions after refraction at surface `s` (point x, y, lz in its vertex frame, r2 = x² + y²) of
     unit directions `d` with index ratio `mu` = n_before / n_after: (new directions, k2 (negative:
-    total internal reflection), the unpolarised Fresnel transmittance when `fresnel`, else None)."""
+    total internal reflection), the unpolarised transmittance when `fresnel`, else None): the bare
+    interface's Fresnel transmittance, or `coated(cos θ)` where the surface has a coating."""
     dx, dy, dz = d
     if s.curvature == 0.0 and s.is_sphere:
         nx, ny, nz = dr.zeros(ftype, 1), dr.zeros(ftype, 1), dr.ones(ftype, 1)
@@ -272,12 +279,47 @@ def _refract(s, x, y, lz, r2, d, mu, fresnel: bool, ftype):
     k2 = 1.0 - mu * mu * (1.0 - cosi * cosi)
     cost = dr.sqrt(dr.maximum(k2, 0.0))
     factor = None
-    if fresnel:
+    if fresnel and coated is not None:
+        factor = coated(cosi)
+    elif fresnel:
         rs = (mu * cosi - cost) / (mu * cosi + cost)
         rp = (cosi - mu * cost) / (cosi + mu * cost)
         factor = 1.0 - 0.5 * (rs * rs + rp * rp)
     g = cost - mu * cosi
     return (dr.fma(mu, dx, g * nx), dr.fma(mu, dy, g * ny), dr.fma(mu, dz, g * nz)), k2, factor
+
+
+def coating_transmittance(c: coating.Coating, before, after, wavelength_um: F, ftype):
+    """cos θ → the unpolarised transmittance of coating `c` between media `before` and `after` at
+    `wavelength_um` (µm), in the array type `ftype`: an ideal coating's constant; else bilinear in
+    `coating.transmittance_table` (a Python float: the transfer matrix itself)."""
+    if c.reflectance is not None:
+        return lambda cosi: 1.0 - c.reflectance
+    if ftype is float:
+        nm = 1000.0 * wavelength_um
+        return lambda cosi: float(c.power(before.index(nm), after.index(nm), nm, abs(cosi)).transmittance)
+    lo, step, count, values = _table(c, before, after)
+    table = ftype(values.ravel())
+    utype = _types(wavelength_um)[1]
+    u = dr.clip((1000.0 * wavelength_um - lo) / step, 0.0, count - 1.000001)
+    i = dr.floor(u)
+    fu = u - i
+
+    def at(cosi):
+        v = dr.clip(dr.abs(cosi) * (coating.TABLE_COS - 1), 0.0, coating.TABLE_COS - 1.000001)
+        j = dr.floor(v)
+        fv = v - j
+        index = utype(i) * coating.TABLE_COS + utype(j)
+        corner = [dr.gather(ftype, table, index + offset) for offset in (0, 1, coating.TABLE_COS, coating.TABLE_COS + 1)]
+        return dr.lerp(dr.lerp(corner[0], corner[1], fv), dr.lerp(corner[2], corner[3], fv), fu)
+
+    return at
+
+
+@lru_cache(maxsize=64)
+def _table(c: coating.Coating, before, after):
+    """`coating.transmittance_table`, kept per coating and media."""
+    return coating.transmittance_table(c, before, after)
 
 
 def _asphere_hit(s, x, y, dx, dy, dz, t):

@@ -214,3 +214,53 @@ def test_formats_without_coatings_refuse_a_coated_lens(doublet_spec, tmp_path):
         lens.save(tmp_path / "x.dat")
     with pytest.raises(SolasError, match="quarter_wave coating has no .zmx form"):
         lens.save(tmp_path / "x.zmx")
+
+
+def plate(front=None, back=None, thickness=5.0, material="N-BK7"):
+    """A plane-parallel plate in air, the stop on its front face, coatings where given."""
+    rows = [{"radius": 0.0, "thickness": thickness, "diameter": 20.0, "material": material, "stop": True},
+            {"radius": 0.0, "thickness": 50.0, "diameter": 20.0}]
+    for row, c in zip(rows, (front, back)):
+        if c is not None:
+            row["coating"] = c
+    return Lens.from_dict({"name": "plate", "surface": rows})
+
+
+@pytest.mark.parametrize("variant", ["llvm", "python"])
+def test_the_tracer_weighs_each_refraction_by_its_coating(variant):
+    """trace(fresnel=True) through a coated plate: the product of the coatings' transmittances at the
+    refraction angles (Snell: n sin θ conserved), from the transfer matrix in NumPy; the uncoated face
+    keeps Fresnel's."""
+    from solas_mi.optics import tracer
+
+    lens = plate(COATINGS[2], None)
+    n = float(lens.surfaces[0].glass.index(531.0))
+    for deg in (0.0, 25.0, 50.0):
+        tan = math.tan(math.radians(deg))
+        if variant == "llvm":
+            rays = tracer.launch(lens, tracer.F(0.0), tracer.F(tan), tracer.F(0.0), tracer.F(0.5))
+            got = tracer.to_numpy(tracer.trace(lens, rays, tracer.F(0.531), fresnel=True).transmittance)[0][0]
+        else:
+            rays = tracer.launch(lens, 0.0, tan, 0.0, 0.5)
+            got = tracer.trace(lens, rays, 0.531, fresnel=True).transmittance
+        cos_air = math.cos(math.radians(deg))
+        cos_glass = math.sqrt(1.0 - (math.sin(math.radians(deg)) / n) ** 2)
+        front = lens.surfaces[0].coating.power(1.0, n, 531.0, cos_air).transmittance
+        back = coating.stack_power(n, [], [], 1.0, 531.0, cos_glass).transmittance
+        assert abs(got - front * back) < (2e-6 if variant == "llvm" else 1e-12)
+
+
+def test_an_uncoated_lens_traces_bit_identically(doublet):
+    """No coating, no change: the doublet's transmittance is the bare Fresnel product it was (computed
+    here from each surface's Fresnel formula would repeat the code; instead a `none` coating stated on
+    every surface gives the same bits as no coating)."""
+    from dataclasses import replace
+
+    from solas_mi.optics import tracer
+
+    stated = replace(doublet, surfaces=tuple(replace(s, coating=None) for s in doublet.surfaces))
+    rays = lambda: tracer.launch(doublet, tracer.F(0.0), tracer.F(0.02), tracer.F([0.0, 3.0, -4.0]),  # noqa: E731
+                                 tracer.F([0.0, 1.0, 2.0]))
+    a = tracer.trace(doublet, rays(), tracer.F(0.531), fresnel=True)
+    b = tracer.trace(stated, rays(), tracer.F(0.531), fresnel=True)
+    assert np.array_equal(*tracer.to_numpy(a.transmittance, b.transmittance))
