@@ -179,9 +179,11 @@ class Lens:
             raise SolasError(f"lens file {str(path)!r}: unknown extension {path.suffix!r}; "
                              f"allowed: {writable()}")
         writer = WRITERS[path.suffix.lower()]
-        if not writer.extra.get("coatings") and any(s.coating for s in self.surfaces):
-            raise SolasError(f"lens file {str(path)!r}: a {path.suffix} file holds no coatings; save the coated "
-                             f"lens as {', '.join(k for k, e in WRITERS.items() if e.extra.get('coatings'))}")
+        for feature, used in (("coatings", any(s.coating for s in self.surfaces)),
+                              ("blades", any(s.blades for s in self.surfaces))):
+            if used and feature not in writer.extra.get("holds", ()):
+                raise SolasError(f"lens file {str(path)!r}: a {path.suffix} file holds no {feature}; save the lens "
+                                 f"as {', '.join(k for k, e in WRITERS.items() if feature in e.extra.get('holds', ()))}")
         write_text(path, writer.function(self))
         return path
 
@@ -357,7 +359,9 @@ class Lens:
                          + ([] if s.is_sphere else [s.conic, list(s.aspheric)])
                          + ([list(s.qbfs), s.norm_radius] if any(s.qbfs) else [])
                          + ([{"focal_length": s.focal_length}] if s.ideal else [])
-                         + ([{"coating": s.coating.table()}] if s.coating else []) for s in self.surfaces],
+                         + ([{"coating": s.coating.table()}] if s.coating else [])
+                         + ([{"blades": s.blades, "blade_rotation": s.blade_rotation}] if s.blades else [])
+                         for s in self.surfaces],
         }
         return hashlib.sha256(json.dumps(content, sort_keys=True).encode()).hexdigest()[:16]
 

@@ -69,6 +69,8 @@ def dumps(lens) -> str:
             lines.append("stop = true")
         if s.coating:
             lines.append(f"coating = {_value(s.coating.table())}")
+        if s.blades:
+            lines += [f"blades = {s.blades}", f"blade_rotation = {_value(s.blade_rotation)}"]
     if lens.image_diameter:
         lines += ["", "[image]", f"diameter = {_value(lens.image_diameter)}"]
     return "\n".join(lines) + "\n"

@@ -221,7 +221,7 @@ def _sampled_pupil(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray,
     opd, ok, clipped, sx, sy, ex, ey = _grid_rays(lens, field_deg, wavelength_nm, chief, alpha, beta, affine)
 
     # Amplitude: power density × |∂e/∂(α,β)|, stop edge anti-aliased by the covered cell fraction.
-    r_stop = lens.surfaces[lens.stop_index].semi_diameter
+    stop = lens.surfaces[lens.stop_index]
     da = (alpha[:, 1] - alpha[:, 0])[:, None, None]
     db = (beta[:, 1] - beta[:, 0])[:, None, None]
 
@@ -233,7 +233,7 @@ def _sampled_pupil(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray,
 
     power = entrance_power(lens, field_deg, wavelength_nm, ex, ey) * jacobian(ex, ey)
     cell = np.sqrt(jacobian(sx, sy) * da * db)  # grid cell size at the stop (mm)
-    margin = r_stop - np.hypot(sx, sy)
+    margin = stop.iris_margin(sx, sy, np.hypot, np.arctan2, np.cos, np.floor)  # round: r_stop − r, as it was
     coverages = np.clip(0.5 + margin / np.maximum(cell, 1e-300), 0.0, 1.0)
     stop_code = lens.stop_index + 1
     other = (clipped != 0) & (clipped != stop_code)

@@ -206,6 +206,9 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False, heigh
         if heights is not None:
             heights.append(r2)
         blocked = r2 > _opaque((s.semi_diameter * (1.0 + _RIM_SLACK)) ** 2, ftype)
+        if s.blades:  # the iris's polygon, inside the clear circle
+            blocked |= s.iris_margin(x, y, lambda a, b: dr.sqrt(a * a + b * b), dr.atan2, dr.cos,
+                                     dr.floor) < -_RIM_SLACK * s.semi_diameter
         clipped = dr.select((clipped == 0) & blocked, utype(k + 1), clipped)
         if s.stop:
             stop_x, stop_y = x, y

@@ -73,8 +73,8 @@ def _trace_instead() -> str:
 
 
 def _check_buildable(lens: Lens, image_radius: float) -> None:
-    """SolasError where `lens` has no solid geometry: an ideal thin lens, a virtual object, overlapping
-    surfaces, or a part (a vertex, the image plane out to `image_radius`) farther from surface 1 than
+    """SolasError where `lens` has no solid geometry: an ideal thin lens, a virtual object, a coating or an
+    iris (the meshes are bare glass with a round stop), overlapping surfaces, or a part (a vertex, the image plane out to `image_radius`) farther from surface 1 than
     float32 places to 1 µm (a film 1e7 mm away rendered the wrong colours, one at 1e12 mm black); each
     message names what traces it instead."""
     reach = max(abs(float(lens.image_z)), float(np.abs(lens.vertex_z).max()), image_radius)
@@ -87,6 +87,11 @@ def _check_buildable(lens: Lens, image_radius: float) -> None:
         raise SolasError(f"surface {ideal} of lens {lens.name} is an ideal thin lens (focal_length), which has no glass "
                          f"to build as Mitsuba geometry; trace it instead: {_trace_instead()}")
     virtual_object.check_real(lens, "the mesh scene")
+    unbuilt = [f"surface {k}'s {what}" for k, s in enumerate(lens.surfaces, start=1)
+               for what, held in (("coating", s.coating), ("iris (blades)", s.blades)) if held]
+    if unbuilt:  # the meshes have bare Fresnel surfaces and a round stop: neither would be what the lens states
+        raise SolasError(f"lens {lens.name}: {', '.join(unbuilt)} has no Mitsuba geometry here (bare glass, a round "
+                         f"stop); trace it instead: {_trace_instead()}")
     if lens.overlaps:
         raise SolasError(f"lens {lens.name} cannot be built as Mitsuba geometry: {'; '.join(lens.overlaps)}. Trace it "
                          f"instead: {_trace_instead()}")
