@@ -114,6 +114,8 @@ def stack_power(n0, indices: list, thicknesses_nm: list, n_sub, wavelength_nm, c
     Fresnel's equations. The characteristic-matrix method (module docstring)."""
     n0 = np.asarray(n0, dtype=np.float64)
     cos0 = np.clip(np.asarray(cos0, dtype=np.float64), 1e-12, 1.0)  # grazing: T → 0 without 0/0
+    if not indices and np.isrealobj(n_sub):
+        return fresnel(n0, np.asarray(n_sub, dtype=np.float64), cos0)
     lam = np.asarray(wavelength_nm, dtype=np.float64)
     kx2 = (n0 * n0) * (1.0 - cos0 * cos0)  # (n₀ sin θ₀)², conserved across the films
     out = []
@@ -132,6 +134,18 @@ def stack_power(n0, indices: list, thicknesses_nm: list, n_sub, wavelength_nm, c
         t = 4.0 * eta0.real * eta_sub.real / np.abs(denominator) ** 2
         out += [r, np.maximum(t, 0.0)]
     return Power(out[0], out[2], out[1], out[3])
+
+
+def fresnel(n0: np.ndarray, n1: np.ndarray, cos0: np.ndarray) -> Power:
+    """Fresnel's equations of a bare interface between lossless media, in real arithmetic (the films'
+    method without films, faster): beyond the critical angle all is reflected."""
+    mu = n0 / n1
+    k2 = 1.0 - mu * mu * (1.0 - cos0 * cos0)
+    cos1 = np.sqrt(np.maximum(k2, 0.0))
+    rs = ((mu * cos0 - cos1) / (mu * cos0 + cos1)) ** 2
+    rp = ((cos0 - mu * cos1) / (cos0 + mu * cos1)) ** 2
+    rs, rp = np.where(k2 > 0, rs, 1.0), np.where(k2 > 0, rp, 1.0)
+    return Power(rs, rp, 1.0 - rs, 1.0 - rp)
 
 
 KINDS = Registry("coating kind", default="none")

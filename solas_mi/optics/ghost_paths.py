@@ -13,6 +13,7 @@ have no glass to reflect or to cross backwards and are refused. Lengths in mm, w
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -109,7 +110,7 @@ def interface(s, before, after, wavelength_nm: float, cos_in: np.ndarray, reflec
     """The unpolarised power a ray keeps at surface `s` going from medium `before` into `after` (glasses),
     meeting it at cos θ = `cos_in`: the reflectance where it reflects, else the transmittance; the surface's
     coating where it has one, else Fresnel's equations."""
-    n_in, n_out = float(before.index(wavelength_nm)), float(after.index(wavelength_nm))
+    n_in, n_out = _index(before, wavelength_nm), _index(after, wavelength_nm)
     if s.coating is not None:
         power = s.coating.power(n_in, n_out, wavelength_nm, cos_in)
     else:
@@ -120,31 +121,69 @@ def interface(s, before, after, wavelength_nm: float, cos_in: np.ndarray, reflec
 def trace(lens: Lens, path: tuple[int, int] | None, rays: Rays, wavelength_nm: float) -> Rays:
     """`rays` (object space, heading for surface 1) along `path` (None: the direct one) to its last surface,
     their power multiplied by every event's reflectance or transmittance: the rays that arrive only."""
-    media = [lens.object_glass] + [s.glass for s in lens.surfaces]
-    r = Rays(*(np.array(a, dtype=np.float64) for a in (rays.x, rays.y, rays.z, rays.dx, rays.dy, rays.dz,
-                                                       rays.power)), rays.alive.copy())
-    forward = True  # the way the path runs: forward to its first reflection, back to its second, then on
+    r, forward = _copy(rays), True  # the way the path runs: forward to its first reflection, back, then on
     for k, reflect in events(lens, path):
-        s, zv = lens.surfaces[k], float(lens.vertex_z[k])
-        r.alive &= (r.dz > 0) == forward
-        x, y, lz, ok = _hit(s, zv, r)
-        if s.stop and s.blades:
-            ok &= s.iris_margin(x, y, np.hypot, np.arctan2, np.cos, np.floor) >= -RIM_SLACK * s.semi_diameter
-        ok &= x * x + y * y <= (s.semi_diameter * (1.0 + RIM_SLACK)) ** 2
-        r.x, r.y, r.z, r.alive = x, y, lz + zv, ok
-        r, (x, y, lz) = _alive(r, x, y, lz)
-        if media[k] == media[k + 1]:  # no interface: nothing bends or reflects (a stop in air, a dummy)
-            continue
-        n_in, n_other = (media[k], media[k + 1]) if forward else (media[k + 1], media[k])
-        nx, ny, nz = _normal(s, x, y, lz)
-        cosi = r.dx * nx + r.dy * ny + r.dz * nz
-        sign = np.where(cosi < 0, -1.0, 1.0)  # the normal turned along the ray
-        nx, ny, nz, cosi = nx * sign, ny * sign, nz * sign, cosi * sign
-        power = r.power * interface(s, n_in, n_other, wavelength_nm, cosi, reflect)
-        r = _bend(r, (nx, ny, nz), cosi, n_in, n_other, wavelength_nm, reflect, r.alive)
-        r.power = power
+        r = step(lens, k, reflect, forward, r, wavelength_nm)
         forward ^= reflect
     return r
+
+
+def trace_all(lens: Lens, rays: Rays, wavelength_nm: float) -> dict:
+    """`trace` of the direct path (key None) and of every path of `paths` (keys (j, i)), sharing what paths
+    share: the rays arriving at j on the direct path, and for each j those arriving back at each i."""
+    surfaces, n = reflecting(lens), len(lens.surfaces)
+    arriving, r = [], _copy(rays)
+    for k in range(n):
+        arriving.append(r)
+        r = step(lens, k, False, True, r, wavelength_nm)
+    out = {None: r}
+    for j in surfaces:
+        back = step(lens, j, True, True, arriving[j], wavelength_nm)  # reflected at j, heading back
+        for k in range(j - 1, surfaces[0] - 1, -1):
+            if k in surfaces:
+                ghost = step(lens, k, True, False, back, wavelength_nm)
+                for m in range(k + 1, n):
+                    ghost = step(lens, m, False, True, ghost, wavelength_nm)
+                out[(j, k)] = ghost
+            if k > surfaces[0]:
+                back = step(lens, k, False, False, back, wavelength_nm)
+    return out
+
+
+def step(lens: Lens, k: int, reflect: bool, forward: bool, r: Rays, wavelength_nm: float) -> Rays:
+    """Rays `r` at surface k (0-based), met going `forward` or back: clipped, then reflected or crossed, their
+    power weighed; only those that go on."""
+    media = [lens.object_glass] + [s.glass for s in lens.surfaces]
+    s, zv = lens.surfaces[k], float(lens.vertex_z[k])
+    r = Rays(r.x, r.y, r.z, r.dx, r.dy, r.dz, r.power, r.alive & ((r.dz > 0) == forward))
+    x, y, lz, ok = _hit(s, zv, r)
+    if s.stop and s.blades:
+        ok &= s.iris_margin(x, y, np.hypot, np.arctan2, np.cos, np.floor) >= -RIM_SLACK * s.semi_diameter
+    ok &= x * x + y * y <= (s.semi_diameter * (1.0 + RIM_SLACK)) ** 2
+    r = Rays(x, y, lz + zv, r.dx, r.dy, r.dz, r.power, ok)
+    r, (x, y, lz) = _alive(r, x, y, lz)
+    if media[k] == media[k + 1]:  # no interface: nothing bends or reflects (a stop in air, a dummy)
+        return r
+    n_in, n_other = (media[k], media[k + 1]) if forward else (media[k + 1], media[k])
+    nx, ny, nz = _normal(s, x, y, lz)
+    cosi = r.dx * nx + r.dy * ny + r.dz * nz
+    sign = np.where(cosi < 0, -1.0, 1.0)  # the normal turned along the ray
+    nx, ny, nz, cosi = nx * sign, ny * sign, nz * sign, cosi * sign
+    power = r.power * interface(s, n_in, n_other, wavelength_nm, cosi, reflect)
+    r = _bend(r, (nx, ny, nz), cosi, n_in, n_other, wavelength_nm, reflect, r.alive)
+    r.power = power
+    return r
+
+
+@lru_cache(maxsize=256)
+def _index(glass, wavelength_nm: float) -> float:
+    """A medium's index, kept: a path asks for each a few times per surface."""
+    return float(glass.index(wavelength_nm))
+
+
+def _copy(rays: Rays) -> Rays:
+    return Rays(*(np.array(a, dtype=np.float64) for a in (rays.x, rays.y, rays.z, rays.dx, rays.dy, rays.dz,
+                                                          rays.power)), rays.alive.copy())
 
 
 def _alive(r: Rays, *more: np.ndarray) -> tuple[Rays, tuple[np.ndarray, ...]]:
@@ -163,7 +202,7 @@ def _bend(r: Rays, normal, cosi, n_in, n_out, wavelength_nm: float, reflect: boo
     if reflect:
         g = -2.0 * cosi
         return Rays(r.x, r.y, r.z, r.dx + g * nx, r.dy + g * ny, r.dz + g * nz, r.power, ok)
-    mu = float(n_in.index(wavelength_nm)) / float(n_out.index(wavelength_nm))
+    mu = _index(n_in, wavelength_nm) / _index(n_out, wavelength_nm)
     k2 = 1.0 - mu * mu * (1.0 - cosi * cosi)
     g = np.sqrt(np.maximum(k2, 0.0)) - mu * cosi
     return Rays(r.x, r.y, r.z, mu * r.dx + g * nx, mu * r.dy + g * ny, mu * r.dz + g * nz, r.power, ok & (k2 >= 0))

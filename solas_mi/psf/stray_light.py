@@ -170,8 +170,9 @@ def ghosts(lens: Lens, field_deg, wavelengths_nm=None, rays: int = ghost_paths.D
     wavelengths = tuple(lens.check_wavelength(w) for w in (wavelengths_nm or lens.wavelengths_nm))
     start = launch(lens, field_deg, rays)
     hits = {}
+    traced = [ghost_paths.trace_all(lens, start, w) for w in wavelengths]
     for path in [None, *ghost_paths.paths(lens)]:
-        parts = [_on_image(lens, ghost_paths.trace(lens, path, start, w)) for w in wavelengths]
+        parts = [_on_image(lens, t[path]) for t in traced]
         hits[path] = tuple(np.concatenate([p[i] for p in parts]) for i in range(5))
     direct = hits.pop(None)
     if direct[2].sum() <= 0:

@@ -98,3 +98,15 @@ def test_ghosts_command_prints_the_table_and_writes_the_hdr_psf(tmp_path, capsys
     data = channels["Y"]
     assert np.isfinite(data).all() and data.min() >= 0
     assert len(meta["ghosts"]) == 3 and meta["unit"].startswith("fraction of the direct image")
+
+
+def test_shared_prefixes_give_each_path_s_own_trace(triplet):
+    """`trace_all` (paths sharing their common parts) equals `trace` of each path alone, bit for bit."""
+    start = ghosts.launch(triplet, (0.0, 8.0), 24)
+    together = ghost_paths.trace_all(triplet, start, 587.5618)
+    assert set(together) == {None, *ghost_paths.paths(triplet)}
+    for path, r in together.items():
+        alone = ghost_paths.trace(triplet, path, start, 587.5618)
+        for a, b in zip((r.x, r.y, r.z, r.dx, r.dy, r.dz, r.power), (alone.x, alone.y, alone.z, alone.dx, alone.dy,
+                                                                     alone.dz, alone.power)):
+            assert np.array_equal(a, b)
