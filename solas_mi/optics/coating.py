@@ -279,3 +279,29 @@ def transmittance_table(coating: Coating, before: glass_mod.Glass, after: glass_
     cos = np.linspace(0.0, 1.0, TABLE_COS)
     t = coating.power(before.index(lam)[:, None], after.index(lam)[:, None], lam[:, None], cos[None, :]).transmittance
     return lo, TABLE_STEP_NM, count, np.ascontiguousarray(t, dtype=np.float64)
+
+
+def metadata(lens) -> dict:
+    """What `lens info` and PSF metadata say of a lens's coatings and iris ({} for a bare, round one):
+    each coated surface, and the on-axis chief ray's transmittance at the primary wavelength with the
+    coatings and bare (it meets every surface at normal incidence)."""
+    out = {}
+    coated = [(k, s) for k, s in enumerate(lens.surfaces, start=1) if s.coating is not None]
+    if coated:
+        w = lens.primary_wavelength
+        media = [lens.object_glass] + [s.glass for s in lens.surfaces]
+        crossings = [(s, float(media[k].index(w)), float(media[k + 1].index(w)))
+                     for k, s in enumerate(lens.surfaces) if media[k] != media[k + 1]]
+        with_ = np.prod([(s.coating.power(a, b, w, 1.0) if s.coating else fresnel(a, b, 1.0)).transmittance
+                         for s, a, b in crossings])
+        bare = np.prod([fresnel(a, b, 1.0).transmittance for _, a, b in crossings])
+        kinds = "; ".join(f"surface {k}: {s.coating.kind} {dict(s.coating.values)}" for k, s in coated)
+        out["coatings"] = (f"{kinds}; on-axis transmittance at {w:g} nm {float(with_):.4f} (bare surfaces: "
+                           f"{float(bare):.4f})")
+    stop = lens.surfaces[lens.stop_index]
+    if stop.blades:
+        share = stop.blades / (2.0 * math.pi) * math.sin(2.0 * math.pi / stop.blades)
+        out["iris"] = (f"{stop.blades} straight blades, first corner at {stop.blade_rotation:g} deg: a regular "
+                       f"{stop.blades}-gon inside the stop's circle, {share:.4f} of its area (f/# and pupils: the "
+                       "circle's)")
+    return out

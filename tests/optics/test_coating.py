@@ -264,3 +264,21 @@ def test_an_uncoated_lens_traces_bit_identically(doublet):
     a = tracer.trace(doublet, rays(), tracer.F(0.531), fresnel=True)
     b = tracer.trace(stated, rays(), tracer.F(0.531), fresnel=True)
     assert np.array_equal(*tracer.to_numpy(a.transmittance, b.transmittance))
+
+
+def test_lens_info_states_coatings_and_the_on_axis_transmittance(doublet_spec, tmp_path, capsys):
+    """The on-axis chief ray meets every surface at normal incidence: its transmittance is the product of
+    each crossing's normal-incidence T, coated or bare (Fresnel: 4 n n' / (n + n')²)."""
+    from solas_mi.cli import main
+
+    doublet_spec["surface"][0]["coating"] = {"kind": "ideal", "reflectance": 0.01}
+    lens = Lens.from_dict(doublet_spec)
+    path = lens.save(tmp_path / "coated.toml")
+    assert main(["lens", "info", str(path)]) == 0
+    printed = capsys.readouterr().out
+    w = lens.primary_wavelength
+    n = lens.indices(w)
+    bare = [4 * a * b / (a + b) ** 2 for a, b in zip(n[:-1], n[1:]) if a != b]
+    line = next(t for t in printed.splitlines() if t.startswith("coatings: "))
+    assert f"{0.99 * np.prod(bare[1:]):.4f} (bare surfaces: {np.prod(bare):.4f})" in line
+    assert main(["lens", "info", "solas-doublet"]) == 0 and "coatings" not in capsys.readouterr().out

@@ -101,6 +101,9 @@ def test_blades_round_trip_and_are_refused_where_they_cannot_be(doublet, doublet
     doublet_spec["surface"][stop]["blades"] = 7
     doublet_spec["surface"][stop]["blade_rotation"] = 12.5
     lens = Lens.from_dict(doublet_spec)
+    from solas_mi.optics import notes
+
+    assert "7 straight blades, first corner at 12.5 deg" in notes.metadata(lens)["iris"]
     again = Lens.load(lens.save(tmp_path / "iris.toml"))
     assert again.surfaces == lens.surfaces and again.hash == lens.hash != Lens.load("solas-doublet").hash
     with pytest.raises(SolasError, match="holds no blades"):
@@ -112,3 +115,30 @@ def test_blades_round_trip_and_are_refused_where_they_cannot_be(doublet, doublet
         with pytest.raises(SolasError, match="on the stop surface only"):
             Lens.from_dict(spec)
 
+
+
+def test_the_reversed_lens_keeps_the_iris_and_the_coatings(doublet_spec, doublet):
+    """The lens camera traces the lens from the image side (`exit_pupil.reversed_lens`): x and y are kept,
+    so the stop's polygon and every coating are the same there, and a ray through a corner region
+    outside the polygon but inside the circle is blocked both ways."""
+    from solas_mi.optics import tracer
+    from solas_mi.optics.exit_pupil import reversed_lens
+
+    doublet_spec["surface"][doublet.stop_index].update(blades=5, blade_rotation=90.0)
+    doublet_spec["surface"][0]["coating"] = "quarter_wave"
+    lens = Lens.from_dict(doublet_spec)
+    back = reversed_lens(lens)
+    stop = back.surfaces[back.stop_index]
+    assert (stop.blades, stop.blade_rotation) == (5, 90.0) and back.surfaces[-1].coating == lens.surfaces[0].coating
+    # a ray from the film's centre through the stop just inside its circle, midway between two corners
+    # (an edge's middle lies at the circle's radius × cos 36°): blocked by the iris, passed by a round stop
+    radius = stop.semi_diameter
+    angle = math.radians(90.0 + 36.0)
+    z_stop = float(back.vertex_z[back.stop_index])
+    for r, blocked in ((0.95 * radius, True), (0.75 * radius, False)):
+        target = (r * math.cos(angle), r * math.sin(angle))
+        rays = tracer.launch(back, tracer.F(0.0), tracer.F(0.0), tracer.F(target[0]), tracer.F(target[1]),
+                             object_point=(tracer.F(0.0), tracer.F(0.0)))
+        traced = tracer.trace(back, rays, tracer.F(0.531))
+        sx, sy, clipped = tracer.to_numpy(traced.stop_x, traced.stop_y, traced.clipped_by)
+        assert z_stop >= 0 and (clipped[0] == back.stop_index + 1) == blocked, (r, sx, sy, clipped)
