@@ -243,10 +243,11 @@ def zemax_coating(name: str, where: str) -> dict:
     1 − 0.xx); a named coating of a coating file cannot be read without that file, refused by name."""
     text = name.strip()
     if text.upper().startswith("I.") and text[2:].isdigit():
-        return {"kind": "ideal", "reflectance": 1.0 - float("0" + text[1:])}
-    raise SolasError(f"{where}: COAT {text!r} names a coating of a Zemax coating file (COATING.DAT), which the "
-                     "lens file does not hold; only the ideal I.xx coatings are read: state it in a .toml "
-                     "lens file as coating = {kind = ..., ...}")
+        return {"kind": "ideal", "reflectance": float(f"{1.0 - float('0' + text[1:]):.12g}")}  # 1 − 0.99: 0.01
+    raise SolasError(f"{where}: COAT {text!r} names a coating of a Zemax coating file (COATING.DAT, or the one "
+                     "COFN names), which the lens file does not hold; only the ideal I.xx coatings are read: "
+                     "state it in a .toml lens file as coating = {kind = ..., ...}, or delete the COAT line "
+                     "for a bare surface")
 
 
 def to_zemax(coating: Coating | None, where: str) -> list[str]:

@@ -110,3 +110,15 @@ def test_shared_prefixes_give_each_path_s_own_trace(triplet):
         for a, b in zip((r.x, r.y, r.z, r.dx, r.dy, r.dz, r.power), (alone.x, alone.y, alone.z, alone.dx, alone.dy,
                                                                      alone.dz, alone.power)):
             assert np.array_equal(a, b)
+
+
+def test_a_near_point_source_on_axis_gives_centred_ghosts(doublet_spec):
+    """A point source at a finite distance (rays from the point, its power per cell ∝ cos³/d²): on axis
+    every ghost is centred; the direct image's centroid too."""
+    doublet_spec["object"] = {"distance": 2000.0}
+    lens = Lens.from_dict(doublet_spec)
+    report = ghosts.ghosts(lens, (0.0, 0.0), [531.0], rays=64)
+    assert len(report.ghosts) == 3 and all(g.energy > 0 for g in report.ghosts)
+    for g in report.ghosts:
+        assert max(abs(c) for c in g.centroid_mm) < 1e-9
+    assert max(abs(c) for c in report.direct_centroid_mm) < 1e-12
