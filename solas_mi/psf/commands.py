@@ -82,8 +82,10 @@ def run_psf_grid(args) -> int:
 def run_ghosts(args) -> int:
     from ..optics.commands import load_lens
     from . import stray_light
+    from .base import check_grid
 
     data_file, png = data_and_preview(args.output, args.png)
+    check_grid(args.pitch_um, args.size)  # before the work
     lens = load_lens(args.lens)
     wavelengths = floats(args.wavelengths_nm, "--wavelengths-nm") if args.wavelengths_nm else None
     report = stray_light.ghosts(lens, _field(args.field_deg), wavelengths, rays=args.rays)

@@ -23,6 +23,7 @@ from ..optics.paraxial import paraxial
 from .geometric import bin_hits
 
 FOCUSED_AIRY = 4.0
+MAX_FIELD_DEG = 89.0  # the widest polar angle ghosts take (light from the front of surface 1)
 
 
 @dataclass(frozen=True)
@@ -90,6 +91,9 @@ class GhostReport:
                  "first aperture)",
                  f"{'path j,i':>9} {'energy':>10} {'x mm':>10} {'y mm':>10} {'rms mm':>9} {'focus mm':>10} focused"]
         for g in sorted(self.ghosts, key=lambda g: -g.energy):
+            if g.energy == 0:
+                lines.append(f"{g.surfaces[0]:>5},{g.surfaces[1]:<3} {0.0:10.3e}  (no ray of the grid arrives)")
+                continue
             lines.append(f"{g.surfaces[0]:>5},{g.surfaces[1]:<3} {g.energy:10.3e} {g.centroid_mm[0]:10.4f} "
                          f"{g.centroid_mm[1]:10.4f} {g.rms_mm:9.4f} {g.focus_mm:10.3f} {'yes' if g.focused else 'no'}")
         lines.append(f"all ghosts: {self.total:.3e} of the direct image")
@@ -101,7 +105,14 @@ def launch(lens: Lens, field_deg: tuple[float, float], rays: int) -> ghost_paths
     clear aperture, each with its power (a point source's, per grid cell; only ratios matter)."""
     first = lens.surfaces[0]
     reach = float(max(abs(first.sag(first.semi_diameter)), 0.0)) + 1.0
-    tan = tracer.field_tangents(np.array(field_deg, dtype=np.float64))
+    if lens.field_type.sideways:  # polar fields: the unit direction; from the front only
+        d = lens.field_type.incoming(np.array(field_deg, dtype=np.float64))
+        if d[2] < math.cos(math.radians(MAX_FIELD_DEG)):
+            raise SolasError(f"field ({field_deg[0]:g}, {field_deg[1]:g}) deg: ghosts take light that meets surface 1 "
+                             f"from the front, a polar angle below {MAX_FIELD_DEG:g} deg")
+        tan = d[:2] / d[2]
+    else:
+        tan = tracer.field_tangents(np.array(field_deg, dtype=np.float64))
     half = first.semi_diameter * 1.001 + reach * float(np.hypot(*tan))
     t = (np.arange(rays) + 0.5) / rays * 2.0 - 1.0
     gx, gy = np.meshgrid(half * t, half * t)

@@ -122,3 +122,13 @@ def test_a_near_point_source_on_axis_gives_centred_ghosts(doublet_spec):
     for g in report.ghosts:
         assert max(abs(c) for c in g.centroid_mm) < 1e-9
     assert max(abs(c) for c in report.direct_centroid_mm) < 1e-12
+
+
+def test_a_fisheye_takes_fields_from_the_front_only():
+    """A lens of polar fields: a field below 89° is launched along its polar direction (on the y axis the
+    same as an angle field's), one from the side is refused by name, never traced along a wrong direction."""
+    lens = Lens.load("nikkor-fisheye")
+    report = ghosts.ghosts(lens, (0.0, 30.0), [587.5618], rays=32)
+    assert report.direct_power > 0 and report.direct_centroid_mm[1] > 0
+    with pytest.raises(SolasError, match="polar angle below 89 deg"):
+        ghosts.ghosts(lens, (0.0, 95.0), rays=16)
