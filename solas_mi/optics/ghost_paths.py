@@ -39,6 +39,7 @@ class Rays:
     dz: np.ndarray
     power: np.ndarray
     alive: np.ndarray
+    ids: np.ndarray | None = None  # each ray's index in the launch (kept as rays drop out)
 
 
 def reflecting(lens: Lens) -> list[int]:
@@ -155,12 +156,12 @@ def step(lens: Lens, k: int, reflect: bool, forward: bool, r: Rays, wavelength_n
     power weighed; only those that go on."""
     media = [lens.object_glass] + [s.glass for s in lens.surfaces]
     s, zv = lens.surfaces[k], float(lens.vertex_z[k])
-    r = Rays(r.x, r.y, r.z, r.dx, r.dy, r.dz, r.power, r.alive & ((r.dz > 0) == forward))
+    r = Rays(r.x, r.y, r.z, r.dx, r.dy, r.dz, r.power, r.alive & ((r.dz > 0) == forward), r.ids)
     x, y, lz, ok = _hit(s, zv, r)
     if s.stop and s.blades:
         ok &= s.iris_margin(x, y, np.hypot, np.arctan2, np.cos, np.floor) >= -RIM_SLACK * s.semi_diameter
     ok &= x * x + y * y <= (s.semi_diameter * (1.0 + RIM_SLACK)) ** 2
-    r = Rays(x, y, lz + zv, r.dx, r.dy, r.dz, r.power, ok)
+    r = Rays(x, y, lz + zv, r.dx, r.dy, r.dz, r.power, ok, r.ids)
     r, (x, y, lz) = _alive(r, x, y, lz)
     if media[k] == media[k + 1]:  # no interface: nothing bends or reflects (a stop in air, a dummy)
         return r
@@ -183,7 +184,7 @@ def _index(glass, wavelength_nm: float) -> float:
 
 def _copy(rays: Rays) -> Rays:
     return Rays(*(np.array(a, dtype=np.float64) for a in (rays.x, rays.y, rays.z, rays.dx, rays.dy, rays.dz,
-                                                          rays.power)), rays.alive.copy())
+                                                          rays.power)), rays.alive.copy(), np.arange(len(rays.x)))
 
 
 def _alive(r: Rays, *more: np.ndarray) -> tuple[Rays, tuple[np.ndarray, ...]]:
@@ -191,7 +192,8 @@ def _alive(r: Rays, *more: np.ndarray) -> tuple[Rays, tuple[np.ndarray, ...]]:
     if r.alive.all():
         return r, more
     keep = np.flatnonzero(r.alive)
-    return Rays(*(a[keep] for a in (r.x, r.y, r.z, r.dx, r.dy, r.dz, r.power, r.alive))), tuple(a[keep] for a in more)
+    return Rays(*(a[keep] for a in (r.x, r.y, r.z, r.dx, r.dy, r.dz, r.power, r.alive, r.ids))), tuple(
+        a[keep] for a in more)
 
 
 def _bend(r: Rays, normal, cosi, n_in, n_out, wavelength_nm: float, reflect: bool, ok) -> Rays:
@@ -201,8 +203,9 @@ def _bend(r: Rays, normal, cosi, n_in, n_out, wavelength_nm: float, reflect: boo
     nx, ny, nz = normal
     if reflect:
         g = -2.0 * cosi
-        return Rays(r.x, r.y, r.z, r.dx + g * nx, r.dy + g * ny, r.dz + g * nz, r.power, ok)
+        return Rays(r.x, r.y, r.z, r.dx + g * nx, r.dy + g * ny, r.dz + g * nz, r.power, ok, r.ids)
     mu = _index(n_in, wavelength_nm) / _index(n_out, wavelength_nm)
     k2 = 1.0 - mu * mu * (1.0 - cosi * cosi)
     g = np.sqrt(np.maximum(k2, 0.0)) - mu * cosi
-    return Rays(r.x, r.y, r.z, mu * r.dx + g * nx, mu * r.dy + g * ny, mu * r.dz + g * nz, r.power, ok & (k2 >= 0))
+    return Rays(r.x, r.y, r.z, mu * r.dx + g * nx, mu * r.dy + g * ny, mu * r.dz + g * nz, r.power, ok & (k2 >= 0),
+                r.ids)

@@ -25,11 +25,11 @@ from .scene import lens_parts, write_ply
 VARIANT = "llvm_ad_spectral"
 
 
-def lens_geometry(lens, rings: int | None = None, image_radius: float = 0.0, **extra):
+def lens_geometry(lens, rings: int | None = None, image_radius: float = 0.0, fresnel: str = "off", **extra):
     """The lens as a Mitsuba scene (mm, lens file's frame): cap meshes of `rings` rings (None:
-    `render.mesh.mesh_rings`'s), a barrel holding the image plane out to `image_radius` mm, with `sellmeier_dielectric` (no
-    Fresnel losses) and absorbing apertures, no sensor image and no texture; `extra` scene entries
-    (a sensor, an integrator, objects) are added as given."""
+    `render.mesh.mesh_rings`'s), a barrel holding the image plane out to `image_radius` mm, with `sellmeier_dielectric`
+    (`fresnel`: "off", no Fresnel losses; "sample", reflections sampled, ghosts) and absorbing apertures, no
+    sensor image and no texture; `extra` scene entries (a sensor, an integrator, objects) are added as given."""
     from .mitsuba import mitsuba
 
     mi = mitsuba(VARIANT)
@@ -40,7 +40,7 @@ def lens_geometry(lens, rings: int | None = None, image_radius: float = 0.0, **e
             write_ply(path, *part.mesh)
             bsdf = {"type": "ref", "id": "absorber"} if part.int_glass is None else {
                 "type": "sellmeier_dielectric", "ext_glass": part.ext_glass, "int_glass": part.int_glass,
-                "fresnel": "off"}
+                "fresnel": fresnel}
             scene[part.name] = {"type": "ply", "filename": str(path), "bsdf": bsdf}
         return mi.load_dict(scene)  # the meshes are read here, before the folder goes
 
