@@ -81,6 +81,17 @@ def _exits(scene, lens, sampler, field_deg, wavelength_nm, f: int, depth: int, e
     ray = mi.Ray3f(mi.Point3f(x, y, z), mi.Vector3f(dx, dy, dz), 0.0,
                    mi.Spectrum(dr.opaque(mi.Float, float(wavelength_nm[0]))))
     sampler.seed(dr.opaque(mi.UInt32, f), n)
+    out_o, out_d, out_w = walk(scene, ray, sampler, depth)
+    return [np.asarray(a, dtype=np.float64) for a in (out_o.x, out_o.y, out_o.z, out_d.x, out_d.y, out_d.z, out_w)]
+
+
+def walk(scene, ray, sampler, depth: int, watch=None):
+    """Rays through the scene's lens in importance transport, `depth` interactions at most, each BSDF
+    sampled: where they leave the scene (origins, directions) and their weights (0: absorbed, or still
+    inside). `watch(si, active, ray, next_ray)`, where given, sees every interaction (Dr.Jit values)."""
+    import drjit as dr
+    import mitsuba as mi
+
     ctx = mi.BSDFContext(mi.TransportMode.Importance)
     weight, active = mi.Float(1.0), mi.Bool(True)
     out_o, out_d, out_w = mi.Point3f(0.0), mi.Vector3f(0.0), mi.Float(0.0)
@@ -93,8 +104,11 @@ def _exits(scene, lens, sampler, field_deg, wavelength_nm, f: int, depth: int, e
         bs, bw = si.bsdf(ray).sample(ctx, si, sampler.next_1d(active), sampler.next_2d(active), active)
         weight *= bw[0]
         active &= weight != 0.0
-        ray = continue_ray(si, ray, bs.wo)
-    return [np.asarray(a, dtype=np.float64) for a in (out_o.x, out_o.y, out_o.z, out_d.x, out_d.y, out_d.z, out_w)]
+        following = continue_ray(si, ray, bs.wo)
+        if watch is not None:
+            watch(si, active, ray, following)
+        ray = following
+    return out_o, out_d, out_w
 
 
 def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int, *,

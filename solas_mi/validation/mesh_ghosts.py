@@ -12,8 +12,7 @@ import numpy as np
 
 from ..optics import ghost_paths
 from ..psf.stray_light import launch
-from ..render.loop import continue_ray
-from ..render.psf import lens_geometry
+from ..render.psf import lens_geometry, walk
 
 
 def mesh_ghosts(lens, field_deg, wavelength_nm: float, rays: int, passes: int, seed: int = 0) -> dict:
@@ -68,25 +67,16 @@ def _pass(scene, lens, start, wavelength_nm: float, seed: int):
                    mi.Spectrum(dr.opaque(mi.Float, float(wavelength_nm))))
     sampler = mi.load_dict({"type": "independent"})
     sampler.seed(dr.opaque(mi.UInt32, seed), n)
-    ctx = mi.BSDFContext(mi.TransportMode.Importance)
-    weight, active = mi.Float(1.0), mi.Bool(True)
-    out_o, out_d, out_w = mi.Point3f(0.0), mi.Vector3f(0.0), mi.Float(0.0)
-    count, first, second = mi.UInt32(0), mi.Point3f(dr.nan), mi.Point3f(dr.nan)  # where a ray turned back
-    for _ in range(3 * len(lens.surfaces) + 6):
-        si = scene.ray_intersect(ray, active)
-        escaped = active & ~si.is_valid()
-        out_o, out_d = dr.select(escaped, ray.o, out_o), dr.select(escaped, ray.d, out_d)
-        out_w = dr.select(escaped, weight, out_w)
-        active &= si.is_valid()
-        bs, bw = si.bsdf(ray).sample(ctx, si, sampler.next_1d(active), sampler.next_2d(active), active)
-        weight *= bw[0]
-        active &= weight != 0.0
-        new = continue_ray(si, ray, bs.wo)
-        turned = active & (new.d.z * ray.d.z < 0)
-        first = dr.select(turned & (count == 0), si.p, first)
-        second = dr.select(turned & (count == 1), si.p, second)
-        count += dr.select(turned, 1, 0)
-        ray = new
+    turned_at = {"count": mi.UInt32(0), "first": mi.Point3f(dr.nan), "second": mi.Point3f(dr.nan)}
+
+    def watch(si, active, ray, following):  # where each ray turned back (the z of its direction changed sign)
+        turned = active & (following.d.z * ray.d.z < 0)
+        turned_at["first"] = dr.select(turned & (turned_at["count"] == 0), si.p, turned_at["first"])
+        turned_at["second"] = dr.select(turned & (turned_at["count"] == 1), si.p, turned_at["second"])
+        turned_at["count"] += dr.select(turned, 1, 0)
+
+    out_o, out_d, out_w = walk(scene, ray, sampler, 3 * len(lens.surfaces) + 6, watch)
+    count, first, second = turned_at["count"], turned_at["first"], turned_at["second"]
     ox, oy, oz, dx, dy, dz, w, turns, *points = (np.asarray(a, dtype=np.float64) for a in (
         out_o.x, out_o.y, out_o.z, out_d.x, out_d.y, out_d.z, out_w, count, first.x, first.y, first.z, second.x,
         second.y, second.z))
