@@ -39,6 +39,7 @@ MATERIALS = {
 }
 MAX_LAYERS = 200  # layers of a stack (a broadband filter holds tens; each costs one matrix product)
 MAX_EXTINCTION = 20.0  # k of an absorbing layer (metals: aluminium ~ 7 in the visible)
+MAX_DECAY = 600.0  # |Im δ| of one film: its amplitude's decay e^-600 (cos δ stays finite; nothing passes beyond)
 
 
 class Power(NamedTuple):
@@ -123,15 +124,20 @@ def stack_power(n0, indices: list, thicknesses_nm: list, n_sub, wavelength_nm, c
         eta0 = tilt(n0, n0 * cos0 + 0j)
         n_s = np.asarray(n_sub, dtype=np.complex128)
         eta_sub = tilt(n_s, _forward_root(n_s * n_s - kx2))
-        b, c = np.ones_like(eta_sub), eta_sub
+        b, c, log_scale = np.ones_like(eta_sub), eta_sub, 0.0
         for n_j, d in zip(indices[::-1], thicknesses_nm[::-1]):  # the matrices applied from the substrate out
             y = _forward_root(n_j * n_j - kx2)
             eta, delta = tilt(n_j, y), 2.0 * math.pi * y * d / lam
+            # an opaque film's e^|Im δ| kept finite (beyond e^-600 nothing passes anyway), and [B, C] rescaled:
+            # r takes their ratio only, T the scale, carried as its logarithm
+            delta = delta.real + 1j * np.clip(delta.imag, -MAX_DECAY, MAX_DECAY)
             cos_d, sin_d = np.cos(delta), np.sin(delta)
             b, c = cos_d * b + 1j * sin_d / eta * c, 1j * eta * sin_d * b + cos_d * c
+            scale = np.maximum(np.abs(b), np.abs(c))
+            b, c, log_scale = b / scale, c / scale, log_scale + np.log(scale)
         denominator = eta0 * b + c
         r = np.abs((eta0 * b - c) / denominator) ** 2
-        t = 4.0 * eta0.real * eta_sub.real / np.abs(denominator) ** 2
+        t = 4.0 * eta0.real * eta_sub.real / np.abs(denominator) ** 2 * np.exp(-2.0 * log_scale)
         out += [r, np.maximum(t, 0.0)]
     return Power(out[0], out[2], out[1], out[3])
 

@@ -174,6 +174,16 @@ def ghosts(lens: Lens, field_deg, wavelengths_nm=None, rays: int = ghost_paths.D
     ------
     SolasError
         For a lens with an ideal thin lens, a bad ray count, or no direct light at that field.
+
+    Examples
+    --------
+    >>> from solas_mi import Lens
+    >>> from solas_mi.psf import ghosts
+    >>> report = ghosts(Lens.load("solas-doublet"), (0, 1), rays=64)
+    >>> [g.surfaces for g in report.ghosts]  # reflect at j, then at i (the doublet's three glass surfaces)
+    [(2, 1), (3, 1), (3, 2)]
+    >>> report.ghosts[1].energy > report.ghosts[0].energy  # the two air faces: the brightest ghost
+    True
     """
     if not isinstance(rays, int) or isinstance(rays, bool) or not 8 <= rays <= 4096:
         raise SolasError(f"rays {rays!r} must be an integer from 8 to 4096 (rays per side of the grid)")

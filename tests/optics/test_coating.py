@@ -282,3 +282,15 @@ def test_lens_info_states_coatings_and_the_on_axis_transmittance(doublet_spec, t
     line = next(t for t in printed.splitlines() if t.startswith("coatings: "))
     assert f"{0.99 * np.prod(bare[1:]):.4f} (bare surfaces: {np.prod(bare):.4f})" in line
     assert main(["lens", "info", "solas-doublet"]) == 0 and "coatings" not in capsys.readouterr().out
+
+
+def test_an_opaque_metal_film_reflects_as_the_bulk_metal_and_passes_nothing():
+    """A thick absorbing film (aluminium-like N = 1 − 7i, 0.1 mm) is the bulk metal: R = |(n0 − N)/(n0 + N)|²
+    (Fresnel with a complex index), T = 0, A = 1 − R, every number finite; it overflowed to NaN before."""
+    c = coating.coating_from_table({"kind": "stack", "layers": [
+        {"material": "model:1.0001", "thickness_nm": 1e5, "k": 7.0}]}, "t")
+    n = complex(c.layers[0].index(550.0))
+    p = c.power(1.0, 1.5, 550.0, np.array([1.0, 0.5]))
+    assert np.all(np.isfinite(p.rs)) and np.all(np.isfinite(p.ts))
+    assert abs(p.rs[0] - abs((1.0 - n) / (1.0 + n)) ** 2) < 1e-12 and np.all(p.ts == 0.0)
+    assert np.all((0.0 < 1.0 - p.rp - p.tp) & (1.0 - p.rp - p.tp < 1.0))
