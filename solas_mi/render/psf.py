@@ -35,7 +35,7 @@ def lens_geometry(lens, rings: int | None = None, image_radius: float = 0.0, fre
     mi = mitsuba(VARIANT)
     scene = {"type": "scene", "absorber": {"type": "diffuse", "reflectance": {"type": "rgb", "value": 0.0}}, **extra}
     with tempfile.TemporaryDirectory(prefix="solas-lens-") as tmp:
-        for part in lens_parts(lens, rings, image_radius):
+        for part in lens_parts(lens, rings, image_radius, lossless=fresnel == "off"):
             path = Path(tmp) / f"{part.name}.ply"
             write_ply(path, *part.mesh)
             bsdf = {"type": "ref", "id": "absorber"} if part.int_glass is None else {
