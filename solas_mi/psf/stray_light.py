@@ -51,8 +51,8 @@ class GhostReport:
     wavelengths_nm : tuple of float
         The wavelengths (nm), summed with equal weights.
     direct_power : float
-        The direct image's power, a fraction of the light that the grid sends into the first surface's
-        clear aperture.
+        The direct image's power, a fraction of the light of the launch grid (a square on the plane of
+        surface 1's vertex that holds its clear aperture).
     direct_centroid_mm : (float, float)
         The direct image's centroid on the image plane (mm).
     ghosts : list of Ghost
@@ -87,8 +87,8 @@ class GhostReport:
         """
         lines = [f"ghosts of {len(self.ghosts)} two-reflection paths, field ({self.field_deg[0]:g}, "
                  f"{self.field_deg[1]:g}) deg, {', '.join(f'{w:g}' for w in self.wavelengths_nm)} nm; energy "
-                 f"relative to the direct image (transmitted power {self.direct_power:.4f} of the light in the "
-                 "first aperture)",
+                 f"relative to the direct image (which carries {self.direct_power:.4f} of the launch grid's light, a "
+                 "square over surface 1)",
                  f"{'path j,i':>9} {'energy':>10} {'x mm':>10} {'y mm':>10} {'rms mm':>9} {'focus mm':>10} focused"]
         for g in sorted(self.ghosts, key=lambda g: -g.energy):
             if g.energy == 0:
