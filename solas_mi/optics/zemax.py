@@ -189,7 +189,7 @@ def _surface(b: dict, i: int, scale: float, gcat: tuple[str, ...], where: str) -
     elif kind == "PARAXIAL":
         row.update(ideal.from_zemax(_parameters(b, ident), scale, ident))
     row.update({"stop": True} if "STOP" in b else {})
-    row.update({"coating": zemax_coating(" ".join(b["COAT"][0]), ident)} if b.get("COAT", [[]])[0] else {})
+    row.update({"coating": zemax_coating(b["COAT"][0][0], ident)} if b.get("COAT", [[]])[0] else {})
     return row
 
 

@@ -185,7 +185,7 @@ def test_uncoated_lens_keeps_its_hash_and_none_is_the_bare_surface(doublet, doub
 
 def _zmx(coat: str) -> str:
     return "\n".join(["UNIT MM X W X CM MR CPMM", "ENPD 10", "WAVM 1 0.55 1", "SURF 0", "  DISZ INFINITY",
-                      "SURF 1", "  CURV 0.01", "  DISZ 5", "  GLAS N-BK7", "  DIAM 8", "  STOP", f"  COAT {coat}",
+                      "SURF 1", "  CURV 0.01", "  DISZ 5", "  GLAS N-BK7", "  DIAM 8", "  STOP", f"  COAT {coat} 0",
                       "SURF 2", "  CURV -0.01", "  DISZ 95", "  DIAM 8", "SURF 3", "  DISZ 0"]) + "\n"
 
 
