@@ -7,7 +7,8 @@ Ghost irradiance is geometric (rays binned per pixel): a ghost far from focus is
 diffraction pattern. A ghost is called focused where its RMS radius on the image plane is within
 `FOCUSED_AIRY` Airy radii (1.22 λ N, N the lens's working f-number) of its centroid: there diffraction
 shapes it and its binned image is only its geometric envelope (the table says which). The direct
-image in the HDR PSF is the Fraunhofer PSF (`psf`), normalised to the direct energy 1.
+image in the HDR PSF is the geometric PSF over the window with the Fraunhofer PSF as its core where that
+is sound (`stray_light_psf`), normalised to the direct energy 1.
 """
 from __future__ import annotations
 
@@ -21,8 +22,9 @@ from ..optics import ghost_paths, tracer
 from ..optics.lens import Lens
 from ..optics.paraxial import paraxial
 from .geometric import bin_hits
+from .registry import MAX_SAMPLING
 
-FOCUSED_AIRY = 4.0
+FOCUSED_AIRY = 4.0  # a ghost within this many Airy radii (RMS) is focused: diffraction shapes it
 MAX_FIELD_DEG = 89.0  # the widest polar angle ghosts take (light from the front of surface 1)
 
 
@@ -104,7 +106,7 @@ def launch(lens: Lens, field_deg: tuple[float, float], rays: int) -> ghost_paths
     """rays × rays rays of the field through a regular grid on the plane of surface 1's vertex that holds its
     clear aperture, each with its power (a point source's, per grid cell; only ratios matter)."""
     first = lens.surfaces[0]
-    reach = float(max(abs(first.sag(first.semi_diameter)), 0.0)) + 1.0
+    reach = abs(float(first.sag(first.semi_diameter))) + 1.0  # how far the face stands off its vertex plane
     if lens.field_type.sideways:  # polar fields: the unit direction; from the front only
         d = lens.field_type.incoming(np.array(field_deg, dtype=np.float64))
         if d[2] < math.cos(math.radians(MAX_FIELD_DEG)):
@@ -185,8 +187,8 @@ def ghosts(lens: Lens, field_deg, wavelengths_nm=None, rays: int = ghost_paths.D
     >>> report.ghosts[1].energy > report.ghosts[0].energy  # the two air faces: the brightest ghost
     True
     """
-    if not isinstance(rays, int) or isinstance(rays, bool) or not 8 <= rays <= 4096:
-        raise SolasError(f"rays {rays!r} must be an integer from 8 to 4096 (rays per side of the grid)")
+    if not isinstance(rays, int) or isinstance(rays, bool) or not 8 <= rays <= MAX_SAMPLING:
+        raise SolasError(f"rays {rays!r} must be an integer from 8 to {MAX_SAMPLING} (rays per side of the grid)")
     field_deg = lens.field_type.check(field_deg)
     wavelengths = tuple(lens.check_wavelength(w) for w in (wavelengths_nm or lens.wavelengths_nm))
     start = launch(lens, field_deg, rays)
