@@ -229,7 +229,7 @@ def _ghost(path: tuple[int, int], hit, direct_power: float, airy_mm: float) -> G
                  rms <= FOCUSED_AIRY * airy_mm)
 
 
-DIRECT_SIZE = 33  # pixels per side of the direct image's Fraunhofer PSF inside the HDR window
+DIRECT_SIZES = (33, 17, 9)  # pixels per side of the direct image's Fraunhofer core, the widest sound one
 MAX_FINE = 1024  # the finest direct PSF's pixels per side (its pitch resolves the diffraction pattern)
 GEOMETRIC_RAYS = 512  # rays per side of the direct image's geometric PSF over the whole window
 LOG_DECADES = 8  # the log-scale PNG shows 1e-8 of the peak to the peak
@@ -238,10 +238,10 @@ LOG_DECADES = 8  # the log-scale PNG shows 1e-8 of the peak to the peak
 def stray_light_psf(lens: Lens, report: GhostReport, pitch_um: float, size: int, pupil_samples: int = 256
                     ) -> tuple[np.ndarray, tuple[float, float], list[str]]:
     """The HDR stray-light PSF (size × size, row 0 the top) in fractions of the direct image's energy per
-    pixel: the direct image (geometric over the window; its central `DIRECT_SIZE` pixels the Fraunhofer
-    PSF's, each the sum of a finer PSF's that resolves it, where that PSF is sound) plus every ghost's rays binned and smoothed over
-    their spacing (`smooth`), centred on the first wavelength's chief ray; also that centre
-    (mm) and a note where the direct image's core stays geometric."""
+    pixel: the direct image (geometric over the window, its central pixels the Fraunhofer PSF's where that
+    is sound, `_diffraction_core`) plus every ghost's rays binned and smoothed over their spacing (`smooth`),
+    centred on the first wavelength's chief ray; also that centre (mm) and a note where the direct image's
+    core stays geometric."""
     from .base import check_grid
     from .methods import psf
 
@@ -251,24 +251,33 @@ def stray_light_psf(lens: Lens, report: GhostReport, pitch_um: float, size: int,
                     rays=GEOMETRIC_RAYS)
     cx, cy = geometric.chief_ray_mm
     total = geometric.data * float(geometric.meta["energy_in_grid"])
-    inner = min(size, DIRECT_SIZE) | 1  # odd: its centre pixel is the big grid's
-    # the core by diffraction: the Fraunhofer PSF at a pitch that resolves it (λ N / 2 at the shortest
-    # wavelength), summed into the pixels; kept where it is sound (no warning), else the rays' core stays
-    fine = max(1, min(math.ceil(pitch_um / (0.5 * min(wavelengths) * 1e-3 * _working_f_number(lens))),
-                      MAX_FINE // inner)) | 1
-    direct = psf(lens, field, wavelengths, pitch_um=pitch_um / fine, size=inner * fine, normalization="sum",
-                 pupil_samples=pupil_samples)
-    notes = [f"the direct image is geometric ({GEOMETRIC_RAYS} x {GEOMETRIC_RAYS} rays): its Fraunhofer core "
-             f"is not sound here ({direct.meta['warnings'][0]})"] if direct.meta["warnings"] else []
-    if not notes:
-        lo = size // 2 - inner // 2
-        core = direct.data.reshape(inner, fine, inner, fine).sum(axis=(1, 3)) * float(direct.meta["energy_in_grid"])
-        total[lo:lo + inner, lo:lo + inner] = core
+    core, notes = _diffraction_core(lens, field, wavelengths, pitch_um, size, pupil_samples)
+    if core is not None:
+        lo = size // 2 - len(core) // 2
+        total[lo:lo + len(core), lo:lo + len(core)] = core
     for x, y, w in report.hits.values():
         if len(w) > 1:
             binned, _ = bin_hits([((x - cx) * 1e3, (y - cy) * 1e3, w)], pitch_um, size)
             total += smooth(binned[0] * pitch_um ** 2, ray_spacing_um(x, y, w) / pitch_um)
     return total, (cx, cy), notes
+
+
+def _diffraction_core(lens: Lens, field, wavelengths: list, pitch_um: float, size: int, pupil_samples: int):
+    """The direct image's core by diffraction: the Fraunhofer PSF at a pitch that resolves it (λ N / 2 at the
+    shortest wavelength) summed into the pixels, on the widest of `DIRECT_SIZES` windows where it is sound
+    (no warning); (core, []) or (None, [why the rays' core stays])."""
+    from .methods import psf
+
+    fine_pitch = 0.5 * min(wavelengths) * 1e-3 * _working_f_number(lens)
+    for inner in [min(size, n) | 1 for n in DIRECT_SIZES]:  # odd: its centre pixel is the big grid's
+        fine = max(1, min(math.ceil(pitch_um / fine_pitch), MAX_FINE // inner)) | 1
+        direct = psf(lens, field, wavelengths, pitch_um=pitch_um / fine, size=inner * fine, normalization="sum",
+                     pupil_samples=pupil_samples)
+        if not direct.meta["warnings"]:
+            core = direct.data.reshape(inner, fine, inner, fine).sum(axis=(1, 3))
+            return core * float(direct.meta["energy_in_grid"]), []
+    return None, [f"the direct image is geometric ({GEOMETRIC_RAYS} x {GEOMETRIC_RAYS} rays): its Fraunhofer core "
+                  f"is not sound here ({direct.meta['warnings'][0]})"]
 
 
 def ray_spacing_um(x: np.ndarray, y: np.ndarray, w: np.ndarray) -> float:

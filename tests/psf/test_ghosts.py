@@ -97,6 +97,7 @@ def test_ghosts_command_prints_the_table_and_writes_the_hdr_psf(tmp_path, capsys
     channels, meta = read_exr(out)
     data = channels["Y"]
     assert np.isfinite(data).all() and data.min() >= 0
+    assert abs(data.sum() - 1.0) < 0.01  # the direct image's energy 1 (the window holds it), ghosts ~1e-5 more
     assert len(meta["ghosts"]) == 3 and meta["unit"].startswith("fraction of the direct image")
 
 
