@@ -21,8 +21,8 @@ from ..errors import SolasError
 from .coating import stack_power
 from .lens import Lens
 from .sag import sag, sag_slope
+from .surface import RIM_SLACK
 
-RIM_SLACK = 1e-9  # relative, as the tracer's: a ray aimed exactly at a rim passes
 NEWTON_STEPS = 8
 DEFAULT_RAYS = 128  # rays × rays over the first surface's clear aperture, per path and wavelength
 

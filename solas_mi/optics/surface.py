@@ -22,6 +22,7 @@ from .coating import Coating, coating_from_table
 from . import glass as glass_mod
 from .sag import sag
 
+RIM_SLACK = 1e-9  # relative: a ray aimed exactly at an aperture's rim passes (every tracer)
 MAX_BLADES = 64  # an iris's blades (more: a circle to a part in 1e3 of its radius)
 NORM_RADIUS_MM = (1e-6, 1e6)  # the Qbfs normalisation radius a surface may have (1 nm to 1 km)
 # What a lens file may hold (anything else is a mistake worth naming, e.g. a surface type we do not model)
