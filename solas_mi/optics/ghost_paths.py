@@ -20,10 +20,9 @@ import numpy as np
 from ..errors import SolasError
 from .coating import stack_power
 from .lens import Lens
-from .sag import sag, sag_slope
+from .sag import ASPHERE_ITERATIONS, ASPHERE_TOL_MM, sag, sag_slope
 from .surface import RIM_SLACK
 
-NEWTON_STEPS = 8
 DEFAULT_RAYS = 128  # rays × rays over the first surface's clear aperture, per path and wavelength
 
 
@@ -86,7 +85,7 @@ def _hit(s, zv: float, r: Rays) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.
         t = np.where(b >= 0, cc / (b + root), cc / (b - root))  # the root nearest the vertex plane, either way
     t = np.where(np.isfinite(t), t, 0.0)
     if not s.is_sphere and (any(s.aspheric) or any(s.qbfs)):
-        for _ in range(NEWTON_STEPS):
+        for _ in range(ASPHERE_ITERATIONS):
             px, py = x + t * r.dx, y + t * r.dy
             r2 = px * px + py * py
             f = t * r.dz - sag(r2, **s.shape)
@@ -94,7 +93,9 @@ def _hit(s, zv: float, r: Rays) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.
             with np.errstate(divide="ignore", invalid="ignore"):
                 t = np.where(df != 0, t - f / df, t)
         px, py = x + t * r.dx, y + t * r.dy
-        ok &= np.abs(t * r.dz - sag(px * px + py * py, **s.shape)) < 1e-7
+        r2 = px * px + py * py
+        inside = (1.0 + s.conic) * s.curvature ** 2 * r2 <= 1.0  # within the conic's domain, as the tracer
+        ok &= inside & (np.abs(t * r.dz - sag(r2, **s.shape)) < ASPHERE_TOL_MM) & np.isfinite(t)
     return x + t * r.dx, y + t * r.dy, t * r.dz, ok
 
 

@@ -25,7 +25,7 @@ from ..llvm import import_drjit
 from . import coating, ideal
 from .fields import ANGLE
 from .lens import Lens
-from .sag import sag, sag_slope
+from .sag import ASPHERE_ITERATIONS, ASPHERE_TOL_MM, sag, sag_slope
 from .surface import RIM_SLACK
 from .paraxial import ideal_conjugates, paraxial, pupil_distance
 
@@ -34,8 +34,6 @@ from drjit.llvm import Bool, Float64, UInt32  # noqa: E402
 
 F = Float64
 _RIM_SLACK = RIM_SLACK
-ASPHERE_ITERATIONS = 8  # Newton steps from the conic root; quadratic convergence reaches Float64 rounding
-ASPHERE_TOL_MM = 1e-7  # a ray whose residual |z − sag| stays above this misses the asphere
 
 
 @dataclass

@@ -60,10 +60,15 @@ def test_on_axis_every_ghost_is_centred_and_the_paths_number_n_n_minus_1_over_2(
     assert abs(report.direct_centroid_mm[0]) < 1e-12 and abs(report.direct_centroid_mm[1]) < 1e-12
 
 
-def test_the_direct_path_is_the_tracer_s(doublet):
-    """The ghost tracer's direct path lands where the Dr.Jit tracer's does (same rays, same lens)."""
+@pytest.mark.parametrize("front", [{}, {"conic": -0.6, "aspheric": [2e-6, -1e-9]}, {"qbfs": [0.01, -0.004],
+                                                                                  "norm_radius": 15.0}])
+def test_the_direct_path_is_the_tracer_s(doublet_spec, front):
+    """The ghost tracer's direct path lands where the Dr.Jit tracer's does (same rays, same lens): spheres,
+    and a front face made a conic with even-asphere terms, or a Qbfs asphere (Newton's method both ways)."""
     from solas_mi.optics import tracer
 
+    doublet_spec["surface"][0].update(front)
+    doublet = Lens.from_dict(doublet_spec)
     start = ghosts.launch(doublet, (0.0, 1.5), 16)
     end = ghost_paths.trace(doublet, None, start, 531.0)
     rays = tracer.Rays(*(tracer.F(a) for a in (start.x, start.y, start.z, start.dx, start.dy, start.dz)),
