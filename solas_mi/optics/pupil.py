@@ -253,7 +253,7 @@ def _sphere_target(lens: Lens, b: Bundle, chief: ChiefRays):
     cz = lens.image_z
 
     def target(tr: tracer.Traced):
-        x, y, z, opl, hit = tracer.to_sphere(tr, cx, cy, cz, radius)
+        x, y, _z, _opl, hit = tracer.to_sphere(tr, cx, cy, cz, radius)
         return (x - cx) / radius, (y - cy) / radius, tr.ok & hit
 
     return target
