@@ -6,6 +6,7 @@ Per shipped lens: its reflecting surfaces, the paths C(N, 2), the wall-clock med
 `ghosts(lens, (0, 0.7 × its half field))` after one warm-up call, and every ghost's energy together
 relative to the direct image. The issue's target: the double Gauss in at most 2 s on 2 cores.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -35,8 +36,10 @@ def main() -> None:
             report = ghosts(lens, field)
             times.append(time.perf_counter() - start)
         n = len(reflecting(lens))
-        print(f"| {name} | {n} | {len(report.ghosts)} | {median(times):.2f} | {min(times):.2f}–{max(times):.2f} | "
-              f"{report.total:.3e} |")
+        print(
+            f"| {name} | {n} | {len(report.ghosts)} | {median(times):.2f} | {min(times):.2f}–{max(times):.2f} | "
+            f"{report.total:.3e} |"
+        )
 
 
 if __name__ == "__main__":

@@ -16,6 +16,7 @@ N = n − ik (k ≥ 0 absorbs), tilted admittances η_s = N cos θ, η_p = N / c
 the layers' matrices applied to [1, η_substrate]: r = (η₀B − C)/(η₀B + C), R = |r|²,
 T = 4 η₀ Re(η_substrate) / |η₀B + C|², A = 1 − R − T. The incident medium is lossless.
 """
+
 from __future__ import annotations
 
 import math
@@ -33,9 +34,12 @@ from . import glass as glass_mod
 # M. J. Dodge, "Refractive properties of magnesium fluoride", Appl. Opt. 23, 1980-1985 (1984), valid
 # 0.2-7 µm, as the refractiveindex.info database (CC0 1.0; data/main/MgF2/nk/Dodge-o.yml) gives it.
 MATERIALS = {
-    "MGF2": glass_mod.Glass("COATING:MGF2", "sellmeier", ((0.48755108, 0.39875031, 2.3120353),
-                                                          (0.04338408 ** 2, 0.09461442 ** 2, 23.793604 ** 2)),
-                            (200.0, 7000.0)),
+    "MGF2": glass_mod.Glass(
+        "COATING:MGF2",
+        "sellmeier",
+        ((0.48755108, 0.39875031, 2.3120353), (0.04338408**2, 0.09461442**2, 23.793604**2)),
+        (200.0, 7000.0),
+    ),
 }
 MAX_LAYERS = 200  # layers of a stack (a broadband filter holds tens; each costs one matrix product)
 MAX_EXTINCTION = 20.0  # k of an absorbing layer (metals: aluminium ~ 7 in the visible)
@@ -93,14 +97,21 @@ class Coating:
         """Reflectance and transmittance for light from the medium of index `n_before` (real) into
         `n_after` (real) at `wavelength_nm`, meeting the surface at cos θ = `cos_before` (arrays
         broadcast). Where light leaves glass for a lower index the layers are met in reverse order."""
-        shape = np.broadcast(np.asarray(n_before), np.asarray(n_after), np.asarray(wavelength_nm),
-                             np.asarray(cos_before)).shape
+        shape = np.broadcast(
+            np.asarray(n_before), np.asarray(n_after), np.asarray(wavelength_nm), np.asarray(cos_before)
+        ).shape
         if self.reflectance is not None:
             r, t = np.full(shape, self.reflectance), np.full(shape, 1.0 - self.reflectance)
             return Power(r, r, t, t)
         layers = self.layers[::-1] if np.all(np.asarray(n_before) > np.asarray(n_after)) else self.layers
-        return stack_power(n_before, [layer.index(wavelength_nm) for layer in layers],
-                           [layer.thickness_nm for layer in layers], n_after, wavelength_nm, cos_before)
+        return stack_power(
+            n_before,
+            [layer.index(wavelength_nm) for layer in layers],
+            [layer.thickness_nm for layer in layers],
+            n_after,
+            wavelength_nm,
+            cos_before,
+        )
 
 
 def _forward_root(z: np.ndarray) -> np.ndarray:
@@ -158,24 +169,39 @@ KINDS = Registry("coating kind", default="none")
 """The coating kinds by name (a `solas_mi.registry.Registry`): each entry's function makes a `Coating`
 from a lens file's [surface.coating] table."""
 MATERIAL = Option("material", str, "MGF2", "the layer's material: a coating material (MGF2) or a glass name")
-DESIGN_NM = Option("design_nm", float, 550.0, "the wavelength (nm) at which the layer is a quarter wave thick",
-                   minimum=100.0, maximum=20000.0)
-REFLECTANCE = Option("reflectance", float, 0.0, "the fraction of the power reflected at every wavelength and "
-                                                "angle (the rest is transmitted)", minimum=0.0, maximum=1.0)
+DESIGN_NM = Option(
+    "design_nm",
+    float,
+    550.0,
+    "the wavelength (nm) at which the layer is a quarter wave thick",
+    minimum=100.0,
+    maximum=20000.0,
+)
+REFLECTANCE = Option(
+    "reflectance",
+    float,
+    0.0,
+    "the fraction of the power reflected at every wavelength and angle (the rest is transmitted)",
+    minimum=0.0,
+    maximum=1.0,
+)
 
 
 def layer_glass(material, where: str) -> glass_mod.Glass:
     """The medium of a layer's `material`: one of `MATERIALS` or a glass name (`glass.resolve`)."""
     if not isinstance(material, str) or not material.strip():
-        raise SolasError(f"{where}: layer material {material!r} must be a name: one of {', '.join(MATERIALS)}, "
-                         "or a glass name (catalogue or model:n)")
+        raise SolasError(
+            f"{where}: layer material {material!r} must be a name: one of {', '.join(MATERIALS)}, "
+            "or a glass name (catalogue or model:n)"
+        )
     if material.upper() in MATERIALS:
         return MATERIALS[material.upper()]
     try:
         return glass_mod.resolve(material)
     except SolasError as exc:
-        raise SolasError(f"{where}: layer material: {exc} (or one of the coating materials "
-                         f"{', '.join(MATERIALS)})") from None
+        raise SolasError(
+            f"{where}: layer material: {exc} (or one of the coating materials {', '.join(MATERIALS)})"
+        ) from None
 
 
 @KINDS.register("none", summary="the bare interface: Fresnel's equations")
@@ -183,28 +209,41 @@ def _none(where: str, **_) -> Coating:
     return Coating("none")
 
 
-@KINDS.register("quarter_wave", options=(MATERIAL, DESIGN_NM),
-                summary="one layer of `material`, a quarter wave thick at `design_nm` (nm)")
+@KINDS.register(
+    "quarter_wave",
+    options=(MATERIAL, DESIGN_NM),
+    summary="one layer of `material`, a quarter wave thick at `design_nm` (nm)",
+)
 def _quarter_wave(where: str, material: str, design_nm: float) -> Coating:
     g = layer_glass(material, where)
     thickness = design_nm / (4.0 * float(g.index(design_nm)))
-    return Coating("quarter_wave", (("material", material), ("design_nm", design_nm)),
-                   (Layer(material, g, thickness),))
+    return Coating("quarter_wave", (("material", material), ("design_nm", design_nm)), (Layer(material, g, thickness),))
 
 
-@KINDS.register("ideal", options=(REFLECTANCE,),
-                summary="`reflectance` at every wavelength and angle, the rest transmitted (Zemax's I.xx)")
+@KINDS.register(
+    "ideal",
+    options=(REFLECTANCE,),
+    summary="`reflectance` at every wavelength and angle, the rest transmitted (Zemax's I.xx)",
+)
 def _ideal(where: str, reflectance: float) -> Coating:
     return Coating("ideal", (("reflectance", reflectance),), reflectance=reflectance)
 
 
-@KINDS.register("stack", summary="films air side first: `layers` = [{material, thickness_nm, k}, ...] (k: "
-                                 "extinction coefficient, default 0)", layers=True)
+@KINDS.register(
+    "stack",
+    summary="films air side first: `layers` = [{material, thickness_nm, k}, ...] (k: "
+    "extinction coefficient, default 0)",
+    layers=True,
+)
 def _stack(where: str, layers) -> Coating:
-    if not isinstance(layers, list) or not 1 <= len(layers) <= MAX_LAYERS or \
-            not all(isinstance(row, dict) for row in layers):
-        raise SolasError(f"{where}: layers = {layers!r} must be a list of 1 to {MAX_LAYERS} tables "
-                         "{material, thickness_nm, k}")
+    if (
+        not isinstance(layers, list)
+        or not 1 <= len(layers) <= MAX_LAYERS
+        or not all(isinstance(row, dict) for row in layers)
+    ):
+        raise SolasError(
+            f"{where}: layers = {layers!r} must be a list of 1 to {MAX_LAYERS} tables {{material, thickness_nm, k}}"
+        )
     films = []
     for i, row in enumerate(layers, start=1):
         ident = f"{where}: layer {i}"
@@ -217,8 +256,10 @@ def _stack(where: str, layers) -> Coating:
         if not _number(k) or not 0 <= k <= MAX_EXTINCTION:
             raise SolasError(f"{ident}: k = {k!r} must be an extinction coefficient from 0 to {MAX_EXTINCTION:g}")
         films.append(Layer(str(row.get("material")), layer_glass(row.get("material"), ident), float(d), float(k)))
-    rows = tuple((("material", f.material), ("thickness_nm", f.thickness_nm), *((("k", f.extinction),) if f.extinction
-                                                                                 else ())) for f in films)
+    rows = tuple(
+        (("material", f.material), ("thickness_nm", f.thickness_nm), *((("k", f.extinction),) if f.extinction else ()))
+        for f in films
+    )
     return Coating("stack", (("layers", rows),), tuple(films))  # rows as tuples: a lens is hashable
 
 
@@ -231,8 +272,9 @@ def coating_from_table(value, where: str) -> Coating | None:
     kind's options; None for "none" (the bare surface, the default)."""
     table = {"kind": value} if isinstance(value, str) else value
     if not isinstance(table, dict) or "kind" not in table:
-        raise SolasError(f"{where}: coating = {value!r} must be a kind ({', '.join(KINDS)}) or a table with "
-                         "kind and its options")
+        raise SolasError(
+            f"{where}: coating = {value!r} must be a kind ({', '.join(KINDS)}) or a table with kind and its options"
+        )
     given = {k: v for k, v in table.items() if k != "kind"}
     try:
         entry = KINDS.get(table["kind"])
@@ -240,7 +282,9 @@ def coating_from_table(value, where: str) -> Coating | None:
         options = KINDS.options(entry.name, given, strict=True)
     except SolasError as exc:
         raise SolasError(f"{where}: coating: {exc}") from None
-    coating = entry.function(f"{where}: coating", **options, **({"layers": layers} if entry.extra.get("layers") else {}))
+    coating = entry.function(
+        f"{where}: coating", **options, **({"layers": layers} if entry.extra.get("layers") else {})
+    )
     return None if coating.kind == "none" else coating
 
 
@@ -250,10 +294,12 @@ def zemax_coating(name: str, where: str) -> dict:
     text = name.strip()
     if text.upper().startswith("I.") and text[2:].isdigit():
         return {"kind": "ideal", "reflectance": float(f"{1.0 - float('0' + text[1:]):.12g}")}  # 1 − 0.99: 0.01
-    raise SolasError(f"{where}: COAT {text!r} names a coating of a Zemax coating file (COATING.DAT, or the one "
-                     "COFN names), which the lens file does not hold; only the ideal I.xx coatings are read: "
-                     "state it in a .toml lens file as coating = {kind = ..., ...}, or delete the COAT line "
-                     "for a bare surface")
+    raise SolasError(
+        f"{where}: COAT {text!r} names a coating of a Zemax coating file (COATING.DAT, or the one "
+        "COFN names), which the lens file does not hold; only the ideal I.xx coatings are read: "
+        "state it in a .toml lens file as coating = {kind = ..., ...}, or delete the COAT line "
+        "for a bare surface"
+    )
 
 
 def to_zemax(coating: Coating | None, where: str) -> list[str]:
@@ -263,8 +309,10 @@ def to_zemax(coating: Coating | None, where: str) -> list[str]:
         return []
     digits = f"{1.0 - (coating.reflectance or 0.0):.12f}".rstrip("0")
     if coating.kind != "ideal" or not digits.startswith("0.") or digits == "0.":
-        raise SolasError(f"{where}: a {coating.kind} coating has no .zmx form here (only the ideal I.xx, "
-                         "0 < T < 1); save it as .toml")
+        raise SolasError(
+            f"{where}: a {coating.kind} coating has no .zmx form here (only the ideal I.xx, "
+            "0 < T < 1); save it as .toml"
+        )
     return [f"  COAT I.{digits[2:]}"]
 
 
@@ -274,8 +322,9 @@ def to_zemax(coating: Coating | None, where: str) -> list[str]:
 TABLE_RANGE_NM, TABLE_STEP_NM, TABLE_COS = (300.0, 1100.0), 1.0, 513
 
 
-def transmittance_table(coating: Coating, before: glass_mod.Glass, after: glass_mod.Glass
-                        ) -> tuple[float, float, int, np.ndarray]:
+def transmittance_table(
+    coating: Coating, before: glass_mod.Glass, after: glass_mod.Glass
+) -> tuple[float, float, int, np.ndarray]:
     """The unpolarised transmittance of `coating` from medium `before` into `after` on a grid, as the
     tracer interpolates it: (first wavelength nm, step nm, wavelengths, values (wavelengths × TABLE_COS) by
     cos θ from 0 to 1 in the medium of incidence). T is reciprocal: the same either way through."""
@@ -297,18 +346,28 @@ def metadata(lens) -> dict:
     if coated:
         w = lens.primary_wavelength
         media = [lens.object_glass] + [s.glass for s in lens.surfaces]
-        crossings = [(s, float(media[k].index(w)), float(media[k + 1].index(w)))
-                     for k, s in enumerate(lens.surfaces) if media[k] != media[k + 1]]
-        with_ = np.prod([(s.coating.power(a, b, w, 1.0) if s.coating else fresnel(a, b, 1.0)).transmittance
-                         for s, a, b in crossings])
+        crossings = [
+            (s, float(media[k].index(w)), float(media[k + 1].index(w)))
+            for k, s in enumerate(lens.surfaces)
+            if media[k] != media[k + 1]
+        ]
+        with_ = np.prod(
+            [
+                (s.coating.power(a, b, w, 1.0) if s.coating else fresnel(a, b, 1.0)).transmittance
+                for s, a, b in crossings
+            ]
+        )
         bare = np.prod([fresnel(a, b, 1.0).transmittance for _, a, b in crossings])
         kinds = "; ".join(f"surface {k}: {s.coating.kind} {dict(s.coating.values)}" for k, s in coated)
-        out["coatings"] = (f"{kinds}; on-axis transmittance at {w:g} nm {float(with_):.4f} (bare surfaces: "
-                           f"{float(bare):.4f})")
+        out["coatings"] = (
+            f"{kinds}; on-axis transmittance at {w:g} nm {float(with_):.4f} (bare surfaces: {float(bare):.4f})"
+        )
     stop = lens.surfaces[lens.stop_index]
     if stop.blades:
         share = stop.blades / (2.0 * math.pi) * math.sin(2.0 * math.pi / stop.blades)
-        out["iris"] = (f"{stop.blades} straight blades, first corner at {stop.blade_rotation:g} deg: a regular "
-                       f"{stop.blades}-gon inside the stop's circle, {share:.4f} of its area (f/# and pupils: the "
-                       "circle's)")
+        out["iris"] = (
+            f"{stop.blades} straight blades, first corner at {stop.blade_rotation:g} deg: a regular "
+            f"{stop.blades}-gon inside the stop's circle, {share:.4f} of its area (f/# and pupils: the "
+            "circle's)"
+        )
     return out

@@ -10,6 +10,7 @@ Surfaces: spheres, planes, conics in closed form, even aspheres and Qbfs by Newt
 conic root (as `tracer`), met from either side: the root nearest the vertex plane. Ideal thin lenses
 have no glass to reflect or to cross backwards and are refused. Lengths in mm, wavelengths in nm.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -45,8 +46,10 @@ def reflecting(lens: Lens) -> list[int]:
     """The surfaces (0-based) that reflect: where the medium changes; SolasError for an ideal thin lens."""
     ideal = [k + 1 for k, s in enumerate(lens.surfaces) if s.ideal]
     if ideal:
-        raise SolasError(f"lens {lens.name}: surface {ideal[0]} is an ideal thin lens (focal_length), which has no "
-                         "glass to reflect from or cross backwards; ghosts need real surfaces")
+        raise SolasError(
+            f"lens {lens.name}: surface {ideal[0]} is an ideal thin lens (focal_length), which has no "
+            "glass to reflect from or cross backwards; ghosts need real surfaces"
+        )
     media = [lens.object_glass] + [s.glass for s in lens.surfaces]
     return [k for k in range(len(lens.surfaces)) if media[k] != media[k + 1]]
 
@@ -63,8 +66,13 @@ def events(lens: Lens, path: tuple[int, int] | None) -> list[tuple[int, bool]]:
     if path is None:
         return [(k, False) for k in range(n)]
     j, i = path
-    return ([(k, False) for k in range(j)] + [(j, True)] + [(k, False) for k in range(j - 1, i, -1)]
-            + [(i, True)] + [(k, False) for k in range(i + 1, n)])
+    return (
+        [(k, False) for k in range(j)]
+        + [(j, True)]
+        + [(k, False) for k in range(j - 1, i, -1)]
+        + [(i, True)]
+        + [(k, False) for k in range(i + 1, n)]
+    )
 
 
 def _hit(s, zv: float, r: Rays) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
@@ -94,7 +102,7 @@ def _hit(s, zv: float, r: Rays) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.
                 t = np.where(df != 0, t - f / df, t)
         px, py = x + t * r.dx, y + t * r.dy
         r2 = px * px + py * py
-        inside = (1.0 + s.conic) * s.curvature ** 2 * r2 <= 1.0  # within the conic's domain, as the tracer
+        inside = (1.0 + s.conic) * s.curvature**2 * r2 <= 1.0  # within the conic's domain, as the tracer
         ok &= inside & (np.abs(t * r.dz - sag(r2, **s.shape)) < ASPHERE_TOL_MM) & np.isfinite(t)
     return x + t * r.dx, y + t * r.dy, t * r.dz, ok
 
@@ -184,8 +192,11 @@ def _index(glass, wavelength_nm: float) -> float:
 
 
 def _copy(rays: Rays) -> Rays:
-    return Rays(*(np.array(a, dtype=np.float64) for a in (rays.x, rays.y, rays.z, rays.dx, rays.dy, rays.dz,
-                                                          rays.power)), rays.alive.copy(), np.arange(len(rays.x)))
+    return Rays(
+        *(np.array(a, dtype=np.float64) for a in (rays.x, rays.y, rays.z, rays.dx, rays.dy, rays.dz, rays.power)),
+        rays.alive.copy(),
+        np.arange(len(rays.x)),
+    )
 
 
 def _alive(r: Rays, *more: np.ndarray) -> tuple[Rays, tuple[np.ndarray, ...]]:
@@ -194,7 +205,8 @@ def _alive(r: Rays, *more: np.ndarray) -> tuple[Rays, tuple[np.ndarray, ...]]:
         return r, more
     keep = np.flatnonzero(r.alive)
     return Rays(*(a[keep] for a in (r.x, r.y, r.z, r.dx, r.dy, r.dz, r.power, r.alive, r.ids))), tuple(
-        a[keep] for a in more)
+        a[keep] for a in more
+    )
 
 
 def _bend(r: Rays, normal, cosi, n_in, n_out, wavelength_nm: float, reflect: bool, ok) -> Rays:
@@ -208,5 +220,6 @@ def _bend(r: Rays, normal, cosi, n_in, n_out, wavelength_nm: float, reflect: boo
     mu = _index(n_in, wavelength_nm) / _index(n_out, wavelength_nm)
     k2 = 1.0 - mu * mu * (1.0 - cosi * cosi)
     g = np.sqrt(np.maximum(k2, 0.0)) - mu * cosi
-    return Rays(r.x, r.y, r.z, mu * r.dx + g * nx, mu * r.dy + g * ny, mu * r.dz + g * nz, r.power, ok & (k2 >= 0),
-                r.ids)
+    return Rays(
+        r.x, r.y, r.z, mu * r.dx + g * nx, mu * r.dy + g * ny, mu * r.dz + g * nz, r.power, ok & (k2 >= 0), r.ids
+    )

@@ -176,7 +176,7 @@ def surface_from_row(row: dict, i: int, where: str, catalogues: tuple[str, ...],
     coating = coating_from_table(row["coating"], ident) if "coating" in row else None
     blades, rotation = row.get("blades", 0), finite_number(row, "blade_rotation", ident, "degrees", 0.0)
     if not isinstance(blades, int) or isinstance(blades, bool) or not (blades == 0 or 3 <= blades <= MAX_BLADES) \
-            or (blades or "blade_rotation" in row) and not stop:
+            or ((blades or "blade_rotation" in row) and not stop):
         raise SolasError(f"{ident}: blades = {blades!r} must be 0 (a round stop) or an integer from 3 to {MAX_BLADES}, "
                          "with blade_rotation (degrees), on the stop surface only")
     return Surface(label, radius, thickness, diameter, str(material), g, stop, conic, aspheric, qbfs, norm_radius,

@@ -10,6 +10,7 @@ shapes it and its binned image is only its geometric envelope (the table says wh
 image in the HDR PSF is the geometric PSF over the window with the Fraunhofer PSF as its core where that
 is sound (`stray_light_psf`), normalised to the direct energy 1.
 """
+
 from __future__ import annotations
 
 import math
@@ -87,17 +88,21 @@ class GhostReport:
             One line per ghost (its surfaces j, i, energy, centroid, RMS radius, best focus, focused),
             then their sum.
         """
-        lines = [f"ghosts of {len(self.ghosts)} two-reflection paths, field ({self.field_deg[0]:g}, "
-                 f"{self.field_deg[1]:g}) deg, {', '.join(f'{w:g}' for w in self.wavelengths_nm)} nm; energy "
-                 f"relative to the direct image (which carries {self.direct_power:.4f} of the launch grid's light, a "
-                 "square over surface 1)",
-                 f"{'path j,i':>9} {'energy':>10} {'x mm':>10} {'y mm':>10} {'rms mm':>9} {'focus mm':>10} focused"]
+        lines = [
+            f"ghosts of {len(self.ghosts)} two-reflection paths, field ({self.field_deg[0]:g}, "
+            f"{self.field_deg[1]:g}) deg, {', '.join(f'{w:g}' for w in self.wavelengths_nm)} nm; energy "
+            f"relative to the direct image (which carries {self.direct_power:.4f} of the launch grid's light, a "
+            "square over surface 1)",
+            f"{'path j,i':>9} {'energy':>10} {'x mm':>10} {'y mm':>10} {'rms mm':>9} {'focus mm':>10} focused",
+        ]
         for g in sorted(self.ghosts, key=lambda g: -g.energy):
             if g.energy == 0:
                 lines.append(f"{g.surfaces[0]:>5},{g.surfaces[1]:<3} {0.0:10.3e}  (no ray of the grid arrives)")
                 continue
-            lines.append(f"{g.surfaces[0]:>5},{g.surfaces[1]:<3} {g.energy:10.3e} {g.centroid_mm[0]:10.4f} "
-                         f"{g.centroid_mm[1]:10.4f} {g.rms_mm:9.4f} {g.focus_mm:10.3f} {'yes' if g.focused else 'no'}")
+            lines.append(
+                f"{g.surfaces[0]:>5},{g.surfaces[1]:<3} {g.energy:10.3e} {g.centroid_mm[0]:10.4f} "
+                f"{g.centroid_mm[1]:10.4f} {g.rms_mm:9.4f} {g.focus_mm:10.3f} {'yes' if g.focused else 'no'}"
+            )
         lines.append(f"all ghosts: {self.total:.3e} of the direct image")
         return "\n".join(lines)
 
@@ -110,38 +115,48 @@ def launch(lens: Lens, field_deg: tuple[float, float], rays: int) -> ghost_paths
     if lens.field_type.sideways:  # polar fields: the unit direction; from the front only
         d = lens.field_type.incoming(np.array(field_deg, dtype=np.float64))
         if d[2] < math.cos(math.radians(MAX_FIELD_DEG)):
-            raise SolasError(f"field ({field_deg[0]:g}, {field_deg[1]:g}) deg: ghosts take light that meets surface 1 "
-                             f"from the front, a polar angle below {MAX_FIELD_DEG:g} deg")
+            raise SolasError(
+                f"field ({field_deg[0]:g}, {field_deg[1]:g}) deg: ghosts take light that meets surface 1 "
+                f"from the front, a polar angle below {MAX_FIELD_DEG:g} deg"
+            )
         tan = d[:2] / d[2]
     else:
         tan = tracer.field_tangents(np.array(field_deg, dtype=np.float64))
     half = first.semi_diameter * 1.001 + reach * float(np.hypot(*tan))
     t = (np.arange(rays) + 0.5) / rays * 2.0 - 1.0
-    gx, gy = np.meshgrid(half * t, half * t)
-    gx, gy = gx.ravel(), gy.ravel()
+    grid_x, grid_y = np.meshgrid(half * t, half * t)
+    gx, gy = grid_x.ravel(), grid_y.ravel()
     z0 = tracer.launch_plane_z(lens)
     if lens.at_infinity:
         (dx, dy, dz), _, _ = tracer.beam_basis(tan[0], tan[1], math.sqrt)
         dx, dy, dz = np.full_like(gx, dx), np.full_like(gx, dy), np.full_like(gx, dz)
         power = np.ones_like(gx)
     else:
-        ox, oy = tracer.object_points(lens, np.array([field_deg], dtype=np.float64))[0]
+        points = tracer.object_points(lens, np.array([field_deg], dtype=np.float64))
+        assert points is not None  # a finite object has its points
+        ox, oy = points[0]
         vx, vy, vz = gx - ox, gy - oy, np.full_like(gx, lens.object_distance)
         dist = np.sqrt(vx * vx + vy * vy + vz * vz)
         sign = math.copysign(1.0, lens.object_distance)  # a virtual object: rays converge toward it
         dx, dy, dz = sign * vx / dist, sign * vy / dist, sign * vz / dist
-        power = abs(lens.object_distance) / dist ** 3
+        power = abs(lens.object_distance) / dist**3
     s = z0 / dz
-    return ghost_paths.Rays(gx + s * dx, gy + s * dy, np.full_like(gx, z0), dx, dy, dz, power,
-                            np.ones(gx.shape, dtype=bool))
+    return ghost_paths.Rays(
+        gx + s * dx, gy + s * dy, np.full_like(gx, z0), dx, dy, dz, power, np.ones(gx.shape, dtype=bool)
+    )
 
 
 def _on_image(lens: Lens, r: ghost_paths.Rays) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The rays that arrive, on the image plane: x, y (mm), their power, and their direction tangents."""
     keep = r.alive & (r.dz > 0) & (r.power > 0)
     t = (lens.image_z - r.z[keep]) / r.dz[keep]
-    return (r.x[keep] + t * r.dx[keep], r.y[keep] + t * r.dy[keep], r.power[keep], r.dx[keep] / r.dz[keep],
-            r.dy[keep] / r.dz[keep])
+    return (
+        r.x[keep] + t * r.dx[keep],
+        r.y[keep] + t * r.dy[keep],
+        r.power[keep],
+        r.dx[keep] / r.dz[keep],
+        r.dy[keep] / r.dz[keep],
+    )
 
 
 def _best_focus(x, y, w, tx, ty) -> float:
@@ -192,21 +207,33 @@ def ghosts(lens: Lens, field_deg, wavelengths_nm=None, rays: int = ghost_paths.D
     field_deg = lens.field_type.check(field_deg)
     wavelengths = tuple(lens.check_wavelength(w) for w in (wavelengths_nm or lens.wavelengths_nm))
     start = launch(lens, field_deg, rays)
-    hits = {}
-    traced = [ghost_paths.trace_all(lens, start, w) for w in wavelengths]
-    for path in [None, *ghost_paths.paths(lens)]:
-        parts = [_on_image(lens, t[path]) for t in traced]
-        hits[path] = tuple(np.concatenate([p[i] for p in parts]) for i in range(5))
+    hits = _path_hits(lens, start, wavelengths)
     direct = hits.pop(None)
     if direct[2].sum() <= 0:
         raise SolasError(f"no direct light reaches the image at field ({field_deg[0]:g}, {field_deg[1]:g}) deg")
     direct_power = float(direct[2].sum())
     airy = 1.22 * max(wavelengths) * 1e-6 * _working_f_number(lens)
     table = [_ghost(path, hit, direct_power, airy) for path, hit in hits.items()]
-    centroid = tuple(float(np.average(a, weights=direct[2])) for a in direct[:2])
+    centroid = (float(np.average(direct[0], weights=direct[2])), float(np.average(direct[1], weights=direct[2])))
     # each ghost ray's power as a fraction of the direct image's energy, for the HDR PSF
-    return GhostReport(field_deg, wavelengths, direct_power / (len(wavelengths) * start.power.sum()), centroid, table,
-                       {p: (h[0], h[1], h[2] / direct_power) for p, h in hits.items()})
+    return GhostReport(
+        field_deg,
+        wavelengths,
+        direct_power / (len(wavelengths) * start.power.sum()),
+        centroid,
+        table,
+        {p: (h[0], h[1], h[2] / direct_power) for p, h in hits.items()},
+    )
+
+
+def _path_hits(lens: Lens, start: ghost_paths.Rays, wavelengths: tuple[float, ...]) -> dict:
+    """Per path (None: the direct one), its rays on the image plane at every wavelength together: x, y (mm),
+    power and direction tangents (`_on_image`)."""
+    traced = [ghost_paths.trace_all(lens, start, w) for w in wavelengths]
+    return {
+        path: tuple(np.concatenate(parts) for parts in zip(*(_on_image(lens, t[path]) for t in traced)))
+        for path in [None, *ghost_paths.paths(lens)]
+    }
 
 
 def _working_f_number(lens: Lens) -> float:
@@ -225,8 +252,14 @@ def _ghost(path: tuple[int, int], hit, direct_power: float, airy_mm: float) -> G
         return Ghost(surfaces, 0.0, (math.nan, math.nan), math.nan, math.nan, False)
     cx, cy = float(np.average(x, weights=w)), float(np.average(y, weights=w))
     rms = float(math.sqrt(np.average((x - cx) ** 2 + (y - cy) ** 2, weights=w)))
-    return Ghost(surfaces, float(w.sum() / direct_power), (cx, cy), rms, _best_focus(x, y, w, tx, ty),
-                 rms <= FOCUSED_AIRY * airy_mm)
+    return Ghost(
+        surfaces,
+        float(w.sum() / direct_power),
+        (cx, cy),
+        rms,
+        _best_focus(x, y, w, tx, ty),
+        rms <= FOCUSED_AIRY * airy_mm,
+    )
 
 
 DIRECT_SIZES = (33, 17, 9)  # pixels per side of the direct image's Fraunhofer core, the widest sound one
@@ -235,8 +268,9 @@ GEOMETRIC_RAYS = 512  # rays per side of the direct image's geometric PSF over t
 LOG_DECADES = 8  # the log-scale PNG shows 1e-8 of the peak to the peak
 
 
-def stray_light_psf(lens: Lens, report: GhostReport, pitch_um: float, size: int, pupil_samples: int = 256
-                    ) -> tuple[np.ndarray, tuple[float, float], list[str]]:
+def stray_light_psf(
+    lens: Lens, report: GhostReport, pitch_um: float, size: int, pupil_samples: int = 256
+) -> tuple[np.ndarray, tuple[float, float], list[str]]:
     """The HDR stray-light PSF (size × size, row 0 the top) in fractions of the direct image's energy per
     pixel: the direct image (geometric over the window, its central pixels the Fraunhofer PSF's where that
     is sound, `_diffraction_core`) plus every ghost's rays binned and smoothed over their spacing (`smooth`),
@@ -247,18 +281,26 @@ def stray_light_psf(lens: Lens, report: GhostReport, pitch_um: float, size: int,
 
     check_grid(pitch_um, size)
     field, wavelengths = report.field_deg, list(report.wavelengths_nm)
-    geometric = psf(lens, field, wavelengths, pitch_um=pitch_um, size=size, normalization="sum", method="geometric",
-                    rays=GEOMETRIC_RAYS)
+    geometric = psf(
+        lens,
+        field,
+        wavelengths,
+        pitch_um=pitch_um,
+        size=size,
+        normalization="sum",
+        method="geometric",
+        rays=GEOMETRIC_RAYS,
+    )
     cx, cy = geometric.chief_ray_mm
     total = geometric.data * float(geometric.meta["energy_in_grid"])
     core, notes = _diffraction_core(lens, field, wavelengths, pitch_um, size, pupil_samples)
     if core is not None:
         lo = size // 2 - len(core) // 2
-        total[lo:lo + len(core), lo:lo + len(core)] = core
+        total[lo : lo + len(core), lo : lo + len(core)] = core
     for x, y, w in report.hits.values():
         if len(w) > 1:
             binned, _ = bin_hits([((x - cx) * 1e3, (y - cy) * 1e3, w)], pitch_um, size)
-            total += smooth(binned[0] * pitch_um ** 2, ray_spacing_um(x, y, w) / pitch_um)
+            total += smooth(binned[0] * pitch_um**2, ray_spacing_um(x, y, w) / pitch_um)
     return total, (cx, cy), notes
 
 
@@ -271,13 +313,22 @@ def _diffraction_core(lens: Lens, field, wavelengths: list, pitch_um: float, siz
     fine_pitch = 0.5 * min(wavelengths) * 1e-3 * _working_f_number(lens)
     for inner in [min(size, n) | 1 for n in DIRECT_SIZES]:  # odd: its centre pixel is the big grid's
         fine = max(1, min(math.ceil(pitch_um / fine_pitch), MAX_FINE // inner)) | 1
-        direct = psf(lens, field, wavelengths, pitch_um=pitch_um / fine, size=inner * fine, normalization="sum",
-                     pupil_samples=pupil_samples)
+        direct = psf(
+            lens,
+            field,
+            wavelengths,
+            pitch_um=pitch_um / fine,
+            size=inner * fine,
+            normalization="sum",
+            pupil_samples=pupil_samples,
+        )
         if not direct.meta["warnings"]:
             core = direct.data.reshape(inner, fine, inner, fine).sum(axis=(1, 3))
             return core * float(direct.meta["energy_in_grid"]), []
-    return None, [f"the direct image is geometric ({GEOMETRIC_RAYS} x {GEOMETRIC_RAYS} rays): its Fraunhofer core "
-                  f"is not sound here ({direct.meta['warnings'][0]})"]
+    return None, [
+        f"the direct image is geometric ({GEOMETRIC_RAYS} x {GEOMETRIC_RAYS} rays): its Fraunhofer core "
+        f"is not sound here ({direct.meta['warnings'][0]})"
+    ]
 
 
 def ray_spacing_um(x: np.ndarray, y: np.ndarray, w: np.ndarray) -> float:
@@ -305,14 +356,28 @@ def write(report: GhostReport, data: np.ndarray, centre_mm: tuple[float, float],
     from ..imageio import write_exr, write_png
     from ..outputs import written_together
 
-    meta = {"field_deg": list(report.field_deg), "wavelengths_nm": list(report.wavelengths_nm),
-            "pitch_um": pitch_um, "size": len(data), "chief_ray_origin_mm": list(centre_mm),
-            "unit": "fraction of the direct image's energy per pixel",
-            "ghosts": [{"surfaces": list(g.surfaces), "energy": g.energy, "centroid_mm": list(g.centroid_mm),
-                        "rms_mm": g.rms_mm, "focus_mm": g.focus_mm, "focused": g.focused} for g in report.ghosts
-                       if g.energy > 0],
-            "irradiance": "geometric for the ghosts (binned rays), Fraunhofer for the direct image"}
-    shown = np.log10(np.maximum(data / max(float(data.max()), 1e-300), 10.0 ** -LOG_DECADES)) / LOG_DECADES + 1.0
+    meta = {
+        "field_deg": list(report.field_deg),
+        "wavelengths_nm": list(report.wavelengths_nm),
+        "pitch_um": pitch_um,
+        "size": len(data),
+        "chief_ray_origin_mm": list(centre_mm),
+        "unit": "fraction of the direct image's energy per pixel",
+        "ghosts": [
+            {
+                "surfaces": list(g.surfaces),
+                "energy": g.energy,
+                "centroid_mm": list(g.centroid_mm),
+                "rms_mm": g.rms_mm,
+                "focus_mm": g.focus_mm,
+                "focused": g.focused,
+            }
+            for g in report.ghosts
+            if g.energy > 0
+        ],
+        "irradiance": "geometric for the ghosts (binned rays), Fraunhofer for the direct image",
+    }
+    shown = np.log10(np.maximum(data / max(float(data.max()), 1e-300), 10.0**-LOG_DECADES)) / LOG_DECADES + 1.0
     with written_together(exr, png) as (tmp_exr, tmp_png):
         write_exr(tmp_exr, {"Y": data.astype(np.float32)}, meta)
         write_png(tmp_png, shown, encoded=True)

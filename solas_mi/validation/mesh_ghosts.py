@@ -6,6 +6,7 @@ none, the direct image; two, the ghost (j, i). Per ghost: its energy relative to
 its centroid on the image plane, as `stray_light.ghosts` gives them for uncoated lenses (the meshes have
 bare glass). Lengths in mm.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -28,8 +29,10 @@ def mesh_ghosts(lens, field_deg, wavelength_nm: float, rays: int, passes: int, s
     sequential = ghost_paths.trace_all(lens, start, wavelength_nm)
     reach = 2.0 * max(abs(lens.image_z), max(s.semi_diameter for s in lens.surfaces)) + 10.0
     scene = lens_geometry(lens, image_radius=reach, fresnel="sample")
-    out = {k: {"observed": 0.0, "expected": passes * float(r.power.sum()), "shifts_um": [], "rays": 0}
-           for k, r in sequential.items()}
+    out = {
+        k: {"observed": 0.0, "expected": passes * float(r.power.sum()), "shifts_um": [], "rays": 0}
+        for k, r in sequential.items()
+    }
     for p in range(passes):
         x, y, ids, keys = _pass(scene, lens, start, wavelength_nm, seed + p)
         for k in set(keys):
@@ -51,8 +54,11 @@ def _shifts_um(lens, seq, ids: np.ndarray, x: np.ndarray, y: np.ndarray) -> list
     out = []
     for i, px, py in zip(ids, x, y):
         n = where.get(int(i))
-        out.append(float("inf") if n is None else
-                   1e3 * float(np.hypot(px - seq.x[n] - t[n] * seq.dx[n], py - seq.y[n] - t[n] * seq.dy[n])))
+        out.append(
+            float("inf")
+            if n is None
+            else 1e3 * float(np.hypot(px - seq.x[n] - t[n] * seq.dx[n], py - seq.y[n] - t[n] * seq.dy[n]))
+        )
     return out
 
 
@@ -63,8 +69,12 @@ def _pass(scene, lens, start, wavelength_nm: float, seed: int):
     import mitsuba as mi
 
     n = len(start.x)
-    ray = mi.Ray3f(mi.Point3f(start.x, start.y, start.z), mi.Vector3f(start.dx, start.dy, start.dz), 0.0,
-                   mi.Spectrum(dr.opaque(mi.Float, float(wavelength_nm))))
+    ray = mi.Ray3f(
+        mi.Point3f(start.x, start.y, start.z),
+        mi.Vector3f(start.dx, start.dy, start.dz),
+        0.0,
+        mi.Spectrum(dr.opaque(mi.Float, float(wavelength_nm))),
+    )
     sampler = mi.load_dict({"type": "independent"})
     sampler.seed(dr.opaque(mi.UInt32, seed), n)
     turned_at = {"count": mi.UInt32(0), "first": mi.Point3f(dr.nan), "second": mi.Point3f(dr.nan)}
@@ -77,14 +87,37 @@ def _pass(scene, lens, start, wavelength_nm: float, seed: int):
 
     out_o, out_d, out_w = walk(scene, ray, sampler, 3 * len(lens.surfaces) + 6, watch)
     count, first, second = turned_at["count"], turned_at["first"], turned_at["second"]
-    ox, oy, oz, dx, dy, dz, w, turns, *points = (np.asarray(a, dtype=np.float64) for a in (
-        out_o.x, out_o.y, out_o.z, out_d.x, out_d.y, out_d.z, out_w, count, first.x, first.y, first.z, second.x,
-        second.y, second.z))
+    ox, oy, oz, dx, dy, dz, w, turns, *points = (
+        np.asarray(a, dtype=np.float64)
+        for a in (
+            out_o.x,
+            out_o.y,
+            out_o.z,
+            out_d.x,
+            out_d.y,
+            out_d.z,
+            out_w,
+            count,
+            first.x,
+            first.y,
+            first.z,
+            second.x,
+            second.y,
+            second.z,
+        )
+    )
     keep = (dz > 0) & (w > 0) & ((turns == 0) | (turns == 2))
     t = (lens.image_z - oz) / np.where(keep, dz, 1.0)
     sel = np.flatnonzero(keep)
-    keys = [None if turns[i] == 0 else (_surface(lens, points[0][i], points[1][i], points[2][i]),
-                                        _surface(lens, points[3][i], points[4][i], points[5][i])) for i in sel]
+    keys = [
+        None
+        if turns[i] == 0
+        else (
+            _surface(lens, points[0][i], points[1][i], points[2][i]),
+            _surface(lens, points[3][i], points[4][i], points[5][i]),
+        )
+        for i in sel
+    ]
     return ox[sel] + t[sel] * dx[sel], oy[sel] + t[sel] * dy[sel], sel, keys
 
 

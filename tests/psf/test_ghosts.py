@@ -2,6 +2,7 @@
 ghost energy R₁R₂ (relative to the direct image; R₁R₂T₁T₂ of the light that enters) and its lateral
 displacement 2 t tan θ' at field θ, with bare faces and coated ones; every ghost of a rotationally
 symmetric lens on axis centred on the axis; the path count N(N−1)/2; the command's table and files."""
+
 import math
 
 import numpy as np
@@ -17,13 +18,16 @@ THICKNESS = 8.0
 
 def plate(front=None, back=None):
     """A stop in air, then a plane-parallel N-BK7 plate wide enough that no face clips the ghost."""
-    faces = [{"radius": 0.0, "thickness": THICKNESS, "diameter": 80.0, "material": "N-BK7"},
-             {"radius": 0.0, "thickness": 50.0, "diameter": 80.0}]
+    faces = [
+        {"radius": 0.0, "thickness": THICKNESS, "diameter": 80.0, "material": "N-BK7"},
+        {"radius": 0.0, "thickness": 50.0, "diameter": 80.0},
+    ]
     for face, c in zip(faces, (front, back)):
         if c is not None:
             face["coating"] = c
-    return Lens.from_dict({"name": "plate", "surface": [
-        {"radius": 0.0, "thickness": 5.0, "diameter": 10.0, "stop": True}, *faces]})
+    return Lens.from_dict(
+        {"name": "plate", "surface": [{"radius": 0.0, "thickness": 5.0, "diameter": 10.0, "stop": True}, *faces]}
+    )
 
 
 @pytest.mark.parametrize("coated", [False, True])
@@ -37,11 +41,17 @@ def test_plate_ghost_energy_and_displacement_are_the_closed_forms(coated, deg):
     assert ghost.surfaces == (3, 2)
     n = float(lens.surfaces[1].glass.index(wavelength))
     sin_t = math.sin(math.radians(deg)) / n
-    cos_t, cos_a = math.sqrt(1.0 - sin_t ** 2), math.cos(math.radians(deg))
-    inside = (lens.surfaces[1].coating.power(n, 1.0, wavelength, cos_t) if coated
-              else coating.stack_power(n, [], [], 1.0, wavelength, cos_t))
-    entering = (lens.surfaces[1].coating.power(1.0, n, wavelength, cos_a) if coated
-                else coating.stack_power(1.0, [], [], n, wavelength, cos_a))
+    cos_t, cos_a = math.sqrt(1.0 - sin_t**2), math.cos(math.radians(deg))
+    inside = (
+        lens.surfaces[1].coating.power(n, 1.0, wavelength, cos_t)
+        if coated
+        else coating.stack_power(n, [], [], 1.0, wavelength, cos_t)
+    )
+    entering = (
+        lens.surfaces[1].coating.power(1.0, n, wavelength, cos_a)
+        if coated
+        else coating.stack_power(1.0, [], [], n, wavelength, cos_a)
+    )
     r = float(inside.reflectance)  # both reflections: from the glass side at θ' (the faces are alike)
     t = float(entering.transmittance) * float(inside.transmittance)
     assert abs(ghost.energy - r * r) <= 1e-9 * r * r
@@ -60,8 +70,9 @@ def test_on_axis_every_ghost_is_centred_and_the_paths_number_n_n_minus_1_over_2(
     assert abs(report.direct_centroid_mm[0]) < 1e-12 and abs(report.direct_centroid_mm[1]) < 1e-12
 
 
-@pytest.mark.parametrize("front", [{}, {"conic": -0.6, "aspheric": [2e-6, -1e-9]}, {"qbfs": [0.01, -0.004],
-                                                                                  "norm_radius": 15.0}])
+@pytest.mark.parametrize(
+    "front", [{}, {"conic": -0.6, "aspheric": [2e-6, -1e-9]}, {"qbfs": [0.01, -0.004], "norm_radius": 15.0}]
+)
 def test_the_direct_path_is_the_tracer_s(doublet_spec, front):
     """The ghost tracer's direct path lands where the Dr.Jit tracer's does (same rays, same lens): spheres,
     and a front face made a conic with even-asphere terms, or a Qbfs asphere (Newton's method both ways)."""
@@ -71,8 +82,10 @@ def test_the_direct_path_is_the_tracer_s(doublet_spec, front):
     doublet = Lens.from_dict(doublet_spec)
     start = ghosts.launch(doublet, (0.0, 1.5), 16)
     end = ghost_paths.trace(doublet, None, start, 531.0)
-    rays = tracer.Rays(*(tracer.F(a) for a in (start.x, start.y, start.z, start.dx, start.dy, start.dz)),
-                       tracer.F(np.zeros(len(start.x))))
+    rays = tracer.Rays(
+        *(tracer.F(a) for a in (start.x, start.y, start.z, start.dx, start.dy, start.dz)),
+        tracer.F(np.zeros(len(start.x))),
+    )
     traced = tracer.trace(doublet, rays, tracer.F(0.531))
     x, y, ok, clipped = tracer.to_numpy(*tracer.to_plane(traced, doublet.image_z)[:2], traced.ok, traced.clipped_by)
     passed = ok & (clipped == 0)
@@ -82,8 +95,12 @@ def test_the_direct_path_is_the_tracer_s(doublet_spec, front):
 
 
 def test_ideal_lens_and_bad_rays_are_refused():
-    lens = Lens.from_dict({"name": "ideal", "surface": [
-        {"radius": 0.0, "thickness": 100.0, "diameter": 10.0, "stop": True, "focal_length": 100.0}]})
+    lens = Lens.from_dict(
+        {
+            "name": "ideal",
+            "surface": [{"radius": 0.0, "thickness": 100.0, "diameter": 10.0, "stop": True, "focal_length": 100.0}],
+        }
+    )
     with pytest.raises(SolasError, match="ideal thin lens"):
         ghosts.ghosts(lens, (0.0, 0.0))
     with pytest.raises(SolasError, match="rays 3 must be an integer from 8"):
@@ -95,8 +112,7 @@ def test_ghosts_command_prints_the_table_and_writes_the_hdr_psf(tmp_path, capsys
     from solas_mi.imageio import read_exr
 
     out = tmp_path / "ghosts.exr"
-    assert main(["ghosts", "solas-doublet", "--field-deg", "0,1", "--size", "64",
-                 "-o", str(out)]) == 0
+    assert main(["ghosts", "solas-doublet", "--field-deg", "0,1", "--size", "64", "-o", str(out)]) == 0
     printed = capsys.readouterr().out
     assert "3,1" in printed and "all ghosts" in printed and (tmp_path / "ghosts.png").exists()
     channels, meta = read_exr(out)
@@ -113,8 +129,10 @@ def test_shared_prefixes_give_each_path_s_own_trace(triplet):
     assert set(together) == {None, *ghost_paths.paths(triplet)}
     for path, r in together.items():
         alone = ghost_paths.trace(triplet, path, start, 587.5618)
-        for a, b in zip((r.x, r.y, r.z, r.dx, r.dy, r.dz, r.power), (alone.x, alone.y, alone.z, alone.dx, alone.dy,
-                                                                     alone.dz, alone.power)):
+        for a, b in zip(
+            (r.x, r.y, r.z, r.dx, r.dy, r.dz, r.power),
+            (alone.x, alone.y, alone.z, alone.dx, alone.dy, alone.dz, alone.power),
+        ):
             assert np.array_equal(a, b)
 
 

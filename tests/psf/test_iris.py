@@ -2,6 +2,7 @@
 method. Against closed forms: the Fraunhofer PSF of a perfect lens behind a regular polygon equals the
 polygon's analytic Fourier transform (a sum over its edges, computed here), its spikes number N for even
 N and 2N for odd N, and the transmitted power is the polygon's share of the round stop's area."""
+
 import math
 
 import numpy as np
@@ -42,8 +43,9 @@ def corners(n, rotation_deg, radius):
 def test_hexagonal_stop_equals_the_polygon_transform():
     """The issue's acceptance: within 1e-3 of the peak, RMS, of the analytic transform."""
     pitch, size = 2.0, 96
-    got = psf(perfect(6, 10.0), (0.0, 0.0), WAVELENGTH, pitch_um=pitch, size=size, normalization="peak",
-              pupil_samples=512).data
+    got = psf(
+        perfect(6, 10.0), (0.0, 0.0), WAVELENGTH, pitch_um=pitch, size=size, normalization="peak", pupil_samples=512
+    ).data
     # the polygon in direction cosines: corners at the stop's radius over the distance to the focus
     offsets = (np.arange(size) - size // 2) * pitch * 1e-3  # mm; row 0 the top (+y)
     u, v = np.meshgrid(offsets, -offsets)
@@ -59,8 +61,9 @@ def test_hexagonal_stop_equals_the_polygon_transform():
 def spikes(blades):
     """The number of maxima of the PSF's power by azimuth in a ring well outside the core."""
     pitch, size = 4.0, 256
-    data = psf(perfect(blades, 0.0), (0.0, 0.0), WAVELENGTH, pitch_um=pitch, size=size, normalization="peak",
-               pupil_samples=256).data
+    data = psf(
+        perfect(blades, 0.0), (0.0, 0.0), WAVELENGTH, pitch_um=pitch, size=size, normalization="peak", pupil_samples=256
+    ).data
     y, x = np.mgrid[:size, :size] - size // 2
     r, phi = np.hypot(x, y) * pitch, np.arctan2(-y, x)
     ring = (r > 150) & (r < 480)
@@ -81,8 +84,10 @@ def test_spikes_number_n_for_even_and_2n_for_odd_blades(blades, expected):
 def test_the_iris_passes_the_polygons_share_of_the_light(method, options):
     """Transmission of an N-gon inscribed in the round stop: (N / 2π) sin(2π / N) of the round stop's."""
     for n in (5, 6, 9):
-        round_, iris = (psf(lens, (0.0, 0.0), WAVELENGTH, pitch_um=8.0, size=32, method=method, **options)
-                        .meta["transmission"] for lens in (perfect(), perfect(n, 7.0)))
+        round_, iris = (
+            psf(lens, (0.0, 0.0), WAVELENGTH, pitch_um=8.0, size=32, method=method, **options).meta["transmission"]
+            for lens in (perfect(), perfect(n, 7.0))
+        )
         share = n / (2 * math.pi) * math.sin(2 * math.pi / n)
         assert abs(iris / round_ - share) < (2e-3 if method == "fraunhofer" else 5e-3), (n, iris / round_, share)
 
@@ -116,7 +121,6 @@ def test_blades_round_trip_and_are_refused_where_they_cannot_be(doublet, doublet
             Lens.from_dict(spec)
 
 
-
 def test_the_reversed_lens_keeps_the_iris_and_the_coatings(doublet_spec, doublet):
     """The lens camera traces the lens from the image side (`exit_pupil.reversed_lens`): x and y are kept,
     so the stop's polygon and every coating are the same there, and a ray through a corner region
@@ -137,8 +141,14 @@ def test_the_reversed_lens_keeps_the_iris_and_the_coatings(doublet_spec, doublet
     z_stop = float(back.vertex_z[back.stop_index])
     for r, blocked in ((0.95 * radius, True), (0.75 * radius, False)):
         target = (r * math.cos(angle), r * math.sin(angle))
-        rays = tracer.launch(back, tracer.F(0.0), tracer.F(0.0), tracer.F(target[0]), tracer.F(target[1]),
-                             object_point=(tracer.F(0.0), tracer.F(0.0)))
+        rays = tracer.launch(
+            back,
+            tracer.F(0.0),
+            tracer.F(0.0),
+            tracer.F(target[0]),
+            tracer.F(target[1]),
+            object_point=(tracer.F(0.0), tracer.F(0.0)),
+        )
         traced = tracer.trace(back, rays, tracer.F(0.531))
         sx, sy, clipped = tracer.to_numpy(traced.stop_x, traced.stop_y, traced.clipped_by)
         assert z_stop >= 0 and (clipped[0] == back.stop_index + 1) == blocked, (r, sx, sy, clipped)

@@ -1,5 +1,6 @@
 """The lens as Mitsuba meshes holds bare glass and a round stop: a lens stating a coating or an iris is
 refused by name there (`render.scene`), never rendered as something else."""
+
 import pytest
 
 from solas_mi import Lens
@@ -25,5 +26,7 @@ def test_the_render_psf_method_takes_a_coated_lens_as_its_bare_glass(doublet_spe
 
     doublet_spec["surface"][0]["coating"] = "quarter_wave"
     coated, bare = Lens.from_dict(doublet_spec), Lens.load("solas-doublet")
-    a, b = (psf(lens, (0.0, 1.0), 531.0, size=16, pitch_um=4.0, method="render", rays=32).data for lens in (coated, bare))
+    a, b = (
+        psf(lens, (0.0, 1.0), 531.0, size=16, pitch_um=4.0, method="render", rays=32).data for lens in (coated, bare)
+    )
     assert (a == b).all()

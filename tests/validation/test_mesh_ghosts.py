@@ -2,6 +2,7 @@
 triplet as Mitsuba meshes whose glass samples each reflection with probability R (`fresnel` "sample").
 The count of rays that take each path is Poisson about the sequential trace's expectation (its weights
 are each ray's chance of that path), and each ray lands where the sequential trace of that ray lands."""
+
 import math
 
 import numpy as np
