@@ -2,7 +2,7 @@
 (`fraunhofer`, `geometric`), the registry naming them with their own options (`registry`; a later
 stage registers its own, as render does "render"), `psf` for one field (`methods`), PSF grids over
 the field (`grid`), their PSFs and file (`grid_file.PSFGrid`) and their options as one value
-(`spec.GridSpec`), the two-reflection ghosts and the stray-light PSF (`stray_light`: `ghosts`), and the
+(`spec.GridSpec`), the two-reflection ghosts (`stray_light`: `ghosts`) and the stray-light PSF (`stray_psf`), and the
 `psf` / `psf-grid` / `ghosts` commands (`commands`).
 
     psf(lens, (0, 2), 531.0, pitch_um=0.5, size=160)              # one PSF

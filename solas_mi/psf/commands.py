@@ -81,7 +81,7 @@ def run_psf_grid(args) -> int:
 
 def run_ghosts(args) -> int:
     from ..optics.commands import load_lens
-    from . import stray_light
+    from . import stray_light, stray_psf
     from .base import check_grid
 
     data_file, png = data_and_preview(args.output, args.png)
@@ -90,10 +90,10 @@ def run_ghosts(args) -> int:
     wavelengths = floats(args.wavelengths_nm, "--wavelengths-nm") if args.wavelengths_nm else None
     report = stray_light.ghosts(lens, _field(args.field_deg), wavelengths, rays=args.rays)
     print(report.table())
-    data, centre, warnings = stray_light.stray_light_psf(lens, report, args.pitch_um, args.size)
+    data, centre, warnings = stray_psf.stray_psf(lens, report, args.pitch_um, args.size)
     for text in warnings:
         print(f"solas-mi ghosts: warning: {text}", file=sys.stderr)
-    stray_light.write(report, data, centre, args.pitch_um, data_file, png)
+    stray_psf.write(report, data, centre, args.pitch_um, data_file, png)
     print(f"wrote {data_file} and {png}")
     return 0
 

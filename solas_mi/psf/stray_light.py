@@ -5,10 +5,9 @@ the ghosts with the direct PSF as one high-dynamic-range stray-light PSF.
 
 Ghost irradiance is geometric (rays binned per pixel): a ghost far from focus is wide against its
 diffraction pattern. A ghost is called focused where its RMS radius on the image plane is within
-`FOCUSED_AIRY` Airy radii (1.22 λ N, N the lens's working f-number) of its centroid: there diffraction
-shapes it and its binned image is only its geometric envelope (the table says which). The direct
-image in the HDR PSF is the geometric PSF over the window with the Fraunhofer PSF as its core where that
-is sound (`stray_light_psf`), normalised to the direct energy 1.
+`FOCUSED_AIRY` Airy radii of its beam (0.61 λ / NA, NA the sine of its widest ray's angle to its mean
+direction): there diffraction shapes it, and the HDR PSF (`stray_psf`) blurs its rays by that Airy
+pattern (geometric ⊗ diffraction, the usual estimate).
 """
 
 from __future__ import annotations
@@ -22,7 +21,6 @@ from ..errors import SolasError
 from ..optics import ghost_paths, tracer
 from ..optics.lens import Lens
 from ..optics.paraxial import paraxial
-from .geometric import bin_hits
 from .registry import MAX_SAMPLING
 
 FOCUSED_AIRY = 4.0  # a ghost within this many Airy radii (RMS) is focused: diffraction shapes it
@@ -33,7 +31,8 @@ MAX_FIELD_DEG = 89.0  # the widest polar angle ghosts take (light from the front
 class Ghost:
     """One ghost path at one field: the surfaces it reflects at (1-based, first j then i), its energy as a
     fraction of the direct image's, its centroid and RMS radius on the image plane (mm), the distance from
-    the image plane to its best focus (mm, + toward the image side), and whether it is focused."""
+    the image plane to its best focus (mm, + toward the image side), whether it is focused and its beam's
+    Airy radius (mm)."""
 
     surfaces: tuple[int, int]
     energy: float
@@ -41,6 +40,7 @@ class Ghost:
     rms_mm: float
     focus_mm: float
     focused: bool
+    airy_mm: float  # the Airy radius 0.61 λ / NA of its beam (λ the longest wavelength; NA its widest ray)
 
 
 @dataclass
@@ -212,8 +212,7 @@ def ghosts(lens: Lens, field_deg, wavelengths_nm=None, rays: int = ghost_paths.D
     if direct[2].sum() <= 0:
         raise SolasError(f"no direct light reaches the image at field ({field_deg[0]:g}, {field_deg[1]:g}) deg")
     direct_power = float(direct[2].sum())
-    airy = 1.22 * max(wavelengths) * 1e-6 * _working_f_number(lens)
-    table = [_ghost(path, hit, direct_power, airy) for path, hit in hits.items()]
+    table = [_ghost(path, hit, direct_power, max(wavelengths)) for path, hit in hits.items()]
     centroid = (float(np.average(direct[0], weights=direct[2])), float(np.average(direct[1], weights=direct[2])))
     # each ghost ray's power as a fraction of the direct image's energy, for the HDR PSF
     return GhostReport(
@@ -236,7 +235,7 @@ def _path_hits(lens: Lens, start: ghost_paths.Rays, wavelengths: tuple[float, ..
     }
 
 
-def _working_f_number(lens: Lens) -> float:
+def working_f_number(lens: Lens) -> float:
     """The lens's working f-number; NaN for a lens that forms no image (a plate, an afocal system): no ghost is
     called focused there."""
     try:
@@ -245,139 +244,24 @@ def _working_f_number(lens: Lens) -> float:
         return math.nan
 
 
-def _ghost(path: tuple[int, int], hit, direct_power: float, airy_mm: float) -> Ghost:
+def _ghost(path: tuple[int, int], hit, direct_power: float, wavelength_nm: float) -> Ghost:
+    """One ghost's row of the table from its rays on the image plane (`_path_hits`)."""
     x, y, w, tx, ty = hit
     surfaces = (path[0] + 1, path[1] + 1)
     if w.sum() <= 0:
-        return Ghost(surfaces, 0.0, (math.nan, math.nan), math.nan, math.nan, False)
+        return Ghost(surfaces, 0.0, (math.nan, math.nan), math.nan, math.nan, False, math.nan)
     cx, cy = float(np.average(x, weights=w)), float(np.average(y, weights=w))
     rms = float(math.sqrt(np.average((x - cx) ** 2 + (y - cy) ** 2, weights=w)))
+    # its beam's numerical aperture: the widest ray about the mean direction (sine of the angle)
+    spread = np.hypot(tx - np.average(tx, weights=w), ty - np.average(ty, weights=w)).max()
+    aperture = spread / math.sqrt(1.0 + spread * spread)
+    airy = float(0.61 * wavelength_nm * 1e-6 / aperture) if aperture > 0 else math.inf
     return Ghost(
         surfaces,
         float(w.sum() / direct_power),
         (cx, cy),
         rms,
         _best_focus(x, y, w, tx, ty),
-        rms <= FOCUSED_AIRY * airy_mm,
+        bool(rms <= FOCUSED_AIRY * airy),
+        airy,
     )
-
-
-DIRECT_SIZES = (33, 17, 9)  # pixels per side of the direct image's Fraunhofer core, the widest sound one
-MAX_FINE = 1024  # the finest direct PSF's pixels per side (its pitch resolves the diffraction pattern)
-GEOMETRIC_RAYS = 512  # rays per side of the direct image's geometric PSF over the whole window
-LOG_DECADES = 8  # the log-scale PNG shows 1e-8 of the peak to the peak
-
-
-def stray_light_psf(
-    lens: Lens, report: GhostReport, pitch_um: float, size: int, pupil_samples: int = 256
-) -> tuple[np.ndarray, tuple[float, float], list[str]]:
-    """The HDR stray-light PSF (size × size, row 0 the top) in fractions of the direct image's energy per
-    pixel: the direct image (geometric over the window, its central pixels the Fraunhofer PSF's where that
-    is sound, `_diffraction_core`) plus every ghost's rays binned and smoothed over their spacing (`smooth`),
-    centred on the first wavelength's chief ray; also that centre (mm) and a note where the direct image's
-    core stays geometric."""
-    from .base import check_grid
-    from .methods import psf
-
-    check_grid(pitch_um, size)
-    field, wavelengths = report.field_deg, list(report.wavelengths_nm)
-    geometric = psf(
-        lens,
-        field,
-        wavelengths,
-        pitch_um=pitch_um,
-        size=size,
-        normalization="sum",
-        method="geometric",
-        rays=GEOMETRIC_RAYS,
-    )
-    cx, cy = geometric.chief_ray_mm
-    total = geometric.data * float(geometric.meta["energy_in_grid"])
-    core, notes = _diffraction_core(lens, field, wavelengths, pitch_um, size, pupil_samples)
-    if core is not None:
-        lo = size // 2 - len(core) // 2
-        total[lo : lo + len(core), lo : lo + len(core)] = core
-    for x, y, w in report.hits.values():
-        if len(w) > 1:
-            binned, _ = bin_hits([((x - cx) * 1e3, (y - cy) * 1e3, w)], pitch_um, size)
-            total += smooth(binned[0] * pitch_um**2, ray_spacing_um(x, y, w) / pitch_um)
-    return total, (cx, cy), notes
-
-
-def _diffraction_core(lens: Lens, field, wavelengths: list, pitch_um: float, size: int, pupil_samples: int):
-    """The direct image's core by diffraction: the Fraunhofer PSF at a pitch that resolves it (λ N / 2 at the
-    shortest wavelength) summed into the pixels, on the widest of `DIRECT_SIZES` windows where it is sound
-    (no warning); (core, []) or (None, [why the rays' core stays])."""
-    from .methods import psf
-
-    fine_pitch = 0.5 * min(wavelengths) * 1e-3 * _working_f_number(lens)
-    for inner in [min(size, n) | 1 for n in DIRECT_SIZES]:  # odd: its centre pixel is the big grid's
-        fine = max(1, min(math.ceil(pitch_um / fine_pitch), MAX_FINE // inner)) | 1
-        direct = psf(
-            lens,
-            field,
-            wavelengths,
-            pitch_um=pitch_um / fine,
-            size=inner * fine,
-            normalization="sum",
-            pupil_samples=pupil_samples,
-        )
-        if not direct.meta["warnings"]:
-            core = direct.data.reshape(inner, fine, inner, fine).sum(axis=(1, 3))
-            return core * float(direct.meta["energy_in_grid"]), []
-    return None, [
-        f"the direct image is geometric ({GEOMETRIC_RAYS} x {GEOMETRIC_RAYS} rays): its Fraunhofer core "
-        f"is not sound here ({direct.meta['warnings'][0]})"
-    ]
-
-
-def ray_spacing_um(x: np.ndarray, y: np.ndarray, w: np.ndarray) -> float:
-    """The mean distance (µm) between a ghost's rays on the image plane: √(π (2 σ)² / rays), σ its RMS radius."""
-    cx, cy = np.average(x, weights=w), np.average(y, weights=w)
-    rms = math.sqrt(np.average((x - cx) ** 2 + (y - cy) ** 2, weights=w))
-    return 1e3 * math.sqrt(math.pi * (2.0 * rms) ** 2 / len(w))
-
-
-def smooth(image: np.ndarray, sigma_px: float) -> np.ndarray:
-    """`image` blurred by a normalised Gaussian of `sigma_px` pixels (a ray stands for its neighbourhood;
-    under half a pixel: unchanged), edges zero-padded (light blurred out of the window is lost, as it is)."""
-    if sigma_px < 0.5:
-        return image
-    half = int(min(3.0 * sigma_px, (image.shape[0] - 1) // 2))  # "same" keeps the image's length
-    kernel = np.exp(-0.5 * (np.arange(-half, half + 1) / sigma_px) ** 2)
-    kernel /= kernel.sum()
-    rows = np.apply_along_axis(np.convolve, 1, image, kernel, "same")
-    return np.apply_along_axis(np.convolve, 0, rows, kernel, "same")
-
-
-def write(report: GhostReport, data: np.ndarray, centre_mm: tuple[float, float], pitch_um: float, exr, png) -> None:
-    """The HDR PSF as OpenEXR (channel Y, the ghost table in its metadata) and a log-scale PNG (black:
-    `LOG_DECADES` decades below the peak), whole or not at all."""
-    from ..imageio import write_exr, write_png
-    from ..outputs import written_together
-
-    meta = {
-        "field_deg": list(report.field_deg),
-        "wavelengths_nm": list(report.wavelengths_nm),
-        "pitch_um": pitch_um,
-        "size": len(data),
-        "chief_ray_origin_mm": list(centre_mm),
-        "unit": "fraction of the direct image's energy per pixel",
-        "ghosts": [
-            {
-                "surfaces": list(g.surfaces),
-                "energy": g.energy,
-                "centroid_mm": list(g.centroid_mm),
-                "rms_mm": g.rms_mm,
-                "focus_mm": g.focus_mm,
-                "focused": g.focused,
-            }
-            for g in report.ghosts
-            if g.energy > 0
-        ],
-        "irradiance": "geometric for the ghosts (binned rays), Fraunhofer for the direct image",
-    }
-    shown = np.log10(np.maximum(data / max(float(data.max()), 1e-300), 10.0**-LOG_DECADES)) / LOG_DECADES + 1.0
-    with written_together(exr, png) as (tmp_exr, tmp_png):
-        write_exr(tmp_exr, {"Y": data.astype(np.float32)}, meta)
-        write_png(tmp_png, shown, encoded=True)

@@ -156,3 +156,31 @@ def test_a_fisheye_takes_fields_from_the_front_only():
     assert report.direct_power > 0 and report.direct_centroid_mm[1] > 0
     with pytest.raises(SolasError, match="polar angle below 89 deg"):
         ghosts.ghosts(lens, (0.0, 95.0), rays=16)
+
+
+def test_a_focused_ghost_is_called_so_and_blurred_by_its_airy_pattern(tmp_path):
+    """A singlet's ghost (3, 2) focuses 93 mm before the image: with the image plane moved there it is
+    focused (RMS far inside its Airy radius 0.61 λ / NA), and the HDR PSF spreads its light by that
+    pattern: the Airy kernel sums to 1 and its first dark ring lies at the radius."""
+    from solas_mi.psf import stray_psf
+
+    rows = [
+        {"radius": 0.0, "thickness": 2.0, "diameter": 2.0, "stop": True},
+        {"radius": 51.68, "thickness": 4.0, "diameter": 20.0, "material": "N-BK7"},
+        {"radius": -51.68, "thickness": 97.0, "diameter": 20.0},
+    ]
+    spec = {"name": "singlet", "wavelengths_nm": [550.0], "surface": rows}
+    (ghost,) = ghosts.ghosts(Lens.from_dict(spec), (0.0, 0.0), rays=96).ghosts
+    assert not ghost.focused and ghost.focus_mm < -50
+    rows[-1]["thickness"] += ghost.focus_mm
+    (focused,) = ghosts.ghosts(Lens.from_dict(spec), (0.0, 0.0), rays=96).ghosts
+    assert focused.focused and focused.rms_mm < 0.5 * focused.airy_mm and 1e-3 < focused.airy_mm < 0.1
+    kernel = stray_psf.airy_kernel(6.0)
+    assert abs(kernel.sum() - 1.0) < 1e-12
+    centre = len(kernel) // 2
+    ring = kernel[centre, centre + 4 : centre + 9]  # the profile from 4 to 8 pixels out: its minimum at 6
+    assert int(np.argmin(ring)) + 4 == 6
+    image = np.zeros((64, 64))
+    image[32, 32] = 1.0
+    blurred = stray_psf.airy_blur(image, 3.0)
+    assert abs(blurred.sum() - 1.0) < 1e-9 and blurred.max() < 0.2
