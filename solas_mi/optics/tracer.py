@@ -17,17 +17,17 @@ Float32 leaves ~20 nm of OPD noise (DESIGN.md).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import lru_cache
 
 import numpy as np
 
 from ..llvm import import_drjit
-from . import coating, ideal
+from . import ideal
+from .coated import coating_transmittance
 from .fields import ANGLE
 from .lens import Lens
+from .paraxial import ideal_conjugates, paraxial, pupil_distance
 from .sag import ASPHERE_ITERATIONS, ASPHERE_TOL_MM, sag, sag_slope
 from .surface import RIM_SLACK
-from .paraxial import ideal_conjugates, paraxial, pupil_distance
 
 dr = import_drjit()
 from drjit.llvm import Bool, Float64, UInt32  # noqa: E402
@@ -291,39 +291,6 @@ def _refract(s, x, y, lz, r2, d, mu, fresnel: bool, ftype, coated=None):
     return (dr.fma(mu, dx, g * nx), dr.fma(mu, dy, g * ny), dr.fma(mu, dz, g * nz)), k2, factor
 
 
-def coating_transmittance(c: coating.Coating, before, after, wavelength_um: F, ftype):
-    """cos θ → the unpolarised transmittance of coating `c` between media `before` and `after` at
-    `wavelength_um` (µm), in the array type `ftype`: an ideal coating's constant; else bilinear in
-    `coating.transmittance_table` (a Python float: the transfer matrix itself)."""
-    if c.reflectance is not None:
-        return lambda cosi: 1.0 - c.reflectance
-    if ftype is float:
-        nm = 1000.0 * wavelength_um
-        return lambda cosi: float(c.power(before.index(nm), after.index(nm), nm, abs(cosi)).transmittance)
-    lo, step, count, values = _table(c, before, after)
-    table = ftype(values.ravel())
-    utype = _types(wavelength_um)[1]
-    u = dr.clip((1000.0 * wavelength_um - lo) / step, 0.0, count - 1.000001)
-    i = dr.floor(u)
-    fu = u - i
-
-    def at(cosi):
-        v = dr.clip(dr.abs(cosi) * (coating.TABLE_COS - 1), 0.0, coating.TABLE_COS - 1.000001)
-        j = dr.floor(v)
-        fv = v - j
-        index = utype(i) * coating.TABLE_COS + utype(j)
-        corner = [dr.gather(ftype, table, index + offset) for offset in (0, 1, coating.TABLE_COS, coating.TABLE_COS + 1)]
-        return dr.lerp(dr.lerp(corner[0], corner[1], fv), dr.lerp(corner[2], corner[3], fv), fu)
-
-    return at
-
-
-@lru_cache(maxsize=64)
-def _table(c: coating.Coating, before, after):
-    """`coating.transmittance_table`, kept per coating and media."""
-    return coating.transmittance_table(c, before, after)
-
-
 def _asphere_hit(s, x, y, dx, dy, dz, t):
     """Ray parameter t where the ray (x, y, 0) + t (dx, dy, dz), in the vertex frame of surface `s`,
     meets its even asphere: Newton's method on f(t) = z(t) − sag(r²(t)) from the conic root `t`.
@@ -378,9 +345,36 @@ def object_points(lens: Lens, field_deg: np.ndarray) -> np.ndarray | None:
     return -field_tangents(field_deg) * pupil_distance(lens, paraxial(lens).entrance_pupil_z_mm)
 
 
+def array(values: np.ndarray, ftype=F):
+    """A NumPy array as a Dr.Jit array of `ftype` (Float64, a Float32 type or UInt32), in memory aligned for Dr.Jit's
+    vector loads. (Dr.Jit maps a NumPy array in place and compiles the kernels that read it for the
+    alignment of its address: kernels over NumPy's own memory were compiled afresh whenever an allocation
+    happened to land differently, measured at 20-40 compilations of 10-100 ms in each 8x8 PSF grid.)"""
+    values = np.asarray(values)
+    dtype = np.uint32 if ftype is UInt32 else np.float64 if ftype is F else np.float32
+    if not (values.dtype == dtype and values.flags.c_contiguous and values.ctypes.data % _ALIGN == 0):
+        values = aligned(values.shape, dtype, values)
+    return ftype(values.ravel())
+
+
+def aligned(shape, dtype, values=None) -> np.ndarray:
+    """A new NumPy array of `shape` and `dtype` whose memory Dr.Jit maps as aligned (`array`), holding
+    `values` where given (else uninitialised)."""
+    size = int(np.prod(shape))
+    raw = np.empty(size + _ALIGN // np.dtype(dtype).itemsize, dtype=dtype)
+    start = (-raw.ctypes.data % _ALIGN) // raw.itemsize
+    out = raw[start:start + size].reshape(shape)
+    if values is not None:
+        out[...] = values
+    return out
+
+
+_ALIGN = 64  # bytes: the alignment Dr.Jit's LLVM backend checks (drjit-core's jitc_var_mem_map)
+
+
 def gather(values: np.ndarray, index: UInt32) -> F:
     """Per-ray Dr.Jit values from per-group NumPy values."""
-    return dr.gather(F, F(np.ascontiguousarray(values, dtype=np.float64)), index)
+    return dr.gather(F, array(values), index)
 
 
 def to_numpy(*values) -> tuple[np.ndarray, ...]:
@@ -391,4 +385,4 @@ def to_numpy(*values) -> tuple[np.ndarray, ...]:
 
 
 __all__ = ["Rays", "Traced", "launch", "launch_direction", "trace", "to_plane", "to_sphere", "field_tangents", "object_points",
-           "gather", "to_numpy", "refractive_index", "launch_plane_z"]
+           "aligned", "array", "gather", "to_numpy", "refractive_index", "launch_plane_z"]
