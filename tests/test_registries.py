@@ -24,6 +24,7 @@ SHIPPED = {
     "solas_mi.render.labels.LABELS": ("depth", "normal", "instance"),
     "solas_mi.optics.formats.READERS": (".toml", ".zmx", ".seq", ".dat"),
     "solas_mi.optics.formats.WRITERS": (".toml", ".zmx", ".dat"),
+    "solas_mi.optics.coating.KINDS": ("none", "quarter_wave", "ideal", "stack"),
     "solas_mi.optics.calibration.models.MODELS": ("opencv-pinhole", "opencv-fisheye", "ocamcalib", "woodscape",
                                                   "double-sphere", "unified"),
     "solas_mi.analysis.registry.ANALYSES": ("mtf", "mtf-field", "mtf50-field", "through-focus", "field-curvature",

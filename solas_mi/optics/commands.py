@@ -68,7 +68,8 @@ def run_lens_info(args) -> int:
     print(f"fields: {lens.field_type.description}")
     if not lens.dispersive:
         print("glass: no dispersion data (every medium a constant index): the columns of every wavelength agree")
-    for key, label in (("virtual_object", "object: virtual, "), ("ideal_lens_path", "ideal lens: ")):
+    for key, label in (("virtual_object", "object: virtual, "), ("ideal_lens_path", "ideal lens: "),
+                       ("coatings", "coatings: "), ("iris", "iris: ")):
         if key in info:
             print(label + info[key])
     for note in info.get("overlaps", []):

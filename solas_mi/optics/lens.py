@@ -178,7 +178,13 @@ class Lens:
         if path.suffix.lower() not in WRITERS:
             raise SolasError(f"lens file {str(path)!r}: unknown extension {path.suffix!r}; "
                              f"allowed: {writable()}")
-        write_text(path, WRITERS[path.suffix.lower()].function(self))
+        writer = WRITERS[path.suffix.lower()]
+        for feature, used in (("coatings", any(s.coating for s in self.surfaces)),
+                              ("blades", any(s.blades for s in self.surfaces))):
+            if used and feature not in writer.extra.get("holds", ()):
+                raise SolasError(f"lens file {str(path)!r}: a {path.suffix} file holds no {feature}; save the lens "
+                                 f"as {', '.join(k for k, e in WRITERS.items() if feature in e.extra.get('holds', ()))}")
+        write_text(path, writer.function(self))
         return path
 
     # long: the public API's numpydoc docstring is a third of it
@@ -352,7 +358,10 @@ class Lens:
             "surfaces": [[s.radius, s.thickness, s.diameter, s.glass.name, s.glass.coefficients, s.stop]
                          + ([] if s.is_sphere else [s.conic, list(s.aspheric)])
                          + ([list(s.qbfs), s.norm_radius] if any(s.qbfs) else [])
-                         + ([{"focal_length": s.focal_length}] if s.ideal else []) for s in self.surfaces],
+                         + ([{"focal_length": s.focal_length}] if s.ideal else [])
+                         + ([{"coating": s.coating.table()}] if s.coating else [])
+                         + ([{"blades": s.blades, "blade_rotation": s.blade_rotation}] if s.blades else [])
+                         for s in self.surfaces],
         }
         return hashlib.sha256(json.dumps(content, sort_keys=True).encode()).hexdigest()[:16]
 

@@ -15,6 +15,8 @@ def _value(v) -> str:
         return repr(float(v))
     if isinstance(v, (list, tuple)):
         return "[" + ", ".join(_value(x) for x in v) + "]"
+    if isinstance(v, dict):  # an inline table; its keys are bare words (a coating's)
+        return "{" + ", ".join(f"{k} = {_value(x)}" for k, x in v.items()) + "}"
     return text(v)
 
 
@@ -65,6 +67,10 @@ def dumps(lens) -> str:
                   f"material = {_value(s.material)}"]
         if s.stop:
             lines.append("stop = true")
+        if s.coating:
+            lines.append(f"coating = {_value(s.coating.table())}")
+        if s.blades:
+            lines += [f"blades = {s.blades}", f"blade_rotation = {_value(s.blade_rotation)}"]
     if lens.image_diameter:
         lines += ["", "[image]", f"diameter = {_value(lens.image_diameter)}"]
     return "\n".join(lines) + "\n"

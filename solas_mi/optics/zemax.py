@@ -14,7 +14,8 @@ Read as the author meant it:
   undone by the next coordinate break; PARAXIAL, the ideal thin lens (`ideal`: PARM 1 the focal length,
   PARM 2 the OPD mode); flat air surfaces without a clear aperture of their own (no DIAM, or DIAM's solve
   type 0, automatic: it cuts no ray) (dummies) are dropped, their thickness added to the gap. STOP (none:
-  surface 1, as in OpticStudio's new lens, said in the description), COMM (the label), CONI, CURV, DISZ.
+  surface 1, as in OpticStudio's new lens, said in the description), COMM (the label), CONI, CURV, DISZ;
+  COAT: the ideal coatings I.xx (`coating.zemax_coating`), a coating file's named ones refused by name.
 - Clear apertures: DIAM (the semi-diameter); where absent or 0, Zemax's automatic semi-diameter:
   the largest height of the real chief and marginal (stop-rim) rays of every field and wavelength.
 - Glass: GLAS names through our catalogue; a name several vendors use is taken from the vendors GCAT
@@ -38,6 +39,7 @@ import math
 
 from ..errors import SolasError
 from . import forbes, ideal
+from .coating import to_zemax, zemax_coating
 from . import glass as glass_mod
 from . import zemax_solves
 from .formats import MAX_FIELDS, check_count, one_line
@@ -186,8 +188,8 @@ def _surface(b: dict, i: int, scale: float, gcat: tuple[str, ...], where: str) -
         row.update(_q_type(b, scale, ident))
     elif kind == "PARAXIAL":
         row.update(ideal.from_zemax(_parameters(b, ident), scale, ident))
-    if "STOP" in b:
-        row["stop"] = True
+    row.update({"stop": True} if "STOP" in b else {})
+    row.update({"coating": zemax_coating(b["COAT"][0][0], ident)} if b.get("COAT", [[]])[0] else {})
     return row
 
 
@@ -380,7 +382,7 @@ def dumps(lens) -> str:
         if any(s.qbfs):
             out += [f"  XDAT {k} {number(v)}" for k, v in
                     enumerate((0.0, float(len(s.qbfs)), s.norm_radius, *s.qbfs), start=1)]
-        out += ["  STOP"] if s.stop else []
+        out += (["  STOP"] if s.stop else []) + to_zemax(s.coating, f"lens {lens.name}: surface {s.label}")
         out += [f"  DISZ {number(s.thickness)}", *glas(s.glass), f"  DIAM {number(s.semi_diameter)} 1 0 0 1 \"\""]
         out += [f"  CONI {number(s.conic)}"] if s.conic else []
     out += [f"SURF {len(lens.surfaces) + 1}", "  TYPE STANDARD", "  CURV 0.0", "  DISZ 0",

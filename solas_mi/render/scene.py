@@ -73,9 +73,10 @@ def _trace_instead() -> str:
             f"({', '.join(tracers)})")
 
 
-def _check_buildable(lens: Lens, image_radius: float) -> None:
-    """SolasError where `lens` has no solid geometry: an ideal thin lens, a virtual object, overlapping
-    surfaces, or a part (a vertex, the image plane out to `image_radius`) farther from surface 1 than
+def _check_buildable(lens: Lens, image_radius: float, lossless: bool = False) -> None:
+    """SolasError where `lens` has no solid geometry: an ideal thin lens, a virtual object, a coating or an
+    iris (the meshes are bare glass with a round stop; a coating changes nothing where the glass is
+    `lossless`, Fresnel off), overlapping surfaces, or a part (a vertex, the image plane out to `image_radius`) farther from surface 1 than
     float32 places to 1 µm (a film 1e7 mm away rendered the wrong colours, one at 1e12 mm black); each
     message names what traces it instead."""
     reach = max(abs(float(lens.image_z)), float(np.abs(lens.vertex_z).max()), image_radius)
@@ -88,12 +89,17 @@ def _check_buildable(lens: Lens, image_radius: float) -> None:
         raise SolasError(f"surface {ideal} of lens {lens.name} is an ideal thin lens (focal_length), which has no glass "
                          f"to build as Mitsuba geometry; trace it instead: {_trace_instead()}")
     virtual_object.check_real(lens, "the mesh scene")
+    unbuilt = [f"surface {k}'s {what}" for k, s in enumerate(lens.surfaces, start=1)
+               for what, held in (("coating", s.coating and not lossless), ("iris (blades)", s.blades)) if held]
+    if unbuilt:  # the meshes have bare Fresnel surfaces and a round stop: neither would be what the lens states
+        raise SolasError(f"lens {lens.name}: {', '.join(unbuilt)} has no Mitsuba geometry here (bare glass, a round "
+                         f"stop); trace it instead: {_trace_instead()}")
     if lens.overlaps:
         raise SolasError(f"lens {lens.name} cannot be built as Mitsuba geometry: {'; '.join(lens.overlaps)}. Trace it "
                          f"instead: {_trace_instead()}")
 
 
-def lens_parts(lens: Lens, rings: int | None = None, image_radius: float = 0.0) -> list[Part]:
+def lens_parts(lens: Lens, rings: int | None = None, image_radius: float = 0.0, lossless: bool = False) -> list[Part]:
     """Caps for refracting surfaces, absorbing annuli around every clear aperture (and the stop), and
     a barrel closing the sides from the first aperture to the image plane. A lens of polar fields (a
     fisheye) takes light from 90° and beyond, which reaches its front element from the side and from
@@ -101,8 +107,9 @@ def lens_parts(lens: Lens, rings: int | None = None, image_radius: float = 0.0) 
     at the second surface's rim. `rings` per cap (None: `mesh_rings`). The barrel's radius is twice the
     largest clear aperture plus 10 mm, or more to hold the image plane out to `image_radius` mm (the
     sensor's corners, a PSF's window): a barrel narrower than the image cut off the light that arrives
-    there (Cooke triplet at 32°: its light lands 31 mm off axis, outside a 30 mm barrel)."""
-    _check_buildable(lens, image_radius)
+    there (Cooke triplet at 32°: its light lands 31 mm off axis, outside a 30 mm barrel). `lossless`: the
+    glass will have no Fresnel losses (a coated lens is then built as its bare glass)."""
+    _check_buildable(lens, image_radius, lossless)
     rings = resolve_rings(lens, rings)
     check_gaps(lens)
     parts = []
