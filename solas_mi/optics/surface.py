@@ -22,8 +22,8 @@ from .sag import sag
 NORM_RADIUS_MM = (1e-6, 1e6)  # the Qbfs normalisation radius a surface may have (1 nm to 1 km)
 # What a lens file may hold (anything else is a mistake worth naming, e.g. a surface type we do not model)
 KEYS = {
-    "lens": ("name", "description", "wavelengths_nm", "field_deg", "catalogues", "materials", "surface", "object",
-             "image"),
+    "lens": ("name", "description", "wavelengths_nm", "field_deg", "catalogues", "materials", "temperature_c",
+             "pressure_kpa", "surface", "object", "image"),
     "surface": ("label", "radius", "thickness", "diameter", "material", "stop", "conic", "aspheric", "qbfs",
                 "norm_radius", "focal_length"),
     "object": ("distance", "material"),
