@@ -37,7 +37,6 @@ from __future__ import annotations
 import math
 import warnings
 from dataclasses import replace
-from typing import Callable
 
 from ..errors import SolasError
 
@@ -138,18 +137,12 @@ def _unthermal(lens) -> list[str]:
     return sorted(name for name, g in media.items() if not g.thermal or g.cte is None)
 
 
-def lens_at(lens, temperature_c: float, pressure_kpa: float, mount=DEFAULT_MOUNT,
-            warn: Callable[[str], None] | None = None):
+def lens_at(lens, temperature_c: float, pressure_kpa: float, mount=DEFAULT_MOUNT):
     """`lens` at `temperature_c` and `pressure_kpa` (`Lens.at`): the lens itself when both are its own."""
     temperature, pressure = check_environment(temperature_c, pressure_kpa)
     ctes = _mounts(lens, mount)
     if (temperature, pressure) == (lens.temperature_c, lens.pressure_kpa):
         return lens
-    held = _unthermal(lens) if temperature != lens.temperature_c else []
-    if held:
-        (warn or (lambda text: warnings.warn(text, stacklevel=3)))(
-            f"lens {lens.name} at {temperature:g} °C: {'glasses' if len(held) > 1 else 'glass'} {', '.join(held)} "
-            "without thermal data (Schott formula and CTE) in the catalogue: absolute index and size held as at 20 °C")
     def grown(alpha: float) -> float:  # a length at 20 °C is L (1 + α (T − 20 °C)): back and forth is exact
         return (1.0 + alpha * (temperature - STANDARD_C)) / (1.0 + alpha * (lens.temperature_c - STANDARD_C))
 
@@ -166,6 +159,11 @@ def in_environment(lens, temperature_c: float, pressure_kpa: float):
     """`lens` with its geometry as it is and every medium at `temperature_c` and `pressure_kpa` (a lens file
     that states its temperature and pressure: its prescription holds there)."""
     temperature, pressure = check_environment(temperature_c, pressure_kpa)
+    held = _unthermal(lens) if temperature != STANDARD_C else []
+    if held:
+        warnings.warn(f"lens {lens.name} at {temperature:g} °C: {'glasses' if len(held) > 1 else 'glass'} "
+                      f"{', '.join(held)} without thermal data (Schott formula and CTE) in the catalogue: absolute "
+                      "index and size held as at 20 °C", stacklevel=3)
     return replace(lens, surfaces=tuple(replace(s, glass=s.glass.at(temperature, pressure)) for s in lens.surfaces),
                    object_glass=lens.object_glass.at(temperature, pressure),
                    materials=tuple(g.at(temperature, pressure) for g in lens.materials),
