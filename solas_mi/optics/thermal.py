@@ -170,5 +170,12 @@ def in_environment(lens, temperature_c: float, pressure_kpa: float):
                    temperature_c=temperature, pressure_kpa=pressure)
 
 
-__all__ = ["DEFAULT_MOUNT", "MOUNTS", "STANDARD_C", "STANDARD_KPA", "absolute_change", "air_index", "in_environment", "lens_at",
+def metadata(lens) -> dict:
+    """{"temperature_c", "pressure_kpa"} of a lens not at 20 °C and 101.325 kPa ({} there: metadata unchanged)."""
+    if (lens.temperature_c, lens.pressure_kpa) == (STANDARD_C, STANDARD_KPA):
+        return {}
+    return {"temperature_c": lens.temperature_c, "pressure_kpa": lens.pressure_kpa}
+
+
+__all__ = ["DEFAULT_MOUNT", "MOUNTS", "STANDARD_C", "STANDARD_KPA", "absolute_change", "air_index", "in_environment", "lens_at", "metadata",
            "mount_cte", "relative_index"]

@@ -182,3 +182,26 @@ def test_mount_per_gap_and_expansion(doublet):
     assert s1[3].thickness == pytest.approx(s0[3].thickness * (1 + 10e-6 * delta), rel=1e-12)
     assert dataclasses.replace(s1[0], radius=s0[0].radius, diameter=s0[0].diameter, thickness=s0[0].thickness,
                                glass=s0[0].glass) == s0[0]
+
+
+def test_every_lens_command_takes_the_environment(capsys, tmp_path):
+    """`lens info LENS --temperature-c 60 --pressure-kpa 90 --mount steel` is `Lens.at(60, 90, "steel")`,
+    recorded in its JSON; without the options the lens file's own (nothing added to the JSON); `lens
+    convert` writes the lens there, which reads back as it."""
+    from strict_json import strict_loads
+
+    from solas_mi.cli import main
+
+    lens = Lens.load("solas-doublet")
+    assert main(["lens", "info", "solas-doublet", "--json", "--temperature-c", "60", "--pressure-kpa", "90",
+                 "--mount", "steel"]) == 0
+    info = strict_loads(capsys.readouterr().out)
+    assert info["hash"] == lens.at(60.0, 90.0, "steel").hash
+    assert (info["temperature_c"], info["pressure_kpa"]) == (60.0, 90.0)
+    assert main(["lens", "info", "solas-doublet", "--json"]) == 0
+    plain = strict_loads(capsys.readouterr().out)
+    assert plain["hash"] == lens.hash and "temperature_c" not in plain
+    assert main(["lens", "convert", "solas-doublet", "--temperature-c", "-40", "-o", str(tmp_path / "cold.zmx")]) == 0
+    assert Lens.load(tmp_path / "cold.zmx").temperature_c == -40.0
+    assert main(["lens", "info", "solas-doublet", "--mount", "wood", "--temperature-c", "30"]) == 2
+    assert "mount 'wood'" in capsys.readouterr().err
