@@ -1,0 +1,74 @@
+"""`solas-mi thermal` (psf.thermal, psf.thermal_report): best focus against a scan of the RMS spot, MTF50
+against a Gaussian's analytic one, the sweep's rows against `Lens.at` and paraxial data."""
+import csv
+import json
+import math
+
+import numpy as np
+import pytest
+
+from solas_mi import Lens
+from solas_mi.errors import SolasError
+from solas_mi.optics.paraxial import paraxial
+from solas_mi.psf import thermal
+
+
+def test_temperatures_include_both_ends():
+    assert thermal.temperatures(-40.0, 105.0, 15.0) == [-40.0 + 15.0 * i for i in range(10)] + [105.0]
+    assert thermal.temperatures(20.0, 20.0, 5.0) == [20.0]
+
+
+@pytest.mark.parametrize("start, stop, step", [(60.0, 20.0, 5.0), (20.0, 60.0, 0.0), (20.0, 60.0, math.nan),
+                                               (-400.0, 20.0, 5.0), (20.0, 60.0, 1e-4)])
+def test_bad_temperature_ranges_are_refused(start, stop, step):
+    with pytest.raises(SolasError, match="temperature"):
+        thermal.temperatures(start, stop, step)
+
+
+def test_mtf50_of_a_gaussian():
+    """A Gaussian PSF of σ has MTF exp(−2π²σ²f²): MTF50 = √(ln 2 / 2) / (π σ)."""
+    sigma_um, pitch_um = 6.0, 0.5
+    x = (np.arange(256) - 128) * pitch_um
+    data = np.exp(-(x[None, :] ** 2 + x[:, None] ** 2) / (2 * sigma_um ** 2))
+    expected = math.sqrt(math.log(2) / 2) / (math.pi * sigma_um / 1000.0)
+    for orientation in thermal.ORIENTATIONS:
+        assert thermal.mtf50_cy_mm(data, pitch_um, orientation) == pytest.approx(expected, rel=1e-3)
+
+
+def test_best_focus_is_the_least_rms_spot(doublet):
+    """The least-squares shift against a scan of the polychromatic RMS spot radius over image planes."""
+    from dataclasses import replace
+
+    from solas_mi.optics.spot import spot
+
+    def rms(shift):
+        lens = replace(doublet, surfaces=doublet.surfaces[:-1] + (
+            replace(doublet.surfaces[-1], thickness=doublet.surfaces[-1].thickness + shift),))
+        hits = [spot(lens, (0.0, 0.0), w, density=thermal.SPOT_RINGS) for w in doublet.wavelengths_nm]
+        return math.sqrt(np.mean(np.concatenate([h.x_um ** 2 + h.y_um ** 2 for h in hits])))
+
+    shifts = np.linspace(0.3, 0.65, 36)
+    scanned = shifts[int(np.argmin([rms(s) for s in shifts]))]
+    assert thermal.best_focus_mm(doublet) == pytest.approx(scanned, abs=0.01)  # the scan's step
+
+
+@pytest.mark.slow
+def test_thermal_command(tmp_path, capsys):
+    """Two temperatures: each row is `Lens.at` there (hash, EFL, BFD), refocusing does not lose MTF50 on axis,
+    the CSV, JSON and PNG written."""
+    from solas_mi.cli import main
+
+    assert main(["thermal", "solas-doublet", "--from", "20", "--to", "60", "--step-c", "40", "-o",
+                 str(tmp_path)]) == 0
+    assert "refocused" in capsys.readouterr().out
+    lens = Lens.load("solas-doublet")
+    doc = json.loads((tmp_path / "thermal.json").read_text())
+    rows = list(csv.DictReader((tmp_path / "thermal.csv").open()))
+    assert [float(r["temperature_c"]) for r in rows] == [20.0, 60.0] and (tmp_path / "thermal.png").stat().st_size
+    for row, entry in zip(rows, doc["rows"]):
+        there = lens.at(float(row["temperature_c"]))
+        first = paraxial(there, there.primary_wavelength)
+        assert entry["hash"] == there.hash
+        assert float(row["efl_mm"]) == first.efl_mm and float(row["bfd_mm"]) == first.bfd_mm
+        assert float(row["mtf50_refocused_axis_t_cy_mm"]) >= float(row["mtf50_as_built_axis_t_cy_mm"])
+    assert doc["rows"][0]["hash"] == lens.hash
