@@ -72,3 +72,31 @@ def test_thermal_command(tmp_path, capsys):
         assert float(row["efl_mm"]) == first.efl_mm and float(row["bfd_mm"]) == first.bfd_mm
         assert float(row["mtf50_refocused_axis_t_cy_mm"]) >= float(row["mtf50_as_built_axis_t_cy_mm"])
     assert doc["rows"][0]["hash"] == lens.hash
+
+
+@pytest.mark.parametrize("name", ["solas-doublet", "cooke-triplet", "double-gauss-50mm", "nikkor-fisheye",
+                                  "wide-angle-22mm"])
+def test_standard_conditions_are_bit_identical(name, tmp_path):
+    """Each shipped lens as loaded, its file saying 20 °C and 101.325 kPa outright, and `Lens.at(20, 101.325)`
+    with another mount: paraxial data, real chief rays and a polychromatic PSF equal to the last bit."""
+    from solas_mi.optics.pupil import chief_rays
+    from solas_mi.psf import psf
+
+    lens = Lens.load(name)
+    text = lens.save(tmp_path / "lens.toml").read_text()
+    stated = tmp_path / "stated.toml"
+    stated.write_text(text.replace("\nfield_deg =", "\ntemperature_c = 20.0\npressure_kpa = 101.325\nfield_deg ="))
+    fields = [0.0, 0.7 * lens.field_deg, lens.field_deg]
+
+    def figures(candidate):
+        out = []
+        for w in candidate.wavelengths_nm:
+            out.append(np.array([v for _, v in sorted(paraxial(candidate, w, fields).as_dict().items())
+                                 if isinstance(v, float)]))
+            out.append(chief_rays(candidate, np.array([[0.0, f] for f in fields]), np.full(3, w)).image_xy)
+        out.append(psf(candidate, (0.0, fields[1]), list(candidate.wavelengths_nm), pitch_um=1.0, size=48).data)
+        return [np.asarray(a).tobytes() for a in out]
+
+    reference = figures(lens)
+    for other in (Lens.load(stated), lens.at(20.0, 101.325, mount="titanium")):
+        assert other.hash == lens.hash and figures(other) == reference
