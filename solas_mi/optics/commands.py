@@ -36,8 +36,9 @@ def add_environment_options(p) -> None:
                    "temperature (°C; default: the lens file's, 20 unless it states one)")
     p.add_argument("--pressure-kpa", type=float, metavar="KPA", help="the air's pressure (kPa; default: the lens "
                    "file's, 101.325 unless it states one)")
-    p.add_argument("--mount", default=thermal.DEFAULT_MOUNT, help="what holds the air gaps, which grow with the "
-                   f"temperature: {', '.join(thermal.MOUNTS)}, or a CTE in 1/K")
+    p.add_argument("--mount", help="what holds every air gap, which grows with the temperature: "
+                   f"{', '.join(thermal.MOUNTS)}, or a CTE in 1/K (default: each surface's mount in the lens file, "
+                   f"{thermal.DEFAULT_MOUNT} where it names none)")
 
 
 def load_lens(args):

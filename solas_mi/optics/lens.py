@@ -326,7 +326,7 @@ class Lens:
         return hashlib.sha256(json.dumps(content, sort_keys=True).encode()).hexdigest()[:16]
 
     def at(self, temperature_c: float = thermal.STANDARD_C, pressure_kpa: float = thermal.STANDARD_KPA,
-           mount=thermal.DEFAULT_MOUNT) -> "Lens":
+           mount=None) -> "Lens":
         """This lens at another temperature and air pressure (`thermal`): glass indices by the Schott
         formula relative to the air there, glass and mount expanded from this lens's temperature.
 
@@ -336,9 +336,10 @@ class Lens:
             The temperature (°C) of the lens, its mount and the air.
         pressure_kpa : float, default 101.325
             The air's pressure (kPa).
-        mount : str, float or sequence, default "aluminium"
+        mount : str, float or sequence, optional
             What holds the air gaps: a material of `thermal.MOUNTS` or a CTE (1/K), for every gap, or one
-            per surface (the gap after it).
+            per surface (the gap after it); default: each surface's `mount` (its lens file's), aluminium
+            where it has none.
 
         Returns
         -------

@@ -71,6 +71,8 @@ def dumps(lens) -> str:
                   f"material = {_value(s.material)}"]
         if s.stop:
             lines.append("stop = true")
+        if s.mount is not None:
+            lines.append(f"mount = {_value(s.mount)}")
     if lens.image_diameter:
         lines += ["", "[image]", f"diameter = {_value(lens.image_diameter)}"]
     return "\n".join(lines) + "\n"

@@ -15,7 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SolasError
-from . import forbes, ideal as ideal_mod
+from . import forbes, ideal as ideal_mod, thermal
 from . import glass as glass_mod
 from .sag import sag
 
@@ -25,7 +25,7 @@ KEYS = {
     "lens": ("name", "description", "wavelengths_nm", "field_deg", "catalogues", "materials", "temperature_c",
              "pressure_kpa", "surface", "object", "image"),
     "surface": ("label", "radius", "thickness", "diameter", "material", "stop", "conic", "aspheric", "qbfs",
-                "norm_radius", "focal_length"),
+                "norm_radius", "focal_length", "mount"),
     "object": ("distance", "material"),
     "image": ("diameter",),
 }
@@ -92,6 +92,7 @@ class Surface:
     qbfs: tuple[float, ...] = ()  # a0, a1, … (mm) of Forbes' Qbfs departure
     norm_radius: float = 1.0  # ρ (mm): the Qbfs terms' u = r/ρ
     focal_length: float | None = None  # mm: an ideal thin lens (n'·t' = n·t − h/f, `ideal`); None: a real surface
+    mount: str | float | None = None  # what holds the air gap after it (`thermal.MOUNTS` or a CTE, 1/K); None: not said
 
     @property
     def ideal(self) -> bool:
@@ -153,8 +154,14 @@ def surface_from_row(row: dict, i: int, where: str, catalogues: tuple[str, ...],
         g = glass_mod.resolve(material, prefer=catalogues, own=own)
     except SolasError as exc:
         raise SolasError(f"{ident}: {exc}") from None
+    mount = row.get("mount")
+    if mount is not None:
+        try:
+            thermal.mount_cte(mount)
+        except SolasError as exc:
+            raise SolasError(f"{ident}: {exc}") from None
     return Surface(label, radius, thickness, diameter, str(material), g, stop, conic, aspheric, qbfs, norm_radius,
-                   focal_length)
+                   focal_length, mount)
 
 
 def polynomial_terms(row: dict, key: str, ident: str, meaning: str) -> tuple[float, ...]:

@@ -25,7 +25,8 @@ conversions use (Edlén 1953 for standard air at 15 °C, scaled to T and p):
 
 Expansion (linear, as design tools model it): a glass element's radii, thicknesses, apertures and
 aspheric terms scale by 1 + α_glass ΔT (its catalogue's CTE at −30 … +70 °C), an air gap by 1 + α_mount ΔT
-(the spacer or housing that holds it, `MOUNTS` or a CTE in 1/K), ΔT = T − 20 °C, from a lens at its own
+(the spacer or housing that holds it, `MOUNTS` or a CTE in 1/K: the lens file's `mount` of the surface
+before the gap, else `DEFAULT_MOUNT`, unless a call names one), ΔT = T − 20 °C, from a lens at its own
 temperature by the ratio of the two (so going to T and back gives the lens again).
 A surface between air and glass takes its glass's α; a cemented one the glass after it; a surface with
 air on both sides (a stop, a plane) the mount's, as do its aperture and the image distance. A glass
@@ -122,7 +123,10 @@ def _glass_cte(glass, mount: float) -> float:
 
 
 def _mounts(lens, mount) -> list[float]:
-    """One mount CTE per surface (the gap after it): `mount` for all, or a sequence of one per surface."""
+    """One mount CTE per surface (the gap after it): `mount` for all, a sequence of one per surface, or (None)
+    each surface's own (its lens file's `mount`), `DEFAULT_MOUNT` where it has none."""
+    if mount is None:
+        return [mount_cte(DEFAULT_MOUNT if s.mount is None else s.mount) for s in lens.surfaces]
     if isinstance(mount, (list, tuple)):
         if len(mount) != len(lens.surfaces):
             raise SolasError(f"mount: {len(mount)} values for {len(lens.surfaces)} surfaces; give one per surface "
@@ -137,7 +141,7 @@ def _unthermal(lens) -> list[str]:
     return sorted(name for name, g in media.items() if not g.thermal or g.cte is None)
 
 
-def lens_at(lens, temperature_c: float, pressure_kpa: float, mount=DEFAULT_MOUNT):
+def lens_at(lens, temperature_c: float, pressure_kpa: float, mount=None):
     """`lens` at `temperature_c` and `pressure_kpa` (`Lens.at`): the lens itself when both are its own."""
     temperature, pressure = check_environment(temperature_c, pressure_kpa)
     ctes = _mounts(lens, mount)

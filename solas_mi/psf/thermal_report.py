@@ -97,7 +97,8 @@ def run_thermal(args) -> int:
     pitch = args.pitch_um or thermal.auto_pitch_um(lens)
     rows = thermal.sweep(lens, temps, pressure, args.mount, pitch, args.size,
                          Progress("thermal", len(temps), "temperatures", stream=sys.stderr))
-    settings = {"pressure_kpa": pressure, "mount": args.mount, "pitch_um": pitch, "size": args.size,
+    mounts = args.mount or [s.mount or thermal.optics_thermal.DEFAULT_MOUNT for s in lens.surfaces]
+    settings = {"pressure_kpa": pressure, "mount": mounts, "pitch_um": pitch, "size": args.size,
                 "wavelengths_nm": list(lens.wavelengths_nm), "field_deg": lens.field_deg}
     print(table(rows))
     paths = write(rows, lens, settings, args.output)

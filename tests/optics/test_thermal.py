@@ -205,3 +205,22 @@ def test_every_lens_command_takes_the_environment(capsys, tmp_path):
     assert Lens.load(tmp_path / "cold.zmx").temperature_c == -40.0
     assert main(["lens", "info", "solas-doublet", "--mount", "wood", "--temperature-c", "30"]) == 2
     assert "mount 'wood'" in capsys.readouterr().err
+
+
+def test_a_lens_file_names_the_mount_of_each_gap(tmp_path, doublet):
+    """A surface's `mount` holds the gap after it (read, written back, used by `Lens.at` unless a call names
+    one); a bad one is refused naming the surface."""
+    text = doublet.save(tmp_path / "d.toml").read_text()
+    rows = text.split("[[surface]]")
+    rows[-1] = rows[-1].replace("material = \"AIR\"", "material = \"AIR\"\nmount = 5e-6", 1)
+    path = tmp_path / "mounted.toml"
+    path.write_text("[[surface]]".join(rows))
+    lens = Lens.load(path)
+    assert lens.surfaces[-1].mount == 5e-6 and Lens.load(lens.save(tmp_path / "again.toml")).surfaces[-1].mount == 5e-6
+    hot = lens.at(70.0)
+    assert hot.surfaces[-1].thickness == pytest.approx(lens.surfaces[-1].thickness * (1 + 5e-6 * 50), rel=1e-12)
+    assert hot.surfaces[2].thickness == pytest.approx(lens.surfaces[2].thickness * (1 + 23.6e-6 * 50), rel=1e-12)
+    assert lens.at(70.0, mount="none").surfaces[-1].thickness == lens.surfaces[-1].thickness
+    path.write_text(path.read_text().replace("mount = 5e-6", "mount = \"wood\""))
+    with pytest.raises(SolasError, match=r"surface 4 .*mount 'wood'"):
+        Lens.load(path)
