@@ -29,6 +29,8 @@ def test_scene_and_render_commands(tmp_path):
     assert main(["render-image", "solas-doublet", str(tmp_path / "nope.png"), "-o", str(tmp_path / "x.exr")]) == 2
 
 OUTPUT_FLAGS = {"help", "output", "png", "force"}  # where a render is written, not how it is rendered
+# where the lens is (`Lens.at`), not how it renders: a batch takes a lens file that states it (lens convert)
+LENS_FLAGS = {"temperature_c", "pressure_kpa", "mount"}
 
 
 @pytest.mark.parametrize("argv, message", [
@@ -83,7 +85,7 @@ def test_every_render_image_setting_reaches_the_batch_items(tmp_path):
 
     parser = build_parser()
     image_cmd, batch_cmd = _subparser(parser, "render-image"), _subparser(parser, "batch", "render")
-    flags = {a.dest: a for a in image_cmd._actions if a.option_strings and a.dest not in OUTPUT_FLAGS}
+    flags = {a.dest: a for a in image_cmd._actions if a.option_strings and a.dest not in OUTPUT_FLAGS | LENS_FLAGS}
     assert set(flags) <= set(RenderSpec.fields_by_name()) and set(flags) == set(IMAGE_SETTINGS)
     Image.fromarray(np.full((24, 32), 128, np.uint8)).save(tmp_path / "photo.png")
     for dest, action in flags.items():
