@@ -147,6 +147,7 @@ def lens_at(lens, temperature_c: float, pressure_kpa: float, mount=None):
     ctes = _mounts(lens, mount)
     if (temperature, pressure) == (lens.temperature_c, lens.pressure_kpa):
         return lens
+
     def grown(alpha: float) -> float:  # a length at 20 °C is L (1 + α (T − 20 °C)): back and forth is exact
         return (1.0 + alpha * (temperature - STANDARD_C)) / (1.0 + alpha * (lens.temperature_c - STANDARD_C))
 
@@ -166,7 +167,7 @@ def in_environment(lens, temperature_c: float, pressure_kpa: float):
     held = _unthermal(lens) if temperature != STANDARD_C else []
     if held:
         warnings.warn(f"lens {lens.name} at {temperature:g} °C: {'glasses' if len(held) > 1 else 'glass'} "
-                      f"{', '.join(held)} without thermal data (Schott formula and CTE) in the catalogue: absolute "
+                      f"{', '.join(held)} without thermal data (Schott formula or CTE) in the catalogue: absolute "
                       "index and size held as at 20 °C", stacklevel=3)
     return replace(lens, surfaces=tuple(replace(s, glass=s.glass.at(temperature, pressure)) for s in lens.surfaces),
                    object_glass=lens.object_glass.at(temperature, pressure),
@@ -181,5 +182,5 @@ def metadata(lens) -> dict:
     return {"temperature_c": lens.temperature_c, "pressure_kpa": lens.pressure_kpa}
 
 
-__all__ = ["DEFAULT_MOUNT", "MOUNTS", "STANDARD_C", "STANDARD_KPA", "absolute_change", "air_index", "in_environment", "lens_at", "metadata",
-           "mount_cte", "relative_index"]
+__all__ = ["DEFAULT_MOUNT", "MOUNTS", "STANDARD_C", "STANDARD_KPA", "absolute_change", "air_index",
+           "check_environment", "in_environment", "lens_at", "metadata", "mount_cte", "relative_index"]
