@@ -86,6 +86,8 @@ def run_lens_info(args) -> int:
     print(f"{lens.name}  ({lens.description})  hash {lens.hash}")
     print(f"stop: surface {lens.stop_index + 1}; image plane z = {lens.image_z:.6f} mm, diameter {lens.image_diameter:g} mm")
     print(f"fields: {lens.field_type.description}")
+    if "temperature_c" in info:
+        print(f"at {lens.temperature_c:g} °C in air of {lens.pressure_kpa:g} kPa (glass indices relative to it)")
     if not lens.dispersive:
         print("glass: no dispersion data (every medium a constant index): the columns of every wavelength agree")
     for key, label in (("virtual_object", "object: virtual, "), ("ideal_lens_path", "ideal lens: ")):

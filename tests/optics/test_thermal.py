@@ -203,6 +203,8 @@ def test_every_lens_command_takes_the_environment(capsys, tmp_path):
     assert plain["hash"] == lens.hash and "temperature_c" not in plain
     assert main(["lens", "convert", "solas-doublet", "--temperature-c", "-40", "-o", str(tmp_path / "cold.zmx")]) == 0
     assert Lens.load(tmp_path / "cold.zmx").temperature_c == -40.0
+    assert main(["lens", "info", "solas-doublet", "--temperature-c", "60"]) == 0
+    assert "at 60 °C in air of 101.325 kPa" in capsys.readouterr().out
     assert main(["lens", "info", "solas-doublet", "--mount", "wood", "--temperature-c", "30"]) == 2
     assert "mount 'wood'" in capsys.readouterr().err
 
