@@ -100,3 +100,13 @@ def test_standard_conditions_are_bit_identical(name, tmp_path):
     reference = figures(lens)
     for other in (Lens.load(stated), lens.at(20.0, 101.325, mount="titanium")):
         assert other.hash == lens.hash and figures(other) == reference
+
+
+def test_a_psf_says_where_its_lens_is(doublet):
+    """A PSF's metadata names the lens's temperature and pressure where not 20 °C and 101.325 kPa."""
+    from solas_mi.psf import psf
+
+    hot = psf(doublet.at(60.0, 95.0), (0.0, 0.0), 531.0, pitch_um=2.0, size=16).meta
+    plain = psf(doublet, (0.0, 0.0), 531.0, pitch_um=2.0, size=16).meta
+    assert (hot["temperature_c"], hot["pressure_kpa"], hot["lens_hash"]) == (60.0, 95.0, doublet.at(60.0, 95.0).hash)
+    assert "temperature_c" not in plain and "pressure_kpa" not in plain
