@@ -58,7 +58,6 @@ def load_lens(args):
 
 def run_lens_info(args) -> int:
     from .distortion import distortion
-    from .lens import Lens
     from .paraxial import paraxial
     from .pupil import chief_rays  # loads Dr.Jit
 
