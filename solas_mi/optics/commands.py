@@ -46,11 +46,15 @@ def load_lens(args):
     `Lens.at`), stating on stderr what of it overlaps (`Lens.overlaps`)."""
     from .lens import Lens
 
+    from . import thermal
+
     lens = Lens.load(args.lens)
-    temperature, pressure = getattr(args, "temperature_c", None), getattr(args, "pressure_kpa", None)
+    temperature, pressure, mount = (args.temperature_c, args.pressure_kpa, args.mount)
+    if mount is not None:
+        thermal.mount_cte(mount)  # checked even where nothing moves (the lens at its own temperature)
     if temperature is not None or pressure is not None:
         lens = lens.at(lens.temperature_c if temperature is None else temperature,
-                       lens.pressure_kpa if pressure is None else pressure, args.mount)
+                       lens.pressure_kpa if pressure is None else pressure, mount)
     for note in lens.overlaps:
         print(f"solas-mi: warning: lens {lens.name}: {note}", file=sys.stderr)
     return lens

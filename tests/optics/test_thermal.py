@@ -207,6 +207,7 @@ def test_every_lens_command_takes_the_environment(capsys, tmp_path):
     assert "at 60 °C in air of 101.325 kPa" in capsys.readouterr().out
     assert main(["lens", "info", "solas-doublet", "--mount", "wood", "--temperature-c", "30"]) == 2
     assert "mount 'wood'" in capsys.readouterr().err
+    assert main(["lens", "info", "solas-doublet", "--mount", "wood"]) == 2  # checked with no temperature too
 
 
 def test_a_lens_file_names_the_mount_of_each_gap(tmp_path, doublet):
