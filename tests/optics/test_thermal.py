@@ -227,3 +227,14 @@ def test_a_lens_file_names_the_mount_of_each_gap(tmp_path, doublet):
     path.write_text(path.read_text().replace("mount = 5e-6", "mount = \"wood\""))
     with pytest.raises(SolasError, match=r"surface 4 .*mount 'wood'"):
         Lens.load(path)
+
+
+def test_an_obsolete_schott_glass_has_its_catalogue_thermal_data():
+    """SCHOTT's LAK33 (OpticStudio's 2008 catalogue, TD and ED lines): its index follows the temperature with
+    the formula of those numbers, its CTE 6e-6/K; no warning for a lens of it."""
+    g = glass.resolve("LAK33")
+    assert g.thermal == (2.57e-06, 1.16e-08, -7.29e-11, 6.01e-07, 1.59e-10, 0.114) and g.cte == 6e-6
+    n = float(g.index(587.5618))
+    hot = _relative("LAK33", 587.5618, 60.0) * thermal.air_index(0.5875618, 60.0, 101.325)
+    cold = n * thermal.air_index(0.5875618, 20.0, 101.325)
+    assert hot - cold == pytest.approx(float(thermal.absolute_change(g.thermal, n, 0.5875618, 40.0)), rel=1e-9)
