@@ -6,7 +6,7 @@ STAMP  := $(VENV)/.installed
 SUDO   := $(shell [ "$$(id -u)" = 0 ] || echo sudo)
 OUT    ?= out
 
-.PHONY: setup llvm demo test bench bench-all docs smoke clean
+.PHONY: setup llvm demo test lint format bench bench-all docs smoke clean
 
 setup: llvm $(STAMP)
 
@@ -30,6 +30,17 @@ demo: setup
 
 test: setup
 	$(PY) -m pytest -q
+
+# ruff's rules and format (pyproject.toml [tool.ruff]: the rule set, and why each ignored rule is), then mypy on
+# the modules that define the public API (.ci/typecheck.py). `make format` rewrites the tree to pass the first two.
+lint: setup
+	$(PY) -m ruff check .
+	$(PY) -m ruff format --check .
+	$(PY) .ci/typecheck.py
+
+format: setup
+	$(PY) -m ruff check --fix .
+	$(PY) -m ruff format .
 
 # `make bench`: the quick set (a few minutes); `make bench-all`: every benchmark (over an hour on 2 cores);
 # `make bench BENCH=bench_convolution` runs one. Results land in benchmarks/results/ (the docs include them).
@@ -57,4 +68,4 @@ smoke: setup
 	PYTHON=$(PYTHON) bash .ci/smoke.sh
 
 clean:
-	rm -rf $(VENV) $(OUT) .pytest_cache site build
+	rm -rf $(VENV) $(OUT) .pytest_cache .ruff_cache .mypy_cache site build

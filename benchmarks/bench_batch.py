@@ -53,11 +53,11 @@ def main() -> None:
 
         def run(out, workers, dask):
             return degrade_batch([images], out, psf_grid=grid_path, workers=workers, dask=dask, progress=False)
-    print("| runner | workers | images/s (median of %d) | s per image in a worker |" % args.repeats)
+    print(f"| runner | workers | images/s (median of {args.repeats}) | s per image in a worker |")
     print("|---|---|---|---|")
     for name, dask, workers in CASES:
         rates, items = [], []
-        for r in range(args.repeats):
+        for _r in range(args.repeats):
             out = WORK / "batch-out"
             shutil.rmtree(out, ignore_errors=True)
             result = run(out, workers, dask)

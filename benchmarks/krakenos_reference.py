@@ -167,7 +167,7 @@ def spot_stats(Kos, lens, w_um, fy, ptype="square", samp=40):
 def zernike_wavefront(Kos, lens, w_um, fy):
     pup = make_pupil(Kos, lens, w_um, fy, "hexapolar", PUPIL_RINGS)
     X, Y, Z, p2v = Kos.Phase(pup)
-    coef, _, rms_chief, rms_centroid, fit_err = Kos.Zernike_Fitting(X, Y, Z, np.ones(N_ZERNIKE))
+    coef, _, _rms_chief, rms_centroid, fit_err = Kos.Zernike_Fitting(X, Y, Z, np.ones(N_ZERNIKE))
     info = dict(
         p2v_waves=float(p2v),
         rms_wfe_waves_fit=float(rms_centroid),
@@ -270,7 +270,7 @@ def main():
             )
             if not args.no_checks:
                 rms_um, cen, nray = spot_stats(Kos, lens, w, fy)
-                rms_hex, _, nhex = spot_stats(Kos, lens, w, fy, "hexapolar", 20)
+                rms_hex, _, _nhex = spot_stats(Kos, lens, w, fy, "hexapolar", 20)
                 c["spot_rms_um_uniform_square_grid"] = float(rms_um)
                 c["spot_rms_um_hexapolar20"] = float(rms_hex)
                 c["spot_n_rays"] = int(nray)
@@ -338,8 +338,8 @@ def main():
             wavelength_um=list(WAVES_UM),
         ),
         kraken_settings=dict(
-            pupil="Kos.Phase on a hexapolar pattern, %d rings (%d rays), rays aimed at the paraxial entrance pupil"
-                  % (PUPIL_RINGS, 1 + 3 * PUPIL_RINGS * (PUPIL_RINGS + 1)),
+            pupil=f"Kos.Phase on a hexapolar pattern, {PUPIL_RINGS} rings ({1 + 3 * PUPIL_RINGS * (PUPIL_RINGS + 1)} "
+                  "rays), rays aimed at the paraxial entrance pupil",
             n_zernike=N_ZERNIKE, zernike="Noll-normalised, Noll order, least squares",
             fft_size=N_FFT, fft_pitch_um=FFT_PITCH_UM,
             wavefront_reference="sphere centred on the chief ray's image-plane point through the exit-pupil centre",
@@ -365,7 +365,7 @@ def main():
     )
     with open(os.path.join(args.out, "README.json"), "w") as f:
         json.dump(readme, f, indent=1, allow_nan=False)  # strict JSON: no NaN/Infinity tokens
-    print("wrote", os.path.join(args.out, "krakenos_psfs.npz"), "in %.1f s" % t_total)
+    print("wrote", os.path.join(args.out, "krakenos_psfs.npz"), f"in {t_total:.1f} s")
 
 
 if __name__ == "__main__":

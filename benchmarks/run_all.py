@@ -4,7 +4,8 @@ hand; `docs/tools/check_pages.py` checks that every table on those pages is such
 
     python benchmarks/run_all.py                   # the quick set (a few minutes on 2 cores): `make bench`
     python benchmarks/run_all.py bench_convolution # one benchmark, by name
-    python benchmarks/run_all.py --all             # every bench_*.py (over an hour on 2 cores): `make bench-all`
+    python benchmarks/run_all.py --all             # every bench_*.py (over an hour on 2 cores): `make bench-all`,
+                                                   # but those of SIDE, which need another tool's environment
 """
 from __future__ import annotations
 
@@ -31,6 +32,8 @@ COMMANDS = {
     "crossval_headline": ["crossval", "solas-doublet", "scenes/images/rocket.png", "-o", "out/bench/crossval",
                           "--spp", "768"],
 }
+# benchmarks that need another tool installed beside this one: run by name, never by --all
+SIDE = {"bench_optiland": "optiland in a side environment (.optiland-venv or $OPTILAND_PYTHON)"}
 # name → arguments of the quick run; the quick set is what `make bench` runs
 QUICK = {"bench_psf_grid": ["--repeats", "3"], "bench_esfr": [], "bench_anchors": [], "bench_sensor_isp": [],
          "check_stability_solas-doublet": COMMANDS["check_stability_solas-doublet"],
@@ -92,7 +95,8 @@ def main(argv: list[str] | None = None) -> int:
     if unknown:
         ap.error(f"unknown benchmark {', '.join(unknown)}; there are: {', '.join(every)}")
     defaults = {**{n: [] for n in every}, **COMMANDS}
-    chosen = defaults if args.all else {n: QUICK.get(n, defaults[n]) for n in args.names} or QUICK
+    every_one = {n: a for n, a in defaults.items() if n not in SIDE}
+    chosen = every_one if args.all else {n: QUICK.get(n, defaults[n]) for n in args.names} or QUICK
     if args.arguments is not None:
         chosen = {args.names[0]: shlex.split(args.arguments)}
     for name, arguments in chosen.items():

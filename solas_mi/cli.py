@@ -45,6 +45,7 @@ class Parser(argparse.ArgumentParser):
 
 def build_parser() -> argparse.ArgumentParser:
     from . import __version__
+    from .analysis import commands as analysis
     from .batch import commands as batch
     from .convolution import commands as convolution
     from .experiments import commands as experiments
@@ -60,7 +61,8 @@ def build_parser() -> argparse.ArgumentParser:
     parser.add_argument("--version", action="version", version=f"solas-mi {__version__}")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
     # in the order of the data: lens → PSFs → convolution; lens → scene → render; irradiance → sensor → image processor (adds --isp to camera); images → metrics; checks
-    for area in (optics, psf, convolution, render, sensor, isp, metrics, validation, batch, experiments):
+    # (analysis adds its commands to optics' `lens`)
+    for area in (optics, psf, convolution, render, sensor, isp, metrics, analysis, validation, batch, experiments):
         area.register(sub)
     return parser
 

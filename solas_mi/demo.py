@@ -117,8 +117,8 @@ def convolutions(out: Path) -> None:
         cli(["degrade", _photo(), "--psf-grid", str(out / f"psf_grid_{grid}.exr"), "--method", method,
              "-o", str(files[name])])
     comparison_sheet({"input (ideal camera)": read_image(_photo()), **{k: read_image(v) for k, v in files.items()}},
-                     d / "comparison.png", "SOLAS doublet: direct render (R/G/B = 656/531/486 nm, %d spp) and PSF-grid "
-                     "convolutions" % DEMO_SPP)
+                     d / "comparison.png", f"SOLAS doublet: direct render (R/G/B = 656/531/486 nm, {DEMO_SPP} spp) and "
+                     "PSF-grid convolutions")
 
 
 def slanted_edge(out: Path) -> None:

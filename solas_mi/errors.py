@@ -8,7 +8,7 @@ _CLOSES = " :;,.!?)]"  # what follows a closing quote in Mitsuba's messages (not
 
 
 MAX_WORD, MAX_MESSAGE = 200, 2000  # characters: a value quoted back from a file is cut, not printed whole
-_LONG_WORD = re.compile(r"\S{%d,}" % (MAX_WORD + 1))
+_LONG_WORD = re.compile(rf"\S{{{MAX_WORD + 1},}}")
 
 
 class SolasError(ValueError):
@@ -47,7 +47,7 @@ def plugin_error(exc: BaseException, context: str, known: str | None = None) -> 
     files), Mitsuba's text ends at its first quote of something the scene does not name
     (`_scene_quotes_only`): Mitsuba quotes what it read from a mesh or spectrum file ("unknown token …"),
     and a scene may name any file the user can read."""
-    cause = exc
+    cause: BaseException | None = exc
     while cause is not None:
         if isinstance(cause, SolasError):
             return SolasError(f"{context}: {cause}")

@@ -7,6 +7,7 @@ Raises; sections are numpydoc's, underlined, and no other style's headers ("Args
 import ast
 import importlib
 import inspect
+import itertools
 import re
 import sys
 import textwrap
@@ -123,11 +124,11 @@ def problems(doc: str | None, params: list[str], returns: bool = False, yields_:
 def attribute_doc(module: str, name: str) -> str | None:
     """The docstring of a module attribute: the string right after its assignment."""
     body = hooks.module_tree(module).body
-    for node, following in zip(body, body[1:]):
+    for node, following in itertools.pairwise(body):
         targets = node.targets if isinstance(node, ast.Assign) else [getattr(node, "target", None)]
-        if name in [getattr(t, "id", None) for t in targets]:
-            if isinstance(following, ast.Expr) and isinstance(following.value, ast.Constant):
-                return str(following.value.value)
+        documented = isinstance(following, ast.Expr) and isinstance(following.value, ast.Constant)
+        if documented and name in [getattr(t, "id", None) for t in targets]:
+            return str(following.value.value)
     return None
 
 

@@ -22,6 +22,7 @@ ALLOWED = {
     "sensor": {"render"},  # irradiance → RAW, after the engines: reads an RGB image as a spectrum as the render does
     "isp": {"sensor"},  # RAW → 8-bit frame: the image processor, after the sensor
     "metrics": set(),
+    "analysis": {"optics", "psf", "metrics"},  # the lens analyses: MTF, aberration plots, reports
     "validation": {"optics", "psf", "convolution", "render", "sensor", "isp", "metrics"},
     "batch": {"optics", "psf", "convolution", "render", "sensor", "isp", "metrics"},
     "experiments": {"optics", "psf", "convolution", "render", "sensor", "isp", "metrics", "validation"},

@@ -2,6 +2,7 @@
 accept the lock (and no exact pins), a truthful requires-python, the README as a short front door
 whose examples the docs run, and a site whose every page exists."""
 import fnmatch
+import itertools
 import re
 import sys
 import tomllib
@@ -33,7 +34,8 @@ def test_licence_is_the_declared_one():
     assert "Neither the name of the copyright holder" in text  # the third clause
 
 
-@pytest.mark.parametrize("requirement", PYPROJECT["dependencies"])
+@pytest.mark.parametrize("requirement", PYPROJECT["dependencies"]
+                         + [r for extra in PYPROJECT["optional-dependencies"].values() for r in extra])
 def test_dependencies_are_ranges_that_accept_the_lock(requirement):
     req = Requirement(requirement)
     assert not any(s.operator in ("==", "===") for s in req.specifier), f"{requirement}: pin it in requirements.lock"
@@ -157,7 +159,7 @@ def test_the_benchmark_page_shows_no_raw_log():
     for path in sorted((ROOT / "benchmarks" / "results").glob("*.md")):
         lines = path.read_text(encoding="utf-8").splitlines()[check_pages.HEADER_LINES:]
         assert not [line for line in lines if log_line.match(line)], path.name
-        assert not [b for a, b in zip(lines, lines[1:]) if a and b and not (a.startswith("|") and b.startswith("|"))], \
+        assert not [b for a, b in itertools.pairwise(lines) if a and b and not (a.startswith("|") and b.startswith("|"))], \
             path.name
 
 

@@ -25,6 +25,9 @@ SHIPPED = {
     "solas_mi.optics.formats.WRITERS": (".toml", ".zmx", ".dat"),
     "solas_mi.optics.calibration.models.MODELS": ("opencv-pinhole", "opencv-fisheye", "ocamcalib", "woodscape",
                                                   "double-sphere", "unified"),
+    "solas_mi.analysis.registry.ANALYSES": ("mtf", "mtf-field", "mtf50-field", "through-focus", "field-curvature",
+                                            "distortion", "lateral-colour", "relative-illumination", "ray-fan",
+                                            "opd-fan", "wavefront", "spot-diagram", "encircled-energy"),
 }
 
 # One of each registered in a fresh process, then looked for in the parser, the messages and the docs.

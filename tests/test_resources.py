@@ -31,7 +31,7 @@ def test_missing_resources_are_an_error_not_a_guess(tmp_path, monkeypatch):
     try:
         resources.resource_dir("scenes")
     except FileNotFoundError as exc:
-        assert "reinstall" in str(exc)
+        assert "reinstall" in str(exc)  # noqa: PT017 -- the else: branch fails the test
     else:
         raise AssertionError("a foreign scenes/ folder was taken for solas-mi's")
 

@@ -49,7 +49,7 @@ def test_an_interruption_reported_by_a_library_is_an_interruption(tmp_path, monk
             os.kill(os.getpid(), signal.SIGTERM)  # raised in the plugin's constructor, as Mitsuba calls it
             time.sleep(5)
         except BaseException as exc:  # Mitsuba's parser: any exception of a plugin becomes a RuntimeError
-            raise plugin_error(RuntimeError(f"failed to instantiate: {type(exc).__name__}"), "cannot load scene")
+            raise plugin_error(RuntimeError(f"failed to instantiate: {type(exc).__name__}"), "cannot load scene")  # noqa: B904 -- as Mitsuba, which chains nothing
         raise SolasError("not interrupted")
 
     monkeypatch.setattr(user_scene, "load", loading)
@@ -141,7 +141,7 @@ def test_a_signal_during_an_import_is_raised_once_the_import_is_whole(tmp_path, 
     previous = signal.signal(sig, handler)
     steps = []
     try:
-        with pytest.raises(exception):
+        with pytest.raises(exception):  # noqa: PT012 -- the step after the import must not run
             importlib.import_module(name)
             steps.append("after the import")
     finally:

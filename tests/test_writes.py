@@ -197,5 +197,5 @@ def test_two_commands_writing_one_output_at_once_both_succeed(tmp_path):
     for p in runs:
         _, err = p.communicate(timeout=120)
         assert p.returncode == 0, err
-    data, meta = read_exr(tmp_path / "p.exr")
+    data, _meta = read_exr(tmp_path / "p.exr")
     assert data and sorted(f.name for f in tmp_path.iterdir()) == ["p.exr", "p.png"]

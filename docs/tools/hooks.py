@@ -209,7 +209,8 @@ def registries_reference() -> str:
              "new entry is one `register` call ([extending](../develop/extending.md)).\n"]
     for name, registry in registries().items():
         default = f" Default: `{registry.default}`." if registry.default else ""
-        parts.append(f"## {registry.kind[0].upper()}{registry.kind[1:]}s\n\n`{name}`.{default}\n\n"
+        plural = registry.kind[:-2] + "es" if registry.kind.endswith("is") else registry.kind + "s"  # analysis
+        parts.append(f"## {plural[0].upper()}{plural[1:]}\n\n`{name}`.{default}\n\n"
                      f"{registry.describe()}\n")
     return "\n".join(parts)
 

@@ -299,6 +299,7 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
     check_memory(f"batch of {len(p.todo)} images on {n} workers", need["peak_bytes"], force)
     header = p.spec.header(p.lens_scale)
     if p.lens is not None:
+        assert p.cache is not None  # a lens's grid is kept in the cache (_grid_source)
         with Progress("psf-grid", None, "PSFs", enabled=progress) as bar:  # shown only when it is computed
             p.grid_path, hit, seconds = p.cache.get(p.lens, p.grid_spec, progress=bar)
         header["grid_source"], header["grid_seconds"] = "cache hit" if hit else "computed", seconds

@@ -178,7 +178,8 @@ def plan(inputs: list[Path], out_dir: Path, roots: dict[Path, Path] | None = Non
     or metadata), or, for a file found in a folder tree (`roots`: file → the folder given), OUT_DIR/<its
     path in the tree>.exr. SolasError when two inputs would write the same output or an output would
     replace an input."""
-    jobs, seen = [], {}
+    jobs = []
+    seen: dict[Path, Path] = {}  # output → the input that writes it
     sources = set(inputs)
     for path in inputs:
         below = path.relative_to(roots[path]).parent if roots and path in roots else Path()

@@ -114,7 +114,8 @@ def _jobs(files: list[Path], out_dir: Path, base: RenderSpec, axes: dict[str, li
     """One item per input and sweep point, named by its input and swept values, seeded by its name."""
     swept = [name for name in SWEEP if len(axes[name]) > 1]
     names = {k: v.name for k, v in lenses.items()}
-    jobs, seen, sources = [], {}, set(files)
+    jobs, sources = [], set(files)
+    seen: dict[Path, Path] = {}  # output → the input that writes it
     for path, point in itertools.product(files, itertools.product(*(axes[name] for name in SWEEP))):
         values = dict(zip(SWEEP, point))
         stem = safe_name("_".join([safe_name(path.stem), *(_label(name, values[name], names) for name in swept)]))
@@ -178,7 +179,8 @@ def estimate(p: RenderPlan, workers: int) -> dict[str, float]:
     from ..render.stock import SAMPLES_PER_PASS
     from ..render.user_scene import scene_film_size
 
-    samples, peak = 0, 0
+    samples = 0
+    peak: float = 0
     for i in p.todo:
         job = p.jobs[i]
         if Path(job.input).suffix.lower() in SCENE_SUFFIXES:

@@ -36,6 +36,7 @@ from . import work
 from .work import run_job
 
 if TYPE_CHECKING:
+    from ..psf.depth import DepthGrid
     from ..psf.grid import PSFGrid
     from .jobs import Manifest
 
@@ -221,7 +222,7 @@ def run_local(jobs: list[Job], todo: list[int], grid_path: str | None, settings:
                 on_done(w.index, result)
 
 
-def run_dask(jobs: list[Job], todo: list[int], grid: "PSFGrid | None", grid_path: str | None, settings: dict[str, Any],
+def run_dask(jobs: list[Job], todo: list[int], grid: "PSFGrid | DepthGrid | None", grid_path: str | None, settings: dict[str, Any],
              address: str, workers: int, on_done: Callable[[int, Job], None]) -> None:
     """Items `todo` on the Dask scheduler at `address`, or on a LocalCluster of `workers` processes
     started for this batch when `address` is "local"."""
@@ -260,7 +261,7 @@ def run_dask(jobs: list[Job], todo: list[int], grid: "PSFGrid | None", grid_path
 
 
 
-def run_batch(manifest: "Manifest", todo: list[int], grid: "PSFGrid | None", grid_path: str | None,
+def run_batch(manifest: "Manifest", todo: list[int], grid: "PSFGrid | DepthGrid | None", grid_path: str | None,
               settings: dict[str, Any], workers: int, dask: str | None, progress: str | None) -> None:
     """Items `todo` of `manifest.jobs` on `workers` local processes or the Dask scheduler `dask`, the
     manifest saved as they finish (and at the end, also when interrupted), a progress bar of the unit

@@ -25,7 +25,9 @@ if TYPE_CHECKING:
     from ..psf.grid import PSFGrid
 
 
-METHODS = Registry("convolution method", default="interp")
+DEFAULT_METHOD = "interp"
+"""The convolution method taken when none is given."""
+METHODS = Registry("convolution method", default=DEFAULT_METHOD)
 """The convolution methods by name (a `solas_mi.registry.Registry`; the [table of methods](registries.md)). Each
 entry's function convolves one channel, ``(channel (H, W), grid, kernels.Layout, grid wavelength index, boundary,
 dtype) -> degraded channel``, and its ``describe`` ``(kernels.Layout, kernel radius R in pixels, grid wavelength
@@ -34,8 +36,6 @@ METHODS.register("interp", interp.convolve_channel, describe=interp.describe, su
                  reference="J. G. Nagy and D. P. O'Leary, SIAM J. Sci. Comput. 19(4), 1998")
 METHODS.register("patch", patch.convolve_channel, describe=patch.describe, summary=patch.SUMMARY,
                  reference="the SOLAS paper (IS&T Electronic Imaging, 2025): one PSF per block")
-DEFAULT_METHOD = METHODS.default
-"""The convolution method taken when none is given."""
 
 
 def check_method(method: str) -> str:

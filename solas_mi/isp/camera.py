@@ -86,9 +86,9 @@ class Camera:
         """
         from ..sensor.files import describe
 
-        auto = isinstance(self.exposure_ms, AutoExposure)
-        return {"sensor": describe(self.sensor), "exposure_ms": AUTO if auto else self.exposure_ms,
-                **({"auto_exposure": self.exposure_ms.describe()} if auto else {}), "scale": self.scale,
+        auto = self.exposure_ms if isinstance(self.exposure_ms, AutoExposure) else None
+        return {"sensor": describe(self.sensor), "exposure_ms": AUTO if auto is not None else self.exposure_ms,
+                **({"auto_exposure": auto.describe()} if auto is not None else {}), "scale": self.scale,
                 "seed": self.seed, "isp": None if self.isp is None else self.isp.describe()}
 
     def shoot(self, irradiance: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray | None, dict]:

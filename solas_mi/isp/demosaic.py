@@ -26,7 +26,8 @@ def slots(pattern: str) -> tuple[str, str]:
     return BAYER.get(pattern, (pattern, "RGB"))
 
 
-METHODS = Registry("demosaicing method", default="Malvar2004")
+DEFAULT_METHOD = "Malvar2004"
+METHODS = Registry("demosaicing method", default=DEFAULT_METHOD)
 
 
 def _package():
@@ -55,9 +56,6 @@ def _malvar2004(mosaic, bayer):
                                   label="demosaicing option refining_step ="),))
 def _menon2007(mosaic, bayer, **options):
     return _package().demosaicing_CFA_Bayer_Menon2007(mosaic, bayer, **options)
-
-
-DEFAULT_METHOD = METHODS.default
 
 
 def check_method(name: str, options: dict | None = None) -> Entry:

@@ -25,6 +25,7 @@ from __future__ import annotations
 import os
 from dataclasses import asdict, dataclass, field, fields
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -32,7 +33,7 @@ from ..errors import SolasError
 from ..options import toml_table
 from ..sensor.model import SensorModel
 from . import black, ccm, demosaic, tone, white
-from .tone import CURVES, GAMMA
+from .tone import CURVES, DEFAULT_CURVE, GAMMA
 
 DEFAULT = "default"
 
@@ -74,12 +75,12 @@ class ISP:
     """
 
     black_level: bool = True
-    white_balance: str | dict = white.METHODS.default
+    white_balance: str | dict = white.DEFAULT_METHOD
     grey_card: tuple[int, int, int, int] | None = None
     demosaic: str = demosaic.DEFAULT_METHOD
     demosaic_options: dict = field(default_factory=dict)
     ccm: str | tuple = "sensor"
-    tone: str = CURVES.default
+    tone: str = DEFAULT_CURVE
     gamma: float = GAMMA.default
 
     def __post_init__(self):
@@ -226,7 +227,7 @@ def develop(raw: np.ndarray, model: SensorModel, isp: ISP = ISP()) -> tuple[np.n
     >>> frame.shape, frame.dtype.name, sorted(meta["stages"])
     ((8, 12, 3), 'uint8', ['black_level', 'ccm', 'demosaic', 'tone', 'white_balance'])
     """
-    stages = {"black_level": {"subtracted": isp.black_level, "black_dn": model.black_level_dn,
+    stages: dict[str, dict[str, Any]] = {"black_level": {"subtracted": isp.black_level, "black_dn": model.black_level_dn,
                               "saturation_dn": black.saturation_dn(model)}}
     signal = black.subtract_black(raw, model, enabled=isp.black_level)
     gains = white.METHODS[_white_balance(isp)].function(signal, model, isp)

@@ -8,7 +8,8 @@ import numpy as np
 from ..imageio import srgb_encode
 from ..registry import Option, Registry
 
-CURVES = Registry("tone curve", default="srgb")
+DEFAULT_CURVE = "srgb"
+CURVES = Registry("tone curve", default=DEFAULT_CURVE)
 GAMMA = Option("gamma", float, 2.2, "the γ of x^(1/γ)", minimum=0, above=True, label="tone gamma")
 
 

@@ -14,7 +14,8 @@ from .black import GAIN_MAX
 from .ccm import responses
 from .demosaic import MINIMUM_FRAME, check_frame, slots
 
-METHODS = Registry("white balance method", default="daylight")
+DEFAULT_METHOD = "daylight"
+METHODS = Registry("white balance method", default=DEFAULT_METHOD)
 GIVEN = "given"  # the method of gains the user gives: an ISP writes it as its table of gains, not by name
 
 

@@ -57,7 +57,7 @@ def _segment_rois(
     at least ROW_GUARD_PX rows from such pixels (isolation from texture and from the adjacent sides
     of a square); the ROI spans the segment's columns widened by the chosen margin each side.
     """
-    height, width = mask.shape
+    _height, width = mask.shape
     labels, _ = ndi.label(mask, structure=np.ones((3, 3), bool))
     out: list[Roi] = []
     for label, box in enumerate(ndi.find_objects(labels), start=1):
@@ -91,9 +91,9 @@ def _segment_rois(
         narrow = spans[min(margins)]
         if narrow is None:
             continue
-        margin = max(pad for pad, span in spans.items()
-                     if span is not None and span[1] - span[0] >= 0.5 * (narrow[1] - narrow[0]))
-        top, bottom = spans[margin][:2]
+        margin, widest = max(((pad, span) for pad, span in spans.items() if span is not None
+                              and span[1] - span[0] >= 0.5 * (narrow[1] - narrow[0])), key=lambda found: found[0])
+        top, bottom = widest[:2]
         n_rows = bottom - top
         if max_rows is None or n_rows <= max_rows:
             starts = [top]
@@ -233,11 +233,13 @@ def _edge_rois(image: np.ndarray, mode: str, contrast: str, full_scale: float | 
     found: list[tuple[Roi, EsfrResult]] = []
     for roi in find_edge_rois(luminance(image)):
         res = esfr(crop(image, roi), mode=mode, full_scale=full_scale)
-        if not res.valid:
+        edge_contrast, angle_deg = res.contrast, res.angle_deg  # both measured in a valid result
+        why: str | None
+        if not res.valid or edge_contrast is None or angle_deg is None:
             why = "invalid e-SFR"
-        elif not c_lo < res.contrast < c_hi:
+        elif not c_lo < edge_contrast < c_hi:
             why = f"contrast outside ({c_lo}, {c_hi})"
-        elif not ANGLE_RANGE_DEG[0] <= res.angle_deg <= ANGLE_RANGE_DEG[1]:
+        elif not ANGLE_RANGE_DEG[0] <= angle_deg <= ANGLE_RANGE_DEG[1]:
             why = f"angle outside {ANGLE_RANGE_DEG[0]}–{ANGLE_RANGE_DEG[1]}°"
         elif res.mtf50 is None:
             why = "MTF50 not found"
@@ -249,10 +251,10 @@ def _edge_rois(image: np.ndarray, mode: str, contrast: str, full_scale: float | 
             found.append((roi, res))
     if found:
         floor = min(MIN_MTF50, 0.5 * float(np.median([r.mtf50 for _, r in found])))
-        low = [f for f in found if f[1].mtf50 < floor]
+        low = [f for f in found if f[1].mtf50 < floor]  # type: ignore[operator]  # each found has an MTF50
         if low:
             rejected[f"MTF50 below {MIN_MTF50} cy/px in a sharper image"] += len(low)
-            found = [f for f in found if f[1].mtf50 >= floor]
+            found = [f for f in found if f[1].mtf50 >= floor]  # type: ignore[operator]  # each found has one
     return found
 
 
@@ -303,7 +305,7 @@ def plot_report(report: NsSfrReport, image: np.ndarray, path: str | os.PathLike)
     ax_img.set_xlim(-0.5, width - 0.5)
     ax_img.set_ylim(height - 0.5, -0.5)
     ax_img.set(title=f"edge ROIs in {report.scheme} annuli", xlabel="x (px)", ylabel="y (px)")
-    after = report.after or [None] * len(report.before)
+    after: Sequence[AnnulusStats | None] = report.after or [None] * len(report.before)
     for stats, post, colour in zip(report.before, after, colours):
         if stats.curve is None:
             continue

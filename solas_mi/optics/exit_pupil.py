@@ -37,7 +37,7 @@ def reversed_lens(lens: Lens) -> Lens:
     before = [lens.object_glass] + [x.glass for x in s[:-1]]
     materials = ["AIR"] + [x.material for x in s[:-1]]
     rev = []
-    for j, i in enumerate(range(len(s) - 1, -1, -1)):
+    for i in range(len(s) - 1, -1, -1):
         thickness = s[i - 1].thickness if i > 0 else 1.0  # beyond the original first surface: unused
         rev.append(Surface(s[i].label, -s[i].radius, thickness, s[i].diameter, materials[i], before[i], s[i].stop,
                            s[i].conic, tuple(-a for a in s[i].aspheric), tuple(-a for a in s[i].qbfs),

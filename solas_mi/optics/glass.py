@@ -20,6 +20,7 @@ d, F, C lines) as a two-term Cauchy fit.
 from __future__ import annotations
 
 import difflib
+import itertools
 import re
 from dataclasses import dataclass, replace
 from functools import lru_cache
@@ -177,7 +178,7 @@ def own_material(name: str, entry: dict, where: str) -> Glass:
         wl, n = entry.get("wavelengths_nm"), entry.get("index")
         good = (isinstance(wl, list) and isinstance(n, list) and len(wl) == len(n) >= 1
                 and all(isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v) for v in wl + n))
-        if not good or any(b <= a for a, b in zip(wl, wl[1:])) or not all(w > 0 for w in wl) \
+        if not good or any(b <= a for a, b in itertools.pairwise(wl)) or not all(w > 0 for w in wl) \
                 or not all(1.0 < v < 5.0 for v in n):
             raise SolasError(f"{ident}: wavelengths_nm = {wl!r}, index = {n!r}: give lists of the same length, "
                              "wavelengths (nm) positive and increasing, indices in (1, 5)")

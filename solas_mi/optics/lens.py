@@ -20,11 +20,11 @@ from ..errors import SolasError
 from ..imageio import write_text
 from . import lens_checks, overlap, thermal
 from . import glass as glass_mod
-from .sag import sag  # noqa: F401 (re-exported)
-from .surface import (NORM_RADIUS_MM, Surface, check_keys, finite_number, lens_catalogues,  # noqa: F401 (NORM_RADIUS_MM:
-                      lens_materials, subtable, surface_from_row)  # re-exported)
-from .formats import (MAX_SURFACES, MAX_WAVELENGTHS, READERS, WRITERS, check_count, check_printable,
-                      lens_path, shipped_lenses, writable)  # noqa: F401 (shipped_lenses: re-exported)
+from .sag import sag as sag  # re-exported
+from .surface import NORM_RADIUS_MM as NORM_RADIUS_MM  # re-exported
+from .surface import Surface, check_keys, finite_number, lens_catalogues, lens_materials, subtable, surface_from_row
+from .formats import MAX_SURFACES, MAX_WAVELENGTHS, READERS, WRITERS, check_count, check_printable, lens_path, writable
+from .formats import shipped_lenses as shipped_lenses  # re-exported
 from .fields import FieldType, field_type_for
 
 def check_lens(lens) -> None:

@@ -58,7 +58,7 @@ def ynu_trace(lens: Lens, wavelength_nm: float, y1: float, u0: float, start: int
         if k > start:
             height = height + slope * (z[k] - z[k - 1])
         s = lens.surfaces[k]
-        power = (n[k + 1] - n[k]) * s.paraxial_curvature + (1.0 / s.focal_length if s.ideal else 0.0)
+        power = (n[k + 1] - n[k]) * s.paraxial_curvature + (1.0 / s.focal_length if s.focal_length is not None else 0.0)
         slope = (n[k] * slope - height * power) / n[k + 1]
         y[k], u[k] = height, slope
     return y, u
@@ -160,7 +160,7 @@ def _paraxial(lens: Lens, wavelength_nm: float, fields_deg: list[float] | None =
 
     # Two base rays at surface 1: a = (y=1, u=0), b = (y=0, u=1); every ray is a mix of them.
     ya, ua = ynu_trace(lens, wavelength_nm, 1.0, 0.0)
-    yb, ub = ynu_trace(lens, wavelength_nm, 0.0, 1.0)
+    yb, _ub = ynu_trace(lens, wavelength_nm, 0.0, 1.0)
     efl = -1.0 / (n[-1] * ua[-1]) if ua[-1] != 0 else math.inf  # 1/power: n'u' = −y1·power
     ep_z, ep_radius, xp_z, xp_radius, xp_f_number = _pupils(lens, wavelength_nm, ya, yb)
     ym, um, obj_z = _marginal_ray(lens, wavelength_nm, ya, ua)

@@ -20,8 +20,8 @@ from .lens import Lens
 from .aiming import Bundle, chief_aim, continued_aim, nearest_passing, stop_target, aim
 from .paraxial import paraxial, pupil_distance
 
-__all__ = ["Bundle", "aim", "ChiefRays", "chief_rays", "widest_field", "stop_rim", "PupilFunction", "pupil_function",
-           "entrance_power", "nearest_passing"]
+__all__ = ["Bundle", "aim", "ChiefRays", "chief_rays", "widest_field", "stop_rim", "stop_aim", "PupilFunction",
+           "pupil_function", "entrance_power", "nearest_passing"]
 dr = tracer.dr
 RIM_RAYS = 32
 RIM_BISECTIONS = 30  # a rim ray moved inside the stop's rim: its radius to 1e-9 of the rim's
@@ -106,17 +106,9 @@ def stop_rim(rim: Bundle, chief: ChiefRays, accept=None, vignetting: np.ndarray 
     if vignetting is not None:  # the rim's ellipse: its points scaled per side
         v = np.repeat(np.asarray(vignetting, dtype=np.float64), RIM_RAYS, axis=0)
         cos, sin = cos * (1.0 - np.where(cos >= 0, v[:, 0], v[:, 1])), sin * (1.0 - np.where(sin >= 0, v[:, 2], v[:, 3]))
-    # start from the chief ray, scaled by the paraxial entrance-pupil/stop size ratio
-    ratio = entrance_pupil_footprint(lens) / r_stop
 
     def at(scale: np.ndarray):
-        gx, gy = tracer.F(r_stop * scale * cos), tracer.F(r_stop * scale * sin)
-        ex, ey = rim.per_ray(chief.entrance[:, 0]) + gx * ratio, rim.per_ray(chief.entrance[:, 1]) + gy * ratio
-        if lens.field_type.sideways:  # wide fields: the pupil is squeezed and tilted; grow the aim out from the chief ray
-            ex, ey = rim.per_ray(chief.entrance[:, 0]), rim.per_ray(chief.entrance[:, 1])
-            for k in range(1, RIM_STEPS):
-                ex, ey, _, _ = aim(rim, stop_target, ex, ey, gx * (k / RIM_STEPS), gy * (k / RIM_STEPS))
-        ex, ey, tr, ok = aim(rim, stop_target, ex, ey, gx, gy)
+        ex, ey, tr, ok = stop_aim(rim, chief, tracer.F(r_stop * scale * cos), tracer.F(r_stop * scale * sin))
         return ex, ey, tr, tracer.to_numpy(ok & accept(tr) if accept is not None else ok)[0]
 
     ex, ey, tr, ok = at(np.ones(len(phi)))
@@ -130,6 +122,22 @@ def stop_rim(rim: Bundle, chief: ChiefRays, accept=None, vignetting: np.ndarray 
     shape = (rim.n_fields, RIM_RAYS)
     ex, ey = tracer.to_numpy(ex, ey)
     return ex.reshape(shape), ey.reshape(shape), tr, ok.reshape(shape)
+
+
+def stop_aim(b: Bundle, chief: ChiefRays, gx: tracer.F, gy: tracer.F):
+    """The rays of bundle `b` aimed at the stop points (gx, gy) (mm in the stop's plane, per ray): each
+    starts from its field's chief ray, shifted by the paraxial entrance-pupil/stop size ratio (wide
+    fields, whose pupil is squeezed and tilted, grow the aim out from the chief ray in RIM_STEPS);
+    entrance coordinates, the trace and whether the aim converged (Dr.Jit)."""
+    lens = b.lens
+    ex, ey = b.per_ray(chief.entrance[:, 0]), b.per_ray(chief.entrance[:, 1])
+    if lens.field_type.sideways:
+        for k in range(1, RIM_STEPS):
+            ex, ey, _, _ = aim(b, stop_target, ex, ey, gx * (k / RIM_STEPS), gy * (k / RIM_STEPS))
+    else:
+        ratio = entrance_pupil_footprint(lens) / lens.surfaces[lens.stop_index].semi_diameter
+        ex, ey = ex + gx * ratio, ey + gy * ratio
+    return aim(b, stop_target, ex, ey, gx, gy)
 
 
 def entrance_pupil_footprint(lens: Lens) -> float:
@@ -253,7 +261,7 @@ def _sphere_target(lens: Lens, b: Bundle, chief: ChiefRays):
     cz = lens.image_z
 
     def target(tr: tracer.Traced):
-        x, y, z, opl, hit = tracer.to_sphere(tr, cx, cy, cz, radius)
+        x, y, _z, _opl, hit = tracer.to_sphere(tr, cx, cy, cz, radius)
         return (x - cx) / radius, (y - cy) / radius, tr.ok & hit
 
     return target

@@ -136,8 +136,8 @@ def _image_hits(bundle: pupil.Bundle, ex: np.ndarray, ey: np.ndarray, image_z: f
     """Image-plane points (mm) of the bundle's rays at entrance coordinates ex, ey, and which arrive."""
     traced = bundle.trace(tracer.F(ex), tracer.F(ey))
     x, y, _ = tracer.to_plane(traced, image_z)
-    keep, x, y = tracer.to_numpy(traced.ok & (traced.clipped_by == 0), x, y)
-    return x, y, keep
+    keep, x_mm, y_mm = tracer.to_numpy(traced.ok & (traced.clipped_by == 0), x, y)
+    return x_mm, y_mm, keep
 
 
 def _light_disc(lens: Lens, field: np.ndarray, wl: np.ndarray, chief_entrance: np.ndarray, reach: float):

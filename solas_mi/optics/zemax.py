@@ -369,7 +369,7 @@ def dumps(lens) -> str:
     out = ["VERS 190513 80 123457 L123457", "MODE SEQ", f"NAME {lens.name}", "PFIL 0 0 0",
            "UNIT MM X W X CM MR CPMM", f"ENVD {number(lens.temperature_c)} {number(lens.pressure_kpa / 101.325)} 0",
            *([f"GCAT {' '.join(vendors)}"] if vendors else []),
-           "FLOA", "FTYP 0 0 2 %d 0 0 0" % len(lens.wavelengths_nm),
+           "FLOA", f"FTYP 0 0 2 {len(lens.wavelengths_nm)} 0 0 0",
            "XFLN 0 0", f"YFLN 0 {number(lens.field_deg)}"]
     out += [f"WAVM {i} {number(w / 1000.0)} 1" for i, w in enumerate(lens.wavelengths_nm, start=1)]
     out += [f"PWAV {lens.wavelengths_nm.index(lens.primary_wavelength) + 1}"]

@@ -13,6 +13,7 @@ from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from ..errors import SolasError
 from ..optics import notes
@@ -133,7 +134,7 @@ def window_energy(data: np.ndarray, pitch_um: float, transmission: np.ndarray) -
     return data.sum(axis=(-2, -1)) * pitch_um ** 2 / np.where(transmission > 0, transmission, 1.0)
 
 
-def window_warnings(energy: np.ndarray, fields_deg: np.ndarray, size: int, pitch_um: float) -> list[str]:
+def window_warnings(energy: ArrayLike, fields_deg: np.ndarray, size: int, pitch_um: float) -> list[str]:
     """A warning for the PSF whose window energy is furthest from 1, if any is outside the limits."""
     energy = np.asarray(energy, dtype=np.float64).ravel()
     fields = np.asarray(fields_deg, dtype=np.float64).reshape(-1, 2)

@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import time
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 
@@ -127,7 +128,7 @@ def grid_fields(lens: Lens, spec: GridSpec) -> tuple[np.ndarray, dict]:
         hx, hy = spec.field_range_deg
     fx = field_nodes(nx, hx, spec.field_sampling)
     fy = field_nodes(ny, hy, spec.field_sampling)[::-1]  # row 0 = top = largest y
-    placement = {"layout": "field", "field_sampling": spec.field_sampling, "field_range_deg": [hx, hy],
+    placement: dict[str, Any] = {"layout": "field", "field_sampling": spec.field_sampling, "field_range_deg": [hx, hy],
                  "grid_orientation": "grid row 0 = largest y field, column 0 = smallest x field"}
     if hx > 0:  # the ideal image an input spanning ±hx horizontally stands for (`optics.camera`)
         placement.update(pinhole_focal_mm=pinhole_focal_mm(lens, hx), reference_wavelength_nm=lens.primary_wavelength)

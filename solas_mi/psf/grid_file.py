@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import TypeGuard
 
 import numpy as np
 
@@ -234,16 +235,15 @@ def check_grid_meta(path, meta: dict) -> tuple[int, int, int, tuple[float, ...]]
         _meta_array(path, meta, "node_mm", (ny, nx, 2))
         if "reference_wavelength_nm" not in meta:
             raise bad("reference_wavelength_nm", "a positive number")
-    elif "field_range_deg" in meta:
-        if (_meta_array(path, meta, "field_range_deg", (2,)) < 0).any():
-            raise bad("field_range_deg", "two non-negative half ranges (deg)")
+    elif "field_range_deg" in meta and (_meta_array(path, meta, "field_range_deg", (2,)) < 0).any():
+        raise bad("field_range_deg", "two non-negative half ranges (deg)")
     for key in ("transmission", "energy_in_window"):
         if key in meta:
             _meta_array(path, meta, key, (len(wl), ny, nx))
     return ny, nx, size, tuple(float(w) for w in wl)
 
 
-def _whole(v) -> bool:
+def _whole(v) -> TypeGuard[int]:
     return isinstance(v, int) and not isinstance(v, bool)
 
 

@@ -120,8 +120,9 @@ def _psf(lens, field, wavelengths, power_weights, pitch_um, size, method, normal
     fields = np.repeat(np.array([field]), len(wavelengths), axis=0)
     # all wavelengths share one origin, the first wavelength's chief ray, so lateral colour shows
     computed = compute(lens, fields, np.array(wavelengths), pitch_um, size, method, shared_origin=True, **own)
-    light = computed.centre_um is not None and bool(computed.chief.vignetted[0])
-    origin = computed.chief.image_xy[0] + (computed.centre_um[0] * 1e-3 if light else 0.0)  # the window's centre, mm
+    centre_um = computed.centre_um if bool(computed.chief.vignetted[0]) else None  # the light's centroid, if needed
+    light = centre_um is not None
+    origin = computed.chief.image_xy[0] + (centre_um[0] * 1e-3 if centre_um is not None else 0.0)  # the window's centre, mm
     blocked = sorted({s for v in computed.vignetted_by for s in v})
     if not np.dot(power_weights, computed.transmission) > 0:
         raise SolasError(f"no light reaches the image at field ({field[0]:g}, {field[1]:g}) deg: every ray is blocked"

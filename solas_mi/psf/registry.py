@@ -26,10 +26,10 @@ PUPIL_SAMPLES = Option("pupil_samples", int, DEFAULT_PUPIL_SAMPLES, "N×N pupil 
                        maximum=MAX_SAMPLING, label="pupil samples")
 RAYS = Option("rays", int, DEFAULT_GEOMETRIC_RAYS, "rays × rays per PSF", minimum=2, maximum=MAX_SAMPLING)
 
-METHODS = Registry("PSF method", default="fraunhofer")
+DEFAULT_METHOD = "fraunhofer"
+METHODS = Registry("PSF method", default=DEFAULT_METHOD)
 """The PSF methods by name (a `solas_mi.registry.Registry`): each entry's function, its own options, a summary
 and a reference; the [table of methods](registries.md)."""
-DEFAULT_METHOD = METHODS.default
 check_method = METHODS.get
 method_options = METHODS.options  # (name, {keyword: value}) -> the method's own options, checked
 

@@ -15,6 +15,7 @@ import json
 import math
 from dataclasses import asdict, dataclass
 from numbers import Real
+from typing import Any
 
 from ..errors import SolasError
 from ..options import OptionSpec, floats, option, parse_size_mm, parse_wxh, wxh_text
@@ -143,7 +144,7 @@ class GridSpec(OptionSpec):
             raise SolasError(f"auto_window {self.auto_window!r} must be True or False")
         set_(self, "distances_m", check_distances(self.distances_m))
 
-    def sampling_options(self) -> dict[str, int]:
+    def sampling_options(self) -> dict[str, Any]:
         """The PSF methods' own options.
 
         Returns
@@ -240,9 +241,9 @@ def inverse_spaced(count: int, near_m: float) -> tuple[float, ...]:
 def parse_distances(text: str) -> tuple[float, ...]:
     """--distances-m: "inf,40,20,10" (m, far to near) or "N:NEAR" (`inverse_spaced`)."""
     if ":" in text:
-        count, _, near = text.partition(":")
+        count_text, _, near_text = text.partition(":")
         try:
-            count, near = int(count), float(near)
+            count, near = int(count_text), float(near_text)
         except ValueError:
             raise SolasError(f"--distances-m {text!r} must be N:NEAR (N nodes, NEAR in metres) or distances "
                              "in m, comma-separated") from None
@@ -256,7 +257,7 @@ def check_distances(value) -> tuple[float, ...] | None:
         return None
     out = []
     for v in _one_or_many(value, "a sequence of distances (m)", "distances"):
-        if not isinstance(v, Real) or isinstance(v, bool) or math.isnan(v) or not v > 0:
+        if not isinstance(v, Real) or isinstance(v, bool) or math.isnan(v) or not float(v) > 0:
             raise SolasError(f"distance {v!r} m must be a positive number (inf: infinity)")
         out.append(float(v))
     if not out or len(set(out)) != len(out):

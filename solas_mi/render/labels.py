@@ -300,7 +300,7 @@ def _instance(hit: Hit):
         value = dr.select(met == mi.ShapePtr(item), float(i), value)
     layer = hit.layer(value)
     about = _instances(layer, names, ids, hit.scene)
-    boxes_3d(hit, about["boxes"], {name: shape for name, shape in zip(names, hit.scene.shapes())})
+    boxes_3d(hit, about["boxes"], dict(zip(names, hit.scene.shapes())))
     return {"instance.id": layer}, about
 
 

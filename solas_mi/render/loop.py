@@ -148,7 +148,7 @@ def render(scene, spp: int, seed: int = 0, max_depth: int | None = None, progres
                          "(each line needs its own samples)")
     width, height, channels = sensor.width, sensor.height, sensor.channels
     depth = max_depth if max_depth is not None else _max_depth(scene, sensor.lens)
-    pixels, samples = width * height, min(_SAMPLES_PER_PASS, steps_per_pass(mi.variant()) // depth)
+    pixels, samples = width * height, min(_SAMPLES_PER_PASS, steps_per_pass(str(mi.variant())) // depth)
     per_pass = max(1, min(spp, samples // pixels))
     passes = math.ceil(spp / per_pass)
     # an image larger than a pass is traced in bands of rows, so a pass stays bounded in memory and time
@@ -204,7 +204,7 @@ def _wavefront_pass(scene, sensor, emitter, spp: int, first: int, total: int, ba
     sampler.seed(dr.opaque(mi.UInt32, seed), samples)
     # what changes from pass to pass (and seed to seed) is opaque, not a literal: the passes run one
     # compiled kernel (a literal per pass compiled a kernel per pass, about 1 s each on CUDA)
-    index, per_pixel, base = dr.arange(mi.UInt32, samples), dr.opaque(mi.UInt32, spp), dr.opaque(mi.UInt32, base)
+    index, per_pixel, seed_base = dr.arange(mi.UInt32, samples), dr.opaque(mi.UInt32, spp), dr.opaque(mi.UInt32, base)
     pixel = index // per_pixel + dr.opaque(mi.UInt32, first_pixel)
     # the sample's index in its pixel's stratified set of `total`
     sample = index % per_pixel + dr.opaque(mi.UInt32, first)
@@ -215,15 +215,15 @@ def _wavefront_pass(scene, sensor, emitter, spp: int, first: int, total: int, ba
         wavelength_sample = (mi.Float(line) + 0.5) / lines
         share = dr.gather(mi.Float, mi.Float(_line_shares(total_samples, lines)), line)
     else:
-        wavelength_sample = stratified_1d(sample, total, hash_seed(pixel, 2, base), sampler.next_1d())
+        wavelength_sample = stratified_1d(sample, total, hash_seed(pixel, 2, seed_base), sampler.next_1d())
         share = mi.Float(1.0)
     film = mi.Point2f(mi.Float(pixel % width), mi.Float(pixel // width))
     # a pixel that covers at most two texels is integrated exactly by the object's footprint filter
     filtered = sensor.max_footprint <= 2.0 * emitter.tan_pitch and emitter.mapping == "rectilinear"
-    jitter = mi.Point2f(0.5) if filtered else cmj_2d(sample, total, hash_seed(pixel, 1, base), sampler.next_2d())
-    pos = (film + jitter) / mi.ScalarPoint2f(width, height)
+    jitter = mi.Point2f(0.5) if filtered else cmj_2d(sample, total, hash_seed(pixel, 1, seed_base), sampler.next_2d())
+    pos = (film + jitter) / mi.ScalarPoint2f(width, height)  # type: ignore[operator]  # Mitsuba's stubs lack this mix
     footprint = sensor.footprint(sensor.film_point(pos)) if filtered else None
-    aperture = cmj_2d(sample, total, hash_seed(pixel, 3, base), sampler.next_2d())
+    aperture = cmj_2d(sample, total, hash_seed(pixel, 3, seed_base), sampler.next_2d())
     ray, throughput = sensor.pupil_ray(0.0, wavelength_sample, pos, aperture)
     _, wavelength_bin = sensor.sample_wavelength(wavelength_sample)
     ctx = mi.BSDFContext()

@@ -19,6 +19,8 @@ experiment. RGB variants are refused: the lens needs a wavelength.
 """
 from __future__ import annotations
 
+from pathlib import Path
+
 from ..errors import SolasError, plugin_error
 from ..llvm import select_libllvm
 
@@ -121,7 +123,7 @@ def mitsuba(variant: str | None = None):
     return mi
 
 
-def load_scene(path: str, variant: str | None = None, **params):
+def load_scene(path: str | Path, variant: str | None = None, **params):
     """Load a scene XML (lengths in mm) with the solas-mi plugins; `params` fill its <default> values.
 
     Loaded on the calling thread (`parallel=False`): the plugins trace the lens with Dr.Jit when they

@@ -9,6 +9,7 @@ Meshes are written as binary PLY beside the scene XML, so a scene directory is s
 """
 from __future__ import annotations
 
+import itertools
 import math
 import os
 from dataclasses import dataclass
@@ -49,7 +50,7 @@ def check_gaps(lens: Lens) -> None:
     apertures, than MIN_GAP_MM: a ray continued SPAWN_OFFSET_MM past one surface would skip the next."""
     caps = [k for k, s in enumerate(lens.surfaces)
             if s.glass != (lens.surfaces[k - 1].glass if k else lens.object_glass)]
-    for a, b in zip(caps[:-1], caps[1:]):
+    for a, b in itertools.pairwise(caps):
         sa, sb = lens.surfaces[a], lens.surfaces[b]
         r = np.linspace(0.0, min(sa.semi_diameter, sb.semi_diameter), 257)
         gap = lens.vertex_z[b] - lens.vertex_z[a] + sb.sag(r) - sa.sag(r)

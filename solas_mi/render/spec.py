@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import asdict, dataclass, replace
-from typing import Any
+from typing import Any, cast
 
 from ..errors import SolasError
 from ..optics.camera import BOUNDARIES, MAPPINGS
@@ -124,7 +124,7 @@ class RenderSpec(OptionSpec):
         if not isinstance(self.response, str) or not self.response.strip():
             raise SolasError(f"camera response {self.response!r} must be srgb, lines, mono:<nm> or table:<file.csv>")
         for name in ("boundary", "fresnel", "mapping"):
-            allowed = self.flags([name])[name].choices
+            allowed = cast(tuple, self.flags([name])[name].choices)  # these three flags' choices are tuples
             if getattr(self, name) not in allowed:
                 raise SolasError(f"{name} {getattr(self, name)!r} must be one of {', '.join(allowed)}")
         set_("labels", ",".join(parse_labels(self.labels)))

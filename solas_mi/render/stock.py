@@ -64,7 +64,8 @@ def render_scene(scene, spp: int, seed: int = 0, progress=None, labels=()) -> Re
     import mitsuba as mi
 
     check_run(spp, seed)
-    layers, label_meta = {}, None  # traced first: a scene without a lens camera is refused before its render
+    layers: dict[str, np.ndarray] = {}
+    label_meta: dict | None = None  # traced first: a scene without a lens camera is refused before its render
     if labels:
         from .labels import render_labels
 
@@ -72,14 +73,16 @@ def render_scene(scene, spp: int, seed: int = 0, progress=None, labels=()) -> Re
     sensor = scene.sensors()[0]
     film = sensor.film()
     width, height = (int(v) for v in film.crop_size())
-    per_pass = spp if not mi.variant().startswith(("llvm", "cuda")) else max(1, min(spp, SAMPLES_PER_PASS // (width * height)))
+    per_pass = spp if not str(mi.variant()).startswith(("llvm", "cuda")) else max(1, min(spp, SAMPLES_PER_PASS // (width * height)))
     passes = math.ceil(spp / per_pass)
-    total, names, done = None, None, 0
+    total: np.ndarray | None = None
+    names: list[str] = []
+    done = 0
     start = time.perf_counter()
     for k in range(passes):
         n = min(per_pass, spp - done)
         try:
-            mi.render(scene, seed=pass_seed(seed, k), spp=n)
+            mi.render(scene, seed=pass_seed(seed, k), spp=n)  # type: ignore[arg-type]  # an int seed: its stub says UInt32
         except RuntimeError as exc:  # a plugin's refusal (e.g. an integrator that cannot see through a lens)
             raise plugin_error(exc, "render") from None
         bitmap = film.bitmap()
@@ -90,6 +93,7 @@ def render_scene(scene, spp: int, seed: int = 0, progress=None, labels=()) -> Re
         if progress is not None:
             progress(done, spp)
     seconds = time.perf_counter() - start
+    assert total is not None  # spp >= 1 (check_run): one pass at least
     image = (total / spp).astype(np.float32)
     integrator = str(scene.integrator()).split("[", 1)[0]
     result = Render(image, tuple(names), spp, seconds, width * height * spp / seconds,

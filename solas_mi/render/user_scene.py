@@ -89,7 +89,7 @@ def _check_data(mi, state) -> None:
     regular file within `userfiles`' bound before Mitsuba reads it; a missing one Mitsuba names."""
     resolver = mi.file_resolver()
     for node in state.nodes:
-        if "filename" in node.props.keys() and isinstance(node.props["filename"], str):
+        if "filename" in node.props.keys() and isinstance(node.props["filename"], str):  # noqa: SIM118 -- Mitsuba Properties, no dict
             path = Path(str(resolver.resolve(node.props["filename"])))
             if os.path.lexists(path):
                 check(path, "scene data file")
@@ -111,7 +111,7 @@ def scene_files(xml_path: str | Path, params: dict | None = None) -> list[Path]:
         _, state = _parse(mi, xml_path, params)
         found = {Path(xml_path).resolve()} | {Path(str(resolver.resolve(f))).resolve() for f in state.files}
         for node in state.nodes:
-            for value in (node.props[key] for key in node.props.keys()):
+            for value in (node.props[key] for key in node.props.keys()):  # noqa: SIM118 -- Mitsuba Properties
                 if isinstance(value, str) and value and (path := Path(str(resolver.resolve(value)))).is_file():
                     found.add(path.resolve())
     finally:
@@ -121,7 +121,7 @@ def scene_files(xml_path: str | Path, params: dict | None = None) -> list[Path]:
 
 def _children(state, node) -> list:
     """The nodes `node` holds (its film, sampler, medium, …)."""
-    refs = [node.props[k] for k in node.props.keys()]
+    refs = [node.props[k] for k in node.props.keys()]  # noqa: SIM118 -- Mitsuba Properties, no dict
     return [state.nodes[r.index()] for r in refs if type(r).__name__ == "ResolvedReference"]
 
 
@@ -135,7 +135,7 @@ def scene_film_size(xml_path: str | Path, params: dict | None = None) -> tuple[i
     from .mitsuba import mitsuba
 
     mi = mitsuba()
-    config, state = _parse(mi, xml_path, params)
+    _config, state = _parse(mi, xml_path, params)
     sensors = [n for n in state.nodes if n.type == mi.ObjectType.Sensor]
     film = _film(mi, state, sensors[0]) if sensors else None
     return _size(film)

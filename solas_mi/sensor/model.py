@@ -10,6 +10,7 @@ gain) and DSNU (spread of the per-pixel offset, e⁻) are spatial: fixed by the 
 """
 import math
 from dataclasses import dataclass, fields
+from typing import cast
 
 import numpy as np
 
@@ -224,10 +225,10 @@ class SensorModel:
         return np.asarray(raw) >= self.black_level_dn + self.saturation_dn - spread
 
     @property
-    def channel_wavelengths_nm(self) -> tuple[float, float, float]:
+    def channel_wavelengths_nm(self) -> tuple[float, ...]:
         """The wavelength (nm) that stands for each image channel R, G, B: `wavelengths_nm`, or with a QE
         curve the centres of the channels' bands (`qe` module)."""
-        return self.wavelengths_nm if self.qe_curve is None else BAND_CENTRES_NM
+        return BAND_CENTRES_NM if self.wavelengths_nm is None else self.wavelengths_nm  # None with a QE curve
 
     def effective_qe(self) -> np.ndarray:
         """The electrons per photon of each image channel on a pixel of each filter (`qe` module).
@@ -239,7 +240,8 @@ class SensorModel:
             `channel_wavelengths_nm`).
         """
         if self.qe_curve is None:
-            return scalar_effective_qe({"R": self.qe_r, "G": self.qe_g, "B": self.qe_b, "C": self.qe_c})
+            # without a QE curve, __post_init__ gave each scalar QE left out its default
+            return scalar_effective_qe(cast(dict[str, float], {"R": self.qe_r, "G": self.qe_g, "B": self.qe_b, "C": self.qe_c}))
         return self.qe_curve.effective_qe(set(self.cfa))
 
     def dark_variance_e2(self, exposure_s: float) -> float:

@@ -115,8 +115,10 @@ def degrade_twice(batch_inputs, change, inputs=None):
     from solas_mi.batch import degrade_batch
 
     out = batch_inputs.root / "out"
-    run = lambda: degrade_batch(inputs or [batch_inputs.images], out, psf_grid=batch_inputs.grid, workers=1,  # noqa: E731
-                                progress=False)
+
+    def run():
+        return degrade_batch(inputs or [batch_inputs.images], out, psf_grid=batch_inputs.grid, workers=1, progress=False)
+
     first = run()
     assert not first.failed
     change(out)
@@ -177,7 +179,7 @@ def test_a_linked_input_keeps_its_name(batch_inputs, tmp_path):
     (frame,) = batch_inputs.write(1)
     link = tmp_path / "alias.png"
     link.symlink_to(frame)
-    out, status, m = degrade_twice(batch_inputs, lambda out: None, inputs=[link])
+    _out, status, m = degrade_twice(batch_inputs, lambda out: None, inputs=[link])
     assert status == {"alias.exr": "skipped"} and m["items"][0]["input"] == str(link)
 
 
@@ -220,10 +222,9 @@ def test_a_folder_that_turns_read_only_keeps_the_batch_s_error(tmp_path, monkeyp
     def read_only(path, *args, **kwargs):
         raise PermissionError(1, "Operation not permitted", str(path))
 
-    with pytest.raises(SolasError, match="cannot write"):
-        with hold_folder(tmp_path / "out", "a batch"):
-            monkeypatch.setattr(os, "unlink", read_only)
-            raise SolasError("cannot write out/batch.json: Operation not permitted")
+    with pytest.raises(SolasError, match="cannot write"), hold_folder(tmp_path / "out", "a batch"):  # noqa: PT012 -- raised in the hold
+        monkeypatch.setattr(os, "unlink", read_only)
+        raise SolasError("cannot write out/batch.json: Operation not permitted")
     monkeypatch.undo()
     with hold_folder(tmp_path / "out", "the next batch"):
         pass

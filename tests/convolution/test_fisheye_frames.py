@@ -141,6 +141,6 @@ def test_the_command_line_takes_a_fisheye_calibration(wide, tmp_path):
     args = p.parse_args(["degrade", str(tmp_path / "in.exr"), "--psf-grid", str(tmp_path / "grid.exr"), "-o",
                          str(tmp_path / "out.exr"), "--fisheye", "polynomial:1,1,160,120,150,12,-4,0.5"])
     assert args.run(args) == 0
-    channels, meta = read_exr(tmp_path / "out.exr")
+    _channels, meta = read_exr(tmp_path / "out.exr")
     assert meta["frame_camera"]["model"] == "polynomial" and meta["camera"]["projection"].startswith("frame")
     assert meta["frame_camera"]["extent_deg"][0] == pytest.approx(67.5, abs=1) and meta["nodes"] == [9, 9]

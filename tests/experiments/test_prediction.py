@@ -7,7 +7,8 @@ import numpy as np
 import pytest
 
 from solas_mi.errors import SolasError
-from solas_mi.experiments.street.prediction import aperture_mtf, edge_normal_deg, mtf50, mtf_along
+from solas_mi.experiments.street.prediction import edge_normal_deg
+from solas_mi.metrics.mtf import aperture_mtf, mtf50, mtf_along
 
 
 def gaussian_psf(sigma_x_um: float, sigma_y_um: float, pitch_um: float = 0.25, size: int = 241) -> np.ndarray:

@@ -21,7 +21,7 @@ def unit_irradiance(model: SensorModel, exposure_s: float = EXPOSURE_S) -> float
     patterns) is the saturation signal: the developed frame's linear 1.0 for a sensor's own CCM."""
     reference = "C" if "C" in model.cfa else "G"
     flat = np.ones((2, 2, 3))
-    sites = {f: v for f, v in zip(model.cfa, mean_electrons(model, flat, exposure_s).ravel())}
+    sites = dict(zip(model.cfa, mean_electrons(model, flat, exposure_s).ravel()))
     return saturation_dn(model) / (model.gain_dn_per_e * sites[reference])
 
 

@@ -100,7 +100,7 @@ def test_opencv_projects_the_written_calibrations_onto_the_tracers_chief_rays(le
         try:
             cal = fit(cmap, name)
         except SolasError as exc:  # the pinhole cannot hold a field past 90 deg: refused by name
-            assert name == "opencv-pinhole" and cmap.lens.field_type.sideways and name in str(exc)
+            assert name == "opencv-pinhole" and cmap.lens.field_type.sideways and name in str(exc)  # noqa: PT017 -- per model
             continue
         for suffix in (".yaml", ".json"):
             k, dist = opencv_file(cal, tmp_path, suffix)

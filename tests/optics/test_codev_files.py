@@ -479,9 +479,9 @@ def test_private_glass_catalogue(tmp_path):
 
 def test_private_glass_in_the_dr_jit_tracer(tmp_path):
     """The tracer's index of a table material (Dr.Jit, each ray its wavelength) is the NumPy spline's."""
-    import drjit as dr  # noqa: PLC0415 - the tracer's array type
+    import drjit as dr  # the tracer's array type
 
-    from solas_mi.optics.tracer import refractive_index  # noqa: PLC0415
+    from solas_mi.optics.tracer import refractive_index
 
     own = G.own_material("T", {"wavelengths_nm": [400.0, 500.0, 550.0, 700.0, 900.0],
                                "index": [1.53, 1.52, 1.517, 1.512, 1.509]}, "test")

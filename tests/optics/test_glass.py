@@ -67,8 +67,8 @@ def test_polynomial_formula():
     p = [0, 2, -2, -4, -6, -8]
     assert g.index(587.5618) == pytest.approx(sum(a * lam ** e for a, e in zip(k, p)) ** 0.5, abs=1e-15)
     assert g.index(587.5618) == pytest.approx(1.83481, abs=1e-5)
-    import drjit as dr  # noqa: PLC0415 - the tracer's path: the same formula on Dr.Jit arrays
-    from drjit.llvm import Float64  # noqa: PLC0415
+    import drjit as dr  # the tracer's path: the same formula on Dr.Jit arrays
+    from drjit.llvm import Float64
     n = g.index_formula(Float64([0.4861327, lam]), dr.sqrt)
     assert list(n) == pytest.approx(list(g.index([486.1327, 587.5618])), abs=1e-14)
 
@@ -335,7 +335,7 @@ def test_calcium_fluoride_daimon():
 def test_conrady_formula():
     """LightPath's NICHIA_MELT1, the Zemax AGF's formula 5 (Conrady, n = A0 + A1/λ + A2/λ^3.5), against the
     formula by hand, and on Dr.Jit arrays (the tracer's path) the same."""
-    import drjit as dr  # noqa: PLC0415 - the tracer's array type
+    import drjit as dr  # the tracer's array type
 
     g = glass.resolve("NICHIA_MELT1")
     assert g.kind == "conrady" and g.name == "LIGHTPATH:NICHIA_MELT1"

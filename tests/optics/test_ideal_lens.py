@@ -120,7 +120,7 @@ def test_a_pencil_through_diverging_and_converging_ideal_lenses_is_stigmatic():
         {"radius": 0.0, "thickness": 20.0, "diameter": 14.0, "stop": True, "focal_length": -50.0},
         {"radius": 0.0, "thickness": bfd, "diameter": 60.0, "focal_length": 40.0}]})
     tan = math.tan(math.radians(8.0))
-    x, y, opl, ok = _pencil(lens, tan)
+    _x, y, opl, ok = _pencil(lens, tan)
     assert ok.all()
     assert np.abs(y - efl * tan).max() < 1e-11
     assert np.ptp(opl) < 1e-11

@@ -41,7 +41,7 @@ def test_pupils_of_a_last_stop_are_its_exit_pupil():
 @pytest.mark.parametrize("distance", ["infinity", 400.0])
 def test_the_marginal_ray_meets_the_stop_rim(distance):
     lens = singlet(distance=distance)
-    ym, um, obj_z = _marginal_ray(lens, lens.primary_wavelength, *ynu_trace(lens, lens.primary_wavelength, 1.0, 0.0))
+    ym, _um, obj_z = _marginal_ray(lens, lens.primary_wavelength, *ynu_trace(lens, lens.primary_wavelength, 1.0, 0.0))
     assert ym[lens.stop_index] == pytest.approx(10.0, rel=1e-12)
     assert obj_z == (-math.inf if distance == "infinity" else -400.0)
 
@@ -59,7 +59,7 @@ def test_refraction_at_a_flat_surface_is_snell():
     d = (T.F(np.sin(theta)), T.F(0.0 * theta), T.F(np.cos(theta)))
     zero = T.F(0.0 * theta)
     mu = 1.0 / 1.5
-    (dx, dy, dz), k2, factor = T._refract(flat.surfaces[0], zero, zero, zero, zero, d, mu, True, T.F)
+    (dx, _dy, dz), _k2, factor = T._refract(flat.surfaces[0], zero, zero, zero, zero, d, mu, True, T.F)
     dx, dz, factor = T.to_numpy(dx, dz, factor)
     assert np.allclose(dx, mu * np.sin(theta), rtol=0, atol=1e-15) and np.allclose(dx ** 2 + dz ** 2, 1.0)
     assert factor[0] == pytest.approx(1.0 - ((1.5 - 1.0) / 2.5) ** 2, rel=1e-12)  # normal incidence: 1 − R
@@ -69,7 +69,7 @@ def test_rays_move_to_a_flat_surface_s_vertex_plane():
     flat = Lens.from_dict({"surface": [{"radius": 0.0, "thickness": 10.0, "diameter": 20.0, "stop": True},
                                        {"radius": 0.0, "thickness": 10.0, "diameter": 20.0}]})
     rays = T.launch(flat, T.F([0.0, 0.1]), T.F([0.0, -0.2]), T.F([1.0, 2.0]), T.F([0.0, 3.0]))
-    x, y, lz, t, opl, hit = T._to_surface(flat.surfaces[1], 10.0, rays, T.F(1.0), False, T.F)
+    x, y, _lz, t, opl, hit = T._to_surface(flat.surfaces[1], 10.0, rays, T.F(1.0), False, T.F)
     rz, rdz = T.to_numpy(rays.z, rays.dz)
     t0 = (10.0 - rz) / rdz
     x, y, opl, t, hit, rx, rdx = T.to_numpy(x, y, opl, t, hit, rays.x, rays.dx)

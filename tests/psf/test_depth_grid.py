@@ -46,7 +46,7 @@ def test_nodes_are_the_lens_at_each_distance_with_its_image_plane(doublet, tmp_p
     assert near.surfaces[-1].thickness == doublet.surfaces[-1].thickness
     assert np.array_equal(g.layers[2].data, psf_grid(near, replace(spec, distances_m=None)).data)
     # focused at infinity, a nearer object is more defocused: wider PSFs, growing with 1/distance
-    y, x = np.mgrid[:48, :48]
+    _y, x = np.mgrid[:48, :48]
     width = [float(np.sqrt(((x - 24) ** 2 * L.data[0, 1, 1]).sum() / L.data[0, 1, 1].sum())) for L in g.layers]
     assert width[0] < width[1] < width[2]
     # one camera for every node

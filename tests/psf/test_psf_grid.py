@@ -69,7 +69,7 @@ def test_grid_symmetry_reuse_is_exact(doublet, method):
 def test_the_preview_mosaic_is_bounded(doublet, tmp_path, monkeypatch):
     """The PNG is for looking: PSFs are block-averaged until the mosaic fits MOSAIC_PX, each tile still
     scaled to its own peak."""
-    from solas_mi.psf import grid as grid_module
+    from solas_mi.psf import grid_file as grid_module
 
     g = psf_grid(doublet, grid=(2, 3), wavelengths_nm=[486.0, 531.0, 656.0], size=48, pupil_samples=32)
     assert g.preview().shape == (96, 144, 3)

@@ -29,7 +29,7 @@ def test_a_film_wider_than_the_doublet_s_image_has_dark_corners():
 def test_image_scales_end_where_the_chief_rays_do():
     """Within the image the table is today's; past it, it stops at the last field with a chief ray."""
     lens = Lens.load("cooke-triplet")
-    h, radial, tangential = image_scales(lens, 25.0, 587.5618)
+    h, radial, _tangential = image_scales(lens, 25.0, 587.5618)
     with pytest.warns(UserWarning, match=r"pass every aperture up to field [\d.]+ deg"):
         h_far, radial_far, tangential_far = image_scales(lens, 40.0, 587.5618)
     assert h_far[-1] < 40.0 and h_far[-1] > h[-1]

@@ -52,7 +52,7 @@ def _sample(mi, bsdf, ctx, si, sample1=0.5):
 
 def _fresnel(mi, lam_nm, cos_theta=0.8):
     n = float(resolve("N-BK7").index_formula(lam_nm * 1e-3, math.sqrt))
-    r, cos_t, _, eta_ti = mi.fresnel(mi.Float(cos_theta), mi.Float(n))
+    r, _cos_t, _, _eta_ti = mi.fresnel(mi.Float(cos_theta), mi.Float(n))
     return float(r[0]), n
 
 

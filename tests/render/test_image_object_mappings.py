@@ -96,7 +96,7 @@ def test_stock_path_renders_the_fisheye_environment_as_the_loop_does(mi, tmp_pat
 
     lens = Lens.load("nikkor-fisheye")
     n, step = 192, 1.0
-    yy, xx = np.indices((n, n))
+    _yy, xx = np.indices((n, n))
     env = (0.5 + 0.4 * np.cos(2 * np.pi * (xx - n / 2) * step / 40.0)).astype(np.float32)
     write_exr(tmp_path / "env.exr", {"Y": env})
     camera = fisheye_camera(lens, (32, 32), n * step / 2, 600.0)

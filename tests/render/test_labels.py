@@ -205,7 +205,7 @@ def test_background_and_past_the_image_circle_are_zero_and_not_valid(mi, tmp_pat
     lens = Lens.load("nikkor-fisheye")
     scene = load(scene_file(tmp_path / "one.xml", [patch("p", -1, 1, -1, 1, 10.0)], 40, 30), "llvm_ad_spectral",
                  lens, pitch_um=900.0, response=MONO)
-    layers, meta = render_labels(scene, ("depth", "normal", "instance"))
+    layers, _meta = render_labels(scene, ("depth", "normal", "instance"))
     for layer in layers.values():
         assert np.all(np.isfinite(layer))
     valid = layers["labels.valid"] == 1.0

@@ -42,7 +42,7 @@ def test_image_object_defaults(plugins):
 
 
 def test_plugins_expose_their_documented_parameters(mi, plugins):
-    keys = {name: {k.split(".", 1)[-1] for k in mi.traverse(p).keys()} for name, p in plugins.items()}
+    keys = {name: {k.split(".", 1)[-1] for k in mi.traverse(p).keys()} for name, p in plugins.items()}  # noqa: SIM118 -- SceneParameters
     assert keys["image_object"] == {"scale"} and keys["sellmeier_dielectric"] == set()
     assert {"pitch_um", "fov_deg"} <= keys["lens_sensor"]
 

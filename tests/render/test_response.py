@@ -75,7 +75,7 @@ def test_srgb_develops_as_hdrfilm(mi, radiance):
 
 def test_samples_follow_the_bins(mi):
     r = parse("srgb", ())
-    lam, weights = r.sample((np.arange(4096) + 0.5) / 4096)
+    lam, _weights = r.sample((np.arange(4096) + 0.5) / 4096)
     assert 380.0 <= lam.min() and lam.max() <= 780.0
     assert _d65_response(r, mi, 4096) == pytest.approx([1.0, 1.0, 1.0], abs=0.02)  # stratified: D65 is white
 

@@ -89,7 +89,7 @@ def test_developed_frame_beside_the_raw(inputs, tmp_path):
 
     from solas_mi.isp.pipeline import develop
 
-    folder, image = inputs
+    folder, _image = inputs
     args = ["camera", str(folder / "in.exr"), "--sensor-model", str(folder / "sensor.toml"), "--exposure-ms", "5"]
     assert main([*args, "-o", str(folder / "raw.exr")]) == 0
     assert main([*args, "--isp", "default", "-o", str(folder / "cam.exr")]) == 0

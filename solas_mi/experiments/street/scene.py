@@ -144,8 +144,8 @@ def _street_layout(rng: np.random.Generator) -> tuple[list[Shape], dict[str, np.
     textures: dict[str, np.ndarray] = {f"sign_{k}.png": sign(k) for k in ("parking", "warning", "stripes")}
     length = STREET_END_M + 10
     shapes.append(Shape("rectangle", _panel((0, 0, length / 2), (2 * ROAD_HALF_M, length), "+y"), ROAD))
-    for z in np.arange(4.0, STREET_END_M, 6.0):  # dashed centre line
-        shapes.append(Shape("rectangle", _panel((0, 0.005, z + 1.5), (0.15, 3.0), "+y"), MARKING))
+    shapes.extend(Shape("rectangle", _panel((0, 0.005, z + 1.5), (0.15, 3.0), "+y"), MARKING)
+                  for z in np.arange(4.0, STREET_END_M, 6.0))  # dashed centre line
     for side in (-1, 1):
         edge = side * (ROAD_HALF_M - 0.4)
         shapes.append(Shape("rectangle", _panel((edge, 0.005, length / 2), (0.15, length), "+y"), MARKING))

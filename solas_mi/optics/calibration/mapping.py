@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -140,7 +141,7 @@ class ChiefMap:
     circle_mm: float | None
     interpolation_error_px: float
     entrance_pupil_mm: float
-    spline: object = field(repr=False, default=None)
+    spline: Any = field(repr=False, default=None)  # h(θ), scipy's CubicSpline (SciPy ships no types)
 
     def __post_init__(self):
         from scipy.interpolate import CubicSpline
@@ -299,7 +300,7 @@ def _refined(lens: Lens, wl: float, top: float) -> tuple[np.ndarray, np.ndarray]
 
 
 def chief_map(lens: Lens, sensor: Sensor, wavelength_nm: float | None = None,
-              focus_distance_mm: float = math.inf) -> ChiefMap:
+              focus_distance_mm: float | None = math.inf) -> ChiefMap:
     """Trace a lens's real chief-ray mapping over a sensor: which direction each pixel sees.
 
     Parameters
@@ -310,8 +311,8 @@ def chief_map(lens: Lens, sensor: Sensor, wavelength_nm: float | None = None,
         The sensor, centred on the axis.
     wavelength_nm : float, optional
         The wavelength (nm); default: the lens's primary.
-    focus_distance_mm : float, default inf
-        The lens focused on an object this far in front of surface 1 (mm); math.inf: at infinity, and the
+    focus_distance_mm : float or None, default inf
+        The lens focused on an object this far in front of surface 1 (mm); math.inf or None: at infinity, and the
         lens file's own object distance where it gives one.
 
     Returns
