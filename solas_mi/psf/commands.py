@@ -10,7 +10,6 @@ from ..options import floats
 from ..outputs import add_png_option, data_and_preview, written_together
 from ..progress import Progress
 from .spec import PSF_OPTIONS, GridSpec
-from .thermal_report import register as register_thermal
 
 
 # what --field-deg takes: its help and its message (one value is a field on the y axis, as `lens info --fields`
@@ -84,7 +83,7 @@ def _add_outputs(p) -> None:
 
 
 def register(sub: Any) -> None:
-    """Add `psf`, `psf-grid` and `thermal`."""
+    """Add `psf` and `psf-grid`."""
     psf = sub.add_parser("psf", help="one PSF (Fraunhofer or geometric) as OpenEXR + PNG")
     add_lens_argument(psf)
     psf.add_argument("--field-deg", required=True, help=f"field angle: {FIELD_FORM}")
@@ -104,4 +103,3 @@ def register(sub: Any) -> None:
                       help="also write the grid as a PNG mosaic for viewing, axes in field degrees (beside the EXR, "
                            "of the same name, or at PNG); default: none (a 32x32 grid's takes about a second)")
     grid.set_defaults(run=run_psf_grid)
-    register_thermal(sub)

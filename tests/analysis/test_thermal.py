@@ -1,5 +1,6 @@
-"""`solas-mi thermal` (psf.thermal, psf.thermal_report): best focus against a scan of the RMS spot, MTF50
-against a Gaussian's analytic one, the sweep's rows against `Lens.at` and paraxial data."""
+"""`solas-mi thermal` (analysis.thermal, analysis.thermal_report): best focus against a scan of the RMS spot,
+MTF50 against `mtf50-field` of the lens there, the sweep's rows against `Lens.at` and paraxial data; and
+the lens at 20 °C and 101.325 kPa bit-identical to the lens as loaded."""
 import csv
 import json
 import math
@@ -10,7 +11,7 @@ import pytest
 from solas_mi import Lens
 from solas_mi.errors import SolasError
 from solas_mi.optics.paraxial import paraxial
-from solas_mi.psf import thermal
+from solas_mi.analysis import thermal
 
 
 def test_temperatures_include_both_ends():
@@ -25,14 +26,15 @@ def test_bad_temperature_ranges_are_refused(start, stop, step):
         thermal.temperatures(start, stop, step)
 
 
-def test_mtf50_of_a_gaussian():
-    """A Gaussian PSF of σ has MTF exp(−2π²σ²f²): MTF50 = √(ln 2 / 2) / (π σ)."""
-    sigma_um, pitch_um = 6.0, 0.5
-    x = (np.arange(256) - 128) * pitch_um
-    data = np.exp(-(x[None, :] ** 2 + x[:, None] ** 2) / (2 * sigma_um ** 2))
-    expected = math.sqrt(math.log(2) / 2) / (math.pi * sigma_um / 1000.0)
-    for orientation in thermal.ORIENTATIONS:
-        assert thermal.mtf50_cy_mm(data, pitch_um, orientation) == pytest.approx(expected, rel=1e-3)
+def test_mtf50_is_the_lens_analysis_of_the_lens_there(doublet):
+    """A row's MTF50 at the edge, as built, is `mtf50-field`'s at the edge of `Lens.at` that temperature."""
+    from solas_mi.analysis.mtf_field import mtf50_field
+
+    row = thermal.at_temperature(doublet, 70.0, 101.325, "aluminium", pupil_samples=64)
+    there = mtf50_field(doublet.at(70.0, 101.325, "aluminium"), field_samples=2, pupil_samples=64)
+    edge = row["mtf50_cy_mm"][thermal.FOCUS[0]][1.0]
+    assert (edge["tangential"], edge["sagittal"]) == pytest.approx(tuple(there.mtf50_cy_mm[-1]), rel=1e-9)
+    assert row["hash"] == doublet.at(70.0).hash
 
 
 def test_best_focus_is_the_least_rms_spot(doublet):

@@ -1,4 +1,4 @@
-"""`solas-mi thermal LENS --from -40 --to 105`: the sweep of `psf.thermal` as a table on stdout and, in the
+"""`solas-mi thermal LENS --from -40 --to 105`: the sweep of `analysis.thermal` as a table on stdout and, in the
 output folder, thermal.csv (one row per temperature), thermal.json (the rows, the lens and the settings)
 and thermal.png (focus and MTF50 against temperature), written together."""
 from __future__ import annotations
@@ -8,7 +8,7 @@ from pathlib import Path
 
 from .. import jsonio
 from ..outputs import output_folder, written_together
-from . import thermal
+from . import inputs, thermal
 
 _FIELDS = {0.0: "axis", 0.7: "0.7 field", 1.0: "edge"}
 
@@ -26,8 +26,8 @@ def columns(row: dict) -> dict:
 
 def table(rows: list[dict]) -> str:
     """The rows as text: T, EFL, BFD, best focus, then MTF50 tangential/sagittal per field, as built | refocused."""
-    def pair(values) -> str:
-        return "/".join("-" if values[o] is None else f"{values[o]:.0f}" for o in thermal.ORIENTATIONS)
+    def pair(values) -> str:  # tangential/sagittal
+        return "/".join("-" if v is None else f"{v:.0f}" for v in values.values())
 
     head = (f"{'T (°C)':>7s}{'EFL (mm)':>11s}{'BFD (mm)':>11s}{'focus (mm)':>11s}  MTF50 T/S (cy/mm): "
             + " ".join(f"{_FIELDS[f]:>9s}" for f in thermal.FIELD_FRACTIONS) + "  | refocused")
@@ -54,7 +54,7 @@ def _plot(rows: list[dict], lens_name: str, path: str) -> None:
     focus.set_ylabel(f"change from {t[0]:g} °C (µm)")
     focus.legend(fontsize=8)
     for i, fraction in enumerate(thermal.FIELD_FRACTIONS):
-        for orientation, style in zip(thermal.ORIENTATIONS, ("-", ":")):
+        for orientation, style in zip(rows[0]["mtf50_cy_mm"][thermal.FOCUS[0]][fraction], ("-", ":")):
             for focus_state, marker in zip(thermal.FOCUS, ("o", "x")):
                 values = [r["mtf50_cy_mm"][focus_state][fraction][orientation] for r in rows]
                 mtf.plot(t, [float("nan") if v is None else v for v in values], style, marker=marker, ms=3,
@@ -94,12 +94,14 @@ def run_thermal(args) -> int:
     lens = load_lens(args)
     temps = thermal.temperatures(args.start_c, args.stop_c, args.step_c)
     pressure = lens.pressure_kpa if args.pressure_kpa is None else args.pressure_kpa
-    pitch = args.pitch_um or thermal.auto_pitch_um(lens)
-    rows = thermal.sweep(lens, temps, pressure, args.mount, pitch, args.size,
+    samples = inputs.pupil_samples(args.pupil_samples)
+    rows = thermal.sweep(lens, temps, pressure, args.mount, samples,
                          Progress("thermal", len(temps), "temperatures", stream=sys.stderr))
     mounts = args.mount or [s.mount or thermal.optics_thermal.DEFAULT_MOUNT for s in lens.surfaces]
-    settings = {"pressure_kpa": pressure, "mount": mounts, "pitch_um": pitch, "size": args.size,
+    settings = {"pressure_kpa": pressure, "mount": mounts, "pupil_samples": samples,
                 "wavelengths_nm": list(lens.wavelengths_nm), "field_deg": lens.field_deg}
+    for text in dict.fromkeys(w for r in rows for w in r["warnings"]):
+        print(f"solas-mi thermal: warning: {text}", file=sys.stderr)
     print(table(rows))
     paths = write(rows, lens, settings, args.output)
     print(f"wrote {', '.join(str(p) for p in paths)}")
@@ -109,6 +111,7 @@ def run_thermal(args) -> int:
 def register(sub) -> None:
     """Add `thermal`."""
     from ..optics.commands import add_lens_argument
+    from .options import OPTIONS
 
     p = sub.add_parser("thermal", help="EFL, back focus, best focus and MTF50 (axis, 0.7 field, edge; as built and "
                                        "refocused) of a lens from one temperature to another")
@@ -116,8 +119,7 @@ def register(sub) -> None:
     p.add_argument("--from", dest="start_c", type=float, default=-40.0, help="first temperature (°C)")
     p.add_argument("--to", dest="stop_c", type=float, default=105.0, help="last temperature (°C)")
     p.add_argument("--step-c", type=float, default=15.0, help="temperature step (°C); the last is --to")
-    p.add_argument("--pitch-um", type=float, help="PSF pitch (µm; default: a quarter of λ_min·F/#)")
-    p.add_argument("--size", type=int, default=256, help="PSF pixels per side (grown until it holds the light)")
+    OPTIONS["pupil_samples"].add_to(p)
     p.add_argument("-o", "--output", required=True, metavar="DIR", help="output folder: thermal.csv, .json, .png")
     p.set_defaults(run=run_thermal)
 

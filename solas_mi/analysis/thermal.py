@@ -6,8 +6,8 @@ edge, tangential and sagittal, as it stands and refocused (the image plane moved
 Best focus: the image-plane shift that minimises the polychromatic RMS spot radius on axis (the lens's
 wavelengths, equal weights): rays are straight behind the lens, so each ray's height is linear in the
 shift, h(δ) = h₀ + t δ, and the least-squares shift is δ = −Σ h₀·t / Σ t·t (t from the spots at two
-planes). MTF50: the first frequency (cycles/mm) where the modulation of the polychromatic Fraunhofer
-PSF's line spread function along y (tangential, for fields on the y axis) or x (sagittal) falls to 0.5.
+planes). MTF50: the first frequency (cycles/mm) where the polychromatic diffraction MTF (`mtf.lens_otf`,
+the pupil function's autocorrelation) falls to 0.5 (`metrics.mtf.mtf50`).
 """
 from __future__ import annotations
 
@@ -17,11 +17,12 @@ from dataclasses import replace
 import numpy as np
 
 from ..errors import SolasError
+from ..metrics.mtf import mtf50
 from ..optics import thermal as optics_thermal
 from ..optics.paraxial import paraxial
+from . import inputs
 
 FIELD_FRACTIONS = (0.0, 0.7, 1.0)  # of the lens's half field: the axis, 0.7, the edge
-ORIENTATIONS = {"tangential": 1, "sagittal": 0}  # the PSF's axis (0: rows, along y; 1: columns) summed away
 FOCUS = ("as built", "refocused")
 SPOT_RINGS = 12  # rings of the hexapolar spots that find best focus
 PROBE_MM = 0.01  # the second plane of those spots, this far behind the image plane
@@ -40,12 +41,6 @@ def temperatures(start_c: float, stop_c: float, step_c: float) -> list[float]:
     return values + ([stop_c] if stop_c - values[-1] > 1e-9 else [])
 
 
-def auto_pitch_um(lens) -> float:
-    """A PSF pitch (µm) that samples the diffraction limit: a quarter of λ_min·F/# (EFL / EPD)."""
-    first = paraxial(lens, lens.primary_wavelength)
-    return 0.25 * min(lens.wavelengths_nm) / 1000.0 * abs(first.f_number)
-
-
 def best_focus_mm(lens) -> float:
     """The shift (mm, + away from the lens) of the image plane to the least polychromatic RMS spot on axis."""
     from ..optics.spot import spot  # loads Dr.Jit
@@ -61,51 +56,45 @@ def best_focus_mm(lens) -> float:
     return -num / den
 
 
-def mtf50_cy_mm(data: np.ndarray, pitch_um: float, orientation: str) -> float | None:
-    """MTF50 (cycles/mm) of a PSF along `orientation` (`ORIENTATIONS`); None where it never falls to 0.5."""
-    lsf = np.asarray(data, dtype=np.float64).sum(axis=ORIENTATIONS[orientation])
-    x_mm = (np.arange(lsf.size) - lsf.size // 2) * pitch_um / 1000.0
-    freq = np.linspace(0.0, 500.0 / pitch_um, 2001)  # to the PSF sampling's Nyquist frequency
-    mtf = np.abs(np.exp(-2j * np.pi * freq[:, None] * x_mm[None, :]) @ lsf) / lsf.sum()
-    below = np.flatnonzero(mtf < 0.5)
-    if below.size == 0:
-        return None
-    i = int(below[0])
-    return float(freq[i - 1] + (mtf[i - 1] - 0.5) * (freq[i] - freq[i - 1]) / (mtf[i - 1] - mtf[i])) if i else 0.0
+def _mtf50s(lens, pupil_samples: int | None) -> tuple[dict, list[str]]:
+    """{field fraction: {direction: MTF50 (cycles/mm), None where it never falls to 1/2}} of `lens`'s
+    polychromatic diffraction MTF (its wavelengths, equal weights), and its warnings (`mtf.lens_otf`)."""
+    from .mtf import DIRECTIONS, lens_otf  # loads Dr.Jit
+    from .mtf_field import MTF50_SAMPLES
+
+    wavelengths, weights = inputs.wavelengths(lens, None)
+    freq = np.linspace(0.0, inputs.cutoff_cy_mm(lens, min(wavelengths)), MTF50_SAMPLES)
+    otf, warnings = lens_otf(lens, tuple(f * lens.field_deg for f in FIELD_FRACTIONS), wavelengths, weights, freq,
+                             pupil_samples)
+    return {fraction: {d: mtf50(np.abs(otf[i, j]), freq) for j, d in enumerate(DIRECTIONS)}
+            for i, fraction in enumerate(FIELD_FRACTIONS)}, warnings
 
 
-def _mtf50s(lens, pitch_um: float, size: int) -> dict:
-    """{field fraction: {orientation: MTF50}} of `lens`'s polychromatic PSFs (equal weights)."""
-    from .methods import psf  # loads Dr.Jit
-
-    out = {}
-    for fraction in FIELD_FRACTIONS:
-        result = psf(lens, (0.0, fraction * lens.field_deg), list(lens.wavelengths_nm), pitch_um=pitch_um, size=size,
-                     auto_window=True)
-        out[fraction] = {o: mtf50_cy_mm(result.data, result.pitch_um, o) for o in ORIENTATIONS}
-    return out
-
-
-def at_temperature(lens, temperature_c: float, pressure_kpa: float, mount, pitch_um: float, size: int) -> dict:
-    """One row of the sweep: the lens at `temperature_c` (`Lens.at`) and its figures (module docstring)."""
+def at_temperature(lens, temperature_c: float, pressure_kpa: float, mount, pupil_samples: int | None = None) -> dict:
+    """One row of the sweep: the lens at `temperature_c` (`Lens.at`) and its figures (module docstring), with
+    the MTF's warnings (a pupil grid too coarse for its wavefront)."""
     there = lens.at(temperature_c, pressure_kpa, mount)
     first = paraxial(there, there.primary_wavelength)
     shift = best_focus_mm(there)
     last = there.surfaces[-1]
     refocused = replace(there, surfaces=there.surfaces[:-1] + (replace(last, thickness=last.thickness + shift),))
-    return {"temperature_c": temperature_c, "efl_mm": first.efl_mm, "bfd_mm": first.bfd_mm,
-            "best_focus_mm": shift, "hash": there.hash,
-            "mtf50_cy_mm": {FOCUS[0]: _mtf50s(there, pitch_um, size), FOCUS[1]: _mtf50s(refocused, pitch_um, size)}}
+    row = {"temperature_c": temperature_c, "efl_mm": first.efl_mm, "bfd_mm": first.bfd_mm, "best_focus_mm": shift,
+           "hash": there.hash, "mtf50_cy_mm": {}, "warnings": []}
+    for state, one in zip(FOCUS, (there, refocused)):
+        row["mtf50_cy_mm"][state], warnings = _mtf50s(one, pupil_samples)
+        row["warnings"] += [w for w in warnings if w not in row["warnings"]]
+    return row
 
 
-def sweep(lens, temperatures_c, pressure_kpa: float, mount, pitch_um: float, size: int, progress=None) -> list[dict]:
+def sweep(lens, temperatures_c, pressure_kpa: float, mount, pupil_samples: int | None = None,
+          progress=None) -> list[dict]:
     """`at_temperature` at each of `temperatures_c`; `progress(done, total)` after each."""
     rows = []
     for i, t in enumerate(temperatures_c):
-        rows.append(at_temperature(lens, t, pressure_kpa, mount, pitch_um, size))
+        rows.append(at_temperature(lens, t, pressure_kpa, mount, pupil_samples))
         if progress:
             progress(i + 1, len(temperatures_c))
     return rows
 
 
-__all__ = ["auto_pitch_um", "best_focus_mm", "mtf50_cy_mm", "sweep", "temperatures"]
+__all__ = ["at_temperature", "best_focus_mm", "sweep", "temperatures"]
