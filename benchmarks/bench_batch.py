@@ -21,10 +21,11 @@ from pathlib import Path
 
 from solas_mi import Lens
 from solas_mi.batch import GridCache, degrade_batch, render_batch
+from solas_mi.psf.spec import GridSpec
 
 ROOT = Path(__file__).resolve().parent.parent
 WORK = ROOT / "out" / "bench"
-GRID = {"grid": "32x32", "wavelengths": [656.0, 531.0, 486.0], "size": 160, "pitch_um": 0.5, "method": "fraunhofer"}
+GRID = dict(grid=(32, 32), wavelengths_nm=(656.0, 531.0, 486.0), size=160, pitch_um=0.5)  # the doublet's
 RENDER_SENSOR, RENDER_SPP = "320x240", 16
 CASES = [("local processes", None, 1), ("local processes", None, 2), ("Dask LocalCluster", "local", 1),
          ("Dask LocalCluster", "local", 2)]
@@ -48,7 +49,7 @@ def main() -> None:
     else:
         cache = GridCache(WORK / "batch-cache")
         start = time.perf_counter()
-        grid_path, hit, _ = cache.get(Lens.load("solas-doublet"), GRID)
+        grid_path, hit, _ = cache.get(Lens.load("solas-doublet"), GridSpec(**GRID))
         print(f"grid {grid_path.name}: {'cache hit' if hit else 'computed'} in {time.perf_counter() - start:.1f} s")
 
         def run(out, workers, dask):

@@ -1,15 +1,21 @@
 """Speed of the sharpness metrics: e-SFR of a 100×100 ROI, natural-scene SFR of a 1280×960 image.
 
-Run: .venv/bin/python benchmarks/bench_esfr.py   (prints a Markdown table; medians of several runs)
+Run: .venv/bin/python benchmarks/bench_esfr.py   (prints a Markdown table, medians of several runs, and the
+figures `run_all.py` compares run to run)
 """
 from __future__ import annotations
 
 import math
 import statistics
+import sys
 import time
-from typing import Callable
+from collections.abc import Callable
+from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from figures import figure
 
 from solas_mi.metrics.esfr import esfr
 from solas_mi.metrics.nssfr import natural_scene_sfr
@@ -47,20 +53,24 @@ def main() -> None:
     sharp = scene((960, 1280), 1.0, seed=2)
     soft = scene((960, 1280), 2.5, seed=2)
     report = natural_scene_sfr(sharp)
-    rows = [
-        ("e-SFR, 100×100 ROI, 2023 mode", median_seconds(lambda: esfr(roi), 200), 200, 0.005),
-        ("e-SFR, 100×100 ROI, 2017 mode", median_seconds(lambda: esfr(roi, mode="2017"), 200), 200, 0.005),
-        (f"natural-scene SFR, 1280×960 ({len(report.rois)} ROIs)", median_seconds(lambda: natural_scene_sfr(sharp), 5),
-         5, 5.0),
-        ("natural-scene SFR, 1280×960, --compare", median_seconds(lambda: natural_scene_sfr(sharp, compare=soft), 5),
-         5, 5.0),
+    rows = [  # (name, figure, median seconds, runs, target seconds)
+        ("e-SFR, 100×100 ROI, 2023 mode", "esfr_roi_2023_s", median_seconds(lambda: esfr(roi), 200), 200, 0.005),
+        ("e-SFR, 100×100 ROI, 2017 mode", "esfr_roi_2017_s", median_seconds(lambda: esfr(roi, mode="2017"), 200), 200,
+         0.005),
+        (f"natural-scene SFR, 1280×960 ({len(report.rois)} ROIs)", "nssfr_s",
+         median_seconds(lambda: natural_scene_sfr(sharp), 5), 5, 5.0),
+        ("natural-scene SFR, 1280×960, --compare", "nssfr_compare_s",
+         median_seconds(lambda: natural_scene_sfr(sharp, compare=soft), 5), 5, 5.0),
     ]
     print("| benchmark | median | runs | target | met |")
     print("|---|---|---|---|---|")
-    for name, sec, runs, target in rows:
+    for name, _, sec, runs, target in rows:
         shown = f"{sec * 1e3:.2f} ms" if sec < 1 else f"{sec:.2f} s"
         goal = f"≤ {target * 1e3:.0f} ms" if target < 1 else f"≤ {target:.0f} s"
         print(f"| {name} | {shown} | {runs} | {goal} | {'yes' if sec <= target else 'NO'} |")
+    print()
+    for _, key, sec, _, _ in rows:
+        figure(key, sec, "s")
 
 
 if __name__ == "__main__":

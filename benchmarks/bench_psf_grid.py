@@ -1,16 +1,27 @@
 """PSF-grid speed and pupil-sampling error against run time for the SOLAS doublet.
 
-Run: .venv/bin/python benchmarks/bench_psf_grid.py [--repeats 3] [--skip-grid]
-Prints Markdown tables (the ones recorded in README.md).
+Run: .venv/bin/python benchmarks/bench_psf_grid.py [--repeats 5] [--skip-grid] [--all-fields]
+Prints Markdown tables: the 32×32×3 grid (656/531/486 nm, 160×160 Fraunhofer PSFs at 0.5 µm, pupil 128²,
+the sampling-error estimate on) and the 8×8×3 one in process (kernels compiled) and the 32×32×3 as the
+`psf-grid` command (a fresh process: imports, kernels, the grid, the EXR), medians and runs, with the
+command's peak memory; then the pupil-sampling error against run time; and the figures `run_all.py`
+compares run to run (and sets the README's headline from, on an idle machine).
 """
 from __future__ import annotations
 
 import argparse
-import os
+import resource
 import statistics
+import subprocess
+import sys
+import tempfile
 import time
+from pathlib import Path
 
 import numpy as np
+
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from figures import figure
 
 from solas_mi import Lens
 from solas_mi.optics import pupil as P
@@ -21,15 +32,29 @@ from solas_mi.psf.registry import DEFAULT_PUPIL_SAMPLES
 
 FIELDS = np.array([[0.0, 0.0], [0.0, 2.0], [0.0, -2.0]] * 3)
 WAVELENGTHS = np.repeat([486.0, 531.0, 656.0], 3)
+KW = dict(wavelengths_nm=[656.0, 531.0, 486.0], pitch_um=0.5, size=160)
 
 
-def grid_seconds(lens: Lens, repeats: int) -> list[float]:
+def grid_seconds(lens: Lens, n: int, repeats: int) -> list[float]:
     times = []
     for _ in range(repeats):
         start = time.perf_counter()
-        psf_grid(lens, grid=(32, 32), wavelengths_nm=[656.0, 531.0, 486.0], pitch_um=0.5, size=160)
+        psf_grid(lens, grid=(n, n), **KW)
         times.append(time.perf_counter() - start)
     return times
+
+
+def command_seconds(repeats: int) -> tuple[list[float], float]:
+    """The `psf-grid` command's wall seconds per run and its peak memory (MB, the largest run's)."""
+    times = []
+    with tempfile.TemporaryDirectory() as tmp:
+        for _ in range(repeats):
+            start = time.perf_counter()
+            subprocess.run([sys.executable, "-m", "solas_mi", "psf-grid", "solas-doublet", "--grid", "32x32",
+                            "--wavelengths-nm", "656,531,486", "--pitch-um", "0.5", "--size", "160", "-o",
+                            str(Path(tmp) / "grid.exr")], check=True, capture_output=True)
+            times.append(time.perf_counter() - start)
+    return times, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
 
 
 def all_fields_seconds(lens: Lens) -> float:
@@ -69,19 +94,32 @@ def sampling_sweep(lens: Lens, samples=(32, 64, 128, 256, 512), repeats: int = 3
 
 def main() -> None:
     ap = argparse.ArgumentParser()
-    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--skip-grid", action="store_true")
+    ap.add_argument("--all-fields", action="store_true", help="also the grid with every field traced (minutes)")
     args = ap.parse_args()
     lens = Lens.load("solas-doublet")
     psf(lens, (0, 0), 531.0)  # compile kernels once
-    print(f"machine: {os.cpu_count()} cores\n")
     if not args.skip_grid:
-        t = grid_seconds(lens, args.repeats)
+        grid_seconds(lens, 8, 1)
+        rows = {"32×32×3 grid, in process": grid_seconds(lens, 32, args.repeats),
+                "8×8×3 grid, in process": grid_seconds(lens, 8, args.repeats)}
+        rows["32×32×3 grid, the `psf-grid` command"], peak_mb = command_seconds(args.repeats)
+        print(f"Fraunhofer PSFs of 160×160 at 0.5 µm, pupil {DEFAULT_PUPIL_SAMPLES}², the sampling-error "
+              "estimate on\n")
         print("| job | median (s) | runs (s) |\n|---|---|---|")
-        print(f"| 32×32 grid × 3 wavelengths, 160×160 Fraunhofer PSFs, pupil {DEFAULT_PUPIL_SAMPLES}² | "
-              f"{statistics.median(t):.1f} | {', '.join(f'{x:.1f}' for x in t)} |")
-        print(f"| the same, all 1024 fields traced (symmetry unused) | {all_fields_seconds(lens):.1f} | 1 run |\n")
-    print("| pupil samples N | median seconds (9 PSFs) | max RMSE/peak vs N=512 | max RMSE/peak, N vs 2N |\n|---|---|---|---|")
+        for name, t in rows.items():
+            print(f"| {name} | {statistics.median(t):.2f} | {', '.join(f'{x:.2f}' for x in t)} |")
+        if args.all_fields:
+            print(f"| the same, all 1024 fields traced (symmetry unused) | {all_fields_seconds(lens):.1f} | 1 run |")
+        print(f"\nthe command's peak memory: {peak_mb:.0f} MB (the grid's PSFs alone: "
+              f"{3 * 32 * 32 * 160 * 160 * 4 / 2 ** 20:.0f} MB)\n")
+        for key, name in (("psf_grid_32x32x3_s", "32×32×3 grid, in process"),
+                          ("psf_grid_8x8x3_s", "8×8×3 grid, in process"),
+                          ("psf_grid_command_s", "32×32×3 grid, the `psf-grid` command")):
+            figure(key, statistics.median(rows[name]), "s")
+        figure("psf_grid_command_peak_mb", peak_mb, "MB")
+    print("\n| pupil samples N | median seconds (9 PSFs) | max RMSE/peak vs N=512 | max RMSE/peak, N vs 2N |\n|---|---|---|---|")
     for n, sec, err, dbl in sampling_sweep(lens):
         print(f"| {n} | {sec:.2f} | {err:.2e} | {dbl:.2e} |")
 

@@ -19,11 +19,11 @@ from .resources import resource_dir
 
 DEMO_SPP = 192  # 64 per colour line: ≈ 2.5 % noise; measured ≈ 2 min on two idle cores, far longer on busy ones
 # the camera step: the street scene framed along the street (the doublet's field is ±4 deg), small and
-# few spp, through an automotive sensor preset (its radiance read through the render's own f-number,
-# auto-exposed) and the default processor
+# few spp, through an automotive HDR sensor preset (its four readouts merged; its radiance read through the
+# render's own f-number, auto-exposed) and the default processor
 STREET_SET = ("width=480", "height=360", "fov=8", "target=0, 2, 140")
 STREET_SPP = 32
-STREET_SENSOR, STREET_EXPOSURE_MS = "ar0132at", "auto"
+STREET_SENSOR, STREET_EXPOSURE_MS = "imx490-hdr", "auto"
 CAMERA_FILES = {"camera": "camera/street_render.exr|png (irradiance + every label's layers), "
                           "camera/street_raw.exr|png (RAW, developed frame)",
                 "camera sheet": "camera/camera_sheet.png"}  # what `camera_frame` writes

@@ -290,6 +290,22 @@ def image_size(path: str | os.PathLike) -> tuple[int, int, int]:
         return 0, 0, 0
 
 
+def read_stored(path: str | os.PathLike) -> np.ndarray:
+    """The values a PNG (8 or 16 bits), JPEG or TIFF file stores, unscaled (integers stay integers: label
+    images of ids), H×W or H×W×C; SolasError naming the file where it cannot be read."""
+    import imageio.v3 as iio
+
+    path = check(path, "image file")
+    try:
+        if path.suffix.lower() == ".png" and _png_bit_depth(path) == 16:
+            return _read_png16(path)
+        with _plain_imageio():
+            return np.asarray(iio.imread(path))
+    except Exception as exc:  # imageio and pypng raise many types for unreadable files
+        reason = str(exc).split("\n")[0].rstrip(".")  # its first line; the rest suggests plugins to install
+        raise SolasError(f"cannot read image {path} as PNG, JPEG, TIFF or OpenEXR ({reason})") from None
+
+
 def read_image(path: str | os.PathLike, *, linearize: bool = True) -> np.ndarray:
     """An image as float64 H×W or H×W×3: EXR as stored (linear; channels by name, `exr_image_channels`);
     PNG (8 or 16 bits), JPEG, TIFF scaled to [0, 1] and sRGB-decoded unless `linearize` is False; an
@@ -300,17 +316,7 @@ def read_image(path: str | os.PathLike, *, linearize: bool = True) -> np.ndarray
         names = exr_image_channels(list(channels), path)
         image = channels[names[0]] if len(names) == 1 else np.stack([channels[n] for n in names], axis=-1)
         return check_finite(image.astype(np.float64), str(path))
-    import imageio.v3 as iio
-
-    try:
-        if path.suffix.lower() == ".png" and _png_bit_depth(path) == 16:
-            raw = _read_png16(path)
-        else:
-            with _plain_imageio():
-                raw = iio.imread(path)
-    except Exception as exc:  # imageio and pypng raise many types for unreadable files
-        reason = str(exc).split("\n")[0].rstrip(".")  # its first line; the rest suggests plugins to install
-        raise SolasError(f"cannot read image {path} as PNG, JPEG, TIFF or OpenEXR ({reason})") from None
+    raw = read_stored(path)
     if raw.dtype == np.uint8:
         scaled = raw.astype(np.float64) / 255.0
     elif raw.dtype == np.uint16:

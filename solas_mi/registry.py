@@ -185,7 +185,8 @@ class Registry:
         for name, e in self._entries.items():
             mark = " (default)" if name == self.default else ""
             options = "<br>".join(o.describe() for o in e.options) or "—"
-            shown = [", ".join(f"`{v}`" for v in e.extra.get(key, ())) or "—" for key in self.shown]
+            values = [e.extra.get(key, ()) for key in self.shown]  # a string is one value, a tuple several
+            shown = [", ".join(f"`{v}`" for v in ((x,) if isinstance(x, str) else x)) or "—" for x in values]
             cells = (f"`{name}`{mark}", *shown, e.summary, options, e.reference or "—")
             rows.append("| " + " | ".join(c.replace("|", "\\|") for c in cells) + " |")
         return "\n".join(rows)

@@ -32,6 +32,7 @@ LIMITS = {
     "QE curve": 4 * MIB,
     "camera response table": 4 * MIB,
     "record": 64 * MIB,  # JSON a run wrote and a later one reads (a batch's manifest, a cache entry's record)
+    "annotations file": 256 * MIB,  # a frame's boxes and keypoints (COCO's JSON layout), `labelkinds`
     "scene file": 64 * MIB,  # a Mitsuba scene's XML
     "scene data file": 16384 * MIB,  # a mesh, texture or spectrum a scene names (Mitsuba reads it)
     "image file": 16384 * MIB,

@@ -13,7 +13,7 @@ ROOT = Path(__file__).resolve().parents[1]
 MAX_LINES = 400
 # Each stage may import itself, the stages before it in this order's groups, and the shared base.
 BASE = {"errors", "interrupts", "lazy", "options", "resources", "llvm", "imageio", "jsonio", "outputs", "budget", "blas",
-        "progress", "userfiles", "registry"}
+        "pages", "progress", "userfiles", "registry", "labelkinds"}
 ALLOWED = {
     "optics": set(),
     "psf": {"optics"},
@@ -194,6 +194,7 @@ def test_stages_import_only_downward():
 @pytest.mark.parametrize("module, heavy", [
     ("solas_mi.cli", ("drjit", "mitsuba", "matplotlib")),
     ("solas_mi.registry", ("numpy", "drjit", "mitsuba", "matplotlib")),  # the CLI builds its choices from it
+    ("solas_mi.labelkinds", ("numpy", "drjit", "mitsuba", "matplotlib")),  # and its label kinds' help
     ("solas_mi.psf.base", ("drjit", "mitsuba", "matplotlib")),
     ("solas_mi.psf.methods", ("drjit", "mitsuba", "matplotlib")),
     ("solas_mi.render.commands", ("drjit", "mitsuba", "matplotlib")),

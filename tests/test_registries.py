@@ -19,7 +19,8 @@ SHIPPED = {
     "solas_mi.convolution.methods.METHODS": ("interp", "patch"),
     "solas_mi.isp.demosaic.METHODS": ("bilinear", "Malvar2004", "Menon2007"),
     "solas_mi.isp.white.METHODS": ("daylight", "grey-world", "grey-card", "given", "none"),
-    "solas_mi.isp.tone.CURVES": ("srgb", "gamma", "none"),
+    "solas_mi.isp.tone.CURVES": ("srgb", "gamma", "none", "reinhard"),
+    "solas_mi.labelkinds.KINDS": ("depth", "normal", "instance", "semantic", "mask", "flow", "boxes"),
     "solas_mi.render.labels.LABELS": ("depth", "normal", "instance"),
     "solas_mi.optics.formats.READERS": (".toml", ".zmx", ".seq", ".dat"),
     "solas_mi.optics.formats.WRITERS": (".toml", ".zmx", ".dat"),
@@ -28,6 +29,7 @@ SHIPPED = {
     "solas_mi.analysis.registry.ANALYSES": ("mtf", "mtf-field", "mtf50-field", "through-focus", "field-curvature",
                                             "distortion", "lateral-colour", "relative-illumination", "ray-fan",
                                             "opd-fan", "wavefront", "spot-diagram", "encircled-energy"),
+    "solas_mi.sensor.chain.STAGES": ("photons", "defects", "readout", "merge", "compander"),
 }
 
 # One of each registered in a fresh process, then looked for in the parser, the messages and the docs.

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+from pathlib import Path
 from typing import Any
 
 from ..errors import SolasError
@@ -22,7 +23,8 @@ BATCH_GRID_DEFAULTS = {"grid": (32, 32)}
 
 # the DegradeSpec flags of `batch degrade`'s main group (--scale-lens is the frames' camera's; the frame, camera
 # and grid are built from their own flags)
-DEGRADE_OPTIONS = ("method", "boundary", "linear", "output_format", "depth_pattern", "occlusion", "silhouette")
+DEGRADE_OPTIONS = ("method", "boundary", "linear", "output_format", "depth_pattern", "label_patterns", "occlusion",
+                   "silhouette", "calibration_model")
 
 
 def _degrade_spec(args: argparse.Namespace):
@@ -64,7 +66,8 @@ def _dry_run(args: argparse.Namespace) -> int:
     print(f"2. degrade {len(p.todo)} of {len(p.jobs)} images ({skipped} already finished, skipped) "
           f"with {p.spec.method}, boundary {p.spec.boundary}, on {where}")
     files = "16-bit PNG + JSON" if p.spec.output_format == "png16" else "EXR + PNG"
-    print(f"3. write {files}{_camera_files(p.jobs)} per image and {p.manifest.path}")
+    labels = "".join(f" + warped labels {Path(f).suffix[1:].upper()}" for f in (p.jobs[0].label_outputs if p.jobs else []))
+    print(f"3. write {files}{labels}{_camera_files(p.jobs)} per image and {p.manifest.path}")
     print(f"estimate: about {grid_s + need['seconds']:.3g} s ({grid_s:.3g} s for the grid, {need['seconds']:.3g} s of "
           f"degrading), peak memory about {size_text(need['peak_bytes'])} (grid {size_text(need['grid_bytes'])} per "
           "worker)")
@@ -160,7 +163,8 @@ def run_batch_render(args: argparse.Namespace) -> int:
     from .render import render_batch
 
     result = render_batch(args.inputs, args.output, lens=args.lens, spec=spec, **sweep, workers=workers,
-                          dask=args.dask, force=args.force, progress=not args.quiet, camera=camera)
+                          dask=args.dask, force=args.force, progress=not args.quiet, camera=camera,
+                          calibration_model=args.calibration_model)
     return _report("render", result)
 
 
@@ -220,6 +224,7 @@ def _add_degrade(sub: Any) -> None:
 
 def register(subparsers: Any) -> None:
     """Add `batch` and its `degrade` and `render`."""
+    from ..optics.calibration.command import add_calibration_option
     from ..optics.formats import lens_help
     from ..render.spec import RenderSpec
     from .render import SWEEP
@@ -243,6 +248,7 @@ def register(subparsers: Any) -> None:
                    help=f"{lens_help()}; repeat to sweep over lenses (a lens at another temperature or pressure: "
                         "its file, from `solas-mi lens convert LENS --temperature-c T -o FILE.toml`)")
     RenderSpec.add_flags(r, RENDER_SETTINGS, sweep=SWEEP[1:])
+    add_calibration_option(r)
     add_camera_options(r, seed=False)  # the sensor's seed is the batch's --seed
     _add_runner_options(r)
     r.set_defaults(run=run_batch_render)

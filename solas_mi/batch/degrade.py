@@ -110,18 +110,26 @@ def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLik
     roots: dict[Path, Path] = {}  # folders are read as trees, their structure kept in the output folder
     labels: list[tuple[Path, str]] = []
     files = expand_inputs(inputs, roots=roots, skipped=labels)
-    pattern = spec.depth_pattern
-    depths = {f: depth_file(f, pattern) for f in files} if pattern is not None else {}
-    images = [f for f in files if f not in set(depths.values())]  # depth maps are no inputs
-    say_skipped([(f, why) for f, why in labels if f not in set(depths.values())])  # those not the frames' depth maps
-    missing = [str(depths[f]) for f in images if depths and not depths[f].is_file()]
-    if missing:
-        raise SolasError(f"{len(missing)} image(s) have no depth map by the pattern {pattern!r}, e.g. {missing[0]}")
+    patterns = {**({"depth map": spec.depth_pattern} if spec.depth_pattern is not None else {}),
+                **dict(spec.label_patterns or ())}
+    beside = {f: {what: beside_file(f, pattern) for what, pattern in patterns.items()} for f in files}
+    theirs = {path for f, found in beside.items() for path in found.values() if path != f}  # a frame may hold its own
+    images = [f for f in files if f not in theirs]  # depth maps and label files are no inputs
+    say_skipped([(f, why) for f, why in labels if f not in theirs])  # those not the frames' own
+    for what, pattern in patterns.items():
+        missing = [str(beside[f][what]) for f in images if not beside[f][what].is_file()]
+        if missing:
+            noun = what if what == "depth map" else f"{what} labels"
+            raise SolasError(f"{len(missing)} image(s) have no {noun} by the pattern {pattern!r}, e.g. {missing[0]}")
     jobs = plan(images, out_dir, roots, OUTPUT_FILES[spec.output_format])
+    with_labels(jobs, spec.label_patterns, files)
     with_camera(jobs, spec.camera, files, spec.output_format)
     for job in jobs:
-        if depths:
-            job.params["depth"] = str(depths[Path(job.input)])
+        found = beside[Path(job.input)]
+        if "depth map" in found:
+            job.params["depth"] = str(found["depth map"])
+        if spec.label_patterns:
+            job.params["labels"] = {kind: str(found[kind]) for kind, _ in spec.label_patterns}
     grid_path, source, lens, grid_spec, cache = _grid_source(psf_grid, lens, spec.grid_spec, cache)
     grid_id = file_hash(grid_path) if source == "given" else grid_path.stem
     key = hashlib.sha256(json.dumps([grid_id, *spec.identity()]).encode()).hexdigest()[:16]
@@ -164,14 +172,27 @@ def with_camera(jobs: list[Job], camera, sources, output_format: str = "exr") ->
     add_outputs(jobs, lambda output: camera_outputs(output, camera), sources)
 
 
-def depth_file(image: Path, pattern: str) -> Path:
-    """The depth map of `image` by `pattern` ({stem}: the image's name without suffix; a pattern
-    `DegradeSpec` checked), beside it."""
+def beside_file(image: Path, pattern: str) -> Path:
+    """The file of `image` by `pattern` (its depth map, a label file; {stem}: the image's name without
+    suffix; a pattern `DegradeSpec` checked), beside it."""
     return image.with_name(pattern.replace("{stem}", image.stem))
+
+
+def with_labels(jobs: list[Job], patterns, sources) -> None:
+    """The warped labels' files (`convolution.labels.label_outputs`) added to each item; none without
+    label patterns."""
+    if patterns:
+        from ..convolution.labels import label_outputs
+
+        kinds = [kind for kind, _ in patterns]
+        add_outputs(jobs, lambda output: [str(p) for p in label_outputs(output, kinds).values()], sources,
+                    "label_outputs")
 
 
 def estimate(p: BatchPlan, workers: int) -> dict[str, float]:
     """Rough seconds and peak memory (bytes, all workers) of the items still to do."""
+    from ..convolution.camera import fit_bytes
+    from ..convolution.labels import memory_bytes
     from ..convolution.output import peak_bytes
     from ..imageio import image_size
 
@@ -184,11 +205,13 @@ def estimate(p: BatchPlan, workers: int) -> dict[str, float]:
         rows, cols = g.grid
         grid_bytes = 4 * rows * cols * g.size ** 2 * len(g.wavelengths_nm or p.lens.wavelengths_nm) * len(
             g.distances_m or [0])
-    # each worker: its largest image's peak (which holds a grid; or its camera's); the parent holds one grid more
-    per_worker = max((max(peak_bytes(path, r, c, ch, grid_bytes), camera_bytes(p.jobs[i], r, c))
-                      for i, (path, (r, c, ch)) in zip(p.todo, sizes)), default=0.0)
+    # each worker: its largest image's peak (which holds a grid; or its camera's)
+    per_worker = max((max(peak_bytes(path, r, c, ch, grid_bytes) + memory_bytes(r * c, p.jobs[i].params.get("labels", ())),
+                          camera_bytes(p.jobs[i], r, c)) for i, (path, (r, c, ch)) in zip(p.todo, sizes)), default=0.0)
+    # the parent: one grid more, and its fits of the frames' camera blocks (`convolution.camera`)
+    parent = grid_bytes + fit_bytes(max((r * c for _, (r, c, _) in sizes), default=0))
     return {"seconds": SECONDS_PER_VALUE * sum(values) / min(workers, max(1, len(values))),
-            "peak_bytes": min(workers, max(1, len(values))) * (per_worker + WORKER_BYTES["degrade"]) + grid_bytes,
+            "peak_bytes": min(workers, max(1, len(values))) * (per_worker + WORKER_BYTES["degrade"]) + parent,
             "grid_bytes": grid_bytes}
 
 
@@ -287,6 +310,8 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
     (['done'], 'computed')
     """
     from ..budget import check_memory
+    from ..convolution.camera import frame_cameras
+    from ..imageio import image_size
     from ..progress import Progress
     from ..psf.depth import read_grid
     from .runner import run_batch
@@ -307,11 +332,14 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
     else:
         header["grid_source"] = "given"
     grid = read_grid(str(p.grid_path))
+    sizes = [image_size(job.input)[1::-1] for job in p.jobs]  # (0, 0): unreadable, the item will say why
+    cameras = frame_cameras(grid, [s for s in sizes if s[0]], p.spec.frame, p.spec.calibration_model,
+                            p.lens)  # one fit per frame size, here, not per frame
     header.update({"psf_grid": str(p.grid_path), "grid_hash": file_hash(p.grid_path),
                    "lens": grid.meta.get("lens"), "lens_hash": grid.meta.get("lens_hash"),
-                   "runner": {"dask": dask} if dask is not None else {"workers": n}})
+                   "cameras": cameras, "runner": {"dask": dask} if dask is not None else {"workers": n}})
     p.manifest.header.update(header)
-    settings = {"spec": p.spec, "camera": p.spec.camera, "force": force,
+    settings = {"spec": p.spec, "camera": p.spec.camera, "force": force, "cameras": cameras,
                 "batch": {"id": p.key, "manifest": str(p.manifest.path), "grid_hash": header["grid_hash"],
                           "lens_hash": header["lens_hash"], **({"lens_scale": p.lens_scale} if p.lens_scale else {})}}
     run_batch(p.manifest, p.todo, grid, str(p.grid_path), settings, n, dask, "image" if progress else None)

@@ -21,8 +21,9 @@ from typing import Any, Callable, Iterable
 
 from .. import jsonio
 from ..errors import SolasError
+from ..labelkinds import KINDS, VALID
 from ..outputs import inside, safe_name
-from ..render.labels import LABELS, VALID
+from ..render.labels import LABELS
 from ..userfiles import check, read_text
 from .cache import file_hash
 
@@ -33,8 +34,10 @@ SAVE_EVERY_S = 1.0  # the manifest is rewritten at most this often while items f
 # The label layers that renderers and simulators write beside their frames (ours as EXR layers,
 # `render.labels`; CARLA, Kubric, AirSim as files): never frames. A file is one by the last word of its
 # name after any frame number (a_depth.exr, street_0001_seg.png, depth_00042.exr) or, for an EXR, by
-# its channels: every one a depth (Z, depth) or a label layer's (depth.Z, normal.X, labels.valid).
-LABEL_WORDS = (*LABELS, VALID.split(".")[0], "seg", "segmentation", "semantic", "instances", "normals", "flow")
+# its channels: every one a depth (Z, depth) or a label layer's (depth.Z, normal.X, labels.valid). The
+# kinds of image labels (`labelkinds.KINDS`: not the JSON annotations) and those the render traces.
+LABEL_WORDS = (*(k for k in KINDS if KINDS[k].extra["layers"]), *LABELS, VALID.split(".")[0], "seg", "segmentation",
+               "instances", "normals")
 DEPTH_CHANNELS = ("z", "depth")
 _WORDS = re.compile(r"[^a-z0-9]+")
 SHOWN_SKIPPED = 5  # skipped label layers named in the note (then a count)
@@ -57,12 +60,13 @@ class Job:
     outputs: dict[str, list] = field(default_factory=dict)  # path → [size, mtime_ns, sha256/16] when finished
     input_hash: str | None = None  # the input's SHA-256 (16 hex digits; a scene's with the files it reads) when finished
     params: dict[str, Any] = field(default_factory=dict)
+    label_outputs: list[str] = field(default_factory=list)  # the warped labels (`convolution.labels.label_outputs`)
     extras: list[str] = field(default_factory=list)  # more outputs: the camera's RAW and developed frame
     warnings: list[str] = field(default_factory=list)  # what the item's run warns of (a saturated RAW)
 
     def paths(self) -> tuple[str, ...]:
         """Every output of the item."""
-        return (self.output, self.png, *self.extras)
+        return (self.output, self.png, *self.label_outputs, *self.extras)
 
     def stamp(self) -> None:
         """Record the finished outputs' sizes, modification times and checksums and the input's
@@ -196,14 +200,15 @@ def plan(inputs: list[Path], out_dir: Path, roots: dict[Path, Path] | None = Non
     return jobs
 
 
-def add_outputs(jobs: list[Job], more: Callable[[str], list[str]], sources: Iterable[str | os.PathLike]) -> None:
-    """Give each job the outputs `more(job.output)` besides its two; SolasError when one would be
-    another item's output or an input."""
-    taken = {p: job.input for job in jobs for p in (job.output, job.png)}
+def add_outputs(jobs: list[Job], more: Callable[[str], list[str]], sources: Iterable[str | os.PathLike],
+                into: str = "extras") -> None:
+    """Give each job the outputs `more(job.output)` besides those it has, as its field `into` (`extras`, or
+    `label_outputs`); SolasError when one would be another item's output or an input."""
+    taken = {p: job.input for job in jobs for p in job.paths()}
     inputs = {str(Path(s)) for s in sources}
     for job in jobs:
-        job.extras = more(job.output)
-        for path in job.extras:
+        setattr(job, into, more(job.output))
+        for path in getattr(job, into):
             if path in taken or path in inputs:
                 raise SolasError(f"output {path} of {job.input!r} would replace "
                                  f"{'an input' if path in inputs else 'an output of ' + repr(taken[path])}; "

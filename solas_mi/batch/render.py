@@ -210,10 +210,35 @@ def batch_variant(p: RenderPlan) -> str:
     return ", ".join(sorted({variant_for(r, p.spec.variant) for r in parsed}))
 
 
+def image_cameras(p: RenderPlan, model: str | None) -> dict[str, dict]:
+    """The camera block (`render.image.image_camera`) of each sensor the batch's image items render onto,
+    fitted once per lens, sensor and wavelength, before any item: `image_sensor_key` → block ({} without a
+    model). A scene file's camera comes from its scene (`batch.work`)."""
+    from ..optics.lens import Lens
+    from ..render.image import image_camera, image_sensor_key
+
+    out: dict[str, dict] = {}
+    if model is None:
+        return out
+    lenses: dict[str, Any] = {}
+    for job in p.jobs:
+        if Path(job.input).suffix.lower() in SCENE_SUFFIXES:
+            continue
+        if job.params["lens"] not in lenses:
+            lenses[job.params["lens"]] = Lens.load(job.params["lens"])
+        lens = lenses[job.params["lens"]]
+        key, camera, response = image_sensor_key(lens, RenderSpec.from_dict(job.params))
+        if key not in out:
+            out[key] = image_camera(lens, camera, response, model)
+    return out
+
+
 # long: the public API's numpydoc docstring is half of it
+# many parameters: the inputs, lens and spec, the runner's settings and what every output records (camera, calibration)
 def render_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *, lens: str | Sequence[str],
                  spec: RenderSpec | None = None, workers: int | None = None, dask: str | None = None,
-                 force: bool = False, progress: bool = True, camera=None, **settings) -> BatchResult:
+                 force: bool = False, progress: bool = True, camera=None, calibration_model: str | None = None,
+                 **settings) -> BatchResult:
     """Render many images and scene files through lenses, over a sweep, on local processes or Dask.
 
     One EXR + PNG per item and the manifest ``batch.json`` go into `output_dir`; a failed item is
@@ -242,6 +267,10 @@ def render_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathL
     camera : isp.camera.Camera, optional
         Each rendered frame through a sensor and image processor, its RAW and developed frame beside it,
         seeded by the camera's seed and the item's name.
+    calibration_model : str, optional
+        The camera model (`optics.calibration.MODELS`) whose fit to the lens each output's camera block
+        records, fitted once per lens and sensor before any item (`image_cameras`; the manifest's
+        ``cameras`` holds them); default: none.
     **settings
         Fields of `RenderSpec` to change; ``focus_distance`` (scenes only), ``sensor`` (images only),
         ``pitch_um`` and ``spp`` take one value or a list each (swept).
@@ -277,6 +306,7 @@ def render_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathL
     check_memory(f"batch of {len(p.todo)} renders on {n} workers", estimate(p, n if dask is None else 1)["peak_bytes"],
                  force)
     chosen = batch_variant(p)
+    cameras = image_cameras(p, calibration_model)
     # each local worker (and each Dask worker of a LocalCluster) gets its share of the cores, so that
     # the local and the Dask runs render with the same thread count (identical sums)
     threads = max(1, (os.cpu_count() or 1) // n) if dask in (None, "local") else None
@@ -284,7 +314,9 @@ def render_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathL
                                                               if k not in SWEEP},
                               "threads_per_worker": threads,
                               **({"camera": camera.describe()} if camera is not None else {}),
+                              "calibration_model": calibration_model, "cameras": cameras,
                               "runner": {"dask": dask} if dask is not None else {"workers": n}})
-    settings = {"threads": threads, "camera": camera, "batch": {"id": p.key, "manifest": str(p.manifest.path)}}
+    settings = {"threads": threads, "camera": camera, "batch": {"id": p.key, "manifest": str(p.manifest.path)},
+                "calibration_model": calibration_model, "cameras": cameras}
     run_batch(p.manifest, p.todo, None, None, settings, n, dask, "render" if progress else None)
     return BatchResult(p.jobs, p.manifest.path, None, "none", time.perf_counter() - start)

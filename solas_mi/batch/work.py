@@ -47,6 +47,7 @@ def run_job(job: Job, grid: "PSFGrid | None", grid_path: str | None, settings: d
 
 def _degrade(job: Job, grid: "PSFGrid", grid_path: str, settings: dict[str, Any]) -> None:
     from ..convolution.output import degrade_file
+    from ..imageio import image_size
     from ..outputs import check_target, data_and_preview
 
     spec = settings["spec"]  # the batch's `convolution.spec.DegradeSpec`
@@ -55,8 +56,30 @@ def _degrade(job: Job, grid: "PSFGrid", grid_path: str, settings: dict[str, Any]
     else:
         output, png = data_and_preview(job.output, job.png, inputs=[job.input, grid_path])
     output.parent.mkdir(parents=True, exist_ok=True)  # a folder tree's sub-folder
+    rows, cols, _ = image_size(job.input)
+    # the batch's camera of the frame's size, fitted once (`convolution.camera`); none: unreadable, degrade says why
+    camera = settings.get("cameras", {}).get(f"{cols}x{rows}")
     degrade_file(job.input, grid, grid_path, output, png, spec, force=settings["force"], depth=job.params.get("depth"),
-                 extra_meta={"batch": {**settings["batch"], "seed": job.seed}})
+                 extra_meta={"batch": {**settings["batch"], "seed": job.seed}, **({"camera": camera} if camera else {})},
+                 labels=job.params.get("labels"))
+
+
+SCENE_CAMERAS: dict[tuple, dict] = {}  # this worker process's scene items' camera blocks, each fitted once
+
+
+def scene_camera(scene, model: str | None) -> dict | None:
+    """The camera block of a scene item (`render.commands.lens_camera`), fitted once per lens (as focused),
+    film, pitch, wavelength and model in this worker process; None without a model."""
+    if model is None:
+        return None
+    from ..render.commands import lens_camera
+
+    sensor = scene.sensors()[0]
+    key = (sensor.lens.hash, tuple(int(v) for v in sensor.film().crop_size()), float(sensor.pitch_um),
+           sensor.response.single_wavelength, model)
+    if key not in SCENE_CAMERAS:
+        SCENE_CAMERAS[key] = lens_camera(scene, model)
+    return SCENE_CAMERAS[key]
 
 
 def _shoot(job: Job, settings: dict[str, Any]) -> None:
@@ -103,12 +126,15 @@ def _render(job: Job, settings: dict[str, Any]) -> None:
 
         scene = load(job.input, spec.variant, lens, pitch_um=spec.pitch_um, focus_distance=spec.focus_distance,
                      response=spec.response)
+        block = scene_camera(scene, settings.get("calibration_model"))  # before the render: a refusal costs none
         result = render_scene(scene, spec.spp, seed=spec.seed, labels=spec.labels)
-        result.meta.update(scene=job.input, lens=lens.name, lens_hash=lens.hash, **camera_meta(scene))
+        result.meta.update(scene=job.input, lens=lens.name, lens_hash=lens.hash, **camera_meta(scene),
+                           **({"camera": block} if block is not None else {}))
     else:
-        from ..render.image import render_image
+        from ..render.image import image_sensor_key, render_image
 
-        result = render_image(lens, job.input, spec)
+        block = settings.get("cameras", {}).get(image_sensor_key(lens, spec)[0])  # the batch's, fitted once
+        result = render_image(lens, job.input, spec, camera_block=block)
         result.meta["image"] = job.input
     result.meta["batch"] = {**settings["batch"], "seed": job.seed, "params": p}
     with written_together(output, png) as (tmp_data, tmp_png):

@@ -7,23 +7,27 @@ pixel grid is the sensor (`kernels.grid_camera`). PNG/JPEG input is sRGB-decoded
 from __future__ import annotations
 
 import argparse
+import sys
 from typing import Any
 
 from ..outputs import add_png_option
 
 LARGE_IMAGE_VALUES = 4096 * 3072 * 3  # beyond 4K (≈ 1.7 s) the command reports each channel
-DEGRADE_OPTIONS = ("method", "boundary", "occlusion", "silhouette", "linear")  # the DegradeSpec fields `degrade` takes
+# the DegradeSpec fields `degrade` takes
+DEGRADE_OPTIONS = ("method", "boundary", "occlusion", "silhouette", "linear", "calibration_model")
 
 
 def run_degrade(args: argparse.Namespace) -> int:
     from ..imageio import image_size
+    from ..labelkinds import parse_label_files
     from ..outputs import data_and_preview
     from ..progress import Progress
     from ..psf.depth import read_grid
     from .output import degrade_file
     from .spec import DegradeSpec
 
-    output, png = data_and_preview(args.output, args.png, inputs=[args.image, args.psf_grid]
+    labels = dict(parse_label_files(args.labels, "--labels")) if args.labels is not None else {}
+    output, png = data_and_preview(args.output, args.png, inputs=[args.image, args.psf_grid, *labels.values()]
                                    + ([args.depth] if args.depth else []))
     spec = DegradeSpec.from_args(args, DEGRADE_OPTIONS, frame=frame_from_args(args))
     rows, cols, channels = image_size(args.image)
@@ -32,10 +36,16 @@ def run_degrade(args: argparse.Namespace) -> int:
     # a large image takes long enough to want a sign of life
     with Progress("degrade", channels, "channels", enabled=large) as bar:
         meta = degrade_file(args.image, read_grid(args.psf_grid), args.psf_grid, output, png, spec, force=args.force,
-                            depth=args.depth, progress=bar)
+                            depth=args.depth, progress=bar, labels=labels, calibration_model=spec.calibration_model)
+    if meta["camera"].get("calibration", True) is None:
+        print(f"degrade: no calibration in the metadata: {meta['camera']['no_calibration']}", file=sys.stderr)
     height, width = meta["output_shape"][:2]
     print(f"wrote {output} and {png} ({spec.method}{', depth-aware' if args.depth else ''}, {width}x{height} px, "
           f"{meta['seconds']:.2f} s)")
+    if labels:
+        about = meta["labels"]
+        print(f"wrote the labels {', '.join(about['kinds'])} warped with it: {', '.join(about['outputs'].values())} "
+              f"({100 * about['valid_fraction']:.1f} % of the pixels valid)")
     return 0
 
 
@@ -63,6 +73,7 @@ def frame_from_args(args: argparse.Namespace):
 
 def register(subparsers: Any) -> None:
     """Add the `degrade` subcommand."""
+    from ..labelkinds import kinds_help
     from .spec import DegradeSpec
 
     p = subparsers.add_parser(
@@ -81,6 +92,10 @@ def register(subparsers: Any) -> None:
     p.add_argument("--depth", metavar="DEPTH.exr", help="the image's depth map (OpenEXR, metres along the optical "
                    "axis, inf: sky; one channel or Z/depth/Y) with a grid over object distance (psf-grid "
                    "--distances-m): PSFs interpolated in field and in 1/distance")
+    p.add_argument("--labels", metavar="KIND=FILE[,KIND=FILE...]",
+                   help=f"the image's label files (KIND one of {kinds_help()}), warped by exactly the mapping the "
+                        "image goes through and written beside the output: the layers in OUT.labels.exr with "
+                        "labels.valid (1 where the pixel's source lies inside the frame), the boxes in OUT.boxes.json")
     DegradeSpec.add_flags(p, DEGRADE_OPTIONS)
     add_frame_options(p)
     p.add_argument("-o", "--output", required=True, metavar="OUT.exr", help="output OpenEXR (linear)")

@@ -142,7 +142,9 @@ def degrade_depth(image: np.ndarray, depth_m: np.ndarray, grid, boundary: str = 
         meta.update(depth_meta(grid, depth, weights, occlusion, boundary, time.perf_counter() - start),
                     silhouette=silhouette, silhouette_pixels_moved=moved)
         meta.update({"camera": lays[0].camera.meta(), "kernel_size_px": 2 * radius + 1,
-                     "channel_wavelengths_nm": [grid.wavelengths_nm[k] for k in wavelengths]})
+                     "channel_wavelengths_nm": [grid.wavelengths_nm[k] for k in wavelengths],
+                     "max_chief_ray_offset_px": max(float(np.abs(lay.offsets[sorted(set(wavelengths))]).max())
+                                                    for lay in lays)})
         if frame is not None:
             meta["frame_camera"] = frame.meta(width, height)
     return out if image.ndim == 3 else out[..., 0]

@@ -8,6 +8,7 @@ from typing import TYPE_CHECKING, Any, Callable
 import numpy as np
 
 from ..errors import SolasError
+from ..outputs import check_target
 from .depth import degrade_depth
 from .methods import degrade
 from .spec import DegradeSpec
@@ -53,33 +54,34 @@ def peak_bytes(image_path: str | Path, rows: int, cols: int, channels: int, grid
 
 
 def read_depth(path: str | Path) -> np.ndarray:
-    """A depth map (m) from an EXR file: its one channel, or its channel Z, depth or Y."""
-    from ..imageio import read_exr
+    """A depth map (m) from an EXR file: as the depth labels are read (`labelkinds.KINDS`: its depth.Z, Z,
+    depth or Y channel, or its only one)."""
+    from ..labelkinds import KINDS
 
-    if Path(path).suffix.lower() != ".exr":
-        raise SolasError(f"depth map {str(path)!r} must be an OpenEXR file of distances in metres")
-    channels, _ = read_exr(path)
-    names = [n for n in ("Z", "depth", "Y") if n in channels] or (list(channels) if len(channels) == 1 else [])
-    if not names:
-        raise SolasError(f"depth map {path} has channels {', '.join(sorted(channels))}: it must have one channel, "
-                         "or one named Z, depth or Y (metres)")
-    return channels[names[0]]
+    return KINDS["depth"].function(path)[..., 0]
 
 
+# many parameters: the item's files (image, grid, outputs, depth map, labels) beside the spec and the run's settings
 def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path: str | Path, output: Path, png: Path,
                  spec: DegradeSpec | None = None, *, force: bool = False, depth: str | Path | None = None,
-                 extra_meta: dict[str, Any] | None = None, progress: Callable[[int, int], None] | None = None
-                 ) -> dict[str, Any]:
+                 extra_meta: dict[str, Any] | None = None, progress: Callable[[int, int], None] | None = None,
+                 labels=None, calibration_model: str | None = None) -> dict[str, Any]:
     """Degrade the image file `image_path` by `grid` (read from `grid_path`, named in the metadata) as
     `spec` says (a `convolution.spec.DegradeSpec`: method, boundary, linear, output format, occlusion,
     silhouette, frame camera; None: its defaults) and write `output` and `png` (`spec.OUTPUT_FILES`' two files)
     together or not at all; returns the output's metadata. `force`: run even when the estimated memory
     exceeds what is free; `depth`: the EXR depth map (m) of the image, with a grid over object distance
-    (`convolution.depth`); `extra_meta` is added to the metadata; `progress(done, total)` after each
-    channel."""
+    (`convolution.depth`); `extra_meta` is added to the metadata (its "camera", the fitted camera block of
+    `convolution.camera`, to the convolution's own "camera"); `progress(done, total)` after each
+    channel; `labels`: the frame's label files (kind → file, `labelkinds.KINDS`), warped by the image's
+    mapping and written beside `output` (`labels.label_outputs`) with the rest, all read and checked first;
+    `calibration_model`: the frame's camera block fitted here (`convolution.camera.frame_camera`, its memory
+    in the estimate; a batch fits it once and gives it in `extra_meta` instead)."""
     from ..budget import check_memory
     from ..imageio import image_size, read_image
     from ..psf.depth import DepthGrid
+    from .camera import fit_bytes, frame_camera
+    from .labels import label_outputs, memory_bytes, read_labels
 
     spec = DegradeSpec() if spec is None else spec
     if not isinstance(spec, DegradeSpec):
@@ -90,19 +92,41 @@ def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path:
                          "depth map (--depth)"))
     rows, cols, channels = image_size(image_path)
     layers = grid.layers if depth is not None else [grid]
+    files = dict(labels or {})
+    targets = label_outputs(output, files)
+    for target in targets.values():
+        check_target(target, [image_path, grid_path, depth, output, png, *files.values()], "labels output")
     need = peak_bytes(image_path, rows, cols, channels, sum(g.data.nbytes for g in layers)) + 9 * len(layers) * rows * cols
-    check_memory(f"degrade {cols}x{rows}", need, force)
+    fitting = 0.0 if calibration_model is None else fit_bytes(rows * cols)
+    check_memory(f"degrade {cols}x{rows}", need + memory_bytes(rows * cols, files) + fitting, force)
+    found = read_labels(files, (rows, cols), image_path)  # every label read and checked before any work
+    extra = {} if calibration_model is None else {"camera": frame_camera(grid, cols, rows, spec.frame, calibration_model)}
+    extra.update(extra_meta or {})
     image = read_image(image_path, linearize=not spec.linear)
     meta: dict[str, Any] = {}
+    depth_m = None
     if depth is None:
         out = degrade(image, grid, spec.method, spec.boundary, meta=meta, progress=progress, frame=spec.frame)
     elif spec.method != "interp":
         raise SolasError(f"method {spec.method!r}: a depth map is convolved with interp per depth layer only")
     else:
-        out = degrade_depth(image, read_depth(depth), grid, spec.boundary, occlusion=spec.occlusion, meta=meta,
+        depth_m = read_depth(depth)
+        out = degrade_depth(image, depth_m, grid, spec.boundary, occlusion=spec.occlusion, meta=meta,
                             progress=progress, frame=spec.frame, silhouette=spec.silhouette)
         meta["depth_map"] = str(depth)
-    first = layers[0]
+    writers = warped_labels(found, targets, grid, out.shape[:2], spec, depth_m, meta)
+    describe_item(meta, image_path, spec, grid_path, layers[0], extra)
+    names = None if out.ndim == 2 or out.shape[-1] == 3 else \
+        [f"C{c:02d}_{meta['channel_wavelengths_nm'][c]:g}nm" for c in range(out.shape[-1])]
+    write_output(output, png, out, names, meta, spec.output_format, image_path, writers)
+    meta["output_shape"] = list(out.shape)
+    return meta
+
+
+def describe_item(meta: dict, image_path, spec: DegradeSpec, grid_path, first, extra: dict) -> None:
+    """The degraded image's metadata `meta` completed: its input, the grid (`first`: its one grid, or its first
+    layer) and the brightness convention, then `extra` (its "camera", the fitted camera block of
+    `convolution.camera`, joining the convolution's own "camera")."""
     meta.update({"input": str(image_path), "input_encoding": "linear" if spec.linear or
                  Path(image_path).suffix.lower() == ".exr" else "sRGB, decoded to linear",
                  "psf_grid": str(grid_path),
@@ -110,19 +134,35 @@ def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path:
                  "psf_grid_shape": list(first.shape), "psf_pitch_um": first.pitch_um, "psf_size": first.size,
                  "values": "mean irradiance over each pixel, in the units of the linear input",
                  "brightness": BRIGHTNESS})
-    meta.update(extra_meta or {})
-    names = None if out.ndim == 2 or out.shape[-1] == 3 else \
-        [f"C{c:02d}_{meta['channel_wavelengths_nm'][c]:g}nm" for c in range(out.shape[-1])]
-    write_output(output, png, out, names, meta, spec.output_format, image_path)
-    meta["output_shape"] = list(out.shape)
-    return meta
+    extra = dict(extra)
+    if "camera" in extra:
+        meta["camera"] = {**meta.get("camera", {}), **extra.pop("camera")}
+    meta.update(extra)
+
+
+def warped_labels(found: dict, targets: dict, grid, shape: tuple[int, int], spec: DegradeSpec,
+                  depth_m: np.ndarray | None, meta: dict) -> dict:
+    """The labels `found` (`labels.read_labels`) warped by the mapping the image went through (its depth map
+    `depth_m` as the convolution read it), recorded in `meta["labels"]`: each of the files `targets`
+    (`labels.label_outputs`) → its writer (`write_output`); {} without labels."""
+    if not found:
+        return {}
+    from .depth import silhouette_depth
+    from .labels import label_writers, warp_labels
+    from .mapping import mapping_for
+
+    depth = None if depth_m is None else silhouette_depth(np.asarray(depth_m, dtype=np.float64), spec.silhouette)[0]
+    mapping = mapping_for(grid, shape[1], shape[0], spec.frame, spec.method, depth)
+    layers, annotations, about = warp_labels(found, mapping, spec.boundary)
+    meta["labels"] = {**about, "outputs": {what: str(path) for what, path in targets.items()}}
+    return label_writers(targets, layers, annotations, meta["labels"])
 
 
 def write_output(output: Path, second: Path, out: np.ndarray, names: list[str] | None, meta: dict,
-                 output_format: str, image_path) -> None:
+                 output_format: str, image_path, more: dict | None = None) -> None:
     """The degraded image `out` (channel `names`, None: grey or RGB) and its metadata as `output_format`
-    says (`spec.OUTPUT_FILES`): the EXR and its PNG preview, or the 16-bit PNG and its JSON; both files appear
-    together or not at all."""
+    says (`spec.OUTPUT_FILES`): the EXR and its PNG preview, or the 16-bit PNG and its JSON; and `more`
+    files (path → its writer of a temporary path: the warped labels); all appear together or not at all."""
     from ..imageio import image_channels, write_exr, write_png
     from ..outputs import written_together
 
@@ -132,12 +172,15 @@ def write_output(output: Path, second: Path, out: np.ndarray, names: list[str] |
         raise SolasError(f"{image_path}: degraded values up to {float(np.abs(out).max()):.4g} exceed half floats' "
                          f"{HALF_MAX:g}: write float EXR (output format exr)")
     meta["output_format"] = output_format
-    with written_together(output, second) as (tmp_data, tmp_second):
+    more = more or {}
+    with written_together(output, second, *more) as (tmp_data, tmp_second, *tmp_more):
         if output_format == "png16":
             write_png16_with_meta(tmp_data, tmp_second, out if names is None else view, meta)
         else:
             write_exr(tmp_data, image_channels(out, names), meta, half=half)
             write_png(tmp_second, view)
+        for tmp, writer in zip(tmp_more, more.values()):
+            writer(tmp)
 
 
 def write_png16_with_meta(path: str, meta_path: str, image: np.ndarray, meta: dict) -> None:

@@ -15,6 +15,9 @@ from dataclasses import asdict, dataclass
 from typing import Any
 
 from ..errors import SolasError
+from ..labelkinds import KINDS, RULES, kinds_help, parse_label_files
+from ..optics.calibration.command import calibration_help
+from ..optics.calibration.models import MODELS
 from ..optics.frame import FrameCamera
 from ..options import OptionSpec, option
 from ..psf.spec import GridSpec
@@ -53,9 +56,15 @@ class DegradeSpec(OptionSpec):
         With a depth map, how layers are composited, one of `depth.OCCLUSIONS` (`convolution.depth`).
     silhouette : str, default "nearest"
         With a depth map, the depth of a silhouette's mixed pixels, one of `depth.SILHOUETTES`.
+    label_patterns : tuple of (str, str), optional
+        A batch's label files beside each image, (kind, pattern) pairs of `labelkinds.KINDS`, warped with it
+        (`convolution.labels`).
     scale_lens : float, optional
         A batch's camera's pixel pitch (µm): its lens scaled to the camera's focal length
         (`batch.degrade.scaled_lens`).
+    calibration_model : str, default "opencv-fisheye"
+        The camera model whose fit to the lens the degraded frames' metadata records, a name of
+        `optics.calibration.MODELS` (`convolution.camera`).
     frame : FrameCamera, optional
         The camera every input was taken with (`optics.frame.FrameCamera`); default: the image spans the
         grid's x field range.
@@ -73,7 +82,7 @@ class DegradeSpec(OptionSpec):
     --------
     >>> from solas_mi.convolution import DegradeSpec
     >>> DegradeSpec(method="patch").header()
-    {'method': 'patch', 'boundary': 'edge', 'linear': False, 'format': 'exr'}
+    {'method': 'patch', 'boundary': 'edge', 'linear': False, 'format': 'exr', 'calibration_model': 'opencv-fisheye'}
     """
 
     method: str = option(METHODS.help, DEFAULT_METHOD, choices=METHODS.names)
@@ -92,9 +101,16 @@ class DegradeSpec(OptionSpec):
     silhouette: str = option(f"{DEPTH_WITH}: nearest (default): a silhouette's pixels of mixed (antialiased) depth "
                              "take the nearest depth around them; as-given: the map's depths", SILHOUETTES[0],
                              choices=SILHOUETTES)
+    label_patterns: tuple[tuple[str, str], ...] | None = option(
+        lambda: f"each image's label files beside it, KIND=PATTERN[,KIND=PATTERN...] (KIND one of {kinds_help()}; "
+                "e.g. instance={stem}_instance.png): warped by the mapping the image goes "
+                "through, written beside its output (<name>.labels.exr, <name>.boxes.json); never taken as frames",
+        flag="--label-pattern", parse=lambda text: parse_label_files(text, "--label-pattern", pattern=True),
+        metavar="KIND={stem}_KIND.png", shown=lambda v: ",".join("=".join(p) for p in v))
     scale_lens: float | None = option("with --lens and --intrinsics/--fisheye: the camera's pixel pitch (µm); the "
                                       "lens scaled to its focal length fx x PIXEL_UM, f-number kept, stated in the "
                                       "metadata", parse=float, metavar="PIXEL_UM")
+    calibration_model: str = option(calibration_help, MODELS.default, choices=MODELS.names)
     frame: FrameCamera | None = None
     camera: Any = None
     grid_spec: GridSpec | None = None
@@ -105,7 +121,7 @@ class DegradeSpec(OptionSpec):
         if not isinstance(self.linear, bool):
             raise SolasError(f"linear {self.linear!r} must be True or False")
         for name, allowed in (("output format", OUTPUT_FORMATS), ("occlusion", OCCLUSIONS),
-                              ("silhouette", SILHOUETTES)):
+                              ("silhouette", SILHOUETTES), ("calibration model", tuple(MODELS.names()))):
             value = getattr(self, name.replace(" ", "_"))
             if not isinstance(value, str) or value not in allowed:
                 raise SolasError(f"{name} {value!r} must be one of {', '.join(allowed)}")
@@ -114,6 +130,9 @@ class DegradeSpec(OptionSpec):
                                          and pattern.lower().endswith(".exr")):
             raise SolasError(f"depth pattern {pattern!r} must be a file name with {{stem}} ending in .exr, "
                              "e.g. {stem}_depth.exr (beside each image)")
+        if self.label_patterns is not None:  # as `parse_label_files` reads them: (kind, pattern) pairs
+            object.__setattr__(self, "label_patterns", parse_label_files(self.label_patterns, "label patterns",
+                                                                         pattern=True))
         scale = self.scale_lens
         if scale is not None and (isinstance(scale, bool) or not isinstance(scale, (int, float))
                                   or not (math.isfinite(scale) and scale > 0)):
@@ -136,7 +155,9 @@ class DegradeSpec(OptionSpec):
                 + ([self.output_format] if self.output_format != "exr" else [])
                 + ([self.depth_pattern, self.occlusion, self.silhouette] if self.depth_pattern is not None else [])
                 + ([asdict(self.frame)] if self.frame is not None else [])
-                + ([self.camera.describe()] if self.camera is not None else []))
+                + ([self.camera.describe()] if self.camera is not None else [])
+                + ([dict(self.label_patterns)] if self.label_patterns else [])
+                + ([self.calibration_model] if self.calibration_model != MODELS.default else []))
 
     def header(self, lens_scale: dict | None = None) -> dict[str, Any]:
         """The options as a batch's manifest states them.
@@ -153,6 +174,19 @@ class DegradeSpec(OptionSpec):
             where given.
         """
         return {"method": self.method, "boundary": self.boundary, "linear": self.linear, "format": self.output_format,
+                "calibration_model": self.calibration_model,
                 **({"frame_camera": asdict(self.frame)} if self.frame is not None else {}),
                 **({"lens_scale": lens_scale} if lens_scale is not None else {}),
-                **({"camera": self.camera.describe()} if self.camera is not None else {})}
+                **({"camera": self.camera.describe()} if self.camera is not None else {}),
+                **({"labels": self.labels_header()} if self.label_patterns else {})}
+
+    def labels_header(self) -> dict[str, dict[str, str]]:
+        """Each label kind a batch warps, as its manifest states them.
+
+        Returns
+        -------
+        dict
+            Kind → its pattern and how it follows the mapping (`labelkinds.RULES`).
+        """
+        return {kind: {"pattern": pattern, "rule": KINDS[kind].extra["rule"], "how": RULES[KINDS[kind].extra["rule"]]}
+                for kind, pattern in self.label_patterns or ()}

@@ -19,6 +19,7 @@ import numpy as np
 from ..errors import SolasError
 from ..sensor.auto_exposure import AUTO, AutoExposure, exposure_seconds
 from ..sensor.capture import check_seed
+from ..sensor.chain import SensorChain
 from ..sensor.model import SensorModel
 from .pipeline import ISP, check_sensor
 
@@ -29,8 +30,8 @@ class Camera:
 
     Parameters
     ----------
-    sensor : SensorModel
-        The sensor.
+    sensor : SensorModel or SensorChain
+        The sensor (an HDR sensor's chain of stages too).
     exposure_ms : float or AutoExposure
         The exposure time (ms), or an `sensor.auto_exposure.AutoExposure` (chosen per frame from its light).
     isp : ISP, optional
@@ -55,15 +56,16 @@ class Camera:
     ((8, 12), (8, 12, 3), 10.0)
     """
 
-    sensor: SensorModel
+    sensor: SensorModel | SensorChain
     exposure_ms: float | AutoExposure
     isp: ISP | None = None
     seed: int = 0
     scale: float = 1.0
 
     def __post_init__(self):
-        if not isinstance(self.sensor, SensorModel):
-            raise SolasError(f"camera sensor {self.sensor!r} must be a solas_mi.sensor.model.SensorModel")
+        if not isinstance(self.sensor, (SensorModel, SensorChain)):
+            raise SolasError(f"camera sensor {self.sensor!r} must be a solas_mi.sensor.model.SensorModel or a "
+                             "solas_mi.sensor.chain.SensorChain")
         if not isinstance(self.exposure_ms, AutoExposure) and (
                 isinstance(self.exposure_ms, bool) or not isinstance(self.exposure_ms, (int, float))
                 or not math.isfinite(self.exposure_ms) or self.exposure_ms <= 0):
@@ -104,13 +106,13 @@ class Camera:
         Returns
         -------
         raw : numpy.ndarray
-            (H, W) uint16 DN.
+            (H, W) DN: uint16, or uint32 for an HDR sensor's merged signal not companded.
         frame : numpy.ndarray or None
             The developed (H, W, 3) uint8 frame; None without an image processor.
         meta : dict
             The camera, the frame's name and number, its exposure, the stages.
         """
-        from ..sensor.capture import capture
+        from ..sensor.capture import as_chain, capture
         from .pipeline import develop
 
         number = frame_number(name)
@@ -121,7 +123,8 @@ class Camera:
                 **({"auto_exposure": chosen} if chosen else {})}
         if self.isp is None:
             return raw, None, meta
-        frame, developed = develop(raw, self.sensor, self.isp)
+        defective = as_chain(self.sensor).defective_pixels(raw.shape, self.seed)
+        frame, developed = develop(raw, self.sensor, self.isp, defective)
         return raw, frame, {**meta, **developed}
 
 

@@ -21,19 +21,20 @@ import numpy as np
 
 from ..errors import SolasError
 from ..sensor.cfa import FILTERS
+from ..sensor.chain import SensorChain
 from ..sensor.model import SensorModel
 from .black import GAIN_MAX
 from .demosaic import slots
 
 
-def responses(model: SensorModel) -> np.ndarray:
+def responses(model: SensorModel | SensorChain) -> np.ndarray:
     """S (3 × 3): the response of each demosaiced channel's filter to each image channel."""
     qe = model.effective_qe()
     lam = np.asarray(model.channel_wavelengths_nm)
     return np.array([qe[FILTERS.index(f)] * lam for f in slots(model.cfa)[1]])
 
 
-def sensor_matrix(model: SensorModel, gains: np.ndarray) -> np.ndarray:
+def sensor_matrix(model: SensorModel | SensorChain, gains: np.ndarray) -> np.ndarray:
     """M = w · P (D S P)⁺ for the sensor's responses S and the daylight gains `gains` (one per channel)."""
     balanced = np.diag(gains) @ responses(model)
     basis = np.array([[1.0, 0.0], [0.0, 1.0], [0.0, 1.0]]) if model.cfa == "RCCC" else np.eye(3)

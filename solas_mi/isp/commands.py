@@ -22,6 +22,7 @@ def run_camera(args: argparse.Namespace) -> int:
     if args.isp is None:
         return sensor.run_camera(args)
     from ..outputs import data_and_preview
+    from ..sensor.capture import as_chain
     from ..sensor.files import load_sensor
     from .camera import write_frame
     from .pipeline import check_sensor, develop, load_isp
@@ -30,7 +31,7 @@ def run_camera(args: argparse.Namespace) -> int:
     check_sensor(isp, load_sensor(args.sensor_model))  # before the frame is taken
     data, png = data_and_preview(args.output, None, [args.image, args.sensor_model, args.isp])
     raw, model, meta = sensor.raw_frame(args, DEVELOP_BYTES_PER_PIXEL)
-    frame, developed = develop(raw, model, isp)
+    frame, developed = develop(raw, model, isp, as_chain(model).defective_pixels(raw.shape, args.seed))
     write_frame(data, raw, frame, {**meta, **developed})
     sensor.report(args, raw, model, meta)
     print(f"{png}: developed 8-bit sRGB frame ({', '.join(developed['stages'])})")

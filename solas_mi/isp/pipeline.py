@@ -2,7 +2,8 @@
 
 The stages, in order, each optional and named in the metadata:
 
-1. black level (`black`): the signal above black as a fraction of saturation;
+1. black level (`black`): the signal above black as a fraction of saturation (an HDR sensor's RAW
+   decompanded first), its defect pixels replaced by their neighbours' mean (`defects`);
 2. white balance (`white.METHODS`): one gain per filter on the mosaic;
 3. demosaicing (`demosaic.METHODS`): three channels per pixel (``none``: the mosaic as a grey frame);
 4. colour correction (`ccm`): the sensor's matrix, a given one, or none;
@@ -31,8 +32,9 @@ import numpy as np
 
 from ..errors import SolasError
 from ..options import toml_table
+from ..sensor.chain import SensorChain
 from ..sensor.model import SensorModel
-from . import black, ccm, demosaic, tone, white
+from . import black, ccm, defects, demosaic, tone, white
 from .tone import CURVES, DEFAULT_CURVE, GAMMA
 
 DEFAULT = "default"
@@ -46,6 +48,8 @@ class ISP:
     ----------
     black_level : bool, default True
         Subtract the black level (the signal becomes a fraction of saturation).
+    defect_correction : bool, default True
+        Replace a sensor's defect pixels by their same-filter neighbours' mean (with a defect map).
     white_balance : str or dict, default: `white.METHODS`'s default
         A name of `white.METHODS`, or gains per filter ({"R": 1.9, "G": 1.0, "B": 1.5}).
     grey_card : (int, int, int, int), optional
@@ -75,6 +79,7 @@ class ISP:
     """
 
     black_level: bool = True
+    defect_correction: bool = True
     white_balance: str | dict = white.DEFAULT_METHOD
     grey_card: tuple[int, int, int, int] | None = None
     demosaic: str = demosaic.DEFAULT_METHOD
@@ -84,8 +89,9 @@ class ISP:
     gamma: float = GAMMA.default
 
     def __post_init__(self):
-        if not isinstance(self.black_level, bool):
-            raise SolasError(f"isp black_level {self.black_level!r} must be true or false")
+        for name in ("black_level", "defect_correction"):
+            if not isinstance(getattr(self, name), bool):
+                raise SolasError(f"isp {name} {getattr(self, name)!r} must be true or false")
         self._check_white_balance()
         if not isinstance(self.demosaic, str) or self.demosaic != "none":
             demosaic.check_method(self.demosaic, self.demosaic_options)
@@ -198,17 +204,21 @@ def check_sensor(isp: ISP, model: SensorModel) -> None:
         white.check_given(isp.white_balance, model.cfa)
 
 
-def develop(raw: np.ndarray, model: SensorModel, isp: ISP = ISP()) -> tuple[np.ndarray, dict]:
+def develop(raw: np.ndarray, model: SensorModel | SensorChain, isp: ISP = ISP(),
+            defective: np.ndarray | None = None) -> tuple[np.ndarray, dict]:
     """Develop a RAW frame into an 8-bit sRGB frame: black level, white balance, demosaic, CCM, tone.
 
     Parameters
     ----------
     raw : numpy.ndarray
         (H, W) DN, the sensor's mosaic (`sensor.capture.capture`).
-    model : SensorModel
-        The sensor that took it.
+    model : SensorModel or SensorChain
+        The sensor that took it (an HDR sensor's RAW is decompanded first).
     isp : ISP, default ISP()
         The image processor.
+    defective : numpy.ndarray, optional
+        The sensor's defect map (`SensorChain.defective_pixels`): those pixels take their same-filter
+        neighbours' mean (`defects`); None: no defects.
 
     Returns
     -------
@@ -228,8 +238,11 @@ def develop(raw: np.ndarray, model: SensorModel, isp: ISP = ISP()) -> tuple[np.n
     ((8, 12, 3), 'uint8', ['black_level', 'ccm', 'demosaic', 'tone', 'white_balance'])
     """
     stages: dict[str, dict[str, Any]] = {"black_level": {"subtracted": isp.black_level, "black_dn": model.black_level_dn,
-                              "saturation_dn": black.saturation_dn(model)}}
+                              "saturation_dn": black.saturation_dn(model),
+                              "decompanded_through": black.decompanded_through(model)}}
     signal = black.subtract_black(raw, model, enabled=isp.black_level)
+    signal, stages["black_level"]["defect_pixels_corrected"] = defects.correct(
+        signal, defective if isp.defect_correction else None)
     gains = white.METHODS[_white_balance(isp)].function(signal, model, isp)
     stages["white_balance"] = {"method": _white_balance(isp), "gains": gains,
                                **({"grey_card": list(isp.grey_card)} if isp.grey_card else {})}
@@ -253,7 +266,7 @@ def develop(raw: np.ndarray, model: SensorModel, isp: ISP = ISP()) -> tuple[np.n
     return frame, {"isp": isp.describe(), "stages": stages}
 
 
-def _matrix(isp: ISP, model: SensorModel) -> np.ndarray | None:
+def _matrix(isp: ISP, model: SensorModel | SensorChain) -> np.ndarray | None:
     if isp.ccm == "none":
         return None
     if isp.ccm == "sensor":

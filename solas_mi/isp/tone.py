@@ -29,6 +29,26 @@ def _none(x):
     return x
 
 
+REINHARD_KEY = 0.18  # the "normal key": the frame's log-average luminance goes to middle grey
+LOG_FLOOR = 2.0**-24  # δ of the log-average: one code of a 24-bit merged signal, as a fraction of saturation
+LUMINANCE = np.array([0.2126, 0.7152, 0.0722])  # Y of linear sRGB (ITU-R BT.709)
+
+
+@CURVES.register("reinhard", summary="for HDR frames: the luminance Y scaled to L = 0.18 Y / Ȳ (Ȳ its "
+                 "log-average), compressed to L (1 + L / L_w²) / (1 + L) with L_w the frame's largest L, each pixel's "
+                 "R, G, B scaled alike, then the sRGB OETF",
+                 reference="Reinhard, Stark, Shirley, Ferwerda, Photographic Tone Reproduction for Digital Images, "
+                           "SIGGRAPH 2002, eqs. 1-4")
+def _reinhard(x):
+    luminance = x @ LUMINANCE
+    mean = np.exp(np.mean(np.log(LOG_FLOOR + luminance))) if luminance.size else 1.0
+    scaled = REINHARD_KEY * luminance / mean
+    white = max(float(scaled.max(initial=0.0)), LOG_FLOOR)
+    display = scaled * (1.0 + scaled / white**2) / (1.0 + scaled)
+    ratio = np.divide(display, luminance, out=np.zeros_like(luminance), where=luminance > 0)
+    return srgb_encode(x * ratio[..., None])
+
+
 def check_curve(curve: str, gamma: float) -> None:
     CURVES.get(curve)
     GAMMA.check(gamma)

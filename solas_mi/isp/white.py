@@ -9,6 +9,7 @@ import numpy as np
 from ..errors import SolasError
 from ..registry import Registry
 from ..sensor.cfa import FILTERS, site_map
+from ..sensor.chain import SensorChain
 from ..sensor.model import SensorModel
 from .black import GAIN_MAX
 from .ccm import responses
@@ -27,7 +28,7 @@ def _filters(pattern: str) -> list[str]:
     return sorted(set(pattern), key=FILTERS.index)
 
 
-def daylight_gains(model: SensorModel) -> dict[str, float]:
+def daylight_gains(model: SensorModel | SensorChain) -> dict[str, float]:
     """g_f = r_ref / r_f for the sensor's response r_f to a white of 1 in every channel."""
     white = dict(zip(slots(model.cfa)[1], responses(model).sum(axis=1)))
     return {f: white[reference(model.cfa)] / white[f] for f in _filters(model.cfa)}

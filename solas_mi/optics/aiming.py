@@ -13,14 +13,13 @@ import numpy as np
 
 from . import tracer
 from .lens import Lens
+from .newton import TOL as _TOL
+from .newton import solve
 from .paraxial import paraxial, pupil_distance
 
 dr = tracer.dr
-_HALVINGS = 6  # a Newton step that loses its ray is halved up to this many times
-_STEP = 1e-5  # mm, finite-difference step in entrance coordinates
 POLAR_STEP_DEG = 2.0  # largest step of the field when continuing a chief-ray aim outward
 _MIN_STEP_DEG = 1e-3  # a continuation step that keeps losing its ray is halved down to this
-_TOL = 1e-13  # convergence of aimed quantities (mm at the stop, direction cosines on the sphere)
 
 
 class Bundle:
@@ -32,84 +31,59 @@ class Bundle:
         self.n_fields = len(field_deg)
         self.per_field = per_field
         self.index = dr.arange(tracer.UInt32, self.n_fields * per_field) // per_field
-        # per ray: field tangents (x, y), or the unit direction (x, y, z) of polar fields
-        incoming = lens.field_type.incoming(field_deg)
-        self.incoming = tuple(tracer.gather(incoming[:, i], self.index) for i in range(incoming.shape[1]))
-        self.wavelength_um = tracer.gather(np.asarray(wavelength_nm) / 1000.0, self.index)
-        pts = tracer.object_points(lens, field_deg)
-        self.object_point = None if pts is None else (tracer.gather(pts[:, 0], self.index),
-                                                      tracer.gather(pts[:, 1], self.index))
+        # per field: field tangents (x, y), or the unit direction (x, y, z) of polar fields
+        self._incoming = lens.field_type.incoming(field_deg)
+        self._object_points = tracer.object_points(lens, field_deg)
         # what a converged aim can reach: rays launched from a far object carry its coordinates'
         # rounding (≈ 1e-17 of the distance, measured: 4e-8 mm at 1e12 mm) into every crossing
         self.tolerance = 1e3 * _TOL + (0.0 if lens.at_infinity else 1e-17 * abs(lens.object_distance))
 
-    def per_ray(self, values: np.ndarray) -> tracer.F:
-        """Per-field values spread over the bundle's rays."""
-        return tracer.gather(values, self.index)
+    def per_ray(self, values: np.ndarray, rays: tracer.UInt32 | None = None) -> tracer.F:
+        """Per-field values spread over the bundle's rays (or the rays `rays`, a UInt32 index)."""
+        return tracer.gather(values, self.index if rays is None else rays // self.per_field)
 
-    def launch(self, ex: tracer.F, ey: tracer.F) -> tracer.Rays:
-        """The bundle's rays at entrance coordinates (ex, ey), in the lens's field type."""
+    def launch(self, ex: tracer.F, ey: tracer.F, rays: tracer.UInt32 | None = None) -> tracer.Rays:
+        """The bundle's rays (or the rays `rays`) at entrance coordinates (ex, ey), in the lens's field type."""
+        incoming = [self.per_ray(self._incoming[:, i], rays) for i in range(self._incoming.shape[1])]
         if self.lens.field_type.sideways:  # directions up to and beyond 90°, object at infinity
-            return tracer.launch_direction(self.lens, *self.incoming, ex, ey)
-        return tracer.launch(self.lens, *self.incoming, ex, ey, self.object_point)
+            return tracer.launch_direction(self.lens, *incoming, ex, ey)
+        pts = self._object_points
+        return tracer.launch(self.lens, *incoming, ex, ey,
+                        None if pts is None else (self.per_ray(pts[:, 0], rays), self.per_ray(pts[:, 1], rays)))
 
-    def trace(self, ex: tracer.F, ey: tracer.F, heights: list | None = None) -> tracer.Traced:
-        """The rays of entrance coordinates (ex, ey) traced; `heights`: see `tracer.trace`."""
-        return tracer.trace(self.lens, self.launch(ex, ey), self.wavelength_um, heights=heights)
+    def trace(self, ex: tracer.F, ey: tracer.F, heights: list | None = None,
+              rays: tracer.UInt32 | None = None) -> tracer.Traced:
+        """The rays (or the rays `rays`) of entrance coordinates (ex, ey) traced; `heights`: see `tracer.trace`."""
+        wavelength_um = self.per_ray(np.asarray(self.bundle_wavelengths) / 1000.0, rays)
+        return tracer.trace(self.lens, self.launch(ex, ey, rays), wavelength_um, heights=heights)
 
 
-def aim(bundle: Bundle, target, ex: tracer.F, ey: tracer.F, goal_x: tracer.F, goal_y: tracer.F, max_iter: int = 60):
-    """Newton iteration on entrance coordinates so that target(traced) → (goal_x, goal_y).
+def aim(bundle: Bundle, target, ex: tracer.F, ey: tracer.F, goal_x: tracer.F, goal_y: tracer.F, max_iter: int = 60,
+        jacobian=None):
+    """Newton iteration on entrance coordinates so that target(traced) → (goal_x, goal_y) (`newton`).
 
-    `target(traced)` returns (gx, gy, ok). The Jacobian is taken by finite differences and reused
-    (chord method), and taken again where a residual stops falling; a step that would leave the rays
-    that pass (into total internal reflection, past a surface's edge) is halved; the iteration ends when
-    every ray's residual is below _TOL or has not fallen for a few steps, or after `max_iter`. A ray counts as
-    converged when its residual is within the precision the launch allows (`Bundle.tolerance`).
-    Returns (ex, ey, traced at the solution, converged mask)."""
-    def residual(ax, ay):
-        tr = bundle.trace(ax, ay)
-        gx, gy, ok = target(tr)
-        return gx - goal_x, gy - goal_y, ok, tr
+    `target(traced, rays=None)` returns (gx, gy, ok) of the rays traced. The Jacobian (j11, j12, j21, j22) =
+    ∂(gx, gy)/∂(ex, ey) is `jacobian` where given (e.g. from neighbouring solutions), else taken by finite
+    differences; it is reused (chord method), and taken again for a ray whose residual stops falling; a
+    step that would leave the rays that pass (into total internal reflection, past a surface's edge) is
+    halved; a ray's iteration ends when its residual is below the tolerance or has not fallen for a few
+    steps, or after `max_iter`. A ray counts as converged when its residual is within the precision the
+    launch allows (`Bundle.tolerance`). Returns (ex, ey, traced at the solution, converged mask)."""
+    return aim_keeping(bundle, target, ex, ey, goal_x, goal_y, max_iter, jacobian)[:4]
 
-    def jacobian(ax, ay, rx, ry):
-        px, py, _, _ = residual(ax + _STEP, ay)
-        qx, qy, _, _ = residual(ax, ay + _STEP)
-        j = ((px - rx) / _STEP, (qx - rx) / _STEP, (py - ry) / _STEP, (qy - ry) / _STEP)
-        dr.eval(*j)
-        return j
 
-    rx, ry, ok, tr = residual(ex, ey)
-    j11, j12, j21, j22 = jacobian(ex, ey, rx, ry)
-    best = np.full(dr.width(rx), np.inf)  # per ray, so a batch's stiff rays do not stop the others
-    stalled = np.zeros(dr.width(rx), dtype=np.int64)
-    for _ in range(max_iter):
-        det = j11 * j22 - j12 * j21
-        step_x = (j22 * rx - j12 * ry) / det
-        step_y = (-j21 * rx + j11 * ry) / det
-        good = ok & dr.isfinite(step_x) & dr.isfinite(step_y)
-        for _ in range(_HALVINGS + 1):
-            nx, ny = dr.select(good, ex - step_x, ex), dr.select(good, ey - step_y, ey)
-            nrx, nry, nok, ntr = residual(nx, ny)
-            lost = good & ~nok  # the step left the rays that pass (total internal reflection, a missed surface)
-            dr.eval(nx, ny, nrx, nry, nok, lost)
-            if not dr.any(lost):
-                break
-            step_x, step_y = dr.select(lost, 0.5 * step_x, step_x), dr.select(lost, 0.5 * step_y, step_y)
-        ex, ey, rx, ry, ok, tr = nx, ny, nrx, nry, nok, ntr
-        err = np.abs(np.asarray(dr.select(ok, dr.maximum(dr.abs(rx), dr.abs(ry)), 0.0)))
-        stalled = np.where(err > 0.5 * best, stalled + 1, 0)
-        best = np.minimum(best, err)
-        active = (err >= _TOL) & (stalled < 4)  # stalled 4 times: at the floor of what the arithmetic resolves
-        if not active.any():
-            break
-        if (active & (stalled == 2)).any():  # the chord has stopped working: a fresh Jacobian where the rays are now
-            j11, j12, j21, j22 = jacobian(ex, ey, rx, ry)
+def aim_keeping(bundle: Bundle, target, ex: tracer.F, ey: tracer.F, goal_x: tracer.F, goal_y: tracer.F,
+                max_iter: int = 60, jacobian=None, keep=None, unknown: tracer.UInt32 | None = None):
+    """`aim`, and also `keep(traced, rays=None)` (a tuple of arrays of the rays traced) evaluated with each
+    step's trace, so that what the caller needs of the rays at the solution costs no trace of its own;
+    `unknown`: the rays whose given `jacobian` is not known, taken by finite differences. Returns (ex, ey,
+    traced, converged, kept)."""
+    ex, ey, rx, ry, ok, kept = solve(bundle, target, ex, ey, goal_x, goal_y, max_iter, jacobian, keep, unknown)
     converged = ok & (dr.maximum(dr.abs(rx), dr.abs(ry)) < bundle.tolerance)
-    return ex, ey, tr, converged
+    return ex, ey, bundle.trace(ex, ey), converged, kept
 
 
-def stop_target(tr: tracer.Traced):
+def stop_target(tr: tracer.Traced, rays=None):
     return tr.stop_x, tr.stop_y, tr.ok
 
 
@@ -131,7 +105,7 @@ def continued_aim(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) 
         nxt = np.minimum(done + step, 1.0)[active]
         b = Bundle(lens, field_deg[active] * nxt[:, None], wavelength_nm[active], 1)
         zero = dr.zeros(tracer.F, int(active.sum()))
-        ex, ey, _, conv = aim(b, stop_target, tracer.F(e[active, 0]), tracer.F(e[active, 1]), zero, zero)
+        ex, ey, _, conv = aim(b, stop_target, tracer.array(e[active, 0]), tracer.array(e[active, 1]), zero, zero)
         ex, ey, conv = tracer.to_numpy(ex, ey, conv)
         idx = np.flatnonzero(active)
         e[idx[conv]] = np.stack([ex, ey], axis=-1)[conv]
@@ -166,7 +140,7 @@ def chief_aim(lens: Lens, b: Bundle) -> tuple[np.ndarray, np.ndarray]:
     else:
         e0 = _paraxial_aim(lens, fields)
         zero = dr.zeros(tracer.F, b.n_fields)
-        lost = ~tracer.to_numpy(aim(b, stop_target, tracer.F(e0[:, 0]), tracer.F(e0[:, 1]), zero, zero)[3])[0]
+        lost = ~tracer.to_numpy(aim(b, stop_target, tracer.array(e0[:, 0]), tracer.array(e0[:, 1]), zero, zero)[3])[0]
         if lost.any():
             e0[lost], reached = continued_aim(lens, fields[lost], waves[lost])
             lost[np.flatnonzero(lost)[reached >= 1.0]] = False
@@ -185,7 +159,7 @@ def nearest_passing(lens: Lens, field_deg: np.ndarray, wavelength_nm: float, sam
     g = np.linspace(-span, span, samples)
     ex, ey = (a.ravel() for a in np.meshgrid(g, g))
     b = Bundle(lens, np.tile(field_deg, (len(ex), 1)), np.full(len(ex), wavelength_nm), 1)
-    tr = b.trace(tracer.F(ex), tracer.F(ey))
+    tr = b.trace(tracer.array(ex), tracer.array(ey))
     ok, clipped, sx, sy = tracer.to_numpy(tr.ok, tr.clipped_by, tr.stop_x, tr.stop_y)
     passed = ok & ((clipped == 0) | (clipped > lens.stop_index + 1))
     if not passed.any():
@@ -201,14 +175,17 @@ class _FilmBundle:
     for `aim`: their entrance coordinates are points on the last surface's vertex plane."""
 
     def __init__(self, rev: Lens, x: np.ndarray, y: np.ndarray, wavelength_nm: float):
-        self.lens, self.x, self.y = rev, tracer.F(x), tracer.F(y)
-        self.wavelength_um = tracer.F(np.full(len(x), wavelength_nm * 1e-3))
+        self.lens, self.x, self.y = rev, tracer.array(x), tracer.array(y)
+        self.wavelength_um = tracer.array(np.full(len(x), wavelength_nm * 1e-3))
         self.tolerance = 1e3 * _TOL
 
-    def trace(self, ex: tracer.F, ey: tracer.F, heights: list | None = None) -> tracer.Traced:
+    def trace(self, ex: tracer.F, ey: tracer.F, heights: list | None = None,
+              rays: tracer.UInt32 | None = None) -> tracer.Traced:
         zero = 0.0 * ex
-        return tracer.trace(self.lens, tracer.launch(self.lens, zero, zero, ex, ey, (self.x, self.y)),
-                            self.wavelength_um, heights=heights)
+        x, y, wavelength = (v if rays is None else dr.gather(tracer.F, v, rays)
+                            for v in (self.x, self.y, self.wavelength_um))
+        return tracer.trace(self.lens, tracer.launch(self.lens, zero, zero, ex, ey, (x, y)), wavelength,
+                            heights=heights)
 
 
 def film_chief_aim(rev: Lens, x: np.ndarray, y: np.ndarray, wavelength_nm: float) -> tuple[np.ndarray, ...]:
@@ -222,7 +199,7 @@ def film_chief_aim(rev: Lens, x: np.ndarray, y: np.ndarray, wavelength_nm: float
     ep_z, od = paraxial(replace(rev, object_distance=math.inf)).entrance_pupil_z_mm, rev.object_distance
     shrink = 1.0 - od / (ep_z + od)
     b = _FilmBundle(rev, x, y, wavelength_nm)
-    zero = tracer.F(np.zeros(len(x)))
-    ex, ey, tr, converged = aim(b, stop_target, tracer.F(x * shrink), tracer.F(y * shrink), zero, zero)
+    zero = dr.zeros(tracer.F, len(x))
+    ex, ey, tr, converged = aim(b, stop_target, tracer.array(x * shrink), tracer.array(y * shrink), zero, zero)
     ex, ey, converged, clipped = tracer.to_numpy(ex, ey, converged, tr.clipped_by)
     return ex, ey, converged & (clipped == 0)

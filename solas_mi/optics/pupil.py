@@ -11,17 +11,18 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from dataclasses import fields as dataclass_fields
 
 import numpy as np
 
 from ..errors import SolasError
-from . import tracer
+from . import pupil_grid, tracer
+from .aiming import Bundle, aim, chief_aim, continued_aim, nearest_passing, stop_target
 from .lens import Lens
-from .aiming import Bundle, chief_aim, continued_aim, nearest_passing, stop_target, aim
 from .paraxial import paraxial, pupil_distance
 
 __all__ = ["Bundle", "aim", "ChiefRays", "chief_rays", "widest_field", "stop_rim", "stop_aim", "PupilFunction",
-           "pupil_function", "entrance_power", "nearest_passing"]
+           "pupil_function", "entrance_power", "nearest_passing", "Pupils"]
 dr = tracer.dr
 RIM_RAYS = 32
 RIM_BISECTIONS = 30  # a rim ray moved inside the stop's rim: its radius to 1e-9 of the rim's
@@ -41,6 +42,10 @@ class ChiefRays:
     vignetted: np.ndarray  # (n,) bool: an aperture blocks the chief ray itself, or none reaches the stop centre
     off_centre: np.ndarray  # (n,) bool: no ray reaches the stop centre; the ray is the passing one nearest it
 
+    def subset(self, index: np.ndarray) -> ChiefRays:
+        """The chief rays of the fields `index`."""
+        return ChiefRays(**{f.name: getattr(self, f.name)[index] for f in dataclass_fields(self)})
+
 
 def chief_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> ChiefRays:
     """Real chief rays aimed through the stop centre; SolasError for a field no ray can reach."""
@@ -48,18 +53,19 @@ def chief_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> 
     wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(field_deg),))
     b = Bundle(lens, field_deg, wavelength_nm, 1)
     e0, goal = chief_aim(lens, b)
-    ex, ey, tr, conv = aim(b, stop_target, tracer.F(e0[:, 0]), tracer.F(e0[:, 1]),
-                           tracer.F(goal[:, 0]), tracer.F(goal[:, 1]))
+    ex, ey, tr, conv = aim(b, stop_target, tracer.array(e0[:, 0]), tracer.array(e0[:, 1]),
+                           tracer.array(goal[:, 0]), tracer.array(goal[:, 1]))
     missed = np.flatnonzero(~tracer.to_numpy(conv)[0])
     if len(missed):  # the aim at the stop centre can miss at the very edge of the fields it reaches (the Cooke
         for f in missed:  # triplet at 31.842°): the passing ray nearest it, as where none reaches it; refused
             found = nearest_passing(lens, field_deg[f], wavelength_nm[f])  # only where no ray passes the stop
             if found is not None:
                 e0[f], goal[f] = found
-        ex, ey, tr, conv = aim(b, stop_target, tracer.F(e0[:, 0]), tracer.F(e0[:, 1]),
-                               tracer.F(goal[:, 0]), tracer.F(goal[:, 1]))
+        ex, ey, tr, conv = aim(b, stop_target, tracer.array(e0[:, 0]), tracer.array(e0[:, 1]), tracer.array(goal[:, 0]),
+                               tracer.array(goal[:, 1]))
     px, py, _ = tracer.to_plane(tr, lens.image_z)
-    xp_z = np.array([paraxial(lens, w).exit_pupil_z_mm for w in wavelength_nm])
+    distinct, which = np.unique(wavelength_nm, return_inverse=True)  # paraxial data once per wavelength
+    xp_z = np.array([paraxial(lens, w).exit_pupil_z_mm for w in distinct])[which.ravel()]
     qx, qy, qopl = tracer.to_plane(tr, b.per_ray(xp_z))
     radius = dr.sqrt((qx - px) ** 2 + (qy - py) ** 2 + (b.per_ray(xp_z) - lens.image_z) ** 2)
     ex, ey, px, py, radius, qopl, sa, sb, n_image, conv, clipped = tracer.to_numpy(
@@ -108,7 +114,7 @@ def stop_rim(rim: Bundle, chief: ChiefRays, accept=None, vignetting: np.ndarray 
         cos, sin = cos * (1.0 - np.where(cos >= 0, v[:, 0], v[:, 1])), sin * (1.0 - np.where(sin >= 0, v[:, 2], v[:, 3]))
 
     def at(scale: np.ndarray):
-        ex, ey, tr, ok = stop_aim(rim, chief, tracer.F(r_stop * scale * cos), tracer.F(r_stop * scale * sin))
+        ex, ey, tr, ok = stop_aim(rim, chief, tracer.array(r_stop * scale * cos), tracer.array(r_stop * scale * sin))
         return ex, ey, tr, tracer.to_numpy(ok & accept(tr) if accept is not None else ok)[0]
 
     ex, ey, tr, ok = at(np.ones(len(phi)))
@@ -164,6 +170,8 @@ class PupilFunction:
     chief: ChiefRays
     wavelength_nm: np.ndarray  # (n,)
     vignetted_by: list[list[int]]  # per field: 1-based surfaces that block part of the pupil
+    complex_pupil: np.ndarray  # (n, N, N) complex64: amplitude × e^{i 2π opd / λ}, the Fraunhofer integrand
+    phase_step: np.ndarray  # (n,) largest phase step (rad) between neighbouring cells inside the pupil
 
     @property
     def cell_area(self) -> np.ndarray:
@@ -186,13 +194,24 @@ def entrance_power(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray,
     """Power per unit entrance area (1/mm²) of rays at entrance coordinates ex, ey (n, ...) for
     fields (n, 2): the on-axis entrance pupil carries 1. Finite objects add cos³ of the ray's angle
     to the axis (a point source's power per area of the aim plane)."""
-    density = np.array([_power_density(lens, float(w)) for w in wavelength_nm])
-    density = density.reshape((-1,) + (1,) * (np.ndim(ex) - 1))
+    density = power_densities(lens, wavelength_nm).reshape((-1,) + (1,) * (np.ndim(ex) - 1))
     if lens.at_infinity:
         return np.broadcast_to(density, np.shape(ex))
     pts = tracer.object_points(lens, field_deg).reshape((-1, 2) + (1,) * (np.ndim(ex) - 1))
-    dist2 = (ex - pts[:, 0]) ** 2 + (ey - pts[:, 1]) ** 2 + lens.object_distance ** 2
-    return density * abs(lens.object_distance) ** 3 / dist2 ** 1.5  # a virtual object's converging cone alike
+    return density * _obliquity(lens, ex - pts[:, 0], ey - pts[:, 1], np.sqrt)
+
+
+def _obliquity(lens: Lens, dx, dy, sqrt):
+    """cos³ of the angle to the axis of rays from an object point offset (dx, dy) mm from where they
+    meet the aim plane (any array type, given its `sqrt`): a virtual object's converging cone alike."""
+    dist2 = dx * dx + dy * dy + lens.object_distance ** 2
+    return abs(lens.object_distance) ** 3 / (dist2 * sqrt(dist2))
+
+
+def power_densities(lens: Lens, wavelength_nm: np.ndarray) -> np.ndarray:
+    """`_power_density` per wavelength (n,), each distinct wavelength's paraxial data computed once."""
+    distinct, which = np.unique(np.asarray(wavelength_nm, dtype=np.float64), return_inverse=True)
+    return np.array([_power_density(lens, float(w)) for w in distinct])[which.ravel()]
 
 
 def _power_density(lens: Lens, wavelength_nm: float) -> float:
@@ -214,57 +233,39 @@ def pupil_function(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray,
 
 def pupil_functions(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, samples) -> list[PupilFunction]:
     """`pupil_function` at each of several grid sizes `samples`, sharing the chief rays and the rim."""
-    field_deg = np.atleast_2d(np.asarray(field_deg, dtype=np.float64))
-    wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(field_deg),)).copy()
-    chief = chief_rays(lens, field_deg, wavelength_nm)
-    rim = _sphere_rim(lens, field_deg, wavelength_nm, chief)
-    return [_sampled_pupil(lens, field_deg, wavelength_nm, chief, _pupil_grid(chief, rim, n)) for n in samples]
+    pupils = Pupils(lens, field_deg, wavelength_nm)
+    return [pupils.sampled(n) for n in samples]
 
 
-def _sampled_pupil(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chief: ChiefRays, grid
-                   ) -> PupilFunction:
-    """The pupil function on the (α, β) grid (alpha, beta, affine) of `_pupil_grid`."""
-    nf = len(field_deg)
-    alpha, beta, affine = grid
-    opd, ok, clipped, sx, sy, ex, ey = _grid_rays(lens, field_deg, wavelength_nm, chief, alpha, beta, affine)
+class Pupils:
+    """The chief rays and stop rims of field/wavelength pairs, from which their pupil functions are
+    sampled at any grid size, of every pair or of some (`sampled`)."""
 
-    # Amplitude: power density × |∂e/∂(α,β)|, stop edge anti-aliased by the covered cell fraction.
-    r_stop = lens.surfaces[lens.stop_index].semi_diameter
-    da = (alpha[:, 1] - alpha[:, 0])[:, None, None]
-    db = (beta[:, 1] - beta[:, 0])[:, None, None]
+    def __init__(self, lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray):
+        self.lens = lens
+        self.field_deg = np.atleast_2d(np.asarray(field_deg, dtype=np.float64))
+        self.wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(self.field_deg),)).copy()
+        self.chief = chief_rays(lens, self.field_deg, self.wavelength_nm)
+        self.rim = _sphere_rim(lens, self.field_deg, self.wavelength_nm, self.chief)
 
-    def jacobian(u: np.ndarray, w: np.ndarray) -> np.ndarray:
-        """|∂(u, w)/∂(α, β)| on the grid of each field."""
-        du_db, du_da = np.gradient(u, axis=(1, 2))
-        dw_db, dw_da = np.gradient(w, axis=(1, 2))
-        return np.abs(du_da * dw_db - du_db * dw_da) / (da * db)
+    def sampled(self, samples: int, index: np.ndarray | None = None) -> PupilFunction:
+        """The pupil functions on samples² (α, β) grids: of every pair, or of the pairs `index`."""
+        lens, fields, waves, chief, rim = self.lens, self.field_deg, self.wavelength_nm, self.chief, self.rim
+        if index is not None:
+            fields, waves, chief, rim = fields[index], waves[index], chief.subset(index), tuple(r[index] for r in rim)
+        alpha, beta = pupil_grid.grid_axes(rim, samples)
+        g, ex, ey, ok, kept = pupil_grid.grid_rays(lens, fields, waves, chief, alpha, beta, pupil_grid.affine_map(rim))
+        density = g.per_ray(power_densities(lens, waves))
+        if lens.at_infinity:
+            def power(ex, ey):
+                return density
+        else:
+            pts = tracer.object_points(lens, fields)
 
-    power = entrance_power(lens, field_deg, wavelength_nm, ex, ey) * jacobian(ex, ey)
-    cell = np.sqrt(jacobian(sx, sy) * da * db)  # grid cell size at the stop (mm)
-    margin = r_stop - np.hypot(sx, sy)
-    coverages = np.clip(0.5 + margin / np.maximum(cell, 1e-300), 0.0, 1.0)
-    stop_code = lens.stop_index + 1
-    other = (clipped != 0) & (clipped != stop_code)
-    coverages = np.where(other | ~ok | ~np.isfinite(power), 0.0, coverages)
-    powers = np.where(coverages > 0, power, 0.0)
-    vignetted = [sorted({int(c) for c in np.unique(clipped[f][ok[f] & (margin[f] > 0)]) if c != 0})
-                 for f in range(nf)]
-    opd = np.where(coverages > 0, opd, 0.0)
-    return PupilFunction(alpha, beta, opd, powers, coverages, chief, wavelength_nm, vignetted)
-
-
-def _sphere_target(lens: Lens, b: Bundle, chief: ChiefRays):
-    """The aim target of `b`'s rays: direction cosines (α, β) of their point on each field's reference
-    sphere, seen from the chief ray's image point."""
-    cx, cy = b.per_ray(chief.image_xy[:, 0]), b.per_ray(chief.image_xy[:, 1])
-    radius = b.per_ray(chief.sphere_radius)
-    cz = lens.image_z
-
-    def target(tr: tracer.Traced):
-        x, y, _z, _opl, hit = tracer.to_sphere(tr, cx, cy, cz, radius)
-        return (x - cx) / radius, (y - cy) / radius, tr.ok & hit
-
-    return target
+            def power(ex, ey):
+                return density * _obliquity(lens, ex - g.per_ray(pts[:, 0]), ey - g.per_ray(pts[:, 1]), dr.sqrt)
+        return PupilFunction(alpha, beta, chief=chief, wavelength_nm=waves,
+                             **pupil_grid.cells(lens, g, ex, ey, ok, kept, alpha, beta, power))
 
 
 def _sphere_rim(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chief: ChiefRays):
@@ -272,7 +273,7 @@ def _sphere_rim(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, ch
     each, (α, β) relative to the chief ray, and which rim rays passed; SolasError for a field none passes."""
     nf = len(field_deg)
     rim = Bundle(lens, field_deg, wavelength_nm, RIM_RAYS)
-    rim_target = _sphere_target(lens, rim, chief)
+    rim_target = pupil_grid.sphere_target(lens, rim, chief)
     rex, rey, rtr, rok = stop_rim(rim, chief, accept=lambda tr: rim_target(tr)[2])
     ra, rb = (a.reshape(nf, RIM_RAYS) for a in tracer.to_numpy(*rim_target(rtr)[:2]))
     if not rok.any(axis=1).all():
@@ -280,48 +281,3 @@ def _sphere_rim(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, ch
         raise SolasError(f"no real ray reaches the stop's rim for field ({bad[0]:g}, {bad[1]:g}) deg; "
                          "the lens is not usable there")
     return rex, rey, ra - chief.sphere_point[:, 0:1], rb - chief.sphere_point[:, 1:2], rok
-
-
-def _pupil_grid(chief: ChiefRays, rim, samples: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The rim of the stop (`_sphere_rim`) → per field the (α, β) grid (n, N) each, relative to the chief
-    ray, that holds the pupil, and an affine map (n, 3, 2) from (1, α, β) to entrance coordinates (the
-    grid's first aim)."""
-    rex, rey, ra, rb, rok = rim
-    nf = len(rex)
-    alpha = np.empty((nf, samples))
-    beta = np.empty((nf, samples))
-    affine = np.empty((nf, 3, 2))
-    for f in range(nf):
-        m = rok[f]
-        a_rel, b_rel = ra[f, m], rb[f, m]
-        for grid, lo, hi in ((alpha, a_rel.min(), a_rel.max()), (beta, b_rel.min(), b_rel.max())):
-            half = 0.5 * (hi - lo) * (1.0 + 2.0 / samples) * 1.01
-            mid = 0.5 * (hi + lo)
-            grid[f] = mid + half * np.linspace(-1.0, 1.0, samples)
-        design = np.stack([np.ones(m.sum()), a_rel, b_rel], axis=1)
-        affine[f], *_ = np.linalg.lstsq(design, np.stack([rex[f, m], rey[f, m]], axis=1), rcond=None)
-    return alpha, beta, affine
-
-
-def _grid_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chief: ChiefRays, alpha: np.ndarray,
-               beta: np.ndarray, affine: np.ndarray) -> tuple[np.ndarray, ...]:
-    """Every grid ray aimed at its (α, β): per field (n, N, N) its OPD to the chief ray (mm), whether it
-    converged and reached the sphere, the surface that clipped it (1-based, 0: none), its stop crossing
-    (mm) and its entrance coordinates (mm)."""
-    nf, samples = alpha.shape
-    g = Bundle(lens, field_deg, wavelength_nm, samples * samples)
-    ca, cb = chief.sphere_point[:, 0], chief.sphere_point[:, 1]
-    ta = np.broadcast_to(alpha[:, None, :], (nf, samples, samples))
-    tb = np.broadcast_to(beta[:, :, None], (nf, samples, samples))
-    ex0 = affine[:, 0, 0, None, None] + affine[:, 1, 0, None, None] * ta + affine[:, 2, 0, None, None] * tb
-    ey0 = affine[:, 0, 1, None, None] + affine[:, 1, 1, None, None] * ta + affine[:, 2, 1, None, None] * tb
-    goal_a = tracer.F((ta + ca[:, None, None]).ravel())
-    goal_b = tracer.F((tb + cb[:, None, None]).ravel())
-    gex, gey, gtr, gconv = aim(g, _sphere_target(lens, g, chief), tracer.F(ex0.ravel()), tracer.F(ey0.ravel()),
-                               goal_a, goal_b)
-    cx, cy = g.per_ray(chief.image_xy[:, 0]), g.per_ray(chief.image_xy[:, 1])
-    _, _, _, opl, hit = tracer.to_sphere(gtr, cx, cy, lens.image_z, g.per_ray(chief.sphere_radius))
-    shape = (nf, samples, samples)
-    opl, ok, clipped, sx, sy, ex, ey = (a.reshape(shape) for a in tracer.to_numpy(
-        opl, gconv & hit, gtr.clipped_by, gtr.stop_x, gtr.stop_y, gex, gey))
-    return opl - chief.opl[:, None, None], ok, clipped, sx, sy, ex, ey

@@ -2,12 +2,13 @@
 
 Measured on this grid, not modelled: the cost of a PSF depends on the lens (its surfaces, the ray
 aiming its field needs), the method, the pupil samples, the size and the machine. The grid is computed
-(`grid.compute_nodes`) in calls of up to FIELDS_PER_BATCH distinct fields at one wavelength (mirror
-images of a field are copied, not computed), and a call costs a fixed part (tracing set-up, ray
+(`nodes.compute_nodes`) in calls of the distinct fields of every wavelength together, as many as hold
+`nodes.BATCH_RAYS` pupil rays (`nodes.batch_sizes`; mirror images of a field are copied, not computed), and a
+call costs a fixed part (tracing set-up, ray
 aiming, the DFT matrices; a call lasts as long as its hardest field needs) and a part per PSF. After
 a call that compiles the tracer's kernels, a call of the grid's first and last fields and one of
 CALIBRATION_FIELDS fields spread over the grid give both parts, and the grid's calls are summed:
-wavelengths × distances × its batches. Measured on the shared 2-core
+distances × its batches. Measured on the shared 2-core
 machine (a load of 3-10), the estimate came within a factor of about 1.5 of the grid's time (doublet,
 32×32 Fraunhofer: estimated 7.1 s, took 6.4 s; see `docs/details/batch.md`). `--auto-window` may
 compute the grid again at twice the size, which the estimate does not include.
@@ -21,8 +22,9 @@ import numpy as np
 
 from .base import check_wavelengths
 from .depth import at_distance
-from .grid import FIELDS_PER_BATCH, grid_fields, symmetry_classes
+from .grid import grid_fields
 from .methods import compute
+from .nodes import batch_sizes, symmetry_classes
 from .spec import GridSpec
 
 CALIBRATION_FIELDS = 8
@@ -71,8 +73,8 @@ def grid_cost(lens, spec: GridSpec) -> GridCost:
     two, several = seconds(ends), seconds(spread) if len(spread) > len(ends) else None
     per_psf = max(several - two, 0.0) / (len(spread) - len(ends)) if several is not None else two / len(ends)
     per_call = max(two - per_psf * len(ends), 0.0)
-    batches = [min(FIELDS_PER_BATCH, len(canon) - a) for a in range(0, len(canon), FIELDS_PER_BATCH)]
-    repeats = len(wavelengths) * len(distances)
-    return GridCost(repeats * sum(per_call + per_psf * b for b in batches), repeats * len(canon),
-                    repeats * fields.shape[0] * fields.shape[1], repeats * len(batches), per_call, per_psf,
-                    1 + len(ends) + len(spread) * (several is not None))
+    batches = batch_sizes(spec, len(wavelengths) * len(canon))
+    repeats = len(distances)
+    return GridCost(repeats * sum(per_call + per_psf * b for b in batches), repeats * len(wavelengths) * len(canon),
+                    repeats * len(wavelengths) * fields.shape[0] * fields.shape[1], repeats * len(batches), per_call,
+                    per_psf, 1 + len(ends) + len(spread) * (several is not None))

@@ -3,8 +3,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ..optics import pupil
-from ..optics import tracer
+from ..optics import pupil, tracer
 from ..optics.lens import Lens
 from ..optics.pupil import ChiefRays
 from .base import Computed, centring_warnings, window_centres_um
@@ -97,7 +96,7 @@ def entrance_grid_hits(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndar
     result = []
     for sl, ex, ey, power in entrance_grid(lens, field_deg, wavelength_nm, rays, chief):
         b = pupil.Bundle(lens, field_deg[sl], wavelength_nm[sl], rays * rays)
-        tr = b.trace(tracer.F(ex.ravel()), tracer.F(ey.ravel()))
+        tr = b.trace(tracer.array(ex.ravel()), tracer.array(ey.ravel()))
         x, y, _ = tracer.to_plane(tr, lens.image_z)
         keep, x, y = (a.reshape(-1, rays * rays) for a in tracer.to_numpy(tr.ok & (tr.clipped_by == 0), x, y))
         for j, f in enumerate(range(sl.start, sl.stop)):

@@ -2,9 +2,7 @@
 `grid_file.PSFGrid` (which writes them as OpenEXR with the metadata needed to use them without the
 lens, and a PNG mosaic for looking at them).
 
-The lens is centred (every surface is rotationally symmetric about the axis), so the PSF of field
-(−x, y) is the mirror image of that of (x, y), and that of (y, x) its transpose: each distinct
-|field| pair is computed once (on an odd grid, symmetric about the chief ray) and mirrored.
+The lens is centred, so each distinct |field| pair is computed once and mirrored (`nodes`).
 
 Field grid convention: `ny`×`nx` nodes in image orientation, row 0 = top = largest y field angle,
 column 0 = smallest x field angle. "centers" sampling puts the nodes at the centres of ny×nx equal
@@ -14,7 +12,7 @@ The SOLAS paper's PSF maps are such grids (8×8 over the doublet's ±2°; see th
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, replace
+from dataclasses import replace
 from typing import Any
 
 import numpy as np
@@ -22,12 +20,13 @@ import numpy as np
 from ..errors import SolasError
 from ..optics.camera import pinhole_focal_mm
 from ..optics.lens import Lens
+from ..pages import small_pages
 from . import base
 from .grid_file import PSFGrid  # a grid's PSFs and its file; imported from here too
-from .methods import compute, method_options
+from .methods import method_options
+from .nodes import Nodes, compute_nodes
 from .sensor import default_sensor_mm, fields_for_points, node_mm
 from .spec import FIELD_SAMPLINGS, GridSpec
-FIELDS_PER_BATCH = 64
 
 
 def field_nodes(n: int, half_range: float, sampling: str) -> np.ndarray:
@@ -37,19 +36,6 @@ def field_nodes(n: int, half_range: float, sampling: str) -> np.ndarray:
     if sampling == "edges":
         return np.linspace(-half_range, half_range, n) if n > 1 else np.zeros(1)
     raise SolasError(f"field sampling {sampling!r} must be one of {', '.join(FIELD_SAMPLINGS)}")
-
-
-def symmetry_classes(fields: np.ndarray, decimals: int = 12):
-    """Fields (n, 2) reduced by the mirror and diagonal symmetries of a centred lens.
-
-    Returns the canonical fields (m, 2) with x ≥ y ≥ 0, and for each input field the index of its
-    canonical field, whether x and y are swapped, and the signs (n, 2) that map canonical to input."""
-    ax = np.abs(fields)
-    swap = ax[:, 1] > ax[:, 0]
-    key = np.round(np.where(swap[:, None], ax[:, ::-1], ax), decimals)
-    canon, which = np.unique(key, axis=0, return_inverse=True)
-    sign = np.where(fields < 0, -1.0, 1.0)
-    return canon, which.ravel(), swap, sign
 
 
 def psf_grid(lens: Lens, spec: GridSpec | None = None, progress=None, **options) -> PSFGrid:
@@ -103,7 +89,8 @@ def psf_grid(lens: Lens, spec: GridSpec | None = None, progress=None, **options)
     size = spec.size
     while True:  # auto_window: the whole grid again at twice the size until every window holds enough
         start = time.perf_counter()
-        nodes = compute_nodes(lens, spec, wl, fields.reshape(-1, 2), size, progress)
+        with small_pages():
+            nodes = compute_nodes(lens, spec, wl, fields.reshape(-1, 2), size, progress)
         if not (spec.auto_window and nodes.energy.min() < base.WINDOW_ENERGY_LIMIT and 2 * size <= base.MAX_SIZE):
             break
         size *= 2
@@ -133,64 +120,6 @@ def grid_fields(lens: Lens, spec: GridSpec) -> tuple[np.ndarray, dict]:
     if hx > 0:  # the ideal image an input spanning ±hx horizontally stands for (`optics.camera`)
         placement.update(pinhole_focal_mm=pinhole_focal_mm(lens, hx), reference_wavelength_nm=lens.primary_wavelength)
     return np.stack(np.meshgrid(fx, fy), axis=-1), placement
-
-
-@dataclass(frozen=True)
-class Nodes:
-    """What `compute_nodes` gives: the PSFs and, per wavelength and node (flat), their data."""
-
-    data: np.ndarray  # (n_wavelengths, ny, nx, size, size), normalised
-    chief: np.ndarray  # (n_wavelengths, n, 2) image point at each PSF's origin pixel, mm
-    transmission: np.ndarray  # (n_wavelengths, n)
-    energy: np.ndarray  # (n_wavelengths, n) fraction of the transmitted light inside the window
-    vignetting: tuple[int, ...]  # surfaces that block part of some pupil
-    doubts: tuple[str, ...]  # the methods' warnings, each once
-
-
-def compute_nodes(lens: Lens, spec: GridSpec, wl: tuple[float, ...], flat: np.ndarray, size: int,
-                  progress=None) -> Nodes:
-    """The PSFs of fields `flat` (n, 2) at wavelengths `wl`, size×size: each distinct |field| pair
-    (`symmetry_classes`) computed once, in batches, and mirrored onto its nodes."""
-    ny, nx = spec.grid
-    n = len(flat)
-    canon, which, swap, sign = symmetry_classes(flat)
-    odd = 2 * (size // 2) + 1  # symmetric about the origin pixel, so mirrors stay on the grid
-    # stored as the EXR's mosaics (wavelength, row, y, column, x), the layout `read` gives too, so that
-    # writing needs no copy; `data` (wavelength, row, column, y, x) is a view of it
-    data = np.zeros((len(wl), ny, size, nx, size), dtype=np.float32).transpose(0, 1, 3, 2, 4)
-    chief, transmission, energy = np.zeros((len(wl), n, 2)), np.zeros((len(wl), n)), np.zeros((len(wl), n))
-    vignetting: set[int] = set()
-    doubts: list[str] = []
-    for k, w in enumerate(wl):
-        for a in range(0, len(canon), FIELDS_PER_BATCH):
-            b = min(len(canon), a + FIELDS_PER_BATCH)
-            c = compute(lens, canon[a:b], np.full(b - a, w), spec.pitch_um, odd, spec.method,
-                        **spec.sampling_options())
-            vignetting.update(s for v in c.vignetted_by for s in v)
-            doubts.extend(d for d in c.warnings if d not in doubts)
-            for j in range(b - a):
-                xy = c.chief.image_xy[j] + (0.0 if c.centre_um is None else c.centre_um[j] * 1e-3)
-                for i in np.flatnonzero(which == a + j):
-                    p, xy_i = mirrored(c.data[j], xy, swap[i], sign[i])
-                    data[k, i // nx, i % nx] = base.normalize(p[:size, :size], spec.normalization)
-                    chief[k, i] = xy_i * sign[i]
-                    transmission[k, i] = c.transmission[j]
-                    energy[k, i] = base.window_energy(p[:size, :size], spec.pitch_um, c.transmission[j])
-            if progress is not None:  # in nodes: the PSFs of the grid, mirrored ones included
-                progress(k * n + int(np.count_nonzero(which < b)), len(wl) * n)
-    return Nodes(data, chief, transmission, energy, tuple(sorted(vignetting)), tuple(doubts))
-
-
-def mirrored(p: np.ndarray, xy: np.ndarray, swap: bool, sign: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """A canonical field's PSF and origin (x, y) turned to a node's: transposed where x and y swap, then
-    mirrored where a sign is negative (the origin's signs are applied by the caller)."""
-    if swap:
-        p, xy = p[::-1, ::-1].T, xy[::-1]
-    if sign[0] < 0:
-        p = p[:, ::-1]
-    if sign[1] < 0:
-        p = p[::-1, :]
-    return p, xy
 
 
 def grid_meta(lens: Lens, spec: GridSpec, wl: tuple[float, ...], fields: np.ndarray, nodes: Nodes, size: int,

@@ -202,7 +202,7 @@ def _render_image(args) -> int:
     check_render(cols, rows, spec.spp, args.force)
     lens = load_lens(args)
     with _progress(spec.spp) as bar:
-        result = render_image(lens, args.image, spec, progress=bar)
+        result = render_image(lens, args.image, spec, progress=bar, calibration_model=args.calibration_model)
     result.meta["image"] = str(args.image)
     return _write(result, data_file, png)
 
@@ -258,5 +258,6 @@ def register(sub) -> None:
     add_lens_argument(image)
     image.add_argument("image", help="input image (PNG/JPEG: sRGB; EXR: linear)")
     RenderSpec.add_flags(image, IMAGE_SETTINGS)
+    add_calibration_option(image)
     _add_output_options(image)
     image.set_defaults(run=_render_image)

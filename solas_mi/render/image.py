@@ -53,9 +53,33 @@ def fisheye_camera(lens, sensor: tuple[int, int], fov_deg: float | None, pitch_u
     return Camera(cols, rows, float(pitch_um), paraxial(lens).efl_mm, fov, lens.primary_wavelength, "sensor")
 
 
+def image_sensor(lens, spec: RenderSpec) -> Camera:
+    """The sensor an image is rendered onto (`spec`'s sensor, pitch and field of view)."""
+    return (camera_for(lens, spec.sensor, spec.fov_deg, spec.pitch_um) if lens.field_type.pinhole
+            else fisheye_camera(lens, spec.sensor, spec.fov_deg, spec.pitch_um))
+
+
+def image_camera(lens, camera: Camera, response, model: str | None) -> dict:
+    """The camera a render of an image records (`optics.calibration.describe_camera`): `lens` at its file's
+    image plane, the sensor `camera` (`image_sensor`) and `model` fitted to the lens's chief-ray mapping over it
+    at the `response`'s one wavelength (mono, lines of one), else the lens's primary."""
+    from ..optics.calibration import Sensor, describe_camera
+
+    return describe_camera(lens, Sensor(camera.width, camera.height, camera.pitch_um), model,
+                           wavelength_nm=float(response.single_wavelength or lens.primary_wavelength))
+
+
+def image_sensor_key(lens, spec: RenderSpec) -> tuple[str, Camera, responses.Response]:
+    """An image item's sensor (`image_sensor`) and response, and their name in the manifest's
+    `cameras`: lens, size, pitch and the wavelength its camera block is fitted at."""
+    camera, response = image_sensor(lens, spec), responses.parse(spec.response, lens.wavelengths_nm)
+    wavelength = response.single_wavelength or lens.primary_wavelength
+    return f"{lens.name} {camera.width}x{camera.height} {camera.pitch_um:.6g}um {wavelength:g}nm", camera, response
+
+
 # long: the public API's numpydoc docstring is half of it
 def render_image(lens, image: str | np.ndarray, spec: RenderSpec | None = None, *, progress=None,
-                 **settings) -> Render:
+                 calibration_model: str | None = None, camera_block: dict | None = None, **settings) -> Render:
     """Render an input image through a lens in Mitsuba, the lens as geometry.
 
     The image's width spans ±``fov_deg`` degrees and, unless ``pitch_um`` is given, so does the
@@ -74,6 +98,12 @@ def render_image(lens, image: str | np.ndarray, spec: RenderSpec | None = None, 
         Fresnel, rings, mapping, spp, variant, seed); default: its defaults.
     progress : callable, optional
         Called as ``progress(done, total)`` with the samples per pixel done.
+    calibration_model : str, optional
+        The camera model (`optics.calibration.MODELS`) whose fit to the lens over the sensor the metadata
+        records as "camera" (`image_camera`), fitted before the render (a model that cannot hold the field is
+        refused before any work); default: no camera block.
+    camera_block : dict, optional
+        The metadata's "camera" already fitted (a batch's, once per sensor), in place of fitting one here.
     **settings
         Fields of `RenderSpec` to change, e.g. ``sensor=(rows, columns)``, ``spp=16``.
 
@@ -105,8 +135,7 @@ def render_image(lens, image: str | np.ndarray, spec: RenderSpec | None = None, 
     if spec.labels:
         raise SolasError(f"labels ({spec.labels}) are traced through the lens camera of a scene file; an image has "
                          "no scene to label: render it without them")
-    camera = (camera_for(lens, spec.sensor, spec.fov_deg, spec.pitch_um) if lens.field_type.pinhole
-              else fisheye_camera(lens, spec.sensor, spec.fov_deg, spec.pitch_um))
+    camera = image_sensor(lens, spec)
     if spec.mapping == "rectilinear" and camera.fov_deg >= 90.0:  # tan θ changes sign: the input would mirror
         raise SolasError(f"a rectilinear input spans less than ±90 deg and this one would span ±{camera.fov_deg:g} deg; "
                          "give --fov-deg below 90 or a mapping that reaches past 90 deg (equidistant, equisolid, "
@@ -117,6 +146,8 @@ def render_image(lens, image: str | np.ndarray, spec: RenderSpec | None = None, 
     variant = variant_for(parsed, spec.variant)
     if not isinstance(image, np.ndarray):
         read_image(image)
+    if camera_block is None and calibration_model is not None:
+        camera_block = image_camera(lens, camera, parsed, calibration_model)
     remove_stale_scenes()
     with tempfile.TemporaryDirectory(prefix=f"{SCENE_PREFIX}{os.getpid()}-") as tmp:
         if isinstance(image, np.ndarray):
@@ -128,5 +159,6 @@ def render_image(lens, image: str | np.ndarray, spec: RenderSpec | None = None, 
         result = render(scene, spec.spp, seed=spec.seed, progress=progress)
     result.meta.update(camera.meta(), f_number=unit_f_number(scene.sensors()[0]))
     result.meta.update({"lens": lens.name, "lens_hash": lens.hash, "boundary": spec.boundary, "fresnel": spec.fresnel,
-                        "mapping": spec.mapping, "cap_rings": resolve_rings(lens, spec.rings), "render_spec": spec.as_dict()})
+                        "mapping": spec.mapping, "cap_rings": resolve_rings(lens, spec.rings), "render_spec": spec.as_dict(),
+                        **({"camera": camera_block} if camera_block is not None else {})})
     return result

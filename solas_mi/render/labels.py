@@ -31,16 +31,16 @@ from typing import Any, Callable
 import numpy as np
 
 from ..errors import SolasError
+from ..labelkinds import ID_LIMIT, KINDS, VALID
 from ..registry import Registry
 
 # label → its function (`Hit`) -> (layer name → H×W float32, metadata), with its layer names (`layers`)
 LABELS = Registry("label", shown=("layers",))
-VALID = "labels.valid"
 # the beams tried where a pixel's chief ray is blocked, until one passes: (film points, pupil samples) per
 # side; the pixel centre's with a coarse and then a fine pupil grid (a sliver of a beam at the edge of the
 # field), then from points across the pixel (a pixel at the rim of a fisheye's image circle)
 BEAMS = ((1, 8), (1, 24), (4, 8))
-ID_MASK = (1 << 24) - 1  # ids below 2^24: exact in a float32 channel
+ID_MASK = ID_LIMIT - 1  # ids below 2^24: exact in a float32 channel
 # memory per pixel (bytes), measured at 2560×1920 through wide-angle-22mm (peak RSS over a render without
 # labels): the label rays' trace and scene intersection, and each channel (labels.valid and the layers')
 LABEL_RAY_BYTES, LABEL_CHANNEL_BYTES = 100, 6
@@ -266,24 +266,26 @@ def render_labels(scene, kinds) -> tuple[dict[str, np.ndarray], dict]:
     return layers, meta
 
 
-@LABELS.register("depth", layers=("depth.Z",), summary="range, in world units: the distance from the centre of the "
-                 "lens's paraxial entrance pupil (on the axis, `entrance_pupil_z` world units in front of surface 1's "
-                 "vertex in the metadata; negative: behind it) to the point the chief ray meets")
+@LABELS.register("depth", layers=KINDS["depth"].extra["layers"],
+                 summary="range, in world units: the distance from the centre of the lens's paraxial entrance "
+                         "pupil (on the axis, `entrance_pupil_z` world units in front of surface 1's vertex in the "
+                         "metadata; negative: behind it) to the point the chief ray meets")
 def _depth(hit: Hit):
     import drjit as dr
     import mitsuba as mi
 
-    return {"depth.Z": hit.layer(dr.norm(hit.si.p - hit.to_world @ mi.Point3f(0.0, 0.0, hit.pupil_z)))}, {}
+    (name,) = LABELS["depth"].extra["layers"]
+    return {name: hit.layer(dr.norm(hit.si.p - hit.to_world @ mi.Point3f(0.0, 0.0, hit.pupil_z)))}, {}
 
 
-@LABELS.register("normal", layers=("normal.X", "normal.Y", "normal.Z"), summary="the unit shading normal there, in "
+@LABELS.register("normal", layers=KINDS["normal"].extra["layers"], summary="the unit shading normal there, in "
                  "the world frame, as Mitsuba gives it (not turned toward the camera)")
 def _normal(hit: Hit):
     n = hit.si.sh_frame.n
     return {name: hit.layer(v) for name, v in zip(LABELS["normal"].extra["layers"], (n.x, n.y, n.z))}, {}
 
 
-@LABELS.register("instance", layers=("instance.id",),
+@LABELS.register("instance", layers=KINDS["instance"].extra["layers"],
                  summary="the shape's id, `instance_id` of its name (its `id` in the scene; an unnamed shape "
                          "`_shape_<key>`, a hash of its bounding box and primitive count); the shapes of a `shapegroup` "
                          "take the id of the `instance` that places them, one id per instance (an unnamed one "
@@ -301,7 +303,8 @@ def _instance(hit: Hit):
     layer = hit.layer(value)
     about = _instances(layer, names, ids, hit.scene)
     boxes_3d(hit, about["boxes"], dict(zip(names, hit.scene.shapes())))
-    return {"instance.id": layer}, about
+    (name,) = LABELS["instance"].extra["layers"]
+    return {name: layer}, about
 
 
 def boxes_3d(hit: Hit, boxes: dict, shapes: dict) -> None:

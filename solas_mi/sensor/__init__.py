@@ -2,15 +2,20 @@
 
 - `exposure`: irradiance (W/m²) and exposure time → photons per pixel; scene radiance → image
   irradiance through the camera equation (f-number, transmission).
-- `model`: `SensorModel`, the sensor's parameters, validated on construction.
+- `model`: `SensorModel`, a sensor of one linear readout (the flat `[sensor]` table), validated on
+  construction.
+- `chain`: `SensorChain`, the sensor as an ordered list of stages (`STAGES`): the photon conversion
+  (`photons`), readouts (`readout`: split pixels, dual conversion gain, multiple exposures), the HDR
+  merge (`merge`) and companding (`compander`), defect pixels (`defects`).
+- `emva`: what EMVA 1288 predicts of one readout; `limits`: the numbers' ranges and checks.
 - `cfa`: colour filter array patterns (RGGB and its turns, RCCB, RCCC) and the mosaic.
 - `qe`: quantum efficiency curves, and the effective QE with which each filter sees each channel.
 - `files`: a sensor in a TOML file, or a preset from `presets/` (public data sheets, sources cited).
-- `capture`: photons → electrons → digital numbers with shot, dark and read noise, PRNU, DSNU,
-  full well, conversion gain, ADC bit depth and black level; deterministic for a seed.
+- `capture`: photons → electrons → digital numbers through the chain, with shot, dark and read noise,
+  PRNU, DSNU, full well, conversion gain, ADC bit depth and black level; deterministic for a seed.
 """
 from ..lazy import lazy_exports
 
 # `capture.capture` is not exported here: its module's own name would hide it once imported
-__all__ = ["SensorModel", "load_sensor"]
-__getattr__ = lazy_exports(__name__, {"SensorModel": ".model", "load_sensor": ".files"})
+__all__ = ["SensorChain", "SensorModel", "load_sensor"]
+__getattr__ = lazy_exports(__name__, {"SensorChain": ".chain", "SensorModel": ".model", "load_sensor": ".files"})

@@ -5,7 +5,8 @@ auto-exposure meters the scene).
 A pixel's mean electrons grow linearly with the exposure t: μ_e(t) = (r + i_d) t, with r its photo-electrons
 per second (`capture.mean_electrons` at t = 1 s: QE, CFA and pixel area, before PRNU) and i_d the dark
 current. With r_P the P-th percentile of r over the frame's pixels and e_sat the saturation in electrons
-(`SensorModel.saturation_dn` / K: the full well, or the ADC's range if that is smaller), the exposure
+(`SensorModel.saturation_e`: the full well, or the ADC's range if that is smaller; an HDR sensor's: its
+reference photodiode's electrons where its last readout saturates, `chain.SensorChain.saturation_e`), the exposure
 
     t = F e_sat / (r_P + i_d)
 
@@ -20,6 +21,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SolasError
+from .chain import SensorChain
 from .model import SensorModel
 
 AUTO = "auto"  # how an exposure is asked to be chosen: "auto", or "auto:P,F"
@@ -41,7 +43,7 @@ class AutoExposure:
     def describe(self) -> dict:
         return {"percentile": self.percentile, "fraction": self.fraction}
 
-    def choose(self, model: SensorModel, irradiance: np.ndarray) -> tuple[float, dict]:
+    def choose(self, model: SensorModel | SensorChain, irradiance: np.ndarray) -> tuple[float, dict]:
         """The exposure (s) for an irradiance image (H, W, 3, W/m²), and what it was chosen from (metadata)."""
         from .capture import mean_electrons
 
@@ -54,13 +56,13 @@ class AutoExposure:
         if not rate > 0:
             raise SolasError(f"auto-exposure: the {self.percentile:g}th percentile of the frame's pixels gets no light "
                              "(0 photo-electrons/s); give --exposure-ms in ms, or a lower percentile")
-        saturation_e = model.saturation_dn / model.gain_dn_per_e
+        saturation_e = model.saturation_e
         seconds = self.fraction * saturation_e / (rate + model.dark_current_e_s)
         return seconds, {**self.describe(), "percentile_e_per_s": rate, "saturation_e": saturation_e,
                          "exposure_ms": seconds * 1e3}
 
 
-def exposure_seconds(exposure: float | AutoExposure, model: SensorModel, irradiance: np.ndarray) -> tuple[float, dict]:
+def exposure_seconds(exposure: float | AutoExposure, model: SensorModel | SensorChain, irradiance: np.ndarray) -> tuple[float, dict]:
     """The exposure (s) of a frame: `exposure` ms as given, or chosen from the irradiance (`AutoExposure`),
     with what it was chosen from ({} when given)."""
     if isinstance(exposure, AutoExposure):

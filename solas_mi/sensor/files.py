@@ -6,7 +6,9 @@
     qe_r = 0.55
     cfa = "RCCB"
 
-Fields left out take `SensorModel`'s values; `describe` lists every value used (the RAW's metadata).
+Fields left out take `SensorModel`'s values; `describe` lists every value used (the RAW's metadata). A
+sensor of several readouts (HDR) names its stages after the photon conversion's fields: `[[sensor.readout]]`
+tables, a `[sensor.merge]` and a `[sensor.compander]` (`chain`); it loads as a `chain.SensorChain`.
 Instead of `qe_r`, `qe_g`, `qe_b`, `qe_c` and `wavelengths_nm`, a sensor may give its filters' quantum
 efficiency against wavelength (`qe.QECurve`): `qe_curve = "curve.csv"` (a CSV file beside the TOML
 file, `qe.read_csv`) or a `[sensor.qe_curve]` table of columns `wavelength_nm`, `R`, `G`, `B`, `C`.
@@ -20,6 +22,7 @@ from pathlib import Path
 
 from ..errors import SolasError
 from ..options import toml_table
+from .chain import HEAD, STAGES, SensorChain
 from .model import SensorModel
 from .qe import read_csv
 
@@ -47,20 +50,20 @@ def _path(name_or_path: str | Path) -> Path:
     return PRESETS / f"{text}.toml"
 
 
-def load_sensor(name_or_path: str | Path) -> SensorModel:
+def load_sensor(name_or_path: str | Path) -> SensorModel | SensorChain:
     """A sensor from a shipped preset or a TOML file.
 
     Parameters
     ----------
     name_or_path : str or Path
         A preset's name (`preset_names`: ``solas-mi sensors``), or the path of a TOML file of one
-        ``[sensor]`` table of `SensorModel`'s field names (a name ending in ".toml" or holding a path
-        separator).
+        ``[sensor]`` table of `SensorModel`'s field names, or naming its stages (`chain`) (a name ending in
+        ".toml" or holding a path separator).
 
     Returns
     -------
-    SensorModel
-        The sensor, checked.
+    SensorModel or SensorChain
+        The sensor, checked: a `SensorChain` where the table names stages (an HDR sensor).
 
     Raises
     ------
@@ -82,13 +85,18 @@ def load_sensor(name_or_path: str | Path) -> SensorModel:
                 raise SolasError("sensor qe_curve = '' must name a CSV file (beside the sensor file) or be a "
                                  "[sensor.qe_curve] table of columns")
             values["qe_curve"] = read_csv(path.parent / values["qe_curve"]).table()
+        if set(values) & (set(STAGES) - {HEAD}):  # the table names stages
+            return SensorChain.from_dict(values)
         return SensorModel.from_dict(values)
     except SolasError as exc:
         raise SolasError(f"sensor model {str(path)!r}: {exc}") from None
 
 
-def describe(model: SensorModel) -> dict:
-    """Every parameter of `model` (JSON-ready; a QE curve as its table of columns), for metadata."""
+def describe(model: SensorModel | SensorChain) -> dict:
+    """Every parameter of `model` (JSON-ready; a QE curve as its table of columns), for metadata: a chain's
+    stages in order."""
+    if isinstance(model, SensorChain):
+        return model.describe()
     values = {k: list(v) if isinstance(v, tuple) else v for k, v in asdict(model).items() if k != "qe_curve"}
     values["qe_curve"] = None if model.qe_curve is None else model.qe_curve.table()
     return values

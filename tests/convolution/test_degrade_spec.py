@@ -27,6 +27,8 @@ from solas_mi.optics.frame import FrameCamera
     ({"scale_lens": 0}, "scale_lens 0 must be the camera's pixel pitch, a positive number of µm"),
     ({"scale_lens": "5"}, "scale_lens '5' must be the camera's pixel pitch"),
     ({"scale_lens": float("nan")}, "scale_lens nan must be the camera's pixel pitch"),
+    ({"label_patterns": "instance=ids.png"}, "label patterns: instance file 'ids.png' must be a file name with {stem}"),
+    ({"label_patterns": {"colour": "{stem}.png"}}, "label patterns: colour={stem}.png must be KIND=FILE with KIND"),
     ({"frame": "pinhole"}, "frame 'pinhole' must be a solas_mi.optics.frame.FrameCamera"),
     ({"grid_spec": {"grid": (8, 8)}}, "grid_spec {'grid': (8, 8)} must be a solas_mi.psf.spec.GridSpec"),
 ])
@@ -48,7 +50,7 @@ def _other_text(name: str, action) -> str:
     default = DegradeSpec.fields_by_name()[name].default
     if action.choices:
         return next(c for c in action.choices if c != default)
-    return {"depth_pattern": "{stem}_z.exr", "scale_lens": "3.5"}[name]
+    return {"depth_pattern": "{stem}_z.exr", "scale_lens": "3.5", "label_patterns": "instance={stem}_ids.png"}[name]
 
 
 @pytest.mark.parametrize("command, base, build", [

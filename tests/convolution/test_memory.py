@@ -16,10 +16,12 @@ import sys
 import solas_mi.convolution.kernels as kernels
 kernels.workers = lambda: int(sys.argv[4])
 from solas_mi.cli import main
+from solas_mi.convolution.camera import fit_bytes
 from solas_mi.convolution.output import peak_bytes
 from solas_mi.imageio import image_size
 from solas_mi.psf.grid import PSFGrid
-print(peak_bytes(sys.argv[1], *image_size(sys.argv[1]), PSFGrid.read(sys.argv[2]).data.nbytes))
+rows, cols, channels = image_size(sys.argv[1])  # the command fits the frame's camera block too
+print(peak_bytes(sys.argv[1], rows, cols, channels, PSFGrid.read(sys.argv[2]).data.nbytes) + fit_bytes(rows * cols))
 assert main(["degrade", sys.argv[1], "--psf-grid", sys.argv[2], "-o", sys.argv[3]]) == 0
 print(next(int(t.split()[1]) * 1024 for t in open("/proc/self/status") if t.startswith("VmHWM:")))
 """

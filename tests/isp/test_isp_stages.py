@@ -112,7 +112,7 @@ def test_isp_from_toml(tmp_path):
     ({"white_balance": "auto"}, "white_balance 'auto' must be one of"),
     ({"white_balance": "grey-card"}, "grey_card .* goes with"),
     ({"ccm": [[1, 0], [0, 1]]}, "must be 3 rows of 3 numbers"),
-    ({"tone": "log"}, "tone curve 'log' must be one of srgb, gamma, none"),
+    ({"tone": "log"}, "tone curve 'log' must be one of srgb, gamma, none, reinhard"),
     ({"demosaic": "none"}, "takes ccm = \"none\""),
     ({"sharpen": 1}, "unknown isp option"),
 ])

@@ -29,6 +29,7 @@ def test_scene_and_render_commands(tmp_path):
     assert main(["render-image", "solas-doublet", str(tmp_path / "nope.png"), "-o", str(tmp_path / "x.exr")]) == 2
 
 OUTPUT_FLAGS = {"help", "output", "png", "force"}  # where a render is written, not how it is rendered
+RECORDED = {"calibration_model"}  # what its metadata records, not how it is rendered: a batch's own option
 # where the lens is (`Lens.at`), not how it renders: a batch takes a lens file that states it (lens convert)
 LENS_FLAGS = {"temperature_c", "pressure_kpa", "mount"}
 
@@ -85,8 +86,10 @@ def test_every_render_image_setting_reaches_the_batch_items(tmp_path):
 
     parser = build_parser()
     image_cmd, batch_cmd = _subparser(parser, "render-image"), _subparser(parser, "batch", "render")
-    flags = {a.dest: a for a in image_cmd._actions if a.option_strings and a.dest not in OUTPUT_FLAGS | LENS_FLAGS}
+    flags = {a.dest: a for a in image_cmd._actions
+             if a.option_strings and a.dest not in OUTPUT_FLAGS | RECORDED | LENS_FLAGS}
     assert set(flags) <= set(RenderSpec.fields_by_name()) and set(flags) == set(IMAGE_SETTINGS)
+    assert {a.dest for a in batch_cmd._actions} & {a.dest for a in image_cmd._actions} >= RECORDED
     Image.fromarray(np.full((24, 32), 128, np.uint8)).save(tmp_path / "photo.png")
     for dest, action in flags.items():
         given = [action.option_strings[-1], _other_value(dest, action)]
@@ -149,3 +152,26 @@ def test_a_film_without_pixels_is_refused_in_one_line(tmp_path, capsys, size, ex
     err = capsys.readouterr().err.strip()
     assert "\n" not in err and shown in err and "must be at least 1 pixel" in err, err
     assert not (tmp_path / "x.exr").exists()
+
+
+def test_render_image_records_its_camera(tmp_path):
+    """render-image says its camera as `render --lens` does: the lens, the sensor it rendered onto (its own
+    metadata's size and pitch) and the chosen model's fit to the lens's chief rays over it, at the response's
+    one wavelength; a model that cannot hold the field is refused by name before the render, nothing written."""
+    from solas_mi import Lens
+    from solas_mi.optics.calibration import Sensor, calibrate
+
+    Image.fromarray(np.full((24, 32), 128, np.uint8)).save(tmp_path / "photo.png")
+    out = tmp_path / "r.exr"
+    assert main(["render-image", "cooke-triplet", str(tmp_path / "photo.png"), "--sensor", "16x12", "--spp", "1",
+                 "--response", "mono:550", "--calibration-model", "woodscape", "-o", str(out)]) == 0
+    meta = read_exr(out)[1]
+    camera, lens = meta["camera"], Lens.load("cooke-triplet")
+    assert camera["sensor_px"] == meta["sensor"] == [16, 12] and camera["pitch_um"] == meta["pitch_um"]
+    assert camera["lens_hash"] == lens.hash and camera["wavelength_nm"] == 550.0
+    (fitted,) = calibrate(lens, "woodscape", Sensor(16, 12, meta["pitch_um"]), [550.0])
+    assert camera["calibration"]["parameters"] == pytest.approx(fitted.values, rel=1e-9)
+    bad = tmp_path / "bad.exr"
+    assert main(["render-image", "nikkor-fisheye", str(tmp_path / "photo.png"), "--sensor", "16x12", "--spp", "1",
+                 "--calibration-model", "opencv-pinhole", "-o", str(bad)]) == 2
+    assert not bad.exists()

@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from solas_mi.sensor.capture import capture, mean_electrons
-from solas_mi.sensor.model import QUANTISATION_VARIANCE, SensorModel
+from solas_mi.sensor.emva import QUANTISATION_VARIANCE
+from solas_mi.sensor.model import SensorModel
 from solas_mi.sensor.qe import QECurve
 
 SHAPE = (256, 512)

@@ -21,39 +21,72 @@ PUBLISHED = {"ar0132at": {"snr_max_db": 43.9}, "imx255": {"snr_max_db": 40.3, "d
 
 
 def test_the_presets_shipped():
-    assert preset_names() == ["ar0132at", "imx255", "imx490", "kac12040", "mt9p001"]
+    assert preset_names() == ["ar0132at", "imx255", "imx490", "imx490-hdr", "kac12040", "mt9p001"]
+
+
+def leaves(table: dict) -> list[str]:
+    """The keys of every value of a TOML table, its stages' tables (and arrays of them) included."""
+    out = []
+    for key, value in table.items():
+        items = value if isinstance(value, list) and value and isinstance(value[0], dict) else [value]
+        out += [k for item in items for k in (leaves(item) if isinstance(item, dict) and key != "qe_curve" else [key])]
+    return out
 
 
 @pytest.mark.parametrize("name", preset_names())
 def test_every_value_says_where_it_comes_from(name):
     text = (PRESETS / f"{name}.toml").read_text(encoding="utf-8")
     assert re.search(r"^# Source: .+", text, re.M) and "https://" in text
-    keys = tomllib.loads(text)["sensor"]
-    lines = {line.split("=")[0].strip(): line for line in text.splitlines() if re.match(r"^\w+ *=", line)}
-    assert set(lines) == set(keys)
-    for key, line in lines.items():
+    keys = leaves(tomllib.loads(text)["sensor"])
+    lines = [(line.split("=")[0].strip(), line) for line in text.splitlines() if re.match(r"^\w+ *=", line)]
+    assert sorted(key for key, _ in lines) == sorted(keys)
+    for key, line in lines:
         comment = line.partition("#")[2].strip()
         assert comment.startswith(KINDS), f"{name}: {key} has no 'data sheet/source/derived/assumption' comment"
 
 
 @pytest.mark.parametrize("name", preset_names())
 def test_derived_values_reproduce_the_published_figures(name):
-    model = load_sensor(name)
+    sensor = load_sensor(name)
+    for model in getattr(sensor, "readouts", [sensor]):
+        check_derived(name, model)
+
+
+def check_derived(name, model):
     figures = PUBLISHED.get(name, {})
     if "snr_max_db" in figures:
         assert 10 * math.log10(model.full_well_e) == pytest.approx(figures["snr_max_db"], abs=0.01)
     if "dynamic_range_db" in figures:
         assert 20 * math.log10(model.full_well_e / model.read_noise_e) == pytest.approx(figures["dynamic_range_db"], abs=0.5)
-    # the ADC's range above black spans the full well: it neither clips before the well fills nor wastes codes
+    # the ADC's range above black spans the (large photodiode's) full well: it neither clips before the well
+    # fills nor wastes codes
+    if getattr(model, "photodiode", "large") != "large":
+        return
     span = model.gain_dn_per_e * model.full_well_e
     assert 0.999 * (model.white_level_dn - model.black_level_dn) <= span <= model.white_level_dn - model.black_level_dn
+
+
+LOW_GAIN, HIGH_GAIN = 49.0, 200.0  # µV/e-, the IMX490's conversion gains (its preset's source)
+
+
+def test_the_imx490_readouts_share_one_adc():
+    """The high gain's DN/e- is the low gain's times the ratio of conversion gains (one ADC); the low gain
+    alone is the `imx490` preset."""
+    hcg, lcg, small_hcg, small_lcg = load_sensor("imx490-hdr").readouts
+    assert hcg.gain_dn_per_e == pytest.approx(lcg.gain_dn_per_e * HIGH_GAIN / LOW_GAIN, rel=1e-4)
+    assert small_hcg.gain_dn_per_e == hcg.gain_dn_per_e and small_lcg.gain_dn_per_e == lcg.gain_dn_per_e
+    assert hcg.full_well_e == pytest.approx(lcg.full_well_e * LOW_GAIN / HIGH_GAIN)
+    assert small_hcg.full_well_e == pytest.approx(small_lcg.full_well_e * LOW_GAIN / HIGH_GAIN)
+    flat = load_sensor("imx490")
+    assert all(getattr(lcg, k) == getattr(flat, k) for k in ("full_well_e", "read_noise_e", "dark_current_e_s",
+                                                              "gain_dn_per_e", "bit_depth", "black_level_dn"))
 
 
 def test_a_preset_name_or_a_file(tmp_path):
     (tmp_path / "mine.toml").write_text((PRESETS / "imx490.toml").read_text().replace("cfa = \"RGGB\"", "cfa = \"RCCB\""))
     mine = load_sensor(tmp_path / "mine.toml")
     assert mine.cfa == "RCCB" and mine.full_well_e == load_sensor("imx490").full_well_e == 22000
-    with pytest.raises(SolasError, match=r"'imx999' is neither a preset \(ar0132at, imx255, imx490, kac12040, mt9p001\)"):
+    with pytest.raises(SolasError, match=r"'imx999' is neither a preset \(ar0132at, imx255, imx490, imx490-hdr, kac12040, mt9p001\)"):
         load_sensor("imx999")
     with pytest.raises(SolasError, match="sensor model .imx999.toml. does not exist"):
         load_sensor("imx999.toml")

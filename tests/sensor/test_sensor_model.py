@@ -8,7 +8,8 @@ from solas_mi.errors import SolasError
 from solas_mi.sensor.capture import capture, fixed_pattern, mean_electrons
 from solas_mi.sensor.cfa import PATTERNS
 from solas_mi.sensor.exposure import LIGHT_SPEED, PLANCK, image_irradiance, photons
-from solas_mi.sensor.model import ELECTRONS_MAX, SensorModel
+from solas_mi.sensor.limits import ELECTRONS_MAX
+from solas_mi.sensor.model import SensorModel
 
 
 @pytest.mark.parametrize("pattern", PATTERNS)

@@ -73,11 +73,16 @@ def run_calibrate(args) -> int:
     return 0
 
 
+def calibration_help() -> str:
+    """What --calibration-model does, for every command that takes it (`add_calibration_option`,
+    `convolution.spec.DegradeSpec`)."""
+    return "the camera model whose fit to the lens the output's metadata records; see `solas-mi lens calibrate`"
+
+
 def add_calibration_option(p) -> None:
     """--calibration-model of the commands whose outputs record their camera (`describe_camera`)."""
     p.add_argument("--calibration-model", choices=MODELS.names(), default=MODELS.default,
-                   help=f"the camera model whose fit to the lens the output's metadata records (default: "
-                        f"{MODELS.default}); see `solas-mi lens calibrate`")
+                   help=f"{calibration_help()} (default: {MODELS.default})")
 
 
 def register(lens_commands, add_lens_argument, load_lens) -> None:

@@ -12,7 +12,7 @@ the widest such direction, found to 1/`EDGE_STEPS` of the table's step, and pixe
 
 Conventions (those of OpenCV and of the calibration files): pixel (0, 0) is the centre of the top-left
 pixel, columns right, rows down; the sensor is centred on the axis, so the axis lands at
-((W − 1)/2, (H − 1)/2); directions are unit vectors in the camera frame x right, y down, z forward
+((W − 1)/2, (H − 1)/2) (or at the principal point a sensor names: a frame's intrinsics); directions are unit vectors in the camera frame x right, y down, z forward
 (along the lens's axis, toward the scene), from the lens's paraxial entrance pupil (the camera centre;
 for an object at a finite distance each field names the direction from there to its object point, as
 the tracer's fields do). The image is upright, as solas-mi writes every image.
@@ -37,7 +37,7 @@ NEWTON_STEPS = 6
 
 @dataclass(frozen=True)
 class Sensor:
-    """A sensor centred on the lens's axis, checked when built.
+    """A sensor on the lens's axis, checked when built.
 
     Parameters
     ----------
@@ -45,11 +45,13 @@ class Sensor:
         Pixels, 1 to 65536 each.
     pitch_um : float
         The pixel pitch (µm), below 1e4.
+    principal : tuple of float, optional
+        (column, row) where the lens's axis lands (a frame's principal point); default: the sensor's centre.
 
     Raises
     ------
     SolasError
-        For a size or pitch out of range.
+        For a size or pitch out of range, or a principal point that is not two finite numbers.
 
     Examples
     --------
@@ -61,6 +63,7 @@ class Sensor:
     width: int
     height: int
     pitch_um: float
+    principal: tuple[float, float] | None = None
 
     def __post_init__(self):
         for name in ("width", "height"):
@@ -70,11 +73,27 @@ class Sensor:
         p = self.pitch_um
         if isinstance(p, bool) or not isinstance(p, (int, float)) or not (math.isfinite(p) and 0 < p < 1e4):
             raise SolasError(f"pixel pitch {p!r} um must be a positive number below 1e4")
+        c = self.principal
+        if c is not None and not (len(c) == 2 and all(isinstance(v, (int, float)) and math.isfinite(v) for v in c)):
+            raise SolasError(f"principal point {c!r} must be two finite numbers (column, row) of pixels")
 
     @property
     def centre(self) -> tuple[float, float]:
         """(column, row) where the axis lands."""
+        if self.principal is not None:
+            return float(self.principal[0]), float(self.principal[1])
         return (self.width - 1) / 2.0, (self.height - 1) / 2.0
+
+    def reach_px(self) -> float:
+        """How far the sensor reaches from the axis.
+
+        Returns
+        -------
+        float
+            The distance (pixels) from the axis to the sensor's farthest pixel centre.
+        """
+        cx, cy = self.centre
+        return max(math.hypot(c - cx, r - cy) for c in (0, self.width - 1) for r in (0, self.height - 1))
 
     def mm(self, cols: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Image-plane points of pixel positions.
@@ -345,7 +364,7 @@ def chief_map(lens: Lens, sensor: Sensor, wavelength_nm: float | None = None,
         lens = focused(lens, focus_distance_mm)
     wl = lens.primary_wavelength if wavelength_nm is None else lens.check_wavelength(wavelength_nm)
     px = sensor.pitch_um * 1e-3
-    reach = px * math.hypot(sensor.width - 1, sensor.height - 1) / 2.0
+    reach = px * sensor.reach_px()
     table, heights, circle = _table(lens, wl, reach)
     theta, h, mid, hm = table[::2], heights[::2], table[1::2], heights[1::2]
     ep = paraxial(lens, wl).entrance_pupil_z_mm - float(lens.vertex_z[0])
