@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from ..caches import ENV
 from ..errors import SolasError
 from ..isp.commands import add_camera_options, camera_from_args
 
@@ -214,7 +215,8 @@ def _add_degrade(sub: Any) -> None:
     add_frame_options(frames)
     DegradeSpec.add_flags(frames, ("scale_lens",))
     add_camera_options(p, seed=True)
-    p.add_argument("--cache", metavar="DIR", help="PSF-grid cache (default: the user's cache folder)/psf-grids")
+    p.add_argument("--cache", metavar="DIR", help=f"PSF-grid cache (default: psf-grids in ${ENV}, else in the user's "
+                   "cache folder)")
     _add_runner_options(p)
     GridSpec.add_flags(p.add_argument_group("grid options (with --lens; those of `solas-mi psf-grid`, the grid "
                                             "itself the accuracy tables' interp grid by default)"),
