@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SolasError
-from . import forbes, ideal as ideal_mod
+from . import forbes, ideal as ideal_mod, thermal
 from .coating import Coating, coating_from_table
 from . import glass as glass_mod
 from .sag import sag
@@ -27,10 +27,10 @@ MAX_BLADES = 64  # an iris's blades (more: a circle to a part in 1e3 of its radi
 NORM_RADIUS_MM = (1e-6, 1e6)  # the Qbfs normalisation radius a surface may have (1 nm to 1 km)
 # What a lens file may hold (anything else is a mistake worth naming, e.g. a surface type we do not model)
 KEYS = {
-    "lens": ("name", "description", "wavelengths_nm", "field_deg", "catalogues", "materials", "surface", "object",
-             "image"),
+    "lens": ("name", "description", "wavelengths_nm", "field_deg", "catalogues", "materials", "temperature_c",
+             "pressure_kpa", "surface", "object", "image"),
     "surface": ("label", "radius", "thickness", "diameter", "material", "stop", "conic", "aspheric", "qbfs",
-                "norm_radius", "focal_length", "coating", "blades", "blade_rotation"),
+                "norm_radius", "focal_length", "coating", "blades", "blade_rotation", "mount"),
     "object": ("distance", "material"),
     "image": ("diameter",),
 }
@@ -100,6 +100,7 @@ class Surface:
     coating: Coating | None = None  # its thin films (`coating`); None: the bare interface
     blades: int = 0  # the stop's iris: N ≥ 3 straight blades, a regular N-gon with its corners on the clear circle; 0: round
     blade_rotation: float = 0.0  # degrees from +x to the polygon's first corner, counter-clockwise seen from the object
+    mount: str | float | None = None  # what holds the air gap after it (`thermal.MOUNTS` or a CTE, 1/K); None: not said
 
     def iris_margin(self, x, y, hypot, atan2, cos, floor):
         """The signed distance (mm) of points (x, y) inside the stop's aperture: to its rim for a round stop,
@@ -112,6 +113,16 @@ class Surface:
         angle = atan2(y, x) - math.radians(self.blade_rotation)
         within = angle - sector * floor(angle / sector)  # from the sector's first corner, in [0, sector)
         return radius * math.cos(0.5 * sector) - hypot(x, y) * cos(within - 0.5 * sector)
+
+    def prescription(self) -> list:
+        """What of this surface changes the optics, for the lens's hash (a kind's terms only where present, so
+        a lens file that gains a kind keeps the hashes of the lenses without it)."""
+        return ([self.radius, self.thickness, self.diameter, self.glass.name, self.glass.coefficients, self.stop]
+                + ([] if self.is_sphere else [self.conic, list(self.aspheric)])
+                + ([list(self.qbfs), self.norm_radius] if any(self.qbfs) else [])
+                + ([{"focal_length": self.focal_length}] if self.ideal else [])
+                + ([{"coating": self.coating.table()}] if self.coating else [])
+                + ([{"blades": self.blades, "blade_rotation": self.blade_rotation}] if self.blades else []))
 
     @property
     def ideal(self) -> bool:
@@ -179,8 +190,14 @@ def surface_from_row(row: dict, i: int, where: str, catalogues: tuple[str, ...],
             or ((blades or "blade_rotation" in row) and not stop):
         raise SolasError(f"{ident}: blades = {blades!r} must be 0 (a round stop) or an integer from 3 to {MAX_BLADES}, "
                          "with blade_rotation (degrees), on the stop surface only")
+    mount = row.get("mount")
+    if mount is not None:
+        try:
+            thermal.mount_cte(mount)
+        except SolasError as exc:
+            raise SolasError(f"{ident}: {exc}") from None
     return Surface(label, radius, thickness, diameter, str(material), g, stop, conic, aspheric, qbfs, norm_radius,
-                   focal_length, coating, blades, rotation)
+                   focal_length, coating, blades, rotation, mount)
 
 
 def polynomial_terms(row: dict, key: str, ident: str, meaning: str) -> tuple[float, ...]:

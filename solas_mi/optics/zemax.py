@@ -28,6 +28,8 @@ Read as the author meant it:
 - Fields (XFLN/YFLN, FTYP's first number): 0 angle, 1 object height, 2 paraxial image height, 3 real
   image height (the field whose real chief ray lands there); field_deg is the widest as an angle.
   Vignetting factors VDXN/VCXN/VDYN/VCYN shape the beam automatic semi-diameters follow.
+- ENVD (°C, atmospheres; older files' TEMP, PRES): where the prescription holds, the lens's `temperature_c`
+  and `pressure_kpa` (glass indices there, `thermal`; radii and thicknesses as given); written back so.
 - UNIT (MM, CM, IN, METER) scales every length to mm; WAVM (or WAVL) the wavelengths (µm in the file),
   PWAV the one the aperture and field solves use; surface 0's DISZ the object distance. The last SURF
   is the image plane (its DIAM the image semi-diameter). Mirrors, gratings, toroids, tilted or decentred
@@ -130,20 +132,19 @@ def read_spec(text: str, where: str) -> dict:
         if semi > 0:
             spec["image"] = {"diameter": 2.0 * semi}
     spec.update(_wavelengths(top, where))
+    spec.update(_environment(top, where))
     fields = _fields(top, scale, where)
     return zemax_solves.solve(spec, _aperture(top, scale, where), fields, _primary(top, spec), where,
-                              _vignetting(top, len(fields[1]), where))
+                              zemax_solves.vignetting_factors(top, len(fields[1]), where))
 
 
-def _vignetting(top: dict, count: int, where: str) -> list[tuple[float, ...]] | None:
-    """Per field, the pupil's fractions (+x, −x, +y, −y) cut off by the VDXN/VCXN/VDYN/VCYN factors (the
-    pupil coordinate p becomes VD + (1 − VC) p); None when all are 0."""
-    dx, cx, dy, cy = ([*_floats((top.get(k) or [[]])[0][:count], f"{where}: {k}"), *[0.0] * count][:count]
-                      for k in ("VDXN", "VCXN", "VDYN", "VCYN"))
-    cuts = [(cx[i] - dx[i], cx[i] + dx[i], cy[i] - dy[i], cy[i] + dy[i]) for i in range(count)]
-    if any(not -1.0 < c < 1.0 for cut in cuts for c in cut):
-        raise SolasError(f"{where}: vignetting factors VDXN/VCXN/VDYN/VCYN leave no pupil at some field: {cuts}")
-    return cuts if any(any(cut) for cut in cuts) else None
+def _environment(top: dict, where: str) -> dict:
+    """temperature_c and pressure_kpa of the ENVD line (°C, atmospheres), or of older files' TEMP and PRES lines."""
+    envd = (top.get("ENVD") or [[]])[0][:2]
+    given = {"temperature_c": envd[:1] or (top.get("TEMP") or [[]])[0][:1],
+             "pressure_kpa": envd[1:2] or (top.get("PRES") or [[]])[0][:1]}
+    return {key: _floats(v, f"{where}: ENVD/TEMP/PRES")[0] * (101.325 if key == "pressure_kpa" else 1.0)
+            for key, v in given.items() if v}
 
 
 def _object(block: dict, scale: float, gcat: tuple[str, ...], where: str) -> dict:
@@ -368,7 +369,8 @@ def dumps(lens) -> str:
     vendors = list(dict.fromkeys(g.name.split(":", 1)[0] for g in glasses if g.kind not in ("air", "model")))
 
     out = ["VERS 190513 80 123457 L123457", "MODE SEQ", f"NAME {lens.name}", "PFIL 0 0 0",
-           "UNIT MM X W X CM MR CPMM", *([f"GCAT {' '.join(vendors)}"] if vendors else []),
+           "UNIT MM X W X CM MR CPMM", f"ENVD {number(lens.temperature_c)} {number(lens.pressure_kpa / 101.325)} 0",
+           *([f"GCAT {' '.join(vendors)}"] if vendors else []),
            "FLOA", f"FTYP 0 0 2 {len(lens.wavelengths_nm)} 0 0 0",
            "XFLN 0 0", f"YFLN 0 {number(lens.field_deg)}"]
     out += [f"WAVM {i} {number(w / 1000.0)} 1" for i, w in enumerate(lens.wavelengths_nm, start=1)]

@@ -49,7 +49,7 @@ def run_psf(args) -> int:
     from .methods import psf
 
     data_file, png = data_and_preview(args.output, args.png)
-    lens = load_lens(args.lens)
+    lens = load_lens(args)
     wavelengths = floats(args.wavelengths_nm, "--wavelengths-nm")
     weights = floats(args.weights, "--weights") if args.weights else None
     p = psf(lens, _field(args.field_deg), wavelengths, weights=weights, **GridSpec.given(args, PSF_OPTIONS))
@@ -65,7 +65,7 @@ def run_psf_grid(args) -> int:
     # the mosaic only when asked: a 32×32 grid's costs about 0.9 s (block means + a 2048² PNG)
     data_file, png = data_and_preview(args.output, args.mosaic or None)
     png = png if args.mosaic is not None else None
-    lens = load_lens(args.lens)
+    lens = load_lens(args)
     spec = GridSpec.from_args(args)
     count = len(spec.wavelengths_nm or lens.wavelengths_nm) * spec.grid[0] * spec.grid[1] * len(spec.distances_m or [0])
     # the float32 PSFs, their mosaics and the PNG when written, and a batch of complex fields

@@ -20,7 +20,7 @@ import numpy as np
 from ..errors import SolasError
 from ..imageio import atomic_path, write_text
 from ..optics.camera import Camera, camera_for
-from ..optics import virtual_object
+from ..optics import thermal, virtual_object
 from ..optics.lens import Lens
 from ..outputs import inside, safe_name
 from ..psf.registry import METHODS
@@ -35,12 +35,14 @@ MIN_GAP_MM = 10 * SPAWN_OFFSET_MM  # closest two refracting surfaces of the mesh
 
 @dataclass(frozen=True)
 class Part:
-    """One shape of the lens scene: a mesh file name, and its two glasses (None: an absorber)."""
+    """One shape of the lens scene: a mesh file name, its two glasses (None: an absorber) and the lens's
+    temperature and pressure where not 20 °C and 101.325 kPa (`optics.thermal.metadata`)."""
 
     name: str
     mesh: tuple[np.ndarray, np.ndarray, np.ndarray]
     ext_glass: str | None = None
     int_glass: str | None = None
+    environment: tuple[tuple[str, float], ...] = ()
 
 
 def check_gaps(lens: Lens) -> None:
@@ -125,7 +127,7 @@ def lens_parts(lens: Lens, rings: int | None = None, image_radius: float = 0.0, 
         if s.glass != before:
             cap = cap_mesh(s.radius, zv, s.semi_diameter, rings, s.conic, s.aspheric, s.qbfs, s.norm_radius)
             rim = cap[0][-len(phi):]
-            parts.append(Part(f"surface{k}", cap, before_name, s.material))
+            parts.append(Part(f"surface{k}", cap, before_name, s.material, tuple(thermal.metadata(lens).items())))
         if not (k == 1 and lens.field_type.sideways):
             parts.append(Part(f"aperture{k}", absorber_ring(rim, s.semi_diameter, outer, zr, phi)))
             ring_z.append(zr)
@@ -162,8 +164,10 @@ def _shapes_xml(parts: list[Part], mono: str) -> str:
         if p.int_glass is None:
             bsdf = '<ref id="absorber"/>'
         else:
+            where = "".join(f'<float name="{key}" value="{value!r}"/>' for key, value in p.environment)
             bsdf = (f'<bsdf type="sellmeier_dielectric"><string name="ext_glass" value="{xml_attr(p.ext_glass)}"/>'
-                    f'<string name="int_glass" value="{xml_attr(p.int_glass)}"/><string name="fresnel" value="$fresnel"/>{mono}</bsdf>')
+                    f'<string name="int_glass" value="{xml_attr(p.int_glass)}"/><string name="fresnel" value="$fresnel"/>'
+                    f'{where}{mono}</bsdf>')
         shapes.append(f'    <shape type="ply" id="{p.name}">\n        <string name="filename" value="meshes/{p.name}.ply"/>\n'
                       f'        {bsdf}\n    </shape>')
     return "\n".join(shapes)
