@@ -121,7 +121,7 @@ def test_glass_at_a_temperature_refracts_with_its_index_there(mi, tmp_path):
     assert dict(part.environment) == {"temperature_c": 80.0, "pressure_kpa": 95.0}
     assert all(not p.environment for p in lens_parts(Lens.load("solas-doublet")))
     bsdf = mi.load_dict({"type": "sellmeier_dielectric", "int_glass": "N-BK7", "fresnel": "transmit",
-                         **{k: v for k, v in part.environment}})
+                         **dict(part.environment)})
     ctx = mi.BSDFContext(mi.TransportMode.Radiance, +mi.BSDFFlags.DeltaTransmission, 1)
     for lam in (450.0, 700.0):
         bs, _ = _sample(mi, bsdf, ctx, _interaction(mi, [lam] * 4), sample1=0.0)
