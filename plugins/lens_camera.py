@@ -12,7 +12,8 @@ sensor; the scene sees only the rays that leave the lens's first surface.
 | `focus_distance` | float     | world units | the lens file's | object distance in focus, in front of surface 1 (inf: infinity) |
 | `world_unit_mm`  | float     | mm          | 1000            | one world unit in mm (1000: the scene in metres)   |
 | `fresnel`        | string    | —           | "off"           | "transmit": weight by each refraction's unpolarised|
-|                  |           |             |                 | Fresnel transmittance; "off": lossless surfaces    |
+|                  |           |             |                 | Fresnel transmittance (a coated surface's: its     |
+|                  |           |             |                 | coating's); "off": lossless surfaces               |
 | `to_world`       | transform | world units | identity        | the camera's frame: looks along local +z, +y up    |
 | `stratify_wavelengths` | boolean | —     | true            | stratify the wavelengths of a pixel's samples      |
 | `lane_tolerance` | float     | pixels      | 0.25            | ε: how alike the spectral lanes' rays must leave   |

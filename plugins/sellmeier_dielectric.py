@@ -8,6 +8,8 @@ Sellmeier formula, or a model glass's two-term fit).
 | `ext_glass` | string | —    | "AIR"      | glass on the normal's side                           |
 | `fresnel`   | string | —    | "transmit" | Fresnel losses: "transmit", "sample" or "off"        |
 | `wavelength`| float  | nm   | 587.5618   | the wavelength of the non-spectral (mono) variants   |
+| `temperature_c` | float | °C | 20        | the glasses' temperature (`Lens.at`: the Schott formula) |
+| `pressure_kpa` | float | kPa | 101.325   | the air's pressure; indices are relative to that air |
 
 Glass names are those of lens files: "N-BK7", "SCHOTT:F2", "OHARA:S-LAH59", "model:1.5168/64.17", "AIR"
 (a bare name that two vendors use, such as "F2", is refused).
@@ -49,6 +51,7 @@ import drjit as dr
 import mitsuba as mi
 
 from solas_mi.errors import SolasError
+from solas_mi.optics import thermal
 from solas_mi.optics.glass import resolve
 from solas_mi.plugins.wavelength_sampling import mono_wavelength
 from solas_mi.render.spec import FRESNEL_MODES
@@ -60,8 +63,10 @@ class SellmeierDielectric(mi.BSDF):
 
     def __init__(self, props: mi.Properties) -> None:
         super().__init__(props)
-        self.int_glass = resolve(props.get("int_glass", "AIR"))
-        self.ext_glass = resolve(props.get("ext_glass", "AIR"))
+        where = thermal.check_environment(props.get("temperature_c", thermal.STANDARD_C),
+                                          props.get("pressure_kpa", thermal.STANDARD_KPA))
+        self.int_glass = resolve(props.get("int_glass", "AIR")).at(*where)
+        self.ext_glass = resolve(props.get("ext_glass", "AIR")).at(*where)
         self.fresnel = str(props.get("fresnel", "transmit"))
         if self.fresnel not in FRESNEL_MODES:
             raise SolasError(f"sellmeier_dielectric fresnel {self.fresnel!r} must be one of {', '.join(FRESNEL_MODES)}")

@@ -11,6 +11,9 @@
   it through the API, e.g. `render_image(variant=...)`; only the first variant ever set stays, Mitsuba
   having no way to unset it). A CUDA variant without a device is skipped.
 - Synthetic PSF grids without the tracer: `synthetic_grid` (`SyntheticGrids`).
+- solas-mi's caches (`solas_mi.caches.cache_root`: PSF grids, fitted cameras) in a folder of the session,
+  never the user's (`_session_cache`, through $SOLAS_MI_CACHE_DIR, which commands run as subprocesses
+  inherit); `fresh_cache` gives a test its own empty one (a test that counts what is computed).
 """
 import contextlib
 import copy
@@ -44,6 +47,25 @@ def doublet_spec():
     """The shipped doublet's lens-file dictionary, free to modify."""
     with open(resource_dir("scenes") / "lenses" / "solas_doublet.toml", "rb") as f:
         return copy.deepcopy(tomllib.load(f))
+
+
+@pytest.fixture(scope="session", autouse=True)
+def _session_cache(tmp_path_factory):
+    from solas_mi.caches import ENV
+
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv(ENV, str(tmp_path_factory.mktemp("solas-mi-cache")))
+        yield
+
+
+@pytest.fixture
+def fresh_cache(tmp_path, monkeypatch):
+    """An empty cache folder of solas-mi's for this test (set as $SOLAS_MI_CACHE_DIR)."""
+    from solas_mi.caches import ENV
+
+    folder = tmp_path / "solas-mi-cache"
+    monkeypatch.setenv(ENV, str(folder))
+    return folder
 
 
 # ---------------------------------------------------------------------------------------- Mitsuba variants

@@ -13,7 +13,7 @@ ROOT = Path(__file__).resolve().parents[1]
 MAX_LINES = 400
 # Each stage may import itself, the stages before it in this order's groups, and the shared base.
 BASE = {"errors", "interrupts", "lazy", "options", "resources", "llvm", "imageio", "jsonio", "outputs", "budget", "blas",
-        "pages", "progress", "userfiles", "registry", "labelkinds"}
+        "pages", "progress", "userfiles", "registry", "labelkinds", "caches"}
 ALLOWED = {
     "optics": set(),
     "psf": {"optics"},

@@ -24,12 +24,13 @@ SHIPPED = {
     "solas_mi.render.labels.LABELS": ("depth", "normal", "instance"),
     "solas_mi.optics.formats.READERS": (".toml", ".zmx", ".seq", ".dat"),
     "solas_mi.optics.formats.WRITERS": (".toml", ".zmx", ".dat"),
+    "solas_mi.optics.coating.KINDS": ("none", "quarter_wave", "ideal", "stack"),
     "solas_mi.optics.calibration.models.MODELS": ("opencv-pinhole", "opencv-fisheye", "ocamcalib", "woodscape",
                                                   "double-sphere", "unified"),
     "solas_mi.analysis.registry.ANALYSES": ("mtf", "mtf-field", "mtf50-field", "through-focus", "field-curvature",
                                             "distortion", "lateral-colour", "relative-illumination", "ray-fan",
                                             "opd-fan", "wavefront", "spot-diagram", "encircled-energy"),
-    "solas_mi.sensor.chain.STAGES": ("photons", "defects", "readout", "merge", "compander"),
+    "solas_mi.sensor.chain.STAGES": ("photons", "shutter", "defects", "readout", "merge", "compander"),
 }
 
 # One of each registered in a fresh process, then looked for in the parser, the messages and the docs.

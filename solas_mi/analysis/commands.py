@@ -27,7 +27,7 @@ def _warn(result) -> None:
 def run_analysis(args) -> int:
     analysis = ANALYSES[args.lens_command]
     options = command_options(args, analysis.extra["keywords"])
-    lens = load_lens(args.lens)
+    lens = load_lens(args)
     from .base import output_paths
 
     output_paths(args.output)  # checked before the work
@@ -41,7 +41,7 @@ def run_analysis(args) -> int:
 def run_report(args) -> int:
     from .report import report
 
-    lens = load_lens(args.lens)
+    lens = load_lens(args)
     index = report(lens, args.output, progress=lambda name: print(f"{name} ...", file=sys.stderr, flush=True),
                    **command_options(args, tuple(OPTIONS)))
     print(f"wrote {index}")
@@ -49,7 +49,7 @@ def run_report(args) -> int:
 
 
 def register(sub: Any) -> None:
-    """Add `lens <analysis>` for each registered analysis and `lens report`."""
+    """Add `lens <analysis>` for each registered analysis, `lens report` and `thermal`."""
     group = _lens_group(sub)
     for name, analysis in ANALYSES.items():
         p = group.add_parser(name, help=analysis.summary,
@@ -70,3 +70,6 @@ def register(sub: Any) -> None:
         option.add_to(report)
     report.add_argument("-o", "--output", required=True, help="the folder (made if need be)")
     report.set_defaults(run=run_report)
+    from .thermal_report import register as register_thermal
+
+    register_thermal(sub)

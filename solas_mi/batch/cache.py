@@ -5,7 +5,8 @@ it (`NAME.exr.json`: its key â€” the lens's hash and the spec's canonical form â
 entry is reused only when its record matches the lens, the spec and the file's content, so a changed,
 swapped or truncated entry is computed again, never passed off as the lens's grid.
 
-The default folder is the user's cache directory (`platformdirs`), e.g. ~/.cache/solas-mi/psf-grids.
+The default folder is psf-grids in solas-mi's cache folder (`caches.cache_root`: $SOLAS_MI_CACHE_DIR, else the
+user's cache directory), e.g. ~/.cache/solas-mi/psf-grids.
 `hits` and `misses` count what this cache object served.
 """
 from __future__ import annotations
@@ -17,15 +18,15 @@ import time
 from pathlib import Path
 
 from .. import jsonio
+from ..caches import cache_root
 from ..errors import SolasError
 from ..outputs import inside, safe_name
 from ..userfiles import read_text
 
 
 def default_cache_dir() -> Path:
-    from platformdirs import user_cache_dir
-
-    return Path(user_cache_dir("solas-mi")) / "psf-grids"
+    """The grids' folder in solas-mi's cache folder (`caches.cache_root`)."""
+    return cache_root() / "psf-grids"
 
 
 def file_hash(path: str | os.PathLike, full: bool = False) -> str:

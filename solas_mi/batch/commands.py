@@ -12,6 +12,7 @@ import sys
 from pathlib import Path
 from typing import Any
 
+from ..caches import ENV
 from ..errors import SolasError
 from ..isp.commands import add_camera_options, camera_from_args
 
@@ -39,12 +40,22 @@ def _degrade_spec(args: argparse.Namespace):
                                  grid_spec=grid)
 
 
+def _lens(args: argparse.Namespace):
+    """--lens as a Lens where --temperature-c or --pressure-kpa moves it (`optics.commands.load_lens`), else as
+    given (a name or file, which the batch loads)."""
+    if args.lens is None or (args.temperature_c is None and args.pressure_kpa is None):
+        return args.lens
+    from ..optics.commands import load_lens
+
+    return load_lens(args)
+
+
 def _dry_run(args: argparse.Namespace) -> int:
     from ..budget import size_text
     from .degrade import check_workers, estimate, plan_batch
 
     workers = check_workers(_workers(args.workers), args.dask)
-    p = plan_batch(args.inputs, args.output, _degrade_spec(args), psf_grid=args.psf_grid, lens=args.lens,
+    p = plan_batch(args.inputs, args.output, _degrade_spec(args), psf_grid=args.psf_grid, lens=_lens(args),
                    cache=args.cache)
     need = estimate(p, workers if args.dask is None else 1)
     where = f"Dask at {args.dask}" if args.dask else f"{workers} local worker process(es)"
@@ -80,7 +91,7 @@ def run_batch_degrade(args: argparse.Namespace) -> int:
         return _dry_run(args)
     from .degrade import degrade_batch
 
-    result = degrade_batch(args.inputs, args.output, _degrade_spec(args), psf_grid=args.psf_grid, lens=args.lens,
+    result = degrade_batch(args.inputs, args.output, _degrade_spec(args), psf_grid=args.psf_grid, lens=_lens(args),
                            workers=_workers(args.workers), dask=args.dask, cache=args.cache, force=args.force,
                            progress=not args.quiet)
     return _report("degrade", result, f" (grid: {result.grid_source})")
@@ -185,6 +196,7 @@ def _add_degrade(sub: Any) -> None:
     """Add `batch degrade`."""
     from ..convolution.commands import add_frame_options
     from ..convolution.spec import DegradeSpec
+    from ..optics.commands import add_environment_options
     from ..optics.formats import lens_help
     from ..psf.spec import GridSpec
 
@@ -197,12 +209,14 @@ def _add_degrade(sub: Any) -> None:
     source = p.add_mutually_exclusive_group(required=True)
     source.add_argument("--psf-grid", metavar="GRID.exr", help="PSF grid written by `solas-mi psf-grid`")
     source.add_argument("--lens", help=f"compute the grid from this lens: {lens_help()}")
+    add_environment_options(p)
     DegradeSpec.add_flags(p, DEGRADE_OPTIONS)
     frames = p.add_argument_group("the frames' camera (as degrade's; every input taken by it)")
     add_frame_options(frames)
     DegradeSpec.add_flags(frames, ("scale_lens",))
     add_camera_options(p, seed=True)
-    p.add_argument("--cache", metavar="DIR", help="PSF-grid cache (default: the user's cache folder)/psf-grids")
+    p.add_argument("--cache", metavar="DIR", help=f"PSF-grid cache (default: psf-grids in ${ENV}, else in the user's "
+                   "cache folder)")
     _add_runner_options(p)
     GridSpec.add_flags(p.add_argument_group("grid options (with --lens; those of `solas-mi psf-grid`, the grid "
                                             "itself the accuracy tables' interp grid by default)"),
@@ -233,7 +247,8 @@ def register(subparsers: Any) -> None:
                     "and the others go on (exit status 1).")
     r.add_argument("inputs", nargs="+", metavar="INPUT", help="images or scene XML files, folders of them, or globs")
     r.add_argument("--lens", action="append", required=True,
-                   help=f"{lens_help()}; repeat to sweep over lenses")
+                   help=f"{lens_help()}; repeat to sweep over lenses (a lens at another temperature or pressure: "
+                        "its file, from `solas-mi lens convert LENS --temperature-c T -o FILE.toml`)")
     RenderSpec.add_flags(r, RENDER_SETTINGS, sweep=SWEEP[1:])
     add_calibration_option(r)
     add_camera_options(r, seed=False)  # the sensor's seed is the batch's --seed

@@ -10,7 +10,8 @@ it: the same, at the grid's sensor pitch. A fisheye frame (`--fisheye`) keeps it
 the reference wavelength's chief rays already, so its calibration is the one it was given.
 
 A fit costs seconds (2–6 s for the shipped lenses): a batch makes it once per frame size (`frame_cameras`),
-never per frame.
+never per frame, and `describe_camera` keeps each block in the cache of fitted cameras, so a later degrade of
+a frame of the same camera reads it back.
 """
 from __future__ import annotations
 
@@ -47,6 +48,27 @@ def fit_bytes(pixels: int) -> float:
     return FIT_FIXED_BYTES + FIT_PIXEL_BYTES * pixels
 
 
+def frame_fit_bytes(grid, width: int, height: int, frame=None, model: str | None = None) -> float:
+    """Memory (bytes) `frame_camera` of these arguments adds: `fit_bytes` of the frame, none where it fits nothing
+    (no model, a fisheye frame, a grid whose lens is gone) or reads its block back from the cache of fitted cameras
+    (`optics.calibration.camera_cached`)."""
+    from ..optics.calibration import camera_cached
+
+    sensor = None if model is None else frame_sensor(grid, width, height, frame)
+    lens = None if sensor is None else grid_lens(grid)
+    if lens is None or camera_cached(lens, sensor, model, wavelength_nm=reference_wavelength(grid)):
+        return 0.0
+    return fit_bytes(width * height)
+
+
+def reference_wavelength(grid) -> float:
+    """The wavelength (nm) of the chief rays degrade's mapping follows (`mapping.reference_index`)."""
+    from .mapping import reference_index
+
+    first = getattr(grid, "layers", [grid])[0]
+    return float(first.wavelengths_nm[reference_index(first)])
+
+
 def frame_sensor(grid, width: int, height: int, frame=None):
     """The sensor (`optics.calibration.Sensor`) degrade puts a width×height frame of camera `frame` on (None: one
     spanning the grid's x field), or None for a fisheye frame, which keeps its own camera; SolasError where the
@@ -72,11 +94,9 @@ def frame_camera(grid, width: int, height: int, frame=None, model: str | None = 
 def _block(grid, width: int, height: int, frame, sensor, model: str | None, lens) -> dict:
     """`frame_camera` on the frame's `sensor` (None: a fisheye frame's own camera)."""
     from ..optics.calibration import describe_camera
-    from .mapping import reference_index
 
-    first = getattr(grid, "layers", [grid])[0]
     named = {"lens": grid.meta.get("lens"), "lens_hash": grid.meta.get("lens_hash"),
-             "wavelength_nm": float(first.wavelengths_nm[reference_index(first)])}
+             "wavelength_nm": reference_wavelength(grid)}
     if sensor is None:
         return {**named, "frame_camera": frame.meta(width, height),
                 "frame": "the frame's own camera, kept: its points are the lens's chief rays at wavelength_nm"}

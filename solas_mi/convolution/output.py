@@ -76,11 +76,11 @@ def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path:
     channel; `labels`: the frame's label files (kind → file, `labelkinds.KINDS`), warped by the image's
     mapping and written beside `output` (`labels.label_outputs`) with the rest, all read and checked first;
     `calibration_model`: the frame's camera block fitted here (`convolution.camera.frame_camera`, its memory
-    in the estimate; a batch fits it once and gives it in `extra_meta` instead)."""
+    in the estimate unless the cache of fitted cameras holds it; a batch fits it once and gives it in `extra_meta` instead)."""
     from ..budget import check_memory
     from ..imageio import image_size, read_image
     from ..psf.depth import DepthGrid
-    from .camera import fit_bytes, frame_camera
+    from .camera import frame_camera, frame_fit_bytes
     from .labels import label_outputs, memory_bytes, read_labels
 
     spec = DegradeSpec() if spec is None else spec
@@ -97,7 +97,7 @@ def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path:
     for target in targets.values():
         check_target(target, [image_path, grid_path, depth, output, png, *files.values()], "labels output")
     need = peak_bytes(image_path, rows, cols, channels, sum(g.data.nbytes for g in layers)) + 9 * len(layers) * rows * cols
-    fitting = 0.0 if calibration_model is None else fit_bytes(rows * cols)
+    fitting = frame_fit_bytes(grid, cols, rows, spec.frame, calibration_model)
     check_memory(f"degrade {cols}x{rows}", need + memory_bytes(rows * cols, files) + fitting, force)
     found = read_labels(files, (rows, cols), image_path)  # every label read and checked before any work
     extra = {} if calibration_model is None else {"camera": frame_camera(grid, cols, rows, spec.frame, calibration_model)}

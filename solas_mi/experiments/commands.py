@@ -20,7 +20,7 @@ def run_street(args: argparse.Namespace) -> int:
     from ..render.commands import check_render
     from .street.run import Settings, run
 
-    lens = load_lens(args.lens)
+    lens = load_lens(args)
     height, width = parse_wxh(args.size, "--size")
     for spp in (args.spp_ideal, args.spp):  # its renders: refused when absurd or too large, announced when long
         check_render(width, height, spp, args.force)
@@ -45,6 +45,7 @@ def run_street_scene(args: argparse.Namespace) -> int:
 
 def register(sub: Any) -> None:
     """Add the `experiment` subcommands."""
+    from ..optics.commands import add_environment_options
     from ..optics.formats import lens_help
     from ..render.mitsuba import VARIANTS
     from ..resources import resource_dir
@@ -60,6 +61,7 @@ def register(sub: Any) -> None:
                     "against the renders on near and far objects. Writes street.md/.csv/.json, figure-5 plots, "
                     "error maps and every image; step times on stderr and in the table.")
     p.add_argument("--lens", default="solas-doublet", help=f"{lens_help()} (default solas-doublet)")
+    add_environment_options(p)
     p.add_argument("-o", "--output", required=True, help="output folder")
     p.add_argument("--size", default="1280x960", help="image WIDTHxHEIGHT in px (default 1280x960)")
     p.add_argument("--spp", type=int, default=64, help="lens render samples per pixel (default 64)")

@@ -21,6 +21,7 @@ from ..sensor.auto_exposure import AUTO, AutoExposure, exposure_seconds
 from ..sensor.capture import check_seed
 from ..sensor.chain import SensorChain
 from ..sensor.model import SensorModel
+from ..sensor.timing import SceneInTime
 from .pipeline import ISP, check_sensor
 
 
@@ -41,6 +42,8 @@ class Camera:
     scale : float, default 1.0
         A frame's values times `scale` are image irradiance in W/m² (radiance through the f-number a frame
         states, for a render through a lens).
+    scene_in_time : sensor.timing.SceneInTime, optional
+        Each frame made a scene in time: a box of PWM-driven light, or the image's motion; none: still.
 
     Raises
     ------
@@ -61,6 +64,7 @@ class Camera:
     isp: ISP | None = None
     seed: int = 0
     scale: float = 1.0
+    scene_in_time: SceneInTime | None = None
 
     def __post_init__(self):
         if not isinstance(self.sensor, (SensorModel, SensorChain)):
@@ -77,6 +81,8 @@ class Camera:
         if self.isp is not None:
             check_sensor(self.isp, self.sensor)
         check_seed(self.seed)
+        if self.scene_in_time is not None and not isinstance(self.scene_in_time, SceneInTime):
+            raise SolasError(f"camera scene_in_time {self.scene_in_time!r} must be a solas_mi.sensor.timing.SceneInTime")
 
     def describe(self) -> dict:
         """Every value as JSON values: for metadata, manifests and the batch's identity.
@@ -91,7 +97,8 @@ class Camera:
         auto = self.exposure_ms if isinstance(self.exposure_ms, AutoExposure) else None
         return {"sensor": describe(self.sensor), "exposure_ms": AUTO if auto is not None else self.exposure_ms,
                 **({"auto_exposure": auto.describe()} if auto is not None else {}), "scale": self.scale,
-                "seed": self.seed, "isp": None if self.isp is None else self.isp.describe()}
+                "seed": self.seed, "isp": None if self.isp is None else self.isp.describe(),
+                **({} if self.scene_in_time is None else self.scene_in_time.describe())}
 
     def shoot(self, irradiance: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray | None, dict]:
         """Shoot one frame: the RAW of an irradiance image, and the developed frame.
@@ -117,7 +124,8 @@ class Camera:
 
         number = frame_number(name)
         seconds, chosen = exposure_seconds(self.exposure_ms, self.sensor, irradiance)
-        raw = capture(self.sensor, irradiance, seconds, self.seed, number)
+        scene = irradiance if self.scene_in_time is None else self.scene_in_time.of(irradiance)
+        raw = capture(self.sensor, scene, seconds, self.seed, number)
         meta = {"kind": "sensor RAW", "unit": "DN", "camera": self.describe(), "frame": name, "frame_number": number,
                 "exposure_ms": seconds * 1e3 if chosen else self.exposure_ms,
                 **({"auto_exposure": chosen} if chosen else {})}
@@ -157,8 +165,9 @@ def write_frame(raw_path: str | Path, raw: np.ndarray, frame: np.ndarray | None,
 
 
 def load_camera(sensor_model: str, exposure_ms: float | AutoExposure, isp: str | None = None, seed: int = 0,
-                scale: float = 1.0) -> Camera:
-    """A camera as the command line gives it (--sensor-model, --exposure-ms, --isp, --seed, --scale).
+                scale: float = 1.0, scene_in_time: SceneInTime | None = None) -> Camera:
+    """A camera as the command line gives it (--sensor-model, --exposure-ms, --isp, --seed, --scale, --flicker or
+    --image-motion).
 
     Parameters
     ----------
@@ -172,6 +181,8 @@ def load_camera(sensor_model: str, exposure_ms: float | AutoExposure, isp: str |
         The sensor's seed.
     scale : float, default 1.0
         A frame's values times `scale` are W/m².
+    scene_in_time : sensor.timing.SceneInTime, optional
+        A box of PWM-driven light, or the image's motion (`sensor.commands.timed_scene`).
 
     Returns
     -------
@@ -181,4 +192,5 @@ def load_camera(sensor_model: str, exposure_ms: float | AutoExposure, isp: str |
     from ..sensor.files import load_sensor
     from .pipeline import load_isp
 
-    return Camera(load_sensor(sensor_model), exposure_ms, None if isp is None else load_isp(isp), seed, scale)
+    return Camera(load_sensor(sensor_model), exposure_ms, None if isp is None else load_isp(isp), seed, scale,
+                  scene_in_time)

@@ -58,8 +58,9 @@ def register(subparsers: Any) -> None:
 
 
 def add_camera_options(p: argparse.ArgumentParser, seed: bool) -> None:
-    """A batch's camera options: --sensor-model, --exposure-ms, --scale, --isp (and --seed where `seed`)."""
-    from ..sensor.commands import add_exposure_option
+    """A batch's camera options: --sensor-model, --exposure-ms, --scale, --isp, --flicker, --image-motion (and
+    --seed where `seed`)."""
+    from ..sensor.commands import add_exposure_option, add_time_options
 
     g = p.add_argument_group("the camera: each frame through a sensor and image processor (its values times --scale "
                              "read as W/m² of image irradiance, or as radiance through the f-number a render states), "
@@ -72,6 +73,7 @@ def add_camera_options(p: argparse.ArgumentParser, seed: bool) -> None:
     g.add_argument("--isp", metavar="default|FILE.toml",
                    help=f"develop each RAW: 'default' or a TOML file with an [isp] table ({stage_choices()}; "
                         "with --sensor-model)")
+    add_time_options(g)
     if seed:
         g.add_argument("--seed", type=int, default=0,
                        help="the sensor's seed: its fixed pattern, and with each frame's name its noise (default 0)")
@@ -81,7 +83,8 @@ def camera_from_args(args: argparse.Namespace, seed: int):
     """The `isp.camera.Camera` of the options, or None without --sensor-model."""
     from ..errors import SolasError
 
-    options = (("--exposure-ms", args.exposure_ms), ("--scale", args.scale), ("--isp", args.isp))
+    options = (("--exposure-ms", args.exposure_ms), ("--scale", args.scale), ("--isp", args.isp),
+               ("--flicker", args.flicker), ("--image-motion", args.image_motion))
     if args.sensor_model is None:
         given = [flag for flag, value in options if value is not None]
         if given:
@@ -90,7 +93,8 @@ def camera_from_args(args: argparse.Namespace, seed: int):
     if args.exposure_ms is None:
         raise SolasError("--sensor-model needs --exposure-ms (the exposure time in ms, or auto)")
     from ..sensor.auto_exposure import parse_exposure
+    from ..sensor.commands import timed_scene
     from .camera import load_camera
 
     return load_camera(args.sensor_model, parse_exposure(args.exposure_ms), args.isp, seed,
-                       1.0 if args.scale is None else args.scale)
+                       1.0 if args.scale is None else args.scale, timed_scene(args))

@@ -23,8 +23,8 @@ READERS.register(".zmx", text_reader(zemax.read_spec), summary="Zemax OpticStudi
 READERS.register(".seq", text_reader(codev.read_spec), summary="CODE V sequence file (`codev`)")
 READERS.register(".dat", text_reader(pbrt_dat.read_spec), check=pbrt_dat.check_read,
                  summary="pbrt lens table: radius, thickness, n_d, aperture per row (`pbrt_dat`)")
-WRITERS.register(".toml", lens_toml.dumps, summary="our TOML lens file, numbers in full: it reads back as the "
+WRITERS.register(".toml", lens_toml.dumps, holds=("coatings", "blades"), summary="our TOML lens file, numbers in full: it reads back as the "
                                                    "same lens (`lens_toml`)")
-WRITERS.register(".zmx", zemax.dumps, summary="Zemax OpticStudio sequential lens file (`zemax`)")
+WRITERS.register(".zmx", zemax.dumps, holds=("coatings",), summary="Zemax OpticStudio sequential lens file (`zemax`)")
 WRITERS.register(".dat", pbrt_dat.dumps, summary="pbrt lens table, spherical surfaces and an object at infinity "
                                                  "only (`pbrt_dat`)")

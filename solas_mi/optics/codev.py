@@ -18,8 +18,9 @@ refracting subset:
   Without any STO the stop is surface 1 (CODE V's default; the description says so). CIR EDG (the edge aperture, drawn only) is read past; CIR OBS and HOL refused.
 - Glass: catalogue names as CODE V writes them, NAME_VENDOR (SCHOTT, OHARA, HOYA, CDGM, SUMITA, HIKARI
   or NIKON; hyphens may be left out: NBK7_SCHOTT is N-BK7) or a bare name; model glass "n_d:V_d" or the
-  code "nnnnnn.vvvvvv" or "nnn.vvv" (n_d = 1.nnnnnn, V_d = vv.vvvv); the object space's on SO. TEM
-  within 20-25 °C (the glass data's reference temperatures) is read past, other temperatures refused.
+  code "nnnnnn.vvvvvv" or "nnn.vvv" (n_d = 1.nnnnnn, V_d = vv.vvvv); the object space's on SO.
+- TEM (°C) and PRE (atmospheres): the temperature and air pressure the prescription holds at, the lens's
+  `temperature_c` and `pressure_kpa` (its glass indices there, `thermal`; radii and thicknesses as given).
 - System: TIT (the name), DIM M / C / I (mm, cm, inches), WL (nm) and REF (the reference one), the
   system aperture EPD (entrance-pupil diameter), FNO (the image-space F/#: EFL / EPD for a distant object,
   the paraxial working F/# 1 / (2 n' u') for a near one), NAO (object-space
@@ -51,7 +52,8 @@ from .paraxial import paraxial
 UNITS = {"M": 1.0, "C": 10.0, "I": 25.4}
 RADII_DEFAULT = "as CODE V's lens data shows them and hand-written files give them"
 INFINITE_OBJECT = 1e10  # an object distance at least this (in lens units) is at infinity, as CODE V takes it
-CATALOGUE_TEMPERATURE_C = (20.0, 25.0)  # the glass data hold at the vendors' reference temperatures, 20-25 °C
+# TEM and PRE: the lens file's key, the unit CODE V gives it in, and the factor to ours (°C; atmospheres to kPa)
+ENVIRONMENT = {"TEM": ("temperature_c", "°C", 1.0), "PRE": ("pressure_kpa", "atmospheres", 101.325)}
 
 
 class _Reader:
@@ -59,7 +61,7 @@ class _Reader:
 
     def __init__(self, where: str, radius_mode: bool = True):
         self.where = where
-        self.system: dict[str, list[str]] = {}
+        self.system: dict = {}  # a system command's arguments; TEM, PRE: temperature_c, pressure_kpa
         self.rows: list[dict] = []  # SO, the surfaces, SI: raw values in lens units
         self.stop_at: int | None = None  # STO Sn: the stop is surface n
         self.radius_mode = radius_mode  # S lines give radii (RDM Y) or curvatures (RDM N, CUM)
@@ -106,8 +108,8 @@ class _Reader:
             self.mode_given = True
         elif key in IGNORED:
             return
-        elif key == "TEM":
-            self.temperature(args, ident)
+        elif key in ENVIRONMENT:
+            self.environment(key, args, ident)
         elif key in SYSTEM:
             self.system[key] = args
         elif not self.rows:
@@ -115,15 +117,13 @@ class _Reader:
         else:
             self.modify(self.rows[-1], key, args, ident)
 
-    @staticmethod
-    def temperature(args: list[str], ident: str) -> None:
-        """TEM: read past within the catalogue's reference temperatures; refused elsewhere (the indices
-        would be wrong)."""
-        value = _numbers(args[:1], f"{ident}: TEM")
-        lo, hi = CATALOGUE_TEMPERATURE_C
-        if not value or not lo <= value[0] <= hi:
-            raise SolasError(f"{ident}: TEM {' '.join(args)!r}: glass data hold at {lo:g}-{hi:g} °C; other "
-                             "temperatures are not supported")
+    def environment(self, key: str, args: list[str], ident: str) -> None:
+        """TEM (°C) or PRE (atmospheres): the lens's temperature or air pressure, checked by `thermal`."""
+        value = _numbers(args[:1], f"{ident}: {key}")
+        if not value:
+            raise SolasError(f"{ident}: {key} needs a number ({ENVIRONMENT[key][1]})")
+        name, _, scale = ENVIRONMENT[key]
+        self.system[name] = value[0] * scale
 
     def surface(self, key: str, args: list[str], ident: str) -> None:
         row: dict = {"kind": key, "curv": 0.0, "thi": 0.0, "glass": "AIR", "ident": ident}
@@ -246,7 +246,8 @@ def _spec(reader: _Reader, where: str) -> dict:
     if dim not in UNITS:
         raise SolasError(f"{where}: DIM {system['DIM'][0]!r} is not supported; allowed: M (mm), C (cm), I (inches)")
     scale = UNITS[dim]
-    spec: dict = {"object": _object(rows[0], scale)}
+    spec: dict = {"object": _object(rows[0], scale), **{key: system[key] for key, _, _ in ENVIRONMENT.values()
+                                                        if key in system}}
     if reader.materials:
         spec["materials"] = reader.materials
     title = one_line(" ".join(unquote(t) for t in system.get("TIT", system.get("TITLE", [])))).strip()

@@ -27,7 +27,7 @@ REFUSED = {**dict.fromkeys(("XDE", "YDE", "ZDE", "ADE", "BDE", "CDE", "DAR", "BE
            "CUF": "fringe curvatures"}
 SURFACE_COMMANDS = ("SO", "S", "STO", "SI", "RDY", "CUY", "THI", "GLA", "CIR", "K", *ASPHERIC, "SLB", "PIM", "SPH",
                     "ASP", "CON")
-KNOWN = frozenset((*SURFACE_COMMANDS, *SYSTEM, *IGNORED, *REFUSED, "RDM", "CUM", "TEM", "PRV"))
+KNOWN = frozenset((*SURFACE_COMMANDS, *SYSTEM, *IGNORED, *REFUSED, "RDM", "CUM", "TEM", "PRE", "PRV"))
 
 
 def command(word: str) -> str:

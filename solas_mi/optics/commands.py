@@ -22,15 +22,39 @@ _ROWS = [("efl_mm", "EFL (mm)"), ("bfd_mm", "BFD (mm)"), ("entrance_pupil_diamet
 
 
 def add_lens_argument(p) -> None:
-    """The positional LENS argument of every command that takes a lens."""
+    """The positional LENS argument of every command that takes a lens, and where the lens is
+    (`add_environment_options`)."""
     p.add_argument("lens", help=lens_help())
+    add_environment_options(p)
 
 
-def load_lens(name: str):
-    """`Lens.load(name)` for a command's work, stating on stderr what of it overlaps (`Lens.overlaps`)."""
+def add_environment_options(p) -> None:
+    """--temperature-c, --pressure-kpa and --mount: the lens at another temperature and pressure (`Lens.at`)."""
+    from . import thermal  # light: no NumPy
+
+    p.add_argument("--temperature-c", type=float, metavar="C", help="the lens, its mount and the air at this "
+                   "temperature (°C; default: the lens file's, 20 unless it states one)")
+    p.add_argument("--pressure-kpa", type=float, metavar="KPA", help="the air's pressure (kPa; default: the lens "
+                   "file's, 101.325 unless it states one)")
+    p.add_argument("--mount", help="what holds every air gap, which grows with the temperature: "
+                   f"{', '.join(thermal.MOUNTS)}, or a CTE in 1/K (default: each surface's mount in the lens file, "
+                   f"{thermal.DEFAULT_MOUNT} where it names none)")
+
+
+def load_lens(args):
+    """The lens of a command (`args.lens`, at `args.temperature_c` and `args.pressure_kpa` where given:
+    `Lens.at`), stating on stderr what of it overlaps (`Lens.overlaps`)."""
     from .lens import Lens
 
-    lens = Lens.load(name)
+    from . import thermal
+
+    lens = Lens.load(args.lens)
+    temperature, pressure, mount = (args.temperature_c, args.pressure_kpa, args.mount)
+    if mount is not None:
+        thermal.mount_cte(mount)  # checked even where nothing moves (the lens at its own temperature)
+    if temperature is not None or pressure is not None:
+        lens = lens.at(lens.temperature_c if temperature is None else temperature,
+                       lens.pressure_kpa if pressure is None else pressure, mount)
     for note in lens.overlaps:
         print(f"solas-mi: warning: lens {lens.name}: {note}", file=sys.stderr)
     return lens
@@ -38,11 +62,10 @@ def load_lens(name: str):
 
 def run_lens_info(args) -> int:
     from .distortion import distortion
-    from .lens import Lens
     from .paraxial import paraxial
     from .pupil import chief_rays  # loads Dr.Jit
 
-    lens = load_lens(args.lens)
+    lens = load_lens(args)
     wavelengths = (floats(args.wavelengths_nm, "--wavelengths-nm") if args.wavelengths_nm is not None
                    else list(lens.wavelengths_nm))
     half = [lens.field_deg, -lens.field_deg] if lens.field_deg else []  # none for a lens that states no field
@@ -66,9 +89,12 @@ def run_lens_info(args) -> int:
     print(f"{lens.name}  ({lens.description})  hash {lens.hash}")
     print(f"stop: surface {lens.stop_index + 1}; image plane z = {lens.image_z:.6f} mm, diameter {lens.image_diameter:g} mm")
     print(f"fields: {lens.field_type.description}")
+    if "temperature_c" in info:
+        print(f"at {lens.temperature_c:g} °C in air of {lens.pressure_kpa:g} kPa (glass indices relative to it)")
     if not lens.dispersive:
         print("glass: no dispersion data (every medium a constant index): the columns of every wavelength agree")
-    for key, label in (("virtual_object", "object: virtual, "), ("ideal_lens_path", "ideal lens: ")):
+    for key, label in (("virtual_object", "object: virtual, "), ("ideal_lens_path", "ideal lens: "),
+                       ("coatings", "coatings: "), ("iris", "iris: ")):
         if key in info:
             print(label + info[key])
     for note in info.get("overlaps", []):
@@ -120,9 +146,8 @@ def run_lens_list(args) -> int:
 
 def run_lens_convert(args) -> int:
     from ..outputs import check_target
-    from .lens import Lens
 
-    lens = Lens.load(args.lens)
+    lens = load_lens(args)
     out = lens.save(check_target(args.output, [lens.source] if lens.source else []))
     print(f"wrote {out} ({lens.name}: {len(lens.surfaces)} surfaces, hash {lens.hash})")
     return 0

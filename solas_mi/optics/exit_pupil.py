@@ -41,7 +41,7 @@ def reversed_lens(lens: Lens) -> Lens:
         thickness = s[i - 1].thickness if i > 0 else 1.0  # beyond the original first surface: unused
         rev.append(Surface(s[i].label, -s[i].radius, thickness, s[i].diameter, materials[i], before[i], s[i].stop,
                            s[i].conic, tuple(-a for a in s[i].aspheric), tuple(-a for a in s[i].qbfs),
-                           s[i].norm_radius, s[i].focal_length))
+                           s[i].norm_radius, s[i].focal_length, s[i].coating, s[i].blades, s[i].blade_rotation))
     return replace(lens, name=lens.name + " (reversed)", surfaces=tuple(rev), object_distance=s[-1].thickness,
                    object_glass=s[-1].glass)
 

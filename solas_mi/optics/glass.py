@@ -22,7 +22,7 @@ from __future__ import annotations
 import difflib
 import itertools
 import re
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
 from typing import Callable, NamedTuple
@@ -31,6 +31,7 @@ import numpy as np
 import tomllib
 
 from ..errors import SolasError
+from . import thermal
 
 CATALOG_DIR = Path(__file__).parent / "data"
 # The vendors' catalogue files, read in this order (the order names no preference).
@@ -55,7 +56,10 @@ class Glass:
     (K, P): n² = Σ K λ^P, P even integers), "conrady" (coefficients ((A0, A1, A2), ()): n = A0 + A1/λ +
     A2/λ^3.5, the Zemax AGF's formula 5), "table" (coefficients (wavelengths in nm, increasing, and
     indices): a lens file's own material, a natural cubic spline in 1/λ² through its points), "model" or "air". `nd`, `vd`: a
-    catalogue glass's stated values (None for others)."""
+    catalogue glass's stated values (None for others). `thermal`: the Schott formula's (D0, D1, D2, E0, E1,
+    λ_TK µm) about `reference_c` (°C), `cte`: the linear expansion (1/K, −30 … +70 °C), () and None where the
+    catalogue has none; `environment`: (°C, kPa) of the air around it where not 20 °C and 101.325 kPa
+    (`at`, `thermal`)."""
 
     name: str
     kind: str
@@ -63,6 +67,18 @@ class Glass:
     range_nm: tuple[float, float] = (0.0, float("inf"))
     nd: float | None = None
     vd: float | None = None
+    thermal: tuple[float, ...] = ()
+    reference_c: float = 20.0
+    cte: float | None = None
+    environment: tuple[float, float] | None = None
+
+    def at(self, temperature_c: float, pressure_kpa: float) -> "Glass":
+        """This glass at `temperature_c` in air of `pressure_kpa`, its index relative to that air (`thermal`):
+        itself (environment None) at 20 °C and 101.325 kPa, and air is always air."""
+        standard = (temperature_c, pressure_kpa) == (thermal.STANDARD_C, thermal.STANDARD_KPA)
+        if self.kind == "air" or (standard and self.environment is None):
+            return self
+        return replace(self, environment=None if standard else (float(temperature_c), float(pressure_kpa)))
 
     def index(self, wavelength_nm: float | np.ndarray) -> np.ndarray | float:
         """Refractive index at `wavelength_nm`; SolasError outside the valid range."""
@@ -79,7 +95,12 @@ class Glass:
 
     def index_formula(self, wavelength_um, sqrt: Callable, select: Callable = np.where):
         """n(λ) with λ in µm for any array type (NumPy, Dr.Jit) given its `sqrt` and `select(mask, a, b)`
-        (a table's spline picks its piece); no range check."""
+        (a table's spline picks its piece); no range check. At an `environment`, relative to its air."""
+        n = self._catalogue_index(wavelength_um, sqrt, select)
+        return n if self.environment is None else thermal.relative_index(self, n, wavelength_um, self.environment)
+
+    def _catalogue_index(self, wavelength_um, sqrt: Callable, select: Callable):
+        """n(λ) of the formula (at 20 °C in standard air), λ in µm."""
         if self.kind == "air":
             return wavelength_um * 0.0 + 1.0
         a, b = self.coefficients
@@ -212,11 +233,18 @@ def _entries(path: str | None) -> dict:
 
 
 def _glass(key: str, e: dict) -> Glass:
+    """A catalogue entry (or a lens file's own formula) as a Glass, with its thermal data where it has them."""
+    heat = {"thermal": tuple(map(float, e.get("thermal", ()))), "reference_c": float(e.get("reference_c", 20.0)),
+            "cte": None if e.get("cte") is None else float(e["cte"])}
+    if len(heat["thermal"]) not in (0, 6):
+        raise ValueError("thermal (D0, D1, D2, E0, E1, λ_TK)")
     if "conrady" in e:
-        return Glass(key, "conrady", (tuple(e["conrady"]), ()), tuple(e["range_nm"]), e.get("nd"), e.get("vd"))
-    if "K" in e:
-        return Glass(key, "polynomial", (tuple(e["K"]), tuple(e["P"])), tuple(e["range_nm"]), e.get("nd"), e.get("vd"))
-    return Glass(key, "sellmeier", (tuple(e["B"]), tuple(e["C"])), tuple(e["range_nm"]), e.get("nd"), e.get("vd"))
+        kind, coefficients = "conrady", (tuple(e["conrady"]), ())
+    elif "K" in e:
+        kind, coefficients = "polynomial", (tuple(e["K"]), tuple(e["P"]))
+    else:
+        kind, coefficients = "sellmeier", (tuple(e["B"]), tuple(e["C"]))
+    return Glass(key, kind, coefficients, tuple(e["range_nm"]), e.get("nd"), e.get("vd"), **heat)
 
 
 @lru_cache(maxsize=4)

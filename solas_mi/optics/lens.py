@@ -18,7 +18,7 @@ import numpy as np
 
 from ..errors import SolasError
 from ..imageio import write_text
-from . import overlap
+from . import lens_checks, overlap, thermal
 from . import glass as glass_mod
 from .sag import sag as sag  # re-exported
 from .surface import NORM_RADIUS_MM as NORM_RADIUS_MM  # re-exported
@@ -26,13 +26,6 @@ from .surface import Surface, check_keys, finite_number, lens_catalogues, lens_m
 from .formats import MAX_SURFACES, MAX_WAVELENGTHS, READERS, WRITERS, check_count, check_printable, lens_path, writable
 from .formats import shipped_lenses as shipped_lenses  # re-exported
 from .fields import FieldType, field_type_for
-
-# The longest length a lens file may give (mm): an object beyond it is at infinity to every digit (its image
-# lies f²/d ≈ 1e-11 mm from the focus of an f = 100 mm lens); a film 1e30 mm away rendered NaN, one at 1e300
-# overflowed lens info's projection fits.
-MAX_LENGTH_MM = 1e15
-_VIRTUAL = ": the image plane lies before the last surface, a virtual image (a diverging lens's focus) that no film records"
-
 
 def check_lens(lens) -> None:
     """SolasError unless `lens` is a Lens (analyses take `Lens.load(name or path)`)."""
@@ -77,6 +70,10 @@ class Lens:
         Glass vendors, most preferred first, whose entry a glass name that several vendors use means.
     materials : tuple of Glass, default ()
         The lens file's own materials, which its surfaces name.
+    temperature_c : float, default 20
+        The temperature (°C) of the lens and the air around it; its media's indices hold there (`at`).
+    pressure_kpa : float, default 101.325
+        The air's pressure (kPa); indices are relative to that air.
 
     Raises
     ------
@@ -102,6 +99,8 @@ class Lens:
     source: str = ""
     catalogues: tuple[str, ...] = ()
     materials: tuple[glass_mod.Glass, ...] = ()
+    temperature_c: float = thermal.STANDARD_C
+    pressure_kpa: float = thermal.STANDARD_KPA
 
     def __post_init__(self) -> None:
         """However it is built (a file, `from_dict`, this constructor, `dataclasses.replace`), a lens holds
@@ -178,7 +177,13 @@ class Lens:
         if path.suffix.lower() not in WRITERS:
             raise SolasError(f"lens file {str(path)!r}: unknown extension {path.suffix!r}; "
                              f"allowed: {writable()}")
-        write_text(path, WRITERS[path.suffix.lower()].function(self))
+        writer = WRITERS[path.suffix.lower()]
+        for feature, used in (("coatings", any(s.coating for s in self.surfaces)),
+                              ("blades", any(s.blades for s in self.surfaces))):
+            if used and feature not in writer.extra.get("holds", ()):
+                raise SolasError(f"lens file {str(path)!r}: a {path.suffix} file holds no {feature}; save the lens "
+                                 f"as {', '.join(k for k, e in WRITERS.items() if feature in e.extra.get('holds', ()))}")
+        write_text(path, writer.function(self))
         return path
 
     # long: the public API's numpydoc docstring is a third of it
@@ -245,45 +250,13 @@ class Lens:
             catalogues=catalogues,
             materials=tuple(own.values()),
         )
-        lens._validate(where)
-        return lens
-
-    def _validate(self, where: str) -> None:
-        if not 0 <= self.field_deg < 180:
-            raise SolasError(f"{where}: field_deg = {self.field_deg:g} must be a half field angle in [0, 180) degrees")
-        for w in self.wavelengths_nm:
-            if not w > 0:
-                raise SolasError(f"{where}: wavelengths_nm holds {w:g}; wavelengths must be positive (nm)")
-        if not 0 <= self.image_diameter <= MAX_LENGTH_MM:
-            raise SolasError(f"{where}: image diameter {self.image_diameter:g} mm must be positive, at most "
-                             f"{MAX_LENGTH_MM:g} mm (or left out)")
-        stops = [i for i, s in enumerate(self.surfaces) if s.stop]
-        if not stops:
-            raise SolasError(f"{where}: no surface is marked as the aperture stop (set stop = true on one)")
-        if len(stops) > 1:
-            raise SolasError(f"{where}: surfaces {', '.join(str(i + 1) for i in stops)} are all marked stop; exactly one may be")
-        if not abs(self.object_distance) <= MAX_LENGTH_MM and math.isfinite(self.object_distance):
-            raise SolasError(f"{where}: object distance {self.object_distance:g} mm must lie within ±{MAX_LENGTH_MM:g} "
-                             "mm, or be \"infinity\" (a farther object is at infinity to every digit)")
-        for i, s in enumerate(self.surfaces, start=1):
-            ident = f"{where}: surface {i} ({s.label})"
-            if not 0 < s.diameter <= MAX_LENGTH_MM:
-                raise SolasError(f"{ident}: diameter {s.diameter:g} mm must be positive and at most {MAX_LENGTH_MM:g} mm")
-            if not abs(s.thickness) <= MAX_LENGTH_MM:
-                raise SolasError(f"{ident}: thickness {s.thickness:g} mm must lie within ±{MAX_LENGTH_MM:g} mm, the "
-                                 "longest length a lens file may give")
-            if s.radius != 0 and s.conic == 0 and s.semi_diameter >= abs(s.radius):
-                raise SolasError(f"{ident}: clear semi-diameter {s.semi_diameter:g} mm is not smaller than |radius| "
-                                 f"{abs(s.radius):g} mm; the sphere cannot hold that aperture")
-            if s.conic != 0 and (1.0 + s.conic) * (s.curvature * s.semi_diameter) ** 2 >= 1.0:
-                raise SolasError(f"{ident}: conic {s.conic:g} with radius {s.radius:g} mm closes before the clear "
-                                 f"semi-diameter {s.semi_diameter:g} mm; the conic cannot hold that aperture")
-        self.field_type.check_lens(self, where)
-        last = self.surfaces[-1]
-        if last.thickness < 0:
-            raise SolasError(f"{where}: surface {len(self.surfaces)} ({last.label}): distance to the image "
-                             f"{last.thickness:g} mm must be positive" + _VIRTUAL + "; 0 mm puts it on the last surface")
-        overlap.notes(self, where)
+        lens_checks.validate(lens, where)
+        environment = [finite_number(spec, key, where, unit, default) for key, unit, default in (
+            ("temperature_c", "°C", thermal.STANDARD_C), ("pressure_kpa", "kPa", thermal.STANDARD_KPA))]
+        try:
+            return thermal.in_environment(lens, *environment)
+        except SolasError as exc:
+            raise SolasError(f"{where}: {exc}") from None
 
     @property
     def overlaps(self) -> tuple[str, ...]:
@@ -349,12 +322,50 @@ class Lens:
         """Short SHA-256 of the optical prescription (what changes the optics, not labels)."""
         content = {
             "object": [self.object_distance if math.isfinite(self.object_distance) else "inf", self.object_glass.name],
-            "surfaces": [[s.radius, s.thickness, s.diameter, s.glass.name, s.glass.coefficients, s.stop]
-                         + ([] if s.is_sphere else [s.conic, list(s.aspheric)])
-                         + ([list(s.qbfs), s.norm_radius] if any(s.qbfs) else [])
-                         + ([{"focal_length": s.focal_length}] if s.ideal else []) for s in self.surfaces],
+            "surfaces": [s.prescription() for s in self.surfaces],
         }
+        if (self.temperature_c, self.pressure_kpa) != (thermal.STANDARD_C, thermal.STANDARD_KPA):
+            content["environment"] = [self.temperature_c, self.pressure_kpa]  # the indices change with it
         return hashlib.sha256(json.dumps(content, sort_keys=True).encode()).hexdigest()[:16]
+
+    def at(self, temperature_c: float = thermal.STANDARD_C, pressure_kpa: float = thermal.STANDARD_KPA,
+           mount=None) -> "Lens":
+        """This lens at another temperature and air pressure (`thermal`): glass indices by the Schott
+        formula relative to the air there, glass and mount expanded from this lens's temperature.
+
+        Parameters
+        ----------
+        temperature_c : float, default 20
+            The temperature (°C) of the lens, its mount and the air.
+        pressure_kpa : float, default 101.325
+            The air's pressure (kPa).
+        mount : str, float or sequence, optional
+            What holds the air gaps: a material of `thermal.MOUNTS` or a CTE (1/K), for every gap, or one
+            per surface (the gap after it); default: each surface's `mount` (its lens file's), aluminium
+            where it has none.
+
+        Returns
+        -------
+        Lens
+            The lens there; itself at its own temperature and pressure. A glass without thermal data
+            keeps its absolute index and size, which a warning names.
+
+        Raises
+        ------
+        SolasError
+            For a temperature, pressure or mount outside what `thermal` allows.
+
+        Examples
+        --------
+        >>> from solas_mi import Lens
+        >>> from solas_mi.optics.paraxial import paraxial
+        >>> lens = Lens.load("solas-doublet")
+        >>> lens.at() is lens
+        True
+        >>> round(paraxial(lens.at(60.0), 531.0).efl_mm - paraxial(lens, 531.0).efl_mm, 4)
+        0.0144
+        """
+        return thermal.lens_at(self, temperature_c, pressure_kpa, mount)
 
     def check_wavelength(self, wavelength_nm: float) -> float:
         """A wavelength every glass of the lens takes.

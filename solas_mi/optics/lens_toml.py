@@ -6,6 +6,8 @@ from __future__ import annotations
 import json
 import math
 
+from . import thermal
+
 
 def _value(v) -> str:
     """A TOML value: booleans, numbers in their exact shortest form, strings and lists."""
@@ -15,6 +17,8 @@ def _value(v) -> str:
         return repr(float(v))
     if isinstance(v, (list, tuple)):
         return "[" + ", ".join(_value(x) for x in v) + "]"
+    if isinstance(v, dict):  # an inline table; its keys are bare words (a coating's)
+        return "{" + ", ".join(f"{k} = {_value(x)}" for k, x in v.items()) + "}"
     return text(v)
 
 
@@ -33,7 +37,9 @@ def _material(g) -> list[str]:
     if g.kind == "model":  # a one-entry table: one index, no dispersion
         return ["wavelengths_nm = [587.5618]", f"index = {_value(a)}"]
     keys = {"sellmeier": ("B", "C"), "polynomial": ("K", "P"), "conrady": ("conrady",)}[g.kind]
-    return [f"{k} = {_value(v)}" for k, v in zip(keys, (a, b))] + [f"range_nm = {_value(g.range_nm)}"]
+    heat = ([f"thermal = {_value(g.thermal)}", f"reference_c = {_value(g.reference_c)}"] if g.thermal else []) + (
+        [f"cte = {_value(g.cte)}"] if g.cte is not None else [])
+    return [f"{k} = {_value(v)}" for k, v in zip(keys, (a, b))] + [f"range_nm = {_value(g.range_nm)}"] + heat
 
 
 def dumps(lens) -> str:
@@ -45,6 +51,8 @@ def dumps(lens) -> str:
     lines += [f"wavelengths_nm = {_value(lens.wavelengths_nm)}", f"field_deg = {_value(lens.field_deg)}"]
     if lens.catalogues:
         lines.append(f"catalogues = {_value(lens.catalogues)}")
+    if (lens.temperature_c, lens.pressure_kpa) != (thermal.STANDARD_C, thermal.STANDARD_KPA):
+        lines += [f"temperature_c = {_value(lens.temperature_c)}", f"pressure_kpa = {_value(lens.pressure_kpa)}"]
     for g in lens.materials:
         lines += ["", f"[materials.{text(g.name)}]", *_material(g)]
     lines += ["", "[object]",
@@ -65,6 +73,12 @@ def dumps(lens) -> str:
                   f"material = {_value(s.material)}"]
         if s.stop:
             lines.append("stop = true")
+        if s.coating:
+            lines.append(f"coating = {_value(s.coating.table())}")
+        if s.blades:
+            lines += [f"blades = {s.blades}", f"blade_rotation = {_value(s.blade_rotation)}"]
+        if s.mount is not None:
+            lines.append(f"mount = {_value(s.mount)}")
     if lens.image_diameter:
         lines += ["", "[image]", f"diameter = {_value(lens.image_diameter)}"]
     return "\n".join(lines) + "\n"

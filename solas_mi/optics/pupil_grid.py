@@ -228,7 +228,9 @@ def _weights(lens: Lens, g: Bundle, ex: tracer.F, ey: tracer.F, ok: tracer.Bool,
 
     power = power_density(ex, ey) * jacobian(ex, ey)
     cell = dr.sqrt(jacobian(sx, sy) * da * db)  # grid cell size at the stop (mm)
-    margin = lens.surfaces[lens.stop_index].semi_diameter - dr.sqrt(sx * sx + sy * sy)
+    # the stop's rim (an iris: its nearest blade's edge); round, the same operations as r_stop − |s|
+    margin = lens.surfaces[lens.stop_index].iris_margin(sx, sy, lambda a, b: dr.sqrt(a * a + b * b), dr.atan2, dr.cos,
+                                                        dr.floor)
     coverage = dr.clip(0.5 + margin / dr.maximum(cell, 1e-300), 0.0, 1.0)
     other = (clipped != 0) & (clipped != lens.stop_index + 1)
     coverage = dr.select(other | ~ok | ~dr.isfinite(power), 0.0, coverage)

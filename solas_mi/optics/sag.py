@@ -7,6 +7,9 @@ import numpy as np
 
 from . import forbes
 
+ASPHERE_ITERATIONS = 8  # Newton steps from the conic root; quadratic convergence reaches Float64 rounding
+ASPHERE_TOL_MM = 1e-7  # a ray whose residual |z − sag| stays above this misses the asphere (every tracer)
+
 
 def sag(r2, curvature: float, conic: float = 0.0, aspheric: tuple[float, ...] = (), sqrt=np.sqrt, maximum=np.maximum,
         qbfs: tuple[float, ...] = (), norm_radius: float = 1.0):
@@ -37,4 +40,4 @@ def sag_slope(r2, curvature: float, conic: float = 0.0, aspheric: tuple[float, .
     return slope
 
 
-__all__ = ["sag", "sag_slope"]
+__all__ = ["sag", "sag_slope", "ASPHERE_ITERATIONS", "ASPHERE_TOL_MM"]

@@ -5,7 +5,9 @@ mistake a SolasError naming the surface and what is allowed. `lens.Lens.from_dic
 A surface is a sphere, or an even asphere: sag z(r) = c r² / (1 + √(1 − (1 + k) c² r²)) + Σ_i A_2i r^2i
 (i ≥ 2) with c = 1/radius, k = `conic` and `aspheric` = [A4, A6, …] (mm^(1−2i)), plus Forbes' Qbfs
 departure φ u²(1 − u²) Σ a_m Q_m^bfs(u²) with `qbfs` = [a0, a1, …] (mm) and u = r / `norm_radius`
-(`forbes`). A flat surface with `focal_length` (mm) is an ideal thin lens (`ideal`). Lengths in mm.
+(`forbes`). A flat surface with `focal_length` (mm) is an ideal thin lens (`ideal`); `coating`, its thin
+films (`coating`); the stop's `blades` (N ≥ 3) and `blade_rotation` (degrees): an iris, the regular N-gon
+whose corners lie on the stop's clear circle. Lengths in mm.
 """
 from __future__ import annotations
 
@@ -15,17 +17,20 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SolasError
-from . import forbes, ideal as ideal_mod
+from . import forbes, ideal as ideal_mod, thermal
+from .coating import Coating, coating_from_table
 from . import glass as glass_mod
 from .sag import sag
 
+RIM_SLACK = 1e-9  # relative: a ray aimed exactly at an aperture's rim passes (every tracer)
+MAX_BLADES = 64  # an iris's blades (more: a circle to a part in 1e3 of its radius)
 NORM_RADIUS_MM = (1e-6, 1e6)  # the Qbfs normalisation radius a surface may have (1 nm to 1 km)
 # What a lens file may hold (anything else is a mistake worth naming, e.g. a surface type we do not model)
 KEYS = {
-    "lens": ("name", "description", "wavelengths_nm", "field_deg", "catalogues", "materials", "surface", "object",
-             "image"),
+    "lens": ("name", "description", "wavelengths_nm", "field_deg", "catalogues", "materials", "temperature_c",
+             "pressure_kpa", "surface", "object", "image"),
     "surface": ("label", "radius", "thickness", "diameter", "material", "stop", "conic", "aspheric", "qbfs",
-                "norm_radius", "focal_length"),
+                "norm_radius", "focal_length", "coating", "blades", "blade_rotation", "mount"),
     "object": ("distance", "material"),
     "image": ("diameter",),
 }
@@ -92,6 +97,32 @@ class Surface:
     qbfs: tuple[float, ...] = ()  # a0, a1, … (mm) of Forbes' Qbfs departure
     norm_radius: float = 1.0  # ρ (mm): the Qbfs terms' u = r/ρ
     focal_length: float | None = None  # mm: an ideal thin lens (n'·t' = n·t − h/f, `ideal`); None: a real surface
+    coating: Coating | None = None  # its thin films (`coating`); None: the bare interface
+    blades: int = 0  # the stop's iris: N ≥ 3 straight blades, a regular N-gon with its corners on the clear circle; 0: round
+    blade_rotation: float = 0.0  # degrees from +x to the polygon's first corner, counter-clockwise seen from the object
+    mount: str | float | None = None  # what holds the air gap after it (`thermal.MOUNTS` or a CTE, 1/K); None: not said
+
+    def iris_margin(self, x, y, hypot, atan2, cos, floor):
+        """The signed distance (mm) of points (x, y) inside the stop's aperture: to its rim for a round stop,
+        to the nearest blade's edge line for an iris of `blades` (negative outside). Any array type, given
+        its functions."""
+        radius = self.semi_diameter
+        if not self.blades:
+            return radius - hypot(x, y)
+        sector = 2.0 * math.pi / self.blades
+        angle = atan2(y, x) - math.radians(self.blade_rotation)
+        within = angle - sector * floor(angle / sector)  # from the sector's first corner, in [0, sector)
+        return radius * math.cos(0.5 * sector) - hypot(x, y) * cos(within - 0.5 * sector)
+
+    def prescription(self) -> list:
+        """What of this surface changes the optics, for the lens's hash (a kind's terms only where present, so
+        a lens file that gains a kind keeps the hashes of the lenses without it)."""
+        return ([self.radius, self.thickness, self.diameter, self.glass.name, self.glass.coefficients, self.stop]
+                + ([] if self.is_sphere else [self.conic, list(self.aspheric)])
+                + ([list(self.qbfs), self.norm_radius] if any(self.qbfs) else [])
+                + ([{"focal_length": self.focal_length}] if self.ideal else [])
+                + ([{"coating": self.coating.table()}] if self.coating else [])
+                + ([{"blades": self.blades, "blade_rotation": self.blade_rotation}] if self.blades else []))
 
     @property
     def ideal(self) -> bool:
@@ -153,8 +184,20 @@ def surface_from_row(row: dict, i: int, where: str, catalogues: tuple[str, ...],
         g = glass_mod.resolve(material, prefer=catalogues, own=own)
     except SolasError as exc:
         raise SolasError(f"{ident}: {exc}") from None
+    coating = coating_from_table(row["coating"], ident) if "coating" in row else None
+    blades, rotation = row.get("blades", 0), finite_number(row, "blade_rotation", ident, "degrees", 0.0)
+    if not isinstance(blades, int) or isinstance(blades, bool) or not (blades == 0 or 3 <= blades <= MAX_BLADES) \
+            or ((blades or "blade_rotation" in row) and not stop):
+        raise SolasError(f"{ident}: blades = {blades!r} must be 0 (a round stop) or an integer from 3 to {MAX_BLADES}, "
+                         "with blade_rotation (degrees), on the stop surface only")
+    mount = row.get("mount")
+    if mount is not None:
+        try:
+            thermal.mount_cte(mount)
+        except SolasError as exc:
+            raise SolasError(f"{ident}: {exc}") from None
     return Surface(label, radius, thickness, diameter, str(material), g, stop, conic, aspheric, qbfs, norm_radius,
-                   focal_length)
+                   focal_length, coating, blades, rotation, mount)
 
 
 def polynomial_terms(row: dict, key: str, ident: str, meaning: str) -> tuple[float, ...]:

@@ -22,18 +22,18 @@ import numpy as np
 
 from ..llvm import import_drjit
 from . import ideal
+from .coated import coating_transmittance
 from .fields import ANGLE
 from .lens import Lens
 from .paraxial import ideal_conjugates, paraxial, pupil_distance
-from .sag import sag, sag_slope
+from .sag import ASPHERE_ITERATIONS, ASPHERE_TOL_MM, sag, sag_slope
+from .surface import RIM_SLACK
 
 dr = import_drjit()
 from drjit.llvm import Bool, Float64, UInt32  # noqa: E402
 
 F = Float64
-_RIM_SLACK = 1e-9  # relative: a ray aimed exactly at an aperture rim passes
-ASPHERE_ITERATIONS = 8  # Newton steps from the conic root; quadratic convergence reaches Float64 rounding
-ASPHERE_TOL_MM = 1e-7  # a ray whose residual |z − sag| stays above this misses the asphere
+_RIM_SLACK = RIM_SLACK
 
 
 @dataclass
@@ -60,7 +60,8 @@ class Traced:
     stop_x: F  # where the ray crosses the stop surface (mm)
     stop_y: F
     n_image: F  # refractive index of image space
-    transmittance: F | float = 1.0  # unpolarised Fresnel transmittance of every refraction (`trace(fresnel=True)`)
+    transmittance: F | float = 1.0  # unpolarised transmittance of every refraction, its coating's where it has one
+    # (`trace(fresnel=True)`)
 
 
 def _opaque(value: float, ftype=F) -> F:
@@ -181,7 +182,8 @@ def launch_direction(lens: Lens, dx: F, dy: F, dz: F, ex: F, ey: F) -> Rays:
 def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False, heights: list | None = None) -> Traced:
     """Trace `rays` (in object space, before surface 1) through every surface of `lens`, in the array
     type of the rays (see the module docstring); with `fresnel`, also the product of the unpolarised
-    Fresnel transmittances (1 − (r_s² + r_p²)/2) of every refraction; a `heights` list receives each
+    Fresnel transmittances (1 − (r_s² + r_p²)/2) of every refraction, a coated surface's coating's
+    (`coating_transmittance`) where it has one; a `heights` list receives each
     surface's squared ray height x² + y² (mm², for automatic clear apertures)."""
     x, y, z, dx, dy, dz, opl = rays.x, rays.y, rays.z, rays.dx, rays.dy, rays.dz, rays.opl
     ftype, utype, btype = _types(x)
@@ -203,6 +205,9 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False, heigh
         if heights is not None:
             heights.append(r2)
         blocked = r2 > _opaque((s.semi_diameter * (1.0 + _RIM_SLACK)) ** 2, ftype)
+        if s.blades:  # the iris's polygon, inside the clear circle
+            blocked |= s.iris_margin(x, y, lambda a, b: dr.sqrt(a * a + b * b), dr.atan2, dr.cos,
+                                     dr.floor) < -_RIM_SLACK * s.semi_diameter
         clipped = dr.select((clipped == 0) & blocked, utype(k + 1), clipped)
         if s.stop:
             stop_x, stop_y = x, y
@@ -213,7 +218,10 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False, heigh
                                                 dr.sqrt)
             opl = opl + delta
         elif s.glass != (lens.surfaces[k - 1].glass if k else lens.object_glass):
-            (dx, dy, dz), k2, factor = _refract(s, x, y, lz, r2, (dx, dy, dz), n_before / n_after, fresnel, ftype)
+            coated = (coating_transmittance(s.coating, lens.surfaces[k - 1].glass if k else lens.object_glass, s.glass,
+                                            wavelength_um, ftype) if fresnel and s.coating is not None else None)
+            (dx, dy, dz), k2, factor = _refract(s, x, y, lz, r2, (dx, dy, dz), n_before / n_after, fresnel, ftype,
+                                                coated)
             tir |= k2 < 0
             ok &= k2 >= 0
             if fresnel:
@@ -254,10 +262,11 @@ def _to_surface(s, zv: float, rays: Rays, n_before: F, sideways: bool, ftype):
     return x, y, lz, t, opl, hit & on
 
 
-def _refract(s, x, y, lz, r2, d, mu, fresnel: bool, ftype):
+def _refract(s, x, y, lz, r2, d, mu, fresnel: bool, ftype, coated=None):
     """Directions after refraction at surface `s` (point x, y, lz in its vertex frame, r2 = x² + y²) of
     unit directions `d` with index ratio `mu` = n_before / n_after: (new directions, k2 (negative:
-    total internal reflection), the unpolarised Fresnel transmittance when `fresnel`, else None)."""
+    total internal reflection), the unpolarised transmittance when `fresnel`, else None): the bare
+    interface's Fresnel transmittance, or `coated(cos θ)` where the surface has a coating."""
     dx, dy, dz = d
     if s.curvature == 0.0 and s.is_sphere:
         nx, ny, nz = dr.zeros(ftype, 1), dr.zeros(ftype, 1), dr.ones(ftype, 1)
@@ -272,7 +281,9 @@ def _refract(s, x, y, lz, r2, d, mu, fresnel: bool, ftype):
     k2 = 1.0 - mu * mu * (1.0 - cosi * cosi)
     cost = dr.sqrt(dr.maximum(k2, 0.0))
     factor = None
-    if fresnel:
+    if fresnel and coated is not None:
+        factor = coated(cosi)
+    elif fresnel:
         rs = (mu * cosi - cost) / (mu * cosi + cost)
         rp = (cosi - mu * cost) / (cosi + mu * cost)
         factor = 1.0 - 0.5 * (rs * rs + rp * rp)

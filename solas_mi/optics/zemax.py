@@ -14,7 +14,8 @@ Read as the author meant it:
   undone by the next coordinate break; PARAXIAL, the ideal thin lens (`ideal`: PARM 1 the focal length,
   PARM 2 the OPD mode); flat air surfaces without a clear aperture of their own (no DIAM, or DIAM's solve
   type 0, automatic: it cuts no ray) (dummies) are dropped, their thickness added to the gap. STOP (none:
-  surface 1, as in OpticStudio's new lens, said in the description), COMM (the label), CONI, CURV, DISZ.
+  surface 1, as in OpticStudio's new lens, said in the description), COMM (the label), CONI, CURV, DISZ;
+  COAT: the ideal coatings I.xx (`coating.zemax_coating`), a coating file's named ones refused by name.
 - Clear apertures: DIAM (the semi-diameter); where absent or 0, Zemax's automatic semi-diameter:
   the largest height of the real chief and marginal (stop-rim) rays of every field and wavelength.
 - Glass: GLAS names through our catalogue; a name several vendors use is taken from the vendors GCAT
@@ -27,6 +28,8 @@ Read as the author meant it:
 - Fields (XFLN/YFLN, FTYP's first number): 0 angle, 1 object height, 2 paraxial image height, 3 real
   image height (the field whose real chief ray lands there); field_deg is the widest as an angle.
   Vignetting factors VDXN/VCXN/VDYN/VCYN shape the beam automatic semi-diameters follow.
+- ENVD (°C, atmospheres; older files' TEMP, PRES): where the prescription holds, the lens's `temperature_c`
+  and `pressure_kpa` (glass indices there, `thermal`; radii and thicknesses as given); written back so.
 - UNIT (MM, CM, IN, METER) scales every length to mm; WAVM (or WAVL) the wavelengths (µm in the file),
   PWAV the one the aperture and field solves use; surface 0's DISZ the object distance. The last SURF
   is the image plane (its DIAM the image semi-diameter). Mirrors, gratings, toroids, tilted or decentred
@@ -38,6 +41,7 @@ import math
 
 from ..errors import SolasError
 from . import forbes, ideal
+from .coating import to_zemax, zemax_coating
 from . import glass as glass_mod
 from . import zemax_solves
 from .formats import MAX_FIELDS, check_count, one_line
@@ -128,20 +132,19 @@ def read_spec(text: str, where: str) -> dict:
         if semi > 0:
             spec["image"] = {"diameter": 2.0 * semi}
     spec.update(_wavelengths(top, where))
+    spec.update(_environment(top, where))
     fields = _fields(top, scale, where)
     return zemax_solves.solve(spec, _aperture(top, scale, where), fields, _primary(top, spec), where,
-                              _vignetting(top, len(fields[1]), where))
+                              zemax_solves.vignetting_factors(top, len(fields[1]), where))
 
 
-def _vignetting(top: dict, count: int, where: str) -> list[tuple[float, ...]] | None:
-    """Per field, the pupil's fractions (+x, −x, +y, −y) cut off by the VDXN/VCXN/VDYN/VCYN factors (the
-    pupil coordinate p becomes VD + (1 − VC) p); None when all are 0."""
-    dx, cx, dy, cy = ([*_floats((top.get(k) or [[]])[0][:count], f"{where}: {k}"), *[0.0] * count][:count]
-                      for k in ("VDXN", "VCXN", "VDYN", "VCYN"))
-    cuts = [(cx[i] - dx[i], cx[i] + dx[i], cy[i] - dy[i], cy[i] + dy[i]) for i in range(count)]
-    if any(not -1.0 < c < 1.0 for cut in cuts for c in cut):
-        raise SolasError(f"{where}: vignetting factors VDXN/VCXN/VDYN/VCYN leave no pupil at some field: {cuts}")
-    return cuts if any(any(cut) for cut in cuts) else None
+def _environment(top: dict, where: str) -> dict:
+    """temperature_c and pressure_kpa of the ENVD line (°C, atmospheres), or of older files' TEMP and PRES lines."""
+    envd = (top.get("ENVD") or [[]])[0][:2]
+    given = {"temperature_c": envd[:1] or (top.get("TEMP") or [[]])[0][:1],
+             "pressure_kpa": envd[1:2] or (top.get("PRES") or [[]])[0][:1]}
+    return {key: _floats(v, f"{where}: ENVD/TEMP/PRES")[0] * (101.325 if key == "pressure_kpa" else 1.0)
+            for key, v in given.items() if v}
 
 
 def _object(block: dict, scale: float, gcat: tuple[str, ...], where: str) -> dict:
@@ -186,8 +189,8 @@ def _surface(b: dict, i: int, scale: float, gcat: tuple[str, ...], where: str) -
         row.update(_q_type(b, scale, ident))
     elif kind == "PARAXIAL":
         row.update(ideal.from_zemax(_parameters(b, ident), scale, ident))
-    if "STOP" in b:
-        row["stop"] = True
+    row.update({"stop": True} if "STOP" in b else {})
+    row.update({"coating": zemax_coating(b["COAT"][0][0], ident)} if b.get("COAT", [[]])[0] else {})
     return row
 
 
@@ -366,7 +369,8 @@ def dumps(lens) -> str:
     vendors = list(dict.fromkeys(g.name.split(":", 1)[0] for g in glasses if g.kind not in ("air", "model")))
 
     out = ["VERS 190513 80 123457 L123457", "MODE SEQ", f"NAME {lens.name}", "PFIL 0 0 0",
-           "UNIT MM X W X CM MR CPMM", *([f"GCAT {' '.join(vendors)}"] if vendors else []),
+           "UNIT MM X W X CM MR CPMM", f"ENVD {number(lens.temperature_c)} {number(lens.pressure_kpa / 101.325)} 0",
+           *([f"GCAT {' '.join(vendors)}"] if vendors else []),
            "FLOA", f"FTYP 0 0 2 {len(lens.wavelengths_nm)} 0 0 0",
            "XFLN 0 0", f"YFLN 0 {number(lens.field_deg)}"]
     out += [f"WAVM {i} {number(w / 1000.0)} 1" for i, w in enumerate(lens.wavelengths_nm, start=1)]
@@ -380,7 +384,7 @@ def dumps(lens) -> str:
         if any(s.qbfs):
             out += [f"  XDAT {k} {number(v)}" for k, v in
                     enumerate((0.0, float(len(s.qbfs)), s.norm_radius, *s.qbfs), start=1)]
-        out += ["  STOP"] if s.stop else []
+        out += (["  STOP"] if s.stop else []) + to_zemax(s.coating, f"lens {lens.name}: surface {s.label}")
         out += [f"  DISZ {number(s.thickness)}", *glas(s.glass), f"  DIAM {number(s.semi_diameter)} 1 0 0 1 \"\""]
         out += [f"  CONI {number(s.conic)}"] if s.conic else []
     out += [f"SURF {len(lens.surfaces) + 1}", "  TYPE STANDARD", "  CURV 0.0", "  DISZ 0",

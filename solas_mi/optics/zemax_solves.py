@@ -21,6 +21,7 @@ from dataclasses import replace
 import numpy as np
 
 from ..errors import SolasError
+from .formats import floats
 from .lens import Lens
 from .paraxial import paraxial, pupil_distance
 
@@ -175,3 +176,14 @@ def _automatic(lens: Lens, auto: list[int], field_deg: list[float], where: str,
             raise SolasError(f"{where}: no real ray passes the lens; automatic semi-diameters cannot be found")
         reach = np.maximum(reach, [math.sqrt(float(np.max(h[good]))) for h in r2])
     return {i: float(reach[i]) for i in auto}
+
+
+def vignetting_factors(top: dict, count: int, where: str) -> list[tuple[float, ...]] | None:
+    """A .zmx file's vignetting (`zemax`): per field, the pupil's fractions (+x, −x, +y, −y) cut off by the
+    VDXN/VCXN/VDYN/VCYN factors (the pupil coordinate p becomes VD + (1 − VC) p); None when all are 0."""
+    dx, cx, dy, cy = ([*floats((top.get(k) or [[]])[0][:count], f"{where}: {k}"), *[0.0] * count][:count]
+                      for k in ("VDXN", "VCXN", "VDYN", "VCYN"))
+    cuts = [(cx[i] - dx[i], cx[i] + dx[i], cy[i] - dy[i], cy[i] + dy[i]) for i in range(count)]
+    if any(not -1.0 < c < 1.0 for cut in cuts for c in cut):
+        raise SolasError(f"{where}: vignetting factors VDXN/VCXN/VDYN/VCYN leave no pupil at some field: {cuts}")
+    return cuts if any(any(cut) for cut in cuts) else None

@@ -6,6 +6,7 @@ from typing import Any
 
 from ..errors import SolasError
 from ..optics.commands import add_lens_argument
+from ..optics.ghost_paths import DEFAULT_RAYS as DEFAULT_GHOST_RAYS
 from ..options import floats
 from ..outputs import add_png_option, data_and_preview, written_together
 from ..progress import Progress
@@ -15,6 +16,7 @@ from .spec import PSF_OPTIONS, GridSpec
 # what --field-deg takes: its help and its message (one value is a field on the y axis, as `lens info --fields`
 # and a lens file's field_deg)
 FIELD_FORM = "X,Y in degrees, or one value Y (x = 0)"
+GHOST_PITCH_UM, GHOST_SIZE = 10.0, 512  # `ghosts`: its stray-light PSF's grid
 
 
 def _field(text: str) -> tuple[float, float]:
@@ -47,7 +49,7 @@ def run_psf(args) -> int:
     from .methods import psf
 
     data_file, png = data_and_preview(args.output, args.png)
-    lens = load_lens(args.lens)
+    lens = load_lens(args)
     wavelengths = floats(args.wavelengths_nm, "--wavelengths-nm")
     weights = floats(args.weights, "--weights") if args.weights else None
     p = psf(lens, _field(args.field_deg), wavelengths, weights=weights, **GridSpec.given(args, PSF_OPTIONS))
@@ -63,7 +65,7 @@ def run_psf_grid(args) -> int:
     # the mosaic only when asked: a 32×32 grid's costs about 0.9 s (block means + a 2048² PNG)
     data_file, png = data_and_preview(args.output, args.mosaic or None)
     png = png if args.mosaic is not None else None
-    lens = load_lens(args.lens)
+    lens = load_lens(args)
     spec = GridSpec.from_args(args)
     count = len(spec.wavelengths_nm or lens.wavelengths_nm) * spec.grid[0] * spec.grid[1] * len(spec.distances_m or [0])
     # the float32 PSFs, their mosaics and the PNG when written, and a batch of complex fields
@@ -74,6 +76,25 @@ def run_psf_grid(args) -> int:
     with Progress("psf-grid", count, "PSFs") as bar:  # nodes × wavelengths × distances, mirrored ones included
         g = make_grid(lens, spec, progress=bar)
     _finish("psf-grid", g, data_file, png, f" ({g.meta['seconds']:.1f} s)")
+    return 0
+
+
+def run_ghosts(args) -> int:
+    from ..optics.commands import load_lens
+    from . import stray_light, stray_psf
+    from .base import check_grid
+
+    data_file, png = data_and_preview(args.output, args.png)
+    check_grid(args.pitch_um, args.size)  # before the work
+    lens = load_lens(args.lens)
+    wavelengths = floats(args.wavelengths_nm, "--wavelengths-nm") if args.wavelengths_nm else None
+    report = stray_light.ghosts(lens, _field(args.field_deg), wavelengths, rays=args.rays)
+    print(report.table())
+    data, centre, warnings = stray_psf.stray_psf(lens, report, args.pitch_um, args.size)
+    for text in warnings:
+        print(f"solas-mi ghosts: warning: {text}", file=sys.stderr)
+    stray_psf.write(report, data, centre, args.pitch_um, data_file, png)
+    print(f"wrote {data_file} and {png}")
     return 0
 
 
@@ -92,6 +113,18 @@ def register(sub: Any) -> None:
     GridSpec.add_flags(psf, PSF_OPTIONS)
     _add_outputs(psf)
     psf.set_defaults(run=run_psf)
+
+    ghost = sub.add_parser("ghosts", help="every two-reflection ghost of a point source: the table, and the "
+                                          "stray-light PSF (ghosts + direct image) as OpenEXR + log-scale PNG")
+    add_lens_argument(ghost)
+    ghost.add_argument("--field-deg", required=True, help=f"field angle: {FIELD_FORM}")
+    ghost.add_argument("--wavelengths-nm", help="wavelengths, summed with equal weights (default: the lens's)")
+    ghost.add_argument("--rays", type=int, default=DEFAULT_GHOST_RAYS, help="rays per side of the grid over the first "
+                                                                    "surface's clear aperture, per path and wavelength")
+    ghost.add_argument("--pitch-um", type=float, default=GHOST_PITCH_UM, help="pixel pitch of the stray-light PSF (um)")
+    ghost.add_argument("--size", type=int, default=GHOST_SIZE, help="pixels per side of the stray-light PSF")
+    _add_outputs(ghost)
+    ghost.set_defaults(run=run_ghosts)
 
     grid = sub.add_parser("psf-grid", help="PSFs on a field grid, one stack per wavelength, as OpenEXR (+ PNG mosaic "
                                            "with --mosaic)")

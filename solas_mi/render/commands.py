@@ -82,7 +82,7 @@ def _scene(args) -> int:
 
     out = output_folder(args.output)
     spec = RenderSpec.from_args(args, SCENE_SETTINGS)
-    lens = load_lens(args.lens)
+    lens = load_lens(args)
     parse(spec.response, lens.wavelengths_nm)  # a bad response is refused now, not when the scene renders
     camera = camera_for(lens, spec.sensor, spec.fov_deg, spec.pitch_um)
     out.mkdir(parents=True, exist_ok=True)
@@ -119,7 +119,7 @@ def _render(args) -> int:
         if not sep or not key:
             raise SolasError(f"--set {item!r} must look like name=value (a <default> of the scene)")
         params[key] = value
-    lens = load_lens(args.lens) if args.lens else None
+    lens = load_lens(args) if args.lens else None
     if lens is None and any(v is not None for v in (args.pitch_um, args.focus_distance, args.world_unit_mm)):
         raise SolasError("--pitch-um, --focus-distance and --world-unit-mm set the lens camera: give --lens too")
     if lens is not None and args.integrator == "solas":
@@ -200,7 +200,7 @@ def _render_image(args) -> int:
     spec = RenderSpec.from_args(args, IMAGE_SETTINGS)
     rows, cols = spec.sensor
     check_render(cols, rows, spec.spp, args.force)
-    lens = load_lens(args.lens)
+    lens = load_lens(args)
     with _progress(spec.spp) as bar:
         result = render_image(lens, args.image, spec, progress=bar, calibration_model=args.calibration_model)
     result.meta["image"] = str(args.image)
@@ -214,7 +214,7 @@ def _add_output_options(p: argparse.ArgumentParser) -> None:
 
 
 def register(sub) -> None:
-    from ..optics.commands import add_lens_argument
+    from ..optics.commands import add_environment_options, add_lens_argument
     from ..optics.formats import lens_help
 
     scene = sub.add_parser("scene", help="write a Mitsuba scene (XML + cap meshes) for a lens")
@@ -236,6 +236,7 @@ def register(sub) -> None:
     render.add_argument("--set", action="append", metavar="NAME=VALUE",
                         help="override a <default> of the scene (e.g. --set image=other.png); repeatable")
     render.add_argument("--lens", help=f"replace the scene's perspective camera by this lens: {lens_help()}")
+    add_environment_options(render)
     render.add_argument("--pitch-um", type=float, help="with --lens: pixel pitch in µm (default: the lens's field "
                                                        "matches the perspective camera's fov)")
     render.add_argument("--focus-distance", help="with --lens: focus distance in world units, or auto (the depth "

@@ -25,22 +25,22 @@ from .scene import lens_parts, write_ply
 VARIANT = "llvm_ad_spectral"
 
 
-def lens_geometry(lens, rings: int | None = None, image_radius: float = 0.0, **extra):
+def lens_geometry(lens, rings: int | None = None, image_radius: float = 0.0, fresnel: str = "off", **extra):
     """The lens as a Mitsuba scene (mm, lens file's frame): cap meshes of `rings` rings (None:
-    `render.mesh.mesh_rings`'s), a barrel holding the image plane out to `image_radius` mm, with `sellmeier_dielectric` (no
-    Fresnel losses) and absorbing apertures, no sensor image and no texture; `extra` scene entries
-    (a sensor, an integrator, objects) are added as given."""
+    `render.mesh.mesh_rings`'s), a barrel holding the image plane out to `image_radius` mm, with `sellmeier_dielectric`
+    (`fresnel`: "off", no Fresnel losses; "sample", reflections sampled, ghosts) and absorbing apertures, no
+    sensor image and no texture; `extra` scene entries (a sensor, an integrator, objects) are added as given."""
     from .mitsuba import mitsuba
 
     mi = mitsuba(VARIANT)
     scene = {"type": "scene", "absorber": {"type": "diffuse", "reflectance": {"type": "rgb", "value": 0.0}}, **extra}
     with tempfile.TemporaryDirectory(prefix="solas-lens-") as tmp:
-        for part in lens_parts(lens, rings, image_radius):
+        for part in lens_parts(lens, rings, image_radius, lossless=fresnel == "off"):
             path = Path(tmp) / f"{part.name}.ply"
             write_ply(path, *part.mesh)
             bsdf = {"type": "ref", "id": "absorber"} if part.int_glass is None else {
                 "type": "sellmeier_dielectric", "ext_glass": part.ext_glass, "int_glass": part.int_glass,
-                "fresnel": "off"}
+                "fresnel": fresnel}
             scene[part.name] = {"type": "ply", "filename": str(path), "bsdf": bsdf}
         return mi.load_dict(scene)  # the meshes are read here, before the folder goes
 
@@ -81,6 +81,17 @@ def _exits(scene, lens, sampler, field_deg, wavelength_nm, f: int, depth: int, e
     ray = mi.Ray3f(mi.Point3f(x, y, z), mi.Vector3f(dx, dy, dz), 0.0,
                    mi.Spectrum(dr.opaque(mi.Float, float(wavelength_nm[0]))))
     sampler.seed(dr.opaque(mi.UInt32, f), n)
+    out_o, out_d, out_w = walk(scene, ray, sampler, depth)
+    return [np.asarray(a, dtype=np.float64) for a in (out_o.x, out_o.y, out_o.z, out_d.x, out_d.y, out_d.z, out_w)]
+
+
+def walk(scene, ray, sampler, depth: int, watch=None):
+    """Rays through the scene's lens in importance transport, `depth` interactions at most, each BSDF
+    sampled: where they leave the scene (origins, directions) and their weights (0: absorbed, or still
+    inside). `watch(si, active, ray, next_ray)`, where given, sees every interaction (Dr.Jit values)."""
+    import drjit as dr
+    import mitsuba as mi
+
     ctx = mi.BSDFContext(mi.TransportMode.Importance)
     weight, active = mi.Float(1.0), mi.Bool(True)
     out_o, out_d, out_w = mi.Point3f(0.0), mi.Vector3f(0.0), mi.Float(0.0)
@@ -93,8 +104,11 @@ def _exits(scene, lens, sampler, field_deg, wavelength_nm, f: int, depth: int, e
         bs, bw = si.bsdf(ray).sample(ctx, si, sampler.next_1d(active), sampler.next_2d(active), active)
         weight *= bw[0]
         active &= weight != 0.0
-        ray = continue_ray(si, ray, bs.wo)
-    return [np.asarray(a, dtype=np.float64) for a in (out_o.x, out_o.y, out_o.z, out_d.x, out_d.y, out_d.z, out_w)]
+        following = continue_ray(si, ray, bs.wo)
+        if watch is not None:
+            watch(si, active, ray, following)
+        ray = following
+    return out_o, out_d, out_w
 
 
 def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int, *,

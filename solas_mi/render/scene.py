@@ -20,7 +20,7 @@ import numpy as np
 from ..errors import SolasError
 from ..imageio import atomic_path, write_text
 from ..optics.camera import Camera, camera_for
-from ..optics import virtual_object
+from ..optics import thermal, virtual_object
 from ..optics.lens import Lens
 from ..outputs import inside, safe_name
 from ..psf.registry import METHODS
@@ -35,12 +35,14 @@ MIN_GAP_MM = 10 * SPAWN_OFFSET_MM  # closest two refracting surfaces of the mesh
 
 @dataclass(frozen=True)
 class Part:
-    """One shape of the lens scene: a mesh file name, and its two glasses (None: an absorber)."""
+    """One shape of the lens scene: a mesh file name, its two glasses (None: an absorber) and the lens's
+    temperature and pressure where not 20 °C and 101.325 kPa (`optics.thermal.metadata`)."""
 
     name: str
     mesh: tuple[np.ndarray, np.ndarray, np.ndarray]
     ext_glass: str | None = None
     int_glass: str | None = None
+    environment: tuple[tuple[str, float], ...] = ()
 
 
 def check_gaps(lens: Lens) -> None:
@@ -73,9 +75,10 @@ def _trace_instead() -> str:
             f"({', '.join(tracers)})")
 
 
-def _check_buildable(lens: Lens, image_radius: float) -> None:
-    """SolasError where `lens` has no solid geometry: an ideal thin lens, a virtual object, overlapping
-    surfaces, or a part (a vertex, the image plane out to `image_radius`) farther from surface 1 than
+def _check_buildable(lens: Lens, image_radius: float, lossless: bool = False) -> None:
+    """SolasError where `lens` has no solid geometry: an ideal thin lens, a virtual object, a coating or an
+    iris (the meshes are bare glass with a round stop; a coating changes nothing where the glass is
+    `lossless`, Fresnel off), overlapping surfaces, or a part (a vertex, the image plane out to `image_radius`) farther from surface 1 than
     float32 places to 1 µm (a film 1e7 mm away rendered the wrong colours, one at 1e12 mm black); each
     message names what traces it instead."""
     reach = max(abs(float(lens.image_z)), float(np.abs(lens.vertex_z).max()), image_radius)
@@ -88,12 +91,17 @@ def _check_buildable(lens: Lens, image_radius: float) -> None:
         raise SolasError(f"surface {ideal} of lens {lens.name} is an ideal thin lens (focal_length), which has no glass "
                          f"to build as Mitsuba geometry; trace it instead: {_trace_instead()}")
     virtual_object.check_real(lens, "the mesh scene")
+    unbuilt = [f"surface {k}'s {what}" for k, s in enumerate(lens.surfaces, start=1)
+               for what, held in (("coating", s.coating and not lossless), ("iris (blades)", s.blades)) if held]
+    if unbuilt:  # the meshes have bare Fresnel surfaces and a round stop: neither would be what the lens states
+        raise SolasError(f"lens {lens.name}: {', '.join(unbuilt)} has no Mitsuba geometry here (bare glass, a round "
+                         f"stop); trace it instead: {_trace_instead()}")
     if lens.overlaps:
         raise SolasError(f"lens {lens.name} cannot be built as Mitsuba geometry: {'; '.join(lens.overlaps)}. Trace it "
                          f"instead: {_trace_instead()}")
 
 
-def lens_parts(lens: Lens, rings: int | None = None, image_radius: float = 0.0) -> list[Part]:
+def lens_parts(lens: Lens, rings: int | None = None, image_radius: float = 0.0, lossless: bool = False) -> list[Part]:
     """Caps for refracting surfaces, absorbing annuli around every clear aperture (and the stop), and
     a barrel closing the sides from the first aperture to the image plane. A lens of polar fields (a
     fisheye) takes light from 90° and beyond, which reaches its front element from the side and from
@@ -101,8 +109,9 @@ def lens_parts(lens: Lens, rings: int | None = None, image_radius: float = 0.0) 
     at the second surface's rim. `rings` per cap (None: `mesh_rings`). The barrel's radius is twice the
     largest clear aperture plus 10 mm, or more to hold the image plane out to `image_radius` mm (the
     sensor's corners, a PSF's window): a barrel narrower than the image cut off the light that arrives
-    there (Cooke triplet at 32°: its light lands 31 mm off axis, outside a 30 mm barrel)."""
-    _check_buildable(lens, image_radius)
+    there (Cooke triplet at 32°: its light lands 31 mm off axis, outside a 30 mm barrel). `lossless`: the
+    glass will have no Fresnel losses (a coated lens is then built as its bare glass)."""
+    _check_buildable(lens, image_radius, lossless)
     rings = resolve_rings(lens, rings)
     check_gaps(lens)
     parts = []
@@ -118,7 +127,7 @@ def lens_parts(lens: Lens, rings: int | None = None, image_radius: float = 0.0) 
         if s.glass != before:
             cap = cap_mesh(s.radius, zv, s.semi_diameter, rings, s.conic, s.aspheric, s.qbfs, s.norm_radius)
             rim = cap[0][-len(phi):]
-            parts.append(Part(f"surface{k}", cap, before_name, s.material))
+            parts.append(Part(f"surface{k}", cap, before_name, s.material, tuple(thermal.metadata(lens).items())))
         if not (k == 1 and lens.field_type.sideways):
             parts.append(Part(f"aperture{k}", absorber_ring(rim, s.semi_diameter, outer, zr, phi)))
             ring_z.append(zr)
@@ -155,8 +164,10 @@ def _shapes_xml(parts: list[Part], mono: str) -> str:
         if p.int_glass is None:
             bsdf = '<ref id="absorber"/>'
         else:
+            where = "".join(f'<float name="{key}" value="{value!r}"/>' for key, value in p.environment)
             bsdf = (f'<bsdf type="sellmeier_dielectric"><string name="ext_glass" value="{xml_attr(p.ext_glass)}"/>'
-                    f'<string name="int_glass" value="{xml_attr(p.int_glass)}"/><string name="fresnel" value="$fresnel"/>{mono}</bsdf>')
+                    f'<string name="int_glass" value="{xml_attr(p.int_glass)}"/><string name="fresnel" value="$fresnel"/>'
+                    f'{where}{mono}</bsdf>')
         shapes.append(f'    <shape type="ply" id="{p.name}">\n        <string name="filename" value="meshes/{p.name}.ply"/>\n'
                       f'        {bsdf}\n    </shape>')
     return "\n".join(shapes)

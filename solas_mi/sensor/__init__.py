@@ -6,7 +6,9 @@
   construction.
 - `chain`: `SensorChain`, the sensor as an ordered list of stages (`STAGES`): the photon conversion
   (`photons`), readouts (`readout`: split pixels, dual conversion gain, multiple exposures), the HDR
-  merge (`merge`) and companding (`compander`), defect pixels (`defects`).
+  merge (`merge`) and companding (`compander`), defect pixels (`defects`), the shutter (`timing`).
+- `timing`: exposure in time: global and rolling shutters, each row's window of a moving scene or of
+  PWM-driven light (LED flicker).
 - `emva`: what EMVA 1288 predicts of one readout; `limits`: the numbers' ranges and checks.
 - `cfa`: colour filter array patterns (RGGB and its turns, RCCB, RCCC) and the mosaic.
 - `qe`: quantum efficiency curves, and the effective QE with which each filter sees each channel.

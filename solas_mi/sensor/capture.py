@@ -78,8 +78,9 @@ def capture(sensor: SensorModel | SensorChain, irradiance: np.ndarray, exposure_
     ----------
     sensor : SensorModel or SensorChain
         The sensor.
-    irradiance : numpy.ndarray
-        (H, W, 3) image-plane irradiance (W/m²) of the channels R, G, B.
+    irradiance : numpy.ndarray, callable or timing.FlickeringScene
+        (H, W, 3) image-plane irradiance (W/m²) of the channels R, G, B; or a scene that changes during the
+        frame, each row taking its window of it through the sensor's shutter (`timing`).
     exposure_s : float
         The exposure time (s).
     seed : int

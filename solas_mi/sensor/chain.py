@@ -7,7 +7,8 @@ from its own named random streams (`readout`, `defects`) and has its inverse in 
 A flat `[sensor]` table (`model.SensorModel`) is the chain photons → one readout (`chain_of`), and gives the
 frames it gave before the chain, bit for bit. A TOML file names the stages after the photon conversion's
 fields in `[sensor]`: `[[sensor.readout]]` tables, one per readout in order of falling response, then
-`[sensor.merge]`, `[sensor.compander]`, `[sensor.defects]` (`STAGES`' keys; docs/details/sensor.md).
+`[sensor.shutter]`, `[sensor.merge]`, `[sensor.compander]`, `[sensor.defects]` (`STAGES`' keys;
+docs/details/sensor.md).
 """
 from __future__ import annotations
 
@@ -27,6 +28,7 @@ from .model import SensorModel
 from .photons import PhotonConversion
 from .qe import QECurve
 from .readout import Readout, check_charges, read_charges
+from .timing import Shutter, exposed_irradiance
 
 # in the order of the chain; each entry's `field`: the SensorChain field that holds it (`many`: a tuple of them),
 # `keys`: its TOML table's keys (the docs' table shows them)
@@ -40,6 +42,9 @@ def _stage(name: str, cls, **extra) -> None:
 _stage("photons", PhotonConversion, field="photons", many=False, reference="EMVA 1288 release 4.0, eqs. 1-2",
        summary="irradiance → mean photo-electrons: pixel pitch, colour filter array, quantum efficiencies (the "
        "[sensor] table's own keys)")
+_stage("shutter", Shutter, field="shutter", many=False,
+       summary="the rows' windows of the exposure in time: global, or rolling with a line time; what a moving or "
+       "PWM-flickering scene gives each row (module timing)")
 _stage("defects", Defects, field="defects", many=False,
        summary="defect pixels fixed per sensor: dead ones, which collect no light, and hot ones, with more dark current")
 _stage("readout", Readout, field="readouts", many=True, reference="EMVA 1288 release 4.0, section 2",
@@ -69,6 +74,8 @@ class SensorChain:
         The companding of the merged signal to the output's bits.
     defects : Defects, optional
         Dead and hot pixels.
+    shutter : timing.Shutter, optional
+        Global or rolling; none is a global one.
 
     Raises
     ------
@@ -82,6 +89,7 @@ class SensorChain:
     merge: Merge | None = None
     compander: Compander | None = None
     defects: Defects | None = None
+    shutter: Shutter | None = None
 
     def __post_init__(self):
         object.__setattr__(self, "readouts", tuple(self.readouts))
@@ -170,8 +178,8 @@ class SensorChain:
 
         Parameters
         ----------
-        irradiance : numpy.ndarray
-            (H, W, 3) image-plane irradiance (W/m²).
+        irradiance : numpy.ndarray, callable or timing.FlickeringScene
+            (H, W, 3) image-plane irradiance (W/m²), or a scene in time (`timing`: each row's window of it).
         exposure_s : float
             The frame's exposure time (s); a readout takes its `Readout.exposure_ratio` of it.
         seed : int
@@ -184,7 +192,7 @@ class SensorChain:
         list of numpy.ndarray
             (H, W) uint16 DN per readout, in the chain's order.
         """
-        mu_e = self.photons.mean_electrons(irradiance, exposure_s)
+        mu_e = self.photons.mean_electrons(exposed_irradiance(self.shutter, irradiance, exposure_s), exposure_s)
         if self.defects is None:
             return read_charges(self.readouts, mu_e, exposure_s, seed, frame)
         return read_charges(self.readouts, mu_e, exposure_s, seed, frame,

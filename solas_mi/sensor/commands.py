@@ -12,6 +12,7 @@ from typing import Any
 
 from ..errors import SolasError
 
+FLICKER_FORM = "X0,Y0,X1,Y1,HZ,DUTY[,PHASE]"  # the camera's --flicker: a box of pixels and its PWM source
 CLIPPED_WARNING = 0.01  # the fraction of a RAW's pixels at saturation past which a camera warns
 # the camera's peak memory (bytes), measured as the peak RSS of `solas-mi camera` on 2000×1500 frames of 3
 # and 10 channels against 8×8 ones: the modules (48 MB; 146 MB with the image processor's), the EXR read
@@ -25,6 +26,9 @@ RAW_BYTES_PER_PIXEL = 110.0
 # +25 B for four, +17 B for three exposures), rounded up: the merge's float64 estimate and weight, and each
 # further readout's frame and electrons
 MERGE_BYTES_PER_PIXEL, READOUT_BYTES_PER_PIXEL = 16.0, 8.0
+# a scene in time (--flicker, --image-motion): two images of it (its static image and light, or one instant
+# and its weighted share) and the rows' average (float64 R, G, B each)
+TIMED_SCENE_BYTES_PER_PIXEL = 72.0
 
 
 def read_input(path):
@@ -95,6 +99,7 @@ def check_camera_memory(args: argparse.Namespace, develop_bytes_per_pixel: float
 
     rows, cols, channels = image_size(args.image)
     need = FIXED_BYTES + frame_bytes(rows, cols, channels, develop_bytes_per_pixel, readouts)
+    need += rows * cols * TIMED_SCENE_BYTES_PER_PIXEL if args.flicker or args.image_motion else 0.0
     check_memory(f"camera {cols}x{rows}", need, args.force, "a smaller image")
 
 
@@ -135,6 +140,61 @@ def as_irradiance(image, meta: dict, what: str, scale: float = 1.0, f_number: fl
     return image_irradiance(image, f_number, transmission), reading, notice
 
 
+def parse_flicker(text: str) -> tuple[tuple[int, int, int, int], tuple[float, ...]]:
+    """The box (x0, y0, x1, y1) and the PWM source's values (frequency, duty cycle[, phase]) of a `FLICKER_FORM`
+    text, e.g. ``"10,20,30,40,90,0.1,0.5"``."""
+    parts = text.split(",")
+    try:
+        box = tuple(int(p) for p in parts[:4])
+        numbers = tuple(float(p) for p in parts[4:])
+    except ValueError:
+        box, numbers = (), ()
+    if len(box) != 4 or not 2 <= len(numbers) <= 3 or min(box[:2]) < 0 or box[2] <= box[0] or box[3] <= box[1]:
+        raise SolasError(f"--flicker {text!r} must be {FLICKER_FORM}: a box of whole pixels x0 < x1, y0 < y1 "
+                         "from 0, the PWM frequency (Hz), duty cycle and phase (fractions)")
+    return (box[0], box[1], box[2], box[3]), numbers
+
+
+def parse_motion(text: str) -> tuple[float, float]:
+    """The velocity (px/s, right and down) of a ``VX,VY`` text."""
+    try:
+        velocity = tuple(float(p) for p in text.split(","))
+    except ValueError:
+        velocity = ()
+    if len(velocity) != 2 or not all(math.isfinite(v) for v in velocity):
+        raise SolasError(f"--image-motion {text!r} must be VX,VY: the image's speed in pixels per second, "
+                         "rightwards and downwards, two finite numbers")
+    return velocity[0], velocity[1]
+
+
+def timed_scene(args: argparse.Namespace):
+    """The `timing.SceneInTime` of the options --flicker and --image-motion (at most one); None without."""
+    if args.flicker is None and args.image_motion is None:
+        return None
+    if args.flicker is not None and args.image_motion is not None:
+        raise SolasError("give --flicker or --image-motion, not both: a scene in time is one or the other here")
+    from .timing import PWMSource, SceneInTime
+
+    if args.flicker is not None:
+        box, source = parse_flicker(args.flicker)
+        return SceneInTime(box=box, source=PWMSource(*source))
+    return SceneInTime(motion_px_s=parse_motion(args.image_motion))
+
+
+def add_time_options(p: Any) -> None:
+    """--flicker and --image-motion: a still image made a scene in time (`timing.SceneInTime`)."""
+    p.add_argument("--flicker", metavar=FLICKER_FORM,
+                   help="the pixels of columns X0 to X1 - 1 and rows Y0 to Y1 - 1 are light driven by pulse-width "
+                        "modulation at HZ with duty cycle DUTY and phase PHASE (fractions; default phase 0): each "
+                        "row sees it over its window of the exposure (the sensor's [sensor.shutter], global "
+                        "without one), e.g. an LED traffic light (default: none)")
+    p.add_argument("--image-motion", metavar="VX,VY",
+                   help="the image moves at VX, VY pixels per second (right, down) during the frame, e.g. a camera "
+                        "panning across a distant scene: each row sees it over its window of the exposure (a "
+                        "rolling shutter skews it, every shutter blurs it; sampled at the shutter's time_samples) "
+                        "(default: still)")
+
+
 def raw_frame(args: argparse.Namespace, develop_bytes_per_pixel: float = 0.0):
     """The RAW frame (H, W, uint16 DN) of the command's image, its `SensorModel` and its metadata."""
     from .auto_exposure import exposure_seconds, parse_exposure
@@ -145,6 +205,7 @@ def raw_frame(args: argparse.Namespace, develop_bytes_per_pixel: float = 0.0):
     exposure = parse_exposure(args.exposure_ms)
     check_seed(args.seed)
     check_frame(args.frame)
+    timed = timed_scene(args)
     check_camera_memory(args, develop_bytes_per_pixel, len(as_chain(model).readouts))
     image, meta_in = read_input(args.image)
     irradiance, reading, notice = as_irradiance(image, meta_in, str(args.image), args.scale, args.f_number,
@@ -153,13 +214,14 @@ def raw_frame(args: argparse.Namespace, develop_bytes_per_pixel: float = 0.0):
         print(f"notice: {notice}", file=sys.stderr)
     seconds, chosen = exposure_seconds(exposure, model, irradiance)
     exposure_ms = exposure if not chosen else seconds * 1e3
-    raw = capture(model, irradiance, seconds, args.seed, args.frame)
+    raw = capture(model, irradiance if timed is None else timed.of(irradiance), seconds, args.seed, args.frame)
     fraction, warning = clipping_warning(model, raw, exposure_ms, str(args.output))
     if warning:
         print(f"solas-mi camera: warning: {warning}", file=sys.stderr)
     meta = {"kind": "sensor RAW", "unit": "DN", "sensor_model": str(args.sensor_model), "sensor": describe(model),
             "seed": args.seed, "frame": args.frame, "exposure_ms": exposure_ms,
-            **({"auto_exposure": chosen} if chosen else {}), **reading,
+            **({"auto_exposure": chosen} if chosen else {}),
+            **(timed.describe() if timed else {}), **reading,
             "input": str(args.image), "saturated_fraction": fraction}
     return raw, model, meta
 
@@ -234,6 +296,7 @@ def register(subparsers: Any) -> None:
                    help="the image is radiance: image irradiance E = π T L / (4 N²) (default: the f-number a render "
                         "through a lens states in its metadata, else none: the image is irradiance)")
     p.add_argument("--transmission", type=float, default=1.0, help="lens transmission T of radiance (default 1)")
+    add_time_options(p)
     p.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
     p.add_argument("-o", "--output", required=True, metavar="OUT.exr", help="RAW frame to write")
     p.set_defaults(run=run_camera)

@@ -50,7 +50,7 @@ def _grids_text(grids) -> str:
 
 def _lens_and_image(args: argparse.Namespace):
     output_folder(args.output)
-    lens = load_lens(args.lens)
+    lens = load_lens(args)
     sensor = parse_wxh(args.sensor, "--sensor") if args.sensor else None
     return lens, load_input(args.image, sensor, args.scale, args.linear)
 
@@ -61,7 +61,7 @@ def _say(text: str) -> None:
 
 
 def run_crossval(args: argparse.Namespace) -> int:
-    lens = load_lens(args.lens)
+    lens = load_lens(args)
     if not lens.field_type.pinhole:
         return _crossval_fisheye(args, lens)
     given = [name for name, value in (("--size", args.size), ("--pitch-um", args.pitch_um), ("--grid", args.grid))
@@ -125,7 +125,7 @@ def run_error_vs_time(args: argparse.Namespace) -> int:
 def run_check_stability(args: argparse.Namespace) -> int:
     from .stability import check_stability, markdown
 
-    lens = load_lens(args.lens)
+    lens = load_lens(args)
     cases = check_stability(lens, progress=lambda name: print(f"check-stability: {name}", file=sys.stderr, flush=True))
     if args.json:
         print(jsonio.dumps({"lens": lens.name, "lens_hash": lens.hash, "passed": all(c.passed for c in cases),

@@ -1,6 +1,7 @@
 """The `solas-mi lens <analysis>` commands and `lens report`: made from the registry (each command's
 options are its entry's), each writing a PNG with strict JSON and CSV beside it, bad values refused by
 name with nothing written, the report's index showing every analysis."""
+import argparse
 import csv
 
 import pytest
@@ -9,6 +10,7 @@ from strict_json import strict_loads
 from solas_mi.analysis.options import OPTIONS
 from solas_mi.analysis.registry import ANALYSES
 from solas_mi.cli import build_parser, iter_commands, main
+from solas_mi.optics.commands import add_environment_options
 
 COMMANDS = dict(iter_commands(build_parser()))
 IDEAL = """name = "ideal"
@@ -23,8 +25,15 @@ focal_length = 100.0
 """
 
 
+def _lens_flags() -> set[str]:
+    """The options of where the lens is (--temperature-c, ...), which every command that takes a lens has."""
+    parser = argparse.ArgumentParser()
+    add_environment_options(parser)
+    return {a.option_strings[0] for a in parser._actions if a.option_strings}
+
+
 def flags(parser) -> set[str]:
-    return {a.option_strings[0] for a in parser._actions if a.option_strings} - {"-h", "-o"}
+    return {a.option_strings[0] for a in parser._actions if a.option_strings} - {"-h", "-o"} - _lens_flags()
 
 
 @pytest.mark.parametrize("name", list(ANALYSES))

@@ -62,6 +62,24 @@ def test_degrade_batch_writes_each_frames_raw_and_developed_frame(camera_inputs)
     assert manifest(out)["summary"] == {"skipped": 2, "done": 1}
 
 
+def test_degrade_batch_with_a_flickering_box(camera_inputs):
+    """--flicker in a batch: each frame's box is PWM-driven light over the exposure, as `camera --flicker` has it
+    (`timing.SceneInTime`), recorded with the camera; at a phase off over the whole exposure the box reads dark."""
+    out = camera_inputs.root / "out"
+    # 90 Hz at 10 %, phase 0.5: on from 5.6 ms of each 11.1 ms period, off over the 0.25 ms exposure
+    assert main(_argv(camera_inputs, out, "--flicker", "0,0,4,3,90,0.1,0.5")) == 0
+    m = manifest(out)
+    assert m["camera"]["flicker"] == {"box": [0, 0, 4, 3], "frequency_hz": 90.0, "duty_cycle": 0.1, "phase": 0.5}
+    model = SensorModel(cfa="RCCB", pixel_pitch_um=2.0)
+    for item in m["items"]:
+        stem = item["output"][:-4]
+        raw = read_exr(f"{stem}_raw.exr")[0]["RAW"]
+        image = read_rgb(item["output"])
+        dark = image.copy()
+        dark[0:3, 0:4] = 0.0
+        assert np.array_equal(raw, capture(model, dark, EXPOSURE_MS * 1e-3, 0, frame_number(stem.rsplit("/", 1)[-1])))
+
+
 def test_frames_depend_on_seed_and_name_not_on_the_run(camera_inputs):
     """One input alone gives the frame it gave among three; another seed, another frame (and another
     batch identity); without the camera, yet another identity."""
@@ -122,6 +140,8 @@ def test_render_batch_through_the_camera(camera_inputs, tmp_path):
     (["--sensor-model", "S", "--exposure-ms", "1", "--format", "png16"], "not png16"),
     (["--sensor-model", "S", "--exposure-ms", "0"], "--exposure-ms 0.0 must be > 0"),
     (["--scale", "2"], "--scale go\\(es\\) with --sensor-model"),
+    (["--flicker", "0,0,4,4,90,0.1"], "--flicker go\\(es\\) with --sensor-model"),
+    (["--sensor-model", "S", "--exposure-ms", "1", "--image-motion", "1"], "--image-motion '1' must be VX,VY"),
     (["--sensor-model", "S", "--exposure-ms", "1", "--scale", "-1"], "scale -1.0 must be a finite number > 0"),
     (["--sensor-model", "S", "--exposure-ms", "auto:0,1"], "auto-exposure percentile 0.0 must be"),
     # gains for a sensor's filters the RCCB sensor lacks: each item failed after its work (exit 1)

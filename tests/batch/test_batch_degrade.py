@@ -297,7 +297,8 @@ FLAG_VARIANTS = {
     "--auto-window": ([], None),
     "--distances-m": ([], "inf,10"),
 }
-NOT_GRID_OPTIONS = {"lens", "output", "mosaic", "force", "help"}
+# the lens's own options (--temperature-c, ... move the lens: test_the_batch_grid_is_the_lens_at_its_temperature)
+NOT_GRID_OPTIONS = {"lens", "output", "mosaic", "force", "help", "temperature-c", "pressure-kpa", "mount"}
 
 
 def test_every_psf_grid_flag_reaches_the_cache_key_and_the_grid(batch_inputs, capsys, doublet):
@@ -545,3 +546,22 @@ def test_depth_maps_by_the_pattern_are_used_not_skipped(batch_inputs, capsys, mo
     assert [Path(j.params["depth"]).name for j in p.jobs] == ["frame000_depth.exr"]
     err = capsys.readouterr().err
     assert "skipped 1 label layer(s)" in err and "frame000_flow.exr (its name ends in 'flow')" in err, err
+
+
+def test_the_batch_grid_is_the_lens_at_its_temperature(batch_inputs, capsys):
+    """`batch degrade --lens L --temperature-c 60` plans the grid of `Lens.at(60)` (its own cache file, by the
+    lens's hash), the plain batch that of the lens as loaded."""
+    from solas_mi import Lens
+    from solas_mi.batch.cache import GridCache
+    from solas_mi.batch.commands import BATCH_GRID_DEFAULTS
+    from solas_mi.psf.spec import GridSpec
+
+    batch_inputs.write(1)
+    cache = batch_inputs.root / "cache"
+    argv = ["batch", "degrade", str(batch_inputs.images), "--lens", "solas-doublet", "--grid", "3x3", "-o",
+            str(batch_inputs.root / "out"), "--cache", str(cache)]
+    plain, hot = _planned_grid(capsys, argv), _planned_grid(capsys, [*argv, "--temperature-c", "60"])
+    spec = GridSpec(**{**BATCH_GRID_DEFAULTS, "grid": (3, 3)})
+    lens = Lens.load("solas-doublet")
+    assert plain == str(GridCache(cache).path(lens, spec)) and hot == str(GridCache(cache).path(lens.at(60.0), spec))
+    assert hot != plain

@@ -24,7 +24,7 @@ def wide_grid(tmp_path_factory):
     return path, grid
 
 
-def test_a_batch_records_its_camera_fitted_once_per_frame_size(tmp_path, wide_grid, monkeypatch):
+def test_a_batch_records_its_camera_fitted_once_per_frame_size(tmp_path, wide_grid, monkeypatch, fresh_cache):
     from solas_mi.optics.calibration import fit as fitting
 
     path, grid = wide_grid
@@ -63,7 +63,7 @@ def test_the_degrade_command_records_its_camera(tmp_path, wide_grid):
     assert {k: camera[k] for k in block} == block and camera["projection"].startswith("rectilinear")
 
 
-def test_a_render_batch_records_each_sensors_camera_fitted_once(tmp_path, monkeypatch):
+def test_a_render_batch_records_each_sensors_camera_fitted_once(tmp_path, monkeypatch, fresh_cache):
     """`batch render --calibration-model`: the image items of one lens and sensor share one fit (two spp values,
     two items), made before any item; each output's camera block is its sensor's, as `render-image` writes it."""
     from solas_mi.batch.render import render_batch

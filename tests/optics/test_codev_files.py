@@ -296,8 +296,24 @@ def test_what_code_v_exports_also_hold(tmp_path):
     assert lens.at_infinity and lens.surfaces == base.surfaces
 
 
+def test_tem_and_pre_are_where_the_prescription_holds(tmp_path):
+    """TEM (°C) and PRE (atmospheres): the lens at that temperature and pressure, radii and thicknesses as
+    given, glass indices there (TEM outside 20-25 °C was refused)."""
+    from solas_mi.optics import thermal
+
+    text = singlet(glass="NBK7_SCHOTT", last="")  # no PIM: the image distance as given, not solved at 60 °C
+    base = load(tmp_path, text, "a.seq")
+    hot = load(tmp_path, text.replace("WL 550", "WL 550\nTEM 60\nPRE 0.9"), "b.seq")
+    assert (hot.temperature_c, hot.pressure_kpa) == (60.0, pytest.approx(0.9 * 101.325))
+    there = thermal.in_environment(base, 60.0, 0.9 * 101.325)  # automatic apertures aside (solved at 60 °C)
+    assert [(s.radius, s.thickness, s.glass) for s in hot.surfaces] == [(s.radius, s.thickness, s.glass)
+                                                                         for s in there.surfaces]
+    assert paraxial(hot, 550.0).efl_mm == paraxial(there, 550.0).efl_mm != paraxial(base, 550.0).efl_mm
+    with pytest.raises(SolasError, match="temperature -300"):
+        load(tmp_path, singlet().replace("WL 550", "WL 550\nTEM -300"), "c.seq")
+
+
 @pytest.mark.parametrize("change, match", [
-    (("WL 550", "WL 550\nTEM 60"), "TEM '60'.*20-25 °C"),
     (("PIM", "PIM\nCUF 0.01"), "CUF: fringe curvatures"),
     (("PIM", "PIM\nCIR OBS 2"), "CIR OBS: obscurations"),
 ])
@@ -472,3 +488,9 @@ def test_private_glass_in_the_dr_jit_tracer(tmp_path):
     waves = np.linspace(400.0, 900.0, 41)
     traced = refractive_index(own, dr.llvm.Float64(waves / 1000.0))
     assert np.asarray(traced) == pytest.approx(own.index(waves), abs=1e-15)
+
+
+def test_a_glass_without_thermal_data_is_named_at_tem(tmp_path):
+    """A model glass in a file at 60 °C: its index cannot follow the temperature, and a warning says so."""
+    with pytest.warns(UserWarning, match="glass model:1.5 without thermal data"):
+        load(tmp_path, singlet().replace("WL 550", "WL 550\nTEM 60"), "a.seq")

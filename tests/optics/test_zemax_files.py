@@ -402,3 +402,18 @@ def test_a_file_without_stop_takes_surface_1_as_opticstudio_does(tmp_path, apert
     for where in ("SURF 0\n", "SURF 9\n"):
         with pytest.raises(SolasError, match="STOP on the object or the image surface"):
             load(tmp_path, text.replace("  STOP\n", "").replace(where, where + "  STOP\n"), name="bad.zmx")
+
+
+@pytest.mark.parametrize("header", ["ENVD 5.0E+1 0.9 0\n", "TEMP 50\nPRES 0.9\n"])
+def test_envd_is_where_the_prescription_holds(tmp_path, header):
+    """ENVD (°C, atmospheres; older files: TEMP and PRES): the lens at 50 °C in air of 0.9 atm, radii and
+    thicknesses as given, glass indices there; written back as ENVD it reads as the same lens."""
+    from solas_mi.optics import thermal
+
+    text = zmx().replace("GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0", "GLAS N-BK7 0 0 1.5168 64.17 0 0 0 0 0 0")
+    base, hot = load(tmp_path, text), load(tmp_path, zmx(header=header).replace(
+        "GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0", "GLAS N-BK7 0 0 1.5168 64.17 0 0 0 0 0 0"), "hot.zmx")
+    assert (hot.temperature_c, hot.pressure_kpa) == (50.0, pytest.approx(0.9 * 101.325))
+    assert hot.hash == thermal.in_environment(base, 50.0, hot.pressure_kpa).hash != base.hash
+    assert Lens.load(hot.save(tmp_path / "again.zmx")).hash == hot.hash
+    assert "ENVD 20.0 1.0 0" in base.save(tmp_path / "base.zmx").read_text()

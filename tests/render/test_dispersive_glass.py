@@ -108,3 +108,23 @@ def test_vendor_glass_refracts_with_its_catalogue_index(mi, name):
         bs, _ = _sample(mi, bsdf, ctx, _interaction(mi, [lam] * 4), sample1=0.0)
         n = resolve(name).index(lam)
         assert abs(float(bs.wo.x[0])) == pytest.approx(0.6 / n, rel=2e-6)
+
+
+def test_glass_at_a_temperature_refracts_with_its_index_there(mi, tmp_path):
+    """`temperature_c` and `pressure_kpa` put the glass there (`Glass.at`), as the mesh scene of a lens at
+    80 °C writes them on each of its dielectrics; without them, 20 °C and standard air."""
+    from solas_mi import Lens
+    from solas_mi.render.scene import lens_parts
+
+    hot = Lens.load("solas-doublet").at(80.0, 95.0)
+    (part, *_) = [p for p in lens_parts(hot) if p.int_glass]
+    assert dict(part.environment) == {"temperature_c": 80.0, "pressure_kpa": 95.0}
+    assert all(not p.environment for p in lens_parts(Lens.load("solas-doublet")))
+    bsdf = mi.load_dict({"type": "sellmeier_dielectric", "int_glass": "N-BK7", "fresnel": "transmit",
+                         **{k: v for k, v in part.environment}})
+    ctx = mi.BSDFContext(mi.TransportMode.Radiance, +mi.BSDFFlags.DeltaTransmission, 1)
+    for lam in (450.0, 700.0):
+        bs, _ = _sample(mi, bsdf, ctx, _interaction(mi, [lam] * 4), sample1=0.0)
+        n = resolve("N-BK7").at(80.0, 95.0).index(lam)
+        assert n != resolve("N-BK7").index(lam)
+        assert abs(float(bs.wo.x[0])) == pytest.approx(0.6 / n, rel=2e-6)

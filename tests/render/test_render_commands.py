@@ -30,6 +30,8 @@ def test_scene_and_render_commands(tmp_path):
 
 OUTPUT_FLAGS = {"help", "output", "png", "force"}  # where a render is written, not how it is rendered
 RECORDED = {"calibration_model"}  # what its metadata records, not how it is rendered: a batch's own option
+# where the lens is (`Lens.at`), not how it renders: a batch takes a lens file that states it (lens convert)
+LENS_FLAGS = {"temperature_c", "pressure_kpa", "mount"}
 
 
 @pytest.mark.parametrize("argv, message", [
@@ -84,7 +86,8 @@ def test_every_render_image_setting_reaches_the_batch_items(tmp_path):
 
     parser = build_parser()
     image_cmd, batch_cmd = _subparser(parser, "render-image"), _subparser(parser, "batch", "render")
-    flags = {a.dest: a for a in image_cmd._actions if a.option_strings and a.dest not in OUTPUT_FLAGS | RECORDED}
+    flags = {a.dest: a for a in image_cmd._actions
+             if a.option_strings and a.dest not in OUTPUT_FLAGS | RECORDED | LENS_FLAGS}
     assert set(flags) <= set(RenderSpec.fields_by_name()) and set(flags) == set(IMAGE_SETTINGS)
     assert {a.dest for a in batch_cmd._actions} & {a.dest for a in image_cmd._actions} >= RECORDED
     Image.fromarray(np.full((24, 32), 128, np.uint8)).save(tmp_path / "photo.png")

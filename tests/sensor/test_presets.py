@@ -15,13 +15,16 @@ from solas_mi.sensor.files import PRESETS, load_sensor, preset_names
 
 KINDS = ("data sheet", "source", "derived", "assumption")
 # the figures each preset's source publishes (its file's header), which the derived values must reproduce:
-# SNR_max (dB) = 10 log10(full well), dynamic range (dB) = 20 log10(full well / read noise)
-PUBLISHED = {"ar0132at": {"snr_max_db": 43.9}, "imx255": {"snr_max_db": 40.3, "dynamic_range_db": 71.3},
+# SNR_max (dB) = 10 log10(full well), dynamic range (dB) = 20 log10(full well / read noise); an HDR sensor's
+# dynamic range (`hdr_dynamic_range_db`) is its chain's, EMVA 1288's μ_e.sat / μ_e.min (at `DR_EXPOSURE_S`)
+PUBLISHED = {"ar0132at": {"snr_max_db": 43.9}, "ar0132at-hdr": {"snr_max_db": 43.9, "hdr_dynamic_range_db": 115.0},
+             "imx255": {"snr_max_db": 40.3, "dynamic_range_db": 71.3},
              "mt9p001": {"snr_max_db": 38.1, "dynamic_range_db": 70.1}, "kac12040": {"dynamic_range_db": 73.0}}
+DR_EXPOSURE_S = 0.01
 
 
 def test_the_presets_shipped():
-    assert preset_names() == ["ar0132at", "imx255", "imx490", "imx490-hdr", "kac12040", "mt9p001"]
+    assert preset_names() == ["ar0132at", "ar0132at-hdr", "imx255", "imx490", "imx490-hdr", "kac12040", "mt9p001"]
 
 
 def leaves(table: dict) -> list[str]:
@@ -50,6 +53,8 @@ def test_derived_values_reproduce_the_published_figures(name):
     sensor = load_sensor(name)
     for model in getattr(sensor, "readouts", [sensor]):
         check_derived(name, model)
+    if "hdr_dynamic_range_db" in PUBLISHED.get(name, {}):  # the issue's 1 dB
+        assert sensor.dynamic_range_db(DR_EXPOSURE_S) == pytest.approx(PUBLISHED[name]["hdr_dynamic_range_db"], abs=1.0)
 
 
 def check_derived(name, model):
@@ -86,7 +91,7 @@ def test_a_preset_name_or_a_file(tmp_path):
     (tmp_path / "mine.toml").write_text((PRESETS / "imx490.toml").read_text().replace("cfa = \"RGGB\"", "cfa = \"RCCB\""))
     mine = load_sensor(tmp_path / "mine.toml")
     assert mine.cfa == "RCCB" and mine.full_well_e == load_sensor("imx490").full_well_e == 22000
-    with pytest.raises(SolasError, match=r"'imx999' is neither a preset \(ar0132at, imx255, imx490, imx490-hdr, kac12040, mt9p001\)"):
+    with pytest.raises(SolasError, match=re.escape(f"'imx999' is neither a preset ({', '.join(preset_names())})")):
         load_sensor("imx999")
     with pytest.raises(SolasError, match="sensor model .imx999.toml. does not exist"):
         load_sensor("imx999.toml")

@@ -60,7 +60,7 @@ def run_calibrate(args) -> int:
     waves = floats(args.wavelength_nm, "--wavelength-nm") if args.wavelength_nm is not None else None
     paths = targets(args.output, waves)
     suffix = check_suffix(args.model, args.output)
-    lens = args.load_lens(args.lens)
+    lens = args.load_lens(args)
     for p in paths:
         check_target(p, [lens.source] if lens.source else [], "calibration file")
     cals = calibrate(lens, args.model, sensor, waves, focus_mm(args.focus_distance))
