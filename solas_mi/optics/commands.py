@@ -60,6 +60,22 @@ def load_lens(args):
     return lens
 
 
+def _print_distortion(table) -> None:
+    """`lens info`'s table of image height, distortion and relative illumination against field."""
+    print(f"\nimage height vs field at {table.wavelength_nm:g} nm (real chief ray); closest projection: "
+          f"{table.projection}")
+    print(f"{'field (deg)':>12s}{'height (mm)':>14s}{'f tan(θ) (mm)':>16s}{'distortion %':>14s}{'rel. illum.':>13s}")
+    for row in zip(table.field_deg, table.image_height_mm, table.rectilinear_height_mm, table.distortion_percent,
+                   table.relative_illumination):
+        rect, percent = ("-", "-") if row[2] is None else (f"{row[2]:.6f}", f"{row[3]:.4f}")
+        print(f"{row[0]:12.3f}{row[1]:14.6f}{rect:>16s}{percent:>14s}{'-' if row[4] is None else f'{row[4]:.4f}':>13s}")
+    if table.illumination_note:
+        print(f"rel. illum. '-': {table.illumination_note}")
+    print("projection fits (focal mm, RMS residual mm): " + ", ".join(
+        f"{k} {f:.4f} / {r:.2e}" if f is not None else f"{k} undefined beyond 90 deg"
+        for k, (f, r) in table.projection_fits.items()))
+
+
 def run_lens_info(args) -> int:
     from .distortion import distortion
     from .paraxial import paraxial
@@ -108,18 +124,7 @@ def run_lens_info(args) -> int:
         print(f"{f'chief ray y at {f:g} deg, paraxial (mm)':36s}" + "".join(f"{r['chief_ray_image_height_mm'][i]:15.6f}" for r in rows))
         print(f"{f'chief ray y at {f:g} deg, real (mm)':36s}" + "".join(f"{r['real_chief_ray_image_height_mm'][i]:15.6f}" for r in rows))
     if table:
-        print(f"\nimage height vs field at {table.wavelength_nm:g} nm (real chief ray); closest projection: "
-              f"{table.projection}")
-        print(f"{'field (deg)':>12s}{'height (mm)':>14s}{'f tan(θ) (mm)':>16s}{'distortion %':>14s}{'rel. illum.':>13s}")
-        for row in zip(table.field_deg, table.image_height_mm, table.rectilinear_height_mm, table.distortion_percent,
-                       table.relative_illumination):
-            rect, percent = ("-", "-") if row[2] is None else (f"{row[2]:.6f}", f"{row[3]:.4f}")
-            print(f"{row[0]:12.3f}{row[1]:14.6f}{rect:>16s}{percent:>14s}{'-' if row[4] is None else f'{row[4]:.4f}':>13s}")
-        if table.illumination_note:
-            print(f"rel. illum. '-': {table.illumination_note}")
-        print("projection fits (focal mm, RMS residual mm): " + ", ".join(
-            f"{k} {f:.4f} / {r:.2e}" if f is not None else f"{k} undefined beyond 90 deg"
-            for k, (f, r) in table.projection_fits.items()))
+        _print_distortion(table)
     return 0
 
 

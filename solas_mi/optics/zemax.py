@@ -28,8 +28,7 @@ Read as the author meant it:
 - Fields (XFLN/YFLN, FTYP's first number): 0 angle, 1 object height, 2 paraxial image height, 3 real
   image height (the field whose real chief ray lands there); field_deg is the widest as an angle.
   Vignetting factors VDXN/VCXN/VDYN/VCYN shape the beam automatic semi-diameters follow.
-- ENVD (°C, atmospheres; older files' TEMP, PRES): where the prescription holds, the lens's `temperature_c`
-  and `pressure_kpa` (glass indices there, `thermal`; radii and thicknesses as given); written back so.
+- ENVD (°C, atm; older TEMP, PRES): the lens's `temperature_c`, `pressure_kpa` (`thermal`); written back so.
 - UNIT (MM, CM, IN, METER) scales every length to mm; WAVM (or WAVL) the wavelengths (µm in the file),
   PWAV the one the aperture and field solves use; surface 0's DISZ the object distance. The last SURF
   is the image plane (its DIAM the image semi-diameter). Mirrors, gratings, toroids, tilted or decentred

@@ -86,7 +86,7 @@ def run_ghosts(args) -> int:
 
     data_file, png = data_and_preview(args.output, args.png)
     check_grid(args.pitch_um, args.size)  # before the work
-    lens = load_lens(args.lens)
+    lens = load_lens(args)
     wavelengths = floats(args.wavelengths_nm, "--wavelengths-nm") if args.wavelengths_nm else None
     report = stray_light.ghosts(lens, _field(args.field_deg), wavelengths, rays=args.rays)
     print(report.table())
