@@ -4,6 +4,7 @@ the design notes (DESIGN.md) record from the SOLAS paper and Zemax (the last col
 Run: .venv/bin/python benchmarks/bench_anchors.py
 Prints the Markdown table of the validation page "Anchors and KrakenOS" (a few seconds).
 """
+
 from __future__ import annotations
 
 from solas_mi import Lens, paraxial, spot
@@ -31,7 +32,8 @@ def rows(lens: Lens) -> dict[str, list[str]]:
         out["RMS spot 0° (µm), 20 hexapolar rings"].append(f"{spot(lens, (0.0, 0.0), w).rms_radius_um():.3f}")
         out["RMS spot ±2° (µm), centroid reference"].append(f"{at_two.rms_radius_um():.3f}")
         out["RMS spot 0° (µm), converged area-uniform"].append(
-            f"{spot(lens, (0.0, 0.0), w, 'grid', 400).rms_radius_um():.2f}")
+            f"{spot(lens, (0.0, 0.0), w, 'grid', 400).rms_radius_um():.2f}"
+        )
         out["real chief ray at +2° (mm)"].append(f"{at_two.chief_ray_mm[1]:.5f}")
     return out
 

@@ -11,6 +11,7 @@ batch into a fresh folder, timed from the call to the end (worker start-up, grid
 scattering, reading, degrading, writing EXR + PNG, manifest). Prints a Markdown table of the median
 images/s and the median seconds one item takes inside its worker.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -27,8 +28,12 @@ ROOT = Path(__file__).resolve().parent.parent
 WORK = ROOT / "out" / "bench"
 GRID = dict(grid=(32, 32), wavelengths_nm=(656.0, 531.0, 486.0), size=160, pitch_um=0.5)  # the doublet's
 RENDER_SENSOR, RENDER_SPP = "320x240", 16
-CASES = [("local processes", None, 1), ("local processes", None, 2), ("Dask LocalCluster", "local", 1),
-         ("Dask LocalCluster", "local", 2)]
+CASES = [
+    ("local processes", None, 1),
+    ("local processes", None, 2),
+    ("Dask LocalCluster", "local", 1),
+    ("Dask LocalCluster", "local", 2),
+]
 
 
 def main() -> None:
@@ -43,9 +48,18 @@ def main() -> None:
     for i in range(args.images):
         shutil.copy(ROOT / "scenes" / "images" / "rocket.png", images / f"rocket{i:03d}.png")
     if args.render:
+
         def run(out, workers, dask):
-            return render_batch([images], out, lens="solas-doublet", sensor=RENDER_SENSOR, spp=RENDER_SPP,
-                                workers=workers, dask=dask, progress=False)
+            return render_batch(
+                [images],
+                out,
+                lens="solas-doublet",
+                sensor=RENDER_SENSOR,
+                spp=RENDER_SPP,
+                workers=workers,
+                dask=dask,
+                progress=False,
+            )
     else:
         cache = GridCache(WORK / "batch-cache")
         start = time.perf_counter()
@@ -54,6 +68,7 @@ def main() -> None:
 
         def run(out, workers, dask):
             return degrade_batch([images], out, psf_grid=grid_path, workers=workers, dask=dask, progress=False)
+
     print(f"| runner | workers | images/s (median of {args.repeats}) | s per image in a worker |")
     print("|---|---|---|---|")
     for name, dask, workers in CASES:

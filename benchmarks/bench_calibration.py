@@ -8,6 +8,7 @@ written to docs/validation/calibration/ for the documentation.
 
 Run: .venv/bin/python benchmarks/bench_calibration.py [--columns 640 --rows 480]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -56,8 +57,10 @@ def main() -> None:
     parser.add_argument("--rows", type=int, default=480)
     args = parser.parse_args()
     FIGURES.mkdir(parents=True, exist_ok=True)
-    print(f"| lens | model | RMS (px) | max (px) | max at (px) | max at (deg) | holds to {HOLDS_PX:g} px | "
-          "fitted | image circle (px) |")
+    print(
+        f"| lens | model | RMS (px) | max (px) | max at (px) | max at (deg) | holds to {HOLDS_PX:g} px | "
+        "fitted | image circle (px) |"
+    )
     print("|---|---|---|---|---|---|---|---|---|")
     for name in shipped_lenses():
         lens = Lens.load(name)
@@ -71,9 +74,12 @@ def main() -> None:
                 print(f"| {name} | {model_name} | — | — | — | — | refused: cannot hold the field | — | — |")
                 continue
             maps[model_name] = residual_map(model(model_name), cal.values, cmap, cal.projection)
-            print(f"| {name} | {model_name} | {cal.rms_px:.2e} | {cal.max_px:.2e} | ({cal.max_at_px[0]:g}, "
-                  f"{cal.max_at_px[1]:g}) | {cal.max_at_deg:.1f} | {'yes' if cal.max_px < HOLDS_PX else 'no'} | "
-                  f"{', '.join(cal.fitted)} | {'—' if circle is None else f'{circle:.1f}'} |", flush=True)
+            print(
+                f"| {name} | {model_name} | {cal.rms_px:.2e} | {cal.max_px:.2e} | ({cal.max_at_px[0]:g}, "
+                f"{cal.max_at_px[1]:g}) | {cal.max_at_deg:.1f} | {'yes' if cal.max_px < HOLDS_PX else 'no'} | "
+                f"{', '.join(cal.fitted)} | {'—' if circle is None else f'{circle:.1f}'} |",
+                flush=True,
+            )
         figure(name, maps, FIGURES / f"{name}.png")
 
 

@@ -8,6 +8,7 @@ allocates during one `degrade` (tracemalloc), the process's peak RSS (grid and i
 the CPU load other processes put on the machine meanwhile (timings are only good near 0).
 Prints a Markdown table.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -93,13 +94,21 @@ def run_case(name: str, repeats: int) -> dict:
     others = (busy_seconds() - busy - (sum(os.times()[:2]) - own)) / (time.perf_counter() - wall)
     tracemalloc.start()
     degrade(image, grid, method)
-    traced = tracemalloc.get_traced_memory()[1] / 2 ** 20
+    traced = tracemalloc.get_traced_memory()[1] / 2**20
     tracemalloc.stop()
-    return {"case": name, "times": times, "median": statistics.median(times), "traced_peak_mb": traced,
-            "rss_before_mb": before, "other_load_cores": others,
-            "max_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
-            "grid_mb": grid.data.nbytes / 2 ** 20, "image_mb": image.nbytes / 2 ** 20,
-            "nodes_or_blocks": meta.get("nodes") or meta.get("blocks"), "kernel_px": meta["kernel_size_px"]}
+    return {
+        "case": name,
+        "times": times,
+        "median": statistics.median(times),
+        "traced_peak_mb": traced,
+        "rss_before_mb": before,
+        "other_load_cores": others,
+        "max_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024,
+        "grid_mb": grid.data.nbytes / 2**20,
+        "image_mb": image.nbytes / 2**20,
+        "nodes_or_blocks": meta.get("nodes") or meta.get("blocks"),
+        "kernel_px": meta["kernel_size_px"],
+    }
 
 
 def main() -> None:
@@ -107,8 +116,12 @@ def main() -> None:
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--case", choices=tuple(CASES), help="run one case in this process and print JSON")
     ap.add_argument("--cases", default=",".join(CASES), help="comma-separated cases to run")
-    ap.add_argument("--max-other-load", type=float, default=0.1,
-                    help="rerun a case while other processes used more cores than this meanwhile")
+    ap.add_argument(
+        "--max-other-load",
+        type=float,
+        default=0.1,
+        help="rerun a case while other processes used more cores than this meanwhile",
+    )
     ap.add_argument("--tries", type=int, default=1, help="runs of a case at most (the least loaded is shown)")
     args = ap.parse_args()
     if args.case:
@@ -117,14 +130,20 @@ def main() -> None:
     for grid in sorted({CASES[c][0] for c in args.cases.split(",")}):
         grid_path(grid)
     print(f"machine: {os.cpu_count()} cores; numpy {np.__version__}\n")
-    print("| case | median (s) | runs (s) | degrade's peak allocation (MB) | process peak RSS (MB) | "
-          "grid + image (MB) | other processes' load (cores) |")
+    print(
+        "| case | median (s) | runs (s) | degrade's peak allocation (MB) | process peak RSS (MB) | "
+        "grid + image (MB) | other processes' load (cores) |"
+    )
     print("|---|---|---|---|---|---|---|")
     for name in args.cases.split(","):
         best = None
         for _ in range(args.tries):  # a shared machine: retry while other processes load it
-            out = subprocess.run([sys.executable, __file__, "--case", name, "--repeats", str(args.repeats)],
-                                 check=True, capture_output=True, text=True).stdout
+            out = subprocess.run(
+                [sys.executable, __file__, "--case", name, "--repeats", str(args.repeats)],
+                check=True,
+                capture_output=True,
+                text=True,
+            ).stdout
             r = jsonio.loads(out.strip().splitlines()[-1])
             if best is None or r["other_load_cores"] < best["other_load_cores"]:
                 best = r
@@ -132,9 +151,13 @@ def main() -> None:
                 break
             time.sleep(10)
         r = best
-        print(f"| {CASES[name][4]} | {r['median']:.2f} | {', '.join(f'{t:.2f}' for t in r['times'])} | "
-              f"{r['traced_peak_mb']:.0f} | {r['max_rss_mb']:.0f} | {r['grid_mb'] + r['image_mb']:.0f} | "
-              f"{max(0.0, r['other_load_cores']):.2f} |", flush=True)
+        print(
+            f"| {CASES[name][4]} | {r['median']:.2f} | {', '.join(f'{t:.2f}' for t in r['times'])} | "
+            f"{r['traced_peak_mb']:.0f} | {r['max_rss_mb']:.0f} | {r['grid_mb'] + r['image_mb']:.0f} | "
+            f"{max(0.0, r['other_load_cores']):.2f} |",
+            flush=True,
+        )
+
 
 if __name__ == "__main__":
     main()

@@ -8,6 +8,7 @@ Prints each stage's median seconds, frames/s and share of the sum; the batch's f
 repeats; worker start-up, grid loading and the manifest included) against what the sum of the stages
 allows (workers / sum); and the figures `run_all.py` compares run to run.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -44,7 +45,9 @@ def setup(frames: int) -> tuple[Path, Path, object]:
     write_png(str(images / "frame000.png"), test_image(W, H))
     for i in range(1, frames):
         shutil.copy(images / "frame000.png", images / f"frame{i:03d}.png")
-    grid_path, _, _ = GridCache(ROOT / "out" / "bench" / "batch-cache").get(Lens.load("solas-doublet"), GridSpec(**GRID))
+    grid_path, _, _ = GridCache(ROOT / "out" / "bench" / "batch-cache").get(
+        Lens.load("solas-doublet"), GridSpec(**GRID)
+    )
     return images, grid_path, load_camera("ar0132at", parse_exposure("auto"), "default")
 
 
@@ -68,10 +71,18 @@ def stages(images: Path, grid_path: Path, camera, repeats: int) -> dict[str, tup
     steps = {
         "read": lambda: state.update(image=read_image(source, linearize=True)),
         "degrade (interp, 32×32 grid)": lambda: state.update(out=degrade(state["image"], grid, "interp", "edge")),
-        "write degraded EXR + PNG": lambda: write_output(out / "f.exr", out / "f.png", state["out"], None, {}, "exr",
-                                                         source),
-        "sensor (auto exposure)": lambda: state.update(raw=capture(camera.sensor, state["out"], exposure_seconds(
-            camera.exposure_ms, camera.sensor, state["out"])[0], camera.seed, 1)),
+        "write degraded EXR + PNG": lambda: write_output(
+            out / "f.exr", out / "f.png", state["out"], None, {}, "exr", source
+        ),
+        "sensor (auto exposure)": lambda: state.update(
+            raw=capture(
+                camera.sensor,
+                state["out"],
+                exposure_seconds(camera.exposure_ms, camera.sensor, state["out"])[0],
+                camera.seed,
+                1,
+            )
+        ),
         "image processor": lambda: state.update(frame=develop(state["raw"], camera.sensor, camera.isp)[0]),
         "write RAW EXR + frame PNG": lambda: write_frame(out / "f_raw.exr", state["raw"], state["frame"], {}),
     }
@@ -93,8 +104,9 @@ def batch(images: Path, grid_path: Path, camera, workers: int, repeats: int) -> 
     for _ in range(repeats):
         out = WORK / "batch-out"
         shutil.rmtree(out, ignore_errors=True)
-        result = degrade_batch([images], out, DegradeSpec(camera=camera), psf_grid=grid_path, workers=workers,
-                               progress=False)
+        result = degrade_batch(
+            [images], out, DegradeSpec(camera=camera), psf_grid=grid_path, workers=workers, progress=False
+        )
         assert not result.failed, result.failed[0].error
         rates.append(len(result.jobs) / result.seconds)
         items.extend(job.seconds for job in result.jobs)
@@ -115,15 +127,20 @@ def main() -> None:
     for name, (s, c) in seconds.items():
         print(f"| {name} | {s:.3f} | {c:.3f} | {1 / s:.2f} | {s / wall:.0%} |")
     print(f"| sum of the stages | {wall:.3f} | {cpu:.3f} | {1 / wall:.2f} | 100% |")
-    print(f"\nThe batch of {args.frames} frames (`batch degrade` with the camera; median of {args.repeats}); the stages "
-          f"allow w workers min(w / seconds, {cores} cores / CPU seconds) frames/s:\n")
+    print(
+        f"\nThe batch of {args.frames} frames (`batch degrade` with the camera; median of {args.repeats}); the stages "
+        f"allow w workers min(w / seconds, {cores} cores / CPU seconds) frames/s:\n"
+    )
     print("| workers | frames/s | the stages allow | allowed / batch | s per item in a worker |\n|---|---|---|---|---|")
     rates = {}
     for workers in (1, 2):
         rates[workers], item = batch(images, grid_path, camera, workers, args.repeats)
         allowed = min(workers / wall, cores / cpu)
-        print(f"| {workers} | {rates[workers]:.3f} | {allowed:.3f} | {allowed / rates[workers]:.2f} (target ≤ {TARGET}) "
-              f"| {item:.2f} |", flush=True)
+        print(
+            f"| {workers} | {rates[workers]:.3f} | {allowed:.3f} | {allowed / rates[workers]:.2f} (target ≤ {TARGET}) "
+            f"| {item:.2f} |",
+            flush=True,
+        )
     print()  # the figures after the table, not between its rows
     for workers, rate in rates.items():
         figure(f"dataset_batch_{workers}_workers", rate, "frames/s")

@@ -9,10 +9,10 @@ ground from 200 m at the horizon to 5 m at the bottom row, evenly in 1/distance,
 above it, a box at 12 m and a post at 25 m). Prints the medians (s), the cores other processes used meanwhile (timings are
 only good near 0) and the grid's computing time when it was computed.
 """
+
 from __future__ import annotations
 
 import argparse
-import math
 import os
 import statistics
 import sys
@@ -22,7 +22,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
-from bench_convolution import CACHE, WAVELENGTHS, busy_seconds, test_image  # noqa: E402
+from bench_convolution import CACHE, WAVELENGTHS, busy_seconds, test_image
 
 W, H = 1280, 960
 
@@ -48,9 +48,18 @@ def grid(nodes: int):
         return read_grid(str(path)), None
     print(f"computing the grid over {nodes} distances once (cached in {path})", file=sys.stderr, flush=True)
     start = time.perf_counter()
-    g = depth_grid(Lens.load("solas-doublet"), GridSpec(
-        grid=(24, 32), wavelengths_nm=WAVELENGTHS, field_range_deg=(2.0, 1.5), method="geometric", pitch_um=0.5,
-        size=160, distances_m=inverse_spaced(nodes, 5.0)))
+    g = depth_grid(
+        Lens.load("solas-doublet"),
+        GridSpec(
+            grid=(24, 32),
+            wavelengths_nm=WAVELENGTHS,
+            field_range_deg=(2.0, 1.5),
+            method="geometric",
+            pitch_um=0.5,
+            size=160,
+            distances_m=inverse_spaced(nodes, 5.0),
+        ),
+    )
     seconds = time.perf_counter() - start
     CACHE.mkdir(parents=True, exist_ok=True)
     g.write(str(path))
@@ -82,18 +91,24 @@ def main() -> None:
     image, depth = test_image(W, H), depth_map()
     meta: dict = {}
     degrade_depth(image, depth, g, meta=meta)
-    print(f"machine: {os.cpu_count()} cores; grid over {args.nodes} distances {meta['distances_m']} m"
-          + (f", computed in {grid_seconds:.0f} s" if grid_seconds else " (cached)"))
+    print(
+        f"machine: {os.cpu_count()} cores; grid over {args.nodes} distances {meta['distances_m']} m"
+        + (f", computed in {grid_seconds:.0f} s" if grid_seconds else " (cached)")
+    )
     print(f"pixels per node: {[round(p) for p in meta['pixels_per_node']]}\n")
     print("| case | median (s) | runs (s) | other processes' load (cores) |\n|---|---|---|---|")
-    cases = {"1280×960 RGB, interp 32×24, one distance": lambda: degrade(image, g.layers[0], "interp"),
-             f"1280×960 RGB + depth, {args.nodes} nodes, occlusion filled": lambda: degrade_depth(image, depth, g),
-             f"1280×960 RGB + depth, {args.nodes} nodes, occlusion none":
-                 lambda: degrade_depth(image, depth, g, occlusion="none")}
+    cases = {
+        "1280×960 RGB, interp 32×24, one distance": lambda: degrade(image, g.layers[0], "interp"),
+        f"1280×960 RGB + depth, {args.nodes} nodes, occlusion filled": lambda: degrade_depth(image, depth, g),
+        f"1280×960 RGB + depth, {args.nodes} nodes, occlusion none": lambda: degrade_depth(
+            image, depth, g, occlusion="none"
+        ),
+    }
     for name, fn in cases.items():
         median, times, others = timed(fn, args.repeats)
-        print(f"| {name} | {median:.2f} | {', '.join(f'{t:.2f}' for t in times)} | {max(0.0, others):.2f} |",
-              flush=True)
+        print(
+            f"| {name} | {median:.2f} | {', '.join(f'{t:.2f}' for t in times)} | {max(0.0, others):.2f} |", flush=True
+        )
 
 
 if __name__ == "__main__":

@@ -7,6 +7,7 @@ reference 2 × 768 spp; patch 8×6 / 32×24, interp 4×3 … 64×48, render 3 �
 on 2 idle cores (the reference render is most of it). Writes table.md, table.csv, error_vs_time.png and
 report.json to out/bench/error_vs_time/ and prints the Markdown table.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -26,8 +27,20 @@ def main() -> int:
     ap.add_argument("--psf", default="geometric")
     ap.add_argument("--out", default=str(ROOT / "out" / "bench" / "error_vs_time"))
     a = ap.parse_args()
-    argv = ["report", "error-vs-time", "solas-doublet", str(ROOT / "scenes" / "images" / "rocket.png"), "-o", a.out,
-            "--scale", str(a.scale), "--ref-spp", str(a.ref_spp), "--psf", a.psf]
+    argv = [
+        "report",
+        "error-vs-time",
+        "solas-doublet",
+        str(ROOT / "scenes" / "images" / "rocket.png"),
+        "-o",
+        a.out,
+        "--scale",
+        str(a.scale),
+        "--ref-spp",
+        str(a.ref_spp),
+        "--psf",
+        a.psf,
+    ]
     if a.spp:
         argv += ["--spp", a.spp]
     parser = argparse.ArgumentParser(prog="bench_error_vs_time")

@@ -3,6 +3,7 @@
 Run: .venv/bin/python benchmarks/bench_esfr.py   (prints a Markdown table, medians of several runs, and the
 figures `run_all.py` compares run to run)
 """
+
 from __future__ import annotations
 
 import math
@@ -55,12 +56,27 @@ def main() -> None:
     report = natural_scene_sfr(sharp)
     rows = [  # (name, figure, median seconds, runs, target seconds)
         ("e-SFR, 100×100 ROI, 2023 mode", "esfr_roi_2023_s", median_seconds(lambda: esfr(roi), 200), 200, 0.005),
-        ("e-SFR, 100×100 ROI, 2017 mode", "esfr_roi_2017_s", median_seconds(lambda: esfr(roi, mode="2017"), 200), 200,
-         0.005),
-        (f"natural-scene SFR, 1280×960 ({len(report.rois)} ROIs)", "nssfr_s",
-         median_seconds(lambda: natural_scene_sfr(sharp), 5), 5, 5.0),
-        ("natural-scene SFR, 1280×960, --compare", "nssfr_compare_s",
-         median_seconds(lambda: natural_scene_sfr(sharp, compare=soft), 5), 5, 5.0),
+        (
+            "e-SFR, 100×100 ROI, 2017 mode",
+            "esfr_roi_2017_s",
+            median_seconds(lambda: esfr(roi, mode="2017"), 200),
+            200,
+            0.005,
+        ),
+        (
+            f"natural-scene SFR, 1280×960 ({len(report.rois)} ROIs)",
+            "nssfr_s",
+            median_seconds(lambda: natural_scene_sfr(sharp), 5),
+            5,
+            5.0,
+        ),
+        (
+            "natural-scene SFR, 1280×960, --compare",
+            "nssfr_compare_s",
+            median_seconds(lambda: natural_scene_sfr(sharp, compare=soft), 5),
+            5,
+            5.0,
+        ),
     ]
     print("| benchmark | median | runs | target | met |")
     print("|---|---|---|---|---|")

@@ -7,6 +7,7 @@ Run: .venv/bin/python benchmarks/bench_grid_end_to_end.py [--repeats 5]
 Prints a Markdown table of medians and runs, and the two ratios the batch issue sets targets for
 (command / in process ≤ 1.5, busy / idle ≤ 1.3).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -32,9 +33,27 @@ def in_process(lens: Lens) -> float:
 
 def command(folder: Path) -> float:
     start = time.perf_counter()
-    subprocess.run([sys.executable, "-m", "solas_mi", "psf-grid", "solas-doublet", "--grid", "32x32", "--wavelengths-nm",
-                    "656,531,486", "--pitch-um", "0.5", "--size", "160", "-o", str(folder / "grid.exr")],
-                   check=True, capture_output=True)
+    subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "solas_mi",
+            "psf-grid",
+            "solas-doublet",
+            "--grid",
+            "32x32",
+            "--wavelengths-nm",
+            "656,531,486",
+            "--pitch-um",
+            "0.5",
+            "--size",
+            "160",
+            "-o",
+            str(folder / "grid.exr"),
+        ],
+        check=True,
+        capture_output=True,
+    )
     return time.perf_counter() - start
 
 
@@ -64,8 +83,10 @@ def main() -> None:
     for name, times in runs.items():
         print(f"| {name} | {statistics.median(times):.2f} | {', '.join(f'{t:.2f}' for t in times)} |")
     idle = statistics.median(runs["in process"])
-    print(f"\ncommand / in process: {statistics.median(runs['command end to end']) / idle:.2f} (target ≤ 1.5); "
-          f"busy / idle: {statistics.median(runs['in process, one core busy']) / idle:.2f} (target ≤ 1.3)")
+    print(
+        f"\ncommand / in process: {statistics.median(runs['command end to end']) / idle:.2f} (target ≤ 1.5); "
+        f"busy / idle: {statistics.median(runs['in process, one core busy']) / idle:.2f} (target ≤ 1.3)"
+    )
 
 
 if __name__ == "__main__":

@@ -21,6 +21,7 @@ seconds. `--independent-wavelengths` switches the lens
 camera's per-pixel stratification of wavelengths off for comparison; `--lane-tolerance` sets its
 `lane_tolerance` (0: no path shared among the spectral lanes; default: the plugin's).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -56,8 +57,11 @@ def _room(mi) -> dict:
         "back": _rect(mi, T().translate([0, 0, 3]).rotate([0, 1, 0], 180), white),
         "left": _rect(mi, T().translate([1, 0, 2]).rotate([0, 1, 0], -90), red),
         "right": _rect(mi, T().translate([-1, 0, 2]).rotate([0, 1, 0], 90), green),
-        "light": {"type": "rectangle", "to_world": T().translate([0, 0.99, 2]).rotate([1, 0, 0], 90).scale(0.3),
-                  "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [12.0, 11.0, 9.0]}}},
+        "light": {
+            "type": "rectangle",
+            "to_world": T().translate([0, 0.99, 2]).rotate([1, 0, 0], 90).scale(0.3),
+            "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [12.0, 11.0, 9.0]}},
+        },
     }
 
 
@@ -75,29 +79,59 @@ def scene_dict(mi, name: str, sensor: dict, folder: Path) -> dict:
     T = mi.ScalarTransform4f
     scene = {"type": "scene", "sensor": sensor}
     if name == "room":
-        scene.update(_room(mi), integrator={"type": "path", "max_depth": 6},
-                     block={"type": "cube", "to_world": T().translate([0.4, -0.6, 2.2]).scale(0.4),
-                            "bsdf": _diffuse((0.6, 0.6, 0.3))})
+        scene.update(
+            _room(mi),
+            integrator={"type": "path", "max_depth": 6},
+            block={
+                "type": "cube",
+                "to_world": T().translate([0.4, -0.6, 2.2]).scale(0.4),
+                "bsdf": _diffuse((0.6, 0.6, 0.3)),
+            },
+        )
     elif name == "env":
-        scene.update(integrator={"type": "path", "max_depth": 6},
-                     sky={"type": "envmap", "filename": _env_map(folder / "sky.exr")},
-                     floor=_rect(mi, T().translate([0, -0.5, 2]).rotate([1, 0, 0], -90).scale(3),
-                                 _diffuse((0.4, 0.4, 0.4))),
-                     a={"type": "sphere", "center": [-0.6, -0.2, 2.0], "radius": 0.3,
-                        "bsdf": _diffuse((0.2, 0.5, 0.8))},
-                     b={"type": "sphere", "center": [0.0, -0.2, 2.2], "radius": 0.3,
-                        "bsdf": {"type": "roughplastic", "alpha": 0.1,
-                                 "diffuse_reflectance": {"type": "rgb", "value": [0.8, 0.2, 0.1]}}},
-                     c={"type": "sphere", "center": [0.6, -0.2, 2.0], "radius": 0.3,
-                        "bsdf": {"type": "roughconductor", "material": "Au", "alpha": 0.15}})
+        scene.update(
+            integrator={"type": "path", "max_depth": 6},
+            sky={"type": "envmap", "filename": _env_map(folder / "sky.exr")},
+            floor=_rect(mi, T().translate([0, -0.5, 2]).rotate([1, 0, 0], -90).scale(3), _diffuse((0.4, 0.4, 0.4))),
+            a={"type": "sphere", "center": [-0.6, -0.2, 2.0], "radius": 0.3, "bsdf": _diffuse((0.2, 0.5, 0.8))},
+            b={
+                "type": "sphere",
+                "center": [0.0, -0.2, 2.2],
+                "radius": 0.3,
+                "bsdf": {
+                    "type": "roughplastic",
+                    "alpha": 0.1,
+                    "diffuse_reflectance": {"type": "rgb", "value": [0.8, 0.2, 0.1]},
+                },
+            },
+            c={
+                "type": "sphere",
+                "center": [0.6, -0.2, 2.0],
+                "radius": 0.3,
+                "bsdf": {"type": "roughconductor", "material": "Au", "alpha": 0.15},
+            },
+        )
     else:
-        scene.update(_room(mi), integrator={"type": "volpath", "max_depth": 12},
-                     ball={"type": "sphere", "center": [-0.35, -0.5, 2.0], "radius": 0.4,
-                           "bsdf": {"type": "dielectric", "int_ior": "bk7"}},
-                     fog={"type": "cube", "to_world": T().translate([0.45, -0.6, 2.3]).scale(0.35),
-                          "bsdf": {"type": "null"},
-                          "interior": {"type": "homogeneous", "sigma_t": 4.0,
-                                       "albedo": {"type": "rgb", "value": [0.9, 0.6, 0.3]}}})
+        scene.update(
+            _room(mi),
+            integrator={"type": "volpath", "max_depth": 12},
+            ball={
+                "type": "sphere",
+                "center": [-0.35, -0.5, 2.0],
+                "radius": 0.4,
+                "bsdf": {"type": "dielectric", "int_ior": "bk7"},
+            },
+            fog={
+                "type": "cube",
+                "to_world": T().translate([0.45, -0.6, 2.3]).scale(0.35),
+                "bsdf": {"type": "null"},
+                "interior": {
+                    "type": "homogeneous",
+                    "sigma_t": 4.0,
+                    "albedo": {"type": "rgb", "value": [0.9, 0.6, 0.3]},
+                },
+            },
+        )
     return scene
 
 
@@ -108,26 +142,37 @@ def cameras(mi, lens: Lens, width: int, height: int, independent: bool, lane_tol
     fov = 2 * math.degrees(math.atan(0.5 * FILM_WIDTH_MM / paraxial(lens).efl_mm))
     film = {"type": "hdrfilm", "width": width, "height": height, "rfilter": {"type": "box"}}
     sampler = {"type": "independent", "sample_count": 4}
-    lens_camera = {"type": "lens_camera", "lens": LENS, "pitch_um": pitch_um, "response": "srgb",
-                   "focus_distance": 2.0, "film": film, "sampler": sampler}
+    lens_camera = {
+        "type": "lens_camera",
+        "lens": LENS,
+        "pitch_um": pitch_um,
+        "response": "srgb",
+        "focus_distance": 2.0,
+        "film": film,
+        "sampler": sampler,
+    }
     if independent:
         lens_camera["stratify_wavelengths"] = False
     if lane_tolerance is not None:
         lens_camera["lane_tolerance"] = lane_tolerance
-    return {"lens_camera": lens_camera,
-            "perspective": {"type": "perspective", "fov": fov, "fov_axis": "x", "film": film, "sampler": sampler}}
+    return {
+        "lens_camera": lens_camera,
+        "perspective": {"type": "perspective", "fov": fov, "fov_axis": "x", "film": film, "sampler": sampler},
+    }
 
 
 def noise(image: np.ndarray, reference: np.ndarray) -> float:
-    return float(np.sqrt(np.mean((image - reference) ** 2)) / np.sqrt(np.mean(reference ** 2)))
+    return float(np.sqrt(np.mean((image - reference) ** 2)) / np.sqrt(np.mean(reference**2)))
 
 
 def measure(mi, scenes: dict, spps, repeats: int) -> dict:
     """Per camera: (spp, median relative noise, median seconds) per spp, against a reference at 32 × max
     spp; the cameras' renders interleaved (each seed renders every camera in turn), so that a change
     in the machine's load reaches both alike."""
-    references = {cam: np.mean([np.array(mi.render(scene, spp=4 * max(spps), seed=1000 + s)) for s in range(8)],
-                               axis=0) for cam, scene in scenes.items()}
+    references = {
+        cam: np.mean([np.array(mi.render(scene, spp=4 * max(spps), seed=1000 + s)) for s in range(8)], axis=0)
+        for cam, scene in scenes.items()
+    }
     rows = {cam: [] for cam in scenes}
     for spp in spps:
         noises, seconds = {cam: [] for cam in scenes}, {cam: [] for cam in scenes}
@@ -161,8 +206,12 @@ def main() -> None:
     print(f"| scene | camera | {' | '.join(f'{s} spp noise / s' for s in spps)} | time to equal noise |")
     print(f"|---|---|{'---|' * len(spps)}---|")
     for name in args.scenes.split(","):
-        scenes = {cam: mi.load_dict(scene_dict(mi, name, sensor, folder)) for cam, sensor in
-                  cameras(mi, lens, width, height, args.independent_wavelengths, args.lane_tolerance).items()}
+        scenes = {
+            cam: mi.load_dict(scene_dict(mi, name, sensor, folder))
+            for cam, sensor in cameras(
+                mi, lens, width, height, args.independent_wavelengths, args.lane_tolerance
+            ).items()
+        }
         for scene in scenes.values():
             mi.render(scene, spp=spps[0], seed=0)  # warm-up: kernels compiled
         results = measure(mi, scenes, spps, args.repeats)

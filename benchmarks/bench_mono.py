@@ -13,6 +13,7 @@ so both see the same load of the shared cores; the table gives medians, min–ma
 sensitive to other jobs on the cores). The 1-minute load average is printed before and after, each round's
 times on stderr as it ends.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -36,8 +37,9 @@ def image_job(lens):
 
     def run(variant: str) -> tuple[float, float]:
         start, cpu = time.perf_counter(), time.process_time()
-        render_image(lens, image, sensor=(480, 640), spp=64, response="mono:450", fresnel="transmit", variant=variant,
-                     seed=1)
+        render_image(
+            lens, image, sensor=(480, 640), spp=64, response="mono:450", fresnel="transmit", variant=variant, seed=1
+        )
         return time.perf_counter() - start, time.process_time() - cpu
 
     return "render-image, doublet, 640×480, 64 spp, mono:450", run
@@ -81,13 +83,20 @@ def main() -> None:
             for k in range(args.repeats):
                 for v in VARIANTS:
                     times[v].append(run(v))
-                print(f"  {name}, round {k + 1}: " + ", ".join(  # progress: stderr (stdout holds the results)
-                    f"{v} {times[v][-1][0]:.2f} s ({times[v][-1][1]:.2f} s CPU)" for v in VARIANTS), file=sys.stderr,
-                      flush=True)
+                print(
+                    f"  {name}, round {k + 1}: "
+                    + ", ".join(  # progress: stderr (stdout holds the results)
+                        f"{v} {times[v][-1][0]:.2f} s ({times[v][-1][1]:.2f} s CPU)" for v in VARIANTS
+                    ),
+                    file=sys.stderr,
+                    flush=True,
+                )
             rows.append((name, times))
     print(f"load average after: {os.getloadavg()[0]:.2f}\n")
-    print("| job | variant | wall median (s) | wall min–max (s) | speed-up | CPU median (s) | CPU min–max (s) | "
-          "speed-up |")
+    print(
+        "| job | variant | wall median (s) | wall min–max (s) | speed-up | CPU median (s) | CPU min–max (s) | "
+        "speed-up |"
+    )
     print("|---|---|---|---|---|---|---|---|")
     for name, times in rows:
         cells = []

@@ -13,6 +13,7 @@ difference against its tolerance.
 Fields: 0, 0.5, 0.7 and 1 of the half field (below 90 deg: optiland's angle fields are tangents), on y;
 curves against field at 11 fields from 0. Both aim real rays at points of the stop.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -35,9 +36,15 @@ HUYGENS_SAMPLES = (128, 192, 256)  # pupil samples a side the Huygens sum may ta
 HUYGENS_SIZE = 480  # the most pixels a side of its window
 GEOMETRIC_BAND = 0.03  # of the cut-off: where many waves of aberration leave diffraction little to change
 TOLERANCES = {  # the issue's: MTF 0.01, focus 1 um, distortion 1e-4 %, Zernike 1e-3 waves; rays 1 nm
-    "chief ray height (mm)": 1e-6, "ray fan (um)": 1e-3, "field curvature (mm)": 1e-3, "distortion f-tan (%)": 1e-4,
-    "distortion f-theta (%)": 1e-4, "lateral colour (um)": 1e-3, "OPD fan (waves)": 1e-3,
-    "Zernike fringe 1-36 (waves)": 1e-3, "MTF": 0.01,
+    "chief ray height (mm)": 1e-6,
+    "ray fan (um)": 1e-3,
+    "field curvature (mm)": 1e-3,
+    "distortion f-tan (%)": 1e-4,
+    "distortion f-theta (%)": 1e-4,
+    "lateral colour (um)": 1e-3,
+    "OPD fan (waves)": 1e-3,
+    "Zernike fringe 1-36 (waves)": 1e-3,
+    "MTF": 0.01,
     "Zernike: sphere convention (waves)": np.inf,  # ours about our own sphere: what the convention alone makes
 }
 
@@ -54,12 +61,31 @@ def request(lens) -> dict:
     wl = lens.primary_wavelength
     n = lens.indices(wl)
     top = largest_field(lens)
-    return {"surfaces": [{"radius": s.radius, "thickness": s.thickness, "index_after": float(n[i + 1]),
-                          "semi_diameter": s.semi_diameter, "stop": s.stop} for i, s in enumerate(lens.surfaces)],
-            "epd_mm": paraxial(lens, wl).entrance_pupil_diameter_mm, "wavelength_nm": wl, "max_field_deg": top,
-            "fields_deg": [f * top for f in FIELD_FRACTIONS], "curve_fields_deg": np.linspace(0, top, CURVE_FIELDS).tolist(),
-            "colour": [{"wavelength_nm": w, "index_after": lens.indices(w)[1:].tolist()} for w in (*lens.wavelengths_nm, wl)],
-            "fan_pupil": FAN.tolist(), "zernike_rings": 32, "opd_fan_rays": len(FAN), "mtf_rays": 256, "mtf_grid": 512}
+    return {
+        "surfaces": [
+            {
+                "radius": s.radius,
+                "thickness": s.thickness,
+                "index_after": float(n[i + 1]),
+                "semi_diameter": s.semi_diameter,
+                "stop": s.stop,
+            }
+            for i, s in enumerate(lens.surfaces)
+        ],
+        "epd_mm": paraxial(lens, wl).entrance_pupil_diameter_mm,
+        "wavelength_nm": wl,
+        "max_field_deg": top,
+        "fields_deg": [f * top for f in FIELD_FRACTIONS],
+        "curve_fields_deg": np.linspace(0, top, CURVE_FIELDS).tolist(),
+        "colour": [
+            {"wavelength_nm": w, "index_after": lens.indices(w)[1:].tolist()} for w in (*lens.wavelengths_nm, wl)
+        ],
+        "fan_pupil": FAN.tolist(),
+        "zernike_rings": 32,
+        "opd_fan_rays": len(FAN),
+        "mtf_rays": 256,
+        "mtf_grid": 512,
+    }
 
 
 def run_optiland(python: str, requests: dict) -> dict:
@@ -67,8 +93,12 @@ def run_optiland(python: str, requests: dict) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         source, target = Path(tmp) / "request.json", Path(tmp) / "result.json"
         source.write_text(json.dumps({"lenses": requests}))
-        subprocess.run([python, str(HERE / "optiland_reference.py"), str(source), str(target)], check=True,
-                       env={**os.environ, "PYTHONWARNINGS": "ignore"}, stderr=subprocess.DEVNULL)
+        subprocess.run(
+            [python, str(HERE / "optiland_reference.py"), str(source), str(target)],
+            check=True,
+            env={**os.environ, "PYTHONWARNINGS": "ignore"},
+            stderr=subprocess.DEVNULL,
+        )
         return json.loads(target.read_text())
 
 
@@ -84,8 +114,14 @@ def ours(lens, spec: dict) -> dict:
     wl, fields = spec["wavelength_nm"], spec["fields_deg"]
     chief = chief_rays(lens, np.array([[0.0, f] for f in fields]), np.full(len(fields), wl)).image_xy[:, 1]
     zero = np.zeros_like(FAN)
-    rays = pupil_rays(lens, fields, np.full(len(fields), wl), np.concatenate([zero, FAN]), np.concatenate([FAN, zero]),
-                      axial_sphere(lens, spec))
+    rays = pupil_rays(
+        lens,
+        fields,
+        np.full(len(fields), wl),
+        np.concatenate([zero, FAN]),
+        np.concatenate([FAN, zero]),
+        axial_sphere(lens, spec),
+    )
     n = len(FAN)
     y = np.where(rays.ok, rays.y_mm, np.nan)[:, :n] - chief[:, None]
     x = np.where(rays.ok, rays.x_mm, np.nan)[:, n:]
@@ -93,9 +129,17 @@ def ours(lens, spec: dict) -> dict:
     d = distortion(within, field_samples=CURVE_FIELDS, wavelength_nm=wl)
     c = field_curvature(within, field_samples=CURVE_FIELDS, wavelengths_nm=[wl])
     colour = lateral_colour(within, field_samples=CURVE_FIELDS, wavelengths_nm=lens.wavelengths_nm)
-    return {"chief": chief, "fan_y": y, "fan_x": x, "opd_y": rays.wavefront_waves[:, :n],
-            "opd_x": rays.wavefront_waves[:, n:], "distortion": d, "curvature": c, "colour": colour.values,
-            "otf": lambda freq: np.abs(lens_otf(lens, fields, (wl,), (1.0,), freq, None)[0])}
+    return {
+        "chief": chief,
+        "fan_y": y,
+        "fan_x": x,
+        "opd_y": rays.wavefront_waves[:, :n],
+        "opd_x": rays.wavefront_waves[:, n:],
+        "distortion": d,
+        "curvature": c,
+        "colour": colour.values,
+        "otf": lambda freq: np.abs(lens_otf(lens, fields, (wl,), (1.0,), freq, None)[0]),
+    }
 
 
 def axial_sphere(lens, spec: dict) -> np.ndarray:
@@ -123,7 +167,7 @@ def zernike_at(lens, spec: dict, points, radius: np.ndarray | None) -> np.ndarra
     out = []
     for i, (f, (x, y, *_)) in enumerate(zip(spec["fields_deg"], points)):
         x, y = np.array(x), np.array(y)
-        rays = pupil_rays(lens, [f], [spec["wavelength_nm"]], x, y, None if radius is None else radius[i:i + 1])
+        rays = pupil_rays(lens, [f], [spec["wavelength_nm"]], x, y, None if radius is None else radius[i : i + 1])
         ok = rays.ok[0]
         out.append(fit("fringe", 36, x[ok], y[ok], rays.wavefront_waves[0][ok]))
     return np.array(out)
@@ -142,19 +186,27 @@ def differences(lens, spec: dict, theirs: dict) -> dict[str, float | None]:
     mine = ours(lens, spec)
     chief = np.array(theirs["chief_y_mm"])
     points = theirs["zernike_points"]
-    out = {"chief ray height (mm)": gap(mine["chief"], chief),
-           "ray fan (um)": gap(1e3 * np.concatenate([mine["fan_y"], mine["fan_x"]]), 1e3 * np.concatenate([
-               np.array(theirs["fan_y_mm"]) - chief[:, None], theirs["fan_x_mm"]])),
-           "OPD fan (waves)": gap(np.concatenate([mine["opd_y"], mine["opd_x"]]),
-                                  np.concatenate([theirs["opd_fan_y"], theirs["opd_fan_x"]])),
-           "Zernike fringe 1-36 (waves)": gap(zernike_at(lens, spec, points, axial_sphere(lens, spec)), theirs["zernike"]),
-           "Zernike: sphere convention (waves)": gap(zernike_at(lens, spec, points, None), theirs["zernike"]),
-           "distortion f-tan (%)": gap(mine["distortion"].f_tan_percent[1:], theirs["f-tan"][1:]),  # 0 on the axis
-           "distortion f-theta (%)": gap(mine["distortion"].f_theta_percent[1:], theirs["f-theta"][1:]),
-           "lateral colour (um)": gap(mine["colour"], 1e3 * (np.array(theirs["colour_chief_y_mm"][:-1])
-                                                             - theirs["colour_chief_y_mm"][-1])),
-           "field curvature (mm)": gap(np.concatenate([mine["curvature"].tangential_mm[0], mine["curvature"].sagittal_mm[0]]),
-                                       np.concatenate([theirs["tangential_mm"], theirs["sagittal_mm"]]))}
+    out = {
+        "chief ray height (mm)": gap(mine["chief"], chief),
+        "ray fan (um)": gap(
+            1e3 * np.concatenate([mine["fan_y"], mine["fan_x"]]),
+            1e3 * np.concatenate([np.array(theirs["fan_y_mm"]) - chief[:, None], theirs["fan_x_mm"]]),
+        ),
+        "OPD fan (waves)": gap(
+            np.concatenate([mine["opd_y"], mine["opd_x"]]), np.concatenate([theirs["opd_fan_y"], theirs["opd_fan_x"]])
+        ),
+        "Zernike fringe 1-36 (waves)": gap(zernike_at(lens, spec, points, axial_sphere(lens, spec)), theirs["zernike"]),
+        "Zernike: sphere convention (waves)": gap(zernike_at(lens, spec, points, None), theirs["zernike"]),
+        "distortion f-tan (%)": gap(mine["distortion"].f_tan_percent[1:], theirs["f-tan"][1:]),  # 0 on the axis
+        "distortion f-theta (%)": gap(mine["distortion"].f_theta_percent[1:], theirs["f-theta"][1:]),
+        "lateral colour (um)": gap(
+            mine["colour"], 1e3 * (np.array(theirs["colour_chief_y_mm"][:-1]) - theirs["colour_chief_y_mm"][-1])
+        ),
+        "field curvature (mm)": gap(
+            np.concatenate([mine["curvature"].tangential_mm[0], mine["curvature"].sagittal_mm[0]]),
+            np.concatenate([theirs["tangential_mm"], theirs["sagittal_mm"]]),
+        ),
+    }
     freq, ours_mtf, their_mtf = mtf_curves(lens, spec, mine["otf"], theirs)
     out["MTF"] = gap(ours_mtf, their_mtf)
     out["third route"] = third_route(lens, spec, freq, ours_mtf, their_mtf)
@@ -167,8 +219,12 @@ def mtf_curves(lens, spec: dict, otf, theirs: dict):
     from solas_mi.analysis.inputs import cutoff_cy_mm
 
     freq = np.linspace(0.0, 0.5 * cutoff_cy_mm(lens, spec["wavelength_nm"]), MTF_FREQUENCIES)
-    other = np.array([[np.interp(freq, theirs[f"freq_{key}"][i], theirs[key][i]) for key in ("tangential", "sagittal")]
-                      for i in range(len(spec["fields_deg"]))])
+    other = np.array(
+        [
+            [np.interp(freq, theirs[f"freq_{key}"][i], theirs[key][i]) for key in ("tangential", "sagittal")]
+            for i in range(len(spec["fields_deg"]))
+        ]
+    )
     return freq, otf(freq), other
 
 
@@ -182,8 +238,9 @@ def huygens_window(lens, field: float, wavelength_nm: float) -> tuple[float, int
     return pitch, int(2 * max(np.hypot(s.x_um, s.y_um).max() * 2.5, 16 * pitch) / pitch) // 2 * 2
 
 
-def huygens_mtf(lens, field: float, wavelength_nm: float, direction: int, freq: np.ndarray,
-                samples: int) -> tuple[np.ndarray, float]:
+def huygens_mtf(
+    lens, field: float, wavelength_nm: float, direction: int, freq: np.ndarray, samples: int
+) -> tuple[np.ndarray, float]:
     """The third route: the MTF along y (direction 0) or x (1) as the Fourier transform of a PSF summed
     wavelet by wavelet over the exit pupil's reference sphere (Rayleigh-Sommerfeld: U(P) = (1/(i lambda))
     sum a(Q) e^{ik(W + |P - Q|)} / |P - Q| dS, exact distances to each image point, no Fraunhofer
@@ -201,7 +258,7 @@ def huygens_mtf(lens, field: float, wavelength_nm: float, direction: int, freq: 
     radius, lam = pf.chief.sphere_radius[0], wavelength_nm * 1e-6
     p0 = np.array([*pf.chief.image_xy[0], lens.image_z])
     q = p0 + radius * np.stack([a[inside], b[inside], -gamma], axis=-1)
-    area = radius ** 2 * pf.cell_area[0] / gamma
+    area = radius**2 * pf.cell_area[0] / gamma
     k = 2 * np.pi / lam
     weight = pf.amplitude[0][inside] * np.sqrt(gamma) / radius * np.exp(1j * k * pf.opd_mm[0][inside]) * area / lam
     x = (np.arange(size) - (size - 1) / 2) * pitch * 1e-3
@@ -209,8 +266,8 @@ def huygens_mtf(lens, field: float, wavelength_nm: float, direction: int, freq: 
     points = np.stack([p0[0] + gx.ravel(), p0[1] + gy.ravel(), np.full(gx.size, p0[2])], axis=-1)
     u = np.empty(len(points), dtype=complex)
     for start in range(0, len(points), 512):
-        d = np.linalg.norm(points[start:start + 512, None, :] - q[None], axis=-1)
-        u[start:start + 512] = (np.exp(1j * k * (d - radius)) / d) @ weight
+        d = np.linalg.norm(points[start : start + 512, None, :] - q[None], axis=-1)
+        u[start : start + 512] = (np.exp(1j * k * (d - radius)) / d) @ weight
     intensity = (np.abs(u) ** 2).reshape(size, size) * (pitch * 1e-3) ** 2  # power per pixel; rows: y
     lsf = intensity.sum(axis=1 - direction)
     # the total in the same measure: Parseval on the image plane, where an oblique pencil's |U|^2 is its
@@ -256,8 +313,10 @@ def third_route(lens, spec: dict, freq, mine, other) -> list[str]:
         third = np.abs(geometric_otf(lens, (field,), (wl,), (1.0,), freq, 512)[0, d])
         top = GEOMETRIC_BAND * cutoff_cy_mm(lens, wl)
         band, route = freq <= top, f"geometric to {top:.3g} cy/mm"
-    return [f"| {lens.name} | {field:.4g} | {('tangential', 'sagittal')[d]} | {gap[i, d]:.3f} | {route} | "
-            f"{np.abs(mine[i, d] - third)[band].max():.4f} | {np.abs(other[i, d] - third)[band].max():.4f} |"]
+    return [
+        f"| {lens.name} | {field:.4g} | {('tangential', 'sagittal')[d]} | {gap[i, d]:.3f} | {route} | "
+        f"{np.abs(mine[i, d] - third)[band].max():.4f} | {np.abs(other[i, d] - third)[band].max():.4f} |"
+    ]
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -266,32 +325,45 @@ def main(argv: list[str] | None = None) -> int:
 
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("lenses", nargs="*", help="shipped lens names (default: every one)")
-    ap.add_argument("--optiland-python", default=os.environ.get("OPTILAND_PYTHON", ".optiland-venv/bin/python"),
-                    help="the Python of optiland's environment (default: $OPTILAND_PYTHON or .optiland-venv/bin/python)")
+    ap.add_argument(
+        "--optiland-python",
+        default=os.environ.get("OPTILAND_PYTHON", ".optiland-venv/bin/python"),
+        help="the Python of optiland's environment (default: $OPTILAND_PYTHON or .optiland-venv/bin/python)",
+    )
     args = ap.parse_args(argv)
     if not Path(args.optiland_python).is_file():
         ap.error(f"no optiland environment at {args.optiland_python}: make one (see the top of this file)")
     lenses = {name: Lens.load(name) for name in (args.lenses or shipped_lenses())}
     theirs = run_optiland(args.optiland_python, {name: request(lens) for name, lens in lenses.items()})
-    print(f"optiland {theirs['optiland']} (NumPy {theirs['numpy']}) against solas-mi, each lens at its primary "
-          "wavelength; the largest difference over fields (0, 0.5, 0.7, 1 of the half field), pupil points, frequencies "
-          "(to half the cut-off) and terms, tolerance in brackets:")
+    print(
+        f"optiland {theirs['optiland']} (NumPy {theirs['numpy']}) against solas-mi, each lens at its primary "
+        "wavelength; the largest difference over fields (0, 0.5, 0.7, 1 of the half field), pupil points, frequencies "
+        "(to half the cut-off) and terms, tolerance in brackets:"
+    )
     print()
     print("| lens | " + " | ".join(f"{k} [{v:g}]" if np.isfinite(v) else k for k, v in TOLERANCES.items()) + " |")
     print("|---|" + "---|" * len(TOLERANCES))
     third, errors = [], []
     for name, lens in lenses.items():
         found = differences(lens, request(lens), theirs["lenses"][name])
-        cells = [("n/a (optiland: not finite)" if found[k] is None else f"{found[k]:.2g}"
-                  + ("" if found[k] <= v else " **over**")) for k, v in TOLERANCES.items()]
+        cells = [
+            (
+                "n/a (optiland: not finite)"
+                if found[k] is None
+                else f"{found[k]:.2g}" + ("" if found[k] <= v else " **over**")
+            )
+            for k, v in TOLERANCES.items()
+        ]
         print(f"| {name} | " + " | ".join(cells) + " |", flush=True)
         third += found["third route"]
         errors += [f"optiland failed on {name}: {e}" for e in theirs["lenses"][name].get("errors", [])]
     if third:
-        print("\nWhere the MTFs differ beyond 0.01, the worst field and direction against a third route: a Huygens-Fresnel "
-              "sum over the exit pupil's reference sphere where up to 256 pupil samples a side resolve the wavefront (and its "
-              "window holds the spot), else the geometric MTF of the ray spot (the limit of many waves of aberration, "
-              "an approximation); the largest difference in its band:\n")
+        print(
+            "\nWhere the MTFs differ beyond 0.01, the worst field and direction against a third route: a Huygens-Fresnel "
+            "sum over the exit pupil's reference sphere where up to 256 pupil samples a side resolve the wavefront (and its "
+            "window holds the spot), else the geometric MTF of the ray spot (the limit of many waves of aberration, "
+            "an approximation); the largest difference in its band:\n"
+        )
         print("| lens | field (deg) | direction | ours vs optiland | third route | ours vs third | optiland vs third |")
         print("|---|---|---|---|---|---|---|")
         print("\n".join(third))

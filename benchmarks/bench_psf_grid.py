@@ -7,6 +7,7 @@ the sampling-error estimate on) and the 8×8×3 one in process (kernels compiled
 command's peak memory; then the pupil-sampling error against run time; and the figures `run_all.py`
 compares run to run (and sets the README's headline from, on an idle machine).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -50,9 +51,27 @@ def command_seconds(repeats: int) -> tuple[list[float], float]:
     with tempfile.TemporaryDirectory() as tmp:
         for _ in range(repeats):
             start = time.perf_counter()
-            subprocess.run([sys.executable, "-m", "solas_mi", "psf-grid", "solas-doublet", "--grid", "32x32",
-                            "--wavelengths-nm", "656,531,486", "--pitch-um", "0.5", "--size", "160", "-o",
-                            str(Path(tmp) / "grid.exr")], check=True, capture_output=True)
+            subprocess.run(
+                [
+                    sys.executable,
+                    "-m",
+                    "solas_mi",
+                    "psf-grid",
+                    "solas-doublet",
+                    "--grid",
+                    "32x32",
+                    "--wavelengths-nm",
+                    "656,531,486",
+                    "--pitch-um",
+                    "0.5",
+                    "--size",
+                    "160",
+                    "-o",
+                    str(Path(tmp) / "grid.exr"),
+                ],
+                check=True,
+                capture_output=True,
+            )
             times.append(time.perf_counter() - start)
     return times, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
 
@@ -64,13 +83,17 @@ def all_fields_seconds(lens: Lens) -> float:
     start = time.perf_counter()
     for w in (656.0, 531.0, 486.0):
         for a in range(0, len(fields), 64):
-            compute(lens, fields[a:a + 64], np.full(64, w), 0.5, 160, "fraunhofer",
-                    pupil_samples=DEFAULT_PUPIL_SAMPLES)
+            compute(
+                lens, fields[a : a + 64], np.full(64, w), 0.5, 160, "fraunhofer", pupil_samples=DEFAULT_PUPIL_SAMPLES
+            )
     return time.perf_counter() - start
 
 
-def sampling_sweep(lens: Lens, samples=(32, 64, 128, 256, 512), repeats: int = 3,
-                   ) -> list[tuple[int, float, float, float]]:
+def sampling_sweep(
+    lens: Lens,
+    samples=(32, 64, 128, 256, 512),
+    repeats: int = 3,
+) -> list[tuple[int, float, float, float]]:
     """(N, median seconds for the 9 PSFs, max RMSE/peak vs the finest, max RMSE/peak vs 2N)."""
     results = {}
     for n in samples:
@@ -87,7 +110,11 @@ def sampling_sweep(lens: Lens, samples=(32, 64, 128, 256, 512), repeats: int = 3
         data, sec = results[n]
         err = float((np.sqrt(np.mean((data - ref) ** 2, axis=(1, 2))) / peak).max())
         nxt = results[samples[i + 1]][0] if i + 1 < len(samples) else None
-        dbl = float((np.sqrt(np.mean((data - nxt) ** 2, axis=(1, 2))) / nxt.max(axis=(1, 2))).max()) if nxt is not None else float("nan")
+        dbl = (
+            float((np.sqrt(np.mean((data - nxt) ** 2, axis=(1, 2))) / nxt.max(axis=(1, 2))).max())
+            if nxt is not None
+            else float("nan")
+        )
         rows.append((n, sec, err, dbl))
     return rows
 
@@ -102,24 +129,31 @@ def main() -> None:
     psf(lens, (0, 0), 531.0)  # compile kernels once
     if not args.skip_grid:
         grid_seconds(lens, 8, 1)
-        rows = {"32×32×3 grid, in process": grid_seconds(lens, 32, args.repeats),
-                "8×8×3 grid, in process": grid_seconds(lens, 8, args.repeats)}
+        rows = {
+            "32×32×3 grid, in process": grid_seconds(lens, 32, args.repeats),
+            "8×8×3 grid, in process": grid_seconds(lens, 8, args.repeats),
+        }
         rows["32×32×3 grid, the `psf-grid` command"], peak_mb = command_seconds(args.repeats)
-        print(f"Fraunhofer PSFs of 160×160 at 0.5 µm, pupil {DEFAULT_PUPIL_SAMPLES}², the sampling-error "
-              "estimate on\n")
+        print(f"Fraunhofer PSFs of 160×160 at 0.5 µm, pupil {DEFAULT_PUPIL_SAMPLES}², the sampling-error estimate on\n")
         print("| job | median (s) | runs (s) |\n|---|---|---|")
         for name, t in rows.items():
             print(f"| {name} | {statistics.median(t):.2f} | {', '.join(f'{x:.2f}' for x in t)} |")
         if args.all_fields:
             print(f"| the same, all 1024 fields traced (symmetry unused) | {all_fields_seconds(lens):.1f} | 1 run |")
-        print(f"\nthe command's peak memory: {peak_mb:.0f} MB (the grid's PSFs alone: "
-              f"{3 * 32 * 32 * 160 * 160 * 4 / 2 ** 20:.0f} MB)\n")
-        for key, name in (("psf_grid_32x32x3_s", "32×32×3 grid, in process"),
-                          ("psf_grid_8x8x3_s", "8×8×3 grid, in process"),
-                          ("psf_grid_command_s", "32×32×3 grid, the `psf-grid` command")):
+        print(
+            f"\nthe command's peak memory: {peak_mb:.0f} MB (the grid's PSFs alone: "
+            f"{3 * 32 * 32 * 160 * 160 * 4 / 2**20:.0f} MB)\n"
+        )
+        for key, name in (
+            ("psf_grid_32x32x3_s", "32×32×3 grid, in process"),
+            ("psf_grid_8x8x3_s", "8×8×3 grid, in process"),
+            ("psf_grid_command_s", "32×32×3 grid, the `psf-grid` command"),
+        ):
             figure(key, statistics.median(rows[name]), "s")
         figure("psf_grid_command_peak_mb", peak_mb, "MB")
-    print("\n| pupil samples N | median seconds (9 PSFs) | max RMSE/peak vs N=512 | max RMSE/peak, N vs 2N |\n|---|---|---|---|")
+    print(
+        "\n| pupil samples N | median seconds (9 PSFs) | max RMSE/peak vs N=512 | max RMSE/peak, N vs 2N |\n|---|---|---|---|"
+    )
     for n, sec, err, dbl in sampling_sweep(lens):
         print(f"| {n} | {sec:.2f} | {err:.2e} | {dbl:.2e} |")
 

@@ -15,6 +15,7 @@ Run: .venv/bin/python benchmarks/bench_render.py [--quick | --stock]
   one's per-pixel noise (relative RMSE between two seeds / √2; stock divided by its flat white).
 Prints Markdown tables.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -35,10 +36,12 @@ from solas_mi.resources import resource_dir
 def noise_table(lens, image, camera, spps, response):
     rows = []
     for spp in spps:
-        a = render_image(lens, image, sensor=(240, 320), pitch_um=camera.pitch_um, spp=spp, response=response,
-                         seed=1).image
-        b = render_image(lens, image, sensor=(240, 320), pitch_um=camera.pitch_um, spp=spp, response=response,
-                         seed=2).image
+        a = render_image(
+            lens, image, sensor=(240, 320), pitch_um=camera.pitch_um, spp=spp, response=response, seed=1
+        ).image
+        b = render_image(
+            lens, image, sensor=(240, 320), pitch_um=camera.pitch_um, spp=spp, response=response, seed=2
+        ).image
         noise = np.sqrt(np.mean((a - b) ** 2) / 2) / np.sqrt(np.mean((0.5 * (a + b)) ** 2))
         rows.append((spp, noise))
         print(f"  {response} spp {spp}: noise {noise * 100:.2f} %", flush=True)
@@ -52,8 +55,9 @@ def stock_table(spp: int = 64, size: tuple[int, int] = (320, 240)) -> None:
     from solas_mi.render.loop import render
 
     mi = mitsuba("llvm_ad_spectral")
-    scene = mi.load_file(str(resource_dir("scenes") / "solas_doublet" / "scene.xml"), width=str(size[0]),
-                         height=str(size[1]))
+    scene = mi.load_file(
+        str(resource_dir("scenes") / "solas_doublet" / "scene.xml"), width=str(size[0]), height=str(size[1])
+    )
     lam = np.arange(380.0, 780.0, 0.05) + 0.025  # hdrfilm's flat white over the camera's wavelengths
     xyz = np.array(mi.cie1931_xyz(mi.Float(lam))).T.sum(axis=0) * 0.05 * mi.MI_CIE_Y_NORMALIZATION
     white = np.array(mi.xyz_to_srgb(mi.Color3f(*(float(v) for v in xyz)))).ravel()
@@ -76,8 +80,11 @@ def stock_table(spp: int = 64, size: tuple[int, int] = (320, 240)) -> None:
         a, b = runs[0][0], runs[1][0]
         noise = np.sqrt(np.mean((a - b) ** 2) / 2) / np.sqrt(np.mean((0.5 * (a + b)) ** 2))
         seconds = [t for _, t in runs]
-        print(f"| {name} | {samples / median(seconds) / 1e6:.2f} | {', '.join(f'{t:.2f}' for t in seconds)} | "
-              f"{noise * 100:.1f} % |", flush=True)
+        print(
+            f"| {name} | {samples / median(seconds) / 1e6:.2f} | {', '.join(f'{t:.2f}' for t in seconds)} | "
+            f"{noise * 100:.1f} % |",
+            flush=True,
+        )
 
 
 def main() -> None:
@@ -97,16 +104,21 @@ def main() -> None:
         r = render_image(lens, image, sensor=(960, 1280), spp=16 if args.quick else 64, response=response)
         rates[response] = 1280 * 960 * r.spp / r.meta["cpu_seconds"] * os.cpu_count()  # contention-proof
         cores = os.cpu_count()
-        print(f"1280x960 {response} {r.spp} spp: {r.seconds:.1f} s wall, {r.samples_per_second / 1e6:.2f} M samples/s; "
-              f"CPU {r.meta['cpu_seconds']:.1f} s = {1280 * 960 * r.spp / r.meta['cpu_seconds'] * cores / 1e6:.2f} "
-              f"M samples/s on {cores} idle cores", flush=True)
+        print(
+            f"1280x960 {response} {r.spp} spp: {r.seconds:.1f} s wall, {r.samples_per_second / 1e6:.2f} M samples/s; "
+            f"CPU {r.meta['cpu_seconds']:.1f} s = {1280 * 960 * r.spp / r.meta['cpu_seconds'] * cores / 1e6:.2f} "
+            f"M samples/s on {cores} idle cores",
+            flush=True,
+        )
     spps = (4, 16, 64) if args.quick else (4, 16, 64, 256, 1024)
     print("\n| response | spp | noise (relative RMSE) | 1280×960 time (s) |\n|---|---|---|---|")
     table = {resp: noise_table(lens, image, camera, spps, resp) for resp in ("lines", "srgb")}
     for resp, rows in table.items():
         for spp, noise in rows:
             print(f"| {resp} | {spp} | {noise * 100:.2f} % | {spp * 1280 * 960 / rates[resp]:.0f} |")
-    print("\n| cap rings | scene PSF centroid error (µm) | RMS radius error | render rate (M samples/s) |\n|---|---|---|---|")
+    print(
+        "\n| cap rings | scene PSF centroid error (µm) | RMS radius error | render rate (M samples/s) |\n|---|---|---|---|"
+    )
     import tempfile
 
     from solas_mi.optics.pupil import chief_rays
@@ -116,8 +128,10 @@ def main() -> None:
 
     for rings in (16, 32, 64, 128):
         with tempfile.TemporaryDirectory() as tmp:
-            scene = load_scene(write_scene(lens, tmp, "x.png", rings=rings, fresnel="off"), image=str(
-                resource_dir("scenes") / "images" / "rocket.png"))
+            scene = load_scene(
+                write_scene(lens, tmp, "x.png", rings=rings, fresnel="off"),
+                image=str(resource_dir("scenes") / "images" / "rocket.png"),
+            )
             worst_c = worst_r = 0.0
             for field in ((0.0, 0.0), (0.0, 2.0), (0.0, -2.0)):
                 for w in (486.0, 531.0, 656.0):
@@ -128,8 +142,9 @@ def main() -> None:
                     rms = math.sqrt(np.average((dx - cx) ** 2 + (dy - cy) ** 2, weights=pw))
                     worst_c = max(worst_c, math.hypot(p.meta["centroid_um"][0] - cx, p.meta["centroid_um"][1] - cy))
                     worst_r = max(worst_r, abs(p.meta["rms_radius_um"] / rms - 1))
-        r = render_image(lens, image, sensor=(240, 320), pitch_um=camera.pitch_um, spp=64, response="lines",
-                         rings=rings)
+        r = render_image(
+            lens, image, sensor=(240, 320), pitch_um=camera.pitch_um, spp=64, response="lines", rings=rings
+        )
         print(f"| {rings} | {worst_c:.3f} | {worst_r * 100:.3f} % | {r.samples_per_second / 1e6:.2f} |", flush=True)
 
 

@@ -10,6 +10,7 @@ processes used meanwhile (timings are only good near 0), and the share of a degr
 (batch.degrade.SECONDS_PER_VALUE per value of an RGB frame: reading, degrading, writing); and the figures
 `run_all.py` compares run to run (each case's median).
 """
+
 from __future__ import annotations
 
 import argparse
@@ -60,7 +61,9 @@ def main() -> None:
 
     degrade_s = SECONDS_PER_VALUE * W * H * 3
     print(f"{W}×{H} frame; a degrade batch item of this size: {degrade_s:.2f} s (SECONDS_PER_VALUE)\n")
-    print("| case | median (s) | runs min–max (s) | frames/s | share of a degrade item | other processes' load (cores) |")
+    print(
+        "| case | median (s) | runs min–max (s) | frames/s | share of a degrade item | other processes' load (cores) |"
+    )
     print("|---|---|---|---|---|---|")
     medians = {}
     for name, run in cases().items():
@@ -72,8 +75,10 @@ def main() -> None:
             times.append(time.perf_counter() - t0)
             busy += busy_seconds() - b0 - times[-1]
         median = medians[name] = statistics.median(times)
-        print(f"| {name} | {median:.3f} | {min(times):.3f}–{max(times):.3f} | {1 / median:.1f} | "
-              f"{median / degrade_s:.0%} | {max(busy / sum(times), 0.0):.2f} |")
+        print(
+            f"| {name} | {median:.3f} | {min(times):.3f}–{max(times):.3f} | {1 / median:.1f} | "
+            f"{median / degrade_s:.0%} | {max(busy / sum(times), 0.0):.2f} |"
+        )
     print()
     for name, median in medians.items():  # "sensor + isp default (RGGB)" → sensor_isp_default_rggb_s
         figure(re.sub(r"[^a-z0-9]+", "_", name.lower()).strip("_") + "_s", median, "s")

@@ -20,6 +20,7 @@ fields.
 
     .venv/bin/python benchmarks/bench_sharpness.py              # or: benchmarks/run_all.py bench_sharpness
 """
+
 from __future__ import annotations
 
 import math
@@ -59,8 +60,14 @@ def edge_image(psf_data: np.ndarray, normal: str) -> np.ndarray:
     return pixels[margin:-margin, margin:-margin]
 
 
-def predicted(lens, field: float | tuple[float, ...], wavelength: float, pitch_um: float, direction: int,
-              ramp_px: float = 1.0 / OVERSAMPLE) -> tuple[float, float]:
+def predicted(
+    lens,
+    field: float | tuple[float, ...],
+    wavelength: float,
+    pitch_um: float,
+    direction: int,
+    ramp_px: float = 1.0 / OVERSAMPLE,
+) -> tuple[float, float]:
     """(lens MTF50 in cy/mm, MTF50 of lens × pixel × the edge's drawing ramp of `ramp_px` pixels, in cy/px)
     along the direction (0: y, tangential; 1: x, sagittal) at field (0, `field`) deg; a tuple of fields:
     of the mean of their lens MTFs."""
@@ -115,9 +122,21 @@ def measure(lens) -> list[dict]:
     for direction, normal in ((0, "y"), (1, "x")):
         lens_mtf50, expected = predicted(lens, field, wl, pitch, direction)
         found = esfr(edge_image(p.data, normal))
-        rows.append({"lens": lens.name, "field": field, "pitch": pitch, "direction": ("tangential", "sagittal")[direction],
-                     "lens_cy_mm": lens_mtf50, "expected": expected, "esfr": found.mtf50, "valid": found.valid,
-                     "reason": found.reason, "energy": p.meta["energy_in_grid"], "samples": samples})
+        rows.append(
+            {
+                "lens": lens.name,
+                "field": field,
+                "pitch": pitch,
+                "direction": ("tangential", "sagittal")[direction],
+                "lens_cy_mm": lens_mtf50,
+                "expected": expected,
+                "esfr": found.mtf50,
+                "valid": found.valid,
+                "reason": found.reason,
+                "energy": p.meta["energy_in_grid"],
+                "samples": samples,
+            }
+        )
     return rows
 
 
@@ -128,12 +147,16 @@ def main() -> int:
     rows = [r for name in shipped_lenses() for r in measure(Lens.load(name))]
     blur = sorted({r["lens"] for r in rows}, key=lambda n: min(r["lens_cy_mm"] for r in rows if r["lens"] == n))
     chosen = set(blur[:LENSES])
-    print(f"e-SFR MTF50 of a slanted edge ({TILT_DEG:g} deg) degraded by the lens's PSF at {FIELD_FRACTION:g} of its half "
-          "field (primary wavelength) and integrated over square pixels, beside the MTF50 of the lens's diffraction MTF "
-          "x the pixel's; the three lenses of largest off-axis blur (lowest lens MTF50) marked *:")
+    print(
+        f"e-SFR MTF50 of a slanted edge ({TILT_DEG:g} deg) degraded by the lens's PSF at {FIELD_FRACTION:g} of its half "
+        "field (primary wavelength) and integrated over square pixels, beside the MTF50 of the lens's diffraction MTF "
+        "x the pixel's; the three lenses of largest off-axis blur (lowest lens MTF50) marked *:"
+    )
     print()
-    print("| lens | field (deg) | pixel (um) | direction | lens MTF50 (cy/mm) | lens x pixel MTF50 (cy/px) | "
-          "e-SFR MTF50 (cy/px) | difference |")
+    print(
+        "| lens | field (deg) | pixel (um) | direction | lens MTF50 (cy/mm) | lens x pixel MTF50 (cy/px) | "
+        "e-SFR MTF50 (cy/px) | difference |"
+    )
     print("|---|---|---|---|---|---|---|---|")
     worst = 0.0
     for r in rows:
@@ -141,11 +164,15 @@ def main() -> int:
         mark = " *" if r["lens"] in chosen else ""
         if r["lens"] in chosen:
             worst = max(worst, abs(diff))
-        print(f"| {r['lens']}{mark} | {r['field']:.3g} | {r['pitch']:.3g} | {r['direction']} | {r['lens_cy_mm']:.4g} | "
-              f"{r['expected']:.4f} | {r['esfr']:.4f} | {100 * diff:+.2f} % |")
+        print(
+            f"| {r['lens']}{mark} | {r['field']:.3g} | {r['pitch']:.3g} | {r['direction']} | {r['lens_cy_mm']:.4g} | "
+            f"{r['expected']:.4f} | {r['esfr']:.4f} | {100 * diff:+.2f} % |"
+        )
     print()
-    print(f"Largest difference on the three lenses of largest off-axis blur ({', '.join(sorted(chosen))}): "
-          f"{100 * worst:.2f} % (acceptance {100 * ACCEPTANCE:g} %): {'met' if worst <= ACCEPTANCE else 'NOT met'}.")
+    print(
+        f"Largest difference on the three lenses of largest off-axis blur ({', '.join(sorted(chosen))}): "
+        f"{100 * worst:.2f} % (acceptance {100 * ACCEPTANCE:g} %): {'met' if worst <= ACCEPTANCE else 'NOT met'}."
+    )
     print()
     print_rendered([r for r in rows if r["lens"] in chosen and r["direction"] == "tangential"])
     return 0
@@ -158,28 +185,39 @@ def print_rendered(chosen: list[dict]) -> None:
 
     from solas_mi import Lens
 
-    rows = [r for c in chosen for r in measure_rendered(Lens.load(c["lens"]), c["field"],
-                                                         Lens.load(c["lens"]).primary_wavelength, c["pitch"])]
-    print(f"The same edges rendered through the lens in Mitsuba ({ROI_PX}x{ROI_PX}-px crop at the field, {SPP} spp, "
-          f"seeds {', '.join(map(str, SEEDS))}, object texels 1/{TEXELS_PER_PX} px, flat-fielded by a render of a "
-          "uniform object), beside the lens x pixel x texel MTF50:")
+    rows = [
+        r
+        for c in chosen
+        for r in measure_rendered(Lens.load(c["lens"]), c["field"], Lens.load(c["lens"]).primary_wavelength, c["pitch"])
+    ]
+    print(
+        f"The same edges rendered through the lens in Mitsuba ({ROI_PX}x{ROI_PX}-px crop at the field, {SPP} spp, "
+        f"seeds {', '.join(map(str, SEEDS))}, object texels 1/{TEXELS_PER_PX} px, flat-fielded by a render of a "
+        "uniform object), beside the lens x pixel x texel MTF50:"
+    )
     print()
-    print("| lens | direction | lens x pixel x texel MTF50 (cy/px) | rendered e-SFR MTF50 (cy/px, mean of seeds) | "
-          "seeds' spread | difference | same, lens MTF averaged over the edge's fields | measured tilt (deg) | "
-          "geometric MTF along the measured normal, averaged over the edge's fields, x pixel x texel | render time per edge (s) |")
+    print(
+        "| lens | direction | lens x pixel x texel MTF50 (cy/px) | rendered e-SFR MTF50 (cy/px, mean of seeds) | "
+        "seeds' spread | difference | same, lens MTF averaged over the edge's fields | measured tilt (deg) | "
+        "geometric MTF along the measured normal, averaged over the edge's fields, x pixel x texel | render time per edge (s) |"
+    )
     print("|---|---|---|---|---|---|---|---|---|---|")
     worst = 0.0
     for r in rows:
         diff = (r["esfr"] - r["expected"]) / r["expected"]
         worst = max(worst, abs(diff)) if math.isfinite(diff) else math.inf
-        print(f"| {r['lens']} | {r['direction']} | {r['expected']:.4f} | {r['esfr']:.4f} | "
-              f"{100 * r['spread'] / r['expected']:.2f} % | {100 * diff:+.2f} % | {r['averaged']:.4f} "
-              f"({r['fields'][0]:.3g}-{r['fields'][1]:.3g} deg) | {r['tilt']:.2f} | {r['geometric']:.4f} "
-              f"({100 * (r['esfr'] / r['geometric'] - 1):+.2f} %) | {r['seconds']:.0f} |"
-              + (f" {r['reason']}" if r["reason"] else ""))
+        print(
+            f"| {r['lens']} | {r['direction']} | {r['expected']:.4f} | {r['esfr']:.4f} | "
+            f"{100 * r['spread'] / r['expected']:.2f} % | {100 * diff:+.2f} % | {r['averaged']:.4f} "
+            f"({r['fields'][0]:.3g}-{r['fields'][1]:.3g} deg) | {r['tilt']:.2f} | {r['geometric']:.4f} "
+            f"({100 * (r['esfr'] / r['geometric'] - 1):+.2f} %) | {r['seconds']:.0f} |"
+            + (f" {r['reason']}" if r["reason"] else "")
+        )
     print()
-    print(f"Largest difference of the rendered edges: {100 * worst:.2f} % (acceptance {100 * ACCEPTANCE:g} %): "
-          f"{'met' if worst <= ACCEPTANCE else 'NOT met'}.")
+    print(
+        f"Largest difference of the rendered edges: {100 * worst:.2f} % (acceptance {100 * ACCEPTANCE:g} %): "
+        f"{'met' if worst <= ACCEPTANCE else 'NOT met'}."
+    )
     print()
     figure("rendered_edges_s", sum(r["seconds"] for r in rows), "s")
 

@@ -8,6 +8,7 @@
 
     .venv/bin/python benchmarks/bench_three_ways.py [--repeats 3] [--spp 64]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -58,40 +59,86 @@ def main() -> None:
         cam = camera_for(lens, (H, W))
         xml = write_scene(lens, tmp, str(Path(tmp) / "image.exr"), cam, response="mono:531", fresnel="off")
         geo = load_scene(xml, "llvm_ad_spectral")
-        rows.append(("image", "solas-mi loop, lens as geometry", *timed(lambda: render(geo, args.spp), args.repeats,
-                                                                             samples)))
+        rows.append(
+            ("image", "solas-mi loop, lens as geometry", *timed(lambda: render(geo, args.spp), args.repeats, samples))
+        )
         text = xml.read_text()
         start, end = text.index('<film type="hdrfilm">'), text.index("</film>") + len("</film>")
-        xml.write_text(text[:start] + '<film type="specfilm"><integer name="width" value="$width"/><integer '
-                       'name="height" value="$height"/><rfilter type="box"/><spectrum name="Y" '
-                       'value="529:0, 530:1, 532:1, 533:0"/></film>' + text[end:])
+        xml.write_text(
+            text[:start] + '<film type="specfilm"><integer name="width" value="$width"/><integer '
+            'name="height" value="$height"/><rfilter type="box"/><spectrum name="Y" '
+            'value="529:0, 530:1, 532:1, 533:0"/></film>' + text[end:]
+        )
         stock = load_scene(xml, "llvm_ad_spectral")
-        rows.append(("image", "Mitsuba path, lens as geometry",
-                     *timed(lambda: mi.render(stock, spp=args.spp), args.repeats, samples)))
-        camera = mi.load_dict({"type": "scene", "integrator": {"type": "path", "max_depth": 2},
-                               "sensor": {"type": "lens_camera", "pitch_um": cam.pitch_um, "response": "mono:531",
-                                          "to_world": back, "film": film},
-                               "object": {"type": "image_object", "filename": str(Path(tmp) / "image.exr"),
-                                          "fov_deg": cam.fov_deg}})
-        rows.append(("image", "Mitsuba path, lens_camera",
-                     *timed(lambda: mi.render(camera, spp=args.spp), args.repeats, samples)))
+        rows.append(
+            (
+                "image",
+                "Mitsuba path, lens as geometry",
+                *timed(lambda: mi.render(stock, spp=args.spp), args.repeats, samples),
+            )
+        )
+        camera = mi.load_dict(
+            {
+                "type": "scene",
+                "integrator": {"type": "path", "max_depth": 2},
+                "sensor": {
+                    "type": "lens_camera",
+                    "pitch_um": cam.pitch_um,
+                    "response": "mono:531",
+                    "to_world": back,
+                    "film": film,
+                },
+                "object": {"type": "image_object", "filename": str(Path(tmp) / "image.exr"), "fov_deg": cam.fov_deg},
+            }
+        )
+        rows.append(
+            (
+                "image",
+                "Mitsuba path, lens_camera",
+                *timed(lambda: mi.render(camera, spp=args.spp), args.repeats, samples),
+            )
+        )
 
     def plane():
         tf = mi.ScalarTransform4f().translate([1e5, 0, -1e5]).scale(1e5)
-        return {"type": "rectangle", "to_world": tf,
-                "emitter": {"type": "area", "radiance": {"type": "uniform", "value": 1.0}}}
+        return {
+            "type": "rectangle",
+            "to_world": tf,
+            "emitter": {"type": "area", "radiance": {"type": "uniform", "value": 1.0}},
+        }
 
-    geometry = lens_geometry(lens, integrator={"type": "path", "max_depth": 8}, edge=plane(),
-                             sensor={"type": "lens_sensor", "lens": lens.source, "pitch_um": 2.0,
-                                     "response": "mono:531", "film": film})
-    sequential = mi.load_dict({"type": "scene", "integrator": {"type": "path", "max_depth": 2}, "edge": plane(),
-                               "sensor": {"type": "lens_camera", "lens": lens.source, "pitch_um": 2.0,
-                                          "response": "mono:531", "world_unit_mm": 1.0, "film": film,
-                                          "to_world": back}})
-    rows.append(("3D", "Mitsuba path, lens as geometry",
-                 *timed(lambda: mi.render(geometry, spp=args.spp), args.repeats, samples)))
-    rows.append(("3D", "Mitsuba path, lens_camera",
-                 *timed(lambda: mi.render(sequential, spp=args.spp), args.repeats, samples)))
+    geometry = lens_geometry(
+        lens,
+        integrator={"type": "path", "max_depth": 8},
+        edge=plane(),
+        sensor={"type": "lens_sensor", "lens": lens.source, "pitch_um": 2.0, "response": "mono:531", "film": film},
+    )
+    sequential = mi.load_dict(
+        {
+            "type": "scene",
+            "integrator": {"type": "path", "max_depth": 2},
+            "edge": plane(),
+            "sensor": {
+                "type": "lens_camera",
+                "lens": lens.source,
+                "pitch_um": 2.0,
+                "response": "mono:531",
+                "world_unit_mm": 1.0,
+                "film": film,
+                "to_world": back,
+            },
+        }
+    )
+    rows.append(
+        (
+            "3D",
+            "Mitsuba path, lens as geometry",
+            *timed(lambda: mi.render(geometry, spp=args.spp), args.repeats, samples),
+        )
+    )
+    rows.append(
+        ("3D", "Mitsuba path, lens_camera", *timed(lambda: mi.render(sequential, spp=args.spp), args.repeats, samples))
+    )
     print("| scene | renderer | M samples/s | runs (s) |\n|---|---|---|---|")
     for scene, name, rate, times in rows:
         print(f"| {scene} | {name} | {rate:.2f} | {', '.join(f'{t:.2f}' for t in times)} |")

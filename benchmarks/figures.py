@@ -3,6 +3,7 @@
 in a rate (…/s) better higher; `run_all.py` compares each with the same figure of the recorded run and
 calls a change for the worse of more than REGRESSION a regression.
 """
+
 from __future__ import annotations
 
 import re

@@ -7,6 +7,7 @@ peak-normalised. Prints the RMSE per case (Markdown), for KrakenOS at the physic
 tools against a direct Huygens–Fresnel sum over our 128² pupil (no Fraunhofer approximation; ~20 s a
 case), which checks the diffraction step apart from the wavefront.
 """
+
 from __future__ import annotations
 
 import sys
@@ -37,8 +38,14 @@ def huygens(lens: Lens, field_y: float, wavelength_nm: float, samples: int = 128
     inside = pf.amplitude[0] > 0
     radius = pf.chief.sphere_radius[0]
     p0 = np.array([*pf.chief.image_xy[0], lens.image_z])
-    q = np.stack([p0[0] + radius * a[inside], p0[1] + radius * b[inside],
-                  p0[2] - radius * np.sqrt(1 - a[inside] ** 2 - b[inside] ** 2)], axis=-1)
+    q = np.stack(
+        [
+            p0[0] + radius * a[inside],
+            p0[1] + radius * b[inside],
+            p0[2] - radius * np.sqrt(1 - a[inside] ** 2 - b[inside] ** 2),
+        ],
+        axis=-1,
+    )
     k = 2 * np.pi / (wavelength_nm * 1e-6)
     field = pf.amplitude[0][inside] * np.exp(1j * k * pf.opd_mm[0][inside])
     x = (np.arange(160) - 79.5) * 0.5e-3
@@ -46,8 +53,8 @@ def huygens(lens: Lens, field_y: float, wavelength_nm: float, samples: int = 128
     p = np.stack([p0[0] + gx.ravel(), p0[1] + gy.ravel(), np.full(gx.size, p0[2])], axis=-1)
     u = np.empty(len(p), dtype=complex)
     for s in range(0, len(p), 512):
-        d = np.linalg.norm(p[s:s + 512, None, :] - q[None], axis=-1)
-        u[s:s + 512] = (np.exp(1j * k * (d - radius)) * (radius / d)) @ field
+        d = np.linalg.norm(p[s : s + 512, None, :] - q[None], axis=-1)
+        u[s : s + 512] = (np.exp(1j * k * (d - radius)) * (radius / d)) @ field
     return normalize((np.abs(u) ** 2).reshape(160, 160), "peak")
 
 
@@ -56,16 +63,20 @@ def main() -> None:
     lens = Lens.load("solas-doublet")
     mine = ours(lens)
     coarse = ours(lens, 128)  # the Huygens sum's own sampling
-    print("| field (deg) | λ (nm) | ours vs KrakenOS F/7.90 | ours vs KrakenOS F/7.99 | ours vs Huygens "
-          "| KrakenOS F/7.90 vs Huygens |")
+    print(
+        "| field (deg) | λ (nm) | ours vs KrakenOS F/7.90 | ours vs KrakenOS F/7.99 | ours vs Huygens "
+        "| KrakenOS F/7.90 vs Huygens |"
+    )
     print("|---|---|---|---|---|---|")
     rmse = lambda p, q: float(np.sqrt(np.mean((p - q) ** 2)))  # noqa: E731
     for f, w in CASES:
         key = f"f{f:+d}_w{w}"
         a, b, c = mine[(f, w)], ref[f"psf_{key}"], ref[f"native_psf_{key}"]
         h = huygens(lens, float(f), float(w))
-        print(f"| {f:+d} | {w} | {rmse(a, b):.4f} | {rmse(a, c):.4f} | {rmse(coarse[(f, w)], h):.1e} | {rmse(b, h):.4f} |",
-              flush=True)
+        print(
+            f"| {f:+d} | {w} | {rmse(a, b):.4f} | {rmse(a, c):.4f} | {rmse(coarse[(f, w)], h):.1e} | {rmse(b, h):.4f} |",
+            flush=True,
+        )
 
 
 if __name__ == "__main__":

@@ -13,6 +13,7 @@ on every surface (so rays are clipped where solas-mi clips them) and real ray ai
 stop points), its entrance pupil scaled so that its pupil's rim is the stop's (`fit_pupil`). Fields are
 angles on y.
 """
+
 from __future__ import annotations
 
 import json
@@ -33,9 +34,14 @@ def build(spec: dict):
     optic = Optic()
     optic.surfaces.add(index=0, radius=np.inf, thickness=np.inf)
     for i, s in enumerate(spec["surfaces"], start=1):
-        optic.surfaces.add(index=i, radius=s["radius"] or np.inf, thickness=s["thickness"],
-                           material=IdealMaterial(s["index_after"]), is_stop=s["stop"],
-                           aperture=RadialAperture(r_max=s["semi_diameter"] * (1 + RIM_SLACK)))
+        optic.surfaces.add(
+            index=i,
+            radius=s["radius"] or np.inf,
+            thickness=s["thickness"],
+            material=IdealMaterial(s["index_after"]),
+            is_stop=s["stop"],
+            aperture=RadialAperture(r_max=s["semi_diameter"] * (1 + RIM_SLACK)),
+        )
     optic.surfaces.add(index=len(spec["surfaces"]) + 1)
     optic.set_aperture(aperture_type="EPD", value=spec["epd_mm"])
     optic.fields.set_type(field_type="angle")
@@ -114,8 +120,13 @@ def lateral_colour(optic, spec: dict) -> dict:
         surfaces = [{**s, "index_after": n} for s, n in zip(spec["surfaces"], colour["index_after"])]
         other = build({**spec, "surfaces": surfaces, "wavelength_nm": colour["wavelength_nm"]})
         hy = np.array(spec["curve_fields_deg"]) / spec["max_field_deg"]
-        rays = other.trace_generic(Hx=np.zeros_like(hy), Hy=hy, Px=np.zeros_like(hy), Py=np.zeros_like(hy),
-                                   wavelength=colour["wavelength_nm"] * 1e-3)
+        rays = other.trace_generic(
+            Hx=np.zeros_like(hy),
+            Hy=hy,
+            Px=np.zeros_like(hy),
+            Py=np.zeros_like(hy),
+            wavelength=colour["wavelength_nm"] * 1e-3,
+        )
         heights.append(np.where(np.asarray(rays.i) > 0, np.asarray(rays.y), np.nan).tolist())
     return {"colour_chief_y_mm": heights}
 
@@ -128,10 +139,13 @@ def wavefront(optic, spec: dict) -> dict:
     out = {"zernike": [], "opd_fan_pupil": None, "opd_fan_y": [], "opd_fan_x": []}
     for f in spec["fields_deg"]:
         field = (0.0, f / spec["max_field_deg"])
-        z = ZernikeOPD(optic, field=field, wavelength=wl, num_rings=spec["zernike_rings"], zernike_type="fringe",
-                       num_terms=36)
+        z = ZernikeOPD(
+            optic, field=field, wavelength=wl, num_rings=spec["zernike_rings"], zernike_type="fringe", num_terms=36
+        )
         out["zernike"].append(np.asarray(z.coeffs).tolist())
-        out.setdefault("zernike_points", []).append([np.asarray(z.x).tolist(), np.asarray(z.y).tolist(), np.asarray(z.z).tolist()])
+        out.setdefault("zernike_points", []).append(
+            [np.asarray(z.x).tolist(), np.asarray(z.y).tolist(), np.asarray(z.z).tolist()]
+        )
         fan = OPDFan(optic, fields=[field], wavelengths=[wl], num_rays=spec["opd_fan_rays"])
         data = fan.get_data(field, wl)
         opd = np.where(np.asarray(data.intensity) > 0, np.asarray(data.opd), np.nan)
@@ -151,10 +165,12 @@ def mtf(optic, spec: dict) -> dict:
     wl = spec["wavelength_nm"] * 1e-3
     fields = [(0.0, f / spec["max_field_deg"]) for f in spec["fields_deg"]]
     m = FFTMTF(optic, fields=fields, wavelength=wl, num_rays=spec["mtf_rays"], grid_size=spec["mtf_grid"])
-    return {"freq_tangential": [np.asarray(v).tolist() for v in m.freq_tang],
-            "freq_sagittal": [np.asarray(v).tolist() for v in m.freq_sag],
-            "tangential": [np.asarray(v[0]).tolist() for v in m.mtf],
-            "sagittal": [np.asarray(v[1]).tolist() for v in m.mtf]}
+    return {
+        "freq_tangential": [np.asarray(v).tolist() for v in m.freq_tang],
+        "freq_sagittal": [np.asarray(v).tolist() for v in m.freq_sag],
+        "tangential": [np.asarray(v[0]).tolist() for v in m.mtf],
+        "sagittal": [np.asarray(v[1]).tolist() for v in m.mtf],
+    }
 
 
 def main(argv: list[str]) -> int:

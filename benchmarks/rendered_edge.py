@@ -12,6 +12,7 @@ whole film). The crop is divided by the same crop rendered from a uniform object
 illumination and Fresnel losses vary by several % across it, which e-SFR would read as a slope of the
 edge's profile), then measured by `metrics.esfr`. Two seeds per edge: their spread is the render noise.
 """
+
 from __future__ import annotations
 
 import math
@@ -73,7 +74,9 @@ def edge_object(lens, field: float, pitch_um: float, scale: tuple[float, float],
     return image, fov, texel * (radial if normal == "y" else across) / (pitch_um * 1e-3)
 
 
-def render_crop(lens, image: np.ndarray, spec, crop: tuple[int, int, int, int], seeds) -> tuple[list[np.ndarray], float]:
+def render_crop(
+    lens, image: np.ndarray, spec, crop: tuple[int, int, int, int], seeds
+) -> tuple[list[np.ndarray], float]:
     """The crop window (column and row of its corner, columns, rows) of the lens's render of `image`, once
     per seed (one scene, loaded once), and the seconds it took."""
     from solas_mi.imageio import image_channels, write_exr
@@ -87,8 +90,10 @@ def render_crop(lens, image: np.ndarray, spec, crop: tuple[int, int, int, int], 
         path = str(Path(tmp) / "object.exr")
         write_exr(path, image_channels(image))
         xml = write_scene(lens, tmp, path, image_sensor(lens, spec), spec)
-        window = "".join(f'\n            <integer name="crop_{k}" value="{v}"/>' for k, v in
-                         zip(("offset_x", "offset_y", "width", "height"), crop))
+        window = "".join(
+            f'\n            <integer name="crop_{k}" value="{v}"/>'
+            for k, v in zip(("offset_x", "offset_y", "width", "height"), crop)
+        )
         film = '<rfilter type="box"/>'
         xml.write_text(xml.read_text().replace(film, film + window))
         scene = load_scene(xml)
@@ -96,7 +101,9 @@ def render_crop(lens, image: np.ndarray, spec, crop: tuple[int, int, int, int], 
     return images, time.perf_counter() - start
 
 
-def along_fields(lens, field: float, pitch_um: float, scale: tuple[float, float], normal: str, pixels: int) -> np.ndarray:
+def along_fields(
+    lens, field: float, pitch_um: float, scale: tuple[float, float], normal: str, pixels: int
+) -> np.ndarray:
     """The fields (deg) of the points of an edge through (0, `field`) along its `pixels` pixels, every 4th:
     radial for an edge across x (sagittal), across the field for one across y (tangential)."""
     _, coordinate = mapping_of(lens)
@@ -107,12 +114,14 @@ def along_fields(lens, field: float, pitch_um: float, scale: tuple[float, float]
     return np.array([inverse(math.hypot(coordinate(field), o / scale[1])) for o in offsets])
 
 
-def geometric_along(lens, fields: np.ndarray, wavelength: float, pitch_um: float, normal_deg: float,
-                    texel_px: float) -> float:
+def geometric_along(
+    lens, fields: np.ndarray, wavelength: float, pitch_um: float, normal_deg: float, texel_px: float
+) -> float:
     """MTF50 (cy/px) of the geometric MTF (the ray spot, 256² rays on the entrance grid: what the render
     traces) along the direction `normal_deg` from x, averaged over the fields (0, f) of `fields`, × the
     pixel's and the texel ramp's."""
     from bench_sharpness import pixel_mtf
+
     from solas_mi.analysis.inputs import cutoff_cy_mm
     from solas_mi.analysis.otf import spot_otf
     from solas_mi.metrics.mtf import mtf50
@@ -122,8 +131,13 @@ def geometric_along(lens, fields: np.ndarray, wavelength: float, pitch_um: float
     points, wl = np.stack([np.zeros(len(fields)), fields], axis=1), np.full(len(fields), wavelength)
     freq = np.linspace(0.0, cutoff_cy_mm(lens, wavelength), 4001)
     t = math.radians(normal_deg)
-    lens_mtf = np.mean([np.abs(spot_otf((x * math.cos(t) + y * math.sin(t)) * 1e-3, power, freq))
-                        for x, y, power in entrance_grid_hits(lens, points, wl, 256, chief_rays(lens, points, wl))], axis=0)
+    lens_mtf = np.mean(
+        [
+            np.abs(spot_otf((x * math.cos(t) + y * math.sin(t)) * 1e-3, power, freq))
+            for x, y, power in entrance_grid_hits(lens, points, wl, 256, chief_rays(lens, points, wl))
+        ],
+        axis=0,
+    )
     f_px = freq * pitch_um * 1e-3
     return mtf50(lens_mtf * pixel_mtf(f_px, texel_px), f_px)
 
@@ -134,14 +148,18 @@ def windows(point: np.ndarray, pitch_um: float, side: int) -> dict[str, tuple[in
     x0 = int(round(side / 2 + point[0] * 1e3 / pitch_um - ROI_PX / 2))
     y0 = int(round(side / 2 - point[1] * 1e3 / pitch_um - ROI_PX / 2))
     inset = (ROI_PX - ALONG_PX) // 2
-    return {"flat": (x0, y0, ROI_PX, ROI_PX), "x": (x0, y0 + inset, ROI_PX, ALONG_PX),
-            "y": (x0 + inset, y0, ALONG_PX, ROI_PX)}
+    return {
+        "flat": (x0, y0, ROI_PX, ROI_PX),
+        "x": (x0, y0 + inset, ROI_PX, ALONG_PX),
+        "y": (x0 + inset, y0, ALONG_PX, ROI_PX),
+    }
 
 
 def measure_rendered(lens, field: float, wavelength: float, pitch_um: float) -> list[dict]:
     """Both directions of one lens by the rendered route (module docstring); beside the prediction at the
     field, the MTF50 of the lens's MTF averaged over the fields along the edge in the crop."""
     from bench_sharpness import predicted
+
     from solas_mi.metrics.esfr import esfr
     from solas_mi.render.spec import RenderSpec
 
@@ -152,25 +170,45 @@ def measure_rendered(lens, field: float, wavelength: float, pitch_um: float) -> 
     rows, seconds, flat = [], 0.0, None
     for direction, normal in ((0, "y"), (1, "x")):
         image, fov, texel_px = edge_object(lens, field, pitch_um, tuple(scale), normal)
-        spec = RenderSpec(sensor=(side, side), pitch_um=pitch_um, fov_deg=fov, mapping=mapping,
-                          response=f"mono:{wavelength!r}", spp=SPP)
+        spec = RenderSpec(
+            sensor=(side, side),
+            pitch_um=pitch_um,
+            fov_deg=fov,
+            mapping=mapping,
+            response=f"mono:{wavelength!r}",
+            spp=SPP,
+        )
         if flat is None:
             (flat,), seconds = render_crop(lens, np.ones((2, 2), np.float32), spec, crops["flat"], SEEDS[:1])
         edges, took = render_crop(lens, image, spec, crops[normal], SEEDS)
         seconds += took
         x, y, w, h = crops[normal]
-        found = [esfr(e / flat[y - crops["flat"][1]:y - crops["flat"][1] + h, x - crops["flat"][0]:x - crops["flat"][0] + w])
-                 for e in edges]
+        found = [
+            esfr(
+                e
+                / flat[y - crops["flat"][1] : y - crops["flat"][1] + h, x - crops["flat"][0] : x - crops["flat"][0] + w]
+            )
+            for e in edges
+        ]
         values = [r.mtf50 if r.valid else math.nan for r in found]
         tilt = found[0].angle_deg or 0.0  # the measured tilt from its axis; its sign the drawn one's (+)
         normal_deg = (90.0 if normal == "y" else 0.0) + tilt
         fields = along_fields(lens, field, pitch_um, tuple(scale), normal, ALONG_PX)
-        rows.append({"lens": lens.name, "direction": ("tangential", "sagittal")[direction], "texel_px": texel_px,
-                     "expected": predicted(lens, field, wavelength, pitch_um, direction, texel_px)[1],
-                     "averaged": predicted(lens, tuple(fields), wavelength, pitch_um, direction, texel_px)[1],
-                     "geometric": geometric_along(lens, fields, wavelength, pitch_um, normal_deg, texel_px),
-                     "tilt": tilt, "fields": (fields.min(), fields.max()), "esfr": float(np.mean(values)),
-                     "spread": abs(values[0] - values[-1]), "reason": "; ".join(r.reason for r in found if not r.valid)})
+        rows.append(
+            {
+                "lens": lens.name,
+                "direction": ("tangential", "sagittal")[direction],
+                "texel_px": texel_px,
+                "expected": predicted(lens, field, wavelength, pitch_um, direction, texel_px)[1],
+                "averaged": predicted(lens, tuple(fields), wavelength, pitch_um, direction, texel_px)[1],
+                "geometric": geometric_along(lens, fields, wavelength, pitch_um, normal_deg, texel_px),
+                "tilt": tilt,
+                "fields": (fields.min(), fields.max()),
+                "esfr": float(np.mean(values)),
+                "spread": abs(values[0] - values[-1]),
+                "reason": "; ".join(r.reason for r in found if not r.valid),
+            }
+        )
     for r in rows:
         r["seconds"] = seconds / len(rows)
     return rows

@@ -12,6 +12,7 @@ above half the cores) is marked so and never sets a README headline. The figures
 (`figures.py`) are compared with the recorded run's: a figure worse by more than 20 % between two runs on
 an idle machine is a REGRESSION, said in the results file and on stderr, and the exit status is 1.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -39,24 +40,39 @@ LOG_LINE = re.compile(r"\d{4}-\d\d-\d\d \d\d:\d\d:\d\d +(TRACE|DEBUG|INFO|WARN|E
 COMMANDS = {
     "check_stability_solas-doublet": ["check-stability", "solas-doublet"],
     "check_stability_cooke-triplet": ["check-stability", "cooke-triplet"],
-    "crossval_headline": ["crossval", "solas-doublet", "scenes/images/rocket.png", "-o", "out/bench/crossval",
-                          "--spp", "768"],
+    "crossval_headline": [
+        "crossval",
+        "solas-doublet",
+        "scenes/images/rocket.png",
+        "-o",
+        "out/bench/crossval",
+        "--spp",
+        "768",
+    ],
 }
 # benchmarks that need another tool installed beside this one: run by name, never by --all
 SIDE = {"bench_optiland": "optiland in a side environment (.optiland-venv or $OPTILAND_PYTHON)"}
 # name → arguments of the quick run; the quick set is what `make bench` runs
-QUICK = {"bench_psf_grid": ["--repeats", "5"], "bench_dataset": [], "bench_esfr": [], "bench_anchors": [],
-         "bench_sensor_isp": [],
-         "check_stability_solas-doublet": COMMANDS["check_stability_solas-doublet"],
-         "check_stability_cooke-triplet": COMMANDS["check_stability_cooke-triplet"]}
+QUICK = {
+    "bench_psf_grid": ["--repeats", "5"],
+    "bench_dataset": [],
+    "bench_esfr": [],
+    "bench_anchors": [],
+    "bench_sensor_isp": [],
+    "check_stability_solas-doublet": COMMANDS["check_stability_solas-doublet"],
+    "check_stability_cooke-triplet": COMMANDS["check_stability_cooke-triplet"],
+}
 
 
 def recorded(stdout: str) -> str:
     """What a results file holds of a run's stdout: its tables and lines of text as Markdown, without the
     log lines of the libraries it ran (`LOG_LINE`), terminal colours or this checkout's paths; each line of
     text a paragraph of its own and each table a block (Markdown would run consecutive lines together)."""
-    kept = [line.rstrip() for line in ANSI.sub("", stdout).replace(f"{HERE.parent}/", "").splitlines()
-            if not LOG_LINE.fullmatch(line.strip())]
+    kept = [
+        line.rstrip()
+        for line in ANSI.sub("", stdout).replace(f"{HERE.parent}/", "").splitlines()
+        if not LOG_LINE.fullmatch(line.strip())
+    ]
     out: list[str] = []
     for line in kept:
         if line and out and out[-1] and not (_is_row(line) and _is_row(out[-1])):
@@ -91,9 +107,11 @@ def run(name: str, arguments: list[str]) -> list[str]:
     if machine.idle:
         verdicts += headlines(name, figures(done.stdout))
     print("\n".join(verdicts), flush=True)
-    header = (f"<!-- written by benchmarks/run_all.py; do not edit -->\n"
-              f"`{shown}`, {datetime.date.today().isoformat()}, {platform.machine()} with {os.cpu_count()} cores, "
-              f"{machine.describe()}:\n\n")
+    header = (
+        f"<!-- written by benchmarks/run_all.py; do not edit -->\n"
+        f"`{shown}`, {datetime.date.today().isoformat()}, {platform.machine()} with {os.cpu_count()} cores, "
+        f"{machine.describe()}:\n\n"
+    )
     RESULTS.mkdir(exist_ok=True)
     tmp = RESULTS / f".{name}.md.tmp"
     tmp.write_text(header + recorded(done.stdout + "\n" + "\n".join(verdicts)), encoding="utf-8")
@@ -111,8 +129,9 @@ class Machine:
         return self
 
     def __exit__(self, *exc):
-        busy, own, wall = (now - then for now, then in zip((_busy_seconds(), _children_seconds(), time.perf_counter()),
-                                                          self._start))
+        busy, own, wall = (
+            now - then for now, then in zip((_busy_seconds(), _children_seconds(), time.perf_counter()), self._start)
+        )
         self.others = max(busy - own, 0.0) / max(wall, 1e-9)
 
     @property
@@ -152,8 +171,10 @@ def compare(recorded_text: str, stdout: str, idle: bool) -> tuple[list[str], lis
     for key in sorted(set(old) & set(new)):
         (a, unit), (b, _) = old[key], new[key]
         change = worse(a, b, unit)
-        line = (f"against the run of {when}: {key} {a:.4g} → {b:.4g} {unit} "
-                f"({100 * abs(change):.0f} % {'worse' if change > 0 else 'better'})")
+        line = (
+            f"against the run of {when}: {key} {a:.4g} → {b:.4g} {unit} "
+            f"({100 * abs(change):.0f} % {'worse' if change > 0 else 'better'})"
+        )
         if not both_idle:
             line += ", not judged (a run on a busy machine)"
         elif change > REGRESSION:
@@ -193,8 +214,11 @@ def main(argv: list[str] | None = None) -> int:
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("names", nargs="*", help=f"benchmarks to run (default: the quick set {', '.join(QUICK)})")
     ap.add_argument("--all", action="store_true", help="run every benchmark with its default arguments")
-    ap.add_argument("--arguments", help="the arguments of the one benchmark named, in place of its quick "
-                    "set's or default ones (e.g. --arguments='--repeats 2')")
+    ap.add_argument(
+        "--arguments",
+        help="the arguments of the one benchmark named, in place of its quick "
+        "set's or default ones (e.g. --arguments='--repeats 2')",
+    )
     args = ap.parse_args(argv)
     if args.arguments is not None and len(args.names) != 1:
         ap.error("--arguments needs exactly one benchmark named")

@@ -17,6 +17,7 @@ sqrt(raw² − denoised²)):
 Writes OUT_DIR/far_error.json (step (g)'s error fields per variant, grid and convolution seconds).
 Several minutes on 2 cores (four 64-spp renders, three field grids over 17 distances).
 """
+
 from __future__ import annotations
 
 import math
@@ -39,8 +40,15 @@ from solas_mi.render.mitsuba import spectral
 from solas_mi.validation.inputs import tangent_cos3
 
 FIELD_GRIDS = ((16, 12), (24, 18), (32, 24))  # 64x48 nodes over 17 distances would hold 14 GB of PSFs
-KEYS = ("rel_rmse_near", "rel_rmse_far", "rel_rmse_far_raw", "far_noise", "rel_rmse_near_pinhole_depth",
-        "rel_rmse_far_pinhole_depth", "rel_bias_far")
+KEYS = (
+    "rel_rmse_near",
+    "rel_rmse_far",
+    "rel_rmse_far_raw",
+    "far_noise",
+    "rel_rmse_near_pinhole_depth",
+    "rel_rmse_far_pinhole_depth",
+    "rel_bias_far",
+)
 
 
 def box_ideal(st, xml: Path) -> np.ndarray:
@@ -63,11 +71,31 @@ def main(size: str = "1280x960", out: str = "out/street_far_error") -> dict:
     ideals = {"gaussian": ideal, "box": box_ideal(st, xml)}
     lens_params = {key: v for key, v in st.params.items() if key != "fov"}
     options = {"response": f"mono:{st.primary:g}", "pitch_um": st.pixel_um}
-    renders = tuple(st.timed(f"lens render, focus at infinity, seed {seed}", R._render, xml, st.variant, lens,
-                             lens_params | {"spp": str(st.s.spp_lens)}, st.s.spp_lens, seed, **options)[..., 0]
-                    for seed in (0, 1))
-    through = st.timed("depth through the lens", R._render, out_dir / "depth.xml", st.variant, lens,
-                       lens_params | {"spp": str(st.s.spp_depth)}, st.s.spp_depth, 0, **options)[..., -1]
+    renders = tuple(
+        st.timed(
+            f"lens render, focus at infinity, seed {seed}",
+            R._render,
+            xml,
+            st.variant,
+            lens,
+            lens_params | {"spp": str(st.s.spp_lens)},
+            st.s.spp_lens,
+            seed,
+            **options,
+        )[..., 0]
+        for seed in (0, 1)
+    )
+    through = st.timed(
+        "depth through the lens",
+        R._render,
+        out_dir / "depth.xml",
+        st.variant,
+        lens,
+        lens_params | {"spp": str(st.s.spp_depth)},
+        st.s.spp_depth,
+        0,
+        **options,
+    )[..., -1]
     near_m = 1.5 * st.near_focus
     masks = (depth < near_m, depth > FAR_M, through < near_m, through > FAR_M)
     k = axis_irradiance(lens, st.primary) / ideal_irradiance(lens, pinhole_focal_mm(lens, st.fov), st.primary)
@@ -83,8 +111,11 @@ def main(size: str = "1280x960", out: str = "out/street_far_error") -> dict:
         for rfilter, ideal_image in ideals.items():
             image, seconds = D._convolve(ideal_image * tangent_cos3(w, h, st.fov), z, grid, k)
             row = D.masked(image, renders, *masks)
-            row.update(grid_seconds=grid_seconds, seconds=seconds,
-                       far_noise=math.sqrt(max(0.0, row["rel_rmse_far_raw"] ** 2 - row["rel_rmse_far"] ** 2)))
+            row.update(
+                grid_seconds=grid_seconds,
+                seconds=seconds,
+                far_noise=math.sqrt(max(0.0, row["rel_rmse_far_raw"] ** 2 - row["rel_rmse_far"] ** 2)),
+            )
             label = f"{field_nodes[0]}x{field_nodes[1]}, {rfilter} ideal"
             rows[label] = row
             print(label, " ".join(f"{key} {100 * row[key]:.2f} %" for key in KEYS), flush=True)

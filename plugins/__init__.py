@@ -15,6 +15,7 @@ toward the exit pupil) and `wavelength_sampling` (a path's wavelength from the c
 `tables` (lookup tables and records in every variant) and `scene_probe` (the scene and integrator
 of the render calling a plugin, which Mitsuba does not pass to Python plugins).
 """
+
 from __future__ import annotations
 
 import importlib

@@ -76,14 +76,14 @@ import math
 import drjit as dr
 import mitsuba as mi
 import numpy as np
-
-from solas_mi.errors import SolasError
-from solas_mi.imageio import read_image
-from solas_mi.optics.camera import BOUNDARIES, MAPPINGS
 from solas_mi.plugins.rgb_spectrum import sigmoid, upsampled
 from solas_mi.plugins.scene_probe import calling_render
 from solas_mi.plugins.tables import lookup, table, zeros
 from solas_mi.plugins.wavelength_sampling import mono_wavelength
+
+from solas_mi.errors import SolasError
+from solas_mi.imageio import read_image
+from solas_mi.optics.camera import BOUNDARIES, MAPPINGS
 from solas_mi.render.response import RGB_BANDS_NM
 
 SPECTRUM_NM = (mi.MI_CIE_MIN, mi.MI_CIE_MAX)  # light tracing samples wavelengths uniformly here

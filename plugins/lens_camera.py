@@ -68,6 +68,7 @@ Integrators: any that starts paths at the camera (`path`, `volpath`, `aov`, `dir
 tracing (`ptracer`) cannot connect to a sensor behind a lens: `sample_direction`, `pdf_direction`,
 `eval_direction` and `sample_position` raise a SolasError.
 """
+
 from __future__ import annotations
 
 import math
@@ -75,25 +76,24 @@ import math
 import drjit as dr
 import mitsuba as mi
 import numpy as np
+from solas_mi.plugins.lens_film import LensFilm, positive
+from solas_mi.plugins.pupil_sampling import PupilSampler
+from solas_mi.plugins.scene_probe import calling_render
+from solas_mi.plugins.wavelength_sampling import lanes
 
 from solas_mi.errors import SolasError
 from solas_mi.optics import tracer, virtual_object
 from solas_mi.optics.exit_pupil import passes, reversed_lens
 from solas_mi.optics.focus import focused
-from solas_mi.optics.paraxial import paraxial
 from solas_mi.optics.lens import Lens
-from solas_mi.plugins.lens_film import LensFilm, positive
-from solas_mi.plugins.pupil_sampling import PupilSampler
-from solas_mi.plugins.scene_probe import calling_render
-from solas_mi.plugins.wavelength_sampling import lanes
+from solas_mi.optics.paraxial import paraxial
 
 FRESNEL = ("off", "transmit")
 
 
 def select_lane(values: list, lane):
     """values[lane] per ray: `lane` an index array of 0…3 over a list of four values."""
-    return dr.select(lane == 0, values[0], dr.select(lane == 1, values[1],
-                                                     dr.select(lane == 2, values[2], values[3])))
+    return dr.select(lane == 0, values[0], dr.select(lane == 1, values[1], dr.select(lane == 2, values[2], values[3])))
 
 
 def on_axis_solid_angle(lens: Lens, sampler: PupilSampler, wavelength_nm: float, grid: int = 512) -> float:
@@ -106,7 +106,7 @@ def on_axis_solid_angle(lens: Lens, sampler: PupilSampler, wavelength_nm: float,
     ok = passes(reversed_lens(lens), np.zeros(len(gu)), 0.0, gu, gv, wavelength_nm)
     dz = sampler.plane_z - sampler.image_z
     cos4 = (dz * dz / (gu * gu + gv * gv + dz * dz)) ** 2
-    return float((ok * cos4).sum() / (dz * dz) * (u1 - u0) * (v1 - v0) / grid ** 2)
+    return float((ok * cos4).sum() / (dz * dz) * (u1 - u0) * (v1 - v0) / grid**2)
 
 
 class LensCamera(LensFilm):
@@ -114,8 +114,9 @@ class LensCamera(LensFilm):
     wavelengths: `lens_film.LensFilm`)."""
 
     def __init__(self, props: mi.Properties) -> None:
-        super().__init__(props, "lens_camera", "srgb",
-                         "an integrator that starts paths at the camera (path, volpath, aov, direct)")
+        super().__init__(
+            props, "lens_camera", "srgb", "an integrator that starts paths at the camera (path, volpath, aov, direct)"
+        )
         self.check_film()
         self.stratify = bool(props.get("stratify_wavelengths", True))
         self.fresnel = str(props.get("fresnel", "off"))
@@ -139,8 +140,10 @@ class LensCamera(LensFilm):
         except (TypeError, ValueError):
             eps = math.nan
         if not eps >= 0:
-            raise SolasError(f"lens_camera: lane_tolerance {props.get('lane_tolerance')!r} must be a number >= 0 "
-                             "(a fraction of a pixel's angular footprint; 0: every path the hero lane's)")
+            raise SolasError(
+                f"lens_camera: lane_tolerance {props.get('lane_tolerance')!r} must be a number >= 0 "
+                "(a fraction of a pixel's angular footprint; 0: every path the hero lane's)"
+            )
         self.lane_tolerance = eps
         first_order = paraxial(self.lens)
         self.angle_tolerance = eps * self.pitch_mm / abs(first_order.efl_mm)
@@ -155,34 +158,49 @@ class LensCamera(LensFilm):
         for i in range(4):
             for j in range(i + 1, 4):
                 gap = dr.norm(origins[i] - origins[j])
-                together[i][j] = together[j][i] = passed[i] & passed[j] & (gap <= self.origin_tolerance) & \
-                    (dr.norm(directions[i] - directions[j]) + gap * self.inv_focus <= self.angle_tolerance)
+                together[i][j] = together[j][i] = (
+                    passed[i]
+                    & passed[j]
+                    & (gap <= self.origin_tolerance)
+                    & (dr.norm(directions[i] - directions[j]) + gap * self.inv_focus <= self.angle_tolerance)
+                )
         return together
 
     def check_film(self) -> None:
         """SolasError for lines (no density) under an `hdrfilm` of a spectral variant: the film would
         develop them with the CIE observer as if they were a continuous spectrum (nearly black)."""
         response = self.response
-        if (mi.is_spectral and self.film().class_name() == "HDRFilm"
-                and bool((response.hi_nm == response.lo_nm).any()) and response.single_wavelength is None):
-            raise SolasError(f"lens_camera: response {response.name!r} has lines, which an hdrfilm cannot develop "
-                             "(they have no spectral density); use a specfilm with one sensitivity per line, or a "
-                             "continuous response (srgb, table:<file.csv>)")
+        if (
+            mi.is_spectral
+            and self.film().class_name() == "HDRFilm"
+            and bool((response.hi_nm == response.lo_nm).any())
+            and response.single_wavelength is None
+        ):
+            raise SolasError(
+                f"lens_camera: response {response.name!r} has lines, which an hdrfilm cannot develop "
+                "(they have no spectral density); use a specfilm with one sensitivity per line, or a "
+                "continuous response (srgb, table:<file.csv>)"
+            )
 
     def prepared(self, lens: Lens, props: mi.Properties) -> Lens:
         """The lens focused at `focus_distance` (world units of `world_unit_mm`), if given."""
         self.world_unit_mm = positive(props, "world_unit_mm", 1000.0, "mm per world unit", "lens_camera")
         if "focus_distance" not in props:
-            virtual_object.check_real(lens, "lens_camera", "give focus_distance to focus it on the scene, or "
-                                      "trace it instead (lens info, psf)")
+            virtual_object.check_real(
+                lens,
+                "lens_camera",
+                "give focus_distance to focus it on the scene, or trace it instead (lens info, psf)",
+            )
             return lens
-        distance = positive(props, "focus_distance", 1.0, "world units, in front of surface 1; inf", "lens_camera",
-                            True)
+        distance = positive(
+            props, "focus_distance", 1.0, "world units, in front of surface 1; inf", "lens_camera", True
+        )
         try:
             return focused(lens, distance * self.world_unit_mm)
         except SolasError as exc:
-            raise SolasError(f"lens_camera: focus_distance {distance:g} (world units of {self.world_unit_mm:g} "
-                             f"mm): {exc}") from None
+            raise SolasError(
+                f"lens_camera: focus_distance {distance:g} (world units of {self.world_unit_mm:g} mm): {exc}"
+            ) from None
 
     def stratified(self, sample1, sample2):
         """The wavelength sample of the k-th of a pixel's n samples moved into the k-th of n strata,
@@ -193,15 +211,19 @@ class LensCamera(LensFilm):
         unbiased estimate."""
         pixels = self.width * self.height
         n = dr.width(sample1) // pixels if dr.is_jit_v(mi.Float) and self.stratify else 0
-        if n < 2 or n * pixels != dr.width(sample1) or dr.width(sample2) != n * pixels or \
-                dr.flag(dr.JitFlag.SymbolicScope):
+        if (
+            n < 2
+            or n * pixels != dr.width(sample1)
+            or dr.width(sample2) != n * pixels
+            or dr.flag(dr.JitFlag.SymbolicScope)
+        ):
             return sample1
         count = dr.opaque(mi.UInt32, n)  # one kernel for every spp
         i = dr.arange(mi.UInt32, n * pixels)
         pixel = i // count
         if not self.samples_in_pixel_order(pixel, sample2):
             return sample1
-        return (mi.Float(i - pixel * count) + dr.clip(sample1, 0.0, 1.0 - 2 ** -24)) / mi.Float(count)
+        return (mi.Float(i - pixel * count) + dr.clip(sample1, 0.0, 1.0 - 2**-24)) / mi.Float(count)
 
     def samples_in_pixel_order(self, pixel, sample2) -> bool:
         """Whether the film samples `sample2` lie in the pixels `pixel` (row-major over the crop window):
@@ -230,11 +252,15 @@ class LensCamera(LensFilm):
         leaving = result.rays
         # camera frame (x, −y, −z of the lens frame): looks along +z, upright; surface 1 at the origin
         scale = 1.0 / self.world_unit_mm
-        origin = mi.Point3f(mi.Float(leaving.x * scale), mi.Float(-leaving.y * scale),
-                            mi.Float((leaving.z - self.last_vertex_z) * scale))
+        origin = mi.Point3f(
+            mi.Float(leaving.x * scale),
+            mi.Float(-leaving.y * scale),
+            mi.Float((leaving.z - self.last_vertex_z) * scale),
+        )
         direction = mi.Vector3f(mi.Float(leaving.dx), mi.Float(-leaving.dy), mi.Float(leaving.dz))
-        passed = mi.Bool(result.ok & (result.clipped_by == 0)) & dr.all(dr.isfinite(origin)) & \
-            dr.all(dr.isfinite(direction))
+        passed = (
+            mi.Bool(result.ok & (result.clipped_by == 0)) & dr.all(dr.isfinite(origin)) & dr.all(dr.isfinite(direction))
+        )
         origin = dr.select(passed, origin, mi.Point3f(0.0))
         direction = dr.select(passed, direction, mi.Vector3f(0.0, 0.0, 1.0))
         return origin, direction, passed, mi.Float(result.transmittance)
@@ -268,13 +294,18 @@ class LensCamera(LensFilm):
         if mi.is_spectral:  # lane i carried where alike the hero, weighted 4 / (the lanes alike lane i)
             together = self.lanes_together(origins, directions, passed)
             counts = [dr.maximum(sum(dr.select(x, 1.0, 0.0) for x in row), 1.0) for row in together]
-            weights = [dr.select(select_lane(together[i], hero), 4.0 * w / counts[i], 0.0)
-                       for i, w in enumerate(weights)]
+            weights = [
+                dr.select(select_lane(together[i], hero), 4.0 * w / counts[i], 0.0) for i, w in enumerate(weights)
+            ]
             origins, directions = [select_lane(origins, hero)], [select_lane(directions, hero)]
         # origin and direction apart: `transform @ ray` fails in a mono variant once a spectral one ran (Mitsuba 3.9)
         to_world = self.world_transform()
-        ray = mi.Ray3f(to_world @ origins[0], to_world @ directions[0], time,
-                       mi.Spectrum(*lams) if mi.is_spectral else lanes(lams[0]))
+        ray = mi.Ray3f(
+            to_world @ origins[0],
+            to_world @ directions[0],
+            time,
+            mi.Spectrum(*lams) if mi.is_spectral else lanes(lams[0]),
+        )
         # a blocked hero carries no lane (`lanes_together`): its path would add 0, so it meets nothing
         ray.maxt = dr.select(select_lane(passed, hero) if mi.is_spectral else passed[0], ray.maxt, 0.0)
         return ray, mi.Spectrum(*weights) if mi.is_spectral else mi.Spectrum(weights[0])
@@ -285,8 +316,17 @@ class LensCamera(LensFilm):
     def bbox(self):
         """The lens and film, in world units."""
         reach = max(max(s.semi_diameter for s in self.lens.surfaces), *self.film_half_mm)
-        corners = np.array([[sx * reach, sy * reach, sz * self.lens.image_z, self.world_unit_mm]
-                            for sx in (-1, 1) for sy in (-1, 1) for sz in (-1, 0)]) / self.world_unit_mm
+        corners = (
+            np.array(
+                [
+                    [sx * reach, sy * reach, sz * self.lens.image_z, self.world_unit_mm]
+                    for sx in (-1, 1)
+                    for sy in (-1, 1)
+                    for sz in (-1, 0)
+                ]
+            )
+            / self.world_unit_mm
+        )
         world = corners @ np.array(self.world_transform().matrix, dtype=np.float64).reshape(4, 4).T
         return mi.ScalarBoundingBox3f(world[:, :3].min(axis=0), world[:, :3].max(axis=0))
 

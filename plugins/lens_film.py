@@ -29,20 +29,21 @@ film (its half diagonal), cropped or not.
 The base class subclasses the current variant's `mi.Sensor`: `plugins.register` reloads this module
 before the sensors' own.
 """
+
 from __future__ import annotations
 
 import math
 
 import drjit as dr
 import mitsuba as mi
+from solas_mi.plugins.pupil_sampling import PupilSampler
+from solas_mi.plugins.scene_files import load_lens, load_response
+from solas_mi.plugins.scene_probe import calling_render, integrator_name
+from solas_mi.plugins.wavelength_sampling import WavelengthSampler, lanes
 
 from solas_mi.errors import SolasError
 from solas_mi.optics.camera import film_pitch_um
 from solas_mi.optics.lens import Lens
-from solas_mi.plugins.pupil_sampling import PupilSampler
-from solas_mi.plugins.scene_probe import calling_render, integrator_name
-from solas_mi.plugins.scene_files import load_lens, load_response
-from solas_mi.plugins.wavelength_sampling import WavelengthSampler, lanes
 
 
 def positive(props: mi.Properties, name: str, default: float, unit: str, plugin: str, infinite: bool = False) -> float:
@@ -79,8 +80,11 @@ class LensFilm(mi.Sensor):
         self.half_diagonal_mm = math.hypot(*self.film_half_mm)  # the film's largest radius
         self.image_z = self.lens.image_z
         r = self.response
-        self.pupil = PupilSampler(self.lens, self.half_diagonal_mm,
-                                  sorted({float(r.lo_nm.min()), float(r.hi_nm.max()), *self.lens.wavelengths_nm}))
+        self.pupil = PupilSampler(
+            self.lens,
+            self.half_diagonal_mm,
+            sorted({float(r.lo_nm.min()), float(r.hi_nm.max()), *self.lens.wavelengths_nm}),
+        )
         self.wavelengths = WavelengthSampler(r)
 
     def prepared(self, lens: Lens, props: mi.Properties) -> Lens:
@@ -102,9 +106,14 @@ class LensFilm(mi.Sensor):
         try:
             pitch = film_pitch_um(self.lens, self.film_size[0], field)
         except SolasError as exc:
-            raise SolasError(f"{self.plugin}: no pitch_um given, and lens {self.lens.name} sets none ({exc}); give "
-                             "pitch_um (µm)") from None
-        span = f"±{field:g} deg field" if self.lens.field_type.pinhole else f"image diameter {self.lens.image_diameter:g} mm"
+            raise SolasError(
+                f"{self.plugin}: no pitch_um given, and lens {self.lens.name} sets none ({exc}); give pitch_um (µm)"
+            ) from None
+        span = (
+            f"±{field:g} deg field"
+            if self.lens.field_type.pinhole
+            else f"image diameter {self.lens.image_diameter:g} mm"
+        )
         self.pitch_note = f"derived: the film's {self.film_size[0]} px width spans lens {self.lens.name}'s {span}"
         mi.Log(mi.LogLevel.Info, f"{self.plugin}: pitch_um {pitch:.6g} um, {self.pitch_note}")
         return pitch
@@ -113,12 +122,13 @@ class LensFilm(mi.Sensor):
         """Image-plane point (x, y) mm of a film sample in [0, 1]² over the crop window (row 0 at +y)."""
         col = dr.fma(sample2.x, self.crop_size[0], self.crop_offset[0])
         row = dr.fma(sample2.y, self.crop_size[1], self.crop_offset[1])
-        return mi.Point2f((col - 0.5 * self.film_size[0]) * self.pitch_mm,
-                          (0.5 * self.film_size[1] - row) * self.pitch_mm)
+        return mi.Point2f(
+            (col - 0.5 * self.film_size[0]) * self.pitch_mm, (0.5 * self.film_size[1] - row) * self.pitch_mm
+        )
 
     def pdf_area(self) -> float:
         """Density (mm⁻²) of `film_point` of a uniform sample: one over the crop window's area."""
-        return 1.0 / (self.crop_size[0] * self.crop_size[1] * self.pitch_mm ** 2)
+        return 1.0 / (self.crop_size[0] * self.crop_size[1] * self.pitch_mm**2)
 
     def sample_wavelength(self, sample1: mi.Float, active=True) -> tuple[mi.Float, mi.UInt32]:
         """Wavelength (nm) of a path, from the response, and the bin it came from."""
@@ -138,9 +148,11 @@ class LensFilm(mi.Sensor):
         """Light tracing's connection to the camera: refused, naming the calling render's integrator."""
         _, integrator = calling_render()
         name = "light tracing" if integrator is None else f"integrator {integrator_name(integrator)!r}"
-        raise SolasError(f"{self.plugin}: {name} traces paths from the lights and must connect them to the camera "
-                         f"through the lens's glass, which no ray can do (the film has no direct view of the "
-                         f"scene); use {self.instead}")
+        raise SolasError(
+            f"{self.plugin}: {name} traces paths from the lights and must connect them to the camera "
+            f"through the lens's glass, which no ray can do (the film has no direct view of the "
+            f"scene); use {self.instead}"
+        )
 
     def pdf_direction(self, it, ds, active=True):
         return self.sample_direction(it, None, active)
@@ -163,6 +175,10 @@ class LensFilm(mi.Sensor):
     def describe(self, *extra: str) -> str:
         """`to_string` of a sensor: its class, lens, film, response, then `extra`."""
         w, h = self.film_size
-        parts = (self.lens.name, f"{w}x{h} px of {self.pitch_um:g} um ({self.pitch_note})", f"response {self.response.name}",
-                 *extra)
+        parts = (
+            self.lens.name,
+            f"{w}x{h} px of {self.pitch_um:g} um ({self.pitch_note})",
+            f"response {self.response.name}",
+            *extra,
+        )
         return f"{type(self).__name__}[{', '.join(parts)}]"

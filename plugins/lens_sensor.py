@@ -58,21 +58,22 @@ more wavelengths is refused (SolasError naming both).
 Coordinates are the lens file's (mm): surface 1's vertex at the origin, +z toward the image, +y up;
 film row 0 is +y.
 """
+
 from __future__ import annotations
 
 import drjit as dr
 import mitsuba as mi
 import numpy as np
+from solas_mi.plugins.lens_film import LensFilm
+from solas_mi.plugins.scene_probe import calling_render, integrator_name
+from solas_mi.plugins.tables import lookup, table, zeros
+from solas_mi.plugins.wavelength_sampling import lanes
 
 from solas_mi.errors import SolasError
 from solas_mi.optics.camera import pinhole_focal_mm
 from solas_mi.optics.illumination import ideal_irradiance, image_scales
 from solas_mi.optics.lens import Lens
 from solas_mi.optics.paraxial import paraxial
-from solas_mi.plugins.lens_film import LensFilm
-from solas_mi.plugins.scene_probe import calling_render, integrator_name
-from solas_mi.plugins.tables import lookup, table, zeros
-from solas_mi.plugins.wavelength_sampling import lanes
 
 INTEGRATORS = ("path", "volpath", "aov")  # Mitsuba's integrators that render through the lens
 
@@ -82,11 +83,14 @@ class LensSensor(LensFilm):
     wavelengths: `lens_film.LensFilm`)."""
 
     def __init__(self, props: mi.Properties) -> None:
-        super().__init__(props, "lens_sensor", "lines",
-                         f"the integrators {', '.join(INTEGRATORS)} or solas-mi's render loop")
+        super().__init__(
+            props, "lens_sensor", "lines", f"the integrators {', '.join(INTEGRATORS)} or solas-mi's render loop"
+        )
         self.fov_deg = self.field_deg(props)
         # a lens of polar fields (a fisheye) has no pinhole image: its units are those of the paraxial camera
-        self.focal_mm = pinhole_focal_mm(self.lens, self.fov_deg) if self.lens.field_type.pinhole else paraxial(self.lens).efl_mm
+        self.focal_mm = (
+            pinhole_focal_mm(self.lens, self.fov_deg) if self.lens.field_type.pinhole else paraxial(self.lens).efl_mm
+        )
         self.norm = 1.0 / ideal_irradiance(self.lens, self.focal_mm)
         heights, radial, tangential = image_scales(self.lens, self.half_diagonal_mm, self.lens.primary_wavelength)
         self.scale_step = float(heights[1] - heights[0]) if heights[-1] > 0 else 1.0
@@ -108,14 +112,15 @@ class LensSensor(LensFilm):
     def prepared(self, lens: Lens, props: mi.Properties) -> Lens:
         """The lens, which must be focused at infinity (SolasError otherwise)."""
         if not lens.at_infinity:
-            raise SolasError(f"lens_sensor: lens {lens.name} has a finite object; the sensor needs a lens "
-                             "focused at infinity (put a near object in the scene with image_object's distance_mm)")
+            raise SolasError(
+                f"lens_sensor: lens {lens.name} has a finite object; the sensor needs a lens "
+                "focused at infinity (put a near object in the scene with image_object's distance_mm)"
+            )
         return lens
 
     def channel_weights(self, index: mi.UInt32, active=True) -> list[mi.Float]:
         """Per-channel weight response_c(λ)/p(λ) of the wavelength bin `index`."""
-        return [lookup(self.channel_table, index * self.channels + c, active)
-                for c in range(self.channels)]
+        return [lookup(self.channel_table, index * self.channels + c, active) for c in range(self.channels)]
 
     def footprint(self, film: mi.Point2f) -> mi.Vector2f:
         """Widths in field tangent (x, y) that the pixel centred at film point (x, y) mm covers on the
@@ -127,8 +132,9 @@ class LensSensor(LensFilm):
         inv_r = dr.lerp(lookup(self.inv_radial, i), lookup(self.inv_radial, i + 1), w)
         inv_t = dr.lerp(lookup(self.inv_tangential, i), lookup(self.inv_tangential, i + 1), w)
         c2 = dr.select(r > 0, dr.square(film.x / r), 1.0)
-        return mi.Vector2f(self.pitch_mm * (c2 * inv_r + (1.0 - c2) * inv_t),
-                           self.pitch_mm * ((1.0 - c2) * inv_r + c2 * inv_t))
+        return mi.Vector2f(
+            self.pitch_mm * (c2 * inv_r + (1.0 - c2) * inv_t), self.pitch_mm * ((1.0 - c2) * inv_r + c2 * inv_t)
+        )
 
     def sample_ray(self, time, sample1, sample2, sample3, active=True):
         """A camera ray for Mitsuba's integrators: `pupil_ray` with the weight 1/p(λ) of its wavelength."""
@@ -155,8 +161,10 @@ class LensSensor(LensFilm):
             return
         name = integrator_name(integrator)
         if name not in INTEGRATORS:
-            raise SolasError(f"lens_sensor: integrator {name!r} cannot render through the lens (the sensor is "
-                             f"reachable only through glass); use {', '.join(INTEGRATORS)} or solas-mi's render loop")
+            raise SolasError(
+                f"lens_sensor: integrator {name!r} cannot render through the lens (the sensor is "
+                f"reachable only through glass); use {', '.join(INTEGRATORS)} or solas-mi's render loop"
+            )
         self.checked.add(id(integrator))
 
     def sample_direction(self, it, sample, active=True):

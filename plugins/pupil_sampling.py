@@ -8,15 +8,16 @@ bound (area A, on a plane a distance d from the film) weighs A·cos⁴θ/d², θ
 in pbrt-v4's RealisticCamera (M. Pharr, W. Jakob, G. Humphreys, "Physically Based Rendering: From
 Theory to Implementation", 4th ed., MIT Press, 2023). Lengths in mm, the lens file's frame.
 """
+
 from __future__ import annotations
 
 import drjit as dr
 import mitsuba as mi
 import numpy as np
+from solas_mi.plugins.tables import lookup, table
 
 from solas_mi.optics.exit_pupil import pupil_bounds
 from solas_mi.optics.lens import Lens
-from solas_mi.plugins.tables import lookup, table
 
 
 class PupilSampler:

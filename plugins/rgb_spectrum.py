@@ -2,6 +2,7 @@
 Mitsuba's smooth spectral upsampling (W. Jakob, J. Hanika, "A Low-Dimensional Function Space for
 Efficient Spectral Upsampling", Computer Graphics Forum 38(2), 2019): coefficients of a sigmoid of a
 quadratic in λ (nm) per colour, `mi.srgb_model_fetch`, evaluated by `mi.srgb_model_eval`."""
+
 from __future__ import annotations
 
 import drjit as dr

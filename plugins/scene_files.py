@@ -1,6 +1,7 @@
 """Files a scene names — the lens file, a camera-response table — found as Mitsuba finds a scene's
 files: through its file resolver (the scene's folder first), else as given (a shipped lens name, a
 path relative to the working folder)."""
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -29,8 +30,10 @@ def load_lens(props: mi.Properties) -> Lens:
     try:
         return Lens.load(path)
     except SolasError:
-        raise SolasError(f"lens file {str(path)!r}, which the scene names, is not a lens solas-mi can use; "
-                         f"`solas-mi lens info {path}` says why") from None
+        raise SolasError(
+            f"lens file {str(path)!r}, which the scene names, is not a lens solas-mi can use; "
+            f"`solas-mi lens info {path}` says why"
+        ) from None
 
 
 def load_response(props: mi.Properties, lens: Lens, default: str) -> responses.Response:

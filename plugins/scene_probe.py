@@ -8,6 +8,7 @@ both. The scalar variants render on worker threads, so the stacks of all threads
 caller's first. In the JIT variants this runs once per traced kernel; the scalar variants call it
 per sample, so callers cache what they learn.
 """
+
 from __future__ import annotations
 
 import sys
@@ -16,9 +17,16 @@ import threading
 import mitsuba as mi
 
 # Mitsuba class names of the integrators, as their plugin names
-INTEGRATOR_NAMES = {"PathIntegrator": "path", "VolumetricPathIntegrator": "volpath", "AOVIntegrator": "aov",
-                    "DirectIntegrator": "direct", "ParticleTracerIntegrator": "ptracer",
-                    "VolpathMisIntegratorImpl": "volpathmis", "PRBIntegrator": "prb", "DepthIntegrator": "depth"}
+INTEGRATOR_NAMES = {
+    "PathIntegrator": "path",
+    "VolumetricPathIntegrator": "volpath",
+    "AOVIntegrator": "aov",
+    "DirectIntegrator": "direct",
+    "ParticleTracerIntegrator": "ptracer",
+    "VolpathMisIntegratorImpl": "volpathmis",
+    "PRBIntegrator": "prb",
+    "DepthIntegrator": "depth",
+}
 
 
 def integrator_name(integrator) -> str:

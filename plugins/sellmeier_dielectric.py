@@ -45,17 +45,17 @@ path, as pbrt-v4 does, needs the path's state: Mitsuba gives a BSDF none — wri
 does not reach the next ray — and scaling lane 0 by 4 at every interface comes out 4^(k−1) too
 bright.)
 """
+
 from __future__ import annotations
 
 import drjit as dr
 import mitsuba as mi
+from solas_mi.plugins.wavelength_sampling import mono_wavelength
 
 from solas_mi.errors import SolasError
 from solas_mi.optics import thermal
 from solas_mi.optics.glass import resolve
-from solas_mi.plugins.wavelength_sampling import mono_wavelength
 from solas_mi.render.spec import FRESNEL_MODES
-
 
 
 class SellmeierDielectric(mi.BSDF):
@@ -63,8 +63,9 @@ class SellmeierDielectric(mi.BSDF):
 
     def __init__(self, props: mi.Properties) -> None:
         super().__init__(props)
-        where = thermal.check_environment(props.get("temperature_c", thermal.STANDARD_C),
-                                          props.get("pressure_kpa", thermal.STANDARD_KPA))
+        where = thermal.check_environment(
+            props.get("temperature_c", thermal.STANDARD_C), props.get("pressure_kpa", thermal.STANDARD_KPA)
+        )
         self.int_glass = resolve(props.get("int_glass", "AIR")).at(*where)
         self.ext_glass = resolve(props.get("ext_glass", "AIR")).at(*where)
         self.fresnel = str(props.get("fresnel", "transmit"))
@@ -103,8 +104,9 @@ class SellmeierDielectric(mi.BSDF):
         bs.pdf = 1.0
         bs.eta = dr.select(reflect, 1.0, eta_it)
         bs.sampled_component = dr.select(reflect, mi.UInt32(0), mi.UInt32(1))
-        bs.sampled_type = dr.select(reflect, mi.UInt32(+mi.BSDFFlags.DeltaReflection),
-                                    mi.UInt32(+mi.BSDFFlags.DeltaTransmission))
+        bs.sampled_type = dr.select(
+            reflect, mi.UInt32(+mi.BSDFFlags.DeltaReflection), mi.UInt32(+mi.BSDFFlags.DeltaTransmission)
+        )
         # radiance is scaled by the squared index ratio on refraction (not importance)
         if ctx.mode == mi.TransportMode.Radiance:  # the mode is one value for all lanes
             scale = scale * dr.select(reflect, 1.0, dr.square(eta_ti))
@@ -116,13 +118,17 @@ class SellmeierDielectric(mi.BSDF):
         the lanes differ). Equal lanes: lane 0, sample1 unchanged; else a lane chosen by sample1."""
         if not mi.is_spectral:
             return None, 0, sample1, False
-        mixed = (wavelengths[1] != wavelengths[0]) | (wavelengths[2] != wavelengths[0]) | \
-            (wavelengths[3] != wavelengths[0])
+        mixed = (
+            (wavelengths[1] != wavelengths[0]) | (wavelengths[2] != wavelengths[0]) | (wavelengths[3] != wavelengths[0])
+        )
         scaled = sample1 * 4.0
         lane = dr.select(mixed, dr.minimum(mi.UInt32(scaled), 3), 0)
         sample1 = dr.select(mixed, scaled - mi.Float(lane), sample1)
-        lam = dr.select(lane == 0, wavelengths[0], dr.select(lane == 1, wavelengths[1],
-                                                             dr.select(lane == 2, wavelengths[2], wavelengths[3])))
+        lam = dr.select(
+            lane == 0,
+            wavelengths[0],
+            dr.select(lane == 1, wavelengths[1], dr.select(lane == 2, wavelengths[2], wavelengths[3])),
+        )
         return lam, lane, sample1, mixed
 
     @staticmethod
@@ -149,8 +155,9 @@ class SellmeierDielectric(mi.BSDF):
         pass
 
     def to_string(self) -> str:
-        return (f"SellmeierDielectric[int={self.int_glass.name}, ext={self.ext_glass.name}, fresnel={self.fresnel}"
-                + ("]" if mi.is_spectral else f", {self.wavelength:g} nm]"))
+        return f"SellmeierDielectric[int={self.int_glass.name}, ext={self.ext_glass.name}, fresnel={self.fresnel}" + (
+            "]" if mi.is_spectral else f", {self.wavelength:g} nm]"
+        )
 
 
 def register() -> None:

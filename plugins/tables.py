@@ -1,5 +1,6 @@
 """Lookup tables and records for the plugins that work in every Mitsuba variant: Dr.Jit arrays gathered
 in the JIT variants, NumPy arrays indexed per call in the scalar ones."""
+
 from __future__ import annotations
 
 import drjit as dr

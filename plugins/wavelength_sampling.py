@@ -3,15 +3,16 @@ that look through a lens (in every Mitsuba variant; `tables` holds the lookups).
 
 A mono variant's rays carry no wavelength: there the response must have one (`render.mitsuba.check_variant`),
 the sensors trace the lens at it, and the rays leave with none (`lanes`)."""
+
 from __future__ import annotations
 
 import drjit as dr
 import mitsuba as mi
 import numpy as np
+from solas_mi.plugins.tables import lookup, table
 
 from solas_mi.errors import SolasError
 from solas_mi.optics.glass import LINE_D
-from solas_mi.plugins.tables import lookup, table
 from solas_mi.render.mitsuba import check_variant
 
 QUANTILES = 4096  # nodes of `WavelengthSampler.sample_quantile`'s inverse CDF (a multiple of 4: the lanes' quarters)

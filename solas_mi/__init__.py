@@ -11,6 +11,7 @@ D. Molloy, F. Collins, A. Scanlan and C. Eising, "SOLAS: Superpositioning an Opt
 Automotive Simulation", IS&T International Symposium on Electronic Imaging, Autonomous Vehicles and
 Machines, 2025 (its BK7/F2 doublet, PSF grids, patch convolution and annulus MTF50).
 """
+
 from __future__ import annotations
 
 from . import render  # noqa: F401  (registers the render stage's PSF method "render": `psf.registry`)
@@ -23,5 +24,7 @@ __version__ = _installed_version()
 
 # `from solas_mi import Lens, paraxial, spot`; PSFs: `from solas_mi.psf import psf, psf_grid, PSFGrid`;
 # Mitsuba with the plugins: `mi = solas_mi.mitsuba(); mi.render(mi.load_file("scene.xml"))`
-__getattr__ = lazy_exports(__name__, {"Lens": ".optics.lens", "paraxial": ".optics.paraxial", "spot": ".optics.spot",
-                                      "mitsuba": ".render.mitsuba"})
+__getattr__ = lazy_exports(
+    __name__,
+    {"Lens": ".optics.lens", "paraxial": ".optics.paraxial", "spot": ".optics.spot", "mitsuba": ".render.mitsuba"},
+)

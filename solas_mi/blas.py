@@ -1,6 +1,7 @@
 """OpenBLAS on one thread where our own code runs many small matrix products: OpenBLAS's threads,
 spinning while they wait, fight our thread pools — or another process — for the cores (measured: a
 4K convolution 3 s → 28 s on 2 busy cores; the Fraunhofer step of a PSF grid 2 → 90 GFLOP/s)."""
+
 from __future__ import annotations
 
 import ctypes
@@ -43,4 +44,3 @@ def single_threaded_blas():
         yield
     finally:
         set_(before)
-

@@ -1,6 +1,7 @@
 """A job's memory, estimated before it starts and checked against the machine: a job that would not
 fit in the memory that is free is refused (unless forced) instead of running the machine out of
 memory halfway, and a large one says what it will take before it starts. Bytes throughout."""
+
 from __future__ import annotations
 
 import sys
@@ -51,7 +52,9 @@ def check_memory(job: str, need: float, force: bool = False, hint: str = "") -> 
     large one."""
     free = available_memory()
     if free is not None and need > free and not force:
-        raise SolasError(f"{job} needs about {size_text(need)} of memory and {size_text(free)} is free"
-                         f"{'; ' + hint if hint else ''} (--force to try anyway)")
+        raise SolasError(
+            f"{job} needs about {size_text(need)} of memory and {size_text(free)} is free"
+            f"{'; ' + hint if hint else ''} (--force to try anyway)"
+        )
     if need > LARGE:
         print(f"{job}: about {size_text(need)} of memory", file=sys.stderr, flush=True)

@@ -7,6 +7,7 @@ SHA-256; it is reused only when all three match, so a corrupt, truncated, foreig
 so on stderr and computed again, never trusted and never an error. A folder that cannot be written is no
 error either: the value is computed each time, and stderr says so once.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -99,14 +100,18 @@ class RecordCache:
             value, why = self.read(path, key)
             if why is None:
                 return value, True
-            print(f"cache entry {path} is not reused: {why}; computing the {self.what} again", file=sys.stderr,
-                  flush=True)
+            print(
+                f"cache entry {path} is not reused: {why}; computing the {self.what} again", file=sys.stderr, flush=True
+            )
         value = jsonio.loads(jsonio.dumps(compute()))  # as a read-back gives it: a first run and a second agree
         try:
             write_text(path, jsonio.dumps({"key": key, "value": value, "sha256": _digest(value)}, indent=1) + "\n")
         except SolasError as exc:
             if path.parent not in self.unwritable:
                 self.unwritable.add(path.parent)
-                print(f"{exc}: the {self.what} is not kept, computed each time (set {ENV} to a folder you can "
-                      "write)", file=sys.stderr, flush=True)
+                print(
+                    f"{exc}: the {self.what} is not kept, computed each time (set {ENV} to a folder you can write)",
+                    file=sys.stderr,
+                    flush=True,
+                )
         return value, False

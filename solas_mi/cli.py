@@ -2,6 +2,7 @@
 `register(subparsers)` each); this module only composes them, turns user errors into one line on
 stderr and exit status 2 (and a library's warning into one line, without its source line), and makes SIGTERM an interruption like Ctrl-C, so that temporary files
 and folders are removed and no output is left half-written (exit status 130 / 143)."""
+
 from __future__ import annotations
 
 import argparse
@@ -13,8 +14,10 @@ import warnings
 from .errors import SolasError
 from .interrupts import raise_outside_imports
 
-DESCRIPTION = ("Physically based lens simulation: PSFs ray-traced through a real lens, images degraded with "
-               "them or rendered through the lens in Mitsuba 3, and the result measured.")
+DESCRIPTION = (
+    "Physically based lens simulation: PSFs ray-traced through a real lens, images degraded with "
+    "them or rendered through the lens in Mitsuba 3, and the result measured."
+)
 
 
 class DefaultsFormatter(argparse.HelpFormatter):
@@ -24,8 +27,12 @@ class DefaultsFormatter(argparse.HelpFormatter):
     def _get_help_string(self, action: argparse.Action) -> str:
         text = action.help or ""
         default = action.default
-        if ("default" in text.lower() or default in (None, False, argparse.SUPPRESS)
-                or not action.option_strings or isinstance(action, argparse._StoreTrueAction)):
+        if (
+            "default" in text.lower()
+            or default in (None, False, argparse.SUPPRESS)
+            or not action.option_strings
+            or isinstance(action, argparse._StoreTrueAction)
+        ):
             return text
         shown = ",".join(map(str, default)) if isinstance(default, (list, tuple)) else default
         return f"{text} (default: {str(shown).replace('%', '%%')})"
@@ -102,8 +109,9 @@ def main(argv: list[str] | None = None) -> int:
     previous = _handlers()  # from the start: building the parser imports every stage's commands (a second)
     args = argparse.Namespace(command=None)
     shown = warnings.showwarning
-    warnings.showwarning = lambda message, *where, **more: print(f"{_prog(args.command)}: warning: {message}",
-                                                                 file=sys.stderr)
+    warnings.showwarning = lambda message, *where, **more: print(
+        f"{_prog(args.command)}: warning: {message}", file=sys.stderr
+    )
     try:
         args = build_parser().parse_args(argv)
         return int(args.run(args) or 0)

@@ -4,12 +4,13 @@ patch 32×24, interp) with a comparison sheet; a slanted-edge target of known MT
 e-SFR; the street scene through the doublet, a sensor preset and the image processor, on a sheet beside
 its depth and instance layers; the street experiment. Each step is announced before it runs, with the
 files it writes (`steps`)."""
+
 from __future__ import annotations
 
 import argparse
+from collections.abc import Callable
 from contextlib import redirect_stdout
 from pathlib import Path
-from typing import Callable
 
 from . import jsonio
 from .cli import main as solas_mi
@@ -24,9 +25,11 @@ DEMO_SPP = 192  # 64 per colour line: ≈ 2.5 % noise; measured ≈ 2 min on two
 STREET_SET = ("width=480", "height=360", "fov=8", "target=0, 2, 140")
 STREET_SPP = 32
 STREET_SENSOR, STREET_EXPOSURE_MS = "imx490-hdr", "auto"
-CAMERA_FILES = {"camera": "camera/street_render.exr|png (irradiance + every label's layers), "
-                          "camera/street_raw.exr|png (RAW, developed frame)",
-                "camera sheet": "camera/camera_sheet.png"}  # what `camera_frame` writes
+CAMERA_FILES = {
+    "camera": "camera/street_render.exr|png (irradiance + every label's layers), "
+    "camera/street_raw.exr|png (RAW, developed frame)",
+    "camera sheet": "camera/camera_sheet.png",
+}  # what `camera_frame` writes
 PHOTO = "images/rocket.png"  # under the shipped scenes
 GRIDS = ("8x8", "32x32")
 CONVOLUTIONS = (("patch 8x6", "8x8", "patch"), ("patch 32x24", "32x32", "patch"), ("interp 32x32", "32x32", "interp"))
@@ -44,23 +47,44 @@ def steps() -> list[tuple[str, dict[str, str], Callable[[Path], None]]]:
     return [
         ("the doublet's paraxial table", {"paraxial": "lens_info.txt, lens_info.json"}, lens_info),
         ("nine PSFs: fields 0, +2 and -2 deg at 486, 531 and 656 nm", {"psfs": "psf/psf_*deg_*nm.exr|png"}, psfs),
-        ("PSF grids " + " and ".join(GRIDS) + " at 656, 531 and 486 nm, each with its PNG mosaic",
-         {"grids": ", ".join(f"psf_grid_{g}.exr|png" for g in GRIDS)}, grids),
-        (f"the bundled photograph rendered through the doublet's glass at {DEMO_SPP} spp, one of the two long "
-         "steps: its progress reports the time left at the rate it measures",
-         {"direct render": "degraded/rocket_render.exr|png"}, render),
-        ("the photograph degraded by the PSF grids (" + ", ".join(c[0] for c in CONVOLUTIONS) + ") and a "
-         "comparison sheet of the four", {"convolutions": ", ".join(f"degraded/rocket_{safe_name(c[0])}.exr|png"
-                                                                    for c in CONVOLUTIONS),
-                                          "comparison sheet": "degraded/comparison.png"}, convolutions),
-        ("a slanted-edge target of known MTF, measured by the e-SFR", {"slanted edge": "sfr/edge_5deg_sigma1px.png"},
-         slanted_edge),
-        (f"the street scene through the doublet ({STREET_SPP} spp) with its labels, the {STREET_SENSOR} sensor and "
-         "the default image processor", CAMERA_FILES, camera_frame),
-        ("the street experiment (the SOLAS paper's natural-scene SFR), the other long step: renders through an "
-         "ideal camera and the lens focused at infinity and near, PSF grids and convolutions, each reported with "
-         "its time as it ends", {"street experiment": "street/street.md (table), street/fig5_*.png (plots), street/*.exr|png"},
-         street_experiment),
+        (
+            "PSF grids " + " and ".join(GRIDS) + " at 656, 531 and 486 nm, each with its PNG mosaic",
+            {"grids": ", ".join(f"psf_grid_{g}.exr|png" for g in GRIDS)},
+            grids,
+        ),
+        (
+            f"the bundled photograph rendered through the doublet's glass at {DEMO_SPP} spp, one of the two long "
+            "steps: its progress reports the time left at the rate it measures",
+            {"direct render": "degraded/rocket_render.exr|png"},
+            render,
+        ),
+        (
+            "the photograph degraded by the PSF grids (" + ", ".join(c[0] for c in CONVOLUTIONS) + ") and a "
+            "comparison sheet of the four",
+            {
+                "convolutions": ", ".join(f"degraded/rocket_{safe_name(c[0])}.exr|png" for c in CONVOLUTIONS),
+                "comparison sheet": "degraded/comparison.png",
+            },
+            convolutions,
+        ),
+        (
+            "a slanted-edge target of known MTF, measured by the e-SFR",
+            {"slanted edge": "sfr/edge_5deg_sigma1px.png"},
+            slanted_edge,
+        ),
+        (
+            f"the street scene through the doublet ({STREET_SPP} spp) with its labels, the {STREET_SENSOR} sensor and "
+            "the default image processor",
+            CAMERA_FILES,
+            camera_frame,
+        ),
+        (
+            "the street experiment (the SOLAS paper's natural-scene SFR), the other long step: renders through an "
+            "ideal camera and the lens focused at infinity and near, PSF grids and convolutions, each reported with "
+            "its time as it ends",
+            {"street experiment": "street/street.md (table), street/fig5_*.png (plots), street/*.exr|png"},
+            street_experiment,
+        ),
     ]
 
 
@@ -70,8 +94,10 @@ def run(out: Path) -> None:
     every = steps()
     written: dict[str, str] = {}
     for k, (what, writes, step) in enumerate(every, start=1):
-        print(f"\n== demo step {k} of {len(every)}: {what}\n   writes (in {out}): {'; '.join(writes.values())}",
-              flush=True)
+        print(
+            f"\n== demo step {k} of {len(every)}: {what}\n   writes (in {out}): {'; '.join(writes.values())}",
+            flush=True,
+        )
         step(out)
         written.update(writes)
     print(jsonio.dumps({"results": str(out.resolve()), **written}, indent=2))
@@ -87,14 +113,45 @@ def lens_info(out: Path) -> None:
 def psfs(out: Path) -> None:
     for field in (0, 2, -2):
         for wl in (486, 531, 656):
-            cli(["psf", "solas-doublet", "--field-deg", f"0,{field}", "--wavelengths-nm", str(wl), "--pitch-um", "0.5",
-                 "--size", "160", "--normalize", "peak", "-o", str(out / "psf" / f"psf_{field:+d}deg_{wl}nm.exr")])
+            cli(
+                [
+                    "psf",
+                    "solas-doublet",
+                    "--field-deg",
+                    f"0,{field}",
+                    "--wavelengths-nm",
+                    str(wl),
+                    "--pitch-um",
+                    "0.5",
+                    "--size",
+                    "160",
+                    "--normalize",
+                    "peak",
+                    "-o",
+                    str(out / "psf" / f"psf_{field:+d}deg_{wl}nm.exr"),
+                ]
+            )
 
 
 def grids(out: Path) -> None:
     for grid in GRIDS:
-        cli(["psf-grid", "solas-doublet", "--grid", grid, "--wavelengths-nm", "656,531,486", "--pitch-um", "0.5",
-             "--size", "160", "--mosaic", "-o", str(out / f"psf_grid_{grid}.exr")])
+        cli(
+            [
+                "psf-grid",
+                "solas-doublet",
+                "--grid",
+                grid,
+                "--wavelengths-nm",
+                "656,531,486",
+                "--pitch-um",
+                "0.5",
+                "--size",
+                "160",
+                "--mosaic",
+                "-o",
+                str(out / f"psf_grid_{grid}.exr"),
+            ]
+        )
 
 
 def _photo() -> str:
@@ -102,8 +159,19 @@ def _photo() -> str:
 
 
 def render(out: Path) -> None:
-    cli(["render-image", "solas-doublet", _photo(), "--response", "lines", "--spp", str(DEMO_SPP),
-         "-o", str(out / "degraded" / "rocket_render.exr")])
+    cli(
+        [
+            "render-image",
+            "solas-doublet",
+            _photo(),
+            "--response",
+            "lines",
+            "--spp",
+            str(DEMO_SPP),
+            "-o",
+            str(out / "degraded" / "rocket_render.exr"),
+        ]
+    )
 
 
 def convolutions(out: Path) -> None:
@@ -114,11 +182,23 @@ def convolutions(out: Path) -> None:
     files = {"direct render": d / "rocket_render.exr"}
     for name, grid, method in CONVOLUTIONS:
         files[name] = d / f"rocket_{safe_name(name)}.exr"
-        cli(["degrade", _photo(), "--psf-grid", str(out / f"psf_grid_{grid}.exr"), "--method", method,
-             "-o", str(files[name])])
-    comparison_sheet({"input (ideal camera)": read_image(_photo()), **{k: read_image(v) for k, v in files.items()}},
-                     d / "comparison.png", f"SOLAS doublet: direct render (R/G/B = 656/531/486 nm, {DEMO_SPP} spp) and "
-                     "PSF-grid convolutions")
+        cli(
+            [
+                "degrade",
+                _photo(),
+                "--psf-grid",
+                str(out / f"psf_grid_{grid}.exr"),
+                "--method",
+                method,
+                "-o",
+                str(files[name]),
+            ]
+        )
+    comparison_sheet(
+        {"input (ideal camera)": read_image(_photo()), **{k: read_image(v) for k, v in files.items()}},
+        d / "comparison.png",
+        f"SOLAS doublet: direct render (R/G/B = 656/531/486 nm, {DEMO_SPP} spp) and PSF-grid convolutions",
+    )
 
 
 def slanted_edge(out: Path) -> None:
@@ -141,14 +221,44 @@ def camera_frame(out: Path) -> dict:
     d = out / "camera"
     render, raw = d / "street_render.exr", d / "street_raw.exr"
     sets = [a for value in STREET_SET for a in ("--set", value)]
-    cli(["render", str(resource_dir("scenes") / "street" / "street.xml"), "--lens", "solas-doublet", *sets,
-         "--spp", str(STREET_SPP), "--labels", ",".join(LABELS), "-o", str(render)])
-    cli(["camera", str(render), "--sensor-model", STREET_SENSOR, "--exposure-ms", STREET_EXPOSURE_MS,
-         "--isp", "default", "-o", str(raw)])
+    cli(
+        [
+            "render",
+            str(resource_dir("scenes") / "street" / "street.xml"),
+            "--lens",
+            "solas-doublet",
+            *sets,
+            "--spp",
+            str(STREET_SPP),
+            "--labels",
+            ",".join(LABELS),
+            "-o",
+            str(render),
+        ]
+    )
+    cli(
+        [
+            "camera",
+            str(render),
+            "--sensor-model",
+            STREET_SENSOR,
+            "--exposure-ms",
+            STREET_EXPOSURE_MS,
+            "--isp",
+            "default",
+            "-o",
+            str(raw),
+        ]
+    )
     channels, meta = read_exr(render)
-    camera_sheet(channels, meta["labels"], read_image(raw.with_suffix(".png"), linearize=False), d / "camera_sheet.png",
-                 f"street scene, solas-doublet ({STREET_SPP} spp) → {STREET_SENSOR} (exposure {STREET_EXPOSURE_MS}) "
-                 "→ default image processor; labels along each pixel's chief ray")
+    camera_sheet(
+        channels,
+        meta["labels"],
+        read_image(raw.with_suffix(".png"), linearize=False),
+        d / "camera_sheet.png",
+        f"street scene, solas-doublet ({STREET_SPP} spp) → {STREET_SENSOR} (exposure {STREET_EXPOSURE_MS}) "
+        "→ default image processor; labels along each pixel's chief ray",
+    )
     return CAMERA_FILES
 
 
@@ -178,8 +288,10 @@ def camera_sheet(channels: dict, labels: dict, frame, path: Path, title: str) ->
     fig.colorbar(shown, ax=axes[2], fraction=0.04, label="range (m)")
     axes[2].set_title(f"depth: {np.nanmin(depth):.1f} to {np.nanmax(depth):.1f} m")
     axes[3].imshow(np.ma.masked_where(~valid, ids % 20), cmap="tab20", vmin=0, vmax=19, interpolation="nearest")
-    boxes = [axes[3].add_patch(Rectangle((x0 - 0.5, y0 - 0.5), x1 - x0, y1 - y0, fill=False, edgecolor="white"))
-             for x0, y0, x1, y1 in (box["box"] for box in labels.get("boxes", {}).values())]
+    boxes = [
+        axes[3].add_patch(Rectangle((x0 - 0.5, y0 - 0.5), x1 - x0, y1 - y0, fill=False, edgecolor="white"))
+        for x0, y0, x1, y1 in (box["box"] for box in labels.get("boxes", {}).values())
+    ]
     for name, box in labels.get("boxes", {}).items():
         axes[3].text(box["box"][0], box["box"][1], name, color="white", fontsize=6, va="bottom")
     axes[3].set_title(f"instances: {len(labels.get('instances', {}))} shapes, {len(boxes)} named (boxed)")

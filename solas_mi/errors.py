@@ -1,4 +1,5 @@
 """The one exception type for user errors."""
+
 import re
 
 _QUOTED = re.compile(r'"([^"]*)("?)')  # a quote in Mitsuba's text, closed or running on to the end
@@ -82,9 +83,9 @@ def _scene_quotes_only(message: str, known: str) -> str:
     from the file's text. A quote counts as closed only where a delimiter follows it (`_CLOSES`)."""
     words = _words(known)
     for m in _QUOTED.finditer(message):
-        after = message[m.end():m.end() + 1]
+        after = message[m.end() : m.end() + 1]
         closed = m[2] == '"' and (not after or after in _CLOSES)
         name = re.sub(r"@\d+$", "", re.split(r"[/\\]", m[1])[-1])  # "mesh.serialized@2": a file's shape 2
         if not (closed and (m[1] in words or name in words)):
-            return message[:m.start()] + '"…"'
+            return message[: m.start()] + '"…"'
     return message

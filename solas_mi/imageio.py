@@ -2,15 +2,16 @@
 
 Every writer is atomic: it writes a temporary file beside the target and renames it.
 """
+
 from __future__ import annotations
 
 import os
 import tempfile
 import warnings
+from collections.abc import Iterator
 from contextlib import contextmanager
 from functools import lru_cache
 from pathlib import Path
-from typing import Iterator
 
 import numpy as np
 
@@ -47,9 +48,14 @@ def remove_stale_temporaries(path: str | os.PathLike) -> int:
     except OSError:
         return 0
     for entry in entries:
-        pid, _, rest = entry.name[len(start):].partition(".")
-        if pid.isdigit() and len(rest) == 8 + len(path.suffix) and rest.endswith(path.suffix) \
-                and entry.is_file(follow_symlinks=False) and not _alive(int(pid)):
+        pid, _, rest = entry.name[len(start) :].partition(".")
+        if (
+            pid.isdigit()
+            and len(rest) == 8 + len(path.suffix)
+            and rest.endswith(path.suffix)
+            and entry.is_file(follow_symlinks=False)
+            and not _alive(int(pid))
+        ):
             Path(entry.path).unlink(missing_ok=True)
             removed += 1
     return removed
@@ -107,8 +113,14 @@ def srgb_decode(encoded: np.ndarray) -> np.ndarray:
     return np.where(x <= 0.04045, x / 12.92, np.power((x + 0.055) / 1.055, 2.4))
 
 
-def write_exr(path: str | os.PathLike, channels: dict[str, np.ndarray], meta: dict | None = None,
-              compress: bool = True, infinite: bool = False, half: bool = False) -> None:
+def write_exr(
+    path: str | os.PathLike,
+    channels: dict[str, np.ndarray],
+    meta: dict | None = None,
+    compress: bool = True,
+    infinite: bool = False,
+    half: bool = False,
+) -> None:
     """Write float32 channels (equal 2-D shapes, row 0 = top) and JSON metadata to an OpenEXR file.
 
     `compress=False` skips ZIP compression, for data that does not compress (PSF grids); `half`
@@ -127,9 +139,8 @@ def write_exr(path: str | os.PathLike, channels: dict[str, np.ndarray], meta: di
         except SolasError as exc:
             raise SolasError(f"{path}: metadata: {exc}") from None
     data = {name: np.ascontiguousarray(a, dtype=np.float16 if half else np.float32) for name, a in channels.items()}
-    with atomic_path(path) as tmp:
-        with OpenEXR.File(header, data) as f:
-            f.write(tmp)
+    with atomic_path(path) as tmp, OpenEXR.File(header, data) as f:
+        f.write(tmp)
 
 
 def image_channels(image: np.ndarray, names: list[str] | None = None) -> dict[str, np.ndarray]:
@@ -204,8 +215,9 @@ def exr_image_channels(names: list[str], path: str | os.PathLike) -> list[str]:
     for rgb in RGB_SPELLINGS:
         if all(c in names for c in rgb):
             return list(rgb)
-    layers = sorted({n.rsplit(".", 1)[0] for n in names
-                     if "." in n and all(f"{n.rsplit('.', 1)[0]}.{c}" in names for c in "RGB")})
+    layers = sorted(
+        {n.rsplit(".", 1)[0] for n in names if "." in n and all(f"{n.rsplit('.', 1)[0]}.{c}" in names for c in "RGB")}
+    )
     if len(layers) == 1:
         return [f"{layers[0]}.{c}" for c in "RGB"]
     colour = [n for n in names if n not in ("A", "a")]
@@ -213,8 +225,10 @@ def exr_image_channels(names: list[str], path: str | os.PathLike) -> list[str]:
     if len(grey) == 1 or len(colour) == 1:
         return grey[:1] or colour
     why = f"several layers have R, G, B ({', '.join(layers)})" if layers else "no R, G, B or single grey channel"
-    raise SolasError(f"{path}: channels {', '.join(names)}: {why}; an image needs R, G, B (or r, g, b, or one "
-                     f"layer's LAYER.R/G/B) or one grey channel (Y)")
+    raise SolasError(
+        f"{path}: channels {', '.join(names)}: {why}; an image needs R, G, B (or r, g, b, or one "
+        f"layer's LAYER.R/G/B) or one grey channel (Y)"
+    )
 
 
 def check_finite(image: np.ndarray, what: str) -> np.ndarray:
@@ -223,8 +237,10 @@ def check_finite(image: np.ndarray, what: str) -> np.ndarray:
     if bad.any():
         first = np.argwhere(bad)[0]
         where = f"row {first[0]}, column {first[1]}" + (f", channel {first[2]}" if len(first) > 2 else "")
-        raise SolasError(f"{what}: {int(bad.sum())} values are NaN or infinite (the first at {where}); "
-                         "images must hold finite values")
+        raise SolasError(
+            f"{what}: {int(bad.sum())} values are NaN or infinite (the first at {where}); "
+            "images must hold finite values"
+        )
     return image
 
 

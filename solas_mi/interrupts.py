@@ -8,6 +8,7 @@ import here is lazy (light modules stay light), so an interruption can come duri
 `raise_outside_imports` lets an import in progress finish and raises the interruption in the frame
 that started it, at its next instruction (the time of one import: a second or two for Mitsuba).
 """
+
 from __future__ import annotations
 
 import sys

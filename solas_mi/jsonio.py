@@ -12,6 +12,7 @@ key (a NaN in the results is a wrong answer upstream, not something to store).
 so that an old file and a new one read the same (resumed batches, cache records, reused references);
 an old `NaN` token reads as a float NaN.
 """
+
 from __future__ import annotations
 
 import json
@@ -38,8 +39,10 @@ def _plain(value: Any, where: str = "") -> Any:
     if isinstance(value, numbers.Real) and not isinstance(value, int):
         number = float(value)
         if math.isnan(number):
-            raise SolasError(f"{where or 'value'} is NaN (not a number), which JSON cannot hold and solas-mi "
-                             "does not write: a result came out undefined")
+            raise SolasError(
+                f"{where or 'value'} is NaN (not a number), which JSON cannot hold and solas-mi "
+                "does not write: a result came out undefined"
+            )
         if math.isinf(number):
             return INFINITY if number > 0 else "-" + INFINITY
         return value if isinstance(value, float) else number
@@ -59,6 +62,6 @@ def loads(text: str | bytes) -> Any:
     try:
         return json.loads(text, parse_constant=_OLD_TOKENS.__getitem__)
     except RecursionError:
-        raise SolasError("JSON nested deeper than the parser goes (thousands of levels): not a file solas-mi "
-                         "wrote") from None
-
+        raise SolasError(
+            "JSON nested deeper than the parser goes (thousands of levels): not a file solas-mi wrote"
+        ) from None

@@ -15,6 +15,7 @@ points as COCO's, (x, y) from the image's top-left corner (the first pixel spans
 
 This module imports nothing heavy when loaded: the readers load NumPy and the image readers when called.
 """
+
 from __future__ import annotations
 
 import math
@@ -28,13 +29,13 @@ ID_LIMIT = 1 << 24  # ids below 2^24 are exact in a float32 channel
 # how a kind follows a warp of its frame, by name (`convolution.labels` applies each)
 RULES = {
     "pick": "the value of one of the four pixels around the source point, never blended (no value appears that was "
-            "not in the input): each with the probability of its bilinear weight, by a fixed dither, so that an edge "
-            "moves by the sub-pixel part of its shift (rounding would move it by whole pixels)",
+    "not in the input): each with the probability of its bilinear weight, by a fixed dither, so that an edge "
+    "moves by the sub-pixel part of its shift (rounding would move it by whole pixels)",
     "surface": "interpolated bilinearly between the four pixels around the source point where they lie on one "
-               "surface (depths apart by less than a silhouette, `convolution.depth.SILHOUETTE_RATIO`), else picked as "
-               "ids are; the value itself is kept",
+    "surface (depths apart by less than a silhouette, `convolution.depth.SILHOUETTE_RATIO`), else picked as "
+    "ids are; the value itself is kept",
     "flow": "picked as ids are, its end point moved by the same mapping: the value is the moved end point minus "
-            "the moved start point",
+    "the moved start point",
     "points": "each point moved by the mapping; a box is the bounding box of its moved outline",
 }
 _ANNOTATIONS = "annotations file"
@@ -50,8 +51,10 @@ def _channels(names: list[str], kind: str, path) -> list[str]:
     if len(entry.extra["layers"]) == 1 and len(names) == 1:
         return names
     ways = " or ".join(", ".join(s) for s in (entry.extra["layers"], *entry.extra["spellings"]))
-    raise SolasError(f"{kind} labels {str(path)!r} have channels {', '.join(names)}: they must be {ways}"
-                     f"{' (or the only channel)' if len(entry.extra['layers']) == 1 else ''}")
+    raise SolasError(
+        f"{kind} labels {str(path)!r} have channels {', '.join(names)}: they must be {ways}"
+        f"{' (or the only channel)' if len(entry.extra['layers']) == 1 else ''}"
+    )
 
 
 def read_layers(path, kind: str):
@@ -77,8 +80,10 @@ def read_layers(path, kind: str):
         if values.shape[-1] == 3 and (values == values[..., :1]).all():
             values = values[..., :1]
         if values.shape[-1] != 1:
-            raise SolasError(f"{kind} labels {str(path)!r} have {values.shape[-1]} different channels: one channel "
-                             "of ids is read (colour-coded ids are not)")
+            raise SolasError(
+                f"{kind} labels {str(path)!r} have {values.shape[-1]} different channels: one channel "
+                "of ids is read (colour-coded ids are not)"
+            )
     values = values.astype(np.float64)
     entry.extra["check"](values, path)
     return values
@@ -90,8 +95,10 @@ def _first(bad, values, path, kind: str, allowed: str) -> None:
 
     if bad.any():
         r, c, k = np.argwhere(bad)[0]
-        raise SolasError(f"{kind} labels {str(path)!r}: value {float(values[r, c, k])!r} at row {r}, column {c} "
-                         f"({int(bad.sum())} such values): {allowed}")
+        raise SolasError(
+            f"{kind} labels {str(path)!r}: value {float(values[r, c, k])!r} at row {r}, column {c} "
+            f"({int(bad.sum())} such values): {allowed}"
+        )
 
 
 def _ids(kind: str):
@@ -99,9 +106,15 @@ def _ids(kind: str):
         import numpy as np
 
         with np.errstate(invalid="ignore"):
-            _first(~np.isfinite(values) | (values != np.round(values)) | (values < 0) | (values >= ID_LIMIT), values,
-                   path, kind, f"{kind} ids are whole numbers from 0 to {ID_LIMIT - 1} (a float or blended id "
-                               "belongs to no object: give the ids as written)")
+            _first(
+                ~np.isfinite(values) | (values != np.round(values)) | (values < 0) | (values >= ID_LIMIT),
+                values,
+                path,
+                kind,
+                f"{kind} ids are whole numbers from 0 to {ID_LIMIT - 1} (a float or blended id "
+                "belongs to no object: give the ids as written)",
+            )
+
     return check
 
 
@@ -109,8 +122,13 @@ def _depth_values(values, path) -> None:
     import numpy as np
 
     with np.errstate(invalid="ignore"):
-        _first(np.isnan(values) | (values < 0), values, path, "depth", "depths are metres >= 0 (0: nothing "
-               "met), inf for the sky")
+        _first(
+            np.isnan(values) | (values < 0),
+            values,
+            path,
+            "depth",
+            "depths are metres >= 0 (0: nothing met), inf for the sky",
+        )
 
 
 def _finite(kind: str):
@@ -118,12 +136,16 @@ def _finite(kind: str):
         import numpy as np
 
         _first(~np.isfinite(values), values, path, kind, f"{kind} values must be finite")
+
     return check
 
 
 def _numbers(value, count: int | None) -> bool:
-    return isinstance(value, list) and (count is None or len(value) == count) and all(
-        isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in value)
+    return (
+        isinstance(value, list)
+        and (count is None or len(value) == count)
+        and all(isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in value)
+    )
 
 
 def read_annotations(path, kind: str = "boxes") -> dict[str, Any]:
@@ -139,8 +161,9 @@ def read_annotations(path, kind: str = "boxes") -> dict[str, Any]:
     except ValueError as exc:
         raise SolasError(f"{kind} file {str(path)!r} is not JSON ({str(exc).splitlines()[0]})") from None
     if not isinstance(data, dict) or not isinstance(data.get("annotations"), list):
-        raise SolasError(f"{kind} file {str(path)!r} must be a JSON object whose \"annotations\" is a list "
-                         "(COCO's layout)")
+        raise SolasError(
+            f'{kind} file {str(path)!r} must be a JSON object whose "annotations" is a list (COCO\'s layout)'
+        )
     for i, a in enumerate(data["annotations"]):
         bad = None if isinstance(a, dict) else "is not an object"
         if bad is None and "bbox" in a and not (_numbers(a["bbox"], 4) and min(a["bbox"][2:]) >= 0):
@@ -149,10 +172,13 @@ def read_annotations(path, kind: str = "boxes") -> dict[str, Any]:
         if points is not None and not (_numbers(points, None) and len(points) % 3 == 0):
             bad = "has keypoints that are not [x1, y1, v1, x2, y2, v2, ...] (finite numbers, in threes)"
         shapes = a.get("segmentation") if bad is None else None
-        if shapes is not None and not (isinstance(shapes, list) and all(
-                _numbers(s, None) and len(s) % 2 == 0 for s in shapes)):
-            bad = "has a segmentation that is not a list of polygons [x1, y1, x2, y2, ...] (run-length " \
-                  "encoded masks: give the mask as a label image)"
+        if shapes is not None and not (
+            isinstance(shapes, list) and all(_numbers(s, None) and len(s) % 2 == 0 for s in shapes)
+        ):
+            bad = (
+                "has a segmentation that is not a list of polygons [x1, y1, x2, y2, ...] (run-length "
+                "encoded masks: give the mask as a label image)"
+            )
         if bad:
             raise SolasError(f"{kind} file {str(path)!r}: annotation {i} {bad}")
     return data
@@ -160,27 +186,76 @@ def read_annotations(path, kind: str = "boxes") -> dict[str, Any]:
 
 KINDS = Registry("label kind", shown=("layers", "files", "rule"))
 _EXR, _IDS = (".exr",), (".png", ".tif", ".tiff", ".exr")
-KINDS.register("depth", lambda path: read_layers(path, "depth"), layers=("depth.Z",),
-               spellings=(("Z",), ("depth",), ("Y",)), files=_EXR, rule="surface", check=_depth_values,
-               summary="distance in metres, along the optical axis (degrade --depth's maps) or a range from the "
-                       "projection centre (render's); 0 where nothing is met, inf for the sky")
-KINDS.register("normal", lambda path: read_layers(path, "normal"), layers=("normal.X", "normal.Y", "normal.Z"),
-               spellings=(("X", "Y", "Z"), ("R", "G", "B")), files=_EXR, rule="pick", check=_finite("normal"),
-               summary="the surface's unit normal, in the world's or the camera's frame")
-KINDS.register("instance", lambda path: read_layers(path, "instance"), layers=("instance.id",),
-               spellings=(("id",), ("Y",)), files=_IDS, rule="pick", check=_ids("instance"),
-               summary="an object's id, a whole number (0: background)")
-KINDS.register("semantic", lambda path: read_layers(path, "semantic"), layers=("semantic.id",),
-               spellings=(("id",), ("Y",)), files=_IDS, rule="pick", check=_ids("semantic"),
-               summary="a class id, a whole number")
-KINDS.register("mask", lambda path: read_layers(path, "mask"), layers=("mask.Y",), spellings=(("Y",),),
-               files=_IDS, rule="pick", check=_ids("mask"),
-               summary="a mask of whole numbers (0 and 1, or 0 and 255)")
-KINDS.register("flow", lambda path: read_layers(path, "flow"), layers=("flow.X", "flow.Y"),
-               spellings=(("X", "Y"), ("U", "V"), ("R", "G")), files=_EXR, rule="flow", check=_finite("flow"),
-               summary="optical flow to the next frame, pixels: +x right, +y down")
-KINDS.register("boxes", read_annotations, layers=(), spellings=(), files=(".json",), rule="points",
-               summary="2D boxes, keypoints and polygons of objects, COCO's JSON layout")
+KINDS.register(
+    "depth",
+    lambda path: read_layers(path, "depth"),
+    layers=("depth.Z",),
+    spellings=(("Z",), ("depth",), ("Y",)),
+    files=_EXR,
+    rule="surface",
+    check=_depth_values,
+    summary="distance in metres, along the optical axis (degrade --depth's maps) or a range from the "
+    "projection centre (render's); 0 where nothing is met, inf for the sky",
+)
+KINDS.register(
+    "normal",
+    lambda path: read_layers(path, "normal"),
+    layers=("normal.X", "normal.Y", "normal.Z"),
+    spellings=(("X", "Y", "Z"), ("R", "G", "B")),
+    files=_EXR,
+    rule="pick",
+    check=_finite("normal"),
+    summary="the surface's unit normal, in the world's or the camera's frame",
+)
+KINDS.register(
+    "instance",
+    lambda path: read_layers(path, "instance"),
+    layers=("instance.id",),
+    spellings=(("id",), ("Y",)),
+    files=_IDS,
+    rule="pick",
+    check=_ids("instance"),
+    summary="an object's id, a whole number (0: background)",
+)
+KINDS.register(
+    "semantic",
+    lambda path: read_layers(path, "semantic"),
+    layers=("semantic.id",),
+    spellings=(("id",), ("Y",)),
+    files=_IDS,
+    rule="pick",
+    check=_ids("semantic"),
+    summary="a class id, a whole number",
+)
+KINDS.register(
+    "mask",
+    lambda path: read_layers(path, "mask"),
+    layers=("mask.Y",),
+    spellings=(("Y",),),
+    files=_IDS,
+    rule="pick",
+    check=_ids("mask"),
+    summary="a mask of whole numbers (0 and 1, or 0 and 255)",
+)
+KINDS.register(
+    "flow",
+    lambda path: read_layers(path, "flow"),
+    layers=("flow.X", "flow.Y"),
+    spellings=(("X", "Y"), ("U", "V"), ("R", "G")),
+    files=_EXR,
+    rule="flow",
+    check=_finite("flow"),
+    summary="optical flow to the next frame, pixels: +x right, +y down",
+)
+KINDS.register(
+    "boxes",
+    read_annotations,
+    layers=(),
+    spellings=(),
+    files=(".json",),
+    rule="points",
+    summary="2D boxes, keypoints and polygons of objects, COCO's JSON layout",
+)
 
 
 def kinds_help() -> str:

@@ -2,6 +2,7 @@
 
 Dr.Jit crashes with libLLVM 15 and 16 and rejects 14, so only 17 or newer is accepted.
 """
+
 from __future__ import annotations
 
 import glob

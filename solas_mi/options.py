@@ -1,10 +1,12 @@
 """What the commands share: parsing of command-line values, the option groups several commands take,
 and the one shape of an option spec (`OptionSpec`, its fields declared by `option`)."""
+
 from __future__ import annotations
 
 import re
+from collections.abc import Callable
 from dataclasses import Field, dataclass, field, fields, replace
-from typing import Any, Callable
+from typing import Any
 
 from .errors import SolasError
 from .userfiles import read_toml
@@ -13,7 +15,7 @@ _WXH = re.compile(r"\s*(\d+)\s*[xX×]\s*(\d+)\s*")
 
 
 def parse_wxh(text: str | tuple[int, int], what: str, minimum: int = 1) -> tuple[int, int]:
-    """"WxH" (columns × rows, e.g. "32x24") or a (rows, columns) tuple → (rows, columns), each ≥ `minimum`."""
+    """ "WxH" (columns × rows, e.g. "32x24") or a (rows, columns) tuple → (rows, columns), each ≥ `minimum`."""
     if isinstance(text, tuple):
         rows, cols = text
         ok = all(isinstance(v, int) and not isinstance(v, bool) for v in text)
@@ -32,7 +34,7 @@ def wxh_text(value: tuple[int, int]) -> str:
 
 
 def parse_size_mm(text: str, what: str) -> tuple[float, float]:
-    """"WxH" in mm (e.g. "23.6x15.8") → (width, height): a physical size, unlike `parse_wxh`'s pixel
+    """ "WxH" in mm (e.g. "23.6x15.8") → (width, height): a physical size, unlike `parse_wxh`'s pixel
     counts (which it returns as rows, columns)."""
     parts = str(text).lower().replace("×", "x").split("x")
     try:
@@ -88,8 +90,10 @@ def toml_table(path, table: str, what: str) -> dict:
     `what` is its kind there (e.g. "sensor model"), which names the file in the one-line errors."""
     data = read_toml(path, what)
     if not isinstance(data.get(table), dict) or set(data) != {table}:
-        raise SolasError(f"{what} {str(path)!r} must hold one [{table}] table (and nothing else); "
-                         f"found {', '.join(sorted(data)) or 'nothing'}")
+        raise SolasError(
+            f"{what} {str(path)!r} must hold one [{table}] table (and nothing else); "
+            f"found {', '.join(sorted(data)) or 'nothing'}"
+        )
     return data[table]
 
 
@@ -123,8 +127,16 @@ class Flag:
             raise SolasError(f"{self.name} {text!r} must be {kind}") from None
 
 
-def option(help: str | Callable[[], str], default=None, *, flag: str | None = None, parse=None, choices=None,
-           metavar: str | None = None, shown: Callable[[Any], str] = str) -> Any:
+def option(
+    help: str | Callable[[], str],
+    default=None,
+    *,
+    flag: str | None = None,
+    parse=None,
+    choices=None,
+    metavar: str | None = None,
+    shown: Callable[[Any], str] = str,
+) -> Any:
     """A field of an `OptionSpec` declared with its command-line flag (`Flag`: its help, the flag when it
     is not the field's name, how its text is read, its choices): adding an option to a spec adds it to
     every command that takes the spec's flags. A bool field is a flag without a value (store_true)."""

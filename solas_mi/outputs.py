@@ -8,14 +8,15 @@ input; the output's folder is writable before the computation starts. Writes go 
 beside the targets, renamed into place at the end (`imageio.atomic_path`), and removed on any error
 or interruption.
 """
+
 from __future__ import annotations
 
 import os
 import re
 import unicodedata
+from collections.abc import Iterable, Iterator
 from contextlib import ExitStack, contextmanager
 from pathlib import Path
-from typing import Iterable, Iterator
 
 from .errors import SolasError
 
@@ -40,8 +41,10 @@ def inside(folder: str | os.PathLike, name: str) -> Path:
     base = Path(folder).resolve()
     path = base / name
     if path.resolve().parent != base:
-        raise SolasError(f"output name {name!r} leads outside the folder {base}; names derived from "
-                         "user data must be plain file names")
+        raise SolasError(
+            f"output name {name!r} leads outside the folder {base}; names derived from "
+            "user data must be plain file names"
+        )
     return path
 
 
@@ -78,12 +81,16 @@ def check_target(path: str | os.PathLike, inputs: Iterable[str | os.PathLike] = 
 def add_png_option(p) -> None:
     """--png, of every command that writes an OpenEXR image and its PNG preview: where the preview goes.
     The preview is always written (`data_and_preview`); `psf-grid`'s optional mosaic is its --mosaic."""
-    p.add_argument("--png", metavar="PNG", help="where the sRGB PNG preview, always written, goes "
-                                                "(default: beside the EXR, of the same name)")
+    p.add_argument(
+        "--png",
+        metavar="PNG",
+        help="where the sRGB PNG preview, always written, goes (default: beside the EXR, of the same name)",
+    )
 
 
-def data_and_preview(output: str | os.PathLike, preview: str | os.PathLike | None = None,
-                     inputs: Iterable[str | os.PathLike] = ()) -> tuple[Path, Path]:
+def data_and_preview(
+    output: str | os.PathLike, preview: str | os.PathLike | None = None, inputs: Iterable[str | os.PathLike] = ()
+) -> tuple[Path, Path]:
     """The checked OpenEXR data path `output` and its PNG preview (default: beside it)."""
     inputs = [i for i in inputs if i is not None]
     data = Path(output)
@@ -150,8 +157,9 @@ def hold_folder(folder: str | os.PathLike, what: str) -> Iterator[Path]:
             except BlockingIOError:
                 holder = _holder(fd)
                 os.close(fd)
-                raise SolasError(f"output folder {folder} is in use by {holder}; wait for it to end or give "
-                                 "another output folder") from None
+                raise SolasError(
+                    f"output folder {folder} is in use by {holder}; wait for it to end or give another output folder"
+                ) from None
             if os.path.exists(folder / LOCK) and os.stat(folder / LOCK).st_ino == os.fstat(fd).st_ino:
                 break
             os.close(fd)  # the holder before removed the file as this process opened it: open it anew
@@ -159,8 +167,11 @@ def hold_folder(folder: str | os.PathLike, what: str) -> Iterator[Path]:
         raise SolasError(f"cannot hold output folder {folder}: {exc.strerror or exc}") from None
     try:
         os.ftruncate(fd, 0)
-        os.write(fd, f"{what} (process {os.getpid()} on {socket.gethostname()}, since "
-                     f"{time.strftime('%Y-%m-%dT%H:%M:%S%z')})\n".encode())
+        os.write(
+            fd,
+            f"{what} (process {os.getpid()} on {socket.gethostname()}, since "
+            f"{time.strftime('%Y-%m-%dT%H:%M:%S%z')})\n".encode(),
+        )
         yield folder
     finally:
         try:

@@ -6,6 +6,7 @@ memory to find a 2 MB page: measured, 0.6 CPU-s to fill a fresh 315 MB array (a 
 PSFs) against 0.13 s with 4 kB pages, and the PSF grid's many fresh working arrays paid it too (a
 32x32x3 grid 25 % faster with 4 kB pages).
 """
+
 from __future__ import annotations
 
 from contextlib import contextmanager
@@ -16,6 +17,7 @@ def small_pages():
     """NumPy's huge-page advice off inside the block (no effect where NumPy has no such setting)."""
     try:
         from numpy._core import multiarray
+
         get, set_ = multiarray._get_madvise_hugepage, multiarray._set_madvise_hugepage
     except (ImportError, AttributeError):
         yield

@@ -9,6 +9,7 @@ after 14 minutes). Both estimate the time left from the rate measured so far.
     with Progress("psf-grid", total, "PSF") as bar:
         psf_grid(lens, spec, progress=bar)     # the library's `progress(done, total)` callbacks
 """
+
 from __future__ import annotations
 
 import sys
@@ -39,8 +40,9 @@ class Progress:
     callback the library's long functions take; `total` may change the announced total) or by
     `update(n)`; `close()`, or the end of its with block, ends it. `enabled=False`: silent."""
 
-    def __init__(self, desc: str, total: float | None, unit: str, *, initial: float = 0, stream=None,
-                 enabled: bool = True):
+    def __init__(
+        self, desc: str, total: float | None, unit: str, *, initial: float = 0, stream=None, enabled: bool = True
+    ):
         self.stream = sys.stderr if stream is None else stream
         self.desc, self.total, self.unit, self.done = desc, total, unit, initial
         self.enabled = enabled
@@ -97,8 +99,11 @@ class Progress:
             left = ""
             if self.total and 0 < self.done < self.total:
                 left = f", about {_duration(seconds * (self.total - self.done) / self.done)} left at this rate"
-            print(f"{self.desc}: {_count(self.done)}{of} {self.unit} ({percent}{seconds:.1f} s{left})",
-                  file=self.stream, flush=True)
+            print(
+                f"{self.desc}: {_count(self.done)}{of} {self.unit} ({percent}{seconds:.1f} s{left})",
+                file=self.stream,
+                flush=True,
+            )
 
     def close(self) -> None:
         self._closed.set()
@@ -106,7 +111,7 @@ class Progress:
             self._bar.close()
             self._bar = None
 
-    def __enter__(self) -> "Progress":
+    def __enter__(self) -> Progress:
         return self
 
     def __exit__(self, *exc) -> None:

@@ -12,12 +12,14 @@ This module imports nothing but the standard library and `errors`, so the comman
 choices from a registry without loading NumPy or Dr.Jit; a registry's entries load their own modules
 when called.
 """
+
 from __future__ import annotations
 
 import math
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from numbers import Integral, Real
-from typing import Any, Callable, Iterator
+from typing import Any
 
 from .errors import SolasError
 
@@ -52,8 +54,9 @@ class Option:
         low, high = self.minimum, self.maximum
         if low is not None and high is not None and not self.above:
             return f"{noun} from {_number(low)} to {_number(high)}"
-        bounds = ([f"{'>' if self.above else '>='} {_number(low)}"] if low is not None else []) + \
-                 ([f"<= {_number(high)}"] if high is not None else [])
+        bounds = ([f"{'>' if self.above else '>='} {_number(low)}"] if low is not None else []) + (
+            [f"<= {_number(high)}"] if high is not None else []
+        )
         return " ".join([noun, " and ".join(bounds)]) if bounds else noun
 
     def fits(self, value) -> bool:
@@ -103,11 +106,13 @@ class Registry:
         self.kind, self.default, self.shown = kind, default, shown
         self._entries: dict[str, Entry] = {}
 
-    def register(self, name: str, function: Callable | None = None, *, summary: str, options=(),
-                 reference: str = "", **extra):
+    def register(
+        self, name: str, function: Callable | None = None, *, summary: str, options=(), reference: str = "", **extra
+    ):
         """Add `name` (a name is registered once; registering the same entry again does nothing). Without
         `function`, a decorator that registers the function it decorates and returns it."""
         if function is None:
+
             def decorate(f: Callable) -> Callable:
                 self.register(name, f, summary=summary, options=options, reference=reference, **extra)
                 return f
@@ -159,12 +164,14 @@ class Registry:
         own = [o.name for o in entry.options]
         stray = sorted(set(given) - set(own if strict else self.option_names()))
         if stray and strict:
-            raise SolasError(f"{self.kind} {name!r} takes no option {', '.join(stray)} "
-                             f"(its options: {', '.join(own) or 'none'})")
+            raise SolasError(
+                f"{self.kind} {name!r} takes no option {', '.join(stray)} (its options: {', '.join(own) or 'none'})"
+            )
         if stray:
             noun = self.kind.rpartition(" ")[0] or self.kind
-            raise SolasError(f"{noun} options {', '.join(stray)} are unknown; "
-                             f"allowed: {', '.join(self.option_names())}")
+            raise SolasError(
+                f"{noun} options {', '.join(stray)} are unknown; allowed: {', '.join(self.option_names())}"
+            )
         return {o.name: o.check(o.default if given.get(o.name) is None else given[o.name]) for o in entry.options}
 
     def help(self) -> str:

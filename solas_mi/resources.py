@@ -4,6 +4,7 @@ Resources are found through the package's own import path: `solas_mi.scenes` and
 are folders inside the installed package (a wheel), or mapped onto the checkout's top-level
 scenes/ and plugins/ (an editable install, a source checkout). A top-level `scenes` or `plugins`
 package that something else installed beside solas_mi is never looked at."""
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -28,8 +29,9 @@ def resource_dir(name: str) -> Path:
         return inside
     if _is_checkout(_PACKAGE.parent):
         return _PACKAGE.parent / name
-    raise FileNotFoundError(f"solas-mi's {name}/ folder is neither in {_PACKAGE} nor beside it in a source "
-                            f"checkout: reinstall solas-mi")
+    raise FileNotFoundError(
+        f"solas-mi's {name}/ folder is neither in {_PACKAGE} nor beside it in a source checkout: reinstall solas-mi"
+    )
 
 
 def installed_version() -> str:

@@ -10,6 +10,7 @@ and no refusal quotes what the file holds (a file another file names may be anyt
 /proc/self/environ included). Files that a library reads by path (images, Mitsuba's meshes) are
 `check`ed the same way first.
 """
+
 from __future__ import annotations
 
 import os
@@ -57,8 +58,10 @@ def _check_stat(info: os.stat_result, path: Path, kind: str) -> None:
     if stat.S_ISDIR(info.st_mode):
         raise SolasError(f"{kind} {str(path)!r} is a folder, not {_a(kind)}")
     if not stat.S_ISREG(info.st_mode):
-        raise SolasError(f"{kind} {str(path)!r} is not a regular file (a device, FIFO or socket); "
-                         f"{_a(kind)} must be a regular file of at most {_size(LIMITS[kind])}")
+        raise SolasError(
+            f"{kind} {str(path)!r} is not a regular file (a device, FIFO or socket); "
+            f"{_a(kind)} must be a regular file of at most {_size(LIMITS[kind])}"
+        )
     if info.st_size > LIMITS[kind]:
         raise _too_big(path, kind)
 

@@ -15,14 +15,15 @@
   never the user's (`_session_cache`, through $SOLAS_MI_CACHE_DIR, which commands run as subprocesses
   inherit); `fresh_cache` gives a test its own empty one (a test that counts what is computed).
 """
+
 import contextlib
 import copy
 import math
 import sys
+import tomllib
 
 import numpy as np
 import pytest
-import tomllib
 
 from solas_mi.render.mitsuba import VARIANTS
 from solas_mi.resources import resource_dir
@@ -150,6 +151,7 @@ def variants_spectral(request):
 
 # --------------------------------------------------------------------------------------- synthetic grids
 
+
 class SyntheticGrids:
     """PSF grids without the tracer, on a pinhole camera of focal length `focal_mm` (mm): the chief ray
     of each node is its ideal image point (plus optional offsets), fields in degrees, pitch in µm.
@@ -165,7 +167,7 @@ class SyntheticGrids:
     def gaussian(size: int, sigma_um: float, pitch_um: float) -> np.ndarray:
         """A centred round Gaussian of σ `sigma_um` on `size`² samples of `pitch_um`, summing to 1."""
         x = (np.arange(size) - size // 2) * pitch_um
-        g = np.exp(-0.5 * (x[None, :] ** 2 + x[:, None] ** 2) / sigma_um ** 2)
+        g = np.exp(-0.5 * (x[None, :] ** 2 + x[:, None] ** 2) / sigma_um**2)
         return g / g.sum()
 
     @staticmethod
@@ -181,8 +183,16 @@ class SyntheticGrids:
         return 2e3 * cls.focal_mm * math.tan(math.radians(fov)) / width
 
     @classmethod
-    def from_psfs(cls, psfs, pitch_um, offsets_um=None, field=(2.0, 2.0), wavelengths=None, normalization="sum",
-                  sampling="centers"):
+    def from_psfs(
+        cls,
+        psfs,
+        pitch_um,
+        offsets_um=None,
+        field=(2.0, 2.0),
+        wavelengths=None,
+        normalization="sum",
+        sampling="centers",
+    ):
         """A PSFGrid of `psfs` (n_wavelengths, ny, nx, s, s) over ±`field` (x, y) degrees; chief rays =
         the ideal image points + `offsets_um` (n_wavelengths, ny, nx, 2) µm (x right, y up);
         wavelengths (nm) 531, 581, ... unless given."""
@@ -196,21 +206,27 @@ class SyntheticGrids:
         chief = np.repeat(cls.focal_mm * np.tan(np.radians(fields))[None], nw, axis=0)
         if offsets_um is not None:
             chief = chief + np.asarray(offsets_um, dtype=np.float64) * 1e-3
-        meta = {"normalization": normalization, "field_range_deg": list(field), "field_sampling": sampling,
-                "pinhole_focal_mm": cls.focal_mm, "reference_wavelength_nm": 531.0, "lens": "synthetic",
-                "lens_hash": "0" * 16}
+        meta = {
+            "normalization": normalization,
+            "field_range_deg": list(field),
+            "field_sampling": sampling,
+            "pinhole_focal_mm": cls.focal_mm,
+            "reference_wavelength_nm": 531.0,
+            "lens": "synthetic",
+            "lens_hash": "0" * 16,
+        }
         wl = tuple(wavelengths) if wavelengths else tuple(531.0 + 50.0 * k for k in range(nw))
         return PSFGrid(psfs, fields, chief, wl, float(pitch_um), meta)
 
-    def __call__(self, shape=(3, 4, 4), wavelengths=None, pitch_um=2.0, size=31, kind="gaussian", sigma_um=8.0,
-                 **options):
+    def __call__(
+        self, shape=(3, 4, 4), wavelengths=None, pitch_um=2.0, size=31, kind="gaussian", sigma_um=8.0, **options
+    ):
         """A grid of `shape` (n_wavelengths, ny, nx) with the same PSF at every node: a Gaussian of σ
         `sigma_um` or a delta (`kind`), `size`² samples of `pitch_um`; `options` as `from_psfs`."""
         if kind not in self.KINDS:
             raise ValueError(f"kind {kind!r} must be one of {', '.join(self.KINDS)}")
         psf = self.gaussian(size, sigma_um, pitch_um) if kind == "gaussian" else self.delta(size)
-        return self.from_psfs(np.broadcast_to(psf, (*shape, size, size)), pitch_um, wavelengths=wavelengths,
-                              **options)
+        return self.from_psfs(np.broadcast_to(psf, (*shape, size, size)), pitch_um, wavelengths=wavelengths, **options)
 
 
 @pytest.fixture(scope="session")

@@ -1,4 +1,5 @@
 """Calls that must return in time: a reader stuck on a FIFO, or reading /dev/zero, never returns."""
+
 import threading
 
 from solas_mi.errors import SolasError

@@ -1,5 +1,6 @@
 """JSON as a strict reader (JavaScript's JSON.parse, Go, serde) reads it: the bare tokens Python's json
 writes for non-finite floats (Infinity, -Infinity, NaN) are refused, as those readers refuse the file."""
+
 import json
 
 

@@ -1,6 +1,7 @@
 """How benchmarks/run_all.py records a run: how busy the machine was (a busy run is marked and sets no
 README headline), and each figure compared with the recorded run's (a regression beyond 20 % between
 runs on an idle machine is named)."""
+
 import sys
 from pathlib import Path
 
@@ -15,8 +16,10 @@ def results(figures: str, busy: bool = False) -> str:
     """A results file as run_all writes it, holding `figures` (figure lines)."""
     machine = run_all.Machine()
     machine.load, machine.cores, machine.others = (3.0 if busy else 0.2), 2, 0.1
-    return (f"<!-- written by benchmarks/run_all.py; do not edit -->\n`python benchmarks/bench_x.py`, 2026-11-29, "
-            f"x86_64 with 2 cores, {machine.describe()}:\n\n{figures}\n")
+    return (
+        f"<!-- written by benchmarks/run_all.py; do not edit -->\n`python benchmarks/bench_x.py`, 2026-11-29, "
+        f"x86_64 with 2 cores, {machine.describe()}:\n\n{figures}\n"
+    )
 
 
 def test_a_run_on_a_busy_machine_is_marked():
@@ -44,17 +47,25 @@ def test_a_regression_between_idle_runs_is_named():
 
 def test_a_busy_run_is_compared_but_not_judged():
     worse = "figure: grid_s = 0.90 s\n"
-    for recorded, idle in ((results("figure: grid_s = 0.40 s", busy=True), True),
-                           (results("figure: grid_s = 0.40 s"), False)):
+    for recorded, idle in (
+        (results("figure: grid_s = 0.40 s", busy=True), True),
+        (results("figure: grid_s = 0.40 s"), False),
+    ):
         lines, regressions = run_all.compare(recorded, worse, idle)
         assert regressions == [] and "not judged" in lines[0]
 
 
 def test_headlines_come_from_their_benchmark(tmp_path, monkeypatch):
     readme = tmp_path / "README.md"
-    readme.write_text("| grid | <!-- headline bench_a grid_s -->old<!-- /headline --> | "
-                      "<!-- headline bench_b grid_s -->other<!-- /headline --> |\n")
+    readme.write_text(
+        "| grid | <!-- headline bench_a grid_s -->old<!-- /headline --> | "
+        "<!-- headline bench_b grid_s -->other<!-- /headline --> |\n"
+    )
     monkeypatch.setattr(run_all, "README", readme)
-    assert run_all.headlines("bench_a", {"grid_s": (0.4321, "s"), "x": (1.0, "s")}) == ["README headline grid_s: 0.43 s"]
-    assert readme.read_text() == ("| grid | <!-- headline bench_a grid_s -->0.43 s<!-- /headline --> | "
-                                  "<!-- headline bench_b grid_s -->other<!-- /headline --> |\n")
+    assert run_all.headlines("bench_a", {"grid_s": (0.4321, "s"), "x": (1.0, "s")}) == [
+        "README headline grid_s: 0.43 s"
+    ]
+    assert readme.read_text() == (
+        "| grid | <!-- headline bench_a grid_s -->0.43 s<!-- /headline --> | "
+        "<!-- headline bench_b grid_s -->other<!-- /headline --> |\n"
+    )

@@ -1,5 +1,6 @@
 """The command line as a whole (`cli`): composition of the stages' commands, --version, and user
 errors as one line naming the bad value."""
+
 import numpy as np
 import pytest
 from PIL import Image
@@ -17,27 +18,71 @@ def test_version(capsys):
     assert exit_.value.code == 0 and capsys.readouterr().out.strip() == f"solas-mi {__version__}"
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["psf", "solas-doublet", "--field-deg", "0,2", "--wavelengths-nm", "", "-o", "{tmp}/x.exr"],
-     "--wavelengths-nm '' must be one or more comma-separated numbers"),
-    (["psf", "solas-doublet", "--field-deg", "0,89", "--wavelengths-nm", "531", "-o", "{tmp}/x.exr"],
-     "field (0, 89) deg: each angle must be finite and below 89 deg in magnitude"),
-    (["psf", "solas-doublet", "--field-deg", "0,1", "--wavelengths-nm", "2500.0001", "-o", "{tmp}/x.exr"],
-     "wavelength 2500.0001 nm is outside glass SCHOTT:N-BK7's valid range 300-2500 nm"),
-    (["sfr", "{tmp}"], "is a folder, not an image file"),
-    (["sfr", "{tmp}/garbage.png"], "cannot read image"),
-    (["lens", "info", "{tmp}/binary.toml"], "binary.toml' is not UTF-8 text (byte 1 is not UTF-8: Latin-1 or binary)"),
-    (["psf", "solas-doublet", "--field-deg", "0,1", "--wavelengths-nm", "531", "--pupil-samples", "100000",
-      "-o", "{tmp}/x.exr"], "pupil samples 100000 must be an integer from 8 to 4096"),
-    (["render-image", "solas-doublet", "{tmp}/photo.png", "--sensor", "32x24", "--spp", "1", "--seed", "-1",
-      "-o", "{tmp}/x.exr"], "seed -1 must be an integer from 0 to 4294967295"),
-    (["scene", "solas-doublet", "-o", "{tmp}/scene", "--spp", "0"], "samples per pixel 0 must be an integer from 1"),
-    (["scene", "solas-doublet", "-o", "{tmp}/scene", "--response", "mono:x"], "mono needs a wavelength in nm"),
-    (["scene", "solas-doublet", "-o", "{tmp}/scene", "--response", "table:{tmp}/rising.csv"],
-     "wavelengths must increase"),
-    (["ss-sfr", "{tmp}/photo.png", "--plot", "{tmp}/photo.png"], "is an input of this command"),
-    (["sfr-target", "-o", "{tmp}/t.png", "--low", "0.5", "--high", "0.5"], "an edge needs two different levels"),
-])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (
+            ["psf", "solas-doublet", "--field-deg", "0,2", "--wavelengths-nm", "", "-o", "{tmp}/x.exr"],
+            "--wavelengths-nm '' must be one or more comma-separated numbers",
+        ),
+        (
+            ["psf", "solas-doublet", "--field-deg", "0,89", "--wavelengths-nm", "531", "-o", "{tmp}/x.exr"],
+            "field (0, 89) deg: each angle must be finite and below 89 deg in magnitude",
+        ),
+        (
+            ["psf", "solas-doublet", "--field-deg", "0,1", "--wavelengths-nm", "2500.0001", "-o", "{tmp}/x.exr"],
+            "wavelength 2500.0001 nm is outside glass SCHOTT:N-BK7's valid range 300-2500 nm",
+        ),
+        (["sfr", "{tmp}"], "is a folder, not an image file"),
+        (["sfr", "{tmp}/garbage.png"], "cannot read image"),
+        (
+            ["lens", "info", "{tmp}/binary.toml"],
+            "binary.toml' is not UTF-8 text (byte 1 is not UTF-8: Latin-1 or binary)",
+        ),
+        (
+            [
+                "psf",
+                "solas-doublet",
+                "--field-deg",
+                "0,1",
+                "--wavelengths-nm",
+                "531",
+                "--pupil-samples",
+                "100000",
+                "-o",
+                "{tmp}/x.exr",
+            ],
+            "pupil samples 100000 must be an integer from 8 to 4096",
+        ),
+        (
+            [
+                "render-image",
+                "solas-doublet",
+                "{tmp}/photo.png",
+                "--sensor",
+                "32x24",
+                "--spp",
+                "1",
+                "--seed",
+                "-1",
+                "-o",
+                "{tmp}/x.exr",
+            ],
+            "seed -1 must be an integer from 0 to 4294967295",
+        ),
+        (
+            ["scene", "solas-doublet", "-o", "{tmp}/scene", "--spp", "0"],
+            "samples per pixel 0 must be an integer from 1",
+        ),
+        (["scene", "solas-doublet", "-o", "{tmp}/scene", "--response", "mono:x"], "mono needs a wavelength in nm"),
+        (
+            ["scene", "solas-doublet", "-o", "{tmp}/scene", "--response", "table:{tmp}/rising.csv"],
+            "wavelengths must increase",
+        ),
+        (["ss-sfr", "{tmp}/photo.png", "--plot", "{tmp}/photo.png"], "is an input of this command"),
+        (["sfr-target", "-o", "{tmp}/t.png", "--low", "0.5", "--high", "0.5"], "an edge needs two different levels"),
+    ],
+)
 def test_user_errors_are_one_line(tmp_path, capsys, argv, message):
     (tmp_path / "garbage.png").write_text("not a png")
     (tmp_path / "binary.toml").write_bytes(b"\x89PNG\r\n")
@@ -49,12 +94,17 @@ def test_user_errors_are_one_line(tmp_path, capsys, argv, message):
     assert not (tmp_path / "x.exr").exists()
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["degrade", "x.png", "--psf-grid", "g.exr", "-o", "d.exr", "--boundary", "nope"],
-     "solas-mi degrade: error: argument --boundary: invalid choice: 'nope'"),
-    (["nope"], "solas-mi: error: argument COMMAND: invalid choice: 'nope'"),
-    (["lens"], "solas-mi lens: error: the following arguments are required: COMMAND"),
-])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (
+            ["degrade", "x.png", "--psf-grid", "g.exr", "-o", "d.exr", "--boundary", "nope"],
+            "solas-mi degrade: error: argument --boundary: invalid choice: 'nope'",
+        ),
+        (["nope"], "solas-mi: error: argument COMMAND: invalid choice: 'nope'"),
+        (["lens"], "solas-mi lens: error: the following arguments are required: COMMAND"),
+    ],
+)
 def test_usage_errors_are_one_line(capsys, argv, message):
     with pytest.raises(SystemExit) as exit_:
         main(argv)

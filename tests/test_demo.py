@@ -1,5 +1,6 @@
 """`make demo` says what it does: each step is announced before it runs, naming the files it writes, and no
 step runs unannounced (the commands are recorded, not run)."""
+
 import fnmatch
 import json
 import re
@@ -36,7 +37,9 @@ def test_each_step_is_announced_before_it_runs_naming_what_it_writes(tmp_path, m
     demo.run(tmp_path)
     printed.append(capsys.readouterr().out)
     announced = ANNOUNCED.findall("".join(printed))
-    assert [(int(k), int(n)) for k, n, *_ in announced] == [(k, len(demo.steps())) for k in range(1, len(announced) + 1)]
+    assert [(int(k), int(n)) for k, n, *_ in announced] == [
+        (k, len(demo.steps())) for k in range(1, len(announced) + 1)
+    ]
     assert len(announced) == len(demo.steps()) and all(folder == str(tmp_path) for *_, folder, _ in announced)
     commands = {}
     for argv, before in calls:
@@ -48,5 +51,5 @@ def test_each_step_is_announced_before_it_runs_naming_what_it_writes(tmp_path, m
             assert any(fnmatch.fnmatch(written, p) or p.startswith(written + "/") for p in named), (written, named)
     assert set(commands) == set(range(1, len(announced) + 1))  # every step runs a command, after its announcement
     assert any(argv[:2] == ["experiment", "street"] for argv in commands[len(announced)])
-    summary = json.loads("".join(printed)[("".join(printed)).rindex("\n{") + 1:])
+    summary = json.loads("".join(printed)[("".join(printed)).rindex("\n{") + 1 :])
     assert set(summary) == {"results"} | {name for _, writes, _ in demo.steps() for name in writes}

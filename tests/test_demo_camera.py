@@ -1,6 +1,7 @@
 """`make demo`'s camera step at a small size: the street scene through the doublet with its labels, a
 sensor preset and the default processor (`solas-mi camera` on a spectral render, whose few-spp RGB
 holds negative values), and the sheet beside the depth and instance layers."""
+
 import imageio.v3 as iio
 import numpy as np
 

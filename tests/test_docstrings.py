@@ -4,6 +4,7 @@ public methods and properties of its classes. Each has a docstring with a summar
 or class that takes parameters has a Parameters section naming each of them and nothing else; one that
 returns a value has Returns (Yields for a generator); one that raises SolasError itself says so under
 Raises; sections are numpydoc's, underlined, and no other style's headers ("Args:") appear."""
+
 import ast
 import importlib
 import inspect
@@ -19,8 +20,22 @@ ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "docs" / "tools"))
 import hooks  # noqa: E402
 
-SECTIONS = ("Parameters", "Other Parameters", "Attributes", "Returns", "Yields", "Receives", "Raises", "Warns",
-            "Warnings", "See Also", "Notes", "References", "Examples", "Methods")
+SECTIONS = (
+    "Parameters",
+    "Other Parameters",
+    "Attributes",
+    "Returns",
+    "Yields",
+    "Receives",
+    "Raises",
+    "Warns",
+    "Warnings",
+    "See Also",
+    "Notes",
+    "References",
+    "Examples",
+    "Methods",
+)
 OTHER_STYLE = re.compile(r"^\s*(Args|Arguments|Keyword Args|Returns|Yields|Raises|Examples?|Note|Notes):\s*$", re.M)
 ENTRY = re.compile(r"^(\*{0,2}[A-Za-z_]\w*(?:\s*,\s*\*{0,2}[A-Za-z_]\w*)*)\s*(?::.*)?$")
 
@@ -40,8 +55,13 @@ def sections(doc: str) -> dict[str, list[str]]:
 def underlines(doc: str) -> list[str]:
     """Section headers whose underline is not a line of dashes as long as the header."""
     lines = inspect.cleandoc(doc).splitlines()
-    return [line.strip() for i, line in enumerate(lines[:-1]) if line.strip() in SECTIONS
-            and re.fullmatch(r"-+", lines[i + 1].strip()) and len(lines[i + 1].strip()) != len(line.strip())]
+    return [
+        line.strip()
+        for i, line in enumerate(lines[:-1])
+        if line.strip() in SECTIONS
+        and re.fullmatch(r"-+", lines[i + 1].strip())
+        and len(lines[i + 1].strip()) != len(line.strip())
+    ]
 
 
 def entries(lines: list[str]) -> set[str]:
@@ -73,8 +93,12 @@ def own_nodes(node):
 
 
 def returns_value(node) -> bool:
-    return any(isinstance(n, ast.Return) and n.value is not None
-               and not (isinstance(n.value, ast.Constant) and n.value.value is None) for n in own_nodes(node))
+    return any(
+        isinstance(n, ast.Return)
+        and n.value is not None
+        and not (isinstance(n.value, ast.Constant) and n.value.value is None)
+        for n in own_nodes(node)
+    )
 
 
 def yields(node) -> bool:
@@ -84,6 +108,7 @@ def yields(node) -> bool:
 def raises_solas_error(node) -> bool:
     def named(exc) -> bool:
         return getattr(exc.func if isinstance(exc, ast.Call) else exc, "id", None) == "SolasError"
+
     return any(isinstance(n, ast.Raise) and n.exc is not None and named(n.exc) for n in own_nodes(node))
 
 
@@ -96,8 +121,9 @@ def parameters(callable_) -> list[str]:
     return [name for name in signature.parameters if name not in ("self", "cls")]
 
 
-def problems(doc: str | None, params: list[str], returns: bool = False, yields_: bool = False,
-             raises: bool = False) -> list[str]:
+def problems(
+    doc: str | None, params: list[str], returns: bool = False, yields_: bool = False, raises: bool = False
+) -> list[str]:
     """What a docstring lacks, given what its object takes, returns and raises."""
     if not doc or not doc.strip():
         return ["no docstring"]
@@ -134,8 +160,12 @@ def attribute_doc(module: str, name: str) -> str | None:
 
 def class_members(cls) -> list[tuple[str, object]]:
     """(name, member) of the public methods and properties defined in a class's own body."""
-    return [(name, member) for name, member in vars(cls).items() if not name.startswith("_")
-            and (inspect.isfunction(member) or isinstance(member, (classmethod, staticmethod, property)))]
+    return [
+        (name, member)
+        for name, member in vars(cls).items()
+        if not name.startswith("_")
+        and (inspect.isfunction(member) or isinstance(member, (classmethod, staticmethod, property)))
+    ]
 
 
 def check(path: str, module: str, name: str) -> dict[str, list[str]]:
@@ -145,7 +175,9 @@ def check(path: str, module: str, name: str) -> dict[str, list[str]]:
         return {path: [] if attribute_doc(module, name) else ["no docstring (a string right after its assignment)"]}
     if inspect.isfunction(obj):
         node = function_node(obj)
-        return {path: problems(obj.__doc__, parameters(obj), returns_value(node), yields(node), raises_solas_error(node))}
+        return {
+            path: problems(obj.__doc__, parameters(obj), returns_value(node), yields(node), raises_solas_error(node))
+        }
     inits = [function_node(vars(obj)[n]) for n in ("__init__", "__post_init__") if inspect.isfunction(vars(obj).get(n))]
     found = {path: problems(obj.__doc__, parameters(obj), raises=any(raises_solas_error(n) for n in inits if n))}
     for member_name, member in class_members(obj):
@@ -155,8 +187,9 @@ def check(path: str, module: str, name: str) -> dict[str, list[str]]:
             continue
         function = member.__func__ if isinstance(member, (classmethod, staticmethod)) else member
         node = function_node(function)
-        found[where] = problems(function.__doc__, parameters(function), returns_value(node), yields(node),
-                                raises_solas_error(node))
+        found[where] = problems(
+            function.__doc__, parameters(function), returns_value(node), yields(node), raises_solas_error(node)
+        )
     return found
 
 
@@ -183,27 +216,56 @@ def test_public_docstrings_are_numpydoc(path, module, name):
     assert not lacking, "\n".join(f"{where}: {'; '.join(what)}" for where, what in lacking.items())
 
 
-@pytest.mark.parametrize("doc, params, returns, raises, expected", [
-    ("Sum.\n\nParameters\n----------\na : int\n    A.\nb\n    B.\n\nReturns\n-------\nint\n", ["a", "b"], True,
-     False, []),
-    ("Sum of a and b.", ["a", "b"], True, False, ["no Parameters section (takes a, b)", "no Returns section (it returns "
-                                                  "a value)"]),
-    ("Sum.\n\nParameters\n----------\na, c : int\n    A.\n", ["a", "b"], False, False,
-     ["Parameters does not name b", "Parameters names c, which it does not take"]),
-    ("Go.\n\nArgs:\n    a: A.\n", [], False, False, ["a header of another style (numpydoc: the name, then a line of "
-                                                      "dashes)"]),
-    ("Go.\n\nRaises\n------\nValueError\n    Bad.\n", [], False, True, ["no Raises section naming SolasError (it "
-                                                                        "raises one)"]),
-    ("Go.\n\nReturns\n----\nint\n", [], True, False, ["Returns: its underline is not as long as it"]),
-    ("Go.\n\nParameters\n----------\n**options\n    Any.\n", ["options"], False, False, []),
-    ("", [], False, False, ["no docstring"]),
-])
+@pytest.mark.parametrize(
+    "doc, params, returns, raises, expected",
+    [
+        (
+            "Sum.\n\nParameters\n----------\na : int\n    A.\nb\n    B.\n\nReturns\n-------\nint\n",
+            ["a", "b"],
+            True,
+            False,
+            [],
+        ),
+        (
+            "Sum of a and b.",
+            ["a", "b"],
+            True,
+            False,
+            ["no Parameters section (takes a, b)", "no Returns section (it returns a value)"],
+        ),
+        (
+            "Sum.\n\nParameters\n----------\na, c : int\n    A.\n",
+            ["a", "b"],
+            False,
+            False,
+            ["Parameters does not name b", "Parameters names c, which it does not take"],
+        ),
+        (
+            "Go.\n\nArgs:\n    a: A.\n",
+            [],
+            False,
+            False,
+            ["a header of another style (numpydoc: the name, then a line of dashes)"],
+        ),
+        (
+            "Go.\n\nRaises\n------\nValueError\n    Bad.\n",
+            [],
+            False,
+            True,
+            ["no Raises section naming SolasError (it raises one)"],
+        ),
+        ("Go.\n\nReturns\n----\nint\n", [], True, False, ["Returns: its underline is not as long as it"]),
+        ("Go.\n\nParameters\n----------\n**options\n    Any.\n", ["options"], False, False, []),
+        ("", [], False, False, ["no docstring"]),
+    ],
+)
 def test_the_check_finds_what_a_docstring_lacks(doc, params, returns, raises, expected):
     assert problems(doc, params, returns=returns, raises=raises) == expected
 
 
 def test_the_check_sees_returns_and_raises_in_the_function_itself():
-    source = ("def f(x):\n    def inner():\n        return 1\n    if x:\n        raise SolasError('x')\n"
-              "    return None\n")
+    source = (
+        "def f(x):\n    def inner():\n        return 1\n    if x:\n        raise SolasError('x')\n    return None\n"
+    )
     node = ast.parse(source).body[0]
     assert not returns_value(node) and raises_solas_error(node) and not yields(node)

@@ -2,6 +2,7 @@
 writing, a full disk, a read-only folder, outputs that would replace inputs or special files,
 concurrent writers, bad image data, runaway jobs. Each case asserts the outcome: a clear error (one
 line, exit 2), or a correct result, and in every case nothing half-written left behind."""
+
 import hashlib
 import os
 import signal
@@ -22,8 +23,14 @@ PHOTO = resource_dir("scenes") / "images" / "rocket.png"
 
 
 def solas(*args, cwd, env=None) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "solas_mi", *map(str, args)], cwd=cwd, env=env,
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    return subprocess.Popen(
+        [sys.executable, "-m", "solas_mi", *map(str, args)],
+        cwd=cwd,
+        env=env,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
 
 
 def digest(path: Path) -> str:
@@ -60,6 +67,7 @@ def one_line_error(capsys, argv) -> str:
 
 # -------------------------------------------------------------------------------------------- interrupts
 
+
 @pytest.mark.parametrize("sig, code", [(signal.SIGTERM, 143), (signal.SIGINT, 130)])
 def test_interrupt_during_compute_leaves_nothing(tmp_path, sig, code):
     p = solas("psf-grid", "solas-doublet", "--grid", "64x64", "-o", "grid.exr", cwd=tmp_path)
@@ -77,26 +85,41 @@ def test_terminated_during_the_write_keeps_the_old_files(tmp_path):
     temporary file is left."""
     for name in ("psf.exr", "psf.png"):
         (tmp_path / name).write_bytes(b"old " + name.encode())
-    code = ("import os, signal, sys\n"
-            "import solas_mi.imageio as io\n"
-            "real = io.write_exr\n"
-            "def dying(path, *a, **k):\n"
-            "    real(path, *a, **k)\n"
-            "    os.kill(os.getpid(), signal.SIGTERM)\n"
-            "io.write_exr = dying\n"
-            "from solas_mi.cli import main\n"
-            "sys.exit(main(['psf', 'solas-doublet', '--field-deg', '0,2', '--wavelengths-nm', '531', '--size', '32',"
-            " '-o', 'psf.exr']))\n")
+    code = (
+        "import os, signal, sys\n"
+        "import solas_mi.imageio as io\n"
+        "real = io.write_exr\n"
+        "def dying(path, *a, **k):\n"
+        "    real(path, *a, **k)\n"
+        "    os.kill(os.getpid(), signal.SIGTERM)\n"
+        "io.write_exr = dying\n"
+        "from solas_mi.cli import main\n"
+        "sys.exit(main(['psf', 'solas-doublet', '--field-deg', '0,2', '--wavelengths-nm', '531', '--size', '32',"
+        " '-o', 'psf.exr']))\n"
+    )
     p = subprocess.run([sys.executable, "-c", code], cwd=tmp_path, capture_output=True, text=True, timeout=120)
     assert p.returncode == 143, p.stderr
     assert sorted(f.name for f in tmp_path.iterdir()) == ["psf.exr", "psf.png"]
-    assert (tmp_path / "psf.exr").read_bytes() == b"old psf.exr" and (tmp_path / "psf.png").read_bytes() == b"old psf.png"
+    assert (tmp_path / "psf.exr").read_bytes() == b"old psf.exr" and (
+        tmp_path / "psf.png"
+    ).read_bytes() == b"old psf.png"
 
 
 def test_terminated_render_leaves_no_scene_folder(tmp_path):
     env = dict(os.environ, TMPDIR=str(tmp_path))
-    p = solas("render-image", "solas-doublet", PHOTO, "--spp", "96", "--sensor", "640x480", "-o", "r.exr",
-              cwd=tmp_path, env=env)
+    p = solas(
+        "render-image",
+        "solas-doublet",
+        PHOTO,
+        "--spp",
+        "96",
+        "--sensor",
+        "640x480",
+        "-o",
+        "r.exr",
+        cwd=tmp_path,
+        env=env,
+    )
     time.sleep(4.0)
     p.send_signal(signal.SIGTERM)
     p.communicate(timeout=60)
@@ -106,10 +129,24 @@ def test_terminated_render_leaves_no_scene_folder(tmp_path):
 
 # ------------------------------------------------------------------------------------------------ disks
 
+
 def test_full_disk_is_a_clear_error(tmp_path, capsys):
     with tmpfs(tmp_path / "small", "size=64k") as disk:
-        err = one_line_error(capsys, ["psf", "solas-doublet", "--field-deg", "0,2", "--wavelengths-nm", "531",
-                                      "--size", "200", "-o", disk / "p.exr"])
+        err = one_line_error(
+            capsys,
+            [
+                "psf",
+                "solas-doublet",
+                "--field-deg",
+                "0,2",
+                "--wavelengths-nm",
+                "531",
+                "--size",
+                "200",
+                "-o",
+                disk / "p.exr",
+            ],
+        )
         assert f"cannot write {disk / 'p.exr'}: No space left on device" in err
         assert list(disk.iterdir()) == []
 
@@ -122,6 +159,7 @@ def test_read_only_folder_fails_before_computing(tmp_path, capsys):
 
 
 # ---------------------------------------------------------------------------------------------- outputs
+
 
 @pytest.fixture
 def grid(tmp_path):
@@ -142,8 +180,9 @@ def test_output_never_replaces_an_input(tmp_path, capsys, grid):
 
 
 def test_data_is_always_exr(tmp_path, capsys):
-    err = one_line_error(capsys, ["psf", "solas-doublet", "--field-deg", "0,2", "--wavelengths-nm", "531",
-                                  "-o", tmp_path / "x.png"])
+    err = one_line_error(
+        capsys, ["psf", "solas-doublet", "--field-deg", "0,2", "--wavelengths-nm", "531", "-o", tmp_path / "x.png"]
+    )
     assert "must end in .exr" in err and "x.exr (a PNG preview is written beside it)" in err
     assert list(tmp_path.iterdir()) == []
 
@@ -158,8 +197,9 @@ def test_special_outputs_are_refused(tmp_path, capsys, kind):
     if kind == "symlink":
         (tmp_path / "real.exr").write_bytes(b"keep")
         target.symlink_to(tmp_path / "real.exr")
-    err = one_line_error(capsys, ["psf", "solas-doublet", "--field-deg", "0,2", "--wavelengths-nm", "531",
-                                  "-o", target])
+    err = one_line_error(
+        capsys, ["psf", "solas-doublet", "--field-deg", "0,2", "--wavelengths-nm", "531", "-o", target]
+    )
     assert {"folder": "is a folder", "symlink": "is a symbolic link", "fifo": "is not a regular file"}[kind] in err
     if kind == "symlink":
         assert target.is_symlink() and (tmp_path / "real.exr").read_bytes() == b"keep"
@@ -176,6 +216,7 @@ def test_concurrent_writers_leave_one_whole_file(tmp_path):
 
 # ------------------------------------------------------------------------------------------------ inputs
 
+
 def test_nan_pixels_are_refused_with_count_and_position(tmp_path, capsys, grid):
     image = np.full((96, 128, 3), 0.5)
     image[10, 20, 1] = np.nan
@@ -185,14 +226,19 @@ def test_nan_pixels_are_refused_with_count_and_position(tmp_path, capsys, grid):
     assert "2 values are NaN or infinite (the first at row 10, column 20, channel 1)" in err
 
 
-@pytest.mark.parametrize("names, expect", [
-    (("R", "G", "B"), [0.1, 0.2, 0.3]),
-    (("r", "g", "b"), [0.1, 0.2, 0.3]),
-    (("beauty.R", "beauty.G", "beauty.B"), [0.1, 0.2, 0.3]),
-])
+@pytest.mark.parametrize(
+    "names, expect",
+    [
+        (("R", "G", "B"), [0.1, 0.2, 0.3]),
+        (("r", "g", "b"), [0.1, 0.2, 0.3]),
+        (("beauty.R", "beauty.G", "beauty.B"), [0.1, 0.2, 0.3]),
+    ],
+)
 def test_exr_channels_are_read_by_name(tmp_path, names, expect):
     values = dict(zip(names, (0.1, 0.2, 0.3)))
-    write_exr(tmp_path / "c.exr", {n: np.full((2, 3), values[n]) for n in reversed(names)} | {"depth.Z": np.ones((2, 3))})
+    write_exr(
+        tmp_path / "c.exr", {n: np.full((2, 3), values[n]) for n in reversed(names)} | {"depth.Z": np.ones((2, 3))}
+    )
     assert np.allclose(read_image(tmp_path / "c.exr")[0, 0], expect)
 
 
@@ -213,18 +259,33 @@ def test_16_bit_png_keeps_its_depth(tmp_path):
 
 def test_plugin_errors_reach_the_user_as_one_line(tmp_path, capsys):
     assert main(["scene", "solas-doublet", "-o", str(tmp_path / "s"), "--sensor", "16x12", "--rings", "8"]) == 0
-    err = one_line_error(capsys, ["render", tmp_path / "s" / "scene.xml", "--integrator", "solas", "--set",
-                                  "response=bogus", "-o", tmp_path / "r.exr"])
+    err = one_line_error(
+        capsys,
+        [
+            "render",
+            tmp_path / "s" / "scene.xml",
+            "--integrator",
+            "solas",
+            "--set",
+            "response=bogus",
+            "-o",
+            tmp_path / "r.exr",
+        ],
+    )
     assert "camera response 'bogus': unknown response; allowed: lines, srgb" in err
 
 
 # ------------------------------------------------------------------------------------------ runaway jobs
 
-@pytest.mark.parametrize("argv, message", [
-    (["psf-grid", "solas-doublet", "--grid", "512x512", "--size", "512"], "needs about"),
-    (["render-image", "solas-doublet", str(PHOTO), "--sensor", "40000x30000"], "needs about"),
-    (["render-image", "solas-doublet", str(PHOTO), "--spp", "2147483648"], "must be an integer from 1 to 1048576"),
-])
+
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["psf-grid", "solas-doublet", "--grid", "512x512", "--size", "512"], "needs about"),
+        (["render-image", "solas-doublet", str(PHOTO), "--sensor", "40000x30000"], "needs about"),
+        (["render-image", "solas-doublet", str(PHOTO), "--spp", "2147483648"], "must be an integer from 1 to 1048576"),
+    ],
+)
 def test_runaway_jobs_are_refused_before_they_start(tmp_path, capsys, argv, message):
     start = time.perf_counter()
     assert message in one_line_error(capsys, [*argv, "-o", tmp_path / "x.exr"])
@@ -233,14 +294,18 @@ def test_runaway_jobs_are_refused_before_they_start(tmp_path, capsys, argv, mess
 
 # ------------------------------------------------------------------ odd values the probe of every command found
 
-@pytest.mark.parametrize("argv, says", [
-    (["sfr-target", "--size", "64x64", "--noise", "nan"], "noise nan must be a finite number"),
-    (["sfr-target", "--size", "64x64", "--noise", "inf"], "noise inf must be a finite number"),
-    (["sfr-target", "--size", "64x64", "--sigma-px", "inf"], "--sigma-px inf must be a finite number"),
-    (["sfr-target", "--size", "64x64", "--angle-deg", "nan"], "--angle-deg nan must be a finite angle"),
-    (["scene", "solas-doublet", "--sensor", "0x0"], "--sensor '0x0' must look like 32x24"),
-    (["psf-grid", "solas-doublet", "--wavelengths-nm", "531,531"], "must differ from each other"),
-])
+
+@pytest.mark.parametrize(
+    "argv, says",
+    [
+        (["sfr-target", "--size", "64x64", "--noise", "nan"], "noise nan must be a finite number"),
+        (["sfr-target", "--size", "64x64", "--noise", "inf"], "noise inf must be a finite number"),
+        (["sfr-target", "--size", "64x64", "--sigma-px", "inf"], "--sigma-px inf must be a finite number"),
+        (["sfr-target", "--size", "64x64", "--angle-deg", "nan"], "--angle-deg nan must be a finite angle"),
+        (["scene", "solas-doublet", "--sensor", "0x0"], "--sensor '0x0' must look like 32x24"),
+        (["psf-grid", "solas-doublet", "--wavelengths-nm", "531,531"], "must differ from each other"),
+    ],
+)
 def test_odd_values_are_one_clear_line(tmp_path, capsys, argv, says):
     out = tmp_path / ("t.png" if argv[0] == "sfr-target" else "scene" if argv[0] == "scene" else "g.exr")
     err = one_line_error(capsys, [*argv, "-o", out])

@@ -1,5 +1,6 @@
 """The shared fixtures of tests/conftest.py: the Mitsuba variant fixtures set a variant with solas-mi's
 plugins and give the variant before back; the synthetic grids are what their parameters say."""
+
 import math
 
 import numpy as np
@@ -45,14 +46,13 @@ def test_finds_the_variant_the_test_before_started_with():
 
 @pytest.mark.parametrize("kind", ["gaussian", "delta"])
 def test_synthetic_grid_is_what_its_parameters_say(synthetic_grid, kind):
-    g = synthetic_grid((2, 3, 5), (486.0, 656.0), pitch_um=1.5, size=21, kind=kind, sigma_um=3.0,
-                       field=(4.0, 2.0))
+    g = synthetic_grid((2, 3, 5), (486.0, 656.0), pitch_um=1.5, size=21, kind=kind, sigma_um=3.0, field=(4.0, 2.0))
     assert g.data.shape == (2, 3, 5, 21, 21) and g.wavelengths_nm == (486.0, 656.0) and g.pitch_um == 1.5
     assert np.allclose(g.data.sum(axis=(-2, -1)), 1.0)
     assert g.fields_deg[0, 0].tolist() == pytest.approx([-3.2, 4 / 3]) and g.fields_deg[-1, -1, 1] < 0  # top row first
     assert np.allclose(g.chief_ray_mm, synthetic_grid.focal_mm * np.tan(np.radians(g.fields_deg))[None])
     x = (np.arange(21) - 10) * 1.5
-    variance = (g.data[0, 0, 0].sum(axis=0) * x ** 2).sum()
+    variance = (g.data[0, 0, 0].sum(axis=0) * x**2).sum()
     assert variance == (pytest.approx(9.0, rel=1e-3) if kind == "gaussian" else 0.0)
     assert math.isclose(g.data[0, 0, 0, 10, 10], g.data[0, 0, 0].max())
 

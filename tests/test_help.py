@@ -1,4 +1,5 @@
 """Every help text states its default, and the help of every command renders."""
+
 import argparse
 
 import pytest
@@ -10,8 +11,18 @@ COMMANDS = list(iter_commands(build_parser()))
 
 def test_every_command_is_walked():
     names = {" ".join(path) for path, _ in COMMANDS}
-    assert {"lens list", "lens info", "psf", "psf-grid", "degrade", "render", "render-image", "experiment street",
-            "batch degrade", "batch render"} <= names
+    assert {
+        "lens list",
+        "lens info",
+        "psf",
+        "psf-grid",
+        "degrade",
+        "render",
+        "render-image",
+        "experiment street",
+        "batch degrade",
+        "batch render",
+    } <= names
 
 
 @pytest.mark.parametrize("path,parser", COMMANDS, ids=[" ".join(p) or "solas-mi" for p, _ in COMMANDS])
@@ -26,8 +37,12 @@ def test_defaults_are_in_the_help(path, parser):
 
 
 def test_every_option_has_a_help_text():
-    bare = [f"{' '.join(path)} {a.option_strings[0]}" for path, parser in COMMANDS for a in parser._actions
-            if a.option_strings and a.help is None]
+    bare = [
+        f"{' '.join(path)} {a.option_strings[0]}"
+        for path, parser in COMMANDS
+        for a in parser._actions
+        if a.option_strings and a.help is None
+    ]
     assert not bare, f"options without help: {bare}"
 
 
@@ -43,8 +58,17 @@ def test_every_lens_argument_names_every_lens_file_format():
             if action.dest == "lens" and action.help is not None:
                 lenses.append(" ".join(path))
                 assert all(e in action.help for e in readable), f"{' '.join(path)} {action.dest}: {action.help!r}"
-    assert {"scene", "render", "render-image", "psf", "psf-grid", "lens info", "crossval",
-            "batch degrade", "batch render"} <= set(lenses)
+    assert {
+        "scene",
+        "render",
+        "render-image",
+        "psf",
+        "psf-grid",
+        "lens info",
+        "crossval",
+        "batch degrade",
+        "batch render",
+    } <= set(lenses)
     convert = dict(COMMANDS)[("lens", "convert")]
     output = next(a for a in convert._actions if a.dest == "output")
     assert all(e in output.help for e in WRITERS) and ".seq" not in WRITERS
@@ -56,8 +80,12 @@ def test_one_field_number_means_what_the_help_says():
     from solas_mi.psf.commands import _field
     from solas_mi.psf.spec import _range
 
-    helps = {(" ".join(path), a.dest): " ".join(a.help.split()) for path, parser in COMMANDS for a in parser._actions
-             if a.dest in ("field_deg", "field_range_deg")}
+    helps = {
+        (" ".join(path), a.dest): " ".join(a.help.split())
+        for path, parser in COMMANDS
+        for a in parser._actions
+        if a.dest in ("field_deg", "field_range_deg")
+    }
     assert _field("2") == (0.0, 2.0) and "one value Y (x = 0)" in helps["psf", "field_deg"]
     assert _range("2") == (2.0, 2.0) and "one value for both" in helps["psf-grid", "field_range_deg"]
 

@@ -1,5 +1,6 @@
 """Strict JSON (`solas_mi.jsonio`): infinities written as "inf"/"-inf", no NaN written, old files with
 `Infinity` tokens read as the new ones, our readers round-trip."""
+
 import json
 import math
 from dataclasses import asdict
@@ -13,11 +14,27 @@ from solas_mi.errors import SolasError
 
 
 def test_infinities_are_the_strings_inf_and_numbers_stay_as_pythons_json_writes_them():
-    value = {"far": math.inf, "near": [-math.inf, 0.1, 1e-300], "f32": np.float32(0.5), "f64": np.float64(-np.inf),
-             "n": np.int64(3), "flag": True, "none": None, "t": (1, 2.5)}
+    value = {
+        "far": math.inf,
+        "near": [-math.inf, 0.1, 1e-300],
+        "f32": np.float32(0.5),
+        "f64": np.float64(-np.inf),
+        "n": np.int64(3),
+        "flag": True,
+        "none": None,
+        "t": (1, 2.5),
+    }
     text = jsonio.dumps(value, indent=1)
-    assert strict_loads(text) == {"far": "inf", "near": ["-inf", 0.1, 1e-300], "f32": 0.5, "f64": "-inf", "n": 3,
-                                  "flag": True, "none": None, "t": [1, 2.5]}
+    assert strict_loads(text) == {
+        "far": "inf",
+        "near": ["-inf", 0.1, 1e-300],
+        "f32": 0.5,
+        "f64": "-inf",
+        "n": 3,
+        "flag": True,
+        "none": None,
+        "t": [1, 2.5],
+    }
     finite = {"a": [0.1, 1 / 3, 2.0, 1e-300, -7.25e22], "b": {"c": 123456789.123456789}}
     assert jsonio.dumps(finite, indent=1) == json.dumps(finite, indent=1)  # finite floats: the same text
     assert float(strict_loads(text)["far"]) == math.inf and float(strict_loads(text)["near"][0]) == -math.inf
@@ -51,8 +68,14 @@ def test_exr_metadata_with_a_nan_is_refused_before_anything_is_written(tmp_path)
 def _job(tmp_path, **stamps):
     from solas_mi.batch.jobs import Job
 
-    return Job(str(tmp_path / "in.png"), str(tmp_path / "a.exr"), str(tmp_path / "a.png"), kind="render",
-              params={"focus_distance": math.inf, "object": [-math.inf, 1.5], "sensor": [2, 3]}, **stamps)
+    return Job(
+        str(tmp_path / "in.png"),
+        str(tmp_path / "a.exr"),
+        str(tmp_path / "a.png"),
+        kind="render",
+        params={"focus_distance": math.inf, "object": [-math.inf, 1.5], "sensor": [2, 3]},
+        **stamps,
+    )
 
 
 def test_a_manifest_written_with_infinity_tokens_still_resumes_and_is_rewritten_strict(tmp_path):

@@ -17,7 +17,9 @@ def test_picks_newest_usable(tmp_path, monkeypatch):
 
 def test_only_old_llvm_fails_clearly(tmp_path, monkeypatch):
     _fake_libs(tmp_path, monkeypatch, ["libLLVM-14.so", "libLLVM-15.so.1", "libLLVM-16.so"])
-    with pytest.raises(SolasError, match=r"Dr.Jit needs libLLVM >= 17; found: 14 .*15 .*16 .*apt-get install -y libllvm19"):
+    with pytest.raises(
+        SolasError, match=r"Dr.Jit needs libLLVM >= 17; found: 14 .*15 .*16 .*apt-get install -y libllvm19"
+    ):
         llvm.select_libllvm()
 
 
@@ -29,11 +31,14 @@ def test_explicit_old_path_is_refused(tmp_path, monkeypatch):
         llvm.select_libllvm()
 
 
-@pytest.mark.parametrize("path, version", [
-    ("/usr/lib/llvm-19/lib/libLLVM.so.1", 19),
-    ("/usr/lib/x86_64-linux-gnu/libLLVM-15.so.1", 15),
-    ("/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1", 19),
-    ("/usr/lib/llvm-14/lib/libLLVM-14.so", 14),
-])
+@pytest.mark.parametrize(
+    "path, version",
+    [
+        ("/usr/lib/llvm-19/lib/libLLVM.so.1", 19),
+        ("/usr/lib/x86_64-linux-gnu/libLLVM-15.so.1", 15),
+        ("/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1", 19),
+        ("/usr/lib/llvm-14/lib/libLLVM-14.so", 14),
+    ],
+)
 def test_version_of_library_path(path, version):
     assert llvm.libllvm_version(path) == version

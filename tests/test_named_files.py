@@ -1,6 +1,7 @@
 """Every reader of a file a user or a file names, given what is no regular file under a name it takes:
 refused in time (`solas_mi.userfiles`). Before, a FIFO made each wait for ever and /dev/zero was read
 until memory ran out (--sensor-model /dev/zero: 2 GB in 14 s)."""
+
 import os
 
 import pytest
@@ -46,9 +47,21 @@ def _readers():
     from solas_mi.sensor.files import load_sensor
     from solas_mi.sensor.qe import read_csv
 
-    return [(load_sensor, ".toml"), (load_isp, ".toml"), (read_csv, ".csv"), (_sensor_naming, ".csv"),
-            (table, ".csv"), (Lens.load, ".toml"), (Lens.load, ".zmx"), (Lens.load, ".seq"), (Lens.load, ".dat"),
-            (read_image, ".png"), (read_image, ".exr"), (read_exr, ".exr"), (_batch_input, ".png")]
+    return [
+        (load_sensor, ".toml"),
+        (load_isp, ".toml"),
+        (read_csv, ".csv"),
+        (_sensor_naming, ".csv"),
+        (table, ".csv"),
+        (Lens.load, ".toml"),
+        (Lens.load, ".zmx"),
+        (Lens.load, ".seq"),
+        (Lens.load, ".dat"),
+        (read_image, ".png"),
+        (read_image, ".exr"),
+        (read_exr, ".exr"),
+        (_batch_input, ".png"),
+    ]
 
 
 @pytest.mark.parametrize("target", ["fifo", "zero"])
@@ -71,14 +84,17 @@ def test_readers_that_only_look_do_not_wait(odd):
     assert finished(Manifest.previous, odd / "fifo") == {"value": {}}
 
 
-@pytest.mark.parametrize("name, text", [
-    ("sensor.toml", '[sensor]\ncfa = "{x}"\n'),
-    ("isp.toml", '[isp]\ntone = "{x}"\n'),
-    ("lens.toml", '[[surface]]\nradius = "{x}"\nthickness = 1\ndiameter = 1\nstop = true\n'),
-    ("lens.seq", "{x}\n"),
-    ("lens.dat", "{x}\n"),
-    ("lens.zmx", "SURF 0\n  DISZ INFINITY\nSURF 1\n  STOP\n  GLAS {x}\n  DIAM 1 1\nSURF 2\n"),
-])
+@pytest.mark.parametrize(
+    "name, text",
+    [
+        ("sensor.toml", '[sensor]\ncfa = "{x}"\n'),
+        ("isp.toml", '[isp]\ntone = "{x}"\n'),
+        ("lens.toml", '[[surface]]\nradius = "{x}"\nthickness = 1\ndiameter = 1\nstop = true\n'),
+        ("lens.seq", "{x}\n"),
+        ("lens.dat", "{x}\n"),
+        ("lens.zmx", "SURF 0\n  DISZ INFINITY\nSURF 1\n  STOP\n  GLAS {x}\n  DIAM 1 1\nSURF 2\n"),
+    ],
+)
 def test_a_huge_line_is_cut_in_the_error(tmp_path, name, text):
     """A line of nearly a megabyte (within the files' bounds) quoted back in a refusal: cut to at most
     MAX_WORD characters a word and MAX_MESSAGE in all (before: the whole line, a one-megabyte message)."""

@@ -1,6 +1,7 @@
 """The one shape of an option spec (`options.option`, `options.OptionSpec`): a field declared with its
 flag gives the command's flag, its help (with the default), how its text is read, and the spec built
 from the parsed arguments; GridSpec, RenderSpec and DegradeSpec are made so."""
+
 import argparse
 from dataclasses import dataclass, field
 
@@ -61,11 +62,14 @@ def test_the_spec_from_the_arguments():
     assert Demo.from_args(p.parse_args(["--count", "1"]), defaults={"count": 9}).count == 1
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["--count", "many"], "--count 'many' must be an integer"),
-    (["--scale", "x"], "--scale 'x' must be a number"),
-    (["--size", "4by2"], "--size '4by2' must look like 32x24"),  # the parser's own message
-])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--count", "many"], "--count 'many' must be an integer"),
+        (["--scale", "x"], "--scale 'x' must be a number"),
+        (["--size", "4by2"], "--size '4by2' must look like 32x24"),  # the parser's own message
+    ],
+)
 def test_a_flag_that_does_not_read_is_named(argv, message):
     with pytest.raises(SolasError, match=message):
         Demo.from_args(_parser().parse_args(argv))

@@ -1,6 +1,7 @@
 """The package's structure: stages import only downward, no import circle (imports inside
 functions included, and imports of a module named by a string: importlib, __import__, registries),
 light modules stay light, no module over 400 lines."""
+
 import ast
 import re
 import subprocess
@@ -12,8 +13,25 @@ import pytest
 ROOT = Path(__file__).resolve().parents[1]
 MAX_LINES = 400
 # Each stage may import itself, the stages before it in this order's groups, and the shared base.
-BASE = {"errors", "interrupts", "lazy", "options", "resources", "llvm", "imageio", "jsonio", "outputs", "budget", "blas",
-        "pages", "progress", "userfiles", "registry", "labelkinds", "caches"}
+BASE = {
+    "errors",
+    "interrupts",
+    "lazy",
+    "options",
+    "resources",
+    "llvm",
+    "imageio",
+    "jsonio",
+    "outputs",
+    "budget",
+    "blas",
+    "pages",
+    "progress",
+    "userfiles",
+    "registry",
+    "labelkinds",
+    "caches",
+}
 ALLOWED = {
     "optics": set(),
     "psf": {"optics"},
@@ -88,16 +106,27 @@ def imports_of(name: str, source: str, mods, is_package: bool = False) -> set[st
         elif isinstance(node, ast.ImportFrom):
             base = ".".join(here[: len(here) - node.level + 1]) if node.level else ""
             source_module = ".".join(p for p in (base, node.module or "") if p)
-            targets |= {f"{source_module}.{a.name}" if f"{source_module}.{a.name}" in mods else source_module
-                        for a in node.names}
-        elif isinstance(node, ast.Call) and call_name(node) in IMPORTERS and node.args \
-                and isinstance(node.args[0], ast.Constant) and isinstance(node.args[0].value, str):
+            targets |= {
+                f"{source_module}.{a.name}" if f"{source_module}.{a.name}" in mods else source_module
+                for a in node.names
+            }
+        elif (
+            isinstance(node, ast.Call)
+            and call_name(node) in IMPORTERS
+            and node.args
+            and isinstance(node.args[0], ast.Constant)
+            and isinstance(node.args[0].value, str)
+        ):
             text, against = _relative_to(node, package, name)
             read.add(id(node.args[0]))
             if against is not None or not text.startswith("."):
                 targets.add(resolve(text, against or package))
-        elif isinstance(node, ast.Constant) and isinstance(node.value, str) and MODULE_STRING.fullmatch(node.value) \
-                and id(node) not in read:
+        elif (
+            isinstance(node, ast.Constant)
+            and isinstance(node.value, str)
+            and MODULE_STRING.fullmatch(node.value)
+            and id(node) not in read
+        ):
             targets.add(resolve(node.value, package))
     return {t for t in targets if t in mods and t != name}
 
@@ -121,7 +150,7 @@ def find_circle(graph: dict[str, set[str]]) -> list[str] | None:
 
     def visit(node):
         if node in path:
-            return path[path.index(node):] + [node]
+            return path[path.index(node) :] + [node]
         if node in done:
             return None
         path.append(node)
@@ -148,19 +177,24 @@ def test_the_graph_sees_imports_inside_functions():
 def test_a_circle_closed_inside_a_function_is_found():
     """Two modules importing each other, one of them only when a function runs: still a circle."""
     mods = {"solas_mi.psf.a", "solas_mi.psf.b"}
-    graph = {"solas_mi.psf.a": imports_of("solas_mi.psf.a", "from . import b\n", mods),
-             "solas_mi.psf.b": imports_of("solas_mi.psf.b", "def f():\n    from .a import g\n    return g\n", mods)}
+    graph = {
+        "solas_mi.psf.a": imports_of("solas_mi.psf.a", "from . import b\n", mods),
+        "solas_mi.psf.b": imports_of("solas_mi.psf.b", "def f():\n    from .a import g\n    return g\n", mods),
+    }
     assert find_circle(graph) == ["solas_mi.psf.a", "solas_mi.psf.b", "solas_mi.psf.a"]
 
 
-@pytest.mark.parametrize("code", [
-    "import importlib\ndef f():\n    return importlib.import_module('..render.psf', __package__)\n",
-    "from importlib import import_module\nm = import_module('.psf', 'solas_mi.render')\n",
-    "m = __import__('solas_mi.render.psf')\n",
-    "m = __import__('render.psf', globals(), locals(), ['compute'], 2)\n",
-    "METHODS = {'render': Method('render', '..render.psf', 'rays')}\n",  # a registry's module string
-    "NAMES = {'psf': 'solas_mi.render.psf'}\n",
-])
+@pytest.mark.parametrize(
+    "code",
+    [
+        "import importlib\ndef f():\n    return importlib.import_module('..render.psf', __package__)\n",
+        "from importlib import import_module\nm = import_module('.psf', 'solas_mi.render')\n",
+        "m = __import__('solas_mi.render.psf')\n",
+        "m = __import__('render.psf', globals(), locals(), ['compute'], 2)\n",
+        "METHODS = {'render': Method('render', '..render.psf', 'rays')}\n",  # a registry's module string
+        "NAMES = {'psf': 'solas_mi.render.psf'}\n",
+    ],
+)
 def test_the_graph_sees_modules_named_by_strings(code):
     """importlib/__import__ of a string, relative ones resolved against the calling module's package,
     and module names in registries (imported later by `import_module(text, __package__)`)."""
@@ -191,21 +225,24 @@ def test_stages_import_only_downward():
     assert not bad, "a stage imports a later one: " + ", ".join(sorted(bad))
 
 
-@pytest.mark.parametrize("module, heavy", [
-    ("solas_mi.cli", ("drjit", "mitsuba", "matplotlib")),
-    ("solas_mi.registry", ("numpy", "drjit", "mitsuba", "matplotlib")),  # the CLI builds its choices from it
-    ("solas_mi.labelkinds", ("numpy", "drjit", "mitsuba", "matplotlib")),  # and its label kinds' help
-    ("solas_mi.psf.base", ("drjit", "mitsuba", "matplotlib")),
-    ("solas_mi.psf.methods", ("drjit", "mitsuba", "matplotlib")),
-    ("solas_mi.render.commands", ("drjit", "mitsuba", "matplotlib")),
-    ("solas_mi.render.response", ("drjit", "mitsuba", "matplotlib")),
-    ("solas_mi.sensor.commands", ("numpy", "OpenEXR", "drjit", "mitsuba")),
-    ("solas_mi.isp.commands", ("numpy", "OpenEXR", "colour_demosaicing", "drjit", "mitsuba")),
-    ("solas_mi.isp.demosaic", ("colour_demosaicing", "colour", "scipy")),
-    ("solas_mi.metrics.commands", ("scipy", "skimage", "matplotlib")),
-    ("solas_mi.batch.commands", ("dask", "distributed", "tqdm", "drjit", "matplotlib")),
-    ("solas_mi", ("drjit", "mitsuba", "matplotlib", "numpy")),
-])
+@pytest.mark.parametrize(
+    "module, heavy",
+    [
+        ("solas_mi.cli", ("drjit", "mitsuba", "matplotlib")),
+        ("solas_mi.registry", ("numpy", "drjit", "mitsuba", "matplotlib")),  # the CLI builds its choices from it
+        ("solas_mi.labelkinds", ("numpy", "drjit", "mitsuba", "matplotlib")),  # and its label kinds' help
+        ("solas_mi.psf.base", ("drjit", "mitsuba", "matplotlib")),
+        ("solas_mi.psf.methods", ("drjit", "mitsuba", "matplotlib")),
+        ("solas_mi.render.commands", ("drjit", "mitsuba", "matplotlib")),
+        ("solas_mi.render.response", ("drjit", "mitsuba", "matplotlib")),
+        ("solas_mi.sensor.commands", ("numpy", "OpenEXR", "drjit", "mitsuba")),
+        ("solas_mi.isp.commands", ("numpy", "OpenEXR", "colour_demosaicing", "drjit", "mitsuba")),
+        ("solas_mi.isp.demosaic", ("colour_demosaicing", "colour", "scipy")),
+        ("solas_mi.metrics.commands", ("scipy", "skimage", "matplotlib")),
+        ("solas_mi.batch.commands", ("dask", "distributed", "tqdm", "drjit", "matplotlib")),
+        ("solas_mi", ("drjit", "mitsuba", "matplotlib", "numpy")),
+    ],
+)
 def test_light_modules_stay_light(module, heavy):
     code = f"import sys, {module}; print(','.join(m for m in {heavy!r} if m in sys.modules))"
     loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
@@ -213,8 +250,10 @@ def test_light_modules_stay_light(module, heavy):
 
 
 def test_building_the_command_line_stays_light():
-    code = ("import sys; from solas_mi.cli import build_parser; build_parser(); "
-            "print(','.join(m for m in ('drjit', 'mitsuba', 'matplotlib', 'dask', 'tqdm') if m in sys.modules))")
+    code = (
+        "import sys; from solas_mi.cli import build_parser; build_parser(); "
+        "print(','.join(m for m in ('drjit', 'mitsuba', 'matplotlib', 'dask', 'tqdm') if m in sys.modules))"
+    )
     loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
     assert loaded == "", f"building the parser loads {loaded}"
 

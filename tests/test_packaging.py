@@ -1,6 +1,7 @@
 """Packaging and documentation facts that a user meets first: the licence, dependency ranges that
 accept the lock (and no exact pins), a truthful requires-python, the README as a short front door
 whose examples the docs run, and a site whose every page exists."""
+
 import fnmatch
 import itertools
 import re
@@ -34,8 +35,10 @@ def test_licence_is_the_declared_one():
     assert "Neither the name of the copyright holder" in text  # the third clause
 
 
-@pytest.mark.parametrize("requirement", PYPROJECT["dependencies"]
-                         + [r for extra in PYPROJECT["optional-dependencies"].values() for r in extra])
+@pytest.mark.parametrize(
+    "requirement",
+    PYPROJECT["dependencies"] + [r for extra in PYPROJECT["optional-dependencies"].values() for r in extra],
+)
 def test_dependencies_are_ranges_that_accept_the_lock(requirement):
     req = Requirement(requirement)
     assert not any(s.operator in ("==", "===") for s in req.specifier), f"{requirement}: pin it in requirements.lock"
@@ -59,8 +62,9 @@ def test_every_package_folder_is_in_the_wheel():
     imports in the repository and fails once installed (the sensor stage did, caught by the smoke run)."""
     setuptools = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
     mapped = {ROOT / path: name for name, path in setuptools.get("package-dir", {}).items()}
-    folders = {mapped.get(p.parent, ".".join(p.parent.relative_to(ROOT).parts))
-               for p in ROOT.glob("solas_mi/**/__init__.py")} | set(mapped.values())
+    folders = {
+        mapped.get(p.parent, ".".join(p.parent.relative_to(ROOT).parts)) for p in ROOT.glob("solas_mi/**/__init__.py")
+    } | set(mapped.values())
     assert folders == set(setuptools["packages"]), folders ^ set(setuptools["packages"])
 
 
@@ -68,21 +72,27 @@ def test_every_data_file_is_in_the_wheel():
     """A data file beside a package's modules (lens data, sensor presets, scenes) ships only where
     pyproject's package-data names it: left out, it loads in the repository and is missing once installed."""
     setuptools = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]
-    folders = {ROOT / setuptools.get("package-dir", {}).get(name, name.replace(".", "/")): name
-               for name in setuptools["packages"]}
+    folders = {
+        ROOT / setuptools.get("package-dir", {}).get(name, name.replace(".", "/")): name
+        for name in setuptools["packages"]
+    }
     for path in [p for folder in set(folders) for p in folder.rglob("*") if p.is_file()]:
         if path.suffix in (".py", ".pyc") or "__pycache__" in path.parts:
             continue
         owner = max((f for f in folders if f in path.parents), key=lambda f: len(f.parts))
         patterns = setuptools["package-data"].get(folders[owner], [])
         relative = path.relative_to(owner).as_posix()
-        assert any(fnmatch.fnmatch(relative, pattern) for pattern in patterns), \
+        assert any(fnmatch.fnmatch(relative, pattern) for pattern in patterns), (
             f"{path.relative_to(ROOT)} is not in {folders[owner]}'s package-data {patterns}"
+        )
 
 
 def test_typed_and_changelog():
     assert (ROOT / "solas_mi" / "py.typed").is_file()
-    assert "py.typed" in tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]["solas_mi"]
+    assert (
+        "py.typed"
+        in tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["package-data"]["solas_mi"]
+    )
     assert "## [Unreleased]" in (ROOT / "CHANGELOG.md").read_text()
 
 
@@ -110,8 +120,12 @@ def test_every_example_of_the_site_is_run_or_says_why_not():
     """Beyond the README and the guide (details, lens files, validation, benchmarks, reference, developer
     guide): each block with commands runs, or carries a skip mark with its reason; none is in a fence
     the runner passes over (a ```text block of commands would be left out silently)."""
-    found = [ex for page in sorted((ROOT / "docs").rglob("*.md")) if "guide" not in page.parts
-             for ex in run_examples.examples(page)]
+    found = [
+        ex
+        for page in sorted((ROOT / "docs").rglob("*.md"))
+        if "guide" not in page.parts
+        for ex in run_examples.examples(page)
+    ]
     unmarked = [f"{ex.page.name}:{ex.line}" for ex in found if ex.language == "text" and not ex.skip]
     assert not unmarked, f"commands in fences that are not run: {unmarked}"
     assert all(len(ex.skip) >= run_examples.MIN_REASON for ex in found if ex.skip)
@@ -142,12 +156,18 @@ def test_benchmark_and_validation_tables_come_from_results_files():
 
 def test_the_table_check_can_fail(tmp_path):
     page = tmp_path / "page.md"
-    page.write_text('| a | b |\n|---|---|\n| 1 | 2 |\n\n--8<-- "benchmarks/results/nothing.md"\n\n'
-                    '--8<-- "README.md"\n\n<!-- table: recorded -->\n\n| c |\n|---|\n\n'
-                    '<!-- table: recorded by a tool that runs elsewhere -->\n\n| d |\n|---|\n\n```\n| e |\n```\n')
+    page.write_text(
+        '| a | b |\n|---|---|\n| 1 | 2 |\n\n--8<-- "benchmarks/results/nothing.md"\n\n'
+        '--8<-- "README.md"\n\n<!-- table: recorded -->\n\n| c |\n|---|\n\n'
+        "<!-- table: recorded by a tool that runs elsewhere -->\n\n| d |\n|---|\n\n```\n| e |\n```\n"
+    )
     problems, included, recorded = check_pages.check(page)
     assert [p.split(": ", 1)[1][:24] for p in problems] == [
-        "a table typed into the p", "includes benchmarks/resu", "includes README.md, not ", "a recorded table needs i"]
+        "a table typed into the p",
+        "includes benchmarks/resu",
+        "includes README.md, not ",
+        "a recorded table needs i",
+    ]
     assert included == [] and len(recorded) == 1
 
 
@@ -157,18 +177,22 @@ def test_the_benchmark_page_shows_no_raw_log():
     no two lines of text that Markdown would run together."""
     log_line = re.compile(r"\d{4}-\d\d-\d\d \d\d:\d\d:\d\d +[A-Z]+ +\[")
     for path in sorted((ROOT / "benchmarks" / "results").glob("*.md")):
-        lines = path.read_text(encoding="utf-8").splitlines()[check_pages.HEADER_LINES:]
+        lines = path.read_text(encoding="utf-8").splitlines()[check_pages.HEADER_LINES :]
         assert not [line for line in lines if log_line.match(line)], path.name
-        assert not [b for a, b in itertools.pairwise(lines) if a and b and not (a.startswith("|") and b.startswith("|"))], \
-            path.name
+        assert not [
+            b for a, b in itertools.pairwise(lines) if a and b and not (a.startswith("|") and b.startswith("|"))
+        ], path.name
 
 
 def test_the_recorder_keeps_results_and_drops_logs():
     recorded = check_pages.recorder().recorded
-    run = ("load average before: 1.2\n\x1b[33m2026-11-26 00:16:11 WARN  [HDRFilm] Monochrome mode enabled\x1b[0m\n"
-           f"wrote {ROOT}/out/x.exr\n| a | b |\n|---|---|\n| 1 | 2 |\nload average after: 1.0\n")
-    assert recorded(run) == ("load average before: 1.2\n\nwrote out/x.exr\n\n| a | b |\n|---|---|\n| 1 | 2 |\n\n"
-                             "load average after: 1.0\n")
+    run = (
+        "load average before: 1.2\n\x1b[33m2026-11-26 00:16:11 WARN  [HDRFilm] Monochrome mode enabled\x1b[0m\n"
+        f"wrote {ROOT}/out/x.exr\n| a | b |\n|---|---|\n| 1 | 2 |\nload average after: 1.0\n"
+    )
+    assert recorded(run) == (
+        "load average before: 1.2\n\nwrote out/x.exr\n\n| a | b |\n|---|---|\n| 1 | 2 |\n\nload average after: 1.0\n"
+    )
     assert recorded(recorded(run)) == recorded(run)
 
 
@@ -187,10 +211,14 @@ def test_the_reference_check_finds_what_a_site_leaves_out(tmp_path):
 
 def test_example_runner_checks_what_a_page_states(tmp_path):
     page = tmp_path / "page.md"
-    page.write_text("```python\nx = 2\nx + 1  # → 4\n```\n\n```sh\necho hello\n```\n\n<!-- example: expect \"bye\" -->\n"
-                    "\n<!-- example: skip not here, for a reason -->\n\n```sh\nexit 3\n```\n")
+    page.write_text(
+        '```python\nx = 2\nx + 1  # → 4\n```\n\n```sh\necho hello\n```\n\n<!-- example: expect "bye" -->\n'
+        "\n<!-- example: skip not here, for a reason -->\n\n```sh\nexit 3\n```\n"
+    )
     assert run_examples.run_page(page, quick=False, keep=False) == 2  # the wrong value and the missing output
-    page.write_text("```python\nx = 2\nx + 0.3  # → 2.2\n```\n\n```sh\necho hello bye\n```\n\n<!-- example: expect \"bye\" -->\n")
+    page.write_text(
+        '```python\nx = 2\nx + 0.3  # → 2.2\n```\n\n```sh\necho hello bye\n```\n\n<!-- example: expect "bye" -->\n'
+    )
     assert run_examples.run_page(page, quick=False, keep=False) == 1  # 2.3 is not 2.2 to the printed digit
 
 
@@ -199,7 +227,9 @@ def test_the_home_page_leads_to_every_guide_and_in_depth_page():
     no row for the sensor, the image processor or batches)."""
     import yaml
 
-    nav = {next(iter(item)): next(iter(item.values())) for item in yaml.safe_load((ROOT / "mkdocs.yml").read_text())["nav"]}
+    nav = {
+        next(iter(item)): next(iter(item.values())) for item in yaml.safe_load((ROOT / "mkdocs.yml").read_text())["nav"]
+    }
     pages = [next(iter(entry.values())) for section in ("Guide", "In depth") for entry in nav[section]]
     home = set(re.findall(r"\]\(([\w/.-]+\.md)\)", (ROOT / "docs" / "index.md").read_text()))
     assert len(pages) >= 10 and [page for page in pages if page not in home] == []

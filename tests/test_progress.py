@@ -1,5 +1,6 @@
 """Progress of long jobs (solas_mi.progress): a live bar on a terminal, a few plain lines in a log, and
 counts that are what they say (a PSF grid counts its PSFs, mirrored ones included)."""
+
 import io
 import re
 import subprocess
@@ -37,8 +38,10 @@ def test_fractions_and_a_total_told_later():
 
 def test_a_terminal_gets_a_live_bar_and_disabled_is_silent():
     tty, log = Terminal(), io.StringIO()
-    with Progress("batch", 10, "images", stream=tty) as live, Progress("x", 10, "images", stream=log,
-                                                                       enabled=False) as quiet:
+    with (
+        Progress("batch", 10, "images", stream=tty) as live,
+        Progress("x", 10, "images", stream=log, enabled=False) as quiet,
+    ):
         for _ in range(10):
             live.update()
             quiet.update()
@@ -50,15 +53,34 @@ def _stderr_lines(tmp_path, *args) -> list[str]:
     """The command's stderr as written to a file (not a terminal), split on newlines and carriage returns."""
     log = tmp_path / "log.txt"
     with open(log, "w") as f:
-        subprocess.run([sys.executable, "-m", "solas_mi", *map(str, args)], cwd=tmp_path, stdout=subprocess.DEVNULL,
-                       stderr=f, check=True, timeout=300)
+        subprocess.run(
+            [sys.executable, "-m", "solas_mi", *map(str, args)],
+            cwd=tmp_path,
+            stdout=subprocess.DEVNULL,
+            stderr=f,
+            check=True,
+            timeout=300,
+        )
     return re.split(r"[\r\n]+", log.read_text().strip())
 
 
 def test_psf_grid_in_a_log_counts_every_psf(tmp_path):
     # 4×4 nodes at 3 wavelengths: 48 PSFs, of which the mirror symmetry computes only a few
-    lines = _stderr_lines(tmp_path, "psf-grid", "solas-doublet", "--grid", "4x4", "--size", "32", "--pitch-um", "2",
-                          "--wavelengths-nm", "486,588,656", "-o", "g.exr")
+    lines = _stderr_lines(
+        tmp_path,
+        "psf-grid",
+        "solas-doublet",
+        "--grid",
+        "4x4",
+        "--size",
+        "32",
+        "--pitch-um",
+        "2",
+        "--wavelengths-nm",
+        "486,588,656",
+        "-o",
+        "g.exr",
+    )
     progress = [line for line in lines if line.startswith("psf-grid:")]
     assert 1 <= len(progress) <= QUARTERS, lines
     assert re.match(r"psf-grid: 48/48 PSFs \(100 %", progress[-1]), progress
@@ -66,8 +88,9 @@ def test_psf_grid_in_a_log_counts_every_psf(tmp_path):
 
 def test_render_in_a_log_writes_a_few_lines(tmp_path):
     # 160×120 px at 640 spp: six passes of the loop (2^21 samples each), each one a progress update
-    lines = _stderr_lines(tmp_path, "render-image", "solas-doublet", PHOTO, "--sensor", "160x120", "--spp", "640",
-                          "-o", "r.exr")
+    lines = _stderr_lines(
+        tmp_path, "render-image", "solas-doublet", PHOTO, "--sensor", "160x120", "--spp", "640", "-o", "r.exr"
+    )
     progress = [line for line in lines if line.startswith("render:")]
     assert 1 <= len(progress) <= QUARTERS, lines
     assert progress[-1].startswith("render: 640/640 spp (100 %"), progress
@@ -108,12 +131,14 @@ def test_a_pipe_hears_from_a_job_that_reports_nothing_for_long():
     import select
     import time
 
-    code = ("import sys\n"
-            "import solas_mi.progress as progress\n"
-            "progress.QUIET_S = 0.5\n"
-            "with progress.Progress('psf-grid', 10, 'PSFs') as bar:\n"
-            "    sys.stdin.readline()  # the job at work, reporting nothing\n"
-            "    bar(10)\n")
+    code = (
+        "import sys\n"
+        "import solas_mi.progress as progress\n"
+        "progress.QUIET_S = 0.5\n"
+        "with progress.Progress('psf-grid', 10, 'PSFs') as bar:\n"
+        "    sys.stdin.readline()  # the job at work, reporting nothing\n"
+        "    bar(10)\n"
+    )
     p = subprocess.Popen([sys.executable, "-c", code], stdin=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     try:
         start = time.monotonic()

@@ -1,6 +1,7 @@
 """Every list of names is a registry (`solas_mi.registry`): adding a demosaicing method, a tone curve, a
 label layer or a lens reader is one registration, which the command line's choices and help, the
 messages and the docs' lists then show; and no list of a registry's names is typed anywhere else."""
+
 import ast
 import json
 import re
@@ -25,16 +26,34 @@ SHIPPED = {
     "solas_mi.optics.formats.READERS": (".toml", ".zmx", ".seq", ".dat"),
     "solas_mi.optics.formats.WRITERS": (".toml", ".zmx", ".dat"),
     "solas_mi.optics.coating.KINDS": ("none", "quarter_wave", "ideal", "stack"),
-    "solas_mi.optics.calibration.models.MODELS": ("opencv-pinhole", "opencv-fisheye", "ocamcalib", "woodscape",
-                                                  "double-sphere", "unified"),
-    "solas_mi.analysis.registry.ANALYSES": ("mtf", "mtf-field", "mtf50-field", "through-focus", "field-curvature",
-                                            "distortion", "lateral-colour", "relative-illumination", "ray-fan",
-                                            "opd-fan", "wavefront", "spot-diagram", "encircled-energy"),
+    "solas_mi.optics.calibration.models.MODELS": (
+        "opencv-pinhole",
+        "opencv-fisheye",
+        "ocamcalib",
+        "woodscape",
+        "double-sphere",
+        "unified",
+    ),
+    "solas_mi.analysis.registry.ANALYSES": (
+        "mtf",
+        "mtf-field",
+        "mtf50-field",
+        "through-focus",
+        "field-curvature",
+        "distortion",
+        "lateral-colour",
+        "relative-illumination",
+        "ray-fan",
+        "opd-fan",
+        "wavefront",
+        "spot-diagram",
+        "encircled-energy",
+    ),
     "solas_mi.sensor.chain.STAGES": ("photons", "shutter", "defects", "readout", "merge", "compander"),
 }
 
 # One of each registered in a fresh process, then looked for in the parser, the messages and the docs.
-ADD_ONE_OF_EACH = r'''
+ADD_ONE_OF_EACH = r"""
 import json, shutil, sys
 from pathlib import Path
 import numpy as np
@@ -78,15 +97,16 @@ print(json.dumps({
              hooks.fill_markers("{{ names solas_mi.isp.demosaic.METHODS }} / {{ table solas_mi.isp.tone.CURVES }}")],
     "choices": stage_choices(),
 }))
-'''
+"""
 
 
 def test_adding_one_of_each_is_one_registration(tmp_path):
     """A dummy demosaicing method, tone curve, label layer and lens reader, each registered by one call and
     nothing else: the command line's help and choices, every message that lists what is allowed and the
     docs' generated lists name them, and Python takes them."""
-    run = subprocess.run([sys.executable, "-c", ADD_ONE_OF_EACH, str(tmp_path)], capture_output=True, text=True,
-                         cwd=ROOT)
+    run = subprocess.run(
+        [sys.executable, "-c", ADD_ONE_OF_EACH, str(tmp_path)], capture_output=True, text=True, cwd=ROOT
+    )
     assert run.returncode == 0, run.stderr
     got = json.loads(run.stdout)
     new = ("Dummy2026", "dummy-curve", "dummy-label", ".dummy")
@@ -133,7 +153,7 @@ def _lists(text: str, registries: dict) -> list[str]:
         pattern = re.compile("|".join(rf"(?<![\w.-]){re.escape(n)}(?![\w-])" for n in names))
         run, need = [], min(len(names), 3)
         for hit in [*pattern.finditer(text), None]:
-            if hit is not None and run and GAP.fullmatch(text[run[-1].end():hit.start()]):
+            if hit is not None and run and GAP.fullmatch(text[run[-1].end() : hit.start()]):
                 run.append(hit)
                 continue
             if len({h[0] for h in run}) >= need:
@@ -177,8 +197,10 @@ def test_no_list_of_names_is_typed_outside_the_registries():
 def test_the_list_finder_finds_lists_and_leaves_examples():
     registries = {k: hooks.registries()[k] for k in ("solas_mi.isp.demosaic.METHODS", "solas_mi.render.labels.LABELS")}
     assert _lists("`bilinear`, `Malvar2004` (default) or `Menon2007`", registries) == [
-        "METHODS: bilinear, Malvar2004, Menon2007"]
+        "METHODS: bilinear, Malvar2004, Menon2007"
+    ]
     assert _lists("--labels depth,normal,instance", registries) == ["LABELS: depth, normal, instance"]
     assert _lists("--labels depth,instance; Menon2007 costs four times Malvar2004", registries) == []
     assert _python_lists("X = ('bilinear', 'Malvar2004', 'Menon2007')\nY = {'depth': 1}\n", registries) == [
-        (1, "METHODS: ['Malvar2004', 'Menon2007', 'bilinear']")]
+        (1, "METHODS: ['Malvar2004', 'Menon2007', 'bilinear']")
+    ]

@@ -1,6 +1,7 @@
 """The generic registry (`solas_mi.registry`): a name registered once, a lookup whose error lists the
 names, options typed and checked with one error naming option, value and what is allowed, each entry
 given only its own options, and the docs' table."""
+
 import numpy as np
 import pytest
 
@@ -16,8 +17,9 @@ MODE = Option("mode", str, "fast", "which way", choices=("fast", "exact"))
 @pytest.fixture
 def things():
     registry = Registry("thing method", default="alpha")
-    registry.register("alpha", lambda x, size: x * size, options=(SIZE,), summary="alpha | things",
-                      reference="A. Author 2020")
+    registry.register(
+        "alpha", lambda x, size: x * size, options=(SIZE,), summary="alpha | things", reference="A. Author 2020"
+    )
 
     @registry.register("beta", options=(SHARP, GAIN), summary="beta things", layers=("beta.X", "beta.Y"))
     def beta(x, sharp, gain):
@@ -32,8 +34,10 @@ def test_names_keep_their_order_and_a_lookup_lists_them(things):
     assert "beta" in things and "gamma" not in things and ["alpha"] not in things
     assert things.get("alpha").summary == "alpha | things" and things["alpha"].reference == "A. Author 2020"
     for bad in ("gamma", None, ["alpha"], 3):
-        with pytest.raises(SolasError, match=rf"^thing method {bad!r} must be one of alpha, beta$".replace("[", r"\[")
-                           .replace("]", r"\]")):
+        with pytest.raises(
+            SolasError,
+            match=rf"^thing method {bad!r} must be one of alpha, beta$".replace("[", r"\[").replace("]", r"\]"),
+        ):
             things.get(bad)
 
 
@@ -61,19 +65,22 @@ def test_each_entry_gets_only_its_own_options_checked(things):
         things.options("alpha", {"size": 1})
 
 
-@pytest.mark.parametrize("option, value, message", [
-    (SIZE, 2.0, "size 2.0 must be an integer from 2 to 64"),
-    (SIZE, True, "size True must be an integer from 2 to 64"),
-    (SIZE, 65, "size 65 must be an integer from 2 to 64"),
-    (SHARP, 1, "sharp 1 must be true or false (a switch)"),
-    (SHARP, "false", "sharp 'false' must be true or false"),
-    (GAIN, 0, r"fancy gain 0 must be a finite number > 0 \(how much\)"),
-    (GAIN, float("nan"), "fancy gain nan must be a finite number > 0"),
-    (GAIN, "1", "fancy gain '1' must be a finite number > 0"),
-    (MODE, "slow", "mode 'slow' must be one of fast, exact"),
-    (Option("n", int, 0, "a count", minimum=0), -1, "n -1 must be an integer >= 0"),
-    (Option("x", float, 0.0, "a value", maximum=2.5), 3.0, "x 3.0 must be a finite number <= 2.5"),
-])
+@pytest.mark.parametrize(
+    "option, value, message",
+    [
+        (SIZE, 2.0, "size 2.0 must be an integer from 2 to 64"),
+        (SIZE, True, "size True must be an integer from 2 to 64"),
+        (SIZE, 65, "size 65 must be an integer from 2 to 64"),
+        (SHARP, 1, "sharp 1 must be true or false (a switch)"),
+        (SHARP, "false", "sharp 'false' must be true or false"),
+        (GAIN, 0, r"fancy gain 0 must be a finite number > 0 \(how much\)"),
+        (GAIN, float("nan"), "fancy gain nan must be a finite number > 0"),
+        (GAIN, "1", "fancy gain '1' must be a finite number > 0"),
+        (MODE, "slow", "mode 'slow' must be one of fast, exact"),
+        (Option("n", int, 0, "a count", minimum=0), -1, "n -1 must be an integer >= 0"),
+        (Option("x", float, 0.0, "a value", maximum=2.5), 3.0, "x 3.0 must be a finite number <= 2.5"),
+    ],
+)
 def test_a_bad_value_names_option_value_and_what_is_allowed(option, value, message):
     with pytest.raises(SolasError, match=message.replace("(a switch)", r"\(a switch\)")):
         option.check(value)

@@ -2,6 +2,7 @@
 (`render.loop.STEPS_PER_PASS`, `render.stock.SAMPLES_PER_PASS`, the render PSF's ray chunks) and a
 signal is answered between them; an interruption that a library reports as its own error (a scene's
 plugin interrupted while Mitsuba loads it) is still an interruption, not an error."""
+
 import importlib
 import os
 import signal
@@ -27,8 +28,14 @@ BATCH_STOP_S = 6.0
 
 
 def solas(*args, cwd) -> subprocess.Popen:
-    return subprocess.Popen([sys.executable, "-m", "solas_mi", *map(str, args)], cwd=cwd, stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True, env=dict(os.environ, TMPDIR=str(cwd)))
+    return subprocess.Popen(
+        [sys.executable, "-m", "solas_mi", *map(str, args)],
+        cwd=cwd,
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+        env=dict(os.environ, TMPDIR=str(cwd)),
+    )
 
 
 def stop(p: subprocess.Popen, sig) -> tuple[float, str]:
@@ -68,8 +75,23 @@ def test_batch_render_stops_within_a_pass(tmp_path):
     image = tmp_path / "f.png"
     image.write_bytes(PHOTO.read_bytes())
     out = tmp_path / "out"
-    p = solas("batch", "render", image, "--lens", "wide-angle-22mm", "--sensor", "160x120", "--spp", "16,256", "-o", out,
-              "--workers", "1", "--quiet", cwd=tmp_path)
+    p = solas(
+        "batch",
+        "render",
+        image,
+        "--lens",
+        "wide-angle-22mm",
+        "--sensor",
+        "160x120",
+        "--spp",
+        "16,256",
+        "-o",
+        out,
+        "--workers",
+        "1",
+        "--quiet",
+        cwd=tmp_path,
+    )
     deadline = time.monotonic() + 300
     while not (out / "f_spp16.exr").exists() and p.poll() is None and time.monotonic() < deadline:
         time.sleep(0.05)
@@ -89,8 +111,23 @@ def test_batch_render_stops_within_a_pass(tmp_path):
 def test_render_psf_stops_within_a_chunk(tmp_path, sig, code):
     """The render PSF traces 9 M rays at each of three wavelengths (one wavefront each before: 10-40 s); a
     signal while it traces ends it within STOP_S."""
-    p = solas("psf", "solas-doublet", "--psf-method", "render", "--rays", "3000", "--field-deg", "0,1",
-              "--wavelengths-nm", "486,550,656", "--size", "64", "-o", "p.exr", cwd=tmp_path)
+    p = solas(
+        "psf",
+        "solas-doublet",
+        "--psf-method",
+        "render",
+        "--rays",
+        "3000",
+        "--field-deg",
+        "0,1",
+        "--wavelengths-nm",
+        "486,550,656",
+        "--size",
+        "64",
+        "-o",
+        "p.exr",
+        cwd=tmp_path,
+    )
     time.sleep(12.0)  # past the start (imports, the lens's chief rays, the entrance grid) into the tracing
     assert p.poll() is None, "the PSF was finished before it could be interrupted"
     seconds, err = stop(p, sig)
@@ -104,8 +141,20 @@ def test_render_image_stops_within_a_pass(tmp_path):
     """A signal one second after the first progress report (the first pass done: the scene loaded and
     its kernel compiled) ends the render within STOP_S. The lens's paths take 14 interactions: a pass
     of the former 2^21 samples took 3-25 s (10.5 s from Ctrl-C to the end, measured)."""
-    p = solas("render-image", "wide-angle-22mm", PHOTO, "--fov-deg", "30", "--sensor", "160x120", "--spp", "1024",
-              "-o", "r.exr", cwd=tmp_path)
+    p = solas(
+        "render-image",
+        "wide-angle-22mm",
+        PHOTO,
+        "--fov-deg",
+        "30",
+        "--sensor",
+        "160x120",
+        "--spp",
+        "1024",
+        "-o",
+        "r.exr",
+        cwd=tmp_path,
+    )
     assert p.stderr.read(1), "no progress report"
     time.sleep(1.0)
     assert p.poll() is None, "the render was finished before it could be interrupted"
@@ -117,17 +166,22 @@ def test_render_image_stops_within_a_pass(tmp_path):
 
 def _module_that_signals(folder: Path, name: str, sig) -> None:
     """A module whose body sends `sig` to its own process half-way and then goes on (`done` set last)."""
-    (folder / f"{name}.py").write_text("import os, signal\n"
-                                      f"os.kill(os.getpid(), signal.{sig.name})\n"
-                                      "later = [i * i for i in range(1000)]  # the handler runs by here\n"
-                                      "done = True\n")
+    (folder / f"{name}.py").write_text(
+        "import os, signal\n"
+        f"os.kill(os.getpid(), signal.{sig.name})\n"
+        "later = [i * i for i in range(1000)]  # the handler runs by here\n"
+        "done = True\n"
+    )
 
 
-@pytest.mark.parametrize("handler, sig, exception", [
-    (cli._stop, signal.SIGINT, KeyboardInterrupt),
-    (cli._stop, signal.SIGTERM, cli.Terminated),
-    (runner._interrupt, signal.SIGTERM, KeyboardInterrupt),  # a batch's worker process
-])
+@pytest.mark.parametrize(
+    "handler, sig, exception",
+    [
+        (cli._stop, signal.SIGINT, KeyboardInterrupt),
+        (cli._stop, signal.SIGTERM, cli.Terminated),
+        (runner._interrupt, signal.SIGTERM, KeyboardInterrupt),  # a batch's worker process
+    ],
+)
 def test_a_signal_during_an_import_is_raised_once_the_import_is_whole(tmp_path, monkeypatch, handler, sig, exception):
     """A signal arriving while a module is imported: the import finishes (the module whole, in
     `sys.modules`) and the interruption is raised in the frame that imported it, before its next step.
@@ -156,15 +210,17 @@ def test_a_signal_while_drjit_loads_is_an_interruption(tmp_path, sig, code):
     """The signal delivered exactly while Dr.Jit's extension initialises (its C++ imports drjit.llvm):
     exit 130 / 143 and nothing written; it was an ImportError, then a NameError in Dr.Jit (exit 1), the
     race that testers hit by timing (Ctrl-C a few seconds into `psf-grid` on a loaded machine)."""
-    code_text = ("import os, signal, sys\n"
-                 "class SignalOnLookup:\n"
-                 "    def find_spec(self, name, path=None, target=None):\n"
-                 "        if name == 'drjit.llvm':\n"
-                 f"            os.kill(os.getpid(), signal.{sig.name})\n"
-                 "        return None\n"
-                 "sys.meta_path.insert(0, SignalOnLookup())\n"
-                 "from solas_mi.cli import main\n"
-                 "sys.exit(main(['psf-grid', 'solas-doublet', '--grid', '4x4', '--size', '32', '-o', 'g.exr']))\n")
+    code_text = (
+        "import os, signal, sys\n"
+        "class SignalOnLookup:\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name == 'drjit.llvm':\n"
+        f"            os.kill(os.getpid(), signal.{sig.name})\n"
+        "        return None\n"
+        "sys.meta_path.insert(0, SignalOnLookup())\n"
+        "from solas_mi.cli import main\n"
+        "sys.exit(main(['psf-grid', 'solas-doublet', '--grid', '4x4', '--size', '32', '-o', 'g.exr']))\n"
+    )
     p = subprocess.run([sys.executable, "-c", code_text], cwd=tmp_path, capture_output=True, text=True, timeout=300)
     assert p.returncode == code and "Traceback" not in p.stderr, p.stderr
     assert "no output was left half-written" in p.stderr
@@ -176,19 +232,22 @@ def test_a_signal_while_the_commands_load_is_an_interruption(tmp_path, sig, code
     """Ctrl-C or SIGTERM in the first second, while the command line imports every stage's commands
     (NumPy among them): exit 130 / 143 with one line. Our handlers came only after that: a
     KeyboardInterrupt traceback of 20 lines (SIGINT), a silent kill (SIGTERM)."""
-    code_text = ("import os, signal, sys\n"
-                 "class SignalOnLookup:\n"
-                 "    def find_spec(self, name, path=None, target=None):\n"
-                 "        if name == 'numpy':\n"
-                 f"            os.kill(os.getpid(), signal.{sig.name})\n"
-                 "        return None\n"
-                 "sys.meta_path.insert(0, SignalOnLookup())\n"
-                 "from solas_mi.cli import main\n"
-                 "sys.exit(main(['sensors']))\n")
+    code_text = (
+        "import os, signal, sys\n"
+        "class SignalOnLookup:\n"
+        "    def find_spec(self, name, path=None, target=None):\n"
+        "        if name == 'numpy':\n"
+        f"            os.kill(os.getpid(), signal.{sig.name})\n"
+        "        return None\n"
+        "sys.meta_path.insert(0, SignalOnLookup())\n"
+        "from solas_mi.cli import main\n"
+        "sys.exit(main(['sensors']))\n"
+    )
     p = subprocess.run([sys.executable, "-c", code_text], cwd=tmp_path, capture_output=True, text=True, timeout=300)
     assert p.returncode == code and "Traceback" not in p.stderr, p.stderr
-    assert p.stderr.strip().splitlines() == [f"solas-mi: {'interrupted' if code == 130 else 'terminated'}; no output "
-                                             "was left half-written"], p.stderr
+    assert p.stderr.strip().splitlines() == [
+        f"solas-mi: {'interrupted' if code == 130 else 'terminated'}; no output was left half-written"
+    ], p.stderr
 
 
 def _ends_late(ready, seconds: float) -> None:
@@ -226,16 +285,18 @@ def test_the_first_worker_of_a_process_leaves_ctrl_c_to_the_batch(tmp_path):
     SIGINT as it ended (its own guard): that worker started with Ctrl-C live, and a Ctrl-C during its
     start killed it (exit -SIGINT, the next test alone failed so). In a fresh interpreter, as a batch's."""
     script = tmp_path / "first_worker.py"
-    script.write_text("import multiprocessing, os, signal, time\n"
-                      "from solas_mi.batch import runner\n"
-                      "if __name__ == '__main__':\n"
-                      "    worker = runner._Worker(multiprocessing.get_context('spawn'), None, {})\n"
-                      "    for _ in range(20):  # while it starts and while it waits for items\n"
-                      "        os.kill(worker.proc.pid, signal.SIGINT)\n"
-                      "        time.sleep(0.1)\n"
-                      "    alive = worker.proc.is_alive()\n"
-                      "    runner._stop_all([worker], now=False)\n"
-                      "    print(alive, worker.proc.exitcode)\n")
+    script.write_text(
+        "import multiprocessing, os, signal, time\n"
+        "from solas_mi.batch import runner\n"
+        "if __name__ == '__main__':\n"
+        "    worker = runner._Worker(multiprocessing.get_context('spawn'), None, {})\n"
+        "    for _ in range(20):  # while it starts and while it waits for items\n"
+        "        os.kill(worker.proc.pid, signal.SIGINT)\n"
+        "        time.sleep(0.1)\n"
+        "    alive = worker.proc.is_alive()\n"
+        "    runner._stop_all([worker], now=False)\n"
+        "    print(alive, worker.proc.exitcode)\n"
+    )
     p = subprocess.run([sys.executable, str(script)], cwd=tmp_path, capture_output=True, text=True, timeout=300)
     assert p.stdout.split() == ["True", "0"] and "Traceback" not in p.stderr, (p.stdout, p.stderr[-500:])
 

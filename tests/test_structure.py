@@ -10,6 +10,7 @@ Nor one taking more than MAX_PARAMETERS parameters (a method's self or cls not c
 options that travel together are one option spec (`options.OptionSpec`: GridSpec, RenderSpec,
 DegradeSpec) instead.
 """
+
 import ast
 import re
 from pathlib import Path
@@ -49,14 +50,16 @@ def _top(node) -> int:
 def functions(source: str):
     """(qualified name, first line, last line, lines, top line) of each function and method in `source`:
     from its `def` (decorators not counted) to its last line, docstring, comments and blank lines included."""
-    return [(name, node.lineno, node.end_lineno, node.end_lineno - node.lineno + 1, _top(node))
-            for name, node in definitions(source)]
+    return [
+        (name, node.lineno, node.end_lineno, node.end_lineno - node.lineno + 1, _top(node))
+        for name, node in definitions(source)
+    ]
 
 
 def says_why(lines: list[str], first: int, last: int, top: int) -> bool:
     """Whether a `# long:` comment stands in lines first..last (1-based: the body) or in the block of
     comment lines directly above line `top` (the def or its first decorator)."""
-    return any(MARKER.search(line) for line in lines[first - 1:last]) or says_above(lines, top, MARKER)
+    return any(MARKER.search(line) for line in lines[first - 1 : last]) or says_above(lines, top, MARKER)
 
 
 def says_above(lines: list[str], top: int, marker: re.Pattern) -> bool:
@@ -82,15 +85,21 @@ def crowded_functions(source: str, limit: int = MAX_PARAMETERS) -> dict[str, int
     """Name → parameters of each function of `source` taking more than `limit` without a
     `# many parameters:` reason directly above it."""
     lines = source.splitlines()
-    return {name: n for name, node in definitions(source)
-            if (n := parameter_count(node)) > limit and not says_above(lines, _top(node), MANY_MARKER)}
+    return {
+        name: n
+        for name, node in definitions(source)
+        if (n := parameter_count(node)) > limit and not says_above(lines, _top(node), MANY_MARKER)
+    }
 
 
 def long_functions(source: str, limit: int = MAX_FUNCTION_LINES) -> dict[str, int]:
     """Name → lines of each function of `source` over `limit` lines without a `# long:` reason."""
     lines = source.splitlines()
-    return {name: n for name, first, last, n, top in functions(source)
-            if n > limit and not says_why(lines, first, last, top)}
+    return {
+        name: n
+        for name, first, last, n, top in functions(source)
+        if n > limit and not says_why(lines, first, last, top)
+    }
 
 
 def sources():
@@ -99,56 +108,71 @@ def sources():
 
 
 def test_no_function_over_the_limit_without_a_reason():
-    long = {f"{path.relative_to(ROOT)}:{name}": n for path in sources()
-            for name, n in long_functions(path.read_text()).items()}
-    assert not long, (f"functions over {MAX_FUNCTION_LINES} lines without a '# long: <reason>' comment: "
-                      + ", ".join(f"{k} ({n})" for k, n in sorted(long.items(), key=lambda kv: -kv[1])))
+    long = {
+        f"{path.relative_to(ROOT)}:{name}": n
+        for path in sources()
+        for name, n in long_functions(path.read_text()).items()
+    }
+    assert not long, f"functions over {MAX_FUNCTION_LINES} lines without a '# long: <reason>' comment: " + ", ".join(
+        f"{k} ({n})" for k, n in sorted(long.items(), key=lambda kv: -kv[1])
+    )
 
 
 def _body(n: int) -> str:
     return "".join(f"    x{i} = {i}\n" for i in range(n))
 
 
-@pytest.mark.parametrize("code, expected", [
-    ("def f():\n" + _body(59), {}),  # 60 lines with the def: at the limit
-    ("def f():\n" + _body(60), {"f": 61}),
-    ("class A:\n    def m(self):\n" + _body(60).replace("    ", "        "), {"A.m": 61}),
-    ("def f():\n    def g():\n" + _body(60).replace("    ", "        "), {"f": 62, "f.g": 61}),
-    ("def f():\n    # long: one table read top to bottom\n" + _body(60), {}),
-    ("# long: one table read top to bottom\n@decorator\ndef f():\n" + _body(60), {}),
-    ("# long: reason\n\ndef f():\n" + _body(60), {"f": 61}),  # a blank line between: not directly above
-    ("def f():\n    # long:\n" + _body(60), {"f": 62}),  # no reason given
-    ("def f():\n    # this is long: no marker\n" + _body(60), {"f": 62}),
-])
+@pytest.mark.parametrize(
+    "code, expected",
+    [
+        ("def f():\n" + _body(59), {}),  # 60 lines with the def: at the limit
+        ("def f():\n" + _body(60), {"f": 61}),
+        ("class A:\n    def m(self):\n" + _body(60).replace("    ", "        "), {"A.m": 61}),
+        ("def f():\n    def g():\n" + _body(60).replace("    ", "        "), {"f": 62, "f.g": 61}),
+        ("def f():\n    # long: one table read top to bottom\n" + _body(60), {}),
+        ("# long: one table read top to bottom\n@decorator\ndef f():\n" + _body(60), {}),
+        ("# long: reason\n\ndef f():\n" + _body(60), {"f": 61}),  # a blank line between: not directly above
+        ("def f():\n    # long:\n" + _body(60), {"f": 62}),  # no reason given
+        ("def f():\n    # this is long: no marker\n" + _body(60), {"f": 62}),
+    ],
+)
 def test_the_limit_and_its_marker(code, expected):
     assert long_functions(code) == expected
 
 
 def test_no_function_takes_over_the_limit_of_parameters_without_a_reason():
-    crowded = {f"{path.relative_to(ROOT)}:{name}": n for path in sources()
-               for name, n in crowded_functions(path.read_text()).items()}
-    assert not crowded, (f"functions of more than {MAX_PARAMETERS} parameters without a '# many parameters: <reason>' "
-                         "comment above them (options that travel together are one option spec): "
-                         + ", ".join(f"{k} ({n})" for k, n in sorted(crowded.items(), key=lambda kv: -kv[1])))
+    crowded = {
+        f"{path.relative_to(ROOT)}:{name}": n
+        for path in sources()
+        for name, n in crowded_functions(path.read_text()).items()
+    }
+    assert not crowded, (
+        f"functions of more than {MAX_PARAMETERS} parameters without a '# many parameters: <reason>' "
+        "comment above them (options that travel together are one option spec): "
+        + ", ".join(f"{k} ({n})" for k, n in sorted(crowded.items(), key=lambda kv: -kv[1]))
+    )
 
 
 def _signature(n: int, first: str = "") -> str:
     return ", ".join([first] * bool(first) + [f"p{i}" for i in range(n)])
 
 
-@pytest.mark.parametrize("code, expected", [
-    (f"def f({_signature(10)}):\n    pass\n", {}),  # at the limit
-    (f"def f({_signature(11)}):\n    pass\n", {"f": 11}),
-    (f"class A:\n    def m({_signature(10, 'self')}):\n        pass\n", {}),  # self is not counted
-    (f"class A:\n    @classmethod\n    def m({_signature(11, 'cls')}):\n        pass\n", {"A.m": 11}),
-    ("def f(a, /, b, *args, c, d, e, f, g, h, i, **kwargs):\n    pass\n", {"f": 11}),  # every kind counted
-    (f"def f():\n    def g({_signature(11)}):\n        pass\n", {"f.g": 11}),
-    (f"# many parameters: the kernel's scalars, each opaque\ndef f({_signature(11)}):\n    pass\n", {}),
-    (f"# many parameters: reason\n# and more of it\n@decorator\ndef f({_signature(11)}):\n    pass\n", {}),
-    (f"# many parameters: reason\n\ndef f({_signature(11)}):\n    pass\n", {"f": 11}),  # not directly above
-    (f"# many parameters:\ndef f({_signature(11)}):\n    pass\n", {"f": 11}),  # no reason given
-    (f"def f({_signature(11)}):\n    # many parameters: in the body\n    pass\n", {"f": 11}),  # above, not inside
-    (f"# long: a reason of the other rule\ndef f({_signature(11)}):\n    pass\n", {"f": 11}),
-])
+@pytest.mark.parametrize(
+    "code, expected",
+    [
+        (f"def f({_signature(10)}):\n    pass\n", {}),  # at the limit
+        (f"def f({_signature(11)}):\n    pass\n", {"f": 11}),
+        (f"class A:\n    def m({_signature(10, 'self')}):\n        pass\n", {}),  # self is not counted
+        (f"class A:\n    @classmethod\n    def m({_signature(11, 'cls')}):\n        pass\n", {"A.m": 11}),
+        ("def f(a, /, b, *args, c, d, e, f, g, h, i, **kwargs):\n    pass\n", {"f": 11}),  # every kind counted
+        (f"def f():\n    def g({_signature(11)}):\n        pass\n", {"f.g": 11}),
+        (f"# many parameters: the kernel's scalars, each opaque\ndef f({_signature(11)}):\n    pass\n", {}),
+        (f"# many parameters: reason\n# and more of it\n@decorator\ndef f({_signature(11)}):\n    pass\n", {}),
+        (f"# many parameters: reason\n\ndef f({_signature(11)}):\n    pass\n", {"f": 11}),  # not directly above
+        (f"# many parameters:\ndef f({_signature(11)}):\n    pass\n", {"f": 11}),  # no reason given
+        (f"def f({_signature(11)}):\n    # many parameters: in the body\n    pass\n", {"f": 11}),  # above, not inside
+        (f"# long: a reason of the other rule\ndef f({_signature(11)}):\n    pass\n", {"f": 11}),
+    ],
+)
 def test_the_parameter_limit_and_its_marker(code, expected):
     assert crowded_functions(code) == expected

@@ -1,6 +1,7 @@
 """Files a user or a file names (`solas_mi.userfiles`): every reader reads regular files only, at most its
 kind's bound, never waits on a FIFO nor reads a device, takes only UTF-8 text, refuses TOML nested
 deeper than `MAX_NESTING`, and never quotes what a file holds."""
+
 import os
 from pathlib import Path
 
@@ -20,9 +21,16 @@ def odd(tmp_path):
     return tmp_path
 
 
-@pytest.mark.parametrize("name, why", [("fifo", "is not a regular file"), ("zero", "is not a regular file"),
-                                       ("/dev/zero", "is not a regular file"), ("folder", "is a folder"),
-                                       ("missing", "does not exist")])
+@pytest.mark.parametrize(
+    "name, why",
+    [
+        ("fifo", "is not a regular file"),
+        ("zero", "is not a regular file"),
+        ("/dev/zero", "is not a regular file"),
+        ("folder", "is a folder"),
+        ("missing", "does not exist"),
+    ],
+)
 @pytest.mark.parametrize("reader", [check, read_bytes, read_text, read_toml])
 def test_only_regular_files_are_read(odd, name, why, reader):
     path = odd / name
@@ -48,12 +56,15 @@ def test_the_bound_of_each_kind_is_stated_and_holds(tmp_path, monkeypatch):
     assert "larger than 10 bytes" in refused(read_bytes, "/proc/self/environ", "lens file")
 
 
-@pytest.mark.parametrize("data, why", [
-    (b"a = 1\x00\n", "it holds NUL bytes"),
-    ("a = 'caf\xe9'\n".encode("latin-1"), "byte 9 is not UTF-8"),
-    ("a = 1\n".encode("utf-16"), "it holds NUL bytes"),
-    (b"\x89PNG\r\n\x1a\n", "byte 1 is not UTF-8"),
-])
+@pytest.mark.parametrize(
+    "data, why",
+    [
+        (b"a = 1\x00\n", "it holds NUL bytes"),
+        ("a = 'caf\xe9'\n".encode("latin-1"), "byte 9 is not UTF-8"),
+        ("a = 1\n".encode("utf-16"), "it holds NUL bytes"),
+        (b"\x89PNG\r\n\x1a\n", "byte 1 is not UTF-8"),
+    ],
+)
 def test_text_is_utf8(tmp_path, data, why):
     path = tmp_path / "t.toml"
     path.write_bytes(data)
@@ -82,9 +93,9 @@ def test_nesting_is_bounded(tmp_path):
         if ok:
             assert read_toml(path, "lens file")["x"]
         else:
-            assert f"nests tables and arrays more than {MAX_NESTING} levels deep" in refused(read_toml, path,
-                                                                                               "lens file")
-
+            assert f"nests tables and arrays more than {MAX_NESTING} levels deep" in refused(
+                read_toml, path, "lens file"
+            )
 
 
 def test_the_docs_state_the_bounds():

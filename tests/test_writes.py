@@ -1,6 +1,7 @@
 """Every command that writes takes the one output check (`outputs.check_target`), `lens convert`
 included; text we write is escaped (a name cannot add a line or a key); an error quotes at most the
 name of a file a scene points to, never its content."""
+
 import dataclasses
 import os
 import shutil
@@ -51,7 +52,7 @@ def test_lens_convert_never_replaces_a_link_a_folder_or_a_device(lens_copy, tmp_
 
 
 # Names with a line break or control character are refused when the lens is made (tests/optics/test_bad_input.py).
-NAMES = ['a "quote"', "close ] bracket", "hash # sign", "back\\slash", 'x" name = "evil', "x\\\" ] evil"]
+NAMES = ['a "quote"', "close ] bracket", "hash # sign", "back\\slash", 'x" name = "evil', 'x\\" ] evil']
 
 
 @pytest.mark.parametrize("ext", [".toml", ".dat"])
@@ -71,8 +72,9 @@ def test_a_name_written_into_a_lens_file_reads_back_as_written(doublet, name, ex
 SECRET = "root:$6$s3cr3t-hash-never-printed:19000:0:99999:7:::"
 
 
-@pytest.mark.parametrize("content", [f"first line\n{SECRET}\n", f"{SECRET}\n1,2,3,4\n", "1,2,3,4\n" + SECRET,
-                                     "\xff\xfe" + SECRET])
+@pytest.mark.parametrize(
+    "content", [f"first line\n{SECRET}\n", f"{SECRET}\n1,2,3,4\n", "1,2,3,4\n" + SECRET, "\xff\xfe" + SECRET]
+)
 def test_a_response_table_is_never_quoted(tmp_path, content):
     from solas_mi.errors import SolasError
     from solas_mi.render.response import parse
@@ -99,9 +101,14 @@ def test_scene_folders_of_killed_renders_are_removed_by_the_next(tmp_path, monke
     assert remove_stale_scenes() == 1 and not stale.exists() and live.is_dir()
 
 
-@pytest.mark.parametrize("extra, message", [(["--spp", "100000000"], "samples per pixel 100000000"),
-                                            (["--spp-ideal", "0"], "samples per pixel 0"),
-                                            (["--size", "100000x100000"], "render 100000x100000 needs about")])
+@pytest.mark.parametrize(
+    "extra, message",
+    [
+        (["--spp", "100000000"], "samples per pixel 100000000"),
+        (["--spp-ideal", "0"], "samples per pixel 0"),
+        (["--size", "100000x100000"], "render 100000x100000 needs about"),
+    ],
+)
 def test_the_street_experiment_checks_its_renders_before_any_work(tmp_path, capsys, extra, message):
     out = tmp_path / "street"
     assert main(["experiment", "street", "-o", str(out), *extra]) == 2
@@ -124,8 +131,9 @@ def test_paths_and_names_written_into_scene_xml_cannot_add_elements(doublet, tmp
 
 
 def test_temporaries_of_a_killed_writer_are_removed_by_the_next_write(lens_copy, tmp_path, capsys):
-    dead = int(subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True,
-                              text=True).stdout)
+    dead = int(
+        subprocess.run([sys.executable, "-c", "import os; print(os.getpid())"], capture_output=True, text=True).stdout
+    )
     stale = tmp_path / f".out.zmx.{dead}.k1lled00.zmx"
     live = tmp_path / f".out.zmx.{os.getppid()}.wr1t1ng0.zmx"  # a writer still running: kept
     other = tmp_path / f".other.zmx.{dead}.k1lled00.zmx"  # another target's: its own next write removes it
@@ -191,9 +199,30 @@ def test_two_commands_writing_one_output_at_once_both_succeed(tmp_path):
     carries its live writer's process id), both succeed, and what is left is one whole EXR and PNG."""
     from solas_mi.imageio import read_exr
 
-    runs = [subprocess.Popen([sys.executable, "-m", "solas_mi", "psf", "solas-doublet", "--field-deg", field,
-                              "--wavelengths-nm", "531", "--size", "48", "-o", "p.exr"], cwd=tmp_path,
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True) for field in ("0,0", "0,1")]
+    runs = [
+        subprocess.Popen(
+            [
+                sys.executable,
+                "-m",
+                "solas_mi",
+                "psf",
+                "solas-doublet",
+                "--field-deg",
+                field,
+                "--wavelengths-nm",
+                "531",
+                "--size",
+                "48",
+                "-o",
+                "p.exr",
+            ],
+            cwd=tmp_path,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+        )
+        for field in ("0,0", "0,1")
+    ]
     for p in runs:
         _, err = p.communicate(timeout=120)
         assert p.returncode == 0, err

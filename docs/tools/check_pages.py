@@ -9,6 +9,7 @@ no run here can make (one that needs another tool installed beside this one) is 
 
     python docs/tools/check_pages.py [PAGES ...]     # default: docs/benchmarks.md docs/validation
 """
+
 from __future__ import annotations
 
 import importlib.util
@@ -61,15 +62,23 @@ def check(page: Path) -> tuple[list[str], list[str], list[str]]:
             elif not HEADER.fullmatch(target.read_text(encoding="utf-8").partition("\n")[0]):
                 problems.append(f"{where}: {m.group(1)} was not written by benchmarks/run_all.py")
             elif unrecorded(target.read_text(encoding="utf-8")):
-                problems.append(f"{where}: {m.group(1)} holds what the recorder leaves out (a raw log, lines run "
-                                "together): record it again with benchmarks/run_all.py")
+                problems.append(
+                    f"{where}: {m.group(1)} holds what the recorder leaves out (a raw log, lines run "
+                    "together): record it again with benchmarks/run_all.py"
+                )
             else:
                 included.append(m.group(1))
-        elif line.lstrip().startswith("|") and not fenced and (number == 1 or not lines[number - 2].lstrip().startswith("|")):
+        elif (
+            line.lstrip().startswith("|")
+            and not fenced
+            and (number == 1 or not lines[number - 2].lstrip().startswith("|"))
+        ):
             reason = RECORDED.match(previous)
             if reason is None:
-                problems.append(f"{where}: a table typed into the page; include the results file of the run "
-                                "that prints it (benchmarks/run_all.py)")
+                problems.append(
+                    f"{where}: a table typed into the page; include the results file of the run "
+                    "that prints it (benchmarks/run_all.py)"
+                )
             elif len(reason.group(1)) < MIN_REASON:
                 problems.append(f"{where}: a recorded table needs its reason")
             else:
@@ -99,8 +108,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"  recorded table (not from a results file): {line}")
     for line in problems:
         print(f"  FAIL {line}")
-    print(f"tables: {len(included)} included from benchmarks/results/, {len(recorded)} recorded, "
-          f"{len(problems)} problems")
+    print(
+        f"tables: {len(included)} included from benchmarks/results/, {len(recorded)} recorded, {len(problems)} problems"
+    )
     return 1 if problems else 0
 
 

@@ -5,6 +5,7 @@ plugin with its parameter table, an XML and a dict example. Run after `mkdocs bu
 
     python docs/tools/check_reference.py [SITE]        # default: site
 """
+
 from __future__ import annotations
 
 import ast
@@ -46,22 +47,31 @@ def missing_public(site: Path) -> list[str]:
 def public_names(path: Path) -> list[str]:
     """The module's public top-level functions and classes (no leading underscore)."""
     tree = ast.parse(path.read_text(encoding="utf-8"))
-    return [node.name for node in tree.body if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef))
-            and not node.name.startswith("_")]
+    return [
+        node.name
+        for node in tree.body
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)) and not node.name.startswith("_")
+    ]
 
 
 def missing_api(site: Path) -> list[str]:
     from hooks import api_modules, module_file
 
     ids = api_ids(site)
-    return [f"{name}.{member}" for _, name in api_modules() for member in public_names(module_file(name))
-            if f"{name}.{member}" not in ids]
+    return [
+        f"{name}.{member}"
+        for _, name in api_modules()
+        for member in public_names(module_file(name))
+        if f"{name}.{member}" not in ids
+    ]
 
 
 def missing_commands(site: Path) -> list[str]:
     from solas_mi.cli import build_parser, iter_commands
 
-    page = html.unescape(re.sub(r"<[^>]+>", "", (site / "reference" / "cli" / "index.html").read_text(encoding="utf-8")))
+    page = html.unescape(
+        re.sub(r"<[^>]+>", "", (site / "reference" / "cli" / "index.html").read_text(encoding="utf-8"))
+    )
     names = [" ".join(("solas-mi", *path)) for path, _ in iter_commands(build_parser())]
     return [name for name in names if f"usage: {name} " not in page and not page.count(f"usage: {name}\n")]
 
@@ -74,11 +84,18 @@ def missing_plugins(site: Path) -> list[str]:
     text = " ".join(html.unescape(re.sub(r"<[^>]+>", "", page)).split())
     missing = []
     for name in PLUGINS:
-        doc = " ".join(re.sub(r"[`*]", "", ast.get_docstring(ast.parse((REPO / "plugins" / f"{name}.py").read_text())) or "").split())
-        wants = {"section": f"## `{name}`" in source, "parameter table": f"::: plugins.{name}" in source,
-                 "XML example": re.search(rf'```xml\n<\w+ type="{name}"', source) is not None,
-                 "dict example": re.search(rf'```python\n(?:.*\n)*?\w+ = \{{"type": "{name}"', source) is not None,
-                 "its documentation rendered": bool(doc) and doc[:60] in text}
+        doc = " ".join(
+            re.sub(
+                r"[`*]", "", ast.get_docstring(ast.parse((REPO / "plugins" / f"{name}.py").read_text())) or ""
+            ).split()
+        )
+        wants = {
+            "section": f"## `{name}`" in source,
+            "parameter table": f"::: plugins.{name}" in source,
+            "XML example": re.search(rf'```xml\n<\w+ type="{name}"', source) is not None,
+            "dict example": re.search(rf'```python\n(?:.*\n)*?\w+ = \{{"type": "{name}"', source) is not None,
+            "its documentation rendered": bool(doc) and doc[:60] in text,
+        }
         missing += [f"{name}: {what}" for what, ok in wants.items() if not ok]
     return missing
 
@@ -89,10 +106,12 @@ def main(argv: list[str] | None = None) -> int:
     if not (site / "reference" / "api" / "index.html").is_file():
         print(f"{site}: no built site (run mkdocs build first)")
         return 1
-    problems = {"public API (names of an __all__ without their entry)": missing_public(site),
-                "API (public functions and classes without an entry)": missing_api(site),
-                "CLI (commands without their help)": missing_commands(site),
-                "plugins": missing_plugins(site)}
+    problems = {
+        "public API (names of an __all__ without their entry)": missing_public(site),
+        "API (public functions and classes without an entry)": missing_api(site),
+        "CLI (commands without their help)": missing_commands(site),
+        "plugins": missing_plugins(site),
+    }
     for what, names in problems.items():
         for name in names:
             print(f"  FAIL {what}: {name}")

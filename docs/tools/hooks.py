@@ -11,6 +11,7 @@
   `{{ default MODULE.REGISTRY }}` its default and `{{ table MODULE.REGISTRY }}` its table: the lists of
   names a page shows are the code's.
 """
+
 from __future__ import annotations
 
 import ast
@@ -32,9 +33,11 @@ def cli_reference() -> str:
     os.environ["COLUMNS"] = "100"  # the help's width, the same on every machine
     from solas_mi.cli import build_parser, iter_commands
 
-    parts = ["# Command-line reference\n",
-             "Generated from the argument parsers at every build of this site: each section is the command's "
-             "`--help`. Defaults are stated in each option's text.\n"]
+    parts = [
+        "# Command-line reference\n",
+        "Generated from the argument parsers at every build of this site: each section is the command's "
+        "`--help`. Defaults are stated in each option's text.\n",
+    ]
     for path, parser in iter_commands(build_parser()):
         name = " ".join(("solas-mi", *path))
         parts.append(f"## {name}\n\n```text\n{parser.format_help().rstrip()}\n```\n")
@@ -67,7 +70,7 @@ def api_modules() -> list[tuple[str, str]]:
         for path in sorted((REPO / folder).rglob("*.py")):
             name = module_name(path)
             if name not in API_SKIP:
-                names.append((installed + name[len(folder):], name))
+                names.append((installed + name[len(folder) :], name))
     return names
 
 
@@ -80,7 +83,8 @@ def declared_all(module: str) -> list[str] | None:
     """The names of the module's `__all__` (a list or tuple of strings at its top level); None without one."""
     for node in module_tree(module).body:
         if isinstance(node, (ast.Assign, ast.AnnAssign)) and "__all__" in [
-                getattr(t, "id", None) for t in (node.targets if isinstance(node, ast.Assign) else [node.target])]:
+            getattr(t, "id", None) for t in (node.targets if isinstance(node, ast.Assign) else [node.target])
+        ]:
             return [element.value for element in node.value.elts]
     return None
 
@@ -89,7 +93,7 @@ def _absolute(module: str, relative: str, level: int, package: bool) -> str:
     """`relative` (`level` dots) as imported by `module` (a package's relative imports start in itself)."""
     if not level:
         return relative
-    parts = module.split(".")[:len(module.split(".")) - level + package]
+    parts = module.split(".")[: len(module.split(".")) - level + package]
     return ".".join([*parts, relative] if relative else parts)
 
 
@@ -114,7 +118,9 @@ def _defines(module: str, name: str) -> bool:
     for node in module_tree(module).body:
         if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)) and node.name == name:
             return True
-        targets = node.targets if isinstance(node, ast.Assign) else [node.target] if isinstance(node, ast.AnnAssign) else []
+        targets = (
+            node.targets if isinstance(node, ast.Assign) else [node.target] if isinstance(node, ast.AnnAssign) else []
+        )
         if name in [getattr(t, "id", None) for t in targets]:
             return True
     return False
@@ -135,8 +141,10 @@ def public_api() -> dict[str, list[tuple[str, str]]]:
     """The public Python API: package → (name, the module that defines it) for each name of the package's
     `__all__`, every package of solas_mi (a package without `__all__` has none: `check_reference` and the
     docstring test name it)."""
-    return {package: [(name, defining_module(package, name)) for name in declared_all(package) or []]
-            for package in packages()}
+    return {
+        package: [(name, defining_module(package, name)) for name in declared_all(package) or []]
+        for package in packages()
+    }
 
 
 def public_definitions() -> dict[str, str]:
@@ -150,13 +158,15 @@ def public_definitions() -> dict[str, str]:
 
 
 def api_reference() -> str:
-    parts = ["# Python API reference\n",
-             "Generated from the docstrings at each build. First the public API: every name of `solas_mi.__all__` "
-             "and of each subpackage's `__all__` (numpydoc: parameters, returns, what it raises, examples run by the "
-             "docs build); then every module, with what else it holds. The stages follow the data: "
-             "optics → psf → convolution; optics → render → sensor → isp; images → metrics; validation, batch and "
-             "experiments on top ([package layout](../develop/layout.md)).\n",
-             "## Public API\n"]
+    parts = [
+        "# Python API reference\n",
+        "Generated from the docstrings at each build. First the public API: every name of `solas_mi.__all__` "
+        "and of each subpackage's `__all__` (numpydoc: parameters, returns, what it raises, examples run by the "
+        "docs build); then every module, with what else it holds. The stages follow the data: "
+        "optics → psf → convolution; optics → render → sensor → isp; images → metrics; validation, batch and "
+        "experiments on top ([package layout](../develop/layout.md)).\n",
+        "## Public API\n",
+    ]
     shown: set[str] = set()
     public = public_definitions()
     for package, names in public_api().items():
@@ -169,16 +179,21 @@ def api_reference() -> str:
                 parts.append(f"- `{package}.{name}`: the same as [`{public[path]}`](#{path})\n")
                 continue
             shown.add(path)
-            parts.append(f"::: {path}\n    options:\n      show_root_heading: true\n      heading: \"{package}.{name}\"\n"
-                         f"      toc_label: \"{package}.{name}\"\n      heading_level: 4\n")
+            parts.append(
+                f'::: {path}\n    options:\n      show_root_heading: true\n      heading: "{package}.{name}"\n'
+                f'      toc_label: "{package}.{name}"\n      heading_level: 4\n'
+            )
     parts.append("## Modules\n")
     for installed, name in api_modules():
         own = sorted(path for path in public if path.rpartition(".")[0] == name)
         filters = ", ".join(f'"{f}"' for f in ["!^_", *(f"!^{path.rpartition('.')[2]}$" for path in own)])
         links = ", ".join(f"[`{public[path]}`](#{path})" for path in own)
-        parts.append(f"### `{installed}`\n" + (f"\nPublic, documented above: {links}.\n" if own else "") +
-                     f"\n::: {name}\n    options:\n      show_root_heading: false\n      heading_level: 4\n"
-                     f"      filters: [{filters}]\n")
+        parts.append(
+            f"### `{installed}`\n"
+            + (f"\nPublic, documented above: {links}.\n" if own else "")
+            + f"\n::: {name}\n    options:\n      show_root_heading: false\n      heading_level: 4\n"
+            f"      filters: [{filters}]\n"
+        )
     return "\n".join(parts)
 
 
@@ -203,15 +218,16 @@ def registries() -> dict[str, object]:
 
 def registries_reference() -> str:
     """Markdown of every registry's table, in the order of the package's stages."""
-    parts = ["# Methods, formats and layers\n",
-             "Generated from the registries at every build of this site (`solas_mi.registry.Registry`): every "
-             "list of names the package takes, each name with what it does, its own options and a reference. A "
-             "new entry is one `register` call ([extending](../develop/extending.md)).\n"]
+    parts = [
+        "# Methods, formats and layers\n",
+        "Generated from the registries at every build of this site (`solas_mi.registry.Registry`): every "
+        "list of names the package takes, each name with what it does, its own options and a reference. A "
+        "new entry is one `register` call ([extending](../develop/extending.md)).\n",
+    ]
     for name, registry in registries().items():
         default = f" Default: `{registry.default}`." if registry.default else ""
         plural = registry.kind[:-2] + "es" if registry.kind.endswith("is") else registry.kind + "s"  # analysis
-        parts.append(f"## {plural[0].upper()}{plural[1:]}\n\n`{name}`.{default}\n\n"
-                     f"{registry.describe()}\n")
+        parts.append(f"## {plural[0].upper()}{plural[1:]}\n\n`{name}`.{default}\n\n{registry.describe()}\n")
     return "\n".join(parts)
 
 
@@ -221,6 +237,7 @@ MARKER = re.compile(r"\{\{\s*(names|table|default)\s+(solas_mi\.[\w.]+)\s*\}\}")
 def fill_markers(markdown: str) -> str:
     """`markdown` with each `{{ names|default|table MODULE.REGISTRY }}` replaced by the registry's names,
     default or table; an unknown registry is an error (the build stops)."""
+
     def fill(match: re.Match) -> str:
         module, _, attr = match[2].rpartition(".")
         registry = getattr(importlib.import_module(module), attr)
@@ -230,8 +247,11 @@ def fill_markers(markdown: str) -> str:
 
 
 def on_files(files, config):
-    pages = (("reference/cli.md", cli_reference()), ("reference/api.md", api_reference()),
-             ("reference/registries.md", registries_reference()))
+    pages = (
+        ("reference/cli.md", cli_reference()),
+        ("reference/api.md", api_reference()),
+        ("reference/registries.md", registries_reference()),
+    )
     for uri, content in pages:
         files.append(File.generated(config, uri, content=content))
     return files

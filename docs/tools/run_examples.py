@@ -25,6 +25,7 @@ docstring's or an example raises.
 
     python docs/tools/run_examples.py README.md docs [--quick] [--keep]
 """
+
 from __future__ import annotations
 
 import argparse
@@ -48,7 +49,7 @@ COMMAND_LINE = re.compile(r"^\s*(\$ |solas-mi |make |python3? |\.venv/|dask |fro
 FENCE_ANY = re.compile(r"^```(\w*)[^\n]*\n(.*?)^```\s*$", re.M | re.S)
 MIN_REASON = 15  # characters: a skip says why
 EXPECT = "# → "
-CHECK = '''
+CHECK = """
 def __expect(value, stated, where):
     text = str(value)
     if text == stated or repr(value) == stated:
@@ -60,7 +61,7 @@ def __expect(value, stated, where):
     except (TypeError, ValueError):
         pass
     raise SystemExit(f"{where}: gave {text}, the page states {stated}")
-'''
+"""
 
 
 @dataclass
@@ -79,8 +80,11 @@ def examples(page: Path) -> list[Example]:
     text = page.read_text(encoding="utf-8")
     found: list[Example] = []
     pending: dict = {}
-    spans = sorted([(m.start(), "fence", m) for m in FENCE_ANY.finditer(text)] +
-                   [(m.start(), "mark", m) for m in MARK.finditer(text)], key=lambda s: s[0])
+    spans = sorted(
+        [(m.start(), "fence", m) for m in FENCE_ANY.finditer(text)]
+        + [(m.start(), "mark", m) for m in MARK.finditer(text)],
+        key=lambda s: s[0],
+    )
     for start, kind, m in spans:
         if kind == "mark":
             what, arg = m.group(1), m.group(2)
@@ -94,8 +98,16 @@ def examples(page: Path) -> list[Example]:
                 pending[what] = arg or True
         elif m.group(1) in RUN or COMMAND_LINE.search(m.group(2)):
             language = RUN.get(m.group(1), "text")
-            found.append(Example(page, text.count("\n", 0, start) + 1, language, m.group(2),
-                                 slow=bool(pending.get("slow")), skip=str(pending.get("skip") or "")))
+            found.append(
+                Example(
+                    page,
+                    text.count("\n", 0, start) + 1,
+                    language,
+                    m.group(2),
+                    slow=bool(pending.get("slow")),
+                    skip=str(pending.get("skip") or ""),
+                )
+            )
             pending = {}
         else:
             pending = {}
@@ -138,8 +150,9 @@ def run(example: Example, folder: Path, env: dict) -> tuple[bool, str, float]:
 
 def environment() -> dict:
     """The examples' environment: this Python's `solas-mi` first on PATH, matplotlib without a display."""
-    return dict(os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}",
-                MPLBACKEND="Agg")
+    return dict(
+        os.environ, PATH=f"{Path(sys.executable).parent}{os.pathsep}{os.environ.get('PATH', '')}", MPLBACKEND="Agg"
+    )
 
 
 def fresh_folder(stem: str) -> Path:
@@ -160,8 +173,10 @@ def run_page(page: Path, quick: bool, keep: bool) -> int:
             continue
         if ex.language == "text":
             failed += 1
-            print(f"  FAIL {where}: commands in a fence that is not run; write it as ```sh or ```python, or mark it "
-                  "<!-- example: skip REASON -->")
+            print(
+                f"  FAIL {where}: commands in a fence that is not run; write it as ```sh or ```python, or mark it "
+                "<!-- example: skip REASON -->"
+            )
             continue
         ok, output, seconds = run(ex, folder, env)
         print(f"  {'ok  ' if ok else 'FAIL'} {where} ({ex.language}, {seconds:.1f} s)", flush=True)
@@ -173,9 +188,11 @@ def run_page(page: Path, quick: bool, keep: bool) -> int:
     return failed
 
 
-DOCTEST = ("import doctest, importlib, sys; result = doctest.testmod(importlib.import_module({name!r}), "
-           "optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE); "
-           "print(f'{{result.attempted}} examples, {{result.failed}} failed'); sys.exit(1 if result.failed else 0)")
+DOCTEST = (
+    "import doctest, importlib, sys; result = doctest.testmod(importlib.import_module({name!r}), "
+    "optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE); "
+    "print(f'{{result.attempted}} examples, {{result.failed}} failed'); sys.exit(1 if result.failed else 0)"
+)
 
 
 def docstring_modules() -> list[str]:
@@ -192,12 +209,20 @@ def run_docstrings(keep: bool) -> int:
     failed = 0
     for name in docstring_modules():
         folder, start = fresh_folder(name.rpartition(".")[2]), time.perf_counter()
-        done = subprocess.run([sys.executable, "-c", DOCTEST.format(name=name)], cwd=folder, env=environment(),
-                              stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+        done = subprocess.run(
+            [sys.executable, "-c", DOCTEST.format(name=name)],
+            cwd=folder,
+            env=environment(),
+            stdout=subprocess.PIPE,
+            stderr=subprocess.STDOUT,
+            text=True,
+        )
         ok = done.returncode == 0 and ": warning:" not in done.stdout
         summary = done.stdout.strip().splitlines()[-1] if done.stdout.strip() else ""
-        print(f"  {'ok  ' if ok else 'FAIL'} {name} (docstrings: {summary}, {time.perf_counter() - start:.1f} s)",
-              flush=True)
+        print(
+            f"  {'ok  ' if ok else 'FAIL'} {name} (docstrings: {summary}, {time.perf_counter() - start:.1f} s)",
+            flush=True,
+        )
         if not ok:
             failed += 1
             print("    " + done.stdout.strip().replace("\n", "\n    "))

@@ -9,6 +9,7 @@ and `through_focus` (the diffraction OTF from the pupil's autocorrelation, `otf`
 
     ANALYSES["mtf"].function(lens, fields_deg=[0, 14], pixel_pitch_um=3.0).write("mtf.png")
 """
+
 from ..lazy import lazy_exports
 
 __all__ = ["ANALYSES", "Result", "Table"]

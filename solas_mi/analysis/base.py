@@ -6,6 +6,7 @@ rows under named columns (units in the names) for CSV and JSON; `plot()`, a matp
 A new analysis subclasses `Result` (a frozen, keyword-only dataclass adding its arrays), implements
 `table()` and `plot()`, and registers its function in `registry.ANALYSES`.
 """
+
 from __future__ import annotations
 
 import csv
@@ -126,9 +127,17 @@ class Result:
             None).
         """
         t = self.table()
-        return {"analysis": self.name, "lens": self.lens, "lens_hash": self.lens_hash, "inputs": self.inputs,
-                "conventions": list(self.conventions), "warnings": list(self.warnings), "summary": t.summary,
-                "columns": list(t.columns), "rows": [list(r) for r in t.rows]}
+        return {
+            "analysis": self.name,
+            "lens": self.lens,
+            "lens_hash": self.lens_hash,
+            "inputs": self.inputs,
+            "conventions": list(self.conventions),
+            "warnings": list(self.warnings),
+            "summary": t.summary,
+            "columns": list(t.columns),
+            "rows": [list(r) for r in t.rows],
+        }
 
     def write(self, png: str | Path) -> tuple[Path, Path, Path]:
         """Write the figure and its numbers beside it, all three replaced together or none.

@@ -2,6 +2,7 @@
 colour (each wavelength's chief-ray image height minus the primary wavelength's, beside the Airy
 radius) and relative illumination (`optics.illumination.relative_illumination`: the image irradiance
 of a uniform scene at each field's chief-ray point over that on the axis)."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -33,8 +34,11 @@ class AgainstField(Result):
     reference_label: str = ""
 
     def table(self) -> Table:
-        rows = tuple((f, w, float(self.values[j, i])) for j, w in enumerate(self.wavelengths_nm)
-                     for i, f in enumerate(self.fields_deg))
+        rows = tuple(
+            (f, w, float(self.values[j, i]))
+            for j, w in enumerate(self.wavelengths_nm)
+            for i, f in enumerate(self.fields_deg)
+        )
         return Table(("field_deg", "wavelength_nm", self.column), rows)
 
     def plot(self):
@@ -43,8 +47,14 @@ class AgainstField(Result):
             ax.plot(self.fields_deg, self.values[j], color=figures.wavelength_colour(w), marker=".", label=f"{w:g} nm")
         if self.reference is not None:
             for sign in (1, -1):
-                ax.plot(self.fields_deg, sign * self.reference, color="black", ls=":", lw=0.8,
-                        label=self.reference_label if sign > 0 else None)
+                ax.plot(
+                    self.fields_deg,
+                    sign * self.reference,
+                    color="black",
+                    ls=":",
+                    lw=0.8,
+                    label=self.reference_label if sign > 0 else None,
+                )
         ax.set(xlabel="field (deg)", ylabel=self.label, xlim=(0, self.fields_deg[-1]))
         ax.grid(alpha=0.3)
         figures.legend(ax)
@@ -60,14 +70,25 @@ def lateral_colour(lens, field_samples: int = O.FIELD_SAMPLES, wavelengths_nm=No
     pairs = np.array([[0.0, f] for w in every for f in fields])
     heights = chief_rays(lens, pairs, np.repeat(every, len(fields))).image_xy[:, 1].reshape(len(every), len(fields))
     airy = 1.22 * primary * 1e-3 * paraxial(lens, primary).working_f_number  # µm
-    return AgainstField(name="lateral-colour", lens=lens.name, lens_hash=lens.hash,
-                        conventions=CONVENTIONS + (f"lateral colour: chief-ray image height minus that at the primary "
-                                                   f"wavelength {primary:g} nm, um; the Airy radius 1.22 lambda N at "
-                                                   f"{primary:g} nm beside it",),
-                        inputs={"fields_deg": fields, "wavelengths_nm": wl, "primary_nm": primary},
-                        fields_deg=fields, wavelengths_nm=wl, values=(heights[:-1] - heights[-1]) * 1e3,
-                        column="lateral_colour_um", label=f"chief-ray height - at {primary:g} nm (um)",
-                        reference=np.full(len(fields), airy), reference_label="Airy radius")
+    return AgainstField(
+        name="lateral-colour",
+        lens=lens.name,
+        lens_hash=lens.hash,
+        conventions=CONVENTIONS
+        + (
+            f"lateral colour: chief-ray image height minus that at the primary "
+            f"wavelength {primary:g} nm, um; the Airy radius 1.22 lambda N at "
+            f"{primary:g} nm beside it",
+        ),
+        inputs={"fields_deg": fields, "wavelengths_nm": wl, "primary_nm": primary},
+        fields_deg=fields,
+        wavelengths_nm=wl,
+        values=(heights[:-1] - heights[-1]) * 1e3,
+        column="lateral_colour_um",
+        label=f"chief-ray height - at {primary:g} nm (um)",
+        reference=np.full(len(fields), airy),
+        reference_label="Airy radius",
+    )
 
 
 def relative_illumination(lens, field_samples: int = O.FIELD_SAMPLES, wavelengths_nm=None) -> AgainstField:
@@ -76,8 +97,19 @@ def relative_illumination(lens, field_samples: int = O.FIELD_SAMPLES, wavelength
     wl, _ = inputs.wavelengths(lens, wavelengths_nm)
     pairs = np.array([[0.0, f] for f in fields])
     values = np.array([illumination(lens, pairs, w) for w in wl])
-    return AgainstField(name="relative-illumination", lens=lens.name, lens_hash=lens.hash,
-                        conventions=CONVENTIONS + ("relative illumination: image irradiance of a uniform (Lambertian) "
-                                                   "scene at the chief ray's image point over that on the axis",),
-                        inputs={"fields_deg": fields, "wavelengths_nm": wl}, fields_deg=fields, wavelengths_nm=wl,
-                        values=values, column="relative_illumination", label="relative illumination E/E(0)")
+    return AgainstField(
+        name="relative-illumination",
+        lens=lens.name,
+        lens_hash=lens.hash,
+        conventions=CONVENTIONS
+        + (
+            "relative illumination: image irradiance of a uniform (Lambertian) "
+            "scene at the chief ray's image point over that on the axis",
+        ),
+        inputs={"fields_deg": fields, "wavelengths_nm": wl},
+        fields_deg=fields,
+        wavelengths_nm=wl,
+        values=values,
+        column="relative_illumination",
+        label="relative illumination E/E(0)",
+    )

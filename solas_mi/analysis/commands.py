@@ -2,6 +2,7 @@
 `options.OPTIONS`, its help from the entry), each writing a PNG and its numbers (.json, .csv) beside
 it; `solas-mi lens report`: all of them into one folder with an index page (`report`). Light: the
 analyses load when a command runs."""
+
 from __future__ import annotations
 
 import argparse
@@ -42,8 +43,12 @@ def run_report(args) -> int:
     from .report import report
 
     lens = load_lens(args)
-    index = report(lens, args.output, progress=lambda name: print(f"{name} ...", file=sys.stderr, flush=True),
-                   **command_options(args, tuple(OPTIONS)))
+    index = report(
+        lens,
+        args.output,
+        progress=lambda name: print(f"{name} ...", file=sys.stderr, flush=True),
+        **command_options(args, tuple(OPTIONS)),
+    )
     print(f"wrote {index}")
     return 0
 
@@ -52,19 +57,28 @@ def register(sub: Any) -> None:
     """Add `lens <analysis>` for each registered analysis, `lens report` and `thermal`."""
     group = _lens_group(sub)
     for name, analysis in ANALYSES.items():
-        p = group.add_parser(name, help=analysis.summary,
-                             description=f"{analysis.summary[0].upper()}{analysis.summary[1:]}. "
-                                         f"Reference: {analysis.reference}.")
+        p = group.add_parser(
+            name,
+            help=analysis.summary,
+            description=f"{analysis.summary[0].upper()}{analysis.summary[1:]}. Reference: {analysis.reference}.",
+        )
         add_lens_argument(p)
         for key in analysis.extra["keywords"]:
             OPTIONS[key].add_to(p)
-        p.add_argument("-o", "--output", default=f"{name}.png",
-                       help="the figure (PNG); its numbers are written beside it as .json and .csv")
+        p.add_argument(
+            "-o",
+            "--output",
+            default=f"{name}.png",
+            help="the figure (PNG); its numbers are written beside it as .json and .csv",
+        )
         p.set_defaults(run=run_analysis)
-    report = group.add_parser("report", help="every lens analysis into one folder, with an index page (HTML)",
-                              description="Every analysis of `solas-mi lens` (" + ", ".join(ANALYSES) + ") into "
-                              "one folder: each one's PNG, JSON and CSV, and index.html showing them all. Each "
-                              "option goes to the analyses that take it.")
+    report = group.add_parser(
+        "report",
+        help="every lens analysis into one folder, with an index page (HTML)",
+        description="Every analysis of `solas-mi lens` (" + ", ".join(ANALYSES) + ") into "
+        "one folder: each one's PNG, JSON and CSV, and index.html showing them all. Each "
+        "option goes to the analyses that take it.",
+    )
     add_lens_argument(report)
     for option in OPTIONS.values():
         option.add_to(report)

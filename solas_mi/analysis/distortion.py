@@ -8,6 +8,7 @@ percent, (h − h_ref)/h_ref × 100:
 - the closest projection (`optics.distortion.fit_projections`: rectilinear, equidistant, equisolid,
   stereographic, each with its own least-squares focal length): the residual against it.
 """
+
 from __future__ import annotations
 
 import math
@@ -48,23 +49,34 @@ class Distortion(Result):
     projection_percent: np.ndarray
 
     def table(self) -> Table:
-        rows = tuple((f, float(h), defined(a), defined(b), defined(c)) for f, h, a, b, c in zip(
-            self.fields_deg, self.height_mm, self.f_tan_percent, self.f_theta_percent, self.projection_percent))
-        return Table(("field_deg", "image_height_mm", "f_tan_percent", "f_theta_percent", "projection_percent"), rows,
-                     {"scale_mm": self.scale_mm, "projection": self.projection,
-                      "projection_focal_mm": self.projection_focal_mm})
+        rows = tuple(
+            (f, float(h), defined(a), defined(b), defined(c))
+            for f, h, a, b, c in zip(
+                self.fields_deg, self.height_mm, self.f_tan_percent, self.f_theta_percent, self.projection_percent
+            )
+        )
+        return Table(
+            ("field_deg", "image_height_mm", "f_tan_percent", "f_theta_percent", "projection_percent"),
+            rows,
+            {"scale_mm": self.scale_mm, "projection": self.projection, "projection_focal_mm": self.projection_focal_mm},
+        )
 
     def plot(self):
         fig, axes = figures.figure(self, 3, columns=3, size=(3.6, 3.8))
-        for ax, values, title in ((axes[0], self.f_tan_percent, f"against f tan(theta), f = {self.scale_mm:.4g} mm"),
-                                  (axes[1], self.f_theta_percent, f"against f theta, f = {self.scale_mm:.4g} mm"),
-                                  (axes[2], self.projection_percent, f"against {self.projection}, "
-                                                                     f"f = {self.projection_focal_mm:.4g} mm")):
+        for ax, values, title in (
+            (axes[0], self.f_tan_percent, f"against f tan(theta), f = {self.scale_mm:.4g} mm"),
+            (axes[1], self.f_theta_percent, f"against f theta, f = {self.scale_mm:.4g} mm"),
+            (axes[2], self.projection_percent, f"against {self.projection}, f = {self.projection_focal_mm:.4g} mm"),
+        ):
             if np.isfinite(values).any():
                 ax.plot(values, self.fields_deg, marker=".")
             ax.axvline(0.0, color="black", lw=0.6)
-            ax.set(xlabel=f"distortion at {self.wavelength_nm:g} nm (%)", ylabel="field (deg)",
-                   ylim=(0, self.fields_deg[-1]), title=title)
+            ax.set(
+                xlabel=f"distortion at {self.wavelength_nm:g} nm (%)",
+                ylabel="field (deg)",
+                ylim=(0, self.fields_deg[-1]),
+                title=title,
+            )
             ax.title.set_fontsize("medium")
             ax.grid(alpha=0.3)
         return fig
@@ -88,9 +100,19 @@ def distortion(lens, field_samples: int = O.FIELD_SAMPLES, wavelength_nm=None) -
     fits = fit_projections(fields, h)
     name = closest_projection(fits)
     focal = fits[name][0]
-    return Distortion(name="distortion", lens=lens.name, lens_hash=lens.hash, conventions=CONVENTIONS,
-                      inputs={"fields_deg": tuple(fields.tolist()), "wavelength_nm": wl},
-                      fields_deg=tuple(fields.tolist()), wavelength_nm=wl, height_mm=h, scale_mm=float(m),
-                      f_tan_percent=_percent(h, f_tan), f_theta_percent=_percent(h, m * theta),
-                      projection=name, projection_focal_mm=float(focal),
-                      projection_percent=_percent(h, focal * PROJECTIONS[name](theta)))
+    return Distortion(
+        name="distortion",
+        lens=lens.name,
+        lens_hash=lens.hash,
+        conventions=CONVENTIONS,
+        inputs={"fields_deg": tuple(fields.tolist()), "wavelength_nm": wl},
+        fields_deg=tuple(fields.tolist()),
+        wavelength_nm=wl,
+        height_mm=h,
+        scale_mm=float(m),
+        f_tan_percent=_percent(h, f_tan),
+        f_theta_percent=_percent(h, m * theta),
+        projection=name,
+        projection_focal_mm=float(focal),
+        projection_percent=_percent(h, focal * PROJECTIONS[name](theta)),
+    )

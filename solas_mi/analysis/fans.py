@@ -2,6 +2,7 @@
 (sagittal fan), per field and wavelength, the transverse ray aberration on the image plane (µm;
 tangential: y error, sagittal: x error, both from the primary wavelength's chief ray, so lateral colour
 shows) or the wavefront W (waves, about each wavelength's own chief ray; `rays`)."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -35,17 +36,22 @@ class Fans(Result):
 
     def table(self) -> Table:
         column = KINDS[self.name][0]
-        rows = tuple((f, w, float(p), defined(self.tangential[i, j, k]), defined(self.sagittal[i, j, k]))
-                     for i, f in enumerate(self.fields_deg) for j, w in enumerate(self.wavelengths_nm)
-                     for k, p in enumerate(self.pupil))
+        rows = tuple(
+            (f, w, float(p), defined(self.tangential[i, j, k]), defined(self.sagittal[i, j, k]))
+            for i, f in enumerate(self.fields_deg)
+            for j, w in enumerate(self.wavelengths_nm)
+            for k, p in enumerate(self.pupil)
+        )
         return Table(("field_deg", "wavelength_nm", "pupil", f"tangential_{column}", f"sagittal_{column}"), rows)
 
     def plot(self):
         fig, axes = figures.figure(self, 2 * len(self.fields_deg), size=(4.0, 2.8), sharey="row")
         label = KINDS[self.name][1]
         for i, f in enumerate(self.fields_deg):
-            for ax, data, direction, axis in ((axes[2 * i], self.tangential, "tangential", "Py"),
-                                             (axes[2 * i + 1], self.sagittal, "sagittal", "Px")):
+            for ax, data, direction, axis in (
+                (axes[2 * i], self.tangential, "tangential", "Py"),
+                (axes[2 * i + 1], self.sagittal, "sagittal", "Px"),
+            ):
                 for j, w in enumerate(self.wavelengths_nm):
                     ax.plot(self.pupil, data[i, j], color=figures.wavelength_colour(w), label=f"{w:g} nm")
                 ax.axhline(0.0, color="black", lw=0.6)
@@ -76,9 +82,18 @@ def _fans(lens, name: str, fields_deg, wavelengths_nm, fan_samples: int) -> Fans
         y = np.where(ok, rays.y_mm.reshape(shape), np.nan) - chief[:, None, None, 1]
         x = np.where(ok, rays.x_mm.reshape(shape), np.nan) - chief[:, None, None, 0]
         tangential, sagittal = y[:, :-1, :n] * 1e3, x[:, :-1, n:] * 1e3
-    return Fans(name=name, lens=lens.name, lens_hash=lens.hash, conventions=CONVENTIONS,
-                inputs={"fields_deg": fields, "wavelengths_nm": wl, "fan_samples": n, "primary_nm": primary},
-                fields_deg=fields, wavelengths_nm=wl, pupil=t, tangential=tangential, sagittal=sagittal)
+    return Fans(
+        name=name,
+        lens=lens.name,
+        lens_hash=lens.hash,
+        conventions=CONVENTIONS,
+        inputs={"fields_deg": fields, "wavelengths_nm": wl, "fan_samples": n, "primary_nm": primary},
+        fields_deg=fields,
+        wavelengths_nm=wl,
+        pupil=t,
+        tangential=tangential,
+        sagittal=sagittal,
+    )
 
 
 def ray_fan(lens, fields_deg=None, wavelengths_nm=None, fan_samples: int = O.FAN_SAMPLES) -> Fans:

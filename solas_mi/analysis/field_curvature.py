@@ -2,6 +2,7 @@
 tangential plane (a pair at normalised pupil y = ±ε) and the sagittal plane (x = ±ε), measured along
 the axis from the image plane (+: away from the lens). As ε → 0 these are the Coddington foci of the
 chief ray; ε = 1e-4 leaves an error of order ε² of the pupil's aberrations (nm)."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -35,11 +36,17 @@ class FieldCurvature(Result):
     paraxial_focus_mm: float
 
     def table(self) -> Table:
-        rows = tuple((f, w, defined(t), defined(s), defined(t - s))
-                     for j, w in enumerate(self.wavelengths_nm) for i, f in enumerate(self.fields_deg)
-                     for t, s in [(self.tangential_mm[j, i], self.sagittal_mm[j, i])])
-        return Table(("field_deg", "wavelength_nm", "tangential_focus_mm", "sagittal_focus_mm", "astigmatism_mm"),
-                     rows, {"paraxial_focus_mm": self.paraxial_focus_mm})
+        rows = tuple(
+            (f, w, defined(t), defined(s), defined(t - s))
+            for j, w in enumerate(self.wavelengths_nm)
+            for i, f in enumerate(self.fields_deg)
+            for t, s in [(self.tangential_mm[j, i], self.sagittal_mm[j, i])]
+        )
+        return Table(
+            ("field_deg", "wavelength_nm", "tangential_focus_mm", "sagittal_focus_mm", "astigmatism_mm"),
+            rows,
+            {"paraxial_focus_mm": self.paraxial_focus_mm},
+        )
 
     def plot(self):
         fig, (left, right) = figures.figure(self, 2, size=(4.4, 4.0))
@@ -50,11 +57,19 @@ class FieldCurvature(Result):
             right.plot(self.tangential_mm[j] - self.sagittal_mm[j], self.fields_deg, color=colour, label=f"{w:g} nm")
         left.axvline(0.0, color="black", lw=0.6)
         left.axvline(self.paraxial_focus_mm, color="grey", ls=":", label="paraxial focus")
-        left.set(title="field curvature", xlabel="focus from the image plane (mm)", ylabel="field (deg)",
-                 ylim=(0, self.fields_deg[-1]))
+        left.set(
+            title="field curvature",
+            xlabel="focus from the image plane (mm)",
+            ylabel="field (deg)",
+            ylim=(0, self.fields_deg[-1]),
+        )
         right.axvline(0.0, color="black", lw=0.6)
-        right.set(title="astigmatism", xlabel="tangential - sagittal focus (mm)", ylabel="field (deg)",
-                  ylim=(0, self.fields_deg[-1]))
+        right.set(
+            title="astigmatism",
+            xlabel="tangential - sagittal focus (mm)",
+            ylabel="field (deg)",
+            ylim=(0, self.fields_deg[-1]),
+        )
         for ax in (left, right):
             ax.grid(alpha=0.3)
             figures.legend(ax)
@@ -77,7 +92,15 @@ def field_curvature(lens, field_samples: int = O.FIELD_SAMPLES, wavelengths_nm=N
     sagittal = -(rays.x_mm[:, 2] - rays.x_mm[:, 3]) / (mx[:, 2] - mx[:, 3])
     shape = (len(fields), len(wl))
     p = paraxial(lens)
-    return FieldCurvature(name="field-curvature", lens=lens.name, lens_hash=lens.hash, conventions=CONVENTIONS,
-                          inputs={"fields_deg": fields, "wavelengths_nm": wl}, fields_deg=fields, wavelengths_nm=wl,
-                          tangential_mm=tangential.reshape(shape).T, sagittal_mm=sagittal.reshape(shape).T,
-                          paraxial_focus_mm=p.focus_z_mm - p.image_z_mm)
+    return FieldCurvature(
+        name="field-curvature",
+        lens=lens.name,
+        lens_hash=lens.hash,
+        conventions=CONVENTIONS,
+        inputs={"fields_deg": fields, "wavelengths_nm": wl},
+        fields_deg=fields,
+        wavelengths_nm=wl,
+        tangential_mm=tangential.reshape(shape).T,
+        sagittal_mm=sagittal.reshape(shape).T,
+        paraxial_focus_mm=p.focus_z_mm - p.image_z_mm,
+    )

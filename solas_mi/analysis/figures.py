@@ -1,6 +1,7 @@
 """What every analysis figure shares: a matplotlib `Figure` without pyplot (no window, no global state),
 a grid of panels laid out so that no label is cut, a title naming the lens and the analysis, one
 colour per field or wavelength, and the PNG written at one resolution."""
+
 from __future__ import annotations
 
 import math

@@ -1,6 +1,7 @@
 """The inputs of the lens analyses, checked before any work: fields within the lens's half field,
 wavelengths its glasses accept, weights, frequencies up to the diffraction cut-off, focus ranges,
 sample counts. Each bad value is a SolasError naming it and what is allowed."""
+
 from __future__ import annotations
 
 import math
@@ -34,8 +35,10 @@ def fields(lens, fields_deg) -> tuple[float, ...]:
         raise SolasError(f"fields {fields_deg!r} must be one or more field angles in degrees")
     for v in values:
         if half > 0 and abs(v) > half * (1 + 1e-12):
-            raise SolasError(f"field {v:g} deg is beyond lens {lens.name}'s half field {half:g} deg (field_deg of "
-                             f"its lens file); allowed: -{half:g} to {half:g} deg")
+            raise SolasError(
+                f"field {v:g} deg is beyond lens {lens.name}'s half field {half:g} deg (field_deg of "
+                f"its lens file); allowed: -{half:g} to {half:g} deg"
+            )
         lens.field_type.check((0.0, float(v)))
     return tuple(float(v) for v in values)
 
@@ -45,8 +48,9 @@ def field_range(lens, samples) -> tuple[float, ...]:
     check_lens(lens)
     samples = count(samples, "field samples", 2)
     if lens.field_deg <= 0:
-        raise SolasError(f"lens {lens.name} states no field (field_deg = 0): an analysis against field needs "
-                         "its half field")
+        raise SolasError(
+            f"lens {lens.name} states no field (field_deg = 0): an analysis against field needs its half field"
+        )
     return tuple(np.linspace(0.0, lens.field_deg, samples).tolist())
 
 
@@ -91,8 +95,10 @@ def frequencies(lens, values, wavelengths_nm, what: str = "frequency") -> tuple[
     values = [values] if _number(values) else list(values)
     for v in values:
         if not _number(v) or not 0 < v <= top:
-            raise SolasError(f"{what} {v!r} cycles/mm must be above 0 and at most the diffraction cut-off "
-                             f"{top:.4g} cycles/mm (1/(lambda N) at {min(wavelengths_nm):g} nm)")
+            raise SolasError(
+                f"{what} {v!r} cycles/mm must be above 0 and at most the diffraction cut-off "
+                f"{top:.4g} cycles/mm (1/(lambda N) at {min(wavelengths_nm):g} nm)"
+            )
     if not values:
         raise SolasError(f"at least one {what} (cycles/mm) is needed")
     return tuple(float(v) for v in values)
@@ -111,8 +117,10 @@ def focus_range(lens, range_um) -> float:
         w = wavelength(lens, None)
         return O.FOCUS_DEPTHS * w * 1e-3 * paraxial(lens, w).working_f_number ** 2
     if not _number(range_um) or range_um <= 0:
-        raise SolasError(f"focus range {range_um!r} um must be a positive number: the image plane moves from "
-                         "-R to +R about its place")
+        raise SolasError(
+            f"focus range {range_um!r} um must be a positive number: the image plane moves from "
+            "-R to +R about its place"
+        )
     return float(range_um)
 
 
@@ -120,8 +128,10 @@ def pixel(pitch_um, fill_factor) -> tuple[float | None, float]:
     """The pixel pitch (µm, None: no pixel) and fill factor (0, 1], checked by `metrics.mtf.pixel_mtf`."""
     if pitch_um is None:
         if fill_factor != 1.0:
-            raise SolasError(f"fill factor {fill_factor!r} needs a pixel pitch (--pixel-pitch-um): without one "
-                             "the MTF is the lens's alone")
+            raise SolasError(
+                f"fill factor {fill_factor!r} needs a pixel pitch (--pixel-pitch-um): without one "
+                "the MTF is the lens's alone"
+            )
         return None, 1.0
     pixel_mtf(np.zeros(1), pitch_um, fill_factor)
     return float(pitch_um), float(fill_factor)

@@ -7,6 +7,7 @@ Directions: fields lie on +y, so the tangential MTF is the OTF along y (the freq
 field's radius: bars perpendicular to it), the sagittal along x. Frequencies in cycles/mm on the image
 plane.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -58,8 +59,9 @@ def _combined(otfs, power, chief_xy, weights, freq, nf) -> np.ndarray:
     return out
 
 
-def lens_otf(lens, fields, wavelengths, weights, freq, pupil_samples: int | None, aberrated: bool = True
-             ) -> tuple[np.ndarray, list[str]]:
+def lens_otf(
+    lens, fields, wavelengths, weights, freq, pupil_samples: int | None, aberrated: bool = True
+) -> tuple[np.ndarray, list[str]]:
     """Diffraction OTFs (fields, 2, F) at `freq` (cycles/mm), [tangential, sagittal], over the weighted
     wavelengths; with `aberrated` False the same pupils without their wavefront error (the diffraction
     limit). `pupil_samples` None: options.PUPIL_SAMPLES, and for a field whose wavefront that grid does not
@@ -77,7 +79,10 @@ def lens_otf(lens, fields, wavelengths, weights, freq, pupil_samples: int | None
             one, index, samples = pf, i, pf.alpha.shape[1]
             if pupil_samples is None and aberrated and steps[i] > STEP and samples < O.MOST_PUPIL_SAMPLES:
                 samples = int(min(np.ceil(need[i] * (np.pi / 2) / STEP / 8) * 8, O.MOST_PUPIL_SAMPLES))
-                one, index = pupil_function(lens, fdeg[start + i:start + i + 1], wl[start + i:start + i + 1], samples), 0
+                one, index = (
+                    pupil_function(lens, fdeg[start + i : start + i + 1], wl[start + i : start + i + 1], samples),
+                    0,
+                )
             otfs[start + i], power[start + i], chief_xy[start + i] = _pair_otf(one, index, freq, aberrated)
             warnings += _sampling_warnings(one, index, fdeg[start + i], samples)
     return _combined(otfs, power, chief_xy, weights, freq, len(fields)), warnings[:1]
@@ -98,9 +103,11 @@ def _sampling_warnings(pf, index: int, field, samples: int) -> list[str]:
     steps, _, need = sampling_need(pf, 1.0, 1)
     if not steps[index] > STEP:
         return []
-    return [f"pupil samples {samples} may under-resolve the wavefront at field {field[1]:g} deg, "
-            f"{pf.wavelength_nm[index]:g} nm (phase steps up to {steps[index]:.1f} rad per cell): check the diffraction "
-            f"MTF there with --pupil-samples {int(max(np.ceil(need[index] * (np.pi / 2) / STEP), 2 * samples))}"]
+    return [
+        f"pupil samples {samples} may under-resolve the wavefront at field {field[1]:g} deg, "
+        f"{pf.wavelength_nm[index]:g} nm (phase steps up to {steps[index]:.1f} rad per cell): check the diffraction "
+        f"MTF there with --pupil-samples {int(max(np.ceil(need[index] * (np.pi / 2) / STEP), 2 * samples))}"
+    ]
 
 
 def geometric_otf(lens, fields, wavelengths, weights, freq, rays: int) -> np.ndarray:
@@ -130,20 +137,33 @@ class MTF(Result):
     pixel: np.ndarray | None
 
     def table(self) -> Table:
-        columns = ["field_deg", "frequency_cy_mm", "diffraction_limit", "tangential", "sagittal",
-                   "geometric_tangential", "geometric_sagittal"]
+        columns = [
+            "field_deg",
+            "frequency_cy_mm",
+            "diffraction_limit",
+            "tangential",
+            "sagittal",
+            "geometric_tangential",
+            "geometric_sagittal",
+        ]
         if self.pixel is not None:
             columns += ["pixel", "tangential_with_pixel", "sagittal_with_pixel"]
         rows, summary = [], {"mtf50_cy_mm": {}}
         for i, f in enumerate(self.fields_deg):
             for k, nu in enumerate(self.frequency_cy_mm):
-                row = [f, float(nu), float(self.limit[k]), *self.diffraction[i, :, k].tolist(),
-                       *self.geometric[i, :, k].tolist()]
+                row = [
+                    f,
+                    float(nu),
+                    float(self.limit[k]),
+                    *self.diffraction[i, :, k].tolist(),
+                    *self.geometric[i, :, k].tolist(),
+                ]
                 if self.pixel is not None:
                     row += [float(self.pixel[k]), *(self.diffraction[i, :, k] * self.pixel[k]).tolist()]
                 rows.append(tuple(row))
-            summary["mtf50_cy_mm"][f"{f:g}"] = {d: mtf50(self.diffraction[i, j], self.frequency_cy_mm)
-                                                for j, d in enumerate(DIRECTIONS)}
+            summary["mtf50_cy_mm"][f"{f:g}"] = {
+                d: mtf50(self.diffraction[i, j], self.frequency_cy_mm) for j, d in enumerate(DIRECTIONS)
+            }
         return Table(tuple(columns), tuple(rows), summary)
 
     def plot(self):
@@ -153,23 +173,41 @@ class MTF(Result):
         fig, axes = figures.figure(self, len(panels), columns=3)
         nu = self.frequency_cy_mm
         for ax, (title, data) in zip(axes, panels):
-            ax.plot(nu, self.limit * (self.pixel if title.endswith("pixel") else 1.0), color="black", lw=0.8,
-                    label="diffraction limit")
+            ax.plot(
+                nu,
+                self.limit * (self.pixel if title.endswith("pixel") else 1.0),
+                color="black",
+                lw=0.8,
+                label="diffraction limit",
+            )
             for i, (f, colour) in enumerate(zip(self.fields_deg, figures.colours(len(self.fields_deg)))):
                 for j, d in enumerate(DIRECTIONS):
                     ax.plot(nu, data[i, j], color=colour, ls=figures.LINESTYLES[d], label=f"{f:g} deg {d[0].upper()}")
             if title.endswith("pixel"):
                 ax.plot(nu, self.pixel, color="grey", ls=":", label="pixel")
-            ax.set(title=f"{title} MTF", xlabel="spatial frequency (cycles/mm)", ylabel="MTF", xlim=(0, nu[-1]),
-                   ylim=(0, 1.02))
+            ax.set(
+                title=f"{title} MTF",
+                xlabel="spatial frequency (cycles/mm)",
+                ylabel="MTF",
+                xlim=(0, nu[-1]),
+                ylim=(0, 1.02),
+            )
             ax.grid(alpha=0.3)
             figures.legend(ax, ncols=2)
         return fig
 
 
-def mtf(lens, fields_deg=None, wavelengths_nm=None, weights=None, max_frequency_cy_mm=None,
-        pupil_samples: int | None = None, rays: int = O.GEOMETRIC_RAYS, pixel_pitch_um=None,
-        fill_factor: float = 1.0) -> MTF:
+def mtf(
+    lens,
+    fields_deg=None,
+    wavelengths_nm=None,
+    weights=None,
+    max_frequency_cy_mm=None,
+    pupil_samples: int | None = None,
+    rays: int = O.GEOMETRIC_RAYS,
+    pixel_pitch_um=None,
+    fill_factor: float = 1.0,
+) -> MTF:
     """MTF against frequency (0 … `max_frequency_cy_mm`, default the cut-off) at `fields_deg` (y,
     degrees; default 0, 0.5, 0.7, 1 × the half field), diffraction and geometric, tangential and
     sagittal, over `wavelengths_nm` with `weights`; `pixel_pitch_um`: also the pixels' MTF."""
@@ -183,8 +221,26 @@ def mtf(lens, fields_deg=None, wavelengths_nm=None, weights=None, max_frequency_
     diffraction, warnings = lens_otf(lens, fields, wl, w8, freq, samples)
     limit, _ = lens_otf(lens, fields[:1], wl, w8, freq, samples, aberrated=False)
     geometric = geometric_otf(lens, fields, wl, w8, freq, rays)
-    return MTF(name="mtf", lens=lens.name, lens_hash=lens.hash, conventions=CONVENTIONS, warnings=tuple(warnings),
-               inputs={"fields_deg": fields, "wavelengths_nm": wl, "weights": w8, "max_frequency_cy_mm": top,
-                       "pupil_samples": samples, "rays": rays, "pixel_pitch_um": pitch, "fill_factor": fill},
-               fields_deg=fields, frequency_cy_mm=freq, diffraction=np.abs(diffraction), geometric=np.abs(geometric),
-               limit=np.abs(limit[0, 0]), pixel=None if pitch is None else pixel_mtf(freq, pitch, fill))
+    return MTF(
+        name="mtf",
+        lens=lens.name,
+        lens_hash=lens.hash,
+        conventions=CONVENTIONS,
+        warnings=tuple(warnings),
+        inputs={
+            "fields_deg": fields,
+            "wavelengths_nm": wl,
+            "weights": w8,
+            "max_frequency_cy_mm": top,
+            "pupil_samples": samples,
+            "rays": rays,
+            "pixel_pitch_um": pitch,
+            "fill_factor": fill,
+        },
+        fields_deg=fields,
+        frequency_cy_mm=freq,
+        diffraction=np.abs(diffraction),
+        geometric=np.abs(geometric),
+        limit=np.abs(limit[0, 0]),
+        pixel=None if pitch is None else pixel_mtf(freq, pitch, fill),
+    )

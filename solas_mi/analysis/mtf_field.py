@@ -1,6 +1,7 @@
 """The diffraction MTF against field: at chosen frequencies (`mtf_field`), and the frequency where it
 falls to one half (`mtf50_field`), tangential and sagittal, from 0 to the lens's half field, optionally
 times the pixel's MTF (then MTF50 also in cycles/pixel, the unit of image measurements)."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -36,16 +37,25 @@ class MTFField(Result):
     pixel: np.ndarray | None
 
     def table(self) -> Table:
-        rows = tuple((f, nu, *self.mtf[i, :, k].tolist()) for k, nu in enumerate(self.frequencies_cy_mm)
-                     for i, f in enumerate(self.fields_deg))
+        rows = tuple(
+            (f, nu, *self.mtf[i, :, k].tolist())
+            for k, nu in enumerate(self.frequencies_cy_mm)
+            for i, f in enumerate(self.fields_deg)
+        )
         return Table(("field_deg", "frequency_cy_mm", "tangential", "sagittal"), rows)
 
     def plot(self):
         fig, (ax,) = figures.figure(self, 1, size=(6.4, 4.2))
         for k, (nu, colour) in enumerate(zip(self.frequencies_cy_mm, figures.colours(len(self.frequencies_cy_mm)))):
             for j, d in enumerate(DIRECTIONS):
-                ax.plot(self.fields_deg, self.mtf[:, j, k], color=colour, ls=figures.LINESTYLES[d], marker=".",
-                        label=f"{nu:g} cy/mm {d}")
+                ax.plot(
+                    self.fields_deg,
+                    self.mtf[:, j, k],
+                    color=colour,
+                    ls=figures.LINESTYLES[d],
+                    marker=".",
+                    label=f"{nu:g} cy/mm {d}",
+                )
         what = "diffraction MTF" + (" x pixel MTF" if self.pixel is not None else "")
         ax.set(xlabel="field (deg)", ylabel=what, ylim=(0, 1.02), xlim=(0, self.fields_deg[-1]))
         ax.grid(alpha=0.3)
@@ -53,21 +63,45 @@ class MTFField(Result):
         return fig
 
 
-def mtf_field(lens, frequencies_cy_mm=None, field_samples: int = O.FIELD_SAMPLES, wavelengths_nm=None, weights=None,
-              pupil_samples: int | None = None, pixel_pitch_um=None, fill_factor: float = 1.0) -> MTFField:
+def mtf_field(
+    lens,
+    frequencies_cy_mm=None,
+    field_samples: int = O.FIELD_SAMPLES,
+    wavelengths_nm=None,
+    weights=None,
+    pupil_samples: int | None = None,
+    pixel_pitch_um=None,
+    fill_factor: float = 1.0,
+) -> MTFField:
     """Diffraction MTF at `frequencies_cy_mm` against field (`field_samples` from 0 to the half field),
     tangential and sagittal."""
-    fields, wl, w8, samples, pitch, fill = _common(lens, field_samples, wavelengths_nm, weights, pupil_samples,
-                                                   pixel_pitch_um, fill_factor)
+    fields, wl, w8, samples, pitch, fill = _common(
+        lens, field_samples, wavelengths_nm, weights, pupil_samples, pixel_pitch_um, fill_factor
+    )
     freq = inputs.frequencies(lens, frequencies_cy_mm, wl)
     otf, warnings = lens_otf(lens, fields, wl, w8, np.array(freq), samples)
     pixel = None if pitch is None else pixel_mtf(np.array(freq), pitch, fill)
     values = np.abs(otf) * (1.0 if pixel is None else pixel)
-    return MTFField(name="mtf-field", lens=lens.name, lens_hash=lens.hash, conventions=CONVENTIONS,
-                    warnings=tuple(warnings), inputs={"frequencies_cy_mm": freq, "fields_deg": fields,
-                                                      "wavelengths_nm": wl, "weights": w8, "pupil_samples": samples,
-                                                      "pixel_pitch_um": pitch, "fill_factor": fill},
-                    fields_deg=fields, frequencies_cy_mm=freq, mtf=values, pixel=pixel)
+    return MTFField(
+        name="mtf-field",
+        lens=lens.name,
+        lens_hash=lens.hash,
+        conventions=CONVENTIONS,
+        warnings=tuple(warnings),
+        inputs={
+            "frequencies_cy_mm": freq,
+            "fields_deg": fields,
+            "wavelengths_nm": wl,
+            "weights": w8,
+            "pupil_samples": samples,
+            "pixel_pitch_um": pitch,
+            "fill_factor": fill,
+        },
+        fields_deg=fields,
+        frequencies_cy_mm=freq,
+        mtf=values,
+        pixel=pixel,
+    )
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -103,18 +137,39 @@ class MTF50Field(Result):
         return fig
 
 
-def mtf50_field(lens, field_samples: int = O.FIELD_SAMPLES, wavelengths_nm=None, weights=None,
-                pupil_samples: int | None = None, pixel_pitch_um=None, fill_factor: float = 1.0) -> MTF50Field:
+def mtf50_field(
+    lens,
+    field_samples: int = O.FIELD_SAMPLES,
+    wavelengths_nm=None,
+    weights=None,
+    pupil_samples: int | None = None,
+    pixel_pitch_um=None,
+    fill_factor: float = 1.0,
+) -> MTF50Field:
     """MTF50 (cycles/mm; with `pixel_pitch_um` also cycles/pixel) of the diffraction MTF against field,
     tangential and sagittal."""
-    fields, wl, w8, samples, pitch, fill = _common(lens, field_samples, wavelengths_nm, weights, pupil_samples,
-                                                   pixel_pitch_um, fill_factor)
+    fields, wl, w8, samples, pitch, fill = _common(
+        lens, field_samples, wavelengths_nm, weights, pupil_samples, pixel_pitch_um, fill_factor
+    )
     freq = np.linspace(0.0, inputs.cutoff_cy_mm(lens, min(wl)), MTF50_SAMPLES)
     otf, warnings = lens_otf(lens, fields, wl, w8, freq, samples)
     values = np.abs(otf) * (1.0 if pitch is None else pixel_mtf(freq, pitch, fill))
     found = np.array([[mtf50(values[i, j], freq) for j in range(2)] for i in range(len(fields))], dtype=float)
-    return MTF50Field(name="mtf50-field", lens=lens.name, lens_hash=lens.hash, conventions=CONVENTIONS,
-                      warnings=tuple(warnings), inputs={"fields_deg": fields, "wavelengths_nm": wl, "weights": w8,
-                                                        "pupil_samples": samples, "pixel_pitch_um": pitch,
-                                                        "fill_factor": fill},
-                      fields_deg=fields, mtf50_cy_mm=found, pixel_pitch_um=pitch)
+    return MTF50Field(
+        name="mtf50-field",
+        lens=lens.name,
+        lens_hash=lens.hash,
+        conventions=CONVENTIONS,
+        warnings=tuple(warnings),
+        inputs={
+            "fields_deg": fields,
+            "wavelengths_nm": wl,
+            "weights": w8,
+            "pupil_samples": samples,
+            "pixel_pitch_um": pitch,
+            "fill_factor": fill,
+        },
+        fields_deg=fields,
+        mtf50_cy_mm=found,
+        pixel_pitch_um=pitch,
+    )

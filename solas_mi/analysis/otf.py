@@ -21,6 +21,7 @@ the chief ray, from the first shift) is taken out and put back. Wavelengths add 
 (`psf.methods.psf`): weight × transmitted power, each PSF at its own chief ray's image point, so
 lateral colour lowers the polychromatic MTF.
 """
+
 from __future__ import annotations
 
 import math
@@ -91,8 +92,12 @@ def at_frequencies(otf: np.ndarray, step: float, freq: np.ndarray) -> np.ndarray
     x = np.clip(f / step, 0.0, len(otf))
     base = np.maximum(np.minimum(np.floor(x).astype(int), len(otf) - 1) - 1, 0)
     u = x - base
-    weights = (-(u - 1) * (u - 2) * (u - 3) / 6, u * (u - 2) * (u - 3) / 2, -u * (u - 1) * (u - 3) / 2,
-               u * (u - 1) * (u - 2) / 6)
+    weights = (
+        -(u - 1) * (u - 2) * (u - 3) / 6,
+        u * (u - 2) * (u - 3) / 2,
+        -u * (u - 1) * (u - 3) / 2,
+        u * (u - 1) * (u - 2) / 6,
+    )
     values = sum(w * padded[base + j] for j, w in enumerate(weights))
     return values * np.exp(1j * slope * f)
 
@@ -103,8 +108,8 @@ def spot_otf(offset_mm: np.ndarray, power: np.ndarray, freq: np.ndarray) -> np.n
     f = np.asarray(freq, dtype=np.float64)
     out = np.empty(len(f), dtype=np.complex128)
     for start in range(0, len(f), 16):  # rows of the phase matrix at a time: bounded memory
-        part = f[start:start + 16, None] * offset_mm[None, :]
-        out[start:start + 16] = np.exp(-2j * math.pi * part) @ power
+        part = f[start : start + 16, None] * offset_mm[None, :]
+        out[start : start + 16] = np.exp(-2j * math.pi * part) @ power
     return out / power.sum()
 
 

@@ -6,6 +6,7 @@ plane and to the reference sphere about the chief ray's image point.
 OPD convention (as Zemax and optiland): W = OPL(chief ray) − OPL(ray) to the reference sphere, in
 waves: positive where the wavefront leads the reference sphere.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass

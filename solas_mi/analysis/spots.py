@@ -1,6 +1,7 @@
 """Spot diagrams over fields and wavelengths (`optics.spot.spot`, hexapolar pupil pattern): every
 wavelength's rays on the image plane about the primary wavelength's chief ray (so lateral colour
 shows), with each one's RMS radius about its centroid and the Airy disc."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -30,18 +31,27 @@ class Spots(Result):
         out = {}
         for f, per_field in zip(self.fields_deg, self.points):
             entry = {}
-            for label, p in [*((f"{w:g}", p) for w, p in zip(self.wavelengths_nm, per_field)),
-                             ("all", np.concatenate(per_field, axis=1))]:
+            for label, p in [
+                *((f"{w:g}", p) for w, p in zip(self.wavelengths_nm, per_field)),
+                ("all", np.concatenate(per_field, axis=1)),
+            ]:
                 d = np.hypot(*(p - p.mean(axis=1, keepdims=True)))
-                entry[label] = {"rms_um": float(np.sqrt(np.mean(d ** 2))), "geo_um": float(d.max())}
+                entry[label] = {"rms_um": float(np.sqrt(np.mean(d**2))), "geo_um": float(d.max())}
             out[f"{f:g}"] = entry
         return out
 
     def table(self) -> Table:
-        rows = tuple((f, w, float(x), float(y)) for f, per_field in zip(self.fields_deg, self.points)
-                     for w, p in zip(self.wavelengths_nm, per_field) for x, y in p.T)
-        return Table(("field_deg", "wavelength_nm", "x_um", "y_um"), rows,
-                     {"airy_radius_um": self.airy_um, "radii": self.radii()})
+        rows = tuple(
+            (f, w, float(x), float(y))
+            for f, per_field in zip(self.fields_deg, self.points)
+            for w, p in zip(self.wavelengths_nm, per_field)
+            for x, y in p.T
+        )
+        return Table(
+            ("field_deg", "wavelength_nm", "x_um", "y_um"),
+            rows,
+            {"airy_radius_um": self.airy_um, "radii": self.radii()},
+        )
 
     def plot(self):
         nf = len(self.fields_deg)
@@ -52,11 +62,15 @@ class Spots(Result):
                 ax.plot(p[0], p[1], ".", ms=1.5, color=figures.wavelength_colour(w), label=f"{w:g} nm")
             centre = np.concatenate(per_field, axis=1).mean(axis=1)
             circle = np.linspace(0, 2 * np.pi, 181)
-            ax.plot(centre[0] + self.airy_um * np.cos(circle), centre[1] + self.airy_um * np.sin(circle), color="black",
-                    lw=0.7, label="Airy disc")
+            ax.plot(
+                centre[0] + self.airy_um * np.cos(circle),
+                centre[1] + self.airy_um * np.sin(circle),
+                color="black",
+                lw=0.7,
+                label="Airy disc",
+            )
             ax.set_aspect("equal", adjustable="datalim")
-            ax.set(title=f"{f:g} deg: RMS {radii[f'{f:g}']['all']['rms_um']:.3g} um", xlabel="x (um)",
-                   ylabel="y (um)")
+            ax.set(title=f"{f:g} deg: RMS {radii[f'{f:g}']['all']['rms_um']:.3g} um", xlabel="x (um)", ylabel="y (um)")
             ax.grid(alpha=0.3)
         figures.legend(axes[0], markerscale=6)
         return fig
@@ -79,9 +93,18 @@ def spot_diagram(lens, fields_deg=None, wavelengths_nm=None, rings: int = O.SPOT
             per_field.append(np.stack([s.x_um + (sx - ox) * 1e3, s.y_um + (sy - oy) * 1e3]))
         points.append(tuple(per_field))
     airy = 1.22 * primary * 1e-3 * paraxial(lens, primary).working_f_number
-    return Spots(name="spot-diagram", lens=lens.name, lens_hash=lens.hash,
-                 conventions=("fields on +y (degrees); image-plane offsets from the primary wavelength's chief ray, um "
-                              "(+y up)", f"Airy radius 1.22 lambda N at the primary wavelength {primary:g} nm, N the "
-                              "working f-number", "RMS radius about the centroid; GEO: the largest distance from it"),
-                 inputs={"fields_deg": fields, "wavelengths_nm": wl, "rings": rings, "primary_nm": primary},
-                 fields_deg=fields, wavelengths_nm=wl, points=tuple(points), airy_um=airy)
+    return Spots(
+        name="spot-diagram",
+        lens=lens.name,
+        lens_hash=lens.hash,
+        conventions=(
+            "fields on +y (degrees); image-plane offsets from the primary wavelength's chief ray, um (+y up)",
+            f"Airy radius 1.22 lambda N at the primary wavelength {primary:g} nm, N the working f-number",
+            "RMS radius about the centroid; GEO: the largest distance from it",
+        ),
+        inputs={"fields_deg": fields, "wavelengths_nm": wl, "rings": rings, "primary_nm": primary},
+        fields_deg=fields,
+        wavelengths_nm=wl,
+        points=tuple(points),
+        airy_um=airy,
+    )

@@ -9,6 +9,7 @@ shift, h(δ) = h₀ + t δ, and the least-squares shift is δ = −Σ h₀·t / 
 planes). MTF50: the first frequency (cycles/mm) where the polychromatic diffraction MTF (`mtf.lens_otf`,
 the pupil function's autocorrelation) falls to 0.5 (`metrics.mtf.mtf50`).
 """
+
 from __future__ import annotations
 
 import math
@@ -35,8 +36,10 @@ def temperatures(start_c: float, stop_c: float, step_c: float) -> list[float]:
     optics_thermal.check_environment(stop_c, optics_thermal.STANDARD_KPA)
     count = math.floor((stop_c - start_c) / step_c + 1e-9) + 1 if math.isfinite(step_c) and step_c > 0 else 0
     if stop_c < start_c or not 1 <= count <= MAX_TEMPERATURES:
-        raise SolasError(f"temperatures --from {start_c:g} --to {stop_c:g} --step-c {step_c:g}: give --to >= --from "
-                         f"and a positive step, at most {MAX_TEMPERATURES} temperatures")
+        raise SolasError(
+            f"temperatures --from {start_c:g} --to {stop_c:g} --step-c {step_c:g}: give --to >= --from "
+            f"and a positive step, at most {MAX_TEMPERATURES} temperatures"
+        )
     values = [start_c + i * step_c for i in range(count)]
     return values + ([stop_c] if stop_c - values[-1] > 1e-9 else [])
 
@@ -45,8 +48,10 @@ def best_focus_mm(lens) -> float:
     """The shift (mm, + away from the lens) of the image plane to the least polychromatic RMS spot on axis."""
     from ..optics.spot import spot  # loads Dr.Jit
 
-    probe = replace(lens, surfaces=lens.surfaces[:-1] + (
-        replace(lens.surfaces[-1], thickness=lens.surfaces[-1].thickness + PROBE_MM),))
+    probe = replace(
+        lens,
+        surfaces=lens.surfaces[:-1] + (replace(lens.surfaces[-1], thickness=lens.surfaces[-1].thickness + PROBE_MM),),
+    )
     num = den = 0.0
     for w in lens.wavelengths_nm:
         near, far = spot(lens, (0.0, 0.0), w, density=SPOT_RINGS), spot(probe, (0.0, 0.0), w, density=SPOT_RINGS)
@@ -64,10 +69,13 @@ def _mtf50s(lens, pupil_samples: int | None) -> tuple[dict, list[str]]:
 
     wavelengths, weights = inputs.wavelengths(lens, None)
     freq = np.linspace(0.0, inputs.cutoff_cy_mm(lens, min(wavelengths)), MTF50_SAMPLES)
-    otf, warnings = lens_otf(lens, tuple(f * lens.field_deg for f in FIELD_FRACTIONS), wavelengths, weights, freq,
-                             pupil_samples)
-    return {fraction: {d: mtf50(np.abs(otf[i, j]), freq) for j, d in enumerate(DIRECTIONS)}
-            for i, fraction in enumerate(FIELD_FRACTIONS)}, warnings
+    otf, warnings = lens_otf(
+        lens, tuple(f * lens.field_deg for f in FIELD_FRACTIONS), wavelengths, weights, freq, pupil_samples
+    )
+    return {
+        fraction: {d: mtf50(np.abs(otf[i, j]), freq) for j, d in enumerate(DIRECTIONS)}
+        for i, fraction in enumerate(FIELD_FRACTIONS)
+    }, warnings
 
 
 def at_temperature(lens, temperature_c: float, pressure_kpa: float, mount, pupil_samples: int | None = None) -> dict:
@@ -78,16 +86,24 @@ def at_temperature(lens, temperature_c: float, pressure_kpa: float, mount, pupil
     shift = best_focus_mm(there)
     last = there.surfaces[-1]
     refocused = replace(there, surfaces=there.surfaces[:-1] + (replace(last, thickness=last.thickness + shift),))
-    row = {"temperature_c": temperature_c, "efl_mm": first.efl_mm, "bfd_mm": first.bfd_mm, "best_focus_mm": shift,
-           "hash": there.hash, "mtf50_cy_mm": {}, "warnings": []}
+    row = {
+        "temperature_c": temperature_c,
+        "efl_mm": first.efl_mm,
+        "bfd_mm": first.bfd_mm,
+        "best_focus_mm": shift,
+        "hash": there.hash,
+        "mtf50_cy_mm": {},
+        "warnings": [],
+    }
     for state, one in zip(FOCUS, (there, refocused)):
         row["mtf50_cy_mm"][state], warnings = _mtf50s(one, pupil_samples)
         row["warnings"] += [w for w in warnings if w not in row["warnings"]]
     return row
 
 
-def sweep(lens, temperatures_c, pressure_kpa: float, mount, pupil_samples: int | None = None,
-          progress=None) -> list[dict]:
+def sweep(
+    lens, temperatures_c, pressure_kpa: float, mount, pupil_samples: int | None = None, progress=None
+) -> list[dict]:
     """`at_temperature` at each of `temperatures_c`; `progress(done, total)` after each."""
     rows = []
     for i, t in enumerate(temperatures_c):

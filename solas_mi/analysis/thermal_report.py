@@ -1,6 +1,7 @@
 """`solas-mi thermal LENS --from -40 --to 105`: the sweep of `analysis.thermal` as a table on stdout and, in the
 output folder, thermal.csv (one row per temperature), thermal.json (the rows, the lens and the settings)
 and thermal.png (focus and MTF50 against temperature), written together."""
+
 from __future__ import annotations
 
 import sys
@@ -26,17 +27,25 @@ def columns(row: dict) -> dict:
 
 def table(rows: list[dict]) -> str:
     """The rows as text: T, EFL, BFD, best focus, then MTF50 tangential/sagittal per field, as built | refocused."""
+
     def pair(values) -> str:  # tangential/sagittal
         return "/".join("-" if v is None else f"{v:.0f}" for v in values.values())
 
-    head = (f"{'T (°C)':>7s}{'EFL (mm)':>11s}{'BFD (mm)':>11s}{'focus (mm)':>11s}  MTF50 T/S (cy/mm): "
-            + " ".join(f"{_FIELDS[f]:>9s}" for f in thermal.FIELD_FRACTIONS) + "  | refocused")
+    head = (
+        f"{'T (°C)':>7s}{'EFL (mm)':>11s}{'BFD (mm)':>11s}{'focus (mm)':>11s}  MTF50 T/S (cy/mm): "
+        + " ".join(f"{_FIELDS[f]:>9s}" for f in thermal.FIELD_FRACTIONS)
+        + "  | refocused"
+    )
     lines = [head]
     for r in rows:
         mtf = r["mtf50_cy_mm"]
-        lines.append(f"{r['temperature_c']:7g}{r['efl_mm']:11.4f}{r['bfd_mm']:11.4f}{r['best_focus_mm']:11.4f}"
-                     + " " * 21 + " ".join(f"{pair(mtf[thermal.FOCUS[0]][f]):>9s}" for f in thermal.FIELD_FRACTIONS)
-                     + "  | " + " ".join(f"{pair(mtf[thermal.FOCUS[1]][f]):>9s}" for f in thermal.FIELD_FRACTIONS))
+        lines.append(
+            f"{r['temperature_c']:7g}{r['efl_mm']:11.4f}{r['bfd_mm']:11.4f}{r['best_focus_mm']:11.4f}"
+            + " " * 21
+            + " ".join(f"{pair(mtf[thermal.FOCUS[0]][f]):>9s}" for f in thermal.FIELD_FRACTIONS)
+            + "  | "
+            + " ".join(f"{pair(mtf[thermal.FOCUS[1]][f]):>9s}" for f in thermal.FIELD_FRACTIONS)
+        )
     return "\n".join(lines)
 
 
@@ -57,8 +66,15 @@ def _plot(rows: list[dict], lens_name: str, path: str) -> None:
         for orientation, style in zip(rows[0]["mtf50_cy_mm"][thermal.FOCUS[0]][fraction], ("-", ":")):
             for focus_state, marker in zip(thermal.FOCUS, ("o", "x")):
                 values = [r["mtf50_cy_mm"][focus_state][fraction][orientation] for r in rows]
-                mtf.plot(t, [float("nan") if v is None else v for v in values], style, marker=marker, ms=3,
-                         color=f"C{i}", label=f"{_FIELDS[fraction]} {orientation[0].upper()} {focus_state}")
+                mtf.plot(
+                    t,
+                    [float("nan") if v is None else v for v in values],
+                    style,
+                    marker=marker,
+                    ms=3,
+                    color=f"C{i}",
+                    label=f"{_FIELDS[fraction]} {orientation[0].upper()} {focus_state}",
+                )
     mtf.set_xlabel("temperature (°C)")
     mtf.set_ylabel("MTF50 (cycles/mm)")
     mtf.legend(fontsize=6, ncol=2)
@@ -74,14 +90,28 @@ def write(rows: list[dict], lens, settings: dict, folder: str) -> list[Path]:
     out.mkdir(parents=True, exist_ok=True)
     paths = [out / "thermal.csv", out / "thermal.json", out / "thermal.png"]
     flat = [columns(r) for r in rows]
-    csv = ",".join(flat[0]) + "\n" + "".join(",".join(repr(v) if isinstance(v, float) else str(v)
-                                                      for v in f.values()) + "\n" for f in flat)
-    rows_json = [{**r, "mtf50_cy_mm": {focus: {_FIELDS[f]: v for f, v in fields.items()}
-                                       for focus, fields in r["mtf50_cy_mm"].items()}} for r in rows]
+    csv = (
+        ",".join(flat[0])
+        + "\n"
+        + "".join(",".join(repr(v) if isinstance(v, float) else str(v) for v in f.values()) + "\n" for f in flat)
+    )
+    rows_json = [
+        {
+            **r,
+            "mtf50_cy_mm": {
+                focus: {_FIELDS[f]: v for f, v in fields.items()} for focus, fields in r["mtf50_cy_mm"].items()
+            },
+        }
+        for r in rows
+    ]
     with written_together(*paths) as (tmp_csv, tmp_json, tmp_png):
         Path(tmp_csv).write_text(csv, encoding="utf-8")
-        Path(tmp_json).write_text(jsonio.dumps({"lens": lens.name, "hash": lens.hash, "source": lens.source,
-                                                **settings, "rows": rows_json}, indent=2), encoding="utf-8")
+        Path(tmp_json).write_text(
+            jsonio.dumps(
+                {"lens": lens.name, "hash": lens.hash, "source": lens.source, **settings, "rows": rows_json}, indent=2
+            ),
+            encoding="utf-8",
+        )
         _plot(rows, lens.name, tmp_png)
     return paths
 
@@ -95,11 +125,17 @@ def run_thermal(args) -> int:
     temps = thermal.temperatures(args.start_c, args.stop_c, args.step_c)
     pressure = lens.pressure_kpa if args.pressure_kpa is None else args.pressure_kpa
     samples = inputs.pupil_samples(args.pupil_samples)
-    rows = thermal.sweep(lens, temps, pressure, args.mount, samples,
-                         Progress("thermal", len(temps), "temperatures", stream=sys.stderr))
+    rows = thermal.sweep(
+        lens, temps, pressure, args.mount, samples, Progress("thermal", len(temps), "temperatures", stream=sys.stderr)
+    )
     mounts = args.mount or [s.mount or thermal.optics_thermal.DEFAULT_MOUNT for s in lens.surfaces]
-    settings = {"pressure_kpa": pressure, "mount": mounts, "pupil_samples": samples,
-                "wavelengths_nm": list(lens.wavelengths_nm), "field_deg": lens.field_deg}
+    settings = {
+        "pressure_kpa": pressure,
+        "mount": mounts,
+        "pupil_samples": samples,
+        "wavelengths_nm": list(lens.wavelengths_nm),
+        "field_deg": lens.field_deg,
+    }
     for text in dict.fromkeys(w for r in rows for w in r["warnings"]):
         print(f"solas-mi thermal: warning: {text}", file=sys.stderr)
     print(table(rows))
@@ -113,8 +149,11 @@ def register(sub) -> None:
     from ..optics.commands import add_lens_argument
     from .options import OPTIONS
 
-    p = sub.add_parser("thermal", help="EFL, back focus, best focus and MTF50 (axis, 0.7 field, edge; as built and "
-                                       "refocused) of a lens from one temperature to another")
+    p = sub.add_parser(
+        "thermal",
+        help="EFL, back focus, best focus and MTF50 (axis, 0.7 field, edge; as built and "
+        "refocused) of a lens from one temperature to another",
+    )
     add_lens_argument(p)
     p.add_argument("--from", dest="start_c", type=float, default=-40.0, help="first temperature (°C)")
     p.add_argument("--to", dest="stop_c", type=float, default=105.0, help="last temperature (°C)")

@@ -1,6 +1,7 @@
 """Through-focus MTF: the diffraction MTF at one frequency as the image plane moves along the axis
 (+: away from the lens), tangential and sagittal, at chosen fields; each position's PSF is a new pupil
 function about that plane's chief-ray point (no defocus term is added by hand)."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass, replace
@@ -19,8 +20,10 @@ def refocused(lens, shift_mm: float):
     """`lens` with its image plane `shift_mm` further from the last surface (negative: nearer)."""
     last = lens.surfaces[-1]
     if last.thickness + shift_mm < 0:
-        raise SolasError(f"a focus shift of {shift_mm * 1e3:g} um puts the image plane before lens {lens.name}'s "
-                         f"last surface ({last.thickness * 1e3:g} um behind it); give a smaller --focus-range-um")
+        raise SolasError(
+            f"a focus shift of {shift_mm * 1e3:g} um puts the image plane before lens {lens.name}'s "
+            f"last surface ({last.thickness * 1e3:g} um behind it); give a smaller --focus-range-um"
+        )
     return replace(lens, surfaces=lens.surfaces[:-1] + (replace(last, thickness=last.thickness + shift_mm),))
 
 
@@ -43,19 +46,28 @@ class ThroughFocus(Result):
         return out
 
     def table(self) -> Table:
-        rows = tuple((f, float(z), *self.mtf[k, i].tolist()) for i, f in enumerate(self.fields_deg)
-                     for k, z in enumerate(self.focus_um))
-        return Table(("field_deg", "focus_shift_um", "tangential", "sagittal"), rows,
-                     {"best_focus_um": self.best_focus_um()})
+        rows = tuple(
+            (f, float(z), *self.mtf[k, i].tolist())
+            for i, f in enumerate(self.fields_deg)
+            for k, z in enumerate(self.focus_um)
+        )
+        return Table(
+            ("field_deg", "focus_shift_um", "tangential", "sagittal"), rows, {"best_focus_um": self.best_focus_um()}
+        )
 
     def plot(self):
         fig, (ax,) = figures.figure(self, 1, size=(6.4, 4.2))
         for i, (f, colour) in enumerate(zip(self.fields_deg, figures.colours(len(self.fields_deg)))):
             for j, d in enumerate(DIRECTIONS):
-                ax.plot(self.focus_um, self.mtf[:, i, j], color=colour, ls=figures.LINESTYLES[d], label=f"{f:g} deg {d}")
+                ax.plot(
+                    self.focus_um, self.mtf[:, i, j], color=colour, ls=figures.LINESTYLES[d], label=f"{f:g} deg {d}"
+                )
         ax.axvline(0.0, color="black", lw=0.6)
-        ax.set(xlabel="image plane shift (um, + away from the lens)",
-               ylabel=f"MTF at {self.frequency_cy_mm:g} cycles/mm", ylim=(0, 1.02))
+        ax.set(
+            xlabel="image plane shift (um, + away from the lens)",
+            ylabel=f"MTF at {self.frequency_cy_mm:g} cycles/mm",
+            ylim=(0, 1.02),
+        )
         ax.grid(alpha=0.3)
         figures.legend(ax, loc="center left", bbox_to_anchor=(1.02, 0.5))
         return fig
@@ -72,9 +84,18 @@ def _peak(z: np.ndarray, m: np.ndarray) -> float:
     return float(z[k])
 
 
-def through_focus(lens, frequency_cy_mm=None, fields_deg=None, wavelengths_nm=None, weights=None,
-                  focus_range_um=None, focus_steps: int = O.FOCUS_STEPS, pupil_samples: int | None = None,
-                  pixel_pitch_um=None, fill_factor: float = 1.0) -> ThroughFocus:
+def through_focus(
+    lens,
+    frequency_cy_mm=None,
+    fields_deg=None,
+    wavelengths_nm=None,
+    weights=None,
+    focus_range_um=None,
+    focus_steps: int = O.FOCUS_STEPS,
+    pupil_samples: int | None = None,
+    pixel_pitch_um=None,
+    fill_factor: float = 1.0,
+) -> ThroughFocus:
     """Diffraction MTF at `frequency_cy_mm` (default 1/4 of the cut-off) at `focus_steps` image-plane
     shifts across ±`focus_range_um` (default 8 λN²), tangential and sagittal, at `fields_deg`."""
     fields = inputs.fields(lens, fields_deg)
@@ -95,8 +116,25 @@ def through_focus(lens, frequency_cy_mm=None, fields_deg=None, wavelengths_nm=No
         values[k], warnings = np.abs(otf[:, :, 0]), warnings or w
     if pitch is not None:
         values *= pixel_mtf(np.array([freq]), pitch, fill)[0]
-    return ThroughFocus(name="through-focus", lens=lens.name, lens_hash=lens.hash, conventions=CONVENTIONS + (
-        "focus shift: the image plane's move along the axis, + away from the lens, um",), warnings=tuple(warnings),
-        inputs={"frequency_cy_mm": float(freq), "fields_deg": fields, "wavelengths_nm": wl, "weights": w8,
-                "focus_range_um": half, "focus_steps": steps, "pupil_samples": samples, "pixel_pitch_um": pitch,
-                "fill_factor": fill}, fields_deg=fields, frequency_cy_mm=float(freq), focus_um=shifts, mtf=values)
+    return ThroughFocus(
+        name="through-focus",
+        lens=lens.name,
+        lens_hash=lens.hash,
+        conventions=CONVENTIONS + ("focus shift: the image plane's move along the axis, + away from the lens, um",),
+        warnings=tuple(warnings),
+        inputs={
+            "frequency_cy_mm": float(freq),
+            "fields_deg": fields,
+            "wavelengths_nm": wl,
+            "weights": w8,
+            "focus_range_um": half,
+            "focus_steps": steps,
+            "pupil_samples": samples,
+            "pixel_pitch_um": pitch,
+            "fill_factor": fill,
+        },
+        fields_deg=fields,
+        frequency_cy_mm=float(freq),
+        focus_um=shifts,
+        mtf=values,
+    )

@@ -1,6 +1,7 @@
 """The wavefront map: W (waves; `rays`) over the pupil on an N × N grid of normalised pupil points
 inside the unit disc, its RMS and peak-to-valley, and its Zernike terms (`zernike`), per field at one
 wavelength."""
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -13,10 +14,12 @@ from .base import Result, Table
 from .rays import pupil_rays
 from .zernike import fit, indices
 
-CONVENTIONS = ("fields on +y (degrees); normalised pupil coordinates: points of the stop (real ray aiming), 1 at its "
-               "rim; rows of the map: Py, columns: Px",
-               "W = OPL(chief) - OPL(ray) to the reference sphere about the chief ray's image point through the chief "
-               "ray's crossing of the paraxial exit-pupil plane, waves")
+CONVENTIONS = (
+    "fields on +y (degrees); normalised pupil coordinates: points of the stop (real ray aiming), 1 at its "
+    "rim; rows of the map: Py, columns: Px",
+    "W = OPL(chief) - OPL(ray) to the reference sphere about the chief ray's image point through the chief "
+    "ray's crossing of the paraxial exit-pupil plane, waves",
+)
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -36,14 +39,19 @@ class Wavefront(Result):
         out = {}
         for f, w in zip(self.fields_deg, self.maps):
             v = w[np.isfinite(w)]
-            out[f"{f:g}"] = {"rms_waves": float(np.sqrt(np.mean((v - v.mean()) ** 2))),
-                             "pv_waves": float(v.max() - v.min())}
+            out[f"{f:g}"] = {
+                "rms_waves": float(np.sqrt(np.mean((v - v.mean()) ** 2))),
+                "pv_waves": float(v.max() - v.min()),
+            }
         return out
 
     def table(self) -> Table:
         terms = indices(self.zernike, self.coefficients.shape[1])
-        rows = tuple((f, j + 1, n, m, float(self.coefficients[i, j])) for i, f in enumerate(self.fields_deg)
-                     for j, (n, m) in enumerate(terms))
+        rows = tuple(
+            (f, j + 1, n, m, float(self.coefficients[i, j]))
+            for i, f in enumerate(self.fields_deg)
+            for j, (n, m) in enumerate(terms)
+        )
         return Table(("field_deg", "term", "n", "m", "coefficient_waves"), rows, self.statistics())
 
     def plot(self):
@@ -55,15 +63,19 @@ class Wavefront(Result):
             image = ax.imshow(w, origin="lower", extent=(-1, 1, -1, 1), cmap="RdBu_r", vmin=-top, vmax=top)
             fig.colorbar(image, ax=ax, label="W (waves)", shrink=0.85)
             s = stats[f"{f:g}"]
-            ax.set(title=f"{f:g} deg\nRMS {s['rms_waves']:.3g}, PV {s['pv_waves']:.3g} waves", xlabel="pupil Px",
-                   ylabel="pupil Py")
+            ax.set(
+                title=f"{f:g} deg\nRMS {s['rms_waves']:.3g}, PV {s['pv_waves']:.3g} waves",
+                xlabel="pupil Px",
+                ylabel="pupil Py",
+            )
             ax.title.set_fontsize("medium")
         bars = axes[-1]
         terms = np.arange(1, self.coefficients.shape[1] + 1)
         width = 0.8 / nf
         for i, (f, colour) in enumerate(zip(self.fields_deg, figures.colours(nf))):
-            bars.bar(terms + (i - (nf - 1) / 2) * width, self.coefficients[i], width=width, color=colour,
-                     label=f"{f:g} deg")
+            bars.bar(
+                terms + (i - (nf - 1) / 2) * width, self.coefficients[i], width=width, color=colour, label=f"{f:g} deg"
+            )
         bars.axhline(0.0, color="black", lw=0.6)
         bars.set(title=f"{self.zernike} Zernike terms", xlabel="term", ylabel="coefficient (waves)")
         bars.grid(alpha=0.3)
@@ -71,8 +83,14 @@ class Wavefront(Result):
         return fig
 
 
-def wavefront(lens, fields_deg=None, wavelength_nm=None, pupil_samples: int | None = None,
-              zernike: str = O.ZERNIKE, zernike_terms: int = O.ZERNIKE_TERMS) -> Wavefront:
+def wavefront(
+    lens,
+    fields_deg=None,
+    wavelength_nm=None,
+    pupil_samples: int | None = None,
+    zernike: str = O.ZERNIKE,
+    zernike_terms: int = O.ZERNIKE_TERMS,
+) -> Wavefront:
     """W over the pupil and its `zernike_terms` Zernike terms of kind `zernike` ("fringe" or "noll") at
     `fields_deg` and `wavelength_nm` (default the primary)."""
     fields = inputs.fields(lens, fields_deg)
@@ -91,13 +109,32 @@ def wavefront(lens, fields_deg=None, wavelength_nm=None, pupil_samples: int | No
         maps[i][inside] = rays.wavefront_waves[i]
         coefficients[i] = fit(zernike, len(terms), px[inside][ok], py[inside][ok], rays.wavefront_waves[i][ok])
         if not ok.all():
-            warnings.append(f"the pupil at {fields[i]:g} deg is vignetted ({100 * (1 - ok.mean()):.3g} % of the unit "
-                            "disc blocked): Zernike terms fitted over a cut pupil depend on where it is sampled")
-    conventions = (*CONVENTIONS, f"Zernike terms: {zernike} ({O.ZERNIKE_KINDS[zernike]}), theta from +x toward +y, least-squares "
-                   "fit over the rays that arrive")
-    return Wavefront(name="wavefront", lens=lens.name, lens_hash=lens.hash, conventions=conventions,
-                     warnings=tuple(warnings),
-                     inputs={"fields_deg": fields, "wavelength_nm": wl, "pupil_samples": n, "zernike": zernike,
-                             "zernike_terms": len(terms)},
-                     fields_deg=fields, wavelength_nm=wl, pupil=t, maps=maps, zernike=zernike,
-                     coefficients=coefficients)
+            warnings.append(
+                f"the pupil at {fields[i]:g} deg is vignetted ({100 * (1 - ok.mean()):.3g} % of the unit "
+                "disc blocked): Zernike terms fitted over a cut pupil depend on where it is sampled"
+            )
+    conventions = (
+        *CONVENTIONS,
+        f"Zernike terms: {zernike} ({O.ZERNIKE_KINDS[zernike]}), theta from +x toward +y, least-squares "
+        "fit over the rays that arrive",
+    )
+    return Wavefront(
+        name="wavefront",
+        lens=lens.name,
+        lens_hash=lens.hash,
+        conventions=conventions,
+        warnings=tuple(warnings),
+        inputs={
+            "fields_deg": fields,
+            "wavelength_nm": wl,
+            "pupil_samples": n,
+            "zernike": zernike,
+            "zernike_terms": len(terms),
+        },
+        fields_deg=fields,
+        wavelength_nm=wl,
+        pupil=t,
+        maps=maps,
+        zernike=zernike,
+        coefficients=coefficients,
+    )

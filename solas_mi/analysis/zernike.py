@@ -10,6 +10,7 @@ Two orders and normalisations:
 - "noll" (R. J. Noll, JOSA 66 (1976) 207; Zemax's Standard): ordered by n, then |m|, even j cos and odd
   j sin, each normalised to unit RMS over the disc: √(n+1) for m = 0, √(2(n+1)) otherwise.
 """
+
 from __future__ import annotations
 
 import math
@@ -26,7 +27,7 @@ def fringe_index(j: int) -> tuple[int, int]:
     group = 0
     while True:
         for m in range(group, -1, -1):
-            for sign in ((1, -1) if m else (1,)):
+            for sign in (1, -1) if m else (1,):
                 count += 1
                 if count == j:
                     return 2 * group - m, sign * m
@@ -48,8 +49,11 @@ def radial(n: int, m: int, rho: np.ndarray) -> np.ndarray:
     m = abs(m)
     out = np.zeros_like(rho, dtype=np.float64)
     for k in range((n - m) // 2 + 1):
-        c = (-1) ** k * math.factorial(n - k) / (
-            math.factorial(k) * math.factorial((n + m) // 2 - k) * math.factorial((n - m) // 2 - k))
+        c = (
+            (-1) ** k
+            * math.factorial(n - k)
+            / (math.factorial(k) * math.factorial((n + m) // 2 - k) * math.factorial((n - m) // 2 - k))
+        )
         out += c * rho ** (n - 2 * k)
     return out
 

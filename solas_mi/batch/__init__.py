@@ -7,8 +7,10 @@ Dask cluster, resumable, with a manifest (`batch.json`) of every item (`jobs`), 
     degrade_batch(["frames/"], "out/", DegradeSpec(grid_spec=GridSpec(grid=(8, 8))), lens="solas-doublet", workers=2)
     render_batch(["frames/", "street.xml"], "out/", lens=["solas-doublet", "cooke-triplet"], spp=[16, 64])
 """
+
 from ..lazy import lazy_exports
 
 __all__ = ["GridCache", "Manifest", "degrade_batch", "render_batch"]
-__getattr__ = lazy_exports(__name__, {"GridCache": ".cache", "Manifest": ".jobs", "degrade_batch": ".degrade",
-                                      "render_batch": ".render"})
+__getattr__ = lazy_exports(
+    __name__, {"GridCache": ".cache", "Manifest": ".jobs", "degrade_batch": ".degrade", "render_batch": ".render"}
+)

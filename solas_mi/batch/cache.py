@@ -9,6 +9,7 @@ The default folder is psf-grids in solas-mi's cache folder (`caches.cache_root`:
 user's cache directory), e.g. ~/.cache/solas-mi/psf-grids.
 `hits` and `misses` count what this cache object served.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -174,6 +175,8 @@ class GridCache:
         except OSError as exc:
             raise SolasError(f"cannot create cache folder {self.folder}: {exc.strerror or exc}") from None
         grid.write(str(path))  # atomic: a concurrent batch computing the same grid writes the same file
-        write_text(f"{path}.json", jsonio.dumps({"key": self.entry_key(lens, spec), "sha256": file_hash(path, full=True)},
-                                              indent=1) + "\n")
+        write_text(
+            f"{path}.json",
+            jsonio.dumps({"key": self.entry_key(lens, spec), "sha256": file_hash(path, full=True)}, indent=1) + "\n",
+        )
         return path, False, time.perf_counter() - start

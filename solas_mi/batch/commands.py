@@ -5,6 +5,7 @@ processes or Dask.
 Exit status 0 when every item is done (or was already), 1 when any item failed (after finishing the
 others; the manifest `batch.json` says which and why), 2 for a mistake in the arguments.
 """
+
 from __future__ import annotations
 
 import argparse
@@ -16,7 +17,6 @@ from ..caches import ENV
 from ..errors import SolasError
 from ..isp.commands import add_camera_options, camera_from_args
 
-
 # the grid options whose defaults differ from `psf-grid`'s: the grid (rows, columns), the accuracy tables'
 # interp 32×24 on a 4:3 frame (README)
 BATCH_GRID_DEFAULTS = {"grid": (32, 32)}
@@ -24,8 +24,17 @@ BATCH_GRID_DEFAULTS = {"grid": (32, 32)}
 
 # the DegradeSpec flags of `batch degrade`'s main group (--scale-lens is the frames' camera's; the frame, camera
 # and grid are built from their own flags)
-DEGRADE_OPTIONS = ("method", "boundary", "linear", "output_format", "depth_pattern", "label_patterns", "occlusion",
-                   "silhouette", "calibration_model")
+DEGRADE_OPTIONS = (
+    "method",
+    "boundary",
+    "linear",
+    "output_format",
+    "depth_pattern",
+    "label_patterns",
+    "occlusion",
+    "silhouette",
+    "calibration_model",
+)
 
 
 def _degrade_spec(args: argparse.Namespace):
@@ -36,8 +45,9 @@ def _degrade_spec(args: argparse.Namespace):
     from ..psf.spec import GridSpec
 
     grid = GridSpec.from_args(args, defaults=BATCH_GRID_DEFAULTS) if args.lens else None
-    return DegradeSpec.from_args(args, frame=frame_from_args(args), camera=camera_from_args(args, args.seed),
-                                 grid_spec=grid)
+    return DegradeSpec.from_args(
+        args, frame=frame_from_args(args), camera=camera_from_args(args, args.seed), grid_spec=grid
+    )
 
 
 def _lens(args: argparse.Namespace):
@@ -55,8 +65,9 @@ def _dry_run(args: argparse.Namespace) -> int:
     from .degrade import check_workers, estimate, plan_batch
 
     workers = check_workers(_workers(args.workers), args.dask)
-    p = plan_batch(args.inputs, args.output, _degrade_spec(args), psf_grid=args.psf_grid, lens=_lens(args),
-                   cache=args.cache)
+    p = plan_batch(
+        args.inputs, args.output, _degrade_spec(args), psf_grid=args.psf_grid, lens=_lens(args), cache=args.cache
+    )
     need = estimate(p, workers if args.dask is None else 1)
     where = f"Dask at {args.dask}" if args.dask else f"{workers} local worker process(es)"
     skipped = len(p.jobs) - len(p.todo)
@@ -64,14 +75,20 @@ def _dry_run(args: argparse.Namespace) -> int:
     scaled = f"; lens scaled x{scale['factor']:.4g} to EFL {scale['efl_mm'][1]:.4g} mm" if scale else ""
     grid_s, grid = _grid_plan(p)
     print(f"1. PSF grid: {p.grid_path} ({grid}{scaled})")
-    print(f"2. degrade {len(p.todo)} of {len(p.jobs)} images ({skipped} already finished, skipped) "
-          f"with {p.spec.method}, boundary {p.spec.boundary}, on {where}")
+    print(
+        f"2. degrade {len(p.todo)} of {len(p.jobs)} images ({skipped} already finished, skipped) "
+        f"with {p.spec.method}, boundary {p.spec.boundary}, on {where}"
+    )
     files = "16-bit PNG + JSON" if p.spec.output_format == "png16" else "EXR + PNG"
-    labels = "".join(f" + warped labels {Path(f).suffix[1:].upper()}" for f in (p.jobs[0].label_outputs if p.jobs else []))
+    labels = "".join(
+        f" + warped labels {Path(f).suffix[1:].upper()}" for f in (p.jobs[0].label_outputs if p.jobs else [])
+    )
     print(f"3. write {files}{labels}{_camera_files(p.jobs)} per image and {p.manifest.path}")
-    print(f"estimate: about {grid_s + need['seconds']:.3g} s ({grid_s:.3g} s for the grid, {need['seconds']:.3g} s of "
-          f"degrading), peak memory about {size_text(need['peak_bytes'])} (grid {size_text(need['grid_bytes'])} per "
-          "worker)")
+    print(
+        f"estimate: about {grid_s + need['seconds']:.3g} s ({grid_s:.3g} s for the grid, {need['seconds']:.3g} s of "
+        f"degrading), peak memory about {size_text(need['peak_bytes'])} (grid {size_text(need['grid_bytes'])} per "
+        "worker)"
+    )
     return 0
 
 
@@ -91,16 +108,25 @@ def run_batch_degrade(args: argparse.Namespace) -> int:
         return _dry_run(args)
     from .degrade import degrade_batch
 
-    result = degrade_batch(args.inputs, args.output, _degrade_spec(args), psf_grid=args.psf_grid, lens=_lens(args),
-                           workers=_workers(args.workers), dask=args.dask, cache=args.cache, force=args.force,
-                           progress=not args.quiet)
+    result = degrade_batch(
+        args.inputs,
+        args.output,
+        _degrade_spec(args),
+        psf_grid=args.psf_grid,
+        lens=_lens(args),
+        workers=_workers(args.workers),
+        dask=args.dask,
+        cache=args.cache,
+        force=args.force,
+        progress=not args.quiet,
+    )
     return _report("degrade", result, f" (grid: {result.grid_source})")
 
 
 def _camera_files(jobs) -> str:
     """What the camera adds per item (its RAW, developed frame), for the dry run's list."""
     extras = jobs[0].extras if jobs else []
-    return "".join([" + RAW EXR", " + developed PNG"][:len(extras)])
+    return "".join([" + RAW EXR", " + developed PNG"][: len(extras)])
 
 
 WARNINGS_SHOWN = 5  # items whose warnings are printed; the manifest holds every item's
@@ -114,16 +140,34 @@ def _report(command: str, result, extra: str = "") -> int:
         for text in job.warnings:
             print(f"solas-mi batch {command}: warning: {text}", file=sys.stderr)
     if len(warned) > WARNINGS_SHOWN:
-        print(f"solas-mi batch {command}: warning: {len(warned) - WARNINGS_SHOWN} more items warn likewise (each "
-              f"item's warnings are in {result.manifest})", file=sys.stderr)
-    print(f"{result.count('done')} done, {result.count('skipped')} skipped, {len(result.failed)} failed "
-          f"in {result.seconds:.1f} s{extra}; manifest {result.manifest}")
+        print(
+            f"solas-mi batch {command}: warning: {len(warned) - WARNINGS_SHOWN} more items warn likewise (each "
+            f"item's warnings are in {result.manifest})",
+            file=sys.stderr,
+        )
+    print(
+        f"{result.count('done')} done, {result.count('skipped')} skipped, {len(result.failed)} failed "
+        f"in {result.seconds:.1f} s{extra}; manifest {result.manifest}"
+    )
     return 1 if result.failed else 0
 
 
 # the render settings `batch render` takes: every one of `render-image`'s, and a scene file's focus distance and labels
-RENDER_SETTINGS = ("sensor", "pitch_um", "fov_deg", "response", "boundary", "fresnel", "rings", "mapping", "spp",
-                   "variant", "seed", "focus_distance", "labels")
+RENDER_SETTINGS = (
+    "sensor",
+    "pitch_um",
+    "fov_deg",
+    "response",
+    "boundary",
+    "fresnel",
+    "rings",
+    "mapping",
+    "spp",
+    "variant",
+    "seed",
+    "focus_distance",
+    "labels",
+)
 
 
 def _render_spec(args: argparse.Namespace):
@@ -155,17 +199,31 @@ def run_batch_render(args: argparse.Namespace) -> int:
         where = f"Dask at {args.dask}" if args.dask else f"{n} local worker process(es)"
         swept = ", ".join(f"{k} ({len(v)} values)" for k, v in p.manifest.header["sweep"].items()) or "nothing"
         print("1. no PSF grid (a direct render through the lens)")
-        print(f"2. render {len(p.todo)} of {len(p.jobs)} items ({len(p.jobs) - len(p.todo)} already finished, "
-              f"skipped; swept: {swept}) with Mitsuba {batch_variant(p)}, on {where}")
+        print(
+            f"2. render {len(p.todo)} of {len(p.jobs)} items ({len(p.jobs) - len(p.todo)} already finished, "
+            f"skipped; swept: {swept}) with Mitsuba {batch_variant(p)}, on {where}"
+        )
         print(f"3. write EXR + PNG{_camera_files(p.jobs)} per item and {p.manifest.path}")
-        print(f"estimate: about {need['seconds']:.1f} s ({need['samples']:.3g} samples), peak memory about "
-              f"{size_text(need['peak_bytes'])}")
+        print(
+            f"estimate: about {need['seconds']:.1f} s ({need['samples']:.3g} samples), peak memory about "
+            f"{size_text(need['peak_bytes'])}"
+        )
         return 0
     from .render import render_batch
 
-    result = render_batch(args.inputs, args.output, lens=args.lens, spec=spec, **sweep, workers=workers,
-                          dask=args.dask, force=args.force, progress=not args.quiet, camera=camera,
-                          calibration_model=args.calibration_model)
+    result = render_batch(
+        args.inputs,
+        args.output,
+        lens=args.lens,
+        spec=spec,
+        **sweep,
+        workers=workers,
+        dask=args.dask,
+        force=args.force,
+        progress=not args.quiet,
+        camera=camera,
+        calibration_model=args.calibration_model,
+    )
     return _report("render", result)
 
 
@@ -183,11 +241,14 @@ def _workers(text: str | None) -> int | None:
 
 def _add_runner_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("-o", "--output", required=True, metavar="OUT_DIR", help="output folder")
-    p.add_argument("--workers", help="local worker processes (default: the machine's cores); "
-                                     "with --dask local, the LocalCluster's workers")
+    p.add_argument(
+        "--workers",
+        help="local worker processes (default: the machine's cores); with --dask local, the LocalCluster's workers",
+    )
     p.add_argument("--dask", metavar="ADDRESS", help="Dask scheduler (tcp://HOST:PORT), or local for a LocalCluster")
-    p.add_argument("--dry-run", action="store_true",
-                   help="print the stages, what is reused and an estimate; do nothing")
+    p.add_argument(
+        "--dry-run", action="store_true", help="print the stages, what is reused and an estimate; do nothing"
+    )
     p.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
     p.add_argument("--quiet", action="store_true", help="no progress bar")
 
@@ -201,10 +262,12 @@ def _add_degrade(sub: Any) -> None:
     from ..psf.spec import GridSpec
 
     p = sub.add_parser(
-        "degrade", help="degrade images (files, folders, glob patterns) with one PSF grid",
+        "degrade",
+        help="degrade images (files, folders, glob patterns) with one PSF grid",
         description="Degrade every input image with one PSF grid — a given file, or computed once from --lens "
-                    "and cached — writing OUT_DIR/<name>.exr + .png and OUT_DIR/batch.json. Finished items are "
-                    "skipped on a re-run; a failed item is reported and the others go on (exit status 1).")
+        "and cached — writing OUT_DIR/<name>.exr + .png and OUT_DIR/batch.json. Finished items are "
+        "skipped on a re-run; a failed item is reported and the others go on (exit status 1).",
+    )
     p.add_argument("inputs", nargs="+", metavar="INPUT", help="image files, folders of images, or glob patterns")
     source = p.add_mutually_exclusive_group(required=True)
     source.add_argument("--psf-grid", metavar="GRID.exr", help="PSF grid written by `solas-mi psf-grid`")
@@ -215,12 +278,17 @@ def _add_degrade(sub: Any) -> None:
     add_frame_options(frames)
     DegradeSpec.add_flags(frames, ("scale_lens",))
     add_camera_options(p, seed=True)
-    p.add_argument("--cache", metavar="DIR", help=f"PSF-grid cache (default: psf-grids in ${ENV}, else in the user's "
-                   "cache folder)")
+    p.add_argument(
+        "--cache", metavar="DIR", help=f"PSF-grid cache (default: psf-grids in ${ENV}, else in the user's cache folder)"
+    )
     _add_runner_options(p)
-    GridSpec.add_flags(p.add_argument_group("grid options (with --lens; those of `solas-mi psf-grid`, the grid "
-                                            "itself the accuracy tables' interp grid by default)"),
-                       defaults=BATCH_GRID_DEFAULTS)
+    GridSpec.add_flags(
+        p.add_argument_group(
+            "grid options (with --lens; those of `solas-mi psf-grid`, the grid "
+            "itself the accuracy tables' interp grid by default)"
+        ),
+        defaults=BATCH_GRID_DEFAULTS,
+    )
     p.set_defaults(run=run_batch_degrade)
 
 
@@ -231,24 +299,32 @@ def register(subparsers: Any) -> None:
     from ..render.spec import RenderSpec
     from .render import SWEEP
 
-    batch = subparsers.add_parser("batch", help="many images at once, on local processes or a Dask cluster",
-                                  description="Batch work, resumable, with a manifest batch.json in the output "
-                                              "folder.")
+    batch = subparsers.add_parser(
+        "batch",
+        help="many images at once, on local processes or a Dask cluster",
+        description="Batch work, resumable, with a manifest batch.json in the output folder.",
+    )
     sub = batch.add_subparsers(dest="batch_command", metavar="COMMAND", required=True)
     _add_degrade(sub)
 
     r = sub.add_parser(
-        "render", help="render images and scene files through a lens, swept over lenses, focus, sensor, spp",
+        "render",
+        help="render images and scene files through a lens, swept over lenses, focus, sensor, spp",
         description="Render every input — images (the lens's image-object scene, as `solas-mi render-image`) and "
-                    "Mitsuba scene XML files (the lens camera in place of the scene's camera, as `solas-mi render "
-                    "SCENE --lens`) — at every point of the sweep (the product of the values of --lens, "
-                    "--focus-distance, --sensor, --pitch-um, --spp), writing OUT_DIR/<name>[_<swept values>].exr + "
-                    ".png and OUT_DIR/batch.json. Finished items are skipped on a re-run; a failed item is reported "
-                    "and the others go on (exit status 1).")
+        "Mitsuba scene XML files (the lens camera in place of the scene's camera, as `solas-mi render "
+        "SCENE --lens`) — at every point of the sweep (the product of the values of --lens, "
+        "--focus-distance, --sensor, --pitch-um, --spp), writing OUT_DIR/<name>[_<swept values>].exr + "
+        ".png and OUT_DIR/batch.json. Finished items are skipped on a re-run; a failed item is reported "
+        "and the others go on (exit status 1).",
+    )
     r.add_argument("inputs", nargs="+", metavar="INPUT", help="images or scene XML files, folders of them, or globs")
-    r.add_argument("--lens", action="append", required=True,
-                   help=f"{lens_help()}; repeat to sweep over lenses (a lens at another temperature or pressure: "
-                        "its file, from `solas-mi lens convert LENS --temperature-c T -o FILE.toml`)")
+    r.add_argument(
+        "--lens",
+        action="append",
+        required=True,
+        help=f"{lens_help()}; repeat to sweep over lenses (a lens at another temperature or pressure: "
+        "its file, from `solas-mi lens convert LENS --temperature-c T -o FILE.toml`)",
+    )
     RenderSpec.add_flags(r, RENDER_SETTINGS, sweep=SWEEP[1:])
     add_calibration_option(r)
     add_camera_options(r, seed=False)  # the sensor's seed is the batch's --seed

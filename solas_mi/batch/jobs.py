@@ -8,6 +8,7 @@ checksums (SHA-256: what a re-run checks before it skips an item), beside what t
 shares (the grid's hash, the lens's hash, the method). It is rewritten atomically, so it is valid
 JSON whenever it is read, also after the batch was killed.
 """
+
 from __future__ import annotations
 
 import glob
@@ -15,9 +16,10 @@ import os
 import re
 import sys
 import time
+from collections.abc import Callable, Iterable
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
-from typing import Any, Callable, Iterable
+from typing import Any
 
 from .. import jsonio
 from ..errors import SolasError
@@ -36,8 +38,15 @@ SAVE_EVERY_S = 1.0  # the manifest is rewritten at most this often while items f
 # name after any frame number (a_depth.exr, street_0001_seg.png, depth_00042.exr) or, for an EXR, by
 # its channels: every one a depth (Z, depth) or a label layer's (depth.Z, normal.X, labels.valid). The
 # kinds of image labels (`labelkinds.KINDS`: not the JSON annotations) and those the render traces.
-LABEL_WORDS = (*(k for k in KINDS if KINDS[k].extra["layers"]), *LABELS, VALID.split(".")[0], "seg", "segmentation",
-               "instances", "normals")
+LABEL_WORDS = (
+    *(k for k in KINDS if KINDS[k].extra["layers"]),
+    *LABELS,
+    VALID.split(".")[0],
+    "seg",
+    "segmentation",
+    "instances",
+    "normals",
+)
 DEPTH_CHANNELS = ("z", "depth")
 _WORDS = re.compile(r"[^a-z0-9]+")
 SHOWN_SKIPPED = 5  # skipped label layers named in the note (then a count)
@@ -58,7 +67,9 @@ class Job:
     seconds: float | None = None
     attempts: int = 0
     outputs: dict[str, list] = field(default_factory=dict)  # path → [size, mtime_ns, sha256/16] when finished
-    input_hash: str | None = None  # the input's SHA-256 (16 hex digits; a scene's with the files it reads) when finished
+    input_hash: str | None = (
+        None  # the input's SHA-256 (16 hex digits; a scene's with the files it reads) when finished
+    )
     params: dict[str, Any] = field(default_factory=dict)
     label_outputs: list[str] = field(default_factory=list)  # the warped labels (`convolution.labels.label_outputs`)
     extras: list[str] = field(default_factory=list)  # more outputs: the camera's RAW and developed frame
@@ -97,9 +108,13 @@ class Job:
         record names exactly this item's outputs), made from this very input (its content's SHA-256: an
         input replaced by another file of the same name is done again)."""
         try:
-            return set(self.outputs) == set(self.paths()) and all(
-                [(s := os.stat(p)).st_size, s.st_mtime_ns, file_hash(p)] == list(v) for p, v in self.outputs.items()) \
+            return (
+                set(self.outputs) == set(self.paths())
+                and all(
+                    [(s := os.stat(p)).st_size, s.st_mtime_ns, file_hash(p)] == list(v) for p, v in self.outputs.items()
+                )
                 and self.input_hash == self.input_digest()
+            )
         except (OSError, SolasError):  # an output or input gone, a scene that no longer reads
             return False
 
@@ -128,12 +143,20 @@ def say_skipped(skipped: list[tuple[Path, str]]) -> None:
     if skipped:
         shown = "; ".join(f"{p.name} ({why})" for p, why in skipped[:SHOWN_SKIPPED])
         more = f"; and {len(skipped) - SHOWN_SKIPPED} more" if len(skipped) > SHOWN_SKIPPED else ""
-        print(f"solas-mi batch: skipped {len(skipped)} label layer(s) (depth, segmentation, normal or flow maps), "
-              f"not frames: {shown}{more}", file=sys.stderr, flush=True)
+        print(
+            f"solas-mi batch: skipped {len(skipped)} label layer(s) (depth, segmentation, normal or flow maps), "
+            f"not frames: {shown}{more}",
+            file=sys.stderr,
+            flush=True,
+        )
 
 
-def expand_inputs(inputs: Iterable[str | os.PathLike], suffixes: tuple[str, ...] = IMAGE_SUFFIXES,
-                  roots: dict[Path, Path] | None = None, skipped: list[tuple[Path, str]] | None = None) -> list[Path]:
+def expand_inputs(
+    inputs: Iterable[str | os.PathLike],
+    suffixes: tuple[str, ...] = IMAGE_SUFFIXES,
+    roots: dict[Path, Path] | None = None,
+    skipped: list[tuple[Path, str]] | None = None,
+) -> list[Path]:
     """Files from files, folders (their files ending in `suffixes`, sorted; with `roots`, the whole
     folder tree, each file's folder given recorded in `roots`) and glob patterns; each once, in the
     order given. Label layers (`label_layer`) are no inputs: they are skipped, and added to `skipped`
@@ -156,8 +179,11 @@ def expand_inputs(inputs: Iterable[str | os.PathLike], suffixes: tuple[str, ...]
         labels = [(p, why) for p in matches if p.suffix.lower() in IMAGE_SUFFIXES and (why := label_layer(p))]
         matches = [p for p in matches if p not in {label for label, _ in labels}]
         if not matches:
-            only = f"only label layers, no frames ({labels[0][0].name}: {labels[0][1]}); give the frames" if labels else \
-                f"no input files ({', '.join(suffixes)})"
+            only = (
+                f"only label layers, no frames ({labels[0][0].name}: {labels[0][1]}); give the frames"
+                if labels
+                else f"no input files ({', '.join(suffixes)})"
+            )
             raise SolasError(f"input {text!r} holds {only}")
         if roots is not None and path.is_dir():
             roots.update({p.resolve(): path.resolve() for p in matches})
@@ -176,8 +202,12 @@ def expand_inputs(inputs: Iterable[str | os.PathLike], suffixes: tuple[str, ...]
     return unique
 
 
-def plan(inputs: list[Path], out_dir: Path, roots: dict[Path, Path] | None = None,
-         suffixes: tuple[str, str] = (".exr", ".png")) -> list[Job]:
+def plan(
+    inputs: list[Path],
+    out_dir: Path,
+    roots: dict[Path, Path] | None = None,
+    suffixes: tuple[str, str] = (".exr", ".png"),
+) -> list[Job]:
     """One degrade job per input: OUT_DIR/<name>.exr + .png (or the two `suffixes`: data, then preview
     or metadata), or, for a file found in a folder tree (`roots`: file → the folder given), OUT_DIR/<its
     path in the tree>.exr. SolasError when two inputs would write the same output or an output would
@@ -187,11 +217,14 @@ def plan(inputs: list[Path], out_dir: Path, roots: dict[Path, Path] | None = Non
     sources = set(inputs)
     for path in inputs:
         below = path.relative_to(roots[path]).parent if roots and path in roots else Path()
-        output = inside(out_dir.joinpath(*(safe_name(part) for part in below.parts)),
-                        f"{safe_name(path.stem)}{suffixes[0]}")
+        output = inside(
+            out_dir.joinpath(*(safe_name(part) for part in below.parts)), f"{safe_name(path.stem)}{suffixes[0]}"
+        )
         if output in seen:
-            raise SolasError(f"inputs {str(seen[output])!r} and {str(path)!r} would both write {output}; "
-                             "give them different names or run them as separate batches")
+            raise SolasError(
+                f"inputs {str(seen[output])!r} and {str(path)!r} would both write {output}; "
+                "give them different names or run them as separate batches"
+            )
         seen[output] = path
         for target in (output, output.with_suffix(suffixes[1])):
             if target in sources:
@@ -200,8 +233,9 @@ def plan(inputs: list[Path], out_dir: Path, roots: dict[Path, Path] | None = Non
     return jobs
 
 
-def add_outputs(jobs: list[Job], more: Callable[[str], list[str]], sources: Iterable[str | os.PathLike],
-                into: str = "extras") -> None:
+def add_outputs(
+    jobs: list[Job], more: Callable[[str], list[str]], sources: Iterable[str | os.PathLike], into: str = "extras"
+) -> None:
     """Give each job the outputs `more(job.output)` besides those it has, as its field `into` (`extras`, or
     `label_outputs`); SolasError when one would be another item's output or an input."""
     taken = {p: job.input for job in jobs for p in job.paths()}
@@ -210,9 +244,11 @@ def add_outputs(jobs: list[Job], more: Callable[[str], list[str]], sources: Iter
         setattr(job, into, more(job.output))
         for path in getattr(job, into):
             if path in taken or path in inputs:
-                raise SolasError(f"output {path} of {job.input!r} would replace "
-                                 f"{'an input' if path in inputs else 'an output of ' + repr(taken[path])}; "
-                                 "rename the input or run it as a separate batch")
+                raise SolasError(
+                    f"output {path} of {job.input!r} would replace "
+                    f"{'an input' if path in inputs else 'an output of ' + repr(taken[path])}; "
+                    "rename the input or run it as a separate batch"
+                )
             taken[path] = job.input
 
 
@@ -269,8 +305,9 @@ class Manifest:
         old = self.previous(self.path)
         if old.get("batch_id") != key:
             return 0
-        done = {(i.get("input"), i.get("output")): i for i in old.get("items", [])
-                if i.get("status") in ("done", "skipped")}
+        done = {
+            (i.get("input"), i.get("output")): i for i in old.get("items", []) if i.get("status") in ("done", "skipped")
+        }
         skipped = 0
         for job in self.jobs:
             before = done.get((job.input, job.output))
@@ -310,7 +347,11 @@ class Manifest:
         now = time.monotonic()
         if not force and now - self._saved < SAVE_EVERY_S:
             return
-        data = {**self.header, "updated": time.strftime("%Y-%m-%dT%H:%M:%S%z"), "summary": self.summary(),
-                "items": [asdict(job) for job in self.jobs]}
+        data = {
+            **self.header,
+            "updated": time.strftime("%Y-%m-%dT%H:%M:%S%z"),
+            "summary": self.summary(),
+            "items": [asdict(job) for job in self.jobs],
+        }
         write_text(self.path, jsonio.dumps(data, indent=1) + "\n")
         self._saved = now

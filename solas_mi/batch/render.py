@@ -17,6 +17,7 @@ luminance instead of evaluating them at λ. A `variant` given is used for every 
 needs a response of one wavelength, and renders images exactly as the spectral one, scene files
 alike only where their spectra are grey. The manifest's header and each EXR record the variant.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -25,9 +26,10 @@ import json
 import math
 import os
 import time
+from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any, Iterable, Sequence
+from typing import Any
 
 from ..errors import SolasError
 from ..outputs import inside, safe_name
@@ -57,8 +59,7 @@ class RenderPlan:
 
 
 def _values(name: str, given) -> list:
-    values = list(given) if isinstance(given, (list, tuple)) and not (name == "sensor" and _is_pair(given)) \
-        else [given]
+    values = list(given) if isinstance(given, (list, tuple)) and not (name == "sensor" and _is_pair(given)) else [given]
     if not values:
         raise SolasError(f"{name} needs at least one value")
     return values
@@ -101,11 +102,15 @@ def batch_spec(spec: RenderSpec | None, settings: dict[str, Any]) -> tuple[Rende
 def _check_inputs(files: list[Path], base: RenderSpec, axes: dict[str, list]) -> None:
     """Refuse a sweep that does not apply to the inputs given."""
     scenes = [f for f in files if f.suffix.lower() in SCENE_SUFFIXES]
-    for given, what, flag in ((axes["focus_distance"] != [None], "a focus distance sets", "--focus-distance"),
-                              (bool(base.labels), "labels are traced through", "--labels")):
+    for given, what, flag in (
+        (axes["focus_distance"] != [None], "a focus distance sets", "--focus-distance"),
+        (bool(base.labels), "labels are traced through", "--labels"),
+    ):
         if given and len(scenes) < len(files):
-            raise SolasError(f"{what} the lens camera of scene files; image inputs lie on the lens's object plane: "
-                             f"give them without {flag}, or as a separate batch")
+            raise SolasError(
+                f"{what} the lens camera of scene files; image inputs lie on the lens's object plane: "
+                f"give them without {flag}, or as a separate batch"
+            )
     if len(axes["sensor"]) > 1 and scenes:
         raise SolasError("a scene file's film sets its sensor; sweep --sensor over image inputs only")
 
@@ -121,21 +126,31 @@ def _jobs(files: list[Path], out_dir: Path, base: RenderSpec, axes: dict[str, li
         stem = safe_name("_".join([safe_name(path.stem), *(_label(name, values[name], names) for name in swept)]))
         output = inside(out_dir, f"{stem}.exr")
         if output in seen:
-            raise SolasError(f"inputs {str(seen[output])!r} and {str(path)!r} would both write {output}; "
-                             "give them different names or run them as separate batches")
+            raise SolasError(
+                f"inputs {str(seen[output])!r} and {str(path)!r} would both write {output}; "
+                "give them different names or run them as separate batches"
+            )
         if output in sources or output.with_suffix(".png") in sources:
             raise SolasError(f"output {output} would replace an input of the same name; choose another -o")
         seen[output] = path
         lens = values.pop("lens")
         item = base.replace(**values, seed=seed_of(stem, base.seed))
         params = {"lens": lens, "lens_name": lenses[lens].name, "lens_hash": lenses[lens].hash, **item.as_dict()}
-        jobs.append(Job(str(path), str(output), str(output.with_suffix(".png")), kind="render", seed=item.seed,
-                        params=params))
+        jobs.append(
+            Job(str(path), str(output), str(output.with_suffix(".png")), kind="render", seed=item.seed, params=params)
+        )
     return jobs
 
 
-def plan_render(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *, lens,
-                spec: RenderSpec | None = None, camera=None, **settings) -> RenderPlan:
+def plan_render(
+    inputs: Iterable[str | os.PathLike],
+    output_dir: str | os.PathLike,
+    *,
+    lens,
+    spec: RenderSpec | None = None,
+    camera=None,
+    **settings,
+) -> RenderPlan:
     """Check everything a render batch needs before any work and find what a former run finished.
     `lens` is one value or a list (the sweep); `settings` are RenderSpec fields changing `spec`, of
     which `focus_distance`, `sensor`, `pitch_um` and `spp` also take a list of values (the sweep);
@@ -191,11 +206,17 @@ def estimate(p: RenderPlan, workers: int) -> dict[str, float]:
         else:
             rows, cols = job.params["sensor"]
         samples += rows * cols * job.params["spp"]
-        peak = max(peak, max(rows * cols, SAMPLES_PER_PASS) * BYTES_PER_SAMPLE + 48 * rows * cols,
-                   camera_bytes(job, rows, cols))
+        peak = max(
+            peak,
+            max(rows * cols, SAMPLES_PER_PASS) * BYTES_PER_SAMPLE + 48 * rows * cols,
+            camera_bytes(job, rows, cols),
+        )
     cores = os.cpu_count() or 1
-    return {"seconds": samples / (SAMPLES_PER_SECOND_PER_CORE * cores), "samples": samples,
-            "peak_bytes": min(workers, max(1, len(p.todo))) * (peak + WORKER_BYTES["render"])}
+    return {
+        "seconds": samples / (SAMPLES_PER_SECOND_PER_CORE * cores),
+        "samples": samples,
+        "peak_bytes": min(workers, max(1, len(p.todo))) * (peak + WORKER_BYTES["render"]),
+    }
 
 
 def batch_variant(p: RenderPlan) -> str:
@@ -235,10 +256,20 @@ def image_cameras(p: RenderPlan, model: str | None) -> dict[str, dict]:
 
 # long: the public API's numpydoc docstring is half of it
 # many parameters: the inputs, lens and spec, the runner's settings and what every output records (camera, calibration)
-def render_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, *, lens: str | Sequence[str],
-                 spec: RenderSpec | None = None, workers: int | None = None, dask: str | None = None,
-                 force: bool = False, progress: bool = True, camera=None, calibration_model: str | None = None,
-                 **settings) -> BatchResult:
+def render_batch(
+    inputs: Iterable[str | os.PathLike],
+    output_dir: str | os.PathLike,
+    *,
+    lens: str | Sequence[str],
+    spec: RenderSpec | None = None,
+    workers: int | None = None,
+    dask: str | None = None,
+    force: bool = False,
+    progress: bool = True,
+    camera=None,
+    calibration_model: str | None = None,
+    **settings,
+) -> BatchResult:
     """Render many images and scene files through lenses, over a sweep, on local processes or Dask.
 
     One EXR + PNG per item and the manifest ``batch.json`` go into `output_dir`; a failed item is
@@ -303,20 +334,31 @@ def render_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathL
     check_dask(dask)
     n = check_workers(workers, dask)
     p = plan_render(inputs, output_dir, lens=lens, spec=spec, camera=camera, **settings)
-    check_memory(f"batch of {len(p.todo)} renders on {n} workers", estimate(p, n if dask is None else 1)["peak_bytes"],
-                 force)
+    check_memory(
+        f"batch of {len(p.todo)} renders on {n} workers", estimate(p, n if dask is None else 1)["peak_bytes"], force
+    )
     chosen = batch_variant(p)
     cameras = image_cameras(p, calibration_model)
     # each local worker (and each Dask worker of a LocalCluster) gets its share of the cores, so that
     # the local and the Dask runs render with the same thread count (identical sums)
     threads = max(1, (os.cpu_count() or 1) // n) if dask in (None, "local") else None
-    p.manifest.header.update({"variant": chosen, "settings": {k: v for k, v in p.spec.as_dict().items()
-                                                              if k not in SWEEP},
-                              "threads_per_worker": threads,
-                              **({"camera": camera.describe()} if camera is not None else {}),
-                              "calibration_model": calibration_model, "cameras": cameras,
-                              "runner": {"dask": dask} if dask is not None else {"workers": n}})
-    settings = {"threads": threads, "camera": camera, "batch": {"id": p.key, "manifest": str(p.manifest.path)},
-                "calibration_model": calibration_model, "cameras": cameras}
+    p.manifest.header.update(
+        {
+            "variant": chosen,
+            "settings": {k: v for k, v in p.spec.as_dict().items() if k not in SWEEP},
+            "threads_per_worker": threads,
+            **({"camera": camera.describe()} if camera is not None else {}),
+            "calibration_model": calibration_model,
+            "cameras": cameras,
+            "runner": {"dask": dask} if dask is not None else {"workers": n},
+        }
+    )
+    settings = {
+        "threads": threads,
+        "camera": camera,
+        "batch": {"id": p.key, "manifest": str(p.manifest.path)},
+        "calibration_model": calibration_model,
+        "cameras": cameras,
+    }
     run_batch(p.manifest, p.todo, None, None, settings, n, dask, "render" if progress else None)
     return BatchResult(p.jobs, p.manifest.path, None, "none", time.perf_counter() - start)

@@ -23,16 +23,17 @@ import signal
 import sys
 import time
 from collections import deque
+from collections.abc import Callable
 from contextlib import contextmanager
 from multiprocessing import resource_tracker
 from multiprocessing.connection import wait
-from typing import TYPE_CHECKING, Any, Callable
+from typing import TYPE_CHECKING, Any
 
+from .. import imageio
 from ..errors import SolasError
 from ..interrupts import raise_outside_imports
-from .jobs import Job
-from .. import imageio
 from . import work
+from .jobs import Job
 from .work import run_job
 
 if TYPE_CHECKING:
@@ -60,7 +61,7 @@ def check_dask(dask: str | None) -> None:
             port = parts.port
         except ValueError:
             port = None
-        ok = (parts.scheme in DASK_SCHEMES and bool(parts.hostname) and port is not None and 0 < port
+        ok = (parts.scheme in DASK_SCHEMES and bool(parts.hostname) and port is not None and port > 0
               and parts.path in ("", "/") and not parts.query and not parts.fragment)
     if not ok:
         raise SolasError(f"--dask {dask!r} must be a scheduler address, tcp://HOST:PORT of a running `dask "
@@ -222,7 +223,7 @@ def run_local(jobs: list[Job], todo: list[int], grid_path: str | None, settings:
                 on_done(w.index, result)
 
 
-def run_dask(jobs: list[Job], todo: list[int], grid: "PSFGrid | DepthGrid | None", grid_path: str | None, settings: dict[str, Any],
+def run_dask(jobs: list[Job], todo: list[int], grid: PSFGrid | DepthGrid | None, grid_path: str | None, settings: dict[str, Any],
              address: str, workers: int, on_done: Callable[[int, Job], None]) -> None:
     """Items `todo` on the Dask scheduler at `address`, or on a LocalCluster of `workers` processes
     started for this batch when `address` is "local"."""
@@ -261,7 +262,7 @@ def run_dask(jobs: list[Job], todo: list[int], grid: "PSFGrid | DepthGrid | None
 
 
 
-def run_batch(manifest: "Manifest", todo: list[int], grid: "PSFGrid | DepthGrid | None", grid_path: str | None,
+def run_batch(manifest: Manifest, todo: list[int], grid: PSFGrid | DepthGrid | None, grid_path: str | None,
               settings: dict[str, Any], workers: int, dask: str | None, progress: str | None) -> None:
     """Items `todo` of `manifest.jobs` on `workers` local processes or the Dask scheduler `dask`, the
     manifest saved as they finish (and at the end, also when interrupted), a progress bar of the unit

@@ -3,6 +3,7 @@ image with the batch's PSF grid; a "render" item renders its image (the lens's i
 `render.image`) or its Mitsuba scene file (the lens camera in place of the scene's camera,
 `render.user_scene` + `render.stock`) at its sweep point. No PSF grid is read for a render.
 """
+
 from __future__ import annotations
 
 import time
@@ -17,7 +18,7 @@ if TYPE_CHECKING:
 STOPPING = False  # set when this worker process is told to stop: an item failing then was interrupted
 
 
-def run_job(job: Job, grid: "PSFGrid | None", grid_path: str | None, settings: dict[str, Any]) -> Job:
+def run_job(job: Job, grid: PSFGrid | None, grid_path: str | None, settings: dict[str, Any]) -> Job:
     """Do one item and return it with its status, error and timing; never raises for the item's own
     problems (an unreadable input, a failed write): they are its `error`."""
     start = time.perf_counter()
@@ -45,7 +46,7 @@ def run_job(job: Job, grid: "PSFGrid | None", grid_path: str | None, settings: d
     return job
 
 
-def _degrade(job: Job, grid: "PSFGrid", grid_path: str, settings: dict[str, Any]) -> None:
+def _degrade(job: Job, grid: PSFGrid, grid_path: str, settings: dict[str, Any]) -> None:
     from ..convolution.output import degrade_file
     from ..imageio import image_size
     from ..outputs import check_target, data_and_preview
@@ -59,9 +60,18 @@ def _degrade(job: Job, grid: "PSFGrid", grid_path: str, settings: dict[str, Any]
     rows, cols, _ = image_size(job.input)
     # the batch's camera of the frame's size, fitted once (`convolution.camera`); none: unreadable, degrade says why
     camera = settings.get("cameras", {}).get(f"{cols}x{rows}")
-    degrade_file(job.input, grid, grid_path, output, png, spec, force=settings["force"], depth=job.params.get("depth"),
-                 extra_meta={"batch": {**settings["batch"], "seed": job.seed}, **({"camera": camera} if camera else {})},
-                 labels=job.params.get("labels"))
+    degrade_file(
+        job.input,
+        grid,
+        grid_path,
+        output,
+        png,
+        spec,
+        force=settings["force"],
+        depth=job.params.get("depth"),
+        extra_meta={"batch": {**settings["batch"], "seed": job.seed}, **({"camera": camera} if camera else {})},
+        labels=job.params.get("labels"),
+    )
 
 
 SCENE_CAMERAS: dict[tuple, dict] = {}  # this worker process's scene items' camera blocks, each fitted once
@@ -75,8 +85,13 @@ def scene_camera(scene, model: str | None) -> dict | None:
     from ..render.commands import lens_camera
 
     sensor = scene.sensors()[0]
-    key = (sensor.lens.hash, tuple(int(v) for v in sensor.film().crop_size()), float(sensor.pitch_um),
-           sensor.response.single_wavelength, model)
+    key = (
+        sensor.lens.hash,
+        tuple(int(v) for v in sensor.film().crop_size()),
+        float(sensor.pitch_um),
+        sensor.response.single_wavelength,
+        model,
+    )
     if key not in SCENE_CAMERAS:
         SCENE_CAMERAS[key] = lens_camera(scene, model)
     return SCENE_CAMERAS[key]
@@ -124,12 +139,23 @@ def _render(job: Job, settings: dict[str, Any]) -> None:
         from ..render.stock import render_scene
         from ..render.user_scene import camera_meta, load
 
-        scene = load(job.input, spec.variant, lens, pitch_um=spec.pitch_um, focus_distance=spec.focus_distance,
-                     response=spec.response)
+        scene = load(
+            job.input,
+            spec.variant,
+            lens,
+            pitch_um=spec.pitch_um,
+            focus_distance=spec.focus_distance,
+            response=spec.response,
+        )
         block = scene_camera(scene, settings.get("calibration_model"))  # before the render: a refusal costs none
         result = render_scene(scene, spec.spp, seed=spec.seed, labels=spec.labels)
-        result.meta.update(scene=job.input, lens=lens.name, lens_hash=lens.hash, **camera_meta(scene),
-                           **({"camera": block} if block is not None else {}))
+        result.meta.update(
+            scene=job.input,
+            lens=lens.name,
+            lens_hash=lens.hash,
+            **camera_meta(scene),
+            **({"camera": block} if block is not None else {}),
+        )
     else:
         from ..render.image import image_sensor_key, render_image
 

@@ -9,8 +9,10 @@ References: the SOLAS paper's patch-wise convolution (`solas_mi` package docstri
 D. P. O'Leary, "Restoring images degraded by spatially variant blur", SIAM J. Sci. Comput. 19(4),
 1063–1082, 1998 (PSFs interpolated between grid nodes, the basis of `interp`).
 """
+
 from ..lazy import lazy_exports
 
 __all__ = ["DEFAULT_METHOD", "METHODS", "DegradeSpec", "degrade"]
-__getattr__ = lazy_exports(__name__, {"DEFAULT_METHOD": ".methods", "METHODS": ".methods", "DegradeSpec": ".spec",
-                                      "degrade": ".methods"})
+__getattr__ = lazy_exports(
+    __name__, {"DEFAULT_METHOD": ".methods", "METHODS": ".methods", "DegradeSpec": ".spec", "degrade": ".methods"}
+)

@@ -13,6 +13,7 @@ A fit costs seconds (2–6 s for the shipped lenses): a batch makes it once per 
 never per frame, and `describe_camera` keeps each block in the cache of fitted cameras, so a later degrade of
 a frame of the same camera reads it back.
 """
+
 from __future__ import annotations
 
 from ..errors import SolasError
@@ -95,18 +96,30 @@ def _block(grid, width: int, height: int, frame, sensor, model: str | None, lens
     """`frame_camera` on the frame's `sensor` (None: a fisheye frame's own camera)."""
     from ..optics.calibration import describe_camera
 
-    named = {"lens": grid.meta.get("lens"), "lens_hash": grid.meta.get("lens_hash"),
-             "wavelength_nm": reference_wavelength(grid)}
+    named = {
+        "lens": grid.meta.get("lens"),
+        "lens_hash": grid.meta.get("lens_hash"),
+        "wavelength_nm": reference_wavelength(grid),
+    }
     if sensor is None:
-        return {**named, "frame_camera": frame.meta(width, height),
-                "frame": "the frame's own camera, kept: its points are the lens's chief rays at wavelength_nm"}
+        return {
+            **named,
+            "frame_camera": frame.meta(width, height),
+            "frame": "the frame's own camera, kept: its points are the lens's chief rays at wavelength_nm",
+        }
     lens = grid_lens(grid) if lens is None else lens
-    frame_note = ("the lens's chief-ray mapping at wavelength_nm over this sensor (its distortion kept; the axis at "
-                  "principal_px)")
+    frame_note = (
+        "the lens's chief-ray mapping at wavelength_nm over this sensor (its distortion kept; the axis at principal_px)"
+    )
     if lens is None:
-        return {**named, **sensor.describe(), "frame": frame_note, "calibration": None,
-                "no_calibration": "the grid's lens file (lens_source) is gone or changed: no lens to fit; degrade a "
-                                  "grid of a lens that is still there"}
+        return {
+            **named,
+            **sensor.describe(),
+            "frame": frame_note,
+            "calibration": None,
+            "no_calibration": "the grid's lens file (lens_source) is gone or changed: no lens to fit; degrade a "
+            "grid of a lens that is still there",
+        }
     return {**describe_camera(lens, sensor, model, wavelength_nm=named["wavelength_nm"]), "frame": frame_note}
 
 

@@ -27,6 +27,7 @@ stack, convolved by real FFTs at a size ≥ tile + 2R (a linear convolution, no 
 the output; one channel at a time, batches of ~1 M samples on a thread pool, so memory stays a few
 image-sized buffers (4K included). Boundary: the image is padded (`kernels.pad`), never wrapped.
 """
+
 from __future__ import annotations
 
 import math
@@ -35,8 +36,7 @@ import numpy as np
 
 from ..psf.grid import PSFGrid
 from . import curved
-from .kernels import (Layout, batches, fast_len, fft_convolve, hats_at, kernel_radius, node_kernels, pad,
-                      parallel_map)
+from .kernels import Layout, batches, fast_len, fft_convolve, hats_at, kernel_radius, node_kernels, pad, parallel_map
 
 SUMMARY = "PSFs interpolated bilinearly between grid nodes at every pixel: no seams"
 
@@ -53,12 +53,13 @@ def hats(knots: np.ndarray, first: int, count: int) -> tuple[np.ndarray, np.ndar
     hi = count - np.argmax(nz[:, ::-1], axis=1)
     length = int((hi - lo).max())
     w = np.pad(w[used], ((0, 0), (0, length)))
-    windows = np.stack([w[i, a:a + length] for i, a in enumerate(lo)])
+    windows = np.stack([w[i, a : a + length] for i, a in enumerate(lo)])
     return used, lo, windows, length
 
 
-def convolve_channel(channel: np.ndarray, grid: PSFGrid, lay: Layout, wavelength: int, boundary: str,
-                     dtype=np.float32) -> np.ndarray:
+def convolve_channel(
+    channel: np.ndarray, grid: PSFGrid, lay: Layout, wavelength: int, boundary: str, dtype=np.float32
+) -> np.ndarray:
     """One channel (H, W) degraded with bilinearly interpolated PSFs of grid wavelength `wavelength` (in
     field angle on a fisheye frame's layout: `curved`)."""
     if isinstance(lay, curved.CurvedLayout):
@@ -87,25 +88,30 @@ def convolve_channel(channel: np.ndarray, grid: PSFGrid, lay: Layout, wavelength
 
     for at, result in parallel_map(work, batches(len(mi), math.prod(shape))):
         for (r, c), res in zip(at, result):
-            acc[r:r + shape[0], c:c + shape[1]] += res
-    return acc[edge:edge + height, edge:edge + width].copy()
+            acc[r : r + shape[0], c : c + shape[1]] += res
+    return acc[edge : edge + height, edge : edge + width].copy()
 
 
-def lit_nodes(padded: np.ndarray, row_lo: np.ndarray, col_lo: np.ndarray, ly: int, lx: int, block: int = 8
-              ) -> tuple[np.ndarray, np.ndarray]:
+def lit_nodes(
+    padded: np.ndarray, row_lo: np.ndarray, col_lo: np.ndarray, ly: int, lx: int, block: int = 8
+) -> tuple[np.ndarray, np.ndarray]:
     """Row and column indices of the nodes whose ly×lx window of `padded` (from row_lo, col_lo) may hold a
     non-zero value: a summed-area table of the block×block blocks holding any (a few extra nodes at
     most, whose tiles add zeros; the table is 1/block² of the image). Only their tiles are cut and
     convolved."""
     h, w = -(-padded.shape[0] // block), -(-padded.shape[1] // block)
     nz = np.zeros((h * block, w * block), dtype=bool)
-    np.not_equal(padded, 0, out=nz[:padded.shape[0], :padded.shape[1]])
+    np.not_equal(padded, 0, out=nz[: padded.shape[0], : padded.shape[1]])
     table = np.zeros((h + 1, w + 1), dtype=np.int64)
     table[1:, 1:] = nz.reshape(h, block, w, block).any(axis=(1, 3)).cumsum(axis=0).cumsum(axis=1)
     r0, r1 = (row_lo // block)[:, None], ((row_lo + ly - 1) // block + 1)[:, None]
     c0, c1 = (col_lo // block)[None, :], ((col_lo + lx - 1) // block + 1)[None, :]
-    count = table[np.minimum(r1, h), np.minimum(c1, w)] - table[r0, np.minimum(c1, w)] - table[np.minimum(r1, h), c0] \
+    count = (
+        table[np.minimum(r1, h), np.minimum(c1, w)]
+        - table[r0, np.minimum(c1, w)]
+        - table[np.minimum(r1, h), c0]
         + table[r0, c0]
+    )
     return np.nonzero(count > 0)
 
 
@@ -116,5 +122,9 @@ def describe(lay: Layout, radius: int, wavelengths: list[int]) -> dict:
     margin = radius + lay.max_shift(wavelengths)
     rows = hats(lay.row_knots, -margin, lay.camera.height + 2 * margin)[0]
     cols = hats(lay.col_knots, -margin, lay.camera.width + 2 * margin)[0]
-    return {"nodes": [len(cols), len(rows)], "node_columns": cols.tolist(), "node_rows": rows.tolist(),
-            "weights": "bilinear hats over the nodes' ideal pixel positions, clamped beyond the outermost nodes"}
+    return {
+        "nodes": [len(cols), len(rows)],
+        "node_columns": cols.tolist(),
+        "node_rows": rows.tolist(),
+        "weights": "bilinear hats over the nodes' ideal pixel positions, clamped beyond the outermost nodes",
+    }

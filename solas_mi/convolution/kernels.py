@@ -27,6 +27,7 @@ Boundary: the image is padded, never wrapped around: "edge" (default) replicates
 "zero" pads with 0 (a dark surround), "reflect" mirrors the image about its border (the border pixel
 repeats).
 """
+
 from __future__ import annotations
 
 import math
@@ -63,8 +64,10 @@ def grid_camera(grid: PSFGrid, width: int, height: int, frame: FrameCamera | Non
     the sensor's pitch is pinhole_focal_mm / fx, the axis at (cx, cy)."""
     meta = grid.meta
     if "pinhole_focal_mm" not in meta or "reference_wavelength_nm" not in meta:
-        raise SolasError("the PSF grid has no pinhole_focal_mm/reference_wavelength_nm metadata (written by an "
-                         "older version, or with a zero x field range): regenerate it with `solas-mi psf-grid`")
+        raise SolasError(
+            "the PSF grid has no pinhole_focal_mm/reference_wavelength_nm metadata (written by an "
+            "older version, or with a zero x field range): regenerate it with `solas-mi psf-grid`"
+        )
     fov = float(meta["field_range_deg"][0])
     focal = float(meta["pinhole_focal_mm"])
     if frame is None:
@@ -72,14 +75,25 @@ def grid_camera(grid: PSFGrid, width: int, height: int, frame: FrameCamera | Non
         return Camera(int(width), int(height), pitch_um, focal, fov, float(meta["reference_wavelength_nm"]))
     check_frame_covered(grid, frame, width, height)
     if frame.model in FISHEYE:
-        raise SolasError(f"a {frame.model} frame's pixels are not a rectilinear image: lay the grid out with "
-                         "convolution.curved.frame_layout")
+        raise SolasError(
+            f"a {frame.model} frame's pixels are not a rectilinear image: lay the grid out with "
+            "convolution.curved.frame_layout"
+        )
     fx, fy, cx, cy = frame.pinhole(width, height)
     if abs(fx / fy - 1) > 1e-3:
-        raise SolasError(f"frame intrinsics fx {fx:g}, fy {fy:g} px: the sensor's pixels are square; resample the "
-                         "frame so that fx = fy")
-    return Camera(int(width), int(height), 1e3 * focal / fx, focal, math.degrees(math.atan((width / 2) / fx)),
-                  float(meta["reference_wavelength_nm"]), principal=(float(cx), float(cy)))
+        raise SolasError(
+            f"frame intrinsics fx {fx:g}, fy {fy:g} px: the sensor's pixels are square; resample the "
+            "frame so that fx = fy"
+        )
+    return Camera(
+        int(width),
+        int(height),
+        1e3 * focal / fx,
+        focal,
+        math.degrees(math.atan((width / 2) / fx)),
+        float(meta["reference_wavelength_nm"]),
+        principal=(float(cx), float(cy)),
+    )
 
 
 def check_frame_covered(grid: PSFGrid, frame: FrameCamera, width: int, height: int) -> None:
@@ -91,10 +105,12 @@ def check_frame_covered(grid: PSFGrid, frame: FrameCamera, width: int, height: i
         reach.append(max(abs(nodes[0]), abs(nodes[-1])) + half * (1 + 2 * COVER_TOLERANCE))
     ex, ey = frame.extent_deg(width, height)
     if ex > reach[0] or ey > reach[1]:
-        raise SolasError(f"the {width}x{height} frame ({frame.model} camera) spans field angles up to {ex:.4g} deg "
-                         f"in x and {ey:.4g} deg in y; the lens's PSF grid covers {reach[0]:.4g} x {reach[1]:.4g} "
-                         f"deg (lens {grid.meta.get('lens')}): the lens "
-                         "does not cover this frame; give the frame's true camera or a lens with a wider field")
+        raise SolasError(
+            f"the {width}x{height} frame ({frame.model} camera) spans field angles up to {ex:.4g} deg "
+            f"in x and {ey:.4g} deg in y; the lens's PSF grid covers {reach[0]:.4g} x {reach[1]:.4g} "
+            f"deg (lens {grid.meta.get('lens')}): the lens "
+            "does not cover this frame; give the frame's true camera or a lens with a wider field"
+        )
 
 
 def channel_wavelengths(grid: PSFGrid, channels: int) -> list[int]:
@@ -105,9 +121,11 @@ def channel_wavelengths(grid: PSFGrid, channels: int) -> list[int]:
         return [0] * channels
     if n == channels:
         return [int(i) for i in np.argsort(grid.wavelengths_nm, kind="stable")[::-1]]
-    raise SolasError(f"the PSF grid has {n} wavelengths {list(grid.wavelengths_nm)} nm but the image has {channels} "
-                     f"channel(s): use an image with {n} channels (R, G, B ← longest to shortest) or a grid of one "
-                     "wavelength")
+    raise SolasError(
+        f"the PSF grid has {n} wavelengths {list(grid.wavelengths_nm)} nm but the image has {channels} "
+        f"channel(s): use an image with {n} channels (R, G, B ← longest to shortest) or a grid of one "
+        "wavelength"
+    )
 
 
 def psf_scale(grid: PSFGrid, wavelength: int, rows: np.ndarray, cols: np.ndarray) -> np.ndarray:
@@ -118,7 +136,7 @@ def psf_scale(grid: PSFGrid, wavelength: int, rows: np.ndarray, cols: np.ndarray
     if how == "sum":
         return np.full(len(rows), flux)
     if how == "none":  # irradiance per µm²: weights sum to the transmitted fraction
-        return np.full(len(rows), flux * grid.pitch_um ** 2)
+        return np.full(len(rows), flux * grid.pitch_um**2)
     if how == "peak":  # no energy scale kept: unit sum (of these nodes' PSFs only: a batch's, not the grid's)
         total = grid.data[wavelength, rows, cols].sum(axis=(-2, -1), dtype=np.float64)
         return 1.0 / np.where(total > 0, total, 1.0)
@@ -152,15 +170,18 @@ def layout(grid: PSFGrid, width: int, height: int, frame: FrameCamera | None = N
         return sensor_layout(grid, width, height)
     camera = grid_camera(grid, width, height, frame)
     f = np.asarray(grid.fields_deg, dtype=np.float64)
-    if not (np.allclose(f[:, :, 0], f[:1, :, 0], rtol=0, atol=1e-9)
-            and np.allclose(f[:, :, 1], f[:, :1, 1], rtol=0, atol=1e-9)):
+    if not (
+        np.allclose(f[:, :, 0], f[:1, :, 0], rtol=0, atol=1e-9)
+        and np.allclose(f[:, :, 1], f[:, :1, 1], rtol=0, atol=1e-9)
+    ):
         raise SolasError("the PSF grid's fields are not a grid of x columns and y rows")
     px = camera.ideal_pixel(f)  # (ny, nx, 2) = (column, row)
     cols, rows = px[0, :, 0], px[:, 0, 1]
     for name, knots, extent in (("x", cols, width), ("y", rows, height)):
         if len(knots) > 1 and not np.all(np.diff(knots) > 0):
-            raise SolasError(f"the PSF grid's {name} fields must be distinct and ordered (columns left to right, "
-                             "rows top to bottom)")
+            raise SolasError(
+                f"the PSF grid's {name} fields must be distinct and ordered (columns left to right, rows top to bottom)"
+            )
         check_covers(knots, extent, name)
     off = (grid.chief_ray_mm - camera.ideal_mm(f)[None]) * (1e3 / camera.pitch_um)
     offsets = np.stack([off[..., 0], -off[..., 1]], axis=-1)
@@ -174,10 +195,13 @@ def sensor_layout(grid: PSFGrid, width: int, height: int) -> Layout:
     w_mm, h_mm = (float(v) for v in grid.meta["sensor_mm"])
     pitch_mm = w_mm / width
     if abs(h_mm / height / pitch_mm - 1.0) > 1e-3:
-        raise SolasError(f"image size {width}x{height} does not have the PSF grid's sensor aspect {w_mm:g} x {h_mm:g} mm "
-                         f"(pixels would not be square); use an image of {width}x{round(width * h_mm / w_mm)}")
-    camera = Camera(int(width), int(height), pitch_mm * 1e3, 0.0, 0.0, float(grid.meta["reference_wavelength_nm"]),
-                    "sensor")
+        raise SolasError(
+            f"image size {width}x{height} does not have the PSF grid's sensor aspect {w_mm:g} x {h_mm:g} mm "
+            f"(pixels would not be square); use an image of {width}x{round(width * h_mm / w_mm)}"
+        )
+    camera = Camera(
+        int(width), int(height), pitch_mm * 1e3, 0.0, 0.0, float(grid.meta["reference_wavelength_nm"]), "sensor"
+    )
     nodes = np.asarray(grid.meta["node_mm"], dtype=np.float64)  # (ny, nx, 2)
     cols = nodes[0, :, 0] / pitch_mm + width / 2 - 0.5
     rows = height / 2 - 0.5 - nodes[:, 0, 1] / pitch_mm
@@ -196,9 +220,11 @@ def check_covers(knots: np.ndarray, extent: int, axis: str) -> None:
     lo, hi = knots[0] - first * (0.5 + COVER_TOLERANCE), knots[-1] + last * (0.5 + COVER_TOLERANCE)
     if lo > -0.5 or hi < extent - 0.5:
         what = "columns" if axis == "x" else "rows"
-        raise SolasError(f"the PSF grid does not cover the image: its {axis} nodes reach pixel {what} "
-                         f"{knots[0] - first / 2:.1f} … {knots[-1] + last / 2:.1f}, the image spans -0.5 … "
-                         f"{extent - 0.5:g}; regenerate the grid with a larger --field-range-deg")
+        raise SolasError(
+            f"the PSF grid does not cover the image: its {axis} nodes reach pixel {what} "
+            f"{knots[0] - first / 2:.1f} … {knots[-1] + last / 2:.1f}, the image spans -0.5 … "
+            f"{extent - 0.5:g}; regenerate the grid with a larger --field-range-deg"
+        )
 
 
 def check_kernel(grid: PSFGrid, lay: Layout) -> int:
@@ -208,11 +234,13 @@ def check_kernel(grid: PSFGrid, lay: Layout) -> int:
     if 2 * radius + 1 > MAX_KERNEL_PX:
         cam = lay.camera
         padded_gb = 4 * (cam.width + 2 * radius) * (cam.height + 2 * radius) / 1e9
-        raise SolasError(f"the PSF grid's {grid.size}-sample windows of {grid.pitch_um:g} um span "
-                         f"{grid.size * lay.q:.4g} pixels of this {cam.width}x{cam.height} image, whose pixels are "
-                         f"{cam.pitch_um:.4g} um (PSF pitch {lay.q:.4g} px): kernels of {2 * radius + 1} px exceed "
-                         f"{MAX_KERNEL_PX} px (padded planes of about {padded_gb:.3g} GB); the grid's field range is "
-                         "far smaller than the image's — use a grid that spans it")
+        raise SolasError(
+            f"the PSF grid's {grid.size}-sample windows of {grid.pitch_um:g} um span "
+            f"{grid.size * lay.q:.4g} pixels of this {cam.width}x{cam.height} image, whose pixels are "
+            f"{cam.pitch_um:.4g} um (PSF pitch {lay.q:.4g} px): kernels of {2 * radius + 1} px exceed "
+            f"{MAX_KERNEL_PX} px (padded planes of about {padded_gb:.3g} GB); the grid's field range is "
+            "far smaller than the image's — use a grid that spans it"
+        )
     return radius
 
 
@@ -256,8 +284,9 @@ def overlap_matrices(frac: np.ndarray, q: float, size: int, radius: int) -> np.n
     return (g[..., :-1] - g[..., 1:]) / q
 
 
-def pixel_kernels(psfs: np.ndarray, q: float, offsets: np.ndarray, scale: np.ndarray, radius: int,
-                  dtype=np.float64) -> tuple[np.ndarray, np.ndarray]:
+def pixel_kernels(
+    psfs: np.ndarray, q: float, offsets: np.ndarray, scale: np.ndarray, radius: int, dtype=np.float64
+) -> tuple[np.ndarray, np.ndarray]:
     """Kernels (n, 2R+1, 2R+1) and integer shifts (n, 2) as (rows, columns) of PSFs (n, s, s) with
     chief-ray offsets (n, 2) as (columns, rows) pixels and weight factors `scale` (n,); the products
     are taken in `dtype`.
@@ -275,12 +304,14 @@ def pixel_kernels(psfs: np.ndarray, q: float, offsets: np.ndarray, scale: np.nda
     return k, shift[:, ::-1].astype(np.int64)
 
 
-def node_kernels(grid: PSFGrid, lay: Layout, wavelength: int, rows: np.ndarray, cols: np.ndarray, radius: int,
-                 dtype=np.float64) -> tuple[np.ndarray, np.ndarray]:
+def node_kernels(
+    grid: PSFGrid, lay: Layout, wavelength: int, rows: np.ndarray, cols: np.ndarray, radius: int, dtype=np.float64
+) -> tuple[np.ndarray, np.ndarray]:
     """Pixel kernels and shifts of the grid nodes (rows[i], cols[i]) for one wavelength index."""
     scale = psf_scale(grid, wavelength, rows, cols)
-    return pixel_kernels(grid.data[wavelength, rows, cols], lay.q, lay.offsets[wavelength, rows, cols], scale,
-                         radius, dtype)
+    return pixel_kernels(
+        grid.data[wavelength, rows, cols], lay.q, lay.offsets[wavelength, rows, cols], scale, radius, dtype
+    )
 
 
 def pad(channel: np.ndarray, margin: int, boundary: str, extra: tuple[int, int] = (0, 0)) -> np.ndarray:

@@ -26,6 +26,7 @@ box of its moved outline, clipped to the frame (one wholly outside is dropped an
 landing outside the frame is marked not labelled (0, 0, 0); an `area` is scaled by the mapping's local
 area change at the box's centre.
 """
+
 from __future__ import annotations
 
 import copy
@@ -56,8 +57,10 @@ def label_outputs(output: str | Path, kinds) -> dict[str, Path]:
     OUT.boxes.json."""
     output, kinds = Path(output), list(kinds)
     layered = {bool(KINDS[k].extra["layers"]) for k in kinds}
-    return {**({"layers": output.with_suffix(LAYERS_SUFFIX)} if True in layered else {}),
-            **({"boxes": output.with_suffix(BOXES_SUFFIX)} if False in layered else {})}
+    return {
+        **({"layers": output.with_suffix(LAYERS_SUFFIX)} if True in layered else {}),
+        **({"boxes": output.with_suffix(BOXES_SUFFIX)} if False in layered else {}),
+    }
 
 
 def memory_bytes(pixels: int, kinds) -> int:
@@ -76,11 +79,13 @@ def read_labels(files, shape: tuple[int, int], frame: str | Path) -> dict:
     """Each kind's values, read from `files` ((kind, file) pairs or a dict), image kinds checked to be the
     frame's `shape` (rows, columns): a SolasError naming the file, its size and the frame's otherwise."""
     out = {}
-    for kind, path in (files.items() if isinstance(files, dict) else files):
+    for kind, path in files.items() if isinstance(files, dict) else files:
         values = KINDS[kind].function(path)
         if KINDS[kind].extra["layers"] and values.shape[:2] != tuple(shape):
-            raise SolasError(f"{kind} labels {str(path)!r} are {values.shape[1]}x{values.shape[0]} pixels; the frame "
-                             f"{str(frame)!r} is {shape[1]}x{shape[0]}: label images must be the frame's size")
+            raise SolasError(
+                f"{kind} labels {str(path)!r} are {values.shape[1]}x{values.shape[0]} pixels; the frame "
+                f"{str(frame)!r} is {shape[1]}x{shape[0]}: label images must be the frame's size"
+            )
         out[kind] = (values, str(path))
     return out
 
@@ -104,7 +109,7 @@ def dither(height: int, width: int) -> tuple[np.ndarray, np.ndarray]:
     while len(bayer) < BAYER:
         bayer = np.block([[4 * bayer, 4 * bayer + 2], [4 * bayer + 3, 4 * bayer + 1]])
     r, c = np.ogrid[:height, :width]
-    return (bayer[r % BAYER, c % BAYER] + 0.5) / BAYER ** 2, (bayer[c % BAYER, r % BAYER] + 0.5) / BAYER ** 2
+    return (bayer[r % BAYER, c % BAYER] + 0.5) / BAYER**2, (bayer[c % BAYER, r % BAYER] + 0.5) / BAYER**2
 
 
 class Sampler:
@@ -118,8 +123,10 @@ class Sampler:
         self.valid = (self.cols >= -0.5) & (self.cols < w - 0.5) & (self.rows >= -0.5) & (self.rows < h - 0.5)
         ux, uy = dither(h, w)
         # the source point rounded up with the probability of its fraction (a point on a pixel stays there)
-        self.picked = [np.floor(np.where(np.abs(v - np.rint(v)) < SNAP_PX, np.rint(v), v) + u)
-                       for v, u in ((self.cols, ux), (self.rows, uy))]
+        self.picked = [
+            np.floor(np.where(np.abs(v - np.rint(v)) < SNAP_PX, np.rint(v), v) + u)
+            for v, u in ((self.cols, ux), (self.rows, uy))
+        ]
 
     def take(self, values: np.ndarray, cols: np.ndarray, rows: np.ndarray) -> np.ndarray:
         """values (H, W, C) at the whole pixels (cols, rows), by the boundary rule beyond the frame (a valid
@@ -176,12 +183,17 @@ def warp_labels(labels: dict, mapping: Mapping, boundary: str) -> tuple[dict, di
         kinds[kind] = about
     if layers:
         layers[VALID] = sampler.valid.astype(np.float32)
-    meta = {"kinds": kinds, **mapping.meta(), "boundary": boundary, **sampler.found,
-            "valid_fraction": float(sampler.valid.mean()),
-            "valid": f"{VALID}: 1 where the pixel's source lies inside the input frame, 0 where beyond its border "
-                     f"(labels there follow the boundary rule {boundary!r}, as the image does)",
-            "coordinates": "pixel centres at whole (column, row); the JSON's points as COCO's (0, 0: the top-left "
-                           "corner of the first pixel)"}
+    meta = {
+        "kinds": kinds,
+        **mapping.meta(),
+        "boundary": boundary,
+        **sampler.found,
+        "valid_fraction": float(sampler.valid.mean()),
+        "valid": f"{VALID}: 1 where the pixel's source lies inside the input frame, 0 where beyond its border "
+        f"(labels there follow the boundary rule {boundary!r}, as the image does)",
+        "coordinates": "pixel centres at whole (column, row); the JSON's points as COCO's (0, 0: the top-left "
+        "corner of the first pixel)",
+    }
     return layers, annotations, meta
 
 
@@ -205,8 +217,11 @@ def _box(a: dict, mapping: Mapping) -> list[float] | None:
     if not (x1 > x0 and y1 > y0):
         return None
     if isinstance(a.get("area"), (int, float)) and not isinstance(a.get("area"), bool):
-        cx, cy = _move(mapping, [x + w / 2 - 0.5, x + w / 2 + 0.5, x + w / 2, x + w / 2],
-                       [y + h / 2, y + h / 2, y + h / 2 - 0.5, y + h / 2 + 0.5])
+        cx, cy = _move(
+            mapping,
+            [x + w / 2 - 0.5, x + w / 2 + 0.5, x + w / 2, x + w / 2],
+            [y + h / 2, y + h / 2, y + h / 2 - 0.5, y + h / 2 + 0.5],
+        )
         a["area"] = float(a["area"]) * abs((cx[1] - cx[0]) * (cy[3] - cy[2]) - (cx[3] - cx[2]) * (cy[1] - cy[0]))
     return [float(x0), float(y0), float(x1 - x0), float(y1 - y0)]
 
@@ -232,8 +247,9 @@ def move_annotations(data: dict, mapping: Mapping) -> tuple[dict, dict]:
             k[:, 2] = np.where(inside, k[:, 2], 0.0)
             a["keypoints"] = [v if i % 3 != 2 else int(v) for i, v in enumerate(k.ravel().tolist())]
         if a.get("segmentation"):
-            a["segmentation"] = [np.stack(_move(mapping, s[0::2], s[1::2]), axis=-1).ravel().tolist()
-                                 for s in a["segmentation"]]
+            a["segmentation"] = [
+                np.stack(_move(mapping, s[0::2], s[1::2]), axis=-1).ravel().tolist() for s in a["segmentation"]
+            ]
         kept.append(a)
     out["annotations"] = kept
     return out, {"annotations": len(kept), "boxes_dropped_outside": dropped, "keypoints_moved_outside": hidden}
@@ -246,7 +262,10 @@ def label_writers(targets: dict[str, Path], layers: dict, annotations: dict | No
     from .. import jsonio
     from ..imageio import write_exr, write_text
 
-    writers = {"layers": lambda tmp: write_exr(tmp, layers, {"labels": meta}),
-               "boxes": lambda tmp: write_text(tmp, jsonio.dumps({**(annotations or {}), "solas_mi_labels": meta},
-                                                                 indent=1) + "\n")}
+    writers = {
+        "layers": lambda tmp: write_exr(tmp, layers, {"labels": meta}),
+        "boxes": lambda tmp: write_text(
+            tmp, jsonio.dumps({**(annotations or {}), "solas_mi_labels": meta}, indent=1) + "\n"
+        ),
+    }
     return {path: writers[what] for what, path in targets.items()}

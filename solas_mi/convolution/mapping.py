@@ -23,6 +23,7 @@ depth edge moves two surfaces differently the iteration may end between them (at
 their offsets away: a fraction of a pixel between neighbouring distance nodes); the metadata gives the
 largest residual |M(p) − q|.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -71,13 +72,15 @@ def layout_offsets(lay: Layout, ref: int, cols: np.ndarray, rows: np.ndarray) ->
     """O at the input points (cols, rows) (…, 2) as (columns, rows) of a grid laid out by `lay`, wavelength `ref`."""
     if isinstance(lay, CurvedLayout):  # hats over field angle, the pixel's as `curved_layout` finds it
         tx, ty = lay.frame.tangents(cols, rows, lay.camera.width, lay.camera.height, clamp=True)
-        return blend(lay.col_knots, lay.row_knots, lay.offsets[ref], np.degrees(np.arctan(tx)),
-                     -np.degrees(np.arctan(ty)))
+        return blend(
+            lay.col_knots, lay.row_knots, lay.offsets[ref], np.degrees(np.arctan(tx)), -np.degrees(np.arctan(ty))
+        )
     return blend(lay.col_knots, lay.row_knots, lay.offsets[ref], cols, rows)
 
 
 def block_offsets(lay: Layout, ref: int, cols: np.ndarray, rows: np.ndarray) -> np.ndarray:
     """O at the output points (cols, rows) of `patch`: the offset of the node whose block holds the pixel."""
+
     def node(knots, x, extent):
         if len(knots) == 1:
             return np.zeros(np.shape(x), dtype=np.int64)
@@ -124,8 +127,10 @@ class Mapping:
         if self.depth is None:
             return layout_offsets(self.layouts[0], self.ref, cols, rows)
         c, r = (cols, rows) if at is None else at
-        d = self.depth[np.clip(np.rint(r), 0, self.height - 1).astype(np.int64),
-                       np.clip(np.rint(c), 0, self.width - 1).astype(np.int64)]
+        d = self.depth[
+            np.clip(np.rint(r), 0, self.height - 1).astype(np.int64),
+            np.clip(np.rint(c), 0, self.width - 1).astype(np.int64),
+        ]
         k0, k1, t = _cells(self.inverse, np.where(np.isinf(d), 0.0, 1.0 / d))
         each = np.stack([layout_offsets(lay, self.ref, cols, rows) for lay in self.layouts])
         pick = np.indices(np.shape(cols))
@@ -156,7 +161,7 @@ class Mapping:
         step = max(1, CHUNK_PIXELS // self.width)
         iterations, residual = 0, 0.0
         for top in range(0, self.height, step):
-            r, c = np.mgrid[top:min(self.height, top + step), 0:self.width].astype(np.float64)
+            r, c = np.mgrid[top : min(self.height, top + step), 0 : self.width].astype(np.float64)
             if self.gathered:  # patch: the block's own offset, no iteration
                 o = self.offsets(c, r)
                 x, y, n = c - o[..., 0], r - o[..., 1], 1
@@ -164,24 +169,32 @@ class Mapping:
                 x, y, n = self._solve(c, r, -1)
             fx, fy = self.forward(x, y)
             residual = max(residual, float(np.hypot(fx - c, fy - r).max()))
-            cols[top:top + len(r)], rows[top:top + len(r)] = x, y
+            cols[top : top + len(r)], rows[top : top + len(r)] = x, y
             iterations = max(iterations, n)
         return cols, rows, {"iterations": iterations, "max_residual_px": residual}
 
     def meta(self) -> dict:
         """What the mapping is, for the metadata."""
         nodes = np.stack([lay.offsets[self.ref] for lay in self.layouts])
-        how = ("patch: each output block takes the input at its node's chief-ray offset" if self.gathered else
-               "interp: each input point moves by its nodes' chief-ray offsets blended by the convolution's hats"
-               + (", and by its depth's hats in 1/distance" if self.depth is not None else ""))
-        return {"wavelength_nm": self.wavelength_nm, "max_chief_ray_offset_px": float(np.abs(nodes).max()),
-                "mapping": how, "max_psf_centroid_px": self.centroid_px,
-                "psf_centroid": "the labels follow the chief ray; the light of a point lands around it, its centroid "
-                                "up to max_psf_centroid_px away (the PSF's first moment: coma, vignetting)"}
+        how = (
+            "patch: each output block takes the input at its node's chief-ray offset"
+            if self.gathered
+            else "interp: each input point moves by its nodes' chief-ray offsets blended by the convolution's hats"
+            + (", and by its depth's hats in 1/distance" if self.depth is not None else "")
+        )
+        return {
+            "wavelength_nm": self.wavelength_nm,
+            "max_chief_ray_offset_px": float(np.abs(nodes).max()),
+            "mapping": how,
+            "max_psf_centroid_px": self.centroid_px,
+            "psf_centroid": "the labels follow the chief ray; the light of a point lands around it, its centroid "
+            "up to max_psf_centroid_px away (the PSF's first moment: coma, vignetting)",
+        }
 
 
-def mapping_for(grid, width: int, height: int, frame=None, method: str = "interp", depth: np.ndarray | None = None
-                ) -> Mapping:
+def mapping_for(
+    grid, width: int, height: int, frame=None, method: str = "interp", depth: np.ndarray | None = None
+) -> Mapping:
     """The mapping a width×height frame (taken by `frame`, `optics.frame.FrameCamera`; None: spanning the
     grid's x field) goes through when degraded by `grid` with `method`; with a depth grid
     (`psf.depth.DepthGrid`), its depth map `depth` (m, as the convolution used it: `depth.silhouette_depth`)."""
@@ -189,5 +202,14 @@ def mapping_for(grid, width: int, height: int, frame=None, method: str = "interp
     lays = [frame_layout(g, width, height, frame) for g in grids]
     ref = reference_index(grids[0])
     centroid = max(float(np.hypot(*psf_centroids(g, lay, ref).transpose(2, 0, 1)).max()) for g, lay in zip(grids, lays))
-    return Mapping(width, height, lays, ref, float(grids[0].wavelengths_nm[ref]), centroid, gathered=method == "patch",
-                   inverse=grid.inverse if depth is not None else None, depth=depth)
+    return Mapping(
+        width,
+        height,
+        lays,
+        ref,
+        float(grids[0].wavelengths_nm[ref]),
+        centroid,
+        gathered=method == "patch",
+        inverse=grid.inverse if depth is not None else None,
+        depth=depth,
+    )

@@ -5,6 +5,7 @@ convolution with its PSF grid.
 The input image is the ideal (pinhole) image of the scene spanning the grid's ±x field range; its
 pixel grid is the sensor (`kernels.grid_camera`).
 """
+
 from __future__ import annotations
 
 import time
@@ -32,10 +33,20 @@ METHODS = Registry("convolution method", default=DEFAULT_METHOD)
 entry's function convolves one channel, ``(channel (H, W), grid, kernels.Layout, grid wavelength index, boundary,
 dtype) -> degraded channel``, and its ``describe`` ``(kernels.Layout, kernel radius R in pixels, grid wavelength
 indices used)`` gives the metadata of what was done."""
-METHODS.register("interp", interp.convolve_channel, describe=interp.describe, summary=interp.SUMMARY,
-                 reference="J. G. Nagy and D. P. O'Leary, SIAM J. Sci. Comput. 19(4), 1998")
-METHODS.register("patch", patch.convolve_channel, describe=patch.describe, summary=patch.SUMMARY,
-                 reference="the SOLAS paper (IS&T Electronic Imaging, 2025): one PSF per block")
+METHODS.register(
+    "interp",
+    interp.convolve_channel,
+    describe=interp.describe,
+    summary=interp.SUMMARY,
+    reference="J. G. Nagy and D. P. O'Leary, SIAM J. Sci. Comput. 19(4), 1998",
+)
+METHODS.register(
+    "patch",
+    patch.convolve_channel,
+    describe=patch.describe,
+    summary=patch.SUMMARY,
+    reference="the SOLAS paper (IS&T Electronic Imaging, 2025): one PSF per block",
+)
 
 
 def check_method(method: str) -> str:
@@ -44,8 +55,17 @@ def check_method(method: str) -> str:
 
 
 # long: the public API's numpydoc docstring is half of it
-def degrade(image: np.ndarray, grid: "PSFGrid | str", method: str = DEFAULT_METHOD, boundary: str = "edge", *,
-            dtype=np.float32, meta: dict | None = None, progress=None, frame=None) -> np.ndarray:
+def degrade(
+    image: np.ndarray,
+    grid: PSFGrid | str,
+    method: str = DEFAULT_METHOD,
+    boundary: str = "edge",
+    *,
+    dtype=np.float32,
+    meta: dict | None = None,
+    progress=None,
+    frame=None,
+) -> np.ndarray:
     """A linear image as the lens of a PSF grid sees it: spatially variant convolution.
 
     The image is the ideal image of the grid's field (`optics.camera`); channels take the grid's
@@ -116,8 +136,10 @@ def degrade(image: np.ndarray, grid: "PSFGrid | str", method: str = DEFAULT_METH
     wavelengths = channel_wavelengths(grid, nchan)
     lay = frame_layout(grid, width, height, frame)
     if isinstance(lay, CurvedLayout) and method != "interp":
-        raise SolasError(f"a {frame.model} frame is degraded by interp (PSFs interpolated in field angle at every "
-                         f"pixel), not {method}: its blocks of pixels are not blocks of field")
+        raise SolasError(
+            f"a {frame.model} frame is degraded by interp (PSFs interpolated in field angle at every "
+            f"pixel), not {method}: its blocks of pixels are not blocks of field"
+        )
     radius = check_kernel(grid, lay)  # before any allocation
     m = METHODS[method]
     start = time.perf_counter()
@@ -128,13 +150,18 @@ def degrade(image: np.ndarray, grid: "PSFGrid | str", method: str = DEFAULT_METH
             if progress is not None:
                 progress(c + 1, nchan)
     if meta is not None:
-        meta.update({
-            "method": method, "boundary": boundary, "camera": lay.camera.meta(),
-            "channel_wavelengths_nm": [grid.wavelengths_nm[k] for k in wavelengths],
-            "kernel_size_px": 2 * radius + 1, "psf_pitch_px": lay.q,
-            "max_chief_ray_offset_px": float(np.abs(lay.offsets[sorted(set(wavelengths))]).max()),
-            "seconds": time.perf_counter() - start,
-        })
+        meta.update(
+            {
+                "method": method,
+                "boundary": boundary,
+                "camera": lay.camera.meta(),
+                "channel_wavelengths_nm": [grid.wavelengths_nm[k] for k in wavelengths],
+                "kernel_size_px": 2 * radius + 1,
+                "psf_pitch_px": lay.q,
+                "max_chief_ray_offset_px": float(np.abs(lay.offsets[sorted(set(wavelengths))]).max()),
+                "seconds": time.perf_counter() - start,
+            }
+        )
         if frame is not None:
             meta["frame_camera"] = frame.meta(width, height)
         meta.update(m.extra["describe"](lay, radius, wavelengths))

@@ -2,8 +2,9 @@
 metadata: what `solas-mi degrade` and every batch item do."""
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
-from typing import TYPE_CHECKING, Any, Callable
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
@@ -62,7 +63,7 @@ def read_depth(path: str | Path) -> np.ndarray:
 
 
 # many parameters: the item's files (image, grid, outputs, depth map, labels) beside the spec and the run's settings
-def degrade_file(image_path: str | Path, grid: "PSFGrid | DepthGrid", grid_path: str | Path, output: Path, png: Path,
+def degrade_file(image_path: str | Path, grid: PSFGrid | DepthGrid, grid_path: str | Path, output: Path, png: Path,
                  spec: DegradeSpec | None = None, *, force: bool = False, depth: str | Path | None = None,
                  extra_meta: dict[str, Any] | None = None, progress: Callable[[int, int], None] | None = None,
                  labels=None, calibration_model: str | None = None) -> dict[str, Any]:

@@ -19,6 +19,7 @@ the method as published; `interp` has none.
 Vectorised: the blocks' input tiles (block + 2R, FFT-friendly size) are cut from the padded image as
 one strided stack, convolved by batched real FFTs in batches of ~1 M samples on a thread pool.
 """
+
 from __future__ import annotations
 
 import math
@@ -28,8 +29,9 @@ import numpy as np
 from ..psf.grid import PSFGrid
 from .kernels import Layout, batches, fast_len, fft_convolve, kernel_radius, node_kernels, pad, parallel_map
 
-SUMMARY = ("the SOLAS paper's one PSF per block (8x6 blocks from an 8x8 grid on a 1280x960 image): seams at "
-           "block borders")
+SUMMARY = (
+    "the SOLAS paper's one PSF per block (8x6 blocks from an 8x8 grid on a 1280x960 image): seams at block borders"
+)
 
 
 def blocks(knots: np.ndarray, extent: int) -> list[tuple[int, int, int]]:
@@ -46,8 +48,9 @@ def block_layout(lay: Layout) -> tuple[list, list]:
     return blocks(lay.row_knots, lay.camera.height), blocks(lay.col_knots, lay.camera.width)
 
 
-def convolve_channel(channel: np.ndarray, grid: PSFGrid, lay: Layout, wavelength: int, boundary: str,
-                     dtype=np.float32) -> np.ndarray:
+def convolve_channel(
+    channel: np.ndarray, grid: PSFGrid, lay: Layout, wavelength: int, boundary: str, dtype=np.float32
+) -> np.ndarray:
     """One channel (H, W) degraded block by block with the PSFs of grid wavelength index `wavelength`."""
     height, width = channel.shape
     row_blocks, col_blocks = block_layout(lay)
@@ -73,7 +76,7 @@ def convolve_channel(channel: np.ndarray, grid: PSFGrid, lay: Layout, wavelength
     for sl, result in parallel_map(work, batches(len(todo), math.prod(shape))):
         for i, res in zip(range(sl.start, sl.stop), result):
             _, _, r0, r1, c0, c1 = todo[i]
-            out[r0:r1, c0:c1] = res[2 * radius:2 * radius + r1 - r0, 2 * radius:2 * radius + c1 - c0]
+            out[r0:r1, c0:c1] = res[2 * radius : 2 * radius + r1 - r0, 2 * radius : 2 * radius + c1 - c0]
     return out
 
 
@@ -81,6 +84,9 @@ def describe(lay: Layout, radius: int, wavelengths: list[int]) -> dict:
     """The blocks and their nodes (`methods.ConvolutionMethod.describe`; the kernel radius and the
     wavelengths do not change them)."""
     rows, cols = block_layout(lay)
-    return {"blocks": [len(cols), len(rows)],
-            "block_columns": [[n, a, b] for n, a, b in cols], "block_rows": [[m, a, b] for m, a, b in rows],
-            "blocks_meaning": "[grid index, first pixel, end pixel) of each block column / row"}
+    return {
+        "blocks": [len(cols), len(rows)],
+        "block_columns": [[n, a, b] for n, a, b in cols],
+        "block_rows": [[m, a, b] for m, a, b in rows],
+        "blocks_meaning": "[grid index, first pixel, end pixel) of each block column / row",
+    }

@@ -8,6 +8,7 @@ The frame's camera, a batch's camera and a batch's grid options are objects the 
 several flags each (`commands.add_frame_options`, `isp.commands.add_camera_options`, the `psf-grid`
 flags): fields without a flag of their own.
 """
+
 from __future__ import annotations
 
 import math
@@ -86,30 +87,56 @@ class DegradeSpec(OptionSpec):
     """
 
     method: str = option(METHODS.help, DEFAULT_METHOD, choices=METHODS.names)
-    boundary: str = option("padding outside the image, never wrapped around: edge (default) replicates the border "
-                           "pixels, zero pads with black, reflect mirrors the image about its border", BOUNDARIES[0],
-                           choices=BOUNDARIES)
+    boundary: str = option(
+        "padding outside the image, never wrapped around: edge (default) replicates the border "
+        "pixels, zero pads with black, reflect mirrors the image about its border",
+        BOUNDARIES[0],
+        choices=BOUNDARIES,
+    )
     linear: bool = option("PNG/JPEG values are already linear: do not decode sRGB", False)
-    output_format: str = option("output data: exr (float, default), exr-half (half floats, half the size) or png16 "
-                                "(16-bit sRGB PNG, values clipped to [0, 1], its metadata in <name>.json beside it)",
-                                OUTPUT_FORMATS[0], flag="--format", choices=OUTPUT_FORMATS)
-    depth_pattern: str | None = option("each image's depth map beside it (metres), with a grid over object distance "
-                                       "(--distances-m): `degrade --depth` per image", metavar="{stem}_depth.exr")
-    occlusion: str = option(f"{DEPTH_WITH}: filled (default): layers composited far to near, the background hidden "
-                            "behind near objects continued from their silhouettes; layered: without that; none: "
-                            "layers added (no occlusion)", OCCLUSIONS[0], choices=OCCLUSIONS)
-    silhouette: str = option(f"{DEPTH_WITH}: nearest (default): a silhouette's pixels of mixed (antialiased) depth "
-                             "take the nearest depth around them; as-given: the map's depths", SILHOUETTES[0],
-                             choices=SILHOUETTES)
+    output_format: str = option(
+        "output data: exr (float, default), exr-half (half floats, half the size) or png16 "
+        "(16-bit sRGB PNG, values clipped to [0, 1], its metadata in <name>.json beside it)",
+        OUTPUT_FORMATS[0],
+        flag="--format",
+        choices=OUTPUT_FORMATS,
+    )
+    depth_pattern: str | None = option(
+        "each image's depth map beside it (metres), with a grid over object distance "
+        "(--distances-m): `degrade --depth` per image",
+        metavar="{stem}_depth.exr",
+    )
+    occlusion: str = option(
+        f"{DEPTH_WITH}: filled (default): layers composited far to near, the background hidden "
+        "behind near objects continued from their silhouettes; layered: without that; none: "
+        "layers added (no occlusion)",
+        OCCLUSIONS[0],
+        choices=OCCLUSIONS,
+    )
+    silhouette: str = option(
+        f"{DEPTH_WITH}: nearest (default): a silhouette's pixels of mixed (antialiased) depth "
+        "take the nearest depth around them; as-given: the map's depths",
+        SILHOUETTES[0],
+        choices=SILHOUETTES,
+    )
     label_patterns: tuple[tuple[str, str], ...] | None = option(
-        lambda: f"each image's label files beside it, KIND=PATTERN[,KIND=PATTERN...] (KIND one of {kinds_help()}; "
-                "e.g. instance={stem}_instance.png): warped by the mapping the image goes "
-                "through, written beside its output (<name>.labels.exr, <name>.boxes.json); never taken as frames",
-        flag="--label-pattern", parse=lambda text: parse_label_files(text, "--label-pattern", pattern=True),
-        metavar="KIND={stem}_KIND.png", shown=lambda v: ",".join("=".join(p) for p in v))
-    scale_lens: float | None = option("with --lens and --intrinsics/--fisheye: the camera's pixel pitch (µm); the "
-                                      "lens scaled to its focal length fx x PIXEL_UM, f-number kept, stated in the "
-                                      "metadata", parse=float, metavar="PIXEL_UM")
+        lambda: (
+            f"each image's label files beside it, KIND=PATTERN[,KIND=PATTERN...] (KIND one of {kinds_help()}; "
+            "e.g. instance={stem}_instance.png): warped by the mapping the image goes "
+            "through, written beside its output (<name>.labels.exr, <name>.boxes.json); never taken as frames"
+        ),
+        flag="--label-pattern",
+        parse=lambda text: parse_label_files(text, "--label-pattern", pattern=True),
+        metavar="KIND={stem}_KIND.png",
+        shown=lambda v: ",".join("=".join(p) for p in v),
+    )
+    scale_lens: float | None = option(
+        "with --lens and --intrinsics/--fisheye: the camera's pixel pitch (µm); the "
+        "lens scaled to its focal length fx x PIXEL_UM, f-number kept, stated in the "
+        "metadata",
+        parse=float,
+        metavar="PIXEL_UM",
+    )
     calibration_model: str = option(calibration_help, MODELS.default, choices=MODELS.names)
     frame: FrameCamera | None = None
     camera: Any = None
@@ -120,22 +147,31 @@ class DegradeSpec(OptionSpec):
         check_boundary(self.boundary)
         if not isinstance(self.linear, bool):
             raise SolasError(f"linear {self.linear!r} must be True or False")
-        for name, allowed in (("output format", OUTPUT_FORMATS), ("occlusion", OCCLUSIONS),
-                              ("silhouette", SILHOUETTES), ("calibration model", tuple(MODELS.names()))):
+        for name, allowed in (
+            ("output format", OUTPUT_FORMATS),
+            ("occlusion", OCCLUSIONS),
+            ("silhouette", SILHOUETTES),
+            ("calibration model", tuple(MODELS.names())),
+        ):
             value = getattr(self, name.replace(" ", "_"))
             if not isinstance(value, str) or value not in allowed:
                 raise SolasError(f"{name} {value!r} must be one of {', '.join(allowed)}")
         pattern = self.depth_pattern
-        if pattern is not None and not (isinstance(pattern, str) and "{stem}" in pattern and "/" not in pattern
-                                         and pattern.lower().endswith(".exr")):
-            raise SolasError(f"depth pattern {pattern!r} must be a file name with {{stem}} ending in .exr, "
-                             "e.g. {stem}_depth.exr (beside each image)")
+        if pattern is not None and not (
+            isinstance(pattern, str) and "{stem}" in pattern and "/" not in pattern and pattern.lower().endswith(".exr")
+        ):
+            raise SolasError(
+                f"depth pattern {pattern!r} must be a file name with {{stem}} ending in .exr, "
+                "e.g. {stem}_depth.exr (beside each image)"
+            )
         if self.label_patterns is not None:  # as `parse_label_files` reads them: (kind, pattern) pairs
-            object.__setattr__(self, "label_patterns", parse_label_files(self.label_patterns, "label patterns",
-                                                                         pattern=True))
+            object.__setattr__(
+                self, "label_patterns", parse_label_files(self.label_patterns, "label patterns", pattern=True)
+            )
         scale = self.scale_lens
-        if scale is not None and (isinstance(scale, bool) or not isinstance(scale, (int, float))
-                                  or not (math.isfinite(scale) and scale > 0)):
+        if scale is not None and (
+            isinstance(scale, bool) or not isinstance(scale, (int, float)) or not (math.isfinite(scale) and scale > 0)
+        ):
             raise SolasError(f"scale_lens {scale!r} must be the camera's pixel pitch, a positive number of µm")
         for name, kind in (("frame", FrameCamera), ("grid_spec", GridSpec)):
             if getattr(self, name) is not None and not isinstance(getattr(self, name), kind):
@@ -151,13 +187,15 @@ class DegradeSpec(OptionSpec):
             (`batch.degrade.plan_batch`): a finished batch resumes only under the same id, so an option
             joins only away from its default (the depth rules only with a depth map).
         """
-        return ([self.method, self.boundary, self.linear]
-                + ([self.output_format] if self.output_format != "exr" else [])
-                + ([self.depth_pattern, self.occlusion, self.silhouette] if self.depth_pattern is not None else [])
-                + ([asdict(self.frame)] if self.frame is not None else [])
-                + ([self.camera.describe()] if self.camera is not None else [])
-                + ([dict(self.label_patterns)] if self.label_patterns else [])
-                + ([self.calibration_model] if self.calibration_model != MODELS.default else []))
+        return (
+            [self.method, self.boundary, self.linear]
+            + ([self.output_format] if self.output_format != "exr" else [])
+            + ([self.depth_pattern, self.occlusion, self.silhouette] if self.depth_pattern is not None else [])
+            + ([asdict(self.frame)] if self.frame is not None else [])
+            + ([self.camera.describe()] if self.camera is not None else [])
+            + ([dict(self.label_patterns)] if self.label_patterns else [])
+            + ([self.calibration_model] if self.calibration_model != MODELS.default else [])
+        )
 
     def header(self, lens_scale: dict | None = None) -> dict[str, Any]:
         """The options as a batch's manifest states them.
@@ -173,12 +211,17 @@ class DegradeSpec(OptionSpec):
             Method, boundary, linear, format, and the frame's camera, the lens's scale and the batch's camera
             where given.
         """
-        return {"method": self.method, "boundary": self.boundary, "linear": self.linear, "format": self.output_format,
-                "calibration_model": self.calibration_model,
-                **({"frame_camera": asdict(self.frame)} if self.frame is not None else {}),
-                **({"lens_scale": lens_scale} if lens_scale is not None else {}),
-                **({"camera": self.camera.describe()} if self.camera is not None else {}),
-                **({"labels": self.labels_header()} if self.label_patterns else {})}
+        return {
+            "method": self.method,
+            "boundary": self.boundary,
+            "linear": self.linear,
+            "format": self.output_format,
+            "calibration_model": self.calibration_model,
+            **({"frame_camera": asdict(self.frame)} if self.frame is not None else {}),
+            **({"lens_scale": lens_scale} if lens_scale is not None else {}),
+            **({"camera": self.camera.describe()} if self.camera is not None else {}),
+            **({"labels": self.labels_header()} if self.label_patterns else {}),
+        }
 
     def labels_header(self) -> dict[str, dict[str, str]]:
         """Each label kind a batch warps, as its manifest states them.
@@ -188,5 +231,7 @@ class DegradeSpec(OptionSpec):
         dict
             Kind → its pattern and how it follows the mapping (`labelkinds.RULES`).
         """
-        return {kind: {"pattern": pattern, "rule": KINDS[kind].extra["rule"], "how": RULES[KINDS[kind].extra["rule"]]}
-                for kind, pattern in self.label_patterns or ()}
+        return {
+            kind: {"pattern": pattern, "rule": KINDS[kind].extra["rule"], "how": RULES[KINDS[kind].extra["rule"]]}
+            for kind, pattern in self.label_patterns or ()
+        }

@@ -10,8 +10,17 @@ the metadata (after the sensor, before the metrics in the import order).
 - `pipeline`: `ISP`, the processor's description (``default`` or a small TOML), and `develop`.
 - `camera`: `Camera`, a sensor, exposure, processor and seed that a batch's frames go through.
 """
+
 from ..lazy import lazy_exports
 
 __all__ = ["Camera", "ISP", "develop", "load_camera", "load_isp"]
-__getattr__ = lazy_exports(__name__, {"ISP": ".pipeline", "develop": ".pipeline", "load_isp": ".pipeline",
-                                      "Camera": ".camera", "load_camera": ".camera"})
+__getattr__ = lazy_exports(
+    __name__,
+    {
+        "ISP": ".pipeline",
+        "develop": ".pipeline",
+        "load_isp": ".pipeline",
+        "Camera": ".camera",
+        "load_camera": ".camera",
+    },
+)

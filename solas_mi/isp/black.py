@@ -7,6 +7,7 @@ saturation signal.
 1.0 is a saturated pixel. An HDR sensor's RAW is first decompanded (`sensor.compander`): y − black is its
 merged linear signal, y_sat that of its last readout at saturation (`sensor.chain`). Without this stage the RAW is only scaled, s = y / y_sat, and the black level
 stays in the signal (a raised floor in the frame)."""
+
 import numpy as np
 
 from ..sensor.chain import SensorChain

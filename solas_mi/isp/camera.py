@@ -7,6 +7,7 @@ frame from its light (`sensor.auto_exposure`).
 
 The sensor's fixed pattern (PRNU, DSNU) comes from the seed alone, as one camera's would; the
 temporal noise from (seed, frame number), the frame number a hash of the frame's name."""
+
 from __future__ import annotations
 
 import hashlib
@@ -68,11 +69,16 @@ class Camera:
 
     def __post_init__(self):
         if not isinstance(self.sensor, (SensorModel, SensorChain)):
-            raise SolasError(f"camera sensor {self.sensor!r} must be a solas_mi.sensor.model.SensorModel or a "
-                             "solas_mi.sensor.chain.SensorChain")
+            raise SolasError(
+                f"camera sensor {self.sensor!r} must be a solas_mi.sensor.model.SensorModel or a "
+                "solas_mi.sensor.chain.SensorChain"
+            )
         if not isinstance(self.exposure_ms, AutoExposure) and (
-                isinstance(self.exposure_ms, bool) or not isinstance(self.exposure_ms, (int, float))
-                or not math.isfinite(self.exposure_ms) or self.exposure_ms <= 0):
+            isinstance(self.exposure_ms, bool)
+            or not isinstance(self.exposure_ms, (int, float))
+            or not math.isfinite(self.exposure_ms)
+            or self.exposure_ms <= 0
+        ):
             raise SolasError(f"exposure {self.exposure_ms!r} ms must be a finite number > 0 or an AutoExposure")
         if isinstance(self.scale, bool) or not isinstance(self.scale, (int, float)) or not 0 < self.scale < math.inf:
             raise SolasError(f"camera scale {self.scale!r} must be a finite number > 0 (W/m² per unit of a frame)")
@@ -82,7 +88,9 @@ class Camera:
             check_sensor(self.isp, self.sensor)
         check_seed(self.seed)
         if self.scene_in_time is not None and not isinstance(self.scene_in_time, SceneInTime):
-            raise SolasError(f"camera scene_in_time {self.scene_in_time!r} must be a solas_mi.sensor.timing.SceneInTime")
+            raise SolasError(
+                f"camera scene_in_time {self.scene_in_time!r} must be a solas_mi.sensor.timing.SceneInTime"
+            )
 
     def describe(self) -> dict:
         """Every value as JSON values: for metadata, manifests and the batch's identity.
@@ -95,10 +103,15 @@ class Camera:
         from ..sensor.files import describe
 
         auto = self.exposure_ms if isinstance(self.exposure_ms, AutoExposure) else None
-        return {"sensor": describe(self.sensor), "exposure_ms": AUTO if auto is not None else self.exposure_ms,
-                **({"auto_exposure": auto.describe()} if auto is not None else {}), "scale": self.scale,
-                "seed": self.seed, "isp": None if self.isp is None else self.isp.describe(),
-                **({} if self.scene_in_time is None else self.scene_in_time.describe())}
+        return {
+            "sensor": describe(self.sensor),
+            "exposure_ms": AUTO if auto is not None else self.exposure_ms,
+            **({"auto_exposure": auto.describe()} if auto is not None else {}),
+            "scale": self.scale,
+            "seed": self.seed,
+            "isp": None if self.isp is None else self.isp.describe(),
+            **({} if self.scene_in_time is None else self.scene_in_time.describe()),
+        }
 
     def shoot(self, irradiance: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray | None, dict]:
         """Shoot one frame: the RAW of an irradiance image, and the developed frame.
@@ -126,9 +139,15 @@ class Camera:
         seconds, chosen = exposure_seconds(self.exposure_ms, self.sensor, irradiance)
         scene = irradiance if self.scene_in_time is None else self.scene_in_time.of(irradiance)
         raw = capture(self.sensor, scene, seconds, self.seed, number)
-        meta = {"kind": "sensor RAW", "unit": "DN", "camera": self.describe(), "frame": name, "frame_number": number,
-                "exposure_ms": seconds * 1e3 if chosen else self.exposure_ms,
-                **({"auto_exposure": chosen} if chosen else {})}
+        meta = {
+            "kind": "sensor RAW",
+            "unit": "DN",
+            "camera": self.describe(),
+            "frame": name,
+            "frame_number": number,
+            "exposure_ms": seconds * 1e3 if chosen else self.exposure_ms,
+            **({"auto_exposure": chosen} if chosen else {}),
+        }
         if self.isp is None:
             return raw, None, meta
         defective = as_chain(self.sensor).defective_pixels(raw.shape, self.seed)
@@ -164,8 +183,14 @@ def write_frame(raw_path: str | Path, raw: np.ndarray, frame: np.ndarray | None,
             write_png(tmps[1], frame / 255.0, encoded=True)
 
 
-def load_camera(sensor_model: str, exposure_ms: float | AutoExposure, isp: str | None = None, seed: int = 0,
-                scale: float = 1.0, scene_in_time: SceneInTime | None = None) -> Camera:
+def load_camera(
+    sensor_model: str,
+    exposure_ms: float | AutoExposure,
+    isp: str | None = None,
+    seed: int = 0,
+    scale: float = 1.0,
+    scene_in_time: SceneInTime | None = None,
+) -> Camera:
     """A camera as the command line gives it (--sensor-model, --exposure-ms, --isp, --seed, --scale, --flicker or
     --image-motion).
 
@@ -192,5 +217,6 @@ def load_camera(sensor_model: str, exposure_ms: float | AutoExposure, isp: str |
     from ..sensor.files import load_sensor
     from .pipeline import load_isp
 
-    return Camera(load_sensor(sensor_model), exposure_ms, None if isp is None else load_isp(isp), seed, scale,
-                  scene_in_time)
+    return Camera(
+        load_sensor(sensor_model), exposure_ms, None if isp is None else load_isp(isp), seed, scale, scene_in_time
+    )

@@ -17,6 +17,7 @@ RGB Bayer patterns here). RCCB: the clear row is η_c (λ_r R + λ_g G + λ_b B)
 RCCC has two signals, red and clear: P = [[1, 0], [0, 1], [0, 1]] takes G = B, and the frame shows
 red and the grey of green and blue (exact for greys and for the red channel).
 """
+
 import numpy as np
 
 from ..errors import SolasError
@@ -45,9 +46,16 @@ def sensor_matrix(model: SensorModel | SensorChain, gains: np.ndarray) -> np.nda
 def check_matrix(values) -> np.ndarray:
     """A given 3 × 3 matrix of numbers within ±GAIN_MAX (rows: output R, G, B)."""
     sequence = (list, tuple, np.ndarray)
-    given = isinstance(values, sequence) and len(values) == 3 and all(
-        isinstance(row, sequence) and len(row) == 3 and all(
-            isinstance(v, (int, float, np.number)) and not isinstance(v, (bool, np.bool_)) for v in row) for row in values)
+    given = (
+        isinstance(values, sequence)
+        and len(values) == 3
+        and all(
+            isinstance(row, sequence)
+            and len(row) == 3
+            and all(isinstance(v, (int, float, np.number)) and not isinstance(v, (bool, np.bool_)) for v in row)
+            for row in values
+        )
+    )
     matrix = np.array(values, dtype=np.float64) if given else np.empty(0)
     if not given or not np.all(np.abs(matrix) <= GAIN_MAX):
         raise SolasError(f"colour correction matrix {values!r} must be 3 rows of 3 numbers within ±{GAIN_MAX:g}")

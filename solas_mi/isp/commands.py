@@ -4,6 +4,7 @@ EXR's metadata. The command is the sensor's (`sensor.commands`); this stage, lat
 adds its option to it.
 
 NumPy, OpenEXR and the processor's modules are imported when the command runs."""
+
 from __future__ import annotations
 
 import argparse
@@ -42,18 +43,24 @@ def stage_choices() -> str:
     """What the method fields of an [isp] table take (their registries), for help texts."""
     from . import demosaic, tone, white
 
-    return (f"white_balance: {', '.join(white.named())} or a table of gains; demosaic: {', '.join(demosaic.METHODS)} "
-            f"or none; tone: {', '.join(tone.CURVES)}")
+    return (
+        f"white_balance: {', '.join(white.named())} or a table of gains; demosaic: {', '.join(demosaic.METHODS)} "
+        f"or none; tone: {', '.join(tone.CURVES)}"
+    )
 
 
 def register(subparsers: Any) -> None:
     """Add --isp to the sensor's `camera` command."""
     p = subparsers.choices["camera"]
-    p.add_argument("--isp", default=None, metavar="default|FILE.toml",
-                   help="develop the RAW through the image processor (black level, white balance, demosaicing, "
-                        f"colour correction, tone curve): 'default' or a TOML file with an [isp] table "
-                        f"({stage_choices()}); the 8-bit sRGB frame is written beside OUT.exr as OUT.png "
-                        "(default: RAW only)")
+    p.add_argument(
+        "--isp",
+        default=None,
+        metavar="default|FILE.toml",
+        help="develop the RAW through the image processor (black level, white balance, demosaicing, "
+        f"colour correction, tone curve): 'default' or a TOML file with an [isp] table "
+        f"({stage_choices()}); the 8-bit sRGB frame is written beside OUT.exr as OUT.png "
+        "(default: RAW only)",
+    )
     p.set_defaults(run=run_camera)
 
 
@@ -62,29 +69,46 @@ def add_camera_options(p: argparse.ArgumentParser, seed: bool) -> None:
     --seed where `seed`)."""
     from ..sensor.commands import add_exposure_option, add_time_options
 
-    g = p.add_argument_group("the camera: each frame through a sensor and image processor (its values times --scale "
-                             "read as W/m² of image irradiance, or as radiance through the f-number a render states), "
-                             "its RAW written as <name>_raw.exr and, with --isp, the developed frame as <name>_raw.png")
-    g.add_argument("--sensor-model", metavar="PRESET|FILE.toml",
-                   help="the sensor: a preset's name (solas-mi sensors lists them) or a TOML file with a [sensor] table")
+    g = p.add_argument_group(
+        "the camera: each frame through a sensor and image processor (its values times --scale "
+        "read as W/m² of image irradiance, or as radiance through the f-number a render states), "
+        "its RAW written as <name>_raw.exr and, with --isp, the developed frame as <name>_raw.png"
+    )
+    g.add_argument(
+        "--sensor-model",
+        metavar="PRESET|FILE.toml",
+        help="the sensor: a preset's name (solas-mi sensors lists them) or a TOML file with a [sensor] table",
+    )
     add_exposure_option(g, required=False)
-    g.add_argument("--scale", type=float, help="W/m² (or W/m²/sr) per unit of each frame (with --sensor-model; "
-                                               "default 1)")
-    g.add_argument("--isp", metavar="default|FILE.toml",
-                   help=f"develop each RAW: 'default' or a TOML file with an [isp] table ({stage_choices()}; "
-                        "with --sensor-model)")
+    g.add_argument(
+        "--scale", type=float, help="W/m² (or W/m²/sr) per unit of each frame (with --sensor-model; default 1)"
+    )
+    g.add_argument(
+        "--isp",
+        metavar="default|FILE.toml",
+        help=f"develop each RAW: 'default' or a TOML file with an [isp] table ({stage_choices()}; with --sensor-model)",
+    )
     add_time_options(g)
     if seed:
-        g.add_argument("--seed", type=int, default=0,
-                       help="the sensor's seed: its fixed pattern, and with each frame's name its noise (default 0)")
+        g.add_argument(
+            "--seed",
+            type=int,
+            default=0,
+            help="the sensor's seed: its fixed pattern, and with each frame's name its noise (default 0)",
+        )
 
 
 def camera_from_args(args: argparse.Namespace, seed: int):
     """The `isp.camera.Camera` of the options, or None without --sensor-model."""
     from ..errors import SolasError
 
-    options = (("--exposure-ms", args.exposure_ms), ("--scale", args.scale), ("--isp", args.isp),
-               ("--flicker", args.flicker), ("--image-motion", args.image_motion))
+    options = (
+        ("--exposure-ms", args.exposure_ms),
+        ("--scale", args.scale),
+        ("--isp", args.isp),
+        ("--flicker", args.flicker),
+        ("--image-motion", args.image_motion),
+    )
     if args.sensor_model is None:
         given = [flag for flag, value in options if value is not None]
         if given:
@@ -96,5 +120,11 @@ def camera_from_args(args: argparse.Namespace, seed: int):
     from ..sensor.commands import timed_scene
     from .camera import load_camera
 
-    return load_camera(args.sensor_model, parse_exposure(args.exposure_ms), args.isp, seed,
-                       1.0 if args.scale is None else args.scale, timed_scene(args))
+    return load_camera(
+        args.sensor_model,
+        parse_exposure(args.exposure_ms),
+        args.isp,
+        seed,
+        1.0 if args.scale is None else args.scale,
+        timed_scene(args),
+    )

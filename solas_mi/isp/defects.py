@@ -2,6 +2,7 @@
 camera as a calibration map is) takes the mean of its nearest neighbours of the same filter, two pixels away
 along the row and the column (every pattern's tile is 2 × 2), leaving out neighbours that are defects too;
 a pixel with none keeps its value."""
+
 import numpy as np
 
 STEPS = ((-2, 0), (2, 0), (0, -2), (0, 2))  # the same filter's nearest sites of a 2 × 2 tile

@@ -8,6 +8,7 @@ RGGB, giving (R, C, C) — its "B" sites are clear too, so the third channel is 
 the clear signal. `slots` names the filter behind each output channel; the colour correction matrix
 (`ccm`) then recovers green from clear (RCCB), or red and grey from (R, C) (RCCC).
 """
+
 from __future__ import annotations
 
 import warnings
@@ -44,16 +45,29 @@ def _bilinear(mosaic, bayer):
     return _package().demosaicing_CFA_Bayer_bilinear(mosaic, bayer)
 
 
-@METHODS.register("Malvar2004", summary="high-quality linear interpolation: bilinear corrected by the other "
-                                        "channels' gradients", reference="Malvar, He and Cutler 2004 (ICASSP)")
+@METHODS.register(
+    "Malvar2004",
+    summary="high-quality linear interpolation: bilinear corrected by the other channels' gradients",
+    reference="Malvar, He and Cutler 2004 (ICASSP)",
+)
 def _malvar2004(mosaic, bayer):
     return _package().demosaicing_CFA_Bayer_Malvar2004(mosaic, bayer)
 
 
-@METHODS.register("Menon2007", summary="directional filtering and a posteriori decision",
-                  reference="Menon, Andriani and Calvagno 2007 (IEEE TIP)",
-                  options=(Option("refining_step", bool, True, "a switch of Menon2007: refine the decided estimate",
-                                  label="demosaicing option refining_step ="),))
+@METHODS.register(
+    "Menon2007",
+    summary="directional filtering and a posteriori decision",
+    reference="Menon, Andriani and Calvagno 2007 (IEEE TIP)",
+    options=(
+        Option(
+            "refining_step",
+            bool,
+            True,
+            "a switch of Menon2007: refine the decided estimate",
+            label="demosaicing option refining_step =",
+        ),
+    ),
+)
 def _menon2007(mosaic, bayer, **options):
     return _package().demosaicing_CFA_Bayer_Menon2007(mosaic, bayer, **options)
 
@@ -63,8 +77,10 @@ def check_method(name: str, options: dict | None = None) -> Entry:
     method = METHODS.get(name)
     options = {} if options is None else options
     if not isinstance(options, dict):
-        raise SolasError(f"demosaicing options {options!r} must be a table of option = true/false "
-                         f"({name}'s options: {', '.join(o.name for o in method.options) or 'none'})")
+        raise SolasError(
+            f"demosaicing options {options!r} must be a table of option = true/false "
+            f"({name}'s options: {', '.join(o.name for o in method.options) or 'none'})"
+        )
     METHODS.options(name, options, strict=True)
     return method
 
@@ -76,8 +92,10 @@ def check_frame(shape: tuple[int, ...], what: str) -> None:
     """SolasError unless a mosaic of `shape` holds a whole CFA tile (every filter's sites); `what` needs it."""
     if len(shape) != 2 or min(shape) < MINIMUM_FRAME:
         size = "x".join(str(n) for n in shape[::-1])
-        raise SolasError(f"{what} needs a frame of at least {MINIMUM_FRAME}x{MINIMUM_FRAME} pixels (one whole tile of "
-                         f"the colour filter array), got {size}")
+        raise SolasError(
+            f"{what} needs a frame of at least {MINIMUM_FRAME}x{MINIMUM_FRAME} pixels (one whole tile of "
+            f"the colour filter array), got {size}"
+        )
 
 
 def demosaic(mosaic: np.ndarray, pattern: str, method: str = DEFAULT_METHOD, **options) -> np.ndarray:

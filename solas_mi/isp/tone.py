@@ -3,6 +3,7 @@
 The curves are `CURVES` (a `solas_mi.registry.Registry`: each curve's function of the clipped values, its
 own options, its formula as summary). Values are clipped to [0, 1] first (highlights past saturation and
 negative values of the colour correction), then rounded to 8 bits."""
+
 import numpy as np
 
 from ..imageio import srgb_encode
@@ -13,8 +14,9 @@ CURVES = Registry("tone curve", default=DEFAULT_CURVE)
 GAMMA = Option("gamma", float, 2.2, "the γ of x^(1/γ)", minimum=0, above=True, label="tone gamma")
 
 
-@CURVES.register("srgb", summary="the sRGB OETF: 12.92 x below 0.0031308, 1.055 x^(1/2.4) − 0.055 above",
-                 reference="IEC 61966-2-1")
+@CURVES.register(
+    "srgb", summary="the sRGB OETF: 12.92 x below 0.0031308, 1.055 x^(1/2.4) − 0.055 above", reference="IEC 61966-2-1"
+)
 def _srgb(x):
     return srgb_encode(x)
 
@@ -34,11 +36,14 @@ LOG_FLOOR = 2.0**-24  # δ of the log-average: one code of a 24-bit merged signa
 LUMINANCE = np.array([0.2126, 0.7152, 0.0722])  # Y of linear sRGB (ITU-R BT.709)
 
 
-@CURVES.register("reinhard", summary="for HDR frames: the luminance Y scaled to L = 0.18 Y / Ȳ (Ȳ its "
-                 "log-average), compressed to L (1 + L / L_w²) / (1 + L) with L_w the frame's largest L, each pixel's "
-                 "R, G, B scaled alike, then the sRGB OETF",
-                 reference="Reinhard, Stark, Shirley, Ferwerda, Photographic Tone Reproduction for Digital Images, "
-                           "SIGGRAPH 2002, eqs. 1-4")
+@CURVES.register(
+    "reinhard",
+    summary="for HDR frames: the luminance Y scaled to L = 0.18 Y / Ȳ (Ȳ its "
+    "log-average), compressed to L (1 + L / L_w²) / (1 + L) with L_w the frame's largest L, each pixel's "
+    "R, G, B scaled alike, then the sRGB OETF",
+    reference="Reinhard, Stark, Shirley, Ferwerda, Photographic Tone Reproduction for Digital Images, "
+    "SIGGRAPH 2002, eqs. 1-4",
+)
 def _reinhard(x):
     luminance = x @ LUMINANCE
     mean = np.exp(np.mean(np.log(LOG_FLOOR + luminance))) if luminance.size else 1.0

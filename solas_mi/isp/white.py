@@ -4,6 +4,7 @@ filter (G, or C for the clear patterns: the middle demosaiced channel) keeps gai
 Where the gains come from: `METHODS` (a `solas_mi.registry.Registry`), each method a function
 (signal above black, sensor model, the `pipeline.ISP`) → gain per filter, with its formula as summary.
 """
+
 import numpy as np
 
 from ..errors import SolasError
@@ -37,11 +38,16 @@ def daylight_gains(model: SensorModel | SensorChain) -> dict[str, float]:
 def check_box(box) -> tuple[int, int, int, int]:
     """A grey card's box: four integers x0, y0, x1, y1 (pixels, columns then rows, end exclusive), at least
     2 pixels each way (`demosaic.MINIMUM_FRAME`: a site of every filter)."""
-    whole = isinstance(box, (list, tuple)) and len(box) == 4 and \
-        all(isinstance(v, int) and not isinstance(v, bool) and v >= 0 for v in box)
+    whole = (
+        isinstance(box, (list, tuple))
+        and len(box) == 4
+        and all(isinstance(v, int) and not isinstance(v, bool) and v >= 0 for v in box)
+    )
     if not whole or box[2] - box[0] < MINIMUM_FRAME or box[3] - box[1] < MINIMUM_FRAME:
-        raise SolasError(f"isp grey_card = {box!r} must be four integers x0, y0, x1, y1 (pixels, end exclusive) with "
-                         f"0 <= x0, x0 + {MINIMUM_FRAME} <= x1, 0 <= y0, y0 + {MINIMUM_FRAME} <= y1")
+        raise SolasError(
+            f"isp grey_card = {box!r} must be four integers x0, y0, x1, y1 (pixels, end exclusive) with "
+            f"0 <= x0, x0 + {MINIMUM_FRAME} <= x1, 0 <= y0, y0 + {MINIMUM_FRAME} <= y1"
+        )
     return tuple(box)
 
 
@@ -53,24 +59,36 @@ def measured_gains(signal: np.ndarray, pattern: str, box: tuple[int, int, int, i
         box = (0, 0, signal.shape[1], signal.shape[0])
     x0, y0, x1, y1 = check_box(box)
     if x1 > signal.shape[1] or y1 > signal.shape[0]:
-        raise SolasError(f"grey card box {box!r} must be inside the {signal.shape[1]}x{signal.shape[0]} frame: "
-                         f"x1 <= {signal.shape[1]}, y1 <= {signal.shape[0]}")
+        raise SolasError(
+            f"grey card box {box!r} must be inside the {signal.shape[1]}x{signal.shape[0]} frame: "
+            f"x1 <= {signal.shape[1]}, y1 <= {signal.shape[0]}"
+        )
     sites = site_map(pattern, signal.shape)
     part, here = signal[y0:y1, x0:x1], sites[y0:y1, x0:x1]
     means = {f: float(part[here == FILTERS.index(f)].mean()) for f in _filters(pattern)}
     if not all(m > 0 for m in means.values()):
-        raise SolasError(f"white balance: a filter's mean signal is not above black ({means}); "
-                         "no gains can be measured from this region")
+        raise SolasError(
+            f"white balance: a filter's mean signal is not above black ({means}); "
+            "no gains can be measured from this region"
+        )
     return {f: means[reference(pattern)] / m for f, m in means.items()}
 
 
 def check_gains(gains) -> dict:
     """A table of gains, one per filter letter (`cfa.FILTERS`), each a number in (0, GAIN_MAX]; which
     filters it must name is the pattern's (`check_given`)."""
-    if not isinstance(gains, dict) or not gains or not set(gains) <= set(FILTERS) or not all(
-            isinstance(v, (int, float)) and not isinstance(v, bool) and 0 < v <= GAIN_MAX for v in gains.values()):
-        raise SolasError(f"white balance gains {gains!r} must be a table of filter letters ({', '.join(FILTERS)}) "
-                         f"to numbers in (0, {GAIN_MAX:g}], e.g. {{R = 1.9, G = 1, B = 1.5}}")
+    if (
+        not isinstance(gains, dict)
+        or not gains
+        or not set(gains) <= set(FILTERS)
+        or not all(
+            isinstance(v, (int, float)) and not isinstance(v, bool) and 0 < v <= GAIN_MAX for v in gains.values()
+        )
+    ):
+        raise SolasError(
+            f"white balance gains {gains!r} must be a table of filter letters ({', '.join(FILTERS)}) "
+            f"to numbers in (0, {GAIN_MAX:g}], e.g. {{R = 1.9, G = 1, B = 1.5}}"
+        )
     return gains
 
 
@@ -78,8 +96,9 @@ def check_given(gains: dict, pattern: str) -> dict[str, float]:
     """The user's gains: a number in (0, GAIN_MAX] for each filter of `pattern`, nothing else."""
     wanted = _filters(pattern)
     if sorted(check_gains(gains), key=FILTERS.index) != wanted:
-        raise SolasError(f"white balance gains {gains!r} must give a number > 0 for each filter of {pattern}: "
-                         f"{', '.join(wanted)}")
+        raise SolasError(
+            f"white balance gains {gains!r} must give a number > 0 for each filter of {pattern}: {', '.join(wanted)}"
+        )
     return {f: float(gains[f]) for f in wanted}
 
 
@@ -96,8 +115,11 @@ def channel_gains(pattern: str, gains: dict[str, float]) -> np.ndarray:
     return np.array([gains[f] for f in slots(pattern)[1]])
 
 
-@METHODS.register("daylight", summary="the sensor's own response to a white (equal R, G, B, the image's white): "
-                                      "g_f = r_ref / r_f with r_f = η_f Σ λ_c over the channels the filter passes")
+@METHODS.register(
+    "daylight",
+    summary="the sensor's own response to a white (equal R, G, B, the image's white): "
+    "g_f = r_ref / r_f with r_f = η_f Σ λ_c over the channels the filter passes",
+)
 def _daylight(signal, model, isp):
     return daylight_gains(model)
 
@@ -107,21 +129,26 @@ def _grey_world(signal, model, isp):
     return measured_gains(signal, model.cfa)
 
 
-@METHODS.register("grey-card", summary="the same over a box (x0, y0, x1, y1) of pixels holding a grey card "
-                                       "(`grey_card`)")
+@METHODS.register(
+    "grey-card", summary="the same over a box (x0, y0, x1, y1) of pixels holding a grey card (`grey_card`)"
+)
 def _grey_card(signal, model, isp):
     return measured_gains(signal, model.cfa, isp.grey_card)
 
 
-@METHODS.register(GIVEN, summary="gains from the user, one per filter of the pattern (the reference's is 1), "
-                                 "written as a table: {R = 1.9, G = 1, B = 1.5}", table=True)
+@METHODS.register(
+    GIVEN,
+    summary="gains from the user, one per filter of the pattern (the reference's is 1), "
+    "written as a table: {R = 1.9, G = 1, B = 1.5}",
+    table=True,
+)
 def _given(signal, model, isp):
     return check_given(isp.white_balance, model.cfa)
 
 
 @METHODS.register("none", summary="gains of 1")
 def _none(signal, model, isp):
-    return check_given({f: 1.0 for f in set(model.cfa)}, model.cfa)
+    return check_given(dict.fromkeys(set(model.cfa), 1.0), model.cfa)
 
 
 def named() -> tuple[str, ...]:

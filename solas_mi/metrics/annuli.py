@@ -6,6 +6,7 @@ at (c, r) and the image centre at ((W − 1)/2, (H − 1)/2).
 Schemes (outer bounds of centre / middle / edge as fractions of R): "automotive" 0.24 / 0.6 / 1.0,
 as in the SOLAS paper's figure 5, and "equal-area", three rings of equal area.
 """
+
 from __future__ import annotations
 
 import math

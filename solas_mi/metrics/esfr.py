@@ -10,6 +10,7 @@ Units: positions in px, frequencies in cycles/px (cy/px) along the edge normal, 
 Input pixel values must be linear in scene luminance (decode sRGB before calling). The standards and
 sfrmat5/sfrmat3, which the edge fits, windows and rounding follow: docs/details/sharpness.md, References.
 """
+
 from __future__ import annotations
 
 import math
@@ -300,8 +301,7 @@ def _esf(a: np.ndarray, px_edge: np.ndarray, res: EsfrResult) -> np.ndarray | No
     res.empty_bins = int(nn - np.count_nonzero(filled))
     if res.empty_bins > EMPTY_BIN_LIMIT * nn:
         res.reason = (
-            f"{res.empty_bins} of {nn} ESF bins are empty: the edge angle {res.angle_deg:.2f}° samples too few "
-            "phases"
+            f"{res.empty_bins} of {nn} ESF bins are empty: the edge angle {res.angle_deg:.2f}° samples too few phases"
         )
         return None
     idx = np.arange(nn)

@@ -1,6 +1,7 @@
 """`EsfrResult`: the e-SFR of one ROI (`esfr.esfr`) with its diagnostics, each stage of the measurement
 filling its part. Frequencies in cycles/px along the edge normal, angles in degrees.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -48,10 +49,24 @@ class EsfrResult:
         out: dict[str, Any] = {
             k: getattr(self, k)
             for k in (
-                "mode", "valid", "reason", "warnings", "mtf50", "mtf10", "mtf50_reason",
-                "angle_deg", "orientation", "contrast", "noise", "step_rows_fraction",
-                "rows_used", "fit_order", "fit_residual_px", "empty_bins",
-                "clipped_fraction", "lsf_width_px",
+                "mode",
+                "valid",
+                "reason",
+                "warnings",
+                "mtf50",
+                "mtf10",
+                "mtf50_reason",
+                "angle_deg",
+                "orientation",
+                "contrast",
+                "noise",
+                "step_rows_fraction",
+                "rows_used",
+                "fit_order",
+                "fit_residual_px",
+                "empty_bins",
+                "clipped_fraction",
+                "lsf_width_px",
             )
         }
         out["freq_cy_px"] = [round(float(v), 6) for v in self.freq]

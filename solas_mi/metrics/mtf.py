@@ -8,6 +8,7 @@ the line spread function). A square pixel of pitch p whose light-sensitive part 
 of fill factor F (its area over p²) integrates the image over a box of width a = p·√F: its MTF along
 the direction φ is |sinc(ν a cos φ)·sinc(ν a sin φ)|, sinc(x) = sin(πx)/(πx).
 """
+
 from __future__ import annotations
 
 import math
@@ -29,11 +30,17 @@ def aperture_mtf(freq_cy_px: np.ndarray, normal_deg: float, aperture: str = "box
     f = np.asarray(freq_cy_px, dtype=np.float64)
     if aperture == "box":
         return box_mtf(f, 1.0, normal_deg)
-    return np.exp(-2.0 * np.pi ** 2 * APERTURES[aperture] ** 2 * f ** 2)
+    return np.exp(-2.0 * np.pi**2 * APERTURES[aperture] ** 2 * f**2)
 
 
-def mtf_along(psf: np.ndarray, psf_pitch_um: float, pixel_um: float, normal_deg: float,
-              aperture: str = "box", freq_cy_px: np.ndarray = FREQ) -> np.ndarray:
+def mtf_along(
+    psf: np.ndarray,
+    psf_pitch_um: float,
+    pixel_um: float,
+    normal_deg: float,
+    aperture: str = "box",
+    freq_cy_px: np.ndarray = FREQ,
+) -> np.ndarray:
     """MTF at `freq_cy_px` (cy/px) along the direction `normal_deg` (degrees from the image's +x axis,
     +y down) of a PSF sampled at `psf_pitch_um` (µm; rows along y), seen by pixels of `pixel_um` (µm)
     with `aperture` ("box" or "gaussian", `aperture_mtf`), normalised to 1 at zero frequency."""

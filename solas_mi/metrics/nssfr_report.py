@@ -3,6 +3,7 @@ statistics per annulus (`AnnulusStats`) and the report of an image or a before/a
 
 ROIs are (x, y, w, h) in px; radii are fractions of R, the centre-to-corner distance; MTF50 in cy/px.
 """
+
 from __future__ import annotations
 
 import math
@@ -44,7 +45,7 @@ class AnnulusStats:
     curve: np.ndarray | None
 
     @staticmethod
-    def of(name: str, r_inner: float, r_outer: float, results: list[EsfrResult]) -> "AnnulusStats":
+    def of(name: str, r_inner: float, r_outer: float, results: list[EsfrResult]) -> AnnulusStats:
         """Statistics of the valid e-SFR results of one annulus (radii as fractions of R)."""
         values = np.sort([r.mtf50 for r in results])[::-1]
         if values.size == 0:
@@ -52,15 +53,25 @@ class AnnulusStats:
         top = values[: max(1, math.ceil(0.1 * values.size))]
         curve = np.mean([np.interp(CURVE_FREQ, r.freq, r.sfr) for r in results], axis=0)
         return AnnulusStats(
-            name, r_inner, r_outer, int(values.size), float(values.mean()), float(np.median(values)),
-            float(top.mean()), curve,
+            name,
+            r_inner,
+            r_outer,
+            int(values.size),
+            float(values.mean()),
+            float(np.median(values)),
+            float(top.mean()),
+            curve,
         )
 
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict: MTF50 values in cy/px, "mean_sfr" on CURVE_FREQ (rounded to 6 decimals)."""
         return {
-            "name": self.name, "r_inner": self.r_inner, "r_outer": self.r_outer, "count": self.count,
-            "mean_mtf50": self.mean_mtf50, "median_mtf50": self.median_mtf50,
+            "name": self.name,
+            "r_inner": self.r_inner,
+            "r_outer": self.r_outer,
+            "count": self.count,
+            "mean_mtf50": self.mean_mtf50,
+            "median_mtf50": self.median_mtf50,
             "sharpest10_mtf50": self.sharpest10_mtf50,
             "mean_sfr": None if self.curve is None else [round(float(v), 6) for v in self.curve],
         }
@@ -100,18 +111,26 @@ class NsSfrReport:
     def to_dict(self) -> dict[str, Any]:
         """JSON-ready dict: R in px, frequencies in cy/px, MTF50 in cy/px, angles in degrees, ROIs in px."""
         out: dict[str, Any] = {
-            "shape": list(self.shape), "annuli_scheme": self.scheme, "mode": self.mode,
-            "radius_px": self.radius_px, "freq_cy_px": [round(float(f), 6) for f in CURVE_FREQ],
-            "annuli": [s.to_dict() for s in self.before], "rejected": self.rejected,
+            "shape": list(self.shape),
+            "annuli_scheme": self.scheme,
+            "mode": self.mode,
+            "radius_px": self.radius_px,
+            "freq_cy_px": [round(float(f), 6) for f in CURVE_FREQ],
+            "annuli": [s.to_dict() for s in self.before],
+            "rejected": self.rejected,
         }
         if self.after is not None:
             out["annuli_after"] = [s.to_dict() for s in self.after]
             out["mean_change_mtf50"] = self.mean_change()
         out["rois"] = [
             {
-                "roi": list(m.roi), "radius": round(m.radius, 4), "annulus": ANNULUS_NAMES[m.annulus],
-                "mtf50": m.before.mtf50, "angle_deg": m.before.angle_deg,
-                "orientation": m.before.orientation, "contrast": m.before.contrast,
+                "roi": list(m.roi),
+                "radius": round(m.radius, 4),
+                "annulus": ANNULUS_NAMES[m.annulus],
+                "mtf50": m.before.mtf50,
+                "angle_deg": m.before.angle_deg,
+                "orientation": m.before.orientation,
+                "contrast": m.before.contrast,
                 **({"mtf50_after": m.after.mtf50} if m.after is not None else {}),
             }
             for m in self.rois

@@ -5,6 +5,7 @@ scene luminance; `luminance` reduces a colour ROI to one plane. The step-edge te
 natural-scene SFR (nssfr) uses to reject lines, texture and double edges (spec §4.4); `esfr` applies
 it to every ROI.
 """
+
 from __future__ import annotations
 
 import functools
@@ -53,8 +54,10 @@ def luminance(image: np.ndarray, channel: int | None = None) -> np.ndarray:
     if a.ndim not in (2, 3) or (a.ndim == 3 and a.shape[2] not in (1, 3, 4)):
         raise SolasError(f"image shape {a.shape} is not H×W, H×W×1, H×W×3 or H×W×4")
     if channel is not None and is_grey(a):
-        raise SolasError(f"channel {channel} asked of a grey image (one channel): it has no colour channels; "
-                         "measure its grey values (no channel)")
+        raise SolasError(
+            f"channel {channel} asked of a grey image (one channel): it has no colour channels; "
+            "measure its grey values (no channel)"
+        )
     if channel is not None:
         if not 0 <= channel < 3:
             raise SolasError(f"channel {channel} does not exist: allowed 0…2")
@@ -84,8 +87,7 @@ def crop(image: np.ndarray, roi: Roi) -> np.ndarray:
         raise SolasError(f"ROI {x},{y},{w},{h} is too small: width and height must be ≥ {MIN_ROI_PX} px")
     if x < 0 or y < 0 or x + w > width or y + h > height:
         raise SolasError(
-            f"ROI {x},{y},{w},{h} leaves the {width}×{height} image: need 0 ≤ x, x+w ≤ {width}, "
-            f"0 ≤ y, y+h ≤ {height}"
+            f"ROI {x},{y},{w},{h} leaves the {width}×{height} image: need 0 ≤ x, x+w ≤ {width}, 0 ≤ y, y+h ≤ {height}"
         )
     return image[y : y + h, x : x + w]
 

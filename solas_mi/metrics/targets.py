@@ -4,11 +4,12 @@ Analytic MTF of the straight edge (ISO 12233 test, spec §3), f in cy/px along t
     MTF(f) = exp(−2π²σ²f²) · |sinc(f cos θ) · sinc(f sin θ)|
 Pixel (i, j) covers x ∈ [j − ½, j + ½], y ∈ [i − ½, i + ½] (px); row 0 is the top.
 """
+
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Sequence
 
 import numpy as np
 from scipy.optimize import brentq
@@ -25,9 +26,7 @@ def analytic_mtf(freq: np.ndarray | float, sigma_px: float, angle_deg: float) ->
     """MTF of the target edge at `freq` cy/px along the edge normal (Gaussian σ in px, tilt in degrees)."""
     f = np.asarray(freq, dtype=np.float64)
     t = math.radians(angle_deg)
-    return np.exp(-2.0 * np.pi**2 * sigma_px**2 * f**2) * np.abs(
-        np.sinc(f * math.cos(t)) * np.sinc(f * math.sin(t))
-    )
+    return np.exp(-2.0 * np.pi**2 * sigma_px**2 * f**2) * np.abs(np.sinc(f * math.cos(t)) * np.sinc(f * math.sin(t)))
 
 
 def analytic_mtf50(sigma_px: float, angle_deg: float, level: float = 0.5) -> float:
@@ -98,8 +97,12 @@ def _pixel_integrated_step(n0: np.ndarray, a: float, b: float, sigma: float) -> 
         v = (_step_single_integral(m + a / 2, sigma) - _step_single_integral(m - a / 2, sigma)) / a
     else:
         g = _step_double_integral
-        v = (g(m + (a + b) / 2, sigma) - g(m + (a - b) / 2, sigma) - g(m - (a - b) / 2, sigma)
-             + g(m - (a + b) / 2, sigma)) / (a * b)
+        v = (
+            g(m + (a + b) / 2, sigma)
+            - g(m + (a - b) / 2, sigma)
+            - g(m - (a - b) / 2, sigma)
+            + g(m - (a + b) / 2, sigma)
+        ) / (a * b)
     return np.where(n0 > 0, 1.0 - v, v)
 
 

@@ -8,6 +8,7 @@ registered here, each format's module beside it). `commands`: `lens info`, `lens
 A lens is data; analyses take it as their first argument: `paraxial(lens, 531.0)`,
 `spot(lens, (0, 2), 531.0)` (also exported by `solas_mi` itself).
 """
+
 from ..lazy import lazy_exports
 from . import codev, lens_toml, pbrt_dat, zemax
 from .formats import READERS, WRITERS, read_toml_lens, text_reader
@@ -21,10 +22,19 @@ __getattr__ = lazy_exports(__name__, {"Lens": ".lens"})
 READERS.register(".toml", read_toml_lens, summary="our TOML lens file: every key `Lens.from_dict` knows")
 READERS.register(".zmx", text_reader(zemax.read_spec), summary="Zemax OpticStudio sequential lens file (`zemax`)")
 READERS.register(".seq", text_reader(codev.read_spec), summary="CODE V sequence file (`codev`)")
-READERS.register(".dat", text_reader(pbrt_dat.read_spec), check=pbrt_dat.check_read,
-                 summary="pbrt lens table: radius, thickness, n_d, aperture per row (`pbrt_dat`)")
-WRITERS.register(".toml", lens_toml.dumps, holds=("coatings", "blades"), summary="our TOML lens file, numbers in full: it reads back as the "
-                                                   "same lens (`lens_toml`)")
+READERS.register(
+    ".dat",
+    text_reader(pbrt_dat.read_spec),
+    check=pbrt_dat.check_read,
+    summary="pbrt lens table: radius, thickness, n_d, aperture per row (`pbrt_dat`)",
+)
+WRITERS.register(
+    ".toml",
+    lens_toml.dumps,
+    holds=("coatings", "blades"),
+    summary="our TOML lens file, numbers in full: it reads back as the same lens (`lens_toml`)",
+)
 WRITERS.register(".zmx", zemax.dumps, holds=("coatings",), summary="Zemax OpticStudio sequential lens file (`zemax`)")
-WRITERS.register(".dat", pbrt_dat.dumps, summary="pbrt lens table, spherical surfaces and an object at infinity "
-                                                 "only (`pbrt_dat`)")
+WRITERS.register(
+    ".dat", pbrt_dat.dumps, summary="pbrt lens table, spherical surfaces and an object at infinity only (`pbrt_dat`)"
+)

@@ -4,6 +4,7 @@ aim starts: the paraxial guess, or a continuation outward from the axis that fol
 pupil of wide lenses as it moves and tilts, or, where no ray reaches the stop centre, the passing ray
 nearest it. Lengths in mm, fields in degrees, wavelengths in nm.
 """
+
 from __future__ import annotations
 
 import math
@@ -48,18 +49,32 @@ class Bundle:
         if self.lens.field_type.sideways:  # directions up to and beyond 90°, object at infinity
             return tracer.launch_direction(self.lens, *incoming, ex, ey)
         pts = self._object_points
-        return tracer.launch(self.lens, *incoming, ex, ey,
-                        None if pts is None else (self.per_ray(pts[:, 0], rays), self.per_ray(pts[:, 1], rays)))
+        return tracer.launch(
+            self.lens,
+            *incoming,
+            ex,
+            ey,
+            None if pts is None else (self.per_ray(pts[:, 0], rays), self.per_ray(pts[:, 1], rays)),
+        )
 
-    def trace(self, ex: tracer.F, ey: tracer.F, heights: list | None = None,
-              rays: tracer.UInt32 | None = None) -> tracer.Traced:
+    def trace(
+        self, ex: tracer.F, ey: tracer.F, heights: list | None = None, rays: tracer.UInt32 | None = None
+    ) -> tracer.Traced:
         """The rays (or the rays `rays`) of entrance coordinates (ex, ey) traced; `heights`: see `tracer.trace`."""
         wavelength_um = self.per_ray(np.asarray(self.bundle_wavelengths) / 1000.0, rays)
         return tracer.trace(self.lens, self.launch(ex, ey, rays), wavelength_um, heights=heights)
 
 
-def aim(bundle: Bundle, target, ex: tracer.F, ey: tracer.F, goal_x: tracer.F, goal_y: tracer.F, max_iter: int = 60,
-        jacobian=None):
+def aim(
+    bundle: Bundle,
+    target,
+    ex: tracer.F,
+    ey: tracer.F,
+    goal_x: tracer.F,
+    goal_y: tracer.F,
+    max_iter: int = 60,
+    jacobian=None,
+):
     """Newton iteration on entrance coordinates so that target(traced) → (goal_x, goal_y) (`newton`).
 
     `target(traced, rays=None)` returns (gx, gy, ok) of the rays traced. The Jacobian (j11, j12, j21, j22) =
@@ -72,8 +87,18 @@ def aim(bundle: Bundle, target, ex: tracer.F, ey: tracer.F, goal_x: tracer.F, go
     return aim_keeping(bundle, target, ex, ey, goal_x, goal_y, max_iter, jacobian)[:4]
 
 
-def aim_keeping(bundle: Bundle, target, ex: tracer.F, ey: tracer.F, goal_x: tracer.F, goal_y: tracer.F,
-                max_iter: int = 60, jacobian=None, keep=None, unknown: tracer.UInt32 | None = None):
+def aim_keeping(
+    bundle: Bundle,
+    target,
+    ex: tracer.F,
+    ey: tracer.F,
+    goal_x: tracer.F,
+    goal_y: tracer.F,
+    max_iter: int = 60,
+    jacobian=None,
+    keep=None,
+    unknown: tracer.UInt32 | None = None,
+):
     """`aim`, and also `keep(traced, rays=None)` (a tuple of arrays of the rays traced) evaluated with each
     step's trace, so that what the caller needs of the rays at the solution costs no trace of its own;
     `unknown`: the rays whose given `jacobian` is not known, taken by finite differences. Returns (ex, ey,
@@ -168,8 +193,6 @@ def nearest_passing(lens: Lens, field_deg: np.ndarray, wavelength_nm: float, sam
     return (ex[k], ey[k]), (sx[k], sy[k])
 
 
-
-
 class _FilmBundle:
     """Rays of the reversed lens (`exit_pupil.reversed_lens`) from film points (x, y) mm, one per point,
     for `aim`: their entrance coordinates are points on the last surface's vertex plane."""
@@ -179,13 +202,16 @@ class _FilmBundle:
         self.wavelength_um = tracer.array(np.full(len(x), wavelength_nm * 1e-3))
         self.tolerance = 1e3 * _TOL
 
-    def trace(self, ex: tracer.F, ey: tracer.F, heights: list | None = None,
-              rays: tracer.UInt32 | None = None) -> tracer.Traced:
+    def trace(
+        self, ex: tracer.F, ey: tracer.F, heights: list | None = None, rays: tracer.UInt32 | None = None
+    ) -> tracer.Traced:
         zero = 0.0 * ex
-        x, y, wavelength = (v if rays is None else dr.gather(tracer.F, v, rays)
-                            for v in (self.x, self.y, self.wavelength_um))
-        return tracer.trace(self.lens, tracer.launch(self.lens, zero, zero, ex, ey, (x, y)), wavelength,
-                            heights=heights)
+        x, y, wavelength = (
+            v if rays is None else dr.gather(tracer.F, v, rays) for v in (self.x, self.y, self.wavelength_um)
+        )
+        return tracer.trace(
+            self.lens, tracer.launch(self.lens, zero, zero, ex, ey, (x, y)), wavelength, heights=heights
+        )
 
 
 def film_chief_aim(rev: Lens, x: np.ndarray, y: np.ndarray, wavelength_nm: float) -> tuple[np.ndarray, ...]:

@@ -14,6 +14,7 @@ left and right edges; everywhere else the real chief ray's offset from the ideal
 distortion and lateral colour. The sensor is W×H pixels of pitch_um centred on the axis, row 0 at the
 top (+y); by default it is the input image's grid.
 """
+
 from __future__ import annotations
 
 import math
@@ -80,19 +81,31 @@ class Camera:
 
     def meta(self) -> dict:
         if self.projection == "sensor":
-            return {"sensor": [self.width, self.height], "pitch_um": self.pitch_um,
-                    "reference_wavelength_nm": self.wavelength_nm,
-                    "projection": "sensor: the input image is the sensor image in the lens's own projection; PSF grid "
-                                  "nodes sit at their chief rays' image points"}
+            return {
+                "sensor": [self.width, self.height],
+                "pitch_um": self.pitch_um,
+                "reference_wavelength_nm": self.wavelength_nm,
+                "projection": "sensor: the input image is the sensor image in the lens's own projection; PSF grid "
+                "nodes sit at their chief rays' image points",
+            }
         if self.projection == "frame":
-            return {"sensor": [self.width, self.height], "pitch_um_at_axis": self.pitch_um,
-                    "pinhole_focal_mm": self.focal_mm, "reference_wavelength_nm": self.wavelength_nm,
-                    "principal_px": list(self.centre),
-                    "projection": "frame: each pixel's field angle from the frame's camera (frame_camera)"}
-        return {"sensor": [self.width, self.height], "pitch_um": self.pitch_um, "pinhole_focal_mm": self.focal_mm,
-                "fov_deg": self.fov_deg, "reference_wavelength_nm": self.wavelength_nm, "principal_px": list(self.centre),
-                "projection": "rectilinear: ideal point = pinhole_focal_mm * (tan x, tan y); image width spans "
-                              "+-fov_deg"}
+            return {
+                "sensor": [self.width, self.height],
+                "pitch_um_at_axis": self.pitch_um,
+                "pinhole_focal_mm": self.focal_mm,
+                "reference_wavelength_nm": self.wavelength_nm,
+                "principal_px": list(self.centre),
+                "projection": "frame: each pixel's field angle from the frame's camera (frame_camera)",
+            }
+        return {
+            "sensor": [self.width, self.height],
+            "pitch_um": self.pitch_um,
+            "pinhole_focal_mm": self.focal_mm,
+            "fov_deg": self.fov_deg,
+            "reference_wavelength_nm": self.wavelength_nm,
+            "principal_px": list(self.centre),
+            "projection": "rectilinear: ideal point = pinhole_focal_mm * (tan x, tan y); image width spans +-fov_deg",
+        }
 
 
 def check_fov(fov_deg: float) -> float:
@@ -123,8 +136,13 @@ def film_pitch_um(lens: Lens, columns: int, fov_deg: float | None = None, wavele
     return 1e3 * lens.image_diameter / columns
 
 
-def camera_for(lens: Lens, sensor: tuple[int, int] = DEFAULT_SENSOR, fov_deg: float | None = None,
-               pitch_um: float | None = None, wavelength_nm: float | None = None) -> Camera:
+def camera_for(
+    lens: Lens,
+    sensor: tuple[int, int] = DEFAULT_SENSOR,
+    fov_deg: float | None = None,
+    pitch_um: float | None = None,
+    wavelength_nm: float | None = None,
+) -> Camera:
     """The camera of `lens` with a sensor of (rows, columns) pixels. The default input image spans
     ±fov_deg horizontally (default: the lens's field); the default pitch makes the sensor's width span
     exactly that field."""

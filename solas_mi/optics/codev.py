@@ -34,6 +34,7 @@ cannot be represented is refused naming the surface and the feature: decentres a
 diffractive, holographic, toric and anamorphic surfaces, rectangular or elliptical apertures,
 obscurations, zoom positions, private catalogues; and any command not listed here.
 """
+
 from __future__ import annotations
 
 import math
@@ -42,8 +43,18 @@ import re
 from ..errors import SolasError
 from . import zemax_solves
 from .codev_glass import PrivateCatalogue, material, unquote
-from .codev_syntax import (APERTURES, ASPHERIC, FIELDS, IGNORED, REFUSED, SYSTEM, VIGNETTING, ZERO_IS_NOTHING,
-                           command, commands)
+from .codev_syntax import (
+    APERTURES,
+    ASPHERIC,
+    FIELDS,
+    IGNORED,
+    REFUSED,
+    SYSTEM,
+    VIGNETTING,
+    ZERO_IS_NOTHING,
+    command,
+    commands,
+)
 from .formats import MAX_FIELDS, check_count, one_line
 from .formats import floats as _numbers
 from .lens import Lens
@@ -93,8 +104,10 @@ class _Reader:
             if key in REFUSED:
                 if key in ZERO_IS_NOTHING and args and _numbers(args[:1], self.ident(line)) == [0.0]:
                     continue  # a zero decentre, tilt or fringe curvature changes nothing
-                raise SolasError(f"{self.ident(line)}: {key}: {REFUSED[key]} are not supported "
-                                 "(rotationally symmetric refracting systems only)")
+                raise SolasError(
+                    f"{self.ident(line)}: {key}: {REFUSED[key]} are not supported "
+                    "(rotationally symmetric refracting systems only)"
+                )
             self.command(key, args, line)
 
     def command(self, key: str, args: list[str], line: int) -> None:
@@ -174,8 +187,10 @@ class _Reader:
             row.pop("asp", None)
             row.pop("conic", None)
         elif key not in ("ASP", "CON"):
-            raise SolasError(f"{ident}: command {key} is not supported (rotationally symmetric refracting "
-                             "surfaces: RDY, CUY, THI, GLA, CIR, STO, SLB, SPH, CON, ASP with K and A…J, PIM)")
+            raise SolasError(
+                f"{ident}: command {key} is not supported (rotationally symmetric refracting "
+                "surfaces: RDY, CUY, THI, GLA, CIR, STO, SLB, SPH, CON, ASP with K and A…J, PIM)"
+            )
 
 
 def read_spec(text: str, where: str) -> dict:
@@ -195,15 +210,20 @@ def read_spec(text: str, where: str) -> dict:
     try:
         other = _spec(_read(text, where, radius_mode=False), where)
         if _real_image(other, where):
-            return _noted(other, "no RDM in the file: its S lines read as radii form no real image, as curvatures "
-                                 "(RDM N) they do: read as curvatures; add RDM or RDM N to say which")
+            return _noted(
+                other,
+                "no RDM in the file: its S lines read as radii form no real image, as curvatures "
+                "(RDM N) they do: read as curvatures; add RDM or RDM N to say which",
+            )
     except SolasError as exc:
         if first is not None and str(exc) == str(first):
             raise first from None  # the same fault either way: not the radii's
     if first is None:  # neither reading forms a real image: the radii stand, as the description says
         return _noted(spec, f"no RDM in the file: its S lines read as radii, {RADII_DEFAULT}")
-    raise SolasError(f"{first} (the file has no RDM: its S lines were read as radii, {RADII_DEFAULT}; "
-                     "if they are curvatures, add RDM N)") from None
+    raise SolasError(
+        f"{first} (the file has no RDM: its S lines were read as radii, {RADII_DEFAULT}; "
+        "if they are curvatures, add RDM N)"
+    ) from None
 
 
 def _read(text: str, where: str, radius_mode: bool) -> _Reader:
@@ -236,8 +256,10 @@ def _spec(reader: _Reader, where: str) -> dict:
         for k, row in enumerate(rows):
             row["stop"] = k == reader.stop_at
     if len(rows) < 3 or rows[0]["kind"] != "SO" or rows[-1]["kind"] != "SI":
-        raise SolasError(f"{where}: a lens needs SO (the object), at least one surface (S or STO) and SI "
-                         f"(the image), in that order; got {' '.join(r['kind'] for r in rows) or 'no surfaces'}")
+        raise SolasError(
+            f"{where}: a lens needs SO (the object), at least one surface (S or STO) and SI "
+            f"(the image), in that order; got {' '.join(r['kind'] for r in rows) or 'no surfaces'}"
+        )
     stop_note = zemax_solves.default_stop(rows[1:-1], "STO", "CODE V's default")
     inner = [r for r in rows[1:-1] if r["kind"] in ("SO", "SI")]
     if inner:
@@ -246,8 +268,10 @@ def _spec(reader: _Reader, where: str) -> dict:
     if dim not in UNITS:
         raise SolasError(f"{where}: DIM {system['DIM'][0]!r} is not supported; allowed: M (mm), C (cm), I (inches)")
     scale = UNITS[dim]
-    spec: dict = {"object": _object(rows[0], scale), **{key: system[key] for key, _, _ in ENVIRONMENT.values()
-                                                        if key in system}}
+    spec: dict = {
+        "object": _object(rows[0], scale),
+        **{key: system[key] for key, _, _ in ENVIRONMENT.values() if key in system},
+    }
     if reader.materials:
         spec["materials"] = reader.materials
     title = one_line(" ".join(unquote(t) for t in system.get("TIT", system.get("TITLE", [])))).strip()
@@ -280,8 +304,7 @@ def _vignetting(system: dict, count: int, where: str) -> list[tuple[float, ...]]
     for k, values in given.items():
         if len(values) > count or not all(-1.0 < v < 1.0 for v in values):
             raise SolasError(f"{where}: {k} {' '.join(system[k])!r}: one factor in (-1, 1) per field ({count} fields)")
-    return [tuple(given.get(k, [])[i] if i < len(given.get(k, [])) else 0.0 for k in VIGNETTING)
-            for i in range(count)]
+    return [tuple(given.get(k, [])[i] if i < len(given.get(k, [])) else 0.0 for k in VIGNETTING) for i in range(count)]
 
 
 def _object(row: dict, scale: float) -> dict:
@@ -294,9 +317,13 @@ def _object(row: dict, scale: float) -> dict:
 def _surface(row: dict, i: int, scale: float) -> dict:
     """The [[surface]] table of a surface row, lengths in mm; "diameter" None without CIR (automatic)."""
     curv = row["curv"] / scale
-    out = {"label": row.get("label") or f"S{i}", "radius": 0.0 if curv == 0 else 1.0 / curv,
-           "thickness": row["thi"] * scale, "material": row["glass"],
-           "diameter": 2.0 * row["cir"] * scale if row.get("cir", 0) > 0 else None}
+    out = {
+        "label": row.get("label") or f"S{i}",
+        "radius": 0.0 if curv == 0 else 1.0 / curv,
+        "thickness": row["thi"] * scale,
+        "material": row["glass"],
+        "diameter": 2.0 * row["cir"] * scale if row.get("cir", 0) > 0 else None,
+    }
     if row.get("conic"):
         out["conic"] = row["conic"]
     terms = [row.get("asp", {}).get(k, 0.0) * scale ** (-3 - 2 * k) for k in range(len(ASPHERIC))]
@@ -354,4 +381,3 @@ def _fields(system: dict, scale: float, where: str) -> tuple[str, list[float]]:
     x, y = x + [0.0] * (n - len(x)), y + [0.0] * (n - len(y))
     unit = 1.0 if given[0] == "YAN" else scale
     return FIELDS[given[0]], [math.hypot(a, b) * unit for a, b in zip(x, y)]
-

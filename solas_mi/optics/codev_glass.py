@@ -2,6 +2,7 @@
 and the glass codes "nnnnnn.vvvvvv" / "nnn.vvv") as our material names, and its private catalogue (PRV … END):
 glasses given as indices at the PWL wavelengths (a table material: the spline through them, `glass.own_material`)
 or by the Laurent series (LAU), carried as the lens's own [materials]."""
+
 from __future__ import annotations
 
 import re
@@ -28,8 +29,11 @@ def material(token: str, ident: str, own: dict | None = None) -> str:
         return name
     model, code = _MODEL.match(name), _CODE.match(name)
     if model or code:
-        nd, vd = ((float(model[1]), float(model[2])) if model
-                  else (1.0 + int(code[1]) / 10 ** len(code[1]), float(code[2][:2] + "." + code[2][2:])))
+        nd, vd = (
+            (float(model[1]), float(model[2]))
+            if model
+            else (1.0 + int(code[1]) / 10 ** len(code[1]), float(code[2][:2] + "." + code[2][2:]))
+        )
         try:
             return glass_mod.model_name(nd, vd)
         except SolasError as exc:
@@ -45,12 +49,17 @@ def material(token: str, ident: str, own: dict | None = None) -> str:
         return key
     squeeze = re.sub(r"[\s\-]", "", bare).upper()
     same = [k for k in glass_mod.candidates(squeeze) if k.split(":", 1)[0] == ours]
-    same = same or [k for k in glass_mod.load_catalog() if k.split(":", 1)[0] == ours
-                    and re.sub(r"[\s\-]", "", k.split(":", 1)[1]).upper() == squeeze]
+    same = same or [
+        k
+        for k in glass_mod.load_catalog()
+        if k.split(":", 1)[0] == ours and re.sub(r"[\s\-]", "", k.split(":", 1)[1]).upper() == squeeze
+    ]
     if len(same) == 1:
         return same[0]
-    raise SolasError(f"{ident}: glass {name!r}: {ours} has no glass {bare!r} in our catalogue"
-                     + (f" (several match: {', '.join(same)})" if same else ""))
+    raise SolasError(
+        f"{ident}: glass {name!r}: {ours} has no glass {bare!r} in our catalogue"
+        + (f" (several match: {', '.join(same)})" if same else "")
+    )
 
 
 class PrivateCatalogue:
@@ -69,16 +78,23 @@ class PrivateCatalogue:
         if key == "PWL":
             self.wavelengths = _numbers(tokens[1:], f"{ident} PWL")
         elif len(tokens) == 8 and tokens[1].upper() == "LAU":
-            self.glasses[unquote(tokens[0])] = {"K": _numbers(tokens[2:], f"{ident} {tokens[0]} LAU"),
-                                                "P": LAURENT_POWERS, "range_nm": list(glass_mod.MODEL_RANGE_NM)}
+            self.glasses[unquote(tokens[0])] = {
+                "K": _numbers(tokens[2:], f"{ident} {tokens[0]} LAU"),
+                "P": LAURENT_POWERS,
+                "range_nm": list(glass_mod.MODEL_RANGE_NM),
+            }
         else:
             numeric = tokens[0][:1] in "'\"" and not any(t[:1].isalpha() for t in tokens[1:])
             index = _numbers(tokens[1:], f"{ident} {tokens[0]}") if numeric else []
             if not index or len(index) != len(self.wavelengths):
-                raise SolasError(f"{ident}: {' '.join(tokens)!r}: a private glass is 'NAME' and one index per PWL "
-                                 f"wavelength ({len(self.wavelengths)}), or 'NAME' LAU and the six Laurent "
-                                 "coefficients; other dispersion formulas are not supported")
+                raise SolasError(
+                    f"{ident}: {' '.join(tokens)!r}: a private glass is 'NAME' and one index per PWL "
+                    f"wavelength ({len(self.wavelengths)}), or 'NAME' LAU and the six Laurent "
+                    "coefficients; other dispersion formulas are not supported"
+                )
             order = sorted(range(len(index)), key=lambda i: self.wavelengths[i])
-            self.glasses[unquote(tokens[0])] = {"wavelengths_nm": [self.wavelengths[i] for i in order],
-                                                "index": [index[i] for i in order]}
+            self.glasses[unquote(tokens[0])] = {
+                "wavelengths_nm": [self.wavelengths[i] for i in order],
+                "index": [index[i] for i in order],
+            }
         return False

@@ -1,5 +1,6 @@
 """The CODE V sequence-file language (`codev`): how a .seq text splits into commands, which command a word
 names, and which commands are read, read past (IGNORED) or refused (REFUSED, with what they describe)."""
+
 from __future__ import annotations
 
 import re
@@ -10,23 +11,75 @@ APERTURES = {"EPD": "epd", "FNO": "fnum", "NAO": "na"}
 # optimisation codes: CCY/CCX (curvature), THC (thickness), GLC (glass), KC (conic), AC … JC (the aspheric
 # coefficients A … J); each says whether its value varies, not what it is. UID: a surface's identifier
 # (CODE V 2026 writes one per surface); CMP, DSX, DSY, BTX, BTY: compensators and tolerances
-IGNORED = frozenset("LEN GO END INI WTW WTF DOR CCY CCX THC GLC DER KC UID CMP DSX DSY BTX BTY".split()
-                    + [k + "C" for k in ASPHERIC])
+IGNORED = frozenset(
+    [
+        "LEN",
+        "GO",
+        "END",
+        "INI",
+        "WTW",
+        "WTF",
+        "DOR",
+        "CCY",
+        "CCX",
+        "THC",
+        "GLC",
+        "DER",
+        "KC",
+        "UID",
+        "CMP",
+        "DSX",
+        "DSY",
+        "BTX",
+        "BTY",
+    ]
+    + [k + "C" for k in ASPHERIC]
+)
 VIGNETTING = ("VUX", "VLX", "VUY", "VLY")  # the pupil's fraction cut off per field: +x, −x, +y, −y
 SYSTEM = ("TIT", "TITLE", "DIM", "WL", "REF", "XAN", "XOB", "XIM", "XRI", *FIELDS, *APERTURES, *VIGNETTING)
 ZERO_IS_NOTHING = ("XDE", "YDE", "ZDE", "ADE", "BDE", "CDE", "CUF")
-REFUSED = {**dict.fromkeys(("XDE", "YDE", "ZDE", "ADE", "BDE", "CDE", "DAR", "BEN", "REV", "RET"),
-                           "decentred or tilted surfaces"),
-           "REFL": "mirrors", "DOE": "diffractive surfaces", "DIF": "diffractive surfaces", "HOE": "holographic surfaces",
-           "HCO": "holographic surfaces", "SPS": "special surface shapes",
-           "YTO": "toric surfaces", "XTO": "toric surfaces", "RDX": "anamorphic surfaces (an x radius)",
-           "CUX": "anamorphic surfaces (an x curvature)", "REX": "rectangular apertures",
-           "REY": "rectangular apertures", "ELX": "elliptical apertures", "ELY": "elliptical apertures",
-           "OBS": "obscurations", "ZOO": "zoom positions",
-           "NA": "image-space NA apertures (use EPD, FNO or NAO)", "TEL": "telecentric object spaces",
-           "CUF": "fringe curvatures"}
-SURFACE_COMMANDS = ("SO", "S", "STO", "SI", "RDY", "CUY", "THI", "GLA", "CIR", "K", *ASPHERIC, "SLB", "PIM", "SPH",
-                    "ASP", "CON")
+REFUSED = {
+    **dict.fromkeys(
+        ("XDE", "YDE", "ZDE", "ADE", "BDE", "CDE", "DAR", "BEN", "REV", "RET"), "decentred or tilted surfaces"
+    ),
+    "REFL": "mirrors",
+    "DOE": "diffractive surfaces",
+    "DIF": "diffractive surfaces",
+    "HOE": "holographic surfaces",
+    "HCO": "holographic surfaces",
+    "SPS": "special surface shapes",
+    "YTO": "toric surfaces",
+    "XTO": "toric surfaces",
+    "RDX": "anamorphic surfaces (an x radius)",
+    "CUX": "anamorphic surfaces (an x curvature)",
+    "REX": "rectangular apertures",
+    "REY": "rectangular apertures",
+    "ELX": "elliptical apertures",
+    "ELY": "elliptical apertures",
+    "OBS": "obscurations",
+    "ZOO": "zoom positions",
+    "NA": "image-space NA apertures (use EPD, FNO or NAO)",
+    "TEL": "telecentric object spaces",
+    "CUF": "fringe curvatures",
+}
+SURFACE_COMMANDS = (
+    "SO",
+    "S",
+    "STO",
+    "SI",
+    "RDY",
+    "CUY",
+    "THI",
+    "GLA",
+    "CIR",
+    "K",
+    *ASPHERIC,
+    "SLB",
+    "PIM",
+    "SPH",
+    "ASP",
+    "CON",
+)
 KNOWN = frozenset((*SURFACE_COMMANDS, *SYSTEM, *IGNORED, *REFUSED, "RDM", "CUM", "TEM", "PRE", "PRV"))
 
 
@@ -47,7 +100,7 @@ def commands(text: str):
     tokens: list[str] = []
     for number, raw in enumerate(text.splitlines(), start=1):
         found = token.findall(raw)
-        found = found[:found.index("!")] if "!" in found else found
+        found = found[: found.index("!")] if "!" in found else found
         going_on = found[-1:] == ["&"]
         for t in found[:-1] if going_on else found:
             if t == ";":

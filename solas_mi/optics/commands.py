@@ -44,9 +44,8 @@ def add_environment_options(p) -> None:
 def load_lens(args):
     """The lens of a command (`args.lens`, at `args.temperature_c` and `args.pressure_kpa` where given:
     `Lens.at`), stating on stderr what of it overlaps (`Lens.overlaps`)."""
-    from .lens import Lens
-
     from . import thermal
+    from .lens import Lens
 
     lens = Lens.load(args.lens)
     temperature, pressure, mount = (args.temperature_c, args.pressure_kpa, args.mount)

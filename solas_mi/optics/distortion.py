@@ -6,6 +6,7 @@ equidistant f θ, equisolid 2f sin(θ/2), stereographic 2f tan(θ/2). The closes
 least-squares fit h ≈ f·g(θ) over the sampled field leaves the smallest RMS residual (f free per
 projection). Angles in degrees at the interfaces, heights in mm.
 """
+
 from __future__ import annotations
 
 import math
@@ -31,8 +32,10 @@ def fit_projections(field_deg: np.ndarray, height_mm: np.ndarray) -> dict[str, t
     theta = np.radians(np.asarray(field_deg, dtype=np.float64))
     h = np.asarray(height_mm, dtype=np.float64)
     if theta.shape != h.shape or theta.ndim != 1 or not np.all((theta >= 0) & (theta < np.pi)) or not theta.any():
-        raise SolasError(f"projection fit needs field angles in [0, 180) deg, one at least nonzero, and as many "
-                         f"image heights; got {np.degrees(theta).tolist()} deg and {h.size} heights")
+        raise SolasError(
+            f"projection fit needs field angles in [0, 180) deg, one at least nonzero, and as many "
+            f"image heights; got {np.degrees(theta).tolist()} deg and {h.size} heights"
+        )
     fits = {}
     for name, g in PROJECTIONS.items():
         if name == "rectilinear" and theta.max() >= np.pi / 2:
@@ -92,5 +95,14 @@ def distortion(lens: Lens, field_deg=None, wavelength_nm: float | None = None, s
     else:
         note = ""
     fits = fit_projections(np.abs(angles), h)
-    return Distortion(wl, angles.tolist(), h.tolist(), rect, percent, ri, closest_projection(fits),
-                      {k: [x if math.isfinite(x) else None for x in v] for k, v in fits.items()}, note)
+    return Distortion(
+        wl,
+        angles.tolist(),
+        h.tolist(),
+        rect,
+        percent,
+        ri,
+        closest_projection(fits),
+        {k: [x if math.isfinite(x) else None for x in v] for k, v in fits.items()},
+        note,
+    )

@@ -13,6 +13,7 @@ RealisticCamera (M. Pharr, W. Jakob, G. Humphreys, "Physically Based Rendering: 
 Implementation", 4th ed., MIT Press, 2023); here they are found by bisecting to the pupil's rim
 through the reversed lens in Float64, rather than by testing rays over the rear element's square.
 """
+
 from __future__ import annotations
 
 import warnings
@@ -21,8 +22,8 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .lens import Lens
-from .surface import Surface
 from .overlap import check_image_distance
+from .surface import Surface
 
 FINE = 512  # points per side of the search for a pupil the coarse grid missed
 MARCH = 48  # samples along each direction from the pupil's centroid to three times the aperture's reach
@@ -39,11 +40,32 @@ def reversed_lens(lens: Lens) -> Lens:
     rev = []
     for i in range(len(s) - 1, -1, -1):
         thickness = s[i - 1].thickness if i > 0 else 1.0  # beyond the original first surface: unused
-        rev.append(Surface(s[i].label, -s[i].radius, thickness, s[i].diameter, materials[i], before[i], s[i].stop,
-                           s[i].conic, tuple(-a for a in s[i].aspheric), tuple(-a for a in s[i].qbfs),
-                           s[i].norm_radius, s[i].focal_length, s[i].coating, s[i].blades, s[i].blade_rotation))
-    return replace(lens, name=lens.name + " (reversed)", surfaces=tuple(rev), object_distance=s[-1].thickness,
-                   object_glass=s[-1].glass)
+        rev.append(
+            Surface(
+                s[i].label,
+                -s[i].radius,
+                thickness,
+                s[i].diameter,
+                materials[i],
+                before[i],
+                s[i].stop,
+                s[i].conic,
+                tuple(-a for a in s[i].aspheric),
+                tuple(-a for a in s[i].qbfs),
+                s[i].norm_radius,
+                s[i].focal_length,
+                s[i].coating,
+                s[i].blades,
+                s[i].blade_rotation,
+            )
+        )
+    return replace(
+        lens,
+        name=lens.name + " (reversed)",
+        surfaces=tuple(rev),
+        object_distance=s[-1].thickness,
+        object_glass=s[-1].glass,
+    )
 
 
 @dataclass(frozen=True)
@@ -65,36 +87,46 @@ class PupilBounds:
         c_k + a_k w (|w| ≤ 1) is c + (c_k − c) + a_k w, of norm ≤ m + 1 in units of max a_k."""
         i = np.clip(np.searchsorted(self.radius_mm, r, side="right") - 1, 0, len(self.radius_mm) - 2)
         a, b = self.bounds_mm[i], self.bounds_mm[i + 1]
-        box = np.stack([np.minimum(a[..., 0], b[..., 0]), np.maximum(a[..., 1], b[..., 1]),
-                        np.minimum(a[..., 2], b[..., 2]), np.maximum(a[..., 3], b[..., 3])], axis=-1)
+        box = np.stack(
+            [
+                np.minimum(a[..., 0], b[..., 0]),
+                np.maximum(a[..., 1], b[..., 1]),
+                np.minimum(a[..., 2], b[..., 2]),
+                np.maximum(a[..., 3], b[..., 3]),
+            ],
+            axis=-1,
+        )
         centre = [0.5 * (a[..., 0:3:2] + a[..., 1:4:2]), 0.5 * (b[..., 0:3:2] + b[..., 1:4:2])]  # (u, v) each
         semi = np.maximum(0.5 * (a[..., 1:4:2] - a[..., 0:3:2]), 0.5 * (b[..., 1:4:2] - b[..., 0:3:2]))
         c = 0.5 * (centre[0] + centre[1])
         m = np.linalg.norm((centre[0] - c) / np.maximum(semi, 1e-300), axis=-1)
         semi = semi * (1.0 + m)[..., None]
-        ellipse = np.stack([c[..., 0] - semi[..., 0], c[..., 0] + semi[..., 0], c[..., 1] - semi[..., 1],
-                            c[..., 1] + semi[..., 1]], axis=-1)
+        ellipse = np.stack(
+            [c[..., 0] - semi[..., 0], c[..., 0] + semi[..., 0], c[..., 1] - semi[..., 1], c[..., 1] + semi[..., 1]],
+            axis=-1,
+        )
         both = (self.elliptical[i] & self.elliptical[i + 1])[..., None]
         return np.concatenate([np.where(both, ellipse, box), both.astype(float)], axis=-1)
 
 
-def passes(rev: Lens, x: np.ndarray, y: np.ndarray, ex: np.ndarray, ey: np.ndarray, wavelength_nm: float
-           ) -> np.ndarray:
+def passes(rev: Lens, x: np.ndarray, y: np.ndarray, ex: np.ndarray, ey: np.ndarray, wavelength_nm: float) -> np.ndarray:
     """Whether the ray from image point (x, y) toward (ex, ey) on the last vertex plane leaves the lens
     (`rev`: the `reversed_lens`)."""
     from . import tracer
 
     n = len(ex)
     zero = tracer.F(np.zeros(n))
-    rays = tracer.launch(rev, zero, zero, tracer.F(ex), tracer.F(ey),
-                         (tracer.F(np.broadcast_to(x, n)), tracer.F(np.broadcast_to(y, n))))
+    rays = tracer.launch(
+        rev, zero, zero, tracer.F(ex), tracer.F(ey), (tracer.F(np.broadcast_to(x, n)), tracer.F(np.broadcast_to(y, n)))
+    )
     tr = tracer.trace(rev, rays, tracer.F(np.full(n, wavelength_nm * 1e-3)))
     ok, clipped = tracer.to_numpy(tr.ok, tr.clipped_by)
     return ok & (clipped == 0)
 
 
-def pupil_bounds(lens: Lens, max_radius_mm: float, wavelengths_nm=None, radii: int = 64, directions: int = 256,
-                 coarse: int = 64) -> PupilBounds:
+def pupil_bounds(
+    lens: Lens, max_radius_mm: float, wavelengths_nm=None, radii: int = 64, directions: int = 256, coarse: int = 64
+) -> PupilBounds:
     """Exit-pupil bounds for film radii 0…max_radius_mm, over `wavelengths_nm` (default: the lens's).
 
     Per radius and wavelength, a coarse grid over the last surface's aperture finds the pupil's centroid;
@@ -112,7 +144,7 @@ def pupil_bounds(lens: Lens, max_radius_mm: float, wavelengths_nm=None, radii: i
     phi = 2.0 * np.pi * np.arange(directions) / directions
     seen = np.zeros(radii, dtype=bool)
     rim_u, rim_v = [], []
-    for w in (lens.wavelengths_nm if wavelengths_nm is None else wavelengths_nm):
+    for w in lens.wavelengths_nm if wavelengths_nm is None else wavelengths_nm:
         cu, cv, lit = _centroids(rev, radius, grid, reach, w)
         seen |= lit
         u, v = _rim(rev, radius, cu, cv, lit, phi, reach, w)
@@ -120,24 +152,36 @@ def pupil_bounds(lens: Lens, max_radius_mm: float, wavelengths_nm=None, radii: i
         rim_v.append(v)
     bounds, elliptical = _box(np.array(rim_u), np.array(rim_v), directions)
     bounds[~seen] = 0.0  # nothing reaches these film radii
-    escaped, cell, excess = _check(rev, radius, bounds, elliptical, reach,
-                                   lens.wavelengths_nm if wavelengths_nm is None else wavelengths_nm)
+    escaped, cell, excess = _check(
+        rev, radius, bounds, elliptical, reach, lens.wavelengths_nm if wavelengths_nm is None else wavelengths_nm
+    )
     ellipse = (elliptical & seen)[:, None]
     if excess > 1.0:  # rays outside an ellipse (a cat's eye's corner between rim points): every ellipse grown
         centre, half = 0.5 * (bounds[:, 0::2] + bounds[:, 1::2]), 0.5 * (bounds[:, 1::2] - bounds[:, 0::2])
         half = np.where(ellipse, half * excess + cell, half)
-        bounds = np.stack([centre[:, 0] - half[:, 0], centre[:, 0] + half[:, 0], centre[:, 1] - half[:, 1],
-                           centre[:, 1] + half[:, 1]], axis=-1)
+        bounds = np.stack(
+            [
+                centre[:, 0] - half[:, 0],
+                centre[:, 0] + half[:, 0],
+                centre[:, 1] - half[:, 1],
+                centre[:, 1] + half[:, 1],
+            ],
+            axis=-1,
+        )
     if escaped.any():  # rays outside a rectangle: every rectangle widened by the most any missed, and a grid cell
         bounds += np.where(ellipse, 0.0, (escaped + cell) * (escaped > 0) * np.array([-1.0, 1.0, -1.0, 1.0]))
     if escaped.max() > 2.0 * cell:  # more than the rim's rounding: a part of the pupil the march stepped over
-        warnings.warn(f"the exit-pupil bounds of {lens.name} missed a thin part of the pupil (rays up to "
-                      f"{escaped.max():.3g} mm outside); widened to hold every checked ray", stacklevel=2)
+        warnings.warn(
+            f"the exit-pupil bounds of {lens.name} missed a thin part of the pupil (rays up to "
+            f"{escaped.max():.3g} mm outside); widened to hold every checked ray",
+            stacklevel=2,
+        )
     return PupilBounds(radius, bounds, elliptical & seen, float(lens.vertex_z[-1]))
 
 
-def _check(rev: Lens, radius: np.ndarray, bounds: np.ndarray, elliptical: np.ndarray, reach: float, wavelengths_nm
-           ) -> tuple[np.ndarray, float, float]:
+def _check(
+    rev: Lens, radius: np.ndarray, bounds: np.ndarray, elliptical: np.ndarray, reach: float, wavelengths_nm
+) -> tuple[np.ndarray, float, float]:
     """The most (mm, ≥ 0) by which rays that leave the lens pass outside the bounds (u0, u1, v0, v1 sides),
     over a CHECK² grid on ±reach at CHECK_RADII film radii (a thin ring that the march stepped over;
     zeros where every checked ray lies inside), the grid's cell (mm), and the most by which the
@@ -173,8 +217,9 @@ def exit_reach(lens: Lens, max_radius_mm: float) -> float:
     return 1.05 * max(rho, s_rim * rho + abs(1.0 - s_rim) * max_radius_mm)
 
 
-def _centroids(rev: Lens, radius: np.ndarray, grid: tuple[np.ndarray, np.ndarray], reach: float, w: float
-               ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _centroids(
+    rev: Lens, radius: np.ndarray, grid: tuple[np.ndarray, np.ndarray], reach: float, w: float
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per film radius, the centroid (u, v) (mm) of the passing points of the coarse `grid`, and
     whether any ray passes (a row the coarse grid misses is searched on a FINE grid)."""
     gx, gy = grid
@@ -186,16 +231,25 @@ def _centroids(rev: Lens, radius: np.ndarray, grid: tuple[np.ndarray, np.ndarray
     empty = np.flatnonzero(~lit)
     if len(empty):  # a sliver of pupil (heavy vignetting at the field's edge) can fall between coarse points
         fu, fv = (a.ravel() for a in np.meshgrid(*2 * [-reach + (np.arange(FINE) + 0.5) * (2.0 * reach / FINE)]))
-        fine = passes(rev, np.repeat(radius[empty], len(fu)), 0.0, np.tile(fu, len(empty)), np.tile(fv, len(empty)),
-                      w).reshape(len(empty), -1)
+        fine = passes(
+            rev, np.repeat(radius[empty], len(fu)), 0.0, np.tile(fu, len(empty)), np.tile(fv, len(empty)), w
+        ).reshape(len(empty), -1)
         n = np.maximum(fine.sum(axis=1), 1)
         cu[empty], cv[empty] = (fine * fu).sum(axis=1) / n, (fine * fv).sum(axis=1) / n
         lit[empty] = fine.any(axis=1)
     return cu, cv, lit
 
 
-def _rim(rev: Lens, radius: np.ndarray, cu: np.ndarray, cv: np.ndarray, lit: np.ndarray, phi: np.ndarray,
-         reach: float, w: float) -> tuple[np.ndarray, np.ndarray]:
+def _rim(
+    rev: Lens,
+    radius: np.ndarray,
+    cu: np.ndarray,
+    cv: np.ndarray,
+    lit: np.ndarray,
+    phi: np.ndarray,
+    reach: float,
+    w: float,
+) -> tuple[np.ndarray, np.ndarray]:
     """Rim points (u, v) (radii, directions) (mm) of the pupil along directions `phi` from its centroid
     (cu, cv): a march in from beyond the aperture to the outermost passing sample of each direction, so
     a pupil that is not convex (a disc and a ring, a crescent) keeps its outer rim; then bisection to it."""

@@ -12,6 +12,7 @@ On the x and y axes both forms name the same direction. A sensor position is no 
 finds the polar angle and azimuth of a chief ray landing there and asks the lens's strategy for the
 field of that direction (`FieldType.field_of`). Light module: NumPy only.
 """
+
 from __future__ import annotations
 
 import math
@@ -54,7 +55,9 @@ class FieldType:
         """What a launch needs per field (…, 2) in degrees (`pupil.Bundle`)."""
         raise NotImplementedError
 
-    def field_of(self, theta_rad: np.ndarray, cos_phi: np.ndarray, sin_phi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    def field_of(
+        self, theta_rad: np.ndarray, cos_phi: np.ndarray, sin_phi: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         """The field (x, y) in degrees of the direction of polar angle θ (radians) and azimuth φ."""
         raise NotImplementedError
 
@@ -97,10 +100,12 @@ class PolarField(FieldType):
         """Rays from the side meet surface 1, which the tracer intersects as a whole sphere only."""
         first = lens.surfaces[0]
         if not first.is_sphere:
-            raise SolasError(f"{where}: surface 1 ({first.label}) is a conic or asphere; a lens of polar fields "
-                             f"(field_deg {lens.field_deg:g} >= {POLAR_FIELD_DEG:g}) takes rays from the side of its "
-                             "first surface, which solas-mi intersects as a whole sphere only: make surface 1 "
-                             f"spherical or flat, or set field_deg below {POLAR_FIELD_DEG:g}")
+            raise SolasError(
+                f"{where}: surface 1 ({first.label}) is a conic or asphere; a lens of polar fields "
+                f"(field_deg {lens.field_deg:g} >= {POLAR_FIELD_DEG:g}) takes rays from the side of its "
+                "first surface, which solas-mi intersects as a whole sphere only: make surface 1 "
+                f"spherical or flat, or set field_deg below {POLAR_FIELD_DEG:g}"
+            )
 
     def incoming(self, field_deg: np.ndarray) -> np.ndarray:
         """Unit directions (…, 3) of the incoming collimated rays."""

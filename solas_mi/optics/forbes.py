@@ -8,15 +8,16 @@ Opt. Express 18, 19700 (2010)).
 - Qcon: u⁴ Σ a_m Q_m^con(u²), Q_m^con(x) = P_m^(0,4)(2x − 1) (Jacobi), a polynomial in r², so
   `qcon_to_even` rewrites it exactly as even-asphere terms A4, A6, … .
 """
+
 from __future__ import annotations
 
 import math
-from functools import lru_cache
+from functools import cache
 
 import numpy as np
 
 
-@lru_cache(maxsize=None)
+@cache
 def _fgh(m: int) -> tuple[tuple[float, ...], tuple[float, ...], tuple[float, ...]]:
     """Forbes 2010's f_0…f_m, g_0…g_(m−1), h_0…h_(m−2) (Q_m = (P_m − g_(m−1) Q_(m−1) − h_(m−2) Q_(m−2)) / f_m)."""
     f, g, h = [2.0, math.sqrt(19.0) / 2.0], [-0.5], []
@@ -35,8 +36,7 @@ def qbfs_sum(x, coefficients: tuple[float, ...]):
     q = [(p_prev / f[0], dp_prev / f[0])]
     for m in range(1, len(coefficients)):
         if m > 1:  # P_m = (2 − 4x) P_(m−1) − P_(m−2)
-            p, p_prev, dp, dp_prev = ((2.0 - 4.0 * x) * p - p_prev, p,
-                                      (2.0 - 4.0 * x) * dp - 4.0 * p - dp_prev, dp)
+            p, p_prev, dp, dp_prev = ((2.0 - 4.0 * x) * p - p_prev, p, (2.0 - 4.0 * x) * dp - 4.0 * p - dp_prev, dp)
         qm, dqm = p - g[m - 1] * q[-1][0], dp - g[m - 1] * q[-1][1]
         if m > 1:
             qm, dqm = qm - h[m - 2] * q[-2][0], dqm - h[m - 2] * q[-2][1]
@@ -47,8 +47,15 @@ def qbfs_sum(x, coefficients: tuple[float, ...]):
     return total, slope
 
 
-def qbfs_departure(r2, curvature: float, conic: float, coefficients: tuple[float, ...], norm_radius: float,
-                   sqrt=np.sqrt, maximum=np.maximum):
+def qbfs_departure(
+    r2,
+    curvature: float,
+    conic: float,
+    coefficients: tuple[float, ...],
+    norm_radius: float,
+    sqrt=np.sqrt,
+    maximum=np.maximum,
+):
     """(Qbfs departure z (mm), its derivative dz/d(r²)) at squared radius r2 (mm²): φ x(1 − x) S(x),
     x = r²/ρ², φ = √((1 − k c² r²)/(1 − (1 + k) c² r²)), the inverse z-component of the base conic's normal."""
     c2 = curvature * curvature

@@ -3,6 +3,7 @@ dictionary (`Lens.from_dict`), and `WRITERS`, extension → the writer that turn
 `solas_mi.registry.Registry`, filled in one place: the package's `__init__`, before any module of it is
 used); how other programs' files are decoded; which file a lens name or path means (`lens_path`).
 """
+
 from __future__ import annotations
 
 import math
@@ -34,6 +35,7 @@ def read_toml_lens(path: Path) -> dict:
 def text_reader(read_spec):
     """The reader of another program's lens file whose text `read_spec(text, where)` parses: the file
     decoded as `decode_text` says."""
+
     def read(path: Path) -> dict:
         return read_spec(decode_text(read_bytes(path, "lens file")), str(path))
 
@@ -79,7 +81,9 @@ def check_printable(text: str, what: str, where: str) -> None:
     """SolasError unless `text` (a lens's name, description or a surface's label: printed by `lens info` and in
     metadata) holds no line break nor control character: an escape sequence would drive the terminal."""
     if _CONTROL.search(text):
-        raise SolasError(f"{where}: the {what} {text!r} holds control characters; it must be printable text on one line")
+        raise SolasError(
+            f"{where}: the {what} {text!r} holds control characters; it must be printable text on one line"
+        )
 
 
 def one_line(text: str) -> str:
@@ -128,15 +132,19 @@ def lens_path(name_or_path) -> Path:
     """The lens file a shipped name (e.g. "solas-doublet") or a path means, checked to exist and to have a
     lens extension: a name holding a path separator or an extension is a path."""
     if not isinstance(name_or_path, (str, os.PathLike)):
-        raise SolasError(f"lens {name_or_path!r} must be a shipped lens name ({', '.join(shipped_lenses())}) "
-                         f"or a path to a lens file ({readable()})")
+        raise SolasError(
+            f"lens {name_or_path!r} must be a shipped lens name ({', '.join(shipped_lenses())}) "
+            f"or a path to a lens file ({readable()})"
+        )
     given = os.fspath(name_or_path)
     path = Path(given)
     if not path.suffix and not any(sep and sep in given for sep in (os.sep, os.altsep, "/")):
         path = _shipped_dir() / (given.replace("-", "_") + ".toml")
         if not path.is_file():
-            raise SolasError(f"unknown lens {given!r}; shipped lenses: {', '.join(shipped_lenses())}, or a path "
-                             f"to a lens file ({readable()})")
+            raise SolasError(
+                f"unknown lens {given!r}; shipped lenses: {', '.join(shipped_lenses())}, or a path "
+                f"to a lens file ({readable()})"
+            )
     if path.suffix.lower() not in READERS:
         what = f"unknown extension {path.suffix!r}" if path.suffix else "no lens extension"
         raise SolasError(f"lens file {given!r} has {what}; allowed: {readable()}")

@@ -16,6 +16,7 @@ the scene, rows down):
 convention of `optics.camera` and of PSF grids; `extent_deg` the largest |θx|, |θy| the frame reaches
 (at its pixels' outer edges), which the lens's PSF grid must cover.
 """
+
 from __future__ import annotations
 
 import math
@@ -54,8 +55,10 @@ class FrameCamera:
             raise SolasError(f"frame intrinsics {k!r} must be fx, fy, cx, cy (pixels), fx and fy positive")
         want = {"pinhole": (0, 0), "kannala-brandt": (4, 4), "polynomial": (1, 5)}[self.model]
         if not (want[0] <= len(self.coefficients) <= want[1] and all(math.isfinite(c) for c in self.coefficients)):
-            raise SolasError(f"{self.model} coefficients {list(self.coefficients)} must be {want[0]}"
-                             f"{'' if want[0] == want[1] else f' to {want[1]}'} finite numbers")
+            raise SolasError(
+                f"{self.model} coefficients {list(self.coefficients)} must be {want[0]}"
+                f"{'' if want[0] == want[1] else f' to {want[1]}'} finite numbers"
+            )
 
     def pinhole(self, width: int, height: int) -> tuple[float, float, float, float]:
         """fx, fy, cx, cy of a rectilinear frame of width×height pixels ("fov" or "pinhole")."""
@@ -71,8 +74,10 @@ class FrameCamera:
         """The focal length in pixels on the axis: fx (pixels per unit tangent, or per radian in a fisheye);
         a polynomial's a1. SolasError for "fov" (it depends on the frame's width) and for fx ≠ fy."""
         if self.model == "fov":
-            raise SolasError("a frame given by --fov-deg has its focal length in pixels only with its width: give "
-                             "--intrinsics FX,FY,CX,CY (or --fisheye)")
+            raise SolasError(
+                "a frame given by --fov-deg has its focal length in pixels only with its width: give "
+                "--intrinsics FX,FY,CX,CY (or --fisheye)"
+            )
         if self.model == "polynomial":
             return float(self.coefficients[0])
         fx, fy = self.intrinsics[:2]
@@ -80,8 +85,9 @@ class FrameCamera:
             raise SolasError(f"frame intrinsics fx {fx:g}, fy {fy:g} px: one focal length needs square pixels")
         return float(fx)
 
-    def tangents(self, cols: np.ndarray, rows: np.ndarray, width: int, height: int, clamp: bool = False
-                 ) -> tuple[np.ndarray, np.ndarray]:
+    def tangents(
+        self, cols: np.ndarray, rows: np.ndarray, width: int, height: int, clamp: bool = False
+    ) -> tuple[np.ndarray, np.ndarray]:
         """The direction (tan_x, tan_y) of pixel positions (cols, rows) (continuous); positions beyond a fisheye
         model's 90 deg are refused, or with `clamp` taken at 90 deg (padding around a frame)."""
         if self.model not in FISHEYE:
@@ -90,8 +96,11 @@ class FrameCamera:
         fx, fy, cx, cy = self.intrinsics
         if self.model == "kannala-brandt":
             dx, dy = (np.asarray(cols) - cx) / fx, (np.asarray(rows) - cy) / fy
-            theta = _invert(lambda t: t * (1 + sum(k * t ** (2 * i + 2) for i, k in enumerate(self.coefficients))),
-                            np.hypot(dx, dy), clamp)
+            theta = _invert(
+                lambda t: t * (1 + sum(k * t ** (2 * i + 2) for i, k in enumerate(self.coefficients))),
+                np.hypot(dx, dy),
+                clamp,
+            )
         else:
             a, aspect = self.coefficients[:4], (self.coefficients[4] if len(self.coefficients) > 4 else 1.0)
             dx, dy = np.asarray(cols) - cx, (np.asarray(rows) - cy) / aspect
@@ -139,16 +148,20 @@ def _invert(fn, radius: np.ndarray, clamp: bool = False) -> np.ndarray:
     t = np.linspace(0.0, math.pi / 2, 4097)
     r = fn(t)
     if not np.all(np.diff(r) > 0):
-        raise SolasError("the fisheye model's radius does not grow with the angle from the axis up to 90 deg: "
-                         "check its coefficients")
+        raise SolasError(
+            "the fisheye model's radius does not grow with the angle from the axis up to 90 deg: check its coefficients"
+        )
     if np.max(radius) > r[-1] and not clamp:
-        raise SolasError(f"a pixel lies {float(np.max(radius)):.4g} from the axis, beyond the model's 90 deg "
-                         f"({r[-1]:.4g}): the frame reaches past 90 deg, which no lens of solas-mi covers")
+        raise SolasError(
+            f"a pixel lies {float(np.max(radius)):.4g} from the axis, beyond the model's 90 deg "
+            f"({r[-1]:.4g}): the frame reaches past 90 deg, which no lens of solas-mi covers"
+        )
     return np.interp(radius, r, t)
 
 
-def parse_frame(fov: str | None = None, axis: str = "x", intrinsics: str | None = None,
-                fisheye: str | None = None) -> FrameCamera | None:
+def parse_frame(
+    fov: str | None = None, axis: str = "x", intrinsics: str | None = None, fisheye: str | None = None
+) -> FrameCamera | None:
     """The command line's frame camera: --fov-deg (with --fov-axis), --intrinsics FX,FY,CX,CY or
     --fisheye MODEL:FX,FY,CX,CY,C1,…, or either as a calibration file (`calibration.files.frame_numbers`: an
     OpenCV pinhole file without distortion; an OpenCV fisheye or WoodScape file); None when none is given."""
@@ -173,8 +186,9 @@ def parse_frame(fov: str | None = None, axis: str = "x", intrinsics: str | None 
         model, _, numbers = fisheye.partition(":")
         values = floats(numbers, "--fisheye")
         if model not in FISHEYE or len(values) < 5:
-            raise SolasError(f"--fisheye {fisheye!r} must be MODEL:FX,FY,CX,CY,C1,... with MODEL one of "
-                             f"{', '.join(FISHEYE)}")
+            raise SolasError(
+                f"--fisheye {fisheye!r} must be MODEL:FX,FY,CX,CY,C1,... with MODEL one of {', '.join(FISHEYE)}"
+            )
         return FrameCamera(model, intrinsics=tuple(values[:4]), coefficients=tuple(values[4:]))
     return None
 

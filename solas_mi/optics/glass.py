@@ -22,13 +22,14 @@ from __future__ import annotations
 import difflib
 import itertools
 import re
+import tomllib
+from collections.abc import Callable
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
-from typing import Callable, NamedTuple
+from typing import NamedTuple
 
 import numpy as np
-import tomllib
 
 from ..errors import SolasError
 from . import thermal
@@ -72,7 +73,7 @@ class Glass:
     cte: float | None = None
     environment: tuple[float, float] | None = None
 
-    def at(self, temperature_c: float, pressure_kpa: float) -> "Glass":
+    def at(self, temperature_c: float, pressure_kpa: float) -> Glass:
         """This glass at `temperature_c` in air of `pressure_kpa`, its index relative to that air (`thermal`):
         itself (environment None) at 20 °C and 101.325 kPa, and air is always air."""
         standard = (temperature_c, pressure_kpa) == (thermal.STANDARD_C, thermal.STANDARD_KPA)

@@ -18,24 +18,27 @@ distance) and approximate for a pencil already aberrated by real surfaces or at 
 focused elsewhere. Zemax's OPD mode 0 (integrate the path over the pupil) is read as perfect too, and
 the lens's description says so (`zemax`). The functions work on any array type given its `sqrt`.
 """
+
 from __future__ import annotations
 
 import math
 
 from ..errors import SolasError
 
-INTEGRATE = ("OPD mode integrate (PARM 2 0) read as perfect (OPD mode 1): its pencil is imaged without "
-             "aberration")
+INTEGRATE = "OPD mode integrate (PARM 2 0) read as perfect (OPD mode 1): its pencil is imaged without aberration"
 
 
 def check(value, ident: str, flat: bool) -> float:
     """A lens file's `focal_length` entry, checked: a finite nonzero number (mm) on a `flat` surface."""
     if not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value) or value == 0:
-        raise SolasError(f"{ident}: focal_length = {value!r} must be a finite nonzero number (mm, negative for a "
-                         "diverging ideal lens)")
+        raise SolasError(
+            f"{ident}: focal_length = {value!r} must be a finite nonzero number (mm, negative for a "
+            "diverging ideal lens)"
+        )
     if not flat:
-        raise SolasError(f"{ident}: an ideal thin lens (focal_length) is flat: radius must be 0 and conic, "
-                         "aspheric and qbfs absent")
+        raise SolasError(
+            f"{ident}: an ideal thin lens (focal_length) is flat: radius must be 0 and conic, aspheric and qbfs absent"
+        )
     return float(value)
 
 
@@ -67,14 +70,24 @@ def metadata(lens) -> dict:
     if not ideal:
         return {}
     media = (lens.object_glass, *(s.glass for s in lens.surfaces))
-    rough = [k + 1 for k in ideal if any(g.dispersive for g in media[:k + 1])
-             or any(not s.ideal and media[j + 1] != media[j] for j, s in enumerate(lens.surfaces[:k]))]
+    rough = [
+        k + 1
+        for k in ideal
+        if any(g.dispersive for g in media[: k + 1])
+        or any(not s.ideal and media[j + 1] != media[j] for j, s in enumerate(lens.surfaces[:k]))
+    ]
     where = ", ".join(str(k + 1) for k in ideal)
-    return {"ideal_lens_path": f"surface {where}: ideal thin lens, its optical path the one that images its pencil "
-            "perfectly (Zemax's OPD mode 1), " + ("exact" if not rough else
-            f"approximate at surface {', '.join(map(str, rough))}: the pencil it meets is aberrated by the surfaces "
+    return {
+        "ideal_lens_path": f"surface {where}: ideal thin lens, its optical path the one that images its pencil "
+        "perfectly (Zemax's OPD mode 1), "
+        + (
+            "exact"
+            if not rough
+            else f"approximate at surface {', '.join(map(str, rough))}: the pencil it meets is aberrated by the surfaces "
             "before it, or focused elsewhere at other wavelengths, and its path is the perfect one for the "
-            "paraxial conjugate at the primary wavelength")}
+            "paraxial conjugate at the primary wavelength"
+        )
+    }
 
 
 def deflect(x, y, d, n, n_after, inv_f, w, sqrt):
@@ -88,8 +101,9 @@ def deflect(x, y, d, n, n_after, inv_f, w, sqrt):
     if w is None:  # the pencil's point on the lens: g → |h| for the rays in and out, a constant per pencil
         delta = (n_after - n) * sqrt(x * x + y * y)
     else:
-        delta = (n_after * _pencil_path(x, y, ux, uy, (n * w + inv_f) / n_after, sqrt)
-                 - n * _pencil_path(x, y, tx, ty, w, sqrt))
+        delta = n_after * _pencil_path(x, y, ux, uy, (n * w + inv_f) / n_after, sqrt) - n * _pencil_path(
+            x, y, tx, ty, w, sqrt
+        )
     inv = 1.0 / sqrt(ux * ux + uy * uy + 1.0)
     return (ux * inv, uy * inv, inv), delta
 
@@ -99,8 +113,9 @@ def _pencil_path(x, y, tx, ty, w, sqrt):
     (2 t·h + w|h|²)/(√(|t + w h|² + 1) + √(|t|² + 1)), free of cancellation, h·d at w = 0 (d the unit
     direction of t: a point at infinity)."""
     ax, ay = tx + w * x, ty + w * y
-    return (2.0 * (tx * x + ty * y) + w * (x * x + y * y)) / (sqrt(ax * ax + ay * ay + 1.0)
-                                                              + sqrt(tx * tx + ty * ty + 1.0))
+    return (2.0 * (tx * x + ty * y) + w * (x * x + y * y)) / (
+        sqrt(ax * ax + ay * ay + 1.0) + sqrt(tx * tx + ty * ty + 1.0)
+    )
 
 
 __all__ = ["check", "deflect", "metadata", "from_zemax", "to_zemax", "zemax_notes", "INTEGRATE"]

@@ -12,6 +12,7 @@ side instead: E = L ∫ cos θ dω over the directions from the image point that
 wherever they cross the last vertex plane (a wide-angle's steep rays far outside the last aperture);
 `relative_illumination` is its ratio to the axis's.
 """
+
 from __future__ import annotations
 
 import math
@@ -112,16 +113,16 @@ def _footprint_box(lens: Lens, x: float, y: float, wavelength_nm: float):
     return x * scale - half, x * scale + half, y * scale - half, y * scale + half
 
 
-def _projected_solid_angle(rev: Lens, x: float, y: float, box, dz: float, samples: int, wavelength_nm: float
-                           ) -> float:
+def _projected_solid_angle(rev: Lens, x: float, y: float, box, dz: float, samples: int, wavelength_nm: float) -> float:
     """∫ cos θ dω (sr) over the rays from (x, y) through `box` on the plane dz above it that pass:
     dω cos θ = cos⁴θ dA / dz² on the plane, by the midpoint rule on samples² points."""
     from .exit_pupil import passes
 
     u0, u1, v0, v1 = box
     du, dv = (u1 - u0) / samples, (v1 - v0) / samples
-    ex, ey = (a.ravel() for a in np.meshgrid(u0 + (np.arange(samples) + 0.5) * du,
-                                             v0 + (np.arange(samples) + 0.5) * dv))
+    ex, ey = (
+        a.ravel() for a in np.meshgrid(u0 + (np.arange(samples) + 0.5) * du, v0 + (np.arange(samples) + 0.5) * dv)
+    )
     ok = passes(rev, x, y, ex, ey, wavelength_nm)
     cos2 = dz * dz / ((ex - x) ** 2 + (ey - y) ** 2 + dz * dz)
     return float(np.sum((cos2 * cos2)[ok]) * du * dv / (dz * dz))
@@ -137,11 +138,12 @@ def ideal_irradiance(lens: Lens, focal_mm: float, wavelength_nm: float | None = 
     the pinhole focal length squared. Renders and convolutions report irradiance in this unit, so an
     ideal lossless lens returns the input radiance."""
     r_ep = 0.5 * paraxial(lens, wavelength_nm).entrance_pupil_diameter_mm
-    return math.pi * r_ep ** 2 / focal_mm ** 2
+    return math.pi * r_ep**2 / focal_mm**2
 
 
-def relative_illumination(lens: Lens, field_deg: np.ndarray, wavelength_nm: float, pupil_samples: int = 128
-                          ) -> np.ndarray:
+def relative_illumination(
+    lens: Lens, field_deg: np.ndarray, wavelength_nm: float, pupil_samples: int = 128
+) -> np.ndarray:
     """E(θ)/E(0) at fields (n, 2) in degrees: the image irradiance of a uniform sky at each field's chief
     ray image point over that on the axis (`irradiance`, exact however blurred the image). A finite
     object takes the chief-ray form (`chief_ray_illumination`, its pupils on `pupil_samples`² grids).
@@ -163,13 +165,16 @@ def relative_illumination(lens: Lens, field_deg: np.ndarray, wavelength_nm: floa
 def _check_axis_lit(lens: Lens, axis: float, wavelength_nm: float) -> None:
     """E(θ)/E(0) is undefined where no light reaches the image's centre (an obscured axis)."""
     if not axis > 0:
-        raise SolasError(f"lens {lens.name}: no light reaches the centre of the image at {wavelength_nm:g} nm "
-                         "(every ray toward it is stopped by an aperture), so the relative illumination "
-                         "E(θ)/E(0) is undefined")
+        raise SolasError(
+            f"lens {lens.name}: no light reaches the centre of the image at {wavelength_nm:g} nm "
+            "(every ray toward it is stopped by an aperture), so the relative illumination "
+            "E(θ)/E(0) is undefined"
+        )
 
 
-def chief_ray_illumination(lens: Lens, field_deg: np.ndarray, wavelength_nm: float, pupil_samples: int = 128
-                           ) -> np.ndarray:
+def chief_ray_illumination(
+    lens: Lens, field_deg: np.ndarray, wavelength_nm: float, pupil_samples: int = 128
+) -> np.ndarray:
     """E(θ)/E(0) at fields (n, 2) in degrees in the chief-ray form: transmission × obliquity × J(0)/J(θ),
     relative to the transmission on the axis (per solid angle for polar fields; the obliquity in
     `_obliquity`). Exact for a sharp image up to the beam's spread of mappings (0.4 % on the doublet, 3 %
@@ -219,9 +224,9 @@ def _polar_scale(lens: Lens, field_deg: np.ndarray, wavelength_nm: float) -> np.
     direction = np.stack([np.cos(azimuth), np.sin(azimuth)], -1)
     both = np.degrees(np.concatenate([theta, other]))[:, None] * np.vstack([direction, direction])
     h = np.hypot(*chief_rays(lens, both, np.full(len(both), wavelength_nm)).image_xy.T)
-    h, h_other = h[:len(theta)], h[len(theta):]
+    h, h_other = h[: len(theta)], h[len(theta) :]
     slope = (h - h_other) / (theta - other)
-    return np.where(theta > 0, h * slope / np.maximum(np.sin(theta), 1e-300), slope ** 2)
+    return np.where(theta > 0, h * slope / np.maximum(np.sin(theta), 1e-300), slope**2)
 
 
 def image_scales(lens: Lens, max_height_mm: float, wavelength_nm: float, samples: int = 64):
@@ -239,7 +244,9 @@ def image_scales(lens: Lens, max_height_mm: float, wavelength_nm: float, samples
     t = np.linspace(0.0, t_max, samples)
     # differences forward, or backward where chief rays end at t_max
     tt = np.concatenate([t, t + _STEP if t_max == wanted else np.maximum(t - _STEP, 0.0)])
-    chief = chief_rays(lens, np.stack([np.degrees(np.arctan(tt)), np.zeros_like(tt)], -1), np.full(len(tt), wavelength_nm))
+    chief = chief_rays(
+        lens, np.stack([np.degrees(np.arctan(tt)), np.zeros_like(tt)], -1), np.full(len(tt), wavelength_nm)
+    )
     h = chief.image_xy[:, 0]
     dt = tt[samples:] - t
     radial = (h[samples:] - h[:samples]) / np.where(dt != 0, dt, 1.0)
@@ -248,10 +255,13 @@ def image_scales(lens: Lens, max_height_mm: float, wavelength_nm: float, samples
     clear = np.flatnonzero(np.cumprod(~chief.vignetted[:samples]))  # chief rays that pass every aperture
     last = clear[-1] if len(clear) else 0
     if (t_max < wanted or last < samples - 1) and h[last] < max_height_mm:  # cut short by the lens, not the table
-        warnings.warn(f"lens {lens.name}'s chief rays pass every aperture up to field "
-                      f"{math.degrees(math.atan(t[last])):.4g} deg (image height {h[last]:.4g} mm) at {wavelength_nm:g} "
-                      f"nm and the film reaches {max_height_mm:.4g} mm: beyond, the image darkens to the dark corners "
-                      "a real camera shows", stacklevel=2)
+        warnings.warn(
+            f"lens {lens.name}'s chief rays pass every aperture up to field "
+            f"{math.degrees(math.atan(t[last])):.4g} deg (image height {h[last]:.4g} mm) at {wavelength_nm:g} "
+            f"nm and the film reaches {max_height_mm:.4g} mm: beyond, the image darkens to the dark corners "
+            "a real camera shows",
+            stacklevel=2,
+        )
     return h[:samples], radial, tangential
 
 

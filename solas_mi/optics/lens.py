@@ -18,14 +18,15 @@ import numpy as np
 
 from ..errors import SolasError
 from ..imageio import write_text
-from . import lens_checks, overlap, thermal
 from . import glass as glass_mod
+from . import lens_checks, overlap, thermal
+from .fields import FieldType, field_type_for
+from .formats import MAX_SURFACES, MAX_WAVELENGTHS, READERS, WRITERS, check_count, check_printable, lens_path, writable
+from .formats import shipped_lenses as shipped_lenses  # re-exported
 from .sag import sag as sag  # re-exported
 from .surface import NORM_RADIUS_MM as NORM_RADIUS_MM  # re-exported
 from .surface import Surface, check_keys, finite_number, lens_catalogues, lens_materials, subtable, surface_from_row
-from .formats import MAX_SURFACES, MAX_WAVELENGTHS, READERS, WRITERS, check_count, check_printable, lens_path, writable
-from .formats import shipped_lenses as shipped_lenses  # re-exported
-from .fields import FieldType, field_type_for
+
 
 def check_lens(lens) -> None:
     """SolasError unless `lens` is a Lens (analyses take `Lens.load(name or path)`)."""
@@ -113,7 +114,7 @@ class Lens:
 
     # ------------------------------------------------------------------ loading
     @classmethod
-    def load(cls, name_or_path: str | Path) -> "Lens":
+    def load(cls, name_or_path: str | Path) -> Lens:
         """A lens by its shipped name or from a lens file.
 
         Parameters
@@ -188,7 +189,7 @@ class Lens:
 
     # long: the public API's numpydoc docstring is a third of it
     @classmethod
-    def from_dict(cls, spec: dict[str, Any], source: str = "") -> "Lens":
+    def from_dict(cls, spec: dict[str, Any], source: str = "") -> Lens:
         """Build and check a lens from a lens file's table (our TOML's keys, [lens-file format](../lens-files.md)).
 
         Parameters
@@ -329,7 +330,7 @@ class Lens:
         return hashlib.sha256(json.dumps(content, sort_keys=True).encode()).hexdigest()[:16]
 
     def at(self, temperature_c: float = thermal.STANDARD_C, pressure_kpa: float = thermal.STANDARD_KPA,
-           mount=None) -> "Lens":
+           mount=None) -> Lens:
         """This lens at another temperature and air pressure (`thermal`): glass indices by the Schott
         formula relative to the air there, glass and mount expanded from this lens's temperature.
 

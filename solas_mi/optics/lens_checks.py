@@ -1,5 +1,6 @@
 """The checks every lens passes when it is built from a lens file's table (`validate`, from `Lens.from_dict`):
 values no lens may hold, each a SolasError naming the value, its surface and what is allowed."""
+
 from __future__ import annotations
 
 import math
@@ -11,7 +12,9 @@ from . import overlap
 # lies f²/d ≈ 1e-11 mm from the focus of an f = 100 mm lens); a film 1e30 mm away rendered NaN, one at 1e300
 # overflowed lens info's projection fits.
 MAX_LENGTH_MM = 1e15
-_VIRTUAL = ": the image plane lies before the last surface, a virtual image (a diverging lens's focus) that no film records"
+_VIRTUAL = (
+    ": the image plane lies before the last surface, a virtual image (a diverging lens's focus) that no film records"
+)
 
 
 def validate(lens, where: str) -> None:
@@ -23,32 +26,46 @@ def validate(lens, where: str) -> None:
         if not w > 0:
             raise SolasError(f"{where}: wavelengths_nm holds {w:g}; wavelengths must be positive (nm)")
     if not 0 <= lens.image_diameter <= MAX_LENGTH_MM:
-        raise SolasError(f"{where}: image diameter {lens.image_diameter:g} mm must be positive, at most "
-                         f"{MAX_LENGTH_MM:g} mm (or left out)")
+        raise SolasError(
+            f"{where}: image diameter {lens.image_diameter:g} mm must be positive, at most "
+            f"{MAX_LENGTH_MM:g} mm (or left out)"
+        )
     stops = [i for i, s in enumerate(lens.surfaces) if s.stop]
     if not stops:
         raise SolasError(f"{where}: no surface is marked as the aperture stop (set stop = true on one)")
     if len(stops) > 1:
-        raise SolasError(f"{where}: surfaces {', '.join(str(i + 1) for i in stops)} are all marked stop; exactly one may be")
+        raise SolasError(
+            f"{where}: surfaces {', '.join(str(i + 1) for i in stops)} are all marked stop; exactly one may be"
+        )
     if not abs(lens.object_distance) <= MAX_LENGTH_MM and math.isfinite(lens.object_distance):
-        raise SolasError(f"{where}: object distance {lens.object_distance:g} mm must lie within ±{MAX_LENGTH_MM:g} "
-                         "mm, or be \"infinity\" (a farther object is at infinity to every digit)")
+        raise SolasError(
+            f"{where}: object distance {lens.object_distance:g} mm must lie within ±{MAX_LENGTH_MM:g} "
+            'mm, or be "infinity" (a farther object is at infinity to every digit)'
+        )
     for i, s in enumerate(lens.surfaces, start=1):
         ident = f"{where}: surface {i} ({s.label})"
         if not 0 < s.diameter <= MAX_LENGTH_MM:
             raise SolasError(f"{ident}: diameter {s.diameter:g} mm must be positive and at most {MAX_LENGTH_MM:g} mm")
         if not abs(s.thickness) <= MAX_LENGTH_MM:
-            raise SolasError(f"{ident}: thickness {s.thickness:g} mm must lie within ±{MAX_LENGTH_MM:g} mm, the "
-                             "longest length a lens file may give")
+            raise SolasError(
+                f"{ident}: thickness {s.thickness:g} mm must lie within ±{MAX_LENGTH_MM:g} mm, the "
+                "longest length a lens file may give"
+            )
         if s.radius != 0 and s.conic == 0 and s.semi_diameter >= abs(s.radius):
-            raise SolasError(f"{ident}: clear semi-diameter {s.semi_diameter:g} mm is not smaller than |radius| "
-                             f"{abs(s.radius):g} mm; the sphere cannot hold that aperture")
+            raise SolasError(
+                f"{ident}: clear semi-diameter {s.semi_diameter:g} mm is not smaller than |radius| "
+                f"{abs(s.radius):g} mm; the sphere cannot hold that aperture"
+            )
         if s.conic != 0 and (1.0 + s.conic) * (s.curvature * s.semi_diameter) ** 2 >= 1.0:
-            raise SolasError(f"{ident}: conic {s.conic:g} with radius {s.radius:g} mm closes before the clear "
-                             f"semi-diameter {s.semi_diameter:g} mm; the conic cannot hold that aperture")
+            raise SolasError(
+                f"{ident}: conic {s.conic:g} with radius {s.radius:g} mm closes before the clear "
+                f"semi-diameter {s.semi_diameter:g} mm; the conic cannot hold that aperture"
+            )
     lens.field_type.check_lens(lens, where)
     last = lens.surfaces[-1]
     if last.thickness < 0:
-        raise SolasError(f"{where}: surface {len(lens.surfaces)} ({last.label}): distance to the image "
-                         f"{last.thickness:g} mm must be positive" + _VIRTUAL + "; 0 mm puts it on the last surface")
+        raise SolasError(
+            f"{where}: surface {len(lens.surfaces)} ({last.label}): distance to the image "
+            f"{last.thickness:g} mm must be positive" + _VIRTUAL + "; 0 mm puts it on the last surface"
+        )
     overlap.notes(lens, where)

@@ -1,6 +1,7 @@
 """Our TOML lens file written from a `Lens` (the reader is `Lens.from_dict`): every key the reader
 knows, numbers written in full (Python's shortest exact form), so reading the text back gives the
 same lens. Lengths in mm, wavelengths in nm, field in degrees."""
+
 from __future__ import annotations
 
 import json
@@ -38,14 +39,17 @@ def _material(g) -> list[str]:
         return ["wavelengths_nm = [587.5618]", f"index = {_value(a)}"]
     keys = {"sellmeier": ("B", "C"), "polynomial": ("K", "P"), "conrady": ("conrady",)}[g.kind]
     heat = ([f"thermal = {_value(g.thermal)}", f"reference_c = {_value(g.reference_c)}"] if g.thermal else []) + (
-        [f"cte = {_value(g.cte)}"] if g.cte is not None else [])
+        [f"cte = {_value(g.cte)}"] if g.cte is not None else []
+    )
     return [f"{k} = {_value(v)}" for k, v in zip(keys, (a, b))] + [f"range_nm = {_value(g.range_nm)}"] + heat
 
 
 def dumps(lens) -> str:
     """The TOML text of `lens` (a `solas_mi.optics.lens.Lens`)."""
-    lines = [f"# {text(lens.name)}: lens file written by solas-mi (lengths in mm, wavelengths in nm)",
-             f"name = {_value(lens.name)}"]
+    lines = [
+        f"# {text(lens.name)}: lens file written by solas-mi (lengths in mm, wavelengths in nm)",
+        f"name = {_value(lens.name)}",
+    ]
     if lens.description:
         lines.append(f"description = {_value(lens.description)}")
     lines += [f"wavelengths_nm = {_value(lens.wavelengths_nm)}", f"field_deg = {_value(lens.field_deg)}"]
@@ -55,8 +59,11 @@ def dumps(lens) -> str:
         lines += [f"temperature_c = {_value(lens.temperature_c)}", f"pressure_kpa = {_value(lens.pressure_kpa)}"]
     for g in lens.materials:
         lines += ["", f"[materials.{text(g.name)}]", *_material(g)]
-    lines += ["", "[object]",
-              f"distance = {_value('infinity') if math.isinf(lens.object_distance) else _value(lens.object_distance)}"]
+    lines += [
+        "",
+        "[object]",
+        f"distance = {_value('infinity') if math.isinf(lens.object_distance) else _value(lens.object_distance)}",
+    ]
     if lens.object_glass.kind != "air":
         lines.append(f"material = {_value(lens.object_glass.name)}")
     for s in lens.surfaces:
@@ -69,8 +76,11 @@ def dumps(lens) -> str:
             lines.append(f"focal_length = {_value(s.focal_length)}")
         if any(s.qbfs):
             lines += [f"qbfs = {_value(s.qbfs)}", f"norm_radius = {_value(s.norm_radius)}"]
-        lines += [f"thickness = {_value(s.thickness)}", f"diameter = {_value(s.diameter)}",
-                  f"material = {_value(s.material)}"]
+        lines += [
+            f"thickness = {_value(s.thickness)}",
+            f"diameter = {_value(s.diameter)}",
+            f"material = {_value(s.material)}",
+        ]
         if s.stop:
             lines.append("stop = true")
         if s.coating:

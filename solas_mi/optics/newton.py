@@ -9,6 +9,7 @@ A bundle is any object with `trace(ex, ey, rays=None)` (the rays `rays`, a UInt3
 from entrance coordinates given for those rays) and `tolerance`; a target is `target(traced, rays=None)`
 → (gx, gy, ok) for the same rays. Lengths in mm.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -35,9 +36,20 @@ def put(dense, values, rays):
     return dense
 
 
-def solve(bundle, target, ex: tracer.F, ey: tracer.F, goal_x: tracer.F, goal_y: tracer.F, max_iter: int, jacobian, keep,
-          unknown=None):
+def solve(
+    bundle,
+    target,
+    ex: tracer.F,
+    ey: tracer.F,
+    goal_x: tracer.F,
+    goal_y: tracer.F,
+    max_iter: int,
+    jacobian,
+    keep,
+    unknown=None,
+):
     """The iteration of `aiming.aim_keeping`: (ex, ey, residual x, residual y, passed, kept)."""
+
     def residual(ax, ay, rays):
         tr = bundle.trace(ax, ay, rays=rays)
         gx, gy, ok = target(tr, rays)
@@ -106,8 +118,10 @@ def _trial(residual, keep, ex, ey, step, good, rays):
             if dr.all(lok):
                 break
             still = dr.compress(~lok)
-            index, sx, sy, bx, by = dr.gather(tracer.UInt32, index, still), *(dr.gather(tracer.F, v, still)
-                                                                          for v in (sx, sy, bx, by))
+            index, sx, sy, bx, by = (
+                dr.gather(tracer.UInt32, index, still),
+                *(dr.gather(tracer.F, v, still) for v in (sx, sy, bx, by)),
+            )
     return (*out[:5], tuple(out[5:]))
 
 

@@ -2,6 +2,7 @@
 (`virtual_object`), ideal thin lenses (`ideal`), surfaces that overlap (`overlap`), coatings and the
 iris (`coating`), a temperature or pressure other than 20 °C and 101.325 kPa (`thermal`). `lens info` and PSF
 metadata carry the same entries."""
+
 from __future__ import annotations
 
 from . import coating, ideal, overlap, thermal, virtual_object
@@ -10,8 +11,13 @@ from . import coating, ideal, overlap, thermal, virtual_object
 def metadata(lens) -> dict:
     """The notes of `lens`'s virtual object, ideal lenses, overlaps, coatings and iris, and environment ({} for an
     ordinary lens)."""
-    return {**virtual_object.metadata(lens), **ideal.metadata(lens), **overlap.metadata(lens),
-            **coating.metadata(lens), **thermal.metadata(lens)}
+    return {
+        **virtual_object.metadata(lens),
+        **ideal.metadata(lens),
+        **overlap.metadata(lens),
+        **coating.metadata(lens),
+        **thermal.metadata(lens),
+    }
 
 
 __all__ = ["metadata"]

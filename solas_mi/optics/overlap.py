@@ -5,6 +5,7 @@ signed step that may be negative; so does the tracer (`tracer._to_surface`). No 
 the mesh scene refuses it (`render.scene`). Glass of thickness 0 whose faces only touch is refused: no glass
 lies between its faces and nothing overlaps, most likely a thickness left out.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -28,22 +29,28 @@ def notes(lens, where: str) -> list[str]:
     # A flat stop in air refracts nothing: the sequential trace checks each ray where its line crosses the
     # plane, even inside a neighbouring face's sag (Zemax's stop "on" a lens surface), as OpticStudio does.
     media = (lens.object_glass, *(s.glass for s in lens.surfaces))
-    plane = [s.stop and s.radius == 0 and not (s.aspheric or s.qbfs) and s.glass is m is glass_mod.AIR
-             for s, m in zip(lens.surfaces, media)]
+    plane = [
+        s.stop and s.radius == 0 and not (s.aspheric or s.qbfs) and s.glass is m is glass_mod.AIR
+        for s, m in zip(lens.surfaces, media)
+    ]
     for i, (a, b) in enumerate(zip(lens.surfaces[:-1], lens.surfaces[1:]), start=1):
         if (plane[i - 1] or plane[i]) and a.thickness >= 0:
             continue
         glass = a.glass is not glass_mod.AIR
         note = _between(a, b, glass)
         if glass and a.thickness == 0 and note is None:
-            raise SolasError(f"{where}: surface {i} ({a.label}): thickness 0 mm inside glass {a.material}, its "
-                             f"faces touching without crossing; glass needs a positive thickness (faces that "
-                             "overlap, a negative thickness, are traced as Zemax does)")
+            raise SolasError(
+                f"{where}: surface {i} ({a.label}): thickness 0 mm inside glass {a.material}, its "
+                f"faces touching without crossing; glass needs a positive thickness (faces that "
+                "overlap, a negative thickness, are traced as Zemax does)"
+            )
         if note:
             notes.append(f"surfaces {i} ({a.label}) and {i + 1} ({b.label}) {note}: {SEQUENTIAL}")
     if lens.surfaces[-1].thickness == 0:
-        notes.append(f"the image plane lies on surface {len(lens.surfaces)} ({lens.surfaces[-1].label}) "
-                     f"(distance 0 mm): {SEQUENTIAL}")
+        notes.append(
+            f"the image plane lies on surface {len(lens.surfaces)} ({lens.surfaces[-1].label}) "
+            f"(distance 0 mm): {SEQUENTIAL}"
+        )
     return notes
 
 
@@ -58,8 +65,14 @@ def _between(a, b, glass: bool) -> str | None:
     tol = 1e-12 * max(1.0, abs(a.thickness))
     if not np.any(g < -tol):
         meet = np.flatnonzero(g[1:] <= tol) + 1 if glass and a.thickness > 0 else []
-        return (f"meet at r = {r[meet[0]]:.4g} mm inside their clear apertures (glass of zero edge thickness, "
-                f"thickness {a.thickness:g} mm)") if len(meet) else None
+        return (
+            (
+                f"meet at r = {r[meet[0]]:.4g} mm inside their clear apertures (glass of zero edge thickness, "
+                f"thickness {a.thickness:g} mm)"
+            )
+            if len(meet)
+            else None
+        )
     neg = g < -tol
     change = np.flatnonzero(np.diff(neg))
     if len(change) == 0:
@@ -76,6 +89,8 @@ def check_image_distance(lens, what: str) -> None:
     """SolasError where `lens`'s image plane lies on its last surface: `what` samples the rays from an image
     point over the last vertex plane, which then passes through the point, so that nothing is defined there."""
     if lens.surfaces[-1].thickness == 0:
-        raise SolasError(f"lens {lens.name}: the image plane lies on the last surface (distance 0 mm), where {what}, "
-                         "sampled over the last vertex plane seen from the image point, is undefined; a PSF method "
-                         "that traces the lens (`psf --psf-method`) takes it as it is")
+        raise SolasError(
+            f"lens {lens.name}: the image plane lies on the last surface (distance 0 mm), where {what}, "
+            "sampled over the last vertex plane seen from the image point, is undefined; a PSF method "
+            "that traces the lens (`psf --psf-method`) takes it as it is"
+        )

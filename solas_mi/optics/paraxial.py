@@ -5,6 +5,7 @@ Lengths in mm; z measured from surface 1's vertex; slopes are paraxial angles (t
 Reference: the y-nu paraxial ray trace, W. J. Smith, "Modern Optical Engineering", 4th ed.,
 McGraw-Hill, 2008, ch. 2–3.
 """
+
 from __future__ import annotations
 
 import functools
@@ -42,8 +43,13 @@ class Paraxial:
         return asdict(self)
 
 
-def ynu_trace(lens: Lens, wavelength_nm: float, y1: float, u0: float, start: int = 0,
-              ) -> tuple[np.ndarray, np.ndarray]:
+def ynu_trace(
+    lens: Lens,
+    wavelength_nm: float,
+    y1: float,
+    u0: float,
+    start: int = 0,
+) -> tuple[np.ndarray, np.ndarray]:
     """Paraxial ray heights at each surface and slopes after each surface.
 
     The ray has height `y1` at surface `start` and slope `u0` just before it (earlier entries are NaN).
@@ -82,8 +88,10 @@ def pupil_distance(lens: Lens, ep_z: float) -> float:
     object); SolasError where the object lies in the pupil, as every chief ray meets there."""
     distance = ep_z + lens.object_distance
     if abs(distance) <= 1e-9 * abs(lens.object_distance):
-        raise SolasError(f"lens {lens.name}: the object lies in the entrance pupil ({ep_z:g} mm from surface 1), "
-                         "where every chief ray meets: a field names no object point; move the object or the stop")
+        raise SolasError(
+            f"lens {lens.name}: the object lies in the entrance pupil ({ep_z:g} mm from surface 1), "
+            "where every chief ray meets: a field names no object point; move the object or the stop"
+        )
     return distance
 
 
@@ -142,8 +150,9 @@ def _check_fields(fields_deg) -> list[float]:
     except (TypeError, ValueError):
         ok = False
     if not ok:
-        raise SolasError(f"fields {fields_deg!r} must be a list of y field angles in degrees, each finite and below "
-                         "180 in magnitude")
+        raise SolasError(
+            f"fields {fields_deg!r} must be a list of y field angles in degrees, each finite and below 180 in magnitude"
+        )
     return fields
 
 
@@ -192,8 +201,9 @@ def _paraxial(lens: Lens, wavelength_nm: float, fields_deg: list[float] | None =
     )
 
 
-def _pupils(lens: Lens, wavelength_nm: float, ya: np.ndarray, yb: np.ndarray
-            ) -> tuple[float, float, float, float, float]:
+def _pupils(
+    lens: Lens, wavelength_nm: float, ya: np.ndarray, yb: np.ndarray
+) -> tuple[float, float, float, float, float]:
     """Entrance pupil z and radius, exit pupil z and radius (mm), and the exit pupil's f-number from the
     image plane, (image z − exit pupil z) / exit pupil diameter, from the heights of the base rays
     a = (y=1, u=0) and b = (y=0, u=1) at surface 1. The f-number is written with the slope u_c of the
@@ -205,9 +215,11 @@ def _pupils(lens: Lens, wavelength_nm: float, ya: np.ndarray, yb: np.ndarray
     last = len(lens.surfaces) - 1
     r_stop = lens.surfaces[s].semi_diameter
     if ya[s] == 0:  # rays parallel to the axis all cross the stop's centre
-        raise SolasError(f"lens {lens.name}: the stop (surface {s + 1}) lies in the rear focal plane of the surfaces "
-                         f"before it at {wavelength_nm:g} nm, so the entrance pupil is at infinity (telecentric in "
-                         "object space), which the ray aiming does not model; move the stop")
+        raise SolasError(
+            f"lens {lens.name}: the stop (surface {s + 1}) lies in the rear focal plane of the surfaces "
+            f"before it at {wavelength_nm:g} nm, so the entrance pupil is at infinity (telecentric in "
+            "object space), which the ray aiming does not model; move the stop"
+        )
     # Entrance pupil: the object-space chief ray (slope 1) crosses the axis where y_stop = 0.
     y1_chief = -yb[s] / ya[s]  # height at surface 1 of the slope-1 ray through the stop centre
     ep_z = z[0] - y1_chief  # y(z) = y1 + (z − z1) = 0
@@ -227,8 +239,9 @@ def _pupils(lens: Lens, wavelength_nm: float, ya: np.ndarray, yb: np.ndarray
     return ep_z, ep_radius, xp_z, xp_radius, f_number
 
 
-def _marginal_ray(lens: Lens, wavelength_nm: float, ya: np.ndarray, ua: np.ndarray
-                  ) -> tuple[np.ndarray, np.ndarray, float]:
+def _marginal_ray(
+    lens: Lens, wavelength_nm: float, ya: np.ndarray, ua: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, float]:
     """Heights and slopes of the marginal ray (from the axial object point through the stop edge), and
     the object's z (mm); SolasError when it leaves the lens parallel (no image)."""
     s = lens.stop_index
@@ -245,8 +258,10 @@ def _marginal_ray(lens: Lens, wavelength_nm: float, ya: np.ndarray, ua: np.ndarr
         ym, um = y0 * scale, u0 * scale
         obj_z = -lens.object_distance
     if um[-1] == 0:
-        raise SolasError(f"lens {lens.name} forms no image at {wavelength_nm:g} nm: rays from an object point leave "
-                         "it parallel (no optical power, or the object in the front focal plane)")
+        raise SolasError(
+            f"lens {lens.name} forms no image at {wavelength_nm:g} nm: rays from an object point leave "
+            "it parallel (no optical power, or the object in the front focal plane)"
+        )
     return ym, um, obj_z
 
 

@@ -13,6 +13,7 @@ matches within the printed digits (half a unit of the last one), else a model gl
 paraxial back focal distance at the d line, so the image plane is at the focus for an object at
 infinity; the object is at infinity and the wavelengths are the F, d and C lines.
 """
+
 from __future__ import annotations
 
 import math
@@ -52,8 +53,10 @@ def _rows(text: str, where: str) -> tuple[list[list[float]], int | None, list[tu
         except ValueError:
             raise SolasError(f"{where}: line {number}: {raw.strip()!r} is not a row of numbers") from None
         if len(values) not in (4, 5):
-            raise SolasError(f"{where}: line {number} has {len(values)} numbers; a row is radius, thickness, "
-                             "index, aperture diameter (mm) and optionally the Abbe number")
+            raise SolasError(
+                f"{where}: line {number} has {len(values)} numbers; a row is radius, thickness, "
+                "index, aperture diameter (mm) and optionally the Abbe number"
+            )
         _check_row(values, f"{where}: line {number}")
         g = _GLASS_RE.match(comment)
         if g:
@@ -101,19 +104,22 @@ def _check_named(material: str, nd: float, where: str) -> None:
     except SolasError as exc:
         raise SolasError(f"{where}: its glass comment {material!r}: {exc}") from None
     if not abs(have - nd) <= 1e-6 * nd:
-        raise SolasError(f"{where}: n_d {nd!r} differs from its glass comment {material!r} (n_d {have:.7g}); "
-                         "correct the row or remove the comment")
+        raise SolasError(
+            f"{where}: n_d {nd!r} differs from its glass comment {material!r} (n_d {have:.7g}); "
+            "correct the row or remove the comment"
+        )
 
 
 def read_spec(text: str, where: str) -> dict:
     """The lens-file dictionary of a .dat text; `where` names it in messages."""
     rows, stop, digits, named = _rows(text, where)
     if stop is None:
-        air = [i for i, r in enumerate(rows)
-               if r[0] == 0 and r[2] <= 1 and (i == 0 or rows[i - 1][2] <= 1)]
+        air = [i for i, r in enumerate(rows) if r[0] == 0 and r[2] <= 1 and (i == 0 or rows[i - 1][2] <= 1)]
         if len(air) != 1:
-            raise SolasError(f"{where}: {len(air)} rows of radius 0 in air; exactly one must mark the aperture "
-                             "stop (or name it with a '# stop = N' comment)")
+            raise SolasError(
+                f"{where}: {len(air)} rows of radius 0 in air; exactly one must mark the aperture "
+                "stop (or name it with a '# stop = N' comment)"
+            )
         stop = air[0] + 1
     if not 1 <= stop <= len(rows):
         raise SolasError(f"{where}: stop = {stop} names no row (1..{len(rows)})")
@@ -123,14 +129,18 @@ def read_spec(text: str, where: str) -> dict:
         material = named.get(i - 1) or glass_mod.material_for(index, vd, nd_tol=nd_tol, vd_tol=vd_tol)
         if i - 1 in named:
             _check_named(material, index, f"{where}: row {i}")
-        surfaces.append({"label": f"row {i}", "radius": radius, "thickness": thickness, "diameter": aperture,
-                         "material": material})
+        surfaces.append(
+            {"label": f"row {i}", "radius": radius, "thickness": thickness, "diameter": aperture, "material": material}
+        )
     surfaces[stop - 1]["stop"] = True
     if surfaces[-1]["thickness"] == 0:
         indices = [glass_mod.resolve(s["material"]).index(glass_mod.LINE_D) for s in surfaces]
         surfaces[-1]["thickness"] = _back_focus(rows, indices)
-    return {"object": {"distance": "infinity"}, "surface": surfaces,
-            "wavelengths_nm": [glass_mod.LINE_F, glass_mod.LINE_D, glass_mod.LINE_C]}
+    return {
+        "object": {"distance": "infinity"},
+        "surface": surfaces,
+        "wavelengths_nm": [glass_mod.LINE_F, glass_mod.LINE_D, glass_mod.LINE_C],
+    }
 
 
 def check_steps(lens, where: str, then: str) -> None:
@@ -138,15 +148,20 @@ def check_steps(lens, where: str, then: str) -> None:
     `then` said after it: pbrt's RealisticCamera drops a ray whose step to the next element is negative, so
     no .dat table holds such a lens, whether written (`dumps`) or read (`check_read`)."""
     if lens.overlaps:
-        raise SolasError(f"{where}: {lens.overlaps[0].split(': traced')[0]}; pbrt's realistic camera steps only "
-                         f"forward from surface to surface, so {then}")
+        raise SolasError(
+            f"{where}: {lens.overlaps[0].split(': traced')[0]}; pbrt's realistic camera steps only "
+            f"forward from surface to surface, so {then}"
+        )
 
 
 def check_read(lens) -> None:
     """A lens read from a .dat table: refused where pbrt cannot trace it (`check_steps`), a damaged table
     (as pbrt's unscaled dgauss.dat and telephoto.dat, whose spacing column is one row off)."""
-    check_steps(lens, f"lens file {lens.source}", "pbrt cannot trace this table: a damaged table (a thickness "
-                "column one row off reads so)")
+    check_steps(
+        lens,
+        f"lens file {lens.source}",
+        "pbrt cannot trace this table: a damaged table (a thickness column one row off reads so)",
+    )
 
 
 def dumps(lens) -> str:
@@ -156,8 +171,10 @@ def dumps(lens) -> str:
         raise SolasError(f"lens {lens.name}: a .dat lens table holds no object distance; its object is at infinity")
     ideal = [i for i, s in enumerate(lens.surfaces, start=1) if s.ideal]
     if ideal:
-        raise SolasError(f"lens {lens.name}: surface {ideal[0]} is an ideal thin lens (focal_length); a .dat lens "
-                         "table holds spheres only; save it as .toml or .zmx")
+        raise SolasError(
+            f"lens {lens.name}: surface {ideal[0]} is an ideal thin lens (focal_length); a .dat lens "
+            "table holds spheres only; save it as .toml or .zmx"
+        )
     check_steps(lens, f"lens {lens.name}", "a .dat lens table cannot hold it; save it as .toml or .zmx")
     bad = [i for i, s in enumerate(lens.surfaces, start=1) if not s.is_sphere]
     if bad:
@@ -165,8 +182,11 @@ def dumps(lens) -> str:
     from .lens_toml import text
 
     lines = [f"# {text(lens.name)}: lens table written by solas-mi", "# radius thickness n_d aperture V_d (mm)"]
-    flat_air = [i for i, s in enumerate(lens.surfaces) if s.radius == 0 and s.glass.kind == "air"
-                and (i == 0 or lens.surfaces[i - 1].glass.kind == "air")]
+    flat_air = [
+        i
+        for i, s in enumerate(lens.surfaces)
+        if s.radius == 0 and s.glass.kind == "air" and (i == 0 or lens.surfaces[i - 1].glass.kind == "air")
+    ]
     if flat_air != [lens.stop_index]:
         lines.append(f"# stop = {lens.stop_index + 1}")
     for s in lens.surfaces:

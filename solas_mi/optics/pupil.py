@@ -7,6 +7,7 @@ plane. The pupil is sampled on a regular grid of direction cosines (α, β) of t
 sphere point, each ray found by Newton iteration on its entrance coordinates, so the Fraunhofer
 integral is an exact matrix DFT in (α, β). Lengths in mm.
 """
+
 from __future__ import annotations
 
 import math
@@ -21,8 +22,20 @@ from .aiming import Bundle, aim, chief_aim, continued_aim, nearest_passing, stop
 from .lens import Lens
 from .paraxial import paraxial, pupil_distance
 
-__all__ = ["Bundle", "aim", "ChiefRays", "chief_rays", "widest_field", "stop_rim", "stop_aim", "PupilFunction",
-           "pupil_function", "entrance_power", "nearest_passing", "Pupils"]
+__all__ = [
+    "Bundle",
+    "aim",
+    "ChiefRays",
+    "chief_rays",
+    "widest_field",
+    "stop_rim",
+    "stop_aim",
+    "PupilFunction",
+    "pupil_function",
+    "entrance_power",
+    "nearest_passing",
+    "Pupils",
+]
 dr = tracer.dr
 RIM_RAYS = 32
 RIM_BISECTIONS = 30  # a rim ray moved inside the stop's rim: its radius to 1e-9 of the rim's
@@ -53,27 +66,42 @@ def chief_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> 
     wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(field_deg),))
     b = Bundle(lens, field_deg, wavelength_nm, 1)
     e0, goal = chief_aim(lens, b)
-    ex, ey, tr, conv = aim(b, stop_target, tracer.array(e0[:, 0]), tracer.array(e0[:, 1]),
-                           tracer.array(goal[:, 0]), tracer.array(goal[:, 1]))
+    ex, ey, tr, conv = aim(
+        b,
+        stop_target,
+        tracer.array(e0[:, 0]),
+        tracer.array(e0[:, 1]),
+        tracer.array(goal[:, 0]),
+        tracer.array(goal[:, 1]),
+    )
     missed = np.flatnonzero(~tracer.to_numpy(conv)[0])
     if len(missed):  # the aim at the stop centre can miss at the very edge of the fields it reaches (the Cooke
         for f in missed:  # triplet at 31.842°): the passing ray nearest it, as where none reaches it; refused
             found = nearest_passing(lens, field_deg[f], wavelength_nm[f])  # only where no ray passes the stop
             if found is not None:
                 e0[f], goal[f] = found
-        ex, ey, tr, conv = aim(b, stop_target, tracer.array(e0[:, 0]), tracer.array(e0[:, 1]), tracer.array(goal[:, 0]),
-                               tracer.array(goal[:, 1]))
+        ex, ey, tr, conv = aim(
+            b,
+            stop_target,
+            tracer.array(e0[:, 0]),
+            tracer.array(e0[:, 1]),
+            tracer.array(goal[:, 0]),
+            tracer.array(goal[:, 1]),
+        )
     px, py, _ = tracer.to_plane(tr, lens.image_z)
     distinct, which = np.unique(wavelength_nm, return_inverse=True)  # paraxial data once per wavelength
     xp_z = np.array([paraxial(lens, w).exit_pupil_z_mm for w in distinct])[which.ravel()]
     qx, qy, qopl = tracer.to_plane(tr, b.per_ray(xp_z))
     radius = dr.sqrt((qx - px) ** 2 + (qy - py) ** 2 + (b.per_ray(xp_z) - lens.image_z) ** 2)
     ex, ey, px, py, radius, qopl, sa, sb, n_image, conv, clipped = tracer.to_numpy(
-        ex, ey, px, py, radius, qopl, (qx - px) / radius, (qy - py) / radius, tr.n_image, conv, tr.clipped_by)
+        ex, ey, px, py, radius, qopl, (qx - px) / radius, (qy - py) / radius, tr.n_image, conv, tr.clipped_by
+    )
     if not conv.all():
         bad = field_deg[~conv][0]
-        raise SolasError(f"no real ray of {wavelength_nm[~conv][0]:g} nm passes the stop for field "
-                         f"({bad[0]:g}, {bad[1]:g}) deg; the lens does not image that field")
+        raise SolasError(
+            f"no real ray of {wavelength_nm[~conv][0]:g} nm passes the stop for field "
+            f"({bad[0]:g}, {bad[1]:g}) deg; the lens does not image that field"
+        )
     return ChiefRays(
         entrance=np.stack([ex, ey], axis=-1),
         image_xy=np.stack([px, py], axis=-1),
@@ -97,8 +125,12 @@ def widest_field(lens: Lens, wavelength_nm: float, samples: int = 45) -> float:
     return float(fields[clear[-1]])
 
 
-def stop_rim(rim: Bundle, chief: ChiefRays, accept=None, vignetting: np.ndarray | None = None,
-             ) -> tuple[np.ndarray, np.ndarray, tracer.Traced, np.ndarray]:
+def stop_rim(
+    rim: Bundle,
+    chief: ChiefRays,
+    accept=None,
+    vignetting: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray, tracer.Traced, np.ndarray]:
     """Rays aimed at RIM_RAYS points of the stop's rim for each field of the `rim` bundle: entrance
     coordinates (n, RIM_RAYS) each, the trace, and which passed. Where the ray to the rim fails (total
     internal reflection, a surface missed, or `accept(traced)` false) the pupil's edge lies inside the
@@ -111,7 +143,10 @@ def stop_rim(rim: Bundle, chief: ChiefRays, accept=None, vignetting: np.ndarray 
     cos, sin = np.cos(phi), np.sin(phi)
     if vignetting is not None:  # the rim's ellipse: its points scaled per side
         v = np.repeat(np.asarray(vignetting, dtype=np.float64), RIM_RAYS, axis=0)
-        cos, sin = cos * (1.0 - np.where(cos >= 0, v[:, 0], v[:, 1])), sin * (1.0 - np.where(sin >= 0, v[:, 2], v[:, 3]))
+        cos, sin = (
+            cos * (1.0 - np.where(cos >= 0, v[:, 0], v[:, 1])),
+            sin * (1.0 - np.where(sin >= 0, v[:, 2], v[:, 3])),
+        )
 
     def at(scale: np.ndarray):
         ex, ey, tr, ok = stop_aim(rim, chief, tracer.array(r_stop * scale * cos), tracer.array(r_stop * scale * sin))
@@ -189,8 +224,9 @@ class PupilFunction:
         return np.sum(self.power * self.coverage, axis=(1, 2)) * self.cell_area
 
 
-def entrance_power(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, ex: np.ndarray,
-                   ey: np.ndarray) -> np.ndarray:
+def entrance_power(
+    lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, ex: np.ndarray, ey: np.ndarray
+) -> np.ndarray:
     """Power per unit entrance area (1/mm²) of rays at entrance coordinates ex, ey (n, ...) for
     fields (n, 2): the on-axis entrance pupil carries 1. Finite objects add cos³ of the ray's angle
     to the axis (a point source's power per area of the aim plane)."""
@@ -204,7 +240,7 @@ def entrance_power(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray,
 def _obliquity(lens: Lens, dx, dy, sqrt):
     """cos³ of the angle to the axis of rays from an object point offset (dx, dy) mm from where they
     meet the aim plane (any array type, given its `sqrt`): a virtual object's converging cone alike."""
-    dist2 = dx * dx + dy * dy + lens.object_distance ** 2
+    dist2 = dx * dx + dy * dy + lens.object_distance**2
     return abs(lens.object_distance) ** 3 / (dist2 * sqrt(dist2))
 
 
@@ -219,10 +255,10 @@ def _power_density(lens: Lens, wavelength_nm: float) -> float:
     p = paraxial(lens, wavelength_nm)
     r_ep = 0.5 * p.entrance_pupil_diameter_mm
     if lens.at_infinity:
-        return 1.0 / (math.pi * r_ep ** 2)
+        return 1.0 / (math.pi * r_ep**2)
     half = math.atan(r_ep / pupil_distance(lens, p.entrance_pupil_z_mm))
     solid = 4.0 * math.pi * math.sin(0.5 * half) ** 2  # = 2π(1 − cos θ), without its cancellation
-    return 1.0 / (lens.object_distance ** 2 * solid)
+    return 1.0 / (lens.object_distance**2 * solid)
 
 
 def pupil_function(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, samples: int) -> PupilFunction:
@@ -257,6 +293,7 @@ class Pupils:
         g, ex, ey, ok, kept = pupil_grid.grid_rays(lens, fields, waves, chief, alpha, beta, pupil_grid.affine_map(rim))
         density = g.per_ray(power_densities(lens, waves))
         if lens.at_infinity:
+
             def power(ex, ey):
                 return density
         else:
@@ -264,8 +301,14 @@ class Pupils:
 
             def power(ex, ey):
                 return density * _obliquity(lens, ex - g.per_ray(pts[:, 0]), ey - g.per_ray(pts[:, 1]), dr.sqrt)
-        return PupilFunction(alpha, beta, chief=chief, wavelength_nm=waves,
-                             **pupil_grid.cells(lens, g, ex, ey, ok, kept, alpha, beta, power))
+
+        return PupilFunction(
+            alpha,
+            beta,
+            chief=chief,
+            wavelength_nm=waves,
+            **pupil_grid.cells(lens, g, ex, ey, ok, kept, alpha, beta, power),
+        )
 
 
 def _sphere_rim(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chief: ChiefRays):
@@ -278,6 +321,7 @@ def _sphere_rim(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, ch
     ra, rb = (a.reshape(nf, RIM_RAYS) for a in tracer.to_numpy(*rim_target(rtr)[:2]))
     if not rok.any(axis=1).all():
         bad = field_deg[~rok.any(axis=1)][0]
-        raise SolasError(f"no real ray reaches the stop's rim for field ({bad[0]:g}, {bad[1]:g}) deg; "
-                         "the lens is not usable there")
+        raise SolasError(
+            f"no real ray reaches the stop's rim for field ({bad[0]:g}, {bad[1]:g}) deg; the lens is not usable there"
+        )
     return rex, rey, ra - chief.sphere_point[:, 0:1], rb - chief.sphere_point[:, 1:2], rok

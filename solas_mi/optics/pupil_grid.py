@@ -13,6 +13,7 @@ edge, the optical path difference, the largest phase step between neighbouring c
 pupil √power × coverage × e^{iφ} in complex64 — each one kernel over every cell of the batch, with no
 NumPy pass over the cells. Lengths in mm.
 """
+
 from __future__ import annotations
 
 import math
@@ -94,8 +95,15 @@ def sphere_target(lens: Lens, b: Bundle, chief):
     return target
 
 
-def grid_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chief, alpha: np.ndarray,
-              beta: np.ndarray, affine: np.ndarray):
+def grid_rays(
+    lens: Lens,
+    field_deg: np.ndarray,
+    wavelength_nm: np.ndarray,
+    chief,
+    alpha: np.ndarray,
+    beta: np.ndarray,
+    affine: np.ndarray,
+):
     """Every node of the (α, β) grids aimed at its point of the reference sphere, coarse to fine
     (`aim_levels`): the finest level's bundle, its rays' entrance coordinates, whether each converged, and
     what `_kept` keeps of them at the solution (Dr.Jit arrays, [field, β, α] order)."""
@@ -103,20 +111,35 @@ def grid_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chie
     levels = aim_levels(samples)
     solved = None
     for m in levels:
-        a, b = (axis if m == samples else axis[:, :1] + (axis[:, -1:] - axis[:, :1]) * np.linspace(0.0, 1.0, m)
-                for axis in (alpha, beta))
-        guess = [np.add(affine[:, 0, c, None, None] + affine[:, 1, c, None, None] * a[:, None, :],
-                        affine[:, 2, c, None, None] * b[:, :, None], out=tracer.aligned((nf, m, m), np.float64))
-                 for c in (0, 1)]  # the rim's affine map
+        a, b = (
+            axis if m == samples else axis[:, :1] + (axis[:, -1:] - axis[:, :1]) * np.linspace(0.0, 1.0, m)
+            for axis in (alpha, beta)
+        )
+        guess = [
+            np.add(
+                affine[:, 0, c, None, None] + affine[:, 1, c, None, None] * a[:, None, :],
+                affine[:, 2, c, None, None] * b[:, :, None],
+                out=tracer.aligned((nf, m, m), np.float64),
+            )
+            for c in (0, 1)
+        ]  # the rim's affine map
         jacobian, unknown = (None, None) if solved is None else _next_level(*solved, m, guess)
         g = Bundle(lens, field_deg, wavelength_nm, m * m)
         ray = dr.arange(tracer.UInt32, nf * m * m)  # the goals: each ray's (α, β) on the sphere, gathered per ray
         goal_a = tracer.gather((a + chief.sphere_point[:, :1]).ravel(), g.index * m + ray % m)
         goal_b = tracer.gather((b + chief.sphere_point[:, 1:]).ravel(), g.index * m + (ray // m) % m)
         keep = _kept(lens, g, chief) if m == samples else None
-        ex, ey, _traced, ok, kept = aim_keeping(g, sphere_target(lens, g, chief), tracer.array(guess[0]),
-                                           tracer.array(guess[1]), goal_a, goal_b, jacobian=jacobian, keep=keep,
-                                           unknown=unknown)
+        ex, ey, _traced, ok, kept = aim_keeping(
+            g,
+            sphere_target(lens, g, chief),
+            tracer.array(guess[0]),
+            tracer.array(guess[1]),
+            goal_a,
+            goal_b,
+            jacobian=jacobian,
+            keep=keep,
+            unknown=unknown,
+        )
         solved = [s.reshape(nf, m, m) for s in tracer.to_numpy(ex, ey, ok)], a, b
     return g, ex, ey, ok, kept
 
@@ -156,20 +179,32 @@ def _next_level(solved: list[np.ndarray], a: np.ndarray, b: np.ndarray, m: int, 
             else:
                 np.copyto(into, np.matmul(w, right[..., :m]), where=~reach)
             right32 = right.astype(np.float32)
-            slopes += [np.matmul(weights, right32[..., part], out=tracer.aligned((nf, m, m), np.float32))
-                       for weights, part in ((w32, slice(m, None)), (dw32, slice(None, m)))]  # per coarse step in α, β
+            slopes += [
+                np.matmul(weights, right32[..., part], out=tracer.aligned((nf, m, m), np.float32))
+                for weights, part in ((w32, slice(m, None)), (dw32, slice(None, m)))
+            ]  # per coarse step in α, β
     unknown = None if reach is None else tracer.array(np.flatnonzero(reach), tracer.UInt32)
     index = dr.arange(tracer.UInt32, nf * m * m) // (m * m)
     per_a, per_b = (tracer.gather((mc - 1) / (x[:, -1] - x[:, 0]), index) for x in (a, b))
     f32 = dr.float32_array_t(tracer.F)
-    ex_a, ex_b, ey_a, ey_b = (tracer.F(tracer.array(v, f32)) * per
-                              for v, per in zip(slopes, (per_a, per_b, per_a, per_b)))
+    ex_a, ex_b, ey_a, ey_b = (
+        tracer.F(tracer.array(v, f32)) * per for v, per in zip(slopes, (per_a, per_b, per_a, per_b))
+    )
     det = ex_a * ey_b - ex_b * ey_a
     return (ey_b / det, -ex_b / det, -ey_a / det, ex_a / det), unknown
 
 
-def cells(lens: Lens, g: Bundle, ex: tracer.F, ey: tracer.F, ok: tracer.Bool, kept: tuple, alpha: np.ndarray,
-          beta: np.ndarray, power_density) -> dict:
+def cells(
+    lens: Lens,
+    g: Bundle,
+    ex: tracer.F,
+    ey: tracer.F,
+    ok: tracer.Bool,
+    kept: tuple,
+    alpha: np.ndarray,
+    beta: np.ndarray,
+    power_density,
+) -> dict:
     """What each cell of the grids carries, from the rays of `grid_rays` (`kept`: their `_kept` values):
     NumPy arrays (n, N, N) power (per dα dβ, a fraction of the on-axis entrance-pupil power), coverage,
     opd_mm and the complex pupil (complex64); per field phase_step (rad, the largest between neighbouring
@@ -197,14 +232,27 @@ def cells(lens: Lens, g: Bundle, ex: tracer.F, ey: tracer.F, ok: tracer.Bool, ke
     pupil = np.empty(shape, dtype=np.complex64)
     pupil.real, pupil.imag = np.asarray(real).reshape(shape), np.asarray(imag).reshape(shape)
     return {
-        "power": np.asarray(power).reshape(shape), "coverage": np.asarray(coverage).reshape(shape),
-        "opd_mm": np.asarray(opd).reshape(shape), "complex_pupil": pupil, "phase_step": np.asarray(steps),
+        "power": np.asarray(power).reshape(shape),
+        "coverage": np.asarray(coverage).reshape(shape),
+        "opd_mm": np.asarray(opd).reshape(shape),
+        "complex_pupil": pupil,
+        "phase_step": np.asarray(steps),
         "vignetted_by": [np.flatnonzero(row).tolist() for row in np.asarray(seen).reshape(nf, surfaces)],
     }
 
 
-def _weights(lens: Lens, g: Bundle, ex: tracer.F, ey: tracer.F, ok: tracer.Bool, kept: tuple, alpha: np.ndarray,
-             beta: np.ndarray, power_density, idx: tracer.UInt32):
+def _weights(
+    lens: Lens,
+    g: Bundle,
+    ex: tracer.F,
+    ey: tracer.F,
+    ok: tracer.Bool,
+    kept: tuple,
+    alpha: np.ndarray,
+    beta: np.ndarray,
+    power_density,
+    idx: tracer.UInt32,
+):
     """Per cell (`cells`): power, coverage, optical path difference (0 outside the pupil) and the surface
     that blocks a ray reaching the stop's opening (0: none); evaluated."""
     n = alpha.shape[1]
@@ -216,8 +264,9 @@ def _weights(lens: Lens, g: Bundle, ex: tracer.F, ey: tracer.F, ok: tracer.Bool,
         """∂u per grid step along rows (stride 1) or columns (stride n), as numpy.gradient takes it."""
         ahead, behind = dr.minimum(along + 1, n - 1), dr.select(along > 0, along - 1, 0)
         at = idx - along * stride
-        return ((dr.gather(tracer.F, u, at + ahead * stride) - dr.gather(tracer.F, u, at + behind * stride))
-                / tracer.F(ahead - behind))
+        return (dr.gather(tracer.F, u, at + ahead * stride) - dr.gather(tracer.F, u, at + behind * stride)) / tracer.F(
+            ahead - behind
+        )
 
     da, db = g.per_ray(alpha[:, 1] - alpha[:, 0]), g.per_ray(beta[:, 1] - beta[:, 0])
 
@@ -229,8 +278,9 @@ def _weights(lens: Lens, g: Bundle, ex: tracer.F, ey: tracer.F, ok: tracer.Bool,
     power = power_density(ex, ey) * jacobian(ex, ey)
     cell = dr.sqrt(jacobian(sx, sy) * da * db)  # grid cell size at the stop (mm)
     # the stop's rim (an iris: its nearest blade's edge); round, the same operations as r_stop − |s|
-    margin = lens.surfaces[lens.stop_index].iris_margin(sx, sy, lambda a, b: dr.sqrt(a * a + b * b), dr.atan2, dr.cos,
-                                                        dr.floor)
+    margin = lens.surfaces[lens.stop_index].iris_margin(
+        sx, sy, lambda a, b: dr.sqrt(a * a + b * b), dr.atan2, dr.cos, dr.floor
+    )
     coverage = dr.clip(0.5 + margin / dr.maximum(cell, 1e-300), 0.0, 1.0)
     other = (clipped != 0) & (clipped != lens.stop_index + 1)
     coverage = dr.select(other | ~ok | ~dr.isfinite(power), 0.0, coverage)

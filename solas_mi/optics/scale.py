@@ -8,6 +8,7 @@ sizes, in mm) scale by s, the same in angle; the diffraction pattern (λ·N) doe
 frame camera with a focal length of F pixels of p µm takes the lens scaled to EFL = F·p: its geometric
 blur in pixels is the unscaled lens's on pixels of EFL/F, its diffraction blur λN/p pixels.
 """
+
 from __future__ import annotations
 
 import math
@@ -23,15 +24,26 @@ def scaled(lens: Lens, factor: float) -> Lens:
     if not (isinstance(factor, (int, float)) and math.isfinite(factor) and factor > 0):
         raise SolasError(f"lens scale factor {factor!r} must be a positive number")
     s = float(factor)
-    return replace(lens, name=f"{lens.name} x{s:.6g}", surfaces=tuple(_surface(x, s) for x in lens.surfaces),
-                   object_distance=lens.object_distance * s, image_diameter=lens.image_diameter * s)
+    return replace(
+        lens,
+        name=f"{lens.name} x{s:.6g}",
+        surfaces=tuple(_surface(x, s) for x in lens.surfaces),
+        object_distance=lens.object_distance * s,
+        image_diameter=lens.image_diameter * s,
+    )
 
 
 def _surface(surface: Surface, s: float) -> Surface:
-    return replace(surface, radius=surface.radius * s, thickness=surface.thickness * s, diameter=surface.diameter * s,
-                   aspheric=tuple(a * s ** (1 - 2 * (i + 2)) for i, a in enumerate(surface.aspheric)),
-                   qbfs=tuple(a * s for a in surface.qbfs), norm_radius=surface.norm_radius * s,
-                   focal_length=None if surface.focal_length is None else surface.focal_length * s)
+    return replace(
+        surface,
+        radius=surface.radius * s,
+        thickness=surface.thickness * s,
+        diameter=surface.diameter * s,
+        aspheric=tuple(a * s ** (1 - 2 * (i + 2)) for i, a in enumerate(surface.aspheric)),
+        qbfs=tuple(a * s for a in surface.qbfs),
+        norm_radius=surface.norm_radius * s,
+        focal_length=None if surface.focal_length is None else surface.focal_length * s,
+    )
 
 
 def image_scale_mm(lens: Lens) -> float:
@@ -43,8 +55,7 @@ def image_scale_mm(lens: Lens) -> float:
     return abs(paraxial(lens, fields_deg=[math.degrees(theta)]).chief_ray_image_height_mm[0]) / math.tan(theta)
 
 
-def scaled_to_focal(lens: Lens, focal_px: float, pixel_um: float, field_deg: float | None = None
-                    ) -> tuple[Lens, dict]:
+def scaled_to_focal(lens: Lens, focal_px: float, pixel_um: float, field_deg: float | None = None) -> tuple[Lens, dict]:
     """`lens` scaled so that its focal length is a camera's of `focal_px` pixels of `pixel_um` µm, and what was
     done (for metadata). The lens's focal length: with `field_deg`, the pinhole focal length the convolution
     takes (`camera.pinhole_focal_mm`: the real chief ray of that field), so a grid over that field puts the
@@ -59,10 +70,20 @@ def scaled_to_focal(lens: Lens, focal_px: float, pixel_um: float, field_deg: flo
     factor = focal_px * pixel_um * 1e-3 / focal(lens)
     out = scaled(lens, factor)
     before, after = paraxial(lens), paraxial(out)
-    return out, {"lens": lens.name, "lens_hash": lens.hash, "factor": factor,
-                 "efl_mm": [before.efl_mm, after.efl_mm], "f_number": [before.f_number, after.f_number],
-                 "focal_mm": [focal(lens), focal(out)], "camera_focal_px": float(focal_px), "pixel_um": float(pixel_um),
-                 "why": "lens scaled so that its focal length is the camera's (pixels x pixel pitch): "
-                        + (f"the pinhole focal length meeting the real chief ray at {field_deg:g} deg, as the "
-                           "convolution takes it" if field_deg else "the paraxial image scale on its image plane")
-                        + "; f-number and field unchanged"}
+    return out, {
+        "lens": lens.name,
+        "lens_hash": lens.hash,
+        "factor": factor,
+        "efl_mm": [before.efl_mm, after.efl_mm],
+        "f_number": [before.f_number, after.f_number],
+        "focal_mm": [focal(lens), focal(out)],
+        "camera_focal_px": float(focal_px),
+        "pixel_um": float(pixel_um),
+        "why": "lens scaled so that its focal length is the camera's (pixels x pixel pitch): "
+        + (
+            f"the pinhole focal length meeting the real chief ray at {field_deg:g} deg, as the convolution takes it"
+            if field_deg
+            else "the paraxial image scale on its image plane"
+        )
+        + "; f-number and field unchanged",
+    }

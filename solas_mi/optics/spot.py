@@ -7,8 +7,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SolasError
-from . import pupil
-from . import tracer
+from . import pupil, tracer
 from .lens import Lens
 
 PATTERNS = ("hexapolar", "grid")

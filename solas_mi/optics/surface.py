@@ -17,9 +17,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..errors import SolasError
-from . import forbes, ideal as ideal_mod, thermal
-from .coating import Coating, coating_from_table
+from . import forbes, thermal
 from . import glass as glass_mod
+from . import ideal as ideal_mod
+from .coating import Coating, coating_from_table
 from .sag import sag
 
 RIM_SLACK = 1e-9  # relative: a ray aimed exactly at an aperture's rim passes (every tracer)
@@ -161,7 +162,7 @@ class Surface:
         return sag(r * r, **self.shape)
 
 
-def surface_from_row(row: dict, i: int, where: str, catalogues: tuple[str, ...], own: dict) -> "Surface":
+def surface_from_row(row: dict, i: int, where: str, catalogues: tuple[str, ...], own: dict) -> Surface:
     """Surface `i` (1-based) of a lens file's [[surface]] table, checked."""
     label = str(row.get("label", f"surface {i}"))
     ident = f"{where}: surface {i} ({label})"

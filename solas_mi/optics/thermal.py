@@ -33,6 +33,7 @@ air on both sides (a stop, a plane) the mount's, as do its aperture and the imag
 without thermal data (a model glass, a lens file's own material, a catalogue entry without them) keeps
 its absolute index and does not expand: `lens_at` names each such glass in a warning, never silently.
 """
+
 from __future__ import annotations
 
 import math
@@ -47,18 +48,23 @@ TEMPERATURE_RANGE_C = (-100.0, 300.0)  # where the glass formula and the air's a
 PRESSURE_RANGE_KPA = (0.0, 1000.0)  # vacuum (0) to ten atmospheres
 # Mount materials: linear CTE (1/K) near room temperature, typical handbook values (ASM Handbook; aluminium
 # 6061-T6, stainless steel 304, Ti-6Al-4V, free-cutting brass, Invar 36); "none": air gaps kept as they are.
-MOUNTS = {"aluminium": 23.6e-6, "steel": 17.3e-6, "titanium": 8.6e-6, "brass": 20.5e-6, "invar": 1.3e-6,
-          "none": 0.0}
+MOUNTS = {"aluminium": 23.6e-6, "steel": 17.3e-6, "titanium": 8.6e-6, "brass": 20.5e-6, "invar": 1.3e-6, "none": 0.0}
 DEFAULT_MOUNT = "aluminium"
 CTE_RANGE = (-1e-4, 1e-3)  # 1/K: a mount CTE given as a number
 
 
 def check_environment(temperature_c, pressure_kpa) -> tuple[float, float]:
     """(temperature °C, pressure kPa) as floats, or SolasError naming the bad value and the allowed range."""
-    for value, what, unit, (lo, hi) in ((temperature_c, "temperature", "°C", TEMPERATURE_RANGE_C),
-                                        (pressure_kpa, "pressure", "kPa", PRESSURE_RANGE_KPA)):
-        if (not isinstance(value, (int, float)) or isinstance(value, bool) or not math.isfinite(value)
-                or not lo <= value <= hi):
+    for value, what, unit, (lo, hi) in (
+        (temperature_c, "temperature", "°C", TEMPERATURE_RANGE_C),
+        (pressure_kpa, "pressure", "kPa", PRESSURE_RANGE_KPA),
+    ):
+        if (
+            not isinstance(value, (int, float))
+            or isinstance(value, bool)
+            or not math.isfinite(value)
+            or not lo <= value <= hi
+        ):
             raise SolasError(f"{what} {value!r} {unit} must be a number from {lo:g} to {hi:g} {unit}")
     return float(temperature_c), float(pressure_kpa)
 
@@ -72,8 +78,10 @@ def mount_cte(mount) -> float:
     except (TypeError, ValueError):
         value = math.nan
     if isinstance(mount, bool) or not CTE_RANGE[0] <= value <= CTE_RANGE[1]:
-        raise SolasError(f"mount {mount!r} must be a material ({', '.join(MOUNTS)}) or a CTE in 1/K from "
-                         f"{CTE_RANGE[0]:g} to {CTE_RANGE[1]:g} (e.g. 23.6e-6)")
+        raise SolasError(
+            f"mount {mount!r} must be a material ({', '.join(MOUNTS)}) or a CTE in 1/K from "
+            f"{CTE_RANGE[0]:g} to {CTE_RANGE[1]:g} (e.g. 23.6e-6)"
+        )
     return value
 
 
@@ -90,8 +98,11 @@ def absolute_change(thermal: tuple[float, ...], index, wavelength_um, delta_c: f
     d0, d1, d2, e0, e1, ltk = thermal
     l2 = wavelength_um * wavelength_um
     dt = delta_c
-    return ((index * index - 1.0) / (2.0 * index)
-            * (d0 * dt + d1 * dt * dt + d2 * dt * dt * dt + (e0 * dt + e1 * dt * dt) / (l2 - ltk * ltk)))
+    return (
+        (index * index - 1.0)
+        / (2.0 * index)
+        * (d0 * dt + d1 * dt * dt + d2 * dt * dt * dt + (e0 * dt + e1 * dt * dt) / (l2 - ltk * ltk))
+    )
 
 
 def relative_index(glass, index, wavelength_um, environment: tuple[float, float]):
@@ -100,8 +111,10 @@ def relative_index(glass, index, wavelength_um, environment: tuple[float, float]
     temperature, pressure = environment
     absolute = index * air_index(wavelength_um, STANDARD_C, STANDARD_KPA)
     if glass.thermal:
-        absolute = absolute + (absolute_change(glass.thermal, index, wavelength_um, temperature - glass.reference_c)
-                               - absolute_change(glass.thermal, index, wavelength_um, STANDARD_C - glass.reference_c))
+        absolute = absolute + (
+            absolute_change(glass.thermal, index, wavelength_um, temperature - glass.reference_c)
+            - absolute_change(glass.thermal, index, wavelength_um, STANDARD_C - glass.reference_c)
+        )
     return absolute / air_index(wavelength_um, temperature, pressure)
 
 
@@ -109,10 +122,15 @@ def _scaled_surface(surface, factor: float, thickness_factor: float):
     """`surface` grown by `factor` (radius, aperture, aspheric and Qbfs terms: z(r) → s·z(r/s)), its
     thickness by `thickness_factor`."""
     aspheric = tuple(a * factor ** (1 - 2 * (i + 2)) for i, a in enumerate(surface.aspheric))
-    return replace(surface, radius=surface.radius * factor, thickness=surface.thickness * thickness_factor,
-                   diameter=surface.diameter * factor, aspheric=aspheric,
-                   qbfs=tuple(q * factor for q in surface.qbfs),
-                   norm_radius=surface.norm_radius * factor if any(surface.qbfs) else surface.norm_radius)
+    return replace(
+        surface,
+        radius=surface.radius * factor,
+        thickness=surface.thickness * thickness_factor,
+        diameter=surface.diameter * factor,
+        aspheric=aspheric,
+        qbfs=tuple(q * factor for q in surface.qbfs),
+        norm_radius=surface.norm_radius * factor if any(surface.qbfs) else surface.norm_radius,
+    )
 
 
 def _glass_cte(glass, mount: float) -> float:
@@ -129,8 +147,10 @@ def _mounts(lens, mount) -> list[float]:
         return [mount_cte(DEFAULT_MOUNT if s.mount is None else s.mount) for s in lens.surfaces]
     if isinstance(mount, (list, tuple)):
         if len(mount) != len(lens.surfaces):
-            raise SolasError(f"mount: {len(mount)} values for {len(lens.surfaces)} surfaces; give one per surface "
-                             "(the gap after it) or one for all")
+            raise SolasError(
+                f"mount: {len(mount)} values for {len(lens.surfaces)} surfaces; give one per surface "
+                "(the gap after it) or one for all"
+            )
         return [mount_cte(m) for m in mount]
     return [mount_cte(mount)] * len(lens.surfaces)
 
@@ -166,13 +186,20 @@ def in_environment(lens, temperature_c: float, pressure_kpa: float):
     temperature, pressure = check_environment(temperature_c, pressure_kpa)
     held = _unthermal(lens) if temperature != STANDARD_C else []
     if held:
-        warnings.warn(f"lens {lens.name} at {temperature:g} °C: {'glasses' if len(held) > 1 else 'glass'} "
-                      f"{', '.join(held)} without thermal data (Schott formula or CTE) in the catalogue: absolute "
-                      "index and size held as at 20 °C", stacklevel=3)
-    return replace(lens, surfaces=tuple(replace(s, glass=s.glass.at(temperature, pressure)) for s in lens.surfaces),
-                   object_glass=lens.object_glass.at(temperature, pressure),
-                   materials=tuple(g.at(temperature, pressure) for g in lens.materials),
-                   temperature_c=temperature, pressure_kpa=pressure)
+        warnings.warn(
+            f"lens {lens.name} at {temperature:g} °C: {'glasses' if len(held) > 1 else 'glass'} "
+            f"{', '.join(held)} without thermal data (Schott formula or CTE) in the catalogue: absolute "
+            "index and size held as at 20 °C",
+            stacklevel=3,
+        )
+    return replace(
+        lens,
+        surfaces=tuple(replace(s, glass=s.glass.at(temperature, pressure)) for s in lens.surfaces),
+        object_glass=lens.object_glass.at(temperature, pressure),
+        materials=tuple(g.at(temperature, pressure) for g in lens.materials),
+        temperature_c=temperature,
+        pressure_kpa=pressure,
+    )
 
 
 def metadata(lens) -> dict:
@@ -182,5 +209,17 @@ def metadata(lens) -> dict:
     return {"temperature_c": lens.temperature_c, "pressure_kpa": lens.pressure_kpa}
 
 
-__all__ = ["DEFAULT_MOUNT", "MOUNTS", "STANDARD_C", "STANDARD_KPA", "absolute_change", "air_index",
-           "check_environment", "in_environment", "lens_at", "metadata", "mount_cte", "relative_index"]
+__all__ = [
+    "DEFAULT_MOUNT",
+    "MOUNTS",
+    "STANDARD_C",
+    "STANDARD_KPA",
+    "absolute_change",
+    "air_index",
+    "check_environment",
+    "in_environment",
+    "lens_at",
+    "metadata",
+    "mount_cte",
+    "relative_index",
+]

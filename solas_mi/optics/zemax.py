@@ -39,10 +39,9 @@ from __future__ import annotations
 import math
 
 from ..errors import SolasError
-from . import forbes, ideal
-from .coating import to_zemax, zemax_coating
+from . import forbes, ideal, zemax_solves
 from . import glass as glass_mod
-from . import zemax_solves
+from .coating import to_zemax, zemax_coating
 from .formats import MAX_FIELDS, check_count, one_line
 from .formats import floats as _floats
 

@@ -13,6 +13,7 @@ Automatic semi-diameters: the largest height at each surface of the real chief r
 at the stop's rim of every field and wavelength, so no aperture but the stop's cuts the beam; where the
 file gives vignetting factors, at the rim squeezed by them (CODE V's VUY/VLY/VUX/VLX, taken at the stop).
 """
+
 from __future__ import annotations
 
 import math
@@ -39,18 +40,26 @@ def default_stop(rows: list[dict], keyword: str, whose: str) -> str:
     return f"no {keyword} in the file: the stop is surface 1, {whose}"
 
 
-def solve(spec: dict, aperture: tuple[str, float], fields: tuple[str, list[float]], primary_nm: float | None,
-          where: str, vignetting: list[tuple[float, float, float, float]] | None = None) -> dict:
+def solve(
+    spec: dict,
+    aperture: tuple[str, float],
+    fields: tuple[str, list[float]],
+    primary_nm: float | None,
+    where: str,
+    vignetting: list[tuple[float, float, float, float]] | None = None,
+) -> dict:
     """`spec` solved (module docstring); `vignetting`: per field of `fields`, the fractions (+x, −x, +y, −y)
     of the pupil that the file's vignetting factors cut off, which the automatic semi-diameters then follow."""
     rows = spec["surface"]
     auto = [i for i, r in enumerate(rows) if r["diameter"] is None]
     stop = next((i for i, r in enumerate(rows) if r.get("stop")), None)
     if aperture[0] == "float" and stop is not None and rows[stop]["diameter"] is None:
-        raise SolasError(f"{where}: the system aperture floats by stop size (FLOA, or no aperture named) on the "
-                         f"stop, surface {stop + 1} "
-                         f"({rows[stop].get('label', '')}), which has no DIAM: the beam's size is then "
-                         "undefined; give the stop's DIAM or a system aperture (ENPD, FNUM)")
+        raise SolasError(
+            f"{where}: the system aperture floats by stop size (FLOA, or no aperture named) on the "
+            f"stop, surface {stop + 1} "
+            f"({rows[stop].get('label', '')}), which has no DIAM: the beam's size is then "
+            "undefined; give the stop's DIAM or a system aperture (ENPD, FNUM)"
+        )
     if not auto and aperture[0] == "float" and fields[0] == "angle":
         spec["field_deg"] = max(fields[1], default=0.0)
         return spec
@@ -73,10 +82,13 @@ def solve(spec: dict, aperture: tuple[str, float], fields: tuple[str, list[float
 
 def _opened(lens: Lens, auto: list[int]) -> Lens:
     """`lens` with its automatic apertures open wide (nothing clips there while they are found)."""
+
     def wide(s):
         return _OPEN * 2.0 * abs(s.radius) if s.radius and s.is_sphere else 2.0 * _FLAT_OPEN_MM
-    return replace(lens, surfaces=tuple(replace(s, diameter=wide(s)) if i in auto else s
-                                        for i, s in enumerate(lens.surfaces)))
+
+    return replace(
+        lens, surfaces=tuple(replace(s, diameter=wide(s)) if i in auto else s for i, s in enumerate(lens.surfaces))
+    )
 
 
 def _stop_sized(lens: Lens, aperture: tuple[str, float], wl: float, where: str) -> Lens:
@@ -102,7 +114,7 @@ def _stop_sized(lens: Lens, aperture: tuple[str, float], wl: float, where: str) 
     k = lens.stop_index
     stop = lens.surfaces[k]
     scaled = replace(stop, diameter=stop.diameter * epd / p.entrance_pupil_diameter_mm)
-    return replace(lens, surfaces=lens.surfaces[:k] + (scaled,) + lens.surfaces[k + 1:])
+    return replace(lens, surfaces=lens.surfaces[:k] + (scaled,) + lens.surfaces[k + 1 :])
 
 
 def _angles(lens: Lens, fields: tuple[str, list[float]], wl: float, where: str) -> list[float]:
@@ -146,12 +158,19 @@ def _real_heights(lens: Lens, heights: list[float], guess: list[float], wl: floa
         if np.all(np.abs(fa) <= 1e-12 * np.maximum(want, 1.0)):
             return a.tolist()
     bad = int(np.argmax(np.abs(fa)))
-    raise SolasError(f"{where}: no field's real chief ray lands at image height {want[bad]:g} mm "
-                     f"(closest {fa[bad] + want[bad]:g} mm at {a[bad]:g} deg)")
+    raise SolasError(
+        f"{where}: no field's real chief ray lands at image height {want[bad]:g} mm "
+        f"(closest {fa[bad] + want[bad]:g} mm at {a[bad]:g} deg)"
+    )
 
 
-def _automatic(lens: Lens, auto: list[int], field_deg: list[float], where: str,
-               cuts: dict[float, tuple[float, float, float, float]]) -> dict[int, float]:
+def _automatic(
+    lens: Lens,
+    auto: list[int],
+    field_deg: list[float],
+    where: str,
+    cuts: dict[float, tuple[float, float, float, float]],
+) -> dict[int, float]:
     """Semi-diameters (mm) of the `auto` surfaces: the largest height there of the real chief and stop-rim
     rays of every field (on the y axis: the lens is rotationally symmetric) and wavelength; the rim of a
     field in `cuts` squeezed by its vignetting factors."""
@@ -163,11 +182,14 @@ def _automatic(lens: Lens, auto: list[int], field_deg: list[float], where: str,
     waves = np.array([w for _ in thetas for w in lens.wavelengths_nm])
     chief = chief_rays(lens, fields, waves)
     rim = Bundle(lens, fields, waves, RIM_RAYS)
-    ex, ey, _, ok = stop_rim(rim, chief, vignetting=[cuts.get(t, (0.0,) * 4) for t in thetas
-                                                     for _ in lens.wavelengths_nm] if cuts else None)
+    ex, ey, _, ok = stop_rim(
+        rim, chief, vignetting=[cuts.get(t, (0.0,) * 4) for t in thetas for _ in lens.wavelengths_nm] if cuts else None
+    )
     reach = np.zeros(len(lens.surfaces))
-    for e, b, passed in ((chief.entrance, Bundle(lens, fields, waves, 1), np.ones(len(fields), bool)),
-                         (np.stack([ex.ravel(), ey.ravel()], axis=-1), rim, ok.ravel())):
+    for e, b, passed in (
+        (chief.entrance, Bundle(lens, fields, waves, 1), np.ones(len(fields), bool)),
+        (np.stack([ex.ravel(), ey.ravel()], axis=-1), rim, ok.ravel()),
+    ):
         heights: list = []
         tr = b.trace(tracer.F(e[:, 0]), tracer.F(e[:, 1]), heights=heights)
         good, *r2 = tracer.to_numpy(tr.ok, *heights)
@@ -181,8 +203,10 @@ def _automatic(lens: Lens, auto: list[int], field_deg: list[float], where: str,
 def vignetting_factors(top: dict, count: int, where: str) -> list[tuple[float, ...]] | None:
     """A .zmx file's vignetting (`zemax`): per field, the pupil's fractions (+x, −x, +y, −y) cut off by the
     VDXN/VCXN/VDYN/VCYN factors (the pupil coordinate p becomes VD + (1 − VC) p); None when all are 0."""
-    dx, cx, dy, cy = ([*floats((top.get(k) or [[]])[0][:count], f"{where}: {k}"), *[0.0] * count][:count]
-                      for k in ("VDXN", "VCXN", "VDYN", "VCYN"))
+    dx, cx, dy, cy = (
+        [*floats((top.get(k) or [[]])[0][:count], f"{where}: {k}"), *[0.0] * count][:count]
+        for k in ("VDXN", "VCXN", "VDYN", "VCYN")
+    )
     cuts = [(cx[i] - dx[i], cx[i] + dx[i], cy[i] - dy[i], cy[i] + dy[i]) for i in range(count)]
     if any(not -1.0 < c < 1.0 for cut in cuts for c in cut):
         raise SolasError(f"{where}: vignetting factors VDXN/VCXN/VDYN/VCYN leave no pupil at some field: {cuts}")

@@ -10,9 +10,20 @@ the field (`grid`), their PSFs and file (`grid_file.PSFGrid`) and their options 
     psf_grid(lens, GridSpec(grid=(24, 32), method="geometric", rays=256))
     ghosts(lens, (0, 2)).table()                                    # GhostReport: every ghost's energy, place
 """
+
 from ..lazy import lazy_exports
 
 __all__ = ["METHODS", "PSF", "GridSpec", "PSFGrid", "psf", "psf_grid", "ghosts", "GhostReport"]
-__getattr__ = lazy_exports(__name__, {"METHODS": ".registry", "PSF": ".base", "GridSpec": ".spec", "PSFGrid": ".grid_file",
-                                      "psf": ".methods", "psf_grid": ".grid", "ghosts": ".stray_light",
-                                      "GhostReport": ".stray_light"})
+__getattr__ = lazy_exports(
+    __name__,
+    {
+        "METHODS": ".registry",
+        "PSF": ".base",
+        "GridSpec": ".spec",
+        "PSFGrid": ".grid_file",
+        "psf": ".methods",
+        "psf_grid": ".grid",
+        "ghosts": ".stray_light",
+        "GhostReport": ".stray_light",
+    },
+)

@@ -6,6 +6,7 @@ Grid convention: `size`×`size` pixels of `pitch_um`; the chief ray's image poin
 irradiance per µm² as a fraction of the on-axis entrance-pupil power ("none"), or normalised to unit
 sum ("sum", default) or unit peak ("peak").
 """
+
 from __future__ import annotations
 
 import math
@@ -96,9 +97,15 @@ class PSF:
         """
         from ..imageio import write_exr
 
-        meta = dict(self.meta, field_deg=list(self.field_deg), wavelengths_nm=list(self.wavelengths_nm),
-                    weights=list(self.weights), pitch_um=self.pitch_um, size=self.size,
-                    chief_ray_origin_mm=list(self.chief_ray_mm))
+        meta = dict(
+            self.meta,
+            field_deg=list(self.field_deg),
+            wavelengths_nm=list(self.wavelengths_nm),
+            weights=list(self.weights),
+            pitch_um=self.pitch_um,
+            size=self.size,
+            chief_ray_origin_mm=list(self.chief_ray_mm),
+        )
         write_exr(path, {"Y": self.data}, meta)
 
     def write_png(self, path: str) -> None:
@@ -139,7 +146,7 @@ def window_energy(data: np.ndarray, pitch_um: float, transmission: np.ndarray) -
 
 def energy_of_sum(total: np.ndarray, pitch_um: float, transmission: np.ndarray) -> np.ndarray:
     """`window_energy` of PSFs whose window sums (1/µm²) are `total`."""
-    return total * pitch_um ** 2 / np.where(transmission > 0, transmission, 1.0)
+    return total * pitch_um**2 / np.where(transmission > 0, transmission, 1.0)
 
 
 def window_warnings(energy: ArrayLike, fields_deg: np.ndarray, size: int, pitch_um: float) -> list[str]:
@@ -152,13 +159,17 @@ def window_warnings(energy: ArrayLike, fields_deg: np.ndarray, size: int, pitch_
     i = int(np.argmax(np.abs(np.log(np.maximum(energy, 1e-300)))))
     fx, fy = fields[i % len(fields)]
     if energy[i] < 1.0:
-        return [f"the {size}x{size} window of {pitch_um:g} um holds only {100 * energy[i]:.1f} % of the transmitted "
-                f"light at field ({fx:g}, {fy:g}) deg ({_count(low)} below {100 * WINDOW_ENERGY_LIMIT:g} %): "
-                "normalised PSFs hide the rest; enlarge --size or --pitch-um (or --auto-window)"]
-    return [f"the PSF at field ({fx:g}, {fy:g}) deg holds {100 * energy[i]:.1f} % of the transmitted light in its "
-            f"window ({_count(high)} above {100 / WINDOW_ENERGY_LIMIT:.0f} %): aliasing from an under-sampled "
-            "pupil; raise --pupil-samples as the sampling warning advises (its --psf-method geometric where "
-            "no allowed count resolves the wavefront)"]
+        return [
+            f"the {size}x{size} window of {pitch_um:g} um holds only {100 * energy[i]:.1f} % of the transmitted "
+            f"light at field ({fx:g}, {fy:g}) deg ({_count(low)} below {100 * WINDOW_ENERGY_LIMIT:g} %): "
+            "normalised PSFs hide the rest; enlarge --size or --pitch-um (or --auto-window)"
+        ]
+    return [
+        f"the PSF at field ({fx:g}, {fy:g}) deg holds {100 * energy[i]:.1f} % of the transmitted light in its "
+        f"window ({_count(high)} above {100 / WINDOW_ENERGY_LIMIT:.0f} %): aliasing from an under-sampled "
+        "pupil; raise --pupil-samples as the sampling warning advises (its --psf-method geometric where "
+        "no allowed count resolves the wavefront)"
+    ]
 
 
 def _count(mask: np.ndarray) -> str:
@@ -182,9 +193,11 @@ def centring_warnings(chief, light_um: np.ndarray | None, fields_deg: np.ndarray
         return []
     i = int(np.argmax(np.hypot(*light_um.T)))
     fx, fy = np.atleast_2d(fields_deg)[i]
-    return [f"the chief ray is blocked at {int(chief.vignetted.sum())} field(s) (e.g. ({fx:g}, {fy:g}) deg): their "
-            f"PSF windows are centred on the light that arrives, up to {np.hypot(*light_um[i]):.1f} um from the "
-            "chief ray (meta centre)"]
+    return [
+        f"the chief ray is blocked at {int(chief.vignetted.sum())} field(s) (e.g. ({fx:g}, {fy:g}) deg): their "
+        f"PSF windows are centred on the light that arrives, up to {np.hypot(*light_um[i]):.1f} um from the "
+        "chief ray (meta centre)"
+    ]
 
 
 def shared_origin_um(image_xy: np.ndarray) -> np.ndarray:
@@ -203,8 +216,12 @@ MAX_SIZE = 8192  # pixels
 def check_grid(pitch_um: float, size: int) -> None:
     if not isinstance(size, (int, np.integer)) or isinstance(size, bool) or not 2 <= size <= MAX_SIZE:
         raise SolasError(f"PSF size {size!r} must be an integer from 2 to {MAX_SIZE} pixels")
-    if (not isinstance(pitch_um, (int, float, np.integer, np.floating)) or isinstance(pitch_um, bool)
-            or not math.isfinite(pitch_um) or pitch_um <= 0):
+    if (
+        not isinstance(pitch_um, (int, float, np.integer, np.floating))
+        or isinstance(pitch_um, bool)
+        or not math.isfinite(pitch_um)
+        or pitch_um <= 0
+    ):
         raise SolasError(f"PSF pitch {pitch_um!r} µm must be a positive number")
 
 
@@ -246,10 +263,15 @@ def describe(lens, method: str, normalization: str, sampling: dict, size: int) -
     """The metadata every PSF output carries: lens, method, sampling (its parameter and value) and
     array conventions."""
     return {
-        "lens": lens.name, "lens_hash": lens.hash, "lens_source": lens.source, "lens_dispersion": lens.dispersive,
+        "lens": lens.name,
+        "lens_hash": lens.hash,
+        "lens_source": lens.source,
+        "lens_dispersion": lens.dispersive,
         **notes.metadata(lens),
         "method": method,
-        "normalization": normalization, "values": VALUE_MEANING[normalization], "sampling": dict(sampling),
+        "normalization": normalization,
+        "values": VALUE_MEANING[normalization],
+        "sampling": dict(sampling),
         "origin_pixel": [size // 2, size // 2],
         "orientation": "row 0 = top (largest y), column 0 = left (smallest x)",
     }

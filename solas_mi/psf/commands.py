@@ -1,4 +1,5 @@
 """`solas-mi psf` (one PSF) and `solas-mi psf-grid` (PSFs over the field), as OpenEXR + PNG."""
+
 from __future__ import annotations
 
 import sys
@@ -11,7 +12,6 @@ from ..options import floats
 from ..outputs import add_png_option, data_and_preview, written_together
 from ..progress import Progress
 from .spec import PSF_OPTIONS, GridSpec
-
 
 # what --field-deg takes: its help and its message (one value is a field on the y axis, as `lens info --fields`
 # and a lens file's field_deg)
@@ -69,9 +69,10 @@ def run_psf_grid(args) -> int:
     spec = GridSpec.from_args(args)
     count = len(spec.wavelengths_nm or lens.wavelengths_nm) * spec.grid[0] * spec.grid[1] * len(spec.distances_m or [0])
     # the float32 PSFs, their mosaics and the PNG when written, and a batch of complex fields
-    need = 3 * 4 * count * spec.size ** 2 + 64 * 64 * (spec.size + 1) ** 2
-    check_memory(f"psf-grid of {count} PSFs of {spec.size}x{spec.size}", need, args.force,
-                 "fewer nodes or a smaller --size")
+    need = 3 * 4 * count * spec.size**2 + 64 * 64 * (spec.size + 1) ** 2
+    check_memory(
+        f"psf-grid of {count} PSFs of {spec.size}x{spec.size}", need, args.force, "fewer nodes or a smaller --size"
+    )
 
     with Progress("psf-grid", count, "PSFs") as bar:  # nodes × wavelengths × distances, mirrored ones included
         g = make_grid(lens, spec, progress=bar)
@@ -114,25 +115,38 @@ def register(sub: Any) -> None:
     _add_outputs(psf)
     psf.set_defaults(run=run_psf)
 
-    ghost = sub.add_parser("ghosts", help="every two-reflection ghost of a point source: the table, and the "
-                                          "stray-light PSF (ghosts + direct image) as OpenEXR + log-scale PNG")
+    ghost = sub.add_parser(
+        "ghosts",
+        help="every two-reflection ghost of a point source: the table, and the "
+        "stray-light PSF (ghosts + direct image) as OpenEXR + log-scale PNG",
+    )
     add_lens_argument(ghost)
     ghost.add_argument("--field-deg", required=True, help=f"field angle: {FIELD_FORM}")
     ghost.add_argument("--wavelengths-nm", help="wavelengths, summed with equal weights (default: the lens's)")
-    ghost.add_argument("--rays", type=int, default=DEFAULT_GHOST_RAYS, help="rays per side of the grid over the first "
-                                                                    "surface's clear aperture, per path and wavelength")
+    ghost.add_argument(
+        "--rays",
+        type=int,
+        default=DEFAULT_GHOST_RAYS,
+        help="rays per side of the grid over the first surface's clear aperture, per path and wavelength",
+    )
     ghost.add_argument("--pitch-um", type=float, default=GHOST_PITCH_UM, help="pixel pitch of the stray-light PSF (um)")
     ghost.add_argument("--size", type=int, default=GHOST_SIZE, help="pixels per side of the stray-light PSF")
     _add_outputs(ghost)
     ghost.set_defaults(run=run_ghosts)
 
-    grid = sub.add_parser("psf-grid", help="PSFs on a field grid, one stack per wavelength, as OpenEXR (+ PNG mosaic "
-                                           "with --mosaic)")
+    grid = sub.add_parser(
+        "psf-grid", help="PSFs on a field grid, one stack per wavelength, as OpenEXR (+ PNG mosaic with --mosaic)"
+    )
     add_lens_argument(grid)
     GridSpec.add_flags(grid)
     grid.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
     grid.add_argument("-o", "--output", required=True, help="output OpenEXR file")
-    grid.add_argument("--mosaic", nargs="?", const="", metavar="PNG",
-                      help="also write the grid as a PNG mosaic for viewing, axes in field degrees (beside the EXR, "
-                           "of the same name, or at PNG); default: none (a 32x32 grid's takes about a second)")
+    grid.add_argument(
+        "--mosaic",
+        nargs="?",
+        const="",
+        metavar="PNG",
+        help="also write the grid as a PNG mosaic for viewing, axes in field degrees (beside the EXR, "
+        "of the same name, or at PNG); default: none (a 32x32 grid's takes about a second)",
+    )
     grid.set_defaults(run=run_psf_grid)

@@ -13,6 +13,7 @@ machine (a load of 3-10), the estimate came within a factor of about 1.5 of the 
 32×32 Fraunhofer: estimated 7.1 s, took 6.4 s; see `docs/details/batch.md`). `--auto-window` may
 compute the grid again at twice the size, which the estimate does not include.
 """
+
 from __future__ import annotations
 
 import time
@@ -43,9 +44,11 @@ class GridCost:
     timed: int  # PSFs timed for it
 
     def text(self) -> str:
-        return (f"about {self.seconds:.3g} s: {self.computed} PSFs to compute of its {self.total} (the others are "
-                f"mirror images) in {self.calls} calls of {self.per_call_s:.2g} s + {self.per_psf_s:.2g} s per PSF, "
-                f"as timed now on {self.timed} of its PSFs")
+        return (
+            f"about {self.seconds:.3g} s: {self.computed} PSFs to compute of its {self.total} (the others are "
+            f"mirror images) in {self.calls} calls of {self.per_call_s:.2g} s + {self.per_psf_s:.2g} s per PSF, "
+            f"as timed now on {self.timed} of its PSFs"
+        )
 
 
 def grid_cost(lens, spec: GridSpec) -> GridCost:
@@ -61,8 +64,15 @@ def grid_cost(lens, spec: GridSpec) -> GridCost:
 
     def seconds(picked) -> float:
         start = time.perf_counter()
-        compute(near, canon[picked], np.full(len(picked), wavelengths[0]), spec.pitch_um, odd, spec.method,
-                **spec.sampling_options())
+        compute(
+            near,
+            canon[picked],
+            np.full(len(picked), wavelengths[0]),
+            spec.pitch_um,
+            odd,
+            spec.method,
+            **spec.sampling_options(),
+        )
         return time.perf_counter() - start
 
     seconds([len(canon) // 2])  # compiles the kernels (once per machine; Dr.Jit caches them)
@@ -75,6 +85,12 @@ def grid_cost(lens, spec: GridSpec) -> GridCost:
     per_call = max(two - per_psf * len(ends), 0.0)
     batches = batch_sizes(spec, len(wavelengths) * len(canon))
     repeats = len(distances)
-    return GridCost(repeats * sum(per_call + per_psf * b for b in batches), repeats * len(wavelengths) * len(canon),
-                    repeats * len(wavelengths) * fields.shape[0] * fields.shape[1], repeats * len(batches), per_call,
-                    per_psf, 1 + len(ends) + len(spread) * (several is not None))
+    return GridCost(
+        repeats * sum(per_call + per_psf * b for b in batches),
+        repeats * len(wavelengths) * len(canon),
+        repeats * len(wavelengths) * fields.shape[0] * fields.shape[1],
+        repeats * len(batches),
+        per_call,
+        per_psf,
+        1 + len(ends) + len(spread) * (several is not None),
+    )

@@ -14,6 +14,7 @@ node (`pinhole_focal_mm`); each node keeps its own chief rays, so the image shif
 File: one OpenEXR with each node's mosaics as channels "d{i}.psf_{w}nm" and the metadata of each
 node's grid in meta["layers"], the distances in meta["distances_m"] ("inf" for infinity).
 """
+
 from __future__ import annotations
 
 import math
@@ -50,9 +51,13 @@ class DepthGrid:
     def nbytes(self) -> int:
         return sum(g.data.nbytes for g in self.layers)
 
-    def subset(self, indices: list[int]) -> "DepthGrid":
+    def subset(self, indices: list[int]) -> DepthGrid:
         """The grid of the nodes `indices` only (far to near), sharing their PSFs."""
-        if not indices or sorted(set(indices)) != list(indices) or not 0 <= indices[0] <= indices[-1] < len(self.layers):
+        if (
+            not indices
+            or sorted(set(indices)) != list(indices)
+            or not 0 <= indices[0] <= indices[-1] < len(self.layers)
+        ):
             raise SolasError(f"node indices {indices!r} must be increasing indices of the {len(self.layers)} nodes")
         return DepthGrid([self.layers[i] for i in indices], tuple(self.distances_m[i] for i in indices), self.meta)
 
@@ -65,28 +70,45 @@ class DepthGrid:
         channels, layers = {}, []
         for i, g in enumerate(self.layers):
             channels.update({f"d{i}.psf_{w:g}nm": g.mosaic(k) for k, w in enumerate(g.wavelengths_nm)})
-            layers.append({**g.meta, "pitch_um": g.pitch_um, "size": g.size, "grid": list(g.shape),
-                           "wavelengths_nm": list(g.wavelengths_nm), "fields_deg": g.fields_deg.tolist(),
-                           "chief_ray_mm": g.chief_ray_mm.tolist()})
+            layers.append(
+                {
+                    **g.meta,
+                    "pitch_um": g.pitch_um,
+                    "size": g.size,
+                    "grid": list(g.shape),
+                    "wavelengths_nm": list(g.wavelengths_nm),
+                    "fields_deg": g.fields_deg.tolist(),
+                    "chief_ray_mm": g.chief_ray_mm.tolist(),
+                }
+            )
         meta = {**self.meta, "distances_m": _json_distances(self.distances_m), "layers": layers}
         write_exr(path, channels, meta, compress=False)
 
     @classmethod
-    def read(cls, path: str, channels: dict | None = None, meta: dict | None = None) -> "DepthGrid":
+    def read(cls, path: str, channels: dict | None = None, meta: dict | None = None) -> DepthGrid:
         """Read a grid written by `write` (or one already read: its channels and metadata)."""
         if channels is None:
             channels, meta = read_exr(path)
         layers_meta, distances = meta.get("layers"), meta.get("distances_m")
-        if not (isinstance(layers_meta, list) and isinstance(distances, list) and layers_meta
-                and len(layers_meta) == len(distances)):
-            raise SolasError(f"PSF grid {path}: metadata fields layers and distances_m must be lists of one "
-                             "entry per object distance")
+        if not (
+            isinstance(layers_meta, list)
+            and isinstance(distances, list)
+            and layers_meta
+            and len(layers_meta) == len(distances)
+        ):
+            raise SolasError(
+                f"PSF grid {path}: metadata fields layers and distances_m must be lists of one "
+                "entry per object distance"
+            )
         layers = []
         for i, m in enumerate(layers_meta):
             check_grid_meta(path, m)
             prefix = f"d{i}."
-            layers.append(PSFGrid.from_channels(path, {k[len(prefix):]: v for k, v in channels.items()
-                                                       if k.startswith(prefix)}, m))
+            layers.append(
+                PSFGrid.from_channels(
+                    path, {k[len(prefix) :]: v for k, v in channels.items() if k.startswith(prefix)}, m
+                )
+            )
         rest = {k: v for k, v in meta.items() if k not in ("layers", "distances_m")}
         return cls(layers, _distances(path, distances), rest)
 
@@ -101,13 +123,16 @@ def _distances(path, values: list) -> tuple[float, ...]:
     except (TypeError, ValueError):
         out = ()
     if not out or any(math.isnan(d) or d <= 0 for d in out) or list(out) != sorted(set(out), reverse=True):
-        raise SolasError(f"PSF grid {path}: metadata field distances_m = {values!r} must be distinct positive "
-                         "distances (m), far to near")
+        raise SolasError(
+            f"PSF grid {path}: metadata field distances_m = {values!r} must be distinct positive "
+            "distances (m), far to near"
+        )
     return out
 
 
-def depth_grid(lens, spec: GridSpec, progress=None, camera_focal_mm: float | None = None,
-               viewpoint_mm: float | None = None) -> DepthGrid:
+def depth_grid(
+    lens, spec: GridSpec, progress=None, camera_focal_mm: float | None = None, viewpoint_mm: float | None = None
+) -> DepthGrid:
     """The field grid of `spec` at each of its object distances (`spec.distances_m`, m), the lens's
     image plane kept. `progress(done, total)` counts PSFs over all distances. `camera_focal_mm`: the
     pinhole focal length that places every node on the image (default: the farthest node's); e.g.
@@ -135,9 +160,14 @@ def depth_grid(lens, spec: GridSpec, progress=None, camera_focal_mm: float | Non
         for d, g in zip(spec.distances_m, layers):
             from_viewpoint(lens, g, d, float(viewpoint_mm))
     warnings = [f"at {d:g} m: {w}" for d, g in zip(spec.distances_m, layers) for w in g.meta["warnings"]]
-    meta = {"lens": lens.name, "lens_hash": lens.hash, "grid_spec": spec.canonical(), "warnings": warnings,
-            "focus": "the lens's image plane as its file says at every distance",
-            "seconds": time.perf_counter() - start}
+    meta = {
+        "lens": lens.name,
+        "lens_hash": lens.hash,
+        "grid_spec": spec.canonical(),
+        "warnings": warnings,
+        "focus": "the lens's image plane as its file says at every distance",
+        "seconds": time.perf_counter() - start,
+    }
     return DepthGrid(layers, spec.distances_m, meta)
 
 
@@ -153,11 +183,14 @@ def from_viewpoint(lens, grid: PSFGrid, distance_m: float, viewpoint_mm: float) 
     d = 1e3 * distance_m
     factor = (d + paraxial(lens).entrance_pupil_z_mm) / (d + viewpoint_mm)
     grid.fields_deg = np.degrees(np.arctan(np.tan(np.radians(grid.fields_deg)) * factor))
-    grid.meta.update(viewpoint_mm=viewpoint_mm, flux_scale=factor ** -2,
-                     fields="directions seen from the viewpoint, viewpoint_mm behind surface 1 (fields_deg); the "
-                     "PSFs are those of the same object points; flux_scale: the light the lens collects from what "
-                     "one frame pixel sees, against an object at infinity: the pixel's patch grows as (d + "
-                     "viewpoint)², the pupil's solid angle falls as 1/(d + entrance pupil)²")
+    grid.meta.update(
+        viewpoint_mm=viewpoint_mm,
+        flux_scale=factor**-2,
+        fields="directions seen from the viewpoint, viewpoint_mm behind surface 1 (fields_deg); the "
+        "PSFs are those of the same object points; flux_scale: the light the lens collects from what "
+        "one frame pixel sees, against an object at infinity: the pixel's patch grows as (d + "
+        "viewpoint)², the pupil's solid angle falls as 1/(d + entrance pupil)²",
+    )
 
 
 def at_distance(lens, distance_m: float):
@@ -172,12 +205,12 @@ def at_distance(lens, distance_m: float):
     return replace(lens, object_distance=1e3 * distance_m)
 
 
-def make_grid(lens, spec: GridSpec, progress=None) -> "PSFGrid | DepthGrid":
+def make_grid(lens, spec: GridSpec, progress=None) -> PSFGrid | DepthGrid:
     """The grid `spec` describes: over field (`psf_grid`), or over field and distance (`depth_grid`)."""
     return psf_grid(lens, spec, progress=progress) if spec.distances_m is None else depth_grid(lens, spec, progress)
 
 
-def read_grid(path: str) -> "PSFGrid | DepthGrid":
+def read_grid(path: str) -> PSFGrid | DepthGrid:
     """A grid file of either kind."""
     channels, meta = read_exr(path)
     if isinstance(meta, dict) and "layers" in meta:

@@ -9,6 +9,7 @@ References: J. W. Goodman, "Introduction to Fourier Optics", 3rd ed., Roberts & 
 R. J. Vanderbei, "Fast computation of Lyot-style coronagraph propagation", Optics Express 15(24),
 15935–15951, 2007 (the matrix Fourier transform).
 """
+
 from __future__ import annotations
 
 import math
@@ -24,8 +25,17 @@ from .geometric import entrance_grid_hits, geometric, light_offsets_um
 dr = tracer.dr
 
 
-def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int, *,
-            shared_origin: bool = False, pupil_samples: int, most: int) -> Computed:
+def compute(
+    lens,
+    field_deg: np.ndarray,
+    wavelength_nm: np.ndarray,
+    pitch_um: float,
+    size: int,
+    *,
+    shared_origin: bool = False,
+    pupil_samples: int,
+    most: int,
+) -> Computed:
     """Fraunhofer PSFs of field/wavelength pairs from their pupil functions on pupil_samples² grids
     (the method "fraunhofer" of `registry`, which gives `most`, the largest pupil samples allowed)."""
     pupils = Pupils(lens, field_deg, wavelength_nm)
@@ -43,10 +53,16 @@ def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: fl
     for w in dict.fromkeys(pf.wavelength_nm.tolist()):  # each wavelength's worst PSF, as when computed alone
         mine = pf.wavelength_nm == w
         warnings += sampling_warnings(pf, pitch_um, size, fields, ~folded & mine, most) + convergence_warnings(
-            np.where(mine, error, 0.0), pupil_samples, most, fields, pf.wavelength_nm, resolved[mine].max())
-    return Computed(data=data, chief=pf.chief, transmission=transmission, vignetted_by=pf.vignetted_by,
-                    centre_um=center, warnings=tuple(warnings + fold_warnings
-                                                     + centring_warnings(pf.chief, light, field_deg)))
+            np.where(mine, error, 0.0), pupil_samples, most, fields, pf.wavelength_nm, resolved[mine].max()
+        )
+    return Computed(
+        data=data,
+        chief=pf.chief,
+        transmission=transmission,
+        vignetted_by=pf.vignetted_by,
+        centre_um=center,
+        warnings=tuple(warnings + fold_warnings + centring_warnings(pf.chief, light, field_deg)),
+    )
 
 
 FOLD_POWER = 20.0  # a pupil cell's power above this many times the median: the pupil may fold (a caustic)
@@ -55,8 +71,16 @@ FOLD_CHECK_RAYS = 128  # rays per side of that count
 FOLD_RAYS = 512  # rays per side of the geometric PSF that replaces a folded pupil's
 
 
-def caustic_fallback(lens, pf: PupilFunction, data: np.ndarray, transmission: np.ndarray, pitch_um: float,
-                     size: int, center: np.ndarray | None, field_deg: np.ndarray) -> tuple[np.ndarray, list[str]]:
+def caustic_fallback(
+    lens,
+    pf: PupilFunction,
+    data: np.ndarray,
+    transmission: np.ndarray,
+    pitch_um: float,
+    size: int,
+    center: np.ndarray | None,
+    field_deg: np.ndarray,
+) -> tuple[np.ndarray, list[str]]:
     """Near a pupil caustic (rays close to total internal reflection: the map from pupil grid to entrance
     folds, the power per cell grows without bound) the pupil function's integral is wrong (Cooke triplet at
     31°: transmission 1.09 against 0.39). Such fields, found by their power peak and confirmed by a ray
@@ -77,14 +101,17 @@ def caustic_fallback(lens, pf: PupilFunction, data: np.ndarray, transmission: np
     if not len(folded):
         return np.zeros(len(data), dtype=bool), []
     i = folded[0]
-    text = (f"the pupil function fails at field ({field_deg[i, 0]:g}, {field_deg[i, 1]:g}) deg, "
-            f"{pf.wavelength_nm[i]:g} nm (it folds over a caustic, rays near total internal reflection, or is "
-            f"built about a substitute for a lost chief ray; Fraunhofer transmission "
-            f"{transmission[i]:.3g} against {counted[off][0]:.3g} by ray count): the PSF of {len(folded)} "
-            f"field(s) is the geometric method's ({FOLD_RAYS} x {FOLD_RAYS} rays), without diffraction")
+    text = (
+        f"the pupil function fails at field ({field_deg[i, 0]:g}, {field_deg[i, 1]:g}) deg, "
+        f"{pf.wavelength_nm[i]:g} nm (it folds over a caustic, rays near total internal reflection, or is "
+        f"built about a substitute for a lost chief ray; Fraunhofer transmission "
+        f"{transmission[i]:.3g} against {counted[off][0]:.3g} by ray count): the PSF of {len(folded)} "
+        f"field(s) is the geometric method's ({FOLD_RAYS} x {FOLD_RAYS} rays), without diffraction"
+    )
     sub = None if center is None else center[folded]
-    data[folded], _, transmission[folded] = geometric(lens, field_deg[folded], pf.wavelength_nm[folded], pitch_um, size,
-                                                      FOLD_RAYS, chief, sub)
+    data[folded], _, transmission[folded] = geometric(
+        lens, field_deg[folded], pf.wavelength_nm[folded], pitch_um, size, FOLD_RAYS, chief, sub
+    )
     mask = np.zeros(len(data), dtype=bool)
     mask[folded] = True
     return mask, [text]
@@ -102,8 +129,9 @@ PROBE_STRIDE = 16  # the error estimate's first pass: every 16th PSF, the 1/16 w
 PROBE_WIDEN = 0.25  # ... and every vignetted one; all of them where one of those is within 4x of ERROR_LIMIT
 
 
-def sampling_errors(pupils: Pupils, pf: PupilFunction, data: np.ndarray, pitch_um: float, size: int,
-                    center: np.ndarray | None) -> np.ndarray:
+def sampling_errors(
+    pupils: Pupils, pf: PupilFunction, data: np.ndarray, pitch_um: float, size: int, center: np.ndarray | None
+) -> np.ndarray:
     """`error_estimate` of the PSFs `data` (n, size, size) from the pupil functions `pf`, in two passes: first
     the PSFs where sampling errors gather (measured on the shipped lenses: every PSF beyond ERROR_LIMIT had a
     pupil clipped by an aperture other than the stop, whose hard edge converges as 1/N, or one of the
@@ -112,7 +140,7 @@ def sampling_errors(pupils: Pupils, pf: PupilFunction, data: np.ndarray, pitch_u
     n = len(data)
     first = np.zeros(n, dtype=bool)
     first[::PROBE_STRIDE] = True
-    first[np.argsort(-pf.phase_step, kind="stable")[:max(1, n // PROBE_STRIDE)]] = True
+    first[np.argsort(-pf.phase_step, kind="stable")[: max(1, n // PROBE_STRIDE)]] = True
     first |= np.array([bool(v) for v in pf.vignetted_by]) | pf.chief.vignetted
     error = np.zeros(n)
     for index in (np.flatnonzero(first), np.flatnonzero(~first)):
@@ -135,8 +163,9 @@ def error_estimate(data: np.ndarray, coarse: np.ndarray, samples: int) -> np.nda
     return np.abs(data - coarse).max(axis=(1, 2)) / peak / (ratio * ratio - 1.0)
 
 
-def convergence_warnings(error: np.ndarray, samples: int, most: int, field_deg: np.ndarray,
-                         wavelength_nm: np.ndarray, floor: float = 0.0) -> list[str]:
+def convergence_warnings(
+    error: np.ndarray, samples: int, most: int, field_deg: np.ndarray, wavelength_nm: np.ndarray, floor: float = 0.0
+) -> list[str]:
     """A warning naming the worst PSF whose estimated error exceeds ERROR_LIMIT of its peak, with the
     pupil samples that bring it within (error ∝ 1/N²; at least `floor`, the count that resolves the
     wavefront: the 1/N² estimate holds only once it is resolved), or saying that `most` samples cannot."""
@@ -144,32 +173,44 @@ def convergence_warnings(error: np.ndarray, samples: int, most: int, field_deg: 
         return []
     i = int(np.argmax(error))
     need = max(int(math.ceil(samples * math.sqrt(error[i] / ERROR_LIMIT) * 1.15 / 8) * 8), int(floor))
-    head = (f"the PSF at field ({field_deg[i, 0]:g}, {field_deg[i, 1]:g}) deg, {wavelength_nm[i]:g} nm is about "
-            f"{100 * error[i]:.1f} % of its peak off its converged value with {samples} pupil samples "
-            f"(limit {100 * ERROR_LIMIT:g} %)")
+    head = (
+        f"the PSF at field ({field_deg[i, 0]:g}, {field_deg[i, 1]:g}) deg, {wavelength_nm[i]:g} nm is about "
+        f"{100 * error[i]:.1f} % of its peak off its converged value with {samples} pupil samples "
+        f"(limit {100 * ERROR_LIMIT:g} %)"
+    )
     if need <= most:
         return [f"{head}; use --pupil-samples {need} or more"]
-    return [f"{head}; that needs about {need} pupil samples, beyond the {most} maximum: use "
-            "--psf-method geometric (the wavefront is far from diffraction-limited)"]
+    return [
+        f"{head}; that needs about {need} pupil samples, beyond the {most} maximum: use "
+        "--psf-method geometric (the wavefront is far from diffraction-limited)"
+    ]
 
 
-def sampling_need(pf: PupilFunction, pitch_um: float, size: int, keep: np.ndarray | None = None
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def sampling_need(
+    pf: PupilFunction, pitch_um: float, size: int, keep: np.ndarray | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Per field: the largest phase step (rad) between neighbouring pupil cells, the PSF period λ'/Δα
     (µm), and the pupil samples that would keep every step within π/2 and the period beyond the
     window. Fields not in `keep` (a mask; default all) need nothing."""
     n = pf.alpha.shape[1]
     steps = pf.phase_step
-    period_um = (pf.wavelength_nm * 1e-3 / pf.chief.n_image) / np.minimum(pf.alpha[:, 1] - pf.alpha[:, 0],
-                                                                          pf.beta[:, 1] - pf.beta[:, 0])
+    period_um = (pf.wavelength_nm * 1e-3 / pf.chief.n_image) / np.minimum(
+        pf.alpha[:, 1] - pf.alpha[:, 0], pf.beta[:, 1] - pf.beta[:, 0]
+    )
     if keep is not None:
         steps, period_um = np.where(keep, steps, 0.0), np.where(keep, period_um, np.inf)
     need = np.maximum(n * steps / (0.5 * math.pi), n * size * pitch_um / period_um)
     return steps, period_um, np.ceil(need / 8) * 8
 
 
-def sampling_warnings(pf: PupilFunction, pitch_um: float, size: int, field_deg: np.ndarray,
-                      keep: np.ndarray | None = None, most: int | None = None) -> list[str]:
+def sampling_warnings(
+    pf: PupilFunction,
+    pitch_um: float,
+    size: int,
+    field_deg: np.ndarray,
+    keep: np.ndarray | None = None,
+    most: int | None = None,
+) -> list[str]:
     """Where the pupil grid cannot carry the wavefront: a phase step above π between neighbouring
     cells (the wavefront is under-sampled), or a PSF period λ'/Δα shorter than the window (copies of
     the PSF fold into it). Each names the worst field and the pupil samples that would do, or, where
@@ -178,18 +219,25 @@ def sampling_warnings(pf: PupilFunction, pitch_um: float, size: int, field_deg: 
     n = pf.alpha.shape[1]
     steps, period_um, need = sampling_need(pf, pitch_um, size, keep)
     window_um = size * pitch_um
-    advice = (f"use --pupil-samples {int(need.max())} or more" if most is None or need.max() <= most else
-              f"that needs about {int(need.max())} pupil samples, beyond the {most} maximum: use --psf-method "
-              "geometric (the wavefront is far from diffraction-limited)")
+    advice = (
+        f"use --pupil-samples {int(need.max())} or more"
+        if most is None or need.max() <= most
+        else f"that needs about {int(need.max())} pupil samples, beyond the {most} maximum: use --psf-method "
+        "geometric (the wavefront is far from diffraction-limited)"
+    )
     out = []
     if (steps > math.pi).any():
         i = int(np.argmax(steps))
-        out.append(f"pupil samples {n} under-resolve the wavefront at field ({field_deg[i, 0]:g}, {field_deg[i, 1]:g}) "
-                   f"deg, {pf.wavelength_nm[i]:g} nm: phase steps up to {steps[i]:.1f} rad per cell (> pi); {advice}")
+        out.append(
+            f"pupil samples {n} under-resolve the wavefront at field ({field_deg[i, 0]:g}, {field_deg[i, 1]:g}) "
+            f"deg, {pf.wavelength_nm[i]:g} nm: phase steps up to {steps[i]:.1f} rad per cell (> pi); {advice}"
+        )
     if (period_um < window_um).any():
         i = int(np.argmin(period_um))
-        out.append(f"the {window_um:g} um window is wider than the PSF period {period_um[i]:.1f} um of {n} pupil samples "
-                   f"at field ({field_deg[i, 0]:g}, {field_deg[i, 1]:g}) deg: copies of the PSF fold in; {advice}")
+        out.append(
+            f"the {window_um:g} um window is wider than the PSF period {period_um[i]:.1f} um of {n} pupil samples "
+            f"at field ({field_deg[i, 0]:g}, {field_deg[i, 1]:g}) deg: copies of the PSF fold in; {advice}"
+        )
     return out
 
 
@@ -215,8 +263,9 @@ def fraunhofer(pf: PupilFunction, pitch_um: float, size: int, center_um: np.ndar
 
     def product(f: int) -> None:
         field_ = (ey[f] @ pf.complex_pupil[f]) @ ex[f]
-        np.multiply(np.square(field_.real, dtype=np.float64) + np.square(field_.imag, dtype=np.float64), scale[f],
-                    out=out[f])
+        np.multiply(
+            np.square(field_.real, dtype=np.float64) + np.square(field_.imag, dtype=np.float64), scale[f], out=out[f]
+        )
 
     with single_threaded_blas():  # many small products: one BLAS thread each, a thread per core
         in_threads(product, list(range(n)))
@@ -229,8 +278,11 @@ def dft_kernels(k: np.ndarray, axis: np.ndarray, offsets: np.ndarray) -> np.ndar
     no = offsets.shape[1]
     e = dr.arange(tracer.UInt32, n * na * no)
     f = e // (na * no)
-    x = (tracer.gather(k, f) * tracer.gather(axis.ravel(), f * na + (e // no) % na)
-         * tracer.gather(offsets.ravel(), f * no + e % no))
+    x = (
+        tracer.gather(k, f)
+        * tracer.gather(axis.ravel(), f * na + (e // no) % na)
+        * tracer.gather(offsets.ravel(), f * no + e % no)
+    )
     sin, cos = dr.sincos(x)
     f32 = dr.float32_array_t(tracer.F)
     real, imag = f32(cos), f32(-sin)

@@ -1,4 +1,5 @@
 """Geometric PSFs: real rays on a regular grid over the entrance pupil, binned per image pixel."""
+
 from __future__ import annotations
 
 import numpy as np
@@ -11,20 +12,35 @@ from .base import Computed, centring_warnings, window_centres_um
 _BATCH_RAYS = 1 << 20  # rays traced at once
 
 
-def compute(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int, *,
-            shared_origin: bool = False, rays: int) -> Computed:
+def compute(
+    lens: Lens,
+    field_deg: np.ndarray,
+    wavelength_nm: np.ndarray,
+    pitch_um: float,
+    size: int,
+    *,
+    shared_origin: bool = False,
+    rays: int,
+) -> Computed:
     """Geometric PSFs of field/wavelength pairs from rays×rays entrance grids (the method "geometric" of
     `registry`)."""
     chief = pupil.chief_rays(lens, field_deg, wavelength_nm)
     light = light_offsets_um(lens, field_deg, wavelength_nm, chief)
     center = window_centres_um(chief, light, shared_origin)
     data, _, transmission = geometric(lens, field_deg, wavelength_nm, pitch_um, size, rays, chief, center)
-    return Computed(data=data, chief=chief, transmission=transmission, vignetted_by=[[] for _ in field_deg],
-                    warnings=tuple(centring_warnings(chief, light, field_deg)), centre_um=center)
+    return Computed(
+        data=data,
+        chief=chief,
+        transmission=transmission,
+        vignetted_by=[[] for _ in field_deg],
+        warnings=tuple(centring_warnings(chief, light, field_deg)),
+        centre_um=center,
+    )
 
 
-def light_offsets_um(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chief: ChiefRays,
-                     rays: int = 64) -> np.ndarray | None:
+def light_offsets_um(
+    lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, chief: ChiefRays, rays: int = 64
+) -> np.ndarray | None:
     """Where the chief ray of a field is blocked but light passes, the offset (µm) from the chief ray's
     image point to the power centroid of the light that arrives (rays×rays entrance grid), else 0:
     (n, 2), or None when no chief ray is blocked."""
@@ -39,9 +55,16 @@ def light_offsets_um(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarra
     return out
 
 
-def geometric(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int,
-              rays: int, chief: ChiefRays | None = None,
-              center_um: np.ndarray | None = None) -> tuple[np.ndarray, ChiefRays, np.ndarray]:
+def geometric(
+    lens: Lens,
+    field_deg: np.ndarray,
+    wavelength_nm: np.ndarray,
+    pitch_um: float,
+    size: int,
+    rays: int,
+    chief: ChiefRays | None = None,
+    center_um: np.ndarray | None = None,
+) -> tuple[np.ndarray, ChiefRays, np.ndarray]:
     """Geometric PSFs (n, size, size) in 1/µm²: rays on a rays×rays grid over the entrance pupil,
     binned on the image-plane grid (each bin holds the power that lands in that pixel); also the
     chief rays and the transmitted power (fraction of the on-axis pupil, inside the grid or not).
@@ -51,13 +74,18 @@ def geometric(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitc
     nf = len(field_deg)
     wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (nf,)).copy()
     chief = chief or pupil.chief_rays(lens, field_deg, wavelength_nm)
-    data, transmission = bin_hits(entrance_grid_hits(lens, field_deg, wavelength_nm, rays, chief), pitch_um, size,
-                                  center_um)
+    data, transmission = bin_hits(
+        entrance_grid_hits(lens, field_deg, wavelength_nm, rays, chief), pitch_um, size, center_um
+    )
     return data, chief, transmission
 
 
-def bin_hits(hits: list[tuple[np.ndarray, np.ndarray, np.ndarray]], pitch_um: float, size: int,
-             center_um: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+def bin_hits(
+    hits: list[tuple[np.ndarray, np.ndarray, np.ndarray]],
+    pitch_um: float,
+    size: int,
+    center_um: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
     """PSFs (n, size, size) in 1/µm² from per-field hits (x, y offsets in µm from the chief ray, power
     of each ray), on the grid whose origin is the chief ray shifted by `center_um` (n, 2); and the
     power of each field's hits."""
@@ -67,7 +95,7 @@ def bin_hits(hits: list[tuple[np.ndarray, np.ndarray, np.ndarray]], pitch_um: fl
     for f, (dx, dy, w) in enumerate(hits):
         # rows run down from +y: the row coordinate is −(y offset), binned like the columns
         h, _, _ = np.histogram2d(shift[f, 1] - dy, dx - shift[f, 0], bins=(edges, edges), weights=w)
-        out[f] = h / pitch_um ** 2
+        out[f] = h / pitch_um**2
     return out, np.array([w.sum() for _, _, w in hits])
 
 
@@ -89,8 +117,9 @@ def entrance_grid(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, 
         yield sl, ex, ey, power * area[:, None]
 
 
-def entrance_grid_hits(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, rays: int,
-                       chief: ChiefRays) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+def entrance_grid_hits(
+    lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, rays: int, chief: ChiefRays
+) -> list[tuple[np.ndarray, np.ndarray, np.ndarray]]:
     """Per field: image-plane offsets (µm) from the chief ray of unvignetted rays on a regular
     rays×rays entrance grid covering the pupil, and each ray's power (fraction of the on-axis pupil)."""
     result = []
@@ -101,8 +130,7 @@ def entrance_grid_hits(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndar
         keep, x, y = (a.reshape(-1, rays * rays) for a in tracer.to_numpy(tr.ok & (tr.clipped_by == 0), x, y))
         for j, f in enumerate(range(sl.start, sl.stop)):
             m = keep[j]
-            result.append(((x[j, m] - chief.image_xy[f, 0]) * 1e3, (y[j, m] - chief.image_xy[f, 1]) * 1e3,
-                           power[j, m]))
+            result.append(((x[j, m] - chief.image_xy[f, 0]) * 1e3, (y[j, m] - chief.image_xy[f, 1]) * 1e3, power[j, m]))
     return result
 
 

@@ -2,6 +2,7 @@
 mosaic channel per wavelength, with the metadata needed to use it without the lens (`check_grid_meta`
 checks every field a user reads); a PNG mosaic for looking at it. `grid.psf_grid` computes one.
 """
+
 from __future__ import annotations
 
 import math
@@ -89,14 +90,21 @@ class PSFGrid:
             For wavelengths that are not distinct to 6 digits (their channel names would collide).
         """
         meta = dict(self.meta)
-        meta.update({
-            "pitch_um": self.pitch_um, "size": self.size, "grid": list(self.shape),
-            "wavelengths_nm": list(self.wavelengths_nm), "fields_deg": self.fields_deg.tolist(),
-            "chief_ray_mm": self.chief_ray_mm.tolist(),
-        })
+        meta.update(
+            {
+                "pitch_um": self.pitch_um,
+                "size": self.size,
+                "grid": list(self.shape),
+                "wavelengths_nm": list(self.wavelengths_nm),
+                "fields_deg": self.fields_deg.tolist(),
+                "chief_ray_mm": self.chief_ray_mm.tolist(),
+            }
+        )
         channels = {f"psf_{w:g}nm": self.mosaic(k) for k, w in enumerate(self.wavelengths_nm)}
         if len(channels) != len(self.wavelengths_nm):
-            raise SolasError(f"wavelengths {self.wavelengths_nm} nm are not distinct to 6 digits; channel names would collide")
+            raise SolasError(
+                f"wavelengths {self.wavelengths_nm} nm are not distinct to 6 digits; channel names would collide"
+            )
         # PSF tails are float noise that compression cannot shrink; stored as uncompressed float32, the
         # fastest (measured, 32×32×3 grid of 160 px, 315 MB: 0.17 s; ZIPS 3.8 s for 1 % less, PIZ 3.9 s for
         # 14 % less; half floats 157 MB but 4.9 s, numpy's float16 conversion of the 88 % of the values
@@ -104,7 +112,7 @@ class PSFGrid:
         write_exr(path, channels, meta, compress=False)
 
     @classmethod
-    def read(cls, path: str) -> "PSFGrid":
+    def read(cls, path: str) -> PSFGrid:
         """Read a grid that `write` wrote (``solas-mi psf-grid``'s output).
 
         Parameters
@@ -133,12 +141,14 @@ class PSFGrid:
         """
         channels, meta = read_exr(path)
         if isinstance(meta, dict) and "layers" in meta:
-            raise SolasError(f"{path} is a PSF grid over object distance (`psf.depth.DepthGrid`): read it with "
-                             "psf.depth.read_grid, use it with a depth map (degrade --depth)")
+            raise SolasError(
+                f"{path} is a PSF grid over object distance (`psf.depth.DepthGrid`): read it with "
+                "psf.depth.read_grid, use it with a depth map (degrade --depth)"
+            )
         return cls.from_channels(path, channels, meta)
 
     @classmethod
-    def from_channels(cls, path, channels: dict, meta) -> "PSFGrid":
+    def from_channels(cls, path, channels: dict, meta) -> PSFGrid:
         """The grid of an EXR file's channels and metadata (`read`).
 
         Parameters
@@ -167,12 +177,21 @@ class PSFGrid:
         for w in wl:
             m = channels.get(f"psf_{w:g}nm")
             if m is None or m.shape != (ny * s, nx * s):
-                raise SolasError(f"PSF grid {path}: channel psf_{w:g}nm is " + ("missing" if m is None else
-                                 f"{m.shape[1]}x{m.shape[0]} px") + f"; the metadata need {nx * s}x{ny * s} px")
+                raise SolasError(
+                    f"PSF grid {path}: channel psf_{w:g}nm is "
+                    + ("missing" if m is None else f"{m.shape[1]}x{m.shape[0]} px")
+                    + f"; the metadata need {nx * s}x{ny * s} px"
+                )
             stacks.append(m.reshape(ny, s, nx, s).transpose(0, 2, 1, 3))
         rest = {k: v for k, v in meta.items() if k not in ("pitch_um", "wavelengths_nm", "fields_deg", "chief_ray_mm")}
-        return cls(np.stack(stacks), _meta_array(path, meta, "fields_deg", (ny, nx, 2)),
-                   _meta_array(path, meta, "chief_ray_mm", (len(wl), ny, nx, 2)), wl, float(meta["pitch_um"]), rest)
+        return cls(
+            np.stack(stacks),
+            _meta_array(path, meta, "fields_deg", (ny, nx, 2)),
+            _meta_array(path, meta, "chief_ray_mm", (len(wl), ny, nx, 2)),
+            wl,
+            float(meta["pitch_um"]),
+            rest,
+        )
 
     def write_png(self, path: str) -> None:
         """Write the mosaic for viewing (`preview`) as a PNG plot, axes in field degrees (`psf.preview`).
@@ -211,6 +230,7 @@ class PSFGrid:
 
 def check_grid_meta(path, meta: dict) -> tuple[int, int, int, tuple[float, ...]]:
     """Every metadata field a grid's users read, checked: (rows, columns, size, wavelengths)."""
+
     def bad(key: str, want: str):
         return _bad_field(path, meta, key, want)
 
@@ -259,8 +279,13 @@ def _meta_array(path, meta: dict, key: str, shape: tuple[int, ...], positive: bo
     except (KeyError, TypeError, ValueError):
         ok = False
     if not ok:
-        raise _bad_field(path, meta, key, f"{'x'.join(map(str, shape))} finite{' positive' if positive else ''} "
-                                          "numbers (the shape the fields grid, size and wavelengths_nm give)")
+        raise _bad_field(
+            path,
+            meta,
+            key,
+            f"{'x'.join(map(str, shape))} finite{' positive' if positive else ''} "
+            "numbers (the shape the fields grid, size and wavelengths_nm give)",
+        )
     return a
 
 

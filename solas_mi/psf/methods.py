@@ -2,6 +2,7 @@
 (`METHODS`, a `solas_mi.registry.Registry`: name → function and its own options), which every caller
 uses (`psf`, PSF grids, the cross-validation, the benchmarks).
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -23,13 +24,22 @@ from .base import (
     window_energy,
     window_warnings,
 )
-from .registry import DEFAULT_METHOD, METHODS, MAX_SAMPLING, check_method, method_options
+from .registry import DEFAULT_METHOD, MAX_SAMPLING, METHODS, check_method, method_options
 
 __all__ = ["DEFAULT_METHOD", "MAX_SAMPLING", "METHODS", "check_method", "compute", "method_options", "psf"]
 
 
-def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int, method: str, *,
-            shared_origin: bool = False, **options) -> Computed:
+def compute(
+    lens,
+    field_deg: np.ndarray,
+    wavelength_nm: np.ndarray,
+    pitch_um: float,
+    size: int,
+    method: str,
+    *,
+    shared_origin: bool = False,
+    **options,
+) -> Computed:
     """Unnormalised PSFs (n, size, size) in 1/µm² for field/wavelength pairs by `method`, each grid's
     origin on its chief ray or, with `shared_origin`, all on the first one's. `options`: the methods'
     own (`registry.METHODS`: each method's options); those of other methods are ignored."""
@@ -38,9 +48,19 @@ def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: fl
 
 
 # long: the public API's numpydoc docstring is half of it
-def psf(lens, field_deg, wavelength_nm, *, weights=None, pitch_um: float = DEFAULT_PITCH_UM,
-        size: int = DEFAULT_SIZE, method: str = DEFAULT_METHOD, normalization: str = "sum", auto_window: bool = False,
-        **options) -> PSF:
+def psf(
+    lens,
+    field_deg,
+    wavelength_nm,
+    *,
+    weights=None,
+    pitch_um: float = DEFAULT_PITCH_UM,
+    size: int = DEFAULT_SIZE,
+    method: str = DEFAULT_METHOD,
+    normalization: str = "sum",
+    auto_window: bool = False,
+    **options,
+) -> PSF:
     """The PSF of one field, monochromatic or polychromatic.
 
     Several wavelengths give the power-weighted sum of their PSFs, all on the first one's chief ray, so
@@ -122,21 +142,36 @@ def _psf(lens, field, wavelengths, power_weights, pitch_um, size, method, normal
     computed = compute(lens, fields, np.array(wavelengths), pitch_um, size, method, shared_origin=True, **own)
     centre_um = computed.centre_um if bool(computed.chief.vignetted[0]) else None  # the light's centroid, if needed
     light = centre_um is not None
-    origin = computed.chief.image_xy[0] + (centre_um[0] * 1e-3 if centre_um is not None else 0.0)  # the window's centre, mm
+    origin = computed.chief.image_xy[0] + (
+        centre_um[0] * 1e-3 if centre_um is not None else 0.0
+    )  # the window's centre, mm
     blocked = sorted({s for v in computed.vignetted_by for s in v})
     if not np.dot(power_weights, computed.transmission) > 0:
-        raise SolasError(f"no light reaches the image at field ({field[0]:g}, {field[1]:g}) deg: every ray is blocked"
-                         + (f" (by surfaces {', '.join(map(str, blocked))})" if blocked else ""))
+        raise SolasError(
+            f"no light reaches the image at field ({field[0]:g}, {field[1]:g}) deg: every ray is blocked"
+            + (f" (by surfaces {', '.join(map(str, blocked))})" if blocked else "")
+        )
     total = np.tensordot(power_weights, computed.data, axes=1)
     energy = float(window_energy(total, pitch_um, np.dot(power_weights, computed.transmission)))
     meta = describe(lens, method, normalization, own, size)
-    meta.update({
-        "chief_ray_mm": {f"{w:g}": computed.chief.image_xy[i].tolist() for i, w in enumerate(wavelengths)},
-        "centre": "centroid of the arriving light (the chief ray is blocked)" if light else "chief ray",
-        "transmission": float(np.dot(power_weights, computed.transmission)),
-        "energy_in_grid": energy,
-        "vignetted_by_surfaces": blocked,
-        "warnings": [*computed.warnings, *window_warnings(energy, np.array([field]), size, pitch_um)],
-    })
-    return PSF(normalize(total, normalization), float(pitch_um), field, wavelengths, tuple(power_weights.tolist()),
-               tuple(origin.tolist()), method, normalization, meta)
+    meta.update(
+        {
+            "chief_ray_mm": {f"{w:g}": computed.chief.image_xy[i].tolist() for i, w in enumerate(wavelengths)},
+            "centre": "centroid of the arriving light (the chief ray is blocked)" if light else "chief ray",
+            "transmission": float(np.dot(power_weights, computed.transmission)),
+            "energy_in_grid": energy,
+            "vignetted_by_surfaces": blocked,
+            "warnings": [*computed.warnings, *window_warnings(energy, np.array([field]), size, pitch_um)],
+        }
+    )
+    return PSF(
+        normalize(total, normalization),
+        float(pitch_um),
+        field,
+        wavelengths,
+        tuple(power_weights.tolist()),
+        tuple(origin.tolist()),
+        method,
+        normalization,
+        meta,
+    )

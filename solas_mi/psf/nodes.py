@@ -7,6 +7,7 @@ The lens is centred (every surface is rotationally symmetric about the axis), so
 (−x, y) is the mirror image of that of (x, y), and that of (y, x) its transpose: each distinct pair is
 computed on an odd window, symmetric about the chief ray, and mirrored.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -44,8 +45,9 @@ class Nodes:
     doubts: tuple[str, ...]  # the methods' warnings, each once
 
 
-def compute_nodes(lens: Lens, spec: GridSpec, wl: tuple[float, ...], flat: np.ndarray, size: int,
-                  progress=None) -> Nodes:
+def compute_nodes(
+    lens: Lens, spec: GridSpec, wl: tuple[float, ...], flat: np.ndarray, size: int, progress=None
+) -> Nodes:
     """The PSFs of fields `flat` (n, 2) at wavelengths `wl`, size×size: each distinct |field| pair
     (`symmetry_classes`) computed once, every wavelength's together in batches of at most `BATCH_RAYS` pupil
     rays, and mirrored onto its nodes."""
@@ -63,8 +65,15 @@ def compute_nodes(lens: Lens, spec: GridSpec, wl: tuple[float, ...], flat: np.nd
     pairs = np.stack(np.meshgrid(np.arange(len(wl)), np.arange(len(canon)), indexing="ij"), axis=-1).reshape(-1, 2)
     done = 0
     for part in np.array_split(pairs, len(batch_sizes(spec, len(pairs)))):
-        c = compute(lens, canon[part[:, 1]], np.asarray(wl)[part[:, 0]], spec.pitch_um, odd, spec.method,
-                    **spec.sampling_options())
+        c = compute(
+            lens,
+            canon[part[:, 1]],
+            np.asarray(wl)[part[:, 0]],
+            spec.pitch_um,
+            odd,
+            spec.method,
+            **spec.sampling_options(),
+        )
         vignetting.update(s for v in c.vignetted_by for s in v)
         doubts.extend(d for d in c.warnings if d not in doubts)
         for k in np.unique(part[:, 0]):
@@ -77,8 +86,9 @@ def compute_nodes(lens: Lens, spec: GridSpec, wl: tuple[float, ...], flat: np.nd
             chief[k, nodes] = np.where(swap[nodes, None], xy[:, ::-1], xy) * sign[nodes]
             transmission[k, nodes] = c.transmission[j]
             turns = np.stack([swap[nodes], sign[nodes, 0] < 0, sign[nodes, 1] < 0], axis=1)
-            energy[k, nodes] = place(c.data, c.transmission, nodes, j, turns, data[k], spec.normalization,
-                                     spec.pitch_um)
+            energy[k, nodes] = place(
+                c.data, c.transmission, nodes, j, turns, data[k], spec.normalization, spec.pitch_um
+            )
             done += len(nodes)
         if progress is not None:  # in nodes: the PSFs of the grid, mirrored ones included
             progress(done, len(wl) * n)
@@ -88,7 +98,7 @@ def compute_nodes(lens: Lens, spec: GridSpec, wl: tuple[float, ...], flat: np.nd
 def batch_sizes(spec: GridSpec, psfs: int) -> list[int]:
     """The PSFs of each call of `methods.compute` that a grid's `psfs` distinct PSFs (every wavelength's)
     are computed in (`compute_nodes`): as few calls as hold at most BATCH_RAYS pupil rays each."""
-    per_psf = spec.pupil_samples ** 2 if spec.method == "fraunhofer" else spec.rays ** 2
+    per_psf = spec.pupil_samples**2 if spec.method == "fraunhofer" else spec.rays**2
     return [len(part) for part in np.array_split(np.arange(psfs), max(1, -(-psfs * per_psf // BATCH_RAYS)))]
 
 
@@ -97,8 +107,16 @@ BATCH_RAYS = 1 << 20  # pupil rays of one batch of PSFs (64 of 128²): measured 
 # that Dr.Jit reuses from batch to batch) and 1.2 s at 2^18 (more, smaller kernels)
 
 
-def place(psfs: np.ndarray, transmission: np.ndarray, nodes: np.ndarray, source: np.ndarray, turns: np.ndarray,
-          out: np.ndarray, normalization: str, pitch_um: float) -> np.ndarray:
+def place(
+    psfs: np.ndarray,
+    transmission: np.ndarray,
+    nodes: np.ndarray,
+    source: np.ndarray,
+    turns: np.ndarray,
+    out: np.ndarray,
+    normalization: str,
+    pitch_um: float,
+) -> np.ndarray:
     """Canonical PSFs `psfs` (m, odd, odd) turned onto grid nodes: node `nodes[i]` (row-major in `out`, (ny, nx,
     size, size) float32) gets PSF `source[i]` turned by `turns[i]` (swap, flip x, flip y: `_turned`), cut to
     size × size and normalised; in threads (NumPy lets go of the GIL). Returns each node's fraction of its

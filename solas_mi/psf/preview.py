@@ -1,6 +1,7 @@
 """The PSF grid's PNG for viewing: its mosaic (`PSFGrid.preview`) drawn as a plot whose axes say where
 each PSF is — the field angle of its node in degrees — and whose title gives the tiles' physical size
 in µm, the wavelengths and the scaling (each PSF to its own peak). matplotlib is imported only here."""
+
 from __future__ import annotations
 
 import math
@@ -46,8 +47,11 @@ def plot_grid(grid, image: np.ndarray, path: str | os.PathLike, dpi: int = 100) 
     ax.set_yticks(y_at, [f"{grid.fields_deg[r, nx // 2, 1]:.3g}" for r in rows])
     ax.set_xlabel("field x (deg), node centres")
     ax.set_ylabel("field y (deg)")
-    ax.set_title(f"{ny}×{nx} nodes, each PSF {grid.size} px × {grid.pitch_um:g} µm = {grid.size * grid.pitch_um:g} µm "
-                 f"wide, scaled to its peak; {colour_note(grid.wavelengths_nm)}", fontsize=8)
+    ax.set_title(
+        f"{ny}×{nx} nodes, each PSF {grid.size} px × {grid.pitch_um:g} µm = {grid.size * grid.pitch_um:g} µm "
+        f"wide, scaled to its peak; {colour_note(grid.wavelengths_nm)}",
+        fontsize=8,
+    )
     _fit_margins(fig, ax, zoom * width, zoom * height)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=dpi)

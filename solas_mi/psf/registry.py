@@ -12,6 +12,7 @@ Dr.Jit; each is imported when it computes), so that a later stage can register i
 import time without loading anything: the render stage adds its own (`solas_mi.render`), which
 keeps `psf` free of any import of a later stage.
 """
+
 from __future__ import annotations
 
 from ..registry import Option, Registry
@@ -22,8 +23,15 @@ MAX_SAMPLING = 4096
 
 DEFAULT_PUPIL_SAMPLES = 128
 DEFAULT_GEOMETRIC_RAYS = 512
-PUPIL_SAMPLES = Option("pupil_samples", int, DEFAULT_PUPIL_SAMPLES, "N×N pupil grid", minimum=8,
-                       maximum=MAX_SAMPLING, label="pupil samples")
+PUPIL_SAMPLES = Option(
+    "pupil_samples",
+    int,
+    DEFAULT_PUPIL_SAMPLES,
+    "N×N pupil grid",
+    minimum=8,
+    maximum=MAX_SAMPLING,
+    label="pupil samples",
+)
 RAYS = Option("rays", int, DEFAULT_GEOMETRIC_RAYS, "rays × rays per PSF", minimum=2, maximum=MAX_SAMPLING)
 
 DEFAULT_METHOD = "fraunhofer"
@@ -34,10 +42,13 @@ check_method = METHODS.get
 method_options = METHODS.options  # (name, {keyword: value}) -> the method's own options, checked
 
 
-@METHODS.register("fraunhofer", options=(PUPIL_SAMPLES,),
-                  summary="|matrix DFT of the pupil function|^2 (diffraction and aberrations)",
-                  reference="J. W. Goodman, Introduction to Fourier Optics, 3rd ed., 2005; Soummer et al., "
-                            "Optics Express 15(24), 2007")
+@METHODS.register(
+    "fraunhofer",
+    options=(PUPIL_SAMPLES,),
+    summary="|matrix DFT of the pupil function|^2 (diffraction and aberrations)",
+    reference="J. W. Goodman, Introduction to Fourier Optics, 3rd ed., 2005; Soummer et al., "
+    "Optics Express 15(24), 2007",
+)
 def _fraunhofer(*args, **kwargs):
     from .fraunhofer import compute
 

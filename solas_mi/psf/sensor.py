@@ -10,6 +10,7 @@ and inverted by interpolation; the node's azimuth is the field's. The node's PSF
 real chief ray (the grid's chief_ray_mm), which lies on the node up to the interpolation error
 (nm) at the reference wavelength and off it by the lateral colour at the others.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -36,7 +37,9 @@ def height_table(lens: Lens, wavelength_nm: float) -> tuple[np.ndarray, np.ndarr
 
     top = min(REACH * lens.field_deg, lens.field_type.largest_deg)
     theta = np.linspace(0.0, top, TABLE_STEPS)
-    h = chief_rays(lens, np.stack([np.zeros_like(theta), theta], axis=-1), np.full(len(theta), wavelength_nm)).image_xy[:, 1]
+    h = chief_rays(lens, np.stack([np.zeros_like(theta), theta], axis=-1), np.full(len(theta), wavelength_nm)).image_xy[
+        :, 1
+    ]
     rising = np.flatnonzero(np.diff(h) <= 0)
     end = rising[0] + 1 if len(rising) else len(h)
     return theta[:end], h[:end]
@@ -50,8 +53,10 @@ def fields_for_points(lens: Lens, points_mm: np.ndarray, wavelength_nm: float) -
     ax, ay = np.abs(p[..., 0]), np.abs(p[..., 1])  # mirror-symmetric nodes get bit-identical fields
     r = np.hypot(ax, ay)
     if r.max() > h[-1]:
-        raise SolasError(f"image point at {r.max():.4g} mm from the axis lies beyond the lens's image circle: its "
-                         f"chief rays reach {h[-1]:.4g} mm (at {theta[-1]:.4g} deg); use a smaller sensor")
+        raise SolasError(
+            f"image point at {r.max():.4g} mm from the axis lies beyond the lens's image circle: its "
+            f"chief rays reach {h[-1]:.4g} mm (at {theta[-1]:.4g} deg); use a smaller sensor"
+        )
     t = np.radians(np.interp(r, h, theta))
     with np.errstate(invalid="ignore", divide="ignore"):
         c, s = np.where(r > 0, ax / r, 1.0), np.where(r > 0, ay / r, 0.0)

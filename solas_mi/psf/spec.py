@@ -8,6 +8,7 @@ Conventions: grid (rows, columns) of nodes (the command line's "COLSxROWS" text 
 ranges (x, y) (None: the lens's field in both); sensor size (width, height) in mm; pitch in µm;
 size in pixels.
 """
+
 from __future__ import annotations
 
 import hashlib
@@ -92,31 +93,41 @@ class GridSpec(OptionSpec):
     ((4, 6), {'pupil_samples': 128, 'rays': 128})
     """
 
-    grid: tuple[int, int] = option("COLSxROWS field nodes", (8, 8), parse=lambda t: parse_wxh(t, "--grid"),
-                                   shown=wxh_text)
+    grid: tuple[int, int] = option(
+        "COLSxROWS field nodes", (8, 8), parse=lambda t: parse_wxh(t, "--grid"), shown=wxh_text
+    )
     wavelengths_nm: tuple[float, ...] | None = option(
-        "nm, comma-separated (default: the lens file's)", parse=lambda t: tuple(floats(t, "--wavelengths-nm")))
-    layout: str = option("field: nodes on field angles; sensor: nodes on sensor positions (wide and fisheye lenses)",
-                         LAYOUTS[0], choices=LAYOUTS)
+        "nm, comma-separated (default: the lens file's)", parse=lambda t: tuple(floats(t, "--wavelengths-nm"))
+    )
+    layout: str = option(
+        "field: nodes on field angles; sensor: nodes on sensor positions (wide and fisheye lenses)",
+        LAYOUTS[0],
+        choices=LAYOUTS,
+    )
     field_range_deg: tuple[float, float] | None = option(
-        f"half range: {RANGE_FORM} (default: the lens file's field)", parse=_range)
-    field_sampling: str = option("nodes at cell centres or spanning the range's ends", FIELD_SAMPLINGS[0],
-                                 choices=FIELD_SAMPLINGS)
+        f"half range: {RANGE_FORM} (default: the lens file's field)", parse=_range
+    )
+    field_sampling: str = option(
+        "nodes at cell centres or spanning the range's ends", FIELD_SAMPLINGS[0], choices=FIELD_SAMPLINGS
+    )
     sensor_mm: tuple[float, float] | None = option(
         "sensor WxH in mm for --layout sensor (default: the square in the image circle)",
-        parse=lambda t: parse_size_mm(t, "--sensor-mm"))
+        parse=lambda t: parse_size_mm(t, "--sensor-mm"),
+    )
     pitch_um: float = option("image-plane pixel pitch (µm)", DEFAULT_PITCH_UM, parse=float)
     size: int = option("PSF width and height (pixels)", DEFAULT_SIZE, parse=int)
     method: str = option("PSF method", DEFAULT_METHOD, flag="--psf-method", choices=METHODS.names)
     pupil_samples: int = option(lambda: METHODS.option_help(PUPIL_SAMPLES.name), PUPIL_SAMPLES.default, parse=int)
     rays: int = option(lambda: METHODS.option_help(RAYS.name), RAYS.default, parse=int)
     normalization: str = option("PSF values", NORMALIZATIONS[0], flag="--normalize", choices=NORMALIZATIONS)
-    auto_window: bool = option(f"double --size until each window holds {100 * WINDOW_ENERGY_LIMIT:g} %% of the light",
-                               False)
+    auto_window: bool = option(
+        f"double --size until each window holds {100 * WINDOW_ENERGY_LIMIT:g} %% of the light", False
+    )
     distances_m: tuple[float, ...] | None = option(
         "object distances (m) of a grid over field and distance, comma-separated (inf: infinity), or N:NEAR for N "
         "nodes spaced evenly in 1/distance from infinity to NEAR (default: the lens file's object distance only)",
-        parse=lambda t: parse_distances(t))
+        parse=lambda t: parse_distances(t),
+    )
 
     def __post_init__(self):
         set_ = object.__setattr__
@@ -125,8 +136,10 @@ class GridSpec(OptionSpec):
         _choice(self.layout, LAYOUTS, "grid layout")
         _choice(self.field_sampling, FIELD_SAMPLINGS, "field sampling")
         if self.layout == "sensor" and self.field_range_deg is not None:
-            raise SolasError(f"field range {self.field_range_deg!r} deg is for layout field; a sensor layout's "
-                             "nodes are set by its sensor size (sensor_mm)")
+            raise SolasError(
+                f"field range {self.field_range_deg!r} deg is for layout field; a sensor layout's "
+                "nodes are set by its sensor size (sensor_mm)"
+            )
         if self.layout == "field" and self.sensor_mm is not None:
             raise SolasError(f"sensor size {self.sensor_mm!r} mm is for layout sensor (nodes on sensor positions)")
         set_(self, "field_range_deg", _half_ranges(self.field_range_deg))
@@ -191,11 +204,16 @@ class GridSpec(OptionSpec):
 
 
 def _rows_cols(value) -> tuple[int, int]:
-    ok = isinstance(value, (tuple, list)) and len(value) == 2 and all(
-        isinstance(v, int) and not isinstance(v, bool) and v >= 1 for v in value)
+    ok = (
+        isinstance(value, (tuple, list))
+        and len(value) == 2
+        and all(isinstance(v, int) and not isinstance(v, bool) and v >= 1 for v in value)
+    )
     if not ok:
-        raise SolasError(f"grid {value!r} must be (rows, columns), each an integer >= 1 (the command line's "
-                         "--grid COLSxROWS is converted to it)")
+        raise SolasError(
+            f"grid {value!r} must be (rows, columns), each an integer >= 1 (the command line's "
+            "--grid COLSxROWS is converted to it)"
+        )
     return int(value[0]), int(value[1])
 
 
@@ -218,8 +236,10 @@ def _wavelengths(value) -> tuple[float, ...] | None:
     """None, one wavelength (nm) or a sequence of them; each a positive number (the lens checks its glasses)."""
     if value is None:
         return None
-    out = tuple(_number(v, "wavelength (nm)") for v in _one_or_many(value, "a number or a sequence of numbers (nm)",
-                                                                      "wavelengths"))
+    out = tuple(
+        _number(v, "wavelength (nm)")
+        for v in _one_or_many(value, "a number or a sequence of numbers (nm)", "wavelengths")
+    )
     if not out or min(out) <= 0:
         raise SolasError(f"wavelengths {value!r} must be one or more positive numbers (nm)")
     if len({f"{w:g}" for w in out}) != len(out):  # each names a channel of the grid file (psf_531nm)
@@ -245,8 +265,9 @@ def parse_distances(text: str) -> tuple[float, ...]:
         try:
             count, near = int(count_text), float(near_text)
         except ValueError:
-            raise SolasError(f"--distances-m {text!r} must be N:NEAR (N nodes, NEAR in metres) or distances "
-                             "in m, comma-separated") from None
+            raise SolasError(
+                f"--distances-m {text!r} must be N:NEAR (N nodes, NEAR in metres) or distances in m, comma-separated"
+            ) from None
         return inverse_spaced(count, near)  # its own message for a count or distance out of range
     return tuple(floats(text, "--distances-m"))
 

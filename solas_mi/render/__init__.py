@@ -14,17 +14,30 @@ them for an input image (`render_image`). Beside them: `sampling` (stratified sa
     render_image(lens, "photo.png", sensor=(960, 1280), spp=64).write("out.exr")
     render_image(lens, "photo.png", RenderSpec(sensor=(960, 1280), response="lines", rings=64))
 """
+
 from ..lazy import lazy_exports
 from ..psf.registry import METHODS, RAYS
 
 __all__ = ["Render", "RenderSpec", "render_image", "render_scene", "write_scene"]
-__getattr__ = lazy_exports(__name__, {"Render": ".loop", "RenderSpec": ".spec", "render_image": ".image",
-                                      "render_scene": ".stock", "write_scene": ".scene"})
+__getattr__ = lazy_exports(
+    __name__,
+    {
+        "Render": ".loop",
+        "RenderSpec": ".spec",
+        "render_image": ".image",
+        "render_scene": ".stock",
+        "write_scene": ".scene",
+    },
+)
 
 
 # this stage adds its PSF method to the registry of the lower stage (which imports nothing from here)
-@METHODS.register("render", options=(RAYS,), meshes=True,
-                  summary="the entrance-grid rays traced through the Mitsuba scene's lens meshes, binned per pixel")
+@METHODS.register(
+    "render",
+    options=(RAYS,),
+    meshes=True,
+    summary="the entrance-grid rays traced through the Mitsuba scene's lens meshes, binned per pixel",
+)
 def _render_psfs(*args, **kwargs):
     """The PSF method "render" (`psf.registry`): `psf.compute`, imported when it computes (it loads Mitsuba)."""
     from .psf import compute

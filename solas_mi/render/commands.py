@@ -76,8 +76,8 @@ def _scene(args) -> int:
     from ..optics.camera import camera_for
     from ..optics.commands import load_lens
     from ..outputs import output_folder
-    from .response import parse
     from ..userfiles import check
+    from .response import parse
     from .scene import write_scene
 
     out = output_folder(args.output)

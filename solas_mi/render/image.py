@@ -1,5 +1,6 @@
 """An input image through the lens geometry: the lens's scene (`scene`) written to a temporary
 directory with the image as its object, loaded (`mitsuba`) and rendered (`loop`)."""
+
 from __future__ import annotations
 
 import os
@@ -28,7 +29,7 @@ def remove_stale_scenes() -> int:
     $TMPDIR: those of processes that no longer run. The number removed."""
     removed = 0
     for folder in Path(tempfile.gettempdir()).glob(f"{SCENE_PREFIX}*-*"):
-        pid = folder.name[len(SCENE_PREFIX):].split("-", 1)[0]
+        pid = folder.name[len(SCENE_PREFIX) :].split("-", 1)[0]
         if not pid.isdigit() or int(pid) == os.getpid() or not folder.is_dir() or folder.is_symlink():
             continue
         try:
@@ -55,8 +56,11 @@ def fisheye_camera(lens, sensor: tuple[int, int], fov_deg: float | None, pitch_u
 
 def image_sensor(lens, spec: RenderSpec) -> Camera:
     """The sensor an image is rendered onto (`spec`'s sensor, pitch and field of view)."""
-    return (camera_for(lens, spec.sensor, spec.fov_deg, spec.pitch_um) if lens.field_type.pinhole
-            else fisheye_camera(lens, spec.sensor, spec.fov_deg, spec.pitch_um))
+    return (
+        camera_for(lens, spec.sensor, spec.fov_deg, spec.pitch_um)
+        if lens.field_type.pinhole
+        else fisheye_camera(lens, spec.sensor, spec.fov_deg, spec.pitch_um)
+    )
 
 
 def image_camera(lens, camera: Camera, response, model: str | None) -> dict:
@@ -65,8 +69,12 @@ def image_camera(lens, camera: Camera, response, model: str | None) -> dict:
     at the `response`'s one wavelength (mono, lines of one), else the lens's primary."""
     from ..optics.calibration import Sensor, describe_camera
 
-    return describe_camera(lens, Sensor(camera.width, camera.height, camera.pitch_um), model,
-                           wavelength_nm=float(response.single_wavelength or lens.primary_wavelength))
+    return describe_camera(
+        lens,
+        Sensor(camera.width, camera.height, camera.pitch_um),
+        model,
+        wavelength_nm=float(response.single_wavelength or lens.primary_wavelength),
+    )
 
 
 def image_sensor_key(lens, spec: RenderSpec) -> tuple[str, Camera, responses.Response]:
@@ -78,8 +86,16 @@ def image_sensor_key(lens, spec: RenderSpec) -> tuple[str, Camera, responses.Res
 
 
 # long: the public API's numpydoc docstring is half of it
-def render_image(lens, image: str | np.ndarray, spec: RenderSpec | None = None, *, progress=None,
-                 calibration_model: str | None = None, camera_block: dict | None = None, **settings) -> Render:
+def render_image(
+    lens,
+    image: str | np.ndarray,
+    spec: RenderSpec | None = None,
+    *,
+    progress=None,
+    calibration_model: str | None = None,
+    camera_block: dict | None = None,
+    **settings,
+) -> Render:
     """Render an input image through a lens in Mitsuba, the lens as geometry.
 
     The image's width spans ±``fov_deg`` degrees and, unless ``pitch_um`` is given, so does the
@@ -130,16 +146,22 @@ def render_image(lens, image: str | np.ndarray, spec: RenderSpec | None = None, 
     """
     spec = (spec or RenderSpec()).replace(**settings)
     if spec.focus_distance is not None:
-        raise SolasError("a focus distance sets the lens camera of a scene file; an image lies on the lens's object "
-                         "plane: render it without one")
+        raise SolasError(
+            "a focus distance sets the lens camera of a scene file; an image lies on the lens's object "
+            "plane: render it without one"
+        )
     if spec.labels:
-        raise SolasError(f"labels ({spec.labels}) are traced through the lens camera of a scene file; an image has "
-                         "no scene to label: render it without them")
+        raise SolasError(
+            f"labels ({spec.labels}) are traced through the lens camera of a scene file; an image has "
+            "no scene to label: render it without them"
+        )
     camera = image_sensor(lens, spec)
     if spec.mapping == "rectilinear" and camera.fov_deg >= 90.0:  # tan θ changes sign: the input would mirror
-        raise SolasError(f"a rectilinear input spans less than ±90 deg and this one would span ±{camera.fov_deg:g} deg; "
-                         "give --fov-deg below 90 or a mapping that reaches past 90 deg (equidistant, equisolid, "
-                         "equirectangular)")
+        raise SolasError(
+            f"a rectilinear input spans less than ±90 deg and this one would span ±{camera.fov_deg:g} deg; "
+            "give --fov-deg below 90 or a mapping that reaches past 90 deg (equidistant, equisolid, "
+            "equirectangular)"
+        )
     # the user's mistakes, named here rather than inside the scene's plugins
     parsed = responses.parse(spec.response, lens.wavelengths_nm)
     responses.check_lens(parsed, lens)
@@ -158,7 +180,16 @@ def render_image(lens, image: str | np.ndarray, spec: RenderSpec | None = None, 
         scene = load_scene(xml, variant)
         result = render(scene, spec.spp, seed=spec.seed, progress=progress)
     result.meta.update(camera.meta(), f_number=unit_f_number(scene.sensors()[0]))
-    result.meta.update({"lens": lens.name, "lens_hash": lens.hash, "boundary": spec.boundary, "fresnel": spec.fresnel,
-                        "mapping": spec.mapping, "cap_rings": resolve_rings(lens, spec.rings), "render_spec": spec.as_dict(),
-                        **({"camera": camera_block} if camera_block is not None else {})})
+    result.meta.update(
+        {
+            "lens": lens.name,
+            "lens_hash": lens.hash,
+            "boundary": spec.boundary,
+            "fresnel": spec.fresnel,
+            "mapping": spec.mapping,
+            "cap_rings": resolve_rings(lens, spec.rings),
+            "render_spec": spec.as_dict(),
+            **({"camera": camera_block} if camera_block is not None else {}),
+        }
+    )
     return result

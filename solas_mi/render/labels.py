@@ -21,12 +21,14 @@ No NaN or inf is written. A scene loaded with Mitsuba's default parser settings 
 its meshes of one material merged into one unnamed mesh, and so one id: load it with
 `render.user_scene.load` (as `solas-mi render` does), which keeps them apart.
 """
+
 from __future__ import annotations
 
 import re
 import zlib
+from collections.abc import Callable
 from dataclasses import dataclass
-from typing import Any, Callable
+from typing import Any
 
 import numpy as np
 
@@ -120,8 +122,10 @@ def _sensor(scene):
 
     sensor = scene.sensors()[0]
     if type(sensor).__name__ != "LensCamera":
-        raise SolasError(f"labels are traced through a lens_camera; the scene's sensor is {type(sensor).__name__} "
-                         "(render with --lens)")
+        raise SolasError(
+            f"labels are traced through a lens_camera; the scene's sensor is {type(sensor).__name__} "
+            "(render with --lens)"
+        )
     if not dr.is_jit_v(mi.Float):
         raise SolasError(f"labels need a vectorised Mitsuba variant (llvm_ad_*, cuda_ad_*), not {mi.variant()}")
     return sensor
@@ -253,10 +257,14 @@ def render_labels(scene, kinds) -> tuple[dict[str, np.ndarray], dict]:
 
     layers = {VALID: layer(mi.Float(1.0))}
     pupil_z = -float(_entrance_pupil_mm(sensor.lens)) / sensor.world_unit_mm  # camera frame: +z toward the scene
-    meta = {"kinds": list(kinds), "wavelength_nm": float(lam),
-            "depth": "range (world units) from the entrance-pupil centre to the point the pixel centre's chief "
-                     "ray (where it is blocked, the passing beam's centre ray) meets; 0 where labels.valid is 0",
-            "entrance_pupil_z": pupil_z, "beam_centre_pixels": centred}
+    meta = {
+        "kinds": list(kinds),
+        "wavelength_nm": float(lam),
+        "depth": "range (world units) from the entrance-pupil centre to the point the pixel centre's chief "
+        "ray (where it is blocked, the passing beam's centre ray) meets; 0 where labels.valid is 0",
+        "entrance_pupil_z": pupil_z,
+        "beam_centre_pixels": centred,
+    }
     hit = Hit(scene, si, to_world, pupil_z, layer)
     for kind in kinds:
         more, about = LABELS[kind].function(hit)
@@ -266,10 +274,13 @@ def render_labels(scene, kinds) -> tuple[dict[str, np.ndarray], dict]:
     return layers, meta
 
 
-@LABELS.register("depth", layers=KINDS["depth"].extra["layers"],
-                 summary="range, in world units: the distance from the centre of the lens's paraxial entrance "
-                         "pupil (on the axis, `entrance_pupil_z` world units in front of surface 1's vertex in the "
-                         "metadata; negative: behind it) to the point the chief ray meets")
+@LABELS.register(
+    "depth",
+    layers=KINDS["depth"].extra["layers"],
+    summary="range, in world units: the distance from the centre of the lens's paraxial entrance "
+    "pupil (on the axis, `entrance_pupil_z` world units in front of surface 1's vertex in the "
+    "metadata; negative: behind it) to the point the chief ray meets",
+)
 def _depth(hit: Hit):
     import drjit as dr
     import mitsuba as mi
@@ -278,18 +289,24 @@ def _depth(hit: Hit):
     return {name: hit.layer(dr.norm(hit.si.p - hit.to_world @ mi.Point3f(0.0, 0.0, hit.pupil_z)))}, {}
 
 
-@LABELS.register("normal", layers=KINDS["normal"].extra["layers"], summary="the unit shading normal there, in "
-                 "the world frame, as Mitsuba gives it (not turned toward the camera)")
+@LABELS.register(
+    "normal",
+    layers=KINDS["normal"].extra["layers"],
+    summary="the unit shading normal there, in the world frame, as Mitsuba gives it (not turned toward the camera)",
+)
 def _normal(hit: Hit):
     n = hit.si.sh_frame.n
     return {name: hit.layer(v) for name, v in zip(LABELS["normal"].extra["layers"], (n.x, n.y, n.z))}, {}
 
 
-@LABELS.register("instance", layers=KINDS["instance"].extra["layers"],
-                 summary="the shape's id, `instance_id` of its name (its `id` in the scene; an unnamed shape "
-                         "`_shape_<key>`, a hash of its bounding box and primitive count); the shapes of a `shapegroup` "
-                         "take the id of the `instance` that places them, one id per instance (an unnamed one "
-                         "`_instance_<group>_<key>`)")
+@LABELS.register(
+    "instance",
+    layers=KINDS["instance"].extra["layers"],
+    summary="the shape's id, `instance_id` of its name (its `id` in the scene; an unnamed shape "
+    "`_shape_<key>`, a hash of its bounding box and primitive count); the shapes of a `shapegroup` "
+    "take the id of the `instance` that places them, one id per instance (an unnamed one "
+    "`_instance_<group>_<key>`)",
+)
 def _instance(hit: Hit):
     import drjit as dr
     import mitsuba as mi
@@ -319,8 +336,11 @@ def boxes_3d(hit: Hit, boxes: dict, shapes: dict) -> None:
     if not boxes:
         return
     sensor = _sensor(hit.scene)
-    cmap = chief_map(sensor.lens, Sensor(int(sensor.width), int(sensor.height), float(sensor.pitch_um)),
-                     float(sensor.response.single_wavelength or sensor.lens.primary_wavelength))
+    cmap = chief_map(
+        sensor.lens,
+        Sensor(int(sensor.width), int(sensor.height), float(sensor.pitch_um)),
+        float(sensor.response.single_wavelength or sensor.lens.primary_wavelength),
+    )
     to_local = hit.to_world.inverse()
     for name, box in boxes.items():
         b = shapes[name].bbox()
@@ -332,8 +352,10 @@ def boxes_3d(hit: Hit, boxes: dict, shapes: dict) -> None:
         uv = cmap.pixels(unit)
         polar = np.arccos(np.clip(unit[:, 2], -1.0, 1.0))
         seen = (polar <= cmap.top) & np.isfinite(uv).all(axis=1)
-        box["box_3d"] = {"corners_camera": xyz.tolist(),
-                         "corners_px": [p.tolist() if ok else None for p, ok in zip(uv, seen)]}
+        box["box_3d"] = {
+            "corners_camera": xyz.tolist(),
+            "corners_px": [p.tolist() if ok else None for p, ok in zip(uv, seen)],
+        }
 
 
 def _entrance_pupil_mm(lens) -> float:
@@ -353,6 +375,9 @@ def _instances(ids: np.ndarray, names: list[str], id_list: list[int], scene) -> 
         table[str(i)] = name
         if shape.id():
             rows, cols = np.nonzero(ids == i)
-            boxes[name] = {"id": i, "box": [int(cols.min()), int(rows.min()), int(cols.max()) + 1,
-                                            int(rows.max()) + 1], "pixels": int(len(rows))}
+            boxes[name] = {
+                "id": i,
+                "box": [int(cols.min()), int(rows.min()), int(cols.max()) + 1, int(rows.max()) + 1],
+                "pixels": int(len(rows)),
+            }
     return {"instances": table, "boxes": boxes}

@@ -4,6 +4,7 @@ no T-junctions, absorbers of two crossing layers), written as binary PLY; and ho
 lens: the blur its caps add (`mesh_blur_um`) and the ring count that keeps it under a share of the
 Airy radius (`mesh_rings`). Lengths in mm.
 """
+
 from __future__ import annotations
 
 import math
@@ -18,8 +19,16 @@ from ..optics.sag import sag_slope
 from .spec import AUTO_MIN_RINGS, MAX_RINGS
 
 
-def cap_mesh(radius: float, vertex_z: float, semi_diameter: float, rings: int, conic: float = 0.0,
-             aspheric: tuple[float, ...] = (), qbfs: tuple[float, ...] = (), norm_radius: float = 1.0):
+def cap_mesh(
+    radius: float,
+    vertex_z: float,
+    semi_diameter: float,
+    rings: int,
+    conic: float = 0.0,
+    aspheric: tuple[float, ...] = (),
+    qbfs: tuple[float, ...] = (),
+    norm_radius: float = 1.0,
+):
     """A spherical cap (flat disk if radius is 0), or the asphere of `conic`, `aspheric` and Forbes
     `qbfs` terms over `norm_radius` (the lens file's sag, `optics.sag.sag`): vertices (n, 3), unit normals (n, 3) facing −z,
     faces (m, 3) wound so that their geometric normals face −z too. `rings` rings of 4·rings
@@ -82,8 +91,9 @@ def _cap_errors(s, zv: float, rings: int) -> tuple[np.ndarray, np.ndarray, np.nd
     return r, dz, dn, np.tile(area, 4)
 
 
-def _surface_blur_mm2(s, zv: float, n1: float, n2: float, beam: float, slope_per_mm: float, lever_shift: float,
-                      lever_tilt: float) -> float:
+def _surface_blur_mm2(
+    s, zv: float, n1: float, n2: float, beam: float, slope_per_mm: float, lever_shift: float, lever_tilt: float
+) -> float:
     """Mean squared image offset (mm²) that surface `s`'s cap mesh (at vertex z `zv`, between indices
     n1 and n2) adds to the rays of an on-axis bundle of radius `beam` there, whose slope before it is
     `slope_per_mm` per mm of height; `lever_shift` and `lever_tilt` are the paraxial transfers of a
@@ -128,9 +138,20 @@ def mesh_blur_um(lens: Lens, rings: int) -> float:
             y, u = yk[last], uk[last]
         return y + u * (lens.image_z - z[last])
 
-    total = sum(_surface_blur_mm2(s, float(z[k]), n[k], n[k + 1], beam[k], u_before[k] / ya[k] if ya[k] else 0.0,
-                                  to_image(k, 1.0, 0.0), to_image(k, 0.0, 1.0))
-                for k, s in enumerate(lens.surfaces) if n[k + 1] != n[k])
+    total = sum(
+        _surface_blur_mm2(
+            s,
+            float(z[k]),
+            n[k],
+            n[k + 1],
+            beam[k],
+            u_before[k] / ya[k] if ya[k] else 0.0,
+            to_image(k, 1.0, 0.0),
+            to_image(k, 0.0, 1.0),
+        )
+        for k, s in enumerate(lens.surfaces)
+        if n[k + 1] != n[k]
+    )
     return 1e3 * math.sqrt(total) * (_REFERENCE_RINGS / rings) ** 2
 
 
@@ -186,17 +207,23 @@ def tube_mesh(radius: float, z_levels, phi: np.ndarray):
     normals = -vertices * np.array([1.0, 1.0, 0.0]) / radius
     j = np.arange(n)
     k = (j + 1) % n
-    faces = np.concatenate([np.concatenate([np.stack([a + j, a + n + j, a + n + k], -1),
-                                            np.stack([a + j, a + n + k, a + k], -1)])
-                            for a in range(0, n * (len(z_levels) - 1), n)])
+    faces = np.concatenate(
+        [
+            np.concatenate([np.stack([a + j, a + n + j, a + n + k], -1), np.stack([a + j, a + n + k, a + k], -1)])
+            for a in range(0, n * (len(z_levels) - 1), n)
+        ]
+    )
     return vertices, normals, _wind(vertices, normals, faces)
 
 
 def joined(*meshes):
     """One mesh of several (vertices, normals, faces) meshes."""
     offsets = np.cumsum([0] + [len(m[0]) for m in meshes[:-1]])
-    return (np.concatenate([m[0] for m in meshes]), np.concatenate([m[1] for m in meshes]),
-            np.concatenate([m[2] + o for m, o in zip(meshes, offsets)]).astype(np.int32))
+    return (
+        np.concatenate([m[0] for m in meshes]),
+        np.concatenate([m[1] for m in meshes]),
+        np.concatenate([m[2] + o for m, o in zip(meshes, offsets)]).astype(np.int32),
+    )
 
 
 def absorber_ring(rim: np.ndarray, radius: float, outer: float, z: float, phi: np.ndarray):
@@ -207,8 +234,10 @@ def absorber_ring(rim: np.ndarray, radius: float, outer: float, z: float, phi: n
     ray in a million through a shared edge; the two layers' edges cross instead of coinciding, so a ray
     let through one layer's edge meets the other's face."""
     turn = phi + math.pi / len(phi)
-    return joined(annulus_mesh(rim, circle(outer, z, phi)),
-                  annulus_mesh(circle(radius / math.cos(math.pi / len(phi)), z, turn), circle(outer, z, turn)))
+    return joined(
+        annulus_mesh(rim, circle(outer, z, phi)),
+        annulus_mesh(circle(radius / math.cos(math.pi / len(phi)), z, turn), circle(outer, z, turn)),
+    )
 
 
 def _wind(vertices: np.ndarray, normals: np.ndarray, faces: np.ndarray) -> np.ndarray:
@@ -223,11 +252,13 @@ def _wind(vertices: np.ndarray, normals: np.ndarray, faces: np.ndarray) -> np.nd
 
 def write_ply(path: str | os.PathLike, vertices: np.ndarray, normals: np.ndarray, faces: np.ndarray) -> None:
     """Binary little-endian PLY with vertex normals (what Mitsuba's `ply` shape reads)."""
-    header = ("ply\nformat binary_little_endian 1.0\n"
-              f"element vertex {len(vertices)}\n"
-              "property float x\nproperty float y\nproperty float z\n"
-              "property float nx\nproperty float ny\nproperty float nz\n"
-              f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n")
+    header = (
+        "ply\nformat binary_little_endian 1.0\n"
+        f"element vertex {len(vertices)}\n"
+        "property float x\nproperty float y\nproperty float z\n"
+        "property float nx\nproperty float ny\nproperty float nz\n"
+        f"element face {len(faces)}\nproperty list uchar int vertex_indices\nend_header\n"
+    )
     vert = np.concatenate([vertices, normals], axis=1).astype("<f4")
     face = np.zeros(len(faces), dtype=[("n", "u1"), ("i", "<i4", (3,))])
     face["n"], face["i"] = 3, faces

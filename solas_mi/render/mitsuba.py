@@ -17,6 +17,7 @@ experiment. RGB variants are refused: the lens needs a wavelength.
     scene = mi.load_file("scenes/solas_doublet/scene.xml")
     image = mi.render(scene)                     # Mitsuba's path integrator, through the lens
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -46,8 +47,10 @@ def check_variant(variant: str, response) -> None:
     (`render.response.Response`): a non-spectral variant needs a response of one wavelength."""
     check_name(variant)
     if not spectral(variant) and response.single_wavelength is None:
-        raise SolasError(f"Mitsuba variant {variant} is not spectral: it renders one wavelength, and camera response "
-                         f"{response.name} has more (use a spectral variant, or a response mono:<nm>)")
+        raise SolasError(
+            f"Mitsuba variant {variant} is not spectral: it renders one wavelength, and camera response "
+            f"{response.name} has more (use a spectral variant, or a response mono:<nm>)"
+        )
 
 
 def variant_for(response, variant: str | None = None) -> str:

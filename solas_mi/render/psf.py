@@ -8,6 +8,7 @@ the "geometric" method: the difference is the scene's geometry (mesh chords, flo
 
 Fresnel losses are off, as in the tracer's radiometry. Lengths in mm, PSF values in 1/µm².
 """
+
 from __future__ import annotations
 
 import tempfile
@@ -15,8 +16,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ..optics import pupil
-from ..optics import tracer
+from ..optics import pupil, tracer
 from ..psf.base import Computed, centring_warnings, window_centres_um
 from ..psf.geometric import bin_hits, entrance_grid, light_offsets_um
 from .loop import continue_ray, steps_per_pass
@@ -38,9 +38,16 @@ def lens_geometry(lens, rings: int | None = None, image_radius: float = 0.0, fre
         for part in lens_parts(lens, rings, image_radius, lossless=fresnel == "off"):
             path = Path(tmp) / f"{part.name}.ply"
             write_ply(path, *part.mesh)
-            bsdf = {"type": "ref", "id": "absorber"} if part.int_glass is None else {
-                "type": "sellmeier_dielectric", "ext_glass": part.ext_glass, "int_glass": part.int_glass,
-                "fresnel": fresnel}
+            bsdf = (
+                {"type": "ref", "id": "absorber"}
+                if part.int_glass is None
+                else {
+                    "type": "sellmeier_dielectric",
+                    "ext_glass": part.ext_glass,
+                    "int_glass": part.int_glass,
+                    "fresnel": fresnel,
+                }
+            )
             scene[part.name] = {"type": "ply", "filename": str(path), "bsdf": bsdf}
         return mi.load_dict(scene)  # the meshes are read here, before the folder goes
 
@@ -58,13 +65,30 @@ def scene_hits(scene, lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, ra
     for sl, ex, ey, power in entrance_grid(lens, field_deg, wavelength_nm, rays, chief):
         for j, f in enumerate(range(sl.start, sl.stop)):
             exf, eyf = ex[j].ravel(), ey[j].ravel()
-            out = [_exits(scene, lens, sampler, field_deg[f:f + 1], wavelength_nm[f:f + 1], f, depth,
-                          exf[k:k + chunk], eyf[k:k + chunk]) for k in range(0, len(exf), chunk)]
+            out = [
+                _exits(
+                    scene,
+                    lens,
+                    sampler,
+                    field_deg[f : f + 1],
+                    wavelength_nm[f : f + 1],
+                    f,
+                    depth,
+                    exf[k : k + chunk],
+                    eyf[k : k + chunk],
+                )
+                for k in range(0, len(exf), chunk)
+            ]
             ox, oy, oz, vx, vy, vz, w = (np.concatenate(a) for a in zip(*out))
             keep = (vz > 0) & (w > 0)
             s = (lens.image_z - oz[keep]) / vz[keep]
-            hits.append(((ox[keep] + s * vx[keep] - chief.image_xy[f, 0]) * 1e3,
-                         (oy[keep] + s * vy[keep] - chief.image_xy[f, 1]) * 1e3, power[j][keep] * w[keep]))
+            hits.append(
+                (
+                    (ox[keep] + s * vx[keep] - chief.image_xy[f, 0]) * 1e3,
+                    (oy[keep] + s * vy[keep] - chief.image_xy[f, 1]) * 1e3,
+                    power[j][keep] * w[keep],
+                )
+            )
     return hits
 
 
@@ -78,8 +102,9 @@ def _exits(scene, lens, sampler, field_deg, wavelength_nm, f: int, depth: int, e
     n = len(ex)
     start = pupil.Bundle(lens, field_deg, wavelength_nm, n).launch(tracer.F(ex), tracer.F(ey))
     x, y, z, dx, dy, dz = tracer.to_numpy(start.x, start.y, start.z, start.dx, start.dy, start.dz)
-    ray = mi.Ray3f(mi.Point3f(x, y, z), mi.Vector3f(dx, dy, dz), 0.0,
-                   mi.Spectrum(dr.opaque(mi.Float, float(wavelength_nm[0]))))
+    ray = mi.Ray3f(
+        mi.Point3f(x, y, z), mi.Vector3f(dx, dy, dz), 0.0, mi.Spectrum(dr.opaque(mi.Float, float(wavelength_nm[0])))
+    )
     sampler.seed(dr.opaque(mi.UInt32, f), n)
     out_o, out_d, out_w = walk(scene, ray, sampler, depth)
     return [np.asarray(a, dtype=np.float64) for a in (out_o.x, out_o.y, out_o.z, out_d.x, out_d.y, out_d.z, out_w)]
@@ -111,8 +136,16 @@ def walk(scene, ray, sampler, depth: int, watch=None):
     return out_o, out_d, out_w
 
 
-def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: float, size: int, *,
-            shared_origin: bool = False, rays: int) -> Computed:
+def compute(
+    lens,
+    field_deg: np.ndarray,
+    wavelength_nm: np.ndarray,
+    pitch_um: float,
+    size: int,
+    *,
+    shared_origin: bool = False,
+    rays: int,
+) -> Computed:
     """PSFs of field/wavelength pairs recorded through the Mitsuba scene (the PSF method "render",
     registered in `psf.registry` by this stage's package)."""
     field_deg = np.atleast_2d(np.asarray(field_deg, dtype=np.float64))
@@ -123,5 +156,11 @@ def compute(lens, field_deg: np.ndarray, wavelength_nm: np.ndarray, pitch_um: fl
     reach = np.hypot(*(chief.image_xy + (0.0 if center is None else center * 1e-3)).T).max() + size * pitch_um * 1e-3
     hits = scene_hits(lens_geometry(lens, image_radius=float(reach)), lens, field_deg, wavelength_nm, rays, chief)
     data, transmission = bin_hits(hits, pitch_um, size, center)
-    return Computed(data=data, chief=chief, transmission=transmission, vignetted_by=[[] for _ in field_deg],
-                    warnings=tuple(centring_warnings(chief, light, field_deg)), centre_um=center)
+    return Computed(
+        data=data,
+        chief=chief,
+        transmission=transmission,
+        vignetted_by=[[] for _ in field_deg],
+        warnings=tuple(centring_warnings(chief, light, field_deg)),
+        centre_um=center,
+    )

@@ -18,6 +18,7 @@ References: the CIE 1931 2° standard observer's colour-matching functions (CIE 
 "Colorimetry", 4th ed.), the D65 illuminant and the sRGB primaries (IEC 61966-2-1:1999), as
 tabulated by Mitsuba 3 (`mi.cie1931_xyz`, `mi.cie_d65`, `mi.xyz_to_srgb`), which its films use.
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -63,8 +64,11 @@ class Response:
 
     def meta(self) -> dict:
         """Name, channels and sampled wavelength range (nm) for a render's metadata."""
-        return {"response": self.name, "channels": list(self.channels),
-                "wavelength_range_nm": [float(self.lo_nm.min()), float(self.hi_nm.max())]}
+        return {
+            "response": self.name,
+            "channels": list(self.channels),
+            "wavelength_range_nm": [float(self.lo_nm.min()), float(self.hi_nm.max())],
+        }
 
 
 def lines(wavelengths_nm) -> Response:
@@ -144,18 +148,25 @@ def _numbers(line: str) -> bool:
 def table(path: str) -> Response:
     """A camera's RGB sensitivities from a CSV file of rows "wavelength_nm, r, g, b" (one header line
     of column names and "#" comment lines allowed), white-balanced for D65."""
-    rows = [line for line in read_text(path, "camera response table").splitlines()
-            if line.strip() and not line.lstrip().startswith("#")]
+    rows = [
+        line
+        for line in read_text(path, "camera response table").splitlines()
+        if line.strip() and not line.lstrip().startswith("#")
+    ]
     if rows and not _numbers(rows[0]):
         rows = rows[1:]  # a header line of column names
     try:
         data = np.loadtxt(rows, delimiter=",", ndmin=2)
     except ValueError:  # never quote the file's text (a scene may name any file)
-        raise SolasError(f"camera response table {path!r} is not a CSV table of numbers (rows 'wavelength_nm, "
-                         "r, g, b', one header line allowed)") from None
+        raise SolasError(
+            f"camera response table {path!r} is not a CSV table of numbers (rows 'wavelength_nm, "
+            "r, g, b', one header line allowed)"
+        ) from None
     if data.shape[1] != 4 or len(data) < 2:
-        raise SolasError(f"camera response table {path!r} must have rows 'wavelength_nm, r, g, b' "
-                         f"(got {data.shape[1]} columns, {len(data)} rows)")
+        raise SolasError(
+            f"camera response table {path!r} must have rows 'wavelength_nm, r, g, b' "
+            f"(got {data.shape[1]} columns, {len(data)} rows)"
+        )
     if not np.isfinite(data).all():
         row = int(np.argwhere(~np.isfinite(data))[0][0]) + 1
         raise SolasError(f"camera response table {path!r}: data row {row} holds a value that is not a finite number")

@@ -7,6 +7,7 @@ All functions take and return Dr.Jit arrays of the current Mitsuba variant (`mi.
 
 Reference: A. Kensler, "Correlated Multi-Jittered Sampling", Pixar Technical Memo 13-01, 2013.
 """
+
 from __future__ import annotations
 
 import drjit as dr
@@ -46,8 +47,7 @@ def permute(i, n: int, p):
     """A pseudo-random permutation of 0…n−1 chosen by the seed p (per element), applied to i < n."""
     w = _mask(n)
     i = _scramble(mi.UInt32(i), w, p)
-    i = dr.while_loop(state=(i, mi.UInt32(p)), cond=lambda i, p: i >= n,
-                      body=lambda i, p: (_scramble(i, w, p), p))[0]
+    i = dr.while_loop(state=(i, mi.UInt32(p)), cond=lambda i, p: i >= n, body=lambda i, p: (_scramble(i, w, p), p))[0]
     return (i + p) % n
 
 
@@ -69,7 +69,7 @@ def stratified_1d(s, n: int, seed, jitter):
 def cmj_2d(s, n: int, seed, jitter: mi.Point2f) -> mi.Point2f:
     """Sample s of a correlated multi-jittered set of n points in [0, 1)² on an m×k grid: m·k = n
     when n has a divisor near √n, else n random slots of a grid slightly larger (still uniform)."""
-    root = max(1, int(n ** 0.5))
+    root = max(1, int(n**0.5))
     m = next(d for d in range(root, 0, -1) if n % d == 0)
     if 2 * m < root:  # no useful factorisation: leave a few slots empty instead
         m = root

@@ -19,8 +19,8 @@ import numpy as np
 
 from ..errors import SolasError
 from ..imageio import atomic_path, write_text
-from ..optics.camera import Camera, camera_for
 from ..optics import thermal, virtual_object
+from ..optics.camera import Camera, camera_for
 from ..optics.lens import Lens
 from ..outputs import inside, safe_name
 from ..psf.registry import METHODS

@@ -7,6 +7,7 @@ and its flag.
 A batch sweeps over some of its fields with `dataclasses.replace`; each item's settings are
 `as_dict()` in the manifest and read back with `from_dict`. Light: no Mitsuba or Dr.Jit here.
 """
+
 from __future__ import annotations
 
 import math
@@ -20,7 +21,9 @@ from .labels import LABELS, parse_labels
 from .mitsuba import MAX_SEED, VARIANTS, check_name
 
 FRESNEL_MODES = ("transmit", "sample", "off")  # sellmeier_dielectric's `fresnel` (it reads them from here)
-AUTO_MIN_RINGS = 32  # the fewest rings the automatic count (`render.mesh.mesh_rings`) gives; denser meshes render slower
+AUTO_MIN_RINGS = (
+    32  # the fewest rings the automatic count (`render.mesh.mesh_rings`) gives; denser meshes render slower
+)
 # rings per cap mesh: 4·rings² vertices each. Measured (solas-doublet, meshes built and written, 2 cores):
 # 256 rings 0.6 s, 39 MB of PLY, 0.26 GB peak; 512 rings 2.8 s, 157 MB, 0.86 GB; 1024 rings 10 s, 629 MB,
 # 3.3 GB; 4096 rings would be 16x that (53 GB). The scene PSFs converged long before (32: 0.2 %, README)
@@ -89,30 +92,53 @@ class RenderSpec(OptionSpec):
     (4, (24, 32))
     """
 
-    sensor: tuple[int, int] = option("sensor pixels, columns x rows", (960, 1280), parse=_sensor, metavar="WxH",
-                                     shown=wxh_text)
-    pitch_um: float | None = option("pixel pitch (µm; default: the sensor's width spans the field)", parse=float,
-                                   metavar="P")
-    fov_deg: float | None = option("half the horizontal field the image spans (degrees; default: the lens's)",
-                                  parse=float)
+    sensor: tuple[int, int] = option(
+        "sensor pixels, columns x rows", (960, 1280), parse=_sensor, metavar="WxH", shown=wxh_text
+    )
+    pitch_um: float | None = option(
+        "pixel pitch (µm; default: the sensor's width spans the field)", parse=float, metavar="P"
+    )
+    fov_deg: float | None = option(
+        "half the horizontal field the image spans (degrees; default: the lens's)", parse=float
+    )
     response: str = option("camera response: srgb, lines, mono:<nm>, table:<file.csv>", "srgb")
-    boundary: str = option("the object outside the image: edge (repeat the border), reflect, zero (black)", "edge",
-                          choices=BOUNDARIES)
-    fresnel: str = option("Fresnel losses: transmit (weight by transmittance), sample (ghost paths too), off",
-                         "transmit", choices=FRESNEL_MODES)
-    rings: int | None = option(f"rings of each cap mesh ({MIN_RINGS}..{MAX_RINGS}; default: from the lens, so that the "
-                              "meshes blur a point by under a quarter of the Airy radius)", parse=int)
-    mapping: str = option("projection of the input image at infinity: rectilinear, or for wide and fisheye lenses "
-                         "equidistant, equisolid, equirectangular (an environment image spanning +-fov-deg)",
-                         "rectilinear", choices=MAPPINGS)
+    boundary: str = option(
+        "the object outside the image: edge (repeat the border), reflect, zero (black)", "edge", choices=BOUNDARIES
+    )
+    fresnel: str = option(
+        "Fresnel losses: transmit (weight by transmittance), sample (ghost paths too), off",
+        "transmit",
+        choices=FRESNEL_MODES,
+    )
+    rings: int | None = option(
+        f"rings of each cap mesh ({MIN_RINGS}..{MAX_RINGS}; default: from the lens, so that the "
+        "meshes blur a point by under a quarter of the Airy radius)",
+        parse=int,
+    )
+    mapping: str = option(
+        "projection of the input image at infinity: rectilinear, or for wide and fisheye lenses "
+        "equidistant, equisolid, equirectangular (an environment image spanning +-fov-deg)",
+        "rectilinear",
+        choices=MAPPINGS,
+    )
     spp: int = option("samples per pixel", 64, parse=int, metavar="N")
-    variant: str | None = option("Mitsuba variant (default: cuda_ad_spectral with a GPU, else llvm_ad_spectral; a "
-                                "mono variant needs a response of one wavelength, mono:<nm>)", choices=VARIANTS)
+    variant: str | None = option(
+        "Mitsuba variant (default: cuda_ad_spectral with a GPU, else llvm_ad_spectral; a "
+        "mono variant needs a response of one wavelength, mono:<nm>)",
+        choices=VARIANTS,
+    )
     seed: int = option("the sampler's seed (a batch's base seed: each item's derives from it)", 0, parse=int)
-    focus_distance: float | None = option("scene files: focus distance in world units (inf: infinity; default: the "
-                                         "lens file's image plane)", parse=_focus, metavar="D")
-    labels: str = option(f"scene files through a lens: label layers traced along each pixel's chief ray into the EXR, "
-                        f"comma-separated: {', '.join(LABELS)} (default: none)", "", metavar="LIST")
+    focus_distance: float | None = option(
+        "scene files: focus distance in world units (inf: infinity; default: the lens file's image plane)",
+        parse=_focus,
+        metavar="D",
+    )
+    labels: str = option(
+        f"scene files through a lens: label layers traced along each pixel's chief ray into the EXR, "
+        f"comma-separated: {', '.join(LABELS)} (default: none)",
+        "",
+        metavar="LIST",
+    )
 
     def __post_init__(self) -> None:
         set_ = lambda name, value: object.__setattr__(self, name, value)  # noqa: E731 (frozen: normalised once)
@@ -155,8 +181,10 @@ class RenderSpec(OptionSpec):
         """
         unknown = set(changes) - set(self.fields_by_name())
         if unknown:
-            raise SolasError(f"unknown render setting(s) {', '.join(sorted(unknown))}: the settings are "
-                             f"{', '.join(self.fields_by_name())}")
+            raise SolasError(
+                f"unknown render setting(s) {', '.join(sorted(unknown))}: the settings are "
+                f"{', '.join(self.fields_by_name())}"
+            )
         return replace(self, **changes)
 
     def as_dict(self) -> dict[str, Any]:
@@ -195,8 +223,13 @@ class RenderSpec(OptionSpec):
 
 def check_rings(rings) -> int:
     """`rings` (rings per cap mesh), or SolasError unless it is an integer in MIN_RINGS..MAX_RINGS."""
-    _check_int("cap rings", rings, MIN_RINGS, MAX_RINGS,
-               why=f" (a cap mesh has 4·rings² vertices: {MAX_RINGS} rings are 1 M per cap)")
+    _check_int(
+        "cap rings",
+        rings,
+        MIN_RINGS,
+        MAX_RINGS,
+        why=f" (a cap mesh has 4·rings² vertices: {MAX_RINGS} rings are 1 M per cap)",
+    )
     return rings
 
 
@@ -213,6 +246,7 @@ def _optional_positive(name: str, value, allow_inf: bool = False) -> float | Non
     except (TypeError, ValueError):
         number = math.nan
     if not number > 0 or (math.isinf(number) and not allow_inf):
-        raise SolasError(f"{name} {value!r} must be a positive number" + (" or inf" if allow_inf else "") +
-                         " (or not given)")
+        raise SolasError(
+            f"{name} {value!r} must be a positive number" + (" or inf" if allow_inf else "") + " (or not given)"
+        )
     return number

@@ -6,6 +6,7 @@ film's value, so the spp-weighted mean is too).
 Pixel values are what the scene's film develops (hdrfilm: linear RGB; specfilm: one channel per
 sensitivity; aov: the extra channels after the colour ones), written with the film's channel names.
 """
+
 from __future__ import annotations
 
 import math
@@ -73,7 +74,11 @@ def render_scene(scene, spp: int, seed: int = 0, progress=None, labels=()) -> Re
     sensor = scene.sensors()[0]
     film = sensor.film()
     width, height = (int(v) for v in film.crop_size())
-    per_pass = spp if not str(mi.variant()).startswith(("llvm", "cuda")) else max(1, min(spp, SAMPLES_PER_PASS // (width * height)))
+    per_pass = (
+        spp
+        if not str(mi.variant()).startswith(("llvm", "cuda"))
+        else max(1, min(spp, SAMPLES_PER_PASS // (width * height)))
+    )
     passes = math.ceil(spp / per_pass)
     total: np.ndarray | None = None
     names: list[str] = []
@@ -96,9 +101,20 @@ def render_scene(scene, spp: int, seed: int = 0, progress=None, labels=()) -> Re
     assert total is not None  # spp >= 1 (check_run): one pass at least
     image = (total / spp).astype(np.float32)
     integrator = str(scene.integrator()).split("[", 1)[0]
-    result = Render(image, tuple(names), spp, seconds, width * height * spp / seconds,
-                    {"variant": mi.variant(), "integrator": integrator, "sensor": str(sensor).split("[", 1)[0],
-                     "passes": passes, "seconds": seconds})
+    result = Render(
+        image,
+        tuple(names),
+        spp,
+        seconds,
+        width * height * spp / seconds,
+        {
+            "variant": mi.variant(),
+            "integrator": integrator,
+            "sensor": str(sensor).split("[", 1)[0],
+            "passes": passes,
+            "seconds": seconds,
+        },
+    )
     if labels:
         result.layers, result.meta["labels"] = layers, label_meta
     return result

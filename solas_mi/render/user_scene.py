@@ -22,6 +22,7 @@ Meshes are not merged (Mitsuba's parser by default joins all meshes of one mater
 mesh, `merge_meshes`): each shape keeps its id, which the instance labels name. Measured on 3000
 rectangles of one material, 256×256 at 16 spp: the render is no slower unmerged (2.2 s against 2.5 s).
 """
+
 from __future__ import annotations
 
 import math
@@ -39,8 +40,17 @@ from .scene import lens_file
 SWAPPABLE = ("perspective", "thinlens")
 FILM_DEFAULT = (768, 576)  # Mitsuba's film size when the scene names none
 MAX_HALF_FIELD_DEG = 89.0  # a perspective camera's half field the lens camera takes (tan θ finite)
-CAMERA_ONLY = ("fov", "focal_length", "fov_axis", "near_clip", "far_clip", "focus_distance", "aperture_radius",
-               "principal_point_offset_x", "principal_point_offset_y")  # what the lens camera replaces
+CAMERA_ONLY = (
+    "fov",
+    "focal_length",
+    "fov_axis",
+    "near_clip",
+    "far_clip",
+    "focus_distance",
+    "aperture_radius",
+    "principal_point_offset_x",
+    "principal_point_offset_y",
+)  # what the lens camera replaces
 
 
 def _scene_text(xml_path: str | Path) -> str:
@@ -77,7 +87,9 @@ def _parse(mi, xml_path: str | Path, params: dict | None):
     _scene_text(path)
     config = mi.parser.ParserConfig(mi.variant())
     config.parallel = False  # our plugins trace with Dr.Jit when built: on the calling thread (`mitsuba.load_scene`)
-    config.merge_meshes = False  # Mitsuba's default joins meshes of one material into one unnamed mesh: labels name each
+    config.merge_meshes = (
+        False  # Mitsuba's default joins meshes of one material into one unnamed mesh: labels name each
+    )
     try:
         return config, mi.parser.parse_file(config, str(path), **{k: str(v) for k, v in (params or {}).items()})
     except RuntimeError as exc:
@@ -147,8 +159,9 @@ def _size(film) -> tuple[int, int]:
         return FILM_DEFAULT
     size = (int(film.props.get("width", FILM_DEFAULT[0])), int(film.props.get("height", FILM_DEFAULT[1])))
     if min(size) < 1:
-        raise SolasError(f"the scene's film is {size[0]}x{size[1]} px (after --set); its width and height must be at "
-                         "least 1 pixel")
+        raise SolasError(
+            f"the scene's film is {size[0]}x{size[1]} px (after --set); its width and height must be at least 1 pixel"
+        )
     return size
 
 
@@ -162,8 +175,9 @@ def field_half_angle(mi, sensor, width: int, height: int) -> tuple[float, str]:
     if axis not in ("x", "y", "diagonal"):
         raise SolasError(f"sensor fov_axis {axis!r} must be one of x, y, diagonal, smaller, larger")
     try:
-        camera = mi.load_dict({"type": "perspective", **props,
-                               "film": {"type": "hdrfilm", "width": width, "height": height}})
+        camera = mi.load_dict(
+            {"type": "perspective", **props, "film": {"type": "hdrfilm", "width": width, "height": height}}
+        )
     except RuntimeError as exc:
         raise plugin_error(exc, "the scene's camera") from None
     t = math.tan(math.radians(0.5 * float(mi.traverse(camera)["x_fov"][0])))
@@ -176,10 +190,15 @@ def default_pitch_um(lens, half_deg: float, axis: str, width: int, height: int) 
     from ..optics.pupil import chief_rays
 
     if not 0.0 < half_deg < MAX_HALF_FIELD_DEG:
-        raise SolasError(f"the scene's camera half field {half_deg:g} deg must lie in (0, {MAX_HALF_FIELD_DEG:g}) degrees")
+        raise SolasError(
+            f"the scene's camera half field {half_deg:g} deg must lie in (0, {MAX_HALF_FIELD_DEG:g}) degrees"
+        )
     span = {"x": width, "y": height, "diagonal": math.hypot(width, height)}[axis]
-    direction = {"x": (1.0, 0.0), "y": (0.0, 1.0), "diagonal": (width / math.hypot(width, height),
-                                                                   height / math.hypot(width, height))}[axis]
+    direction = {
+        "x": (1.0, 0.0),
+        "y": (0.0, 1.0),
+        "diagonal": (width / math.hypot(width, height), height / math.hypot(width, height)),
+    }[axis]
     t = math.tan(math.radians(half_deg))
     field = np.degrees(np.arctan(np.array([[t * direction[0], t * direction[1]]])))
     try:
@@ -187,17 +206,20 @@ def default_pitch_um(lens, half_deg: float, axis: str, width: int, height: int) 
         if chief.vignetted[0]:  # no light along it: its image height frames nothing
             raise SolasError("its chief ray there is blocked by an aperture")
     except SolasError as exc:
-        raise SolasError(f"the scene's camera sees ±{half_deg:g} deg along {axis} and lens {lens.name} cannot image "
-                         f"that field ({exc}); narrow the camera's fov, or give --pitch-um for a film that the "
-                         "lens's field covers (beyond it, the dark corners a real camera shows)") from None
+        raise SolasError(
+            f"the scene's camera sees ±{half_deg:g} deg along {axis} and lens {lens.name} cannot image "
+            f"that field ({exc}); narrow the camera's fov, or give --pitch-um for a film that the "
+            "lens's field covers (beyond it, the dark corners a real camera shows)"
+        ) from None
     return 2e3 * float(np.hypot(*chief.image_xy[0])) / span
 
 
 def _first_sensor(mi, state, path):
     sensors = [n for n in state.nodes if n.type == mi.ObjectType.Sensor]
     if not sensors:
-        raise SolasError(f"scene {path} has no <sensor> (includes read); add a perspective camera where the lens "
-                         "should be")
+        raise SolasError(
+            f"scene {path} has no <sensor> (includes read); add a perspective camera where the lens should be"
+        )
     kind = sensors[0].props.plugin_name()
     if kind not in SWAPPABLE:
         raise SolasError(f"the scene's sensor is {kind!r}; --lens replaces a {' or '.join(SWAPPABLE)} camera")
@@ -230,8 +252,10 @@ def _swap_sensor(mi, state, path, lens, held: Path, options: dict, notes: list) 
         focus = float(props["focus_distance"])
         notes.append(f"focus distance {focus:g} from the scene's thinlens camera")
     if props.plugin_name() == "thinlens":
-        notes.append(f"the scene's thinlens aperture_radius {props.get('aperture_radius', 0.02)!r} is not used: "
-                     f"the lens {lens.name} has its own stop")
+        notes.append(
+            f"the scene's thinlens aperture_radius {props.get('aperture_radius', 0.02)!r} is not used: "
+            f"the lens {lens.name} has its own stop"
+        )
     for name in CAMERA_ONLY:
         if name in props:
             del props[name]
@@ -257,8 +281,14 @@ def _centre_depth(scene) -> float:
     return t if np.isfinite(t) and t > 0 else math.inf
 
 
-def load(xml_path: str | Path, variant: str | None = None, lens=None, params: dict | None = None,
-         notes: list | None = None, **lens_options):
+def load(
+    xml_path: str | Path,
+    variant: str | None = None,
+    lens=None,
+    params: dict | None = None,
+    notes: list | None = None,
+    **lens_options,
+):
     """The scene file `xml_path` loaded in Mitsuba (plugins registered) with `params` (as `mi.load_file`
     takes them), relative paths from the scene's folder: a path integrator where it has none and, given
     `lens`, its first sensor a lens_camera (`lens_options`: pitch_um, focus_distance (world units or
@@ -271,7 +301,9 @@ def load(xml_path: str | Path, variant: str | None = None, lens=None, params: di
     resolver = mi.file_resolver()
     resolver.prepend(str(Path(xml_path).resolve().parent))
     try:
-        with tempfile.TemporaryDirectory(prefix="solas-lens-") as folder:  # the lens camera reads its lens while loading
+        with tempfile.TemporaryDirectory(
+            prefix="solas-lens-"
+        ) as folder:  # the lens camera reads its lens while loading
             held = lens_file(lens, folder) if lens is not None else None
             scene = _built(mi, xml_path, params, lens, held, lens_options, notes)
             if lens is not None and lens_options.get("focus_distance") == "auto":
@@ -286,8 +318,10 @@ def load(xml_path: str | Path, variant: str | None = None, lens=None, params: di
     except (ValueError, ZeroDivisionError) as exc:  # the camera's numbers as the lens camera reads them
         if lens is None:
             raise
-        raise SolasError(f"scene {xml_path}: its camera's film size and field must be numbers (a film of at least "
-                         f"1x1 px) for the lens camera to replace it: {type(exc).__name__}: {exc}") from None
+        raise SolasError(
+            f"scene {xml_path}: its camera's film size and field must be numbers (a film of at least "
+            f"1x1 px) for the lens camera to replace it: {type(exc).__name__}: {exc}"
+        ) from None
     finally:
         del resolver[0]
 
@@ -312,8 +346,12 @@ def camera_meta(scene) -> dict:
     """The lens camera's pitch (µm), focus distance, world unit (mm) and f-number (`unit_f_number`) for a
     render's metadata."""
     sensor = scene.sensors()[0]
-    return {"pitch_um": sensor.pitch_um, "focus_distance": sensor.focus_distance,
-            "world_unit_mm": sensor.world_unit_mm, "f_number": unit_f_number(sensor)}
+    return {
+        "pitch_um": sensor.pitch_um,
+        "focus_distance": sensor.focus_distance,
+        "world_unit_mm": sensor.world_unit_mm,
+        "f_number": unit_f_number(sensor),
+    }
 
 
 def unit_f_number(sensor) -> float:

@@ -16,6 +16,7 @@
 - `capture`: photons → electrons → digital numbers through the chain, with shot, dark and read noise,
   PRNU, DSNU, full well, conversion gain, ADC bit depth and black level; deterministic for a seed.
 """
+
 from ..lazy import lazy_exports
 
 # `capture.capture` is not exported here: its module's own name would hide it once imported

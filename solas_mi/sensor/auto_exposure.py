@@ -13,6 +13,7 @@ reference photodiode's electrons where its last readout saturates, `chain.Sensor
 puts the P-th percentile's mean signal at the fraction F of saturation; the pixels above it are the
 (100 − P) % that may clip. A frame with no light at that percentile has no such exposure (refused).
 """
+
 from __future__ import annotations
 
 import math
@@ -36,7 +37,10 @@ class AutoExposure:
     fraction: float = 0.8
 
     def __post_init__(self):
-        for name, value, low, high in (("percentile", self.percentile, 0.0, 100.0), ("fraction", self.fraction, 0.0, 1.0)):
+        for name, value, low, high in (
+            ("percentile", self.percentile, 0.0, 100.0),
+            ("fraction", self.fraction, 0.0, 1.0),
+        ):
             if isinstance(value, bool) or not isinstance(value, (int, float)) or not low < value <= high:
                 raise SolasError(f"auto-exposure {name} {value!r} must be a number in ({low:g}, {high:g}]")
 
@@ -50,19 +54,29 @@ class AutoExposure:
         try:
             per_second = mean_electrons(model, irradiance, 1.0)
         except SolasError:  # the light of one second (an image checked finite and >= 0) passes a float64
-            raise SolasError(f"auto-exposure: irradiance up to {float(np.max(irradiance)):.3g} W/m² gives more "
-                             "photo-electrons per second than a float64 holds (1.8e308); give a smaller --scale") from None
+            raise SolasError(
+                f"auto-exposure: irradiance up to {float(np.max(irradiance)):.3g} W/m² gives more "
+                "photo-electrons per second than a float64 holds (1.8e308); give a smaller --scale"
+            ) from None
         rate = float(np.percentile(per_second, self.percentile))
         if not rate > 0:
-            raise SolasError(f"auto-exposure: the {self.percentile:g}th percentile of the frame's pixels gets no light "
-                             "(0 photo-electrons/s); give --exposure-ms in ms, or a lower percentile")
+            raise SolasError(
+                f"auto-exposure: the {self.percentile:g}th percentile of the frame's pixels gets no light "
+                "(0 photo-electrons/s); give --exposure-ms in ms, or a lower percentile"
+            )
         saturation_e = model.saturation_e
         seconds = self.fraction * saturation_e / (rate + model.dark_current_e_s)
-        return seconds, {**self.describe(), "percentile_e_per_s": rate, "saturation_e": saturation_e,
-                         "exposure_ms": seconds * 1e3}
+        return seconds, {
+            **self.describe(),
+            "percentile_e_per_s": rate,
+            "saturation_e": saturation_e,
+            "exposure_ms": seconds * 1e3,
+        }
 
 
-def exposure_seconds(exposure: float | AutoExposure, model: SensorModel | SensorChain, irradiance: np.ndarray) -> tuple[float, dict]:
+def exposure_seconds(
+    exposure: float | AutoExposure, model: SensorModel | SensorChain, irradiance: np.ndarray
+) -> tuple[float, dict]:
     """The exposure (s) of a frame: `exposure` ms as given, or chosen from the irradiance (`AutoExposure`),
     with what it was chosen from ({} when given)."""
     if isinstance(exposure, AutoExposure):
@@ -76,14 +90,16 @@ def parse_exposure(text, flag: str = "--exposure-ms") -> float | AutoExposure:
         return text
     word = str(text).strip()
     if word == AUTO or word.startswith(AUTO + ":"):
-        parts = word[len(AUTO) + 1:].split(",") if word != AUTO else []
+        parts = word[len(AUTO) + 1 :].split(",") if word != AUTO else []
         try:
             values = [float(p) for p in parts]
         except ValueError:
             values = []
         if len(values) != len(parts) or len(values) not in (0, 2):
-            raise SolasError(f"{flag} {text!r} must be a time in ms, {AUTO}, or {AUTO}:P,F (percentile P of the "
-                             "pixels at fraction F of saturation, e.g. auto:99,0.8)")
+            raise SolasError(
+                f"{flag} {text!r} must be a time in ms, {AUTO}, or {AUTO}:P,F (percentile P of the "
+                "pixels at fraction F of saturation, e.g. auto:99,0.8)"
+            )
         return AutoExposure(*values)
     try:
         value = float(word)

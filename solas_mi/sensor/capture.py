@@ -9,6 +9,7 @@ hot pixels are a stage of their own (`defects`). The fixed
 pattern (PRNU, DSNU) comes from the seed alone, so every frame of one seed shares it; the temporal noise
 comes from (seed, frame). A flat sensor (`model.SensorModel`) is the chain of one readout (`chain.chain_of`).
 """
+
 import numpy as np
 
 from ..errors import SolasError
@@ -58,16 +59,18 @@ def check_frame(frame) -> None:
         raise SolasError(f"sensor frame {frame!r} must be an integer >= 0")
 
 
-def capture_readouts(sensor: SensorModel | SensorChain, irradiance: np.ndarray, exposure_s: float, seed: int,
-                     frame: int = 0) -> list[np.ndarray]:
+def capture_readouts(
+    sensor: SensorModel | SensorChain, irradiance: np.ndarray, exposure_s: float, seed: int, frame: int = 0
+) -> list[np.ndarray]:
     """Each readout's frame (H, W, uint16 DN), in the chain's order, before any merge."""
     check_seed(seed)
     check_frame(frame)
     return as_chain(sensor).readout_frames(irradiance, exposure_s, seed, frame)
 
 
-def capture(sensor: SensorModel | SensorChain, irradiance: np.ndarray, exposure_s: float, seed: int,
-            frame: int = 0) -> np.ndarray:
+def capture(
+    sensor: SensorModel | SensorChain, irradiance: np.ndarray, exposure_s: float, seed: int, frame: int = 0
+) -> np.ndarray:
     """The RAW frame a sensor gives for an image-plane irradiance image: photons → electrons → DN.
 
     Shot, dark and read noise, PRNU and DSNU, full well, conversion gain, ADC and black level, through the

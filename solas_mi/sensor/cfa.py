@@ -5,6 +5,7 @@ R, G and B sites sample the image's channels 0, 1 and 2; a clear site (C, of RCC
 automotive patterns) has no colour filter and collects all three (`CHANNELS`: the scalar model; a QE
 curve also gives each filter what it passes of the other channels, `qe`).
 """
+
 import numpy as np
 
 from ..errors import SolasError
@@ -16,8 +17,10 @@ CHANNELS = {"R": (0,), "G": (1,), "B": (2,), "C": (0, 1, 2)}  # the image channe
 
 def check_pattern(pattern: str) -> str:
     if not isinstance(pattern, str) or pattern not in PATTERNS:
-        raise SolasError(f"sensor cfa = {pattern!r} must be one of {', '.join(PATTERNS)} (the colour filter array's "
-                         "2×2 tile, row by row)")
+        raise SolasError(
+            f"sensor cfa = {pattern!r} must be one of {', '.join(PATTERNS)} (the colour filter array's "
+            "2×2 tile, row by row)"
+        )
     return pattern
 
 

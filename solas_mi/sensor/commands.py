@@ -2,6 +2,7 @@
 `sensors`, the shipped sensor presets.
 
 NumPy, OpenEXR and the sensor modules are imported when the command runs."""
+
 from __future__ import annotations
 
 import argparse
@@ -39,14 +40,18 @@ def read_input(path):
     from ..imageio import check_finite, read_exr
 
     if Path(path).suffix.lower() != ".exr":
-        raise SolasError(f"{path}: the sensor reads an OpenEXR image of linear irradiance (R, G, B), not a "
-                         f"{Path(path).suffix or 'suffix-less'} file; give the EXR of a render, render-image or "
-                         "degrade (a photograph: through a lens first, e.g. render-image LENS PHOTO -o OUT.exr)")
+        raise SolasError(
+            f"{path}: the sensor reads an OpenEXR image of linear irradiance (R, G, B), not a "
+            f"{Path(path).suffix or 'suffix-less'} file; give the EXR of a render, render-image or "
+            "degrade (a photograph: through a lens first, e.g. render-image LENS PHOTO -o OUT.exr)"
+        )
     channels, meta = read_exr(path)
     missing = [c for c in "RGB" if c not in channels]
     if missing:
-        raise SolasError(f"{path}: channels {', '.join(missing)} missing; the sensor needs R, G and B "
-                         f"(found {', '.join(sorted(channels))})")
+        raise SolasError(
+            f"{path}: channels {', '.join(missing)} missing; the sensor needs R, G and B "
+            f"(found {', '.join(sorted(channels))})"
+        )
     image = check_finite(np.stack([channels[c] for c in "RGB"], axis=-1).astype(np.float64), str(path))
     return image, meta
 
@@ -67,15 +72,23 @@ def radiance_f_number(given: float | None, meta: dict, what: str) -> tuple[float
     if given is not None:
         given = check_f_number(given, "--f-number")
         shown = f"f/{own:.4g}" if isinstance(own, (int, float)) and not isinstance(own, bool) else f"f_number {own!r}"
-        notice = (f"{what}: --f-number {given:g} differs from the image's own {shown} (its lens's, from its "
-                  "metadata); --f-number used") if own is not None and own != given else None
+        notice = (
+            (
+                f"{what}: --f-number {given:g} differs from the image's own {shown} (its lens's, from its "
+                "metadata); --f-number used"
+            )
+            if own is not None and own != given
+            else None
+        )
         return given, {"f_number": given, "f_number_source": "--f-number", "f_number_of_input": own}, notice
     if own is None:
         return None, {"f_number": None, "f_number_source": None}, None
     own = check_f_number(own, f"{what}: the f_number in its metadata")
     source = f"input metadata (lens {meta.get('lens', 'unnamed')})"
-    notice = (f"{what}: read as radiance through the camera equation at f/{own:.4g}, its lens's f-number from its "
-              "metadata (--f-number sets another)")
+    notice = (
+        f"{what}: read as radiance through the camera equation at f/{own:.4g}, its lens's f-number from its "
+        "metadata (--f-number sets another)"
+    )
     return own, {"f_number": own, "f_number_source": source}, notice
 
 
@@ -85,9 +98,11 @@ def clipping_warning(model, raw, exposure_ms: float, what: str) -> tuple[float, 
     fraction = float(model.saturated(raw).mean()) if raw.size else 0.0
     if fraction <= CLIPPED_WARNING:
         return fraction, None
-    return fraction, (f"{what}: {100 * fraction:.1f} % of the RAW's pixels are saturated (full well or white level) "
-                      f"at {exposure_ms:.4g} ms; give a shorter --exposure-ms or a smaller --scale, or --exposure-ms "
-                      "auto (an exposure chosen from the light)")
+    return fraction, (
+        f"{what}: {100 * fraction:.1f} % of the RAW's pixels are saturated (full well or white level) "
+        f"at {exposure_ms:.4g} ms; give a shorter --exposure-ms or a smaller --scale, or --exposure-ms "
+        "auto (an exposure chosen from the light)"
+    )
 
 
 def check_camera_memory(args: argparse.Namespace, develop_bytes_per_pixel: float = 0.0, readouts: int = 1) -> None:
@@ -103,17 +118,21 @@ def check_camera_memory(args: argparse.Namespace, develop_bytes_per_pixel: float
     check_memory(f"camera {cols}x{rows}", need, args.force, "a smaller image")
 
 
-def frame_bytes(rows: int, cols: int, channels: int = 3, develop_bytes_per_pixel: float = 0.0,
-                readouts: int = 1) -> float:
+def frame_bytes(
+    rows: int, cols: int, channels: int = 3, develop_bytes_per_pixel: float = 0.0, readouts: int = 1
+) -> float:
     """The camera's peak memory for a frame beyond its modules (bytes): the largest of the EXR read (of
     `channels` channels), the sensor's chain (of `readouts` readouts) and the image processor's (0: none)."""
     read = READ_BYTES_PER_VALUE * channels + READ_BYTES_PER_PIXEL
-    chain = RAW_BYTES_PER_PIXEL + (MERGE_BYTES_PER_PIXEL + READOUT_BYTES_PER_PIXEL * (readouts - 1) if readouts > 1 else 0.0)
+    chain = RAW_BYTES_PER_PIXEL + (
+        MERGE_BYTES_PER_PIXEL + READOUT_BYTES_PER_PIXEL * (readouts - 1) if readouts > 1 else 0.0
+    )
     return rows * cols * max(read, chain, develop_bytes_per_pixel)
 
 
-def as_irradiance(image, meta: dict, what: str, scale: float = 1.0, f_number: float | None = None,
-                  transmission: float = 1.0):
+def as_irradiance(
+    image, meta: dict, what: str, scale: float = 1.0, f_number: float | None = None, transmission: float = 1.0
+):
     """An input image (H, W, 3) with its metadata as image-plane irradiance in W/m², how it was read (for
     the RAW's metadata) and a notice (None: nothing to say): its R, G, B times `scale` (negative values
     read as no light, `exposure.negatives_as_no_light`), through the camera equation when it is radiance
@@ -127,15 +146,19 @@ def as_irradiance(image, meta: dict, what: str, scale: float = 1.0, f_number: fl
     with np.errstate(over="ignore"):
         scaled = image * scale
     if not np.all(np.isfinite(scaled)):
-        raise SolasError(f"--scale {scale:g} times the image's largest value {np.abs(image).max():.3g} passes the "
-                         "largest float64 (1.8e308); give a smaller --scale")
+        raise SolasError(
+            f"--scale {scale:g} times the image's largest value {np.abs(image).max():.3g} passes the "
+            "largest float64 (1.8e308); give a smaller --scale"
+        )
     image, negative = negatives_as_no_light(scaled, what)
     f_number, reading, notice = radiance_f_number(f_number, meta, what)
     reading.update(scale=scale, transmission=transmission, negative_values_taken_as_zero=negative)
     if f_number is None:
         if transmission != 1.0:
-            raise SolasError("--transmission applies with --f-number (or a render that states its f-number): to "
-                             "radiance; give --f-number too")
+            raise SolasError(
+                "--transmission applies with --f-number (or a render that states its f-number): to "
+                "radiance; give --f-number too"
+            )
         return image, reading, notice
     return image_irradiance(image, f_number, transmission), reading, notice
 
@@ -150,8 +173,10 @@ def parse_flicker(text: str) -> tuple[tuple[int, int, int, int], tuple[float, ..
     except ValueError:
         box, numbers = (), ()
     if len(box) != 4 or not 2 <= len(numbers) <= 3 or min(box[:2]) < 0 or box[2] <= box[0] or box[3] <= box[1]:
-        raise SolasError(f"--flicker {text!r} must be {FLICKER_FORM}: a box of whole pixels x0 < x1, y0 < y1 "
-                         "from 0, the PWM frequency (Hz), duty cycle and phase (fractions)")
+        raise SolasError(
+            f"--flicker {text!r} must be {FLICKER_FORM}: a box of whole pixels x0 < x1, y0 < y1 "
+            "from 0, the PWM frequency (Hz), duty cycle and phase (fractions)"
+        )
     return (box[0], box[1], box[2], box[3]), numbers
 
 
@@ -162,8 +187,10 @@ def parse_motion(text: str) -> tuple[float, float]:
     except ValueError:
         velocity = ()
     if len(velocity) != 2 or not all(math.isfinite(v) for v in velocity):
-        raise SolasError(f"--image-motion {text!r} must be VX,VY: the image's speed in pixels per second, "
-                         "rightwards and downwards, two finite numbers")
+        raise SolasError(
+            f"--image-motion {text!r} must be VX,VY: the image's speed in pixels per second, "
+            "rightwards and downwards, two finite numbers"
+        )
     return velocity[0], velocity[1]
 
 
@@ -183,16 +210,22 @@ def timed_scene(args: argparse.Namespace):
 
 def add_time_options(p: Any) -> None:
     """--flicker and --image-motion: a still image made a scene in time (`timing.SceneInTime`)."""
-    p.add_argument("--flicker", metavar=FLICKER_FORM,
-                   help="the pixels of columns X0 to X1 - 1 and rows Y0 to Y1 - 1 are light driven by pulse-width "
-                        "modulation at HZ with duty cycle DUTY and phase PHASE (fractions; default phase 0): each "
-                        "row sees it over its window of the exposure (the sensor's [sensor.shutter], global "
-                        "without one), e.g. an LED traffic light (default: none)")
-    p.add_argument("--image-motion", metavar="VX,VY",
-                   help="the image moves at VX, VY pixels per second (right, down) during the frame, e.g. a camera "
-                        "panning across a distant scene: each row sees it over its window of the exposure (a "
-                        "rolling shutter skews it, every shutter blurs it; sampled at the shutter's time_samples) "
-                        "(default: still)")
+    p.add_argument(
+        "--flicker",
+        metavar=FLICKER_FORM,
+        help="the pixels of columns X0 to X1 - 1 and rows Y0 to Y1 - 1 are light driven by pulse-width "
+        "modulation at HZ with duty cycle DUTY and phase PHASE (fractions; default phase 0): each "
+        "row sees it over its window of the exposure (the sensor's [sensor.shutter], global "
+        "without one), e.g. an LED traffic light (default: none)",
+    )
+    p.add_argument(
+        "--image-motion",
+        metavar="VX,VY",
+        help="the image moves at VX, VY pixels per second (right, down) during the frame, e.g. a camera "
+        "panning across a distant scene: each row sees it over its window of the exposure (a "
+        "rolling shutter skews it, every shutter blurs it; sampled at the shutter's time_samples) "
+        "(default: still)",
+    )
 
 
 def raw_frame(args: argparse.Namespace, develop_bytes_per_pixel: float = 0.0):
@@ -208,8 +241,9 @@ def raw_frame(args: argparse.Namespace, develop_bytes_per_pixel: float = 0.0):
     timed = timed_scene(args)
     check_camera_memory(args, develop_bytes_per_pixel, len(as_chain(model).readouts))
     image, meta_in = read_input(args.image)
-    irradiance, reading, notice = as_irradiance(image, meta_in, str(args.image), args.scale, args.f_number,
-                                                args.transmission)
+    irradiance, reading, notice = as_irradiance(
+        image, meta_in, str(args.image), args.scale, args.f_number, args.transmission
+    )
     if notice:
         print(f"notice: {notice}", file=sys.stderr)
     seconds, chosen = exposure_seconds(exposure, model, irradiance)
@@ -218,21 +252,38 @@ def raw_frame(args: argparse.Namespace, develop_bytes_per_pixel: float = 0.0):
     fraction, warning = clipping_warning(model, raw, exposure_ms, str(args.output))
     if warning:
         print(f"solas-mi camera: warning: {warning}", file=sys.stderr)
-    meta = {"kind": "sensor RAW", "unit": "DN", "sensor_model": str(args.sensor_model), "sensor": describe(model),
-            "seed": args.seed, "frame": args.frame, "exposure_ms": exposure_ms,
-            **({"auto_exposure": chosen} if chosen else {}),
-            **(timed.describe() if timed else {}), **reading,
-            "input": str(args.image), "saturated_fraction": fraction}
+    meta = {
+        "kind": "sensor RAW",
+        "unit": "DN",
+        "sensor_model": str(args.sensor_model),
+        "sensor": describe(model),
+        "seed": args.seed,
+        "frame": args.frame,
+        "exposure_ms": exposure_ms,
+        **({"auto_exposure": chosen} if chosen else {}),
+        **(timed.describe() if timed else {}),
+        **reading,
+        "input": str(args.image),
+        "saturated_fraction": fraction,
+    }
     return raw, model, meta
 
 
 def report(args: argparse.Namespace, raw, model, meta: dict) -> None:
     auto = meta.get("auto_exposure")
-    chosen = (f", exposure {meta['exposure_ms']:.4g} ms (auto: the {auto['percentile']:g}th percentile at "
-              f"{100 * auto['fraction']:g} % of saturation)") if auto else ""
-    print(f"{args.output}: {raw.shape[1]}x{raw.shape[0]} RAW ({model.cfa}, {model.bit_depth} bit), "
-          f"mean {raw.mean():.1f} DN, {int(model.saturated(raw).sum())} pixels saturated (full well or white level)"
-          f"{chosen}")
+    chosen = (
+        (
+            f", exposure {meta['exposure_ms']:.4g} ms (auto: the {auto['percentile']:g}th percentile at "
+            f"{100 * auto['fraction']:g} % of saturation)"
+        )
+        if auto
+        else ""
+    )
+    print(
+        f"{args.output}: {raw.shape[1]}x{raw.shape[0]} RAW ({model.cfa}, {model.bit_depth} bit), "
+        f"mean {raw.mean():.1f} DN, {int(model.saturated(raw).sum())} pixels saturated (full well or white level)"
+        f"{chosen}"
+    )
 
 
 def run_camera(args: argparse.Namespace) -> int:
@@ -255,8 +306,15 @@ def run_sensors(args: argparse.Namespace) -> int:
     if args.json:
         from .. import jsonio
 
-        print(jsonio.dumps([{"name": name, "title": preset_title(name), "sensor": describe(load_sensor(name))}
-                            for name in preset_names()], indent=2))
+        print(
+            jsonio.dumps(
+                [
+                    {"name": name, "title": preset_title(name), "sensor": describe(load_sensor(name))}
+                    for name in preset_names()
+                ],
+                indent=2,
+            )
+        )
         return 0
     for name in preset_names():
         print(f"{name:12s} {preset_title(name)}")
@@ -266,42 +324,70 @@ def run_sensors(args: argparse.Namespace) -> int:
 
 def add_exposure_option(p: Any, required: bool) -> None:
     """--exposure-ms: a time in ms, or auto[:P,F] (`auto_exposure`)."""
-    p.add_argument("--exposure-ms", required=required, metavar="MS|auto[:P,F]",
-                   help="exposure time in ms, or auto: chosen from the light so that the P-th percentile of the "
-                        "pixels sits at the fraction F of saturation (auto = auto:99,0.8), the choice in the metadata")
+    p.add_argument(
+        "--exposure-ms",
+        required=required,
+        metavar="MS|auto[:P,F]",
+        help="exposure time in ms, or auto: chosen from the light so that the P-th percentile of the "
+        "pixels sits at the fraction F of saturation (auto = auto:99,0.8), the choice in the metadata",
+    )
 
 
 def register(subparsers: Any) -> None:
     """Add the `camera` and `sensors` subcommands."""
     p = subparsers.add_parser(
-        "camera", help="sensor RAW of an irradiance image (EMVA 1288 noise model, CFA, ADC)",
+        "camera",
+        help="sensor RAW of an irradiance image (EMVA 1288 noise model, CFA, ADC)",
         description="The RAW frame a sensor gives for an image-plane irradiance image: photons through the "
-                    "CFA's quantum efficiencies, shot/dark/read noise, PRNU/DSNU, full well, conversion gain, "
-                    "ADC; an HDR sensor's readouts (split pixels, dual conversion gain, multiple exposures) merged "
-                    "into one linear signal and companded. Written as one EXR channel RAW (DN) with the sensor's "
-                    "stages and seed in its metadata.")
-    p.add_argument("image", help="EXR with R, G, B channels: irradiance in W/m² (times --scale), or radiance "
-                                 "in W/m²/sr with --f-number (a render through a lens states its own f-number)")
-    p.add_argument("--sensor-model", required=True, metavar="PRESET|FILE.toml",
-                   help="a sensor preset's name (solas-mi sensors lists them) or a TOML file with a [sensor] table "
-                        "(an HDR sensor's naming its stages in tables of their own, e.g. imx490-hdr)")
+        "CFA's quantum efficiencies, shot/dark/read noise, PRNU/DSNU, full well, conversion gain, "
+        "ADC; an HDR sensor's readouts (split pixels, dual conversion gain, multiple exposures) merged "
+        "into one linear signal and companded. Written as one EXR channel RAW (DN) with the sensor's "
+        "stages and seed in its metadata.",
+    )
+    p.add_argument(
+        "image",
+        help="EXR with R, G, B channels: irradiance in W/m² (times --scale), or radiance "
+        "in W/m²/sr with --f-number (a render through a lens states its own f-number)",
+    )
+    p.add_argument(
+        "--sensor-model",
+        required=True,
+        metavar="PRESET|FILE.toml",
+        help="a sensor preset's name (solas-mi sensors lists them) or a TOML file with a [sensor] table "
+        "(an HDR sensor's naming its stages in tables of their own, e.g. imx490-hdr)",
+    )
     add_exposure_option(p, required=True)
-    p.add_argument("--seed", type=int, default=0, help="the sensor's seed: its fixed pattern (PRNU, DSNU) and, with "
-                                                       "--frame, its temporal noise (default 0)")
-    p.add_argument("--frame", type=int, default=0,
-                   help="frame number: another frame of the same sensor (same seed: same fixed pattern, new "
-                        "temporal noise), e.g. for photon transfer or video (default 0)")
+    p.add_argument(
+        "--seed",
+        type=int,
+        default=0,
+        help="the sensor's seed: its fixed pattern (PRNU, DSNU) and, with --frame, its temporal noise (default 0)",
+    )
+    p.add_argument(
+        "--frame",
+        type=int,
+        default=0,
+        help="frame number: another frame of the same sensor (same seed: same fixed pattern, new "
+        "temporal noise), e.g. for photon transfer or video (default 0)",
+    )
     p.add_argument("--scale", type=float, default=1.0, help="W/m² (or W/m²/sr) per unit of the image (default 1)")
-    p.add_argument("--f-number", type=float, default=None,
-                   help="the image is radiance: image irradiance E = π T L / (4 N²) (default: the f-number a render "
-                        "through a lens states in its metadata, else none: the image is irradiance)")
+    p.add_argument(
+        "--f-number",
+        type=float,
+        default=None,
+        help="the image is radiance: image irradiance E = π T L / (4 N²) (default: the f-number a render "
+        "through a lens states in its metadata, else none: the image is irradiance)",
+    )
     p.add_argument("--transmission", type=float, default=1.0, help="lens transmission T of radiance (default 1)")
     add_time_options(p)
     p.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
     p.add_argument("-o", "--output", required=True, metavar="OUT.exr", help="RAW frame to write")
     p.set_defaults(run=run_camera)
-    p = subparsers.add_parser("sensors", help="list the sensor presets (camera --sensor-model NAME)",
-                              description="The sensor presets shipped with solas-mi, from public data sheets; each "
-                                          "preset's file cites its sources and names the values that are assumptions.")
+    p = subparsers.add_parser(
+        "sensors",
+        help="list the sensor presets (camera --sensor-model NAME)",
+        description="The sensor presets shipped with solas-mi, from public data sheets; each "
+        "preset's file cites its sources and names the values that are assumptions.",
+    )
     p.add_argument("--json", action="store_true", help="as JSON: each preset's name, title and every value")
     p.set_defaults(run=run_sensors)

@@ -4,6 +4,7 @@ and hot pixels, whose dark current is higher by `hot_dark_current_e_s` (in every
 Which pixels are defects is fixed per sensor (its seed), from the stage's own stream [seed, 4, id], and a hot
 pixel's extra dark electrons are Poisson, from [seed, 5, id, frame, charge] (id the CRC-32 of "defects"), so
 a sensor without defects, and every other pixel of one with them, gives the frames it gave without."""
+
 from __future__ import annotations
 
 import zlib
@@ -20,16 +21,24 @@ FRACTION_MAX = 0.01  # 1 % of the pixels: far past any sensor shipped (data shee
 @dataclass(frozen=True)
 class Defects:
     """The fractions of dead and hot pixels, and a hot pixel's extra dark current (e⁻/s)."""
+
     dead_fraction: float = 0.0
     hot_fraction: float = 0.0
     hot_dark_current_e_s: float = 1000.0
 
     def __post_init__(self):
         for name in ("dead_fraction", "hot_fraction"):
-            check_number(getattr(self, name), name, 0.0, FRACTION_MAX, "a fraction of the pixels",
-                         where="sensor defects")
-        check_number(self.hot_dark_current_e_s, "hot_dark_current_e_s", 0.0, ELECTRONS_MAX,
-                     "a hot pixel's extra dark current in e⁻/s", where="sensor defects")
+            check_number(
+                getattr(self, name), name, 0.0, FRACTION_MAX, "a fraction of the pixels", where="sensor defects"
+            )
+        check_number(
+            self.hot_dark_current_e_s,
+            "hot_dark_current_e_s",
+            0.0,
+            ELECTRONS_MAX,
+            "a hot pixel's extra dark current in e⁻/s",
+            where="sensor defects",
+        )
 
     def describe(self) -> dict:
         return asdict(self)
@@ -53,8 +62,9 @@ class Defects:
         dead = draw < self.dead_fraction
         return dead, ~dead & (draw < self.dead_fraction + self.hot_fraction)
 
-    def hot_electrons(self, hot: np.ndarray, seconds: float, cap: float, seed: int, frame: int,
-                      charge: int) -> np.ndarray:
+    def hot_electrons(
+        self, hot: np.ndarray, seconds: float, cap: float, seed: int, frame: int, charge: int
+    ) -> np.ndarray:
         """A charge's extra dark electrons on the hot pixels over `seconds` (Poisson, at most `cap` as mean).
 
         Parameters

@@ -9,6 +9,7 @@ that rounds (σ_q² = 1/12 DN², eq. 5).
     μ_e.min = 1/2 + sqrt(1/4 + σ_d² + σ_q²/K²)           the signal of SNR = 1 (the absolute sensitivity threshold)
 
 Every readout of a sensor's chain, and the flat one-readout sensor, use these."""
+
 import math
 
 import numpy as np

@@ -8,6 +8,7 @@ equation turns radiance into image irradiance for an f-number N and lens transmi
     E = π T L / (4 N²)
 (object at infinity; the cos⁴ fall-off is the engine's, not repeated here).
 """
+
 import numpy as np
 
 from ..errors import SolasError
@@ -24,8 +25,10 @@ def check_f_number(f_number, what: str = "f-number") -> float:
     """`f_number` as a float, or SolasError naming `what` unless it lies in F_NUMBER_RANGE."""
     low, high = F_NUMBER_RANGE
     if isinstance(f_number, bool) or not isinstance(f_number, (int, float)) or not low <= f_number <= high:
-        raise SolasError(f"{what} {f_number!r} must be a number from {low:g} (a lens in air: N = 1 / (2 NA)) "
-                         f"to {high:g} (past any pinhole camera)")
+        raise SolasError(
+            f"{what} {f_number!r} must be a number from {low:g} (a lens in air: N = 1 / (2 NA)) "
+            f"to {high:g} (past any pinhole camera)"
+        )
     return float(f_number)
 
 
@@ -57,31 +60,45 @@ def negatives_as_no_light(image: np.ndarray, what: str) -> tuple[np.ndarray, dic
     floor = round_off_floor(image)
     beyond = int(np.count_nonzero(image < floor))
     if beyond:
-        print(f"notice: {what}: {beyond} values below zero (least {image.min():.3g}, outside the RGB gamut or "
-              "not light) read as no light; counted in the RAW's metadata", file=sys.stderr)
-    info = {"count": int(np.count_nonzero(image < 0.0)), "beyond_round_off": beyond,
-            "least": float(min(image.min(initial=0.0), 0.0)), "round_off": ROUND_OFF}
+        print(
+            f"notice: {what}: {beyond} values below zero (least {image.min():.3g}, outside the RGB gamut or "
+            "not light) read as no light; counted in the RAW's metadata",
+            file=sys.stderr,
+        )
+    info = {
+        "count": int(np.count_nonzero(image < 0.0)),
+        "beyond_round_off": beyond,
+        "least": float(min(image.min(initial=0.0), 0.0)),
+        "round_off": ROUND_OFF,
+    }
     return np.maximum(image, 0.0), info
 
 
-def photons(irradiance: np.ndarray, exposure_s: float, pixel_pitch_um: float,
-            wavelengths_nm: tuple[float, ...]) -> np.ndarray:
+def photons(
+    irradiance: np.ndarray, exposure_s: float, pixel_pitch_um: float, wavelengths_nm: tuple[float, ...]
+) -> np.ndarray:
     """Mean photons per pixel μ_p = A E t λ / (h c) of an irradiance image (H, W, C) in W/m², channel c
     at wavelength `wavelengths_nm[c]`, for a square pixel of pitch `pixel_pitch_um` and exposure
     `exposure_s` seconds."""
     image = np.asarray(irradiance, dtype=np.float64)
     if image.ndim != 3 or image.shape[2] != len(wavelengths_nm):
-        raise SolasError(f"irradiance image of shape {image.shape} must be (height, width, "
-                         f"{len(wavelengths_nm)}): one channel per sensor wavelength")
+        raise SolasError(
+            f"irradiance image of shape {image.shape} must be (height, width, "
+            f"{len(wavelengths_nm)}): one channel per sensor wavelength"
+        )
     if not np.all(np.isfinite(image)):
-        raise SolasError(f"irradiance image holds {np.count_nonzero(~np.isfinite(image))} non-finite values; "
-                         "it must hold finite values >= 0")
+        raise SolasError(
+            f"irradiance image holds {np.count_nonzero(~np.isfinite(image))} non-finite values; "
+            "it must hold finite values >= 0"
+        )
     # an FFT convolution leaves round-off around zero in dark regions: read as no light; more is an error
     floor = round_off_floor(image)
     if np.any(image < floor):
-        raise SolasError(f"irradiance image holds {np.count_nonzero(image < floor)} values below zero (least "
-                         f"{image.min():.3g}); it must hold values >= 0 (down to -{ROUND_OFF:g} of its largest "
-                         "value are read as round-off and taken as 0)")
+        raise SolasError(
+            f"irradiance image holds {np.count_nonzero(image < floor)} values below zero (least "
+            f"{image.min():.3g}); it must hold values >= 0 (down to -{ROUND_OFF:g} of its largest "
+            "value are read as round-off and taken as 0)"
+        )
     image = np.maximum(image, 0.0)
     if not exposure_s >= 0 or not np.isfinite(exposure_s):
         raise SolasError(f"exposure time {exposure_s!r} s must be a finite number >= 0")
@@ -90,6 +107,8 @@ def photons(irradiance: np.ndarray, exposure_s: float, pixel_pitch_um: float,
     with np.errstate(over="ignore", invalid="ignore"):
         out = image * (area * exposure_s / energy)
     if not np.all(np.isfinite(out)):
-        raise SolasError(f"an exposure of {exposure_s:g} s at up to {image.max():.3g} W/m² gives more photons per pixel "
-                         "than a float64 holds (1.8e308); give a shorter exposure or a smaller scale")
+        raise SolasError(
+            f"an exposure of {exposure_s:g} s at up to {image.max():.3g} W/m² gives more photons per pixel "
+            "than a float64 holds (1.8e308); give a shorter exposure or a smaller scale"
+        )
     return out

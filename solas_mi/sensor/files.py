@@ -16,6 +16,7 @@ file, `qe.read_csv`) or a `[sensor.qe_curve]` table of columns `wavelength_nm`, 
 `load_sensor(name_or_path)` takes a preset's name (`preset_names`: the TOML files of
 `solas_mi/sensor/presets/`, each citing its sources) or the path of a TOML file (a name ending in
 ".toml" or holding a path separator)."""
+
 import os
 from dataclasses import asdict
 from pathlib import Path
@@ -82,8 +83,10 @@ def load_sensor(name_or_path: str | Path) -> SensorModel | SensorChain:
     try:
         if isinstance(values.get("qe_curve"), str):  # a CSV file, relative to the TOML file
             if not values["qe_curve"].strip():  # else the sensor file's folder, refused as "a folder"
-                raise SolasError("sensor qe_curve = '' must name a CSV file (beside the sensor file) or be a "
-                                 "[sensor.qe_curve] table of columns")
+                raise SolasError(
+                    "sensor qe_curve = '' must name a CSV file (beside the sensor file) or be a "
+                    "[sensor.qe_curve] table of columns"
+                )
             values["qe_curve"] = read_csv(path.parent / values["qe_curve"]).table()
         if set(values) & (set(STAGES) - {HEAD}):  # the table names stages
             return SensorChain.from_dict(values)

@@ -22,6 +22,7 @@ whole number: `Merge.rounding_e2`) added in its electrons:
 
 so at each transition the SNR falls by the step from readout i to readout i + 1 (the "SNR dip").
 """
+
 from __future__ import annotations
 
 import math
@@ -42,6 +43,7 @@ class Merge:
     """The merged signal's bits, the threshold (a fraction of a readout's saturation) where the next readout
     takes over, the width of the blend below it (0: a hard switch), and the merged signal's black level (a
     pedestal, so that the noise of a dark pixel is not clipped at 0)."""
+
     bits: int = 24
     threshold: float = 0.9
     blend: float = 0.0
@@ -50,12 +52,28 @@ class Merge:
     def __post_init__(self):
         low, high = MERGE_BITS
         if not isinstance(self.bits, int) or isinstance(self.bits, bool) or not low <= self.bits <= high:
-            raise SolasError(f"sensor merge bits = {self.bits!r} must be an integer from {low} to {high} (the "
-                             "merged linear signal; a RAW's float32 holds integers to 2^24 exactly)")
-        check_number(self.threshold, "threshold", 0.0, 1.0, "the fraction of a readout's saturation where the next "
-                     "readout takes over", open_low=True, where="sensor merge")
-        check_number(self.blend, "blend", 0.0, self.threshold, "the width below the threshold over which two "
-                     "readouts are blended, 0 for a hard switch", open_high=True, where="sensor merge")
+            raise SolasError(
+                f"sensor merge bits = {self.bits!r} must be an integer from {low} to {high} (the "
+                "merged linear signal; a RAW's float32 holds integers to 2^24 exactly)"
+            )
+        check_number(
+            self.threshold,
+            "threshold",
+            0.0,
+            1.0,
+            "the fraction of a readout's saturation where the next readout takes over",
+            open_low=True,
+            where="sensor merge",
+        )
+        check_number(
+            self.blend,
+            "blend",
+            0.0,
+            self.threshold,
+            "the width below the threshold over which two readouts are blended, 0 for a hard switch",
+            open_high=True,
+            where="sensor merge",
+        )
         check_adc(self.bits, self.black_level_dn, where="sensor merge", bits=MERGE_BITS)
 
     def describe(self) -> dict:
@@ -70,14 +88,18 @@ class Merge:
         gains = [r.gain_dn_per_e * r.response for r in readouts]
         for (a, ga), (b, gb) in zip(zip(readouts, gains), zip(readouts[1:], gains[1:])):
             if not gb < ga:
-                raise SolasError(f"sensor readout {b.name!r} gives {gb:.6g} DN per reference photo-electron, not "
-                                 f"less than readout {a.name!r} before it ({ga:.6g}): the merge takes the readouts "
-                                 "in order of falling response (gain × sensitivity × exposure ratio)")
+                raise SolasError(
+                    f"sensor readout {b.name!r} gives {gb:.6g} DN per reference photo-electron, not "
+                    f"less than readout {a.name!r} before it ({ga:.6g}): the merge takes the readouts "
+                    "in order of falling response (gain × sensitivity × exposure ratio)"
+                )
         need = self.saturation_dn(readouts) + self.black_level_dn
         if need > self.white_level_dn:
-            raise SolasError(f"sensor merge bits = {self.bits} holds merged codes up to {self.white_level_dn}, below "
-                             f"the last readout's saturation over black_level_dn ({need:.0f} in DN of the first "
-                             f"readout); give bits >= {math.ceil(math.log2(need + 1))}")
+            raise SolasError(
+                f"sensor merge bits = {self.bits} holds merged codes up to {self.white_level_dn}, below "
+                f"the last readout's saturation over black_level_dn ({need:.0f} in DN of the first "
+                f"readout); give bits >= {math.ceil(math.log2(need + 1))}"
+            )
 
     def merge(self, readouts: tuple[Readout, ...], frames: list[np.ndarray]) -> np.ndarray:
         """The merged code (H, W, uint32) of the readouts' frames (module docstring)."""
@@ -106,10 +128,20 @@ class Merge:
         photodiode over the frame's exposure `exposure_s` (module docstring): that of the first readout whose
         mean signal lies below the threshold, with the merged code's rounding."""
         top = readouts[0].gain_dn_per_e * readouts[0].response
-        used = next((r for r in readouts[:-1] if r.gain_dn_per_e * (electrons * r.response + r.dark_current_e_s
-                     * exposure_s * r.exposure_ratio) < self.threshold * r.saturation_dn), readouts[-1])
-        return emva.snr(electrons * used.response, used.gain_dn_per_e,
-                        used.dark_variance_e2(exposure_s) + self.rounding_e2(used, top))
+        used = next(
+            (
+                r
+                for r in readouts[:-1]
+                if r.gain_dn_per_e * (electrons * r.response + r.dark_current_e_s * exposure_s * r.exposure_ratio)
+                < self.threshold * r.saturation_dn
+            ),
+            readouts[-1],
+        )
+        return emva.snr(
+            electrons * used.response,
+            used.gain_dn_per_e,
+            used.dark_variance_e2(exposure_s) + self.rounding_e2(used, top),
+        )
 
     @staticmethod
     def rounding_e2(readout: Readout, top: float) -> float:

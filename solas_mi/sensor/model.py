@@ -8,6 +8,7 @@ mean and variance i_d t) and read noise σ_r (Gaussian), so σ_d² = σ_r² + i_
 and the SNR (eq. 15) SNR = μ_e / sqrt(σ_d² + σ_q²/K² + μ_e). PRNU (relative spread of the per-pixel
 gain) and DSNU (spread of the per-pixel offset, e⁻) are spatial: fixed by the seed, not temporal.
 """
+
 from dataclasses import dataclass, fields
 from functools import cached_property
 
@@ -73,6 +74,7 @@ class SensorModel:
     >>> sensor.white_level_dn, round(sensor.snr(1000.0, exposure_s=0.01), 2)
     (4095, 31.54)
     """
+
     pixel_pitch_um: float = 3.0
     qe_r: float | None = None  # default 0.6 (SCALAR_DEFAULTS), None with a qe_curve
     qe_g: float | None = None  # 0.7
@@ -243,8 +245,9 @@ class SensorModel:
         float
             σ_y² (DN²).
         """
-        return emva.temporal_variance_dn2(self.gain_dn_per_e, self.dark_variance_e2(exposure_s), mean_dn,
-                                          self.dark_mean_dn(exposure_s))
+        return emva.temporal_variance_dn2(
+            self.gain_dn_per_e, self.dark_variance_e2(exposure_s), mean_dn, self.dark_mean_dn(exposure_s)
+        )
 
     def snr(self, electrons: float, exposure_s: float) -> float:
         """The signal-to-noise ratio, EMVA 1288 eq. 15: SNR = μ_e / sqrt(σ_d² + σ_q²/K² + μ_e).

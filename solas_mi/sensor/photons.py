@@ -6,6 +6,7 @@ eqs. 1 and 2; `exposure.photons`, `cfa.mosaic`), with the effective quantum effi
 values per filter or of QE curves (`qe`). A readout's photodiode sees a share of these (its sensitivity)
 over its exposure's window of time (`readout`).
 """
+
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass, fields
@@ -27,6 +28,7 @@ class PhotonConversion:
     """Pixel pitch (µm), the colour filter array, and the quantum efficiency per filter (R, G, B, clear)
     with the representative wavelength of the image's three channels, or instead a QE curve per filter
     (`qe.QECurve`). The scalar fields left out take `SCALAR_DEFAULTS`."""
+
     pixel_pitch_um: float = 3.0
     qe_r: float | None = None  # default 0.6 (SCALAR_DEFAULTS), None with a qe_curve
     qe_g: float | None = None  # 0.7
@@ -43,8 +45,10 @@ class PhotonConversion:
         elif not isinstance(self.qe_curve, QECurve):
             raise SolasError(f"sensor qe_curve must be a QECurve, got {type(self.qe_curve).__name__}")
         elif given := [name for name in SCALAR_DEFAULTS if getattr(self, name) is not None]:
-            raise SolasError(f"sensor qe_curve and {', '.join(given)} both given: a QE curve replaces the scalar "
-                             f"quantum efficiencies and sets the channel wavelengths; give one or the other")
+            raise SolasError(
+                f"sensor qe_curve and {', '.join(given)} both given: a QE curve replaces the scalar "
+                f"quantum efficiencies and sets the channel wavelengths; give one or the other"
+            )
         check_pattern(self.cfa)
         if self.qe_curve is not None:
             self.qe_curve.check_filters(self.cfa)
@@ -58,7 +62,9 @@ class PhotonConversion:
         for name in ("qe_r", "qe_g", "qe_b", "qe_c"):
             check_number(getattr(self, name), name, 0.0, 1.0, "a quantum efficiency", open_low=True)
         if not isinstance(self.wavelengths_nm, (tuple, list)) or len(self.wavelengths_nm) != 3:
-            raise SolasError(f"sensor wavelengths_nm = {self.wavelengths_nm!r} must be three wavelengths (R, G, B) in nm")
+            raise SolasError(
+                f"sensor wavelengths_nm = {self.wavelengths_nm!r} must be three wavelengths (R, G, B) in nm"
+            )
         for value in self.wavelengths_nm:
             check_ranged(value, "wavelengths_nm")
         object.__setattr__(self, "wavelengths_nm", tuple(float(v) for v in self.wavelengths_nm))

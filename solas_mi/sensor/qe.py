@@ -22,6 +22,7 @@ A curve is given at sample wavelengths, piecewise linear between them (a repeate
 step) and 0 outside them; its integrals are exact (Simpson's rule on each piece, where QE·λ is a
 quadratic).
 """
+
 from __future__ import annotations
 
 from dataclasses import dataclass
@@ -30,12 +31,16 @@ from pathlib import Path
 import numpy as np
 
 from ..errors import SolasError
-from ..userfiles import read_text
 from ..render.response import RGB_BANDS_NM, SRGB_RANGE_NM
+from ..userfiles import read_text
 from .cfa import CHANNELS, FILTERS
 
 # the bands of image channels R, G, B (nm)
-BANDS_NM = ((RGB_BANDS_NM[1], SRGB_RANGE_NM[1]), (RGB_BANDS_NM[0], RGB_BANDS_NM[1]), (SRGB_RANGE_NM[0], RGB_BANDS_NM[0]))
+BANDS_NM = (
+    (RGB_BANDS_NM[1], SRGB_RANGE_NM[1]),
+    (RGB_BANDS_NM[0], RGB_BANDS_NM[1]),
+    (SRGB_RANGE_NM[0], RGB_BANDS_NM[0]),
+)
 BAND_CENTRES_NM = tuple(0.5 * (lo + hi) for lo, hi in BANDS_NM)
 WAVELENGTH = "wavelength_nm"
 
@@ -45,33 +50,41 @@ class QECurve:
     """Quantum efficiency (0–1) of each filter named in `filters` (letters of `cfa.FILTERS`) at the
     wavelengths `wavelength_nm` (non-decreasing; a repeated wavelength is a step); `qe[i]` is filter
     `filters[i]`'s column."""
+
     wavelength_nm: tuple[float, ...]
     filters: tuple[str, ...]
     qe: tuple[tuple[float, ...], ...]
 
     @classmethod
-    def from_table(cls, table: dict, where: str = "qe_curve") -> "QECurve":
+    def from_table(cls, table: dict, where: str = "qe_curve") -> QECurve:
         """A curve from columns {"wavelength_nm": [...], "R": [...], ...}; `where` names it in errors."""
         if not isinstance(table, dict):
-            raise SolasError(f"{where} must be a table of columns ({WAVELENGTH} and filters R, G, B, C), "
-                             f"got {type(table).__name__}")
+            raise SolasError(
+                f"{where} must be a table of columns ({WAVELENGTH} and filters R, G, B, C), got {type(table).__name__}"
+            )
         unknown = sorted(set(table) - {WAVELENGTH, *FILTERS})
         if unknown or WAVELENGTH not in table:
-            raise SolasError(f"{where}: columns {', '.join(unknown) or '(none)'} unknown or {WAVELENGTH} missing; "
-                             f"allowed: {WAVELENGTH} and the filters {', '.join(FILTERS)}")
+            raise SolasError(
+                f"{where}: columns {', '.join(unknown) or '(none)'} unknown or {WAVELENGTH} missing; "
+                f"allowed: {WAVELENGTH} and the filters {', '.join(FILTERS)}"
+            )
         filters = tuple(f for f in FILTERS if f in table)
         columns = [_column(table[WAVELENGTH], f"{where} {WAVELENGTH}")]
         columns += [_column(table[f], f"{where} {f}") for f in filters]
         if not filters or len({len(c) for c in columns}) != 1 or len(columns[0]) < 2:
-            raise SolasError(f"{where}: needs {WAVELENGTH} and at least one filter column, all of one length "
-                             f">= 2 (got lengths {', '.join(str(len(c)) for c in columns)})")
+            raise SolasError(
+                f"{where}: needs {WAVELENGTH} and at least one filter column, all of one length "
+                f">= 2 (got lengths {', '.join(str(len(c)) for c in columns)})"
+            )
         lam = np.array(columns[0])
         if np.any(lam <= 0) or np.any(np.diff(lam) < 0):
             raise SolasError(f"{where}: {WAVELENGTH} must be > 0 and non-decreasing (a repeated wavelength is a step)")
         for name, column in zip(filters, columns[1:]):
             if min(column) < 0 or max(column) > 1:
-                raise SolasError(f"{where}: filter {name}'s quantum efficiency must be in [0, 1] "
-                                 f"(found {min(column):g} to {max(column):g}); give fractions, not %")
+                raise SolasError(
+                    f"{where}: filter {name}'s quantum efficiency must be in [0, 1] "
+                    f"(found {min(column):g} to {max(column):g}); give fractions, not %"
+                )
         return cls(tuple(columns[0]), filters, tuple(tuple(c) for c in columns[1:]))
 
     def table(self) -> dict:
@@ -82,8 +95,10 @@ class QECurve:
         """SolasError unless the curve has a column for every filter in `cfa_filters`."""
         missing = sorted(set(cfa_filters) - set(self.filters), key=FILTERS.index)
         if missing:
-            raise SolasError(f"qe_curve has no column for filter(s) {', '.join(missing)} of the colour filter array "
-                             f"(columns: {', '.join(self.filters)})")
+            raise SolasError(
+                f"qe_curve has no column for filter(s) {', '.join(missing)} of the colour filter array "
+                f"(columns: {', '.join(self.filters)})"
+            )
 
     def check_response(self, cfa_filters) -> None:
         """SolasError unless every filter in `cfa_filters` has some quantum efficiency inside the channels'
@@ -91,9 +106,11 @@ class QECurve:
         qe = self.effective_qe(cfa_filters)
         blind = [f for f in sorted(set(cfa_filters), key=FILTERS.index) if not qe[FILTERS.index(f)].any()]
         if blind:
-            raise SolasError(f"qe_curve: filter(s) {', '.join(blind)} of the colour filter array have zero quantum "
-                             f"efficiency over {SRGB_RANGE_NM[0]:g}–{SRGB_RANGE_NM[1]:g} nm (the bands of the image's "
-                             "R, G, B); each filter must respond somewhere in them")
+            raise SolasError(
+                f"qe_curve: filter(s) {', '.join(blind)} of the colour filter array have zero quantum "
+                f"efficiency over {SRGB_RANGE_NM[0]:g}–{SRGB_RANGE_NM[1]:g} nm (the bands of the image's "
+                "R, G, B); each filter must respond somewhere in them"
+            )
 
     def effective_qe(self, cfa_filters) -> np.ndarray:
         """Q[f, c] (4 × 3, rows in `cfa.FILTERS` order): the photon-weighted mean QE of filter f over the
@@ -102,13 +119,16 @@ class QECurve:
         out = np.zeros((len(FILTERS), len(BANDS_NM)))
         for name, column in zip(self.filters, self.qe):
             for c, (lo, hi) in enumerate(BANDS_NM):
-                out[FILTERS.index(name), c] = _integral(self.wavelength_nm, column, lo, hi) / (0.5 * (hi * hi - lo * lo))
+                out[FILTERS.index(name), c] = _integral(self.wavelength_nm, column, lo, hi) / (
+                    0.5 * (hi * hi - lo * lo)
+                )
         return out
 
 
 def _column(values, where: str) -> list[float]:
     if not isinstance(values, (list, tuple)) or not all(
-            isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v) for v in values):
+        isinstance(v, (int, float)) and not isinstance(v, bool) and np.isfinite(v) for v in values
+    ):
         raise SolasError(f"{where} must be a list of finite numbers")
     return [float(v) for v in values]
 
@@ -141,8 +161,11 @@ def read_csv(path: str | Path) -> QECurve:
     of numbers per wavelength; "#" lines are comments. No message quotes the file (a sensor file may name
     any file)."""
     where = f"QE curve {str(path)!r}"
-    rows = [line.strip() for line in read_text(path, "QE curve").splitlines()
-            if line.strip() and not line.lstrip().startswith("#")]
+    rows = [
+        line.strip()
+        for line in read_text(path, "QE curve").splitlines()
+        if line.strip() and not line.lstrip().startswith("#")
+    ]
     header = [name.strip() for name in rows[0].split(",")] if rows else []
     allowed = (WAVELENGTH, *FILTERS)
     bad = [i for i, name in enumerate(header, start=1) if name not in allowed or header.index(name) != i - 1]
@@ -152,8 +175,9 @@ def read_csv(path: str | Path) -> QECurve:
     try:
         data = np.loadtxt(rows[1:], delimiter=",", ndmin=2) if len(rows) > 1 else np.zeros((0, len(header)))
     except ValueError:
-        raise SolasError(f"{where} is not a CSV table of numbers under a header line of column names "
-                         f"({WAVELENGTH},R,G,B,C)") from None
+        raise SolasError(
+            f"{where} is not a CSV table of numbers under a header line of column names ({WAVELENGTH},R,G,B,C)"
+        ) from None
     if data.shape[1] != len(header):
         raise SolasError(f"{where}: the header names {len(header)} distinct columns, the rows hold {data.shape[1]}")
     return QECurve.from_table({name: data[:, i].tolist() for i, name in enumerate(header)}, where)

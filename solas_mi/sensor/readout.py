@@ -19,6 +19,7 @@ gives the frames it gave before the chain; every other charge from its own named
 and [seed, 3, id, frame] with id the CRC-32 of its name ("photodiode@exposure ratio"), so adding a readout
 changes no other charge's draws.
 """
+
 from __future__ import annotations
 
 import zlib
@@ -39,6 +40,7 @@ class Readout:
     over the reference photodiode's, 1 for the large one) and the `exposure_ratio` of its exposure (over the
     frame's), the noise (e⁻), full well, conversion gain (DN/e⁻) and ADC. What is left out takes
     `limits.READOUT_DEFAULTS` and `limits.ADC_DEFAULTS`."""
+
     name: str = "linear"
     photodiode: str = "large"
     sensitivity: float = 1.0
@@ -58,11 +60,25 @@ class Readout:
             value = getattr(self, name)
             if not isinstance(value, str) or not value.strip() or not value.isprintable():
                 raise SolasError(f"{where} {name} = {value!r} must be a non-empty printable name")
-        check_number(self.sensitivity, "sensitivity", 0.0, 1.0, "the photodiode's photo-electrons over the "
-                     "reference photodiode's: 1 for the large one of a split pixel, less for the small one",
-                     open_low=True, where=where)
-        check_number(self.exposure_ratio, "exposure_ratio", 0.0, 1.0, "the readout's exposure time over the "
-                     "frame's", open_low=True, where=where)
+        check_number(
+            self.sensitivity,
+            "sensitivity",
+            0.0,
+            1.0,
+            "the photodiode's photo-electrons over the "
+            "reference photodiode's: 1 for the large one of a split pixel, less for the small one",
+            open_low=True,
+            where=where,
+        )
+        check_number(
+            self.exposure_ratio,
+            "exposure_ratio",
+            0.0,
+            1.0,
+            "the readout's exposure time over the frame's",
+            open_low=True,
+            where=where,
+        )
         for name in ("dark_current_e_s", "read_noise_e", "dsnu_e", "full_well_e"):
             check_ranged(getattr(self, name), name, where=where)
         check_number(self.prnu, "prnu", 0.0, 1.0, PRNU_MEANING, open_high=True, where=where)
@@ -97,8 +113,9 @@ class Readout:
 
     def dark_mean_dn(self, exposure_s: float) -> float:
         """μ_y.dark = black + K i_d r t (DN) over the frame's exposure t."""
-        return emva.dark_mean_dn(self.black_level_dn, self.gain_dn_per_e, self.dark_current_e_s,
-                                 exposure_s * self.exposure_ratio)
+        return emva.dark_mean_dn(
+            self.black_level_dn, self.gain_dn_per_e, self.dark_current_e_s, exposure_s * self.exposure_ratio
+        )
 
     def dark_variance_e2(self, exposure_s: float) -> float:
         """σ_d² = σ_r² + i_d r t (e⁻²) over the frame's exposure t."""
@@ -112,9 +129,11 @@ def check_charges(readouts: tuple[Readout, ...]) -> None:
         other = first.setdefault(r.charge, r)
         for name in SHARED:
             if getattr(r, name) != getattr(other, name):
-                raise SolasError(f"sensor readout {r.name!r}: {name} = {getattr(r, name)!r} differs from the "
-                                 f"{getattr(other, name)!r} of readout {other.name!r}; both read photodiode {r.photodiode!r} "
-                                 "over the same exposure (one charge), whose property it is")
+                raise SolasError(
+                    f"sensor readout {r.name!r}: {name} = {getattr(r, name)!r} differs from the "
+                    f"{getattr(other, name)!r} of readout {other.name!r}; both read photodiode {r.photodiode!r} "
+                    "over the same exposure (one charge), whose property it is"
+                )
 
 
 def charge_pattern(readouts: list[Readout], shape: tuple[int, int], rng: np.random.Generator):
@@ -138,8 +157,9 @@ def charge_streams(index: int, charge: str, seed: int, frame: int):
     return np.random.default_rng([seed, 2, key]), np.random.default_rng([seed, 3, key, frame])
 
 
-def read_charges(readouts: tuple[Readout, ...], mu_e: np.ndarray, exposure_s: float, seed: int, frame: int,
-                 defects=None) -> list[np.ndarray]:
+def read_charges(
+    readouts: tuple[Readout, ...], mu_e: np.ndarray, exposure_s: float, seed: int, frame: int, defects=None
+) -> list[np.ndarray]:
     """The frame (H, W, uint16 DN) of each readout, in order, for the pixels' mean photo-electrons `mu_e` of
     the reference photodiode over the frame's exposure `exposure_s` (module docstring); `defects`: the
     sensor's `defects.Defects` with its dead and hot pixels (None: none). A dead pixel's photo-electrons are

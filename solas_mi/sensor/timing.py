@@ -23,6 +23,7 @@ trapezoid in the phase, rising over τ, of length DT + w at its base. A rolling 
 spanning n rows see the union of their windows, w = t + (n − 1) L, so the source is missed in fewer frames
 than under a global shutter, but shows in bands of rows.
 """
+
 from __future__ import annotations
 
 from dataclasses import asdict, dataclass
@@ -41,6 +42,7 @@ class Shutter:
     """How the rows take their windows of the frame's exposure: `mode` global or rolling, the rolling
     shutter's `line_time_s` (s between two rows' starts) and `direction`, and the `time_samples` at which a
     moving scene is sampled over the frame (module docstring)."""
+
     mode: str = "global"
     line_time_s: float = 0.0
     direction: str = "top-down"
@@ -50,13 +52,24 @@ class Shutter:
         for name, allowed in (("mode", MODES), ("direction", DIRECTIONS)):
             if getattr(self, name) not in allowed:
                 raise SolasError(f"sensor shutter {name} = {getattr(self, name)!r} must be one of {', '.join(allowed)}")
-        check_number(self.line_time_s, "line_time_s", 0.0, 1.0, "the time between two rows' starts in s; 0 for a "
-                     "global shutter", where="sensor shutter")
+        check_number(
+            self.line_time_s,
+            "line_time_s",
+            0.0,
+            1.0,
+            "the time between two rows' starts in s; 0 for a global shutter",
+            where="sensor shutter",
+        )
         if (self.mode == "rolling") != (self.line_time_s > 0):
-            raise SolasError(f"sensor shutter line_time_s = {self.line_time_s!r}: a rolling shutter takes a line time "
-                             "above 0, a global one none (0)")
-        if not isinstance(self.time_samples, int) or isinstance(self.time_samples, bool) \
-                or not 1 <= self.time_samples <= 100000:
+            raise SolasError(
+                f"sensor shutter line_time_s = {self.line_time_s!r}: a rolling shutter takes a line time "
+                "above 0, a global one none (0)"
+            )
+        if (
+            not isinstance(self.time_samples, int)
+            or isinstance(self.time_samples, bool)
+            or not 1 <= self.time_samples <= 100000
+        ):
             raise SolasError(f"sensor shutter time_samples = {self.time_samples!r} must be an integer from 1 to 100000")
 
     def describe(self) -> dict:
@@ -78,8 +91,10 @@ class Shutter:
         for k in range(self.time_samples):
             image = np.asarray(scene(0.5 * (edges[k] + edges[k + 1])), dtype=np.float64)
             if image.ndim != 3 or image.shape[0] != rows:
-                raise SolasError(f"a moving scene's image at t = {edges[k]:g} s has shape {image.shape}; it must be "
-                                 f"(H, W, 3) with H = {rows} rows at every time")
+                raise SolasError(
+                    f"a moving scene's image at t = {edges[k]:g} s has shape {image.shape}; it must be "
+                    f"(H, W, 3) with H = {rows} rows at every time"
+                )
             share = (np.minimum(ends, edges[k + 1]) - np.maximum(starts, edges[k])).clip(0.0) / exposure_s
             total = image * share[:, None, None] if total is None else total + image * share[:, None, None]
         return total
@@ -100,17 +115,27 @@ def exposed_irradiance(shutter: Shutter | None, scene, exposure_s: float) -> np.
 class PWMSource:
     """A light driven by pulse-width modulation: `frequency_hz`, `duty_cycle` (its on share of each period)
     and `phase` (where in the period it turns on, a fraction of the period)."""
+
     frequency_hz: float
     duty_cycle: float
     phase: float = 0.0
 
     def __post_init__(self):
-        check_number(self.frequency_hz, "frequency_hz", 0.0, 1e9, "the PWM frequency in Hz", open_low=True,
-                     where="PWM source")
-        check_number(self.duty_cycle, "duty_cycle", 0.0, 1.0, "the on share of each period", open_low=True,
-                     where="PWM source")
-        check_number(self.phase, "phase", 0.0, 1.0, "where in the period it turns on, a fraction of the period",
-                     open_high=True, where="PWM source")
+        check_number(
+            self.frequency_hz, "frequency_hz", 0.0, 1e9, "the PWM frequency in Hz", open_low=True, where="PWM source"
+        )
+        check_number(
+            self.duty_cycle, "duty_cycle", 0.0, 1.0, "the on share of each period", open_low=True, where="PWM source"
+        )
+        check_number(
+            self.phase,
+            "phase",
+            0.0,
+            1.0,
+            "where in the period it turns on, a fraction of the period",
+            open_high=True,
+            where="PWM source",
+        )
 
     @property
     def period_s(self) -> float:
@@ -131,8 +156,9 @@ class PWMSource:
         `least_on_s` (at most the on-time and the window; module docstring)."""
         on = self.duty_cycle * self.period_s
         if not 0.0 <= least_on_s <= min(on, window_s):
-            raise SolasError(f"least_on_s = {least_on_s!r} must be from 0 to the on-time {on:g} s and the window "
-                             f"{window_s:g} s")
+            raise SolasError(
+                f"least_on_s = {least_on_s!r} must be from 0 to the on-time {on:g} s and the window {window_s:g} s"
+            )
         return min(1.0, (on + window_s - 2.0 * least_on_s) / self.period_s)
 
 
@@ -140,14 +166,17 @@ class PWMSource:
 class FlickeringScene:
     """A scene of a static irradiance image (H, W, 3) plus `light` (H, W, 3; W/m² while on) driven by
     `source`: e.g. an LED traffic light's pixels."""
+
     static: np.ndarray
     light: np.ndarray
     source: PWMSource
 
     def __post_init__(self):
         if np.shape(self.static) != np.shape(self.light) or np.ndim(self.static) != 3:
-            raise SolasError(f"a flickering scene's static image {np.shape(self.static)} and light "
-                             f"{np.shape(self.light)} must be (H, W, 3) images of one shape")
+            raise SolasError(
+                f"a flickering scene's static image {np.shape(self.static)} and light "
+                f"{np.shape(self.light)} must be (H, W, 3) images of one shape"
+            )
 
     def mean_over(self, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
         """Each row's average irradiance over its window [starts[r], ends[r]]."""
@@ -181,14 +210,17 @@ class SceneInTime:
     """A still image made a scene in time, as the `camera` command's and a batch's camera's options give it:
     the pixels of `box` (x0, y0, x1, y1: columns x0 to x1 − 1, rows y0 to y1 − 1) lit by `source`
     (`flickering_box`), or the whole image moving at `motion_px_s` (`moving_image`); one or the other."""
+
     box: tuple[int, int, int, int] | None = None
     source: PWMSource | None = None
     motion_px_s: tuple[float, float] | None = None
 
     def __post_init__(self):
         if (self.box is None) != (self.source is None) or (self.box is None) == (self.motion_px_s is None):
-            raise SolasError("a scene in time is a box of PWM-driven light (box and source) or the image's motion "
-                             "(motion_px_s), one of them")
+            raise SolasError(
+                "a scene in time is a box of PWM-driven light (box and source) or the image's motion "
+                "(motion_px_s), one of them"
+            )
 
     def of(self, image: np.ndarray):
         """The scene of an (H, W, 3) irradiance image: a `FlickeringScene` or a callable of time."""

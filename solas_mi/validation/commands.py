@@ -15,9 +15,9 @@ from ..errors import SolasError
 from ..optics.commands import add_lens_argument, load_lens
 from ..options import add_image_input_options, parse_wxh, positive_ints
 from ..outputs import output_folder
-from ..userfiles import read_text
 from ..psf.methods import METHODS as PSF_METHODS
 from ..render.mitsuba import VARIANTS
+from ..userfiles import read_text
 from .crossval import DEFAULT_CASES, crossval
 from .engines import Case, parse_blocks
 from .error_vs_time import DEFAULT_INTERP_GRIDS, DEFAULT_PATCH_GRIDS, DEFAULT_RENDER_SPP, error_vs_time

@@ -23,6 +23,7 @@ A convolution case names the convolution method (`convolution.methods.METHODS`),
 (`psf.methods.METHODS`) and the grid of blocks, e.g. "interp:geometric:32x24"; each PSF method is
 sampled as `PSF_SAMPLING` says. Times are wall-clock seconds.
 """
+
 from __future__ import annotations
 
 import time
@@ -67,7 +68,7 @@ def check_kind(kind: str) -> str:
 
 
 def parse_blocks(text: str, what: str) -> tuple[int, int]:
-    """"COLSxROWS" → (columns, rows)."""
+    """ "COLSxROWS" → (columns, rows)."""
     rows, cols = parse_wxh(text, what)
     return cols, rows
 
@@ -85,17 +86,18 @@ class Case:
         return f"{self.method}:{self.kind}:{self.blocks[0]}x{self.blocks[1]}"
 
     @classmethod
-    def parse(cls, text: str) -> "Case":
+    def parse(cls, text: str) -> Case:
         parts = text.strip().split(":")
         if len(parts) != 3 or parts[0] not in CONVOLUTION_METHODS or parts[1] not in PSF_METHODS:
-            raise SolasError(f"case {text!r} must look like METHOD:PSF:COLSxROWS with METHOD in "
-                             f"{'/'.join(CONVOLUTION_METHODS)} and PSF in {'/'.join(PSF_METHODS)} "
-                             "(e.g. interp:geometric:32x24)")
+            raise SolasError(
+                f"case {text!r} must look like METHOD:PSF:COLSxROWS with METHOD in "
+                f"{'/'.join(CONVOLUTION_METHODS)} and PSF in {'/'.join(PSF_METHODS)} "
+                "(e.g. interp:geometric:32x24)"
+            )
         return cls(parts[0], parts[1], parse_blocks(parts[2], "case grid"))
 
 
-def psf_grid_for(lens, kind: str, blocks: tuple[int, int], width: int, height: int, fov_deg: float,
-                 progress=None):
+def psf_grid_for(lens, kind: str, blocks: tuple[int, int], width: int, height: int, fov_deg: float, progress=None):
     """The PSF grid with one node at the centre of each of cols×rows equal blocks of a width×height image
     spanning ±fov_deg (nodes over ±fov × ±fov·H/W: for the doublet's 1280×960 image the paper's 8×8 /
     32×32 grids over ±2° with the rows inside the image), normalised "none"; Fraunhofer PSFs rescaled to
@@ -104,8 +106,16 @@ def psf_grid_for(lens, kind: str, blocks: tuple[int, int], width: int, height: i
     cols, rows = blocks
     pitch, size = PSF_SAMPLING[kind]
     start = time.perf_counter()
-    grid = psf_grid(lens, grid=(rows, cols), field_range_deg=(fov_deg, fov_deg * height / width), method=kind,
-                    normalization="none", pitch_um=pitch, size=size, progress=progress)
+    grid = psf_grid(
+        lens,
+        grid=(rows, cols),
+        field_range_deg=(fov_deg, fov_deg * height / width),
+        method=kind,
+        normalization="none",
+        pitch_um=pitch,
+        size=size,
+        progress=progress,
+    )
     if kind == "fraunhofer":
         fold_tails(grid)
     return grid, time.perf_counter() - start
@@ -115,16 +125,20 @@ def fold_tails(grid) -> None:
     """Rescale each PSF of a "none" grid so that it sums to its transmission (the energy beyond the
     window folded back); records the captured fraction in the metadata."""
     trans = np.asarray(grid.meta["transmission"], dtype=np.float64)
-    sums = grid.data.sum(axis=(-2, -1), dtype=np.float64) * grid.pitch_um ** 2
+    sums = grid.data.sum(axis=(-2, -1), dtype=np.float64) * grid.pitch_um**2
     captured = sums / np.where(trans > 0, trans, 1.0)
     grid.data *= (trans / np.where(sums > 0, sums, 1.0))[..., None, None].astype(np.float32)
-    grid.meta["window_captured_fraction"] = {"min": float(captured.min()), "max": float(captured.max()),
-                                             "mean": float(captured.mean())}
+    grid.meta["window_captured_fraction"] = {
+        "min": float(captured.min()),
+        "max": float(captured.max()),
+        "mean": float(captured.mean()),
+    }
     grid.meta["tails"] = "each PSF rescaled to sum to its transmission (energy beyond the window folded back)"
 
 
-def convolve(image: np.ndarray, grid, method: str, lens, fov_deg: float, boundary: str = "edge",
-             scale: np.ndarray | None = None) -> tuple[np.ndarray, float]:
+def convolve(
+    image: np.ndarray, grid, method: str, lens, fov_deg: float, boundary: str = "edge", scale: np.ndarray | None = None
+) -> tuple[np.ndarray, float]:
     """The convolution engine in render units: k_c · degrade(image · cos³θ, grid). Returns (image, seconds)."""
     height, width = image.shape[:2]
     start = time.perf_counter()
@@ -142,11 +156,30 @@ def ideal(image: np.ndarray, fov_deg: float, scale: np.ndarray) -> np.ndarray:
     return (image * tangent_cos3(w, h, fov_deg)[..., None] * scale).astype(np.float32)
 
 
-def render(lens, image: np.ndarray, spp: int, seed: int, fov_deg: float, boundary: str = "edge",
-           variant: str | None = None, progress=None):
+def render(
+    lens,
+    image: np.ndarray,
+    spp: int,
+    seed: int,
+    fov_deg: float,
+    boundary: str = "edge",
+    variant: str | None = None,
+    progress=None,
+):
     """The direct render in the cross-validation's settings (lines, no Fresnel, sensor = image grid)."""
     from ..render.image import render_image
 
     h, w = image.shape[:2]
-    return render_image(lens, image, sensor=(h, w), spp=spp, response="lines", fov_deg=fov_deg, boundary=boundary,
-                        fresnel="off", variant=variant, seed=seed, progress=progress)
+    return render_image(
+        lens,
+        image,
+        sensor=(h, w),
+        spp=spp,
+        response="lines",
+        fov_deg=fov_deg,
+        boundary=boundary,
+        fresnel="off",
+        variant=variant,
+        seed=seed,
+        progress=progress,
+    )

@@ -5,6 +5,7 @@ The input is the ideal (pinhole) image spanning ±fov_deg horizontally; its pixe
 (`optics.camera`). Values are linear (PNG/JPEG are sRGB-decoded unless declared linear), H×W×3
 float64, in arbitrary radiance units L that the engines' outputs carry on.
 """
+
 from __future__ import annotations
 
 import math
@@ -14,8 +15,9 @@ import numpy as np
 from ..errors import SolasError
 
 
-def load_input(image: str | np.ndarray, sensor: tuple[int, int] | None = None, scale: float | None = None,
-               linear: bool = False) -> np.ndarray:
+def load_input(
+    image: str | np.ndarray, sensor: tuple[int, int] | None = None, scale: float | None = None, linear: bool = False
+) -> np.ndarray:
     """The linear H×W×3 float64 input image, resampled (area average) to sensor (rows, columns) or by
     `scale`. PNG/JPEG are sRGB-decoded unless `linear`; a one-channel image is repeated as R, G, B."""
     from ..imageio import read_image

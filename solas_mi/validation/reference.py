@@ -6,6 +6,7 @@ for two), as one RMS value for the whole image and as a per-pixel variance map f
 (`scores.compare` removes it in quadrature). It is stored as reference.exr with the settings it was
 rendered with (`REFERENCE_KEYS`), so that a later run with the same settings can reuse it.
 """
+
 from __future__ import annotations
 
 import math
@@ -31,19 +32,30 @@ class Reference:
     @property
     def rms(self) -> float:
         """RMS of the image over all pixels and channels."""
-        return math.sqrt(float(np.mean(self.image ** 2)))
+        return math.sqrt(float(np.mean(self.image**2)))
 
 
 def check_reference(spp: int, seeds: int) -> None:
     """SolasError unless `seeds` ≥ 2 renders of spp/seeds samples each can be made."""
     if not (isinstance(seeds, int) and seeds >= 2):
-        raise SolasError(f"reference seeds {seeds!r} must be an integer >= 2 (the noise is estimated from their spread)")
+        raise SolasError(
+            f"reference seeds {seeds!r} must be an integer >= 2 (the noise is estimated from their spread)"
+        )
     if not (isinstance(spp, int) and spp >= seeds):
         raise SolasError(f"reference spp {spp!r} must be an integer >= the number of seeds ({seeds})")
 
 
-def reference(lens, image: np.ndarray, spp: int, fov_deg: float, seeds: int = 2, boundary: str = "edge",
-              variant: str | None = None, first_seed: int = 1001, progress=None) -> Reference:
+def reference(
+    lens,
+    image: np.ndarray,
+    spp: int,
+    fov_deg: float,
+    seeds: int = 2,
+    boundary: str = "edge",
+    variant: str | None = None,
+    first_seed: int = 1001,
+    progress=None,
+) -> Reference:
     """Mean of `seeds` renders of spp/seeds samples each, with its noise estimated from their spread;
     `progress(done, total)` is told the samples per pixel done over all of them."""
     check_reference(spp, seeds)
@@ -79,8 +91,19 @@ def write_reference(path: Path, ref: Reference, var_map: np.ndarray, meta: dict)
 
     channels = image_channels(ref.image.astype(np.float32))
     channels["noise_var"] = var_map.astype(np.float32)
-    write_exr(path, channels, dict(meta, spp=ref.spp, seeds=len(ref.renders), seconds=ref.seconds,
-                                   noise_abs=ref.noise, response="lines", fresnel="off"))
+    write_exr(
+        path,
+        channels,
+        dict(
+            meta,
+            spp=ref.spp,
+            seeds=len(ref.renders),
+            seconds=ref.seconds,
+            noise_abs=ref.noise,
+            response="lines",
+            fresnel="off",
+        ),
+    )
 
 
 def read_reference(path: Path, expect: dict) -> tuple[Reference, np.ndarray] | None:
@@ -90,9 +113,13 @@ def read_reference(path: Path, expect: dict) -> tuple[Reference, np.ndarray] | N
     if not path.is_file():
         return None
     channels, meta = read_exr(path)
-    if "noise_var" not in channels or "noise_abs" not in meta or any(
-            meta.get(k) != expect.get(k) for k in REFERENCE_KEYS):
+    if (
+        "noise_var" not in channels
+        or "noise_abs" not in meta
+        or any(meta.get(k) != expect.get(k) for k in REFERENCE_KEYS)
+    ):
         return None
     image = np.stack([channels[c] for c in "RGB"], axis=-1).astype(np.float64)
-    return Reference(image, float(meta["noise_abs"]), int(meta["spp"]), float(meta["seconds"])), \
-        channels["noise_var"].astype(np.float64)
+    return Reference(image, float(meta["noise_abs"]), int(meta["spp"]), float(meta["seconds"])), channels[
+        "noise_var"
+    ].astype(np.float64)

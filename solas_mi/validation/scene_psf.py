@@ -6,6 +6,7 @@ cross the scene's caps through `sellmeier_dielectric` (importance transport, `re
 and are binned where they meet the image plane, on the tracer's PSF grid centred on the tracer's
 chief ray. Lengths in mm, offsets in µm.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -18,8 +19,15 @@ from ..psf.registry import DEFAULT_GEOMETRIC_RAYS
 from ..render.psf import scene_hits
 
 
-def scene_psf(scene, lens: Lens, field_deg, wavelength_nm: float, pitch_um: float = base.DEFAULT_PITCH_UM,
-              size: int = base.DEFAULT_SIZE, rays: int = DEFAULT_GEOMETRIC_RAYS) -> base.PSF:
+def scene_psf(
+    scene,
+    lens: Lens,
+    field_deg,
+    wavelength_nm: float,
+    pitch_um: float = base.DEFAULT_PITCH_UM,
+    size: int = base.DEFAULT_SIZE,
+    rays: int = DEFAULT_GEOMETRIC_RAYS,
+) -> base.PSF:
     """Geometric PSF (unit sum) of field (x, y) degrees at one wavelength through `scene`'s geometry.
     meta holds the rays' landing centroid and RMS radius (µm from the chief ray) and the transmitted
     power (fraction of the on-axis entrance-pupil power)."""
@@ -33,7 +41,22 @@ def scene_psf(scene, lens: Lens, field_deg, wavelength_nm: float, pitch_um: floa
     cx, cy = np.average(px, weights=w), np.average(py, weights=w)
     rms = float(np.sqrt(np.average((px - cx) ** 2 + (py - cy) ** 2, weights=w)))
     meta = base.describe(lens, "scene-geometric", "sum", {"rays": rays}, size)
-    meta.update({"centroid_um": [float(cx), float(cy)], "rms_radius_um": rms,
-                 "transmission": float(transmission[0]), "chief_ray_mm": chief.image_xy[0].tolist()})
-    return base.PSF(base.normalize(data[0], "sum"), float(pitch_um), tuple(field[0]), (float(wl[0]),), (1.0,),
-                    tuple(chief.image_xy[0].tolist()), "scene-geometric", "sum", meta)
+    meta.update(
+        {
+            "centroid_um": [float(cx), float(cy)],
+            "rms_radius_um": rms,
+            "transmission": float(transmission[0]),
+            "chief_ray_mm": chief.image_xy[0].tolist(),
+        }
+    )
+    return base.PSF(
+        base.normalize(data[0], "sum"),
+        float(pitch_um),
+        tuple(field[0]),
+        (float(wl[0]),),
+        (1.0,),
+        tuple(chief.image_xy[0].tolist()),
+        "scene-geometric",
+        "sum",
+        meta,
+    )

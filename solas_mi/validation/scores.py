@@ -7,6 +7,7 @@ per annulus (centre < 0.24 R ≤ middle < 0.6 R ≤ edge, R = the centre-to-corn
 from scikit-image (channel_axis=-1, same data_range). The reference's noise σ_ref (`reference`) is
 removed in quadrature: e = sqrt(max(0, e_measured² − σ_ref²)). All are unitless (PSNR in dB).
 """
+
 from __future__ import annotations
 
 import math
@@ -44,15 +45,16 @@ def _pixels(values, what: str) -> np.ndarray:
     except (TypeError, ValueError):
         raise SolasError(f"the {what} must be an H×W×C array of numbers, not {type(values).__name__}") from None
     if a.ndim != 3 or min(a.shape[:2]) < SSIM_WINDOW_PX:
-        raise SolasError(f"the {what}'s shape {a.shape} must be H×W×C (channels last), at least "
-                         f"{SSIM_WINDOW_PX} px a side (SSIM's window)")
+        raise SolasError(
+            f"the {what}'s shape {a.shape} must be H×W×C (channels last), at least "
+            f"{SSIM_WINDOW_PX} px a side (SSIM's window)"
+        )
     if not np.all(np.isfinite(a)):
         raise SolasError(f"the {what} holds NaN or infinite values: only finite pixel values are allowed")
     return a
 
 
-def compare(image: np.ndarray, ref: np.ndarray, ref_noise: float = 0.0, noise_map: np.ndarray | None = None
-            ) -> Errors:
+def compare(image: np.ndarray, ref: np.ndarray, ref_noise: float = 0.0, noise_map: np.ndarray | None = None) -> Errors:
     """Errors of `image` against `ref` (same shape). ref_noise: the reference's RMS noise (absolute);
     noise_map: its per-pixel variance estimate (for the annuli; default uniform)."""
     from skimage.metrics import peak_signal_noise_ratio, structural_similarity
@@ -61,7 +63,7 @@ def compare(image: np.ndarray, ref: np.ndarray, ref_noise: float = 0.0, noise_ma
     if image.shape != ref.shape:
         raise SolasError(f"image shape {image.shape} differs from the reference's {ref.shape}")
     diff2 = (image - ref) ** 2
-    ref_rms = math.sqrt(float(np.mean(ref ** 2)))
+    ref_rms = math.sqrt(float(np.mean(ref**2)))
     if ref_rms == 0:
         raise SolasError("the reference image is black: nothing to compare against")
     rmse = math.sqrt(float(diff2.mean()))
@@ -69,7 +71,7 @@ def compare(image: np.ndarray, ref: np.ndarray, ref_noise: float = 0.0, noise_ma
     psnr = float(peak_signal_noise_ratio(ref, image, data_range=top)) if rmse > 0 else float("inf")
     ssim = float(structural_similarity(ref, image, channel_axis=-1, data_range=top))
     rings = annulus_map(*ref.shape[:2])
-    var = noise_map if noise_map is not None else np.full(ref.shape[:2], ref_noise ** 2)
+    var = noise_map if noise_map is not None else np.full(ref.shape[:2], ref_noise**2)
     ann, ann_dn = {}, {}
     for i, name in enumerate(ANNULUS_NAMES):
         m = rings == i

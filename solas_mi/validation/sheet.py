@@ -1,5 +1,6 @@
 """A comparison sheet of degraded images: each image whole, then crops of its centre and its
 periphery enlarged, side by side (the layout of the SOLAS paper's figure 4)."""
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -35,7 +36,7 @@ def comparison_sheet(images: dict[str, np.ndarray], path: str | Path, title: str
         axes[0, j].set_title(name, fontsize=11)
         for i, (crop, (r, c, h, w)) in enumerate(boxes.items(), start=1):
             axes[0, j].add_patch(Rectangle((c, r), w, h, fill=False, edgecolor="yellow", linewidth=1))
-            axes[i, j].imshow(rgb[r:r + h, c:c + w], interpolation="nearest")
+            axes[i, j].imshow(rgb[r : r + h, c : c + w], interpolation="nearest")
             axes[i, j].set_title(f"{crop} crop", fontsize=9)
     for ax in axes.ravel():
         ax.set_xticks([])

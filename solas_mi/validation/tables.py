@@ -4,6 +4,7 @@ render at some spp, the unblurred image), written as Markdown (`crossval_markdow
 unitless), times in wall-clock seconds with the PSF grid's computation and the run (convolution or
 render) apart.
 """
+
 from __future__ import annotations
 
 import csv
@@ -34,11 +35,21 @@ class Row:
 
     def flat(self) -> dict[str, Any]:
         e = self.errors
-        out = {"name": self.name, "method": self.method, "psf": self.psf, "grid": self.grid, "spp": self.spp,
-               "psf_seconds": round(self.psf_seconds, 3), "run_seconds": round(self.conv_seconds, 3),
-               "total_seconds": round(self.seconds, 3),
-               "rel_rmse": e.rel_rmse, "rel_rmse_denoised": e.rel_rmse_denoised, "rmse": e.rmse,
-               "psnr_db": e.psnr_db, "ssim": e.ssim}
+        out = {
+            "name": self.name,
+            "method": self.method,
+            "psf": self.psf,
+            "grid": self.grid,
+            "spp": self.spp,
+            "psf_seconds": round(self.psf_seconds, 3),
+            "run_seconds": round(self.conv_seconds, 3),
+            "total_seconds": round(self.seconds, 3),
+            "rel_rmse": e.rel_rmse,
+            "rel_rmse_denoised": e.rel_rmse_denoised,
+            "rmse": e.rmse,
+            "psnr_db": e.psnr_db,
+            "ssim": e.ssim,
+        }
         for k, v in e.annuli.items():
             out[f"rel_rmse_{k}"] = v
         for k, v in e.annuli_denoised.items():
@@ -63,28 +74,36 @@ def _with_note(lines: list[str], note: str) -> str:
 
 def crossval_markdown(rows: list[Row], noise_note: str = "") -> str:
     """`solas-mi crossval`'s table: the cases, their PSF and grid, times, errors."""
-    head = ("| case | PSF | grid | PSF s | run s | total s | rel. RMSE | rel. RMSE − noise | centre | middle | edge "
-            "| PSNR dB | SSIM |")
+    head = (
+        "| case | PSF | grid | PSF s | run s | total s | rel. RMSE | rel. RMSE − noise | centre | middle | edge "
+        "| PSNR dB | SSIM |"
+    )
     lines = [head, "|" + "---|" * 13]
     for r in rows:
         e = r.errors
         lines.append(
             f"| {r.name} | {r.psf} | {r.grid} | {r.psf_seconds:.2f} | {r.conv_seconds:.2f} | {r.seconds:.2f} | "
             f"{_percent(e.rel_rmse)} | {_percent(e.rel_rmse_denoised)} | {_annuli(e)} | {e.psnr_db:.2f} | "
-            f"{e.ssim:.5f} |")
+            f"{e.ssim:.5f} |"
+        )
     return _with_note(lines, noise_note)
 
 
 def error_vs_time_markdown(rows: list[Row], note: str = "") -> str:
     """`solas-mi report error-vs-time`'s table: times first, then the errors with the noise removed."""
-    lines = ["| case | PSF grid s | run s | total s | rel. RMSE − noise | centre | middle | edge | rel. RMSE | "
-             "PSNR dB | SSIM |", "|" + "---|" * 11]
+    lines = [
+        "| case | PSF grid s | run s | total s | rel. RMSE − noise | centre | middle | edge | rel. RMSE | "
+        "PSNR dB | SSIM |",
+        "|" + "---|" * 11,
+    ]
     for r in rows:
         e = r.errors
         psf = f"{r.psf_seconds:.2f}" if r.method != "render" else "—"
-        lines.append(f"| {r.name} | {psf} | {r.conv_seconds:.3f} | {r.seconds:.2f} | "
-                     f"{_percent(e.rel_rmse_denoised)} | {_annuli(e)} | {_percent(e.rel_rmse)} | {e.psnr_db:.2f} | "
-                     f"{e.ssim:.5f} |")
+        lines.append(
+            f"| {r.name} | {psf} | {r.conv_seconds:.3f} | {r.seconds:.2f} | "
+            f"{_percent(e.rel_rmse_denoised)} | {_annuli(e)} | {_percent(e.rel_rmse)} | {e.psnr_db:.2f} | "
+            f"{e.ssim:.5f} |"
+        )
     return _with_note(lines, note)
 
 

@@ -2,6 +2,7 @@
 ray and OPD fans, its spot, its flat field), a plane-parallel plate in a converging beam (its
 sagittal and tangential focus shifts, and the through-focus MTF peaking at them), distortion of an
 ideal lens, the diffraction-limited encircled energy; the Zernike polynomials themselves."""
+
 import math
 
 import numpy as np
@@ -44,7 +45,7 @@ def test_a_pure_defocus_has_its_analytic_z4(kind, scale):
     nodes, weights = np.polynomial.legendre.leggauss(200)
     rho = (nodes + 1.0) / 2.0
     w = defocus_wavefront(rho * f / n / 2.0, f, defocus)
-    expected = 6.0 * np.dot(weights / 2.0, w * (2 * rho ** 2 - 1) * rho) * scale
+    expected = 6.0 * np.dot(weights / 2.0, w * (2 * rho**2 - 1) * rho) * scale
     result = wavefront(ideal_lens(f, n, defocus), fields_deg=[0.0], pupil_samples=64, zernike=kind)
     assert expected * (math.sqrt(3.0) if kind == "noll" else 1.0) > 1.5  # waves: a real defocus
     assert result.coefficients[0, 3] == pytest.approx(expected, abs=1e-6)
@@ -85,16 +86,25 @@ def test_the_spot_of_a_defocused_ideal_lens():
 def plate_lens(f=50.0, n=1.5, t=5.0, field=20.0) -> Lens:
     """An ideal lens (stop, f/10), then a plate of index n, thickness t 10 mm behind it; the image plane
     at the on-axis focus, f + t (1 − 1/n)."""
-    return Lens.from_dict({"name": "plate", "wavelengths_nm": [WL], "field_deg": field, "surface": [
-        {"radius": 0.0, "thickness": 10.0, "diameter": f / 10.0, "stop": True, "focal_length": f},
-        {"radius": 0.0, "thickness": t, "diameter": 40.0, "material": f"model:{n}"},
-        {"radius": 0.0, "thickness": f + t * (1 - 1 / n) - 10.0 - t, "diameter": 40.0}]})
+    return Lens.from_dict(
+        {
+            "name": "plate",
+            "wavelengths_nm": [WL],
+            "field_deg": field,
+            "surface": [
+                {"radius": 0.0, "thickness": 10.0, "diameter": f / 10.0, "stop": True, "focal_length": f},
+                {"radius": 0.0, "thickness": t, "diameter": 40.0, "material": f"model:{n}"},
+                {"radius": 0.0, "thickness": f + t * (1 - 1 / n) - 10.0 - t, "diameter": 40.0},
+            ],
+        }
+    )
 
 
 def plate_foci(theta: np.ndarray, n: float, t: float) -> tuple[np.ndarray, np.ndarray]:
     """Axial shifts of the tangential and sagittal foci of a pencil crossing a plate at angle θ: each ray
     is displaced by d(θ) = t sin(θ − θ')/cos θ' across itself; the sagittal pair meets on the axis through
     the focus moved by d/sin θ, the tangential pair at the envelope, moved by d' cos θ + d sin θ."""
+
     def d(a):
         return t * (np.sin(a) - np.cos(a) * np.sin(a) / np.sqrt(n * n - np.sin(a) ** 2))
 
@@ -126,8 +136,9 @@ def test_the_through_focus_mtf_peaks_at_the_tangential_and_sagittal_foci():
     n, t = 1.5, 5.0
     lens = plate_lens(n=n, t=t)
     tangential, sagittal = (v[0] * 1e3 - t * (1 - 1 / n) * 1e3 for v in plate_foci(np.radians([20.0]), n, t))
-    result = through_focus(lens, frequency_cy_mm=10.0, fields_deg=[20.0], focus_range_um=450.0, focus_steps=31,
-                           pupil_samples=96)
+    result = through_focus(
+        lens, frequency_cy_mm=10.0, fields_deg=[20.0], focus_range_um=450.0, focus_steps=31, pupil_samples=96
+    )
     best = result.best_focus_um()["20"]
     separation = abs(tangential - sagittal)
     assert abs(best["tangential"] - tangential) < 0.1 * separation
@@ -171,8 +182,17 @@ def test_noll_terms_are_orthonormal_and_fringe_terms_in_their_order():
     terms = [polynomial("noll", *noll_index(j), r, t) for j in range(1, 22)]
     gram = np.array([[np.sum(a * b * area) for b in terms] for a in terms])
     assert gram == pytest.approx(np.eye(21), abs=1e-9)
-    assert [fringe_index(j) for j in range(1, 10)] == [(0, 0), (1, 1), (1, -1), (2, 0), (2, 2), (2, -2), (3, 1),
-                                                       (3, -1), (4, 0)]
+    assert [fringe_index(j) for j in range(1, 10)] == [
+        (0, 0),
+        (1, 1),
+        (1, -1),
+        (2, 0),
+        (2, 2),
+        (2, -2),
+        (3, 1),
+        (3, -1),
+        (4, 0),
+    ]
     # j = (1 + (n + |m|)/2)² − 2|m| + (1 − sign m)/2: Z37 is (6, 6), as optiland has it (Zemax puts ρ¹² there)
     assert [fringe_index(j) for j in (16, 25, 36, 37)] == [(6, 0), (8, 0), (10, 0), (6, 6)]
     for j in range(1, 50):
@@ -180,14 +200,17 @@ def test_noll_terms_are_orthonormal_and_fringe_terms_in_their_order():
         assert (1 + (n + abs(m)) // 2) ** 2 - 2 * abs(m) + (1 - np.sign(m)) // 2 == j
 
 
-@pytest.mark.parametrize("call, words", [
-    (lambda lens: wavefront(lens, zernike="zemax"), "Zernike kind 'zemax' must be one of fringe, noll"),
-    (lambda lens: wavefront(lens, zernike_terms=0), "Zernike terms 0"),
-    (lambda lens: ray_fan(lens, fields_deg=[-21.0]), "field -21 deg is beyond"),
-    (lambda lens: encircled_energy(lens, energy_reference="peak"), "energy reference 'peak'"),
-    (lambda lens: field_curvature(lens, field_samples=1), "field samples 1"),
-    (lambda lens: spot_diagram(lens, wavelengths_nm=[-5.0]), "wavelength -5.0 nm"),
-])
+@pytest.mark.parametrize(
+    "call, words",
+    [
+        (lambda lens: wavefront(lens, zernike="zemax"), "Zernike kind 'zemax' must be one of fringe, noll"),
+        (lambda lens: wavefront(lens, zernike_terms=0), "Zernike terms 0"),
+        (lambda lens: ray_fan(lens, fields_deg=[-21.0]), "field -21 deg is beyond"),
+        (lambda lens: encircled_energy(lens, energy_reference="peak"), "energy reference 'peak'"),
+        (lambda lens: field_curvature(lens, field_samples=1), "field samples 1"),
+        (lambda lens: spot_diagram(lens, wavelengths_nm=[-5.0]), "wavelength -5.0 nm"),
+    ],
+)
 def test_bad_inputs_are_refused_by_name(cooke, call, words):
     with pytest.raises(SolasError, match=words.replace("(", r"\(").replace(".", r"\.")):
         call(cooke)

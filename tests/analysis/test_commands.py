@@ -1,6 +1,7 @@
 """The `solas-mi lens <analysis>` commands and `lens report`: made from the registry (each command's
 options are its entry's), each writing a PNG with strict JSON and CSV beside it, bad values refused by
 name with nothing written, the report's index showing every analysis."""
+
 import argparse
 import csv
 
@@ -61,8 +62,11 @@ def test_a_command_writes_the_figure_and_its_numbers(tmp_path, capsys):
 def test_undefined_values_are_empty_cells_and_null(tmp_path):
     """A ray blocked by an aperture has no aberration: null in the JSON, an empty CSV cell (never NaN)."""
     lens = tmp_path / "vignetted.toml"
-    lens.write_text(IDEAL.replace("diameter = 12.5", "diameter = 12.5\n[[surface]]\nradius = 0.0\nthickness = 0.0\n"
-                                  "diameter = 11.0").replace("thickness = 100.5", "thickness = 50.0"))
+    lens.write_text(
+        IDEAL.replace(
+            "diameter = 12.5", "diameter = 12.5\n[[surface]]\nradius = 0.0\nthickness = 0.0\ndiameter = 11.0"
+        ).replace("thickness = 100.5", "thickness = 50.0")
+    )
     out = tmp_path / "fan.png"
     assert main(["lens", "ray-fan", str(lens), "--fields", "0", "--fan-samples", "9", "-o", str(out)]) == 0
     record = strict_loads(out.with_suffix(".json").read_text())
@@ -77,13 +81,16 @@ def status(argv) -> int:
         return exc.code
 
 
-@pytest.mark.parametrize("argv, words", [
-    (["lens", "mtf", "cooke-triplet", "--fields", "0,25"], "field 25 deg is beyond"),
-    (["lens", "mtf-field", "cooke-triplet", "--frequencies", "900"], "at most the diffraction cut-off"),
-    (["lens", "through-focus", "cooke-triplet", "--focus-range-um", "-10"], "focus range -10.0 um"),
-    (["lens", "mtf", "cooke-triplet", "-o", "{tmp}/mtf.jpg"], "must end in .png"),
-    (["lens", "wavefront", "cooke-triplet", "--zernike", "standard"], "invalid choice"),
-])
+@pytest.mark.parametrize(
+    "argv, words",
+    [
+        (["lens", "mtf", "cooke-triplet", "--fields", "0,25"], "field 25 deg is beyond"),
+        (["lens", "mtf-field", "cooke-triplet", "--frequencies", "900"], "at most the diffraction cut-off"),
+        (["lens", "through-focus", "cooke-triplet", "--focus-range-um", "-10"], "focus range -10.0 um"),
+        (["lens", "mtf", "cooke-triplet", "-o", "{tmp}/mtf.jpg"], "must end in .png"),
+        (["lens", "wavefront", "cooke-triplet", "--zernike", "standard"], "invalid choice"),
+    ],
+)
 def test_bad_values_are_refused_by_name_and_nothing_is_written(tmp_path, capsys, argv, words):
     argv = [a.replace("{tmp}", str(tmp_path)) for a in argv]
     if "-o" not in argv:
@@ -97,9 +104,32 @@ def test_the_report_shows_every_analysis(tmp_path):
     lens = tmp_path / "ideal.toml"
     lens.write_text(IDEAL)
     out = tmp_path / "report"
-    assert main(["lens", "report", str(lens), "-o", str(out), "--pupil-samples", "32", "--rays", "16",
-                 "--field-samples", "3", "--focus-steps", "3", "--fan-samples", "5", "--rings", "2",
-                 "--fields", "0,4"]) == 0
+    assert (
+        main(
+            [
+                "lens",
+                "report",
+                str(lens),
+                "-o",
+                str(out),
+                "--pupil-samples",
+                "32",
+                "--rays",
+                "16",
+                "--field-samples",
+                "3",
+                "--focus-steps",
+                "3",
+                "--fan-samples",
+                "5",
+                "--rings",
+                "2",
+                "--fields",
+                "0,4",
+            ]
+        )
+        == 0
+    )
     index = (out / "index.html").read_text()
     for name in ANALYSES:
         assert (out / f"{name}.png").is_file() and f"src='{name}.png'" in index

@@ -2,6 +2,7 @@
 ideal lens, the defocused MTF (Hopkins' integral for a pure defocus), the geometric MTF of a
 defocused ideal lens (a uniform disc), the OTF against the Fourier transform of the package's
 Fraunhofer PSF, the pixel's sinc; bad inputs refused by name."""
+
 import math
 
 import numpy as np
@@ -98,8 +99,16 @@ def test_the_otf_is_the_fourier_transform_of_the_fraunhofer_psf(cooke, field):
     carries lateral colour) equals the Fourier transform of the package's polychromatic Fraunhofer PSF
     along y and x, within the light the PSF's window leaves out plus 5e-4."""
     wl, weights = cooke.wavelengths_nm, (0.25, 0.5, 0.25)
-    p = psf(cooke, (0.0, field), list(wl), weights=list(weights), pitch_um=0.5, size=480, pupil_samples=256,
-            normalization="none")
+    p = psf(
+        cooke,
+        (0.0, field),
+        list(wl),
+        weights=list(weights),
+        pitch_um=0.5,
+        size=480,
+        pupil_samples=256,
+        normalization="none",
+    )
     nu = np.linspace(0.0, 200.0, 21)
     otf, _ = lens_otf(cooke, (field,), wl, weights, nu, 256)
     for axis, coordinate, direction in ((1, p.y_um, 0), (0, p.x_um, 1)):
@@ -110,14 +119,22 @@ def test_the_otf_is_the_fourier_transform_of_the_fraunhofer_psf(cooke, field):
 
 
 def test_mtf_with_pixels_is_the_lens_times_the_sinc(cooke):
-    result = mtf(cooke, fields_deg=[0.0], max_frequency_cy_mm=100.0, pupil_samples=64, rays=32, pixel_pitch_um=4.0,
-                 fill_factor=0.81)
+    result = mtf(
+        cooke,
+        fields_deg=[0.0],
+        max_frequency_cy_mm=100.0,
+        pupil_samples=64,
+        rays=32,
+        pixel_pitch_um=4.0,
+        fill_factor=0.81,
+    )
     a_mm = 4.0e-3 * 0.9
     assert result.pixel == pytest.approx(np.abs(np.sinc(result.frequency_cy_mm * a_mm)), abs=1e-15)
     table = result.table()
     row = table.rows[50]
     assert row[table.columns.index("tangential_with_pixel")] == pytest.approx(
-        row[table.columns.index("tangential")] * row[table.columns.index("pixel")])
+        row[table.columns.index("tangential")] * row[table.columns.index("pixel")]
+    )
 
 
 def test_pixel_mtf_along_the_diagonal_is_a_product_of_sincs():
@@ -130,8 +147,14 @@ def test_through_focus_of_an_ideal_lens_peaks_at_its_focus():
     """An ideal lens's through-focus MTF peaks at its focus (the parabola through the samples about the
     largest, within a hundredth of the 50 um step; the curve is not quite symmetric: the reference sphere's
     radius changes with the plane)."""
-    result = through_focus(ideal_lens(f_number=8.0), frequency_cy_mm=60.0, fields_deg=[0.0], focus_range_um=200.0,
-                           focus_steps=9, pupil_samples=64)
+    result = through_focus(
+        ideal_lens(f_number=8.0),
+        frequency_cy_mm=60.0,
+        fields_deg=[0.0],
+        focus_range_um=200.0,
+        focus_steps=9,
+        pupil_samples=64,
+    )
     best = result.best_focus_um()["0"]
     assert abs(best["tangential"]) < 0.5 and abs(best["sagittal"]) < 0.5
 
@@ -148,17 +171,20 @@ def test_mtf50_of_an_ideal_lens_is_where_the_closed_form_is_one_half():
     assert result.mtf50_cy_mm[0] == pytest.approx([lo * cutoff] * 2, rel=2e-4)
 
 
-@pytest.mark.parametrize("call, words", [
-    (lambda lens: mtf(lens, fields_deg=[25.0]), "field 25 deg is beyond"),
-    (lambda lens: mtf(lens, max_frequency_cy_mm=1000.0), "at most the diffraction cut-off"),
-    (lambda lens: mtf_field(lens, frequencies_cy_mm=[50.0, 500.0]), "frequency 500.0 cycles/mm"),
-    (lambda lens: through_focus(lens, focus_range_um=-5.0), "focus range -5.0 um must be a positive"),
-    (lambda lens: through_focus(lens, focus_range_um=1e6), "before lens cooke-triplet's last surface"),
-    (lambda lens: mtf(lens, fill_factor=0.5), "fill factor 0.5 needs a pixel pitch"),
-    (lambda lens: mtf(lens, pixel_pitch_um=-3.0), "pixel pitch -3.0 um"),
-    (lambda lens: mtf(lens, pupil_samples=4), "pupil samples 4 must be"),
-    (lambda lens: mtf(lens, wavelengths_nm=[550.0], weights=[1.0, 2.0]), "weights"),
-])
+@pytest.mark.parametrize(
+    "call, words",
+    [
+        (lambda lens: mtf(lens, fields_deg=[25.0]), "field 25 deg is beyond"),
+        (lambda lens: mtf(lens, max_frequency_cy_mm=1000.0), "at most the diffraction cut-off"),
+        (lambda lens: mtf_field(lens, frequencies_cy_mm=[50.0, 500.0]), "frequency 500.0 cycles/mm"),
+        (lambda lens: through_focus(lens, focus_range_um=-5.0), "focus range -5.0 um must be a positive"),
+        (lambda lens: through_focus(lens, focus_range_um=1e6), "before lens cooke-triplet's last surface"),
+        (lambda lens: mtf(lens, fill_factor=0.5), "fill factor 0.5 needs a pixel pitch"),
+        (lambda lens: mtf(lens, pixel_pitch_um=-3.0), "pixel pitch -3.0 um"),
+        (lambda lens: mtf(lens, pupil_samples=4), "pupil samples 4 must be"),
+        (lambda lens: mtf(lens, wavelengths_nm=[550.0], weights=[1.0, 2.0]), "weights"),
+    ],
+)
 def test_bad_inputs_are_refused_by_name(cooke, call, words):
     with pytest.raises(SolasError, match=words.replace(".", r"\.").replace("(", r"\(")):
         call(cooke)

@@ -1,6 +1,7 @@
 """`solas-mi thermal` (analysis.thermal, analysis.thermal_report): best focus against a scan of the RMS spot,
 MTF50 against `mtf50-field` of the lens there, the sweep's rows against `Lens.at` and paraxial data; and
 the lens at 20 °C and 101.325 kPa bit-identical to the lens as loaded."""
+
 import csv
 import json
 import math
@@ -9,9 +10,9 @@ import numpy as np
 import pytest
 
 from solas_mi import Lens
+from solas_mi.analysis import thermal
 from solas_mi.errors import SolasError
 from solas_mi.optics.paraxial import paraxial
-from solas_mi.analysis import thermal
 
 
 def test_temperatures_include_both_ends():
@@ -19,8 +20,10 @@ def test_temperatures_include_both_ends():
     assert thermal.temperatures(20.0, 20.0, 5.0) == [20.0]
 
 
-@pytest.mark.parametrize("start, stop, step", [(60.0, 20.0, 5.0), (20.0, 60.0, 0.0), (20.0, 60.0, math.nan),
-                                               (-400.0, 20.0, 5.0), (20.0, 60.0, 1e-4)])
+@pytest.mark.parametrize(
+    "start, stop, step",
+    [(60.0, 20.0, 5.0), (20.0, 60.0, 0.0), (20.0, 60.0, math.nan), (-400.0, 20.0, 5.0), (20.0, 60.0, 1e-4)],
+)
 def test_bad_temperature_ranges_are_refused(start, stop, step):
     with pytest.raises(SolasError, match="temperature"):
         thermal.temperatures(start, stop, step)
@@ -44,10 +47,13 @@ def test_best_focus_is_the_least_rms_spot(doublet):
     from solas_mi.optics.spot import spot
 
     def rms(shift):
-        lens = replace(doublet, surfaces=doublet.surfaces[:-1] + (
-            replace(doublet.surfaces[-1], thickness=doublet.surfaces[-1].thickness + shift),))
+        lens = replace(
+            doublet,
+            surfaces=doublet.surfaces[:-1]
+            + (replace(doublet.surfaces[-1], thickness=doublet.surfaces[-1].thickness + shift),),
+        )
         hits = [spot(lens, (0.0, 0.0), w, density=thermal.SPOT_RINGS) for w in doublet.wavelengths_nm]
-        return math.sqrt(np.mean(np.concatenate([h.x_um ** 2 + h.y_um ** 2 for h in hits])))
+        return math.sqrt(np.mean(np.concatenate([h.x_um**2 + h.y_um**2 for h in hits])))
 
     shifts = np.linspace(0.3, 0.65, 36)
     scanned = shifts[int(np.argmin([rms(s) for s in shifts]))]
@@ -60,8 +66,7 @@ def test_thermal_command(tmp_path, capsys):
     the CSV, JSON and PNG written."""
     from solas_mi.cli import main
 
-    assert main(["thermal", "solas-doublet", "--from", "20", "--to", "60", "--step-c", "40", "-o",
-                 str(tmp_path)]) == 0
+    assert main(["thermal", "solas-doublet", "--from", "20", "--to", "60", "--step-c", "40", "-o", str(tmp_path)]) == 0
     assert "refocused" in capsys.readouterr().out
     lens = Lens.load("solas-doublet")
     doc = json.loads((tmp_path / "thermal.json").read_text())
@@ -76,8 +81,9 @@ def test_thermal_command(tmp_path, capsys):
     assert doc["rows"][0]["hash"] == lens.hash
 
 
-@pytest.mark.parametrize("name", ["solas-doublet", "cooke-triplet", "double-gauss-50mm", "nikkor-fisheye",
-                                  "wide-angle-22mm"])
+@pytest.mark.parametrize(
+    "name", ["solas-doublet", "cooke-triplet", "double-gauss-50mm", "nikkor-fisheye", "wide-angle-22mm"]
+)
 def test_standard_conditions_are_bit_identical(name, tmp_path):
     """Each shipped lens as loaded, its file saying 20 °C and 101.325 kPa outright, and `Lens.at(20, 101.325)`
     with another mount: paraxial data, real chief rays and a polychromatic PSF equal to the last bit."""
@@ -93,8 +99,11 @@ def test_standard_conditions_are_bit_identical(name, tmp_path):
     def figures(candidate):
         out = []
         for w in candidate.wavelengths_nm:
-            out.append(np.array([v for _, v in sorted(paraxial(candidate, w, fields).as_dict().items())
-                                 if isinstance(v, float)]))
+            out.append(
+                np.array(
+                    [v for _, v in sorted(paraxial(candidate, w, fields).as_dict().items()) if isinstance(v, float)]
+                )
+            )
             out.append(chief_rays(candidate, np.array([[0.0, f] for f in fields]), np.full(3, w)).image_xy)
         out.append(psf(candidate, (0.0, fields[1]), list(candidate.wavelengths_nm), pitch_um=1.0, size=48).data)
         return [np.asarray(a).tobytes() for a in out]

@@ -1,5 +1,6 @@
 """Small batches for the batch tests: a synthetic 4×4 grid of 31 px Gaussian PSFs (no tracer, the shared
 `synthetic_grid`) and 64×48 images, as the `batch_inputs` fixture."""
+
 import numpy as np
 import pytest
 

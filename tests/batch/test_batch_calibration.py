@@ -9,6 +9,7 @@ gives the same frames as with the lens's own mapping. A pinhole frame of discs w
 
 Both frames' discs (their light, their ids) lie in the same places, wherever the file's residual against the
 tracer's chief rays is below 0.05 px; a file 1 % off in focal length moves them by far more."""
+
 import math
 
 import cv2  # a test-only dependency: the test extra of pyproject.toml, requirements.lock
@@ -25,8 +26,22 @@ from solas_mi.optics.calibration.mapping import Sensor, chief_map
 from solas_mi.optics.calibration.models import model
 
 W, H, R, FOV = 480, 324, 7, 40.0  # the frame, the discs' radius (px), the half field its width spans (deg)
-GRID = ["--grid", "41x29", "--psf-method", "geometric", "--rays", "16", "--size", "15", "--pitch-um", "8",
-        "--field-sampling", "edges", "--field-range-deg", f"{FOV:g},29"]
+GRID = [
+    "--grid",
+    "41x29",
+    "--psf-method",
+    "geometric",
+    "--rays",
+    "16",
+    "--size",
+    "15",
+    "--pitch-um",
+    "8",
+    "--field-sampling",
+    "edges",
+    "--field-range-deg",
+    f"{FOV:g},29",
+]
 HELD_PX = 0.05  # the issue's: where the file holds the lens to this
 
 
@@ -36,7 +51,7 @@ def discs() -> np.ndarray:
     ids = np.zeros((H, W))
     for y in np.arange(2 * R + 2, H - 2 * R, 4 * R):
         for x in np.arange(2 * R + 2, W - 2 * R, 4 * R):
-            ids[(rows - y) ** 2 + (cols - x) ** 2 <= R ** 2] = ids.max() + 1
+            ids[(rows - y) ** 2 + (cols - x) ** 2 <= R**2] = ids.max() + 1
     return ids
 
 
@@ -47,9 +62,31 @@ def write_frame(folder, light: np.ndarray, ids: np.ndarray) -> None:
 
 
 def batch(frames, out, *extra) -> None:
-    assert main(["batch", "degrade", str(frames), "--lens", "wide-angle-22mm", *GRID, "--wavelengths-nm", "587.6",
-                 "--label-pattern", "instance={stem}_ids.png", "--cache", str(out.parent / "cache"), "-o", str(out),
-                 "--workers", "1", "--quiet", *extra]) == 0
+    assert (
+        main(
+            [
+                "batch",
+                "degrade",
+                str(frames),
+                "--lens",
+                "wide-angle-22mm",
+                *GRID,
+                "--wavelengths-nm",
+                "587.6",
+                "--label-pattern",
+                "instance={stem}_ids.png",
+                "--cache",
+                str(out.parent / "cache"),
+                "-o",
+                str(out),
+                "--workers",
+                "1",
+                "--quiet",
+                *extra,
+            ]
+        )
+        == 0
+    )
 
 
 def into_file_camera(k, d, light: np.ndarray, ids: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -62,8 +99,10 @@ def into_file_camera(k, d, light: np.ndarray, ids: np.ndarray) -> tuple[np.ndarr
     at = xy * ((W / 2) / math.tan(math.radians(FOV))) + [(W - 1) / 2, (H - 1) / 2]
     near = np.clip(np.rint(at), 0, [W - 1, H - 1]).astype(int)
     at = at.astype(np.float32)
-    return (cv2.remap(light.astype(np.float32), at[..., 0], at[..., 1], cv2.INTER_LINEAR,
-                      borderMode=cv2.BORDER_REPLICATE), ids[near[..., 1], near[..., 0]])
+    return (
+        cv2.remap(light.astype(np.float32), at[..., 0], at[..., 1], cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE),
+        ids[near[..., 1], near[..., 0]],
+    )
 
 
 def centroids(weights: np.ndarray | None, ids: np.ndarray) -> np.ndarray:
@@ -90,8 +129,24 @@ def test_a_batch_with_the_exported_kannala_brandt_file_gives_the_lenss_own_frame
     batch(tmp_path / "pinhole", tmp_path / "own")
     camera = strict_loads((tmp_path / "own" / "batch.json").read_text())["cameras"][f"{W}x{H}"]
     kb = tmp_path / "kb.yaml"
-    assert main(["lens", "calibrate", "wide-angle-22mm", "--model", "opencv-fisheye", "--sensor", f"{W}x{H}",
-                 "--pitch-um", repr(camera["pitch_um"]), "-o", str(kb)]) == 0
+    assert (
+        main(
+            [
+                "lens",
+                "calibrate",
+                "wide-angle-22mm",
+                "--model",
+                "opencv-fisheye",
+                "--sensor",
+                f"{W}x{H}",
+                "--pitch-um",
+                repr(camera["pitch_um"]),
+                "-o",
+                str(kb),
+            ]
+        )
+        == 0
+    )
     off = tmp_path / "off.yaml"  # the same file, its focal length 1 % long
     fs = cv2.FileStorage(str(off), cv2.FILE_STORAGE_WRITE)
     k, d = file_numbers(kb)
@@ -108,15 +163,24 @@ def test_a_batch_with_the_exported_kannala_brandt_file_gives_the_lenss_own_frame
     lens = Lens.load("wide-angle-22mm")
     error = residual_map(model("opencv-fisheye"), values, chief_map(lens, Sensor(W, H, camera["pitch_um"])))
     own_ids = read_exr(tmp_path / "own" / "a.labels.exr")[0]["instance.id"]
-    light = {o: centroids(np.mean(list(read_exr(tmp_path / o / "a.exr")[0].values()), axis=0), own_ids)
-             for o in ("own", "filed", "off")}
-    held = error[np.clip(np.rint(light["own"][:, 1]).astype(int), 0, H - 1),
-                 np.clip(np.rint(light["own"][:, 0]).astype(int), 0, W - 1)] < HELD_PX
+    light = {
+        o: centroids(np.mean(list(read_exr(tmp_path / o / "a.exr")[0].values()), axis=0), own_ids)
+        for o in ("own", "filed", "off")
+    }
+    held = (
+        error[
+            np.clip(np.rint(light["own"][:, 1]).astype(int), 0, H - 1),
+            np.clip(np.rint(light["own"][:, 0]).astype(int), 0, W - 1),
+        ]
+        < HELD_PX
+    )
     moved = np.hypot(*(light["own"] - centroids(None, ids)).T)
     apart = {o: np.hypot(*(light["own"] - light[o]).T)[held] for o in ("filed", "off")}
-    print(f"{held.sum()} of {len(held)} discs where the file holds to {HELD_PX} px (its max "
-          f"{np.nanmax(error):.3f} px); the lens moved them up to {moved.max():.2f} px; the discs' light through "
-          f"the file up to {apart['filed'].max():.3f} px (mean {apart['filed'].mean():.3f}) from the lens's own, "
-          f"through the file 1 % off up to {apart['off'].max():.3f} px")
+    print(
+        f"{held.sum()} of {len(held)} discs where the file holds to {HELD_PX} px (its max "
+        f"{np.nanmax(error):.3f} px); the lens moved them up to {moved.max():.2f} px; the discs' light through "
+        f"the file up to {apart['filed'].max():.3f} px (mean {apart['filed'].mean():.3f}) from the lens's own, "
+        f"through the file 1 % off up to {apart['off'].max():.3f} px"
+    )
     assert held.sum() > 0.8 * len(held) and moved.max() > 1.0
     assert apart["filed"].max() < 2 * HELD_PX < apart["off"].max()

@@ -34,8 +34,23 @@ def camera_inputs(batch_inputs):
 
 
 def _argv(inputs, out, *extra):
-    return ["batch", "degrade", str(inputs.images), "--psf-grid", str(inputs.grid), "-o", str(out), "--workers", "1",
-            "--quiet", "--sensor-model", str(inputs.root / "sensor.toml"), "--exposure-ms", str(EXPOSURE_MS), *extra]
+    return [
+        "batch",
+        "degrade",
+        str(inputs.images),
+        "--psf-grid",
+        str(inputs.grid),
+        "-o",
+        str(out),
+        "--workers",
+        "1",
+        "--quiet",
+        "--sensor-model",
+        str(inputs.root / "sensor.toml"),
+        "--exposure-ms",
+        str(EXPOSURE_MS),
+        *extra,
+    ]
 
 
 def test_degrade_batch_writes_each_frames_raw_and_developed_frame(camera_inputs):
@@ -85,15 +100,33 @@ def test_frames_depend_on_seed_and_name_not_on_the_run(camera_inputs):
     batch identity); without the camera, yet another identity."""
     root = camera_inputs.root
     camera = load_camera(str(root / "sensor.toml"), EXPOSURE_MS, None, 2)
-    all_three = degrade_batch([camera_inputs.images], root / "all", psf_grid=camera_inputs.grid, workers=2,
-                              progress=False, spec=DegradeSpec(camera=camera))
-    alone = degrade_batch([camera_inputs.images / "frame002.png"], root / "alone", psf_grid=camera_inputs.grid,
-                          workers=1, progress=False, spec=DegradeSpec(camera=camera))
-    other = degrade_batch([camera_inputs.images / "frame002.png"], root / "other", psf_grid=camera_inputs.grid,
-                          workers=1, progress=False,
-                          spec=DegradeSpec(camera=Camera(camera.sensor, EXPOSURE_MS, None, 3)))
-    plain = degrade_batch([camera_inputs.images / "frame002.png"], root / "plain", psf_grid=camera_inputs.grid,
-                          workers=1, progress=False)
+    all_three = degrade_batch(
+        [camera_inputs.images],
+        root / "all",
+        psf_grid=camera_inputs.grid,
+        workers=2,
+        progress=False,
+        spec=DegradeSpec(camera=camera),
+    )
+    alone = degrade_batch(
+        [camera_inputs.images / "frame002.png"],
+        root / "alone",
+        psf_grid=camera_inputs.grid,
+        workers=1,
+        progress=False,
+        spec=DegradeSpec(camera=camera),
+    )
+    other = degrade_batch(
+        [camera_inputs.images / "frame002.png"],
+        root / "other",
+        psf_grid=camera_inputs.grid,
+        workers=1,
+        progress=False,
+        spec=DegradeSpec(camera=Camera(camera.sensor, EXPOSURE_MS, None, 3)),
+    )
+    plain = degrade_batch(
+        [camera_inputs.images / "frame002.png"], root / "plain", psf_grid=camera_inputs.grid, workers=1, progress=False
+    )
     raw = {k: read_exr(root / k / "frame002_raw.exr")[0]["RAW"] for k in ("all", "alone", "other")}
     assert np.array_equal(raw["all"], raw["alone"]) and not np.array_equal(raw["alone"], raw["other"])
     assert not (root / "all" / "frame002_raw.png").exists()  # no isp: the RAW only
@@ -105,18 +138,40 @@ def test_frames_depend_on_seed_and_name_not_on_the_run(camera_inputs):
 def test_dask_gives_the_same_frames(camera_inputs):
     camera = load_camera(str(camera_inputs.root / "sensor.toml"), EXPOSURE_MS, "default", 0)
     for where, dask in (("local", None), ("dask", "local")):
-        degrade_batch([camera_inputs.images], camera_inputs.root / where, psf_grid=camera_inputs.grid, workers=1,
-                      dask=dask, progress=False, spec=DegradeSpec(camera=camera))
+        degrade_batch(
+            [camera_inputs.images],
+            camera_inputs.root / where,
+            psf_grid=camera_inputs.grid,
+            workers=1,
+            dask=dask,
+            progress=False,
+            spec=DegradeSpec(camera=camera),
+        )
     for name in ("frame000_raw.exr", "frame000_raw.png", "frame002_raw.exr"):
-        assert (camera_inputs.root / "local" / name).read_bytes() == (camera_inputs.root / "dask" / name).read_bytes() \
-            or name.endswith(".exr") and np.array_equal(read_exr(camera_inputs.root / "local" / name)[0]["RAW"],
-                                                         read_exr(camera_inputs.root / "dask" / name)[0]["RAW"])
+        assert (camera_inputs.root / "local" / name).read_bytes() == (
+            camera_inputs.root / "dask" / name
+        ).read_bytes() or (
+            name.endswith(".exr")
+            and np.array_equal(
+                read_exr(camera_inputs.root / "local" / name)[0]["RAW"],
+                read_exr(camera_inputs.root / "dask" / name)[0]["RAW"],
+            )
+        )
 
 
 def test_render_batch_through_the_camera(camera_inputs, tmp_path):
     camera = load_camera(str(camera_inputs.root / "sensor.toml"), EXPOSURE_MS, "default", 7)
-    result = render_batch([camera_inputs.images / "frame000.png"], tmp_path / "r", lens="solas-doublet",
-                          sensor="16x12", spp=1, workers=1, progress=False, camera=camera, seed=7)
+    result = render_batch(
+        [camera_inputs.images / "frame000.png"],
+        tmp_path / "r",
+        lens="solas-doublet",
+        sensor="16x12",
+        spp=1,
+        workers=1,
+        progress=False,
+        camera=camera,
+        seed=7,
+    )
     (job,) = result.jobs
     assert job.status == "done", job.error
     channels, meta = read_exr(tmp_path / "r" / "frame000_raw.exr")
@@ -127,32 +182,45 @@ def test_render_batch_through_the_camera(camera_inputs, tmp_path):
     render, own = read_exr(tmp_path / "r" / "frame000.exr")
     radiance = np.maximum(np.stack([render[c] for c in "RGB"], axis=-1).astype(np.float64), 0.0)
     assert meta["f_number"] == own["f_number"] and meta["f_number_source"].startswith("input metadata")
-    expected = capture(camera.sensor, np.pi * radiance / (4 * own["f_number"] ** 2), EXPOSURE_MS * 1e-3, 7,
-                       frame_number("frame000"))
+    expected = capture(
+        camera.sensor, np.pi * radiance / (4 * own["f_number"] ** 2), EXPOSURE_MS * 1e-3, 7, frame_number("frame000")
+    )
     assert np.array_equal(channels["RAW"], expected)
     assert manifest(tmp_path / "r")["camera"] == camera.describe()
     assert iio.imread(tmp_path / "r" / "frame000_raw.png").shape == (12, 16, 3)
 
 
-@pytest.mark.parametrize("extra, message", [
-    (["--isp", "default"], "--isp go\\(es\\) with --sensor-model"),
-    (["--sensor-model", "S"], "--sensor-model needs --exposure-ms"),
-    (["--sensor-model", "S", "--exposure-ms", "1", "--format", "png16"], "not png16"),
-    (["--sensor-model", "S", "--exposure-ms", "0"], "--exposure-ms 0.0 must be > 0"),
-    (["--scale", "2"], "--scale go\\(es\\) with --sensor-model"),
-    (["--flicker", "0,0,4,4,90,0.1"], "--flicker go\\(es\\) with --sensor-model"),
-    (["--sensor-model", "S", "--exposure-ms", "1", "--image-motion", "1"], "--image-motion '1' must be VX,VY"),
-    (["--sensor-model", "S", "--exposure-ms", "1", "--scale", "-1"], "scale -1.0 must be a finite number > 0"),
-    (["--sensor-model", "S", "--exposure-ms", "auto:0,1"], "auto-exposure percentile 0.0 must be"),
-    # gains for a sensor's filters the RCCB sensor lacks: each item failed after its work (exit 1)
-    (["--sensor-model", "S", "--exposure-ms", "1", "--isp", "I"], "must give a number > 0 for each filter of RCCB"),
-])
+@pytest.mark.parametrize(
+    "extra, message",
+    [
+        (["--isp", "default"], "--isp go\\(es\\) with --sensor-model"),
+        (["--sensor-model", "S"], "--sensor-model needs --exposure-ms"),
+        (["--sensor-model", "S", "--exposure-ms", "1", "--format", "png16"], "not png16"),
+        (["--sensor-model", "S", "--exposure-ms", "0"], "--exposure-ms 0.0 must be > 0"),
+        (["--scale", "2"], "--scale go\\(es\\) with --sensor-model"),
+        (["--flicker", "0,0,4,4,90,0.1"], "--flicker go\\(es\\) with --sensor-model"),
+        (["--sensor-model", "S", "--exposure-ms", "1", "--image-motion", "1"], "--image-motion '1' must be VX,VY"),
+        (["--sensor-model", "S", "--exposure-ms", "1", "--scale", "-1"], "scale -1.0 must be a finite number > 0"),
+        (["--sensor-model", "S", "--exposure-ms", "auto:0,1"], "auto-exposure percentile 0.0 must be"),
+        # gains for a sensor's filters the RCCB sensor lacks: each item failed after its work (exit 1)
+        (["--sensor-model", "S", "--exposure-ms", "1", "--isp", "I"], "must give a number > 0 for each filter of RCCB"),
+    ],
+)
 def test_camera_options_refused(camera_inputs, extra, message, capsys):
     (camera_inputs.root / "gains.toml").write_text("[isp]\nwhite_balance = {R = 1.9, G = 1, B = 1.5}\n")
     files = {"S": "sensor.toml", "I": "gains.toml"}
     extra = [str(camera_inputs.root / files[e]) if e in files else e for e in extra]
-    argv = ["batch", "degrade", str(camera_inputs.images), "--psf-grid", str(camera_inputs.grid), "-o",
-            str(camera_inputs.root / "never"), "--quiet", *extra]
+    argv = [
+        "batch",
+        "degrade",
+        str(camera_inputs.images),
+        "--psf-grid",
+        str(camera_inputs.grid),
+        "-o",
+        str(camera_inputs.root / "never"),
+        "--quiet",
+        *extra,
+    ]
     assert main(argv) == 2
     import re
 
@@ -173,8 +241,14 @@ def test_a_preset_by_name_from_the_cli_and_python(camera_inputs, tmp_path):
     assert SensorModel.from_dict(manifest(tmp_path / "cli")["camera"]["sensor"]) == preset
     camera = load_camera("imx490", EXPOSURE_MS, None, 3)
     assert camera.sensor == preset
-    result = degrade_batch([camera_inputs.images], tmp_path / "py", psf_grid=camera_inputs.grid, workers=1,
-                           progress=False, spec=DegradeSpec(camera=camera))
+    result = degrade_batch(
+        [camera_inputs.images],
+        tmp_path / "py",
+        psf_grid=camera_inputs.grid,
+        workers=1,
+        progress=False,
+        spec=DegradeSpec(camera=camera),
+    )
     assert [job.status for job in result.jobs] == ["done"] * 3
     for name in ("frame000", "frame001", "frame002"):
         raw = read_exr(tmp_path / "cli" / f"{name}_raw.exr")[0]["RAW"]
@@ -211,7 +285,7 @@ def test_scale_auto_exposure_and_saturation_warnings(camera_inputs, capsys):
         assert text in err and item["warnings"] and text in item["warnings"][0]
 
     argv[argv.index("--exposure-ms") + 1] = "auto"
-    assert main([*argv[:argv.index("-o") + 1], str(root / "auto"), *argv[argv.index("-o") + 2:]]) == 0
+    assert main([*argv[: argv.index("-o") + 1], str(root / "auto"), *argv[argv.index("-o") + 2 :]]) == 0
     assert "warning" not in capsys.readouterr().err
     for item in manifest(root / "auto")["items"]:
         channels, meta = read_exr(item["output"][:-4] + "_raw.exr")
@@ -229,6 +303,12 @@ def test_the_estimate_counts_the_camera(camera_inputs, tmp_path):
     from solas_mi.sensor.commands import frame_bytes
 
     camera = load_camera(str(camera_inputs.root / "sensor.toml"), EXPOSURE_MS, "default", 0)
-    p = plan_render([camera_inputs.images / "frame000.png"], tmp_path / "r", lens="solas-doublet", camera=camera,
-                    sensor="2000x1500", spp=1)
+    p = plan_render(
+        [camera_inputs.images / "frame000.png"],
+        tmp_path / "r",
+        lens="solas-doublet",
+        camera=camera,
+        sensor="2000x1500",
+        spp=1,
+    )
     assert estimate(p, 1)["peak_bytes"] == frame_bytes(1500, 2000, 3, DEVELOP_BYTES_PER_PIXEL) + WORKER_BYTES["render"]

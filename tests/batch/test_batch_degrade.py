@@ -1,5 +1,6 @@
 """`solas-mi batch degrade` and `degrade_batch`: failures reported per item, resuming, interruption,
 local processes against Dask, the PSF-grid cache, argument errors."""
+
 import os
 import re
 import signal
@@ -24,8 +25,18 @@ def test_one_corrupt_item_is_reported_and_a_rerun_skips_the_rest(batch_inputs, c
     batch_inputs.write(19)
     (batch_inputs.images / "frame007b.png").write_bytes(b"not a png at all")
     out = batch_inputs.root / "out"
-    argv = ["batch", "degrade", str(batch_inputs.images), "--psf-grid", str(batch_inputs.grid), "-o", str(out),
-            "--workers", "2", "--quiet"]
+    argv = [
+        "batch",
+        "degrade",
+        str(batch_inputs.images),
+        "--psf-grid",
+        str(batch_inputs.grid),
+        "-o",
+        str(out),
+        "--workers",
+        "2",
+        "--quiet",
+    ]
     assert main(argv) == 1
     err = capsys.readouterr().err
     assert "frame007b.png" in err and "cannot read image" in err
@@ -53,9 +64,26 @@ def test_one_corrupt_item_is_reported_and_a_rerun_skips_the_rest(batch_inputs, c
 def test_sigterm_midway_leaves_only_finished_items(batch_inputs):
     batch_inputs.write(40, shape=(480, 640))
     out = batch_inputs.root / "out"
-    p = subprocess.Popen([sys.executable, "-m", "solas_mi", "batch", "degrade", str(batch_inputs.images),
-                          "--psf-grid", str(batch_inputs.grid), "-o", str(out), "--workers", "2", "--quiet"],
-                         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    p = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "solas_mi",
+            "batch",
+            "degrade",
+            str(batch_inputs.images),
+            "--psf-grid",
+            str(batch_inputs.grid),
+            "-o",
+            str(out),
+            "--workers",
+            "2",
+            "--quiet",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     deadline = time.monotonic() + 60
     while len(list(out.glob("[!.]*.exr"))) < 3 and time.monotonic() < deadline:  # not the temporary files
         time.sleep(0.05)
@@ -65,7 +93,7 @@ def test_sigterm_midway_leaves_only_finished_items(batch_inputs):
     m = manifest(out)  # valid JSON
     done = {i["output"] for i in m["items"] if i["status"] == "done"}
     written = {str(f) for f in out.glob("*.exr")}
-    assert 1 <= len(done) and done <= written and len(written) < 40
+    assert len(done) >= 1 and done <= written and len(written) < 40
     # an item finished while the signal came may be written and not yet recorded: it is done again on a re-run
     assert len(written - done) <= 2
     assert not [f for f in out.iterdir() if f.name.startswith(".")]  # no temporary file left
@@ -80,10 +108,17 @@ def test_dask_local_and_local_processes_give_identical_outputs(batch_inputs):
     from solas_mi.imageio import read_exr
 
     batch_inputs.write(4)
-    a = degrade_batch([batch_inputs.images], batch_inputs.root / "local", psf_grid=batch_inputs.grid, workers=2,
-                      progress=False)
-    b = degrade_batch([str(batch_inputs.images / "*.png")], batch_inputs.root / "dask", psf_grid=batch_inputs.grid,
-                      dask="local", workers=2, progress=False)
+    a = degrade_batch(
+        [batch_inputs.images], batch_inputs.root / "local", psf_grid=batch_inputs.grid, workers=2, progress=False
+    )
+    b = degrade_batch(
+        [str(batch_inputs.images / "*.png")],
+        batch_inputs.root / "dask",
+        psf_grid=batch_inputs.grid,
+        dask="local",
+        workers=2,
+        progress=False,
+    )
     assert a.count("done") == b.count("done") == 4 and not b.failed
     assert manifest(batch_inputs.root / "dask")["runner"] == {"dask": "local"}
     for job in a.jobs:
@@ -101,20 +136,39 @@ def test_the_grid_is_computed_once_and_cached(batch_inputs, doublet):
     batch_inputs.write(3)
     cache = GridCache(batch_inputs.root / "cache")
     options = {"grid": (4, 4), "size": 32, "pupil_samples": 32}
-    first = degrade_batch([batch_inputs.images], batch_inputs.root / "a", DegradeSpec(grid_spec=GridSpec(**options)),
-                          lens=doublet, cache=cache, workers=2, progress=False)
+    first = degrade_batch(
+        [batch_inputs.images],
+        batch_inputs.root / "a",
+        DegradeSpec(grid_spec=GridSpec(**options)),
+        lens=doublet,
+        cache=cache,
+        workers=2,
+        progress=False,
+    )
     assert (cache.misses, cache.hits) == (1, 0) and first.grid_source == "computed" and not first.failed
-    second = degrade_batch([batch_inputs.images], batch_inputs.root / "b",
-                           DegradeSpec(grid_spec=GridSpec(**options, method="fraunhofer")), lens="solas-doublet",
-                           cache=cache, workers=1, progress=False)
+    second = degrade_batch(
+        [batch_inputs.images],
+        batch_inputs.root / "b",
+        DegradeSpec(grid_spec=GridSpec(**options, method="fraunhofer")),
+        lens="solas-doublet",
+        cache=cache,
+        workers=1,
+        progress=False,
+    )
     assert (cache.misses, cache.hits) == (1, 1) and second.grid_source == "cache hit"
     assert len(list(cache.folder.glob("*.exr"))) == 1 and len(list(cache.folder.iterdir())) == 2  # + its record
     m = manifest(batch_inputs.root / "b")
     assert m["lens_hash"] == doublet.hash and m["grid_spec"] == GridSpec(**options).canonical()
     assert m["grid_spec"]["grid"] == [4, 4]
-    degrade_batch([batch_inputs.images], batch_inputs.root / "c",
-                  DegradeSpec(grid_spec=GridSpec(**{**options, "size": 48})), lens=doublet, cache=cache, workers=1,
-                  progress=False)
+    degrade_batch(
+        [batch_inputs.images],
+        batch_inputs.root / "c",
+        DegradeSpec(grid_spec=GridSpec(**{**options, "size": 48})),
+        lens=doublet,
+        cache=cache,
+        workers=1,
+        progress=False,
+    )
     assert (cache.misses, cache.hits) == (2, 1)  # another sampling option: another grid
 
 
@@ -130,9 +184,15 @@ def test_the_lens_scaled_to_the_frames_camera_is_stated(batch_inputs, doublet, c
     fx = 32 / np.tan(np.radians(1.5))  # the 64-px frames span ±1.5°
     frame = FrameCamera("pinhole", intrinsics=(fx, fx, 31.5, 23.5))
     spec = GridSpec(grid=(3, 3), size=32, method="geometric", rays=32, pitch_um=0.5)
-    out = degrade_batch([batch_inputs.images], batch_inputs.root / "s", DegradeSpec(grid_spec=spec, frame=frame,
-                        scale_lens=5.0), lens=doublet, cache=GridCache(batch_inputs.root / "cache"), workers=1,
-                        progress=False)
+    out = degrade_batch(
+        [batch_inputs.images],
+        batch_inputs.root / "s",
+        DegradeSpec(grid_spec=spec, frame=frame, scale_lens=5.0),
+        lens=doublet,
+        cache=GridCache(batch_inputs.root / "cache"),
+        workers=1,
+        progress=False,
+    )
     assert not out.failed
     scale = manifest(batch_inputs.root / "s")["lens_scale"]
     # the doublet's pinhole focal length meeting its real chief ray at its 2° field: 99.50 mm
@@ -141,9 +201,11 @@ def test_the_lens_scaled_to_the_frames_camera_is_stated(batch_inputs, doublet, c
     _, meta = read_exr(batch_inputs.root / "s" / "frame000.exr")
     assert meta["camera"]["pitch_um"] == pytest.approx(5.0, rel=1e-3) and meta["batch"]["lens_scale"] == scale
     argv = ["batch", "degrade", str(batch_inputs.images), "-o", str(batch_inputs.root / "t"), "--scale-lens", "5"]
-    for extra, what in ((["--psf-grid", str(batch_inputs.grid), "--intrinsics", "1000,1000,31.5,23.5"], "give --lens"),
-                        (["--lens", "solas-doublet", "--fov-deg", "1.5"], "give --intrinsics"),
-                        (["--lens", "solas-doublet"], "frames' camera")):
+    for extra, what in (
+        (["--psf-grid", str(batch_inputs.grid), "--intrinsics", "1000,1000,31.5,23.5"], "give --lens"),
+        (["--lens", "solas-doublet", "--fov-deg", "1.5"], "give --intrinsics"),
+        (["--lens", "solas-doublet"], "frames' camera"),
+    ):
         assert main([*argv, *extra]) == 2
         assert what in capsys.readouterr().err
 
@@ -166,8 +228,8 @@ def test_a_dead_worker_loses_only_its_item(batch_inputs):
     import psutil
 
     from solas_mi.batch.jobs import expand_inputs, plan
-    from solas_mi.outputs import remove_temporaries
     from solas_mi.batch.runner import run_local
+    from solas_mi.outputs import remove_temporaries
 
     batch_inputs.write(12, shape=(240, 320))
     jobs = plan(expand_inputs([batch_inputs.images]), batch_inputs.root / "out")
@@ -194,13 +256,16 @@ def test_a_dead_worker_loses_only_its_item(batch_inputs):
     assert not [f for f in (batch_inputs.root / "out").iterdir() if f.name.startswith(".")]
 
 
-@pytest.mark.parametrize("extra, message", [
-    (["--workers", "0"], "--workers '0' must be a whole number >= 1"),
-    (["--psf-grid", "{tmp}/nothing.exr"], "PSF grid '{tmp}/nothing.exr' is not a file"),
-    (["--lens", "solas-doublet", "--grid", "4by4"], "--grid '4by4' must look like 32x24"),
-    (["--lens", "no-such-lens"], "no-such-lens"),
-    (["--psf-grid", "{tmp}/grid.exr", "--dask", " "], "must be a scheduler address"),
-])
+@pytest.mark.parametrize(
+    "extra, message",
+    [
+        (["--workers", "0"], "--workers '0' must be a whole number >= 1"),
+        (["--psf-grid", "{tmp}/nothing.exr"], "PSF grid '{tmp}/nothing.exr' is not a file"),
+        (["--lens", "solas-doublet", "--grid", "4by4"], "--grid '4by4' must look like 32x24"),
+        (["--lens", "no-such-lens"], "no-such-lens"),
+        (["--psf-grid", "{tmp}/grid.exr", "--dask", " "], "must be a scheduler address"),
+    ],
+)
 def test_bad_arguments_are_one_line(batch_inputs, capsys, extra, message):
     batch_inputs.write(2)
     tmp = str(batch_inputs.root)
@@ -218,8 +283,10 @@ def test_inputs_that_match_nothing_or_collide(batch_inputs, capsys):
     batch_inputs.write(1)
     (batch_inputs.root / "other").mkdir()
     (batch_inputs.root / "other" / "frame000.png").write_bytes((batch_inputs.images / "frame000.png").read_bytes())
-    for inputs, message in (([f"{batch_inputs.root}/nope*.png"], "holds no input files"),
-                            ([str(batch_inputs.images), str(batch_inputs.root / "other")], "would both write")):
+    for inputs, message in (
+        ([f"{batch_inputs.root}/nope*.png"], "holds no input files"),
+        ([str(batch_inputs.images), str(batch_inputs.root / "other")], "would both write"),
+    ):
         argv = ["batch", "degrade", *inputs, "--psf-grid", str(batch_inputs.grid), "-o", str(batch_inputs.root / "o")]
         assert main(argv) == 2
         err = capsys.readouterr().err
@@ -245,15 +312,34 @@ def test_dry_run_estimates_the_grid_and_says_whether_it_is_reused(batch_inputs, 
     distinct |x|, |y| pairs up to a swap ((1, 1), (1, 3), (3, 3) quarter-cells), so 3 × 3 wavelengths of
     its 48 PSFs are computed; a second dry run after the batch says the cached grid is reused."""
     batch_inputs.write(1)
-    argv = ["batch", "degrade", str(batch_inputs.images), "--lens", "solas-doublet", "--grid", "4x4", "--size", "32",
-            "-o", str(batch_inputs.root / "out"), "--cache", str(batch_inputs.root / "cache")]
+    argv = [
+        "batch",
+        "degrade",
+        str(batch_inputs.images),
+        "--lens",
+        "solas-doublet",
+        "--grid",
+        "4x4",
+        "--size",
+        "32",
+        "-o",
+        str(batch_inputs.root / "out"),
+        "--cache",
+        str(batch_inputs.root / "cache"),
+    ]
     assert main([*argv, "--dry-run"]) == 0
     first, *_, estimate = capsys.readouterr().out.splitlines()
     assert "(not in the cache: computed once, about " in first and "9 PSFs to compute of its 48" in first, first
     assert re.search(r"as timed now on \d+ of its PSFs; then cached\)$", first), first
     grid_s = float(re.search(r"about ([\d.e+-]+) s: ", first)[1])
-    total, of_grid, degrading = map(float, re.match(r"estimate: about ([\d.e+-]+) s \(([\d.e+-]+) s for the grid, "
-                                                    r"([\d.e+-]+) s of degrading\)", estimate).groups())
+    total, of_grid, degrading = map(
+        float,
+        re.match(
+            r"estimate: about ([\d.e+-]+) s \(([\d.e+-]+) s for the grid, "
+            r"([\d.e+-]+) s of degrading\)",
+            estimate,
+        ).groups(),
+    )
     assert of_grid == pytest.approx(grid_s, rel=1e-2) and total == pytest.approx(grid_s + degrading, rel=1e-2)
     assert main([*argv, "--quiet"]) == 0
     capsys.readouterr()
@@ -272,8 +358,19 @@ def _planned_grid(capsys, argv) -> str:
 def test_a_fisheye_sensor_layout_is_not_dropped_by_the_batch(batch_inputs, capsys):
     """--layout/--sensor-mm used to be parsed and dropped: the batch planned the field-layout grid."""
     batch_inputs.write(1)
-    argv = ["batch", "degrade", str(batch_inputs.images), "--lens", "nikkor-fisheye", "--grid", "3x3", "-o",
-            str(batch_inputs.root / "out"), "--cache", str(batch_inputs.root / "cache")]
+    argv = [
+        "batch",
+        "degrade",
+        str(batch_inputs.images),
+        "--lens",
+        "nikkor-fisheye",
+        "--grid",
+        "3x3",
+        "-o",
+        str(batch_inputs.root / "out"),
+        "--cache",
+        str(batch_inputs.root / "cache"),
+    ]
     plain = _planned_grid(capsys, [*argv, "--field-range-deg", "60"])  # ±90°, its field, has no pinhole image
     sensor = _planned_grid(capsys, [*argv, "--layout", "sensor", "--sensor-mm", "19x19"])
     assert sensor != plain
@@ -311,15 +408,35 @@ def test_every_psf_grid_flag_reaches_the_cache_key_and_the_grid(batch_inputs, ca
     from solas_mi.psf.spec import GridSpec
 
     sub = next(a for a in build_parser()._actions if isinstance(a, argparse._SubParsersAction))
-    flags = {max(a.option_strings, key=len) if a.option_strings else a.dest
-             for a in sub.choices["psf-grid"]._actions}
+    flags = {max(a.option_strings, key=len) if a.option_strings else a.dest for a in sub.choices["psf-grid"]._actions}
     flags = {f for f in flags if f.lstrip("-") not in NOT_GRID_OPTIONS}
     assert flags == set(FLAG_VARIANTS), "a psf-grid flag without a variant here (or a variant of no flag)"
     batch_inputs.write(1)
-    base = ["--grid", "1x2", "--wavelengths-nm", "531", "--size", "16", "--pitch-um", "2", "--pupil-samples", "16",
-            "--rays", "8"]
-    argv = ["batch", "degrade", str(batch_inputs.images), "--lens", "solas-doublet", "-o",
-            str(batch_inputs.root / "out"), "--cache", str(batch_inputs.root / "cache")]
+    base = [
+        "--grid",
+        "1x2",
+        "--wavelengths-nm",
+        "531",
+        "--size",
+        "16",
+        "--pitch-um",
+        "2",
+        "--pupil-samples",
+        "16",
+        "--rays",
+        "8",
+    ]
+    argv = [
+        "batch",
+        "degrade",
+        str(batch_inputs.images),
+        "--lens",
+        "solas-doublet",
+        "-o",
+        str(batch_inputs.root / "out"),
+        "--cache",
+        str(batch_inputs.root / "cache"),
+    ]
 
     def spec_of(options):
         args = sub.choices["batch"].parse_args(["degrade", "x", "--lens", "l", "-o", "o", *options])
@@ -356,16 +473,23 @@ def test_a_folder_tree_keeps_its_structure_and_half_floats_halve_the_output(batc
     assert full.is_file() and nested.is_file() and nested.with_suffix(".png").is_file()
     assert np.array_equal(read_image(full), read_image(nested))  # same input, same output, its own folder
     half = batch_inputs.root / "half"
-    degrade_batch([batch_inputs.images], half, DegradeSpec(output_format="exr-half"), psf_grid=batch_inputs.grid,
-                  workers=1, progress=False)
+    degrade_batch(
+        [batch_inputs.images],
+        half,
+        DegradeSpec(output_format="exr-half"),
+        psf_grid=batch_inputs.grid,
+        workers=1,
+        progress=False,
+    )
     channels, meta = read_exr(half / "frame000.exr")
     assert channels["R"].dtype == np.float16 and meta["output_format"] == "exr-half"
     assert np.allclose(read_image(half / "frame000.exr"), read_image(full), rtol=1e-3, atol=1e-4)
     from solas_mi import SolasError
 
     with pytest.raises(SolasError, match="output format"):
-        degrade_batch([batch_inputs.images], half, DegradeSpec(output_format="png8"), psf_grid=batch_inputs.grid,
-                      workers=1)
+        degrade_batch(
+            [batch_inputs.images], half, DegradeSpec(output_format="png8"), psf_grid=batch_inputs.grid, workers=1
+        )
 
 
 def test_a_batch_from_a_lens_defaults_to_the_accuracy_tables_grid():
@@ -396,8 +520,18 @@ def test_a_batch_with_depth_maps_by_name_pattern(tmp_path, doublet):
     from solas_mi.psf.depth import depth_grid
     from solas_mi.psf.spec import GridSpec
 
-    g = depth_grid(doublet, GridSpec(grid=(3, 4), wavelengths_nm=[531.0], size=32, pitch_um=4.0, method="geometric",
-                                     rays=32, distances_m=(float("inf"), 10.0)))
+    g = depth_grid(
+        doublet,
+        GridSpec(
+            grid=(3, 4),
+            wavelengths_nm=[531.0],
+            size=32,
+            pitch_um=4.0,
+            method="geometric",
+            rays=32,
+            distances_m=(float("inf"), 10.0),
+        ),
+    )
     g.write(str(tmp_path / "g.exr"))
     folder = tmp_path / "frames"
     folder.mkdir()
@@ -405,20 +539,40 @@ def test_a_batch_with_depth_maps_by_name_pattern(tmp_path, doublet):
     depth = np.where(np.arange(64)[None, :] < 32, 10.0, np.inf) * np.ones((48, 1))
     write_exr(folder / "a.exr", image_channels(img), {})
     write_exr(folder / "a_depth.exr", {"Z": depth.astype(np.float32)}, {}, infinite=True)  # the sky: inf
-    result = degrade_batch([folder], tmp_path / "out", DegradeSpec(depth_pattern="{stem}_depth.exr"),
-                           psf_grid=tmp_path / "g.exr", workers=1, progress=False)
+    result = degrade_batch(
+        [folder],
+        tmp_path / "out",
+        DegradeSpec(depth_pattern="{stem}_depth.exr"),
+        psf_grid=tmp_path / "g.exr",
+        workers=1,
+        progress=False,
+    )
     assert [j.status for j in result.jobs] == ["done"]  # the depth map is not an input of its own
     out = read_image(tmp_path / "out" / "a.exr")
     assert np.allclose(out, degrade_depth(read_image(folder / "a.exr"), depth, g), atol=1e-6)
-    again = degrade_batch([folder], tmp_path / "out", DegradeSpec(depth_pattern="{stem}_depth.exr", occlusion="none"),
-                          psf_grid=tmp_path / "g.exr", workers=1, progress=False)
+    again = degrade_batch(
+        [folder],
+        tmp_path / "out",
+        DegradeSpec(depth_pattern="{stem}_depth.exr", occlusion="none"),
+        psf_grid=tmp_path / "g.exr",
+        workers=1,
+        progress=False,
+    )
     assert [j.status for j in again.jobs] == ["done"]  # another occlusion rule: not the former run's items
-    assert np.allclose(read_image(tmp_path / "out" / "a.exr"),
-                       degrade_depth(read_image(folder / "a.exr"), depth, g, occlusion="none"), atol=1e-6)
+    assert np.allclose(
+        read_image(tmp_path / "out" / "a.exr"),
+        degrade_depth(read_image(folder / "a.exr"), depth, g, occlusion="none"),
+        atol=1e-6,
+    )
     (folder / "b.exr").write_bytes((folder / "a.exr").read_bytes())
     with pytest.raises(__import__("solas_mi").SolasError, match="no depth map"):
-        degrade_batch([folder], tmp_path / "out2", DegradeSpec(depth_pattern="{stem}_depth.exr"),
-                      psf_grid=tmp_path / "g.exr", workers=1)
+        degrade_batch(
+            [folder],
+            tmp_path / "out2",
+            DegradeSpec(depth_pattern="{stem}_depth.exr"),
+            psf_grid=tmp_path / "g.exr",
+            workers=1,
+        )
 
 
 def test_the_frames_camera_applies_to_every_item(batch_inputs, capsys):
@@ -431,8 +585,20 @@ def test_the_frames_camera_applies_to_every_item(batch_inputs, capsys):
     out, narrow = batch_inputs.root / "out", ["--fov-deg", "1", "--fov-axis", "x"]
     base = ["--psf-grid", str(batch_inputs.grid), "--workers", "1", "--quiet"]
     assert main(["batch", "degrade", str(batch_inputs.images), "-o", str(out), *base, *narrow]) == 0
-    assert main(["degrade", str(first), "--psf-grid", str(batch_inputs.grid), "-o", str(batch_inputs.root / "one.exr"),
-                 *narrow]) == 0
+    assert (
+        main(
+            [
+                "degrade",
+                str(first),
+                "--psf-grid",
+                str(batch_inputs.grid),
+                "-o",
+                str(batch_inputs.root / "one.exr"),
+                *narrow,
+            ]
+        )
+        == 0
+    )
     assert main(["batch", "degrade", str(batch_inputs.images), "-o", str(batch_inputs.root / "plain"), *base]) == 0
     ch, meta = read_exr(out / "frame000.exr")
     one, plain = read_exr(batch_inputs.root / "one.exr")[0], read_exr(batch_inputs.root / "plain" / "frame000.exr")[0]
@@ -456,16 +622,22 @@ def test_16_bit_png_output(batch_inputs):
     out, exr = batch_inputs.root / "png16", batch_inputs.root / "exr"
     assert main(["batch", "degrade", *base, "-o", str(out), "--format", "png16"]) == 0
     assert main(["batch", "degrade", *base, "-o", str(exr)]) == 0
-    assert sorted(p.name for p in out.iterdir()) == ["batch.json", "frame000.json", "frame000.png", "frame001.json",
-                                                       "frame001.png"]
+    assert sorted(p.name for p in out.iterdir()) == [
+        "batch.json",
+        "frame000.json",
+        "frame000.png",
+        "frame001.json",
+        "frame001.png",
+    ]
     with open(out / "frame000.png", "rb") as f:
         assert f.read(25)[24] == 16  # the IHDR's bit depth
     ch = read_exr(exr / "frame000.exr")[0]
     want = np.clip(np.stack([ch[c] for c in "RGB"], axis=-1), 0, 1)
     assert np.abs(read_image(out / "frame000.png") - want).max() < 2e-5
     meta = strict_loads((out / "frame000.json").read_text())
-    assert meta["output_format"] == "png16" and meta["png16"]["clipped_values"] == int(np.sum(want != np.stack(
-        [ch[c] for c in "RGB"], axis=-1)))
+    assert meta["output_format"] == "png16" and meta["png16"]["clipped_values"] == int(
+        np.sum(want != np.stack([ch[c] for c in "RGB"], axis=-1))
+    )
     assert main(["batch", "degrade", *base, "-o", str(out), "--format", "png16"]) == 0  # finished: skipped
     assert manifest(out)["summary"] == {"skipped": 2}
 
@@ -483,9 +655,34 @@ def test_one_frame_with_its_intrinsics_and_a_scaled_lens_is_a_batch_of_one(batch
     frame = batch_inputs.write(1)[0]
     fx = 32 / np.tan(np.radians(1.5))
     out = batch_inputs.root / "one"
-    argv = ["batch", "degrade", str(frame), "--lens", "solas-doublet", "--intrinsics", f"{fx},{fx},31.5,23.5",
-            "--scale-lens", "5", "--grid", "3x3", "--size", "32", "--psf-method", "geometric", "--rays", "32",
-            "--pitch-um", "0.5", "--cache", str(batch_inputs.root / "cache"), "--workers", "1", "--quiet", "-o", str(out)]
+    argv = [
+        "batch",
+        "degrade",
+        str(frame),
+        "--lens",
+        "solas-doublet",
+        "--intrinsics",
+        f"{fx},{fx},31.5,23.5",
+        "--scale-lens",
+        "5",
+        "--grid",
+        "3x3",
+        "--size",
+        "32",
+        "--psf-method",
+        "geometric",
+        "--rays",
+        "32",
+        "--pitch-um",
+        "0.5",
+        "--cache",
+        str(batch_inputs.root / "cache"),
+        "--workers",
+        "1",
+        "--quiet",
+        "-o",
+        str(out),
+    ]
     assert main(argv) == 0, capsys.readouterr().err
     channels, meta = read_exr(out / "frame000.exr")
     assert all(c.shape == (48, 64) and np.isfinite(c).all() for c in channels.values())
@@ -515,9 +712,13 @@ def test_label_layers_beside_frames_are_skipped_and_named(batch_inputs, capsys):
     assert [(Path(i["input"]).name, i["status"]) for i in items] == [(frame.name, "done")]
     err = capsys.readouterr().err
     assert "skipped 5 label layer(s)" in err and "not frames" in err
-    for says in ("frame000_depth.exr (its name ends in 'depth')", "frame000_seg.png (its name ends in 'seg')",
-                 "normal_0000.png (its name ends in 'normal')", "z.exr (its channels (depth) are labels, no image)",
-                 "render.exr (its channels (depth.Z, labels.valid) are labels, no image)"):
+    for says in (
+        "frame000_depth.exr (its name ends in 'depth')",
+        "frame000_seg.png (its name ends in 'seg')",
+        "normal_0000.png (its name ends in 'normal')",
+        "z.exr (its channels (depth) are labels, no image)",
+        "render.exr (its channels (depth.Z, labels.valid) are labels, no image)",
+    ):
         assert says in err, err
 
 
@@ -525,8 +726,15 @@ def test_a_folder_of_label_layers_only_is_refused(batch_inputs, capsys):
     from solas_mi.imageio import write_exr
 
     write_exr(batch_inputs.images / "a_depth.exr", {"Z": np.ones((48, 64))})
-    argv = ["batch", "degrade", str(batch_inputs.images), "--psf-grid", str(batch_inputs.grid), "-o",
-            str(batch_inputs.root / "out")]
+    argv = [
+        "batch",
+        "degrade",
+        str(batch_inputs.images),
+        "--psf-grid",
+        str(batch_inputs.grid),
+        "-o",
+        str(batch_inputs.root / "out"),
+    ]
     assert main(argv) == 2
     err = capsys.readouterr().err
     assert "holds only label layers, no frames (a_depth.exr: its name ends in 'depth')" in err, err
@@ -539,8 +747,9 @@ def test_depth_maps_by_the_pattern_are_used_not_skipped(batch_inputs, capsys, mo
 
     (frame,) = batch_inputs.write(1)
     write_exr(frame.with_name("frame000_depth.exr"), {"Z": np.ones((48, 64))})
-    write_exr(frame.with_name("frame000_flow.exr"), {"R": np.ones((48, 64)), "G": np.ones((48, 64)),
-                                                     "B": np.ones((48, 64))})
+    write_exr(
+        frame.with_name("frame000_flow.exr"), {"R": np.ones((48, 64)), "G": np.ones((48, 64)), "B": np.ones((48, 64))}
+    )
     monkeypatch.chdir(batch_inputs.root)  # the folder given as a relative path
     p = plan_batch(["images"], "out", DegradeSpec(depth_pattern="{stem}_depth.exr"), psf_grid=batch_inputs.grid)
     assert [Path(j.params["depth"]).name for j in p.jobs] == ["frame000_depth.exr"]
@@ -558,8 +767,19 @@ def test_the_batch_grid_is_the_lens_at_its_temperature(batch_inputs, capsys):
 
     batch_inputs.write(1)
     cache = batch_inputs.root / "cache"
-    argv = ["batch", "degrade", str(batch_inputs.images), "--lens", "solas-doublet", "--grid", "3x3", "-o",
-            str(batch_inputs.root / "out"), "--cache", str(cache)]
+    argv = [
+        "batch",
+        "degrade",
+        str(batch_inputs.images),
+        "--lens",
+        "solas-doublet",
+        "--grid",
+        "3x3",
+        "-o",
+        str(batch_inputs.root / "out"),
+        "--cache",
+        str(cache),
+    ]
     plain, hot = _planned_grid(capsys, argv), _planned_grid(capsys, [*argv, "--temperature-c", "60"])
     spec = GridSpec(**{**BATCH_GRID_DEFAULTS, "grid": (3, 3)})
     lens = Lens.load("solas-doublet")

@@ -1,5 +1,6 @@
 """`batch degrade --label-pattern`: each frame's label files beside it, warped with the frame (as `degrade
 --labels` does one), recorded in the manifest, never taken as frames; a depth-aware batch carries them too."""
+
 import json
 import math
 from pathlib import Path
@@ -36,8 +37,18 @@ def depth_grid_file(tmp_path_factory, doublet):
     from solas_mi.psf.depth import depth_grid
     from solas_mi.psf.spec import GridSpec
 
-    g = depth_grid(doublet, GridSpec(grid=(3, 4), wavelengths_nm=[531.0], size=32, pitch_um=4.0, method="geometric",
-                                     rays=32, distances_m=(math.inf, 10.0)))
+    g = depth_grid(
+        doublet,
+        GridSpec(
+            grid=(3, 4),
+            wavelengths_nm=[531.0],
+            size=32,
+            pitch_um=4.0,
+            method="geometric",
+            rays=32,
+            distances_m=(math.inf, 10.0),
+        ),
+    )
     path = tmp_path_factory.mktemp("grid") / "g.exr"
     g.write(str(path))
     return path, g
@@ -66,24 +77,46 @@ def test_a_depth_aware_batch_carries_its_labels(tmp_path, depth_grid_file):
     (job,) = result.jobs
     assert job.label_outputs == [str(out / "a.labels.exr"), str(out / "a.boxes.json")]
     m = strict_loads((out / "batch.json").read_text())
-    assert m["labels"]["instance"] == {"pattern": "{stem}_ids.png", "rule": "pick", "how": m["labels"]["instance"]["how"]}
-    assert m["items"][0]["params"]["labels"] == {"instance": str(folder / "a_ids.png"),
-                                                  "boxes": str(folder / "a_boxes.json")}
+    assert m["labels"]["instance"] == {
+        "pattern": "{stem}_ids.png",
+        "rule": "pick",
+        "how": m["labels"]["instance"]["how"],
+    }
+    assert m["items"][0]["params"]["labels"] == {
+        "instance": str(folder / "a_ids.png"),
+        "boxes": str(folder / "a_boxes.json"),
+    }
     assert set(m["items"][0]["outputs"]) == {str(out / n) for n in ("a.exr", "a.png", "a.labels.exr", "a.boxes.json")}
     one = tmp_path / "one"
     one.mkdir()
-    degrade_file(folder / "a.exr", read_grid(str(grid_path)), grid_path, one / "a.exr", one / "a.png", spec,
-                 depth=folder / "a_depth.exr", labels={"instance": folder / "a_ids.png", "boxes": folder / "a_boxes.json"})
+    degrade_file(
+        folder / "a.exr",
+        read_grid(str(grid_path)),
+        grid_path,
+        one / "a.exr",
+        one / "a.png",
+        spec,
+        depth=folder / "a_depth.exr",
+        labels={"instance": folder / "a_ids.png", "boxes": folder / "a_boxes.json"},
+    )
     batch_layers, batch_meta = read_exr(out / "a.labels.exr")
     assert all(np.array_equal(v, read_exr(one / "a.labels.exr")[0][k]) for k, v in batch_layers.items())
-    assert "1/distance" in batch_meta["labels"]["mapping"] and set(np.unique(batch_layers["instance.id"])) <= {0, 1, 2, 3}
-    assert json.loads((out / "a.boxes.json").read_text())["annotations"] == \
-        json.loads((one / "a.boxes.json").read_text())["annotations"]
+    assert "1/distance" in batch_meta["labels"]["mapping"] and set(np.unique(batch_layers["instance.id"])) <= {
+        0,
+        1,
+        2,
+        3,
+    }
+    assert (
+        json.loads((out / "a.boxes.json").read_text())["annotations"]
+        == json.loads((one / "a.boxes.json").read_text())["annotations"]
+    )
     again = degrade_batch([folder], out, spec, psf_grid=grid_path, workers=1, progress=False)
     assert [j.status for j in again.jobs] == ["skipped"]
     (out / "a.labels.exr").unlink()
-    assert [j.status for j in degrade_batch([folder], out, spec, psf_grid=grid_path, workers=1,
-                                            progress=False).jobs] == ["done"]
+    assert [
+        j.status for j in degrade_batch([folder], out, spec, psf_grid=grid_path, workers=1, progress=False).jobs
+    ] == ["done"]
     assert (out / "a.labels.exr").is_file()
 
 
@@ -103,10 +136,17 @@ def test_label_files_are_no_frames_and_a_missing_one_is_named(batch_inputs, caps
     assert sorted(p.jobs[0].params["labels"]) == sorted(kind for kind, _ in spec.label_patterns)
     assert "skipped" not in capsys.readouterr().err
     (frames[1].parent / f"{frames[1].stem}_ids.png").unlink()
-    with pytest.raises(SolasError, match=r"1 image\(s\) have no instance labels by the pattern '\{stem\}_ids.png', "
-                                         r"e\.g\. .*frame001_ids\.png"):
-        plan_batch([batch_inputs.images], batch_inputs.root / "out", DegradeSpec(label_patterns=PATTERNS),
-                   psf_grid=batch_inputs.grid)
+    with pytest.raises(
+        SolasError,
+        match=r"1 image\(s\) have no instance labels by the pattern '\{stem\}_ids.png', "
+        r"e\.g\. .*frame001_ids\.png",
+    ):
+        plan_batch(
+            [batch_inputs.images],
+            batch_inputs.root / "out",
+            DegradeSpec(label_patterns=PATTERNS),
+            psf_grid=batch_inputs.grid,
+        )
 
 
 def test_an_item_with_a_bad_label_fails_alone_and_writes_nothing(batch_inputs, capsys):
@@ -114,13 +154,29 @@ def test_an_item_with_a_bad_label_fails_alone_and_writes_nothing(batch_inputs, c
     with_labels(frames[0].parent, frames[0].stem, discs())
     with_labels(frames[1].parent, frames[1].stem, discs((48, 60)))  # another size than its frame
     out = batch_inputs.root / "out"
-    argv = ["batch", "degrade", str(batch_inputs.images), "--psf-grid", str(batch_inputs.grid), "-o", str(out),
-            "--label-pattern", PATTERNS, "--workers", "1", "--quiet"]
+    argv = [
+        "batch",
+        "degrade",
+        str(batch_inputs.images),
+        "--psf-grid",
+        str(batch_inputs.grid),
+        "-o",
+        str(out),
+        "--label-pattern",
+        PATTERNS,
+        "--workers",
+        "1",
+        "--quiet",
+    ]
     assert main(argv) == 1
     err = capsys.readouterr().err
     assert "frame001_ids.png' are 60x48 pixels; the frame" in err and "is 64x48" in err, err
     assert sorted(p.name for p in out.iterdir() if p.name.startswith("frame")) == [
-        "frame000.boxes.json", "frame000.exr", "frame000.labels.exr", "frame000.png"]
+        "frame000.boxes.json",
+        "frame000.exr",
+        "frame000.labels.exr",
+        "frame000.png",
+    ]
     assert main(argv[:-3] + ["--dry-run"]) == 0
     assert "EXR + PNG + warped labels EXR + warped labels JSON per image" in capsys.readouterr().out
 
@@ -135,7 +191,13 @@ def test_a_frame_may_hold_its_own_labels(batch_inputs):
     frame = batch_inputs.images / "own.exr"
     write_exr(frame, {"R": ids / 3, "G": ids / 3, "B": ids / 3, "instance.id": ids})
     out = batch_inputs.root / "out"
-    result = degrade_batch([frame], out, DegradeSpec(label_patterns="instance={stem}.exr"), psf_grid=batch_inputs.grid,
-                           workers=1, progress=False)
+    result = degrade_batch(
+        [frame],
+        out,
+        DegradeSpec(label_patterns="instance={stem}.exr"),
+        psf_grid=batch_inputs.grid,
+        workers=1,
+        progress=False,
+    )
     assert [j.status for j in result.jobs] == ["done"]
     assert set(np.unique(read_exr(out / "own.labels.exr")[0]["instance.id"])) <= {0, 1, 2, 3}

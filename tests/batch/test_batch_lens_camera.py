@@ -1,6 +1,7 @@
 """A degrade batch says its camera (`convolution.camera`): the manifest holds the camera block of each
 frame size, each degraded frame the block of its own size, fitted once per size in the batch's process
 (a fit takes seconds: never once per frame)."""
+
 import numpy as np
 import pytest
 from strict_json import strict_loads
@@ -16,9 +17,19 @@ from solas_mi.psf.spec import GridSpec
 @pytest.fixture(scope="module")
 def wide_grid(tmp_path_factory):
     lens = Lens.load("wide-angle-22mm")
-    grid = psf_grid(lens, GridSpec(grid=(9, 7), size=21, method="geometric", rays=16, field_sampling="edges",
-                                   wavelengths_nm=(lens.primary_wavelength,), field_range_deg=(40.0, 29.0),
-                                   pitch_um=8.0))
+    grid = psf_grid(
+        lens,
+        GridSpec(
+            grid=(9, 7),
+            size=21,
+            method="geometric",
+            rays=16,
+            field_sampling="edges",
+            wavelengths_nm=(lens.primary_wavelength,),
+            field_range_deg=(40.0, 29.0),
+            pitch_um=8.0,
+        ),
+    )
     path = tmp_path_factory.mktemp("grid") / "wide.exr"
     grid.write(str(path))
     return path, grid
@@ -37,8 +48,25 @@ def test_a_batch_records_its_camera_fitted_once_per_frame_size(tmp_path, wide_gr
     real = fitting.fit
     monkeypatch.setattr(fitting, "fit", lambda cmap, name: fits.append(name) or real(cmap, name))
     out = tmp_path / "out"
-    assert main(["batch", "degrade", str(frames), "--psf-grid", str(path), "--calibration-model", "woodscape",
-                 "-o", str(out), "--workers", "2", "--quiet"]) == 0
+    assert (
+        main(
+            [
+                "batch",
+                "degrade",
+                str(frames),
+                "--psf-grid",
+                str(path),
+                "--calibration-model",
+                "woodscape",
+                "-o",
+                str(out),
+                "--workers",
+                "2",
+                "--quiet",
+            ]
+        )
+        == 0
+    )
     assert fits == ["woodscape", "woodscape"]  # two frame sizes, four frames
     manifest = strict_loads((out / "batch.json").read_text())
     cameras = manifest["cameras"]
@@ -77,13 +105,22 @@ def test_a_render_batch_records_each_sensors_camera_fitted_once(tmp_path, monkey
     fits = []
     real = fitting.fit
     monkeypatch.setattr(fitting, "fit", lambda cmap, name: fits.append(name) or real(cmap, name))
-    result = render_batch([image], tmp_path / "r", lens="cooke-triplet", sensor="16x12", spp=[1, 2], workers=1,
-                          progress=False, calibration_model="opencv-pinhole")
+    result = render_batch(
+        [image],
+        tmp_path / "r",
+        lens="cooke-triplet",
+        sensor="16x12",
+        spp=[1, 2],
+        workers=1,
+        progress=False,
+        calibration_model="opencv-pinhole",
+    )
     assert [j.status for j in result.jobs] == ["done", "done"] and fits == ["opencv-pinhole"]
     manifest = strict_loads((tmp_path / "r" / "batch.json").read_text())
     (block,) = manifest["cameras"].values()
     lens = Lens.load("cooke-triplet")
-    assert block == image_camera(lens, camera_for(lens, (12, 16), None, None), parse("srgb", lens.wavelengths_nm),
-                                 "opencv-pinhole")
+    assert block == image_camera(
+        lens, camera_for(lens, (12, 16), None, None), parse("srgb", lens.wavelengths_nm), "opencv-pinhole"
+    )
     for job in result.jobs:
         assert read_exr(job.output)[1]["camera"] == block

@@ -1,5 +1,6 @@
 """Names from user data are never paths: a lens name, an input's name or a sweep value cannot make a
 batch or the PSF-grid cache write outside its folder (`outputs.safe_name`, `outputs.inside`)."""
+
 import dataclasses
 import os
 from pathlib import Path
@@ -27,8 +28,11 @@ def test_a_safe_name_is_one_plain_component(text, tmp_path):
     assert inside(tmp_path, name + ".exr").parent == tmp_path.resolve()
 
 
-@pytest.mark.parametrize("text, name", [("ïrr ä", "ïrr_ä"), ("東京", "東京"), ("e\u0301te\u0301", "été"),
-                                        ("é" * 100, "é" * 60)], ids=["latin", "cjk", "decomposed", "long"])
+@pytest.mark.parametrize(
+    "text, name",
+    [("ïrr ä", "ïrr_ä"), ("東京", "東京"), ("e\u0301te\u0301", "été"), ("é" * 100, "é" * 60)],
+    ids=["latin", "cjk", "decomposed", "long"],
+)
 def test_a_safe_name_keeps_the_letters_of_every_script(text, name):
     """Letters and digits of any script stay (they became "_", and a name of none "item": "ïrr ä.exr"
     gave rr.exr, two CJK names one output, refused), within NAME_MAX bytes of UTF-8."""
@@ -117,7 +121,9 @@ def degrade_twice(batch_inputs, change, inputs=None):
     out = batch_inputs.root / "out"
 
     def run():
-        return degrade_batch(inputs or [batch_inputs.images], out, psf_grid=batch_inputs.grid, workers=1, progress=False)
+        return degrade_batch(
+            inputs or [batch_inputs.images], out, psf_grid=batch_inputs.grid, workers=1, progress=False
+        )
 
     first = run()
     assert not first.failed
@@ -198,9 +204,26 @@ def test_two_batches_on_one_folder_the_second_is_refused_naming_the_first(batch_
     other = tmp_path / "other"
     other.mkdir()
     (other / "mine.png").write_bytes((batch_inputs.images / "frame000.png").read_bytes())
-    first = subprocess.Popen([sys.executable, "-m", "solas_mi", "batch", "degrade", str(batch_inputs.images),
-                              "--psf-grid", str(batch_inputs.grid), "-o", str(out), "--workers", "1", "--quiet"],
-                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    first = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "solas_mi",
+            "batch",
+            "degrade",
+            str(batch_inputs.images),
+            "--psf-grid",
+            str(batch_inputs.grid),
+            "-o",
+            str(out),
+            "--workers",
+            "1",
+            "--quiet",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     deadline = time.monotonic() + 60
     while not list(out.glob("[!.]*.exr")) and time.monotonic() < deadline:
         time.sleep(0.05)
@@ -219,6 +242,7 @@ def test_a_folder_that_turns_read_only_keeps_the_batch_s_error(tmp_path, monkeyp
     """The output folder made read-only while a batch runs (a remount, chattr +i): the batch's own
     one-line error (its manifest cannot be written), not a traceback of the lock file's removal; the
     lock file left behind holds nothing."""
+
     def read_only(path, *args, **kwargs):
         raise PermissionError(1, "Operation not permitted", str(path))
 
@@ -245,11 +269,13 @@ def test_an_address_space_limit_bounds_the_free_memory(tmp_path):
     import subprocess
     import sys
 
-    code = ("import resource; from solas_mi.budget import available_memory, check_memory\n"
-            "used = int(open('/proc/self/status').read().split('VmSize:')[1].split()[0]) * 1024\n"
-            "resource.setrlimit(resource.RLIMIT_AS, (used + (300 << 20), resource.RLIM_INFINITY))\n"
-            "assert available_memory() <= 300 << 20, available_memory()\n"
-            "check_memory('job', 1e9)\n")
+    code = (
+        "import resource; from solas_mi.budget import available_memory, check_memory\n"
+        "used = int(open('/proc/self/status').read().split('VmSize:')[1].split()[0]) * 1024\n"
+        "resource.setrlimit(resource.RLIMIT_AS, (used + (300 << 20), resource.RLIM_INFINITY))\n"
+        "assert available_memory() <= 300 << 20, available_memory()\n"
+        "check_memory('job', 1e9)\n"
+    )
     run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True)
     assert run.returncode == 1 and "SolasError" in run.stderr and "needs about 1.0 GB" in run.stderr, run.stderr
 

@@ -1,6 +1,7 @@
 """A degrade batch's options as one `DegradeSpec`: the batch's identity is the one finished batches
 hold (they resume), and the manifest and each output's header state the options the user gave, the
 same through Python and the command line."""
+
 import hashlib
 import json
 from dataclasses import asdict
@@ -29,13 +30,27 @@ def manifest(folder: Path) -> dict:
     return strict_loads((folder / "batch.json").read_text())
 
 
-def former_identity(grid_id: str, method="interp", boundary="edge", linear=False, output_format="exr",
-                    depth_pattern=None, occlusion="filled", silhouette="nearest", frame=None, camera=None) -> str:
+def former_identity(
+    grid_id: str,
+    method="interp",
+    boundary="edge",
+    linear=False,
+    output_format="exr",
+    depth_pattern=None,
+    occlusion="filled",
+    silhouette="nearest",
+    frame=None,
+    camera=None,
+) -> str:
     """The batch id as batches before DegradeSpec computed it from their loose options (the ids in the
     manifests they left): a batch resumes only when its id is unchanged."""
-    identity = [grid_id, method, boundary, linear] + ([output_format] if output_format != "exr" else []) + (
-        [depth_pattern, occlusion, silhouette] if depth_pattern is not None else []) + (
-        [asdict(frame)] if frame is not None else []) + ([camera.describe()] if camera is not None else [])
+    identity = (
+        [grid_id, method, boundary, linear]
+        + ([output_format] if output_format != "exr" else [])
+        + ([depth_pattern, occlusion, silhouette] if depth_pattern is not None else [])
+        + ([asdict(frame)] if frame is not None else [])
+        + ([camera.describe()] if camera is not None else [])
+    )
     return hashlib.sha256(json.dumps(identity).encode()).hexdigest()[:16]
 
 
@@ -44,23 +59,35 @@ def test_the_batch_identity_is_the_one_finished_batches_hold(batch_inputs, doubl
     write_exr(frame.with_name("frame000_depth.exr"), {"Z": np.full((48, 64), 10.0, np.float32)})
     (batch_inputs.root / "sensor.toml").write_text('[sensor]\ncfa = "RCCB"\npixel_pitch_um = 2.0\n')
     camera = load_camera(str(batch_inputs.root / "sensor.toml"), 0.25, "default", 3)
-    options = [{}, {"method": "patch", "boundary": "zero", "linear": True}, {"output_format": "exr-half"},
-               {"output_format": "png16", "boundary": "reflect"},
-               {"depth_pattern": "{stem}_depth.exr"},
-               {"depth_pattern": "{stem}_depth.exr", "occlusion": "none", "silhouette": "as-given"},
-               {"frame": FRAME}, {"camera": camera}, {"frame": FRAME, "camera": camera, "output_format": "exr-half"}]
+    options = [
+        {},
+        {"method": "patch", "boundary": "zero", "linear": True},
+        {"output_format": "exr-half"},
+        {"output_format": "png16", "boundary": "reflect"},
+        {"depth_pattern": "{stem}_depth.exr"},
+        {"depth_pattern": "{stem}_depth.exr", "occlusion": "none", "silhouette": "as-given"},
+        {"frame": FRAME},
+        {"camera": camera},
+        {"frame": FRAME, "camera": camera, "output_format": "exr-half"},
+    ]
     grid_id = file_hash(batch_inputs.grid)
     keys = set()
     for given in options:
-        p = plan_batch([batch_inputs.images], batch_inputs.root / "out", DegradeSpec(**given),
-                       psf_grid=batch_inputs.grid)
+        p = plan_batch(
+            [batch_inputs.images], batch_inputs.root / "out", DegradeSpec(**given), psf_grid=batch_inputs.grid
+        )
         assert p.key == former_identity(grid_id, **given), given
         keys.add(p.key)
     assert len(keys) == len(options)  # each option is part of the identity
     cache = GridCache(batch_inputs.root / "cache")
     grid = GridSpec(grid=(2, 2), size=16, pupil_samples=16)
-    p = plan_batch([batch_inputs.images], batch_inputs.root / "out", DegradeSpec(grid_spec=grid, linear=True),
-                   lens=doublet, cache=cache)
+    p = plan_batch(
+        [batch_inputs.images],
+        batch_inputs.root / "out",
+        DegradeSpec(grid_spec=grid, linear=True),
+        lens=doublet,
+        cache=cache,
+    )
     assert p.key == former_identity(cache.path(doublet, grid).stem, linear=True)
 
 
@@ -73,14 +100,34 @@ def test_the_manifest_and_headers_state_the_options_given(batch_inputs, capsys):
     py, cli = batch_inputs.root / "py", batch_inputs.root / "cli"
     result = degrade_batch([batch_inputs.images], py, spec, psf_grid=batch_inputs.grid, workers=1, progress=False)
     assert result.count("done") == 2
-    argv = ["batch", "degrade", str(batch_inputs.images), "--psf-grid", str(batch_inputs.grid), "--workers", "1",
-            "--quiet", "--method", "patch", "--boundary", "reflect", "--linear", "--format", "exr-half",
-            "--intrinsics", ",".join(str(v) for v in FRAME.intrinsics)]
+    argv = [
+        "batch",
+        "degrade",
+        str(batch_inputs.images),
+        "--psf-grid",
+        str(batch_inputs.grid),
+        "--workers",
+        "1",
+        "--quiet",
+        "--method",
+        "patch",
+        "--boundary",
+        "reflect",
+        "--linear",
+        "--format",
+        "exr-half",
+        "--intrinsics",
+        ",".join(str(v) for v in FRAME.intrinsics),
+    ]
     assert main([*argv, "-o", str(cli)]) == 0
     a, b = manifest(py), manifest(cli)
     assert {k: a[k] for k in ("method", "boundary", "linear", "format", "frame_camera")} == {
-        "method": "patch", "boundary": "reflect", "linear": True, "format": "exr-half",
-        "frame_camera": json.loads(json.dumps(asdict(FRAME)))}
+        "method": "patch",
+        "boundary": "reflect",
+        "linear": True,
+        "format": "exr-half",
+        "frame_camera": json.loads(json.dumps(asdict(FRAME))),
+    }
     assert "camera" not in a and "lens_scale" not in a  # none given, none stated
     same = {k for k in a if k not in ("items", "updated", "summary")}
     assert {k: a[k] for k in same} == {k: b[k] for k in same} and a["batch_id"] == b["batch_id"]
@@ -98,11 +145,14 @@ def test_the_manifest_and_headers_state_the_options_given(batch_inputs, capsys):
     assert "0 done, 2 skipped" in capsys.readouterr().out
 
 
-@pytest.mark.parametrize("given, psf_grid, message", [
-    ({"grid_spec": GridSpec()}, True, "grid_spec is for a grid computed from a lens"),
-    ({"scale_lens": 5.0, "frame": FRAME}, True, "needs the lens the grid is computed from"),
-    ({"scale_lens": 5.0}, False, "needs the frames' camera"),
-])
+@pytest.mark.parametrize(
+    "given, psf_grid, message",
+    [
+        ({"grid_spec": GridSpec()}, True, "grid_spec is for a grid computed from a lens"),
+        ({"scale_lens": 5.0, "frame": FRAME}, True, "needs the lens the grid is computed from"),
+        ({"scale_lens": 5.0}, False, "needs the frames' camera"),
+    ],
+)
 def test_options_that_do_not_fit_the_grid_are_refused(batch_inputs, doublet, given, psf_grid, message):
     batch_inputs.write(1)
     source = {"psf_grid": batch_inputs.grid} if psf_grid else {"lens": doublet}

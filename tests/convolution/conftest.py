@@ -1,5 +1,6 @@
 """Synthetic PSF grids (no tracer; built by the shared `synthetic_grid`, tests/conftest.py) and direct
 reference operations shared by the convolution tests, as the `synthetic` fixture."""
+
 import math
 
 import numpy as np
@@ -12,8 +13,12 @@ class Synthetic:
 
     def __init__(self, grids):
         self.grids = grids
-        self.focal_mm, self.pixel_um, self.gaussian, self.make_grid = (grids.focal_mm, grids.pixel_um,
-                                                                       grids.gaussian, grids.from_psfs)
+        self.focal_mm, self.pixel_um, self.gaussian, self.make_grid = (
+            grids.focal_mm,
+            grids.pixel_um,
+            grids.gaussian,
+            grids.from_psfs,
+        )
 
     @staticmethod
     def reference_convolution(image: np.ndarray, kernel: np.ndarray, shift, boundary="edge") -> np.ndarray:
@@ -27,7 +32,7 @@ class Synthetic:
         for a in range(2 * r + 1):
             for b in range(2 * r + 1):
                 y0, x0 = m - (a - r) - shift[0], m - (b - r) - shift[1]
-                out += kernel[a, b] * p[y0:y0 + h, x0:x0 + w]
+                out += kernel[a, b] * p[y0 : y0 + h, x0 : x0 + w]
         return out
 
     @staticmethod
@@ -36,7 +41,9 @@ class Synthetic:
         r, c = np.indices(image.shape)
         return np.array([(image * c).sum(), (image * r).sum()]) / image.sum()
 
-    def varied_grid(self, rng, width, ny=8, nx=8, pitch_div=4, max_offset_px=1.0, normalization="sum", transmission=None):
+    def varied_grid(
+        self, rng, width, ny=8, nx=8, pitch_div=4, max_offset_px=1.0, normalization="sum", transmission=None
+    ):
         """Gaussian PSFs of random widths (0.5–4 px) and random chief-ray offsets on an 8×8 grid."""
         pix = self.pixel_um(width)
         pitch = pix / pitch_div
@@ -44,7 +51,7 @@ class Synthetic:
         sig = rng.uniform(0.5, 4.0, (ny, nx)) * pix
         psfs = np.stack([[self.gaussian(size, s, pitch) for s in row] for row in sig])[None]
         if transmission is not None:
-            psfs = psfs * (transmission / pitch ** 2)[None, :, :, None, None]
+            psfs = psfs * (transmission / pitch**2)[None, :, :, None, None]
         off = rng.uniform(-max_offset_px, max_offset_px, (1, ny, nx, 2)) * pix
         return self.make_grid(psfs, pitch, off, normalization=normalization)
 

@@ -2,6 +2,7 @@
 fitted cameras (`optics.calibration.describe_camera`, `caches.RecordCache`): a second degrade of the same frame
 reads it back (no fit) and records the same block; a changed lens file, a corrupt or tampered record is fitted
 again; a cache folder that cannot be written is no error."""
+
 import dataclasses
 
 import numpy as np
@@ -35,14 +36,28 @@ def records(folder) -> list:
 
 def test_a_second_degrade_reads_its_camera_back(tmp_path, fits, fresh_cache):
     lens = Lens.load(Lens.load("solas-doublet").save(tmp_path / "doublet.toml"))  # a grid naming its lens file
-    grid = psf_grid(lens, GridSpec(grid=(3, 3), size=15, method="geometric", rays=16,
-                                   wavelengths_nm=(lens.primary_wavelength,)))
+    grid = psf_grid(
+        lens, GridSpec(grid=(3, 3), size=15, method="geometric", rays=16, wavelengths_nm=(lens.primary_wavelength,))
+    )
     grid.write(str(tmp_path / "grid.exr"))
     write_png(tmp_path / "f.png", np.full((48, 64, 3), 0.5))
     blocks = []
     for name in ("a.exr", "b.exr"):
-        assert main(["degrade", str(tmp_path / "f.png"), "--psf-grid", str(tmp_path / "grid.exr"),
-                     "--calibration-model", MODEL, "-o", str(tmp_path / name)]) == 0
+        assert (
+            main(
+                [
+                    "degrade",
+                    str(tmp_path / "f.png"),
+                    "--psf-grid",
+                    str(tmp_path / "grid.exr"),
+                    "--calibration-model",
+                    MODEL,
+                    "-o",
+                    str(tmp_path / name),
+                ]
+            )
+            == 0
+        )
         blocks.append(read_exr(tmp_path / name)[1]["camera"])
     assert fits == [MODEL] and len(records(fresh_cache)) == 1
     assert blocks[0] == blocks[1] and blocks[0]["calibration"]["model"] == MODEL
@@ -60,11 +75,14 @@ def test_a_changed_lens_file_is_fitted_again(tmp_path, fits, fresh_cache):
     assert first["calibration"]["parameters"] != second["calibration"]["parameters"]
 
 
-@pytest.mark.parametrize("spoil", [
-    lambda text: text[: len(text) // 2],  # truncated
-    lambda text: text.replace('"rms_residual_px": ', '"rms_residual_px": 1'),  # changed, still JSON
-    lambda text: "[]",  # not a record
-])
+@pytest.mark.parametrize(
+    "spoil",
+    [
+        lambda text: text[: len(text) // 2],  # truncated
+        lambda text: text.replace('"rms_residual_px": ', '"rms_residual_px": 1'),  # changed, still JSON
+        lambda text: "[]",  # not a record
+    ],
+)
 def test_a_spoiled_record_is_fitted_again(doublet, fits, fresh_cache, capsys, spoil):
     first = describe_camera(doublet, SENSOR, MODEL)
     (record,) = records(fresh_cache)

@@ -1,4 +1,5 @@
 """`degrade` with each registered method: one ordinary convolution for invariant grids, energy, seams, chief-ray offsets, the doublet's grid against the tracer, bad input."""
+
 import math
 
 import numpy as np
@@ -40,15 +41,18 @@ def test_invariant_rgb_grid_uses_longest_wavelength_for_red(method, synthetic):
     pix = synthetic.pixel_um(w)
     pitch = pix / 4
     p = np.stack([synthetic.gaussian(21, s * pix, pitch) for s in (0.6, 1.0, 2.0)])  # for 486, 656, 531 nm
-    g = synthetic.make_grid(np.broadcast_to(p[:, None, None], (3, 4, 4, 21, 21)), pitch, wavelengths=(486.0, 656.0, 531.0))
+    g = synthetic.make_grid(
+        np.broadcast_to(p[:, None, None], (3, 4, 4, 21, 21)), pitch, wavelengths=(486.0, 656.0, 531.0)
+    )
     img = rng.random((h, w, 3))
     out = degrade(img, g, method, dtype=np.float64)
     lay = layout(g, w, h)
     radius = kernel_radius(21, lay.q)
     for channel, k in zip(range(3), (1, 2, 0)):  # R ← 656, G ← 531, B ← 486
         kern, shift = pixel_kernels(g.data[k, :1, 0], lay.q, np.zeros((1, 2)), np.ones(1), radius)
-        np.testing.assert_allclose(out[..., channel], synthetic.reference_convolution(img[..., channel], kern[0], shift[0]),
-                                   atol=1e-12)
+        np.testing.assert_allclose(
+            out[..., channel], synthetic.reference_convolution(img[..., channel], kern[0], shift[0]), atol=1e-12
+        )
 
 
 @pytest.mark.parametrize("method", list(METHODS))
@@ -62,8 +66,11 @@ def test_delta_grid_returns_input(method, synthetic):
     img = rng.random((h, w))
     assert np.abs(degrade(img, g, method) - img).max() < 1e-4
     # offset by whole pixels (3 right, 2 up): the image moves, exactly
-    g = synthetic.make_grid(np.broadcast_to(delta, (1, 8, 8, 5, 5)), pitch,
-                  np.broadcast_to([3 * synthetic.pixel_um(w), 2 * synthetic.pixel_um(w)], (1, 8, 8, 2)))
+    g = synthetic.make_grid(
+        np.broadcast_to(delta, (1, 8, 8, 5, 5)),
+        pitch,
+        np.broadcast_to([3 * synthetic.pixel_um(w), 2 * synthetic.pixel_um(w)], (1, 8, 8, 2)),
+    )
     out = degrade(img, g, method, "zero")
     assert np.abs(out[:-2, 3:] - img[2:, :-3]).max() < 1e-4
     assert np.abs(out[-2:]).max() < 1e-4 and np.abs(out[:, :3]).max() < 1e-4
@@ -87,7 +94,7 @@ def test_energy_is_preserved(method, synthetic):
 
 
 def test_transmission_normalised_energy(synthetic):
-    """"none" grids: PSF·pitch² sums to the transmitted fraction; with interp each input pixel keeps
+    """ "none" grids: PSF·pitch² sums to the transmitted fraction; with interp each input pixel keeps
     the bilinear blend of its nodes' transmissions (vignetting carried)."""
     rng = np.random.default_rng(4)
     h, w = 96, 128
@@ -117,7 +124,9 @@ def test_uniform_input_stays_uniform(synthetic):
     pix = synthetic.pixel_um(128)
     f = np.linspace(0.0, 1.0, 8)
     sigma = (1.0 + 0.5 * f[None, :] + 0.3 * f[:, None]) * pix  # 1–1.8 px across the field
-    g = synthetic.make_grid(np.stack([[synthetic.gaussian(65, s, pix / 4) for s in row] for row in sigma])[None], pix / 4)
+    g = synthetic.make_grid(
+        np.stack([[synthetic.gaussian(65, s, pix / 4) for s in row] for row in sigma])[None], pix / 4
+    )
     np.testing.assert_allclose(degrade(np.full((96, 128), 0.25), g, "interp"), 0.25, rtol=2e-3)
 
 
@@ -148,8 +157,11 @@ def test_chief_ray_offset_moves_a_dot(method, synthetic):
     h, w = 96, 128
     pix = synthetic.pixel_um(w)
     pitch = pix / 4
-    g = synthetic.make_grid(np.broadcast_to(synthetic.gaussian(33, 1.5 * pix, pitch), (1, 8, 8, 33, 33)), pitch,
-                  np.broadcast_to([3.7 * pix, -2.2 * pix], (1, 8, 8, 2)))  # 3.7 px right, 2.2 px down
+    g = synthetic.make_grid(
+        np.broadcast_to(synthetic.gaussian(33, 1.5 * pix, pitch), (1, 8, 8, 33, 33)),
+        pitch,
+        np.broadcast_to([3.7 * pix, -2.2 * pix], (1, 8, 8, 2)),
+    )  # 3.7 px right, 2.2 px down
     img = np.zeros((h, w))
     img[40, 50] = 1.0
     np.testing.assert_allclose(synthetic.centroid(degrade(img, g, method, dtype=np.float64)), [53.7, 42.2], atol=1e-9)
@@ -187,8 +199,9 @@ def tracer_centroids(lens, cam, field, synthetic) -> np.ndarray:
         xy = chief_rays(lens, np.array([field]), np.array([wl])).image_xy[0] * 1e3  # µm
         p = psf(lens, tuple(field), wl, size=64, pitch_um=1.0, pupil_samples=32)
         dx, dy = synthetic.centroid(p.data) - 32  # µm right, µm down from the chief ray
-        found.append([(xy[0] + dx) / cam.pitch_um + cam.width / 2 - 0.5,
-                      cam.height / 2 - 0.5 - (xy[1] - dy) / cam.pitch_um])
+        found.append(
+            [(xy[0] + dx) / cam.pitch_um + cam.width / 2 - 0.5, cam.height / 2 - 0.5 - (xy[1] - dy) / cam.pitch_um]
+        )
     return np.array(found)
 
 
@@ -206,19 +219,28 @@ def test_dot_lands_where_the_tracer_says(doublet, doublet_grid, synthetic):
         img = np.zeros((h, w, 3))
         img[row, col] = 1.0
         out = degrade(img, doublet_grid, "interp")
-        found = np.array([synthetic.centroid(out[row - 20:row + 21, col - 20:col + 21, c]) + [col - 20, row - 20]
-                          for c in range(3)])
+        found = np.array(
+            [
+                synthetic.centroid(out[row - 20 : row + 21, col - 20 : col + 21, c]) + [col - 20, row - 20]
+                for c in range(3)
+            ]
+        )
         expected = tracer_centroids(doublet, cam, field, synthetic)
         np.testing.assert_allclose(found, expected, atol=tolerance)
         if tolerance < 0.1:
             on_node = (img, row, col, expected)
     # the offsets matter: discarding them (chief rays on the ideal points) misplaces R by > 1 px
     img, row, col, expected = on_node
-    g = PSFGrid(doublet_grid.data, doublet_grid.fields_deg,
-                np.repeat(cam.ideal_mm(doublet_grid.fields_deg)[None], 3, axis=0), doublet_grid.wavelengths_nm,
-                doublet_grid.pitch_um, doublet_grid.meta)
+    g = PSFGrid(
+        doublet_grid.data,
+        doublet_grid.fields_deg,
+        np.repeat(cam.ideal_mm(doublet_grid.fields_deg)[None], 3, axis=0),
+        doublet_grid.wavelengths_nm,
+        doublet_grid.pitch_um,
+        doublet_grid.meta,
+    )
     out = degrade(img, g, "interp")
-    wrong = synthetic.centroid(out[row - 20:row + 21, col - 20:col + 21, 0]) + [col - 20, row - 20]
+    wrong = synthetic.centroid(out[row - 20 : row + 21, col - 20 : col + 21, 0]) + [col - 20, row - 20]
     assert np.abs(wrong - expected[0]).max() > 1.0
     # lateral colour: the chief rays of 656 and 486 nm are 0.57 px apart in x at (1.5°, 0.5°); their
     # PSFs' centroids bring the R and B centroids to 0.12 px
@@ -258,7 +280,9 @@ def test_channel_count_mismatch(synthetic):
 
 
 def test_tiny_image_and_large_kernel(synthetic):
-    g = synthetic.make_grid(np.broadcast_to(synthetic.gaussian(61, 5000.0, 800.0), (1, 4, 4, 61, 61)), 800.0)  # ±14 px on 3×4 px
+    g = synthetic.make_grid(
+        np.broadcast_to(synthetic.gaussian(61, 5000.0, 800.0), (1, 4, 4, 61, 61)), 800.0
+    )  # ±14 px on 3×4 px
     for boundary in ("edge", "zero", "reflect"):
         for method in METHODS:
             out = degrade(np.full((3, 4), 0.5), g, method, boundary)

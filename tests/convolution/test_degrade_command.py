@@ -1,4 +1,5 @@
 """`solas-mi degrade` (convolution.commands)."""
+
 import argparse
 
 import numpy as np
@@ -17,14 +18,26 @@ def parser():
 def test_command_line(tmp_path, synthetic):
     from solas_mi.imageio import read_exr, read_image, write_png
 
-    g = synthetic.make_grid(np.broadcast_to(synthetic.gaussian(15, 8.0, 2.0), (3, 4, 4, 15, 15)), 2.0, wavelengths=(656, 531, 486))
+    g = synthetic.make_grid(
+        np.broadcast_to(synthetic.gaussian(15, 8.0, 2.0), (3, 4, 4, 15, 15)), 2.0, wavelengths=(656, 531, 486)
+    )
     g.write(str(tmp_path / "grid.exr"))
     img = np.zeros((48, 64, 3))
     img[:, :32] = [0.2, 0.5, 0.8]
     img[:, 32:] = 0.6
     write_png(tmp_path / "in.png", img)
-    args = parser().parse_args(["degrade", str(tmp_path / "in.png"), "--psf-grid", str(tmp_path / "grid.exr"),
-                                "--method", "patch", "-o", str(tmp_path / "out.exr")])
+    args = parser().parse_args(
+        [
+            "degrade",
+            str(tmp_path / "in.png"),
+            "--psf-grid",
+            str(tmp_path / "grid.exr"),
+            "--method",
+            "patch",
+            "-o",
+            str(tmp_path / "out.exr"),
+        ]
+    )
     assert args.run(args) == 0
     _, meta = read_exr(tmp_path / "out.exr")
     out = read_image(tmp_path / "out.exr")
@@ -34,11 +47,26 @@ def test_command_line(tmp_path, synthetic):
     linear_in = read_image(tmp_path / "in.png")  # sRGB decoded
     # far from the edge the output equals the linearised input; the PNG re-encodes it
     assert np.abs(out[:, :20] - linear_in[:, :20]).max() < 1e-5
-    assert np.abs(read_image(tmp_path / "out.png", linearize=False)[:, :20]
-                  - read_image(tmp_path / "in.png", linearize=False)[:, :20]).max() <= 1 / 255 + 1e-9
+    assert (
+        np.abs(
+            read_image(tmp_path / "out.png", linearize=False)[:, :20]
+            - read_image(tmp_path / "in.png", linearize=False)[:, :20]
+        ).max()
+        <= 1 / 255 + 1e-9
+    )
     # default: interp
-    args = parser().parse_args(["degrade", str(tmp_path / "out.exr"), "--psf-grid", str(tmp_path / "grid.exr"),
-                                "-o", str(tmp_path / "twice.exr"), "--boundary", "reflect"])
+    args = parser().parse_args(
+        [
+            "degrade",
+            str(tmp_path / "out.exr"),
+            "--psf-grid",
+            str(tmp_path / "grid.exr"),
+            "-o",
+            str(tmp_path / "twice.exr"),
+            "--boundary",
+            "reflect",
+        ]
+    )
     assert args.run(args) == 0
     assert read_exr(tmp_path / "twice.exr")[1]["method"] == "interp"
     assert (tmp_path / "twice.png").is_file()
@@ -52,8 +80,10 @@ def test_command_line_errors_leave_nothing(tmp_path, synthetic):
     from solas_mi.imageio import write_exr
 
     write_exr(write, {"Y": np.zeros((30, 40), np.float32)})
-    for extra, message in ((["--psf-grid", str(tmp_path / "old.exr"), "-o", str(tmp_path / "o.exr")], "psf-grid"),
-                           (["--psf-grid", str(tmp_path / "old.exr"), "-o", str(tmp_path / "o.png")], ".exr")):
+    for extra, message in (
+        (["--psf-grid", str(tmp_path / "old.exr"), "-o", str(tmp_path / "o.exr")], "psf-grid"),
+        (["--psf-grid", str(tmp_path / "old.exr"), "-o", str(tmp_path / "o.png")], ".exr"),
+    ):
         args = parser().parse_args(["degrade", str(write), *extra])
         with pytest.raises(SolasError, match=message):
             args.run(args)

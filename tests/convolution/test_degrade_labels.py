@@ -2,6 +2,7 @@
 the image went through, checked against the degraded image itself (each object's light), the tracer's
 chief rays, and the labels' own rules (no id that was not in the input, depth not blended across an edge,
 flow the motion of the warped objects)."""
+
 import json
 import math
 
@@ -26,18 +27,21 @@ def wide():
     """wide-angle-22mm over ±40° x ±29° (a 3:2 frame's field: 4.5 px of distortion at 640 px wide), at its
     primary wavelength."""
     lens = Lens.load("wide-angle-22mm")
-    return psf_grid(lens, GridSpec(**GRID, wavelengths_nm=(lens.primary_wavelength,), field_range_deg=(40.0, 29.0),
-                                   pitch_um=8.0))
+    return psf_grid(
+        lens, GridSpec(**GRID, wavelengths_nm=(lens.primary_wavelength,), field_range_deg=(40.0, 29.0), pitch_um=8.0)
+    )
 
 
 @pytest.fixture(scope="module")
 def fisheye():
     """nikkor-fisheye over ±58° x ±48°, and a Kannala–Brandt frame reaching that far."""
     lens = Lens.load("nikkor-fisheye")
-    grid = psf_grid(lens, GridSpec(**GRID, wavelengths_nm=(lens.primary_wavelength,), field_range_deg=(58.0, 48.0),
-                                   pitch_um=10.0))
-    return grid, FrameCamera("kannala-brandt", intrinsics=(180.0, 180.0, W / 2 - 0.5, H / 2 - 0.5),
-                             coefficients=(-0.02, 0.003, 0.0, 0.0))
+    grid = psf_grid(
+        lens, GridSpec(**GRID, wavelengths_nm=(lens.primary_wavelength,), field_range_deg=(58.0, 48.0), pitch_um=10.0)
+    )
+    return grid, FrameCamera(
+        "kannala-brandt", intrinsics=(180.0, 180.0, W / 2 - 0.5, H / 2 - 0.5), coefficients=(-0.02, 0.003, 0.0, 0.0)
+    )
 
 
 def discs(width=W, height=H, radius=R, shift=(0.0, 0.0)):
@@ -45,9 +49,15 @@ def discs(width=W, height=H, radius=R, shift=(0.0, 0.0)):
     rows, cols = np.mgrid[:height, :width]
     ids = np.zeros((height, width))
     step = 4 * radius
-    for k, (cy, cx) in enumerate(((y, x) for y in np.arange(step / 2 + 2, height - step / 2, step)
-                                  for x in np.arange(step / 2 + 2, width - step / 2, step)), start=1):
-        ids[(rows - cy - shift[1]) ** 2 + (cols - cx - shift[0]) ** 2 <= radius ** 2] = k
+    for k, (cy, cx) in enumerate(
+        (
+            (y, x)
+            for y in np.arange(step / 2 + 2, height - step / 2, step)
+            for x in np.arange(step / 2 + 2, width - step / 2, step)
+        ),
+        start=1,
+    ):
+        ids[(rows - cy - shift[1]) ** 2 + (cols - cx - shift[0]) ** 2 <= radius**2] = k
     return ids
 
 
@@ -115,8 +125,13 @@ def test_a_sub_pixel_shift_moves_the_ids_by_as_much(synthetic_grid, shift):
     within 0.1 px (rounding the source points would move them by whole pixels: 0.3 px → 0), and a point
     that lands on a pixel centre keeps it (no shift, no dither)."""
     pixel = synthetic_grid.pixel_um(W)
-    grid = synthetic_grid((1, 4, 4), pitch_um=pixel / 4, size=9, sigma_um=pixel / 4,
-                          offsets_um=np.broadcast_to(np.array([shift[0], -shift[1]]) * pixel, (1, 4, 4, 2)))
+    grid = synthetic_grid(
+        (1, 4, 4),
+        pitch_um=pixel / 4,
+        size=9,
+        sigma_um=pixel / 4,
+        offsets_um=np.broadcast_to(np.array([shift[0], -shift[1]]) * pixel, (1, 4, 4, 2)),
+    )
     ids = discs()
     layers, _, _ = warp(grid, ids)
     moved = [centroid(layers["instance.id"] == k) - centroid(ids == k) for k in np.unique(ids)[1:]]
@@ -162,7 +177,9 @@ def test_depth_is_kept_within_a_surface_and_never_blended_across_an_edge(wide):
     lands = np.stack([camera.centre[0] + xy[:, 0] / camera.pitch_mm, camera.centre[1] - xy[:, 1] / camera.pitch_mm], 1)
     ideal = camera.ideal_pixel(fields)
     for (c, r), (ic, ir) in zip(lands, ideal):
-        q = np.rint([c, r]).astype(int)  # the output pixel nearest the chief ray; its source lies as far from the ideal pixel
+        q = np.rint([c, r]).astype(
+            int
+        )  # the output pixel nearest the chief ray; its source lies as far from the ideal pixel
         if ids[int(round(ir)), int(round(ic))] == 0 and np.isfinite(depth[int(round(ir)), int(round(ic))]):
             want = 5.0 + 0.02 * (ic + q[0] - c) + 0.01 * (ir + q[1] - r)
             assert warped[q[1], q[0]] == pytest.approx(want, abs=2e-3)
@@ -194,8 +211,9 @@ def test_normals_and_masks_are_values_of_the_input(wide):
     mask = (ids % 2 == 1).astype(float)[..., None] * 255
     layers, _, _ = warp(wide, {"normal": (normals, "n"), "mask": (mask, "m")})
     got = np.stack([layers[f"normal.{a}"] for a in "XYZ"], axis=-1).reshape(-1, 3)
-    assert {tuple(v) for v in np.unique(got, axis=0)} <= {tuple(v) for v in np.unique(normals.astype(np.float32)
-                                                                                     .reshape(-1, 3), axis=0)}
+    assert {tuple(v) for v in np.unique(got, axis=0)} <= {
+        tuple(v) for v in np.unique(normals.astype(np.float32).reshape(-1, 3), axis=0)
+    }
     assert np.allclose(np.linalg.norm(got, axis=-1), 1.0, atol=1e-6)
     assert set(np.unique(layers["mask.Y"])) == {0.0, 255.0}
 
@@ -209,11 +227,18 @@ def test_boxes_and_keypoints_move_with_the_ids(wide):
     annotations = []
     for k in np.unique(ids)[1:]:
         r, c = rows[ids == k], cols[ids == k]
-        annotations.append({"id": int(k), "bbox": [int(c.min()), int(r.min()), int(np.ptp(c)) + 1, int(np.ptp(r)) + 1],
-                            "keypoints": [float(c.mean()) + 0.5, float(r.mean()) + 0.5, 2], "area": float(len(r))})
+        annotations.append(
+            {
+                "id": int(k),
+                "bbox": [int(c.min()), int(r.min()), int(np.ptp(c)) + 1, int(np.ptp(r)) + 1],
+                "keypoints": [float(c.mean()) + 0.5, float(r.mean()) + 0.5, 2],
+                "area": float(len(r)),
+            }
+        )
     annotations.append({"id": 999, "bbox": [-50.0, -50.0, 10.0, 10.0], "keypoints": [-40.0, -40.0, 2]})
-    layers, moved, about = warp(wide, {"instance": (ids[..., None], "a"), "boxes": ({"annotations": annotations,
-                                                                                      "info": "kept"}, "b")})
+    layers, moved, about = warp(
+        wide, {"instance": (ids[..., None], "a"), "boxes": ({"annotations": annotations, "info": "kept"}, "b")}
+    )
     assert moved["info"] == "kept" and about["kinds"]["boxes"]["boxes_dropped_outside"] == 1
     for a in moved["annotations"]:
         mine = layers["instance.id"] == a["id"]
@@ -237,10 +262,11 @@ def barrel(synthetic_grid):
     radius (relative to the corner's) inward, 4.8 px at the corners of a 320x216 frame."""
     fields = np.linspace(-2.0, 2.0, 9)
     ideal = synthetic_grid.focal_mm * np.tan(np.radians(np.stack(np.meshgrid(fields, fields[::-1]), axis=-1))) * 1e3
-    squared = (ideal ** 2).sum(axis=-1, keepdims=True) / (ideal ** 2).sum(axis=-1).max()
+    squared = (ideal**2).sum(axis=-1, keepdims=True) / (ideal**2).sum(axis=-1).max()
     psf = synthetic_grid.gaussian(15, 4.0, 2.0)
-    return synthetic_grid.from_psfs(np.broadcast_to(psf, (1, 9, 9, 15, 15)), 2.0, (-0.03 * ideal * squared)[None],
-                                    sampling="edges")
+    return synthetic_grid.from_psfs(
+        np.broadcast_to(psf, (1, 9, 9, 15, 15)), 2.0, (-0.03 * ideal * squared)[None], sampling="edges"
+    )
 
 
 @pytest.mark.parametrize("boundary", ["edge", "reflect", "zero"])
@@ -253,9 +279,14 @@ def test_the_valid_layer_is_where_the_source_lies_inside_the_frame(barrel, bound
     ids = discs() + 1  # no 0 in the input
     layers, _, about = warp(barrel, ids, boundary=boundary)
     edge = np.linspace(-0.5, W - 0.5, 4 * W), np.linspace(-0.5, H - 0.5, 4 * H)
-    border = np.concatenate([np.stack([edge[0], np.full(4 * W, -0.5)], 1), np.stack([np.full(4 * H, W - 0.5), edge[1]], 1),
-                             np.stack([edge[0][::-1], np.full(4 * W, H - 0.5)], 1),
-                             np.stack([np.full(4 * H, -0.5), edge[1][::-1]], 1)])
+    border = np.concatenate(
+        [
+            np.stack([edge[0], np.full(4 * W, -0.5)], 1),
+            np.stack([np.full(4 * H, W - 0.5), edge[1]], 1),
+            np.stack([edge[0][::-1], np.full(4 * W, H - 0.5)], 1),
+            np.stack([np.full(4 * H, -0.5), edge[1][::-1]], 1),
+        ]
+    )
     polygon = Polygon(np.stack(mapping.forward(border[:, 0], border[:, 1]), axis=1))
     rows, cols = np.indices((H, W))
     inside = polygon.contains_points(np.stack([cols.ravel(), rows.ravel()], 1)).reshape(H, W)
@@ -274,8 +305,16 @@ def test_depth_aware_labels_follow_each_distances_mapping():
     from solas_mi.psf.depth import depth_grid
 
     lens = Lens.load("wide-angle-22mm")
-    g = depth_grid(lens, GridSpec(**GRID, wavelengths_nm=(lens.primary_wavelength,), field_range_deg=(40.0, 29.0),
-                                  pitch_um=8.0, distances_m=(math.inf, 2.0)))
+    g = depth_grid(
+        lens,
+        GridSpec(
+            **GRID,
+            wavelengths_nm=(lens.primary_wavelength,),
+            field_range_deg=(40.0, 29.0),
+            pitch_um=8.0,
+            distances_m=(math.inf, 2.0),
+        ),
+    )
     ids = discs()
     depth = np.where(ids > 0, 2.0, np.inf)
     meta = {}
@@ -323,17 +362,22 @@ def test_bad_labels_are_refused_by_name_before_anything_is_written(tmp_path, wid
     write_exr(tmp_path / "floats.exr", {"instance.id": np.full((H, W), 2.5)})
     write_exr(tmp_path / "d.exr", {"Z": np.full((H, W), -1.0)})
     (tmp_path / "rle.json").write_text(json.dumps({"annotations": [{"segmentation": {"counts": "x", "size": [2, 2]}}]}))
-    cases = [({"instance": tmp_path / "small.exr"}, f"are {W}x{H - 1} pixels; the frame .* is {W}x{H}"),
-             ({"instance": tmp_path / "floats.exr"}, "value 2.5 at row 0, column 0 .*whole numbers"),
-             ({"semantic": tmp_path / "missing.png"}, "missing.png' does not exist"),
-             ({"boxes": tmp_path / "rle.json"}, "annotation 0 has a segmentation that is not a list of polygons")]
+    cases = [
+        ({"instance": tmp_path / "small.exr"}, f"are {W}x{H - 1} pixels; the frame .* is {W}x{H}"),
+        ({"instance": tmp_path / "floats.exr"}, "value 2.5 at row 0, column 0 .*whole numbers"),
+        ({"semantic": tmp_path / "missing.png"}, "missing.png' does not exist"),
+        ({"boxes": tmp_path / "rle.json"}, "annotation 0 has a segmentation that is not a list of polygons"),
+    ]
     out = tmp_path / "out.exr"
     for files, says in cases:
         with pytest.raises(SolasError, match=says):
             degrade_file(frame, wide, "grid.exr", out, tmp_path / "out.png", labels=files)
         assert not out.exists() and not (tmp_path / "out.png").exists() and not (tmp_path / "out.labels.exr").exists()
-    for text, says in (("colour=a.png", "KIND one of depth, normal"), ("instance=a.jpg", "ending in .png or"),
-                       ("instance=a.png,instance=b.png", "instance is given twice")):
+    for text, says in (
+        ("colour=a.png", "KIND one of depth, normal"),
+        ("instance=a.jpg", "ending in .png or"),
+        ("instance=a.png,instance=b.png", "instance is given twice"),
+    ):
         with pytest.raises(SolasError, match=says):
             parse_label_files(text, "--labels")
     with pytest.raises(SolasError, match="with {stem} beside each frame"):
@@ -353,8 +397,16 @@ def test_the_degrade_command_writes_the_warped_labels_beside_the_frame(tmp_path,
     (tmp_path / "boxes.json").write_text(json.dumps({"annotations": [{"bbox": [10, 10, 20, 20]}]}))
     wide.write(str(tmp_path / "grid.exr"))
     out = tmp_path / "out.exr"
-    argv = ["degrade", str(frame), "--psf-grid", str(tmp_path / "grid.exr"), "-o", str(out),
-            "--labels", f"instance={tmp_path / 'ids.png'},depth={tmp_path / 'depth.exr'},boxes={tmp_path / 'boxes.json'}"]
+    argv = [
+        "degrade",
+        str(frame),
+        "--psf-grid",
+        str(tmp_path / "grid.exr"),
+        "-o",
+        str(out),
+        "--labels",
+        f"instance={tmp_path / 'ids.png'},depth={tmp_path / 'depth.exr'},boxes={tmp_path / 'boxes.json'}",
+    ]
     assert main(argv) == 0
     targets = label_outputs(out, ["instance", "boxes"])
     assert targets == {"layers": tmp_path / "out.labels.exr", "boxes": tmp_path / "out.boxes.json"}

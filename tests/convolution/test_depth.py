@@ -1,5 +1,6 @@
 """The depth-aware convolution (`convolution.depth`): planes at one depth against the single-distance
 grid, and a depth edge against the exact layered construction (the hidden background known)."""
+
 import math
 from dataclasses import replace
 
@@ -64,13 +65,16 @@ def edge_errors(g) -> dict:
     layered construction with the hidden background known, per occlusion rule, relative to its RMS."""
     far, mask, near, band = scene()
     unit = replace(g.layers[2], meta={**g.layers[2].meta, "normalization": "peak"})
-    cover = np.clip(interp.convolve_channel(mask.astype(np.float32), unit, layout(unit, W, H), 0, "edge",
-                                            np.float32), 0, 1)
+    cover = np.clip(
+        interp.convolve_channel(mask.astype(np.float32), unit, layout(unit, W, H), 0, "edge", np.float32), 0, 1
+    )
     ref = degrade(far, g.layers[0], "interp") * (1 - cover) + degrade(mask * near, g.layers[2], "interp")
     img, depth = far * (1 - mask) + near * mask, np.where(mask > 0, 10.0, np.inf)
     rms = np.sqrt(np.mean(ref[band] ** 2))
-    return {o: float(np.sqrt(np.mean((degrade_depth(img, depth, g, occlusion=o) - ref)[band] ** 2)) / rms)
-            for o in ("filled", "layered", "none")}
+    return {
+        o: float(np.sqrt(np.mean((degrade_depth(img, depth, g, occlusion=o) - ref)[band] ** 2)) / rms)
+        for o in ("filled", "layered", "none")
+    }
 
 
 @pytest.mark.parametrize("focus", ["inf", "10 m"])
@@ -83,8 +87,11 @@ def test_occlusion_at_a_depth_edge(grids, focus):
 
 def test_bad_depth_maps_are_refused(grids):
     img = scene()[0]
-    for bad, what in ((np.zeros((H, W)), "positive"), (np.full((H, W), np.nan), "positive"),
-                      (np.ones((H, W + 1)), "image's")):
+    for bad, what in (
+        (np.zeros((H, W)), "positive"),
+        (np.full((H, W), np.nan), "positive"),
+        (np.ones((H, W + 1)), "image's"),
+    ):
         with pytest.raises(SolasError, match=what):
             degrade_depth(img, bad, grids["inf"])
     with pytest.raises(SolasError, match="occlusion"):
@@ -119,8 +126,9 @@ def stripes_edge_errors(g, mixed: bool) -> dict:
     y = np.mgrid[:H, :W][0]
     far = 0.5 + 0.4 * np.sign(np.sin(y / 6.0))
     unit = replace(g.layers[2], meta={**g.layers[2].meta, "normalization": "peak"})
-    cover = np.clip(interp.convolve_channel(mask.astype(np.float32), unit, layout(unit, W, H), 0, "edge",
-                                            np.float32), 0, 1)
+    cover = np.clip(
+        interp.convolve_channel(mask.astype(np.float32), unit, layout(unit, W, H), 0, "edge", np.float32), 0, 1
+    )
     ref = degrade(far, g.layers[0], "interp") * (1 - cover) + degrade(mask * near, g.layers[2], "interp")
     img, depth = far * (1 - mask) + near * mask, np.where(mask > 0, 10.0, np.inf)
     if mixed:
@@ -129,8 +137,12 @@ def stripes_edge_errors(g, mixed: bool) -> dict:
     rms = np.sqrt(np.mean(ref[band] ** 2))
     # the map's depths as given: this reference counts the mixed column as far (the silhouette rule, which
     # moves it to the near plane, has its own reference: test_a_silhouettes_mixed_pixels_take_the_near_depth)
-    return {o: float(np.sqrt(np.mean((degrade_depth(img, depth, g, occlusion=o, silhouette="as-given") - ref)[band]
-                                     ** 2)) / rms) for o in ("filled", "layered")}
+    return {
+        o: float(
+            np.sqrt(np.mean((degrade_depth(img, depth, g, occlusion=o, silhouette="as-given") - ref)[band] ** 2)) / rms
+        )
+        for o in ("filled", "layered")
+    }
 
 
 @pytest.mark.parametrize("focus", ["inf", "10 m"])
@@ -160,8 +172,10 @@ def test_a_uniform_plane_is_as_bright_from_any_viewpoint(doublet):
     img = np.full((H, W), 0.5)
     for d in spec.distances_m:
         depth = np.full((H, W), d)
-        centre = [degrade_depth(img, depth, seen[v])[H // 2 - 20:H // 2 + 20, W // 2 - 20:W // 2 + 20].mean()
-                  for v in (0.0, None)]
+        centre = [
+            degrade_depth(img, depth, seen[v])[H // 2 - 20 : H // 2 + 20, W // 2 - 20 : W // 2 + 20].mean()
+            for v in (0.0, None)
+        ]
         assert centre[0] / centre[1] == pytest.approx(1.0, abs=2e-3), (d, centre)
     assert seen[0.0].layers[1].meta["flux_scale"] < 0.975
 
@@ -180,8 +194,9 @@ def test_a_silhouettes_mixed_pixels_take_the_near_depth(grids, focus):
     cover_px = mask.copy()
     cover_px[:, W // 2] = 0.5
     unit = replace(g.layers[2], meta={**g.layers[2].meta, "normalization": "peak"})
-    cover = np.clip(interp.convolve_channel(cover_px.astype(np.float32), unit, layout(unit, W, H), 0, "edge",
-                                            np.float32), 0, 1)
+    cover = np.clip(
+        interp.convolve_channel(cover_px.astype(np.float32), unit, layout(unit, W, H), 0, "edge", np.float32), 0, 1
+    )
     ref = degrade(far, g.layers[0], "interp") * (1 - cover) + degrade(cover_px * near, g.layers[2], "interp")
     img = far * (1 - cover_px) + near * cover_px
     depth = np.where(mask > 0, 10.0, np.inf)
@@ -191,7 +206,9 @@ def test_a_silhouettes_mixed_pixels_take_the_near_depth(grids, focus):
     depth[:, W // 2] = 40.0
     assert silhouette_depth(depth)[1] == H
     rms = np.sqrt(np.mean(ref[band] ** 2))
-    e = {s: float(np.sqrt(np.mean((degrade_depth(img, depth, g, silhouette=s) - ref)[band] ** 2)) / rms)
-         for s in ("nearest", "as-given")}
+    e = {
+        s: float(np.sqrt(np.mean((degrade_depth(img, depth, g, silhouette=s) - ref)[band] ** 2)) / rms)
+        for s in ("nearest", "as-given")
+    }
     print(focus, {k: f"{100 * v:.2f} %" for k, v in e.items()})
     assert e["nearest"] < 0.3 * e["as-given"]  # measured 0.50 % against 2.90 % (inf), 0.49 % against 4.18 % (10 m)

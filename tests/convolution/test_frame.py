@@ -1,5 +1,6 @@
 """The frame's own camera (`optics.frame`) on the convolution: pixels mapped to field angles, frames the
 lens does not cover refused with the numbers."""
+
 import math
 
 import numpy as np
@@ -16,8 +17,16 @@ W, H = 320, 240
 
 @pytest.fixture(scope="module")
 def grid(doublet):
-    return psf_grid(doublet, grid=(6, 8), wavelengths_nm=[531.0], size=64, pitch_um=1.0, method="geometric", rays=64,
-                    field_range_deg=(2.0, 1.5))
+    return psf_grid(
+        doublet,
+        grid=(6, 8),
+        wavelengths_nm=[531.0],
+        size=64,
+        pitch_um=1.0,
+        method="geometric",
+        rays=64,
+        field_range_deg=(2.0, 1.5),
+    )
 
 
 def test_kannala_brandt_and_polynomial_map_radius_to_angle():
@@ -38,8 +47,9 @@ def test_a_frame_spanning_the_grids_field_is_the_default(grid):
     same = degrade(img, grid, frame=FrameCamera("fov", fov_deg=2.0))
     assert np.allclose(same, degrade(img, grid), atol=1e-6)
     fx = (W / 2) / math.tan(math.radians(2.0))
-    assert np.allclose(degrade(img, grid, frame=parse_frame(intrinsics=f"{fx},{fx},{W / 2 - 0.5},{H / 2 - 0.5}")),
-                       same, atol=1e-6)
+    assert np.allclose(
+        degrade(img, grid, frame=parse_frame(intrinsics=f"{fx},{fx},{W / 2 - 0.5},{H / 2 - 0.5}")), same, atol=1e-6
+    )
 
 
 def test_a_narrower_frame_has_larger_pixels_blur(grid):
@@ -64,12 +74,18 @@ def test_the_principal_point_moves_the_nodes(grid):
     assert np.allclose(b.col_knots - a.col_knots, 10) and np.allclose(b.row_knots - a.row_knots, -4)
 
 
-@pytest.mark.parametrize("frame, what", [
-    (FrameCamera("fov", fov_deg=3.0), "up to 3 deg in x"),
-    (FrameCamera("fov", fov_deg=2.0, fov_axis="y"), "in y"),
-    (FrameCamera("pinhole", intrinsics=(10000.0, 9000.0, 160.0, 120.0)), "square"),
-    (FrameCamera("kannala-brandt", intrinsics=(200.0, 200.0, 160.0, 120.0), coefficients=(0, 0, 0, 0)), "does not cover"),
-])
+@pytest.mark.parametrize(
+    "frame, what",
+    [
+        (FrameCamera("fov", fov_deg=3.0), "up to 3 deg in x"),
+        (FrameCamera("fov", fov_deg=2.0, fov_axis="y"), "in y"),
+        (FrameCamera("pinhole", intrinsics=(10000.0, 9000.0, 160.0, 120.0)), "square"),
+        (
+            FrameCamera("kannala-brandt", intrinsics=(200.0, 200.0, 160.0, 120.0), coefficients=(0, 0, 0, 0)),
+            "does not cover",
+        ),
+    ],
+)
 def test_frames_the_grid_does_not_take_are_refused_with_numbers(grid, frame, what):
     with pytest.raises(SolasError, match=what):
         degrade(np.ones((H, W)), grid, frame=frame)
@@ -81,8 +97,11 @@ def test_a_fisheye_frame_the_lens_covers_is_degraded(grid):
     same focal length."""
     point = np.zeros((H, W))
     point[120, 160] = 1.0
-    fisheye = degrade(point, grid, frame=FrameCamera("kannala-brandt", intrinsics=(20000.0, 20000.0, 160.0, 120.0),
-                                                     coefficients=(0, 0, 0, 0)))
+    fisheye = degrade(
+        point,
+        grid,
+        frame=FrameCamera("kannala-brandt", intrinsics=(20000.0, 20000.0, 160.0, 120.0), coefficients=(0, 0, 0, 0)),
+    )
     pinhole = degrade(point, grid, frame=FrameCamera("pinhole", intrinsics=(20000.0, 20000.0, 160.0, 120.0)))
     r, c = np.indices(point.shape)
     for out in (fisheye, pinhole):
@@ -95,8 +114,12 @@ def test_a_fisheye_frame_the_lens_covers_is_degraded(grid):
 
 
 def test_bad_frame_cameras_are_refused():
-    for kwargs in ({"model": "fov", "fov_deg": 95.0}, {"model": "pinhole", "intrinsics": (0, 1, 0, 0)},
-                   {"model": "kannala-brandt", "intrinsics": (1, 1, 0, 0), "coefficients": (1.0,)}, {"model": "x"}):
+    for kwargs in (
+        {"model": "fov", "fov_deg": 95.0},
+        {"model": "pinhole", "intrinsics": (0, 1, 0, 0)},
+        {"model": "kannala-brandt", "intrinsics": (1, 1, 0, 0), "coefficients": (1.0,)},
+        {"model": "x"},
+    ):
         with pytest.raises(SolasError):
             FrameCamera(**kwargs)
     with pytest.raises(SolasError, match="one frame camera"):

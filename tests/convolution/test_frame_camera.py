@@ -1,6 +1,7 @@
 """The camera block of a degraded frame (`convolution.camera`): the lens's chief-ray mapping over the sensor
 degrade's mapping puts the frame on, checked against the tracer's own chief rays (`optics.pupil.chief_rays`)
 and against where degrade's mapping puts each node of the grid."""
+
 import json
 
 import numpy as np
@@ -24,9 +25,19 @@ MODEL = "opencv-fisheye"
 def wide():
     """wide-angle-22mm over ±40° x ±29° at its primary wavelength (geometric PSFs: only the chief rays matter)."""
     lens = Lens.load("wide-angle-22mm")
-    return psf_grid(lens, GridSpec(grid=(11, 9), size=21, method="geometric", rays=16, field_sampling="edges",
-                                   wavelengths_nm=(lens.primary_wavelength,), field_range_deg=(40.0, 29.0),
-                                   pitch_um=8.0))
+    return psf_grid(
+        lens,
+        GridSpec(
+            grid=(11, 9),
+            size=21,
+            method="geometric",
+            rays=16,
+            field_sampling="edges",
+            wavelengths_nm=(lens.primary_wavelength,),
+            field_range_deg=(40.0, 29.0),
+            pitch_um=8.0,
+        ),
+    )
 
 
 def node_pixels(grid, frame=None) -> np.ndarray:
@@ -45,8 +56,11 @@ def traced_pixels(lens, fields_deg, wavelength, block) -> np.ndarray:
     return np.stack([cx + c.image_xy[:, 0] / px, cy - c.image_xy[:, 1] / px], axis=-1)
 
 
-@pytest.mark.parametrize("frame", [None, FrameCamera("pinhole", intrinsics=(230.0, 230.0, 166.0, 101.5))],
-                         ids=["field", "intrinsics-off-centre"])
+@pytest.mark.parametrize(
+    "frame",
+    [None, FrameCamera("pinhole", intrinsics=(230.0, 230.0, 166.0, 101.5))],
+    ids=["field", "intrinsics-off-centre"],
+)
 def test_the_camera_block_is_the_mapping_degrade_applies(wide, frame):
     """The block's sensor (pitch, principal point) is the one degrade's mapping puts the frame on: every
     node lands where the tracer's chief ray of its field lands on it (to 1e-6 px); and its fitted model
@@ -70,11 +84,22 @@ def test_the_camera_block_is_the_mapping_degrade_applies(wide, frame):
 def test_a_fisheye_frame_keeps_its_own_camera():
     """A fisheye frame's points are the lens's chief rays already: its block is the frame's calibration, no fit."""
     lens = Lens.load("nikkor-fisheye")
-    grid = psf_grid(lens, GridSpec(grid=(5, 5), size=21, method="geometric", rays=16, field_sampling="edges",
-                                   wavelengths_nm=(lens.primary_wavelength,), field_range_deg=(58.0, 48.0),
-                                   pitch_um=10.0))
-    frame = FrameCamera("kannala-brandt", intrinsics=(180.0, 180.0, W / 2 - 0.5, H / 2 - 0.5),
-                        coefficients=(-0.02, 0.003, 0.0, 0.0))
+    grid = psf_grid(
+        lens,
+        GridSpec(
+            grid=(5, 5),
+            size=21,
+            method="geometric",
+            rays=16,
+            field_sampling="edges",
+            wavelengths_nm=(lens.primary_wavelength,),
+            field_range_deg=(58.0, 48.0),
+            pitch_um=10.0,
+        ),
+    )
+    frame = FrameCamera(
+        "kannala-brandt", intrinsics=(180.0, 180.0, W / 2 - 0.5, H / 2 - 0.5), coefficients=(-0.02, 0.003, 0.0, 0.0)
+    )
     block = frame_camera(grid, W, H, frame, MODEL)
     assert block["frame_camera"] == frame.meta(W, H) and "calibration" not in block
 

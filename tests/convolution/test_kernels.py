@@ -1,4 +1,5 @@
 """PSF grid → pixel kernels: exact pixel integration, kernel sums, interpolation hats, the paper's block layouts."""
+
 import numpy as np
 import pytest
 
@@ -34,7 +35,7 @@ def test_kernel_sums(normalization, synthetic):
     pix = synthetic.pixel_um(128)
     pitch = pix / 3
     p = synthetic.gaussian(33, 1.5 * pix, pitch)
-    scale = {"sum": 1.0, "none": 0.7 / pitch ** 2, "peak": 1 / p.max()}[normalization]
+    scale = {"sum": 1.0, "none": 0.7 / pitch**2, "peak": 1 / p.max()}[normalization]
     g = synthetic.make_grid(np.broadcast_to(p * scale, (1, 2, 2, 33, 33)), pitch, normalization=normalization)
     lay = layout(g, 128, 128)
     k, _ = node_kernels(g, lay, 0, np.array([0, 1]), np.array([1, 0]), kernel_radius(33, lay.q))
@@ -47,7 +48,7 @@ def test_hats_are_a_partition_of_unity():
     used, lo, w, length = hats(knots, -5, 60)
     total = np.zeros(60 + length)
     for a, row in zip(lo, w):
-        total[a:a + length] += row
+        total[a : a + length] += row
     np.testing.assert_allclose(total[:60], 1.0, atol=1e-12)
     assert list(used) == [0, 1, 2, 3]
 

@@ -1,6 +1,7 @@
 """What `degrade` announces before it starts: a peak-memory estimate that covers the real peak without
 crying wolf (measured in a subprocess), and a refusal, before anything is allocated, of a grid whose
 PSF windows span far more of the image than any kernel could."""
+
 import subprocess
 import sys
 
@@ -31,8 +32,10 @@ print(next(int(t.split()[1]) * 1024 for t in open("/proc/self/status") if t.star
 
 
 # fitted: the frame's camera block fitted by the command; else read back from the cache of fitted cameras
-@pytest.mark.parametrize("suffix, threads, fitted", [(".png", 2, True), (".exr", 2, True), (".png", 8, True),
-                                                     (".exr", 8, True), (".png", 2, False)])
+@pytest.mark.parametrize(
+    "suffix, threads, fitted",
+    [(".png", 2, True), (".exr", 2, True), (".png", 8, True), (".exr", 8, True), (".png", 2, False)],
+)
 def test_the_memory_estimate_covers_the_peak(doublet, tmp_path, fresh_cache, suffix, threads, fitted):
     from solas_mi.imageio import write_exr, write_png
     from solas_mi.psf.grid import psf_grid
@@ -47,8 +50,12 @@ def test_the_memory_estimate_covers_the_peak(doublet, tmp_path, fresh_cache, suf
     else:
         write_exr(path, {c: image[..., i] for i, c in enumerate("RGB")})
     for _ in range(1 if fitted else 2):  # (the first run of a cached case fills the cache)
-        out = subprocess.run([sys.executable, "-c", PEAK, str(path), str(tmp_path / "grid.exr"),
-                              str(tmp_path / "o.exr"), str(threads)], capture_output=True, text=True, check=True).stdout.split()
+        out = subprocess.run(
+            [sys.executable, "-c", PEAK, str(path), str(tmp_path / "grid.exr"), str(tmp_path / "o.exr"), str(threads)],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.split()
     estimate, peak = float(out[0]), int(out[-1])
     assert peak <= estimate <= 1.5 * peak, f"estimate {estimate / 1e6:.0f} MB, peak {peak / 1e6:.0f} MB"
 
@@ -60,6 +67,9 @@ def test_a_tiny_field_range_is_refused_before_allocating(doublet):
     from solas_mi.psf.grid import psf_grid
 
     grid = psf_grid(doublet, grid=(2, 2), wavelengths_nm=[531.0], field_range_deg=1e-7, size=32, pupil_samples=16)
-    with pytest.raises(SolasError, match=r"32-sample windows of .* um span .* pixels of this 64x48 image.*"
-                                         r"kernels of \d+ px exceed 2049 px"):
+    with pytest.raises(
+        SolasError,
+        match=r"32-sample windows of .* um span .* pixels of this 64x48 image.*"
+        r"kernels of \d+ px exceed 2049 px",
+    ):
         degrade(np.ones((48, 64)), grid)

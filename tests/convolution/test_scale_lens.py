@@ -1,6 +1,7 @@
 """A lens scaled to the frame camera's focal length (`optics.scale`): the paraxial scaling laws (EFL and
 pupils scale, the f-number does not, geometric blur scales in mm, so it is the same in pixels of the
 camera's focal length) and the batch option that asks for it."""
+
 import math
 from dataclasses import replace
 
@@ -25,7 +26,7 @@ def test_paraxial_scaling_laws(doublet, factor):
     assert b.f_number == pytest.approx(a.f_number, rel=1e-9)
     assert b.working_f_number == pytest.approx(a.working_f_number, rel=1e-9)
     sa, sb = spot(doublet, (0.0, 1.5), 531.0), spot(scaled(doublet, factor), (0.0, 1.5), 531.0)
-    rms = [math.sqrt(np.mean(s.x_um ** 2 + s.y_um ** 2)) for s in (sa, sb)]
+    rms = [math.sqrt(np.mean(s.x_um**2 + s.y_um**2)) for s in (sa, sb)]
     assert rms[1] == pytest.approx(factor * rms[0], rel=1e-6)  # geometric blur scales with the lens
 
 
@@ -34,7 +35,7 @@ def test_every_sag_scales_with_the_lens(doublet):
     lens = replace(doublet, surfaces=(s, *doublet.surfaces[1:]))
     big = scaled(lens, 2.5).surfaces[0]
     r = np.linspace(0.0, s.semi_diameter, 9)
-    assert np.allclose(sag((2.5 * r) ** 2, **big.shape), 2.5 * sag(r ** 2, **s.shape), rtol=1e-12, atol=1e-15)
+    assert np.allclose(sag((2.5 * r) ** 2, **big.shape), 2.5 * sag(r**2, **s.shape), rtol=1e-12, atol=1e-15)
     assert big.diameter == 2.5 * s.diameter and scaled(lens, 2.5).hash != lens.hash
 
 
@@ -43,7 +44,9 @@ def test_a_lens_scaled_to_the_camera_blurs_the_same_pixels_geometrically(doublet
     the geometric blur in pixels that the unscaled lens gives on pixels of EFL/fx; the metadata says so."""
     lens, info = scaled_to_focal(doublet, 40000.0, 0.5)
     # the image scale on the doublet's image plane, 0.46 mm inside the paraxial focus: 98.80 mm, EFL 99.95 mm
-    assert info["focal_mm"][1] == pytest.approx(20.0, rel=1e-9) and info["factor"] == pytest.approx(20.0 / 98.80, rel=1e-4)
+    assert info["focal_mm"][1] == pytest.approx(20.0, rel=1e-9) and info["factor"] == pytest.approx(
+        20.0 / 98.80, rel=1e-4
+    )
     assert info["efl_mm"][1] == pytest.approx(info["factor"] * paraxial(doublet).efl_mm, rel=1e-9)
     assert info["f_number"][1] == pytest.approx(info["f_number"][0], rel=1e-9)
     frame = FrameCamera("pinhole", intrinsics=(40000.0, 40000.0, 80.0, 60.0))
@@ -51,13 +54,21 @@ def test_a_lens_scaled_to_the_camera_blurs_the_same_pixels_geometrically(doublet
     point[60, 80] = 1.0
     widths, pitches = [], []
     for lns, pitch in ((doublet, 1.0), (lens, info["factor"])):  # the same PSF samples, scaled
-        grid = psf_grid(lns, grid=(3, 3), wavelengths_nm=[531.0], size=64, pitch_um=pitch, method="geometric",
-                        rays=64, field_range_deg=(0.2, 0.2))
+        grid = psf_grid(
+            lns,
+            grid=(3, 3),
+            wavelengths_nm=[531.0],
+            size=64,
+            pitch_um=pitch,
+            method="geometric",
+            rays=64,
+            field_range_deg=(0.2, 0.2),
+        )
         meta = {}
         out = degrade(point, grid, frame=frame, meta=meta)
         pitches.append(meta["camera"]["pitch_um"])
         c = np.arange(161) - 80
-        widths.append(math.sqrt((out.sum(axis=0) * c ** 2).sum()))
+        widths.append(math.sqrt((out.sum(axis=0) * c**2).sum()))
     assert widths[0] > 2 and widths[1] == pytest.approx(widths[0], rel=1e-3)
     # the scaled lens's pixels are the camera's; the unscaled lens's are its image scale / fx, 5x larger
     assert pitches[1] == pytest.approx(0.5, rel=1e-4) and pitches[0] == pytest.approx(0.5 / info["factor"], rel=1e-3)

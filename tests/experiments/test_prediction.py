@@ -1,6 +1,7 @@
 """The MTF50 predicted from a PSF along an edge normal against closed forms: a Gaussian PSF seen
 through a Gaussian film filter (MTF exp(−2π²σ²f²), σ² the sum of both variances in px²), a point PSF
 through a square pixel (sinc), and an elliptical Gaussian whose width depends on the direction."""
+
 import math
 
 import numpy as np
@@ -18,7 +19,7 @@ def gaussian_psf(sigma_x_um: float, sigma_y_um: float, pitch_um: float = 0.25, s
 
 def gaussian_mtf50(sigma_px: float) -> float:
     """f where exp(−2π²σ²f²) = 1/2 (cy/px)."""
-    return math.sqrt(math.log(2) / (2 * math.pi ** 2 * sigma_px ** 2))
+    return math.sqrt(math.log(2) / (2 * math.pi**2 * sigma_px**2))
 
 
 @pytest.mark.parametrize("normal_deg", [0.0, 5.0, 37.0, 95.0])
@@ -48,7 +49,7 @@ def test_an_elliptical_psf_is_sharper_across_its_narrow_axis():
     assert along_x == pytest.approx(gaussian_mtf50(math.hypot(2.0 / pixel, 0.5)), rel=1e-3)
     assert along_y == pytest.approx(gaussian_mtf50(math.hypot(6.0 / pixel, 0.5)), rel=1e-3)
     # at 30°: the projected variance σx²cos² + σy²sin²
-    s30 = math.sqrt(2.0 ** 2 * math.cos(math.radians(30)) ** 2 + 6.0 ** 2 * math.sin(math.radians(30)) ** 2)
+    s30 = math.sqrt(2.0**2 * math.cos(math.radians(30)) ** 2 + 6.0**2 * math.sin(math.radians(30)) ** 2)
     at30 = mtf50(mtf_along(psf, 0.25, pixel, 30.0, "gaussian"))
     assert at30 == pytest.approx(gaussian_mtf50(math.hypot(s30 / pixel, 0.5)), rel=1e-3)
 

@@ -2,6 +2,7 @@
 doublet's ideal 1280×960 view has enough slanted edges in every annulus; the experiment runs end to end
 at a tiny size and shows the depth-dependent blur (the lens focused near matches the convolution on near
 objects and not on far ones; focused at infinity the other way round)."""
+
 from pathlib import Path
 from types import SimpleNamespace
 
@@ -32,8 +33,9 @@ def test_the_shipped_scene_defaults_to_the_doublets_view():
     import xml.etree.ElementTree as ET
 
     defaults = {d.get("name"): d.get("value") for d in ET.parse(SCENE).getroot().iter("default")}
-    expected = NARROW.params(float(defaults["fov"]), int(defaults["width"]), int(defaults["height"]),
-                             int(defaults["spp"]))
+    expected = NARROW.params(
+        float(defaults["fov"]), int(defaults["width"]), int(defaults["height"]), int(defaults["spp"])
+    )
     assert defaults == expected and NARROW.roll_deg != 0
 
 
@@ -62,17 +64,54 @@ def test_the_doublets_ideal_view_has_edges_in_every_annulus(doublet, tmp_path):
 
 def test_the_experiment_end_to_end(tmp_path):
     out = tmp_path / "street"
-    assert main(["experiment", "street", "-o", str(out), "--size", "160x120", "--spp", "16", "--spp-ideal", "4",
-                 "--variant", "llvm_ad_spectral", "--depth-layers", "1,2"]) == 0
-    for name in ("street.md", "street.csv", "street.json", "ideal.exr", "depth.exr", "interp_32x24.exr",
-                 "patch_8x6.exr", "patch_32x24.exr", "render_infinity.exr", "render_20_m.exr",
-                 "fig5_interp_32x24.png", "error_interp_32x24_vs_render_20_m.png", "interp_32x24_at_140_m.exr"):
+    assert (
+        main(
+            [
+                "experiment",
+                "street",
+                "-o",
+                str(out),
+                "--size",
+                "160x120",
+                "--spp",
+                "16",
+                "--spp-ideal",
+                "4",
+                "--variant",
+                "llvm_ad_spectral",
+                "--depth-layers",
+                "1,2",
+            ]
+        )
+        == 0
+    )
+    for name in (
+        "street.md",
+        "street.csv",
+        "street.json",
+        "ideal.exr",
+        "depth.exr",
+        "interp_32x24.exr",
+        "patch_8x6.exr",
+        "patch_32x24.exr",
+        "render_infinity.exr",
+        "render_20_m.exr",
+        "fig5_interp_32x24.png",
+        "error_interp_32x24_vs_render_20_m.png",
+        "interp_32x24_at_140_m.exr",
+    ):
         assert (out / name).is_file(), name
     report = strict_loads((out / "street.json").read_text())
-    assert {r["image"] for r in report["sfr"]} == {"interp 32x24", "patch 8x6", "patch 32x24", "render infinity",
-                                                   "render 20 m", "interp 32x24 at 140 m",
-                                                   "depth-aware interp 16x12, 3 nodes, focus infinity",
-                                                   "depth-aware interp 16x12, 3 nodes, focus 20 m"}
+    assert {r["image"] for r in report["sfr"]} == {
+        "interp 32x24",
+        "patch 8x6",
+        "patch 32x24",
+        "render infinity",
+        "render 20 m",
+        "interp 32x24 at 140 m",
+        "depth-aware interp 16x12, 3 nodes, focus infinity",
+        "depth-aware interp 16x12, 3 nodes, focus 20 m",
+    }
     assert set(report["seconds"]) >= {"(a) ideal image", "(c) lens render, focus at 20 m"}
     infinity, near = (report["errors"][f"interp 32x24 vs render {f}"] for f in ("infinity", "20 m"))
     assert near["rel_rmse_near"] < near["rel_rmse_far"]  # focused at 20 m: the near post sharp, the far field not
@@ -116,8 +155,27 @@ def test_a_fisheye_is_refused_naming_why_and_what_to_do_instead(tmp_path, capsys
     from solas_mi.cli import main
 
     out = tmp_path / "street"
-    assert main(["experiment", "street", "--lens", "nikkor-fisheye", "-o", str(out), "--size", "64x48", "--spp", "4",
-                 "--spp-ideal", "4", "--depth-layers", "none"]) == 2
+    assert (
+        main(
+            [
+                "experiment",
+                "street",
+                "--lens",
+                "nikkor-fisheye",
+                "-o",
+                str(out),
+                "--size",
+                "64x48",
+                "--spp",
+                "4",
+                "--spp-ideal",
+                "4",
+                "--depth-layers",
+                "none",
+            ]
+        )
+        == 2
+    )
     err = capsys.readouterr().err
     assert err.count("\n") == 1 and "fisheye" in err and "pinhole" in err and "render-image" in err, err
     assert not out.exists()

@@ -1,4 +1,5 @@
 """Step (g) of the street experiment: the helpers whose results can be derived by hand."""
+
 import math
 
 import numpy as np
@@ -13,7 +14,7 @@ def test_axial_depth_is_ray_distance_times_cos():
     d[0, 0] = np.inf
     z = axial_depth(d, 45.0)  # 4 px span ±45°: the corner pixel's tangents (0.75, -0.25)
     assert math.isinf(z[0, 0])
-    assert z[1, 3] == pytest.approx(10.0 / math.sqrt(1 + 0.75 ** 2 + 0.25 ** 2))
+    assert z[1, 3] == pytest.approx(10.0 / math.sqrt(1 + 0.75**2 + 0.25**2))
 
 
 def test_render_noise_is_removed_in_quadrature():
@@ -23,9 +24,9 @@ def test_render_noise_is_removed_in_quadrature():
     near = np.zeros(ref.shape, bool)
     near[:50] = True
     e = denoised_errors(ref + 0.02 * rng.normal(size=ref.shape), (ref + n1, ref + n2), near, ~near)
-    rms = math.sqrt(np.mean(ref ** 2))
+    rms = math.sqrt(np.mean(ref**2))
     assert e["rel_rmse_all"] == pytest.approx(0.02 / rms, rel=0.05)  # the render noise is gone
-    assert e["rel_rmse_all_raw"] == pytest.approx(math.sqrt(0.02 ** 2 + 0.05 ** 2 / 2) / rms, rel=0.05)
+    assert e["rel_rmse_all_raw"] == pytest.approx(math.sqrt(0.02**2 + 0.05**2 / 2) / rms, rel=0.05)
     assert e["near_pixels"] == 10000
 
 
@@ -41,10 +42,11 @@ def test_a_refocused_render_is_in_its_own_focus_unit(doublet, variant_scalar_spe
     solid angle seen from the film centre, integrated over the pupil): refocused at 20 m, the doublet's
     film lies 1.3 % further from the exit pupil and its unit is 2.5 % less, which the paraxial ratio
     (N/N')² gives to 1e-3 (the convolution divided by the file focus's unit came out 2.4 % dark)."""
-    from solas_mi.experiments.street.depth import focus_unit
-    from solas_mi.optics.focus import focused
     from solas_mi.plugins.lens_camera import on_axis_solid_angle
     from solas_mi.plugins.pupil_sampling import PupilSampler
+
+    from solas_mi.experiments.street.depth import focus_unit
+    from solas_mi.optics.focus import focused
 
     lenses = (doublet, focused(doublet, 20e3))
     omega = [on_axis_solid_angle(lens, PupilSampler(lens, 0.5, [531.0]), 531.0) for lens in lenses]

@@ -1,4 +1,5 @@
 """Test inputs of the image processor: the noise-free RAW of a sensor, and a colour chart."""
+
 from functools import lru_cache
 
 import numpy as np
@@ -49,7 +50,7 @@ def chart_image(patch: int = 32) -> np.ndarray:
 
 def patch_means(frame: np.ndarray, patch: int = 32, margin: int = 8) -> np.ndarray:
     """The mean (24, 3) of each patch's centre, `margin` pixels in from its edges."""
-    cells = frame.reshape(4, patch, 6, patch, 3)[:, margin:patch - margin, :, margin:patch - margin]
+    cells = frame.reshape(4, patch, 6, patch, 3)[:, margin : patch - margin, :, margin : patch - margin]
     return cells.mean(axis=(1, 3)).reshape(24, 3)
 
 

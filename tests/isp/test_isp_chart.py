@@ -1,14 +1,14 @@
 """Acceptance: a colour chart through the sensor (noise off) and the image processor recovers the
 chart's colours within a stated CIEDE2000, and a grey card's white balance is neutral."""
+
 import numpy as np
 import pytest
+from isp_inputs import EXPOSURE_S, chart_image, delta_e, ideal_raw, patch_means, unit_irradiance
 
 from solas_mi.imageio import srgb_encode
 from solas_mi.isp.pipeline import ISP, develop
 from solas_mi.sensor.capture import capture
 from solas_mi.sensor.model import SensorModel
-
-from isp_inputs import EXPOSURE_S, chart_image, delta_e, ideal_raw, patch_means, unit_irradiance
 
 # measured worst patch (8-bit rounding and the demosaicer at the patch centres): see docs/details/isp.md
 BOUND_DE = 0.5  # measured 0.34 (mean 0.155) for every pattern and method
@@ -81,8 +81,15 @@ def _cross_talk_curve():
     def bump(peak, width, height):
         return (0.03 + height * np.exp(-0.5 * ((lam - peak) / width) ** 2)).tolist()
 
-    return QECurve.from_table({"wavelength_nm": lam.tolist(), "R": bump(610, 45, 0.45), "G": bump(535, 40, 0.6),
-                               "B": bump(460, 35, 0.5), "C": bump(540, 150, 0.8)})
+    return QECurve.from_table(
+        {
+            "wavelength_nm": lam.tolist(),
+            "R": bump(610, 45, 0.45),
+            "G": bump(535, 40, 0.6),
+            "B": bump(460, 35, 0.5),
+            "C": bump(540, 150, 0.8),
+        }
+    )
 
 
 @pytest.mark.parametrize("cfa", ["RGGB", "RCCB"])

@@ -1,13 +1,14 @@
 """Each stage of the image processor against numbers derived by hand: black level, white-balance
 gains, the sensor's colour correction matrix, the tone curves; the ISP's description and its errors."""
+
 import numpy as np
 import pytest
-
 from isp_inputs import ideal_raw, unit_irradiance
+
 from solas_mi.errors import SolasError
 from solas_mi.isp import black, ccm, tone, white
-from solas_mi.isp.demosaic import METHODS, demosaic
 from solas_mi.isp.camera import Camera
+from solas_mi.isp.demosaic import METHODS, demosaic
 from solas_mi.isp.pipeline import ISP, develop, load_isp
 from solas_mi.sensor.model import SensorModel
 
@@ -93,29 +94,34 @@ def test_metadata_names_every_stage():
     assert list(meta["stages"]) == ["black_level", "white_balance", "demosaic", "ccm", "tone"]
     assert meta["stages"]["white_balance"]["gains"]["R"] == pytest.approx(0.7 * 540 / (0.5 * 610))
     assert meta["stages"]["tone"] == {"curve": "gamma", "gamma": 2.0, "values_clipped": 0, "bits": 8}
-    assert np.all(np.abs(frame[4:-4, 4:-4].astype(int) - round(255 * 0.5 ** 0.5)) <= 1)
+    assert np.all(np.abs(frame[4:-4, 4:-4].astype(int) - round(255 * 0.5**0.5)) <= 1)
     assert ISP.from_dict(meta["isp"]) == ISP(tone="gamma", gamma=2.0)
 
 
 def test_isp_from_toml(tmp_path):
     path = tmp_path / "isp.toml"
-    path.write_text('[isp]\nwhite_balance = {R = 2.0, G = 1.0, B = 1.5}\ndemosaic = "Menon2007"\n'
-                    'demosaic_options = {refining_step = false}\nccm = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]\n')
+    path.write_text(
+        '[isp]\nwhite_balance = {R = 2.0, G = 1.0, B = 1.5}\ndemosaic = "Menon2007"\n'
+        "demosaic_options = {refining_step = false}\nccm = [[1, 0, 0], [0, 1, 0], [0, 0, 1]]\n"
+    )
     isp = load_isp(path)
     assert isp.demosaic == "Menon2007" and isp.ccm == ((1, 0, 0), (0, 1, 0), (0, 0, 1))
     assert load_isp("default") == ISP()
 
 
-@pytest.mark.parametrize("values, message", [
-    ({"demosaic": "AHD"}, "demosaicing method 'AHD' must be one of bilinear, Malvar2004, Menon2007"),
-    ({"demosaic": "bilinear", "demosaic_options": {"refining_step": True}}, "takes no option refining_step"),
-    ({"white_balance": "auto"}, "white_balance 'auto' must be one of"),
-    ({"white_balance": "grey-card"}, "grey_card .* goes with"),
-    ({"ccm": [[1, 0], [0, 1]]}, "must be 3 rows of 3 numbers"),
-    ({"tone": "log"}, "tone curve 'log' must be one of srgb, gamma, none, reinhard"),
-    ({"demosaic": "none"}, "takes ccm = \"none\""),
-    ({"sharpen": 1}, "unknown isp option"),
-])
+@pytest.mark.parametrize(
+    "values, message",
+    [
+        ({"demosaic": "AHD"}, "demosaicing method 'AHD' must be one of bilinear, Malvar2004, Menon2007"),
+        ({"demosaic": "bilinear", "demosaic_options": {"refining_step": True}}, "takes no option refining_step"),
+        ({"white_balance": "auto"}, "white_balance 'auto' must be one of"),
+        ({"white_balance": "grey-card"}, "grey_card .* goes with"),
+        ({"ccm": [[1, 0], [0, 1]]}, "must be 3 rows of 3 numbers"),
+        ({"tone": "log"}, "tone curve 'log' must be one of srgb, gamma, none, reinhard"),
+        ({"demosaic": "none"}, 'takes ccm = "none"'),
+        ({"sharpen": 1}, "unknown isp option"),
+    ],
+)
 def test_bad_isp_refused(values, message):
     with pytest.raises(SolasError, match=message):
         ISP.from_dict(values)

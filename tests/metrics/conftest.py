@@ -1,5 +1,6 @@
 """A synthetic scene of slanted squares whose blur grows from the centre to the periphery, shared by
 the natural-scene SFR tests (the `graded_scene` fixture)."""
+
 import numpy as np
 import pytest
 
@@ -8,9 +9,11 @@ from solas_mi.metrics.targets import Square, slanted_squares
 SHAPE = (480, 640)
 CENTRE = (319.5, 239.5)
 # square centres and the annulus they lie in (R = 400 px: centre < 96 px, middle < 240 px)
-LAYOUT = [((0, 0), 0)] + [((dx, dy), 1) for dx, dy in ((-170, 0), (170, 0), (0, -150), (0, 150))] + [
-    ((dx, dy), 2) for dx in (-250, 250) for dy in (-170, 170)
-]
+LAYOUT = (
+    [((0, 0), 0)]
+    + [((dx, dy), 1) for dx, dy in ((-170, 0), (170, 0), (0, -150), (0, 150))]
+    + [((dx, dy), 2) for dx in (-250, 250) for dy in (-170, 170)]
+)
 SIGMA = (0.8, 1.4, 2.2)  # px per annulus
 
 

@@ -1,4 +1,5 @@
 """The one annulus definition (metrics.annuli): r/R with R the centre-to-corner distance."""
+
 import math
 
 import numpy as np

@@ -1,4 +1,5 @@
 """ISO 12233 e-SFR: accuracy against the analytic MTF of synthetic edges, and the flags."""
+
 import math
 
 import imageio.v3 as iio
@@ -140,8 +141,9 @@ def test_srgb_png_is_linearised(tmp_path, bits):
 
 
 def test_two_edges_or_none_are_rejected():
-    bar = slanted_edge((100, 100), 5.0, 1.0, offset_px=-15) - 0.6 * slanted_edge((100, 100), 5.0, 1.0, offset_px=15,
-                                                                                   low=0.0, high=1.0)
+    bar = slanted_edge((100, 100), 5.0, 1.0, offset_px=-15) - 0.6 * slanted_edge(
+        (100, 100), 5.0, 1.0, offset_px=15, low=0.0, high=1.0
+    )
     res = esfr(bar)
     assert not res.valid and "not one step edge" in res.reason
     noise = 0.5 + 0.01 * np.random.default_rng(0).normal(size=(100, 100))
@@ -178,8 +180,13 @@ def test_user_errors():
     bad[3, 3] = np.nan
     with pytest.raises(SolasError, match="NaN"):
         esfr(bad)
-    for odd, message in [(np.zeros((0, 0)), "too small"), (np.zeros((1, 1)), "too small"), ([], "too small"),
-                         ("roi", "pass linear floats"), (None, "pass linear floats"),
-                         (np.full((16, 16), np.inf), "NaN or infinite")]:
+    for odd, message in [
+        (np.zeros((0, 0)), "too small"),
+        (np.zeros((1, 1)), "too small"),
+        ([], "too small"),
+        ("roi", "pass linear floats"),
+        (None, "pass linear floats"),
+        (np.full((16, 16), np.inf), "NaN or infinite"),
+    ]:
         with pytest.raises(SolasError, match=message):
             esfr(odd)

@@ -28,8 +28,24 @@ def test_target_png_then_auto_sfr(tmp_path, capsys):
 
 def test_square_chart_exr_gives_four_edges(tmp_path, capsys):
     out = tmp_path / "square.exr"
-    assert main(["sfr-target", "-o", str(out), "--shape", "square", "--size", "256x256",
-                 "--angle-deg", "6", "--sigma-px", "1.5"]) == 0
+    assert (
+        main(
+            [
+                "sfr-target",
+                "-o",
+                str(out),
+                "--shape",
+                "square",
+                "--size",
+                "256x256",
+                "--angle-deg",
+                "6",
+                "--sigma-px",
+                "1.5",
+            ]
+        )
+        == 0
+    )
     capsys.readouterr()
     code, data = run_json(capsys, "sfr", str(out), "--json", "--mode", "2017")
     assert code == 0 and len(data["results"]) == 4
@@ -48,11 +64,14 @@ def test_sfr_with_roi_text_and_invalid_edge(tmp_path, capsys):
     assert "invalid" in text and "0°" in text
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["--roi", "1,2,3"], "malformed"),
-    (["--roi", "100,100,64,64"], "leaves"),
-    (["--full-scale", "-1"], "full-scale"),
-])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (["--roi", "1,2,3"], "malformed"),
+        (["--roi", "100,100,64,64"], "leaves"),
+        (["--full-scale", "-1"], "full-scale"),
+    ],
+)
 def test_sfr_user_errors_exit_2(tmp_path, capsys, argv, message):
     out = tmp_path / "edge.png"
     main(["sfr-target", "-o", str(out)])
@@ -72,8 +91,9 @@ def test_ss_sfr_compare_json_and_plot(tmp_path, capsys, graded_scene):
     a, b, plot = tmp_path / "a.exr", tmp_path / "b.exr", tmp_path / "fig.png"
     write_exr(a, {"Y": graded_scene()})
     write_exr(b, {"Y": graded_scene((1.0, 1.4, 1.8))})
-    code, data = run_json(capsys, "ss-sfr", str(a), "--compare", str(b), "--json", "--plot", str(plot),
-                          "--full-scale", "1")
+    code, data = run_json(
+        capsys, "ss-sfr", str(a), "--compare", str(b), "--json", "--plot", str(plot), "--full-scale", "1"
+    )
     assert code == 0 and plot.is_file()
     assert [s["name"] for s in data["annuli"]] == ["centre", "middle", "edge"]
     assert all(s["count"] >= 4 for s in data["annuli"])
@@ -104,4 +124,3 @@ def test_a_negative_noise_seed_is_one_line(tmp_path, capsys):
     err = capsys.readouterr().err
     assert "noise seed -1 must be a whole number ≥ 0" in err and err.count("\n") == 1, err
     assert not out.exists()
-

@@ -1,4 +1,5 @@
 """Natural-scene SFR on a synthetic scene whose blur grows from the centre to the periphery."""
+
 import math
 
 import imageio.v3 as iio
@@ -109,12 +110,21 @@ def test_plot_axes_are_labelled_with_units(tmp_path, sharp, degraded, monkeypatc
     assert all(ax.get_title() for ax in (image, sfr))
 
 
-@pytest.mark.parametrize("image, message", [
-    (np.array([]), "too small"), (np.zeros((0, 0)), "too small"), (np.zeros((1, 1)), "too small"),
-    (np.full((64, 64), np.nan), "NaN or infinite"), (np.full((64, 64), np.inf), "NaN or infinite"),
-    ([[0.5] * 64] * 3, "too small"), ("photo.png", "pass linear floats"), (None, "pass linear floats"),
-    (np.zeros((64, 64), np.uint8), "pass linear floats"), (np.zeros((64, 64, 2)), "H×W×1, H×W×3 or H×W×4"),
-])
+@pytest.mark.parametrize(
+    "image, message",
+    [
+        (np.array([]), "too small"),
+        (np.zeros((0, 0)), "too small"),
+        (np.zeros((1, 1)), "too small"),
+        (np.full((64, 64), np.nan), "NaN or infinite"),
+        (np.full((64, 64), np.inf), "NaN or infinite"),
+        ([[0.5] * 64] * 3, "too small"),
+        ("photo.png", "pass linear floats"),
+        (None, "pass linear floats"),
+        (np.zeros((64, 64), np.uint8), "pass linear floats"),
+        (np.zeros((64, 64, 2)), "H×W×1, H×W×3 or H×W×4"),
+    ],
+)
 def test_odd_images_are_refused_by_name(image, message):
     """Not an image of linear values an edge could be measured in: a SolasError saying so, never a
     TypeError or IndexError, nor a report of no ROIs as if the image had been measured."""

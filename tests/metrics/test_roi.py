@@ -1,4 +1,5 @@
 """The ROI box: "x,y,w,h" text and the crop it selects."""
+
 import numpy as np
 import pytest
 

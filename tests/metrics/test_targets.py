@@ -1,4 +1,5 @@
 """Synthetic slanted-edge targets: exact pixel integrals, analytic MTF50, options."""
+
 import math
 
 import numpy as np
@@ -75,8 +76,9 @@ def test_clipping_and_encoding_options():
 
 
 def test_squares_levels_and_overlap_check():
-    img = slanted_squares((120, 160), [Square(50, 60, 40, 10, 1.0, 0.1), Square(115, 60, 30, -5, 2.0, 0.5)],
-                          background=0.7)
+    img = slanted_squares(
+        (120, 160), [Square(50, 60, 40, 10, 1.0, 0.1), Square(115, 60, 30, -5, 2.0, 0.5)], background=0.7
+    )
     assert img[60, 50] == pytest.approx(0.1, abs=1e-6)
     assert img[60, 115] == pytest.approx(0.5, abs=1e-6)
     assert img[5, 5] == pytest.approx(0.7, abs=1e-12)
@@ -84,9 +86,16 @@ def test_squares_levels_and_overlap_check():
         slanted_squares((100, 100), [Square(40, 50, 40, 0, 1, 0.1), Square(60, 50, 40, 0, 1, 0.1)])
 
 
-@pytest.mark.parametrize("kwargs", [
-    {"shape": (4, 100)}, {"sigma_px": -1.0}, {"noise": -0.1}, {"encoding": "gamma22"}, {"bit_depth": 12},
-])
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        {"shape": (4, 100)},
+        {"sigma_px": -1.0},
+        {"noise": -0.1},
+        {"encoding": "gamma22"},
+        {"bit_depth": 12},
+    ],
+)
 def test_bad_parameters_raise(kwargs):
     with pytest.raises(SolasError):
         slanted_edge(**kwargs)

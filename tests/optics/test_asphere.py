@@ -1,6 +1,7 @@
 """Even aspheres (conic + polynomial) in the lens file, the tracer, the reversed lens and the mesh
 scene, checked against the sag formula, Snell's law with a finite-difference normal, and a conic
 singlet that is stigmatic on axis."""
+
 import numpy as np
 import pytest
 
@@ -14,14 +15,15 @@ ASPHERE = {"radius": 40.0, "conic": -0.6, "aspheric": [-2e-6, 3e-9]}
 
 def single_surface(**surface) -> Lens:
     """One refracting surface into N-BK7, stop on it: traced rays end on the surface itself."""
-    return Lens.from_dict({"surface": [{"thickness": 10.0, "diameter": 20.0, "material": "N-BK7", "stop": True,
-                                        **surface}]})
+    return Lens.from_dict(
+        {"surface": [{"thickness": 10.0, "diameter": 20.0, "material": "N-BK7", "stop": True, **surface}]}
+    )
 
 
 def test_sag_follows_the_formula():
     r = np.linspace(0.0, 9.0, 10)
     assert np.allclose(sag(r * r, 1 / 30.0, -1.0), r * r / 60.0, rtol=0, atol=1e-15)  # paraboloid: c r² / 2
-    assert np.allclose(sag(r * r, 0.0, 0.0, (1e-4, -2e-7)), 1e-4 * r ** 4 - 2e-7 * r ** 6, rtol=0, atol=1e-15)
+    assert np.allclose(sag(r * r, 0.0, 0.0, (1e-4, -2e-7)), 1e-4 * r**4 - 2e-7 * r**6, rtol=0, atol=1e-15)
     c, k = 1 / 30.0, 0.7  # oblate ellipsoid: (1 + k) z² − 2 R z + r² = 0, solved for the near root
     R = 30.0
     direct = (R - np.sqrt(R * R - (1 + k) * r * r)) / (1 + k)
@@ -53,9 +55,15 @@ def test_trace_lands_on_the_asphere_and_obeys_snell():
 def plano_hyperbolic(conic: float) -> Lens:
     """Flat front (the stop), hyperbolic rear face in a glass of n_d = 1.5: for k = −n² a collimated
     axial beam meets in one point at |R| / (n − 1) behind the rear vertex."""
-    return Lens.from_dict({"wavelengths_nm": [587.5618], "surface": [
-        {"radius": 0.0, "thickness": 5.0, "diameter": 20.0, "material": "model:1.5/60", "stop": True},
-        {"radius": -25.0, "conic": conic, "thickness": 50.0, "diameter": 20.0, "material": "AIR"}]})
+    return Lens.from_dict(
+        {
+            "wavelengths_nm": [587.5618],
+            "surface": [
+                {"radius": 0.0, "thickness": 5.0, "diameter": 20.0, "material": "model:1.5/60", "stop": True},
+                {"radius": -25.0, "conic": conic, "thickness": 50.0, "diameter": 20.0, "material": "AIR"},
+            ],
+        }
+    )
 
 
 def test_the_plano_hyperbolic_lens_is_stigmatic_on_axis():
@@ -69,15 +77,28 @@ def test_the_plano_hyperbolic_lens_is_stigmatic_on_axis():
 def test_reversed_asphere_retraces_the_ray():
     """A ray traced through the lens, then back through the reversed lens from its image point,
     leaves along the reversed incoming direction: the reversed lens holds the same surfaces."""
-    lens = Lens.from_dict({"object": {"distance": 200.0}, "surface": [
-        {"thickness": 4.0, "diameter": 20.0, "material": "N-BK7", **ASPHERE},
-        {"radius": -60.0, "conic": -3.0, "aspheric": [1e-5], "thickness": 60.0, "diameter": 20.0, "stop": True}]})
+    lens = Lens.from_dict(
+        {
+            "object": {"distance": 200.0},
+            "surface": [
+                {"thickness": 4.0, "diameter": 20.0, "material": "N-BK7", **ASPHERE},
+                {"radius": -60.0, "conic": -3.0, "aspheric": [1e-5], "thickness": 60.0, "diameter": 20.0, "stop": True},
+            ],
+        }
+    )
     obj = (T.F([0.0, 3.0]), T.F([0.0, -5.0]))
     tr = T.trace(lens, T.launch(lens, None, None, T.F([4.0, 2.0]), T.F([1.0, -3.0]), obj), T.F(0.55))
     ix, iy, _ = T.to_plane(tr, lens.image_z)
     rev = reversed_lens(lens)
-    back = T.Rays(ix, iy, T.F([0.0, 0.0]) - lens.surfaces[-1].thickness + 0.0 * ix, -tr.rays.dx, -tr.rays.dy,
-                  tr.rays.dz, T.F([0.0, 0.0]))
+    back = T.Rays(
+        ix,
+        iy,
+        T.F([0.0, 0.0]) - lens.surfaces[-1].thickness + 0.0 * ix,
+        -tr.rays.dx,
+        -tr.rays.dy,
+        tr.rays.dz,
+        T.F([0.0, 0.0]),
+    )
     out = T.trace(rev, back, T.F(0.55))
     dx, dy, ok = T.to_numpy(out.rays.dx, out.rays.dy, out.ok)
     assert ok.all()
@@ -86,11 +107,17 @@ def test_reversed_asphere_retraces_the_ray():
     assert np.allclose(dx, -v[:, 0], atol=1e-10) and np.allclose(dy, -v[:, 1], atol=1e-10)  # mirrored in z only
 
 
-@pytest.mark.parametrize("surface, match", [
-    ({"conic": "x"}, r"conic = 'x' must be a finite number"),
-    ({"aspheric": [1e-5, "a"]}, r"aspheric = \[1e-05, 'a'\] must be a list of at most 12 finite numbers"),
-    ({"radius": 5.0, "conic": 1.0, "diameter": 9.0}, r"conic 1 with radius 5 mm closes before the clear semi-diameter"),
-])
+@pytest.mark.parametrize(
+    "surface, match",
+    [
+        ({"conic": "x"}, r"conic = 'x' must be a finite number"),
+        ({"aspheric": [1e-5, "a"]}, r"aspheric = \[1e-05, 'a'\] must be a list of at most 12 finite numbers"),
+        (
+            {"radius": 5.0, "conic": 1.0, "diameter": 9.0},
+            r"conic 1 with radius 5 mm closes before the clear semi-diameter",
+        ),
+    ],
+)
 def test_bad_asphere_keys_are_named(surface, match):
     with pytest.raises(SolasError, match=match):
         single_surface(**{"radius": 40.0, **surface})

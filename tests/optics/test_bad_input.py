@@ -1,5 +1,6 @@
 """Bad input at the optics boundary: a SolasError naming the value and what is allowed (one line,
 exit 2, on the command line), never a TypeError or a misleading message."""
+
 import math
 
 import numpy as np
@@ -21,19 +22,25 @@ def test_shipped_lenses_are_the_shipped_folder():
 
 @pytest.mark.parametrize("value", [None, 5, [], 1.5, {"lens": "solas-doublet"}, b"solas-doublet"])
 def test_a_lens_is_a_name_or_a_path(value):
-    with pytest.raises(SolasError, match=r"must be a shipped lens name \(.*solas-doublet.*\) or a path to a lens file "
-                                         r"\(\.toml, \.zmx, \.seq, \.dat\)") as err:
+    with pytest.raises(
+        SolasError,
+        match=r"must be a shipped lens name \(.*solas-doublet.*\) or a path to a lens file "
+        r"\(\.toml, \.zmx, \.seq, \.dat\)",
+    ) as err:
         Lens.load(value)
     assert repr(value) in str(err.value)
 
 
-@pytest.mark.parametrize("given, message", [
-    ("/etc/passwd", "lens file '/etc/passwd' has no lens extension; allowed: .toml, .zmx, .seq, .dat"),
-    ("{tmp}/lens.txt", "has unknown extension '.txt'; allowed: .toml, .zmx, .seq, .dat"),
-    ("{tmp}/folder.toml", "is a folder, not a lens file"),
-    ("{tmp}/missing.zmx", "missing.zmx' does not exist"),
-    ("sub/solas-doublet", "has no lens extension"),  # a path, even one that ends in a shipped name
-])
+@pytest.mark.parametrize(
+    "given, message",
+    [
+        ("/etc/passwd", "lens file '/etc/passwd' has no lens extension; allowed: .toml, .zmx, .seq, .dat"),
+        ("{tmp}/lens.txt", "has unknown extension '.txt'; allowed: .toml, .zmx, .seq, .dat"),
+        ("{tmp}/folder.toml", "is a folder, not a lens file"),
+        ("{tmp}/missing.zmx", "missing.zmx' does not exist"),
+        ("sub/solas-doublet", "has no lens extension"),  # a path, even one that ends in a shipped name
+    ],
+)
 def test_a_name_with_a_separator_is_a_path(tmp_path, given, message):
     (tmp_path / "lens.txt").write_text("[lens]\n")
     (tmp_path / "folder.toml").mkdir()
@@ -83,15 +90,21 @@ def test_focused_takes_numpy_distances(doublet):
     assert focused(doublet, np.int64(20000)) == focused(doublet, 20000.0)
 
 
-@pytest.mark.parametrize("argv, message", [
-    (["lens", "info", "/etc/passwd"], "lens file '/etc/passwd' has no lens extension; allowed: .toml, .zmx, .seq, .dat"),
-    (["lens", "info", "no-such-lens"], "shipped lenses: cooke-triplet, "),
-    (["lens", "info", "{tmp}/folder.toml"], "is a folder, not a lens file"),
-    (["lens", "info", "solas-doublet", "--fields", "0,nan"], "must be a list of y field angles in degrees"),
-    (["lens", "info", "solas-doublet", "--wavelengths", "-5"], "wavelength -5.0 nm must be a positive number"),
-    (["lens", "convert", "/etc/passwd", "-o", "{tmp}/x.toml"], "has no lens extension"),
-    (["lens", "convert", "solas-doublet", "-o", "{tmp}/x.txt"], "unknown extension '.txt'"),
-])
+@pytest.mark.parametrize(
+    "argv, message",
+    [
+        (
+            ["lens", "info", "/etc/passwd"],
+            "lens file '/etc/passwd' has no lens extension; allowed: .toml, .zmx, .seq, .dat",
+        ),
+        (["lens", "info", "no-such-lens"], "shipped lenses: cooke-triplet, "),
+        (["lens", "info", "{tmp}/folder.toml"], "is a folder, not a lens file"),
+        (["lens", "info", "solas-doublet", "--fields", "0,nan"], "must be a list of y field angles in degrees"),
+        (["lens", "info", "solas-doublet", "--wavelengths", "-5"], "wavelength -5.0 nm must be a positive number"),
+        (["lens", "convert", "/etc/passwd", "-o", "{tmp}/x.toml"], "has no lens extension"),
+        (["lens", "convert", "solas-doublet", "-o", "{tmp}/x.txt"], "unknown extension '.txt'"),
+    ],
+)
 def test_cli_lens_errors_are_one_line(tmp_path, capsys, argv, message):
     (tmp_path / "folder.toml").mkdir()
     assert main([a.replace("{tmp}", str(tmp_path)) for a in argv]) == 2
@@ -99,14 +112,29 @@ def test_cli_lens_errors_are_one_line(tmp_path, capsys, argv, message):
     assert message in err and err.count("\n") == 1 and "Traceback" not in err
 
 
-@pytest.mark.parametrize("old, new, message", [
-    ("thickness = 39.496", "thickness = 1e30", r"surface 4 \(Aperture stop\): thickness 1e\+30 mm must lie within ±1e\+15"),
-    ("thickness = 39.496", "thickness = 1e300", r"surface 4 \(Aperture stop\): thickness 1e\+300 mm must lie within"),
-    ("thickness = 6.0", "thickness = -1e300", r"surface 1 \(Surface 1\): thickness -1e\+300 mm must lie within"),
-    ('distance = "infinity"', "distance = 1e300", r"object distance 1e\+300 mm must lie within ±1e\+15 mm, or be "),
-    ("diameter = 5.0", "diameter = 1e300", r"surface 4 \(Aperture stop\): diameter 1e\+300 mm must be positive and at "
-                                           r"most 1e\+15 mm"),
-])
+@pytest.mark.parametrize(
+    "old, new, message",
+    [
+        (
+            "thickness = 39.496",
+            "thickness = 1e30",
+            r"surface 4 \(Aperture stop\): thickness 1e\+30 mm must lie within ±1e\+15",
+        ),
+        (
+            "thickness = 39.496",
+            "thickness = 1e300",
+            r"surface 4 \(Aperture stop\): thickness 1e\+300 mm must lie within",
+        ),
+        ("thickness = 6.0", "thickness = -1e300", r"surface 1 \(Surface 1\): thickness -1e\+300 mm must lie within"),
+        ('distance = "infinity"', "distance = 1e300", r"object distance 1e\+300 mm must lie within ±1e\+15 mm, or be "),
+        (
+            "diameter = 5.0",
+            "diameter = 1e300",
+            r"surface 4 \(Aperture stop\): diameter 1e\+300 mm must be positive and at "
+            r"most 1e\+15 mm",
+        ),
+    ],
+)
 def test_lengths_beyond_any_lens_are_refused_by_name(tmp_path, capsys, old, new, message):
     """An image 1e30 mm behind the stop rendered black (the lens camera NaN), DISZ 1e300 gave lens info a
     TypeError, an object 1e300 mm away an OverflowError: a lens file's lengths are refused past 1e15 mm (an
@@ -134,14 +162,17 @@ def test_a_zemax_image_distance_of_1e300_is_refused_by_name(tmp_path, capsys):
     assert "thickness 1e+300 mm must lie within ±1e+15 mm" in capsys.readouterr().err
 
 
-@pytest.mark.parametrize("key, text", [("name", "evil\x1b[31mRED"), ("description", "a\x1b]0;title\x07"),
-                                       ("name", "two\nlines")])
+@pytest.mark.parametrize(
+    "key, text", [("name", "evil\x1b[31mRED"), ("description", "a\x1b]0;title\x07"), ("name", "two\nlines")]
+)
 def test_a_lens_text_that_would_drive_the_terminal_is_refused(tmp_path, key, text):
     """`lens info` prints a lens's name and description: an escape sequence there would drive the terminal."""
     path = tmp_path / "lens.toml"
     source = (resource_dir("scenes") / "lenses" / "solas_doublet.toml").read_text()
-    lines = [f"{key} = {text!r}".replace("'", '"').replace("\\x", "\\u00") if line.startswith(f"{key} =") else line
-             for line in source.splitlines()]
+    lines = [
+        f"{key} = {text!r}".replace("'", '"').replace("\\x", "\\u00") if line.startswith(f"{key} =") else line
+        for line in source.splitlines()
+    ]
     path.write_text("\n".join(lines))
     with pytest.raises(SolasError, match=f"the {key} .* holds control characters; it must be printable text"):
         Lens.load(path)
@@ -151,7 +182,9 @@ def test_control_characters_of_a_codev_title_become_spaces(tmp_path):
     """CODE V files from Windows hold CP1252 quotes, which read as C1 control codes (the Zemax reader makes
     them spaces too): the title loads, its control characters spaces."""
     path = tmp_path / "lens.seq"
-    path.write_bytes(b"LEN\nTIT '\x93quoted\x94 lens'\nDIM M\nWL 587.6\nEPD 10\nYAN 0\nSO 0 1e10\nS 50 5 BK7_SCHOTT\n"
-                     b"STO\nS -50 45\nSI 0 0\nGO\n")
+    path.write_bytes(
+        b"LEN\nTIT '\x93quoted\x94 lens'\nDIM M\nWL 587.6\nEPD 10\nYAN 0\nSO 0 1e10\nS 50 5 BK7_SCHOTT\n"
+        b"STO\nS -50 45\nSI 0 0\nGO\n"
+    )
     lens = Lens.load(path)
     assert lens.name == "quoted  lens"

@@ -1,6 +1,7 @@
 """Camera models fitted to the lens's real chief-ray mapping (`optics.calibration`): against OpenCV's own
 projection of the written files (a test-only dependency), fitted back from their own data, their files
 read back as written, and bad inputs refused by name with nothing written."""
+
 import math
 
 import cv2  # a test-only dependency: the test extra of pyproject.toml, requirements.lock
@@ -17,13 +18,28 @@ from solas_mi.optics.frame import parse_frame
 from solas_mi.optics.lens import Lens, shipped_lenses
 from solas_mi.optics.pupil import chief_rays
 
-
 COLUMNS, ROWS = 320, 240
 
 # coefficients of each model, every one nonzero, of a camera of about 100 deg half field (the pinhole 60)
 TRUTH = {
-    "opencv-pinhole": dict(fx=800.0, fy=805.0, cx=160.3, cy=119.6, k1=-0.28, k2=0.09, p1=1e-3, p2=-5e-4, k3=-0.012,
-                           k4=0.05, k5=0.01, k6=0.002, s1=2e-4, s2=-1e-4, s3=3e-4, s4=-2e-4),
+    "opencv-pinhole": dict(
+        fx=800.0,
+        fy=805.0,
+        cx=160.3,
+        cy=119.6,
+        k1=-0.28,
+        k2=0.09,
+        p1=1e-3,
+        p2=-5e-4,
+        k3=-0.012,
+        k4=0.05,
+        k5=0.01,
+        k6=0.002,
+        s1=2e-4,
+        s2=-1e-4,
+        s3=3e-4,
+        s4=-2e-4,
+    ),
     "opencv-fisheye": dict(fx=400.0, fy=402.0, cx=160.3, cy=119.6, k1=0.02, k2=-0.01, k3=0.003, k4=-0.0005),
     "ocamcalib": dict(xc=119.6, yc=160.3, c=1.002, d=0.001, e=-0.0015, a0=-400.0, a2=8e-4, a3=-2e-7, a4=3e-10),
     "woodscape": dict(cx=160.3, cy=119.6, aspect_ratio=1.003, k1=400.0, k2=-10.0, k3=5.0, k4=-1.0),
@@ -34,8 +50,9 @@ TRUTH = {
 
 def sphere(top_deg: float, rings: int = 40, spokes: int = 36) -> np.ndarray:
     """Unit directions (camera frame: z forward) on rings of polar angle up to `top_deg`."""
-    theta, phi = np.meshgrid(np.radians(np.linspace(0.0, top_deg, rings)[1:]),
-                             np.linspace(0.0, 2 * np.pi, spokes, endpoint=False))
+    theta, phi = np.meshgrid(
+        np.radians(np.linspace(0.0, top_deg, rings)[1:]), np.linspace(0.0, 2 * np.pi, spokes, endpoint=False)
+    )
     theta, phi = theta.ravel(), phi.ravel()
     return np.stack([np.sin(theta) * np.cos(phi), np.sin(theta) * np.sin(phi), np.cos(theta)], -1)
 
@@ -117,8 +134,19 @@ def test_every_file_reads_back_as_written(name, tmp_path):
 
     m = model(name)
     extra = {"inverse_polynomial": [1.0, 2.0, 3.0]} if name == "ocamcalib" else {}
-    cal = Calibration(name, dict(TRUTH[name]), list(m.params), {}, 0.1, 0.2, [1.0, 2.0], 3.0, 4,
-                      {"lens": "test", "sensor_px": [COLUMNS, ROWS], "wavelength_nm": 587.6}, extra)
+    cal = Calibration(
+        name,
+        dict(TRUTH[name]),
+        list(m.params),
+        {},
+        0.1,
+        0.2,
+        [1.0, 2.0],
+        3.0,
+        4,
+        {"lens": "test", "sensor_px": [COLUMNS, ROWS], "wavelength_nm": 587.6},
+        extra,
+    )
     for suffix in m.formats:
         path = tmp_path / f"c{suffix}"
         path.write_text(write_text(cal, suffix))
@@ -127,15 +155,16 @@ def test_every_file_reads_back_as_written(name, tmp_path):
         assert {k: values[k] for k in m.params} == TRUTH[name]  # bit for bit
 
 
-@pytest.mark.parametrize("name, option", [("opencv-fisheye", "--fisheye"), ("woodscape", "--fisheye"),
-                                          ("opencv-pinhole", "--intrinsics")])
+@pytest.mark.parametrize(
+    "name, option", [("opencv-fisheye", "--fisheye"), ("woodscape", "--fisheye"), ("opencv-pinhole", "--intrinsics")]
+)
 def test_the_frame_options_read_the_files_as_the_model_projects(name, option, tmp_path):
     from solas_mi.optics.calibration.fit import Calibration
 
     m = model(name)
     values = dict(TRUTH[name])
     if name == "opencv-pinhole":  # --intrinsics: a pinhole without distortion
-        values.update({k: 0.0 for k in m.params[4:]})
+        values.update(dict.fromkeys(m.params[4:], 0.0))
     cal = Calibration(name, values, list(m.params), {}, 0.1, 0.2, [1.0, 2.0], 3.0, 4, {"sensor_px": [COLUMNS, ROWS]})
     path = tmp_path / f"c{m.formats[-1]}"
     path.write_text(write_text(cal, m.formats[-1]))
@@ -145,8 +174,9 @@ def test_the_frame_options_read_the_files_as_the_model_projects(name, option, tm
     assert np.stack([cols, rows], -1) == pytest.approx(m.project(values, xyz), abs=1e-9)
     if name == "opencv-pinhole":
         values["k1"] = 0.1
-        path.write_text(write_text(Calibration(name, values, [], {}, 0, 0, [0, 0], 0, 0, {"sensor_px": [1, 1]}),
-                                   ".json"))
+        path.write_text(
+            write_text(Calibration(name, values, [], {}, 0, 0, [0, 0], 0, 0, {"sensor_px": [1, 1]}), ".json")
+        )
         with pytest.raises(SolasError, match="k1 0.1"):
             parse_frame(**{option.lstrip("-"): str(path)})
 
@@ -158,12 +188,36 @@ def test_bad_inputs_are_refused_by_name_and_nothing_is_written(tmp_path, capsys)
     cases = [
         (["nikkor-fisheye", "--model", "opencv-pinhole", "--sensor", "320x240", "--pitch-um", "90"], "opencv-pinhole"),
         (["solas-doublet", "--model", "opencv-fisheye", "--sensor", "4x4", "--pitch-um", "9000"], "fewer than 16"),
-        (["solas-doublet", "--model", "opencv-fisheye", "--sensor", "64x48", "--pitch-um", "5",
-          "--wavelength-nm", "-3"], "-3"),
+        (
+            [
+                "solas-doublet",
+                "--model",
+                "opencv-fisheye",
+                "--sensor",
+                "64x48",
+                "--pitch-um",
+                "5",
+                "--wavelength-nm",
+                "-3",
+            ],
+            "-3",
+        ),
         (["solas-doublet", "--model", "opencv-fisheye", "--sensor", "64x48", "--pitch-um", "0"], "pitch 0"),
         (["solas-doublet", "--model", "woodscape", "--sensor", "64x48", "--pitch-um", "5"], ".json"),
-        (["solas-doublet", "--model", "opencv-fisheye", "--sensor", "64x48", "--pitch-um", "5",
-          "--focus-distance", "-1"], "-1"),
+        (
+            [
+                "solas-doublet",
+                "--model",
+                "opencv-fisheye",
+                "--sensor",
+                "64x48",
+                "--pitch-um",
+                "5",
+                "--focus-distance",
+                "-1",
+            ],
+            "-1",
+        ),
     ]
     for args, named in cases:
         assert main(["lens", "calibrate", *args, "-o", str(out)]) == 2

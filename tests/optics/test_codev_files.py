@@ -2,6 +2,7 @@
 (EFL, BFD, f/#, real chief rays to 1e-9), and a first-order trace written out here (y–nu, from the
 catalogue's indices, independent of `paraxial`) gives the doublet's EFL and BFD; units, curvature
 mode, aspheres, model glass and the system-aperture and field types each in a file written here."""
+
 import math
 
 import numpy as np
@@ -159,8 +160,11 @@ def test_curvature_mode_and_per_surface_commands(tmp_path):
     """CUM: S lines give curvatures; RDY, CUY, THI and GLA on lines of their own give the same lens."""
     base = load(tmp_path, singlet(), "a.seq")
     cum = singlet(mode="CUM").replace(f"STO {R1!r}", f"STO {1 / R1!r}").replace(f"S {R2!r}", f"S {1 / R2!r}")
-    split = singlet().replace(f"STO {R1!r} {T1!r} 1.5:0", f"STO 0 0\nRDY {R1!r}\nTHI {T1!r}\nGLA 1.5:0").replace(
-        f"S {R2!r} 1.0", f"S; CUY {1 / R2!r}; THI 1")
+    split = (
+        singlet()
+        .replace(f"STO {R1!r} {T1!r} 1.5:0", f"STO 0 0\nRDY {R1!r}\nTHI {T1!r}\nGLA 1.5:0")
+        .replace(f"S {R2!r} 1.0", f"S; CUY {1 / R2!r}; THI 1")
+    )
     for text in (cum, split):
         other = load(tmp_path, text, "b.seq")
         assert [s.radius for s in other.surfaces] == pytest.approx([s.radius for s in base.surfaces], rel=1e-12)
@@ -173,24 +177,40 @@ def test_aspheric_terms_and_units(tmp_path):
     mm = load(tmp_path, singlet(second=asp), "mm.seq")
     s = mm.surfaces[1]
     assert s.conic == -0.5 and s.aspheric == (1e-6, -2e-9, 0.0, 3e-15)
-    cm = load(tmp_path, singlet(10.0, "C", system="EPD 2\nYAN 0 10",
-                                second="ASP\nK -0.5\nA 1e-3\nB -2e-4\nD 3e-5\n"), "cm.seq")
+    cm = load(
+        tmp_path,
+        singlet(10.0, "C", system="EPD 2\nYAN 0 10", second="ASP\nK -0.5\nA 1e-3\nB -2e-4\nD 3e-5\n"),
+        "cm.seq",
+    )
     # A (r⁴) scales as length⁻³, B as length⁻⁵, D (r¹⁰) as length⁻⁹
     assert cm.surfaces[1].aspheric == pytest.approx((1e-6, -2e-9, 0.0, 3e-14), rel=1e-12)
     sph = load(tmp_path, singlet(second=asp + "SPH\n"), "sph.seq")
     assert not any(sph.surfaces[1].aspheric) and sph.surfaces[1].conic == 0.0
     # the optimisation codes of the conic and of each coefficient (KC, AC … JC, as CODE V writes them for
     # variables and frozen values alike) say nothing of the surface: the same lens
-    coded = load(tmp_path, singlet(second="ASP\nK -0.5; KC 100\nA 1e-6; AC 100\nB -2e-9; BC 0\nD 3e-15\n"
-                                          "CC 0; DC 100; EC 0; FC 0; GC 0; HC 0; JC 0\n"), "coded.seq")
+    coded = load(
+        tmp_path,
+        singlet(
+            second="ASP\nK -0.5; KC 100\nA 1e-6; AC 100\nB -2e-9; BC 0\nD 3e-15\n"
+            "CC 0; DC 100; EC 0; FC 0; GC 0; HC 0; JC 0\n"
+        ),
+        "coded.seq",
+    )
     assert coded.surfaces == mm.surfaces
     # a surface identifier on each surface (UID, as CODE V 2026 writes) and tolerances name no change
     tagged = singlet(second=asp).replace("SI 0 0", 'SI 0 0\nUID S0 "a1"\nUID S1 "b2"\nDSX S1 0.01\nBTY S2 0.02')
     assert load(tmp_path, tagged, "tagged.seq").surfaces == mm.surfaces
 
 
-@pytest.mark.parametrize("token, name", [("1.699:30.1", "model:1.699/30.1"), ("699000.301000", "model:1.699/30.1"),
-                                         ("'517000.642000'", "model:1.517/64.2"), ("1.62:0", "model:1.62")])
+@pytest.mark.parametrize(
+    "token, name",
+    [
+        ("1.699:30.1", "model:1.699/30.1"),
+        ("699000.301000", "model:1.699/30.1"),
+        ("'517000.642000'", "model:1.517/64.2"),
+        ("1.62:0", "model:1.62"),
+    ],
+)
 def test_model_glass(tmp_path, token, name):
     assert load(tmp_path, singlet(glass=token)).surfaces[0].glass.name == name
 
@@ -211,17 +231,20 @@ def test_field_types(tmp_path):
     assert load(tmp_path, text).surfaces[0].semi_diameter == pytest.approx(500 * math.tan(math.asin(0.02)), rel=1e-12)
 
 
-@pytest.mark.parametrize("insert, match", [
-    ("XDE 0.5\n", r"line \d+, surface S2: XDE: decentred or tilted surfaces are not supported"),
-    ("S -240.0 1.0 XYZ_SCHOTT\n", r"line \d+, surface S3: glass .XYZ_SCHOTT."),  # the surface its own line begins
-    ("ADE 1\n", "ADE: decentred or tilted"),
-    ("REFL\n", "REFL: mirrors"),
-    ("DOE\n", "DOE: diffractive surfaces"),
-    ("RDX 50\n", "RDX: anamorphic"),
-    ("YTO\n", "YTO: toric surfaces"),
-    ("FOO 1\n", "command FOO is not supported"),
-    ("GLA XYZ_SCHOTT\n", "SCHOTT has no glass 'XYZ'"),
-])
+@pytest.mark.parametrize(
+    "insert, match",
+    [
+        ("XDE 0.5\n", r"line \d+, surface S2: XDE: decentred or tilted surfaces are not supported"),
+        ("S -240.0 1.0 XYZ_SCHOTT\n", r"line \d+, surface S3: glass .XYZ_SCHOTT."),  # the surface its own line begins
+        ("ADE 1\n", "ADE: decentred or tilted"),
+        ("REFL\n", "REFL: mirrors"),
+        ("DOE\n", "DOE: diffractive surfaces"),
+        ("RDX 50\n", "RDX: anamorphic"),
+        ("YTO\n", "YTO: toric surfaces"),
+        ("FOO 1\n", "command FOO is not supported"),
+        ("GLA XYZ_SCHOTT\n", "SCHOTT has no glass 'XYZ'"),
+    ],
+)
 def test_refusals_name_the_surface_and_feature(tmp_path, insert, match):
     with pytest.raises(SolasError, match=match):
         load(tmp_path, singlet(second=insert))
@@ -267,18 +290,26 @@ GO
     assert p.efl_mm == pytest.approx(EFL, rel=1e-12) and p.entrance_pupil_diameter_mm == pytest.approx(20.0, rel=1e-12)
     assert lens.field_deg == 10.0 and lens.surfaces[1].aspheric == (1e-7, -2e-11)
     # without RDM, S lines of curvatures (as radii of 0.017 mm they form no real image) are read as curvatures
-    cum = load(tmp_path, text.replace("RDM;LEN", "LEN").replace(f"S     {R1!r}", f"S     {1 / R1!r}")
-               .replace(f"S     {R2!r}", f"S     {1 / R2!r}"), "cum.seq")
+    cum = load(
+        tmp_path,
+        text.replace("RDM;LEN", "LEN")
+        .replace(f"S     {R1!r}", f"S     {1 / R1!r}")
+        .replace(f"S     {R2!r}", f"S     {1 / R2!r}"),
+        "cum.seq",
+    )
     assert [s.radius for s in cum.surfaces] == pytest.approx([R1, R2], rel=1e-12)
     assert "read as curvatures" in cum.description
 
 
-@pytest.mark.parametrize("change, match", [
-    (("STO", "ZOO 2\nSTO"), "ZOO: zoom positions"),
-    (("SO 0 1e10", "PRV\nPWL 550 600\n'X' 1.5\nEND\nSO 0 1e10"), "one index per PWL wavelength \\(2\\)"),
-    (("SO 0 1e10", "PRV\nPWL 550\n'X' SEL 1 2 3\nEND\nSO 0 1e10"), "other dispersion formulas are not supported"),
-    (("SI 0 0", "SI 0 0\nPRV\nPWL 550\n'X' 1.5"), "PRV \\(a private glass catalogue\\) has no END"),
-])
+@pytest.mark.parametrize(
+    "change, match",
+    [
+        (("STO", "ZOO 2\nSTO"), "ZOO: zoom positions"),
+        (("SO 0 1e10", "PRV\nPWL 550 600\n'X' 1.5\nEND\nSO 0 1e10"), "one index per PWL wavelength \\(2\\)"),
+        (("SO 0 1e10", "PRV\nPWL 550\n'X' SEL 1 2 3\nEND\nSO 0 1e10"), "other dispersion formulas are not supported"),
+        (("SI 0 0", "SI 0 0\nPRV\nPWL 550\n'X' 1.5"), "PRV \\(a private glass catalogue\\) has no END"),
+    ],
+)
 def test_refused_systems(tmp_path, change, match):
     with pytest.raises(SolasError, match=match):
         load(tmp_path, singlet(system="FNO 4\nYAN 0 1").replace(*change))
@@ -306,17 +337,21 @@ def test_tem_and_pre_are_where_the_prescription_holds(tmp_path):
     hot = load(tmp_path, text.replace("WL 550", "WL 550\nTEM 60\nPRE 0.9"), "b.seq")
     assert (hot.temperature_c, hot.pressure_kpa) == (60.0, pytest.approx(0.9 * 101.325))
     there = thermal.in_environment(base, 60.0, 0.9 * 101.325)  # automatic apertures aside (solved at 60 °C)
-    assert [(s.radius, s.thickness, s.glass) for s in hot.surfaces] == [(s.radius, s.thickness, s.glass)
-                                                                         for s in there.surfaces]
+    assert [(s.radius, s.thickness, s.glass) for s in hot.surfaces] == [
+        (s.radius, s.thickness, s.glass) for s in there.surfaces
+    ]
     assert paraxial(hot, 550.0).efl_mm == paraxial(there, 550.0).efl_mm != paraxial(base, 550.0).efl_mm
     with pytest.raises(SolasError, match="temperature -300"):
         load(tmp_path, singlet().replace("WL 550", "WL 550\nTEM -300"), "c.seq")
 
 
-@pytest.mark.parametrize("change, match", [
-    (("PIM", "PIM\nCUF 0.01"), "CUF: fringe curvatures"),
-    (("PIM", "PIM\nCIR OBS 2"), "CIR OBS: obscurations"),
-])
+@pytest.mark.parametrize(
+    "change, match",
+    [
+        (("PIM", "PIM\nCUF 0.01"), "CUF: fringe curvatures"),
+        (("PIM", "PIM\nCIR OBS 2"), "CIR OBS: obscurations"),
+    ],
+)
 def test_what_code_v_exports_refused(tmp_path, change, match):
     with pytest.raises(SolasError, match=match):
         load(tmp_path, singlet().replace(*change))
@@ -335,8 +370,11 @@ def test_commands_by_their_first_three_letters(tmp_path):
     does, TITLE and TEMPERATURE are TIT and TEM; a word beginning with a refused command (REFLECT) is
     refused as that one, not read as REF (the reference wavelength)."""
     marked = load(tmp_path, singlet(), "a.seq")
-    words = singlet(system="EPD 20\nYAN 0 10\nTITLE 'words'\nTEMPERATURE 20").replace(
-        f"STO {R1!r}", f"S {R1!r}").replace(f"S {R2!r} 1.0", f"STOP\nS {R2!r} 1.0")
+    words = (
+        singlet(system="EPD 20\nYAN 0 10\nTITLE 'words'\nTEMPERATURE 20")
+        .replace(f"STO {R1!r}", f"S {R1!r}")
+        .replace(f"S {R2!r} 1.0", f"STOP\nS {R2!r} 1.0")
+    )
     worded = load(tmp_path, words, "b.seq")
     assert worded.surfaces == marked.surfaces and worded.name == "words"
     with pytest.raises(SolasError, match="REFL: mirrors are not supported"):
@@ -348,7 +386,7 @@ def test_commands_by_their_first_three_letters(tmp_path):
 def test_vignetting_factors_shape_the_automatic_apertures(tmp_path):
     """Vignetting factors of 0.5 on every side at every field squeeze the beam at the stop to half its
     radius: the automatic semi-diameters are those of the same lens with half the entrance pupil."""
-    lens = f"""RDM
+    lens = """RDM
 WL 550
 YAN 0 8 12
 SO 0 1e10
@@ -455,8 +493,9 @@ def test_private_glass_catalogue(tmp_path):
     written to TOML and read back, the same lens; .zmx, which cannot name them, refuses."""
     bk7 = G.resolve("N-BK7")
     pwl = [float(w) for w in range(1000, 399, -25)]
-    text = PRIVATE.format(pwl=" ".join(map(repr, pwl)), index=" ".join(repr(float(bk7.index(w))) for w in pwl),
-                          glass="MYGLASS")
+    text = PRIVATE.format(
+        pwl=" ".join(map(repr, pwl)), index=" ".join(repr(float(bk7.index(w))) for w in pwl), glass="MYGLASS"
+    )
     lens = load(tmp_path, text)
     ref = load(tmp_path, text.replace("STO 60.0 8.0 MYGLASS", "STO 60.0 8.0 NBK7_SCHOTT"), "ref.seq")
     own = lens.surfaces[0].glass
@@ -467,7 +506,7 @@ def test_private_glass_catalogue(tmp_path):
         assert paraxial(lens, w).efl_mm == pytest.approx(paraxial(ref, w).efl_mm, rel=4e-8)  # Δn / (n − 1)
     glue, lam = lens.materials[1], 0.5875618
     a = (2.36390625, 0.0, 0.025493134, -0.000580235, -0.349933e-5, 0.445404e-7)
-    hand = math.sqrt(a[0] + a[1] * lam ** 2 + sum(k * lam ** (-2 * i) for i, k in enumerate(a[2:], start=1)))
+    hand = math.sqrt(a[0] + a[1] * lam**2 + sum(k * lam ** (-2 * i) for i, k in enumerate(a[2:], start=1)))
     assert glue.index(587.5618) == pytest.approx(hand, abs=1e-15)
     with pytest.raises(SolasError, match="outside glass MYGLASS's valid range 400-1000 nm"):
         own.index(1064.0)
@@ -483,8 +522,9 @@ def test_private_glass_in_the_dr_jit_tracer(tmp_path):
 
     from solas_mi.optics.tracer import refractive_index
 
-    own = G.own_material("T", {"wavelengths_nm": [400.0, 500.0, 550.0, 700.0, 900.0],
-                               "index": [1.53, 1.52, 1.517, 1.512, 1.509]}, "test")
+    own = G.own_material(
+        "T", {"wavelengths_nm": [400.0, 500.0, 550.0, 700.0, 900.0], "index": [1.53, 1.52, 1.517, 1.512, 1.509]}, "test"
+    )
     waves = np.linspace(400.0, 900.0, 41)
     traced = refractive_index(own, dr.llvm.Float64(waves / 1000.0))
     assert np.asarray(traced) == pytest.approx(own.index(waves), abs=1e-15)

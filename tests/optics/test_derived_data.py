@@ -1,5 +1,6 @@
 """Derived lens data cannot go stale: paraxial data are memoised by the lens's content, so a lens
 changed with `dataclasses.replace` or `focused` always gets its own data."""
+
 import math
 from dataclasses import fields, replace
 
@@ -33,12 +34,15 @@ def test_a_replaced_object_distance_gets_fresh_data(doublet):
 
 
 def _last_thickness(lens):
-    return replace(lens, surfaces=lens.surfaces[:-1] + (replace(lens.surfaces[-1], thickness=lens.surfaces[-1].thickness
-                                                                + 0.5),))
+    return replace(
+        lens, surfaces=lens.surfaces[:-1] + (replace(lens.surfaces[-1], thickness=lens.surfaces[-1].thickness + 0.5),)
+    )
 
 
 def _first_radius(lens):
-    return replace(lens, surfaces=(replace(lens.surfaces[0], radius=lens.surfaces[0].radius * 1.01),) + lens.surfaces[1:])
+    return replace(
+        lens, surfaces=(replace(lens.surfaces[0], radius=lens.surfaces[0].radius * 1.01),) + lens.surfaces[1:]
+    )
 
 
 def _first_glass(lens):

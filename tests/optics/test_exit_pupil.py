@@ -1,5 +1,6 @@
 """Exit-pupil bounds per film radius (`optics.exit_pupil`): the table a sensor samples from must hold
 every ray that leaves the lens, at every radius between its rows."""
+
 import numpy as np
 import pytest
 
@@ -43,8 +44,9 @@ def test_every_passing_ray_lies_inside_the_bound(name):
 def test_the_ellipse_between_two_rows_holds_both():
     """Rows' ellipses with different centres: the bound between them is an ellipse holding both (the
     inscribed ellipse of their boxes' union would cut the first circle's top)."""
-    table = PupilBounds(np.array([0.0, 1.0]), np.array([[-1.0, 1.0, -1.0, 1.0], [0.0, 2.0, -1.0, 1.0]]),
-                        np.ones(2, dtype=bool), 0.0)
+    table = PupilBounds(
+        np.array([0.0, 1.0]), np.array([[-1.0, 1.0, -1.0, 1.0], [0.0, 2.0, -1.0, 1.0]]), np.ones(2, dtype=bool), 0.0
+    )
     u0, u1, v0, v1, elliptical = table.at(np.array(0.5))
     assert elliptical == 1
     phi = np.linspace(0, 2 * np.pi, 721)
@@ -100,7 +102,7 @@ def test_bounds_hold_the_ring_of_a_real_disc_and_ring_pupil(monkeypatch):
     gu, gv = (a.ravel() for a in np.meshgrid(g, g))
     ok = E.passes(E.reversed_lens(lens), 0.0, 0.0, gu, gv, 587.5618)
     h = lens.surfaces[-1].thickness  # the film lies this far behind the last vertex plane
-    weight = ok * (h * h / (h * h + gu ** 2 + gv ** 2)) ** 2
+    weight = ok * (h * h / (h * h + gu**2 + gv**2)) ** 2
     d = np.hypot(gu, gv)
     assert weight[(d > 1.9) & (d < 2.2)].sum() > 0.25 * weight.sum() and not ok[(d > 0.4) & (d < 1.9)].any()
 

@@ -2,6 +2,7 @@
 camera lens, the object in its focal plane, as on an MTF bench): the transmitted power of wave optics
 (`pupil_function`) and of ray optics (`geometric`) against a brute-force count of rays from the object
 point over the whole first surface, and the relative illumination against the cos⁴ law's integral."""
+
 import math
 from pathlib import Path
 
@@ -11,7 +12,6 @@ import pytest
 from solas_mi import Lens
 from solas_mi.optics import pupil as P
 from solas_mi.optics import tracer as T
-from solas_mi.optics.illumination import relative_illumination
 from solas_mi.optics.paraxial import paraxial
 from solas_mi.psf import psf
 from solas_mi.psf.geometric import geometric
@@ -33,7 +33,7 @@ def counted_transmission(lens, field_deg, wavelength_nm, samples=1000):
     b = P.Bundle(lens, np.array([[0.0, field_deg]]), np.array([wavelength_nm]), len(ex))
     tr = b.trace(T.F(ex), T.F(ey))
     ok, clipped = T.to_numpy(tr.ok, tr.clipped_by)
-    cos3 = d ** 3 / (ex ** 2 + (ey - point) ** 2 + d * d) ** 1.5
+    cos3 = d**3 / (ex**2 + (ey - point) ** 2 + d * d) ** 1.5
     power = float(np.sum(cos3[ok & (clipped == 0)])) * step * step / (d * d)
     half = math.atan(0.5 * p.entrance_pupil_diameter_mm / (p.entrance_pupil_z_mm + d))
     return power / (2.0 * math.pi * (1.0 - math.cos(half)))
@@ -61,7 +61,9 @@ def test_the_rim_aim_starts_from_the_beam_on_the_first_surface():
     entrance pupil's radius at infinity, its cone from the object point cut by z = 0 for a finite object."""
     lens = Lens.load(STIFF / "collimated_double_gauss.toml")
     p = paraxial(lens)
-    footprint = 0.5 * p.entrance_pupil_diameter_mm * lens.object_distance / (p.entrance_pupil_z_mm + lens.object_distance)
+    footprint = (
+        0.5 * p.entrance_pupil_diameter_mm * lens.object_distance / (p.entrance_pupil_z_mm + lens.object_distance)
+    )
     assert P.entrance_pupil_footprint(lens) == pytest.approx(footprint, rel=1e-12)
     assert footprint == pytest.approx(12.5, rel=0.01)  # the collimated beam fills the double Gauss's 25 mm pupil
     far = Lens.load("double-gauss-50mm")

@@ -1,4 +1,5 @@
 """Field types as one strategy (`optics.fields`), chosen once per lens."""
+
 import ast
 from pathlib import Path
 
@@ -27,16 +28,25 @@ def test_no_module_tests_the_kind_of_field_itself():
         if path == FIELDS:
             continue
         for node in ast.walk(tree):
-            name = (node.attr if isinstance(node, ast.Attribute) else node.id if isinstance(node, ast.Name)
-                    else node.name if isinstance(node, ast.alias) else None)
+            name = (
+                node.attr
+                if isinstance(node, ast.Attribute)
+                else node.id
+                if isinstance(node, ast.Name)
+                else node.name
+                if isinstance(node, ast.alias)
+                else None
+            )
             if name in ("polar_field", "POLAR_FIELD_DEG", "PolarField", "AngleField", "POLAR") or (
-                    name == "field_type_for" and path.name != "lens.py"):
+                name == "field_type_for" and path.name != "lens.py"
+            ):
                 bad.append(f"{path.relative_to(ROOT)}:{node.lineno}: {name}")
     assert not bad, "\n".join(bad)
 
 
-@pytest.mark.parametrize("name, kind", [("nikkor-fisheye", POLAR), ("solas-doublet", ANGLE),
-                                        ("wide-angle-22mm", ANGLE)])
+@pytest.mark.parametrize(
+    "name, kind", [("nikkor-fisheye", POLAR), ("solas-doublet", ANGLE), ("wide-angle-22mm", ANGLE)]
+)
 def test_each_lens_has_one_field_type(name, kind):
     assert Lens.load(name).field_type is kind
 
@@ -70,8 +80,13 @@ def test_the_field_of_a_direction_names_that_direction(kind):
 
 def test_each_kind_checks_its_own_limits():
     assert POLAR.check((0.0, 120.0)) == (0.0, 120.0)
-    for kind, field in ((ANGLE, (0.0, 89.0)), (POLAR, (0.0, 180.0)), (ANGLE, "ab"), (POLAR, (float("nan"), 0.0)),
-                        (ANGLE, None)):
+    for kind, field in (
+        (ANGLE, (0.0, 89.0)),
+        (POLAR, (0.0, 180.0)),
+        (ANGLE, "ab"),
+        (POLAR, (float("nan"), 0.0)),
+        (ANGLE, None),
+    ):
         with pytest.raises(SolasError, match="field"):
             kind.check(field)
 

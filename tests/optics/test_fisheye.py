@@ -1,5 +1,6 @@
 """The shipped fisheye (nikkor-fisheye, US 7,161,746 B2): published focal length and f-number,
 polar fields up to 90°, and real chief rays aimed through the stop centre by continuation."""
+
 import numpy as np
 import pytest
 
@@ -27,8 +28,18 @@ def test_published_efl_and_f_number(fisheye):
 
 
 # The patent's n_d / V_d per element (US 7,161,746 B2), in file order.
-PATENT_GLASS = [(1.62041, 60.29), (1.81600, 46.63), (1.72000, 43.69), (1.77250, 49.61), (1.72825, 28.46),
-                (1.51742, 52.42), (1.83481, 42.72), (1.84666, 23.78), (1.49700, 81.61), (1.65160, 58.54)]
+PATENT_GLASS = [
+    (1.62041, 60.29),
+    (1.81600, 46.63),
+    (1.72000, 43.69),
+    (1.77250, 49.61),
+    (1.72825, 28.46),
+    (1.51742, 52.42),
+    (1.83481, 42.72),
+    (1.84666, 23.78),
+    (1.49700, 81.61),
+    (1.65160, 58.54),
+]
 
 
 def test_the_glasses_are_vendor_glasses_of_the_patents_nd_vd(fisheye):
@@ -57,8 +68,13 @@ def test_scaled_to_10_5_mm_the_image_circle_is_the_products_diagonal(fisheye):
     h = chief_rays_height(fisheye, ninety)
     assert abs(h / half_diagonal - 1.0) < 0.02
     k = 10.5 / 9.8995
-    printed = replace(fisheye, surfaces=tuple(replace(s, radius=s.radius / k, thickness=s.thickness / k,
-                                                      diameter=s.diameter / k) for s in fisheye.surfaces))
+    printed = replace(
+        fisheye,
+        surfaces=tuple(
+            replace(s, radius=s.radius / k, thickness=s.thickness / k, diameter=s.diameter / k)
+            for s in fisheye.surfaces
+        ),
+    )
     assert paraxial(printed, LINE_D).efl_mm == pytest.approx(9.8995, rel=1e-4)
     assert chief_rays_height(printed, ninety) / half_diagonal < 0.94
 
@@ -126,7 +142,11 @@ def test_polar_lens_with_an_aspheric_first_surface_is_refused(tmp_path):
     conic there is refused when the lens is read, not met later as a field the lens cannot image."""
     from solas_mi.resources import resource_dir
 
-    text = (resource_dir("scenes") / "lenses" / "nikkor_fisheye.toml").read_text().replace("radius = 90.1559", "radius = 90.1559\nconic = -0.5", 1)
+    text = (
+        (resource_dir("scenes") / "lenses" / "nikkor_fisheye.toml")
+        .read_text()
+        .replace("radius = 90.1559", "radius = 90.1559\nconic = -0.5", 1)
+    )
     assert "conic = -0.5" in text
     (tmp_path / "fe.toml").write_text(text)
     with pytest.raises(SolasError, match="surface 1 .* conic or asphere; a lens of polar fields"):
@@ -139,8 +159,10 @@ def test_psf_at_the_edge_of_the_field(fisheye):
     """At 90° (on the y axis and on the diagonal) the PSF is finite, sums to one and says how much of
     the transmitted light its window holds, converged under pupil refinement; both azimuths give the
     same transmission (symmetry, to the square pupil grid's resolution). 64 pupil samples alias there (the PSF warns so): 256 are needed."""
-    out = [psf(fisheye, f, LINE_D, size=64, pitch_um=2.0, pupil_samples=n)
-           for f, n in [((0.0, 90.0), 256), ((63.6396, 63.6396), 256), ((0.0, 90.0), 512)]]
+    out = [
+        psf(fisheye, f, LINE_D, size=64, pitch_um=2.0, pupil_samples=n)
+        for f, n in [((0.0, 90.0), 256), ((63.6396, 63.6396), 256), ((0.0, 90.0), 512)]
+    ]
     for p in out:
         assert np.isfinite(p.data).all() and p.data.min() >= 0 and abs(p.data.sum() - 1.0) < 1e-12
         assert 0.0 < p.meta["energy_in_grid"] <= 1.0 and 0.0 < p.meta["transmission"] < 1.0

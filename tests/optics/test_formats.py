@@ -1,5 +1,6 @@
 """Lens files in other formats: Zemax .zmx and pbrt .dat written by us and read back give the same
 lens; hand-written files as other tools write them are read, or refused naming what is wrong."""
+
 import math
 
 import pytest
@@ -83,7 +84,7 @@ def test_aspheric_round_trip_and_units(tmp_path):
     # the system aperture (ENPD 2 cm) sizes the stop, surface 1, as in Zemax: its DIAM 1.2 cm is not the pupil
     assert (s1.radius, s1.thickness, s1.diameter, s1.stop) == pytest.approx((50.0, 6.0, 20.0, True))
     assert s2.radius == pytest.approx(-500.0) and s2.conic == -1.5
-    assert s2.aspheric == pytest.approx((1e-3 * 10 ** -3, -2e-5 * 10 ** -5))  # A4 in cm⁻³ → mm⁻³, A6 in cm⁻⁵ → mm⁻⁵
+    assert s2.aspheric == pytest.approx((1e-3 * 10**-3, -2e-5 * 10**-5))  # A4 in cm⁻³ → mm⁻³, A6 in cm⁻⁵ → mm⁻⁵
     assert lens.wavelengths_nm == pytest.approx((486.1327, 587.5618, 656.2725)) and lens.field_deg == 10.0
     assert lens.image_diameter == pytest.approx(10.0) and math.isinf(lens.object_distance)
     for ext in (".zmx", ".toml"):
@@ -112,8 +113,16 @@ def test_unknown_glass_is_named(tmp_path):
         Lens.load(tmp_path / "other.zmx")
 
 
-@pytest.mark.parametrize("name,key", [("S-LAH59", "OHARA:S-LAH59"), ("TAFD5G", "HOYA:TAFD5G"),
-                                      ("TAFD5F", "HOYA:TAFD5F"), ("H-ZF52", "CDGM:H-ZF52"), ("S-BSL7", "OHARA:S-BSL7")])
+@pytest.mark.parametrize(
+    "name,key",
+    [
+        ("S-LAH59", "OHARA:S-LAH59"),
+        ("TAFD5G", "HOYA:TAFD5G"),
+        ("TAFD5F", "HOYA:TAFD5F"),
+        ("H-ZF52", "CDGM:H-ZF52"),
+        ("S-BSL7", "OHARA:S-BSL7"),
+    ],
+)
 def test_other_vendors_glass_names_load(name, key, tmp_path):
     (tmp_path / "vendor.zmx").write_text(ZMX.format(glass=name))
     lens = Lens.load(tmp_path / "vendor.zmx")
@@ -122,7 +131,7 @@ def test_other_vendors_glass_names_load(name, key, tmp_path):
 
 
 def test_gcat_picks_the_vendor_of_a_shared_name(tmp_path):
-    """"F2" is SCHOTT's, CDGM's and HIKARI's: the file's GCAT line says which; without one, SCHOTT, as
+    """ "F2" is SCHOTT's, CDGM's and HIKARI's: the file's GCAT line says which; without one, SCHOTT, as
     OpticStudio's default (stated in the description); a GCAT naming none of them leaves it ambiguous."""
     path = tmp_path / "f2.zmx"
     path.write_text(ZMX.format(glass="F2"))
@@ -136,7 +145,7 @@ def test_gcat_picks_the_vendor_of_a_shared_name(tmp_path):
         path.write_text(ZMX.format(glass="F2").replace("ENPD 2", f"ENPD 2\nGCAT {gcat}"))
         assert Lens.load(path).surfaces[0].glass.name == key
     lens = Lens.load("solas-doublet")  # written with GCAT SCHOTT and GLAS F2, read back as SCHOTT:F2
-    text = (tmp_path / "doublet.zmx")
+    text = tmp_path / "doublet.zmx"
     lens.save(text)
     assert "GCAT SCHOTT" in text.read_text() and "GLAS F2 " in text.read_text()
     assert [s.glass.name for s in Lens.load(text).surfaces][:2] == ["SCHOTT:N-BK7", "SCHOTT:F2"]
@@ -146,11 +155,17 @@ def test_model_glass_and_refusals(tmp_path):
     path = tmp_path / "model.zmx"
     path.write_text(ZMX.format(glass="___BLANK 1 0 1.5168 64.17 0 0 0 0 0 0 ;"))
     assert Lens.load(path).surfaces[0].glass.name == "model:1.5168/64.17"
-    for old, new, match in [("TYPE EVENASPH", "TYPE TOROIDAL", r"SURF 2 \(line 24\): surface TYPE TOROIDAL is not "
-                             r"supported; allowed: STANDARD, EVENASPH"),
-                            ("PARM 1 0", "PARM 1 0.01", r"PARM 1 \(the r² term\) = 0.01"),
-                            ("UNIT CM", "UNIT FT", r"UNIT 'FT' is not supported"),
-                            ("GLAS N-BK7", "GLAS MIRROR", r"GLAS MIRROR: mirrors are not supported")]:
+    for old, new, match in [
+        (
+            "TYPE EVENASPH",
+            "TYPE TOROIDAL",
+            r"SURF 2 \(line 24\): surface TYPE TOROIDAL is not "
+            r"supported; allowed: STANDARD, EVENASPH",
+        ),
+        ("PARM 1 0", "PARM 1 0.01", r"PARM 1 \(the r² term\) = 0.01"),
+        ("UNIT CM", "UNIT FT", r"UNIT 'FT' is not supported"),
+        ("GLAS N-BK7", "GLAS MIRROR", r"GLAS MIRROR: mirrors are not supported"),
+    ]:
         path.write_text(ZMX.format(glass="N-BK7").replace(old, new))
         with pytest.raises(SolasError, match=match):
             Lens.load(path)

@@ -6,9 +6,15 @@ from solas_mi.optics import glass
 
 # Schott data-sheet values n_d, V_d, typed from the data sheets (not read from the catalogue files).
 SCHOTT = {
-    "N-BK7": (1.51680, 64.17), "SCHOTT:F2": (1.62004, 36.37), "N-SF5": (1.67271, 32.25), "N-SK16": (1.62041, 60.32),
-    "N-LAK9": (1.69100, 54.71), "N-SF11": (1.78472, 25.68), "SCHOTT:F5": (1.60342, 38.03),
-    "N-BAF10": (1.67003, 47.11), "N-SSK8": (1.61773, 49.83),
+    "N-BK7": (1.51680, 64.17),
+    "SCHOTT:F2": (1.62004, 36.37),
+    "N-SF5": (1.67271, 32.25),
+    "N-SK16": (1.62041, 60.32),
+    "N-LAK9": (1.69100, 54.71),
+    "N-SF11": (1.78472, 25.68),
+    "SCHOTT:F5": (1.60342, 38.03),
+    "N-BAF10": (1.67003, 47.11),
+    "N-SSK8": (1.61773, 49.83),
 }
 # What each vendor's formulas reproduce of its stated n_d / V_d (computed at 587.5618 / 486.1327 /
 # 656.2725 nm). Measured worst cases: SCHOTT 4.8e-6 / 0.0087 (N-LAK21, SF6G05), HOYA 5.5e-6 / 0.0088
@@ -20,13 +26,37 @@ SCHOTT = {
 # MISC's tolerance).
 # An entry `fitted` to a data sheet's table of 4-decimal indices (SCHOTT:B270): n_d within
 # half that digit, V_d within what ±5e-5 in n_F and n_C allows (±1e-4 in n_F − n_C ≈ 0.0089: ±0.7).
-TOLERANCE = {"SCHOTT": (1e-5, 0.01), "HOYA": (1e-5, 0.01), "OHARA": (1e-6, 1e-4), "CDGM": (1e-6, 1e-4),
-             "HIKARI": (1e-6, 1e-4), "SUMITA": (4e-5, 0.25), "MISC": (5e-5, 0.05), "CORNING": (1e-6, 1e-4),
-             "LIGHTPATH": (1e-6, 1e-4), "RPO": (1e-6, 1e-4), "ZEON": (1e-6, 1e-4), "OSAKAGASCHEMICAL": (1e-6, 1e-4),
-             "ANGSTROMLINK": (1e-6, 1e-4)}
+TOLERANCE = {
+    "SCHOTT": (1e-5, 0.01),
+    "HOYA": (1e-5, 0.01),
+    "OHARA": (1e-6, 1e-4),
+    "CDGM": (1e-6, 1e-4),
+    "HIKARI": (1e-6, 1e-4),
+    "SUMITA": (4e-5, 0.25),
+    "MISC": (5e-5, 0.05),
+    "CORNING": (1e-6, 1e-4),
+    "LIGHTPATH": (1e-6, 1e-4),
+    "RPO": (1e-6, 1e-4),
+    "ZEON": (1e-6, 1e-4),
+    "OSAKAGASCHEMICAL": (1e-6, 1e-4),
+    "ANGSTROMLINK": (1e-6, 1e-4),
+}
 FITTED = (5e-5, 0.7)
-COUNTS = {"SCHOTT": 356, "OHARA": 410, "HOYA": 190, "CDGM": 314, "SUMITA": 176, "HIKARI": 363, "MISC": 9, "CORNING": 1,
-          "LIGHTPATH": 10, "RPO": 38, "ZEON": 9, "OSAKAGASCHEMICAL": 3, "ANGSTROMLINK": 3}
+COUNTS = {
+    "SCHOTT": 356,
+    "OHARA": 410,
+    "HOYA": 190,
+    "CDGM": 314,
+    "SUMITA": 176,
+    "HIKARI": 363,
+    "MISC": 9,
+    "CORNING": 1,
+    "LIGHTPATH": 10,
+    "RPO": 38,
+    "ZEON": 9,
+    "OSAKAGASCHEMICAL": 3,
+    "ANGSTROMLINK": 3,
+}
 
 
 @pytest.mark.parametrize("name", sorted(SCHOTT))
@@ -65,18 +95,28 @@ def test_polynomial_formula():
     lam = 0.5875618
     k = [3.275546, -0.014470354, 0.030922062, 0.00073289981, 4.6573307e-06, 1.8242746e-06]
     p = [0, 2, -2, -4, -6, -8]
-    assert g.index(587.5618) == pytest.approx(sum(a * lam ** e for a, e in zip(k, p)) ** 0.5, abs=1e-15)
+    assert g.index(587.5618) == pytest.approx(sum(a * lam**e for a, e in zip(k, p)) ** 0.5, abs=1e-15)
     assert g.index(587.5618) == pytest.approx(1.83481, abs=1e-5)
     import drjit as dr  # the tracer's path: the same formula on Dr.Jit arrays
     from drjit.llvm import Float64
+
     n = g.index_formula(Float64([0.4861327, lam]), dr.sqrt)
     assert list(n) == pytest.approx(list(g.index([486.1327, 587.5618])), abs=1e-14)
 
 
-@pytest.mark.parametrize("name,key", [("S-LAH59", "OHARA:S-LAH59"), ("ohara:s-lah59", "OHARA:S-LAH59"),
-                                      ("TAFD5G", "HOYA:TAFD5G"), ("H-ZF52", "CDGM:H-ZF52"),
-                                      ("E-LASF05", "HIKARI:E-LASF05"), ("K-LaSFn9", "SUMITA:K-LaSFn9"),
-                                      ("BK7", "SCHOTT:N-BK7"), ("N-BAF10", "SCHOTT:N-BAF10")])
+@pytest.mark.parametrize(
+    "name,key",
+    [
+        ("S-LAH59", "OHARA:S-LAH59"),
+        ("ohara:s-lah59", "OHARA:S-LAH59"),
+        ("TAFD5G", "HOYA:TAFD5G"),
+        ("H-ZF52", "CDGM:H-ZF52"),
+        ("E-LASF05", "HIKARI:E-LASF05"),
+        ("K-LaSFn9", "SUMITA:K-LaSFn9"),
+        ("BK7", "SCHOTT:N-BK7"),
+        ("N-BAF10", "SCHOTT:N-BAF10"),
+    ],
+)
 def test_bare_names_resolve_to_one_entry(name, key):
     assert glass.resolve(name).name == key
 
@@ -116,9 +156,12 @@ def test_model_glass_has_given_nd_vd():
 
 
 def test_unknown_glass_is_named():
-    with pytest.raises(SolasError, match=r"unknown glass 'N-BK8'; close: .*SCHOTT:N-BK7.*; allowed: AIR, a catalogue "
-                                         r"glass \(1882 of ANGSTROMLINK, CDGM, CORNING, HIKARI, HOYA, LIGHTPATH, "
-                                         r"MISC, OHARA, OSAKAGASCHEMICAL, RPO, SCHOTT, SUMITA, ZEON"):
+    with pytest.raises(
+        SolasError,
+        match=r"unknown glass 'N-BK8'; close: .*SCHOTT:N-BK7.*; allowed: AIR, a catalogue "
+        r"glass \(1882 of ANGSTROMLINK, CDGM, CORNING, HIKARI, HOYA, LIGHTPATH, "
+        r"MISC, OHARA, OSAKAGASCHEMICAL, RPO, SCHOTT, SUMITA, ZEON",
+    ):
         glass.resolve("N-BK8")
 
 
@@ -140,15 +183,25 @@ def test_outside_valid_range(wavelength):
 
 
 def test_malformed_model_glass():
-    with pytest.raises(SolasError, match=r"model glass 'model:1.2.3/40' must read model:n_d/V_d"):  # not "unknown glass"
+    with pytest.raises(
+        SolasError, match=r"model glass 'model:1.2.3/40' must read model:n_d/V_d"
+    ):  # not "unknown glass"
         glass.resolve("model:1.2.3/40")
 
 
-@pytest.mark.parametrize("name, key", [
-    # precision-moulding (low-Tg) glasses of the lens files of moulded aspheres
-    ("L-BAL35", "OHARA:L-BAL35"), ("L-TIM28", "OHARA:L-TIM28"), ("L-LAH53", "OHARA:L-LAH53"),
-    ("M-TAF1", "HOYA:M-TAF1"), ("MC-TAF1", "HOYA:MC-TAF1"), ("MP-FDS1", "HOYA:MP-FDS1"), ("D-ZK3", "CDGM:D-ZK3"),
-])
+@pytest.mark.parametrize(
+    "name, key",
+    [
+        # precision-moulding (low-Tg) glasses of the lens files of moulded aspheres
+        ("L-BAL35", "OHARA:L-BAL35"),
+        ("L-TIM28", "OHARA:L-TIM28"),
+        ("L-LAH53", "OHARA:L-LAH53"),
+        ("M-TAF1", "HOYA:M-TAF1"),
+        ("MC-TAF1", "HOYA:MC-TAF1"),
+        ("MP-FDS1", "HOYA:MP-FDS1"),
+        ("D-ZK3", "CDGM:D-ZK3"),
+    ],
+)
 def test_moulding_glasses(name, key):
     """Moulded aspheres' glasses resolve by their bare names, the formula giving the catalogue's n_d / V_d."""
     g = glass.resolve(name)
@@ -172,8 +225,16 @@ def test_b270_and_fused_silica():
     where lithography lenses work."""
     b270 = glass.resolve("B270")
     assert b270.name == "SCHOTT:B270"
-    sheet = {435.83: 1.5341, 479.99: 1.5297, 486.13: 1.5292, 546.07: 1.5251, 587.56: 1.5230, 589.29: 1.5229,
-             643.85: 1.5207, 656.27: 1.5203}
+    sheet = {
+        435.83: 1.5341,
+        479.99: 1.5297,
+        486.13: 1.5292,
+        546.07: 1.5251,
+        587.56: 1.5230,
+        589.29: 1.5229,
+        643.85: 1.5207,
+        656.27: 1.5203,
+    }
     assert max(abs(b270.index(w) - n) for w, n in sheet.items()) < 5e-5
     silica = glass.resolve("SILICA")
     assert silica.name == "MISC:SILICA" and glass.resolve("FUSED-SILICA") is silica
@@ -188,9 +249,11 @@ def test_b270_in_the_near_infrared_keeps_opticstudios_dispersion():
     920, 1064 and 1550 nm as at the d line to 1e-6 (the constant K0 alone was fitted), and its dispersion
     is a crown's: n falls with λ, below n_C."""
     k = (2.286575, -8.7334582e-3, 1.1742884e-2, 2.9041756e-4, -1.2506695e-5, 9.2646253e-7)
+
     def opticstudio(nm):
         lam = nm / 1000.0
-        return np.sqrt(sum(c * lam ** p for c, p in zip(k, (0, 2, -2, -4, -6, -8))))
+        return np.sqrt(sum(c * lam**p for c, p in zip(k, (0, 2, -2, -4, -6, -8))))
+
     b270 = glass.resolve("B270")
     # n² differs by the constant ΔK0, so n differs by ΔK0 / (n + n'): nearly constant, exactly so in n².
     shift = b270.index(587.5618) ** 2 - opticstudio(587.5618) ** 2
@@ -221,9 +284,11 @@ def test_obsolete_schott_glasses_answer_to_their_names_only_where_no_other_glass
 def test_table_matching_is_unchanged_by_the_obsolete_glasses(tmp_path):
     """Every catalogue glass's stated (n_d, V_d) and every shipped lens written as a .dat table and read
     back get the same material as from a catalogue without the `by_name` entries."""
+    import tomllib
+
     from solas_mi.optics import pbrt_dat
     from solas_mi.optics.lens import Lens
-    import tomllib
+
     entries = glass._entries(None)
     kept = {k: e for k, e in entries.items() if not e.get("by_name")}
     assert len(entries) - len(kept) == 199
@@ -243,9 +308,14 @@ def test_table_matching_is_unchanged_by_the_obsolete_glasses(tmp_path):
 
 def _inline(entry: dict) -> str:
     """A catalogue entry as a TOML inline table."""
+
     def value(v):
-        return "[" + ", ".join(value(x) for x in v) + "]" if isinstance(v, list) else (
-            '"' + v.replace('"', '\\"') + '"' if isinstance(v, str) else ("true" if v is True else repr(v)))
+        return (
+            "[" + ", ".join(value(x) for x in v) + "]"
+            if isinstance(v, list)
+            else ('"' + v.replace('"', '\\"') + '"' if isinstance(v, str) else ("true" if v is True else repr(v)))
+        )
+
     return "{" + ", ".join(f"{k} = {value(v)}" for k, v in entry.items()) + "}"
 
 
@@ -269,16 +339,33 @@ def test_corning_7980_is_fused_silica():
 
 
 # Moulded glass as its moulder's catalogue gives it (after moulding) and the glass it is moulded from.
-MOULDED = {"LIGHTPATH:D-ZK3M": "CDGM:D-ZK3", "RPO:L-TIM28_MOLD": "OHARA:L-TIM28", "RPO:N-BK7_MOLD": "SCHOTT:N-BK7",
-           "RPO:S-LAL12_MOLD": "OHARA:S-LAL12", "RPO:P-SK57_MOLD": "SCHOTT:P-SK57", "RPO:TAF1_MOLD": "HOYA:TAF1"}
+MOULDED = {
+    "LIGHTPATH:D-ZK3M": "CDGM:D-ZK3",
+    "RPO:L-TIM28_MOLD": "OHARA:L-TIM28",
+    "RPO:N-BK7_MOLD": "SCHOTT:N-BK7",
+    "RPO:S-LAL12_MOLD": "OHARA:S-LAL12",
+    "RPO:P-SK57_MOLD": "SCHOTT:P-SK57",
+    "RPO:TAF1_MOLD": "HOYA:TAF1",
+}
 
 
-@pytest.mark.parametrize("name, key", [
-    ("D-ZK3M", "LIGHTPATH:D-ZK3M"), ("L-TIM28_MOLD", "RPO:L-TIM28_MOLD"), ("C79-80", "CORNING:C79-80"),
-    ("E48R", "ZEON:E48R"), ("OKP4HT", "OSAKAGASCHEMICAL:OKP4HT"), ("PMMA", "MISC:PMMA"), ("POLYCARB", "MISC:POLYCARB"),
-    ("POLYSTYR", "MISC:POLYSTYR"), ("COC", "MISC:COC"), ("F_SILICA", "MISC:SILICA"), ("L-TIM28", "OHARA:L-TIM28"),
-    ("AL-6263-(OKP4HT)", "ANGSTROMLINK:AL-6263-(OKP4HT)"),
-])
+@pytest.mark.parametrize(
+    "name, key",
+    [
+        ("D-ZK3M", "LIGHTPATH:D-ZK3M"),
+        ("L-TIM28_MOLD", "RPO:L-TIM28_MOLD"),
+        ("C79-80", "CORNING:C79-80"),
+        ("E48R", "ZEON:E48R"),
+        ("OKP4HT", "OSAKAGASCHEMICAL:OKP4HT"),
+        ("PMMA", "MISC:PMMA"),
+        ("POLYCARB", "MISC:POLYCARB"),
+        ("POLYSTYR", "MISC:POLYSTYR"),
+        ("COC", "MISC:COC"),
+        ("F_SILICA", "MISC:SILICA"),
+        ("L-TIM28", "OHARA:L-TIM28"),
+        ("AL-6263-(OKP4HT)", "ANGSTROMLINK:AL-6263-(OKP4HT)"),
+    ],
+)
 def test_plastics_and_moulded_glass_names(name, key):
     """The names OpticStudio files use for plastics and moulded glass resolve by themselves (no vendor shares
     them), the moulded variants without taking the name of the glass they are moulded from."""
@@ -317,14 +404,13 @@ def test_calcium_fluoride_daimon():
     (1963, 24 °C; CaF2's index falls about 1e-5 per kelvin) to 5e-5 over 400-1000 nm and in V_d to 0.3."""
     caf2 = glass.resolve("CAF2_DAIMON-20")
     assert caf2.name == "MISC:CAF2_DAIMON-20"
-    b, c = (0.443749998, 0.444930066, 0.150133991, 8.85319946), (0.00178027854, 0.00788536061, 0.0124119491,
-                                                                  2752.28175)
+    b, c = (0.443749998, 0.444930066, 0.150133991, 8.85319946), (0.00178027854, 0.00788536061, 0.0124119491, 2752.28175)
     for nm in (157.6, 587.5618, 2000.0):
         l2 = (nm / 1000) ** 2
-        assert caf2.index(nm) == pytest.approx((1 + sum(bi * l2 / (l2 - ci) for bi, ci in zip(b, c))) ** 0.5,
-                                               abs=1e-15)
-    malitson = glass.Glass("CaF2 Malitson", "sellmeier", ((0.5675888, 0.4710914, 3.8484723),
-                                                          (0.050263605 ** 2, 0.1003909 ** 2, 34.649040 ** 2)))
+        assert caf2.index(nm) == pytest.approx((1 + sum(bi * l2 / (l2 - ci) for bi, ci in zip(b, c))) ** 0.5, abs=1e-15)
+    malitson = glass.Glass(
+        "CaF2 Malitson", "sellmeier", ((0.5675888, 0.4710914, 3.8484723), (0.050263605**2, 0.1003909**2, 34.649040**2))
+    )
     misc = glass.resolve("CAF2")  # OpticStudio's MISC CAF2: Malitson's formula, its C_i squared to 7 digits
     assert misc.name == "MISC:CAF2" and misc.index(587.5618) == pytest.approx(malitson.index(587.5618), abs=2e-7)
     visible = np.linspace(400.0, 1000.0, 31)
@@ -342,7 +428,7 @@ def test_conrady_formula():
     a = (1.47444837, 0.0103147698, 0.00026742387)
     for nm in (400.0, 587.5618, 1550.0):
         lam = nm / 1000
-        assert g.index(nm) == pytest.approx(a[0] + a[1] / lam + a[2] / lam ** 3.5, abs=1e-15)
+        assert g.index(nm) == pytest.approx(a[0] + a[1] / lam + a[2] / lam**3.5, abs=1e-15)
     waves = np.linspace(400.0, 1000.0, 7)
     traced = np.asarray(g.index_formula(dr.llvm.Float64(waves / 1000), dr.sqrt, dr.select))
     assert traced == pytest.approx(g.index(waves), abs=1e-15)

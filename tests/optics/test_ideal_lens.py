@@ -2,6 +2,7 @@
 EFL and BFD of one lens, of two (Gullstrand) and of one before a real singlet, real rays that land at
 f·tan θ and at the conjugate 1/s' = 1/f − 1/s with its magnification, a wavefront without aberration
 (Airy PSF), the TOML and .zmx round trips, and the refusals."""
+
 import math
 
 import numpy as np
@@ -20,9 +21,23 @@ WL = 550.0
 
 def _ideal(f, *, distance="infinity", image=None, diameter=20.0, material="AIR", field=10.0):
     """One ideal lens of focal length `f` (mm) as the stop, image plane `image` mm behind it (default f)."""
-    return Lens.from_dict({"field_deg": field, "wavelengths_nm": [WL], "object": {"distance": distance},
-                           "surface": [{"radius": 0.0, "thickness": image or abs(f), "diameter": diameter,
-                                        "stop": True, "focal_length": f, "material": material}]})
+    return Lens.from_dict(
+        {
+            "field_deg": field,
+            "wavelengths_nm": [WL],
+            "object": {"distance": distance},
+            "surface": [
+                {
+                    "radius": 0.0,
+                    "thickness": image or abs(f),
+                    "diameter": diameter,
+                    "stop": True,
+                    "focal_length": f,
+                    "material": material,
+                }
+            ],
+        }
+    )
 
 
 @pytest.mark.parametrize("f", [50.0, -80.0, 1234.5])
@@ -44,9 +59,14 @@ def test_an_ideal_lens_into_glass_focuses_at_n_prime_f():
 @pytest.mark.parametrize("f1, f2, d", [(50.0, 80.0, 20.0), (-30.0, 25.0, 12.0), (100.0, 100.0, 150.0)])
 def test_two_ideal_lenses_follow_gullstrand(f1, f2, d):
     """1/F = 1/f1 + 1/f2 − d/(f1 f2); the back focus F (1 − d/f1) behind the second lens."""
-    lens = Lens.from_dict({"surface": [
-        {"radius": 0.0, "thickness": d, "diameter": 10.0, "stop": True, "focal_length": f1},
-        {"radius": 0.0, "thickness": 30.0, "diameter": 60.0, "focal_length": f2}]})
+    lens = Lens.from_dict(
+        {
+            "surface": [
+                {"radius": 0.0, "thickness": d, "diameter": 10.0, "stop": True, "focal_length": f1},
+                {"radius": 0.0, "thickness": 30.0, "diameter": 60.0, "focal_length": f2},
+            ]
+        }
+    )
     efl = 1.0 / (1.0 / f1 + 1.0 / f2 - d / (f1 * f2))
     p = paraxial(lens, 550.0)
     assert p.efl_mm == pytest.approx(efl, rel=1e-13)
@@ -58,10 +78,15 @@ def test_ideal_lens_before_a_real_singlet_follows_the_thick_lens_formulas():
     the singlet's power (n − 1)/R, its principal planes at its curved vertex and t/n before its flat back,
     combined by Gullstrand's formula with the ideal lens."""
     f, d, radius, t = 120.0, 15.0, 40.0, 6.0
-    lens = Lens.from_dict({"surface": [
-        {"radius": 0.0, "thickness": d, "diameter": 10.0, "stop": True, "focal_length": f},
-        {"radius": radius, "thickness": t, "diameter": 20.0, "material": "N-BK7"},
-        {"radius": 0.0, "thickness": 30.0, "diameter": 20.0}]})
+    lens = Lens.from_dict(
+        {
+            "surface": [
+                {"radius": 0.0, "thickness": d, "diameter": 10.0, "stop": True, "focal_length": f},
+                {"radius": radius, "thickness": t, "diameter": 20.0, "material": "N-BK7"},
+                {"radius": 0.0, "thickness": 30.0, "diameter": 20.0},
+            ]
+        }
+    )
     n = lens.surfaces[1].glass.index(WL)
     phi_b = (n - 1.0) / radius
     efl = 1.0 / (1.0 / f + phi_b - d * phi_b / f)
@@ -81,7 +106,7 @@ def _pencil(lens, tan_y, object_point=None, wavelength_um=WL / 1000.0):
         rays = T.launch(lens, F(0.0 * ex), F(0.0 * ex), F(ex), F(ey), (F(object_point[0]), F(object_point[1])))
     traced = T.trace(lens, rays, F(wavelength_um))
     x, y, opl = T.to_numpy(*T.to_plane(traced, lens.image_z))
-    ok, = T.to_numpy(traced.ok)
+    (ok,) = T.to_numpy(traced.ok)
     return x, y, opl, ok
 
 
@@ -116,9 +141,15 @@ def test_a_pencil_through_diverging_and_converging_ideal_lenses_is_stigmatic():
     meet in one point with one optical path, at the EFL's image height."""
     efl = 1.0 / (1.0 / -50.0 + 1.0 / 40.0 - 20.0 / (-50.0 * 40.0))
     bfd = efl * (1.0 + 20.0 / 50.0)
-    lens = Lens.from_dict({"wavelengths_nm": [WL], "surface": [
-        {"radius": 0.0, "thickness": 20.0, "diameter": 14.0, "stop": True, "focal_length": -50.0},
-        {"radius": 0.0, "thickness": bfd, "diameter": 60.0, "focal_length": 40.0}]})
+    lens = Lens.from_dict(
+        {
+            "wavelengths_nm": [WL],
+            "surface": [
+                {"radius": 0.0, "thickness": 20.0, "diameter": 14.0, "stop": True, "focal_length": -50.0},
+                {"radius": 0.0, "thickness": bfd, "diameter": 60.0, "focal_length": 40.0},
+            ],
+        }
+    )
     tan = math.tan(math.radians(8.0))
     _x, y, opl, ok = _pencil(lens, tan)
     assert ok.all()
@@ -161,10 +192,15 @@ def test_toml_round_trip_keeps_the_focal_length(tmp_path):
 
 
 def test_zmx_round_trip_and_reading_paraxial(tmp_path):
-    lens = Lens.from_dict({"surface": [
-        {"radius": 0.0, "thickness": 10.0, "diameter": 12.0, "stop": True, "focal_length": 80.0},
-        {"radius": 30.0, "thickness": 4.0, "diameter": 16.0, "material": "N-BK7"},
-        {"radius": 0.0, "thickness": 40.0, "diameter": 16.0}]})
+    lens = Lens.from_dict(
+        {
+            "surface": [
+                {"radius": 0.0, "thickness": 10.0, "diameter": 12.0, "stop": True, "focal_length": 80.0},
+                {"radius": 30.0, "thickness": 4.0, "diameter": 16.0, "material": "N-BK7"},
+                {"radius": 0.0, "thickness": 40.0, "diameter": 16.0},
+            ]
+        }
+    )
     path = lens.save(tmp_path / "ideal.zmx")
     text = path.read_text()
     assert "TYPE PARAXIAL" in text and "PARM 1 80.0" in text and "PARM 2 1" in text
@@ -176,9 +212,29 @@ def test_zmx_round_trip_and_reading_paraxial(tmp_path):
 def test_zmx_paraxial_in_cm_with_integrate_mode_says_its_opd_is_taken_perfect(tmp_path):
     """UNIT CM scales PARM 1 (the focal length); OPD mode 0 (integrate) is read as perfect, and the lens's
     description says so; a nonzero CURV on a PARAXIAL surface is ignored, as Zemax does."""
-    text = "\n".join(["UNIT CM X W X CM MR CPMM", "ENPD 1", "WAVM 1 0.55 1", "SURF 0", "  DISZ INFINITY",
-                      "SURF 1", "  TYPE PARAXIAL", "  CURV 0.5", "  STOP", "  PARM 1 5", "  PARM 2 0", "  DISZ 5",
-                      "  DIAM 1 1 0 0 1 \"\"", "SURF 2", "  TYPE STANDARD", "  DISZ 0"]) + "\n"
+    text = (
+        "\n".join(
+            [
+                "UNIT CM X W X CM MR CPMM",
+                "ENPD 1",
+                "WAVM 1 0.55 1",
+                "SURF 0",
+                "  DISZ INFINITY",
+                "SURF 1",
+                "  TYPE PARAXIAL",
+                "  CURV 0.5",
+                "  STOP",
+                "  PARM 1 5",
+                "  PARM 2 0",
+                "  DISZ 5",
+                '  DIAM 1 1 0 0 1 ""',
+                "SURF 2",
+                "  TYPE STANDARD",
+                "  DISZ 0",
+            ]
+        )
+        + "\n"
+    )
     (tmp_path / "cm.zmx").write_text(text)
     lens = Lens.load(tmp_path / "cm.zmx")
     assert lens.surfaces[0].focal_length == 50.0 and lens.surfaces[0].radius == 0.0
@@ -190,21 +246,29 @@ def test_zmx_paraxial_in_cm_with_integrate_mode_says_its_opd_is_taken_perfect(tm
 
 
 def test_reversed_lens_keeps_the_ideal_lens():
-    lens = Lens.from_dict({"surface": [
-        {"radius": 0.0, "thickness": 10.0, "diameter": 12.0, "stop": True, "focal_length": 80.0},
-        {"radius": 0.0, "thickness": 40.0, "diameter": 20.0, "focal_length": -120.0}]})
+    lens = Lens.from_dict(
+        {
+            "surface": [
+                {"radius": 0.0, "thickness": 10.0, "diameter": 12.0, "stop": True, "focal_length": 80.0},
+                {"radius": 0.0, "thickness": 40.0, "diameter": 20.0, "focal_length": -120.0},
+            ]
+        }
+    )
     rev = reversed_lens(lens)
     assert [s.focal_length for s in rev.surfaces] == [-120.0, 80.0]
     assert paraxial(rev).efl_mm == pytest.approx(paraxial(lens).efl_mm, rel=1e-13)
 
 
-@pytest.mark.parametrize("row, match", [
-    ({"focal_length": 0.0}, "focal_length = 0.0 must be a finite nonzero number"),
-    ({"focal_length": "50"}, "focal_length = '50' must be a finite nonzero number"),
-    ({"focal_length": float("nan")}, "focal_length = nan must be a finite nonzero number"),
-    ({"focal_length": 50.0, "radius": 100.0}, "an ideal thin lens \\(focal_length\\) is flat"),
-    ({"focal_length": 50.0, "conic": -1.0}, "an ideal thin lens \\(focal_length\\) is flat"),
-])
+@pytest.mark.parametrize(
+    "row, match",
+    [
+        ({"focal_length": 0.0}, "focal_length = 0.0 must be a finite nonzero number"),
+        ({"focal_length": "50"}, "focal_length = '50' must be a finite nonzero number"),
+        ({"focal_length": float("nan")}, "focal_length = nan must be a finite nonzero number"),
+        ({"focal_length": 50.0, "radius": 100.0}, "an ideal thin lens \\(focal_length\\) is flat"),
+        ({"focal_length": 50.0, "conic": -1.0}, "an ideal thin lens \\(focal_length\\) is flat"),
+    ],
+)
 def test_bad_ideal_lens_rows_are_refused(row, match):
     base = {"radius": 0.0, "thickness": 50.0, "diameter": 10.0, "stop": True}
     with pytest.raises(SolasError, match=match):
@@ -220,8 +284,12 @@ def test_writers_that_cannot_hold_it_refuse(tmp_path):
 
 def test_a_virtual_object_before_an_ideal_lens_loads():
     """Once refused, now traced (test_virtual_object): an object 53.4 mm behind the lens, 1/s' = 1/53.4 + 1/50."""
-    lens = Lens.from_dict({"object": {"distance": -53.4}, "surface": [
-        {"radius": 0.0, "thickness": 50.0, "diameter": 10.0, "stop": True, "focal_length": 50.0}]})
+    lens = Lens.from_dict(
+        {
+            "object": {"distance": -53.4},
+            "surface": [{"radius": 0.0, "thickness": 50.0, "diameter": 10.0, "stop": True, "focal_length": 50.0}],
+        }
+    )
     assert lens.virtual_object
     assert paraxial(lens, WL).focus_z_mm == pytest.approx(1.0 / (1.0 / 53.4 + 1.0 / 50.0), rel=1e-14)
 
@@ -231,14 +299,24 @@ def test_metadata_says_where_the_ideal_lens_path_is_exact():
     (the pencil it meets is aberrated); in the PSF metadata, absent for a lens without one."""
     exact = psf(_ideal(50.0, diameter=4.0), (0.0, 0.0), WL, size=32).meta["ideal_lens_path"]
     assert exact.startswith("surface 1: ideal thin lens") and exact.endswith("exact")
-    behind = Lens.from_dict({"surface": [
-        {"radius": 40.0, "thickness": 6.0, "diameter": 20.0, "material": "N-BK7"},
-        {"radius": 0.0, "thickness": 5.0, "diameter": 20.0},
-        {"radius": 0.0, "thickness": 30.0, "diameter": 10.0, "stop": True, "focal_length": 120.0}]})
+    behind = Lens.from_dict(
+        {
+            "surface": [
+                {"radius": 40.0, "thickness": 6.0, "diameter": 20.0, "material": "N-BK7"},
+                {"radius": 0.0, "thickness": 5.0, "diameter": 20.0},
+                {"radius": 0.0, "thickness": 30.0, "diameter": 10.0, "stop": True, "focal_length": 120.0},
+            ]
+        }
+    )
     assert "approximate at surface 3" in psf(behind, (0.0, 0.0), 550.0, size=32).meta["ideal_lens_path"]
-    singlet = Lens.from_dict({"surface": [
-        {"radius": 40.0, "thickness": 6.0, "diameter": 20.0, "material": "N-BK7", "stop": True},
-        {"radius": 0.0, "thickness": 60.0, "diameter": 20.0}]})
+    singlet = Lens.from_dict(
+        {
+            "surface": [
+                {"radius": 40.0, "thickness": 6.0, "diameter": 20.0, "material": "N-BK7", "stop": True},
+                {"radius": 0.0, "thickness": 60.0, "diameter": 20.0},
+            ]
+        }
+    )
     assert "ideal_lens_path" not in psf(singlet, (0.0, 0.0), 550.0, size=32).meta
 
 

@@ -1,6 +1,7 @@
 """Image irradiance of a uniform sky (`optics.illumination.irradiance`) at the edge of every shipped
 lens's field, against two independent routes: the chief-ray form `chief_ray_illumination`, and a
 plain integral over a wide square of the last vertex plane (no search for where the light goes)."""
+
 import numpy as np
 import pytest
 
@@ -75,7 +76,9 @@ def forward_sky(lens, xy, wavelength_nm, fields=200, rays=24, rho=0.15, tan_max=
         ex = (cx[k, None, None] + u[None, None, :] + 0 * u[None, :, None]).ravel()
         ey = (cy[k, None, None] + u[None, :, None] + 0 * u[None, None, :]).ravel()
         bx, by = (np.repeat(a[k], rays * rays) for a in (tx, ty))
-        tr = T.trace(lens, T.launch(lens, T.F(bx), T.F(by), T.F(ex), T.F(ey)), T.F(np.full(len(ex), wavelength_nm * 1e-3)))
+        tr = T.trace(
+            lens, T.launch(lens, T.F(bx), T.F(by), T.F(ex), T.F(ey)), T.F(np.full(len(ex), wavelength_nm * 1e-3))
+        )
         x, y, _ = T.to_plane(tr, lens.image_z)
         ok, x, y = T.to_numpy(tr.ok & (tr.clipped_by == 0), x, y)
         near = ok & ((x - xy[0]) ** 2 + (y - xy[1]) ** 2 < rho * rho)
@@ -149,7 +152,7 @@ def test_relative_illumination_of_a_finite_object_follows_the_cos4_law():
     x, y, area = r * np.cos(phi), r * np.sin(phi), r * (a / n) * (2.0 * np.pi / n)
 
     def power(y0):
-        return float(np.sum(d ** 4 / (x ** 2 + (y - y0) ** 2 + d * d) ** 2 * area))
+        return float(np.sum(d**4 / (x**2 + (y - y0) ** 2 + d * d) ** 2 * area))
 
     theta = np.array([10.0, 20.0, 30.0, 40.0])
     exact = np.array([power(-d * np.tan(np.radians(t))) for t in theta]) / power(0.0)

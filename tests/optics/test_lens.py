@@ -30,8 +30,11 @@ def test_negative_thickness(doublet_spec):
     doublet_spec["surface"][2]["thickness"] = -1.0
     notes = Lens.from_dict(doublet_spec, source="test.toml").overlaps
     assert len(notes) == 1
-    assert re.match(r"surfaces 3 \(Surface 3\) and 4 \(Aperture stop\) overlap across their clear apertures .*"
-                    r"thickness -1 mm\): traced sequentially, as Zemax does", notes[0])
+    assert re.match(
+        r"surfaces 3 \(Surface 3\) and 4 \(Aperture stop\) overlap across their clear apertures .*"
+        r"thickness -1 mm\): traced sequentially, as Zemax does",
+        notes[0],
+    )
 
 
 def test_zero_glass_thickness(doublet_spec):
@@ -81,19 +84,22 @@ def test_hash_follows_optics_not_labels(doublet_spec):
     assert Lens.from_dict(doublet_spec).hash != a.hash
 
 
-@pytest.mark.parametrize("key, value, match", [
-    ("wavelengths_nm", [], r"wavelengths_nm = \[\] must be a non-empty list"),
-    ("wavelengths_nm", ["green"], r"wavelengths_nm = 'green' must be a finite number \(nm\)"),
-    ("field_deg", "two", r"field_deg = 'two' must be a finite number \(degrees\)"),
-    ("object", 5, r"object = 5 must be a table"),
-    ("image", {"diameter": "wide"}, r"image: diameter = 'wide' must be a finite number \(mm\)"),
-    ("surface", [], r"no \[\[surface\]\] entries"),
-    ("surface", [1, 2], r"surface = \[1, 2\]: each surface must be a table"),
-    ("wavelengths_nm", [-531.0], r"wavelengths_nm holds -531; wavelengths must be positive"),
-    ("field_deg", 180.0, r"field_deg = 180 must be a half field angle in \[0, 180\) degrees"),
-    ("field_deg", -2.0, r"field_deg = -2 must be a half field angle"),
-    ("image", {"diameter": -4.0}, r"image diameter -4 mm must be positive"),
-])
+@pytest.mark.parametrize(
+    "key, value, match",
+    [
+        ("wavelengths_nm", [], r"wavelengths_nm = \[\] must be a non-empty list"),
+        ("wavelengths_nm", ["green"], r"wavelengths_nm = 'green' must be a finite number \(nm\)"),
+        ("field_deg", "two", r"field_deg = 'two' must be a finite number \(degrees\)"),
+        ("object", 5, r"object = 5 must be a table"),
+        ("image", {"diameter": "wide"}, r"image: diameter = 'wide' must be a finite number \(mm\)"),
+        ("surface", [], r"no \[\[surface\]\] entries"),
+        ("surface", [1, 2], r"surface = \[1, 2\]: each surface must be a table"),
+        ("wavelengths_nm", [-531.0], r"wavelengths_nm holds -531; wavelengths must be positive"),
+        ("field_deg", 180.0, r"field_deg = 180 must be a half field angle in \[0, 180\) degrees"),
+        ("field_deg", -2.0, r"field_deg = -2 must be a half field angle"),
+        ("image", {"diameter": -4.0}, r"image diameter -4 mm must be positive"),
+    ],
+)
 def test_malformed_entries(doublet_spec, key, value, match):
     doublet_spec[key] = value
     _bad(doublet_spec, match)
@@ -104,15 +110,25 @@ def test_malformed_surface_number(doublet_spec):
     _bad(doublet_spec, r"surface 1 \(Surface 1\): radius = '92.8' must be a finite number \(mm\)")
 
 
-@pytest.mark.parametrize("where, key, value, match", [
-    ("surface", "conik", -1.0, r"surface 1 \(Surface 1\): unknown key conik in the surface table; allowed: label, "
-                               r"radius, thickness, diameter, material, stop, conic, aspheric"),
-    ("lens", "focal", 100.0, r"unknown key focal in the lens table; allowed: name, description"),
-    ("object", "angle", 3.0, r"object: unknown key angle in the object table; allowed: distance, material"),
-    ("image", "width", 3.0, r"image: unknown key width in the image table; allowed: diameter"),
-])
+@pytest.mark.parametrize(
+    "where, key, value, match",
+    [
+        (
+            "surface",
+            "conik",
+            -1.0,
+            r"surface 1 \(Surface 1\): unknown key conik in the surface table; allowed: label, "
+            r"radius, thickness, diameter, material, stop, conic, aspheric",
+        ),
+        ("lens", "focal", 100.0, r"unknown key focal in the lens table; allowed: name, description"),
+        ("object", "angle", 3.0, r"object: unknown key angle in the object table; allowed: distance, material"),
+        ("image", "width", 3.0, r"image: unknown key width in the image table; allowed: diameter"),
+    ],
+)
 def test_unknown_keys_are_named(doublet_spec, where, key, value, match):
-    table = {"lens": doublet_spec, "surface": doublet_spec["surface"][0]}.get(where) or doublet_spec.setdefault(where, {})
+    table = {"lens": doublet_spec, "surface": doublet_spec["surface"][0]}.get(where) or doublet_spec.setdefault(
+        where, {}
+    )
     table[key] = value
     _bad(doublet_spec, match)
 

@@ -1,4 +1,5 @@
 """`solas-mi lens info` (optics.commands)."""
+
 import numpy as np
 import pytest
 
@@ -21,9 +22,8 @@ def test_cli_lens_info_json(capsys):
 def test_lens_info_carries_distortion_and_illumination(name, capsys):
     """Both lenses are rectilinear; the table's heights are the real chief rays' and its distortion is
     their departure from EFL·tanθ; the illumination falls steadily off the axis."""
-    from strict_json import strict_loads
-
     import numpy as np
+    from strict_json import strict_loads
 
     from solas_mi.cli import main
 
@@ -78,7 +78,9 @@ def test_lens_info_of_a_lens_without_field_shows_the_axis_once(tmp_path, capsys)
     from solas_mi.cli import main
 
     path = tmp_path / "singlet.dat"
-    path.write_text("# a singlet behind its stop, pbrt style\n0.0 5.0 1.0 10.0\n60.0 8.0 1.5 20.0\n-240.0 100.0 1.0 20.0\n")
+    path.write_text(
+        "# a singlet behind its stop, pbrt style\n0.0 5.0 1.0 10.0\n60.0 8.0 1.5 20.0\n-240.0 100.0 1.0 20.0\n"
+    )
     assert main(["lens", "info", str(path)]) == 0
     out = capsys.readouterr().out
     assert out.count("chief ray y at 0 deg, paraxial") == 1 and out.count("chief ray y at 0 deg, real") == 1

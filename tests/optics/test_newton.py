@@ -1,6 +1,7 @@
 """The Newton iteration of ray aiming (`optics.newton`) traces only the rays still moving, and a ray's
 solution is its own, whatever rays share its batch; NumPy arrays reach Dr.Jit in memory that does not
 change its kernels."""
+
 import numpy as np
 import pytest
 
@@ -51,7 +52,7 @@ def test_numpy_arrays_reach_dr_jit_without_new_kernels():
         kernels = set()
         for offset in range(8):
             raw = np.arange(100_040, dtype=np.float64)
-            x = T.array(raw[offset:offset + 100_000])
+            x = T.array(raw[offset : offset + 100_000])
             dr.kernel_history()
             dr.eval(dr.sqrt(x * x + 0.123456789))
             kernels |= {str(k["hash"]) for k in dr.kernel_history() if str(k["type"]).endswith("JIT")}

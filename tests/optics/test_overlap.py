@@ -3,6 +3,7 @@ thickness (an optimiser's zero), an air gap whose faces cross inside their clear
 last surface. Each is checked against numbers derived without the code under test: thick-lens and
 ray-transfer-matrix formulas, and a hand trace of one real ray with the signed intersection (a line meets
 a sphere where it meets it, before or after the point it comes from)."""
+
 import math
 import re
 
@@ -76,13 +77,20 @@ def test_negative_glass_element():
     r1, r2, t = -40.0, 60.0, -0.02
     efl = 1.0 / ((N - 1) * (1 / r1 - 1 / r2 + (N - 1) * t / (N * r1 * r2)))
     bfd = efl * (1 - (N - 1) * t / (N * r1))
-    lens = _lens([{"radius": r1, "thickness": t, "diameter": 16.0, "material": "model:1.5", "stop": True},
-                  {"radius": r2, "thickness": 30.0, "diameter": 16.0}])
+    lens = _lens(
+        [
+            {"radius": r1, "thickness": t, "diameter": 16.0, "material": "model:1.5", "stop": True},
+            {"radius": r2, "thickness": 30.0, "diameter": 16.0},
+        ]
+    )
     p = paraxial(lens, WL)
     assert p.efl_mm == pytest.approx(efl, rel=1e-12) and p.bfd_mm == pytest.approx(bfd, rel=1e-12)
     (note,) = lens.overlaps
-    assert re.match(r"surfaces 1 \(surface 1\) and 2 \(surface 2\) overlap within r = [\d.]+ mm .*thickness -0.02 mm"
-                    r"\): traced sequentially, as Zemax does; the lens cannot be built as solid geometry", note)
+    assert re.match(
+        r"surfaces 1 \(surface 1\) and 2 \(surface 2\) overlap within r = [\d.]+ mm .*thickness -0.02 mm"
+        r"\): traced sequentially, as Zemax does; the lens cannot be built as solid geometry",
+        note,
+    )
     r = float(re.search(r"r = ([\d.]+) mm", note).group(1))  # where the faces meet: gap 0 by the sphere sags
     sag = lambda radius: radius - math.copysign(math.sqrt(radius * radius - r * r), radius)  # noqa: E731
     assert t + sag(r2) - sag(r1) == pytest.approx(0.0, abs=1e-4)
@@ -118,8 +126,12 @@ def test_air_gap_crossing_at_the_rim():
 
 def _rod():
     """A plano-convex rod (R 20 mm) whose flat back face, n R / (n − 1) = 60 mm behind, is its focus and image."""
-    return _lens([{"radius": 20.0, "thickness": N * 20.0 / (N - 1), "diameter": 12.0, "material": "model:1.5",
-                   "stop": True}, {"radius": 0.0, "thickness": 0.0, "diameter": 12.0}])
+    return _lens(
+        [
+            {"radius": 20.0, "thickness": N * 20.0 / (N - 1), "diameter": 12.0, "material": "model:1.5", "stop": True},
+            {"radius": 0.0, "thickness": 0.0, "diameter": 12.0},
+        ]
+    )
 
 
 def test_check_stability_expects_the_refusal_of_an_image_on_the_last_surface():
@@ -144,8 +156,10 @@ def test_image_on_a_flat_last_surface():
     p = paraxial(lens, WL)
     assert p.efl_mm == pytest.approx(radius / (N - 1), rel=1e-12) and p.bfd_mm == pytest.approx(0.0, abs=1e-12)
     assert lens.image_z == t
-    assert lens.overlaps == ("the image plane lies on surface 2 (surface 2) (distance 0 mm): traced sequentially, "
-                             "as Zemax does; the lens cannot be built as solid geometry",)
+    assert lens.overlaps == (
+        "the image plane lies on surface 2 (surface 2) (distance 0 mm): traced sequentially, "
+        "as Zemax does; the lens cannot be built as solid geometry",
+    )
     assert _traced(lens, 4.0) == pytest.approx(_hand_ray(4.0, [(0.0, radius, N)], t), abs=1e-9)
     assert focused(lens, math.inf).image_z == t  # focused where it is: the image stays on the surface
     near = focused(lens, 1000.0)  # Newton: the image moves f² / (1000 − f) behind the focal point
@@ -159,14 +173,21 @@ def test_image_on_a_flat_last_surface():
 def test_virtual_image_and_touching_glass_stay_refused():
     """A negative distance to the image is a virtual image; glass of thickness 0 whose faces only touch
     (a biconcave element: its faces part away from the axis) holds no glass and overlaps nothing."""
-    rows = [{"radius": 40.0, "thickness": 3.0, "diameter": 12.0, "material": "model:1.5", "stop": True},
-            {"radius": 0.0, "thickness": -1.0, "diameter": 12.0}]
+    rows = [
+        {"radius": 40.0, "thickness": 3.0, "diameter": 12.0, "material": "model:1.5", "stop": True},
+        {"radius": 0.0, "thickness": -1.0, "diameter": 12.0},
+    ]
     with pytest.raises(SolasError, match=r"distance to the image -1 mm must be positive: .*a virtual image"):
         _lens(rows)
-    rows = [{"radius": -40.0, "thickness": 0.0, "diameter": 12.0, "material": "model:1.5", "stop": True},
-            {"radius": 40.0, "thickness": 50.0, "diameter": 12.0}]
-    with pytest.raises(SolasError, match=r"surface 1 \(surface 1\): thickness 0 mm inside glass model:1.5, its "
-                                         "faces touching without crossing"):
+    rows = [
+        {"radius": -40.0, "thickness": 0.0, "diameter": 12.0, "material": "model:1.5", "stop": True},
+        {"radius": 40.0, "thickness": 50.0, "diameter": 12.0},
+    ]
+    with pytest.raises(
+        SolasError,
+        match=r"surface 1 \(surface 1\): thickness 0 mm inside glass model:1.5, its "
+        "faces touching without crossing",
+    ):
         _lens(rows)
 
 
@@ -220,8 +241,11 @@ def test_zemax_file_and_command_line(tmp_path, capsys):
     assert paraxial(lens, WL).efl_mm == pytest.approx(efl, rel=1e-12)
     for again in (Lens.load(lens.save(tmp_path / "again.zmx")), Lens.load(lens.save(tmp_path / "again.toml"))):
         assert again.surfaces[0].thickness == t and again.overlaps == lens.overlaps
-    with pytest.raises(SolasError, match=r"surfaces 1 \(SURF 1\) and 2 \(SURF 2\) overlap .*pbrt's realistic camera "
-                                         "steps only forward"):
+    with pytest.raises(
+        SolasError,
+        match=r"surfaces 1 \(SURF 1\) and 2 \(SURF 2\) overlap .*pbrt's realistic camera "
+        "steps only forward",
+    ):
         lens.save(tmp_path / "again.dat")
     assert not (tmp_path / "again.dat").exists()
     assert main(["lens", "info", str(path)]) == 0
@@ -233,6 +257,9 @@ def test_zemax_file_and_command_line(tmp_path, capsys):
     from solas_mi.psf import psf
 
     assert psf(lens, (0.0, 0.0), WL, size=16).meta["overlaps"] == list(lens.overlaps)
-    with pytest.raises(SolasError, match=r"lens overlap singlet cannot be built as Mitsuba geometry: surfaces 1 "
-                                         r"\(SURF 1\) and 2 \(SURF 2\) overlap within .* the lens camera"):
+    with pytest.raises(
+        SolasError,
+        match=r"lens overlap singlet cannot be built as Mitsuba geometry: surfaces 1 "
+        r"\(SURF 1\) and 2 \(SURF 2\) overlap within .* the lens camera",
+    ):
         lens_parts(lens)

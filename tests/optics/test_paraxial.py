@@ -1,4 +1,5 @@
 """Paraxial data against DESIGN.md anchors and thin-lens / imaging-equation limits."""
+
 import numpy as np
 import pytest
 
@@ -34,10 +35,12 @@ def test_thin_lens_limit():
     """A thin singlet in air: EFL = 1 / ((n − 1)(1/R1 − 1/R2))."""
     from solas_mi import Lens
 
-    spec = {"surface": [
-        {"radius": 200.0, "thickness": 0.01, "diameter": 1.0, "material": "N-BK7", "stop": True},
-        {"radius": -200.0, "thickness": 200.0, "diameter": 1.0, "material": "AIR"},
-    ]}
+    spec = {
+        "surface": [
+            {"radius": 200.0, "thickness": 0.01, "diameter": 1.0, "material": "N-BK7", "stop": True},
+            {"radius": -200.0, "thickness": 200.0, "diameter": 1.0, "material": "AIR"},
+        ]
+    }
     lens = Lens.from_dict(spec)
     n = lens.surfaces[0].glass.index(587.5618)
     assert paraxial(lens, 587.5618).efl_mm == pytest.approx(1.0 / ((n - 1) * (2 / 200.0)), rel=1e-4)
@@ -75,7 +78,9 @@ def test_far_finite_object_approaches_infinity(doublet_spec):
     far = Lens.from_dict(doublet_spec)
     inf = Lens.from_dict({**doublet_spec, "object": {"distance": "infinity"}})
     fields = [[0.0, 2.0]]
-    assert chief_rays(far, fields, [531.0]).image_xy == pytest.approx(chief_rays(inf, fields, [531.0]).image_xy, abs=2e-5)
+    assert chief_rays(far, fields, [531.0]).image_xy == pytest.approx(
+        chief_rays(inf, fields, [531.0]).image_xy, abs=2e-5
+    )
     # spot patterns lie in the aim plane z = 0 (tilted 2° to the beam), so rim sampling differs slightly
     assert spot(far, (0, 2), 531.0).rms_radius_um() == pytest.approx(spot(inf, (0, 2), 531.0).rms_radius_um(), rel=1e-2)
     t_far = pupil_function(far, [[0.0, 0.0], [0.0, 2.0]], [531.0] * 2, 64).transmission
@@ -94,10 +99,15 @@ def test_exit_pupil_f_number_of_a_lens_telecentric_in_image_space():
     from solas_mi import Lens
 
     def lens(stop_gap):
-        return Lens.from_dict({"surface": [
-            {"radius": 0.0, "thickness": stop_gap, "diameter": 10.0, "material": "AIR", "stop": True},
-            {"radius": 50.0, "thickness": 3.0, "diameter": 20.0, "material": "model:1.5"},
-            {"radius": 0.0, "thickness": 100.0, "diameter": 20.0, "material": "AIR"}]})
+        return Lens.from_dict(
+            {
+                "surface": [
+                    {"radius": 0.0, "thickness": stop_gap, "diameter": 10.0, "material": "AIR", "stop": True},
+                    {"radius": 50.0, "thickness": 3.0, "diameter": 20.0, "material": "model:1.5"},
+                    {"radius": 0.0, "thickness": 100.0, "diameter": 20.0, "material": "AIR"},
+                ]
+            }
+        )
 
     p = paraxial(lens(100.0), 587.5618)
     assert p.exit_pupil_f_number == pytest.approx(10.0, rel=1e-12)
@@ -113,13 +123,21 @@ def test_a_lens_telecentric_in_object_space_is_refused_saying_so():
     from solas_mi import Lens
     from solas_mi.errors import SolasError
 
-    lens = Lens.from_dict({"surface": [
-        {"radius": 50.0, "thickness": 3.0, "diameter": 30.0, "material": "model:1.5"},
-        {"radius": 0.0, "thickness": 98.0, "diameter": 30.0, "material": "AIR"},
-        {"radius": 0.0, "thickness": 60.0, "diameter": 4.0, "material": "AIR", "stop": True}],
-        "object": {"distance": 300.0}})
-    with pytest.raises(SolasError, match=r"stop \(surface 3\) lies in the rear focal plane .* entrance pupil is at "
-                                         r"infinity \(telecentric in object space\)"):
+    lens = Lens.from_dict(
+        {
+            "surface": [
+                {"radius": 50.0, "thickness": 3.0, "diameter": 30.0, "material": "model:1.5"},
+                {"radius": 0.0, "thickness": 98.0, "diameter": 30.0, "material": "AIR"},
+                {"radius": 0.0, "thickness": 60.0, "diameter": 4.0, "material": "AIR", "stop": True},
+            ],
+            "object": {"distance": 300.0},
+        }
+    )
+    with pytest.raises(
+        SolasError,
+        match=r"stop \(surface 3\) lies in the rear focal plane .* entrance pupil is at "
+        r"infinity \(telecentric in object space\)",
+    ):
         paraxial(lens, 587.5618)
 
 
@@ -129,9 +147,14 @@ def test_efl_in_image_space_is_the_rear_focal_length_in_the_image_medium():
     (Zemax's "in image space", optiland's f2); `lens info` shows the row only where they differ."""
     n, n_img, c1, c2, t = 1.5, 1.333, 1 / 30.0, -1 / 80.0, 5.0
     phi = (n - 1) * c1 + (n_img - n) * c2 - (n - 1) * (n_img - n) * c1 * c2 * t / n
-    lens = Lens.from_dict({"surface": [
-        {"radius": 30.0, "thickness": t, "diameter": 12.0, "material": "model:1.5", "stop": True},
-        {"radius": -80.0, "thickness": 40.0, "diameter": 12.0, "material": "model:1.333"}]})
+    lens = Lens.from_dict(
+        {
+            "surface": [
+                {"radius": 30.0, "thickness": t, "diameter": 12.0, "material": "model:1.5", "stop": True},
+                {"radius": -80.0, "thickness": 40.0, "diameter": 12.0, "material": "model:1.333"},
+            ]
+        }
+    )
     p = paraxial(lens, 550.0)
     assert p.efl_mm == pytest.approx(1 / phi, rel=1e-12)
     assert p.efl_image_space_mm == pytest.approx(n_img / phi, rel=1e-12)

@@ -2,6 +2,7 @@
 that defines the polynomials, Qcon against scipy's Jacobi polynomials, the sag's slope against finite
 differences, a Qbfs surface equal to a known even asphere traced alike, and .zmx QED_TYPE surfaces
 (as OpticStudio writes them) against a paraxial hand calculation."""
+
 import math
 
 import numpy as np
@@ -36,7 +37,7 @@ def test_qbfs_slopes_are_orthonormal():
     slopes = []
     for m in range(10):
         q, dq = forbes.qbfs_sum(x, (0.0,) * m + (1.0,))
-        slopes.append((2 * u - 4 * u ** 3) * q + x * (1 - x) * dq * 2 * u)  # d/du, chain rule x = u²
+        slopes.append((2 * u - 4 * u**3) * q + x * (1 - x) * dq * 2 * u)  # d/du, chain rule x = u²
     gram = np.array([[np.sum(a * b) * (math.pi / 2 / 400) / (math.pi / 2) for b in slopes] for a in slopes])
     assert np.abs(gram - np.eye(10)).max() < 1e-9
 
@@ -61,7 +62,7 @@ def test_qbfs_sag_and_slope():
     expected = c * r * r / (1 + np.sqrt(1 - (1 + k) * c * c * r * r)) + phi * x * (1 - x) * s
     assert np.abs(sag(r * r, c, k, qbfs=a, norm_radius=rho) - expected).max() < 1e-14
     h, r = 1e-4, r[1:]  # r > 0: the difference quotient in r²
-    numeric = (sag((r + h) ** 2, c, k, qbfs=a, norm_radius=rho) - sag((r - h) ** 2, c, k, qbfs=a, norm_radius=rho))
+    numeric = sag((r + h) ** 2, c, k, qbfs=a, norm_radius=rho) - sag((r - h) ** 2, c, k, qbfs=a, norm_radius=rho)
     numeric /= (r + h) ** 2 - (r - h) ** 2
     assert np.abs(sag_slope(r * r, c, k, qbfs=a, norm_radius=rho) - numeric).max() < 1e-8
 
@@ -71,7 +72,7 @@ def _as_qbfs(c: float, a4: float, a6: float, rho: float) -> list[float]:
     a least-squares fit on the Q basis, exact to rounding when the polynomial lies in its span."""
     x = np.linspace(0.0, 1.2, 40)
     basis = np.stack([x * (1 - x) * forbes.qbfs_sum(x, (0.0,) * m + (1.0,))[0] for m in range(2)], -1)
-    target = c / 2 * rho ** 2 * x + a4 * rho ** 4 * x ** 2 + a6 * rho ** 6 * x ** 3
+    target = c / 2 * rho**2 * x + a4 * rho**4 * x**2 + a6 * rho**6 * x**3
     coefficients, *_ = np.linalg.lstsq(basis, target, rcond=None)
     assert np.abs(basis @ coefficients - target).max() < 1e-14
     return [float(v) for v in coefficients]
@@ -81,21 +82,33 @@ def test_a_qbfs_surface_equal_to_an_even_asphere_traces_alike():
     """A paraboloid with r⁴ and r⁶ terms is a polynomial in r²; a flat-based Qbfs surface holding the
     same polynomial must give the same EFL and the same traced rays."""
     c, a4, rho = 1 / 40.0, -2e-5, 10.0
-    a6 = -(a4 * rho ** 4 + c * rho ** 2 / 2) / rho ** 6  # what x(1 − x)(s0 + s1 x) forces
+    a6 = -(a4 * rho**4 + c * rho**2 / 2) / rho**6  # what x(1 − x)(s0 + s1 x) forces
     back = {"radius": -80.0, "thickness": 60.0, "diameter": 18.0}
     even = {"radius": 40.0, "conic": -1.0, "aspheric": [a4, a6]}
     qbfs = {"radius": 0.0, "qbfs": _as_qbfs(c, a4, a6, rho), "norm_radius": rho}
-    lenses = [Lens.from_dict({"wavelengths_nm": [587.5618], "field_deg": 5.0, "surface": [
-        {"thickness": 5.0, "diameter": 18.0, "material": "N-BK7", "stop": True, **front}, back]})
-        for front in (even, qbfs)]
+    lenses = [
+        Lens.from_dict(
+            {
+                "wavelengths_nm": [587.5618],
+                "field_deg": 5.0,
+                "surface": [{"thickness": 5.0, "diameter": 18.0, "material": "N-BK7", "stop": True, **front}, back],
+            }
+        )
+        for front in (even, qbfs)
+    ]
     assert lenses[1].surfaces[0].paraxial_curvature == pytest.approx(c, rel=1e-14)
     efl = [paraxial(lens).efl_mm for lens in lenses]
     assert efl[1] == pytest.approx(efl[0], rel=1e-12)
     ex, ey = np.meshgrid(np.linspace(-8, 8, 9), np.linspace(-8, 8, 9))
     out = []
     for lens in lenses:
-        rays = T.launch(lens, T.F(0.0 * ex.ravel()), T.F(0.0 * ex.ravel() + math.tan(math.radians(5))),
-                        T.F(ex.ravel()), T.F(ey.ravel()))
+        rays = T.launch(
+            lens,
+            T.F(0.0 * ex.ravel()),
+            T.F(0.0 * ex.ravel() + math.tan(math.radians(5))),
+            T.F(ex.ravel()),
+            T.F(ey.ravel()),
+        )
         tr = T.trace(lens, rays, T.F(0.5875618))
         out.append(np.stack(T.to_numpy(*T.to_plane(tr, lens.image_z)[:2], tr.ok), -1))
     assert out[0][:, 2].all() and out[1][:, 2].all()
@@ -103,8 +116,9 @@ def test_a_qbfs_surface_equal_to_an_even_asphere_traces_alike():
 
 
 def test_qbfs_trace_lands_on_the_surface():
-    lens = Lens.from_dict({"surface": [{"thickness": 10.0, "diameter": 18.0, "material": "N-BK7", "stop": True,
-                                        **QBFS}]})
+    lens = Lens.from_dict(
+        {"surface": [{"thickness": 10.0, "diameter": 18.0, "material": "N-BK7", "stop": True, **QBFS}]}
+    )
     s = lens.surfaces[0]
     rng = np.random.default_rng(3)
     ex, ey = rng.uniform(-6, 6, 100), rng.uniform(-6, 6, 100)
@@ -116,7 +130,7 @@ def test_qbfs_trace_lands_on_the_surface():
 
 
 def _zmx(kind: int, terms: list[float], rho: float, conic: float = 0.0) -> str:
-    xdat = "\n".join(f"  XDAT {k} {v!r} 0 0 1 0 0 \"\"" for k, v in enumerate([kind, len(terms), rho, *terms], 1))
+    xdat = "\n".join(f'  XDAT {k} {v!r} 0 0 1 0 0 ""' for k, v in enumerate([kind, len(terms), rho, *terms], 1))
     return f"""VERS 200914
 UNIT MM X W X CM MR CPMM
 ENPD 10
@@ -153,7 +167,7 @@ def test_zmx_qbfs_surface_bends_the_vertex():
     assert row["qbfs"] == a and row["norm_radius"] == rho and row["conic"] == -0.5
     lens = Lens.from_dict(spec)
     bend = a[0] + a[1] * 13 / math.sqrt(19) + a[2] * 58 / math.sqrt(190)
-    assert paraxial(lens).efl_mm == pytest.approx(1 / (0.5 * (0.04 + 2 * bend / rho ** 2)), rel=1e-12)
+    assert paraxial(lens).efl_mm == pytest.approx(1 / (0.5 * (0.04 + 2 * bend / rho**2)), rel=1e-12)
 
 
 def test_zmx_qcon_surface_is_its_even_asphere(tmp_path):
@@ -167,8 +181,14 @@ def test_zmx_qcon_surface_is_its_even_asphere(tmp_path):
 
 
 def test_qbfs_lens_round_trips_through_toml_and_zmx(tmp_path):
-    lens = Lens.from_dict({"surface": [{"thickness": 5.0, "diameter": 18.0, "material": "N-BK7", "stop": True,
-                                        **QBFS}, {"radius": -60.0, "thickness": 40.0, "diameter": 18.0}]})
+    lens = Lens.from_dict(
+        {
+            "surface": [
+                {"thickness": 5.0, "diameter": 18.0, "material": "N-BK7", "stop": True, **QBFS},
+                {"radius": -60.0, "thickness": 40.0, "diameter": 18.0},
+            ]
+        }
+    )
     for suffix in (".toml", ".zmx"):
         again = Lens.load(lens.save(tmp_path / f"q{suffix}"))
         assert again.surfaces[0].qbfs == lens.surfaces[0].qbfs
@@ -178,7 +198,19 @@ def test_qbfs_lens_round_trips_through_toml_and_zmx(tmp_path):
 
 def test_qbfs_needs_its_normalisation_radius():
     with pytest.raises(SolasError, match="norm_radius"):
-        Lens.from_dict({"surface": [{"radius": 30.0, "thickness": 5.0, "diameter": 10.0, "stop": True,
-                                     "material": "N-BK7", "qbfs": [0.1]}]})
+        Lens.from_dict(
+            {
+                "surface": [
+                    {
+                        "radius": 30.0,
+                        "thickness": 5.0,
+                        "diameter": 10.0,
+                        "stop": True,
+                        "material": "N-BK7",
+                        "qbfs": [0.1],
+                    }
+                ]
+            }
+        )
     with pytest.raises(SolasError, match="type 0 .Qbfs. or 1 .Qcon."):
         read_spec(_zmx(2, [0.1], 5.0), "q.zmx")

@@ -1,4 +1,5 @@
 """Spot diagrams: the DESIGN.md RMS radii and convergence of dense sampling."""
+
 import pytest
 
 from solas_mi import spot

@@ -1,4 +1,5 @@
 """The stages of the optics' longer computations, each against a fact derivable on its own."""
+
 import math
 
 import numpy as np
@@ -13,10 +14,16 @@ from solas_mi.optics.paraxial import _chief_height, _marginal_ray, _pupils, para
 
 
 def singlet(stop_first: bool = True, distance="infinity") -> Lens:
-    return Lens.from_dict({"object": {"distance": distance}, "surface": [
-        {"radius": 60.0, "thickness": 5.0, "diameter": 20.0, "material": "N-BK7", "stop": stop_first},
-        {"radius": 0.0, "thickness": 1.0, "diameter": 20.0},
-        {"radius": 0.0, "thickness": 100.0, "diameter": 10.0, "stop": not stop_first}]})
+    return Lens.from_dict(
+        {
+            "object": {"distance": distance},
+            "surface": [
+                {"radius": 60.0, "thickness": 5.0, "diameter": 20.0, "material": "N-BK7", "stop": stop_first},
+                {"radius": 0.0, "thickness": 1.0, "diameter": 20.0},
+                {"radius": 0.0, "thickness": 100.0, "diameter": 10.0, "stop": not stop_first},
+            ],
+        }
+    )
 
 
 def test_pupils_of_a_stop_on_surface_1_are_the_stop():
@@ -53,21 +60,33 @@ def test_chief_heights_are_odd_in_the_field(doublet):
 
 
 def test_refraction_at_a_flat_surface_is_snell():
-    flat = Lens.from_dict({"surface": [{"radius": 0.0, "thickness": 10.0, "diameter": 20.0, "material": "N-BK7",
-                                        "stop": True}, {"radius": 0.0, "thickness": 10.0, "diameter": 20.0}]})
+    flat = Lens.from_dict(
+        {
+            "surface": [
+                {"radius": 0.0, "thickness": 10.0, "diameter": 20.0, "material": "N-BK7", "stop": True},
+                {"radius": 0.0, "thickness": 10.0, "diameter": 20.0},
+            ]
+        }
+    )
     theta = np.radians([0.0, 10.0, 40.0])
     d = (T.F(np.sin(theta)), T.F(0.0 * theta), T.F(np.cos(theta)))
     zero = T.F(0.0 * theta)
     mu = 1.0 / 1.5
     (dx, _dy, dz), _k2, factor = T._refract(flat.surfaces[0], zero, zero, zero, zero, d, mu, True, T.F)
     dx, dz, factor = T.to_numpy(dx, dz, factor)
-    assert np.allclose(dx, mu * np.sin(theta), rtol=0, atol=1e-15) and np.allclose(dx ** 2 + dz ** 2, 1.0)
+    assert np.allclose(dx, mu * np.sin(theta), rtol=0, atol=1e-15) and np.allclose(dx**2 + dz**2, 1.0)
     assert factor[0] == pytest.approx(1.0 - ((1.5 - 1.0) / 2.5) ** 2, rel=1e-12)  # normal incidence: 1 − R
 
 
 def test_rays_move_to_a_flat_surface_s_vertex_plane():
-    flat = Lens.from_dict({"surface": [{"radius": 0.0, "thickness": 10.0, "diameter": 20.0, "stop": True},
-                                       {"radius": 0.0, "thickness": 10.0, "diameter": 20.0}]})
+    flat = Lens.from_dict(
+        {
+            "surface": [
+                {"radius": 0.0, "thickness": 10.0, "diameter": 20.0, "stop": True},
+                {"radius": 0.0, "thickness": 10.0, "diameter": 20.0},
+            ]
+        }
+    )
     rays = T.launch(flat, T.F([0.0, 0.1]), T.F([0.0, -0.2]), T.F([1.0, 2.0]), T.F([0.0, 3.0]))
     x, y, _lz, t, opl, hit = T._to_surface(flat.surfaces[1], 10.0, rays, T.F(1.0), False, T.F)
     rz, rdz = T.to_numpy(rays.z, rays.dz)
@@ -80,7 +99,7 @@ def test_rays_move_to_a_flat_surface_s_vertex_plane():
 def test_aspheric_terms_scale_with_the_unit():
     block = {"PARM": [["2", "1e-5"], ["3", "0"], ["4", "2e-9"], ["5", "0"]]}
     assert zemax._aspheric(block, 1.0, "SURF 1") == [1e-5, 0.0, 2e-9]
-    assert zemax._aspheric(block, 10.0, "SURF 1") == pytest.approx([1e-5 * 10 ** -3, 0.0, 2e-9 * 10 ** -7])
+    assert zemax._aspheric(block, 10.0, "SURF 1") == pytest.approx([1e-5 * 10**-3, 0.0, 2e-9 * 10**-7])
     with pytest.raises(SolasError, match="PARM 1"):
         zemax._aspheric({"PARM": [["1", "0.1"]]}, 1.0, "SURF 1")
 

@@ -1,5 +1,6 @@
 """pbrt lens tables (.dat) read strictly: a row that cannot be a surface is an error naming its line,
 never air or a glass without dispersion; a model glass written to .dat reads back as itself."""
+
 import pytest
 
 from solas_mi.errors import SolasError
@@ -14,11 +15,16 @@ TABLE = """# radius thickness n_d aperture V_d
 """
 
 
-@pytest.mark.parametrize("nd, vd, message", [("0.5", "60", "index 0.5 is neither air"),
-                                             ("-1.5", "60", "index -1.5 is neither air"),
-                                             ("1.5", "-60", "Abbe number -60 is negative"),
-                                             ("nan", "60", "the index is nan"),
-                                             ("1.5", "inf", "the Abbe number is inf")])
+@pytest.mark.parametrize(
+    "nd, vd, message",
+    [
+        ("0.5", "60", "index 0.5 is neither air"),
+        ("-1.5", "60", "index -1.5 is neither air"),
+        ("1.5", "-60", "Abbe number -60 is negative"),
+        ("nan", "60", "the index is nan"),
+        ("1.5", "inf", "the Abbe number is inf"),
+    ],
+)
 def test_a_row_that_cannot_be_a_surface_is_an_error_naming_its_line(tmp_path, nd, vd, message):
     path = tmp_path / "bad.dat"
     path.write_text(TABLE.format(nd=nd, vd=vd))
@@ -63,6 +69,9 @@ def test_a_table_pbrt_cannot_trace_is_refused_naming_the_rows_and_the_step(tmp_p
     (tmp_path / "right.dat").write_text(right)
     (tmp_path / "shifted.dat").write_text(shifted)
     assert not Lens.load(tmp_path / "right.dat").overlaps
-    with pytest.raises(SolasError, match=r"shifted.dat: surfaces 1 \(row 1\) and 2 \(row 2\) (cross|overlap) .*\(thickness 0 "
-                                         r"mm\); pbrt's realistic camera steps only forward.* damaged table"):
+    with pytest.raises(
+        SolasError,
+        match=r"shifted.dat: surfaces 1 \(row 1\) and 2 \(row 2\) (cross|overlap) .*\(thickness 0 "
+        r"mm\); pbrt's realistic camera steps only forward.* damaged table",
+    ):
         Lens.load(tmp_path / "shifted.dat")

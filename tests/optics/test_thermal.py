@@ -1,6 +1,7 @@
 """A lens at a temperature and pressure (`optics.thermal`, `Lens.at`): the glass formula against the vendor's
 published table, the air's index against Ciddor's equations, a thin singlet's focal shift against the
 first-order thermal optics formula, and the default conditions changing nothing."""
+
 import dataclasses
 import math
 import warnings
@@ -16,9 +17,11 @@ from solas_mi.optics.paraxial import paraxial
 # SCHOTT's N-BK7 data sheet, "Temperature Coefficients of Refractive Index" (1e-6/K): the mean of dn/dT over
 # each temperature range, relative to air and absolute, at 1060.0 nm, e (546.07 nm) and g (435.83 nm).
 BK7_WAVELENGTHS_NM = (1060.0, 546.074, 435.835)
-BK7_TABLE = {(-40.0, -20.0): ((2.4, 2.9, 3.3), (0.3, 0.8, 1.2)),
-             (20.0, 40.0): ((2.4, 3.0, 3.5), (1.1, 1.6, 2.1)),
-             (60.0, 80.0): ((2.5, 3.1, 3.7), (1.5, 2.1, 2.7))}
+BK7_TABLE = {
+    (-40.0, -20.0): ((2.4, 2.9, 3.3), (0.3, 0.8, 1.2)),
+    (20.0, 40.0): ((2.4, 3.0, 3.5), (1.1, 1.6, 2.1)),
+    (60.0, 80.0): ((2.5, 3.1, 3.7), (1.5, 2.1, 2.7)),
+}
 
 
 def _relative(name: str, wavelength_nm: float, temperature_c: float, pressure_kpa: float = 101.325) -> float:
@@ -26,8 +29,9 @@ def _relative(name: str, wavelength_nm: float, temperature_c: float, pressure_kp
 
 
 def _absolute(name: str, wavelength_nm: float, temperature_c: float) -> float:
-    return _relative(name, wavelength_nm, temperature_c) * thermal.air_index(wavelength_nm / 1000.0, temperature_c,
-                                                                            101.325)
+    return _relative(name, wavelength_nm, temperature_c) * thermal.air_index(
+        wavelength_nm / 1000.0, temperature_c, 101.325
+    )
 
 
 @pytest.mark.parametrize("span", sorted(BK7_TABLE))
@@ -49,10 +53,10 @@ SF6_THERMAL = (-4.93e-6, 7.02e-9, -2.4e-11, 9.84e-7, 1.54e-9, 0.29)
 
 
 def _sf6_dn_abs_dt(wavelength_um: float, dt: np.ndarray) -> np.ndarray:
-    l2 = wavelength_um ** 2
+    l2 = wavelength_um**2
     n = math.sqrt(1 + sum(b * l2 / (l2 - c) for b, c in zip(*SF6_SELLMEIER)))
     d0, d1, d2, e0, e1, ltk = SF6_THERMAL
-    return (n * n - 1) / (2 * n) * (d0 + 2 * d1 * dt + 3 * d2 * dt ** 2 + (e0 + 2 * e1 * dt) / (l2 - ltk ** 2))
+    return (n * n - 1) / (2 * n) * (d0 + 2 * d1 * dt + 3 * d2 * dt**2 + (e0 + 2 * e1 * dt) / (l2 - ltk**2))
 
 
 @pytest.mark.parametrize("span", [(-40.0, -20.0), (20.0, 40.0), (60.0, 80.0), (80.0, 105.0)])
@@ -68,12 +72,12 @@ def test_n_sf6_against_the_published_formula(span):
 def _ciddor(wavelength_um: float, temperature_c: float, pressure_pa: float) -> float:
     """Ciddor (1996, Appl. Opt. 35, 1566) for dry air with 450 ppm CO2: standard air's refractivity scaled by
     the density ratio, with the compressibility Z of his equation 12."""
-    s2 = 1.0 / wavelength_um ** 2
+    s2 = 1.0 / wavelength_um**2
     standard = 1e-8 * (5792105.0 / (238.0185 - s2) + 167917.0 / (57.362 - s2))
 
     def density(t_c: float, p: float) -> float:  # ∝ p/(Z T)
         t = t_c + 273.15
-        z = 1 - p / t * (1.58123e-6 - 2.9331e-8 * t_c + 1.1043e-10 * t_c ** 2) + (p / t) ** 2 * 1.83e-11
+        z = 1 - p / t * (1.58123e-6 - 2.9331e-8 * t_c + 1.1043e-10 * t_c**2) + (p / t) ** 2 * 1.83e-11
         return p / (z * t)
 
     return 1.0 + standard * density(temperature_c, pressure_pa) / density(15.0, 101325.0)
@@ -94,9 +98,14 @@ def test_air_index_against_ciddor():
 
 def _singlet(material: str, thickness: float = 0.2, radius: float = 100.0) -> Lens:
     """A thin biconvex singlet, stop on its front face, image at its paraxial focus."""
-    spec = {"name": "singlet", "wavelengths_nm": [587.5618], "surface": [
-        {"radius": radius, "thickness": thickness, "diameter": 10.0, "material": material, "stop": True},
-        {"radius": -radius, "thickness": 95.0, "diameter": 10.0, "material": "AIR"}]}
+    spec = {
+        "name": "singlet",
+        "wavelengths_nm": [587.5618],
+        "surface": [
+            {"radius": radius, "thickness": thickness, "diameter": 10.0, "material": material, "stop": True},
+            {"radius": -radius, "thickness": 95.0, "diameter": 10.0, "material": "AIR"},
+        ],
+    }
     spec["surface"][1]["thickness"] = paraxial(Lens.from_dict(spec), 587.5618).bfd_mm
     return Lens.from_dict(spec)
 
@@ -117,8 +126,9 @@ def test_thin_singlet_focal_shift(material, temperature):
     assert -focus == pytest.approx(-f0 * (beta + thermal.MOUNTS["aluminium"]) * delta, rel=0.01)
 
 
-@pytest.mark.parametrize("name", ["solas-doublet", "cooke-triplet", "double-gauss-50mm", "nikkor-fisheye",
-                                  "wide-angle-22mm"])
+@pytest.mark.parametrize(
+    "name", ["solas-doublet", "cooke-triplet", "double-gauss-50mm", "nikkor-fisheye", "wide-angle-22mm"]
+)
 def test_default_conditions_are_the_lens_itself(name):
     """20 °C and 101.325 kPa: the very lens (every figure bit-identical), the same hash; its glasses the
     catalogue's own objects."""
@@ -163,9 +173,18 @@ def test_a_glass_without_thermal_data_is_named():
         lens.at(20.0, 90.0)  # pressure alone: every index follows its air, nothing held
 
 
-@pytest.mark.parametrize("temperature, pressure, mount", [
-    (math.nan, 101.325, "aluminium"), (-300.0, 101.325, "aluminium"), (20.0, -1.0, "aluminium"),
-    (25.0, 101.325, "wood"), (25.0, 101.325, 1.0), (25.0, 101.325, True), (25.0, 101.325, ["aluminium"])])
+@pytest.mark.parametrize(
+    "temperature, pressure, mount",
+    [
+        (math.nan, 101.325, "aluminium"),
+        (-300.0, 101.325, "aluminium"),
+        (20.0, -1.0, "aluminium"),
+        (25.0, 101.325, "wood"),
+        (25.0, 101.325, 1.0),
+        (25.0, 101.325, True),
+        (25.0, 101.325, ["aluminium"]),
+    ],
+)
 def test_bad_conditions_are_refused(doublet, temperature, pressure, mount):
     with pytest.raises(SolasError, match=r"temperature|pressure|mount"):
         doublet.at(temperature, pressure, mount)
@@ -180,8 +199,12 @@ def test_mount_per_gap_and_expansion(doublet):
     assert s1[1].thickness == pytest.approx(s0[1].thickness * (1 + glass.resolve("SCHOTT:F2").cte * delta), rel=1e-12)
     assert s1[2].thickness == s0[2].thickness
     assert s1[3].thickness == pytest.approx(s0[3].thickness * (1 + 10e-6 * delta), rel=1e-12)
-    assert dataclasses.replace(s1[0], radius=s0[0].radius, diameter=s0[0].diameter, thickness=s0[0].thickness,
-                               glass=s0[0].glass) == s0[0]
+    assert (
+        dataclasses.replace(
+            s1[0], radius=s0[0].radius, diameter=s0[0].diameter, thickness=s0[0].thickness, glass=s0[0].glass
+        )
+        == s0[0]
+    )
 
 
 def test_every_lens_command_takes_the_environment(capsys, tmp_path):
@@ -193,8 +216,23 @@ def test_every_lens_command_takes_the_environment(capsys, tmp_path):
     from solas_mi.cli import main
 
     lens = Lens.load("solas-doublet")
-    assert main(["lens", "info", "solas-doublet", "--json", "--temperature-c", "60", "--pressure-kpa", "90",
-                 "--mount", "steel"]) == 0
+    assert (
+        main(
+            [
+                "lens",
+                "info",
+                "solas-doublet",
+                "--json",
+                "--temperature-c",
+                "60",
+                "--pressure-kpa",
+                "90",
+                "--mount",
+                "steel",
+            ]
+        )
+        == 0
+    )
     info = strict_loads(capsys.readouterr().out)
     assert info["hash"] == lens.at(60.0, 90.0, "steel").hash
     assert (info["temperature_c"], info["pressure_kpa"]) == (60.0, 90.0)
@@ -215,7 +253,7 @@ def test_a_lens_file_names_the_mount_of_each_gap(tmp_path, doublet):
     one); a bad one is refused naming the surface."""
     text = doublet.save(tmp_path / "d.toml").read_text()
     rows = text.split("[[surface]]")
-    rows[-1] = rows[-1].replace("material = \"AIR\"", "material = \"AIR\"\nmount = 5e-6", 1)
+    rows[-1] = rows[-1].replace('material = "AIR"', 'material = "AIR"\nmount = 5e-6', 1)
     path = tmp_path / "mounted.toml"
     path.write_text("[[surface]]".join(rows))
     lens = Lens.load(path)
@@ -224,7 +262,7 @@ def test_a_lens_file_names_the_mount_of_each_gap(tmp_path, doublet):
     assert hot.surfaces[-1].thickness == pytest.approx(lens.surfaces[-1].thickness * (1 + 5e-6 * 50), rel=1e-12)
     assert hot.surfaces[2].thickness == pytest.approx(lens.surfaces[2].thickness * (1 + 23.6e-6 * 50), rel=1e-12)
     assert lens.at(70.0, mount="none").surfaces[-1].thickness == lens.surfaces[-1].thickness
-    path.write_text(path.read_text().replace("mount = 5e-6", "mount = \"wood\""))
+    path.write_text(path.read_text().replace("mount = 5e-6", 'mount = "wood"'))
     with pytest.raises(SolasError, match=r"surface 4 .*mount 'wood'"):
         Lens.load(path)
 

@@ -1,4 +1,5 @@
 """The Float64 sequential tracer: OPD exactness, unreachable fields, vignetting, TIR."""
+
 import numpy as np
 import pytest
 
@@ -19,24 +20,30 @@ def test_opd_is_float64_exact(doublet):
     assert np.abs(waves - waves[::-1, :])[inside].max() < 1e-6
     # smoothness: W(ρ²) is a low-order polynomial; the fit residual is rounding noise only
     a, b = np.meshgrid(pf.alpha[0], pf.beta[0])
-    rho2 = (a ** 2 + b ** 2)[inside]
+    rho2 = (a**2 + b**2)[inside]
     coef = np.polynomial.polynomial.polyfit(rho2 / rho2.max(), waves[inside], 6)
     residual = waves[inside] - np.polynomial.polynomial.polyval(rho2 / rho2.max(), coef)
     assert np.abs(residual).max() < 1e-6
     assert np.ptp(waves[inside]) > 1.0  # defocus of a few waves is really there
 
 
-@pytest.mark.parametrize("call", [
-    lambda lens: psf(lens, (0, 30), 531.0),
-    lambda lens: psf(lens, (0, 30), 531.0, method="geometric"),
-    lambda lens: spot(lens, (0, 30), 531.0),
-])
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda lens: psf(lens, (0, 30), 531.0),
+        lambda lens: psf(lens, (0, 30), 531.0, method="geometric"),
+        lambda lens: spot(lens, (0, 30), 531.0),
+    ],
+)
 def test_unreachable_field_is_a_clear_error(doublet, call):
     """At 30° the chief ray through the stop centre exists (found by continuation where the paraxial guess
     loses it), but surface 1 blocks every ray of the field: a refusal naming the field and the cause."""
-    with pytest.raises(SolasError, match=r"(no light reaches the image at field \(0, 30\) deg: every ray is blocked|"
-                                         r"no ray of 531 nm through the pupil reaches the image for field \(0, 30\) deg: "
-                                         r"every one is blocked)"):
+    with pytest.raises(
+        SolasError,
+        match=r"(no light reaches the image at field \(0, 30\) deg: every ray is blocked|"
+        r"no ray of 531 nm through the pupil reaches the image for field \(0, 30\) deg: "
+        r"every one is blocked)",
+    ):
         call(doublet)
 
 
@@ -55,10 +62,12 @@ def test_total_internal_reflection_is_flagged():
     the incidence is 53°, at y = 0 it is 0°."""
     from solas_mi.optics import tracer as T
 
-    spec = {"surface": [
-        {"radius": 0.0, "thickness": 5.0, "diameter": 20.0, "material": "N-SF11", "stop": True},
-        {"radius": 5.0, "thickness": 10.0, "diameter": 9.0, "material": "AIR"},
-    ]}
+    spec = {
+        "surface": [
+            {"radius": 0.0, "thickness": 5.0, "diameter": 20.0, "material": "N-SF11", "stop": True},
+            {"radius": 5.0, "thickness": 10.0, "diameter": 9.0, "material": "AIR"},
+        ]
+    }
     lens = Lens.from_dict(spec)
     zero = T.F([0.0, 0.0])
     tr = T.trace(lens, T.launch(lens, zero, zero, zero, T.F([0.0, 4.0])), T.F(0.55))

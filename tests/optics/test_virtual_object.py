@@ -10,15 +10,16 @@ Signs: z along the light, distances from a surface to a point positive when the 
 n'/s' = n/s + (n' − n)/R (an ideal lens: 1/s' = 1/s + 1/f), with the lateral magnification
 m = (n s')/(n' s).
 """
+
 import math
 
 import numpy as np
 import pytest
 
 from solas_mi import Lens, SolasError
+from solas_mi.cli import main as cli_main
 from solas_mi.optics import pupil as P
 from solas_mi.optics import tracer as T
-from solas_mi.cli import main as cli_main
 from solas_mi.optics.paraxial import paraxial
 from solas_mi.psf import psf
 
@@ -29,20 +30,31 @@ def _ideal(f=50.0, gap=10.0, behind=25.0):
     """A flat stop, `gap` mm before an ideal lens of focal length `f`; the object `behind` mm behind
     the ideal lens (gap + behind behind surface 1); the image plane on its thin-lens image."""
     image = 1.0 / (1.0 / behind + 1.0 / f)
-    return Lens.from_dict({"wavelengths_nm": [WL], "field_deg": 5.0, "object": {"distance": -(gap + behind)},
-                           "surface": [{"radius": 0.0, "thickness": gap, "diameter": 8.0, "stop": True},
-                                       {"radius": 0.0, "thickness": image, "diameter": 30.0, "focal_length": f}]})
+    return Lens.from_dict(
+        {
+            "wavelengths_nm": [WL],
+            "field_deg": 5.0,
+            "object": {"distance": -(gap + behind)},
+            "surface": [
+                {"radius": 0.0, "thickness": gap, "diameter": 8.0, "stop": True},
+                {"radius": 0.0, "thickness": image, "diameter": 30.0, "focal_length": f},
+            ],
+        }
+    )
 
 
 def _singlet(distance=-30.0):
     """A biconvex N-BK7 singlet (R1 = 40, R2 = −60 mm, 6 mm thick), its front face the stop, the object
     `distance` mm from surface 1; the image plane on the paraxial image (by hand, `_gauss`)."""
-    rows = [{"radius": 40.0, "thickness": 6.0, "diameter": 12.0, "stop": True, "material": "N-BK7"},
-            {"radius": -60.0, "thickness": 10.0, "diameter": 12.0}]
+    rows = [
+        {"radius": 40.0, "thickness": 6.0, "diameter": 12.0, "stop": True, "material": "N-BK7"},
+        {"radius": -60.0, "thickness": 10.0, "diameter": 12.0},
+    ]
     n = Lens.from_dict({"surface": rows}).surfaces[0].glass.index(WL)
     rows[1]["thickness"] = _gauss(n, distance)[0]
-    return Lens.from_dict({"wavelengths_nm": [WL], "field_deg": 4.0, "object": {"distance": distance},
-                           "surface": rows}), n
+    return Lens.from_dict(
+        {"wavelengths_nm": [WL], "field_deg": 4.0, "object": {"distance": distance}, "surface": rows}
+    ), n
 
 
 def _gauss(n, distance):
@@ -63,7 +75,7 @@ def _rays(lens, object_point, aperture=3.0, count=9):
     rays = T.launch(lens, F(0.0 * ex), F(0.0 * ex), F(ex), F(ey), (F(object_point[0]), F(object_point[1])))
     traced = T.trace(lens, rays, F(WL / 1000.0))
     x, y, opl = T.to_numpy(*T.to_plane(traced, lens.image_z))
-    ok, = T.to_numpy(traced.ok)
+    (ok,) = T.to_numpy(traced.ok)
     return ex, ey, x, y, opl, ok
 
 
@@ -120,7 +132,7 @@ def _snell_trace(n, object_point, ex, ey, image_z):
         normal = (c - p) / radius  # toward +z at the vertex
         cos_i = np.sum(d * normal, -1)
         mu = n1 / n2
-        cos_t = np.sqrt(1.0 - mu * mu * (1.0 - cos_i ** 2))
+        cos_t = np.sqrt(1.0 - mu * mu * (1.0 - cos_i**2))
         d = mu * d + (cos_t - mu * cos_i)[:, None] * normal
     t = (image_z - p[:, 2]) / d[:, 2]
     return p[:, 0] + t * d[:, 0], p[:, 1] + t * d[:, 1]
@@ -146,10 +158,18 @@ def test_ideal_lens_on_the_virtual_object_point_keeps_the_pencil_perfect():
     Relay_exit_pupilMatched.zmx carried 0.24 mm of OPD at 18.6° when the lens took that point's pencil as
     coming from infinity)."""
     s2 = 1.0 / (1.0 / 45.0 - 1.0 / 90.0)
-    lens = Lens.from_dict({"wavelengths_nm": [WL], "field_deg": 15.0, "object": {"distance": -40.0}, "surface": [
-        {"radius": 0.0, "thickness": 40.0, "diameter": 8.0, "stop": True},
-        {"radius": 0.0, "thickness": 90.0, "diameter": 40.0, "focal_length": 30.0},
-        {"radius": 0.0, "thickness": s2, "diameter": 40.0, "focal_length": 45.0}]})
+    lens = Lens.from_dict(
+        {
+            "wavelengths_nm": [WL],
+            "field_deg": 15.0,
+            "object": {"distance": -40.0},
+            "surface": [
+                {"radius": 0.0, "thickness": 40.0, "diameter": 8.0, "stop": True},
+                {"radius": 0.0, "thickness": 90.0, "diameter": 40.0, "focal_length": 30.0},
+                {"radius": 0.0, "thickness": s2, "diameter": 40.0, "focal_length": 45.0},
+            ],
+        }
+    )
     pf = P.pupil_function(lens, np.array([[0.0, 0.0], [0.0, 15.0]]), np.full(2, WL), 48)
     assert (pf.coverage > 0).sum() > 2 * 1000
     assert np.abs(np.where(pf.coverage > 0, pf.opd_mm, 0.0)).max() < 1e-11
@@ -163,10 +183,18 @@ def test_an_intermediate_image_on_an_ideal_lens_is_perfect_off_axis():
     ideal lens (a field lens) 100 mm on; a third lens images that onto the film. The pencil meets the
     field lens at one point: no aberration at 5° either."""
     s3 = 1.0 / (1.0 / 40.0 - 1.0 / 80.0)
-    lens = Lens.from_dict({"wavelengths_nm": [WL], "field_deg": 5.0, "object": {"distance": 100.0}, "surface": [
-        {"radius": 0.0, "thickness": 100.0, "diameter": 10.0, "stop": True, "focal_length": 50.0},
-        {"radius": 0.0, "thickness": 80.0, "diameter": 40.0, "focal_length": 60.0},
-        {"radius": 0.0, "thickness": s3, "diameter": 60.0, "focal_length": 40.0}]})
+    lens = Lens.from_dict(
+        {
+            "wavelengths_nm": [WL],
+            "field_deg": 5.0,
+            "object": {"distance": 100.0},
+            "surface": [
+                {"radius": 0.0, "thickness": 100.0, "diameter": 10.0, "stop": True, "focal_length": 50.0},
+                {"radius": 0.0, "thickness": 80.0, "diameter": 40.0, "focal_length": 60.0},
+                {"radius": 0.0, "thickness": s3, "diameter": 60.0, "focal_length": 40.0},
+            ],
+        }
+    )
     pf = P.pupil_function(lens, np.array([[0.0, 5.0]]), np.array([WL]), 48)
     assert (pf.coverage > 0).sum() > 1000
     assert np.abs(np.where(pf.coverage > 0, pf.opd_mm, 0.0)).max() < 1e-11
@@ -192,14 +220,21 @@ def test_lens_info_and_psf_metadata_say_the_object_is_virtual(tmp_path, capsys):
 
 def test_a_zero_object_distance_is_refused():
     with pytest.raises(SolasError, match=r"object distance 0 must be a non-zero number .*negative: a virtual object"):
-        Lens.from_dict({"object": {"distance": 0}, "surface": [
-            {"radius": 0.0, "thickness": 50.0, "diameter": 10.0, "stop": True, "focal_length": 50.0}]})
+        Lens.from_dict(
+            {
+                "object": {"distance": 0},
+                "surface": [{"radius": 0.0, "thickness": 50.0, "diameter": 10.0, "stop": True, "focal_length": 50.0}],
+            }
+        )
 
 
 def test_the_mesh_scene_refuses_a_virtual_object_by_name():
     from solas_mi.render.scene import lens_parts
-    with pytest.raises(SolasError, match="the mesh scene: lens .* has a virtual object, 30 mm behind surface 1 .*"
-                                         "no scene in front of the lens"):
+
+    with pytest.raises(
+        SolasError,
+        match="the mesh scene: lens .* has a virtual object, 30 mm behind surface 1 .*no scene in front of the lens",
+    ):
         lens_parts(_singlet()[0])
 
 
@@ -252,8 +287,13 @@ def test_a_zemax_file_with_a_virtual_object_sizes_its_pupil_and_fields(tmp_path)
 def test_an_object_in_the_entrance_pupil_is_refused_by_name(tmp_path):
     """The stop 40 mm behind surface 1 and the virtual object on it: every chief ray meets the object point,
     so an object-height field names no angle (it divided by zero) and a field angle no object point."""
-    text = ZMX.replace("DISZ -500", "DISZ -40").replace("  STOP\n", "").replace(
-        "  TYPE PARAXIAL", "  STOP\n  TYPE PARAXIAL").replace("OBNA 0.02 0", "ENPD 10").replace("{image!r}", "80")
+    text = (
+        ZMX.replace("DISZ -500", "DISZ -40")
+        .replace("  STOP\n", "")
+        .replace("  TYPE PARAXIAL", "  STOP\n  TYPE PARAXIAL")
+        .replace("OBNA 0.02 0", "ENPD 10")
+        .replace("{image!r}", "80")
+    )
     (tmp_path / "pupil.zmx").write_text(text.replace("DISZ 50", "DISZ 40"))
     with pytest.raises(SolasError, match=r"the object lies in the entrance pupil \(40 mm from surface 1\)"):
         Lens.load(tmp_path / "pupil.zmx")

@@ -1,10 +1,10 @@
 """Zemax files as their authors meant them, each feature in a file written here and checked against
 numbers derived by hand: the thick-lens formulas of a singlet of constant index, and a meridional
 real-ray trace written out below (Snell's law at spheres, in two dimensions, independent of the tracer)."""
+
 import math
 import re
 
-import numpy as np
 import pytest
 
 from solas_mi import Lens, SolasError
@@ -19,8 +19,16 @@ BFD = EFL * (1 - (N - 1) * T1 / (N * R1))
 WL = 0.55  # µm
 
 
-def zmx(*, aperture="ENPD 20", fields="FTYP 0 0 2 1 0 0 0\nXFLN 0 0\nYFLN 0 10", obj="INFINITY", s1="DIAM 12 1",
-        s2="DIAM 14 1", extra="", header=""):
+def zmx(
+    *,
+    aperture="ENPD 20",
+    fields="FTYP 0 0 2 1 0 0 0\nXFLN 0 0\nYFLN 0 10",
+    obj="INFINITY",
+    s1="DIAM 12 1",
+    s2="DIAM 14 1",
+    extra="",
+    header="",
+):
     """A singlet, stop on surface 1, image plane at the paraxial focus; pieces replaceable."""
     return f"""VERS 190513 80 123457 L123457
 MODE SEQ
@@ -64,7 +72,7 @@ def hand_trace(theta_deg, y_stop, surfaces=((1 / R1, T1, N), (1 / R2, BFD, 1.0))
     surface and on the image plane."""
     u = math.radians(theta_deg)
     c = surfaces[0][0]
-    sag = c * y_stop ** 2 / (1 + math.sqrt(1 - (c * y_stop) ** 2))
+    sag = c * y_stop**2 / (1 + math.sqrt(1 - (c * y_stop) ** 2))
     y, z, dy, dz, n = y_stop - math.tan(u) * (10.0 + sag), -10.0, math.sin(u), math.cos(u), 1.0
     heights, vertex = [], 0.0
     for c, t, n2 in surfaces:
@@ -95,11 +103,14 @@ def test_the_singlet_is_the_thick_lens_of_the_formulas(tmp_path):
     assert not lens.dispersive
 
 
-@pytest.mark.parametrize("aperture, epd", [
-    ("ENPD 15", 15.0),  # the stop's DIAM 12 (24 mm) does not win
-    ("FNUM 4 0", EFL / 4.0),  # image-space F/# = EFL / EPD
-    ("FLOA\nENPD 15", 24.0),  # float by stop size: the stop's DIAM
-])
+@pytest.mark.parametrize(
+    "aperture, epd",
+    [
+        ("ENPD 15", 15.0),  # the stop's DIAM 12 (24 mm) does not win
+        ("FNUM 4 0", EFL / 4.0),  # image-space F/# = EFL / EPD
+        ("FLOA\nENPD 15", 24.0),  # float by stop size: the stop's DIAM
+    ],
+)
 def test_aperture_types_size_the_stop(tmp_path, aperture, epd):
     lens = load(tmp_path, zmx(aperture=aperture))
     p = paraxial(lens, WL * 1000)
@@ -113,8 +124,11 @@ def test_object_space_na(tmp_path):
     assert lens.surfaces[0].semi_diameter == pytest.approx(500.0 * math.tan(math.asin(0.02)), rel=1e-12)
     with pytest.raises(SolasError, match="object-space NA needs a finite object"):
         load(tmp_path, zmx(aperture="OBNA 0.02 0"))
-    with pytest.raises(SolasError, match="system aperture type not supported; allowed: .* paraxial working F/# "
-                                         r"\(FNUM x 1\)"):
+    with pytest.raises(
+        SolasError,
+        match="system aperture type not supported; allowed: .* paraxial working F/# "
+        r"\(FNUM x 1\)",
+    ):
         load(tmp_path, zmx(aperture="FNUM 4 2"))
 
 
@@ -161,10 +175,15 @@ def test_dummy_surfaces_and_axial_coordinate_breaks(tmp_path):
     base = load(tmp_path, zmx())
     dummy = "SURF 3\n  TYPE STANDARD\n  CURV 0\n  DISZ 0\n  DIAM 0 0\n"
     axial = "SURF 4\n  TYPE COORDBRK\n  DISZ 0\n  PARM 1 0\n  PARM 3 0\n"
-    undo = ("SURF 5\n  TYPE COORDBRK\n  DISZ 0\n  PARM 3 12.5\n  PARM 1 0.5\n"
-            "SURF 6\n  TYPE COORDBRK\n  DISZ 0\n  PARM 3 -12.5\n  PARM 1 -0.5\n  PARM 6 1\n")
-    text = zmx(extra=dummy + axial + undo).replace(f"DISZ {BFD!r}", f"DISZ {BFD - 7!r}").replace(
-        "SURF 4\n  TYPE COORDBRK\n  DISZ 0", "SURF 4\n  TYPE COORDBRK\n  DISZ 7")
+    undo = (
+        "SURF 5\n  TYPE COORDBRK\n  DISZ 0\n  PARM 3 12.5\n  PARM 1 0.5\n"
+        "SURF 6\n  TYPE COORDBRK\n  DISZ 0\n  PARM 3 -12.5\n  PARM 1 -0.5\n  PARM 6 1\n"
+    )
+    text = (
+        zmx(extra=dummy + axial + undo)
+        .replace(f"DISZ {BFD!r}", f"DISZ {BFD - 7!r}")
+        .replace("SURF 4\n  TYPE COORDBRK\n  DISZ 0", "SURF 4\n  TYPE COORDBRK\n  DISZ 7")
+    )
     lens = load(tmp_path, text)
     assert len(lens.surfaces) == 2 and lens.surfaces[1].thickness == pytest.approx(BFD, rel=1e-12)
     assert paraxial(lens, WL * 1000).efl_mm == pytest.approx(paraxial(base, WL * 1000).efl_mm, rel=1e-12)
@@ -178,7 +197,7 @@ def test_dummy_with_zemax_automatic_aperture_and_a_negative_gap(tmp_path):
     last computation: it cuts no ray) is a dummy, even when a negative gap leads to it (met in published
     files: the lens's back face, 3 mm back to a dummy, 3 mm + BFD on to the image); its thickness joins the
     gap before, which leaves the same lens: BFD and EFL of the thick-lens formulas."""
-    dummy = f"SURF 3\n  TYPE STANDARD\n  CURV 0\n  DISZ {3.0 + BFD!r}\n  DIAM 9.87654321 0 0 0 1 \"\"\n"
+    dummy = f'SURF 3\n  TYPE STANDARD\n  CURV 0\n  DISZ {3.0 + BFD!r}\n  DIAM 9.87654321 0 0 0 1 ""\n'
     lens = load(tmp_path, zmx(extra=dummy).replace(f"DISZ {BFD!r}", "DISZ -3.0"))
     p = paraxial(lens, WL * 1000)
     assert len(lens.surfaces) == 2 and lens.surfaces[1].thickness == pytest.approx(BFD, rel=1e-12)
@@ -192,8 +211,12 @@ def test_dummy_with_zemax_automatic_aperture_and_a_negative_gap(tmp_path):
 
 
 def test_odd_asphere_even_terms(tmp_path):
-    even = zmx(s2="DIAM 14 1").replace("SURF 2\n  TYPE STANDARD", "SURF 2\n  TYPE EVENASPH\n  PARM 2 1e-6\n  PARM 3 -2e-9")
-    odd = zmx(s2="DIAM 14 1").replace("SURF 2\n  TYPE STANDARD", "SURF 2\n  TYPE ODDASPH\n  PARM 4 1e-6\n  PARM 6 -2e-9")
+    even = zmx(s2="DIAM 14 1").replace(
+        "SURF 2\n  TYPE STANDARD", "SURF 2\n  TYPE EVENASPH\n  PARM 2 1e-6\n  PARM 3 -2e-9"
+    )
+    odd = zmx(s2="DIAM 14 1").replace(
+        "SURF 2\n  TYPE STANDARD", "SURF 2\n  TYPE ODDASPH\n  PARM 4 1e-6\n  PARM 6 -2e-9"
+    )
     a, b = load(tmp_path, even, "even.zmx"), load(tmp_path, odd, "odd.zmx")
     assert a.surfaces[1].aspheric == b.surfaces[1].aspheric == (1e-6, -2e-9)
     with pytest.raises(SolasError, match=r"SURF 2 \(line \d+\): ODDASPH PARM 3 \(the r\^3 term\)"):
@@ -212,6 +235,7 @@ def test_names_round_trip_on_one_line(tmp_path):
     lens = load(tmp_path, zmx().replace("NAME singlet", "NAME Ø18 mm ½ singlet"))
     assert Lens.load(lens.save(tmp_path / "back.zmx")).name == "Ø18 mm ½ singlet"
     from dataclasses import replace
+
     with pytest.raises(SolasError, match="holds control characters"):  # no lens holds a name the writer would split
         replace(lens, name="x\nUNIT IN\nNAME y")
 
@@ -227,7 +251,9 @@ def test_model_glass_writes_its_digits(tmp_path):
 def test_model_glass_given_by_n_d_alone_and_bad_numbers(tmp_path):
     lens = load(tmp_path, zmx().replace(f"___BLANK 1 0 {N} 0 0 0 0 0 0", "___BLANK 1 0 1.62"))
     assert lens.surfaces[0].glass.name == "model:1.62"
-    with pytest.raises(SolasError, match=r"SURF 1 \(line \d+\): model glass GLAS ___BLANK n_d V_d: 'nan 0' must be finite"):
+    with pytest.raises(
+        SolasError, match=r"SURF 1 \(line \d+\): model glass GLAS ___BLANK n_d V_d: 'nan 0' must be finite"
+    ):
         load(tmp_path, zmx().replace(f"___BLANK 1 0 {N} 0", "___BLANK 1 0 nan 0"))
     with pytest.raises(SolasError, match=r"needs n_d"):
         load(tmp_path, zmx().replace(f"___BLANK 1 0 {N} 0 0 0 0 0 0", "___BLANK 1 0"))
@@ -244,8 +270,9 @@ def test_vignetting_factors_shape_the_automatic_apertures(tmp_path):
     assert vignetted.surfaces[1].diameter == pytest.approx(smaller.surfaces[1].diameter, rel=1e-9)
     assert vignetted.surfaces[1].diameter < full.surfaces[1].diameter
     assert vignetted.surfaces[0].diameter == pytest.approx(20.0, rel=1e-12)  # the stop keeps ENPD 20
-    up, down = (load(tmp_path, zmx(fields=fields + f"VDYN 0 {d}\nVCYN 0 0.3", s2="DIAM 0 0"), "d.zmx")
-                for d in (0.3, -0.3))  # the pupil moved up (cut below) or down (cut above, at the widest ray)
+    up, down = (
+        load(tmp_path, zmx(fields=fields + f"VDYN 0 {d}\nVCYN 0 0.3", s2="DIAM 0 0"), "d.zmx") for d in (0.3, -0.3)
+    )  # the pupil moved up (cut below) or down (cut above, at the widest ray)
     assert up.surfaces[1].diameter == pytest.approx(full.surfaces[1].diameter, rel=1e-12)
     assert smaller.surfaces[1].diameter < down.surfaces[1].diameter < full.surfaces[1].diameter
     with pytest.raises(SolasError, match="leave no pupil"):
@@ -261,9 +288,14 @@ def test_corning_fused_silica_loads(tmp_path, header):
     text = zmx(header=header).replace("GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0", glas)
     lens = load(tmp_path, text)
     assert lens.surfaces[0].glass.name == "CORNING:C79-80" and lens.dispersive
-    l2 = WL ** 2
-    n = (1 + sum(b * l2 / (l2 - c) for b, c in [(0.683740494, 0.00460352869), (0.420323613, 0.0133968856),
-                                                 (0.58502748, 64.4932732)])) ** 0.5
+    l2 = WL**2
+    n = (
+        1
+        + sum(
+            b * l2 / (l2 - c)
+            for b, c in [(0.683740494, 0.00460352869), (0.420323613, 0.0133968856), (0.58502748, 64.4932732)]
+        )
+    ) ** 0.5
     efl = 1.0 / ((n - 1) * (1 / R1 - 1 / R2 + (n - 1) * T1 / (n * R1 * R2)))
     assert paraxial(lens, WL * 1000).efl_mm == pytest.approx(efl, rel=1e-12)
     saved = lens.save(tmp_path / "again.zmx")
@@ -278,8 +310,11 @@ def test_every_plastic_and_moulded_glass_loads_by_its_zemax_name(tmp_path):
     SCHOTT), loads that glass; its EFL is the thick-lens formula's at the glass's index."""
     from solas_mi.optics import glass
 
-    keys = [k for k in glass.load_catalog() if k.split(":")[0] in ("LIGHTPATH", "RPO", "ZEON", "OSAKAGASCHEMICAL",
-                                                                      "ANGSTROMLINK", "CORNING")]
+    keys = [
+        k
+        for k in glass.load_catalog()
+        if k.split(":")[0] in ("LIGHTPATH", "RPO", "ZEON", "OSAKAGASCHEMICAL", "ANGSTROMLINK", "CORNING")
+    ]
     keys += [f"MISC:{n}" for n in ("PMMA", "POLYCARB", "POLYSTYR", "ACRYLIC", "SAN", "COC")]
     assert len(keys) == 70
     for key in keys:
@@ -303,9 +338,14 @@ def test_obsolete_schott_glass_loads_and_a_shared_name_keeps_its_current_glass(t
     glas = "GLAS LAK33 0 0 1.753977 52.430467 0 0 0 0 0 0"
     lens = load(tmp_path, zmx(header=header).replace("GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0", glas))
     assert lens.surfaces[0].glass.name == "SCHOTT:LAK33"
-    l2 = WL ** 2
-    n = (1 + sum(b * l2 / (l2 - c) for b, c in [(1.45796869, 0.0068054528), (0.555403936, 0.0225253283),
-                                                 (1.19938794, 82.7543327)])) ** 0.5
+    l2 = WL**2
+    n = (
+        1
+        + sum(
+            b * l2 / (l2 - c)
+            for b, c in [(1.45796869, 0.0068054528), (0.555403936, 0.0225253283), (1.19938794, 82.7543327)]
+        )
+    ) ** 0.5
     efl = 1.0 / ((n - 1) * (1 / R1 - 1 / R2 + (n - 1) * T1 / (n * R1 * R2)))
     assert paraxial(lens, WL * 1000).efl_mm == pytest.approx(efl, rel=1e-12)
     assert Lens.load(lens.save(tmp_path / "again.zmx")).surfaces[0].glass.name == "SCHOTT:LAK33"
@@ -323,11 +363,17 @@ def test_flat_stop_on_a_concave_face(tmp_path):
     r1, r2, t = -40.0, -15.0, 8.0
     efl = 1.0 / ((N - 1) * (1 / r1 - 1 / r2 + (N - 1) * t / (N * r1 * r2)))
     bfd = efl * (1 - (N - 1) * t / (N * r1))
-    stop = "SURF 1\n  STOP\n  TYPE STANDARD\n  CURV 0.0\n  DISZ 7e-07\n  DIAM 5 0 0 0 1 \"\"\n"
-    text = zmx(aperture="ENPD 10", s2="DIAM 8 1").replace("SURF 2\n", "SURF 3\n").replace(
-        "SURF 1\n  STOP\n", stop + "SURF 2\n").replace(f"CURV {1 / R1!r}", f"CURV {1 / r1!r}").replace(
-        f"CURV {1 / R2!r}", f"CURV {1 / r2!r}").replace(f"DISZ {T1}", f"DISZ {t}").replace(
-        f"DISZ {BFD!r}", f"DISZ {bfd!r}").replace("DIAM 12 1", "DIAM 8 1")
+    stop = 'SURF 1\n  STOP\n  TYPE STANDARD\n  CURV 0.0\n  DISZ 7e-07\n  DIAM 5 0 0 0 1 ""\n'
+    text = (
+        zmx(aperture="ENPD 10", s2="DIAM 8 1")
+        .replace("SURF 2\n", "SURF 3\n")
+        .replace("SURF 1\n  STOP\n", stop + "SURF 2\n")
+        .replace(f"CURV {1 / R1!r}", f"CURV {1 / r1!r}")
+        .replace(f"CURV {1 / R2!r}", f"CURV {1 / r2!r}")
+        .replace(f"DISZ {T1}", f"DISZ {t}")
+        .replace(f"DISZ {BFD!r}", f"DISZ {bfd!r}")
+        .replace("DIAM 12 1", "DIAM 8 1")
+    )
     lens = load(tmp_path, text)
     assert [s.stop for s in lens.surfaces] == [True, False, False]
     assert lens.surfaces[1].sag(5.0) < -0.3  # the face is in front of the stop's plane over its rim
@@ -336,8 +382,10 @@ def test_flat_stop_on_a_concave_face(tmp_path):
     image = hand_trace(10.0, 0.0, surfaces=((1 / r1, t, N), (1 / r2, bfd, 1.0)))[1]
     assert chief.image_xy[0, 1] == pytest.approx(image, rel=1e-6)
     assert lens.overlaps == ()
-    for crossed in (text.replace("  DISZ 7e-07\n", "  DISZ 7e-07\n  GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0\n"),
-                    text.replace("  CURV 0.0\n  DISZ 7e-07", f"  CURV {1 / 200!r}\n  DISZ 7e-07")):
+    for crossed in (
+        text.replace("  DISZ 7e-07\n", "  DISZ 7e-07\n  GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0\n"),
+        text.replace("  CURV 0.0\n  DISZ 7e-07", f"  CURV {1 / 200!r}\n  DISZ 7e-07"),
+    ):
         notes = load(tmp_path, crossed).overlaps  # traced as Zemax does, and named
         assert len(notes) == 1 and notes[0].startswith("surfaces 1 (SURF 1) and 2 (SURF 2) cross at r = ")
 
@@ -346,8 +394,11 @@ def test_image_plane_before_the_last_surface(tmp_path):
     """A negative distance to the image (a diverging singlet's file, its image plane on the virtual focus
     6.56 mm before its back face: OpticStudio traces rays backwards to it) is a virtual image: refused
     with that reason, not as a negative air gap."""
-    with pytest.raises(SolasError, match=r"surface 2 \(SURF 2\): distance to the image -5 mm must be positive: "
-                                         r"the image plane lies before the last surface, a virtual image"):
+    with pytest.raises(
+        SolasError,
+        match=r"surface 2 \(SURF 2\): distance to the image -5 mm must be positive: "
+        r"the image plane lies before the last surface, a virtual image",
+    ):
         load(tmp_path, zmx().replace(f"DISZ {BFD!r}", "DISZ -5.0"))
 
 
@@ -355,9 +406,12 @@ def test_float_by_stop_size_on_a_stop_without_diameter(tmp_path):
     """FLOA takes the beam's size from the stop's DIAM: a stop without one leaves it undefined (ef35mm_f2.0
     of a public corpus): refused naming FLOA and the stop; the same stop under ENPD loads, its size the
     system aperture's (20 mm: the stop is the first surface)."""
-    with pytest.raises(SolasError, match=r"floats by stop size \(FLOA, or no aperture named\) on the stop, surface 1 "
-                                         r"\(SURF 1\), which "
-                                         r"has no DIAM"):
+    with pytest.raises(
+        SolasError,
+        match=r"floats by stop size \(FLOA, or no aperture named\) on the stop, surface 1 "
+        r"\(SURF 1\), which "
+        r"has no DIAM",
+    ):
         load(tmp_path, zmx(aperture="FLOA", s1=""))
     assert load(tmp_path, zmx(s1="")).surfaces[0].diameter == pytest.approx(20.0)
 
@@ -368,8 +422,11 @@ def test_constant_index_media_hold_at_every_wavelength_and_below_air(tmp_path):
     with index differences, φ = (n − m)(c1 − c2) + (n − m)² t c1 c2 / n, at a wavelength outside the
     dispersive model glass's range."""
     n, m, wl = 1.5602889, 0.999712, 193.304
-    text = zmx(obj="100").replace("WAVM 1 0.55 1", f"WAVM 1 {wl / 1000!r} 1").replace(
-        f"___BLANK 1 0 {N} 0", f"___BLANK 1 0 {n} 0")
+    text = (
+        zmx(obj="100")
+        .replace("WAVM 1 0.55 1", f"WAVM 1 {wl / 1000!r} 1")
+        .replace(f"___BLANK 1 0 {N} 0", f"___BLANK 1 0 {n} 0")
+    )
     text = text.replace("  DISZ 100\n", f"  DISZ 100\n  GLAS ___BLANK 1 0 {m} 0 0 0 0 0 0\n")
     text = text.replace(f"  DISZ {BFD!r}\n", f"  DISZ {BFD!r}\n  GLAS ___BLANK 1 0 {m} 0 0 0 0 0 0\n")
     lens = load(tmp_path, text)
@@ -377,8 +434,11 @@ def test_constant_index_media_hold_at_every_wavelength_and_below_air(tmp_path):
     c1, c2 = 1 / R1, 1 / R2
     power = (n - m) * (c1 - c2) + (n - m) ** 2 * T1 * c1 * c2 / n
     assert paraxial(lens, wl).efl_mm == pytest.approx(1 / power, rel=1e-12)
-    with pytest.raises(SolasError, match=r"SURF 1 \(line \d+\): model glass n_d=0.5: a constant index must lie in "
-                                         r"\(0.9, 3.0\)"):
+    with pytest.raises(
+        SolasError,
+        match=r"SURF 1 \(line \d+\): model glass n_d=0.5: a constant index must lie in "
+        r"\(0.9, 3.0\)",
+    ):
         load(tmp_path, zmx().replace(f"___BLANK 1 0 {N} 0", "___BLANK 1 0 0.5 0"))
     with pytest.raises(SolasError, match=r"n_d must lie in \(1, 3\) and V_d in \(5, 150\)"):
         load(tmp_path, zmx().replace(f"___BLANK 1 0 {N} 0", "___BLANK 1 0 0.999712 40"))
@@ -411,8 +471,14 @@ def test_envd_is_where_the_prescription_holds(tmp_path, header):
     from solas_mi.optics import thermal
 
     text = zmx().replace("GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0", "GLAS N-BK7 0 0 1.5168 64.17 0 0 0 0 0 0")
-    base, hot = load(tmp_path, text), load(tmp_path, zmx(header=header).replace(
-        "GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0", "GLAS N-BK7 0 0 1.5168 64.17 0 0 0 0 0 0"), "hot.zmx")
+    base, hot = (
+        load(tmp_path, text),
+        load(
+            tmp_path,
+            zmx(header=header).replace("GLAS ___BLANK 1 0 1.5 0 0 0 0 0 0", "GLAS N-BK7 0 0 1.5168 64.17 0 0 0 0 0 0"),
+            "hot.zmx",
+        ),
+    )
     assert (hot.temperature_c, hot.pressure_kpa) == (50.0, pytest.approx(0.9 * 101.325))
     assert hot.hash == thermal.in_environment(base, 50.0, hot.pressure_kpa).hash != base.hash
     assert Lens.load(hot.save(tmp_path / "again.zmx")).hash == hot.hash

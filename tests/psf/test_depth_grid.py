@@ -1,4 +1,5 @@
 """PSF grids over field and object distance (`psf.depth`, `GridSpec.distances_m`)."""
+
 import math
 from dataclasses import replace
 
@@ -55,8 +56,10 @@ def test_nodes_are_the_lens_at_each_distance_with_its_image_plane(doublet, tmp_p
     g.write(path)
     back = read_grid(path)
     assert isinstance(back, DepthGrid) and back.distances_m == g.distances_m
-    assert all(np.array_equal(a.data, b.data) and np.array_equal(a.chief_ray_mm, b.chief_ray_mm)
-               for a, b in zip(g.layers, back.layers))
+    assert all(
+        np.array_equal(a.data, b.data) and np.array_equal(a.chief_ray_mm, b.chief_ray_mm)
+        for a, b in zip(g.layers, back.layers)
+    )
     with pytest.raises(SolasError, match="object distance"):
         PSFGrid.read(path)
     at_inf.write(str(tmp_path / "one.exr"))
@@ -73,7 +76,9 @@ def test_subset_camera_and_viewpoint(doublet):
     assert np.array_equal(g.layers[0].fields_deg, plain.layers[0].fields_deg)  # infinity: no parallax
     ep = paraxial(doublet).entrance_pupil_z_mm
     factor = (10e3 + ep) / 10e3  # seen from surface 1 instead of the entrance pupil
-    assert np.allclose(np.tan(np.radians(g.layers[2].fields_deg)), np.tan(np.radians(plain.layers[2].fields_deg)) * factor)
+    assert np.allclose(
+        np.tan(np.radians(g.layers[2].fields_deg)), np.tan(np.radians(plain.layers[2].fields_deg)) * factor
+    )
     sub = plain.subset([0, 2])
     assert sub.distances_m == (math.inf, 10.0) and sub.layers[1] is plain.layers[2]
     with pytest.raises(SolasError, match="indices"):

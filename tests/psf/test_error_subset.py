@@ -2,6 +2,7 @@
 where errors gather (every 16th, the steepest wavefronts, the vignetted), and every PSF only where one of
 those comes near the limit: a grid's warnings are those of estimating every PSF, at a fraction of its cost
 where nothing comes near."""
+
 import numpy as np
 
 from solas_mi.optics import pupil as P

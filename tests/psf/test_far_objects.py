@@ -1,5 +1,6 @@
 """Far finite objects: the pupil's power and the chief ray stay right however far the object is
 (a cancellation-free solid angle; an aim that converges to the precision a far launch allows)."""
+
 import numpy as np
 import pytest
 

@@ -1,4 +1,5 @@
 """Fraunhofer PSFs against physics: the Airy pattern, discrete Parseval, convergence in pupil sampling."""
+
 import math
 
 import numpy as np
@@ -16,10 +17,12 @@ from solas_mi.psf.registry import DEFAULT_PUPIL_SAMPLES
 def slow_singlet():
     """A plano-convex N-BK7 singlet stopped to 2 mm (f/50), image plane at its paraxial focus:
     diffraction-limited, so its PSF is the Airy pattern."""
-    spec = {"surface": [
-        {"radius": 51.68, "thickness": 3.0, "diameter": 2.0, "material": "N-BK7", "stop": True},
-        {"radius": 0.0, "thickness": 100.0, "diameter": 10.0, "material": "AIR"},
-    ]}
+    spec = {
+        "surface": [
+            {"radius": 51.68, "thickness": 3.0, "diameter": 2.0, "material": "N-BK7", "stop": True},
+            {"radius": 0.0, "thickness": 100.0, "diameter": 10.0, "material": "AIR"},
+        ]
+    }
     bfd = paraxial(Lens.from_dict(spec), 550.0).bfd_mm
     spec["surface"][1]["thickness"] = bfd
     return Lens.from_dict(spec)
@@ -27,8 +30,10 @@ def slow_singlet():
 
 def test_airy_pattern(slow_singlet):
     p = psf(slow_singlet, (0, 0), 550.0, pitch_um=1.0, size=121, normalization="peak")
-    rim = P.stop_rim(P.Bundle(slow_singlet, np.zeros((1, 2)), np.array([550.0]), P.RIM_RAYS),
-                     P.chief_rays(slow_singlet, [[0.0, 0.0]], [550.0]))[2]
+    rim = P.stop_rim(
+        P.Bundle(slow_singlet, np.zeros((1, 2)), np.array([550.0]), P.RIM_RAYS),
+        P.chief_rays(slow_singlet, [[0.0, 0.0]], [550.0]),
+    )[2]
     na = float(np.max(np.asarray(rim.rays.dy)))  # sine of the real marginal ray's angle
     x, y = np.meshgrid(p.x_um, p.y_um)
     arg = 2 * math.pi / 0.55 * na * np.hypot(x, y)
@@ -46,7 +51,7 @@ def test_parseval_discrete(doublet):
     assert pf.beta[0, 1] - pf.beta[0, 0] == pytest.approx(da)
     pitch_um = 531e-6 / (n * da) * 1e3
     psf = fraunhofer(pf, pitch_um, n)[0]
-    assert psf.sum() * pitch_um ** 2 == pytest.approx(float(np.sum(pf.amplitude ** 2) * pf.cell_area[0]), rel=1e-5)
+    assert psf.sum() * pitch_um**2 == pytest.approx(float(np.sum(pf.amplitude**2) * pf.cell_area[0]), rel=1e-5)
 
 
 @pytest.mark.parametrize("field", [0.0, 2.0])

@@ -1,5 +1,6 @@
 """`GridSpec`: the one definition of a PSF grid's options; the public arguments of `psf`, `psf_grid`
 and `degrade` checked with one clear error each; the PSF method registry."""
+
 import numpy as np
 import pytest
 
@@ -32,23 +33,26 @@ def test_the_canonical_form_keeps_only_what_makes_the_grid():
     assert GridSpec(field_range_deg=2).field_range_deg == (2.0, 2.0)
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    (dict(wavelengths_nm="531"), r"wavelengths '531' must be a number or a sequence"),
-    (dict(wavelengths_nm=[531, "x"]), r"wavelength \(nm\) 'x' must be a finite number"),
-    (dict(wavelengths_nm=[]), r"wavelengths \[\] must be one or more positive numbers"),
-    (dict(grid="8x8"), r"grid '8x8' must be \(rows, columns\)"),
-    (dict(grid=(2.0, 3)), r"grid \(2.0, 3\) must be \(rows, columns\)"),
-    (dict(layout="polar"), "grid layout 'polar' must be one of field, sensor"),
-    (dict(sensor_mm=(6, 4)), r"sensor size \(6, 4\) mm is for layout sensor"),
-    (dict(layout="sensor", field_range_deg=2.0), "field range 2.0 deg is for layout field"),
-    (dict(pitch_um="0.5"), "PSF pitch '0.5' µm must be a positive number"),
-    (dict(pitch_um=True), "PSF pitch True µm must be a positive number"),
-    (dict(size=16.0), "PSF size 16.0 must be an integer"),
-    (dict(method=None), "PSF method None must be one of fraunhofer, geometric"),
-    (dict(method="geometric", rays=1), "rays 1 must be an integer from 2 to 4096"),
-    (dict(normalization=0), "normalization 0 must be one of"),
-    (dict(auto_window="yes"), "auto_window 'yes' must be True or False"),
-])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(wavelengths_nm="531"), r"wavelengths '531' must be a number or a sequence"),
+        (dict(wavelengths_nm=[531, "x"]), r"wavelength \(nm\) 'x' must be a finite number"),
+        (dict(wavelengths_nm=[]), r"wavelengths \[\] must be one or more positive numbers"),
+        (dict(grid="8x8"), r"grid '8x8' must be \(rows, columns\)"),
+        (dict(grid=(2.0, 3)), r"grid \(2.0, 3\) must be \(rows, columns\)"),
+        (dict(layout="polar"), "grid layout 'polar' must be one of field, sensor"),
+        (dict(sensor_mm=(6, 4)), r"sensor size \(6, 4\) mm is for layout sensor"),
+        (dict(layout="sensor", field_range_deg=2.0), "field range 2.0 deg is for layout field"),
+        (dict(pitch_um="0.5"), "PSF pitch '0.5' µm must be a positive number"),
+        (dict(pitch_um=True), "PSF pitch True µm must be a positive number"),
+        (dict(size=16.0), "PSF size 16.0 must be an integer"),
+        (dict(method=None), "PSF method None must be one of fraunhofer, geometric"),
+        (dict(method="geometric", rays=1), "rays 1 must be an integer from 2 to 4096"),
+        (dict(normalization=0), "normalization 0 must be one of"),
+        (dict(auto_window="yes"), "auto_window 'yes' must be True or False"),
+    ],
+)
 def test_bad_spec_arguments(doublet, kwargs, match):
     with pytest.raises(SolasError, match=match):
         GridSpec(**kwargs)
@@ -56,15 +60,18 @@ def test_bad_spec_arguments(doublet, kwargs, match):
         psf_grid(doublet, **kwargs)
 
 
-@pytest.mark.parametrize("call, match", [
-    (lambda d: psf_grid("solas-doublet"), "lens 'solas-doublet' must be a Lens"),
-    (lambda d: psf_grid(d, {"grid": (2, 2)}), "must be a GridSpec"),
-    (lambda d: psf(None, (0, 0), 531.0), "lens None must be a Lens"),
-    (lambda d: psf(d, (0, 0), "531"), "wavelength '531' nm must be a positive number"),
-    (lambda d: psf(d, (0, 0), [531.0, 486.0], weights="1,1"), "weights '1,1' must be 2 non-negative numbers"),
-    (lambda d: psf(d, (0, 0), 531.0, size=16, pupil_sample=16), "PSF options pupil_sample are unknown"),
-    (lambda d: psf(d, (0, 0), 531.0, method=["geometric"]), r"PSF method \['geometric'\] must be one of"),
-])
+@pytest.mark.parametrize(
+    "call, match",
+    [
+        (lambda d: psf_grid("solas-doublet"), "lens 'solas-doublet' must be a Lens"),
+        (lambda d: psf_grid(d, {"grid": (2, 2)}), "must be a GridSpec"),
+        (lambda d: psf(None, (0, 0), 531.0), "lens None must be a Lens"),
+        (lambda d: psf(d, (0, 0), "531"), "wavelength '531' nm must be a positive number"),
+        (lambda d: psf(d, (0, 0), [531.0, 486.0], weights="1,1"), "weights '1,1' must be 2 non-negative numbers"),
+        (lambda d: psf(d, (0, 0), 531.0, size=16, pupil_sample=16), "PSF options pupil_sample are unknown"),
+        (lambda d: psf(d, (0, 0), 531.0, method=["geometric"]), r"PSF method \['geometric'\] must be one of"),
+    ],
+)
 def test_bad_public_arguments(doublet, call, match):
     with pytest.raises(SolasError, match=match):
         call(doublet)
@@ -87,8 +94,9 @@ def test_each_method_has_its_own_options_and_the_render_stage_registers_its_own(
     assert "render" in METHODS and METHODS["render"].options == METHODS["geometric"].options
 
 
-@pytest.mark.parametrize("text, says", [("0:5", "depth node count 0"), ("3:-1", "nearest distance -1.0 m"),
-                                        ("x:5", "must be N:NEAR")])
+@pytest.mark.parametrize(
+    "text, says", [("0:5", "depth node count 0"), ("3:-1", "nearest distance -1.0 m"), ("x:5", "must be N:NEAR")]
+)
 def test_distances_text_names_what_is_wrong(text, says):
     from solas_mi.psf.spec import parse_distances
 

@@ -1,4 +1,5 @@
 """`psf()` through the method registry: energy, symmetry, wave vs ray optics, polychromatic PSFs, normalisation, bad arguments."""
+
 import numpy as np
 import pytest
 
@@ -64,15 +65,18 @@ def test_normalizations(doublet):
     assert s.meta["lens_hash"] == doublet.hash and s.meta["origin_pixel"] == [32, 32]
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    (dict(pitch_um=0.0), "pitch 0.0 µm must be a positive number"),
-    (dict(size=1), "size 1 must be an integer from 2"),
-    (dict(method="huygens"), "method 'huygens' must be one of fraunhofer, geometric"),
-    (dict(normalization="max"), "normalization 'max' must be one of sum, peak, none"),
-    (dict(pupil_samples=4), "pupil samples 4 must be an integer from 8 to 4096"),
-    (dict(pupil_samples=100000), "pupil samples 100000 must be an integer from 8 to 4096"),
-    (dict(method="geometric", rays=1), "rays 1 must be an integer from 2 to 4096"),
-])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(pitch_um=0.0), "pitch 0.0 µm must be a positive number"),
+        (dict(size=1), "size 1 must be an integer from 2"),
+        (dict(method="huygens"), "method 'huygens' must be one of fraunhofer, geometric"),
+        (dict(normalization="max"), "normalization 'max' must be one of sum, peak, none"),
+        (dict(pupil_samples=4), "pupil samples 4 must be an integer from 8 to 4096"),
+        (dict(pupil_samples=100000), "pupil samples 100000 must be an integer from 8 to 4096"),
+        (dict(method="geometric", rays=1), "rays 1 must be an integer from 2 to 4096"),
+    ],
+)
 def test_bad_psf_arguments(doublet, kwargs, match):
     with pytest.raises(SolasError, match=match):
         psf(doublet, (0, 0), 531.0, **kwargs)

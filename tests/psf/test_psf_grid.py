@@ -1,4 +1,5 @@
 """PSF grids: layout, file round trip, agreement with single PSFs, symmetry reuse, bad arguments."""
+
 import numpy as np
 import pytest
 
@@ -26,8 +27,9 @@ def test_grid_layout_and_round_trip(doublet, tmp_path):
 
 
 def test_grid_matches_single_psfs(doublet):
-    g = psf_grid(doublet, grid=(1, 2), wavelengths_nm=[531.0], field_range_deg=(2.0, 0.0), size=40,
-                         field_sampling="edges")
+    g = psf_grid(
+        doublet, grid=(1, 2), wavelengths_nm=[531.0], field_range_deg=(2.0, 0.0), size=40, field_sampling="edges"
+    )
     one = psf(doublet, (2.0, 0.0), 531.0, size=40).data
     assert np.abs(g.data[0, 0, 1] - one).max() < 1e-6 * one.max()
 
@@ -40,12 +42,15 @@ def test_field_nodes():
     assert parse_wxh("32x24", "grid") == (24, 32)
 
 
-@pytest.mark.parametrize("kwargs, match", [
-    (dict(grid=(0, 1)), r"grid \(0, 1\) must be \(rows, columns\), each an integer >= 1"),
-    (dict(field_range_deg=(1.0, 2.0, 3.0)), r"field \(1.0, 2.0, 3.0\) must be two angles"),
-    (dict(field_range_deg=(-1.0, 2.0)), r"field range \(-1, 2\) deg must be non-negative"),
-    (dict(normalization="max"), "normalization 'max' must be one of"),
-])
+@pytest.mark.parametrize(
+    "kwargs, match",
+    [
+        (dict(grid=(0, 1)), r"grid \(0, 1\) must be \(rows, columns\), each an integer >= 1"),
+        (dict(field_range_deg=(1.0, 2.0, 3.0)), r"field \(1.0, 2.0, 3.0\) must be two angles"),
+        (dict(field_range_deg=(-1.0, 2.0)), r"field range \(-1, 2\) deg must be non-negative"),
+        (dict(normalization="max"), "normalization 'max' must be one of"),
+    ],
+)
 def test_bad_grid_arguments(doublet, kwargs, match):
     with pytest.raises(SolasError, match=match):
         psf_grid(doublet, **kwargs)
@@ -54,14 +59,25 @@ def test_bad_grid_arguments(doublet, kwargs, match):
 @pytest.mark.parametrize("method", ["fraunhofer", "geometric"])
 def test_grid_symmetry_reuse_is_exact(doublet, method):
     """Nodes filled by mirroring/transposing a computed PSF equal a direct computation."""
-    g = psf_grid(doublet, grid=(2, 3), wavelengths_nm=[531.0], field_range_deg=(2.0, 2.0), size=40,
-                         field_sampling="edges", method=method, rays=200, pupil_samples=48, normalization="none")
+    g = psf_grid(
+        doublet,
+        grid=(2, 3),
+        wavelengths_nm=[531.0],
+        field_range_deg=(2.0, 2.0),
+        size=40,
+        field_sampling="edges",
+        method=method,
+        rays=200,
+        pupil_samples=48,
+        normalization="none",
+    )
     ny, nx = g.shape
     for r in range(ny):
         for c in range(nx):
             fx, fy = g.fields_deg[r, c]
-            one = psf(doublet, (fx, fy), 531.0, size=40, method=method, rays=200, pupil_samples=48,
-                              normalization="none")
+            one = psf(
+                doublet, (fx, fy), 531.0, size=40, method=method, rays=200, pupil_samples=48, normalization="none"
+            )
             assert np.abs(g.data[0, r, c] - one.data).max() <= 1e-5 * one.data.max()
             assert g.chief_ray_mm[0, r, c] == pytest.approx(one.chief_ray_mm, abs=1e-12)
 
@@ -117,8 +133,9 @@ def test_every_label_of_the_mosaic_lies_inside_the_png(tmp_path, monkeypatch, no
     monkeypatch.setattr(Figure, "savefig", lambda fig, *a, **k: (saved.append(fig), save(fig, *a, **k))[1])
     centres = (np.arange(nodes) + 0.5) * 4.0 / nodes - 2.0  # `centers` sampling of ±2 deg
     fields = np.stack(np.meshgrid(centres, centres[::-1]), axis=-1)
-    grid = SimpleNamespace(shape=(nodes, nodes), fields_deg=fields, size=160, pitch_um=0.5,
-                           wavelengths_nm=(656.0, 531.0, 486.0))
+    grid = SimpleNamespace(
+        shape=(nodes, nodes), fields_deg=fields, size=160, pitch_um=0.5, wavelengths_nm=(656.0, 531.0, 486.0)
+    )
     plot_grid(grid, np.zeros((nodes * tile, nodes * tile, 3)), tmp_path / "mosaic.png")
     (fig,) = saved
     (ax,) = fig.axes

@@ -1,5 +1,6 @@
 """The pupil-sampling criterion bounds the PSF's error: a Fraunhofer PSF more than 2 % of its peak
 off its converged value is flagged with a pupil-sample count that brings it within 2 %."""
+
 import re
 
 import numpy as np

@@ -1,5 +1,6 @@
 """PSF grids laid out on the sensor (`--layout sensor`): nodes at sensor positions, each PSF's chief
 ray on its node, mirror symmetry, and the convolution placing each node's PSF at its node."""
+
 import numpy as np
 import pytest
 
@@ -12,8 +13,16 @@ LINE_D = 587.5618
 
 @pytest.fixture(scope="module")
 def fisheye_grid():
-    return psf_grid(Lens.load("nikkor-fisheye"), grid=(5, 5), wavelengths_nm=[LINE_D], size=32, pitch_um=4.0,
-                    pupil_samples=128, layout="sensor", sensor_mm=(19.0, 19.0))
+    return psf_grid(
+        Lens.load("nikkor-fisheye"),
+        grid=(5, 5),
+        wavelengths_nm=[LINE_D],
+        size=32,
+        pitch_um=4.0,
+        pupil_samples=128,
+        layout="sensor",
+        sensor_mm=(19.0, 19.0),
+    )
 
 
 def test_chief_rays_land_on_the_nodes(fisheye_grid, doublet):
@@ -30,8 +39,16 @@ def test_chief_rays_land_on_the_nodes(fisheye_grid, doublet):
     assert np.array_equal(f[0, 4], f[0, 0] * np.array([-1, 1])) and np.array_equal(f[4, 0], f[0, 0] * np.array([1, -1]))
     assert tr[0, 0] == tr[0, 4] == tr[4, 0] == tr[4, 4] and 0 < tr[0, 0] < tr[2, 2]
     # a lens of tangent fields takes the same layout: its chief rays land on its nodes too
-    t = psf_grid(doublet, grid=(3, 3), wavelengths_nm=[531.0], size=16, pitch_um=2.0, pupil_samples=32,
-                 layout="sensor", sensor_mm=(6.0, 4.0))
+    t = psf_grid(
+        doublet,
+        grid=(3, 3),
+        wavelengths_nm=[531.0],
+        size=16,
+        pitch_um=2.0,
+        pupil_samples=32,
+        layout="sensor",
+        sensor_mm=(6.0, 4.0),
+    )
     assert np.abs(t.chief_ray_mm[0] - np.array(t.meta["node_mm"])).max() < 1e-4
 
 
@@ -64,5 +81,12 @@ def test_degrade_puts_a_node_psf_at_its_node(fisheye_grid):
 
 def test_sensor_beyond_the_image_circle_is_an_error():
     with pytest.raises(SolasError, match="beyond the lens's image circle"):
-        psf_grid(Lens.load("nikkor-fisheye"), grid=(3, 3), wavelengths_nm=[LINE_D], size=16, pupil_samples=32,
-                 layout="sensor", sensor_mm=(40.0, 40.0))  # corner nodes 18.9 mm off axis; the image circle ends near 14.3 mm
+        psf_grid(
+            Lens.load("nikkor-fisheye"),
+            grid=(3, 3),
+            wavelengths_nm=[LINE_D],
+            size=16,
+            pupil_samples=32,
+            layout="sensor",
+            sensor_mm=(40.0, 40.0),
+        )  # corner nodes 18.9 mm off axis; the image circle ends near 14.3 mm

@@ -1,5 +1,6 @@
 """What a PSF's window holds, and sampling that cannot carry the wavefront: recorded in every PSF's
 and grid's metadata, warned about, and (on request) the window enlarged until it holds the light."""
+
 import numpy as np
 import pytest
 
@@ -43,7 +44,22 @@ def test_grids_record_the_energy_of_every_window(doublet):
 
 
 def test_warnings_go_to_stderr_once(tmp_path, capsys):
-    assert main(["psf", "solas-doublet", "--field-deg", "0,0", "--wavelengths-nm", "656", "--size", "40",
-                 "-o", str(tmp_path / "p.exr")]) == 0
+    assert (
+        main(
+            [
+                "psf",
+                "solas-doublet",
+                "--field-deg",
+                "0,0",
+                "--wavelengths-nm",
+                "656",
+                "--size",
+                "40",
+                "-o",
+                str(tmp_path / "p.exr"),
+            ]
+        )
+        == 0
+    )
     out, err = capsys.readouterr()
     assert err.count("solas-mi psf: warning: the 40x40 window") == 1 and "solas-mi psf: warning" not in out

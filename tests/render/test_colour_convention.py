@@ -3,6 +3,7 @@ Mitsuba's own integrator and `hdrfilm` (`mi.render`), with `solas-mi render` (ou
 scene file) and with `render-image` comes out with its own colours, with no normalisation.
 Before this convention `image_object` emitted three box bands balanced for a flat-spectrum white:
 `mi.render` of the shipped scene came out red (R/G 1.13 against the photo's 0.91)."""
+
 import math
 
 import numpy as np
@@ -23,13 +24,16 @@ def _three_paths(mi, scene_file: str, image: str, doublet, width: int, height: i
     pixels spanning the whole image (the shipped pitch × 1280/width); `spp` for our stratified loop,
     2 × `stock_spp` (two seeds) for Mitsuba's independent sampler (one wavelength per path: more
     colour noise; measured 0.9 % RMS on the red of a green patch's 384 px at 256 spp)."""
-    size = {"width": str(width), "height": str(height), "fresnel": "off",
-            "pitch_um": str(SHIPPED_PITCH_UM * 1280 / width)}
+    size = {
+        "width": str(width),
+        "height": str(height),
+        "fresnel": "off",
+        "pitch_um": str(SHIPPED_PITCH_UM * 1280 / width),
+    }
     scene = mi.load_file(scene_file, **size)
     stock = np.mean([np.array(mi.render(scene, spp=stock_spp, seed=s)) for s in (1, 2)], axis=0)
     loop = render(scene, spp, seed=3).image
-    direct = render_image(doublet, image, sensor=(height, width), spp=spp, response="srgb", fresnel="off",
-                          seed=4).image
+    direct = render_image(doublet, image, sensor=(height, width), spp=spp, response="srgb", fresnel="off", seed=4).image
     return stock, loop, direct
 
 
@@ -66,7 +70,7 @@ def test_flat_colour_patches_keep_their_colours_on_every_path(mi, doublet, tmp_p
         assert x.mean(axis=(0, 1)) == pytest.approx(paths[1].mean(axis=(0, 1)), rel=0.01)
         for i in range(2):
             for j in range(2):
-                block = x[24 * i + 4:24 * i + 20, 32 * j + 4:32 * j + 28].mean(axis=(0, 1))
+                block = x[24 * i + 4 : 24 * i + 20, 32 * j + 4 : 32 * j + 28].mean(axis=(0, 1))
                 assert block == pytest.approx(PATCHES[i, j], rel=0.02, abs=2e-3), (i, j, block)
 
 
@@ -78,13 +82,28 @@ def test_image_object_emits_what_mitsubas_envmap_emits(mi, tmp_path, colour):
     write_exr(str(tmp_path / "sky.exr"), image_channels(np.full((8, 16, 3), colour, np.float32)))
 
     def seen(emitter):
-        return np.array(mi.render(mi.load_dict({
-            "type": "scene", "integrator": {"type": "path"}, "emitter": emitter,
-            "sensor": {"type": "perspective", "fov": 60.0, "film": {"type": "hdrfilm", "width": 4, "height": 4},
-                       "sampler": {"type": "independent", "sample_count": 1024}}}), seed=2)).mean(axis=(0, 1))
+        return np.array(
+            mi.render(
+                mi.load_dict(
+                    {
+                        "type": "scene",
+                        "integrator": {"type": "path"},
+                        "emitter": emitter,
+                        "sensor": {
+                            "type": "perspective",
+                            "fov": 60.0,
+                            "film": {"type": "hdrfilm", "width": 4, "height": 4},
+                            "sampler": {"type": "independent", "sample_count": 1024},
+                        },
+                    }
+                ),
+                seed=2,
+            )
+        ).mean(axis=(0, 1))
 
-    ours = seen({"type": "image_object", "filename": str(tmp_path / "sky.exr"), "mapping": "equirectangular",
-                 "fov_deg": 180.0})
+    ours = seen(
+        {"type": "image_object", "filename": str(tmp_path / "sky.exr"), "mapping": "equirectangular", "fov_deg": 180.0}
+    )
     theirs = seen({"type": "envmap", "filename": str(tmp_path / "sky.exr")})
     assert ours == pytest.approx(theirs, rel=0.01)
     assert ours == pytest.approx(colour, rel=0.01)

@@ -1,5 +1,6 @@
 """A render whose film reaches past the lens's image shows the dark corners a real camera shows, with
 a warning naming the field the lens covers (it was refused: 'the lens does not image that field')."""
+
 import numpy as np
 import pytest
 
@@ -12,13 +13,17 @@ from solas_mi.render.spec import RenderSpec
 def test_a_film_wider_than_the_doublet_s_image_has_dark_corners():
     """38.4 × 28.8 mm of film (24 mm to a corner) behind the doublet, whose light ends at 9.65°: its
     chief rays are blocked from a smaller field on, which the warning names."""
-    with pytest.warns(UserWarning, match=r"pass every aperture up to field ([\d.]+) deg \(image height ([\d.]+) mm\)") as w:
-        r = render_image(Lens.load("solas-doublet"), "scenes/images/rocket.png",
-                         RenderSpec(sensor=(24, 32), pitch_um=1200, spp=4))
+    with pytest.warns(
+        UserWarning, match=r"pass every aperture up to field ([\d.]+) deg \(image height ([\d.]+) mm\)"
+    ) as w:
+        r = render_image(
+            Lens.load("solas-doublet"), "scenes/images/rocket.png", RenderSpec(sensor=(24, 32), pitch_um=1200, spp=4)
+        )
     import re
 
-    field, height = map(float, re.search(r"up to field ([\d.]+) deg \(image height ([\d.]+) mm",
-                                         str(w[0].message)).groups())
+    field, height = map(
+        float, re.search(r"up to field ([\d.]+) deg \(image height ([\d.]+) mm", str(w[0].message)).groups()
+    )
     assert 3.0 < field < 9.7 and height < 24.0
     a = np.asarray(r.image)
     assert np.isfinite(a).all()
@@ -68,12 +73,31 @@ def test_the_cooke_triplet_renders_30_degrees_where_its_beam_is_vignetted(tmp_pa
     assert np.isfinite(chief.image_xy).all()
     with warnings.catch_warnings():
         warnings.simplefilter("ignore")
-        renders = [render_image(lens, np.ones((24, 32, 3), np.float32), sensor=(6, 8), spp=16, fov_deg=f).image[..., 1]
-                   for f in (29.0, 30.0)]
+        renders = [
+            render_image(lens, np.ones((24, 32, 3), np.float32), sensor=(6, 8), spp=16, fov_deg=f).image[..., 1]
+            for f in (29.0, 30.0)
+        ]
     centre = [float(r[2:4, 3:5].mean()) for r in renders]
     print(f"centre at 29 and 30 deg: {centre}; corners at 30: {renders[1][[0, 0, -1, -1], [0, -1, 0, -1]]}")
     assert centre[1] == pytest.approx(centre[0], rel=0.1)
     assert np.all(renders[1][[0, 0, -1, -1], [0, -1, 0, -1]] > 0)
     out = tmp_path / "c.exr"
-    assert main(["render-image", "cooke-triplet", "scenes/images/rocket.png", "--fov-deg", "30", "--sensor", "6x8",
-                 "--spp", "1", "-o", str(out)]) == 0 and out.is_file()
+    assert (
+        main(
+            [
+                "render-image",
+                "cooke-triplet",
+                "scenes/images/rocket.png",
+                "--fov-deg",
+                "30",
+                "--sensor",
+                "6x8",
+                "--spp",
+                "1",
+                "-o",
+                str(out),
+            ]
+        )
+        == 0
+        and out.is_file()
+    )

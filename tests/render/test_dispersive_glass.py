@@ -1,5 +1,6 @@
 """`sellmeier_dielectric` under a stock camera (four different wavelengths per path) and its
 component masks."""
+
 import math
 
 import numpy as np
@@ -24,15 +25,25 @@ def test_a_glass_slab_seen_by_a_stock_camera_passes_white_light_unchanged(varian
     so each pixel is the film's flat white. Lane termination at every interface without its
     probability would come out 4× too bright (two interfaces), no termination weight 4× too dark."""
     mi = solas_mi.mitsuba(variant)
-    scene = mi.load_dict({
-        "type": "scene", "integrator": {"type": "path", "max_depth": 4},
-        "sensor": {"type": "perspective", "fov": 10.0,
-                   "to_world": mi.ScalarTransform4f().look_at([0, 0, -5], [0, 0, 0], [0, 1, 0]),
-                   "film": {"type": "hdrfilm", "width": size, "height": size, "rfilter": {"type": "box"}},
-                   "sampler": {"type": "independent", "sample_count": spp}},
-        "light": {"type": "constant", "radiance": {"type": "spectrum", "value": 1.0}},
-        "slab": {"type": "cube", "to_world": mi.ScalarTransform4f().scale([3.0, 3.0, 0.5]),
-                 "bsdf": {"type": "sellmeier_dielectric", "int_glass": "N-BK7", "fresnel": "off"}}})
+    scene = mi.load_dict(
+        {
+            "type": "scene",
+            "integrator": {"type": "path", "max_depth": 4},
+            "sensor": {
+                "type": "perspective",
+                "fov": 10.0,
+                "to_world": mi.ScalarTransform4f().look_at([0, 0, -5], [0, 0, 0], [0, 1, 0]),
+                "film": {"type": "hdrfilm", "width": size, "height": size, "rfilter": {"type": "box"}},
+                "sampler": {"type": "independent", "sample_count": spp},
+            },
+            "light": {"type": "constant", "radiance": {"type": "spectrum", "value": 1.0}},
+            "slab": {
+                "type": "cube",
+                "to_world": mi.ScalarTransform4f().scale([3.0, 3.0, 0.5]),
+                "bsdf": {"type": "sellmeier_dielectric", "int_glass": "N-BK7", "fresnel": "off"},
+            },
+        }
+    )
     image = np.array(mi.render(scene, seed=5))
     ratio = image.mean(axis=(0, 1)) / _flat_white(solas_mi.mitsuba("llvm_ad_spectral"))
     assert np.abs(ratio - 1).max() < (0.03 if variant == "llvm_ad_spectral" else 0.08), ratio
@@ -40,7 +51,7 @@ def test_a_glass_slab_seen_by_a_stock_camera_passes_white_light_unchanged(varian
 
 def _interaction(mi, wavelengths, cos_theta=0.8):
     si = mi.SurfaceInteraction3f()
-    si.wi = mi.Vector3f(math.sqrt(1 - cos_theta ** 2), 0.0, cos_theta)
+    si.wi = mi.Vector3f(math.sqrt(1 - cos_theta**2), 0.0, cos_theta)
     si.wavelengths = mi.Spectrum(*wavelengths)
     return si
 
@@ -64,10 +75,12 @@ def test_component_masks_return_one_component_with_its_weight(mi, fresnel):
     si = _interaction(mi, [550.0] * 4)
     r, n = _fresnel(mi, 550.0)
     for flags, component in ((mi.BSDFFlags.DeltaReflection, 0), (mi.BSDFFlags.DeltaTransmission, 1)):
-        for ctx in (mi.BSDFContext(mi.TransportMode.Radiance, +flags, component),  # by type
-                    mi.BSDFContext(mi.TransportMode.Radiance, +mi.BSDFFlags.All, component)):  # by index
+        for ctx in (
+            mi.BSDFContext(mi.TransportMode.Radiance, +flags, component),  # by type
+            mi.BSDFContext(mi.TransportMode.Radiance, +mi.BSDFFlags.All, component),
+        ):  # by index
             bs, weight = _sample(mi, bsdf, ctx, si, sample1=0.999 if component == 0 else 0.0)
-            expected = r if component == 0 else (1 - r) / n ** 2
+            expected = r if component == 0 else (1 - r) / n**2
             assert np.allclose(weight, expected, rtol=1e-5)
             assert int(bs.sampled_component[0]) == component and (float(bs.wo.z[0]) > 0) == (component == 0)
 
@@ -90,12 +103,12 @@ def test_different_wavelengths_follow_one_lane_weighted_by_four(mi, sample1, lan
     bs, weight = _sample(mi, bsdf, ctx, _interaction(mi, lams), sample1)
     r, n = _fresnel(mi, lams[lane])
     expected = np.zeros(4)
-    expected[lane] = 4 * (1 - r) / n ** 2
+    expected[lane] = 4 * (1 - r) / n**2
     assert np.allclose(weight, expected, rtol=1e-5)
     sin_t = -float(bs.wo.x[0])  # the refracted ray crosses to the other side of the normal
     assert sin_t == pytest.approx(0.6 / n, rel=1e-5)  # Snell's law at this lane's index
     _, equal = _sample(mi, bsdf, ctx, _interaction(mi, [lams[lane]] * 4), sample1)
-    assert np.allclose(equal, (1 - r) / n ** 2, rtol=1e-5)
+    assert np.allclose(equal, (1 - r) / n**2, rtol=1e-5)
 
 
 @pytest.mark.parametrize("name", ["HOYA:TAFD5F", "OHARA:S-LAH59"])
@@ -120,8 +133,9 @@ def test_glass_at_a_temperature_refracts_with_its_index_there(mi, tmp_path):
     (part, *_) = [p for p in lens_parts(hot) if p.int_glass]
     assert dict(part.environment) == {"temperature_c": 80.0, "pressure_kpa": 95.0}
     assert all(not p.environment for p in lens_parts(Lens.load("solas-doublet")))
-    bsdf = mi.load_dict({"type": "sellmeier_dielectric", "int_glass": "N-BK7", "fresnel": "transmit",
-                         **dict(part.environment)})
+    bsdf = mi.load_dict(
+        {"type": "sellmeier_dielectric", "int_glass": "N-BK7", "fresnel": "transmit", **dict(part.environment)}
+    )
     ctx = mi.BSDFContext(mi.TransportMode.Radiance, +mi.BSDFFlags.DeltaTransmission, 1)
     for lam in (450.0, 700.0):
         bs, _ = _sample(mi, bsdf, ctx, _interaction(mi, [lam] * 4), sample1=0.0)

@@ -2,6 +2,7 @@
 (an environment map seen through the fisheye, whose film reaches past its image circle, renders with
 no NaN), the image writer refuses a NaN or infinite pixel naming the count and the first, and lines
 under an hdrfilm are refused with the way out."""
+
 import numpy as np
 import pytest
 
@@ -10,10 +11,19 @@ from solas_mi.errors import SolasError
 
 def _fisheye_env_scene(mi, pitch_um):
     env = np.ones((8, 16, 3), dtype=np.float32)
-    return mi.load_dict({"type": "scene", "integrator": {"type": "path"},
-                         "env": {"type": "envmap", "bitmap": mi.Bitmap(env)},
-                         "sensor": {"type": "lens_camera", "lens": "nikkor-fisheye", "pitch_um": pitch_um,
-                                    "film": {"type": "hdrfilm", "width": 40, "height": 30}}})
+    return mi.load_dict(
+        {
+            "type": "scene",
+            "integrator": {"type": "path"},
+            "env": {"type": "envmap", "bitmap": mi.Bitmap(env)},
+            "sensor": {
+                "type": "lens_camera",
+                "lens": "nikkor-fisheye",
+                "pitch_um": pitch_um,
+                "film": {"type": "hdrfilm", "width": 40, "height": 30},
+            },
+        }
+    )
 
 
 def test_env_map_through_the_fisheye_past_its_image_circle_has_no_nan(mi):
@@ -55,6 +65,9 @@ def test_infinite_allowed_where_said_nan_never(tmp_path):
 
 def test_lines_under_an_hdrfilm_are_refused_with_the_way_out(mi):
     sensor = {"type": "lens_camera", "response": "lines", "film": {"type": "hdrfilm", "width": 8, "height": 6}}
-    with pytest.raises(RuntimeError, match=r"response 'lines.*' has lines, which an hdrfilm cannot develop.*"
-                                           r"specfilm.*continuous response \(srgb"):
+    with pytest.raises(
+        RuntimeError,
+        match=r"response 'lines.*' has lines, which an hdrfilm cannot develop.*"
+        r"specfilm.*continuous response \(srgb",
+    ):
         mi.load_dict(sensor)

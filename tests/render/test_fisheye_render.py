@@ -1,5 +1,6 @@
 """The fisheye rendered directly through its lens geometry: an equidistant environment image of dots
 at 0…90° lands where the Float64 tracer's real chief rays land (distortion from the optics alone)."""
+
 import numpy as np
 import pytest
 
@@ -25,8 +26,17 @@ def dot_image(fields_deg) -> np.ndarray:
 def test_dots_land_on_the_chief_rays_out_to_90_degrees():
     lens = Lens.load("nikkor-fisheye")
     fields = np.array([[0.0, 0.0], [0.0, 45.0], [0.0, 75.0], [0.0, 90.0], [90.0, 0.0], [-63.5, -63.5]])
-    r = render_image(lens, dot_image(fields), sensor=(SENSOR, SENSOR), pitch_um=PITCH_UM, spp=256, response="mono:587.5618",
-                     fov_deg=FOV_DEG, mapping="equidistant", variant="llvm_ad_spectral")
+    r = render_image(
+        lens,
+        dot_image(fields),
+        sensor=(SENSOR, SENSOR),
+        pitch_um=PITCH_UM,
+        spp=256,
+        response="mono:587.5618",
+        fov_deg=FOV_DEG,
+        mapping="equidistant",
+        variant="llvm_ad_spectral",
+    )
     img = r.image[..., 0].astype(np.float64)
     xy = chief_rays(lens, fields, np.full(len(fields), 587.5618)).image_xy
     pitch = PITCH_UM * 1e-3
@@ -55,16 +65,22 @@ def test_a_3d_scene_through_the_fisheye_lens_camera(tmp_path):
     from solas_mi.render.stock import render_scene
     from solas_mi.render.user_scene import load
 
-    balls = {0.0: (0.0, 0.0, 10.0), 60.0: (10 * np.sin(np.radians(60)), 0.0, 10 * np.cos(np.radians(60))),
-             90.0: (0.0, 10.0, 0.0)}
-    shapes = "".join(f'<shape type="sphere"><point name="center" x="{x}" y="{y}" z="{z}"/><float name="radius" '
-                     f'value="0.05"/><emitter type="area"><rgb name="radiance" value="100"/></emitter></shape>'
-                     for x, y, z in balls.values())
+    balls = {
+        0.0: (0.0, 0.0, 10.0),
+        60.0: (10 * np.sin(np.radians(60)), 0.0, 10 * np.cos(np.radians(60))),
+        90.0: (0.0, 10.0, 0.0),
+    }
+    shapes = "".join(
+        f'<shape type="sphere"><point name="center" x="{x}" y="{y}" z="{z}"/><float name="radius" '
+        f'value="0.05"/><emitter type="area"><rgb name="radiance" value="100"/></emitter></shape>'
+        for x, y, z in balls.values()
+    )
     (tmp_path / "balls.xml").write_text(
         '<scene version="3.0.0"><sensor type="perspective"><float name="fov" value="60"/><transform '
         'name="to_world"><lookat origin="0,0,0" target="0,0,1" up="0,1,0"/></transform><film type="hdrfilm">'
         f'<integer name="width" value="{SENSOR}"/><integer name="height" value="{SENSOR}"/></film></sensor>'
-        f"{shapes}</scene>")
+        f"{shapes}</scene>"
+    )
     lens = Lens.load("nikkor-fisheye")
     scene = load(tmp_path / "balls.xml", "llvm_ad_spectral", lens, pitch_um=PITCH_UM, response="mono:587.5618")
     img = render_scene(scene, 64).image[..., 0].astype(np.float64)

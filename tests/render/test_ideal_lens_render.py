@@ -1,5 +1,6 @@
 """An ideal thin lens (`focal_length`) in the render stage: the lens camera traces it (a dot lands where
 the thin-lens equation puts it), the mesh scene, which has no glass to build for it, refuses it by name."""
+
 import numpy as np
 import pytest
 
@@ -14,8 +15,14 @@ F_MM = 20.0
 @pytest.fixture
 def ideal(tmp_path):
     """An ideal lens f = 20 mm stopped to 4 mm (f/5), focused at infinity, saved as TOML."""
-    lens = Lens.from_dict({"name": "ideal", "field_deg": 10.0, "wavelengths_nm": [531.0], "surface": [
-        {"radius": 0.0, "thickness": F_MM, "diameter": 4.0, "stop": True, "focal_length": F_MM}]})
+    lens = Lens.from_dict(
+        {
+            "name": "ideal",
+            "field_deg": 10.0,
+            "wavelengths_nm": [531.0],
+            "surface": [{"radius": 0.0, "thickness": F_MM, "diameter": 4.0, "stop": True, "focal_length": F_MM}],
+        }
+    )
     return lens.save(tmp_path / "ideal.toml")
 
 
@@ -30,14 +37,37 @@ def test_lens_camera_images_a_dot_where_the_thin_lens_equation_says(mi, ideal):
     expected = magnification * np.array([ox, oy])
     row0 = int(round(rows / 2 - expected[1] * 1e3)) - n // 2
     T = mi.ScalarTransform4f
-    film = {"type": "hdrfilm", "width": n, "height": rows, "pixel_format": "luminance", "rfilter": {"type": "box"},
-            "crop_offset_y": row0, "crop_width": n, "crop_height": n}
-    sensor = {"type": "lens_camera", "lens": str(ideal), "pitch_um": 1.0, "response": "mono:531",
-              "focus_distance": distance, "film": film}
+    film = {
+        "type": "hdrfilm",
+        "width": n,
+        "height": rows,
+        "pixel_format": "luminance",
+        "rfilter": {"type": "box"},
+        "crop_offset_y": row0,
+        "crop_width": n,
+        "crop_height": n,
+    }
+    sensor = {
+        "type": "lens_camera",
+        "lens": str(ideal),
+        "pitch_um": 1.0,
+        "response": "mono:531",
+        "focus_distance": distance,
+        "film": film,
+    }
     disk = T().translate([ox * 1e-3, -oy * 1e-3, distance]).rotate([0, 1, 0], 180).scale(1e-3)
-    scene = mi.load_dict({"type": "scene", "integrator": {"type": "path"}, "sensor": sensor,
-                          "dot": {"type": "disk", "to_world": disk,
-                                  "emitter": {"type": "area", "radiance": {"type": "uniform", "value": 1.0}}}})
+    scene = mi.load_dict(
+        {
+            "type": "scene",
+            "integrator": {"type": "path"},
+            "sensor": sensor,
+            "dot": {
+                "type": "disk",
+                "to_world": disk,
+                "emitter": {"type": "area", "radiance": {"type": "uniform", "value": 1.0}},
+            },
+        }
+    )
     image = np.array(mi.render(scene, spp=64, seed=1))[..., 0]
     assert image.sum() > 0
     w = image / image.sum()

@@ -2,6 +2,7 @@
 inverse of `plane_point`): the pdf integrates to one over the sphere, sampled directions carry the pdf
 that `pdf_direction` gives them, and the sampled estimate of the emitted radiance over the sphere
 equals a uniform-sphere estimate. Then the fisheye's environment under stock `path`."""
+
 import math
 
 import numpy as np
@@ -19,8 +20,9 @@ def _emitter(mi, tmp_path, mapping, fov):
     image = (0.2 + rng.random((12, 20))).astype(np.float32)
     image[3:6, 4:9] = 6.0  # a bright patch: the sampling must follow the texel weights
     write_exr(tmp_path / "env.exr", {"Y": image})
-    emitter = mi.load_dict({"type": "image_object", "filename": str(tmp_path / "env.exr"), "fov_deg": fov,
-                            "mapping": mapping})
+    emitter = mi.load_dict(
+        {"type": "image_object", "filename": str(tmp_path / "env.exr"), "fov_deg": fov, "mapping": mapping}
+    )
     emitter.set_scene(mi.load_dict({"type": "scene", "ball": {"type": "sphere"}}))
     return emitter, image
 
@@ -100,8 +102,9 @@ def test_stock_path_renders_the_fisheye_environment_as_the_loop_does(mi, tmp_pat
     env = (0.5 + 0.4 * np.cos(2 * np.pi * (xx - n / 2) * step / 40.0)).astype(np.float32)
     write_exr(tmp_path / "env.exr", {"Y": env})
     camera = fisheye_camera(lens, (32, 32), n * step / 2, 600.0)
-    xml = write_scene(lens, tmp_path, str(tmp_path / "env.exr"), camera, response="srgb", fresnel="off",
-                      mapping="equidistant")
+    xml = write_scene(
+        lens, tmp_path, str(tmp_path / "env.exr"), camera, response="srgb", fresnel="off", mapping="equidistant"
+    )
     scene = mi.load_file(str(xml))
     stock = np.array(mi.render(scene, spp=1024, seed=1))  # independent wavelengths: 1024 for 1 % in the means
     loop = render(scene, 64, seed=1).image

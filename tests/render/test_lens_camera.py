@@ -1,6 +1,7 @@
 """The `lens_camera` sensor: a real lens traced sequentially inside the sensor, in any Mitsuba scene
 (world in metres). Edge widths and a +2° dot against the Float64 tracer, the variants against each
 other, the framing of a `perspective` sensor, and its errors."""
+
 import math
 
 import numpy as np
@@ -19,23 +20,32 @@ EDGE_W, EDGE_H = 96, 8
 
 def _camera(mi, width, height, pitch_um, response="mono:531", **extra):
     """A lens_camera dict on a luminance hdrfilm with a box filter."""
-    film = {"type": "hdrfilm", "width": width, "height": height, "pixel_format": "luminance",
-            "rfilter": {"type": "box"}}
+    film = {
+        "type": "hdrfilm",
+        "width": width,
+        "height": height,
+        "pixel_format": "luminance",
+        "rfilter": {"type": "box"},
+    }
     film.update(extra.pop("film", {}))
     return {"type": "lens_camera", "pitch_um": pitch_um, "response": response, "film": film, **extra}
 
 
 def _emitter(shape: str, to_world) -> dict:
-    return {"type": shape, "to_world": to_world,
-            "emitter": {"type": "area", "radiance": {"type": "uniform", "value": 1.0}}}
+    return {
+        "type": shape,
+        "to_world": to_world,
+        "emitter": {"type": "area", "radiance": {"type": "uniform", "value": 1.0}},
+    }
 
 
 def _half_plane_scene(mi, distance, sensor):
     """A white half-plane (camera x > 0) facing the camera at `distance` (m) on its axis."""
     size = min(distance, 1e3)
     tf = mi.ScalarTransform4f().translate([size, 0, distance]).rotate([0, 1, 0], 180).scale(size)
-    return mi.load_dict({"type": "scene", "integrator": {"type": "path"}, "sensor": sensor,
-                         "plane": _emitter("rectangle", tf)})
+    return mi.load_dict(
+        {"type": "scene", "integrator": {"type": "path"}, "sensor": sensor, "plane": _emitter("rectangle", tf)}
+    )
 
 
 def _width_10_90(profile: np.ndarray, pitch: float) -> float:
@@ -65,8 +75,9 @@ def test_edge_width_matches_the_tracer(mi, doublet, distance):
     away) within 2 % of the tracer's finite-object prediction (measured: within 0.3 %)."""
     focus = {} if math.isinf(distance) else {"focus_distance": distance}
     sensor = _camera(mi, EDGE_W, EDGE_H, PITCH_UM, **focus)
-    image = np.array(mi.render(_half_plane_scene(mi, 1e6 if math.isinf(distance) else distance, sensor),
-                               spp=1024, seed=1))[..., 0]
+    image = np.array(
+        mi.render(_half_plane_scene(mi, 1e6 if math.isinf(distance) else distance, sensor), spp=1024, seed=1)
+    )[..., 0]
     lens = doublet if math.isinf(distance) else focused(doublet, distance * 1e3)
     width, predicted = _width_10_90(image.mean(axis=0), PITCH_UM), _predicted_width(lens)
     assert abs(width / predicted - 1) < 0.02, (width, predicted)
@@ -84,11 +95,19 @@ def test_dot_at_two_degrees_lands_where_the_tracer_says(mi, doublet):
     row0 = int(round(rows / 2 - expected[1] * 1e3)) - n // 2
     T = mi.ScalarTransform4f
     to_world = T().look_at([60, 0, 80], [61, 0.2, 81], [0, 1, 0])
-    sensor = _camera(mi, n, rows, 1.0, focus_distance=distance, to_world=to_world,
-                     film={"crop_offset_y": row0, "crop_width": n, "crop_height": n})
+    sensor = _camera(
+        mi,
+        n,
+        rows,
+        1.0,
+        focus_distance=distance,
+        to_world=to_world,
+        film={"crop_offset_y": row0, "crop_width": n, "crop_height": n},
+    )
     disk = to_world @ T().translate([ox * 1e-3, -oy * 1e-3, distance]).rotate([0, 1, 0], 180).scale(1e-3)
-    scene = mi.load_dict({"type": "scene", "integrator": {"type": "path"}, "sensor": sensor,
-                          "dot": _emitter("disk", disk)})
+    scene = mi.load_dict(
+        {"type": "scene", "integrator": {"type": "path"}, "sensor": sensor, "dot": _emitter("disk", disk)}
+    )
     image = np.array(mi.render(scene, spp=256, seed=1))[..., 0]
     w = image / image.sum()
     x = (np.arange(n) + 0.5 - n / 2) * 1e-3
@@ -100,10 +119,10 @@ def test_dot_at_two_degrees_lands_where_the_tracer_says(mi, doublet):
 def test_scalar_and_llvm_agree():
     """A tiny srgb render of the half-plane at 2 m: scalar_spectral's channel means within 4 σ of the
     llvm renders' seed-to-seed spread at the same spp."""
+
     def render(variant, spp, seed):
         mi = solas_mi.mitsuba(variant)
-        sensor = _camera(mi, 8, 6, 20.0, response="srgb", focus_distance=2.0,
-                         film={"pixel_format": "rgb"})
+        sensor = _camera(mi, 8, 6, 20.0, response="srgb", focus_distance=2.0, film={"pixel_format": "rgb"})
         return np.array(mi.render(_half_plane_scene(mi, 2.0, sensor), spp=spp, seed=seed)).mean(axis=(0, 1))
 
     scalar = render("scalar_spectral", 64, 3)
@@ -116,8 +135,9 @@ def _marker_column(mi, sensor, to_world, x: float, distance: float) -> float:
     """Column centroid of a 2 cm disc at camera-frame (x, 0, distance)."""
     T = mi.ScalarTransform4f
     disk = to_world @ T().translate([x, 0, distance]).rotate([0, 1, 0], 180).scale(0.01)
-    scene = mi.load_dict({"type": "scene", "integrator": {"type": "path"}, "sensor": sensor,
-                          "marker": _emitter("disk", disk)})
+    scene = mi.load_dict(
+        {"type": "scene", "integrator": {"type": "path"}, "sensor": sensor, "marker": _emitter("disk", disk)}
+    )
     image = np.array(mi.render(scene, spp=64, seed=1))[..., 0]
     return float((image.sum(axis=0) * np.arange(image.shape[1])).sum() / image.sum())
 
@@ -129,10 +149,10 @@ def test_perspective_swap_keeps_the_framing(mi, doublet):
     half = math.atan(0.5 * width * pitch * 1e-3 / paraxial(doublet).efl_mm)
     to_world = mi.ScalarTransform4f().look_at([3, 1, -2], [3.5, 1, 0], [0, 1, 0])
     film = {"type": "hdrfilm", "width": width, "height": height, "pixel_format": "luminance"}
-    sensors = [{"type": "perspective", "fov": 2 * math.degrees(half), "fov_axis": "x", "to_world": to_world,
-                "film": film},
-               {"type": "lens_camera", "pitch_um": pitch, "focus_distance": distance, "to_world": to_world,
-                "film": film}]
+    sensors = [
+        {"type": "perspective", "fov": 2 * math.degrees(half), "fov_axis": "x", "to_world": to_world, "film": film},
+        {"type": "lens_camera", "pitch_um": pitch, "focus_distance": distance, "to_world": to_world, "film": film},
+    ]
     for sensor in sensors:
         centre = _marker_column(mi, sensor, to_world, 0.0, distance)
         right = _marker_column(mi, sensor, to_world, -0.8 * math.tan(half) * distance, distance)
@@ -140,16 +160,19 @@ def test_perspective_swap_keeps_the_framing(mi, doublet):
         assert 0.85 * width < right < width, (sensor["type"], right)
 
 
-@pytest.mark.parametrize("prop, value, allowed", [
-    ("pitch_um", -1.0, "positive number"),
-    ("world_unit_mm", 0.0, "positive number"),
-    ("focus_distance", -2.0, "positive number"),
-    ("focus_distance", 0.05, "beyond the focal length"),
-    ("fresnel", "always", "off, transmit"),
-    ("lane_tolerance", -1.0, ">= 0"),
-    ("response", "rainbow", "allowed: lines"),
-    ("lens", "no-such-lens", "shipped lenses"),
-])
+@pytest.mark.parametrize(
+    "prop, value, allowed",
+    [
+        ("pitch_um", -1.0, "positive number"),
+        ("world_unit_mm", 0.0, "positive number"),
+        ("focus_distance", -2.0, "positive number"),
+        ("focus_distance", 0.05, "beyond the focal length"),
+        ("fresnel", "always", "off, transmit"),
+        ("lane_tolerance", -1.0, ">= 0"),
+        ("response", "rainbow", "allowed: lines"),
+        ("lens", "no-such-lens", "shipped lenses"),
+    ],
+)
 def test_bad_properties_name_value_and_allowed(mi, prop, value, allowed):
     """Mitsuba's loader passes the plugin's SolasError on inside a RuntimeError."""
     with pytest.raises(RuntimeError) as info:
@@ -182,9 +205,14 @@ def test_light_tracing_is_refused_with_a_clear_message(mi, tmp_path):
     operation')."""
     from solas_mi.render.stock import render_scene
 
-    scene = mi.load_dict({"type": "scene", "integrator": {"type": "ptracer"}, "sensor": _camera(mi, 8, 6, 40.0),
-                          "plane": _emitter("rectangle", mi.ScalarTransform4f().translate([0, 0, 5]).rotate(
-                              [0, 1, 0], 180))})
+    scene = mi.load_dict(
+        {
+            "type": "scene",
+            "integrator": {"type": "ptracer"},
+            "sensor": _camera(mi, 8, 6, 40.0),
+            "plane": _emitter("rectangle", mi.ScalarTransform4f().translate([0, 0, 5]).rotate([0, 1, 0], 180)),
+        }
+    )
     with pytest.raises(Exception) as info:  # noqa: PT011 -- whatever Mitsuba wraps it in; the cause is checked
         mi.render(scene, spp=1)
     cause = info.value
@@ -250,11 +278,26 @@ def test_stratified_wavelengths_cut_the_colour_noise_without_bias(mi):
     0.7 × that of independent ones (measured 0.10 ×), and the centre pixels' mean the sky's colour
     (the lens lossless, its relative illumination 1 there): within 1 % (3 % for the noisier
     independent wavelengths)."""
+
     def renders(stratify: bool):  # lanes never shared: the hero's wavelength alone is stratified
-        camera = _camera(mi, 16, 12, 40.0, response="srgb", stratify_wavelengths=stratify, lane_tolerance=0.0,
-                         film={"pixel_format": "rgb"})
-        scene = mi.load_dict({"type": "scene", "integrator": {"type": "path"}, "sensor": camera,
-                              "sky": {"type": "constant", "radiance": {"type": "rgb", "value": [0.8, 0.3, 0.1]}}})
+        camera = _camera(
+            mi,
+            16,
+            12,
+            40.0,
+            response="srgb",
+            stratify_wavelengths=stratify,
+            lane_tolerance=0.0,
+            film={"pixel_format": "rgb"},
+        )
+        scene = mi.load_dict(
+            {
+                "type": "scene",
+                "integrator": {"type": "path"},
+                "sensor": camera,
+                "sky": {"type": "constant", "radiance": {"type": "rgb", "value": [0.8, 0.3, 0.1]}},
+            }
+        )
         return np.array([np.array(mi.render(scene, spp=16, seed=s)) for s in range(16)])
 
     noise, centre = [], []
@@ -278,14 +321,32 @@ def test_lanes_that_leave_alike_share_a_path_without_bias(mi):
     (`lane_tolerance` 0.25, the default) gives at most 0.7 × the RGB noise of the hero lane alone (0;
     measured 0.55 ×: the rest is the ball's path noise), and the same mean image: every pixel within
     4 standard errors, the channels' means within 1 %."""
+
     def scene(tolerance):
-        camera = _camera(mi, 16, 12, 400.0, response="srgb", lane_tolerance=tolerance, focus_distance=1.0,
-                         film={"pixel_format": "rgb"})
-        return mi.load_dict({"type": "scene", "integrator": {"type": "path"}, "sensor": camera,
-                             "sky": {"type": "constant", "radiance": {"type": "rgb", "value": [0.8, 0.3, 0.1]}},
-                             "ball": {"type": "sphere", "center": [0.0, 0.0, 1.0], "radius": 0.02,
-                                      "bsdf": {"type": "diffuse",
-                                               "reflectance": {"type": "rgb", "value": [0.1, 0.3, 0.8]}}}})
+        camera = _camera(
+            mi,
+            16,
+            12,
+            400.0,
+            response="srgb",
+            lane_tolerance=tolerance,
+            focus_distance=1.0,
+            film={"pixel_format": "rgb"},
+        )
+        return mi.load_dict(
+            {
+                "type": "scene",
+                "integrator": {"type": "path"},
+                "sensor": camera,
+                "sky": {"type": "constant", "radiance": {"type": "rgb", "value": [0.8, 0.3, 0.1]}},
+                "ball": {
+                    "type": "sphere",
+                    "center": [0.0, 0.0, 1.0],
+                    "radius": 0.02,
+                    "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.1, 0.3, 0.8]}},
+                },
+            }
+        )
 
     shared, hero = (_seeds(mi, scene(t), 16, 16) for t in (0.25, 0.0))
     noise = [np.sqrt(np.mean((x - x.mean(axis=0)) ** 2)) / x.mean() for x in (shared, hero)]
@@ -302,15 +363,20 @@ def test_the_fisheyes_lateral_colour_survives_the_lane_sharing(mi):
     (`lane_tolerance` 1e9, what a camera with one ray for the four lanes would do) loses it (measured
     0.04 px): the test can tell."""
     th = math.radians(40.0)
-    stripe = {"type": "rectangle", "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [1.0, 1.0, 1.0]}},
-              "to_world": mi.ScalarTransform4f().translate([math.sin(th), 0, math.cos(th)])
-              .rotate([0, 1, 0], 220).scale([0.01, 0.3, 1])}
+    stripe = {
+        "type": "rectangle",
+        "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [1.0, 1.0, 1.0]}},
+        "to_world": mi.ScalarTransform4f()
+        .translate([math.sin(th), 0, math.cos(th)])
+        .rotate([0, 1, 0], 220)
+        .scale([0.01, 0.3, 1]),
+    }
 
     def offset(tolerance):
-        film = {"pixel_format": "rgb", "crop_offset_x": 184, "crop_offset_y": 596, "crop_width": 48,
-                "crop_height": 8}
-        camera = _camera(mi, 1600, 1200, 12.0, response="srgb", lens="nikkor-fisheye", lane_tolerance=tolerance,
-                         film=film)
+        film = {"pixel_format": "rgb", "crop_offset_x": 184, "crop_offset_y": 596, "crop_width": 48, "crop_height": 8}
+        camera = _camera(
+            mi, 1600, 1200, 12.0, response="srgb", lens="nikkor-fisheye", lane_tolerance=tolerance, film=film
+        )
         scene = mi.load_dict({"type": "scene", "integrator": {"type": "path"}, "sensor": camera, "stripe": stripe})
         profile = _seeds(mi, scene, 64, 4).mean(axis=(0, 1))  # (columns, channels)
         centroid = (profile * np.arange(len(profile))[:, None]).sum(axis=0) / profile.sum(axis=0)

@@ -1,4 +1,5 @@
 """`render SCENE --lens`: a scene camera whose numbers the lens camera cannot read is one line, exit 2."""
+
 import pytest
 
 from solas_mi.cli import main
@@ -15,9 +16,16 @@ SCENE = """<scene version="3.0.0">
 FOV = '<float name="fov" value="4"/>'
 
 
-@pytest.mark.parametrize("field, width, height", [(FOV, 0, 0), ('<float name="fov" value="abc"/>', 24, 16),
-                                                  ('<string name="focal_length" value="abcmm"/>', 24, 16),
-                                                  (FOV, "abc", 16), (FOV, "$nodef", 16)])
+@pytest.mark.parametrize(
+    "field, width, height",
+    [
+        (FOV, 0, 0),
+        ('<float name="fov" value="abc"/>', 24, 16),
+        ('<string name="focal_length" value="abcmm"/>', 24, 16),
+        (FOV, "abc", 16),
+        (FOV, "$nodef", 16),
+    ],
+)
 def test_a_camera_the_lens_camera_cannot_read_is_one_line(tmp_path, capsys, field, width, height):
     scene = tmp_path / "s.xml"
     scene.write_text(SCENE.format(field=field, width=width, height=height))

@@ -1,6 +1,7 @@
 """What `lens_camera` does to stay cheap per sample, checked against what it replaces: the wavelengths
 from the response's quantile table (`WavelengthSampler.sample_quantile`) against the response's bins,
 and the rays the lens blocks, which leave with no length (no scene path traced for a weight 0)."""
+
 import numpy as np
 
 from solas_mi.render.response import parse

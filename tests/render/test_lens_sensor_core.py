@@ -1,5 +1,6 @@
 """The core both lens sensors share (`plugins/lens_film.py`): the film's pixels on the image plane,
 its crop window, the density of a film point, and one message for a bad pitch."""
+
 import re
 import tempfile
 from pathlib import Path
@@ -25,8 +26,9 @@ def mi():
 
 
 def _sensor(mi, plugin, **film):
-    return mi.load_dict({"type": plugin, "pitch_um": PITCH_UM,
-                         "film": {"type": "hdrfilm", "width": WIDTH, "height": HEIGHT, **film}})
+    return mi.load_dict(
+        {"type": plugin, "pitch_um": PITCH_UM, "film": {"type": "hdrfilm", "width": WIDTH, "height": HEIGHT, **film}}
+    )
 
 
 def _grid(n=5):
@@ -45,7 +47,7 @@ def test_film_points_are_the_pixels_on_the_image_plane(mi, plugin, doublet):
     pitch = PITCH_UM * 1e-3
     assert np.allclose(np.array(p.x), (cols + 0.5 - WIDTH / 2) * pitch, atol=1e-7)
     assert np.allclose(np.array(p.y), (HEIGHT / 2 - rows - 0.5) * pitch, atol=1e-7)
-    assert sensor.pdf_area() == pytest.approx(1.0 / (WIDTH * HEIGHT * pitch ** 2))
+    assert sensor.pdf_area() == pytest.approx(1.0 / (WIDTH * HEIGHT * pitch**2))
     assert (sensor.width, sensor.height) == (WIDTH, HEIGHT)
 
 
@@ -72,8 +74,16 @@ def _ramp_scene(tmp: str, crop: dict, response: str):
     x, y = np.meshgrid(np.linspace(0.0, 1.0, WIDTH), np.linspace(0.0, 1.0, HEIGHT))
     path = str(Path(tmp) / "ramp.exr")
     write_exr(path, image_channels((0.6 * x + 0.4 * y).astype(np.float32)))
-    xml = write_scene(lens, tmp, path, camera_for(lens, (HEIGHT, WIDTH)), spp=16, response=response,
-                      fresnel="off", name=f"scene{len(crop)}.xml")
+    xml = write_scene(
+        lens,
+        tmp,
+        path,
+        camera_for(lens, (HEIGHT, WIDTH)),
+        spp=16,
+        response=response,
+        fresnel="off",
+        name=f"scene{len(crop)}.xml",
+    )
     text = xml.read_text()
     ints = "".join(f'<integer name="{k}" value="{v}"/>' for k, v in crop.items())
     xml.write_text(text.replace('<rfilter type="box"/>', ints + '<rfilter type="box"/>'))
@@ -105,7 +115,7 @@ def test_cropped_render_is_those_pixels_of_the_whole_render(mi, engine, spp):
                 images.append(np.array(mi.render(scene, spp=spp, seed=3))[..., 0])
     whole, cropped = images
     x0, y0, w, h = (CROP[k] for k in ("crop_offset_x", "crop_offset_y", "crop_width", "crop_height"))
-    part = whole[y0:y0 + h, x0:x0 + w]
+    part = whole[y0 : y0 + h, x0 : x0 + w]
     assert cropped.shape == part.shape
     _agree(cropped, part, 0)
     _agree(cropped, part, 1)

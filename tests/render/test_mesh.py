@@ -3,6 +3,7 @@ its rim vertices with its absorbing annulus, and every annulus its outer ring wi
 dense regular grid of rays meets either glass or absorber at every aperture plane; the ring count
 follows the lens (`render.mesh.mesh_rings`) so the caps' blur stays below a stated share of the Airy
 radius, checked against rays traced through the Mitsuba scene."""
+
 from pathlib import Path
 
 import numpy as np
@@ -43,11 +44,16 @@ def misses(mi, parts, grid: int, tilt_deg: float, z0: float, half: float) -> tup
 def closed_pairs(lens, rings):
     """Per aperture: that surface's cap (if it refracts) and its annulus, with the annulus's outer radius."""
     parts = {p.name: p for p in lens_parts(lens, rings)}
-    return [[parts[f"surface{k}"], parts[f"aperture{k}"]] for k in range(1, len(lens.surfaces) + 1)
-            if f"surface{k}" in parts and f"aperture{k}" in parts]
+    return [
+        [parts[f"surface{k}"], parts[f"aperture{k}"]]
+        for k in range(1, len(lens.surfaces) + 1)
+        if f"surface{k}" in parts and f"aperture{k}" in parts
+    ]
 
 
-@pytest.mark.parametrize("name,rings", [("solas-doublet", 32), ("cooke-triplet", 7), (str(DATA / "fast_asphere.toml"), 32)])
+@pytest.mark.parametrize(
+    "name,rings", [("solas-doublet", 32), ("cooke-triplet", 7), (str(DATA / "fast_asphere.toml"), 32)]
+)
 def test_a_dense_grid_of_rays_meets_glass_or_absorber_everywhere(mi, name, rings):
     """Before, the annulus (256 segments from 0°) and the cap's rim (4·rings from half a segment) were
     two different polygons: 557 rays of a 1500² grid passed between them on the doublet's front, in

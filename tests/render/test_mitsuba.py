@@ -1,4 +1,5 @@
 """Mitsuba set-up (`render.mitsuba`): variants and the plugins registered for them."""
+
 import pytest
 
 from solas_mi import SolasError

@@ -4,6 +4,7 @@ llvm_ad_mono / cuda_ad_mono, on request, and gives the spectral variant's image 
 Both variants draw the same samples (the loop's stratified sets, the same sampler seeds), so the
 renders agree to float32 rounding; 450 nm is far from the d line (587.6 nm), the wavelength a plugin
 falls back to without one, and the test checks that the d line renders measurably differently."""
+
 import numpy as np
 import pytest
 
@@ -79,15 +80,24 @@ def test_the_loop_refuses_plugins_at_another_wavelength(doublet, tmp_path):
     from solas_mi.render.scene import write_scene
 
     write_exr(tmp_path / "object.exr", image_channels(_object()))
-    xml = write_scene(doublet, tmp_path, str(tmp_path / "object.exr"), camera_for(doublet, (6, 8)), rings=8, spp=4,
-                      response=f"mono:{LAMBDA_NM:g}")
+    xml = write_scene(
+        doublet,
+        tmp_path,
+        str(tmp_path / "object.exr"),
+        camera_for(doublet, (6, 8)),
+        rings=8,
+        spp=4,
+        response=f"mono:{LAMBDA_NM:g}",
+    )
     text = xml.read_text()
     assert text.count('<float name="wavelength" value="$wavelength"/>') == 4  # three glass caps and the object
     assert '<default name="wavelength" value="450.0"/>' in text
     scene = load_scene(xml, "llvm_ad_mono", wavelength=600)
     with pytest.raises(SolasError, match=r"450 nm.*image_object at 600 nm, sellmeier_dielectric at 600 nm"):
         render(scene, 4)
-    srgb = write_scene(doublet, tmp_path / "srgb", str(tmp_path / "object.exr"), camera_for(doublet, (6, 8)), rings=8, spp=4)
+    srgb = write_scene(
+        doublet, tmp_path / "srgb", str(tmp_path / "object.exr"), camera_for(doublet, (6, 8)), rings=8, spp=4
+    )
     assert "wavelength" not in srgb.read_text()  # more than one wavelength: the plugins' default
 
 
@@ -105,8 +115,14 @@ def test_lens_camera_in_mono_matches_spectral_on_a_grey_scene(doublet, tmp_path)
     for variant in (default_variant(), _mono_variant()):
         spectral = "spectral" in variant
         xml = experiment_scene(SCENE, tmp_path / variant, LAMBDA_NM, spectral=spectral)
-        scene = load(xml, variant, doublet, params, response=f"mono:{LAMBDA_NM:g}",
-                     pitch_um=default_pitch_um(doublet, fov, "x", w, h))
+        scene = load(
+            xml,
+            variant,
+            doublet,
+            params,
+            response=f"mono:{LAMBDA_NM:g}",
+            pitch_um=default_pitch_um(doublet, fov, "x", w, h),
+        )
         result = render_scene(scene, 8, seed=2)
         assert result.meta["variant"] == variant
         images[spectral] = result.image[..., 0]

@@ -1,6 +1,7 @@
 """A lens whose air gap closes before the rim (faces crossing at r = 15.6 mm inside 20 mm apertures) in the
 `lens_camera`: the Dr.Jit tracer inside the sensor steps back where the second face comes first, so the
 spot it renders is the Float64 tracer's, rays through the overlap included; the mesh scene refuses it."""
+
 import numpy as np
 import pytest
 
@@ -32,9 +33,18 @@ def test_lens_camera_renders_the_tracers_spot_through_crossing_faces(mi, tmp_pat
     film = {"type": "hdrfilm", "width": W, "height": W, "pixel_format": "luminance", "rfilter": {"type": "box"}}
     sensor = {"type": "lens_camera", "lens": str(path), "pitch_um": PITCH_UM, "response": "mono:531", "film": film}
     tf = mi.ScalarTransform4f().translate([0, 0, 1e5]).rotate([0, 1, 0], 180).scale(400.0)
-    scene = mi.load_dict({"type": "scene", "integrator": {"type": "path"}, "sensor": sensor,
-                          "dot": {"type": "disk", "to_world": tf,
-                                  "emitter": {"type": "area", "radiance": {"type": "uniform", "value": 1.0}}}})
+    scene = mi.load_dict(
+        {
+            "type": "scene",
+            "integrator": {"type": "path"},
+            "sensor": sensor,
+            "dot": {
+                "type": "disk",
+                "to_world": tf,
+                "emitter": {"type": "area", "radiance": {"type": "uniform", "value": 1.0}},
+            },
+        }
+    )
     image = np.array(mi.render(scene, spp=2048, seed=1))[..., 0]
     efl = paraxial(lens, 531.0).efl_mm
     rng = np.random.default_rng(1)  # the disc's image, radius f·R/D, uniform: 16 points about each ray
@@ -49,6 +59,9 @@ def test_lens_camera_renders_the_tracers_spot_through_crossing_faces(mi, tmp_pat
         assert abs(image[inside].sum() / image.sum() - traced[inside].sum()) < 0.01, radius
     from solas_mi.render.scene import lens_parts
 
-    with pytest.raises(SolasError, match=r"cannot be built as Mitsuba geometry: surfaces 2 \(surface 2\) and 3 "
-                                         r"\(surface 3\) cross at .*the lens camera"):
+    with pytest.raises(
+        SolasError,
+        match=r"cannot be built as Mitsuba geometry: surfaces 2 \(surface 2\) and 3 "
+        r"\(surface 3\) cross at .*the lens camera",
+    ):
         lens_parts(lens)

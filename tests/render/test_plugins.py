@@ -1,5 +1,6 @@
 """The Mitsuba plugins (`plugins/`): the defaults their docstrings document, what they expose to
 `mi.traverse`, and their parameter checks."""
+
 import math
 
 import numpy as np
@@ -13,9 +14,11 @@ from solas_mi.optics.pupil import chief_rays
 def plugins(mi):
     """Each plugin with its default parameters (the object's image from Python: a 2×4 grey 0.5)."""
     image = mi.TensorXf(np.full((2, 4), 0.5, dtype=np.float32))
-    return {"lens_sensor": mi.load_dict({"type": "lens_sensor"}),
-            "sellmeier_dielectric": mi.load_dict({"type": "sellmeier_dielectric"}),
-            "image_object": mi.load_dict({"type": "image_object", "image": image})}
+    return {
+        "lens_sensor": mi.load_dict({"type": "lens_sensor"}),
+        "sellmeier_dielectric": mi.load_dict({"type": "sellmeier_dielectric"}),
+        "image_object": mi.load_dict({"type": "image_object", "image": image}),
+    }
 
 
 def test_lens_sensor_defaults(plugins, doublet):
@@ -47,18 +50,22 @@ def test_plugins_expose_their_documented_parameters(mi, plugins):
     assert {"pitch_um", "fov_deg"} <= keys["lens_sensor"]
 
 
-@pytest.mark.parametrize("plugin, message", [
-    ({"type": "sellmeier_dielectric", "fresnel": "ghost"}, "fresnel 'ghost' must be one of transmit, sample, off"),
-    ({"type": "image_object", "boundary": "wrap"}, "boundary 'wrap' must be one of edge, reflect, zero"),
-    ({"type": "lens_sensor", "pitch_um": -1.0}, "lens_sensor: pitch_um -1.0 must be a positive number \\(µm\\)"),
-])
+@pytest.mark.parametrize(
+    "plugin, message",
+    [
+        ({"type": "sellmeier_dielectric", "fresnel": "ghost"}, "fresnel 'ghost' must be one of transmit, sample, off"),
+        ({"type": "image_object", "boundary": "wrap"}, "boundary 'wrap' must be one of edge, reflect, zero"),
+        ({"type": "lens_sensor", "pitch_um": -1.0}, "lens_sensor: pitch_um -1.0 must be a positive number \\(µm\\)"),
+    ],
+)
 def test_bad_parameters_are_named(mi, plugin, message):
     with pytest.raises(RuntimeError, match=message):
         mi.load_dict(plugin)
 
 
-@pytest.mark.parametrize("lens, film", [("solas-doublet", (64, 48)), ("cooke-triplet", (40, 30)),
-                                        ("nikkor-fisheye", (64, 64))])
+@pytest.mark.parametrize(
+    "lens, film", [("solas-doublet", (64, 48)), ("cooke-triplet", (40, 30)), ("nikkor-fisheye", (64, 64))]
+)
 def test_lens_camera_without_pitch_spans_the_lens_s_field(mi, lens, film):
     """`lens_camera` loaded from Python without `pitch_um` took 5 µm, silently a ±0.9° crop of the scene
     (the doublet's 768 px): as Mitsuba's cameras take the film's size and a field, the film's width now
@@ -66,8 +73,9 @@ def test_lens_camera_without_pitch_spans_the_lens_s_field(mi, lens, film):
     `to_string` says the pitch was derived; a lens that states neither is refused naming pitch_um."""
     from solas_mi import Lens
 
-    camera = mi.load_dict({"type": "lens_camera", "lens": lens, "film": {"type": "hdrfilm", "width": film[0],
-                                                                          "height": film[1]}})
+    camera = mi.load_dict(
+        {"type": "lens_camera", "lens": lens, "film": {"type": "hdrfilm", "width": film[0], "height": film[1]}}
+    )
     optics = Lens.load(lens)
     if optics.field_type.pinhole:
         edge = chief_rays(optics, [[optics.field_deg, 0.0]], [optics.primary_wavelength]).image_xy[0, 0]
@@ -85,7 +93,10 @@ def test_lens_camera_of_a_lens_without_field_needs_a_pitch(mi, tmp_path):
     from solas_mi import Lens
 
     path = replace(Lens.load("solas-doublet"), field_deg=0.0).save(tmp_path / "nofield.toml")
-    with pytest.raises(RuntimeError, match=r"lens_camera: no pitch_um given, and lens solas-doublet sets none "
-                                           r"\(field of view 0(\.0)? deg .*\); give pitch_um"):
+    with pytest.raises(
+        RuntimeError,
+        match=r"lens_camera: no pitch_um given, and lens solas-doublet sets none "
+        r"\(field of view 0(\.0)? deg .*\); give pitch_um",
+    ):
         mi.load_dict({"type": "lens_camera", "lens": str(path)})
     assert mi.load_dict({"type": "lens_camera", "lens": str(path), "pitch_um": 5.0}).pitch_um == 5.0

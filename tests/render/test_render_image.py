@@ -1,5 +1,6 @@
 """An input image through the lens geometry (`render.image`) against the Float64 tracer: radiometry
 and image positions."""
+
 import math
 
 import numpy as np
@@ -19,8 +20,15 @@ def test_white_object_relative_illumination(doublet):
     """A uniform white object renders the tracer's irradiance (image side, exact) and its
     transmitted-energy view (pupil transmission × cos³θ × J(0)/J) across the field within 1 %."""
     camera = camera_for(doublet, (6, 8))
-    r = render_image(doublet, np.ones((6, 8)), sensor=(6, 8), spp=1024, response="mono:531", fresnel="off",
-                     variant="llvm_ad_spectral")
+    r = render_image(
+        doublet,
+        np.ones((6, 8)),
+        sensor=(6, 8),
+        spp=1024,
+        response="mono:531",
+        fresnel="off",
+        variant="llvm_ad_spectral",
+    )
     x, y = np.meshgrid(camera.pixel_x_mm(), camera.pixel_y_mm())
     pts = np.stack([x.ravel(), y.ravel()], -1)
     exact = irradiance(doublet, pts, 531.0, samples=256) / ideal_irradiance(doublet, camera.focal_mm)
@@ -36,10 +44,18 @@ def test_white_object_relative_illumination(doublet):
 
 
 def test_white_object_never_exceeds_the_lens_transmission(doublet):
-    lossless = render_image(doublet, np.ones((6, 8)), sensor=(6, 8), spp=192, response="lines", fresnel="off",
-                            variant="llvm_ad_spectral").image
-    real = render_image(doublet, np.ones((6, 8)), sensor=(6, 8), spp=192, response="lines", fresnel="transmit",
-                        variant="llvm_ad_spectral").image
+    lossless = render_image(
+        doublet, np.ones((6, 8)), sensor=(6, 8), spp=192, response="lines", fresnel="off", variant="llvm_ad_spectral"
+    ).image
+    real = render_image(
+        doublet,
+        np.ones((6, 8)),
+        sensor=(6, 8),
+        spp=192,
+        response="lines",
+        fresnel="transmit",
+        variant="llvm_ad_spectral",
+    ).image
     camera = camera_for(doublet, (6, 8))
     # a lossless lens gives at most its on-axis irradiance (in the ideal camera's unit: (f'/f)² × sin²u'/tan²u')
     axis = irradiance(doublet, np.zeros((1, 2)), 531.0, samples=256)[0] / ideal_irradiance(doublet, camera.focal_mm)
@@ -57,8 +73,16 @@ def test_dot_lands_where_the_tracer_says(doublet):
     col = int(math.floor(math.tan(math.radians(2.0)) / t + 360))
     image[11:13, col] = 1.0  # two texels straddling y = 0
     field = np.degrees(np.arctan((col + 0.5 - 360) * t))
-    r = render_image(doublet, image, sensor=(24, 720), fov_deg=fov, spp=64, response="mono:531", fresnel="off",
-                     variant="llvm_ad_spectral")
+    r = render_image(
+        doublet,
+        image,
+        sensor=(24, 720),
+        fov_deg=fov,
+        spp=64,
+        response="mono:531",
+        fresnel="off",
+        variant="llvm_ad_spectral",
+    )
     img = r.image[..., 0]
     x, y = np.meshgrid(camera.pixel_x_mm(), camera.pixel_y_mm())
     cx = float((img * x).sum() / img.sum()) * 1e3

@@ -1,5 +1,6 @@
 """The PSF method "render" (`render.psf`): rays traced through the Mitsuba scene's lens meshes agree
 with the Float64 tracer's geometric PSF, at infinity and for a finite object."""
+
 import numpy as np
 import pytest
 
@@ -35,8 +36,29 @@ def test_render_psf_matches_the_tracer(doublet_spec, distance):
 
 def test_psf_command_with_the_render_method(tmp_path, capsys):
     out = tmp_path / "psf.exr"
-    assert main(["psf", "solas-doublet", "--field-deg", "0,2", "--wavelengths-nm", "531", "--psf-method", "render",
-                 "--rays", "128", "--size", "40", "--pitch-um", "2", "-o", str(out)]) == 0
+    assert (
+        main(
+            [
+                "psf",
+                "solas-doublet",
+                "--field-deg",
+                "0,2",
+                "--wavelengths-nm",
+                "531",
+                "--psf-method",
+                "render",
+                "--rays",
+                "128",
+                "--size",
+                "40",
+                "--pitch-um",
+                "2",
+                "-o",
+                str(out),
+            ]
+        )
+        == 0
+    )
     channels, meta = read_exr(out)
     assert meta["method"] == "render" and meta["sampling"] == {"rays": 128}
     assert channels["Y"].sum() == pytest.approx(1.0, rel=1e-5)

@@ -1,4 +1,5 @@
 """The lens as Mitsuba geometry (`render.scene`): cap meshes and the parts of a lens."""
+
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +19,7 @@ def test_cap_mesh_lies_on_the_sphere_and_faces_the_object():
     # the flat triangles sit inside the sphere by about (edge length)² / 8R, no more
     edge = np.linalg.norm(v[f[:, 1]] - v[f[:, 2]], axis=1).max()
     depth = 30.716 - np.linalg.norm(v[f].mean(axis=1) - centre, axis=1)
-    assert 0 < depth.max() < 1.5 * edge ** 2 / (8 * 30.716)
+    assert 0 < depth.max() < 1.5 * edge**2 / (8 * 30.716)
 
 
 def test_parts_of_the_doublet(doublet):
@@ -78,9 +79,11 @@ def test_a_user_scene_names_the_lens_changed_in_memory(tmp_path, doublet):
     from solas_mi.render.user_scene import load
 
     scene = tmp_path / "scene.xml"
-    scene.write_text('<scene version="3.0.0"><sensor type="perspective"><float name="fov" value="4"/>'
-                     '<film type="hdrfilm"><integer name="width" value="64"/><integer name="height" value="48"/>'
-                     '</film></sensor></scene>')
+    scene.write_text(
+        '<scene version="3.0.0"><sensor type="perspective"><float name="fov" value="4"/>'
+        '<film type="hdrfilm"><integer name="width" value="64"/><integer name="height" value="48"/>'
+        "</film></sensor></scene>"
+    )
     near = focused(doublet, 2000.0)
     held = load(scene, "llvm_ad_spectral", near).sensors()[0].lens
     assert held.hash == near.hash
@@ -114,6 +117,7 @@ def test_the_lens_file_is_parsed_once_per_content(tmp_path, doublet, monkeypatch
 def test_cap_mesh_of_a_qbfs_surface_lies_on_its_sag():
     """A Forbes Qbfs surface becomes a mesh on its own sag (not the base conic's), normals from its slope."""
     from solas_mi.optics.sag import sag
+
     qbfs, rho = (0.05, -0.02, 0.01), 9.0
     v, n, _ = cap_mesh(30.0, 2.0, 9.0, 16, -0.7, (), qbfs, rho)
     r2 = v[:, 0] ** 2 + v[:, 1] ** 2
@@ -121,8 +125,10 @@ def test_cap_mesh_of_a_qbfs_surface_lies_on_its_sag():
     assert np.abs(v[:, 2] - 2.0 - sag(r2, 1 / 30.0, -0.7)).max() > 1e-3  # the Qbfs terms move it
     h = 1e-5
     r = np.sqrt(r2[1:])
-    dz = (sag((r + h) ** 2, 1 / 30.0, -0.7, qbfs=qbfs, norm_radius=rho)
-          - sag((r - h) ** 2, 1 / 30.0, -0.7, qbfs=qbfs, norm_radius=rho)) / (2 * h)
+    dz = (
+        sag((r + h) ** 2, 1 / 30.0, -0.7, qbfs=qbfs, norm_radius=rho)
+        - sag((r - h) ** 2, 1 / 30.0, -0.7, qbfs=qbfs, norm_radius=rho)
+    ) / (2 * h)
     assert np.abs(-n[1:, 2] * dz - np.hypot(n[1:, 0], n[1:, 1])).max() < 1e-7  # |n_r| / |n_z| = dz/dr
 
 
@@ -137,13 +143,30 @@ def test_a_lens_farther_than_float32_holds_is_refused_by_the_mesh_scene(doublet,
     from solas_mi.cli import main
     from solas_mi.render.scene import FLOAT32_REACH_MM
 
-    assert FLOAT32_REACH_MM == pytest.approx(2 ** 24 * 1e-3)
+    assert pytest.approx(2**24 * 1e-3) == FLOAT32_REACH_MM
     far = replace(doublet, surfaces=(*doublet.surfaces[:-1], replace(doublet.surfaces[-1], thickness=distance)))
-    with pytest.raises(SolasError, match=r"reaches .* mm from surface 1 .* float32 geometry holds a point to 1 µm "
-                                         r"within 16777.2 mm only; trace it instead"):
+    with pytest.raises(
+        SolasError,
+        match=r"reaches .* mm from surface 1 .* float32 geometry holds a point to 1 µm "
+        r"within 16777.2 mm only; trace it instead",
+    ):
         lens_parts(far)
     assert lens_parts(doublet)
     path = far.save(tmp_path / "far.toml")
-    assert main(["render-image", str(path), str(Path(__file__).parents[2] / "scenes" / "images" / "rocket.png"),
-                 "--sensor", "8x6", "--spp", "1", "-o", str(tmp_path / "far.exr")]) == 2
+    assert (
+        main(
+            [
+                "render-image",
+                str(path),
+                str(Path(__file__).parents[2] / "scenes" / "images" / "rocket.png"),
+                "--sensor",
+                "8x6",
+                "--spp",
+                "1",
+                "-o",
+                str(tmp_path / "far.exr"),
+            ]
+        )
+        == 2
+    )
     assert "float32 geometry" in capsys.readouterr().err and not (tmp_path / "far.exr").exists()

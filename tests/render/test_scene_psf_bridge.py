@@ -1,5 +1,6 @@
 """Geometric PSFs traced through the scene's meshes and plugins (`validation.scene_psf`) against the
 Float64 tracer: the lens as Mitsuba geometry is the tracer's lens."""
+
 import math
 
 import numpy as np
@@ -22,8 +23,9 @@ def scene(doublet, tmp_path_factory, in_variant):
     out = tmp_path_factory.mktemp("scene")
     write_exr(out / "white.exr", {"Y": np.ones((12, 16), dtype=np.float32)})
     with in_variant("llvm_ad_spectral"):
-        return load_scene(write_scene(doublet, out, "white.exr", camera_for(doublet, (12, 16)), fresnel="off"),
-                          "llvm_ad_spectral")
+        return load_scene(
+            write_scene(doublet, out, "white.exr", camera_for(doublet, (12, 16)), fresnel="off"), "llvm_ad_spectral"
+        )
 
 
 def tracer_spot(lens, field, wavelength):
@@ -54,8 +56,11 @@ def test_lateral_colour_matches_tracer(doublet, scene, variant_llvm_ad_spectral)
         pos = []
         for w in (486.0, 656.0):
             chief = chief_rays(doublet, np.array([field]), np.array([w])).image_xy[0] * 1e3
-            c = (np.array(scene_psf(scene, doublet, field, w, rays=RAYS).meta["centroid_um"]) if source == "scene"
-                 else tracer_spot(doublet, field, w)[0])
+            c = (
+                np.array(scene_psf(scene, doublet, field, w, rays=RAYS).meta["centroid_um"])
+                if source == "scene"
+                else tracer_spot(doublet, field, w)[0]
+            )
             pos.append(chief + c)
         shift[source] = pos[0] - pos[1]
     assert 0.5 < abs(shift["tracer"][1]) < 5.0

@@ -1,4 +1,5 @@
 """Scenes rendered with their own integrator in passes of bounded memory (`render.stock`)."""
+
 import numpy as np
 import pytest
 
@@ -8,9 +9,14 @@ from solas_mi.render import stock
 
 @pytest.fixture
 def white_sky(mi):
-    return mi.load_dict({"type": "scene", "integrator": {"type": "path"}, "emitter": {"type": "constant"},
-                         "sensor": {"type": "perspective", "fov": 30,
-                                    "film": {"type": "hdrfilm", "width": 32, "height": 24}}})
+    return mi.load_dict(
+        {
+            "type": "scene",
+            "integrator": {"type": "path"},
+            "emitter": {"type": "constant"},
+            "sensor": {"type": "perspective", "fov": 30, "film": {"type": "hdrfilm", "width": 32, "height": 24}},
+        }
+    )
 
 
 def test_passes_average_to_the_radiance(white_sky, monkeypatch):

@@ -1,6 +1,7 @@
 """The lens scene under Mitsuba's own integrators (`mi.render`): stock `path` against solas-mi's loop,
 the variants against each other, the integrators that cannot see through a lens, and
 `solas_mi.mitsuba` as the entry for Python users."""
+
 import subprocess
 import sys
 
@@ -24,7 +25,7 @@ def _flat_white(mi, lo_nm: float, hi_nm: float) -> np.ndarray:
 
 
 def _rel(a, b) -> float:
-    return float(np.sqrt(np.mean((a - b) ** 2)) / np.sqrt(np.mean(b ** 2)))
+    return float(np.sqrt(np.mean((a - b) ** 2)) / np.sqrt(np.mean(b**2)))
 
 
 def _causes(exc):
@@ -78,9 +79,11 @@ def test_integrators_that_cannot_see_through_the_lens_say_so(variants_spectral, 
     with pytest.raises(Exception) as info:  # noqa: PT011 -- whatever Mitsuba wraps it in; the causes are checked
         mi.render(scene, integrator=mi.load_dict({"type": integrator}), spp=1)
     errors = [e for e in _causes(info.value) if isinstance(e, SolasError)]
-    assert errors and str(errors[0]) == (f"lens_sensor: integrator {integrator!r} cannot render through the lens (the "
-                                         "sensor is reachable only through glass); use path, volpath, aov or "
-                                         "solas-mi's render loop")
+    assert errors and str(errors[0]) == (
+        f"lens_sensor: integrator {integrator!r} cannot render through the lens (the "
+        "sensor is reachable only through glass); use path, volpath, aov or "
+        "solas-mi's render loop"
+    )
 
 
 def test_volpath_renders_through_the_lens(mi, small_scene):
@@ -116,8 +119,10 @@ def test_a_finite_distance_object_stops_a_stock_render(mi, tmp_path, doublet):
 def test_mitsuba_is_the_entry_and_registers_once_per_variant():
     """`solas_mi.mitsuba` registers the plugins for a variant the caller set himself, and a variant
     set again later keeps its own plugin classes."""
-    code = ("import mitsuba as mi; mi.set_variant('scalar_spectral'); import solas_mi; m = solas_mi.mitsuba("
-            "'scalar_spectral'); print(type(m.load_dict({'type': 'sellmeier_dielectric'})).__name__)")
+    code = (
+        "import mitsuba as mi; mi.set_variant('scalar_spectral'); import solas_mi; m = solas_mi.mitsuba("
+        "'scalar_spectral'); print(type(m.load_dict({'type': 'sellmeier_dielectric'})).__name__)"
+    )
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout
     assert out.strip() == "SellmeierDielectric"
     for variant in ("scalar_spectral", "llvm_ad_spectral", "scalar_spectral", "llvm_ad_spectral"):
@@ -145,10 +150,12 @@ def test_a_finite_distance_object_as_a_rectangle_renders_like_image_object(mi, t
     half = distance * math.tan(math.radians(2.0))
     start = text.index('    <emitter type="image_object"')
     end = text.index("</emitter>", start) + len("</emitter>")
-    rectangle = (f'<shape type="rectangle"><transform name="to_world"><scale x="{-half}" y="{half * h / w}"/>'
-                 f'<translate z="{-distance}"/></transform><emitter type="area"><texture type="bitmap" name="radiance">'
-                 '<string name="filename" value="$image"/><string name="filter_type" value="nearest"/></texture>'
-                 '</emitter></shape>')
+    rectangle = (
+        f'<shape type="rectangle"><transform name="to_world"><scale x="{-half}" y="{half * h / w}"/>'
+        f'<translate z="{-distance}"/></transform><emitter type="area"><texture type="bitmap" name="radiance">'
+        '<string name="filename" value="$image"/><string name="filter_type" value="nearest"/></texture>'
+        "</emitter></shape>"
+    )
     (tmp_path / "stock.xml").write_text(text[:start] + rectangle + text[end:])
     size = {"width": "64", "height": "48", "pitch_um": str(5.429042104233675 * 20)}
     # 256 spp: the loop's own noise well below the tolerance (64 spp: 0.43-0.52 % over seeds 1-4, in passes of
@@ -173,15 +180,25 @@ def test_image_object_lights_a_diffuse_plane_as_computed(mi, integrator):
     import math
 
     image = np.array([[1.0, 0.5, 0.2, 1.0], [0.3, 1.0, 0.8, 0.1], [1.0, 1.0, 0.0, 0.6]], np.float32)
-    scene = mi.load_dict({
-        "type": "scene", "integrator": {"type": integrator, "max_depth": 3},
-        "sensor": {"type": "perspective", "fov": 20.0,
-                   "to_world": mi.ScalarTransform4f().look_at([0, 0, -5], [0, 0, 0], [0, 1, 0]),
-                   "film": {"type": "hdrfilm", "width": 8, "height": 8, "rfilter": {"type": "box"}},
-                   "sampler": {"type": "independent", "sample_count": 1024}},
-        "object": {"type": "image_object", "image": mi.TensorXf(image), "boundary": "zero"},
-        "plane": {"type": "rectangle", "to_world": mi.ScalarTransform4f().rotate([0, 1, 0], 180),  # facing −z
-                  "bsdf": {"type": "diffuse", "reflectance": {"type": "spectrum", "value": 0.5}}}})
+    scene = mi.load_dict(
+        {
+            "type": "scene",
+            "integrator": {"type": integrator, "max_depth": 3},
+            "sensor": {
+                "type": "perspective",
+                "fov": 20.0,
+                "to_world": mi.ScalarTransform4f().look_at([0, 0, -5], [0, 0, 0], [0, 1, 0]),
+                "film": {"type": "hdrfilm", "width": 8, "height": 8, "rfilter": {"type": "box"}},
+                "sampler": {"type": "independent", "sample_count": 1024},
+            },
+            "object": {"type": "image_object", "image": mi.TensorXf(image), "boundary": "zero"},
+            "plane": {
+                "type": "rectangle",
+                "to_world": mi.ScalarTransform4f().rotate([0, 1, 0], 180),  # facing −z
+                "bsdf": {"type": "diffuse", "reflectance": {"type": "spectrum", "value": 0.5}},
+            },
+        }
+    )
     pitch, n = math.tan(math.radians(2.0)) / 2, 200  # texel pitch in tangent space; cells per texel
     u, v = (np.arange(4 * n) + 0.5) / n, (np.arange(3 * n) + 0.5) / n
     tx, ty = (u - 2) * pitch, (1.5 - v) * pitch
@@ -200,10 +217,12 @@ def test_lines_through_specfilm_match_the_loop(mi, tmp_path, doublet):
     xml = write_scene(doublet, tmp_path, str(resource_dir("scenes") / "images" / "rocket.png"), response="lines")
     text = xml.read_text()
     start, end = text.index('<film type="hdrfilm">'), text.index("</film>") + len("</film>")
-    film = ('<film type="specfilm"><integer name="width" value="$width"/><integer name="height" value="$height"/>'
-            '<rfilter type="box"/><spectrum name="R" value="654:0, 655:1, 657:1, 658:0"/>'
-            '<spectrum name="G" value="529:0, 530:1, 532:1, 533:0"/>'
-            '<spectrum name="B" value="484:0, 485:1, 487:1, 488:0"/></film>')
+    film = (
+        '<film type="specfilm"><integer name="width" value="$width"/><integer name="height" value="$height"/>'
+        '<rfilter type="box"/><spectrum name="R" value="654:0, 655:1, 657:1, 658:0"/>'
+        '<spectrum name="G" value="529:0, 530:1, 532:1, 533:0"/>'
+        '<spectrum name="B" value="484:0, 485:1, 487:1, 488:0"/></film>'
+    )
     xml.write_text(text[:start] + film + text[end:])
     scene = mi.load_file(str(xml), width="160", height="120")
     stock = np.array(mi.render(scene, spp=256, seed=1))

@@ -7,6 +7,7 @@ Two conventions differ and are accounted for, not hidden: `image_object` is defi
 180°; and `lens_camera` counts irradiance in units of the lossless lens's on-axis irradiance, the
 loop and `lens_sensor` in units of the ideal camera's (`optics.illumination`), a factor
 k = axis_irradiance / ideal_irradiance (1.0101 for the doublet at 531 nm)."""
+
 import numpy as np
 import pytest
 
@@ -40,16 +41,29 @@ def test_lens_camera_sees_the_image_scene_as_the_loop_does(mi, doublet, tmp_path
     loop = render_image(doublet, image, sensor=(48, 64), spp=64, response="mono:531", fresnel="off", seed=1)
     cam = camera_for(doublet, (48, 64))
     write_exr(tmp_path / "image.exr", {"Y": image})
-    scene = mi.load_dict({
-        "type": "scene", "integrator": {"type": "path", "max_depth": 2},
-        "sensor": {"type": "lens_camera", "pitch_um": cam.pitch_um, "response": "mono:531",
-                   "to_world": looking_back(mi), "film": film(64, 48)},
-        "object": {"type": "image_object", "filename": str(tmp_path / "image.exr"), "fov_deg": cam.fov_deg,
-                   "spectrum": "bands"}})  # the line responses' object, as render_image writes it for mono:531
+    scene = mi.load_dict(
+        {
+            "type": "scene",
+            "integrator": {"type": "path", "max_depth": 2},
+            "sensor": {
+                "type": "lens_camera",
+                "pitch_um": cam.pitch_um,
+                "response": "mono:531",
+                "to_world": looking_back(mi),
+                "film": film(64, 48),
+            },
+            "object": {
+                "type": "image_object",
+                "filename": str(tmp_path / "image.exr"),
+                "fov_deg": cam.fov_deg,
+                "spectrum": "bands",
+            },
+        }
+    )  # the line responses' object, as render_image writes it for mono:531
     seen = np.array(mi.render(scene, spp=256, seed=3))[::-1, ::-1, 0] * units(doublet, cam.focal_mm)
     reference = loop.image[..., 0]
     assert seen.mean() == pytest.approx(reference.mean(), rel=3e-3)
-    assert np.sqrt(np.mean((seen - reference) ** 2)) / np.sqrt(np.mean(reference ** 2)) < 0.01  # measured 0.28 %
+    assert np.sqrt(np.mean((seen - reference) ** 2)) / np.sqrt(np.mean(reference**2)) < 0.01  # measured 0.28 %
 
 
 @pytest.mark.parametrize("aspheric", [False, True])
@@ -65,16 +79,40 @@ def test_lens_camera_matches_the_lens_as_geometry_on_a_3d_edge(mi, doublet, doub
 
     def plane():  # world x > 0 lit, facing the lens
         tf = mi.ScalarTransform4f().translate([distance, 0, -distance]).scale(distance)
-        return {"type": "rectangle", "to_world": tf,
-                "emitter": {"type": "area", "radiance": {"type": "uniform", "value": 1.0}}}
+        return {
+            "type": "rectangle",
+            "to_world": tf,
+            "emitter": {"type": "area", "radiance": {"type": "uniform", "value": 1.0}},
+        }
 
-    geometry = lens_geometry(doublet, integrator={"type": "path", "max_depth": 8}, edge=plane(),
-                             sensor={"type": "lens_sensor", "lens": doublet.source, "pitch_um": 2.0,
-                                     "response": "mono:531", "film": film(width, height)})
-    camera = mi.load_dict({"type": "scene", "integrator": {"type": "path", "max_depth": 2}, "edge": plane(),
-                           "sensor": {"type": "lens_camera", "lens": doublet.source, "pitch_um": 2.0,
-                                      "response": "mono:531", "world_unit_mm": 1.0, "film": film(width, height),
-                                      "to_world": looking_back(mi)}})
+    geometry = lens_geometry(
+        doublet,
+        integrator={"type": "path", "max_depth": 8},
+        edge=plane(),
+        sensor={
+            "type": "lens_sensor",
+            "lens": doublet.source,
+            "pitch_um": 2.0,
+            "response": "mono:531",
+            "film": film(width, height),
+        },
+    )
+    camera = mi.load_dict(
+        {
+            "type": "scene",
+            "integrator": {"type": "path", "max_depth": 2},
+            "edge": plane(),
+            "sensor": {
+                "type": "lens_camera",
+                "lens": doublet.source,
+                "pitch_um": 2.0,
+                "response": "mono:531",
+                "world_unit_mm": 1.0,
+                "film": film(width, height),
+                "to_world": looking_back(mi),
+            },
+        }
+    )
     through_meshes = np.array(mi.render(geometry, spp=1024, seed=1))[..., 0].mean(axis=0)
     sequential = np.array(mi.render(camera, spp=1024, seed=2))[::-1, ::-1, 0].mean(axis=0)
 

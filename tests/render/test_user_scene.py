@@ -1,6 +1,7 @@
 """A user's scene file prepared for rendering (`render.user_scene`), read by Mitsuba's own parser: a
 default integrator where it has none (includes read), the perspective camera swapped for a lens_camera
 at the same pose with the matching field, everything else as Mitsuba loads it."""
+
 import math
 
 import numpy as np
@@ -56,19 +57,25 @@ def test_lens_camera_takes_the_pose_film_and_field(scene_file, doublet):
 
 def test_explicit_pitch_and_fov_axis_y(tmp_path, doublet):
     path = tmp_path / "y.xml"
-    path.write_text(SCENE.replace('<float name="fov" value="4"/>',
-                                  '<float name="fov" value="3"/><string name="fov_axis" value="y"/>'))
+    path.write_text(
+        SCENE.replace(
+            '<float name="fov" value="4"/>', '<float name="fov" value="3"/><string name="fov_axis" value="y"/>'
+        )
+    )
     # the real chief ray of the 1.5° field in y lands at the film's top edge, 480 px above the centre
     height_mm = chief_rays(doublet, [[0.0, 1.5]], [doublet.primary_wavelength]).image_xy[0, 1]
     assert _sensor(path, doublet).pitch_um == pytest.approx(height_mm * 1e3 / 480, rel=1e-6)
     assert _sensor(path, doublet, pitch_um=3.0).pitch_um == 3.0
 
 
-@pytest.mark.parametrize("text, match", [
-    ("<scene version='3.0.0'><shape type='sphere'/></scene>", "has no <sensor>"),
-    ("<scene version='3.0.0'><sensor type='orthographic'/></scene>", "sensor is 'orthographic'"),
-    ("<scene", "cannot read scene .*Parsing of XML file"),
-])
+@pytest.mark.parametrize(
+    "text, match",
+    [
+        ("<scene version='3.0.0'><shape type='sphere'/></scene>", "has no <sensor>"),
+        ("<scene version='3.0.0'><sensor type='orthographic'/></scene>", "sensor is 'orthographic'"),
+        ("<scene", "cannot read scene .*Parsing of XML file"),
+    ],
+)
 def test_scenes_that_cannot_take_a_lens(tmp_path, doublet, text, match):
     path = tmp_path / "bad.xml"
     path.write_text(text)
@@ -80,8 +87,10 @@ def test_a_perspective_without_fov_takes_mitsubas_default(tmp_path, doublet, mi)
     """Mitsuba's perspective without fov or focal_length (its default focal length): the lens camera's
     film edge meets the chief ray of the field Mitsuba gives it."""
     path = tmp_path / "nofov.xml"
-    path.write_text("<scene version='3.0.0'><sensor type='perspective'><film type='hdrfilm'>"
-                    "<integer name='width' value='64'/><integer name='height' value='48'/></film></sensor></scene>")
+    path.write_text(
+        "<scene version='3.0.0'><sensor type='perspective'><film type='hdrfilm'>"
+        "<integer name='width' value='64'/><integer name='height' value='48'/></film></sensor></scene>"
+    )
     x_fov = float(mi.traverse(load(path, VARIANT).sensors()[0])["x_fov"][0])
     wide = Lens.load("double-gauss-50mm")
     edge_mm = chief_rays(wide, [[0.5 * x_fov, 0.0]], [wide.primary_wavelength]).image_xy[0, 0]
@@ -107,8 +116,11 @@ def test_spp_renders_a_scene_without_an_spp_default(tmp_path):
     from solas_mi.imageio import read_exr
 
     path = tmp_path / "scene.xml"
-    path.write_text(SCENE.replace('value="1280"', 'value="16"').replace('value="960"', 'value="12"')
-                    .replace("</scene>", '<emitter type="constant"/></scene>'))
+    path.write_text(
+        SCENE.replace('value="1280"', 'value="16"')
+        .replace('value="960"', 'value="12"')
+        .replace("</scene>", '<emitter type="constant"/></scene>')
+    )
     assert main(["render", str(path), "--spp", "2", "-o", str(tmp_path / "out.exr")]) == 0
     channels, _ = read_exr(tmp_path / "out.exr")
     assert all(c.shape == (12, 16) and c.mean() > 0 for c in channels.values())
@@ -122,8 +134,21 @@ def test_a_response_table_travels_with_the_scene(tmp_path, monkeypatch):
 
     table = tmp_path / "camera.csv"
     table.write_text("# a camera\nwavelength_nm,r,g,b\n" + "".join(f"{w},1,1,1\n" for w in range(400, 701, 50)))
-    assert main(["scene", "solas-doublet", "-o", str(tmp_path / "scene"), "--sensor", "16x12",
-                 "--response", f"table:{table}"]) == 0
+    assert (
+        main(
+            [
+                "scene",
+                "solas-doublet",
+                "-o",
+                str(tmp_path / "scene"),
+                "--sensor",
+                "16x12",
+                "--response",
+                f"table:{table}",
+            ]
+        )
+        == 0
+    )
     assert (tmp_path / "scene" / "camera.csv").read_text() == table.read_text()
     elsewhere = tmp_path / "elsewhere"
     elsewhere.mkdir()
@@ -136,8 +161,11 @@ def test_a_response_table_travels_with_the_scene(tmp_path, monkeypatch):
 def test_a_camera_wider_than_the_lens_is_named(tmp_path, doublet):
     path = tmp_path / "wide.xml"
     path.write_text(SCENE.replace('name="fov" value="4"', 'name="fov" value="30"'))
-    with pytest.raises(SolasError, match=r"the scene's camera sees ±15 deg along x and lens solas-doublet cannot image "
-                                         r"that field .*narrow the camera's fov, or give --pitch-um"):
+    with pytest.raises(
+        SolasError,
+        match=r"the scene's camera sees ±15 deg along x and lens solas-doublet cannot image "
+        r"that field .*narrow the camera's fov, or give --pitch-um",
+    ):
         load(path, VARIANT, doublet)
 
 
@@ -217,11 +245,13 @@ def test_to_world_moved_by_traverse_renders_as_a_reload(included, doublet, mi):
     params["sensor.to_world" if "sensor.to_world" in params else "front.to_world"] = moved
     params.update()
     shifted = np.array(mi.render(scene, spp=16, seed=3))
-    (included.parent / "moved.xml").write_text(INCLUDED.replace('origin="0, 0, 5" target="0, 0, 0"',
-                                                                'origin="0.01, 0.005, 5" target="0.01, 0.005, 0"'))
+    (included.parent / "moved.xml").write_text(
+        INCLUDED.replace('origin="0, 0, 5" target="0, 0, 0"', 'origin="0.01, 0.005, 5" target="0.01, 0.005, 0"')
+    )
     (included.parent / "main2.xml").write_text(MAIN.replace("camera.xml", "moved.xml"))
-    reloaded = np.array(mi.render(load(included.parent / "main2.xml", VARIANT, doublet, small, pitch_um=20.0),
-                                  spp=16, seed=3))
+    reloaded = np.array(
+        mi.render(load(included.parent / "main2.xml", VARIANT, doublet, small, pitch_um=20.0), spp=16, seed=3)
+    )
     original = np.array(mi.render(load(included, VARIANT, doublet, small, pitch_um=20.0), spp=16, seed=3))
     assert np.abs(shifted - reloaded).max() < 1e-4
     assert np.abs(shifted - original).max() > 0.1
@@ -236,9 +266,33 @@ def test_render_metadata_holds_pitch_focus_and_unit(included, tmp_path, doublet)
     from solas_mi.optics.paraxial import paraxial
 
     out = tmp_path / "out.exr"
-    assert main(["render", str(included), "--lens", "solas-doublet", "--set", "depth=2", "--set", "focus=170", "--set", "width=16",
-                 "--set", "height=12", "--spp", "1", "--pitch-um", "40", "--world-unit-mm", "10",
-                 "-o", str(out)]) == 0
+    assert (
+        main(
+            [
+                "render",
+                str(included),
+                "--lens",
+                "solas-doublet",
+                "--set",
+                "depth=2",
+                "--set",
+                "focus=170",
+                "--set",
+                "width=16",
+                "--set",
+                "height=12",
+                "--spp",
+                "1",
+                "--pitch-um",
+                "40",
+                "--world-unit-mm",
+                "10",
+                "-o",
+                str(out),
+            ]
+        )
+        == 0
+    )
     meta = read_exr(out)[1]
     assert meta["pitch_um"] == 40.0 and meta["focus_distance"] == 170.0 and meta["world_unit_mm"] == 10.0
     lens = focused(doublet, 1700.0)
@@ -256,7 +310,28 @@ def test_render_metadata_of_a_lens_focused_at_infinity_is_strict_json(included, 
     from solas_mi.imageio import read_exr
 
     out = tmp_path / "out.exr"
-    assert main(["render", str(included), "--lens", "solas-doublet", "--set", "depth=2", "--set", "width=16",
-                 "--set", "height=12", "--spp", "1", "--focus-distance", "inf", "-o", str(out)]) == 0
+    assert (
+        main(
+            [
+                "render",
+                str(included),
+                "--lens",
+                "solas-doublet",
+                "--set",
+                "depth=2",
+                "--set",
+                "width=16",
+                "--set",
+                "height=12",
+                "--spp",
+                "1",
+                "--focus-distance",
+                "inf",
+                "-o",
+                str(out),
+            ]
+        )
+        == 0
+    )
     assert exr_meta(out)["focus_distance"] == "inf"
     assert float(read_exr(out)[1]["focus_distance"]) == math.inf

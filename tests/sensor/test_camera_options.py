@@ -1,6 +1,7 @@
 """`solas-mi camera`'s frames, exposure and reading of its input: --frame (another frame of one sensor,
 checked with photon statistics as EMVA 1288's photon transfer takes them), --exposure-ms auto, the
 f-number a render states, the saturation warning, the memory estimate; and `sensors --json`."""
+
 import re
 
 import numpy as np
@@ -40,16 +41,37 @@ def flat(tmp_path):
     """A flat field putting the G sites at about 40 % of the full well (eq. 1 with the model's QE)."""
     (tmp_path / "sensor.toml").write_text(SENSOR)
     model = load_sensor(tmp_path / "sensor.toml")
-    per_unit = (model.pixel_pitch_um * 1e-6) ** 2 * EXPOSURE_MS * 1e-3 * model.wavelengths_nm[1] * 1e-9 \
-        / (PLANCK * LIGHT_SPEED) * model.qe_g  # G electrons per W/m²
+    per_unit = (
+        (model.pixel_pitch_um * 1e-6) ** 2
+        * EXPOSURE_MS
+        * 1e-3
+        * model.wavelengths_nm[1]
+        * 1e-9
+        / (PLANCK * LIGHT_SPEED)
+        * model.qe_g
+    )  # G electrons per W/m²
     level = 0.4 * model.full_well_e / per_unit
     write_exr(tmp_path / "flat.exr", {c: np.full(SHAPE, level, np.float32) for c in "RGB"})
     return tmp_path, model
 
 
 def _frame(folder, name, *extra):
-    assert main(["camera", str(folder / "flat.exr"), "--sensor-model", str(folder / "sensor.toml"),
-                 "--exposure-ms", str(EXPOSURE_MS), *extra, "-o", str(folder / name)]) == 0
+    assert (
+        main(
+            [
+                "camera",
+                str(folder / "flat.exr"),
+                "--sensor-model",
+                str(folder / "sensor.toml"),
+                "--exposure-ms",
+                str(EXPOSURE_MS),
+                *extra,
+                "-o",
+                str(folder / name),
+            ]
+        )
+        == 0
+    )
     channels, meta = read_exr(folder / name)
     return channels["RAW"].astype(np.float64), meta
 
@@ -90,8 +112,20 @@ def test_frame_numbers_from_python_are_the_commands(flat):
 
 def test_a_negative_frame_number_is_refused(flat, capsys):
     folder, _ = flat
-    code = main(["camera", str(folder / "flat.exr"), "--sensor-model", str(folder / "sensor.toml"), "--exposure-ms",
-                 "1", "--frame", "-1", "-o", str(folder / "x.exr")])
+    code = main(
+        [
+            "camera",
+            str(folder / "flat.exr"),
+            "--sensor-model",
+            str(folder / "sensor.toml"),
+            "--exposure-ms",
+            "1",
+            "--frame",
+            "-1",
+            "-o",
+            str(folder / "x.exr"),
+        ]
+    )
     assert code == 2 and "sensor frame -1 must be an integer >= 0" in capsys.readouterr().err
     assert not (folder / "x.exr").exists()
 
@@ -104,16 +138,36 @@ def test_auto_exposure_puts_the_percentile_at_its_fraction_of_saturation(tmp_pat
     model = load_sensor(tmp_path / "sensor.toml")
     image = np.zeros((64, 96, 3), np.float32)
     for band, level in enumerate((1.0, 2.0, 4.0)):
-        image[:, 32 * band:32 * band + 32] = level * 1e-3
+        image[:, 32 * band : 32 * band + 32] = level * 1e-3
     write_exr(tmp_path / "in.exr", dict(zip("RGB", np.moveaxis(image, -1, 0))))
-    assert main(["camera", str(tmp_path / "in.exr"), "--sensor-model", str(tmp_path / "sensor.toml"),
-                 "--exposure-ms", "auto:90,0.6", "-o", str(tmp_path / "raw.exr")]) == 0
+    assert (
+        main(
+            [
+                "camera",
+                str(tmp_path / "in.exr"),
+                "--sensor-model",
+                str(tmp_path / "sensor.toml"),
+                "--exposure-ms",
+                "auto:90,0.6",
+                "-o",
+                str(tmp_path / "raw.exr"),
+            ]
+        )
+        == 0
+    )
     raw, meta = read_exr(tmp_path / "raw.exr")
     area = (model.pixel_pitch_um * 1e-6) ** 2
     rates = {}  # electrons per second of each (filter, band)
     for f, channel, qe in (("R", 0, model.qe_r), ("G", 1, model.qe_g), ("B", 2, model.qe_b)):
         for band, level in enumerate((1.0, 2.0, 4.0)):
-            rates[f, band] = float(np.float32(level * 1e-3)) * area * model.wavelengths_nm[channel] * 1e-9 / (PLANCK * LIGHT_SPEED) * qe
+            rates[f, band] = (
+                float(np.float32(level * 1e-3))
+                * area
+                * model.wavelengths_nm[channel]
+                * 1e-9
+                / (PLANCK * LIGHT_SPEED)
+                * qe
+            )
     # the pixels sorted by rate: each (filter, band) holds 1/12 (R, B) or 1/6 (G) of them
     share = {k: (2 if k[0] == "G" else 1) / 12 for k in rates}
     ordered = sorted(rates, key=rates.get)
@@ -126,36 +180,67 @@ def test_auto_exposure_puts_the_percentile_at_its_fraction_of_saturation(tmp_pat
     sites = np.zeros(raw["RAW"].shape, dtype=bool)
     row, col = {"R": (0, 0), "G": (0, 1), "B": (1, 1)}[at[0]]
     sites[row::2, col::2] = True
-    sites[:, :32 * at[1]] = sites[:, 32 * at[1] + 32:] = False
+    sites[:, : 32 * at[1]] = sites[:, 32 * at[1] + 32 :] = False
     signal = raw["RAW"][sites].mean() - model.black_level_dn
     assert signal == pytest.approx(0.6 * model.saturation_dn, rel=0.01)
     assert "exposure" in capsys.readouterr().out
 
 
-@pytest.mark.parametrize("value, says", [
-    ("auto:99", "must be a time in ms, auto, or auto:P,F"),
-    ("auto:0,0.5", "percentile 0.0 must be a number in \\(0, 100\\]"),
-    ("auto:99,1.5", "fraction 1.5 must be a number in \\(0, 1\\]"),
-    ("soon", "'soon' must be a time in ms"),
-])
+@pytest.mark.parametrize(
+    "value, says",
+    [
+        ("auto:99", "must be a time in ms, auto, or auto:P,F"),
+        ("auto:0,0.5", "percentile 0.0 must be a number in \\(0, 100\\]"),
+        ("auto:99,1.5", "fraction 1.5 must be a number in \\(0, 1\\]"),
+        ("soon", "'soon' must be a time in ms"),
+    ],
+)
 def test_bad_auto_exposures(flat, capsys, value, says):
     folder, _ = flat
-    assert main(["camera", str(folder / "flat.exr"), "--sensor-model", str(folder / "sensor.toml"), "--exposure-ms",
-                 value, "-o", str(folder / "x.exr")]) == 2
+    assert (
+        main(
+            [
+                "camera",
+                str(folder / "flat.exr"),
+                "--sensor-model",
+                str(folder / "sensor.toml"),
+                "--exposure-ms",
+                value,
+                "-o",
+                str(folder / "x.exr"),
+            ]
+        )
+        == 2
+    )
     assert re.search(says, capsys.readouterr().err)
 
 
 def test_auto_exposure_of_a_black_frame_is_refused(tmp_path, capsys):
     write_exr(tmp_path / "black.exr", {c: np.zeros((8, 8), np.float32) for c in "RGB"})
-    assert main(["camera", str(tmp_path / "black.exr"), "--sensor-model", "imx490", "--exposure-ms", "auto",
-                 "-o", str(tmp_path / "x.exr")]) == 2
+    assert (
+        main(
+            [
+                "camera",
+                str(tmp_path / "black.exr"),
+                "--sensor-model",
+                "imx490",
+                "--exposure-ms",
+                "auto",
+                "-o",
+                str(tmp_path / "x.exr"),
+            ]
+        )
+        == 2
+    )
     assert "gets no light" in capsys.readouterr().err and not (tmp_path / "x.exr").exists()
 
 
 def _render_like(folder, f_number):
     """An EXR as a render through a lens writes it: radiance and its lens's f-number in the metadata."""
     image = np.random.default_rng(2).uniform(0.5, 1.5, (16, 24, 3)).astype(np.float32)
-    write_exr(folder / "render.exr", dict(zip("RGB", np.moveaxis(image, -1, 0))), {"lens": "a-lens", "f_number": f_number})
+    write_exr(
+        folder / "render.exr", dict(zip("RGB", np.moveaxis(image, -1, 0))), {"lens": "a-lens", "f_number": f_number}
+    )
     return image.astype(np.float64)
 
 
@@ -215,11 +300,23 @@ def test_memory_estimate_refuses_what_does_not_fit(flat, capsys, monkeypatch, is
 
     folder, _ = flat
     monkeypatch.setattr(budget, "available_memory", lambda: 64e6)
-    argv = ["camera", str(folder / "flat.exr"), "--sensor-model", str(folder / "sensor.toml"), "--exposure-ms", "1",
-            *(["--isp", isp] if isp else []), "-o", str(folder / "x.exr")]
+    argv = [
+        "camera",
+        str(folder / "flat.exr"),
+        "--sensor-model",
+        str(folder / "sensor.toml"),
+        "--exposure-ms",
+        "1",
+        *(["--isp", isp] if isp else []),
+        "-o",
+        str(folder / "x.exr"),
+    ]
     assert main(argv) == 2
-    per_pixel = max(commands.RAW_BYTES_PER_PIXEL, DEVELOP_BYTES_PER_PIXEL if isp else 0.0,
-                    3 * commands.READ_BYTES_PER_VALUE + commands.READ_BYTES_PER_PIXEL)
+    per_pixel = max(
+        commands.RAW_BYTES_PER_PIXEL,
+        DEVELOP_BYTES_PER_PIXEL if isp else 0.0,
+        3 * commands.READ_BYTES_PER_VALUE + commands.READ_BYTES_PER_PIXEL,
+    )
     need = commands.FIXED_BYTES + SHAPE[0] * SHAPE[1] * per_pixel
     assert f"camera 256x128 needs about {budget.size_text(need)} of memory and 64 MB is free" in capsys.readouterr().err
     assert not (folder / "x.exr").exists()

@@ -4,6 +4,7 @@ path as it was (`legacy_capture` below: photons, mosaic, fixed pattern from [see
 noise from [seed, 1, frame], full well, ADC), compared by the SHA-256 of the frames. (When this test was
 written the same digests were also checked against main's own code in a worktree: equal.) A file that names
 the stages of the flat form gives those frames too."""
+
 import hashlib
 
 import numpy as np
@@ -32,7 +33,7 @@ def legacy_mean_electrons(model: SensorModel, image: np.ndarray, seconds: float)
     else:
         weights = model.effective_qe()
     tile = np.array(["RGBC".index(f) for f in model.cfa]).reshape(2, 2)
-    sites = np.tile(tile, ((image.shape[0] + 1) // 2, (image.shape[1] + 1) // 2))[:image.shape[0], :image.shape[1]]
+    sites = np.tile(tile, ((image.shape[0] + 1) // 2, (image.shape[1] + 1) // 2))[: image.shape[0], : image.shape[1]]
     out = np.zeros(image.shape[:2])
     for index in range(4):
         here = sites == index
@@ -68,7 +69,7 @@ def digest(frame: np.ndarray) -> str:
 
 def scene(shape=(48, 66)) -> np.ndarray:
     """Irradiance over five decades (W/m²), channels unequal, with a black corner and round-off below zero."""
-    rows, cols = np.mgrid[0:shape[0], 0:shape[1]]
+    rows, cols = np.mgrid[0 : shape[0], 0 : shape[1]]
     level = 10.0 ** (-3.0 + 5.0 * cols / (shape[1] - 1))
     image = np.stack([level * (1.0 + 0.3 * np.sin(rows / 5.0)), 0.7 * level, 0.4 * level], axis=-1)
     image[:6, :6] = 0.0
@@ -76,15 +77,26 @@ def scene(shape=(48, 66)) -> np.ndarray:
     return image
 
 
-CURVE = QECurve.from_table({"wavelength_nm": [380, 480, 540, 620, 780], "R": [0.02, 0.03, 0.1, 0.6, 0.3],
-                            "G": [0.05, 0.3, 0.7, 0.2, 0.05], "B": [0.4, 0.6, 0.15, 0.03, 0.02],
-                            "C": [0.5, 0.6, 0.7, 0.6, 0.4]})
-FILES = {"defaults": SensorModel(), "rccb-10bit": SensorModel(cfa="RCCB", bit_depth=10, black_level_dn=0, gain_dn_per_e=0.05),
-         "rccc-hot": SensorModel(cfa="RCCC", dark_current_e_s=5e4, prnu=0.05, dsnu_e=20.0, pixel_pitch_um=4.2),
-         "curve": SensorModel(qe_r=None, qe_g=None, qe_b=None, qe_c=None, cfa="RCCB", qe_curve=CURVE),
-         "adc-bound": SensorModel(full_well_e=50000, gain_dn_per_e=0.2, bit_depth=12)}
-SENSORS = {**{name: load_sensor(name) for name in preset_names() if isinstance(load_sensor(name), SensorModel)},
-           **FILES}
+CURVE = QECurve.from_table(
+    {
+        "wavelength_nm": [380, 480, 540, 620, 780],
+        "R": [0.02, 0.03, 0.1, 0.6, 0.3],
+        "G": [0.05, 0.3, 0.7, 0.2, 0.05],
+        "B": [0.4, 0.6, 0.15, 0.03, 0.02],
+        "C": [0.5, 0.6, 0.7, 0.6, 0.4],
+    }
+)
+FILES = {
+    "defaults": SensorModel(),
+    "rccb-10bit": SensorModel(cfa="RCCB", bit_depth=10, black_level_dn=0, gain_dn_per_e=0.05),
+    "rccc-hot": SensorModel(cfa="RCCC", dark_current_e_s=5e4, prnu=0.05, dsnu_e=20.0, pixel_pitch_um=4.2),
+    "curve": SensorModel(qe_r=None, qe_g=None, qe_b=None, qe_c=None, cfa="RCCB", qe_curve=CURVE),
+    "adc-bound": SensorModel(full_well_e=50000, gain_dn_per_e=0.2, bit_depth=12),
+}
+SENSORS = {
+    **{name: load_sensor(name) for name in preset_names() if isinstance(load_sensor(name), SensorModel)},
+    **FILES,
+}
 
 
 @pytest.mark.parametrize("name", list(SENSORS))
@@ -92,7 +104,9 @@ def test_every_flat_sensor_gives_the_frames_it_gave(name):
     model = SENSORS[name]
     image = scene()
     for seconds, seed, frame in ((1e-3, 0, 0), (0.02, 7, 1), (0.3, 2**31 - 1, 2**55 + 3)):
-        assert digest(capture(model, image, seconds, seed, frame)) == digest(legacy_capture(model, image, seconds, seed, frame))
+        assert digest(capture(model, image, seconds, seed, frame)) == digest(
+            legacy_capture(model, image, seconds, seed, frame)
+        )
     auto, _ = AutoExposure(99.0, 0.8).choose(model, image)
     assert auto == legacy_auto_seconds(model, image, 99.0, 0.8)
 
@@ -102,8 +116,16 @@ def test_the_flat_presets_are_all_here():
     assert {"ar0132at", "imx255", "imx490", "kac12040", "mt9p001"} <= set(SENSORS)
 
 
-FLAT_FIELDS = ("dark_current_e_s", "read_noise_e", "prnu", "dsnu_e", "full_well_e", "gain_dn_per_e", "bit_depth",
-               "black_level_dn")
+FLAT_FIELDS = (
+    "dark_current_e_s",
+    "read_noise_e",
+    "prnu",
+    "dsnu_e",
+    "full_well_e",
+    "gain_dn_per_e",
+    "bit_depth",
+    "black_level_dn",
+)
 
 
 def test_a_file_naming_the_stages_of_a_flat_sensor_gives_its_frames(tmp_path):

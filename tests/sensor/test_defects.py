@@ -2,6 +2,7 @@
 dark level whatever the light (EMVA 1288's μ_y.dark = black + K i_d t), hot pixels K i_hot t more than they
 would, in the fractions asked, fixed by the seed; every other pixel reads what it read without defects, bit
 for bit."""
+
 import math
 from dataclasses import replace
 
@@ -23,8 +24,9 @@ DEFECTS = "\n[sensor.defects]\ndead_fraction = 0.005\nhot_fraction = 0.004\nhot_
 
 @pytest.fixture
 def sensors(tmp_path):
-    (tmp_path / "defects.toml").write_text((PRESETS / "imx490.toml").read_text(encoding="utf-8") + DEFECTS,
-                                           encoding="utf-8")
+    (tmp_path / "defects.toml").write_text(
+        (PRESETS / "imx490.toml").read_text(encoding="utf-8") + DEFECTS, encoding="utf-8"
+    )
     return load_sensor("imx490"), load_sensor(tmp_path / "defects.toml")
 
 
@@ -62,10 +64,16 @@ def test_the_defects_are_fixed_by_the_seed_in_the_fractions_asked(sensors):
     assert np.array_equal(again[0], dead) and np.array_equal(again[1], hot) and not np.array_equal(other[0], dead)
 
 
-@pytest.mark.parametrize("values, message", [
-    (dict(dead_fraction=0.5), r"sensor defects dead_fraction = 0.5 must be a number in \[0, 0.01\]"),
-    (dict(hot_dark_current_e_s=-1.0), r"sensor defects hot_dark_current_e_s = -1.0 must be a number in \[0, 1e\+09\]"),
-])
+@pytest.mark.parametrize(
+    "values, message",
+    [
+        (dict(dead_fraction=0.5), r"sensor defects dead_fraction = 0.5 must be a number in \[0, 0.01\]"),
+        (
+            dict(hot_dark_current_e_s=-1.0),
+            r"sensor defects hot_dark_current_e_s = -1.0 must be a number in \[0, 1e\+09\]",
+        ),
+    ],
+)
 def test_bad_defects_are_refused_by_name(values, message):
     with pytest.raises(SolasError, match=message):
         Defects(**values)
@@ -92,8 +100,25 @@ def test_camera_corrects_the_defects_of_its_sensor(sensors, tmp_path):
     from solas_mi.imageio import read_exr, write_exr
 
     write_exr(tmp_path / "in.exr", {c: np.full(SHAPE, 0.05, np.float32) for c in "RGB"})
-    assert main(["camera", str(tmp_path / "in.exr"), "--sensor-model", str(tmp_path / "defects.toml"),
-                 "--exposure-ms", "10", "--seed", "7", "--isp", "default", "-o", str(tmp_path / "raw.exr")]) == 0
+    assert (
+        main(
+            [
+                "camera",
+                str(tmp_path / "in.exr"),
+                "--sensor-model",
+                str(tmp_path / "defects.toml"),
+                "--exposure-ms",
+                "10",
+                "--seed",
+                "7",
+                "--isp",
+                "default",
+                "-o",
+                str(tmp_path / "raw.exr"),
+            ]
+        )
+        == 0
+    )
     _, meta = read_exr(tmp_path / "raw.exr")
     assert meta["stages"]["black_level"]["defect_pixels_corrected"] == int(sensors[1].defective_pixels(SHAPE, 7).sum())
     assert [s["stage"] for s in meta["sensor"]["stages"]][1] == "defects"

@@ -2,6 +2,7 @@
 photon transfer of every readout (two-frame analysis, 1.5 %), the merged signal's SNR on both sides of each
 transition and the dip between (0.2 dB), split pixels with dual conversion gain (the IMX490-class preset) and
 multiple exposures; the compander's round trip within each segment's quantisation step."""
+
 import math
 from dataclasses import replace
 
@@ -24,9 +25,21 @@ EXPOSURE = 0.01  # s
 SPLIT = load_sensor("imx490-hdr")  # split pixels, each at two conversion gains: 4 readouts, 2 charges
 PHOTONS = PhotonConversion(pixel_pitch_um=3.0)
 # three exposures of one photodiode, each 1/16 of the one before (AR0820AT-class; values are assumptions)
-EXPOSURES = SensorChain(PHOTONS, tuple(
-    Readout(name=f"T{i + 1}", exposure_ratio=16.0**-i, full_well_e=12000, gain_dn_per_e=(4095 - 64) / 12000,
-            read_noise_e=2.5, dark_current_e_s=50.0) for i in range(3)), Merge(bits=20))
+EXPOSURES = SensorChain(
+    PHOTONS,
+    tuple(
+        Readout(
+            name=f"T{i + 1}",
+            exposure_ratio=16.0**-i,
+            full_well_e=12000,
+            gain_dn_per_e=(4095 - 64) / 12000,
+            read_noise_e=2.5,
+            dark_current_e_s=50.0,
+        )
+        for i in range(3)
+    ),
+    Merge(bits=20),
+)
 CHAINS = {"split-pixel-dcg": SPLIT, "multi-exposure": EXPOSURES}
 
 
@@ -63,8 +76,9 @@ def test_every_readout_follows_its_photon_transfer_line(name):
         frames = zip(*two_frames(chain, float(electrons), merged=False))
         for r, (a, b) in zip(chain.readouts, frames):
             mean, variance = temporal(a, b)
-            expected = emva.temporal_variance_dn2(r.gain_dn_per_e, r.dark_variance_e2(EXPOSURE), mean,
-                                                  r.dark_mean_dn(EXPOSURE))
+            expected = emva.temporal_variance_dn2(
+                r.gain_dn_per_e, r.dark_variance_e2(EXPOSURE), mean, r.dark_mean_dn(EXPOSURE)
+            )
             if mean - r.black_level_dn < 0.85 * r.saturation_dn and expected > 0.6**2:
                 assert variance == pytest.approx(expected, rel=0.015), (r.name, electrons)
                 checked[r.name] += 1
@@ -83,8 +97,11 @@ def transitions(chain: SensorChain) -> list[float]:
     """The reference photo-electrons where the merge moves on: readout i reaches the merge's threshold of its
     saturation (a readout already saturated there is passed over: the IMX490-class small photodiode's high
     gain fills within the large one's low gain)."""
-    switches = [(chain.merge.threshold * r.saturation_dn / r.gain_dn_per_e - r.dark_current_e_s * EXPOSURE
-                 * r.exposure_ratio) / r.response for r in chain.readouts[:-1]]
+    switches = [
+        (chain.merge.threshold * r.saturation_dn / r.gain_dn_per_e - r.dark_current_e_s * EXPOSURE * r.exposure_ratio)
+        / r.response
+        for r in chain.readouts[:-1]
+    ]
     return [s for i, s in enumerate(switches) if s > max(switches[:i], default=0.0)]
 
 
@@ -146,8 +163,13 @@ KNEES = ((0, 0), (2048, 2048), (16384, 2560), (131072, 3072), (2**20 - 1, 4000))
 def test_decompanding_gives_the_linear_signal_within_each_segment_step():
     compander = Compander(KNEES, bit_depth=12, black_level_dn=42)
     rng = np.random.default_rng(5)
-    linear = np.concatenate([np.arange(4096), rng.integers(0, 2**20, 200_000),
-                             [x + d for x, _ in KNEES for d in (-2, -1, 0, 1, 2) if 0 <= x + d < 2**20]])
+    linear = np.concatenate(
+        [
+            np.arange(4096),
+            rng.integers(0, 2**20, 200_000),
+            [x + d for x, _ in KNEES for d in (-2, -1, 0, 1, 2) if 0 <= x + d < 2**20],
+        ]
+    )
     codes = compander.compand(linear)
     assert codes.dtype == np.uint16 and codes.min() == 42 and codes.max() == 4042
     error = np.abs(compander.decompand(codes) - linear)
@@ -196,14 +218,25 @@ def test_a_charge_has_its_own_stream():
     assert np.corrcoef(high, low)[0, 1] > 0.9
 
 
-@pytest.mark.parametrize("change, message", [
-    (dict(merge=None), r"a sensor of 4 readout\(s\) takes a \[sensor.merge\] table"),
-    (dict(readouts=SPLIT.readouts[::-1]), r"readout 'small-HCG' gives 0.07478 DN per reference photo-electron, not less than readout 'small-LCG'"),
-    (dict(readouts=(*SPLIT.readouts[:3], replace(SPLIT.readouts[3], dark_current_e_s=1.0))),
-     r"readout 'small-LCG': dark_current_e_s = 1.0 differs from the 4.2 of readout 'small-HCG'; both read "
-     r"photodiode 'small'"),
-    (dict(compander=Compander(KNEES)), r"compander's last knee must sit at the merged signal's white level \(16777215\)"),
-])
+@pytest.mark.parametrize(
+    "change, message",
+    [
+        (dict(merge=None), r"a sensor of 4 readout\(s\) takes a \[sensor.merge\] table"),
+        (
+            dict(readouts=SPLIT.readouts[::-1]),
+            r"readout 'small-HCG' gives 0.07478 DN per reference photo-electron, not less than readout 'small-LCG'",
+        ),
+        (
+            dict(readouts=(*SPLIT.readouts[:3], replace(SPLIT.readouts[3], dark_current_e_s=1.0))),
+            r"readout 'small-LCG': dark_current_e_s = 1.0 differs from the 4.2 of readout 'small-HCG'; both read "
+            r"photodiode 'small'",
+        ),
+        (
+            dict(compander=Compander(KNEES)),
+            r"compander's last knee must sit at the merged signal's white level \(16777215\)",
+        ),
+    ],
+)
 def test_a_chain_that_cannot_be_is_refused_by_name(change, message):
     with pytest.raises(SolasError, match=message):
         replace(SPLIT, **change)
@@ -211,9 +244,12 @@ def test_a_chain_that_cannot_be_is_refused_by_name(change, message):
 
 def test_a_merge_too_narrow_for_its_readouts_is_refused():
     """Three exposures 16 × apart span 4031 × 256 DN of the first: 20 bits, not 16."""
-    with pytest.raises(SolasError, match=r"sensor merge bits = 16 holds merged codes up to 65535, below the last "
-                                         r"readout's saturation over black_level_dn \(1032000 in DN of the first "
-                                         r"readout\); give bits >= 20"):
+    with pytest.raises(
+        SolasError,
+        match=r"sensor merge bits = 16 holds merged codes up to 65535, below the last "
+        r"readout's saturation over black_level_dn \(1032000 in DN of the first "
+        r"readout\); give bits >= 20",
+    ):
         replace(EXPOSURES, merge=Merge(bits=16))
 
 

@@ -1,6 +1,7 @@
 """An HDR sensor through the whole chain: `solas-mi camera` writes its merged (or companded) RAW with every
 stage named in the metadata, auto-exposure meters it, the image processor decompands and develops it, and a
 batch's camera takes it."""
+
 import json
 import math
 
@@ -38,24 +39,56 @@ def companded(tmp_path):
 
 def test_camera_writes_the_merged_raw_and_names_the_stages(tmp_path, capsys):
     image = scene(tmp_path)
-    assert main(["camera", str(tmp_path / "in.exr"), "--sensor-model", "imx490-hdr", "--exposure-ms", "10",
-                 "--seed", "4", "-o", str(tmp_path / "raw.exr")]) == 0
+    assert (
+        main(
+            [
+                "camera",
+                str(tmp_path / "in.exr"),
+                "--sensor-model",
+                "imx490-hdr",
+                "--exposure-ms",
+                "10",
+                "--seed",
+                "4",
+                "-o",
+                str(tmp_path / "raw.exr"),
+            ]
+        )
+        == 0
+    )
     channels, meta = read_exr(tmp_path / "raw.exr")
     sensor = load_sensor("imx490-hdr")
     assert np.array_equal(channels["RAW"], capture(sensor, image, 0.01, 4).astype(np.float32))
     assert channels["RAW"].max() > 4095  # past the 12 bits of one readout: the merged signal
     stages = [s["stage"] for s in meta["sensor"]["stages"]]
     assert stages == ["photons", *["readout"] * 4, "merge"] and set(stages) <= set(STAGES)
-    assert [s["name"] for s in meta["sensor"]["stages"] if s["stage"] == "readout"] == \
-           ["large-HCG", "large-LCG", "small-HCG", "small-LCG"]
+    assert [s["name"] for s in meta["sensor"]["stages"] if s["stage"] == "readout"] == [
+        "large-HCG",
+        "large-LCG",
+        "small-HCG",
+        "small-LCG",
+    ]
     assert "24 bit" in capsys.readouterr().out
 
 
 def test_auto_exposure_meters_the_reference_photodiode(tmp_path):
     """auto:99,0.8 puts the 99th percentile at 80 % of the merged signal's saturation."""
     scene(tmp_path)
-    assert main(["camera", str(tmp_path / "in.exr"), "--sensor-model", "imx490-hdr", "--exposure-ms", "auto",
-                 "-o", str(tmp_path / "raw.exr")]) == 0
+    assert (
+        main(
+            [
+                "camera",
+                str(tmp_path / "in.exr"),
+                "--sensor-model",
+                "imx490-hdr",
+                "--exposure-ms",
+                "auto",
+                "-o",
+                str(tmp_path / "raw.exr"),
+            ]
+        )
+        == 0
+    )
     _, meta = read_exr(tmp_path / "raw.exr")
     chosen = meta["auto_exposure"]
     assert chosen["saturation_e"] == load_sensor("imx490-hdr").saturation_e == 79000.0
@@ -76,8 +109,23 @@ def test_the_image_processor_decompands_a_companded_raw(tmp_path):
     assert developed["stages"]["black_level"]["decompanded_through"] == KNEES
     assert developed["stages"]["black_level"]["black_dn"] == 64  # the merged signal's, before companding
     assert np.abs(frame.astype(int) - reference).max() <= 1
-    assert main(["camera", str(tmp_path / "in.exr"), "--sensor-model", str(path), "--exposure-ms", "10",
-                 "--isp", "default", "-o", str(tmp_path / "raw.exr")]) == 0
+    assert (
+        main(
+            [
+                "camera",
+                str(tmp_path / "in.exr"),
+                "--sensor-model",
+                str(path),
+                "--exposure-ms",
+                "10",
+                "--isp",
+                "default",
+                "-o",
+                str(tmp_path / "raw.exr"),
+            ]
+        )
+        == 0
+    )
     assert (tmp_path / "raw.png").exists()
 
 
@@ -86,8 +134,13 @@ def test_a_batch_camera_takes_an_hdr_sensor(tmp_path):
     camera = Camera(load_sensor("imx490-hdr"), 10.0, ISP(), seed=3)
     raw, frame, meta = camera.shoot(image, "frame000")
     assert raw.dtype == np.uint32 and frame.shape == (16, 64, 3)
-    assert meta["camera"]["sensor"]["stages"][-1] == {"stage": "merge", "bits": 24, "threshold": 0.9, "blend": 0.0,
-                                                     "black_level_dn": 64}
+    assert meta["camera"]["sensor"]["stages"][-1] == {
+        "stage": "merge",
+        "bits": 24,
+        "threshold": 0.9,
+        "blend": 0.0,
+        "black_level_dn": 64,
+    }
 
 
 def test_reinhard_tone_maps_by_its_formula():
@@ -125,8 +178,21 @@ def test_the_memory_check_counts_the_readouts(tmp_path, monkeypatch, capsys):
 
     write_exr(tmp_path / "big.exr", {c: np.full((1000, 1000), 0.01, dtype=np.float32) for c in "RGB"})
     monkeypatch.setattr(budget, "available_memory", lambda: 64e6)
-    assert main(["camera", str(tmp_path / "big.exr"), "--sensor-model", "imx490-hdr", "--exposure-ms", "1",
-                 "-o", str(tmp_path / "x.exr")]) == 2
+    assert (
+        main(
+            [
+                "camera",
+                str(tmp_path / "big.exr"),
+                "--sensor-model",
+                "imx490-hdr",
+                "--exposure-ms",
+                "1",
+                "-o",
+                str(tmp_path / "x.exr"),
+            ]
+        )
+        == 2
+    )
     per_pixel = commands.RAW_BYTES_PER_PIXEL + commands.MERGE_BYTES_PER_PIXEL + 3 * commands.READOUT_BYTES_PER_PIXEL
     need, flat = (commands.FIXED_BYTES + 1e6 * bytes_ for bytes_ in (per_pixel, commands.RAW_BYTES_PER_PIXEL))
     assert budget.size_text(need) != budget.size_text(flat)

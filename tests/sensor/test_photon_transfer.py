@@ -3,6 +3,7 @@ model's own predictions — temporal variance against mean (eq. 6), SNR against 
 dark frames against dark current and read noise, and the collapse of the variance at the full well.
 Temporal statistics come from the difference of two frames of one seed (the fixed pattern cancels).
 The transfer runs for the scalar quantum efficiencies and for a QE curve with cross-talk (`sensor.qe`)."""
+
 from dataclasses import replace
 
 import numpy as np
@@ -15,12 +16,34 @@ from solas_mi.sensor.qe import QECurve
 
 SHAPE = (256, 512)
 EXPOSURE = 0.01  # s
-MODEL = SensorModel(dark_current_e_s=200.0, read_noise_e=5.0, prnu=0.01, dsnu_e=2.0, full_well_e=10000.0,
-                    gain_dn_per_e=0.25, bit_depth=12, black_level_dn=64, cfa="RGGB")
+MODEL = SensorModel(
+    dark_current_e_s=200.0,
+    read_noise_e=5.0,
+    prnu=0.01,
+    dsnu_e=2.0,
+    full_well_e=10000.0,
+    gain_dn_per_e=0.25,
+    bit_depth=12,
+    black_level_dn=64,
+    cfa="RGGB",
+)
 # the same sensor with filters that pass some of the neighbouring bands (cross-talk)
-CURVE = replace(MODEL, qe_r=None, qe_g=None, qe_b=None, qe_c=None, wavelengths_nm=None, qe_curve=QECurve.from_table(
-    {"wavelength_nm": [380, 480, 540, 620, 780], "R": [0.02, 0.03, 0.1, 0.6, 0.3], "G": [0.05, 0.3, 0.7, 0.2, 0.05],
-     "B": [0.4, 0.6, 0.15, 0.03, 0.02]}))
+CURVE = replace(
+    MODEL,
+    qe_r=None,
+    qe_g=None,
+    qe_b=None,
+    qe_c=None,
+    wavelengths_nm=None,
+    qe_curve=QECurve.from_table(
+        {
+            "wavelength_nm": [380, 480, 540, 620, 780],
+            "R": [0.02, 0.03, 0.1, 0.6, 0.3],
+            "G": [0.05, 0.3, 0.7, 0.2, 0.05],
+            "B": [0.4, 0.6, 0.15, 0.03, 0.02],
+        }
+    ),
+)
 GREEN = np.zeros(SHAPE, dtype=bool)
 GREEN[0::2, 1::2] = GREEN[1::2, 0::2] = True  # RGGB: the G sites
 
@@ -35,7 +58,9 @@ def electrons_per_unit(model: SensorModel = MODEL) -> float:
     return float(mean_electrons(model, np.ones((2, 2, 3)), EXPOSURE)[0, 1])
 
 
-def temporal(level: float, exposure: float = EXPOSURE, seed: int = 7, model: SensorModel = MODEL) -> tuple[float, float]:
+def temporal(
+    level: float, exposure: float = EXPOSURE, seed: int = 7, model: SensorModel = MODEL
+) -> tuple[float, float]:
     """Mean (DN) and temporal variance (DN², half the variance of the two frames' difference) of the G sites."""
     a = capture(model, flat(level), exposure, seed, frame=0)[GREEN].astype(np.float64)
     b = capture(model, flat(level), exposure, seed, frame=1)[GREEN].astype(np.float64)
@@ -75,7 +100,9 @@ def test_snr_against_irradiance(transfer):
 def test_dark_frames_match_dark_current_and_read_noise(exposure):
     mean, variance = temporal(0.0, exposure)
     assert abs(mean - MODEL.dark_mean_dn(exposure)) < 0.05  # black + K i_d t (i_d t = 0.2 to 40 e⁻)
-    expected = MODEL.gain_dn_per_e**2 * (MODEL.read_noise_e**2 + MODEL.dark_current_e_s * exposure) + QUANTISATION_VARIANCE
+    expected = (
+        MODEL.gain_dn_per_e**2 * (MODEL.read_noise_e**2 + MODEL.dark_current_e_s * exposure) + QUANTISATION_VARIANCE
+    )
     assert abs(variance / expected - 1) < 0.02
 
 

@@ -1,6 +1,7 @@
 """Sensor presets from public data sheets: each loads by name, each value says where it comes from
 (data sheet / source, derived, assumption), the derived values reproduce the published figures through
 the EMVA 1288 model, and the CLI takes a preset name and lists the presets."""
+
 import math
 import re
 import tomllib
@@ -17,9 +18,13 @@ KINDS = ("data sheet", "source", "derived", "assumption")
 # the figures each preset's source publishes (its file's header), which the derived values must reproduce:
 # SNR_max (dB) = 10 log10(full well), dynamic range (dB) = 20 log10(full well / read noise); an HDR sensor's
 # dynamic range (`hdr_dynamic_range_db`) is its chain's, EMVA 1288's μ_e.sat / μ_e.min (at `DR_EXPOSURE_S`)
-PUBLISHED = {"ar0132at": {"snr_max_db": 43.9}, "ar0132at-hdr": {"snr_max_db": 43.9, "hdr_dynamic_range_db": 115.0},
-             "imx255": {"snr_max_db": 40.3, "dynamic_range_db": 71.3},
-             "mt9p001": {"snr_max_db": 38.1, "dynamic_range_db": 70.1}, "kac12040": {"dynamic_range_db": 73.0}}
+PUBLISHED = {
+    "ar0132at": {"snr_max_db": 43.9},
+    "ar0132at-hdr": {"snr_max_db": 43.9, "hdr_dynamic_range_db": 115.0},
+    "imx255": {"snr_max_db": 40.3, "dynamic_range_db": 71.3},
+    "mt9p001": {"snr_max_db": 38.1, "dynamic_range_db": 70.1},
+    "kac12040": {"dynamic_range_db": 73.0},
+}
 DR_EXPOSURE_S = 0.01
 
 
@@ -62,7 +67,9 @@ def check_derived(name, model):
     if "snr_max_db" in figures:
         assert 10 * math.log10(model.full_well_e) == pytest.approx(figures["snr_max_db"], abs=0.01)
     if "dynamic_range_db" in figures:
-        assert 20 * math.log10(model.full_well_e / model.read_noise_e) == pytest.approx(figures["dynamic_range_db"], abs=0.5)
+        assert 20 * math.log10(model.full_well_e / model.read_noise_e) == pytest.approx(
+            figures["dynamic_range_db"], abs=0.5
+        )
     # the ADC's range above black spans the (large photodiode's) full well: it neither clips before the well
     # fills nor wastes codes
     if getattr(model, "photodiode", "large") != "large":
@@ -83,12 +90,14 @@ def test_the_imx490_readouts_share_one_adc():
     assert hcg.full_well_e == pytest.approx(lcg.full_well_e * LOW_GAIN / HIGH_GAIN)
     assert small_hcg.full_well_e == pytest.approx(small_lcg.full_well_e * LOW_GAIN / HIGH_GAIN)
     flat = load_sensor("imx490")
-    assert all(getattr(lcg, k) == getattr(flat, k) for k in ("full_well_e", "read_noise_e", "dark_current_e_s",
-                                                              "gain_dn_per_e", "bit_depth", "black_level_dn"))
+    assert all(
+        getattr(lcg, k) == getattr(flat, k)
+        for k in ("full_well_e", "read_noise_e", "dark_current_e_s", "gain_dn_per_e", "bit_depth", "black_level_dn")
+    )
 
 
 def test_a_preset_name_or_a_file(tmp_path):
-    (tmp_path / "mine.toml").write_text((PRESETS / "imx490.toml").read_text().replace("cfa = \"RGGB\"", "cfa = \"RCCB\""))
+    (tmp_path / "mine.toml").write_text((PRESETS / "imx490.toml").read_text().replace('cfa = "RGGB"', 'cfa = "RCCB"'))
     mine = load_sensor(tmp_path / "mine.toml")
     assert mine.cfa == "RCCB" and mine.full_well_e == load_sensor("imx490").full_well_e == 22000
     with pytest.raises(SolasError, match=re.escape(f"'imx999' is neither a preset ({', '.join(preset_names())})")):
@@ -99,8 +108,21 @@ def test_a_preset_name_or_a_file(tmp_path):
 
 def test_camera_with_a_preset_and_the_listing(tmp_path, capsys):
     write_exr(tmp_path / "in.exr", {c: np.full((8, 12), 0.01, dtype=np.float32) for c in "RGB"})
-    assert main(["camera", str(tmp_path / "in.exr"), "--sensor-model", "kac12040", "--exposure-ms", "2",
-                 "-o", str(tmp_path / "raw.exr")]) == 0
+    assert (
+        main(
+            [
+                "camera",
+                str(tmp_path / "in.exr"),
+                "--sensor-model",
+                "kac12040",
+                "--exposure-ms",
+                "2",
+                "-o",
+                str(tmp_path / "raw.exr"),
+            ]
+        )
+        == 0
+    )
     channels, meta = read_exr(tmp_path / "raw.exr")
     assert meta["sensor_model"] == "kac12040" and meta["sensor"]["pixel_pitch_um"] == 4.7
     assert channels["RAW"].shape == (8, 12)

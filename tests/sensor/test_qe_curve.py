@@ -1,5 +1,6 @@
 """QE curves (`sensor.qe`): the effective QE matrix against integrals done by hand, the scalar model as
 the degenerate curve (same frames), cross-talk, and a curve in a TOML file (inline or CSV)."""
+
 import re
 from dataclasses import replace
 
@@ -44,8 +45,10 @@ def test_cross_talk_of_a_tent():
     red = (rise + fall) / ((780**2 - 590**2) / 2)
     assert q == pytest.approx([red, green, 0.0], rel=1e-12)
     # the electrons of a flat green field on an R site: Q[R, G] times the green band's photons
-    model = SensorModel(cfa="RGGB", qe_curve=QECurve.from_table({"wavelength_nm": [550, 650, 750], "R": [0, 1, 0],
-                                                                  "G": [1, 1, 1], "B": [1, 1, 1]}))
+    model = SensorModel(
+        cfa="RGGB",
+        qe_curve=QECurve.from_table({"wavelength_nm": [550, 650, 750], "R": [0, 1, 0], "G": [1, 1, 1], "B": [1, 1, 1]}),
+    )
     got = mean_electrons(model, np.broadcast_to([0.0, 2.0, 0.0], (2, 2, 3)), 0.01)[0, 0]
     photons = 2.0 * (model.pixel_pitch_um * 1e-6) ** 2 * 0.01 * 545e-9 / (PLANCK * LIGHT_SPEED)
     assert got == pytest.approx(green * photons, rel=1e-12)
@@ -63,8 +66,16 @@ def test_scalar_model_is_the_degenerate_curve(cfa):
     """The scalar QEs at the bands' centres and the step curve of the same QEs give the same matrix and
     the same frames (photon shot noise, dark, read noise, PRNU, DSNU all on)."""
     qe = {"R": 0.45, "G": 0.6, "B": 0.4, "C": 0.85}
-    scalar = SensorModel(cfa=cfa, qe_r=qe["R"], qe_g=qe["G"], qe_b=qe["B"], qe_c=qe["C"], wavelengths_nm=(685, 545, 440),
-                         prnu=0.02, dsnu_e=3.0)
+    scalar = SensorModel(
+        cfa=cfa,
+        qe_r=qe["R"],
+        qe_g=qe["G"],
+        qe_b=qe["B"],
+        qe_c=qe["C"],
+        wavelengths_nm=(685, 545, 440),
+        prnu=0.02,
+        dsnu_e=3.0,
+    )
     curve = replace(scalar, qe_r=None, qe_g=None, qe_b=None, qe_c=None, wavelengths_nm=None, qe_curve=step_curve(qe))
     assert curve.channel_wavelengths_nm == scalar.wavelengths_nm
     assert np.allclose(curve.effective_qe(), scalar.effective_qe(), rtol=1e-14, atol=0)
@@ -74,11 +85,13 @@ def test_scalar_model_is_the_degenerate_curve(cfa):
 
 def test_curve_in_a_toml_file_inline_and_csv(tmp_path):
     table = {"wavelength_nm": [400, 550, 700], "R": [0.05, 0.1, 0.6], "G": [0.2, 0.7, 0.1], "B": [0.6, 0.2, 0.02]}
-    (tmp_path / "qe.csv").write_text("# measured\nwavelength_nm,R,G,B\n" +
-                                     "".join(f"{w},{r},{g},{b}\n" for w, r, g, b in zip(*table.values())))
+    (tmp_path / "qe.csv").write_text(
+        "# measured\nwavelength_nm,R,G,B\n" + "".join(f"{w},{r},{g},{b}\n" for w, r, g, b in zip(*table.values()))
+    )
     (tmp_path / "csv.toml").write_text('[sensor]\nqe_curve = "qe.csv"\n')
-    (tmp_path / "inline.toml").write_text("[sensor]\n[sensor.qe_curve]\n" +
-                                          "".join(f"{k} = {v}\n" for k, v in table.items()))
+    (tmp_path / "inline.toml").write_text(
+        "[sensor]\n[sensor.qe_curve]\n" + "".join(f"{k} = {v}\n" for k, v in table.items())
+    )
     from_csv, inline = load_sensor(tmp_path / "csv.toml"), load_sensor(tmp_path / "inline.toml")
     assert from_csv == inline == SensorModel(qe_curve=QECurve.from_table(table))
     assert read_csv(tmp_path / "qe.csv") == inline.qe_curve
@@ -86,19 +99,33 @@ def test_curve_in_a_toml_file_inline_and_csv(tmp_path):
     assert meta["qe_curve"] == table and meta["qe_r"] is None and SensorModel.from_dict(meta) == inline
 
 
-@pytest.mark.parametrize("sensor, message", [
-    ('qe_r = 0.5\n[sensor.qe_curve]\nwavelength_nm = [400, 700]\nR = [0.5, 0.5]\nG = [0.5, 0.5]\nB = [0.5, 0.5]\n',
-     "qe_curve and qe_r both given"),
-    ('cfa = "RCCB"\n[sensor.qe_curve]\nwavelength_nm = [400, 700]\nR = [0.5, 0.5]\nG = [0.5, 0.5]\nB = [0.5, 0.5]\n',
-     "no column for filter\\(s\\) C"),
-    ('[sensor.qe_curve]\nwavelength_nm = [400, 700]\nR = [50, 60]\nG = [0.5, 0.5]\nB = [0.5, 0.5]\n',
-     "filter R's quantum efficiency must be in \\[0, 1\\].*not %"),
-    ('[sensor.qe_curve]\nwavelength_nm = [700, 400]\nR = [0.5, 0.5]\nG = [0.5, 0.5]\nB = [0.5, 0.5]\n',
-     "non-decreasing"),
-    ('[sensor.qe_curve]\nwavelength_nm = [400, 700]\nR = [0.5]\nG = [0.5, 0.5]\nB = [0.5, 0.5]\n', "all of one length"),
-    ('[sensor.qe_curve]\nwavelength = [400, 700]\nR = [0.5, 0.5]\n', "wavelength unknown or wavelength_nm missing"),
-    ('qe_curve = "missing.csv"\n', "QE curve .*missing.csv.* does not exist"),
-])
+@pytest.mark.parametrize(
+    "sensor, message",
+    [
+        (
+            "qe_r = 0.5\n[sensor.qe_curve]\nwavelength_nm = [400, 700]\nR = [0.5, 0.5]\nG = [0.5, 0.5]\nB = [0.5, 0.5]\n",
+            "qe_curve and qe_r both given",
+        ),
+        (
+            'cfa = "RCCB"\n[sensor.qe_curve]\nwavelength_nm = [400, 700]\nR = [0.5, 0.5]\nG = [0.5, 0.5]\nB = [0.5, 0.5]\n',
+            "no column for filter\\(s\\) C",
+        ),
+        (
+            "[sensor.qe_curve]\nwavelength_nm = [400, 700]\nR = [50, 60]\nG = [0.5, 0.5]\nB = [0.5, 0.5]\n",
+            "filter R's quantum efficiency must be in \\[0, 1\\].*not %",
+        ),
+        (
+            "[sensor.qe_curve]\nwavelength_nm = [700, 400]\nR = [0.5, 0.5]\nG = [0.5, 0.5]\nB = [0.5, 0.5]\n",
+            "non-decreasing",
+        ),
+        (
+            "[sensor.qe_curve]\nwavelength_nm = [400, 700]\nR = [0.5]\nG = [0.5, 0.5]\nB = [0.5, 0.5]\n",
+            "all of one length",
+        ),
+        ("[sensor.qe_curve]\nwavelength = [400, 700]\nR = [0.5, 0.5]\n", "wavelength unknown or wavelength_nm missing"),
+        ('qe_curve = "missing.csv"\n', "QE curve .*missing.csv.* does not exist"),
+    ],
+)
 def test_bad_curves_are_named(tmp_path, sensor, message):
     (tmp_path / "s.toml").write_text("[sensor]\n" + sensor)
     with pytest.raises(SolasError, match=message) as info:

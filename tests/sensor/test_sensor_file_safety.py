@@ -1,6 +1,7 @@
 """A sensor model, its QE curve and an ISP file as a tester (or a hostile sensor file) gives them: files
 that are no text, devices, FIFOs, the process environment. Each is one line naming the file and what is
 allowed, in time, quoting nothing the file holds (`solas_mi.userfiles`)."""
+
 import os
 import re
 
@@ -14,8 +15,17 @@ from solas_mi.sensor.files import load_sensor
 
 
 def _camera(folder, sensor, isp=None) -> list[str]:
-    return ["camera", str(folder / "in.exr"), "--sensor-model", str(sensor), "--exposure-ms", "5",
-            *(["--isp", str(isp)] if isp else []), "-o", str(folder / "raw.exr")]
+    return [
+        "camera",
+        str(folder / "in.exr"),
+        "--sensor-model",
+        str(sensor),
+        "--exposure-ms",
+        "5",
+        *(["--isp", str(isp)] if isp else []),
+        "-o",
+        str(folder / "raw.exr"),
+    ]
 
 
 @pytest.fixture
@@ -37,13 +47,17 @@ def test_a_qe_curve_error_quotes_nothing_of_the_file(folder, curve):
     assert not any(s in str(info.value) for s in secrets), str(info.value)
 
 
-@pytest.mark.parametrize("make, message", [
-    (lambda p: os.symlink("/dev/zero", p), "is not a regular file"),
-    (lambda p: p.write_bytes("[sensor]\n# caf\xe9\n".encode("latin-1")), "is not UTF-8 text"),
-    (lambda p: p.write_bytes("[sensor]\npixel_pitch_um = 3.0\n".encode("utf-16")), "is not UTF-8 text"),
-    (lambda p: p.write_bytes(b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR"), "is not UTF-8 text"),
-    (lambda p: p.write_text("[sensor]\nx = " + "[" * 3000 + "]" * 3000 + "\n"), "nests tables and arrays"),
-], ids=["dev-zero", "latin-1", "utf-16", "binary", "nested"])
+@pytest.mark.parametrize(
+    "make, message",
+    [
+        (lambda p: os.symlink("/dev/zero", p), "is not a regular file"),
+        (lambda p: p.write_bytes("[sensor]\n# caf\xe9\n".encode("latin-1")), "is not UTF-8 text"),
+        (lambda p: p.write_bytes("[sensor]\npixel_pitch_um = 3.0\n".encode("utf-16")), "is not UTF-8 text"),
+        (lambda p: p.write_bytes(b"\x89PNG\r\n\x1a\n\x00\x00\x00\rIHDR"), "is not UTF-8 text"),
+        (lambda p: p.write_text("[sensor]\nx = " + "[" * 3000 + "]" * 3000 + "\n"), "nests tables and arrays"),
+    ],
+    ids=["dev-zero", "latin-1", "utf-16", "binary", "nested"],
+)
 @pytest.mark.parametrize("role", ["sensor", "isp"])
 def test_odd_sensor_and_isp_files_are_one_line(folder, capsys, make, message, role):
     """--sensor-model /dev/zero read 2 GB in 14 s (a FIFO, which waited for ever: `test_odd_files`); Latin-1,
@@ -57,4 +71,3 @@ def test_odd_sensor_and_isp_files_are_one_line(folder, capsys, make, message, ro
     assert len(err.strip().splitlines()) == 1 and message in err and "odd.toml" in err, err
     assert re.search("sensor model|isp file", err)
     assert not (folder / "raw.exr").exists()
-

@@ -1,4 +1,5 @@
 """The sensor's CFA sites, its determinism for a seed and its checks of bad values."""
+
 import re
 
 import numpy as np
@@ -21,10 +22,15 @@ def test_each_site_samples_its_filter(pattern):
     image = np.broadcast_to(np.array([1.0, 10.0, 100.0]), (*shape, 3))
     got = mean_electrons(model, image, 0.002)
     area = (model.pixel_pitch_um * 1e-6) ** 2
-    per_channel = [e * area * 0.002 * (w * 1e-9) / (PLANCK * LIGHT_SPEED)
-                   for e, w in zip((1.0, 10.0, 100.0), model.wavelengths_nm)]
-    expected = {"R": 0.3 * per_channel[0], "G": 0.5 * per_channel[1], "B": 0.7 * per_channel[2],
-                "C": 0.9 * sum(per_channel)}
+    per_channel = [
+        e * area * 0.002 * (w * 1e-9) / (PLANCK * LIGHT_SPEED) for e, w in zip((1.0, 10.0, 100.0), model.wavelengths_nm)
+    ]
+    expected = {
+        "R": 0.3 * per_channel[0],
+        "G": 0.5 * per_channel[1],
+        "B": 0.7 * per_channel[2],
+        "C": 0.9 * sum(per_channel),
+    }
     for i in range(shape[0]):
         for j in range(shape[1]):
             letter = pattern[2 * (i % 2) + (j % 2)]
@@ -71,15 +77,28 @@ def test_bad_seed_or_frame(name, value):
         capture(SensorModel(), np.zeros((2, 2, 3)), 0.01, **{"seed": 0, name: value})
 
 
-@pytest.mark.parametrize("field, value, allowed", [
-    ("pixel_pitch_um", 0.0, r"in \[0.1, 1000\]"), ("pixel_pitch_um", float("nan"), r"in \[0.1, 1000\]"),
-    ("qe_g", 1.2, r"\(0, 1\]"), ("qe_c", -0.1, r"\(0, 1\]"), ("read_noise_e", -1.0, r"\[0, 1e\+09\]"),
-    ("dark_current_e_s", float("inf"), r"\[0, 1e\+09\]"), ("prnu", 1.0, r"\[0, 1\)"), ("dsnu_e", -2.0, r"\[0, 1e\+09\]"),
-    ("full_well_e", 0, r"\[1, 1e\+09\]"), ("gain_dn_per_e", -0.1, r"\(0, 4095\]"), ("bit_depth", 20, "from 8 to 16"),
-    ("bit_depth", 12.0, "integer"), ("black_level_dn", 4095, "from 0 to 4094"), ("black_level_dn", -1, "from 0"),
-    ("cfa", "RGBW", "RGGB"), ("wavelengths_nm", (500.0, 600.0), "three wavelengths"),
-    ("wavelengths_nm", (500.0, 0.0, 600.0), r"\[380, 780\]"),
-])
+@pytest.mark.parametrize(
+    "field, value, allowed",
+    [
+        ("pixel_pitch_um", 0.0, r"in \[0.1, 1000\]"),
+        ("pixel_pitch_um", float("nan"), r"in \[0.1, 1000\]"),
+        ("qe_g", 1.2, r"\(0, 1\]"),
+        ("qe_c", -0.1, r"\(0, 1\]"),
+        ("read_noise_e", -1.0, r"\[0, 1e\+09\]"),
+        ("dark_current_e_s", float("inf"), r"\[0, 1e\+09\]"),
+        ("prnu", 1.0, r"\[0, 1\)"),
+        ("dsnu_e", -2.0, r"\[0, 1e\+09\]"),
+        ("full_well_e", 0, r"\[1, 1e\+09\]"),
+        ("gain_dn_per_e", -0.1, r"\(0, 4095\]"),
+        ("bit_depth", 20, "from 8 to 16"),
+        ("bit_depth", 12.0, "integer"),
+        ("black_level_dn", 4095, "from 0 to 4094"),
+        ("black_level_dn", -1, "from 0"),
+        ("cfa", "RGBW", "RGGB"),
+        ("wavelengths_nm", (500.0, 600.0), "three wavelengths"),
+        ("wavelengths_nm", (500.0, 0.0, 600.0), r"\[380, 780\]"),
+    ],
+)
 def test_bad_values_name_the_field_and_what_is_allowed(field, value, allowed):
     with pytest.raises(SolasError, match=field if field != "cfa" else "colour filter array") as caught:
         SensorModel(**{field: value})
@@ -87,20 +106,31 @@ def test_bad_values_name_the_field_and_what_is_allowed(field, value, allowed):
 
 
 def test_from_dict_refuses_unknown_names():
-    assert SensorModel.from_dict({"cfa": "RCCB", "wavelengths_nm": [600, 530, 460]}).wavelengths_nm == (600.0, 530.0, 460.0)
+    assert SensorModel.from_dict({"cfa": "RCCB", "wavelengths_nm": [600, 530, 460]}).wavelengths_nm == (
+        600.0,
+        530.0,
+        460.0,
+    )
     with pytest.raises(SolasError, match="unknown sensor parameter.*full_wel\\b.*allowed: .*full_well_e"):
         SensorModel.from_dict({"full_wel": 100})
 
 
-@pytest.mark.parametrize("call, match", [
-    (lambda: photons(np.ones((2, 2)), 1.0, 3.0, (500.0, 500.0, 500.0)), "must be \\(height, width, 3\\)"),
-    (lambda: photons(np.full((2, 2, 3), np.nan), 1.0, 3.0, (500.0,) * 3), "12 non-finite values"),
-    (lambda: photons(np.stack([np.full((2, 2), -1e-3), np.ones((2, 2)), np.ones((2, 2))], -1), 1.0, 3.0, (500.0,) * 3),
-     "4 values below zero \\(least -0.001\\)"),
-    (lambda: photons(np.ones((2, 2, 3)), -1.0, 3.0, (500.0,) * 3), "exposure time -1.0 s"),
-    (lambda: image_irradiance(np.ones(2), 0.0), "f-number 0.0"),
-    (lambda: image_irradiance(np.ones(2), 2.0, 1.5), "transmission 1.5"),
-])
+@pytest.mark.parametrize(
+    "call, match",
+    [
+        (lambda: photons(np.ones((2, 2)), 1.0, 3.0, (500.0, 500.0, 500.0)), "must be \\(height, width, 3\\)"),
+        (lambda: photons(np.full((2, 2, 3), np.nan), 1.0, 3.0, (500.0,) * 3), "12 non-finite values"),
+        (
+            lambda: photons(
+                np.stack([np.full((2, 2), -1e-3), np.ones((2, 2)), np.ones((2, 2))], -1), 1.0, 3.0, (500.0,) * 3
+            ),
+            "4 values below zero \\(least -0.001\\)",
+        ),
+        (lambda: photons(np.ones((2, 2, 3)), -1.0, 3.0, (500.0,) * 3), "exposure time -1.0 s"),
+        (lambda: image_irradiance(np.ones(2), 0.0), "f-number 0.0"),
+        (lambda: image_irradiance(np.ones(2), 2.0, 1.5), "transmission 1.5"),
+    ],
+)
 def test_bad_inputs(call, match):
     with pytest.raises(SolasError, match=match):
         call()

@@ -1,5 +1,6 @@
 """Exposure in time (`sensor.timing`): LED flicker over random phases against the closed-form overlap
 probability under a global and a rolling shutter, and a rolling shutter's lean of a moving vertical bar."""
+
 import numpy as np
 import pytest
 
@@ -73,6 +74,7 @@ def bar(speed_px_s, width=200, x0=40.0, bar_px=6.0):
         left = x0 + speed_px_s * t
         cover = np.clip(np.minimum(edges[1:], left + bar_px) - np.maximum(edges[:-1], left), 0.0, None)
         return np.broadcast_to((5.0 * cover)[None, :, None], (ROWS, width, 3)).copy()
+
     return scene
 
 
@@ -101,10 +103,16 @@ def test_static_image_unchanged_by_a_shutter():
     assert np.array_equal(capture(rolled, image, 0.01, seed=2), plain)
 
 
-@pytest.mark.parametrize("values, word", [
-    ({"mode": "sliding"}, "mode"), ({"mode": "rolling"}, "line_time_s"), ({"line_time_s": 1e-5}, "line_time_s"),
-    ({"mode": "rolling", "line_time_s": 1e-5, "direction": "left"}, "direction"), ({"time_samples": 0}, "time_samples"),
-])
+@pytest.mark.parametrize(
+    "values, word",
+    [
+        ({"mode": "sliding"}, "mode"),
+        ({"mode": "rolling"}, "line_time_s"),
+        ({"line_time_s": 1e-5}, "line_time_s"),
+        ({"mode": "rolling", "line_time_s": 1e-5, "direction": "left"}, "direction"),
+        ({"time_samples": 0}, "time_samples"),
+    ],
+)
 def test_bad_shutter_values_are_named(values, word):
     with pytest.raises(SolasError, match=word):
         Shutter(**values)
@@ -113,8 +121,13 @@ def test_bad_shutter_values_are_named(values, word):
 def test_shutter_from_a_sensor_table():
     sensor = SensorChain.from_dict({"pixel_pitch_um": 3.0, "shutter": {"mode": "rolling", "line_time_s": 1e-5}})
     assert sensor.shutter == Shutter("rolling", 1e-5)
-    assert sensor.describe()["stages"][1] == {"stage": "shutter", "mode": "rolling", "line_time_s": 1e-5,
-                                              "direction": "top-down", "time_samples": 64}
+    assert sensor.describe()["stages"][1] == {
+        "stage": "shutter",
+        "mode": "rolling",
+        "line_time_s": 1e-5,
+        "direction": "top-down",
+        "time_samples": 64,
+    }
 
 
 def test_a_moving_scene_of_the_wrong_shape_is_named():
@@ -122,8 +135,9 @@ def test_a_moving_scene_of_the_wrong_shape_is_named():
         capture(chain(Shutter("rolling", LINE_S)), lambda t: np.zeros((ROWS + (t > 0), 4, 3)), 1e-3, seed=1)
 
 
-@pytest.mark.parametrize("values, word", [((0.0, 0.5), "frequency_hz"), ((90.0, 1.5), "duty_cycle"),
-                                          ((90.0, 0.5, 1.0), "phase")])
+@pytest.mark.parametrize(
+    "values, word", [((0.0, 0.5), "frequency_hz"), ((90.0, 1.5), "duty_cycle"), ((90.0, 0.5, 1.0), "phase")]
+)
 def test_bad_pwm_values_are_named(values, word):
     with pytest.raises(SolasError, match=word):
         PWMSource(*values)
@@ -137,8 +151,24 @@ def test_on_time_of_a_window_is_the_duty_cycle_over_whole_periods():
 
 
 def camera(folder, *extra, toml="sensor.toml"):
-    assert main(["camera", str(folder / "in.exr"), "--sensor-model", str(folder / toml), "--exposure-ms", "1",
-                 "--seed", "5", "-o", str(folder / "raw.exr"), *extra]) == 0
+    assert (
+        main(
+            [
+                "camera",
+                str(folder / "in.exr"),
+                "--sensor-model",
+                str(folder / toml),
+                "--exposure-ms",
+                "1",
+                "--seed",
+                "5",
+                "-o",
+                str(folder / "raw.exr"),
+                *extra,
+            ]
+        )
+        == 0
+    )
     return read_exr(folder / "raw.exr")
 
 
@@ -147,8 +177,10 @@ def led(tmp_path):
     image = np.full((ROWS, 16, 3), 2.0, dtype=np.float32)
     write_exr(tmp_path / "in.exr", dict(zip("RGB", np.moveaxis(image, -1, 0))))
     (tmp_path / "sensor.toml").write_text("[sensor]\npixel_pitch_um = 3.0\nfull_well_e = 100000\n")
-    (tmp_path / "rolling.toml").write_text("[sensor]\npixel_pitch_um = 3.0\nfull_well_e = 100000\n\n"
-                                           f"[sensor.shutter]\nmode = \"rolling\"\nline_time_s = {LINE_S}\n")
+    (tmp_path / "rolling.toml").write_text(
+        "[sensor]\npixel_pitch_um = 3.0\nfull_well_e = 100000\n\n"
+        f'[sensor.shutter]\nmode = "rolling"\nline_time_s = {LINE_S}\n'
+    )
     return tmp_path
 
 
@@ -181,10 +213,25 @@ def test_camera_image_motion_leans_a_bar_under_a_rolling_shutter(tmp_path):
     image = bar(0.0)(0.0).astype(np.float32)  # the bar standing at x0 = 40
     write_exr(tmp_path / "in.exr", dict(zip("RGB", np.moveaxis(image, -1, 0))))
     sensor = "[sensor]\nread_noise_e = 3.0\nfull_well_e = 20000\ngain_dn_per_e = 0.2\n\n[sensor.shutter]\n"
-    (tmp_path / "rolling.toml").write_text(sensor + f"mode = \"rolling\"\nline_time_s = {LINE_S}\ntime_samples = 512\n")
+    (tmp_path / "rolling.toml").write_text(sensor + f'mode = "rolling"\nline_time_s = {LINE_S}\ntime_samples = 512\n')
     speed = 20000.0
-    assert main(["camera", str(tmp_path / "in.exr"), "--sensor-model", str(tmp_path / "rolling.toml"),
-                 "--exposure-ms", "0.2", "--image-motion", f"{speed},0", "-o", str(tmp_path / "raw.exr")]) == 0
+    assert (
+        main(
+            [
+                "camera",
+                str(tmp_path / "in.exr"),
+                "--sensor-model",
+                str(tmp_path / "rolling.toml"),
+                "--exposure-ms",
+                "0.2",
+                "--image-motion",
+                f"{speed},0",
+                "-o",
+                str(tmp_path / "raw.exr"),
+            ]
+        )
+        == 0
+    )
     channels, meta = read_exr(tmp_path / "raw.exr")
     raw = channels["RAW"].astype(np.float64) - load_sensor(tmp_path / "rolling.toml").black_level_dn
     x = np.arange(raw.shape[1]) + 0.5
@@ -195,9 +242,26 @@ def test_camera_image_motion_leans_a_bar_under_a_rolling_shutter(tmp_path):
 BAD_FLICKER = ["1,2,3", "4,10,2,30,90,0.1", "a,b,c,d,90,0.1", "0,0,4,4,90", "0,0,4,4,-5,0.1", "0,0,999,4,90,0.1"]
 
 
-@pytest.mark.parametrize("extra", [["--flicker", value] for value in BAD_FLICKER] + [
-    ["--image-motion", "5"], ["--image-motion", "1,inf"], ["--image-motion", "1,2", "--flicker", "0,0,4,4,90,0.1"]])
+@pytest.mark.parametrize(
+    "extra",
+    [["--flicker", value] for value in BAD_FLICKER]
+    + [["--image-motion", "5"], ["--image-motion", "1,inf"], ["--image-motion", "1,2", "--flicker", "0,0,4,4,90,0.1"]],
+)
 def test_bad_scene_in_time_is_one_line_and_writes_nothing(led, capsys, extra):
-    assert main(["camera", str(led / "in.exr"), "--sensor-model", str(led / "sensor.toml"), "--exposure-ms", "1",
-                 "-o", str(led / "raw.exr"), *extra]) == 2
+    assert (
+        main(
+            [
+                "camera",
+                str(led / "in.exr"),
+                "--sensor-model",
+                str(led / "sensor.toml"),
+                "--exposure-ms",
+                "1",
+                "-o",
+                str(led / "raw.exr"),
+                *extra,
+            ]
+        )
+        == 2
+    )
     assert len(capsys.readouterr().err.strip().splitlines()) == 1 and not (led / "raw.exr").exists()

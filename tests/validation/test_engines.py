@@ -1,4 +1,5 @@
 """The two engines in the cross-validation's settings agree (`solas_mi.validation.engines`)."""
+
 import numpy as np
 import pytest
 
@@ -27,14 +28,19 @@ def test_uniform_white_radiometry_agrees(doublet):
     conv, _ = convolve(white, grid, "interp", doublet, 2.0)
     ref = render(doublet, white, 48, 3, 2.0).image.astype(np.float64)
     axis = axis_irradiance(doublet, 531.0) / ideal_irradiance(doublet, pinhole_focal_mm(doublet, 2.0))
-    centre = ref[h // 2 - 2:h // 2 + 2, w // 2 - 2:w // 2 + 2, 1].mean()
+    centre = ref[h // 2 - 2 : h // 2 + 2, w // 2 - 2 : w // 2 + 2, 1].mean()
     assert centre == pytest.approx(axis, abs=2e-3)
-    assert ref[h // 2 - 2:h // 2 + 2, :3, 1].mean() / centre == pytest.approx(0.986, abs=3e-3)
+    assert ref[h // 2 - 2 : h // 2 + 2, :3, 1].mean() / centre == pytest.approx(0.986, abs=3e-3)
     assert ref[:3, :3, 1].mean() / centre == pytest.approx(0.978, abs=3e-3)
     ratio = conv / ref
     # inside the outermost nodes (the 16×12 grid's nodes are 10 px apart, the outer ones 5 px from the border)
-    for region in (np.s_[h // 2 - 4:h // 2 + 4, w // 2 - 4:w // 2 + 4], np.s_[h // 2 - 4:h // 2 + 4, 6:10],
-                   np.s_[6:10, 6:10], np.s_[6:10, w // 2 - 4:w // 2 + 4], np.s_[:, :]):
+    for region in (
+        np.s_[h // 2 - 4 : h // 2 + 4, w // 2 - 4 : w // 2 + 4],
+        np.s_[h // 2 - 4 : h // 2 + 4, 6:10],
+        np.s_[6:10, 6:10],
+        np.s_[6:10, w // 2 - 4 : w // 2 + 4],
+        np.s_[:, :],
+    ):
         assert ratio[region].mean() == pytest.approx(1.0, abs=3e-3)
     # beyond them interp holds the outermost chief-ray offsets (no distortion there): ~1-2 % too bright
     assert 1.0 < ratio[:2, :2].mean() < 1.03

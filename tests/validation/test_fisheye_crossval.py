@@ -1,5 +1,6 @@
 """Cross-validation for the fisheye: an equidistant environment image rendered directly through the
 lens geometry against its ideal sensor image degraded by the lens's own sensor-space PSF grid."""
+
 import numpy as np
 import pytest
 from strict_json import strict_loads
@@ -42,7 +43,7 @@ def test_defocused_fisheye_blur_is_the_psf_grid_blur():
 
     r = compare_fisheye(defocused(Lens.load("nikkor-fisheye"), 3.0), environment(), FOV_DEG, 64, 300.0, (5, 5), 256)
     ideal = np.sqrt(np.mean((r.ideal - r.direct) ** 2)) / r.direct.mean()
-    denoised = np.sqrt(max(r.rms_error ** 2 - r.rms_noise ** 2, 0.0))
+    denoised = np.sqrt(max(r.rms_error**2 - r.rms_noise**2, 0.0))
     assert ideal > 0.03  # the blur is there to be seen
     assert r.rms_error < 0.022 and denoised < 0.5 * ideal
     for a in r.annuli():
@@ -62,8 +63,28 @@ def test_crossval_command_on_the_fisheye(tmp_path, capsys):
 
     write_exr(tmp_path / "env.exr", {"Y": environment()})
     out = tmp_path / "cv"
-    assert main(["crossval", "nikkor-fisheye", str(tmp_path / "env.exr"), "-o", str(out), "--fov-deg", str(FOV_DEG),
-                 "--size", "24", "--spp", "32", "--grid", "3x3", "--defocus-mm", "2"]) == 0
+    assert (
+        main(
+            [
+                "crossval",
+                "nikkor-fisheye",
+                str(tmp_path / "env.exr"),
+                "-o",
+                str(out),
+                "--fov-deg",
+                str(FOV_DEG),
+                "--size",
+                "24",
+                "--spp",
+                "32",
+                "--grid",
+                "3x3",
+                "--defocus-mm",
+                "2",
+            ]
+        )
+        == 0
+    )
     meta = strict_loads((out / "crossval.json").read_text())
     direct, convolved = (read_exr(out / f"{name}.exr")[0]["Y"].astype(np.float64) for name in ("direct", "convolved"))
     rms = np.sqrt(np.mean((convolved - direct) ** 2)) / direct.mean()
@@ -77,12 +98,15 @@ def test_crossval_command_on_the_fisheye(tmp_path, capsys):
     assert "Fisheye cross-validation of nikkor-fisheye" in capsys.readouterr().out
 
 
-@pytest.mark.parametrize("lens, extra, message", [
-    ("nikkor-fisheye", ["--cases", "interp:geometric:4x3"], "--cases: not for a lens of polar fields"),
-    ("nikkor-fisheye", ["--fov-deg", "180"], "--fov-deg 180 must lie in"),
-    ("nikkor-fisheye", ["--defocus-mm", "-60"], "defocus -60 mm must be finite and leave the image plane"),
-    ("solas-doublet", ["--size", "32"], "--size: only for a lens of polar fields"),
-])
+@pytest.mark.parametrize(
+    "lens, extra, message",
+    [
+        ("nikkor-fisheye", ["--cases", "interp:geometric:4x3"], "--cases: not for a lens of polar fields"),
+        ("nikkor-fisheye", ["--fov-deg", "180"], "--fov-deg 180 must lie in"),
+        ("nikkor-fisheye", ["--defocus-mm", "-60"], "defocus -60 mm must be finite and leave the image plane"),
+        ("solas-doublet", ["--size", "32"], "--size: only for a lens of polar fields"),
+    ],
+)
 def test_crossval_options_that_do_not_fit_the_lens(tmp_path, capsys, lens, extra, message):
     from solas_mi.cli import main
     from solas_mi.imageio import write_exr

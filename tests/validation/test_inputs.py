@@ -1,4 +1,5 @@
 """The cross-validation's input image (`solas_mi.validation.inputs`)."""
+
 import math
 
 import numpy as np

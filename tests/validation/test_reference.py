@@ -1,4 +1,5 @@
 """The reference render's noise and its storage (`solas_mi.validation.reference`)."""
+
 import numpy as np
 import pytest
 
@@ -9,7 +10,7 @@ def test_noise_variance_map_is_the_variance_of_the_mean():
     a, b = np.full((20, 30, 3), 1.0), np.full((20, 30, 3), 1.2)
     var = noise_variance_map([a, b])
     assert var.shape == (20, 30)
-    assert np.allclose(var, 0.1 ** 2)  # per-render variance 2 · 0.1² / (2 − 1), the mean's half of it
+    assert np.allclose(var, 0.1**2)  # per-render variance 2 · 0.1² / (2 − 1), the mean's half of it
 
 
 def test_reference_is_reused_only_with_the_same_settings(tmp_path):

@@ -1,5 +1,6 @@
 """Stiff and extreme cases (`validation.stability`, `solas-mi check-stability`): the shipped lenses pass
 every case, and each class has a lens of our own (tests/data/stiff/) that failed before its fix."""
+
 from pathlib import Path
 
 import numpy as np
@@ -49,7 +50,7 @@ def test_a_batch_of_fields_aims_each_field_as_alone():
     lens = Lens.load(STIFF / "steep_singlet.toml")
     fields = np.array([[0.0, 0.0], [0.0, 7.0], [0.0, 10.0]])
     batch = pupil_function(lens, fields, [587.5618] * 3, 64).transmission
-    alone = [pupil_function(lens, fields[i:i + 1], [587.5618], 64).transmission[0] for i in range(3)]
+    alone = [pupil_function(lens, fields[i : i + 1], [587.5618], 64).transmission[0] for i in range(3)]
     assert batch == pytest.approx(alone, rel=1e-4)
 
 
@@ -185,7 +186,9 @@ def test_a_lens_without_a_field_is_checked_at_a_field_it_images(tmp_path):
     path.write_text(ACHROMAT)
     cases = check_stability(Lens.load(path))
     field = cases[0]
-    assert field.name == "field of a lens that states none" and "paraxial field of image height 12.7 mm" in field.observed
+    assert (
+        field.name == "field of a lens that states none" and "paraxial field of image height 12.7 mm" in field.observed
+    )
     assert float(field.observed.split(" deg")[0]) == pytest.approx(np.degrees(np.arctan(12.7 / 100.0)), rel=2e-3)
     failed = [c.to_dict() for c in cases if not c.passed]
     assert not failed, failed

@@ -1,4 +1,5 @@
 """The results tables (`solas_mi.validation.tables`)."""
+
 import numpy as np
 
 from solas_mi.validation.scores import compare
@@ -7,8 +8,10 @@ from solas_mi.validation.tables import Row, crossval_markdown, csv_text, error_v
 
 def rows() -> list[Row]:
     ref = 0.2 + np.random.default_rng(2).random((30, 40, 3))
-    return [Row("interp 4x3", "interp", "geometric", "4x3", 0.5, 0.125, compare(ref * 1.01, ref)),
-            Row("render 3 spp", "render", "—", "—", 0.0, 0.25, compare(ref * 1.02, ref), spp=3)]
+    return [
+        Row("interp 4x3", "interp", "geometric", "4x3", 0.5, 0.125, compare(ref * 1.01, ref)),
+        Row("render 3 spp", "render", "—", "—", 0.0, 0.25, compare(ref * 1.02, ref), spp=3),
+    ]
 
 
 def test_markdown_tables_give_every_row_in_per_cent():

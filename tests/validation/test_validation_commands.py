@@ -1,4 +1,5 @@
 """`solas-mi crossval` and `solas-mi report error-vs-time` (`solas_mi.validation.commands`)."""
+
 import argparse
 
 import pytest
@@ -51,8 +52,14 @@ def test_error_maps_label_their_axes_and_scale(tmp_path, monkeypatch):
     assert (tmp_path / "e.png").is_file()
 
 
-@pytest.mark.parametrize("text, says", [("", "--cases '' selects no case"), (" , ", "--cases ' , ' selects no case"),
-                                        ("interp:geometric:4x3,", "has an empty entry")])
+@pytest.mark.parametrize(
+    "text, says",
+    [
+        ("", "--cases '' selects no case"),
+        (" , ", "--cases ' , ' selects no case"),
+        ("interp:geometric:4x3,", "has an empty entry"),
+    ],
+)
 def test_an_empty_case_selection_is_refused(monkeypatch, capsys, tmp_path, text, says):
     """`--cases ''` ran every default case; an empty selection is an error naming it, before any work."""
     from solas_mi.cli import main

@@ -22,6 +22,7 @@ ideal depth map and the render's own (the depth scene through the lens camera: t
 each pixel's rays): a pixel at a silhouette that one calls near and the other not mixes both sides'
 light and is neither (the ideal map's classes alone: the "…_pinhole_depth" fields).
 """
+
 from __future__ import annotations
 
 import math
@@ -43,14 +44,15 @@ def axial_depth(depth: np.ndarray, fov_deg: float) -> np.ndarray:
     return depth * tangent_cos3(w, h, fov_deg) ** (1.0 / 3.0)
 
 
-def denoised_errors(image: np.ndarray, renders: tuple[np.ndarray, np.ndarray], near: np.ndarray,
-                    far: np.ndarray) -> dict:
+def denoised_errors(
+    image: np.ndarray, renders: tuple[np.ndarray, np.ndarray], near: np.ndarray, far: np.ndarray
+) -> dict:
     """Relative RMSE of `image` against the mean of two renders, all / near / far pixels, with and
     without the renders' noise (variance (r1 − r2)²/4 per pixel) removed in quadrature."""
     r1, r2 = (r.astype(np.float64) for r in renders)
     ref = 0.5 * (r1 + r2)
     err2, noise2 = (image - ref) ** 2, 0.25 * (r1 - r2) ** 2
-    rms = math.sqrt(float(np.mean(ref ** 2)))
+    rms = math.sqrt(float(np.mean(ref**2)))
     out = {}
     for name, mask in (("all", np.ones_like(near)), ("near", near), ("far", far)):
         if not mask.any():
@@ -60,8 +62,12 @@ def denoised_errors(image: np.ndarray, renders: tuple[np.ndarray, np.ndarray], n
         out[f"rel_rmse_{name}"] = math.sqrt(max(0.0, e - n)) / rms
         out[f"rel_rmse_{name}_raw"] = math.sqrt(e) / rms
         out[f"rel_bias_{name}"] = float(np.mean((image - ref)[mask])) / rms
-    return dict(out, near_pixels=int(near.sum()), far_pixels=int(far.sum()),
-                render_noise_rel=math.sqrt(float(np.mean(noise2))) / rms)
+    return dict(
+        out,
+        near_pixels=int(near.sum()),
+        far_pixels=int(far.sum()),
+        render_noise_rel=math.sqrt(float(np.mean(noise2))) / rms,
+    )
 
 
 def check_layers(layers) -> tuple[int, ...]:
@@ -70,13 +76,16 @@ def check_layers(layers) -> tuple[int, ...]:
 
     out = tuple(layers)
     if not out or any(not isinstance(n, int) or n < 1 or out[-1] % n for n in out) or list(out) != sorted(set(out)):
-        raise SolasError(f"depth layers {layers!r} must be increasing whole numbers >= 1, each dividing the "
-                         "largest (the node sets are nested), e.g. 1,2,4,8,16")
+        raise SolasError(
+            f"depth layers {layers!r} must be increasing whole numbers >= 1, each dividing the "
+            "largest (the node sets are nested), e.g. 1,2,4,8,16"
+        )
     return out
 
 
-def depth_rows(st, weighted: np.ndarray, depth: np.ndarray, k: float, renders: dict, masks: dict,
-               field_range: tuple[float, float]) -> tuple[dict, dict]:
+def depth_rows(
+    st, weighted: np.ndarray, depth: np.ndarray, k: float, renders: dict, masks: dict, field_range: tuple[float, float]
+) -> tuple[dict, dict]:
     """(images, error rows) of the depth-aware convolution for each focus ("infinity", the near focus)
     and each count of intervals in st.s.depth_layers; `renders`: focus label → (seed 0, seed 1) renders;
     `masks`: focus label → near and far by the ideal depth map, then by the render's own (`masked`)."""
@@ -91,38 +100,55 @@ def depth_rows(st, weighted: np.ndarray, depth: np.ndarray, k: float, renders: d
     lenses = {"infinity": st.lens, f"{st.near_focus:g} m": focused(st.lens, 1e3 * st.near_focus)}
     for label, lens in lenses.items():
         unit = k * focus_unit(st.lens, lens, st.primary)
-        full = st.timed(f"(g) PSF grids over {len(nodes)} distances, focus {label}", _grid, st, lens, nodes,
-                        field_range)
+        full = st.timed(
+            f"(g) PSF grids over {len(nodes)} distances, focus {label}", _grid, st, lens, nodes, field_range
+        )
         for count in (0, *layers):
             step = layers[-1] // count if count else None
             grid = full.subset(list(range(0, len(nodes), step)) if step else [0])
             name = f"depth-aware interp {DEPTH_GRID[0]}x{DEPTH_GRID[1]}, {count + 1} nodes, focus {label}"
             image, seconds = _convolve(weighted, z, grid, unit)
-            rows[f"{name} vs render {label}"] = dict(masked(image, renders[label], *masks[label]), intervals=count,
-                                                     nodes=count + 1, seconds=seconds, nearest_node_m=nearest,
-                                                     unit_k=unit)
+            rows[f"{name} vs render {label}"] = dict(
+                masked(image, renders[label], *masks[label]),
+                intervals=count,
+                nodes=count + 1,
+                seconds=seconds,
+                nearest_node_m=nearest,
+                unit_k=unit,
+            )
             if count == layers[-1]:
                 images[name] = image
-                for suffix, options in ((", no occlusion", {"occlusion": "none"}),
-                                        (", silhouettes' depth as given", {"silhouette": "as-given"})):
+                for suffix, options in (
+                    (", no occlusion", {"occlusion": "none"}),
+                    (", silhouettes' depth as given", {"silhouette": "as-given"}),
+                ):
                     other, seconds = _convolve(weighted, z, grid, unit, **options)
                     rows[f"{name}{suffix} vs render {label}"] = dict(
-                        masked(other, renders[label], *masks[label]), intervals=count, nodes=count + 1,
-                        seconds=seconds, **options)
+                        masked(other, renders[label], *masks[label]),
+                        intervals=count,
+                        nodes=count + 1,
+                        seconds=seconds,
+                        **options,
+                    )
     return images, rows
 
 
-def masked(image: np.ndarray, renders: tuple, near: np.ndarray, far: np.ndarray, near_lens: np.ndarray,
-           far_lens: np.ndarray) -> dict:
+def masked(
+    image: np.ndarray, renders: tuple, near: np.ndarray, far: np.ndarray, near_lens: np.ndarray, far_lens: np.ndarray
+) -> dict:
     """`denoised_errors` on the pixels both the ideal depth map (`near`, `far`) and the render's own
     (`near_lens`, `far_lens`: by the mean distance along each pixel's rays through the lens) call near or
     far (a pixel at a silhouette whose light mixes both sides is neither), and on the ideal map's alone
     ("…_pinhole_depth")."""
     both = denoised_errors(image, renders, near & near_lens, far & far_lens)
     alone = denoised_errors(image, renders, near, far)
-    return dict(both, near_far="by the ideal depth map and the render's own (through the lens) alike",
-                **{f"{key}_pinhole_depth": alone[key] for key in ("rel_rmse_near", "rel_rmse_far", "near_pixels",
-                                                                  "far_pixels")})
+    return dict(
+        both,
+        near_far="by the ideal depth map and the render's own (through the lens) alike",
+        **{
+            f"{key}_pinhole_depth": alone[key] for key in ("rel_rmse_near", "rel_rmse_far", "near_pixels", "far_pixels")
+        },
+    )
 
 
 def focus_unit(lens, refocused, wavelength_nm: float) -> float:
@@ -131,7 +157,9 @@ def focus_unit(lens, refocused, wavelength_nm: float) -> float:
     f-number (image plane − exit pupil over its diameter), which grows as the image plane moves back."""
     from ...optics.paraxial import paraxial
 
-    return (paraxial(lens, wavelength_nm).exit_pupil_f_number / paraxial(refocused, wavelength_nm).exit_pupil_f_number) ** 2
+    return (
+        paraxial(lens, wavelength_nm).exit_pupil_f_number / paraxial(refocused, wavelength_nm).exit_pupil_f_number
+    ) ** 2
 
 
 def _grid(st, lens, nodes, field_range):
@@ -139,9 +167,16 @@ def _grid(st, lens, nodes, field_range):
     from ...psf.depth import depth_grid
     from ...psf.spec import GridSpec
 
-    spec = GridSpec(grid=(DEPTH_GRID[1], DEPTH_GRID[0]), wavelengths_nm=[st.primary], field_range_deg=field_range,
-                    method="geometric", normalization="none", pitch_um=st.pixel_um / 4, size=DEPTH_PSF_SIZE,
-                    distances_m=nodes)
+    spec = GridSpec(
+        grid=(DEPTH_GRID[1], DEPTH_GRID[0]),
+        wavelengths_nm=[st.primary],
+        field_range_deg=field_range,
+        method="geometric",
+        normalization="none",
+        pitch_um=st.pixel_um / 4,
+        size=DEPTH_PSF_SIZE,
+        distances_m=nodes,
+    )
     # one camera for both focus settings: the lens renders' pixel pitch is set for the lens as its file
     # focuses it; refocused, the image's change of scale (0.5 % at 20 m) is part of the chief-ray offsets
     # the ideal camera's pinhole sits at surface 1's vertex (`lens_camera`'s origin), the lens sees from its
@@ -149,8 +184,9 @@ def _grid(st, lens, nodes, field_range):
     return depth_grid(lens, spec, camera_focal_mm=pinhole_focal_mm(st.lens, st.fov), viewpoint_mm=0.0)
 
 
-def _convolve(weighted: np.ndarray, z: np.ndarray, grid, k: float, occlusion: str = "filled",
-              silhouette: str = "nearest"):
+def _convolve(
+    weighted: np.ndarray, z: np.ndarray, grid, k: float, occlusion: str = "filled", silhouette: str = "nearest"
+):
     from ...convolution.depth import degrade_depth
 
     start = time.perf_counter()

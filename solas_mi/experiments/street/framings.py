@@ -7,6 +7,7 @@ PSF grid is computed. `FRAMINGS` is keyed by lens name; a lens without an
 entry takes `NARROW` (half field ≤ NARROW_MAX_DEG: the far end of the street, the doublet's view) or
 `WIDE` (the street ahead).
 """
+
 from __future__ import annotations
 
 import math
@@ -31,11 +32,19 @@ class Framing:
 
     def params(self, fov_deg: float, width: int, height: int, spp: int) -> dict[str, str]:
         """The scene's <default> values for this framing, a horizontal field of `fov_deg` (degrees)."""
+
         def v(p):
             return ", ".join(f"{c:g}" for c in p)
 
-        return {"origin": v(self.origin), "target": v(self.target), "up": v(self.up()), "fov": f"{fov_deg:.6g}",
-                "width": str(width), "height": str(height), "spp": str(spp)}
+        return {
+            "origin": v(self.origin),
+            "target": v(self.target),
+            "up": v(self.up()),
+            "fov": f"{fov_deg:.6g}",
+            "width": str(width),
+            "height": str(height),
+            "spp": str(spp),
+        }
 
 
 # the doublet (±2°, 9.8 m wide at 140 m): the office blocks closing the street, a car, posts at 20 and 60 m

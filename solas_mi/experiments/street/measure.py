@@ -7,6 +7,7 @@ FAR_M): n (edges measured), the mean MTF50 of the ideal image and of the degrade
 degraded one's median, the mean change (degraded − ideal, same ROIs) and the mean MTF50 predicted by
 the PSF grid (`prediction`) on the same ROIs. MTF50 in cy/px.
 """
+
 from __future__ import annotations
 
 from pathlib import Path
@@ -36,21 +37,33 @@ def sfr_rows(name: str, report, far: list[bool], predicted: dict[str, list[float
             pick = [i for i, m in enumerate(report.rois) if m.annulus == ring and (subset == "all" or far[i])]
             before = [report.rois[i].before.mtf50 for i in pick]
             after = [report.rois[i].after.mtf50 for i in pick]
-            rows.append({"image": name, "annulus": ring_name, "edges": subset, "n": len(pick),
-                         "ideal_mean": _mean(before), "mean": _mean(after),
-                         "median": float(np.median(after)) if after else None,
-                         "change": _mean([a - b for a, b in zip(after, before)]),
-                         **{f"predicted {g}": _mean([p[i] for i in pick]) for g, p in predicted.items()}})
+            rows.append(
+                {
+                    "image": name,
+                    "annulus": ring_name,
+                    "edges": subset,
+                    "n": len(pick),
+                    "ideal_mean": _mean(before),
+                    "mean": _mean(after),
+                    "median": float(np.median(after)) if after else None,
+                    "change": _mean([a - b for a, b in zip(after, before)]),
+                    **{f"predicted {g}": _mean([p[i] for i in pick]) for g, p in predicted.items()},
+                }
+            )
     return rows
 
 
 def error_stats(image: np.ndarray, render: np.ndarray, near: np.ndarray, far: np.ndarray) -> dict:
     """Relative error (image − render)/RMS(render): its RMS over all, near and far pixels, and the counts."""
     rel = (image.astype(np.float64) - render) / np.sqrt(np.mean(render.astype(np.float64) ** 2))
-    return {"rel_rmse_all": float(np.sqrt(np.mean(rel ** 2))),
-            "rel_rmse_near": float(np.sqrt(np.mean(rel[near] ** 2))) if near.any() else None,
-            "rel_rmse_far": float(np.sqrt(np.mean(rel[far] ** 2))) if far.any() else None,
-            "near_pixels": int(near.sum()), "far_pixels": int(far.sum()), "map": rel}
+    return {
+        "rel_rmse_all": float(np.sqrt(np.mean(rel**2))),
+        "rel_rmse_near": float(np.sqrt(np.mean(rel[near] ** 2))) if near.any() else None,
+        "rel_rmse_far": float(np.sqrt(np.mean(rel[far] ** 2))) if far.any() else None,
+        "near_pixels": int(near.sum()),
+        "far_pixels": int(far.sum()),
+        "map": rel,
+    }
 
 
 def measure(outcome, grids: dict, lay, near_focus_m: float, out: Path) -> list[dict]:
@@ -71,9 +84,13 @@ def measure(outcome, grids: dict, lay, near_focus_m: float, out: Path) -> list[d
             if m.roi not in known:
                 x, y, w, h = m.roi
                 normal = edge_normal_deg(m.before.orientation, m.before.angle_deg)
-                known[m.roi] = (bool(depth[y:y + h, x:x + w].min() > FAR_M),
-                                {g: predicted_mtf50(grid, lay, x + (w - 1) / 2, y + (h - 1) / 2, normal, APERTURE)
-                                 for g, grid in grids.items()})
+                known[m.roi] = (
+                    bool(depth[y : y + h, x : x + w].min() > FAR_M),
+                    {
+                        g: predicted_mtf50(grid, lay, x + (w - 1) / 2, y + (h - 1) / 2, normal, APERTURE)
+                        for g, grid in grids.items()
+                    },
+                )
         far = [known[m.roi][0] for m in rep.rois]
         predicted = {g: [known[m.roi][1][g] for m in rep.rois] for g in grids}
         outcome.reports[name] = rep
@@ -85,8 +102,12 @@ def measure(outcome, grids: dict, lay, near_focus_m: float, out: Path) -> list[d
         for name in [n for n in outcome.images if n.startswith("render")]:
             stats = error_stats(outcome.images[conv], outcome.images[name], near, far_px)
             rel = stats.pop("map")
-            heat_png(out / f"error_{safe_name(conv)}_vs_{safe_name(name)}.png", np.abs(rel),
-                     f"|{conv} − {name}| / RMS({name})", vmax=0.2)
+            heat_png(
+                out / f"error_{safe_name(conv)}_vs_{safe_name(name)}.png",
+                np.abs(rel),
+                f"|{conv} − {name}| / RMS({name})",
+                vmax=0.2,
+            )
             outcome.errors[f"{conv} vs {name}"] = dict(stats, near_m=1.5 * near_focus_m, far_m=FAR_M)
     outcome.meta.update(rejected={n: r.rejected for n, r in outcome.reports.items()})
     return rows
@@ -106,26 +127,53 @@ def write_tables(out: Path, rows: list[dict], outcome) -> None:
 
     columns = list(rows[0]) if rows else list(COLUMNS)
     predicted = [c for c in columns if c.startswith("predicted")]
-    md = ["| image | annulus | edges | n | ideal MTF50 | MTF50 mean | median | change | "
-          + " | ".join(predicted) + " |", "|---|---|---|" + "---:|" * (5 + len(predicted))]
+    md = [
+        "| image | annulus | edges | n | ideal MTF50 | MTF50 mean | median | change | " + " | ".join(predicted) + " |",
+        "|---|---|---|" + "---:|" * (5 + len(predicted)),
+    ]
     md += ["| " + " | ".join(_fmt(r[c]) for c in columns) + " |" for r in rows]
-    md += ["", "| convolution vs render | rel. RMSE: all | near | far | near px | far px |",
-           "|---|---:|---:|---:|---:|---:|"]
+    md += [
+        "",
+        "| convolution vs render | rel. RMSE: all | near | far | near px | far px |",
+        "|---|---:|---:|---:|---:|---:|",
+    ]
     for name, e in outcome.errors.items():
         parts = [_pct(e[k]) for k in ("rel_rmse_all", "rel_rmse_near", "rel_rmse_far")]
         md.append(f"| {name} | " + " | ".join(parts) + f" | {e['near_pixels']} | {e['far_pixels']} |")
     layered = {n: e for n, e in outcome.errors.items() if "intervals" in e}
     if layered:  # step (g): error against the number of depth layers and run time, render noise removed
-        md += ["", "| depth-aware convolution (render noise removed) | nodes | near | far | near, raw | far, raw | "
-               "near, pinhole depth | far, pinhole depth | seconds |", "|---|---:|---:|---:|---:|---:|---:|---:|---:|"]
-        md += [f"| {n} | {e['nodes']} | " + " | ".join(_pct(e.get(k)) for k in (
-               "rel_rmse_near", "rel_rmse_far", "rel_rmse_near_raw", "rel_rmse_far_raw", "rel_rmse_near_pinhole_depth",
-               "rel_rmse_far_pinhole_depth")) + f" | {e['seconds']:.2f} |" for n, e in layered.items()]
-        md += ["", "Near and far: pixels both the ideal depth map and the render's own (through the lens) put nearer "
-               "than near_m or beyond far_m; pinhole depth: by the ideal depth map alone."]
+        md += [
+            "",
+            "| depth-aware convolution (render noise removed) | nodes | near | far | near, raw | far, raw | "
+            "near, pinhole depth | far, pinhole depth | seconds |",
+            "|---|---:|---:|---:|---:|---:|---:|---:|---:|",
+        ]
+        md += [
+            f"| {n} | {e['nodes']} | "
+            + " | ".join(
+                _pct(e.get(k))
+                for k in (
+                    "rel_rmse_near",
+                    "rel_rmse_far",
+                    "rel_rmse_near_raw",
+                    "rel_rmse_far_raw",
+                    "rel_rmse_near_pinhole_depth",
+                    "rel_rmse_far_pinhole_depth",
+                )
+            )
+            + f" | {e['seconds']:.2f} |"
+            for n, e in layered.items()
+        ]
+        md += [
+            "",
+            "Near and far: pixels both the ideal depth map and the render's own (through the lens) put nearer "
+            "than near_m or beyond far_m; pinhole depth: by the ideal depth map alone.",
+        ]
     md += ["", "| step | seconds |", "|---|---:|"] + [f"| {k} | {v:.1f} |" for k, v in outcome.seconds.items()]
     write_text(out / "street.md", "\n".join(md) + "\n")
     csv = [",".join(columns)] + [",".join("" if r[c] is None else str(r[c]) for c in columns) for r in rows]
     write_text(out / "street.csv", "\n".join(csv) + "\n")
-    write_text(out / "street.json", jsonio.dumps(dict(outcome.meta, sfr=rows, errors=outcome.errors,
-                                                    seconds=outcome.seconds), indent=1))
+    write_text(
+        out / "street.json",
+        jsonio.dumps(dict(outcome.meta, sfr=rows, errors=outcome.errors, seconds=outcome.seconds), indent=1),
+    )

@@ -8,6 +8,7 @@ standard deviation σ (px) exp(−2π²σ²f²), f in cy/px. An image that is th
 this MTF at every edge, so the e-SFR measured on it should match, up to the e-SFR's own sampling and
 noise.
 """
+
 from __future__ import annotations
 
 import numpy as np
@@ -21,8 +22,9 @@ def edge_normal_deg(orientation: str, angle_deg: float) -> float:
     return float(angle_deg) if orientation.startswith("v") else 90.0 + float(angle_deg)
 
 
-def predicted_mtf50(grid, lay, x_px: float, y_px: float, normal_deg: float, aperture: str = "box",
-                    channel: int = 0) -> float | None:
+def predicted_mtf50(
+    grid, lay, x_px: float, y_px: float, normal_deg: float, aperture: str = "box", channel: int = 0
+) -> float | None:
     """MTF50 (cy/px) that `grid` (a PSFGrid) predicts at pixel (x_px, y_px) of the image it is laid on
     (`lay`: `convolution.kernels.layout` of the grid on that image): the PSF of the nearest node, its
     MTF along `normal_deg` with the `aperture` of the layout's camera's pixels."""

@@ -30,6 +30,7 @@ Units: the convolution takes the ideal image (radiance) to irradiance in units o
 (`validation.engines.convolve`) and divides by k = axis irradiance / ideal irradiance, the lens
 camera's unit (a lossless lens's on-axis irradiance).
 """
+
 from __future__ import annotations
 
 import math
@@ -43,8 +44,8 @@ import numpy as np
 from ...errors import SolasError
 from ...outputs import safe_name
 from ...resources import resource_dir
-from .framings import framing
 from .depth import LAYERS, check_layers, depth_rows
+from .framings import framing
 from .measure import FAR_M, measure, write_tables
 
 PATCH_GRIDS = ((8, 6), (32, 24))
@@ -176,10 +177,12 @@ def check_lens(lens) -> None:
 
     if not lens.field_type.pinhole or not 0 < lens.field_deg < MAX_FIELD_DEG:
         kind = "a fisheye (polar fields)" if not lens.field_type.pinhole else "a lens"
-        raise SolasError(f"experiment street compares a lens with the ideal pinhole (perspective) camera of its field, "
-                         f"and lens {lens.name} is {kind} of ±{lens.field_deg:g} deg, which no pinhole camera frames "
-                         f"(its field must lie below {MAX_FIELD_DEG:g} deg); run the experiment on a rectilinear "
-                         "lens, and render the fisheye with `solas-mi render-image` or `solas-mi render SCENE --lens`")
+        raise SolasError(
+            f"experiment street compares a lens with the ideal pinhole (perspective) camera of its field, "
+            f"and lens {lens.name} is {kind} of ±{lens.field_deg:g} deg, which no pinhole camera frames "
+            f"(its field must lie below {MAX_FIELD_DEG:g} deg); run the experiment on a rectilinear "
+            "lens, and render the fisheye with `solas-mi render-image` or `solas-mi render SCENE --lens`"
+        )
 
 
 def run(lens, out: str | Path, settings: Settings | None = None, log=print) -> Outcome:
@@ -202,15 +205,24 @@ def run(lens, out: str | Path, settings: Settings | None = None, log=print) -> O
     depth_errors = _depth_aware(st, xml, images, depth, k) if s.depth_layers else {}
     _write_images(st, images, depth)
     lay = layout(grids[s.interp_grid], st.w, st.h)
-    meta = {"lens": lens.name, "lens_hash": lens.hash, "size": [st.w, st.h], "field_deg": st.fov,
-            "wavelength_nm": st.primary, "framing": st.params, "near_focus_m": st.near_focus, "far_m": FAR_M,
-            "far_subject_m": st.fr.far_m, "unit_k": k,
-            "pixel_pitch_um": lay.camera.pitch_um, "spp": {"ideal": s.spp_ideal, "lens": s.spp_lens,
-                                                          "depth": s.spp_depth}, "variant": st.variant}
+    meta = {
+        "lens": lens.name,
+        "lens_hash": lens.hash,
+        "size": [st.w, st.h],
+        "field_deg": st.fov,
+        "wavelength_nm": st.primary,
+        "framing": st.params,
+        "near_focus_m": st.near_focus,
+        "far_m": FAR_M,
+        "far_subject_m": st.fr.far_m,
+        "unit_k": k,
+        "pixel_pitch_um": lay.camera.pitch_um,
+        "spp": {"ideal": s.spp_ideal, "lens": s.spp_lens, "depth": s.spp_depth},
+        "variant": st.variant,
+    }
     outcome = Outcome(images, depth, seconds=st.seconds, meta=meta)
     predictors = {"infinity": grids[s.interp_grid], f"{st.fr.far_m:g} m": far_grid}
-    rows = st.timed("(d, e) NS-SFR, predictions and error maps", measure, outcome, predictors, lay, st.near_focus,
-                    out)
+    rows = st.timed("(d, e) NS-SFR, predictions and error maps", measure, outcome, predictors, lay, st.near_focus, out)
     outcome.errors.update(depth_errors)
     write_tables(out, rows, outcome)
     return outcome
@@ -228,11 +240,14 @@ def _depth_aware(st: _Steps, xml: Path, images: dict, depth: np.ndarray, k: floa
     labels = ("infinity", f"{st.near_focus:g} m")
     renders = {label: (images[f"render {label}"], second[f"render {label}"]) for label in labels}
     near_m = 1.5 * st.near_focus
-    masks = {label: (depth < near_m, depth > FAR_M, through[f"render {label}"] < near_m,
-                     through[f"render {label}"] > FAR_M) for label in labels}
+    masks = {
+        label: (depth < near_m, depth > FAR_M, through[f"render {label}"] < near_m, through[f"render {label}"] > FAR_M)
+        for label in labels
+    }
     field_range = (st.fov, math.degrees(math.atan(math.tan(math.radians(st.fov)) * st.h / st.w)))
-    new, rows = depth_rows(st, images["ideal"] * tangent_cos3(st.w, st.h, st.fov), depth, k, renders, masks,
-                           field_range)
+    new, rows = depth_rows(
+        st, images["ideal"] * tangent_cos3(st.w, st.h, st.fov), depth, k, renders, masks, field_range
+    )
     for row in rows.values():
         row.update(near_m=near_m, far_m=FAR_M)
     images.update(new)
@@ -260,13 +275,23 @@ def _psf_grids(st: _Steps) -> tuple[dict, object]:
     field_range = (fov, math.degrees(math.atan(math.tan(math.radians(fov)) * st.h / st.w)))  # the image's y edge
 
     def grid_for(subject, blocks: tuple[int, int], label: str):
-        return st.timed(f"(b) PSF grid {blocks[0]}x{blocks[1]}{label}", psf_grid, subject,
-                        grid=(blocks[1], blocks[0]), wavelengths_nm=[st.primary], field_range_deg=field_range,
-                        method="geometric", normalization="none", pitch_um=st.pixel_um / 8, size=160)
+        return st.timed(
+            f"(b) PSF grid {blocks[0]}x{blocks[1]}{label}",
+            psf_grid,
+            subject,
+            grid=(blocks[1], blocks[0]),
+            wavelengths_nm=[st.primary],
+            field_range_deg=field_range,
+            method="geometric",
+            normalization="none",
+            pitch_um=st.pixel_um / 8,
+            size=160,
+        )
 
     grids = {blocks: grid_for(st.lens, blocks, "") for blocks in dict.fromkeys((s.interp_grid, *s.patch_grids))}
-    far_grid = grid_for(replace(st.lens, object_distance=1e3 * st.fr.far_m), s.interp_grid,
-                        f", object at {st.fr.far_m:g} m")
+    far_grid = grid_for(
+        replace(st.lens, object_distance=1e3 * st.fr.far_m), s.interp_grid, f", object at {st.fr.far_m:g} m"
+    )
     return grids, far_grid
 
 
@@ -298,11 +323,29 @@ def _lens_renders(st: _Steps, xml: Path, seed: int = 0, depth: bool = False) -> 
     note = (", seed " + str(seed) if seed else "") + (", depth" if depth else "")
     channel = -1 if depth else 0
     return {
-        "render infinity": st.timed(f"(c) lens render, focus at infinity{note}", _render, xml, st.variant, st.lens,
-                                    lens_params, spp, seed, **render_options)[..., channel],
+        "render infinity": st.timed(
+            f"(c) lens render, focus at infinity{note}",
+            _render,
+            xml,
+            st.variant,
+            st.lens,
+            lens_params,
+            spp,
+            seed,
+            **render_options,
+        )[..., channel],
         f"render {st.near_focus:g} m": st.timed(
-            f"(c) lens render, focus at {st.near_focus:g} m{note}", _render, xml, st.variant, st.lens, lens_params,
-            spp, seed, focus_distance=st.near_focus, **render_options)[..., channel],
+            f"(c) lens render, focus at {st.near_focus:g} m{note}",
+            _render,
+            xml,
+            st.variant,
+            st.lens,
+            lens_params,
+            spp,
+            seed,
+            focus_distance=st.near_focus,
+            **render_options,
+        )[..., channel],
     }
 
 
@@ -312,8 +355,8 @@ def _write_images(st: _Steps, images: dict[str, np.ndarray], depth: np.ndarray) 
 
     for name, img in images.items():
         stem = safe_name(name)
-        write_exr(st.out / f"{stem}.exr", image_channels(img), {"lens": st.lens.name, "image": name,
-                                                                "variant": st.variant})
+        write_exr(
+            st.out / f"{stem}.exr", image_channels(img), {"lens": st.lens.name, "image": name, "variant": st.variant}
+        )
         write_png(st.out / f"{stem}.png", np.clip(img / 0.9, 0, 1))
-    write_exr(st.out / "depth.exr", {"Z": depth}, {"lens": st.lens.name, "unit": "m", "sky": "inf"},
-              infinite=True)
+    write_exr(st.out / "depth.exr", {"Z": depth}, {"lens": st.lens.name, "unit": "m", "sky": "inf"}, infinite=True)

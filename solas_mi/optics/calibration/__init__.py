@@ -5,6 +5,7 @@ written in the model's own ecosystem's file and read back (`files`). `calibrate`
 calibrate`'s work; `describe_camera` the camera block every output records, fitted once per lens, sensor and model and kept in the
 user's cache folder (`caches.RecordCache`).
 """
+
 from __future__ import annotations
 
 import math
@@ -58,8 +59,9 @@ def calibrate(lens, model: str, sensor: Sensor, wavelengths_nm=None, focus_dista
     return [fit(chief_map(lens, sensor, w, focus_distance_mm), model) for w in waves]
 
 
-def describe_camera(lens, sensor: Sensor, model: str | None, focus_distance_mm: float | None = None,
-                    wavelength_nm: float | None = None) -> dict:
+def describe_camera(
+    lens, sensor: Sensor, model: str | None, focus_distance_mm: float | None = None, wavelength_nm: float | None = None
+) -> dict:
     """The camera an output was made with, as its metadata records it.
 
     Parameters
@@ -84,32 +86,46 @@ def describe_camera(lens, sensor: Sensor, model: str | None, focus_distance_mm: 
     """
     block, _ = CAMERAS.get(
         camera_key(lens, sensor, model, focus_distance_mm, wavelength_nm),
-        lambda: _camera_block(lens, sensor, model, focus_distance_mm, wavelength_nm))
+        lambda: _camera_block(lens, sensor, model, focus_distance_mm, wavelength_nm),
+    )
     return block
 
 
-def camera_cached(lens, sensor: Sensor, model: str | None, focus_distance_mm: float | None = None,
-                  wavelength_nm: float | None = None) -> bool:
+def camera_cached(
+    lens, sensor: Sensor, model: str | None, focus_distance_mm: float | None = None, wavelength_nm: float | None = None
+) -> bool:
     """Whether `describe_camera` of these arguments reads its block back from the cache (fits nothing)."""
     return CAMERAS.holds(camera_key(lens, sensor, model, focus_distance_mm, wavelength_nm))
 
 
-def camera_key(lens, sensor: Sensor, model: str | None, focus_distance_mm: float | None,
-               wavelength_nm: float | None) -> dict:
+def camera_key(
+    lens, sensor: Sensor, model: str | None, focus_distance_mm: float | None, wavelength_nm: float | None
+) -> dict:
     """Everything `describe_camera`'s block depends on, the key of its record in the cache of fitted cameras:
     the lens (its name, the hash of its prescription and what else its mapping reads: its stated field, image
     diameter and wavelengths), the sensor, model, focus, wavelength, `FIT_VERSION` and solas-mi's version."""
     from ...resources import installed_version
 
-    return {"fit_version": FIT_VERSION, "solas_mi": installed_version(),
-            "lens": {"name": lens.name, "hash": lens.hash, "field_deg": lens.field_deg,
-                     "image_diameter": lens.image_diameter, "wavelengths_nm": list(lens.wavelengths_nm)},
-            "sensor": sensor.describe(), "model": model, "focus_distance_mm": focus_distance_mm,
-            "wavelength_nm": wavelength_nm}
+    return {
+        "fit_version": FIT_VERSION,
+        "solas_mi": installed_version(),
+        "lens": {
+            "name": lens.name,
+            "hash": lens.hash,
+            "field_deg": lens.field_deg,
+            "image_diameter": lens.image_diameter,
+            "wavelengths_nm": list(lens.wavelengths_nm),
+        },
+        "sensor": sensor.describe(),
+        "model": model,
+        "focus_distance_mm": focus_distance_mm,
+        "wavelength_nm": wavelength_nm,
+    }
 
 
-def _camera_block(lens, sensor: Sensor, model: str | None, focus_distance_mm: float | None,
-                  wavelength_nm: float | None) -> dict:
+def _camera_block(
+    lens, sensor: Sensor, model: str | None, focus_distance_mm: float | None, wavelength_nm: float | None
+) -> dict:
     """`describe_camera`'s block, traced and fitted."""
     cmap = chief_map(lens, sensor, wavelength_nm, focus_distance_mm)
     out = {**cmap.describe()}

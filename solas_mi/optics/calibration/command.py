@@ -1,5 +1,6 @@
 """`solas-mi lens calibrate`: a camera model fitted to a lens's chief-ray mapping over a sensor, written in
 its ecosystem's file (one per wavelength: lateral colour as one calibration each), with its residual."""
+
 from __future__ import annotations
 
 import math
@@ -35,11 +36,13 @@ def targets(output: str, wavelengths: list[float] | None) -> list[Path]:
 def report(cal, path: Path) -> str:
     m = cal.mapping
     circle = m["image_circle_radius_px"]
-    lines = [f"wrote {path}: {cal.model} of lens {m['lens']} at {m['wavelength_nm']:g} nm, sensor "
-             f"{m['sensor_px'][0]}x{m['sensor_px'][1]} px of {m['pitch_um']:g} um",
-             f"  residual over {cal.pixels} imaged pixels: RMS {cal.rms_px:.3g} px, max {cal.max_px:.3g} px at pixel "
-             f"({cal.max_at_px[0]:g}, {cal.max_at_px[1]:g}), {cal.max_at_deg:.4g} deg from the axis",
-             f"  fitted: {', '.join(cal.fitted)}"]
+    lines = [
+        f"wrote {path}: {cal.model} of lens {m['lens']} at {m['wavelength_nm']:g} nm, sensor "
+        f"{m['sensor_px'][0]}x{m['sensor_px'][1]} px of {m['pitch_um']:g} um",
+        f"  residual over {cal.pixels} imaged pixels: RMS {cal.rms_px:.3g} px, max {cal.max_px:.3g} px at pixel "
+        f"({cal.max_at_px[0]:g}, {cal.max_at_px[1]:g}), {cal.max_at_deg:.4g} deg from the axis",
+        f"  fitted: {', '.join(cal.fitted)}",
+    ]
     lines += [f"  {n} = 0: {why}" for n, why in cal.fixed.items()]
     if circle is not None:
         lines.append(f"  image circle: radius {circle:.6g} px; pixels outside it left out")
@@ -53,7 +56,8 @@ def run_calibrate(args) -> int:
     from ...options import floats, parse_wxh
     from ...outputs import check_target, written_together
     from . import Sensor, calibrate
-    from .files import check_suffix, write_text as calibration_text
+    from .files import check_suffix
+    from .files import write_text as calibration_text
 
     rows, cols = parse_wxh(args.sensor, "--sensor")
     sensor = Sensor(cols, rows, args.pitch_um)
@@ -81,29 +85,51 @@ def calibration_help() -> str:
 
 def add_calibration_option(p) -> None:
     """--calibration-model of the commands whose outputs record their camera (`describe_camera`)."""
-    p.add_argument("--calibration-model", choices=MODELS.names(), default=MODELS.default,
-                   help=f"{calibration_help()} (default: {MODELS.default})")
+    p.add_argument(
+        "--calibration-model",
+        choices=MODELS.names(),
+        default=MODELS.default,
+        help=f"{calibration_help()} (default: {MODELS.default})",
+    )
 
 
 def register(lens_commands, add_lens_argument, load_lens) -> None:
     """Add `lens calibrate` to the `lens` subcommands (`optics.commands` gives its LENS argument and loader)."""
     p = lens_commands.add_parser(
-        "calibrate", help="fit a camera model to the lens's real chief-ray mapping over a sensor and write it in "
-                          "the model's own file (OpenCV, OCamCalib, WoodScape, Kalibr)",
+        "calibrate",
+        help="fit a camera model to the lens's real chief-ray mapping over a sensor and write it in "
+        "the model's own file (OpenCV, OCamCalib, WoodScape, Kalibr)",
         description="Fits MODEL to where the lens's real chief rays land on every pixel of the sensor (pixels "
-                    "outside a fisheye's image circle left out) and reports the residual: RMS, maximum and where "
-                    "it lies. Pixel (0, 0) is the top-left pixel's centre; directions are in the camera frame x "
-                    "right, y down, z forward, from the lens's entrance pupil.")
+        "outside a fisheye's image circle left out) and reports the residual: RMS, maximum and where "
+        "it lies. Pixel (0, 0) is the top-left pixel's centre; directions are in the camera frame x "
+        "right, y down, z forward, from the lens's entrance pupil.",
+    )
     add_lens_argument(p)
     p.add_argument("--model", required=True, choices=MODELS.names(), help=MODELS.help())
-    p.add_argument("--sensor", required=True, metavar="WxH", help="sensor size in pixels (columns x rows), "
-                                                                  "centred on the lens's axis")
+    p.add_argument(
+        "--sensor",
+        required=True,
+        metavar="WxH",
+        help="sensor size in pixels (columns x rows), centred on the lens's axis",
+    )
     p.add_argument("--pitch-um", required=True, type=float, help="pixel pitch (um)")
-    p.add_argument("--wavelength-nm", metavar="NM[,NM...]", help="wavelength(s) in nm (default: the lens's primary); "
-                   "several: one calibration each (lateral colour), written as OUT's stem + _<nm>nm")
-    p.add_argument("--focus-distance", metavar="MM", help="focus on an object this far in front of surface 1 "
-                                                          "(mm, or inf; default: the lens file's object distance)")
-    p.add_argument("-o", "--output", required=True, metavar="FILE",
-                   help="the calibration file, its format by MODEL and extension: " + "; ".join(
-                       f"{n}: {', '.join(e.extra['formats'])}" for n, e in MODELS.items()))
+    p.add_argument(
+        "--wavelength-nm",
+        metavar="NM[,NM...]",
+        help="wavelength(s) in nm (default: the lens's primary); "
+        "several: one calibration each (lateral colour), written as OUT's stem + _<nm>nm",
+    )
+    p.add_argument(
+        "--focus-distance",
+        metavar="MM",
+        help="focus on an object this far in front of surface 1 (mm, or inf; default: the lens file's object distance)",
+    )
+    p.add_argument(
+        "-o",
+        "--output",
+        required=True,
+        metavar="FILE",
+        help="the calibration file, its format by MODEL and extension: "
+        + "; ".join(f"{n}: {', '.join(e.extra['formats'])}" for n, e in MODELS.items()),
+    )
     p.set_defaults(run=run_calibrate, load_lens=load_lens)

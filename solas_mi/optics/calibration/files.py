@@ -9,6 +9,7 @@ metadata) of a file written by solas-mi or by the ecosystem's own tool; `frame_n
 frame's camera (`optics.frame.FrameCamera`'s numbers) of a file that the frame options `--fisheye` and
 `--intrinsics` take: the parameters as written, so the round trip is exact.
 """
+
 from __future__ import annotations
 
 import math
@@ -20,12 +21,25 @@ from ...errors import SolasError
 from .filestorage import Matrix, dumps_json, dumps_yaml, loads
 from .models import MODELS, CameraModel, ocam_pixels, ocam_rho
 
-OPENCV_DISTORTION = {"opencv-pinhole": ("k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6", "s1", "s2", "s3", "s4"),
-                     "opencv-fisheye": ("k1", "k2", "k3", "k4"), "unified": ("k1", "k2", "p1", "p2")}
+OPENCV_DISTORTION = {
+    "opencv-pinhole": ("k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6", "s1", "s2", "s3", "s4"),
+    "opencv-fisheye": ("k1", "k2", "k3", "k4"),
+    "unified": ("k1", "k2", "p1", "p2"),
+}
 INVERSE_TOLERANCE_PX = 1e-4  # OCamCalib's inverse polynomial against its direct one, over the field
 MAX_INVERSE_DEGREE = 24
-META_KEYS = ("lens", "lens_hash", "wavelength_nm", "focus_distance_mm", "sensor_px", "pitch_um", "principal_px",
-             "image_circle_radius_px", "camera_centre", "interpolation_error_px")
+META_KEYS = (
+    "lens",
+    "lens_hash",
+    "wavelength_nm",
+    "focus_distance_mm",
+    "sensor_px",
+    "pitch_um",
+    "principal_px",
+    "image_circle_radius_px",
+    "camera_centre",
+    "interpolation_error_px",
+)
 
 
 def ocam_inverse(values: dict, widest_rad: float) -> tuple[list[float], float]:
@@ -56,29 +70,44 @@ def extra_for(m: CameraModel, values: dict, widest_rad: float):
     """What a model's file needs beyond its values, and the projection its users compute (None: the model's)."""
     if m.name == "ocamcalib":
         inverse, err = ocam_inverse(values, widest_rad)
-        return ({"inverse_polynomial": inverse, "inverse_polynomial_error_px": err},
-                lambda v, xyz: ocam_world2cam({**v, "invpol": inverse}, xyz))
+        return (
+            {"inverse_polynomial": inverse, "inverse_polynomial_error_px": err},
+            lambda v, xyz: ocam_world2cam({**v, "invpol": inverse}, xyz),
+        )
     if m.name == "opencv-fisheye" and widest_rad >= math.pi / 2:
-        return {"note": "cv2.fisheye.projectPoints takes points in front of the camera (z > 0) only; the model's "
-                        f"own formula holds to {math.degrees(widest_rad):.4g} deg"}, None
+        return {
+            "note": "cv2.fisheye.projectPoints takes points in front of the camera (z > 0) only; the model's "
+            f"own formula holds to {math.degrees(widest_rad):.4g} deg"
+        }, None
     return {}, None
 
 
 def _meta(cal) -> dict:
     m = cal.mapping
     out = {k: m[k] for k in META_KEYS if k in m}
-    out.update(model=cal.model, rms_residual_px=cal.rms_px, max_residual_px=cal.max_px,
-               max_residual_at_px=cal.max_at_px, max_residual_at_deg=cal.max_at_deg,
-               fitted=list(cal.fitted), fixed_at_zero=list(cal.fixed))
+    out.update(
+        model=cal.model,
+        rms_residual_px=cal.rms_px,
+        max_residual_px=cal.max_px,
+        max_residual_at_px=cal.max_at_px,
+        max_residual_at_deg=cal.max_at_deg,
+        fitted=list(cal.fitted),
+        fixed_at_zero=list(cal.fixed),
+    )
     return out
 
 
 def _opencv(cal) -> dict:
     v, (w, h) = cal.values, cal.mapping["sensor_px"]
-    doc = {"model": cal.model, "image_width": w, "image_height": h,
-           "camera_matrix": Matrix(3, 3, (v["fx"], 0.0, v["cx"], 0.0, v["fy"], v["cy"], 0.0, 0.0, 1.0)),
-           "distortion_coefficients": Matrix(1, len(OPENCV_DISTORTION[cal.model]),
-                                             tuple(v[k] for k in OPENCV_DISTORTION[cal.model]))}
+    doc = {
+        "model": cal.model,
+        "image_width": w,
+        "image_height": h,
+        "camera_matrix": Matrix(3, 3, (v["fx"], 0.0, v["cx"], 0.0, v["fy"], v["cy"], 0.0, 0.0, 1.0)),
+        "distortion_coefficients": Matrix(
+            1, len(OPENCV_DISTORTION[cal.model]), tuple(v[k] for k in OPENCV_DISTORTION[cal.model])
+        ),
+    }
     if cal.model == "unified":
         doc["xi"] = Matrix(1, 1, (v["xi"],))
     return doc
@@ -88,31 +117,65 @@ def _ocam_text(cal) -> str:
     v, (w, h) = cal.values, cal.mapping["sensor_px"]
     ss = [v["a0"], 0.0, v["a2"], v["a3"], v["a4"]]
     inv = cal.extra["inverse_polynomial"]
-    lines = ["#polynomial coefficients for the DIRECT mapping function (ocam_model.ss in MATLAB). These are used by "
-             "cam2world", "", " ".join([str(len(ss))] + [repr(c) for c in ss]), "",
-             "#polynomial coefficients for the inverse mapping function (ocam_model.invpol in MATLAB). These are used "
-             "by world2cam", "", " ".join([str(len(inv))] + [repr(c) for c in inv]), "",
-             '#center: "row" and "column", starting from 0 (C convention)', "", f"{v['xc']!r} {v['yc']!r}", "",
-             '#affine parameters "c", "d", "e"', "", f"{v['c']!r} {v['d']!r} {v['e']!r}", "",
-             '#image size: "height" and "width"', "", f"{h} {w}", ""]
+    lines = [
+        "#polynomial coefficients for the DIRECT mapping function (ocam_model.ss in MATLAB). These are used by "
+        "cam2world",
+        "",
+        " ".join([str(len(ss))] + [repr(c) for c in ss]),
+        "",
+        "#polynomial coefficients for the inverse mapping function (ocam_model.invpol in MATLAB). These are used "
+        "by world2cam",
+        "",
+        " ".join([str(len(inv))] + [repr(c) for c in inv]),
+        "",
+        '#center: "row" and "column", starting from 0 (C convention)',
+        "",
+        f"{v['xc']!r} {v['yc']!r}",
+        "",
+        '#affine parameters "c", "d", "e"',
+        "",
+        f"{v['c']!r} {v['d']!r} {v['e']!r}",
+        "",
+        '#image size: "height" and "width"',
+        "",
+        f"{h} {w}",
+        "",
+    ]
     lines += [f"#solas_mi {k}: {val}" for k, val in _meta(cal).items()]
     return "\n".join(lines) + "\n"
 
 
 def _woodscape(cal) -> dict:
     v, (w, h) = cal.values, cal.mapping["sensor_px"]
-    return {"extrinsic": {"quaternion": [0.0, 0.0, 0.0, 1.0], "translation": [0.0, 0.0, 0.0]},
-            "intrinsic": {"aspect_ratio": v["aspect_ratio"], "cx_offset": v["cx"] - (0.5 * w - 0.5),
-                          "cy_offset": v["cy"] - (0.5 * h - 0.5), "height": h, "width": w,
-                          **{k: v[k] for k in ("k1", "k2", "k3", "k4")}, "model": "radial_poly", "poly_order": 4},
-            "name": cal.mapping.get("lens", ""), "solas_mi": _meta(cal)}
+    return {
+        "extrinsic": {"quaternion": [0.0, 0.0, 0.0, 1.0], "translation": [0.0, 0.0, 0.0]},
+        "intrinsic": {
+            "aspect_ratio": v["aspect_ratio"],
+            "cx_offset": v["cx"] - (0.5 * w - 0.5),
+            "cy_offset": v["cy"] - (0.5 * h - 0.5),
+            "height": h,
+            "width": w,
+            **{k: v[k] for k in ("k1", "k2", "k3", "k4")},
+            "model": "radial_poly",
+            "poly_order": 4,
+        },
+        "name": cal.mapping.get("lens", ""),
+        "solas_mi": _meta(cal),
+    }
 
 
 def _kalibr(cal) -> dict:
     v = cal.values
-    return {"cam0": {"camera_model": "ds", "intrinsics": [v[k] for k in ("xi", "alpha", "fx", "fy", "cx", "cy")],
-                     "distortion_model": "none", "distortion_coeffs": [], "resolution": list(cal.mapping["sensor_px"])},
-            "solas_mi": _meta(cal)}
+    return {
+        "cam0": {
+            "camera_model": "ds",
+            "intrinsics": [v[k] for k in ("xi", "alpha", "fx", "fy", "cx", "cy")],
+            "distortion_model": "none",
+            "distortion_coeffs": [],
+            "resolution": list(cal.mapping["sensor_px"]),
+        },
+        "solas_mi": _meta(cal),
+    }
 
 
 def check_suffix(model_name: str, path) -> str:
@@ -120,8 +183,9 @@ def check_suffix(model_name: str, path) -> str:
     formats = MODELS.get(model_name).extra["formats"]
     suffix = Path(path).suffix.lower()
     if suffix not in formats:
-        raise SolasError(f"calibration file {str(path)!r}: a {model_name} calibration is written as "
-                         f"{', '.join(formats)}")
+        raise SolasError(
+            f"calibration file {str(path)!r}: a {model_name} calibration is written as {', '.join(formats)}"
+        )
     return suffix
 
 
@@ -141,7 +205,9 @@ def _numbers(line: str, where: str, number: int) -> list[float]:
     try:
         return [float(t) for t in line.split()]
     except ValueError:
-        raise SolasError(f"{where}: its line of numbers {number} holds other text (OCamCalib calib_results.txt)") from None
+        raise SolasError(
+            f"{where}: its line of numbers {number} holds other text (OCamCalib calib_results.txt)"
+        ) from None
 
 
 def _read_ocam(text: str, where: str):
@@ -149,14 +215,33 @@ def _read_ocam(text: str, where: str):
     if len(rows) < 5:
         raise SolasError(f"{where}: an OCamCalib calib_results.txt has 5 lines of numbers; found {len(rows)}")
     ss, inv, centre, affine, size = (_numbers(r, where, i) for i, r in enumerate(rows[:5], 1))
-    if len(ss) < 3 or int(ss[0]) != len(ss) - 1 or len(ss) > 6 or len(centre) != 2 or len(affine) != 3 or len(size) != 2:
-        raise SolasError(f"{where}: the OCamCalib numbers are not ss (its length first, at most 5 terms), invpol, "
-                         "centre (row, column), affine (c, d, e), size (height, width)")
+    if (
+        len(ss) < 3
+        or int(ss[0]) != len(ss) - 1
+        or len(ss) > 6
+        or len(centre) != 2
+        or len(affine) != 3
+        or len(size) != 2
+    ):
+        raise SolasError(
+            f"{where}: the OCamCalib numbers are not ss (its length first, at most 5 terms), invpol, "
+            "centre (row, column), affine (c, d, e), size (height, width)"
+        )
     a = ss[1:] + [0.0] * (5 - len(ss[1:]))
     if a[1] != 0.0:
         raise SolasError(f"{where}: the direct polynomial's a1 is {a[1]:g}; OCamCalib's model has a1 = 0")
-    values = {"xc": centre[0], "yc": centre[1], "c": affine[0], "d": affine[1], "e": affine[2], "a0": a[0],
-              "a2": a[2], "a3": a[3], "a4": a[4], "invpol": inv[1:]}
+    values = {
+        "xc": centre[0],
+        "yc": centre[1],
+        "c": affine[0],
+        "d": affine[1],
+        "e": affine[2],
+        "a0": a[0],
+        "a2": a[2],
+        "a3": a[3],
+        "a4": a[4],
+        "invpol": inv[1:],
+    }
     return "ocamcalib", values, (int(size[1]), int(size[0])), {}
 
 
@@ -166,27 +251,42 @@ def _from_document(doc: dict, where: str, expect: str | None):
     if "intrinsic" in doc:
         i = doc["intrinsic"]
         w, h = int(i["width"]), int(i["height"])
-        values = {"cx": i["cx_offset"] + 0.5 * w - 0.5, "cy": i["cy_offset"] + 0.5 * h - 0.5,
-                  "aspect_ratio": i.get("aspect_ratio", 1.0), **{k: float(i.get(k, 0.0)) for k in ("k1", "k2", "k3", "k4")}}
+        values = {
+            "cx": i["cx_offset"] + 0.5 * w - 0.5,
+            "cy": i["cy_offset"] + 0.5 * h - 0.5,
+            "aspect_ratio": i.get("aspect_ratio", 1.0),
+            **{k: float(i.get(k, 0.0)) for k in ("k1", "k2", "k3", "k4")},
+        }
         return "woodscape", values, (w, h), meta
     if "cam0" in doc:
         cam = doc["cam0"]
         if cam.get("camera_model") != "ds" or len(cam.get("intrinsics", [])) != 6:
-            raise SolasError(f"{where}: a Kalibr camera chain of the double sphere model (camera_model ds, six intrinsics)"
-                             f" is read; found camera_model {cam.get('camera_model')!r}")
+            raise SolasError(
+                f"{where}: a Kalibr camera chain of the double sphere model (camera_model ds, six intrinsics)"
+                f" is read; found camera_model {cam.get('camera_model')!r}"
+            )
         values = dict(zip(("xi", "alpha", "fx", "fy", "cx", "cy"), map(float, cam["intrinsics"])))
         return "double-sphere", values, tuple(cam.get("resolution", (0, 0))), meta
     name = doc.get("model", expect)
     k, dist = doc.get("camera_matrix"), doc.get("distortion_coefficients")
     if name not in OPENCV_DISTORTION or not isinstance(k, Matrix) or k.rows * k.cols != 9:
-        raise SolasError(f"{where}: an OpenCV calibration has camera_matrix (3x3) and distortion_coefficients; "
-                         f"its model ({', '.join(OPENCV_DISTORTION)}) in `model` or by the option that reads it")
+        raise SolasError(
+            f"{where}: an OpenCV calibration has camera_matrix (3x3) and distortion_coefficients; "
+            f"its model ({', '.join(OPENCV_DISTORTION)}) in `model` or by the option that reads it"
+        )
     coefs = list(dist.data) if isinstance(dist, Matrix) else []
     names = OPENCV_DISTORTION[name]
-    if len(coefs) > len(names) and any(coefs[len(names):]):
-        raise SolasError(f"{where}: {len(coefs)} distortion coefficients; a {name} calibration has at most {len(names)}")
-    values = {"fx": k.data[0], "fy": k.data[4], "cx": k.data[2], "cy": k.data[5],
-              **dict(zip(names, coefs + [0.0] * (len(names) - len(coefs))))}
+    if len(coefs) > len(names) and any(coefs[len(names) :]):
+        raise SolasError(
+            f"{where}: {len(coefs)} distortion coefficients; a {name} calibration has at most {len(names)}"
+        )
+    values = {
+        "fx": k.data[0],
+        "fy": k.data[4],
+        "cx": k.data[2],
+        "cy": k.data[5],
+        **dict(zip(names, coefs + [0.0] * (len(names) - len(coefs)))),
+    }
     if name == "unified":
         xi = doc.get("xi")
         values["xi"] = float(xi.data[0] if isinstance(xi, Matrix) else xi)
@@ -216,13 +316,18 @@ def frame_numbers(path, option: str) -> tuple[str, tuple[float, ...], tuple[floa
     if option == "--fisheye" and model == "opencv-fisheye":
         return "kannala-brandt", (v["fx"], v["fy"], v["cx"], v["cy"]), tuple(v[k] for k in ("k1", "k2", "k3", "k4"))
     if option == "--fisheye" and model == "woodscape":
-        return ("polynomial", (v["k1"], v["k1"], v["cx"], v["cy"]),
-                tuple(v[k] for k in ("k1", "k2", "k3", "k4")) + (v["aspect_ratio"],))
+        return (
+            "polynomial",
+            (v["k1"], v["k1"], v["cx"], v["cy"]),
+            tuple(v[k] for k in ("k1", "k2", "k3", "k4")) + (v["aspect_ratio"],),
+        )
     if option == "--intrinsics" and model == "opencv-pinhole":
         bent = {k: v[k] for k in OPENCV_DISTORTION[model] if v[k] != 0.0}
         if bent:
-            raise SolasError(f"{option} {str(path)!r}: its distortion ({', '.join(f'{k} {x:g}' for k, x in bent.items())})"
-                             " is not a pinhole's; --intrinsics takes a calibration without distortion")
+            raise SolasError(
+                f"{option} {str(path)!r}: its distortion ({', '.join(f'{k} {x:g}' for k, x in bent.items())})"
+                " is not a pinhole's; --intrinsics takes a calibration without distortion"
+            )
         return "pinhole", (v["fx"], v["fy"], v["cx"], v["cy"]), ()
     takes = "opencv-fisheye, woodscape" if option == "--fisheye" else "opencv-pinhole"
     raise SolasError(f"{option} {str(path)!r} holds a {model} calibration; {option} takes {takes}")

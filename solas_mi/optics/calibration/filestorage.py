@@ -7,6 +7,7 @@ maps of rows, cols, dt, data; JSON matrices as maps with "type_id": "opencv-matr
 reads either form back into the same dict (matrices as `Matrix`). Numbers that are not finite are written
 as strings ("inf"), as JSON has no infinity.
 """
+
 from __future__ import annotations
 
 import json
@@ -59,8 +60,13 @@ def _yaml_lines(document: dict, indent: int) -> list[str]:
             raise SolasError(f"FileStorage key {key!r} must be letters, digits and underscores")
         if isinstance(value, Matrix):
             data = ", ".join(repr(float(v)) for v in value.data)
-            out += [f"{pad}{key}: !!opencv-matrix", f"{pad}   rows: {value.rows}", f"{pad}   cols: {value.cols}",
-                    f"{pad}   dt: d", f"{pad}   data: [ {data} ]"]
+            out += [
+                f"{pad}{key}: !!opencv-matrix",
+                f"{pad}   rows: {value.rows}",
+                f"{pad}   cols: {value.cols}",
+                f"{pad}   dt: d",
+                f"{pad}   data: [ {data} ]",
+            ]
         elif isinstance(value, dict):
             out += [f"{pad}{key}:", *_yaml_lines(value, indent + 3)]
         elif isinstance(value, (list, tuple)):
@@ -77,10 +83,16 @@ def dumps_yaml(document: dict, header: str = "%YAML:1.0\n---") -> str:
 
 def dumps_json(document: dict) -> str:
     """A FileStorage JSON file."""
+
     def convert(value):
         if isinstance(value, Matrix):
-            return {"type_id": "opencv-matrix", "rows": value.rows, "cols": value.cols, "dt": "d",
-                    "data": [float(v) for v in value.data]}
+            return {
+                "type_id": "opencv-matrix",
+                "rows": value.rows,
+                "cols": value.cols,
+                "dt": "d",
+                "data": [float(v) for v in value.data],
+            }
         if isinstance(value, dict):
             return {k: convert(v) for k, v in value.items()}
         return _plain(value)

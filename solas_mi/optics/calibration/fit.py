@@ -9,6 +9,7 @@ the others stay 0 and `Calibration.fixed` says why. A model that cannot hold the
 one whose `widest_deg` the field reaches (a pinhole at 90°), and one whose fitted projection is undefined
 or folds back (its radius stops growing with the angle) inside the field.
 """
+
 from __future__ import annotations
 
 import math
@@ -18,7 +19,8 @@ import numpy as np
 
 from ...errors import SolasError
 from .mapping import ChiefMap
-from .models import MODELS, CameraModel, model as get_model
+from .models import MODELS, CameraModel
+from .models import model as get_model
 
 FIT_SIDE = 64  # fit on about this many pixels along the sensor's longer side
 MAX_CONDITION = 1e10
@@ -46,10 +48,19 @@ class Calibration:
 
     def describe(self) -> dict:
         """The calibration as metadata (JSON values)."""
-        return {"model": self.model, "parameters": dict(self.values), "fitted": list(self.fitted),
-                "fixed_at_zero": dict(self.fixed), "rms_residual_px": self.rms_px, "max_residual_px": self.max_px,
-                "max_residual_at_px": list(self.max_at_px), "max_residual_at_deg": self.max_at_deg,
-                "pixels": self.pixels, "mapping": dict(self.mapping), **self.extra}
+        return {
+            "model": self.model,
+            "parameters": dict(self.values),
+            "fitted": list(self.fitted),
+            "fixed_at_zero": dict(self.fixed),
+            "rms_residual_px": self.rms_px,
+            "max_residual_px": self.max_px,
+            "max_residual_at_px": list(self.max_at_px),
+            "max_residual_at_deg": self.max_at_deg,
+            "pixels": self.pixels,
+            "mapping": dict(self.mapping),
+            **self.extra,
+        }
 
 
 def _solve(m: CameraModel, start: np.ndarray, free: list[int], xyz: np.ndarray, uv: np.ndarray):
@@ -59,19 +70,28 @@ def _solve(m: CameraModel, start: np.ndarray, free: list[int], xyz: np.ndarray, 
 
     if m.linear is not None:
         start = m.vector(m.linear(m.values(start), xyz, uv, [m.params[i] for i in free]))
+
     def residual(q):
         p = start.copy()
         p[free] = q
         r = (m.project(m.values(p), xyz) - uv).ravel()
         return np.where(np.isfinite(r), r, 1e6)
 
-    got = least_squares(residual, start[free], method="lm", x_scale="jac", xtol=1e-12, ftol=1e-12, gtol=1e-12,
-                        max_nfev=100 * (len(free) + 1))
+    got = least_squares(
+        residual,
+        start[free],
+        method="lm",
+        x_scale="jac",
+        xtol=1e-12,
+        ftol=1e-12,
+        gtol=1e-12,
+        max_nfev=100 * (len(free) + 1),
+    )
     p = start.copy()
     p[free] = got.x
     jac = got.jac / np.maximum(np.linalg.norm(got.jac, axis=0), 1e-300)
     s = np.linalg.svd(jac, compute_uv=False)
-    return p, float(np.sqrt(np.mean(got.fun ** 2) * 2)), float(s[0] / s[-1]) if s[-1] > 0 else math.inf
+    return p, float(np.sqrt(np.mean(got.fun**2) * 2)), float(s[0] / s[-1]) if s[-1] > 0 else math.inf
 
 
 def fit_points(m: CameraModel, xyz: np.ndarray, uv: np.ndarray, start) -> tuple[dict, list[str], dict]:
@@ -85,16 +105,19 @@ def fit_points(m: CameraModel, xyz: np.ndarray, uv: np.ndarray, start) -> tuple[
     free, fixed, held = list(first), {}, []
     for stage in m.stages[1:]:
         if rms < EXACT_PX:
-            fixed.update({n: f"the fit already holds to {rms:.1e} px" for n in stage})
+            fixed.update(dict.fromkeys(stage, f"the fit already holds to {rms:.1e} px"))
             continue
         trial = free + [m.params.index(n) for n in [*held, *stage]]
         q, rms_q, condition = _solve(m, p, trial, xyz, uv)
         if condition > MAX_CONDITION:
-            fixed.update({n: f"not determined by the mapping (condition number {condition:.1e})" for n in stage})
+            fixed.update(dict.fromkeys(stage, f"not determined by the mapping (condition number {condition:.1e})"))
         elif not rms_q < (1 - GAIN) * rms:
             held += stage
-            fixed.update({n: f"lowers the RMS residual by less than {100 * GAIN:g} % ({rms:.3g} to {rms_q:.3g} px)"
-                          for n in stage})
+            fixed.update(
+                dict.fromkeys(
+                    stage, f"lowers the RMS residual by less than {100 * GAIN:g} % ({rms:.3g} to {rms_q:.3g} px)"
+                )
+            )
         else:
             p, rms, free = q, rms_q, trial
             for n in held:
@@ -125,9 +148,11 @@ def check_holds(m: CameraModel, cmap: ChiefMap, widest_rad: float) -> None:
     """SolasError naming the model when the field reaches its `widest_deg`."""
     if math.degrees(widest_rad) >= m.widest_deg:
         wider = [n for n in MODELS if get_model(n).widest_deg > math.degrees(widest_rad)]
-        raise SolasError(f"calibration model {m.name} cannot hold the field of lens {cmap.lens.name} on this sensor: it "
-                         f"reaches {math.degrees(widest_rad):.4g} deg from the axis, and {m.name} holds less than "
-                         f"{m.widest_deg:g} deg; choose a model that holds it: {', '.join(wider)}")
+        raise SolasError(
+            f"calibration model {m.name} cannot hold the field of lens {cmap.lens.name} on this sensor: it "
+            f"reaches {math.degrees(widest_rad):.4g} deg from the axis, and {m.name} holds less than "
+            f"{m.widest_deg:g} deg; choose a model that holds it: {', '.join(wider)}"
+        )
 
 
 def _check_fitted(m: CameraModel, values: dict, cmap: ChiefMap, widest_rad: float) -> None:
@@ -139,10 +164,12 @@ def _check_fitted(m: CameraModel, values: dict, cmap: ChiefMap, widest_rad: floa
         radius = np.hypot(*(uv - uv[0]).T)
         if not np.all(np.isfinite(uv)) or not np.all(np.diff(radius) > 0):
             bad = int(np.argmax(~np.isfinite(uv).all(axis=1) | np.r_[False, np.diff(radius) <= 0]))
-            raise SolasError(f"calibration model {m.name} cannot hold the field of lens {cmap.lens.name}: fitted to it, "
-                             f"its projection is {'undefined' if not np.isfinite(uv[bad]).all() else 'folded back'} "
-                             f"at {math.degrees(theta[bad]):.4g} deg of the {math.degrees(widest_rad):.4g} deg the "
-                             "sensor reaches; choose another model")
+            raise SolasError(
+                f"calibration model {m.name} cannot hold the field of lens {cmap.lens.name}: fitted to it, "
+                f"its projection is {'undefined' if not np.isfinite(uv[bad]).all() else 'folded back'} "
+                f"at {math.degrees(theta[bad]):.4g} deg of the {math.degrees(widest_rad):.4g} deg the "
+                "sensor reaches; choose another model"
+            )
 
 
 def residual_map(m: CameraModel, values: dict, cmap: ChiefMap, project=None) -> np.ndarray:
@@ -157,7 +184,7 @@ def residual_map(m: CameraModel, values: dict, cmap: ChiefMap, project=None) -> 
         xyz, inside = cmap.directions(c.ravel(), r.ravel())
         err = np.full(inside.shape, np.nan)
         err[inside] = np.hypot(*(project(values, xyz[inside]) - np.stack([c.ravel(), r.ravel()], -1)[inside]).T)
-        out[r0:r0 + c.shape[0]] = np.where(inside & ~np.isfinite(err), np.inf, err).reshape(c.shape)
+        out[r0 : r0 + c.shape[0]] = np.where(inside & ~np.isfinite(err), np.inf, err).reshape(c.shape)
     return out
 
 
@@ -168,9 +195,13 @@ def residuals(m: CameraModel, values: dict, cmap: ChiefMap, project=None) -> dic
     imaged = ~np.isnan(err)
     k = np.unravel_index(int(np.argmax(np.where(imaged, err, -1.0))), err.shape)
     xyz, _ = cmap.directions(np.array([float(k[1])]), np.array([float(k[0])]))
-    return {"rms_px": float(np.sqrt(np.mean(err[imaged] ** 2))), "max_px": float(err[k]),
-            "max_at_px": [float(k[1]), float(k[0])], "max_at_deg": math.degrees(math.acos(min(1.0, xyz[0, 2]))),
-            "pixels": int(imaged.sum())}
+    return {
+        "rms_px": float(np.sqrt(np.mean(err[imaged] ** 2))),
+        "max_px": float(err[k]),
+        "max_at_px": [float(k[1]), float(k[0])],
+        "max_at_deg": math.degrees(math.acos(min(1.0, xyz[0, 2]))),
+        "pixels": int(imaged.sum()),
+    }
 
 
 def fit(cmap: ChiefMap, model_name: str) -> Calibration:
@@ -184,10 +215,23 @@ def fit(cmap: ChiefMap, model_name: str) -> Calibration:
     widest = float(np.max(np.arccos(np.clip(xyz[inside, 2], -1.0, 1.0))))
     check_holds(m, cmap, widest)
     focal_px = float(cmap.spline(1e-3) / 1e-3) / (cmap.sensor.pitch_um * 1e-3)
-    values, fitted, fixed = fit_points(m, xyz[inside], np.stack([cols, rows], -1)[inside],
-                                       m.start(focal_px, *cmap.sensor.centre))
+    values, fitted, fixed = fit_points(
+        m, xyz[inside], np.stack([cols, rows], -1)[inside], m.start(focal_px, *cmap.sensor.centre)
+    )
     _check_fitted(m, values, cmap, widest)
     extra, project = extra_for(m, values, widest)
     stats = residuals(m, values, cmap, project)
-    return Calibration(model_name, values, fitted, fixed, stats["rms_px"], stats["max_px"], stats["max_at_px"],
-                       stats["max_at_deg"], stats["pixels"], cmap.describe(), extra, project)
+    return Calibration(
+        model_name,
+        values,
+        fitted,
+        fixed,
+        stats["rms_px"],
+        stats["max_px"],
+        stats["max_at_px"],
+        stats["max_at_deg"],
+        stats["pixels"],
+        cmap.describe(),
+        extra,
+        project,
+    )

@@ -8,6 +8,7 @@ them (`fit.fit`: the first stage always, each later one where the data determine
 residual). `widest_deg`: the widest polar angle the model can hold (a pinhole's image of 90° is at
 infinity).
 """
+
 from __future__ import annotations
 
 import math
@@ -35,7 +36,9 @@ class CameraModel:
     start: object
     formats: tuple[str, ...]
     widest_deg: float = 180.0
-    linear: object = None  # (values, xyz, uv, free names) → values: the free linear parameters solved for, the rest kept
+    linear: object = (
+        None  # (values, xyz, uv, free names) → values: the free linear parameters solved for, the rest kept
+    )
 
     def vector(self, values: dict) -> np.ndarray:
         return np.array([float(values.get(n, 0.0)) for n in self.params])
@@ -57,8 +60,9 @@ def brown(x: np.ndarray, y: np.ndarray, v: dict) -> tuple[np.ndarray, np.ndarray
     (coefficients absent: 0)."""
     g = v.get
     r2 = x * x + y * y
-    radial = (1 + r2 * (g("k1", 0) + r2 * (g("k2", 0) + r2 * g("k3", 0)))) / \
-        (1 + r2 * (g("k4", 0) + r2 * (g("k5", 0) + r2 * g("k6", 0))))
+    radial = (1 + r2 * (g("k1", 0) + r2 * (g("k2", 0) + r2 * g("k3", 0)))) / (
+        1 + r2 * (g("k4", 0) + r2 * (g("k5", 0) + r2 * g("k6", 0)))
+    )
     p1, p2 = g("p1", 0), g("p2", 0)
     xd = x * radial + 2 * p1 * x * y + p2 * (r2 + 2 * x * x) + r2 * (g("s1", 0) + r2 * g("s2", 0))
     yd = y * radial + p1 * (r2 + 2 * y * y) + 2 * p2 * x * y + r2 * (g("s3", 0) + r2 * g("s4", 0))
@@ -166,48 +170,68 @@ _FOCAL = ("fx", "fy", "cx", "cy")
 _SPECS = {
     "opencv-pinhole": dict(
         summary="OpenCV's pinhole camera with Brown–Conrady distortion: radial k1…k6 (k4…k6 the rational model's "
-                "denominator), tangential p1, p2, thin prism s1…s4 (cv2.projectPoints); fields below 90 deg only",
+        "denominator), tangential p1, p2, thin prism s1…s4 (cv2.projectPoints); fields below 90 deg only",
         reference="OpenCV calib3d, camera calibration; Brown (1966), Conrady (1919)",
         params=_FOCAL + ("k1", "k2", "p1", "p2", "k3", "k4", "k5", "k6", "s1", "s2", "s3", "s4"),
         stages=(_FOCAL + ("k1",), ("k2",), ("p1", "p2"), ("k3",), ("k4", "k5", "k6"), ("s1", "s2", "s3", "s4")),
-        project=_pinhole, start=_centred(), formats=(".yaml", ".yml", ".json"), widest_deg=90.0),
+        project=_pinhole,
+        start=_centred(),
+        formats=(".yaml", ".yml", ".json"),
+        widest_deg=90.0,
+    ),
     "opencv-fisheye": dict(
         summary="OpenCV's fisheye camera, Kannala–Brandt: θd = θ(1 + k1θ² + k2θ⁴ + k3θ⁶ + k4θ⁸) "
-                "(cv2.fisheye.projectPoints, which takes points in front of the camera only)",
+        "(cv2.fisheye.projectPoints, which takes points in front of the camera only)",
         reference="Kannala & Brandt, IEEE TPAMI 28(8), 2006; OpenCV calib3d fisheye",
-        params=_FOCAL + ("k1", "k2", "k3", "k4"), stages=(_FOCAL, ("k1",), ("k2",), ("k3",), ("k4",)),
-        project=_kannala_brandt, start=_centred(k1=0.0), formats=(".yaml", ".yml", ".json")),
+        params=_FOCAL + ("k1", "k2", "k3", "k4"),
+        stages=(_FOCAL, ("k1",), ("k2",), ("k3",), ("k4",)),
+        project=_kannala_brandt,
+        start=_centred(k1=0.0),
+        formats=(".yaml", ".yml", ".json"),
+    ),
     "ocamcalib": dict(
         summary="Scaramuzza's omnidirectional model (OCamCalib): direction ∝ (x, y, a0 + a2ρ² + a3ρ³ + a4ρ⁴) of the "
-                "pixel's affine-corrected offset (c, d, e) from the centre (xc, yc), with the inverse polynomial "
-                "(world2cam) beside it",
+        "pixel's affine-corrected offset (c, d, e) from the centre (xc, yc), with the inverse polynomial "
+        "(world2cam) beside it",
         reference="Scaramuzza, Martinelli & Siegwart, IROS 2006; OCamCalib toolbox calib_results.txt",
         params=("xc", "yc", "c", "d", "e", "a0", "a2", "a3", "a4"),
-        stages=(("xc", "yc", "c", "d", "e", "a0", "a2"), ("a3",), ("a4",)), project=_ocam, linear=_ocam_linear,
+        stages=(("xc", "yc", "c", "d", "e", "a0", "a2"), ("a3",), ("a4",)),
+        project=_ocam,
+        linear=_ocam_linear,
         start=lambda f, cx, cy: {"xc": cy, "yc": cx, "c": 1.0, "d": 0.0, "e": 0.0, "a0": -f, "a2": 0.5 / f},
-        formats=(".txt",)),
+        formats=(".txt",),
+    ),
     "woodscape": dict(
         summary="the WoodScape fisheye polynomial: radius r = k1θ + k2θ² + k3θ³ + k4θ⁴ pixels, "
-                "(u, v) = (cx + r cos φ, cy + aspect_ratio · r sin φ)",
+        "(u, v) = (cx + r cos φ, cy + aspect_ratio · r sin φ)",
         reference="Yogamani et al., WoodScape, ICCV 2019 (scripts/calibration/projection.py)",
         params=("cx", "cy", "aspect_ratio", "k1", "k2", "k3", "k4"),
-        stages=(("cx", "cy", "aspect_ratio", "k1"), ("k2",), ("k3",), ("k4",)), project=_woodscape,
-        start=lambda f, cx, cy: {"cx": cx, "cy": cy, "aspect_ratio": 1.0, "k1": f}, formats=(".json",)),
+        stages=(("cx", "cy", "aspect_ratio", "k1"), ("k2",), ("k3",), ("k4",)),
+        project=_woodscape,
+        start=lambda f, cx, cy: {"cx": cx, "cy": cy, "aspect_ratio": 1.0, "k1": f},
+        formats=(".json",),
+    ),
     "double-sphere": dict(
         summary="the double sphere model (fx, fy, cx, cy, xi, alpha), written as a Kalibr camera chain (ds)",
         reference="Usenko, Demmel & Cremers, 3DV 2018",
-        params=_FOCAL + ("alpha", "xi"), stages=(_FOCAL + ("alpha", "xi"),), project=_double_sphere,
+        params=_FOCAL + ("alpha", "xi"),
+        stages=(_FOCAL + ("alpha", "xi"),),
+        project=_double_sphere,
         start=lambda f, cx, cy: [_centred(alpha=a, xi=x)(f, cx, cy) for a in (0.3, 0.5, 0.7) for x in (-0.3, 0.0, 0.3)],
-        formats=(".yaml", ".yml")),
+        formats=(".yaml", ".yml"),
+    ),
     "unified": dict(
         summary="the unified camera model of Mei (fx, fy, cx, cy, xi, radial-tangential k1, k2, p1, p2), written as "
-                "OpenCV's omnidir calibration (camera_matrix, distortion_coefficients, xi)",
+        "OpenCV's omnidir calibration (camera_matrix, distortion_coefficients, xi)",
         reference="Mei & Rives, ICRA 2007; Geyer & Daniilidis 2000; OpenCV contrib omnidir",
-        params=_FOCAL + ("xi", "k1", "k2", "p1", "p2"), stages=(_FOCAL + ("xi",), ("k1",), ("k2",), ("p1", "p2")),
+        params=_FOCAL + ("xi", "k1", "k2", "p1", "p2"),
+        stages=(_FOCAL + ("xi",), ("k1",), ("k2",), ("p1", "p2")),
         project=_unified,  # small angles: fx/(1 + xi) pixels per unit tangent, the lens's focal length
-        start=lambda f, cx, cy: [{"fx": (1 + xi) * f, "fy": (1 + xi) * f, "cx": cx, "cy": cy, "xi": xi}
-                                 for xi in (0.25, 0.5, 1.0, 2.0, 4.0)],
-        formats=(".yaml", ".yml", ".json")),
+        start=lambda f, cx, cy: [
+            {"fx": (1 + xi) * f, "fy": (1 + xi) * f, "cx": cx, "cy": cy, "xi": xi} for xi in (0.25, 0.5, 1.0, 2.0, 4.0)
+        ],
+        formats=(".yaml", ".yml", ".json"),
+    ),
 }
 
 
