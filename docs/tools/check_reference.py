@@ -93,7 +93,7 @@ def missing_plugins(site: Path) -> list[str]:
             "section": f"## `{name}`" in source,
             "parameter table": f"::: plugins.{name}" in source,
             "XML example": re.search(rf'```xml\n<\w+ type="{name}"', source) is not None,
-            "dict example": re.search(rf'```python\n(?:.*\n)*?\w+ = \{{"type": "{name}"', source) is not None,
+            "dict example": re.search(rf'```python\n(?:.*\n)*?\w+ = \{{\s*"type": "{name}"', source) is not None,
             "its documentation rendered": bool(doc) and doc[:60] in text,
         }
         missing += [f"{name}: {what}" for what, ok in wants.items() if not ok]
