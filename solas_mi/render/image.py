@@ -168,8 +168,6 @@ def render_image(
     variant = variant_for(parsed, spec.variant)
     if not isinstance(image, np.ndarray):
         read_image(image)
-    if camera_block is None and calibration_model is not None:
-        camera_block = image_camera(lens, camera, parsed, calibration_model)
     remove_stale_scenes()
     with tempfile.TemporaryDirectory(prefix=f"{SCENE_PREFIX}{os.getpid()}-") as tmp:
         if isinstance(image, np.ndarray):
@@ -177,6 +175,8 @@ def render_image(
             write_exr(path, image_channels(np.asarray(image, dtype=np.float32)))
             image = path
         xml = write_scene(lens, tmp, str(Path(image).resolve()), camera, spec)
+        if camera_block is None and calibration_model is not None:  # after the scene's own checks, before the render
+            camera_block = image_camera(lens, camera, parsed, calibration_model)
         scene = load_scene(xml, variant)
         result = render(scene, spec.spp, seed=spec.seed, progress=progress)
     result.meta.update(camera.meta(), f_number=unit_f_number(scene.sensors()[0]))
