@@ -149,7 +149,8 @@ def checked_end(to_world_end) -> np.ndarray:
 class RenderedParts:
     """A scene's light split by time slice and PWM emitter: `edges` (K + 1, s) of the slices, `steady`
     (K, H, W, C: the PWM emitters off), `alone` (name → (K, H, W, C): that PWM emitter alone), the channels'
-    names, samples per pixel, seconds and the last render's meta."""
+    names, samples per pixel, seconds, the last render's meta, and the rows of the film (a crop window's rows
+    take the windows of their rows of the whole film)."""
 
     edges: np.ndarray
     steady: np.ndarray
@@ -158,12 +159,21 @@ class RenderedParts:
     spp: int
     seconds: float
     meta: dict = field(default_factory=dict)
+    film_rows: tuple[int, int] = (0, 0)  # the film's first row drawn (its crop window's) and its rows in all
+
+    def windows(self, shutter: Shutter, exposure_s: float) -> tuple[np.ndarray, np.ndarray]:
+        """The windows (s) of the rows drawn: those of the whole film's rows (`film_rows`) that its crop window
+        draws."""
+        first, rows = self.film_rows
+        drawn = slice(first, first + self.steady.shape[1])
+        starts, ends = shutter.windows(max(rows, drawn.stop), exposure_s)
+        return starts[drawn], ends[drawn]
 
     def over_windows(self, shutter: Shutter | None, exposure_s: float, sources: dict[str, PWMSource]) -> np.ndarray:
         """The image (H, W, C) each row gathers over its window, its sources at their `sources` values (the
         names rendered alone); SolasError for windows past the span rendered."""
         shutter = shutter or Shutter()
-        starts, ends = shutter.windows(self.steady.shape[1], exposure_s)
+        starts, ends = self.windows(shutter, exposure_s)
         if starts.min() < self.edges[0] or ends.max() > self.edges[-1] * (1 + 1e-12):
             raise SolasError(
                 f"the rows' windows ({starts.min():g} to {ends.max():g} s) reach past the time rendered "
@@ -191,7 +201,8 @@ def render_parts(
     shutter = shutter or Shutter()
     if not (isinstance(exposure_s, (int, float)) and 0.0 < exposure_s < float("inf")):
         raise SolasError(f"exposure_s = {exposure_s!r} must be a number above 0 (s)")
-    rows = int(scene.sensors()[0].film().crop_size()[1])
+    film = scene.sensors()[0].film()
+    rows = int(film.size()[1])  # the whole film's: a crop window's rows keep their times
     indices = pwm_indices(scene, pwm)
     switches = [emission(e) for e in scene.emitters()] if indices else []
     if to_world_end is None:
@@ -227,6 +238,7 @@ def render_parts(
         spp,
         time.perf_counter() - began,
         result.meta,
+        (int(film.crop_offset()[1]), rows),
     )
 
 

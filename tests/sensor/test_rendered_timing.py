@@ -120,6 +120,25 @@ def test_the_parts_sum_to_the_scenes_own_render(variant_llvm_ad_spectral):
     assert np.array_equal(again, whole.astype(np.float32))
 
 
+@pytest.mark.parametrize("direction", ["top-down", "bottom-up"])
+def test_a_crop_windows_rows_keep_their_times_on_the_whole_film(variant_llvm_ad_spectral, direction):
+    """A film drawing rows 50-89 of its 120 (its crop window): each row's share of the LED's light is the on-time
+    within that row's window of the whole film, not of a film of 40 rows."""
+    mi = variant_llvm_ad_spectral
+    scene = led_scene(mi)
+    params = mi.traverse(scene)
+    params["sensor.film.crop_offset"] = mi.ScalarPoint2u(0, 50)
+    params["sensor.film.crop_size"] = mi.ScalarPoint2u(COLS, 40)
+    params.update()
+    shutter, source = Shutter("rolling", LINE_S, direction), PWMSource(90.0, 0.1, 0.95)
+    parts = render_parts(scene, 4, shutter, EXPOSURE_S, ["led"])
+    frame = parts.over_windows(shutter, EXPOSURE_S, {"led": source})
+    share = ((frame - parts.steady[0]) / parts.alone["led"][0])[..., 0].mean(axis=1)
+    starts, ends = shutter.windows(ROWS, EXPOSURE_S)
+    assert parts.steady.shape[1] == 40
+    assert np.allclose(share, source.on_time(starts[50:90], ends[50:90]) / EXPOSURE_S)
+
+
 def bar_scene(mi, rows, cols, x_end=None):
     """A bright vertical bar 4 pixels wide at the image centre, the camera at x = 0 (or `x_end`)."""
     return mi.load_dict(
