@@ -9,7 +9,7 @@ from ..errors import SolasError
 from ..optics.commands import add_lens_argument
 from ..optics.ghost_paths import DEFAULT_RAYS as DEFAULT_GHOST_RAYS
 from ..options import floats
-from ..outputs import add_png_option, data_and_preview, written_together
+from ..outputs import add_png_option, check_target, data_and_preview, written_together
 from ..progress import Progress
 from .spec import PSF_OPTIONS, GridSpec
 
@@ -99,6 +99,24 @@ def run_ghosts(args) -> int:
     return 0
 
 
+def run_ghost_grid(args) -> int:
+    from ..optics.commands import load_lens
+    from .ghost_grid import ghost_grid
+
+    exr = check_target(args.output)
+    json_path = check_target(args.json or exr.with_suffix(".json"))
+    lens = load_lens(args)
+    wavelengths = floats(args.wavelengths_nm, "--wavelengths-nm") if args.wavelengths_nm else None
+    field = floats(args.field_deg, "--field-deg")[0] if args.field_deg else None
+    with Progress("ghost-grid", args.radii * (args.azimuths or 1), "nodes") as bar:
+        grid = ghost_grid(lens, args.radii, field, wavelengths, args.rays, args.kernel, args.azimuths, progress=bar)
+    grid.write(exr, json_path)
+    print(
+        f"wrote {exr} and {json_path} ({len(grid.paths)} ghosts on {grid.energy.shape[1] * grid.energy.shape[2]} nodes)"
+    )
+    return 0
+
+
 def _add_outputs(p) -> None:
     p.add_argument("-o", "--output", required=True, help="output OpenEXR file")
     add_png_option(p)
@@ -134,6 +152,7 @@ def register(sub: Any) -> None:
     _add_outputs(ghost)
     ghost.set_defaults(run=run_ghosts)
 
+    _register_ghost_grid(sub)
     grid = sub.add_parser(
         "psf-grid", help="PSFs on a field grid, one stack per wavelength, as OpenEXR (+ PNG mosaic with --mosaic)"
     )
@@ -150,3 +169,23 @@ def register(sub: Any) -> None:
         "of the same name, or at PNG); default: none (a 32x32 grid's takes about a second)",
     )
     grid.set_defaults(run=run_psf_grid)
+
+
+def _register_ghost_grid(sub: Any) -> None:
+    from .ghost_grid_file import DEFAULT_KERNEL, DEFAULT_RADII
+
+    p = sub.add_parser(
+        "ghost-grid",
+        help="every ghost on nodes along the field's radius (per node and wavelength: energy, centroid, kernel) "
+        "as OpenEXR + JSON, for stray light over the image",
+    )
+    add_lens_argument(p)
+    p.add_argument("--radii", type=int, default=DEFAULT_RADII, help="nodes along the field's radius, from the axis")
+    p.add_argument("--field-deg", help="the largest polar field angle (degrees; default the lens's field_deg)")
+    p.add_argument("--wavelengths-nm", help="wavelengths, a channel each (default: the lens's)")
+    p.add_argument("--rays", type=int, default=DEFAULT_GHOST_RAYS, help="rays per side of each node's launch grid")
+    p.add_argument("--kernel", type=int, default=DEFAULT_KERNEL, help="pixels per side of each ghost's kernel (odd)")
+    p.add_argument("--azimuths", type=int, help="an iris's nodes per blade sector (default 4; a round stop: 1)")
+    p.add_argument("-o", "--output", required=True, help="output OpenEXR file")
+    p.add_argument("--json", help="the metadata as JSON (default: beside the EXR, of the same name)")
+    p.set_defaults(run=run_ghost_grid)

@@ -1,0 +1,138 @@
+"""Ghost grids (`psf.ghost_grid`): a node is `ghosts` at its field, a field at another azimuth is the meridian's
+turned, the cache reads back what it kept, and bad options are refused by name."""
+
+import math
+
+import numpy as np
+import pytest
+
+from solas_mi import Lens
+from solas_mi.errors import SolasError
+from solas_mi.psf import ghosts
+from solas_mi.psf.ghost_grid import CACHE, ghost_grid, ghost_kernel
+from solas_mi.psf.ghost_grid_file import GhostGrid
+
+WL = [587.6]
+SMALL = {"radii": 3, "rays": 48, "kernel": 31, "wavelengths_nm": WL, "cache": False}
+
+
+@pytest.fixture(scope="module")
+def triplet():
+    return Lens.load("cooke-triplet")
+
+
+@pytest.fixture(scope="module")
+def grid(triplet):
+    return ghost_grid(triplet, field_deg=12.0, **SMALL)
+
+
+def _table(report):
+    return np.array([g.energy for g in report.ghosts]), np.array([g.centroid_mm for g in report.ghosts])
+
+
+def test_a_node_is_the_ghosts_of_its_field(triplet, grid):
+    """Each node's energies and centroids are those `ghosts` gives at its field (the same rays); its kernels sum
+    to 1 and its image on the sensor holds the ghosts' energy."""
+    for r, field in enumerate(grid.meta["fields_deg"][0]):
+        energy, centroid = _table(ghosts(triplet, tuple(field), WL, rays=SMALL["rays"]))
+        node = grid.node(0, r)
+        lit = energy > 0
+        np.testing.assert_allclose(node.energy[0], energy, rtol=1e-12, atol=0)
+        np.testing.assert_allclose(node.centroid_mm[0][lit], centroid[lit], rtol=0, atol=1e-12)
+        np.testing.assert_allclose(node.kernels[0][lit].sum(axis=(1, 2)), 1.0, rtol=1e-5)
+    reach_um = (np.abs(node.centroid_mm).max() * 1e3 + node.pitch_um.max() * SMALL["kernel"]) * 1.01
+    image = node.image(2.0 * reach_um / 512, 512, (0.0, 0.0))  # holds every ghost's kernel
+    assert image.sum() == pytest.approx(node.energy.sum(), rel=1e-5)
+
+
+def test_a_turned_field_is_the_meridian_turned(triplet, grid):
+    """A field on the x axis (the meridian's node turned by -90 deg; the square launch grid turns onto itself, so
+    the direct computation traces the same rays turned): energies, centroids, pitches and kernels as `ghosts`
+    there; at 30 deg off the meridian (other rays) the totals agree to the sampling."""
+    theta = grid.polar_deg[-1]
+    report = ghosts(triplet, (theta, 0.0), WL, rays=SMALL["rays"])
+    energy, centroid = _table(report)
+    turned = grid.at((theta, 0.0))
+    lit = energy > 0
+    np.testing.assert_allclose(turned.energy[0], energy, rtol=1e-9, atol=0)
+    np.testing.assert_allclose(turned.centroid_mm[0][lit], centroid[lit], rtol=0, atol=1e-9)
+    for p, path in enumerate(report.hits):
+        if energy[p] > 0:
+            pitch, kernel = ghost_kernel(report.hits[path], report.ghosts[p], SMALL["kernel"])
+            assert turned.pitch_um[0, p] == pytest.approx(pitch, rel=1e-9)
+            assert np.abs(turned.kernels[0, p] - kernel).max() < 1e-3 * kernel.max()
+    phi = math.radians(30.0)
+    field = tuple(float(f) for f in triplet.field_type.field_of(math.radians(theta), math.cos(phi), math.sin(phi)))
+    energy, _ = _table(ghosts(triplet, field, WL, rays=SMALL["rays"]))
+    assert grid.at(field).energy.sum() == pytest.approx(energy.sum(), rel=0.03)
+
+
+def test_the_cache_reads_back_what_it_kept(triplet, tmp_path, monkeypatch):
+    monkeypatch.setenv("SOLAS_MI_CACHE_DIR", str(tmp_path))
+    options = {**SMALL, "cache": True, "radii": 2}
+    first = ghost_grid(triplet, **options)
+    assert list((tmp_path / "ghost-grids").glob("*.exr"))
+    monkeypatch.setattr("solas_mi.psf.ghost_grid.compute", lambda *a: pytest.fail("computed again"))
+    second = ghost_grid(triplet, **options)
+    for key in ("polar_deg", "energy", "centroid_mm", "pitch_um", "kernels", "direct_mm"):
+        assert np.array_equal(getattr(first, key), getattr(second, key)), key
+    path = next((tmp_path / "ghost-grids").glob("*.exr"))
+    path.write_bytes(path.read_bytes()[:-10])  # truncated: computed again
+    monkeypatch.undo()
+    monkeypatch.setenv("SOLAS_MI_CACHE_DIR", str(tmp_path))
+    assert np.array_equal(ghost_grid(triplet, **options).kernels, first.kernels)
+    assert CACHE.check(path, {"lens_hash": triplet.hash, "ghost_grid": first.meta["options"]}) is None
+
+
+def test_the_file_round_trips(grid, tmp_path):
+    grid.write(tmp_path / "g.exr", tmp_path / "g.json")
+    back = GhostGrid.read(tmp_path / "g.exr")
+    assert np.array_equal(back.kernels, grid.kernels) and np.array_equal(back.energy, grid.energy)
+    assert (tmp_path / "g.json").read_text().count('"paths"') == 1
+
+
+@pytest.mark.parametrize(
+    "option,value",
+    [("radii", 1), ("radii", 2.5), ("kernel", 4), ("kernel", 32), ("field_deg", 95.0), ("field_deg", 0), ("rays", 2),
+     ("azimuths", 3), ("wavelengths_nm", [587.6, 587.6])],
+)  # fmt: skip
+def test_bad_options_are_refused_by_name(triplet, option, value):
+    with pytest.raises(SolasError, match=option.replace("_deg", "_deg").split("_nm")[0]):
+        ghost_grid(triplet, **{**SMALL, option: value})
+
+
+def test_a_field_beyond_the_grid_is_refused(grid):
+    with pytest.raises(SolasError, match="beyond the ghost grid"):
+        grid.at((0.0, 13.0))
+
+
+def test_the_command_writes_the_grid_and_its_json(tmp_path, monkeypatch, capsys):
+    from solas_mi.cli import main
+
+    monkeypatch.setenv("SOLAS_MI_CACHE_DIR", str(tmp_path / "cache"))
+    out = tmp_path / "g.exr"
+    assert main(["ghost-grid", "solas-doublet", "--radii", "2", "--rays", "16", "--kernel", "15", "-o", str(out)]) == 0
+    back = GhostGrid.read(out)
+    assert back.energy.shape == (3, 1, 2, 3) and (tmp_path / "g.json").is_file()
+    assert main(["ghost-grid", "solas-doublet", "--radii", "0", "-o", str(out)]) == 2
+    assert "radii 0 must be an integer from 2" in capsys.readouterr().err
+
+
+def test_an_iris_grid_turns_by_whole_sectors(triplet):
+    """A four-blade iris repeats every 90 deg: a field at azimuth 180 deg is the 90 deg node turned by one sector
+    (exact: the launch grid turns onto itself), and one between two azimuth nodes lies between them."""
+    import tomllib
+
+    from solas_mi.resources import resource_dir
+
+    with open(resource_dir("scenes") / "lenses" / "cooke_triplet.toml", "rb") as f:
+        spec = tomllib.load(f)
+    spec["surface"][triplet.stop_index].update(blades=4, blade_rotation=10.0)
+    iris = Lens.from_dict(spec)
+    grid = ghost_grid(iris, field_deg=12.0, azimuths=2, **{**SMALL, "radii": 2})
+    assert grid.sector_deg == 90.0 and grid.azimuth_deg.tolist() == [90.0, 135.0]
+    energy, centroid = _table(ghosts(iris, (-12.0, 0.0), WL, rays=SMALL["rays"]))
+    turned = grid.at((-12.0, 0.0))
+    np.testing.assert_allclose(turned.energy[0], energy, rtol=1e-9, atol=0)
+    lit = energy > 0
+    np.testing.assert_allclose(turned.centroid_mm[0][lit], centroid[lit], rtol=0, atol=1e-9)
