@@ -101,7 +101,7 @@ def run_ghosts(args) -> int:
 
 def run_ghost_grid(args) -> int:
     from ..optics.commands import load_lens
-    from .ghost_grid import ghost_grid
+    from .ghost_nodes import ghost_grid
 
     exr = check_target(args.output)
     json_path = check_target(args.json or exr.with_suffix(".json"))

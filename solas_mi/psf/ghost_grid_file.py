@@ -1,4 +1,4 @@
-"""`GhostGrid`, the ghosts of a lens over the field (`ghost_grid.ghost_grid` computes one), and its file: OpenEXR
+"""`GhostGrid`, the ghosts of a lens over the field (`ghost_nodes.ghost_grid` computes one), and its file: OpenEXR
 (each wavelength's kernels as one mosaic channel, the rest in the metadata) with the same metadata as JSON beside
 it. `GhostGrid.at` gives the ghosts of any field, `NodeGhosts.image` their irradiance on the sensor.
 
@@ -24,7 +24,7 @@ import numpy as np
 
 from ..errors import SolasError
 
-# the options of `ghost_grid.ghost_grid` (here, where the light command line reads them)
+# the options of `ghost_nodes.ghost_grid` (here, where the light command line reads them)
 DEFAULT_RADII = 9  # nodes along the field's radius, 0 to the grid's field
 MAX_RADII = 64
 DEFAULT_KERNEL = 63  # pixels per side of each ghost's kernel: odd, symmetric about its centroid's pixel, so that

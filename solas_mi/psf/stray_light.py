@@ -250,7 +250,7 @@ def working_f_number(lens: Lens) -> float:
 
 
 def ghost_row(path: tuple[int, int], hit, direct_power: float, wavelength_nm: float) -> Ghost:
-    """One ghost's row of the table from its rays on the image plane (`_path_hits`, `psf.ghost_grid`)."""
+    """One ghost's row of the table from its rays on the image plane (`_path_hits`, `psf.ghost_nodes`)."""
     x, y, w, tx, ty = hit
     surfaces = (path[0] + 1, path[1] + 1)
     if w.sum() <= 0:

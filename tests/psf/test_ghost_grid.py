@@ -1,4 +1,4 @@
-"""Ghost grids (`psf.ghost_grid`): a node is `ghosts` at its field, a field at another azimuth is the meridian's
+"""Ghost grids (`psf.ghost_nodes`): a node is `ghosts` at its field, a field at another azimuth is the meridian's
 turned, the cache reads back what it kept, and bad options are refused by name."""
 
 import math
@@ -9,8 +9,8 @@ import pytest
 from solas_mi import Lens
 from solas_mi.errors import SolasError
 from solas_mi.psf import ghosts
-from solas_mi.psf.ghost_grid import CACHE, ghost_grid, ghost_kernel
 from solas_mi.psf.ghost_grid_file import GhostGrid
+from solas_mi.psf.ghost_nodes import CACHE, ghost_grid, ghost_kernel
 
 WL = [587.6]
 SMALL = {"radii": 3, "rays": 48, "kernel": 31, "wavelengths_nm": WL, "cache": False}
@@ -72,7 +72,7 @@ def test_the_cache_reads_back_what_it_kept(triplet, tmp_path, monkeypatch):
     options = {**SMALL, "cache": True, "radii": 2}
     first = ghost_grid(triplet, **options)
     assert list((tmp_path / "ghost-grids").glob("*.exr"))
-    monkeypatch.setattr("solas_mi.psf.ghost_grid.compute", lambda *a: pytest.fail("computed again"))
+    monkeypatch.setattr("solas_mi.psf.ghost_nodes.compute", lambda *a: pytest.fail("computed again"))
     second = ghost_grid(triplet, **options)
     for key in ("polar_deg", "energy", "centroid_mm", "pitch_um", "kernels", "direct_mm"):
         assert np.array_equal(getattr(first, key), getattr(second, key)), key

@@ -130,7 +130,7 @@ def ghost_grid(
     Examples
     --------
     >>> from solas_mi import Lens
-    >>> from solas_mi.psf.ghost_grid import ghost_grid
+    >>> from solas_mi.psf import ghost_grid
     >>> grid = ghost_grid(Lens.load("solas-doublet"), radii=3, rays=32, kernel=15, cache=False)
     >>> grid.energy.shape  # wavelengths, azimuths, radii, paths
     (3, 1, 3, 3)
