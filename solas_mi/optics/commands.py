@@ -11,7 +11,7 @@ import numpy as np
 
 from .. import jsonio
 from ..options import floats
-from . import notes
+from . import notes, typical_ar
 from .formats import lens_help, writable
 
 _ROWS = [("efl_mm", "EFL (mm)"), ("bfd_mm", "BFD (mm)"), ("entrance_pupil_diameter_mm", "EPD (mm)"),
@@ -93,7 +93,7 @@ def run_lens_info(args) -> int:
         rows.append(p)
     info = {"lens": lens.name, "hash": lens.hash, "source": lens.source, "stop_surface": lens.stop_index + 1,
             "image_z_mm": lens.image_z, "image_diameter_mm": lens.image_diameter, "field_type": lens.field_type.name,
-            "dispersion": lens.dispersive, **notes.metadata(lens), "per_wavelength": rows}
+            "dispersion": lens.dispersive, **notes.metadata(lens), **typical_ar.note(lens), "per_wavelength": rows}
     table = None
     if args.fields or lens.field_deg > 0:  # the given fields, else 0 … the lens's half field
         table = distortion(lens, sorted({abs(f) for f in fields} | {0.0}) if args.fields else None)
