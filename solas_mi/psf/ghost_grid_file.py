@@ -192,7 +192,7 @@ class GhostGrid:
         from scipy.ndimage import map_coordinates
 
         parts = [(self.node(a, r), w, turn) for a, r, w, turn in self.corners(field_deg)]
-        energy = sum(w * g.energy for g, w, _ in parts)
+        energy = np.sum([w * g.energy for g, w, _ in parts], axis=0)
         lit = [(w * (g.energy > 0), g) for g, w, _ in parts]
         share = sum(w for w, _ in lit)
         share = np.where(share > 0, share, 1.0)
@@ -201,11 +201,11 @@ class GhostGrid:
             / share[..., None]
         )
         pitch = np.where(energy > 0, sum(w * g.pitch_um for w, g in lit) / share, 1.0)
-        direct = sum(w * _turn(g.direct_mm, turn) for g, w, turn in parts)
+        direct = np.sum([w * _turn(g.direct_mm, turn) for g, w, turn in parts], axis=0)
         k = self.kernels.shape[-1]
         offsets = np.arange(k) - k // 2
         col, row = np.meshgrid(offsets, offsets)  # the output's pixels, in units of its pitch (row: −y)
-        kernels = np.zeros((len(energy), len(energy[0]), k, k))
+        kernels = np.zeros((*energy.shape, k, k))
         for (w, g), (_, _, turn) in zip(lit, parts):
             for wl, p in zip(*np.nonzero(w > 0)):
                 scale = pitch[wl, p] / g.pitch_um[wl, p]

@@ -12,8 +12,6 @@ PSF does (`stray_psf`), on a kernel whose pitch holds the whole ghost.
 
 from __future__ import annotations
 
-import math
-
 import numpy as np
 
 from ..caches import FileCache
@@ -156,7 +154,7 @@ def compute(lens: Lens, options: dict, progress=None) -> GhostGrid:
     fields = np.zeros((len(azimuth), len(polar), 2))
     for a, phi in enumerate(np.radians(azimuth)):
         for r, theta in enumerate(np.radians(polar)):
-            fx, fy = lens.field_type.field_of(theta, math.cos(phi), math.sin(phi))
+            fx, fy = lens.field_type.field_of(theta, np.cos(phi), np.sin(phi))
             fields[a, r] = float(fx), float(fy)
             start = launch(lens, tuple(fields[a, r]), options["rays"])
             for w, wavelength in enumerate(wl):
