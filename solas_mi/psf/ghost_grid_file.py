@@ -136,7 +136,20 @@ class GhostGrid:
     meta: dict = field(default_factory=dict)
 
     def node(self, a: int, r: int) -> NodeGhosts:
-        """The ghosts of node (azimuth index `a`, radius index `r`) as computed."""
+        """The ghosts of one node as computed.
+
+        Parameters
+        ----------
+        a : int
+            Its azimuth's index in `azimuth_deg`.
+        r : int
+            Its radius's index in `polar_deg`.
+
+        Returns
+        -------
+        NodeGhosts
+            Its ghosts.
+        """
         return NodeGhosts(
             self.energy[:, a, r],
             self.centroid_mm[:, a, r],
@@ -146,7 +159,24 @@ class GhostGrid:
         )
 
     def corners(self, field_deg) -> list[tuple[int, int, float, float]]:
-        """The nodes a field takes: (azimuth index, radius index, weight, the angle (radians) to turn them by)."""
+        """The nodes a field takes.
+
+        Parameters
+        ----------
+        field_deg : (float, float)
+            The field (x, y) in degrees.
+
+        Returns
+        -------
+        list of tuple
+            (azimuth index, radius index, weight, the angle (radians) to turn the node's ghosts by), weights
+            summing to 1.
+
+        Raises
+        ------
+        SolasError
+            For a field beyond the grid's polar angle.
+        """
         from ..optics.fields import FIELD_TYPES
 
         theta, phi = FIELD_TYPES[self.meta["field_type"]].polar(field_deg)
@@ -222,7 +252,13 @@ class GhostGrid:
         return self.kernels.shape[-1]
 
     def arrays_meta(self) -> dict:
-        """Everything but the kernels, as JSON values (the file's metadata, `write`)."""
+        """Everything but the kernels, as JSON values (the file's metadata, `write`).
+
+        Returns
+        -------
+        dict
+            `meta` with the arrays, wavelengths, paths, sector and kernel size.
+        """
         meta = dict(self.meta)
         meta.update({key: np.asarray(getattr(self, key)).tolist() for key in OFFSET_KEYS})
         meta.update(
@@ -236,7 +272,15 @@ class GhostGrid:
     def write(self, path, json_path=None) -> None:
         """Write the grid as OpenEXR (a channel per wavelength, "ghosts_531nm": the kernels as a mosaic, rows
         azimuth, radius, kernel row; columns path, kernel column) with the rest in its metadata; and the same
-        metadata as JSON at `json_path` where given; whole or not at all."""
+        metadata as JSON at `json_path` where given; whole or not at all.
+
+        Parameters
+        ----------
+        path : str or PathLike
+            The EXR file.
+        json_path : str or PathLike, optional
+            The JSON file of its metadata.
+        """
         from .. import jsonio
         from ..imageio import write_exr
         from ..outputs import written_together
@@ -254,7 +298,23 @@ class GhostGrid:
 
     @classmethod
     def read(cls, path) -> GhostGrid:
-        """Read a grid `write` wrote; SolasError for a file that is not one or whose channels do not fit."""
+        """Read a grid `write` wrote.
+
+        Parameters
+        ----------
+        path : str or PathLike
+            The EXR file.
+
+        Returns
+        -------
+        GhostGrid
+            The grid.
+
+        Raises
+        ------
+        SolasError
+            For a file that is not a ghost grid, or whose metadata or channels do not fit.
+        """
         from ..imageio import read_exr
 
         channels, meta = read_exr(path)
