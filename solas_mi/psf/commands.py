@@ -172,7 +172,7 @@ def register(sub: Any) -> None:
 
 
 def _register_ghost_grid(sub: Any) -> None:
-    from .ghost_grid_file import DEFAULT_KERNEL, DEFAULT_RADII
+    from .ghost_grid_file import DEFAULT_IRIS_AZIMUTHS, DEFAULT_KERNEL, DEFAULT_RADII
 
     p = sub.add_parser(
         "ghost-grid",
@@ -185,7 +185,11 @@ def _register_ghost_grid(sub: Any) -> None:
     p.add_argument("--wavelengths-nm", help="wavelengths, a channel each (default: the lens's)")
     p.add_argument("--rays", type=int, default=DEFAULT_GHOST_RAYS, help="rays per side of each node's launch grid")
     p.add_argument("--kernel", type=int, default=DEFAULT_KERNEL, help="pixels per side of each ghost's kernel (odd)")
-    p.add_argument("--azimuths", type=int, help="an iris's nodes per blade sector (default 4; a round stop: 1)")
+    p.add_argument(
+        "--azimuths",
+        type=int,
+        help=f"an iris's nodes per blade sector (default {DEFAULT_IRIS_AZIMUTHS}; a round stop: 1, its ghosts turn)",
+    )
     p.add_argument("-o", "--output", required=True, help="output OpenEXR file")
     p.add_argument("--json", help="the metadata as JSON (default: beside the EXR, of the same name)")
     p.set_defaults(run=run_ghost_grid)

@@ -1,8 +1,8 @@
 """The high-dynamic-range stray-light PSF of a point source (`stray_psf`): the direct image (geometric over
-the window, its core the Fraunhofer PSF where that is sound, with its diffraction wings beyond the core,
-`diffraction_wings`) plus every ghost of `stray_light.ghosts`, its
-rays binned and smoothed over their spacing, a focused ghost blurred by its Airy pattern; in fractions of
-the direct image's energy per pixel, written as OpenEXR and a log-scale PNG (`write`).
+the window, its core the Fraunhofer PSF where that is sound, its diffraction wings beyond the core,
+`diffraction_wings`) plus every ghost of `stray_light.ghosts`, its rays binned and smoothed over their
+spacing, a focused ghost blurred by its Airy pattern; in fractions of the direct image's energy per pixel,
+written as OpenEXR and a log-scale PNG (`write`).
 """
 
 from __future__ import annotations
