@@ -100,20 +100,28 @@ def run_ghosts(args) -> int:
 
 
 def run_ghost_grid(args) -> int:
+    from ..budget import check_memory
+    from ..optics import ghost_paths
     from ..optics.commands import load_lens
-    from .ghost_nodes import ghost_grid
+    from .ghost_nodes import ghost_grid, grid_options
 
     exr = check_target(args.output)
     json_path = check_target(args.json or exr.with_suffix(".json"))
     lens = load_lens(args)
     wavelengths = floats(args.wavelengths_nm, "--wavelengths-nm") if args.wavelengths_nm else None
     field = floats(args.field_deg, "--field-deg")[0] if args.field_deg else None
-    with Progress("ghost-grid", args.radii * (args.azimuths or 1), "nodes") as bar:
-        grid = ghost_grid(lens, args.radii, field, wavelengths, args.rays, args.kernel, args.azimuths, progress=bar)
+    chosen = (args.radii, field, wavelengths, args.rays, args.kernel, args.azimuths)
+    options = grid_options(lens, *chosen)  # checked before the work
+    nodes = options["radii"] * options["azimuths"]
+    kernels = len(options["wavelengths_nm"]) * nodes * len(ghost_paths.paths(lens))
+    check_memory(  # the float32 kernels, their mosaics in the file, and a node's work
+        f"ghost-grid of {kernels} kernels of {args.kernel}x{args.kernel}", 3 * 4 * kernels * args.kernel**2 + (1 << 28),
+        args.force, "fewer --radii or a smaller --kernel",
+    )  # fmt: skip
+    with Progress("ghost-grid", nodes, "nodes") as bar:
+        grid = ghost_grid(lens, *chosen, progress=bar)
     grid.write(exr, json_path)
-    print(
-        f"wrote {exr} and {json_path} ({len(grid.paths)} ghosts on {grid.energy.shape[1] * grid.energy.shape[2]} nodes)"
-    )
+    print(f"wrote {exr} and {json_path} ({len(grid.paths)} ghosts on {nodes} nodes)")
     return 0
 
 
@@ -190,6 +198,7 @@ def _register_ghost_grid(sub: Any) -> None:
         type=int,
         help=f"an iris's nodes per blade sector (default {DEFAULT_IRIS_AZIMUTHS}; a round stop: 1, its ghosts turn)",
     )
+    p.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
     p.add_argument("-o", "--output", required=True, help="output OpenEXR file")
     p.add_argument("--json", help="the metadata as JSON (default: beside the EXR, of the same name)")
     p.set_defaults(run=run_ghost_grid)

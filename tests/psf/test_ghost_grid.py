@@ -108,7 +108,7 @@ def test_a_field_beyond_the_grid_is_refused(grid):
 
 def test_the_command_writes_the_grid_and_its_json(tmp_path, monkeypatch, capsys):
     from solas_mi.cli import build_parser, main
-    from solas_mi.psf.ghost_grid_file import DEFAULT_IRIS_AZIMUTHS
+    from solas_mi.psf.ghost_grid_file import DEFAULT_IRIS_AZIMUTHS, DEFAULT_KERNEL, DEFAULT_RADII
 
     helps = build_parser()._subparsers._group_actions[0].choices["ghost-grid"].format_help()
     assert f"default {DEFAULT_IRIS_AZIMUTHS};" in helps
@@ -120,6 +120,12 @@ def test_the_command_writes_the_grid_and_its_json(tmp_path, monkeypatch, capsys)
     assert back.energy.shape == (3, 1, 2, 3) and (tmp_path / "g.json").is_file()
     assert main(["ghost-grid", "solas-doublet", "--radii", "0", "-o", str(out)]) == 2
     assert "radii 0 must be an integer from 2" in capsys.readouterr().err
+    monkeypatch.setattr("solas_mi.budget.available_memory", lambda: 1 << 20)  # 1 MiB free: refused before the work
+    assert main(["ghost-grid", "solas-doublet", "-o", str(tmp_path / "big.exr")]) == 2
+    kernels = 3 * DEFAULT_RADII * 3  # the doublet's wavelengths, the radii, its three paths
+    assert (
+        f"ghost-grid of {kernels} kernels of {DEFAULT_KERNEL}x{DEFAULT_KERNEL} needs about" in capsys.readouterr().err
+    )
 
 
 def test_an_iris_grid_turns_by_whole_sectors(triplet):
