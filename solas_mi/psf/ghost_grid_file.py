@@ -19,6 +19,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -78,7 +79,6 @@ class NodeGhosts:
             is left out), row 0 the top.
         """
         from .base import check_grid
-        from .geometric import bin_hits
 
         check_grid(pitch_um, size)
         cx, cy = self.direct_mm[0] if centre_mm is None else centre_mm
@@ -86,13 +86,12 @@ class NodeGhosts:
         k = self.kernels.shape[-1]
         for w, p in zip(*np.nonzero(self.energy > 0)):
             pitch = float(self.pitch_um[w, p])
-            sub = int(min(8, max(1, math.ceil(2.0 * pitch / pitch_um))))  # points per kernel pixel side
-            offsets = ((np.arange(k * sub) + 0.5) / sub - 0.5 - k // 2) * pitch  # µm from the centroid
-            dx, dy = np.meshgrid(offsets, -offsets)
-            weight = np.repeat(np.repeat(self.kernels[w, p], sub, axis=0), sub, axis=1) / sub**2
-            x0, y0 = (self.centroid_mm[w, p] - (cx, cy)) * 1e3
-            binned, _ = bin_hits([((dx + x0).ravel(), (dy + y0).ravel(), weight.ravel())], pitch_um, size)
-            out[w] += binned[0] * pitch_um**2 * self.energy[w, p]
+            x0, y0 = (self.centroid_mm[w, p] - (cx, cy)) * 1e3  # µm from the grid's centre
+            cols, across = _overlap(x0, pitch, k, pitch_um, size)
+            rows, down = _overlap(-y0, pitch, k, pitch_um, size)  # rows run down from +y
+            if len(cols) and len(rows):
+                spread = (across @ self.kernels[w, p].T).T  # sparse products: each grid pixel meets few kernel pixels
+                out[w, rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1] += self.energy[w, p] * (down @ spread)
         return out
 
 
@@ -334,6 +333,20 @@ class GhostGrid:
             arrays["polar_deg"], arrays["azimuth_deg"], sector, wl, paths, arrays["energy"], arrays["centroid_mm"],
             arrays["pitch_um"], kernels, arrays["direct_mm"], meta
         )  # fmt: skip
+
+
+def _overlap(centre: float, pitch: float, k: int, grid_pitch: float, size: int) -> tuple[np.ndarray, Any]:
+    """Along one axis, the pixels of a size-pixel grid (centred on pixel size // 2) that a k-pixel kernel (centred
+    at `centre`, µm, on its pixel k // 2) covers, and the share of each kernel pixel each of them holds (their
+    overlap over the kernel's pitch): a kernel's light resampled onto the grid by area, none lost inside it."""
+    kernel = centre + (np.arange(k + 1) - k // 2 - 0.5) * pitch  # its pixels' edges
+    first = max(0, int(math.floor(kernel[0] / grid_pitch + size // 2 + 0.5)))
+    last = min(size - 1, int(math.ceil(kernel[-1] / grid_pitch + size // 2 - 0.5)))
+    from scipy.sparse import csr_array
+
+    grid = (np.arange(first, last + 2) - size // 2 - 0.5) * grid_pitch
+    share = np.minimum(grid[1:, None], kernel[None, 1:]) - np.maximum(grid[:-1, None], kernel[None, :-1])
+    return np.arange(first, last + 1), csr_array(np.maximum(share, 0.0) / pitch)
 
 
 def _turn(xy: np.ndarray, angle: float) -> np.ndarray:

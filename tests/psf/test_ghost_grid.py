@@ -161,3 +161,31 @@ def test_a_field_between_nodes_is_near_its_direct_ghosts(triplet):
     bright = energy > 0.05 * energy.max()
     assert at.energy.sum() == pytest.approx(energy.sum(), rel=0.02)
     assert (np.hypot(*(at.centroid_mm[0][bright] - centroid[bright]).T) < 0.1 * rms[bright]).all()
+
+
+@pytest.mark.parametrize("ratio", [0.23, 1.0, 3.7])  # the grid's pitch over the kernel's: finer, equal, coarser
+def test_a_ghosts_image_keeps_its_light_and_its_centroid(grid, ratio):
+    """Each ghost resampled onto the sensor grid by area: all its light (within the grid) and its centroid, to half
+    a pixel of the grid, at its kernel's centroid."""
+    from solas_mi.psf.ghost_grid_file import NodeGhosts
+
+    node = grid.node(0, 2)
+    k = node.kernels.shape[-1]
+    offsets = np.arange(k) - k // 2
+    for p in np.argsort(-node.energy[0])[:3]:
+        alone = np.zeros_like(node.energy)
+        alone[0, p] = node.energy[0, p]
+        one = NodeGhosts(alone, node.centroid_mm, node.pitch_um, node.kernels, node.direct_mm)
+        kernel, pitch = node.kernels[0, p], node.pitch_um[0, p]
+        pitch_um = ratio * pitch
+        centre = node.centroid_mm[0, p] + 1e-3 * pitch * np.array([(kernel.sum(0) * offsets).sum(),
+                                                                    -(kernel.sum(1) * offsets).sum()])  # fmt: skip
+        size = int(2 * (pitch * k / pitch_um + 4)) | 1
+        image = one.image(pitch_um, size, centre_mm=node.centroid_mm[0, p])[0]
+        assert image.sum() == pytest.approx(node.energy[0, p], rel=1e-6)
+        rows, cols = np.indices(image.shape) - size // 2
+        got = (
+            node.centroid_mm[0, p]
+            + 1e-3 * pitch_um * np.array([(image * cols).sum(), -(image * rows).sum()]) / image.sum()
+        )
+        assert np.hypot(*(got - centre)) < 0.5e-3 * pitch_um
