@@ -150,9 +150,12 @@ def run_lens_list(args) -> int:
 
 def run_lens_convert(args) -> int:
     from ..outputs import check_target
+    from .lens import Lens
 
     lens = load_lens(args)
-    out = lens.save(check_target(args.output, [lens.source] if lens.source else []))
+    target = check_target(args.output, [lens.source] if lens.source else [])
+    out = (typical_ar.with_typical_ar(lens) if args.typical_ar else lens).save(target)
+    lens = Lens.load(out) if args.typical_ar else lens
     print(f"wrote {out} ({lens.name}: {len(lens.surfaces)} surfaces, hash {lens.hash})")
     return 0
 
@@ -174,6 +177,9 @@ def register(sub: Any) -> None:
     add_lens_argument(convert)
     convert.add_argument("-o", "--output", required=True, help=f"the new lens file, its format by its extension: "
                                                                 f"{writable()}")
+    ar = typical_ar.TYPICAL_AR
+    convert.add_argument("--typical-ar", action="store_true", help=f"state the typical AR coating on every air-glass "
+                         f"surface that states none: {ar['material']} a quarter wave at {ar['design_nm']:g} nm")
     convert.set_defaults(run=run_lens_convert)
     from .calibration.command import register as register_calibrate
 

@@ -6,7 +6,8 @@ Filters*, ch. 3: the single-layer quarter-wave AR, MgF₂ the usual material). C
 
 The shipped lenses state their coatings as their sources give them, none (bare glass, Fresnel's equations), so
 that their figures, hashes and mesh renders stay those of their sources; `lens info` states that and their
-on-axis transmittance with this typical coating beside it (`note`), and `with_typical_ar` gives the lens coated so.
+on-axis transmittance with this typical coating beside it (`note`), and `with_typical_ar` (`lens convert
+--typical-ar`) gives the lens coated so.
 """
 
 from __future__ import annotations

@@ -59,3 +59,17 @@ def test_every_shipped_lens_states_bare_surfaces_in_lens_info(name, capsys):
     line = next(x for x in capsys.readouterr().out.splitlines() if x.startswith("coatings: "))
     assert "none stated" in line and f"on its {len(typical_ar.air_glass(lens))} air-glass surfaces" in line
     assert np.isfinite(float(re.search(r"transmittance at [\d.]+ nm ([\d.]+)", line).group(1)))
+
+
+def test_lens_convert_states_the_typical_ar(tmp_path, capsys):
+    from solas_mi.cli import build_parser
+
+    convert = build_parser()._subparsers._group_actions[0].choices["lens"]._subparsers._group_actions[0]
+    ar = typical_ar.TYPICAL_AR
+    helps = " ".join(convert.choices["convert"].format_help().split())  # the lines joined
+    assert f"{ar['material']} a quarter wave at {ar['design_nm']:g} nm" in helps
+    out = tmp_path / "coated.toml"
+    assert main(["lens", "convert", "cooke-triplet", "--typical-ar", "-o", str(out)]) == 0
+    coated, expected = Lens.load(out), typical_ar.with_typical_ar(Lens.load("cooke-triplet"))
+    assert coated.surfaces == expected.surfaces and coated.hash == expected.hash
+    assert f"hash {coated.hash}" in capsys.readouterr().out
