@@ -29,6 +29,7 @@ READ_BYTES_PER_VALUE = {"exr": 20, "other": 44}
 CONVOLVE_BYTES_PER_VALUE = 22
 FFT_BYTES_PER_SAMPLE = 24  # per sample of the two batches of TILE_SAMPLES in flight per worker thread
 TILE_SAMPLES_PER_PIXEL = 4  # a channel's tiles hold each pixel up to 4 times (interp's hats; patch's once)
+GHOST_BYTES_PER_VALUE = 24  # the ghosts' float64 frame and the flare label's layers (float64 then float32)
 FIXED_BYTES = 96e6  # the interpreter, NumPy and the package's modules (measured 78 MB with a 20 MB grid read), and 16 MB
 # for the allocator's slack: on a busy machine a peak came out 1 MB over the estimate with 80 MB
 # the brightness convention of `degrade` beside `render-image`'s (README "PSF-grid convolution"), in every output
@@ -66,7 +67,7 @@ def read_depth(path: str | Path) -> np.ndarray:
 def degrade_file(image_path: str | Path, grid: PSFGrid | DepthGrid, grid_path: str | Path, output: Path, png: Path,
                  spec: DegradeSpec | None = None, *, force: bool = False, depth: str | Path | None = None,
                  extra_meta: dict[str, Any] | None = None, progress: Callable[[int, int], None] | None = None,
-                 labels=None, calibration_model: str | None = None) -> dict[str, Any]:
+                 labels=None, calibration_model: str | None = None, lens=None) -> dict[str, Any]:
     """Degrade the image file `image_path` by `grid` (read from `grid_path`, named in the metadata) as
     `spec` says (a `convolution.spec.DegradeSpec`: method, boundary, linear, output format, occlusion,
     silhouette, frame camera; None: its defaults) and write `output` and `png` (`spec.OUTPUT_FILES`' two files)
@@ -77,12 +78,15 @@ def degrade_file(image_path: str | Path, grid: PSFGrid | DepthGrid, grid_path: s
     channel; `labels`: the frame's label files (kind → file, `labelkinds.KINDS`), warped by the image's
     mapping and written beside `output` (`labels.label_outputs`) with the rest, all read and checked first;
     `calibration_model`: the frame's camera block fitted here (`convolution.camera.frame_camera`, its memory
-    in the estimate unless the cache of fitted cameras holds it; a batch fits it once and gives it in `extra_meta` instead)."""
+    in the estimate unless the cache of fitted cameras holds it; a batch fits it once and gives it in `extra_meta` instead);
+    `lens`: with `spec.ghosts`, the grid's lens (None: read again from the grid's metadata, `camera.grid_lens`): its
+    ghosts of the frame's sources added (`convolution.ghosts`), the flare label beside the output."""
     from ..budget import check_memory
     from ..imageio import image_size, read_image
     from ..psf.depth import DepthGrid
     from .camera import frame_camera, frame_fit_bytes
-    from .labels import label_outputs, memory_bytes, read_labels
+    from .ghosts import FrameGhosts
+    from .labels import LAYERS_SUFFIX, label_outputs, memory_bytes, read_labels
 
     spec = DegradeSpec() if spec is None else spec
     if not isinstance(spec, DegradeSpec):
@@ -95,12 +99,16 @@ def degrade_file(image_path: str | Path, grid: PSFGrid | DepthGrid, grid_path: s
     layers = grid.layers if depth is not None else [grid]
     files = dict(labels or {})
     targets = label_outputs(output, files)
+    if spec.ghosts:  # the flare label's layers
+        targets.setdefault("layers", output.with_suffix(LAYERS_SUFFIX))
     for target in targets.values():
         check_target(target, [image_path, grid_path, depth, output, png, *files.values()], "labels output")
     need = peak_bytes(image_path, rows, cols, channels, sum(g.data.nbytes for g in layers)) + 9 * len(layers) * rows * cols
+    need += GHOST_BYTES_PER_VALUE * rows * cols * channels if spec.ghosts else 0
     fitting = frame_fit_bytes(grid, cols, rows, spec.frame, calibration_model)
     check_memory(f"degrade {cols}x{rows}", need + memory_bytes(rows * cols, files) + fitting, force)
     found = read_labels(files, (rows, cols), image_path)  # every label read and checked before any work
+    ghosts = FrameGhosts.plan(image_path, grid, spec, force, lens, depth)  # None without spec.ghosts
     extra = {} if calibration_model is None else {"camera": frame_camera(grid, cols, rows, spec.frame, calibration_model)}
     extra.update(extra_meta or {})
     image = read_image(image_path, linearize=not spec.linear)
@@ -115,7 +123,8 @@ def degrade_file(image_path: str | Path, grid: PSFGrid | DepthGrid, grid_path: s
         out = degrade_depth(image, depth_m, grid, spec.boundary, occlusion=spec.occlusion, meta=meta,
                             progress=progress, frame=spec.frame, silhouette=spec.silhouette)
         meta["depth_map"] = str(depth)
-    writers = warped_labels(found, targets, grid, out.shape[:2], spec, depth_m, meta)
+    flare = {} if ghosts is None else ghosts.add(image, out, meta)
+    writers = warped_labels(found, targets, grid, out.shape[:2], spec, depth_m, meta, flare)
     describe_item(meta, image_path, spec, grid_path, layers[0], extra)
     names = None if out.ndim == 2 or out.shape[-1] == 3 else \
         [f"C{c:02d}_{meta['channel_wavelengths_nm'][c]:g}nm" for c in range(out.shape[-1])]
@@ -142,20 +151,27 @@ def describe_item(meta: dict, image_path, spec: DegradeSpec, grid_path, first, e
 
 
 def warped_labels(found: dict, targets: dict, grid, shape: tuple[int, int], spec: DegradeSpec,
-                  depth_m: np.ndarray | None, meta: dict) -> dict:
+                  depth_m: np.ndarray | None, meta: dict, flare: dict | None = None) -> dict:
     """The labels `found` (`labels.read_labels`) warped by the mapping the image went through (its depth map
-    `depth_m` as the convolution read it), recorded in `meta["labels"]`: each of the files `targets`
-    (`labels.label_outputs`) → its writer (`write_output`); {} without labels."""
-    if not found:
+    `depth_m` as the convolution read it) and the flare label's layers `flare` (`ghosts.FrameGhosts.add`), recorded
+    in `meta["labels"]`: each of the files `targets` (`labels.label_outputs`) → its writer (`write_output`); {}
+    without either."""
+    if not found and not flare:
         return {}
     from .depth import silhouette_depth
+    from .ghosts import FLARE_ABOUT, RATIO_CAP
     from .labels import label_writers, warp_labels
     from .mapping import mapping_for
 
-    depth = None if depth_m is None else silhouette_depth(np.asarray(depth_m, dtype=np.float64), spec.silhouette)[0]
-    mapping = mapping_for(grid, shape[1], shape[0], spec.frame, spec.method, depth)
-    layers, annotations, about = warp_labels(found, mapping, spec.boundary)
-    meta["labels"] = {**about, "outputs": {what: str(path) for what, path in targets.items()}}
+    layers: dict = {}
+    annotations, about = None, {}
+    if found:
+        depth = None if depth_m is None else silhouette_depth(np.asarray(depth_m, dtype=np.float64), spec.silhouette)[0]
+        mapping = mapping_for(grid, shape[1], shape[0], spec.frame, spec.method, depth)
+        layers, annotations, about = warp_labels(found, mapping, spec.boundary)
+    layers.update(flare or {})
+    meta["labels"] = {**about, **({"flare": FLARE_ABOUT.format(cap=RATIO_CAP)} if flare else {}),
+                      "outputs": {what: str(path) for what, path in targets.items()}}
     return label_writers(targets, layers, annotations, meta["labels"])
 
 
