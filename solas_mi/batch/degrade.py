@@ -181,17 +181,13 @@ def beside_file(image: Path, pattern: str) -> Path:
 
 def with_labels(jobs: list[Job], patterns, sources, flare: bool = False) -> None:
     """The warped labels' files (`convolution.labels.label_outputs`) added to each item, and with `flare` (ghosts)
-    the flare label's layers file; none without either."""
+    the flare label's; none without either."""
     if patterns or flare:
-        from ..convolution.labels import LAYERS_SUFFIX, label_outputs
+        from ..convolution.labels import label_outputs
 
         kinds = [kind for kind, _ in patterns or ()]
-
-        def files(output: str) -> list[str]:
-            out = {**label_outputs(output, kinds), **({"layers": Path(output).with_suffix(LAYERS_SUFFIX)} if flare else {})}
-            return [str(p) for p in out.values()]
-
-        add_outputs(jobs, files, sources, "label_outputs")
+        add_outputs(jobs, lambda output: [str(p) for p in label_outputs(output, kinds, flare).values()], sources,
+                    "label_outputs")
 
 
 def estimate(p: BatchPlan, workers: int) -> dict[str, float]:
@@ -211,7 +207,7 @@ def estimate(p: BatchPlan, workers: int) -> dict[str, float]:
         grid_bytes = 4 * rows * cols * g.size ** 2 * len(g.wavelengths_nm or p.lens.wavelengths_nm) * len(
             g.distances_m or [0])
     # each worker: its largest image's peak (which holds a grid; or its camera's)
-    per_worker = max((max(peak_bytes(path, r, c, ch, grid_bytes) + memory_bytes(r * c, p.jobs[i].params.get("labels", ())),
+    per_worker = max((max(peak_bytes(path, r, c, ch, grid_bytes, p.spec.ghosts) + memory_bytes(r * c, p.jobs[i].params.get("labels", ())),
                           camera_bytes(p.jobs[i], r, c, p.spec.camera)) for i, (path, (r, c, ch)) in zip(p.todo, sizes)), default=0.0)
     # the parent: one grid more, and its fits of the frames' camera blocks (`convolution.camera`)
     parent = grid_bytes + fit_bytes(max((r * c for _, (r, c, _) in sizes), default=0))

@@ -16,7 +16,14 @@ from ..outputs import add_png_option
 LARGE_IMAGE_VALUES = 4096 * 3072 * 3  # beyond 4K (≈ 1.7 s) the command reports each channel
 # the DegradeSpec fields `degrade` takes
 DEGRADE_OPTIONS = (
-    "method", "boundary", "occlusion", "silhouette", "linear", "calibration_model", "ghosts", "ghost_threshold"
+    "method",
+    "boundary",
+    "occlusion",
+    "silhouette",
+    "linear",
+    "calibration_model",
+    "ghosts",
+    "ghost_threshold",
 )
 
 

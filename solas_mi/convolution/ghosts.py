@@ -176,9 +176,7 @@ def flare_layers(flare: np.ndarray, direct: np.ndarray) -> dict[str, np.ndarray]
     direct image's (0 where no stray light arrives; `RATIO_CAP` where there is no direct light)."""
     stray = flare.mean(axis=-1)
     base = np.asarray(direct, dtype=np.float64).mean(axis=-1)
-    ratio = np.where(
-        stray > 0, np.minimum(stray / np.where(base > 0, base, 1.0), RATIO_CAP), 0.0
-    )
+    ratio = np.where(stray > 0, np.minimum(stray / np.where(base > 0, base, 1.0), RATIO_CAP), 0.0)
     ratio = np.where((stray > 0) & (base <= 0), RATIO_CAP, ratio)
     return {"flare.irradiance": stray.astype(np.float32), "flare.ratio": ratio.astype(np.float32)}
 

@@ -42,17 +42,18 @@ HALF_MAX = 65504.0
 GRID_META_KEYS = ("lens", "lens_hash", "method", "normalization", "field_range_deg", "field_sampling", "layout", "sensor_mm")
 
 
-def peak_bytes(image_path: str | Path, rows: int, cols: int, channels: int, grid_bytes: int) -> float:
+def peak_bytes(image_path: str | Path, rows: int, cols: int, channels: int, grid_bytes: int, ghosts: bool = False) -> float:
     """Peak memory (bytes) of degrading the rows×cols×channels image file `image_path` with a grid of
     `grid_bytes` of PSFs: the fixed part, the grid and the larger of reading the image (by file type)
-    and convolving it (its buffers and the FFT batches in flight, two per worker thread)."""
+    and convolving it (its buffers and the FFT batches in flight, two per worker thread); with `ghosts`, their
+    frame and the flare label too."""
     from .kernels import TILE_SAMPLES, workers
 
     values = rows * cols * max(channels, 1)
     read = READ_BYTES_PER_VALUE["exr" if Path(image_path).suffix.lower() == ".exr" else "other"] * values
     in_flight = min(2 * workers() * TILE_SAMPLES, TILE_SAMPLES_PER_PIXEL * rows * cols)  # a channel's tiles at most
     convolve = CONVOLVE_BYTES_PER_VALUE * values + FFT_BYTES_PER_SAMPLE * in_flight
-    return FIXED_BYTES + grid_bytes + max(read, convolve)
+    return FIXED_BYTES + grid_bytes + max(read, convolve) + (GHOST_BYTES_PER_VALUE * values if ghosts else 0)
 
 
 def read_depth(path: str | Path) -> np.ndarray:
@@ -86,7 +87,7 @@ def degrade_file(image_path: str | Path, grid: PSFGrid | DepthGrid, grid_path: s
     from ..psf.depth import DepthGrid
     from .camera import frame_camera, frame_fit_bytes
     from .ghosts import FrameGhosts
-    from .labels import LAYERS_SUFFIX, label_outputs, memory_bytes, read_labels
+    from .labels import label_outputs, memory_bytes, read_labels
 
     spec = DegradeSpec() if spec is None else spec
     if not isinstance(spec, DegradeSpec):
@@ -98,13 +99,11 @@ def degrade_file(image_path: str | Path, grid: PSFGrid | DepthGrid, grid_path: s
     rows, cols, channels = image_size(image_path)
     layers = grid.layers if depth is not None else [grid]
     files = dict(labels or {})
-    targets = label_outputs(output, files)
-    if spec.ghosts:  # the flare label's layers
-        targets.setdefault("layers", output.with_suffix(LAYERS_SUFFIX))
+    targets = label_outputs(output, files, flare=spec.ghosts)
     for target in targets.values():
         check_target(target, [image_path, grid_path, depth, output, png, *files.values()], "labels output")
-    need = peak_bytes(image_path, rows, cols, channels, sum(g.data.nbytes for g in layers)) + 9 * len(layers) * rows * cols
-    need += GHOST_BYTES_PER_VALUE * rows * cols * channels if spec.ghosts else 0
+    need = peak_bytes(image_path, rows, cols, channels, sum(g.data.nbytes for g in layers), spec.ghosts)
+    need += 9 * len(layers) * rows * cols
     fitting = frame_fit_bytes(grid, cols, rows, spec.frame, calibration_model)
     check_memory(f"degrade {cols}x{rows}", need + memory_bytes(rows * cols, files) + fitting, force)
     found = read_labels(files, (rows, cols), image_path)  # every label read and checked before any work
@@ -113,16 +112,7 @@ def degrade_file(image_path: str | Path, grid: PSFGrid | DepthGrid, grid_path: s
     extra.update(extra_meta or {})
     image = read_image(image_path, linearize=not spec.linear)
     meta: dict[str, Any] = {}
-    depth_m = None
-    if depth is None:
-        out = degrade(image, grid, spec.method, spec.boundary, meta=meta, progress=progress, frame=spec.frame)
-    elif spec.method != "interp":
-        raise SolasError(f"method {spec.method!r}: a depth map is convolved with interp per depth layer only")
-    else:
-        depth_m = read_depth(depth)
-        out = degrade_depth(image, depth_m, grid, spec.boundary, occlusion=spec.occlusion, meta=meta,
-                            progress=progress, frame=spec.frame, silhouette=spec.silhouette)
-        meta["depth_map"] = str(depth)
+    out, depth_m = convolve(image, grid, spec, depth, meta, progress)
     flare = {} if ghosts is None else ghosts.add(image, out, meta)
     writers = warped_labels(found, targets, grid, out.shape[:2], spec, depth_m, meta, flare)
     describe_item(meta, image_path, spec, grid_path, layers[0], extra)
@@ -131,6 +121,20 @@ def degrade_file(image_path: str | Path, grid: PSFGrid | DepthGrid, grid_path: s
     write_output(output, png, out, names, meta, spec.output_format, image_path, writers)
     meta["output_shape"] = list(out.shape)
     return meta
+
+
+def convolve(image: np.ndarray, grid, spec: DegradeSpec, depth, meta: dict, progress) -> tuple[np.ndarray, Any]:
+    """The image degraded by `grid` as `spec` says (with the depth map file `depth`: by depth layers), what was
+    done in `meta`; and the depth map as read (None without)."""
+    if depth is None:
+        return degrade(image, grid, spec.method, spec.boundary, meta=meta, progress=progress, frame=spec.frame), None
+    if spec.method != "interp":
+        raise SolasError(f"method {spec.method!r}: a depth map is convolved with interp per depth layer only")
+    depth_m = read_depth(depth)
+    out = degrade_depth(image, depth_m, grid, spec.boundary, occlusion=spec.occlusion, meta=meta,
+                        progress=progress, frame=spec.frame, silhouette=spec.silhouette)
+    meta["depth_map"] = str(depth)
+    return out, depth_m
 
 
 def describe_item(meta: dict, image_path, spec: DegradeSpec, grid_path, first, extra: dict) -> None:
