@@ -103,22 +103,21 @@ def source_cells(image: np.ndarray, threshold: float, fields: FrameFields, cell_
     return out
 
 
-def place(flare: np.ndarray, ghosts, channel: int, k: int, light: float, fields: FrameFields) -> None:
-    """Add the ghosts of grid wavelength `k` (`NodeGhosts`), `light` times their energy, to `flare`'s `channel`."""
+def place(plane: np.ndarray, ghosts, k: int, light: float, fields: FrameFields) -> None:
+    """Add the ghosts of grid wavelength `k` (`NodeGhosts`), `light` times their energy, to the frame's `plane`
+    (H, W)."""
     from ..psf.ghost_grid_file import kernel_overlap
 
-    height, width = flare.shape[:2]
+    height, width = plane.shape
     size = ghosts.kernels.shape[-1]
     for p in np.nonzero(ghosts.energy[k] > 0)[0]:
-        centre = ghosts.centroid_mm[k, p]
-        (col, row), scale = fields.pixel(centre)
+        (col, row), scale = fields.pixel(ghosts.centroid_mm[k, p])
         pitch = float(ghosts.pitch_um[k, p]) * 1e-3 * scale  # the kernel's pitch in frame pixels
         cols, across = kernel_overlap(col - width // 2, pitch, size, 1.0, width)
         rows, down = kernel_overlap(row - height // 2, pitch, size, 1.0, height)
         if len(cols) and len(rows):
-            spread = (across @ ghosts.kernels[k, p].T).T
-            block = light * float(ghosts.energy[k, p]) * (down @ spread)
-            flare[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1, channel] += block
+            spread = (across @ (light * float(ghosts.energy[k, p]) * ghosts.kernels[k, p]).T).T
+            plane[rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1] += down @ spread
 
 
 def frame_ghosts(
@@ -149,14 +148,14 @@ def frame_ghosts(
     threshold = check_threshold(threshold)
     spacing = float(np.diff(grid.polar_deg).min()) if len(grid.polar_deg) > 1 else float(grid.polar_deg[-1])
     cells = source_cells(image, threshold, fields, spacing / CELLS_PER_NODE)
-    flare = np.zeros(image.shape, dtype=np.float64)
+    flare = np.zeros((image.shape[-1], *image.shape[:2]))  # a plane per channel: each ghost adds to a contiguous block
     expected = np.zeros(image.shape[-1])
     for centre, light in cells:
         ghosts = grid.at(fields.clamped(centre, float(grid.polar_deg[-1])))
         for c, k in enumerate(channels):
             expected[c] += light[c] * float(ghosts.energy[k].sum())
             if light[c] > 0:
-                place(flare, ghosts, c, k, float(light[c]), fields)
+                place(flare[c], ghosts, k, float(light[c]), fields)
     source = np.asarray([light for _, light in cells]).sum(axis=0) if cells else np.zeros(image.shape[-1])
     meta = {
         "threshold": threshold,
@@ -165,10 +164,10 @@ def frame_ghosts(
         "cell_deg": spacing / CELLS_PER_NODE,
         "source_light": source.tolist(),
         "ghost_light": expected.tolist(),
-        "ghost_light_in_frame": flare.sum(axis=(0, 1)).tolist(),
+        "ghost_light_in_frame": flare.sum(axis=(1, 2)).tolist(),
         "seconds": time.perf_counter() - start,
     }
-    return flare, meta
+    return np.moveaxis(flare, 0, -1), meta
 
 
 def flare_layers(flare: np.ndarray, direct: np.ndarray) -> dict[str, np.ndarray]:
