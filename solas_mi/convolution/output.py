@@ -168,7 +168,7 @@ def warped_labels(found: dict, targets: dict, grid, shape: tuple[int, int], spec
     from .mapping import mapping_for
 
     layers: dict = {}
-    annotations, about = None, {}
+    annotations, about = None, {}  # type: dict | None, dict
     if found:
         depth = None if depth_m is None else silhouette_depth(np.asarray(depth_m, dtype=np.float64), spec.silhouette)[0]
         mapping = mapping_for(grid, shape[1], shape[0], spec.frame, spec.method, depth)
