@@ -214,12 +214,13 @@ class FrameGhosts:
         if not any(s.coating for s in lens.surfaces):
             warnings.append(UNCOATED.format(name=lens.name))
         rows, cols, channels = image_size(image_path)
+        fields = FrameFields(lens, first, cols, rows, spec.frame)  # a frame it cannot take refused before the grid
         grid = lens_ghosts(lens, first)
         about = {"lens": lens.name, "lens_hash": lens.hash, "paths": len(grid.paths),
                  "grid_options": grid.meta.get("options"), "warnings": warnings,
                  "depth": "sources taken at infinity: the depth map does not change their ghosts"
                  if depth is not None else None}  # fmt: skip
-        return cls(grid, FrameFields(lens, first, cols, rows, spec.frame), channel_wavelengths(first, channels),
+        return cls(grid, fields, channel_wavelengths(first, channels),
                    spec.ghost_threshold, about)  # fmt: skip
 
     def add(self, image: np.ndarray, out: np.ndarray, meta: dict) -> dict[str, np.ndarray]:
