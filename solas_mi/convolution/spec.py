@@ -67,6 +67,10 @@ class DegradeSpec(OptionSpec):
     calibration_model : str, default "opencv-fisheye"
         The camera model whose fit to the lens the degraded frames' metadata records, a name of
         `optics.calibration.MODELS` (`convolution.camera`).
+    ghosts : bool, default False
+        Add the lens's ghosts of each frame's bright sources and write the flare label (`convolution.ghosts`).
+    ghost_threshold : float, default 10
+        With ghosts: the pixels whose brightest channel exceeds it (linear input units) are the sources.
     frame : FrameCamera, optional
         The camera every input was taken with (`optics.frame.FrameCamera`); default: the image spans the
         grid's x field range.
