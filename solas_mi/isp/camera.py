@@ -207,7 +207,7 @@ def load_camera(
     scale : float, default 1.0
         A frame's values times `scale` are W/m².
     scene_in_time : sensor.timing.SceneInTime, optional
-        A box of PWM-driven light, or the image's motion (`sensor.commands.timed_scene`).
+        A box of PWM-driven light, or the image's motion (`sensor.time_options.timed_scene`).
 
     Returns
     -------

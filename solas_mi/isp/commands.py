@@ -67,7 +67,8 @@ def register(subparsers: Any) -> None:
 def add_camera_options(p: argparse.ArgumentParser, seed: bool) -> None:
     """A batch's camera options: --sensor-model, --exposure-ms, --scale, --isp, --flicker, --image-motion (and
     --seed where `seed`)."""
-    from ..sensor.commands import add_exposure_option, add_time_options
+    from ..sensor.commands import add_exposure_option
+    from ..sensor.time_options import add_time_options
 
     g = p.add_argument_group(
         "the camera: each frame through a sensor and image processor (its values times --scale "
@@ -117,7 +118,7 @@ def camera_from_args(args: argparse.Namespace, seed: int):
     if args.exposure_ms is None:
         raise SolasError("--sensor-model needs --exposure-ms (the exposure time in ms, or auto)")
     from ..sensor.auto_exposure import parse_exposure
-    from ..sensor.commands import timed_scene
+    from ..sensor.time_options import timed_scene
     from .camera import load_camera
 
     return load_camera(

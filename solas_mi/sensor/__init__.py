@@ -11,6 +11,8 @@
   PWM-driven light (LED flicker).
 - `rendered`: a Mitsuba scene rendered over the rows' windows: its PWM-driven emitters (named by id) and a
   camera moving during the frame (`render_in_time`).
+- `commands`: `solas-mi camera` and `sensors`; `time_options`: the camera's --flicker and --image-motion;
+  `scene_input`: the camera's scene-file input (--pwm-emitter, --camera-motion).
 - `emva`: what EMVA 1288 predicts of one readout; `limits`: the numbers' ranges and checks.
 - `cfa`: colour filter array patterns (RGGB and its turns, RCCB, RCCC) and the mosaic.
 - `qe`: quantum efficiency curves, and the effective QE with which each filter sees each channel.

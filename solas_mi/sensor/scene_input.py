@@ -1,0 +1,179 @@
+"""`camera`'s scene input: a Mitsuba scene file rendered over the sensor's exposure windows (`rendered`) in place
+of an irradiance image, its emitters named as PWM-driven (`--pwm-emitter`) and its camera moving during the
+frame (`--camera-motion`).
+
+The windows are the sensor's: its `[sensor.shutter]` (global without one) and `--exposure-ms`. A moving camera is
+given as a simulator gives it: the camera's velocity (world units per second) and angular velocity (degrees per
+second about the world's axes through the camera), constant over the frame, so the scene's camera pose is the
+frame's start (the first row's) and `end_pose` its pose at the frame's end (the last row's end); `rendered`
+interpolates between them, which for a constant angular velocity is its rotation exactly (a spherical
+interpolation about one axis). Nothing here imports Mitsuba or NumPy at import.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+from typing import Any
+
+from ..errors import SolasError
+
+SCENE_SUFFIX = ".xml"  # a Mitsuba scene file: `camera`'s input is rendered instead of read
+PWM_FORM = "ID,HZ,DUTY[,PHASE]"  # --pwm-emitter: an emitter's id (or its shape's) and its PWM source's values
+MOTION_FORM = "VX,VY,VZ[,WX,WY,WZ]"  # --camera-motion: velocity and angular velocity
+SPEED_UNIT, TURN_UNIT = "world units/s", "deg/s"
+MAX_TURN_DEG = 180.0  # over the frame: a turn of more has two shortest ways, the interpolation can take neither
+# the parts a render in time keeps (`rendered.RenderedParts`: float32 per slice and PWM emitter) and the rows' sum
+# (float64), per pixel and channel of the film (counted as 4: R, G, B, A)
+PART_BYTES, SUM_BYTES, FILM_CHANNELS = 4.0, 8.0, 4
+
+
+def is_scene(path) -> bool:
+    return str(path).lower().endswith(SCENE_SUFFIX)
+
+
+def parse_pwm_emitter(text: str) -> tuple[str, Any]:
+    """The emitter's name and its `timing.PWMSource` of a `PWM_FORM` text, e.g. ``"tail_light,90,0.1,0.5"``."""
+    from .timing import PWMSource
+
+    name, _, rest = text.partition(",")
+    try:
+        numbers = [float(p) for p in rest.split(",")]
+    except ValueError:
+        numbers = []
+    if not name or not 2 <= len(numbers) <= 3:
+        raise SolasError(
+            f"--pwm-emitter {text!r} must be {PWM_FORM}: an emitter's id (or its shape's) in the scene, the PWM "
+            "frequency (Hz), duty cycle and phase (fractions)"
+        )
+    try:
+        return name, PWMSource(*numbers)
+    except SolasError as exc:
+        raise SolasError(f"--pwm-emitter {text!r}: {exc}") from None
+
+
+def parse_motion(text: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
+    """The velocity and angular velocity (0 0 0 when not given) of a `MOTION_FORM` text."""
+    try:
+        numbers = tuple(float(p) for p in text.split(","))
+    except ValueError:
+        numbers = ()
+    if len(numbers) not in (3, 6) or not all(math.isfinite(v) for v in numbers):
+        raise SolasError(
+            f"--camera-motion {text!r} must be {MOTION_FORM}: the camera's velocity in {SPEED_UNIT} and its angular "
+            f"velocity in {TURN_UNIT} about the world's x, y, z axes, three or six finite numbers"
+        )
+    return numbers[:3], (numbers[3:] or (0.0, 0.0, 0.0))
+
+
+def end_pose(start, velocity, angular_deg_s, span_s: float):
+    """The camera's `to_world` (4×4) `span_s` after `start` moving at `velocity` and turning at `angular_deg_s`
+    about the world's axes through its own position; SolasError for a turn of `MAX_TURN_DEG` or more."""
+    import numpy as np
+    from scipy.spatial.transform import Rotation
+
+    turn = np.radians(np.asarray(angular_deg_s, dtype=np.float64)) * span_s
+    if np.degrees(np.linalg.norm(turn)) >= MAX_TURN_DEG:
+        raise SolasError(
+            f"--camera-motion turns the camera {np.degrees(np.linalg.norm(turn)):g}° over the frame's {span_s:g} s; "
+            f"it must turn less than {MAX_TURN_DEG:g}° (a turn is interpolated the shortest way)"
+        )
+    end = np.array(start, dtype=np.float64)
+    end[:3, :3] = Rotation.from_rotvec(turn).as_matrix() @ end[:3, :3]
+    end[:3, 3] += np.asarray(velocity, dtype=np.float64) * span_s
+    return end
+
+
+def check_scene_options(args: argparse.Namespace) -> None:
+    """Refuse options that go with the other kind of input: --pwm-emitter, --camera-motion and --spp need a scene,
+    --flicker and --image-motion an image (a scene's emitters and camera move themselves)."""
+    scene = is_scene(args.image)
+    wrong = (
+        [f for f, v in (("--flicker", args.flicker), ("--image-motion", args.image_motion)) if v is not None]
+        if scene
+        else [
+            f
+            for f, v in (
+                ("--pwm-emitter", args.pwm_emitter),
+                ("--camera-motion", args.camera_motion),
+                ("--spp", args.spp),
+            )
+            if v
+        ]
+    )
+    if wrong:
+        needs = "an EXR image: a scene's emitters (--pwm-emitter) and camera (--camera-motion)" if scene else "a scene"
+        raise SolasError(f"{' and '.join(wrong)} go(es) with {needs} input ({SCENE_SUFFIX}); {args.image} is not one")
+
+
+def rendered_input(args: argparse.Namespace, shutter, exposure_s: float | None, camera_bytes):
+    """The R, G, B image (H, W, 3, float64) each row of the scene file `args.image` gathers over its window, and
+    its metadata (the render's, its f-number where its camera is a lens camera, and `exposure_windows`); the
+    memory checked first: the render's, its parts' and the camera's (`camera_bytes(rows, cols)`)."""
+    import numpy as np
+
+    from ..render.commands import check_render
+    from ..render.user_scene import load
+    from .rendered import camera_pose, render_in_time
+    from .timing import Shutter
+
+    if exposure_s is None:
+        raise SolasError("--exposure-ms auto: a scene is rendered over the exposure's windows; give a time in ms")
+    pwm = dict(parse_pwm_emitter(t) for t in args.pwm_emitter or [])
+    motion = parse_motion(args.camera_motion) if args.camera_motion else None
+    scene = load(args.image)
+    film = scene.sensors()[0].film()
+    cols, rows = (int(v) for v in film.crop_size())
+    spp = args.spp if args.spp is not None else int(scene.sensors()[0].sampler().sample_count())
+    check_render(cols, rows, spp, args.force)
+    shutter = shutter or Shutter()
+    slices = shutter.time_samples if motion else 1
+    parts = (slices * (1 + len(pwm)) * PART_BYTES + SUM_BYTES) * FILM_CHANNELS * rows * cols
+    from ..budget import check_memory
+
+    check_memory(
+        f"camera {cols}x{rows} of a scene in time", parts + camera_bytes(rows, cols), args.force, "a smaller film"
+    )
+    end = None
+    if motion:
+        span = float(shutter.windows(int(film.size()[1]), exposure_s)[1].max())  # the whole film's rows
+        end = end_pose(camera_pose(scene.sensors()[0])[1], *motion, span)
+    result = render_in_time(scene, spp, shutter, exposure_s, pwm, end, args.seed)
+    missing = [c for c in "RGB" if c not in result.channels]
+    if missing:
+        raise SolasError(
+            f"{args.image}: its film gives channels {', '.join(result.channels)}; the sensor needs R, G, B"
+        )
+    image = np.stack([result.image[..., result.channels.index(c)] for c in "RGB"], axis=-1).astype(np.float64)
+    meta = dict(result.meta, scene=str(args.image))
+    if motion:
+        meta["exposure_windows"]["camera_motion"] = {"velocity": motion[0], "angular_velocity_deg_s": motion[1]}
+    if type(scene.sensors()[0]).__name__ == "LensCamera":
+        from ..render.user_scene import camera_meta
+
+        meta.update(camera_meta(scene))
+    return image, meta
+
+
+def add_scene_options(p: Any) -> None:
+    """--spp, --pwm-emitter, --camera-motion: a scene input's render over the exposure windows."""
+    p.add_argument(
+        "--spp", type=int, help="with a scene input: samples per pixel of each part rendered (default: the scene's)"
+    )
+    p.add_argument(
+        "--pwm-emitter",
+        action="append",
+        metavar=PWM_FORM,
+        help="with a scene input: the emitter of id ID (or of the shape of id ID, for an area light) is driven by "
+        "pulse-width modulation at HZ with duty cycle DUTY and phase PHASE (fractions; default phase 0): it is "
+        "rendered alone and each row gathers its light over the time it is on within the row's window, e.g. an "
+        "LED traffic light; repeatable (default: none)",
+    )
+    p.add_argument(
+        "--camera-motion",
+        metavar=MOTION_FORM,
+        help=f"with a scene input: the scene's camera moves at VX, VY, VZ {SPEED_UNIT} and turns at WX, WY, WZ "
+        f"{TURN_UNIT} about the world's axes through itself (default 0) during the frame, from its pose in the "
+        "scene at the first row's start: each row sees it over its window (a rolling shutter skews, every shutter "
+        f"blurs; the shutter's time_samples poses; less than {MAX_TURN_DEG:g}° over the frame) (default: still)",
+    )
