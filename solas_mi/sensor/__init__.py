@@ -24,5 +24,26 @@
 from ..lazy import lazy_exports
 
 # `capture.capture` is not exported here: its module's own name would hide it once imported
-__all__ = ["SensorChain", "SensorModel", "load_sensor"]
-__getattr__ = lazy_exports(__name__, {"SensorChain": ".chain", "SensorModel": ".model", "load_sensor": ".files"})
+__all__ = [
+    "PWMSource",
+    "RenderedParts",
+    "SensorChain",
+    "SensorModel",
+    "Shutter",
+    "load_sensor",
+    "render_in_time",
+    "render_parts",
+]
+__getattr__ = lazy_exports(
+    __name__,
+    {
+        "PWMSource": ".timing",
+        "RenderedParts": ".rendered",
+        "SensorChain": ".chain",
+        "SensorModel": ".model",
+        "Shutter": ".timing",
+        "load_sensor": ".files",
+        "render_in_time": ".rendered",
+        "render_parts": ".rendered",
+    },
+)

@@ -51,7 +51,7 @@ def emitter_names(emitter) -> list[str]:
     return [name for name in (emitter.id(), shape.id() if shape is not None else "") if name]
 
 
-def emission(emitter) -> tuple[object, dict]:
+def emission(emitter) -> tuple:
     """The emitter's parameters (`mitsuba.traverse`) and the values of those that scale its emission: its
     "scale" where it has one (an environment map), else its radiance, intensity or irradiance values
     (`LEVELS`)."""
@@ -125,7 +125,7 @@ def pose_at(start: np.ndarray, end: np.ndarray, fraction: float) -> np.ndarray:
     return pose
 
 
-def camera_pose(sensor) -> tuple[object, np.ndarray]:
+def camera_pose(sensor) -> tuple:
     """The sensor's parameters (`mitsuba.traverse`) and its `to_world` (4×4); SolasError for a sensor
     without one."""
     import mitsuba as mi
@@ -147,10 +147,28 @@ def checked_end(to_world_end) -> np.ndarray:
 
 @dataclass
 class RenderedParts:
-    """A scene's light split by time slice and PWM emitter: `edges` (K + 1, s) of the slices, `steady`
-    (K, H, W, C: the PWM emitters off), `alone` (name → (K, H, W, C): that PWM emitter alone), the channels'
-    names, samples per pixel, seconds, the last render's meta, and the rows of the film (a crop window's rows
-    take the windows of their rows of the whole film)."""
+    """A scene's light split by time slice and PWM emitter (`render_parts`), to combine over any windows.
+
+    Parameters
+    ----------
+    edges : numpy.ndarray
+        (K + 1,): the edges of the K time slices rendered (s, from the first row's start).
+    steady : numpy.ndarray
+        (K, H, W, C): each slice with the PWM emitters off.
+    alone : dict of str to numpy.ndarray
+        Each PWM emitter's name → (K, H, W, C): each slice with that emitter alone.
+    channels : tuple of str
+        The film's channel names.
+    spp : int
+        Samples per pixel of each part.
+    seconds : float
+        The time the renders took (s).
+    meta : dict, optional
+        The last render's metadata.
+    film_rows : tuple of int, default (0, 0)
+        The first row drawn (its crop window's) and the whole film's rows: a crop window's rows take the
+        windows of their rows on the whole film.
+    """
 
     edges: np.ndarray
     steady: np.ndarray
@@ -162,16 +180,48 @@ class RenderedParts:
     film_rows: tuple[int, int] = (0, 0)  # the film's first row drawn (its crop window's) and its rows in all
 
     def windows(self, shutter: Shutter, exposure_s: float) -> tuple[np.ndarray, np.ndarray]:
-        """The windows (s) of the rows drawn: those of the whole film's rows (`film_rows`) that its crop window
-        draws."""
+        """The windows of the rows drawn: those of the whole film's rows (`film_rows`) its crop window draws.
+
+        Parameters
+        ----------
+        shutter : Shutter
+            The rows' windows.
+        exposure_s : float
+            The exposure time (s).
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            The starts and ends (s) of the rows drawn.
+        """
         first, rows = self.film_rows
         drawn = slice(first, first + self.steady.shape[1])
         starts, ends = shutter.windows(max(rows, drawn.stop), exposure_s)
         return starts[drawn], ends[drawn]
 
     def over_windows(self, shutter: Shutter | None, exposure_s: float, sources: dict[str, PWMSource]) -> np.ndarray:
-        """The image (H, W, C) each row gathers over its window, its sources at their `sources` values (the
-        names rendered alone); SolasError for windows past the span rendered."""
+        """The image each row gathers over its window, without rendering again.
+
+        Parameters
+        ----------
+        shutter : Shutter or None
+            The rows' windows (None: a global shutter).
+        exposure_s : float
+            The exposure time (s).
+        sources : dict of str to PWMSource
+            The PWM source of each emitter rendered alone (the same names).
+
+        Returns
+        -------
+        numpy.ndarray
+            (H, W, C), float64: each row's mean over its window.
+
+        Raises
+        ------
+        SolasError
+            For windows past the span rendered, other names than those rendered, or a source that is not a
+            `PWMSource`.
+        """
         shutter = shutter or Shutter()
         starts, ends = self.windows(shutter, exposure_s)
         if starts.min() < self.edges[0] or ends.max() > self.edges[-1] * (1 + 1e-12):
@@ -191,11 +241,40 @@ class RenderedParts:
         return total
 
 
+# long: the public API's numpydoc docstring is half of it
 def render_parts(
     scene, spp: int, shutter: Shutter | None, exposure_s: float, pwm=(), to_world_end=None, seed: int = 0
 ) -> RenderedParts:
-    """The parts (module docstring) of a loaded scene for a frame of `exposure_s` under `shutter` (None:
-    global): the emitters named in `pwm` alone, and the camera moving to `to_world_end` (4×4; None: still)."""
+    """Render a loaded scene's parts over a frame: each time slice with its PWM emitters off and each alone.
+
+    Parameters
+    ----------
+    scene : mitsuba.Scene
+        The scene (its first sensor the camera).
+    spp : int
+        Samples per pixel of each part.
+    shutter : Shutter or None
+        The rows' windows (None: a global shutter).
+    exposure_s : float
+        The exposure time (s, above 0).
+    pwm : iterable of str, default ()
+        The PWM emitters' names: an emitter's id, or an area light's shape's id.
+    to_world_end : array_like, optional
+        The camera's 4×4 `to_world` at the frame's end (the last row's end); default: still (one slice).
+    seed : int, default 0
+        The render's seed (the same for every part).
+
+    Returns
+    -------
+    RenderedParts
+        The parts, to combine with `RenderedParts.over_windows` for any phases and windows in the span.
+
+    Raises
+    ------
+    SolasError
+        For a bad exposure, a name that is not one emitter's, an emitter without a parameter of its emission,
+        a camera without `to_world` or a transform that is not a finite 4×4 affine one.
+    """
     from ..render.stock import render_scene
 
     shutter = shutter or Shutter()
@@ -229,10 +308,10 @@ def render_parts(
         if to_world_end is not None:
             params["to_world"] = type(params["to_world"])(start)
             params.update()
-    steady_images = np.stack(images.pop(None))
+    assert result is not None  # a slice and a group at least: rendered
     return RenderedParts(
         edges,
-        steady_images,
+        np.stack(images.pop(None)),
         {name: np.stack(v) for name, v in images.items()},
         result.channels,
         spp,
@@ -242,6 +321,7 @@ def render_parts(
     )
 
 
+# long: the public API's numpydoc docstring is half of it
 def render_in_time(
     scene,
     spp: int,
@@ -251,10 +331,57 @@ def render_in_time(
     to_world_end=None,
     seed: int = 0,
 ) -> Render:
-    """A loaded scene as the sensor's rows see it over their windows of `exposure_s` under `shutter` (None:
-    global): its emitters named in `pwm` driven by their PWM sources, the camera moving from its own
-    `to_world` to `to_world_end` (4×4; None: still) over the frame (module docstring). The image is each
-    row's mean over its window; the meta says the shutter, exposure, sources, motion and slices."""
+    """Render a loaded scene as the sensor's rows see it over their windows: PWM emitters, a moving camera.
+
+    Parameters
+    ----------
+    scene : mitsuba.Scene
+        The scene (its first sensor the camera).
+    spp : int
+        Samples per pixel of each part rendered.
+    shutter : Shutter or None
+        The rows' windows (None: a global shutter).
+    exposure_s : float
+        The exposure time (s, above 0).
+    pwm : dict of str to PWMSource, optional
+        Each PWM emitter's name (an emitter's id, or an area light's shape's id) → its source; default none.
+    to_world_end : array_like, optional
+        The camera's 4×4 `to_world` at the frame's end (the last row's end; its own at the first row's start,
+        interpolated between, module docstring); default: still.
+    seed : int, default 0
+        The render's seed.
+
+    Returns
+    -------
+    render.loop.Render
+        Its image each row's mean over its window (the irradiance `capture` takes, as a still one's); its
+        meta's ``exposure_windows`` the shutter, exposure, sources, end pose and slices.
+
+    Raises
+    ------
+    SolasError
+        For what `render_parts` and `RenderedParts.over_windows` refuse.
+
+    Examples
+    --------
+    >>> from solas_mi.render.mitsuba import mitsuba
+    >>> from solas_mi.sensor import PWMSource, Shutter, render_in_time
+    >>> mi = mitsuba()
+    >>> scene = mi.load_dict({
+    ...     "type": "scene",
+    ...     "integrator": {"type": "direct"},
+    ...     "sensor": {"type": "perspective", "film": {"type": "hdrfilm", "width": 4, "height": 4}},
+    ...     "led": {  # a wall 5 units along the camera's view, facing it
+    ...         "type": "rectangle",
+    ...         "to_world": mi.ScalarTransform4f().translate([0, 0, 5]).rotate([1, 0, 0], 180).scale(9),
+    ...         "emitter": {"type": "area", "radiance": 1.0},
+    ...     },
+    ... })
+    >>> on = render_in_time(scene, 4, Shutter(), 5e-4, {"led": PWMSource(100.0, 0.1)})  # on over [0, 1 ms)
+    >>> off = render_in_time(scene, 4, Shutter(), 5e-4, {"led": PWMSource(100.0, 0.1, phase=0.5)})
+    >>> float(off.image.max()) < 1e-20 < 0.5 < float(on.image.min())  # dark in its off-time, lit in its on-time
+    True
+    """
     pwm = dict(pwm or {})
     parts = render_parts(scene, spp, shutter, exposure_s, pwm, to_world_end, seed)
     image = parts.over_windows(shutter, exposure_s, pwm).astype(np.float32)
