@@ -10,7 +10,7 @@
 - `timing`: exposure in time: global and rolling shutters, each row's window of a moving scene or of
   PWM-driven light (LED flicker).
 - `rendered`: a Mitsuba scene rendered over the rows' windows: its PWM-driven emitters (named by id) and a
-  camera moving during the frame (`render_in_time`).
+  camera moving during the frame (`render_in_time`); `poses`: the camera's pose over the frame.
 - `commands`: `solas-mi camera` and `sensors`; `time_options`: the camera's --flicker and --image-motion;
   `scene_input`: the camera's scene-file input (--pwm-emitter, --camera-motion).
 - `emva`: what EMVA 1288 predicts of one readout; `limits`: the numbers' ranges and checks.

@@ -2,7 +2,7 @@
 camera that moves during the frame.
 
 PWM emitters are named by id in a table beside the scene, {id: `timing.PWMSource`}: an emitter's own id, or
-for an area light the id of its shape. (Mitsuba refuses a property its plugin does not read — "unreferenced
+for an area light the id of its shape, or "#N" for the scene's N-th emitter (one without an id). (Mitsuba refuses a property its plugin does not read — "unreferenced
 property" — so frequency, duty cycle and phase cannot travel on the emitter in the scene file or dict.)
 Light transport is linear in the emitters' emission, so the scene rendered with every PWM emitter off (the
 steady light) plus each PWM emitter rendered alone (every other emitter off), each weighted per row by the
@@ -13,7 +13,7 @@ rolling shutter, whatever the integrator. An emitter is switched off by scaling 
 
 A moving camera: the scene's camera (any sensor whose `to_world` is a parameter: `perspective`,
 `lens_camera`, …) has its own `to_world` at the frame's start (the first row's start) and `to_world_end` at
-its end (the last row's end); between them its pose is interpolated (`pose_at`: the rotation by spherical
+its end (the last row's end); between them its pose is interpolated (`poses.pose_at`: the rotation by spherical
 interpolation, the rest linearly). The frame's span is split into `Shutter.time_samples` even slices, each
 rendered at the pose of its midpoint, and each row averages the slices its window covers, each weighted by
 its share of the window: a rolling shutter's rows see the camera at their own times (skew), every row the
@@ -34,6 +34,7 @@ import numpy as np
 
 from ..errors import SolasError
 from ..render.loop import Render
+from .poses import camera_pose, checked_end, pose_at
 from .timing import PWMSource, Shutter, slice_shares
 
 EMISSION = ("radiance", "intensity", "irradiance")  # an emitter's parameters of emitted light (or its "scale")
@@ -43,6 +44,7 @@ LEVELS = ("value", "values", "data")
 # what an emitter switched off keeps of them: not 0, which Mitsuba refuses for a spectrum it samples ("no
 # probability mass"); 2⁻¹⁰⁰ of an emitter's light is below float32's resolution of any other emitter's
 OFF = 2.0**-100
+INDEX = "#"  # "#N": the scene's N-th emitter (from 0), a name for one without an id (public scenes often give none)
 
 
 def emitter_names(emitter) -> list[str]:
@@ -91,58 +93,20 @@ def lit_alone(switches: list, lit: set[int]):
 
 
 def pwm_indices(scene, pwm) -> dict[str, int]:
-    """The index among `scene.emitters()` of each PWM emitter named in `pwm`; SolasError for a name that is
-    not one emitter's (naming those there are)."""
-    names = [emitter_names(e) for e in scene.emitters()]
+    """The index among `scene.emitters()` of each PWM emitter named in `pwm` (`emitter_names`, or `INDEX` and
+    its index, for one without an id); SolasError for a name that is not one emitter's (listing them)."""
+    names = [[*emitter_names(e), f"{INDEX}{i}"] for i, e in enumerate(scene.emitters())]
     found = {}
     for name in pwm:
         hits = [i for i, known in enumerate(names) if name in known]
         if len(hits) != 1:
-            known = sorted({n for known in names for n in known})
+            known = "; ".join(f"{' = '.join(n)} ({e.class_name()})" for n, e in zip(names, scene.emitters()))
             raise SolasError(
-                f"PWM emitter {name!r} names {len(hits)} of the scene's emitters; it must name one by its id or "
-                f"its shape's id (the scene's: {', '.join(known) or 'none with an id'})"
+                f"PWM emitter {name!r} names {len(hits)} of the scene's emitters; it must name one by its id, its "
+                f"shape's id or {INDEX} and its index (the scene's: {known or 'none'})"
             )
         found[name] = hits[0]
     return found
-
-
-def pose_at(start: np.ndarray, end: np.ndarray, fraction: float) -> np.ndarray:
-    """The 4×4 transform `fraction` of the way from `start` to `end`: the rotation of each (its polar
-    decomposition's) interpolated spherically, the stretch and translation linearly; SolasError where one
-    mirrors and the other does not."""
-    from scipy.linalg import polar
-    from scipy.spatial.transform import Rotation, Slerp
-
-    (ra, sa), (rb, sb) = polar(start[:3, :3]), polar(end[:3, :3])
-    mirror = np.diag([1.0, 1.0, np.sign(np.linalg.det(ra))])
-    if np.sign(np.linalg.det(ra)) != np.sign(np.linalg.det(rb)):
-        raise SolasError("the camera's to_world at the frame's start and end: one mirrors, the other does not")
-    turn = Slerp([0.0, 1.0], Rotation.from_matrix([ra @ mirror, rb @ mirror]))([fraction]).as_matrix()[0]
-    pose = np.eye(4)
-    pose[:3, :3] = turn @ mirror @ ((1.0 - fraction) * sa + fraction * sb)
-    pose[:3, 3] = (1.0 - fraction) * start[:3, 3] + fraction * end[:3, 3]
-    return pose
-
-
-def camera_pose(sensor) -> tuple:
-    """The sensor's parameters (`mitsuba.traverse`) and its `to_world` (4×4); SolasError for a sensor
-    without one."""
-    import mitsuba as mi
-
-    params = mi.traverse(sensor)
-    if "to_world" not in params:
-        raise SolasError(f"camera motion: the scene's sensor {sensor.class_name()} has no to_world parameter")
-    return params, np.array(params["to_world"].matrix, dtype=np.float64).reshape(4, 4)
-
-
-def checked_end(to_world_end) -> np.ndarray:
-    end = np.asarray(to_world_end, dtype=np.float64)
-    if end.shape != (4, 4) or not np.isfinite(end).all() or not np.allclose(end[3], [0.0, 0.0, 0.0, 1.0]):
-        raise SolasError(
-            f"to_world_end must be a finite 4x4 affine transform (last row 0 0 0 1), not {np.shape(to_world_end)}"
-        )
-    return end
 
 
 @dataclass

@@ -5,9 +5,9 @@ frame (`--camera-motion`).
 The windows are the sensor's: its `[sensor.shutter]` (global without one) and `--exposure-ms`. A moving camera is
 given as a simulator gives it: the camera's velocity (world units per second) and angular velocity (degrees per
 second about the world's axes through the camera), constant over the frame, so the scene's camera pose is the
-frame's start (the first row's) and `end_pose` its pose at the frame's end (the last row's end); `rendered`
+frame's start (the first row's) and `poses.end_pose` its pose at the frame's end (the last row's end); `rendered`
 interpolates between them, which for a constant angular velocity is its rotation exactly (a spherical
-interpolation about one axis). Nothing here imports Mitsuba or NumPy at import.
+interpolation about one axis, `poses`). Nothing here imports Mitsuba or NumPy at import.
 """
 
 from __future__ import annotations
@@ -17,12 +17,12 @@ import math
 from typing import Any
 
 from ..errors import SolasError
+from .poses import MAX_TURN_DEG
 
 SCENE_SUFFIX = ".xml"  # a Mitsuba scene file: `camera`'s input is rendered instead of read
 PWM_FORM = "ID,HZ,DUTY[,PHASE]"  # --pwm-emitter: an emitter's id (or its shape's) and its PWM source's values
 MOTION_FORM = "VX,VY,VZ[,WX,WY,WZ]"  # --camera-motion: velocity and angular velocity
 SPEED_UNIT, TURN_UNIT = "world units/s", "deg/s"
-MAX_TURN_DEG = 180.0  # over the frame: a turn of more has two shortest ways, the interpolation can take neither
 # the parts a render in time keeps (`rendered.RenderedParts`: float32 per slice and PWM emitter) and the rows' sum
 # (float64), per pixel and channel of the film (counted as 4: R, G, B, A)
 PART_BYTES, SUM_BYTES, FILM_CHANNELS = 4.0, 8.0, 4
@@ -66,24 +66,6 @@ def parse_motion(text: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
     return numbers[:3], (numbers[3:] or (0.0, 0.0, 0.0))
 
 
-def end_pose(start, velocity, angular_deg_s, span_s: float):
-    """The camera's `to_world` (4×4) `span_s` after `start` moving at `velocity` and turning at `angular_deg_s`
-    about the world's axes through its own position; SolasError for a turn of `MAX_TURN_DEG` or more."""
-    import numpy as np
-    from scipy.spatial.transform import Rotation
-
-    turn = np.radians(np.asarray(angular_deg_s, dtype=np.float64)) * span_s
-    if np.degrees(np.linalg.norm(turn)) >= MAX_TURN_DEG:
-        raise SolasError(
-            f"--camera-motion turns the camera {np.degrees(np.linalg.norm(turn)):g}° over the frame's {span_s:g} s; "
-            f"it must turn less than {MAX_TURN_DEG:g}° (a turn is interpolated the shortest way)"
-        )
-    end = np.array(start, dtype=np.float64)
-    end[:3, :3] = Rotation.from_rotvec(turn).as_matrix() @ end[:3, :3]
-    end[:3, 3] += np.asarray(velocity, dtype=np.float64) * span_s
-    return end
-
-
 def check_scene_options(args: argparse.Namespace) -> None:
     """Refuse options that go with the other kind of input: --pwm-emitter, --camera-motion and --spp need a scene,
     --flicker and --image-motion an image (a scene's emitters and camera move themselves)."""
@@ -114,7 +96,8 @@ def rendered_input(args: argparse.Namespace, shutter, exposure_s: float | None, 
 
     from ..render.commands import check_render
     from ..render.user_scene import load
-    from .rendered import camera_pose, render_in_time
+    from .poses import camera_pose, end_pose
+    from .rendered import render_in_time
     from .timing import Shutter
 
     if exposure_s is None:
@@ -157,6 +140,8 @@ def rendered_input(args: argparse.Namespace, shutter, exposure_s: float | None, 
 
 def add_scene_options(p: Any) -> None:
     """--spp, --pwm-emitter, --camera-motion: a scene input's render over the exposure windows."""
+    from .rendered import INDEX
+
     p.add_argument(
         "--spp", type=int, help="with a scene input: samples per pixel of each part rendered (default: the scene's)"
     )
@@ -164,7 +149,8 @@ def add_scene_options(p: Any) -> None:
         "--pwm-emitter",
         action="append",
         metavar=PWM_FORM,
-        help="with a scene input: the emitter of id ID (or of the shape of id ID, for an area light) is driven by "
+        help=f"with a scene input: the emitter of id ID (or of the shape of id ID, for an area light, or {INDEX}N: "
+        "the scene's N-th emitter from 0, for one without an id) is driven by "
         "pulse-width modulation at HZ with duty cycle DUTY and phase PHASE (fractions; default phase 0): it is "
         "rendered alone and each row gathers its light over the time it is on within the row's window, e.g. an "
         "LED traffic light; repeatable (default: none)",

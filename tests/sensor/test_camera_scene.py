@@ -12,7 +12,7 @@ from solas_mi.cli import main
 from solas_mi.imageio import read_exr
 from solas_mi.sensor.capture import capture
 from solas_mi.sensor.files import load_sensor
-from solas_mi.sensor.rendered import render_in_time
+from solas_mi.sensor.rendered import INDEX, render_in_time
 from solas_mi.sensor.scene_input import MOTION_FORM, PWM_FORM, TURN_UNIT
 from solas_mi.sensor.timing import Shutter
 
@@ -71,6 +71,18 @@ def test_an_led_is_dark_in_its_off_time_and_steady_in_its_on_time(files):
     assert windows["shutter"]["mode"] == "global" and meta["rendered"]["scene"].endswith("wall.xml")
 
 
+def test_an_emitter_without_an_id_is_named_by_its_index(files, capsys):
+    """Public scenes often give an emitter no id (Mitsuba's Cornell box): "#0" names the scene's first emitter, and
+    a name that matches none is refused with the scene's emitters listed by index."""
+    (files / "anonymous.xml").write_text(scene_xml(40.0).replace(' id="led"', ""))
+    off, meta = camera(files, "anonymous.xml", "global.toml", 0.5, "--pwm-emitter", f"{INDEX}0,100,0.1,0.5")
+    assert abs(off["RAW"].mean() - load_sensor(files / "global.toml").black_level_dn) < 0.5
+    assert list(meta["rendered"]["exposure_windows"]["pwm_emitters"]) == [f"{INDEX}0"]
+    argv = ["camera", str(files / "anonymous.xml"), "--sensor-model", str(files / "global.toml"), "--exposure-ms", "1"]
+    assert main([*argv, "--pwm-emitter", "led,100,0.1", "-o", str(files / "out.exr")]) == 2
+    assert f"{INDEX}0 (AreaLight)" in capsys.readouterr().err
+
+
 def test_a_moving_camera_gives_the_python_apis_frame_and_leans_a_bar(files, variant_llvm_ad_spectral):
     """--camera-motion VX,0,0 for the frame's span (first row's start to last row's end): the RAW of `render_in_time`
     with the camera moved VX × span; its bar leans by the image's speed × line time × rows."""
@@ -111,7 +123,7 @@ def test_the_help_names_the_forms_and_units():
     from solas_mi.cli import build_parser
 
     text = " ".join(build_parser()._subparsers._group_actions[0].choices["camera"].format_help().split())
-    assert PWM_FORM in text and MOTION_FORM in text and TURN_UNIT in text
+    assert PWM_FORM in text and MOTION_FORM in text and TURN_UNIT in text and f"{INDEX}N" in text
 
 
 @pytest.mark.parametrize(
