@@ -298,7 +298,8 @@ def add_exposure_option(p: Any, required: bool) -> None:
 
 def register(subparsers: Any) -> None:
     """Add the `camera` and `sensors` subcommands."""
-    from .scene_input import SCENE_SUFFIX, add_scene_options
+    from ..render.mitsuba import SCENE_SUFFIXES
+    from .scene_input import add_scene_options
     from .time_options import add_time_options
 
     p = subparsers.add_parser(
@@ -315,7 +316,7 @@ def register(subparsers: Any) -> None:
         "image",
         help="EXR with R, G, B channels: irradiance in W/m² (times --scale), or radiance "
         "in W/m²/sr with --f-number (a render through a lens states its own f-number); or a Mitsuba scene "
-        f"file (*{SCENE_SUFFIX}) rendered with its own camera over the exposure's windows (--pwm-emitter, "
+        f"file ({', '.join('*' + s for s in SCENE_SUFFIXES)}) rendered with its own camera over the exposure's windows (--pwm-emitter, "
         "--camera-motion, --spp), its R, G, B read as the EXR's",
     )
     p.add_argument(

@@ -14,12 +14,13 @@ from __future__ import annotations
 
 import argparse
 import math
+from dataclasses import dataclass
 from typing import Any
 
 from ..errors import SolasError
+from ..render.mitsuba import SCENE_SUFFIXES
 from .poses import MAX_TURN_DEG
 
-SCENE_SUFFIX = ".xml"  # a Mitsuba scene file: `camera`'s input is rendered instead of read
 PWM_FORM = "ID,HZ,DUTY[,PHASE]"  # --pwm-emitter: an emitter's id (or its shape's) and its PWM source's values
 MOTION_FORM = "VX,VY,VZ[,WX,WY,WZ]"  # --camera-motion: velocity and angular velocity
 SPEED_UNIT, TURN_UNIT = "world units/s", "deg/s"
@@ -29,7 +30,8 @@ PART_BYTES, SUM_BYTES, FILM_CHANNELS = 4.0, 8.0, 4
 
 
 def is_scene(path) -> bool:
-    return str(path).lower().endswith(SCENE_SUFFIX)
+    """A Mitsuba scene file (`render.mitsuba.SCENE_SUFFIXES`): `camera`'s input rendered instead of read."""
+    return str(path).lower().endswith(SCENE_SUFFIXES)
 
 
 def parse_pwm_emitter(text: str) -> tuple[str, Any]:
@@ -66,6 +68,65 @@ def parse_motion(text: str) -> tuple[tuple[float, ...], tuple[float, ...]]:
     return numbers[:3], (numbers[3:] or (0.0, 0.0, 0.0))
 
 
+@dataclass(frozen=True)
+class SceneTiming:
+    """A scene file's light and camera over the frame (the options --pwm-emitter, --camera-motion): its PWM emitters
+    by name, ((name, `timing.PWMSource`), ...), and its camera's velocity (`SPEED_UNIT`; None: still) and angular
+    velocity (`TURN_UNIT` about the world's axes through the camera), constant over the frame."""
+
+    pwm: tuple = ()
+    velocity: tuple[float, ...] | None = None
+    angular_deg_s: tuple[float, ...] = (0.0, 0.0, 0.0)
+
+    def describe(self) -> dict:
+        """For metadata and a batch's identity: the PWM sources by name and the camera's motion (None: still)."""
+        motion = (
+            None if self.velocity is None else {"velocity": self.velocity, "angular_velocity_deg_s": self.angular_deg_s}
+        )
+        return {"pwm_emitters": {name: vars(source) for name, source in self.pwm}, "camera_motion": motion}
+
+    def parts(self, shutter) -> int:
+        """The parts its render takes under `shutter` (None: global): each time slice with the PWM emitters off
+        and each alone (`rendered.render_parts`)."""
+        from .timing import Shutter
+
+        return ((shutter or Shutter()).time_samples if self.velocity is not None else 1) * (1 + len(self.pwm))
+
+    def parts_bytes(self, shutter, rows: int, cols: int) -> float:
+        """The memory of its render's parts and their sum (bytes) for a film of `rows` × `cols` under `shutter`."""
+        return (self.parts(shutter) * PART_BYTES + SUM_BYTES) * FILM_CHANNELS * rows * cols
+
+    def render(self, scene, spp: int, shutter, exposure_s: float, seed: int):
+        """The loaded `scene` rendered over the rows' windows (`rendered.render_in_time`), its camera's end pose
+        the one its motion reaches over the frame's span (`poses.end_pose`); its meta's ``exposure_windows`` adds
+        the motion."""
+        from .poses import camera_pose, end_pose
+        from .rendered import render_in_time
+        from .timing import Shutter
+
+        end = None
+        if self.velocity is not None:
+            rows = int(scene.sensors()[0].film().size()[1])  # the whole film's
+            span = float((shutter or Shutter()).windows(rows, exposure_s)[1].max())
+            end = end_pose(camera_pose(scene.sensors()[0])[1], self.velocity, self.angular_deg_s, span)
+        result = render_in_time(scene, spp, shutter, exposure_s, dict(self.pwm), end, seed)
+        result.meta["exposure_windows"]["camera_motion"] = self.describe()["camera_motion"]
+        return result
+
+
+def scene_timing(pwm_emitters, camera_motion) -> SceneTiming | None:
+    """The `SceneTiming` of the texts of --pwm-emitter (a list or None) and --camera-motion (or None); None
+    without either."""
+    if not pwm_emitters and camera_motion is None:
+        return None
+    pwm = tuple(parse_pwm_emitter(text) for text in pwm_emitters or [])
+    if len({name for name, _ in pwm}) < len(pwm):
+        raise SolasError(f"--pwm-emitter names an emitter twice ({', '.join(n for n, _ in pwm)}); give each once")
+    if camera_motion is None:
+        return SceneTiming(pwm)
+    return SceneTiming(pwm, *parse_motion(camera_motion))
+
+
 def check_scene_options(args: argparse.Namespace) -> None:
     """Refuse options that go with the other kind of input: --pwm-emitter, --camera-motion and --spp need a scene,
     --flicker and --image-motion an image (a scene's emitters and camera move themselves)."""
@@ -85,7 +146,9 @@ def check_scene_options(args: argparse.Namespace) -> None:
     )
     if wrong:
         needs = "an EXR image: a scene's emitters (--pwm-emitter) and camera (--camera-motion)" if scene else "a scene"
-        raise SolasError(f"{' and '.join(wrong)} go(es) with {needs} input ({SCENE_SUFFIX}); {args.image} is not one")
+        raise SolasError(
+            f"{' and '.join(wrong)} go(es) with {needs} input ({', '.join(SCENE_SUFFIXES)}); {args.image} is not one"
+        )
 
 
 def rendered_input(args: argparse.Namespace, shutter, exposure_s: float | None, camera_bytes):
@@ -96,32 +159,24 @@ def rendered_input(args: argparse.Namespace, shutter, exposure_s: float | None, 
 
     from ..render.commands import check_render
     from ..render.user_scene import load
-    from .poses import camera_pose, end_pose
-    from .rendered import render_in_time
     from .timing import Shutter
 
     if exposure_s is None:
         raise SolasError("--exposure-ms auto: a scene is rendered over the exposure's windows; give a time in ms")
-    pwm = dict(parse_pwm_emitter(t) for t in args.pwm_emitter or [])
-    motion = parse_motion(args.camera_motion) if args.camera_motion else None
+    timing = scene_timing(args.pwm_emitter, args.camera_motion) or SceneTiming()
     scene = load(args.image)
     film = scene.sensors()[0].film()
     cols, rows = (int(v) for v in film.crop_size())
     spp = args.spp if args.spp is not None else int(scene.sensors()[0].sampler().sample_count())
     check_render(cols, rows, spp, args.force)
     shutter = shutter or Shutter()
-    slices = shutter.time_samples if motion else 1
-    parts = (slices * (1 + len(pwm)) * PART_BYTES + SUM_BYTES) * FILM_CHANNELS * rows * cols
+    parts = timing.parts_bytes(shutter, rows, cols)
     from ..budget import check_memory
 
     check_memory(
         f"camera {cols}x{rows} of a scene in time", parts + camera_bytes(rows, cols), args.force, "a smaller film"
     )
-    end = None
-    if motion:
-        span = float(shutter.windows(int(film.size()[1]), exposure_s)[1].max())  # the whole film's rows
-        end = end_pose(camera_pose(scene.sensors()[0])[1], *motion, span)
-    result = render_in_time(scene, spp, shutter, exposure_s, pwm, end, args.seed)
+    result = timing.render(scene, spp, shutter, exposure_s, args.seed)
     missing = [c for c in "RGB" if c not in result.channels]
     if missing:
         raise SolasError(
@@ -129,8 +184,6 @@ def rendered_input(args: argparse.Namespace, shutter, exposure_s: float | None, 
         )
     image = np.stack([result.image[..., result.channels.index(c)] for c in "RGB"], axis=-1).astype(np.float64)
     meta = dict(result.meta, scene=str(args.image))
-    if motion:
-        meta["exposure_windows"]["camera_motion"] = {"velocity": motion[0], "angular_velocity_deg_s": motion[1]}
     if type(scene.sensors()[0]).__name__ == "LensCamera":
         from ..render.user_scene import camera_meta
 
@@ -140,26 +193,30 @@ def rendered_input(args: argparse.Namespace, shutter, exposure_s: float | None, 
 
 def add_scene_options(p: Any) -> None:
     """--spp, --pwm-emitter, --camera-motion: a scene input's render over the exposure windows."""
-    from .rendered import INDEX
-
     p.add_argument(
         "--spp", type=int, help="with a scene input: samples per pixel of each part rendered (default: the scene's)"
     )
+    add_timing_options(p, "with a scene input")
+
+
+def add_timing_options(p: Any, where: str) -> None:
+    """--pwm-emitter and --camera-motion (`SceneTiming`), their help opening with `where` they apply."""
+    from .rendered import INDEX
+
     p.add_argument(
         "--pwm-emitter",
         action="append",
         metavar=PWM_FORM,
-        help=f"with a scene input: the emitter of id ID (or of the shape of id ID, for an area light, or {INDEX}N: "
-        "the scene's N-th emitter from 0, for one without an id) is driven by "
-        "pulse-width modulation at HZ with duty cycle DUTY and phase PHASE (fractions; default phase 0): it is "
-        "rendered alone and each row gathers its light over the time it is on within the row's window, e.g. an "
-        "LED traffic light; repeatable (default: none)",
+        help=f"{where}: the emitter of id ID (or of the shape of id ID, for an area light, or {INDEX}N: the scene's "
+        "N-th emitter from 0, for one without an id) is driven by pulse-width modulation at HZ with duty cycle DUTY "
+        "and phase PHASE (fractions; default phase 0): it is rendered alone and each row gathers its light over the "
+        "time it is on within the row's window, e.g. an LED traffic light; repeatable (default: none)",
     )
     p.add_argument(
         "--camera-motion",
         metavar=MOTION_FORM,
-        help=f"with a scene input: the scene's camera moves at VX, VY, VZ {SPEED_UNIT} and turns at WX, WY, WZ "
-        f"{TURN_UNIT} about the world's axes through itself (default 0) during the frame, from its pose in the "
-        "scene at the first row's start: each row sees it over its window (a rolling shutter skews, every shutter "
-        f"blurs; the shutter's time_samples poses; less than {MAX_TURN_DEG:g}° over the frame) (default: still)",
+        help=f"{where}: the scene's camera moves at VX, VY, VZ {SPEED_UNIT} and turns at WX, WY, WZ {TURN_UNIT} about "
+        "the world's axes through itself (default 0) during the frame, from its pose in the scene at the first row's "
+        "start: each row sees it over its window (a rolling shutter skews, every shutter blurs; the shutter's "
+        f"time_samples poses; less than {MAX_TURN_DEG:g}° over the frame) (default: still)",
     )
