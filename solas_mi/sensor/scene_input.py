@@ -128,7 +128,7 @@ def scene_timing(pwm_emitters, camera_motion) -> SceneTiming | None:
 
 
 def check_scene_options(args: argparse.Namespace) -> None:
-    """Refuse options that go with the other kind of input: --pwm-emitter, --camera-motion and --spp need a scene,
+    """Refuse options that go with the other kind of input: --pwm-emitter, --camera-motion, --spp, --set need a scene,
     --flicker and --image-motion an image (a scene's emitters and camera move themselves)."""
     scene = is_scene(args.image)
     wrong = (
@@ -140,6 +140,7 @@ def check_scene_options(args: argparse.Namespace) -> None:
                 ("--pwm-emitter", args.pwm_emitter),
                 ("--camera-motion", args.camera_motion),
                 ("--spp", args.spp),
+                ("--set", args.set),
             )
             if v
         ]
@@ -157,14 +158,14 @@ def rendered_input(args: argparse.Namespace, shutter, exposure_s: float | None, 
     memory checked first: the render's, its parts' and the camera's (`camera_bytes(rows, cols)`)."""
     import numpy as np
 
-    from ..render.commands import check_render
+    from ..render.commands import check_render, scene_params
     from ..render.user_scene import load
     from .timing import Shutter
 
     if exposure_s is None:
         raise SolasError("--exposure-ms auto: a scene is rendered over the exposure's windows; give a time in ms")
     timing = scene_timing(args.pwm_emitter, args.camera_motion) or SceneTiming()
-    scene = load(args.image)
+    scene = load(args.image, params=scene_params(args.set))
     film = scene.sensors()[0].film()
     cols, rows = (int(v) for v in film.crop_size())
     spp = args.spp if args.spp is not None else int(scene.sensors()[0].sampler().sample_count())
@@ -192,10 +193,13 @@ def rendered_input(args: argparse.Namespace, shutter, exposure_s: float | None, 
 
 
 def add_scene_options(p: Any) -> None:
-    """--spp, --pwm-emitter, --camera-motion: a scene input's render over the exposure windows."""
+    """--spp, --set, --pwm-emitter, --camera-motion: a scene input's render over the exposure windows."""
     p.add_argument(
         "--spp", type=int, help="with a scene input: samples per pixel of each part rendered (default: the scene's)"
     )
+    from ..render.commands import add_set_option
+
+    add_set_option(p, "with a scene input: ")
     add_timing_options(p, "with a scene input")
 
 

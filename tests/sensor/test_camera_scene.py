@@ -83,6 +83,14 @@ def test_an_emitter_without_an_id_is_named_by_its_index(files, capsys):
     assert f"{INDEX}0 (AreaLight)" in capsys.readouterr().err
 
 
+def test_set_overrides_a_default_of_the_scene(files):
+    """--set NAME=VALUE as `render` takes it: a public scene's film size from a <default> ($res in Mitsuba's)."""
+    text = scene_xml(40.0).replace('<scene version="3.0.0">', '<scene version="3.0.0">\n<default name="w" value="64"/>')
+    (files / "defaults.xml").write_text(text.replace(f'name="width" value="{COLS}"', 'name="width" value="$w"'))
+    raw, _ = camera(files, "defaults.xml", "global.toml", 0.5, "--set", "w=24")
+    assert raw["RAW"].shape == (ROWS, 24)
+
+
 def test_a_moving_camera_gives_the_python_apis_frame_and_leans_a_bar(files, variant_llvm_ad_spectral):
     """--camera-motion VX,0,0 for the frame's span (first row's start to last row's end): the RAW of `render_in_time`
     with the camera moved VX × span; its bar leans by the image's speed × line time × rows."""
