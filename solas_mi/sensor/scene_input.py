@@ -158,6 +158,7 @@ def rendered_input(args: argparse.Namespace, shutter, exposure_s: float | None, 
     memory checked first: the render's, its parts' and the camera's (`camera_bytes(rows, cols)`)."""
     import numpy as np
 
+    from ..imageio import check_finite
     from ..render.commands import check_render, scene_params
     from ..render.user_scene import load
     from .timing import Shutter
@@ -184,6 +185,7 @@ def rendered_input(args: argparse.Namespace, shutter, exposure_s: float | None, 
             f"{args.image}: its film gives channels {', '.join(result.channels)}; the sensor needs R, G, B"
         )
     image = np.stack([result.image[..., result.channels.index(c)] for c in "RGB"], axis=-1).astype(np.float64)
+    check_finite(image, f"{args.image} rendered over the exposure windows")
     meta = dict(result.meta, scene=str(args.image))
     if type(scene.sensors()[0]).__name__ == "LensCamera":
         from ..render.user_scene import camera_meta

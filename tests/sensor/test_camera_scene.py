@@ -46,6 +46,7 @@ def files(tmp_path):
     (tmp_path / "wall.xml").write_text(scene_xml(40.0))  # the LED fills the view
     bar_m = 4 * 2.0 * DISTANCE * math.tan(math.radians(FOV_DEG / 2)) / COLS  # 4 pixels wide
     (tmp_path / "bar.xml").write_text(scene_xml(bar_m))
+    (tmp_path / "blinding.xml").write_text(scene_xml(40.0).replace('value="1.0"', 'value="1e39"'))  # inf in float32
     (tmp_path / "global.toml").write_text(SENSOR)
     (tmp_path / "rolling.toml").write_text(ROLLING)
     return tmp_path
@@ -145,8 +146,9 @@ def test_the_help_names_the_forms_and_units():
         ("wall.xml", ["--flicker", "0,0,4,4,90,0.1"], "--flicker"),
         ("wall.xml", ["--spp", "0"], "samples per pixel"),
         ("in.exr", ["--pwm-emitter", "led,100,0.1"], "--pwm-emitter"),
+        ("blinding.xml", [], "NaN or infinite"),
     ],
-    ids=["form", "duty", "unknown emitter", "motion form", "turn", "flicker", "spp", "image input"],
+    ids=["form", "duty", "unknown emitter", "motion form", "turn", "flicker", "spp", "image input", "infinite light"],
 )
 def test_bad_values_are_one_line_and_write_nothing(files, capsys, scene, extra, word):
     (files / "in.exr").write_bytes(b"")  # refused for its option before it is read
