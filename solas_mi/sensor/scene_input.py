@@ -190,7 +190,7 @@ def rendered_input(args: argparse.Namespace, shutter, exposure_s: float | None, 
     if type(scene.sensors()[0]).__name__ == "LensCamera":
         from ..render.user_scene import camera_meta
 
-        meta.update(camera_meta(scene))
+        meta.update(lens=scene.sensors()[0].lens.name, **camera_meta(scene))
     return image, meta
 
 

@@ -84,6 +84,21 @@ def test_an_emitter_without_an_id_is_named_by_its_index(files, capsys):
     assert f"{INDEX}0 (AreaLight)" in capsys.readouterr().err
 
 
+def test_a_lens_cameras_scene_is_read_as_radiance_through_its_lens(files, variant_llvm_ad_spectral):
+    """A scene whose camera is a `lens_camera`: its render is radiance, read through the camera equation at the
+    lens's f-number as `render --lens` states it (`user_scene.unit_f_number`), the lens named."""
+    from solas_mi.render.user_scene import load, unit_f_number
+
+    text = scene_xml(40.0).replace('<float name="fov" value="40.0"/>', "")
+    lens = (
+        '<sensor type="lens_camera"><string name="lens" value="solas-doublet"/><float name="focus_distance" value="5"/>'
+    )
+    (files / "lens.xml").write_text(text.replace('<sensor type="perspective">', lens))
+    _, meta = camera(files, "lens.xml", "global.toml", 0.5, "--pwm-emitter", "led,100,0.1")
+    assert meta["f_number"] == pytest.approx(unit_f_number(load(str(files / "lens.xml")).sensors()[0]))
+    assert meta["f_number_source"] == "input metadata (lens solas-doublet)"
+
+
 def test_set_overrides_a_default_of_the_scene(files):
     """--set NAME=VALUE as `render` takes it: a public scene's film size from a <default> ($res in Mitsuba's)."""
     text = scene_xml(40.0).replace('<scene version="3.0.0">', '<scene version="3.0.0">\n<default name="w" value="64"/>')
