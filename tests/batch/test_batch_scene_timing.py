@@ -56,6 +56,28 @@ def test_a_scene_items_pwm_light_is_dark_off_and_lit_on_over_the_cameras_exposur
     assert rendered["pwm_emitters"] == {"led": {"frequency_hz": 100.0, "duty_cycle": 0.1, "phase": 0.5}}
 
 
+def test_the_estimate_counts_the_parts_rendered(files):
+    """A moving camera and two PWM emitters under a shutter of 8 time samples: 8 slices × (the PWM emitters off, and
+    each alone) = 24 renders of the film per item, in the samples and in the peak memory."""
+    from solas_mi.batch.render import estimate, plan_render
+    from solas_mi.isp.camera import load_camera
+    from solas_mi.sensor.scene_input import scene_timing
+
+    (files / "slices.toml").write_text((files / "sensor.toml").read_text() + "\n[sensor.shutter]\ntime_samples = 8\n")
+    timing = scene_timing(["led,100,0.1", "#0,50,0.2"], "1,0,0")
+    plans = [
+        plan_render([files / "wall.xml"], files / name, lens="solas-doublet", spp=4, camera=camera)
+        for name, camera in (
+            ("still", None),
+            ("timed", load_camera(str(files / "slices.toml"), 0.5, None, 0, 1.0, None, timing)),
+        )
+    ]
+    still, timed = (estimate(p, 1) for p in plans)
+    assert timed["samples"] == 8 * 3 * still["samples"] == 8 * 3 * 16 * 12 * 4
+    # the parts held (float32) and their sum (float64), per channel of the film (R, G, B, A) and pixel
+    assert timed["peak_bytes"] - still["peak_bytes"] == (24 * 4 + 8) * 4 * 16 * 12
+
+
 @pytest.mark.parametrize(
     "source, extra, word",
     [
