@@ -13,7 +13,8 @@ from solas_mi.render.stock import render_scene
 from solas_mi.sensor.capture import capture
 from solas_mi.sensor.chain import SensorChain, chain_of
 from solas_mi.sensor.model import SensorModel
-from solas_mi.sensor.rendered import pose_at, render_in_time, render_parts
+from solas_mi.sensor.poses import pose_at
+from solas_mi.sensor.rendered import render_in_time, render_parts
 from solas_mi.sensor.timing import PWMSource, Shutter
 
 EXPOSURE_S = 1e-3
