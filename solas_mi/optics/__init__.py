@@ -31,7 +31,7 @@ READERS.register(
 WRITERS.register(
     ".toml",
     lens_toml.dumps,
-    holds=("coatings", "blades"),
+    holds=("coatings", "blades", "surfaces without rotational symmetry", "coordinate breaks"),
     summary="our TOML lens file, numbers in full: it reads back as the same lens (`lens_toml`)",
 )
 WRITERS.register(".zmx", zemax.dumps, holds=("coatings",), summary="Zemax OpticStudio sequential lens file (`zemax`)")

@@ -180,7 +180,9 @@ class Lens:
                              f"allowed: {writable()}")
         writer = WRITERS[path.suffix.lower()]
         for feature, used in (("coatings", any(s.coating for s in self.surfaces)),
-                              ("blades", any(s.blades for s in self.surfaces))):
+                              ("blades", any(s.blades for s in self.surfaces)),
+                              ("surfaces without rotational symmetry", any(s.form for s in self.surfaces)),
+                              ("coordinate breaks", any(s.placement for s in self.surfaces))):
             if used and feature not in writer.extra.get("holds", ()):
                 raise SolasError(f"lens file {str(path)!r}: a {path.suffix} file holds no {feature}; save the lens "
                                  f"as {', '.join(k for k, e in WRITERS.items() if feature in e.extra.get('holds', ()))}")

@@ -61,6 +61,8 @@ def validate(lens, where: str) -> None:
                 f"{ident}: conic {s.conic:g} with radius {s.radius:g} mm closes before the clear "
                 f"semi-diameter {s.semi_diameter:g} mm; the conic cannot hold that aperture"
             )
+        if s.form is not None:
+            s.form.check_aperture(s.semi_diameter, ident)
     lens.field_type.check_lens(lens, where)
     last = lens.surfaces[-1]
     if last.thickness < 0:
@@ -69,3 +71,15 @@ def validate(lens, where: str) -> None:
             f"{last.thickness:g} mm must be positive" + _VIRTUAL + "; 0 mm puts it on the last surface"
         )
     overlap.notes(lens, where)
+
+
+def refuse_as_built(lens, engine: str) -> None:
+    """SolasError naming `lens`'s first surface that is not rotationally symmetric or sits behind a coordinate
+    break, which `engine` (named in the message) does not trace: the NumPy tracer `local_trace` does."""
+    for i, s in enumerate(lens.surfaces, start=1):
+        if s.form is not None or s.placement is not None:
+            what = f"a {s.form.kind}" if s.form is not None else "decentred or tilted (a coordinate break before it)"
+            raise SolasError(
+                f"lens {lens.name}: surface {i} ({s.label}) is {what}, which {engine} does not take yet "
+                "(only rotationally symmetric surfaces on one axis); the NumPy tracer optics.local_trace traces it"
+            )

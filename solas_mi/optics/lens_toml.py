@@ -67,7 +67,9 @@ def dumps(lens) -> str:
     if lens.object_glass.kind != "air":
         lines.append(f"material = {_value(lens.object_glass.name)}")
     for s in lens.surfaces:
-        lines += ["", "[[surface]]", f"label = {_value(s.label)}", f"radius = {_value(s.radius)}"]
+        lines += ["", "[[surface]]", f"label = {_value(s.label)}"]
+        shape = {"kind": s.form.kind, **s.form.table()} if s.form else {"radius": s.radius}
+        lines += [f"{key} = {_value(value)}" for key, value in shape.items()]
         if s.conic:
             lines.append(f"conic = {_value(s.conic)}")
         if any(s.aspheric):
@@ -89,6 +91,11 @@ def dumps(lens) -> str:
             lines += [f"blades = {s.blades}", f"blade_rotation = {_value(s.blade_rotation)}"]
         if s.mount is not None:
             lines.append(f"mount = {_value(s.mount)}")
+        if s.placement:
+            lines += [
+                f"{key} = {value if key == 'tilt_order' else _value(value)}"  # the order flag an integer
+                for key, value in s.placement.table().items()
+            ]
     if lens.image_diameter:
         lines += ["", "[image]", f"diameter = {_value(lens.image_diameter)}"]
     return "\n".join(lines) + "\n"
