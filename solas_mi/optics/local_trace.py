@@ -49,7 +49,8 @@ def bundle(points, directions) -> Bundle:
     d = np.asarray(directions, dtype=np.float64).reshape(-1, 3)
     d = d / np.linalg.norm(d, axis=1, keepdims=True)
     p, d = np.broadcast_arrays(p, d)
-    return Bundle(*p.T.copy(), *d.T.copy(), np.zeros(len(p)), np.ones(len(p), dtype=bool))
+    (x, y, z), (dx, dy, dz) = p.T.copy(), d.T.copy()
+    return Bundle(x, y, z, dx, dy, dz, np.zeros(len(p)), np.ones(len(p), dtype=bool))
 
 
 def trace(lens: Lens, rays: Bundle, wavelength_nm: float) -> Bundle:
@@ -74,7 +75,7 @@ def trace(lens: Lens, rays: Bundle, wavelength_nm: float) -> Bundle:
         ok &= x * x + y * y <= (s.semi_diameter * (1.0 + RIM_SLACK)) ** 2
         if s.blades:
             ok &= s.iris_margin(x, y, np.hypot, np.arctan2, np.cos, np.floor) >= -RIM_SLACK * s.semi_diameter
-        if s.ideal:
+        if s.focal_length is not None:  # an ideal thin lens
             w = conjugates[k]
             ld, delta = ideal.deflect(x, y, tuple(ld.T), n_before, n_after, 1.0 / s.focal_length, w, np.sqrt)
             ld, opl = np.stack(ld, axis=1), opl + delta
@@ -89,7 +90,8 @@ def trace(lens: Lens, rays: Bundle, wavelength_nm: float) -> Bundle:
         t = -lp[:, 2] / ld[:, 2]
     image = lp + t[:, None] * ld
     p = origin + image @ axes.T
-    return Bundle(*p.T, *d.T, opl + n_before * t, ok & np.isfinite(t), image[:, 0], image[:, 1])
+    (x, y, z), (dx, dy, dz) = p.T, d.T
+    return Bundle(x, y, z, dx, dy, dz, opl + n_before * t, ok & np.isfinite(t), image[:, 0], image[:, 1])
 
 
 def _refract(normal, d: np.ndarray, mu: float) -> tuple[np.ndarray, np.ndarray]:

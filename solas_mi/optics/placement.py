@@ -14,7 +14,7 @@ global frame of surface 1 (the lens as built). Lengths in mm, angles in degrees.
 from __future__ import annotations
 
 import math
-from dataclasses import astuple, dataclass, fields
+from dataclasses import astuple, dataclass, fields, replace
 
 import numpy as np
 
@@ -45,6 +45,10 @@ class Placement:
             return origin + axes @ shift, axes @ self.rotation()
         turned = axes @ self.rotation()
         return origin + turned @ shift, turned
+
+    def scaled(self, factor: float) -> Placement:
+        """The break of a lens grown by `factor`: its decentres times `factor`, its tilts kept."""
+        return replace(self, decentre_x=self.decentre_x * factor, decentre_y=self.decentre_y * factor)
 
     def table(self) -> dict:
         """Its entries in a lens file's [[surface]] row: the values other than 0 (`KEYS`' names)."""

@@ -43,6 +43,8 @@ def _surface(surface: Surface, s: float) -> Surface:
         qbfs=tuple(a * s for a in surface.qbfs),
         norm_radius=surface.norm_radius * s,
         focal_length=None if surface.focal_length is None else surface.focal_length * s,
+        form=None if surface.form is None else surface.form.scaled(s),
+        placement=None if surface.placement is None else surface.placement.scaled(s),
     )
 
 

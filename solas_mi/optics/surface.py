@@ -259,9 +259,9 @@ def row_placement(row: dict, ident: str) -> Placement | None:
     if not isinstance(order, int) or isinstance(order, bool) or order not in ORDERS:
         raise SolasError(f"{ident}: tilt_order = {order!r} must be one of {', '.join(map(str, ORDERS))} (0: decentre, "
                          "then tilt about x, y, z; 1: tilt about z, y, x, then decentre; Zemax's order flag)")
-    values = [finite_number(row, key, ident, "mm" if key.startswith("decentre") else "degrees", 0.0)
-              for key in PLACEMENT_KEYS[:-1]]
-    return Placement(*values, order)
+    values = {key: finite_number(row, key, ident, "mm" if key.startswith("decentre") else "degrees", 0.0)
+              for key in PLACEMENT_KEYS[:-1]}
+    return Placement(**values, order=order)
 
 
 def polynomial_terms(row: dict, key: str, ident: str, meaning: str) -> tuple[float, ...]:

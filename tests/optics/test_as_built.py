@@ -2,7 +2,9 @@
 file, and the NumPy tracer that works in each surface's frame (`local_trace`): the same rays as the
 Dr.Jit tracer through every shipped lens and an asphere, a tilted plate's shift t·sin(θ − θ′)/cos θ′,
 a decentred ideal lens's image moved by the decentre × (1 − m), the TOML round trip, and the stages
-that take symmetric lenses only refusing the others by name."""
+that take symmetric lenses only refusing the others by name; in .zmx files (`zemax_asbuilt`): TOROIDAL
+and BICONICX read scaled by UNIT, the round trip through .zmx and TOML, an element tilted and returned as
+OpticStudio's break pair leaves it, and what is not read refused by name."""
 
 import math
 
@@ -12,7 +14,7 @@ import pytest
 from solas_mi import Lens, SolasError
 from solas_mi.optics import aiming, ghost_paths, local_trace, pupil, shapes, tracer
 from solas_mi.optics.lens import shipped_lenses
-from solas_mi.optics.placement import Placement
+from solas_mi.optics.placement import Placement, frames
 
 
 def _lens(*rows, **extra) -> Lens:
@@ -196,6 +198,146 @@ def test_the_stages_of_symmetric_lenses_refuse_the_lens_as_built_by_name(tmp_pat
     )
     with pytest.raises(SolasError, match=r"decentred or tilted \(a coordinate break before it\)"):
         tracer.trace(tilted, rays, tracer.F(np.full(4, 0.55)))
-    with pytest.raises(SolasError, match="a .zmx file holds no surfaces without rotational symmetry"):
-        lens.save(tmp_path / "as-built.zmx")
+    with pytest.raises(SolasError, match="a .dat file holds no surfaces without rotational symmetry"):
+        lens.save(tmp_path / "as-built.dat")
     assert shapes.KINDS["toroid"].extra["symmetric"] is False
+
+
+def test_a_lens_as_built_grown_by_s_images_s_times_farther_out():
+    """`scale.scaled`: every length (radii, terms, decentres) times s, the tilts kept: a bundle grown by s
+    meets the image plane at s times the points."""
+    from solas_mi.optics.scale import scaled
+
+    lens, s = _lens(*AS_BUILT), 1.9
+    points = np.stack([np.linspace(-3, 3, 5), np.linspace(-1, 2, 5), np.full(5, -5.0)], 1)
+    out = local_trace.trace(lens, local_trace.bundle(points, [0.0, 0.02, 1.0]), 550.0)
+    big = local_trace.trace(scaled(lens, s), local_trace.bundle(points * s, [0.0, 0.02, 1.0]), 550.0)
+    assert out.ok.all() and big.ok.all()
+    assert np.abs(big.image_x - s * out.image_x).max() < 1e-12 and np.abs(big.image_y - s * out.image_y).max() < 1e-12
+
+
+def _zmx(surfaces: str, unit: str = "MM") -> str:
+    return f"""VERS 190513 80 123457 L123457
+MODE SEQ
+NAME as-built
+UNIT {unit} X W X CM MR CPMM
+FLOA
+FTYP 0 0 1 1 0 0 0
+XFLN 0
+YFLN 0
+WAVM 1 0.55 1
+PWAV 1
+SURF 0
+  TYPE STANDARD
+  DISZ INFINITY
+{surfaces}SURF 99
+  TYPE STANDARD
+  DISZ 0
+"""
+
+
+def _load(tmp_path, text: str) -> Lens:
+    path = tmp_path / "lens.zmx"
+    path.write_text(text)
+    return Lens.load(path)
+
+
+SINGLET = """SURF 1
+  STOP
+  TYPE TOROIDAL
+  CURV 0.25
+  CONI -0.5
+  PARM 1 -3.0
+  PARM 2 0.002
+  PARM 3 -0.0001
+  DISZ 0.4
+  GLAS N-BK7 0 0 1.5168 64.17 0 0 0 0 0 0
+  DIAM 0.8 1
+SURF 2
+  TYPE BICONICX
+  CURV -0.1
+  CONI 0.3
+  PARM 1 -2.5
+  PARM 2 -0.7
+  DISZ 5
+  DIAM 0.8 1
+"""
+
+
+def test_toroidal_and_biconicx_read_scaled_to_mm(tmp_path):
+    """In centimetres: radii and the radius of rotation ×10, α_i (on y^2i) ×10^(1−2i), conics kept."""
+    toroid, biconic = (s.form for s in _load(tmp_path, _zmx(SINGLET, "CM")).surfaces)
+    assert toroid == shapes.KINDS["toroid"].function(40.0, -0.5, (0.002 / 10, -0.0001 / 1000), -30.0)
+    assert biconic.radius == pytest.approx(-100.0, rel=1e-15) and biconic.conic == 0.3
+    assert (biconic.radius_x, biconic.conic_x) == (-25.0, -0.7)
+    assert (
+        shapes.KINDS["cylinder"].function(4.0, -0.5)
+        == _load(tmp_path, _zmx(SINGLET.replace("  PARM 1 -3.0\n  PARM 2 0.002\n  PARM 3 -0.0001\n", "")))
+        .surfaces[0]
+        .form
+    )
+
+
+def test_the_lens_as_built_round_trips_through_zmx_and_toml(tmp_path):
+    lens = _lens(*AS_BUILT)
+    back = Lens.load(Lens.load(lens.save(tmp_path / "a.zmx")).save(tmp_path / "b.toml"))
+    for s, t in zip(lens.surfaces, back.surfaces):
+        assert s.placement == t.placement and s.kind == t.kind
+        assert all(
+            v == pytest.approx(w, rel=1e-15) for v, w in zip(s.geometry.table().values(), t.geometry.table().values())
+        )
+
+
+def test_an_element_tilted_and_returned_by_a_break_pair(tmp_path):
+    """OpticStudio's element tilt: a break tilting by θ before the element, its reverse (order 1, values
+    negated) after: the element lies in the tilted frame; after it the axes are the original ones, the
+    vertex moved by the element's thickness along the tilted axis, t (0, −sin θ, cos θ)."""
+    theta, t = 3.0, 4.0
+    text = _zmx(f"""SURF 1
+  TYPE COORDBRK
+  DISZ 0
+  PARM 3 {theta}
+SURF 2
+  STOP
+  CURV 0.02
+  DISZ {t}
+  GLAS N-BK7 0 0 1.5168 64.17 0 0 0 0 0 0
+  DIAM 8 1
+SURF 3
+  CURV -0.02
+  DISZ 0
+  DIAM 8 1
+SURF 4
+  TYPE COORDBRK
+  DISZ 0
+  PARM 3 {-theta}
+  PARM 6 1
+SURF 5
+  CURV 0
+  DISZ 50
+  DIAM 8 1
+""")
+    lens = _load(tmp_path, text)
+    assert [s.placement for s in lens.surfaces] == [Placement(tilt_x=theta), None, Placement(tilt_x=-theta, order=1)]
+    origin, axes = frames(lens.surfaces)[2]
+    assert np.abs(axes - np.eye(3)).max() < 1e-15
+    assert (
+        np.abs(origin - t * np.array([0.0, -math.sin(math.radians(theta)), math.cos(math.radians(theta))])).max()
+        < 1e-15
+    )
+
+
+@pytest.mark.parametrize(
+    "extra, message",
+    [
+        ("SURF 3\n  TYPE COORDBRK\n  DISZ 0\n  PARM 3 5\n", "before the image plane"),
+        (
+            "SURF 3\n  TYPE COORDBRK\n  DISZ 2\n  PARM 1 0.5\nSURF 4\n  DISZ 1\n  DIAM 1 1\n",
+            "with a thickness of its own",
+        ),
+        ("SURF 3\n  TYPE TOROIDAL\n  PARM 12 0.5\n  DIAM 1 1\n", "TOROIDAL PARM 12 = 0.5 is not read"),
+    ],
+)
+def test_what_is_not_read_is_refused_by_name(tmp_path, extra, message):
+    with pytest.raises(SolasError, match=message):
+        _load(tmp_path, _zmx(SINGLET + extra))

@@ -125,3 +125,14 @@ def test_a_toroid_refuses_an_aperture_it_does_not_reach():
 
     with pytest.raises(SolasError, match="toroid closes before the clear semi-diameter 12"):
         shapes.KINDS["toroid"].function(25.0, 0.0, (), 10.0).check_aperture(12.0, "lens: surface 1")
+
+
+@pytest.mark.parametrize("kind", shapes.NAMED)
+def test_a_shape_grown_by_s_is_s_times_its_sag_at_x_over_s(kind):
+    values = {
+        "toroid": (25.0, -0.4, (2e-4, 3e-7), -35.0),
+        "cylinder": (-20.0, 0.3),
+        "biconic": (-22.0, -1.8, 40.0, 0.6),
+    }
+    shape, s = shapes.KINDS[kind].function(*values[kind]), 1.7
+    assert np.abs(shape.scaled(s).sag(X, Y) - s * shape.sag(X / s, Y / s)).max() < 1e-12

@@ -28,7 +28,7 @@ from .toroid import Toroid
 KINDS = Registry("surface kind", default="conic")
 """The surface kinds by name (a `solas_mi.registry.Registry`): each entry's function is the kind's
 `base.Shape` class; `keys`, `lists` and `symmetric` its extras (the module docstring)."""
-_SUMMARIES = {
+_SUMMARIES: dict[type[Shape], str] = {
     Plane: "flat: radius 0",
     Conic: "a sphere (conic 0) or conic of revolution: radius, conic",
     EvenAsphere: "a conic plus even terms A4 r^4 + A6 r^6 + ...: aspheric",
@@ -39,14 +39,13 @@ _SUMMARIES = {
     Biconic: "z = (cx x^2 + cy y^2)/(1 + sqrt(1 - (1+kx) cx^2 x^2 - (1+ky) cy^2 y^2)): radius, conic (y), "
     "radius_x, conic_x",
 }
-for _cls, _summary in _SUMMARIES.items():
-    _keys = tuple(f.name for f in fields(_cls))
+for _cls, _summary in _SUMMARIES.items():  # each a dataclass (mypy sees only type[Shape])
     KINDS.register(
         _cls.kind,
         _cls,
         summary=_summary,
-        keys=_keys,
-        lists=tuple(f.name for f in fields(_cls) if f.type == "tuple[float, ...]"),
+        keys=tuple(f.name for f in fields(_cls)),  # type: ignore[arg-type]
+        lists=tuple(f.name for f in fields(_cls) if f.type == "tuple[float, ...]"),  # type: ignore[arg-type]
         symmetric=_cls.symmetric,
     )
 NAMED = tuple(name for name, entry in KINDS.items() if not entry.extra["symmetric"])

@@ -57,6 +57,11 @@ class Shape:
         """Its entries in a lens file's [[surface]] row (our TOML's keys)."""
         raise NotImplementedError
 
+    def scaled(self, factor: float) -> Shape:
+        """The shape grown by `factor`: z(x, y) → s·z(x/s, y/s) (a kind held whole, `Surface.form`; the
+        rotational kinds scale with the surface's radius, conic, aspheric and qbfs entries)."""
+        raise NotImplementedError
+
     def seed(self, x, y, dx, dy, dz):
         """Where Newton's method starts: t = 0, the ray's point on the vertex plane."""
         return np.zeros_like(x)

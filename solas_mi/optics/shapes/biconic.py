@@ -27,7 +27,7 @@ class Biconic(Shape):
 
     @property
     def section_curvatures(self) -> tuple[float, float]:
-        return tuple(0.0 if r == 0.0 else 1.0 / r for r in (self.radius_x, self.radius))
+        return (0.0 if self.radius_x == 0.0 else 1.0 / self.radius_x, 0.0 if self.radius == 0.0 else 1.0 / self.radius)
 
     def _parts(self, x, y):
         """(A, B, S) at (x, y)."""
@@ -48,6 +48,9 @@ class Biconic(Shape):
         gx = 2.0 * cx * x / d + bend * 2.0 * (1.0 + self.conic_x) * cx * cx * x
         gy = 2.0 * cy * y / d + bend * 2.0 * (1.0 + self.conic) * cy * cy * y
         return gx, gy
+
+    def scaled(self, factor: float) -> Biconic:
+        return Biconic(self.radius * factor, self.conic, self.radius_x * factor, self.conic_x)
 
     def table(self) -> dict:
         return {"radius": self.radius, "conic": self.conic, "radius_x": self.radius_x, "conic_x": self.conic_x}

@@ -34,5 +34,8 @@ class Cylinder(Shape):
     def section_curvatures(self) -> tuple[float, float]:
         return self.toroid.section_curvatures
 
+    def scaled(self, factor: float) -> Cylinder:
+        return Cylinder(self.radius * factor, self.conic)
+
     def table(self) -> dict:
         return {"radius": self.radius, "conic": self.conic}

@@ -67,6 +67,10 @@ class Toroid(Shape):
         cx = 0.0 if self.radius_rotation == 0.0 else 1.0 / self.radius_rotation
         return cx, self.curvature + (2.0 * self.terms_y[0] if self.terms_y else 0.0)
 
+    def scaled(self, factor: float) -> Toroid:
+        terms = tuple(a * factor ** (1 - 2 * i) for i, a in enumerate(self.terms_y, start=1))
+        return Toroid(self.radius * factor, self.conic, terms, self.radius_rotation * factor)
+
     def table(self) -> dict:
         return {
             "radius": self.radius,

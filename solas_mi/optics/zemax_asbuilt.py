@@ -1,0 +1,143 @@
+"""The lens as built in .zmx files (`zemax` reads and writes through it): TOROIDAL and BICONICX surfaces,
+coordinate breaks that decentre or tilt, and the folding of breaks and dummies into our rows.
+
+- TOROIDAL: CURV and CONI the y-z curve's, PARM 1 the radius of rotation (0: none, a cylinder),
+  PARM 2… α1, α2, … on y², y⁴, … (`shapes.toroid`); its Zernike extra data is refused by name.
+- BICONICX: CURV and CONI the y-z section's, PARM 1 the x radius (0: flat in x), PARM 2 the x conic
+  (`shapes.biconic`; its polynomial terms refused by name).
+- COORDBRK: PARM 1, 2 the decentres, PARM 3, 4, 5 the tilts (degrees), PARM 6 the order flag; with DISZ 0
+  it becomes the next surface's `placement` (`placement.Placement`, the same convention); a break that only
+  moves along the axis gives its DISZ to the gap before, and a pair of breaks that undo each other
+  vanishes (as before the lens as built was read). A moving break with a thickness of its own, two in a
+  row that do not undo each other, and one before the image plane (a tilted sensor) are refused by name.
+Lengths scaled to mm by the file's UNIT.
+"""
+
+from __future__ import annotations
+
+from ..errors import SolasError
+from .placement import KEYS as PLACEMENT_KEYS
+
+SHAPE_TYPES = ("TOROIDAL", "BICONICX")
+TERMS = 8  # TOROIDAL's PARM 2…9: α1…α8
+
+
+def form_row(kind: str, parameters: dict[int, float], scale: float, ident: str) -> dict:
+    """The row entries beyond radius and conic (CURV, CONI) of a TOROIDAL or BICONICX block's PARM lines."""
+    stray = sorted(k for k, v in parameters.items() if v and not (1 <= k <= (1 + TERMS if kind == "TOROIDAL" else 2)))
+    if stray:
+        raise SolasError(
+            f"{ident}: {kind} PARM {stray[0]} = {parameters[stray[0]]:g} is not read (only PARM 1"
+            f"{f'…{1 + TERMS}' if kind == 'TOROIDAL' else ', 2'})"
+        )
+    if kind == "BICONICX":
+        return {"kind": "biconic", "radius_x": parameters.get(1, 0.0) * scale, "conic_x": parameters.get(2, 0.0)}
+    terms = [parameters.get(k, 0.0) * scale ** (1 - 2 * (k - 1)) for k in range(2, 2 + TERMS)]
+    while terms and terms[-1] == 0.0:
+        terms.pop()
+    rotation = parameters.get(1, 0.0) * scale
+    if not terms and not rotation:
+        return {"kind": "cylinder"}
+    return {"kind": "toroid", "terms_y": terms, "radius_rotation": rotation}
+
+
+def fold(rows: list[dict], where: str) -> list[dict]:
+    """Rows without coordinate breaks and dummies: a pure axial break, a pair of breaks that undo each
+    other, and a flat air surface with no clear aperture of its own give their thickness to the row
+    before (or to the object's gap: refused, as the object distance would change); a break that decentres
+    or tilts becomes the next row's placement."""
+    out: list[dict] = []
+    i = 0
+    while i < len(rows):
+        row = rows[i]
+        if "break" in row:
+            shift = _break_shift(rows, i)
+            if shift == "placed":
+                rows[i + 1].update(_placement(row["break"]))
+                i += 1
+                continue
+            span = 2 if shift is None else 1
+            moved = row["thickness"] + (rows[i + 1]["thickness"] if shift is None else 0.0)
+            if not out:
+                raise SolasError(f"{row['ident']}: a coordinate break before the first surface is not supported")
+            out[-1]["thickness"] += moved
+            i += span
+            continue
+        air_before = not out or out[-1]["material"].upper() == "AIR"
+        plain = not any(row.get(k) for k in ("stop", "aspheric", "qbfs", "kind", *PLACEMENT_KEYS))
+        dummy = (
+            row["radius"] == 0
+            and plain
+            and "focal_length" not in row
+            and (row["diameter"] is None or row["auto"])
+            and row["material"].upper() == "AIR"
+            and air_before
+            and out
+        )
+        if dummy:
+            out[-1]["thickness"] += row["thickness"]
+        else:
+            out.append(row)
+        i += 1
+    return [{k: v for k, v in row.items() if k not in ("ident", "auto", "opd_mode")} for row in out]
+
+
+def _break_shift(rows: list[dict], i: int) -> float | str | None:
+    """0.0 for a coordinate break that only moves along the axis; None when the next row is a break
+    that undoes it (no thickness between them); "placed" for one that becomes the next surface's placement;
+    else SolasError naming the break."""
+    row = rows[i]
+    p = row["break"]
+    moves = [p.get(k, 0.0) for k in range(1, 6)]
+    if not any(moves):
+        return 0.0
+    nxt = rows[i + 1] if i + 1 < len(rows) else {}
+    q = nxt.get("break")
+    if q is not None and row["thickness"] == 0:
+        back = [q.get(k, 0.0) for k in range(1, 6)]
+        reordered = p.get(6, 0.0) != q.get(6, 0.0)
+        several = sum(1 for v in moves if v) > 1
+        if back == [-v for v in moves] and (reordered or not several):
+            return None
+    if nxt and q is None and row["thickness"] == 0:
+        return "placed"
+    why = (
+        "before the image plane (a tilted or decentred sensor is not read yet)"
+        if not nxt
+        else "with a thickness of its own (put it on a dummy surface after the break)"
+        if row["thickness"]
+        else "followed by another break that does not undo it"
+    )
+    raise SolasError(
+        f"{row['ident']}: COORDBRK decentres or tilts the axis (decenter x, y {moves[0]:g}, "
+        f"{moves[1]:g}; tilt x, y, z {moves[2]:g}, {moves[3]:g}, {moves[4]:g}) {why}"
+    )
+
+
+def _placement(parameters: dict[int, float]) -> dict:
+    """The row entries of a break's PARM 1…6 (`placement.KEYS`, the order flag 0 or 1)."""
+    values = [parameters.get(k, 0.0) for k in range(1, 6)] + [1 if parameters.get(6, 0.0) else 0]
+    return {key: value for key, value in zip(PLACEMENT_KEYS, values) if value}
+
+
+def surface_lines(s, number) -> tuple[str, list[str]]:
+    """(TYPE, the PARM lines) of a surface without rotational symmetry; ("", []) for the others."""
+    table = s.form.table() if s.form is not None else {}
+    if s.kind == "biconic":
+        return "BICONICX", [f"  PARM 1 {number(table['radius_x'])}", f"  PARM 2 {number(table['conic_x'])}"]
+    if s.form is None:
+        return "", []
+    terms = table.get("terms_y", [])
+    return "TOROIDAL", [f"  PARM 1 {number(table.get('radius_rotation', 0.0))}"] + [
+        f"  PARM {k} {number(a)}" for k, a in enumerate(terms, start=2)
+    ]
+
+
+def break_lines(placement, number) -> list[str]:
+    """The lines of a COORDBRK block (after its SURF line) that places the next surface."""
+    values = (placement.decentre_x, placement.decentre_y, placement.tilt_x, placement.tilt_y, placement.tilt_z)
+    return (
+        ["  TYPE COORDBRK", "  CURV 0.0", "  DISZ 0"]
+        + [f"  PARM {k} {number(v)}" for k, v in enumerate(values, start=1)]
+        + [f"  PARM 6 {placement.order}"]
+    )
