@@ -91,11 +91,10 @@ def dumps(lens) -> str:
             lines += [f"blades = {s.blades}", f"blade_rotation = {_value(s.blade_rotation)}"]
         if s.mount is not None:
             lines.append(f"mount = {_value(s.mount)}")
-        if s.placement:
-            lines += [
-                f"{key} = {value if key == 'tilt_order' else _value(value)}"  # the order flag an integer
-                for key, value in s.placement.table().items()
-            ]
-    if lens.image_diameter:
-        lines += ["", "[image]", f"diameter = {_value(lens.image_diameter)}"]
+        if s.placement:  # the order flag an integer
+            lines += [f"{k} = {v if k == 'tilt_order' else _value(v)}" for k, v in s.placement.table().items()]
+    image = {"diameter": lens.image_diameter} if lens.image_diameter else {}
+    image.update(lens.image_placement.table() if lens.image_placement else {})
+    if image:
+        lines += ["", "[image]"] + [f"{k} = {v if k == 'tilt_order' else _value(v)}" for k, v in image.items()]
     return "\n".join(lines) + "\n"

@@ -3,7 +3,8 @@ coordinate breaks of its surfaces chained), met through its geometry object (`Su
 kind of `shapes.KINDS`: toroids, cylinders and biconics too), clipped at its clear aperture (and the
 stop's iris), refracted by the vector form of Snell's law or bent by an ideal thin lens (`ideal.deflect`),
 the optical path accumulated. Rays and results are in the global frame of surface 1 before any break;
-the image plane is the last frame's z = 0 plane after the last thickness. A reference for the lens as
+the image plane is the last frame's z = 0 plane after the last thickness, moved by the lens's
+`image_placement` (a decentred or tilted sensor). A reference for the lens as
 built (small bundles: NumPy traces 2–6e6 rays/s); the Dr.Jit tracer, the ghosts and the mesh scene take
 rotationally symmetric lenses on one axis only and refuse the others by name (`lens_checks.refuse_as_built`).
 
@@ -55,7 +56,7 @@ def bundle(points, directions) -> Bundle:
 
 def trace(lens: Lens, rays: Bundle, wavelength_nm: float) -> Bundle:
     """`rays` (object space, before surface 1) through every surface of `lens` as built, to its image plane."""
-    placed = frames(lens.surfaces)
+    placed = frames(lens.surfaces, lens.image_placement)
     conjugates = ideal_conjugates(lens) if any(s.ideal for s in lens.surfaces) else {}
     n_before = float(lens.object_glass.index(wavelength_nm))
     p = np.stack([rays.x, rays.y, rays.z], axis=1)

@@ -18,6 +18,8 @@ from dataclasses import astuple, dataclass, fields, replace
 
 import numpy as np
 
+from ..errors import SolasError
+
 ORDERS = (0, 1)  # Zemax's order flag: 0 decentre then tilt x, y, z; 1 tilt z, y, x then decentre
 
 
@@ -34,8 +36,7 @@ class Placement:
 
     def rotation(self) -> np.ndarray:
         """The 3×3 matrix whose columns are the new axes in the old frame."""
-        turns = [_turn(axis, self_angle) for axis, self_angle in enumerate((self.tilt_x, self.tilt_y, self.tilt_z))]
-        x, y, z = turns
+        x, y, z = (_turn(axis, degrees) for axis, degrees in enumerate((self.tilt_x, self.tilt_y, self.tilt_z)))
         return x @ y @ z if self.order == 0 else z @ y @ x
 
     def apply(self, origin: np.ndarray, axes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -59,6 +60,21 @@ KEYS = tuple(f"tilt_{f.name}" if f.name == "order" else f.name for f in fields(P
 """A [[surface]] row's entries of its placement, in `Placement`'s field order (`order` as `tilt_order`)."""
 
 
+def from_row(row: dict, ident: str, number) -> Placement | None:
+    """The break a lens file's row (a [[surface]] or the [image] table) gives by its `KEYS`, each checked by
+    `number` (`surface.finite_number`); None without any; SolasError naming a bad one."""
+    if not any(key in row for key in KEYS):
+        return None
+    order = row.get("tilt_order", 0)
+    if not isinstance(order, int) or isinstance(order, bool) or order not in ORDERS:
+        raise SolasError(
+            f"{ident}: tilt_order = {order!r} must be one of {', '.join(map(str, ORDERS))} (0: decentre, then tilt "
+            "about x, y, z; 1: tilt about z, y, x, then decentre; Zemax's order flag)"
+        )
+    values = {key: number(row, key, ident, "mm" if key.startswith("decentre") else "degrees", 0.0) for key in KEYS[:-1]}
+    return Placement(**values, order=order)
+
+
 def _turn(axis: int, degrees: float) -> np.ndarray:
     """The right-hand rotation by `degrees` about coordinate `axis` (0 x, 1 y, 2 z)."""
     c, s = math.cos(math.radians(degrees)), math.sin(math.radians(degrees))
@@ -68,14 +84,15 @@ def _turn(axis: int, degrees: float) -> np.ndarray:
     return m if axis != 1 else m.T  # about y the right-hand rule turns z toward x
 
 
-def frames(surfaces) -> list[tuple[np.ndarray, np.ndarray]]:
+def frames(surfaces, image: Placement | None = None) -> list[tuple[np.ndarray, np.ndarray]]:
     """(vertex, axes) of each of `surfaces` and then of the image plane, in surface 1's frame before any
-    break: each surface's `placement` applied at the point its predecessor's thickness reaches."""
+    break: each surface's `placement` applied at the point its predecessor's thickness reaches, `image` (a
+    lens's `image_placement`: the sensor decentred or tilted) at the point the last thickness reaches."""
     origin, axes, out = np.zeros(3), np.eye(3), []
     for s in surfaces:
         if s.placement is not None:
             origin, axes = s.placement.apply(origin, axes)
         out.append((origin, axes))
         origin = origin + axes[:, 2] * s.thickness
-    out.append((origin, axes))
+    out.append(image.apply(origin, axes) if image is not None else (origin, axes))
     return out

@@ -30,6 +30,7 @@ def scaled(lens: Lens, factor: float) -> Lens:
         surfaces=tuple(_surface(x, s) for x in lens.surfaces),
         object_distance=lens.object_distance * s,
         image_diameter=lens.image_diameter * s,
+        image_placement=None if lens.image_placement is None else lens.image_placement.scaled(s),
     )
 
 

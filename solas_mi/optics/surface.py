@@ -26,7 +26,8 @@ from . import glass as glass_mod
 from . import ideal as ideal_mod
 from .coating import Coating, coating_from_table
 from .placement import KEYS as PLACEMENT_KEYS
-from .placement import ORDERS, Placement
+from .placement import Placement
+from .placement import from_row as placement_from_row
 from .sag import sag
 
 RIM_SLACK = 1e-9  # relative: a ray aimed exactly at an aperture's rim passes (every tracer)
@@ -39,7 +40,7 @@ KEYS = {
     "surface": ("label", "radius", "thickness", "diameter", "material", "stop", *shapes.KEYS[1:], "coating", "blades",
                 "blade_rotation", "mount", "kind", *PLACEMENT_KEYS),
     "object": ("distance", "material"),
-    "image": ("diameter",),
+    "image": ("diameter", *PLACEMENT_KEYS),
 }
 
 
@@ -194,7 +195,7 @@ def surface_from_row(row: dict, i: int, where: str, catalogues: tuple[str, ...],
     label = str(row.get("label", f"surface {i}"))
     ident = f"{where}: surface {i} ({label})"
     check_keys(row, "surface", ident)
-    form, placement = shape_form(row, ident), row_placement(row, ident)
+    form, placement = shape_form(row, ident), placement_from_row(row, ident, finite_number)
     if form is not None:  # the kind's entries are its own: the rest of the row as a flat surface's
         row = {k: v for k, v in row.items() if k not in ("kind", *shapes.KINDS[form.kind].extra["keys"])}
         row["radius"] = 0.0
@@ -249,19 +250,6 @@ def shape_form(row: dict, ident: str) -> shapes.Shape | None:
                                  None if key == "radius" else 0.0)
               for key in entry.extra["keys"]}
     return entry.function(**values)
-
-
-def row_placement(row: dict, ident: str) -> Placement | None:
-    """The coordinate break a row's decentre_x, …, tilt_order give (`placement`); None without any."""
-    if not any(key in row for key in PLACEMENT_KEYS):
-        return None
-    order = row.get("tilt_order", 0)
-    if not isinstance(order, int) or isinstance(order, bool) or order not in ORDERS:
-        raise SolasError(f"{ident}: tilt_order = {order!r} must be one of {', '.join(map(str, ORDERS))} (0: decentre, "
-                         "then tilt about x, y, z; 1: tilt about z, y, x, then decentre; Zemax's order flag)")
-    values = {key: finite_number(row, key, ident, "mm" if key.startswith("decentre") else "degrees", 0.0)
-              for key in PLACEMENT_KEYS[:-1]}
-    return Placement(**values, order=order)
 
 
 def polynomial_terms(row: dict, key: str, ident: str, meaning: str) -> tuple[float, ...]:

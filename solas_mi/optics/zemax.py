@@ -125,11 +125,11 @@ def read_spec(text: str, where: str) -> dict:
     notes.append(zemax_solves.default_stop(rows, "STOP", "as in OpticStudio's new lens (OBJ, STO, IMA)"))
     spec.update({"description": "; ".join(filter(None, notes))} if any(notes) else {})
     spec.update(ideal.zemax_notes(rows, spec.get("description")))
-    spec["surface"] = zemax_asbuilt.fold(rows, where)
+    spec["surface"], image = zemax_asbuilt.fold(rows, where)
     if "DIAM" in blocks[-1]:
         semi = _floats(blocks[-1]["DIAM"][0][:1], f"{where}: image DIAM")[0] * scale
-        if semi > 0:
-            spec["image"] = {"diameter": 2.0 * semi}
+        image.update({"diameter": 2.0 * semi} if semi > 0 else {})
+    spec.update({"image": image} if image else {})
     spec.update(_wavelengths(top, where))
     spec.update(_environment(top, where))
     fields = _fields(top, scale, where)
@@ -345,6 +345,9 @@ def dumps(lens) -> str:
         out += (["  STOP"] if s.stop else []) + to_zemax(s.coating, f"lens {lens.name}: surface {s.label}")
         out += [f"  DISZ {number(s.thickness)}", *glas(s.glass), f"  DIAM {number(s.semi_diameter)} 1 0 0 1 \"\""]
         out += [f"  CONI {number(shape.conic)}"] if shape.conic else []
+    if lens.image_placement is not None:  # the sensor decentred or tilted
+        i += 1
+        out += [f"SURF {i}", *zemax_asbuilt.break_lines(lens.image_placement, number)]
     out += [f"SURF {i + 1}", "  TYPE STANDARD", "  CURV 0.0", "  DISZ 0",
             f"  DIAM {number(lens.image_diameter / 2.0)} 1 0 0 1 \"\""]
     return "\n".join(out) + "\n"

@@ -6,10 +6,11 @@ coordinate breaks that decentre or tilt, and the folding of breaks and dummies i
 - BICONICX: CURV and CONI the y-z section's, PARM 1 the x radius (0: flat in x), PARM 2 the x conic
   (`shapes.biconic`; its polynomial terms refused by name).
 - COORDBRK: PARM 1, 2 the decentres, PARM 3, 4, 5 the tilts (degrees), PARM 6 the order flag; with DISZ 0
-  it becomes the next surface's `placement` (`placement.Placement`, the same convention); a break that only
+  it becomes the next surface's `placement` (`placement.Placement`, the same convention), or the image
+  plane's (a decentred or tilted sensor, `Lens.image_placement`); a break that only
   moves along the axis gives its DISZ to the gap before, and a pair of breaks that undo each other
-  vanishes (as before the lens as built was read). A moving break with a thickness of its own, two in a
-  row that do not undo each other, and one before the image plane (a tilted sensor) are refused by name.
+  vanishes (as before the lens as built was read). A moving break with a thickness of its own and two in
+  a row that do not undo each other are refused by name.
 Lengths scaled to mm by the file's UNIT.
 """
 
@@ -41,19 +42,20 @@ def form_row(kind: str, parameters: dict[int, float], scale: float, ident: str) 
     return {"kind": "toroid", "terms_y": terms, "radius_rotation": rotation}
 
 
-def fold(rows: list[dict], where: str) -> list[dict]:
-    """Rows without coordinate breaks and dummies: a pure axial break, a pair of breaks that undo each
-    other, and a flat air surface with no clear aperture of its own give their thickness to the row
-    before (or to the object's gap: refused, as the object distance would change); a break that decentres
-    or tilts becomes the next row's placement."""
+def fold(rows: list[dict], where: str) -> tuple[list[dict], dict]:
+    """Rows without coordinate breaks and dummies, and the [image] table's placement entries: a pure axial
+    break, a pair of breaks that undo each other, and a flat air surface with no clear aperture of its own
+    give their thickness to the row before (or to the object's gap: refused, as the object distance would
+    change); a break that decentres or tilts becomes the next row's placement, or the image plane's."""
     out: list[dict] = []
+    image: dict = {}
     i = 0
     while i < len(rows):
         row = rows[i]
         if "break" in row:
             shift = _break_shift(rows, i)
             if shift == "placed":
-                rows[i + 1].update(_placement(row["break"]))
+                (rows[i + 1] if i + 1 < len(rows) else image).update(_placement(row["break"]))
                 i += 1
                 continue
             span = 2 if shift is None else 1
@@ -79,12 +81,12 @@ def fold(rows: list[dict], where: str) -> list[dict]:
         else:
             out.append(row)
         i += 1
-    return [{k: v for k, v in row.items() if k not in ("ident", "auto", "opd_mode")} for row in out]
+    return [{k: v for k, v in row.items() if k not in ("ident", "auto", "opd_mode")} for row in out], image
 
 
 def _break_shift(rows: list[dict], i: int) -> float | str | None:
     """0.0 for a coordinate break that only moves along the axis; None when the next row is a break
-    that undoes it (no thickness between them); "placed" for one that becomes the next surface's placement;
+    that undoes it (no thickness between them); "placed" for one that places the next surface (or the image plane);
     else SolasError naming the break."""
     row = rows[i]
     p = row["break"]
@@ -99,12 +101,10 @@ def _break_shift(rows: list[dict], i: int) -> float | str | None:
         several = sum(1 for v in moves if v) > 1
         if back == [-v for v in moves] and (reordered or not several):
             return None
-    if nxt and q is None and row["thickness"] == 0:
-        return "placed"
+    if q is None and row["thickness"] == 0:
+        return "placed"  # on the next surface, or the image plane (the sensor) where none follows
     why = (
-        "before the image plane (a tilted or decentred sensor is not read yet)"
-        if not nxt
-        else "with a thickness of its own (put it on a dummy surface after the break)"
+        "with a thickness of its own (put it on a dummy surface after the break)"
         if row["thickness"]
         else "followed by another break that does not undo it"
     )

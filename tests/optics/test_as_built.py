@@ -37,7 +37,7 @@ def _collimated(lens, field_deg, n=9):
     )
 
 
-ASPHERE = _lens(
+ASPHERE_ROWS = (
     {
         "radius": 30.0,
         "conic": -0.7,
@@ -51,6 +51,7 @@ ASPHERE = _lens(
     },
     {"radius": -60.0, "thickness": 40.0, "diameter": 18.0},
 )
+ASPHERE = _lens(*ASPHERE_ROWS)
 
 
 @pytest.mark.parametrize("name", [*shipped_lenses(), "asphere"])
@@ -112,6 +113,26 @@ def test_a_decentred_ideal_lens_moves_the_image_by_the_decentre_times_one_minus_
     assert np.abs(out.y - decentre * (1.0 - m)).max() < 1e-12 and np.abs(out.x).max() < 1e-12
 
 
+def test_a_sensor_tilted_by_scheimpflug_s_angle_images_a_tilted_object_plane_sharply():
+    """Scheimpflug: an object plane tilted by α (z = −s + y tan α) images through an ideal lens (f) onto the
+    plane tilted by β, tan β = m tan α (m = −s′/s), through the axial image: every pencil from the object
+    plane meets in one point on a sensor tilted by β (`image_placement`); on the upright sensor the pencils
+    off the axis are blurred."""
+    s, f, alpha = 150.0, 50.0, math.radians(20.0)
+    image = 1.0 / (1.0 / f - 1.0 / s)
+    beta = math.degrees(math.atan(-image / s * math.tan(alpha)))
+    rows = ({"radius": 0.0, "focal_length": f, "thickness": image, "diameter": 30.0, "stop": True},)
+    tilted = _lens(*rows, object={"distance": s}, image={"tilt_x": beta})
+    upright = _lens(*rows, object={"distance": s})
+    aim = np.stack([a.ravel() for a in np.meshgrid(np.linspace(-8, 8, 5), np.linspace(-8, 8, 5))] + [np.zeros(25)], 1)
+    for y in (-20.0, 0.0, 15.0, 30.0):
+        point = np.array([0.0, y, -s + y * math.tan(alpha)])
+        pencil = local_trace.bundle(point, aim - point)
+        sharp, blurred = (local_trace.trace(lens, pencil, 550.0) for lens in (tilted, upright))
+        assert sharp.ok.all() and np.ptp(sharp.image_x) < 1e-12 and np.ptp(sharp.image_y) < 1e-11
+        assert y == 0.0 or np.ptp(blurred.image_y) > 0.1
+
+
 def test_breaks_chain_and_undo():
     """A break of order 1 with every value negated undoes one of order 0."""
     there = Placement(0.3, -0.2, 5.0, -7.0, 30.0, 0)
@@ -156,11 +177,11 @@ AS_BUILT = (
 
 
 def test_kinds_and_breaks_read_write_and_read_back(tmp_path):
-    lens = _lens(*AS_BUILT)
+    lens = _lens(*AS_BUILT, image={"decentre_y": 0.2, "tilt_x": 1.5})
     assert [s.kind for s in lens.surfaces] == [row.get("kind", "plane") for row in AS_BUILT]
     assert lens.surfaces[1].placement == Placement(0.1, 0.0, 0.0, 0.5, 0.0, 0)
     back = Lens.load(lens.save(tmp_path / "as-built.toml"))
-    assert back.hash == lens.hash and back.surfaces == lens.surfaces
+    assert back.hash == lens.hash and back.surfaces == lens.surfaces and back.image_placement == lens.image_placement
     assert lens.hash != _lens(*AS_BUILT[:1], {**AS_BUILT[1], "tilt_y": 0.6}, *AS_BUILT[2:]).hash
     out = local_trace.trace(
         lens,
@@ -198,6 +219,9 @@ def test_the_stages_of_symmetric_lenses_refuse_the_lens_as_built_by_name(tmp_pat
     )
     with pytest.raises(SolasError, match=r"decentred or tilted \(a coordinate break before it\)"):
         tracer.trace(tilted, rays, tracer.F(np.full(4, 0.55)))
+    sensor = _lens(*ASPHERE_ROWS, image={"tilt_x": 0.5})
+    with pytest.raises(SolasError, match=r"its image plane \(the sensor\) is decentred or tilted, which the ghost"):
+        ghost_paths.paths(sensor)
     with pytest.raises(SolasError, match="a .dat file holds no surfaces without rotational symmetry"):
         lens.save(tmp_path / "as-built.dat")
     assert shapes.KINDS["toroid"].extra["symmetric"] is False
@@ -279,10 +303,10 @@ def test_toroidal_and_biconicx_read_scaled_to_mm(tmp_path):
 
 
 def test_the_lens_as_built_round_trips_through_zmx_and_toml(tmp_path):
-    lens = _lens(*AS_BUILT)
+    lens = _lens(*AS_BUILT, image={"tilt_y": -2.0, "tilt_order": 1})
     back = Lens.load(Lens.load(lens.save(tmp_path / "a.zmx")).save(tmp_path / "b.toml"))
     for s, t in zip(lens.surfaces, back.surfaces):
-        assert s.placement == t.placement and s.kind == t.kind
+        assert s.placement == t.placement and s.kind == t.kind and back.image_placement == lens.image_placement
         assert all(
             v == pytest.approx(w, rel=1e-15) for v, w in zip(s.geometry.table().values(), t.geometry.table().values())
         )
@@ -330,7 +354,10 @@ SURF 5
 @pytest.mark.parametrize(
     "extra, message",
     [
-        ("SURF 3\n  TYPE COORDBRK\n  DISZ 0\n  PARM 3 5\n", "before the image plane"),
+        (
+            "SURF 3\n  TYPE COORDBRK\n  DISZ 0\n  PARM 3 5\nSURF 4\n  TYPE COORDBRK\n  DISZ 0\n  PARM 1 2\n",
+            "followed by another break that does not undo it",
+        ),
         (
             "SURF 3\n  TYPE COORDBRK\n  DISZ 2\n  PARM 1 0.5\nSURF 4\n  DISZ 1\n  DIAM 1 1\n",
             "with a thickness of its own",
