@@ -5,7 +5,9 @@ by (`decentre_x`, `decentre_y`) along the current x and y axes, then tilts by `t
 x axis, then `tilt_y` about the new y axis, then `tilt_z` about the newest z axis; with `order` 1 it tilts
 about z, then y, then x, then decentres along the tilted axes (so a break of order 1 with every value
 negated undoes one of order 0). Each tilt turns the frame by the right-hand rule: a positive `tilt_x`
-turns +y toward +z.
+turns +y toward +z. (OpticStudio User Guide, "Coordinate Break" and "Tilt/Decenter": "decentered in X,
+decentered in Y, and then tilted around X, tilted around Y, tilted around Z … tilts in degrees about the
+respective axis in a right hand direction", the order flag reversing the sequence.)
 
 `frames` chains the breaks of a lens: each surface's vertex and axes, and the image plane's, in the
 global frame of surface 1 (the lens as built). Lengths in mm, angles in degrees.

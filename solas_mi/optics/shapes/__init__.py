@@ -28,22 +28,29 @@ from .toroid import Toroid
 KINDS = Registry("surface kind", default="conic")
 """The surface kinds by name (a `solas_mi.registry.Registry`): each entry's function is the kind's
 `base.Shape` class; `keys`, `lists` and `symmetric` its extras (the module docstring)."""
-_SUMMARIES: dict[type[Shape], str] = {
-    Plane: "flat: radius 0",
-    Conic: "a sphere (conic 0) or conic of revolution: radius, conic",
-    EvenAsphere: "a conic plus even terms A4 r^4 + A6 r^6 + ...: aspheric",
-    Qbfs: "a conic plus Forbes' Qbfs departure: qbfs, norm_radius",
-    IdealLens: "an ideal thin lens of focal_length (mm), flat",
-    Toroid: "the y-z curve (radius, conic, terms_y on y^2, y^4, ...) rotated at radius_rotation (0: a cylinder)",
-    Cylinder: "curved in y-z (radius, conic), straight along x",
-    Biconic: "z = (cx x^2 + cy y^2)/(1 + sqrt(1 - (1+kx) cx^2 x^2 - (1+ky) cy^2 y^2)): radius, conic (y), "
-    "radius_x, conic_x",
+_SUMMARIES: dict[type[Shape], tuple[str, str]] = {  # summary, reference
+    Plane: ("flat: radius 0", ""),
+    Conic: ("a sphere (conic 0) or conic of revolution: radius, conic", ""),
+    EvenAsphere: ("a conic plus even terms A4 r^4 + A6 r^6 + ...: aspheric", ""),
+    Qbfs: ("a conic plus Forbes' Qbfs departure: qbfs, norm_radius", "G. W. Forbes, Opt. Express 15, 5218 (2007)"),
+    IdealLens: ("an ideal thin lens of focal_length (mm), flat", "OpticStudio's PARAXIAL"),
+    Toroid: (
+        "named by kind: the y-z curve (radius, conic, terms_y on y^2, y^4, ...) rotated at radius_rotation (0: none)",
+        "OpticStudio's TOROIDAL; optiland's ToroidalGeometry",
+    ),
+    Cylinder: ("named by kind: curved in y-z (radius, conic), straight along x", "OpticStudio's TOROIDAL, PARM 1 0"),
+    Biconic: (
+        "named by kind: z = (cx x^2 + cy y^2)/(1 + sqrt(1 - (1+kx) cx^2 x^2 - (1+ky) cy^2 y^2)): radius, conic "
+        "(y), radius_x, conic_x",
+        "OpticStudio's BICONICX, without its polynomial terms",
+    ),
 }
-for _cls, _summary in _SUMMARIES.items():  # each a dataclass (mypy sees only type[Shape])
+for _cls, (_summary, _reference) in _SUMMARIES.items():  # each a dataclass (mypy sees only type[Shape])
     KINDS.register(
         _cls.kind,
         _cls,
         summary=_summary,
+        reference=_reference,
         keys=tuple(f.name for f in fields(_cls)),  # type: ignore[arg-type]
         lists=tuple(f.name for f in fields(_cls) if f.type == "tuple[float, ...]"),  # type: ignore[arg-type]
         symmetric=_cls.symmetric,
