@@ -30,7 +30,8 @@ from .surface import RIM_SLACK
 class Bundle:
     """Ray points (x, y, z), unit directions (dx, dy, dz) and optical path (mm), NumPy arrays in the global
     frame; `ok`: the rays still travelling (every surface met inside its aperture, no total internal reflection);
-    `image_x`, `image_y`: where they meet the image plane, in its own frame (after `trace`)."""
+    `image_x`, `image_y`: where they meet the image plane, in its own frame, and `stop_x`, `stop_y` where they
+    cross the stop surface, in its frame (after `trace`)."""
 
     x: np.ndarray
     y: np.ndarray
@@ -42,6 +43,8 @@ class Bundle:
     ok: np.ndarray
     image_x: np.ndarray | None = None
     image_y: np.ndarray | None = None
+    stop_x: np.ndarray | None = None
+    stop_y: np.ndarray | None = None
 
 
 def bundle(points, directions) -> Bundle:
@@ -62,6 +65,7 @@ def trace(lens: Lens, rays: Bundle, wavelength_nm: float) -> Bundle:
     p = np.stack([rays.x, rays.y, rays.z], axis=1)
     d = np.stack([rays.dx, rays.dy, rays.dz], axis=1)
     opl, ok = rays.opl * 1.0, rays.ok.copy()
+    stop = (None, None)
     for k, (s, (origin, axes)) in enumerate(zip(lens.surfaces, placed)):
         n_after = float(s.glass.index(wavelength_nm))
         lp, ld = (p - origin) @ axes, d @ axes  # into the surface's frame
@@ -74,6 +78,7 @@ def trace(lens: Lens, rays: Bundle, wavelength_nm: float) -> Bundle:
         x, y, lz = x + t * ld[:, 0], y + t * ld[:, 1], t * ld[:, 2]
         opl = opl + n_before * (t0 + t)
         ok &= x * x + y * y <= (s.semi_diameter * (1.0 + RIM_SLACK)) ** 2
+        stop = (x, y) if s.stop else stop
         if s.blades:
             ok &= s.iris_margin(x, y, np.hypot, np.arctan2, np.cos, np.floor) >= -RIM_SLACK * s.semi_diameter
         if s.focal_length is not None:  # an ideal thin lens
@@ -92,7 +97,7 @@ def trace(lens: Lens, rays: Bundle, wavelength_nm: float) -> Bundle:
     image = lp + t[:, None] * ld
     p = origin + image @ axes.T
     (x, y, z), (dx, dy, dz) = p.T, d.T
-    return Bundle(x, y, z, dx, dy, dz, opl + n_before * t, ok & np.isfinite(t), image[:, 0], image[:, 1])
+    return Bundle(x, y, z, dx, dy, dz, opl + n_before * t, ok & np.isfinite(t), image[:, 0], image[:, 1], *stop)
 
 
 def _refract(normal, d: np.ndarray, mu: float) -> tuple[np.ndarray, np.ndarray]:

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 from solas_mi import Lens, SolasError
-from solas_mi.optics import aiming, ghost_paths, local_trace, pupil, shapes, tracer
+from solas_mi.optics import aiming, ghost_paths, local_aim, local_trace, pupil, shapes, tracer
 from solas_mi.optics.lens import shipped_lenses
 from solas_mi.optics.placement import Placement, frames
 
@@ -368,3 +368,38 @@ SURF 5
 def test_what_is_not_read_is_refused_by_name(tmp_path, extra, message):
     with pytest.raises(SolasError, match=message):
         _load(tmp_path, _zmx(SINGLET + extra))
+
+
+@pytest.mark.parametrize("name", ["cooke-triplet", "double-gauss-50mm", "wide-angle-22mm"])
+def test_chief_rays_aimed_in_two_dimensions_are_the_drjit_tracers(name):
+    """`local_aim`: x and y aimed together at the stop's centre land where the Dr.Jit tracer's chief rays do."""
+    lens, wl = Lens.load(name), 587.5618
+    f = lens.field_deg
+    fields = np.array([[0.0, 0.0], [0.3 * f, 0.6 * f], [-0.5 * f, 0.2 * f], [0.7 * f, -0.7 * f]])
+    ours = local_aim.chief_rays(lens, fields, wl)
+    theirs = pupil.chief_rays(lens, fields, np.full(len(fields), wl))
+    assert ours.found.all() and np.abs(ours.image_xy - theirs.image_xy).max() < 1e-9
+
+
+def test_the_chief_ray_of_a_decentred_ideal_lens_lands_at_the_decentre_plus_f_tan_theta():
+    """An ideal lens of focal f decentred by (Dx, Dy), the stop on it, the image plane at its focus back on
+    the axis: the chief ray passes the lens's centre undeviated, to (Dx + f tan θx, Dy + f tan θy)."""
+    f, dx, dy = 40.0, 0.4, -0.25
+    lens = _lens(
+        {
+            "radius": 0.0,
+            "focal_length": f,
+            "thickness": f,
+            "diameter": 20.0,
+            "stop": True,
+            "decentre_x": dx,
+            "decentre_y": dy,
+        },
+        {"radius": 0.0, "thickness": 0.0, "diameter": 40.0, "decentre_x": -dx, "decentre_y": -dy},
+    )
+    fields = np.array([[0.0, 0.0], [3.0, -5.0], [-8.0, 2.0]])
+    chief = local_aim.chief_rays(lens, fields, 550.0)
+    expected = np.array([dx, dy]) + f * np.tan(np.radians(fields))
+    assert chief.found.all() and np.abs(chief.image_xy - expected).max() < 1e-12
+    with pytest.raises(SolasError, match="aimed for an object at infinity only"):
+        local_aim.chief_rays(_lens(*ASPHERE_ROWS, object={"distance": 500.0}), fields, 550.0)
