@@ -208,7 +208,7 @@ def estimate(p: BatchPlan, workers: int) -> dict[str, float]:
             g.distances_m or [0])
     # each worker: its largest image's peak (which holds a grid; or its camera's)
     per_worker = max((max(peak_bytes(path, r, c, ch, grid_bytes) + memory_bytes(r * c, p.jobs[i].params.get("labels", ())),
-                          camera_bytes(p.jobs[i], r, c)) for i, (path, (r, c, ch)) in zip(p.todo, sizes)), default=0.0)
+                          camera_bytes(p.jobs[i], r, c, p.spec.camera)) for i, (path, (r, c, ch)) in zip(p.todo, sizes)), default=0.0)
     # the parent: one grid more, and its fits of the frames' camera blocks (`convolution.camera`)
     parent = grid_bytes + fit_bytes(max((r * c for _, (r, c, _) in sizes), default=0))
     return {"seconds": SECONDS_PER_VALUE * sum(values) / min(workers, max(1, len(values))),
@@ -216,15 +216,24 @@ def estimate(p: BatchPlan, workers: int) -> dict[str, float]:
             "grid_bytes": grid_bytes}
 
 
-def camera_bytes(job: Job, rows: int, cols: int) -> float:
-    """The peak memory of an item's camera stage (`sensor.commands.frame_bytes`, its RGB output read back;
-    with the image processor when it writes a developed frame); 0 without a camera."""
-    if not job.extras:
+def camera_bytes(job: Job, rows: int, cols: int, camera) -> float:
+    """The peak memory of an item's stage through the batch's `camera` (`sensor.commands.frame_bytes`: its RGB
+    output read back, the sensor's readouts, the camera's scene in time; with the image processor when it
+    writes a developed frame); 0 without a camera."""
+    if not job.extras or camera is None:
         return 0.0
     from ..isp.commands import DEVELOP_BYTES_PER_PIXEL
+    from ..sensor.capture import as_chain
     from ..sensor.commands import frame_bytes
 
-    return frame_bytes(rows, cols, 3, DEVELOP_BYTES_PER_PIXEL if len(job.extras) > 1 else 0.0)
+    return frame_bytes(
+        rows,
+        cols,
+        3,
+        DEVELOP_BYTES_PER_PIXEL if len(job.extras) > 1 else 0.0,
+        len(as_chain(camera.sensor).readouts),
+        camera.scene_in_time is not None,
+    )
 
 
 def scaled_lens(lens, spec: DegradeSpec) -> tuple[Any, dict | None]:

@@ -52,6 +52,7 @@ class RenderPlan:
     manifest: Manifest
     key: str
     spec: RenderSpec
+    camera: Any = None  # the batch's camera (`isp.camera.Camera`), or None
 
     @property
     def todo(self) -> list[int]:
@@ -178,7 +179,7 @@ def plan_render(
     sweep = {name: _json_axis(name, axes[name]) for name in SWEEP if len(axes[name]) > 1}
     manifest = Manifest(out_dir / MANIFEST, {"version": 1, "kind": "render", "batch_id": key, "sweep": sweep}, jobs)
     manifest.resume(key)
-    return RenderPlan(jobs, manifest, key, base)
+    return RenderPlan(jobs, manifest, key, base, camera)
 
 
 def _json_axis(name: str, values: list) -> list:
@@ -209,7 +210,7 @@ def estimate(p: RenderPlan, workers: int) -> dict[str, float]:
         peak = max(
             peak,
             max(rows * cols, SAMPLES_PER_PASS) * BYTES_PER_SAMPLE + 48 * rows * cols,
-            camera_bytes(job, rows, cols),
+            camera_bytes(job, rows, cols, p.camera),
         )
     cores = os.cpu_count() or 1
     return {

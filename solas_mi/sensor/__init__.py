@@ -9,6 +9,8 @@
   merge (`merge`) and companding (`compander`), defect pixels (`defects`), the shutter (`timing`).
 - `timing`: exposure in time: global and rolling shutters, each row's window of a moving scene or of
   PWM-driven light (LED flicker).
+- `rendered`: a Mitsuba scene rendered over the rows' windows: its PWM-driven emitters (named by id) and a
+  camera moving during the frame (`render_in_time`).
 - `emva`: what EMVA 1288 predicts of one readout; `limits`: the numbers' ranges and checks.
 - `cfa`: colour filter array patterns (RGGB and its turns, RCCB, RCCC) and the mosaic.
 - `qe`: quantum efficiency curves, and the effective QE with which each filter sees each channel.

@@ -113,21 +113,28 @@ def check_camera_memory(args: argparse.Namespace, develop_bytes_per_pixel: float
     from ..imageio import image_size
 
     rows, cols, channels = image_size(args.image)
-    need = FIXED_BYTES + frame_bytes(rows, cols, channels, develop_bytes_per_pixel, readouts)
-    need += rows * cols * TIMED_SCENE_BYTES_PER_PIXEL if args.flicker or args.image_motion else 0.0
+    timed = bool(args.flicker or args.image_motion)
+    need = FIXED_BYTES + frame_bytes(rows, cols, channels, develop_bytes_per_pixel, readouts, timed)
     check_memory(f"camera {cols}x{rows}", need, args.force, "a smaller image")
 
 
 def frame_bytes(
-    rows: int, cols: int, channels: int = 3, develop_bytes_per_pixel: float = 0.0, readouts: int = 1
+    rows: int,
+    cols: int,
+    channels: int = 3,
+    develop_bytes_per_pixel: float = 0.0,
+    readouts: int = 1,
+    timed: bool = False,
 ) -> float:
     """The camera's peak memory for a frame beyond its modules (bytes): the largest of the EXR read (of
-    `channels` channels), the sensor's chain (of `readouts` readouts) and the image processor's (0: none)."""
+    `channels` channels), the sensor's chain (of `readouts` readouts) and the image processor's (0: none),
+    plus a scene in time's images (`timed`: a flickering box or the image's motion)."""
     read = READ_BYTES_PER_VALUE * channels + READ_BYTES_PER_PIXEL
     chain = RAW_BYTES_PER_PIXEL + (
         MERGE_BYTES_PER_PIXEL + READOUT_BYTES_PER_PIXEL * (readouts - 1) if readouts > 1 else 0.0
     )
-    return rows * cols * max(read, chain, develop_bytes_per_pixel)
+    scene = TIMED_SCENE_BYTES_PER_PIXEL if timed else 0.0
+    return rows * cols * (max(read, chain, develop_bytes_per_pixel) + scene)
 
 
 def as_irradiance(

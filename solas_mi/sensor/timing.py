@@ -83,10 +83,16 @@ class Shutter:
         starts = order * self.line_time_s
         return starts, starts + exposure_s
 
+    def slices(self, rows: int, exposure_s: float) -> np.ndarray:
+        """The edges (s) of the `time_samples` even slices of the frame's span of time, from the first row's
+        start to the last row's end."""
+        starts, ends = self.windows(rows, exposure_s)
+        return np.linspace(starts.min(), ends.max(), self.time_samples + 1)
+
     def mean_over_windows(self, scene, rows: int, exposure_s: float) -> np.ndarray:
         """The irradiance (H, W, 3) each row of a callable `scene(t)` averages over its window (module docstring)."""
-        starts, ends = self.windows(rows, exposure_s)
-        edges = np.linspace(starts.min(), ends.max(), self.time_samples + 1)
+        edges = self.slices(rows, exposure_s)
+        shares = slice_shares(*self.windows(rows, exposure_s), edges, exposure_s)
         total = None
         for k in range(self.time_samples):
             image = np.asarray(scene(0.5 * (edges[k] + edges[k + 1])), dtype=np.float64)
@@ -95,9 +101,18 @@ class Shutter:
                     f"a moving scene's image at t = {edges[k]:g} s has shape {image.shape}; it must be "
                     f"(H, W, 3) with H = {rows} rows at every time"
                 )
-            share = (np.minimum(ends, edges[k + 1]) - np.maximum(starts, edges[k])).clip(0.0) / exposure_s
-            total = image * share[:, None, None] if total is None else total + image * share[:, None, None]
+            share = shares[k][:, None, None]
+            total = image * share if total is None else total + image * share
         return total
+
+
+def slice_shares(starts, ends, edges, exposure_s: float, source: PWMSource | None = None) -> np.ndarray:
+    """(K, rows): the share of each row's exposure (its window [starts[r], ends[r]]) that lies in each slice
+    [edges[k], edges[k + 1]] of the frame's time: the overlap's length over `exposure_s`, or the time `source`
+    is on within the overlap (the light a PWM-driven source gives the row from that slice)."""
+    low = np.maximum(np.asarray(starts)[None, :], np.asarray(edges)[:-1, None])
+    high = np.maximum(np.minimum(np.asarray(ends)[None, :], np.asarray(edges)[1:, None]), low)
+    return (high - low if source is None else source.on_time(low, high)) / exposure_s
 
 
 def exposed_irradiance(shutter: Shutter | None, scene, exposure_s: float) -> np.ndarray:
