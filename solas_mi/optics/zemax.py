@@ -189,7 +189,7 @@ def _surface(b: dict, i: int, scale: float, gcat: tuple[str, ...], where: str) -
     elif kind == "PARAXIAL":
         row.update(ideal.from_zemax(_parameters(b, ident), scale, ident))
     elif kind in zemax_asbuilt.SHAPE_TYPES:
-        row.update(zemax_asbuilt.form_row(kind, _parameters(b, ident), scale, ident), conic=conic)
+        row.update(zemax_asbuilt.form_row(kind, _parameters(b, ident), _extra_data(b, ident), scale, ident), conic=conic)
     row.update({"stop": True} if "STOP" in b else {})
     row.update({"coating": zemax_coating(b["COAT"][0][0], ident)} if b.get("COAT", [[]])[0] else {})
     return row
@@ -197,6 +197,10 @@ def _surface(b: dict, i: int, scale: float, gcat: tuple[str, ...], where: str) -
 
 def _parameters(b: dict, ident: str) -> dict[int, float]:
     return {int(p[0]): _floats(p[1:2], f"{ident}: PARM {p[0]}")[0] for p in b.get("PARM", []) if len(p) > 1}
+
+
+def _extra_data(b: dict, ident: str) -> dict[int, float]:
+    return {int(p[0]): _floats(p[1:2], f"{ident}: XDAT {p[0]}")[0] for p in b.get("XDAT", []) if len(p) > 1}
 
 
 def _aspheric(b: dict, scale: float, ident: str) -> list[float]:
@@ -222,7 +226,7 @@ def _odd_aspheric(b: dict, scale: float, ident: str) -> list[float]:
 def _q_type(b: dict, scale: float, ident: str) -> dict:
     """The row entries of a QED_TYPE block: {"qbfs", "norm_radius"} (type 0) or {"aspheric"} (type 1,
     Qcon, an even asphere exactly); {} when every coefficient is 0."""
-    xdat = {int(p[0]): _floats(p[1:2], f"{ident}: XDAT {p[0]}")[0] for p in b.get("XDAT", []) if len(p) > 1}
+    xdat = _extra_data(b, ident)
     kind, count, radius = xdat.get(1, 0.0), xdat.get(2, 0.0), xdat.get(3, 0.0) * scale
     if kind not in (0.0, 1.0) or count != int(count) or not 0 <= count <= 12:
         raise SolasError(f"{ident}: QED_TYPE with type (XDAT 1) {kind:g} and {count:g} terms (XDAT 2); allowed: "

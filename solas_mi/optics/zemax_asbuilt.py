@@ -23,13 +23,20 @@ SHAPE_TYPES = ("TOROIDAL", "BICONICX")
 TERMS = 8  # TOROIDAL's PARM 2…9: α1…α8
 
 
-def form_row(kind: str, parameters: dict[int, float], scale: float, ident: str) -> dict:
-    """The row entries beyond radius and conic (CURV, CONI) of a TOROIDAL or BICONICX block's PARM lines."""
-    stray = sorted(k for k, v in parameters.items() if v and not (1 <= k <= (1 + TERMS if kind == "TOROIDAL" else 2)))
+def form_row(kind: str, parameters: dict[int, float], extra: dict[int, float], scale: float, ident: str) -> dict:
+    """The row entries beyond radius and conic (CURV, CONI) of a TOROIDAL or BICONICX block's PARM lines;
+    SolasError for a parameter or extra data (XDAT: a toroid's Zernike terms) that is not read."""
+    last = 1 + TERMS if kind == "TOROIDAL" else 2
+    stray = sorted(k for k, v in parameters.items() if v and not 1 <= k <= last)
     if stray:
         raise SolasError(
-            f"{ident}: {kind} PARM {stray[0]} = {parameters[stray[0]]:g} is not read (only PARM 1"
-            f"{f'…{1 + TERMS}' if kind == 'TOROIDAL' else ', 2'})"
+            f"{ident}: {kind} PARM {stray[0]} = {parameters[stray[0]]:g} is not read (only PARM 1 to {last})"
+        )
+    extra_set = sorted(k for k, v in extra.items() if v)
+    if extra_set:
+        raise SolasError(
+            f"{ident}: {kind} extra data XDAT {extra_set[0]} = {extra[extra_set[0]]:g} is not read "
+            "(its Zernike or polynomial terms)"
         )
     if kind == "BICONICX":
         return {"kind": "biconic", "radius_x": parameters.get(1, 0.0) * scale, "conic_x": parameters.get(2, 0.0)}

@@ -363,6 +363,7 @@ SURF 5
             "with a thickness of its own",
         ),
         ("SURF 3\n  TYPE TOROIDAL\n  PARM 12 0.5\n  DIAM 1 1\n", "TOROIDAL PARM 12 = 0.5 is not read"),
+        ("SURF 3\n  TYPE TOROIDAL\n  XDAT 2 3\n  DIAM 1 1\n", "TOROIDAL extra data XDAT 2 = 3 is not read"),
     ],
 )
 def test_what_is_not_read_is_refused_by_name(tmp_path, extra, message):
