@@ -9,15 +9,21 @@ coordinate breaks that decentre or tilt, and the folding of breaks and dummies i
   it becomes the next surface's `placement` (`placement.Placement`, the same convention), or the image
   plane's (a decentred or tilted sensor, `Lens.image_placement`); a break that only
   moves along the axis gives its DISZ to the gap before, and a pair of breaks that undo each other
-  vanishes (as before the lens as built was read). A moving break with a thickness of its own and two in
-  a row that do not undo each other are refused by name.
+  vanishes (as before the lens as built was read); a moving break's own thickness is folded exactly into
+  the gap before it and its decentres (`_placed`). Two breaks in a row that do not undo each other are
+  refused by name.
 Lengths scaled to mm by the file's UNIT.
 """
 
 from __future__ import annotations
 
+from dataclasses import replace
+
+import numpy as np
+
 from ..errors import SolasError
 from .placement import KEYS as PLACEMENT_KEYS
+from .placement import Placement
 
 SHAPE_TYPES = ("TOROIDAL", "BICONICX")
 TERMS = 8  # TOROIDAL's PARM 2…9: α1…α8
@@ -62,7 +68,7 @@ def fold(rows: list[dict], where: str) -> tuple[list[dict], dict]:
         if "break" in row:
             shift = _break_shift(rows, i)
             if shift == "placed":
-                (rows[i + 1] if i + 1 < len(rows) else image).update(_placement(row["break"]))
+                (rows[i + 1] if i + 1 < len(rows) else image).update(_placed(row, out))
                 i += 1
                 continue
             span = 2 if shift is None else 1
@@ -108,23 +114,45 @@ def _break_shift(rows: list[dict], i: int) -> float | str | None:
         several = sum(1 for v in moves if v) > 1
         if back == [-v for v in moves] and (reordered or not several):
             return None
-    if q is None and row["thickness"] == 0:
+    if q is None:
         return "placed"  # on the next surface, or the image plane (the sensor) where none follows
-    why = (
-        "with a thickness of its own (put it on a dummy surface after the break)"
-        if row["thickness"]
-        else "followed by another break that does not undo it"
-    )
+    why = "followed by another break that does not undo it"
     raise SolasError(
         f"{row['ident']}: COORDBRK decentres or tilts the axis (decenter x, y {moves[0]:g}, "
         f"{moves[1]:g}; tilt x, y, z {moves[2]:g}, {moves[3]:g}, {moves[4]:g}) {why}"
     )
 
 
-def _placement(parameters: dict[int, float]) -> dict:
-    """The row entries of a break's PARM 1…6 (`placement.KEYS`, the order flag 0 or 1)."""
-    values = [parameters.get(k, 0.0) for k in range(1, 6)] + [1 if parameters.get(6, 0.0) else 0]
-    return {key: value for key, value in zip(PLACEMENT_KEYS, values) if value}
+def _placed(row: dict, out: list[dict]) -> dict:
+    """The placement entries of a break `row` (PARM 1…6: `placement.KEYS`, the order flag 0 or 1) for the row
+    after it. A break's own thickness t (along its new z) is folded into the row before (`out[-1]`), exactly:
+    order 0 decentres before it tilts by R, so R (0, 0, t) = (a, b, c) adds (a, b) to the decentres and c to
+    that thickness; order 1 decentres along the tilted axes, so the thickness grows by δ = t / R_zz and the
+    decentres lose δ (R_zx, R_zy) (refused where R_zz = 0, a tilt of 90°)."""
+    p = row["break"]
+    values = [p.get(k, 0.0) for k in range(1, 6)] + [1 if p.get(6, 0.0) else 0]
+    placement = Placement(*values)
+    t = row["thickness"]
+    if t:
+        if not out:
+            raise SolasError(
+                f"{row['ident']}: a coordinate break with a thickness (DISZ {t:g}) before the first "
+                "surface is not supported"
+            )
+        r = placement.rotation()
+        if placement.order == 0:
+            a, b, c = r @ np.array([0.0, 0.0, t])
+        else:
+            if abs(r[2, 2]) < 1e-12:
+                raise SolasError(
+                    f"{row['ident']}: a coordinate break of order 1 tilted by 90° with a thickness "
+                    f"(DISZ {t:g}) is not supported"
+                )
+            c = t / r[2, 2]
+            a, b = -c * r[2, :2]
+        out[-1]["thickness"] += c
+        placement = replace(placement, decentre_x=placement.decentre_x + a, decentre_y=placement.decentre_y + b)
+    return placement.table()
 
 
 def surface_lines(s, number) -> tuple[str, list[str]]:

@@ -351,16 +351,26 @@ SURF 5
     )
 
 
+@pytest.mark.parametrize("order", [0, 1])
+def test_a_break_with_a_thickness_of_its_own_places_the_next_surface_as_zemax_does(tmp_path, order):
+    """A COORDBRK with DISZ t: the next vertex lies t along the new z axis from the break's point, its axes the
+    break's (built here from `Placement.apply` and that step); the reader folds t into the gap before and the
+    decentres, exactly."""
+    t, moves = 5.0, (0.2, -0.1, 3.0, -2.0, 10.0)
+    cb = "".join(f"  PARM {k} {v}\n" for k, v in enumerate(moves, start=1)) + f"  PARM 6 {order}\n"
+    lens = _load(tmp_path, _zmx(SINGLET + f"SURF 3\n  TYPE COORDBRK\n  DISZ {t}\n{cb}SURF 4\n  DISZ 10\n  DIAM 1 1\n"))
+    origin, axes = Placement(*moves, order).apply(np.array([0.0, 0.0, 0.4 + 5.0]), np.eye(3))
+    expected = origin + axes[:, 2] * t
+    placed = frames(lens.surfaces)[2]
+    assert np.abs(placed[0] - expected).max() < 1e-12 and np.abs(placed[1] - axes).max() < 1e-15
+
+
 @pytest.mark.parametrize(
     "extra, message",
     [
         (
             "SURF 3\n  TYPE COORDBRK\n  DISZ 0\n  PARM 3 5\nSURF 4\n  TYPE COORDBRK\n  DISZ 0\n  PARM 1 2\n",
             "followed by another break that does not undo it",
-        ),
-        (
-            "SURF 3\n  TYPE COORDBRK\n  DISZ 2\n  PARM 1 0.5\nSURF 4\n  DISZ 1\n  DIAM 1 1\n",
-            "with a thickness of its own",
         ),
         ("SURF 3\n  TYPE TOROIDAL\n  PARM 12 0.5\n  DIAM 1 1\n", "TOROIDAL PARM 12 = 0.5 is not read"),
         ("SURF 3\n  TYPE TOROIDAL\n  XDAT 2 3\n  DIAM 1 1\n", "TOROIDAL extra data XDAT 2 = 3 is not read"),
