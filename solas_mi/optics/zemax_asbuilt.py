@@ -2,7 +2,9 @@
 coordinate breaks that decentre or tilt, and the folding of breaks and dummies into our rows.
 
 - TOROIDAL: CURV and CONI the y-z curve's, PARM 1 the radius of rotation (0: none, a cylinder),
-  PARM 2… α1, α2, … on y², y⁴, … (`shapes.toroid`); its Zernike extra data is refused by name.
+  PARM 2…8 α1…α7 on y², y⁴, …, y¹⁴ (`shapes.toroid`); PARM 0, the extrapolation flag, changes nothing
+  inside the curve's domain (rays beyond it are lost); its Zernike terms (PARM 13…, or extra data) are
+  refused by name (OpticStudio User Guide, "Toroidal").
 - BICONICX: CURV and CONI the y-z section's, PARM 1 the x radius (0: flat in x), PARM 2 the x conic
   (`shapes.biconic`; its polynomial terms refused by name).
 - COORDBRK: PARM 1, 2 the decentres, PARM 3, 4, 5 the tilts (degrees), PARM 6 the order flag; with DISZ 0
@@ -26,14 +28,14 @@ from .placement import KEYS as PLACEMENT_KEYS
 from .placement import Placement
 
 SHAPE_TYPES = ("TOROIDAL", "BICONICX")
-TERMS = 8  # TOROIDAL's PARM 2…9: α1…α8
+TERMS = 7  # TOROIDAL's PARM 2…8: α1…α7 (OpticStudio User Guide, "Toroidal")
 
 
 def form_row(kind: str, parameters: dict[int, float], extra: dict[int, float], scale: float, ident: str) -> dict:
     """The row entries beyond radius and conic (CURV, CONI) of a TOROIDAL or BICONICX block's PARM lines;
     SolasError for a parameter or extra data (XDAT: a toroid's Zernike terms) that is not read."""
     last = 1 + TERMS if kind == "TOROIDAL" else 2
-    stray = sorted(k for k, v in parameters.items() if v and not 1 <= k <= last)
+    stray = sorted(k for k, v in parameters.items() if v and not ((k == 0 and kind == "TOROIDAL") or 1 <= k <= last))
     if stray:
         raise SolasError(
             f"{ident}: {kind} PARM {stray[0]} = {parameters[stray[0]]:g} is not read (only PARM 1 to {last})"
@@ -163,6 +165,11 @@ def surface_lines(s, number) -> tuple[str, list[str]]:
     if s.form is None:
         return "", []
     terms = table.get("terms_y", [])
+    if len(terms) > TERMS:
+        raise SolasError(
+            f"surface {s.label}: a toroid of {len(terms)} terms_y has no .zmx form (TOROIDAL holds "
+            f"{TERMS}); save it as .toml"
+        )
     return "TOROIDAL", [f"  PARM 1 {number(table.get('radius_rotation', 0.0))}"] + [
         f"  PARM {k} {number(a)}" for k, a in enumerate(terms, start=2)
     ]
