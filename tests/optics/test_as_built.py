@@ -310,6 +310,9 @@ def test_the_lens_as_built_round_trips_through_zmx_and_toml(tmp_path):
         assert all(
             v == pytest.approx(w, rel=1e-15) for v, w in zip(s.geometry.table().values(), t.geometry.table().values())
         )
+    eight = _lens({**AS_BUILT[0], "terms_y": [1e-5] * 8}, *AS_BUILT[1:])
+    with pytest.raises(SolasError, match="a toroid of 8 terms_y has no .zmx form"):
+        eight.save(tmp_path / "eight.zmx")
 
 
 def test_an_element_tilted_and_returned_by_a_break_pair(tmp_path):
