@@ -25,6 +25,7 @@ from . import ideal
 from .coated import coating_transmittance
 from .fields import ANGLE
 from .lens import Lens
+from .lens_checks import refuse_as_built
 from .paraxial import ideal_conjugates, paraxial, pupil_distance
 from .sag import ASPHERE_ITERATIONS, ASPHERE_TOL_MM, sag, sag_slope
 from .surface import RIM_SLACK
@@ -185,6 +186,7 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False, heigh
     Fresnel transmittances (1 − (r_s² + r_p²)/2) of every refraction, a coated surface's coating's
     (`coating_transmittance`) where it has one; a `heights` list receives each
     surface's squared ray height x² + y² (mm², for automatic clear apertures)."""
+    refuse_as_built(lens, "the Dr.Jit tracer")
     x, y, z, dx, dy, dz, opl = rays.x, rays.y, rays.z, rays.dx, rays.dy, rays.dz, rays.opl
     ftype, utype, btype = _types(x)
     ok = dr.full(btype, True, dr.width(x))
