@@ -44,6 +44,10 @@ LEVELS = ("value", "values", "data")
 # what an emitter switched off keeps of them: not 0, which Mitsuba refuses for a spectrum it samples ("no
 # probability mass"); 2⁻¹⁰⁰ of an emitter's light is below float32's resolution of any other emitter's
 OFF = 2.0**-100
+# what is left of the switched-off emitters in a part: values within OFF·2²⁴ of the brightest part's peak are
+# that remainder (a part's own light so far below another's lies beyond any sensor's 24-bit merge) and read as 0,
+# so a frame whose emitters are all off is black, not ±1e-33 (negative where a colour leaves the RGB gamut)
+REMAINDER = OFF * 2.0**24
 INDEX = "#"  # "#N": the scene's N-th emitter (from 0), a name for one without an id (public scenes often give none)
 
 
@@ -273,10 +277,14 @@ def render_parts(
             params["to_world"] = type(params["to_world"])(start)
             params.update()
     assert result is not None  # a slice and a group at least: rendered
+    stacks = {name: np.stack(v) for name, v in images.items()}
+    floor = REMAINDER * max(float(np.abs(v).max(initial=0.0)) for v in stacks.values())
+    for v in stacks.values():
+        v[np.abs(v) <= floor] = 0.0
     return RenderedParts(
         edges,
-        np.stack(images.pop(None)),
-        {name: np.stack(v) for name, v in images.items()},
+        stacks.pop(None),
+        stacks,
         result.channels,
         spp,
         time.perf_counter() - began,

@@ -121,6 +121,35 @@ def test_the_parts_sum_to_the_scenes_own_render(variant_llvm_ad_spectral):
     assert np.array_equal(again, whole.astype(np.float32))
 
 
+def test_a_frame_whose_only_emitter_is_off_is_black(variant_llvm_ad_spectral):
+    """A blue LED lighting a green wall, off over the whole exposure: the frame is 0, not the ±1e-33 that the
+    switched-off emitter's remainder (`OFF` of its light) gives, negative where its colour leaves the RGB gamut
+    (which the camera then announced as values below zero)."""
+    mi = variant_llvm_ad_spectral
+    scene = mi.load_dict(
+        {
+            "type": "scene",
+            "integrator": {"type": "path"},
+            "sensor": perspective(mi, 24, 24),
+            "wall": {
+                "type": "rectangle",
+                "to_world": mi.ScalarTransform4f().scale([50.0, 50.0, 1.0]),
+                "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.05, 0.9, 0.05]}},
+            },
+            "led": {
+                "type": "sphere",
+                "center": [0.0, 3.0, 2.0],
+                "radius": 0.5,
+                "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [0.1, 0.2, 5.0]}},
+            },
+        }
+    )
+    parts = render_parts(scene, 4, None, EXPOSURE_S, ["led"])
+    assert parts.alone["led"].max() > 0.01  # the LED alone lights the wall
+    off = parts.over_windows(None, EXPOSURE_S, {"led": PWMSource(100.0, 0.1, phase=0.5)})
+    assert not off.any()
+
+
 @pytest.mark.parametrize("direction", ["top-down", "bottom-up"])
 def test_a_crop_windows_rows_keep_their_times_on_the_whole_film(variant_llvm_ad_spectral, direction):
     """A film drawing rows 50-89 of its 120 (its crop window): each row's share of the LED's light is the on-time
