@@ -12,8 +12,12 @@ sensor; the scene sees only the rays that leave the lens's first surface.
 | `focus_distance` | float     | world units | the lens file's | object distance in focus, in front of surface 1 (inf: infinity) |
 | `world_unit_mm`  | float     | mm          | 1000            | one world unit in mm (1000: the scene in metres)   |
 | `fresnel`        | string    | —           | "off"           | "transmit": weight by each refraction's unpolarised|
-|                  |           |             |                 | Fresnel transmittance (a coated surface's: its     |
-|                  |           |             |                 | coating's); "off": lossless surfaces               |
+|                  |           |             | ("transmit"     | Fresnel transmittance (a coated surface's: its     |
+|                  |           |             | with `ghosts`)  | coating's); "off": lossless surfaces               |
+| `ghosts`         | string    | —           | "off"           | the lens's ghosts (`ghost_sampling`): "on" (the    |
+|                  |           |             |                 | direct path and every two-reflection path), "only" |
+|                  |           |             |                 | (the stray light alone), "j,i" (that ghost alone); |
+|                  |           |             |                 | "off": the direct image, traced as without it      |
 | `to_world`       | transform | world units | identity        | the camera's frame: looks along local +z, +y up    |
 | `stratify_wavelengths` | boolean | —     | true            | stratify the wavelengths of a pixel's samples      |
 | `lane_tolerance` | float     | pixels      | 0.25            | ε: how alike the spectral lanes' rays must leave   |
@@ -48,6 +52,13 @@ Float64 sequential tracer (`solas_mi.optics.tracer`, on the reversed lens of
 and the stop clip, total internal reflection ends the ray. The hero's ray leaves for the scene carrying
 the lanes that leave the lens within `lane_tolerance` of it (`lanes_together`), each weighted 4/(the
 lanes alike it), so every lane's estimate is unbiased.
+
+With `ghosts`, each sample first draws its path, the direct one or a ghost (`ghost_sampling`: by the
+ghost table's energies), and all its lanes follow it (`solas_mi.optics.ghost_trace`: the reversed lens's
+surfaces met from either side, reflected or crossed; every event weighs the ray by its coating's or
+Fresnel's reflectance or transmittance); the weight is divided by the path's probability. A ghost's pupil
+point is drawn on a square that holds the last surface's whole clear aperture (its rays may enter where
+the direct path's are stopped).
 
 The weight of `sample_ray` is the pupil weight × 1/p(λ) × the Fresnel transmittance, scaled so that the
 pixel value is the image irradiance in units of a lossless lens's on-axis irradiance from radiance 1: a
