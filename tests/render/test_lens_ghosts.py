@@ -197,3 +197,11 @@ def test_bad_ghosts_are_refused_by_name(variant_llvm_ad_mono, extra, message):
     sensor = {"type": "lens_camera", "lens": DOUBLE_GAUSS, "response": f"mono:{LAM}", **extra}
     with pytest.raises(RuntimeError, match=message):  # Mitsuba wraps the plugin's SolasError
         mi.load_dict({"type": "scene", "sensor": sensor})
+
+
+def test_ghosts_in_a_scalar_variant_are_refused_by_name(variant_scalar_spectral):
+    """The ghost paths are drawn and traced per wavefront (gathers over the path table): a scalar variant, one
+    ray at a time, is refused naming the JIT variants."""
+    sensor = {"type": "lens_camera", "lens": DOUBLE_GAUSS, "ghosts": "on"}
+    with pytest.raises(RuntimeError, match="ghosts need a JIT variant .* not scalar_spectral"):
+        variant_scalar_spectral.load_dict({"type": "scene", "sensor": sensor})
