@@ -1,5 +1,6 @@
 """Where solas-mi keeps what it computed once and reuses: `cache_root`, the folder of its caches (the PSF grids
-of `batch.cache`, the fitted cameras of `optics.calibration`), and `RecordCache`, JSON records kept by a key.
+of `batch.cache`, the fitted cameras of `optics.calibration`), `RecordCache`, JSON records kept by a key, and
+`FileCache`, files (the ghost grids of `psf.ghost_nodes`) kept by a key with a record of it beside each.
 
 The root is $SOLAS_MI_CACHE_DIR where set (`ENV`), else the user's cache directory (`platformdirs`), e.g.
 ~/.cache/solas-mi. A record is a file named by the hash of its key, holding its key, its value and the value's
@@ -33,6 +34,15 @@ def cache_root() -> Path:
     return Path(user_cache_dir("solas-mi"))
 
 
+def file_hash(path: str | os.PathLike, full: bool = False) -> str:
+    """The first 16 hex digits of the file's SHA-256 (all 64 when `full`)."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            digest.update(chunk)
+    return digest.hexdigest() if full else digest.hexdigest()[:16]
+
+
 def _digest(value: Any) -> str:
     return hashlib.sha256(jsonio.dumps(value, sort_keys=True).encode()).hexdigest()
 
@@ -59,6 +69,16 @@ class RecordCache:
     def __init__(self, name: str, what: str):
         self.name = name
         self.what = what
+
+    def not_kept(self, folder: Path, exc: SolasError) -> None:
+        """Say once per folder on stderr that what cannot be written there is computed each time."""
+        if folder not in self.unwritable:
+            self.unwritable.add(folder)
+            print(
+                f"{exc}: the {self.what} is not kept, computed each time (set {ENV} to a folder you can write)",
+                file=sys.stderr,
+                flush=True,
+            )
 
     def path(self, key: Any) -> Path:
         """The file of the record of `key`: its hash's first 32 hex digits, in the folder."""
@@ -107,11 +127,66 @@ class RecordCache:
         try:
             write_text(path, jsonio.dumps({"key": key, "value": value, "sha256": _digest(value)}, indent=1) + "\n")
         except SolasError as exc:
-            if path.parent not in self.unwritable:
-                self.unwritable.add(path.parent)
-                print(
-                    f"{exc}: the {self.what} is not kept, computed each time (set {ENV} to a folder you can write)",
-                    file=sys.stderr,
-                    flush=True,
-                )
+            self.not_kept(path.parent, exc)
+        return value, False
+
+
+class FileCache(RecordCache):
+    """Files kept in a folder of `cache_root` by their key, each with its record beside it (``NAME.json``: the
+    key and the file's SHA-256); an entry is reused only when its record names the key and the file's content
+    matches, so a changed, swapped or truncated file is said so on stderr and computed again.
+
+    Parameters
+    ----------
+    name : str
+        The folder's name in `cache_root()`.
+    what : str
+        What a file holds, as the notes on stderr call it ("ghost grid").
+    suffix : str
+        The files' ending (".exr").
+    """
+
+    def __init__(self, name: str, what: str, suffix: str):
+        super().__init__(name, what)
+        self.suffix = suffix
+
+    def path(self, key: Any) -> Path:
+        """The file of `key`: its hash's first 32 hex digits, in the folder."""
+        return super().path(key).with_suffix(self.suffix)
+
+    def check(self, path: Path, key: Any) -> str | None:
+        """None where `path` is whole and its record names `key`; else why it is not reused."""
+        value, why = self.read(Path(f"{path}.json"), key)
+        if why is not None:
+            return f"its record: {why}"
+        return None if value == file_hash(path, full=True) else "its content does not match its record's checksum"
+
+    def get_file(self, key: Any, compute: Callable[[], Any], write: Callable, read: Callable) -> tuple[Any, bool]:
+        """The value of `key`: ``read(path)`` where its file is whole, else ``compute()``d, kept by ``write(value,
+        path)`` (atomic) with its record and read back; a folder that cannot be written: computed each time.
+
+        Returns
+        -------
+        tuple
+            (the value; whether it came from the cache).
+        """
+        from .imageio import write_text
+
+        path = self.path(key)
+        if path.exists():
+            why = self.check(path, key)
+            if why is None:
+                return read(path), True
+            print(f"cache entry {path} is not reused: {why}; computing the {self.what} again", file=sys.stderr)
+        value = compute()
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            write(value, path)
+            digest = file_hash(path, full=True)
+            write_text(f"{path}.json", jsonio.dumps({"key": key, "value": digest, "sha256": _digest(digest)}) + "\n")
+            return read(path), False  # as a read-back gives it: a first call and a second agree
+        except OSError as exc:
+            self.not_kept(path.parent, SolasError(f"cannot write {path}: {exc.strerror or exc}"))
+        except SolasError as exc:
+            self.not_kept(path.parent, exc)
         return value, False

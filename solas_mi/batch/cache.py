@@ -12,14 +12,13 @@ user's cache directory), e.g. ~/.cache/solas-mi/psf-grids.
 
 from __future__ import annotations
 
-import hashlib
 import os
 import sys
 import time
 from pathlib import Path
 
 from .. import jsonio
-from ..caches import cache_root
+from ..caches import cache_root, file_hash  # file_hash: imported from here too
 from ..errors import SolasError
 from ..outputs import inside, safe_name
 from ..userfiles import read_text
@@ -28,15 +27,6 @@ from ..userfiles import read_text
 def default_cache_dir() -> Path:
     """The grids' folder in solas-mi's cache folder (`caches.cache_root`)."""
     return cache_root() / "psf-grids"
-
-
-def file_hash(path: str | os.PathLike, full: bool = False) -> str:
-    """The first 16 hex digits of the file's SHA-256 (all 64 when `full`)."""
-    digest = hashlib.sha256()
-    with open(path, "rb") as f:
-        for chunk in iter(lambda: f.read(1 << 20), b""):
-            digest.update(chunk)
-    return digest.hexdigest() if full else digest.hexdigest()[:16]
 
 
 class GridCache:

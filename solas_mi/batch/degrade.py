@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..errors import SolasError
 from .cache import GridCache, file_hash
-from .jobs import MANIFEST, Job, Manifest, add_outputs, expand_inputs, plan, say_skipped
+from .jobs import MANIFEST, SCENE_SUFFIXES, Job, Manifest, add_outputs, expand_inputs, plan, say_skipped
 from .runner import check_dask
 
 if TYPE_CHECKING:
@@ -170,6 +170,10 @@ def with_camera(jobs: list[Job], camera, sources, output_format: str = "exr") ->
     if output_format == "png16":
         raise SolasError("a camera reads each item's irradiance from its EXR: write exr or exr-half, not png16 "
                          "(16-bit sRGB, clipped to [0, 1])")
+    images = [str(f) for f in sources if Path(f).suffix.lower() not in SCENE_SUFFIXES]
+    if camera.scene_timing is not None and images:  # --pwm-emitter, --camera-motion: a scene file's
+        raise SolasError(f"the camera's PWM emitters and camera motion are a scene file's; {images[0]} is an image: "
+                         "give the images as a separate batch")
     add_outputs(jobs, lambda output: camera_outputs(output, camera), sources)
 
 
@@ -208,7 +212,7 @@ def estimate(p: BatchPlan, workers: int) -> dict[str, float]:
             g.distances_m or [0])
     # each worker: its largest image's peak (which holds a grid; or its camera's)
     per_worker = max((max(peak_bytes(path, r, c, ch, grid_bytes) + memory_bytes(r * c, p.jobs[i].params.get("labels", ())),
-                          camera_bytes(p.jobs[i], r, c)) for i, (path, (r, c, ch)) in zip(p.todo, sizes)), default=0.0)
+                          camera_bytes(p.jobs[i], r, c, p.spec.camera)) for i, (path, (r, c, ch)) in zip(p.todo, sizes)), default=0.0)
     # the parent: one grid more, and its fits of the frames' camera blocks (`convolution.camera`)
     parent = grid_bytes + fit_bytes(max((r * c for _, (r, c, _) in sizes), default=0))
     return {"seconds": SECONDS_PER_VALUE * sum(values) / min(workers, max(1, len(values))),
@@ -216,15 +220,24 @@ def estimate(p: BatchPlan, workers: int) -> dict[str, float]:
             "grid_bytes": grid_bytes}
 
 
-def camera_bytes(job: Job, rows: int, cols: int) -> float:
-    """The peak memory of an item's camera stage (`sensor.commands.frame_bytes`, its RGB output read back;
-    with the image processor when it writes a developed frame); 0 without a camera."""
-    if not job.extras:
+def camera_bytes(job: Job, rows: int, cols: int, camera) -> float:
+    """The peak memory of an item's stage through the batch's `camera` (`sensor.commands.frame_bytes`: its RGB
+    output read back, the sensor's readouts, the camera's scene in time; with the image processor when it
+    writes a developed frame); 0 without a camera."""
+    if not job.extras or camera is None:
         return 0.0
     from ..isp.commands import DEVELOP_BYTES_PER_PIXEL
+    from ..sensor.capture import as_chain
     from ..sensor.commands import frame_bytes
 
-    return frame_bytes(rows, cols, 3, DEVELOP_BYTES_PER_PIXEL if len(job.extras) > 1 else 0.0)
+    return frame_bytes(
+        rows,
+        cols,
+        3,
+        DEVELOP_BYTES_PER_PIXEL if len(job.extras) > 1 else 0.0,
+        len(as_chain(camera.sensor).readouts),
+        camera.scene_in_time is not None,
+    )
 
 
 def scaled_lens(lens, spec: DegradeSpec) -> tuple[Any, dict | None]:

@@ -366,9 +366,14 @@ def metadata(lens) -> dict:
         )
     stop = lens.surfaces[lens.stop_index]
     if stop.blades:
-        share = stop.blades / (2.0 * math.pi) * math.sin(2.0 * math.pi / stop.blades)
+        share = stop.iris_area() / (math.pi * stop.semi_diameter**2)
+        sides = (
+            f"blades curved {stop.blade_curvature:g} (arcs of {1.0 / stop.blade_curvature:g} clear radii)"
+            if stop.blade_curvature
+            else "straight blades"
+        )
         out["iris"] = (
-            f"{stop.blades} straight blades, first corner at {stop.blade_rotation:g} deg: a regular "
+            f"{stop.blades} {sides}, first corner at {stop.blade_rotation:g} deg: a regular "
             f"{stop.blades}-gon inside the stop's circle, {share:.4f} of its area (f/# and pupils: the "
             "circle's)"
         )

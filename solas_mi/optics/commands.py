@@ -11,7 +11,7 @@ import numpy as np
 
 from .. import jsonio
 from ..options import floats
-from . import notes
+from . import notes, typical_ar
 from .formats import lens_help, writable
 
 _ROWS = [("efl_mm", "EFL (mm)"), ("bfd_mm", "BFD (mm)"), ("entrance_pupil_diameter_mm", "EPD (mm)"),
@@ -93,7 +93,7 @@ def run_lens_info(args) -> int:
         rows.append(p)
     info = {"lens": lens.name, "hash": lens.hash, "source": lens.source, "stop_surface": lens.stop_index + 1,
             "image_z_mm": lens.image_z, "image_diameter_mm": lens.image_diameter, "field_type": lens.field_type.name,
-            "dispersion": lens.dispersive, **notes.metadata(lens), "per_wavelength": rows}
+            "dispersion": lens.dispersive, **notes.metadata(lens), **typical_ar.note(lens), "per_wavelength": rows}
     table = None
     if args.fields or lens.field_deg > 0:  # the given fields, else 0 … the lens's half field
         table = distortion(lens, sorted({abs(f) for f in fields} | {0.0}) if args.fields else None)
@@ -150,9 +150,12 @@ def run_lens_list(args) -> int:
 
 def run_lens_convert(args) -> int:
     from ..outputs import check_target
+    from .lens import Lens
 
     lens = load_lens(args)
-    out = lens.save(check_target(args.output, [lens.source] if lens.source else []))
+    target = check_target(args.output, [lens.source] if lens.source else [])
+    out = (typical_ar.with_typical_ar(lens) if args.typical_ar else lens).save(target)
+    lens = Lens.load(out) if args.typical_ar else lens
     print(f"wrote {out} ({lens.name}: {len(lens.surfaces)} surfaces, hash {lens.hash})")
     return 0
 
@@ -174,6 +177,9 @@ def register(sub: Any) -> None:
     add_lens_argument(convert)
     convert.add_argument("-o", "--output", required=True, help=f"the new lens file, its format by its extension: "
                                                                 f"{writable()}")
+    ar = typical_ar.TYPICAL_AR
+    convert.add_argument("--typical-ar", action="store_true", help=f"state the typical AR coating on every air-glass "
+                         f"surface that states none: {ar['material']} a quarter wave at {ar['design_nm']:g} nm")
     convert.set_defaults(run=run_lens_convert)
     from .calibration.command import register as register_calibrate
 

@@ -57,6 +57,7 @@ def reversed_lens(lens: Lens) -> Lens:
                 s[i].coating,
                 s[i].blades,
                 s[i].blade_rotation,
+                blade_curvature=s[i].blade_curvature,
             )
         )
     return replace(

@@ -61,6 +61,13 @@ class FieldType:
         """The field (x, y) in degrees of the direction of polar angle θ (radians) and azimuth φ."""
         raise NotImplementedError
 
+    def polar(self, field_deg) -> tuple[float, float]:
+        """The polar angle θ and azimuth φ (radians, φ from +x counter-clockwise) of a field's direction: the
+        inverse of `field_of`."""
+        v = self.incoming(np.asarray(field_deg, dtype=np.float64))
+        z = v[2] if len(v) == 3 else 1.0  # tangents: the direction ∝ (tan x, tan y, 1)
+        return math.atan2(math.hypot(v[0], v[1]), z), math.atan2(v[1], v[0])
+
 
 class AngleField(FieldType):
     name = "angle"
@@ -118,6 +125,7 @@ class PolarField(FieldType):
 
 
 ANGLE, POLAR = AngleField(), PolarField()
+FIELD_TYPES = {t.name: t for t in (ANGLE, POLAR)}  # by name, as files store it
 
 
 def field_type_for(half_field_deg: float) -> FieldType:

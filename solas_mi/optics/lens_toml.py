@@ -87,6 +87,8 @@ def dumps(lens) -> str:
             lines.append(f"coating = {_value(s.coating.table())}")
         if s.blades:
             lines += [f"blades = {s.blades}", f"blade_rotation = {_value(s.blade_rotation)}"]
+        if s.blade_curvature:
+            lines.append(f"blade_curvature = {_value(s.blade_curvature)}")
         if s.mount is not None:
             lines.append(f"mount = {_value(s.mount)}")
     if lens.image_diameter:

@@ -7,7 +7,8 @@ A surface is a sphere, or an even asphere: sag z(r) = c r² / (1 + √(1 − (1 
 departure φ u²(1 − u²) Σ a_m Q_m^bfs(u²) with `qbfs` = [a0, a1, …] (mm) and u = r / `norm_radius`
 (`forbes`). A flat surface with `focal_length` (mm) is an ideal thin lens (`ideal`); `coating`, its thin
 films (`coating`); the stop's `blades` (N ≥ 3) and `blade_rotation` (degrees): an iris, the regular N-gon
-whose corners lie on the stop's clear circle. Lengths in mm.
+whose corners lie on the stop's clear circle, its sides straight or, with `blade_curvature` κ in (0, 1], arcs of
+radius (clear radius)/κ bulging outward through the same corners (κ = 1: the clear circle). Lengths in mm.
 """
 from __future__ import annotations
 
@@ -31,7 +32,7 @@ KEYS = {
     "lens": ("name", "description", "wavelengths_nm", "field_deg", "catalogues", "materials", "temperature_c",
              "pressure_kpa", "surface", "object", "image"),
     "surface": ("label", "radius", "thickness", "diameter", "material", "stop", "conic", "aspheric", "qbfs",
-                "norm_radius", "focal_length", "coating", "blades", "blade_rotation", "mount"),
+                "norm_radius", "focal_length", "coating", "blades", "blade_rotation", "mount", "blade_curvature"),
     "object": ("distance", "material"),
     "image": ("diameter",),
 }
@@ -102,6 +103,7 @@ class Surface:
     blades: int = 0  # the stop's iris: N ≥ 3 straight blades, a regular N-gon with its corners on the clear circle; 0: round
     blade_rotation: float = 0.0  # degrees from +x to the polygon's first corner, counter-clockwise seen from the object
     mount: str | float | None = None  # what holds the air gap after it (`thermal.MOUNTS` or a CTE, 1/K); None: not said
+    blade_curvature: float = 0.0  # the iris's sides: 0 straight, κ in (0, 1] arcs of radius (clear radius)/κ
 
     def iris_margin(self, x, y, hypot, atan2, cos, floor):
         """The signed distance (mm) of points (x, y) inside the stop's aperture: to its rim for a round stop,
@@ -113,7 +115,37 @@ class Surface:
         sector = 2.0 * math.pi / self.blades
         angle = atan2(y, x) - math.radians(self.blade_rotation)
         within = angle - sector * floor(angle / sector)  # from the sector's first corner, in [0, sector)
-        return radius * math.cos(0.5 * sector) - hypot(x, y) * cos(within - 0.5 * sector)
+        along = hypot(x, y) * cos(within - 0.5 * sector)  # the point's distance along its sector's bisector
+        if not self.blade_curvature:
+            return radius * math.cos(0.5 * sector) - along
+        # the arc through the sector's two corners, of radius R = r/κ, its centre on the bisector at d (< apex A),
+        # as R − |p − centre| = ((A − along)(R + along − d) − across²) / (R + |p − centre|): no cancellation as
+        # κ → 0 (R → ∞), where it tends to the straight side's margin
+        arc, apex, centre = self.iris_arc()
+        across = hypot(x, y) * cos(within - 0.5 * sector - 0.5 * math.pi)
+        return ((apex - along) * (arc + along - centre) - across * across) / (arc + hypot(along - centre, across))
+
+    def iris_arc(self) -> tuple[float, float, float]:
+        """A curved-blade iris's arc: its radius R = r/κ, the distance from the axis of its apex A (on a sector's
+        bisector) and of its centre A − R (r the clear radius, κ `blade_curvature`, corners at half-angle π/N)."""
+        r, half = self.semi_diameter, math.pi / self.blades
+        arc = r / self.blade_curvature
+        chord = r * math.sin(half)  # half the chord between the corners
+        apex = r * math.cos(half) + chord * chord / (arc + math.sqrt(arc * arc - chord * chord))
+        return arc, apex, apex - arc
+
+    def iris_area(self) -> float:
+        """The aperture's area (mm²): the circle, the N-gon (N/2) r² sin(2π/N), or the N-gon and N circular
+        segments (R²/2)(2α − sin 2α), sin α = κ sin(π/N), for curved blades."""
+        r = self.semi_diameter
+        if not self.blades:
+            return math.pi * r * r
+        polygon = 0.5 * self.blades * r * r * math.sin(2.0 * math.pi / self.blades)
+        if not self.blade_curvature:
+            return polygon
+        arc = r / self.blade_curvature
+        alpha = math.asin(self.blade_curvature * math.sin(math.pi / self.blades))
+        return polygon + self.blades * 0.5 * arc * arc * (2.0 * alpha - math.sin(2.0 * alpha))
 
     def prescription(self) -> list:
         """What of this surface changes the optics, for the lens's hash (a kind's terms only where present, so
@@ -123,7 +155,8 @@ class Surface:
                 + ([list(self.qbfs), self.norm_radius] if any(self.qbfs) else [])
                 + ([{"focal_length": self.focal_length}] if self.ideal else [])
                 + ([{"coating": self.coating.table()}] if self.coating else [])
-                + ([{"blades": self.blades, "blade_rotation": self.blade_rotation}] if self.blades else []))
+                + ([{"blades": self.blades, "blade_rotation": self.blade_rotation}] if self.blades else [])
+                + ([{"blade_curvature": self.blade_curvature}] if self.blade_curvature else []))
 
     @property
     def ideal(self) -> bool:
@@ -186,11 +219,7 @@ def surface_from_row(row: dict, i: int, where: str, catalogues: tuple[str, ...],
     except SolasError as exc:
         raise SolasError(f"{ident}: {exc}") from None
     coating = coating_from_table(row["coating"], ident) if "coating" in row else None
-    blades, rotation = row.get("blades", 0), finite_number(row, "blade_rotation", ident, "degrees", 0.0)
-    if not isinstance(blades, int) or isinstance(blades, bool) or not (blades == 0 or 3 <= blades <= MAX_BLADES) \
-            or ((blades or "blade_rotation" in row) and not stop):
-        raise SolasError(f"{ident}: blades = {blades!r} must be 0 (a round stop) or an integer from 3 to {MAX_BLADES}, "
-                         "with blade_rotation (degrees), on the stop surface only")
+    blades, rotation, curvature = _iris(row, ident, stop)
     mount = row.get("mount")
     if mount is not None:
         try:
@@ -198,7 +227,21 @@ def surface_from_row(row: dict, i: int, where: str, catalogues: tuple[str, ...],
         except SolasError as exc:
             raise SolasError(f"{ident}: {exc}") from None
     return Surface(label, radius, thickness, diameter, str(material), g, stop, conic, aspheric, qbfs, norm_radius,
-                   focal_length, coating, blades, rotation, mount)
+                   focal_length, coating, blades, rotation, mount, curvature)
+
+
+def _iris(row: dict, ident: str, stop: bool) -> tuple[int, float, float]:
+    """A row's iris: blades, blade_rotation (degrees) and blade_curvature; SolasError naming a bad one."""
+    blades, rotation = row.get("blades", 0), finite_number(row, "blade_rotation", ident, "degrees", 0.0)
+    if not isinstance(blades, int) or isinstance(blades, bool) or not (blades == 0 or 3 <= blades <= MAX_BLADES) \
+            or ((blades or "blade_rotation" in row) and not stop):
+        raise SolasError(f"{ident}: blades = {blades!r} must be 0 (a round stop) or an integer from 3 to {MAX_BLADES}, "
+                         "with blade_rotation (degrees), on the stop surface only")
+    curvature = finite_number(row, "blade_curvature", ident, "the blades' curvature", 0.0)
+    if not 0.0 <= curvature <= 1.0 or ("blade_curvature" in row and not blades):
+        raise SolasError(f"{ident}: blade_curvature = {row['blade_curvature']!r} must be from 0 (straight blades) to 1 "
+                         "(arcs of the clear circle), with blades")
+    return blades, rotation, curvature
 
 
 def polynomial_terms(row: dict, key: str, ident: str, meaning: str) -> tuple[float, ...]:

@@ -9,7 +9,7 @@ from ..errors import SolasError
 from ..optics.commands import add_lens_argument
 from ..optics.ghost_paths import DEFAULT_RAYS as DEFAULT_GHOST_RAYS
 from ..options import floats
-from ..outputs import add_png_option, data_and_preview, written_together
+from ..outputs import add_png_option, check_target, data_and_preview, written_together
 from ..progress import Progress
 from .spec import PSF_OPTIONS, GridSpec
 
@@ -99,6 +99,32 @@ def run_ghosts(args) -> int:
     return 0
 
 
+def run_ghost_grid(args) -> int:
+    from ..budget import check_memory
+    from ..optics import ghost_paths
+    from ..optics.commands import load_lens
+    from .ghost_nodes import ghost_grid, grid_options
+
+    exr = check_target(args.output)
+    json_path = check_target(args.json or exr.with_suffix(".json"))
+    lens = load_lens(args)
+    wavelengths = floats(args.wavelengths_nm, "--wavelengths-nm") if args.wavelengths_nm else None
+    field = floats(args.field_deg, "--field-deg")[0] if args.field_deg else None
+    chosen = (args.radii, field, wavelengths, args.rays, args.kernel, args.azimuths)
+    options = grid_options(lens, *chosen)  # checked before the work
+    nodes = options["radii"] * options["azimuths"]
+    kernels = len(options["wavelengths_nm"]) * nodes * len(ghost_paths.paths(lens))
+    check_memory(  # the float32 kernels, their mosaics in the file, and a node's work
+        f"ghost-grid of {kernels} kernels of {args.kernel}x{args.kernel}", 3 * 4 * kernels * args.kernel**2 + (1 << 28),
+        args.force, "fewer --radii or a smaller --kernel",
+    )  # fmt: skip
+    with Progress("ghost-grid", nodes, "nodes") as bar:
+        grid = ghost_grid(lens, *chosen, progress=bar)
+    grid.write(exr, json_path)
+    print(f"wrote {exr} and {json_path} ({len(grid.paths)} ghosts on {nodes} nodes)")
+    return 0
+
+
 def _add_outputs(p) -> None:
     p.add_argument("-o", "--output", required=True, help="output OpenEXR file")
     add_png_option(p)
@@ -134,6 +160,7 @@ def register(sub: Any) -> None:
     _add_outputs(ghost)
     ghost.set_defaults(run=run_ghosts)
 
+    _register_ghost_grid(sub)
     grid = sub.add_parser(
         "psf-grid", help="PSFs on a field grid, one stack per wavelength, as OpenEXR (+ PNG mosaic with --mosaic)"
     )
@@ -150,3 +177,28 @@ def register(sub: Any) -> None:
         "of the same name, or at PNG); default: none (a 32x32 grid's takes about a second)",
     )
     grid.set_defaults(run=run_psf_grid)
+
+
+def _register_ghost_grid(sub: Any) -> None:
+    from .ghost_grid_file import DEFAULT_IRIS_AZIMUTHS, DEFAULT_KERNEL, DEFAULT_RADII
+
+    p = sub.add_parser(
+        "ghost-grid",
+        help="every ghost on nodes along the field's radius (per node and wavelength: energy, centroid, kernel) "
+        "as OpenEXR + JSON, for stray light over the image",
+    )
+    add_lens_argument(p)
+    p.add_argument("--radii", type=int, default=DEFAULT_RADII, help="nodes along the field's radius, from the axis")
+    p.add_argument("--field-deg", help="the largest polar field angle (degrees; default the lens's field_deg)")
+    p.add_argument("--wavelengths-nm", help="wavelengths, a channel each (default: the lens's)")
+    p.add_argument("--rays", type=int, default=DEFAULT_GHOST_RAYS, help="rays per side of each node's launch grid")
+    p.add_argument("--kernel", type=int, default=DEFAULT_KERNEL, help="pixels per side of each ghost's kernel (odd)")
+    p.add_argument(
+        "--azimuths",
+        type=int,
+        help=f"an iris's nodes per blade sector (default {DEFAULT_IRIS_AZIMUTHS}; a round stop: 1, its ghosts turn)",
+    )
+    p.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
+    p.add_argument("-o", "--output", required=True, help="output OpenEXR file")
+    p.add_argument("--json", help="the metadata as JSON (default: beside the EXR, of the same name)")
+    p.set_defaults(run=run_ghost_grid)

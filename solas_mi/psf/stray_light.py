@@ -107,6 +107,12 @@ class GhostReport:
         return "\n".join(lines)
 
 
+def check_rays(rays) -> None:
+    """SolasError unless `rays` (rays per side of the launch grid) is an integer from 8 to MAX_SAMPLING."""
+    if not isinstance(rays, int) or isinstance(rays, bool) or not 8 <= rays <= MAX_SAMPLING:
+        raise SolasError(f"rays {rays!r} must be an integer from 8 to {MAX_SAMPLING} (rays per side of the grid)")
+
+
 def launch(lens: Lens, field_deg: tuple[float, float], rays: int) -> ghost_paths.Rays:
     """rays × rays rays of the field through a regular grid on the plane of surface 1's vertex that holds its
     clear aperture, each with its power (a point source's, per grid cell; only ratios matter)."""
@@ -146,7 +152,7 @@ def launch(lens: Lens, field_deg: tuple[float, float], rays: int) -> ghost_paths
     )
 
 
-def _on_image(lens: Lens, r: ghost_paths.Rays) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+def on_image(lens: Lens, r: ghost_paths.Rays) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The rays that arrive, on the image plane: x, y (mm), their power, and their direction tangents."""
     keep = r.alive & (r.dz > 0) & (r.power > 0)
     t = (lens.image_z - r.z[keep]) / r.dz[keep]
@@ -202,8 +208,7 @@ def ghosts(lens: Lens, field_deg, wavelengths_nm=None, rays: int = ghost_paths.D
     >>> report.ghosts[1].energy > report.ghosts[0].energy  # the two air faces: the brightest ghost
     True
     """
-    if not isinstance(rays, int) or isinstance(rays, bool) or not 8 <= rays <= MAX_SAMPLING:
-        raise SolasError(f"rays {rays!r} must be an integer from 8 to {MAX_SAMPLING} (rays per side of the grid)")
+    check_rays(rays)
     field_deg = lens.field_type.check(field_deg)
     wavelengths = tuple(lens.check_wavelength(w) for w in (wavelengths_nm or lens.wavelengths_nm))
     start = launch(lens, field_deg, rays)
@@ -212,7 +217,7 @@ def ghosts(lens: Lens, field_deg, wavelengths_nm=None, rays: int = ghost_paths.D
     if direct[2].sum() <= 0:
         raise SolasError(f"no direct light reaches the image at field ({field_deg[0]:g}, {field_deg[1]:g}) deg")
     direct_power = float(direct[2].sum())
-    table = [_ghost(path, hit, direct_power, max(wavelengths)) for path, hit in hits.items()]
+    table = [ghost_row(path, hit, direct_power, max(wavelengths)) for path, hit in hits.items()]
     centroid = (float(np.average(direct[0], weights=direct[2])), float(np.average(direct[1], weights=direct[2])))
     # each ghost ray's power as a fraction of the direct image's energy, for the HDR PSF
     return GhostReport(
@@ -227,10 +232,10 @@ def ghosts(lens: Lens, field_deg, wavelengths_nm=None, rays: int = ghost_paths.D
 
 def _path_hits(lens: Lens, start: ghost_paths.Rays, wavelengths: tuple[float, ...]) -> dict:
     """Per path (None: the direct one), its rays on the image plane at every wavelength together: x, y (mm),
-    power and direction tangents (`_on_image`)."""
+    power and direction tangents (`on_image`)."""
     traced = [ghost_paths.trace_all(lens, start, w) for w in wavelengths]
     return {
-        path: tuple(np.concatenate(parts) for parts in zip(*(_on_image(lens, t[path]) for t in traced)))
+        path: tuple(np.concatenate(parts) for parts in zip(*(on_image(lens, t[path]) for t in traced)))
         for path in [None, *ghost_paths.paths(lens)]
     }
 
@@ -244,8 +249,8 @@ def working_f_number(lens: Lens) -> float:
         return math.nan
 
 
-def _ghost(path: tuple[int, int], hit, direct_power: float, wavelength_nm: float) -> Ghost:
-    """One ghost's row of the table from its rays on the image plane (`_path_hits`)."""
+def ghost_row(path: tuple[int, int], hit, direct_power: float, wavelength_nm: float) -> Ghost:
+    """One ghost's row of the table from its rays on the image plane (`_path_hits`, `psf.ghost_nodes`)."""
     x, y, w, tx, ty = hit
     surfaces = (path[0] + 1, path[1] + 1)
     if w.sum() <= 0:

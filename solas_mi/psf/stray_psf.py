@@ -1,7 +1,8 @@
 """The high-dynamic-range stray-light PSF of a point source (`stray_psf`): the direct image (geometric over
-the window, its core the Fraunhofer PSF where that is sound) plus every ghost of `stray_light.ghosts`, its
-rays binned and smoothed over their spacing, a focused ghost blurred by its Airy pattern; in fractions of
-the direct image's energy per pixel, written as OpenEXR and a log-scale PNG (`write`).
+the window, its core the Fraunhofer PSF where that is sound, its diffraction wings beyond the core,
+`diffraction_wings`) plus every ghost of `stray_light.ghosts`, its rays binned and smoothed over their
+spacing, a focused ghost blurred by its Airy pattern; in fractions of the direct image's energy per pixel,
+written as OpenEXR and a log-scale PNG (`write`).
 """
 
 from __future__ import annotations
@@ -49,6 +50,7 @@ def stray_psf(
     if core is not None:
         lo = size // 2 - len(core) // 2
         total[lo : lo + len(core), lo : lo + len(core)] = core
+        total += diffraction_wings(core, size)
     ghosts = {(g.surfaces[0] - 1, g.surfaces[1] - 1): g for g in report.ghosts}
     for path, (x, y, w) in report.hits.items():
         if len(w) > 1:
@@ -56,6 +58,28 @@ def stray_psf(
             image = smooth(binned[0] * pitch_um**2, ray_spacing_um(x, y, w) / pitch_um)
             total += airy_blur(image, ghosts[path].airy_mm * 1e3 / pitch_um) if ghosts[path].focused else image
     return total, (cx, cy), notes
+
+
+WING_RING = 3  # pixels: the core's outermost ring that scales the diffraction wings to it
+
+
+def diffraction_wings(core: np.ndarray, size: int) -> np.ndarray:
+    """The direct image's diffraction wings beyond its Fraunhofer core (zero inside it), size × size: the far
+    field of a pupil's edge, whose ring-averaged irradiance falls as 1/r³ (the Airy pattern's mean (λN)/(π³ r³)
+    per unit area, r from the centre pixel), scaled to the core's own mean over its outermost `WING_RING`
+    pixels (so an aberrated or polygonal pupil's level is its own, and the PSF has no step at the core's edge).
+    The wings are round: an iris's spikes beyond the core are not modelled."""
+    half = len(core) // 2
+    rows, cols = np.indices((size, size)) - size // 2
+    r = np.hypot(rows, cols)
+    model = 1.0 / np.maximum(r, 0.5) ** 3
+    inside = (np.abs(rows) <= half) & (np.abs(cols) <= half)
+    ring = inside & (r > half - WING_RING) & (r <= half)
+    if not ring.any() or half < 2 * WING_RING:
+        return np.zeros((size, size))
+    core_ring = core[(rows[ring] + half), (cols[ring] + half)]
+    scale = float(core_ring.mean() / model[ring].mean())
+    return np.where(inside, 0.0, scale * model)
 
 
 AIRY_REACH = 4.0  # the Airy kernel's half width, in Airy radii (it holds 98 % of the pattern's light)

@@ -101,6 +101,23 @@ def _scene(args) -> int:
 INTEGRATORS = ("auto", "scene", "solas")
 
 
+def scene_params(items) -> dict[str, str]:
+    """The scene parameters of --set NAME=VALUE options (a list, or None), as `user_scene.load` takes them."""
+    params = {}
+    for item in items or []:
+        key, sep, value = item.partition("=")
+        if not sep or not key:
+            raise SolasError(f"--set {item!r} must look like name=value (a <default> of the scene)")
+        params[key] = value
+    return params
+
+
+def add_set_option(p, where: str = "") -> None:
+    """--set NAME=VALUE (`scene_params`), its help opening with `where` it applies."""
+    p.add_argument("--set", action="append", metavar="NAME=VALUE",
+                   help=f"{where}override a <default> of the scene (e.g. --set image=other.png); repeatable")
+
+
 def _image_scene(scene) -> bool:
     """A scene of `solas-mi scene`: a lens_sensor looking at one image_object."""
     return (type(scene.sensors()[0]).__name__ == "LensSensor"
@@ -113,12 +130,7 @@ def _render(args) -> int:
     from .user_scene import load
 
     data_file, png = data_and_preview(args.output, args.png, inputs=[args.scene])
-    params = {}
-    for item in args.set or []:
-        key, sep, value = item.partition("=")
-        if not sep or not key:
-            raise SolasError(f"--set {item!r} must look like name=value (a <default> of the scene)")
-        params[key] = value
+    params = scene_params(args.set)
     lens = load_lens(args) if args.lens else None
     if lens is None and any(v is not None for v in (args.pitch_um, args.focus_distance, args.world_unit_mm)):
         raise SolasError("--pitch-um, --focus-distance and --world-unit-mm set the lens camera: give --lens too")
@@ -240,8 +252,7 @@ def register(sub) -> None:
     from .flare import FLARE_LAYERS
 
     add_calibration_option(render)
-    render.add_argument("--set", action="append", metavar="NAME=VALUE",
-                        help="override a <default> of the scene (e.g. --set image=other.png); repeatable")
+    add_set_option(render)
     render.add_argument("--lens", help=f"replace the scene's perspective camera by this lens: {lens_help()}")
     add_environment_options(render)
     render.add_argument("--pitch-um", type=float, help="with --lens: pixel pitch in µm (default: the lens's field "

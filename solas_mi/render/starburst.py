@@ -9,7 +9,7 @@ working f-number change little), so one kernel convolved by FFT onto the whole d
 bright pixel its spikes, noise-free, in one pass.
 
 The kernel (`iris_kernel`) is the aberration-free diffraction pattern of the stop's shape (the iris's
-regular polygon of `blades`, or the round stop: its Airy pattern) at the lens's working f-number and one
+polygon of `blades`, straight or curved, or the round stop: its Airy pattern) at the lens's working f-number and one
 wavelength, |FFT(aperture)|² sampled at `OVERSAMPLE`·(Nyquist) over two windows (no spike folds back into
 the window) and binned to the film's pixels, normalised
 to sum 1 over its window (the energy beyond it is dropped: the window is `KERNEL_PX` pixels, fewer where the

@@ -17,6 +17,7 @@ from solas_mi.isp.pipeline import ISP, develop
 from solas_mi.sensor.capture import capture
 from solas_mi.sensor.commands import read_rgb
 from solas_mi.sensor.model import SensorModel
+from solas_mi.sensor.timing import SceneInTime
 
 SENSOR = '[sensor]\ncfa = "RCCB"\npixel_pitch_um = 2.0\n'
 EXPOSURE_MS = 0.25  # the frames' values (0…1) read as W/m²: 2300–3100 photons per channel at 1 (2 µm pixels)
@@ -312,3 +313,24 @@ def test_the_estimate_counts_the_camera(camera_inputs, tmp_path):
         spp=1,
     )
     assert estimate(p, 1)["peak_bytes"] == frame_bytes(1500, 2000, 3, DEVELOP_BYTES_PER_PIXEL) + WORKER_BYTES["render"]
+
+
+@pytest.mark.parametrize("in_time", [None, SceneInTime(motion_px_s=(40.0, 0.0))])
+def test_the_estimate_counts_hdr_readouts_and_a_scene_in_time(camera_inputs, tmp_path, in_time):
+    """A 2000×1500 render batch through the four-readout imx490-hdr camera (with the image's motion, or still):
+    the estimate is the camera's frame of four readouts (and the scene in time's images), more than one
+    readout's — the camera command's own count (`sensor.commands.frame_bytes`)."""
+    from solas_mi.batch.degrade import WORKER_BYTES
+    from solas_mi.batch.render import estimate, plan_render
+    from solas_mi.sensor.capture import as_chain
+    from solas_mi.sensor.commands import frame_bytes
+
+    camera = load_camera("imx490-hdr", EXPOSURE_MS, None, 0, scene_in_time=in_time)
+    readouts = len(as_chain(camera.sensor).readouts)
+    p = plan_render(
+        [camera_inputs.images / "frame000.png"], tmp_path / "r", lens="solas-doublet", camera=camera, sensor="2000x1500"
+    )
+    single = frame_bytes(1500, 2000, 3, 0.0) + WORKER_BYTES["render"]
+    expected = frame_bytes(1500, 2000, 3, 0.0, readouts, in_time is not None) + WORKER_BYTES["render"]
+    assert readouts == 4 and expected > single
+    assert estimate(p, 1)["peak_bytes"] == expected

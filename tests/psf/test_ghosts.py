@@ -184,3 +184,24 @@ def test_a_focused_ghost_is_called_so_and_blurred_by_its_airy_pattern(tmp_path):
     image[32, 32] = 1.0
     blurred = stray_psf.airy_blur(image, 3.0)
     assert abs(blurred.sum() - 1.0) < 1e-9 and blurred.max() < 0.2
+
+
+def test_the_direct_image_has_its_diffraction_wings_beyond_its_core():
+    """Beyond the Fraunhofer core (33 px) the HDR PSF's direct image carries its diffraction wings: its ring means
+    agree with a Fraunhofer PSF computed over the whole window (resolved, converged) across the core's edge (no
+    step) and out to 38 px (within 40 %, the wings' 1/r³ asymptote), where the rays alone left zero."""
+    from solas_mi.psf import stray_psf
+    from solas_mi.psf.methods import psf
+
+    lens, size, pitch, fine = Lens.load("solas-doublet"), 81, 10.0, 3
+    report = ghosts.ghosts(lens, (0.0, 0.0), rays=16)
+    report.hits = {}  # the direct image alone
+    data, _, notes = stray_psf.stray_psf(lens, report, pitch, size)
+    whole = psf(lens, (0.0, 0.0), list(lens.wavelengths_nm), pitch_um=pitch / fine, size=size * fine,
+                normalization="sum", pupil_samples=448)  # fmt: skip
+    assert not notes and not whole.meta["warnings"]
+    reference = whole.data.reshape(size, fine, size, fine).sum(axis=(1, 3)) * float(whole.meta["energy_in_grid"])
+    r = np.hypot(*(np.indices((size, size)) - size // 2))
+    for ring in (15, 16, 17, 18, 24, 30, 38):
+        near = np.abs(r - ring) < 0.5
+        assert data[near].mean() == pytest.approx(reference[near].mean(), rel=0.1 if ring < 20 else 0.4), ring

@@ -15,10 +15,12 @@ from solas_mi.psf.methods import psf
 F_MM, STOP_MM, WAVELENGTH = 100.0, 2.0, 550.0  # an ideal f = 100 mm lens at f/50: no aberration at all
 
 
-def perfect(blades=0, rotation=0.0):
+def perfect(blades=0, rotation=0.0, curvature=None):
     row = {"radius": 0.0, "thickness": F_MM, "diameter": STOP_MM, "stop": True, "focal_length": F_MM}
     if blades:
         row.update(blades=blades, blade_rotation=rotation)
+    if curvature is not None:
+        row["blade_curvature"] = curvature
     return Lens.from_dict({"name": "perfect", "wavelengths_nm": [WAVELENGTH], "surface": [row]})
 
 
@@ -134,6 +136,9 @@ def test_the_reversed_lens_keeps_the_iris_and_the_coatings(doublet_spec, doublet
     back = reversed_lens(lens)
     stop = back.surfaces[back.stop_index]
     assert (stop.blades, stop.blade_rotation) == (5, 90.0) and back.surfaces[-1].coating == lens.surfaces[0].coating
+    doublet_spec["surface"][doublet.stop_index]["blade_curvature"] = 0.3
+    curved = reversed_lens(Lens.from_dict(doublet_spec))
+    assert curved.surfaces[curved.stop_index].blade_curvature == 0.3
     # a ray from the film's centre through the stop just inside its circle, midway between two corners
     # (an edge's middle lies at the circle's radius × cos 36°): blocked by the iris, passed by a round stop
     radius = stop.semi_diameter
@@ -152,3 +157,60 @@ def test_the_reversed_lens_keeps_the_iris_and_the_coatings(doublet_spec, doublet
         traced = tracer.trace(back, rays, tracer.F(0.531))
         sx, sy, clipped = tracer.to_numpy(traced.stop_x, traced.stop_y, traced.clipped_by)
         assert z_stop >= 0 and (clipped[0] == back.stop_index + 1) == blocked, (r, sx, sy, clipped)
+
+
+def curved_share(n: int, kappa: float) -> float:
+    """The area of N blades curved κ over the round stop's: the N-gon with corners on the unit circle and N circular
+    segments of radius 1/κ on its sides, each (R²/2)(2α − sin 2α) with half-angle α, sin α = κ sin(π/N)."""
+    polygon = n / 2 * math.sin(2 * math.pi / n)
+    big, alpha = 1 / kappa, math.asin(kappa * math.sin(math.pi / n))
+    return (polygon + n * big**2 / 2 * (2 * alpha - math.sin(2 * alpha))) / math.pi
+
+
+@pytest.mark.parametrize("method, options", [("fraunhofer", {"pupil_samples": 256}), ("geometric", {"rays": 512})])
+def test_curved_blades_pass_their_area_and_the_round_limit_is_the_round_stop(method, options):
+    """Blades curved κ pass the closed-form share of the light (polygon + segments); κ = 1 is the round stop."""
+    round_ = psf(perfect(), (0.0, 0.0), WAVELENGTH, pitch_um=8.0, size=32, method=method, **options)
+    for n, kappa in ((5, 0.5), (6, 0.8), (9, 0.3)):
+        lens = perfect(n, 7.0, kappa)
+        iris = psf(lens, (0.0, 0.0), WAVELENGTH, pitch_um=8.0, size=32, method=method, **options).meta["transmission"]
+        share = curved_share(n, kappa)
+        assert lens.surfaces[0].iris_area() / (math.pi * (STOP_MM / 2) ** 2) == pytest.approx(share, rel=1e-12)
+        assert abs(iris / round_.meta["transmission"] - share) < (2e-3 if method == "fraunhofer" else 5e-3), (n, kappa)
+    circle = psf(perfect(6, 7.0, 1.0), (0.0, 0.0), WAVELENGTH, pitch_um=8.0, size=32, method=method, **options)
+    assert np.abs(circle.data - round_.data).max() < 1e-5 * round_.data.max()
+
+
+def test_the_curved_margin_is_the_distance_to_the_arc_and_tends_to_the_straight_side():
+    """The margin of points on a sector's bisector is the apex's distance minus theirs; near κ = 0 it is the
+    straight side's margin (no cancellation); inside the N-gon it is inside for every κ."""
+    r = STOP_MM / 2
+    straight, nearly, curved = (perfect(6, 0.0, k).surfaces[0] for k in (None, 1e-12, 0.5))
+    x, y = np.linspace(-r, r, 41)[:, None] * np.ones(41), np.linspace(-r, r, 41)[None, :] * np.ones((41, 1))
+    margin = [s.iris_margin(x, y, np.hypot, np.arctan2, np.cos, np.floor) for s in (straight, nearly, curved)]
+    assert np.abs(margin[1] - margin[0]).max() < 1e-12
+    assert (margin[2][margin[0] >= 0] >= 0).all()  # the arcs bulge outward: the polygon stays inside
+    assert (margin[2][margin[0] < 0] > -1e-12).any()  # and they hold more: points outside the polygon
+    bisector = math.pi / 6  # corners at 0, 60, ...: the first side's bisector at 30 deg
+    _, apex, _ = curved.iris_arc()
+    for t in (0.0, 0.3, 0.9):
+        px, py = t * r * math.cos(bisector), t * r * math.sin(bisector)
+        assert curved.iris_margin(px, py, math.hypot, math.atan2, math.cos, math.floor) == pytest.approx(
+            apex - t * r, abs=1e-12
+        )
+
+
+def test_blade_curvature_round_trips_and_is_refused_by_name(tmp_path):
+    lens = perfect(6, 7.0, 0.4)
+    again = Lens.load(lens.save(tmp_path / "curved.toml"))
+    assert again.surfaces == lens.surfaces and again.hash == lens.hash != perfect(6, 7.0).hash
+    assert perfect(6, 7.0, 0.0).hash == perfect(6, 7.0).hash  # stated straight: the straight iris's hash
+    from solas_mi.optics import notes
+
+    assert "6 blades curved 0.4" in notes.metadata(lens)["iris"]
+    for blades, value in ((6, 1.5), (6, -0.1), (6, True), (0, 0.5)):
+        with pytest.raises(SolasError, match="blade_curvature"):
+            perfect(blades, 0.0, value) if blades else Lens.from_dict(
+                {"name": "p", "wavelengths_nm": [WAVELENGTH], "surface": [
+                    {"radius": 0.0, "thickness": F_MM, "diameter": STOP_MM, "stop": True, "focal_length": F_MM,
+                     "blade_curvature": value}]})  # fmt: skip
