@@ -270,15 +270,7 @@ def _refract(s, x, y, lz, r2, d, mu, fresnel: bool, ftype, coated=None):
     total internal reflection), the unpolarised transmittance when `fresnel`, else None): the bare
     interface's Fresnel transmittance, or `coated(cos θ)` where the surface has a coating."""
     dx, dy, dz = d
-    if s.curvature == 0.0 and s.is_sphere:
-        nx, ny, nz = dr.zeros(ftype, 1), dr.zeros(ftype, 1), dr.ones(ftype, 1)
-    elif s.is_sphere:
-        c = _opaque(s.curvature, ftype)
-        nx, ny, nz = -c * x, -c * y, 1.0 - c * lz
-    else:  # exact even-asphere normal (−2x s', −2y s', 1) / |…|
-        slope = 2.0 * sag_slope(r2, **s.shape, sqrt=dr.sqrt, maximum=dr.maximum)
-        nz = dr.rsqrt(dr.fma(slope * slope, r2, 1.0))
-        nx, ny = -slope * x * nz, -slope * y * nz
+    nx, ny, nz = surface_normal(s, x, y, lz, r2, ftype)
     cosi = dx * nx + dy * ny + dz * nz
     k2 = 1.0 - mu * mu * (1.0 - cosi * cosi)
     cost = dr.sqrt(dr.maximum(k2, 0.0))
@@ -291,6 +283,19 @@ def _refract(s, x, y, lz, r2, d, mu, fresnel: bool, ftype, coated=None):
         factor = 1.0 - 0.5 * (rs * rs + rp * rp)
     g = cost - mu * cosi
     return (dr.fma(mu, dx, g * nx), dr.fma(mu, dy, g * ny), dr.fma(mu, dz, g * nz)), k2, factor
+
+
+def surface_normal(s, x, y, lz, r2, ftype):
+    """The unit normal of surface `s` (+z at its vertex) at its point (x, y, lz) in its vertex frame, r2 = x² + y²."""
+    if s.curvature == 0.0 and s.is_sphere:
+        return dr.zeros(ftype, 1), dr.zeros(ftype, 1), dr.ones(ftype, 1)
+    if s.is_sphere:
+        c = _opaque(s.curvature, ftype)
+        return -c * x, -c * y, 1.0 - c * lz
+    # an exact even asphere: (−2x s', −2y s', 1) / |…|
+    slope = 2.0 * sag_slope(r2, **s.shape, sqrt=dr.sqrt, maximum=dr.maximum)
+    nz = dr.rsqrt(dr.fma(slope * slope, r2, 1.0))
+    return -slope * x * nz, -slope * y * nz, nz
 
 
 def _asphere_hit(s, x, y, dx, dy, dz, t):

@@ -141,16 +141,22 @@ def _render(args) -> int:
     notes = []
     focus = _focus(args.focus_distance)
     scene = load(args.scene, run.variant, lens, params, notes, pitch_um=args.pitch_um, focus_distance=focus,
-                 response=args.response, world_unit_mm=args.world_unit_mm)
+                 response=args.response, world_unit_mm=args.world_unit_mm, ghosts="only" if args.ghosts else None)
     for note in notes:
         print(f"render: {note}", file=sys.stderr)
     spp = args.spp if args.spp is not None else int(scene.sensors()[0].sampler().sample_count())
     width, height = (int(v) for v in scene.sensors()[0].film().crop_size())
     check_render(width, height, spp, args.force, run.labels)
     loop = args.integrator == "solas" or (args.integrator == "auto" and lens is None and _image_scene(scene))
-    if loop and run.labels:
-        raise SolasError("--labels are traced through a lens camera: give --lens, or a scene with a lens_camera")
-    if loop:
+    if loop and (run.labels or args.ghosts):
+        raise SolasError(f"--{'labels' if run.labels else 'ghosts'} are traced through a lens camera: give --lens, "
+                         "or a scene with a lens_camera")
+    if args.ghosts and not loop:
+        from .flare import render_with_flare
+
+        with _progress(spp) as bar:
+            result = render_with_flare(scene, spp, seed=run.seed, progress=bar, labels=run.labels)
+    elif loop:
         from .loop import render
 
         with _progress(spp) as bar:
@@ -243,6 +249,7 @@ def register(sub) -> None:
                     "Mitsuba scene whose perspective camera is replaced by a lens_camera at the same pose.")
     render.add_argument("scene", help="scene XML")
     from ..optics.calibration.command import add_calibration_option
+    from .flare import FLARE_LAYERS
 
     add_calibration_option(render)
     add_set_option(render)
@@ -260,6 +267,11 @@ def register(sub) -> None:
                         help="auto (default): solas-mi's stratified loop for scenes of `solas-mi scene`, the "
                              "scene's own integrator for any other; scene: the scene's own (path where it has "
                              "none); solas: the loop (lens_sensor + image_object scenes)")
+    render.add_argument("--ghosts", action="store_true",
+                        help="add the stray light of the lens's ghosts (every two-reflection path, its coatings' "
+                             "or Fresnel's reflectance; rendered apart and added) and the flare label layers "
+                             f"{', '.join(FLARE_LAYERS)}; the lens camera's surfaces then weigh by their "
+                             "transmittance (its fresnel 'transmit')")
     render.add_argument("--spp", type=int, help="samples per pixel (default: the scene's)")
     RenderSpec.add_flags(render, SCENE_FILE_SETTINGS)
     _add_output_options(render)
