@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..errors import SolasError
 from .cache import GridCache, file_hash
-from .jobs import MANIFEST, Job, Manifest, add_outputs, expand_inputs, plan, say_skipped
+from .jobs import MANIFEST, SCENE_SUFFIXES, Job, Manifest, add_outputs, expand_inputs, plan, say_skipped
 from .runner import check_dask
 
 if TYPE_CHECKING:
@@ -170,6 +170,10 @@ def with_camera(jobs: list[Job], camera, sources, output_format: str = "exr") ->
     if output_format == "png16":
         raise SolasError("a camera reads each item's irradiance from its EXR: write exr or exr-half, not png16 "
                          "(16-bit sRGB, clipped to [0, 1])")
+    images = [str(f) for f in sources if Path(f).suffix.lower() not in SCENE_SUFFIXES]
+    if camera.scene_timing is not None and images:  # --pwm-emitter, --camera-motion: a scene file's
+        raise SolasError(f"the camera's PWM emitters and camera motion are a scene file's; {images[0]} is an image: "
+                         "give the images as a separate batch")
     add_outputs(jobs, lambda output: camera_outputs(output, camera), sources)
 
 

@@ -323,17 +323,19 @@ TABLE_RANGE_NM, TABLE_STEP_NM, TABLE_COS = (300.0, 1100.0), 1.0, 513
 
 
 def transmittance_table(
-    coating: Coating, before: glass_mod.Glass, after: glass_mod.Glass
+    coating: Coating, before: glass_mod.Glass, after: glass_mod.Glass, reflect: bool = False
 ) -> tuple[float, float, int, np.ndarray]:
-    """The unpolarised transmittance of `coating` from medium `before` into `after` on a grid, as the
-    tracer interpolates it: (first wavelength nm, step nm, wavelengths, values (wavelengths × TABLE_COS) by
-    cos θ from 0 to 1 in the medium of incidence). T is reciprocal: the same either way through."""
+    """The unpolarised transmittance (with `reflect`: reflectance) of `coating` from medium `before` into
+    `after` on a grid, as the tracer interpolates it: (first wavelength nm, step nm, wavelengths, values
+    (wavelengths × TABLE_COS) by cos θ from 0 to 1 in the medium of incidence). T is reciprocal: the same
+    either way through; R of an absorbing stack is not."""
     lo = max(TABLE_RANGE_NM[0], before.range_nm[0], after.range_nm[0], *(f.glass.range_nm[0] for f in coating.layers))
     hi = min(TABLE_RANGE_NM[1], before.range_nm[1], after.range_nm[1], *(f.glass.range_nm[1] for f in coating.layers))
     count = int((hi - lo) // TABLE_STEP_NM) + 1
     lam = lo + TABLE_STEP_NM * np.arange(count)
     cos = np.linspace(0.0, 1.0, TABLE_COS)
-    t = coating.power(before.index(lam)[:, None], after.index(lam)[:, None], lam[:, None], cos[None, :]).transmittance
+    power = coating.power(before.index(lam)[:, None], after.index(lam)[:, None], lam[:, None], cos[None, :])
+    t = power.reflectance if reflect else power.transmittance
     return lo, TABLE_STEP_NM, count, np.ascontiguousarray(t, dtype=np.float64)
 
 

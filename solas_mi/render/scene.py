@@ -19,7 +19,7 @@ import numpy as np
 
 from ..errors import SolasError
 from ..imageio import atomic_path, write_text
-from ..optics import thermal, virtual_object
+from ..optics import lens_checks, thermal, virtual_object
 from ..optics.camera import Camera, camera_for
 from ..optics.lens import Lens
 from ..outputs import inside, safe_name
@@ -91,6 +91,7 @@ def _check_buildable(lens: Lens, image_radius: float, lossless: bool = False) ->
         raise SolasError(f"surface {ideal} of lens {lens.name} is an ideal thin lens (focal_length), which has no glass "
                          f"to build as Mitsuba geometry; trace it instead: {_trace_instead()}")
     virtual_object.check_real(lens, "the mesh scene")
+    lens_checks.refuse_as_built(lens, "the mesh scene")
     unbuilt = [f"surface {k}'s {what}" for k, s in enumerate(lens.surfaces, start=1)
                for what, held in (("coating", s.coating and not lossless), ("iris (blades)", s.blades)) if held]
     if unbuilt:  # the meshes have bare Fresnel surfaces and a round stop: neither would be what the lens states
