@@ -40,7 +40,6 @@ if TYPE_CHECKING:
 DEFAULT_THRESHOLD = 10.0  # ten times the white of a linear frame: a sun, lamps and headlights, not lit surfaces
 CELLS_PER_NODE = 4  # field cells per spacing of the ghost grid's radial nodes: the sources' light gathered per cell
 HDR_SUFFIXES = (".exr",)
-RATIO_CAP = 1e6  # the flare label's ratio where a pixel has flare and no direct light (never inf)
 UNCOATED = (
     "lens {name} states no coatings: its ghosts are those of uncoated glass (about 4 % a surface), far stronger than "
     "a coated lens's; `solas-mi lens convert --typical-ar` writes it with the typical AR"
@@ -170,16 +169,6 @@ def frame_ghosts(
     return np.moveaxis(flare, 0, -1), meta
 
 
-def flare_layers(flare: np.ndarray, direct: np.ndarray) -> dict[str, np.ndarray]:
-    """The flare label's layers: per pixel the stray light's irradiance (the channels' mean) and its ratio to the
-    direct image's (0 where no stray light arrives; `RATIO_CAP` where there is no direct light)."""
-    stray = flare.mean(axis=-1)
-    base = np.asarray(direct, dtype=np.float64).mean(axis=-1)
-    ratio = np.where(stray > 0, np.minimum(stray / np.where(base > 0, base, 1.0), RATIO_CAP), 0.0)
-    ratio = np.where((stray > 0) & (base <= 0), RATIO_CAP, ratio)
-    return {"flare.irradiance": stray.astype(np.float32), "flare.ratio": ratio.astype(np.float32)}
-
-
 FLARE_ABOUT = (
     "flare.irradiance: the lens's ghosts of the frame's sources (the channels' mean, the image's units), 0 where none "
     "arrive; flare.ratio: that over the degraded direct image's mean ({cap:g} where a pixel has no direct light)"
@@ -228,8 +217,10 @@ class FrameGhosts:
         the flare label's layers."""
         planes = image[..., None] if image.ndim == 2 else image
         flare, about = frame_ghosts(planes, self.grid, self.fields, self.channels, self.threshold)
+        from ..labelkinds import flare_layers
+
         direct = out[..., None] if out.ndim == 2 else out
-        layers = flare_layers(flare, direct)
+        layers = flare_layers(direct, flare)
         direct += flare.astype(out.dtype)
         meta["ghosts"] = {**self.about, **about}
         return layers

@@ -162,8 +162,9 @@ def warped_labels(found: dict, targets: dict, grid, shape: tuple[int, int], spec
     without either."""
     if not found and not flare:
         return {}
+    from ..labelkinds import MAX_RATIO
     from .depth import silhouette_depth
-    from .ghosts import FLARE_ABOUT, RATIO_CAP
+    from .ghosts import FLARE_ABOUT
     from .labels import label_writers, warp_labels
     from .mapping import mapping_for
 
@@ -174,7 +175,7 @@ def warped_labels(found: dict, targets: dict, grid, shape: tuple[int, int], spec
         mapping = mapping_for(grid, shape[1], shape[0], spec.frame, spec.method, depth)
         layers, annotations, about = warp_labels(found, mapping, spec.boundary)
     layers.update(flare or {})
-    meta["labels"] = {**about, **({"flare": FLARE_ABOUT.format(cap=RATIO_CAP)} if flare else {}),
+    meta["labels"] = {**about, **({"flare": FLARE_ABOUT.format(cap=MAX_RATIO)} if flare else {}),
                       "outputs": {what: str(path) for what, path in targets.items()}}
     return label_writers(targets, layers, annotations, meta["labels"])
 

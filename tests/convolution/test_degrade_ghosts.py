@@ -10,10 +10,11 @@ import pytest
 
 from solas_mi import SolasError
 from solas_mi.convolution.frame_fields import FrameFields
-from solas_mi.convolution.ghosts import RATIO_CAP, flare_layers, frame_ghosts
+from solas_mi.convolution.ghosts import frame_ghosts
 from solas_mi.convolution.kernels import channel_wavelengths
 from solas_mi.convolution.spec import DegradeSpec
 from solas_mi.imageio import read_exr, write_exr, write_png
+from solas_mi.labelkinds import FLARE_LAYERS, MAX_RATIO, flare_layers
 from solas_mi.optics.frame import FrameCamera
 from solas_mi.psf import ghost_grid, psf_grid
 
@@ -96,10 +97,10 @@ def test_the_flare_label_is_zero_without_stray_light_and_never_nan():
     flare[1, 2] = 0.6
     direct = np.ones((2, 3, 3))
     direct[1, 2] = 0.0
-    layers = flare_layers(flare, direct)
+    layers = flare_layers(direct, flare)
     assert layers["flare.irradiance"][0, 1] == pytest.approx(0.3)
     assert layers["flare.ratio"][0, 1] == pytest.approx(0.3)
-    assert layers["flare.ratio"][1, 2] == RATIO_CAP
+    assert layers["flare.ratio"][1, 2] == MAX_RATIO
     assert layers["flare.ratio"][0, 0] == 0 and layers["flare.irradiance"][0, 0] == 0
     assert all(np.isfinite(v).all() for v in layers.values())
 
@@ -157,7 +158,7 @@ def test_ghosts_off_is_the_degraded_frame_and_on_adds_the_flare_label(frames, ca
     assert added == pytest.approx(meta["ghosts"]["ghost_light_in_frame"], rel=1e-3)
     assert meta["ghosts"]["source_pixels"] == 25
     layers, label_meta = read_exr(frames / "on.labels.exr")
-    assert set(layers) == {"flare.irradiance", "flare.ratio"} and "flare" in label_meta["labels"]
+    assert set(layers) == set(FLARE_LAYERS) and "flare" in label_meta["labels"]
     assert layers["flare.irradiance"].max() > 0 and np.isfinite(layers["flare.ratio"]).all()
 
 
