@@ -34,6 +34,8 @@ DEGRADE_OPTIONS = (
     "occlusion",
     "silhouette",
     "calibration_model",
+    "ghosts",
+    "ghost_threshold",
 )
 
 

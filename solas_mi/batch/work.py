@@ -71,6 +71,7 @@ def _degrade(job: Job, grid: PSFGrid, grid_path: str, settings: dict[str, Any]) 
         depth=job.params.get("depth"),
         extra_meta={"batch": {**settings["batch"], "seed": job.seed}, **({"camera": camera} if camera else {})},
         labels=job.params.get("labels"),
+        lens=settings.get("lens"),
     )
 
 
