@@ -283,7 +283,8 @@ def _weights(
     )
     coverage = dr.clip(0.5 + margin / dr.maximum(cell, 1e-300), 0.0, 1.0)
     other = (clipped != 0) & (clipped != lens.stop_index + 1)
-    coverage = dr.select(other | ~ok | ~dr.isfinite(power), 0.0, coverage)
+    # a cell beside a lost ray (its stop crossing NaN) has no size at the stop, its coverage NaN: no light
+    coverage = dr.select(other | ~ok | ~dr.isfinite(power) | ~dr.isfinite(coverage), 0.0, coverage)
     inside = coverage > 0
     out = dr.select(inside, power, 0.0), coverage, dr.select(inside, opd, 0.0), dr.select(ok & (margin > 0), clipped, 0)
     dr.eval(*out)
