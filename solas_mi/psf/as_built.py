@@ -64,9 +64,9 @@ def field_hits(
     plane = np.array([0.0, 0.0, chief.start[0, 2]])
     centre = np.array([(chief.start[0] - plane) @ e1, (chief.start[0] - plane) @ e2])
     half = beam_half_width(lens, d, plane, (e1, e2), centre, wavelength_nm) if half_mm is None else half_mm
-    ex, ey, out = _trace_grid(lens, d, plane, (e1, e2), centre, half, rays, wavelength_nm)
+    _, _, out = _trace_grid(lens, d, plane, (e1, e2), centre, half, rays, wavelength_nm)
     area = (2.0 * half / rays) ** 2
-    power = np.full(len(ex), float(power_densities(lens, np.array([wavelength_nm]))[0]) * area)
+    power = np.full(rays * rays, float(power_densities(lens, np.array([wavelength_nm]))[0]) * area)
     ok = out.ok
     return Hits(out.image_x[ok], out.image_y[ok], power[ok], chief.image_xy[0]), half
 

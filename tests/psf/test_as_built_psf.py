@@ -11,7 +11,6 @@ import pytest
 
 from solas_mi import Lens
 from solas_mi.optics import pupil
-from solas_mi.optics.lens import shipped_lenses
 from solas_mi.optics.placement import Placement
 from solas_mi.psf import as_built, geometric
 
@@ -20,10 +19,12 @@ PITCH_UM, SIZE, RAYS = 2.0, 33, 64
 
 def _zero_placed(lens: Lens) -> Lens:
     """`lens` with a coordinate break of all zeros before every surface and at the image plane."""
-    return replace(lens, surfaces=tuple(replace(s, placement=Placement()) for s in lens.surfaces), image_placement=Placement())
+    return replace(
+        lens, surfaces=tuple(replace(s, placement=Placement()) for s in lens.surfaces), image_placement=Placement()
+    )
 
 
-@pytest.mark.parametrize("name", ["solas-doublet", "cooke-triplet", "double-gauss-50mm"])
+@pytest.mark.parametrize("name", ["solas-doublet", "cooke-triplet", "double-gauss-50mm", "wide-angle-22mm"])
 def test_a_lens_placed_with_zero_breaks_gives_the_symmetric_paths_geometric_psfs(name):
     lens = Lens.load(name)
     fields = np.array([[0.0, 0.0], [0.0, 0.6 * lens.field_deg], [0.3 * lens.field_deg, -0.5 * lens.field_deg]])
@@ -48,8 +49,15 @@ def _ideal(decentre) -> Lens:
         {
             "name": "decentred-ideal",
             "surface": [
-                {"radius": 0.0, "focal_length": 40.0, "thickness": 40.0, "diameter": 10.0, "stop": True,
-                 "decentre_x": dx, "decentre_y": dy},
+                {
+                    "radius": 0.0,
+                    "focal_length": 40.0,
+                    "thickness": 40.0,
+                    "diameter": 10.0,
+                    "stop": True,
+                    "decentre_x": dx,
+                    "decentre_y": dy,
+                },
                 {"radius": 0.0, "thickness": 0.0, "diameter": 40.0, "decentre_x": -dx, "decentre_y": -dy},
             ],
         }
