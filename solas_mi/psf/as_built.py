@@ -77,7 +77,11 @@ def beam_half_width(lens: Lens, d, plane, axes, centre, wavelength_nm: float) ->
     vertex), widened by one of its cells and `MARGIN`."""
     first = frames(lens.surfaces, lens.image_placement)[0][0]
     s = lens.surfaces[0]
-    reach = np.hypot(s.semi_diameter, np.abs(s.geometry.sag(np.array([s.semi_diameter]), np.zeros(1))).max())
+    rim = (
+        np.array([s.semi_diameter, 0.0, -s.semi_diameter, 0.0]),
+        np.array([0.0, s.semi_diameter, 0.0, -s.semi_diameter]),
+    )
+    reach = np.hypot(s.semi_diameter, np.abs(s.geometry.sag(*rim)).max())  # x and y: a toroid's sags differ
     vertex = np.array([(first - plane) @ axes[0], (first - plane) @ axes[1]])
     outer = float(np.abs(vertex - centre).max() + reach) * MARGIN
     ex, ey, out = _trace_grid(lens, d, plane, axes, centre, outer, COARSE_RAYS, wavelength_nm)
