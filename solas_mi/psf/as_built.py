@@ -47,11 +47,36 @@ def basis(d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return np.array([e1x, 0.0, e1z]), np.array([d[1] * e1z, d[2] * e1x - d[0] * e1z, -d[1] * e1x])
 
 
-def field_hits(
-    lens: Lens, field_deg, wavelength_nm: float, rays: int, half_mm: float | None = None
-) -> tuple[Hits, float]:
-    """The `Hits` of a rays×rays grid across the beam of field `field_deg` (x, y degrees) at `wavelength_nm`,
-    and the grid's half-width (mm; found by `beam_half_width` unless `half_mm` is given)."""
+@dataclass
+class Beam:
+    """One field's collimated beam: its chief ray (`local_aim.Chief` of one field), direction (3,), the point
+    (3,) and unit vectors (e1, e2) of the plane across it where entrance coordinates lie, the chief ray's
+    entrance coordinates (2,) and the half-width (mm) of the square about them that holds the pupil."""
+
+    chief: local_aim.Chief
+    direction: np.ndarray
+    plane: np.ndarray
+    axes: tuple[np.ndarray, np.ndarray]
+    centre: np.ndarray
+    half: float
+
+    def grid(self, rays: int) -> tuple[np.ndarray, np.ndarray]:
+        """Entrance coordinates (rays²,) of the rays×rays cell centres of the square (rows up the e2 axis, as
+        `geometric.entrance_grid`)."""
+        t = (np.arange(rays) + 0.5) / rays * 2.0 - 1.0
+        ex = np.broadcast_to(self.centre[0] + self.half * t[None, :], (rays, rays)).ravel()
+        ey = np.broadcast_to(self.centre[1] + self.half * t[:, None], (rays, rays)).ravel()
+        return ex, ey
+
+    def trace(self, lens: Lens, ex: np.ndarray, ey: np.ndarray, wavelength_nm: float) -> local_trace.Bundle:
+        """The rays of entrance coordinates (ex, ey) traced through `lens` as built."""
+        points = self.plane + ex[:, None] * self.axes[0] + ey[:, None] * self.axes[1]
+        return local_trace.trace(lens, local_trace.bundle(points, self.direction), wavelength_nm)
+
+
+def beam(lens: Lens, field_deg, wavelength_nm: float, half_mm: float | None = None) -> Beam:
+    """The `Beam` of field `field_deg` (x, y degrees) at `wavelength_nm`, its half-width found by
+    `beam_half_width` unless `half_mm` is given; SolasError where no chief ray is found."""
     field_deg = np.asarray(field_deg, dtype=np.float64).reshape(2)
     chief = local_aim.chief_rays(lens, field_deg.reshape(1, 2), wavelength_nm)
     if not chief.found[0]:
@@ -60,19 +85,33 @@ def field_hits(
             f"deg, {wavelength_nm:g} nm (none passes the stop's centre, or its aim does not converge)"
         )
     d = chief.direction[0]
-    e1, e2 = basis(d)
+    axes = basis(d)
     plane = np.array([0.0, 0.0, chief.start[0, 2]])
-    centre = np.array([(chief.start[0] - plane) @ e1, (chief.start[0] - plane) @ e2])
-    half = beam_half_width(lens, d, plane, (e1, e2), centre, wavelength_nm) if half_mm is None else half_mm
-    _, _, out = _trace_grid(lens, d, plane, (e1, e2), centre, half, rays, wavelength_nm)
-    area = (2.0 * half / rays) ** 2
-    power = np.full(rays * rays, float(power_densities(lens, np.array([wavelength_nm]))[0]) * area)
+    centre = np.array([(chief.start[0] - plane) @ axes[0], (chief.start[0] - plane) @ axes[1]])
+    found = Beam(chief, d, plane, axes, centre, 0.0)
+    found.half = beam_half_width(lens, found, wavelength_nm) if half_mm is None else half_mm
+    return found
+
+
+def ray_power(lens: Lens, b: Beam, rays: int, wavelength_nm: float) -> float:
+    """The power of one ray of a rays×rays grid over beam `b` (fraction of the on-axis entrance pupil's)."""
+    return float(power_densities(lens, np.array([wavelength_nm]))[0]) * (2.0 * b.half / rays) ** 2
+
+
+def field_hits(
+    lens: Lens, field_deg, wavelength_nm: float, rays: int, half_mm: float | None = None
+) -> tuple[Hits, float]:
+    """The `Hits` of a rays×rays grid across the beam of field `field_deg` (x, y degrees) at `wavelength_nm`,
+    and the grid's half-width (mm; found by `beam_half_width` unless `half_mm` is given)."""
+    b = beam(lens, field_deg, wavelength_nm, half_mm)
+    out = b.trace(lens, *b.grid(rays), wavelength_nm)
     ok = out.ok
-    return Hits(out.image_x[ok], out.image_y[ok], power[ok], chief.image_xy[0]), half
+    power = np.full(int(ok.sum()), ray_power(lens, b, rays, wavelength_nm))
+    return Hits(out.image_x[ok], out.image_y[ok], power, b.chief.image_xy[0]), b.half
 
 
-def beam_half_width(lens: Lens, d, plane, axes, centre, wavelength_nm: float) -> float:
-    """Half-width (mm) of a square across the beam, about `centre`, that holds every ray the lens passes: a
+def beam_half_width(lens: Lens, b: Beam, wavelength_nm: float) -> float:
+    """Half-width (mm) of a square across beam `b`, about its chief ray, that holds every ray the lens passes: a
     coarse grid over what surface 1's aperture can let through (its semi-diameter and sag's reach about its
     vertex), widened by one of its cells and `MARGIN`."""
     first = frames(lens.surfaces, lens.image_placement)[0][0]
@@ -82,23 +121,15 @@ def beam_half_width(lens: Lens, d, plane, axes, centre, wavelength_nm: float) ->
         np.array([0.0, s.semi_diameter, 0.0, -s.semi_diameter]),
     )
     reach = np.hypot(s.semi_diameter, np.abs(s.geometry.sag(*rim)).max())  # x and y: a toroid's sags differ
-    vertex = np.array([(first - plane) @ axes[0], (first - plane) @ axes[1]])
-    outer = float(np.abs(vertex - centre).max() + reach) * MARGIN
-    ex, ey, out = _trace_grid(lens, d, plane, axes, centre, outer, COARSE_RAYS, wavelength_nm)
-    if not out.ok.any():
+    vertex = np.array([(first - b.plane) @ b.axes[0], (first - b.plane) @ b.axes[1]])
+    outer = float(np.abs(vertex - b.centre).max() + reach) * MARGIN
+    coarse = Beam(b.chief, b.direction, b.plane, b.axes, b.centre, outer)
+    ex, ey = coarse.grid(COARSE_RAYS)
+    ok = coarse.trace(lens, ex, ey, wavelength_nm).ok
+    if not ok.any():
         return outer
-    spread = max(np.abs(ex[out.ok] - centre[0]).max(), np.abs(ey[out.ok] - centre[1]).max())
+    spread = max(np.abs(ex[ok] - b.centre[0]).max(), np.abs(ey[ok] - b.centre[1]).max())
     return min(outer, (spread + 2.0 * outer / COARSE_RAYS) * MARGIN)
-
-
-def _trace_grid(lens: Lens, d, plane, axes, centre, half: float, rays: int, wavelength_nm: float):
-    """Entrance coordinates (rays²,) of a rays×rays grid of half-width `half` about `centre` across the beam
-    (cell centres, rows up the e2 axis as `geometric.entrance_grid`) and their trace."""
-    t = (np.arange(rays) + 0.5) / rays * 2.0 - 1.0
-    ex = np.broadcast_to(centre[0] + half * t[None, :], (rays, rays)).ravel()
-    ey = np.broadcast_to(centre[1] + half * t[:, None], (rays, rays)).ravel()
-    points = plane + ex[:, None] * axes[0] + ey[:, None] * axes[1]
-    return ex, ey, local_trace.trace(lens, local_trace.bundle(points, d), wavelength_nm)
 
 
 def geometric(
@@ -117,4 +148,4 @@ def geometric(
     return data, np.array([h.chief_xy for h in found]), transmission
 
 
-__all__ = ["Hits", "basis", "beam_half_width", "field_hits", "geometric"]
+__all__ = ["Beam", "Hits", "basis", "beam", "beam_half_width", "field_hits", "geometric", "ray_power"]
