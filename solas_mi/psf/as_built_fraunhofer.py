@@ -47,7 +47,15 @@ def sphere_points(lens: Lens, b: Beam, ex, ey, wavelength_nm: float, radius: flo
     return q[:, 0] / radius, q[:, 1] / radius, out.opl - n_image * t, out.ok, radius
 
 
-def fraunhofer(lens: Lens, field_deg, wavelength_nm: float, pitch_um: float, size: int, rays: int) -> np.ndarray:
+def fraunhofer(lens: Lens, field_deg, wavelength_nm, pitch_um: float, size: int, rays: int) -> np.ndarray:
+    """Fraunhofer PSFs (n, size, size) in 1/µm² of the lens as built at fields `field_deg` (n, 2) and
+    `wavelength_nm` (n,, or one), each traced (a grid over the whole field: no half of it mirrored)."""
+    field_deg = np.asarray(field_deg, dtype=np.float64).reshape(-1, 2)
+    wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(field_deg),))
+    return np.array([field_psf(lens, f, float(w), pitch_um, size, rays) for f, w in zip(field_deg, wavelength_nm)])
+
+
+def field_psf(lens: Lens, field_deg, wavelength_nm: float, pitch_um: float, size: int, rays: int) -> np.ndarray:
     """The Fraunhofer PSF (size, size) in 1/µm² of the lens as built at `field_deg`, on the image plane's grid
     about the chief ray's image point (rows down from +y, as `fraunhofer.fraunhofer`), from rays×rays rays."""
     b = beam(lens, field_deg, wavelength_nm)
@@ -74,4 +82,4 @@ def fraunhofer(lens: Lens, field_deg, wavelength_nm: float, pitch_um: float, siz
     return (field.real**2 + field.imag**2) / lam**2 * 1e-6
 
 
-__all__ = ["STEP", "fraunhofer", "sphere_points"]
+__all__ = ["STEP", "field_psf", "fraunhofer", "sphere_points"]
