@@ -12,8 +12,12 @@ sensor; the scene sees only the rays that leave the lens's first surface.
 | `focus_distance` | float     | world units | the lens file's | object distance in focus, in front of surface 1 (inf: infinity) |
 | `world_unit_mm`  | float     | mm          | 1000            | one world unit in mm (1000: the scene in metres)   |
 | `fresnel`        | string    | —           | "off"           | "transmit": weight by each refraction's unpolarised|
-|                  |           |             |                 | Fresnel transmittance (a coated surface's: its     |
-|                  |           |             |                 | coating's); "off": lossless surfaces               |
+|                  |           |             | ("transmit"     | Fresnel transmittance (a coated surface's: its     |
+|                  |           |             | with `ghosts`)  | coating's); "off": lossless surfaces               |
+| `ghosts`         | string    | —           | "off"           | the lens's ghosts (`ghost_sampling`): "on" (the    |
+|                  |           |             |                 | direct path and every two-reflection path), "only" |
+|                  |           |             |                 | (the stray light alone), "j,i" (that ghost alone); |
+|                  |           |             |                 | "off": the direct image, traced as without it      |
 | `to_world`       | transform | world units | identity        | the camera's frame: looks along local +z, +y up    |
 | `stratify_wavelengths` | boolean | —     | true            | stratify the wavelengths of a pixel's samples      |
 | `lane_tolerance` | float     | pixels      | 0.25            | ε: how alike the spectral lanes' rays must leave   |
@@ -49,6 +53,13 @@ and the stop clip, total internal reflection ends the ray. The hero's ray leaves
 the lanes that leave the lens within `lane_tolerance` of it (`lanes_together`), each weighted 4/(the
 lanes alike it), so every lane's estimate is unbiased.
 
+With `ghosts`, each sample first draws its path, the direct one or a ghost (`ghost_sampling`: by the
+ghost table's energies), and all its lanes follow it (`solas_mi.optics.ghost_trace`: the reversed lens's
+surfaces met from either side, reflected or crossed; every event weighs the ray by its coating's or
+Fresnel's reflectance or transmittance); the weight is divided by the path's probability. A ghost's pupil
+point is drawn on a square that holds the last surface's whole clear aperture (its rays may enter where
+the direct path's are stopped).
+
 The weight of `sample_ray` is the pupil weight × 1/p(λ) × the Fresnel transmittance, scaled so that the
 pixel value is the image irradiance in units of a lossless lens's on-axis irradiance from radiance 1: a
 uniform white scene is 1 at the image centre (less with `fresnel` "transmit") and falls off with the
@@ -76,13 +87,14 @@ import math
 import drjit as dr
 import mitsuba as mi
 import numpy as np
+from solas_mi.plugins.ghost_sampling import GhostSampler
 from solas_mi.plugins.lens_film import LensFilm, positive
 from solas_mi.plugins.pupil_sampling import PupilSampler
 from solas_mi.plugins.scene_probe import calling_render
 from solas_mi.plugins.wavelength_sampling import lanes
 
 from solas_mi.errors import SolasError
-from solas_mi.optics import tracer, virtual_object
+from solas_mi.optics import ghost_trace, tracer, virtual_object
 from solas_mi.optics.exit_pupil import passes, reversed_lens
 from solas_mi.optics.focus import focused
 from solas_mi.optics.lens import Lens
@@ -119,9 +131,11 @@ class LensCamera(LensFilm):
         )
         self.check_film()
         self.stratify = bool(props.get("stratify_wavelengths", True))
-        self.fresnel = str(props.get("fresnel", "off"))
+        ghosts = str(props.get("ghosts", "off")).strip().lower()
+        self.fresnel = str(props.get("fresnel", "off" if ghosts == "off" else "transmit"))
         if self.fresnel not in FRESNEL:
             raise SolasError(f"lens_camera: fresnel {self.fresnel!r} must be one of {', '.join(FRESNEL)}")
+        self.ghosts = None if ghosts == "off" else self.ghost_sampler(ghosts)
         self.focus_distance = self.lens.object_distance / self.world_unit_mm
         solid_angle = on_axis_solid_angle(self.lens, self.pupil, self.lens.primary_wavelength)
         if not solid_angle > 0:
@@ -130,6 +144,21 @@ class LensCamera(LensFilm):
         self.reversed = reversed_lens(self.lens)
         self.last_vertex_z = float(self.lens.vertex_z[-1])
         self.lane_tolerances(props)
+
+    def ghost_sampler(self, ghosts: str) -> GhostSampler:
+        """The sampler of the paths of `ghosts` (`ghost_sampling`); SolasError where they cannot be traced:
+        `fresnel` "off" (lossless surfaces reflect nothing), a scalar variant (one ray at a time)."""
+        if self.fresnel == "off":
+            raise SolasError(
+                f"lens_camera: ghosts {ghosts!r} need the surfaces' reflectance and transmittance: fresnel 'off' "
+                "(lossless surfaces) reflects nothing; leave fresnel out or give 'transmit'"
+            )
+        if not dr.is_jit_v(mi.Float):
+            raise SolasError(f"lens_camera: ghosts need a JIT variant (llvm_ad_*, cuda_ad_*), not {mi.variant()}")
+        sampler = GhostSampler(self.lens, ghosts, self.pupil.plane_z, self.half_diagonal_mm)
+        if all(s.coating is None for s in self.lens.surfaces):
+            mi.Log(mi.LogLevel.Warn, f"lens_camera: lens {self.lens.name} has no coatings: its ghosts are bare glass's")
+        return sampler
 
     def lane_tolerances(self, props: mi.Properties) -> None:
         """Where the lanes share a path (docs/details/render.md, "Colour noise of the lens camera"): rays at
@@ -239,17 +268,21 @@ class LensCamera(LensFilm):
         x, y = sample2.x * self.width, sample2.y * self.height
         return bool(dr.all((x >= col - 1e-3) & (x <= col + 1.001) & (y >= row - 1e-3) & (y <= row + 1.001)))
 
-    def exit_ray(self, film, target, lam):
+    def exit_ray(self, film, target, lam, path=None):
         """The ray from film point `film` toward pupil point `target` (mm) at wavelength(s) `lam` (nm),
-        traced through the lens: its origin on surface 1 and direction in the camera frame (world units),
-        whether it passed, and its Fresnel transmittance. A blocked ray (past the image circle, TIR) may
+        traced through the lens (along `path`, (first, second) of `ghost_trace`, where given): its origin
+        on surface 1 and direction in the camera frame (world units), whether it passed, and its Fresnel
+        transmittance (a ghost's: its reflectances too). A blocked ray (past the image circle, TIR) may
         hold NaN: it leaves from the vertex along the axis, so that no integrator multiplies its weight 0
         by a NaN radiance."""
         f64 = dr.float64_array_t(mi.Float)
         # the reversed lens: x, y kept, z mirrored; the film is its object, the pupil plane its z = 0
         rays = tracer.launch(self.reversed, None, None, f64(target.x), f64(target.y), (f64(film.x), f64(film.y)))
-        result = tracer.trace(self.reversed, rays, f64(lam) * 1e-3, fresnel=self.fresnel == "transmit")
-        leaving = result.rays
+        if path is None:
+            result = tracer.trace(self.reversed, rays, f64(lam) * 1e-3, fresnel=self.fresnel == "transmit")
+            leaving, passed, transmittance = result.rays, result.ok & (result.clipped_by == 0), result.transmittance
+        else:
+            leaving, passed, transmittance = ghost_trace.trace_paths(self.reversed, rays, f64(lam) * 1e-3, *path)
         # camera frame (x, −y, −z of the lens frame): looks along +z, upright; surface 1 at the origin
         scale = 1.0 / self.world_unit_mm
         origin = mi.Point3f(
@@ -258,12 +291,10 @@ class LensCamera(LensFilm):
             mi.Float((leaving.z - self.last_vertex_z) * scale),
         )
         direction = mi.Vector3f(mi.Float(leaving.dx), mi.Float(-leaving.dy), mi.Float(leaving.dz))
-        passed = (
-            mi.Bool(result.ok & (result.clipped_by == 0)) & dr.all(dr.isfinite(origin)) & dr.all(dr.isfinite(direction))
-        )
+        passed = mi.Bool(passed) & dr.all(dr.isfinite(origin)) & dr.all(dr.isfinite(direction))
         origin = dr.select(passed, origin, mi.Point3f(0.0))
         direction = dr.select(passed, direction, mi.Vector3f(0.0, 0.0, 1.0))
-        return origin, direction, passed, mi.Float(result.transmittance)
+        return origin, direction, passed, mi.Float(transmittance)
 
     def lane_samples(self, sample1, sample2):
         """The lanes' samples of the response's distribution, and the hero lane (module docstring): the
@@ -280,13 +311,18 @@ class LensCamera(LensFilm):
         """The ray leaving surface 1 toward the scene (world units) and its weight (module docstring):
         the four lanes traced from one film point and pupil point, the hero's ray carrying those that
         leave the lens alike it."""
-        film = self.film_point(sample2)
+        film, path = self.film_point(sample2), None
+        if self.ghosts is not None:  # the sample's path (`ghost_sampling`), and sample3 stretched back
+            *path, inverse_p, sample3 = self.ghosts.choose(sample3)
         target, weight = self.pupil.sample(film, sample3, active)
+        if path:
+            target, weight = self.ghosts.target(film, sample3, path[0], target, weight)
+            weight = weight * inverse_p
         samples, hero = self.lane_samples(sample1, sample2)
         lams, origins, directions, passed, weights = [], [], [], [], []
         for sample in samples:
             lam, inverse_pdf = self.wavelengths.sample_quantile(sample, active)
-            origin, direction, ok, transmittance = self.exit_ray(film, target, lam)
+            origin, direction, ok, transmittance = self.exit_ray(film, target, lam, path)
             for values, value in zip((lams, origins, directions, passed), (lam, origin, direction, ok)):
                 values.append(value)
             w = weight * self.norm * transmittance * inverse_pdf
@@ -337,7 +373,8 @@ class LensCamera(LensFilm):
         callback.put("to_world", self.m_to_world, mi.ParamFlags.NonDifferentiable)
 
     def to_string(self) -> str:
-        return self.describe(f"focus {self.focus_distance:g}", f"fresnel {self.fresnel}")
+        extra = () if self.ghosts is None else (f"ghosts {self.ghosts.mode}",)
+        return self.describe(f"focus {self.focus_distance:g}", f"fresnel {self.fresnel}", *extra)
 
 
 def register() -> None:

@@ -26,6 +26,7 @@ SHIPPED = {
     "solas_mi.optics.formats.READERS": (".toml", ".zmx", ".seq", ".dat"),
     "solas_mi.optics.formats.WRITERS": (".toml", ".zmx", ".dat"),
     "solas_mi.optics.coating.KINDS": ("none", "quarter_wave", "ideal", "stack"),
+    "solas_mi.optics.shapes.KINDS": ("plane", "conic", "asphere", "qbfs", "ideal", "toroid", "cylinder", "biconic"),
     "solas_mi.optics.calibration.models.MODELS": (
         "opencv-pinhole",
         "opencv-fisheye",

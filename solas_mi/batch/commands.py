@@ -34,6 +34,8 @@ DEGRADE_OPTIONS = (
     "occlusion",
     "silhouette",
     "calibration_model",
+    "ghosts",
+    "ghost_threshold",
 )
 
 
@@ -327,6 +329,6 @@ def register(subparsers: Any) -> None:
     )
     RenderSpec.add_flags(r, RENDER_SETTINGS, sweep=SWEEP[1:])
     add_calibration_option(r)
-    add_camera_options(r, seed=False)  # the sensor's seed is the batch's --seed
+    add_camera_options(r, seed=False, scenes=True)  # the sensor's seed is the batch's --seed
     _add_runner_options(r)
     r.set_defaults(run=run_batch_render)

@@ -19,7 +19,7 @@ from typing import TYPE_CHECKING, Any
 
 from ..errors import SolasError
 from .cache import GridCache, file_hash
-from .jobs import MANIFEST, Job, Manifest, add_outputs, expand_inputs, plan, say_skipped
+from .jobs import MANIFEST, SCENE_SUFFIXES, Job, Manifest, add_outputs, expand_inputs, plan, say_skipped
 from .runner import check_dask
 
 if TYPE_CHECKING:
@@ -123,7 +123,7 @@ def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLik
             noun = what if what == "depth map" else f"{what} labels"
             raise SolasError(f"{len(missing)} image(s) have no {noun} by the pattern {pattern!r}, e.g. {missing[0]}")
     jobs = plan(images, out_dir, roots, OUTPUT_FILES[spec.output_format])
-    with_labels(jobs, spec.label_patterns, files)
+    with_labels(jobs, spec.label_patterns, files, spec.ghosts)
     with_camera(jobs, spec.camera, files, spec.output_format)
     for job in jobs:
         found = beside[Path(job.input)]
@@ -170,6 +170,10 @@ def with_camera(jobs: list[Job], camera, sources, output_format: str = "exr") ->
     if output_format == "png16":
         raise SolasError("a camera reads each item's irradiance from its EXR: write exr or exr-half, not png16 "
                          "(16-bit sRGB, clipped to [0, 1])")
+    images = [str(f) for f in sources if Path(f).suffix.lower() not in SCENE_SUFFIXES]
+    if camera.scene_timing is not None and images:  # --pwm-emitter, --camera-motion: a scene file's
+        raise SolasError(f"the camera's PWM emitters and camera motion are a scene file's; {images[0]} is an image: "
+                         "give the images as a separate batch")
     add_outputs(jobs, lambda output: camera_outputs(output, camera), sources)
 
 
@@ -179,14 +183,14 @@ def beside_file(image: Path, pattern: str) -> Path:
     return image.with_name(pattern.replace("{stem}", image.stem))
 
 
-def with_labels(jobs: list[Job], patterns, sources) -> None:
-    """The warped labels' files (`convolution.labels.label_outputs`) added to each item; none without
-    label patterns."""
-    if patterns:
+def with_labels(jobs: list[Job], patterns, sources, flare: bool = False) -> None:
+    """The warped labels' files (`convolution.labels.label_outputs`) added to each item, and with `flare` (ghosts)
+    the flare label's; none without either."""
+    if patterns or flare:
         from ..convolution.labels import label_outputs
 
-        kinds = [kind for kind, _ in patterns]
-        add_outputs(jobs, lambda output: [str(p) for p in label_outputs(output, kinds).values()], sources,
+        kinds = [kind for kind, _ in patterns or ()]
+        add_outputs(jobs, lambda output: [str(p) for p in label_outputs(output, kinds, flare).values()], sources,
                     "label_outputs")
 
 
@@ -207,7 +211,7 @@ def estimate(p: BatchPlan, workers: int) -> dict[str, float]:
         grid_bytes = 4 * rows * cols * g.size ** 2 * len(g.wavelengths_nm or p.lens.wavelengths_nm) * len(
             g.distances_m or [0])
     # each worker: its largest image's peak (which holds a grid; or its camera's)
-    per_worker = max((max(peak_bytes(path, r, c, ch, grid_bytes) + memory_bytes(r * c, p.jobs[i].params.get("labels", ())),
+    per_worker = max((max(peak_bytes(path, r, c, ch, grid_bytes, p.spec.ghosts) + memory_bytes(r * c, p.jobs[i].params.get("labels", ())),
                           camera_bytes(p.jobs[i], r, c, p.spec.camera)) for i, (path, (r, c, ch)) in zip(p.todo, sizes)), default=0.0)
     # the parent: one grid more, and its fits of the frames' camera blocks (`convolution.camera`)
     parent = grid_bytes + fit_bytes(max((r * c for _, (r, c, _) in sizes), default=0))
@@ -234,6 +238,19 @@ def camera_bytes(job: Job, rows: int, cols: int, camera) -> float:
         len(as_chain(camera.sensor).readouts),
         camera.scene_in_time is not None,
     )
+
+
+def batch_ghosts(grid, lens) -> str:
+    """The ghost grid of the batch's `lens` (None: the grid's, `convolution.camera.grid_lens`) over the PSF grid's
+    field, computed into the cache before the items (`convolution.ghosts.lens_ghosts`); the lens's name."""
+    from ..convolution.camera import grid_lens
+    from ..convolution.ghosts import lens_ghosts
+
+    lens = grid_lens(grid) if lens is None else lens
+    if lens is None:
+        raise SolasError(f"ghosts: the PSF grid's lens {grid.meta.get('lens')!r} cannot be read again: give --lens")
+    lens_ghosts(lens, getattr(grid, "layers", [grid])[0])
+    return lens.name
 
 
 def scaled_lens(lens, spec: DegradeSpec) -> tuple[Any, dict | None]:
@@ -348,8 +365,10 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
     header.update({"psf_grid": str(p.grid_path), "grid_hash": file_hash(p.grid_path),
                    "lens": grid.meta.get("lens"), "lens_hash": grid.meta.get("lens_hash"),
                    "cameras": cameras, "runner": {"dask": dask} if dask is not None else {"workers": n}})
+    if p.spec.ghosts:  # the lens's ghost grid computed once here, each item reads it from the cache
+        header["ghosts"]["lens"] = batch_ghosts(grid, p.lens)
     p.manifest.header.update(header)
-    settings = {"spec": p.spec, "camera": p.spec.camera, "force": force, "cameras": cameras,
+    settings = {"spec": p.spec, "camera": p.spec.camera, "force": force, "cameras": cameras, "lens": p.lens,
                 "batch": {"id": p.key, "manifest": str(p.manifest.path), "grid_hash": header["grid_hash"],
                           "lens_hash": header["lens_hash"], **({"lens_scale": p.lens_scale} if p.lens_scale else {})}}
     run_batch(p.manifest, p.todo, grid, str(p.grid_path), settings, n, dask, "image" if progress else None)

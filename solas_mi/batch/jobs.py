@@ -26,12 +26,12 @@ from ..errors import SolasError
 from ..labelkinds import KINDS, VALID
 from ..outputs import inside, safe_name
 from ..render.labels import LABELS
+from ..render.mitsuba import SCENE_SUFFIXES  # Mitsuba scene files (render items)
 from ..userfiles import check, read_text
 from .cache import file_hash
 
 MANIFEST = "batch.json"
 IMAGE_SUFFIXES = (".png", ".jpg", ".jpeg", ".tif", ".tiff", ".exr")
-SCENE_SUFFIXES = (".xml",)  # Mitsuba scene files (render items)
 SAVE_EVERY_S = 1.0  # the manifest is rewritten at most this often while items finish (and at the end)
 # The label layers that renderers and simulators write beside their frames (ours as EXR layers,
 # `render.labels`; CARLA, Kubric, AirSim as files): never frames. A file is one by the last word of its

@@ -170,6 +170,11 @@ def plan_render(
     _check_inputs(files, base, axes)
     jobs = _jobs(files, out_dir, base, axes, lenses)
     with_camera(jobs, camera, files)
+    if base.labels and camera is not None and camera.scene_timing is not None:
+        raise SolasError(
+            "--labels are traced at one pose of the camera, a camera's PWM emitters and camera motion render the "
+            "frame over its exposure windows: give them as separate batches"
+        )
     # the settings every item shares; each item is matched on its input, output and sweep point, so a
     # sweep grown by a value redoes only the new items
     shared = {k: v for k, v in base.as_dict().items() if k not in SWEEP}
@@ -197,6 +202,17 @@ def estimate(p: RenderPlan, workers: int) -> dict[str, float]:
 
     samples = 0
     peak: float = 0
+    timing = None if p.camera is None else p.camera.scene_timing  # its scene items rendered in parts over the frame
+    shutter = None
+    if timing is not None:
+        from ..sensor.capture import as_chain
+
+        shutter = as_chain(p.camera.sensor).shutter
+    parts = 1 if timing is None else timing.parts(shutter)
+
+    def timed(rows: int, cols: int) -> float:
+        return 0.0 if timing is None else timing.parts_bytes(shutter, rows, cols)
+
     for i in p.todo:
         job = p.jobs[i]
         if Path(job.input).suffix.lower() in SCENE_SUFFIXES:
@@ -206,10 +222,10 @@ def estimate(p: RenderPlan, workers: int) -> dict[str, float]:
                 continue
         else:
             rows, cols = job.params["sensor"]
-        samples += rows * cols * job.params["spp"]
+        samples += rows * cols * job.params["spp"] * parts
         peak = max(
             peak,
-            max(rows * cols, SAMPLES_PER_PASS) * BYTES_PER_SAMPLE + 48 * rows * cols,
+            max(rows * cols, SAMPLES_PER_PASS) * BYTES_PER_SAMPLE + 48 * rows * cols + timed(rows, cols),
             camera_bytes(job, rows, cols, p.camera),
         )
     cores = os.cpu_count() or 1

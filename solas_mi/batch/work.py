@@ -71,6 +71,7 @@ def _degrade(job: Job, grid: PSFGrid, grid_path: str, settings: dict[str, Any]) 
         depth=job.params.get("depth"),
         extra_meta={"batch": {**settings["batch"], "seed": job.seed}, **({"camera": camera} if camera else {})},
         labels=job.params.get("labels"),
+        lens=settings.get("lens"),
     )
 
 
@@ -117,6 +118,19 @@ def _shoot(job: Job, settings: dict[str, Any]) -> None:
     write_frame(job.extras[0], raw, frame, meta)
 
 
+def _scene_render(scene, spec, camera):
+    """A scene item's render: over the batch camera's exposure windows where it has a scene timing (PWM emitters,
+    camera motion: `sensor.scene_input.SceneTiming`), else still (`render.stock.render_scene`)."""
+    if camera is None or camera.scene_timing is None:
+        from ..render.stock import render_scene
+
+        return render_scene(scene, spec.spp, seed=spec.seed, labels=spec.labels)
+    from ..sensor.capture import as_chain
+
+    shutter = as_chain(camera.sensor).shutter
+    return camera.scene_timing.render(scene, spec.spp, shutter, camera.exposure_ms / 1e3, spec.seed)
+
+
 def _render(job: Job, settings: dict[str, Any]) -> None:
     """Render the item at its settings `job.params` (its lens and `render.spec.RenderSpec`, its own
     seed included); EXR (metadata: the batch, seed, settings, Mitsuba variant) + PNG written together,
@@ -136,7 +150,6 @@ def _render(job: Job, settings: dict[str, Any]) -> None:
     output, png = data_and_preview(job.output, job.png, inputs=[job.input])
     lens = Lens.load(p["lens"])
     if Path(job.input).suffix.lower() in SCENE_SUFFIXES:
-        from ..render.stock import render_scene
         from ..render.user_scene import camera_meta, load
 
         scene = load(
@@ -148,7 +161,7 @@ def _render(job: Job, settings: dict[str, Any]) -> None:
             response=spec.response,
         )
         block = scene_camera(scene, settings.get("calibration_model"))  # before the render: a refusal costs none
-        result = render_scene(scene, spec.spp, seed=spec.seed, labels=spec.labels)
+        result = _scene_render(scene, spec, settings.get("camera"))
         result.meta.update(
             scene=job.input,
             lens=lens.name,

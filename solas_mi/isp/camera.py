@@ -22,6 +22,7 @@ from ..sensor.auto_exposure import AUTO, AutoExposure, exposure_seconds
 from ..sensor.capture import check_seed
 from ..sensor.chain import SensorChain
 from ..sensor.model import SensorModel
+from ..sensor.scene_input import SceneTiming
 from ..sensor.timing import SceneInTime
 from .pipeline import ISP, check_sensor
 
@@ -45,11 +46,15 @@ class Camera:
         states, for a render through a lens).
     scene_in_time : sensor.timing.SceneInTime, optional
         Each frame made a scene in time: a box of PWM-driven light, or the image's motion; none: still.
+    scene_timing : sensor.scene_input.SceneTiming, optional
+        A scene file's PWM emitters and camera motion: a batch's scene items rendered over this camera's
+        exposure windows (its sensor's shutter and exposure); none: rendered still.
 
     Raises
     ------
     SolasError
-        For a value of the wrong kind, a non-positive exposure or scale, or a bad seed.
+        For a value of the wrong kind, a non-positive exposure or scale, a bad seed, or a scene timing with a scene
+        in time or an automatic exposure.
 
     Examples
     --------
@@ -66,6 +71,7 @@ class Camera:
     seed: int = 0
     scale: float = 1.0
     scene_in_time: SceneInTime | None = None
+    scene_timing: SceneTiming | None = None
 
     def __post_init__(self):
         if not isinstance(self.sensor, (SensorModel, SensorChain)):
@@ -91,6 +97,8 @@ class Camera:
             raise SolasError(
                 f"camera scene_in_time {self.scene_in_time!r} must be a solas_mi.sensor.timing.SceneInTime"
             )
+        if self.scene_timing is not None:
+            check_scene_timing(self)
 
     def describe(self) -> dict:
         """Every value as JSON values: for metadata, manifests and the batch's identity.
@@ -111,6 +119,7 @@ class Camera:
             "seed": self.seed,
             "isp": None if self.isp is None else self.isp.describe(),
             **({} if self.scene_in_time is None else self.scene_in_time.describe()),
+            **({} if self.scene_timing is None else {"scene_timing": self.scene_timing.describe()}),
         }
 
     def shoot(self, irradiance: np.ndarray, name: str) -> tuple[np.ndarray, np.ndarray | None, dict]:
@@ -155,6 +164,24 @@ class Camera:
         return raw, frame, {**meta, **developed}
 
 
+def check_scene_timing(camera: Camera) -> None:
+    """Refuse a camera's scene timing of the wrong kind, with a scene in time, or with an automatic exposure."""
+    if not isinstance(camera.scene_timing, SceneTiming):
+        raise SolasError(
+            f"camera scene_timing {camera.scene_timing!r} must be a solas_mi.sensor.scene_input.SceneTiming"
+        )
+    if camera.scene_in_time is not None:
+        raise SolasError(
+            "a camera's --pwm-emitter and --camera-motion (a scene file's) go without --flicker and --image-motion "
+            "(an image's)"
+        )
+    if isinstance(camera.exposure_ms, AutoExposure):
+        raise SolasError(
+            "--exposure-ms auto: a scene file is rendered over the exposure's windows (--pwm-emitter, "
+            "--camera-motion); give a time in ms"
+        )
+
+
 def frame_number(name: str) -> int:
     """The frame number of the frame named `name` (56 bits of its SHA-256)."""
     return int.from_bytes(hashlib.sha256(name.encode()).digest()[:7], "little")
@@ -190,9 +217,10 @@ def load_camera(
     seed: int = 0,
     scale: float = 1.0,
     scene_in_time: SceneInTime | None = None,
+    scene_timing: SceneTiming | None = None,
 ) -> Camera:
     """A camera as the command line gives it (--sensor-model, --exposure-ms, --isp, --seed, --scale, --flicker or
-    --image-motion).
+    --image-motion, --pwm-emitter and --camera-motion).
 
     Parameters
     ----------
@@ -207,7 +235,9 @@ def load_camera(
     scale : float, default 1.0
         A frame's values times `scale` are W/m².
     scene_in_time : sensor.timing.SceneInTime, optional
-        A box of PWM-driven light, or the image's motion (`sensor.commands.timed_scene`).
+        A box of PWM-driven light, or the image's motion (`sensor.time_options.timed_scene`).
+    scene_timing : sensor.scene_input.SceneTiming, optional
+        A scene file's PWM emitters and camera motion (`sensor.scene_input.scene_timing`).
 
     Returns
     -------
@@ -217,6 +247,5 @@ def load_camera(
     from ..sensor.files import load_sensor
     from .pipeline import load_isp
 
-    return Camera(
-        load_sensor(sensor_model), exposure_ms, None if isp is None else load_isp(isp), seed, scale, scene_in_time
-    )
+    isp_model = None if isp is None else load_isp(isp)
+    return Camera(load_sensor(sensor_model), exposure_ms, isp_model, seed, scale, scene_in_time, scene_timing)

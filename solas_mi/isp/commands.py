@@ -64,10 +64,12 @@ def register(subparsers: Any) -> None:
     p.set_defaults(run=run_camera)
 
 
-def add_camera_options(p: argparse.ArgumentParser, seed: bool) -> None:
+def add_camera_options(p: argparse.ArgumentParser, seed: bool, scenes: bool = False) -> None:
     """A batch's camera options: --sensor-model, --exposure-ms, --scale, --isp, --flicker, --image-motion (and
-    --seed where `seed`)."""
-    from ..sensor.commands import add_exposure_option, add_time_options
+    --seed where `seed`; --pwm-emitter and --camera-motion where its items include `scenes` files)."""
+    from ..sensor.commands import add_exposure_option
+    from ..sensor.scene_input import add_timing_options
+    from ..sensor.time_options import add_time_options
 
     g = p.add_argument_group(
         "the camera: each frame through a sensor and image processor (its values times --scale "
@@ -89,6 +91,8 @@ def add_camera_options(p: argparse.ArgumentParser, seed: bool) -> None:
         help=f"develop each RAW: 'default' or a TOML file with an [isp] table ({stage_choices()}; with --sensor-model)",
     )
     add_time_options(g)
+    if scenes:
+        add_timing_options(g, "with --sensor-model, a scene file's")
     if seed:
         g.add_argument(
             "--seed",
@@ -108,6 +112,8 @@ def camera_from_args(args: argparse.Namespace, seed: int):
         ("--isp", args.isp),
         ("--flicker", args.flicker),
         ("--image-motion", args.image_motion),
+        ("--pwm-emitter", getattr(args, "pwm_emitter", None)),
+        ("--camera-motion", getattr(args, "camera_motion", None)),
     )
     if args.sensor_model is None:
         given = [flag for flag, value in options if value is not None]
@@ -117,7 +123,8 @@ def camera_from_args(args: argparse.Namespace, seed: int):
     if args.exposure_ms is None:
         raise SolasError("--sensor-model needs --exposure-ms (the exposure time in ms, or auto)")
     from ..sensor.auto_exposure import parse_exposure
-    from ..sensor.commands import timed_scene
+    from ..sensor.scene_input import scene_timing
+    from ..sensor.time_options import timed_scene
     from .camera import load_camera
 
     return load_camera(
@@ -127,4 +134,5 @@ def camera_from_args(args: argparse.Namespace, seed: int):
         seed,
         1.0 if args.scale is None else args.scale,
         timed_scene(args),
+        scene_timing(getattr(args, "pwm_emitter", None), getattr(args, "camera_motion", None)),
     )

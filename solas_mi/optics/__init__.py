@@ -31,10 +31,15 @@ READERS.register(
 WRITERS.register(
     ".toml",
     lens_toml.dumps,
-    holds=("coatings", "blades"),
+    holds=("coatings", "blades", "surfaces without rotational symmetry", "coordinate breaks"),
     summary="our TOML lens file, numbers in full: it reads back as the same lens (`lens_toml`)",
 )
-WRITERS.register(".zmx", zemax.dumps, holds=("coatings",), summary="Zemax OpticStudio sequential lens file (`zemax`)")
+WRITERS.register(
+    ".zmx",
+    zemax.dumps,
+    holds=("coatings", "surfaces without rotational symmetry", "coordinate breaks"),
+    summary="Zemax OpticStudio sequential lens file (`zemax`)",
+)
 WRITERS.register(
     ".dat", pbrt_dat.dumps, summary="pbrt lens table, spherical surfaces and an object at infinity only (`pbrt_dat`)"
 )

@@ -316,30 +316,27 @@ def to_zemax(coating: Coating | None, where: str) -> list[str]:
     return [f"  COAT I.{digits[2:]}"]
 
 
-# The tables of a coating's unpolarised transmittance (the tracer's weight) and reflectance (the mesh scene's
-# `coated_dielectric`): wavelengths every TABLE_STEP_NM nm over the media's common range within TABLE_RANGE_NM,
-# cos θ in TABLE_COS steps; bilinear between nodes (measured: within 2e-5 of the transfer matrix for a three-layer
-# absorbing stack, 380-780 nm, every angle; a render's weight).
+# The tracer's table of a coating's unpolarised transmittance: wavelengths every TABLE_STEP_NM nm over the
+# media's common range within TABLE_RANGE_NM, cos θ in TABLE_COS steps; bilinear between nodes (measured: within
+# 2e-5 of the transfer matrix for a three-layer absorbing stack, 380-780 nm, every angle; a render's weight).
 TABLE_RANGE_NM, TABLE_STEP_NM, TABLE_COS = (300.0, 1100.0), 1.0, 513
-TABLE_QUANTITIES = ("transmittance", "reflectance")  # what `power_table` tabulates: properties of `Power`
 
 
-def power_table(
-    coating: Coating, before: glass_mod.Glass, after: glass_mod.Glass, quantity: str = "transmittance"
+def transmittance_table(
+    coating: Coating, before: glass_mod.Glass, after: glass_mod.Glass, reflect: bool = False
 ) -> tuple[float, float, int, np.ndarray]:
-    """The unpolarised `quantity` (one of TABLE_QUANTITIES) of `coating` from medium `before` into `after` on a
-    grid, as the tracer and the mesh scene interpolate it: (first wavelength nm, step nm, wavelengths, values
-    (wavelengths × TABLE_COS) by cos θ from 0 to 1 in the medium of incidence). T is reciprocal: the same either
-    way through; R of an absorbing stack is not."""
-    if quantity not in TABLE_QUANTITIES:
-        raise ValueError(f"quantity {quantity!r} must be one of {', '.join(TABLE_QUANTITIES)}")
+    """The unpolarised transmittance (with `reflect`: reflectance) of `coating` from medium `before` into
+    `after` on a grid, as the tracer interpolates it: (first wavelength nm, step nm, wavelengths, values
+    (wavelengths × TABLE_COS) by cos θ from 0 to 1 in the medium of incidence). T is reciprocal: the same
+    either way through; R of an absorbing stack is not."""
     lo = max(TABLE_RANGE_NM[0], before.range_nm[0], after.range_nm[0], *(f.glass.range_nm[0] for f in coating.layers))
     hi = min(TABLE_RANGE_NM[1], before.range_nm[1], after.range_nm[1], *(f.glass.range_nm[1] for f in coating.layers))
     count = int((hi - lo) // TABLE_STEP_NM) + 1
     lam = lo + TABLE_STEP_NM * np.arange(count)
     cos = np.linspace(0.0, 1.0, TABLE_COS)
     power = coating.power(before.index(lam)[:, None], after.index(lam)[:, None], lam[:, None], cos[None, :])
-    return lo, TABLE_STEP_NM, count, np.ascontiguousarray(getattr(power, quantity), dtype=np.float64)
+    t = power.reflectance if reflect else power.transmittance
+    return lo, TABLE_STEP_NM, count, np.ascontiguousarray(t, dtype=np.float64)
 
 
 def metadata(lens) -> dict:

@@ -22,6 +22,7 @@ from dataclasses import dataclass, replace
 import numpy as np
 
 from .lens import Lens
+from .lens_checks import refuse_as_built
 from .overlap import check_image_distance
 from .surface import Surface
 
@@ -33,7 +34,9 @@ CHECK_RADII = 9
 
 def reversed_lens(lens: Lens) -> Lens:
     """The lens seen from the image side: surfaces in reverse order, mirrored in z, the image plane
-    as a finite object. Vertex z of the reversed lens = last vertex z − original vertex z."""
+    as a finite object. Vertex z of the reversed lens = last vertex z − original vertex z. SolasError for a
+    lens as built (not reversed here: `lens_checks.refuse_as_built`)."""
+    refuse_as_built(lens, "reversing a lens (for its exit-pupil bounds)")
     s = lens.surfaces
     before = [lens.object_glass] + [x.glass for x in s[:-1]]
     materials = ["AIR"] + [x.material for x in s[:-1]]

@@ -21,6 +21,7 @@ import numpy as np
 from ..errors import SolasError
 from .coating import stack_power
 from .lens import Lens
+from .lens_checks import refuse_as_built
 from .sag import ASPHERE_ITERATIONS, ASPHERE_TOL_MM, sag, sag_slope
 from .surface import RIM_SLACK
 
@@ -43,7 +44,9 @@ class Rays:
 
 
 def reflecting(lens: Lens) -> list[int]:
-    """The surfaces (0-based) that reflect: where the medium changes; SolasError for an ideal thin lens."""
+    """The surfaces (0-based) that reflect: where the medium changes; SolasError for an ideal thin lens, a
+    surface without rotational symmetry or a coordinate break."""
+    refuse_as_built(lens, "the ghost tracer")
     ideal = [k + 1 for k, s in enumerate(lens.surfaces) if s.ideal]
     if ideal:
         raise SolasError(

@@ -19,9 +19,9 @@ import numpy as np
 from ..errors import SolasError
 from ..imageio import write_text
 from . import glass as glass_mod
-from . import lens_checks, overlap, thermal
+from . import lens_checks, overlap, placement, thermal
 from .fields import FieldType, field_type_for
-from .formats import MAX_SURFACES, MAX_WAVELENGTHS, READERS, WRITERS, check_count, check_printable, lens_path, writable
+from .formats import READERS, WRITERS, check_printable, lens_path, writable
 from .formats import shipped_lenses as shipped_lenses  # re-exported
 from .sag import sag as sag  # re-exported
 from .surface import NORM_RADIUS_MM as NORM_RADIUS_MM  # re-exported
@@ -32,12 +32,6 @@ def check_lens(lens) -> None:
     """SolasError unless `lens` is a Lens (analyses take `Lens.load(name or path)`)."""
     if not isinstance(lens, Lens):
         raise SolasError(f"lens {lens!r} must be a Lens: Lens.load(a shipped name or a lens file)")
-
-
-def _check_size(surfaces, wavelengths, where: str) -> None:
-    """SolasError unless there are at most `formats.MAX_SURFACES` surfaces and `MAX_WAVELENGTHS` wavelengths."""
-    check_count(len(surfaces), "surfaces", MAX_SURFACES, where)
-    check_count(len(wavelengths), "wavelengths", MAX_WAVELENGTHS, where)
 
 
 @dataclass(frozen=True)
@@ -75,6 +69,8 @@ class Lens:
         The temperature (°C) of the lens and the air around it; its media's indices hold there (`at`).
     pressure_kpa : float, default 101.325
         The air's pressure (kPa); indices are relative to that air.
+    image_placement : Placement, optional
+        A coordinate break before the image plane: the sensor decentred or tilted (`placement`).
 
     Raises
     ------
@@ -102,12 +98,13 @@ class Lens:
     materials: tuple[glass_mod.Glass, ...] = ()
     temperature_c: float = thermal.STANDARD_C
     pressure_kpa: float = thermal.STANDARD_KPA
+    image_placement: placement.Placement | None = None
 
     def __post_init__(self) -> None:
         """However it is built (a file, `from_dict`, this constructor, `dataclasses.replace`), a lens holds
         at most `formats.MAX_SURFACES` surfaces and `MAX_WAVELENGTHS` wavelengths (why: `formats`), and
         its texts are printable (`formats.check_printable`)."""
-        _check_size(self.surfaces, self.wavelengths_nm, self.source or self.name)
+        lens_checks.check_size(self.surfaces, self.wavelengths_nm, self.source or self.name)
         for what, text in (("name", self.name), ("description", self.description),
                            *(("surface label", s.label) for s in self.surfaces)):
             check_printable(text, what, self.source or "lens")
@@ -179,8 +176,7 @@ class Lens:
             raise SolasError(f"lens file {str(path)!r}: unknown extension {path.suffix!r}; "
                              f"allowed: {writable()}")
         writer = WRITERS[path.suffix.lower()]
-        for feature, used in (("coatings", any(s.coating for s in self.surfaces)),
-                              ("blades", any(s.blades for s in self.surfaces))):
+        for feature, used in lens_checks.features(self):
             if used and feature not in writer.extra.get("holds", ()):
                 raise SolasError(f"lens file {str(path)!r}: a {path.suffix} file holds no {feature}; save the lens "
                                  f"as {', '.join(k for k, e in WRITERS.items() if feature in e.extra.get('holds', ()))}")
@@ -221,7 +217,7 @@ class Lens:
         wavelengths = spec.get("wavelengths_nm", [486.0, 531.0, 656.0])
         if not isinstance(wavelengths, list) or not wavelengths:
             raise SolasError(f"{where}: wavelengths_nm = {wavelengths!r} must be a non-empty list of numbers (nm)")
-        _check_size(rows, wavelengths, where)  # before any work on them
+        lens_checks.check_size(rows, wavelengths, where)  # before any work on them
         catalogues, own = lens_catalogues(spec, where), lens_materials(spec, where)
         surfaces = [surface_from_row(row, i, where, catalogues, own) for i, row in enumerate(rows, start=1)]
         obj, image = subtable(spec, "object", where), subtable(spec, "image", where)
@@ -244,6 +240,7 @@ class Lens:
             object_distance=float(distance),
             object_glass=object_glass,
             image_diameter=finite_number(image, "diameter", f"{where}: image", "mm", 0.0),
+            image_placement=placement.from_row(image, f"{where}: image", finite_number),
             wavelengths_nm=tuple(finite_number({"wavelengths_nm": w}, "wavelengths_nm", where, "nm") for w in wavelengths),
             field_deg=finite_number(spec, "field_deg", where, "degrees", 0.0),
             description=str(spec.get("description", "")),
@@ -327,6 +324,8 @@ class Lens:
         }
         if (self.temperature_c, self.pressure_kpa) != (thermal.STANDARD_C, thermal.STANDARD_KPA):
             content["environment"] = [self.temperature_c, self.pressure_kpa]  # the indices change with it
+        if self.image_placement:
+            content["image_placement"] = self.image_placement.table()
         return hashlib.sha256(json.dumps(content, sort_keys=True).encode()).hexdigest()[:16]
 
     def at(self, temperature_c: float = thermal.STANDARD_C, pressure_kpa: float = thermal.STANDARD_KPA,

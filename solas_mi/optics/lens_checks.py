@@ -7,6 +7,7 @@ import math
 
 from ..errors import SolasError
 from . import overlap
+from .formats import MAX_SURFACES, MAX_WAVELENGTHS, check_count
 
 # The longest length a lens file may give (mm): an object beyond it is at infinity to every digit (its image
 # lies f²/d ≈ 1e-11 mm from the focus of an f = 100 mm lens); a film 1e30 mm away rendered NaN, one at 1e300
@@ -15,6 +16,12 @@ MAX_LENGTH_MM = 1e15
 _VIRTUAL = (
     ": the image plane lies before the last surface, a virtual image (a diverging lens's focus) that no film records"
 )
+
+
+def check_size(surfaces, wavelengths, where: str) -> None:
+    """SolasError unless there are at most `formats.MAX_SURFACES` surfaces and `MAX_WAVELENGTHS` wavelengths."""
+    check_count(len(surfaces), "surfaces", MAX_SURFACES, where)
+    check_count(len(wavelengths), "wavelengths", MAX_WAVELENGTHS, where)
 
 
 def validate(lens, where: str) -> None:
@@ -61,6 +68,8 @@ def validate(lens, where: str) -> None:
                 f"{ident}: conic {s.conic:g} with radius {s.radius:g} mm closes before the clear "
                 f"semi-diameter {s.semi_diameter:g} mm; the conic cannot hold that aperture"
             )
+        if s.form is not None:
+            s.form.check_aperture(s.semi_diameter, ident)
     lens.field_type.check_lens(lens, where)
     last = lens.surfaces[-1]
     if last.thickness < 0:
@@ -69,3 +78,31 @@ def validate(lens, where: str) -> None:
             f"{last.thickness:g} mm must be positive" + _VIRTUAL + "; 0 mm puts it on the last surface"
         )
     overlap.notes(lens, where)
+
+
+def features(lens) -> list[tuple[str, bool]]:
+    """(feature, whether `lens` uses it) of what a lens file format may not hold (`Lens.save`)."""
+    surfaces = lens.surfaces
+    return [
+        ("coatings", any(s.coating for s in surfaces)),
+        ("blades", any(s.blades for s in surfaces)),
+        ("surfaces without rotational symmetry", any(s.form for s in surfaces)),
+        ("coordinate breaks", any(s.placement for s in surfaces) or lens.image_placement is not None),
+    ]
+
+
+def refuse_as_built(lens, engine: str) -> None:
+    """SolasError naming `lens`'s first surface that is not rotationally symmetric or sits behind a coordinate
+    break, which `engine` (named in the message) does not trace: the NumPy tracer `local_trace` does."""
+    for i, s in enumerate(lens.surfaces, start=1):
+        if s.form is not None or s.placement is not None:
+            what = f"a {s.form.kind}" if s.form is not None else "decentred or tilted (a coordinate break before it)"
+            raise SolasError(
+                f"lens {lens.name}: surface {i} ({s.label}) is {what}, which {engine} does not take yet "
+                "(only rotationally symmetric surfaces on one axis); the NumPy tracer optics.local_trace traces it"
+            )
+    if lens.image_placement is not None:
+        raise SolasError(
+            f"lens {lens.name}: its image plane (the sensor) is decentred or tilted, which {engine} does not take "
+            "yet; the NumPy tracer optics.local_trace traces it"
+        )

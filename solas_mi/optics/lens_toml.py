@@ -67,7 +67,9 @@ def dumps(lens) -> str:
     if lens.object_glass.kind != "air":
         lines.append(f"material = {_value(lens.object_glass.name)}")
     for s in lens.surfaces:
-        lines += ["", "[[surface]]", f"label = {_value(s.label)}", f"radius = {_value(s.radius)}"]
+        lines += ["", "[[surface]]", f"label = {_value(s.label)}"]
+        shape = {"kind": s.form.kind, **s.form.table()} if s.form else {"radius": s.radius}
+        lines += [f"{key} = {_value(value)}" for key, value in shape.items()]
         if s.conic:
             lines.append(f"conic = {_value(s.conic)}")
         if any(s.aspheric):
@@ -91,6 +93,10 @@ def dumps(lens) -> str:
             lines.append(f"blade_curvature = {_value(s.blade_curvature)}")
         if s.mount is not None:
             lines.append(f"mount = {_value(s.mount)}")
-    if lens.image_diameter:
-        lines += ["", "[image]", f"diameter = {_value(lens.image_diameter)}"]
+        if s.placement:  # the order flag an integer
+            lines += [f"{k} = {v if k == 'tilt_order' else _value(v)}" for k, v in s.placement.table().items()]
+    image = {"diameter": lens.image_diameter} if lens.image_diameter else {}
+    image.update(lens.image_placement.table() if lens.image_placement else {})
+    if image:
+        lines += ["", "[image]"] + [f"{k} = {v if k == 'tilt_order' else _value(v)}" for k, v in image.items()]
     return "\n".join(lines) + "\n"

@@ -30,6 +30,7 @@ def scaled(lens: Lens, factor: float) -> Lens:
         surfaces=tuple(_surface(x, s) for x in lens.surfaces),
         object_distance=lens.object_distance * s,
         image_diameter=lens.image_diameter * s,
+        image_placement=None if lens.image_placement is None else lens.image_placement.scaled(s),
     )
 
 
@@ -43,6 +44,8 @@ def _surface(surface: Surface, s: float) -> Surface:
         qbfs=tuple(a * s for a in surface.qbfs),
         norm_radius=surface.norm_radius * s,
         focal_length=None if surface.focal_length is None else surface.focal_length * s,
+        form=None if surface.form is None else surface.form.scaled(s),
+        placement=None if surface.placement is None else surface.placement.scaled(s),
     )
 
 

@@ -8,20 +8,27 @@ departure φ u²(1 − u²) Σ a_m Q_m^bfs(u²) with `qbfs` = [a0, a1, …] (mm)
 (`forbes`). A flat surface with `focal_length` (mm) is an ideal thin lens (`ideal`); `coating`, its thin
 films (`coating`); the stop's `blades` (N ≥ 3) and `blade_rotation` (degrees): an iris, the regular N-gon
 whose corners lie on the stop's clear circle, its sides straight or, with `blade_curvature` κ in (0, 1], arcs of
-radius (clear radius)/κ bulging outward through the same corners (κ = 1: the clear circle). Lengths in mm.
+radius (clear radius)/κ bulging outward through the same corners (κ = 1: the clear circle). A surface
+without rotational symmetry names its `kind` (one of `shapes.NAMED`) with that kind's entries, and is held
+whole as `form`; a coordinate break before a surface (decentres, tilts: `placement`) is its `placement`.
+Every shape is a geometry object of `shapes.KINDS` (`Surface.geometry`). Lengths in mm.
 """
 from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
 from ..errors import SolasError
-from . import forbes, thermal
+from . import forbes, shapes, thermal
 from . import glass as glass_mod
 from . import ideal as ideal_mod
 from .coating import Coating, coating_from_table
+from .placement import KEYS as PLACEMENT_KEYS
+from .placement import Placement
+from .placement import from_row as placement_from_row
 from .sag import sag
 
 RIM_SLACK = 1e-9  # relative: a ray aimed exactly at an aperture's rim passes (every tracer)
@@ -31,10 +38,10 @@ NORM_RADIUS_MM = (1e-6, 1e6)  # the Qbfs normalisation radius a surface may have
 KEYS = {
     "lens": ("name", "description", "wavelengths_nm", "field_deg", "catalogues", "materials", "temperature_c",
              "pressure_kpa", "surface", "object", "image"),
-    "surface": ("label", "radius", "thickness", "diameter", "material", "stop", "conic", "aspheric", "qbfs",
-                "norm_radius", "focal_length", "coating", "blades", "blade_rotation", "mount", "blade_curvature"),
+    "surface": ("label", "radius", "thickness", "diameter", "material", "stop", *shapes.KEYS[1:], "coating", "blades",
+                "blade_rotation", "mount", "blade_curvature", "kind", *PLACEMENT_KEYS),
     "object": ("distance", "material"),
-    "image": ("diameter",),
+    "image": ("diameter", *PLACEMENT_KEYS),
 }
 
 
@@ -104,6 +111,8 @@ class Surface:
     blade_rotation: float = 0.0  # degrees from +x to the polygon's first corner, counter-clockwise seen from the object
     mount: str | float | None = None  # what holds the air gap after it (`thermal.MOUNTS` or a CTE, 1/K); None: not said
     blade_curvature: float = 0.0  # the iris's sides: 0 straight, κ in (0, 1] arcs of radius (clear radius)/κ
+    form: shapes.Shape | None = None  # its shape where not rotationally symmetric (`shapes.NAMED`; radius etc. then 0)
+    placement: Placement | None = None  # a coordinate break before it (decentres, tilts); None: on the axis
 
     def iris_margin(self, x, y, hypot, atan2, cos, floor):
         """The signed distance (mm) of points (x, y) inside the stop's aperture: to its rim for a round stop,
@@ -156,7 +165,20 @@ class Surface:
                 + ([{"focal_length": self.focal_length}] if self.ideal else [])
                 + ([{"coating": self.coating.table()}] if self.coating else [])
                 + ([{"blades": self.blades, "blade_rotation": self.blade_rotation}] if self.blades else [])
-                + ([{"blade_curvature": self.blade_curvature}] if self.blade_curvature else []))
+                + ([{"blade_curvature": self.blade_curvature}] if self.blade_curvature else [])
+                + ([{"kind": self.form.kind, **self.form.table()}] if self.form else [])
+                + ([self.placement.table()] if self.placement else []))
+
+    @cached_property
+    def geometry(self) -> shapes.Shape:
+        """Its shape as a geometry object (`shapes.KINDS`): `form`, or the rotationally symmetric one of
+        its radius, conic, aspheric, qbfs and focal_length."""
+        return self.form if self.form is not None else shapes.rotational(self)
+
+    @property
+    def kind(self) -> str:
+        """Its shape's kind, a name of `shapes.KINDS`."""
+        return self.geometry.kind
 
     @property
     def ideal(self) -> bool:
@@ -165,8 +187,8 @@ class Surface:
 
     @property
     def is_sphere(self) -> bool:
-        """A sphere or plane (no conic, no polynomial terms)."""
-        return self.conic == 0.0 and not any(self.aspheric) and not any(self.qbfs)
+        """A sphere or plane (no conic, no polynomial terms, rotationally symmetric)."""
+        return self.conic == 0.0 and not any(self.aspheric) and not any(self.qbfs) and self.form is None
 
     @property
     def shape(self) -> dict:
@@ -176,7 +198,10 @@ class Surface:
 
     @property
     def paraxial_curvature(self) -> float:
-        """1/mm: the vertex curvature, c + 2 Σ a_m Q_m^bfs(0)/ρ² where Qbfs terms bend the vertex too."""
+        """1/mm: the vertex curvature, c + 2 Σ a_m Q_m^bfs(0)/ρ² where Qbfs terms bend the vertex too; for a
+        surface without rotational symmetry, its y-z section's (paraxial data in the y-z plane, as Zemax's)."""
+        if self.form is not None:
+            return self.form.section_curvatures[1]
         bend = forbes.qbfs_sum(0.0, self.qbfs)[0] if any(self.qbfs) else 0.0
         return self.curvature + 2.0 * bend / self.norm_radius ** 2
 
@@ -190,8 +215,11 @@ class Surface:
         return 0.5 * self.diameter
 
     def sag(self, r: np.ndarray | float) -> np.ndarray | float:
-        """Surface z relative to its vertex at radial distance r (mm)."""
+        """Surface z relative to its vertex at radial distance r (mm); for a surface without rotational
+        symmetry, along its y-z section."""
         r = np.asarray(r, dtype=np.float64)
+        if self.form is not None:
+            return self.form.sag(0.0 * r, r)
         return sag(r * r, **self.shape)
 
 
@@ -200,6 +228,10 @@ def surface_from_row(row: dict, i: int, where: str, catalogues: tuple[str, ...],
     label = str(row.get("label", f"surface {i}"))
     ident = f"{where}: surface {i} ({label})"
     check_keys(row, "surface", ident)
+    form, placement = shape_form(row, ident), placement_from_row(row, ident, finite_number)
+    if form is not None:  # the kind's entries are its own: the rest of the row as a flat surface's
+        row = {k: v for k, v in row.items() if k not in ("kind", *shapes.KINDS[form.kind].extra["keys"])}
+        row["radius"] = 0.0
     stop = row.get("stop", False)
     if not isinstance(stop, bool):
         raise SolasError(f"{ident}: stop = {stop!r} must be true or false (a TOML boolean, unquoted)")
@@ -227,7 +259,7 @@ def surface_from_row(row: dict, i: int, where: str, catalogues: tuple[str, ...],
         except SolasError as exc:
             raise SolasError(f"{ident}: {exc}") from None
     return Surface(label, radius, thickness, diameter, str(material), g, stop, conic, aspheric, qbfs, norm_radius,
-                   focal_length, coating, blades, rotation, mount, curvature)
+                   focal_length, coating, blades, rotation, mount, curvature, form, placement)
 
 
 def _iris(row: dict, ident: str, stop: bool) -> tuple[int, float, float]:
@@ -242,6 +274,25 @@ def _iris(row: dict, ident: str, stop: bool) -> tuple[int, float, float]:
         raise SolasError(f"{ident}: blade_curvature = {row['blade_curvature']!r} must be from 0 (straight blades) to 1 "
                          "(arcs of the clear circle), with blades")
     return blades, rotation, curvature
+
+
+def shape_form(row: dict, ident: str) -> shapes.Shape | None:
+    """The shape a row names by `kind` (`shapes.NAMED`), of its kind's entries, checked; None without `kind`."""
+    if "kind" not in row:
+        return None
+    kind = row["kind"]
+    if kind not in shapes.NAMED:
+        raise SolasError(f"{ident}: kind = {kind!r} must be one of {', '.join(shapes.NAMED)} (a rotationally "
+                         "symmetric surface takes no kind: radius, conic, aspheric, qbfs or focal_length say it)")
+    entry = shapes.KINDS[kind]
+    stray = [key for key in shapes.KEYS if key in row and key not in entry.extra["keys"]]
+    if stray:
+        raise SolasError(f"{ident}: a {kind} takes {', '.join(entry.extra['keys'])}; not {', '.join(stray)}")
+    values = {key: polynomial_terms(row, key, ident, "(mm^(1-2i))") if key in entry.extra["lists"]
+              else finite_number(row, key, ident, "mm" if key.startswith("radius") else "dimensionless",
+                                 None if key == "radius" else 0.0)
+              for key in entry.extra["keys"]}
+    return entry.function(**values)
 
 
 def polynomial_terms(row: dict, key: str, ident: str, meaning: str) -> tuple[float, ...]:

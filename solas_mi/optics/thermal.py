@@ -130,6 +130,8 @@ def _scaled_surface(surface, factor: float, thickness_factor: float):
         aspheric=aspheric,
         qbfs=tuple(q * factor for q in surface.qbfs),
         norm_radius=surface.norm_radius * factor if any(surface.qbfs) else surface.norm_radius,
+        form=None if surface.form is None else surface.form.scaled(factor),
+        placement=None if surface.placement is None else surface.placement.scaled(factor),
     )
 
 

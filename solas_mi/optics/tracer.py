@@ -26,6 +26,7 @@ from . import ideal
 from .coated import coating_power
 from .fields import ANGLE
 from .lens import Lens
+from .lens_checks import refuse_as_built
 from .paraxial import ideal_conjugates, paraxial, pupil_distance
 from .sag import ASPHERE_ITERATIONS, ASPHERE_TOL_MM, sag, sag_slope
 from .surface import RIM_SLACK
@@ -186,6 +187,7 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False, heigh
     Fresnel transmittances (1 − (r_s² + r_p²)/2) of every refraction, a coated surface's coating's
     (`coating_power`) where it has one; a `heights` list receives each
     surface's squared ray height x² + y² (mm², for automatic clear apertures)."""
+    refuse_as_built(lens, "the Dr.Jit tracer")
     x, y, z, dx, dy, dz, opl = rays.x, rays.y, rays.z, rays.dx, rays.dy, rays.dz, rays.opl
     ftype, utype, btype = _types(x)
     ok = dr.full(btype, True, dr.width(x))
@@ -269,15 +271,7 @@ def _refract(s, x, y, lz, r2, d, mu, fresnel: bool, ftype, coated=None):
     total internal reflection), the unpolarised transmittance when `fresnel`, else None): the bare
     interface's Fresnel transmittance, or `coated(cos θ)` where the surface has a coating."""
     dx, dy, dz = d
-    if s.curvature == 0.0 and s.is_sphere:
-        nx, ny, nz = dr.zeros(ftype, 1), dr.zeros(ftype, 1), dr.ones(ftype, 1)
-    elif s.is_sphere:
-        c = _opaque(s.curvature, ftype)
-        nx, ny, nz = -c * x, -c * y, 1.0 - c * lz
-    else:  # exact even-asphere normal (−2x s', −2y s', 1) / |…|
-        slope = 2.0 * sag_slope(r2, **s.shape, sqrt=dr.sqrt, maximum=dr.maximum)
-        nz = dr.rsqrt(dr.fma(slope * slope, r2, 1.0))
-        nx, ny = -slope * x * nz, -slope * y * nz
+    nx, ny, nz = surface_normal(s, x, y, lz, r2, ftype)
     cosi = dx * nx + dy * ny + dz * nz
     k2 = 1.0 - mu * mu * (1.0 - cosi * cosi)
     cost = dr.sqrt(dr.maximum(k2, 0.0))
@@ -290,6 +284,19 @@ def _refract(s, x, y, lz, r2, d, mu, fresnel: bool, ftype, coated=None):
         factor = 1.0 - 0.5 * (rs * rs + rp * rp)
     g = cost - mu * cosi
     return (dr.fma(mu, dx, g * nx), dr.fma(mu, dy, g * ny), dr.fma(mu, dz, g * nz)), k2, factor
+
+
+def surface_normal(s, x, y, lz, r2, ftype):
+    """The unit normal of surface `s` (+z at its vertex) at its point (x, y, lz) in its vertex frame, r2 = x² + y²."""
+    if s.curvature == 0.0 and s.is_sphere:
+        return dr.zeros(ftype, 1), dr.zeros(ftype, 1), dr.ones(ftype, 1)
+    if s.is_sphere:
+        c = _opaque(s.curvature, ftype)
+        return -c * x, -c * y, 1.0 - c * lz
+    # an exact even asphere: (−2x s', −2y s', 1) / |…|
+    slope = 2.0 * sag_slope(r2, **s.shape, sqrt=dr.sqrt, maximum=dr.maximum)
+    nz = dr.rsqrt(dr.fma(slope * slope, r2, 1.0))
+    return -slope * x * nz, -slope * y * nz, nz
 
 
 def _asphere_hit(s, x, y, dx, dy, dz, t):

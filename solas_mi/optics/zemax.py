@@ -10,8 +10,9 @@ Read as the author meant it:
   k the r^k coefficient: the even ones from r⁴ up are kept; r² and odd terms are refused naming the
   surface), QED_TYPE (OpticStudio's Q-type asphere: XDAT 1 the type, 0 Qbfs or 1 Qcon, XDAT 2 the number
   of terms, XDAT 3 the normalisation radius, XDAT 4… a0, a1, …; Qbfs kept as such, Qcon rewritten exactly
-  as even-asphere terms, `forbes`), COORDBRK when it is a pure axial shift (its DISZ added to the gap) or
-  undone by the next coordinate break; PARAXIAL, the ideal thin lens (`ideal`: PARM 1 the focal length,
+  as even-asphere terms, `forbes`), COORDBRK (a pure axial shift: its DISZ added to the gap; undone by the
+  next break: gone; one that decentres or tilts: the next surface's placement), TOROIDAL and BICONICX
+  (`zemax_asbuilt`, which writes them and the breaks back); PARAXIAL, the ideal thin lens (`ideal`: PARM 1 the focal length,
   PARM 2 the OPD mode); flat air surfaces without a clear aperture of their own (no DIAM, or DIAM's solve
   type 0, automatic: it cuts no ray) (dummies) are dropped, their thickness added to the gap. STOP (none:
   surface 1, as in OpticStudio's new lens, said in the description), COMM (the label), CONI, CURV, DISZ;
@@ -31,22 +32,22 @@ Read as the author meant it:
 - ENVD (°C, atm; older TEMP, PRES): the lens's `temperature_c`, `pressure_kpa` (`thermal`); written back so.
 - UNIT (MM, CM, IN, METER) scales every length to mm; WAVM (or WAVL) the wavelengths (µm in the file),
   PWAV the one the aperture and field solves use; surface 0's DISZ the object distance. The last SURF
-  is the image plane (its DIAM the image semi-diameter). Mirrors, gratings, toroids, tilted or decentred
-  coordinate breaks and other surface types are refused naming the surface and the feature.
+  is the image plane (its DIAM the image semi-diameter). Mirrors, gratings, a tilted sensor and other
+  surface types are refused naming the surface and the feature.
 """
 from __future__ import annotations
 
 import math
 
 from ..errors import SolasError
-from . import forbes, ideal, zemax_solves
+from . import forbes, ideal, zemax_asbuilt, zemax_solves
 from . import glass as glass_mod
 from .coating import to_zemax, zemax_coating
 from .formats import MAX_FIELDS, check_count, one_line
 from .formats import floats as _floats
 
 UNITS = {"MM": 1.0, "CM": 10.0, "IN": 25.4, "METER": 1000.0, "M": 1000.0}
-SURFACE_TYPES = ("STANDARD", "EVENASPH", "ODDASPH", "QED_TYPE", "COORDBRK", "PARAXIAL")
+SURFACE_TYPES = ("STANDARD", "EVENASPH", "ODDASPH", "QED_TYPE", "COORDBRK", "PARAXIAL", *zemax_asbuilt.SHAPE_TYPES)
 FIELD_TYPES = {"0": "angle", "1": "object height", "2": "paraxial image height", "3": "real image height"}
 # GCAT catalogue names → our vendors (Zemax's NIKON catalogue is Hikari's glass).
 GCAT_VENDORS = {**{v: v for v in glass_mod.VENDORS}, "NIKON": "HIKARI", "NIKON-HIKARI": "HIKARI"}
@@ -124,11 +125,11 @@ def read_spec(text: str, where: str) -> dict:
     notes.append(zemax_solves.default_stop(rows, "STOP", "as in OpticStudio's new lens (OBJ, STO, IMA)"))
     spec.update({"description": "; ".join(filter(None, notes))} if any(notes) else {})
     spec.update(ideal.zemax_notes(rows, spec.get("description")))
-    spec["surface"] = _fold(rows, where)
+    spec["surface"], image = zemax_asbuilt.fold(rows, where)
     if "DIAM" in blocks[-1]:
         semi = _floats(blocks[-1]["DIAM"][0][:1], f"{where}: image DIAM")[0] * scale
-        if semi > 0:
-            spec["image"] = {"diameter": 2.0 * semi}
+        image.update({"diameter": 2.0 * semi} if semi > 0 else {})
+    spec.update({"image": image} if image else {})
     spec.update(_wavelengths(top, where))
     spec.update(_environment(top, where))
     fields = _fields(top, scale, where)
@@ -162,7 +163,7 @@ def _surface(b: dict, i: int, scale: float, gcat: tuple[str, ...], where: str) -
     kind = (b.get("TYPE") or [["STANDARD"]])[0][0].upper()
     if kind not in SURFACE_TYPES:
         raise SolasError(f"{ident}: surface TYPE {kind} is not supported; allowed: {', '.join(SURFACE_TYPES)} "
-                         "(rotationally symmetric refracting surfaces)")
+                         "(refracting surfaces)")
     curv = _floats((b.get("CURV") or [["0"]])[0][:1], f"{ident}: CURV")[0] / scale
     thickness = (b.get("DISZ") or [["0"]])[0][0]
     if thickness.upper().startswith("INF"):
@@ -187,6 +188,8 @@ def _surface(b: dict, i: int, scale: float, gcat: tuple[str, ...], where: str) -
         row.update(_q_type(b, scale, ident))
     elif kind == "PARAXIAL":
         row.update(ideal.from_zemax(_parameters(b, ident), scale, ident))
+    elif kind in zemax_asbuilt.SHAPE_TYPES:
+        row.update(zemax_asbuilt.form_row(kind, _parameters(b, ident), _extra_data(b, ident), scale, ident), conic=conic)
     row.update({"stop": True} if "STOP" in b else {})
     row.update({"coating": zemax_coating(b["COAT"][0][0], ident)} if b.get("COAT", [[]])[0] else {})
     return row
@@ -194,6 +197,10 @@ def _surface(b: dict, i: int, scale: float, gcat: tuple[str, ...], where: str) -
 
 def _parameters(b: dict, ident: str) -> dict[int, float]:
     return {int(p[0]): _floats(p[1:2], f"{ident}: PARM {p[0]}")[0] for p in b.get("PARM", []) if len(p) > 1}
+
+
+def _extra_data(b: dict, ident: str) -> dict[int, float]:
+    return {int(p[0]): _floats(p[1:2], f"{ident}: XDAT {p[0]}")[0] for p in b.get("XDAT", []) if len(p) > 1}
 
 
 def _aspheric(b: dict, scale: float, ident: str) -> list[float]:
@@ -219,7 +226,7 @@ def _odd_aspheric(b: dict, scale: float, ident: str) -> list[float]:
 def _q_type(b: dict, scale: float, ident: str) -> dict:
     """The row entries of a QED_TYPE block: {"qbfs", "norm_radius"} (type 0) or {"aspheric"} (type 1,
     Qcon, an even asphere exactly); {} when every coefficient is 0."""
-    xdat = {int(p[0]): _floats(p[1:2], f"{ident}: XDAT {p[0]}")[0] for p in b.get("XDAT", []) if len(p) > 1}
+    xdat = _extra_data(b, ident)
     kind, count, radius = xdat.get(1, 0.0), xdat.get(2, 0.0), xdat.get(3, 0.0) * scale
     if kind not in (0.0, 1.0) or count != int(count) or not 0 <= count <= 12:
         raise SolasError(f"{ident}: QED_TYPE with type (XDAT 1) {kind:g} and {count:g} terms (XDAT 2); allowed: "
@@ -236,56 +243,6 @@ def _trim(terms: list[float]) -> list[float]:
     while terms and terms[-1] == 0.0:
         terms.pop()
     return terms
-
-
-def _fold(rows: list[dict], where: str) -> list[dict]:
-    """Rows without coordinate breaks and dummies: a pure axial break, a pair of breaks that undo each
-    other, and a flat air surface with no clear aperture of its own give their thickness to the row
-    before (or to the object's gap: refused, as the object distance would change)."""
-    out: list[dict] = []
-    i = 0
-    while i < len(rows):
-        row = rows[i]
-        if "break" in row:
-            shift = _break_shift(rows, i)
-            span = 2 if shift is None else 1
-            moved = row["thickness"] + (rows[i + 1]["thickness"] if shift is None else 0.0)
-            if not out:
-                raise SolasError(f"{row['ident']}: a coordinate break before the first surface is not supported")
-            out[-1]["thickness"] += moved
-            i += span
-            continue
-        air_before = not out or out[-1]["material"].upper() == "AIR"
-        dummy = (row["radius"] == 0 and not row.get("stop") and not row.get("aspheric") and not row.get("qbfs") and "focal_length" not in row
-                 and (row["diameter"] is None or row["auto"])
-                 and row["material"].upper() == "AIR" and air_before and out)
-        if dummy:
-            out[-1]["thickness"] += row["thickness"]
-        else:
-            out.append(row)
-        i += 1
-    return [{k: v for k, v in row.items() if k not in ("ident", "auto", "opd_mode")} for row in out]
-
-
-def _break_shift(rows: list[dict], i: int) -> float | None:
-    """0.0 for a coordinate break that only moves along the axis; None when the next row is a break
-    that undoes it (no thickness between them); else SolasError naming the break."""
-    row = rows[i]
-    p = row["break"]
-    moves = [p.get(k, 0.0) for k in range(1, 6)]
-    if not any(moves):
-        return 0.0
-    nxt = rows[i + 1] if i + 1 < len(rows) else {}
-    q = nxt.get("break")
-    if q is not None and row["thickness"] == 0:
-        back = [q.get(k, 0.0) for k in range(1, 6)]
-        reordered = p.get(6, 0.0) != q.get(6, 0.0)
-        several = sum(1 for v in moves if v) > 1
-        if back == [-v for v in moves] and (reordered or not several):
-            return None
-    raise SolasError(f"{row['ident']}: COORDBRK decentres or tilts the axis (decenter x, y {moves[0]:g}, "
-                     f"{moves[1]:g}; tilt x, y, z {moves[2]:g}, {moves[3]:g}, {moves[4]:g}); only rotationally "
-                     "symmetric systems are supported (axial shifts, or breaks undone by the next)")
 
 
 def _wavelengths(top: dict, where: str) -> dict:
@@ -375,17 +332,27 @@ def dumps(lens) -> str:
     out += [f"PWAV {lens.wavelengths_nm.index(lens.primary_wavelength) + 1}"]
     distance = "INFINITY" if lens.at_infinity else number(lens.object_distance)
     out += ["SURF 0", "  TYPE STANDARD", "  CURV 0.0", f"  DISZ {distance}", *glas(lens.object_glass)]
-    for i, s in enumerate(lens.surfaces, start=1):
-        out += [f"SURF {i}", f"  TYPE {_surface_type(s, i)}", f"  COMM {s.label}",
-                f"  CURV {number(s.curvature)}"]
+    i = 0
+    for k, s in enumerate(lens.surfaces, start=1):
+        if s.placement is not None:
+            i += 1
+            out += [f"SURF {i}", *zemax_asbuilt.break_lines(s.placement, number)]
+        i += 1
+        kind, parm = zemax_asbuilt.surface_lines(s, number)
+        shape = s.form or s
+        out += [f"SURF {i}", f"  TYPE {kind or _surface_type(s, k)}", f"  COMM {s.label}", *parm,
+                f"  CURV {number(0.0 if shape.radius == 0 else 1.0 / shape.radius)}"]
         out += [f"  PARM {k} {number(a)}" for k, a in enumerate(s.aspheric, start=2)] + ideal.to_zemax(s.focal_length)
         if any(s.qbfs):
             out += [f"  XDAT {k} {number(v)}" for k, v in
                     enumerate((0.0, float(len(s.qbfs)), s.norm_radius, *s.qbfs), start=1)]
         out += (["  STOP"] if s.stop else []) + to_zemax(s.coating, f"lens {lens.name}: surface {s.label}")
         out += [f"  DISZ {number(s.thickness)}", *glas(s.glass), f"  DIAM {number(s.semi_diameter)} 1 0 0 1 \"\""]
-        out += [f"  CONI {number(s.conic)}"] if s.conic else []
-    out += [f"SURF {len(lens.surfaces) + 1}", "  TYPE STANDARD", "  CURV 0.0", "  DISZ 0",
+        out += [f"  CONI {number(shape.conic)}"] if shape.conic else []
+    if lens.image_placement is not None:  # the sensor decentred or tilted
+        i += 1
+        out += [f"SURF {i}", *zemax_asbuilt.break_lines(lens.image_placement, number)]
+    out += [f"SURF {i + 1}", "  TYPE STANDARD", "  CURV 0.0", "  DISZ 0",
             f"  DIAM {number(lens.image_diameter / 2.0)} 1 0 0 1 \"\""]
     return "\n".join(out) + "\n"
 

@@ -101,6 +101,23 @@ def _scene(args) -> int:
 INTEGRATORS = ("auto", "scene", "solas")
 
 
+def scene_params(items) -> dict[str, str]:
+    """The scene parameters of --set NAME=VALUE options (a list, or None), as `user_scene.load` takes them."""
+    params = {}
+    for item in items or []:
+        key, sep, value = item.partition("=")
+        if not sep or not key:
+            raise SolasError(f"--set {item!r} must look like name=value (a <default> of the scene)")
+        params[key] = value
+    return params
+
+
+def add_set_option(p, where: str = "") -> None:
+    """--set NAME=VALUE (`scene_params`), its help opening with `where` it applies."""
+    p.add_argument("--set", action="append", metavar="NAME=VALUE",
+                   help=f"{where}override a <default> of the scene (e.g. --set image=other.png); repeatable")
+
+
 def _image_scene(scene) -> bool:
     """A scene of `solas-mi scene`: a lens_sensor looking at one image_object."""
     return (type(scene.sensors()[0]).__name__ == "LensSensor"
@@ -113,12 +130,7 @@ def _render(args) -> int:
     from .user_scene import load
 
     data_file, png = data_and_preview(args.output, args.png, inputs=[args.scene])
-    params = {}
-    for item in args.set or []:
-        key, sep, value = item.partition("=")
-        if not sep or not key:
-            raise SolasError(f"--set {item!r} must look like name=value (a <default> of the scene)")
-        params[key] = value
+    params = scene_params(args.set)
     lens = load_lens(args) if args.lens else None
     if lens is None and any(v is not None for v in (args.pitch_um, args.focus_distance, args.world_unit_mm)):
         raise SolasError("--pitch-um, --focus-distance and --world-unit-mm set the lens camera: give --lens too")
@@ -129,16 +141,22 @@ def _render(args) -> int:
     notes = []
     focus = _focus(args.focus_distance)
     scene = load(args.scene, run.variant, lens, params, notes, pitch_um=args.pitch_um, focus_distance=focus,
-                 response=args.response, world_unit_mm=args.world_unit_mm)
+                 response=args.response, world_unit_mm=args.world_unit_mm, ghosts="only" if args.ghosts else None)
     for note in notes:
         print(f"render: {note}", file=sys.stderr)
     spp = args.spp if args.spp is not None else int(scene.sensors()[0].sampler().sample_count())
     width, height = (int(v) for v in scene.sensors()[0].film().crop_size())
     check_render(width, height, spp, args.force, run.labels)
     loop = args.integrator == "solas" or (args.integrator == "auto" and lens is None and _image_scene(scene))
-    if loop and run.labels:
-        raise SolasError("--labels are traced through a lens camera: give --lens, or a scene with a lens_camera")
-    if loop:
+    if loop and (run.labels or args.ghosts):
+        raise SolasError(f"--{'labels' if run.labels else 'ghosts'} are traced through a lens camera: give --lens, "
+                         "or a scene with a lens_camera")
+    if args.ghosts and not loop:
+        from .flare import render_with_flare
+
+        with _progress(spp) as bar:
+            result = render_with_flare(scene, spp, seed=run.seed, progress=bar, labels=run.labels)
+    elif loop:
         from .loop import render
 
         with _progress(spp) as bar:
@@ -230,11 +248,11 @@ def register(sub) -> None:
                     "`solas-mi scene`, any scene holding a lens_sensor or lens_camera, or, with --lens, any "
                     "Mitsuba scene whose perspective camera is replaced by a lens_camera at the same pose.")
     render.add_argument("scene", help="scene XML")
+    from ..labelkinds import FLARE_LAYERS
     from ..optics.calibration.command import add_calibration_option
 
     add_calibration_option(render)
-    render.add_argument("--set", action="append", metavar="NAME=VALUE",
-                        help="override a <default> of the scene (e.g. --set image=other.png); repeatable")
+    add_set_option(render)
     render.add_argument("--lens", help=f"replace the scene's perspective camera by this lens: {lens_help()}")
     add_environment_options(render)
     render.add_argument("--pitch-um", type=float, help="with --lens: pixel pitch in µm (default: the lens's field "
@@ -249,6 +267,11 @@ def register(sub) -> None:
                         help="auto (default): solas-mi's stratified loop for scenes of `solas-mi scene`, the "
                              "scene's own integrator for any other; scene: the scene's own (path where it has "
                              "none); solas: the loop (lens_sensor + image_object scenes)")
+    render.add_argument("--ghosts", action="store_true",
+                        help="add the stray light of the lens's ghosts (every two-reflection path, its coatings' "
+                             "or Fresnel's reflectance; rendered apart and added) and the flare label layers "
+                             f"{', '.join(FLARE_LAYERS)}; the lens camera's surfaces then weigh by their "
+                             "transmittance (its fresnel 'transmit')")
     render.add_argument("--spp", type=int, help="samples per pixel (default: the scene's)")
     RenderSpec.add_flags(render, SCENE_FILE_SETTINGS)
     _add_output_options(render)

@@ -26,6 +26,7 @@ from ..errors import SolasError, plugin_error
 from ..llvm import select_libllvm
 
 VARIANTS = ("llvm_ad_spectral", "scalar_spectral", "cuda_ad_spectral", "llvm_ad_mono", "cuda_ad_mono")
+SCENE_SUFFIXES = (".xml",)  # Mitsuba scene files (a batch's render items, `camera`'s scene input)
 _registered: set[str] = set()  # variants whose plugin classes are registered
 
 

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..errors import SolasError
 from ..imageio import atomic_path, write_text
-from ..optics import thermal, virtual_object
+from ..optics import lens_checks, thermal, virtual_object
 from ..optics.camera import Camera, camera_for
 from ..optics.coating import Coating
 from ..optics.lens import Lens
@@ -103,6 +103,7 @@ def _check_buildable(lens: Lens, image_radius: float) -> None:
         raise SolasError(f"surface {ideal} of lens {lens.name} is an ideal thin lens (focal_length), which has no glass "
                          f"to build as Mitsuba geometry; trace it instead: {_trace_instead()}")
     virtual_object.check_real(lens, "the mesh scene")
+    lens_checks.refuse_as_built(lens, "the mesh scene")
     iris = next((k for k, s in enumerate(lens.surfaces, start=1) if s.blades), None)
     if iris is not None:  # the meshes have a round stop: not what the lens states
         raise SolasError(f"lens {lens.name}: surface {iris}'s iris (blades) has no Mitsuba geometry here (a round "

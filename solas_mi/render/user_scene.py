@@ -238,7 +238,8 @@ def _add_integrator(mi, state) -> None:
 
 
 def _swap_sensor(mi, state, path, lens, held: Path, options: dict, notes: list) -> None:
-    """Make the first sensor a lens_camera (`options`: pitch_um, focus_distance, response, world_unit_mm)."""
+    """Make the first sensor a lens_camera (`options`: pitch_um, focus_distance, response, world_unit_mm,
+    ghosts)."""
     old = _first_sensor(mi, state, path)
     props = old.props
     width, height = _size(_film(mi, state, old))
@@ -262,9 +263,9 @@ def _swap_sensor(mi, state, path, lens, held: Path, options: dict, notes: list) 
     props.set_plugin_name("lens_camera")
     props["lens"] = str(held.resolve())
     props["pitch_um"] = float(pitch_um)
-    for name in ("world_unit_mm", "response"):
+    for name in ("world_unit_mm", "response", "ghosts"):
         if options.get(name) is not None:
-            props[name] = options[name] if name == "response" else float(options[name])
+            props[name] = float(options[name]) if name == "world_unit_mm" else options[name]
     if focus is not None and focus != "auto":
         props["focus_distance"] = float(focus)
 
@@ -292,7 +293,7 @@ def load(
     """The scene file `xml_path` loaded in Mitsuba (plugins registered) with `params` (as `mi.load_file`
     takes them), relative paths from the scene's folder: a path integrator where it has none and, given
     `lens`, its first sensor a lens_camera (`lens_options`: pitch_um, focus_distance (world units or
-    "auto"), response, world_unit_mm). What was carried over from the scene's camera is appended to
+    "auto"), response, world_unit_mm, ghosts). What was carried over from the scene's camera is appended to
     `notes`."""
     from .mitsuba import mitsuba
 

@@ -10,7 +10,9 @@
 - `timing`: exposure in time: global and rolling shutters, each row's window of a moving scene or of
   PWM-driven light (LED flicker).
 - `rendered`: a Mitsuba scene rendered over the rows' windows: its PWM-driven emitters (named by id) and a
-  camera moving during the frame (`render_in_time`).
+  camera moving during the frame (`render_in_time`); `poses`: the camera's pose over the frame.
+- `commands`: `solas-mi camera` and `sensors`; `time_options`: the camera's --flicker and --image-motion;
+  `scene_input`: the camera's scene-file input (--pwm-emitter, --camera-motion).
 - `emva`: what EMVA 1288 predicts of one readout; `limits`: the numbers' ranges and checks.
 - `cfa`: colour filter array patterns (RGGB and its turns, RCCB, RCCC) and the mosaic.
 - `qe`: quantum efficiency curves, and the effective QE with which each filter sees each channel.
@@ -22,5 +24,26 @@
 from ..lazy import lazy_exports
 
 # `capture.capture` is not exported here: its module's own name would hide it once imported
-__all__ = ["SensorChain", "SensorModel", "load_sensor"]
-__getattr__ = lazy_exports(__name__, {"SensorChain": ".chain", "SensorModel": ".model", "load_sensor": ".files"})
+__all__ = [
+    "PWMSource",
+    "RenderedParts",
+    "SensorChain",
+    "SensorModel",
+    "Shutter",
+    "load_sensor",
+    "render_in_time",
+    "render_parts",
+]
+__getattr__ = lazy_exports(
+    __name__,
+    {
+        "PWMSource": ".timing",
+        "RenderedParts": ".rendered",
+        "SensorChain": ".chain",
+        "SensorModel": ".model",
+        "Shutter": ".timing",
+        "load_sensor": ".files",
+        "render_in_time": ".rendered",
+        "render_parts": ".rendered",
+    },
+)

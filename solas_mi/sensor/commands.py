@@ -13,7 +13,6 @@ from typing import Any
 
 from ..errors import SolasError
 
-FLICKER_FORM = "X0,Y0,X1,Y1,HZ,DUTY[,PHASE]"  # the camera's --flicker: a box of pixels and its PWM source
 CLIPPED_WARNING = 0.01  # the fraction of a RAW's pixels at saturation past which a camera warns
 # the camera's peak memory (bytes), measured as the peak RSS of `solas-mi camera` on 2000×1500 frames of 3
 # and 10 channels against 8×8 ones: the modules (48 MB; 146 MB with the image processor's), the EXR read
@@ -170,84 +169,40 @@ def as_irradiance(
     return image_irradiance(image, f_number, transmission), reading, notice
 
 
-def parse_flicker(text: str) -> tuple[tuple[int, int, int, int], tuple[float, ...]]:
-    """The box (x0, y0, x1, y1) and the PWM source's values (frequency, duty cycle[, phase]) of a `FLICKER_FORM`
-    text, e.g. ``"10,20,30,40,90,0.1,0.5"``."""
-    parts = text.split(",")
-    try:
-        box = tuple(int(p) for p in parts[:4])
-        numbers = tuple(float(p) for p in parts[4:])
-    except ValueError:
-        box, numbers = (), ()
-    if len(box) != 4 or not 2 <= len(numbers) <= 3 or min(box[:2]) < 0 or box[2] <= box[0] or box[3] <= box[1]:
-        raise SolasError(
-            f"--flicker {text!r} must be {FLICKER_FORM}: a box of whole pixels x0 < x1, y0 < y1 "
-            "from 0, the PWM frequency (Hz), duty cycle and phase (fractions)"
-        )
-    return (box[0], box[1], box[2], box[3]), numbers
+def camera_input(args: argparse.Namespace, model, exposure, develop_bytes_per_pixel: float):
+    """The command's input (H, W, 3, float64) and its metadata, its memory checked first: an EXR image read
+    (`read_input`), or a scene file rendered over the sensor's exposure windows (`scene_input.rendered_input`)."""
+    from .capture import as_chain
+    from .scene_input import is_scene, rendered_input
 
-
-def parse_motion(text: str) -> tuple[float, float]:
-    """The velocity (px/s, right and down) of a ``VX,VY`` text."""
-    try:
-        velocity = tuple(float(p) for p in text.split(","))
-    except ValueError:
-        velocity = ()
-    if len(velocity) != 2 or not all(math.isfinite(v) for v in velocity):
-        raise SolasError(
-            f"--image-motion {text!r} must be VX,VY: the image's speed in pixels per second, "
-            "rightwards and downwards, two finite numbers"
-        )
-    return velocity[0], velocity[1]
-
-
-def timed_scene(args: argparse.Namespace):
-    """The `timing.SceneInTime` of the options --flicker and --image-motion (at most one); None without."""
-    if args.flicker is None and args.image_motion is None:
-        return None
-    if args.flicker is not None and args.image_motion is not None:
-        raise SolasError("give --flicker or --image-motion, not both: a scene in time is one or the other here")
-    from .timing import PWMSource, SceneInTime
-
-    if args.flicker is not None:
-        box, source = parse_flicker(args.flicker)
-        return SceneInTime(box=box, source=PWMSource(*source))
-    return SceneInTime(motion_px_s=parse_motion(args.image_motion))
-
-
-def add_time_options(p: Any) -> None:
-    """--flicker and --image-motion: a still image made a scene in time (`timing.SceneInTime`)."""
-    p.add_argument(
-        "--flicker",
-        metavar=FLICKER_FORM,
-        help="the pixels of columns X0 to X1 - 1 and rows Y0 to Y1 - 1 are light driven by pulse-width "
-        "modulation at HZ with duty cycle DUTY and phase PHASE (fractions; default phase 0): each "
-        "row sees it over its window of the exposure (the sensor's [sensor.shutter], global "
-        "without one), e.g. an LED traffic light (default: none)",
-    )
-    p.add_argument(
-        "--image-motion",
-        metavar="VX,VY",
-        help="the image moves at VX, VY pixels per second (right, down) during the frame, e.g. a camera "
-        "panning across a distant scene: each row sees it over its window of the exposure (a "
-        "rolling shutter skews it, every shutter blurs it; sampled at the shutter's time_samples) "
-        "(default: still)",
+    readouts = len(as_chain(model).readouts)
+    if not is_scene(args.image):
+        check_camera_memory(args, develop_bytes_per_pixel, readouts)
+        return read_input(args.image)
+    exposure_s = exposure / 1e3 if isinstance(exposure, (int, float)) else None  # None: auto, refused there
+    return rendered_input(
+        args,
+        as_chain(model).shutter,
+        exposure_s,
+        lambda rows, cols: FIXED_BYTES + frame_bytes(rows, cols, 3, develop_bytes_per_pixel, readouts),
     )
 
 
 def raw_frame(args: argparse.Namespace, develop_bytes_per_pixel: float = 0.0):
     """The RAW frame (H, W, uint16 DN) of the command's image, its `SensorModel` and its metadata."""
     from .auto_exposure import exposure_seconds, parse_exposure
-    from .capture import as_chain, capture, check_frame, check_seed
+    from .capture import capture, check_frame, check_seed
     from .files import describe, load_sensor
+    from .scene_input import check_scene_options, is_scene
+    from .time_options import timed_scene
 
     model = load_sensor(args.sensor_model)
     exposure = parse_exposure(args.exposure_ms)
     check_seed(args.seed)
     check_frame(args.frame)
+    check_scene_options(args)
     timed = timed_scene(args)
-    check_camera_memory(args, develop_bytes_per_pixel, len(as_chain(model).readouts))
-    image, meta_in = read_input(args.image)
+    image, meta_in = camera_input(args, model, exposure, develop_bytes_per_pixel)
     irradiance, reading, notice = as_irradiance(
         image, meta_in, str(args.image), args.scale, args.f_number, args.transmission
     )
@@ -271,6 +226,7 @@ def raw_frame(args: argparse.Namespace, develop_bytes_per_pixel: float = 0.0):
         **(timed.describe() if timed else {}),
         **reading,
         "input": str(args.image),
+        **({"rendered": meta_in} if is_scene(args.image) else {}),
         "saturated_fraction": fraction,
     }
     return raw, model, meta
@@ -342,10 +298,15 @@ def add_exposure_option(p: Any, required: bool) -> None:
 
 def register(subparsers: Any) -> None:
     """Add the `camera` and `sensors` subcommands."""
+    from ..render.mitsuba import SCENE_SUFFIXES
+    from .scene_input import add_scene_options
+    from .time_options import add_time_options
+
     p = subparsers.add_parser(
         "camera",
         help="sensor RAW of an irradiance image (EMVA 1288 noise model, CFA, ADC)",
-        description="The RAW frame a sensor gives for an image-plane irradiance image: photons through the "
+        description="The RAW frame a sensor gives for an image-plane irradiance image (or a Mitsuba scene file "
+        "rendered over the sensor's exposure windows: PWM-driven emitters, a moving camera): photons through the "
         "CFA's quantum efficiencies, shot/dark/read noise, PRNU/DSNU, full well, conversion gain, "
         "ADC; an HDR sensor's readouts (split pixels, dual conversion gain, multiple exposures) merged "
         "into one linear signal and companded. Written as one EXR channel RAW (DN) with the sensor's "
@@ -354,7 +315,9 @@ def register(subparsers: Any) -> None:
     p.add_argument(
         "image",
         help="EXR with R, G, B channels: irradiance in W/m² (times --scale), or radiance "
-        "in W/m²/sr with --f-number (a render through a lens states its own f-number)",
+        "in W/m²/sr with --f-number (a render through a lens states its own f-number); or a Mitsuba scene "
+        f"file ({', '.join('*' + s for s in SCENE_SUFFIXES)}) rendered with its own camera over the exposure's windows (--pwm-emitter, "
+        "--camera-motion, --spp), its R, G, B read as the EXR's",
     )
     p.add_argument(
         "--sensor-model",
@@ -387,9 +350,14 @@ def register(subparsers: Any) -> None:
     )
     p.add_argument("--transmission", type=float, default=1.0, help="lens transmission T of radiance (default 1)")
     add_time_options(p)
+    add_scene_options(p)
     p.add_argument("--force", action="store_true", help="run even when the estimated memory exceeds what is free")
     p.add_argument("-o", "--output", required=True, metavar="OUT.exr", help="RAW frame to write")
     p.set_defaults(run=run_camera)
+    add_sensors_command(subparsers)
+
+
+def add_sensors_command(subparsers: Any) -> None:
     p = subparsers.add_parser(
         "sensors",
         help="list the sensor presets (camera --sensor-model NAME)",

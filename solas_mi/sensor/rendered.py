@@ -2,7 +2,7 @@
 camera that moves during the frame.
 
 PWM emitters are named by id in a table beside the scene, {id: `timing.PWMSource`}: an emitter's own id, or
-for an area light the id of its shape. (Mitsuba refuses a property its plugin does not read — "unreferenced
+for an area light the id of its shape, or "#N" for the scene's N-th emitter (one without an id). (Mitsuba refuses a property its plugin does not read — "unreferenced
 property" — so frequency, duty cycle and phase cannot travel on the emitter in the scene file or dict.)
 Light transport is linear in the emitters' emission, so the scene rendered with every PWM emitter off (the
 steady light) plus each PWM emitter rendered alone (every other emitter off), each weighted per row by the
@@ -13,7 +13,7 @@ rolling shutter, whatever the integrator. An emitter is switched off by scaling 
 
 A moving camera: the scene's camera (any sensor whose `to_world` is a parameter: `perspective`,
 `lens_camera`, …) has its own `to_world` at the frame's start (the first row's start) and `to_world_end` at
-its end (the last row's end); between them its pose is interpolated (`pose_at`: the rotation by spherical
+its end (the last row's end); between them its pose is interpolated (`poses.pose_at`: the rotation by spherical
 interpolation, the rest linearly). The frame's span is split into `Shutter.time_samples` even slices, each
 rendered at the pose of its midpoint, and each row averages the slices its window covers, each weighted by
 its share of the window: a rolling shutter's rows see the camera at their own times (skew), every row the
@@ -34,6 +34,7 @@ import numpy as np
 
 from ..errors import SolasError
 from ..render.loop import Render
+from .poses import camera_pose, checked_end, pose_at
 from .timing import PWMSource, Shutter, slice_shares
 
 EMISSION = ("radiance", "intensity", "irradiance")  # an emitter's parameters of emitted light (or its "scale")
@@ -43,6 +44,11 @@ LEVELS = ("value", "values", "data")
 # what an emitter switched off keeps of them: not 0, which Mitsuba refuses for a spectrum it samples ("no
 # probability mass"); 2⁻¹⁰⁰ of an emitter's light is below float32's resolution of any other emitter's
 OFF = 2.0**-100
+# what is left of the switched-off emitters in a part: values within OFF·2²⁴ of the brightest part's peak are
+# that remainder (a part's own light so far below another's lies beyond any sensor's 24-bit merge) and read as 0,
+# so a frame whose emitters are all off is black, not ±1e-33 (negative where a colour leaves the RGB gamut)
+REMAINDER = OFF * 2.0**24
+INDEX = "#"  # "#N": the scene's N-th emitter (from 0), a name for one without an id (public scenes often give none)
 
 
 def emitter_names(emitter) -> list[str]:
@@ -51,7 +57,7 @@ def emitter_names(emitter) -> list[str]:
     return [name for name in (emitter.id(), shape.id() if shape is not None else "") if name]
 
 
-def emission(emitter) -> tuple[object, dict]:
+def emission(emitter) -> tuple:
     """The emitter's parameters (`mitsuba.traverse`) and the values of those that scale its emission: its
     "scale" where it has one (an environment map), else its radiance, intensity or irradiance values
     (`LEVELS`)."""
@@ -91,66 +97,46 @@ def lit_alone(switches: list, lit: set[int]):
 
 
 def pwm_indices(scene, pwm) -> dict[str, int]:
-    """The index among `scene.emitters()` of each PWM emitter named in `pwm`; SolasError for a name that is
-    not one emitter's (naming those there are)."""
-    names = [emitter_names(e) for e in scene.emitters()]
+    """The index among `scene.emitters()` of each PWM emitter named in `pwm` (`emitter_names`, or `INDEX` and
+    its index, for one without an id); SolasError for a name that is not one emitter's (listing them)."""
+    names = [[*emitter_names(e), f"{INDEX}{i}"] for i, e in enumerate(scene.emitters())]
     found = {}
     for name in pwm:
         hits = [i for i, known in enumerate(names) if name in known]
         if len(hits) != 1:
-            known = sorted({n for known in names for n in known})
+            known = "; ".join(f"{' = '.join(n)} ({e.class_name()})" for n, e in zip(names, scene.emitters()))
             raise SolasError(
-                f"PWM emitter {name!r} names {len(hits)} of the scene's emitters; it must name one by its id or "
-                f"its shape's id (the scene's: {', '.join(known) or 'none with an id'})"
+                f"PWM emitter {name!r} names {len(hits)} of the scene's emitters; it must name one by its id, its "
+                f"shape's id or {INDEX} and its index (the scene's: {known or 'none'})"
             )
         found[name] = hits[0]
     return found
 
 
-def pose_at(start: np.ndarray, end: np.ndarray, fraction: float) -> np.ndarray:
-    """The 4×4 transform `fraction` of the way from `start` to `end`: the rotation of each (its polar
-    decomposition's) interpolated spherically, the stretch and translation linearly; SolasError where one
-    mirrors and the other does not."""
-    from scipy.linalg import polar
-    from scipy.spatial.transform import Rotation, Slerp
-
-    (ra, sa), (rb, sb) = polar(start[:3, :3]), polar(end[:3, :3])
-    mirror = np.diag([1.0, 1.0, np.sign(np.linalg.det(ra))])
-    if np.sign(np.linalg.det(ra)) != np.sign(np.linalg.det(rb)):
-        raise SolasError("the camera's to_world at the frame's start and end: one mirrors, the other does not")
-    turn = Slerp([0.0, 1.0], Rotation.from_matrix([ra @ mirror, rb @ mirror]))([fraction]).as_matrix()[0]
-    pose = np.eye(4)
-    pose[:3, :3] = turn @ mirror @ ((1.0 - fraction) * sa + fraction * sb)
-    pose[:3, 3] = (1.0 - fraction) * start[:3, 3] + fraction * end[:3, 3]
-    return pose
-
-
-def camera_pose(sensor) -> tuple[object, np.ndarray]:
-    """The sensor's parameters (`mitsuba.traverse`) and its `to_world` (4×4); SolasError for a sensor
-    without one."""
-    import mitsuba as mi
-
-    params = mi.traverse(sensor)
-    if "to_world" not in params:
-        raise SolasError(f"camera motion: the scene's sensor {sensor.class_name()} has no to_world parameter")
-    return params, np.array(params["to_world"].matrix, dtype=np.float64).reshape(4, 4)
-
-
-def checked_end(to_world_end) -> np.ndarray:
-    end = np.asarray(to_world_end, dtype=np.float64)
-    if end.shape != (4, 4) or not np.isfinite(end).all() or not np.allclose(end[3], [0.0, 0.0, 0.0, 1.0]):
-        raise SolasError(
-            f"to_world_end must be a finite 4x4 affine transform (last row 0 0 0 1), not {np.shape(to_world_end)}"
-        )
-    return end
-
-
 @dataclass
 class RenderedParts:
-    """A scene's light split by time slice and PWM emitter: `edges` (K + 1, s) of the slices, `steady`
-    (K, H, W, C: the PWM emitters off), `alone` (name → (K, H, W, C): that PWM emitter alone), the channels'
-    names, samples per pixel, seconds, the last render's meta, and the rows of the film (a crop window's rows
-    take the windows of their rows of the whole film)."""
+    """A scene's light split by time slice and PWM emitter (`render_parts`), to combine over any windows.
+
+    Parameters
+    ----------
+    edges : numpy.ndarray
+        (K + 1,): the edges of the K time slices rendered (s, from the first row's start).
+    steady : numpy.ndarray
+        (K, H, W, C): each slice with the PWM emitters off.
+    alone : dict of str to numpy.ndarray
+        Each PWM emitter's name → (K, H, W, C): each slice with that emitter alone.
+    channels : tuple of str
+        The film's channel names.
+    spp : int
+        Samples per pixel of each part.
+    seconds : float
+        The time the renders took (s).
+    meta : dict, optional
+        The last render's metadata.
+    film_rows : tuple of int, default (0, 0)
+        The first row drawn (its crop window's) and the whole film's rows: a crop window's rows take the
+        windows of their rows on the whole film.
+    """
 
     edges: np.ndarray
     steady: np.ndarray
@@ -162,16 +148,48 @@ class RenderedParts:
     film_rows: tuple[int, int] = (0, 0)  # the film's first row drawn (its crop window's) and its rows in all
 
     def windows(self, shutter: Shutter, exposure_s: float) -> tuple[np.ndarray, np.ndarray]:
-        """The windows (s) of the rows drawn: those of the whole film's rows (`film_rows`) that its crop window
-        draws."""
+        """The windows of the rows drawn: those of the whole film's rows (`film_rows`) its crop window draws.
+
+        Parameters
+        ----------
+        shutter : Shutter
+            The rows' windows.
+        exposure_s : float
+            The exposure time (s).
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            The starts and ends (s) of the rows drawn.
+        """
         first, rows = self.film_rows
         drawn = slice(first, first + self.steady.shape[1])
         starts, ends = shutter.windows(max(rows, drawn.stop), exposure_s)
         return starts[drawn], ends[drawn]
 
     def over_windows(self, shutter: Shutter | None, exposure_s: float, sources: dict[str, PWMSource]) -> np.ndarray:
-        """The image (H, W, C) each row gathers over its window, its sources at their `sources` values (the
-        names rendered alone); SolasError for windows past the span rendered."""
+        """The image each row gathers over its window, without rendering again.
+
+        Parameters
+        ----------
+        shutter : Shutter or None
+            The rows' windows (None: a global shutter).
+        exposure_s : float
+            The exposure time (s).
+        sources : dict of str to PWMSource
+            The PWM source of each emitter rendered alone (the same names).
+
+        Returns
+        -------
+        numpy.ndarray
+            (H, W, C), float64: each row's mean over its window.
+
+        Raises
+        ------
+        SolasError
+            For windows past the span rendered, other names than those rendered, or a source that is not a
+            `PWMSource`.
+        """
         shutter = shutter or Shutter()
         starts, ends = self.windows(shutter, exposure_s)
         if starts.min() < self.edges[0] or ends.max() > self.edges[-1] * (1 + 1e-12):
@@ -191,11 +209,40 @@ class RenderedParts:
         return total
 
 
+# long: the public API's numpydoc docstring is half of it
 def render_parts(
     scene, spp: int, shutter: Shutter | None, exposure_s: float, pwm=(), to_world_end=None, seed: int = 0
 ) -> RenderedParts:
-    """The parts (module docstring) of a loaded scene for a frame of `exposure_s` under `shutter` (None:
-    global): the emitters named in `pwm` alone, and the camera moving to `to_world_end` (4×4; None: still)."""
+    """Render a loaded scene's parts over a frame: each time slice with its PWM emitters off and each alone.
+
+    Parameters
+    ----------
+    scene : mitsuba.Scene
+        The scene (its first sensor the camera).
+    spp : int
+        Samples per pixel of each part.
+    shutter : Shutter or None
+        The rows' windows (None: a global shutter).
+    exposure_s : float
+        The exposure time (s, above 0).
+    pwm : iterable of str, default ()
+        The PWM emitters' names: an emitter's id, or an area light's shape's id.
+    to_world_end : array_like, optional
+        The camera's 4×4 `to_world` at the frame's end (the last row's end); default: still (one slice).
+    seed : int, default 0
+        The render's seed (the same for every part).
+
+    Returns
+    -------
+    RenderedParts
+        The parts, to combine with `RenderedParts.over_windows` for any phases and windows in the span.
+
+    Raises
+    ------
+    SolasError
+        For a bad exposure, a name that is not one emitter's, an emitter without a parameter of its emission,
+        a camera without `to_world` or a transform that is not a finite 4×4 affine one.
+    """
     from ..render.stock import render_scene
 
     shutter = shutter or Shutter()
@@ -229,11 +276,15 @@ def render_parts(
         if to_world_end is not None:
             params["to_world"] = type(params["to_world"])(start)
             params.update()
-    steady_images = np.stack(images.pop(None))
+    assert result is not None  # a slice and a group at least: rendered
+    stacks = {name: np.stack(v) for name, v in images.items()}
+    floor = REMAINDER * max(float(np.abs(v).max(initial=0.0)) for v in stacks.values())
+    for v in stacks.values():
+        v[np.abs(v) <= floor] = 0.0
     return RenderedParts(
         edges,
-        steady_images,
-        {name: np.stack(v) for name, v in images.items()},
+        stacks.pop(None),
+        stacks,
         result.channels,
         spp,
         time.perf_counter() - began,
@@ -242,6 +293,7 @@ def render_parts(
     )
 
 
+# long: the public API's numpydoc docstring is half of it
 def render_in_time(
     scene,
     spp: int,
@@ -251,10 +303,57 @@ def render_in_time(
     to_world_end=None,
     seed: int = 0,
 ) -> Render:
-    """A loaded scene as the sensor's rows see it over their windows of `exposure_s` under `shutter` (None:
-    global): its emitters named in `pwm` driven by their PWM sources, the camera moving from its own
-    `to_world` to `to_world_end` (4×4; None: still) over the frame (module docstring). The image is each
-    row's mean over its window; the meta says the shutter, exposure, sources, motion and slices."""
+    """Render a loaded scene as the sensor's rows see it over their windows: PWM emitters, a moving camera.
+
+    Parameters
+    ----------
+    scene : mitsuba.Scene
+        The scene (its first sensor the camera).
+    spp : int
+        Samples per pixel of each part rendered.
+    shutter : Shutter or None
+        The rows' windows (None: a global shutter).
+    exposure_s : float
+        The exposure time (s, above 0).
+    pwm : dict of str to PWMSource, optional
+        Each PWM emitter's name (an emitter's id, or an area light's shape's id) → its source; default none.
+    to_world_end : array_like, optional
+        The camera's 4×4 `to_world` at the frame's end (the last row's end; its own at the first row's start,
+        interpolated between, module docstring); default: still.
+    seed : int, default 0
+        The render's seed.
+
+    Returns
+    -------
+    render.loop.Render
+        Its image each row's mean over its window (the irradiance `capture` takes, as a still one's); its
+        meta's ``exposure_windows`` the shutter, exposure, sources, end pose and slices.
+
+    Raises
+    ------
+    SolasError
+        For what `render_parts` and `RenderedParts.over_windows` refuse.
+
+    Examples
+    --------
+    >>> from solas_mi.render.mitsuba import mitsuba
+    >>> from solas_mi.sensor import PWMSource, Shutter, render_in_time
+    >>> mi = mitsuba()
+    >>> scene = mi.load_dict({
+    ...     "type": "scene",
+    ...     "integrator": {"type": "direct"},
+    ...     "sensor": {"type": "perspective", "film": {"type": "hdrfilm", "width": 4, "height": 4}},
+    ...     "led": {  # a wall 5 units along the camera's view, facing it
+    ...         "type": "rectangle",
+    ...         "to_world": mi.ScalarTransform4f().translate([0, 0, 5]).rotate([1, 0, 0], 180).scale(9),
+    ...         "emitter": {"type": "area", "radiance": 1.0},
+    ...     },
+    ... })
+    >>> on = render_in_time(scene, 4, Shutter(), 5e-4, {"led": PWMSource(100.0, 0.1)})  # on over [0, 1 ms)
+    >>> off = render_in_time(scene, 4, Shutter(), 5e-4, {"led": PWMSource(100.0, 0.1, phase=0.5)})
+    >>> float(off.image.max()) < 1e-20 < 0.5 < float(on.image.min())  # dark in its off-time, lit in its on-time
+    True
+    """
     pwm = dict(pwm or {})
     parts = render_parts(scene, spp, shutter, exposure_s, pwm, to_world_end, seed)
     image = parts.over_windows(shutter, exposure_s, pwm).astype(np.float32)

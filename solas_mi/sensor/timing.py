@@ -39,9 +39,32 @@ DIRECTIONS = ("top-down", "bottom-up")
 
 @dataclass(frozen=True)
 class Shutter:
-    """How the rows take their windows of the frame's exposure: `mode` global or rolling, the rolling
-    shutter's `line_time_s` (s between two rows' starts) and `direction`, and the `time_samples` at which a
-    moving scene is sampled over the frame (module docstring)."""
+    """How the rows take their windows of the frame's exposure (a stage of the sensor's chain, its
+    ``[sensor.shutter]`` table; module docstring).
+
+    Parameters
+    ----------
+    mode : str, default "global"
+        One of `MODES`: every row over [0, t] (global), or row r over [r L, r L + t] (rolling).
+    line_time_s : float, default 0
+        A rolling shutter's time between two rows' starts L (s, above 0); 0 for a global one.
+    direction : str, default "top-down"
+        One of `DIRECTIONS`: the row read first, row 0 (top-down) or the last (bottom-up).
+    time_samples : int, default 64
+        The slices of the frame's span over which a moving scene or camera is sampled (1 to 100 000).
+
+    Raises
+    ------
+    SolasError
+        For a mode or direction not listed, a line time that does not go with the mode, or a bad count.
+
+    Examples
+    --------
+    >>> from solas_mi.sensor import Shutter
+    >>> starts, ends = Shutter("rolling", 30e-6).windows(3, 1e-3)
+    >>> [round(float(t) * 1e6) for t in starts], [round(float(t) * 1e6) for t in ends]
+    ([0, 30, 60], [1000, 1030, 1060])
+    """
 
     mode: str = "global"
     line_time_s: float = 0.0
@@ -73,10 +96,30 @@ class Shutter:
             raise SolasError(f"sensor shutter time_samples = {self.time_samples!r} must be an integer from 1 to 100000")
 
     def describe(self) -> dict:
+        """Its fields, for metadata.
+
+        Returns
+        -------
+        dict
+            Mode, line time, direction and time samples by name.
+        """
         return asdict(self)
 
     def windows(self, rows: int, exposure_s: float) -> tuple[np.ndarray, np.ndarray]:
-        """Each row's start and end (s, from the first row's start) for an exposure of `exposure_s`."""
+        """Each row's window of the frame.
+
+        Parameters
+        ----------
+        rows : int
+            The frame's rows.
+        exposure_s : float
+            The exposure time t (s).
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            Each row's start and end (s, from the first row's start), in the order of the rows.
+        """
         order = np.arange(rows, dtype=np.float64)
         if self.direction == "bottom-up":
             order = order[::-1]
@@ -84,13 +127,45 @@ class Shutter:
         return starts, starts + exposure_s
 
     def slices(self, rows: int, exposure_s: float) -> np.ndarray:
-        """The edges (s) of the `time_samples` even slices of the frame's span of time, from the first row's
-        start to the last row's end."""
+        """The slices of the frame's span of time over which a moving scene is sampled.
+
+        Parameters
+        ----------
+        rows : int
+            The frame's rows.
+        exposure_s : float
+            The exposure time t (s).
+
+        Returns
+        -------
+        numpy.ndarray
+            The edges (s) of `time_samples` even slices from the first row's start to the last row's end.
+        """
         starts, ends = self.windows(rows, exposure_s)
         return np.linspace(starts.min(), ends.max(), self.time_samples + 1)
 
     def mean_over_windows(self, scene, rows: int, exposure_s: float) -> np.ndarray:
-        """The irradiance (H, W, 3) each row of a callable `scene(t)` averages over its window (module docstring)."""
+        """The irradiance each row of a moving scene averages over its window (module docstring).
+
+        Parameters
+        ----------
+        scene : callable
+            ``scene(t)``: the (H, W, 3) irradiance image (W/m²) at time t (s, from the first row's start).
+        rows : int
+            The frame's rows H.
+        exposure_s : float
+            The exposure time t (s).
+
+        Returns
+        -------
+        numpy.ndarray
+            (H, W, 3): each row's mean over its window, from `time_samples` instants.
+
+        Raises
+        ------
+        SolasError
+            For a scene whose image is not (H, W, 3) with H = `rows` at every instant.
+        """
         edges = self.slices(rows, exposure_s)
         shares = slice_shares(*self.windows(rows, exposure_s), edges, exposure_s)
         total = None
@@ -103,6 +178,7 @@ class Shutter:
                 )
             share = shares[k][:, None, None]
             total = image * share if total is None else total + image * share
+        assert total is not None  # time_samples ≥ 1
         return total
 
 
@@ -128,8 +204,31 @@ def exposed_irradiance(shutter: Shutter | None, scene, exposure_s: float) -> np.
 
 @dataclass(frozen=True)
 class PWMSource:
-    """A light driven by pulse-width modulation: `frequency_hz`, `duty_cycle` (its on share of each period)
-    and `phase` (where in the period it turns on, a fraction of the period)."""
+    """A light driven by pulse-width modulation: on over [φT, φT + DT) of each period T (module docstring).
+
+    Parameters
+    ----------
+    frequency_hz : float
+        The PWM frequency 1/T (Hz, above 0, at most 10⁹).
+    duty_cycle : float
+        Its on share D of each period (above 0, at most 1).
+    phase : float, default 0
+        Where in the period it turns on, φ, a fraction of the period (0 to below 1).
+
+    Raises
+    ------
+    SolasError
+        For a value out of its range.
+
+    Examples
+    --------
+    >>> from solas_mi.sensor import PWMSource
+    >>> led = PWMSource(100.0, 0.1, phase=0.5)  # on from 5 ms to 6 ms of each 10 ms
+    >>> [round(float(t) * 1e3, 6) for t in led.on_time([0.0, 0.0045], [0.001, 0.0055])]
+    [0.0, 0.5]
+    >>> round(led.visible_probability(1e-3), 6)  # (DT + w) / T over random phases
+    0.2
+    """
 
     frequency_hz: float
     duty_cycle: float
@@ -154,6 +253,7 @@ class PWMSource:
 
     @property
     def period_s(self) -> float:
+        """The period T = 1 / frequency (s)."""
         return 1.0 / self.frequency_hz
 
     def _on_since_zero(self, t: np.ndarray) -> np.ndarray:
@@ -162,13 +262,41 @@ class PWMSource:
         return np.floor(t / period) * self.duty_cycle * period + np.minimum(np.mod(t, period), self.duty_cycle * period)
 
     def on_time(self, starts, ends) -> np.ndarray:
-        """The time (s) it is on within each window [start, end]."""
+        """The time it is on within each window [start, end], in closed form.
+
+        Parameters
+        ----------
+        starts, ends : array_like
+            The windows' starts and ends (s, on the same clock as the phase: 0 at a period's start).
+
+        Returns
+        -------
+        numpy.ndarray
+            The on-time (s) of each window.
+        """
         shift = self.phase * self.period_s
         return self._on_since_zero(np.asarray(ends) - shift) - self._on_since_zero(np.asarray(starts) - shift)
 
     def visible_probability(self, window_s: float, least_on_s: float = 0.0) -> float:
-        """The probability over a uniformly random phase that a window of `window_s` sees it on for at least
-        `least_on_s` (at most the on-time and the window; module docstring)."""
+        """The probability over a uniformly random phase that a window sees it on long enough (module docstring).
+
+        Parameters
+        ----------
+        window_s : float
+            The window's length w (s): the exposure under a global shutter.
+        least_on_s : float, default 0
+            The on-time τ the window needs to see it (s; at most the on-time and the window).
+
+        Returns
+        -------
+        float
+            min(1, (DT + w − 2τ)/T).
+
+        Raises
+        ------
+        SolasError
+            For a `least_on_s` out of its range.
+        """
         on = self.duty_cycle * self.period_s
         if not 0.0 <= least_on_s <= min(on, window_s):
             raise SolasError(
@@ -239,12 +367,14 @@ class SceneInTime:
 
     def of(self, image: np.ndarray):
         """The scene of an (H, W, 3) irradiance image: a `FlickeringScene` or a callable of time."""
-        if self.box is not None:
+        if self.box is not None and self.source is not None:
             return flickering_box(image, self.box, self.source)
+        assert self.motion_px_s is not None  # one or the other (__post_init__)
         return moving_image(image, self.motion_px_s)
 
     def describe(self) -> dict:
         """For the RAW's metadata: ``flicker`` (the box and the source's values) or ``image_motion_px_s``."""
-        if self.box is not None:
+        if self.box is not None and self.source is not None:
             return {"flicker": {"box": list(self.box), **asdict(self.source)}}
+        assert self.motion_px_s is not None  # one or the other (__post_init__)
         return {"image_motion_px_s": list(self.motion_px_s)}

@@ -158,8 +158,8 @@ def test_model_glass_and_refusals(tmp_path):
     for old, new, match in [
         (
             "TYPE EVENASPH",
-            "TYPE TOROIDAL",
-            r"SURF 2 \(line 24\): surface TYPE TOROIDAL is not "
+            "TYPE SZERNSAG",
+            r"SURF 2 \(line 24\): surface TYPE SZERNSAG is not "
             r"supported; allowed: STANDARD, EVENASPH",
         ),
         ("PARM 1 0", "PARM 1 0.01", r"PARM 1 \(the r² term\) = 0.01"),

@@ -10,6 +10,7 @@ import pytest
 from solas_mi import Lens, SolasError
 from solas_mi.optics import pupil as P
 from solas_mi.optics.paraxial import paraxial
+from solas_mi.optics.placement import Placement
 
 N = 1.5  # the singlet's constant index (model glass without dispersion)
 R1, R2, T1 = 60.0, -240.0, 8.0  # mm
@@ -187,9 +188,10 @@ def test_dummy_surfaces_and_axial_coordinate_breaks(tmp_path):
     lens = load(tmp_path, text)
     assert len(lens.surfaces) == 2 and lens.surfaces[1].thickness == pytest.approx(BFD, rel=1e-12)
     assert paraxial(lens, WL * 1000).efl_mm == pytest.approx(paraxial(base, WL * 1000).efl_mm, rel=1e-12)
-    tilted = zmx(extra="SURF 3\n  TYPE COORDBRK\n  DISZ 0\n  PARM 3 5\n")
+    tilted = zmx(extra="SURF 3\n  TYPE COORDBRK\n  DISZ 0\n  PARM 3 5\n")  # the sensor tilted (test_as_built)
+    assert load(tmp_path, tilted).image_placement == Placement(tilt_x=5.0)
     with pytest.raises(SolasError, match=r"SURF 3 \(line \d+\): COORDBRK decentres or tilts the axis"):
-        load(tmp_path, tilted)
+        load(tmp_path, tilted.replace("PARM 3 5\n", "PARM 3 5\nSURF 4\n  TYPE COORDBRK\n  DISZ 0\n  PARM 3 1\n"))
 
 
 def test_dummy_with_zemax_automatic_aperture_and_a_negative_gap(tmp_path):

@@ -170,3 +170,22 @@ def test_a_lens_farther_than_float32_holds_is_refused_by_the_mesh_scene(doublet,
         == 2
     )
     assert "float32 geometry" in capsys.readouterr().err and not (tmp_path / "far.exr").exists()
+
+
+def test_the_lens_as_built_is_refused_by_name():
+    """A toroid or a coordinate break has no cap mesh yet: refused naming the surface, not built symmetric."""
+    from solas_mi import Lens
+
+    rows = [
+        {"radius": 0.0, "thickness": 5.0, "diameter": 10.0, "stop": True},
+        {"radius": 30.0, "thickness": 3.0, "diameter": 10.0, "material": "N-BK7"},
+        {"radius": 0.0, "thickness": 40.0, "diameter": 10.0},
+    ]
+    toroid = Lens.from_dict(
+        {"name": "t", "surface": [rows[0], {**rows[1], "kind": "toroid", "radius_rotation": 20.0}, rows[2]]}
+    )
+    with pytest.raises(SolasError, match=r"surface 2 \(surface 2\) is a toroid, which the mesh scene"):
+        lens_parts(toroid)
+    tilted = Lens.from_dict({"name": "t", "surface": [rows[0], {**rows[1], "tilt_x": 1.0}, rows[2]]})
+    with pytest.raises(SolasError, match="decentred or tilted"):
+        lens_parts(tilted)

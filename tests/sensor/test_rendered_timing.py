@@ -13,7 +13,8 @@ from solas_mi.render.stock import render_scene
 from solas_mi.sensor.capture import capture
 from solas_mi.sensor.chain import SensorChain, chain_of
 from solas_mi.sensor.model import SensorModel
-from solas_mi.sensor.rendered import pose_at, render_in_time, render_parts
+from solas_mi.sensor.poses import pose_at
+from solas_mi.sensor.rendered import render_in_time, render_parts
 from solas_mi.sensor.timing import PWMSource, Shutter
 
 EXPOSURE_S = 1e-3
@@ -118,6 +119,35 @@ def test_the_parts_sum_to_the_scenes_own_render(variant_llvm_ad_spectral):
     assert np.allclose(half, parts.steady[0] + 0.5 * parts.alone["led"][0] + parts.alone["tail"][0])
     again = render_scene(scene, 64, seed=5).image
     assert np.array_equal(again, whole.astype(np.float32))
+
+
+def test_a_frame_whose_only_emitter_is_off_is_black(variant_llvm_ad_spectral):
+    """A blue LED lighting a green wall, off over the whole exposure: the frame is 0, not the ±1e-33 that the
+    switched-off emitter's remainder (`OFF` of its light) gives, negative where its colour leaves the RGB gamut
+    (which the camera then announced as values below zero)."""
+    mi = variant_llvm_ad_spectral
+    scene = mi.load_dict(
+        {
+            "type": "scene",
+            "integrator": {"type": "path"},
+            "sensor": perspective(mi, 24, 24),
+            "wall": {
+                "type": "rectangle",
+                "to_world": mi.ScalarTransform4f().scale([50.0, 50.0, 1.0]),
+                "bsdf": {"type": "diffuse", "reflectance": {"type": "rgb", "value": [0.05, 0.9, 0.05]}},
+            },
+            "led": {
+                "type": "sphere",
+                "center": [0.0, 3.0, 2.0],
+                "radius": 0.5,
+                "emitter": {"type": "area", "radiance": {"type": "rgb", "value": [0.1, 0.2, 5.0]}},
+            },
+        }
+    )
+    parts = render_parts(scene, 4, None, EXPOSURE_S, ["led"])
+    assert parts.alone["led"].max() > 0.01  # the LED alone lights the wall
+    off = parts.over_windows(None, EXPOSURE_S, {"led": PWMSource(100.0, 0.1, phase=0.5)})
+    assert not off.any()
 
 
 @pytest.mark.parametrize("direction", ["top-down", "bottom-up"])
