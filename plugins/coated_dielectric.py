@@ -60,9 +60,9 @@ class CoatedDielectric(SellmeierDielectric):
             ftype = mi.Float if dr.is_jit_v(mi.Float) else float
             media = {"front": (self.ext_glass, self.int_glass), "back": (self.int_glass, self.ext_glass)}
             self.power = {
-                (side, quantity): coating_power(self.coating, *pair, ftype, quantity)
+                (side, reflect): coating_power(self.coating, *pair, ftype, reflect)
                 for side, pair in media.items()
-                for quantity in ("reflectance", "transmittance")
+                for reflect in (True, False)
             }
 
     def split(self, r_i, tir, cos_theta_i, lam):
@@ -72,7 +72,7 @@ class CoatedDielectric(SellmeierDielectric):
         front = cos_theta_i > 0.0
         r, t = (
             dr.select(front, self.power["front", q](um, cos_theta_i), self.power["back", q](um, cos_theta_i))
-            for q in ("reflectance", "transmittance")
+            for q in (True, False)
         )
         return dr.select(tir, 1.0, r), dr.select(tir, 0.0, t)
 

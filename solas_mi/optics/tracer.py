@@ -17,13 +17,12 @@ Float32 leaves ~20 nm of OPD noise (DESIGN.md).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from functools import partial
 
 import numpy as np
 
 from ..llvm import import_drjit
 from . import ideal
-from .coated import coating_power
+from .coated import coating_transmittance
 from .fields import ANGLE
 from .lens import Lens
 from .lens_checks import refuse_as_built
@@ -185,7 +184,7 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False, heigh
     """Trace `rays` (in object space, before surface 1) through every surface of `lens`, in the array
     type of the rays (see the module docstring); with `fresnel`, also the product of the unpolarised
     Fresnel transmittances (1 − (r_s² + r_p²)/2) of every refraction, a coated surface's coating's
-    (`coating_power`) where it has one; a `heights` list receives each
+    (`coating_transmittance`) where it has one; a `heights` list receives each
     surface's squared ray height x² + y² (mm², for automatic clear apertures)."""
     refuse_as_built(lens, "the Dr.Jit tracer")
     x, y, z, dx, dy, dz, opl = rays.x, rays.y, rays.z, rays.dx, rays.dy, rays.dz, rays.opl
@@ -221,8 +220,8 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False, heigh
                                                 dr.sqrt)
             opl = opl + delta
         elif s.glass != (lens.surfaces[k - 1].glass if k else lens.object_glass):
-            coated = (partial(coating_power(s.coating, lens.surfaces[k - 1].glass if k else lens.object_glass, s.glass,
-                                            ftype), wavelength_um) if fresnel and s.coating is not None else None)
+            coated = (coating_transmittance(s.coating, lens.surfaces[k - 1].glass if k else lens.object_glass, s.glass,
+                                            wavelength_um, ftype) if fresnel and s.coating is not None else None)
             (dx, dy, dz), k2, factor = _refract(s, x, y, lz, r2, (dx, dy, dz), n_before / n_after, fresnel, ftype,
                                                 coated)
             tir |= k2 < 0
