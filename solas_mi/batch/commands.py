@@ -44,7 +44,7 @@ def _degrade_spec(args: argparse.Namespace):
     from ..convolution.spec import DegradeSpec
     from ..psf.spec import GridSpec
 
-    grid = GridSpec.from_args(args, defaults=BATCH_GRID_DEFAULTS) if args.lens else None
+    grid = GridSpec.from_args(args, defaults=BATCH_GRID_DEFAULTS) if args.lens or args.lens_population else None
     return DegradeSpec.from_args(
         args, frame=frame_from_args(args), camera=camera_from_args(args, args.seed), grid_spec=grid
     )
@@ -53,6 +53,9 @@ def _degrade_spec(args: argparse.Namespace):
 def _lens(args: argparse.Namespace):
     """--lens as a Lens where --temperature-c or --pressure-kpa moves it (`optics.commands.load_lens`), else as
     given (a name or file, which the batch loads)."""
+    if args.lens_population is not None and (args.temperature_c, args.pressure_kpa, args.mount) != (None,) * 3:
+        raise SolasError("--temperature-c, --pressure-kpa and --mount are for --lens; a lens population's frames "
+                         "take their temperatures from --frame-temperatures-c")
     if args.lens is None or (args.temperature_c is None and args.pressure_kpa is None):
         return args.lens
     from ..optics.commands import load_lens
@@ -65,9 +68,8 @@ def _dry_run(args: argparse.Namespace) -> int:
     from .degrade import check_workers, estimate, plan_batch
 
     workers = check_workers(_workers(args.workers), args.dask)
-    p = plan_batch(
-        args.inputs, args.output, _degrade_spec(args), psf_grid=args.psf_grid, lens=_lens(args), cache=args.cache
-    )
+    p = plan_batch(args.inputs, args.output, _degrade_spec(args), psf_grid=args.psf_grid, lens=_lens(args),
+                   cache=args.cache, **_population(args))
     need = estimate(p, workers if args.dask is None else 1)
     where = f"Dask at {args.dask}" if args.dask else f"{workers} local worker process(es)"
     skipped = len(p.jobs) - len(p.todo)
@@ -92,9 +94,28 @@ def _dry_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _population(args: argparse.Namespace) -> dict:
+    """The lens population of `plan_batch` and `degrade_batch` (`population.Population`: the folder, the seed,
+    the frames' temperatures); {} without one (and SolasError for temperatures without one)."""
+    if args.lens_population is None:
+        if args.frame_temperatures_c:
+            raise SolasError("--frame-temperatures-c is for --lens-population; give --lens with --temperature-c "
+                             "for one lens")
+        return {}
+    from .population import Population
+
+    return {"lens_population": Population(args.lens_population, args.seed, tuple(args.frame_temperatures_c or ()))}
+
+
 def _grid_plan(p) -> tuple[float, str]:
     """Seconds the batch's grid will take and what is done with it: reused (a file given, or a cache
-    entry of this lens and grid), or computed, its time measured on a few of its PSFs (`psf.cost`)."""
+    entry of this lens and grid), or computed, its time measured on a few of its PSFs (`psf.cost`); a
+    population's grids: one per lens instance its items use, each as long as the first lens's."""
+    if p.grid_source == "population":
+        from ..psf.cost import grid_cost
+
+        used = len({p.jobs[i].params["lens"]["hash"] for i in p.todo})
+        return used * grid_cost(p.lens, p.grid_spec).seconds, f"{used} lens instances of {p.grid_path}, each cached"
     if p.grid_source != "to compute":
         return 0.0, {"given": "given", "cache hit": "in the cache: reused, nothing to compute"}[p.grid_source]
     from ..psf.cost import grid_cost
@@ -119,6 +140,7 @@ def run_batch_degrade(args: argparse.Namespace) -> int:
         cache=args.cache,
         force=args.force,
         progress=not args.quiet,
+        **_population(args),
     )
     return _report("degrade", result, f" (grid: {result.grid_source})")
 
@@ -272,6 +294,11 @@ def _add_degrade(sub: Any) -> None:
     source = p.add_mutually_exclusive_group(required=True)
     source.add_argument("--psf-grid", metavar="GRID.exr", help="PSF grid written by `solas-mi psf-grid`")
     source.add_argument("--lens", help=f"compute the grid from this lens: {lens_help()}")
+    source.add_argument("--lens-population", metavar="DIR", help="a folder of lens files (a `solas-mi tolerance` "
+                        "output): each frame degraded by one of them, chosen by --seed and its name as its noise is; "
+                        "each lens's grid computed once and cached, the manifest naming each frame's lens")
+    p.add_argument("--frame-temperatures-c", type=float, nargs="+", metavar="C", help="with --lens-population: each "
+                   "frame's lens at one of these temperatures (°C), chosen by --seed and its name")
     add_environment_options(p)
     DegradeSpec.add_flags(p, DEGRADE_OPTIONS)
     frames = p.add_argument_group("the frames' camera (as degrade's; every input taken by it)")
