@@ -38,7 +38,7 @@ def sample_columns(row: dict, spec) -> dict:
     return flat
 
 
-def _listed(values) -> list:
+def _listed(values) -> list | float | None:
     """An array of MTF50s as nested lists, None where the MTF never falls to 1/2 (NaN)."""
     return [_listed(v) for v in values] if getattr(values, "ndim", 0) else defined(float(values))
 

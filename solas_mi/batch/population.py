@@ -79,17 +79,23 @@ def check_temperatures(temperatures_c) -> tuple[float, ...]:
     return tuple(check_environment(t, STANDARD_KPA)[0] for t in temperatures_c or ())
 
 
-def assign(jobs: list[Job], population, seed: int, temperatures_c, cache, grid_spec) -> None:
-    """Each item's lens instance and temperature (`lens`: file, index, hash, °C) and the grid it takes from
-    `cache` (`psf_grid`), recorded in its params."""
+def pick(name: str, lenses, seed: int, temperatures_c) -> dict:
+    """The lens of the frame (item) `name`: {"file", "index", "hash", "temperature_c"} (`instance`,
+    `temperature`; the hash of the lens at that temperature), and that lens ("lens", not for the manifest)."""
+    index = instance(name, seed, len(lenses))
+    path, lens = lenses[index]
+    t = temperature(name, seed, temperatures_c)
+    there = lens if t is None else lens.at(t)
+    return {"file": path, "index": index, "hash": there.hash, "temperature_c": t, "lens": there}
+
+
+def assign(jobs: list[Job], lenses, seed: int, temperatures_c, cache, grid_spec) -> None:
+    """Each item's lens instance and temperature (`pick`: `lens` in its params) and the grid it takes from
+    `cache` (`psf_grid`)."""
     for job in jobs:
-        name = Path(job.output).stem
-        index = instance(name, seed, len(population))
-        path, lens = population[index]
-        t = temperature(name, seed, temperatures_c)
-        there = lens if t is None else lens.at(t)
-        job.params["lens"] = {"file": path, "index": index, "hash": there.hash, "temperature_c": t}
-        job.params["psf_grid"] = str(cache.path(there, grid_spec))
+        record = pick(Path(job.output).stem, lenses, seed, temperatures_c)
+        job.params["psf_grid"] = str(cache.path(record.pop("lens"), grid_spec))
+        job.params["lens"] = record
 
 
 def key(population, seed: int, temperatures_c) -> str:
@@ -131,6 +137,14 @@ def cameras(jobs: list[Job], todo: list[int], population, sizes, frame, model) -
     return out
 
 
+def item_lens(params: dict):
+    """A render item's lens: its file (`params["lens"]`), at the temperature a population picked for it."""
+    from ..optics.lens import Lens
+
+    lens = Lens.load(params["lens"])
+    return lens if params.get("temperature_c") is None else lens.at(params["temperature_c"])
+
+
 def item_grid(path: str):
     """The grid at `path`, read once while this process's items use it in turn."""
     from ..psf.depth import read_grid
@@ -148,16 +162,32 @@ def checked(population, psf_grid, lens, scale_lens) -> tuple[Population, list] |
         raise SolasError("give one of a PSF grid file, a lens to compute one from, or a lens population")
     if population is None:
         return None
-    if not isinstance(population, Population):
-        population = Population(population)
     if scale_lens is not None:
         raise SolasError("--scale-lens scales one lens: give --lens, not --lens-population")
+    return loaded(population)
+
+
+def loaded(population) -> tuple[Population, list]:
+    """`population` (a `Population`, or its folder) checked, and its lenses ((path, Lens), `load_population`)."""
+    if not isinstance(population, Population):
+        population = Population(population)
     seed = population.seed
     if not isinstance(seed, int) or isinstance(seed, bool) or seed < 0:
         raise SolasError(f"seed {seed!r} must be a whole number >= 0")
-    return Population(population.folder, seed, check_temperatures(population.temperatures_c)), load_population(
-        population.folder
-    )
+    given = Population(population.folder, seed, check_temperatures(population.temperatures_c))
+    return given, load_population(population.folder)
 
 
-__all__ = ["LENS_FOLDER", "Population", "assign", "grids", "instance", "item_grid", "load_population", "temperature"]
+__all__ = [
+    "LENS_FOLDER",
+    "Population",
+    "assign",
+    "grids",
+    "instance",
+    "item_grid",
+    "item_lens",
+    "load_population",
+    "loaded",
+    "pick",
+    "temperature",
+]

@@ -46,7 +46,7 @@ def run_job(job: Job, grid: PSFGrid | None, grid_path: str | None, settings: dic
     return job
 
 
-def _degrade(job: Job, grid: PSFGrid, grid_path: str, settings: dict[str, Any]) -> None:
+def _degrade(job: Job, grid: PSFGrid | None, grid_path: str | None, settings: dict[str, Any]) -> None:
     from ..convolution.output import degrade_file
     from ..imageio import image_size
     from ..outputs import check_target, data_and_preview
@@ -75,7 +75,10 @@ def _degrade(job: Job, grid: PSFGrid, grid_path: str, settings: dict[str, Any]) 
         spec,
         force=settings["force"],
         depth=job.params.get("depth"),
-        extra_meta={"batch": {**settings["batch"], "seed": job.seed, **_lens_of(job)}, **({"camera": camera} if camera else {})},
+        extra_meta={
+            "batch": {**settings["batch"], "seed": job.seed, **_lens_of(job)},
+            **({"camera": camera} if camera else {}),
+        },
         labels=job.params.get("labels"),
     )
 
@@ -134,9 +137,9 @@ def _render(job: Job, settings: dict[str, Any]) -> None:
     atomically."""
     from pathlib import Path
 
-    from ..optics.lens import Lens
     from ..outputs import data_and_preview, written_together
     from ..render.spec import RenderSpec
+    from .population import item_lens
 
     p = job.params
     spec = RenderSpec.from_dict(p)
@@ -145,7 +148,7 @@ def _render(job: Job, settings: dict[str, Any]) -> None:
 
         dr.set_thread_count(settings["threads"])  # the batch's workers share the cores
     output, png = data_and_preview(job.output, job.png, inputs=[job.input])
-    lens = Lens.load(p["lens"])
+    lens = item_lens(p)  # its file, at its temperature where a lens population picked one
     if Path(job.input).suffix.lower() in SCENE_SUFFIXES:
         from ..render.stock import render_scene
         from ..render.user_scene import camera_meta, load

@@ -248,7 +248,7 @@ def _melted(g, delta_nd: float, delta_vd: float):
     return replace(g, name=name, melt=(delta_nd, delta_vd), nd=None, vd=None), name
 
 
-def perturbed(lens, spec: ToleranceSpec, deltas) -> object:
+def perturbed(lens, spec: ToleranceSpec, deltas):
     """`lens` with each of `spec.terms` moved by its delta in `deltas` (one per term, in the term's unit; 0:
     untouched), named the lens's own; its glasses melted become the lens's own materials."""
     surfaces = list(lens.surfaces)

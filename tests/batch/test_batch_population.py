@@ -157,3 +157,23 @@ def test_the_command_takes_a_population(batch_inputs, population, capsys):
     argv[argv.index("--lens-population") : argv.index("--seed")] = ["--lens", "solas-doublet"]
     assert main([*argv, "--frame-temperatures-c", "60", "--dry-run"]) == 2
     assert "--frame-temperatures-c is for --lens-population" in capsys.readouterr().err
+
+
+def test_a_render_batch_takes_a_population(batch_inputs, population, tmp_path):
+    """`render_batch(lens=Population(...))`: each item's lens is the population's pick for its name (and
+    temperature), named in its params; rendering the frame with that lens file alone gives the same image."""
+    from solas_mi.batch import render_batch
+
+    frames = batch_inputs.write(3)
+    common = {"sensor": "16x12", "spp": 1, "workers": 1, "progress": False}
+    done = render_batch(frames, tmp_path / "pop", lens=pop.Population(population, 0, (-20.0, 60.0)), **common)
+    assert [job.status for job in done.jobs] == ["done"] * 3
+    lenses = pop.load_population(population)
+    for job in done.jobs:
+        own = pop.pick(Path(job.output).stem, lenses, 0, (-20.0, 60.0))
+        assert job.params["lens"] == own["file"] and job.params["temperature_c"] == own["temperature_c"]
+        assert job.params["lens_hash"] == own["lens"].hash == pop.item_lens(job.params).hash
+    plain = render_batch(frames, tmp_path / "pop0", lens=pop.Population(population), **common)
+    job = plain.jobs[0]
+    alone = render_batch([job.input], tmp_path / "alone", lens=job.params["lens"], **common)
+    np.testing.assert_array_equal(_pixels(alone.jobs[0].output), _pixels(job.output))
