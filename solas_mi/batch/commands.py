@@ -70,15 +70,7 @@ def _dry_run(args: argparse.Namespace) -> int:
     from .degrade import check_workers, estimate, plan_batch
 
     workers = check_workers(_workers(args.workers), args.dask)
-    p = plan_batch(
-        args.inputs,
-        args.output,
-        _degrade_spec(args),
-        psf_grid=args.psf_grid,
-        lens=_lens(args),
-        cache=args.cache,
-        **_population(args, args.seed),
-    )
+    p = plan_batch(args.inputs, args.output, _degrade_spec(args), **_sources(args))
     need = estimate(p, workers if args.dask is None else 1)
     where = f"Dask at {args.dask}" if args.dask else f"{workers} local worker process(es)"
     skipped = len(p.jobs) - len(p.todo)
@@ -101,6 +93,12 @@ def _dry_run(args: argparse.Namespace) -> int:
         "worker)"
     )
     return 0
+
+
+def _sources(args: argparse.Namespace) -> dict:
+    """`batch degrade`'s grid: a file, a lens or a lens population, and the grid cache (keywords of `plan_batch`
+    and `degrade_batch`)."""
+    return {"psf_grid": args.psf_grid, "lens": _lens(args), "cache": args.cache, **_population(args, args.seed)}
 
 
 def _population(args: argparse.Namespace, seed: int) -> dict:
@@ -143,14 +141,11 @@ def run_batch_degrade(args: argparse.Namespace) -> int:
         args.inputs,
         args.output,
         _degrade_spec(args),
-        psf_grid=args.psf_grid,
-        lens=_lens(args),
+        **_sources(args),
         workers=_workers(args.workers),
         dask=args.dask,
-        cache=args.cache,
         force=args.force,
         progress=not args.quiet,
-        **_population(args, args.seed),
     )
     return _report("degrade", result, f" (grid: {result.grid_source})")
 
