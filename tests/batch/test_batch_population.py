@@ -177,3 +177,18 @@ def test_a_render_batch_takes_a_population(batch_inputs, population, tmp_path):
     job = plain.jobs[0]
     alone = render_batch([job.input], tmp_path / "alone", lens=job.params["lens"], **common)
     np.testing.assert_array_equal(_pixels(alone.jobs[0].output), _pixels(job.output))
+
+
+def test_a_population_batch_on_dask_equals_the_local_one(batch_inputs, population):
+    from solas_mi.batch import GridCache, degrade_batch
+
+    frames = batch_inputs.write(3)
+    cache = GridCache(batch_inputs.root / "cache")
+    common = {"lens_population": pop.Population(population, 4), "cache": cache, "workers": 2, "progress": False}
+    spec = DegradeSpec(grid_spec=GridSpec(**GRID))
+    local = degrade_batch(frames, batch_inputs.root / "local", spec, **common)
+    dask = degrade_batch(frames, batch_inputs.root / "dask", spec, dask="local", **common)
+    assert dask.count("done") == local.count("done") == 3
+    for a, b in zip(local.jobs, dask.jobs):
+        assert a.params == b.params
+        np.testing.assert_array_equal(_pixels(a.output), _pixels(b.output))
