@@ -69,20 +69,24 @@ def _plot(nominal: dict, spread: dict, limit, lens_name: str, path: str) -> None
 
 
 def write(folder, lens, spec, rows, sensitivity, nominal: dict, summary: dict) -> list[Path]:
-    """Each sample's lens file, then samples.csv, sensitivity.csv, tolerance.json and tolerance.png written
-    together in `folder`; their paths."""
+    """Each sample's lens file, samples.csv, sensitivity.csv, tolerance.json and tolerance.png, all written
+    together in `folder` (none changed if one fails); the lens files' folder and the others' paths."""
+    from ..optics.lens_toml import dumps
+    from ..optics.tolerance import LENS_FOLDER
+
     out = output_folder(folder)
-    (out / "lenses").mkdir(parents=True, exist_ok=True)
-    for row in rows:
-        row["lens"].save(out / "lenses" / f"sample_{row['index']:05d}.toml")
+    (out / LENS_FOLDER).mkdir(parents=True, exist_ok=True)
+    lens_files = [out / LENS_FOLDER / f"sample_{row['index']:05d}.toml" for row in rows]
     paths = [out / name for name in ("samples.csv", "sensitivity.csv", "tolerance.json", "tolerance.png")]
     spread = tolerance.percentiles(rows)
-    with written_together(*paths) as (samples_csv, sensitivity_csv, data, png):
+    with written_together(*paths, *lens_files) as (samples_csv, sensitivity_csv, data, png, *lens_tmps):
+        for row, tmp in zip(rows, lens_tmps):
+            Path(tmp).write_text(dumps(row["lens"]), encoding="utf-8")
         Path(samples_csv).write_text(_csv([sample_columns(r, spec) for r in rows]), encoding="utf-8")
         Path(sensitivity_csv).write_text(_csv(sensitivity) if sensitivity else "", encoding="utf-8")
         Path(data).write_text(jsonio.dumps(summary, indent=2), encoding="utf-8")
         _plot(nominal, spread, summary["mtf50_limit_cy_mm"], lens.name, png)
-    return [out / "lenses", *paths]
+    return [out / LENS_FOLDER, *paths]
 
 
 def summarise(lens, spec, settings, rows, nominal, limit, seed) -> dict:

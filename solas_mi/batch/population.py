@@ -16,9 +16,9 @@ from pathlib import Path
 from typing import Any
 
 from ..errors import SolasError
+from ..optics.tolerance import LENS_FOLDER
 from .jobs import Job
 
-LENS_FOLDER = "lenses"  # where `solas-mi tolerance` writes a population's lens files
 MAX_INSTANCES = 100_000
 _READ: dict[str, Any] = {}  # this process's last grid read (`item_grid`): a worker's items share it in turn
 
@@ -179,7 +179,6 @@ def loaded(population) -> tuple[Population, list]:
 
 
 __all__ = [
-    "LENS_FOLDER",
     "Population",
     "assign",
     "grids",

@@ -49,6 +49,7 @@ DEFAULT_TRUNCATE = 3.0  # σ: a normal draw beyond ±3σ is drawn again
 DISTRIBUTIONS = ("normal", "uniform")
 COMPENSATORS = ("rms-spot", "mtf50", "none")
 SIDES = ((-1.0, "minus"), (1.0, "plus"))  # a sensitivity's two draws: −1 and +1 σ (or ± the limit)
+LENS_FOLDER = "lenses"  # where `solas-mi tolerance` writes its drawn lenses (a population a batch reads)
 MAX_TERMS = 1000  # tolerances × surfaces of one file
 REFUSED = {
     "decentre": "an element's decentre",
@@ -339,6 +340,7 @@ __all__ = [
     "COMPENSATORS",
     "DISTRIBUTIONS",
     "KINDS",
+    "LENS_FOLDER",
     "REFUSED",
     "Term",
     "ToleranceSpec",

@@ -24,7 +24,7 @@ def population(tmp_path, doublet):
     spec = tol.spec_from_dict(
         doublet, {"tolerance": [{"kind": "radius", "surfaces": [1], "fringes": 20.0}, {"kind": "despace", "mm": 0.2}]}
     )
-    folder = tmp_path / "population" / pop.LENS_FOLDER
+    folder = tmp_path / "population" / tol.LENS_FOLDER
     folder.mkdir(parents=True)
     for i in range(3):
         tol.draw(doublet, spec, 1, i)[0].save(folder / f"sample_{i:05d}.toml")
