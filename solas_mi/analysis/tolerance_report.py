@@ -43,7 +43,7 @@ def _listed(values) -> list | float | None:
     return [_listed(v) for v in values] if getattr(values, "ndim", 0) else defined(float(values))
 
 
-def _plot(nominal: dict, spread: dict, limit, lens_name: str, path: str) -> None:
+def _plot(nominal: dict, spread: dict, summary: dict, path: str) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -55,20 +55,20 @@ def _plot(nominal: dict, spread: dict, limit, lens_name: str, path: str) -> None
         ax.fill_between(fields, spread[10][:, j], spread[90][:, j], alpha=0.3, label="10-90 % of samples")
         ax.plot(fields, spread[50][:, j], marker=".", label="median")
         ax.plot(fields, nominal["mtf50_cy_mm"][:, j], "k--", label="nominal")
-        if limit is not None:
-            ax.axhline(limit, color="C3", lw=1, label="limit")
+        if summary["mtf50_limit_cy_mm"] is not None:
+            ax.axhline(summary["mtf50_limit_cy_mm"], color="C3", lw=1, label="limit")
         ax.set(title=orientation, xlabel="field (deg)", xlim=(0, fields[-1]))
         ax.grid(alpha=0.3)
-    axes[0].set_ylabel("MTF50 (cycles/mm), compensated")
+    axes[0].set_ylabel(f"MTF50 (cycles/mm), back focus: {summary['settings']['compensator']}")
     axes[0].set_ylim(bottom=0)
     axes[0].legend(fontsize=8)
-    fig.suptitle(f"{lens_name}: MTF50 of the tolerance Monte Carlo", fontsize=10)
+    fig.suptitle(f"{summary['lens']}: MTF50 of {summary['samples']} samples (seed {summary['seed']})", fontsize=10)
     fig.tight_layout()
     fig.savefig(path, format="png", dpi=100)
     plt.close(fig)
 
 
-def write(folder, lens, spec, rows, sensitivity, nominal: dict, summary: dict) -> list[Path]:
+def write(folder, spec, rows, sensitivity, nominal: dict, summary: dict) -> list[Path]:
     """Each sample's lens file, samples.csv, sensitivity.csv, tolerance.json and tolerance.png, all written
     together in `folder` (none changed if one fails); the lens files' folder and the others' paths."""
     from ..optics.lens_toml import dumps
@@ -85,7 +85,7 @@ def write(folder, lens, spec, rows, sensitivity, nominal: dict, summary: dict) -
         Path(samples_csv).write_text(_csv([sample_columns(r, spec) for r in rows]), encoding="utf-8")
         Path(sensitivity_csv).write_text(_csv(sensitivity) if sensitivity else "", encoding="utf-8")
         Path(data).write_text(jsonio.dumps(summary, indent=2), encoding="utf-8")
-        _plot(nominal, spread, summary["mtf50_limit_cy_mm"], lens.name, png)
+        _plot(nominal, spread, summary, png)
     return [out / LENS_FOLDER, *paths]
 
 
@@ -183,7 +183,7 @@ def run_tolerance(args) -> int:
         print(f"solas-mi tolerance: warning: {text}", file=sys.stderr)
     summary = summarise(lens, spec, settings, rows, nominal, args.mtf50_limit, args.seed)
     print(_say(summary))
-    paths = write(args.output, lens, spec, rows, sensitivity, nominal, summary)
+    paths = write(args.output, spec, rows, sensitivity, nominal, summary)
     print(f"wrote {', '.join(str(p) for p in paths)}")
     return 0
 
