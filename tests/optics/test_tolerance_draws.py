@@ -213,3 +213,26 @@ def test_percent_of_a_flat_radius_is_refused(cooke):
         tol.spec_from_dict(flat, {"tolerance": [{"kind": "radius", "surfaces": [1], "percent": 1.0}]})
     fringes = tol.spec_from_dict(flat, {"tolerance": [{"kind": "radius", "surfaces": "all", "fringes": 1.0}]})
     assert [t.name for t in fringes.terms] == ["radius s1", "radius s2"]  # fringes bend a flat
+
+
+def test_draws_follow_their_distributions(cooke):
+    """4000 samples: a normal truncated at k σ has the standard deviation σ √(1 − 2 k φ(k) / (2 Φ(k) − 1)) and
+    nothing beyond k σ; a uniform of limit L has L/√3 and nothing beyond L (within 4 sampling errors)."""
+    spec = tol.spec_from_dict(
+        cooke,
+        {
+            "tolerance": [
+                {"kind": "thickness", "surfaces": [1], "mm": 0.02, "truncate": 1.5},
+                {"kind": "thickness", "surfaces": [2], "mm": 0.03, "distribution": "uniform"},
+                {"kind": "despace", "mm": 0.01},
+            ]
+        },
+    )
+    draws = np.array([tol.draw_deltas(spec, 3, i) for i in range(4000)])
+    k = 1.5
+    phi, big_phi = math.exp(-k * k / 2) / math.sqrt(2 * math.pi), 0.5 * (1 + math.erf(k / math.sqrt(2)))
+    expected = [0.02 * math.sqrt(1 - 2 * k * phi / (2 * big_phi - 1)), 0.03 / math.sqrt(3), 0.01]
+    for column, sigma, bound in zip(draws.T, expected, (0.03, 0.03, 0.03)):
+        assert abs(column.mean()) < 4 * sigma / math.sqrt(len(column))
+        assert column.std() == pytest.approx(sigma, rel=4 / math.sqrt(2 * len(column)))
+        assert np.abs(column).max() <= bound
