@@ -76,6 +76,7 @@ def test_each_frame_is_degraded_by_the_lens_its_manifest_names(batch_inputs, pop
             progress=False,
         )
         np.testing.assert_array_equal(_pixels(again.jobs[0].output), _pixels(item["output"]))
+        assert Path(again.jobs[0].png).read_bytes() == Path(item["png"]).read_bytes()
     assert len(used) > 1  # the frames were not all one lens
     assert manifest["grids"]["computed"] == len(used)
 
