@@ -42,7 +42,7 @@ import numpy as np
 from ..errors import SolasError
 from ..userfiles import read_toml
 from . import glass as glass_mod
-from . import thermal
+from . import lens_checks, thermal
 
 DEFAULT_TEST_WAVELENGTH_NM = 632.8  # HeNe: the wavelength fringes are counted at unless the file says
 DEFAULT_TRUNCATE = 3.0  # σ: a normal draw beyond ±3σ is drawn again
@@ -330,10 +330,21 @@ def draw_deltas(spec: ToleranceSpec, seed: int, index: int) -> list[float]:
 
 
 def draw(lens, spec: ToleranceSpec, seed: int, index: int):
-    """(lens of sample `index`, its deltas): `perturbed` by `draw_deltas`, named `<lens> sample <index>`."""
+    """(lens of sample `index`, its deltas): `perturbed` by `draw_deltas`, named `<lens> sample <index>`;
+    SolasError where the draw cannot be built (a lens file's checks, `lens_checks`, or faces that cross
+    where the design's do not), naming the sample: its tolerances are too wide for the lens."""
     deltas = draw_deltas(spec, seed, index)
     drawn = perturbed(lens, spec, deltas)
-    return replace(drawn, name=f"{lens.name} sample {index}", description=f"{lens.name} drawn by seed {seed}"), deltas
+    drawn = replace(drawn, name=f"{lens.name} sample {index}", description=f"{lens.name} drawn by seed {seed}")
+    where = f"tolerance sample {index} of seed {seed}"
+    lens_checks.validate(drawn, where)
+    crossing = [note for note in drawn.overlaps if note not in lens.overlaps]
+    if len(drawn.overlaps) > len(lens.overlaps):
+        raise SolasError(
+            f"{where}: {crossing[0] if crossing else drawn.overlaps[0]}; the tolerances draw lenses "
+            "that cannot be built (give smaller values, or truncate the normal ones)"
+        )
+    return drawn, deltas
 
 
 __all__ = [

@@ -236,3 +236,13 @@ def test_draws_follow_their_distributions(cooke):
         assert abs(column.mean()) < 4 * sigma / math.sqrt(len(column))
         assert column.std() == pytest.approx(sigma, rel=4 / math.sqrt(2 * len(column)))
         assert np.abs(column).max() <= bound
+
+
+def test_a_draw_that_cannot_be_built_is_refused_naming_the_sample(cooke):
+    """The front crown (3.26 mm at the centre, about 0.74 mm at its rim) drawn 0.9 mm thinner: its faces cross."""
+    spec = tol.spec_from_dict(
+        cooke, {"tolerance": [{"kind": "thickness", "surfaces": [1], "mm": 1.0, "distribution": "uniform"}]}
+    )
+    seed = next(s for s in range(100) if tol.draw_deltas(spec, s, 0)[0] < -0.9)
+    with pytest.raises(SolasError, match=f"tolerance sample 0 of seed {seed}: .*cannot be built"):
+        tol.draw(cooke, spec, seed, 0)
