@@ -173,8 +173,8 @@ def plan_render(
     base, axes = batch_spec(spec, settings)
     out_dir = output_folder(output_dir).resolve()
     files = expand_inputs(inputs, IMAGE_SUFFIXES + SCENE_SUFFIXES)
-    population, lenses = loaded(lens) if isinstance(lens, Population) else (None, None)
-    lenses = dict(lenses) if lenses else {str(v): Lens.load(str(v)) for v in _values("lens", lens)}
+    population, members = loaded(lens) if isinstance(lens, Population) else (None, [])
+    lenses: dict[str, Any] = dict(members) or {str(v): Lens.load(str(v)) for v in _values("lens", lens)}
     for one in lenses.values():
         responses.check_lens(responses.parse(base.response, one.wavelengths_nm), one)
     axes["lens"] = list(lenses) if population is None else [None]  # a population's: picked per item
