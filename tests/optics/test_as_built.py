@@ -376,7 +376,11 @@ def test_a_break_with_a_thickness_of_its_own_places_the_next_surface_as_zemax_do
             "followed by another break that does not undo it",
         ),
         ("SURF 3\n  TYPE TOROIDAL\n  PARM 12 0.5\n  DIAM 1 1\n", "TOROIDAL PARM 12 = 0.5 is not read"),
-        ("SURF 3\n  TYPE TOROIDAL\n  XDAT 2 3\n  DIAM 1 1\n", "TOROIDAL extra data XDAT 2 = 3 is not read"),
+        ("SURF 3\n  TYPE TOROIDAL\n  XDAT 1 2\n  XDAT 2 3\n  DIAM 1 1\n", "TOROIDAL extra data XDAT 1 = 2 is not read"),
+        (
+            "SURF 3\n  TYPE TOROIDAL\n  XDAT 2 3\n  XDAT 3 0.1\n  DIAM 1 1\n",
+            "TOROIDAL extra data XDAT 2 = 3 is not read",
+        ),
     ],
 )
 def test_what_is_not_read_is_refused_by_name(tmp_path, extra, message):
@@ -430,3 +434,12 @@ def test_the_fisheye_s_chief_rays_are_aimed_out_to_80_degrees_as_the_drjit_trace
     aimed = ~theirs.off_centre
     assert aimed.sum() >= len(fields) - 2 and ours.found[aimed].all()
     assert np.abs(ours.image_xy - theirs.image_xy)[aimed].max() < 1e-9
+
+
+def test_a_toroid_s_normalisation_radius_without_terms_is_read_as_nothing(tmp_path):
+    """TOROIDAL's XDAT 1 is its number of Zernike terms and XDAT 2 their normalisation radius: with no terms
+    (Thorlabs' cylinder lenses write XDAT 1 0, XDAT 2 100) the radius changes nothing, and the lens loads as
+    without it (it was refused)."""
+    plain = _load(tmp_path, _zmx(SINGLET))
+    extra = SINGLET.replace("  TYPE TOROIDAL\n", "  TYPE TOROIDAL\n  XDAT 1 0\n  XDAT 2 100\n", 1)
+    assert extra != SINGLET and _load(tmp_path, _zmx(extra)).surfaces == plain.surfaces
