@@ -134,3 +134,44 @@ def test_the_fraunhofer_psf_of_a_lens_placed_with_zero_breaks_is_the_symmetric_p
     expected = fraunhofer(Pupils(lens, np.array([field]), np.array([wl])).sampled(512), 1.0, 48)[0]
     data = as_built_fraunhofer.field_psf(_zero_placed(lens), field, wl, 1.0, 48, 256)
     assert np.abs(data - expected).max() < 0.01 * expected.max()
+
+
+def test_solas_mi_psf_of_a_lens_as_built_takes_the_numpy_tracer_s_paths(tmp_path, capsys):
+    """`solas-mi psf` of the doublet with a tilted sensor, written as TOML: its geometric PSF is
+    `psf.as_built`'s (normalised), the metadata says which path and that the paraxial data are about the nominal
+    axis; the Fraunhofer path runs; a method without a path for the lens as built is refused by name."""
+    from solas_mi.cli import main
+    from solas_mi.imageio import read_exr
+    from solas_mi.psf.as_built_methods import PATHS
+    from solas_mi.psf.registry import METHODS
+
+    doublet = Lens.load("solas-doublet")
+    tilted = replace(doublet, name="tilted-doublet", image_placement=Placement(tilt_x=0.5))
+    tilted.save(tmp_path / "tilted.toml")
+    lens, wl = Lens.load(str(tmp_path / "tilted.toml")), doublet.primary_wavelength
+    args = ["psf", str(tmp_path / "tilted.toml"), "--field-deg", "0,3", "--wavelengths-nm", f"{wl}"]
+    args += ["--pitch-um", f"{PITCH_UM}", "--size", f"{SIZE}"]
+    for method in PATHS:
+        out = tmp_path / f"{method}.exr"
+        assert (
+            main([*args, "--psf-method", method, "--rays", f"{RAYS}", "--pupil-samples", f"{RAYS}", "-o", str(out)])
+            == 0
+        )
+        channels, meta = read_exr(str(out))
+        assert meta["path"] == PATHS[method] and "nominal axis" in meta["paraxial_axis"]
+        data = next(iter(channels.values()))
+        assert np.isfinite(data).all() and abs(data.sum() - 1.0) < 1e-6
+    expected = as_built.geometric(lens, [[0.0, 3.0]], wl, PITCH_UM, SIZE, RAYS)[0][0]
+    channels, _ = read_exr(str(tmp_path / "geometric.exr"))
+    assert (
+        np.abs(next(iter(channels.values())) - expected / expected.sum()).max() < 1e-6 * expected.max() / expected.sum()
+    )
+    refused = [m for m in METHODS if m not in PATHS]
+    for method in refused:
+        capsys.readouterr()
+        assert main([*args, "--psf-method", method, "-o", str(tmp_path / "refused.exr")]) == 2
+        assert f"PSF method {method!r} does not take it" in capsys.readouterr().err
+    poly = [*args[:4], "--wavelengths-nm", "486.1,656.3", *args[6:], "-o", str(tmp_path / "poly.exr")]
+    assert main(poly) == 2 and "takes one wavelength at a time" in capsys.readouterr().err
+    assert main([*poly, "--psf-method", "geometric", "--rays", f"{RAYS}"]) == 0
+    assert len(refused) >= 1 and not (tmp_path / "refused.exr").exists()
