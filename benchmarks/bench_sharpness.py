@@ -12,11 +12,14 @@ Nyquist). The three
 lenses with the largest off-axis blur (the lowest lens MTF50 in cycles/mm at that field) are the
 acceptance set: within 3 %.
 
+e-SFR measures the MTF along the edge's normal, 5 deg off the axis: beside the lens's MTF along the axis, its
+MTF along that normal (`normal_mtf50`, from the Fraunhofer PSF), which on the fisheye's sagittal edge is
+2.4 % lower (its tangential blur is 3x the sagittal).
+
 On those three lenses the same edges are also rendered through the lens in Mitsuba and measured by e-SFR
-(`rendered_edge`: a crop at the field, flat-fielded, two seeds), beside the same prediction (with the
-object's texel ramp in place of the drawing ramp), the lens MTF averaged over the fields the edge crosses
-in the crop, and the geometric MTF (what the render traces) along the measured edge normal over those
-fields.
+(`rendered_edge`: a short crop at the field, flat-fielded, two seeds), beside the same predictions (with
+the object's texel ramp in place of the drawing ramp) and the geometric MTF (what the render traces) along
+each row's local normal averaged over the crop's rows.
 
     .venv/bin/python benchmarks/bench_sharpness.py              # or: benchmarks/run_all.py bench_sharpness
 """
@@ -82,6 +85,24 @@ def predicted(
     return mtf50(lens_mtf, freq), mtf50(lens_mtf * pixel_mtf(f_px, ramp_px), f_px)
 
 
+def normal_mtf50(psf, pitch_um: float, direction: int, ramp_px: float = 1.0 / OVERSAMPLE) -> float:
+    """MTF50 (cy/px) of the lens's MTF along the slanted edge's normal (TILT_DEG from y for the tangential
+    edge, direction 0, from x for the sagittal, 1), the Fourier transform of its Fraunhofer PSF `psf`
+    (`lens_psf`, sampled at pitch_um/OVERSAMPLE) projected on that normal, × the pixel's and the ramp's
+    (`pixel_mtf`): what e-SFR measures, where `predicted` takes the MTF along the axis. On the fisheye at
+    63° the sagittal edge's 5° mixes in enough of the 3× wider tangential blur to lower it 2.4 %."""
+    from solas_mi.analysis.otf import spot_otf
+    from solas_mi.metrics.mtf import mtf50
+
+    n = psf.data.shape[0]
+    c = (np.arange(n) - n // 2) * pitch_um * 1e-3 / OVERSAMPLE
+    x, y = np.meshgrid(c, -c)  # rows: +y first
+    a = math.radians(TILT_DEG + (90.0 if direction == 0 else 0.0))
+    f_px = np.linspace(0.0, 1.0, 501)
+    otf = spot_otf((x * math.cos(a) + y * math.sin(a)).ravel(), psf.data.ravel(), f_px / (pitch_um * 1e-3))
+    return mtf50(np.abs(otf) * pixel_mtf(f_px, ramp_px), f_px)
+
+
 def pixel_mtf(f_px: np.ndarray, ramp_px: float) -> np.ndarray:
     """The MTF along an edge's normal (TILT_DEG from the pixel axis) of a square pixel of 100 % fill and of
     the ramp of `ramp_px` pixels the edge is drawn with, at `f_px` cycles/pixel."""
@@ -130,6 +151,7 @@ def measure(lens) -> list[dict]:
                 "direction": ("tangential", "sagittal")[direction],
                 "lens_cy_mm": lens_mtf50,
                 "expected": expected,
+                "normal": normal_mtf50(p, pitch, direction),
                 "esfr": found.mtf50,
                 "valid": found.valid,
                 "reason": found.reason,
@@ -155,9 +177,9 @@ def main() -> int:
     print()
     print(
         "| lens | field (deg) | pixel (um) | direction | lens MTF50 (cy/mm) | lens x pixel MTF50 (cy/px) | "
-        "e-SFR MTF50 (cy/px) | difference |"
+        "e-SFR MTF50 (cy/px) | difference | lens x pixel MTF50 along the edge normal (cy/px) | difference |"
     )
-    print("|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|")
     worst = 0.0
     for r in rows:
         diff = (r["esfr"] - r["expected"]) / r["expected"] if r["esfr"] is not None else math.nan
@@ -166,7 +188,8 @@ def main() -> int:
             worst = max(worst, abs(diff))
         print(
             f"| {r['lens']}{mark} | {r['field']:.3g} | {r['pitch']:.3g} | {r['direction']} | {r['lens_cy_mm']:.4g} | "
-            f"{r['expected']:.4f} | {r['esfr']:.4f} | {100 * diff:+.2f} % |"
+            f"{r['expected']:.4f} | {r['esfr']:.4f} | {100 * diff:+.2f} % | {r['normal']:.4f} | "
+            f"{100 * (r['esfr'] / r['normal'] - 1):+.2f} % |"
         )
     print()
     print(
@@ -181,7 +204,7 @@ def main() -> int:
 def print_rendered(chosen: list[dict]) -> None:
     """The rendered route (`rendered_edge`) on the lenses of `chosen` (one row each: lens, field, pitch)."""
     from figures import figure
-    from rendered_edge import ROI_PX, SEEDS, SPP, TEXELS_PER_PX, measure_rendered
+    from rendered_edge import ALONG_PX, ROI_PX, SEEDS, SPP, TEXELS_PER_PX, measure_rendered
 
     from solas_mi import Lens
 
@@ -191,32 +214,34 @@ def print_rendered(chosen: list[dict]) -> None:
         for r in measure_rendered(Lens.load(c["lens"]), c["field"], Lens.load(c["lens"]).primary_wavelength, c["pitch"])
     ]
     print(
-        f"The same edges rendered through the lens in Mitsuba ({ROI_PX}x{ROI_PX}-px crop at the field, {SPP} spp, "
-        f"seeds {', '.join(map(str, SEEDS))}, object texels 1/{TEXELS_PER_PX} px, flat-fielded by a render of a "
-        "uniform object), beside the lens x pixel x texel MTF50:"
+        f"The same edges rendered through the lens in Mitsuba ({ROI_PX}x{ALONG_PX}-px crop at the field, {SPP} spp, "
+        f"seeds {', '.join(map(str, SEEDS))}, object texels 1/{TEXELS_PER_PX} px, the edge tilted {TILT_DEG:g} deg in "
+        "the image, flat-fielded by a render of a uniform object), beside the lens x pixel x texel MTF50 along the "
+        "axis and along the edge's normal (what e-SFR measures; the acceptance), and the geometric MTF (what the "
+        "render traces) along each row's local normal averaged over the crop's rows:"
     )
     print()
     print(
-        "| lens | direction | lens x pixel x texel MTF50 (cy/px) | rendered e-SFR MTF50 (cy/px, mean of seeds) | "
-        "seeds' spread | difference | same, lens MTF averaged over the edge's fields | measured tilt (deg) | "
-        "geometric MTF along the measured normal, averaged over the edge's fields, x pixel x texel | render time per edge (s) |"
+        "| lens | direction | lens x pixel x texel MTF50 along the axis (cy/px) | along the edge normal | "
+        "rendered e-SFR MTF50 (cy/px, mean of seeds) | seeds' spread | difference from the normal's | "
+        "difference from the axis's | geometric MTF50 over the crop's rows (fields) | measured tilt (deg) | "
+        "render time per edge (s) |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|")
     worst = 0.0
     for r in rows:
-        diff = (r["esfr"] - r["expected"]) / r["expected"]
+        diff = (r["esfr"] - r["normal"]) / r["normal"]
         worst = max(worst, abs(diff)) if math.isfinite(diff) else math.inf
         print(
-            f"| {r['lens']} | {r['direction']} | {r['expected']:.4f} | {r['esfr']:.4f} | "
-            f"{100 * r['spread'] / r['expected']:.2f} % | {100 * diff:+.2f} % | {r['averaged']:.4f} "
-            f"({r['fields'][0]:.3g}-{r['fields'][1]:.3g} deg) | {r['tilt']:.2f} | {r['geometric']:.4f} "
-            f"({100 * (r['esfr'] / r['geometric'] - 1):+.2f} %) | {r['seconds']:.0f} |"
+            f"| {r['lens']} | {r['direction']} | {r['expected']:.4f} | {r['normal']:.4f} | {r['esfr']:.4f} | "
+            f"{100 * r['spread'] / r['normal']:.2f} % | {100 * diff:+.2f} % | {100 * (r['esfr'] / r['expected'] - 1):+.2f} % | "
+            f"{r['rows']:.4f} ({r['fields'][0]:.3g}-{r['fields'][1]:.3g} deg) | {r['tilt']:.2f} | {r['seconds']:.0f} |"
             + (f" {r['reason']}" if r["reason"] else "")
         )
     print()
     print(
-        f"Largest difference of the rendered edges: {100 * worst:.2f} % (acceptance {100 * ACCEPTANCE:g} %): "
-        f"{'met' if worst <= ACCEPTANCE else 'NOT met'}."
+        f"Largest difference of the rendered edges from the lens x pixel MTF50 along the edge normal: {100 * worst:.2f} % "
+        f"(acceptance {100 * ACCEPTANCE:g} %): {'met' if worst <= ACCEPTANCE else 'NOT met'}."
     )
     print()
     figure("rendered_edges_s", sum(r["seconds"] for r in rows), "s")

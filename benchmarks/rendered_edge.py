@@ -3,14 +3,22 @@ geometry, `render.image`'s scene) and measured by e-SFR.
 
 The object is an image at infinity (`image_object`) whose width spans a few degrees about the axis and
 whose height reaches past the field: a step (0.2 to 0.8) through the field's point of the image's mapping
-(rectilinear tan θ, or equidistant θ for a lens of polar fields), tilted `bench_sharpness.TILT_DEG` from its
-columns or rows, in square texels of 1/`TEXELS_PER_PX` of a pixel (nearest neighbour: the staircase is a
-ramp of one texel across the edge, in the prediction as `bench_sharpness.predicted`'s `ramp_px`). The
-sensor is a film of the bench's pitch reaching past the field, of which only a `ROI_PX`² crop window
-centred on the chief ray's image point is rendered (`lens_film`: a crop is exactly those pixels of the
-whole film). The crop is divided by the same crop rendered from a uniform object (flat field: relative
-illumination and Fresnel losses vary by several % across it, which e-SFR would read as a slope of the
-edge's profile), then measured by `metrics.esfr`. Two seeds per edge: their spread is the render noise.
+(rectilinear tan θ, or equidistant θ for a lens of polar fields), tilted from its columns or rows so that
+its image is tilted `bench_sharpness.TILT_DEG` (`object_tilt`: the lens's radial and across scales differ),
+in square texels of 1/`TEXELS_PER_PX` of a pixel (nearest neighbour: the staircase is a ramp of one texel
+across the edge, in the prediction as `bench_sharpness.predicted`'s `ramp_px`). The sensor is a film of the
+bench's pitch reaching past the field, of which only a crop window centred on the chief ray's image point
+is rendered, `ROI_PX` across the edge and `ALONG_PX` along it (`lens_film`: a crop is exactly those pixels
+of the whole film). The crop is divided by the same crop rendered from a uniform object (flat field:
+relative illumination and Fresnel losses vary by several % across it, which e-SFR would read as a slope of
+the edge's profile), then measured by `metrics.esfr`. Two seeds per edge: their spread is the render noise.
+
+e-SFR measures the MTF along the edge's normal, averaged over the rows it crosses. The prediction it is
+held to is the lens's diffraction MTF along that normal at the field (`bench_sharpness.normal_mtf50`) ×
+the pixel's × the texel ramp's. Beside it, the geometric MTF (what the render traces) along each row's
+local normal averaged over the crop's rows (`edge_rows`, `geometric_rows`): on a fisheye a long crop spans
+tens of degrees of field, unevenly (the radial scale shrinks outward), and its edge's normal turns with
+the scales' ratio; a 96-row crop at 63° on the fisheye spans 48°-80° and reads 8 % below the field's MTF50.
 """
 
 from __future__ import annotations
@@ -23,19 +31,34 @@ from pathlib import Path
 import numpy as np
 
 ROI_PX = 96  # the rendered crop, pixels across the edge
-ALONG_PX = 96  # and along it
-SPP = 256  # samples per pixel of each render
+ALONG_PX = 32  # and along it: the rows e-SFR averages over, few, so that their fields stay near the field
+SPP = 512  # samples per pixel of each render
+RAYS = 128  # the geometric prediction's entrance grid, rays a side
 SEEDS = (0, 1)
 TEXELS_PER_PX = 8  # object texels per pixel side at the field
 STEP = (0.2, 0.8)
 DELTA_DEG = 0.05  # the field step of the finite differences of the chief ray's image point
 
 
-def mapping_of(lens) -> tuple[str, object]:
-    """The image object's mapping for the lens, and its image-plane coordinate of a field angle (deg)."""
+def mapping_of(lens):
+    """The image object's mapping for the lens, its image-plane coordinate of a field angle (deg), and that
+    coordinate's field angle (deg): rectilinear tan θ for a lens of angle fields, equidistant θ (radians) for
+    one of polar fields (`optics.fields`: field (x, y) sits at (x, y) in either coordinate)."""
     if lens.field_type.pinhole:
-        return "rectilinear", lambda deg: math.tan(math.radians(deg))
-    return "equidistant", math.radians
+        return "rectilinear", lambda deg: math.tan(math.radians(deg)), lambda c: np.degrees(np.arctan(c))
+    return "equidistant", math.radians, np.degrees
+
+
+def object_tilt(scale: tuple[float, float], normal: str) -> float:
+    """The tilt (rad) of the object's edge from its columns (`normal` "x") or rows ("y") that the image's
+    radial and across `scale` turn into TILT_DEG in the image (the degraded edge's): a fisheye's across
+    scale is 1.2 × its radial one at 63°, which would turn 5° into 6° and mix 20 % more of its tangential blur
+    into the sagittal edge's MTF."""
+    from bench_sharpness import TILT_DEG
+
+    radial, across = scale
+    ratio = radial / across if normal == "x" else across / radial
+    return math.atan(math.tan(math.radians(TILT_DEG)) * ratio)
 
 
 def field_point(lens, field: float, wavelength: float) -> tuple[np.ndarray, float, float]:
@@ -43,7 +66,7 @@ def field_point(lens, field: float, wavelength: float) -> tuple[np.ndarray, floa
     coordinate there, radially (y) and across (x)."""
     from solas_mi.optics.pupil import chief_rays
 
-    _, coordinate = mapping_of(lens)
+    coordinate = mapping_of(lens)[1]
     d = DELTA_DEG
     fields = np.array([[0.0, field], [0.0, field + d], [0.0, field - d], [d, field]])
     xy = chief_rays(lens, fields, np.full(4, wavelength)).image_xy
@@ -56,9 +79,7 @@ def edge_object(lens, field: float, pitch_um: float, scale: tuple[float, float],
     """(image, fov_deg, texel in pixels along the normal): the step through the field's point (module
     docstring), its texels 1/TEXELS_PER_PX of a pixel in the image's larger scale, spanning 0.75 ROI past
     the crop on every side."""
-    from bench_sharpness import TILT_DEG
-
-    _, coordinate = mapping_of(lens)
+    coordinate = mapping_of(lens)[1]
     radial, across = scale
     texel = pitch_um * 1e-3 / TEXELS_PER_PX / max(radial, across)
     half_w = 0.75 * ROI_PX * pitch_um * 1e-3 / across
@@ -66,11 +87,11 @@ def edge_object(lens, field: float, pitch_um: float, scale: tuple[float, float],
     cols, rows = (int(math.ceil(2 * h / texel)) for h in (half_w, half_h))
     u = (np.arange(cols) + 0.5 - cols / 2) * texel
     v = (rows / 2 - np.arange(rows) - 0.5)[:, None] * texel - coordinate(field)  # row 0 at +y
-    t = math.radians(TILT_DEG)
+    t = object_tilt(scale, normal)
     distance = u * math.cos(t) + v * math.sin(t) if normal == "x" else v * math.cos(t) - u * math.sin(t)
     image = np.where(distance > 0, STEP[1], STEP[0]).astype(np.float32)
     half = cols * texel / 2
-    fov = math.degrees(half) if not lens.field_type.pinhole else math.degrees(math.atan(half))
+    fov = float(mapping_of(lens)[2](half))
     return image, fov, texel * (radial if normal == "y" else across) / (pitch_um * 1e-3)
 
 
@@ -101,114 +122,109 @@ def render_crop(
     return images, time.perf_counter() - start
 
 
-def along_fields(
-    lens, field: float, pitch_um: float, scale: tuple[float, float], normal: str, pixels: int
-) -> np.ndarray:
-    """The fields (deg) of the points of an edge through (0, `field`) along its `pixels` pixels, every 4th:
-    radial for an edge across x (sagittal), across the field for one across y (tangential)."""
-    _, coordinate = mapping_of(lens)
-    inverse = math.degrees if not lens.field_type.pinhole else lambda c: math.degrees(math.atan(c))
-    offsets = np.arange(-(pixels // 2), pixels // 2 + 1, 4) * pitch_um * 1e-3
-    if normal == "x":
-        return np.array([inverse(coordinate(field) + o / scale[0]) for o in offsets])
-    return np.array([inverse(math.hypot(coordinate(field), o / scale[1])) for o in offsets])
+def edge_rows(lens, field: float, wavelength: float, pitch_um: float, scale, normal: str, pixels: int):
+    """Where the edge crosses every 2nd of the crop's `pixels` rows along it (rows for an edge across x,
+    columns for one across y): the object's edge line traced by chief rays to the image; per row the
+    field (deg, (n, 2)) of the edge's point there and the angle (rad, from x) of the edge's local normal in
+    the image. On a lens whose radial and across scales change with field (a fisheye) the rows are not
+    evenly spaced in field, and the normal turns along the edge."""
+    from solas_mi.optics.pupil import chief_rays
+
+    _, coordinate, inverse = mapping_of(lens)
+    t = object_tilt(scale, normal)
+    s = np.linspace(-1.0, 1.0, 801) * pixels * pitch_um * 1e-3 / min(scale)
+    u, v = (-s * math.tan(t), coordinate(field) + s) if normal == "x" else (s, coordinate(field) + s * math.tan(t))
+    fields = np.stack([inverse(u), inverse(v)], axis=1)
+    xy = chief_rays(lens, fields, np.full(len(s), wavelength)).image_xy
+    along = 1 if normal == "x" else 0
+    order = np.argsort(xy[:, along])
+    rows = xy[400, along] + np.arange(-(pixels // 2), pixels // 2 + 1, 2) * pitch_um * 1e-3
+    at = np.interp(rows, xy[order, along], s[order])
+    dx, dy = (np.interp(at, s, np.gradient(xy[:, k], s)) for k in (0, 1))
+    u, v = (-at * math.tan(t), coordinate(field) + at) if normal == "x" else (at, coordinate(field) + at * math.tan(t))
+    return np.stack([inverse(u), inverse(v)], axis=1), np.arctan2(-dx, dy)
 
 
-def geometric_along(
-    lens, fields: np.ndarray, wavelength: float, pitch_um: float, normal_deg: float, texel_px: float
-) -> float:
-    """MTF50 (cy/px) of the geometric MTF (the ray spot, 256² rays on the entrance grid: what the render
-    traces) along the direction `normal_deg` from x, averaged over the fields (0, f) of `fields`, × the
-    pixel's and the texel ramp's."""
+def geometric_rows(lens, fields: np.ndarray, normals: np.ndarray, wavelength: float, pitch_um: float, texel_px: float):
+    """MTF50 (cy/px) of the geometric OTF (the ray spot, RAYS² on the entrance grid: what the render traces)
+    along each row's local normal (`edge_rows`), each about its centroid (e-SFR's edge fit follows the
+    edge's centroid row by row), averaged over the rows, × the pixel's and the texel ramp's."""
     from bench_sharpness import pixel_mtf
 
-    from solas_mi.analysis.inputs import cutoff_cy_mm
     from solas_mi.analysis.otf import spot_otf
     from solas_mi.metrics.mtf import mtf50
     from solas_mi.optics.pupil import chief_rays
     from solas_mi.psf.geometric import entrance_grid_hits
 
-    points, wl = np.stack([np.zeros(len(fields)), fields], axis=1), np.full(len(fields), wavelength)
-    freq = np.linspace(0.0, cutoff_cy_mm(lens, wavelength), 4001)
-    t = math.radians(normal_deg)
-    lens_mtf = np.mean(
+    f_px = np.linspace(0.0, 1.0, 501)
+    freq, wl = f_px / (pitch_um * 1e-3), np.full(len(fields), wavelength)
+    hits = entrance_grid_hits(lens, fields, wl, RAYS, chief_rays(lens, fields, wl))
+    otf = np.mean(
         [
-            np.abs(spot_otf((x * math.cos(t) + y * math.sin(t)) * 1e-3, power, freq))
-            for x, y, power in entrance_grid_hits(lens, points, wl, 256, chief_rays(lens, points, wl))
+            spot_otf(d - np.average(d, weights=p), p, freq)
+            for (x, y, p), a in zip(hits, normals)
+            for d in [(x * math.cos(a) + y * math.sin(a)) * 1e-3]
         ],
         axis=0,
     )
-    f_px = freq * pitch_um * 1e-3
-    return mtf50(lens_mtf * pixel_mtf(f_px, texel_px), f_px)
+    return mtf50(np.abs(otf) * pixel_mtf(f_px, texel_px), f_px)
 
 
 def windows(point: np.ndarray, pitch_um: float, side: int) -> dict[str, tuple[int, int, int, int]]:
-    """The crop windows (column, row of the corner, columns, rows) of the flat field (ROI_PX²) and of each
-    edge (ROI_PX across it, ALONG_PX along it), centred on the image `point` (mm) of a `side`² film."""
-    x0 = int(round(side / 2 + point[0] * 1e3 / pitch_um - ROI_PX / 2))
-    y0 = int(round(side / 2 - point[1] * 1e3 / pitch_um - ROI_PX / 2))
-    inset = (ROI_PX - ALONG_PX) // 2
+    """The crop windows (column, row of the corner, columns, rows) of each edge (ROI_PX across it, ALONG_PX
+    along it), centred on the image `point` (mm) of a `side`² film."""
+    x0 = int(round(side / 2 + point[0] * 1e3 / pitch_um))
+    y0 = int(round(side / 2 - point[1] * 1e3 / pitch_um))
     return {
-        "flat": (x0, y0, ROI_PX, ROI_PX),
-        "x": (x0, y0 + inset, ROI_PX, ALONG_PX),
-        "y": (x0 + inset, y0, ALONG_PX, ROI_PX),
+        "x": (x0 - ROI_PX // 2, y0 - ALONG_PX // 2, ROI_PX, ALONG_PX),
+        "y": (x0 - ALONG_PX // 2, y0 - ROI_PX // 2, ALONG_PX, ROI_PX),
     }
 
 
-def measure_rendered(lens, field: float, wavelength: float, pitch_um: float) -> list[dict]:
-    """Both directions of one lens by the rendered route (module docstring); beside the prediction at the
-    field, the MTF50 of the lens's MTF averaged over the fields along the edge in the crop."""
-    from bench_sharpness import predicted
+def measure_rendered(lens, field: float, wavelength: float, pitch_um: float, directions=(0, 1)) -> list[dict]:
+    """The `directions` (0: tangential, 1: sagittal) of one lens by the rendered route (module docstring),
+    beside the predictions (`bench_sharpness.predicted` along the axis, `normal_mtf50` along the edge's
+    normal, `geometric_rows` over the crop's rows)."""
+    from bench_sharpness import OVERSAMPLE, lens_psf, normal_mtf50, predicted
 
     from solas_mi.metrics.esfr import esfr
     from solas_mi.render.spec import RenderSpec
 
     point, *scale = field_point(lens, field, wavelength)
     side = int(2 * (np.abs(point).max() * 1e3 / pitch_um + ROI_PX)) // 2 * 2
-    crops = windows(point, pitch_um, side)
-    mapping, _ = mapping_of(lens)
-    rows, seconds, flat = [], 0.0, None
-    for direction, normal in ((0, "y"), (1, "x")):
+    psf, _ = lens_psf(lens, field, wavelength, pitch_um / OVERSAMPLE)
+    rows = []
+    for direction in directions:
+        normal = "yx"[direction]
         image, fov, texel_px = edge_object(lens, field, pitch_um, tuple(scale), normal)
         spec = RenderSpec(
             sensor=(side, side),
             pitch_um=pitch_um,
             fov_deg=fov,
-            mapping=mapping,
+            mapping=mapping_of(lens)[0],
             response=f"mono:{wavelength!r}",
             spp=SPP,
         )
-        if flat is None:
-            (flat,), seconds = render_crop(lens, np.ones((2, 2), np.float32), spec, crops["flat"], SEEDS[:1])
-        edges, took = render_crop(lens, image, spec, crops[normal], SEEDS)
-        seconds += took
-        x, y, w, h = crops[normal]
-        found = [
-            esfr(
-                e
-                / flat[y - crops["flat"][1] : y - crops["flat"][1] + h, x - crops["flat"][0] : x - crops["flat"][0] + w]
-            )
-            for e in edges
-        ]
+        crop = windows(point, pitch_um, side)[normal]
+        (flat,), seconds = render_crop(lens, np.ones((2, 2), np.float32), spec, crop, SEEDS[:1])
+        edges, took = render_crop(lens, image, spec, crop, SEEDS)
+        found = [esfr(e / flat) for e in edges]
         values = [r.mtf50 if r.valid else math.nan for r in found]
-        tilt = found[0].angle_deg or 0.0  # the measured tilt from its axis; its sign the drawn one's (+)
-        normal_deg = (90.0 if normal == "y" else 0.0) + tilt
-        fields = along_fields(lens, field, pitch_um, tuple(scale), normal, ALONG_PX)
+        fields, normals = edge_rows(lens, field, wavelength, pitch_um, tuple(scale), normal, ALONG_PX)
         rows.append(
             {
                 "lens": lens.name,
                 "direction": ("tangential", "sagittal")[direction],
                 "texel_px": texel_px,
                 "expected": predicted(lens, field, wavelength, pitch_um, direction, texel_px)[1],
-                "averaged": predicted(lens, tuple(fields), wavelength, pitch_um, direction, texel_px)[1],
-                "geometric": geometric_along(lens, fields, wavelength, pitch_um, normal_deg, texel_px),
-                "tilt": tilt,
-                "fields": (fields.min(), fields.max()),
+                "normal": normal_mtf50(psf, pitch_um, direction, texel_px),
+                "rows": geometric_rows(lens, fields, normals, wavelength, pitch_um, texel_px),
+                "fields": (np.hypot(*fields.T).min(), np.hypot(*fields.T).max()),
+                "tilt": found[0].angle_deg or 0.0,  # the measured tilt from its axis
                 "esfr": float(np.mean(values)),
                 "spread": abs(values[0] - values[-1]),
                 "reason": "; ".join(r.reason for r in found if not r.valid),
+                "seconds": seconds + took,
             }
         )
-    for r in rows:
-        r["seconds"] = seconds / len(rows)
     return rows

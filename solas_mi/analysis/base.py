@@ -4,7 +4,9 @@ rows under named columns (units in the names) for CSV and JSON; `plot()`, a matp
 `write(png)`, the PNG with its JSON and CSV beside it, written together or not at all.
 
 A new analysis subclasses `Result` (a frozen, keyword-only dataclass adding its arrays), implements
-`table()` and `plot()`, and registers its function in `registry.ANALYSES`.
+`table()` and `plot()`, ends its function with `YourResult.of(lens, "its-name", inputs=..., conventions=...,
+warnings=..., its arrays...)` (the header every result shares, filled from the lens), and registers the
+function in `registry.ANALYSES`.
 """
 
 from __future__ import annotations
@@ -14,7 +16,7 @@ import io
 import math
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Self
 
 from .. import jsonio
 from ..errors import SolasError
@@ -96,6 +98,41 @@ class Result:
     inputs: dict  # the options it was computed with, as resolved (defaults filled in)
     conventions: tuple[str, ...]  # what the numbers mean: directions, units, references
     warnings: tuple[str, ...] = ()
+
+    @classmethod
+    def of(cls, lens, name: str, *, inputs: dict, conventions, warnings=(), **numbers) -> Self:
+        """The result of the analysis `name` of `lens`: the header every analysis shares (the lens's name and
+        hash, `inputs`, `conventions` and `warnings` as tuples) and the subclass's `numbers`.
+
+        Parameters
+        ----------
+        lens : Lens
+            The lens analysed.
+        name : str
+            The analysis, a name of `registry.ANALYSES`.
+        inputs : dict
+            The options it was computed with, as resolved (defaults filled in).
+        conventions : sequence of str
+            What the numbers mean.
+        warnings : sequence of str
+            What may make the numbers less than they seem.
+        **numbers
+            The subclass's own fields.
+
+        Returns
+        -------
+        Result
+            An instance of the subclass it is called on.
+        """
+        return cls(
+            name=name,
+            lens=lens.name,
+            lens_hash=lens.hash,
+            inputs=inputs,
+            conventions=tuple(conventions),
+            warnings=tuple(warnings),
+            **numbers,
+        )
 
     def table(self) -> Table:
         """The numbers as a table.

@@ -70,10 +70,9 @@ def lateral_colour(lens, field_samples: int = O.FIELD_SAMPLES, wavelengths_nm=No
     pairs = np.array([[0.0, f] for w in every for f in fields])
     heights = chief_rays(lens, pairs, np.repeat(every, len(fields))).image_xy[:, 1].reshape(len(every), len(fields))
     airy = 1.22 * primary * 1e-3 * paraxial(lens, primary).working_f_number  # µm
-    return AgainstField(
-        name="lateral-colour",
-        lens=lens.name,
-        lens_hash=lens.hash,
+    return AgainstField.of(
+        lens,
+        "lateral-colour",
         conventions=CONVENTIONS
         + (
             f"lateral colour: chief-ray image height minus that at the primary "
@@ -97,10 +96,9 @@ def relative_illumination(lens, field_samples: int = O.FIELD_SAMPLES, wavelength
     wl, _ = inputs.wavelengths(lens, wavelengths_nm)
     pairs = np.array([[0.0, f] for f in fields])
     values = np.array([illumination(lens, pairs, w) for w in wl])
-    return AgainstField(
-        name="relative-illumination",
-        lens=lens.name,
-        lens_hash=lens.hash,
+    return AgainstField.of(
+        lens,
+        "relative-illumination",
         conventions=CONVENTIONS
         + (
             "relative illumination: image irradiance of a uniform (Lambertian) "

@@ -100,10 +100,9 @@ def distortion(lens, field_samples: int = O.FIELD_SAMPLES, wavelength_nm=None) -
     fits = fit_projections(fields, h)
     name = closest_projection(fits)
     focal = fits[name][0]
-    return Distortion(
-        name="distortion",
-        lens=lens.name,
-        lens_hash=lens.hash,
+    return Distortion.of(
+        lens,
+        "distortion",
         conventions=CONVENTIONS,
         inputs={"fields_deg": tuple(fields.tolist()), "wavelength_nm": wl},
         fields_deg=tuple(fields.tolist()),

@@ -168,11 +168,10 @@ def encircled_energy(
         curves[i, :, 1] = _geometric(lens, f, wl, energy_reference, radii)
         warnings += w
     encircled, ensquared = curves[:, 0], curves[:, 1]
-    return Energy(
-        name="encircled-energy",
-        lens=lens.name,
-        lens_hash=lens.hash,
-        warnings=tuple(dict.fromkeys(warnings)),
+    return Energy.of(
+        lens,
+        "encircled-energy",
+        warnings=dict.fromkeys(warnings),
         conventions=(
             "fields on +y (degrees); radius (circles) or half width (squares, sides along x and y) "
             f"about the {energy_reference}, um",

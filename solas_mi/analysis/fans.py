@@ -82,10 +82,9 @@ def _fans(lens, name: str, fields_deg, wavelengths_nm, fan_samples: int) -> Fans
         y = np.where(ok, rays.y_mm.reshape(shape), np.nan) - chief[:, None, None, 1]
         x = np.where(ok, rays.x_mm.reshape(shape), np.nan) - chief[:, None, None, 0]
         tangential, sagittal = y[:, :-1, :n] * 1e3, x[:, :-1, n:] * 1e3
-    return Fans(
-        name=name,
-        lens=lens.name,
-        lens_hash=lens.hash,
+    return Fans.of(
+        lens,
+        name,
         conventions=CONVENTIONS,
         inputs={"fields_deg": fields, "wavelengths_nm": wl, "fan_samples": n, "primary_nm": primary},
         fields_deg=fields,

@@ -92,10 +92,9 @@ def field_curvature(lens, field_samples: int = O.FIELD_SAMPLES, wavelengths_nm=N
     sagittal = -(rays.x_mm[:, 2] - rays.x_mm[:, 3]) / (mx[:, 2] - mx[:, 3])
     shape = (len(fields), len(wl))
     p = paraxial(lens)
-    return FieldCurvature(
-        name="field-curvature",
-        lens=lens.name,
-        lens_hash=lens.hash,
+    return FieldCurvature.of(
+        lens,
+        "field-curvature",
         conventions=CONVENTIONS,
         inputs={"fields_deg": fields, "wavelengths_nm": wl},
         fields_deg=fields,

@@ -221,12 +221,11 @@ def mtf(
     diffraction, warnings = lens_otf(lens, fields, wl, w8, freq, samples)
     limit, _ = lens_otf(lens, fields[:1], wl, w8, freq, samples, aberrated=False)
     geometric = geometric_otf(lens, fields, wl, w8, freq, rays)
-    return MTF(
-        name="mtf",
-        lens=lens.name,
-        lens_hash=lens.hash,
+    return MTF.of(
+        lens,
+        "mtf",
         conventions=CONVENTIONS,
-        warnings=tuple(warnings),
+        warnings=warnings,
         inputs={
             "fields_deg": fields,
             "wavelengths_nm": wl,

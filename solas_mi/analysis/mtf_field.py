@@ -18,12 +18,20 @@ MTF50_SAMPLES = 401  # frequencies from 0 to the cut-off where MTF50 is looked f
 
 
 def _common(lens, field_samples, wavelengths_nm, weights, pupil_samples, pixel_pitch_um, fill_factor):
-    """The checked inputs every MTF-against-field analysis shares."""
+    """The checked inputs every MTF-against-field analysis shares, and their record (`Result.inputs`)."""
     fields = inputs.field_range(lens, field_samples)
     wl, w8 = inputs.wavelengths(lens, wavelengths_nm, weights)
     samples = inputs.pupil_samples(pupil_samples)
     pitch, fill = inputs.pixel(pixel_pitch_um, fill_factor)
-    return fields, wl, w8, samples, pitch, fill
+    record = {
+        "fields_deg": fields,
+        "wavelengths_nm": wl,
+        "weights": w8,
+        "pupil_samples": samples,
+        "pixel_pitch_um": pitch,
+        "fill_factor": fill,
+    }
+    return fields, wl, w8, samples, pitch, fill, record
 
 
 @dataclass(frozen=True, kw_only=True)
@@ -75,28 +83,19 @@ def mtf_field(
 ) -> MTFField:
     """Diffraction MTF at `frequencies_cy_mm` against field (`field_samples` from 0 to the half field),
     tangential and sagittal."""
-    fields, wl, w8, samples, pitch, fill = _common(
+    fields, wl, w8, samples, pitch, fill, record = _common(
         lens, field_samples, wavelengths_nm, weights, pupil_samples, pixel_pitch_um, fill_factor
     )
     freq = inputs.frequencies(lens, frequencies_cy_mm, wl)
     otf, warnings = lens_otf(lens, fields, wl, w8, np.array(freq), samples)
     pixel = None if pitch is None else pixel_mtf(np.array(freq), pitch, fill)
     values = np.abs(otf) * (1.0 if pixel is None else pixel)
-    return MTFField(
-        name="mtf-field",
-        lens=lens.name,
-        lens_hash=lens.hash,
+    return MTFField.of(
+        lens,
+        "mtf-field",
         conventions=CONVENTIONS,
-        warnings=tuple(warnings),
-        inputs={
-            "frequencies_cy_mm": freq,
-            "fields_deg": fields,
-            "wavelengths_nm": wl,
-            "weights": w8,
-            "pupil_samples": samples,
-            "pixel_pitch_um": pitch,
-            "fill_factor": fill,
-        },
+        warnings=warnings,
+        inputs={"frequencies_cy_mm": freq, **record},
         fields_deg=fields,
         frequencies_cy_mm=freq,
         mtf=values,
@@ -148,27 +147,19 @@ def mtf50_field(
 ) -> MTF50Field:
     """MTF50 (cycles/mm; with `pixel_pitch_um` also cycles/pixel) of the diffraction MTF against field,
     tangential and sagittal."""
-    fields, wl, w8, samples, pitch, fill = _common(
+    fields, wl, w8, samples, pitch, fill, record = _common(
         lens, field_samples, wavelengths_nm, weights, pupil_samples, pixel_pitch_um, fill_factor
     )
     freq = np.linspace(0.0, inputs.cutoff_cy_mm(lens, min(wl)), MTF50_SAMPLES)
     otf, warnings = lens_otf(lens, fields, wl, w8, freq, samples)
     values = np.abs(otf) * (1.0 if pitch is None else pixel_mtf(freq, pitch, fill))
     found = np.array([[mtf50(values[i, j], freq) for j in range(2)] for i in range(len(fields))], dtype=float)
-    return MTF50Field(
-        name="mtf50-field",
-        lens=lens.name,
-        lens_hash=lens.hash,
+    return MTF50Field.of(
+        lens,
+        "mtf50-field",
         conventions=CONVENTIONS,
-        warnings=tuple(warnings),
-        inputs={
-            "fields_deg": fields,
-            "wavelengths_nm": wl,
-            "weights": w8,
-            "pupil_samples": samples,
-            "pixel_pitch_um": pitch,
-            "fill_factor": fill,
-        },
+        warnings=warnings,
+        inputs=record,
         fields_deg=fields,
         mtf50_cy_mm=found,
         pixel_pitch_um=pitch,

@@ -93,10 +93,9 @@ def spot_diagram(lens, fields_deg=None, wavelengths_nm=None, rings: int = O.SPOT
             per_field.append(np.stack([s.x_um + (sx - ox) * 1e3, s.y_um + (sy - oy) * 1e3]))
         points.append(tuple(per_field))
     airy = 1.22 * primary * 1e-3 * paraxial(lens, primary).working_f_number
-    return Spots(
-        name="spot-diagram",
-        lens=lens.name,
-        lens_hash=lens.hash,
+    return Spots.of(
+        lens,
+        "spot-diagram",
         conventions=(
             "fields on +y (degrees); image-plane offsets from the primary wavelength's chief ray, um (+y up)",
             f"Airy radius 1.22 lambda N at the primary wavelength {primary:g} nm, N the working f-number",

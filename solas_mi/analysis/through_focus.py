@@ -116,12 +116,11 @@ def through_focus(
         values[k], warnings = np.abs(otf[:, :, 0]), warnings or w
     if pitch is not None:
         values *= pixel_mtf(np.array([freq]), pitch, fill)[0]
-    return ThroughFocus(
-        name="through-focus",
-        lens=lens.name,
-        lens_hash=lens.hash,
+    return ThroughFocus.of(
+        lens,
+        "through-focus",
         conventions=CONVENTIONS + ("focus shift: the image plane's move along the axis, + away from the lens, um",),
-        warnings=tuple(warnings),
+        warnings=warnings,
         inputs={
             "frequency_cy_mm": float(freq),
             "fields_deg": fields,

@@ -118,12 +118,11 @@ def wavefront(
         f"Zernike terms: {zernike} ({O.ZERNIKE_KINDS[zernike]}), theta from +x toward +y, least-squares "
         "fit over the rays that arrive",
     )
-    return Wavefront(
-        name="wavefront",
-        lens=lens.name,
-        lens_hash=lens.hash,
+    return Wavefront.of(
+        lens,
+        "wavefront",
         conventions=conventions,
-        warnings=tuple(warnings),
+        warnings=warnings,
         inputs={
             "fields_deg": fields,
             "wavelength_nm": wl,
