@@ -417,3 +417,13 @@ def test_the_chief_ray_of_a_decentred_ideal_lens_lands_at_the_decentre_plus_f_ta
     assert chief.found.all() and np.abs(chief.image_xy - expected).max() < 1e-12
     with pytest.raises(SolasError, match="aimed for an object at infinity only"):
         local_aim.chief_rays(_lens(*ASPHERE_ROWS, object={"distance": 500.0}), fields, 550.0)
+
+
+@pytest.mark.parametrize("key, kind", [("radius_x", "biconic"), ("conic_x", "biconic"), ("terms_y", "toroid")])
+def test_a_kind_s_key_without_kind_is_refused_not_dropped(key, kind):
+    """A surface's radius_x, conic_x, terms_y or radius_rotation without `kind` was read as a sphere, the key
+    dropped unread; it is refused, naming the key and the kind that takes it."""
+    row = {key: value for key, value in AS_BUILT[0].items() if key not in ("kind", "terms_y", "radius_rotation")}
+    value = [1e-5] if key in shapes.KINDS[kind].extra["lists"] else 30.0
+    with pytest.raises(SolasError, match=f"{key} without kind: .* needs kind = '{kind}'"):
+        _lens({**row, key: value}, *AS_BUILT[1:])
