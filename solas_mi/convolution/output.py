@@ -97,6 +97,8 @@ def degrade_file(image_path: str | Path, grid: PSFGrid | DepthGrid, grid_path: s
                          "--distances-m)" if depth is not None else "a grid over object distance needs the image's "
                          "depth map (--depth)"))
     rows, cols, channels = image_size(image_path)
+    if not rows:  # its header unreadable (a missing or broken file): the reader says why, before any estimate
+        rows, cols, channels = np.atleast_3d(read_image(image_path, linearize=False)).shape
     layers = grid.layers if depth is not None else [grid]
     files = dict(labels or {})
     targets = label_outputs(output, files, flare=spec.ghosts)

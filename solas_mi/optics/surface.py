@@ -279,6 +279,12 @@ def _iris(row: dict, ident: str, stop: bool) -> tuple[int, float, float]:
 def shape_form(row: dict, ident: str) -> shapes.Shape | None:
     """The shape a row names by `kind` (`shapes.NAMED`), of its kind's entries, checked; None without `kind`."""
     if "kind" not in row:
+        symmetric = {key for _, entry in shapes.KINDS.items() if entry.extra["symmetric"] for key in entry.extra["keys"]}
+        named = [key for key in shapes.KEYS if key in row and key not in symmetric]  # else dropped unread
+        if named:
+            kinds = [kind for kind in shapes.NAMED if named[0] in shapes.KINDS[kind].extra["keys"]]
+            raise SolasError(f"{ident}: {', '.join(named)} without kind: a surface with {named[0]} needs kind = "
+                             f"{' or '.join(repr(k) for k in kinds)} (a rotationally symmetric surface takes none)")
         return None
     kind = row["kind"]
     if kind not in shapes.NAMED:

@@ -38,10 +38,12 @@ def with_typical_ar(lens: Lens) -> Lens:
     (6, True)
     """
     coating = coating_from_table(TYPICAL_AR, "the typical AR coating")
+    bare = [k for k in air_glass(lens) if lens.surfaces[k].coating is None]
+    if not bare:  # every air-glass surface states its own: nothing added, the name stays
+        return lens
     surfaces = list(lens.surfaces)
-    for k in air_glass(lens):
-        if surfaces[k].coating is None:
-            surfaces[k] = replace(surfaces[k], coating=coating)
+    for k in bare:
+        surfaces[k] = replace(surfaces[k], coating=coating)
     return replace(lens, name=f"{lens.name} (typical AR)", surfaces=tuple(surfaces))
 
 

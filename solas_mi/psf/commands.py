@@ -109,8 +109,7 @@ def run_ghost_grid(args) -> int:
     json_path = check_target(args.json or exr.with_suffix(".json"))
     lens = load_lens(args)
     wavelengths = floats(args.wavelengths_nm, "--wavelengths-nm") if args.wavelengths_nm else None
-    field = floats(args.field_deg, "--field-deg")[0] if args.field_deg else None
-    chosen = (args.radii, field, wavelengths, args.rays, args.kernel, args.azimuths)
+    chosen = (args.radii, args.field_deg, wavelengths, args.rays, args.kernel, args.azimuths)
     options = grid_options(lens, *chosen)  # checked before the work
     nodes = options["radii"] * options["azimuths"]
     kernels = len(options["wavelengths_nm"]) * nodes * len(ghost_paths.paths(lens))
@@ -189,7 +188,9 @@ def _register_ghost_grid(sub: Any) -> None:
     )
     add_lens_argument(p)
     p.add_argument("--radii", type=int, default=DEFAULT_RADII, help="nodes along the field's radius, from the axis")
-    p.add_argument("--field-deg", help="the largest polar field angle (degrees; default the lens's field_deg)")
+    p.add_argument(
+        "--field-deg", type=float, help="the largest polar field angle (degrees; default the lens's field_deg)"
+    )
     p.add_argument("--wavelengths-nm", help="wavelengths, a channel each (default: the lens's)")
     p.add_argument("--rays", type=int, default=DEFAULT_GHOST_RAYS, help="rays per side of each node's launch grid")
     p.add_argument("--kernel", type=int, default=DEFAULT_KERNEL, help="pixels per side of each ghost's kernel (odd)")

@@ -118,7 +118,8 @@ def _diffraction_core(lens: Lens, field, wavelengths: list, pitch_um: float, siz
     from .methods import psf
 
     fine_pitch = 0.5 * min(wavelengths) * 1e-3 * working_f_number(lens)
-    for inner in [min(size, n) | 1 for n in DIRECT_SIZES]:  # odd: its centre pixel is the big grid's
+    odd_size = size - 1 + size % 2  # the widest odd window inside the grid (its centre pixel is the grid's)
+    for inner in [min(odd_size, n) for n in DIRECT_SIZES]:
         fine = max(1, min(math.ceil(pitch_um / fine_pitch), MAX_FINE // inner)) | 1
         direct = psf(
             lens,

@@ -187,8 +187,10 @@ def field_half_angle(mi, sensor, width: int, height: int) -> tuple[float, str]:
 
 def default_pitch_um(lens, half_deg: float, axis: str, width: int, height: int) -> float:
     """Pixel pitch (µm) whose film edge along `axis` meets the real chief ray of `half_deg`."""
+    from ..optics.lens_checks import refuse_as_built
     from ..optics.pupil import chief_rays
 
+    refuse_as_built(lens, "the lens camera")  # the lens, not the field: narrowing the fov would not help
     if not 0.0 < half_deg < MAX_HALF_FIELD_DEG:
         raise SolasError(
             f"the scene's camera half field {half_deg:g} deg must lie in (0, {MAX_HALF_FIELD_DEG:g}) degrees"

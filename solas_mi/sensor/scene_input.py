@@ -142,13 +142,17 @@ def check_scene_options(args: argparse.Namespace) -> None:
                 ("--spp", args.spp),
                 ("--set", args.set),
             )
-            if v
+            if v is not None  # given, even as 0 or empty: refused, not dropped
         ]
     )
-    if wrong:
-        needs = "an EXR image: a scene's emitters (--pwm-emitter) and camera (--camera-motion)" if scene else "a scene"
+    if wrong and scene:
         raise SolasError(
-            f"{' and '.join(wrong)} go(es) with {needs} input ({', '.join(SCENE_SUFFIXES)}); {args.image} is not one"
+            f"{' and '.join(wrong)} go(es) with an image input (EXR), and {args.image} is a scene: its emitters take "
+            "--pwm-emitter and its camera --camera-motion"
+        )
+    if wrong:
+        raise SolasError(
+            f"{' and '.join(wrong)} go(es) with a scene input ({', '.join(SCENE_SUFFIXES)}); {args.image} is not one"
         )
 
 

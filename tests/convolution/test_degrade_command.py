@@ -90,3 +90,19 @@ def test_command_line_errors_leave_nothing(tmp_path, synthetic):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["in.exr", "old.exr"]
     with pytest.raises(SystemExit):
         parser().parse_args(["degrade", str(write), "--psf-grid", "g.exr", "-o", "o.exr", "--method", "fft"])
+
+
+def test_a_missing_or_broken_image_is_named_not_called_0x0(tmp_path, synthetic):
+    """An input whose header cannot be read (missing, a folder, not an image) was refused as "image size 0x0"
+    by the frame fit's estimate; the reader's own message names the file and why, and nothing is written."""
+    synthetic.small_grid().write(str(tmp_path / "grid.exr"))
+    (tmp_path / "broken.exr").write_text("not an image")
+    (tmp_path / "folder.exr").mkdir()
+    for name, message in (("missing.exr", "does not exist"), ("broken.exr", "cannot read"), ("folder.exr", "folder")):
+        args = parser().parse_args(
+            ["degrade", str(tmp_path / name), "--psf-grid", str(tmp_path / "grid.exr"), "-o", str(tmp_path / "o.exr")]
+        )
+        with pytest.raises(SolasError, match=message) as refused:
+            args.run(args)
+        assert name in str(refused.value) and "0x0" not in str(refused.value)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["broken.exr", "folder.exr", "grid.exr"]

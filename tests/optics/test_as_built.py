@@ -443,3 +443,13 @@ def test_a_toroid_s_normalisation_radius_without_terms_is_read_as_nothing(tmp_pa
     plain = _load(tmp_path, _zmx(SINGLET))
     extra = SINGLET.replace("  TYPE TOROIDAL\n", "  TYPE TOROIDAL\n  XDAT 1 0\n  XDAT 2 100\n", 1)
     assert extra != SINGLET and _load(tmp_path, _zmx(extra)).surfaces == plain.surfaces
+
+
+@pytest.mark.parametrize("key, kind", [("radius_x", "biconic"), ("conic_x", "biconic"), ("terms_y", "toroid")])
+def test_a_kind_s_key_without_kind_is_refused_not_dropped(key, kind):
+    """A surface's radius_x, conic_x, terms_y or radius_rotation without `kind` was read as a sphere, the key
+    dropped unread; it is refused, naming the key and the kind that takes it."""
+    row = {key: value for key, value in AS_BUILT[0].items() if key not in ("kind", "terms_y", "radius_rotation")}
+    value = [1e-5] if key in shapes.KINDS[kind].extra["lists"] else 30.0
+    with pytest.raises(SolasError, match=f"{key} without kind: .* needs kind = '{kind}'"):
+        _lens({**row, key: value}, *AS_BUILT[1:])

@@ -73,3 +73,15 @@ def test_lens_convert_states_the_typical_ar(tmp_path, capsys):
     coated, expected = Lens.load(out), typical_ar.with_typical_ar(Lens.load("cooke-triplet"))
     assert coated.surfaces == expected.surfaces and coated.hash == expected.hash
     assert f"hash {coated.hash}" in capsys.readouterr().out
+
+
+def test_a_lens_coated_already_is_given_back_unchanged(tmp_path, capsys):
+    """--typical-ar on a lens whose every air-glass surface states a coating adds none: the lens comes back as it
+    is (converting a converted file once wrote "NAME (typical AR) (typical AR)", naming a second coating that was
+    never added)."""
+    once = typical_ar.with_typical_ar(Lens.load("solas-doublet"))
+    assert typical_ar.with_typical_ar(once) is once
+    first, second = tmp_path / "once.toml", tmp_path / "twice.toml"
+    assert main(["lens", "convert", "solas-doublet", "--typical-ar", "-o", str(first)]) == 0
+    assert main(["lens", "convert", str(first), "--typical-ar", "-o", str(second)]) == 0
+    assert Lens.load(second).name == Lens.load(first).name == once.name

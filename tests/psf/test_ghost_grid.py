@@ -189,3 +189,15 @@ def test_a_ghosts_image_keeps_its_light_and_its_centroid(grid, ratio):
             + 1e-3 * pitch_um * np.array([(image * cols).sum(), -(image * rows).sum()]) / image.sum()
         )
         assert np.hypot(*(got - centre)) < 0.5e-3 * pitch_um
+
+
+def test_the_command_refuses_a_field_list_it_would_cut_to_its_first_value(tmp_path, capsys):
+    """--field-deg of ghost-grid is one polar angle: "1,2" once ran on 1 deg (the 2 dropped silently); it is
+    refused, naming the value, before any work (exit 2, nothing written)."""
+    from solas_mi.cli import main
+
+    out = tmp_path / "g.exr"
+    with pytest.raises(SystemExit) as refused:
+        main(["ghost-grid", "solas-doublet", "--field-deg", "1,2", "--radii", "2", "-o", str(out)])
+    assert refused.value.code == 2
+    assert "'1,2'" in capsys.readouterr().err and not out.exists()

@@ -205,3 +205,19 @@ def test_the_direct_image_has_its_diffraction_wings_beyond_its_core():
     for ring in (15, 16, 17, 18, 24, 30, 38):
         near = np.abs(r - ring) < 0.5
         assert data[near].mean() == pytest.approx(reference[near].mean(), rel=0.1 if ring < 20 else 0.4), ring
+
+
+@pytest.mark.parametrize("size", [2, 16, 32])
+def test_an_even_window_narrower_than_the_core_holds_the_core_centred(size):
+    """An even --size below the widest core (33 px) once made a 33 px core for a 32 px window (a broadcast
+    error); the core is now the widest odd window inside the grid, its centre pixel the grid's (size // 2):
+    the PSF is finite, carries at most the direct image's light, and is centred within a pixel."""
+    from solas_mi.psf import stray_psf
+
+    lens = Lens.load("solas-doublet")
+    report = ghosts.ghosts(lens, (0.0, 0.0), rays=16)
+    report.hits = {}  # the direct image alone
+    data, _, _ = stray_psf.stray_psf(lens, report, 10.0, size)
+    assert data.shape == (size, size) and np.isfinite(data).all() and 0 < data.sum() <= 1.0 + 1e-9
+    centroid = [float((np.indices(data.shape)[k] * data).sum() / data.sum()) for k in (0, 1)]
+    assert centroid == pytest.approx([size // 2, size // 2], abs=1.0)

@@ -335,3 +335,20 @@ def test_render_metadata_of_a_lens_focused_at_infinity_is_strict_json(included, 
     )
     assert exr_meta(out)["focus_distance"] == "inf"
     assert float(read_exr(out)[1]["focus_distance"]) == math.inf
+
+
+def test_a_lens_as_built_is_refused_for_itself_not_for_the_scene_s_field(tmp_path):
+    """A lens with a toroid (or a coordinate break) cannot be rendered at any field; the film's default pitch once
+    reported it as "cannot image that field ... narrow the camera's fov", advice that cannot help. The refusal
+    names the surface and says nothing of the field."""
+    from dataclasses import replace
+
+    from solas_mi.optics.shapes import KINDS
+    from solas_mi.render.user_scene import default_pitch_um
+
+    lens = Lens.load("cooke-triplet")
+    toroid = KINDS["toroid"].function(radius=lens.surfaces[0].radius, conic=0.0, terms_y=(), radius_rotation=0.0)
+    as_built = replace(lens, surfaces=(replace(lens.surfaces[0], form=toroid), *lens.surfaces[1:]))
+    with pytest.raises(SolasError, match=r"surface 1 \(surface 1\) is a toroid") as refused:
+        default_pitch_um(as_built, 5.0, "x", 32, 24)
+    assert "fov" not in str(refused.value) and "field" not in str(refused.value)

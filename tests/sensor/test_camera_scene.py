@@ -158,12 +158,24 @@ def test_the_help_names_the_forms_and_units():
         ("wall.xml", ["--pwm-emitter", "nowhere,100,0.1"], "nowhere"),
         ("wall.xml", ["--camera-motion", "1,2"], "--camera-motion"),
         ("wall.xml", ["--camera-motion", "0,0,0,0,1e9,0"], "turns"),
-        ("wall.xml", ["--flicker", "0,0,4,4,90,0.1"], "--flicker"),
+        ("wall.xml", ["--flicker", "0,0,4,4,90,0.1"], "is a scene: its emitters take --pwm-emitter"),
         ("wall.xml", ["--spp", "0"], "samples per pixel"),
         ("in.exr", ["--pwm-emitter", "led,100,0.1"], "--pwm-emitter"),
+        ("in.exr", ["--spp", "0"], "--spp go(es) with a scene input"),  # 0 was dropped silently (falsy)
         ("blinding.xml", [], "NaN or infinite"),
     ],
-    ids=["form", "duty", "unknown emitter", "motion form", "turn", "flicker", "spp", "image input", "infinite light"],
+    ids=[
+        "form",
+        "duty",
+        "unknown emitter",
+        "motion form",
+        "turn",
+        "flicker",
+        "spp",
+        "image input",
+        "spp 0 of an image",
+        "infinite light",
+    ],
 )
 def test_bad_values_are_one_line_and_write_nothing(files, capsys, scene, extra, word):
     (files / "in.exr").write_bytes(b"")  # refused for its option before it is read
