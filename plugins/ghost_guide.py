@@ -33,7 +33,7 @@ from solas_mi.optics import ghost_trace, tracer
 from solas_mi.optics.lens import Lens
 
 GUIDE_RAYS = 192  # rays per side of each emitter's beam, per ghost path
-TILE_PX = 4  # film pixels per side of a tile with its own pupil histogram
+TILE_PX = 2  # film pixels per side of a tile with its own pupil histogram
 CELLS = 64  # cells per side of the pupil square
 UNIFORM_SHARE = 0.2  # the uniform square's share of the mixture where a tile has a histogram
 SPREAD = 1  # each crossing counts in the cells this many on each side of its own too

@@ -17,10 +17,13 @@ its own wavelength): lanes on different paths would rarely leave the lens alike,
 would drop them. The path is drawn from the pupil sample's first coordinate, which is then stretched back
 over [0, 1) within the path's interval (one uniform number does both, independently).
 
-A ghost ray's pupil point is drawn uniformly on a square of the exit-pupil plane that holds the whole
-clear aperture of the last surface (`exit_pupil.exit_reach`), not in the direct path's pupil bound: a
-ghost's rays may enter the lens where the direct path's are stopped. Its weight is that of
-`PupilSampler.sample`: A·cos⁴θ/d².
+A ghost ray's pupil point is drawn on a square of the exit-pupil plane that holds the whole clear aperture
+of the last surface (`exit_pupil.exit_reach`), not in the direct path's pupil bound: a ghost's rays may
+enter the lens where the direct path's are stopped. Uniformly on it (path by `PathChoice`) where the scene
+has no area emitter in front of the lens; else (`aim`, once per scene and camera placement) path and point
+together from the film tile's histogram of the emitters' light traced forward (`ghost_guide`), mixed with
+the uniform choice. Its weight is cos⁴θ/d² over the density of its path and point (on the square, uniform:
+A·cos⁴θ/d²/p, as `PupilSampler.sample`).
 """
 
 from __future__ import annotations

@@ -54,11 +54,11 @@ the lanes that leave the lens within `lane_tolerance` of it (`lanes_together`), 
 lanes alike it), so every lane's estimate is unbiased.
 
 With `ghosts`, each sample first draws its path, the direct one or a ghost (`ghost_sampling`: by the
-ghost table's energies), and all its lanes follow it (`solas_mi.optics.ghost_trace`: the reversed lens's
+ghost table's energies, or toward the scene's area emitters, `ghost_guide`), and all its lanes follow it (`solas_mi.optics.ghost_trace`: the reversed lens's
 surfaces met from either side, reflected or crossed; every event weighs the ray by its coating's or
 Fresnel's reflectance or transmittance); the weight is divided by the path's probability. A ghost's pupil
 point is drawn on a square that holds the last surface's whole clear aperture (its rays may enter where
-the direct path's are stopped).
+the direct path's are stopped), toward the scene's area emitters where it has any.
 
 The weight of `sample_ray` is the pupil weight × 1/p(λ) × the Fresnel transmittance, scaled so that the
 pixel value is the image irradiance in units of a lossless lens's on-axis irradiance from radiance 1: a
