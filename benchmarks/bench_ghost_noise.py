@@ -44,7 +44,11 @@ def disc_at(x: float, y: float, z: float, radius: float) -> dict:
     import mitsuba as mi
 
     to_world = mi.ScalarTransform4f().translate([x, y, z]).scale(radius).rotate([1, 0, 0], 180.0)
-    return {"type": "disk", "to_world": to_world, "emitter": {"type": "area", "radiance": {"type": "rgb", "value": 1.0}}}
+    return {
+        "type": "disk",
+        "to_world": to_world,
+        "emitter": {"type": "area", "radiance": {"type": "rgb", "value": 1.0}},
+    }
 
 
 SCENES = {
@@ -100,7 +104,9 @@ def main() -> None:
     centre[size[1] // 4 : 3 * size[1] // 4, size[0] // 4 : 3 * size[0] // 4] = True
     patch = noise(render(mi, sky, args.spp, 0)[0], render(mi, sky, args.spp, 1)[0], centre)
     print(f"direct image of a uniform sky, {args.spp} spp: relative noise {patch:.4f}")
-    print("| scene | guided noise | uniform noise | guided / sky patch | direct s | stray s (guide built) | stray s | with / without |")
+    print(
+        "| scene | guided noise | uniform noise | guided / sky patch | direct s | stray s (guide built) | stray s | with / without |"
+    )
     print("|---|---|---|---|---|---|---|---|")
     for name, shapes in SCENES.items():
         direct = scene(mi, shapes(), "off", size, args.spp)
