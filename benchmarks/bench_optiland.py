@@ -69,6 +69,8 @@ def request(lens) -> dict:
                 "index_after": float(n[i + 1]),
                 "semi_diameter": s.semi_diameter,
                 "stop": s.stop,
+                "conic": s.conic,
+                "aspheric": list(s.aspheric),  # A4, A6, ...: a drawn lens's irregularity (`optics.tolerance`); no Qbfs
             }
             for i, s in enumerate(lens.surfaces)
         ],

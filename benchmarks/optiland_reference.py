@@ -34,6 +34,12 @@ def build(spec: dict):
     optic = Optic()
     optic.surfaces.add(index=0, radius=np.inf, thickness=np.inf)
     for i, s in enumerate(spec["surfaces"], start=1):
+        # an even asphere (optiland's coefficients multiply r², r⁴, ...; ours A4, A6, ...), its Newton to 1e-12 mm
+        shape = (
+            {"surface_type": "even_asphere", "conic": s["conic"], "coefficients": [0.0, *s["aspheric"]], "tol": 1e-12}
+            if any(s.get("aspheric", ())) or s.get("conic")
+            else {}
+        )
         optic.surfaces.add(
             index=i,
             radius=s["radius"] or np.inf,
@@ -41,6 +47,7 @@ def build(spec: dict):
             material=IdealMaterial(s["index_after"]),
             is_stop=s["stop"],
             aperture=RadialAperture(r_max=s["semi_diameter"] * (1 + RIM_SLACK)),
+            **shape,
         )
     optic.surfaces.add(index=len(spec["surfaces"]) + 1)
     optic.set_aperture(aperture_type="EPD", value=spec["epd_mm"])

@@ -92,10 +92,10 @@ class SellmeierDielectric(mi.BSDF):
         if self.fresnel == "off":
             r_w, t_w = dr.select(tir, 1.0, 0.0), dr.select(tir, 0.0, 1.0)
         else:
-            r_w, t_w = r_i, 1.0 - r_i
+            r_w, t_w = self.split(r_i, tir, cos_theta_i, lam)
         if has_r and has_t:
-            reflect = (sample1 <= r_i) if self.fresnel == "sample" else tir
-            scale = dr.select(reflect, 1.0, 1.0 if self.fresnel == "sample" else t_w)
+            reflect = (sample1 <= r_w) if self.fresnel == "sample" else tir
+            scale = dr.select(reflect, 1.0, self.sampled_transmission(r_w, t_w) if self.fresnel == "sample" else t_w)
         else:
             reflect = mi.Bool(has_r)
             scale = r_w if has_r else t_w
@@ -112,6 +112,17 @@ class SellmeierDielectric(mi.BSDF):
             scale = scale * dr.select(reflect, 1.0, dr.square(eta_ti))
         active = active & (has_r or has_t)
         return bs, dr.select(active, self._lane_weights(scale, lane, mixed), 0.0)
+
+    def split(self, r_i, tir, cos_theta_i, lam):
+        """(R, T) of the interface for light meeting it at cos θ = `cos_theta_i` (> 0 from the exterior) at
+        wavelength `lam` (nm; None in the mono variants), given Fresnel's unpolarised `r_i` and where it
+        totally reflects (`tir`): here the bare interface's R = r_i, T = 1 − R (`coated_dielectric`: the coating's)."""
+        return r_i, 1.0 - r_i
+
+    def sampled_transmission(self, r, t):
+        """The weight of a refraction chosen with probability 1 − R (`fresnel` "sample"): T/(1 − R), which
+        is 1 for the bare interface, whose R + T = 1."""
+        return 1.0
 
     def _lane(self, wavelengths, sample1):
         """(wavelength the interface follows, its lane, sample1 left for the Fresnel choice, whether

@@ -26,6 +26,11 @@ from .registry import Registry
 
 VALID = "labels.valid"  # the layer written beside every label: 1 where the label holds
 ID_LIMIT = 1 << 24  # ids below 2^24 are exact in a float32 channel
+# the flare label a frame with stray light carries (render --ghosts, degrade --ghosts): the stray light's irradiance
+# per pixel (the channels' mean, the image's units) and its ratio to the direct image's (the same mean), 0 where no
+# stray light arrives, MAX_RATIO where it meets a pixel the direct image leaves dark; never NaN (`flare_layers`)
+FLARE_LAYERS = ("flare.irradiance", "flare.ratio")
+MAX_RATIO = 1e6
 # how a kind follows a warp of its frame, by name (`convolution.labels` applies each)
 RULES = {
     "pick": "the value of one of the four pixels around the source point, never blended (no value appears that was "
@@ -287,3 +292,15 @@ def parse_label_files(text, what: str, pattern: bool = False) -> tuple[tuple[str
             raise SolasError(f"{what}: {kind} file {name!r} must be {shape}ending in {' or '.join(files)}")
         out[kind] = name
     return tuple(out.items())
+
+
+def flare_layers(direct, stray) -> dict[str, Any]:
+    """The `FLARE_LAYERS` of a direct and a stray-light image (H×W×C): the stray light's channel mean and its ratio
+    to the direct image's (0 where no stray light arrives, `MAX_RATIO` where the direct image is dark), float32."""
+    import numpy as np
+
+    flare = np.asarray(stray, dtype=np.float64).mean(axis=-1)
+    base = np.asarray(direct, dtype=np.float64).mean(axis=-1)
+    lit = flare > 0
+    ratio = np.where(lit & (base > 0), flare / np.where(base > 0, base, 1.0), np.where(lit, MAX_RATIO, 0.0))
+    return {FLARE_LAYERS[0]: flare.astype(np.float32), FLARE_LAYERS[1]: np.minimum(ratio, MAX_RATIO).astype(np.float32)}

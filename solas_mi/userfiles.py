@@ -27,6 +27,7 @@ MIB = 1 << 20
 # which the commands estimate from their headers (`budget`).
 LIMITS = {
     "lens file": 1 * MIB,
+    "tolerance file": 1 * MIB,  # a lens's tolerances (`optics.tolerance`)
     "calibration file": 1 * MIB,  # a camera calibration (OpenCV, OCamCalib, WoodScape, Kalibr)
     "sensor model": 1 * MIB,
     "isp file": 1 * MIB,

@@ -54,7 +54,7 @@ def run_report(args) -> int:
 
 
 def register(sub: Any) -> None:
-    """Add `lens <analysis>` for each registered analysis, `lens report` and `thermal`."""
+    """Add `lens <analysis>` for each registered analysis, `lens report`, `thermal` and `tolerance`."""
     group = _lens_group(sub)
     for name, analysis in ANALYSES.items():
         p = group.add_parser(
@@ -87,3 +87,6 @@ def register(sub: Any) -> None:
     from .thermal_report import register as register_thermal
 
     register_thermal(sub)
+    from .tolerance_report import register as register_tolerance
+
+    register_tolerance(sub)

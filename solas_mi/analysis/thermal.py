@@ -48,10 +48,7 @@ def best_focus_mm(lens) -> float:
     """The shift (mm, + away from the lens) of the image plane to the least polychromatic RMS spot on axis."""
     from ..optics.spot import spot  # loads Dr.Jit
 
-    probe = replace(
-        lens,
-        surfaces=lens.surfaces[:-1] + (replace(lens.surfaces[-1], thickness=lens.surfaces[-1].thickness + PROBE_MM),),
-    )
+    probe = refocused(lens, PROBE_MM)
     num = den = 0.0
     for w in lens.wavelengths_nm:
         near, far = spot(lens, (0.0, 0.0), w, density=SPOT_RINGS), spot(probe, (0.0, 0.0), w, density=SPOT_RINGS)
@@ -59,6 +56,12 @@ def best_focus_mm(lens) -> float:
         num += float(np.sum(near.x_um * tx + near.y_um * ty))
         den += float(np.sum(tx * tx + ty * ty))
     return -num / den
+
+
+def refocused(lens, shift_mm: float):
+    """`lens` with its image plane moved `shift_mm` (+ away from the lens)."""
+    last = lens.surfaces[-1]
+    return replace(lens, surfaces=lens.surfaces[:-1] + (replace(last, thickness=last.thickness + shift_mm),))
 
 
 def _mtf50s(lens, pupil_samples: int | None) -> tuple[dict, list[str]]:
@@ -84,8 +87,6 @@ def at_temperature(lens, temperature_c: float, pressure_kpa: float, mount, pupil
     there = lens.at(temperature_c, pressure_kpa, mount)
     first = paraxial(there, there.primary_wavelength)
     shift = best_focus_mm(there)
-    last = there.surfaces[-1]
-    refocused = replace(there, surfaces=there.surfaces[:-1] + (replace(last, thickness=last.thickness + shift),))
     row = {
         "temperature_c": temperature_c,
         "efl_mm": first.efl_mm,
@@ -95,7 +96,7 @@ def at_temperature(lens, temperature_c: float, pressure_kpa: float, mount, pupil
         "mtf50_cy_mm": {},
         "warnings": [],
     }
-    for state, one in zip(FOCUS, (there, refocused)):
+    for state, one in zip(FOCUS, (there, refocused(there, shift))):
         row["mtf50_cy_mm"][state], warnings = _mtf50s(one, pupil_samples)
         row["warnings"] += [w for w in warnings if w not in row["warnings"]]
     return row
@@ -113,4 +114,4 @@ def sweep(
     return rows
 
 
-__all__ = ["at_temperature", "best_focus_mm", "sweep", "temperatures"]
+__all__ = ["at_temperature", "best_focus_mm", "refocused", "sweep", "temperatures"]

@@ -10,6 +10,7 @@ from pathlib import Path
 from .. import jsonio
 from ..outputs import output_folder, written_together
 from . import inputs, thermal
+from .options import OPTIONS
 
 _FIELDS = {0.0: "axis", 0.7: "0.7 field", 1.0: "edge"}
 
@@ -124,7 +125,7 @@ def run_thermal(args) -> int:
     lens = load_lens(args)
     temps = thermal.temperatures(args.start_c, args.stop_c, args.step_c)
     pressure = lens.pressure_kpa if args.pressure_kpa is None else args.pressure_kpa
-    samples = inputs.pupil_samples(args.pupil_samples)
+    samples = inputs.pupil_samples(OPTIONS["pupil_samples"].value(args))
     rows = thermal.sweep(
         lens, temps, pressure, args.mount, samples, Progress("thermal", len(temps), "temperatures", stream=sys.stderr)
     )
@@ -147,7 +148,6 @@ def run_thermal(args) -> int:
 def register(sub) -> None:
     """Add `thermal`."""
     from ..optics.commands import add_lens_argument
-    from .options import OPTIONS
 
     p = sub.add_parser(
         "thermal",

@@ -34,6 +34,8 @@ DEGRADE_OPTIONS = (
     "occlusion",
     "silhouette",
     "calibration_model",
+    "ghosts",
+    "ghost_threshold",
 )
 
 
@@ -44,7 +46,7 @@ def _degrade_spec(args: argparse.Namespace):
     from ..convolution.spec import DegradeSpec
     from ..psf.spec import GridSpec
 
-    grid = GridSpec.from_args(args, defaults=BATCH_GRID_DEFAULTS) if args.lens else None
+    grid = GridSpec.from_args(args, defaults=BATCH_GRID_DEFAULTS) if args.lens or args.lens_population else None
     return DegradeSpec.from_args(
         args, frame=frame_from_args(args), camera=camera_from_args(args, args.seed), grid_spec=grid
     )
@@ -53,6 +55,11 @@ def _degrade_spec(args: argparse.Namespace):
 def _lens(args: argparse.Namespace):
     """--lens as a Lens where --temperature-c or --pressure-kpa moves it (`optics.commands.load_lens`), else as
     given (a name or file, which the batch loads)."""
+    if args.lens_population is not None and (args.temperature_c, args.pressure_kpa, args.mount) != (None,) * 3:
+        raise SolasError(
+            "--temperature-c, --pressure-kpa and --mount are for --lens; a lens population's frames "
+            "take their temperatures from --frame-temperatures-c"
+        )
     if args.lens is None or (args.temperature_c is None and args.pressure_kpa is None):
         return args.lens
     from ..optics.commands import load_lens
@@ -65,9 +72,7 @@ def _dry_run(args: argparse.Namespace) -> int:
     from .degrade import check_workers, estimate, plan_batch
 
     workers = check_workers(_workers(args.workers), args.dask)
-    p = plan_batch(
-        args.inputs, args.output, _degrade_spec(args), psf_grid=args.psf_grid, lens=_lens(args), cache=args.cache
-    )
+    p = plan_batch(args.inputs, args.output, _degrade_spec(args), **_sources(args))
     need = estimate(p, workers if args.dask is None else 1)
     where = f"Dask at {args.dask}" if args.dask else f"{workers} local worker process(es)"
     skipped = len(p.jobs) - len(p.todo)
@@ -92,9 +97,35 @@ def _dry_run(args: argparse.Namespace) -> int:
     return 0
 
 
+def _sources(args: argparse.Namespace) -> dict:
+    """`batch degrade`'s grid: a file, a lens or a lens population, and the grid cache (keywords of `plan_batch`
+    and `degrade_batch`)."""
+    return {"psf_grid": args.psf_grid, "lens": _lens(args), "cache": args.cache, **_population(args, args.seed)}
+
+
+def _population(args: argparse.Namespace, seed: int) -> dict:
+    """The lens population of a batch (`population.Population`: the folder, `seed`, the frames' temperatures)
+    as `degrade_batch`'s keyword; {} without one (and SolasError for temperatures without one)."""
+    if args.lens_population is None:
+        if args.frame_temperatures_c:
+            raise SolasError(
+                "--frame-temperatures-c is for --lens-population; give one lens at its temperature with --lens"
+            )
+        return {}
+    from .population import Population
+
+    return {"lens_population": Population(args.lens_population, seed, tuple(args.frame_temperatures_c or ()))}
+
+
 def _grid_plan(p) -> tuple[float, str]:
     """Seconds the batch's grid will take and what is done with it: reused (a file given, or a cache
-    entry of this lens and grid), or computed, its time measured on a few of its PSFs (`psf.cost`)."""
+    entry of this lens and grid), or computed, its time measured on a few of its PSFs (`psf.cost`); a
+    population's grids: one per lens instance its items use, each as long as the first lens's."""
+    if p.grid_source == "population":
+        from ..psf.cost import grid_cost
+
+        used = len({p.jobs[i].params["lens"]["hash"] for i in p.todo})
+        return used * grid_cost(p.lens, p.grid_spec).seconds, f"{used} lens instances of {p.grid_path}, each cached"
     if p.grid_source != "to compute":
         return 0.0, {"given": "given", "cache hit": "in the cache: reused, nothing to compute"}[p.grid_source]
     from ..psf.cost import grid_cost
@@ -112,11 +143,9 @@ def run_batch_degrade(args: argparse.Namespace) -> int:
         args.inputs,
         args.output,
         _degrade_spec(args),
-        psf_grid=args.psf_grid,
-        lens=_lens(args),
+        **_sources(args),
         workers=_workers(args.workers),
         dask=args.dask,
-        cache=args.cache,
         force=args.force,
         progress=not args.quiet,
     )
@@ -194,7 +223,7 @@ def run_batch_render(args: argparse.Namespace) -> int:
         from .render import batch_variant, estimate, plan_render
 
         n = check_workers(workers, args.dask)
-        p = plan_render(args.inputs, args.output, lens=args.lens, spec=spec, camera=camera, **sweep)
+        p = plan_render(args.inputs, args.output, lens=_render_lens(args, spec.seed), spec=spec, camera=camera, **sweep)
         need = estimate(p, n if args.dask is None else 1)
         where = f"Dask at {args.dask}" if args.dask else f"{n} local worker process(es)"
         swept = ", ".join(f"{k} ({len(v)} values)" for k, v in p.manifest.header["sweep"].items()) or "nothing"
@@ -214,7 +243,7 @@ def run_batch_render(args: argparse.Namespace) -> int:
     result = render_batch(
         args.inputs,
         args.output,
-        lens=args.lens,
+        lens=_render_lens(args, spec.seed),
         spec=spec,
         **sweep,
         workers=workers,
@@ -225,6 +254,11 @@ def run_batch_render(args: argparse.Namespace) -> int:
         calibration_model=args.calibration_model,
     )
     return _report("render", result)
+
+
+def _render_lens(args: argparse.Namespace, seed: int):
+    """`batch render`'s lenses: --lens (one or a sweep), or the population of --lens-population (`_population`)."""
+    return _population(args, seed).get("lens_population", args.lens)
 
 
 def _workers(text: str | None) -> int | None:
@@ -253,6 +287,24 @@ def _add_runner_options(p: argparse.ArgumentParser) -> None:
     p.add_argument("--quiet", action="store_true", help="no progress bar")
 
 
+def _add_population_options(group, p: argparse.ArgumentParser) -> None:
+    """--lens-population (in `group`, beside the batch's other lens sources) and --frame-temperatures-c."""
+    group.add_argument(
+        "--lens-population",
+        metavar="DIR",
+        help="a folder of lens files (a `solas-mi tolerance` output): each frame through one of them, picked by "
+        "--seed and its name as its noise is; the manifest names each frame's lens",
+    )
+    p.add_argument(
+        "--frame-temperatures-c",
+        type=float,
+        nargs="+",
+        metavar="C",
+        help="with --lens-population: each frame's lens at one of these temperatures (°C), picked by --seed and "
+        "its name",
+    )
+
+
 def _add_degrade(sub: Any) -> None:
     """Add `batch degrade`."""
     from ..convolution.commands import add_frame_options
@@ -272,6 +324,7 @@ def _add_degrade(sub: Any) -> None:
     source = p.add_mutually_exclusive_group(required=True)
     source.add_argument("--psf-grid", metavar="GRID.exr", help="PSF grid written by `solas-mi psf-grid`")
     source.add_argument("--lens", help=f"compute the grid from this lens: {lens_help()}")
+    _add_population_options(source, p)
     add_environment_options(p)
     DegradeSpec.add_flags(p, DEGRADE_OPTIONS)
     frames = p.add_argument_group("the frames' camera (as degrade's; every input taken by it)")
@@ -318,13 +371,14 @@ def register(subparsers: Any) -> None:
         "and the others go on (exit status 1).",
     )
     r.add_argument("inputs", nargs="+", metavar="INPUT", help="images or scene XML files, folders of them, or globs")
-    r.add_argument(
+    lenses = r.add_mutually_exclusive_group(required=True)
+    lenses.add_argument(
         "--lens",
         action="append",
-        required=True,
         help=f"{lens_help()}; repeat to sweep over lenses (a lens at another temperature or pressure: "
         "its file, from `solas-mi lens convert LENS --temperature-c T -o FILE.toml`)",
     )
+    _add_population_options(lenses, r)
     RenderSpec.add_flags(r, RENDER_SETTINGS, sweep=SWEEP[1:])
     add_calibration_option(r)
     add_camera_options(r, seed=False, scenes=True)  # the sensor's seed is the batch's --seed

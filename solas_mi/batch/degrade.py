@@ -49,6 +49,7 @@ class BatchPlan:
     grid_spec: Any = None  # the grid's `psf.spec.GridSpec` when computed from the lens
     cache: GridCache | None = None  # where that grid is kept
     lens_scale: dict | None = None  # what scaling the lens did (`scaled_lens`), or None
+    population: tuple | None = None  # a lens population (`population.Population`, its (lens file, Lens)), or None
 
     @property
     def todo(self) -> list[int]:
@@ -91,19 +92,20 @@ def check_workers(workers: int | None, dask: str | None = None) -> int:
 
 def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, spec: DegradeSpec | None = None, *,
                psf_grid: str | os.PathLike | None = None, lens=None,
-               cache: GridCache | str | os.PathLike | None = None) -> BatchPlan:
+               cache: GridCache | str | os.PathLike | None = None, lens_population=None) -> BatchPlan:
     """Check everything a batch needs before any work and find what a former run finished: the items of
     `inputs` degraded into `output_dir` as `spec` says (a `convolution.spec.DegradeSpec`; None: its
-    defaults) by the grid file `psf_grid` or the grid of `lens` (scaled as `spec.scale_lens` says) and
-    `spec.grid_spec`, kept in `cache` (a GridCache or folder; None: the user's)."""
+    defaults) by the grid file `psf_grid`, the grid of `lens` (scaled as `spec.scale_lens` says) and
+    `spec.grid_spec`, kept in `cache` (a GridCache or folder; None: the user's), or each item's own lens of
+    `lens_population` (a folder or a `population.Population`: seed and temperatures)."""
     from ..convolution.spec import OUTPUT_FILES, DegradeSpec
     from ..outputs import output_folder
+    from . import population as pop
 
     spec = DegradeSpec() if spec is None else spec
     if not isinstance(spec, DegradeSpec):
         raise SolasError(f"spec {spec!r} must be a solas_mi.convolution.spec.DegradeSpec")
-    if (psf_grid is None) == (lens is None):
-        raise SolasError("give either a PSF grid file or a lens to compute one from, not both and not neither")
+    population = pop.checked(lens_population, psf_grid, lens, spec.scale_lens)
     if psf_grid is not None and spec.grid_spec is not None:
         raise SolasError("grid_spec is for a grid computed from a lens; a PSF grid file given is used as it is")
     lens, scale = scaled_lens(lens, spec)
@@ -123,7 +125,7 @@ def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLik
             noun = what if what == "depth map" else f"{what} labels"
             raise SolasError(f"{len(missing)} image(s) have no {noun} by the pattern {pattern!r}, e.g. {missing[0]}")
     jobs = plan(images, out_dir, roots, OUTPUT_FILES[spec.output_format])
-    with_labels(jobs, spec.label_patterns, files)
+    with_labels(jobs, spec.label_patterns, files, spec.ghosts)
     with_camera(jobs, spec.camera, files, spec.output_format)
     for job in jobs:
         found = beside[Path(job.input)]
@@ -131,12 +133,17 @@ def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLik
             job.params["depth"] = str(found["depth map"])
         if spec.label_patterns:
             job.params["labels"] = {kind: str(found[kind]) for kind, _ in spec.label_patterns}
+    lens = population[1][0][1] if population is not None else lens
     grid_path, source, lens, grid_spec, cache = _grid_source(psf_grid, lens, spec.grid_spec, cache)
     grid_id = file_hash(grid_path) if source == "given" else grid_path.stem
+    if population is not None:  # the first lens's cache name stands for the grid options
+        (given, lenses), source = population, "population"
+        pop.assign(jobs, lenses, given.seed, given.temperatures_c, cache, grid_spec)
+        grid_id, grid_path = f"{pop.key(lenses, given.seed, given.temperatures_c)}-{grid_id}", Path(given.folder)
     key = hashlib.sha256(json.dumps([grid_id, *spec.identity()]).encode()).hexdigest()[:16]
     manifest = Manifest(out_dir / MANIFEST, {"version": 1, "kind": "degrade", "batch_id": key}, jobs)
     manifest.resume(key)
-    return BatchPlan(jobs, manifest, key, spec, grid_path, source, lens, grid_spec, cache, scale)
+    return BatchPlan(jobs, manifest, key, spec, grid_path, source, lens, grid_spec, cache, scale, population)
 
 
 def _grid_source(psf_grid, lens, grid_spec, cache) -> tuple[Path, str, Any, Any, GridCache | None]:
@@ -183,14 +190,14 @@ def beside_file(image: Path, pattern: str) -> Path:
     return image.with_name(pattern.replace("{stem}", image.stem))
 
 
-def with_labels(jobs: list[Job], patterns, sources) -> None:
-    """The warped labels' files (`convolution.labels.label_outputs`) added to each item; none without
-    label patterns."""
-    if patterns:
+def with_labels(jobs: list[Job], patterns, sources, flare: bool = False) -> None:
+    """The warped labels' files (`convolution.labels.label_outputs`) added to each item, and with `flare` (ghosts)
+    the flare label's; none without either."""
+    if patterns or flare:
         from ..convolution.labels import label_outputs
 
-        kinds = [kind for kind, _ in patterns]
-        add_outputs(jobs, lambda output: [str(p) for p in label_outputs(output, kinds).values()], sources,
+        kinds = [kind for kind, _ in patterns or ()]
+        add_outputs(jobs, lambda output: [str(p) for p in label_outputs(output, kinds, flare).values()], sources,
                     "label_outputs")
 
 
@@ -211,7 +218,7 @@ def estimate(p: BatchPlan, workers: int) -> dict[str, float]:
         grid_bytes = 4 * rows * cols * g.size ** 2 * len(g.wavelengths_nm or p.lens.wavelengths_nm) * len(
             g.distances_m or [0])
     # each worker: its largest image's peak (which holds a grid; or its camera's)
-    per_worker = max((max(peak_bytes(path, r, c, ch, grid_bytes) + memory_bytes(r * c, p.jobs[i].params.get("labels", ())),
+    per_worker = max((max(peak_bytes(path, r, c, ch, grid_bytes, p.spec.ghosts) + memory_bytes(r * c, p.jobs[i].params.get("labels", ())),
                           camera_bytes(p.jobs[i], r, c, p.spec.camera)) for i, (path, (r, c, ch)) in zip(p.todo, sizes)), default=0.0)
     # the parent: one grid more, and its fits of the frames' camera blocks (`convolution.camera`)
     parent = grid_bytes + fit_bytes(max((r * c for _, (r, c, _) in sizes), default=0))
@@ -240,6 +247,19 @@ def camera_bytes(job: Job, rows: int, cols: int, camera) -> float:
     )
 
 
+def batch_ghosts(grid, lens) -> str:
+    """The ghost grid of the batch's `lens` (None: the grid's, `convolution.camera.grid_lens`) over the PSF grid's
+    field, computed into the cache before the items (`convolution.ghosts.lens_ghosts`); the lens's name."""
+    from ..convolution.camera import grid_lens
+    from ..convolution.ghosts import lens_ghosts
+
+    lens = grid_lens(grid) if lens is None else lens
+    if lens is None:
+        raise SolasError(f"ghosts: the PSF grid's lens {grid.meta.get('lens')!r} cannot be read again: give --lens")
+    lens_ghosts(lens, getattr(grid, "layers", [grid])[0])
+    return lens.name
+
+
 def scaled_lens(lens, spec: DegradeSpec) -> tuple[Any, dict | None]:
     """The batch's lens scaled to the frames' camera `spec.frame` (`optics.scale.scaled_to_focal`: its
     pinhole focal length over the x field range of `spec.grid_spec` (None: the lens's field) the camera's
@@ -263,10 +283,11 @@ def scaled_lens(lens, spec: DegradeSpec) -> tuple[Any, dict | None]:
 
 
 # long: the public API's numpydoc docstring is half of it
+# many parameters: a batch's three exclusive sources (a grid file, a lens, a lens population) are keywords of their own
 def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLike, spec: DegradeSpec | None = None,
                   *, psf_grid: str | os.PathLike | None = None, lens=None, workers: int | None = None,
                   dask: str | None = None, cache: GridCache | str | os.PathLike | None = None, force: bool = False,
-                  progress: bool = True) -> BatchResult:
+                  progress: bool = True, lens_population=None) -> BatchResult:
     """Degrade many images by one PSF grid, on local processes or a Dask cluster; resumable.
 
     One EXR + PNG per input (or as ``spec.output_format`` says) and the manifest ``batch.json`` go into
@@ -287,6 +308,9 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
         A PSF grid's EXR file; or give `lens`.
     lens : Lens or str, optional
         A lens (or its name or file) whose grid is computed with ``spec.grid_spec`` and cached.
+    lens_population : str, PathLike or population.Population, optional
+        Instead: a folder of lens files (a `solas-mi tolerance` output), each item degraded by one of them,
+        chosen by the Population's seed and the item's name, at one of its temperatures where given.
     workers : int, optional
         Local processes; default: the cores.
     dask : str, optional
@@ -333,10 +357,13 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
     start = time.perf_counter()
     check_dask(dask)
     n = check_workers(workers, dask)
-    p = plan_batch(inputs, output_dir, spec, psf_grid=psf_grid, lens=lens, cache=cache)
+    p = plan_batch(inputs, output_dir, spec, psf_grid=psf_grid, lens=lens, cache=cache,
+                   lens_population=lens_population)
     need = estimate(p, n if dask is None else 1)
     check_memory(f"batch of {len(p.todo)} images on {n} workers", need["peak_bytes"], force)
     header = p.spec.header(p.lens_scale)
+    if p.population is not None:
+        return _degrade_population(p, header, n, dask, force, progress, start)
     if p.lens is not None:
         assert p.cache is not None  # a lens's grid is kept in the cache (_grid_source)
         with Progress("psf-grid", None, "PSFs", enabled=progress) as bar:  # shown only when it is computed
@@ -352,9 +379,36 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
     header.update({"psf_grid": str(p.grid_path), "grid_hash": file_hash(p.grid_path),
                    "lens": grid.meta.get("lens"), "lens_hash": grid.meta.get("lens_hash"),
                    "cameras": cameras, "runner": {"dask": dask} if dask is not None else {"workers": n}})
+    if p.spec.ghosts:  # the lens's ghost grid computed once here, each item reads it from the cache
+        header["ghosts"]["lens"] = batch_ghosts(grid, p.lens)
     p.manifest.header.update(header)
-    settings = {"spec": p.spec, "camera": p.spec.camera, "force": force, "cameras": cameras,
+    settings = {"spec": p.spec, "camera": p.spec.camera, "force": force, "cameras": cameras, "lens": p.lens,
                 "batch": {"id": p.key, "manifest": str(p.manifest.path), "grid_hash": header["grid_hash"],
                           "lens_hash": header["lens_hash"], **({"lens_scale": p.lens_scale} if p.lens_scale else {})}}
     run_batch(p.manifest, p.todo, grid, str(p.grid_path), settings, n, dask, "image" if progress else None)
     return BatchResult(p.jobs, p.manifest.path, p.grid_path, header["grid_source"], time.perf_counter() - start)
+
+
+def _degrade_population(p: BatchPlan, header: dict, n: int, dask, force: bool, progress: bool,
+                        start: float) -> BatchResult:
+    """`degrade_batch` of a lens population: each item's grid (`population.grids`) and camera blocks."""
+    from ..imageio import image_size
+    from ..progress import Progress
+    from . import population as pop
+    from .runner import run_batch
+
+    assert p.population is not None and p.cache is not None
+    given, lenses = p.population
+    with Progress("psf-grid", None, "PSFs", enabled=progress) as bar:
+        counts = pop.grids(p.jobs, p.todo, lenses, p.grid_spec, p.cache, progress=bar)
+    sizes = [image_size(p.jobs[i].input)[1::-1] for i in p.todo]
+    cameras = pop.cameras(p.jobs, p.todo, lenses, [s for s in sizes if s[0]], p.spec.frame, p.spec.calibration_model)
+    header.update({"grid_source": "population", "grid_spec": p.grid_spec.canonical(), "grids": counts,
+                   "lens_population": {"folder": str(Path(given.folder).resolve()), "lenses": len(lenses),
+                                       "seed": given.seed, "temperatures_c": list(given.temperatures_c)},
+                   "runner": {"dask": dask} if dask is not None else {"workers": n}})
+    p.manifest.header.update(header)
+    settings = {"spec": p.spec, "camera": p.spec.camera, "force": force, "population_cameras": cameras,
+                "batch": {"id": p.key, "manifest": str(p.manifest.path)}}
+    run_batch(p.manifest, p.todo, None, None, settings, n, dask, "image" if progress else None)
+    return BatchResult(p.jobs, p.manifest.path, None, "population", time.perf_counter() - start)

@@ -36,6 +36,8 @@ from ..outputs import inside, safe_name
 from ..render.spec import RenderSpec
 from .degrade import WORKER_BYTES, BatchResult, camera_bytes, check_workers, with_camera
 from .jobs import IMAGE_SUFFIXES, MANIFEST, SCENE_SUFFIXES, Job, Manifest, expand_inputs
+from .population import Population, item_lens, loaded, pick
+from .population import key as key_of
 from .runner import check_dask
 
 SWEEP = ("lens", "focus_distance", "sensor", "pitch_um", "spp")  # lens, then RenderSpec fields
@@ -116,8 +118,11 @@ def _check_inputs(files: list[Path], base: RenderSpec, axes: dict[str, list]) ->
         raise SolasError("a scene file's film sets its sensor; sweep --sensor over image inputs only")
 
 
-def _jobs(files: list[Path], out_dir: Path, base: RenderSpec, axes: dict[str, list], lenses: dict) -> list[Job]:
-    """One item per input and sweep point, named by its input and swept values, seeded by its name."""
+def _jobs(
+    files: list[Path], out_dir: Path, base: RenderSpec, axes: dict[str, list], lenses: dict, population=None
+) -> list[Job]:
+    """One item per input and sweep point, named by its input and swept values, seeded by its name; with a
+    lens `population` (`population.Population`), its lens (and temperature) picked by the seed and that name."""
     swept = [name for name in SWEEP if len(axes[name]) > 1]
     names = {k: v.name for k, v in lenses.items()}
     jobs, sources = [], set(files)
@@ -134,9 +139,14 @@ def _jobs(files: list[Path], out_dir: Path, base: RenderSpec, axes: dict[str, li
         if output in sources or output.with_suffix(".png") in sources:
             raise SolasError(f"output {output} would replace an input of the same name; choose another -o")
         seen[output] = path
-        lens = values.pop("lens")
+        lens, own = values.pop("lens"), {}
+        if population is not None:  # `population.pick`: the lens file and its temperature
+            own = pick(stem, list(lenses.items()), population.seed, population.temperatures_c)
+            lens = own.pop("file")
         item = base.replace(**values, seed=seed_of(stem, base.seed))
-        params = {"lens": lens, "lens_name": lenses[lens].name, "lens_hash": lenses[lens].hash, **item.as_dict()}
+        chosen = own.pop("lens") if own else lenses[lens]
+        params = {"lens": lens, "lens_name": chosen.name, "lens_hash": chosen.hash, **item.as_dict()}
+        params.update({"lens_index": own["index"], "temperature_c": own["temperature_c"]} if own else {})
         jobs.append(
             Job(str(path), str(output), str(output.with_suffix(".png")), kind="render", seed=item.seed, params=params)
         )
@@ -153,7 +163,8 @@ def plan_render(
     **settings,
 ) -> RenderPlan:
     """Check everything a render batch needs before any work and find what a former run finished.
-    `lens` is one value or a list (the sweep); `settings` are RenderSpec fields changing `spec`, of
+    `lens` is one value or a list (the sweep), or a `population.Population` (each item's lens picked by its
+    seed and the item's name); `settings` are RenderSpec fields changing `spec`, of
     which `focus_distance`, `sensor`, `pitch_um` and `spp` also take a list of values (the sweep);
     `seed` is the batch's base seed (each item's derives from it and the item's name)."""
     from ..optics.lens import Lens
@@ -163,12 +174,13 @@ def plan_render(
     base, axes = batch_spec(spec, settings)
     out_dir = output_folder(output_dir).resolve()
     files = expand_inputs(inputs, IMAGE_SUFFIXES + SCENE_SUFFIXES)
-    lenses = {str(v): Lens.load(str(v)) for v in _values("lens", lens)}
+    population, members = loaded(lens) if isinstance(lens, Population) else (None, [])
+    lenses: dict[str, Any] = dict(members) or {str(v): Lens.load(str(v)) for v in _values("lens", lens)}
     for one in lenses.values():
         responses.check_lens(responses.parse(base.response, one.wavelengths_nm), one)
-    axes["lens"] = list(lenses)
+    axes["lens"] = list(lenses) if population is None else [None]  # a population's: picked per item
     _check_inputs(files, base, axes)
-    jobs = _jobs(files, out_dir, base, axes, lenses)
+    jobs = _jobs(files, out_dir, base, axes, lenses, population)
     with_camera(jobs, camera, files)
     if base.labels and camera is not None and camera.scene_timing is not None:
         raise SolasError(
@@ -180,6 +192,8 @@ def plan_render(
     shared = {k: v for k, v in base.as_dict().items() if k not in SWEEP}
     if camera is not None:
         shared["camera"] = camera.describe()
+    if population is not None:
+        shared["lens_population"] = key_of(list(lenses.items()), population.seed, population.temperatures_c)
     key = hashlib.sha256(json.dumps(["render", shared]).encode()).hexdigest()[:16]
     sweep = {name: _json_axis(name, axes[name]) for name in SWEEP if len(axes[name]) > 1}
     manifest = Manifest(out_dir / MANIFEST, {"version": 1, "kind": "render", "batch_id": key, "sweep": sweep}, jobs)
@@ -252,7 +266,6 @@ def image_cameras(p: RenderPlan, model: str | None) -> dict[str, dict]:
     """The camera block (`render.image.image_camera`) of each sensor the batch's image items render onto,
     fitted once per lens, sensor and wavelength, before any item: `image_sensor_key` → block ({} without a
     model). A scene file's camera comes from its scene (`batch.work`)."""
-    from ..optics.lens import Lens
     from ..render.image import image_camera, image_sensor_key
 
     out: dict[str, dict] = {}
@@ -262,9 +275,10 @@ def image_cameras(p: RenderPlan, model: str | None) -> dict[str, dict]:
     for job in p.jobs:
         if Path(job.input).suffix.lower() in SCENE_SUFFIXES:
             continue
-        if job.params["lens"] not in lenses:
-            lenses[job.params["lens"]] = Lens.load(job.params["lens"])
-        lens = lenses[job.params["lens"]]
+        which = f"{job.params['lens']}@{job.params.get('temperature_c')}"
+        if which not in lenses:
+            lenses[which] = item_lens(job.params)
+        lens = lenses[which]
         key, camera, response = image_sensor_key(lens, RenderSpec.from_dict(job.params))
         if key not in out:
             out[key] = image_camera(lens, camera, response, model)

@@ -46,12 +46,18 @@ def run_job(job: Job, grid: PSFGrid | None, grid_path: str | None, settings: dic
     return job
 
 
-def _degrade(job: Job, grid: PSFGrid, grid_path: str, settings: dict[str, Any]) -> None:
+def _degrade(job: Job, grid: PSFGrid | None, grid_path: str | None, settings: dict[str, Any]) -> None:
     from ..convolution.output import degrade_file
     from ..imageio import image_size
     from ..outputs import check_target, data_and_preview
 
     spec = settings["spec"]  # the batch's `convolution.spec.DegradeSpec`
+    cameras = settings.get("cameras", {})
+    if "psf_grid" in job.params:  # a lens population's item: its own lens's grid and camera (`population`)
+        from .population import item_grid
+
+        grid_path = job.params["psf_grid"]
+        grid, cameras = item_grid(grid_path), settings["population_cameras"].get(grid_path, {})
     if spec.output_format == "png16":  # a 16-bit PNG and its metadata's JSON (`plan`'s suffixes)
         output, png = (check_target(p, [job.input, grid_path]) for p in (job.output, job.png))
     else:
@@ -59,7 +65,7 @@ def _degrade(job: Job, grid: PSFGrid, grid_path: str, settings: dict[str, Any]) 
     output.parent.mkdir(parents=True, exist_ok=True)  # a folder tree's sub-folder
     rows, cols, _ = image_size(job.input)
     # the batch's camera of the frame's size, fitted once (`convolution.camera`); none: unreadable, degrade says why
-    camera = settings.get("cameras", {}).get(f"{cols}x{rows}")
+    camera = cameras.get(f"{cols}x{rows}")
     degrade_file(
         job.input,
         grid,
@@ -69,9 +75,18 @@ def _degrade(job: Job, grid: PSFGrid, grid_path: str, settings: dict[str, Any]) 
         spec,
         force=settings["force"],
         depth=job.params.get("depth"),
-        extra_meta={"batch": {**settings["batch"], "seed": job.seed}, **({"camera": camera} if camera else {})},
+        extra_meta={
+            "batch": {**settings["batch"], "seed": job.seed, **_lens_of(job)},
+            **({"camera": camera} if camera else {}),
+        },
         labels=job.params.get("labels"),
+        lens=settings.get("lens"),
     )
+
+
+def _lens_of(job: Job) -> dict:
+    """A population item's lens (file, hash, temperature), for its output's metadata; {} for others."""
+    return {"lens": job.params["lens"]} if "lens" in job.params else {}
 
 
 SCENE_CAMERAS: dict[tuple, dict] = {}  # this worker process's scene items' camera blocks, each fitted once
@@ -136,9 +151,9 @@ def _render(job: Job, settings: dict[str, Any]) -> None:
     atomically."""
     from pathlib import Path
 
-    from ..optics.lens import Lens
     from ..outputs import data_and_preview, written_together
     from ..render.spec import RenderSpec
+    from .population import item_lens
 
     p = job.params
     spec = RenderSpec.from_dict(p)
@@ -147,7 +162,7 @@ def _render(job: Job, settings: dict[str, Any]) -> None:
 
         dr.set_thread_count(settings["threads"])  # the batch's workers share the cores
     output, png = data_and_preview(job.output, job.png, inputs=[job.input])
-    lens = Lens.load(p["lens"])
+    lens = item_lens(p)  # its file, at its temperature where a lens population picked one
     if Path(job.input).suffix.lower() in SCENE_SUFFIXES:
         from ..render.user_scene import camera_meta, load
 

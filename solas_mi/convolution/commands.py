@@ -15,7 +15,16 @@ from ..outputs import add_png_option
 
 LARGE_IMAGE_VALUES = 4096 * 3072 * 3  # beyond 4K (≈ 1.7 s) the command reports each channel
 # the DegradeSpec fields `degrade` takes
-DEGRADE_OPTIONS = ("method", "boundary", "occlusion", "silhouette", "linear", "calibration_model")
+DEGRADE_OPTIONS = (
+    "method",
+    "boundary",
+    "occlusion",
+    "silhouette",
+    "linear",
+    "calibration_model",
+    "ghosts",
+    "ghost_threshold",
+)
 
 
 def run_degrade(args: argparse.Namespace) -> int:
@@ -59,6 +68,8 @@ def run_degrade(args: argparse.Namespace) -> int:
         f"wrote {output} and {png} ({spec.method}{', depth-aware' if args.depth else ''}, {width}x{height} px, "
         f"{meta['seconds']:.2f} s)"
     )
+    if "ghosts" in meta:
+        report_ghosts(meta["ghosts"], meta["labels"]["outputs"]["layers"])
     if labels:
         about = meta["labels"]
         print(
@@ -66,6 +77,16 @@ def run_degrade(args: argparse.Namespace) -> int:
             f"({100 * about['valid_fraction']:.1f} % of the pixels valid)"
         )
     return 0
+
+
+def report_ghosts(about: dict, layers: str) -> None:
+    """Say what `degrade --ghosts` added (`convolution.ghosts`) and warn of what it assumed."""
+    for warning in about["warnings"]:
+        print(f"degrade: warning: {warning}", file=sys.stderr)
+    print(
+        f"added the ghosts of {about['source_pixels']} source pixels ({about['cells']} field cells, {about['paths']} "
+        f"ghost paths of {about['lens']}, {about['seconds']:.2f} s); the flare label in {layers}"
+    )
 
 
 def add_frame_options(p) -> None:

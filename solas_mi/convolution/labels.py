@@ -51,12 +51,12 @@ RULE_BYTES = {"pick": 16, "surface": 102, "flow": 160, "points": 0}
 SNAP_PX = 1e-6  # a source point this near a pixel centre is on it (the mapping's identity, to rounding)
 
 
-def label_outputs(output: str | Path, kinds) -> dict[str, Path]:
+def label_outputs(output: str | Path, kinds, flare: bool = False) -> dict[str, Path]:
     """The files the labels `kinds` of the degraded frame `output` are written to, beside it: "layers", its
-    image kinds' layers in OUT.labels.exr (with `labels.valid`); "boxes", a JSON kind's annotations in
-    OUT.boxes.json."""
+    image kinds' layers in OUT.labels.exr (with `labels.valid`) and, with `flare` (degrade --ghosts), the flare
+    label's; "boxes", a JSON kind's annotations in OUT.boxes.json."""
     output, kinds = Path(output), list(kinds)
-    layered = {bool(KINDS[k].extra["layers"]) for k in kinds}
+    layered = {bool(KINDS[k].extra["layers"]) for k in kinds} | ({True} if flare else set())
     return {
         **({"layers": output.with_suffix(LAYERS_SUFFIX)} if True in layered else {}),
         **({"boxes": output.with_suffix(BOXES_SUFFIX)} if False in layered else {}),

@@ -29,6 +29,7 @@ READ_BYTES_PER_VALUE = {"exr": 20, "other": 44}
 CONVOLVE_BYTES_PER_VALUE = 22
 FFT_BYTES_PER_SAMPLE = 24  # per sample of the two batches of TILE_SAMPLES in flight per worker thread
 TILE_SAMPLES_PER_PIXEL = 4  # a channel's tiles hold each pixel up to 4 times (interp's hats; patch's once)
+GHOST_BYTES_PER_VALUE = 24  # the ghosts' float64 frame and the flare label's layers (float64 then float32)
 FIXED_BYTES = 96e6  # the interpreter, NumPy and the package's modules (measured 78 MB with a 20 MB grid read), and 16 MB
 # for the allocator's slack: on a busy machine a peak came out 1 MB over the estimate with 80 MB
 # the brightness convention of `degrade` beside `render-image`'s (README "PSF-grid convolution"), in every output
@@ -41,17 +42,18 @@ HALF_MAX = 65504.0
 GRID_META_KEYS = ("lens", "lens_hash", "method", "normalization", "field_range_deg", "field_sampling", "layout", "sensor_mm")
 
 
-def peak_bytes(image_path: str | Path, rows: int, cols: int, channels: int, grid_bytes: int) -> float:
+def peak_bytes(image_path: str | Path, rows: int, cols: int, channels: int, grid_bytes: int, ghosts: bool = False) -> float:
     """Peak memory (bytes) of degrading the rows×cols×channels image file `image_path` with a grid of
     `grid_bytes` of PSFs: the fixed part, the grid and the larger of reading the image (by file type)
-    and convolving it (its buffers and the FFT batches in flight, two per worker thread)."""
+    and convolving it (its buffers and the FFT batches in flight, two per worker thread); with `ghosts`, their
+    frame and the flare label too."""
     from .kernels import TILE_SAMPLES, workers
 
     values = rows * cols * max(channels, 1)
     read = READ_BYTES_PER_VALUE["exr" if Path(image_path).suffix.lower() == ".exr" else "other"] * values
     in_flight = min(2 * workers() * TILE_SAMPLES, TILE_SAMPLES_PER_PIXEL * rows * cols)  # a channel's tiles at most
     convolve = CONVOLVE_BYTES_PER_VALUE * values + FFT_BYTES_PER_SAMPLE * in_flight
-    return FIXED_BYTES + grid_bytes + max(read, convolve)
+    return FIXED_BYTES + grid_bytes + max(read, convolve) + (GHOST_BYTES_PER_VALUE * values if ghosts else 0)
 
 
 def read_depth(path: str | Path) -> np.ndarray:
@@ -66,7 +68,7 @@ def read_depth(path: str | Path) -> np.ndarray:
 def degrade_file(image_path: str | Path, grid: PSFGrid | DepthGrid, grid_path: str | Path, output: Path, png: Path,
                  spec: DegradeSpec | None = None, *, force: bool = False, depth: str | Path | None = None,
                  extra_meta: dict[str, Any] | None = None, progress: Callable[[int, int], None] | None = None,
-                 labels=None, calibration_model: str | None = None) -> dict[str, Any]:
+                 labels=None, calibration_model: str | None = None, lens=None) -> dict[str, Any]:
     """Degrade the image file `image_path` by `grid` (read from `grid_path`, named in the metadata) as
     `spec` says (a `convolution.spec.DegradeSpec`: method, boundary, linear, output format, occlusion,
     silhouette, frame camera; None: its defaults) and write `output` and `png` (`spec.OUTPUT_FILES`' two files)
@@ -77,11 +79,14 @@ def degrade_file(image_path: str | Path, grid: PSFGrid | DepthGrid, grid_path: s
     channel; `labels`: the frame's label files (kind → file, `labelkinds.KINDS`), warped by the image's
     mapping and written beside `output` (`labels.label_outputs`) with the rest, all read and checked first;
     `calibration_model`: the frame's camera block fitted here (`convolution.camera.frame_camera`, its memory
-    in the estimate unless the cache of fitted cameras holds it; a batch fits it once and gives it in `extra_meta` instead)."""
+    in the estimate unless the cache of fitted cameras holds it; a batch fits it once and gives it in `extra_meta` instead);
+    `lens`: with `spec.ghosts`, the grid's lens (None: read again from the grid's metadata, `camera.grid_lens`): its
+    ghosts of the frame's sources added (`convolution.ghosts`), the flare label beside the output."""
     from ..budget import check_memory
     from ..imageio import image_size, read_image
     from ..psf.depth import DepthGrid
     from .camera import frame_camera, frame_fit_bytes
+    from .ghosts import FrameGhosts
     from .labels import label_outputs, memory_bytes, read_labels
 
     spec = DegradeSpec() if spec is None else spec
@@ -94,34 +99,42 @@ def degrade_file(image_path: str | Path, grid: PSFGrid | DepthGrid, grid_path: s
     rows, cols, channels = image_size(image_path)
     layers = grid.layers if depth is not None else [grid]
     files = dict(labels or {})
-    targets = label_outputs(output, files)
+    targets = label_outputs(output, files, flare=spec.ghosts)
     for target in targets.values():
         check_target(target, [image_path, grid_path, depth, output, png, *files.values()], "labels output")
-    need = peak_bytes(image_path, rows, cols, channels, sum(g.data.nbytes for g in layers)) + 9 * len(layers) * rows * cols
+    need = peak_bytes(image_path, rows, cols, channels, sum(g.data.nbytes for g in layers), spec.ghosts)
+    need += 9 * len(layers) * rows * cols
     fitting = frame_fit_bytes(grid, cols, rows, spec.frame, calibration_model)
     check_memory(f"degrade {cols}x{rows}", need + memory_bytes(rows * cols, files) + fitting, force)
     found = read_labels(files, (rows, cols), image_path)  # every label read and checked before any work
+    ghosts = FrameGhosts.plan(image_path, grid, spec, force, lens, depth)  # None without spec.ghosts
     extra = {} if calibration_model is None else {"camera": frame_camera(grid, cols, rows, spec.frame, calibration_model)}
     extra.update(extra_meta or {})
     image = read_image(image_path, linearize=not spec.linear)
     meta: dict[str, Any] = {}
-    depth_m = None
-    if depth is None:
-        out = degrade(image, grid, spec.method, spec.boundary, meta=meta, progress=progress, frame=spec.frame)
-    elif spec.method != "interp":
-        raise SolasError(f"method {spec.method!r}: a depth map is convolved with interp per depth layer only")
-    else:
-        depth_m = read_depth(depth)
-        out = degrade_depth(image, depth_m, grid, spec.boundary, occlusion=spec.occlusion, meta=meta,
-                            progress=progress, frame=spec.frame, silhouette=spec.silhouette)
-        meta["depth_map"] = str(depth)
-    writers = warped_labels(found, targets, grid, out.shape[:2], spec, depth_m, meta)
+    out, depth_m = convolve(image, grid, spec, depth, meta, progress)
+    flare = {} if ghosts is None else ghosts.add(image, out, meta)
+    writers = warped_labels(found, targets, grid, out.shape[:2], spec, depth_m, meta, flare)
     describe_item(meta, image_path, spec, grid_path, layers[0], extra)
     names = None if out.ndim == 2 or out.shape[-1] == 3 else \
         [f"C{c:02d}_{meta['channel_wavelengths_nm'][c]:g}nm" for c in range(out.shape[-1])]
     write_output(output, png, out, names, meta, spec.output_format, image_path, writers)
     meta["output_shape"] = list(out.shape)
     return meta
+
+
+def convolve(image: np.ndarray, grid, spec: DegradeSpec, depth, meta: dict, progress) -> tuple[np.ndarray, Any]:
+    """The image degraded by `grid` as `spec` says (with the depth map file `depth`: by depth layers), what was
+    done in `meta`; and the depth map as read (None without)."""
+    if depth is None:
+        return degrade(image, grid, spec.method, spec.boundary, meta=meta, progress=progress, frame=spec.frame), None
+    if spec.method != "interp":
+        raise SolasError(f"method {spec.method!r}: a depth map is convolved with interp per depth layer only")
+    depth_m = read_depth(depth)
+    out = degrade_depth(image, depth_m, grid, spec.boundary, occlusion=spec.occlusion, meta=meta,
+                        progress=progress, frame=spec.frame, silhouette=spec.silhouette)
+    meta["depth_map"] = str(depth)
+    return out, depth_m
 
 
 def describe_item(meta: dict, image_path, spec: DegradeSpec, grid_path, first, extra: dict) -> None:
@@ -142,20 +155,28 @@ def describe_item(meta: dict, image_path, spec: DegradeSpec, grid_path, first, e
 
 
 def warped_labels(found: dict, targets: dict, grid, shape: tuple[int, int], spec: DegradeSpec,
-                  depth_m: np.ndarray | None, meta: dict) -> dict:
+                  depth_m: np.ndarray | None, meta: dict, flare: dict | None = None) -> dict:
     """The labels `found` (`labels.read_labels`) warped by the mapping the image went through (its depth map
-    `depth_m` as the convolution read it), recorded in `meta["labels"]`: each of the files `targets`
-    (`labels.label_outputs`) → its writer (`write_output`); {} without labels."""
-    if not found:
+    `depth_m` as the convolution read it) and the flare label's layers `flare` (`ghosts.FrameGhosts.add`), recorded
+    in `meta["labels"]`: each of the files `targets` (`labels.label_outputs`) → its writer (`write_output`); {}
+    without either."""
+    if not found and not flare:
         return {}
+    from ..labelkinds import MAX_RATIO
     from .depth import silhouette_depth
+    from .ghosts import FLARE_ABOUT
     from .labels import label_writers, warp_labels
     from .mapping import mapping_for
 
-    depth = None if depth_m is None else silhouette_depth(np.asarray(depth_m, dtype=np.float64), spec.silhouette)[0]
-    mapping = mapping_for(grid, shape[1], shape[0], spec.frame, spec.method, depth)
-    layers, annotations, about = warp_labels(found, mapping, spec.boundary)
-    meta["labels"] = {**about, "outputs": {what: str(path) for what, path in targets.items()}}
+    layers: dict = {}
+    annotations, about = None, {}  # type: dict | None, dict
+    if found:
+        depth = None if depth_m is None else silhouette_depth(np.asarray(depth_m, dtype=np.float64), spec.silhouette)[0]
+        mapping = mapping_for(grid, shape[1], shape[0], spec.frame, spec.method, depth)
+        layers, annotations, about = warp_labels(found, mapping, spec.boundary)
+    layers.update(flare or {})
+    meta["labels"] = {**about, **({"flare": FLARE_ABOUT.format(cap=MAX_RATIO)} if flare else {}),
+                      "outputs": {what: str(path) for what, path in targets.items()}}
     return label_writers(targets, layers, annotations, meta["labels"])
 
 

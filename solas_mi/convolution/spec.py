@@ -23,6 +23,7 @@ from ..optics.frame import FrameCamera
 from ..options import OptionSpec, option
 from ..psf.spec import GridSpec
 from .depth import OCCLUSIONS, SILHOUETTES
+from .ghosts import DEFAULT_THRESHOLD, check_threshold
 from .kernels import BOUNDARIES, check_boundary
 from .methods import DEFAULT_METHOD, METHODS, check_method
 
@@ -66,6 +67,10 @@ class DegradeSpec(OptionSpec):
     calibration_model : str, default "opencv-fisheye"
         The camera model whose fit to the lens the degraded frames' metadata records, a name of
         `optics.calibration.MODELS` (`convolution.camera`).
+    ghosts : bool, default False
+        Add the lens's ghosts of each frame's bright sources and write the flare label (`convolution.ghosts`).
+    ghost_threshold : float, default 10
+        With ghosts: the pixels whose brightest channel exceeds it (linear input units) are the sources.
     frame : FrameCamera, optional
         The camera every input was taken with (`optics.frame.FrameCamera`); default: the image spans the
         grid's x field range.
@@ -138,6 +143,19 @@ class DegradeSpec(OptionSpec):
         metavar="PIXEL_UM",
     )
     calibration_model: str = option(calibration_help, MODELS.default, choices=MODELS.names)
+    ghosts: bool = option(
+        "add the lens's ghosts of the frame's bright sources (an HDR frame: EXR; others refused without --force): "
+        "each source's ghosts at their own field-dependent places and shapes (`solas-mi ghost-grid`, cached), "
+        "and the flare label (flare.irradiance, flare.ratio) in <name>.labels.exr",
+        False,
+    )
+    ghost_threshold: float = option(
+        f"with --ghosts: pixels whose brightest channel exceeds it (linear input units) are the ghosts' sources "
+        f"(default {DEFAULT_THRESHOLD:g})",
+        DEFAULT_THRESHOLD,
+        parse=float,
+        metavar="VALUE",
+    )
     frame: FrameCamera | None = None
     camera: Any = None
     grid_spec: GridSpec | None = None
@@ -168,6 +186,11 @@ class DegradeSpec(OptionSpec):
             object.__setattr__(
                 self, "label_patterns", parse_label_files(self.label_patterns, "label patterns", pattern=True)
             )
+        if not isinstance(self.ghosts, bool):
+            raise SolasError(f"ghosts {self.ghosts!r} must be True or False")
+        check_threshold(self.ghost_threshold)
+        if not self.ghosts and self.ghost_threshold != DEFAULT_THRESHOLD:
+            raise SolasError(f"ghost threshold {self.ghost_threshold!r} is for ghosts: give --ghosts too")
         scale = self.scale_lens
         if scale is not None and (
             isinstance(scale, bool) or not isinstance(scale, (int, float)) or not (math.isfinite(scale) and scale > 0)
@@ -195,6 +218,7 @@ class DegradeSpec(OptionSpec):
             + ([self.camera.describe()] if self.camera is not None else [])
             + ([dict(self.label_patterns)] if self.label_patterns else [])
             + ([self.calibration_model] if self.calibration_model != MODELS.default else [])
+            + ([{"ghosts": self.ghost_threshold}] if self.ghosts else [])
         )
 
     def header(self, lens_scale: dict | None = None) -> dict[str, Any]:
@@ -221,6 +245,7 @@ class DegradeSpec(OptionSpec):
             **({"lens_scale": lens_scale} if lens_scale is not None else {}),
             **({"camera": self.camera.describe()} if self.camera is not None else {}),
             **({"labels": self.labels_header()} if self.label_patterns else {}),
+            **({"ghosts": {"threshold": self.ghost_threshold}} if self.ghosts else {}),
         }
 
     def labels_header(self) -> dict[str, dict[str, str]]:

@@ -152,11 +152,12 @@ def _paraxial_aim(lens: Lens, field_deg: np.ndarray) -> np.ndarray:
     return pts * (1.0 - lens.object_distance / pupil_distance(lens, ep_z))
 
 
-def chief_aim(lens: Lens, b: Bundle) -> tuple[np.ndarray, np.ndarray]:
+def chief_aim(lens: Lens, b: Bundle) -> tuple[np.ndarray, np.ndarray, tuple | None]:
     """Where to start the chief rays' aim (entrance coordinates, (n, 2)) and the stop point to aim at.
     The stop centre, from the paraxial guess; where that loses the ray (wide fields, also of a lens that
     states a small field), by continuation outward from the axis (`continued_aim`); where no ray reaches
-    the stop centre, the passing ray nearest it (`nearest_passing`): light of that field still arrives."""
+    the stop centre, the passing ray nearest it (`nearest_passing`): light of that field still arrives.
+    Also the aim from the paraxial guess (`aim`'s answer) where it reached every field: that aim itself."""
     fields, waves = b.bundle_fields, b.bundle_wavelengths
     goal = np.zeros((b.n_fields, 2))
     if lens.field_type.sideways:
@@ -165,15 +166,17 @@ def chief_aim(lens: Lens, b: Bundle) -> tuple[np.ndarray, np.ndarray]:
     else:
         e0 = _paraxial_aim(lens, fields)
         zero = dr.zeros(tracer.F, b.n_fields)
-        lost = ~tracer.to_numpy(aim(b, stop_target, tracer.array(e0[:, 0]), tracer.array(e0[:, 1]), zero, zero)[3])[0]
-        if lost.any():
-            e0[lost], reached = continued_aim(lens, fields[lost], waves[lost])
-            lost[np.flatnonzero(lost)[reached >= 1.0]] = False
+        paraxial_aim = aim(b, stop_target, tracer.array(e0[:, 0]), tracer.array(e0[:, 1]), zero, zero)
+        lost = ~tracer.to_numpy(paraxial_aim[3])[0]
+        if not lost.any():
+            return e0, goal, paraxial_aim
+        e0[lost], reached = continued_aim(lens, fields[lost], waves[lost])
+        lost[np.flatnonzero(lost)[reached >= 1.0]] = False
     for f in np.flatnonzero(lost):
         found = nearest_passing(lens, fields[f], waves[f])
         if found is not None:
             e0[f], goal[f] = found
-    return e0, goal
+    return e0, goal, None
 
 
 def nearest_passing(lens: Lens, field_deg: np.ndarray, wavelength_nm: float, samples: int = 129):

@@ -1,12 +1,12 @@
 """A coated surface's transmittance inside the tracer (`tracer.trace(fresnel=True)`; its reflectance for the
-ghost paths, `ghost_trace`): the coating's
-unpolarised transmittance per wavelength and angle, bilinear in a table of the transfer matrix
-(`coating.transmittance_table`) for Dr.Jit arrays of any family, the matrix itself for a Python float ray
-(Mitsuba's scalar variants), an ideal coating's constant."""
+ghost paths, `ghost_trace`, and both for the mesh scene's `coated_dielectric`): the coating's unpolarised
+value per wavelength and angle, bilinear in a table of the transfer matrix (`coating.transmittance_table`) for
+Dr.Jit arrays of any family, the matrix itself for a Python float ray (Mitsuba's scalar variants), an ideal
+coating's constant."""
 
 from __future__ import annotations
 
-from functools import lru_cache
+from functools import lru_cache, partial
 
 from ..llvm import import_drjit
 from . import coating
@@ -16,14 +16,23 @@ dr = import_drjit()
 
 def coating_transmittance(c: coating.Coating, before, after, wavelength_um, ftype, reflect: bool = False):
     """cos θ → the unpolarised transmittance (with `reflect`: reflectance) of coating `c` for light from
-    medium `before` into `after` at `wavelength_um` (µm), in the array type `ftype`: an ideal coating's
-    constant; else bilinear in `coating.transmittance_table` (a Python float: the transfer matrix itself)."""
-    if c.reflectance is not None:
-        return lambda cosi: c.reflectance if reflect else 1.0 - c.reflectance
-    if ftype is float:
-        nm = 1000.0 * wavelength_um
+    medium `before` into `after` at `wavelength_um` (µm), in the array type `ftype`: `coating_power` at that
+    wavelength."""
+    return partial(coating_power(c, before, after, ftype, reflect), wavelength_um)
 
-        def matrix(cosi):
+
+def coating_power(c: coating.Coating, before, after, ftype, reflect: bool = False):
+    """(wavelength µm, cos θ) → the unpolarised transmittance (with `reflect`: reflectance) of coating `c` for
+    light from medium `before` into `after`, in the array type `ftype`: an ideal coating's constant; else
+    bilinear in `coating.transmittance_table`, made an array once here (a Python float: the transfer matrix
+    itself)."""
+    if c.reflectance is not None:
+        value = c.reflectance if reflect else 1.0 - c.reflectance
+        return lambda wavelength_um, cosi: value
+    if ftype is float:
+
+        def matrix(wavelength_um, cosi):
+            nm = 1000.0 * wavelength_um
             power = c.power(before.index(nm), after.index(nm), nm, abs(cosi))
             return float(power.reflectance if reflect else power.transmittance)
 
@@ -31,11 +40,11 @@ def coating_transmittance(c: coating.Coating, before, after, wavelength_um, ftyp
     lo, step, count, values = _table(c, before, after, reflect)
     table = ftype(values.ravel())
     utype = dr.uint32_array_t(ftype)
-    u = dr.clip((1000.0 * wavelength_um - lo) / step, 0.0, count - 1.000001)
-    i = dr.floor(u)
-    fu = u - i
 
-    def at(cosi):
+    def at(wavelength_um, cosi):
+        u = dr.clip((1000.0 * wavelength_um - lo) / step, 0.0, count - 1.000001)
+        i = dr.floor(u)
+        fu = u - i
         v = dr.clip(dr.abs(cosi) * (coating.TABLE_COS - 1), 0.0, coating.TABLE_COS - 1.000001)
         j = dr.floor(v)
         fv = v - j

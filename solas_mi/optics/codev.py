@@ -29,8 +29,9 @@ refracting subset:
   without CIR get the automatic semi-diameter.
 Vignetting factors VUY/VLY/VUX/VLX shape the beam the automatic semi-diameters follow (`zemax_solves`).
 Weights, optimisation codes, surface identifiers (UID), tolerances, DER values and view settings are read
-past (`codev_syntax.IGNORED`); a zero CUF (fringe curvature) or decentre changes nothing. What
-cannot be represented is refused naming the surface and the feature: decentres and tilts, mirrors,
+past (`codev_syntax.IGNORED`); a zero CUF (fringe curvature) changes nothing. Decentres and tilts (XDE, YDE,
+ZDE, ADE, BDE, CDE; DAR, REV, BEN) become coordinate breaks (`codev_placement`). What
+cannot be represented is refused naming the surface and the feature: RET, mirrors,
 diffractive, holographic, toric and anamorphic surfaces, rectangular or elliptical apertures,
 obscurations, zoom positions, private catalogues; and any command not listed here.
 """
@@ -41,7 +42,7 @@ import math
 import re
 
 from ..errors import SolasError
-from . import zemax_solves
+from . import codev_placement, zemax_solves
 from .codev_glass import PrivateCatalogue, material, unquote
 from .codev_syntax import (
     APERTURES,
@@ -103,7 +104,7 @@ class _Reader:
             key = command(key)
             if key in REFUSED:
                 if key in ZERO_IS_NOTHING and args and _numbers(args[:1], self.ident(line)) == [0.0]:
-                    continue  # a zero decentre, tilt or fringe curvature changes nothing
+                    continue  # a zero fringe curvature changes nothing
                 raise SolasError(
                     f"{self.ident(line)}: {key}: {REFUSED[key]} are not supported "
                     "(rotationally symmetric refracting systems only)"
@@ -186,6 +187,8 @@ class _Reader:
         elif key == "SPH":
             row.pop("asp", None)
             row.pop("conic", None)
+        elif key in codev_placement.MOVES + codev_placement.TYPES:
+            codev_placement.note(row, key, args, ident)
         elif key not in ("ASP", "CON"):
             raise SolasError(
                 f"{ident}: command {key} is not supported (rotationally symmetric refracting "
@@ -282,6 +285,7 @@ def _spec(reader: _Reader, where: str) -> dict:
     spec["surface"] = [_surface(r, i, scale) for i, r in enumerate(rows[1:-1], start=1)]
     if rows[-1].get("cir", 0) > 0:
         spec["image"] = {"diameter": 2.0 * rows[-1]["cir"] * scale}
+    codev_placement.place(spec, rows, scale)
     waves = _numbers(system.get("WL", []), f"{where}: WL")
     if waves:
         spec["wavelengths_nm"] = list(dict.fromkeys(waves))

@@ -37,11 +37,9 @@ IGNORED = frozenset(
 )
 VIGNETTING = ("VUX", "VLX", "VUY", "VLY")  # the pupil's fraction cut off per field: +x, −x, +y, −y
 SYSTEM = ("TIT", "TITLE", "DIM", "WL", "REF", "XAN", "XOB", "XIM", "XRI", *FIELDS, *APERTURES, *VIGNETTING)
-ZERO_IS_NOTHING = ("XDE", "YDE", "ZDE", "ADE", "BDE", "CDE", "CUF")
+ZERO_IS_NOTHING = ("CUF",)
 REFUSED = {
-    **dict.fromkeys(
-        ("XDE", "YDE", "ZDE", "ADE", "BDE", "CDE", "DAR", "BEN", "REV", "RET"), "decentred or tilted surfaces"
-    ),
+    "RET": "coordinate returns to a named surface",
     "REFL": "mirrors",
     "DOE": "diffractive surfaces",
     "DIF": "diffractive surfaces",

@@ -75,10 +75,31 @@ def _print_distortion(table) -> None:
         for k, (f, r) in table.projection_fits.items()))
 
 
+def _real_chief_y(lens, fields: list[float], wavelength_nm: float) -> list[float]:
+    """Image y (mm) of the real chief rays of fields (0, f) degrees: the Dr.Jit tracer's aim, or for a lens as
+    built (`lens_checks.as_built`) the NumPy tracer's (`local_aim`, on the sensor in its own frame)."""
+    from .lens_checks import as_built
+
+    field_deg = np.array([[0.0, f] for f in fields]).reshape(-1, 2)
+    if not as_built(lens):
+        from .pupil import chief_rays  # loads Dr.Jit
+
+        return chief_rays(lens, field_deg, np.full(len(fields), wavelength_nm)).image_xy[:, 1].tolist()
+    from ..errors import SolasError
+    from .local_aim import chief_rays as aimed
+
+    chief = aimed(lens, field_deg, wavelength_nm)
+    if not chief.found.all():
+        bad = field_deg[~chief.found][0]
+        raise SolasError(f"lens {lens.name}: no real chief ray of {wavelength_nm:g} nm through the stop's centre "
+                         f"found for field ({bad[0]:g}, {bad[1]:g}) deg")
+    return chief.image_xy[:, 1].tolist()
+
+
 def run_lens_info(args) -> int:
     from .distortion import distortion
+    from .lens_checks import as_built
     from .paraxial import paraxial
-    from .pupil import chief_rays  # loads Dr.Jit
 
     lens = load_lens(args)
     wavelengths = (floats(args.wavelengths_nm, "--wavelengths-nm") if args.wavelengths_nm is not None
@@ -88,14 +109,13 @@ def run_lens_info(args) -> int:
     rows = []
     for w in wavelengths:
         p = paraxial(lens, w, fields).as_dict()
-        real = chief_rays(lens, np.array([[0.0, f] for f in fields]), np.full(len(fields), w))
-        p["real_chief_ray_image_height_mm"] = real.image_xy[:, 1].tolist()
+        p["real_chief_ray_image_height_mm"] = _real_chief_y(lens, fields, w)
         rows.append(p)
     info = {"lens": lens.name, "hash": lens.hash, "source": lens.source, "stop_surface": lens.stop_index + 1,
             "image_z_mm": lens.image_z, "image_diameter_mm": lens.image_diameter, "field_type": lens.field_type.name,
             "dispersion": lens.dispersive, **notes.metadata(lens), **typical_ar.note(lens), "per_wavelength": rows}
     table = None
-    if args.fields or lens.field_deg > 0:  # the given fields, else 0 … the lens's half field
+    if (args.fields or lens.field_deg > 0) and not as_built(lens):  # the given fields, else 0 … the half field
         table = distortion(lens, sorted({abs(f) for f in fields} | {0.0}) if args.fields else None)
     info["distortion"] = table.as_dict() if table else None
     if args.json:
@@ -109,7 +129,7 @@ def run_lens_info(args) -> int:
     if not lens.dispersive:
         print("glass: no dispersion data (every medium a constant index): the columns of every wavelength agree")
     for key, label in (("virtual_object", "object: virtual, "), ("ideal_lens_path", "ideal lens: "),
-                       ("coatings", "coatings: "), ("iris", "iris: ")):
+                       ("coatings", "coatings: "), ("iris", "iris: "), ("paraxial_axis", "note: ")):
         if key in info:
             print(label + info[key])
     for note in info.get("overlaps", []):
@@ -124,6 +144,8 @@ def run_lens_info(args) -> int:
         print(f"{f'chief ray y at {f:g} deg, real (mm)':36s}" + "".join(f"{r['real_chief_ray_image_height_mm'][i]:15.6f}" for r in rows))
     if table:
         _print_distortion(table)
+    elif as_built(lens):
+        print("\nno distortion table: it is computed for lenses on one axis only (this one is as built)")
     return 0
 
 

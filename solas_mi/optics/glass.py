@@ -32,6 +32,7 @@ from typing import NamedTuple
 import numpy as np
 
 from ..errors import SolasError
+from . import melt as melt_mod
 from . import thermal
 
 CATALOG_DIR = Path(__file__).parent / "data"
@@ -72,6 +73,7 @@ class Glass:
     reference_c: float = 20.0
     cte: float | None = None
     environment: tuple[float, float] | None = None
+    melt: tuple[float, ...] = ()  # (Δn_d, ΔV_d): a melt off the catalogue's values (`melt`); (): the catalogue's
 
     def at(self, temperature_c: float, pressure_kpa: float) -> Glass:
         """This glass at `temperature_c` in air of `pressure_kpa`, its index relative to that air (`thermal`):
@@ -98,6 +100,9 @@ class Glass:
         """n(λ) with λ in µm for any array type (NumPy, Dr.Jit) given its `sqrt` and `select(mask, a, b)`
         (a table's spline picks its piece); no range check. At an `environment`, relative to its air."""
         n = self._catalogue_index(wavelength_um, sqrt, select)
+        if self.melt:  # a melt's n_d and V_d (`melt`)
+            offset, scale = melt_mod.terms(self)
+            n = offset + scale * n
         return n if self.environment is None else thermal.relative_index(self, n, wavelength_um, self.environment)
 
     def _catalogue_index(self, wavelength_um, sqrt: Callable, select: Callable):
@@ -236,9 +241,9 @@ def _entries(path: str | None) -> dict:
 def _glass(key: str, e: dict) -> Glass:
     """A catalogue entry (or a lens file's own formula) as a Glass, with its thermal data where it has them."""
     heat = {"thermal": tuple(map(float, e.get("thermal", ()))), "reference_c": float(e.get("reference_c", 20.0)),
-            "cte": None if e.get("cte") is None else float(e["cte"])}
-    if len(heat["thermal"]) not in (0, 6):
-        raise ValueError("thermal (D0, D1, D2, E0, E1, λ_TK)")
+            "cte": None if e.get("cte") is None else float(e["cte"]), "melt": tuple(map(float, e.get("melt", ())))}
+    if len(heat["thermal"]) not in (0, 6) or len(heat["melt"]) not in (0, 2):
+        raise ValueError("thermal (D0, D1, D2, E0, E1, λ_TK) or melt (Δn_d, ΔV_d)")
     if "conrady" in e:
         kind, coefficients = "conrady", (tuple(e["conrady"]), ())
     elif "K" in e:

@@ -38,8 +38,10 @@ def _material(g) -> list[str]:
     if g.kind == "model":  # a one-entry table: one index, no dispersion
         return ["wavelengths_nm = [587.5618]", f"index = {_value(a)}"]
     keys = {"sellmeier": ("B", "C"), "polynomial": ("K", "P"), "conrady": ("conrady",)}[g.kind]
-    heat = ([f"thermal = {_value(g.thermal)}", f"reference_c = {_value(g.reference_c)}"] if g.thermal else []) + (
-        [f"cte = {_value(g.cte)}"] if g.cte is not None else []
+    heat = (
+        ([f"thermal = {_value(g.thermal)}", f"reference_c = {_value(g.reference_c)}"] if g.thermal else [])
+        + ([f"cte = {_value(g.cte)}"] if g.cte is not None else [])
+        + ([f"melt = {_value(g.melt)}"] if g.melt else [])
     )
     return [f"{k} = {_value(v)}" for k, v in zip(keys, (a, b))] + [f"range_nm = {_value(g.range_nm)}"] + heat
 

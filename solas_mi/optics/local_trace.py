@@ -57,8 +57,10 @@ def bundle(points, directions) -> Bundle:
     return Bundle(x, y, z, dx, dy, dz, np.zeros(len(p)), np.ones(len(p), dtype=bool))
 
 
-def trace(lens: Lens, rays: Bundle, wavelength_nm: float) -> Bundle:
-    """`rays` (object space, before surface 1) through every surface of `lens` as built, to its image plane."""
+def trace(lens: Lens, rays: Bundle, wavelength_nm: float, apertures: bool = True) -> Bundle:
+    """`rays` (object space, before surface 1) through every surface of `lens` as built, to its image plane;
+    without `apertures`, a ray beyond a surface's rim or iris travels on (`ok`: every surface met, no total
+    internal reflection), as the chief-ray aim wants its rays."""
     placed = frames(lens.surfaces, lens.image_placement)
     conjugates = ideal_conjugates(lens) if any(s.ideal for s in lens.surfaces) else {}
     n_before = float(lens.object_glass.index(wavelength_nm))
@@ -77,9 +79,9 @@ def trace(lens: Lens, rays: Bundle, wavelength_nm: float) -> Bundle:
         ok &= on
         x, y, lz = x + t * ld[:, 0], y + t * ld[:, 1], t * ld[:, 2]
         opl = opl + n_before * (t0 + t)
-        ok &= x * x + y * y <= (s.semi_diameter * (1.0 + RIM_SLACK)) ** 2
+        ok &= (x * x + y * y <= (s.semi_diameter * (1.0 + RIM_SLACK)) ** 2) | (not apertures)
         stop = (x, y) if s.stop else stop
-        if s.blades:
+        if s.blades and apertures:
             ok &= s.iris_margin(x, y, np.hypot, np.arctan2, np.cos, np.floor) >= -RIM_SLACK * s.semi_diameter
         if s.focal_length is not None:  # an ideal thin lens
             w = conjugates[k]

@@ -98,3 +98,23 @@ def frames(surfaces, image: Placement | None = None) -> list[tuple[np.ndarray, n
         origin = origin + axes[:, 2] * s.thickness
     out.append(image.apply(origin, axes) if image is not None else (origin, axes))
     return out
+
+
+def moved(p: Placement | None) -> bool:
+    """Whether break `p` decentres or tilts (a break of zeros, or none, leaves the frame where it is)."""
+    return p is not None and any(astuple(p)[:-1])
+
+
+def metadata(lens) -> dict:
+    """{"paraxial_axis": a note that `lens`'s paraxial data are about its nominal axis}, where a coordinate break
+    decentres or tilts a surface or the sensor (the paraxial trace ignores the breaks: an approximation of the
+    lens as built); {} for a lens on one axis."""
+    surfaces = [str(i) for i, s in enumerate(lens.surfaces, start=1) if moved(s.placement)]
+    parts = [f"surface {', '.join(surfaces)} decentred or tilted"] * bool(surfaces)
+    parts += ["the sensor decentred or tilted"] * moved(lens.image_placement)
+    if not parts:
+        return {}
+    return {
+        "paraxial_axis": "paraxial data (EFL, BFD, pupils, f-numbers, paraxial chief rays) are about the nominal axis "
+        f"(surface 1's, before any coordinate break), which approximates the lens as built: {' and '.join(parts)}"
+    }

@@ -65,8 +65,8 @@ def chief_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> 
     field_deg = np.atleast_2d(np.asarray(field_deg, dtype=np.float64))
     wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(field_deg),))
     b = Bundle(lens, field_deg, wavelength_nm, 1)
-    e0, goal = chief_aim(lens, b)
-    ex, ey, tr, conv = aim(
+    e0, goal, aimed = chief_aim(lens, b)
+    ex, ey, tr, conv = aimed or aim(
         b,
         stop_target,
         tracer.array(e0[:, 0]),
@@ -283,14 +283,23 @@ class Pupils:
         self.wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(self.field_deg),)).copy()
         self.chief = chief_rays(lens, self.field_deg, self.wavelength_nm)
         self.rim = _sphere_rim(lens, self.field_deg, self.wavelength_nm, self.chief)
+        self.solved: dict[int, tuple] = {}  # per grid size sampled of every pair, its rays (`grid_rays`)
 
     def sampled(self, samples: int, index: np.ndarray | None = None) -> PupilFunction:
-        """The pupil functions on samples² (α, β) grids: of every pair, or of the pairs `index`."""
+        """The pupil functions on samples² (α, β) grids: of every pair, or of the pairs `index`. A grid
+        no finer than one already sampled of every pair is aimed from that one's rays."""
         lens, fields, waves, chief, rim = self.lens, self.field_deg, self.wavelength_nm, self.chief, self.rim
+        finer = [n for n in self.solved if n >= samples]
+        start = self.solved[min(finer)] if finer else None
         if index is not None:
             fields, waves, chief, rim = fields[index], waves[index], chief.subset(index), tuple(r[index] for r in rim)
+            start = None if start is None else ([v[index] for v in start[0]], start[1][index], start[2][index])
         alpha, beta = pupil_grid.grid_axes(rim, samples)
-        g, ex, ey, ok, kept = pupil_grid.grid_rays(lens, fields, waves, chief, alpha, beta, pupil_grid.affine_map(rim))
+        g, ex, ey, ok, kept, solved = pupil_grid.grid_rays(
+            lens, fields, waves, chief, alpha, beta, pupil_grid.affine_map(rim), start
+        )
+        if index is None:
+            self.solved[samples] = solved
         density = g.per_ray(power_densities(lens, waves))
         if lens.at_infinity:
 

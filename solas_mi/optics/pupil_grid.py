@@ -62,11 +62,12 @@ def aim_levels(samples: int) -> list[int]:
     return sizes
 
 
-def lagrange(fine: int, coarse: int) -> tuple[np.ndarray, np.ndarray]:
+def lagrange(fine: int, coarse: int, t: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
     """Weights (fine, coarse) of cubic Lagrange interpolation from `coarse` evenly spaced nodes to `fine`
-    ones spanning the same interval (each from the four nodes around it, one-sided at the ends), and
+    ones spanning the same interval, or at the positions `t` (in coarse spacings from the first node, a
+    little beyond the ends allowed) (each from the four nodes around it, one-sided at the ends), and
     of its derivative per coarse spacing."""
-    t = np.arange(fine) * ((coarse - 1) / max(fine - 1, 1))
+    t = np.arange(fine) * ((coarse - 1) / max(fine - 1, 1)) if t is None else t
     start = np.clip(np.floor(t).astype(int) - 1, 0, coarse - 4)
     nodes = start[:, None] + np.arange(4)  # (fine, 4)
     x = t[:, None] - nodes  # distances to the four nodes
@@ -103,13 +104,17 @@ def grid_rays(
     alpha: np.ndarray,
     beta: np.ndarray,
     affine: np.ndarray,
+    start: tuple | None = None,
 ):
     """Every node of the (α, β) grids aimed at its point of the reference sphere, coarse to fine
-    (`aim_levels`): the finest level's bundle, its rays' entrance coordinates, whether each converged, and
-    what `_kept` keeps of them at the solution (Dr.Jit arrays, [field, β, α] order)."""
+    (`aim_levels`), or in one level from `start`, the same pupils solved on another grid (the error
+    estimate's coarser grid from the PSF's own, `pupil.Pupils.sampled`): the finest level's bundle, its
+    rays' entrance coordinates, whether each converged, and what `_kept` keeps of them at the solution
+    (Dr.Jit arrays, [field, β, α] order); and that solution as a `start` (NumPy entrance coordinates and
+    convergence (n, N, N), and the grids α, β)."""
     nf, samples = alpha.shape
-    levels = aim_levels(samples)
-    solved = None
+    levels = aim_levels(samples) if start is None else [samples]
+    solved = start
     for m in levels:
         a, b = (
             axis if m == samples else axis[:, :1] + (axis[:, -1:] - axis[:, :1]) * np.linspace(0.0, 1.0, m)
@@ -123,7 +128,10 @@ def grid_rays(
             )
             for c in (0, 1)
         ]  # the rim's affine map
-        jacobian, unknown = (None, None) if solved is None else _next_level(*solved, m, guess)
+        # from another grid (`grid_axes` scales α and β alike): its nodes' positions in the solved grid's
+        # spacings, the same for every field
+        at = None if start is None else (a[0] - start[1][0, 0]) * ((start[1].shape[1] - 1) / np.ptp(start[1][0]))
+        jacobian, unknown = (None, None) if solved is None else _next_level(*solved, m, guess, at)
         g = Bundle(lens, field_deg, wavelength_nm, m * m)
         ray = dr.arange(tracer.UInt32, nf * m * m)  # the goals: each ray's (α, β) on the sphere, gathered per ray
         goal_a = tracer.gather((a + chief.sphere_point[:, :1]).ravel(), g.index * m + ray % m)
@@ -141,7 +149,7 @@ def grid_rays(
             unknown=unknown,
         )
         solved = [s.reshape(nf, m, m) for s in tracer.to_numpy(ex, ey, ok)], a, b
-    return g, ex, ey, ok, kept
+    return g, ex, ey, ok, kept, solved
 
 
 def _kept(lens: Lens, g: Bundle, chief):
@@ -159,14 +167,17 @@ def _kept(lens: Lens, g: Bundle, chief):
     return keep
 
 
-def _next_level(solved: list[np.ndarray], a: np.ndarray, b: np.ndarray, m: int, guess: list[np.ndarray]):
+def _next_level(
+    solved: list[np.ndarray], a: np.ndarray, b: np.ndarray, m: int, guess: list[np.ndarray], at: np.ndarray | None
+):
     """Interpolate a level's solution (`solved`: entrance coordinates and whether each converged, on the
-    grids `a`, `b`) by cubic Lagrange polynomials onto the next level, m nodes per side: its first guess
+    grids `a`, `b`) by cubic Lagrange polynomials onto the next level, m nodes per side (spanning the same
+    interval, or at the positions `at` in spacings of `a` and `b` alike): its first guess
     (written into `guess`, two (n, m, m) arrays) and Newton Jacobian ∂(α, β)/∂(ex, ey) (four Dr.Jit arrays),
     and the nodes whose interpolation reaches a ray that did not converge (a UInt32 index, or None): they
     keep their guess (the rim's affine map), their Jacobian taken by finite differences."""
     (sx, sy, ok), nf, mc = solved, a.shape[0], a.shape[1]
-    w, dw = lagrange(m, mc)
+    w, dw = lagrange(m, mc, at)
     both = np.concatenate([w, dw]).T  # (mc, 2m): values and slopes along α
     slopes = []
     w32, dw32 = w.astype(np.float32), dw.astype(np.float32)
@@ -283,7 +294,8 @@ def _weights(
     )
     coverage = dr.clip(0.5 + margin / dr.maximum(cell, 1e-300), 0.0, 1.0)
     other = (clipped != 0) & (clipped != lens.stop_index + 1)
-    coverage = dr.select(other | ~ok | ~dr.isfinite(power), 0.0, coverage)
+    # a cell beside a lost ray (its stop crossing NaN) has no size at the stop, its coverage NaN: no light
+    coverage = dr.select(other | ~ok | ~dr.isfinite(power) | ~dr.isfinite(coverage), 0.0, coverage)
     inside = coverage > 0
     out = dr.select(inside, power, 0.0), coverage, dr.select(inside, opd, 0.0), dr.select(ok & (margin > 0), clipped, 0)
     dr.eval(*out)

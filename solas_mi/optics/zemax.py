@@ -169,12 +169,14 @@ def _surface(b: dict, i: int, scale: float, gcat: tuple[str, ...], where: str) -
     if thickness.upper().startswith("INF"):
         raise SolasError(f"{ident}: DISZ INFINITY inside the lens; only the object may be at infinity")
     semi = _floats(b["DIAM"][0][:1], f"{ident}: DIAM")[0] * scale if "DIAM" in b else 0.0
+    hard = _circular_aperture(b, ident) * scale
+    semi = hard or semi
     row = {"label": one_line(" ".join((b.get("COMM") or [[]])[0])).strip() or f"SURF {i}",
            "radius": 0.0 if curv == 0 else 1.0 / curv,
            "thickness": _floats([thickness], f"{ident}: DISZ")[0] * scale,
            "diameter": 2.0 * semi if semi > 0 else None,
            "material": _material(b["GLAS"][0], ident, gcat) if "GLAS" in b else "AIR", "ident": ident,
-           "auto": semi <= 0 or b["DIAM"][0][1:2] == ["0"]}  # DIAM's solve type 0: Zemax's automatic aperture
+           "auto": not hard and (semi <= 0 or b["DIAM"][0][1:2] == ["0"])}  # DIAM's solve type 0: Zemax's automatic aperture
     conic = _floats((b.get("CONI") or [["0"]])[0][:1], f"{ident}: CONI")[0]
     if conic:
         row["conic"] = conic
@@ -193,6 +195,34 @@ def _surface(b: dict, i: int, scale: float, gcat: tuple[str, ...], where: str) -
     row.update({"stop": True} if "STOP" in b else {})
     row.update({"coating": zemax_coating(b["COAT"][0][0], ident)} if b.get("COAT", [[]])[0] else {})
     return row
+
+
+# a surface's apertures other than a circle about the axis: refused, as reading DIAM instead would trace rays the
+# lens stops (rectangle, ellipse, obscurations, a user-defined shape; an aperture decentred by OBDC)
+OTHER_APERTURES = {"SQAP": "rectangular aperture", "ELAP": "elliptical aperture", "OBSC": "circular obscuration",
+                   "OBSQ": "rectangular obscuration", "OBEL": "elliptical obscuration", "UDAD": "user-defined aperture",
+                   "UDAP": "user-defined aperture"}
+
+
+def _circular_aperture(b: dict, ident: str) -> float:
+    """The radius of a CLAP line (Zemax's circular aperture, `CLAP min max …`; 0 without one) in file units: the
+    hard aperture rays beyond are stopped at, which replaces DIAM's. An annulus (min > 0), any other aperture kind
+    and a decentred aperture are refused by name."""
+    other = sorted(set(b) & set(OTHER_APERTURES))
+    if other:
+        raise SolasError(f"{ident}: {other[0]} ({OTHER_APERTURES[other[0]]}) is not supported; a surface's aperture "
+                         "may be its DIAM or a circular CLAP about the axis")
+    shift = [v for v in (b.get("OBDC") or [[]])[0][:2] if _floats([v], f"{ident}: OBDC")[0]]
+    if shift:
+        raise SolasError(f"{ident}: OBDC {' '.join(b['OBDC'][0][:2])} decentres the aperture; only apertures "
+                         "centred on the axis are supported")
+    if "CLAP" not in b:
+        return 0.0
+    radii = _floats(b["CLAP"][0][:2], f"{ident}: CLAP")
+    if len(radii) < 2 or radii[0] != 0.0 or not radii[1] > 0.0:
+        raise SolasError(f"{ident}: CLAP {' '.join(b['CLAP'][0][:2])}: a circular aperture must run from radius 0 to "
+                         "a positive radius (an annulus is not supported)")
+    return radii[1]
 
 
 def _parameters(b: dict, ident: str) -> dict[int, float]:

@@ -29,6 +29,7 @@ from .placement import Placement
 
 SHAPE_TYPES = ("TOROIDAL", "BICONICX")
 TERMS = 7  # TOROIDAL's PARM 2…8: α1…α7 (OpticStudio User Guide, "Toroidal")
+NORM_RADIUS_XDAT = 2  # TOROIDAL's extra data: XDAT 1 the number of Zernike terms, XDAT 2 their normalisation radius
 
 
 def form_row(kind: str, parameters: dict[int, float], extra: dict[int, float], scale: float, ident: str) -> dict:
@@ -40,7 +41,14 @@ def form_row(kind: str, parameters: dict[int, float], extra: dict[int, float], s
         raise SolasError(
             f"{ident}: {kind} PARM {stray[0]} = {parameters[stray[0]]:g} is not read (only PARM 1 to {last})"
         )
-    extra_set = sorted(k for k, v in extra.items() if v)
+    # TOROIDAL's XDAT 1 is its number of Zernike terms, XDAT 2 their normalisation radius (set, at 100, in
+    # files with no terms: Thorlabs' cylinder lenses), XDAT 3… the terms: the radius alone changes nothing
+    unused = (
+        {NORM_RADIUS_XDAT}
+        if kind == "TOROIDAL" and not any(v for k, v in extra.items() if k != NORM_RADIUS_XDAT)
+        else set()
+    )
+    extra_set = sorted(k for k, v in extra.items() if v and k not in unused)
     if extra_set:
         raise SolasError(
             f"{ident}: {kind} extra data XDAT {extra_set[0]} = {extra[extra_set[0]]:g} is not read "

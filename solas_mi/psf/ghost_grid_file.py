@@ -87,8 +87,8 @@ class NodeGhosts:
         for w, p in zip(*np.nonzero(self.energy > 0)):
             pitch = float(self.pitch_um[w, p])
             x0, y0 = (self.centroid_mm[w, p] - (cx, cy)) * 1e3  # µm from the grid's centre
-            cols, across = _overlap(x0, pitch, k, pitch_um, size)
-            rows, down = _overlap(-y0, pitch, k, pitch_um, size)  # rows run down from +y
+            cols, across = kernel_overlap(x0, pitch, k, pitch_um, size)
+            rows, down = kernel_overlap(-y0, pitch, k, pitch_um, size)  # rows run down from +y
             if len(cols) and len(rows):
                 spread = (across @ self.kernels[w, p].T).T  # sparse products: each grid pixel meets few kernel pixels
                 out[w, rows[0] : rows[-1] + 1, cols[0] : cols[-1] + 1] += self.energy[w, p] * (down @ spread)
@@ -335,7 +335,7 @@ class GhostGrid:
         )  # fmt: skip
 
 
-def _overlap(centre: float, pitch: float, k: int, grid_pitch: float, size: int) -> tuple[np.ndarray, Any]:
+def kernel_overlap(centre: float, pitch: float, k: int, grid_pitch: float, size: int) -> tuple[np.ndarray, Any]:
     """Along one axis, the pixels of a size-pixel grid (centred on pixel size // 2) that a k-pixel kernel (centred
     at `centre`, µm, on its pixel k // 2) covers, and the share of each kernel pixel each of them holds (their
     overlap over the kernel's pitch): a kernel's light resampled onto the grid by area, none lost inside it."""

@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..errors import SolasError
+from ..optics.lens_checks import as_built
 from .base import (
     DEFAULT_PITCH_UM,
     DEFAULT_SIZE,
@@ -44,6 +45,12 @@ def compute(
     origin on its chief ray or, with `shared_origin`, all on the first one's. `options`: the methods'
     own (`registry.METHODS`: each method's options); those of other methods are ignored."""
     own = method_options(method, options)
+    if as_built(lens):  # the Dr.Jit tracer's methods do not trace it: the NumPy tracer's paths
+        from . import as_built_methods
+
+        return as_built_methods.compute(
+            lens, field_deg, wavelength_nm, pitch_um, size, method, shared_origin=shared_origin, **own
+        )
     return METHODS[method].function(lens, field_deg, wavelength_nm, pitch_um, size, shared_origin=shared_origin, **own)
 
 
@@ -154,6 +161,10 @@ def _psf(lens, field, wavelengths, power_weights, pitch_um, size, method, normal
     total = np.tensordot(power_weights, computed.data, axes=1)
     energy = float(window_energy(total, pitch_um, np.dot(power_weights, computed.transmission)))
     meta = describe(lens, method, normalization, own, size)
+    if as_built(lens):
+        from .as_built_methods import PATHS
+
+        meta["path"] = PATHS[method]
     meta.update(
         {
             "chief_ray_mm": {f"{w:g}": computed.chief.image_xy[i].tolist() for i, w in enumerate(wavelengths)},

@@ -248,8 +248,8 @@ def register(sub) -> None:
                     "`solas-mi scene`, any scene holding a lens_sensor or lens_camera, or, with --lens, any "
                     "Mitsuba scene whose perspective camera is replaced by a lens_camera at the same pose.")
     render.add_argument("scene", help="scene XML")
+    from ..labelkinds import FLARE_LAYERS
     from ..optics.calibration.command import add_calibration_option
-    from .flare import FLARE_LAYERS
 
     add_calibration_option(render)
     add_set_option(render)

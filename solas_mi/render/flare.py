@@ -23,9 +23,8 @@ import math
 import numpy as np
 
 from ..errors import SolasError
+from ..labelkinds import FLARE_LAYERS, MAX_RATIO, flare_layers
 
-FLARE_LAYERS = ("flare.irradiance", "flare.ratio")
-MAX_RATIO = 1e6  # flare.ratio where stray light falls on a pixel the direct image leaves dark
 STRAY_SEED = 0x9E3779B9  # the stray-light render's seed: the frame's XOR this (its samples apart from the direct's)
 
 
@@ -97,16 +96,3 @@ def with_starburst(sensor, direct: np.ndarray, stray: np.ndarray):
             "wings": float(1.0 - kernel[centre, centre]),
         },
     )
-
-
-def flare_layers(direct: np.ndarray, stray: np.ndarray) -> dict[str, np.ndarray]:
-    """The `FLARE_LAYERS` of a direct and a stray-light image (H×W×C): the stray light's channel mean and
-    its ratio to the direct image's (module docstring)."""
-    flare = stray.astype(np.float64).mean(axis=-1)
-    base = direct.astype(np.float64).mean(axis=-1)
-    lit = flare > 0
-    ratio = np.where(lit & (base > 0), flare / np.where(base > 0, base, 1.0), np.where(lit, MAX_RATIO, 0.0))
-    return {
-        FLARE_LAYERS[0]: flare.astype(np.float32),
-        FLARE_LAYERS[1]: np.minimum(ratio, MAX_RATIO).astype(np.float32),
-    }

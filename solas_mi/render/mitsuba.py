@@ -80,7 +80,8 @@ def mitsuba(variant: str | None = None):
     """Mitsuba with a variant set and the solas-mi plugins registered for it.
 
     The entry for Python users: after it, a scene file or a `mi.load_dict` dictionary can name the
-    plugins (``lens_camera``, ``lens_sensor``, ``sellmeier_dielectric``, ``image_object``; the
+    plugins (``lens_camera``, ``lens_sensor``, ``sellmeier_dielectric``, ``coated_dielectric``,
+    ``image_object``; the
     [plugin reference](plugins.md)) like Mitsuba's own.
 
     Parameters

@@ -28,26 +28,18 @@ VARIANT = "llvm_ad_spectral"
 def lens_geometry(lens, rings: int | None = None, image_radius: float = 0.0, fresnel: str = "off", **extra):
     """The lens as a Mitsuba scene (mm, lens file's frame): cap meshes of `rings` rings (None:
     `render.mesh.mesh_rings`'s), a barrel holding the image plane out to `image_radius` mm, with `sellmeier_dielectric`
-    (`fresnel`: "off", no Fresnel losses; "sample", reflections sampled, ghosts) and absorbing apertures, no
+    (`coated_dielectric` on a coated surface; `fresnel`: "off", no Fresnel losses; "sample", reflections
+    sampled, ghosts) and absorbing apertures, no
     sensor image and no texture; `extra` scene entries (a sensor, an integrator, objects) are added as given."""
     from .mitsuba import mitsuba
 
     mi = mitsuba(VARIANT)
     scene = {"type": "scene", "absorber": {"type": "diffuse", "reflectance": {"type": "rgb", "value": 0.0}}, **extra}
     with tempfile.TemporaryDirectory(prefix="solas-lens-") as tmp:
-        for part in lens_parts(lens, rings, image_radius, lossless=fresnel == "off"):
+        for part in lens_parts(lens, rings, image_radius):
             path = Path(tmp) / f"{part.name}.ply"
             write_ply(path, *part.mesh)
-            bsdf = (
-                {"type": "ref", "id": "absorber"}
-                if part.int_glass is None
-                else {
-                    "type": "sellmeier_dielectric",
-                    "ext_glass": part.ext_glass,
-                    "int_glass": part.int_glass,
-                    "fresnel": fresnel,
-                }
-            )
+            bsdf = {"type": "ref", "id": "absorber"} if part.int_glass is None else part.bsdf(fresnel)
             scene[part.name] = {"type": "ply", "filename": str(path), "bsdf": bsdf}
         return mi.load_dict(scene)  # the meshes are read here, before the folder goes
 

@@ -1,7 +1,7 @@
 """A lens as Mitsuba geometry (the meshes: `render.mesh`): every refracting surface a triangle-mesh cap (sphere or even asphere) with vertex
 normals carrying its two glasses (`sellmeier_dielectric`), every clear aperture and the stop an
 absorbing annulus, a barrel closing the sides, the `lens_sensor` on the image plane and the input
-image as `image_object`.
+image as `image_object`. A coated surface's cap is a `coated_dielectric`, the same glasses with its coating.
 
 Coordinates are the lens file's (surface 1's vertex at the origin, +z toward the image, mm). Cap
 normals face the object (−z); the glass after the surface is the dielectric's interior.
@@ -10,6 +10,7 @@ Meshes are written as binary PLY beside the scene XML, so a scene directory is s
 from __future__ import annotations
 
 import itertools
+import json
 import math
 import os
 from dataclasses import dataclass
@@ -21,6 +22,7 @@ from ..errors import SolasError
 from ..imageio import atomic_path, write_text
 from ..optics import lens_checks, thermal, virtual_object
 from ..optics.camera import Camera, camera_for
+from ..optics.coating import Coating
 from ..optics.lens import Lens
 from ..outputs import inside, safe_name
 from ..psf.registry import METHODS
@@ -35,14 +37,25 @@ MIN_GAP_MM = 10 * SPAWN_OFFSET_MM  # closest two refracting surfaces of the mesh
 
 @dataclass(frozen=True)
 class Part:
-    """One shape of the lens scene: a mesh file name, its two glasses (None: an absorber) and the lens's
-    temperature and pressure where not 20 °C and 101.325 kPa (`optics.thermal.metadata`)."""
+    """One shape of the lens scene: a mesh file name, its two glasses (None: an absorber), the lens's
+    temperature and pressure where not 20 °C and 101.325 kPa (`optics.thermal.metadata`) and the surface's
+    coating (None: bare glass)."""
 
     name: str
     mesh: tuple[np.ndarray, np.ndarray, np.ndarray]
     ext_glass: str | None = None
     int_glass: str | None = None
     environment: tuple[tuple[str, float], ...] = ()
+    coating: Coating | None = None
+
+    def bsdf(self, fresnel: str) -> dict:
+        """The cap's BSDF as `mi.load_dict` takes it, its environment left out: `sellmeier_dielectric`
+        between its glasses with `fresnel`, or `coated_dielectric` with its coating's lens-file table as JSON."""
+        bsdf = {"type": "sellmeier_dielectric", "ext_glass": self.ext_glass, "int_glass": self.int_glass,
+                "fresnel": fresnel}
+        if self.coating is not None:
+            bsdf.update(type="coated_dielectric", coating=json.dumps(self.coating.table()))
+        return bsdf
 
 
 def check_gaps(lens: Lens) -> None:
@@ -75,10 +88,9 @@ def _trace_instead() -> str:
             f"({', '.join(tracers)})")
 
 
-def _check_buildable(lens: Lens, image_radius: float, lossless: bool = False) -> None:
-    """SolasError where `lens` has no solid geometry: an ideal thin lens, a virtual object, a coating or an
-    iris (the meshes are bare glass with a round stop; a coating changes nothing where the glass is
-    `lossless`, Fresnel off), overlapping surfaces, or a part (a vertex, the image plane out to `image_radius`) farther from surface 1 than
+def _check_buildable(lens: Lens, image_radius: float) -> None:
+    """SolasError where `lens` has no solid geometry: an ideal thin lens, a virtual object, an iris (the
+    meshes have a round stop), overlapping surfaces, or a part (a vertex, the image plane out to `image_radius`) farther from surface 1 than
     float32 places to 1 µm (a film 1e7 mm away rendered the wrong colours, one at 1e12 mm black); each
     message names what traces it instead."""
     reach = max(abs(float(lens.image_z)), float(np.abs(lens.vertex_z).max()), image_radius)
@@ -92,17 +104,16 @@ def _check_buildable(lens: Lens, image_radius: float, lossless: bool = False) ->
                          f"to build as Mitsuba geometry; trace it instead: {_trace_instead()}")
     virtual_object.check_real(lens, "the mesh scene")
     lens_checks.refuse_as_built(lens, "the mesh scene")
-    unbuilt = [f"surface {k}'s {what}" for k, s in enumerate(lens.surfaces, start=1)
-               for what, held in (("coating", s.coating and not lossless), ("iris (blades)", s.blades)) if held]
-    if unbuilt:  # the meshes have bare Fresnel surfaces and a round stop: neither would be what the lens states
-        raise SolasError(f"lens {lens.name}: {', '.join(unbuilt)} has no Mitsuba geometry here (bare glass, a round "
+    iris = next((k for k, s in enumerate(lens.surfaces, start=1) if s.blades), None)
+    if iris is not None:  # the meshes have a round stop: not what the lens states
+        raise SolasError(f"lens {lens.name}: surface {iris}'s iris (blades) has no Mitsuba geometry here (a round "
                          f"stop); trace it instead: {_trace_instead()}")
     if lens.overlaps:
         raise SolasError(f"lens {lens.name} cannot be built as Mitsuba geometry: {'; '.join(lens.overlaps)}. Trace it "
                          f"instead: {_trace_instead()}")
 
 
-def lens_parts(lens: Lens, rings: int | None = None, image_radius: float = 0.0, lossless: bool = False) -> list[Part]:
+def lens_parts(lens: Lens, rings: int | None = None, image_radius: float = 0.0) -> list[Part]:
     """Caps for refracting surfaces, absorbing annuli around every clear aperture (and the stop), and
     a barrel closing the sides from the first aperture to the image plane. A lens of polar fields (a
     fisheye) takes light from 90° and beyond, which reaches its front element from the side and from
@@ -110,9 +121,8 @@ def lens_parts(lens: Lens, rings: int | None = None, image_radius: float = 0.0, 
     at the second surface's rim. `rings` per cap (None: `mesh_rings`). The barrel's radius is twice the
     largest clear aperture plus 10 mm, or more to hold the image plane out to `image_radius` mm (the
     sensor's corners, a PSF's window): a barrel narrower than the image cut off the light that arrives
-    there (Cooke triplet at 32°: its light lands 31 mm off axis, outside a 30 mm barrel). `lossless`: the
-    glass will have no Fresnel losses (a coated lens is then built as its bare glass)."""
-    _check_buildable(lens, image_radius, lossless)
+    there (Cooke triplet at 32°: its light lands 31 mm off axis, outside a 30 mm barrel)."""
+    _check_buildable(lens, image_radius)
     rings = resolve_rings(lens, rings)
     check_gaps(lens)
     parts = []
@@ -128,7 +138,8 @@ def lens_parts(lens: Lens, rings: int | None = None, image_radius: float = 0.0, 
         if s.glass != before:
             cap = cap_mesh(s.radius, zv, s.semi_diameter, rings, s.conic, s.aspheric, s.qbfs, s.norm_radius)
             rim = cap[0][-len(phi):]
-            parts.append(Part(f"surface{k}", cap, before_name, s.material, tuple(thermal.metadata(lens).items())))
+            parts.append(Part(f"surface{k}", cap, before_name, s.material, tuple(thermal.metadata(lens).items()),
+                              s.coating))
         if not (k == 1 and lens.field_type.sideways):
             parts.append(Part(f"aperture{k}", absorber_ring(rim, s.semi_diameter, outer, zr, phi)))
             ring_z.append(zr)
@@ -158,17 +169,19 @@ def xml_attr(text) -> str:
 
 
 def _shapes_xml(parts: list[Part], mono: str) -> str:
-    """The <shape> elements of `parts`: a `sellmeier_dielectric` between its two glasses (with the mono
-    variants' `wavelength` element `mono`, or ""), or the absorber."""
+    """The <shape> elements of `parts`: its BSDF (`Part.bsdf`: `sellmeier_dielectric` between its two glasses,
+    `coated_dielectric` for a coated surface; with the mono variants' `wavelength` element `mono`, or ""), or
+    the absorber."""
     shapes = []
     for p in parts:
         if p.int_glass is None:
             bsdf = '<ref id="absorber"/>'
         else:
             where = "".join(f'<float name="{key}" value="{value!r}"/>' for key, value in p.environment)
-            bsdf = (f'<bsdf type="sellmeier_dielectric"><string name="ext_glass" value="{xml_attr(p.ext_glass)}"/>'
-                    f'<string name="int_glass" value="{xml_attr(p.int_glass)}"/><string name="fresnel" value="$fresnel"/>'
-                    f'{where}{mono}</bsdf>')
+            params = p.bsdf("$fresnel")
+            bsdf = (f'<bsdf type="{params.pop("type")}">'
+                    + "".join(f'<string name="{key}" value="{xml_attr(value)}"/>' for key, value in params.items())
+                    + f'{where}{mono}</bsdf>')
         shapes.append(f'    <shape type="ply" id="{p.name}">\n        <string name="filename" value="meshes/{p.name}.ply"/>\n'
                       f'        {bsdf}\n    </shape>')
     return "\n".join(shapes)

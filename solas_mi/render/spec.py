@@ -106,7 +106,8 @@ class RenderSpec(OptionSpec):
         "the object outside the image: edge (repeat the border), reflect, zero (black)", "edge", choices=BOUNDARIES
     )
     fresnel: str = option(
-        "Fresnel losses: transmit (weight by transmittance), sample (ghost paths too), off",
+        "Fresnel losses (a coated surface's: its coating's): transmit (weight by transmittance), sample (ghost "
+        "paths too), off",
         "transmit",
         choices=FRESNEL_MODES,
     )

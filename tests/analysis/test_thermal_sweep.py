@@ -121,3 +121,12 @@ def test_a_psf_says_where_its_lens_is(doublet):
     plain = psf(doublet, (0.0, 0.0), 531.0, pitch_um=2.0, size=16).meta
     assert (hot["temperature_c"], hot["pressure_kpa"], hot["lens_hash"]) == (60.0, 95.0, doublet.at(60.0, 95.0).hash)
     assert "temperature_c" not in plain and "pressure_kpa" not in plain
+
+
+def test_thermal_command_takes_pupil_samples(tmp_path):
+    """--pupil-samples reaches the sweep as a number (it was passed on as the command line's text and refused)."""
+    from solas_mi.cli import main
+
+    argv = ["thermal", "solas-doublet", "--from", "20", "--to", "20", "--pupil-samples", "32", "-o", str(tmp_path)]
+    assert main(argv) == 0
+    assert json.loads((tmp_path / "thermal.json").read_text())["pupil_samples"] == 32

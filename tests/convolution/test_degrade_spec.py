@@ -57,7 +57,16 @@ def _other_text(name: str, action) -> str:
     default = DegradeSpec.fields_by_name()[name].default
     if action.choices:
         return next(c for c in action.choices if c != default)
-    return {"depth_pattern": "{stem}_z.exr", "scale_lens": "3.5", "label_patterns": "instance={stem}_ids.png"}[name]
+    return {
+        "depth_pattern": "{stem}_z.exr",
+        "scale_lens": "3.5",
+        "label_patterns": "instance={stem}_ids.png",
+        "ghost_threshold": "250",
+    }[name]
+
+
+# the flags another flag goes with: the ghost threshold is refused without --ghosts
+WITH = {"ghost_threshold": ("ghosts", ["--ghosts"])}
 
 
 @pytest.mark.parametrize(
@@ -85,9 +94,10 @@ def test_every_flag_sets_its_spec_field(command, base, build):
         extra = [action.option_strings[0]] + (
             [] if isinstance(action, argparse._StoreTrueAction) else [_other_text(name, action)]
         )
-        spec = build(parser.parse_args([*base, *extra]))
+        other, flag = WITH.get(name, (None, []))
+        spec = build(parser.parse_args([*base, *flag, *extra]))
         changed = {f for f in DegradeSpec.fields_by_name() if getattr(spec, f) != getattr(default, f)}
-        assert changed == {name}, (name, changed)
+        assert changed == {name} | ({other} if other else set()), (name, changed)
         assert getattr(spec, name) == (True if len(extra) == 1 else flags[name].read(extra[1]))
 
 

@@ -376,7 +376,11 @@ def test_a_break_with_a_thickness_of_its_own_places_the_next_surface_as_zemax_do
             "followed by another break that does not undo it",
         ),
         ("SURF 3\n  TYPE TOROIDAL\n  PARM 12 0.5\n  DIAM 1 1\n", "TOROIDAL PARM 12 = 0.5 is not read"),
-        ("SURF 3\n  TYPE TOROIDAL\n  XDAT 2 3\n  DIAM 1 1\n", "TOROIDAL extra data XDAT 2 = 3 is not read"),
+        ("SURF 3\n  TYPE TOROIDAL\n  XDAT 1 2\n  XDAT 2 3\n  DIAM 1 1\n", "TOROIDAL extra data XDAT 1 = 2 is not read"),
+        (
+            "SURF 3\n  TYPE TOROIDAL\n  XDAT 2 3\n  XDAT 3 0.1\n  DIAM 1 1\n",
+            "TOROIDAL extra data XDAT 2 = 3 is not read",
+        ),
     ],
 )
 def test_what_is_not_read_is_refused_by_name(tmp_path, extra, message):
@@ -417,3 +421,25 @@ def test_the_chief_ray_of_a_decentred_ideal_lens_lands_at_the_decentre_plus_f_ta
     assert chief.found.all() and np.abs(chief.image_xy - expected).max() < 1e-12
     with pytest.raises(SolasError, match="aimed for an object at infinity only"):
         local_aim.chief_rays(_lens(*ASPHERE_ROWS, object={"distance": 500.0}), fields, 550.0)
+
+
+def test_the_fisheye_s_chief_rays_are_aimed_out_to_80_degrees_as_the_drjit_tracer_s():
+    """`local_aim` on the shipped fisheye (no breaks): its chief rays land where the Dr.Jit tracer's do at every
+    field the Dr.Jit aim reaches, 0 to 80° in x, y and both (45° once circled without converging)."""
+    lens, wl = Lens.load("nikkor-fisheye"), 587.5618
+    angles = np.arange(0.0, 81.0, 5.0)
+    fields = np.concatenate([np.stack([0 * angles, angles], 1), [[45.0, 0.0], [30.0, 30.0], [-50.0, 40.0]]])
+    ours = local_aim.chief_rays(lens, fields, wl)
+    theirs = pupil.chief_rays(lens, fields, np.full(len(fields), wl))
+    aimed = ~theirs.off_centre
+    assert aimed.sum() >= len(fields) - 2 and ours.found[aimed].all()
+    assert np.abs(ours.image_xy - theirs.image_xy)[aimed].max() < 1e-9
+
+
+def test_a_toroid_s_normalisation_radius_without_terms_is_read_as_nothing(tmp_path):
+    """TOROIDAL's XDAT 1 is its number of Zernike terms and XDAT 2 their normalisation radius: with no terms
+    (Thorlabs' cylinder lenses write XDAT 1 0, XDAT 2 100) the radius changes nothing, and the lens loads as
+    without it (it was refused)."""
+    plain = _load(tmp_path, _zmx(SINGLET))
+    extra = SINGLET.replace("  TYPE TOROIDAL\n", "  TYPE TOROIDAL\n  XDAT 1 0\n  XDAT 2 100\n", 1)
+    assert extra != SINGLET and _load(tmp_path, _zmx(extra)).surfaces == plain.surfaces

@@ -59,3 +59,25 @@ def test_numpy_arrays_reach_dr_jit_without_new_kernels():
         assert len(kernels) == 1
     finally:
         dr.set_flag(dr.JitFlag.KernelHistory, False)
+
+
+def test_chief_rays_that_the_paraxial_guess_reaches_are_aimed_once(monkeypatch):
+    """`chief_aim` aims from the paraxial guess to learn which fields it loses; where it loses none, that
+    aim is the chief rays' (the same aim, from the same start, was run a second time)."""
+    fields = np.stack([np.zeros(5), np.linspace(0.0, 2.0, 5)], axis=-1)
+    doublet = Lens.load("solas-doublet")
+    calls = []
+    aim = A.aim
+
+    def counting(*args, **kwargs):
+        calls.append(args[0].n_fields)
+        return aim(*args, **kwargs)
+
+    monkeypatch.setattr(A, "aim", counting)
+    monkeypatch.setattr(P, "aim", counting)
+    chief = P.chief_rays(doublet, fields, np.full(5, 531.0))
+    assert calls == [5]
+    tr = P.Bundle(doublet, fields, np.full(5, 531.0), 1).trace(
+        T.array(chief.entrance[:, 0]), T.array(chief.entrance[:, 1])
+    )
+    assert np.abs(np.concatenate(T.to_numpy(tr.stop_x, tr.stop_y))).max() < 1e-9  # through the stop centre

@@ -485,3 +485,28 @@ def test_envd_is_where_the_prescription_holds(tmp_path, header):
     assert hot.hash == thermal.in_environment(base, 50.0, hot.pressure_kpa).hash != base.hash
     assert Lens.load(hot.save(tmp_path / "again.zmx")).hash == hot.hash
     assert "ENVD 20.0 1.0 0" in base.save(tmp_path / "base.zmx").read_text()
+
+
+def test_a_circular_aperture_is_the_surfaces_clear_aperture(tmp_path):
+    """CLAP 0 R is the hard aperture Zemax stops rays at: it replaces DIAM's semi-diameter (14 here), which Zemax
+    draws but does not stop rays with; before, CLAP was dropped without a word and rays passed out to 14 mm."""
+    lens = load(tmp_path, zmx(s2='DIAM 14 1 0 0 1 ""\n  CLAP 0 5 0'))
+    assert lens.surfaces[1].diameter == pytest.approx(10.0, rel=1e-12)
+    assert load(tmp_path, zmx(s2="CLAP 0 5.5 0")).surfaces[1].diameter == pytest.approx(11.0, rel=1e-12)
+
+
+@pytest.mark.parametrize(
+    "line, words",
+    [
+        ("SQAP 3 2 0", "SQAP (rectangular aperture)"),
+        ("ELAP 3 2 0", "ELAP (elliptical aperture)"),
+        ("OBSC 0 1 0", "OBSC (circular obscuration)"),
+        ("CLAP 2 5 0", "CLAP 2 5: a circular aperture must run from radius 0"),
+        ("CLAP 0 5 0\n  OBDC 0.5 0", "OBDC 0.5 0 decentres the aperture"),
+    ],
+)
+def test_apertures_other_than_a_centred_circle_are_refused_by_name(tmp_path, line, words):
+    """A rectangle, an ellipse, an obscuration, an annulus or a decentred aperture: reading DIAM instead (as
+    before, silently) would trace rays the real lens stops."""
+    with pytest.raises(SolasError, match=re.escape(words)):
+        load(tmp_path, zmx(s2=f"DIAM 14 1\n  {line}"))

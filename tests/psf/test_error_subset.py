@@ -51,3 +51,28 @@ def test_a_converged_grid_estimates_a_few(doublet, monkeypatch):
     monkeypatch.setattr(F, "error_estimate", lambda *a: errors.append(estimate(*a)) or errors[-1])
     psf_grid(doublet, **options)
     assert np.max(np.concatenate(errors)) < F.PROBE_WIDEN * F.ERROR_LIMIT  # the first pass was right
+
+
+def test_the_estimate_s_coarser_pupils_are_aimed_from_the_psfs_own_rays(doublet, monkeypatch):
+    """The error estimate's coarser pupils (85² of the PSFs' 128²) start from the PSFs' solved rays, one
+    level of Newton steps on the 85² grid alone (the coarser levels 6² and 22² of an aim from the stop rim
+    left out), and are the pupils that aim gives: every ray converges to the same tolerance."""
+    fields = np.array([[0.0, 0.0], [1.0, 0.5], [2.0, 2.0], [0.3, 1.9]])
+    waves = np.array([486.0, 531.0, 656.0, 531.0])
+    coarse, index = F.coarse_samples(128), np.array([1, 3])
+    cold = P.Pupils(doublet, fields, waves).sampled(coarse, index)
+    pupils = P.Pupils(doublet, fields, waves)
+    pupils.sampled(128)
+    traced = []
+    trace = P.Bundle.trace
+
+    def record(self, ex, ey, heights=None, rays=None):
+        traced.append(self.per_field)
+        return trace(self, ex, ey, heights, rays)
+
+    monkeypatch.setattr(P.Bundle, "trace", record)
+    warm = pupils.sampled(coarse, index)
+    assert set(traced) == {coarse * coarse}
+    np.testing.assert_allclose(warm.opd_mm, cold.opd_mm, rtol=0, atol=1e-12)
+    np.testing.assert_allclose(warm.power, cold.power, rtol=1e-8, atol=1e-8 * cold.power.max())
+    np.testing.assert_allclose(warm.coverage, cold.coverage, rtol=0, atol=1e-8)

@@ -1,0 +1,85 @@
+"""Fraunhofer PSFs of the lens as built at a field (x, y degrees), from a grid of real rays traced by the NumPy
+tracer (`psf.as_built.Beam`): each ray's optical path to the reference sphere about the chief ray's image point
+on the image plane (in that plane's own frame: a tilted sensor's), whose radius is the chief ray's path back to
+the paraxial exit-pupil plane (about the nominal axis), and the direction cosines (α, β) of its point on the
+sphere seen from the image point. The Fraunhofer integral over the sphere, ∫ A e^{ikW} e^{−ik(αu + βv)} dα dβ
+with A² the power per dα dβ, is summed over the rays: each carries √(p dΩ) (its power p and the solid angle
+dΩ = |∂(α, β)/∂(ex, ey)| dA its entrance cell maps to, the Jacobian by finite differences of offset traces),
+separable in u and v as `fraunhofer.fraunhofer`'s matrix DFT, in the same units (1/µm²; the on-axis entrance
+pupil carries power 1). The pupil's rim is the entrance grid's staircase (errors of about one cell's width
+over the pupil's radius at the rim; `tests/psf/test_as_built_psf.py` measures them). Lengths in mm.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from ..optics.lens import Lens
+from ..optics.paraxial import paraxial
+from ..optics.placement import frames
+from .as_built import Beam, beam, ray_power
+from .base import grid_offsets
+
+STEP = 1e-4  # the finite-difference step of the Jacobian, as a fraction of the pupil square's half-width
+
+
+def sphere_points(lens: Lens, b: Beam, ex, ey, wavelength_nm: float, radius: float | None = None):
+    """(α, β, optical path to the sphere, ok) of the rays of entrance coordinates (ex, ey): α, β the direction
+    cosines from the chief ray's image point to where each ray crosses the reference sphere, in the image plane's
+    frame; `radius` that sphere's (default: the chief ray's path back to the paraxial exit-pupil plane). Also the
+    radius."""
+    axes = frames(lens.surfaces, lens.image_placement)[-1][1]
+    out = b.trace(lens, ex, ey, wavelength_nm)
+    d = np.stack([out.dx, out.dy, out.dz], axis=1) @ axes  # directions in the image plane's frame
+    p0 = np.append(b.chief.image_xy[0], 0.0)
+    if radius is None:
+        chief = b.trace(lens, *(np.array([c]) for c in b.centre), wavelength_nm)
+        cd = np.array([chief.dx[0], chief.dy[0], chief.dz[0]]) @ axes
+        p = paraxial(lens, wavelength_nm)
+        radius = float((p.image_z_mm - p.exit_pupil_z_mm) / cd[2])
+    w = np.stack([out.image_x, out.image_y, np.zeros(len(ex))], axis=1) - p0
+    wd = np.sum(w * d, axis=1)
+    t = wd + np.sqrt(wd * wd - np.sum(w * w, axis=1) + radius * radius)  # back along each ray to the sphere
+    q = w - t[:, None] * d
+    n_image = float(lens.surfaces[-1].glass.index(wavelength_nm))
+    return q[:, 0] / radius, q[:, 1] / radius, out.opl - n_image * t, out.ok, radius
+
+
+def fraunhofer(lens: Lens, field_deg, wavelength_nm, pitch_um: float, size: int, rays: int) -> np.ndarray:
+    """Fraunhofer PSFs (n, size, size) in 1/µm² of the lens as built at fields `field_deg` (n, 2) and
+    `wavelength_nm` (n,, or one), each traced (a grid over the whole field: no half of it mirrored)."""
+    field_deg = np.asarray(field_deg, dtype=np.float64).reshape(-1, 2)
+    wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(field_deg),))
+    return np.array([field_psf(lens, f, float(w), pitch_um, size, rays) for f, w in zip(field_deg, wavelength_nm)])
+
+
+def field_psf(lens: Lens, field_deg, wavelength_nm: float, pitch_um: float, size: int, rays: int) -> np.ndarray:
+    """The Fraunhofer PSF (size, size) in 1/µm² of the lens as built at `field_deg`, on the image plane's grid
+    about the chief ray's image point (rows down from +y, as `fraunhofer.fraunhofer`), from rays×rays rays."""
+    b = beam(lens, field_deg, wavelength_nm)
+    ex, ey = b.grid(rays)
+    alpha, beta, path, ok, radius = sphere_points(lens, b, ex, ey, wavelength_nm)
+    h = STEP * b.half
+    jac = []
+    for dx, dy in ((h, 0.0), (0.0, h)):  # forward differences, backward where the forward ray is lost
+        a1, b1, _, ok1, _ = sphere_points(lens, b, ex + dx, ey + dy, wavelength_nm, radius)
+        a0, b0, _, ok0, _ = sphere_points(lens, b, ex - dx, ey - dy, wavelength_nm, radius)
+        jac.append(np.where(ok1, [a1 - alpha, b1 - beta], [alpha - a0, beta - b0]) / h)
+        ok &= ok1 | ok0
+    solid = np.abs(jac[0][0] * jac[1][1] - jac[0][1] * jac[1][0]) * (2.0 * b.half / rays) ** 2
+    centre = np.flatnonzero(ok)[np.argmin(np.hypot(ex - b.centre[0], ey - b.centre[1])[ok])]
+    opd = path - path[centre]  # to the ray nearest the chief ray
+    wave = wavelength_nm * 1e-6
+    lam = wave / float(lens.surfaces[-1].glass.index(wavelength_nm))  # in image space
+    k = 2.0 * math.pi / lam
+    amp = np.sqrt(ray_power(lens, b, rays, wavelength_nm) * solid[ok]) * np.exp(2j * math.pi * opd[ok] / wave)
+    offs = grid_offsets(size, pitch_um) * 1e-3
+    ku = np.exp(-1j * k * np.outer(alpha[ok], offs))  # (rays, size): columns u = +x
+    kv = np.exp(-1j * k * np.outer(beta[ok], -offs))  # rows v = −offsets: down from +y
+    field = (kv * amp[:, None]).T @ ku
+    return (field.real**2 + field.imag**2) / lam**2 * 1e-6
+
+
+__all__ = ["STEP", "field_psf", "fraunhofer", "sphere_points"]
