@@ -54,11 +54,11 @@ the lanes that leave the lens within `lane_tolerance` of it (`lanes_together`), 
 lanes alike it), so every lane's estimate is unbiased.
 
 With `ghosts`, each sample first draws its path, the direct one or a ghost (`ghost_sampling`: by the
-ghost table's energies), and all its lanes follow it (`solas_mi.optics.ghost_trace`: the reversed lens's
+ghost table's energies, or toward the scene's area emitters, `ghost_guide`), and all its lanes follow it (`solas_mi.optics.ghost_trace`: the reversed lens's
 surfaces met from either side, reflected or crossed; every event weighs the ray by its coating's or
 Fresnel's reflectance or transmittance); the weight is divided by the path's probability. A ghost's pupil
 point is drawn on a square that holds the last surface's whole clear aperture (its rays may enter where
-the direct path's are stopped).
+the direct path's are stopped), toward the scene's area emitters where it has any.
 
 The weight of `sample_ray` is the pupil weight × 1/p(λ) × the Fresnel transmittance, scaled so that the
 pixel value is the image irradiance in units of a lossless lens's on-axis irradiance from radiance 1: a
@@ -155,7 +155,7 @@ class LensCamera(LensFilm):
             )
         if not dr.is_jit_v(mi.Float):
             raise SolasError(f"lens_camera: ghosts need a JIT variant (llvm_ad_*, cuda_ad_*), not {mi.variant()}")
-        sampler = GhostSampler(self.lens, ghosts, self.pupil.plane_z, self.half_diagonal_mm)
+        sampler = GhostSampler(self.lens, ghosts, self.pupil.plane_z, (self.film_size, self.pitch_mm))
         if all(s.coating is None for s in self.lens.surfaces):
             mi.Log(mi.LogLevel.Warn, f"lens_camera: lens {self.lens.name} has no coatings: its ghosts are bare glass's")
         return sampler
@@ -312,12 +312,15 @@ class LensCamera(LensFilm):
         the four lanes traced from one film point and pupil point, the hero's ray carrying those that
         leave the lens alike it."""
         film, path = self.film_point(sample2), None
-        if self.ghosts is not None:  # the sample's path (`ghost_sampling`), and sample3 stretched back
-            *path, inverse_p, sample3 = self.ghosts.choose(sample3)
+        if self.ghosts is not None:  # the sample's path and pupil point (`ghost_sampling`)
+            if not dr.flag(dr.JitFlag.SymbolicScope):  # toward the scene's bright emitters (`ghost_guide`)
+                matrix = np.array(self.world_transform().matrix, dtype=np.float64).reshape(4, 4)
+                wavelength = self.response.single_wavelength or self.lens.primary_wavelength
+                self.ghosts.aim(calling_render()[0], matrix, wavelength)
+            path, direct, sample3, point, ghost_weight = self.ghosts.draw(film, sample3)
         target, weight = self.pupil.sample(film, sample3, active)
         if path:
-            target, weight = self.ghosts.target(film, sample3, path[0], target, weight)
-            weight = weight * inverse_p
+            target, weight = self.ghosts.target(direct, target, weight, point, ghost_weight)
         samples, hero = self.lane_samples(sample1, sample2)
         lams, origins, directions, passed, weights = [], [], [], [], []
         for sample in samples:
