@@ -9,6 +9,13 @@ RMS spot on axis (`thermal.best_focus_mm`), "mtf50" from there to the highest MT
 section search over ± `MTF_FOCUS_SPAN` · 2 λ N², λ the primary wavelength, N the working f-number: a
 few depths of focus), "none" leaves it (the lens as assembled on a fixed flange).
 
+A spec with an as-built kind (decentre, tilt, sensor tilt: `optics.tolerance.is_as_built`) draws lenses
+that are no longer symmetric: then every lens of the run — the nominal, each sample and each sensitivity —
+is measured by one method, `Settings.mtf` = "geometric" (`as_built.mtf50_across_field`: the geometric MTF
+at the primary wavelength, no diffraction) at signed fields along y (−half … +half field), so that
+percentiles and the yield compare like with like; a symmetric-only spec keeps the diffraction MTF at
+0 … half field, its figures as before. The compensator still focuses on the nominal axis.
+
 Samples are independent: each is drawn from the seed and its index (`optics.tolerance.draw`) by whichever
 process measures it, so `workers` (local processes) change the time only, never a number.
 """
@@ -42,6 +49,20 @@ class Settings:
     compensator: str = "rms-spot"
     field_samples: int = 5
     pupil_samples: int | None = None
+    mtf: str = "diffraction"  # `MTF_METHODS`: "geometric" for a run with a lens as built (module docstring)
+
+
+MTF_METHODS = ("diffraction", "geometric")
+
+
+def _geometric_mtf50(lens, field_samples: int) -> tuple[tuple[float, ...], np.ndarray]:
+    """(signed y fields, degrees; their MTF50 (fields, 2)) of `as_built.mtf50_across_field` at the primary
+    wavelength over −half … +half field (2 · `field_samples` − 1 fields)."""
+    from .as_built import mtf50_across_field
+
+    fields = tuple(float(f) for f in np.linspace(-1.0, 1.0, 2 * field_samples - 1) * lens.field_deg)
+    grid = np.array([[0.0, f] for f in fields])
+    return fields, mtf50_across_field(lens, grid, lens.primary_wavelength)
 
 
 def _axis_mtf50(lens, pupil_samples: int | None) -> float:
@@ -90,14 +111,18 @@ def evaluate(lens, settings: Settings, despace_mm: float = 0.0) -> dict:
         shift = _mtf_focus(lens, shift, settings.pupil_samples)
     shift += despace_mm if settings.compensator != "none" else 0.0
     assembled = refocused(lens, shift)
-    result = mtf50_field(assembled, field_samples=settings.field_samples, pupil_samples=settings.pupil_samples)
+    if settings.mtf == "geometric":
+        fields, values, warnings = *_geometric_mtf50(assembled, settings.field_samples), ()
+    else:
+        result = mtf50_field(assembled, field_samples=settings.field_samples, pupil_samples=settings.pupil_samples)
+        fields, values, warnings = result.fields_deg, result.mtf50_cy_mm, result.warnings
     return {
         "efl_mm": first.efl_mm,
         "bfd_mm": first.bfd_mm,
         "focus_shift_mm": shift,
-        "fields_deg": result.fields_deg,
-        "mtf50_cy_mm": result.mtf50_cy_mm,
-        "warnings": result.warnings,
+        "fields_deg": fields,
+        "mtf50_cy_mm": values,
+        "warnings": warnings,
         "assembled": assembled,
     }
 
@@ -194,6 +219,7 @@ def yield_fraction(rows: list[dict], limit_cy_mm: float) -> tuple[float, float]:
 
 
 __all__ = [
+    "MTF_METHODS",
     "PERCENTILES",
     "Settings",
     "check_limit",

@@ -89,6 +89,13 @@ def write(folder, spec, rows, sensitivity, nominal: dict, summary: dict) -> list
     return [out / LENS_FOLDER, *paths]
 
 
+MTF_NOTES = {
+    "diffraction": "the polychromatic diffraction MTF at 0 ... half field (a lens symmetric about its axis)",
+    "geometric": "the geometric MTF (no diffraction) at the primary wavelength of every lens, the nominal too, "
+    "at signed fields along y (lenses as built: decentre, tilt or sensor tilt)",
+}
+
+
 def summarise(lens, spec, settings, rows, nominal, limit, seed) -> dict:
     """tolerance.json's content: the settings, nominal figures, percentiles per field and the yield."""
     spread = tolerance.percentiles(rows)
@@ -114,6 +121,8 @@ def summarise(lens, spec, settings, rows, nominal, limit, seed) -> dict:
             "compensator": settings.compensator,
             "field_samples": settings.field_samples,
             "pupil_samples": settings.pupil_samples,
+            "mtf": settings.mtf,
+            "mtf_note": MTF_NOTES[settings.mtf],
         },
         "nominal": {
             **{k: v for k, v in nominal.items() if k not in ("warnings", "mtf50_cy_mm", "assembled")},
@@ -136,6 +145,7 @@ def _say(summary: dict) -> str:
             f"{field:12g}  {pair(nominal['mtf50_cy_mm'][i]):>11s}   "
             + "  ".join(f"{pair(spread[str(p)][i]):>9s}" for p in tolerance.PERCENTILES)
         )
+    lines.append(f"MTF50: {summary['settings']['mtf_note']}")
     if summary["yield"] is not None:
         lines.append(
             f"yield (worst MTF50 >= {summary['mtf50_limit_cy_mm']:g} cy/mm): "
@@ -147,7 +157,7 @@ def _say(summary: dict) -> str:
 def run_tolerance(args) -> int:
     """The `tolerance` command."""
     from ..optics.commands import load_lens
-    from ..optics.tolerance import read_spec
+    from ..optics.tolerance import is_as_built, read_spec
     from ..progress import Progress
     from . import inputs
 
@@ -161,6 +171,7 @@ def run_tolerance(args) -> int:
         spec.compensator,
         inputs.count(args.field_samples, "field samples", 2, 64),
         inputs.pupil_samples(OPTIONS["pupil_samples"].value(args)),
+        tolerance.MTF_METHODS[is_as_built(spec)],
     )
     nominal = tolerance.evaluate(lens, settings)
     rows = tolerance.monte_carlo(
