@@ -157,7 +157,8 @@ def _say(summary: dict) -> str:
 def run_tolerance(args) -> int:
     """The `tolerance` command."""
     from ..optics.commands import load_lens
-    from ..optics.tolerance import is_as_built, read_spec
+    from ..optics.tolerance import read_spec
+    from ..optics.tolerance_placement import is_as_built
     from ..progress import Progress
     from . import inputs
 
@@ -205,7 +206,7 @@ def register(sub) -> None:
 
     p = sub.add_parser(
         "tolerance",
-        help="Monte Carlo of a lens's symmetric tolerances (a TOML file): the drawn lenses, their MTF50 per "
+        help="Monte Carlo of a lens's tolerances (a TOML file): the drawn lenses, their MTF50 per "
         "field (percentiles, a plot), each tolerance's sensitivity and the yield against an MTF50 limit",
     )
     add_lens_argument(p)

@@ -1,4 +1,4 @@
-"""A lens's symmetric tolerances: a tolerance file (TOML, `read_spec`), each tolerance's perturbation of a
+"""A lens's tolerances: a tolerance file (TOML, `read_spec`), each tolerance's perturbation of a
 lens (`perturbed`, through `dataclasses.replace` of the public `Lens` and `Surface`), and the lenses of a
 Monte Carlo drawn from it (`draw`), each sample's random stream derived from the seed and the sample's
 index alone (`numpy.random.default_rng([seed, index])`), so a sample is the same lens whichever worker
@@ -306,9 +306,9 @@ def perturbed(lens, spec: ToleranceSpec, deltas):
     return as_built.placed(lens, groups, sensor) if groups or any(sensor) else lens
 
 
-def is_as_built(spec: ToleranceSpec) -> bool:
-    """Whether `spec` draws lenses as built (a decentre, tilt or sensor tilt: `tolerance_placement`)."""
-    return any(term.kind in as_built.AS_BUILT for term in spec.terms)
+def symmetric(lens, spec: ToleranceSpec, deltas):
+    """`perturbed` by `deltas` without the as-built terms: the drawn lens's part on one axis."""
+    return perturbed(lens, spec, [0.0 if t.kind in as_built.AS_BUILT else d for t, d in zip(spec.terms, deltas)])
 
 
 def parameter(lens, term: Term) -> float:
@@ -388,7 +388,6 @@ __all__ = [
     "ToleranceSpec",
     "draw",
     "draw_deltas",
-    "is_as_built",
     "SIDES",
     "alone",
     "despace",
@@ -397,4 +396,5 @@ __all__ = [
     "perturbed",
     "read_spec",
     "spec_from_dict",
+    "symmetric",
 ]

@@ -66,11 +66,18 @@ def placed(lens, groups: dict, sensor: tuple[float, float] = (0.0, 0.0)):
     return replace(lens, surfaces=tuple(surfaces), image_placement=image)
 
 
+def is_as_built(spec) -> bool:
+    """Whether tolerance spec `spec` draws lenses as built (a decentre, tilt or sensor tilt)."""
+    return any(term.kind in AS_BUILT for term in spec.terms)
+
+
 def moves(spec, deltas) -> tuple[dict, tuple[float, float]]:
     """(groups, sensor) of `placed` from the as-built terms of `spec` at `deltas`."""
     groups: dict = {}
     sensor = [0.0, 0.0]
     for term, delta in zip(spec.terms, deltas):
+        if not delta:
+            continue
         if term.kind == "sensor_tilt":
             sensor[AXES.index(term.axis)] += delta
         elif term.kind in AS_BUILT:
@@ -90,4 +97,4 @@ def parameter(lens, term) -> float:
     return math.degrees(-math.asin(z[1]) if term.axis == "x" else math.atan2(z[0], z[2]))
 
 
-__all__ = ["AS_BUILT", "AXES", "moves", "parameter", "placed"]
+__all__ = ["AS_BUILT", "AXES", "is_as_built", "moves", "parameter", "placed"]

@@ -85,3 +85,19 @@ def test_elements_that_share_a_surface_are_refused(cooke):
     ]
     with pytest.raises(SolasError, match="s3-4 and s4-5 share surfaces"):
         tol.spec_from_dict(cooke, {"tolerance": entries})
+
+
+def test_the_last_elements_tilt_and_decentre_return_to_a_sensor_tilted_about_its_axial_point(cooke):
+    entries = [
+        {"kind": "decentre", "surfaces": [5, 6], "mm": 0.05},
+        {"kind": "tilt", "surfaces": [5, 6], "degrees": 0.3},
+        {"kind": "sensor_tilt", "degrees": 0.4},
+    ]
+    spec = tol.spec_from_dict(cooke, {"tolerance": entries})
+    drawn, (dx, dy, tx, ty, sx, sy) = tol.draw(cooke, spec, 5, 2)
+    design, built = _frames(cooke), _frames(drawn)
+    turn = Placement(tilt_x=tx, tilt_y=ty).rotation()
+    pivot = design[4][0] + np.array([dx, dy, 0.0])
+    assert np.abs(built[5][0] - (pivot + turn @ (design[5][0] - design[4][0]))).max() < 1e-12
+    assert np.abs(built[6][0] - design[6][0]).max() < 1e-12  # the image plane's axial point stays
+    assert np.abs(built[6][1] - Placement(tilt_x=sx, tilt_y=sy).rotation()).max() < 1e-12

@@ -57,3 +57,15 @@ def test_the_sensitivity_table_has_the_sensor_tilt_terms(doublet, spec):
     for row in rows:  # a tilt defocuses one side of the field or the other: the worst field gets worse
         assert row["worst_mtf50_cy_mm_minus"] < nominal and row["worst_mtf50_cy_mm_plus"] < nominal
         assert row["parameter_plus"] == pytest.approx(TILT_DEG, rel=1e-9)
+
+
+def test_a_decentred_sample_is_focused_as_its_symmetric_part_by_the_compensator(doublet):
+    """The Dr.Jit tracer the compensator uses takes one axis: it focuses the drawn lens without its decentre
+    (here: the design), and the as-built lens is measured at that focus."""
+    entry = {"kind": "decentre", "surfaces": [1, 2], "mm": 0.02}
+    spec = tol.spec_from_dict(doublet, {"tolerance": [entry]})
+    settings = tolerance.Settings("rms-spot", 2, None, "geometric")
+    row = tolerance.sample(doublet, spec, 2, 0, settings)
+    assert row["focus_shift_mm"] == tolerance.evaluate(doublet, settings)["focus_shift_mm"]
+    assert row["lens"].surfaces[0].placement == Placement(decentre_x=row["deltas"][0], decentre_y=row["deltas"][1])
+    assert np.isfinite(row["mtf50_cy_mm"]).all()
