@@ -57,7 +57,7 @@ def _plot(nominal: dict, spread: dict, summary: dict, path: str) -> None:
         ax.plot(fields, nominal["mtf50_cy_mm"][:, j], "k--", label="nominal")
         if summary["mtf50_limit_cy_mm"] is not None:
             ax.axhline(summary["mtf50_limit_cy_mm"], color="C3", lw=1, label="limit")
-        ax.set(title=orientation, xlabel="field (deg)", xlim=(0, fields[-1]))
+        ax.set(title=orientation, xlabel="field (deg)", xlim=(min(0.0, fields[0]), fields[-1]))
         ax.grid(alpha=0.3)
     axes[0].set_ylabel(f"MTF50 (cycles/mm), back focus: {summary['settings']['compensator']}")
     axes[0].set_ylim(bottom=0)
