@@ -1,4 +1,4 @@
-"""A Monte Carlo of a lens's symmetric tolerances (`solas-mi tolerance`): samples drawn from a tolerance
+"""A Monte Carlo of a lens's tolerances (`solas-mi tolerance`): samples drawn from a tolerance
 file (`optics.tolerance`), each refocused by the back-focus compensator and measured: EFL and back focus
 at the primary wavelength, the compensator's shift, and MTF50 against field, tangential and sagittal
 (`mtf_field.mtf50_field`, the polychromatic diffraction MTF); the sensitivity of each tolerance alone at
@@ -8,6 +8,15 @@ Compensators (`optics.tolerance.COMPENSATORS`): "rms-spot" moves the image plane
 RMS spot on axis (`thermal.best_focus_mm`), "mtf50" from there to the highest MTF50 on axis (a golden-
 section search over ± `MTF_FOCUS_SPAN` · 2 λ N², λ the primary wavelength, N the working f-number: a
 few depths of focus), "none" leaves it (the lens as assembled on a fixed flange).
+
+A spec with an as-built kind (decentre, tilt, sensor tilt: `optics.tolerance_placement.is_as_built`) draws lenses
+that are no longer symmetric: then every lens of the run — the nominal, each sample and each sensitivity —
+is measured by one method, `Settings.mtf` = "geometric" (`as_built.mtf50_across_field`: the geometric MTF
+at the primary wavelength, no diffraction) at signed fields along y (−half … +half field), so that
+percentiles and the yield compare like with like; a symmetric-only spec keeps the diffraction MTF at
+0 … half field, its figures as before. The compensator focuses the drawn lens's symmetric part (its
+decentres and tilts left out: the Dr.Jit tracer takes one axis), and the as-built lens is refocused by
+that shift of its last thickness; EFL and back focus are of that symmetric part too.
 
 Samples are independent: each is drawn from the seed and its index (`optics.tolerance.draw`) by whichever
 process measures it, so `workers` (local processes) change the time only, never a number.
@@ -24,6 +33,7 @@ from ..errors import SolasError
 from ..metrics.mtf import mtf50
 from ..optics import tolerance as tol
 from ..optics.paraxial import paraxial
+from ..optics.tolerance_placement import AS_BUILT
 from . import inputs
 from .thermal import best_focus_mm, refocused
 
@@ -42,6 +52,20 @@ class Settings:
     compensator: str = "rms-spot"
     field_samples: int = 5
     pupil_samples: int | None = None
+    mtf: str = "diffraction"  # `MTF_METHODS`: "geometric" for a run with a lens as built (module docstring)
+
+
+MTF_METHODS = ("diffraction", "geometric")
+
+
+def _geometric_mtf50(lens, field_samples: int) -> tuple[tuple[float, ...], np.ndarray]:
+    """(signed y fields, degrees; their MTF50 (fields, 2)) of `as_built.mtf50_across_field` at the primary
+    wavelength over −half … +half field (2 · `field_samples` − 1 fields)."""
+    from .as_built import mtf50_across_field
+
+    fields = tuple(float(f) for f in np.linspace(-1.0, 1.0, 2 * field_samples - 1) * lens.field_deg)
+    grid = np.array([[0.0, f] for f in fields])
+    return fields, mtf50_across_field(lens, grid, lens.primary_wavelength)
 
 
 def _axis_mtf50(lens, pupil_samples: int | None) -> float:
@@ -76,28 +100,35 @@ def _mtf_focus(lens, start_mm: float, pupil_samples: int | None) -> float:
     return 0.5 * (lo + hi)
 
 
-def evaluate(lens, settings: Settings, despace_mm: float = 0.0) -> dict:
+def evaluate(lens, settings: Settings, despace_mm: float = 0.0, on_axis=None) -> dict:
     """EFL, back focus (mm, primary wavelength), the compensator's shift (mm) and MTF50 (fields, 2) of `lens`
     assembled (`assembled`: refocused by that shift), with the MTF's warnings. `despace_mm`, the sensor's
-    despace that `lens` holds, stays after a compensator: the sensor sits that far from the focus it found."""
+    despace that `lens` holds, stays after a compensator: the sensor sits that far from the focus it found.
+    `on_axis`: the lens the compensator focuses and the paraxial figures are of, where `lens` is as built
+    (its symmetric part: `optics.tolerance.symmetric`); `lens` itself by default."""
     from .mtf_field import mtf50_field
 
-    first = paraxial(lens, lens.primary_wavelength)
+    on_axis = lens if on_axis is None else on_axis
+    first = paraxial(on_axis, on_axis.primary_wavelength)
     shift = 0.0
     if settings.compensator != "none":
-        shift = best_focus_mm(lens)
+        shift = best_focus_mm(on_axis)
     if settings.compensator == "mtf50":
-        shift = _mtf_focus(lens, shift, settings.pupil_samples)
+        shift = _mtf_focus(on_axis, shift, settings.pupil_samples)
     shift += despace_mm if settings.compensator != "none" else 0.0
     assembled = refocused(lens, shift)
-    result = mtf50_field(assembled, field_samples=settings.field_samples, pupil_samples=settings.pupil_samples)
+    if settings.mtf == "geometric":
+        fields, values, warnings = *_geometric_mtf50(assembled, settings.field_samples), ()
+    else:
+        result = mtf50_field(assembled, field_samples=settings.field_samples, pupil_samples=settings.pupil_samples)
+        fields, values, warnings = result.fields_deg, result.mtf50_cy_mm, result.warnings
     return {
         "efl_mm": first.efl_mm,
         "bfd_mm": first.bfd_mm,
         "focus_shift_mm": shift,
-        "fields_deg": result.fields_deg,
-        "mtf50_cy_mm": result.mtf50_cy_mm,
-        "warnings": result.warnings,
+        "fields_deg": fields,
+        "mtf50_cy_mm": values,
+        "warnings": warnings,
         "assembled": assembled,
     }
 
@@ -106,7 +137,7 @@ def sample(lens, spec: tol.ToleranceSpec, seed: int, index: int, settings: Setti
     """Sample `index` of seed `seed`: its deltas, `evaluate`'s figures, and the lens as assembled (the drawn
     lens with the compensator's image plane), its hash."""
     drawn, deltas = tol.draw(lens, spec, seed, index)
-    figures = evaluate(drawn, settings, tol.despace(spec, deltas))
+    figures = evaluate(drawn, settings, tol.despace(spec, deltas), tol.symmetric(lens, spec, deltas))
     return {
         "index": index,
         "lens": figures["assembled"],
@@ -158,8 +189,9 @@ def sensitivity(lens, spec: tol.ToleranceSpec, settings: Settings, progress=None
     rows = tol.paraxial_sensitivity(lens, spec)
     for k, row in enumerate(rows):
         for sign, side in tol.SIDES:
-            moved = tol.alone(lens, spec, k, sign)
-            figures = evaluate(moved, settings, sign * spec.terms[k].value if spec.terms[k].kind == "despace" else 0.0)
+            moved, term = tol.alone(lens, spec, k, sign), spec.terms[k]
+            despace = sign * term.value if term.kind == "despace" else 0.0
+            figures = evaluate(moved, settings, despace, lens if term.kind in AS_BUILT else moved)
             row[f"focus_shift_mm_{side}"] = figures["focus_shift_mm"]
             row[f"worst_mtf50_cy_mm_{side}"] = worst(figures["mtf50_cy_mm"])
         if progress:
@@ -194,6 +226,7 @@ def yield_fraction(rows: list[dict], limit_cy_mm: float) -> tuple[float, float]:
 
 
 __all__ = [
+    "MTF_METHODS",
     "PERCENTILES",
     "Settings",
     "check_limit",

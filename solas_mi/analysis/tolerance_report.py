@@ -57,7 +57,7 @@ def _plot(nominal: dict, spread: dict, summary: dict, path: str) -> None:
         ax.plot(fields, nominal["mtf50_cy_mm"][:, j], "k--", label="nominal")
         if summary["mtf50_limit_cy_mm"] is not None:
             ax.axhline(summary["mtf50_limit_cy_mm"], color="C3", lw=1, label="limit")
-        ax.set(title=orientation, xlabel="field (deg)", xlim=(0, fields[-1]))
+        ax.set(title=orientation, xlabel="field (deg)", xlim=(min(0.0, fields[0]), fields[-1]))
         ax.grid(alpha=0.3)
     axes[0].set_ylabel(f"MTF50 (cycles/mm), back focus: {summary['settings']['compensator']}")
     axes[0].set_ylim(bottom=0)
@@ -89,6 +89,13 @@ def write(folder, spec, rows, sensitivity, nominal: dict, summary: dict) -> list
     return [out / LENS_FOLDER, *paths]
 
 
+MTF_NOTES = {
+    "diffraction": "the polychromatic diffraction MTF at 0 ... half field (a lens symmetric about its axis)",
+    "geometric": "the geometric MTF (no diffraction) at the primary wavelength of every lens, the nominal too, "
+    "at signed fields along y (lenses as built: decentre, tilt or sensor tilt)",
+}
+
+
 def summarise(lens, spec, settings, rows, nominal, limit, seed) -> dict:
     """tolerance.json's content: the settings, nominal figures, percentiles per field and the yield."""
     spread = tolerance.percentiles(rows)
@@ -114,6 +121,8 @@ def summarise(lens, spec, settings, rows, nominal, limit, seed) -> dict:
             "compensator": settings.compensator,
             "field_samples": settings.field_samples,
             "pupil_samples": settings.pupil_samples,
+            "mtf": settings.mtf,
+            "mtf_note": MTF_NOTES[settings.mtf],
         },
         "nominal": {
             **{k: v for k, v in nominal.items() if k not in ("warnings", "mtf50_cy_mm", "assembled")},
@@ -136,6 +145,7 @@ def _say(summary: dict) -> str:
             f"{field:12g}  {pair(nominal['mtf50_cy_mm'][i]):>11s}   "
             + "  ".join(f"{pair(spread[str(p)][i]):>9s}" for p in tolerance.PERCENTILES)
         )
+    lines.append(f"MTF50: {summary['settings']['mtf_note']}")
     if summary["yield"] is not None:
         lines.append(
             f"yield (worst MTF50 >= {summary['mtf50_limit_cy_mm']:g} cy/mm): "
@@ -148,6 +158,7 @@ def run_tolerance(args) -> int:
     """The `tolerance` command."""
     from ..optics.commands import load_lens
     from ..optics.tolerance import read_spec
+    from ..optics.tolerance_placement import is_as_built
     from ..progress import Progress
     from . import inputs
 
@@ -161,6 +172,7 @@ def run_tolerance(args) -> int:
         spec.compensator,
         inputs.count(args.field_samples, "field samples", 2, 64),
         inputs.pupil_samples(OPTIONS["pupil_samples"].value(args)),
+        tolerance.MTF_METHODS[is_as_built(spec)],
     )
     nominal = tolerance.evaluate(lens, settings)
     rows = tolerance.monte_carlo(
@@ -194,7 +206,7 @@ def register(sub) -> None:
 
     p = sub.add_parser(
         "tolerance",
-        help="Monte Carlo of a lens's symmetric tolerances (a TOML file): the drawn lenses, their MTF50 per "
+        help="Monte Carlo of a lens's tolerances (a TOML file): the drawn lenses, their MTF50 per "
         "field (percentiles, a plot), each tolerance's sensitivity and the yield against an MTF50 limit",
     )
     add_lens_argument(p)

@@ -1,4 +1,4 @@
-"""A lens's symmetric tolerances: a tolerance file (TOML, `read_spec`), each tolerance's perturbation of a
+"""A lens's tolerances: a tolerance file (TOML, `read_spec`), each tolerance's perturbation of a
 lens (`perturbed`, through `dataclasses.replace` of the public `Lens` and `Surface`), and the lenses of a
 Monte Carlo drawn from it (`draw`), each sample's random stream derived from the seed and the sample's
 index alone (`numpy.random.default_rng([seed, index])`), so a sample is the same lens whichever worker
@@ -28,12 +28,16 @@ What each kind moves (lengths in mm):
   asphere term A4 += ±h/y⁴): the vertex curvature stays, the zone departs.
 - despace: mm added to the image distance: the sensor's axial error, after the back-focus compensator
   where there is one (`analysis.tolerance`: it focuses, then the sensor sits this far from that focus).
-Element decentre and tilt, sensor tilt and non-symmetric irregularity (`REFUSED`) are refused by name:
-they need a surface's own frame (the lens as built).
+- decentre: mm, an element (`surfaces`: its consecutive surfaces) decentred along x and along y, two terms
+  drawn independently ("decentre_x s3-4", "decentre_y s3-4"); tilt: degrees about x and about y, about the
+  element's first vertex as Zemax's TETX/TETY; sensor_tilt: degrees about x and y, about the sensor's axial
+  point (no surfaces). The drawn lens is a lens as built (`tolerance_placement`: coordinate breaks).
+Non-symmetric irregularity (`REFUSED`) is refused by name.
 """
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass, replace
 
@@ -43,6 +47,7 @@ from ..errors import SolasError
 from ..userfiles import read_toml
 from . import glass as glass_mod
 from . import lens_checks, thermal
+from . import tolerance_placement as as_built
 
 DEFAULT_TEST_WAVELENGTH_NM = 632.8  # HeNe: the wavelength fringes are counted at unless the file says
 DEFAULT_TRUNCATE = 3.0  # σ: a normal draw beyond ±3σ is drawn again
@@ -52,9 +57,6 @@ SIDES = ((-1.0, "minus"), (1.0, "plus"))  # a sensitivity's two draws: −1 and 
 LENS_FOLDER = "lenses"  # where `solas-mi tolerance` writes its drawn lenses (a population a batch reads)
 MAX_TERMS = 1000  # tolerances × surfaces of one file
 REFUSED = {
-    "decentre": "an element's decentre",
-    "tilt": "an element's tilt",
-    "sensor_tilt": "the sensor's tilt",
     "irregularity_astigmatism": "an astigmatic (non-symmetric) irregularity",
 }
 SPEC_KEYS = ("test_wavelength_nm", "compensator", "tolerance")
@@ -78,6 +80,9 @@ KINDS = {
     "abbe": Kind(("delta", "percent"), "the glass's V_d (melt)"),
     "irregularity": Kind(("fringes",), "a fourth-order symmetric sag term"),
     "despace": Kind(("mm",), "the sensor's axial position", per_surface=False),
+    "decentre": Kind(("mm",), "an element's decentre in x and y (its surfaces as a group)"),
+    "tilt": Kind(("degrees",), "an element's tilt about x and y (about its first vertex)"),
+    "sensor_tilt": Kind(("degrees",), "the sensor's tilt about x and y", per_surface=False),
 }
 
 
@@ -92,11 +97,17 @@ class Term:
     value: float
     distribution: str = "normal"
     truncate: float = DEFAULT_TRUNCATE
+    axis: str = ""  # an as-built kind's x or y (`tolerance_placement.AXES`)
+    last: int | None = None  # an element's last surface (0-based; decentre, tilt)
 
     @property
     def name(self) -> str:
-        """ "radius s2", "despace": how columns and tables name it."""
-        return self.kind if self.surface is None else f"{self.kind} s{self.surface + 1}"
+        """ "radius s2", "despace", "tilt_x s3-4", "sensor_tilt_y": how columns and tables name it."""
+        kind = f"{self.kind}_{self.axis}" if self.axis else self.kind
+        if self.surface is None:
+            return kind
+        end = f"-{self.last + 1}" if self.last is not None and self.last != self.surface else ""
+        return f"{kind} s{self.surface + 1}{end}"
 
     def draw(self, rng: np.random.Generator) -> float:
         """One draw of this term's delta (in `unit`) from `rng`."""
@@ -150,6 +161,9 @@ def _surfaces(lens, entry: dict, kind: str, unit: str, where: str) -> list[int |
         return [None]
     value = entry.get("surfaces")
     count = len(lens.surfaces)
+    element = f"{where}: surfaces = {value!r} must be an element's consecutive surface numbers, e.g. [3, 4]"
+    if value == "all" and kind in as_built.AS_BUILT:
+        raise SolasError(element)
     if value == "all":
         return [i for i in range(count) if _why_not(lens, kind, i, unit) is None]
     if (
@@ -158,6 +172,8 @@ def _surfaces(lens, entry: dict, kind: str, unit: str, where: str) -> list[int |
         or not all(isinstance(v, int) and not isinstance(v, bool) and 1 <= v <= count for v in value)
     ):
         raise SolasError(f'{where}: surfaces = {value!r} must be "all" or a list of surface numbers from 1 to {count}')
+    if kind in as_built.AS_BUILT and value != list(range(value[0], value[0] + len(value))):
+        raise SolasError(element)
     for v in value:
         why = _why_not(lens, kind, v - 1, unit)
         if why:
@@ -194,9 +210,11 @@ def _entry_terms(lens, entry, n: int) -> list[Term]:
         raise SolasError(f"{where}: truncate (in σ) is for the normal distribution only")
     truncate = _number(entry, "truncate", where) if "truncate" in entry else DEFAULT_TRUNCATE
     value = _number(entry, given[0], where)
-    return [
-        Term(kind, i, given[0], value, distribution, truncate) for i in _surfaces(lens, entry, kind, given[0], where)
-    ]
+    surfaces = _surfaces(lens, entry, kind, given[0], where)
+    if kind in as_built.AS_BUILT:
+        first, last = (None, None) if surfaces == [None] else (surfaces[0], surfaces[-1])
+        return [Term(kind, first, given[0], value, distribution, truncate, axis, last) for axis in as_built.AXES]
+    return [Term(kind, i, given[0], value, distribution, truncate) for i in surfaces]
 
 
 def read_spec(lens, path) -> ToleranceSpec:
@@ -227,6 +245,10 @@ def spec_from_dict(lens, table: dict, where: str = "tolerances") -> ToleranceSpe
             f"{where}: {'tolerances given twice: ' + ', '.join(twice) if twice else 'too many terms'}"
             f" (each kind at most once per surface, at most {MAX_TERMS} in all)"
         )
+    groups = sorted({(t.surface or 0, t.last) for t in terms if t.last is not None})
+    for (a, b), (c, d) in itertools.pairwise(groups):
+        if c <= b:
+            raise SolasError(f"{where}: elements s{a + 1}-{b + 1} and s{c + 1}-{d + 1} share surfaces (give each once)")
     return ToleranceSpec(tuple(terms), wavelength or DEFAULT_TEST_WAVELENGTH_NM, back_focus)
 
 
@@ -256,7 +278,7 @@ def perturbed(lens, spec: ToleranceSpec, deltas):
     melts: dict[int, list[float]] = {}
     wavelength_mm = spec.test_wavelength_nm * 1e-6
     for term, delta in zip(spec.terms, deltas):
-        if not delta:
+        if not delta or term.kind in as_built.AS_BUILT:
             continue
         i = len(surfaces) - 1 if term.surface is None else term.surface
         s = surfaces[i]
@@ -279,12 +301,21 @@ def perturbed(lens, spec: ToleranceSpec, deltas):
         g, name = _melted(surfaces[i].glass, dn, dv)
         surfaces[i] = replace(surfaces[i], glass=g, material=name)
         materials += [g] if g.kind != "model" else []
-    return replace(lens, surfaces=tuple(surfaces), materials=tuple(materials))
+    lens = replace(lens, surfaces=tuple(surfaces), materials=tuple(materials))
+    groups, sensor = as_built.moves(spec, deltas)
+    return as_built.placed(lens, groups, sensor) if groups or any(sensor) else lens
+
+
+def symmetric(lens, spec: ToleranceSpec, deltas):
+    """`perturbed` by `deltas` without the as-built terms: the drawn lens's part on one axis."""
+    return perturbed(lens, spec, [0.0 if t.kind in as_built.AS_BUILT else d for t, d in zip(spec.terms, deltas)])
 
 
 def parameter(lens, term: Term) -> float:
     """What `term` moves, as `lens` has it: a radius or thickness (the image distance for despace, mm), the
     A4 term (irregularity, mm⁻³), the glass's n_d or V_d (index, abbe)."""
+    if term.kind in as_built.AS_BUILT:
+        return as_built.parameter(lens, term)
     s = lens.surfaces[-1 if term.surface is None else term.surface]
     if term.kind in ("index", "abbe"):
         return s.glass.abbe()[term.kind == "abbe"]
@@ -365,4 +396,5 @@ __all__ = [
     "perturbed",
     "read_spec",
     "spec_from_dict",
+    "symmetric",
 ]

@@ -136,6 +136,6 @@ def test_tolerance_command_refuses_a_bad_entry_before_any_work(tmp_path, capsys)
     from solas_mi.cli import main
 
     spec_file = tmp_path / "tol.toml"
-    spec_file.write_text('[[tolerance]]\nkind = "decentre"\nsurfaces = [1]\nmm = 0.01\n')
+    spec_file.write_text('[[tolerance]]\nkind = "decentre"\nsurfaces = [1, 3]\nmm = 0.01\n')
     assert main(["tolerance", "cooke-triplet", "--spec", str(spec_file), "-o", str(tmp_path / "out")]) == 2
     assert "decentre" in capsys.readouterr().err and not (tmp_path / "out").exists()

@@ -162,7 +162,7 @@ def test_a_drawn_lens_survives_its_lens_file(cooke, spec, tmp_path):
 @pytest.mark.parametrize(
     "entry, named",
     [
-        ({"kind": "decentre", "surfaces": [1], "mm": 0.01}, "decentre"),
+        ({"kind": "decentre", "surfaces": [1, 3], "mm": 0.01}, "decentre"),
         ({"kind": "tilt", "surfaces": [1], "mm": 0.01}, "tilt"),
         ({"kind": "sensor_tilt", "mm": 0.01}, "sensor_tilt"),
         ({"kind": "wedge", "surfaces": [1], "mm": 0.01}, "wedge"),
