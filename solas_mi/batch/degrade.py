@@ -363,7 +363,11 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
     check_memory(f"batch of {len(p.todo)} images on {n} workers", need["peak_bytes"], force)
     header = p.spec.header(p.lens_scale)
     if p.population is not None:
-        return _degrade_population(p, header, n, dask, force, progress, start)
+        from .population import degrade_settings
+
+        settings = degrade_settings(p, header, n, dask, force, progress)
+        run_batch(p.manifest, p.todo, None, None, settings, n, dask, "image" if progress else None)
+        return BatchResult(p.jobs, p.manifest.path, None, "population", time.perf_counter() - start)
     if p.lens is not None:
         assert p.cache is not None  # a lens's grid is kept in the cache (_grid_source)
         with Progress("psf-grid", None, "PSFs", enabled=progress) as bar:  # shown only when it is computed
@@ -388,27 +392,3 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
     run_batch(p.manifest, p.todo, grid, str(p.grid_path), settings, n, dask, "image" if progress else None)
     return BatchResult(p.jobs, p.manifest.path, p.grid_path, header["grid_source"], time.perf_counter() - start)
 
-
-def _degrade_population(p: BatchPlan, header: dict, n: int, dask, force: bool, progress: bool,
-                        start: float) -> BatchResult:
-    """`degrade_batch` of a lens population: each item's grid (`population.grids`) and camera blocks."""
-    from ..imageio import image_size
-    from ..progress import Progress
-    from . import population as pop
-    from .runner import run_batch
-
-    assert p.population is not None and p.cache is not None
-    given, lenses = p.population
-    with Progress("psf-grid", None, "PSFs", enabled=progress) as bar:
-        counts = pop.grids(p.jobs, p.todo, lenses, p.grid_spec, p.cache, progress=bar)
-    sizes = [image_size(p.jobs[i].input)[1::-1] for i in p.todo]
-    cameras = pop.cameras(p.jobs, p.todo, lenses, [s for s in sizes if s[0]], p.spec.frame, p.spec.calibration_model)
-    header.update({"grid_source": "population", "grid_spec": p.grid_spec.canonical(), "grids": counts,
-                   "lens_population": {"folder": str(Path(given.folder).resolve()), "lenses": len(lenses),
-                                       "seed": given.seed, "temperatures_c": list(given.temperatures_c)},
-                   "runner": {"dask": dask} if dask is not None else {"workers": n}})
-    p.manifest.header.update(header)
-    settings = {"spec": p.spec, "camera": p.spec.camera, "force": force, "population_cameras": cameras,
-                "batch": {"id": p.key, "manifest": str(p.manifest.path)}}
-    run_batch(p.manifest, p.todo, None, None, settings, n, dask, "image" if progress else None)
-    return BatchResult(p.jobs, p.manifest.path, None, "population", time.perf_counter() - start)

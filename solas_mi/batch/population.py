@@ -190,3 +190,39 @@ __all__ = [
     "pick",
     "temperature",
 ]
+
+
+def degrade_settings(p, header: dict, n: int, dask, force: bool, progress: bool) -> dict:
+    """A lens population's part of `degrade_batch` (`p` its `BatchPlan`): every item's grid (`grids`) and camera
+    blocks, the manifest's header told of the population; the settings each item is degraded with."""
+    from ..imageio import image_size
+    from ..progress import Progress
+
+    assert p.population is not None and p.cache is not None
+    given, lenses = p.population
+    with Progress("psf-grid", None, "PSFs", enabled=progress) as bar:
+        counts = grids(p.jobs, p.todo, lenses, p.grid_spec, p.cache, progress=bar)
+    sizes = [image_size(p.jobs[i].input)[1::-1] for i in p.todo]
+    blocks = cameras(p.jobs, p.todo, lenses, [s for s in sizes if s[0]], p.spec.frame, p.spec.calibration_model)
+    header.update(
+        {
+            "grid_source": "population",
+            "grid_spec": p.grid_spec.canonical(),
+            "grids": counts,
+            "lens_population": {
+                "folder": str(Path(given.folder).resolve()),
+                "lenses": len(lenses),
+                "seed": given.seed,
+                "temperatures_c": list(given.temperatures_c),
+            },
+            "runner": {"dask": dask} if dask is not None else {"workers": n},
+        }
+    )
+    p.manifest.header.update(header)
+    return {
+        "spec": p.spec,
+        "camera": p.spec.camera,
+        "force": force,
+        "population_cameras": blocks,
+        "batch": {"id": p.key, "manifest": str(p.manifest.path)},
+    }
