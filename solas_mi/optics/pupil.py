@@ -88,11 +88,12 @@ def chief_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> 
             tracer.array(goal[:, 0]),
             tracer.array(goal[:, 1]),
         )
-    px, py, _ = tracer.to_plane(tr, lens.image_z)
+    image_z = tracer._opaque(lens.image_z)  # a kernel input, not a literal: a new lens reuses the kernels
+    px, py, _ = tracer.to_plane(tr, image_z)
     distinct, which = np.unique(wavelength_nm, return_inverse=True)  # paraxial data once per wavelength
     xp_z = np.array([paraxial(lens, w).exit_pupil_z_mm for w in distinct])[which.ravel()]
     qx, qy, qopl = tracer.to_plane(tr, b.per_ray(xp_z))
-    radius = dr.sqrt((qx - px) ** 2 + (qy - py) ** 2 + (b.per_ray(xp_z) - lens.image_z) ** 2)
+    radius = dr.sqrt((qx - px) ** 2 + (qy - py) ** 2 + (b.per_ray(xp_z) - image_z) ** 2)
     ex, ey, px, py, radius, qopl, sa, sb, n_image, conv, clipped = tracer.to_numpy(
         ex, ey, px, py, radius, qopl, (qx - px) / radius, (qy - py) / radius, tr.n_image, conv, tr.clipped_by
     )
@@ -176,7 +177,7 @@ def stop_aim(b: Bundle, chief: ChiefRays, gx: tracer.F, gy: tracer.F):
         for k in range(1, RIM_STEPS):
             ex, ey, _, _ = aim(b, stop_target, ex, ey, gx * (k / RIM_STEPS), gy * (k / RIM_STEPS))
     else:
-        ratio = entrance_pupil_footprint(lens) / lens.surfaces[lens.stop_index].semi_diameter
+        ratio = tracer._opaque(entrance_pupil_footprint(lens) / lens.surfaces[lens.stop_index].semi_diameter)
         ex, ey = ex + gx * ratio, ey + gy * ratio
     return aim(b, stop_target, ex, ey, gx, gy)
 

@@ -70,6 +70,11 @@ def _opaque(value: float, ftype=F) -> F:
     return dr.opaque(ftype, float(value))
 
 
+def _kernel_input(value, like):
+    """A Python number as an opaque value of Dr.Jit array `like`'s type (a literal: new kernels per lens)."""
+    return _opaque(value, type(like)) if isinstance(value, (int, float)) and dr.is_array_v(like) else value
+
+
 def _types(value) -> tuple[type, type, type]:
     """The Float64, UInt32 and Bool types of the array family of `value` (Python float, bool, int for
     a Python float)."""
@@ -318,7 +323,7 @@ def _asphere_hit(s, x, y, dx, dy, dz, t):
 def to_plane(traced: Traced, z_plane: float | F) -> tuple[F, F, F]:
     """Image-space rays continued to the plane z = `z_plane`: (x, y, optical path to it)."""
     r = traced.rays
-    t = (z_plane - r.z) / r.dz
+    t = (_kernel_input(z_plane, r.z) - r.z) / r.dz
     return dr.fma(t, r.dx, r.x), dr.fma(t, r.dy, r.y), dr.fma(traced.n_image, t, r.opl)
 
 
@@ -326,7 +331,7 @@ def to_sphere(traced: Traced, cx: F, cy: F, cz: F, radius: F) -> tuple[F, F, F, 
     """Image-space rays continued (forward or back) to the sphere of `radius` about (cx, cy, cz),
     on the side away from the centre: (x, y, z, optical path to it) and whether it was hit."""
     r = traced.rays
-    wx, wy, wz = r.x - cx, r.y - cy, r.z - cz
+    wx, wy, wz = r.x - cx, r.y - cy, r.z - _kernel_input(cz, r.z)
     b = wx * r.dx + wy * r.dy + wz * r.dz
     c = wx * wx + wy * wy + wz * wz - radius * radius
     disc = b * b - c

@@ -1,5 +1,8 @@
 """The Float64 sequential tracer: OPD exactness, unreachable fields, vignetting, TIR."""
 
+from dataclasses import replace
+
+import drjit as dr
 import numpy as np
 import pytest
 
@@ -73,3 +76,27 @@ def test_total_internal_reflection_is_flagged():
     tr = T.trace(lens, T.launch(lens, zero, zero, zero, T.F([0.0, 4.0])), T.F(0.55))
     assert list(np.asarray(tr.tir)) == [False, True]
     assert list(np.asarray(tr.ok)) == [True, False]
+
+
+def _psf_kernels(lens) -> set:
+    """The hashes of the Dr.Jit kernels that a diffraction PSF of `lens` runs."""
+    dr.kernel_history()  # start from an empty history
+    psf(lens, (0, 10), 531.0, size=32)
+    return {k["hash"] for k in dr.kernel_history() if k.get("type") == dr.KernelType.JIT}
+
+
+def test_a_lens_drawn_anew_runs_the_kernels_of_its_nominal(triplet):
+    """A lens's numbers (vertex positions, its image plane, its pupil's size) enter the kernels as opaque
+    inputs, not literals: a tolerance sample (one thickness changed) reuses the nominal lens's compiled
+    kernels instead of compiling its own (0.65 s against 0.06 s of CPU for a two-field OTF of the Cooke
+    triplet)."""
+    surfaces = list(triplet.surfaces)
+    surfaces[1] = replace(surfaces[1], thickness=surfaces[1].thickness + 0.01)
+    flag = dr.flag(dr.JitFlag.KernelHistory)
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    try:
+        nominal = _psf_kernels(triplet)
+        drawn = _psf_kernels(replace(triplet, surfaces=tuple(surfaces)))
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, flag)
+    assert nominal and drawn == nominal, f"{len(drawn - nominal)} kernels of {len(drawn)} new"
