@@ -2,7 +2,8 @@
 `grid_file.PSFGrid` (which writes them as OpenEXR with the metadata needed to use them without the
 lens, and a PNG mosaic for looking at them).
 
-The lens is centred, so each distinct |field| pair is computed once and mirrored (`nodes`).
+A centred lens's distinct |field| pairs are each computed once and mirrored (`nodes`); a lens as built
+(decentred, tilted or non-symmetric surfaces, or a placed sensor) has every node traced (`as_built_grid`).
 
 Field grid convention: `ny`×`nx` nodes in image orientation, row 0 = top = largest y field angle,
 column 0 = smallest x field angle. "centers" sampling puts the nodes at the centres of ny×nx equal
@@ -20,6 +21,7 @@ import numpy as np
 from ..errors import SolasError
 from ..optics.camera import pinhole_focal_mm
 from ..optics.lens import Lens
+from ..optics.lens_checks import as_built
 from ..pages import small_pages
 from . import base
 from .grid_file import PSFGrid  # a grid's PSFs and its file; imported from here too
@@ -43,7 +45,7 @@ def psf_grid(lens: Lens, spec: GridSpec | None = None, progress=None, **options)
 
     Layout "field": nodes spanning ±field_range_deg (x, y); layout "sensor" (`psf.sensor`): nodes at
     the cell centres of a sensor, each with the field whose chief ray lands there (``meta["node_mm"]``:
-    their image points). A centred lens's mirror-image fields are computed once.
+    their image points). A centred lens's mirror-image fields are computed once, a lens as built's each traced.
 
     Parameters
     ----------
@@ -85,12 +87,12 @@ def psf_grid(lens: Lens, spec: GridSpec | None = None, progress=None, **options)
         raise SolasError(f"distances {list(spec.distances_m)} m make a grid over object distance: use "
                          "psf.depth.depth_grid (psf_grid is for the lens file's object distance)")
     wl = base.check_wavelengths(lens, spec.wavelengths_nm if spec.wavelengths_nm is not None else lens.wavelengths_nm)
-    fields, placement = grid_fields(lens, spec)
+    compute, (fields, placement) = node_computer(lens, spec, wl), grid_fields(lens, spec)  # checked first
     size = spec.size
     while True:  # auto_window: the whole grid again at twice the size until every window holds enough
         start = time.perf_counter()
         with small_pages():
-            nodes = compute_nodes(lens, spec, wl, fields.reshape(-1, 2), size, progress)
+            nodes = compute(lens, spec, wl, fields.reshape(-1, 2), size, progress)
         if not (spec.auto_window and nodes.energy.min() < base.WINDOW_ENERGY_LIMIT and 2 * size <= base.MAX_SIZE):
             break
         size *= 2
@@ -98,6 +100,17 @@ def psf_grid(lens: Lens, spec: GridSpec | None = None, progress=None, **options)
     meta["seconds"] = time.perf_counter() - start
     ny, nx = spec.grid
     return PSFGrid(nodes.data, fields, nodes.chief.reshape(len(wl), ny, nx, 2), wl, spec.pitch_um, meta)
+
+
+def node_computer(lens: Lens, spec: GridSpec, wl: tuple[float, ...]):
+    """What computes the grid's nodes: `nodes.compute_nodes` (mirrored) for a centred lens, and for a lens as
+    built `as_built_grid.compute_nodes` (every node traced), once `as_built_grid.check` takes the spec."""
+    if not as_built(lens):
+        return compute_nodes
+    from . import as_built_grid
+
+    as_built_grid.check(lens, spec, wl)
+    return as_built_grid.compute_nodes
 
 
 def grid_fields(lens: Lens, spec: GridSpec) -> tuple[np.ndarray, dict]:
@@ -118,7 +131,10 @@ def grid_fields(lens: Lens, spec: GridSpec) -> tuple[np.ndarray, dict]:
     placement: dict[str, Any] = {"layout": "field", "field_sampling": spec.field_sampling, "field_range_deg": [hx, hy],
                  "grid_orientation": "grid row 0 = largest y field, column 0 = smallest x field"}
     if hx > 0:  # the ideal image an input spanning ±hx horizontally stands for (`optics.camera`)
-        placement.update(pinhole_focal_mm=pinhole_focal_mm(lens, hx), reference_wavelength_nm=lens.primary_wavelength)
+        from .as_built_grid import pinhole_focal_mm as as_built_focal_mm
+
+        focal = (as_built_focal_mm if as_built(lens) else pinhole_focal_mm)(lens, hx)
+        placement.update(pinhole_focal_mm=focal, reference_wavelength_nm=lens.primary_wavelength)
     return np.stack(np.meshgrid(fx, fy), axis=-1), placement
 
 
@@ -132,6 +148,10 @@ def grid_meta(lens: Lens, spec: GridSpec, wl: tuple[float, ...], fields: np.ndar
     meta = base.describe(lens, spec.method, spec.normalization, method_options(spec.method, spec.sampling_options()),
                          size)
     meta.update(placement)
+    if as_built(lens):  # every node traced by the NumPy tracer's paths, none mirrored
+        from .as_built_methods import PATHS
+
+        meta["path"] = PATHS[spec.method] + "; every node traced (none mirrored)"
     dark = [] if lit.all() else [f"{int((~lit).sum())} of {lit.size} PSFs receive no light (every ray blocked): "
                                  "they are zero"]
     meta.update({
