@@ -23,6 +23,11 @@ import numpy as np
 from ..errors import SolasError
 
 ORDERS = (0, 1)  # Zemax's order flag: 0 decentre then tilt x, y, z; 1 tilt z, y, x then decentre
+FACING_LIMIT = 90.0
+"""|tilt_x| and |tilt_y| stay below it (degrees): the new z axis keeps cos(tilt_x)·cos(tilt_y) > 0 of the old one,
+in either order; at 90° or more the surface turns edge-on or backward."""
+SPIN_LIMIT = 360.0
+"""|tilt_z| at most it (degrees): a spin about the axis, a full turn at most."""
 
 
 @dataclass(frozen=True)
@@ -74,7 +79,23 @@ def from_row(row: dict, ident: str, number) -> Placement | None:
             "about x, y, z; 1: tilt about z, y, x, then decentre; Zemax's order flag)"
         )
     values = {key: number(row, key, ident, "mm" if key.startswith("decentre") else "degrees", 0.0) for key in KEYS[:-1]}
+    _check_tilts(values, ident)
     return Placement(**values, order=order)
+
+
+def _check_tilts(values: dict, ident: str) -> None:
+    """SolasError naming a tilt of `values` (a row's placement entries) outside `FACING_LIMIT` or `SPIN_LIMIT`."""
+    for key in ("tilt_x", "tilt_y"):
+        if not abs(values[key]) < FACING_LIMIT:
+            raise SolasError(
+                f"{ident}: {key} = {values[key]:g} degrees; |{key}| must be below {FACING_LIMIT:g} (at "
+                f"{FACING_LIMIT:g} or more the surface turns edge-on or backward)"
+            )
+    if not abs(values["tilt_z"]) <= SPIN_LIMIT:
+        raise SolasError(
+            f"{ident}: tilt_z = {values['tilt_z']:g} degrees; |tilt_z| must be at most {SPIN_LIMIT:g} (a spin about "
+            "the axis)"
+        )
 
 
 def _turn(axis: int, degrees: float) -> np.ndarray:

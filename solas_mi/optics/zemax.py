@@ -181,7 +181,7 @@ def _surface(b: dict, i: int, scale: float, gcat: tuple[str, ...], where: str) -
     if conic:
         row["conic"] = conic
     if kind == "COORDBRK":
-        row["break"] = _parameters(b, ident)
+        row["break"] = _numbered(b, "PARM", ident)
     elif kind in ("EVENASPH", "ODDASPH"):
         terms = _aspheric(b, scale, ident) if kind == "EVENASPH" else _odd_aspheric(b, scale, ident)
         if terms:
@@ -189,9 +189,9 @@ def _surface(b: dict, i: int, scale: float, gcat: tuple[str, ...], where: str) -
     elif kind == "QED_TYPE":
         row.update(_q_type(b, scale, ident))
     elif kind == "PARAXIAL":
-        row.update(ideal.from_zemax(_parameters(b, ident), scale, ident))
+        row.update(ideal.from_zemax(_numbered(b, "PARM", ident), scale, ident))
     elif kind in zemax_asbuilt.SHAPE_TYPES:
-        row.update(zemax_asbuilt.form_row(kind, _parameters(b, ident), _extra_data(b, ident), scale, ident), conic=conic)
+        row.update(zemax_asbuilt.form_row(kind, _numbered(b, "PARM", ident), _numbered(b, "XDAT", ident), scale, ident), conic=conic)
     row.update({"stop": True} if "STOP" in b else {})
     row.update({"coating": zemax_coating(b["COAT"][0][0], ident)} if b.get("COAT", [[]])[0] else {})
     return row
@@ -225,17 +225,20 @@ def _circular_aperture(b: dict, ident: str) -> float:
     return radii[1]
 
 
-def _parameters(b: dict, ident: str) -> dict[int, float]:
-    return {int(p[0]): _floats(p[1:2], f"{ident}: PARM {p[0]}")[0] for p in b.get("PARM", []) if len(p) > 1}
-
-
-def _extra_data(b: dict, ident: str) -> dict[int, float]:
-    return {int(p[0]): _floats(p[1:2], f"{ident}: XDAT {p[0]}")[0] for p in b.get("XDAT", []) if len(p) > 1}
+def _numbered(b: dict, key: str, ident: str) -> dict[int, float]:
+    """{n: value} of a block's lines `key` n value (PARM, XDAT); SolasError naming one without its n or value."""
+    out: dict[int, float] = {}
+    for p in b.get(key, []):
+        if len(p) < 2 or not p[0].isdigit():
+            why = "has no value" if p[:1] and p[0].isdigit() else "has no whole number n"
+            raise SolasError(f"{ident}: {' '.join([key, *p])} {why}; a {key} line is '{key} <n> <value>'")
+        out[int(p[0])] = _floats(p[1:2], f"{ident}: {key} {p[0]}")[0]
+    return out
 
 
 def _aspheric(b: dict, scale: float, ident: str) -> list[float]:
     """[A4, A6, …] (mm^(1−2i)) of an EVENASPH block's PARM lines, trailing zeros dropped."""
-    parm = _parameters(b, ident)
+    parm = _numbered(b, "PARM", ident)
     if parm.get(1, 0.0):
         raise SolasError(f"{ident}: PARM 1 (the r² term) = {parm[1]:g}; only A4 and higher are modelled "
                          "(fold the r² term into CURV)")
@@ -244,7 +247,7 @@ def _aspheric(b: dict, scale: float, ident: str) -> list[float]:
 
 def _odd_aspheric(b: dict, scale: float, ident: str) -> list[float]:
     """[A4, A6, A8] of an ODDASPH block (PARM k: the r^k coefficient); r² and odd terms refused."""
-    parm = _parameters(b, ident)
+    parm = _numbered(b, "PARM", ident)
     other = {k: v for k, v in parm.items() if v and (k % 2 or k == 2)}
     if other:
         k = min(other)
@@ -256,7 +259,7 @@ def _odd_aspheric(b: dict, scale: float, ident: str) -> list[float]:
 def _q_type(b: dict, scale: float, ident: str) -> dict:
     """The row entries of a QED_TYPE block: {"qbfs", "norm_radius"} (type 0) or {"aspheric"} (type 1,
     Qcon, an even asphere exactly); {} when every coefficient is 0."""
-    xdat = _extra_data(b, ident)
+    xdat = _numbered(b, "XDAT", ident)
     kind, count, radius = xdat.get(1, 0.0), xdat.get(2, 0.0), xdat.get(3, 0.0) * scale
     if kind not in (0.0, 1.0) or count != int(count) or not 0 <= count <= 12:
         raise SolasError(f"{ident}: QED_TYPE with type (XDAT 1) {kind:g} and {count:g} terms (XDAT 2); allowed: "

@@ -92,7 +92,7 @@ def run_ghosts(args) -> int:
     report = stray_light.ghosts(lens, _field(args.field_deg), wavelengths, rays=args.rays)
     print(report.table())
     data, centre, warnings = stray_psf.stray_psf(lens, report, args.pitch_um, args.size)
-    for text in warnings:
+    for text in [*report.warnings, *warnings]:
         print(f"solas-mi ghosts: warning: {text}", file=sys.stderr)
     stray_psf.write(report, data, centre, args.pitch_um, data_file, png)
     print(f"wrote {data_file} and {png}")

@@ -58,6 +58,8 @@ class GhostReport:
         surface 1's vertex that holds its clear aperture).
     direct_centroid_mm : (float, float)
         The direct image's centroid on the image plane (mm).
+    rays : int
+        Rays per side of the launch grid, per path and wavelength.
     ghosts : list of Ghost
         One per two-reflection path: its surfaces, energy relative to the direct image, centroid, RMS
         radius, best focus and whether it is focused.
@@ -70,9 +72,20 @@ class GhostReport:
     wavelengths_nm: tuple[float, ...]
     direct_power: float
     direct_centroid_mm: tuple[float, float]
+    rays: int
     ghosts: list[Ghost]
     hits: dict = field(default_factory=dict, repr=False)  # path → (x mm, y mm, power as a fraction of the direct
     # image's energy) of its rays on the image plane, all wavelengths
+
+    @property
+    def warnings(self) -> list[str]:
+        """A line where no ray of the launch grid arrives by any path (the total 0 measures nothing)."""
+        if not self.ghosts or any(g.energy for g in self.ghosts):
+            return []
+        return [
+            f"no ray of the {self.rays} x {self.rays} grid arrives by any of the {len(self.ghosts)} ghost paths, "
+            f"so their energies of 0 measure nothing: raise --rays (now {self.rays})"
+        ]
 
     @property
     def total(self) -> float:
@@ -225,6 +238,7 @@ def ghosts(lens: Lens, field_deg, wavelengths_nm=None, rays: int = ghost_paths.D
         wavelengths,
         direct_power / (len(wavelengths) * start.power.sum()),
         centroid,
+        rays,
         table,
         {p: (h[0], h[1], h[2] / direct_power) for p, h in hits.items()},
     )

@@ -133,9 +133,11 @@ def _diffraction_core(lens: Lens, field, wavelengths: list, pitch_um: float, siz
         if not direct.meta["warnings"]:
             core = direct.data.reshape(inner, fine, inner, fine).sum(axis=(1, 3))
             return core * float(direct.meta["energy_in_grid"]), []
+    # a PSF warning reads "what is wrong; the remedy by `psf`'s options", which `ghosts` does not take: the first part
+    why = direct.meta["warnings"][0].split("; ")[0]
     return None, [
         f"the direct image is geometric ({GEOMETRIC_RAYS} x {GEOMETRIC_RAYS} rays): its Fraunhofer core "
-        f"is not sound here ({direct.meta['warnings'][0]})"
+        f"is not sound here ({why})"
     ]
 
 

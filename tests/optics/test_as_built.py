@@ -7,6 +7,7 @@ and BICONICX read scaled by UNIT, the round trip through .zmx and TOML, an eleme
 OpticStudio's break pair leaves it, and what is not read refused by name."""
 
 import math
+import re
 
 import numpy as np
 import pytest
@@ -14,7 +15,7 @@ import pytest
 from solas_mi import Lens, SolasError
 from solas_mi.optics import aiming, ghost_paths, local_aim, local_trace, pupil, shapes, tracer
 from solas_mi.optics.lens import shipped_lenses
-from solas_mi.optics.placement import Placement, frames
+from solas_mi.optics.placement import FACING_LIMIT, SPIN_LIMIT, Placement, frames
 
 
 def _lens(*rows, **extra) -> Lens:
@@ -198,11 +199,14 @@ def test_kinds_and_breaks_read_write_and_read_back(tmp_path):
         ({"aspheric": [1e-6]}, "a toroid takes radius, conic, terms_y, radius_rotation; not aspheric"),
         ({"tilt_order": 2}, "tilt_order = 2 must be one of 0, 1"),
         ({"tilt_x": "5"}, "tilt_x = '5' must be a finite number"),
+        ({"tilt_x": 1e300}, f"tilt_x = 1e+300 degrees; |tilt_x| must be below {FACING_LIMIT:g}"),
+        ({"tilt_y": 90.0}, f"tilt_y = 90 degrees; |tilt_y| must be below {FACING_LIMIT:g}"),
+        ({"tilt_z": -1e3}, f"tilt_z = -1000 degrees; |tilt_z| must be at most {SPIN_LIMIT:g}"),
         ({"radius_rotation": 7.0}, "the toroid closes before the clear semi-diameter 8"),
     ],
 )
 def test_a_bad_kind_or_break_is_named(change, message):
-    with pytest.raises(SolasError, match=message.replace("(", r"\(")):
+    with pytest.raises(SolasError, match=re.escape(message)):
         _lens({**AS_BUILT[0], **change}, *AS_BUILT[1:])
 
 
@@ -380,6 +384,17 @@ def test_a_break_with_a_thickness_of_its_own_places_the_next_surface_as_zemax_do
         (
             "SURF 3\n  TYPE TOROIDAL\n  XDAT 2 3\n  XDAT 3 0.1\n  DIAM 1 1\n",
             "TOROIDAL extra data XDAT 2 = 3 is not read",
+        ),
+        ("SURF 3\n  TYPE COORDBRK\n  DISZ 0\n  PARM 1\n  PARM 3 5\n", r"SURF 3 \(line \d+\): PARM 1 has no value"),
+        ("SURF 3\n  TYPE COORDBRK\n  DISZ 0\n  PARM\n  PARM 3 5\n", r"SURF 3 \(line \d+\): PARM has no whole number"),
+        ("SURF 3\n  TYPE TOROIDAL\n  XDAT 1\n  DIAM 1 1\n", r"SURF 3 \(line \d+\): XDAT 1 has no value"),
+        (
+            "SURF 3\n  TYPE COORDBRK\n  DISZ 0\n  PARM 3 1e300\n",
+            f"tilt_x = 1e\\+300 degrees; \\|tilt_x\\| must be below {FACING_LIMIT:g}",
+        ),
+        (
+            "SURF 3\n  TYPE COORDBRK\n  DISZ 0\n  PARM 4 -90\n",
+            f"tilt_y = -90 degrees; \\|tilt_y\\| must be below {FACING_LIMIT:g}",
         ),
     ],
 )
