@@ -217,17 +217,19 @@ def print_rendered(chosen: list[dict]) -> None:
         f"The same edges rendered through the lens in Mitsuba ({ROI_PX}x{ALONG_PX}-px crop at the field, {SPP} spp, "
         f"seeds {', '.join(map(str, SEEDS))}, object texels 1/{TEXELS_PER_PX} px, the edge tilted {TILT_DEG:g} deg in "
         "the image, flat-fielded by a render of a uniform object), beside the lens x pixel x texel MTF50 along the "
-        "axis and along the edge's normal (what e-SFR measures; the acceptance), and the geometric MTF (what the "
-        "render traces) along each row's local normal averaged over the crop's rows:"
+        "axis and along the edge's normal (what e-SFR measures; the acceptance), the e-SFR of the crop built from "
+        "the geometric spots (what the render traces) of its rows' fields, and the normal's prediction x that crop's "
+        "e-SFR / the same crop's at the one field (the crop's field spread as e-SFR merges it):"
     )
     print()
     print(
         "| lens | direction | lens x pixel x texel MTF50 along the axis (cy/px) | along the edge normal | "
         "rendered e-SFR MTF50 (cy/px, mean of seeds) | seeds' spread | difference from the normal's | "
-        "difference from the axis's | geometric MTF50 over the crop's rows (fields) | measured tilt (deg) | "
+        "difference from the axis's | geometric crop's e-SFR MTF50 (its rows' fields) | over the crop | "
+        "difference from it | measured tilt (deg) | "
         "render time per edge (s) |"
     )
-    print("|---|---|---|---|---|---|---|---|---|---|---|")
+    print("|---|---|---|---|---|---|---|---|---|---|---|---|---|")
     worst = 0.0
     for r in rows:
         diff = (r["esfr"] - r["normal"]) / r["normal"]
@@ -235,7 +237,8 @@ def print_rendered(chosen: list[dict]) -> None:
         print(
             f"| {r['lens']} | {r['direction']} | {r['expected']:.4f} | {r['normal']:.4f} | {r['esfr']:.4f} | "
             f"{100 * r['spread'] / r['normal']:.2f} % | {100 * diff:+.2f} % | {100 * (r['esfr'] / r['expected'] - 1):+.2f} % | "
-            f"{r['rows']:.4f} ({r['fields'][0]:.3g}-{r['fields'][1]:.3g} deg) | {r['tilt']:.2f} | {r['seconds']:.0f} |"
+            f"{r['rows']:.4f} ({r['fields'][0]:.3g}-{r['fields'][1]:.3g} deg) | {r['crop']:.4f} | "
+            f"{100 * (r['esfr'] / r['crop'] - 1):+.2f} % | {r['tilt']:.2f} | {r['seconds']:.0f} |"
             + (f" {r['reason']}" if r["reason"] else "")
         )
     print()
