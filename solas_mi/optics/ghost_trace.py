@@ -66,12 +66,12 @@ def _meet(s, zv: float, state, ftype):
     """Rays (global frame) to surface `s` (vertex at z = `zv`) from either side: the point (x, y, lz, the
     vertex frame) and whether it is met."""
     x, y, z, dx, dy, dz = state
-    t0 = (tracer._opaque(zv, ftype) - z) / dz
+    t0 = (tracer.opaque(zv, ftype) - z) / dz
     x, y = dr.fma(t0, dx, x), dr.fma(t0, dy, y)
     hit = dr.isfinite(t0)
     if s.curvature == 0.0 and s.is_sphere:
         return x, y, dr.zeros(ftype, dr.width(x)), hit
-    c = tracer._opaque(s.curvature, ftype)
+    c = tracer.opaque(s.curvature, ftype)
     b = dz - c * (x * dx + y * dy)
     cc = c * (x * x + y * y)
     disc = b * b - (c if s.conic == 0.0 else c * (1.0 + s.conic * dz * dz)) * cc
@@ -94,12 +94,12 @@ def _event(lens: Lens, k: int, forward: bool, reflect, state, media, wavelength_
     dx, dy, dz = state[3:]
     ok &= (dz > 0) if forward else (dz < 0)
     r2 = x * x + y * y
-    ok &= r2 <= tracer._opaque((s.semi_diameter * (1.0 + RIM_SLACK)) ** 2, ftype)
+    ok &= r2 <= tracer.opaque((s.semi_diameter * (1.0 + RIM_SLACK)) ** 2, ftype)
     if s.blades:
         ok &= s.iris_margin(x, y, lambda a, b: dr.sqrt(a * a + b * b), dr.atan2, dr.cos, dr.floor) >= (
             -RIM_SLACK * s.semi_diameter
         )
-    z = lz + tracer._opaque(zv, ftype)
+    z = lz + tracer.opaque(zv, ftype)
     glasses, index = media
     if glasses[k] == glasses[k + 1]:  # no interface (a stop in air): nothing bends or reflects
         return (x, y, z, dx, dy, dz), ok, 1.0

@@ -88,7 +88,7 @@ def chief_rays(lens: Lens, field_deg: np.ndarray, wavelength_nm: np.ndarray) -> 
             tracer.array(goal[:, 0]),
             tracer.array(goal[:, 1]),
         )
-    image_z = tracer._opaque(lens.image_z)  # a kernel input, not a literal: a new lens reuses the kernels
+    image_z = tracer.opaque(lens.image_z)  # a kernel input, not a literal: a new lens reuses the kernels
     px, py, _ = tracer.to_plane(tr, image_z)
     distinct, which = np.unique(wavelength_nm, return_inverse=True)  # paraxial data once per wavelength
     xp_z = np.array([paraxial(lens, w).exit_pupil_z_mm for w in distinct])[which.ravel()]
@@ -177,7 +177,7 @@ def stop_aim(b: Bundle, chief: ChiefRays, gx: tracer.F, gy: tracer.F):
         for k in range(1, RIM_STEPS):
             ex, ey, _, _ = aim(b, stop_target, ex, ey, gx * (k / RIM_STEPS), gy * (k / RIM_STEPS))
     else:
-        ratio = tracer._opaque(entrance_pupil_footprint(lens) / lens.surfaces[lens.stop_index].semi_diameter)
+        ratio = tracer.opaque(entrance_pupil_footprint(lens) / lens.surfaces[lens.stop_index].semi_diameter)
         ex, ey = ex + gx * ratio, ey + gy * ratio
     return aim(b, stop_target, ex, ey, gx, gy)
 

@@ -65,14 +65,14 @@ class Traced:
     # (`trace(fresnel=True)`)
 
 
-def _opaque(value: float, ftype=F) -> F:
+def opaque(value: float, ftype=F) -> F:
     """A scalar as an opaque value of `ftype`, so kernels are reused across lenses and wavelengths."""
     return dr.opaque(ftype, float(value))
 
 
 def _kernel_input(value, like):
     """A Python number as an opaque value of Dr.Jit array `like`'s type (a literal: new kernels per lens)."""
-    return _opaque(value, type(like)) if isinstance(value, (int, float)) and dr.is_array_v(like) else value
+    return opaque(value, type(like)) if isinstance(value, (int, float)) and dr.is_array_v(like) else value
 
 
 def _types(value) -> tuple[type, type, type]:
@@ -119,7 +119,7 @@ def launch(lens: Lens, tan_x: F, tan_y: F, ex: F, ey: F, object_point: tuple[F, 
     ftype = _types(ex)[0]
     if object_point is None:
         (dx, dy, dz), (e1x, _, e1z), (e2x, e2y, e2z) = beam_basis(tan_x, tan_y, dr.sqrt)
-        z0 = _opaque(launch_plane_z(lens), ftype)
+        z0 = opaque(launch_plane_z(lens), ftype)
         x = ex * e1x + ey * e2x
         y = ey * e2y
         z = z0 + ex * e1z + ey * e2z
@@ -127,7 +127,7 @@ def launch(lens: Lens, tan_x: F, tan_y: F, ex: F, ey: F, object_point: tuple[F, 
     ox, oy = object_point
     zs = launch_plane_z(lens)
     if -zs >= lens.object_distance > 0:  # a near object (a film, in a reversed lens): start at the point itself
-        oz = _opaque(-lens.object_distance, ftype)
+        oz = opaque(-lens.object_distance, ftype)
         vx, vy, vz = ex - ox, ey - oy, -oz + 0.0 * ex
         inv = dr.rsqrt(vx * vx + vy * vy + vz * vz)
         return Rays(ox + 0.0 * ex, oy + 0.0 * ex, oz + 0.0 * ex, vx * inv, vy * inv, vz * inv,
@@ -137,7 +137,7 @@ def launch(lens: Lens, tan_x: F, tan_y: F, ex: F, ey: F, object_point: tuple[F, 
     # paths of up to 1e12 mm would leave (0.1 µm of noise, a fifth of a wave). A virtual object (d < 0,
     # behind surface 1): the same line through the object point and (ex, ey, 0), travelling toward the
     # point, whose converging wave reaches the sphere of radius s before that of radius R: the path R − s.
-    d, z0 = _opaque(lens.object_distance, ftype), _opaque(zs, ftype)
+    d, z0 = opaque(lens.object_distance, ftype), opaque(zs, ftype)
     sx, sy = (ex - ox) / d, (ey - oy) / d  # slopes toward (ex, ey, 0)
     x, y = dr.fma(z0, sx, ex), dr.fma(z0, sy, ey)
     h = z0 + d
@@ -166,7 +166,7 @@ def launch_direction(lens: Lens, dx: F, dy: F, dz: F, ex: F, ey: F) -> Rays:
     of d, e1 = cos φ e_θ − sin φ e_φ and e2 = sin φ e_θ + cos φ e_φ, well defined at every θ (e1 = x,
     e2 = y on axis; the same basis as `beam_basis` on the y axis). OPL starts at 0 there."""
     ftype = _types(ex)[0]
-    reach = _opaque(-launch_plane_z(lens), ftype)
+    reach = opaque(-launch_plane_z(lens), ftype)
     s = dr.sqrt(dx * dx + dy * dy)
     cos_t, sin_t = dz, s
     on_axis = s == 0.0
@@ -211,7 +211,7 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False, heigh
         r2 = x * x + y * y
         if heights is not None:
             heights.append(r2)
-        blocked = r2 > _opaque((s.semi_diameter * (1.0 + _RIM_SLACK)) ** 2, ftype)
+        blocked = r2 > opaque((s.semi_diameter * (1.0 + _RIM_SLACK)) ** 2, ftype)
         if s.blades:  # the iris's polygon, inside the clear circle
             blocked |= s.iris_margin(x, y, lambda a, b: dr.sqrt(a * a + b * b), dr.atan2, dr.cos,
                                      dr.floor) < -_RIM_SLACK * s.semi_diameter
@@ -220,8 +220,8 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False, heigh
             stop_x, stop_y = x, y
         n_after = refractive_index(s.glass, wavelength_um)
         if s.ideal:
-            (dx, dy, dz), delta = ideal.deflect(x, y, (dx, dy, dz), n_before, n_after, _opaque(1.0 / s.focal_length, ftype),
-                                                None if conjugates[k] is None else _opaque(conjugates[k], ftype),
+            (dx, dy, dz), delta = ideal.deflect(x, y, (dx, dy, dz), n_before, n_after, opaque(1.0 / s.focal_length, ftype),
+                                                None if conjugates[k] is None else opaque(conjugates[k], ftype),
                                                 dr.sqrt)
             opl = opl + delta
         elif s.glass != (lens.surfaces[k - 1].glass if k else lens.object_glass):
@@ -233,7 +233,7 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False, heigh
             ok &= k2 >= 0
             if fresnel:
                 transmittance = transmittance * factor
-        z = lz + _opaque(zv, ftype)
+        z = lz + opaque(zv, ftype)
         n_before = n_after
     return Traced(Rays(x, y, z, dx, dy, dz, opl), ok, tir, clipped, stop_x, stop_y, n_before, transmittance)
 
@@ -247,16 +247,16 @@ def _to_surface(s, zv: float, rays: Rays, n_before: F, sideways: bool, ftype):
     curved sphere from where they are."""
     x, y, z, dx, dy, dz, opl = rays.x, rays.y, rays.z, rays.dx, rays.dy, rays.dz, rays.opl
     if sideways and s.curvature != 0.0 and s.is_sphere:
-        lz, t, hit = _sphere_from_launch(_opaque(s.curvature, ftype), x, y, z - _opaque(zv, ftype), dx, dy, dz)
+        lz, t, hit = _sphere_from_launch(opaque(s.curvature, ftype), x, y, z - opaque(zv, ftype), dx, dy, dz)
         return x, y, lz, t, opl, hit
-    t0 = (_opaque(zv, ftype) - z) / dz
+    t0 = (opaque(zv, ftype) - z) / dz
     hit = dz > 0
     x, y = dr.fma(t0, dx, x), dr.fma(t0, dy, y)
     lz = dr.zeros(ftype, dr.width(x))
     opl = dr.fma(n_before, t0, opl)
     if s.curvature == 0.0 and s.is_sphere:
         return x, y, lz, dr.zeros(ftype, dr.width(x)), opl, hit
-    c = _opaque(s.curvature, ftype)
+    c = opaque(s.curvature, ftype)
     b = dz - c * (x * dx + y * dy)
     cc = c * (x * x + y * y)
     # conic: A t² − 2B t + C = 0 with A = c (1 + k dz²) (= c for a sphere)
@@ -295,7 +295,7 @@ def surface_normal(s, x, y, lz, r2, ftype):
     if s.curvature == 0.0 and s.is_sphere:
         return dr.zeros(ftype, 1), dr.zeros(ftype, 1), dr.ones(ftype, 1)
     if s.is_sphere:
-        c = _opaque(s.curvature, ftype)
+        c = opaque(s.curvature, ftype)
         return -c * x, -c * y, 1.0 - c * lz
     # an exact even asphere: (−2x s', −2y s', 1) / |…|
     slope = 2.0 * sag_slope(r2, **s.shape, sqrt=dr.sqrt, maximum=dr.maximum)
