@@ -397,4 +397,4 @@ def to_numpy(*values) -> tuple[np.ndarray, ...]:
 
 
 __all__ = ["Rays", "Traced", "launch", "launch_direction", "trace", "to_plane", "to_sphere", "field_tangents", "object_points",
-           "aligned", "array", "gather", "to_numpy", "refractive_index", "launch_plane_z"]
+           "aligned", "array", "gather", "to_numpy", "refractive_index", "launch_plane_z", "opaque"]
