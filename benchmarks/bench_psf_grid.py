@@ -13,7 +13,6 @@ from __future__ import annotations
 import argparse
 import resource
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
@@ -22,6 +21,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from bench_grid_end_to_end import command
 from figures import figure
 
 from solas_mi import Lens
@@ -47,32 +47,8 @@ def grid_seconds(lens: Lens, n: int, repeats: int) -> list[float]:
 
 def command_seconds(repeats: int) -> tuple[list[float], float]:
     """The `psf-grid` command's wall seconds per run and its peak memory (MB, the largest run's)."""
-    times = []
     with tempfile.TemporaryDirectory() as tmp:
-        for _ in range(repeats):
-            start = time.perf_counter()
-            subprocess.run(
-                [
-                    sys.executable,
-                    "-m",
-                    "solas_mi",
-                    "psf-grid",
-                    "solas-doublet",
-                    "--grid",
-                    "32x32",
-                    "--wavelengths-nm",
-                    "656,531,486",
-                    "--pitch-um",
-                    "0.5",
-                    "--size",
-                    "160",
-                    "-o",
-                    str(Path(tmp) / "grid.exr"),
-                ],
-                check=True,
-                capture_output=True,
-            )
-            times.append(time.perf_counter() - start)
+        times = [command(Path(tmp)) for _ in range(repeats)]
     return times, resource.getrusage(resource.RUSAGE_CHILDREN).ru_maxrss / 1024
 
 
