@@ -63,3 +63,35 @@ def test_a_totally_reflected_chief_ray_still_gives_the_light_that_arrives(cooke,
     p = psf(cooke, (0, 32.0), 587.56, method=method, size=128, pitch_um=10.0, normalization="none")
     assert p.meta["transmission"] == pytest.approx(brute, rel=0.02)
     assert p.data.sum() * 100.0 > 0.95 * p.meta["transmission"]  # the window, centred on the light, holds it
+
+
+def test_the_power_peak_test_counts_cells_as_the_median_would_decide():
+    """`power_peaks` decides "peak > FOLD_POWER × median" by counting cells below the bound: on pupils built
+    to sit at every edge of that rule (odd and even counts, an even count split exactly at the bound, ties,
+    zeros, no full cell, one cell) it agrees with the median taken directly."""
+    from solas_mi.psf.fraunhofer import FOLD_POWER, power_peaks
+
+    rng = np.random.default_rng(7)
+    power, full = rng.exponential(1.0, (400, 6, 6)), rng.random((400, 6, 6)) < 0.6
+    full[0], full[1] = False, False  # no full cell
+    full[1, 2, 3] = True  # one cell
+    power[2:50] = np.round(power[2:50] * 4) / 4  # ties at the bound
+    power[50:60] = 0.0  # all zero
+    power[::2, 0, 0] *= 30.0  # half the pupils with a peak near the bound
+    for i in range(60, 400):  # an even count split so that the mean of the two middle cells meets the bound
+        cells = np.sort(power[i][full[i]])
+        if len(cells) >= 2 and len(cells) % 2 == 0:
+            k = len(cells) // 2
+            peak = np.where(full[i], power[i], 0.0).max()
+            bound = peak / FOLD_POWER  # the two middle cells astride it, their mean below, at or above it
+            lower, upper = full[i] & (power[i] == cells[k - 1]), full[i] & (power[i] == cells[k])
+            if cells[k] < peak:
+                power[i][lower], power[i][upper] = bound * 0.5, bound * rng.choice([1.4, 1.5, 1.6])
+    direct = np.array(
+        [
+            np.where(m, p, 0.0).max() > FOLD_POWER * max(np.median(p[m]) if m.any() else 0.0, 1e-300)
+            for p, m in zip(power, full)
+        ]
+    )
+    assert direct.any() and not direct.all()
+    assert (power_peaks(power, full) == direct).all()
