@@ -136,3 +136,23 @@ def test_a_library_warning_is_one_line(monkeypatch, capsys):
     monkeypatch.setattr(commands, "run_sensors", warns)
     assert main(["sensors"]) == 0
     assert capsys.readouterr().err.splitlines() == ["solas-mi sensors: warning: the film reaches past the lens's field"]
+
+
+def test_a_command_builds_the_parser_of_its_stage_only_and_the_same_help():
+    """`build_parser(command)` stops at the stage that registers the command (and that extends it): each command's
+    every sub-command has the help it has in the whole parser, and `psf-grid` imports no later stage's commands."""
+    import subprocess
+    import sys
+
+    from solas_mi.cli import build_parser, iter_commands
+
+    full = {path: p.format_help() for path, p in iter_commands(build_parser()) if path}
+    for name in {path[0] for path in full}:
+        own = {path: p.format_help() for path, p in iter_commands(build_parser(name)) if path and path[0] == name}
+        assert own == {path: text for path, text in full.items() if path[0] == name}, name
+    code = (
+        "import sys; from solas_mi.cli import AREAS, build_parser; build_parser('psf-grid'); "
+        "print(','.join(a for a in AREAS if f'solas_mi.{a}.commands' in sys.modules))"
+    )
+    loaded = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True).stdout.strip()
+    assert loaded == "optics,psf"
