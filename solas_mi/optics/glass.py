@@ -31,6 +31,7 @@ from typing import NamedTuple
 
 import numpy as np
 
+from ..caches import parsed_files
 from ..errors import SolasError
 from . import melt as melt_mod
 from . import thermal
@@ -230,12 +231,11 @@ def catalog_files() -> list[Path]:
 
 @lru_cache(maxsize=4)
 def _entries(path: str | None) -> dict:
-    """The [glass] tables of the catalogue file `path`, or of all shipped vendor files (None)."""
-    entries: dict = {}
-    for file in [path] if path else catalog_files():
-        with open(file, "rb") as f:
-            entries.update(tomllib.load(f)["glass"])
-    return entries
+    """The [glass] tables of the catalogue file `path`, or of all shipped vendor files (None; kept parsed:
+    `caches.parsed_files`)."""
+    files = [Path(path)] if path else catalog_files()
+    parse = lambda: {k: e for file in files for k, e in tomllib.loads(file.read_text("utf-8"))["glass"].items()}  # noqa: E731
+    return parse() if path else parsed_files("glass", "parsed glass catalogue", files, parse)
 
 
 def _glass(key: str, e: dict) -> Glass:

@@ -432,3 +432,28 @@ def test_conrady_formula():
     waves = np.linspace(400.0, 1000.0, 7)
     traced = np.asarray(g.index_formula(dr.llvm.Float64(waves / 1000), dr.sqrt, dr.select))
     assert traced == pytest.approx(g.index(waves), abs=1e-15)
+
+
+def test_the_shipped_catalogue_is_kept_parsed_and_read_back_as_its_toml_reads(fresh_cache, capsys):
+    """The shipped catalogue's [glass] tables (`glass._entries`) are kept parsed in the cache folder
+    (`caches.parsed_files`): a process that finds them there gets the same tables, in the same order, as
+    tomllib reading the vendor files; a kept file that was changed is said so and parsed again."""
+    import tomllib
+
+    from solas_mi.optics import glass
+
+    direct: dict = {}
+    for file in glass.catalog_files():
+        direct.update(tomllib.loads(file.read_text("utf-8"))["glass"])
+    glass._entries.cache_clear()
+    first = glass._entries(None)
+    kept = list((fresh_cache / "glass").glob("*.marshal"))
+    assert len(kept) == 1
+    glass._entries.cache_clear()
+    again = glass._entries(None)
+    assert list(first.items()) == list(direct.items()) and list(again.items()) == list(direct.items())
+    kept[0].write_bytes(kept[0].read_bytes()[:-9] + b"truncated")
+    glass._entries.cache_clear()
+    assert list(glass._entries(None).items()) == list(direct.items())
+    assert "is not reused" in capsys.readouterr().err
+    glass._entries.cache_clear()
