@@ -1,6 +1,7 @@
 """Where solas-mi keeps what it computed once and reuses: `cache_root`, the folder of its caches (the PSF grids
 of `batch.cache`, the fitted cameras of `optics.calibration`), `RecordCache`, JSON records kept by a key, and
-`FileCache`, files (the ghost grids of `psf.ghost_nodes`) kept by a key with a record of it beside each.
+`FileCache`, files (the ghost grids of `psf.ghost_nodes`) kept by a key with a record of it beside each, and
+`parsed_files`, what parsing some files gives (the shipped glass catalogue of `optics.glass`) kept by their contents.
 
 The root is $SOLAS_MI_CACHE_DIR where set (`ENV`), else the user's cache directory (`platformdirs`), e.g.
 ~/.cache/solas-mi. A record is a file named by the hash of its key, holding its key, its value and the value's
