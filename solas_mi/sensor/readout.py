@@ -34,6 +34,7 @@ from dataclasses import asdict, dataclass, fields
 import numpy as np
 
 from ..errors import SolasError
+from ..threads import in_threads
 from . import emva
 from .limits import ADC_DEFAULTS, PRNU_MEANING, READOUT_DEFAULTS, check_adc, check_gain, check_number, check_ranged
 
@@ -212,37 +213,52 @@ def read_out(readout: Readout, electrons: np.ndarray, offset: np.ndarray, tempor
     return frame
 
 
+def charge_electrons(group: list[Readout], gain, mu_e, exposure_s: float, temporal, draw: tuple, defects):
+    """The electrons (float64) of one charge read by the readouts `group`: Poisson photo-electrons of mean
+    `gain` (its pattern's) × `mu_e` × the photodiode's response, then Poisson dark electrons, drawn from
+    `temporal`; dead pixels emptied, hot ones filled (`defects`, drawn by `draw`: seed, frame and the charge's
+    index)."""
+    first = group[0]
+    # past the full well the count is clipped anyway: capping the Poisson means at 2 × full well + 1000 keeps
+    # them within NumPy's Poisson range (the Chernoff bound puts the chance that the well then fails to fill
+    # below e⁻⁷⁰⁰)
+    cap = 2.0 * max(r.full_well_e for r in group) + 1000.0
+    mean = np.multiply(gain, mu_e if first.response == 1.0 else mu_e * first.response)  # (x × 1.0 is x: skipped)
+    electrons = temporal.poisson(np.minimum(mean, cap, out=mean)).astype(np.float64)
+    if defects is not None:
+        electrons[defects[1]] = 0.0  # dead: no photo-electrons
+    seconds = exposure_s * first.exposure_ratio
+    electrons += temporal.poisson(min(first.dark_current_e_s * seconds, cap), electrons.shape)
+    if defects is not None:
+        stage, _, hot = defects
+        electrons[hot] += stage.hot_electrons(hot, seconds, cap, *draw)
+    return electrons
+
+
 def read_charges(
     readouts: tuple[Readout, ...], mu_e: np.ndarray, exposure_s: float, seed: int, frame: int, defects=None
 ) -> list[np.ndarray]:
     """The frame (H, W, uint16 DN) of each readout, in order, for the pixels' mean photo-electrons `mu_e` of
     the reference photodiode over the frame's exposure `exposure_s` (module docstring); `defects`: the
     sensor's `defects.Defects` with its dead and hot pixels (None: none). A dead pixel's photo-electrons are
-    dropped after they are drawn, so that the other pixels' draws stay as they were."""
+    dropped after they are drawn, so that the other pixels' draws stay as they were. The charges, each
+    from its own streams, are drawn on the process's threads at once (`threads.in_threads`)."""
     charges: dict[str, list[int]] = {}
     for i, r in enumerate(readouts):
         charges.setdefault(r.charge, []).append(i)
     frames: list[np.ndarray | None] = [None] * len(readouts)
     held: set[tuple] = set()
-    for index, (charge, members) in enumerate(charges.items()):
-        first = readouts[members[0]]
-        fixed, temporal = charge_streams(index, charge, seed, frame)
-        # past the full well the count is clipped anyway: capping the Poisson means at 2 × full well + 1000
-        # keeps them within NumPy's Poisson range (the Chernoff bound puts the chance that the well then
-        # fails to fill below e⁻⁷⁰⁰)
-        cap = 2.0 * max(readouts[i].full_well_e for i in members) + 1000.0
-        pattern, offsets = held_pattern([readouts[i] for i in members], mu_e.shape, (seed, index, charge), fixed, held)
-        gain = np.multiply(pattern, mu_e if first.response == 1.0 else mu_e * first.response)  # (x × 1.0 skipped)
-        electrons = temporal.poisson(np.minimum(gain, cap, out=gain)).astype(np.float64)
-        if defects is not None:
-            electrons[defects[1]] = 0.0  # dead: no photo-electrons
-        seconds = exposure_s * first.exposure_ratio
-        electrons += temporal.poisson(min(first.dark_current_e_s * seconds, cap), mu_e.shape)
-        if defects is not None:
-            stage, _, hot = defects
-            electrons[hot] += stage.hot_electrons(hot, seconds, cap, seed, frame, index)
+
+    def read(charge: tuple[int, tuple[str, list[int]]]) -> None:
+        index, (name, members) = charge
+        group = [readouts[i] for i in members]
+        fixed, temporal = charge_streams(index, name, seed, frame)
+        gain, offsets = held_pattern(group, mu_e.shape, (seed, index, name), fixed, held)
+        electrons = charge_electrons(group, gain, mu_e, exposure_s, temporal, (seed, frame, index), defects)
         for i, offset in zip(members, offsets):
             frames[i] = read_out(readouts[i], electrons, offset, temporal)
+
+    in_threads(read, list(enumerate(charges.items())))
     with _PATTERNS_LOCK:
         for key in set(_PATTERNS) - held:
             del _PATTERNS[key]  # another sensor's, seed's or frame size's: not held

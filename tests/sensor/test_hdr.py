@@ -294,3 +294,20 @@ def test_frames_worked_in_bands_are_the_frames_worked_whole(monkeypatch, blend):
     assert len(readout.bands(image.shape[:2])) == 37  # 7 values: a band per row
     for values in (80, 7):
         assert all(np.array_equal(a, b) for a, b in zip(outputs[values], outputs[10**9], strict=True))
+
+
+def test_charges_drawn_on_threads_give_the_frames_drawn_in_turn(monkeypatch):
+    """The charges of a frame are drawn on the process's threads at once, each from its own streams and
+    pattern: the readouts are those of the charges drawn one after the other."""
+    from solas_mi.sensor import readout
+
+    image = np.full((64, 96, 3), 0.05)
+    image[:, 48:] *= 400.0  # past the large photodiode's well: every readout in use
+    threaded = capture_readouts(SPLIT, image, EXPOSURE, 5, 6)
+    in_turn = []
+    monkeypatch.setattr(readout, "in_threads", lambda work, parts: in_turn.extend(work(p) for p in parts))
+    readout._PATTERNS.clear()  # drawn again in turn too
+    assert all(
+        np.array_equal(a, b) for a, b in zip(capture_readouts(SPLIT, image, EXPOSURE, 5, 6), threaded, strict=True)
+    )
+    assert len(in_turn) == 2  # the two charges, one after the other
