@@ -31,6 +31,7 @@ BASE = {
     "registry",
     "labelkinds",
     "caches",
+    "threads",
 }
 ALLOWED = {
     "optics": set(),

@@ -10,10 +10,7 @@ sum ("sum", default) or unit peak ("peak").
 from __future__ import annotations
 
 import math
-import os
-from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
-from functools import lru_cache
 from typing import Any
 
 import numpy as np
@@ -275,20 +272,3 @@ def describe(lens, method: str, normalization: str, sampling: dict, size: int) -
         "origin_pixel": [size // 2, size // 2],
         "orientation": "row 0 = top (largest y), column 0 = left (smallest x)",
     }
-
-
-@lru_cache(maxsize=1)
-def thread_pool() -> ThreadPoolExecutor:
-    """One thread per core this process may use, kept for the process (matrix products and the placing of
-    a grid's nodes; starting threads each time took 3 ms a thread on a loaded machine)."""
-    return ThreadPoolExecutor(len(os.sched_getaffinity(0)), thread_name_prefix="solas-psf")
-
-
-def in_threads(work, parts: list) -> None:
-    """`work(part)` for each of `parts` on the pool's threads, the parts dealt out in turn; returns when all are done."""
-    n = min(len(parts), len(os.sched_getaffinity(0)))
-    if n <= 1:
-        for part in parts:
-            work(part)
-        return
-    list(thread_pool().map(lambda k: [work(p) for p in parts[k::n]], range(n)))

@@ -19,7 +19,8 @@ import numpy as np
 from ..blas import single_threaded_blas
 from ..optics import tracer
 from ..optics.pupil import PupilFunction, Pupils
-from .base import Computed, centring_warnings, grid_offsets, in_threads, window_centres_um
+from ..threads import in_threads
+from .base import Computed, centring_warnings, grid_offsets, window_centres_um
 from .geometric import entrance_grid_hits, geometric, light_offsets_um
 
 dr = tracer.dr

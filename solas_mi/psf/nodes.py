@@ -15,6 +15,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..optics.lens import Lens
+from ..threads import in_threads
 from . import base
 from .methods import compute
 from .spec import GridSpec
@@ -138,7 +139,7 @@ def place(
         turned = _turned(single, *key)[:, :size, :size]
         jobs += [(turned[source[i]], scale[source[i]], out[nodes[i] // nx, nodes[i] % nx]) for i in mine]
 
-    base.in_threads(lambda job: np.multiply(job[0], job[1], out=job[2]), jobs)
+    in_threads(lambda job: np.multiply(job[0], job[1], out=job[2]), jobs)
     return energy
 
 

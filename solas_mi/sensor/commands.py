@@ -127,13 +127,17 @@ def frame_bytes(
 ) -> float:
     """The camera's peak memory for a frame beyond its modules (bytes): the largest of the EXR read (of
     `channels` channels), the sensor's chain (of `readouts` readouts) and the image processor's (0: none),
-    plus a scene in time's images (`timed`: a flickering box or the image's motion)."""
+    plus a scene in time's images (`timed`: a flickering box or the image's motion) and the sensor's fixed
+    pattern, held from frame to frame (`readout.PATTERN_VALUES_PER_READOUT`)."""
+    from .readout import PATTERN_VALUES_PER_READOUT
+
     read = READ_BYTES_PER_VALUE * channels + READ_BYTES_PER_PIXEL
     chain = RAW_BYTES_PER_PIXEL + (
         MERGE_BYTES_PER_PIXEL + READOUT_BYTES_PER_PIXEL * (readouts - 1) if readouts > 1 else 0.0
     )
     scene = TIMED_SCENE_BYTES_PER_PIXEL if timed else 0.0
-    return rows * cols * (max(read, chain, develop_bytes_per_pixel) + scene)
+    held = 8.0 * PATTERN_VALUES_PER_READOUT * readouts
+    return rows * cols * (max(read, chain, develop_bytes_per_pixel) + scene + held)
 
 
 def as_irradiance(

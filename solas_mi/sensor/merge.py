@@ -33,7 +33,7 @@ import numpy as np
 from ..errors import SolasError
 from . import emva
 from .limits import check_adc, check_number
-from .readout import Readout
+from .readout import Readout, bands
 
 MERGE_BITS = (16, 24)  # the merged signal's bits: data sheets give 20-24; float32 (the RAW's EXR) holds 2^24 exactly
 
@@ -102,7 +102,14 @@ class Merge:
             )
 
     def merge(self, readouts: tuple[Readout, ...], frames: list[np.ndarray]) -> np.ndarray:
-        """The merged code (H, W, uint32) of the readouts' frames (module docstring)."""
+        """The merged code (H, W, uint32) of the readouts' frames (module docstring), band by band
+        (`readout.bands`: the same arithmetic, in the processor's cache)."""
+        merged = np.empty(frames[0].shape, dtype=np.uint32)
+        for band in bands(merged.shape):
+            merged[band] = self._merge(readouts, [frame[band] for frame in frames])
+        return merged
+
+    def _merge(self, readouts: tuple[Readout, ...], frames: list[np.ndarray]) -> np.ndarray:
         top = readouts[0].gain_dn_per_e * readouts[0].response
         estimates = [(np.asarray(y, dtype=np.float64) - r.black_level_dn, r) for y, r in zip(frames, readouts)]
         signal, last = estimates[-1]

@@ -18,16 +18,23 @@ pattern from [seed, 0] and its temporal noise from [seed, 1, frame], so every se
 gives the frames it gave before the chain; every other charge from its own named streams, [seed, 2, id]
 and [seed, 3, id, frame] with id the CRC-32 of its name ("photodiode@exposure ratio"), so adding a readout
 changes no other charge's draws.
+
+The fixed pattern depends on the seed, the frame's shape and the photodiode's and readouts' spreads, never
+on the frame: the patterns of the last frame's charges are kept (`held_pattern`, read-only arrays,
+`PATTERN_VALUES_PER_READOUT`) and reused for the next frame of the same sensor and seed, as a batch draws them.
 """
 
 from __future__ import annotations
 
+import math
+import threading
 import zlib
 from dataclasses import asdict, dataclass, fields
 
 import numpy as np
 
 from ..errors import SolasError
+from ..threads import in_threads
 from . import emva
 from .limits import ADC_DEFAULTS, PRNU_MEANING, READOUT_DEFAULTS, check_adc, check_gain, check_number, check_ranged
 
@@ -149,6 +156,32 @@ def charge_pattern(readouts: list[Readout], shape: tuple[int, int], rng: np.rand
     return np.clip(gain, 0.0, None, out=gain), offsets
 
 
+# the fixed patterns held between frames, per pixel and readout at most: its offset and, for the first readout
+# of a charge, the charge's gain (float64 values; the camera's and batch's memory estimates count them,
+# `sensor.commands.frame_bytes`)
+PATTERN_VALUES_PER_READOUT = 2
+BAND_VALUES = 1 << 15  # the values of a band of a frame worked at once (`bands`: 256 KiB of float64)
+_PATTERNS: dict[tuple, tuple[np.ndarray, list[np.ndarray]]] = {}
+_PATTERNS_LOCK = threading.Lock()  # frames captured on threads at once (a threaded Dask worker)
+
+
+def held_pattern(readouts: list[Readout], shape: tuple[int, int], charge: tuple, rng, held: set):
+    """`charge_pattern` of one charge (`charge`: the seed, its index and name), drawn from its stream `rng` the
+    first time and kept while a frame of the same shape asks for it again (module docstring); read-only
+    arrays. Its key is added to `held`, the keys the frame keeps."""
+    key = (*charge, shape, readouts[0].prnu, tuple(r.dsnu_e for r in readouts))
+    held.add(key)
+    with _PATTERNS_LOCK:
+        pattern = _PATTERNS.get(key)
+    if pattern is None:
+        pattern = charge_pattern(readouts, shape, rng)
+        for array in (pattern[0], *pattern[1]):
+            array.flags.writeable = False
+        with _PATTERNS_LOCK:
+            _PATTERNS[key] = pattern
+    return pattern
+
+
 def charge_streams(index: int, charge: str, seed: int, frame: int):
     """The fixed-pattern and temporal random streams of the `index`-th charge of a chain (module docstring)."""
     if index == 0:
@@ -157,42 +190,76 @@ def charge_streams(index: int, charge: str, seed: int, frame: int):
     return np.random.default_rng([seed, 2, key]), np.random.default_rng([seed, 3, key, frame])
 
 
+def bands(shape: tuple[int, ...]):
+    """The row slices of a frame of `shape` in bands of about `BAND_VALUES` values (at least a row each)."""
+    rows = max(1, BAND_VALUES // max(1, math.prod(shape[1:])))
+    return [slice(start, start + rows) for start in range(0, shape[0], rows)]
+
+
+def read_out(readout: Readout, electrons: np.ndarray, offset: np.ndarray, temporal: np.random.Generator) -> np.ndarray:
+    """The frame (uint16 DN) a readout gives for a charge's `electrons`: at most its full well, its `offset`
+    and read noise (drawn from `temporal`, row after row), its ADC. Done in bands of `BAND_VALUES` values,
+    which stay in the processor's cache: the same draws and the same arithmetic as on the whole frame."""
+    frame = np.empty(electrons.shape, dtype=np.uint16)
+    for band in bands(electrons.shape):
+        read = np.minimum(electrons[band], readout.full_well_e)
+        noise = temporal.standard_normal(read.shape)
+        noise *= readout.read_noise_e
+        noise += offset[band]
+        read += noise
+        read *= readout.gain_dn_per_e  # the ADC, in place: round(K e + black), clipped
+        read += readout.black_level_dn
+        frame[band] = np.clip(np.rint(read, out=read), 0, readout.white_level_dn, out=read)
+    return frame
+
+
+def charge_electrons(group: list[Readout], gain, mu_e, exposure_s: float, temporal, draw: tuple, defects):
+    """The electrons (float64) of one charge read by the readouts `group`: Poisson photo-electrons of mean
+    `gain` (its pattern's) × `mu_e` × the photodiode's response, then Poisson dark electrons, drawn from
+    `temporal`; dead pixels emptied, hot ones filled (`defects`, drawn by `draw`: seed, frame and the charge's
+    index)."""
+    first = group[0]
+    # past the full well the count is clipped anyway: capping the Poisson means at 2 × full well + 1000 keeps
+    # them within NumPy's Poisson range (the Chernoff bound puts the chance that the well then fails to fill
+    # below e⁻⁷⁰⁰)
+    cap = 2.0 * max(r.full_well_e for r in group) + 1000.0
+    mean = np.multiply(gain, mu_e if first.response == 1.0 else mu_e * first.response)  # (x × 1.0 is x: skipped)
+    electrons = temporal.poisson(np.minimum(mean, cap, out=mean)).astype(np.float64)
+    if defects is not None:
+        electrons[defects[1]] = 0.0  # dead: no photo-electrons
+    seconds = exposure_s * first.exposure_ratio
+    electrons += temporal.poisson(min(first.dark_current_e_s * seconds, cap), electrons.shape)
+    if defects is not None:
+        stage, _, hot = defects
+        electrons[hot] += stage.hot_electrons(hot, seconds, cap, *draw)
+    return electrons
+
+
 def read_charges(
     readouts: tuple[Readout, ...], mu_e: np.ndarray, exposure_s: float, seed: int, frame: int, defects=None
 ) -> list[np.ndarray]:
     """The frame (H, W, uint16 DN) of each readout, in order, for the pixels' mean photo-electrons `mu_e` of
     the reference photodiode over the frame's exposure `exposure_s` (module docstring); `defects`: the
     sensor's `defects.Defects` with its dead and hot pixels (None: none). A dead pixel's photo-electrons are
-    dropped after they are drawn, so that the other pixels' draws stay as they were."""
+    dropped after they are drawn, so that the other pixels' draws stay as they were. The charges, each
+    from its own streams, are drawn on the process's threads at once (`threads.in_threads`)."""
     charges: dict[str, list[int]] = {}
     for i, r in enumerate(readouts):
         charges.setdefault(r.charge, []).append(i)
     frames: list[np.ndarray | None] = [None] * len(readouts)
-    for index, (charge, members) in enumerate(charges.items()):
-        first = readouts[members[0]]
-        fixed, temporal = charge_streams(index, charge, seed, frame)
-        # past the full well the count is clipped anyway: capping the Poisson means at 2 × full well + 1000
-        # keeps them within NumPy's Poisson range (the Chernoff bound puts the chance that the well then
-        # fails to fill below e⁻⁷⁰⁰)
-        cap = 2.0 * max(readouts[i].full_well_e for i in members) + 1000.0
-        gain, offsets = charge_pattern([readouts[i] for i in members], mu_e.shape, fixed)
-        gain *= mu_e if first.response == 1.0 else mu_e * first.response  # (x × 1.0 is x: skipped)
-        electrons = temporal.poisson(np.minimum(gain, cap, out=gain)).astype(np.float64)
-        if defects is not None:
-            electrons[defects[1]] = 0.0  # dead: no photo-electrons
-        seconds = exposure_s * first.exposure_ratio
-        electrons += temporal.poisson(min(first.dark_current_e_s * seconds, cap), mu_e.shape)
-        if defects is not None:
-            stage, _, hot = defects
-            electrons[hot] += stage.hot_electrons(hot, seconds, cap, seed, frame, index)
+    held: set[tuple] = set()
+
+    def read(charge: tuple[int, tuple[str, list[int]]]) -> None:
+        index, (name, members) = charge
+        group = [readouts[i] for i in members]
+        fixed, temporal = charge_streams(index, name, seed, frame)
+        gain, offsets = held_pattern(group, mu_e.shape, (seed, index, name), fixed, held)
+        electrons = charge_electrons(group, gain, mu_e, exposure_s, temporal, (seed, frame, index), defects)
         for i, offset in zip(members, offsets):
-            r = readouts[i]
-            read = np.minimum(electrons, r.full_well_e)
-            noise = temporal.standard_normal(mu_e.shape)
-            noise *= r.read_noise_e
-            noise += offset
-            read += noise
-            read *= r.gain_dn_per_e  # the ADC, in place: round(K e + black), clipped
-            read += r.black_level_dn
-            frames[i] = np.clip(np.rint(read, out=read), 0, r.white_level_dn, out=read).astype(np.uint16)
+            frames[i] = read_out(readouts[i], electrons, offset, temporal)
+
+    in_threads(read, list(enumerate(charges.items())))
+    with _PATTERNS_LOCK:
+        for key in set(_PATTERNS) - held:
+            del _PATTERNS[key]  # another sensor's, seed's or frame size's: not held
     return frames

@@ -13,6 +13,7 @@ from solas_mi.imageio import read_exr, write_exr
 from solas_mi.sensor.capture import capture, fixed_pattern
 from solas_mi.sensor.exposure import LIGHT_SPEED, PLANCK
 from solas_mi.sensor.files import load_sensor
+from solas_mi.sensor.readout import PATTERN_VALUES_PER_READOUT
 
 # a sensor whose fixed pattern dwarfs its temporal noise (PRNU 5 %, DSNU 20 e⁻), so a frame difference that
 # kept any of it would show
@@ -317,7 +318,8 @@ def test_memory_estimate_refuses_what_does_not_fit(flat, capsys, monkeypatch, is
         DEVELOP_BYTES_PER_PIXEL if isp else 0.0,
         3 * commands.READ_BYTES_PER_VALUE + commands.READ_BYTES_PER_PIXEL,
     )
-    need = commands.FIXED_BYTES + SHAPE[0] * SHAPE[1] * per_pixel
+    held = 8 * PATTERN_VALUES_PER_READOUT  # the fixed pattern held between frames
+    need = commands.FIXED_BYTES + SHAPE[0] * SHAPE[1] * (per_pixel + held)
     assert f"camera 256x128 needs about {budget.size_text(need)} of memory and 64 MB is free" in capsys.readouterr().err
     assert not (folder / "x.exr").exists()
     assert main([*argv, "--force"]) == 0

@@ -140,3 +140,30 @@ def test_a_file_naming_the_stages_of_a_flat_sensor_gives_its_frames(tmp_path):
     assert not isinstance(staged, SensorModel) and [kind for kind, _ in staged.stages()] == ["photons", "readout"]
     image = scene()
     assert digest(capture(staged, image, 0.01, 3, 5)) == digest(legacy_capture(flat, image, 0.01, 3, 5))
+
+
+def test_frames_in_a_row_draw_the_fixed_pattern_once_and_give_the_frames_they_gave(monkeypatch):
+    """A batch's frames of one sensor and seed reuse its fixed pattern (drawn once: counted) and each frame is
+    still the legacy one, bit for bit — also after another seed, another frame size or an HDR sensor came
+    between, whose own patterns replace the held ones."""
+    from solas_mi.sensor import readout
+
+    drawn, original = [], readout.charge_pattern
+
+    def counted(readouts, shape, rng):
+        drawn.append(shape)
+        return original(readouts, shape, rng)
+
+    monkeypatch.setattr(readout, "charge_pattern", counted)
+    model, hdr, image = SENSORS["defaults"], load_sensor("imx490-hdr"), scene()
+    small = image[:20, :30]
+    order = [(image, 4, 0), (image, 4, 1), (image, 4, 2), (image, 5, 0), (small, 4, 3), (image, 4, 3)]
+    for frame_image, seed, frame in order:
+        expected = legacy_capture(model, frame_image, 0.01, seed, frame)
+        assert digest(capture(model, frame_image, 0.01, seed, frame)) == digest(expected)
+        if frame == 1:
+            capture(hdr, frame_image, 0.01, seed, frame)
+    # frame 0 (frame 1 reuses it); the HDR sensor's two charges; frame 2 again; seed 5; the small frame; back
+    assert drawn == [image.shape[:2]] * 5 + [small.shape[:2], image.shape[:2]]
+    ((gain, offsets),) = readout._PATTERNS.values()
+    assert not gain.flags.writeable and not offsets[0].flags.writeable

@@ -275,3 +275,39 @@ def test_the_dynamic_range_spans_snr_1_to_saturation(name):
     assert top.mean() - chain.black_level_dn == pytest.approx(chain.saturation_dn, rel=0.01)
     alone = SensorChain(chain.photons, chain.readouts[:1]).dynamic_range_db(EXPOSURE)  # the first readout's
     assert chain.dynamic_range_db(EXPOSURE) > alone + 10.0
+
+
+@pytest.mark.parametrize("blend", [0.0, 0.2])
+def test_frames_worked_in_bands_are_the_frames_worked_whole(monkeypatch, blend):
+    """The readouts and the merge work a frame in bands of rows (`readout.bands`, in the processor's cache): a
+    band of a row and a half, or of a part of a row, gives the frame of one band over the whole frame."""
+    from solas_mi.sensor import readout
+
+    chain = replace(SPLIT, merge=replace(SPLIT.merge, blend=blend))
+    rows, cols = np.mgrid[0:37, 0:53]
+    image = np.stack([10.0 ** (-3.0 + 6.0 * cols / 52.0) * (1.0 + 0.2 * np.sin(rows))] * 3, axis=-1)
+    outputs = {}
+    for values in (10**9, 80, 7):
+        monkeypatch.setattr(readout, "BAND_VALUES", values)
+        readouts = capture_readouts(chain, image, EXPOSURE, 3, 4)
+        outputs[values] = [*readouts, capture(chain, image, EXPOSURE, 3, 4)]
+    assert len(readout.bands(image.shape[:2])) == 37  # 7 values: a band per row
+    for values in (80, 7):
+        assert all(np.array_equal(a, b) for a, b in zip(outputs[values], outputs[10**9], strict=True))
+
+
+def test_charges_drawn_on_threads_give_the_frames_drawn_in_turn(monkeypatch):
+    """The charges of a frame are drawn on the process's threads at once, each from its own streams and
+    pattern: the readouts are those of the charges drawn one after the other."""
+    from solas_mi.sensor import readout
+
+    image = np.full((64, 96, 3), 0.05)
+    image[:, 48:] *= 400.0  # past the large photodiode's well: every readout in use
+    threaded = capture_readouts(SPLIT, image, EXPOSURE, 5, 6)
+    in_turn = []
+    monkeypatch.setattr(readout, "in_threads", lambda work, parts: in_turn.extend(work(p) for p in parts))
+    readout._PATTERNS.clear()  # drawn again in turn too
+    assert all(
+        np.array_equal(a, b) for a, b in zip(capture_readouts(SPLIT, image, EXPOSURE, 5, 6), threaded, strict=True)
+    )
+    assert len(in_turn) == 2  # the two charges, one after the other

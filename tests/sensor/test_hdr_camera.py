@@ -175,6 +175,7 @@ def test_the_memory_check_counts_the_readouts(tmp_path, monkeypatch, capsys):
     """An HDR sensor's chain holds more per pixel than one readout's: its merge and each further readout."""
     from solas_mi import budget
     from solas_mi.sensor import commands
+    from solas_mi.sensor.readout import PATTERN_VALUES_PER_READOUT
 
     write_exr(tmp_path / "big.exr", {c: np.full((1000, 1000), 0.01, dtype=np.float32) for c in "RGB"})
     monkeypatch.setattr(budget, "available_memory", lambda: 64e6)
@@ -193,7 +194,9 @@ def test_the_memory_check_counts_the_readouts(tmp_path, monkeypatch, capsys):
         )
         == 2
     )
+    held = 8 * PATTERN_VALUES_PER_READOUT  # the fixed pattern held between frames, per readout
     per_pixel = commands.RAW_BYTES_PER_PIXEL + commands.MERGE_BYTES_PER_PIXEL + 3 * commands.READOUT_BYTES_PER_PIXEL
-    need, flat = (commands.FIXED_BYTES + 1e6 * bytes_ for bytes_ in (per_pixel, commands.RAW_BYTES_PER_PIXEL))
+    flat = commands.RAW_BYTES_PER_PIXEL + held
+    need, flat = (commands.FIXED_BYTES + 1e6 * bytes_ for bytes_ in (per_pixel + 4 * held, flat))
     assert budget.size_text(need) != budget.size_text(flat)
     assert f"camera 1000x1000 needs about {budget.size_text(need)} of memory" in capsys.readouterr().err
