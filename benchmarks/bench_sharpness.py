@@ -18,8 +18,8 @@ MTF along that normal (`normal_mtf50`, from the Fraunhofer PSF), which on the fi
 
 On those three lenses the same edges are also rendered through the lens in Mitsuba and measured by e-SFR
 (`rendered_edge`: a short crop at the field, flat-fielded, two seeds), beside the same predictions (with
-the object's texel ramp in place of the drawing ramp) and the geometric MTF (what the render traces) along
-each row's local normal averaged over the crop's rows.
+the object's texel ramp in place of the drawing ramp) and the e-SFR of the crop built from the geometric
+spots (what the render traces) of the edge's points along it (`rendered_edge.geometric_crop`).
 
     .venv/bin/python benchmarks/bench_sharpness.py              # or: benchmarks/run_all.py bench_sharpness
 """
@@ -218,14 +218,14 @@ def print_rendered(chosen: list[dict]) -> None:
         f"seeds {', '.join(map(str, SEEDS))}, object texels 1/{TEXELS_PER_PX} px, the edge tilted {TILT_DEG:g} deg in "
         "the image, flat-fielded by a render of a uniform object), beside the lens x pixel x texel MTF50 along the "
         "axis and along the edge's normal (what e-SFR measures; the acceptance), the e-SFR of the crop built from "
-        "the geometric spots (what the render traces) of its rows' fields, and the normal's prediction x that crop's "
+        "the geometric spots (what the render traces) of the edge's points, and the normal's prediction x that crop's "
         "e-SFR / the same crop's at the one field (the crop's field spread as e-SFR merges it):"
     )
     print()
     print(
         "| lens | direction | lens x pixel x texel MTF50 along the axis (cy/px) | along the edge normal | "
         "rendered e-SFR MTF50 (cy/px, mean of seeds) | seeds' spread | difference from the normal's | "
-        "difference from the axis's | geometric crop's e-SFR MTF50 (its rows' fields) | over the crop | "
+        "difference from the axis's | geometric crop's e-SFR MTF50 (its fields) | over the crop | "
         "difference from it | measured tilt (deg) | "
         "render time per edge (s) |"
     )
