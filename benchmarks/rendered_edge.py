@@ -44,7 +44,8 @@ SEEDS = (0, 1)
 TEXELS_PER_PX = 8  # object texels per pixel side at the field
 STEP = (0.2, 0.8)
 MARGIN_PX = 16  # pixels along and across the crop whence the crop prediction's spots still land in it
-SUBPIXELS = 8  # points a pixel side of the crop prediction's grid
+SUBPIXELS = 8  # the crop prediction's edge points a pixel along the edge (its spots: RAYS² rays each)
+ACROSS_STEPS = 64  # and its grid's steps a pixel across it
 DELTA_DEG = 0.05  # the field step of the finite differences of the chief ray's image point
 
 
@@ -197,25 +198,27 @@ def crop_image(spots, edge, centres, normal: str, pitch_um: float, texel_px: flo
     points at `edge` (positions along it and across, mm) lights the points of its line across the edge,
     from itself to the bright side, each through its own spot `spots` (`entrance_grid_hits`), so a row gets
     the light its spots send it from the points along the edge they come from (a spot several pixels long
-    along the edge brings the blur of the fields there). Summed on a grid of SUBPIXELS² points a pixel, put
-    through the texel ramp of `texel_px` across the edge, divided by the same image of the whole plane (the
-    flat field) and integrated over the pixels."""
+    along the edge brings the blur of the fields there). Summed on a grid of SUBPIXELS points a pixel along
+    the edge by ACROSS_STEPS across it, put through the texel ramp of `texel_px` across the edge, divided by
+    the same image of the whole plane (the flat field) and integrated over the pixels."""
     along, p = (1 if normal == "x" else 0), pitch_um * 1e-3
-    step, (lines, across) = p / SUBPIXELS, edge
+    lines, across = edge
     a0, c0 = centres[along].min() - p / 2, centres[1 - along].min() - p / 2 - MARGIN_PX * p
-    shape = (len(centres[along]) * SUBPIXELS, (len(centres[1 - along]) + MARGIN_PX) * SUBPIXELS)
-    landed = np.zeros((shape[0], shape[1] + 1))  # the last column: beyond the crop on the bright side
+    n_along, n_across = len(centres[along]), len(centres[1 - along])
+    rows, cols = n_along * SUBPIXELS, (n_across + MARGIN_PX) * ACROSS_STEPS + 1  # the last: beyond the crop
+    cells, powers = [], []
     for (x, y, power), a, c in zip(spots, lines, across):
         ra, rc = (y, x) if normal == "x" else (x, y)
-        i = np.floor((a + ra * 1e-3 - a0) / step).astype(int)
-        j = np.clip(np.floor((c + rc * 1e-3 - c0) / step).astype(int), 0, shape[1])
-        keep = (i >= 0) & (i < shape[0])
-        np.add.at(landed, (i[keep], j[keep]), power[keep])
+        i = np.floor((a + ra * 1e-3 - a0) / (p / SUBPIXELS)).astype(int)
+        j = np.clip(np.floor((c + rc * 1e-3 - c0) / (p / ACROSS_STEPS)).astype(int), 0, cols - 1)
+        keep = (i >= 0) & (i < rows)
+        cells.append(i[keep] * cols + j[keep])
+        powers.append(power[keep])
+    landed = np.bincount(np.concatenate(cells), np.concatenate(powers), rows * cols).reshape(rows, cols)
     bright = (np.cumsum(landed, axis=1) / landed.sum(axis=1, keepdims=True))[:, :-1]
-    k = max(1, int(round(texel_px * SUBPIXELS)))
+    k = max(1, int(round(texel_px * ACROSS_STEPS)))
     bright = np.stack([np.convolve(np.pad(r, k, mode="edge"), np.ones(k) / k, mode="same")[k:-k] for r in bright])
-    n_along, n_across = len(centres[along]), len(centres[1 - along])
-    pixels = bright[:, MARGIN_PX * SUBPIXELS :].reshape(n_along, SUBPIXELS, n_across, SUBPIXELS).mean(axis=(1, 3))
+    pixels = bright[:, MARGIN_PX * ACROSS_STEPS :].reshape(n_along, SUBPIXELS, n_across, ACROSS_STEPS).mean(axis=(1, 3))
     image = pixels[::-1] if normal == "x" else pixels.T[::-1]  # rows: +y first, columns: +x last
     return STEP[0] + (STEP[1] - STEP[0]) * image
 

@@ -95,7 +95,7 @@ def test_a_spot_displaced_along_the_edge_brings_its_fields_blur_to_the_rows_it_l
     """Spots whose sagittal blur grows along the edge and which all land D pixels further along it: a row
     gets its light, and so its blur, from the edge's points D pixels back. The crop then reads by e-SFR as
     the crop of undisplaced spots with the blur and place of the points D back (the former model kept each
-    row's own blur and read the displaced crop as the undisplaced one, 0.2609 cy/px both, where it reads 0.2320)."""
+    row's own blur and read the displaced crop as the undisplaced one, 0.2609 cy/px both, where it reads 0.2323)."""
     from solas_mi.metrics.esfr import esfr
 
     pitch, d_px = 10.0, 6  # µm; the displacement, pixels along the edge (+y)
