@@ -204,7 +204,7 @@ def main() -> int:
 def print_rendered(chosen: list[dict]) -> None:
     """The rendered route (`rendered_edge`) on the lenses of `chosen` (one row each: lens, field, pitch)."""
     from figures import figure
-    from rendered_edge import ALONG_PX, ROI_PX, SEEDS, SPP, TEXELS_PER_PX, measure_rendered
+    from rendered_edge import ALONG_PX, RINGS, ROI_PX, SEEDS, SPP, TEXELS_PER_PX, measure_rendered
 
     from solas_mi import Lens
 
@@ -214,8 +214,8 @@ def print_rendered(chosen: list[dict]) -> None:
         for r in measure_rendered(Lens.load(c["lens"]), c["field"], Lens.load(c["lens"]).primary_wavelength, c["pitch"])
     ]
     print(
-        f"The same edges rendered through the lens in Mitsuba ({ROI_PX}x{ALONG_PX}-px crop at the field, {SPP} spp, "
-        f"seeds {', '.join(map(str, SEEDS))}, object texels 1/{TEXELS_PER_PX} px, the edge tilted {TILT_DEG:g} deg in "
+        f"The same edges rendered through the lens in Mitsuba ({RINGS}-ring cap meshes, {ROI_PX}x{ALONG_PX}-px crop at the "
+        f"field, {SPP} spp, seeds {', '.join(map(str, SEEDS))}, object texels 1/{TEXELS_PER_PX} px, the edge tilted {TILT_DEG:g} deg in "
         "the image, flat-fielded by a render of a uniform object), beside the lens x pixel x texel MTF50 along the "
         "axis and along the edge's normal (what e-SFR measures; the acceptance), the e-SFR of the crop built from "
         "the geometric spots (what the render traces) of the edge's points, and the normal's prediction x that crop's "

@@ -9,9 +9,9 @@ in square texels of 1/`TEXELS_PER_PX` of a pixel (nearest neighbour: the stairca
 across the edge, in the prediction as `bench_sharpness.predicted`'s `ramp_px`). The sensor is a film of the
 bench's pitch reaching past the field, of which only a crop window centred on the chief ray's image point
 is rendered, `ROI_PX` across the edge and `ALONG_PX` along it (`lens_film`: a crop is exactly those pixels
-of the whole film). The crop is divided by the same crop rendered from a uniform object (flat field:
-relative illumination and Fresnel losses vary by several % across it, which e-SFR would read as a slope of
-the edge's profile), then measured by `metrics.esfr`. Two seeds per edge: their spread is the render noise.
+of the whole film), the lens's caps meshed in RINGS rings. The crop is divided by the same crop rendered from
+a uniform object (flat field: relative illumination and Fresnel losses vary by several % across it, which
+e-SFR would read as a slope of the edge's profile), then measured by `metrics.esfr`. Two seeds per edge: their spread is the render noise.
 
 e-SFR measures the MTF along the edge's normal, averaged over the rows it crosses. The prediction it is
 held to is the lens's diffraction MTF along that normal at the field (`bench_sharpness.normal_mtf50`) ×
@@ -39,6 +39,9 @@ import numpy as np
 ROI_PX = 96  # the rendered crop, pixels across the edge
 ALONG_PX = 32  # and along it: the rows e-SFR averages over, few, so that their fields stay near the field
 SPP = 512  # samples per pixel of each render
+# rings of each cap mesh: the automatic count (`render.mesh.mesh_rings`, from the meshes' blur on the axis: 32 on
+# the fisheye) read the fisheye's sagittal edge at 63° 2.4 % below its 128-ring render, the meshes' blur there
+RINGS = 128
 RAYS = 128  # the geometric prediction's entrance grid, rays a side
 SEEDS = (0, 1)
 TEXELS_PER_PX = 8  # object texels per pixel side at the field
@@ -257,6 +260,7 @@ def measure_rendered(lens, field: float, wavelength: float, pitch_um: float, dir
             mapping=mapping_of(lens)[0],
             response=f"mono:{wavelength!r}",
             spp=SPP,
+            rings=RINGS,
         )
         crop = windows(point, pitch_um, side)[normal]
         (flat,), seconds = render_crop(lens, np.ones((2, 2), np.float32), spec, crop, SEEDS[:1])
