@@ -9,20 +9,22 @@ in square texels of 1/`TEXELS_PER_PX` of a pixel (nearest neighbour: the stairca
 across the edge, in the prediction as `bench_sharpness.predicted`'s `ramp_px`). The sensor is a film of the
 bench's pitch reaching past the field, of which only a crop window centred on the chief ray's image point
 is rendered, `ROI_PX` across the edge and `ALONG_PX` along it (`lens_film`: a crop is exactly those pixels
-of the whole film). The crop is divided by the same crop rendered from a uniform object (flat field:
-relative illumination and Fresnel losses vary by several % across it, which e-SFR would read as a slope of
-the edge's profile), then measured by `metrics.esfr`. Two seeds per edge: their spread is the render noise.
+of the whole film), the lens's caps meshed in RINGS rings. The crop is divided by the same crop rendered from
+a uniform object (flat field: relative illumination and Fresnel losses vary by several % across it, which
+e-SFR would read as a slope of the edge's profile), then measured by `metrics.esfr`. Two seeds per edge: their spread is the render noise.
 
 e-SFR measures the MTF along the edge's normal, averaged over the rows it crosses. The prediction it is
 held to is the lens's diffraction MTF along that normal at the field (`bench_sharpness.normal_mtf50`) ×
 the pixel's × the texel ramp's. Beside it, the crop built from the geometric spots (what the render
-traces) of each row's field (`edge_rows`: on a fisheye a long crop spans tens of degrees of field, unevenly,
-and its edge's normal turns with the scales' ratio) measured by the same e-SFR (`geometric_crop`), and that
-prediction × the ratio of that crop's e-SFR to the one field's: a 32-row crop at 63° on the fisheye spans
-58°-68°, whose sagittal MTF50 falls steadily from 0.38 to 0.23 cy/px, and e-SFR reads it 5 % below the
-field's where the rows' mean OTF is 1 % below: e-SFR bins the rows' pixels by their phase to the edge, and
-as the blur changes steadily along the edge each bin holds rows of a different blur (shuffled, the same rows
-read 2 % below).
+traces) of the edge's points along it (`edge_rows`: on a fisheye a long crop spans tens of degrees of field,
+unevenly) as the image of the bright half-plane (`crop_image`: each point's light lands in the rows its
+spot sends it to, a spot several pixels long along the edge bringing the blur of the field it comes from)
+measured by the same e-SFR (`geometric_crop`), and that prediction × the ratio of that crop's e-SFR to the
+one field's: a 32-row crop at 63° on the fisheye spans 58°-68°, whose sagittal MTF50 falls steadily from
+0.38 to 0.23 cy/px, and e-SFR reads it 6.1 % below the field's where the rows' mean OTF is 1 % below:
+e-SFR bins the rows' pixels by their phase to the edge, and as the blur changes steadily along the edge each
+bin holds rows of a different blur (5.3 %), and the spots, 3× longer along the edge than across, bring each
+row light from the blurrier fields outward (0.8 %).
 """
 
 from __future__ import annotations
@@ -37,10 +39,16 @@ import numpy as np
 ROI_PX = 96  # the rendered crop, pixels across the edge
 ALONG_PX = 32  # and along it: the rows e-SFR averages over, few, so that their fields stay near the field
 SPP = 512  # samples per pixel of each render
+# rings of each cap mesh: the automatic count (`render.mesh.mesh_rings`, from the meshes' blur on the axis: 32 on
+# the fisheye) read the fisheye's sagittal edge at 63° 2.4 % below its 128-ring render, the meshes' blur there
+RINGS = 128
 RAYS = 128  # the geometric prediction's entrance grid, rays a side
 SEEDS = (0, 1)
 TEXELS_PER_PX = 8  # object texels per pixel side at the field
 STEP = (0.2, 0.8)
+MARGIN_PX = 16  # pixels along and across the crop whence the crop prediction's spots still land in it
+SUBPIXELS = 8  # the crop prediction's edge points a pixel along the edge (its spots: RAYS² rays each)
+ACROSS_STEPS = 64  # and its grid's steps a pixel across it
 DELTA_DEG = 0.05  # the field step of the finite differences of the chief ray's image point
 
 
@@ -127,24 +135,22 @@ def render_crop(
 
 
 def edge_rows(lens, field: float, wavelength: float, pitch_um: float, scale, normal: str, centres: np.ndarray):
-    """Where the edge crosses the crop's rows (columns for an edge across y) centred at `centres` (mm on the
-    image's y for an edge across x, x for one across y): the object's edge line traced by chief rays to the
-    image; per row the field (deg, (n, 2)) of the edge's point there, the angle (rad, from x) of the edge's
-    local normal in the image and the edge's position across the row (mm). On a lens whose radial and across
-    scales change with field (a fisheye) the rows are not evenly spaced in field, and the normal turns."""
+    """Where the edge crosses the image's lines along it at `centres` (mm on the image's y for an edge across
+    x, x for one across y): the object's edge line traced by chief rays to the image; per line the field (deg,
+    (n, 2)) of the edge's point there and the edge's position across the line (mm). On a lens whose radial
+    and across scales change with field (a fisheye) the lines are not evenly spaced in field."""
     from solas_mi.optics.pupil import chief_rays
 
     _, coordinate, inverse = mapping_of(lens)
     t = object_tilt(scale, normal)
-    s = np.linspace(-1.0, 1.0, 801) * ALONG_PX * pitch_um * 1e-3 / min(scale)
+    s = np.linspace(-1.0, 1.0, 801) * (ALONG_PX + 2 * MARGIN_PX) * pitch_um * 1e-3 / min(scale)
     u, v = (-s * math.tan(t), coordinate(field) + s) if normal == "x" else (s, coordinate(field) + s * math.tan(t))
     xy = chief_rays(lens, np.stack([inverse(u), inverse(v)], axis=1), np.full(len(s), wavelength)).image_xy
     along = 1 if normal == "x" else 0
     order = np.argsort(xy[:, along])
     at = np.interp(centres, xy[order, along], s[order])
-    dx, dy = (np.interp(at, s, np.gradient(xy[:, k], s)) for k in (0, 1))
     u, v = (-at * math.tan(t), coordinate(field) + at) if normal == "x" else (at, coordinate(field) + at * math.tan(t))
-    return np.stack([inverse(u), inverse(v)], axis=1), np.arctan2(-dx, dy), np.interp(at, s, xy[:, 1 - along])
+    return np.stack([inverse(u), inverse(v)], axis=1), np.interp(at, s, xy[:, 1 - along])
 
 
 def crop_centres(window: tuple[int, int, int, int], side: int, pitch_um: float) -> tuple[np.ndarray, np.ndarray]:
@@ -156,53 +162,68 @@ def crop_centres(window: tuple[int, int, int, int], side: int, pitch_um: float) 
     return x, y
 
 
-def edge_profile(d: np.ndarray, power: np.ndarray, grid: np.ndarray, ramp: float) -> np.ndarray:
-    """The edge spread function on `grid` (mm along the normal) of rays landing `d` (mm along the normal)
-    from the edge's image with `power`, through a ramp `ramp` mm wide (the object's texel staircase)."""
-    order = np.argsort(d)
-    esf = np.concatenate([[0.0], np.cumsum(power[order])])[np.searchsorted(d[order], grid)] / power.sum()
-    k = max(1, int(round(ramp / (grid[1] - grid[0]))))
-    return np.convolve(np.pad(esf, k, mode="edge"), np.ones(k) / k, mode="same")[k:-k]
-
-
 def geometric_crop(
     lens, field: float, wavelength: float, pitch_um: float, scale, normal: str, centres, texel_px: float
 ):
-    """e-SFR MTF50s (cy/px) of the crop (pixel `centres`, `crop_centres`) built from the geometric spot (the
-    ray spot, RAYS² on the entrance grid: what the render traces) of each of its rows' fields (`edge_rows`),
-    and of the same crop with every row the field's spot, and the rows' fields (deg): e-SFR's supersampled
-    profile is not the rows' mean OTF (module docstring)."""
+    """e-SFR MTF50s (cy/px) of the crop (pixel `centres`, `crop_centres`) built from the geometric spots (the
+    ray spot, RAYS² on the entrance grid: what the render traces) of the edge's points (`edge_rows`) every
+    1/SUBPIXELS pixel along it (`crop_image`), and of the same crop with every point the field's spot, and
+    the fields (deg) of the edge's points within the crop: e-SFR's supersampled profile is not the rows'
+    mean OTF (module docstring)."""
     from solas_mi.metrics.esfr import esfr
     from solas_mi.optics.pupil import chief_rays
     from solas_mi.psf.geometric import entrance_grid_hits
 
     along = 1 if normal == "x" else 0
-    fields, normals, across = edge_rows(lens, field, wavelength, pitch_um, scale, normal, centres[along])
+    lines = source_lines(centres[along], pitch_um)
+    fields, across = edge_rows(lens, field, wavelength, pitch_um, scale, normal, lines)
     everywhere = np.vstack([fields, [[0.0, field]]])
     wl = np.full(len(everywhere), wavelength)
     hits = entrance_grid_hits(lens, everywhere, wl, RAYS, chief_rays(lens, everywhere, wl))
-    edge = (normals, across, np.gradient(across, centres[along]))
     found = [
-        esfr(crop_image(spots, edge, centres, normal, pitch_um, texel_px))
+        esfr(crop_image(spots, (lines, across), centres, normal, pitch_um, texel_px))
         for spots in (hits[:-1], hits[-1:] * len(fields))
     ]
-    return found[0].mtf50, found[1].mtf50, np.hypot(*fields.T)
+    inside = (lines >= centres[along].min()) & (lines <= centres[along].max())
+    return found[0].mtf50, found[1].mtf50, np.hypot(*fields[inside].T)
+
+
+def source_lines(centres: np.ndarray, pitch_um: float) -> np.ndarray:
+    """Positions (mm, ascending) along the edge every 1/SUBPIXELS pixel over the crop's pixels at `centres`
+    and MARGIN_PX beyond them on both sides (whence a spot's light still lands in the crop)."""
+    p = pitch_um * 1e-3
+    n = (len(centres) + 2 * MARGIN_PX) * SUBPIXELS
+    return centres.min() - p / 2 - MARGIN_PX * p + (np.arange(n) + 0.5) * p / SUBPIXELS
 
 
 def crop_image(spots, edge, centres, normal: str, pitch_um: float, texel_px: float) -> np.ndarray:
-    """The crop (pixel `centres`) of the edge whose rows (columns for an edge across y) have the spots
-    `spots` (`entrance_grid_hits`) and the `edge` normals (rad), positions across (mm) and their slopes
-    along it, each pixel integrated over 8² points, its edge through a ramp of `texel_px`."""
+    """The crop (pixel `centres`) of the edge as the image of its bright half-plane: each of the edge's
+    points at `edge` (positions along it and across, mm) lights the points of its line across the edge,
+    from itself to the bright side, each through its own spot `spots` (`entrance_grid_hits`), so a row gets
+    the light its spots send it from the points along the edge they come from (a spot several pixels long
+    along the edge brings the blur of the fields there). Summed on a grid of SUBPIXELS points a pixel along
+    the edge by ACROSS_STEPS across it, put through the texel ramp of `texel_px` across the edge, divided by
+    the same image of the whole plane (the flat field) and integrated over the pixels."""
     along, p = (1 if normal == "x" else 0), pitch_um * 1e-3
-    grid = np.linspace(-8.0, 8.0, 6401) * p
-    sub = (np.arange(8) + 0.5) / 8 - 0.5
-    image = np.zeros((len(centres[1 - along]), len(spots)))
-    for i, ((x, y, power), a, at, slope) in enumerate(zip(spots, *edge)):
-        esf = edge_profile((x * math.cos(a) + y * math.sin(a)) * 1e-3, power, grid, texel_px * p)
-        cos = math.cos(a) if normal == "x" else math.sin(a)
-        distance = cos * (centres[1 - along][:, None, None] + sub[None, :, None] * p - at - slope * sub * p)
-        image[:, i] = np.interp(distance, grid, esf).mean(axis=(1, 2))
-    return STEP[0] + (STEP[1] - STEP[0]) * (image.T if normal == "x" else image)
+    lines, across = edge
+    a0, c0 = centres[along].min() - p / 2, centres[1 - along].min() - p / 2 - MARGIN_PX * p
+    n_along, n_across = len(centres[along]), len(centres[1 - along])
+    rows, cols = n_along * SUBPIXELS, (n_across + MARGIN_PX) * ACROSS_STEPS + 1  # the last: beyond the crop
+    cells, powers = [], []
+    for (x, y, power), a, c in zip(spots, lines, across):
+        ra, rc = (y, x) if normal == "x" else (x, y)
+        i = np.floor((a + ra * 1e-3 - a0) / (p / SUBPIXELS)).astype(int)
+        j = np.clip(np.floor((c + rc * 1e-3 - c0) / (p / ACROSS_STEPS)).astype(int), 0, cols - 1)
+        keep = (i >= 0) & (i < rows)
+        cells.append(i[keep] * cols + j[keep])
+        powers.append(power[keep])
+    landed = np.bincount(np.concatenate(cells), np.concatenate(powers), rows * cols).reshape(rows, cols)
+    bright = (np.cumsum(landed, axis=1) / landed.sum(axis=1, keepdims=True))[:, :-1]
+    k = max(1, int(round(texel_px * ACROSS_STEPS)))
+    bright = np.stack([np.convolve(np.pad(r, k, mode="edge"), np.ones(k) / k, mode="same")[k:-k] for r in bright])
+    pixels = bright[:, MARGIN_PX * ACROSS_STEPS :].reshape(n_along, SUBPIXELS, n_across, ACROSS_STEPS).mean(axis=(1, 3))
+    image = pixels[::-1] if normal == "x" else pixels.T[::-1]  # rows: +y first, columns: +x last
+    return STEP[0] + (STEP[1] - STEP[0]) * image
 
 
 def windows(point: np.ndarray, pitch_um: float, side: int) -> dict[str, tuple[int, int, int, int]]:
@@ -219,7 +240,7 @@ def windows(point: np.ndarray, pitch_um: float, side: int) -> dict[str, tuple[in
 def measure_rendered(lens, field: float, wavelength: float, pitch_um: float, directions=(0, 1)) -> list[dict]:
     """The `directions` (0: tangential, 1: sagittal) of one lens by the rendered route (module docstring),
     beside the predictions (`bench_sharpness.predicted` along the axis, `normal_mtf50` along the edge's
-    normal, `geometric_crop` over the crop's rows, and "crop": the normal's × its crop's ratio)."""
+    normal, `geometric_crop` over the crop, and "crop": the normal's × its crop's ratio)."""
     from bench_sharpness import OVERSAMPLE, lens_psf, normal_mtf50, predicted
 
     from solas_mi.metrics.esfr import esfr
@@ -239,6 +260,7 @@ def measure_rendered(lens, field: float, wavelength: float, pitch_um: float, dir
             mapping=mapping_of(lens)[0],
             response=f"mono:{wavelength!r}",
             spp=SPP,
+            rings=RINGS,
         )
         crop = windows(point, pitch_um, side)[normal]
         (flat,), seconds = render_crop(lens, np.ones((2, 2), np.float32), spec, crop, SEEDS[:1])
