@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..llvm import import_drjit
-from . import ideal, tracer
+from . import ideal, local_trace, tracer
 from .coated import coating_transmittance
 from .lens import Lens
 from .lens_checks import as_built
@@ -150,4 +150,22 @@ def _normal(form, x, y):
     return -gx * nz, -gy * nz, nz
 
 
-__all__ = ["trace"]
+def trace_bundle(lens: Lens, rays: local_trace.Bundle, wavelength_nm: float) -> local_trace.Bundle:
+    """`local_trace.trace(lens, rays, wavelength_nm)` (apertures on) computed by `trace` in Dr.Jit: the rays to the
+    image plane, in the global frame and in the image plane's own x and y, the stop crossings in the stop's frame."""
+    start = tracer.Rays(*(tracer.array(a) for a in (rays.x, rays.y, rays.z, rays.dx, rays.dy, rays.dz, rays.opl)))
+    traced = trace(lens, start, opaque(wavelength_nm * 1e-3))
+    x, y, opl = tracer.to_plane(traced, lens.image_z)
+    passed = traced.ok & (traced.clipped_by == 0) & dr.isfinite(x) & dr.isfinite(y)
+    d = traced.rays
+    x, y, opl, passed, dx, dy, dz, stop_x, stop_y = tracer.to_numpy(
+        x, y, opl, passed, d.dx, d.dy, d.dz, traced.stop_x, traced.stop_y
+    )
+    origin, axes = frames(lens.surfaces, lens.image_placement)[-1]
+    with np.errstate(invalid="ignore"):  # a lost ray's NaNs
+        p = origin + np.stack([x, y, np.zeros_like(x)], axis=1) @ axes.T
+        d = np.stack([dx, dy, dz], axis=1) @ axes.T
+    return local_trace.Bundle(*p.T, *d.T, opl, passed & rays.ok, x, y, stop_x, stop_y)
+
+
+__all__ = ["trace", "trace_bundle"]

@@ -19,7 +19,7 @@ import numpy as np
 from ..optics.lens import Lens
 from ..optics.paraxial import paraxial
 from ..optics.placement import frames
-from .as_built import Beam, beam, ray_power
+from .as_built import Beam, beam, beams, ray_power
 from .base import grid_offsets
 
 STEP = 1e-4  # the finite-difference step of the Jacobian, as a fraction of the pupil square's half-width
@@ -52,13 +52,23 @@ def fraunhofer(lens: Lens, field_deg, wavelength_nm, pitch_um: float, size: int,
     `wavelength_nm` (n,, or one), each traced (a grid over the whole field: no half of it mirrored)."""
     field_deg = np.asarray(field_deg, dtype=np.float64).reshape(-1, 2)
     wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(field_deg),))
-    return np.array([field_psf(lens, f, float(w), pitch_um, size, rays) for f, w in zip(field_deg, wavelength_nm)])
+    out = np.zeros((len(field_deg), size, size))
+    for w in np.unique(wavelength_nm):
+        at = np.flatnonzero(wavelength_nm == w)  # the fields of one wavelength aimed together
+        for i, b in zip(at, beams(lens, field_deg[at], float(w))):
+            out[i] = beam_psf(lens, b, float(w), pitch_um, size, rays)
+    return out
 
 
 def field_psf(lens: Lens, field_deg, wavelength_nm: float, pitch_um: float, size: int, rays: int) -> np.ndarray:
-    """The Fraunhofer PSF (size, size) in 1/µm² of the lens as built at `field_deg`, on the image plane's grid
-    about the chief ray's image point (rows down from +y, as `fraunhofer.fraunhofer`), from rays×rays rays."""
-    b = beam(lens, field_deg, wavelength_nm)
+    """The Fraunhofer PSF (size, size) in 1/µm² of the lens as built at `field_deg` (x, y degrees) (`beam_psf`)."""
+    return beam_psf(lens, beam(lens, field_deg, wavelength_nm), wavelength_nm, pitch_um, size, rays)
+
+
+def beam_psf(lens: Lens, b: Beam, wavelength_nm: float, pitch_um: float, size: int, rays: int) -> np.ndarray:
+    """The Fraunhofer PSF (size, size) in 1/µm² of the lens as built across beam `b` (`as_built.beams`: a field's),
+    on the image plane's grid about the chief ray's image point (rows down from +y, as `fraunhofer.fraunhofer`),
+    from rays×rays rays."""
     ex, ey = b.grid(rays)
     alpha, beta, path, ok, radius = sphere_points(lens, b, ex, ey, wavelength_nm)
     h = STEP * b.half
@@ -82,4 +92,4 @@ def field_psf(lens: Lens, field_deg, wavelength_nm: float, pitch_um: float, size
     return (field.real**2 + field.imag**2) / lam**2 * 1e-6
 
 
-__all__ = ["STEP", "field_psf", "fraunhofer", "sphere_points"]
+__all__ = ["STEP", "beam_psf", "field_psf", "fraunhofer", "sphere_points"]

@@ -54,7 +54,7 @@ def compute(lens, field_deg, wavelength_nm, pitch_um: float, size: int, method: 
     field_deg = np.asarray(field_deg, dtype=np.float64).reshape(-1, 2)
     wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(field_deg),))
     rays = own["pupil_samples" if method == "fraunhofer" else "rays"]
-    found = [as_built.field_hits(lens, f, float(w), rays)[0] for f, w in zip(field_deg, wavelength_nm)]
+    found = as_built.hits_by_wavelength(lens, field_deg, wavelength_nm, rays)
     chief = np.array([h.chief_xy for h in found])
     origins = np.repeat(chief[:1], len(chief), axis=0) if shared_origin else chief
     offsets = [((h.x - o[0]) * 1e3, (h.y - o[1]) * 1e3, h.power) for h, o in zip(found, origins)]

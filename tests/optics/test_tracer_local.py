@@ -109,3 +109,14 @@ def test_breaks_of_zeros_trace_as_the_lens_on_one_axis(triplet):
     ):
         assert np.abs(a - b)[passed].max() < 1e-12
     assert np.array_equal(*tracer.to_numpy(ours.clipped_by, theirs.clipped_by))
+
+
+def test_a_bundle_traced_in_drjit_is_the_numpy_tracer_s(cooke_as_built):
+    """`trace_bundle`: `local_trace.trace`'s result (global points and directions, image and stop points, paths)."""
+    lens = cooke_as_built(True, 1.5)
+    p, d, _ = _rays(FIELDS_DEG)
+    ours = tracer_local.trace_bundle(lens, local_trace.bundle(p, d), lens.primary_wavelength)
+    theirs = local_trace.trace(lens, local_trace.bundle(p, d), lens.primary_wavelength)
+    assert ours.ok.sum() > 200 and np.array_equal(ours.ok, theirs.ok)
+    for name in ("x", "y", "z", "dx", "dy", "dz", "opl", "image_x", "image_y", "stop_x", "stop_y"):
+        assert np.abs(getattr(ours, name) - getattr(theirs, name))[ours.ok].max() < 1e-9, name
