@@ -1,5 +1,6 @@
 """Geometric PSFs of the lens as built (decentred or tilted surfaces, toroids, a tilted sensor), traced with
-the NumPy tracer (`optics.local_trace`) about chief rays aimed in two dimensions (`optics.local_aim`).
+the Dr.Jit tracer in each surface's frame (`optics.tracer_local`, every field of a wavelength in one trace) about
+chief rays aimed in two dimensions, all fields together (`optics.local_aim`).
 
 For each field (x, y degrees; an object at infinity) the collimated rays start on a regular rays×rays grid
 across the beam, in the plane through (0, 0, z0) perpendicular to their direction and the basis of the Dr.Jit

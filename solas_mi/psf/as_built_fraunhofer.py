@@ -1,6 +1,6 @@
-"""Fraunhofer PSFs of the lens as built at a field (x, y degrees), from a grid of real rays traced by the NumPy
-tracer (`psf.as_built.Beam`): each ray's optical path to the reference sphere about the chief ray's image point
-on the image plane (in that plane's own frame: a tilted sensor's), whose radius is the chief ray's path back to
+"""Fraunhofer PSFs of the lens as built at a field (x, y degrees), from a grid of real rays traced by the Dr.Jit
+tracer in local frames (`psf.as_built.Beam`): each ray's optical path to the reference sphere about the chief
+ray's image point on the image plane (in that plane's own frame: a tilted sensor's), whose radius is the chief ray's path back to
 the paraxial exit-pupil plane (about the nominal axis), and the direction cosines (α, β) of its point on the
 sphere seen from the image point. The Fraunhofer integral over the sphere, ∫ A e^{ikW} e^{−ik(αu + βv)} dα dβ
 with A² the power per dα dβ, is summed over the rays: each carries √(p dΩ) (its power p and the solid angle

@@ -1,7 +1,7 @@
 """The PSF methods of `registry` for a lens as built (`optics.lens_checks.as_built`: a surface without
-rotational symmetry or behind a coordinate break, or a placed sensor), which the Dr.Jit tracer does not
-trace: "geometric" by `psf.as_built` and "fraunhofer" by `psf.as_built_fraunhofer` (the NumPy tracer, chief
-rays aimed in two dimensions); the other methods are refused by name. Lengths in mm, pitches in µm.
+rotational symmetry or behind a coordinate break, or a placed sensor), which the symmetric paths do not take:
+"geometric" by `psf.as_built` and "fraunhofer" by `psf.as_built_fraunhofer` (the Dr.Jit tracer in local
+frames, chief rays aimed in two dimensions); the other methods are refused by name. Lengths in mm, pitches in µm.
 """
 
 from __future__ import annotations
@@ -17,8 +17,8 @@ from .geometric import bin_hits
 
 # method → the path that computes it for a lens as built (the PSF's metadata says which)
 PATHS = {
-    "geometric": "psf.as_built: real rays of the lens as built (NumPy tracer), binned about the chief ray",
-    "fraunhofer": "psf.as_built_fraunhofer: real rays of the lens as built (NumPy tracer) to the reference "
+    "geometric": "psf.as_built: real rays of the lens as built (Dr.Jit tracer in local frames), binned about the chief ray",
+    "fraunhofer": "psf.as_built_fraunhofer: real rays of the lens as built (Dr.Jit tracer in local frames) to the reference "
     "sphere, matrix DFT",
 }
 
