@@ -121,9 +121,16 @@ def beam(lens: Lens, field_deg, wavelength_nm: float, half_mm: float | None = No
     return beams(lens, field_deg, wavelength_nm, None if half_mm is None else [half_mm])[0]
 
 
-def ray_power(lens: Lens, b: Beam, rays: int, wavelength_nm: float) -> float:
-    """The power of one ray of a rays×rays grid over beam `b` (fraction of the on-axis entrance pupil's)."""
-    return float(power_densities(lens, np.array([wavelength_nm]))[0]) * (2.0 * b.half / rays) ** 2
+def pupil_density(lens: Lens, wavelength_nm: float) -> float:
+    """The power per mm² across a beam at `wavelength_nm` (`pupil.power_densities`: the on-axis entrance pupil
+    carries 1)."""
+    return float(power_densities(lens, np.array([wavelength_nm]))[0])
+
+
+def ray_power(density: float, b: Beam, rays: int) -> float:
+    """The power of one ray of a rays×rays grid over beam `b` (fraction of the on-axis entrance pupil's), of
+    `pupil_density` `density`."""
+    return density * (2.0 * b.half / rays) ** 2
 
 
 def fields_hits(lens: Lens, field_deg, wavelength_nm: float, rays: int, half_mm=None) -> list[Hits]:
@@ -131,9 +138,10 @@ def fields_hits(lens: Lens, field_deg, wavelength_nm: float, rays: int, half_mm=
     `wavelength_nm`, all traced together (`beams`, `trace_beams`); `half_mm` as `beams`'."""
     found = beams(lens, field_deg, wavelength_nm, half_mm)
     traced = trace_beams(lens, found, [b.grid(rays) for b in found], wavelength_nm)
+    density = pupil_density(lens, wavelength_nm)
     out = []
     for b, t in zip(found, traced):
-        power = np.full(int(t.ok.sum()), ray_power(lens, b, rays, wavelength_nm))
+        power = np.full(int(t.ok.sum()), ray_power(density, b, rays))
         out.append(Hits(t.image_x[t.ok], t.image_y[t.ok], power, b.chief.image_xy[0], b.half))
     return out
 
@@ -211,6 +219,7 @@ __all__ = [
     "fields_hits",
     "geometric",
     "hits_by_wavelength",
+    "pupil_density",
     "ray_power",
     "trace_beams",
 ]

@@ -19,7 +19,7 @@ import numpy as np
 from ..optics.lens import Lens
 from ..optics.paraxial import paraxial
 from ..optics.placement import frames
-from .as_built import Beam, beam, beams, ray_power
+from .as_built import Beam, beam, beams, pupil_density, ray_power
 from .base import grid_offsets
 
 STEP = 1e-4  # the finite-difference step of the Jacobian, as a fraction of the pupil square's half-width
@@ -84,7 +84,9 @@ def beam_psf(lens: Lens, b: Beam, wavelength_nm: float, pitch_um: float, size: i
     wave = wavelength_nm * 1e-6
     lam = wave / float(lens.surfaces[-1].glass.index(wavelength_nm))  # in image space
     k = 2.0 * math.pi / lam
-    amp = np.sqrt(ray_power(lens, b, rays, wavelength_nm) * solid[ok]) * np.exp(2j * math.pi * opd[ok] / wave)
+    amp = np.sqrt(ray_power(pupil_density(lens, wavelength_nm), b, rays) * solid[ok]) * np.exp(
+        2j * math.pi * opd[ok] / wave
+    )
     offs = grid_offsets(size, pitch_um) * 1e-3
     ku = np.exp(-1j * k * np.outer(alpha[ok], offs))  # (rays, size): columns u = +x
     kv = np.exp(-1j * k * np.outer(beta[ok], -offs))  # rows v = −offsets: down from +y
