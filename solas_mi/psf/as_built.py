@@ -19,11 +19,14 @@ from dataclasses import astuple, dataclass, fields
 import numpy as np
 
 from ..errors import SolasError
-from ..optics import local_aim, local_trace, tracer_local
+from ..llvm import import_drjit
+from ..optics import local_aim, local_trace, tracer, tracer_local
 from ..optics.lens import Lens
 from ..optics.placement import frames
 from ..optics.pupil import power_densities
 from .geometric import bin_hits
+
+dr = import_drjit()
 
 COARSE_RAYS = 48  # rays per side of the pass that finds the beam's half-width
 MARGIN = 1.02  # the half-width's margin over the outermost passing ray of that pass (as `geometric`'s)
@@ -90,6 +93,31 @@ def trace_beams(lens: Lens, beams: list[Beam], entrance, wavelength_nm: float) -
     return [local_trace.Bundle(*columns) for columns in zip(*parts)]
 
 
+def grid_hits(lens: Lens, found: list[Beam], rays: int, wavelength_nm: float) -> tuple[np.ndarray, ...]:
+    """Where the rays of each of beams `found` on its rays×rays grid (`Beam.grid`) land on the image plane, in its
+    own frame: (x, y, passed), each (beams, rays²). The rays are made in Dr.Jit from each beam's plane, axes,
+    centre, half-width and direction (gathered per ray) and traced in one call of the Dr.Jit tracer in local
+    frames; only the image points come back to NumPy."""
+    n = rays * rays
+    idx = dr.arange(tracer.UInt32, len(found) * n)
+    beam, cell = idx // n, idx % n
+    per_beam = np.array([[*b.plane, *b.axes[0], *b.axes[1], *b.centre, b.half, *b.direction] for b in found])
+    plane, e1, e2, centre, half, d = (
+        [tracer.gather(per_beam[:, k], beam) for k in range(start, stop)]
+        for start, stop in ((0, 3), (3, 6), (6, 9), (9, 11), (11, 12), (12, 15))
+    )
+    steps = 2.0 / rays
+    ex = dr.fma(half[0], tracer.F(cell % rays) * steps + (0.5 * steps - 1.0), centre[0])
+    ey = dr.fma(half[0], tracer.F(cell // rays) * steps + (0.5 * steps - 1.0), centre[1])
+    p = [dr.fma(ex, a, dr.fma(ey, b, o)) for o, a, b in zip(plane, e1, e2)]
+    traced = tracer_local.trace(
+        lens, tracer.Rays(*p, *d, dr.zeros(tracer.F, len(found) * n)), tracer.opaque(wavelength_nm * 1e-3)
+    )
+    x, y, _ = tracer.to_plane(traced, lens.image_z)
+    passed = traced.ok & (traced.clipped_by == 0) & dr.isfinite(x) & dr.isfinite(y)
+    return tuple(a.reshape(len(found), n) for a in tracer.to_numpy(x, y, passed))
+
+
 def beams(lens: Lens, field_deg, wavelength_nm: float, half_mm=None) -> list[Beam]:
     """The `Beam` of each of fields `field_deg` ((n, 2) degrees) at `wavelength_nm`, their chief rays aimed together,
     their half-widths found together by `beam_half_widths` unless `half_mm` ((n,) mm) is given; SolasError naming the
@@ -137,12 +165,10 @@ def fields_hits(lens: Lens, field_deg, wavelength_nm: float, rays: int, half_mm=
     """The `Hits` of a rays×rays grid across the beam of each of fields `field_deg` ((n, 2) degrees) at
     `wavelength_nm`, all traced together (`beams`, `trace_beams`); `half_mm` as `beams`'."""
     found = beams(lens, field_deg, wavelength_nm, half_mm)
-    traced = trace_beams(lens, found, [b.grid(rays) for b in found], wavelength_nm)
     density = pupil_density(lens, wavelength_nm)
     out = []
-    for b, t in zip(found, traced):
-        power = np.full(int(t.ok.sum()), ray_power(density, b, rays))
-        out.append(Hits(t.image_x[t.ok], t.image_y[t.ok], power, b.chief.image_xy[0], b.half))
+    for b, x, y, ok in zip(found, *grid_hits(lens, found, rays, wavelength_nm)):
+        out.append(Hits(x[ok], y[ok], np.full(int(ok.sum()), ray_power(density, b, rays)), b.chief.image_xy[0], b.half))
     return out
 
 
@@ -170,13 +196,13 @@ def beam_half_widths(lens: Lens, found: list[Beam], wavelength_nm: float) -> np.
         vertex = np.array([(first - b.plane) @ b.axes[0], (first - b.plane) @ b.axes[1]])
         outer = float(np.abs(vertex - b.centre).max() + reach) * MARGIN
         coarse.append(Beam(b.chief, b.direction, b.plane, b.axes, b.centre, outer))
-    entrance = [c.grid(COARSE_RAYS) for c in coarse]
     halves = []
-    for c, (ex, ey), t in zip(coarse, entrance, trace_beams(lens, coarse, entrance, wavelength_nm)):
-        if not t.ok.any():
+    for c, *_, ok in zip(coarse, *grid_hits(lens, coarse, COARSE_RAYS, wavelength_nm)):
+        if not ok.any():
             halves.append(c.half)
             continue
-        spread = max(np.abs(ex[t.ok] - c.centre[0]).max(), np.abs(ey[t.ok] - c.centre[1]).max())
+        ex, ey = c.grid(COARSE_RAYS)
+        spread = max(np.abs(ex[ok] - c.centre[0]).max(), np.abs(ey[ok] - c.centre[1]).max())
         halves.append(min(c.half, (spread + 2.0 * c.half / COARSE_RAYS) * MARGIN))
     return np.array(halves)
 
@@ -217,6 +243,7 @@ __all__ = [
     "beams",
     "field_hits",
     "fields_hits",
+    "grid_hits",
     "geometric",
     "hits_by_wavelength",
     "pupil_density",
