@@ -57,10 +57,11 @@ def bundle(points, directions) -> Bundle:
     return Bundle(x, y, z, dx, dy, dz, np.zeros(len(p)), np.ones(len(p), dtype=bool))
 
 
-def trace(lens: Lens, rays: Bundle, wavelength_nm: float, apertures: bool = True) -> Bundle:
+def trace(lens: Lens, rays: Bundle, wavelength_nm: float, apertures: bool = True, last: int | None = None) -> Bundle:
     """`rays` (object space, before surface 1) through every surface of `lens` as built, to its image plane;
     without `apertures`, a ray beyond a surface's rim or iris travels on (`ok`: every surface met, no total
-    internal reflection), as the chief-ray aim wants its rays."""
+    internal reflection), as the chief-ray aim wants its rays; with `last` (0-based), through surfaces 1 to
+    `last` only, the rays returned there (no image points)."""
     placed = frames(lens.surfaces, lens.image_placement)
     conjugates = ideal_conjugates(lens) if any(s.ideal for s in lens.surfaces) else {}
     n_before = float(lens.object_glass.index(wavelength_nm))
@@ -91,6 +92,8 @@ def trace(lens: Lens, rays: Bundle, wavelength_nm: float, apertures: bool = True
             ld, k2 = _refract(s.geometry.normal(x, y), ld, n_before / n_after)
             ok &= k2 >= 0
         p, d = origin + np.stack([x, y, lz], axis=1) @ axes.T, ld @ axes.T  # back to the global frame
+        if k == last:
+            return Bundle(*p.T, *d.T, opl, ok, None, None, *stop)
         n_before = n_after
     origin, axes = placed[-1]
     lp, ld = (p - origin) @ axes, d @ axes

@@ -14,7 +14,7 @@ given. Lengths in mm (offsets and pitches in µm), wavelengths in nm.
 
 from __future__ import annotations
 
-from dataclasses import astuple, dataclass, fields
+from dataclasses import dataclass, fields
 
 import numpy as np
 
@@ -132,7 +132,7 @@ def beams(lens: Lens, field_deg, wavelength_nm: float, half_mm=None) -> list[Bea
         )
     found = []
     for i in range(len(field_deg)):
-        one = local_aim.Chief(*(a[i : i + 1] for a in astuple(chief)))
+        one = local_aim.Chief(*(a[i : i + 1] for a in (chief.start, chief.direction, chief.image_xy, chief.found)))
         d = chief.direction[i]
         axes = basis(d)
         plane = np.array([0.0, 0.0, chief.start[i, 2]])
