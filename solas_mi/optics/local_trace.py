@@ -5,8 +5,9 @@ stop's iris), refracted by the vector form of Snell's law or bent by an ideal th
 the optical path accumulated. Rays and results are in the global frame of surface 1 before any break;
 the image plane is the last frame's z = 0 plane after the last thickness, moved by the lens's
 `image_placement` (a decentred or tilted sensor). A reference for the lens as
-built (small bundles: NumPy traces 2–6e6 rays/s); the Dr.Jit tracer, the ghosts and the mesh scene take
-rotationally symmetric lenses on one axis only and refuse the others by name (`lens_checks.refuse_as_built`).
+built (small bundles: NumPy traces 2–6e6 rays/s); the Dr.Jit tracer in local frames (`tracer_local`) traces the
+same lens for the PSFs, while `tracer.trace`, the ghosts, the mesh scene and the lens camera take rotationally
+symmetric lenses on one axis only and refuse the others by name (`lens_checks.refuse_as_built`).
 
 For each surface: the ray into its frame (p′ = Rᵀ(p − o), d′ = Rᵀ d), on to its vertex plane, then to the
 surface (`Shape.intersect`), the normal there (`Shape.normal`), refraction, and back to the global frame.
