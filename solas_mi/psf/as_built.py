@@ -77,10 +77,6 @@ class Beam:
         """The start points (n, 3) of the rays of entrance coordinates (ex, ey)."""
         return self.plane + ex[:, None] * self.axes[0] + ey[:, None] * self.axes[1]
 
-    def trace(self, lens: Lens, ex: np.ndarray, ey: np.ndarray, wavelength_nm: float) -> local_trace.Bundle:
-        """The rays of entrance coordinates (ex, ey) traced through `lens` as built (the Dr.Jit tracer)."""
-        return trace_beams(lens, [self], [(ex, ey)], wavelength_nm)[0]
-
 
 def trace_beams(lens: Lens, beams: list[Beam], entrance, wavelength_nm: float) -> list[local_trace.Bundle]:
     """The rays of each of `beams` at its entrance coordinates (`entrance`: (ex, ey) per beam) through `lens` as
@@ -142,11 +138,6 @@ def beams(lens: Lens, field_deg, wavelength_nm: float, half_mm=None) -> list[Bea
     for b, half in zip(found, halves):
         b.half = float(half)
     return found
-
-
-def beam(lens: Lens, field_deg, wavelength_nm: float, half_mm: float | None = None) -> Beam:
-    """The `Beam` of one field `field_deg` (x, y degrees) (`beams`)."""
-    return beams(lens, field_deg, wavelength_nm, None if half_mm is None else [half_mm])[0]
 
 
 def pupil_density(lens: Lens, wavelength_nm: float) -> float:
@@ -238,7 +229,6 @@ __all__ = [
     "Beam",
     "Hits",
     "basis",
-    "beam",
     "beam_half_widths",
     "beams",
     "field_hits",
