@@ -1,6 +1,8 @@
 """Fixtures shared by the test modules.
 
-- The shipped lenses: `doublet`, `triplet` (session), `doublet_spec` (its lens-file dictionary).
+- The shipped lenses: `doublet`, `triplet` (session), `doublet_spec` (its lens-file dictionary); a lens as built:
+  `cooke_as_built` (its maker: the triplet with a decentred and tilted element, a toroid, a tilted sensor);
+  `every_lens`: two shipped lenses and that one, each stage's tests on lenses with and without symmetry.
 - Mitsuba variants, after Mitsuba's own `src/conftest.py`: `variant_<name>` for each of
   `render.mitsuba.VARIANTS` (e.g. `variant_llvm_ad_spectral`, `variant_scalar_spectral`,
   `variant_llvm_ad_mono`) sets that variant through `render.mitsuba.mitsuba` (so solas-mi's plugins
@@ -41,6 +43,47 @@ def triplet():
     from solas_mi import Lens
 
     return Lens.load("cooke-triplet")
+
+
+def _cooke_as_built(toroid: bool = True, sensor_tilt_deg: float = 0.0):
+    """The Cooke triplet as built: its middle element decentred by (0.1, -0.05) mm and tilted by (0.4, -0.3) deg
+    (a coordinate break before it, its reverse after it, as benchmarks/asbuilt_optiland.py compares with optiland),
+    with `toroid`, its last surface a toroid (its radius, rotated at 1.002 times it: astigmatism of ~40 µm), and a sensor tilted about x by
+    `sensor_tilt_deg`."""
+    from dataclasses import replace
+
+    from solas_mi import Lens
+    from solas_mi.optics.placement import Placement
+    from solas_mi.optics.shapes.toroid import Toroid
+
+    base = Lens.load("cooke-triplet")
+    surfaces = list(base.surfaces)
+    surfaces[2] = replace(surfaces[2], placement=Placement(0.1, -0.05, 0.4, -0.3, 0.0, 0))
+    surfaces[4] = replace(surfaces[4], placement=Placement(-0.1, 0.05, -0.4, 0.3, 0.0, 1))
+    if toroid:
+        last = surfaces[-1]
+        surfaces[-1] = replace(last, radius=0.0, form=Toroid(last.radius, 0.0, (), 1.002 * last.radius))
+    image = Placement(tilt_x=sensor_tilt_deg) if sensor_tilt_deg else None
+    return replace(base, name="cooke-triplet-as-built", surfaces=tuple(surfaces), image_placement=image)
+
+
+@pytest.fixture(scope="session")
+def cooke_as_built():
+    """`_cooke_as_built`, the maker of the Cooke triplet as built."""
+    return _cooke_as_built
+
+
+AS_BUILT_LENS = "cooke-triplet-as-built"  # `every_lens`'s name of `_cooke_as_built(True, 0.5)`
+EVERY_LENS = ("solas-doublet", "cooke-triplet", AS_BUILT_LENS)
+
+
+@pytest.fixture(scope="session", params=EVERY_LENS)
+def every_lens(request):
+    """Each of two shipped lenses on one axis and the Cooke triplet as built (a decentred and tilted element, a
+    toroid, the sensor tilted 0.5 deg), for the tests a stage runs on any lens."""
+    from solas_mi import Lens
+
+    return _cooke_as_built(True, 0.5) if request.param == AS_BUILT_LENS else Lens.load(request.param)
 
 
 @pytest.fixture

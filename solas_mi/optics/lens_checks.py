@@ -93,13 +93,14 @@ def features(lens) -> list[tuple[str, bool]]:
 
 def as_built(lens) -> bool:
     """Whether `lens` has a surface without rotational symmetry or behind a coordinate break, or a placed
-    sensor: a lens as built, which only the NumPy tracer (`local_trace`) traces."""
+    sensor: a lens as built, which the tracers in local frames trace (`local_trace` in NumPy, `tracer_local` in
+    Dr.Jit)."""
     return any(s.form is not None or s.placement is not None for s in lens.surfaces) or lens.image_placement is not None
 
 
 def refuse_as_built(lens, engine: str) -> None:
     """SolasError naming `lens`'s first surface that is not rotationally symmetric or sits behind a coordinate
-    break, which `engine` (named in the message) does not trace: the NumPy tracer `local_trace` does."""
+    break, which `engine` (named in the message) does not trace: the tracers in local frames do."""
     for i, s in enumerate(lens.surfaces, start=1):
         if s.form is not None or s.placement is not None:
             what = f"a {s.form.kind}" if s.form is not None else "decentred or tilted (a coordinate break before it)"

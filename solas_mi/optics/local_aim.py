@@ -1,13 +1,12 @@
-"""Chief rays of the lens as built, aimed in two dimensions with the NumPy tracer (`local_trace`): for
-each field (x, y degrees, the direction of the incoming collimated rays in the lens's field type,
-`fields`), the ray of that
-direction that crosses the stop surface at its centre (in the stop's own frame, so a decentred or tilted
-stop is aimed at where it is), found by Newton's method on its start point with a finite-difference
-Jacobian (2×2 per field, all fields at once), each step halved until its ray passes every surface (apertures
-aside) and crosses the stop nearer its centre, from the axis out to the field in steps halved where an aim does
-not converge. No symmetry is assumed: x and y are aimed together. Objects at infinity only (a finite object is
-refused by name). Found on the shipped fisheye out to 80°, as the Dr.Jit tracer's aim (`aiming`). Lengths in
-mm, wavelengths in nm.
+"""Chief rays of the lens as built, aimed in two dimensions with the NumPy tracer (`local_trace`): for each field
+(x, y degrees, the direction of the incoming collimated rays in the lens's field type, `fields`), the ray of
+that direction that crosses the stop surface at its centre (in the stop's own frame, so a decentred or tilted
+stop is aimed at where it is), found by Newton's method on its start point with a finite-difference Jacobian
+(2×2 per field, all fields at once), each step halved until its ray passes every surface up to the stop
+(apertures aside) and crosses the stop nearer its centre, from the axis out to the field in steps halved where
+an aim does not converge; the aimed rays are then traced through the whole lens. No symmetry is assumed: x and y
+are aimed together. Objects at infinity only (a finite object is refused by name). Found on the shipped fisheye
+out to 80°, as the Dr.Jit tracer's aim (`aiming`). Lengths in mm, wavelengths in nm.
 """
 
 from __future__ import annotations
@@ -121,9 +120,10 @@ def _damped(lens: Lens, start, step, miss, d, z0: float, wavelength_nm: float) -
 
 def _stop_crossing(lens: Lens, start: np.ndarray, d: np.ndarray, z0: float, wavelength_nm: float) -> np.ndarray:
     """(n, 2): where rays from (start, z0) along `d` cross the stop surface, in its frame (NaN: a ray that misses
-    a surface or is totally reflected; apertures are not applied)."""
+    a surface up to the stop or is totally reflected there; apertures are not applied; the surfaces after the stop
+    are not traced: `chief_rays` checks the aimed rays through them)."""
     points = np.concatenate([start, np.full((len(start), 1), z0)], axis=1)
-    out = local_trace.trace(lens, local_trace.bundle(points, d), wavelength_nm, apertures=False)
+    out = local_trace.trace(lens, local_trace.bundle(points, d), wavelength_nm, apertures=False, last=lens.stop_index)
     return np.where(out.ok[:, None], np.stack([out.stop_x, out.stop_y], axis=1), np.nan)
 
 

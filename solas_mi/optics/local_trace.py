@@ -5,8 +5,9 @@ stop's iris), refracted by the vector form of Snell's law or bent by an ideal th
 the optical path accumulated. Rays and results are in the global frame of surface 1 before any break;
 the image plane is the last frame's z = 0 plane after the last thickness, moved by the lens's
 `image_placement` (a decentred or tilted sensor). A reference for the lens as
-built (small bundles: NumPy traces 2–6e6 rays/s); the Dr.Jit tracer, the ghosts and the mesh scene take
-rotationally symmetric lenses on one axis only and refuse the others by name (`lens_checks.refuse_as_built`).
+built (small bundles: NumPy traces 2–6e6 rays/s); the Dr.Jit tracer in local frames (`tracer_local`) traces the
+same lens for the PSFs, while `tracer.trace`, the ghosts, the mesh scene and the lens camera take rotationally
+symmetric lenses on one axis only and refuse the others by name (`lens_checks.refuse_as_built`).
 
 For each surface: the ray into its frame (p′ = Rᵀ(p − o), d′ = Rᵀ d), on to its vertex plane, then to the
 surface (`Shape.intersect`), the normal there (`Shape.normal`), refraction, and back to the global frame.
@@ -57,10 +58,11 @@ def bundle(points, directions) -> Bundle:
     return Bundle(x, y, z, dx, dy, dz, np.zeros(len(p)), np.ones(len(p), dtype=bool))
 
 
-def trace(lens: Lens, rays: Bundle, wavelength_nm: float, apertures: bool = True) -> Bundle:
+def trace(lens: Lens, rays: Bundle, wavelength_nm: float, apertures: bool = True, last: int | None = None) -> Bundle:
     """`rays` (object space, before surface 1) through every surface of `lens` as built, to its image plane;
     without `apertures`, a ray beyond a surface's rim or iris travels on (`ok`: every surface met, no total
-    internal reflection), as the chief-ray aim wants its rays."""
+    internal reflection), as the chief-ray aim wants its rays; with `last` (0-based), through surfaces 1 to
+    `last` only, the rays returned there (no image points)."""
     placed = frames(lens.surfaces, lens.image_placement)
     conjugates = ideal_conjugates(lens) if any(s.ideal for s in lens.surfaces) else {}
     n_before = float(lens.object_glass.index(wavelength_nm))
@@ -91,6 +93,8 @@ def trace(lens: Lens, rays: Bundle, wavelength_nm: float, apertures: bool = True
             ld, k2 = _refract(s.geometry.normal(x, y), ld, n_before / n_after)
             ok &= k2 >= 0
         p, d = origin + np.stack([x, y, lz], axis=1) @ axes.T, ld @ axes.T  # back to the global frame
+        if k == last:
+            return Bundle(*p.T, *d.T, opl, ok, None, None, *stop)
         n_before = n_after
     origin, axes = placed[-1]
     lp, ld = (p - origin) @ axes, d @ axes

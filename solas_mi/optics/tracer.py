@@ -227,8 +227,8 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False, heigh
         elif s.glass != (lens.surfaces[k - 1].glass if k else lens.object_glass):
             coated = (coating_transmittance(s.coating, lens.surfaces[k - 1].glass if k else lens.object_glass, s.glass,
                                             wavelength_um, ftype) if fresnel and s.coating is not None else None)
-            (dx, dy, dz), k2, factor = _refract(s, x, y, lz, r2, (dx, dy, dz), n_before / n_after, fresnel, ftype,
-                                                coated)
+            (dx, dy, dz), k2, factor = _refract(surface_normal(s, x, y, lz, r2, ftype), (dx, dy, dz), n_before / n_after,
+                                                fresnel, coated)
             tir |= k2 < 0
             ok &= k2 >= 0
             if fresnel:
@@ -269,13 +269,13 @@ def _to_surface(s, zv: float, rays: Rays, n_before: F, sideways: bool, ftype):
     return x, y, lz, t, opl, hit & on
 
 
-def _refract(s, x, y, lz, r2, d, mu, fresnel: bool, ftype, coated=None):
-    """Directions after refraction at surface `s` (point x, y, lz in its vertex frame, r2 = x² + y²) of
-    unit directions `d` with index ratio `mu` = n_before / n_after: (new directions, k2 (negative:
-    total internal reflection), the unpolarised transmittance when `fresnel`, else None): the bare
-    interface's Fresnel transmittance, or `coated(cos θ)` where the surface has a coating."""
+def _refract(normal, d, mu, fresnel: bool, coated=None):
+    """Directions after refraction at a surface of unit `normal` (+z at its vertex) of unit directions `d` with
+    index ratio `mu` = n_before / n_after: (new directions, k2 (negative: total internal reflection), the
+    unpolarised transmittance when `fresnel`, else None): the bare interface's Fresnel transmittance, or
+    `coated(cos θ)` where the surface has a coating."""
     dx, dy, dz = d
-    nx, ny, nz = surface_normal(s, x, y, lz, r2, ftype)
+    nx, ny, nz = normal
     cosi = dx * nx + dy * ny + dz * nz
     k2 = 1.0 - mu * mu * (1.0 - cosi * cosi)
     cost = dr.sqrt(dr.maximum(k2, 0.0))

@@ -1,5 +1,5 @@
 """The PSFs of a grid's nodes for a lens as built (`optics.lens_checks.as_built`, for `grid.psf_grid`): every
-node of the whole field traced (`as_built_methods`, the NumPy tracer), none mirrored, since a decentred or
+node of the whole field traced (`as_built_methods`, the Dr.Jit tracer in local frames), none mirrored, since a decentred or
 tilted surface or a placed sensor breaks the mirror symmetries that `nodes.compute_nodes` uses; one wavelength
 per call (the Fraunhofer path takes one per window), cut to size and normalised by `nodes.place`.
 """

@@ -1,7 +1,7 @@
 """The PSF methods of `registry` for a lens as built (`optics.lens_checks.as_built`: a surface without
-rotational symmetry or behind a coordinate break, or a placed sensor), which the Dr.Jit tracer does not
-trace: "geometric" by `psf.as_built` and "fraunhofer" by `psf.as_built_fraunhofer` (the NumPy tracer, chief
-rays aimed in two dimensions); the other methods are refused by name. Lengths in mm, pitches in µm.
+rotational symmetry or behind a coordinate break, or a placed sensor), which the symmetric paths do not take:
+"geometric" by `psf.as_built` and "fraunhofer" by `psf.as_built_fraunhofer` (the Dr.Jit tracer in local
+frames, chief rays aimed in two dimensions); the other methods are refused by name. Lengths in mm, pitches in µm.
 """
 
 from __future__ import annotations
@@ -17,8 +17,8 @@ from .geometric import bin_hits
 
 # method → the path that computes it for a lens as built (the PSF's metadata says which)
 PATHS = {
-    "geometric": "psf.as_built: real rays of the lens as built (NumPy tracer), binned about the chief ray",
-    "fraunhofer": "psf.as_built_fraunhofer: real rays of the lens as built (NumPy tracer) to the reference "
+    "geometric": "psf.as_built: real rays of the lens as built (Dr.Jit tracer in local frames), binned about the chief ray",
+    "fraunhofer": "psf.as_built_fraunhofer: real rays of the lens as built (Dr.Jit tracer in local frames) to the reference "
     "sphere, matrix DFT",
 }
 
@@ -54,7 +54,7 @@ def compute(lens, field_deg, wavelength_nm, pitch_um: float, size: int, method: 
     field_deg = np.asarray(field_deg, dtype=np.float64).reshape(-1, 2)
     wavelength_nm = np.broadcast_to(np.asarray(wavelength_nm, dtype=np.float64), (len(field_deg),))
     rays = own["pupil_samples" if method == "fraunhofer" else "rays"]
-    found = [as_built.field_hits(lens, f, float(w), rays)[0] for f, w in zip(field_deg, wavelength_nm)]
+    found = as_built.hits_by_wavelength(lens, field_deg, wavelength_nm, rays)
     chief = np.array([h.chief_xy for h in found])
     origins = np.repeat(chief[:1], len(chief), axis=0) if shared_origin else chief
     offsets = [((h.x - o[0]) * 1e3, (h.y - o[1]) * 1e3, h.power) for h, o in zip(found, origins)]

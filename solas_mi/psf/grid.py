@@ -148,7 +148,7 @@ def grid_meta(lens: Lens, spec: GridSpec, wl: tuple[float, ...], fields: np.ndar
     meta = base.describe(lens, spec.method, spec.normalization, method_options(spec.method, spec.sampling_options()),
                          size)
     meta.update(placement)
-    if as_built(lens):  # every node traced by the NumPy tracer's paths, none mirrored
+    if as_built(lens):  # every node traced by the paths of the lens as built, none mirrored
         from .as_built_methods import PATHS
 
         meta["path"] = PATHS[spec.method] + "; every node traced (none mirrored)"

@@ -45,7 +45,7 @@ def compute(
     origin on its chief ray or, with `shared_origin`, all on the first one's. `options`: the methods'
     own (`registry.METHODS`: each method's options); those of other methods are ignored."""
     own = method_options(method, options)
-    if as_built(lens):  # the Dr.Jit tracer's methods do not trace it: the NumPy tracer's paths
+    if as_built(lens):  # the symmetric paths do not take it: those of the lens as built (`as_built_methods`)
         from . import as_built_methods
 
         return as_built_methods.compute(

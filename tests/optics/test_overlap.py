@@ -263,3 +263,29 @@ def test_zemax_file_and_command_line(tmp_path, capsys):
         r"\(SURF 1\) and 2 \(SURF 2\) overlap within .* the lens camera",
     ):
         lens_parts(lens)
+
+
+@pytest.mark.parametrize("thickness, overlaps", [(0.5, True), (2.0, False)])
+def test_a_tilted_face_overlaps_where_its_tilt_brings_it_before_the_last(thickness, overlaps):
+    """A flat face tilted 10° about x behind a flat face `thickness` mm before it, both 20 mm across: its points at
+    y < 0 come first where |y| sin 10° > thickness (nowhere inside r = 10 mm for 2 mm: 10 sin 10° = 1.74)."""
+    lens = _lens(
+        [
+            {"radius": 0.0, "thickness": thickness, "diameter": 20.0, "material": "N-BK7", "stop": True},
+            {"radius": 0.0, "thickness": 20.0, "diameter": 20.0, "tilt_x": 10.0},
+        ]
+    )
+    if not overlaps:
+        assert lens.overlaps == ()
+        return
+    (note,) = lens.overlaps
+    x, y = map(
+        float, re.search(r"overlap at \(x, y\) = \(([-\d.e]+), ([-\d.e]+)\) mm of the first's frame", note).groups()
+    )
+    ring = thickness / math.sin(math.radians(10.0))  # the tilted face's first ring that comes before
+    assert note.startswith("surfaces 1 (surface 1) and 2 (surface 2) overlap at") and y < 0
+    assert ring * math.cos(math.radians(10.0)) - 0.01 < math.hypot(x, y) < ring + 10.0 / 64 + 0.01
+
+
+def test_the_lens_as_built_of_the_stages_overlaps_nothing(cooke_as_built):
+    assert cooke_as_built(True, 1.5).overlaps == ()

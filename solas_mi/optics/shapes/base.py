@@ -36,6 +36,11 @@ class Shape:
         """(∂z/∂x, ∂z/∂y) of the sag at (x, y)."""
         raise NotImplementedError
 
+    def sag_and_gradient(self, x, y, sqrt):
+        """(z, ∂z/∂x, ∂z/∂y) at (x, y) in any array type given its `sqrt` (NumPy's or Dr.Jit's): how the
+        Dr.Jit tracer (`tracer_local`) meets the kinds without rotational symmetry (it meets the others itself)."""
+        raise NotImplementedError
+
     def normal(self, x, y):
         """Unit normals (nx, ny, nz) at (x, y): (−∂z/∂x, −∂z/∂y, 1)/|…|, +z at the vertex."""
         gx, gy = self.gradient(x, y)

@@ -29,25 +29,28 @@ class Biconic(Shape):
     def section_curvatures(self) -> tuple[float, float]:
         return (0.0 if self.radius_x == 0.0 else 1.0 / self.radius_x, 0.0 if self.radius == 0.0 else 1.0 / self.radius)
 
-    def _parts(self, x, y):
+    def _parts(self, x, y, sqrt=np.sqrt):
         """(A, B, S) at (x, y)."""
         (cx, cy), x2, y2 = self.section_curvatures, x * x, y * y
         b = (1.0 + self.conic_x) * cx * cx * x2 + (1.0 + self.conic) * cy * cy * y2
         with np.errstate(invalid="ignore"):
-            return cx * x2 + cy * y2, b, np.sqrt(1.0 - b)
+            return cx * x2 + cy * y2, b, sqrt(1.0 - b)
 
     def sag(self, x, y):
         a, _, s = self._parts(x, y)
         return a / (1.0 + s)
 
     def gradient(self, x, y):
-        (cx, cy), (a, _, s) = self.section_curvatures, self._parts(x, y)
+        return self.sag_and_gradient(x, y)[1:]
+
+    def sag_and_gradient(self, x, y, sqrt=np.sqrt):
+        (cx, cy), (a, _, s) = self.section_curvatures, self._parts(x, y, sqrt)
         d = 1.0 + s
         with np.errstate(invalid="ignore", divide="ignore"):
             bend = a / (2.0 * s * d * d)
         gx = 2.0 * cx * x / d + bend * 2.0 * (1.0 + self.conic_x) * cx * cx * x
         gy = 2.0 * cy * y / d + bend * 2.0 * (1.0 + self.conic) * cy * cy * y
-        return gx, gy
+        return a / d, gx, gy
 
     def scaled(self, factor: float) -> Biconic:
         return Biconic(self.radius * factor, self.conic, self.radius_x * factor, self.conic_x)

@@ -30,6 +30,9 @@ class Cylinder(Shape):
     def gradient(self, x, y):
         return self.toroid.gradient(x, y)
 
+    def sag_and_gradient(self, x, y, sqrt):
+        return self.toroid.sag_and_gradient(x, y, sqrt)
+
     @property
     def section_curvatures(self) -> tuple[float, float]:
         return self.toroid.section_curvatures

@@ -32,11 +32,11 @@ class Toroid(Shape):
         """1/mm: the y-z curve's base curvature 1/`radius` (0 for radius 0)."""
         return 0.0 if self.radius == 0.0 else 1.0 / self.radius
 
-    def profile(self, y):
+    def profile(self, y, sqrt=np.sqrt):
         """(z_y, dz_y/dy) of the y-z curve."""
         c, y2 = self.curvature, y * y
         with np.errstate(invalid="ignore", divide="ignore"):
-            root = np.sqrt(1.0 - (1.0 + self.conic) * c * c * y2)
+            root = sqrt(1.0 - (1.0 + self.conic) * c * c * y2)
             z, dz = c * y2 / (1.0 + root), c * y / root
         power, odd = y2, y  # y^2i and y^(2i−1)
         for i, a in enumerate(self.terms_y, start=1):
@@ -45,20 +45,18 @@ class Toroid(Shape):
         return z, dz
 
     def sag(self, x, y):
-        return self._sag(x, y)[0]
+        return self.sag_and_gradient(np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64))[0]
 
     def gradient(self, x, y):
-        return self._sag(x, y)[1:]
+        return self.sag_and_gradient(np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64))[1:]
 
-    def _sag(self, x, y):
-        """(z, ∂z/∂x, ∂z/∂y) at (x, y)."""
-        x, y = np.asarray(x, dtype=np.float64), np.asarray(y, dtype=np.float64)
-        zy, dzy = self.profile(y)
+    def sag_and_gradient(self, x, y, sqrt=np.sqrt):
+        zy, dzy = self.profile(y, sqrt)
         if self.radius_rotation == 0.0:
-            return zy, np.zeros_like(zy + x), dzy + 0.0 * x
+            return zy, 0.0 * (zy + x), dzy + 0.0 * x
         a = self.radius_rotation - zy
         with np.errstate(invalid="ignore", divide="ignore"):
-            root = np.sign(a) * np.sqrt(a * a - x * x)  # R − z
+            root = a / abs(a) * sqrt(a * a - x * x)  # R − z
             z = zy + x * x / (a + root)
             return z, x / root, a * dzy / root
 
