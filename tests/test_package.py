@@ -25,6 +25,7 @@ BASE = {
     "outputs",
     "budget",
     "blas",
+    "cores",
     "pages",
     "progress",
     "userfiles",

@@ -262,17 +262,27 @@ def run_dask(jobs: list[Job], todo: list[int], grid: PSFGrid | DepthGrid | None,
 
 
 
+def worker_threads(workers: int, dask: str | None) -> int | None:
+    """The threads each of a batch's `workers` runs (`cores.use_share`): its share of this machine's cores where
+    they share them (local processes, a Dask LocalCluster); None on a Dask scheduler's (its machines' own)."""
+    from ..cores import share
+
+    return share(workers) if dask in (None, "local") else None
+
+
 def run_batch(manifest: Manifest, todo: list[int], grid: PSFGrid | DepthGrid | None, grid_path: str | None,
               settings: dict[str, Any], workers: int, dask: str | None, progress: str | None) -> None:
     """Items `todo` of `manifest.jobs` on `workers` local processes or the Dask scheduler `dask`, the
     manifest saved as they finish (and at the end, also when interrupted), a progress bar of the unit
     `progress` ("image", "render"; None: no bar). The output folder is held for the whole run
     (`outputs.hold_folder`: a second batch on it is refused, naming this one); the temporary files
-    that killed runs or workers left there are removed before and after."""
+    that killed runs or workers left there are removed before and after. Each worker runs its share of the
+    cores' threads (`worker_threads`, settings' "threads")."""
     from ..outputs import hold_folder, remove_temporaries
     from ..progress import Progress
 
     jobs = manifest.jobs
+    settings = {**settings, "threads": worker_threads(workers, dask)}
     with hold_folder(manifest.path.parent, f"batch {manifest.header.get('kind')} {manifest.header.get('batch_id')}"):
         remove_temporaries(manifest.path.parent)
         manifest.save()

@@ -11,6 +11,7 @@ from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
+from ..cores import use_share
 from ..errors import SolasError
 from .jobs import SCENE_SUFFIXES, Job
 
@@ -25,6 +26,8 @@ def run_job(job: Job, grid: PSFGrid | None, grid_path: str | None, settings: dic
     problems (an unreadable input, a failed write): they are its `error`."""
     start = time.perf_counter()
     job.attempts += 1
+    if settings.get("threads"):  # this worker's share of the cores (`runner.worker_threads`)
+        use_share(settings["threads"])
     try:
         degraded = None  # a degrade item's image as its EXR holds it, for the camera (None: read from the file)
         if job.kind == "degrade":
@@ -178,7 +181,7 @@ def _render(job: Job, settings: dict[str, Any]) -> None:
     if settings.get("threads"):
         import drjit as dr
 
-        dr.set_thread_count(settings["threads"])  # the batch's workers share the cores
+        dr.set_thread_count(settings["threads"])  # the batch's workers share the cores (`runner.worker_threads`)
     output, png = data_and_preview(job.output, job.png, inputs=[job.input])
     lens = item_lens(p)  # its file, at its temperature where a lens population picked one
     if Path(job.input).suffix.lower() in SCENE_SUFFIXES:

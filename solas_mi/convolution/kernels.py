@@ -31,13 +31,13 @@ repeats).
 from __future__ import annotations
 
 import math
-import os
 from collections import deque
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
 
+from ..cores import threads
 from ..errors import SolasError
 from ..optics.camera import BOUNDARIES, Camera
 from ..optics.frame import FISHEYE, FrameCamera
@@ -352,7 +352,8 @@ def batches(n: int, per_item: int) -> list[slice]:
 
 
 def workers() -> int:
-    return max(1, min(os.cpu_count() or 1, 8))
+    """The pool's threads: this process's (`cores.threads`: its share where it is one of a batch's workers), 8 at most."""
+    return max(1, min(threads(), 8))
 
 
 def parallel_map(fn, items: list):

@@ -10,7 +10,6 @@ sum ("sum", default) or unit peak ("peak").
 from __future__ import annotations
 
 import math
-import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from functools import lru_cache
@@ -19,6 +18,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from ..cores import cores, threads
 from ..errors import SolasError
 from ..optics import notes
 
@@ -281,12 +281,12 @@ def describe(lens, method: str, normalization: str, sampling: dict, size: int) -
 def thread_pool() -> ThreadPoolExecutor:
     """One thread per core this process may use, kept for the process (matrix products and the placing of
     a grid's nodes; starting threads each time took 3 ms a thread on a loaded machine)."""
-    return ThreadPoolExecutor(len(os.sched_getaffinity(0)), thread_name_prefix="solas-psf")
+    return ThreadPoolExecutor(cores(), thread_name_prefix="solas-psf")
 
 
 def in_threads(work, parts: list) -> None:
     """`work(part)` for each of `parts` on the pool's threads, the parts dealt out in turn; returns when all are done."""
-    n = min(len(parts), len(os.sched_getaffinity(0)))
+    n = min(len(parts), threads())  # a batch worker's share of the cores (`cores.use_share`)
     if n <= 1:
         for part in parts:
             work(part)

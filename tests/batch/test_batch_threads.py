@@ -1,0 +1,56 @@
+"""A batch's workers share the machine's cores: each runs its share of them (`runner.worker_threads`) in its
+convolution pool and in OpenBLAS, not every core each (two workers on 2 cores ran up to 8 busy threads), and
+degrades to the same pixels."""
+
+import numpy as np
+import pytest
+
+from solas_mi import blas, cores
+from solas_mi.batch import degrade_batch, runner
+from solas_mi.batch.work import run_job
+from solas_mi.convolution import kernels
+from solas_mi.imageio import read_exr
+from solas_mi.psf.depth import read_grid
+
+
+@pytest.fixture
+def own_threads(monkeypatch):
+    """This process's share of the cores and OpenBLAS's threads as they were, after the test."""
+    monkeypatch.setattr(cores, "_SHARE", None)
+    api = blas._openblas_threads()
+    before = api[0]() if api is not None else None
+    yield api
+    if api is not None:
+        api[1](before)
+
+
+def test_each_of_two_workers_on_two_cores_runs_one_thread(batch_inputs, monkeypatch, own_threads):
+    batch_inputs.write(2)
+    monkeypatch.setattr(cores, "cores", lambda: 2)
+    pools, seen = [], {}
+    real_pool = kernels.ThreadPoolExecutor
+    monkeypatch.setattr(kernels, "ThreadPoolExecutor", lambda n: pools.append(n) or real_pool(n))
+
+    def in_process(jobs, todo, grid_path, settings, workers, on_done):  # `run_local`, here: what a worker runs
+        seen.update(settings)
+        for i in todo:
+            on_done(i, run_job(jobs[i], read_grid(grid_path), grid_path, settings))
+        seen["blas"] = own_threads[0]() if own_threads is not None else 1
+
+    monkeypatch.setattr(runner, "run_local", in_process)
+    root = batch_inputs.root
+    two = degrade_batch([batch_inputs.images], root / "two", psf_grid=batch_inputs.grid, workers=2, progress=False)
+    assert seen["threads"] == 1 and kernels.workers() == 1 and seen["blas"] == 1
+    assert pools == []  # one thread: the convolution runs without a pool
+    monkeypatch.setattr(cores, "_SHARE", None)
+    one = degrade_batch([batch_inputs.images], root / "one", psf_grid=batch_inputs.grid, workers=1, progress=False)
+    assert seen["threads"] == 2 and pools and set(pools) == {2}
+    for a, b in zip(two.jobs, one.jobs):
+        assert a.status == b.status == "done"
+        assert all(np.array_equal(x, y) for x, y in zip(read_exr(a.output)[0].values(), read_exr(b.output)[0].values()))
+
+
+def test_the_share_of_the_cores():
+    assert cores.share(1) == cores.cores() and cores.share(cores.cores()) == 1 and cores.share(10 * cores.cores()) == 1
+    assert runner.worker_threads(1, None) == runner.worker_threads(1, "local") == cores.cores()
+    assert runner.worker_threads(1, "tcp://scheduler:8786") is None  # its machines' own cores
