@@ -22,6 +22,8 @@ def test_read_exr_returns_the_pixels_the_binding_read_without_a_copy(tmp_path, m
 
     monkeypatch.setattr(OpenEXR, "File", Watched)
     channels, meta = read_exr(path)
-    assert meta == {"what": "test"} and np.array_equal(channels["R"], values) and np.array_equal(channels["G"], 2 * values)
+    assert (
+        meta == {"what": "test"} and np.array_equal(channels["R"], values) and np.array_equal(channels["G"], 2 * values)
+    )
     assert all(any(np.shares_memory(a, h) for h in handed) for a in channels.values())
     assert all(a.flags.writeable for a in channels.values())  # readers scale and normalise in place
