@@ -69,3 +69,40 @@ def test_a_given_grid_is_hashed_once_per_batch(batch_inputs, monkeypatch):
     assert result.count("done") == 1 and hashed.count(str(batch_inputs.grid)) == 1
     header = result.manifest.read_text()
     assert real_hash(batch_inputs.grid) in header
+
+
+def test_the_workers_map_the_grid_the_batch_read_not_its_file(batch_inputs, monkeypatch):
+    """The local workers take the batch's grid from shared memory, read-only, instead of each reading the grid
+    file again (0.7 CPU-s and 315 MB per worker for a 32×32×3 grid of 160 px): with the file gone once the
+    batch has read it, the workers still degrade every frame, to the pixels of a batch that kept it."""
+    batch_inputs.write(3)
+    root = batch_inputs.root
+    kept = degrade_batch([batch_inputs.images], root / "kept", psf_grid=batch_inputs.grid, workers=2, progress=False)
+    real_run = runner.run_local
+
+    def file_gone(jobs, todo, grid_path, settings, workers, on_done):
+        (root / "grid.exr").rename(root / "moved.exr")
+        assert settings["shared_grid"] is not None
+        real_run(jobs, todo, grid_path, settings, workers, on_done)
+
+    monkeypatch.setattr(runner, "run_local", file_gone)
+    mapped = degrade_batch(
+        [batch_inputs.images], root / "mapped", psf_grid=batch_inputs.grid, workers=2, progress=False
+    )
+    assert [job.status for job in mapped.jobs] == ["done"] * 3, mapped.failed[:1] and mapped.failed[0].error
+    for a, b in zip(kept.jobs, mapped.jobs):
+        assert all(np.array_equal(x, y) for x, y in zip(read_exr(a.output)[0].values(), read_exr(b.output)[0].values()))
+
+
+def test_the_shared_grid_is_read_only_and_removed_after_the_batch(batch_inputs):
+    import os
+
+    grid = read_grid(str(batch_inputs.grid))
+    with runner._shared_grid(grid) as shared:
+        mapped = runner._mapped_grid(shared)
+        assert np.array_equal(mapped.data, grid.data) and not mapped.data.flags.writeable
+        name = shared[1]
+        assert os.path.exists(f"/dev/shm/{name}")
+    assert not os.path.exists(f"/dev/shm/{name}")
+    del mapped  # its arrays release the block, which this process (no worker) then closes
+    runner._MAPPED.pop().close()
