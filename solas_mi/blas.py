@@ -44,3 +44,10 @@ def single_threaded_blas():
         yield
     finally:
         set_(before)
+
+
+def set_threads(n: int) -> None:
+    """OpenBLAS on `n` threads from now on (no effect with another BLAS)."""
+    api = _openblas_threads()
+    if api is not None:
+        api[1](n)

@@ -169,7 +169,8 @@ def read_exr(path: str | os.PathLike) -> tuple[dict[str, np.ndarray], dict]:
             header = f.header()
             # read the metadata before the pixels: loading channels rebuilds the header dictionary
             meta = jsonio.loads(header[META_KEY]) if META_KEY in header else {}
-            channels = {name: np.array(c.pixels) for name, c in f.channels().items()}
+            # the binding's arrays own their pixels (kept after the file closes): no copy (a 315 MB grid's took 0.2 s)
+            channels = {name: np.asarray(c.pixels) for name, c in f.channels().items()}
     except (RuntimeError, OSError, ValueError) as exc:  # not an EXR, truncated, bad metadata
         raise SolasError(f"cannot read {path} as OpenEXR: {str(exc).splitlines()[0] if str(exc) else exc}") from None
     return channels, meta

@@ -50,6 +50,7 @@ class BatchPlan:
     cache: GridCache | None = None  # where that grid is kept
     lens_scale: dict | None = None  # what scaling the lens did (`scaled_lens`), or None
     population: tuple | None = None  # a lens population (`population.Population`, its (lens file, Lens)), or None
+    grid_hash: str | None = None  # a given grid file's `file_hash` (hashed once: 0.2 CPU-s for a 315 MB grid)
 
     @property
     def todo(self) -> list[int]:
@@ -135,7 +136,8 @@ def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLik
             job.params["labels"] = {kind: str(found[kind]) for kind, _ in spec.label_patterns}
     lens = population[1][0][1] if population is not None else lens
     grid_path, source, lens, grid_spec, cache = _grid_source(psf_grid, lens, spec.grid_spec, cache)
-    grid_id = file_hash(grid_path) if source == "given" else grid_path.stem
+    grid_hash = file_hash(grid_path) if source == "given" else None
+    grid_id = grid_hash or grid_path.stem
     if population is not None:  # the first lens's cache name stands for the grid options
         (given, lenses), source = population, "population"
         pop.assign(jobs, lenses, given.seed, given.temperatures_c, cache, grid_spec)
@@ -143,7 +145,7 @@ def plan_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.PathLik
     key = hashlib.sha256(json.dumps([grid_id, *spec.identity()]).encode()).hexdigest()[:16]
     manifest = Manifest(out_dir / MANIFEST, {"version": 1, "kind": "degrade", "batch_id": key}, jobs)
     manifest.resume(key)
-    return BatchPlan(jobs, manifest, key, spec, grid_path, source, lens, grid_spec, cache, scale, population)
+    return BatchPlan(jobs, manifest, key, spec, grid_path, source, lens, grid_spec, cache, scale, population, grid_hash)
 
 
 def _grid_source(psf_grid, lens, grid_spec, cache) -> tuple[Path, str, Any, Any, GridCache | None]:
@@ -380,7 +382,7 @@ def degrade_batch(inputs: Iterable[str | os.PathLike], output_dir: str | os.Path
     sizes = [image_size(job.input)[1::-1] for job in p.jobs]  # (0, 0): unreadable, the item will say why
     cameras = frame_cameras(grid, [s for s in sizes if s[0]], p.spec.frame, p.spec.calibration_model,
                             p.lens)  # one fit per frame size, here, not per frame
-    header.update({"psf_grid": str(p.grid_path), "grid_hash": file_hash(p.grid_path),
+    header.update({"psf_grid": str(p.grid_path), "grid_hash": p.grid_hash or file_hash(p.grid_path),
                    "lens": grid.meta.get("lens"), "lens_hash": grid.meta.get("lens_hash"),
                    "cameras": cameras, "runner": {"dask": dask} if dask is not None else {"workers": n}})
     if p.spec.ghosts:  # the lens's ghost grid computed once here, each item reads it from the cache

@@ -38,7 +38,7 @@ from .degrade import WORKER_BYTES, BatchResult, camera_bytes, check_workers, wit
 from .jobs import IMAGE_SUFFIXES, MANIFEST, SCENE_SUFFIXES, Job, Manifest, expand_inputs
 from .population import Population, item_lens, loaded, pick
 from .population import key as key_of
-from .runner import check_dask
+from .runner import check_dask, worker_threads
 
 SWEEP = ("lens", "focus_distance", "sensor", "pitch_um", "spp")  # lens, then RenderSpec fields
 SEEDS = 4096  # seeds 0…4095: the render passes' seeds (seed·1000003 + pass) stay within 32 bits
@@ -372,7 +372,7 @@ def render_batch(
     cameras = image_cameras(p, calibration_model)
     # each local worker (and each Dask worker of a LocalCluster) gets its share of the cores, so that
     # the local and the Dask runs render with the same thread count (identical sums)
-    threads = max(1, (os.cpu_count() or 1) // n) if dask in (None, "local") else None
+    threads = worker_threads(n, dask)
     p.manifest.header.update(
         {
             "variant": chosen,
@@ -385,7 +385,6 @@ def render_batch(
         }
     )
     settings = {
-        "threads": threads,
         "camera": camera,
         "batch": {"id": p.key, "manifest": str(p.manifest.path)},
         "calibration_model": calibration_model,

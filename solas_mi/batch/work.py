@@ -9,7 +9,10 @@ from __future__ import annotations
 import time
 from typing import TYPE_CHECKING, Any
 
+import numpy as np
+
 from ..errors import SolasError
+from ..threads import use_share
 from .jobs import SCENE_SUFFIXES, Job
 
 if TYPE_CHECKING:
@@ -23,15 +26,18 @@ def run_job(job: Job, grid: PSFGrid | None, grid_path: str | None, settings: dic
     problems (an unreadable input, a failed write): they are its `error`."""
     start = time.perf_counter()
     job.attempts += 1
+    if settings.get("threads"):  # this worker's share of the cores (`runner.worker_threads`)
+        use_share(settings["threads"])
     try:
+        degraded = None  # a degrade item's image as its EXR holds it, for the camera (None: read from the file)
         if job.kind == "degrade":
-            _degrade(job, grid, grid_path, settings)
+            degraded = _degrade(job, grid, grid_path, settings)
         elif job.kind == "render":
             _render(job, settings)
         else:
             raise SolasError(f"item kind {job.kind!r} must be degrade or render")
         if settings.get("camera") is not None:
-            _shoot(job, settings)
+            _shoot(job, settings, degraded)
         job.stamp()
         job.status, job.error = "done", None
     except SolasError as exc:
@@ -46,7 +52,8 @@ def run_job(job: Job, grid: PSFGrid | None, grid_path: str | None, settings: dic
     return job
 
 
-def _degrade(job: Job, grid: PSFGrid | None, grid_path: str | None, settings: dict[str, Any]) -> None:
+def _degrade(job: Job, grid: PSFGrid | None, grid_path: str | None, settings: dict[str, Any]) -> tuple | None:
+    """Degrade the item's image; with the batch's camera, the image as its EXR holds it (`as_written`)."""
     from ..convolution.output import degrade_file
     from ..imageio import image_size
     from ..outputs import check_target, data_and_preview
@@ -66,7 +73,8 @@ def _degrade(job: Job, grid: PSFGrid | None, grid_path: str | None, settings: di
     rows, cols, _ = image_size(job.input)
     # the batch's camera of the frame's size, fitted once (`convolution.camera`); none: unreadable, degrade says why
     camera = cameras.get(f"{cols}x{rows}")
-    degrade_file(
+    written: dict[str, Any] | None = {} if settings.get("camera") is not None else None
+    meta = degrade_file(
         job.input,
         grid,
         grid_path,
@@ -81,7 +89,19 @@ def _degrade(job: Job, grid: PSFGrid | None, grid_path: str | None, settings: di
         },
         labels=job.params.get("labels"),
         lens=settings.get("lens"),
+        written=written,
     )
+    return None if written is None else as_written(written["image"], meta, spec.output_format)
+
+
+def as_written(image: np.ndarray, meta: dict, output_format: str) -> tuple[np.ndarray, dict] | None:
+    """A degraded image and its metadata as the camera reads them back from its EXR (`sensor.commands.read_input`:
+    R, G, B at the file's precision, float32 or half for exr-half, as float64), without reading the file: the same
+    values; None where it is no R, G, B image (the camera reads the file, and says what it lacks)."""
+    if image.ndim != 3 or image.shape[-1] != 3:
+        return None
+    stored = np.float16 if output_format == "exr-half" else np.float32
+    return image.astype(stored, copy=False).astype(np.float64), meta
 
 
 def _lens_of(job: Job) -> dict:
@@ -112,18 +132,19 @@ def scene_camera(scene, model: str | None) -> dict | None:
     return SCENE_CAMERAS[key]
 
 
-def _shoot(job: Job, settings: dict[str, Any]) -> None:
+def _shoot(job: Job, settings: dict[str, Any], degraded: tuple[np.ndarray, dict] | None = None) -> None:
     """The item's output through the batch's camera, read as `solas-mi camera` reads it (image irradiance,
     or radiance through the f-number it states, `sensor.commands.as_irradiance`): its RAW EXR (and
     developed frame) beside it, the frame named by its output's stem (`isp.camera`); a warning on the item
-    where the RAW saturates (`sensor.commands.clipping_warning`)."""
+    where the RAW saturates (`sensor.commands.clipping_warning`). `degraded`: the output's image and metadata as its
+    EXR holds them (`as_written`), not read back; None: read from the file."""
     from pathlib import Path
 
     from ..isp.camera import write_frame
     from ..sensor.commands import as_irradiance, clipping_warning, read_input
 
     camera = settings["camera"]
-    image, own = read_input(job.output)
+    image, own = read_input(job.output) if degraded is None else degraded
     irradiance, reading, _ = as_irradiance(image, own, job.output, camera.scale)
     raw, frame, meta = camera.shoot(irradiance, Path(job.output).stem)
     fraction, warning = clipping_warning(camera.sensor, raw, meta["exposure_ms"], Path(job.extras[0]).name)
@@ -160,7 +181,7 @@ def _render(job: Job, settings: dict[str, Any]) -> None:
     if settings.get("threads"):
         import drjit as dr
 
-        dr.set_thread_count(settings["threads"])  # the batch's workers share the cores
+        dr.set_thread_count(settings["threads"])  # the batch's workers share the cores (`runner.worker_threads`)
     output, png = data_and_preview(job.output, job.png, inputs=[job.input])
     lens = item_lens(p)  # its file, at its temperature where a lens population picked one
     if Path(job.input).suffix.lower() in SCENE_SUFFIXES:

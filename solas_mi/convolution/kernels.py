@@ -31,7 +31,6 @@ repeats).
 from __future__ import annotations
 
 import math
-import os
 from collections import deque
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
@@ -42,6 +41,7 @@ from ..errors import SolasError
 from ..optics.camera import BOUNDARIES, Camera
 from ..optics.frame import FISHEYE, FrameCamera
 from ..psf.grid import PSFGrid
+from ..threads import pool_threads
 
 _PAD_MODES = {"edge": "edge", "zero": "constant", "reflect": "symmetric"}
 COVER_TOLERANCE = 0.1  # the image may reach this fraction of a node spacing beyond the outermost node's cell
@@ -352,7 +352,8 @@ def batches(n: int, per_item: int) -> list[slice]:
 
 
 def workers() -> int:
-    return max(1, min(os.cpu_count() or 1, 8))
+    """The pool's threads: this process's (`threads.pool_threads`: its share where it is one of a batch's workers), 8 at most."""
+    return max(1, min(pool_threads(), 8))
 
 
 def parallel_map(fn, items: list):

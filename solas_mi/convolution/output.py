@@ -68,7 +68,7 @@ def read_depth(path: str | Path) -> np.ndarray:
 def degrade_file(image_path: str | Path, grid: PSFGrid | DepthGrid, grid_path: str | Path, output: Path, png: Path,
                  spec: DegradeSpec | None = None, *, force: bool = False, depth: str | Path | None = None,
                  extra_meta: dict[str, Any] | None = None, progress: Callable[[int, int], None] | None = None,
-                 labels=None, calibration_model: str | None = None, lens=None) -> dict[str, Any]:
+                 labels=None, calibration_model: str | None = None, lens=None, written: dict | None = None) -> dict:
     """Degrade the image file `image_path` by `grid` (read from `grid_path`, named in the metadata) as
     `spec` says (a `convolution.spec.DegradeSpec`: method, boundary, linear, output format, occlusion,
     silhouette, frame camera; None: its defaults) and write `output` and `png` (`spec.OUTPUT_FILES`' two files)
@@ -81,7 +81,8 @@ def degrade_file(image_path: str | Path, grid: PSFGrid | DepthGrid, grid_path: s
     `calibration_model`: the frame's camera block fitted here (`convolution.camera.frame_camera`, its memory
     in the estimate unless the cache of fitted cameras holds it; a batch fits it once and gives it in `extra_meta` instead);
     `lens`: with `spec.ghosts`, the grid's lens (None: read again from the grid's metadata, `camera.grid_lens`): its
-    ghosts of the frame's sources added (`convolution.ghosts`), the flare label beside the output."""
+    ghosts of the frame's sources added (`convolution.ghosts`), the flare label beside the output; `written`: a dict
+    that gets the degraded image ("image") for a caller that goes on with it (a batch's camera), not read back."""
     from ..budget import check_memory
     from ..imageio import image_size, read_image
     from ..psf.depth import DepthGrid
@@ -122,6 +123,7 @@ def degrade_file(image_path: str | Path, grid: PSFGrid | DepthGrid, grid_path: s
         [f"C{c:02d}_{meta['channel_wavelengths_nm'][c]:g}nm" for c in range(out.shape[-1])]
     write_output(output, png, out, names, meta, spec.output_format, image_path, writers)
     meta["output_shape"] = list(out.shape)
+    (written if written is not None else {})["image"] = out
     return meta
 
 
