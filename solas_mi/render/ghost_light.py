@@ -39,13 +39,13 @@ import mitsuba as mi
 import numpy as np
 
 from ..optics import ghost_paths, ghost_trace, tracer
-from .ghost_sources import CONE, light, sources
+from .ghost_sources import CONE, light, opaque, sources
 
 PILOT = 32  # pilot rays per side, per (source, path)
 DENSITY = 4.0  # landings per pixel and sample in the brightest ghost
 BUDGET = 16.0  # rays at most per pixel and sample, over every source and path
 MEASURED = 32  # pilot landings a path needs for its area (and brightness) to count
-CHUNK = 1 << 19  # rays traced at once
+CHUNK = 1 << 22  # rays traced at once
 METHOD = (
     "light-traced: rays from each source (area emitters, delta lights, an environment map's sun) along every "
     "two-reflection path of the lens to the film"
@@ -56,19 +56,13 @@ def stray_light(scene, sensor, spp: int, seed: int = 0):
     """The stray light of `sensor`'s (a `lens_camera`) ghosts in `scene` at `spp` (module docstring): (the
     image, crop rows × columns × 3 (the film's RGB), float64; what the metadata says of it)."""
     start = time.perf_counter()
-    to_world = np.array(sensor.world_transform().matrix, dtype=np.float64).reshape(4, 4)
-    found, skipped = sources(scene, to_world)
-    paths = ghost_paths.paths(sensor.lens)
-    rng = np.random.default_rng([seed, 0x5EED])
-    film = sensor.film()
-    size = tuple(int(v) for v in film.crop_size())
-    block = mi.ImageBlock(mi.ScalarVector2u(size), mi.ScalarPoint2i(0, 0), 5, film.rfilter(), normalize=True)
-    context = (scene, sensor, to_world, size, block)
-    pilots = [_trace(context, s, paths, np.full(len(paths), PILOT * PILOT), rng, splat=False) for s in found]
-    counts = _counts(pilots, spp * size[0] * size[1], spp)
-    for source, n in zip(found, counts):
-        _trace(context, source, paths, n, rng, splat=True)
-    image = np.array(block.tensor(), dtype=np.float64)[..., :3]
+    found, skipped = sources(scene, np.array(sensor.world_transform().matrix, dtype=np.float64).reshape(4, 4))
+    tracing = Tracing(scene, sensor)
+    pilots = [tracing.trace(s, np.full(tracing.paths, PILOT * PILOT), (seed, k, 0)) for k, s in enumerate(found)]
+    counts = _counts(pilots, spp * tracing.size[0] * tracing.size[1], spp)
+    for k, (source, n) in enumerate(zip(found, counts)):
+        tracing.trace(source, n, (seed, k, 1), splat=True)
+    image = np.array(tracing.block.tensor(), dtype=np.float64)[..., :3]
     meta = {
         "method": METHOD,
         "sources": [s.name for s in found],
@@ -80,8 +74,8 @@ def stray_light(scene, sensor, spp: int, seed: int = 0):
 
 
 def _counts(pilots, pixel_samples: int, spp: int) -> list[np.ndarray]:
-    """The main pass's rays per (source, path) from the pilots' (light, landed share, area) (module
-    docstring)."""
+    """The main pass's rays per (source, path) from the pilots' (light, landed share, area, landings)
+    (module docstring)."""
     if not pilots:
         return []
     light, share, area, landed = (np.array([p[i] for p in pilots]) for i in range(4))
@@ -92,18 +86,119 @@ def _counts(pilots, pixel_samples: int, spp: int) -> list[np.ndarray]:
     return list(np.maximum(np.ceil(wanted), 1).astype(np.int64))
 
 
-def _reach(lens, source, scene, sensor, to_world) -> float:
-    """Half the side of the entrance square: surface 1's clear aperture, widened by its rim's sag along
-    the source's steepest direction (a delta light's: the one at the vertex)."""
-    front = lens.surfaces[0]
-    if source.kind == CONE:
-        steepest = math.acos(min(1.0, float(source.axis[2]))) + source.radius
-    else:
-        wav = _lanes(mi.Float(550.0))
-        d, _ = light(scene, source, to_world, sensor.world_unit_mm, (np.zeros(1), np.zeros(1)), np.zeros((2, 1)), wav)
-        steepest = math.acos(float(np.clip(d[2, 0], -1.0, 1.0))) + 0.05
-    rim = abs(float(front.sag(front.semi_diameter)))
-    return 1.02 * front.semi_diameter + rim * min(math.tan(min(steepest, 1.5)), 4.0)
+def _lane0(value):
+    """A Mitsuba Spectrum whose colour (`spectrum_to_srgb`, the mean of the lanes') is lane 0's `value`'s."""
+    return mi.Spectrum(4.0 * value, 0.0, 0.0, 0.0) if mi.is_spectral else mi.Spectrum(value)
+
+
+def _stratified(index: np.ndarray, shift: np.ndarray) -> np.ndarray:
+    """The `index`-th points of a Kronecker (R_d) sequence in [0, 1)^d, d = len(`shift`), shifted by `shift`
+    (Cranley–Patterson: each point uniform, the points of consecutive indices spread evenly); in 32-bit
+    fixed point, exact for every index."""
+    dims, phi = len(shift), 2.0
+    for _ in range(30):
+        phi = (1.0 + phi) ** (1.0 / (dims + 1))
+    steps = np.array([int((1.0 / phi ** (k + 1)) % 1.0 * 2**32) for k in range(dims)], dtype=np.uint64)
+    fixed = (index.astype(np.uint64)[None, :] * steps[:, None] + (shift * 2**32).astype(np.uint64)[:, None]) % 2**32
+    return (fixed >> 8).astype(np.float64) * 2.0**-24
+
+
+class Tracing:
+    """Rays of the sources of `scene` along every ghost path of `sensor`'s lens to its film (module
+    docstring): `trace` puts them into `block` or sums the pilot's figures."""
+
+    def __init__(self, scene, sensor) -> None:
+        self.scene, self.sensor, self.lens = scene, sensor, sensor.lens
+        film = sensor.film()
+        self.size = tuple(int(v) for v in film.crop_size())
+        self.block = mi.ImageBlock(
+            mi.ScalarVector2u(self.size), mi.ScalarPoint2i(0, 0), 5, film.rfilter(), normalize=True
+        )
+        every = ghost_paths.paths(self.lens)
+        self.paths = len(every)
+        self.first, self.second = (mi.UInt32([p[k] for p in every]) for k in (0, 1))
+        self.to_world = sensor.world_transform()
+
+    def reach(self, source) -> float:
+        """Half the side of the entrance square: surface 1's clear aperture, widened by its rim's sag along
+        the source's steepest direction (a delta light's: the one at the vertex, + 0.05 rad)."""
+        front = self.lens.surfaces[0]
+        if source.kind == CONE:
+            steepest = math.acos(min(1.0, float(source.axis[2]))) + source.radius
+        else:
+            d, _ = light(
+                self.scene,
+                source,
+                self.to_world,
+                self.sensor.world_unit_mm,
+                (mi.Float(0.0), mi.Float(0.0)),
+                mi.Point2f(0.5, 0.5),
+                _lanes(mi.Float(550.0)),
+            )
+            steepest = math.acos(float(np.clip(d.z[0], -1.0, 1.0))) + 0.05
+        rim = abs(float(front.sag(front.semi_diameter)))
+        return 1.02 * front.semi_diameter + rim * min(math.tan(min(steepest, 1.5)), 4.0)
+
+    def trace(self, source, counts: np.ndarray, seed: tuple, splat: bool = False):
+        """`counts[k]` rays (rounded up to a square) of `source` along each path k: splatted into `block`
+        (`splat`), else the pilot's (light on the film, landed share, area in px, landings) per path."""
+        sides = np.ceil(np.sqrt(counts)).astype(np.int64)
+        n = sides * sides
+        ends = np.cumsum(n)
+        reach = self.reach(source)
+        rng = np.random.default_rng(list(seed))
+        sums = [dr.zeros(mi.Float, self.paths) for _ in range(8)]
+        for lo in range(0, int(ends[-1]), CHUNK):
+            hi = min(int(ends[-1]), lo + CHUNK)
+            index = np.searchsorted(ends, np.arange(lo, hi), side="right")
+            local = np.arange(lo, hi) - (ends - n)[index]  # the ray's cell in its path's grid, row-major
+            row, col = np.divmod(local, sides[index])  # (in NumPy: an LLVM kernel's integer division may trap)
+            cell = 2.0 * reach / sides[index]
+            points = tuple(mi.Float((v + rng.random(hi - lo)) * cell - reach) for v in (col, row))
+            uv, uw, ul = (mi.Float(v) for v in _stratified(local, rng.random(3)))
+            path, cell = mi.UInt32(index.astype(np.uint32)), mi.Float(cell)
+            lam, inverse_pdf = self.sensor.wavelengths.sample_quantile(ul)
+            wav = _lanes(lam)
+            d, carried = light(
+                self.scene, source, self.to_world, self.sensor.world_unit_mm, points, mi.Point2f(uv, uw), wav
+            )
+            col, row, value, landed = self.land(points, d, lam, path)
+            value *= carried * cell * cell * inverse_pdf
+            landed &= value > 0
+            if splat:
+                self.block.put(mi.Point2f(col, row), wav, _lane0(dr.select(landed, value, 0.0)), 0.0, 0.0, landed)
+                dr.eval(self.block.tensor())  # each chunk its own launch of one kernel (else chunks fuse, new kernels)
+                continue
+            w = dr.select(landed, value, 0.0)
+            for k, v in enumerate(
+                (1.0, dr.select(landed, 1.0, 0.0), w, w * col, w * row, w * col * col, w * row * row, w * col * row)
+            ):
+                dr.scatter_add(sums[k], v, path)
+            dr.eval(sums)
+        return None if splat else _pilot_figures(np.array([np.array(v, dtype=np.float64) for v in sums]).T)
+
+    def land(self, points, d, lam, path):
+        """Rays through entrance `points` of the vertex plane along lens-frame `d` at wavelengths `lam`
+        (nm), traced along their paths (indices `path`) to the film plane: (column, row of the crop window,
+        the path's reflectances and transmittances × the camera's `norm` over the pixel's area (mm²),
+        whether it landed on the crop window)."""
+        sensor, f64 = self.sensor, dr.float64_array_t(mi.Float)
+        z0 = tracer.launch_plane_z(self.lens)
+        dx, dy, dz = f64(d.x), f64(d.y), f64(dr.select(d.z > 0, d.z, 1.0))
+        t = tracer.opaque(-z0, f64) / dz
+        start = (f64(points[0]) - t * dx, f64(points[1]) - t * dy, dr.full(f64, z0, dr.width(dz)))
+        rays = tracer.Rays(*start, dx, dy, dz, dr.zeros(f64, dr.width(dz)))
+        first, second = dr.gather(mi.UInt32, self.first, path), dr.gather(mi.UInt32, self.second, path)
+        leaving, ok, power = ghost_trace.trace_paths(self.lens, rays, f64(lam) * 1e-3, first, second)
+        ok &= (leaving.dz > 0) & (d.z > 0)
+        s = (tracer.opaque(self.lens.image_z, f64) - leaving.z) / dr.select(ok, leaving.dz, 1.0)
+        inverse_pitch = opaque(1.0 / sensor.pitch_mm)
+        centre = [opaque(0.5 * sensor.film_size[k] - sensor.crop_offset[k]) for k in (0, 1)]
+        col = dr.fma(mi.Float(leaving.x + s * leaving.dx), inverse_pitch, centre[0])
+        row = centre[1] - mi.Float(leaving.y + s * leaving.dy) * inverse_pitch
+        ok = mi.Bool(ok) & (col >= 0) & (col < opaque(self.size[0])) & (row >= 0) & (row < opaque(self.size[1]))
+        value = dr.select(ok, mi.Float(power) * opaque(sensor.norm / sensor.pitch_mm**2), 0.0)
+        return col, row, value, ok
 
 
 def _lanes(lam):
@@ -111,93 +206,11 @@ def _lanes(lam):
     return mi.Spectrum(lam) if mi.is_spectral else mi.Color0f()
 
 
-def _lane0(value: np.ndarray):
-    """A Mitsuba Spectrum whose colour (`spectrum_to_srgb`, the mean of the lanes') is lane 0's `value`'s."""
-    if not mi.is_spectral:
-        return mi.Spectrum(mi.Float(value))
-    return mi.Spectrum(mi.Float(4.0 * value), 0.0, 0.0, 0.0)
-
-
-def _samples(counts: np.ndarray, reach: float, rng):
-    """Per (path k, counts[k] rays, rounded up to a square): path index, entrance points stratified on
-    the square ±`reach`, and three more stratified uniforms (direction, wavelength), each its own
-    permutation of strata; the area of each ray's cell (mm²)."""
-    sides = np.ceil(np.sqrt(counts)).astype(np.int64)
-    index = np.repeat(np.arange(len(counts)), sides * sides)
-    parts = []
-    for m in sides:
-        cells = np.arange(m * m)
-        parts.append(np.stack([((cells % m) + rng.random(m * m)) / m, ((cells // m) + rng.random(m * m)) / m]))
-    ex, ey = (np.concatenate(parts, axis=1) * 2.0 - 1.0) * reach
-    u = np.concatenate(
-        [np.stack([(rng.permutation(m * m) + rng.random(m * m)) / (m * m) for _ in range(3)]) for m in sides], axis=1
-    )
-    return index, ex, ey, u, (2.0 * reach) ** 2 / (sides * sides)[index]
-
-
-def _trace(context, source, paths, counts: np.ndarray, rng, splat: bool):
-    """`counts[k]` rays of `source` along each of `paths`, traced to the film: splatted into the block
-    (`splat`), else the pilot's (light on the film, landed share, area in px) per path."""
-    scene, sensor, to_world, size, block = context
-    lens = sensor.lens
-    index, ex, ey, u, cell = _samples(counts, _reach(lens, source, scene, sensor, to_world), rng)
-    sums = np.zeros((len(paths), 7))  # per path: rays, landed rays, Σw, Σw·c, Σw·r, Σw·c², Σw·r² (…and c·r below)
-    cross = np.zeros(len(paths))
-    for lo in range(0, index.size, CHUNK):
-        part = slice(lo, lo + CHUNK)
-        lam, inverse_pdf = sensor.wavelengths.sample_quantile(mi.Float(u[2, part]))
-        wav = _lanes(lam)
-        d, carried = light(scene, source, to_world, sensor.world_unit_mm, (ex[part], ey[part]), u[:2, part], wav)
-        col, row, value = _land(sensor, (ex[part], ey[part]), d, np.array(lam, dtype=np.float64), index[part])
-        value *= carried * cell[part] * np.array(inverse_pdf, dtype=np.float64)
-        landed = (col >= 0) & (col < size[0]) & (row >= 0) & (row < size[1]) & (value > 0)
-        if splat:
-            spectrum = _lane0(np.where(landed, value, 0.0))
-            block.put(mi.Point2f(mi.Float(col), mi.Float(row)), wav, spectrum, 0.0, 0.0, mi.Bool(landed))
-            continue
-        k, w, c, r = index[part][landed], value[landed], col[landed], row[landed]
-        sums[:, 0] += np.bincount(index[part], minlength=len(paths))
-        for j, v in enumerate((np.ones_like(w), w, w * c, w * r, w * c * c, w * r * r), start=1):
-            sums[:, j] += np.bincount(k, weights=v, minlength=len(paths))
-        cross += np.bincount(k, weights=w * c * r, minlength=len(paths))
-    if splat:
-        return None
-    return _pilot_figures(sums, cross)
-
-
-def _pilot_figures(sums: np.ndarray, cross: np.ndarray):
-    """(light on the film, landed share, area in px, landed rays) per path from the pilot's sums."""
+def _pilot_figures(sums: np.ndarray):
+    """(light on the film, landed share, area in px, landings) per path from the pilot's sums (per path:
+    rays, landings, Σw, Σw·c, Σw·r, Σw·c², Σw·r², Σw·c·r; w the light, c and r the column and row)."""
     w = np.maximum(sums[:, 2], 1e-300)
     mc, mr = sums[:, 3] / w, sums[:, 4] / w
-    vc, vr, vcr = sums[:, 5] / w - mc * mc, sums[:, 6] / w - mr * mr, cross / w - mc * mr
+    vc, vr, vcr = sums[:, 5] / w - mc * mc, sums[:, 6] / w - mr * mr, sums[:, 7] / w - mc * mr
     area = 4.0 * math.pi * np.sqrt(np.maximum(vc * vr - vcr * vcr, 0.0))
     return sums[:, 2], sums[:, 1] / np.maximum(sums[:, 0], 1.0), np.maximum(area, 1.0), sums[:, 1]
-
-
-def _land(sensor, points, d, lam_nm: np.ndarray, index: np.ndarray):
-    """Rays through entrance `points` of the vertex plane along lens-frame `d`, traced along their
-    paths (`index` into `ghost_paths.paths`) to the film plane: (column, row of the crop window, the
-    path's reflectances and transmittances × the camera's `norm` over the pixel's area (mm²))."""
-    lens = sensor.lens
-    paths = ghost_paths.paths(lens)
-    z0 = tracer.launch_plane_z(lens)
-    dz = np.where(d[2] > 0, d[2], 1.0)
-    t = -z0 / dz
-    rays = tracer.Rays(
-        *(tracer.F(v) for v in (points[0] - t * d[0], points[1] - t * d[1], np.full(dz.size, z0), d[0], d[1], dz)),
-        tracer.F(np.zeros(dz.size)),
-    )
-    first = tracer.UInt32(np.array([p[0] for p in paths], dtype=np.uint32)[index])
-    second = tracer.UInt32(np.array([p[1] for p in paths], dtype=np.uint32)[index])
-    leaving, ok, power = ghost_trace.trace_paths(lens, rays, tracer.F(lam_nm * 1e-3), first, second)
-    x, y, z, dx, dy, dzo, ok, power = tracer.to_numpy(
-        *(getattr(leaving, a) for a in ("x", "y", "z", "dx", "dy", "dz")), ok, power
-    )
-    ok = ok & (dzo > 0) & (d[2] > 0)
-    s = (lens.image_z - z) / np.where(ok, dzo, 1.0)
-    fx, fy = x + s * dx, y + s * dy
-    pitch = sensor.pitch_mm
-    col = fx / pitch + 0.5 * sensor.film_size[0] - sensor.crop_offset[0]
-    row = 0.5 * sensor.film_size[1] - fy / pitch - sensor.crop_offset[1]
-    value = np.where(ok, power, 0.0) * sensor.norm / (pitch * pitch)
-    return np.where(ok, col, -1.0), np.where(ok, row, -1.0), np.nan_to_num(value)

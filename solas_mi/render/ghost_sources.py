@@ -99,47 +99,48 @@ def _sun(scene, emitter, to_local: np.ndarray) -> Source:
     return Source("envmap sun", CONE, emitter, np.array([local[0], -local[1], -local[2]]), spread + texel, True)
 
 
-def _to_world(to_world: np.ndarray, world_unit_mm: float, ex, ey, d):
-    """Entrance points (ex, ey) of the vertex plane (mm, lens frame) and lens-frame directions `d` (3 × n,
-    NumPy) as world points and the world directions toward the source (Mitsuba arrays)."""
-    local = np.stack([ex / world_unit_mm, -ey / world_unit_mm, np.zeros_like(ex), np.ones_like(ex)])
-    p = (to_world @ local)[:3]
-    toward = to_world[:3, :3] @ np.stack([-d[0], d[1], d[2]])
-    toward /= np.linalg.norm(toward, axis=0)
-    return mi.Point3f(*(mi.Float(v) for v in p)), mi.Vector3f(*(mi.Float(v) for v in toward))
+def _lens_to_camera(v):
+    """A lens-frame vector (x, y, z) in the camera frame (x, −y, −z)."""
+    return mi.Vector3f(v[0], -v[1], -v[2])
 
 
-def light(scene, source: Source, to_world: np.ndarray, world_unit_mm: float, points, u, wavelengths):
-    """Rays through entrance `points` (ex, ey: NumPy, mm, lens frame) of `source`, their directions from
-    uniform `u` (2 × n; a CONE's): (lens-frame directions 3 × n, NumPy; the light each carries per mm² of
-    the vertex plane at `wavelengths` (a Mitsuba Spectrum), lane 0's, NumPy) (module docstring)."""
+def light(scene, source: Source, to_world, world_unit_mm: float, points, u, wavelengths):
+    """Rays through entrance `points` (ex, ey: mi.Float, mm, lens frame) of the vertex plane from `source`
+    (camera at mi.Transform4f `to_world`), their directions from uniform `u` (mi.Point2f; a CONE's): (the
+    lens-frame directions, mi.Vector3f; the light each carries per mm² of the plane at `wavelengths` (a
+    Mitsuba Spectrum), lane 0's, mi.Float) (module docstring)."""
     ex, ey = points
-    wav = wavelengths
+    scale = opaque(1.0 / world_unit_mm)
+    p = to_world @ mi.Point3f(ex * scale, -ey * scale, 0.0)
     if source.kind == CONE:
         d = cone(source.axis, source.radius, u)
-        p, toward = _to_world(to_world, world_unit_mm, ex, ey, d)
-        si = scene.ray_intersect(mi.Ray3f(p, toward, 0.0, wav))
-        value = si.emitter(scene).eval(si) * source.solid_angle
-        mine = ~si.is_valid() if source.environment else (si.emitter(scene) == mi.EmitterPtr(source.emitter))
-        value = dr.select(mine, value, 0.0)
+        si = scene.ray_intersect(mi.Ray3f(p, dr.normalize(to_world @ -_lens_to_camera(d)), 0.0, wavelengths))
+        emitter = si.emitter(scene)
+        mine = ~si.is_valid() if source.environment else (emitter == mi.EmitterPtr(source.emitter))
+        value = dr.select(mine, emitter.eval(si, mine)[0] * opaque(source.solid_angle), 0.0)
     else:
-        it = dr.zeros(mi.Interaction3f, ex.size)
-        it.p, _ = _to_world(to_world, world_unit_mm, ex, ey, np.zeros((3, ex.size)))
-        it.wavelengths = wav
-        ds, value = source.emitter.sample_direction(it, mi.Point2f(u[0], u[1]))
-        value = dr.select(scene.ray_test(it.spawn_ray_to(ds.p)), 0.0, value)
-        back = np.linalg.inv(to_world)[:3, :3] @ np.array(ds.d, dtype=np.float64)
-        d = np.stack([-back[0], back[1], back[2]]) / np.linalg.norm(back, axis=0)
-    lane0 = np.nan_to_num(np.array(value[0], dtype=np.float64), nan=0.0, posinf=0.0, neginf=0.0)
-    return d, np.where(d[2] > 0, lane0 * np.maximum(d[2], 0.0), 0.0)
+        it = dr.zeros(mi.Interaction3f, dr.width(ex))
+        it.p, it.wavelengths = p, wavelengths
+        ds, spectrum = source.emitter.sample_direction(it, u)
+        value = dr.select(scene.ray_test(it.spawn_ray_to(ds.p)), 0.0, spectrum[0])
+        d = -_lens_to_camera(dr.normalize(to_world.inverse() @ ds.d))  # the camera map is its own inverse
+    value = dr.select(dr.isfinite(value) & (d.z > 0), value * d.z, 0.0)
+    return d, value
 
 
-def cone(axis: np.ndarray, radius: float, u: np.ndarray) -> np.ndarray:
-    """Unit directions uniform in the cone of half-angle `radius` about `axis` from uniform `u` (2 × n)."""
-    cos_t = 1.0 - u[0] * (1.0 - math.cos(radius))
-    sin_t, phi = np.sqrt(np.maximum(1.0 - cos_t * cos_t, 0.0)), 2.0 * math.pi * u[1]
+def cone(axis: np.ndarray, radius: float, u):
+    """Unit directions uniform in the cone of half-angle `radius` about `axis` (NumPy) from uniform `u`
+    (mi.Point2f)."""
+    cos_t = 1.0 - u.x * opaque(1.0 - math.cos(radius))
+    sin_t, phi = dr.sqrt(dr.maximum(1.0 - cos_t * cos_t, 0.0)), 2.0 * math.pi * u.y
     helper = np.array([1.0, 0.0, 0.0]) if abs(axis[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
     a = np.cross(axis, helper)
     a /= np.linalg.norm(a)
     b = np.cross(axis, a)
-    return axis[:, None] * cos_t + a[:, None] * (sin_t * np.cos(phi)) + b[:, None] * (sin_t * np.sin(phi))
+    sc, ss = sin_t * dr.cos(phi), sin_t * dr.sin(phi)
+    return mi.Vector3f(*(opaque(axis[k]) * cos_t + opaque(a[k]) * sc + opaque(b[k]) * ss for k in range(3)))
+
+
+def opaque(value) -> mi.Float:
+    """A number as an opaque mi.Float: one kernel for every source and camera."""
+    return dr.opaque(mi.Float, float(value))
