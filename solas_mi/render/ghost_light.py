@@ -104,17 +104,18 @@ def _stratified(index: np.ndarray, shift: np.ndarray) -> np.ndarray:
 
 
 class Tracing:
-    """Rays of the sources of `scene` along every ghost path of `sensor`'s lens to its film (module
-    docstring): `trace` puts them into `block` or sums the pilot's figures."""
+    """Rays of the sources of `scene` along the ghost `paths` ((j, i) 0-based; every one of `ghost_paths`
+    by default) of `sensor`'s lens to its film (module docstring): `trace` puts them into `block` or sums
+    the pilot's figures."""
 
-    def __init__(self, scene, sensor) -> None:
+    def __init__(self, scene, sensor, paths=None) -> None:
         self.scene, self.sensor, self.lens = scene, sensor, sensor.lens
         film = sensor.film()
         self.size = tuple(int(v) for v in film.crop_size())
         self.block = mi.ImageBlock(
             mi.ScalarVector2u(self.size), mi.ScalarPoint2i(0, 0), 5, film.rfilter(), normalize=True
         )
-        every = ghost_paths.paths(self.lens)
+        every = ghost_paths.paths(self.lens) if paths is None else paths
         self.paths = len(every)
         self.first, self.second = (mi.UInt32([p[k] for p in every]) for k in (0, 1))
         self.to_world = sensor.world_transform()
