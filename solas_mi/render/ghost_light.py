@@ -41,7 +41,8 @@ import numpy as np
 from ..optics import ghost_paths, ghost_trace, tracer
 from .ghost_sources import CONE, light, opaque, sources
 
-PILOT = 32  # pilot rays per side, per (source, path)
+PILOT = 32  # pilot rays per side of the entrance square, per (source, path)
+GRID = 16  # cells per side of the entrance square: the main pass traces only those where pilot rays landed
 DENSITY = 4.0  # landings per pixel and sample in the brightest ghost
 BUDGET = 16.0  # rays at most per pixel and sample, over every source and path
 MEASURED = 32  # pilot landings a path needs for its area (and brightness) to count
@@ -58,16 +59,17 @@ def stray_light(scene, sensor, spp: int, seed: int = 0):
     start = time.perf_counter()
     found, skipped = sources(scene, np.array(sensor.world_transform().matrix, dtype=np.float64).reshape(4, 4))
     tracing = Tracing(scene, sensor)
-    pilots = [tracing.trace(s, np.full(tracing.paths, PILOT * PILOT), (seed, k, 0)) for k, s in enumerate(found)]
-    counts = _counts(pilots, spp * tracing.size[0] * tracing.size[1], spp)
-    for k, (source, n) in enumerate(zip(found, counts)):
-        tracing.trace(source, n, (seed, k, 1), splat=True)
+    every = ([np.arange(GRID * GRID)] * tracing.paths, np.full(tracing.paths, PILOT // GRID))
+    pilots = [tracing.trace(s, every, (seed, k, 0)) for k, s in enumerate(found)]
+    counts = _counts([_in_cells(*p) for p in pilots], spp * tracing.size[0] * tracing.size[1], spp)
+    for k, (source, n, (_, cells)) in enumerate(zip(found, counts, pilots)):
+        tracing.trace(source, _plan(cells, n), (seed, k, 1), splat=True)
     image = np.array(tracing.block.tensor(), dtype=np.float64)[..., :3]
     meta = {
         "method": METHOD,
         "sources": [s.name for s in found],
         "not_traced": skipped + ["light scattered by the scene's surfaces, a sky without a sun"],
-        "rays": int(sum(int(n.sum()) for n in counts)),
+        "rays": int(sum(int(n.sum()) for n in counts)),  # asked for; rounded up per cell
         "seconds": time.perf_counter() - start,
     }
     return np.nan_to_num(image, nan=0.0, posinf=0.0, neginf=0.0), meta
@@ -84,6 +86,34 @@ def _counts(pilots, pixel_samples: int, spp: int) -> list[np.ndarray]:
     wanted = np.maximum(wanted, PILOT * PILOT)
     wanted *= min(1.0, BUDGET * pixel_samples / wanted.sum())
     return list(np.maximum(np.ceil(wanted), 1).astype(np.int64))
+
+
+def _in_cells(figures, cells: np.ndarray):
+    """The pilot's `figures` with the landed share of the rays in the main pass's `cells` (paths × cells)."""
+    light, _, area, landed = figures
+    return light, landed / np.maximum(cells.sum(axis=(1, 2)) * (PILOT // GRID) ** 2, 1), area, landed
+
+
+def _plan(cells: np.ndarray, counts: np.ndarray):
+    """The main pass's entrance cells per path (those of `cells`, paths × `GRID` × `GRID`, true) and rays per
+    side of each, about `counts`[k] per path in all (a path without a cell: none)."""
+    ids = [np.flatnonzero(c) for c in cells]
+    sides = np.array([max(1, math.ceil(math.sqrt(n / max(len(c), 1)))) for c, n in zip(ids, counts)])
+    return ids, sides
+
+
+def _dilated(mask: np.ndarray) -> np.ndarray:
+    """Each path's cells (…, `GRID`, `GRID`) and their 8 neighbours."""
+    out = mask.copy()
+    for a in (-1, 0, 1):
+        for b in (-1, 0, 1):
+            shifted = np.roll(np.roll(mask, a, axis=-2), b, axis=-1)
+            if a:
+                shifted[..., 0 if a > 0 else -1, :] = False
+            if b:
+                shifted[..., :, 0 if b > 0 else -1] = False
+            out |= shifted
+    return out
 
 
 def _lane0(value):
@@ -140,43 +170,55 @@ class Tracing:
         rim = abs(float(front.sag(front.semi_diameter)))
         return 1.02 * front.semi_diameter + rim * min(math.tan(min(steepest, 1.5)), 4.0)
 
-    def trace(self, source, counts: np.ndarray, seed: tuple, splat: bool = False):
-        """`counts[k]` rays (rounded up to a square) of `source` along each path k: splatted into `block`
-        (`splat`), else the pilot's (light on the film, landed share, area in px, landings) per path."""
-        sides = np.ceil(np.sqrt(counts)).astype(np.int64)
-        n = sides * sides
-        ends = np.cumsum(n)
+    def trace(self, source, plan, seed: tuple, splat: bool = False):
+        """Rays of `source` along each path k, on the entrance cells `plan`[0][k] (ids of the `GRID`² cells
+        of the square), `plan`[1][k]² rays in each (stratified): splatted into `block` (`splat`), else the
+        pilot's figures (`_pilot_figures`) and the cells whose rays landed."""
+        cells, sides = plan
+        per_path = np.array([len(c) for c in cells]) * sides * sides
+        ends = np.cumsum(per_path)
+        flat, first_cell = np.concatenate(cells).astype(np.int64), np.cumsum([0] + [len(c) for c in cells])[:-1]
         reach = self.reach(source)
         rng = np.random.default_rng(list(seed))
         sums = [dr.zeros(mi.Float, self.paths) for _ in range(8)]
+        hit = dr.zeros(mi.Float, self.paths * GRID * GRID)
         for lo in range(0, int(ends[-1]), CHUNK):
             hi = min(int(ends[-1]), lo + CHUNK)
             index = np.searchsorted(ends, np.arange(lo, hi), side="right")
-            local = np.arange(lo, hi) - (ends - n)[index]  # the ray's cell in its path's grid, row-major
-            row, col = np.divmod(local, sides[index])  # (in NumPy: an LLVM kernel's integer division may trap)
-            cell = 2.0 * reach / sides[index]
-            points = tuple(mi.Float((v + rng.random(hi - lo)) * cell - reach) for v in (col, row))
-            uv, uw, ul = (mi.Float(v) for v in _stratified(local, rng.random(3)))
-            path, cell = mi.UInt32(index.astype(np.uint32)), mi.Float(cell)
+            s = sides[index]
+            ordinal, sub = np.divmod(np.arange(lo, hi) - (ends - per_path)[index], s * s)  # NumPy: an LLVM
+            cell = flat[first_cell[index] + ordinal]  # kernel's integer division may trap
+            size = 2.0 * reach / (GRID * s)  # a ray's share of the square, a side
+            points = tuple(
+                mi.Float(((c * s + v) + rng.random(hi - lo)) * size - reach)
+                for c, v in zip(np.divmod(cell, GRID)[::-1], np.divmod(sub, s)[::-1])
+            )
+            uv, uw, ul = (mi.Float(v) for v in _stratified(ordinal * s * s + sub, rng.random(3)))
+            path, size = mi.UInt32(index.astype(np.uint32)), mi.Float(size)
             lam, inverse_pdf = self.sensor.wavelengths.sample_quantile(ul)
             wav = _lanes(lam)
             d, carried = light(
                 self.scene, source, self.to_world, self.sensor.world_unit_mm, points, mi.Point2f(uv, uw), wav
             )
             col, row, value, landed = self.land(points, d, lam, path)
-            value *= carried * cell * cell * inverse_pdf
+            value *= carried * size * size * inverse_pdf
             landed &= value > 0
             if splat:
                 self.block.put(mi.Point2f(col, row), wav, _lane0(dr.select(landed, value, 0.0)), 0.0, 0.0, landed)
                 dr.eval(self.block.tensor())  # each chunk its own launch of one kernel (else chunks fuse, new kernels)
                 continue
-            w = dr.select(landed, value, 0.0)
+            w, one = dr.select(landed, value, 0.0), dr.select(landed, 1.0, 0.0)
             for k, v in enumerate(
-                (1.0, dr.select(landed, 1.0, 0.0), w, w * col, w * row, w * col * col, w * row * row, w * col * row)
+                (one + 1.0 - one, one, w, w * col, w * row, w * col * col, w * row * row, w * col * row)
             ):
                 dr.scatter_add(sums[k], v, path)
-            dr.eval(sums)
-        return None if splat else _pilot_figures(np.array([np.array(v, dtype=np.float64) for v in sums]).T)
+            dr.scatter_add(hit, one, path * (GRID * GRID) + mi.UInt32(cell.astype(np.uint32)))
+            dr.eval(sums, hit)
+        if splat:
+            return None
+        return _pilot_figures(np.array([np.array(v, dtype=np.float64) for v in sums]).T), _dilated(
+            np.array(hit).reshape(self.paths, GRID, GRID) > 0
+        )
 
     def land(self, points, d, lam, path):
         """Rays through entrance `points` of the vertex plane along lens-frame `d` at wavelengths `lam`

@@ -113,7 +113,7 @@ def test_each_ghost_carries_the_ghost_table_s_energy_to_its_centroid(tmp_path):
     1 px."""
     import mitsuba as mi
 
-    from solas_mi.render.ghost_light import Tracing
+    from solas_mi.render.ghost_light import GRID, Tracing
     from solas_mi.render.ghost_sources import sources
 
     lens_path = lens_file(tmp_path, coated=False)
@@ -127,7 +127,7 @@ def test_each_ghost_carries_the_ghost_table_s_energy_to_its_centroid(tmp_path):
     for row in sorted(report.ghosts, key=lambda g: -g.energy)[:5]:
         j, i = row.surfaces
         tracing = Tracing(sc, sensor, [(j - 1, i - 1)])
-        tracing.trace(source[0], np.array([300_000]), (0, 0, 0), splat=True)
+        tracing.trace(source[0], ([np.arange(GRID * GRID)], np.array([36])), (0, 0, 0), splat=True)
         image = np.array(tracing.block.tensor(), dtype=np.float64)[..., :3]
         x, y, w = report.hits[(j - 1, i - 1)]
         col, row_ = x / sensor.pitch_mm + size[0] / 2, size[1] / 2 - y / sensor.pitch_mm
