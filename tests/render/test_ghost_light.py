@@ -83,34 +83,35 @@ def centroid(image):
 
 def test_light_traced_ghosts_agree_with_the_cameras_path_sampling(mi, tmp_path):
     """A 1° disc at (3°, 2°) through the coated double Gauss (spectral, sRGB): the light-traced stray light and
-    the lens camera's ghosts "only" (path-sampled, 1024 spp, two seeds) agree in each colour's total within 3 %
-    and, over 6×6-pixel blocks holding light, within 5 noise sigmas of the path-sampled image (its noise from
-    its two seeds' difference)."""
+    the lens camera's ghosts "only" (path-sampled, four seeds of 256 spp) agree in each colour's total and over
+    6×6-pixel blocks holding light, within 4 standard errors of the path-sampled mean (from its seeds' spread)
+    + 2 % of the total (3 % of the brightest block's light, a block's: the light-traced image's own noise and
+    the spread's)."""
     lens = lens_file(tmp_path, coated=True)
     lights = {"sun": sphere((3.0, 2.0), 1.0, 100.0)}
     light, meta = traced(scene(mi, lens, lights), spp=64)
     assert meta["sources"] == ["area sun"] and meta["method"].startswith("light-traced")
-    sampled = scene(mi, lens, lights, ghosts_value="only", spp=512)
-    a, b = (np.array(mi.render(sampled, seed=s), dtype=np.float64) for s in (1, 2))
-    path = 0.5 * (a + b)
-    assert light.sum(axis=(0, 1)) == pytest.approx(path.sum(axis=(0, 1)), rel=0.03)
+    sampled = scene(mi, lens, lights, ghosts_value="only", spp=256)
+    renders = np.array([np.array(mi.render(sampled, seed=s), dtype=np.float64) for s in range(4)])
 
-    def blocks(image):
-        return image.mean(axis=-1).reshape(6, 6, 8, 6).sum(axis=(1, 3))
+    def agree(mine, theirs, floor):
+        mean, error = theirs.mean(axis=0), theirs.std(axis=0, ddof=1) / 2.0
+        assert (np.abs(mine - mean) < 4.0 * error + floor).all(), (mine, mean, error)
 
-    sigma = np.abs(blocks(a) - blocks(b)) / 2.0  # the mean's noise, one draw per block
-    sigma = np.sqrt(np.mean(sigma**2)) + 0.01 * blocks(path)  # pooled, and 1 % for the light-traced own noise
-    lit = blocks(path) > 0.02 * blocks(path).max()
+    agree(light.sum(axis=(0, 1)), renders.sum(axis=(1, 2)), 0.02 * renders.sum(axis=(1, 2)).mean(axis=0))
+    blocks = light.mean(axis=-1).reshape(6, 6, 8, 6).sum(axis=(1, 3))
+    theirs = renders.mean(axis=-1).reshape(4, 6, 6, 8, 6).sum(axis=(2, 4))
+    lit = theirs.mean(axis=0) > 0.05 * theirs.mean(axis=0).max()
     assert lit.sum() >= 8
-    assert (np.abs(blocks(light) - blocks(path))[lit] < 5.0 * sigma[lit]).all()
+    agree(blocks[lit], theirs[:, lit], 0.03 * theirs.mean(axis=0).max())  # 4 seeds: their spread itself varies
 
 
 @pytest.mark.usefixtures("variant_llvm_ad_mono")
 def test_each_ghost_carries_the_ghost_table_s_energy_to_its_centroid(tmp_path):
-    """Point-like sun (0.1°) at (0°, 6°) through the bare double Gauss (mono at the table's wavelength): each of
-    the five strongest ghosts of the table, light-traced alone, carries its table energy (a fraction of the
-    direct image's light, the direct image rendered by the camera) within 5 % and lands at its centroid within
-    1 px."""
+    """A 1° disc at (0°, 8°) through the bare double Gauss (mono at the table's wavelength): each of
+    the five strongest ghosts of the table that land whole on the film, light-traced alone, carries its table
+    energy (a fraction of the direct image's light, the direct image rendered by the camera) within 5 % and
+    lands at its centroid within 1 px."""
     import mitsuba as mi
 
     from solas_mi.render.ghost_light import GRID, Tracing
@@ -118,23 +119,29 @@ def test_each_ghost_carries_the_ghost_table_s_energy_to_its_centroid(tmp_path):
 
     lens_path = lens_file(tmp_path, coated=False)
     size = (128, 96)
-    sc = scene(mi, lens_path, {"sun": sphere((0.0, 6.0), 0.1)}, size=size, response=f"mono:{LAM}")
+    sc = scene(mi, lens_path, {"sun": sphere((0.0, 8.0), 1.0)}, size=size, response=f"mono:{LAM}")
     sensor = sc.sensors()[0]
     direct = np.array(mi.render(sc, spp=64), dtype=np.float64).mean(axis=-1).sum()
-    report = ghosts(sensor.lens, (0.0, 6.0), (LAM,), rays=96)
+    report = ghosts(sensor.lens, (0.0, 8.0), (LAM,), rays=256)
     source = sources(sc, np.array(sensor.world_transform().matrix, dtype=np.float64).reshape(4, 4))[0]
     assert len(source) == 1
-    for row in sorted(report.ghosts, key=lambda g: -g.energy)[:5]:
-        j, i = row.surfaces
-        tracing = Tracing(sc, sensor, [(j - 1, i - 1)])
+    on_film = {}
+    for path, (x, y, w) in report.hits.items():
+        col, row = x / sensor.pitch_mm + size[0] / 2, size[1] / 2 - y / sensor.pitch_mm
+        on = (col >= 0) & (col < size[0]) & (row >= 0) & (row < size[1])
+        if len(w) and w[on].sum() >= 0.95 * w.sum():  # whole on the film: its edge cuts no ghost
+            on_film[path] = (
+                w[on].sum(),
+                np.array([np.average(col[on], weights=w[on]), np.average(row[on], weights=w[on])]),
+            )
+    assert len(on_film) >= 5
+    for path in sorted(on_film, key=lambda p: -on_film[p][0])[:5]:
+        tracing = Tracing(sc, sensor, [path])
         tracing.trace(source[0], ([np.arange(GRID * GRID)], np.array([36])), (0, 0, 0), splat=True)
         image = np.array(tracing.block.tensor(), dtype=np.float64)[..., :3]
-        x, y, w = report.hits[(j - 1, i - 1)]
-        col, row_ = x / sensor.pitch_mm + size[0] / 2, size[1] / 2 - y / sensor.pitch_mm
-        on = (col >= 0) & (col < size[0]) & (row_ >= 0) & (row_ < size[1])
-        assert image.mean(axis=-1).sum() / direct == pytest.approx(w[on].sum(), rel=0.05), row.surfaces
-        expected = np.array([np.average(col[on], weights=w[on]), np.average(row_[on], weights=w[on])])
-        assert np.abs(centroid(image) + 0.5 - expected).max() < 1.0, row.surfaces
+        energy, place = on_film[path]
+        assert image.mean(axis=-1).sum() / direct == pytest.approx(energy, rel=0.05), path
+        assert np.abs(centroid(image) + 0.5 - place).max() < 1.0, path
 
 
 def test_an_occluder_between_the_sun_and_the_lens_removes_its_ghosts(mi, tmp_path):
