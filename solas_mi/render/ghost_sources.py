@@ -96,7 +96,7 @@ def _sun(scene, emitter, to_local: np.ndarray) -> Source:
     texel = math.pi / int(np.shape(mi.traverse(emitter)["data"])[0])
     local = to_local[:3, :3] @ centre  # toward the sun, camera frame; the light travels the other way
     local /= np.linalg.norm(local)
-    return Source("envmap sun", CONE, emitter, np.array([local[0], -local[1], -local[2]]), spread + texel, True)
+    return Source("envmap sun", CONE, emitter, np.array([-local[0], local[1], local[2]]), spread + texel, True)
 
 
 def _lens_to_camera(v):

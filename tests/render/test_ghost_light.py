@@ -199,7 +199,7 @@ def environment(mi, sun, irradiance):
     col, row = int(u * width), int(v * height)
     texel = (2.0 * math.pi / width) * (math.pi / height) * math.sin(math.acos(sun[1]))
     image[row : row + 2, col : col + 2] = irradiance / (4.0 * texel)
-    return {"type": "envmap", "bitmap": mi.Bitmap(image), "filter_type": "nearest"}
+    return {"type": "envmap", "bitmap": mi.Bitmap(image)}
 
 
 def test_a_lens_camera_with_lossless_surfaces_is_refused(mi):
