@@ -12,16 +12,19 @@ only one ray cast (occluders shadow the flare), so the rays are cheap and are sp
 
 Rays: per (source, path), entrance points stratified over a square of the front vertex plane that holds
 surface 1's clear aperture (widened by its rim's sag along the source's steepest ray), a CONE source's
-directions and every ray's wavelength stratified too (Latin hypercube), the wavelength drawn from the
-camera response as the camera draws it (`sample_quantile`, weight 1/p(λ)). Each ray carries the light per
+directions and every ray's wavelength spread evenly too (a shifted Kronecker sequence over the rays of a
+cell), the wavelength drawn from the camera response as the camera draws it (`sample_quantile`, weight
+1/p(λ)). The square is cut into `GRID`² cells; the main pass traces only a path's cells where its pilot
+rays landed and their neighbours (a path no pilot ray of which lands is not traced further: light that
+1024 rays over the aperture all miss). Each ray carries the light per
 area of the plane × the cell's area (`ghost_sources.light`) × the path's reflectances and transmittances
 × 1/p(λ), in the camera's units (× its `norm`, over the pixel's area): an unbiased estimate of the image
 irradiance the camera's samples estimate. It lands on the film plane and is put into a Mitsuba
 `ImageBlock` with the film's reconstruction filter, its weights normalised (each ray's light is kept), its
 colour the film's (one wavelength in lane 0, `spectrum_to_srgb`).
 
-How many rays (`counts`): a pilot pass of `PILOT`² rays per (source, path) measures each path's light on
-the film E, the share f of its rays that land, and the area A (px) its light covers (4π √det of the
+How many rays (`_counts`): a pilot pass of `PILOT`² rays per (source, path) measures each path's light on
+the film E, the share f of its rays in the main pass's cells that land, and the area A (px) its light covers (4π √det of the
 landing points' light-weighted covariance: πr² for a uniform disc); the main pass gives (source, path)
 `DENSITY` × spp × E / (f b_max) rays, b_max the brightest E/A: the brightest ghost gets `DENSITY` landings
 per pixel and sample, a path of brightness b in proportion b/b_max (least summed noise for the rays;
