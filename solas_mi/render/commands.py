@@ -269,7 +269,8 @@ def register(sub) -> None:
                              "none); solas: the loop (lens_sensor + image_object scenes)")
     render.add_argument("--ghosts", action="store_true",
                         help="add the stray light of the lens's ghosts (every two-reflection path, its coatings' "
-                             "or Fresnel's reflectance; rendered apart and added) and the flare label layers "
+                             "or Fresnel's reflectance; traced from the scene's area emitters, delta lights and "
+                             "environment map's sun to the film, and added) and the flare label layers "
                              f"{', '.join(FLARE_LAYERS)}; the lens camera's surfaces then weigh by their "
                              "transmittance (its fresnel 'transmit')")
     render.add_argument("--spp", type=int, help="samples per pixel (default: the scene's)")

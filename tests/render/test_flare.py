@@ -23,7 +23,7 @@ SCENE = """<scene version="3.0.0">
         <transform name="to_world"><lookat origin="0, 0, 0" target="0, 0, 1" up="0, 1, 0"/></transform>
         <film type="hdrfilm"><integer name="width" value="32"/><integer name="height" value="24"/></film>
     </sensor>
-    <shape type="sphere">
+    <shape type="sphere" id="sun">
         <point name="center" x="1500" y="1000" z="10000"/>
         <float name="radius" value="150"/>
         <emitter type="area"><rgb name="radiance" value="2000, 1800, 1500"/></emitter>
@@ -62,6 +62,7 @@ def test_render_with_ghosts_writes_the_flare_layers(tmp_path, capsys):
     plain, _ = read_exr(tmp_path / "plain.exr")
     flare, ratio = (channels[name] for name in FLARE_LAYERS)
     assert meta["flare"]["layers"] == list(FLARE_LAYERS), json.dumps(meta.get("flare"))
+    assert meta["flare"]["method"].startswith("light-traced") and meta["flare"]["sources"] == ["area sun"]
     assert np.isfinite(ratio).all() and np.isfinite(flare).all() and (flare >= 0).all()
     assert ((ratio == 0) == (flare == 0)).all() and (flare > 0).mean() > 0.05
     assert meta["flare"]["starburst"]["blades"] == 0 and 0 <= meta["flare"]["starburst"]["wings"] < 0.1
