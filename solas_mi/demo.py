@@ -2,7 +2,8 @@
 bundled photograph rendered through the doublet's glass and degraded by the PSF grids (patch 8×6,
 patch 32×24, interp) with a comparison sheet; a slanted-edge target of known MTF measured by the
 e-SFR; the street scene through the doublet, a sensor preset and the image processor, on a sheet beside
-its depth and instance layers; the street experiment. Each step is announced before it runs, with the
+its depth and instance layers; a night street with headlights and a sun in the frame through a coated lens with
+its ghosts (render, flare layer, developed frame); the street experiment. Each step is announced before it runs, with the
 files it writes (`steps`)."""
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ CAMERA_FILES = {
     "camera/street_raw.exr|png (RAW, developed frame)",
     "camera sheet": "camera/camera_sheet.png",
 }  # what `camera_frame` writes
+FLARE_LENS, FLARE_SPP = "double-gauss-50mm", 16  # the flare step's lens (given the typical AR coating) and spp
 PHOTO = "images/rocket.png"  # under the shipped scenes
 GRIDS = ("8x8", "32x32")
 CONVOLUTIONS = (("patch 8x6", "8x8", "patch"), ("patch 32x24", "32x32", "patch"), ("interp 32x32", "32x32", "interp"))
@@ -77,6 +79,14 @@ def steps() -> list[tuple[str, dict[str, str], Callable[[Path], None]]]:
             "the default image processor",
             CAMERA_FILES,
             camera_frame,
+        ),
+        (
+            f"flare: a night street with a car's headlights and a view with the sun in the frame through the "
+            f"{FLARE_LENS} (typical AR coating) with its ghosts and the iris's starburst ({FLARE_SPP} spp), the "
+            "imx490-hdr sensor and the default image processor; a sheet per view of the render, its flare layer and "
+            "the developed frame",
+            {"flare": "flare/night_street_*, flare/sun_in_frame_* (render .exr|png, raw .exr|png, sheet .png)"},
+            flare,
         ),
         (
             "the street experiment (the SOLAS paper's natural-scene SFR), the other long step: renders through an "
@@ -205,6 +215,17 @@ def slanted_edge(out: Path) -> None:
     edge = out / "sfr" / "edge_5deg_sigma1px.png"
     cli(["sfr-target", "-o", str(edge), "--angle-deg", "5", "--sigma-px", "1", "--size", "128x128"])
     cli(["sfr", str(edge)])
+
+
+def flare(out: Path) -> None:
+    """The flare views (`validation.flare_views`) through the coated FLARE_LENS."""
+    from .optics.lens import Lens
+    from .optics.typical_ar import with_typical_ar
+    from .validation.flare_views import flare_views
+
+    flare_views(
+        with_typical_ar(Lens.load(FLARE_LENS)), out / "flare", spp=FLARE_SPP, run=lambda *a: cli(list(map(str, a)))
+    )
 
 
 def street_experiment(out: Path) -> None:

@@ -8,8 +8,8 @@ this process (`cli.main`): the pinhole frame (`render SCENE`, HDR), the lens's P
 (`psf-grid LENS --field-range-deg`) and `degrade FRAME --ghosts` (threshold `DEFAULT_THRESHOLD`); and `render SCENE
 --lens LENS --ghosts --response mono:531`, both renders in Mitsuba's mono variant (both routes at the grid's one
 wavelength, `WAVELENGTH_NM`, so that they weigh the coatings alike; `--response mono:531` in a spectral variant writes
-an RGB film whose R and B are negative, a fifth of the light in G). The degraded frame's pixels are the grid's camera's (`convolution.kernels.grid_camera`: its pinhole focal length over
-the grid's x field range), and the lens camera's film takes their pitch (`render --lens --pitch-um`): the same
+an RGB film whose R and B are negative, a fifth of the light in G). The degraded frame's pixels are the grid's camera's (`convolution.kernels.grid_camera`: its pinhole focal length and
+the frame's field of view, `degrade --fov-deg`), and the lens camera's film takes their pitch (`render --lens --pitch-um`): the same
 image points, distortion and all.
 
 What is compared:
@@ -44,6 +44,7 @@ FAR_M = 1e4  # the sun's distance
 SUN_RADIANCE = 2e4
 HEADLIGHT_RADIANCE = 2e3
 SKY_RADIANCE = 0.05
+GRID_MARGIN = 1.25  # the PSF grid's field range over the frame's (at most the lens's field): its nodes cover the frame
 MAX_HALF_FOV_DEG = 60.0  # a perspective camera's half field of view: far from its tan θ pole
 
 
@@ -144,16 +145,17 @@ def compare(lens, folder, size=(160, 120), spp=64, path_spp=256, paths=PATHS, gr
     out = RouteComparison(lens.name, hx)
     hy = math.degrees(math.atan(math.tan(math.radians(hx)) * size[1] / size[0]))
     start = time.perf_counter()
+    reach = [min(GRID_MARGIN * h, float(lens.field_deg)) for h in (hx, hy)]
     run("psf-grid", lens_path, "--grid", f"{grid}x{grid}", "--wavelengths-nm", WAVELENGTH_NM, "--field-range-deg",
-        f"{hx},{hy}", "--psf-method", "geometric", "--rays", 64, "--size", 32, "-o", folder / "grid.exr")  # fmt: skip
+        f"{reach[0]},{reach[1]}", "--psf-method", "geometric", "--rays", 64, "--size", 32, "-o", folder / "grid.exr")  # fmt: skip
     out.seconds["psf_grid"] = time.perf_counter() - start
-    pitch_um = frame_pitch_um(folder / "grid.exr", size[0])
+    pitch_um = frame_pitch_um(folder / "grid.exr", size, hx)
     for name, parts in SCENES.items():
         xml = folder / f"{name}.xml"
         xml.write_text(scene_xml(hx, size, parts))
         start = time.perf_counter()
         run("render", xml, "--variant", VARIANT, "--spp", 16, "-o", folder / f"{name}_pinhole.exr")
-        run("degrade", folder / f"{name}_pinhole.exr", "--psf-grid", folder / "grid.exr", "--ghosts",
+        run("degrade", folder / f"{name}_pinhole.exr", "--psf-grid", folder / "grid.exr", "--ghosts", "--fov-deg", hx,
             "-o", folder / f"{name}_degraded.exr")  # fmt: skip
         out.seconds[f"degraded {name}"] = time.perf_counter() - start
         start = time.perf_counter()
@@ -169,13 +171,16 @@ def compare(lens, folder, size=(160, 120), spp=64, path_spp=256, paths=PATHS, gr
     return out
 
 
-def frame_pitch_um(grid_path, width: int) -> float:
-    """The degraded frame's pixel pitch (µm) on the lens's image plane (`convolution.kernels.grid_camera`): the lens
-    camera's film takes it, so that both routes' pixels are the same image points."""
+def frame_pitch_um(grid_path, size: tuple[int, int], half_fov_deg: float) -> float:
+    """The degraded frame's pixel pitch (µm) on the lens's image plane (`convolution.kernels.grid_camera` of the frame
+    of `half_fov_deg` across its width): the lens camera's film takes it, so that both routes' pixels are the same
+    image points."""
     from ..convolution.kernels import grid_camera
+    from ..optics.frame import parse_frame
     from ..psf.grid_file import PSFGrid
 
-    return float(grid_camera(PSFGrid.read(str(grid_path)), width, 1).pitch_um)
+    frame = parse_frame(half_fov_deg, "x", None, None)
+    return float(grid_camera(PSFGrid.read(str(grid_path)), size[0], size[1], frame).pitch_um)
 
 
 def hits(out: RouteComparison, degraded_labels, rendered) -> None:

@@ -1,0 +1,131 @@
+"""Flare in the frame, as a user meets it (`make demo`, the docs' flare page): a night street with a car's two
+headlights and a day view with the sun in the frame, each rendered through a coated lens with its ghosts (`render
+--lens --ghosts`: the flare label beside the image), then through a sensor preset and the image processor (`camera`),
+on one sheet per view: the render, its flare layer and the developed frame (`flare_sheet`).
+
+The scenes (`view_xml`) are small and our own: a perspective camera 1.2 m above a grey road plane, a uniform sky
+(night: `NIGHT_SKY`; day: `DAY_SKY`), and the sources: two headlights (discs of 0.1 m, 1.5 m apart, 20 m ahead,
+`HEADLIGHT_RADIANCE`) or the sun (a far sphere of 0.27 deg, `SUN_RADIANCE`, up and to the right), in linear units of
+the scene (an HDR frame: the sources far above the sky, as they are).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+
+NIGHT_SKY, DAY_SKY = 0.02, 1.0  # the sky's radiance at night and by day
+HEADLIGHT_RADIANCE = 2e3
+SUN_RADIANCE = 2e4
+SUN_DEG = (6.0, 4.0)  # the sun's direction (deg right, up)
+VIEWS = {"night street": "headlights", "sun in frame": "sun"}  # view: its sources
+SENSOR, EXPOSURE_MS = "imx490-hdr", "auto"
+
+
+def view_xml(sources: str, half_fov_deg: float, size: tuple[int, int]) -> str:
+    """The scene of `sources` ("headlights": night, "sun": day) for a perspective camera of `half_fov_deg` across
+    a `size` (width, height) film."""
+    width, height = size
+    if sources == "headlights":
+        sky, lights = (
+            NIGHT_SKY,
+            "".join(
+                f"""
+    <shape type="disk">
+        <transform name="to_world"><scale value="0.1"/><rotate x="1" angle="180"/><translate x="{x}" y="-0.5" z="20"/></transform>
+        <emitter type="area"><rgb name="radiance" value="{HEADLIGHT_RADIANCE}"/></emitter>
+    </shape>"""
+                for x in (-0.75, 0.75)
+            ),
+        )
+    else:
+        far = 1e4
+        tx, ty = (math.tan(math.radians(v)) for v in SUN_DEG)
+        radius = far * math.hypot(1.0, tx, ty) * math.radians(0.27)
+        sky, lights = (
+            DAY_SKY,
+            f"""
+    <shape type="sphere">
+        <point name="center" x="{-tx * far}" y="{ty * far}" z="{far}"/>
+        <float name="radius" value="{radius}"/>
+        <emitter type="area"><rgb name="radiance" value="{SUN_RADIANCE}"/></emitter>
+    </shape>""",
+        )
+    return f"""<scene version="3.0.0">
+    <integrator type="path"><integer name="max_depth" value="3"/></integrator>
+    <sensor type="perspective">
+        <float name="fov" value="{2 * half_fov_deg}"/>
+        <string name="fov_axis" value="x"/>
+        <transform name="to_world"><lookat origin="0, 0, 0" target="0, 0, 1" up="0, 1, 0"/></transform>
+        <film type="hdrfilm"><integer name="width" value="{width}"/><integer name="height" value="{height}"/>
+            <rfilter type="box"/></film>
+    </sensor>
+    <shape type="rectangle">
+        <transform name="to_world"><scale x="40" y="200"/><rotate x="1" angle="-90"/><translate y="-1.2" z="150"/></transform>
+        <bsdf type="diffuse"><rgb name="reflectance" value="0.15"/></bsdf>
+    </shape>
+    <emitter type="constant"><rgb name="radiance" value="{sky}"/></emitter>{lights}
+</scene>"""
+
+
+def flare_views(lens, folder, size=(320, 240), spp=16, half_fov_deg=15.0, run=None) -> dict[str, dict]:
+    """Each of `VIEWS` through `lens` (a Lens, written to `folder` as a lens file) with its ghosts, developed by
+    `SENSOR` and the default image processor, and its sheet (`flare_sheet`); per view its files."""
+    from ..render.scene import lens_file
+    from .flare_routes import run as command
+
+    run = command if run is None else run
+    folder = Path(folder)
+    folder.mkdir(parents=True, exist_ok=True)
+    lens_path = lens_file(lens, folder)
+    written = {}
+    for view, sources in VIEWS.items():
+        stem = folder / view.replace(" ", "_")
+        xml = stem.with_suffix(".xml")
+        xml.write_text(view_xml(sources, half_fov_deg, size))
+        render, raw = Path(f"{stem}_render.exr"), Path(f"{stem}_raw.exr")
+        run("render", xml, "--lens", lens_path, "--ghosts", "--spp", spp, "-o", render)
+        run("camera", render, "--sensor-model", SENSOR, "--exposure-ms", EXPOSURE_MS, "--isp", "default", "-o", raw)
+        sheet = Path(f"{stem}_sheet.png")
+        flare_sheet(render, raw.with_suffix(".png"), sheet, f"{view}: {lens.name}, {spp} spp, {SENSOR}")
+        written[view] = {"render": str(render), "developed": str(raw.with_suffix(".png")), "sheet": str(sheet)}
+    return written
+
+
+def flare_sheet(render, developed, path, title: str) -> None:
+    """One row: the render through the lens (irradiance, log scale), its flare layer (`flare.irradiance`, log scale,
+    its hit mask `flare.ratio` > 1e-3 outlined) and the developed frame."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from ..imageio import atomic_path, read_exr, read_image
+    from .flare_routes import HIT_RATIO
+
+    channels, _ = read_exr(render)
+    image = np.mean([channels[c] for c in "RGB"], axis=0)
+    flare, ratio = channels["flare.irradiance"], channels["flare.ratio"]
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.2))
+    floor = max(float(image[image > 0].min()) if (image > 0).any() else 1e-6, 1e-6)
+    shown = axes[0].imshow(np.log10(np.maximum(image, floor)), cmap="magma")
+    fig.colorbar(shown, ax=axes[0], fraction=0.04, label="log10 irradiance")
+    axes[0].set_title("through the lens, ghosts and starburst (log)")
+    lit = flare[flare > 0]
+    low = float(np.quantile(lit, 0.01)) if len(lit) else 1e-9
+    shown = axes[1].imshow(np.log10(np.maximum(flare, low)), cmap="viridis")
+    axes[1].contour(ratio > HIT_RATIO, levels=[0.5], colors="white", linewidths=0.6)
+    fig.colorbar(shown, ax=axes[1], fraction=0.04, label="log10 flare.irradiance")
+    axes[1].set_title(f"flare layer; white: flare.ratio > {HIT_RATIO:g} ({100 * (ratio > HIT_RATIO).mean():.0f} %)")
+    axes[2].imshow(read_image(developed, linearize=False))
+    axes[2].set_title("sensor + image processor (8-bit sRGB)")
+    for ax in axes:
+        ax.set_xticks([])
+        ax.set_yticks([])
+    fig.suptitle(title, fontsize=11)
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=100, format="png")
+    plt.close(fig)
