@@ -28,7 +28,7 @@ SCENE = """<scene version="3.0.0">
 
 def sky_with_sun(path, width=720, height=360):
     """A lat-long sky (Mitsuba's envmap: u along azimuth from -x, v from +y down) of radiance 0.5 with a sun of
-    0.25 deg radius at `SUN` from +z (the camera's axis) of radiance 1e5."""
+    0.6 deg radius (a few texels) at `SUN` from +z (the camera's axis) of radiance 1e5."""
     u = (np.arange(width) + 0.5) / width
     v = (np.arange(height) + 0.5) / height
     phi, theta = np.meshgrid(u * 2 * math.pi, v * math.pi)
@@ -36,7 +36,7 @@ def sky_with_sun(path, width=720, height=360):
     tx, ty = (math.tan(math.radians(a)) for a in SUN)
     sun = np.array([-tx, ty, 1.0]) / math.hypot(tx, ty, 1.0)  # Mitsuba's camera: +x of the world on the image's left
     radiance = np.where(direction @ sun > math.cos(math.radians(0.6)), 1e5, 0.5).astype(np.float32)
-    write_exr(path, {c: radiance for c in "RGB"}, {})
+    write_exr(path, dict.fromkeys("RGB", radiance), {})
 
 
 def brightest(image):
