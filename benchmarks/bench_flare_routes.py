@@ -3,7 +3,7 @@ sun and two headlights rendered with a pinhole camera and degraded with the lens
 against the lens camera's render of the same scene with ghosts (`render --lens --ghosts`); the comparison is
 `solas_mi.validation.flare_routes` (its docstring says what is compared and how).
 
-Run: .venv/bin/python benchmarks/bench_flare_routes.py [--size 128x96] [--spp 64] [--path-spp 128] [--paths 3]
+Run: .venv/bin/python benchmarks/bench_flare_routes.py [--size 96x72] [--spp 64] [--path-spp 64] [--paths 3]
 
 Acceptance: each compared ghost's centroid within 2 px and light within 10 %, the flare label's hit masks'
 IoU >= 0.8.
@@ -20,9 +20,9 @@ LENSES = ("double-gauss-50mm", "wide-angle-22mm", "nikkor-fisheye")
 
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--size", default="128x96")
+    parser.add_argument("--size", default="96x72")
     parser.add_argument("--spp", type=int, default=64)
-    parser.add_argument("--path-spp", type=int, default=128)
+    parser.add_argument("--path-spp", type=int, default=64)
     parser.add_argument("--paths", type=int, default=3)
     args = parser.parse_args()
     from solas_mi import Lens

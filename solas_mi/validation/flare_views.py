@@ -41,7 +41,7 @@ def view_xml(sources: str, half_fov_deg: float, size: tuple[int, int]) -> str:
             ),
         )
     else:
-        far = 1e4
+        far = 1e3  # inside the perspective camera's far clip (1e4 by default)
         tx, ty = (math.tan(math.radians(v)) for v in SUN_DEG)
         radius = far * math.hypot(1.0, tx, ty) * math.radians(0.27)
         sky, lights = (
@@ -128,4 +128,69 @@ def flare_sheet(render, developed, path, title: str) -> None:
     fig.tight_layout()
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=100, format="png")
+    plt.close(fig)
+
+
+def ghost_figure(lens, field_deg: tuple[float, float], path, size_mm: float = 24.0, pixels: int = 480) -> None:
+    """The lens's ghosts of a far point source at `field_deg` (the ghost grid's, `psf.ghost_grid`, at its reference
+    wavelength): on the image plane (log10 of each pixel's fraction of the direct image's light, `size_mm` square
+    about the axis) beside the energies of the twelve strongest."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from ..imageio import atomic_path
+    from ..psf import ghost_grid
+
+    polar = math.degrees(lens.field_type.polar(field_deg)[0])
+    wavelength = float(lens.primary_wavelength)
+    grid = ghost_grid(lens, radii=3, field_deg=polar, wavelengths_nm=[wavelength])
+    ghosts = grid.at(field_deg)
+    pitch_um = size_mm * 1e3 / pixels
+    image = ghosts.image(pitch_um, pixels, centre_mm=(0.0, 0.0))[0]
+    fig, axes = plt.subplots(1, 2, figsize=(13, 5))
+    half = size_mm / 2
+    floor = max(float(image[image > 0].min()) if (image > 0).any() else 1e-12, 1e-12)
+    shown = axes[0].imshow(np.log10(np.maximum(image, floor)), cmap="magma", extent=(-half, half, -half, half))
+    axes[0].plot(*ghosts.direct_mm[0], "c+", markersize=12)
+    fig.colorbar(shown, ax=axes[0], fraction=0.04, label="log10 fraction of the direct image per pixel")
+    axes[0].set_xlabel("x (mm)")
+    axes[0].set_ylabel("y (mm)")
+    axes[0].set_title(f"every ghost on the image plane (+: the direct image), {pitch_um:.0f} µm pixels")
+    order = np.argsort(-ghosts.energy[0])[:12]
+    axes[1].barh([f"{grid.paths[k][0]},{grid.paths[k][1]}" for k in order][::-1], ghosts.energy[0, order][::-1])
+    axes[1].set_xscale("log")
+    axes[1].set_xlabel("energy (fraction of the direct image)")
+    axes[1].set_title(f"the 12 strongest of {len(grid.paths)} (surfaces j, i: reflected at j, then i)")
+    fig.suptitle(f"{lens.name}: ghosts of a far point at field ({field_deg[0]:g}, {field_deg[1]:g}) deg, "
+                 f"{wavelength:g} nm; all: {ghosts.energy[0].sum():.2e}", fontsize=11)  # fmt: skip
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=90, format="png")
+    plt.close(fig)
+
+
+def sun_through(renders: dict, path, title: str) -> None:
+    """One row: each render (name → `render --ghosts` EXR) of the sun in the frame, log10 irradiance."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from ..imageio import atomic_path, read_exr
+
+    fig, axes = plt.subplots(1, len(renders), figsize=(5.2 * len(renders), 4.2))
+    for ax, (name, exr) in zip(np.atleast_1d(axes), renders.items()):
+        channels, _ = read_exr(exr)
+        image = np.mean([channels[c] for c in "RGB"], axis=0)
+        lit = image[image > 0]
+        ax.imshow(np.log10(np.maximum(image, float(np.quantile(lit, 0.001)) if len(lit) else 1e-6)), cmap="magma")
+        ax.set_title(name)
+        ax.set_xticks([])
+        ax.set_yticks([])
+    fig.suptitle(title, fontsize=11)
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=90, format="png")
     plt.close(fig)
