@@ -18,6 +18,14 @@ import time
 LENSES = ("double-gauss-50mm", "wide-angle-22mm", "nikkor-fisheye")
 
 
+def run(*args) -> None:
+    """One solas-mi command, in this process; SystemExit unless it succeeds."""
+    from solas_mi.cli import main as solas_mi
+
+    if solas_mi([str(a) for a in args]) != 0:
+        raise SystemExit(f"solas-mi {' '.join(map(str, args))} failed")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--size", default="96x72")
@@ -40,7 +48,7 @@ def main() -> None:
     for name in LENSES:
         with tempfile.TemporaryDirectory(prefix="solas-flare-") as folder:
             start = time.perf_counter()
-            result = compare(with_typical_ar(Lens.load(name)), folder, size, args.spp, args.path_spp, args.paths)
+            result = compare(with_typical_ar(Lens.load(name)), folder, run, size, args.spp, args.path_spp, args.paths)
             found.append((result, time.perf_counter() - start))
         for row in result.paths:
             print(

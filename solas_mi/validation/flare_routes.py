@@ -4,7 +4,7 @@ against the lens camera's render of the same scene with its ghosts (`render SCEN
 The scene (`scene_xml`): a perspective camera of half field of view `half_fov_deg` across its width, a sun (a far
 sphere of `SUN_RADIUS_DEG`) up and to the side, two headlights (discs of 0.1 m, 1.5 m apart, 20 m ahead and 1 m
 below the axis) and, for the flare label, a dim uniform sky. Both routes run their commands as a user would, in
-this process (`cli.main`): the pinhole frame (`render SCENE`, HDR), the lens's PSF grid over that frame's field
+this process (the caller's `run`: `cli.main`, which this stage does not import): the pinhole frame (`render SCENE`, HDR), the lens's PSF grid over that frame's field
 (`psf-grid LENS --field-range-deg`) and `degrade FRAME --ghosts` (threshold `DEFAULT_THRESHOLD`); and `render SCENE
 --lens LENS --ghosts --response mono:531`, both renders in Mitsuba's mono variant (both routes at the grid's one
 wavelength, `WAVELENGTH_NM`, so that they weigh the coatings alike; `--response mono:531` in a spectral variant writes
@@ -109,14 +109,6 @@ def half_fov(lens) -> float:
     return min(0.8 * float(lens.field_deg), MAX_HALF_FOV_DEG)
 
 
-def run(*args) -> None:
-    """One solas-mi command, as a user runs it; SolasError-free or AssertionError naming it."""
-    from ..cli import main
-
-    code = main([str(a) for a in args])
-    assert code == 0, f"solas-mi {' '.join(map(str, args))}: exit {code}"
-
-
 def mean_image(path) -> tuple[np.ndarray, dict, dict]:
     """An EXR's image (the mean of its colour channels), its layers and its metadata."""
     from ..imageio import read_exr
@@ -135,8 +127,9 @@ def centroid(image: np.ndarray) -> np.ndarray:
 SCENES = {"sky": ("sun", "headlights", "sky"), "sun": ("sun",), "headlights": ("headlights",)}  # scene: its parts
 
 
-def compare(lens, folder, size=(160, 120), spp=64, path_spp=256, paths=PATHS, grid=5) -> RouteComparison:
-    """Both routes of `lens` (a Lens; written to `folder` as a lens file) over a `size` frame (module docstring)."""
+def compare(lens, folder, run, size=(160, 120), spp=64, path_spp=256, paths=PATHS, grid=5) -> RouteComparison:
+    """Both routes of `lens` (a Lens; written to `folder` as a lens file) over a `size` frame (module docstring);
+    `run(*args)` runs one solas-mi command (`solas_mi.cli.main` of its arguments as strings, failing unless it exits 0)."""
     from ..render.scene import lens_file
 
     folder = Path(folder)

@@ -70,13 +70,12 @@ def view_xml(sources: str, half_fov_deg: float, size: tuple[int, int]) -> str:
 </scene>"""
 
 
-def flare_views(lens, folder, size=(320, 240), spp=16, half_fov_deg=15.0, run=None) -> dict[str, dict]:
+def flare_views(lens, folder, run, size=(320, 240), spp=16, half_fov_deg=15.0) -> dict[str, dict]:
     """Each of `VIEWS` through `lens` (a Lens, written to `folder` as a lens file) with its ghosts, developed by
-    `SENSOR` and the default image processor, and its sheet (`flare_sheet`); per view its files."""
+    `SENSOR` and the default image processor, and its sheet (`flare_sheet`); per view its files. `run(*args)` runs one
+    solas-mi command (`solas_mi.cli.main` of its arguments as strings)."""
     from ..render.scene import lens_file
-    from .flare_routes import run as command
 
-    run = command if run is None else run
     folder = Path(folder)
     folder.mkdir(parents=True, exist_ok=True)
     lens_path = lens_file(lens, folder)
