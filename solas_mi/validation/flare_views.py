@@ -126,7 +126,7 @@ def flare_sheet(render, developed, path, title: str) -> None:
     fig.suptitle(title, fontsize=11)
     fig.tight_layout()
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=100, format="png")
+        fig.savefig(tmp, dpi=70, format="png")
     plt.close(fig)
 
 
