@@ -295,6 +295,7 @@ def camera_sheet(channels: dict, labels: dict, frame, path: Path, title: str) ->
     from matplotlib.patches import Rectangle
 
     from .imageio import srgb_encode
+    from .validation.flare_views import finish
 
     valid = channels["labels.valid"] > 0
     depth = np.where(valid, channels["depth.Z"], np.nan)
@@ -316,14 +317,7 @@ def camera_sheet(channels: dict, labels: dict, frame, path: Path, title: str) ->
     for name, box in labels.get("boxes", {}).items():
         axes[3].text(box["box"][0], box["box"][1], name, color="white", fontsize=6, va="bottom")
     axes[3].set_title(f"instances: {len(labels.get('instances', {}))} shapes, {len(boxes)} named (boxed)")
-    for ax in axes:
-        ax.set_xticks([])
-        ax.set_yticks([])
-    fig.suptitle(title, fontsize=11)
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=100, format="png")
-    plt.close(fig)
+    finish(fig, axes, title, path, 100)
     return len(boxes)
 
 

@@ -92,16 +92,22 @@ def scene_xml(half_fov_deg: float, size: tuple[int, int], parts=("sun", "headlig
         ),
         "sky": f'\n    <emitter type="constant"><rgb name="radiance" value="{SKY_RADIANCE}"/></emitter>',
     }
+    return scene_head(half_fov_deg, size, 2) + "".join(shapes[p] for p in parts) + "\n</scene>"
+
+
+def scene_head(half_fov_deg: float, size: tuple[int, int], max_depth: int) -> str:
+    """A scene file's opening: a path integrator of `max_depth` and a perspective camera at the origin looking along
+    +z (+y up), of `half_fov_deg` across a `size` (width, height) HDR film."""
+    width, height = size
     return f"""<scene version="3.0.0">
-    <integrator type="path"><integer name="max_depth" value="2"/></integrator>
+    <integrator type="path"><integer name="max_depth" value="{max_depth}"/></integrator>
     <sensor type="perspective">
         <float name="fov" value="{2 * half_fov_deg}"/>
         <string name="fov_axis" value="x"/>
         <transform name="to_world"><lookat origin="0, 0, 0" target="0, 0, 1" up="0, 1, 0"/></transform>
         <film type="hdrfilm"><integer name="width" value="{width}"/><integer name="height" value="{height}"/>
             <rfilter type="box"/></film>
-    </sensor>{"".join(shapes[p] for p in parts)}
-</scene>"""
+    </sensor>"""
 
 
 def half_fov(lens) -> float:

@@ -16,6 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .flare_routes import scene_head
+
 NIGHT_SKY, DAY_SKY = 0.02, 1.0  # the sky's radiance at night and by day
 HEADLIGHT_RADIANCE = 2e3
 SUN_RADIANCE = 2e4
@@ -27,7 +29,6 @@ SENSOR, EXPOSURE_MS = "imx490-hdr", "auto"
 def view_xml(sources: str, half_fov_deg: float, size: tuple[int, int]) -> str:
     """The scene of `sources` ("headlights": night, "sun": day) for a perspective camera of `half_fov_deg` across
     a `size` (width, height) film."""
-    width, height = size
     if sources == "headlights":
         sky, lights = (
             NIGHT_SKY,
@@ -53,15 +54,7 @@ def view_xml(sources: str, half_fov_deg: float, size: tuple[int, int]) -> str:
         <emitter type="area"><rgb name="radiance" value="{SUN_RADIANCE}"/></emitter>
     </shape>""",
         )
-    return f"""<scene version="3.0.0">
-    <integrator type="path"><integer name="max_depth" value="3"/></integrator>
-    <sensor type="perspective">
-        <float name="fov" value="{2 * half_fov_deg}"/>
-        <string name="fov_axis" value="x"/>
-        <transform name="to_world"><lookat origin="0, 0, 0" target="0, 0, 1" up="0, 1, 0"/></transform>
-        <film type="hdrfilm"><integer name="width" value="{width}"/><integer name="height" value="{height}"/>
-            <rfilter type="box"/></film>
-    </sensor>
+    return f"""{scene_head(half_fov_deg, size, 3)}
     <shape type="rectangle">
         <transform name="to_world"><scale x="40" y="200"/><rotate x="1" angle="-90"/><translate y="-1.2" z="150"/></transform>
         <bsdf type="diffuse"><rgb name="reflectance" value="0.15"/></bsdf>
@@ -101,7 +94,7 @@ def flare_sheet(render, developed, path, title: str) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from ..imageio import atomic_path, read_exr, read_image
+    from ..imageio import read_exr, read_image
     from .flare_routes import HIT_RATIO
 
     channels, _ = read_exr(render)
@@ -120,14 +113,7 @@ def flare_sheet(render, developed, path, title: str) -> None:
     axes[1].set_title(f"flare layer; white: flare.ratio > {HIT_RATIO:g} ({100 * (ratio > HIT_RATIO).mean():.0f} %)")
     axes[2].imshow(read_image(developed, linearize=False))
     axes[2].set_title("sensor + image processor (8-bit sRGB)")
-    for ax in axes:
-        ax.set_xticks([])
-        ax.set_yticks([])
-    fig.suptitle(title, fontsize=11)
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=70, format="png")
-    plt.close(fig)
+    finish(fig, axes, title, path, 70)
 
 
 def ghost_figure(lens, field_deg: tuple[float, float], path, size_mm: float = 24.0, pixels: int = 480) -> None:
@@ -139,7 +125,6 @@ def ghost_figure(lens, field_deg: tuple[float, float], path, size_mm: float = 24
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from ..imageio import atomic_path
     from ..psf import ghost_grid
 
     polar = math.degrees(lens.field_type.polar(field_deg)[0])
@@ -162,12 +147,9 @@ def ghost_figure(lens, field_deg: tuple[float, float], path, size_mm: float = 24
     axes[1].set_xscale("log")
     axes[1].set_xlabel("energy (fraction of the direct image)")
     axes[1].set_title(f"the 12 strongest of {len(grid.paths)} (surfaces j, i: reflected at j, then i)")
-    fig.suptitle(f"{lens.name}: ghosts of a far point at field ({field_deg[0]:g}, {field_deg[1]:g}) deg, "
-                 f"{wavelength:g} nm; all: {ghosts.energy[0].sum():.2e}", fontsize=11)  # fmt: skip
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=90, format="png")
-    plt.close(fig)
+    title = (f"{lens.name}: ghosts of a far point at field ({field_deg[0]:g}, {field_deg[1]:g}) deg, {wavelength:g} "
+             f"nm; all: {ghosts.energy[0].sum():.2e}")  # fmt: skip
+    finish(fig, [], title, path, 90)
 
 
 def sun_through(renders: dict, path, title: str) -> None:
@@ -177,7 +159,7 @@ def sun_through(renders: dict, path, title: str) -> None:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from ..imageio import atomic_path, read_exr
+    from ..imageio import read_exr
 
     fig, axes = plt.subplots(1, len(renders), figsize=(5.2 * len(renders), 4.2))
     for ax, (name, exr) in zip(np.atleast_1d(axes), renders.items()):
@@ -186,10 +168,21 @@ def sun_through(renders: dict, path, title: str) -> None:
         lit = image[image > 0]
         ax.imshow(np.log10(np.maximum(image, float(np.quantile(lit, 0.001)) if len(lit) else 1e-6)), cmap="magma")
         ax.set_title(name)
+    finish(fig, axes, title, path, 90)
+
+
+def finish(fig, axes, title: str, path, dpi: int) -> None:
+    """A sheet's last steps: its axes without ticks, its title, laid out and written to `path` (PNG, whole or not at
+    all), the figure closed."""
+    import matplotlib.pyplot as plt
+
+    from ..imageio import atomic_path
+
+    for ax in np.atleast_1d(axes):
         ax.set_xticks([])
         ax.set_yticks([])
     fig.suptitle(title, fontsize=11)
     fig.tight_layout()
     with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=90, format="png")
+        fig.savefig(tmp, dpi=dpi, format="png")
     plt.close(fig)
