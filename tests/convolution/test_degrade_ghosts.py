@@ -59,6 +59,24 @@ def test_the_ghosts_added_hold_the_sources_light_times_the_ghost_energy(doublet,
     assert np.asarray(meta["ghost_light"]) == pytest.approx(expected, rel=0.01)
 
 
+def test_the_ghosts_of_each_path_alone_add_up_to_all_of_them(doublet, doublet_grids):
+    """`GhostGrid.only(k)`, the grid of one ghost path (what the degraded-vs-rendered comparison places ghost by
+    ghost): the frames of each path alone sum to the frame of every path, each path's light its energy's share."""
+    grid, ghosts = doublet_grids
+    ghosts = compact(ghosts)
+    fields = FrameFields(doublet, grid, W, H)
+    image = np.full((H, W, 3), 0.5)
+    image[66:69, 150:153] = 3000.0
+    channels = channel_wavelengths(grid, 3)
+    every = frame_ghosts(image, ghosts, fields, channels, 10.0)[0]
+    alone = [frame_ghosts(image, ghosts.only(k), fields, channels, 10.0) for k in range(len(ghosts.paths))]
+    assert [ghosts.only(k).paths for k in range(len(ghosts.paths))] == [[p] for p in ghosts.paths]
+    assert np.allclose(sum(flare for flare, _ in alone), every, rtol=1e-9, atol=1e-12)
+    assert sum(np.asarray(meta["ghost_light"]) for _, meta in alone) == pytest.approx(
+        frame_ghosts(image, ghosts, fields, channels, 10.0)[1]["ghost_light"], rel=1e-9
+    )
+
+
 def test_a_bright_pixel_at_a_node_casts_each_ghost_at_the_grids_centroid(doublet, doublet_grids):
     """One bright pixel exactly at the ghost grid's node (0, theta_1): each ghost alone lands at its centroid in the
     grid, turned into pixels by the pinhole frame's camera (focal length over fx), within 1 px."""
