@@ -153,7 +153,8 @@ def ghost_figure(lens, field_deg: tuple[float, float], path, size_mm: float = 24
 
 
 def sun_through(renders: dict, path, title: str) -> None:
-    """One row: each render (name → `render --ghosts` EXR) of the sun in the frame, log10 irradiance."""
+    """One row: each render (name → `render --ghosts` EXR) of the sun in the frame, log10 irradiance from its 1st to
+    its 99.5th percentile."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -165,8 +166,9 @@ def sun_through(renders: dict, path, title: str) -> None:
     for ax, (name, exr) in zip(np.atleast_1d(axes), renders.items()):
         channels, _ = read_exr(exr)
         image = np.mean([channels[c] for c in "RGB"], axis=0)
-        lit = image[image > 0]
-        ax.imshow(np.log10(np.maximum(image, float(np.quantile(lit, 0.001)) if len(lit) else 1e-6)), cmap="magma")
+        lit = np.log10(image[image > 0]) if (image > 0).any() else np.zeros(1)
+        low, high = np.quantile(lit, [0.01, 0.995])  # the sun's few pixels above the range: the ghosts in it
+        ax.imshow(np.log10(np.maximum(image, 10.0**low)), cmap="magma", vmin=low, vmax=high)
         ax.set_title(name)
     finish(fig, axes, title, path, 90)
 
