@@ -44,6 +44,7 @@ FAR_M = 1e3  # the sun's distance: inside the perspective camera's far clip (1e4
 SUN_RADIANCE = 2e4
 HEADLIGHT_RADIANCE = 2e3
 SKY_RADIANCE = 0.05
+PINHOLE_SPP = 256  # the pinhole frame's: a sun of a tenth of a pixel needs hundreds of samples to hold its light
 GRID_MARGIN = 1.25  # the PSF grid's field range over the frame's (at most the lens's field): its nodes cover the frame
 MAX_HALF_FOV_DEG = 60.0  # a perspective camera's half field of view: far from its tan θ pole
 
@@ -153,7 +154,7 @@ def compare(lens, folder, run, size=(160, 120), spp=64, path_spp=256, paths=PATH
         xml = folder / f"{name}.xml"
         xml.write_text(scene_xml(hx, size, parts))
         start = time.perf_counter()
-        run("render", xml, "--variant", VARIANT, "--spp", 16, "-o", folder / f"{name}_pinhole.exr")
+        run("render", xml, "--variant", VARIANT, "--spp", PINHOLE_SPP, "-o", folder / f"{name}_pinhole.exr")
         run("degrade", folder / f"{name}_pinhole.exr", "--psf-grid", folder / "grid.exr", "--ghosts", "--fov-deg", hx,
             "-o", folder / f"{name}_degraded.exr")  # fmt: skip
         out.seconds[f"degraded {name}"] = time.perf_counter() - start
@@ -207,6 +208,7 @@ def ghost_paths(lens, folder: Path, name: str, count: int, spp: int) -> list[dic
     """The `count` ghosts that put the most light in scene `name`'s degraded frame, each alone in both routes."""
     from ..convolution.ghosts import FrameGhosts, frame_ghosts
     from ..convolution.spec import DegradeSpec
+    from ..errors import SolasError
     from ..imageio import read_image
     from ..psf.grid_file import PSFGrid
     from ..render.stock import render_scene
@@ -217,6 +219,8 @@ def ghost_paths(lens, folder: Path, name: str, count: int, spp: int) -> list[dic
     planner = FrameGhosts.plan(pinhole, grid, DegradeSpec(ghosts=True), force=False, lens=lens)
     image = np.atleast_3d(read_image(pinhole))
     source = float(image[image.max(axis=-1) > planner.threshold].sum() / image.shape[-1])
+    if not source > 0:
+        raise SolasError(f"{pinhole}: no pixel above the ghost threshold {planner.threshold:g}: no source to compare")
     direct = rendered_direct(folder / f"{name}_rendered.exr")
     found = []
     for k, path in enumerate(planner.grid.paths):
