@@ -210,13 +210,15 @@ def ghost_paths(lens, folder: Path, name: str, count: int, spp: int) -> list[dic
     from ..convolution.spec import DegradeSpec
     from ..errors import SolasError
     from ..imageio import read_image
+    from ..optics.frame import parse_frame
     from ..psf.grid_file import PSFGrid
     from ..render.stock import render_scene
     from ..render.user_scene import load
 
     pinhole = folder / f"{name}_pinhole.exr"
     grid = PSFGrid.read(str(folder / "grid.exr"))
-    planner = FrameGhosts.plan(pinhole, grid, DegradeSpec(ghosts=True), force=False, lens=lens)
+    spec = DegradeSpec(ghosts=True, frame=parse_frame(half_fov(lens), "x", None, None))  # the frame `degrade` was given
+    planner = FrameGhosts.plan(pinhole, grid, spec, force=False, lens=lens)
     image = np.atleast_3d(read_image(pinhole))
     source = float(image[image.max(axis=-1) > planner.threshold].sum() / image.shape[-1])
     if not source > 0:
