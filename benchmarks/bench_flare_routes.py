@@ -19,10 +19,16 @@ LENSES = ("double-gauss-50mm", "wide-angle-22mm", "nikkor-fisheye")
 
 
 def run(*args) -> None:
-    """One solas-mi command, in this process; SystemExit unless it succeeds."""
+    """One solas-mi command, in this process, its report on stderr (stdout is the results' tables); SystemExit unless
+    it succeeds."""
+    import contextlib
+    import sys
+
     from solas_mi.cli import main as solas_mi
 
-    if solas_mi([str(a) for a in args]) != 0:
+    with contextlib.redirect_stdout(sys.stderr):
+        code = solas_mi([str(a) for a in args])
+    if code != 0:
         raise SystemExit(f"solas-mi {' '.join(map(str, args))} failed")
 
 
