@@ -2,7 +2,8 @@
 bundled photograph rendered through the doublet's glass and degraded by the PSF grids (patch 8×6,
 patch 32×24, interp) with a comparison sheet; a slanted-edge target of known MTF measured by the
 e-SFR; the street scene through the doublet, a sensor preset and the image processor, on a sheet beside
-its depth and instance layers; the street experiment. Each step is announced before it runs, with the
+its depth and instance layers; a night street with headlights and a sun in the frame through a coated lens with
+its ghosts (render, flare layer, developed frame); the street experiment. Each step is announced before it runs, with the
 files it writes (`steps`)."""
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ CAMERA_FILES = {
     "camera/street_raw.exr|png (RAW, developed frame)",
     "camera sheet": "camera/camera_sheet.png",
 }  # what `camera_frame` writes
+FLARE_LENS, FLARE_SPP = "double-gauss-50mm", 16  # the flare step's lens (given the typical AR coating) and spp
 PHOTO = "images/rocket.png"  # under the shipped scenes
 GRIDS = ("8x8", "32x32")
 CONVOLUTIONS = (("patch 8x6", "8x8", "patch"), ("patch 32x24", "32x32", "patch"), ("interp 32x32", "32x32", "interp"))
@@ -77,6 +79,14 @@ def steps() -> list[tuple[str, dict[str, str], Callable[[Path], None]]]:
             "the default image processor",
             CAMERA_FILES,
             camera_frame,
+        ),
+        (
+            f"flare: a night street with a car's headlights and a view with the sun in the frame through the "
+            f"{FLARE_LENS} (typical AR coating) with its ghosts and the iris's starburst ({FLARE_SPP} spp), the "
+            "imx490-hdr sensor and the default image processor; a sheet per view of the render, its flare layer and "
+            "the developed frame",
+            {"flare": "flare/night_street_*, flare/sun_in_frame_* (render .exr|png, raw .exr|png, sheet .png)"},
+            flare,
         ),
         (
             "the street experiment (the SOLAS paper's natural-scene SFR), the other long step: renders through an "
@@ -207,6 +217,17 @@ def slanted_edge(out: Path) -> None:
     cli(["sfr", str(edge)])
 
 
+def flare(out: Path) -> None:
+    """The flare views (`validation.flare_views`) through the coated FLARE_LENS."""
+    from .optics.lens import Lens
+    from .optics.typical_ar import with_typical_ar
+    from .validation.flare_views import flare_views
+
+    flare_views(
+        with_typical_ar(Lens.load(FLARE_LENS)), out / "flare", spp=FLARE_SPP, run=lambda *a: cli(list(map(str, a)))
+    )
+
+
 def street_experiment(out: Path) -> None:
     cli(["experiment", "street", "--lens", "solas-doublet", "-o", str(out / "street")])
 
@@ -274,6 +295,7 @@ def camera_sheet(channels: dict, labels: dict, frame, path: Path, title: str) ->
     from matplotlib.patches import Rectangle
 
     from .imageio import srgb_encode
+    from .validation.flare_views import finish
 
     valid = channels["labels.valid"] > 0
     depth = np.where(valid, channels["depth.Z"], np.nan)
@@ -295,14 +317,7 @@ def camera_sheet(channels: dict, labels: dict, frame, path: Path, title: str) ->
     for name, box in labels.get("boxes", {}).items():
         axes[3].text(box["box"][0], box["box"][1], name, color="white", fontsize=6, va="bottom")
     axes[3].set_title(f"instances: {len(labels.get('instances', {}))} shapes, {len(boxes)} named (boxed)")
-    for ax in axes:
-        ax.set_xticks([])
-        ax.set_yticks([])
-    fig.suptitle(title, fontsize=11)
-    fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=100, format="png")
-    plt.close(fig)
+    finish(fig, axes, title, path, 100)
     return len(boxes)
 
 

@@ -21,6 +21,7 @@ def patterns(writes: str) -> list[str]:
 
 def test_each_step_is_announced_before_it_runs_naming_what_it_writes(tmp_path, monkeypatch, capsys):
     import solas_mi.imageio
+    import solas_mi.validation.flare_views
     import solas_mi.validation.sheet
 
     printed, calls = [], []  # what the demo printed; (command, the announcements printed before it)
@@ -34,6 +35,7 @@ def test_each_step_is_announced_before_it_runs_naming_what_it_writes(tmp_path, m
     monkeypatch.setattr(demo, "camera_sheet", lambda *a, **k: None)
     monkeypatch.setattr(solas_mi.imageio, "read_exr", lambda *a, **k: ({}, {"labels": {}}))
     monkeypatch.setattr(solas_mi.validation.sheet, "comparison_sheet", lambda *a, **k: None)
+    monkeypatch.setattr(solas_mi.validation.flare_views, "flare_sheet", lambda *a, **k: None)
     demo.run(tmp_path)
     printed.append(capsys.readouterr().out)
     announced = ANNOUNCED.findall("".join(printed))

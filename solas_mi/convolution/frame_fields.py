@@ -28,6 +28,7 @@ class FrameFields:
                 "stated; give a grid over field angle (psf-grid without --sensor)"
             )
         self.field_type, self.width, self.height = lens.field_type, int(width), int(height)
+        self.wavelength_nm = float(psf_grid.meta["reference_wavelength_nm"])  # the grid's chief rays' wavelength
         self.fisheye = frame if frame is not None and frame.model in FISHEYE else None
         if self.fisheye is None:
             camera = grid_camera(psf_grid, width, height, frame)
@@ -39,8 +40,7 @@ class FrameFields:
         largest = max(lens.field_type.polar(f)[0] for f in fields)
         self.theta = np.linspace(0.0, largest, TABLE_SAMPLES)
         fx, fy = lens.field_type.field_of(self.theta, np.ones_like(self.theta), np.zeros_like(self.theta))
-        wavelength = float(psf_grid.meta["reference_wavelength_nm"])
-        rays = chief_rays(lens, np.stack([fx, fy], axis=-1), np.full(len(self.theta), wavelength))
+        rays = chief_rays(lens, np.stack([fx, fy], axis=-1), np.full(len(self.theta), self.wavelength_nm))
         self.rho = np.asarray(rays.image_xy, dtype=np.float64)[:, 0]
         if not np.all(np.diff(self.rho) > 0):
             raise SolasError(

@@ -16,10 +16,15 @@ at the grid's reference wavelength (its image height over polar angle, inverted)
 kernel scaled by the mapping's local size at its centroid (an isotropic approximation: a fisheye's radial and
 tangential scales differ toward the edge). A grid laid out on the sensor is not taken.
 
+The iris's starburst (`psf.starburst`: the stop's aberration-free diffraction at the working f-number, one kernel at
+the grid's reference wavelength on the frame's pixels at its centre) is spread from the degraded image as `render
+--ghosts` spreads it from the direct image: each pixel keeps the kernel's centre share and gives the rest to the
+wings, which join the flare label.
+
 What is not modelled: the ghost grid is of a source at infinity, so with a depth map the sources' distance does not
 change their ghosts' focus (for a source beyond some metres a ghost's defocus changes little, its centroid less);
-the iris's starburst is not added (the ghost grid has no diffraction spikes); a source's ghosts are those of the
-cell's one field, so the ghost of a sun disc is its kernel, not the disc imaged through the ghost's magnification.
+a source's ghosts are those of the cell's one field, so the ghost of a sun disc is its kernel, not the disc imaged
+through the ghost's magnification.
 """
 
 from __future__ import annotations
@@ -179,8 +184,9 @@ class FrameGhosts:
     """`degrade --ghosts` of one frame: checked and its ghost grid read (or computed) before any work (`plan`), then
     the ghosts added to the degraded image (`add`)."""
 
-    def __init__(self, grid, fields: FrameFields, channels: list[int], threshold: float, about: dict) -> None:
+    def __init__(self, grid, fields: FrameFields, channels: list[int], threshold: float, about: dict, lens) -> None:
         self.grid, self.fields, self.channels, self.threshold, self.about = grid, fields, channels, threshold, about
+        self.lens, self.wavelength_nm = lens, float(fields.wavelength_nm)
 
     @classmethod
     def plan(cls, image_path, psf_grid, spec, force: bool, lens=None, depth=None) -> FrameGhosts | None:
@@ -210,17 +216,38 @@ class FrameGhosts:
                  "depth": "sources taken at infinity: the depth map does not change their ghosts"
                  if depth is not None else None}  # fmt: skip
         return cls(grid, fields, channel_wavelengths(first, channels),
-                   spec.ghost_threshold, about)  # fmt: skip
+                   spec.ghost_threshold, about, lens)  # fmt: skip
+
+    def starburst(self) -> tuple[np.ndarray, dict] | None:
+        """The iris's starburst kernel on the frame's pixels (`psf.starburst.lens_starburst`) at the grid's reference
+        wavelength (one kernel for every channel, as `render --ghosts` takes one), the pixel pitch the frame's at
+        its centre; computed once per `FrameGhosts` (a batch's frames share it)."""
+        if not hasattr(self, "_starburst"):
+            from ..psf.starburst import lens_starburst
+
+            per_mm = self.fields.pixel((0.0, 0.0))[1]  # pixels per mm on the axis
+            self._starburst = lens_starburst(self.lens, self.wavelength_nm, 1e3 / per_mm)
+        return self._starburst
 
     def add(self, image: np.ndarray, out: np.ndarray, meta: dict) -> dict[str, np.ndarray]:
-        """Add the ghosts of `image`'s sources to its degraded image `out` (in place), record them in `meta["ghosts"]`;
-        the flare label's layers."""
+        """Add the ghosts of `image`'s sources and the iris's starburst of the degraded image `out` to `out` (in
+        place), record them in `meta["ghosts"]`; the flare label's layers (the stray light over the direct image
+        less what it gave to the starburst's wings, as `render --ghosts` has them)."""
         planes = image[..., None] if image.ndim == 2 else image
         flare, about = frame_ghosts(planes, self.grid, self.fields, self.channels, self.threshold)
         from ..labelkinds import flare_layers
+        from ..psf.starburst import spread
 
         direct = out[..., None] if out.ndim == 2 else out
-        layers = flare_layers(direct, flare)
-        direct += flare.astype(out.dtype)
-        meta["ghosts"] = {**self.about, **about}
+        kept, starburst = direct.astype(np.float64), None
+        if self.starburst() is not None:
+            kernel, starburst = self.starburst()
+            kept, brought = spread(direct, kernel)
+            flare += brought
+            given = direct.astype(np.float64).sum(axis=(0, 1)) * starburst["wings"]
+            starburst = {**starburst, "light_in_frame": brought.sum(axis=(0, 1)).tolist(),
+                         "light_given": given.tolist()}  # fmt: skip
+        layers = flare_layers(kept, flare)
+        direct[...] = (kept + flare).astype(out.dtype)
+        meta["ghosts"] = {**self.about, **about, "starburst": starburst}
         return layers

@@ -18,7 +18,7 @@ turned by the whole sectors between (exact) and the rest of the angle (an approx
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -244,6 +244,13 @@ class GhostGrid:
                 kernels[wl, p] += w[wl, p] * sampled * scale**2
         sums = kernels.sum(axis=(2, 3), keepdims=True)
         return NodeGhosts(energy, centroid, pitch, kernels / np.where(sums > 0, sums, 1.0), direct)
+
+    def only(self, path: int) -> GhostGrid:
+        """The grid of its one ghost path `path` (an index into `paths`): that ghost's ghosts alone."""
+        keep = slice(path, path + 1)
+        return replace(self, paths=self.paths[keep], energy=self.energy[..., keep],
+                       centroid_mm=self.centroid_mm[..., keep, :], pitch_um=self.pitch_um[..., keep],
+                       kernels=self.kernels[..., keep, :, :])  # fmt: skip
 
     @property
     def size(self) -> int:
