@@ -21,7 +21,6 @@ metadata's `flare` names them and says how they were made.
 
 from __future__ import annotations
 
-import math
 import time
 
 import numpy as np
@@ -87,28 +86,15 @@ def render_with_flare(scene, spp: int, seed: int = 0, progress=None, labels=()):
 
 def with_starburst(sensor, direct: np.ndarray, stray: np.ndarray):
     """The direct image less the light its pixels give to the iris's diffraction wings, the stray light
-    with what the wings bring (`starburst`), and what the metadata says of it; the images unchanged (None)
+    with what the wings bring (`psf.starburst`), and what the metadata says of it; the images unchanged (None)
     for a lens without a stop or an f-number."""
-    from ..psf.stray_light import working_f_number
-    from .starburst import iris_kernel, spread
+    from ..psf.starburst import lens_starburst, spread
 
     lens = sensor.lens
-    stops = [s for s in lens.surfaces if s.stop]
-    f_number = working_f_number(lens)
-    if not stops or not math.isfinite(f_number):
-        return direct, stray, None
     wavelength = float(sensor.response.single_wavelength or lens.primary_wavelength)
-    kernel = iris_kernel(stops[0], f_number, wavelength, float(sensor.pitch_um))
+    found = lens_starburst(lens, wavelength, float(sensor.pitch_um))
+    if found is None:
+        return direct, stray, None
+    kernel, about = found
     kept, brought = spread(direct, kernel)
-    centre = kernel.shape[0] // 2
-    return (
-        kept,
-        stray + brought,
-        {
-            "kernel_px": kernel.shape[0],
-            "wavelength_nm": wavelength,
-            "f_number": f_number,
-            "blades": stops[0].blades,
-            "wings": float(1.0 - kernel[centre, centre]),
-        },
-    )
+    return kept, stray + brought, about

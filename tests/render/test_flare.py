@@ -14,8 +14,8 @@ from solas_mi.cli import main
 from solas_mi.imageio import read_exr
 from solas_mi.labelkinds import FLARE_LAYERS, MAX_RATIO, flare_layers
 from solas_mi.optics import coating
+from solas_mi.psf.starburst import iris_kernel, spread
 from solas_mi.psf.stray_light import working_f_number
-from solas_mi.render.starburst import iris_kernel, spread
 
 SCENE = """<scene version="3.0.0">
     <sensor type="perspective">
