@@ -30,6 +30,15 @@ from solas_mi import Lens  # noqa: E402
 from solas_mi.optics import tolerance as tol  # noqa: E402
 from solas_mi.optics.paraxial import paraxial  # noqa: E402
 
+# optiland's perturbations of `symmetric_spec`'s distributions (`d`: the request, `problem`: its Tolerancing)
+PERTURB = """for i, r in enumerate(d["radii"], start=1):
+    sampler = DistributionSampler("normal", seed=100 + i, loc=r, scale=abs(r) * d["percent"] / 100)
+    problem.add_perturbation("radius", sampler, surface_number=i)
+for i, t in enumerate(d["thicknesses"], start=1):
+    sampler = DistributionSampler("uniform", seed=200 + i, low=t - d["limit"], high=t + d["limit"])
+    problem.add_perturbation("thickness", sampler, surface_number=i)
+"""
+
 THEIRS = """
 import json, sys
 import numpy as np
@@ -42,18 +51,41 @@ d = json.load(open({path!r}))
 optic = build(d["spec"])
 problem = Tolerancing(optic)
 problem.add_operand("f2", input_data={{"optic": optic}})
-for i, r in enumerate(d["radii"], start=1):
-    sampler = DistributionSampler("normal", seed=100 + i, loc=r, scale=abs(r) * d["percent"] / 100)
-    problem.add_perturbation("radius", sampler, surface_number=i)
-for i, t in enumerate(d["thicknesses"], start=1):
-    sampler = DistributionSampler("uniform", seed=200 + i, low=t - d["limit"], high=t + d["limit"])
-    problem.add_perturbation("thickness", sampler, surface_number=i)
+{perturb}
 mc = MonteCarlo(problem)
 mc.run(d["samples"])
 results = mc.get_results()
 efl = np.asarray(results[[c for c in results.columns if "f2" in str(c)][0]], dtype=float)
 print(json.dumps([float(efl.mean()), float(efl.std(ddof=1))]))
 """
+
+
+def symmetric_spec(lens, percent: float, limit: float):
+    """Radius errors (normal, σ `percent` of R, untruncated as optiland's) on every surface and thickness errors
+    (uniform ± `limit` mm) on every surface but the last."""
+    last = len(lens.surfaces)
+    radius = {"kind": "radius", "surfaces": "all", "percent": percent, "truncate": 20.0}
+    thickness = {"kind": "thickness", "surfaces": list(range(1, last)), "mm": limit, "distribution": "uniform"}
+    return tol.spec_from_dict(lens, {"tolerance": [radius, thickness]})
+
+
+def run_optiland(lens, args, script: str, **extra) -> list:
+    """`script` (`THEIRS`'s kind: {here}, {path} and {perturb} filled in) run by `args.optiland_python` on the
+    request for `lens` and `args`' distributions (and `extra` entries): the JSON list its last line prints."""
+    with tempfile.TemporaryDirectory() as tmp:
+        path = Path(tmp) / "lens.json"
+        data = {
+            "spec": request(lens),
+            "percent": args.percent,
+            "limit": args.limit,
+            "samples": args.samples,
+            "radii": [s.radius for s in lens.surfaces],
+            "thicknesses": [s.thickness for s in lens.surfaces[:-1]],
+        }
+        path.write_text(json.dumps({**data, **extra}))
+        filled = script.format(here=str(HERE), path=str(path), perturb=PERTURB)
+        done = subprocess.run([args.optiland_python, "-c", filled], capture_output=True, text=True, check=True)
+    return json.loads(done.stdout.strip().splitlines()[-1])
 
 
 def main() -> None:
@@ -66,20 +98,7 @@ def main() -> None:
     args = ap.parse_args()
     lens = Lens.load("cooke-triplet")
     last = len(lens.surfaces)
-    spec = tol.spec_from_dict(
-        lens,
-        {
-            "tolerance": [
-                {
-                    "kind": "radius",
-                    "surfaces": "all",
-                    "percent": args.percent,
-                    "truncate": 20.0,
-                },  # untruncated, as optiland's
-                {"kind": "thickness", "surfaces": list(range(1, last)), "mm": args.limit, "distribution": "uniform"},
-            ]
-        },
-    )
+    spec = symmetric_spec(lens, args.percent, args.limit)
     variance = 0.0
     for row, term in zip(tol.paraxial_sensitivity(lens, spec), spec.terms):
         sigma = (
@@ -101,27 +120,7 @@ def main() -> None:
             for d in (tol.draw(lens, spec, seed, i)[0] for i in range(args.samples))
         ]
         print(f"| solas-mi, seed {seed} | {np.mean(efl):.4f} | {np.std(efl, ddof=1):.4f} |", flush=True)
-    with tempfile.TemporaryDirectory() as tmp:
-        path = Path(tmp) / "lens.json"
-        path.write_text(
-            json.dumps(
-                {
-                    "spec": request(lens),
-                    "percent": args.percent,
-                    "limit": args.limit,
-                    "samples": args.samples,
-                    "radii": [s.radius for s in lens.surfaces],
-                    "thicknesses": [s.thickness for s in lens.surfaces[:-1]],
-                }
-            )
-        )
-        done = subprocess.run(
-            [args.optiland_python, "-c", THEIRS.format(here=str(HERE), path=str(path))],
-            capture_output=True,
-            text=True,
-            check=True,
-        )
-    mean, std = json.loads(done.stdout.strip().splitlines()[-1])
+    mean, std = run_optiland(lens, args, THEIRS)
     print(f"| optiland `tolerancing.MonteCarlo` | {mean:.4f} | {std:.4f} |")
     print(f"\nsampling error of a standard deviation: about {100 / math.sqrt(2 * args.samples):.1f} % each")
 

@@ -97,39 +97,42 @@ class Glass:
         n = np.asarray(self.index_formula(wl / 1000.0, np.sqrt))
         return float(n) if n.ndim == 0 else n
 
-    def index_formula(self, wavelength_um, sqrt: Callable, select: Callable = np.where):
+    def index_formula(self, wavelength_um, sqrt: Callable, select: Callable = np.where, constant: Callable = float):
         """n(λ) with λ in µm for any array type (NumPy, Dr.Jit) given its `sqrt` and `select(mask, a, b)`
-        (a table's spline picks its piece); no range check. At an `environment`, relative to its air."""
-        n = self._catalogue_index(wavelength_um, sqrt, select)
-        if self.melt:  # a melt's n_d and V_d (`melt`)
-            offset, scale = melt_mod.terms(self)
-            n = offset + scale * n
-        return n if self.environment is None else thermal.relative_index(self, n, wavelength_um, self.environment)
+        (a table's spline picks its piece); no range check. At an `environment`, relative to its air. `constant`
+        makes each number of the glass (coefficients, a melt's terms, thermal data, environment) a value of the
+        caller's type: the Dr.Jit tracer's opaque kernel inputs, so a melt or another glass reuses its kernels."""
+        n = self._catalogue_index(wavelength_um, sqrt, select, constant)
+        # a melt's n_d and V_d (`melt`); the catalogue's glass too (0, 1: n itself), so a melt runs its kernels
+        offset, scale = melt_mod.terms(self) if self.melt else (0.0, 1.0)
+        n = constant(offset) + constant(scale) * n
+        return n if self.environment is None else thermal.relative_index(self, n, wavelength_um, self.environment, constant)
 
-    def _catalogue_index(self, wavelength_um, sqrt: Callable, select: Callable):
-        """n(λ) of the formula (at 20 °C in standard air), λ in µm."""
+    def _catalogue_index(self, wavelength_um, sqrt: Callable, select: Callable, constant: Callable = float):
+        """n(λ) of the formula (at 20 °C in standard air), λ in µm; `constant` as `index_formula`'s."""
         if self.kind == "air":
             return wavelength_um * 0.0 + 1.0
         a, b = self.coefficients
         l2 = wavelength_um * wavelength_um
         if self.kind == "model":
-            return a[0] + b[0] / l2
+            return constant(a[0]) + constant(b[0]) / l2
         if self.kind == "conrady":
-            return a[0] + a[1] / wavelength_um + a[2] / (l2 * wavelength_um * sqrt(wavelength_um))
+            a0, a1, a2 = (constant(v) for v in a)
+            return a0 + a1 / wavelength_um + a2 / (l2 * wavelength_um * sqrt(wavelength_um))
         if self.kind == "table":
-            return _spline(a, b, wavelength_um, select)
+            return _spline(a, b, wavelength_um, select, constant)
         if self.kind == "polynomial":
             n2 = wavelength_um * 0.0
             inv = 1.0 / l2
             for k, p in zip(a, b):
-                term, base = k, (l2 if p > 0 else inv)
+                term, base = constant(k), (l2 if p > 0 else inv)
                 for _ in range(abs(int(p)) // 2):
                     term = term * base
                 n2 = n2 + term
             return sqrt(n2)
         n2 = 1.0
         for bi, ci in zip(a, b):
-            n2 = n2 + bi * l2 / (l2 - ci)
+            n2 = n2 + constant(bi) * l2 / (l2 - constant(ci))
         return sqrt(n2)
 
     @property
@@ -162,11 +165,12 @@ def _pieces(wavelengths_nm: tuple[float, ...], index: tuple[float, ...]) -> tupl
     return tuple(tuple(map(float, piece)) for piece in zip(x[:-1], y[:-1], slope, second[:-1] / 2.0, cubic))
 
 
-def _spline(wavelengths_nm, index, wavelength_um, select: Callable):
+def _spline(wavelengths_nm, index, wavelength_um, select: Callable, constant: Callable = float):
     """A table's index at `wavelength_um`: its spline piece's cubic (the first and last pieces reach past
-    the ends; `Glass.index` keeps wavelengths within the table)."""
+    the ends; `Glass.index` keeps wavelengths within the table); `constant` as `Glass.index_formula`'s."""
     x, n = 1.0 / (wavelength_um * wavelength_um), None
-    for x0, y0, b, c, d in _pieces(tuple(wavelengths_nm), tuple(index)):
+    for piece in _pieces(tuple(wavelengths_nm), tuple(index)):
+        x0, y0, b, c, d = (constant(v) for v in piece)
         t = x - x0
         value = y0 + t * (b + t * (c + t * d))
         n = value if n is None else select(x >= x0, value, n)

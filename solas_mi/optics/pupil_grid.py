@@ -17,6 +17,7 @@ NumPy pass over the cells. Lengths in mm.
 from __future__ import annotations
 
 import math
+from functools import partial
 
 import numpy as np
 
@@ -290,7 +291,7 @@ def _weights(
     cell = dr.sqrt(jacobian(sx, sy) * da * db)  # grid cell size at the stop (mm)
     # the stop's rim (an iris: its nearest blade's edge); round, the same operations as r_stop − |s|
     margin = lens.surfaces[lens.stop_index].iris_margin(
-        sx, sy, lambda a, b: dr.sqrt(a * a + b * b), dr.atan2, dr.cos, dr.floor
+        sx, sy, lambda a, b: dr.sqrt(a * a + b * b), dr.atan2, dr.cos, dr.floor, partial(tracer.opaque, ftype=type(sx))
     )
     coverage = dr.clip(0.5 + margin / dr.maximum(cell, 1e-300), 0.0, 1.0)
     other = (clipped != 0) & (clipped != lens.stop_index + 1)

@@ -16,6 +16,7 @@ Every shape is a geometry object of `shapes.KINDS` (`Surface.geometry`). Lengths
 from __future__ import annotations
 
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -114,23 +115,24 @@ class Surface:
     form: shapes.Shape | None = None  # its shape where not rotationally symmetric (`shapes.NAMED`; radius etc. then 0)
     placement: Placement | None = None  # a coordinate break before it (decentres, tilts); None: on the axis
 
-    def iris_margin(self, x, y, hypot, atan2, cos, floor):
+    def iris_margin(self, x, y, hypot, atan2, cos, floor, constant=float):
         """The signed distance (mm) of points (x, y) inside the stop's aperture: to its rim for a round stop,
         to the nearest blade's edge line for an iris of `blades` (negative outside). Any array type, given
-        its functions."""
+        its functions; `constant` makes the aperture's numbers values of that type (the Dr.Jit tracer: opaque
+        kernel inputs)."""
         radius = self.semi_diameter
         if not self.blades:
-            return radius - hypot(x, y)
+            return constant(radius) - hypot(x, y)
         sector = 2.0 * math.pi / self.blades
         angle = atan2(y, x) - math.radians(self.blade_rotation)
         within = angle - sector * floor(angle / sector)  # from the sector's first corner, in [0, sector)
         along = hypot(x, y) * cos(within - 0.5 * sector)  # the point's distance along its sector's bisector
         if not self.blade_curvature:
-            return radius * math.cos(0.5 * sector) - along
+            return constant(radius * math.cos(0.5 * sector)) - along
         # the arc through the sector's two corners, of radius R = r/κ, its centre on the bisector at d (< apex A),
         # as R − |p − centre| = ((A − along)(R + along − d) − across²) / (R + |p − centre|): no cancellation as
         # κ → 0 (R → ∞), where it tends to the straight side's margin
-        arc, apex, centre = self.iris_arc()
+        arc, apex, centre = (constant(v) for v in self.iris_arc())
         across = hypot(x, y) * cos(within - 0.5 * sector - 0.5 * math.pi)
         return ((apex - along) * (arc + along - centre) - across * across) / (arc + hypot(along - centre, across))
 
@@ -195,6 +197,13 @@ class Surface:
         """The keyword arguments of `sag` and `sag_slope` that describe this surface."""
         return {"curvature": self.curvature, "conic": self.conic, "aspheric": self.aspheric, "qbfs": self.qbfs,
                 "norm_radius": self.norm_radius}
+
+    def shape_in(self, constant: Callable) -> dict:
+        """`shape` with its numbers but the Qbfs terms (which `sag` tests) made values of an array type by
+        `constant`: the Dr.Jit tracer's opaque kernel inputs, so a drawn radius or irregularity reuses its
+        compiled kernels."""
+        return {**self.shape, **{key: constant(getattr(self, key)) for key in ("curvature", "conic", "norm_radius")},
+                "aspheric": tuple(constant(a) for a in self.aspheric)}
 
     @property
     def paraxial_curvature(self) -> float:

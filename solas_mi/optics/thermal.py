@@ -105,17 +105,20 @@ def absolute_change(thermal: tuple[float, ...], index, wavelength_um, delta_c: f
     )
 
 
-def relative_index(glass, index, wavelength_um, environment: tuple[float, float]):
+def relative_index(glass, index, wavelength_um, environment: tuple[float, float], constant=float):
     """The index relative to the air around it, at `environment` (°C, kPa), of `glass` whose catalogue index
-    at `wavelength_um` is `index` (module docstring); without thermal data, its absolute index held."""
+    at `wavelength_um` is `index` (module docstring); without thermal data, its absolute index held.
+    `constant` turns the glass's thermal data and the environment into values of the caller's type
+    (`Glass.index_formula`)."""
     temperature, pressure = environment
     absolute = index * air_index(wavelength_um, STANDARD_C, STANDARD_KPA)
     if glass.thermal:
+        data = tuple(constant(v) for v in glass.thermal)
         absolute = absolute + (
-            absolute_change(glass.thermal, index, wavelength_um, temperature - glass.reference_c)
-            - absolute_change(glass.thermal, index, wavelength_um, STANDARD_C - glass.reference_c)
+            absolute_change(data, index, wavelength_um, constant(temperature - glass.reference_c))
+            - absolute_change(data, index, wavelength_um, constant(STANDARD_C - glass.reference_c))
         )
-    return absolute / air_index(wavelength_um, temperature, pressure)
+    return absolute / air_index(wavelength_um, constant(temperature), constant(pressure))
 
 
 def _scaled_surface(surface, factor: float, thickness_factor: float):

@@ -17,6 +17,7 @@ Float32 leaves ~20 nm of OPD noise (DESIGN.md).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
@@ -28,13 +29,12 @@ from .lens import Lens
 from .lens_checks import refuse_as_built
 from .paraxial import ideal_conjugates, paraxial, pupil_distance
 from .sag import ASPHERE_ITERATIONS, ASPHERE_TOL_MM, sag, sag_slope
-from .surface import RIM_SLACK
+from .surface import RIM_SLACK as _RIM_SLACK
 
 dr = import_drjit()
 from drjit.llvm import Bool, Float64, UInt32  # noqa: E402
 
 F = Float64
-_RIM_SLACK = RIM_SLACK
 
 
 @dataclass
@@ -61,8 +61,7 @@ class Traced:
     stop_x: F  # where the ray crosses the stop surface (mm)
     stop_y: F
     n_image: F  # refractive index of image space
-    transmittance: F | float = 1.0  # unpolarised transmittance of every refraction, its coating's where it has one
-    # (`trace(fresnel=True)`)
+    transmittance: F | float = 1.0  # of every refraction, unpolarised, its coating's where it has one (fresnel=True)
 
 
 def opaque(value: float, ftype=F) -> F:
@@ -83,8 +82,8 @@ def _types(value) -> tuple[type, type, type]:
 
 
 def refractive_index(glass, wavelength_um: F) -> F:
-    """n(λ) as a Dr.Jit array (λ in µm)."""
-    return glass.index_formula(wavelength_um, dr.sqrt, dr.select)
+    """n(λ) as a Dr.Jit array (λ in µm), the glass's numbers opaque (a melt or another glass reuses the kernels)."""
+    return glass.index_formula(wavelength_um, dr.sqrt, dr.select, partial(opaque, ftype=_types(wavelength_um)[0]))
 
 
 def launch_plane_z(lens: Lens) -> float:
@@ -213,8 +212,8 @@ def trace(lens: Lens, rays: Rays, wavelength_um: F, fresnel: bool = False, heigh
             heights.append(r2)
         blocked = r2 > opaque((s.semi_diameter * (1.0 + _RIM_SLACK)) ** 2, ftype)
         if s.blades:  # the iris's polygon, inside the clear circle
-            blocked |= s.iris_margin(x, y, lambda a, b: dr.sqrt(a * a + b * b), dr.atan2, dr.cos,
-                                     dr.floor) < -_RIM_SLACK * s.semi_diameter
+            blocked |= s.iris_margin(x, y, lambda a, b: dr.sqrt(a * a + b * b), dr.atan2, dr.cos, dr.floor,
+                                     partial(opaque, ftype=ftype)) < opaque(-_RIM_SLACK * s.semi_diameter, ftype)
         clipped = dr.select((clipped == 0) & blocked, utype(k + 1), clipped)
         if s.stop:
             stop_x, stop_y = x, y
@@ -298,7 +297,7 @@ def surface_normal(s, x, y, lz, r2, ftype):
         c = opaque(s.curvature, ftype)
         return -c * x, -c * y, 1.0 - c * lz
     # an exact even asphere: (−2x s', −2y s', 1) / |…|
-    slope = 2.0 * sag_slope(r2, **s.shape, sqrt=dr.sqrt, maximum=dr.maximum)
+    slope = 2.0 * sag_slope(r2, **s.shape_in(partial(opaque, ftype=ftype)), sqrt=dr.sqrt, maximum=dr.maximum)
     nz = dr.rsqrt(dr.fma(slope * slope, r2, 1.0))
     return -slope * x * nz, -slope * y * nz, nz
 
@@ -307,16 +306,17 @@ def _asphere_hit(s, x, y, dx, dy, dz, t):
     """Ray parameter t where the ray (x, y, 0) + t (dx, dy, dz), in the vertex frame of surface `s`,
     meets its even asphere: Newton's method on f(t) = z(t) − sag(r²(t)) from the conic root `t`.
     Also whether it converged (|f| < ASPHERE_TOL_MM inside the conic's domain)."""
+    shape = s.shape_in(partial(opaque, ftype=_types(x)[0]))
     for _ in range(ASPHERE_ITERATIONS):
         px, py = dr.fma(t, dx, x), dr.fma(t, dy, y)
         r2 = px * px + py * py
-        f = t * dz - sag(r2, **s.shape, sqrt=dr.sqrt, maximum=dr.maximum)
-        df = dz - 2.0 * sag_slope(r2, **s.shape, sqrt=dr.sqrt, maximum=dr.maximum) * (px * dx + py * dy)
+        f = t * dz - sag(r2, **shape, sqrt=dr.sqrt, maximum=dr.maximum)
+        df = dz - 2.0 * sag_slope(r2, **shape, sqrt=dr.sqrt, maximum=dr.maximum) * (px * dx + py * dy)
         t = t - f / df
     px, py = dr.fma(t, dx, x), dr.fma(t, dy, y)
     r2 = px * px + py * py
-    residual = t * dz - sag(r2, **s.shape, sqrt=dr.sqrt, maximum=dr.maximum)
-    inside = (1.0 + s.conic) * s.curvature ** 2 * r2 <= 1.0  # (also within the Qbfs factor's, k c² r² ≤ 1)
+    residual = t * dz - sag(r2, **shape, sqrt=dr.sqrt, maximum=dr.maximum)
+    inside = opaque((1.0 + s.conic) * s.curvature ** 2, type(r2)) * r2 <= 1.0  # (also within the Qbfs factor's)
     return t, inside & (dr.abs(residual) < ASPHERE_TOL_MM) & dr.isfinite(t)
 
 

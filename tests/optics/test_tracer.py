@@ -7,6 +7,7 @@ import numpy as np
 import pytest
 
 from solas_mi import Lens, SolasError, spot
+from solas_mi.optics import glass
 from solas_mi.optics import pupil as P
 from solas_mi.psf import psf
 
@@ -85,18 +86,59 @@ def _psf_kernels(lens) -> set:
     return {k["hash"] for k in dr.kernel_history() if k.get("type") == dr.KernelType.JIT}
 
 
-def test_a_lens_drawn_anew_runs_the_kernels_of_its_nominal(triplet):
-    """A lens's numbers (vertex positions, its image plane, its pupil's size) enter the kernels as opaque
-    inputs, not literals: a tolerance sample (one thickness changed) reuses the nominal lens's compiled
-    kernels instead of compiling its own (0.65 s against 0.06 s of CPU for a two-field OTF of the Cooke
-    triplet)."""
-    surfaces = list(triplet.surfaces)
+def _thicker(lens):
+    """`lens` with its first air gap 0.01 mm longer."""
+    surfaces = list(lens.surfaces)
     surfaces[1] = replace(surfaces[1], thickness=surfaces[1].thickness + 0.01)
+    return replace(lens, surfaces=tuple(surfaces))
+
+
+def _reglazed(lens, glass_of):
+    """`lens` with each glass g of its surfaces replaced by `glass_of(g)` (air kept)."""
+    return replace(
+        lens, surfaces=tuple(s if s.glass.kind == "air" else replace(s, glass=glass_of(s.glass)) for s in lens.surfaces)
+    )
+
+
+def _irregular(lens, a4: float):
+    """`lens` with an r⁴ sag term `a4` (mm⁻³) on its first surface (a tolerance's irregularity)."""
+    surfaces = list(lens.surfaces)
+    surfaces[0] = replace(surfaces[0], aspheric=(a4,))
+    return replace(lens, surfaces=tuple(surfaces))
+
+
+# (the lens the kernels are first compiled for, the lens that must reuse them)
+_SAME_KERNELS = {
+    "thickness": (lambda lens: lens, _thicker),
+    "melt": (lambda lens: lens, lambda lens: _reglazed(lens, lambda g: replace(g, melt=(5e-4, -0.2)))),
+    "another melt": (
+        lambda lens: _reglazed(lens, lambda g: replace(g, melt=(5e-4, -0.2))),
+        lambda lens: _reglazed(lens, lambda g: replace(g, melt=(-3e-4, 0.1))),
+    ),
+    "another glass": (
+        lambda lens: lens,
+        lambda lens: _reglazed(
+            lens, lambda g: glass.resolve("SCHOTT:N-SK4") if g.name.endswith("N-SK16") else glass.resolve("SCHOTT:SF5")
+        ),
+    ),
+    "temperature": (lambda lens: lens.at(60.0), lambda lens: lens.at(-20.0, 90.0)),
+    "irregularity": (lambda lens: _irregular(lens, 2e-7), lambda lens: _irregular(lens, -3e-7)),
+}
+
+
+@pytest.mark.parametrize("change", sorted(_SAME_KERNELS))
+def test_a_lens_drawn_anew_runs_the_kernels_of_its_nominal(triplet, change):
+    """A lens's numbers (vertex positions, its image plane, its pupil's size, its glasses' dispersion
+    coefficients, a melt's terms, thermal data and temperature, its aspheric terms) enter the kernels as opaque inputs, not
+    literals: a tolerance sample (a thickness, a melt, another glass of the same formula, an irregularity) or another
+    temperature reuses the first lens's compiled kernels instead of compiling its own (0.65 s against
+    0.06 s of CPU for a two-field OTF of the Cooke triplet)."""
+    first, then = _SAME_KERNELS[change]
     flag = dr.flag(dr.JitFlag.KernelHistory)
     dr.set_flag(dr.JitFlag.KernelHistory, True)
     try:
-        nominal = _psf_kernels(triplet)
-        drawn = _psf_kernels(replace(triplet, surfaces=tuple(surfaces)))
+        nominal = _psf_kernels(first(triplet))
+        drawn = _psf_kernels(then(triplet))
     finally:
         dr.set_flag(dr.JitFlag.KernelHistory, flag)
     assert nominal and drawn == nominal, f"{len(drawn - nominal)} kernels of {len(drawn)} new"
