@@ -250,6 +250,7 @@ def huygens_mtf(
     gamma / R^2, dS = R^2 d alpha d beta / gamma), over the total (the light beyond the window is in it:
     the curve is meaningful from a few cycles per window on). Window: 2.5 spot diameters or 16 lambda N,
     pitch lambda N / 2 (the PSF holds no frequency above 1/(lambda N): sampled at its Nyquist rate)."""
+    from huygens import huygens_intensity
     from solas_mi.optics.pupil import pupil_function
 
     pitch, size = huygens_window(lens, field, wavelength_nm)
@@ -258,19 +259,11 @@ def huygens_mtf(
     inside = pf.amplitude[0] > 0
     gamma = np.sqrt(1 - a[inside] ** 2 - b[inside] ** 2)
     radius, lam = pf.chief.sphere_radius[0], wavelength_nm * 1e-6
-    p0 = np.array([*pf.chief.image_xy[0], lens.image_z])
-    q = p0 + radius * np.stack([a[inside], b[inside], -gamma], axis=-1)
     area = radius**2 * pf.cell_area[0] / gamma
     k = 2 * np.pi / lam
     weight = pf.amplitude[0][inside] * np.sqrt(gamma) / radius * np.exp(1j * k * pf.opd_mm[0][inside]) * area / lam
     x = (np.arange(size) - (size - 1) / 2) * pitch * 1e-3
-    gx, gy = np.meshgrid(x, x)
-    points = np.stack([p0[0] + gx.ravel(), p0[1] + gy.ravel(), np.full(gx.size, p0[2])], axis=-1)
-    u = np.empty(len(points), dtype=complex)
-    for start in range(0, len(points), 512):
-        d = np.linalg.norm(points[start : start + 512, None, :] - q[None], axis=-1)
-        u[start : start + 512] = (np.exp(1j * k * (d - radius)) / d) @ weight
-    intensity = (np.abs(u) ** 2).reshape(size, size) * (pitch * 1e-3) ** 2  # power per pixel; rows: y
+    intensity = huygens_intensity(a[inside], b[inside], weight, radius, lam, x, x) * (pitch * 1e-3) ** 2  # per pixel
     lsf = intensity.sum(axis=1 - direction)
     # the total in the same measure: Parseval on the image plane, where an oblique pencil's |U|^2 is its
     # power per area over gamma (the chief ray 12 deg off the axis: 2.3 %)
