@@ -6,7 +6,7 @@ exact distances d_j = |P - Q_j| (no Fraunhofer approximation).
 Vectorised over image points, a symbolic loop over the pupil's samples (UNROLL per turn), in float32
 with the phase taken without cancellation: |P - Q|^2 = R^2 + s with s = |delta|^2 - 2 R delta . n
 (delta in the image plane: delta . n = x n_x + y n_y), so d - R = s / (d + R), reduced to a fraction of a
-wave before its sine and cosine; the sums are accumulated in float64. The pupil is swept in CHUNK samples
+wave before its sine and cosine; the sums are accumulated in float32 over a chunk, in float64 over chunks. The pupil is swept in CHUNK samples
 per kernel launch (one compiled kernel for all, the bounds opaque) so that a long sum reports progress.
 """
 
@@ -55,8 +55,8 @@ def huygens_intensity(
             waves = s / (d + r) * inv_lam
             sin, cos = dr.sincos(2.0 * np.pi * (waves - dr.round(waves)))
             a, b, g = dr.gather(Float, wr, j), dr.gather(Float, wi, j), dr.rcp(d)
-            ur += Float64((a * cos - b * sin) * g)
-            ui += Float64((a * sin + b * cos) * g)
+            ur = dr.fma(a * cos - b * sin, g, ur)
+            ui = dr.fma(a * sin + b * cos, g, ui)
         return i + UNROLL, stop, ur, ui
 
     ur, ui = dr.zeros(Float64, len(gx)), dr.zeros(Float64, len(gx))
@@ -64,7 +64,9 @@ def huygens_intensity(
     for start in range(0, total, CHUNK):
         i = dr.full(UInt32, 0, len(gx)) + dr.opaque(UInt32, start)
         stop = dr.opaque(UInt32, min(start + CHUNK, total))
-        _, _, ur, ui = dr.while_loop(state=(i, stop, ur, ui), cond=lambda i, stop, ur, ui: i < stop, body=turn)
+        zero = dr.zeros(Float, len(gx))
+        _, _, vr, vi = dr.while_loop(state=(i, stop, zero, zero), cond=lambda i, stop, ur, ui: i < stop, body=turn)
+        ur, ui = ur + Float64(vr), ui + Float64(vi)
         dr.eval(ur, ui)
         if log:
             done = min(start + CHUNK, total)
