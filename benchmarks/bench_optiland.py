@@ -298,9 +298,9 @@ def huygens_terms(lens, field: float, pf) -> int:
 
 def third_route(lens, spec: dict, freq, mine, other) -> list[str]:
     """Where ours and optiland's MTF differ by more than the tolerance: at the worst field and direction,
-    each against a third route, as a table row: the Huygens-Fresnel sum (`huygens_mtf`) where up to 256
-    pupil samples a side resolve the wavefront and HUYGENS_SIZE pixels hold the spot; else (tens of waves
-    of aberration: the Huygens sum would need thousands of samples a side) the geometric MTF (the Fourier
+    each against a third route, as a table row: the Huygens-Fresnel sum (`huygens_mtf`) where up to 768
+    pupil samples a side resolve the wavefront and it takes at most HUYGENS_TERMS wavelet terms; else (tens
+    of waves of aberration: the Huygens sum would need thousands of samples a side) the geometric MTF (the Fourier
     transform of the ray spot, rays on an entrance grid, no pupil function), the limit the MTF tends to
     where the wavefront error is many waves, to GEOMETRIC_BAND of the cut-off (an approximation: it
     decides a large gap, not one of 0.01)."""
@@ -368,8 +368,8 @@ def main(argv: list[str] | None = None) -> int:
     if third:
         print(
             "\nWhere the MTFs differ beyond 0.01, the worst field and direction against a third route: a Huygens-Fresnel "
-            "sum over the exit pupil's reference sphere where up to 256 pupil samples a side resolve the wavefront (and its "
-            "window holds the spot), else the geometric MTF of the ray spot (the limit of many waves of aberration, "
+            f"sum over the exit pupil's reference sphere where up to {HUYGENS_SAMPLES[-1]} pupil samples a side resolve the "
+            f"wavefront and it takes at most {HUYGENS_TERMS:.2g} wavelet terms, else the geometric MTF of the ray spot (the limit of many waves of aberration, "
             "an approximation); the largest difference in its band:\n"
         )
         print("| lens | field (deg) | direction | ours vs optiland | third route | ours vs third | optiland vs third |")

@@ -6,19 +6,16 @@ exact distances d_j = |P - Q_j| (no Fraunhofer approximation).
 Vectorised over image points, a symbolic loop over the pupil's samples (UNROLL per turn), in float32
 with the phase taken without cancellation: |P - Q|^2 = R^2 + s with s = |delta|^2 - 2 R delta . n
 (delta in the image plane: delta . n = x n_x + y n_y), so d - R = s / (d + R), reduced to a fraction of a
-wave before its sine and cosine; the sums are accumulated in float32 over a chunk, in float64 over chunks. The pupil is swept in CHUNK samples
-per kernel launch (one compiled kernel for all, the bounds opaque) so that a long sum reports progress.
+wave before its sine and cosine; the sums are accumulated in float32 over CHUNK pupil samples (one kernel
+launch each, one compiled kernel for all, the bounds opaque) and in float64 over chunks.
 """
 
 from __future__ import annotations
 
-import sys
-import time
-
 import numpy as np
 
 UNROLL = 4  # pupil samples per turn of the loop
-CHUNK = 16384  # pupil samples per kernel launch
+CHUNK = 16384  # pupil samples per kernel launch, summed in float32 (about 1e-5 of their magnitude)
 
 
 def huygens_intensity(
@@ -29,7 +26,6 @@ def huygens_intensity(
     wavelength_mm: float,
     x_mm: np.ndarray,
     y_mm: np.ndarray,
-    log: bool = False,
 ) -> np.ndarray:
     """|U|^2 on the grid of image-plane offsets (y_mm rows, x_mm columns) from the sphere's centre, summed
     over wavelets from the sphere's points of unit directions (n_x, n_y, .) with complex weights `weight`
@@ -60,17 +56,11 @@ def huygens_intensity(
         return i + UNROLL, stop, ur, ui
 
     ur, ui = dr.zeros(Float64, len(gx)), dr.zeros(Float64, len(gx))
-    total, started = len(w), time.perf_counter()
-    for start in range(0, total, CHUNK):
+    for start in range(0, len(w), CHUNK):
         i = dr.full(UInt32, 0, len(gx)) + dr.opaque(UInt32, start)
-        stop = dr.opaque(UInt32, min(start + CHUNK, total))
+        stop = dr.opaque(UInt32, min(start + CHUNK, len(w)))
         zero = dr.zeros(Float, len(gx))
         _, _, vr, vi = dr.while_loop(state=(i, stop, zero, zero), cond=lambda i, stop, ur, ui: i < stop, body=turn)
         ur, ui = ur + Float64(vr), ui + Float64(vi)
         dr.eval(ur, ui)
-        if log:
-            done = min(start + CHUNK, total)
-            took = time.perf_counter() - started
-            print(f"huygens: {done}/{total} pupil samples, {took:.0f} s, {done * len(gx) / took:.3g} terms/s",
-                  file=sys.stderr, flush=True)
     return (ur.numpy() ** 2 + ui.numpy() ** 2).reshape(len(y_mm), len(x_mm))

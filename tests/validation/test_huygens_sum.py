@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[2] / "benchmarks"))
-import huygens  # noqa: E402
+import huygens
 
 RADIUS_MM = 50.0
 WAVELENGTH_MM = 587.6e-6
@@ -51,7 +51,7 @@ def test_float32_sum_matches_the_direct_float64_sum(monkeypatch):
 
 def test_uniform_spherical_wave_gives_the_airy_pattern():
     scipy_special = pytest.importorskip("scipy.special")
-    n_x, n_y, pitch = disc(121)
+    n_x, n_y, _ = disc(121)
     lam_n = WAVELENGTH_MM / (2 * NA)
     x = np.linspace(0.0, 4 * lam_n, 25)
     row = huygens.huygens_intensity(n_x, n_y, np.ones(len(n_x)), RADIUS_MM, WAVELENGTH_MM, x, np.zeros(1))[0]
