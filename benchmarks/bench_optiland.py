@@ -290,18 +290,22 @@ def resolving(lens, field: float, wavelength_nm: float):
     return None
 
 
-def huygens_terms(lens, field: float, pf) -> int:
-    """The wavelet terms of `huygens_mtf` with the pupil function `pf`: pupil samples times image points."""
+def huygens_affordable(lens, field: float, pf) -> bool:
+    """Whether `huygens_mtf` with the pupil function `pf` takes at most HUYGENS_TERMS wavelet terms (pupil
+    samples times image points) and its window lies within the period lambda / d alpha of the PSF that
+    the pupil's sampling makes (a coarser grid folds the spot onto itself)."""
     _, x, y = huygens_window(lens, field, pf.wavelength_nm[0])
-    return int(np.count_nonzero(pf.amplitude[0] > 0)) * len(x) * len(y)
+    period = pf.wavelength_nm[0] * 1e-6 / np.array([np.diff(pf.alpha[0, :2])[0], np.diff(pf.beta[0, :2])[0]])
+    terms = np.count_nonzero(pf.amplitude[0] > 0) * len(x) * len(y)
+    return bool(terms <= HUYGENS_TERMS and 2 * x[-1] < period[0] and y[-1] - y[0] < period[1])
 
 
 def third_route(lens, spec: dict, freq, mine, other) -> list[str]:
     """Where ours and optiland's MTF differ by more than the tolerance: at the worst field and direction,
     each against a third route, as a table row: the Huygens-Fresnel sum (`huygens_mtf`) where up to 768
-    pupil samples a side resolve the wavefront and it takes at most HUYGENS_TERMS wavelet terms; else (tens
-    of waves of aberration: the Huygens sum would need thousands of samples a side) the geometric MTF (the Fourier
-    transform of the ray spot, rays on an entrance grid, no pupil function), the limit the MTF tends to
+    pupil samples a side resolve the wavefront and it is affordable (`huygens_affordable`); else (tens
+    of waves of aberration: the Huygens sum would need thousands of samples a side) the geometric MTF (the
+    Fourier transform of the ray spot, rays on an entrance grid, no pupil function), the limit the MTF tends to
     where the wavefront error is many waves, to GEOMETRIC_BAND of the cut-off (an approximation: it
     decides a large gap, not one of 0.01)."""
     from solas_mi.analysis.inputs import cutoff_cy_mm
@@ -313,7 +317,7 @@ def third_route(lens, spec: dict, freq, mine, other) -> list[str]:
         return []
     field, wl = spec["fields_deg"][i], spec["wavelength_nm"]
     pf = resolving(lens, field, wl)
-    if pf is not None and huygens_terms(lens, field, pf) <= HUYGENS_TERMS:
+    if pf is not None and huygens_affordable(lens, field, pf):
         third, lowest, held = huygens_mtf(lens, field, pf, d, freq)
         band = freq >= lowest
         route = f"Huygens ({pf.alpha.shape[1]}² samples, {held:.4f} of the light) from {lowest:.3g} cy/mm"
