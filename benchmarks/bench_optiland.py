@@ -278,14 +278,15 @@ def huygens_mtf(lens, field: float, pf, direction: int, freq: np.ndarray) -> tup
     return mtf, 5.0 / (at[-1] - at[0]), float(intensity.sum() / total)
 
 
-def resolving(lens, field: float, wavelength_nm: float):
+def huygens_pupil(lens, field: float, wavelength_nm: float):
     """The pupil function of the fewest of HUYGENS_SAMPLES pupil samples that resolve the wavefront (phase
-    steps within pi per cell), None if none does."""
+    steps within pi per cell) and with which the Huygens sum is affordable (`huygens_affordable`), None if
+    none does."""
     from solas_mi.optics.pupil import pupil_functions
     from solas_mi.psf.fraunhofer import sampling_need
 
     for pf in pupil_functions(lens, np.array([[0.0, field]]), np.array([wavelength_nm]), HUYGENS_SAMPLES):
-        if sampling_need(pf, 1.0, 1)[0][0] <= np.pi:
+        if sampling_need(pf, 1.0, 1)[0][0] <= np.pi and huygens_affordable(lens, field, pf):
             return pf
     return None
 
@@ -303,7 +304,7 @@ def huygens_affordable(lens, field: float, pf) -> bool:
 def third_route(lens, spec: dict, freq, mine, other) -> list[str]:
     """Where ours and optiland's MTF differ by more than the tolerance: at the worst field and direction,
     each against a third route, as a table row: the Huygens-Fresnel sum (`huygens_mtf`) where up to 768
-    pupil samples a side resolve the wavefront and it is affordable (`huygens_affordable`); else (tens
+    pupil samples a side resolve the wavefront and make it affordable (`huygens_pupil`); else (tens
     of waves of aberration: the Huygens sum would need thousands of samples a side) the geometric MTF (the
     Fourier transform of the ray spot, rays on an entrance grid, no pupil function), the limit the MTF tends to
     where the wavefront error is many waves, to GEOMETRIC_BAND of the cut-off (an approximation: it
@@ -316,8 +317,8 @@ def third_route(lens, spec: dict, freq, mine, other) -> list[str]:
     if gap[i, d] <= TOLERANCES["MTF"]:
         return []
     field, wl = spec["fields_deg"][i], spec["wavelength_nm"]
-    pf = resolving(lens, field, wl)
-    if pf is not None and huygens_affordable(lens, field, pf):
+    pf = huygens_pupil(lens, field, wl)
+    if pf is not None:
         third, lowest, held = huygens_mtf(lens, field, pf, d, freq)
         band = freq >= lowest
         route = f"Huygens ({pf.alpha.shape[1]}² samples, {held:.4f} of the light) from {lowest:.3g} cy/mm"
