@@ -32,8 +32,9 @@ FIELD_FRACTIONS = (0.0, 0.5, 0.7, 1.0)
 CURVE_FIELDS = 11
 FAN = np.linspace(-1.0, 1.0, 11)
 MTF_FREQUENCIES = 40  # from 0 to half the cut-off
-HUYGENS_SAMPLES = (128, 192, 256)  # pupil samples a side the Huygens sum may take (its time: 1-8 min)
-HUYGENS_SIZE = 480  # the most pixels a side of its window
+HUYGENS_SAMPLES = (128, 192, 256, 384, 512, 768)  # pupil samples a side the Huygens sum may take
+HUYGENS_MARGIN = 0.25  # of the spot's diameter: its window's margin beyond the spot on either side
+HUYGENS_TERMS = 5e10  # the most wavelet terms it may sum (about 1e8 a second on 2 loaded cores: 8 min)
 GEOMETRIC_BAND = 0.03  # of the cut-off: where many waves of aberration leave diffraction little to change
 TOLERANCES = {  # the issue's: MTF 0.01, focus 1 um, distortion 1e-4 %, Zernike 1e-3 waves; rays 1 nm
     "chief ray height (mm)": 1e-6,
@@ -230,73 +231,82 @@ def mtf_curves(lens, spec: dict, otf, theirs: dict):
     return freq, otf(freq), other
 
 
-def huygens_window(lens, field: float, wavelength_nm: float) -> tuple[float, int]:
-    """The Huygens PSF's pitch (µm, lambda N / 2) and pixels a side (2.5 spot diameters, at least 16 lambda N)."""
+def huygens_window(lens, field: float, wavelength_nm: float) -> tuple[float, np.ndarray, np.ndarray]:
+    """The Huygens PSF's pitch (µm, lambda N / 2: the PSF holds no frequency above 1/(lambda N)) and its
+    pixels' offsets (mm) from the chief ray's image point along x (from 0: the PSF of a field on y is even
+    in x) and y: each axis spans the ray spot's extent widened on either side by HUYGENS_MARGIN of its
+    diameter and 4 lambda N."""
     from solas_mi.optics.paraxial import paraxial
     from solas_mi.optics.spot import spot
 
     pitch = 0.5 * wavelength_nm * 1e-3 * paraxial(lens, wavelength_nm).working_f_number
     s = spot(lens, (0.0, field), wavelength_nm)
-    return pitch, int(2 * max(np.hypot(s.x_um, s.y_um).max() * 2.5, 16 * pitch) / pitch) // 2 * 2
+    margin = HUYGENS_MARGIN * 2 * np.hypot(s.x_um, s.y_um).max() + 8 * pitch
+    x = np.arange(0, (np.abs(s.x_um).max() + margin) / pitch + 1)
+    y = np.arange(np.floor((s.y_um.min() - margin) / pitch), np.ceil((s.y_um.max() + margin) / pitch) + 1)
+    return pitch, x * pitch * 1e-3, y * pitch * 1e-3
 
 
-def huygens_mtf(
-    lens, field: float, wavelength_nm: float, direction: int, freq: np.ndarray, samples: int
-) -> tuple[np.ndarray, float]:
+def huygens_mtf(lens, field: float, pf, direction: int, freq: np.ndarray) -> tuple[np.ndarray, float, float]:
     """The third route: the MTF along y (direction 0) or x (1) as the Fourier transform of a PSF summed
     wavelet by wavelet over the exit pupil's reference sphere (Rayleigh-Sommerfeld: U(P) = (1/(i lambda))
     sum a(Q) e^{ik(W + |P - Q|)} / |P - Q| dS, exact distances to each image point, no Fraunhofer
-    approximation), a(Q) the field amplitude on the sphere (power per area: power per d alpha d beta times
-    gamma / R^2, dS = R^2 d alpha d beta / gamma), over the total (the light beyond the window is in it:
-    the curve is meaningful from a few cycles per window on). Window: 2.5 spot diameters or 16 lambda N,
-    pitch lambda N / 2 (the PSF holds no frequency above 1/(lambda N): sampled at its Nyquist rate)."""
-    from solas_mi.optics.pupil import pupil_function
+    approximation; `huygens.huygens_intensity`), a(Q) the field amplitude on the sphere (power per area:
+    power per d alpha d beta times gamma / R^2, dS = R^2 d alpha d beta / gamma) of the pupil function `pf`
+    (of the field `field` on y, one wavelength), over the total (the light beyond the window is in it: the curve is
+    meaningful from a few cycles per window on); with the lowest such frequency and the share of the light
+    the window holds. Window: `huygens_window`."""
+    from huygens import huygens_intensity
 
-    pitch, size = huygens_window(lens, field, wavelength_nm)
-    pf = pupil_function(lens, np.array([[0.0, field]]), np.array([wavelength_nm]), samples)
+    wavelength_nm = pf.wavelength_nm[0]
+    pitch, x, y = huygens_window(lens, field, wavelength_nm)
     a, b = np.meshgrid(pf.alpha[0] + pf.chief.sphere_point[0, 0], pf.beta[0] + pf.chief.sphere_point[0, 1])
     inside = pf.amplitude[0] > 0
     gamma = np.sqrt(1 - a[inside] ** 2 - b[inside] ** 2)
     radius, lam = pf.chief.sphere_radius[0], wavelength_nm * 1e-6
-    p0 = np.array([*pf.chief.image_xy[0], lens.image_z])
-    q = p0 + radius * np.stack([a[inside], b[inside], -gamma], axis=-1)
     area = radius**2 * pf.cell_area[0] / gamma
     k = 2 * np.pi / lam
     weight = pf.amplitude[0][inside] * np.sqrt(gamma) / radius * np.exp(1j * k * pf.opd_mm[0][inside]) * area / lam
-    x = (np.arange(size) - (size - 1) / 2) * pitch * 1e-3
-    gx, gy = np.meshgrid(x, x)
-    points = np.stack([p0[0] + gx.ravel(), p0[1] + gy.ravel(), np.full(gx.size, p0[2])], axis=-1)
-    u = np.empty(len(points), dtype=complex)
-    for start in range(0, len(points), 512):
-        d = np.linalg.norm(points[start : start + 512, None, :] - q[None], axis=-1)
-        u[start : start + 512] = (np.exp(1j * k * (d - radius)) / d) @ weight
-    intensity = (np.abs(u) ** 2).reshape(size, size) * (pitch * 1e-3) ** 2  # power per pixel; rows: y
-    lsf = intensity.sum(axis=1 - direction)
+    half = huygens_intensity(a[inside], b[inside], weight, radius, lam, x, y) * (pitch * 1e-3) ** 2  # per pixel
+    intensity = np.concatenate([half[:, :0:-1], half], axis=1)  # rows: y; columns: x from -x[-1] to x[-1]
+    x = np.concatenate([-x[:0:-1], x])
+    lsf, at = (intensity.sum(axis=1), y) if direction == 0 else (intensity.sum(axis=0), x)
     # the total in the same measure: Parseval on the image plane, where an oblique pencil's |U|^2 is its
     # power per area over gamma (the chief ray 12 deg off the axis: 2.3 %)
     total = np.sum(pf.amplitude[0][inside] ** 2 * pf.cell_area[0] / gamma)
-    return np.abs(np.exp(-2j * np.pi * np.outer(freq, x)) @ lsf) / total, 5.0 / (size * pitch * 1e-3)
+    mtf = np.abs(np.exp(-2j * np.pi * np.outer(freq, at)) @ lsf) / total
+    return mtf, 5.0 / (at[-1] - at[0]), float(intensity.sum() / total)
 
 
-def resolving(lens, field: float, wavelength_nm: float) -> int | None:
-    """The fewest of HUYGENS_SAMPLES pupil samples that resolve the wavefront (phase steps within pi per
-    cell), None if none does."""
-    from solas_mi.optics.pupil import pupil_function
+def huygens_pupil(lens, field: float, wavelength_nm: float):
+    """The pupil function of the fewest of HUYGENS_SAMPLES pupil samples that resolve the wavefront (phase
+    steps within pi per cell) and with which the Huygens sum is affordable (`huygens_affordable`), None if
+    none does."""
+    from solas_mi.optics.pupil import pupil_functions
     from solas_mi.psf.fraunhofer import sampling_need
 
-    for samples in HUYGENS_SAMPLES:
-        pf = pupil_function(lens, np.array([[0.0, field]]), np.array([wavelength_nm]), samples)
-        if sampling_need(pf, 1.0, 1)[0][0] <= np.pi:
-            return samples
+    for pf in pupil_functions(lens, np.array([[0.0, field]]), np.array([wavelength_nm]), HUYGENS_SAMPLES):
+        if sampling_need(pf, 1.0, 1)[0][0] <= np.pi and huygens_affordable(lens, field, pf):
+            return pf
     return None
+
+
+def huygens_affordable(lens, field: float, pf) -> bool:
+    """Whether `huygens_mtf` with the pupil function `pf` takes at most HUYGENS_TERMS wavelet terms (pupil
+    samples times image points) and its window lies within the period lambda / d alpha of the PSF that
+    the pupil's sampling makes (a coarser grid folds the spot onto itself)."""
+    _, x, y = huygens_window(lens, field, pf.wavelength_nm[0])
+    period = pf.wavelength_nm[0] * 1e-6 / np.array([np.diff(pf.alpha[0, :2])[0], np.diff(pf.beta[0, :2])[0]])
+    terms = np.count_nonzero(pf.amplitude[0] > 0) * len(x) * len(y)
+    return bool(terms <= HUYGENS_TERMS and 2 * x[-1] < period[0] and y[-1] - y[0] < period[1])
 
 
 def third_route(lens, spec: dict, freq, mine, other) -> list[str]:
     """Where ours and optiland's MTF differ by more than the tolerance: at the worst field and direction,
-    each against a third route, as a table row: the Huygens-Fresnel sum (`huygens_mtf`) where up to 256
-    pupil samples a side resolve the wavefront and HUYGENS_SIZE pixels hold the spot; else (tens of waves
-    of aberration: the Huygens sum would need thousands of samples a side) the geometric MTF (the Fourier
-    transform of the ray spot, rays on an entrance grid, no pupil function), the limit the MTF tends to
+    each against a third route, as a table row: the Huygens-Fresnel sum (`huygens_mtf`) where up to 768
+    pupil samples a side resolve the wavefront and make it affordable (`huygens_pupil`); else (tens
+    of waves of aberration: the Huygens sum would need thousands of samples a side) the geometric MTF (the
+    Fourier transform of the ray spot, rays on an entrance grid, no pupil function), the limit the MTF tends to
     where the wavefront error is many waves, to GEOMETRIC_BAND of the cut-off (an approximation: it
     decides a large gap, not one of 0.01)."""
     from solas_mi.analysis.inputs import cutoff_cy_mm
@@ -307,10 +317,11 @@ def third_route(lens, spec: dict, freq, mine, other) -> list[str]:
     if gap[i, d] <= TOLERANCES["MTF"]:
         return []
     field, wl = spec["fields_deg"][i], spec["wavelength_nm"]
-    samples = resolving(lens, field, wl) if huygens_window(lens, field, wl)[1] <= HUYGENS_SIZE else None
-    if samples:
-        third, lowest = huygens_mtf(lens, field, wl, d, freq, samples)
-        band, route = freq >= lowest, f"Huygens ({samples}² samples) from {lowest:.3g} cy/mm"
+    pf = huygens_pupil(lens, field, wl)
+    if pf is not None:
+        third, lowest, held = huygens_mtf(lens, field, pf, d, freq)
+        band = freq >= lowest
+        route = f"Huygens ({pf.alpha.shape[1]}² samples, {held:.4f} of the light) from {lowest:.3g} cy/mm"
     else:
         third = np.abs(geometric_otf(lens, (field,), (wl,), (1.0,), freq, 512)[0, d])
         top = GEOMETRIC_BAND * cutoff_cy_mm(lens, wl)
@@ -362,8 +373,8 @@ def main(argv: list[str] | None = None) -> int:
     if third:
         print(
             "\nWhere the MTFs differ beyond 0.01, the worst field and direction against a third route: a Huygens-Fresnel "
-            "sum over the exit pupil's reference sphere where up to 256 pupil samples a side resolve the wavefront (and its "
-            "window holds the spot), else the geometric MTF of the ray spot (the limit of many waves of aberration, "
+            f"sum over the exit pupil's reference sphere where up to {HUYGENS_SAMPLES[-1]} pupil samples a side resolve the "
+            f"wavefront and it takes at most {HUYGENS_TERMS:.2g} wavelet terms, else the geometric MTF of the ray spot (the limit of many waves of aberration, "
             "an approximation); the largest difference in its band:\n"
         )
         print("| lens | field (deg) | direction | ours vs optiland | third route | ours vs third | optiland vs third |")
