@@ -24,19 +24,13 @@ PUPIL_MM = [(0, 0), (1.5, 0), (0, 1.5), (-1.2, -0.8), (0.7, -1.4)]  # where each
 
 def request(path: str) -> None:
     """Write the lens as built, its rays and solas-mi's trace of them to `path`."""
-    from dataclasses import replace
-
+    from as_built_lens import cooke_as_built
     from scipy.spatial.transform import Rotation
 
-    from solas_mi import Lens
     from solas_mi.optics import local_trace
-    from solas_mi.optics.placement import Placement, frames
+    from solas_mi.optics.placement import frames
 
-    base, wavelength = Lens.load("cooke-triplet"), 587.5618
-    surfaces = list(base.surfaces)
-    surfaces[2] = replace(surfaces[2], placement=Placement(0.1, -0.05, 0.4, -0.3, 0.0, 0))
-    surfaces[4] = replace(surfaces[4], placement=Placement(-0.1, 0.05, -0.4, 0.3, 0.0, 1))
-    lens = replace(base, surfaces=tuple(surfaces))
+    lens, wavelength = cooke_as_built(toroid=False), 587.5618
     placed = frames(lens.surfaces)
     angles = [list(Rotation.from_matrix(axes).as_euler("xyz")) for _, axes in placed]  # axes = Rz Ry Rx
     rows = [

@@ -1,10 +1,14 @@
-"""PSF-grid speed and pupil-sampling error against run time for the SOLAS doublet.
+"""PSF-grid speed and pupil-sampling error against run time for the SOLAS doublet, and a lens as built against
+the same lens on one axis.
 
-Run: .venv/bin/python benchmarks/bench_psf_grid.py [--repeats 5] [--skip-grid] [--all-fields]
+Run: .venv/bin/python benchmarks/bench_psf_grid.py [--repeats 5] [--skip-grid] [--skip-as-built] [--all-fields]
 Prints Markdown tables: the 32×32×3 grid (656/531/486 nm, 160×160 Fraunhofer PSFs at 0.5 µm, pupil 128²,
 the sampling-error estimate on) and the 8×8×3 one in process (kernels compiled) and the 32×32×3 as the
 `psf-grid` command (a fresh process: imports, kernels, the grid, the EXR), medians and runs, with the
-command's peak memory; then the pupil-sampling error against run time; and the figures `run_all.py`
+command's peak memory; then the Cooke triplet as built (`as_built_lens`: every field traced) against the Cooke
+triplet, the 32×32×3 geometric grid and the 8×8×3 Fraunhofer one, medians and their ratios (issue 40's
+bound: the as-built geometric grid within 2.5× the symmetric one's time); then the pupil-sampling error
+against run time; and the figures `run_all.py`
 compares run to run (and sets the README's headline from, on an idle machine).
 """
 
@@ -21,6 +25,7 @@ from pathlib import Path
 import numpy as np
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
+from as_built_lens import cooke_as_built
 from bench_grid_end_to_end import command
 from figures import figure
 
@@ -36,13 +41,36 @@ WAVELENGTHS = np.repeat([486.0, 531.0, 656.0], 3)
 KW = dict(wavelengths_nm=[656.0, 531.0, 486.0], pitch_um=0.5, size=160)
 
 
-def grid_seconds(lens: Lens, n: int, repeats: int) -> list[float]:
+def grid_seconds(lens: Lens, n: int, repeats: int, method: str = "fraunhofer") -> list[float]:
     times = []
     for _ in range(repeats):
         start = time.perf_counter()
-        psf_grid(lens, grid=(n, n), **KW)
+        psf_grid(lens, grid=(n, n), method=method, **KW)
         times.append(time.perf_counter() - start)
     return times
+
+
+def as_built_against_symmetric(repeats: int) -> None:
+    """Print the grids of the Cooke triplet as built and of the Cooke triplet (the same lens on one axis, its
+    mirror-image fields computed once) side by side, medians and runs, and each pair's ratio; the
+    geometric pair's as-built time and ratio as figures."""
+    pairs = {"32×32×3 geometric grid": (32, "geometric"), "8×8×3 Fraunhofer grid": (8, "fraunhofer")}
+    lenses = {"as built": cooke_as_built(), "on one axis": Lens.load("cooke-triplet")}
+    for lens in lenses.values():  # compile both lenses' kernels first
+        for method in ("geometric", "fraunhofer"):
+            grid_seconds(lens, 2, 1, method)
+    print("\nThe Cooke triplet as built (middle element decentred and tilted, a toroid last) against it on one axis")
+    print("\n| grid | as built, median (s) | on one axis, median (s) | ratio | runs as built / on one axis (s) |")
+    print("|---|---|---|---|---|")
+    medians = {}
+    for name, (n, method) in pairs.items():
+        built, axis = (grid_seconds(lens, n, repeats, method) for lens in lenses.values())
+        medians[name] = statistics.median(built), statistics.median(axis)
+        (a, b), runs = medians[name], f"{', '.join(f'{x:.2f}' for x in built)} / {', '.join(f'{x:.2f}' for x in axis)}"
+        print(f"| {name} | {a:.2f} | {b:.2f} | {a / b:.1f} | {runs} |")
+    built, axis = medians["32×32×3 geometric grid"]
+    figure("psf_grid_as_built_geometric_32x32x3_s", built, "s")
+    figure("psf_grid_as_built_geometric_ratio", built / axis, "x")
 
 
 def command_seconds(repeats: int) -> tuple[list[float], float]:
@@ -99,6 +127,7 @@ def main() -> None:
     ap = argparse.ArgumentParser()
     ap.add_argument("--repeats", type=int, default=5)
     ap.add_argument("--skip-grid", action="store_true")
+    ap.add_argument("--skip-as-built", action="store_true")
     ap.add_argument("--all-fields", action="store_true", help="also the grid with every field traced (minutes)")
     args = ap.parse_args()
     lens = Lens.load("solas-doublet")
@@ -127,6 +156,8 @@ def main() -> None:
         ):
             figure(key, statistics.median(rows[name]), "s")
         figure("psf_grid_command_peak_mb", peak_mb, "MB")
+    if not args.skip_as_built:
+        as_built_against_symmetric(args.repeats)
     print(
         "\n| pupil samples N | median seconds (9 PSFs) | max RMSE/peak vs N=512 | max RMSE/peak, N vs 2N |\n|---|---|---|---|"
     )
