@@ -174,8 +174,8 @@ class Tracing:
         return 1.02 * front.semi_diameter + rim * min(math.tan(min(steepest, 1.5)), 4.0)
 
     def trace(self, source, plan, seed: tuple, splat: bool = False):
-        """Rays of `source` along each path k, on the entrance cells `plan`[0][k] (ids of the `GRID`² cells
-        of the square), `plan`[1][k]² rays in each (stratified): splatted into `block` (`splat`), else the
+        """Rays of `source` along each path k, on the entrance cells `plan[0][k]` (ids of the `GRID`² cells
+        of the square), `plan[1][k]`² rays in each (stratified): splatted into `block` (`splat`), else the
         pilot's figures (`_pilot_figures`) and the cells whose rays landed."""
         cells, sides = plan
         per_path = np.array([len(c) for c in cells]) * sides * sides
