@@ -246,7 +246,18 @@ class GhostGrid:
         return NodeGhosts(energy, centroid, pitch, kernels / np.where(sums > 0, sums, 1.0), direct)
 
     def only(self, path: int) -> GhostGrid:
-        """The grid of its one ghost path `path` (an index into `paths`): that ghost's ghosts alone."""
+        """The grid of one ghost path: that path's ghosts alone, at every node and wavelength.
+
+        Parameters
+        ----------
+        path : int
+            The path's index into `paths`.
+
+        Returns
+        -------
+        GhostGrid
+            The same grid holding only that path (its energies, centroids, pitches and kernels).
+        """
         keep = slice(path, path + 1)
         return replace(self, paths=self.paths[keep], energy=self.energy[..., keep],
                        centroid_mm=self.centroid_mm[..., keep, :], pitch_um=self.pitch_um[..., keep],
