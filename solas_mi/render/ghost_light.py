@@ -78,6 +78,19 @@ def stray_light(scene, sensor, spp: int, seed: int = 0):
     return np.nan_to_num(image, nan=0.0, posinf=0.0, neginf=0.0), meta
 
 
+def direct_light(scene, sensor, side: int = 36, seed: int = 0) -> np.ndarray:
+    """The direct image of `scene`'s sources (those `stray_light` traces) through `sensor`'s (a `lens_camera`)
+    lens, light-traced like its ghosts along the direct path, `side`² rays per cell of the whole entrance
+    square: (crop rows × columns × 3, float64). Converged where a camera render of a sun under a pixel is
+    not: a reference to weigh a ghost's light by."""
+    found, _ = sources(scene, np.array(sensor.world_transform().matrix, dtype=np.float64).reshape(4, 4))
+    direct = ghost_trace.direct(sensor.lens)
+    tracing = Tracing(scene, sensor, [(direct, direct)])
+    for k, source in enumerate(found):
+        tracing.trace(source, ([np.arange(GRID * GRID)], np.array([side])), (seed, k, 0), splat=True)
+    return np.nan_to_num(np.array(tracing.block.tensor(), dtype=np.float64)[..., :3], nan=0.0, posinf=0.0, neginf=0.0)
+
+
 def _counts(pilots, pixel_samples: int, spp: int) -> list[np.ndarray]:
     """The main pass's rays per (source, path) from the pilots' (light, landed share, area, landings)
     (module docstring)."""

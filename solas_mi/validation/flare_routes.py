@@ -18,8 +18,9 @@ What is compared:
   headlights alone without sky (the sky's own ghosts would veil every path; each source group apart, as the
   routes weigh sources at different fields differently: the render's direct light carries the lens's relative
   illumination, the degraded frame's does not): its centroid (px) and its light over the direct light of the
-  sources (the degraded frame's: the sources' pinhole light; the render's: its direct image, from `render
-  --ghosts`'s frame less its flare over the starburst kernel's centre share, `metadata["flare"]["starburst"]`);
+  sources (the degraded frame's: the sources' pinhole light; the render's: its direct image light-traced,
+  `render.ghost_light.direct_light`: a render of a sun under a pixel at the frame's spp is no such reference, its
+  seeds spread by tens of per cent, and every ghost over it reads off together);
 - the flare label's hit mask, `flare.ratio` > `HIT_RATIO`, of the whole scene, sky included: its IoU between the routes, and
   the flare light (`flare.irradiance`) in the frame.
 Lengths in mm, angles in degrees, pixels of the frame.
@@ -196,12 +197,13 @@ def hits(out: RouteComparison, degraded_labels, rendered) -> None:
     out.flare_light = (float(labels["flare.irradiance"].sum()), float(layers["flare.irradiance"].sum()))
 
 
-def rendered_direct(path) -> float:
-    """The light of `render --ghosts`'s direct image (module docstring)."""
-    image, layers, meta = mean_image(path)
-    kept = float((image - layers["flare.irradiance"]).sum())
-    starburst = meta["flare"]["starburst"]
-    return kept / (1.0 - starburst["wings"]) if starburst else kept
+def traced_direct(xml, lens) -> float:
+    """The light of the lens camera's direct image of scene `xml`'s sources, light-traced (module docstring)."""
+    from ..render.ghost_light import direct_light
+    from ..render.user_scene import load
+
+    scene = load(xml, VARIANT, lens, response=f"mono:{WAVELENGTH_NM}")
+    return float(direct_light(scene, scene.sensors()[0]).mean(axis=-1).sum())
 
 
 def ghost_paths(lens, folder: Path, name: str, count: int, spp: int) -> list[dict]:
@@ -223,7 +225,7 @@ def ghost_paths(lens, folder: Path, name: str, count: int, spp: int) -> list[dic
     source = float(image[image.max(axis=-1) > planner.threshold].sum() / image.shape[-1])
     if not source > 0:
         raise SolasError(f"{pinhole}: no pixel above the ghost threshold {planner.threshold:g}: no source to compare")
-    direct = rendered_direct(folder / f"{name}_rendered.exr")
+    direct = traced_direct(folder / f"{name}.xml", lens)
     found = []
     for k, path in enumerate(planner.grid.paths):
         flare = frame_ghosts(image, planner.grid.only(k), planner.fields, planner.channels, planner.threshold)[0]
