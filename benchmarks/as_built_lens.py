@@ -1,7 +1,7 @@
 """The Cooke triplet as built, the lens as built that the benchmarks time and compare (`bench_psf_grid`,
 `asbuilt_optiland`): its middle element decentred by (0.1, −0.05) mm and tilted by (0.4°, −0.3°) (a
 coordinate break before it, its reverse after it), with `toroid` its last surface a toroid (its radius,
-rotated at 1.002 times it: astigmatism of ~40 µm). The tests' fixture `cooke_as_built` is the same lens.
+rotated at 1.002 times it: astigmatism of ~40 µm). The tests' fixture `cooke_as_built` takes it (with a sensor tilt).
 """
 
 from __future__ import annotations

@@ -46,25 +46,19 @@ def triplet():
 
 
 def _cooke_as_built(toroid: bool = True, sensor_tilt_deg: float = 0.0):
-    """The Cooke triplet as built: its middle element decentred by (0.1, -0.05) mm and tilted by (0.4, -0.3) deg
-    (a coordinate break before it, its reverse after it, as benchmarks/asbuilt_optiland.py compares with optiland),
-    with `toroid`, its last surface a toroid (its radius, rotated at 1.002 times it: astigmatism of ~40 µm), and a sensor tilted about x by
+    """The Cooke triplet as built that the benchmarks time and compare with optiland (`benchmarks/as_built_lens.py`:
+    its middle element decentred and tilted, with `toroid` a toroid last), with a sensor tilted about x by
     `sensor_tilt_deg`."""
     from dataclasses import replace
+    from pathlib import Path
 
-    from solas_mi import Lens
     from solas_mi.optics.placement import Placement
-    from solas_mi.optics.shapes.toroid import Toroid
 
-    base = Lens.load("cooke-triplet")
-    surfaces = list(base.surfaces)
-    surfaces[2] = replace(surfaces[2], placement=Placement(0.1, -0.05, 0.4, -0.3, 0.0, 0))
-    surfaces[4] = replace(surfaces[4], placement=Placement(-0.1, 0.05, -0.4, 0.3, 0.0, 1))
-    if toroid:
-        last = surfaces[-1]
-        surfaces[-1] = replace(last, radius=0.0, form=Toroid(last.radius, 0.0, (), 1.002 * last.radius))
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "benchmarks"))
+    from as_built_lens import cooke_as_built
+
     image = Placement(tilt_x=sensor_tilt_deg) if sensor_tilt_deg else None
-    return replace(base, name="cooke-triplet-as-built", surfaces=tuple(surfaces), image_placement=image)
+    return replace(cooke_as_built(toroid), image_placement=image)
 
 
 @pytest.fixture(scope="session")
