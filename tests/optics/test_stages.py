@@ -72,7 +72,8 @@ def test_refraction_at_a_flat_surface_is_snell():
     d = (T.F(np.sin(theta)), T.F(0.0 * theta), T.F(np.cos(theta)))
     zero = T.F(0.0 * theta)
     mu = 1.0 / 1.5
-    (dx, _dy, dz), _k2, factor = T._refract(flat.surfaces[0], zero, zero, zero, zero, d, mu, True, T.F)
+    normal = T.surface_normal(flat.surfaces[0], zero, zero, zero, zero, T.F)
+    (dx, _dy, dz), _k2, factor = T._refract(normal, d, mu, True)
     dx, dz, factor = T.to_numpy(dx, dz, factor)
     assert np.allclose(dx, mu * np.sin(theta), rtol=0, atol=1e-15) and np.allclose(dx**2 + dz**2, 1.0)
     assert factor[0] == pytest.approx(1.0 - ((1.5 - 1.0) / 2.5) ** 2, rel=1e-12)  # normal incidence: 1 − R
