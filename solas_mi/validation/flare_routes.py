@@ -78,23 +78,33 @@ def scene_xml(half_fov_deg: float, size: tuple[int, int], parts=("sun", "headlig
     sun = np.array([tx, ty, 1.0]) * FAR_M
     radius = FAR_M * math.hypot(1.0, tx, ty) * math.radians(SUN_RADIUS_DEG)
     shapes = {
-        "sun": f"""
-    <shape type="sphere">
-        <point name="center" x="{sun[0]}" y="{sun[1]}" z="{sun[2]}"/>
-        <float name="radius" value="{radius}"/>
-        <emitter type="area"><rgb name="radiance" value="{SUN_RADIANCE}"/></emitter>
-    </shape>""",
-        "headlights": "".join(
-            f"""
-    <shape type="disk">
-        <transform name="to_world"><scale value="0.1"/><rotate x="1" angle="180"/><translate x="{x}" y="-1" z="20"/></transform>
-        <emitter type="area"><rgb name="radiance" value="{HEADLIGHT_RADIANCE}"/></emitter>
-    </shape>"""
-            for x in (-0.75, 0.75)
-        ),
+        "sun": sun_sphere(sun, radius),
+        "headlights": headlights(-1),
         "sky": f'\n    <emitter type="constant"><rgb name="radiance" value="{SKY_RADIANCE}"/></emitter>',
     }
     return scene_head(half_fov_deg, size, 2) + "".join(shapes[p] for p in parts) + "\n</scene>"
+
+
+def sun_sphere(centre, radius: float) -> str:
+    """The sun, a sphere emitting `SUN_RADIANCE` at `centre` (x, y, z) of `radius`, as scene XML."""
+    return f"""
+    <shape type="sphere">
+        <point name="center" x="{centre[0]}" y="{centre[1]}" z="{centre[2]}"/>
+        <float name="radius" value="{radius}"/>
+        <emitter type="area"><rgb name="radiance" value="{SUN_RADIANCE}"/></emitter>
+    </shape>"""
+
+
+def headlights(height_m: float) -> str:
+    """Two headlights (discs of 0.1 emitting `HEADLIGHT_RADIANCE`, 1.5 apart) 20 ahead at `height_m`, as scene XML."""
+    return "".join(
+        f"""
+    <shape type="disk">
+        <transform name="to_world"><scale value="0.1"/><rotate x="1" angle="180"/><translate x="{x}" y="{height_m:g}" z="20"/></transform>
+        <emitter type="area"><rgb name="radiance" value="{HEADLIGHT_RADIANCE}"/></emitter>
+    </shape>"""
+        for x in (-0.75, 0.75)
+    )
 
 
 def scene_head(half_fov_deg: float, size: tuple[int, int], max_depth: int) -> str:

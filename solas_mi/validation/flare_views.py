@@ -5,7 +5,7 @@ on one sheet per view: the render, its flare layer and the developed frame (`fla
 
 The scenes (`view_xml`) are small and our own: a perspective camera 1.2 m above a grey road plane, a uniform sky
 (night: `NIGHT_SKY`; day: `DAY_SKY`), and the sources: two headlights (discs of 0.1 m, 1.5 m apart, 20 m ahead,
-`HEADLIGHT_RADIANCE`) or the sun (a far sphere of 0.27 deg, `SUN_RADIANCE`, up and to the right), in linear units of
+`flare_routes.HEADLIGHT_RADIANCE`) or the sun (a far sphere of 0.27 deg, `flare_routes.SUN_RADIANCE`, up and to the right), in linear units of
 the scene (an HDR frame: the sources far above the sky, as they are).
 """
 
@@ -16,11 +16,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .flare_routes import scene_head
+from .flare_routes import headlights, scene_head, sun_sphere
 
 NIGHT_SKY, DAY_SKY = 0.02, 1.0  # the sky's radiance at night and by day
-HEADLIGHT_RADIANCE = 2e3
-SUN_RADIANCE = 2e4
 SUN_DEG = (6.0, 4.0)  # the sun's direction (deg right, up)
 VIEWS = {"night street": "headlights", "sun in frame": "sun"}  # view: its sources
 SENSOR, EXPOSURE_MS = "imx490-hdr", "auto"
@@ -30,30 +28,12 @@ def view_xml(sources: str, half_fov_deg: float, size: tuple[int, int]) -> str:
     """The scene of `sources` ("headlights": night, "sun": day) for a perspective camera of `half_fov_deg` across
     a `size` (width, height) film."""
     if sources == "headlights":
-        sky, lights = (
-            NIGHT_SKY,
-            "".join(
-                f"""
-    <shape type="disk">
-        <transform name="to_world"><scale value="0.1"/><rotate x="1" angle="180"/><translate x="{x}" y="-0.5" z="20"/></transform>
-        <emitter type="area"><rgb name="radiance" value="{HEADLIGHT_RADIANCE}"/></emitter>
-    </shape>"""
-                for x in (-0.75, 0.75)
-            ),
-        )
+        sky, lights = NIGHT_SKY, headlights(-0.5)
     else:
         far = 1e3  # inside the perspective camera's far clip (1e4 by default)
         tx, ty = (math.tan(math.radians(v)) for v in SUN_DEG)
         radius = far * math.hypot(1.0, tx, ty) * math.radians(0.27)
-        sky, lights = (
-            DAY_SKY,
-            f"""
-    <shape type="sphere">
-        <point name="center" x="{-tx * far}" y="{ty * far}" z="{far}"/>
-        <float name="radius" value="{radius}"/>
-        <emitter type="area"><rgb name="radiance" value="{SUN_RADIANCE}"/></emitter>
-    </shape>""",
-        )
+        sky, lights = DAY_SKY, sun_sphere((-tx * far, ty * far, far), radius)
     return f"""{scene_head(half_fov_deg, size, 3)}
     <shape type="rectangle">
         <transform name="to_world"><scale x="40" y="200"/><rotate x="1" angle="-90"/><translate y="-1.2" z="150"/></transform>
