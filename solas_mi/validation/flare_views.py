@@ -4,9 +4,9 @@ headlights and a day view with the sun in the frame, each rendered through a coa
 on one sheet per view: the render, its flare layer and the developed frame (`flare_sheet`).
 
 The scenes (`view_xml`) are small and our own: a perspective camera 1.2 m above a grey road plane, a uniform sky
-(night: `NIGHT_SKY`; day: `DAY_SKY`), and the sources: two headlights (discs of 0.1 m, 1.5 m apart, 20 m ahead,
-`flare_routes.HEADLIGHT_RADIANCE`) or the sun (a far sphere of 0.27 deg, `flare_routes.SUN_RADIANCE`, up and to the right), in linear units of
-the scene (an HDR frame: the sources far above the sky, as they are).
+(night: `NIGHT_SKY`; day: `DAY_SKY`), and the sources: two headlights (discs of 0.1 m, 1.5 m apart, 20 m
+ahead, `flare_routes.HEADLIGHT_RADIANCE`) or the sun (a far sphere of 0.27 deg, `flare_routes.SUN_RADIANCE`, up
+and to the right), in linear units of the scene (an HDR frame: the sources far above the sky, as they are).
 """
 
 from __future__ import annotations
